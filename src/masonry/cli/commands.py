@@ -1,0 +1,12 @@
+"""Imports each command module once so its commands register on the app (order = order in --help)."""
+
+from __future__ import annotations
+
+import importlib
+
+_MODULES = (
+    "plan",  # masonry plan, schema, blueprint
+)
+
+for _name in _MODULES:
+    importlib.import_module(f"masonry.cli.{_name}")

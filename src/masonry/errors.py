@@ -1,0 +1,87 @@
+"""The one error tree of masonry.
+
+::
+
+    MasonryError
+    ├── BlueprintError          a blueprint file or value is invalid (names file, field or id)
+    ├── PlanningError           the planner or dispatcher was asked something impossible
+    ├── InputError              a command-line input (image, intrinsics, calibration, option) is unusable
+    ├── PerceptionError         the vision pipeline cannot run (unknown dictionary, bad calibration)
+    ├── HardwareError           a port's device failed
+    │   ├── DeviceNotFound      the device or endpoint is absent or is not the expected device
+    │   ├── CommandRejected     the device answered "no" to a command (carries the reason)
+    │   ├── CommandTimeout      the device did not answer in time
+    │   └── LinkLost            the link went silent past its watchdog
+    └── MissionError            mission control or its transport/journal failed
+        ├── ProtocolError       a message is malformed, of another version, or from an unknown UAV
+        └── JournalError        the journal cannot be read, written or resumed
+
+Adapters translate library failures at the boundary with ``raise ... from exc``; the CLI
+prints ``str(error)`` as one line and exits with status 2 (bad input) or 1 (runtime failure).
+"""
+
+from __future__ import annotations
+
+
+class MasonryError(Exception):
+    """Base of every error masonry raises on purpose."""
+
+
+class BlueprintError(MasonryError):
+    """A blueprint is invalid: the message names the file, the field or brick id, and the problem."""
+
+    def __init__(self, source: str, where: str, problem: str) -> None:
+        self.source = source
+        self.where = where
+        self.problem = problem
+        location = f"{source}: {where}" if where else source
+        super().__init__(f"{location}: {problem}")
+
+
+class PlanningError(MasonryError):
+    """The planner or the dispatcher cannot do what was asked."""
+
+
+class InputError(MasonryError):
+    """A command-line input is unusable (unreadable image, malformed intrinsics, bad option)."""
+
+
+class PerceptionError(MasonryError):
+    """The perception pipeline cannot run with the given configuration."""
+
+
+class HardwareError(MasonryError):
+    """A hardware port failed."""
+
+
+class DeviceNotFound(HardwareError):
+    """The device or endpoint is missing, or it is not the device expected."""
+
+
+class CommandRejected(HardwareError):
+    """The device refused a command; ``reason`` says why."""
+
+    def __init__(self, command: str, reason: str) -> None:
+        self.command = command
+        self.reason = reason
+        super().__init__(f"{command} rejected: {reason}")
+
+
+class CommandTimeout(HardwareError):
+    """The device did not answer a command in time."""
+
+
+class LinkLost(HardwareError):
+    """The link to a device or peer went silent past its watchdog time."""
+
+
+class MissionError(MasonryError):
+    """Mission control, its transport or its journal failed."""
+
+
+class ProtocolError(MissionError):
+    """A message is malformed, of an unsupported version, or from an unknown sender."""
+
+
+class JournalError(MissionError):
+    """The mission journal cannot be read, written or resumed."""

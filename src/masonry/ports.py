@@ -1,0 +1,130 @@
+"""The seams of masonry: every piece of hardware or middleware a UAV handler talks to, as a small Protocol.
+
+World frame ENU (x east, y north, z up), metres, radians, seconds. Adapters (``masonry.adapters``), the
+simulator (``masonry.sim``) and the scripted fakes (``masonry.fakes``) implement these; the state machines
+(``masonry.fsm``) use nothing else.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from masonry.perception.types import CameraIntrinsics, TagPose
+    from masonry.planner.tasks import Task
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Telemetry:
+    """A flight controller's state at ``time_s``."""
+
+    time_s: float
+    position_m: Vec3
+    velocity_mps: Vec3
+    attitude_rad: Vec3  # roll, pitch, yaw (yaw about +z from +x, ENU)
+    armed: bool
+    mode: str
+    battery_fraction: float  # 1.0 full, 0.0 empty
+    link_ok: bool
+    position_ok: bool  # the autopilot's position estimate is usable
+    on_ground: bool
+
+
+@dataclass(frozen=True, eq=False)
+class CameraFrame:
+    """One camera sample: an image (BGR or grey) to run detection on, or marker poses already measured."""
+
+    time_s: float
+    image: np.ndarray | None = None
+    tags: tuple[TagPose, ...] | None = None
+
+
+@dataclass(frozen=True)
+class TaskResult:
+    """What a UAV reports when it finishes or abandons a task."""
+
+    task_id: str
+    status: Literal["done", "failed"]
+    duration_s: float
+    reason: str | None = None
+    placement_error_m: float | None = None
+    coverage: float | None = None
+
+
+@runtime_checkable
+class Clock(Protocol):
+    """Time source: simulated (advances only when told) or wall."""
+
+    def now_s(self) -> float: ...
+
+    def sleep(self, duration_s: float) -> None: ...
+
+
+@runtime_checkable
+class FlightController(Protocol):
+    """The autopilot: arming, takeoff/land, velocity + yaw-rate setpoints, telemetry."""
+
+    def connect(self) -> None: ...
+
+    def close(self) -> None: ...
+
+    def arm(self) -> None: ...
+
+    def disarm(self) -> None: ...
+
+    def takeoff(self, altitude_m: float) -> None: ...
+
+    def land(self) -> None: ...
+
+    def send_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float) -> None: ...
+
+    def telemetry(self) -> Telemetry: ...
+
+
+@runtime_checkable
+class Gripper(Protocol):
+    """Electromagnet on a lockable ball joint."""
+
+    def set_magnet(self, on: bool) -> None: ...
+
+    def set_joint_locked(self, locked: bool) -> None: ...
+
+    def is_attached(self) -> bool: ...
+
+
+@runtime_checkable
+class Sprayer(Protocol):
+    """The adhesive valve."""
+
+    def set_valve(self, open_: bool) -> None: ...
+
+    def is_valve_open(self) -> bool: ...
+
+
+@runtime_checkable
+class Camera(Protocol):
+    """Downward camera on the UAV body: intrinsics, mounting, frames."""
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics: ...
+
+    @property
+    def T_body_cam(self) -> np.ndarray: ...  # 4x4: camera pose in the UAV body frame (FLU body, z up)
+
+    def read(self) -> CameraFrame | None: ...
+
+
+@runtime_checkable
+class MissionLink(Protocol):
+    """A UAV handler's line to mission control: tasks in; progress and results out."""
+
+    def poll_task(self) -> Task | None: ...
+
+    def report_progress(self, task_id: str, state: str, time_s: float) -> None: ...
+
+    def report_result(self, result: TaskResult) -> None: ...
