@@ -1,0 +1,586 @@
+"""Reactive task assignment (the paper's Algorithm 1), incremental so that a 20,000-brick wall dispatches fast.
+
+A task is *available* when it is not done, not in progress, not stuck, all its prerequisites in the dependency
+graph G^d are complete, and it conflicts (G^c) with no task in progress. The dispatcher keeps two counters per
+task: ``prereqs`` (prerequisites not yet complete) and ``blockers`` (conflicting tasks in progress). An
+assignment, completion, failure or UAV loss touches only the task's neighbours in both graphs, so an event costs
+about the degree of the task, never a rescan of the wall. Available tasks sit in per-role priority structures
+ordered by the policy; see docs/dispatch.md for the algorithm, its complexity and the failure rules.
+
+The module is pure: no I/O, no clock. Mission control calls :meth:`Dispatcher.assign` whenever something
+changed and feeds back :meth:`~Dispatcher.complete`, :meth:`~Dispatcher.fail` and
+:meth:`~Dispatcher.remove_uav`.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Iterable, Iterator, Mapping, Sequence, Set
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Literal
+
+from masonry.blueprint import ROLES, UavSpec
+from masonry.errors import PlanningError
+from masonry.planner.tasks import BrickTask, Plan, Task
+
+Policy = Literal["fifo", "critical-path", "nearest"]
+POLICIES: tuple[str, ...] = ("fifo", "critical-path", "nearest")
+DEFAULT_POLICY: Policy = "critical-path"
+
+Vec3 = Sequence[float]
+
+_PENDING, _RUNNING, _DONE, _STUCK = 0, 1, 2, 3
+
+
+@dataclass(frozen=True)
+class Assignment:
+    """Task ``task_id`` goes to UAV ``uav``; ``attempt`` counts from 1 (failed attempts before it + 1)."""
+
+    uav: str
+    task_id: str
+    attempt: int = 1
+
+
+class _SetView(Set[str]):
+    """A live, read-only view of a set of task ids held by the dispatcher (O(1) to obtain)."""
+
+    __slots__ = ("_data",)
+
+    def __init__(self, data: Set[str]) -> None:
+        self._data = data
+
+    def __contains__(self, item: object) -> bool:
+        return item in self._data
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __repr__(self) -> str:
+        return f"{{{', '.join(sorted(self._data))}}}"
+
+
+def task_start_m(task: Task) -> tuple[float, float, float]:
+    """Where a UAV has to fly to begin ``task``: the pickup (or the drop-off if unknown) or the segment start."""
+    if isinstance(task, BrickTask):
+        return task.pickup_m if task.pickup_m is not None else task.position_m
+    return task.start_m
+
+
+def task_end_m(task: Task) -> tuple[float, float, float]:
+    """Where a UAV is when ``task`` is complete: the drop-off or the segment end."""
+    if isinstance(task, BrickTask):
+        return task.position_m
+    return task.end_m
+
+
+def _vec3(value: Vec3, what: str) -> tuple[float, float, float]:
+    try:
+        x, y, z = (float(v) for v in value)
+    except (TypeError, ValueError) as exc:
+        raise PlanningError(f"{what}: expected 3 coordinates in metres, got {value!r}") from exc
+    if not all(math.isfinite(c) for c in (x, y, z)):
+        raise PlanningError(f"{what}: coordinates must be finite, got {value!r}")
+    return (x, y, z)
+
+
+class Dispatcher:
+    """Assign available, non-conflicting tasks of a :class:`Plan` to idle UAVs, reacting to every event.
+
+    Args:
+        plan: the frozen plan (tasks, dependencies (u, v) "u after v", unordered conflicts).
+        fleet: the UAVs; each takes tasks of its role ("brick" or "adhesion") one at a time.
+        policy: priority among available tasks: ``"fifo"`` (plan order, the paper's baseline),
+            ``"critical-path"`` (longest remaining dependency chain first, ties by flight distance; default) or
+            ``"nearest"`` (shortest flight for the UAV: to the pickup then the drop-off for a brick, to the
+            segment start for adhesion; ties by plan order).
+        max_attempts: a task that failed this many times is *stuck* and never assigned again.
+        durations_s: expected duration per task id, used by ``critical-path`` to weight the chain (each
+            not-done task must be present); without it every task weighs 1.
+
+    Raises:
+        PlanningError: unknown policy, duplicate task or UAV names, unknown ids or self-loops in the graphs,
+            a dependency cycle, or bad durations.
+    """
+
+    def __init__(
+        self,
+        plan: Plan,
+        fleet: Sequence[UavSpec],
+        policy: str = DEFAULT_POLICY,
+        max_attempts: int = 3,
+        durations_s: Mapping[str, float] | None = None,
+    ) -> None:
+        if policy not in POLICIES:
+            raise PlanningError(f"unknown dispatch policy {policy!r}; expected one of {', '.join(POLICIES)}")
+        if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
+            raise PlanningError(f"max_attempts must be an integer >= 1, got {max_attempts!r}")
+        self.plan = plan
+        self.policy: str = policy
+        self.max_attempts = max_attempts
+
+        tasks = plan.tasks
+        n = len(tasks)
+        self._tasks: tuple[Task, ...] = tasks
+        self._ids: list[str] = [t.id for t in tasks]
+        self._index: dict[str, int] = {}
+        for i, tid in enumerate(self._ids):
+            if tid in self._index:
+                raise PlanningError(f"plan has two tasks with id {tid!r}")
+            self._index[tid] = i
+        self._role: list[str] = []
+        for t in tasks:
+            if t.kind not in ROLES:
+                raise PlanningError(f"task {t.id}: unknown kind {t.kind!r}")
+            self._role.append(t.kind)
+        self._start_m = [task_start_m(t) for t in tasks]
+        self._end_m = [task_end_m(t) for t in tasks]
+        # The part of a brick flight that does not depend on the UAV: pickup -> drop-off.
+        self._leg_m = [
+            math.dist(self._start_m[i], self._end_m[i]) if self._role[i] == "brick" else 0.0 for i in range(n)
+        ]
+
+        # Adjacency, built once: O(size of the plan).
+        self._dependents: list[list[int]] = [[] for _ in range(n)]
+        self._prerequisites: list[list[int]] = [[] for _ in range(n)]
+        seen: set[tuple[int, int]] = set()
+        for u, v in plan.dependencies:
+            iu, iv = self._lookup(u, "dependency"), self._lookup(v, "dependency")
+            if iu == iv:
+                raise PlanningError(f"dependency ({u}, {v}): a task cannot depend on itself")
+            if (iu, iv) in seen:
+                continue
+            seen.add((iu, iv))
+            self._dependents[iv].append(iu)
+            self._prerequisites[iu].append(iv)
+        self._neighbours: list[list[int]] = [[] for _ in range(n)]
+        seen.clear()
+        for a, b in plan.conflicts:
+            ia, ib = self._lookup(a, "conflict"), self._lookup(b, "conflict")
+            if ia == ib:
+                raise PlanningError(f"conflict ({a}, {b}): a task cannot conflict with itself")
+            key = (ia, ib) if ia < ib else (ib, ia)
+            if key in seen:
+                continue
+            seen.add(key)
+            self._neighbours[ia].append(ib)
+            self._neighbours[ib].append(ia)
+        del seen
+
+        self._chain = self._chains(durations_s)
+
+        # Fleet.
+        self._fleet: dict[str, UavSpec] = {}
+        for spec in fleet:
+            if spec.name in self._fleet:
+                raise PlanningError(f"fleet has two UAVs named {spec.name!r}")
+            if spec.role not in ROLES:
+                raise PlanningError(f"UAV {spec.name}: unknown role {spec.role!r}")
+            self._fleet[spec.name] = spec
+        self._position: dict[str, tuple[float, float, float]] = {
+            s.name: _vec3(s.home_m, f"UAV {s.name} home_m") for s in self._fleet.values()
+        }
+        self._live: set[str] = set(self._fleet)
+        self._uav_task: dict[str, int] = {}
+        self._live_count: dict[str, int] = {r: 0 for r in ROLES}
+        for s in self._fleet.values():
+            self._live_count[s.role] += 1
+
+        # Per-task state.
+        self._status = [_DONE if t.done else _PENDING for t in tasks]
+        self._prereqs = [sum(1 for p in self._prerequisites[i] if self._status[p] != _DONE) for i in range(n)]
+        self._blockers = [0] * n
+        self._attempts: dict[str, int] = {}
+        self._done: set[str] = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
+        self._stuck: set[str] = set()
+        self._in_progress: dict[str, str] = {}
+
+        # Available tasks per role (insertion-ordered dict used as a set) and the policy's structures.
+        self._available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
+        self._heap: dict[str, list[tuple[float, int]]] = {r: [] for r in ROLES}
+        self._in_heap = [False] * n
+        # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
+        self._buckets: dict[str, dict[float, dict[int, None]]] = {r: {} for r in ROLES}
+        self._heap_values: dict[str, set[float]] = {r: set() for r in ROLES}
+        self._events = 0
+        for i in range(n):
+            self._maybe_available(i)
+
+    # ------------------------------------------------------------------ construction helpers
+
+    def _lookup(self, task_id: str, graph: str) -> int:
+        try:
+            return self._index[task_id]
+        except KeyError:
+            raise PlanningError(f"{graph} names unknown task {task_id!r}") from None
+
+    def _chains(self, durations_s: Mapping[str, float] | None) -> list[float]:
+        """Longest remaining dependency chain from each task (its own duration included): the bottom level."""
+        n = len(self._tasks)
+        weight = [0.0] * n
+        for i, t in enumerate(self._tasks):
+            if t.done:
+                continue
+            if durations_s is None:
+                weight[i] = 1.0
+                continue
+            if t.id not in durations_s:
+                raise PlanningError(f"durations_s has no entry for task {t.id}")
+            d = durations_s[t.id]
+            try:
+                d = float(d)
+            except (TypeError, ValueError):
+                raise PlanningError(f"durations_s[{t.id!r}] is not a number: {d!r}") from None
+            if not math.isfinite(d) or d < 0.0:
+                raise PlanningError(f"durations_s[{t.id!r}] must be finite and >= 0, got {d!r}")
+            weight[i] = d
+        # Kahn's algorithm from the tasks nothing depends on, walking towards prerequisites.
+        pending = [len(self._dependents[i]) for i in range(n)]
+        order = [i for i in range(n) if pending[i] == 0]
+        chain = [0.0] * n
+        k = 0
+        while k < len(order):
+            i = order[k]
+            k += 1
+            best = 0.0
+            for d in self._dependents[i]:
+                if chain[d] > best:
+                    best = chain[d]
+            chain[i] = weight[i] + best
+            for p in self._prerequisites[i]:
+                pending[p] -= 1
+                if pending[p] == 0:
+                    order.append(p)
+        if len(order) != n:
+            on_cycle = next(self._ids[i] for i in range(n) if pending[i] > 0)
+            raise PlanningError(f"the dependency graph has a cycle through task {on_cycle}")
+        return chain
+
+    # ------------------------------------------------------------------ availability bookkeeping
+
+    def _maybe_available(self, i: int) -> None:
+        if self._status[i] != _PENDING or self._prereqs[i] or self._blockers[i]:
+            return
+        role = self._role[i]
+        avail = self._available[role]
+        if i in avail:
+            return
+        avail[i] = None
+        if self.policy == "fifo":
+            if not self._in_heap[i]:
+                self._in_heap[i] = True
+                heapq.heappush(self._heap[role], (float(i), i))
+        elif self.policy == "critical-path":
+            c = self._chain[i]
+            buckets = self._buckets[role]
+            bucket = buckets.get(c)
+            if bucket is None:
+                buckets[c] = bucket = {}
+                if c not in self._heap_values[role]:
+                    self._heap_values[role].add(c)
+                    heapq.heappush(self._heap[role], (-c, i))
+            bucket[i] = None
+
+    def _unavailable(self, i: int) -> None:
+        role = self._role[i]
+        if self._available[role].pop(i, 0) is None and self.policy == "critical-path":
+            buckets = self._buckets[role]
+            c = self._chain[i]
+            bucket = buckets[c]
+            del bucket[i]
+            if not bucket:
+                del buckets[c]  # its heap entry is dropped lazily
+
+    # ------------------------------------------------------------------ selection per policy
+
+    def _select(self, role: str, uav: str) -> int | None:
+        avail = self._available[role]
+        if not avail:
+            return None
+        if self.policy == "fifo":
+            heap = self._heap[role]
+            while heap:
+                _, i = heap[0]
+                if i in avail:
+                    return i
+                heapq.heappop(heap)
+                self._in_heap[i] = False
+            return None  # pragma: no cover - avail non-empty implies a heap entry
+        candidates = avail
+        if self.policy == "critical-path":
+            heap = self._heap[role]
+            buckets = self._buckets[role]
+            while True:
+                c = -heap[0][0]
+                bucket = buckets.get(c)
+                if bucket:
+                    candidates = bucket
+                    break
+                heapq.heappop(heap)
+                self._heap_values[role].discard(c)
+        # Shortest flight (to the start, plus pickup -> drop-off for a brick); ties by plan order.
+        pos = self._position[uav]
+        start, leg, dist = self._start_m, self._leg_m, math.dist
+        best, best_cost = -1, math.inf
+        for i in candidates:
+            cost = dist(pos, start[i]) + leg[i]
+            if cost < best_cost or (cost == best_cost and i < best):
+                best, best_cost = i, cost
+        return best
+
+    # ------------------------------------------------------------------ events
+
+    def assign(self, uav_positions_m: Mapping[str, Vec3] | None = None) -> list[Assignment]:
+        """Give available, mutually non-conflicting tasks to idle UAVs and mark them in progress.
+
+        Roles are served brick first, then adhesion (the order of the paper's Algorithm 1), idle UAVs in fleet
+        order; a task assigned here blocks its conflicting tasks for the rest of the call.
+
+        Args:
+            uav_positions_m: current positions of (some) UAVs for the distance-based choices; a UAV not listed
+                is taken to be where its last task ended (its home before the first one).
+
+        Returns:
+            The new assignments (possibly empty).
+
+        Raises:
+            PlanningError: a position is given for a UAV not in the fleet, or is not 3 finite numbers.
+        """
+        if uav_positions_m:
+            for name, p in uav_positions_m.items():
+                if name not in self._fleet:
+                    raise PlanningError(f"position given for unknown UAV {name!r}")
+                self._position[name] = _vec3(p, f"position of UAV {name}")
+        out: list[Assignment] = []
+        for role in ROLES:
+            if not self._available[role]:
+                continue
+            for name, spec in self._fleet.items():
+                if spec.role != role or name not in self._live or name in self._uav_task:
+                    continue
+                i = self._select(role, name)
+                if i is None:
+                    break
+                self._start(i, name)
+                tid = self._ids[i]
+                out.append(Assignment(name, tid, self._attempts.get(tid, 0) + 1))
+        return out
+
+    def _start(self, i: int, uav: str) -> None:
+        self._events += 1
+        self._unavailable(i)
+        self._status[i] = _RUNNING
+        self._uav_task[uav] = i
+        self._in_progress[self._ids[i]] = uav
+        blockers = self._blockers
+        for j in self._neighbours[i]:
+            blockers[j] += 1
+            if blockers[j] == 1:
+                self._unavailable(j)
+
+    def _stop(self, i: int) -> str:
+        """Take running task ``i`` off its UAV and unblock its conflicting tasks; returns the UAV's name."""
+        self._events += 1
+        uav = self._in_progress.pop(self._ids[i])
+        del self._uav_task[uav]
+        self._status[i] = _PENDING
+        blockers = self._blockers
+        for j in self._neighbours[i]:
+            blockers[j] -= 1
+            if blockers[j] == 0:
+                self._maybe_available(j)
+        return uav
+
+    def _running(self, task_id: str, action: str) -> int:
+        i = self._index.get(task_id)
+        if i is None:
+            raise PlanningError(f"cannot {action} unknown task {task_id!r}")
+        if self._status[i] != _RUNNING:
+            state = {_PENDING: "not assigned", _DONE: "already done", _STUCK: "stuck"}[self._status[i]]
+            raise PlanningError(f"cannot {action} task {task_id}: it is {state}, not in progress")
+        return i
+
+    def complete(self, task_id: str) -> None:
+        """Mark an in-progress task done: its UAV becomes idle where the task ended and dependents may start.
+
+        Raises:
+            PlanningError: the task is unknown or not in progress.
+        """
+        i = self._running(task_id, "complete")
+        uav = self._stop(i)
+        self._position[uav] = self._end_m[i]
+        self._status[i] = _DONE
+        self._done.add(task_id)
+        self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
+        prereqs = self._prereqs
+        for d in self._dependents[i]:
+            prereqs[d] -= 1
+            if prereqs[d] == 0:
+                self._maybe_available(d)
+
+    def fail(self, task_id: str) -> bool:
+        """Count a failed attempt of an in-progress task and free its UAV.
+
+        Returns:
+            True if the task went back to the pool, False if it reached ``max_attempts`` and is now stuck.
+
+        Raises:
+            PlanningError: the task is unknown or not in progress.
+        """
+        i = self._running(task_id, "fail")
+        self._stop(i)
+        n = self._attempts.get(task_id, 0) + 1
+        self._attempts[task_id] = n
+        if n >= self.max_attempts:
+            self._status[i] = _STUCK
+            self._stuck.add(task_id)
+            return False
+        self._maybe_available(i)
+        return True
+
+    def remove_uav(self, name: str) -> str | None:
+        """Drop a UAV that is lost; its task (if any) returns to the pool without counting an attempt.
+
+        Returns:
+            The released task id, or None if the UAV had no task (or was already removed).
+
+        Raises:
+            PlanningError: the UAV is not in the fleet.
+        """
+        if name not in self._fleet:
+            raise PlanningError(f"cannot remove unknown UAV {name!r}")
+        if name not in self._live:
+            return None
+        self._live.discard(name)
+        self._live_count[self._fleet[name].role] -= 1
+        i = self._uav_task.get(name)
+        if i is None:
+            return None
+        self._stop(i)
+        self._maybe_available(i)
+        return self._ids[i]
+
+    def restore(self, done_ids: Iterable[str], attempts: Mapping[str, int]) -> None:
+        """Resume from a journal: mark ``done_ids`` complete and set the attempt counts (see JournalState).
+
+        ``attempts`` counts the finished (completed or failed) attempts per task; a not-done task whose count
+        reached ``max_attempts`` is stuck. Call before the first :meth:`assign`.
+
+        Raises:
+            PlanningError: a task is in progress, an id is unknown, or a count is negative.
+        """
+        if self._in_progress:
+            raise PlanningError("restore() must be called before any task is assigned")
+        for tid in done_ids:
+            i = self._lookup(tid, "restored done set")
+            if self._status[i] == _DONE:
+                continue
+            self._unavailable(i)
+            self._status[i] = _DONE
+            self._stuck.discard(tid)
+            self._done.add(tid)
+            for d in self._dependents[i]:
+                self._prereqs[d] -= 1
+        for tid, n in attempts.items():
+            i = self._lookup(tid, "restored attempts")
+            if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+                raise PlanningError(f"restored attempts[{tid!r}] must be an integer >= 0, got {n!r}")
+            if n:
+                self._attempts[tid] = n
+            else:
+                self._attempts.pop(tid, None)
+            if self._status[i] == _PENDING and n >= self.max_attempts:
+                self._unavailable(i)
+                self._status[i] = _STUCK
+                self._stuck.add(tid)
+        # Prerequisite counts changed in bulk: drop what is no longer available, then add what now is.
+        for role in ROLES:
+            for i in [i for i in self._available[role] if self._status[i] != _PENDING or self._prereqs[i]]:
+                self._unavailable(i)
+        for i in range(len(self._tasks)):
+            self._maybe_available(i)
+
+    # ------------------------------------------------------------------ queries
+
+    @property
+    def done(self) -> Set[str]:
+        """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
+        return _SetView(self._done)
+
+    @property
+    def in_progress(self) -> Mapping[str, str]:
+        """Task id -> UAV name for every task in progress; a live read-only view."""
+        return MappingProxyType(self._in_progress)
+
+    @property
+    def stuck(self) -> Set[str]:
+        """Ids of tasks that failed ``max_attempts`` times; a live read-only view."""
+        return _SetView(self._stuck)
+
+    @property
+    def attempts(self) -> Mapping[str, int]:
+        """Finished (completed or failed) attempts per task id; tasks never finished are absent."""
+        return MappingProxyType(self._attempts)
+
+    @property
+    def idle_uavs(self) -> tuple[str, ...]:
+        """Names of UAVs in the fleet, not removed, with no task, in fleet order."""
+        return tuple(n for n in self._fleet if n in self._live and n not in self._uav_task)
+
+    @property
+    def uavs(self) -> tuple[str, ...]:
+        """Names of the UAVs not removed, in fleet order."""
+        return tuple(n for n in self._fleet if n in self._live)
+
+    @property
+    def available(self) -> tuple[str, ...]:
+        """Ids of tasks that could be assigned now (both roles), in plan order."""
+        return tuple(self._ids[i] for i in sorted(i for r in ROLES for i in self._available[r]))
+
+    @property
+    def remaining(self) -> tuple[str, ...]:
+        """Ids of tasks not done (pending, in progress or stuck), in plan order."""
+        return tuple(tid for i, tid in enumerate(self._ids) if self._status[i] != _DONE)
+
+    @property
+    def finished(self) -> bool:
+        """True when every task of the plan is done."""
+        return len(self._done) == len(self._tasks)
+
+    @property
+    def blocked(self) -> bool:
+        """True when the mission cannot finish: not finished, nothing in progress and nothing assignable.
+
+        This happens when a task is stuck (it and everything depending on it can never run) or every UAV of a
+        role that still has work was removed.
+        """
+        if self.finished or self._in_progress:
+            return False
+        return not any(self._available[r] and self._live_count[r] for r in ROLES)
+
+    @property
+    def events(self) -> int:
+        """Number of assignment, completion, failure and release events processed so far."""
+        return self._events
+
+    def task(self, task_id: str) -> Task:
+        """The task with id ``task_id`` (O(1), unlike ``Plan.task``)."""
+        return self._tasks[self._lookup(task_id, "query")]
+
+    def task_of(self, uav: str) -> str | None:
+        """The id of the task UAV ``uav`` is flying, or None."""
+        i = self._uav_task.get(uav)
+        return None if i is None else self._ids[i]
+
+    def attempt_of(self, task_id: str) -> int:
+        """The number the next (or current) attempt of ``task_id`` has: finished attempts + 1."""
+        self._lookup(task_id, "query")
+        return self._attempts.get(task_id, 0) + 1
+
+    def chain_s(self, task_id: str) -> float:
+        """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
+        return self._chain[self._lookup(task_id, "query")]
