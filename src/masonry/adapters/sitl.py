@@ -1,0 +1,512 @@
+"""A simulated multirotor behind a real MAVLink 2 endpoint that behaves like ArduCopter (``masonry sitl``).
+
+It pushes its stream to ``udpout:HOST:PORT`` as ArduPilot's SITL/MAVProxy do (``--out 127.0.0.1:14550``), so a
+ground station or :class:`~masonry.adapters.mavlink.MavlinkFlightController` listens with ``udpin:0.0.0.0:PORT``
+(pymavlink's ``udp:`` is the same) and is answered on the address it replies from.
+
+What it models (ArduCopter semantics; names from ArduPilot):
+- HEARTBEAT at 1 Hz (wall time), custom modes STABILIZE/GUIDED/LAND/..., armed flag in ``base_mode``.
+- An EKF that needs ``ekf_converge_s`` (simulated) after boot before LOCAL_POSITION_NED flows and
+  EKF_STATUS_REPORT reports a usable position (or, with ``position_source="vision"``, VISION_POSITION_ESTIMATE
+  messages); arming with pre-arm checks (position estimate, battery, an injectable failure) answered with
+  STATUSTEXT "PreArm: ..." and COMMAND_ACK FAILED.
+- MAV_CMD_NAV_TAKEOFF in GUIDED, velocity + yaw-rate SET_POSITION_TARGET_LOCAL_NED with the guided timeout
+  (GUID_TIMEOUT, 3 s: no setpoint -> stop), LAND mode with auto-disarm on touchdown, GCS failsafe
+  (FS_GCS_TIMEOUT, 5 s without a GCS heartbeat while flying -> LAND), battery drain in SYS_STATUS,
+  MAV_CMD_SET_MESSAGE_INTERVAL, MAVLink 2 signing.
+- ``time_scale``: simulated seconds per wall second, so tests fly a whole takeoff in a fraction of a second.
+  The link timeouts (guided timeout, GCS failsafe) run on wall time: a ground station streams at wall rates, and
+  scaling them would trip the failsafes of a correctly behaving ground station.
+
+The vehicle dynamics are :class:`masonry.sim.vehicle.SimVehicle` when available (the simulator's multirotor), else
+the compact first-order model :class:`LagVehicle` below with the same interface.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from masonry.adapters.mavlink import (
+    ARDUPILOT_MODES,
+    MAV_AUTOPILOT_ARDUPILOTMEGA,
+    MAV_CMD_COMPONENT_ARM_DISARM,
+    MAV_CMD_DO_SET_MODE,
+    MAV_CMD_NAV_LAND,
+    MAV_CMD_NAV_TAKEOFF,
+    MAV_CMD_SET_MESSAGE_INTERVAL,
+    MAV_FRAME_LOCAL_NED,
+    MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+    MAV_MODE_FLAG_SAFETY_ARMED,
+    MAV_TYPE_GCS,
+    MSG_ATTITUDE,
+    MSG_EKF_STATUS_REPORT,
+    MSG_EXTENDED_SYS_STATE,
+    MSG_HEARTBEAT,
+    MSG_LOCAL_POSITION_NED,
+    MSG_SYS_STATUS,
+    FrameTransform,
+    mavutil_module,
+)
+from masonry.ports import Vec3
+
+MAV_TYPE_QUADROTOR = 2
+MAV_RESULT_ACCEPTED, MAV_RESULT_DENIED, MAV_RESULT_UNSUPPORTED, MAV_RESULT_FAILED = 0, 2, 3, 4
+MAV_SEVERITY_CRITICAL, MAV_SEVERITY_WARNING, MAV_SEVERITY_INFO = 2, 4, 6
+MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
+MAV_LANDED_STATE_ON_GROUND, MAV_LANDED_STATE_IN_AIR = 1, 2
+MAV_LANDED_STATE_TAKEOFF, MAV_LANDED_STATE_LANDING = 3, 4
+DISARM_MAGIC = 21196  # ArduPilot: param2 of a forced disarm
+VELOCITY_ONLY_IGNORED = 1 | 2 | 4  # x, y, z ignored: the only targets this SITL flies (velocity control)
+
+#: Default stream rates (Hz) before a ground station asks for others (ArduPilot's SRx_ defaults are a few Hz).
+DEFAULT_RATES_HZ = {
+    MSG_LOCAL_POSITION_NED: 4.0,
+    MSG_ATTITUDE: 4.0,
+    MSG_SYS_STATUS: 1.0,
+    MSG_EKF_STATUS_REPORT: 1.0,
+    MSG_EXTENDED_SYS_STATE: 1.0,
+}
+
+
+@dataclass
+class LagVehicle:
+    """A multirotor's velocity loop as a first-order lag with limits, takeoff, landing and ground contact (ENU)."""
+
+    position_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    yaw_rad: float = 0.0
+    tau_s: float = 0.25
+    max_speed_mps: float = 2.0
+    max_accel_mps2: float = 3.0
+    climb_rate_mps: float = 1.0
+    land_rate_mps: float = 0.5
+    battery_drain_per_s: float = 1.0 / 900.0  # 15 minutes of hover
+
+    def __post_init__(self) -> None:
+        self.velocity_mps = (0.0, 0.0, 0.0)
+        self.yaw_rate_radps = 0.0
+        self.armed = False
+        self.battery_fraction = 1.0
+        self._command: tuple[Vec3, float] = ((0.0, 0.0, 0.0), 0.0)
+        self._phase = "ground"  # ground | takeoff | flying | landing
+        self._takeoff_alt_m = 0.0
+        self._ground_z_m = self.position_m[2]
+
+    @property
+    def on_ground(self) -> bool:
+        return self._phase == "ground"
+
+    @property
+    def phase(self) -> str:
+        return self._phase
+
+    def arm(self) -> None:
+        self.armed = True
+
+    def disarm(self) -> None:
+        self.armed = False
+        self._phase = "ground"
+
+    def takeoff(self, altitude_m: float) -> None:
+        self._takeoff_alt_m = altitude_m
+        self._phase = "takeoff"
+
+    def land(self) -> None:
+        if self._phase != "ground":
+            self._phase = "landing"
+
+    def command_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float) -> None:
+        self._command = (velocity_mps, yaw_rate_radps)
+        if self._phase == "takeoff":
+            self._phase = "flying"  # as ArduCopter: a velocity target ends the guided takeoff
+
+    def step(self, dt_s: float) -> None:
+        if self.armed:
+            self.battery_fraction = max(0.0, self.battery_fraction - self.battery_drain_per_s * dt_s)
+        if not self.armed or self._phase == "ground":
+            self.velocity_mps = (0.0, 0.0, 0.0)
+            self.yaw_rate_radps = 0.0
+            return
+        target, yaw_rate = self._command
+        if self._phase == "takeoff":
+            error = self._takeoff_alt_m - self.position_m[2]
+            target, yaw_rate = (0.0, 0.0, max(-self.climb_rate_mps, min(self.climb_rate_mps, 2.0 * error))), 0.0
+            if abs(error) < 0.02:
+                self._phase = "flying"
+                self._command = ((0.0, 0.0, 0.0), 0.0)
+        elif self._phase == "landing":
+            target, yaw_rate = (0.0, 0.0, -self.land_rate_mps), 0.0
+        speed = math.sqrt(sum(c * c for c in target))
+        if speed > self.max_speed_mps:
+            target = tuple(c * self.max_speed_mps / speed for c in target)  # type: ignore[assignment]
+        alpha = min(1.0, dt_s / self.tau_s)
+        dv = [(t - v) * alpha for t, v in zip(target, self.velocity_mps)]
+        dv_norm = math.sqrt(sum(c * c for c in dv))
+        limit = self.max_accel_mps2 * dt_s
+        if dv_norm > limit:
+            dv = [c * limit / dv_norm for c in dv]
+        self.velocity_mps = tuple(v + d for v, d in zip(self.velocity_mps, dv))  # type: ignore[assignment]
+        self.yaw_rate_radps = yaw_rate
+        self.yaw_rad = (self.yaw_rad + yaw_rate * dt_s + math.pi) % (2 * math.pi) - math.pi
+        x, y, z = (p + v * dt_s for p, v in zip(self.position_m, self.velocity_mps))
+        if z <= self._ground_z_m and self._phase in ("flying", "landing") and self.velocity_mps[2] <= 0.0:
+            z = self._ground_z_m
+            self.velocity_mps = (0.0, 0.0, 0.0)
+            if self._phase == "landing":
+                self._phase = "ground"
+        self.position_m = (x, y, z)
+
+
+@dataclass(frozen=True)
+class SitlConfig:
+    """Knobs of the simulated autopilot (ArduCopter parameter names in comments)."""
+
+    guided_timeout_s: float = 3.0  # GUID_TIMEOUT
+    gcs_failsafe_s: float = 5.0  # FS_GCS_TIMEOUT (FS_GCS_ENABLE = LAND)
+    ekf_converge_s: float = 0.5
+    position_source: str = "internal"  # "internal" (always available) or "vision" (needs VISION_POSITION_ESTIMATE)
+    arm_min_battery: float = 0.2  # BATT_ARM_MAH-like: refuse to arm below this fraction
+    prearm_failure: str | None = None  # e.g. "Compass not calibrated": every arm attempt fails with it
+    heartbeat_hz: float = 1.0
+    system_id: int = 1
+    component_id: int = 1
+
+
+class MavlinkSitl:
+    """ArduCopter-like SITL: a vehicle model served over MAVLink 2 on UDP (construct, then ``start``).
+
+    Args:
+        port: UDP port the stream is sent to (where the ground station listens).
+        host: address of the ground station.
+        vehicle: the dynamics (``LagVehicle`` or ``masonry.sim.vehicle.SimVehicle``-like); default a LagVehicle at
+            ``home_m``.
+        home_m: start position (world ENU = the autopilot's local frame, as with motion capture fed to it).
+        time_scale: simulated seconds per wall second.
+        signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
+        config: autopilot knobs.
+    """
+
+    def __init__(
+        self,
+        port: int = 14550,
+        host: str = "127.0.0.1",
+        *,
+        vehicle: Any = None,
+        home_m: Vec3 = (0.0, 0.0, 0.0),
+        time_scale: float = 1.0,
+        signing_key: bytes | None = None,
+        config: SitlConfig | None = None,
+        physics_dt_s: float = 0.01,
+    ) -> None:
+        self.port = port
+        self.host = host
+        self.vehicle = vehicle if vehicle is not None else LagVehicle(position_m=home_m)
+        self.time_scale = time_scale
+        self.signing_key = signing_key
+        self.config = config or SitlConfig()
+        self.physics_dt_s = physics_dt_s
+        self.frame = FrameTransform()
+        self.sim_time_s = 0.0
+        self.mode = "STABILIZE"
+        self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
+        self.vision_received = 0
+        self.setpoints_received = 0
+        self.status_log: list[str] = []
+        self._rates_hz = dict(DEFAULT_RATES_HZ)
+        self._next_due: dict[int, float] = {}
+        self._conn: Any = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._lock = threading.Lock()
+        self._last_setpoint_wall_s = -math.inf
+        self._last_gcs_wall_s: float | None = None
+        self._last_vision_sim_s = -math.inf
+        self._velocity_control = False
+
+    # ------------------------------------------------------------------------------------------- lifecycle
+
+    def __enter__(self) -> MavlinkSitl:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def start(self) -> None:
+        """Open the endpoint and run the simulation in a background thread."""
+        mavutil = mavutil_module()
+        self._conn = mavutil.mavlink_connection(
+            f"udpout:{self.host}:{self.port}",
+            source_system=self.config.system_id,
+            source_component=self.config.component_id,
+        )
+        if self.signing_key is not None:
+            self._conn.setup_signing(self.signing_key, sign_outgoing=True, allow_unsigned_callback=None)
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name="masonry-sitl", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+    def serve_forever(self) -> None:
+        """Run in the calling thread until KeyboardInterrupt (the ``masonry sitl`` command)."""
+        self.start()
+        try:
+            while self._thread is not None and self._thread.is_alive():
+                self._thread.join(timeout=0.5)
+        finally:
+            self.stop()
+
+    # ----------------------------------------------------------------------------------------------- loop
+
+    def _run(self) -> None:
+        last = time.monotonic()
+        next_beat = last
+        while not self._stop.is_set():
+            now = time.monotonic()
+            with self._lock:
+                self._drain_input()
+                self._advance((now - last) * self.time_scale)
+                last = now
+                if not self.link_down:
+                    if now >= next_beat:
+                        self._send_heartbeat()
+                        next_beat = now + 1.0 / self.config.heartbeat_hz
+                    self._send_streams(now)
+            self._stop.wait(0.004)
+
+    def _advance(self, dt_s: float) -> None:
+        while dt_s > 1e-9:
+            h = min(self.physics_dt_s, dt_s)
+            dt_s -= h
+            self.sim_time_s += h
+            self._autopilot_logic()
+            self.vehicle.step(h)
+            if self.mode == "LAND" and self.vehicle.armed and self.vehicle.on_ground:
+                self.vehicle.disarm()  # ArduCopter disarms after touchdown in LAND
+                self._text(MAV_SEVERITY_INFO, "Land complete, disarming")
+
+    def _autopilot_logic(self) -> None:
+        v = self.vehicle
+        flying = v.armed and not v.on_ground
+        if (
+            self.mode == "GUIDED"
+            and self._velocity_control
+            and time.monotonic() - self._last_setpoint_wall_s > self.config.guided_timeout_s
+        ):
+            v.command_velocity((0.0, 0.0, 0.0), 0.0)  # GUID_TIMEOUT: stop and hold
+            self._velocity_control = False
+        if (
+            flying
+            and self._last_gcs_wall_s is not None
+            and time.monotonic() - self._last_gcs_wall_s > self.config.gcs_failsafe_s
+            and self.mode != "LAND"
+        ):
+            self._text(MAV_SEVERITY_CRITICAL, "GCS Failsafe")
+            self._set_mode("LAND")
+
+    def _ekf_ok(self) -> bool:
+        if self.sim_time_s < self.config.ekf_converge_s:
+            return False
+        if self.config.position_source == "vision":
+            return self.sim_time_s - self._last_vision_sim_s < 0.5
+        return True
+
+    # ------------------------------------------------------------------------------------------- receiving
+
+    def _drain_input(self) -> None:
+        while True:
+            try:
+                msg = self._conn.recv_msg()
+            except (OSError, ValueError):
+                return
+            if msg is None:
+                return
+            if self.link_down:
+                continue
+            self._handle(msg)
+
+    def _handle(self, msg: Any) -> None:
+        kind = msg.get_type()
+        if kind == "HEARTBEAT":
+            if msg.type == MAV_TYPE_GCS:
+                self._last_gcs_wall_s = time.monotonic()
+        elif kind == "COMMAND_LONG":
+            if msg.target_system in (0, self.config.system_id):
+                self._command(msg)
+        elif kind == "SET_MODE":
+            if msg.target_system == self.config.system_id:
+                self._set_mode_by_number(int(msg.custom_mode))
+        elif kind == "SET_POSITION_TARGET_LOCAL_NED":
+            if msg.target_system == self.config.system_id:
+                self._position_target(msg)
+        elif kind == "VISION_POSITION_ESTIMATE":
+            self.vision_received += 1
+            self._last_vision_sim_s = self.sim_time_s
+
+    def _ack(self, command: int, result: int) -> None:
+        self._conn.mav.command_ack_send(command, result)
+
+    def _text(self, severity: int, text: str) -> None:
+        self.status_log.append(text)
+        if not self.link_down and self._conn is not None:
+            self._conn.mav.statustext_send(severity, text.encode("ascii", errors="replace")[:50])
+
+    def _command(self, msg: Any) -> None:
+        cmd = int(msg.command)
+        v = self.vehicle
+        if cmd == MAV_CMD_COMPONENT_ARM_DISARM:
+            if msg.param1 >= 0.5:
+                problem = self._prearm_problem()
+                if problem is not None:
+                    self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")
+                    self._ack(cmd, MAV_RESULT_FAILED)
+                    return
+                v.arm()
+                self._ack(cmd, MAV_RESULT_ACCEPTED)
+                self._text(MAV_SEVERITY_INFO, "Arming motors")
+            else:
+                if not v.on_ground and int(msg.param2) != DISARM_MAGIC:
+                    self._text(MAV_SEVERITY_CRITICAL, "Disarm: vehicle is flying")
+                    self._ack(cmd, MAV_RESULT_FAILED)
+                    return
+                v.disarm()
+                self._ack(cmd, MAV_RESULT_ACCEPTED)
+        elif cmd == MAV_CMD_NAV_TAKEOFF:
+            if self.mode != "GUIDED" or not v.armed or not v.on_ground:
+                why = "not in GUIDED" if self.mode != "GUIDED" else "not armed" if not v.armed else "already flying"
+                self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
+                self._ack(cmd, MAV_RESULT_FAILED)
+                return
+            ground_z = v.position_m[2]
+            v.takeoff(ground_z + max(0.0, float(msg.param7)))
+            self._velocity_control = False
+            self._ack(cmd, MAV_RESULT_ACCEPTED)
+        elif cmd == MAV_CMD_NAV_LAND:
+            self._set_mode("LAND")
+            self._ack(cmd, MAV_RESULT_ACCEPTED)
+        elif cmd == MAV_CMD_DO_SET_MODE:
+            ok = self._set_mode_by_number(int(msg.param2))
+            self._ack(cmd, MAV_RESULT_ACCEPTED if ok else MAV_RESULT_FAILED)
+        elif cmd == MAV_CMD_SET_MESSAGE_INTERVAL:
+            msg_id, interval_us = int(msg.param1), float(msg.param2)
+            if msg_id not in DEFAULT_RATES_HZ and msg_id != MSG_HEARTBEAT:
+                self._ack(cmd, MAV_RESULT_DENIED)
+                return
+            if msg_id == MSG_HEARTBEAT:
+                self._ack(cmd, MAV_RESULT_ACCEPTED)  # heartbeat stays at 1 Hz, as on ArduPilot
+                return
+            if interval_us < 0:
+                self._rates_hz[msg_id] = 0.0
+            elif interval_us == 0:
+                self._rates_hz[msg_id] = DEFAULT_RATES_HZ[msg_id]
+            else:
+                self._rates_hz[msg_id] = min(100.0, 1e6 / interval_us)
+            self._ack(cmd, MAV_RESULT_ACCEPTED)
+        else:
+            self._ack(cmd, MAV_RESULT_UNSUPPORTED)
+
+    def _prearm_problem(self) -> str | None:
+        if self.config.prearm_failure:
+            return self.config.prearm_failure
+        if not self._ekf_ok():
+            return "Need Position Estimate"
+        if self.vehicle.battery_fraction < self.config.arm_min_battery:
+            return f"Battery below minimum arming capacity ({self.vehicle.battery_fraction * 100:.0f}%)"
+        return None
+
+    def _set_mode_by_number(self, custom_mode: int) -> bool:
+        for name, number in ARDUPILOT_MODES.items():
+            if number == custom_mode:
+                if name == "GUIDED" and not self._ekf_ok():
+                    self._text(MAV_SEVERITY_WARNING, "Mode change to GUIDED failed: requires position")
+                    return False
+                self._set_mode(name)
+                return True
+        self._text(MAV_SEVERITY_WARNING, f"Mode change to {custom_mode} failed: unknown mode")
+        return False
+
+    def _set_mode(self, name: str) -> None:
+        self.mode = name
+        self._velocity_control = False
+        if name == "LAND":
+            self.vehicle.land()
+        elif self.vehicle.armed and not self.vehicle.on_ground:
+            self.vehicle.command_velocity((0.0, 0.0, 0.0), 0.0)  # a mode change holds position first
+
+    def _position_target(self, msg: Any) -> None:
+        if self.mode != "GUIDED" or not self.vehicle.armed or self.vehicle.on_ground:
+            return
+        if msg.coordinate_frame != MAV_FRAME_LOCAL_NED or msg.type_mask & VELOCITY_ONLY_IGNORED != VELOCITY_ONLY_IGNORED:
+            return  # position targets and other frames are not modelled
+        self.setpoints_received += 1
+        v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
+        yaw_rate = 0.0 if msg.type_mask & 2048 else FrameTransform.yaw_rate_to_world(msg.yaw_rate)
+        self.vehicle.command_velocity(v_world, yaw_rate)
+        self._velocity_control = True
+        self._last_setpoint_wall_s = time.monotonic()
+
+    # --------------------------------------------------------------------------------------------- sending
+
+    def _send_heartbeat(self) -> None:
+        v = self.vehicle
+        base = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (MAV_MODE_FLAG_SAFETY_ARMED if v.armed else 0)
+        self._conn.mav.heartbeat_send(
+            MAV_TYPE_QUADROTOR,
+            MAV_AUTOPILOT_ARDUPILOTMEGA,
+            base,
+            ARDUPILOT_MODES[self.mode],
+            MAV_STATE_ACTIVE if v.armed else MAV_STATE_STANDBY,
+        )
+
+    def _send_streams(self, now: float) -> None:
+        for msg_id, rate_hz in self._rates_hz.items():
+            if rate_hz <= 0.0:
+                continue
+            due = self._next_due.get(msg_id, now)
+            if now < due:
+                continue
+            self._next_due[msg_id] = max(due + 1.0 / rate_hz, now)
+            self._send_stream(msg_id)
+
+    def _send_stream(self, msg_id: int) -> None:
+        v = self.vehicle
+        mav = self._conn.mav
+        boot_ms = int(self.sim_time_s * 1000) & 0xFFFFFFFF
+        ekf_ok = self._ekf_ok()
+        if msg_id == MSG_LOCAL_POSITION_NED:
+            if ekf_ok:
+                x, y, z = self.frame.position_to_ned(v.position_m)
+                vx, vy, vz = self.frame.velocity_to_ned(v.velocity_mps)
+                mav.local_position_ned_send(boot_ms, x, y, z, vx, vy, vz)
+        elif msg_id == MSG_ATTITUDE:
+            roll, pitch, yaw = self.frame.attitude_to_ned(0.0, 0.0, v.yaw_rad)
+            mav.attitude_send(boot_ms, roll, pitch, yaw, 0.0, 0.0, -v.yaw_rate_radps)
+        elif msg_id == MSG_SYS_STATUS:
+            fraction = v.battery_fraction
+            voltage_mv = int((3.5 + 0.7 * fraction) * 4 * 1000)  # a 4S pack between 14.0 and 16.8 V
+            mav.sys_status_send(0, 0, 0, 500, voltage_mv, 1500 if v.armed else 50, int(round(fraction * 100)),
+                                0, 0, 0, 0, 0, 0)  # fmt: skip
+        elif msg_id == MSG_EKF_STATUS_REPORT:
+            flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 1024
+            mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
+        elif msg_id == MSG_EXTENDED_SYS_STATE:
+            if not v.armed or v.on_ground:
+                landed = MAV_LANDED_STATE_ON_GROUND
+            elif getattr(v, "phase", "") == "takeoff":
+                landed = MAV_LANDED_STATE_TAKEOFF
+            elif self.mode == "LAND":
+                landed = MAV_LANDED_STATE_LANDING
+            else:
+                landed = MAV_LANDED_STATE_IN_AIR
+            mav.extended_sys_state_send(0, landed)
