@@ -1,0 +1,219 @@
+"""Minimum-jerk trajectories between full kinematic states (paper Sec. IV, trajectory equation, after Kumar & Padhi).
+
+The trajectory minimises ``1/2 * integral |jerk|^2 dt`` with position, velocity and acceleration fixed at both ends;
+the minimiser is a quintic in time. We write it in ``t`` (time since the start)::
+
+    r(t) = r0 + v0 t + a0 t^2 / 2 + k3 t^3 + k4 t^4 + k5 t^5
+
+with ``T = duration_s``, ``dr = rf - (r0 + v0 T + a0 T^2/2)``, ``dv = vf - (v0 + a0 T)``, ``da = af - a0``::
+
+    k3 = (10 dr - 4 dv T +   da T^2 / 2) / T^3
+    k4 = (-15 dr + 7 dv T -  da T^2)     / T^4
+    k5 = (6 dr - 3 dv T +    da T^2 / 2) / T^5
+
+This is the paper's quintic in ``t_go`` rewritten in ``t``; the paper's ``c2`` has its ``Z_a0`` term with the wrong
+sign (``+Z_a0/t_go^2`` instead of ``-Z_a0/t_go^2``), which moves ``r(0)`` by ``2 (a0 - af) T^2``; see
+docs/estimation.md for the derivation and ``paper_coefficients`` for both forms.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from masonry.errors import PlanningError
+
+ArrayLike3 = Sequence[float] | np.ndarray
+
+MIN_T_GO_S = 0.1
+"""Floor on the remaining time used by :meth:`MinJerk.replan`: the coefficients grow like ``1/t_go^5``."""
+
+
+def _vec3(name: str, value: ArrayLike3) -> np.ndarray:
+    arr = np.array(value, dtype=float).reshape(-1)
+    if arr.shape != (3,):
+        raise PlanningError(f"min-jerk {name} must have 3 components, got shape {np.shape(value)}")
+    if not np.all(np.isfinite(arr)):
+        raise PlanningError(f"min-jerk {name} must be finite, got {arr.tolist()}")
+    arr.flags.writeable = False
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class MinJerk:
+    """Minimum-jerk quintic from ``(r0, v0, a0)`` to ``(rf, vf, af)`` in ``duration_s`` (3-D, SI units).
+
+    Evaluation methods take ``t`` in seconds since the start: a scalar gives shape ``(3,)``, an array of shape
+    ``S`` gives ``S + (3,)``. Outside ``[0, duration_s]`` the trajectory continues the boundary state at constant
+    acceleration (zero jerk), so position, velocity and acceleration stay consistent and bounded in time.
+
+    Raises:
+        PlanningError: a state is not a finite 3-vector or ``duration_s`` is not a positive finite number.
+    """
+
+    r0: np.ndarray
+    v0: np.ndarray
+    a0: np.ndarray
+    rf: np.ndarray
+    vf: np.ndarray
+    af: np.ndarray
+    duration_s: float
+    _coeffs: np.ndarray = field(init=False, repr=False)
+
+    def __init__(
+        self,
+        r0: ArrayLike3,
+        v0: ArrayLike3,
+        a0: ArrayLike3,
+        rf: ArrayLike3,
+        vf: ArrayLike3,
+        af: ArrayLike3,
+        duration_s: float,
+    ) -> None:
+        values = {
+            name: _vec3(name, v)
+            for name, v in zip(("r0", "v0", "a0", "rf", "vf", "af"), (r0, v0, a0, rf, vf, af))
+        }
+        duration = float(duration_s)
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise PlanningError(f"min-jerk duration_s must be positive and finite, got {duration_s!r}")
+        for name, arr in values.items():
+            object.__setattr__(self, name, arr)
+        object.__setattr__(self, "duration_s", duration)
+        T = duration
+        dr = values["rf"] - (values["r0"] + values["v0"] * T + values["a0"] * (T * T / 2.0))
+        dv = values["vf"] - (values["v0"] + values["a0"] * T)
+        da = values["af"] - values["a0"]
+        k3 = (10.0 * dr - 4.0 * dv * T + da * (T * T / 2.0)) / T**3
+        k4 = (-15.0 * dr + 7.0 * dv * T - da * (T * T)) / T**4
+        k5 = (6.0 * dr - 3.0 * dv * T + da * (T * T / 2.0)) / T**5
+        # Rows: coefficients of t^0 .. t^5 (position polynomial), one column per axis.
+        coeffs = np.stack([values["r0"], values["v0"], values["a0"] / 2.0, k3, k4, k5])
+        coeffs.flags.writeable = False
+        object.__setattr__(self, "_coeffs", coeffs)
+
+    @property
+    def coefficients(self) -> np.ndarray:
+        """Polynomial coefficients of the position, shape (6, 3): row i multiplies ``t**i``."""
+        return self._coeffs
+
+    def _eval(self, t: float | Sequence[float] | np.ndarray, order: int) -> np.ndarray:
+        t_arr = np.asarray(t, dtype=float)
+        T = self.duration_s
+        tc = np.clip(t_arr, 0.0, T)
+        # Derivative `order` of sum c_i t^i: sum c_i * i!/(i-order)! * t^(i-order), evaluated by Horner.
+        c = self._coeffs
+        out = np.zeros(tc.shape + (3,))
+        tt = tc[..., None]
+        for i in range(5, order - 1, -1):
+            factor = math.factorial(i) / math.factorial(i - order)
+            out = out * tt + factor * c[i]
+        outside = (t_arr < 0.0) | (t_arr > T)
+        if np.any(outside):
+            out = np.where(outside[..., None], self._extrapolate(t_arr, order), out)
+        return out
+
+    def _extrapolate(self, t_arr: np.ndarray, order: int) -> np.ndarray:
+        before = (t_arr < 0.0)[..., None]
+        r: np.ndarray = np.where(before, self.r0, self.rf)
+        v: np.ndarray = np.where(before, self.v0, self.vf)
+        a: np.ndarray = np.where(before, self.a0, self.af)
+        dt: np.ndarray = np.where(t_arr < 0.0, t_arr, t_arr - self.duration_s)[..., None]
+        if order == 0:
+            return np.asarray(r + v * dt + a * (dt * dt / 2.0))
+        if order == 1:
+            return np.asarray(v + a * dt)
+        if order == 2:
+            return a + 0.0 * dt
+        return np.zeros(np.broadcast_shapes(dt.shape, (3,)))
+
+    def position(self, t: float | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Position in metres at ``t`` seconds since the start."""
+        return self._eval(t, 0)
+
+    def velocity(self, t: float | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Velocity in m/s at ``t`` seconds since the start."""
+        return self._eval(t, 1)
+
+    def acceleration(self, t: float | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Acceleration in m/s^2 at ``t`` seconds since the start."""
+        return self._eval(t, 2)
+
+    def jerk(self, t: float | Sequence[float] | np.ndarray) -> np.ndarray:
+        """Jerk in m/s^3 at ``t`` seconds since the start."""
+        return self._eval(t, 3)
+
+    def state(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position, velocity and acceleration at ``t`` (each shape (3,))."""
+        return self.position(t), self.velocity(t), self.acceleration(t)
+
+    def cost(self) -> float:
+        """The paper's cost ``1/2 * integral_0^T |jerk|^2 dt`` (exact: 3-point Gauss-Legendre on a quartic)."""
+        nodes, weights = np.polynomial.legendre.leggauss(3)
+        half = self.duration_s / 2.0
+        j = self.jerk(half * (nodes + 1.0))
+        return float(0.5 * half * np.sum(weights * np.sum(j * j, axis=1)))
+
+    def replan(
+        self,
+        r: ArrayLike3,
+        v: ArrayLike3,
+        a: ArrayLike3,
+        t_go_s: float,
+        *,
+        min_t_go_s: float = MIN_T_GO_S,
+    ) -> MinJerk:
+        """A new trajectory from the current state ``(r, v, a)`` to the same target over the remaining time.
+
+        This is the paper's guidance law: the quintic is re-solved with ``t_go = t_f - t`` at each control step,
+        so disturbances are absorbed instead of accumulating. ``t_go_s`` is floored at ``min_t_go_s`` because
+        the coefficients scale like ``1/t_go^5``; below the floor the new trajectory simply arrives a bit later.
+
+        Args:
+            r, v, a: current position (m), velocity (m/s), acceleration (m/s^2).
+            t_go_s: remaining time to the target (s); may be zero or negative once the deadline has passed.
+            min_t_go_s: floor on the horizon (s), positive.
+        """
+        if not (math.isfinite(min_t_go_s) and min_t_go_s > 0.0):
+            raise PlanningError(f"min-jerk min_t_go_s must be positive and finite, got {min_t_go_s!r}")
+        t_go = float(t_go_s)
+        if math.isnan(t_go):
+            raise PlanningError("min-jerk t_go_s is NaN")
+        return MinJerk(r, v, a, self.rf, self.vf, self.af, max(t_go, min_t_go_s))
+
+    def __repr__(self) -> str:
+        return (
+            f"MinJerk(r0={self.r0.tolist()}, v0={self.v0.tolist()}, a0={self.a0.tolist()}, rf={self.rf.tolist()}, "
+            f"vf={self.vf.tolist()}, af={self.af.tolist()}, duration_s={self.duration_s})"
+        )
+
+
+def paper_coefficients(
+    r0: ArrayLike3,
+    v0: ArrayLike3,
+    a0: ArrayLike3,
+    rf: ArrayLike3,
+    vf: ArrayLike3,
+    af: ArrayLike3,
+    t_go_s: float,
+    *,
+    as_printed: bool = False,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coefficients ``(c1, c2, c3)`` of the paper's quintic in ``t_go``.
+
+    ``r(t_go) = c3 t_go^5 + c2 t_go^4 + c1 t_go^3 + af t_go^2/2 - vf t_go + rf``. With ``as_printed=True``, ``c2``
+    uses the paper's printed ``+Z_a0 / t_go^2`` term, which violates ``r(t_go = T) = r0`` whenever ``a0 != af``;
+    the default gives the corrected ``-Z_a0 / t_go^2``. Kept for the record and for the test that shows the error.
+    """
+    r0_, v0_, a0_, rf_, vf_, af_ = (np.asarray(x, dtype=float) for x in (r0, v0, a0, rf, vf, af))
+    T = float(t_go_s)
+    z_r0 = r0_ - rf_ + vf_ * T - 0.5 * af_ * T * T
+    z_v0 = v0_ - vf_ + af_ * T
+    z_a0 = a0_ - af_
+    c1 = 10.0 / T**3 * z_r0 + 4.0 / T**2 * z_v0 + 1.0 / (2.0 * T) * z_a0
+    c2 = -15.0 / T**4 * z_r0 - 7.0 / T**3 * z_v0 + (1.0 if as_printed else -1.0) / T**2 * z_a0
+    c3 = 6.0 / T**5 * z_r0 + 3.0 / T**4 * z_v0 + 1.0 / (2.0 * T**3) * z_a0
+    return c1, c2, c3
