@@ -1,0 +1,221 @@
+"""Bricks as objects in the simulated world: where each really lies, who carries it, where it landed.
+
+Geometry is 2.5-D: a brick is a box with a yaw; it rests on the ground (z = 0) or on the top of bricks below it.
+Lookups go through a uniform spatial hash on the ground plane, so finding the bricks near an effector, a camera
+or a falling brick costs the same for a 10-brick wall and a 10,000-brick one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Literal
+
+from masonry.blueprint import Brick
+
+__all__ = [
+    "GROUND_Z_M",
+    "BrickField",
+    "SimBrick",
+    "SpatialHash",
+    "point_in_rect",
+    "rect_corners",
+    "rects_overlap",
+]
+
+GROUND_Z_M = 0.0
+BrickState = Literal["pickup", "carried", "placed"]
+
+
+class SpatialHash:
+    """Keys indexed by the ground-plane cells their bounding boxes touch."""
+
+    def __init__(self, cell_m: float = 0.5) -> None:
+        if not cell_m > 0:
+            raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
+        self.cell_m = float(cell_m)
+        self._cells: dict[tuple[int, int], set[int]] = {}
+        self._where: dict[int, list[tuple[int, int]]] = {}
+
+    def _range(self, lo: float, hi: float) -> range:
+        return range(math.floor(lo / self.cell_m), math.floor(hi / self.cell_m) + 1)
+
+    def insert(self, key: int, xmin: float, ymin: float, xmax: float, ymax: float) -> None:
+        self.remove(key)
+        cells = [(i, j) for i in self._range(xmin, xmax) for j in self._range(ymin, ymax)]
+        for c in cells:
+            self._cells.setdefault(c, set()).add(key)
+        self._where[key] = cells
+
+    def remove(self, key: int) -> None:
+        for c in self._where.pop(key, ()):
+            bucket = self._cells[c]
+            bucket.discard(key)
+            if not bucket:
+                del self._cells[c]
+
+    def query(self, xmin: float, ymin: float, xmax: float, ymax: float) -> set[int]:
+        """Keys whose cells meet the box (a superset of the keys whose boxes meet it)."""
+        found: set[int] = set()
+        cells = self._cells
+        for i in self._range(xmin, xmax):
+            for j in self._range(ymin, ymax):
+                bucket = cells.get((i, j))
+                if bucket:
+                    found |= bucket
+        return found
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._where
+
+    def __len__(self) -> int:
+        return len(self._where)
+
+
+def rect_corners(x: float, y: float, yaw: float, hx: float, hy: float) -> list[tuple[float, float]]:
+    """Corners of a rectangle centred at (x, y) with half sizes (hx, hy) along its yawed axes, counter-clockwise."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [
+        (x + c * dx - s * dy, y + s * dx + c * dy) for dx, dy in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
+    ]
+
+
+def point_in_rect(px: float, py: float, x: float, y: float, yaw: float, hx: float, hy: float) -> bool:
+    """Whether (px, py) lies in the yawed rectangle (closed)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = px - x, py - y
+    return abs(c * dx + s * dy) <= hx and abs(-s * dx + c * dy) <= hy
+
+
+def rects_overlap(
+    a: tuple[float, float, float, float, float], b: tuple[float, float, float, float, float]
+) -> bool:
+    """Whether two yawed rectangles (x, y, yaw, hx, hy) overlap with positive area (separating axis test)."""
+    ca, cb = rect_corners(*a), rect_corners(*b)
+    for yaw in (a[2], b[2]):
+        for ux, uy in ((math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))):
+            pa = [ux * px + uy * py for px, py in ca]
+            pb = [ux * px + uy * py for px, py in cb]
+            if max(pa) <= min(pb) + 1e-9 or max(pb) <= min(pa) + 1e-9:
+                return False
+    return True
+
+
+@dataclass(eq=False)
+class SimBrick:
+    """One brick's true state: centre ``position_m``, ``yaw_rad``, and where it is in its life."""
+
+    id: int
+    blueprint: Brick
+    position_m: tuple[float, float, float]
+    yaw_rad: float
+    state: BrickState
+    carrier: str | None = None
+    released: bool = False  # dropped at least once by a UAV: its placement error is measured
+
+    @property
+    def size_m(self) -> tuple[float, float, float]:
+        return self.blueprint.size_m
+
+    @property
+    def top_z_m(self) -> float:
+        return self.position_m[2] + self.blueprint.size_m[2] / 2.0
+
+    @property
+    def bottom_z_m(self) -> float:
+        return self.position_m[2] - self.blueprint.size_m[2] / 2.0
+
+    @property
+    def top_center_m(self) -> tuple[float, float, float]:
+        return (self.position_m[0], self.position_m[1], self.top_z_m)
+
+    def rect(self, shrink_m: float = 0.0) -> tuple[float, float, float, float, float]:
+        """Footprint as (x, y, yaw, hx, hy), optionally shrunk on every side."""
+        sx, sy, _ = self.blueprint.size_m
+        return (
+            self.position_m[0],
+            self.position_m[1],
+            self.yaw_rad,
+            max(sx / 2.0 - shrink_m, 1e-4),
+            max(sy / 2.0 - shrink_m, 1e-4),
+        )
+
+    def placement_error_m(self) -> float:
+        """Distance from the blueprint centre."""
+        return math.dist(self.position_m, self.blueprint.position_m)
+
+
+class BrickField:
+    """All bricks of a world; the resting ones (at a pickup site or placed) indexed by a spatial hash."""
+
+    def __init__(self, cell_m: float = 0.5) -> None:
+        self.bricks: dict[int, SimBrick] = {}
+        self._hash = SpatialHash(cell_m)
+
+    def __iter__(self) -> Iterator[SimBrick]:
+        return iter(self.bricks.values())
+
+    def __len__(self) -> int:
+        return len(self.bricks)
+
+    def add(self, brick: SimBrick) -> None:
+        self.bricks[brick.id] = brick
+        if brick.state != "carried":
+            self._index(brick)
+
+    def _index(self, brick: SimBrick) -> None:
+        xs, ys = zip(*rect_corners(*brick.rect()))
+        self._hash.insert(brick.id, min(xs), min(ys), max(xs), max(ys))
+
+    def pick(self, brick_id: int, carrier: str) -> SimBrick:
+        """Take a resting brick out of the index: it is now carried."""
+        brick = self.bricks[brick_id]
+        self._hash.remove(brick_id)
+        brick.state = "carried"
+        brick.carrier = carrier
+        return brick
+
+    def drop(self, brick_id: int, shrink_m: float) -> SimBrick:
+        """Let a carried brick fall straight down onto whatever is below its footprint, and index it."""
+        brick = self.bricks[brick_id]
+        x, y, _ = brick.position_m
+        support = self.support_under(brick.rect(shrink_m), below_z_m=brick.bottom_z_m)
+        brick.position_m = (x, y, support + brick.size_m[2] / 2.0)
+        brick.state = "placed"
+        brick.carrier = None
+        brick.released = True
+        self._index(brick)
+        return brick
+
+    def near(self, x: float, y: float, radius_m: float) -> Iterable[SimBrick]:
+        """Resting bricks whose indexed cells meet the square of half side ``radius_m`` around (x, y)."""
+        bricks = self.bricks
+        return [bricks[k] for k in self._hash.query(x - radius_m, y - radius_m, x + radius_m, y + radius_m)]
+
+    def support_at(self, x: float, y: float, below_z_m: float = math.inf, tol_m: float = 0.02) -> float:
+        """Height of the surface under the point (x, y) at or below ``below_z_m`` (+ ``tol_m``): a brick top or the ground."""
+        top = GROUND_Z_M
+        limit = below_z_m + tol_m
+        bricks = self.bricks
+        for k in self._hash.query(x, y, x, y):
+            b = bricks[k]
+            t = b.top_z_m
+            if top < t <= limit and point_in_rect(x, y, *b.rect()):
+                top = t
+        return top
+
+    def support_under(
+        self, rect: tuple[float, float, float, float, float], below_z_m: float = math.inf, tol_m: float = 0.02
+    ) -> float:
+        """Height of the highest surface under a footprint, at or below ``below_z_m`` (+ ``tol_m``)."""
+        xs, ys = zip(*rect_corners(*rect))
+        top = GROUND_Z_M
+        limit = below_z_m + tol_m
+        bricks = self.bricks
+        for k in self._hash.query(min(xs), min(ys), max(xs), max(ys)):
+            b = bricks[k]
+            t = b.top_z_m
+            if top < t <= limit and rects_overlap(rect, b.rect()):
+                top = t
+        return top

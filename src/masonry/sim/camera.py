@@ -1,0 +1,183 @@
+"""The simulated downward camera: which markers it sees, and the noisy marker poses a detector would report.
+
+A marker is seen when all four of its corners project inside the image, it faces the camera within
+``max_view_angle_rad``, its smallest projected side is at least ``min_marker_px`` pixels (so there is a range
+limit: 500 px focal length, 5 cm markers, 10 px -> 2.5 m), and the brick the UAV carries does not hide it.
+Other bricks do not occlude (markers sit on top faces; a brick above another covers its markers anyway).
+
+Noise on a seen marker's pose (camera frame), growing with the distance d in metres:
+lateral (x, y) ``lateral_noise_m + lateral_noise_per_m * d``, depth (z) ``depth_noise_m + depth_noise_per_m * d``,
+and a small random rotation of ``angle_noise_rad + angle_noise_per_m * d`` per axis (all standard deviations).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from masonry.blueprint import MarkerSpec
+from masonry.perception.types import CameraIntrinsics, TagPose
+from masonry.sim.bricks import SimBrick, point_in_rect
+
+__all__ = ["DEFAULT_INTRINSICS", "CameraConfig", "R_world_body", "observe_markers"]
+
+DEFAULT_INTRINSICS = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
+"""640x480, 500 px focal length: about 65 degrees horizontal field of view."""
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """Simulated camera: intrinsics, detection limits, measurement noise and rendering parameters."""
+
+    intrinsics: CameraIntrinsics = field(default_factory=lambda: DEFAULT_INTRINSICS)
+    min_marker_px: float = 10.0
+    max_view_angle_rad: float = math.radians(70.0)
+    lateral_noise_m: float = 0.002
+    lateral_noise_per_m: float = 0.002
+    depth_noise_m: float = 0.005
+    depth_noise_per_m: float = 0.005
+    angle_noise_rad: float = 0.005
+    angle_noise_per_m: float = 0.005
+    blur_sigma_px: float = 0.6  # render mode
+    noise_sigma: float = 2.0  # render mode, grey levels
+
+    def max_range_m(self, marker_size_m: float) -> float:
+        """Farthest distance at which a marker still spans ``min_marker_px`` pixels."""
+        return max(self.intrinsics.fx, self.intrinsics.fy) * marker_size_m / self.min_marker_px
+
+    def half_diagonal_tan(self) -> float:
+        """Tangent of the half-angle from the optical axis to the farthest image corner."""
+        i = self.intrinsics
+        return math.hypot(max(i.cx, i.width_px - i.cx) / i.fx, max(i.cy, i.height_px - i.cy) / i.fy)
+
+
+def R_world_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
+    """Rotation of the FLU body in the ENU world: Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr = math.cos(roll_rad), math.sin(roll_rad)
+    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
+    cy, sy = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+
+
+def _rotvec_to_matrix(w: np.ndarray) -> np.ndarray:
+    theta = float(np.linalg.norm(w))
+    if theta < 1e-12:
+        return np.eye(3)
+    k = w / theta
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * (K @ K)
+
+
+def marker_layout(
+    bricks: Sequence[SimBrick], markers: MarkerSpec
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Marker ids (m,), centres (m, 3) and corners (m, 4, 3) in the world for the bricks' top faces."""
+    ids = np.empty(2 * len(bricks), dtype=int)
+    centres = np.empty((2 * len(bricks), 3))
+    yaws = np.empty(2 * len(bricks))
+    half = markers.spacing_m / 2.0
+    for i, b in enumerate(bricks):
+        c, s = math.cos(b.yaw_rad), math.sin(b.yaw_rad)
+        x, y, _ = b.position_m
+        top = b.top_z_m
+        ids[2 * i], ids[2 * i + 1] = 2 * b.id, 2 * b.id + 1
+        centres[2 * i] = (x + c * half, y + s * half, top)
+        centres[2 * i + 1] = (x - c * half, y - s * half, top)
+        yaws[2 * i] = yaws[2 * i + 1] = b.yaw_rad
+    h = markers.size_m / 2.0
+    local = np.array([[-h, h], [h, h], [h, -h], [-h, -h]])  # top-left, top-right, bottom-right, bottom-left
+    cos, sin = np.cos(yaws), np.sin(yaws)
+    ox = cos[:, None] * local[None, :, 0] - sin[:, None] * local[None, :, 1]
+    oy = sin[:, None] * local[None, :, 0] + cos[:, None] * local[None, :, 1]
+    corners = np.repeat(centres[:, None, :], 4, axis=1)
+    corners[:, :, 0] += ox
+    corners[:, :, 1] += oy
+    return ids, centres, corners
+
+
+def observe_markers(
+    R_wc: np.ndarray,
+    c_w: np.ndarray,
+    bricks: Sequence[SimBrick],
+    markers: MarkerSpec,
+    config: CameraConfig,
+    rng: np.random.Generator,
+    *,
+    hidden: frozenset[int] | set[int] = frozenset(),
+    occluder: SimBrick | None = None,
+) -> tuple[TagPose, ...]:
+    """Noisy camera-frame poses of the markers of ``bricks`` seen by a camera at ``c_w`` with rotation ``R_wc``.
+
+    Args:
+        R_wc: 3x3 rotation of the camera frame (x right, y down, z forward) in the world.
+        c_w: camera centre in the world (3,).
+        bricks: candidate bricks (those near the camera).
+        markers: marker size and spacing.
+        config: intrinsics, limits and noise.
+        rng: randomness for the measurement noise.
+        hidden: marker ids not to report (occlusion fault).
+        occluder: the brick this UAV carries: markers behind it are not seen.
+    """
+    if not bricks:
+        return ()
+    intr = config.intrinsics
+    ids, centres, corners = marker_layout(bricks, markers)
+    p_c = (centres - c_w) @ R_wc  # camera frame = R_wc^T (p - c)
+    q_c = (corners - c_w) @ R_wc  # (m, 4, 3)
+    z = q_c[:, :, 2]
+    ok = np.all(z > 0.05, axis=1)
+    zs = np.where(z > 0.05, z, 1.0)
+    u = intr.fx * q_c[:, :, 0] / zs + intr.cx
+    v = intr.fy * q_c[:, :, 1] / zs + intr.cy
+    ok &= np.all((u >= 0.0) & (u <= intr.width_px - 1.0) & (v >= 0.0) & (v <= intr.height_px - 1.0), axis=1)
+    dist = np.linalg.norm(p_c, axis=1)
+    normal_c = R_wc[2, :]  # world +z (the markers' face normal) in the camera frame
+    cos_view = -(p_c @ normal_c) / np.maximum(dist, 1e-9)
+    ok &= cos_view >= math.cos(config.max_view_angle_rad)
+    side = np.hypot(
+        np.diff(np.concatenate([u, u[:, :1]], axis=1)), np.diff(np.concatenate([v, v[:, :1]], axis=1))
+    )
+    ok &= side.min(axis=1) >= config.min_marker_px
+    index = np.flatnonzero(ok)
+    if hidden:
+        index = np.array([i for i in index if int(ids[i]) not in hidden], dtype=int)
+    if occluder is not None and len(index):
+        index = np.array([i for i in index if not _behind(occluder, c_w, centres[i])], dtype=int)
+    if not len(index):
+        return ()
+    yaw_of = {2 * b.id: b.yaw_rad for b in bricks} | {2 * b.id + 1: b.yaw_rad for b in bricks}
+    noise = rng.standard_normal((len(index), 6))
+    out = []
+    for row, i in enumerate(index):
+        d = float(dist[i])
+        lat = config.lateral_noise_m + config.lateral_noise_per_m * d
+        dep = config.depth_noise_m + config.depth_noise_per_m * d
+        ang = config.angle_noise_rad + config.angle_noise_per_m * d
+        n = noise[row]
+        pos = p_c[i] + np.array([lat * n[0], lat * n[1], dep * n[2]])
+        yaw = yaw_of[int(ids[i])]
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        R_world_marker = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+        R = R_wc.T @ R_world_marker @ _rotvec_to_matrix(ang * n[3:6])
+        out.append(TagPose(marker_id=int(ids[i]), position_m=pos, R_cam_marker=R))
+    return tuple(out)
+
+
+def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:
+    """Whether the segment camera -> marker crosses the top face of the carried brick (and the marker is not on it)."""
+    top = occluder.top_z_m
+    if p_w[2] >= top - 1e-6 or c_w[2] <= top:
+        return False
+    t = (top - c_w[2]) / (p_w[2] - c_w[2])
+    qx = c_w[0] + t * (p_w[0] - c_w[0])
+    qy = c_w[1] + t * (p_w[1] - c_w[1])
+    return point_in_rect(qx, qy, *occluder.rect())

@@ -1,0 +1,190 @@
+"""Fault injection for the simulated world: each fault is one knob, settable from the command line.
+
+``Faults.parse(["grasp=0.3", "uav-loss=brick-2@120"])`` reads the ``--fault KEY=VALUE`` options of
+``masonry sim`` / ``masonry fly --sim``. Keys:
+
+============  ==================  ===============================================================
+key           value               effect
+============  ==================  ===============================================================
+grasp         probability [0, 1]  an attach attempt fails (magnet on, touching, nothing attached)
+dropout       probability [0, 1]  a whole camera frame carries no marker observation
+occlusion     probability [0, 1]  in a frame, one marker of every brick is hidden
+gusts         m/s >= 0            standard deviation of the wind gusts (horizontal)
+battery       1/s >= 0            battery drain while airborne, fraction of a full pack per second
+link-loss     NAME@SECONDS        the UAV's autopilot link goes silent at that simulated time
+uav-loss      NAME@SECONDS        the UAV fails (falls, disarms) at that simulated time
+============  ==================  ===============================================================
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, fields, replace
+from types import MappingProxyType
+from typing import Any
+
+from masonry.errors import InputError
+
+__all__ = ["FAULT_KEYS", "Faults"]
+
+FAULT_KEYS: tuple[str, ...] = ("grasp", "dropout", "occlusion", "gusts", "battery", "link-loss", "uav-loss")
+
+_ALIASES = {
+    "grasp-failure": "grasp",
+    "gust": "gusts",
+    "battery-drain": "battery",
+    "link": "link-loss",
+    "uav": "uav-loss",
+}
+_SCALAR_FIELD = {
+    "grasp": "grasp_failure",
+    "dropout": "dropout",
+    "occlusion": "occlusion",
+    "gusts": "gusts_mps",
+    "battery": "battery_drain_per_s",
+}
+_TIMED_FIELD = {"link-loss": "link_loss_at_s", "uav-loss": "uav_loss_at_s"}
+_PROBABILITIES = ("grasp_failure", "dropout", "occlusion")
+
+
+@dataclass(frozen=True)
+class Faults:
+    """The faults injected into a simulated world (all off by default).
+
+    Attributes:
+        grasp_failure: probability that an attach attempt fails although the magnet touches the brick.
+        dropout: probability that a camera frame carries no marker observation at all.
+        occlusion: probability that, in a frame, one marker (chosen at random) of every brick is hidden.
+        gusts_mps: standard deviation of the horizontal wind gusts, m/s (0: still air).
+        link_loss_at_s: UAV name -> simulated time at which its autopilot link is lost for good.
+        battery_drain_per_s: battery drain while airborne (fraction of a full pack per second); None keeps the
+            vehicle's own figure (``VehicleConfig.battery_drain_per_s``).
+        uav_loss_at_s: UAV name -> simulated time at which the UAV fails (motors stop, it falls).
+    """
+
+    grasp_failure: float = 0.0
+    dropout: float = 0.0
+    occlusion: float = 0.0
+    gusts_mps: float = 0.0
+    link_loss_at_s: Mapping[str, float] = field(default_factory=dict)
+    battery_drain_per_s: float | None = None
+    uav_loss_at_s: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in _PROBABILITIES:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
+                raise InputError(f"fault {name}: a probability must be in [0, 1], got {value!r}")
+        if not (
+            isinstance(self.gusts_mps, (int, float)) and math.isfinite(self.gusts_mps) and self.gusts_mps >= 0
+        ):
+            raise InputError(f"fault gusts_mps: must be a finite speed >= 0 m/s, got {self.gusts_mps!r}")
+        drain = self.battery_drain_per_s
+        if drain is not None and not (
+            isinstance(drain, (int, float)) and math.isfinite(drain) and drain >= 0
+        ):
+            raise InputError(
+                f"fault battery_drain_per_s: must be a finite rate >= 0 per second, got {drain!r}"
+            )
+        for name in ("link_loss_at_s", "uav_loss_at_s"):
+            table = dict(getattr(self, name))
+            for uav, at_s in table.items():
+                if not isinstance(uav, str) or not uav:
+                    raise InputError(f"fault {name}: UAV names must be non-empty strings, got {uav!r}")
+                if not (isinstance(at_s, (int, float)) and math.isfinite(at_s) and at_s >= 0):
+                    raise InputError(f"fault {name}[{uav}]: the time must be finite and >= 0 s, got {at_s!r}")
+            object.__setattr__(self, name, MappingProxyType({k: float(v) for k, v in table.items()}))
+
+    def __hash__(self) -> int:
+        return hash(
+            tuple(
+                tuple(sorted(v.items())) if isinstance(v, Mapping) else v
+                for v in (getattr(self, f.name) for f in fields(self))
+            )
+        )
+
+    @property
+    def any(self) -> bool:
+        """True when at least one fault is on."""
+        return self != Faults()
+
+    def uav_names(self) -> frozenset[str]:
+        """Every UAV name a timed fault refers to."""
+        return frozenset(self.link_loss_at_s) | frozenset(self.uav_loss_at_s)
+
+    def check_uavs(self, names: Iterable[str]) -> None:
+        """Raise InputError if a timed fault names a UAV that is not among ``names``."""
+        known = set(names)
+        for table, key in ((self.link_loss_at_s, "link-loss"), (self.uav_loss_at_s, "uav-loss")):
+            for uav in table:
+                if uav not in known:
+                    raise InputError(
+                        f"fault {key}={uav}@{table[uav]:g}: no UAV named {uav!r} (fleet: {', '.join(sorted(known))})"
+                    )
+
+    @classmethod
+    def parse(cls, items: Iterable[str], base: Faults | None = None) -> Faults:
+        """Build Faults from ``KEY=VALUE`` strings (``--fault`` options), on top of ``base``.
+
+        Args:
+            items: e.g. ``["grasp=0.3", "dropout=0.5", "gusts=2.0", "uav-loss=brick-2@120"]``.
+            base: faults to start from (default: none).
+
+        Raises:
+            InputError: an item is malformed, its key unknown, its value out of range, or a key given twice.
+        """
+        changes: dict[str, Any] = {}
+        timed: dict[str, dict[str, float]] = {
+            f: dict(getattr(base, f)) if base else {} for f in _TIMED_FIELD.values()
+        }
+        seen: set[str] = set()
+        for item in items:
+            text = str(item).strip()
+            key, sep, value = text.partition("=")
+            key = key.strip().lower().replace("_", "-")
+            value = value.strip()
+            if not sep or not key or not value:
+                raise InputError(
+                    f"fault {text!r}: expected KEY=VALUE with KEY one of {', '.join(FAULT_KEYS)}"
+                )
+            key = _ALIASES.get(key, key)
+            if key in _SCALAR_FIELD:
+                if key in seen:
+                    raise InputError(f"fault {text!r}: {key} is given twice")
+                seen.add(key)
+                number = _number(text, key, value)
+                name = _SCALAR_FIELD[key]
+                if name in _PROBABILITIES and not 0.0 <= number <= 1.0:
+                    raise InputError(f"fault {text!r}: {key} is a probability and must be in [0, 1]")
+                if number < 0.0:
+                    raise InputError(f"fault {text!r}: {key} must be >= 0")
+                changes[name] = number
+            elif key in _TIMED_FIELD:
+                uav, at, when = value.rpartition("@")
+                uav = uav.strip()
+                if not at or not uav:
+                    raise InputError(f"fault {text!r}: {key} expects NAME@SECONDS, e.g. {key}=brick-2@120")
+                at_s = _number(text, key, when.strip())
+                if at_s < 0.0:
+                    raise InputError(f"fault {text!r}: the time must be >= 0 s")
+                table = timed[_TIMED_FIELD[key]]
+                if f"{key}:{uav}" in seen:
+                    raise InputError(f"fault {text!r}: {key} is given twice for {uav}")
+                seen.add(f"{key}:{uav}")
+                table[uav] = at_s
+            else:
+                raise InputError(f"fault {text!r}: unknown key {key!r} (known: {', '.join(FAULT_KEYS)})")
+        for name, table in timed.items():
+            changes[name] = table
+        return replace(base if base is not None else cls(), **changes)
+
+
+def _number(text: str, key: str, value: str) -> float:
+    try:
+        number = float(value)
+    except ValueError:
+        raise InputError(f"fault {text!r}: {key} needs a number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise InputError(f"fault {text!r}: {key} needs a finite number, got {value!r}")
+    return number

@@ -1,0 +1,114 @@
+"""The simulated adapters: ``masonry.ports`` Protocols implemented on a ``SimUav`` of a ``World``.
+
+Behaviour a state machine sees, as on the real UAV:
+
+- Flight controller: commands go to the autopilot model (``SimVehicle``); refusals raise ``CommandRejected``.
+  After a link loss or a UAV failure, commands are ignored and ``telemetry()`` keeps returning the last sample
+  received, with ``link_ok`` False. ``connect``/``close`` only mark the port open (nothing to reach).
+- Gripper: magnet and ball-joint lock; ``is_attached()`` reports whether a brick really hangs on the magnet.
+- Sprayer: the valve; adhesive is deposited by the world while it is open near a surface (adhesion UAVs).
+- Camera: every ``read()`` is a new frame at the current simulated time (``None`` once the UAV has failed):
+  marker poses (``geometric``) or a rendered image (``render``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from masonry.perception.types import CameraIntrinsics
+from masonry.ports import CameraFrame, Telemetry, Vec3
+
+if TYPE_CHECKING:
+    from masonry.sim.world import SimUav
+
+__all__ = ["SimCamera", "SimFlightController", "SimGripper", "SimSprayer"]
+
+
+class SimFlightController:
+    """``FlightController`` on the simulated autopilot of one UAV."""
+
+    def __init__(self, uav: SimUav) -> None:
+        self._uav = uav
+        self.connected = False
+
+    def connect(self) -> None:
+        self.connected = True
+
+    def close(self) -> None:
+        self.connected = False
+
+    def _listening(self) -> bool:
+        return self._uav.link_ok
+
+    def arm(self) -> None:
+        if self._listening():
+            self._uav.vehicle.arm()
+
+    def disarm(self) -> None:
+        if self._listening():
+            self._uav.vehicle.disarm()
+
+    def takeoff(self, altitude_m: float) -> None:
+        if self._listening():
+            self._uav.vehicle.takeoff(altitude_m)
+
+    def land(self) -> None:
+        if self._listening():
+            self._uav.vehicle.land()
+
+    def send_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float) -> None:
+        if self._listening():
+            vehicle = self._uav.vehicle
+            vehicle.command_velocity(velocity_mps, yaw_rate_radps, vehicle.time_s)
+
+    def telemetry(self) -> Telemetry:
+        return self._uav.telemetry()
+
+
+class SimGripper:
+    """``Gripper``: the electromagnet on its lockable ball joint (the ball joint starts locked, the magnet off)."""
+
+    def __init__(self, uav: SimUav) -> None:
+        self._uav = uav
+
+    def set_magnet(self, on: bool) -> None:
+        self._uav.set_magnet(bool(on))
+
+    def set_joint_locked(self, locked: bool) -> None:
+        self._uav.joint_locked = bool(locked)
+
+    def is_attached(self) -> bool:
+        return self._uav.carried_brick is not None
+
+
+class SimSprayer:
+    """``Sprayer``: the adhesive valve."""
+
+    def __init__(self, uav: SimUav) -> None:
+        self._uav = uav
+
+    def set_valve(self, open_: bool) -> None:
+        self._uav.set_valve(bool(open_))
+
+    def is_valve_open(self) -> bool:
+        return self._uav.valve_open
+
+
+class SimCamera:
+    """``Camera``: the downward camera on the UAV body."""
+
+    def __init__(self, uav: SimUav) -> None:
+        self._uav = uav
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics:
+        return self._uav.world.camera_config.intrinsics
+
+    @property
+    def T_body_cam(self) -> np.ndarray:
+        return self._uav.world.airframe.T_body_cam()
+
+    def read(self) -> CameraFrame | None:
+        return self._uav.world._camera_frame(self._uav)

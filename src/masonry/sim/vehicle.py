@@ -1,0 +1,469 @@
+"""A multirotor as its autopilot presents it: velocity setpoints in, motion and telemetry out.
+
+The model (plain floats, no numpy on the hot path: a world steps many of these thousands of times per second):
+
+- The autopilot's velocity loop is a first-order lag with time constant ``velocity_tau_s`` toward the commanded
+  velocity, whose magnitude is limited (horizontal speed, climb, descent), and the resulting acceleration is
+  limited too (horizontal, vertical). Yaw rate follows its setpoint with its own lag and limit.
+- Wind gusts: a horizontal Ornstein-Uhlenbeck wind (standard deviation ``gusts_mps``, correlation time
+  ``gust_tau_s``) pushes the airframe with acceleration ``drag_per_s * wind``; the velocity loop fights it.
+- Like ArduPilot's GUIDED mode: a velocity setpoint is followed for ``setpoint_timeout_s``, then the vehicle
+  brakes and holds the position where it stopped. ``takeoff`` climbs to the altitude on its own (a velocity
+  setpoint during the climb takes over, as on ArduCopter); ``land`` descends at ``land_speed_mps`` and disarms on
+  touchdown. On the ground only ``takeoff`` moves it.
+- Failsafes: link lost -> hover ``link_failsafe_s`` then land; battery at ``battery_land_fraction`` -> land;
+  battery empty in the air -> the motors stop. ``fail()`` stops the motors now: the vehicle falls.
+- Ground contact at ``ground_z_m``; ``hold_above(z)`` lets the world stop the airframe on a brick top (the
+  rod pushing on a brick); in LAND mode a vehicle held up for ``land_detect_s`` counts as landed there.
+- Telemetry adds motion-capture noise (``mocap_noise_m``, millimetres) to the true state.
+
+Roll and pitch are reconstructed from the horizontal acceleration (a multirotor tilts to accelerate):
+body frame FLU, so accelerating forward is a positive pitch and accelerating left a negative roll.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from masonry.errors import CommandRejected
+from masonry.geometry import wrap_angle_rad
+from masonry.ports import Telemetry, Vec3
+
+__all__ = ["GRAVITY_MPS2", "SimVehicle", "VehicleConfig"]
+
+GRAVITY_MPS2 = 9.81
+
+
+@dataclass(frozen=True)
+class VehicleConfig:
+    """Parameters of the simulated multirotor and its autopilot (SI units in the names)."""
+
+    velocity_tau_s: float = 0.3
+    max_speed_xy_mps: float = 2.0
+    max_climb_mps: float = 1.0
+    max_descent_mps: float = 1.0
+    max_accel_xy_mps2: float = 2.5
+    max_accel_z_mps2: float = 2.0
+    yaw_tau_s: float = 0.15
+    max_yaw_rate_radps: float = 1.5
+    takeoff_speed_mps: float = 0.6
+    land_speed_mps: float = 0.4
+    setpoint_timeout_s: float = 0.5
+    hold_gain_per_s: float = 1.0  # position hold after the setpoint timeout: v = gain * error
+    hold_max_speed_mps: float = 0.5
+    link_failsafe_s: float = 5.0  # ArduPilot FS_GCS_TIMEOUT: hover this long after the link goes, then land
+    land_detect_s: float = 1.0
+    battery_drain_per_s: float = 1.0 / 1200.0  # a full pack lasts 20 minutes airborne
+    battery_arm_min_fraction: float = 0.15
+    battery_land_fraction: float = 0.05
+    drag_per_s: float = 0.5
+    gust_tau_s: float = 2.0
+    mocap_noise_m: float = 0.0015
+    velocity_noise_mps: float = 0.005
+    yaw_noise_rad: float = 0.002
+
+    def __post_init__(self) -> None:
+        for name in (
+            "velocity_tau_s",
+            "max_speed_xy_mps",
+            "max_climb_mps",
+            "max_descent_mps",
+            "max_accel_xy_mps2",
+            "max_accel_z_mps2",
+            "yaw_tau_s",
+            "max_yaw_rate_radps",
+            "takeoff_speed_mps",
+            "land_speed_mps",
+            "setpoint_timeout_s",
+            "gust_tau_s",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
+
+
+class _Gauss:
+    """Standard normal draws from a Generator, fetched in blocks (one numpy call per 4096 draws)."""
+
+    __slots__ = ("_buf", "_i", "_rng")
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self._rng = rng
+        self._buf: list[float] = []
+        self._i = 0
+
+    def __call__(self) -> float:
+        if self._i >= len(self._buf):
+            self._buf = self._rng.standard_normal(4096).tolist()
+            self._i = 0
+        value = self._buf[self._i]
+        self._i += 1
+        return value
+
+
+class SimVehicle:
+    """One simulated multirotor with its autopilot (state + ``step(dt_s)`` + commands).
+
+    Args:
+        config: dynamics, limits, failsafes and noise.
+        position_m: where it stands (ENU); it starts landed and disarmed there.
+        yaw_rad: initial heading.
+        rng: randomness for wind and telemetry noise (own stream: other vehicles are unaffected).
+        gusts_mps: wind gust standard deviation (0: still air).
+        battery_drain_per_s: override of ``config.battery_drain_per_s``.
+        ground_z_m: height of the ground under it (default: the starting height).
+        start_s: the vehicle's clock at creation (keep it equal to the simulation clock).
+    """
+
+    def __init__(
+        self,
+        config: VehicleConfig | None = None,
+        *,
+        position_m: Vec3 = (0.0, 0.0, 0.0),
+        yaw_rad: float = 0.0,
+        rng: np.random.Generator | None = None,
+        gusts_mps: float = 0.0,
+        battery_drain_per_s: float | None = None,
+        ground_z_m: float | None = None,
+        start_s: float = 0.0,
+    ) -> None:
+        self.config = config if config is not None else VehicleConfig()
+        self._gauss = _Gauss(rng if rng is not None else np.random.default_rng(0))
+        self.ground_z_m = float(position_m[2] if ground_z_m is None else ground_z_m)
+        self._x, self._y = float(position_m[0]), float(position_m[1])
+        self._z = max(float(position_m[2]), self.ground_z_m)
+        self._vx = self._vy = self._vz = 0.0
+        self._ax = self._ay = 0.0
+        self._yaw = wrap_angle_rad(float(yaw_rad))
+        self._yaw_rate = 0.0
+        self._t = float(start_s)
+        self.armed = False
+        self.mode = "GUIDED"
+        self.on_ground = True
+        self.failed = False
+        self.battery_fraction = 1.0
+        self.gusts_mps = float(gusts_mps)
+        self._drain = (
+            self.config.battery_drain_per_s if battery_drain_per_s is None else float(battery_drain_per_s)
+        )
+        self._wx = self._wy = 0.0
+        if self.gusts_mps > 0:
+            self._wx, self._wy = self.gusts_mps * self._gauss(), self.gusts_mps * self._gauss()
+        self._sp: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+        self._sp_time = -math.inf
+        self._takeoff_z: float | None = None
+        self._hold: tuple[float, float, float] | None = None
+        self._link_lost_at: float | None = None
+        self._contact_s = 0.0
+        self._held = False
+        self.distance_m = 0.0
+        self.airborne_s = 0.0
+        self._lag_dt = -1.0
+        self._lag_k = self._yaw_k = 0.0
+
+    # ------------------------------------------------------------------ state
+    @property
+    def time_s(self) -> float:
+        """The vehicle's own time: the sum of the steps it has taken."""
+        return self._t
+
+    @property
+    def position_m(self) -> Vec3:
+        return (self._x, self._y, self._z)
+
+    @property
+    def velocity_mps(self) -> Vec3:
+        return (self._vx, self._vy, self._vz)
+
+    @property
+    def yaw_rad(self) -> float:
+        return self._yaw
+
+    @property
+    def yaw_rate_radps(self) -> float:
+        return self._yaw_rate
+
+    @property
+    def attitude_rad(self) -> Vec3:
+        """Roll, pitch, yaw: the tilt a multirotor needs for its current horizontal acceleration (FLU body)."""
+        c, s = math.cos(self._yaw), math.sin(self._yaw)
+        a_fwd = c * self._ax + s * self._ay
+        a_left = -s * self._ax + c * self._ay
+        return (-math.atan2(a_left, GRAVITY_MPS2), math.atan2(a_fwd, GRAVITY_MPS2), self._yaw)
+
+    @property
+    def wind_mps(self) -> tuple[float, float]:
+        return (self._wx, self._wy)
+
+    @property
+    def taking_off(self) -> bool:
+        return self._takeoff_z is not None
+
+    @property
+    def link_lost(self) -> bool:
+        return self._link_lost_at is not None
+
+    @property
+    def airborne(self) -> bool:
+        """Flying under power (armed, off the ground, not failed)."""
+        return self.armed and not self.on_ground and not self.failed
+
+    # --------------------------------------------------------------- commands
+    def arm(self) -> None:
+        """Arm the motors (on the ground, with enough battery); GUIDED mode."""
+        if self.failed:
+            raise CommandRejected("arm", "the vehicle has failed")
+        if self.armed:
+            return
+        if not self.on_ground:
+            raise CommandRejected("arm", "not on the ground")
+        if self.battery_fraction < self.config.battery_arm_min_fraction:
+            raise CommandRejected("arm", f"battery at {self.battery_fraction:.0%}, below the arming minimum")
+        self.armed = True
+        self.mode = "GUIDED"
+        self._sp_time = -math.inf
+        self._takeoff_z = None
+        self._hold = None
+
+    def disarm(self, force: bool = False) -> None:
+        """Disarm; refused in the air unless ``force`` (then the vehicle falls)."""
+        if not self.armed:
+            return
+        if not self.on_ground and not force:
+            raise CommandRejected("disarm", "airborne (land first)")
+        self.armed = False
+        self._takeoff_z = None
+
+    def takeoff(self, altitude_m: float) -> None:
+        """Climb on its own to ``altitude_m`` above the ground it stands on."""
+        if not (math.isfinite(altitude_m) and altitude_m > 0):
+            raise CommandRejected("takeoff", f"altitude must be > 0 m, got {altitude_m!r}")
+        if self.failed:
+            raise CommandRejected("takeoff", "the vehicle has failed")
+        if not self.armed:
+            raise CommandRejected("takeoff", "not armed")
+        if not self.on_ground:
+            raise CommandRejected("takeoff", "already flying")
+        self.mode = "GUIDED"
+        self._takeoff_z = self._z + float(altitude_m)
+        self._hold = None
+        self._sp_time = -math.inf
+
+    def land(self) -> None:
+        """Switch to LAND: descend where it is and disarm on touchdown."""
+        if self.failed:
+            raise CommandRejected("land", "the vehicle has failed")
+        if not self.armed:
+            return
+        if self.on_ground:
+            self.disarm()
+            return
+        self.mode = "LAND"
+        self._takeoff_z = None
+
+    def command_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float, now_s: float) -> None:
+        """A velocity (ENU, m/s) and yaw-rate (rad/s) setpoint, valid for ``setpoint_timeout_s`` from ``now_s``.
+
+        Ignored (as by ArduPilot) on the ground, disarmed or in LAND; in the air it ends an auto climb.
+        """
+        vx, vy, vz = (float(v) for v in velocity_mps)
+        if not all(math.isfinite(v) for v in (vx, vy, vz, yaw_rate_radps)):
+            raise CommandRejected("velocity", f"setpoint not finite: {velocity_mps!r}, {yaw_rate_radps!r}")
+        if self.failed or not self.armed or self.on_ground or self.mode != "GUIDED":
+            return
+        self._sp = (vx, vy, vz, float(yaw_rate_radps))
+        self._sp_time = float(now_s)
+        self._takeoff_z = None
+        self._hold = None
+
+    def fail(self) -> None:
+        """The motors stop now (power or ESC failure): the vehicle disarms and falls."""
+        self.failed = True
+        self.armed = False
+        self.mode = "FAILED"
+        self._takeoff_z = None
+
+    def lose_link(self) -> None:
+        """The ground link goes silent: no more setpoints; hover, then land after ``link_failsafe_s``."""
+        if self._link_lost_at is None:
+            self._link_lost_at = self._t
+
+    def swap_battery(self) -> None:
+        """A fresh pack (ground crew): only landed and disarmed."""
+        if self.armed or not self.on_ground:
+            raise CommandRejected("swap battery", "only on the ground and disarmed")
+        self.battery_fraction = 1.0
+
+    def hold_above(self, z_min_m: float) -> None:
+        """Contact: the world stops the airframe from going below ``z_min_m`` (e.g. the rod on a brick)."""
+        if self._z < z_min_m:
+            self._z = z_min_m
+            self._vz = max(self._vz, 0.0)
+            self._held = True
+
+    # ------------------------------------------------------------------- step
+    def step(self, dt_s: float) -> None:
+        """Advance the vehicle by ``dt_s`` seconds."""
+        cfg = self.config
+        self._t += dt_s
+        if self.failed:
+            self._fall(dt_s)
+            return
+        held, self._held = self._held, False
+        if not self.armed:
+            if not self.on_ground:
+                self._fall(dt_s)
+            return
+        if self.on_ground and self._takeoff_z is None:
+            self._vx = self._vy = self._vz = self._ax = self._ay = self._yaw_rate = 0.0
+            return
+        if not self.on_ground:
+            self.airborne_s += dt_s
+            self.battery_fraction = max(0.0, self.battery_fraction - self._drain * dt_s)
+            if self.battery_fraction <= 0.0:
+                self.fail()
+                self._fall(dt_s)
+                return
+            if self.battery_fraction <= cfg.battery_land_fraction and self.mode != "LAND":
+                self.mode = "LAND"
+                self._takeoff_z = None
+            if (
+                self._link_lost_at is not None
+                and self.mode != "LAND"
+                and self._t - self._link_lost_at >= cfg.link_failsafe_s
+            ):
+                self.mode = "LAND"
+                self._takeoff_z = None
+        if dt_s != self._lag_dt:
+            self._lag_dt = dt_s
+            self._lag_k = (1.0 - math.exp(-dt_s / cfg.velocity_tau_s)) / dt_s
+            self._yaw_k = 1.0 - math.exp(-dt_s / cfg.yaw_tau_s)
+
+        # Target velocity from the active mode.
+        tyaw = 0.0
+        if self.mode == "LAND":
+            tx = ty = 0.0
+            tz = -cfg.land_speed_mps
+        elif self._takeoff_z is not None:
+            tx = ty = 0.0
+            err = self._takeoff_z - self._z
+            tz = min(cfg.takeoff_speed_mps, max(-cfg.max_descent_mps, 1.5 * err))
+            if abs(err) < 0.03 and abs(self._vz) < 0.1:
+                self._takeoff_z = None
+                self._hold = (self._x, self._y, self._z)
+        elif self._t - self._sp_time <= cfg.setpoint_timeout_s and self._link_lost_at is None:
+            tx, ty, tz, tyaw = self._sp
+        else:
+            hold = self._hold
+            if hold is None:
+                tx = ty = tz = 0.0
+                if self._vx * self._vx + self._vy * self._vy + self._vz * self._vz < 0.01:
+                    self._hold = (self._x, self._y, self._z)
+            else:
+                g = cfg.hold_gain_per_s
+                tx, ty, tz = g * (hold[0] - self._x), g * (hold[1] - self._y), g * (hold[2] - self._z)
+                n = math.sqrt(tx * tx + ty * ty + tz * tz)
+                if n > cfg.hold_max_speed_mps:
+                    f = cfg.hold_max_speed_mps / n
+                    tx, ty, tz = tx * f, ty * f, tz * f
+
+        # Speed limits.
+        sxy = math.sqrt(tx * tx + ty * ty)
+        if sxy > cfg.max_speed_xy_mps:
+            f = cfg.max_speed_xy_mps / sxy
+            tx, ty = tx * f, ty * f
+        tz = min(cfg.max_climb_mps, max(-cfg.max_descent_mps, tz))
+
+        # First-order lag, then acceleration limits.
+        k = self._lag_k
+        ax, ay, az = (tx - self._vx) * k, (ty - self._vy) * k, (tz - self._vz) * k
+        axy = math.sqrt(ax * ax + ay * ay)
+        if axy > cfg.max_accel_xy_mps2:
+            f = cfg.max_accel_xy_mps2 / axy
+            ax, ay = ax * f, ay * f
+        az = min(cfg.max_accel_z_mps2, max(-cfg.max_accel_z_mps2, az))
+        if self.gusts_mps > 0.0:
+            a = dt_s / cfg.gust_tau_s
+            b = self.gusts_mps * math.sqrt(2.0 * a)
+            self._wx += -self._wx * a + b * self._gauss()
+            self._wy += -self._wy * a + b * self._gauss()
+            ax += cfg.drag_per_s * self._wx
+            ay += cfg.drag_per_s * self._wy
+        self._ax, self._ay = ax, ay
+        self._vx += ax * dt_s
+        self._vy += ay * dt_s
+        self._vz += az * dt_s
+        dx, dy, dz = self._vx * dt_s, self._vy * dt_s, self._vz * dt_s
+        self._x += dx
+        self._y += dy
+        self._z += dz
+        self.distance_m += math.sqrt(dx * dx + dy * dy + dz * dz)
+
+        tyaw = min(cfg.max_yaw_rate_radps, max(-cfg.max_yaw_rate_radps, tyaw))
+        self._yaw_rate += (tyaw - self._yaw_rate) * self._yaw_k
+        self._yaw = wrap_angle_rad(self._yaw + self._yaw_rate * dt_s)
+
+        # Ground contact, or resting on a support (hold_above) in LAND mode.
+        if self._z <= self.ground_z_m:
+            self._z = self.ground_z_m
+            self._touchdown()
+        elif held and self.mode == "LAND":
+            self._contact_s += dt_s
+            if self._contact_s >= cfg.land_detect_s:
+                self._touchdown()
+        else:
+            self._contact_s = 0.0
+            if self.on_ground and self._z > self.ground_z_m + 0.01:
+                self.on_ground = False
+
+    def _touchdown(self) -> None:
+        climbing = self._takeoff_z is not None and self._vz > 0.0
+        if climbing:
+            return
+        self.on_ground = True
+        self._vx = self._vy = self._vz = self._ax = self._ay = self._yaw_rate = 0.0
+        self._contact_s = 0.0
+        self._hold = None
+        self._takeoff_z = None
+        if self.mode == "LAND":
+            self.armed = False
+
+    def _fall(self, dt_s: float) -> None:
+        if self.on_ground:
+            self._vx = self._vy = self._vz = 0.0
+            return
+        self._vz -= GRAVITY_MPS2 * dt_s
+        damp = math.exp(-self.config.drag_per_s * dt_s)
+        self._vx *= damp
+        self._vy *= damp
+        self._x += self._vx * dt_s
+        self._y += self._vy * dt_s
+        self._z += self._vz * dt_s
+        if self._z <= self.ground_z_m or self._held:
+            self._z = max(self._z, self.ground_z_m)
+            self.on_ground = True
+            self._vx = self._vy = self._vz = self._ax = self._ay = 0.0
+        self._held = False
+
+    # -------------------------------------------------------------- telemetry
+    def telemetry(self, *, link_ok: bool = True) -> Telemetry:
+        """What the autopilot reports now: the true state plus motion-capture noise."""
+        cfg = self.config
+        g = self._gauss
+        n, v = cfg.mocap_noise_m, cfg.velocity_noise_mps
+        roll, pitch, yaw = self.attitude_rad
+        return Telemetry(
+            time_s=self._t,
+            position_m=(self._x + n * g(), self._y + n * g(), self._z + n * g()),
+            velocity_mps=(self._vx + v * g(), self._vy + v * g(), self._vz + v * g()),
+            attitude_rad=(roll, pitch, wrap_angle_rad(yaw + cfg.yaw_noise_rad * g())),
+            armed=self.armed,
+            mode=self.mode,
+            battery_fraction=self.battery_fraction,
+            link_ok=link_ok and self._link_lost_at is None and not self.failed,
+            position_ok=not self.failed,
+            on_ground=self.on_ground,
+        )

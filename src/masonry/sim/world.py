@@ -1,0 +1,492 @@
+"""The simulated world: bricks, adhesive and UAVs on one simulated clock, behind the ``masonry.ports`` seams.
+
+``World(blueprint, seed=...)`` lays the bricks out (pre-placed ones at their blueprint pose, the others at their
+approximate pickup plus a random offset and yaw), ``add_uav(spec)`` adds a UAV whose ``.fc``, ``.gripper``,
+``.sprayer`` and ``.camera`` are the ports a state machine drives, and ``step(dt_s)`` advances the clock and the
+physics. Randomness: one seed per world; the bricks draw from their own stream and every UAV from a stream
+derived from the seed and its name, so adding a UAV does not change the others' noise.
+
+Cost per step is independent of the number of bricks: tool contact, attachment, deposits and camera views look
+bricks up in a spatial hash.
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from masonry.airframe import DEFAULT_AIRFRAME, Airframe
+from masonry.blueprint import Blueprint, UavSpec
+from masonry.errors import InputError
+from masonry.planner.tasks import AdhesionTask
+from masonry.ports import CameraFrame, Telemetry, Vec3
+from masonry.sim.adhesive import AdhesiveDeposit
+from masonry.sim.bricks import BrickField, SimBrick
+from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
+from masonry.sim.clock import SimClock
+from masonry.sim.faults import Faults
+from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
+from masonry.sim.vehicle import SimVehicle, VehicleConfig
+
+if TYPE_CHECKING:
+    from masonry.planner.tasks import BrickTask
+
+__all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
+
+CameraMode = Literal["geometric", "render"]
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """Physical parameters of the world around the UAVs (metres, radians, seconds)."""
+
+    pickup_offset_m: float = 0.05  # a brick lies uniformly within this radius of its approximate pickup
+    pickup_yaw_spread_rad: float = math.pi  # ... with a yaw uniform in +- this (pi: any yaw)
+    contact_band_m: float = 0.015  # the effector touches a brick top when within this height of it
+    guide_residual: float = 0.2  # the conical guide centres the brick: this fraction of the offset remains
+    support_margin_m: float = 0.025  # a falling brick ignores overlaps with neighbours thinner than this
+    spray_max_height_m: float = 0.25  # adhesive reaches the surface from at most this nozzle height
+    bead_radius_m: float = 0.03  # coverage: a point is covered within this distance of a bead
+    path_sample_s: float = 0.5  # flown paths are recorded at this period
+    cell_m: float = 0.5  # spatial hash cell
+
+
+@dataclass(eq=False)
+class SimUav:
+    """One UAV in a world: its autopilot model, its tool state and its ports.
+
+    Ports: ``fc`` (FlightController), ``gripper`` (Gripper), ``sprayer`` (Sprayer), ``camera`` (Camera).
+    Every UAV has all four; the world moves bricks only for ``role == "brick"`` and deposits adhesive only for
+    ``role == "adhesion"``.
+    """
+
+    name: str
+    spec: UavSpec
+    world: World
+    vehicle: SimVehicle
+    rng: np.random.Generator  # gripper and camera faults, camera noise
+    magnet_on: bool = False
+    joint_locked: bool = True
+    valve_open: bool = False
+    carried_brick: int | None = None
+    failed: bool = False
+    link_ok: bool = True
+    _carry_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # brick top centre (body x, y) and yaw offset
+    _attempt: int | None = None  # brick of the current contact episode
+    _attempt_ok: bool = False
+    _last_deposit: Vec3 | None = None
+    _stale: Telemetry | None = None
+    _path: list[tuple[float, float, float, float]] = field(default_factory=list)
+    _next_sample_s: float = -math.inf
+
+    def __post_init__(self) -> None:
+        self.fc = SimFlightController(self)
+        self.gripper = SimGripper(self)
+        self.sprayer = SimSprayer(self)
+        self.camera = SimCamera(self)
+
+    @property
+    def role(self) -> str:
+        return self.spec.role
+
+    @property
+    def position_m(self) -> Vec3:
+        """True position (no measurement noise)."""
+        return self.vehicle.position_m
+
+    def tool_point_m(self, offset_m: Vec3) -> Vec3:
+        """A point fixed on the body (FLU offset) in the world; tilt is neglected (a few degrees at most)."""
+        x, y, z = self.vehicle.position_m
+        yaw = self.vehicle.yaw_rad
+        c, s = math.cos(yaw), math.sin(yaw)
+        return (x + c * offset_m[0] - s * offset_m[1], y + s * offset_m[0] + c * offset_m[1], z + offset_m[2])
+
+    def effector_m(self) -> Vec3:
+        """The electromagnet's tip in the world."""
+        return self.tool_point_m(self.world.airframe.effector_offset_m)
+
+    def nozzle_m(self) -> Vec3:
+        """The spray nozzle's outlet in the world."""
+        return self.tool_point_m(self.world.airframe.nozzle_offset_m)
+
+    def telemetry(self) -> Telemetry:
+        """What the flight controller port reports (stale, with ``link_ok`` False, after link or UAV loss)."""
+        if self.link_ok:
+            return self.vehicle.telemetry()
+        if self._stale is None:
+            self._stale = self.vehicle.telemetry()
+        return replace(self._stale, link_ok=False)
+
+    def set_magnet(self, on: bool) -> None:
+        self.magnet_on = on
+        if not on:
+            self._attempt = None
+            if self.carried_brick is not None:
+                self.world._release(self)
+
+    def set_valve(self, open_: bool) -> None:
+        self.valve_open = open_ and not self.failed
+        if not self.valve_open:
+            self._last_deposit = None
+
+    def path_m(self) -> np.ndarray:
+        """The recorded path: rows (t_s, x, y, z), one per ``WorldConfig.path_sample_s``."""
+        return np.asarray(self._path, dtype=float).reshape(-1, 4)
+
+
+class World:
+    """Bricks, adhesive and UAVs on a simulated clock.
+
+    Args:
+        blueprint: the wall; its bricks are laid out in the world (its fleet is not added: see ``add_fleet``).
+        seed: one seed for everything random in the world (>= 0).
+        camera: ``"geometric"`` (marker poses from the camera model plus noise) or ``"render"`` (synthetic images).
+        faults: injected faults.
+        airframe: tool and camera placement on the UAVs.
+        vehicle: multirotor model parameters.
+        camera_config: intrinsics, detection limits and noise.
+        config: pickup scatter, contact and adhesive parameters.
+        start_s: the clock's initial time.
+    """
+
+    def __init__(
+        self,
+        blueprint: Blueprint,
+        *,
+        seed: int = 0,
+        camera: CameraMode = "geometric",
+        faults: Faults | None = None,
+        airframe: Airframe = DEFAULT_AIRFRAME,
+        vehicle: VehicleConfig | None = None,
+        camera_config: CameraConfig | None = None,
+        config: WorldConfig | None = None,
+        start_s: float = 0.0,
+    ) -> None:
+        if camera not in ("geometric", "render"):
+            raise InputError(f"camera mode must be 'geometric' or 'render', got {camera!r}")
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+            raise InputError(f"seed must be an integer >= 0, got {seed!r}")
+        self.blueprint = blueprint
+        self.seed = int(seed)
+        self.camera_mode: CameraMode = camera
+        self.faults = faults if faults is not None else Faults()
+        self.airframe = airframe
+        self.vehicle_config = vehicle if vehicle is not None else VehicleConfig()
+        self.camera_config = camera_config if camera_config is not None else CameraConfig()
+        self.config = config if config is not None else WorldConfig()
+        self.clock = SimClock(start_s)
+        self.uavs: dict[str, SimUav] = {}
+        self.adhesive = AdhesiveDeposit(bead_radius_m=self.config.bead_radius_m)
+        self.field = BrickField(self.config.cell_m)
+        self._min_sep: float | None = None
+        self._carriers: list[SimUav] = []
+        self._lay_out_bricks()
+
+    # ---------------------------------------------------------------- layout
+    def _lay_out_bricks(self) -> None:
+        cfg = self.config
+        rng = np.random.default_rng([self.seed, 0])
+        bricks = self.blueprint.bricks
+        radius = cfg.pickup_offset_m * np.sqrt(rng.random(len(bricks)))
+        angle = rng.uniform(-math.pi, math.pi, len(bricks))
+        yaw = rng.uniform(-cfg.pickup_yaw_spread_rad, cfg.pickup_yaw_spread_rad, len(bricks))
+        for b in sorted(bricks, key=lambda b: b.position_m[2]):
+            if b.placed:
+                self.field.add(SimBrick(b.id, b, b.position_m, b.yaw_rad, "placed"))
+        for i, b in enumerate(bricks):
+            if b.placed or b.pickup_m is None:
+                continue
+            x = b.pickup_m[0] + float(radius[i] * math.cos(angle[i]))
+            y = b.pickup_m[1] + float(radius[i] * math.sin(angle[i]))
+            brick = SimBrick(b.id, b, (x, y, 0.0), float(yaw[i]), "carried")
+            support = self.field.support_under(brick.rect(cfg.support_margin_m))
+            brick.position_m = (x, y, support + b.size_m[2] / 2.0)
+            brick.state = "pickup"
+            self.field.add(brick)
+
+    # ------------------------------------------------------------------ UAVs
+    def add_uav(self, spec: UavSpec, *, yaw_rad: float = 0.0) -> SimUav:
+        """Add a UAV landed and disarmed at ``spec.home_m``; its random stream derives from the seed and its name."""
+        if spec.name in self.uavs:
+            raise InputError(f"a UAV named {spec.name!r} is already in the world")
+        vehicle_ss, uav_ss = np.random.SeedSequence([self.seed, 1, zlib.crc32(spec.name.encode())]).spawn(2)
+        vehicle = SimVehicle(
+            self.vehicle_config,
+            position_m=spec.home_m,
+            yaw_rad=yaw_rad,
+            rng=np.random.default_rng(vehicle_ss),
+            gusts_mps=self.faults.gusts_mps,
+            battery_drain_per_s=self.faults.battery_drain_per_s,
+            start_s=self.clock.now_s(),
+        )
+        uav = SimUav(spec.name, spec, self, vehicle, np.random.default_rng(uav_ss))
+        self.uavs[spec.name] = uav
+        return uav
+
+    def add_fleet(self, fleet: Iterable[UavSpec] | None = None) -> list[SimUav]:
+        """Add every UAV of ``fleet`` (default: the blueprint's), after checking the faults name only these."""
+        specs = list(self.blueprint.fleet if fleet is None else fleet)
+        self.faults.check_uavs([s.name for s in specs] + list(self.uavs))
+        return [self.add_uav(s) for s in specs]
+
+    # ------------------------------------------------------------------ step
+    def step(self, dt_s: float) -> None:
+        """Advance the clock and the physics of every UAV and brick by ``dt_s`` seconds."""
+        if not (dt_s > 0.0 and math.isfinite(dt_s)):
+            raise ValueError(f"World.step needs a finite dt_s > 0, got {dt_s!r}")
+        now = self.clock.now_s() + dt_s
+        faults = self.faults
+        airborne: list[Vec3] = []
+        for uav in self.uavs.values():
+            vehicle = uav.vehicle
+            if not uav.failed:
+                at = faults.uav_loss_at_s.get(uav.name)
+                if at is not None and now >= at:
+                    self._fail(uav)
+                elif uav.link_ok:
+                    at = faults.link_loss_at_s.get(uav.name)
+                    if at is not None and now >= at:
+                        uav._stale = vehicle.telemetry()
+                        uav.link_ok = False
+                        vehicle.lose_link()
+            if vehicle.on_ground and not vehicle.armed and not vehicle.taking_off and not uav.failed:
+                vehicle.step(dt_s)  # parked: nothing moves
+            else:
+                vehicle.step(dt_s)
+                self._contact(uav)
+                if uav.role == "brick":
+                    self._grip(uav)
+                elif uav.valve_open:
+                    self._spray(uav)
+            if now >= uav._next_sample_s:
+                x, y, z = vehicle.position_m
+                uav._path.append((now, x, y, z))
+                uav._next_sample_s = now + self.config.path_sample_s
+            if vehicle.airborne:
+                airborne.append(vehicle.position_m)
+        if len(airborne) > 1:
+            best = self._min_sep if self._min_sep is not None else math.inf
+            for i in range(len(airborne) - 1):
+                a = airborne[i]
+                for b in airborne[i + 1 :]:
+                    d = math.dist(a, b)
+                    best = min(best, d)
+            self._min_sep = best
+        self.clock.advance(dt_s)
+
+    def run(self, duration_s: float, dt_s: float = 0.05) -> None:
+        """Step for ``duration_s`` seconds (no controllers: for tests and notebooks)."""
+        for _ in range(max(0, round(duration_s / dt_s))):
+            self.step(dt_s)
+
+    def _fail(self, uav: SimUav) -> None:
+        uav._stale = uav.vehicle.telemetry()
+        uav.failed = True
+        uav.link_ok = False
+        uav.vehicle.fail()
+        uav.set_valve(False)
+        uav.magnet_on = False
+        if uav.carried_brick is not None:
+            self._release(uav)
+
+    def _contact(self, uav: SimUav) -> None:
+        """Keep the tool (or the carried brick) from passing through brick tops: the airframe is held up."""
+        vehicle = uav.vehicle
+        tol = 0.06
+        if uav.carried_brick is not None:
+            brick = self.field.bricks[uav.carried_brick]
+            self._carry_pose(uav, brick)
+            support = self.field.support_under(
+                brick.rect(self.config.support_margin_m), below_z_m=brick.bottom_z_m, tol_m=tol
+            )
+            if brick.bottom_z_m < support:
+                vehicle.hold_above(vehicle.position_m[2] + support - brick.bottom_z_m)
+                self._carry_pose(uav, brick)
+            return
+        tool = uav.effector_m() if uav.role == "brick" else uav.nozzle_m()
+        support = self.field.support_at(tool[0], tool[1], below_z_m=tool[2], tol_m=tol)
+        if tool[2] < support:
+            vehicle.hold_above(vehicle.position_m[2] + support - tool[2])
+
+    def _carry_pose(self, uav: SimUav, brick: SimBrick) -> None:
+        ex, ey, ez = uav.effector_m()
+        yaw = uav.vehicle.yaw_rad
+        c, s = math.cos(yaw), math.sin(yaw)
+        bx, by, dyaw = uav._carry_offset
+        brick.position_m = (ex + c * bx - s * by, ey + s * bx + c * by, ez - brick.size_m[2] / 2.0)
+        brick.yaw_rad = math.remainder(yaw + dyaw, 2.0 * math.pi)
+
+    def _grip(self, uav: SimUav) -> None:
+        if not uav.magnet_on or uav.joint_locked or uav.carried_brick is not None or uav.failed:
+            return
+        ex, ey, ez = uav.effector_m()
+        tol = self.airframe.grasp_tolerance_m
+        band = self.config.contact_band_m
+        best: SimBrick | None = None
+        best_d2 = tol * tol
+        for b in self.field.near(ex, ey, tol):
+            tx, ty, tz = b.top_center_m
+            d2 = (ex - tx) ** 2 + (ey - ty) ** 2
+            if d2 <= best_d2 and abs(ez - tz) <= band:
+                best, best_d2 = b, d2
+        if best is None:
+            uav._attempt = None
+            return
+        if uav._attempt != best.id:
+            uav._attempt = best.id
+            uav._attempt_ok = bool(uav.rng.random() >= self.faults.grasp_failure)
+        if not uav._attempt_ok:
+            return
+        yaw = uav.vehicle.yaw_rad
+        c, s = math.cos(yaw), math.sin(yaw)
+        tx, ty, _ = best.top_center_m
+        dx, dy = (tx - ex) * self.config.guide_residual, (ty - ey) * self.config.guide_residual
+        uav._carry_offset = (c * dx + s * dy, -s * dx + c * dy, best.yaw_rad - yaw)
+        self.field.pick(best.id, uav.name)
+        uav.carried_brick = best.id
+        uav._attempt = None
+        self._carry_pose(uav, best)
+
+    def _release(self, uav: SimUav) -> None:
+        brick_id = uav.carried_brick
+        if brick_id is None:
+            return
+        brick = self.field.bricks[brick_id]
+        self._carry_pose(uav, brick)
+        self.field.drop(brick_id, self.config.support_margin_m)
+        uav.carried_brick = None
+
+    def _spray(self, uav: SimUav) -> None:
+        nx, ny, nz = uav.nozzle_m()
+        surface = self.field.support_at(nx, ny, below_z_m=nz)
+        if not (-0.01 <= nz - surface <= self.config.spray_max_height_m):
+            uav._last_deposit = None
+            return
+        point = (nx, ny, surface)
+        prev = uav._last_deposit
+        if prev is not None and abs(prev[2] - surface) > 1e-6:
+            prev = None  # moved onto another surface: start a new bead
+        self.adhesive.add(prev if prev is not None else point, point)
+        uav._last_deposit = point
+
+    # ---------------------------------------------------------------- camera
+    def camera_pose(self, uav: SimUav) -> np.ndarray:
+        """4x4 true pose of the UAV's camera in the world (body attitude included)."""
+        vehicle = uav.vehicle
+        T_wb = np.eye(4)
+        T_wb[:3, :3] = R_world_body(*vehicle.attitude_rad)
+        T_wb[:3, 3] = vehicle.position_m
+        return T_wb @ self.airframe.T_body_cam()
+
+    def _visible_candidates(self, uav: SimUav, T_wc: np.ndarray) -> list[SimBrick]:
+        cfg = self.camera_config
+        cx, cy, cz = T_wc[:3, 3]
+        reach = min(cfg.max_range_m(self.blueprint.markers.size_m), max(cz, 0.0) + 0.1)
+        radius = reach * cfg.half_diagonal_tan() + 0.3
+        found = list(self.field.near(float(cx), float(cy), radius))
+        for other in self.uavs.values():
+            if other.carried_brick is not None:
+                found.append(self.field.bricks[other.carried_brick])
+        return found
+
+    def _camera_frame(self, uav: SimUav) -> CameraFrame | None:
+        if uav.failed:
+            return None
+        now = self.clock.now_s()
+        T_wc = self.camera_pose(uav)
+        bricks = self._visible_candidates(uav, T_wc)
+        rng = uav.rng
+        faults = self.faults
+        dropped = faults.dropout > 0.0 and rng.random() < faults.dropout
+        hidden: set[int] = set()
+        if faults.occlusion > 0.0 and rng.random() < faults.occlusion:
+            hidden = {2 * b.id + int(rng.integers(2)) for b in bricks}
+        if self.camera_mode == "render":
+            from masonry.perception.render import RenderedBrick, render_frame
+
+            if dropped:
+                hidden = {m for b in bricks for m in (2 * b.id, 2 * b.id + 1)}
+            image = render_frame(
+                self.camera_config.intrinsics,
+                T_wc,
+                [RenderedBrick(b.id, b.position_m, b.yaw_rad, b.size_m) for b in bricks],
+                self.blueprint.markers,
+                rng=rng,
+                blur_sigma_px=self.camera_config.blur_sigma_px,
+                noise_sigma=self.camera_config.noise_sigma,
+                hidden_markers=frozenset(hidden),
+            )
+            return CameraFrame(time_s=now, image=image)
+        if dropped:
+            return CameraFrame(time_s=now, tags=())
+        occluder = self.field.bricks[uav.carried_brick] if uav.carried_brick is not None else None
+        tags = observe_markers(
+            T_wc[:3, :3],
+            T_wc[:3, 3],
+            bricks,
+            self.blueprint.markers,
+            self.camera_config,
+            rng,
+            hidden=hidden,
+            occluder=occluder,
+        )
+        return CameraFrame(time_s=now, tags=tags)
+
+    # -------------------------------------------------------------- measures
+    @property
+    def bricks(self) -> Mapping[int, SimBrick]:
+        """Every brick in the world by id (true state)."""
+        return self.field.bricks
+
+    def placement_error_m(self, brick_id: int) -> float | None:
+        """Distance (3-D) from a released brick's resting centre to its blueprint centre.
+
+        0.0 for a pre-placed brick; None while the brick has not been released by a UAV (still at its pickup
+        or carried) or if the world has no such brick.
+        """
+        brick = self.field.bricks.get(brick_id)
+        if brick is None or brick.state == "carried":
+            return None
+        if brick.blueprint.placed and not brick.released:
+            return 0.0
+        if not brick.released:
+            return None
+        return brick.placement_error_m()
+
+    def placement_yaw_error_rad(self, brick_id: int) -> float | None:
+        """Absolute yaw difference of a released brick from its blueprint yaw (None as ``placement_error_m``)."""
+        if self.placement_error_m(brick_id) is None:
+            return None
+        brick = self.field.bricks[brick_id]
+        return abs(math.remainder(brick.yaw_rad - brick.blueprint.yaw_rad, 2.0 * math.pi))
+
+    def placement_errors(self) -> dict[int, float]:
+        """Placement error of every brick released so far, by brick id."""
+        return {
+            k: b.placement_error_m()
+            for k, b in self.field.bricks.items()
+            if b.released and b.state == "placed"
+        }
+
+    def coverage(self, task: AdhesionTask) -> float:
+        """Fraction of the task's segment within ``WorldConfig.bead_radius_m`` of deposited adhesive."""
+        return self.adhesive.coverage(task.start_m, task.end_m)
+
+    def distance_flown_m(self, name: str) -> float:
+        """Path length flown by the UAV so far (true positions)."""
+        return self.uavs[name].vehicle.distance_m
+
+    @property
+    def min_separation_m(self) -> float | None:
+        """Smallest distance seen between two airborne UAVs so far (None until two have flown at once)."""
+        return self._min_sep
+
+    def brick_task_target_m(self, task: BrickTask) -> Vec3:
+        """Where the effector must be to put ``task``'s brick on its blueprint pose: the top-face centre."""
+        x, y, z = task.position_m
+        return (x, y, z + task.size_m[2] / 2.0)
