@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Iterable, Iterator, Mapping, Sequence, Set
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
@@ -43,12 +44,12 @@ class Assignment:
     attempt: int = 1
 
 
-class _SetView(Set[str]):
+class _SetView(AbstractSet[str]):
     """A live, read-only view of a set of task ids held by the dispatcher (O(1) to obtain)."""
 
     __slots__ = ("_data",)
 
-    def __init__(self, data: Set[str]) -> None:
+    def __init__(self, data: AbstractSet[str]) -> None:
         self._data = data
 
     def __contains__(self, item: object) -> bool:
@@ -248,8 +249,7 @@ class Dispatcher:
             k += 1
             best = 0.0
             for d in self._dependents[i]:
-                if chain[d] > best:
-                    best = chain[d]
+                best = max(best, chain[d])
             chain[i] = weight[i] + best
             for p in self._prerequisites[i]:
                 pending[p] -= 1
@@ -507,7 +507,7 @@ class Dispatcher:
     # ------------------------------------------------------------------ queries
 
     @property
-    def done(self) -> Set[str]:
+    def done(self) -> AbstractSet[str]:
         """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
         return _SetView(self._done)
 
@@ -517,7 +517,7 @@ class Dispatcher:
         return MappingProxyType(self._in_progress)
 
     @property
-    def stuck(self) -> Set[str]:
+    def stuck(self) -> AbstractSet[str]:
         """Ids of tasks that failed ``max_attempts`` times; a live read-only view."""
         return _SetView(self._stuck)
 

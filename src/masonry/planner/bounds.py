@@ -1,0 +1,240 @@
+"""Makespan lower bound of a plan for a fleet, and expected task durations to feed it and the dispatcher.
+
+The bound (issue 5, section 3) is the larger of
+
+* the longest dependency chain of task durations (no schedule can run a chain faster than its sum), and
+* for each role, the total work of that role divided by the number of UAVs of that role (they can at best share
+  it perfectly).
+
+Conflicts only make the true optimum larger, so both terms stay valid lower bounds for any dispatcher.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
+from masonry.errors import PlanningError
+from masonry.planner.tasks import BrickTask, Plan
+
+
+def _check_durations(plan: Plan, durations_s: Mapping[str, float]) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for t in plan.tasks:
+        if t.done:
+            continue
+        if t.id not in durations_s:
+            raise PlanningError(f"durations_s has no entry for task {t.id}")
+        try:
+            d = float(durations_s[t.id])
+        except (TypeError, ValueError):
+            raise PlanningError(f"durations_s[{t.id!r}] is not a number: {durations_s[t.id]!r}") from None
+        if not math.isfinite(d) or d < 0.0:
+            raise PlanningError(f"durations_s[{t.id!r}] must be finite and >= 0, got {d!r}")
+        out[t.id] = d
+    return out
+
+
+def longest_chain_s(plan: Plan, durations_s: Mapping[str, float]) -> float:
+    """The longest dependency chain of not-done tasks, weighted by ``durations_s`` (done tasks weigh 0).
+
+    Raises:
+        PlanningError: a not-done task has no (or a bad) duration, the graph names an unknown task or has a
+            cycle.
+    """
+    dur = _check_durations(plan, durations_s)
+    ids = [t.id for t in plan.tasks]
+    index = {tid: i for i, tid in enumerate(ids)}
+    n = len(ids)
+    prereqs: list[list[int]] = [[] for _ in range(n)]
+    n_dependents = [0] * n
+    dependents: list[list[int]] = [[] for _ in range(n)]
+    for u, v in plan.dependencies:
+        if u not in index or v not in index:
+            raise PlanningError(f"dependency ({u}, {v}) names an unknown task")
+        iu, iv = index[u], index[v]
+        prereqs[iu].append(iv)
+        dependents[iv].append(iu)
+        n_dependents[iv] += 1
+    weight = [dur.get(tid, 0.0) for tid in ids]
+    # Kahn's algorithm in prerequisite-first order: finish[i] = weight[i] + max(finish of prerequisites).
+    missing = [len(prereqs[i]) for i in range(n)]
+    order = [i for i in range(n) if missing[i] == 0]
+    finish = [0.0] * n
+    k = 0
+    while k < len(order):
+        i = order[k]
+        k += 1
+        finish[i] = weight[i] + max((finish[p] for p in prereqs[i]), default=0.0)
+        for d in dependents[i]:
+            missing[d] -= 1
+            if missing[d] == 0:
+                order.append(d)
+    if len(order) != n:
+        raise PlanningError(f"the dependency graph has a cycle through task {ids[missing.index(max(missing))]}")
+    return max(finish, default=0.0)
+
+
+def lower_bound_s(plan: Plan, fleet: Sequence[UavSpec], durations_s: Mapping[str, float]) -> float:
+    """A makespan lower bound: max(longest dependency chain, each role's total work / its number of UAVs).
+
+    Args:
+        plan: the plan; its done tasks (pre-placed bricks) cost nothing.
+        fleet: the UAVs at the start of the mission.
+        durations_s: the duration of every not-done task (e.g. from :func:`estimate_durations_s`, or the
+            durations measured in a run).
+
+    Returns:
+        The bound in seconds (0.0 for a plan with nothing to do).
+
+    Raises:
+        PlanningError: a duration is missing or bad, the dependency graph is cyclic or names unknown tasks, or
+            a role has work but no UAV (no makespan is finite then).
+    """
+    dur = _check_durations(plan, durations_s)
+    count = {r: 0 for r in ROLES}
+    for spec in fleet:
+        count[spec.role] = count.get(spec.role, 0) + 1
+    work = {r: 0.0 for r in ROLES}
+    tasks_of = {r: 0 for r in ROLES}
+    for t in plan.tasks:
+        if not t.done:
+            work[t.kind] += dur[t.id]
+            tasks_of[t.kind] += 1
+    per_role = 0.0
+    for role in ROLES:
+        if tasks_of[role] and not count[role]:
+            raise PlanningError(f"no {role} UAV in the fleet for {tasks_of[role]} {role} task(s)")
+        if count[role]:
+            per_role = max(per_role, work[role] / count[role])
+    return max(longest_chain_s(plan, dur), per_role)
+
+
+def estimate_durations_s(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    *,
+    cruise_speed_mps: float = 1.0,
+    vertical_speed_mps: float = 0.4,
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
+    descent_s: float = 7.0,
+    spray_speed_mps: float = 0.15,
+    spray_descent_s: float = 4.0,
+    brick_handling_s: float = 4.0,
+    adhesion_handling_s: float = 1.5,
+) -> dict[str, float]:
+    """Expected duration of every not-done task, from the flight it implies (defaults match ``UavConfig``).
+
+    A brick task: the approach to the pickup (from the nearest brick UAV home or, if nearer, from its own
+    drop-off, where a UAV coming back from the previous placement is), a minimum-jerk descent of ``descent_s``,
+    the climb back to cruise altitude, the carry to the drop-off at ``cruise_speed_mps``, a second descent, the
+    climb, and ``brick_handling_s`` of settling, estimation and grasp/release dwells. An adhesion task: a descent
+    of ``spray_descent_s``, the segment at ``spray_speed_mps``, the climb, and ``adhesion_handling_s``; its
+    approach counts as zero (consecutive segments are neighbours). Horizontal legs use ``cruise_speed_mps``,
+    climbs ``vertical_speed_mps``.
+
+    Returns:
+        task id -> seconds, for every not-done task.
+
+    Raises:
+        PlanningError: a speed or time is not finite and positive (times: >= 0).
+    """
+    for name, value in (
+        ("cruise_speed_mps", cruise_speed_mps),
+        ("vertical_speed_mps", vertical_speed_mps),
+        ("spray_speed_mps", spray_speed_mps),
+    ):
+        if not math.isfinite(value) or value <= 0.0:
+            raise PlanningError(f"{name} must be finite and > 0, got {value!r}")
+    for name, value in (
+        ("cruise_altitude_m", cruise_altitude_m),
+        ("descent_s", descent_s),
+        ("spray_descent_s", spray_descent_s),
+        ("brick_handling_s", brick_handling_s),
+        ("adhesion_handling_s", adhesion_handling_s),
+    ):
+        if not math.isfinite(value) or value < 0.0:
+            raise PlanningError(f"{name} must be finite and >= 0, got {value!r}")
+    brick_homes = [spec.home_m for spec in fleet if spec.role == "brick"]
+
+    def horizontal(a: Sequence[float], b: Sequence[float]) -> float:
+        return math.hypot(a[0] - b[0], a[1] - b[1])
+
+    def climb(z_m: float) -> float:
+        return max(cruise_altitude_m - z_m, 0.0) / vertical_speed_mps
+
+    out: dict[str, float] = {}
+    for t in plan.tasks:
+        if t.done:
+            continue
+        if isinstance(t, BrickTask):
+            pickup = t.pickup_m if t.pickup_m is not None else t.position_m
+            carry = horizontal(pickup, t.position_m)
+            approach = min([carry] + [horizontal(h, pickup) for h in brick_homes])
+            out[t.id] = (
+                (approach + carry) / cruise_speed_mps
+                + 2.0 * descent_s
+                + climb(pickup[2])
+                + climb(t.position_m[2])
+                + brick_handling_s
+            )
+        else:
+            out[t.id] = (
+                spray_descent_s
+                + t.length_m / spray_speed_mps
+                + climb(min(t.start_m[2], t.end_m[2]))
+                + adhesion_handling_s
+            )
+    return out
+
+
+def dispatch_makespan_s(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    durations_s: Mapping[str, float],
+    policy: str = "critical-path",
+    *,
+    cruise_speed_mps: float | None = None,
+) -> float:
+    """The makespan the reactive dispatcher reaches when every task takes exactly its duration (no faults).
+
+    A discrete-event run of :class:`~masonry.planner.dispatch.Dispatcher` in model time: useful to compare
+    policies against :func:`lower_bound_s` without flying anything. With ``cruise_speed_mps`` the flight from
+    the UAV's position (its home, then where its last task ended) to the task's start is added at that speed
+    (then ``durations_s`` should not include it); without it, moving between tasks is free.
+
+    Raises:
+        PlanningError: as :class:`Dispatcher` and :func:`lower_bound_s`; or the run cannot finish (a role with
+            work has no UAV).
+    """
+    import heapq
+
+    from masonry.planner.dispatch import Dispatcher, task_start_m
+
+    dur = _check_durations(plan, durations_s)
+    if cruise_speed_mps is not None and (not math.isfinite(cruise_speed_mps) or cruise_speed_mps <= 0.0):
+        raise PlanningError(f"cruise_speed_mps must be finite and > 0, got {cruise_speed_mps!r}")
+    d = Dispatcher(plan, fleet, policy, durations_s=dur)
+    where = {spec.name: tuple(spec.home_m) for spec in fleet}
+    now = 0.0
+    events: list[tuple[float, int, str]] = []
+    seq = 0
+    while True:
+        for a in d.assign():
+            task = d.task(a.task_id)
+            travel = 0.0
+            if cruise_speed_mps is not None:
+                travel = math.dist(where[a.uav], task_start_m(task)) / cruise_speed_mps
+            heapq.heappush(events, (now + travel + dur[a.task_id], seq, a.task_id))
+            seq += 1
+        if not events:
+            break
+        now, _, tid = heapq.heappop(events)
+        uav = d.in_progress[tid]
+        d.complete(tid)
+        t = d.task(tid)
+        where[uav] = t.position_m if isinstance(t, BrickTask) else t.end_m
+    if not d.finished:
+        raise PlanningError(f"the plan cannot finish with this fleet: {len(d.remaining)} task(s) left")
+    return now
