@@ -6,6 +6,8 @@ import importlib
 
 _MODULES = (
     "plan",  # masonry plan, schema, blueprint
+    "sim",  # masonry sim
+    "mission",  # masonry mission-control
 )
 
 for _name in _MODULES:

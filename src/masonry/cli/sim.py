@@ -1,0 +1,93 @@
+"""``masonry sim``: a whole mission in simulated time, with the real state machines and mission control."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+from masonry.cli.app import command
+from masonry.errors import InputError
+
+
+@command("sim")
+def sim(
+    blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON)."),
+    brick_uavs: Optional[int] = typer.Option(None, "--brick-uavs", help="Number of brick UAVs (overrides the fleet)."),
+    adhesion_uavs: Optional[int] = typer.Option(None, "--adhesion-uavs",
+                                                help="Number of adhesion UAVs (overrides the fleet)."),
+    policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
+    camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
+    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
+                                    "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R."),
+    journal: Optional[Path] = typer.Option(None, "--journal", help="SQLite journal of the mission."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
+    fmt: str = typer.Option("text", "--format", help="text | json."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write the JSON report to this file."),
+    gantt: Optional[Path] = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
+    plot3d: Optional[Path] = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
+    dt: float = typer.Option(0.05, "--dt", help="Simulation tick, seconds."),
+) -> None:
+    """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks)."""
+    from masonry.blueprint import load_blueprint
+    from masonry.mission.simulate import simulate
+    from masonry.sim import Faults
+
+    if fmt not in ("text", "json"):
+        raise InputError(f"--format must be text or json, got {fmt!r}")
+    for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
+        if p is not None and p.suffix.lower() not in exts:
+            raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
+    bp = load_blueprint(blueprint)
+    faults = Faults.parse(fault)
+
+    progress_cb, finish = _progress_bar(enabled=sys.stderr.isatty())
+    try:
+        result = simulate(bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed,
+                          camera=camera, faults=faults, journal_path=journal, resume=resume, dt_s=dt,
+                          progress=progress_cb)
+    finally:
+        finish()
+    if report is not None:
+        report.write_text(result.to_json(indent=1) + "\n")
+    if gantt is not None:
+        from masonry.viz.gantt import draw_gantt
+
+        draw_gantt(result, gantt, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
+    if plot3d is not None:
+        from masonry.viz.plot3d import draw_plot3d
+
+        draw_plot3d(bp, result, plot3d, title=f"{bp.name or blueprint.name}: wall and flown paths")
+    if fmt == "json":
+        typer.echo(result.to_json())
+    else:
+        typer.echo(result.summary())
+        if not result.completed:
+            raise typer.Exit(1)
+
+
+def _progress_bar(enabled: bool) -> tuple[Any, Any]:
+    """A rich progress bar on stderr (a terminal only): tasks done out of total, with simulated time."""
+    if not enabled:
+        return None, lambda: None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(TextColumn("mission"), BarColumn(), MofNCompleteColumn(), TextColumn("sim {task.fields[t]:.0f} s"),
+                   TimeElapsedColumn(), console=Console(stderr=True), transient=True)
+    state: dict[str, Any] = {}
+
+    def update(done: int, total: int, now_s: float) -> None:
+        if "id" not in state:
+            bar.start()
+            state["id"] = bar.add_task("mission", total=total, t=now_s)
+        bar.update(state["id"], completed=done, t=now_s)
+
+    def finish() -> None:
+        if "id" in state:
+            bar.stop()
+
+    return update, finish

@@ -1,0 +1,337 @@
+"""Mission control: the paper's Algorithm 1 as a step function over a transport, a dispatcher and a journal.
+
+``MissionControl.step(now_s)`` is one tick: read every incoming message (heartbeats, progress, results),
+declare UAVs silent past the heartbeat timeout lost (their task goes back to the pool), hand available tasks
+to idle UAVs through the dispatcher, journal every assignment, completion, failure and loss, send the
+assignments, and send its own heartbeat. The loop around it is thin (``masonry sim`` steps it in simulated
+time, ``masonry mission-control`` in wall time), so the same code runs in both.
+
+Startup: a UAV takes tasks once it has been heard from. Mission control waits until the whole fleet is
+online, or ``startup_timeout_s`` after its first step, then removes the UAVs never heard from.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from masonry.blueprint import UavSpec
+from masonry.errors import MissionError, ProtocolError
+from masonry.mission.messages import (
+    MISSION_CONTROL,
+    Assign,
+    Heartbeat,
+    MissionEnd,
+    Progress,
+    Result,
+    decode,
+    encode,
+)
+from masonry.mission.transport import Transport
+from masonry.planner.tasks import Plan, Task
+
+log = logging.getLogger(__name__)
+
+Vec3 = tuple[float, float, float]
+AttemptStatus = Literal["running", "done", "failed"]
+
+
+@dataclass
+class Attempt:
+    """One assignment of a task to a UAV, as mission control saw it."""
+
+    task_id: str
+    uav: str
+    attempt: int
+    start_s: float
+    end_s: float | None = None
+    status: AttemptStatus = "running"
+    reason: str | None = None
+    placement_error_m: float | None = None
+    coverage: float | None = None
+
+
+@dataclass
+class UavLink:
+    """What mission control knows about one UAV."""
+
+    spec: UavSpec
+    last_heard_s: float | None = None
+    position_m: Vec3 | None = None
+    state: str = ""
+    lost: bool = False
+    lost_at_s: float | None = None
+    distance_m: float = 0.0  # summed between successive reported positions
+
+    def moved_to(self, position_m: Vec3) -> None:
+        if self.position_m is not None:
+            self.distance_m += math.dist(self.position_m, position_m)
+        self.position_m = position_m
+
+
+@dataclass
+class MissionEvents:
+    """Counters of what crossed the transport (for the report and the benchmark)."""
+
+    received: int = 0
+    rejected: int = 0
+    sent: int = 0
+    progress: int = 0
+    errors: list[str] = field(default_factory=list)
+
+
+class MissionControl:
+    """Reactive mission control over a :class:`~masonry.mission.transport.Transport`.
+
+    Args:
+        plan: the wall's plan (``masonry.planner.plan``).
+        fleet: the UAVs of the mission (names must be unique).
+        transport: the endpoint named ``"mission-control"``.
+        policy: dispatcher priority, ``fifo``, ``critical-path`` or ``nearest``.
+        journal: an open :class:`~masonry.mission.journal.Journal`, or None for no journal.
+        max_attempts: attempts per task before it is reported stuck.
+        durations_s: expected task durations for the critical-path priority (task id -> s).
+        heartbeat_period_s: how often mission control sends its heartbeat.
+        heartbeat_timeout_s: a UAV silent for longer is declared lost.
+        startup_timeout_s: how long to wait for the whole fleet before starting without the missing UAVs.
+    """
+
+    def __init__(
+        self,
+        plan: Plan,
+        fleet: Sequence[UavSpec],
+        transport: Transport,
+        *,
+        policy: str = "critical-path",
+        journal: Any = None,
+        max_attempts: int = 3,
+        durations_s: Mapping[str, float] | None = None,
+        heartbeat_period_s: float = 1.0,
+        heartbeat_timeout_s: float = 5.0,
+        startup_timeout_s: float = 30.0,
+    ) -> None:
+        from masonry.planner.dispatch import Dispatcher
+
+        names = [u.name for u in fleet]
+        if len(set(names)) != len(names):
+            raise MissionError(f"fleet names must be unique, got {names}")
+        self.plan = plan
+        self.fleet = tuple(fleet)
+        self.transport = transport
+        self.policy = policy
+        self.journal = journal
+        self.heartbeat_period_s = heartbeat_period_s
+        self.heartbeat_timeout_s = heartbeat_timeout_s
+        self.startup_timeout_s = startup_timeout_s
+        self.dispatcher = Dispatcher(plan, self.fleet, policy=policy, max_attempts=max_attempts,
+                                     durations_s=durations_s)
+        self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
+        self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
+        self.history: list[Attempt] = []
+        self._running: dict[str, Attempt] = {}  # task id -> its running attempt
+        self.events = MissionEvents()
+        self.started_at_s: float | None = None
+        self._first_step_s: float | None = None
+        self._last_heartbeat_s: float | None = None
+        self._dirty = True
+        self.ended_at_s: float | None = None
+        self.resumed_at_s: float | None = None
+        self.now_s = 0.0
+
+    # -- resume ----------------------------------------------------------------------------------------
+    def restore(self, state: Any) -> None:
+        """Continue from a journal's replayed state: done tasks stay done with their times, attempts carry on.
+
+        Tasks that were in progress when the previous run stopped go back to the pool (flown again);
+        UAVs the journal declared lost stay lost.
+        """
+        from masonry.errors import JournalError
+
+        done = {rec.task_id: rec for rec in state.done}
+        unknown = sorted(({t for t in done} | {f.task_id for f in state.failures}) - set(self._tasks))
+        if unknown:
+            raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
+        attempts = {k: int(v) for k, v in state.attempts.items()}
+        self.dispatcher.restore(list(done), attempts)
+        for f in state.failures:
+            self.history.append(Attempt(f.task_id, f.uav, f.attempt, f.start_s if f.start_s is not None
+                                        else f.time_s, f.time_s, "failed", f.reason))
+        for task_id, rec in done.items():
+            fields = dict(rec.fields)
+            self.history.append(
+                Attempt(
+                    task_id=task_id,
+                    uav=rec.uav,
+                    attempt=rec.attempt,
+                    start_s=rec.start_s if rec.start_s is not None else rec.time_s,
+                    end_s=rec.time_s,
+                    status="done",
+                    placement_error_m=fields.get("placement_error_m"),
+                    coverage=fields.get("coverage"),
+                )
+            )
+        for name in state.lost_uavs:
+            link = self.uavs.get(name)
+            if link is not None and not link.lost:
+                link.lost = True
+                self.dispatcher.remove_uav(name)
+        self.history.sort(key=lambda a: (a.start_s, a.task_id))
+        self.resumed_at_s = state.last_time_s
+
+    # -- properties ------------------------------------------------------------------------------------
+    @property
+    def finished(self) -> bool:
+        """Every task is done."""
+        return bool(self.dispatcher.finished)
+
+    @property
+    def blocked(self) -> bool:
+        """The mission cannot finish (stuck tasks or no UAV left for a role) and nothing is in flight."""
+        return bool(self.dispatcher.blocked) and not self.dispatcher.in_progress
+
+    @property
+    def over(self) -> bool:
+        """Finished or blocked: mission control has sent (or will send) MissionEnd."""
+        return self.finished or self.blocked
+
+    @property
+    def online(self) -> list[str]:
+        return [n for n, u in self.uavs.items() if u.last_heard_s is not None and not u.lost]
+
+    # -- the tick --------------------------------------------------------------------------------------
+    def step(self, now_s: float) -> None:
+        """One tick of mission control at mission time ``now_s`` (see the module docstring)."""
+        self.now_s = now_s
+        if self._first_step_s is None:
+            self._first_step_s = now_s
+        for raw in self.transport.receive():
+            self._handle(raw, now_s)
+        self._check_heartbeats(now_s)
+        if self.started_at_s is None:
+            self._maybe_start(now_s)
+        if self.started_at_s is not None and self.ended_at_s is None:
+            if self._dirty:
+                self._dispatch(now_s)
+            if self.over:
+                self.ended_at_s = now_s
+                self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
+        if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:
+            self._last_heartbeat_s = now_s
+            self._broadcast(Heartbeat(MISSION_CONTROL, now_s, state="running" if self.ended_at_s is None
+                                      else "ended"))
+
+    def _maybe_start(self, now_s: float) -> None:
+        missing = [n for n, u in self.uavs.items() if u.last_heard_s is None and not u.lost]
+        assert self._first_step_s is not None
+        if missing and now_s - self._first_step_s < self.startup_timeout_s:
+            return
+        for name in missing:
+            log.warning("UAV %s never came online; starting without it", name)
+            self._lose(name, now_s)
+        self.started_at_s = now_s
+        self._dirty = True
+
+    def _handle(self, raw: bytes, now_s: float) -> None:
+        try:
+            msg = decode(raw, self.uavs.keys())
+        except ProtocolError as exc:
+            self.events.rejected += 1
+            self.events.errors.append(str(exc))
+            log.warning("rejected message: %s", exc)
+            return
+        self.events.received += 1
+        if msg.sender == MISSION_CONTROL:
+            return
+        link = self.uavs[msg.sender]
+        if link.lost:
+            return  # a UAV declared lost stays lost; its task has been given to another
+        link.last_heard_s = now_s
+        if isinstance(msg, Heartbeat):
+            link.state = msg.state
+            if msg.position_m is not None:
+                link.moved_to(msg.position_m)
+        elif isinstance(msg, Progress):
+            self.events.progress += 1
+            link.state = msg.state
+            if msg.position_m is not None:
+                link.moved_to(msg.position_m)
+        elif isinstance(msg, Result):
+            if msg.position_m is not None:
+                link.moved_to(msg.position_m)
+            self._on_result(msg, now_s)
+
+    def _on_result(self, msg: Result, now_s: float) -> None:
+        r = msg.result
+        if self.dispatcher.in_progress.get(r.task_id) != msg.sender:
+            log.info("ignoring a result for %s from %s: not its task now", r.task_id, msg.sender)
+            return
+        att = self._running.pop(r.task_id)
+        att.end_s = now_s
+        att.placement_error_m = r.placement_error_m
+        att.coverage = r.coverage
+        if r.status == "done":
+            att.status = "done"
+            self.dispatcher.complete(r.task_id)
+            if self.journal is not None:
+                fields: dict[str, Any] = {}
+                if r.placement_error_m is not None:
+                    fields["placement_error_m"] = r.placement_error_m
+                if r.coverage is not None:
+                    fields["coverage"] = r.coverage
+                self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+        else:
+            att.status = "failed"
+            att.reason = r.reason or "failed"
+            self.dispatcher.fail(r.task_id)
+            if self.journal is not None:
+                self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
+        self._dirty = True
+
+    def _check_heartbeats(self, now_s: float) -> None:
+        for name, link in self.uavs.items():
+            if link.lost or link.last_heard_s is None:
+                continue
+            if now_s - link.last_heard_s > self.heartbeat_timeout_s:
+                log.warning("UAV %s silent for %.1f s: lost", name, now_s - link.last_heard_s)
+                self._lose(name, now_s)
+
+    def _lose(self, name: str, now_s: float) -> None:
+        link = self.uavs[name]
+        link.lost = True
+        link.lost_at_s = now_s
+        released = self.dispatcher.remove_uav(name)
+        if released is not None:
+            att = self._running.pop(released, None)
+            if att is not None:
+                att.end_s = now_s
+                att.status = "failed"
+                att.reason = "uav lost"
+        if self.journal is not None:
+            self.journal.record_uav_lost(now_s, name)
+        self._dirty = True
+
+    def _dispatch(self, now_s: float) -> None:
+        self._dirty = False
+        positions = {n: u.position_m for n, u in self.uavs.items() if u.position_m is not None and not u.lost}
+        for a in self.dispatcher.assign(positions or None):
+            attempt = a.attempt
+            att = Attempt(a.task_id, a.uav, attempt, now_s)
+            self.history.append(att)
+            self._running[a.task_id] = att
+            if self.journal is not None:
+                self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
+            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s))
+
+    def _send(self, to: str, msg: Any) -> None:
+        self.transport.send(to, encode(msg))
+        self.events.sent += 1
+
+    def _broadcast(self, msg: Any) -> None:
+        data = encode(msg)
+        for name, link in self.uavs.items():
+            if not link.lost:
+                self.transport.send(name, data)
+                self.events.sent += 1

@@ -1,0 +1,310 @@
+"""The mission protocol: versioned, validated messages between mission control and UAV handlers.
+
+Every message travels as one JSON object with an envelope ``{"v": 1, "type": ..., "sender": ...}``.
+:func:`decode` checks the version, the type, every field's type and, when the fleet is given, that the
+sender (and the addressed UAV) belongs to it; anything else raises :class:`~masonry.errors.ProtocolError`.
+
+Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
+
+- :class:`Heartbeat` both ways, every ``heartbeat_period_s``: a silent peer is declared lost.
+- :class:`Assign` mission control -> UAV: one task (the whole task value) and its attempt number.
+- :class:`Progress` UAV -> mission control: the UAV's state machine entered ``state`` while on ``task_id``.
+- :class:`Result` UAV -> mission control: the task is done or failed (a :class:`~masonry.ports.TaskResult`).
+- :class:`MissionEnd` mission control -> UAV: nothing more will come; go home and land.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Collection
+from dataclasses import dataclass
+from typing import Any, Union
+
+from masonry.errors import ProtocolError
+from masonry.planner.tasks import AdhesionTask, BrickTask, Task
+from masonry.ports import TaskResult
+
+PROTOCOL_VERSION = 1
+MISSION_CONTROL = "mission-control"
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    """I am alive: sent by every UAV handler and by mission control once per heartbeat period."""
+
+    sender: str
+    time_s: float
+    state: str = ""
+    task_id: str | None = None
+    position_m: Vec3 | None = None
+
+
+@dataclass(frozen=True)
+class Assign:
+    """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1)."""
+
+    sender: str
+    uav: str
+    task: Task
+    attempt: int
+    time_s: float
+
+
+@dataclass(frozen=True)
+class Progress:
+    """A UAV's state machine entered ``state`` while working on ``task_id``."""
+
+    sender: str
+    task_id: str
+    state: str
+    time_s: float
+    position_m: Vec3 | None = None
+
+
+@dataclass(frozen=True)
+class Result:
+    """A UAV finished (``done``) or abandoned (``failed``) a task."""
+
+    sender: str
+    result: TaskResult
+    time_s: float
+    position_m: Vec3 | None = None
+
+
+@dataclass(frozen=True)
+class MissionEnd:
+    """Mission control is done with the UAVs (``completed`` false when the mission could not finish)."""
+
+    sender: str
+    time_s: float
+    completed: bool
+
+
+Message = Union[Heartbeat, Assign, Progress, Result, MissionEnd]
+
+_TYPE_NAMES: dict[type, str] = {
+    Heartbeat: "heartbeat",
+    Assign: "assign",
+    Progress: "progress",
+    Result: "result",
+    MissionEnd: "mission-end",
+}
+
+
+def _vec(v: Vec3 | None) -> list[float] | None:
+    return None if v is None else [float(x) for x in v]
+
+
+def task_to_dict(task: Task) -> dict[str, Any]:
+    """A task value as plain JSON data (the inverse of :func:`task_from_dict`)."""
+    if isinstance(task, BrickTask):
+        return {
+            "kind": "brick",
+            "id": task.id,
+            "brick": task.brick,
+            "done": task.done,
+            "position_m": _vec(task.position_m),
+            "yaw_rad": task.yaw_rad,
+            "pickup_m": _vec(task.pickup_m),
+            "size_m": _vec(task.size_m),
+        }
+    return {
+        "kind": "adhesion",
+        "id": task.id,
+        "below": task.below,
+        "above": task.above,
+        "start_m": _vec(task.start_m),
+        "end_m": _vec(task.end_m),
+        "length_m": task.length_m,
+        "done": task.done,
+    }
+
+
+def encode(message: Message) -> bytes:
+    """Serialise one message to its JSON wire form (UTF-8)."""
+    body: dict[str, Any] = {"v": PROTOCOL_VERSION, "type": _TYPE_NAMES[type(message)], "sender": message.sender}
+    if isinstance(message, Heartbeat):
+        body.update(time_s=message.time_s, state=message.state, task_id=message.task_id,
+                    position_m=_vec(message.position_m))
+    elif isinstance(message, Assign):
+        body.update(uav=message.uav, task=task_to_dict(message.task), attempt=message.attempt,
+                    time_s=message.time_s)
+    elif isinstance(message, Progress):
+        body.update(task_id=message.task_id, state=message.state, time_s=message.time_s,
+                    position_m=_vec(message.position_m))
+    elif isinstance(message, Result):
+        r = message.result
+        body.update(
+            time_s=message.time_s,
+            position_m=_vec(message.position_m),
+            result={
+                "task_id": r.task_id,
+                "status": r.status,
+                "duration_s": r.duration_s,
+                "reason": r.reason,
+                "placement_error_m": r.placement_error_m,
+                "coverage": r.coverage,
+            },
+        )
+    else:
+        body.update(time_s=message.time_s, completed=message.completed)
+    return json.dumps(body, separators=(",", ":"), allow_nan=False).encode()
+
+
+class _Fields:
+    """Typed access to a JSON object's fields; every failure names the message type and the field."""
+
+    def __init__(self, data: dict[str, Any], what: str) -> None:
+        self.data = data
+        self.what = what
+
+    def fail(self, field: str, problem: str) -> ProtocolError:
+        return ProtocolError(f"{self.what} message: field {field!r} {problem}")
+
+    def get(self, field: str) -> Any:
+        if field not in self.data:
+            raise self.fail(field, "is missing")
+        return self.data[field]
+
+    def str_(self, field: str, *, optional: bool = False) -> Any:
+        v = self.data.get(field) if optional else self.get(field)
+        if v is None and optional:
+            return None
+        if not isinstance(v, str) or not v:
+            raise self.fail(field, f"must be a non-empty string, got {v!r}")
+        return v
+
+    def num(self, field: str, *, optional: bool = False) -> Any:
+        v = self.data.get(field) if optional else self.get(field)
+        if v is None and optional:
+            return None
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.fail(field, f"must be a finite number, got {v!r}")
+        return float(v)
+
+    def int_(self, field: str) -> int:
+        v = self.get(field)
+        if isinstance(v, bool) or not isinstance(v, int):
+            raise self.fail(field, f"must be an integer, got {v!r}")
+        return v
+
+    def bool_(self, field: str) -> bool:
+        v = self.get(field)
+        if not isinstance(v, bool):
+            raise self.fail(field, f"must be true or false, got {v!r}")
+        return v
+
+    def vec(self, field: str, *, optional: bool = False) -> Any:
+        v = self.data.get(field) if optional else self.get(field)
+        if v is None and optional:
+            return None
+        if (
+            not isinstance(v, list)
+            or len(v) != 3
+            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v)
+        ):
+            raise self.fail(field, f"must be a list of 3 finite numbers, got {v!r}")
+        return (float(v[0]), float(v[1]), float(v[2]))
+
+    def obj(self, field: str) -> dict[str, Any]:
+        v = self.get(field)
+        if not isinstance(v, dict):
+            raise self.fail(field, f"must be an object, got {type(v).__name__}")
+        return v
+
+
+def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
+    """Rebuild a task value from :func:`task_to_dict` data (raises ProtocolError)."""
+    f = _Fields(data, f"{what} task")
+    kind = f.get("kind")
+    if kind == "brick":
+        return BrickTask(
+            id=f.str_("id"),
+            brick=f.int_("brick"),
+            done=f.bool_("done"),
+            position_m=f.vec("position_m"),
+            yaw_rad=f.num("yaw_rad"),
+            pickup_m=f.vec("pickup_m", optional=True),
+            size_m=f.vec("size_m"),
+        )
+    if kind == "adhesion":
+        return AdhesionTask(
+            id=f.str_("id"),
+            below=f.int_("below"),
+            above=f.int_("above"),
+            start_m=f.vec("start_m"),
+            end_m=f.vec("end_m"),
+            length_m=f.num("length_m"),
+            done=f.bool_("done"),
+        )
+    raise f.fail("kind", f"must be 'brick' or 'adhesion', got {kind!r}")
+
+
+def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
+    """Parse and validate one wire message.
+
+    Args:
+        raw: the JSON bytes as received.
+        fleet: the UAV names of the blueprint's fleet; when given, a UAV sender or addressee outside it is
+            rejected.
+
+    Raises:
+        ProtocolError: malformed JSON, another protocol version, an unknown type, a bad field, or a UAV name
+            not in ``fleet``.
+    """
+    try:
+        data = json.loads(raw)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ProtocolError(f"message is not valid JSON: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ProtocolError(f"message must be a JSON object, got {type(data).__name__}")
+    version = data.get("v")
+    if version != PROTOCOL_VERSION:
+        raise ProtocolError(f"message has protocol version {version!r}; this side speaks {PROTOCOL_VERSION}")
+    kind = data.get("type")
+    f = _Fields(data, str(kind))
+    sender = f.str_("sender")
+
+    def check_uav(name: str, field: str) -> None:
+        if fleet is not None and name not in fleet:
+            raise ProtocolError(f"{kind} message: {field} {name!r} is not a UAV of the blueprint's fleet")
+
+    if kind == "heartbeat":
+        if sender != MISSION_CONTROL:
+            check_uav(sender, "sender")
+        return Heartbeat(sender, f.num("time_s"), state=str(data.get("state") or ""),
+                         task_id=f.str_("task_id", optional=True), position_m=f.vec("position_m", optional=True))
+    if kind in ("assign", "mission-end") and sender != MISSION_CONTROL:
+        raise ProtocolError(f"{kind} message: only {MISSION_CONTROL!r} may send it, not {sender!r}")
+    if kind == "assign":
+        uav = f.str_("uav")
+        check_uav(uav, "uav")
+        attempt = f.int_("attempt")
+        if attempt < 1:
+            raise f.fail("attempt", f"must be >= 1, got {attempt}")
+        return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"))
+    if kind == "progress":
+        check_uav(sender, "sender")
+        return Progress(sender, f.str_("task_id"), f.str_("state"), f.num("time_s"),
+                        f.vec("position_m", optional=True))
+    if kind == "result":
+        check_uav(sender, "sender")
+        r = _Fields(f.obj("result"), "result result")
+        status = r.get("status")
+        if status not in ("done", "failed"):
+            raise r.fail("status", f"must be 'done' or 'failed', got {status!r}")
+        result = TaskResult(
+            task_id=r.str_("task_id"),
+            status=status,
+            duration_s=r.num("duration_s"),
+            reason=r.str_("reason", optional=True),
+            placement_error_m=r.num("placement_error_m", optional=True),
+            coverage=r.num("coverage", optional=True),
+        )
+        return Result(sender, result, f.num("time_s"), f.vec("position_m", optional=True))
+    if kind == "mission-end":
+        return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
+    raise ProtocolError(f"unknown message type {kind!r}")

@@ -1,0 +1,322 @@
+"""The mission report: what ``masonry sim --format json`` prints, plus what the Gantt chart and 3-D plot need.
+
+Also the two checks the report carries, computed from a trace of executed intervals independently of the
+dispatcher that produced it (:func:`count_violations`), and the makespan lower bound (:func:`lower_bound_s`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from masonry.planner.tasks import Plan
+
+
+@dataclass(frozen=True)
+class UavReport:
+    """One UAV over the mission."""
+
+    name: str
+    role: str
+    busy_s: float
+    distance_m: float
+    status: str  # "ok", "lost" (declared lost by mission control) or "failed" (never came online)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "role": self.role, "busy_s": _r(self.busy_s, 2),
+                "distance_m": _r(self.distance_m, 2), "status": self.status}
+
+
+@dataclass(frozen=True)
+class TaskReport:
+    """One task: the attempt that completed it (start at its assignment, end at its completion)."""
+
+    id: str
+    uav: str | None
+    start_s: float | None
+    end_s: float | None
+    status: str  # "done", "stuck" (attempt limit reached or no UAV of its role left) or "pending"
+    attempts: int
+    kind: str = "brick"
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "uav": self.uav, "start_s": _r(self.start_s, 2), "end_s": _r(self.end_s, 2),
+                "status": self.status, "attempts": self.attempts}
+
+
+@dataclass(frozen=True)
+class AttemptReport:
+    """One assignment of a task to a UAV (for the Gantt chart: failures are marked)."""
+
+    task_id: str
+    uav: str
+    attempt: int
+    start_s: float
+    end_s: float | None
+    status: str  # "done", "failed", "running" (the mission ended first)
+    kind: str
+    reason: str | None = None
+
+
+@dataclass(frozen=True)
+class MissionReport:
+    """The outcome of a mission; :meth:`to_dict` is the exact JSON of ``masonry sim --format json``."""
+
+    completed: bool
+    makespan_s: float
+    lower_bound_s: float
+    policy: str
+    seed: int
+    uavs: tuple[UavReport, ...]
+    tasks: tuple[TaskReport, ...]
+    placement_error_m: Mapping[str, float]
+    min_separation_m: float | None
+    conflict_violations: int
+    dependency_violations: int
+    stuck: tuple[str, ...] = ()
+    attempts: tuple[AttemptReport, ...] = ()
+    paths_m: Mapping[str, Any] = field(default_factory=dict)  # UAV name -> (n, 3) array of flown positions
+    sim_time_s: float = 0.0
+    wall_time_s: float = 0.0
+    resumed_from_s: float | None = None
+    messages: int = 0
+
+    @property
+    def real_time_factor(self) -> float:
+        """Simulated seconds per wall second."""
+        return self.sim_time_s / self.wall_time_s if self.wall_time_s > 0 else math.inf
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "completed": self.completed,
+            "makespan_s": _r(self.makespan_s, 2),
+            "lower_bound_s": _r(self.lower_bound_s, 2),
+            "policy": self.policy,
+            "seed": self.seed,
+            "uavs": [u.to_dict() for u in self.uavs],
+            "tasks": [t.to_dict() for t in self.tasks],
+            "placement_error_m": {k: _r(v, 4) for k, v in self.placement_error_m.items()},
+            "min_separation_m": _r(self.min_separation_m, 3),
+            "conflict_violations": self.conflict_violations,
+            "dependency_violations": self.dependency_violations,
+        }
+        if not self.completed:
+            out["stuck"] = list(self.stuck)
+        return out
+
+    def to_json(self, indent: int | None = None) -> str:
+        return json.dumps(self.to_dict(), indent=indent)
+
+    def summary(self) -> str:
+        """A few human lines: outcome, makespan against the bound, fleet, checks."""
+        done = sum(1 for t in self.tasks if t.status == "done")
+        ratio = self.makespan_s / self.lower_bound_s if self.lower_bound_s > 0 else float("nan")
+        lines = [
+            f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} tasks, "
+            f"policy {self.policy}, seed {self.seed}",
+            f"makespan {self.makespan_s:.1f} s (lower bound {self.lower_bound_s:.1f} s, ratio {ratio:.2f})",
+        ]
+        if self.resumed_from_s is not None:
+            lines.append(f"resumed from the journal at {self.resumed_from_s:.1f} s")
+        for u in self.uavs:
+            lines.append(f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}")
+        errs = list(self.placement_error_m.values())
+        if errs:
+            lines.append(f"placement error: mean {sum(errs) / len(errs) * 100:.1f} cm, max {max(errs) * 100:.1f} cm")
+        sep = "n/a" if self.min_separation_m is None else f"{self.min_separation_m:.2f} m"
+        lines.append(f"min separation {sep}; conflict violations {self.conflict_violations}, "
+                     f"dependency violations {self.dependency_violations}")
+        failures = sum(1 for a in self.attempts if a.status == "failed")
+        if failures:
+            lines.append(f"failed attempts: {failures}")
+        if not self.completed:
+            lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
+        if self.wall_time_s > 0:
+            lines.append(f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
+                         f"(x{self.real_time_factor:.0f} real time)")
+        return "\n".join(lines)
+
+
+def _r(v: float | None, nd: int) -> float | None:
+    if v is None or not math.isfinite(v):
+        return None
+    return round(float(v), nd)
+
+
+def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | None]]) -> tuple[int, int]:
+    """Conflict and dependency violations in a trace of executed intervals.
+
+    Args:
+        plan: the plan whose conflicts and dependencies are checked.
+        intervals: (task id, start_s, end_s) for every attempt as the UAVs flew it; ``end_s`` None means
+            still in progress at the end of the trace (open interval).
+
+    Returns:
+        (conflict_violations, dependency_violations): the number of pairs of conflicting tasks whose
+        intervals overlap (each pair counted once), and the number of attempts that started before every
+        prerequisite had completed (a prerequisite done before the mission, ``done`` in the plan, counts as
+        completed at -inf).
+    """
+    by_task: dict[str, list[tuple[float, float]]] = {}
+    for task_id, start, end in intervals:
+        by_task.setdefault(task_id, []).append((start, math.inf if end is None else end))
+    conflicts = 0
+    for a, b in plan.conflicts:
+        ia, ib = by_task.get(a), by_task.get(b)
+        if not ia or not ib:
+            continue
+        if any(s1 < e2 and s2 < e1 for s1, e1 in ia for s2, e2 in ib):
+            conflicts += 1
+    # completion time of each task = end of its last interval (the successful one closes the task)
+    pre_done = {t.id for t in plan.tasks if t.done}
+    completion: dict[str, float] = {}
+    for task_id, ivs in by_task.items():
+        ends = [e for _, e in ivs if math.isfinite(e)]
+        if ends:
+            completion[task_id] = max(ends)
+    prereqs: dict[str, list[str]] = {}
+    for u, v in plan.dependencies:
+        prereqs.setdefault(u, []).append(v)
+    deps = 0
+    for task_id, ivs in by_task.items():
+        for start, _ in ivs:
+            for v in prereqs.get(task_id, ()):
+                if v in pre_done:
+                    continue
+                if completion.get(v, math.inf) > start:
+                    deps += 1
+                    break
+    return conflicts, deps
+
+
+def lower_bound_s(plan: Plan, durations_s: Mapping[str, float], fleet_size: Mapping[str, int]) -> float:
+    """A makespan lower bound: max(longest dependency chain of durations, each role's work / its fleet size).
+
+    Args:
+        plan: the plan (its ``done`` tasks cost nothing).
+        durations_s: duration of each task to be done (task id -> s); tasks missing count 0.
+        fleet_size: number of UAVs per role ("brick", "adhesion") at the start of the mission.
+    """
+    todo = {t.id: t for t in plan.tasks if not t.done}
+    prereqs: dict[str, list[str]] = {}
+    for u, v in plan.dependencies:
+        if u in todo and v in todo:
+            prereqs.setdefault(u, []).append(v)
+    # longest chain by memoised DFS in topological order (iterative: walls can be deep)
+    finish: dict[str, float] = {}
+    for root in todo:
+        if root in finish:
+            continue
+        stack: list[tuple[str, bool]] = [(root, False)]
+        while stack:
+            node, expanded = stack.pop()
+            if node in finish:
+                continue
+            if expanded:
+                finish[node] = durations_s.get(node, 0.0) + max((finish[p] for p in prereqs.get(node, ())),
+                                                                 default=0.0)
+                continue
+            stack.append((node, True))
+            stack.extend((p, False) for p in prereqs.get(node, ()) if p not in finish)
+    chain = max(finish.values(), default=0.0)
+    work: dict[str, float] = {}
+    for t in todo.values():
+        work[t.kind] = work.get(t.kind, 0.0) + durations_s.get(t.id, 0.0)
+    per_role = max((w / fleet_size[k] for k, w in work.items() if fleet_size.get(k, 0) > 0), default=0.0)
+    return max(chain, per_role)
+
+
+def makespan_s(attempts: Sequence[AttemptReport], start_s: float = 0.0) -> float:
+    """Time from ``start_s`` to the last completion."""
+    ends = [a.end_s for a in attempts if a.status == "done" and a.end_s is not None]
+    return max(ends) - start_s if ends else 0.0
+
+
+def control_report(
+    mc: Any,
+    plan: Plan,
+    *,
+    policy: str,
+    seed: int = 0,
+    intervals: Sequence[tuple[str, str, float, float | None]] | None = None,
+    distances_m: Mapping[str, float] | None = None,
+    placement_error_m: Mapping[str, float] | None = None,
+    min_separation_m: float | None = None,
+    now_s: float | None = None,
+    **extra: Any,
+) -> MissionReport:
+    """Build the report from a :class:`~masonry.mission.control.MissionControl`'s history.
+
+    Without a simulator, the measurements come from what the UAVs reported: intervals from mission
+    control's attempts, distances from the positions in heartbeats, placement errors from the results.
+    ``masonry sim`` passes the world's own measurements instead.
+
+    Args:
+        intervals: (uav, task id, start_s, end_s) executed by the UAVs (default: mission control's attempts).
+        distances_m, placement_error_m, min_separation_m: measured values overriding the reported ones.
+        now_s: end of the trace for attempts still running (default: mission control's last step).
+    """
+    now = mc.now_s if now_s is None else now_s
+    kinds = {t.id: t.kind for t in plan.tasks}
+    attempts = tuple(
+        AttemptReport(a.task_id, a.uav, a.attempt, a.start_s, a.end_s, a.status, kinds[a.task_id], a.reason)
+        for a in sorted(mc.history, key=lambda a: (a.start_s, a.task_id))
+    )
+    done_att = {a.task_id: a for a in attempts if a.status == "done"}
+    tasks: list[TaskReport] = []
+    stuck: list[str] = []
+    for t in plan.tasks:
+        if t.done:
+            continue
+        tries = [a for a in attempts if a.task_id == t.id]
+        n = max((a.attempt for a in tries), default=0)
+        a = done_att.get(t.id)
+        if a is not None:
+            tasks.append(TaskReport(t.id, a.uav, a.start_s, a.end_s, "done", n, t.kind))
+            continue
+        last = tries[-1] if tries else None
+        status = "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
+        stuck.append(t.id)
+        tasks.append(TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind))
+    makespan = max((a.end_s for a in done_att.values() if a.end_s is not None), default=0.0)
+    durations = {tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
+    fleet_size: dict[str, int] = {}
+    for spec in mc.fleet:
+        fleet_size[spec.role] = fleet_size.get(spec.role, 0) + 1
+    bound = lower_bound_s(plan, durations, fleet_size)
+    if intervals is None:
+        intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
+    conflicts, deps = count_violations(plan, [(tid, s, e) for _, tid, s, e in intervals])
+    busy: dict[str, float] = {}
+    for uav, _, s, e in intervals:
+        busy[uav] = busy.get(uav, 0.0) + ((e if e is not None else now) - s)
+    uavs = tuple(
+        UavReport(spec.name, spec.role, busy.get(spec.name, 0.0),
+                  float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
+                  "lost" if mc.uavs[spec.name].lost else "ok")
+        for spec in mc.fleet
+    )
+    if placement_error_m is None:
+        placement_error_m = {a.task_id: a.placement_error_m for a in mc.history
+                              if a.status == "done" and a.placement_error_m is not None}
+    ordered = {t.id: placement_error_m[t.id] for t in plan.tasks if t.id in placement_error_m}
+    return MissionReport(
+        completed=not stuck,
+        makespan_s=makespan,
+        lower_bound_s=bound,
+        policy=policy,
+        seed=seed,
+        uavs=uavs,
+        tasks=tuple(tasks),
+        placement_error_m=ordered,
+        min_separation_m=min_separation_m,
+        conflict_violations=conflicts,
+        dependency_violations=deps,
+        stuck=tuple(stuck),
+        attempts=attempts,
+        resumed_from_s=mc.resumed_at_s,
+        **extra,
+    )

@@ -1,0 +1,368 @@
+"""A whole mission in simulated time: World + one handler and state machine per UAV + MissionControl, in-process.
+
+``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every tick (``dt_s`` of simulated time):
+each live UAV handler reads its messages and ticks its state machine, mission control steps, then the
+world advances. Nothing sleeps, so a mission runs as fast as the machine allows and is deterministic for a
+given seed.
+
+Safety checks in the report are measured independently of mission control: conflict and dependency
+violations from the intervals the UAV handlers actually executed, separation from the world's vehicles.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from masonry.blueprint import Blueprint, UavSpec
+from masonry.errors import InputError, JournalError
+from masonry.mission.control import MissionControl
+from masonry.mission.handler import UavHandler
+from masonry.mission.inproc import InprocBus
+from masonry.mission.messages import MISSION_CONTROL
+from masonry.mission.report import MissionReport, control_report
+from masonry.planner.tasks import BrickTask, Plan
+
+POLICIES = ("fifo", "critical-path", "nearest")
+
+#: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
+LANDING_GRACE_S = 180.0
+#: Sample period of the flown paths kept for the 3-D plot.
+PATH_SAMPLE_S = 0.5
+
+ProgressFn = Callable[[int, int, float], None]
+
+
+def fleet_for(blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None) -> tuple[UavSpec, ...]:
+    """The blueprint's fleet, or one with ``brick_uavs`` / ``adhesion_uavs`` UAVs of each role.
+
+    UAVs the blueprint names are kept (first ones of their role); extra ones are named ``brick-N`` /
+    ``glue-N`` and parked in a row next to the last home of their role, ``2 * clearance`` apart, so
+    that homes never violate the clearance.
+    """
+    out: list[UavSpec] = []
+    taken = {u.name for u in blueprint.fleet}
+    spacing = max(2.0, 2.0 * blueprint.clearance_m)
+    for role, count, prefix in (("brick", brick_uavs, "brick"), ("adhesion", adhesion_uavs, "glue")):
+        existing = list(blueprint.uavs(role))  # type: ignore[arg-type]
+        if count is None:
+            out.extend(existing)
+            continue
+        if count < 0:
+            raise InputError(f"--{role}-uavs must be >= 0, got {count}")
+        kept = existing[:count]
+        out.extend(kept)
+        if len(kept) < count:
+            homes = [u.home_m for u in blueprint.fleet]
+            if kept:
+                base = kept[-1].home_m
+            else:
+                base = _default_home(blueprint, role)
+            k, n = 1, 0
+            while len(kept) + n < count:
+                name = f"{prefix}-{len(kept) + n + 1}"
+                while name in taken:
+                    name = f"{prefix}-{len(kept) + n + 1 + k * 100}"
+                    k += 1
+                home = (base[0] + spacing * (n + 1), base[1], base[2])
+                while any(math.dist(home[:2], h[:2]) < spacing * 0.99 for h in homes):
+                    home = (home[0] + spacing, home[1], home[2])
+                homes.append(home)
+                taken.add(name)
+                out.append(UavSpec(name, role, home))  # type: ignore[arg-type]
+                n += 1
+    return tuple(out)
+
+
+def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]:
+    """A home row for a role the blueprint has no UAV of: in front of the wall (-y), left edge."""
+    xs = [b.position_m[0] for b in blueprint.bricks] or [0.0]
+    ys = [b.position_m[1] for b in blueprint.bricks] or [0.0]
+    for b in blueprint.bricks:
+        if b.pickup_m is not None:
+            ys.append(b.pickup_m[1])
+    offset = 3.0 * blueprint.clearance_m if role == "brick" else 5.0 * blueprint.clearance_m
+    return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
+
+
+def estimate_durations_s(plan: Plan, cruise_speed_mps: float = 1.0) -> dict[str, float]:
+    """Rough expected duration of each task, for the critical-path priority (not for the report's bound).
+
+    A brick task: pickup -> drop-off at cruise speed plus estimation, two 7 s guided descents and the
+    climbs (the paper's Section IV); an adhesion task: the segment at spraying speed plus the descent.
+    """
+    out: dict[str, float] = {}
+    for t in plan.tasks:
+        if t.done:
+            continue
+        if isinstance(t, BrickTask):
+            leg = math.dist(t.pickup_m, t.position_m) if t.pickup_m is not None else 0.0
+            out[t.id] = 35.0 + leg / cruise_speed_mps
+        else:
+            out[t.id] = 20.0 + t.length_m / 0.2
+    return out
+
+
+def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any) -> Any:
+    from masonry.fsm import AdhesionUav, BrickUav, UavConfig
+
+    config = UavConfig(
+        name=spec.name,
+        role=spec.role,
+        home_m=spec.home_m,
+        cruise_altitude_m=blueprint.cruise_altitude_m,
+        markers=blueprint.markers,
+    )
+    if spec.role == "brick":
+        return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock)
+    return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock)
+
+
+def simulate(
+    blueprint: Blueprint,
+    *,
+    brick_uavs: int | None = None,
+    adhesion_uavs: int | None = None,
+    policy: str = "critical-path",
+    seed: int = 0,
+    camera: str = "geometric",
+    faults: Any = None,
+    journal_path: str | Path | None = None,
+    resume: bool = False,
+    dt_s: float = 0.05,
+    max_time_s: float | None = None,
+    heartbeat_timeout_s: float = 5.0,
+    max_attempts: int = 3,
+    progress: ProgressFn | None = None,
+) -> MissionReport:
+    """Run a whole mission in simulated time and report it.
+
+    Args:
+        blueprint: the wall and its fleet.
+        brick_uavs, adhesion_uavs: override the fleet's size per role (see :func:`fleet_for`).
+        policy: dispatcher priority: ``fifo``, ``critical-path`` or ``nearest``.
+        seed: seed of the world (brick offsets, noise, faults).
+        camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
+        faults: a :class:`masonry.sim.Faults` (None: no fault).
+        journal_path: SQLite journal to write (and, with ``resume``, to continue from).
+        resume: continue the mission recorded in ``journal_path``: its done tasks stay done (their bricks
+            are in place in the world), its clock continues, the report covers the whole mission.
+        dt_s: simulation tick, seconds.
+        max_time_s: give up at this simulated time (default: generous, from the number of tasks).
+        heartbeat_timeout_s: a UAV silent that long is declared lost.
+        max_attempts: failed attempts before a task is stuck.
+        progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion.
+
+    Raises:
+        InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
+        JournalError: the journal cannot be used (e.g. it already holds a mission and ``resume`` is off).
+    """
+    from masonry.mission.journal import Journal
+    from masonry.planner import plan as make_plan
+    from masonry.sim import Faults, World
+
+    if policy not in POLICIES:
+        raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
+    if camera not in ("geometric", "render"):
+        raise InputError(f"--camera must be geometric or render, got {camera!r}")
+    if not (dt_s > 0 and math.isfinite(dt_s)):
+        raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+    if resume and journal_path is None:
+        raise InputError("--resume needs --journal FILE")
+    faults = faults if faults is not None else Faults()
+    wall0 = time.perf_counter()
+
+    fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
+    if not fleet:
+        raise InputError("the fleet is empty: give --brick-uavs / --adhesion-uavs or a fleet in the blueprint")
+    blueprint = dataclasses.replace(blueprint, fleet=fleet)
+    the_plan = make_plan(blueprint)
+    todo = [t for t in the_plan.tasks if not t.done]
+
+    journal = None
+    state = None
+    if journal_path is not None:
+        journal_path = Path(journal_path)
+        existed = journal_path.exists() and journal_path.stat().st_size > 0
+        if resume and not existed:
+            raise JournalError(f"{journal_path}: no journal to resume from")
+        journal = Journal(journal_path)
+        journal.__enter__()
+        if existed:
+            state = journal.replay()
+            if not resume and not state.empty:
+                journal.__exit__(None, None, None)
+                raise JournalError(f"{journal_path} already holds a mission: pass --resume to continue it, "
+                                   "or give another --journal file")
+            if not resume:
+                state = None
+    try:
+        return _run(
+            blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
+            journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
+            heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
+            wall0=wall0, World=World,
+        )
+    finally:
+        if journal is not None:
+            journal.__exit__(None, None, None)
+
+
+def _run(
+    blueprint: Blueprint,
+    the_plan: Plan,
+    fleet: tuple[UavSpec, ...],
+    todo: list[Any],
+    *,
+    policy: str,
+    seed: int,
+    camera: str,
+    faults: Any,
+    journal: Any,
+    state: Any,
+    dt_s: float,
+    max_time_s: float | None,
+    heartbeat_timeout_s: float,
+    max_attempts: int,
+    progress: ProgressFn | None,
+    wall0: float,
+    World: Any,
+) -> MissionReport:
+    resumed_from = None
+    world_blueprint = blueprint
+    if state is not None:
+        # bricks the journal says are placed are in place in the rebuilt world
+        placed = {the_plan.task(r.task_id).brick for r in state.done  # type: ignore[union-attr]
+                  if isinstance(the_plan.task(r.task_id), BrickTask)}
+        world_blueprint = dataclasses.replace(
+            blueprint,
+            bricks=tuple(dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks),
+        )
+        resumed_from = float(state.last_time_s or 0.0)
+
+    world = World(world_blueprint, seed=seed, camera=camera, faults=faults)
+    if resumed_from:
+        world.clock.advance(resumed_from)
+    bus = InprocBus()
+    mc = MissionControl(
+        the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, journal=journal,
+        max_attempts=max_attempts, durations_s=estimate_durations_s(the_plan),
+        heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
+    )
+    if state is not None:
+        mc.restore(state)
+
+    handlers: dict[str, UavHandler] = {}
+    sim_uavs: dict[str, Any] = {}
+    for spec in fleet:
+        sim_uav = world.add_uav(spec)
+        sim_uavs[spec.name] = sim_uav
+        fc = sim_uav.fc
+        h = UavHandler(spec.name, bus.endpoint(spec.name), position=lambda fc=fc: fc.telemetry().position_m,
+                       heartbeat_timeout_s=heartbeat_timeout_s)
+        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock))
+        handlers[spec.name] = h
+
+    total = len(todo)
+    if max_time_s is None:
+        max_time_s = (resumed_from or 0.0) + 600.0 + 150.0 * total
+    paths: dict[str, list[tuple[float, float, float]]] = {n: [] for n in handlers}
+    next_sample = world.clock.now_s()
+    dead: dict[str, float] = {}
+    done_seen = len(mc.dispatcher.done) - sum(1 for t in the_plan.tasks if t.done)
+    mission_end_s: float | None = None
+
+    while True:
+        now = world.clock.now_s()
+        for name, h in handlers.items():
+            if name in dead:
+                continue
+            if sim_uavs[name].failed:
+                # a failed UAV (``uav-loss``) says nothing more: mission control must notice the silence
+                dead[name] = now
+                bus.cut(name)
+                continue
+            h.step(now)
+        mc.step(now)
+        if progress is not None:
+            n_done = len(mc.dispatcher.done) - sum(1 for t in the_plan.tasks if t.done)
+            if n_done != done_seen:
+                done_seen = n_done
+                progress(n_done, total, now)
+        if now >= next_sample:
+            next_sample = now + PATH_SAMPLE_S
+            for name, su in sim_uavs.items():
+                if name not in dead:
+                    paths[name].append(tuple(su.fc.telemetry().position_m))  # type: ignore[arg-type]
+        if mc.ended_at_s is not None:
+            if mission_end_s is None:
+                mission_end_s = now
+            landed = all(h.finished for n, h in handlers.items() if n not in dead)
+            if landed or now - mission_end_s > LANDING_GRACE_S:
+                break
+        if now >= max_time_s:
+            break
+        world.step(dt_s)
+
+    return _report(
+        blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed, paths=paths,
+        sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
+        resumed_from=resumed_from, messages=bus.sent,
+    )
+
+
+def _report(
+    blueprint: Blueprint,
+    the_plan: Plan,
+    fleet: tuple[UavSpec, ...],
+    mc: MissionControl,
+    handlers: Mapping[str, UavHandler],
+    world: Any,
+    dead: Mapping[str, float],
+    *,
+    policy: str,
+    seed: int,
+    paths: Mapping[str, list[tuple[float, float, float]]],
+    sim_time_s: float,
+    wall_time_s: float,
+    resumed_from: float | None,
+    messages: int,
+) -> MissionReport:
+    now = world.clock.now_s()
+    # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
+    # flying when it failed), plus the completed attempts of the run before a resume (from the journal).
+    intervals: list[tuple[str, str, float, float | None]] = []
+    for name, h in handlers.items():
+        for e in h.executions:
+            intervals.append((name, e.task_id, e.start_s, e.end_s if e.end_s is not None else dead.get(name)))
+    if resumed_from is not None:
+        intervals.extend((a.uav, a.task_id, a.start_s, a.end_s) for a in mc.history
+                         if a.end_s is not None and a.end_s <= resumed_from and a.status == "done")
+    journaled = {a.task_id: a.placement_error_m for a in mc.history
+                 if resumed_from is not None and a.status == "done" and (a.end_s or 0.0) <= resumed_from}
+    done = {a.task_id for a in mc.history if a.status == "done"}
+    placement: dict[str, float] = {}
+    for t in the_plan.tasks:
+        if isinstance(t, BrickTask) and t.id in done:
+            # a brick placed before the resume was rebuilt in place: its error is the one journaled then
+            err = journaled[t.id] if t.id in journaled else world.placement_error_m(t.brick)
+            if err is not None:
+                placement[t.id] = float(err)
+    sep = world.min_separation_m
+    sep = None if sep is None or not math.isfinite(sep) else float(sep)
+    return control_report(
+        mc, the_plan, policy=policy, seed=seed, intervals=intervals,
+        distances_m={u.name: float(world.distance_flown_m(u.name)) for u in fleet},
+        placement_error_m=placement, min_separation_m=sep, now_s=now,
+        paths_m={n: np.asarray(p, dtype=float).reshape(-1, 3) for n, p in paths.items()},
+        sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
+    )
+
+
+__all__ = ["POLICIES", "estimate_durations_s", "fleet_for", "simulate"]
