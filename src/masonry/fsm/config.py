@@ -1,0 +1,72 @@
+"""UavConfig: everything a UAV's state machine needs to know about itself and its task execution."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from masonry.airframe import DEFAULT_AIRFRAME, Airframe
+from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, MarkerSpec, Role, UavSpec
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class UavConfig:
+    """One UAV: identity, home, airframe, and the tuning of its task sequence (SI units).
+
+    Defaults follow the paper where it gives a value (C_th = 0.75, minimum-jerk descent t_f = 7 s) and are
+    otherwise chosen for the paper's indoor arena (a motion-capture volume of a few metres).
+    """
+
+    name: str
+    role: Role
+    home_m: Vec3
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
+    markers: MarkerSpec = MarkerSpec()
+    airframe: Airframe = DEFAULT_AIRFRAME
+    # Flight
+    cruise_speed_mps: float = 1.0  # average speed of a lateral min-jerk leg (its peak is 1.875 x this)
+    vertical_speed_mps: float = 0.4  # average speed of a climb leg
+    arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end
+    align_tolerance_m: float = 0.015  # horizontal alignment of the tool before a descent
+    align_yaw_tolerance_rad: float = 0.05
+    settle_speed_mps: float = 0.08  # "hovering" means slower than this
+    clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
+    takeoff_timeout_s: float = 30.0
+    leg_timeout_s: float = 60.0  # a lateral leg or an alignment that takes longer than this aborts the task
+    battery_low_fraction: float = 0.20  # below this a task is aborted and the UAV goes home
+    battery_critical_fraction: float = 0.10  # below this it lands where it is
+    link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this
+    # Brick pickup (paper, Section IV)
+    confidence_threshold: float = 0.75  # C_th
+    min_estimates: int = 10  # estimates in the window before its confidence counts
+    window_size: int = 30  # N^W
+    sigma_tol_m: float = 0.04  # sigma_tol of the confidence metric
+    settle_time_s: float = 0.5  # hover this long before collecting estimates
+    estimate_timeout_s: float = 5.0  # without C >= C_th by then, climb one step
+    climb_step_m: float = 0.3
+    max_climbs: int = 3  # then the task fails
+    descent_duration_s: float = 7.0  # t_f of the minimum-jerk descent
+    grasp_press_m: float = 0.005  # aim the effector this far below the brick's top face
+    grasp_dwell_s: float = 0.5  # hold on the brick with the magnet on before climbing
+    max_grasp_attempts: int = 3
+    # Brick placement
+    placement_radius_m: float = 0.015  # r_pl: release when the effector is this close to its target
+    release_timeout_s: float = 4.0  # after the descent's t_f; then hover above and try again
+    max_place_attempts: int = 3
+    release_dwell_s: float = 0.5
+    max_release_attempts: int = 3
+    # Adhesion (paper, Section V)
+    spray_speed_mps: float = 0.15
+    spray_descent_s: float = 4.0
+    stable_time_s: float = 1.0  # hover still this long over the segment start before descending
+    spray_tolerance_m: float = 0.015
+    close_dwell_s: float = 0.3
+    # Control (None: the motion layer's defaults)
+    pid_gains: Any = None
+
+    @classmethod
+    def from_spec(cls, spec: UavSpec, **overrides: Any) -> UavConfig:
+        """The configuration of a fleet member of a blueprint (name, role, home), with overrides."""
+        return cls(name=spec.name, role=spec.role, home_m=tuple(spec.home_m), **overrides)  # type: ignore[arg-type]

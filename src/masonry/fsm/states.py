@@ -1,0 +1,166 @@
+"""The brick and adhesion UAV machines as data: nested states and transitions for ``transitions``.
+
+State names carry no underscore: ``transitions`` joins nested names with ``_`` (``pickup_estimate``).
+Every leaf state ``s`` has a tick handler ``do_s`` on the model (called once per control tick while the
+machine is in ``s``); ``on_enter`` callbacks set up the state's motion target and actuators. Triggers are
+fired by the tick handlers; ``abort`` (task failure, battery low) and ``lost`` (flight-controller link lost,
+vehicle failure, any hardware error) are the failsafes and can fire from every airborne state.
+
+Brick UAV (paper, Section IV)::
+
+    idle -> takeoff -> pickup {goto, estimate, align, descend, grasp, ascend, verify}
+         -> transport -> place {align, descend, release, verify, ascend} -> (pickup | home) -> land -> idle
+
+Adhesion UAV (paper, Section V)::
+
+    idle -> takeoff -> cruise -> hover -> descend -> spray -> close -> ascend -> (cruise | home) -> land -> idle
+
+Failsafes, both machines: ``abort`` -> failsafe -> (home | emergency); ``lost`` -> emergency -> halted
+(``landed``, or ``giveup`` when the flight controller stays silent: its own failsafe lands it).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+State = dict[str, Any]
+Transition = dict[str, Any]
+
+#: States every UAV has, around its task-specific ones.
+_COMMON_STATES: list[State] = [
+    {"name": "idle", "on_enter": "enter_idle"},
+    {"name": "takeoff", "on_enter": "enter_takeoff"},
+    {"name": "home", "on_enter": "enter_home"},
+    {"name": "land", "on_enter": "enter_land"},
+    {"name": "failsafe", "on_enter": "enter_failsafe"},
+    {"name": "emergency", "on_enter": "enter_emergency"},
+    {"name": "halted", "on_enter": "enter_halted"},
+]
+
+BRICK_STATES: list[State] = [
+    _COMMON_STATES[0],
+    _COMMON_STATES[1],
+    {
+        "name": "pickup",
+        "initial": "goto",
+        "children": [
+            {"name": "goto", "on_enter": "enter_pickup_goto"},
+            {"name": "estimate", "on_enter": "enter_pickup_estimate"},
+            {"name": "align", "on_enter": "enter_pickup_align"},
+            {"name": "descend", "on_enter": "enter_pickup_descend"},
+            {"name": "grasp", "on_enter": "enter_pickup_grasp"},
+            {"name": "ascend", "on_enter": "enter_pickup_ascend"},
+            {"name": "verify", "on_enter": "enter_pickup_verify"},
+        ],
+    },
+    {"name": "transport", "on_enter": "enter_transport"},
+    {
+        "name": "place",
+        "initial": "align",
+        "children": [
+            {"name": "align", "on_enter": "enter_place_align"},
+            {"name": "descend", "on_enter": "enter_place_descend"},
+            {"name": "release", "on_enter": "enter_place_release"},
+            {"name": "verify", "on_enter": "enter_place_verify"},
+            {"name": "ascend", "on_enter": "enter_place_ascend"},
+        ],
+    },
+    *_COMMON_STATES[2:],
+]
+
+#: States in which a brick task is under way (``abort`` fires from these).
+BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place"]
+#: States in which the UAV is (or may be) in the air under our control (``lost`` fires from these).
+_AIRBORNE_COMMON: list[str] = ["takeoff", "home", "land", "failsafe"]
+
+BRICK_TRANSITIONS: list[Transition] = [
+    {"trigger": "assign", "source": "idle", "dest": "takeoff"},
+    {"trigger": "retire", "source": "idle", "dest": "halted"},
+    {"trigger": "airborne", "source": "takeoff", "dest": "pickup"},
+    {"trigger": "arrived", "source": "pickup_goto", "dest": "pickup_estimate"},
+    {"trigger": "widen", "source": "pickup_estimate", "dest": "=", "before": "climb_step"},
+    {"trigger": "estimated", "source": "pickup_estimate", "dest": "pickup_align"},
+    {"trigger": "aligned", "source": "pickup_align", "dest": "pickup_descend"},
+    {"trigger": "touched", "source": "pickup_descend", "dest": "pickup_grasp"},
+    {"trigger": "grasped", "source": "pickup_grasp", "dest": "pickup_ascend"},
+    {"trigger": "ascended", "source": "pickup_ascend", "dest": "pickup_verify"},
+    {"trigger": "attached", "source": "pickup_verify", "dest": "transport"},
+    {"trigger": "missed", "source": "pickup_verify", "dest": "pickup_estimate"},
+    {"trigger": "arrived", "source": "transport", "dest": "place"},
+    {"trigger": "aligned", "source": "place_align", "dest": "place_descend"},
+    {"trigger": "reached", "source": "place_descend", "dest": "place_release"},
+    {"trigger": "timeout", "source": "place_descend", "dest": "place_align"},
+    {"trigger": "released", "source": "place_release", "dest": "place_verify"},
+    {"trigger": "deposited", "source": "place_verify", "dest": "place_ascend"},
+    {"trigger": "stuck", "source": "place_verify", "dest": "place_release"},
+    {"trigger": "finish", "source": "place_ascend", "dest": "pickup", "conditions": "has_next_task"},
+    {"trigger": "finish", "source": "place_ascend", "dest": "home"},
+    {"trigger": "arrived", "source": "home", "dest": "land"},
+    {"trigger": "landed", "source": "land", "dest": "halted", "conditions": "must_halt"},
+    {"trigger": "landed", "source": "land", "dest": "idle"},
+    {"trigger": "abort", "source": BRICK_TASK_STATES, "dest": "failsafe", "before": "fail_task"},
+    {"trigger": "recover", "source": "failsafe", "dest": "home"},
+    {"trigger": "lost", "source": [*BRICK_TASK_STATES, *_AIRBORNE_COMMON], "dest": "emergency",
+     "before": "fail_task"},
+    {"trigger": "landed", "source": "emergency", "dest": "halted"},
+    {"trigger": "giveup", "source": "emergency", "dest": "halted"},
+]
+
+ADHESION_STATES: list[State] = [
+    _COMMON_STATES[0],
+    _COMMON_STATES[1],
+    {"name": "cruise", "on_enter": "enter_cruise"},
+    {"name": "hover", "on_enter": "enter_hover"},
+    {"name": "descend", "on_enter": "enter_descend"},
+    {"name": "spray", "on_enter": "enter_spray"},
+    {"name": "close", "on_enter": "enter_close"},
+    {"name": "ascend", "on_enter": "enter_ascend"},
+    *_COMMON_STATES[2:],
+]
+
+ADHESION_TASK_STATES: list[str] = ["takeoff", "cruise", "hover", "descend", "spray", "close", "ascend"]
+
+ADHESION_TRANSITIONS: list[Transition] = [
+    {"trigger": "assign", "source": "idle", "dest": "takeoff"},
+    {"trigger": "retire", "source": "idle", "dest": "halted"},
+    {"trigger": "airborne", "source": "takeoff", "dest": "cruise"},
+    {"trigger": "arrived", "source": "cruise", "dest": "hover"},
+    {"trigger": "stable", "source": "hover", "dest": "descend"},
+    {"trigger": "reached", "source": "descend", "dest": "spray"},
+    {"trigger": "sprayed", "source": "spray", "dest": "close"},
+    {"trigger": "closed", "source": "close", "dest": "ascend"},
+    {"trigger": "finish", "source": "ascend", "dest": "cruise", "conditions": "has_next_task"},
+    {"trigger": "finish", "source": "ascend", "dest": "home"},
+    {"trigger": "arrived", "source": "home", "dest": "land"},
+    {"trigger": "landed", "source": "land", "dest": "halted", "conditions": "must_halt"},
+    {"trigger": "landed", "source": "land", "dest": "idle"},
+    {"trigger": "abort", "source": ADHESION_TASK_STATES, "dest": "failsafe", "before": "fail_task"},
+    {"trigger": "recover", "source": "failsafe", "dest": "home"},
+    {"trigger": "lost", "source": [*ADHESION_TASK_STATES, *_AIRBORNE_COMMON], "dest": "emergency",
+     "before": "fail_task"},
+    {"trigger": "landed", "source": "emergency", "dest": "halted"},
+    {"trigger": "giveup", "source": "emergency", "dest": "halted"},
+]
+
+MACHINES: dict[str, tuple[list[State], list[Transition]]] = {
+    "brick": (BRICK_STATES, BRICK_TRANSITIONS),
+    "adhesion": (ADHESION_STATES, ADHESION_TRANSITIONS),
+}
+
+
+def leaf_states(states: list[State], prefix: str = "") -> list[str]:
+    """Full names (``parent_child``) of the leaf states of a nested state list, in declaration order."""
+    names: list[str] = []
+    for state in states:
+        name = prefix + state["name"]
+        children = state.get("children")
+        if children:
+            names.extend(leaf_states(children, name + "_"))
+        else:
+            names.append(name)
+    return names
+
+
+def triggers(transitions: list[Transition]) -> list[str]:
+    """The distinct trigger names of a transition list, in declaration order."""
+    return list(dict.fromkeys(t["trigger"] for t in transitions))
