@@ -37,7 +37,8 @@ def mission_control(
     from masonry.mission.journal import Journal
     from masonry.mission.messages import MISSION_CONTROL
     from masonry.mission.report import control_report
-    from masonry.mission.simulate import POLICIES, estimate_durations_s
+    from masonry.mission.simulate import POLICIES, priority_durations_s
+    from masonry.planner import estimate_durations_s
     from masonry.mission.zenoh_transport import ZenohTransport
     from masonry.planner import plan as make_plan
 
@@ -74,7 +75,9 @@ def mission_control(
     transport.connect()
     try:
         mc = MissionControl(the_plan, bp.fleet, transport, policy=policy, journal=jr,
-                            durations_s=estimate_durations_s(the_plan), heartbeat_timeout_s=heartbeat_timeout,
+                            durations_s=priority_durations_s(
+                                estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)),
+                            heartbeat_timeout_s=heartbeat_timeout,
                             startup_timeout_s=startup_timeout)
         offset = 0.0
         if state is not None:

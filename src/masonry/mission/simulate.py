@@ -18,8 +18,6 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, JournalError
 from masonry.mission.control import MissionControl
@@ -33,8 +31,6 @@ POLICIES = ("fifo", "critical-path", "nearest")
 
 #: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
 LANDING_GRACE_S = 180.0
-#: Sample period of the flown paths kept for the 3-D plot.
-PATH_SAMPLE_S = 0.5
 
 ProgressFn = Callable[[int, int, float], None]
 
@@ -91,22 +87,19 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-def estimate_durations_s(plan: Plan, cruise_speed_mps: float = 1.0) -> dict[str, float]:
-    """Rough expected duration of each task, for the critical-path priority (not for the report's bound).
+#: Expected durations are rounded to this for the critical-path priority (see :func:`priority_durations_s`).
+PRIORITY_QUANTUM_S = 5.0
 
-    A brick task: pickup -> drop-off at cruise speed plus estimation, two 7 s guided descents and the
-    climbs (the paper's Section IV); an adhesion task: the segment at spraying speed plus the descent.
+
+def priority_durations_s(durations_s: Mapping[str, float], quantum_s: float = PRIORITY_QUANTUM_S) -> dict[str, float]:
+    """Expected durations rounded to ``quantum_s`` for the dispatcher's critical-path priority.
+
+    The estimates are a model, good to several seconds; comparing chains that differ by less than that
+    would let noise (a home a metre further away) decide, where the tie-break by flight distance is the
+    better rule. In the paper's case study this is what makes A0, the adhesion task nearest the adhesion
+    UAV, go first.
     """
-    out: dict[str, float] = {}
-    for t in plan.tasks:
-        if t.done:
-            continue
-        if isinstance(t, BrickTask):
-            leg = math.dist(t.pickup_m, t.position_m) if t.pickup_m is not None else 0.0
-            out[t.id] = 35.0 + leg / cruise_speed_mps
-        else:
-            out[t.id] = 20.0 + t.length_m / 0.2
-    return out
+    return {k: max(quantum_s, round(v / quantum_s) * quantum_s) for k, v in durations_s.items()}
 
 
 def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any) -> Any:
@@ -164,6 +157,7 @@ def simulate(
         JournalError: the journal cannot be used (e.g. it already holds a mission and ``resume`` is off).
     """
     from masonry.mission.journal import Journal
+    from masonry.planner import estimate_durations_s
     from masonry.planner import plan as make_plan
     from masonry.sim import Faults, World
 
@@ -207,7 +201,7 @@ def simulate(
             blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
             journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
             heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
-            wall0=wall0, World=World,
+            wall0=wall0, World=World, estimate_durations_s=estimate_durations_s,
         )
     finally:
         if journal is not None:
@@ -233,6 +227,7 @@ def _run(
     progress: ProgressFn | None,
     wall0: float,
     World: Any,
+    estimate_durations_s: Any,
 ) -> MissionReport:
     resumed_from = None
     world_blueprint = blueprint
@@ -246,13 +241,13 @@ def _run(
         )
         resumed_from = float(state.last_time_s or 0.0)
 
-    world = World(world_blueprint, seed=seed, camera=camera, faults=faults)
-    if resumed_from:
-        world.clock.advance(resumed_from)
+    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
     bus = InprocBus()
     mc = MissionControl(
         the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, journal=journal,
-        max_attempts=max_attempts, durations_s=estimate_durations_s(the_plan),
+        max_attempts=max_attempts,
+        durations_s=priority_durations_s(estimate_durations_s(the_plan, fleet,
+                                                              cruise_altitude_m=blueprint.cruise_altitude_m)),
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
     )
     if state is not None:
@@ -260,8 +255,7 @@ def _run(
 
     handlers: dict[str, UavHandler] = {}
     sim_uavs: dict[str, Any] = {}
-    for spec in fleet:
-        sim_uav = world.add_uav(spec)
+    for spec, sim_uav in zip(fleet, world.add_fleet(fleet)):
         sim_uavs[spec.name] = sim_uav
         fc = sim_uav.fc
         h = UavHandler(spec.name, bus.endpoint(spec.name), position=lambda fc=fc: fc.telemetry().position_m,
@@ -272,8 +266,6 @@ def _run(
     total = len(todo)
     if max_time_s is None:
         max_time_s = (resumed_from or 0.0) + 600.0 + 150.0 * total
-    paths: dict[str, list[tuple[float, float, float]]] = {n: [] for n in handlers}
-    next_sample = world.clock.now_s()
     dead: dict[str, float] = {}
     done_seen = len(mc.dispatcher.done) - sum(1 for t in the_plan.tasks if t.done)
     mission_end_s: float | None = None
@@ -295,11 +287,6 @@ def _run(
             if n_done != done_seen:
                 done_seen = n_done
                 progress(n_done, total, now)
-        if now >= next_sample:
-            next_sample = now + PATH_SAMPLE_S
-            for name, su in sim_uavs.items():
-                if name not in dead:
-                    paths[name].append(tuple(su.fc.telemetry().position_m))  # type: ignore[arg-type]
         if mc.ended_at_s is not None:
             if mission_end_s is None:
                 mission_end_s = now
@@ -311,7 +298,7 @@ def _run(
         world.step(dt_s)
 
     return _report(
-        blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed, paths=paths,
+        blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
         sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
         resumed_from=resumed_from, messages=bus.sent,
     )
@@ -328,7 +315,6 @@ def _report(
     *,
     policy: str,
     seed: int,
-    paths: Mapping[str, list[tuple[float, float, float]]],
     sim_time_s: float,
     wall_time_s: float,
     resumed_from: float | None,
@@ -360,9 +346,9 @@ def _report(
         mc, the_plan, policy=policy, seed=seed, intervals=intervals,
         distances_m={u.name: float(world.distance_flown_m(u.name)) for u in fleet},
         placement_error_m=placement, min_separation_m=sep, now_s=now,
-        paths_m={n: np.asarray(p, dtype=float).reshape(-1, 3) for n, p in paths.items()},
+        paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
     )
 
 
-__all__ = ["POLICIES", "estimate_durations_s", "fleet_for", "simulate"]
+__all__ = ["POLICIES", "fleet_for", "simulate"]
