@@ -231,23 +231,25 @@ class LinkClock:
         self._lock = threading.Lock()
         self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
         self._last: tuple[float, float] | None = None
+        self._returned = -math.inf
 
     def observe(self, boot_s: float, monotonic_s: float) -> None:
         with self._lock:
             if self._last is not None and boot_s < self._last[0] - 1.0:  # autopilot rebooted
                 self._first = None
+                self._returned = -math.inf
             if self._first is None:
                 self._first = (boot_s, monotonic_s)
             self._last = (boot_s, monotonic_s)
 
     @property
     def rate(self) -> float:
-        """Autopilot seconds per local second (1.0 until half a second of samples exist)."""
+        """Autopilot seconds per local second (1.0 until 0.2 s of samples exist)."""
         with self._lock:
             if self._first is None or self._last is None:
                 return 1.0
             dt_local = self._last[1] - self._first[1]
-            if dt_local < 0.5:
+            if dt_local < 0.2:
                 return 1.0
             return max(1e-3, (self._last[0] - self._first[0]) / dt_local)
 
@@ -255,8 +257,11 @@ class LinkClock:
         rate = self.rate
         with self._lock:
             if self._last is None:
-                return time.monotonic()
-            return self._last[0] + (time.monotonic() - self._last[1]) * rate
+                now = time.monotonic()
+            else:  # extrapolated over one telemetry period at most; never runs backwards
+                now = self._last[0] + (time.monotonic() - self._last[1]) * rate
+            self._returned = max(self._returned, now)
+            return self._returned
 
     def sleep(self, duration_s: float) -> None:
         if duration_s > 0.0:
@@ -468,7 +473,7 @@ class MavlinkFlightController:
             MSG_ATTITUDE: self.telemetry_rate_hz,
             MSG_SYS_STATUS: 2.0,
             MSG_EXTENDED_SYS_STATE: 10.0,
-            MSG_EKF_STATUS_REPORT if self.autopilot == "ardupilot" else MSG_ESTIMATOR_STATUS: 2.0,
+            MSG_EKF_STATUS_REPORT if self.autopilot == "ardupilot" else MSG_ESTIMATOR_STATUS: 5.0,
         }
         sent_at = time.monotonic()
         for msg_id, rate_hz in rates.items():
@@ -583,7 +588,7 @@ class MavlinkFlightController:
                     self._takeoff_target_m = None
             elif self.autopilot == "px4":
                 # PX4 has no GUIDED-style takeoff inside OFFBOARD: climb with a P law (0.5 m/s max).
-                climb = min(0.5, max(0.1, 1.0 * (takeoff_target - world_alt)))
+                climb = min(0.5, max(0.0, 1.0 * (takeoff_target - world_alt)))
                 self._send_position_target((0.0, 0.0, -climb), 0.0)
                 return
             else:

@@ -18,8 +18,8 @@ What it models (ArduCopter semantics; names from ArduPilot):
   The link timeouts (guided timeout, GCS failsafe) run on wall time: a ground station streams at wall rates, and
   scaling them would trip the failsafes of a correctly behaving ground station.
 
-The vehicle dynamics are :class:`masonry.sim.vehicle.SimVehicle` when available (the simulator's multirotor), else
-the compact first-order model :class:`LagVehicle` below with the same interface.
+The vehicle dynamics are the simulator's multirotor, :class:`masonry.sim.vehicle.SimVehicle` (velocity lag with
+limits, takeoff, landing, ground contact, battery, motion-capture noise); this module adds the autopilot around it.
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ import threading
 import time
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
@@ -51,6 +53,7 @@ from masonry.adapters.mavlink import (
     FrameTransform,
     mavutil_module,
 )
+from masonry.errors import CommandRejected
 from masonry.ports import Vec3
 
 MAV_TYPE_QUADROTOR = 2
@@ -72,92 +75,13 @@ DEFAULT_RATES_HZ = {
 }
 
 
-@dataclass
-class LagVehicle:
-    """A multirotor's velocity loop as a first-order lag with limits, takeoff, landing and ground contact (ENU)."""
+def free_udp_port(host: str = "127.0.0.1") -> int:
+    """A UDP port on ``host`` that nothing is bound to right now (for tests and ``masonry sitl --port 0``)."""
+    import socket
 
-    position_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    yaw_rad: float = 0.0
-    tau_s: float = 0.25
-    max_speed_mps: float = 2.0
-    max_accel_mps2: float = 3.0
-    climb_rate_mps: float = 1.0
-    land_rate_mps: float = 0.5
-    battery_drain_per_s: float = 1.0 / 900.0  # 15 minutes of hover
-
-    def __post_init__(self) -> None:
-        self.velocity_mps = (0.0, 0.0, 0.0)
-        self.yaw_rate_radps = 0.0
-        self.armed = False
-        self.battery_fraction = 1.0
-        self._command: tuple[Vec3, float] = ((0.0, 0.0, 0.0), 0.0)
-        self._phase = "ground"  # ground | takeoff | flying | landing
-        self._takeoff_alt_m = 0.0
-        self._ground_z_m = self.position_m[2]
-
-    @property
-    def on_ground(self) -> bool:
-        return self._phase == "ground"
-
-    @property
-    def phase(self) -> str:
-        return self._phase
-
-    def arm(self) -> None:
-        self.armed = True
-
-    def disarm(self) -> None:
-        self.armed = False
-        self._phase = "ground"
-
-    def takeoff(self, altitude_m: float) -> None:
-        self._takeoff_alt_m = altitude_m
-        self._phase = "takeoff"
-
-    def land(self) -> None:
-        if self._phase != "ground":
-            self._phase = "landing"
-
-    def command_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float) -> None:
-        self._command = (velocity_mps, yaw_rate_radps)
-        if self._phase == "takeoff":
-            self._phase = "flying"  # as ArduCopter: a velocity target ends the guided takeoff
-
-    def step(self, dt_s: float) -> None:
-        if self.armed:
-            self.battery_fraction = max(0.0, self.battery_fraction - self.battery_drain_per_s * dt_s)
-        if not self.armed or self._phase == "ground":
-            self.velocity_mps = (0.0, 0.0, 0.0)
-            self.yaw_rate_radps = 0.0
-            return
-        target, yaw_rate = self._command
-        if self._phase == "takeoff":
-            error = self._takeoff_alt_m - self.position_m[2]
-            target, yaw_rate = (0.0, 0.0, max(-self.climb_rate_mps, min(self.climb_rate_mps, 2.0 * error))), 0.0
-            if abs(error) < 0.02:
-                self._phase = "flying"
-                self._command = ((0.0, 0.0, 0.0), 0.0)
-        elif self._phase == "landing":
-            target, yaw_rate = (0.0, 0.0, -self.land_rate_mps), 0.0
-        speed = math.sqrt(sum(c * c for c in target))
-        if speed > self.max_speed_mps:
-            target = tuple(c * self.max_speed_mps / speed for c in target)  # type: ignore[assignment]
-        alpha = min(1.0, dt_s / self.tau_s)
-        dv = [(t - v) * alpha for t, v in zip(target, self.velocity_mps)]
-        dv_norm = math.sqrt(sum(c * c for c in dv))
-        limit = self.max_accel_mps2 * dt_s
-        if dv_norm > limit:
-            dv = [c * limit / dv_norm for c in dv]
-        self.velocity_mps = tuple(v + d for v, d in zip(self.velocity_mps, dv))  # type: ignore[assignment]
-        self.yaw_rate_radps = yaw_rate
-        self.yaw_rad = (self.yaw_rad + yaw_rate * dt_s + math.pi) % (2 * math.pi) - math.pi
-        x, y, z = (p + v * dt_s for p, v in zip(self.position_m, self.velocity_mps))
-        if z <= self._ground_z_m and self._phase in ("flying", "landing") and self.velocity_mps[2] <= 0.0:
-            z = self._ground_z_m
-            self.velocity_mps = (0.0, 0.0, 0.0)
-            if self._phase == "landing":
-                self._phase = "ground"
-        self.position_m = (x, y, z)
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind((host, 0))
+        return int(sock.getsockname()[1])
 
 
 @dataclass(frozen=True)
@@ -181,8 +105,8 @@ class MavlinkSitl:
     Args:
         port: UDP port the stream is sent to (where the ground station listens).
         host: address of the ground station.
-        vehicle: the dynamics (``LagVehicle`` or ``masonry.sim.vehicle.SimVehicle``-like); default a LagVehicle at
-            ``home_m``.
+        vehicle: the dynamics; default a :class:`~masonry.sim.vehicle.SimVehicle` standing at ``home_m`` whose
+            setpoint timeout is the guided timeout (in simulated seconds: ``guided_timeout_s * time_scale``).
         home_m: start position (world ENU = the autopilot's local frame, as with motion capture fed to it).
         time_scale: simulated seconds per wall second.
         signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
@@ -200,13 +124,26 @@ class MavlinkSitl:
         signing_key: bytes | None = None,
         config: SitlConfig | None = None,
         physics_dt_s: float = 0.01,
+        seed: int = 0,
     ) -> None:
         self.port = port
         self.host = host
-        self.vehicle = vehicle if vehicle is not None else LagVehicle(position_m=home_m)
         self.time_scale = time_scale
         self.signing_key = signing_key
         self.config = config or SitlConfig()
+        if vehicle is None:
+            from masonry.sim.vehicle import SimVehicle, VehicleConfig
+
+            vehicle = SimVehicle(
+                VehicleConfig(
+                    setpoint_timeout_s=self.config.guided_timeout_s * time_scale,
+                    link_failsafe_s=math.inf,  # the GCS failsafe below decides
+                    battery_arm_min_fraction=self.config.arm_min_battery,
+                ),
+                position_m=home_m,
+                rng=np.random.default_rng(seed),
+            )
+        self.vehicle = vehicle
         self.physics_dt_s = physics_dt_s
         self.frame = FrameTransform()
         self.sim_time_s = 0.0
@@ -214,6 +151,7 @@ class MavlinkSitl:
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
         self.vision_received = 0
         self.setpoints_received = 0
+        self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
         self._rates_hz = dict(DEFAULT_RATES_HZ)
         self._next_due: dict[int, float] = {}
@@ -221,10 +159,8 @@ class MavlinkSitl:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._lock = threading.Lock()
-        self._last_setpoint_wall_s = -math.inf
         self._last_gcs_wall_s: float | None = None
         self._last_vision_sim_s = -math.inf
-        self._velocity_control = False
 
     # ------------------------------------------------------------------------------------------- lifecycle
 
@@ -281,33 +217,32 @@ class MavlinkSitl:
                 if not self.link_down:
                     if now >= next_beat:
                         self._send_heartbeat()
-                        next_beat = now + 1.0 / self.config.heartbeat_hz
+                        # until a ground station has answered, beat at 5 Hz so it finds us quickly
+                        searching = self._last_gcs_wall_s is None
+                        next_beat = now + (0.2 if searching else 1.0 / self.config.heartbeat_hz)
                     self._send_streams(now)
             self._stop.wait(0.004)
 
     def _advance(self, dt_s: float) -> None:
+        v = self.vehicle
         while dt_s > 1e-9:
             h = min(self.physics_dt_s, dt_s)
             dt_s -= h
             self.sim_time_s += h
-            self._autopilot_logic()
-            self.vehicle.step(h)
-            if self.mode == "LAND" and self.vehicle.armed and self.vehicle.on_ground:
-                self.vehicle.disarm()  # ArduCopter disarms after touchdown in LAND
-                self._text(MAV_SEVERITY_INFO, "Land complete, disarming")
+            self._gcs_failsafe()
+            was_armed = v.armed
+            v.step(h)
+            if v.mode == "LAND" and self.mode != "LAND":  # the vehicle's battery failsafe
+                self._text(MAV_SEVERITY_CRITICAL, "Battery failsafe: landing")
+                self.mode = "LAND"
+            if was_armed and not v.armed:
+                self._text(MAV_SEVERITY_INFO, "Land complete, disarming" if v.on_ground else "Motors stopped")
 
-    def _autopilot_logic(self) -> None:
+    def _gcs_failsafe(self) -> None:
         v = self.vehicle
-        flying = v.armed and not v.on_ground
         if (
-            self.mode == "GUIDED"
-            and self._velocity_control
-            and time.monotonic() - self._last_setpoint_wall_s > self.config.guided_timeout_s
-        ):
-            v.command_velocity((0.0, 0.0, 0.0), 0.0)  # GUID_TIMEOUT: stop and hold
-            self._velocity_control = False
-        if (
-            flying
+            v.armed
+            and not v.on_ground
             and self._last_gcs_wall_s is not None
             and time.monotonic() - self._last_gcs_wall_s > self.config.gcs_failsafe_s
             and self.mode != "LAND"
@@ -372,7 +307,13 @@ class MavlinkSitl:
                     self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")
                     self._ack(cmd, MAV_RESULT_FAILED)
                     return
-                v.arm()
+                try:
+                    v.arm()
+                except CommandRejected as exc:
+                    self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {exc.reason}")
+                    self._ack(cmd, MAV_RESULT_FAILED)
+                    return
+                v.mode = self.mode  # the vehicle model arms into GUIDED; keep the autopilot's mode
                 self._ack(cmd, MAV_RESULT_ACCEPTED)
                 self._text(MAV_SEVERITY_INFO, "Arming motors")
             else:
@@ -380,7 +321,7 @@ class MavlinkSitl:
                     self._text(MAV_SEVERITY_CRITICAL, "Disarm: vehicle is flying")
                     self._ack(cmd, MAV_RESULT_FAILED)
                     return
-                v.disarm()
+                v.disarm(force=int(msg.param2) == DISARM_MAGIC)
                 self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_TAKEOFF:
             if self.mode != "GUIDED" or not v.armed or not v.on_ground:
@@ -388,9 +329,12 @@ class MavlinkSitl:
                 self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
-            ground_z = v.position_m[2]
-            v.takeoff(ground_z + max(0.0, float(msg.param7)))
-            self._velocity_control = False
+            try:
+                v.takeoff(float(msg.param7))  # NAV_TAKEOFF altitude: above home (the ground it stands on)
+            except CommandRejected as exc:
+                self._text(MAV_SEVERITY_WARNING, f"Takeoff: {exc.reason}")
+                self._ack(cmd, MAV_RESULT_FAILED)
+                return
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_LAND:
             self._set_mode("LAND")
@@ -421,9 +365,7 @@ class MavlinkSitl:
             return self.config.prearm_failure
         if not self._ekf_ok():
             return "Need Position Estimate"
-        if self.vehicle.battery_fraction < self.config.arm_min_battery:
-            return f"Battery below minimum arming capacity ({self.vehicle.battery_fraction * 100:.0f}%)"
-        return None
+        return None  # battery and the vehicle's own checks: SimVehicle.arm()
 
     def _set_mode_by_number(self, custom_mode: int) -> bool:
         for name, number in ARDUPILOT_MODES.items():
@@ -438,11 +380,11 @@ class MavlinkSitl:
 
     def _set_mode(self, name: str) -> None:
         self.mode = name
-        self._velocity_control = False
+        v = self.vehicle
         if name == "LAND":
-            self.vehicle.land()
-        elif self.vehicle.armed and not self.vehicle.on_ground:
-            self.vehicle.command_velocity((0.0, 0.0, 0.0), 0.0)  # a mode change holds position first
+            v.land()
+        elif v.mode != "FAILED":
+            v.mode = name  # GUIDED follows setpoints; the other modes hold where the vehicle is (no pilot here)
 
     def _position_target(self, msg: Any) -> None:
         if self.mode != "GUIDED" or not self.vehicle.armed or self.vehicle.on_ground:
@@ -452,9 +394,8 @@ class MavlinkSitl:
         self.setpoints_received += 1
         v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
         yaw_rate = 0.0 if msg.type_mask & 2048 else FrameTransform.yaw_rate_to_world(msg.yaw_rate)
-        self.vehicle.command_velocity(v_world, yaw_rate)
-        self._velocity_control = True
-        self._last_setpoint_wall_s = time.monotonic()
+        self.vehicle.command_velocity(v_world, yaw_rate, self.vehicle.time_s)
+        self.last_setpoint_mps = v_world
 
     # --------------------------------------------------------------------------------------------- sending
 
@@ -486,12 +427,13 @@ class MavlinkSitl:
         ekf_ok = self._ekf_ok()
         if msg_id == MSG_LOCAL_POSITION_NED:
             if ekf_ok:
-                x, y, z = self.frame.position_to_ned(v.position_m)
-                vx, vy, vz = self.frame.velocity_to_ned(v.velocity_mps)
+                tel = v.telemetry()
+                x, y, z = self.frame.position_to_ned(tel.position_m)
+                vx, vy, vz = self.frame.velocity_to_ned(tel.velocity_mps)
                 mav.local_position_ned_send(boot_ms, x, y, z, vx, vy, vz)
         elif msg_id == MSG_ATTITUDE:
-            roll, pitch, yaw = self.frame.attitude_to_ned(0.0, 0.0, v.yaw_rad)
-            mav.attitude_send(boot_ms, roll, pitch, yaw, 0.0, 0.0, -v.yaw_rate_radps)
+            roll, pitch, yaw = self.frame.attitude_to_ned(*v.attitude_rad)
+            mav.attitude_send(boot_ms, roll, pitch, yaw, 0.0, 0.0, FrameTransform.yaw_rate_to_ned(v.yaw_rate_radps))
         elif msg_id == MSG_SYS_STATUS:
             fraction = v.battery_fraction
             voltage_mv = int((3.5 + 0.7 * fraction) * 4 * 1000)  # a 4S pack between 14.0 and 16.8 V
@@ -503,7 +445,7 @@ class MavlinkSitl:
         elif msg_id == MSG_EXTENDED_SYS_STATE:
             if not v.armed or v.on_ground:
                 landed = MAV_LANDED_STATE_ON_GROUND
-            elif getattr(v, "phase", "") == "takeoff":
+            elif v.taking_off:
                 landed = MAV_LANDED_STATE_TAKEOFF
             elif self.mode == "LAND":
                 landed = MAV_LANDED_STATE_LANDING

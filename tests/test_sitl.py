@@ -1,0 +1,299 @@
+"""The MAVLink adapter against the SITL over UDP on loopback: flight, link loss, rejections, signing, streams.
+
+The SITL runs faster than real time (``TIME_SCALE``); each test stays within a few wall seconds.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pytest
+
+from masonry.adapters.mavlink import MavlinkFlightController, mavutil_module
+from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
+from masonry.motion import MinJerk
+
+TIME_SCALE = 8.0
+KEY = bytes(range(32))
+OTHER_KEY = bytes(range(1, 33))
+
+
+@contextmanager
+def flight(
+    config: SitlConfig | None = None,
+    *,
+    sitl_key: bytes | None = None,
+    fc_key: bytes | None = None,
+    home_m=(0.0, 0.0, 0.0),
+    time_scale: float = TIME_SCALE,
+    **fc_options,
+) -> Iterator[tuple[MavlinkSitl, MavlinkFlightController]]:
+    port = free_udp_port()
+    # heartbeats at 4 Hz (ArduPilot: 1 Hz) so that armed/disarmed shows within a quarter second
+    config = replace(config or SitlConfig(), heartbeat_hz=4.0)
+    sitl = MavlinkSitl(port, time_scale=time_scale, config=config, signing_key=sitl_key, home_m=home_m)
+    fc_options.setdefault("connect_timeout_s", 3.0)
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", signing_key=fc_key, **fc_options)
+    sitl.start()
+    try:
+        yield sitl, fc
+    finally:
+        fc.close()
+        sitl.stop()
+
+
+def wait_until(predicate, timeout_s: float, what: str) -> float:
+    started = time.monotonic()
+    while not predicate():
+        if time.monotonic() - started > timeout_s:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(0.01)
+    return time.monotonic() - started
+
+
+def take_off(fc: MavlinkFlightController, altitude_m: float = 1.2) -> None:
+    fc.arm()
+    fc.takeoff(altitude_m)
+    wait_until(
+        lambda: fc.telemetry().position_m[2] > altitude_m - 0.05 and abs(fc.telemetry().velocity_mps[2]) < 0.05,
+        5.0,
+        "the takeoff altitude",
+    )
+
+
+def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
+    # time scale 4: the 50 Hz wall-time loop below closes the loop at 12.5 Hz of autopilot time
+    with flight(home_m=(1.0, 2.0, 0.0), time_scale=4.0, telemetry_rate_hz=50.0) as (sitl, fc):
+        fc.connect()
+        assert fc.autopilot == "ardupilot" and fc.target_system == 1
+        assert fc.warnings == []
+        fc.wait_for_estimate(timeout_s=2.0)
+        tel = fc.telemetry()
+        assert tel.link_ok and tel.position_ok and tel.on_ground and not tel.armed
+        assert tel.position_m == pytest.approx((1.0, 2.0, 0.0), abs=0.01)  # the SITL's home, world frame
+        assert tel.battery_fraction == pytest.approx(1.0)
+
+        take_off(fc, 1.2)
+        tel = fc.telemetry()
+        assert tel.armed and tel.mode == "GUIDED" and not tel.on_ground
+        assert tel.position_m[2] == pytest.approx(1.2, abs=0.05)
+
+        # Minimum-jerk descent from 1.2 m to 0.6 m in 3 s (autopilot time), tracked with feedforward + P.
+        start = np.array(tel.position_m)
+        goal = start - np.array([0.0, 0.0, 0.6])
+        traj = MinJerk(start, np.zeros(3), np.zeros(3), goal, np.zeros(3), np.zeros(3), 3.0)
+        t0 = fc.clock.now_s()
+        worst = 0.0
+        while (t := fc.clock.now_s() - t0) < traj.duration_s + 0.5:
+            p = np.array(fc.telemetry().position_m)
+            ref = traj.position(min(t, traj.duration_s))
+            worst = max(worst, float(np.linalg.norm(ref - p)))
+            v = traj.velocity(min(t, traj.duration_s)) + 1.5 * (ref - p)
+            fc.send_velocity(tuple(v), 0.0)
+            time.sleep(0.02)
+        end = np.array(fc.telemetry().position_m)
+        assert np.linalg.norm(end - goal) < 0.05
+        assert worst < 0.1  # the autopilot's velocity lag and the telemetry latency
+
+        fc.land()
+        wait_until(lambda: not fc.telemetry().armed, 5.0, "touchdown and disarm")
+        tel = fc.telemetry()
+        assert tel.on_ground and tel.mode == "LAND" and tel.position_m[2] == pytest.approx(0.0, abs=0.02)
+        assert tel.battery_fraction < 1.0
+        assert "Land complete, disarming" in sitl.status_log
+
+
+def test_velocity_and_yaw_rate_move_the_right_way() -> None:
+    with flight() as (sitl, fc):
+        fc.connect()
+        take_off(fc, 1.0)
+        yaw0 = fc.telemetry().attitude_rad[2]
+        p0 = np.array(fc.telemetry().position_m)
+        t0 = fc.clock.now_s()
+        while fc.clock.now_s() - t0 < 1.5:  # north-east and a little up, turning left
+            fc.send_velocity((0.4, 0.4, 0.1), 0.3)
+            time.sleep(0.02)
+        d = np.array(fc.telemetry().position_m) - p0
+        assert d[0] > 0.3 and d[1] > 0.3 and d[2] > 0.03
+        assert abs(d[0] - d[1]) < 0.1
+        assert fc.telemetry().attitude_rad[2] - yaw0 > 0.2  # counter-clockwise seen from above
+        assert sitl.last_setpoint_mps == pytest.approx((0.4, 0.4, 0.1), abs=1e-6)
+
+
+def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> None:
+    with flight(setpoint_rate_hz=20.0, setpoint_hold_s=0.3) as (sitl, fc):
+        fc.connect()
+        take_off(fc, 1.0)
+        fc.send_velocity((0.3, 0.0, 0.0), 0.0)
+        before = sitl.setpoints_received
+        time.sleep(0.2)
+        assert sitl.last_setpoint_mps == pytest.approx((0.3, 0.0, 0.0), abs=1e-6)  # repeated while fresh
+        time.sleep(0.8)
+        rate_hz = (sitl.setpoints_received - before) / 1.0
+        assert rate_hz >= 15.0  # >= 10 Hz required by the autopilots; configured 20 Hz
+        assert sitl.last_setpoint_mps == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)  # caller silent: hover
+
+
+def test_link_loss_fires_the_watchdog_and_the_autopilot_failsafe() -> None:
+    with flight(SitlConfig(gcs_failsafe_s=0.5), heartbeat_timeout_s=1.0) as (sitl, fc):
+        fc.connect()
+        take_off(fc, 1.0)
+        sitl.link_down = True  # radio outage: nothing gets through either way
+        lost_after = wait_until(lambda: not fc.telemetry().link_ok, 2.0, "link_ok to drop")
+        assert 0.9 <= lost_after <= 1.3  # within the watchdog time (plus the last message's age)
+        with pytest.raises(LinkLost, match="no message from the autopilot"):
+            fc.send_velocity((0.0, 0.0, 0.0), 0.0)
+        with pytest.raises(LinkLost):
+            fc.land()
+        assert fc.telemetry().position_ok is False
+        wait_until(lambda: sitl.mode == "LAND", 2.0, "the SITL's GCS failsafe")
+        wait_until(lambda: not sitl.vehicle.armed, 5.0, "the failsafe landing")
+        sitl.link_down = False
+        wait_until(lambda: fc.telemetry().link_ok, 2.0, "the link to come back")
+        assert fc.telemetry().mode == "LAND"
+
+
+def test_rejected_arming_carries_the_autopilot_reason() -> None:
+    with flight(SitlConfig(prearm_failure="Compass not calibrated")) as (_sitl, fc):
+        fc.connect()
+        with pytest.raises(CommandRejected) as info:
+            fc.arm()
+        assert info.value.command == "arm"
+        assert info.value.reason == "failed: PreArm: Compass not calibrated"
+        assert str(info.value) == "arm rejected: failed: PreArm: Compass not calibrated"
+        assert not fc.telemetry().armed
+
+
+def test_arming_waits_for_the_position_estimate() -> None:
+    with flight(SitlConfig(ekf_converge_s=1000.0), estimate_timeout_s=0.4) as (_sitl, fc):
+        fc.connect()
+        assert fc.telemetry().position_ok is False
+        with pytest.raises(CommandRejected, match="no usable position estimate .* after 0.4 s"):
+            fc.arm()
+
+
+def test_takeoff_before_arming_and_disarm_in_flight_are_refused() -> None:
+    with flight() as (_sitl, fc):
+        fc.connect()
+        fc.wait_for_estimate(2.0)
+        fc.set_mode("GUIDED")
+        with pytest.raises(CommandRejected, match="takeoff rejected: failed: Takeoff: not armed"):
+            fc.takeoff(1.0)
+        take_off(fc, 1.0)
+        with pytest.raises(CommandRejected, match="disarm rejected: failed"):
+            fc.disarm()
+        assert fc.telemetry().armed
+
+
+def test_a_silent_autopilot_times_out_after_retries() -> None:
+    """A peer that sends heartbeats but never answers commands."""
+    mavutil = mavutil_module()
+    port = free_udp_port()
+    peer = mavutil.mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1, source_component=1)
+    fc = MavlinkFlightController(
+        f"udpin:127.0.0.1:{port}", connect_timeout_s=2.0, command_timeout_s=0.15, command_retries=2
+    )
+    import threading
+
+    stop = threading.Event()
+
+    def beat() -> None:
+        while not stop.is_set():
+            peer.mav.heartbeat_send(2, 3, 0, 0, 3)
+            while peer.recv_msg() is not None:
+                pass
+            stop.wait(0.1)
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        fc.connect()
+        started = time.monotonic()
+        with pytest.raises(CommandTimeout, match="set mode GUIDED: no COMMAND_ACK .* after 3 tries"):
+            fc.set_mode("GUIDED")
+        assert 0.4 <= time.monotonic() - started < 1.0
+        assert any("SET_MESSAGE_INTERVAL" in w for w in fc.warnings)  # rates were not acknowledged either
+    finally:
+        stop.set()
+        thread.join()
+        fc.close()
+        peer.close()
+
+
+def test_message_rates_are_requested() -> None:
+    with flight(telemetry_rate_hz=25.0) as (sitl, fc):
+        fc.connect()
+        wait_until(lambda: sitl._rates_hz[32] == pytest.approx(25.0), 1.0, "the LOCAL_POSITION_NED rate")
+        assert sitl._rates_hz[30] == pytest.approx(25.0)
+        assert fc.warnings == []
+
+
+def test_signing_on_both_ends() -> None:
+    with flight(sitl_key=KEY, fc_key=KEY) as (sitl, fc):
+        fc.connect()
+        take_off(fc, 0.8)
+        fc.land()
+        wait_until(lambda: not fc.telemetry().armed, 5.0, "landing")
+        assert fc._conn.mav.signing.goodsig_count > 10  # everything we got was signed with the key
+        assert sitl._conn.mav.signing.goodsig_count > 10
+
+
+def test_a_wrongly_signed_peer_is_ignored() -> None:
+    # The adapter with the wrong key never sees a heartbeat.
+    with flight(sitl_key=KEY, fc_key=OTHER_KEY, connect_timeout_s=0.5) as (_sitl, fc):
+        with pytest.raises(DeviceNotFound, match="signing key"):
+            fc.connect()
+    # A wrongly signed (or unsigned) peer's commands do nothing, while the right peer flies.
+    mavutil = mavutil_module()
+    with flight(sitl_key=KEY, fc_key=KEY) as (sitl, fc):
+        fc.connect()
+        fc.wait_for_estimate(2.0)
+        for key in (OTHER_KEY, None):
+            rogue = mavutil.mavlink_connection(f"udpout:127.0.0.1:{sitl_port(sitl)}", source_system=200)
+            if key is not None:
+                rogue.setup_signing(key, sign_outgoing=True)
+            rogue.mav.command_long_send(1, 1, 176, 0, 1, 4, 0, 0, 0, 0, 0)  # GUIDED
+            rogue.mav.command_long_send(1, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0)  # arm
+            time.sleep(0.3)
+            rogue.close()
+            assert not sitl.vehicle.armed and sitl.mode == "STABILIZE"
+        assert sitl._conn.mav.signing.badsig_count + sitl._conn.mav.signing.unsigned_count >= 2
+        fc.arm()
+        assert sitl.vehicle.armed
+
+
+def sitl_port(sitl: MavlinkSitl) -> int:
+    """The SITL's own (ephemeral) UDP port, which it receives on."""
+    return int(sitl._conn.port.getsockname()[1])
+
+
+def test_vision_positions_feed_the_estimate() -> None:
+    @dataclass(frozen=True)
+    class Pose:
+        time_s: float
+        position_m: tuple[float, float, float]
+        attitude_rad: tuple[float, float, float]
+
+    class Source:
+        def __init__(self) -> None:
+            self.pose: Pose | None = None
+
+        def latest(self) -> Pose | None:
+            return self.pose
+
+    source = Source()
+    with flight(SitlConfig(position_source="vision"), pose_source=source, estimate_timeout_s=0.5) as (sitl, fc):
+        fc.connect()
+        with pytest.raises(CommandRejected, match="position estimate"):
+            fc.arm()  # no motion capture yet
+        stop = time.monotonic() + 3.0
+        while not fc.telemetry().position_ok and time.monotonic() < stop:
+            source.pose = Pose(time.monotonic(), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # a new sample each time
+            time.sleep(0.01)
+        assert fc.telemetry().position_ok
+        assert sitl.vision_received > 0 and fc.vision_sent >= sitl.vision_received
