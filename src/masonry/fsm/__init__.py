@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import AdhesionUav, BrickUav, UavModel
-from masonry.fsm.runner import SingleTaskRun, run_single_task
+from masonry.fsm.runner import SingleTaskRun, build_uav, fly_task, run_single_task
 from masonry.fsm.states import MACHINES, leaf_states
 
 __all__ = [
@@ -31,6 +31,8 @@ __all__ = [
     "SingleTaskRun",
     "UavConfig",
     "UavModel",
+    "build_uav",
+    "fly_task",
     "leaf_states",
     "run_single_task",
 ]

@@ -9,8 +9,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from masonry.fsm.model import UavModel
-from masonry.ports import Clock, TaskResult
+from masonry.fsm.config import UavConfig
+from masonry.fsm.model import AdhesionUav, BrickUav, UavModel
+from masonry.planner.tasks import Task
+from masonry.ports import Camera, Clock, FlightController, Gripper, MissionLink, Sprayer, TaskResult
 
 
 @dataclass(frozen=True)
@@ -62,3 +64,54 @@ def run_single_task(
         step_time(dt_s)
     result = uav.results[n_results] if len(uav.results) > n_results else None
     return SingleTaskRun(result, tuple(uav.trace), start_s, clock.now_s(), uav.state)
+
+
+def build_uav(
+    config: UavConfig,
+    *,
+    fc: FlightController,
+    link: MissionLink,
+    clock: Clock,
+    gripper: Gripper | None = None,
+    camera: Camera | None = None,
+    sprayer: Sprayer | None = None,
+) -> UavModel:
+    """The model for ``config.role`` on the given ports (a brick UAV needs a gripper and a camera, an adhesion
+    UAV a sprayer)."""
+    if config.role == "brick":
+        if gripper is None or camera is None:
+            raise ValueError(f"brick UAV {config.name} needs a gripper and a camera")
+        return BrickUav(config, fc, gripper, camera, link, clock)
+    if config.role == "adhesion":
+        if sprayer is None:
+            raise ValueError(f"adhesion UAV {config.name} needs a sprayer")
+        return AdhesionUav(config, fc, sprayer, link, clock)
+    raise ValueError(f"unknown UAV role {config.role!r}")
+
+
+def fly_task(
+    config: UavConfig,
+    task: Task,
+    *,
+    fc: FlightController,
+    clock: Clock,
+    gripper: Gripper | None = None,
+    camera: Camera | None = None,
+    sprayer: Sprayer | None = None,
+    dt_s: float = 0.05,
+    advance: Callable[[float], None] | None = None,
+    timeout_s: float = 900.0,
+) -> SingleTaskRun:
+    """Fly one task with one UAV from take-off to landing (``masonry fly``): connect, run, close.
+
+    The task comes in through a :class:`~masonry.fakes.QueueMissionLink` holding just that task.
+    """
+    from masonry.fakes import QueueMissionLink
+
+    link = QueueMissionLink([task])
+    uav = build_uav(config, fc=fc, link=link, clock=clock, gripper=gripper, camera=camera, sprayer=sprayer)
+    fc.connect()
+    try:
+        return run_single_task(uav, clock, dt_s=dt_s, advance=advance, timeout_s=timeout_s)
+    finally:
+        fc.close()

@@ -71,7 +71,7 @@ BRICK_STATES: list[State] = [
 #: States in which a brick task is under way (``abort`` fires from these).
 BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place"]
 #: States in which the UAV is (or may be) in the air under our control (``lost`` fires from these).
-_AIRBORNE_COMMON: list[str] = ["takeoff", "home", "land", "failsafe"]
+_AIRBORNE_COMMON: list[str] = ["home", "land", "failsafe"]
 
 BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "assign", "source": "idle", "dest": "takeoff"},

@@ -1,0 +1,171 @@
+"""``masonry fly``: one UAV flies one task of a blueprint, here in the simulated world (``--sim``).
+
+The command is thin: parse, pick the UAV and the task, wire the adapters (:func:`select_adapters`, the one
+place that decides what drives the flight controller, the actuators and the camera), run
+:func:`masonry.fsm.fly_task`, print the trace and the result.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+from masonry.cli.app import command
+from masonry.errors import InputError
+
+
+@dataclass
+class Adapters:
+    """The ports one UAV flies with, the clock and how to move time forward by one tick."""
+
+    fc: Any
+    gripper: Any
+    sprayer: Any
+    camera: Any
+    clock: Any
+    advance: Callable[[float], None]
+    world: Any = None  # the simulated World when --sim (for the measured placement error / coverage)
+
+
+def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any) -> Adapters:
+    """Choose and build the adapters for the UAV ``spec``: today the simulated world (``--sim``).
+
+    Real hardware adapters (MAVLink flight controller, serial actuators, OpenCV camera) plug in here.
+    """
+    if not sim:
+        raise InputError("no hardware adapters are configured: pass --sim to fly in the simulated world")
+    from masonry.sim import World
+
+    world = World(blueprint, seed=seed, camera=camera, faults=faults)  # type: ignore[arg-type]
+    faults.check_uavs([spec.name])
+    uav = world.add_uav(spec)
+    return Adapters(uav.fc, uav.gripper, uav.sprayer, uav.camera, world.clock, world.step, world)
+
+
+def _pick_uav(blueprint: Any, role: str, name: str | None) -> Any:
+    if name is not None:
+        for spec in blueprint.fleet:
+            if spec.name == name:
+                if spec.role != role:
+                    raise InputError(f"--name {name}: {name} is a {spec.role} UAV, not a {role} UAV")
+                return spec
+        raise InputError(f"--name {name}: no UAV of that name in the fleet of {blueprint.source} "
+                         f"({', '.join(u.name for u in blueprint.fleet) or 'empty fleet'})")
+    for spec in blueprint.fleet:
+        if spec.role == role:
+            return spec
+    raise InputError(f"{blueprint.source}: the fleet has no {role} UAV")
+
+
+def _prerequisites(plan: Any, task_id: str) -> set[str]:
+    """Every task ``task_id`` depends on, directly or not."""
+    after: dict[str, list[str]] = {}
+    for u, v in plan.dependencies:
+        after.setdefault(u, []).append(v)
+    seen: set[str] = set()
+    stack = list(after.get(task_id, ()))
+    while stack:
+        t = stack.pop()
+        if t not in seen:
+            seen.add(t)
+            stack.extend(after.get(t, ()))
+    return seen
+
+
+@command("fly")
+def fly(
+    uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
+    sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
+    blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
+    task: str = typer.Option(..., "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...)."),
+    name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
+    camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
+    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "
+                                    "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
+    fmt: str = typer.Option("text", "--format", help="text | json."),
+    dt: float = typer.Option(0.05, "--dt", help="Control tick, seconds."),
+    timeout: float = typer.Option(900.0, "--timeout", help="Give up after this much flight time, seconds."),
+) -> None:
+    """Fly one UAV through one task: state trace with times, then the result (exit 1 if the task failed)."""
+    from masonry.blueprint import load_blueprint
+    from masonry.fsm import UavConfig, fly_task
+    from masonry.planner import plan
+    from masonry.sim import Faults
+
+    if uav not in ("brick", "adhesion"):
+        raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
+    if fmt not in ("text", "json"):
+        raise InputError(f"--format must be text or json, got {fmt!r}")
+    if camera not in ("geometric", "render"):
+        raise InputError(f"--camera must be geometric or render, got {camera!r}")
+    if not dt > 0.0 or not timeout > 0.0:
+        raise InputError("--dt and --timeout must be > 0")
+    bp = load_blueprint(blueprint)
+    the_plan = plan(bp)
+    try:
+        the_task = the_plan.task(task)
+    except KeyError:
+        ids = [t.id for t in the_plan.tasks if not t.done]
+        shown = ", ".join(ids[:12]) + (", ..." if len(ids) > 12 else "")
+        raise InputError(f"--task {task}: no such task in {bp.source} (tasks: {shown or 'none'})") from None
+    if the_task.kind != uav:
+        raise InputError(f"--task {task} is a {the_task.kind} task: fly it with --uav {the_task.kind}")
+    if the_task.done:
+        raise InputError(f"--task {task}: brick {task[1:]} is already in place in {bp.source}")
+    spec = _pick_uav(bp, uav, name)
+    faults = Faults.parse(fault)
+
+    # Single-task mode: every brick the task depends on is taken as already built.
+    before = {t for t in _prerequisites(the_plan, task) if t.startswith("B")}
+    bricks = tuple(replace(b, placed=True) if f"B{b.id}" in before else b for b in bp.bricks)
+    world_bp = replace(bp, bricks=bricks)
+
+    adapters = select_adapters(sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults)
+    config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
+    run = fly_task(config, the_task, fc=adapters.fc, clock=adapters.clock, gripper=adapters.gripper,
+                   camera=adapters.camera, sprayer=adapters.sprayer, dt_s=dt, advance=adapters.advance,
+                   timeout_s=timeout)
+
+    result = run.result
+    status = result.status if result is not None else "failed"
+    out: dict[str, Any] = {
+        "uav": spec.name,
+        "task": the_task.id,
+        "status": status,
+        "duration_s": round(result.duration_s if result is not None else run.duration_s, 2),
+        "placement_error_m": None,
+    }
+    world = adapters.world
+    if the_task.kind == "brick":
+        error = world.placement_error_m(the_task.brick) if world is not None else result and result.placement_error_m
+        out["placement_error_m"] = None if error is None else round(float(error), 4)
+    else:
+        coverage = world.coverage(the_task) if world is not None else result and result.coverage
+        out["coverage"] = None if coverage is None else round(float(coverage), 3)
+    if status != "done":
+        out["reason"] = result.reason if result is not None else f"no result after {timeout:g} s"
+    out["trace"] = [{"t_s": round(t, 2), "state": s} for t, s in run.trace]
+
+    if fmt == "json":
+        typer.echo(json.dumps(out))
+        return
+    typer.echo(f"{spec.name} flies {the_task.id} ({'simulated, seed ' + str(seed) if sim else 'hardware'}, "
+               f"{camera} camera)")
+    for t, s in run.trace:
+        typer.echo(f"{t:8.2f} s  {s}")
+    line = f"{the_task.id}: {status} in {out['duration_s']:.1f} s"
+    if out.get("placement_error_m") is not None:
+        line += f", placement error {out['placement_error_m'] * 1000:.1f} mm"
+    if out.get("coverage") is not None:
+        line += f", coverage {out['coverage']:.0%}"
+    if "reason" in out:
+        line += f": {out['reason']}"
+    typer.echo(line)
+    if status != "done":
+        raise typer.Exit(1)

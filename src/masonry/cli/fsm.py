@@ -1,0 +1,37 @@
+"""``masonry fsm diagram``: draw the brick or adhesion UAV's nested state machine."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from masonry.cli.app import app, command, fail
+from masonry.errors import InputError
+
+fsm_app = typer.Typer(help="The UAVs' state machines.", no_args_is_help=True)
+app.add_typer(fsm_app, name="fsm")
+
+
+@command("diagram", typer_app=fsm_app)
+def diagram(
+    machine: str = typer.Argument(..., help="brick | adhesion."),
+    output: Path = typer.Option(..., "-o", "--output", help="Output file: .svg, .png (need graphviz's dot) or .dot."),
+) -> None:
+    """Render a UAV's nested state machine (states, triggers, [conditions]) with graphviz."""
+    from masonry.fsm.diagram import FORMATS, dot_available, write_diagram
+    from masonry.fsm.states import MACHINES
+
+    if machine not in MACHINES:
+        raise InputError(f"unknown machine {machine!r}: expected brick or adhesion")
+    fmt = output.suffix.lower().lstrip(".")
+    if fmt not in FORMATS:
+        raise InputError(f"{output}: the file must end in .svg, .png or .dot")
+    if fmt != "dot" and not dot_available():
+        raise fail(f"graphviz's `dot` is not installed, so {output.name} cannot be rendered: install graphviz "
+                   f"(apt install graphviz) or write a .dot file instead", 1)
+    try:
+        write_diagram(machine, output)
+    except OSError as exc:
+        raise InputError(f"{output}: cannot write the diagram ({exc.strerror or exc})") from exc
+    typer.echo(f"wrote {output}")
