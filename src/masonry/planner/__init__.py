@@ -1,3 +1,17 @@
+"""The pure mission planner (paper Section III): tasks, dependency graph G^d, conflict graph G^c.
 
-# Dispatcher and bounds (issue 5, dispatcher engineer).
+``plan(blueprint) -> Plan`` is a plain function with no I/O; :mod:`masonry.planner.tasks` holds the values.
+"""
+
+from __future__ import annotations
+
+from masonry.planner.graphs import adhesion_segments, plan
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
+
+__all__ = ["AdhesionTask", "BrickTask", "Plan", "Task", "adhesion_segments", "plan"]
+
+# The dispatcher (issue 5) adds its names below this line.
+from masonry.planner.bounds import estimate_durations_s, lower_bound_s  # noqa: E402
 from masonry.planner.dispatch import POLICIES, Assignment, Dispatcher  # noqa: E402
+
+__all__ += ["POLICIES", "Assignment", "Dispatcher", "estimate_durations_s", "lower_bound_s"]

@@ -145,32 +145,35 @@ class Dispatcher:
             math.dist(self._start_m[i], self._end_m[i]) if self._role[i] == "brick" else 0.0 for i in range(n)
         ]
 
-        # Adjacency, built once: O(size of the plan).
-        self._dependents: list[list[int]] = [[] for _ in range(n)]
-        self._prerequisites: list[list[int]] = [[] for _ in range(n)]
-        seen: set[tuple[int, int]] = set()
-        for u, v in plan.dependencies:
-            iu, iv = self._lookup(u, "dependency"), self._lookup(v, "dependency")
-            if iu == iv:
-                raise PlanningError(f"dependency ({u}, {v}): a task cannot depend on itself")
-            if (iu, iv) in seen:
-                continue
-            seen.add((iu, iv))
-            self._dependents[iv].append(iu)
-            self._prerequisites[iu].append(iv)
-        self._neighbours: list[list[int]] = [[] for _ in range(n)]
-        seen.clear()
-        for a, b in plan.conflicts:
-            ia, ib = self._lookup(a, "conflict"), self._lookup(b, "conflict")
-            if ia == ib:
-                raise PlanningError(f"conflict ({a}, {b}): a task cannot conflict with itself")
-            key = (ia, ib) if ia < ib else (ib, ia)
-            if key in seen:
-                continue
-            seen.add(key)
-            self._neighbours[ia].append(ib)
-            self._neighbours[ib].append(ia)
-        del seen
+        # Adjacency, built once: O(size of the plan). Duplicate edges are dropped per task afterwards (cheaper
+        # than a global set of pairs on a wall with millions of conflicts).
+        index = self._index
+        dependents: list[list[int]] = [[] for _ in range(n)]
+        prerequisites: list[list[int]] = [[] for _ in range(n)]
+        try:
+            for u, v in plan.dependencies:
+                iu, iv = index[u], index[v]
+                if iu == iv:
+                    raise PlanningError(f"dependency ({u}, {v}): a task cannot depend on itself")
+                dependents[iv].append(iu)
+                prerequisites[iu].append(iv)
+        except KeyError as exc:
+            raise PlanningError(f"dependency names unknown task {exc.args[0]!r}") from None
+        neighbours: list[list[int]] = [[] for _ in range(n)]
+        try:
+            for a, b in plan.conflicts:
+                ia, ib = index[a], index[b]
+                if ia == ib:
+                    raise PlanningError(f"conflict ({a}, {b}): a task cannot conflict with itself")
+                neighbours[ia].append(ib)
+                neighbours[ib].append(ia)
+        except KeyError as exc:
+            raise PlanningError(f"conflict names unknown task {exc.args[0]!r}") from None
+        for lists in (dependents, prerequisites, neighbours):
+            for i, items in enumerate(lists):
+                if len(items) > 1 and len(set(items)) != len(items):
+                    lists[i] = list(dict.fromkeys(items))
+        self._dependents, self._prerequisites, self._neighbours = dependents, prerequisites, neighbours
 
         self._chain = self._chains(durations_s)
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal, Union
+from dataclasses import dataclass, field
+from typing import Any, Literal, Union
 
 TaskKind = Literal["brick", "adhesion"]
 
@@ -63,6 +63,9 @@ class Plan:
     tasks: tuple[Task, ...]
     dependencies: tuple[tuple[str, str], ...]
     conflicts: tuple[tuple[str, str], ...]
+    #: Optional (a, b) integer arrays of task indices, one entry per conflict (a fast path for large plans;
+    #: filled by ``plan()``, ignored by equality).
+    conflict_indices: Any = field(default=None, compare=False, repr=False)
 
     def task(self, task_id: str) -> Task:
         for t in self.tasks:

@@ -1,0 +1,176 @@
+"""Generated blueprints: running-bond walls, towers and pyramids of any size (pure; returns Blueprint values).
+
+Every generator lays the wall in its own frame (u along the wall, v across it, z up), then rotates it by
+``yaw_rad`` about z and moves it to ``origin_m``. Bricks of the lowest ``placed_courses`` courses are placed
+already; every other brick gets a pickup point on a pallet: a grid on the ground on the -v side of the wall,
+``pallet_distance_m`` (default r_c + 1 m) away from it. UAV homes are in a row beyond the pallet, r_c + 0.5 m
+apart.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from masonry.blueprint import (
+    DEFAULT_BRICK_SIZE_M,
+    DEFAULT_CLEARANCE_M,
+    DEFAULT_CRUISE_ALTITUDE_M,
+    Blueprint,
+    Brick,
+    MarkerSpec,
+    UavSpec,
+)
+from masonry.errors import BlueprintError
+
+Vec3 = tuple[float, float, float]
+#: (u, v, course) of each brick in the wall frame, plus its yaw relative to the wall.
+_Layout = list[tuple[float, float, int, float]]
+
+GENERATORS: tuple[str, ...] = ("running-bond", "towers", "pyramid")
+
+
+def running_bond(courses: int = 4, bricks_per_course: int = 6, **options: object) -> Blueprint:
+    """A straight wall of stretchers; every other course is shifted by half a brick (running bond)."""
+    _check_count("courses", courses)
+    _check_count("bricks per course", bricks_per_course)
+    length, _, _ = _size(options)
+    joint = float(options.get("joint_m", 0.0))  # type: ignore[arg-type]
+    pitch = length + joint
+    layout: _Layout = []
+    for course in range(courses):
+        shift = pitch / 2.0 if course % 2 else 0.0
+        for k in range(bricks_per_course):
+            layout.append((k * pitch + shift, 0.0, course, 0.0))
+    return _build("running-bond", layout, options)
+
+
+def towers(towers: int = 2, height: int = 3, spacing_m: float = 1.0, **options: object) -> Blueprint:
+    """``towers`` stacks of ``height`` bricks each, ``spacing_m`` apart along the wall line."""
+    _check_count("towers", towers)
+    _check_count("height", height)
+    length, width, _ = _size(options)
+    if not (math.isfinite(spacing_m) and spacing_m > 0.0):
+        raise BlueprintError("<generator>", "spacing", f"must be > 0, got {spacing_m}")
+    layout: _Layout = [(t * spacing_m, 0.0, course, 0.0) for t in range(towers) for course in range(height)]
+    if towers > 1 and spacing_m < length:
+        raise BlueprintError("<generator>", "spacing", f"{spacing_m} m is less than the brick length {length} m")
+    del width
+    return _build("towers", layout, options)
+
+
+def pyramid(base: int = 5, **options: object) -> Blueprint:
+    """A stepped pyramid wall: ``base`` bricks in the first course, one fewer in each course above."""
+    _check_count("base", base)
+    length, _, _ = _size(options)
+    joint = float(options.get("joint_m", 0.0))  # type: ignore[arg-type]
+    pitch = length + joint
+    layout: _Layout = []
+    for course in range(base):
+        for k in range(base - course):
+            layout.append((k * pitch + course * pitch / 2.0, 0.0, course, 0.0))
+    return _build("pyramid", layout, options)
+
+
+def _check_count(what: str, value: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise BlueprintError("<generator>", what, f"must be an integer >= 1, got {value!r}")
+
+
+def _size(options: dict[str, object]) -> Vec3:
+    size = options.get("brick_size_m", DEFAULT_BRICK_SIZE_M)
+    values = tuple(float(v) for v in size)  # type: ignore[attr-defined]
+    if len(values) != 3 or not all(math.isfinite(v) and v > 0.0 for v in values):
+        raise BlueprintError("<generator>", "brick size", f"must be 3 positive numbers, got {size!r}")
+    return (values[0], values[1], values[2])
+
+
+def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
+    allowed = {
+        "brick_size_m", "joint_m", "yaw_rad", "origin_m", "placed_courses", "brick_uavs", "adhesion_uavs",
+        "clearance_m", "cruise_altitude_m", "pallet_columns", "pallet_distance_m", "name", "markers",
+    }
+    unknown = set(options) - allowed
+    if unknown:
+        raise TypeError(f"unknown generator options: {', '.join(sorted(unknown))}")
+    size = _size(options)
+    length, width, height = size
+    yaw = float(options.get("yaw_rad", 0.0))  # type: ignore[arg-type]
+    origin = tuple(float(v) for v in options.get("origin_m", (0.0, 0.0)))  # type: ignore[attr-defined]
+    placed_courses = int(options.get("placed_courses", 0))  # type: ignore[call-overload]
+    brick_uavs = int(options.get("brick_uavs", 1))  # type: ignore[call-overload]
+    adhesion_uavs = int(options.get("adhesion_uavs", 1))  # type: ignore[call-overload]
+    clearance = float(options.get("clearance_m", DEFAULT_CLEARANCE_M))  # type: ignore[arg-type]
+    cruise = float(options.get("cruise_altitude_m", DEFAULT_CRUISE_ALTITUDE_M))  # type: ignore[arg-type]
+    pallet_distance = float(options.get("pallet_distance_m", clearance + 1.0))  # type: ignore[arg-type]
+    markers = options.get("markers", MarkerSpec())
+    if len(origin) not in (2, 3):
+        raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
+    if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
+        raise BlueprintError("<generator>", "counts", "placed courses and fleet sizes must be >= 0")
+    ox, oy = origin[0], origin[1]
+    oz = origin[2] if len(origin) == 3 else 0.0
+    cos_y, sin_y = math.cos(yaw), math.sin(yaw)
+
+    def world(u: float, v: float, z: float) -> Vec3:
+        return (ox + cos_y * u - sin_y * v, oy + sin_y * u + cos_y * v, oz + z)
+
+    # Centre the wall on the origin along u.
+    us = [u for u, _, _, _ in layout]
+    u_mid = (min(us) + max(us)) / 2.0
+    todo = [i for i, (_, _, course, _) in enumerate(layout) if course >= placed_courses]
+    columns = int(options.get("pallet_columns", 0)) or max(1, min(len(todo), 10 if len(todo) <= 40 else 20))  # type: ignore[call-overload]
+    pallet_pitch_u = length + 0.2
+    pallet_pitch_v = width + 0.3
+    pickups: dict[int, Vec3] = {}
+    for slot, index in enumerate(todo):
+        row, col = divmod(slot, columns)
+        u = (col - (columns - 1) / 2.0) * pallet_pitch_u
+        v = -(width / 2.0 + pallet_distance + row * pallet_pitch_v)
+        pickups[index] = world(u, v, height / 2.0)
+    bricks = []
+    for index, (u, v, course, rel_yaw) in enumerate(layout):
+        placed = course < placed_courses
+        bricks.append(
+            Brick(
+                id=index,
+                position_m=world(u - u_mid, v, course * height + height / 2.0),
+                size_m=size,
+                yaw_rad=yaw + rel_yaw,
+                placed=placed,
+                pickup_m=None if placed else pickups[index],
+            )
+        )
+    rows = math.ceil(len(todo) / columns) if todo else 0
+    home_v = -(width / 2.0 + pallet_distance + max(rows - 1, 0) * pallet_pitch_v + clearance + 1.0)
+    names = [f"brick-{k + 1}" for k in range(brick_uavs)] + [f"glue-{k + 1}" for k in range(adhesion_uavs)]
+    roles = ["brick"] * brick_uavs + ["adhesion"] * adhesion_uavs
+    step = clearance + 0.5
+    fleet = tuple(
+        UavSpec(name=n, role=r, home_m=world((k - (len(names) - 1) / 2.0) * step, home_v, 0.0))  # type: ignore[arg-type]
+        for k, (n, r) in enumerate(zip(names, roles))
+    )
+    name = options.get("name") or f"{kind}-{len(bricks)}"
+    return Blueprint(
+        bricks=tuple(bricks),
+        fleet=fleet,
+        name=str(name),
+        clearance_m=clearance,
+        cruise_altitude_m=cruise,
+        brick_size_m=size,
+        markers=markers,  # type: ignore[arg-type]
+        source=f"<{kind}>",
+    )
+
+
+def generate(kind: str, **options: object) -> Blueprint:
+    """Dispatch on the generator name ("running-bond", "towers" or "pyramid")."""
+    funcs = {"running-bond": running_bond, "towers": towers, "pyramid": pyramid}
+    if kind not in funcs:
+        raise BlueprintError("<generator>", "kind", f"unknown generator {kind!r} (one of {', '.join(GENERATORS)})")
+    return funcs[kind](**options)  # type: ignore[arg-type]
+
+
+def bricks_of(blueprint: Blueprint) -> Sequence[Brick]:
+    """The blueprint's bricks (a convenience for notebooks)."""
+    return blueprint.bricks
