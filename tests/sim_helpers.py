@@ -26,7 +26,9 @@ def fly_to(
         tel = uav.fc.telemetry()
         err = [t - p for t, p in zip(target_m, tel.position_m)]
         dist = math.sqrt(sum(e * e for e in err))
-        yaw_err = 0.0 if target_yaw_rad is None else math.remainder(target_yaw_rad - tel.attitude_rad[2], math.tau)
+        yaw_err = (
+            0.0 if target_yaw_rad is None else math.remainder(target_yaw_rad - tel.attitude_rad[2], math.tau)
+        )
         if dist < tol_m and abs(yaw_err) < 0.02:
             return True
         v = [gain * e for e in err]

@@ -354,7 +354,7 @@ class SimVehicle:
             if abs(err) < 0.03 and abs(self._vz) < 0.1:
                 self._takeoff_z = None
                 self._hold = (self._x, self._y, self._z)
-        elif self._t - self._sp_time <= cfg.setpoint_timeout_s and self._link_lost_at is None:
+        elif self._t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
             tx, ty, tz, tyaw = self._sp
         else:
             hold = self._hold

@@ -26,7 +26,7 @@ from masonry.errors import InputError
 from masonry.planner.tasks import AdhesionTask
 from masonry.ports import CameraFrame, Telemetry, Vec3
 from masonry.sim.adhesive import AdhesiveDeposit
-from masonry.sim.bricks import BrickField, SimBrick
+from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
 from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
 from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
@@ -295,7 +295,7 @@ class World:
             self._release(uav)
 
     def _contact(self, uav: SimUav) -> None:
-        """Keep the tool (or the carried brick) from passing through brick tops: the airframe is held up."""
+        """Keep the tool from passing through brick tops, and a carried brick through bricks or the ground."""
         vehicle = uav.vehicle
         tol = 0.06
         if uav.carried_brick is not None:
@@ -310,7 +310,8 @@ class World:
             return
         tool = uav.effector_m() if uav.role == "brick" else uav.nozzle_m()
         support = self.field.support_at(tool[0], tool[1], below_z_m=tool[2], tol_m=tol)
-        if tool[2] < support:
+        # Bricks only: on the ground the landing gear, not the rod, takes the vehicle's weight.
+        if support > GROUND_Z_M and tool[2] < support:
             vehicle.hold_above(vehicle.position_m[2] + support - tool[2])
 
     def _carry_pose(self, uav: SimUav, brick: SimBrick) -> None:
