@@ -8,6 +8,9 @@ _MODULES = (
     "plan",  # masonry plan, schema, blueprint
     "sim",  # masonry sim
     "mission",  # masonry mission-control
+    "perception",  # masonry estimate, markers, calibrate
+    "fly",  # masonry fly
+    "fsm",  # masonry fsm diagram
 )
 
 for _name in _MODULES:
