@@ -1,0 +1,279 @@
+"""``masonry plan``, ``masonry schema`` and ``masonry blueprint running-bond|towers|pyramid``."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Optional
+
+import typer
+
+from masonry.cli.app import app, command
+from masonry.errors import InputError
+
+if TYPE_CHECKING:
+    from masonry.blueprint import Blueprint
+    from masonry.planner.tasks import Plan
+
+GRAPH_FORMATS = (".png", ".svg", ".dot", ".graphml")
+#: Plans with at most this many tasks to do list every task in the text summary.
+DETAIL_LIMIT = 40
+
+
+@command("plan")
+def plan_command(
+    blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML; see docs/blueprint-format.md)."),
+    fmt: str = typer.Option("text", "--format", help="text (a human summary) | json."),
+    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write the output to this file."),
+    graph: Optional[Path] = typer.Option(
+        None, "--graph", help="Draw/export G^d and G^c together: .png, .svg, .dot or .graphml."
+    ),
+) -> None:
+    """Plan a wall: tasks, dependency graph G^d, conflict graph G^c (paper Section III)."""
+    from masonry.blueprint import load_blueprint
+    from masonry.planner import plan
+
+    if fmt not in ("text", "json"):
+        raise InputError(f"--format must be text or json, got {fmt!r}")
+    if graph is not None and graph.suffix.lower() not in GRAPH_FORMATS:
+        raise InputError(f"--graph {graph}: the file must end in {', '.join(GRAPH_FORMATS)}")
+    bp = load_blueprint(blueprint)
+    result = plan(bp)
+    if fmt == "json":
+        from masonry.planner.export import iter_plan_json
+
+        _write(iter_plan_json(result), output)
+    else:
+        _write([summary(bp, result)], output)
+    if graph is not None:
+        from masonry.viz.graph_drawing import export_graphs
+
+        export_graphs(result, graph, title=bp.name or blueprint.name)
+
+
+def _write(pieces: Any, output: Path | None) -> None:
+    if output is None:
+        for piece in pieces:
+            sys.stdout.write(piece)
+        sys.stdout.flush()
+        return
+    try:
+        with output.open("w", encoding="utf-8") as fh:
+            for piece in pieces:
+                fh.write(piece)
+    except OSError as exc:
+        raise InputError(f"--output {output}: cannot write: {exc.strerror or exc}") from None
+
+
+def summary(bp: Blueprint, result: Plan) -> str:
+    """The human summary of a plan: counts, tasks available at the start, the longest chain."""
+    bricks = bp.bricks
+    placed = sum(1 for b in bricks if b.placed)
+    todo = [t for t in result.tasks if not t.done]
+    n_brick = sum(1 for t in todo if t.kind == "brick")
+    n_adh = len(todo) - n_brick
+    available = result.available()
+    chain = result.longest_chain()
+    fleet = ", ".join(f"{u.name} ({u.role})" for u in bp.fleet) or "none"
+    lines = [
+        f"{bp.name or Path(bp.source).stem}  ({bp.source})",
+        f"  bricks          {len(bricks)}: {placed} placed, {len(bricks) - placed} to place",
+        f"  tasks to do     {len(todo)}: {n_brick} brick, {n_adh} adhesion",
+        f"  dependencies    {len(result.dependencies)} edges in G^d",
+        f"  conflicts       {len(result.conflicts)} pairs in G^c (clearance r_c = {bp.clearance_m:g} m)",
+        f"  fleet           {fleet}",
+        f"  available now   {_id_list(available)}",
+        f"  longest chain   {len(chain)} tasks: {_chain(chain)}",
+    ]
+    if 0 < len(todo) <= DETAIL_LIMIT:
+        prereq = result.prerequisites()
+        done = {x.id for x in result.tasks if x.done}
+        conflicts: dict[str, list[str]] = {t.id: [] for t in todo}
+        for a, b in result.conflicts:
+            conflicts[a].append(b)
+            conflicts[b].append(a)
+        lines.append("")
+        lines.append("  task  what                                        waits for         conflicts with")
+        for t in todo:
+            if t.kind == "brick":
+                what = f"place brick {t.brick} at {_xyz(t.position_m)}"  # type: ignore[union-attr]
+            else:
+                what = f"glue {t.length_m:.2f} m on brick {t.below} under {t.above}"  # type: ignore[union-attr]
+            waits = ", ".join(v + (" (done)" if v in done else "") for v in prereq[t.id]) or "-"
+            lines.append(f"  {t.id:<5} {what:<43} {waits:<17} {', '.join(conflicts[t.id]) or '-'}")
+    return "\n".join(lines) + "\n"
+
+
+def _xyz(p: tuple[float, float, float]) -> str:
+    return "(" + ", ".join(f"{v:.2f}" for v in p) + ")"
+
+
+def _id_list(ids: list[str], limit: int = 12) -> str:
+    if not ids:
+        return "none"
+    shown = ", ".join(ids[:limit])
+    return f"{len(ids)}: {shown}" + (f", ... ({len(ids) - limit} more)" if len(ids) > limit else "")
+
+
+def _chain(chain: list[str], limit: int = 9) -> str:
+    if not chain:
+        return "-"
+    if len(chain) <= limit:
+        return " -> ".join(chain)
+    return " -> ".join(chain[:4]) + " -> ... -> " + " -> ".join(chain[-4:])
+
+
+@command("schema")
+def schema_command() -> None:
+    """Print the JSON Schema of the blueprint format (for editors and validators)."""
+    import json
+
+    from masonry.schema import blueprint_schema
+
+    typer.echo(json.dumps(blueprint_schema(), indent=2))
+
+
+blueprint_app = typer.Typer(
+    help="Generate blueprints of any size (running-bond walls, towers, pyramids).", no_args_is_help=True
+)
+app.add_typer(blueprint_app, name="blueprint")
+
+
+def _common(
+    output: Optional[Path],
+    brick_size: Optional[tuple[float, float, float]],
+    joint: float,
+    yaw: float,
+    origin: tuple[float, float],
+    placed_courses: int,
+    pallet_columns: int,
+    brick_uavs: int,
+    adhesion_uavs: int,
+    clearance: float,
+    cruise_altitude: float,
+    name: Optional[str],
+) -> dict[str, Any]:
+    options: dict[str, Any] = {
+        "joint_m": joint,
+        "yaw_rad": yaw,
+        "origin_m": origin,
+        "placed_courses": placed_courses,
+        "pallet_columns": pallet_columns,
+        "brick_uavs": brick_uavs,
+        "adhesion_uavs": adhesion_uavs,
+        "clearance_m": clearance,
+        "cruise_altitude_m": cruise_altitude,
+    }
+    if brick_size is not None:
+        options["brick_size_m"] = brick_size
+    if name:
+        options["name"] = name
+    return options
+
+
+def _emit(kind: str, options: dict[str, Any], output: Optional[Path], argv: str) -> None:
+    from masonry.blueprint import format_blueprint, validate_blueprint
+    from masonry.blueprint_gen import generate
+    from masonry.errors import BlueprintError
+
+    try:
+        bp = generate(kind, **options)
+        validate_blueprint(bp)
+    except BlueprintError as exc:
+        raise InputError(f"masonry blueprint {kind}: {exc.where}: {exc.problem}") from None
+    text = format_blueprint(bp, header=f"Generated by: masonry blueprint {kind}{argv}")
+    if output is None:
+        sys.stdout.write(text)
+        return
+    try:
+        output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"-o {output}: cannot write: {exc.strerror or exc}") from None
+    n_todo = sum(1 for b in bp.bricks if not b.placed)
+    typer.echo(f"wrote {output}: {len(bp.bricks)} bricks ({n_todo} to place), {len(bp.fleet)} UAVs", err=True)
+
+
+_OUT = typer.Option(None, "--output", "-o", help="Write the blueprint here (default: stdout).")
+_SIZE = typer.Option(None, "--brick-size", help="Brick length, width, height in metres (default 0.30 0.15 0.10).")
+_JOINT = typer.Option(0.0, "--joint", help="Gap between neighbouring bricks of a course, metres.")
+_YAW = typer.Option(0.0, "--yaw", help="Direction of the wall (and its bricks' length axis), radians.")
+_ORIGIN = typer.Option((0.0, 0.0), "--origin", help="x y of the wall's centre on the ground, metres.")
+_PLACED = typer.Option(0, "--placed-courses", help="How many bottom courses are already in place.")
+_PALLET = typer.Option(0, "--pallet-columns", help="Pickup pallet columns (0: automatic).")
+_BUAV = typer.Option(1, "--brick-uavs", help="Number of brick UAVs in the fleet.")
+_AUAV = typer.Option(1, "--adhesion-uavs", help="Number of adhesion UAVs in the fleet.")
+_CLEAR = typer.Option(1.5, "--clearance", help="Minimum clearance r_c between UAVs, metres.")
+_CRUISE = typer.Option(1.2, "--cruise-altitude", help="Cruise altitude, metres.")
+_NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bricks>).")
+
+
+@command("running-bond", typer_app=blueprint_app)
+def running_bond_command(
+    courses: int = typer.Option(4, "--courses", help="Number of courses (rows)."),
+    bricks_per_course: int = typer.Option(6, "--bricks-per-course", help="Bricks in each course."),
+    output: Optional[Path] = _OUT,
+    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    joint: float = _JOINT,
+    yaw: float = _YAW,
+    origin: tuple[float, float] = _ORIGIN,
+    placed_courses: int = _PLACED,
+    pallet_columns: int = _PALLET,
+    brick_uavs: int = _BUAV,
+    adhesion_uavs: int = _AUAV,
+    clearance: float = _CLEAR,
+    cruise_altitude: float = _CRUISE,
+    name: Optional[str] = _NAME,
+) -> None:
+    """A straight running-bond wall: every other course shifted by half a brick."""
+    options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,
+                      adhesion_uavs, clearance, cruise_altitude, name)
+    options.update(courses=courses, bricks_per_course=bricks_per_course)
+    _emit("running-bond", options, output, f" --courses {courses} --bricks-per-course {bricks_per_course}")
+
+
+@command("towers", typer_app=blueprint_app)
+def towers_command(
+    towers: int = typer.Option(2, "--towers", help="Number of towers."),
+    height: int = typer.Option(3, "--height", help="Bricks per tower."),
+    spacing: float = typer.Option(1.0, "--spacing", help="Distance between tower centres, metres."),
+    output: Optional[Path] = _OUT,
+    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    yaw: float = _YAW,
+    origin: tuple[float, float] = _ORIGIN,
+    placed_courses: int = _PLACED,
+    pallet_columns: int = _PALLET,
+    brick_uavs: int = _BUAV,
+    adhesion_uavs: int = _AUAV,
+    clearance: float = _CLEAR,
+    cruise_altitude: float = _CRUISE,
+    name: Optional[str] = _NAME,
+) -> None:
+    """Separate stacks of bricks in a row (the paper's case study is --towers 2 --height 3 --placed-courses 2)."""
+    options = _common(output, brick_size, 0.0, yaw, origin, placed_courses, pallet_columns, brick_uavs,
+                      adhesion_uavs, clearance, cruise_altitude, name)
+    options.pop("joint_m")
+    options.update(towers=towers, height=height, spacing_m=spacing)
+    _emit("towers", options, output, f" --towers {towers} --height {height} --spacing {spacing:g}")
+
+
+@command("pyramid", typer_app=blueprint_app)
+def pyramid_command(
+    base: int = typer.Option(5, "--base", help="Bricks in the bottom course (one fewer per course above)."),
+    output: Optional[Path] = _OUT,
+    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    joint: float = _JOINT,
+    yaw: float = _YAW,
+    origin: tuple[float, float] = _ORIGIN,
+    placed_courses: int = _PLACED,
+    pallet_columns: int = _PALLET,
+    brick_uavs: int = _BUAV,
+    adhesion_uavs: int = _AUAV,
+    clearance: float = _CLEAR,
+    cruise_altitude: float = _CRUISE,
+    name: Optional[str] = _NAME,
+) -> None:
+    """A stepped pyramid wall."""
+    options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,
+                      adhesion_uavs, clearance, cruise_altitude, name)
+    options.update(base=base)
+    _emit("pyramid", options, output, f" --base {base}")
