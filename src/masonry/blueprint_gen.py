@@ -103,7 +103,7 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
     clearance = float(options.get("clearance_m", DEFAULT_CLEARANCE_M))  # type: ignore[arg-type]
     cruise = float(options.get("cruise_altitude_m", DEFAULT_CRUISE_ALTITUDE_M))  # type: ignore[arg-type]
     pallet_distance = float(options.get("pallet_distance_m", clearance + 1.0))  # type: ignore[arg-type]
-    markers = options.get("markers", MarkerSpec())
+    markers = options.get("markers") or MarkerSpec(dictionary=_dictionary_for(len(layout)))
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
     if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
@@ -161,6 +161,14 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
         markers=markers,  # type: ignore[arg-type]
         source=f"<{kind}>",
     )
+
+
+def _dictionary_for(n_bricks: int) -> str:
+    """The smallest 4x4 ArUco dictionary holding markers 0 .. 2n-1 (DICT_4X4_1000 beyond 500 bricks)."""
+    for size in (50, 100, 250, 1000):
+        if 2 * n_bricks <= size:
+            return f"DICT_4X4_{size}"
+    return "DICT_4X4_1000"
 
 
 def generate(kind: str, **options: object) -> Blueprint:
