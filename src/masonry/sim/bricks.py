@@ -66,6 +66,11 @@ class SpatialHash:
                     found |= bucket
         return found
 
+    def query_point(self, x: float, y: float) -> set[int] | None:
+        """Keys whose cells hold the point (None if none; the set is the index's own: do not modify it)."""
+        c = self.cell_m
+        return self._cells.get((math.floor(x / c), math.floor(y / c)))
+
     def __contains__(self, key: object) -> bool:
         return key in self._where
 
@@ -198,7 +203,7 @@ class BrickField:
         top = GROUND_Z_M
         limit = below_z_m + tol_m
         bricks = self.bricks
-        for k in self._hash.query(x, y, x, y):
+        for k in self._hash.query_point(x, y) or ():
             b = bricks[k]
             t = b.top_z_m
             if top < t <= limit and point_in_rect(x, y, *b.rect()):

@@ -269,8 +269,8 @@ class SimVehicle:
 
         Ignored (as by ArduPilot) on the ground, disarmed or in LAND; in the air it ends an auto climb.
         """
-        vx, vy, vz = (float(v) for v in velocity_mps)
-        if not all(math.isfinite(v) for v in (vx, vy, vz, yaw_rate_radps)):
+        vx, vy, vz = float(velocity_mps[0]), float(velocity_mps[1]), float(velocity_mps[2])
+        if not math.isfinite(vx + vy + vz + yaw_rate_radps):
             raise CommandRejected("velocity", f"setpoint not finite: {velocity_mps!r}, {yaw_rate_radps!r}")
         if self.failed or not self.armed or self.on_ground or self.mode != "GUIDED":
             return

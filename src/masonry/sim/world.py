@@ -50,6 +50,11 @@ class WorldConfig:
     contact_band_m: float = 0.015  # the effector touches a brick top when within this height of it
     guide_residual: float = 0.2  # the conical guide centres the brick: this fraction of the offset remains
     support_margin_m: float = 0.025  # a falling brick ignores overlaps with neighbours thinner than this
+    release_scatter_m: float = (
+        0.002  # a released brick settles this far (std, per axis) from where it was let go
+    )
+    release_scatter_per_m: float = 0.05  # ... plus this much per metre of fall
+    release_yaw_scatter_rad: float = 0.005
     spray_max_height_m: float = 0.25  # adhesive reaches the surface from at most this nozzle height
     bead_radius_m: float = 0.03  # coverage: a point is covered within this distance of a bead
     path_sample_s: float = 0.5  # flown paths are recorded at this period
@@ -359,7 +364,16 @@ class World:
             return
         brick = self.field.bricks[brick_id]
         self._carry_pose(uav, brick)
-        self.field.drop(brick_id, self.config.support_margin_m)
+        cfg = self.config
+        fall_m = brick.bottom_z_m - self.field.support_under(
+            brick.rect(cfg.support_margin_m), below_z_m=brick.bottom_z_m
+        )
+        sigma = cfg.release_scatter_m + cfg.release_scatter_per_m * max(0.0, fall_m)
+        dx, dy, dyaw = uav.rng.standard_normal(3).tolist()
+        x, y, z = brick.position_m
+        brick.position_m = (x + sigma * dx, y + sigma * dy, z)
+        brick.yaw_rad = math.remainder(brick.yaw_rad + cfg.release_yaw_scatter_rad * dyaw, 2.0 * math.pi)
+        self.field.drop(brick_id, cfg.support_margin_m)
         uav.carried_brick = None
 
     def _spray(self, uav: SimUav) -> None:
