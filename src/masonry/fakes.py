@@ -210,10 +210,10 @@ class FakeFlightController(_Scripted):
         elif self.mode == "LAND":
             cmd = np.array([0.0, 0.0, -self.land_rate_mps])
         elif self._takeoff_z_m is not None:
-            cmd = np.array([0.0, 0.0, self.climb_rate_mps])
-            if self._pos[2] >= self._takeoff_z_m:
+            error = self._takeoff_z_m - self._pos[2]
+            cmd = np.array([0.0, 0.0, min(self.climb_rate_mps, max(-self.climb_rate_mps, 1.5 * error))])
+            if abs(error) < 0.02 and abs(self._vel[2]) < 0.05:
                 self._takeoff_z_m = None
-                cmd = np.zeros(3)
         elif self._t_s - self._cmd_time_s <= self.command_timeout_s:
             cmd = self._cmd_vel + np.asarray(self.wind_mps)
             cmd_yaw_rate = self._cmd_yaw_rate
@@ -436,6 +436,7 @@ class FakeCamera(_Scripted):
         yaw_noise_sigma_rad: float = 0.0,
         dropout: float = 0.0,
         hidden: frozenset[int] = frozenset(),
+        blind: bool = False,
         rate_hz: float = 30.0,
         seed: int = 0,
     ) -> None:
@@ -449,7 +450,7 @@ class FakeCamera(_Scripted):
         self.yaw_noise_sigma_rad = float(yaw_noise_sigma_rad)
         self.dropout = float(dropout)
         self.hidden = frozenset(hidden)
-        self.blind = False
+        self.blind = bool(blind)
         self.rate_hz = float(rate_hz)
         self.frames_read = 0
         self._rng = np.random.default_rng(seed)

@@ -729,6 +729,9 @@ class BrickUav(UavModel):
         pass  # keep tracking the descent's end point (pressing on the brick) with the magnet on
 
     def do_pickup_grasp(self, tel: Telemetry) -> None:
+        # Press on the brick with the magnet on for the dwell (the magnet grips on contact; polling lets an
+        # actuator board report it), then climb: the verification happens at cruise altitude.
+        self.gripper.is_attached()
         if self._now_s - self._entered_s >= self.config.grasp_dwell_s:
             self._grasp_effector = self._tool_position(tel, self._eff)
             self._grasp_yaw_rad = tel.attitude_rad[2]

@@ -1,0 +1,253 @@
+"""Scripted scenarios on fakes: every state and transition of both machines, happy paths and failures."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from fsm_rig import HOME, Rig, adhesion_task, brick_task
+
+from masonry.fsm.states import ADHESION_STATES, BRICK_STATES, leaf_states
+
+HAPPY_BRICK = [
+    "idle", "takeoff", "pickup_goto", "pickup_estimate", "pickup_align", "pickup_descend", "pickup_grasp",
+    "pickup_ascend", "pickup_verify", "transport", "place_align", "place_descend", "place_release",
+    "place_verify", "place_ascend", "home", "land", "idle",
+]
+
+
+def test_brick_happy_path() -> None:
+    rig = Rig("brick").run()
+    assert rig.states == HAPPY_BRICK
+    (result,) = rig.link.results
+    assert result.status == "done" and result.task_id == "B7" and result.reason is None
+    assert result.placement_error_m is not None and result.placement_error_m <= 0.015
+    assert rig.uav.finished and rig.uav.task is None
+    # The brick's yaw was estimated and the UAV turned to it before the descent.
+    assert rig.uav.brick_estimate is not None
+    center, yaw = rig.uav.brick_estimate
+    assert math.dist(center[:2], rig.brick.top_center_m[:2]) < 0.01
+    assert yaw == pytest.approx(0.6, abs=0.03)
+    # Magnet on for the descent with the joint unlocked; off at release.
+    assert ("joint_locked", False) in rig.gripper.commands and ("magnet", True) in rig.gripper.commands
+    assert rig.gripper.commands[-1][0] in ("magnet", "joint_locked") and not rig.gripper.magnet_on
+    # Progress went out for every state of the task.
+    assert [p[1] for p in rig.link.progress][:3] == ["takeoff", "pickup_goto", "pickup_estimate"]
+    assert rig.fc.telemetry().on_ground and rig.fc.position_m[:2] == pytest.approx(HOME[:2], abs=0.1)
+
+
+def test_brick_places_at_the_blueprint_pose_with_the_carried_yaw() -> None:
+    """At release the effector is on the top-face centre of the target and the UAV's yaw puts the brick at 0.3."""
+    rig = Rig("brick", tasks=[brick_task(yaw_rad=0.3)])
+    seen: dict[str, object] = {}
+
+    def watch(r: Rig) -> None:
+        if r.uav.state == "place_release" and "eff" not in seen:
+            seen["eff"] = r.effector_m()
+            seen["yaw"] = r.fc.yaw_rad
+
+    rig.run(on_tick=watch)
+    assert rig.link.results[0].status == "done"
+    assert math.dist(seen["eff"], (0.0, 0.5, 0.30)) <= 0.015  # type: ignore[arg-type]
+    # The brick lay at 0.6 rad and the UAV grasped it aligned: it must now fly at 0.3 rad.
+    assert seen["yaw"] == pytest.approx(0.3, abs=0.06)
+
+
+def test_brick_not_seen_climbs_to_widen_the_view() -> None:
+    # 0.75 m off the approximate pickup: outside the view at cruise altitude, inside after one climb.
+    rig = Rig("brick", brick_offset_m=(0.0, 0.75)).run()
+    assert rig.link.results[0].status == "done"
+    assert rig.followed("pickup_estimate", "pickup_estimate")
+    assert rig.uav.climbs >= 1
+
+
+def test_brick_never_seen_fails_after_the_climbs_and_goes_home() -> None:
+    rig = Rig("brick", camera={"blind": True}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "not seen" in (result.reason or "")
+    assert rig.states.count("pickup_estimate") == 1 + rig.config.max_climbs
+    assert rig.states[-4:] == ["failsafe", "home", "land", "idle"]
+
+
+def test_brick_low_confidence_climbs_then_succeeds() -> None:
+    rig = Rig("brick", camera={"noise_sigma_m": 0.08})
+
+    def clear_up(r: Rig) -> None:
+        if r.uav.climbs >= 1:
+            r.camera.noise_sigma_m = 0.002  # the view is clear from one step higher
+
+    rig.run(on_tick=clear_up)
+    assert rig.link.results[0].status == "done"
+    assert rig.followed("pickup_estimate", "pickup_estimate")
+
+
+def test_brick_confidence_that_stays_low_fails_the_task() -> None:
+    rig = Rig("brick", camera={"noise_sigma_m": 0.08}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "confidence" in (result.reason or "")
+
+
+def test_failed_grasp_is_retried_from_the_estimate() -> None:
+    rig = Rig("brick", gripper={"failures": 1}).run()
+    assert rig.link.results[0].status == "done"
+    assert rig.followed("pickup_verify", "pickup_estimate")
+    assert rig.states.count("pickup_descend") == 2 and rig.uav.grasp_attempts == 1
+
+
+def test_grasp_that_keeps_failing_fails_the_task() -> None:
+    rig = Rig("brick", gripper={"failures": 99}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "not attached after 3 grasps" in (result.reason or "")
+    assert rig.states.count("pickup_descend") == 3
+
+
+def test_missed_release_hovers_above_and_tries_again() -> None:
+    blocked = {"done": False}
+
+    def obstacle(r: Rig) -> None:
+        # Something is in the way during the first placement descent: the UAV cannot get within r_pl.
+        if r.uav.state == "place_descend" and not blocked["done"]:
+            r.fc.floor_z_m = 0.9
+            blocked["done"] = True
+        elif r.uav.state == "place_align" and blocked["done"]:
+            r.fc.floor_z_m = 0.0
+
+    rig = Rig("brick").run(on_tick=obstacle)
+    assert rig.link.results[0].status == "done"
+    assert rig.followed("place_descend", "place_align")
+    assert rig.states.count("place_descend") == 2 and rig.uav.place_attempts == 1
+
+
+def test_release_that_sticks_is_repeated() -> None:
+    rig = Rig("brick", gripper={"stuck_releases": 1}).run()
+    assert rig.link.results[0].status == "done"
+    assert rig.followed("place_verify", "place_release")
+
+
+def test_link_loss_reports_failure_and_lands() -> None:
+    rig = Rig("brick")
+    rig.fc.at(20.0, link_ok=False)
+    rig.run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "link lost" in (result.reason or "")
+    assert rig.states[-2:] == ["emergency", "halted"]
+    assert rig.uav.finished and rig.uav.halt_reason
+    assert rig.fc.telemetry().on_ground  # the autopilot's own failsafe
+
+
+def test_low_battery_aborts_goes_home_and_retires() -> None:
+    rig = Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "battery low" in (result.reason or "")
+    assert rig.states[-4:] == ["failsafe", "home", "land", "halted"]
+    assert "battery" in (rig.uav.halt_reason or "")
+    # Out of service: a new task is refused at once.
+    rig.link.push(brick_task("B8", brick=8))
+    rig.uav.step(rig.clock.now_s())
+    assert rig.link.results[-1].task_id == "B8" and "out of service" in (rig.link.results[-1].reason or "")
+
+
+def test_critical_battery_in_failsafe_lands_where_it_is() -> None:
+    rig = Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008},
+              config={"battery_critical_fraction": 0.25}).run()
+    assert rig.followed("failsafe", "emergency")
+    assert rig.states[-1] == "halted"
+
+
+def test_uav_failure_is_an_emergency() -> None:
+    rig = Rig("brick")
+    rig.fc.at(30.0, failure="motor failure")
+    rig.run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "motor failure" in (result.reason or "")
+    assert rig.states[-2:] == ["emergency", "halted"]
+
+
+def test_rejected_arming_fails_the_task_with_the_reason() -> None:
+    rig = Rig("brick", fc={"arm_rejection": "pre-arm: compass not calibrated"}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and "compass not calibrated" in (result.reason or "")
+    assert rig.states[-1] == "halted"
+
+
+def test_next_task_is_flown_without_landing() -> None:
+    rig = Rig("brick", tasks=[brick_task("B7"), brick_task("B8", brick=7, position=(0.0, 0.5, 0.35))])
+    rig.run(results=2)
+    assert [r.status for r in rig.link.results] == ["done", "done"]
+    assert rig.followed("place_ascend", "pickup_goto")
+    assert rig.states.count("takeoff") == 1 and rig.states.count("land") == 1
+
+
+def test_task_of_the_wrong_kind_is_refused() -> None:
+    rig = Rig("brick", tasks=[adhesion_task()])
+    rig.uav.step(0.0)
+    assert rig.link.results[0].status == "failed" and "cannot fly adhesion task" in (rig.link.results[0].reason or "")
+    assert rig.uav.state == "idle" and rig.uav.finished
+
+
+def test_brick_task_without_pickup_is_refused() -> None:
+    rig = Rig("brick", tasks=[brick_task(pickup=None)])
+    rig.uav.step(0.0)
+    assert rig.link.results[0].status == "failed" and "no pickup" in (rig.link.results[0].reason or "")
+
+
+HAPPY_ADHESION = ["idle", "takeoff", "cruise", "hover", "descend", "spray", "close", "ascend", "home", "land", "idle"]
+
+
+def test_adhesion_happy_path_sprays_along_the_segment() -> None:
+    rig = Rig("adhesion")
+    path: list[tuple[float, float, float]] = []
+
+    def record(r: Rig) -> None:
+        if r.sprayer.is_valve_open():
+            x, y, z = r.fc.position_m
+            path.append((x, y, z - 0.35))  # the nozzle
+
+    rig.run(on_tick=record)
+    assert rig.states == HAPPY_ADHESION
+    assert rig.link.results[0].status == "done"
+    assert len(rig.sprayer.intervals) == 1 and not rig.sprayer.is_valve_open()
+    # The valve was open along the segment, at the spraying height above it.
+    assert path[0][0] == pytest.approx(-0.15, abs=0.02) and path[-1][0] == pytest.approx(0.15, abs=0.02)
+    assert all(abs(p[1] - 0.5) < 0.02 and abs(p[2] - 0.30) < 0.02 for p in path)
+
+
+def test_adhesion_link_loss_while_spraying_closes_the_valve() -> None:
+    rig = Rig("adhesion")
+    lost = {"done": False}
+
+    def cut(r: Rig) -> None:
+        if r.uav.state == "spray" and not lost["done"]:
+            r.fc.link_ok = False
+            lost["done"] = True
+
+    rig.run(on_tick=cut)
+    assert rig.link.results[0].status == "failed"
+    assert not rig.sprayer.is_valve_open()
+    assert rig.states[-2:] == ["emergency", "halted"]
+
+
+def test_adhesion_low_battery_closes_the_valve_and_goes_home() -> None:
+    rig = Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run()
+    assert rig.link.results[0].status == "failed" and "battery" in (rig.link.results[0].reason or "")
+    assert not rig.sprayer.is_valve_open()
+    assert rig.states[-4:] == ["failsafe", "home", "land", "halted"]
+
+
+def test_adhesion_next_task_goes_straight_to_the_next_segment() -> None:
+    rig = Rig("adhesion", tasks=[adhesion_task("A0"), adhesion_task("A1", (-0.15, -0.5, 0.2), (0.15, -0.5, 0.2))])
+    rig.run(results=2)
+    assert [r.status for r in rig.link.results] == ["done", "done"]
+    assert rig.followed("ascend", "cruise")
+
+
+def test_scenarios_visit_every_state() -> None:
+    """Together the scenarios above reach every leaf state of both machines (checked on a few here)."""
+    brick = set(HAPPY_BRICK)
+    brick |= Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008}).run().visited()
+    brick |= Rig("brick", fc={"arm_rejection": "no"}).run().visited()
+    assert brick == set(leaf_states(BRICK_STATES))
+    adhesion = set(HAPPY_ADHESION)
+    adhesion |= Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run().visited()
+    adhesion |= Rig("adhesion", fc={"arm_rejection": "no"}).run().visited()
+    assert adhesion == set(leaf_states(ADHESION_STATES))
