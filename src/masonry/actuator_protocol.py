@@ -194,14 +194,16 @@ def parse_status(fields: tuple[str, ...]) -> ActuatorStatus:
 class DeviceLogic:
     """The device side of the protocol (what the firmware does), on a plain state: line in, line out.
 
-    ``attached`` is the brick sensor (a switch in the conical guide): set it from outside, or let it follow the
-    magnet with ``attach_follows_magnet`` for a bench demo. ``faults`` maps a command to an error message the
-    device answers with (FAULT) instead of acting.
+    ``attached`` is the brick sensor (a switch in the conical guide): set it from outside (``set_attached``), or
+    let it follow the magnet with ``attach_follows_magnet`` for a bench demo. ``release_drops_brick`` models the
+    physics around the sensor (switching the magnet off lets the brick fall, so the sensor opens); the firmware
+    only reads its pin. ``faults`` maps a command to an error message the device answers with (FAULT).
     """
 
-    def __init__(self, *, attach_follows_magnet: bool = False) -> None:
+    def __init__(self, *, attach_follows_magnet: bool = False, release_drops_brick: bool = True) -> None:
         self.status = ActuatorStatus()
         self.attach_follows_magnet = attach_follows_magnet
+        self.release_drops_brick = release_drops_brick
         self.faults: dict[str, str] = {}
         self.executed: list[Request] = []
         self._last: tuple[int, str, tuple[str, ...], bytes] | None = None
@@ -244,7 +246,7 @@ class DeviceLogic:
             status = replace(status, magnet_on=on)
             if self.attach_follows_magnet:
                 status = replace(status, attached=on)
-            elif not on:
+            elif not on and self.release_drops_brick:
                 status = replace(status, attached=False)  # the brick falls off
         elif command == "JOINT":
             status = replace(status, joint_locked=args[0] == "LOCK")
