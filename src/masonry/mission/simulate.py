@@ -55,7 +55,7 @@ def fleet_for(blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs
         kept = existing[:count]
         out.extend(kept)
         if len(kept) < count:
-            homes = [u.home_m for u in blueprint.fleet]
+            homes = [u.home_m for u in blueprint.fleet] + [u.home_m for u in out]
             if kept:
                 base = kept[-1].home_m
             else:
