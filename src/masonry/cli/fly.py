@@ -47,12 +47,16 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
     return Adapters(uav.fc, uav.gripper, uav.sprayer, uav.camera, world.clock, world.step, world)
 
 
+def _a(word: str) -> str:
+    return ("an " if word[:1] in "aeiou" else "a ") + word
+
+
 def _pick_uav(blueprint: Any, role: str, name: str | None) -> Any:
     if name is not None:
         for spec in blueprint.fleet:
             if spec.name == name:
                 if spec.role != role:
-                    raise InputError(f"--name {name}: {name} is a {spec.role} UAV, not a {role} UAV")
+                    raise InputError(f"--name {name}: {name} is {_a(spec.role)} UAV, not {_a(role)} UAV")
                 return spec
         raise InputError(f"--name {name}: no UAV of that name in the fleet of {blueprint.source} "
                          f"({', '.join(u.name for u in blueprint.fleet) or 'empty fleet'})")
@@ -115,7 +119,7 @@ def fly(
         shown = ", ".join(ids[:12]) + (", ..." if len(ids) > 12 else "")
         raise InputError(f"--task {task}: no such task in {bp.source} (tasks: {shown or 'none'})") from None
     if the_task.kind != uav:
-        raise InputError(f"--task {task} is a {the_task.kind} task: fly it with --uav {the_task.kind}")
+        raise InputError(f"--task {task} is {_a(the_task.kind)} task: fly it with --uav {the_task.kind}")
     if the_task.done:
         raise InputError(f"--task {task}: brick {task[1:]} is already in place in {bp.source}")
     spec = _pick_uav(bp, uav, name)
