@@ -144,6 +144,28 @@ def run(plan: Plan, fleet: list[UavSpec], policy: str, durations: dict[str, floa
             "p99_s": p99}
 
 
+def makespan_table(seed: int) -> None:
+    """Model-time makespan / lower bound per policy on a few walls and fleets (flights at 1 m/s included)."""
+    from masonry.blueprint_gen import running_bond
+    from masonry.planner import plan as make_plan
+    from masonry.planner.bounds import dispatch_makespan_s
+
+    print("makespan / lower bound in model time: task durations from estimate_durations_s without the approach,")
+    print("plus the flight from each UAV's position to the task's start at 1 m/s; no faults")
+    print(f"{'wall':<22}{'fleet':>8}{'LB s':>9}" + "".join(f"{p:>15}" for p in POLICIES))
+    for courses, per in ((4, 6), (10, 30), (20, 60)):
+        for brick_uavs, adhesion_uavs in ((1, 1), (2, 1), (4, 2), (8, 4)):
+            bp = running_bond(courses=courses, bricks_per_course=per, placed_courses=1, brick_uavs=brick_uavs,
+                              adhesion_uavs=adhesion_uavs)
+            plan = make_plan(bp)
+            durations = estimate_durations_s(plan, bp.fleet, include_approach=False)
+            bound = lower_bound_s(plan, bp.fleet, durations)
+            ratios = [dispatch_makespan_s(plan, bp.fleet, durations, p, cruise_speed_mps=1.0) / bound
+                      for p in POLICIES]
+            print(f"{f'{courses}x{per} running bond':<22}{f'{brick_uavs}+{adhesion_uavs}':>8}{bound:>9.0f}"
+                  + "".join(f"{r:>15.3f}" for r in ratios))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--courses", type=int, default=40)
@@ -155,7 +177,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--unweighted", action="store_true", help="critical-path counts tasks instead of seconds")
     ap.add_argument("--direct", action="store_true", help="build the Plan directly, not with the planner")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--makespan", action="store_true", help="print the policy makespan table instead")
     args = ap.parse_args(argv)
+    if args.makespan:
+        makespan_table(args.seed)
+        return 0
 
     print(f"python {platform.python_version()} on {platform.machine()}, {args.courses} courses x "
           f"{args.per_course} bricks, {args.brick_uavs} brick + {args.adhesion_uavs} adhesion UAVs, "

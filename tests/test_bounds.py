@@ -105,6 +105,7 @@ def test_estimate_approach_uses_the_nearest_brick_home_or_the_drop_off() -> None
     base = estimate_durations_s(plan, at_depot)["B0"]
     # far home: the approach is capped by the return from the drop-off (4 m)
     assert estimate_durations_s(plan, far_away)["B0"] == pytest.approx(base + 4.0)
+    assert estimate_durations_s(plan, far_away, include_approach=False)["B0"] == pytest.approx(base)
 
 
 @st.composite

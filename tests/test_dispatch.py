@@ -352,7 +352,15 @@ def random_plans(draw: st.DrawFn) -> Plan:
     return Plan(tuple(tasks), tuple(deps), tuple(conflicts))
 
 
-def simulate(plan: Plan, uavs: list[UavSpec], policy: str, seed: int, p_fail: float, losses: int) -> Dispatcher:
+def simulate(
+    plan: Plan,
+    uavs: list[UavSpec],
+    policy: str,
+    seed: int,
+    p_fail: float,
+    losses: int,
+    durations_s: dict[str, float] | None = None,
+) -> Dispatcher:
     """Drive the dispatcher with a random event order and check every safety invariant from the outside."""
     rng = random.Random(seed)
     prereqs: dict[str, set[str]] = {t.id: set() for t in plan.tasks}
@@ -364,7 +372,7 @@ def simulate(plan: Plan, uavs: list[UavSpec], policy: str, seed: int, p_fail: fl
         conflicts[b].add(a)
     role_of = {t.id: t.kind for t in plan.tasks}
     uav_role = {u.name: u.role for u in uavs}
-    d = Dispatcher(plan, uavs, policy, max_attempts=3)
+    d = Dispatcher(plan, uavs, policy, max_attempts=3, durations_s=durations_s)
     completed: list[str] = []
     done = {t.id for t in plan.tasks if t.done}
     running: dict[str, str] = {}
@@ -484,3 +492,50 @@ def _seeded_plan(rng: random.Random) -> Plan:
     deps = [(tasks[j].id, tasks[i].id) for j in range(n) for i in range(j) if rng.random() < 0.15]
     conflicts = [(tasks[i].id, tasks[j].id) for j in range(n) for i in range(j) if rng.random() < 0.2]
     return Plan(tuple(tasks), tuple(deps), tuple(conflicts))
+
+
+@settings(max_examples=25)
+@given(
+    courses=st.integers(1, 4),
+    per_course=st.integers(1, 6),
+    placed=st.integers(0, 1),
+    bricks=st.integers(1, 3),
+    glues=st.integers(1, 2),
+    policy=st.sampled_from(["fifo", "critical-path", "nearest"]),
+    kind=st.sampled_from(["running-bond", "pyramid", "towers"]),
+    seed=st.integers(0, 10**6),
+    p_fail=st.sampled_from([0.0, 0.3]),
+    losses=st.integers(0, 1),
+)
+def test_random_walls_from_the_planner_stay_safe(
+    courses: int, per_course: int, placed: int, bricks: int, glues: int, policy: str, kind: str, seed: int,
+    p_fail: float, losses: int,
+) -> None:
+    from masonry.blueprint_gen import generate
+    from masonry.planner import plan as make_plan
+    from masonry.planner.bounds import estimate_durations_s
+
+    shape = {
+        "running-bond": {"courses": courses, "bricks_per_course": per_course},
+        "pyramid": {"base": per_course},
+        "towers": {"towers": per_course, "height": courses, "spacing_m": 0.5},
+    }[kind]
+    bp = generate(kind, placed_courses=min(placed, courses - 1), brick_uavs=bricks, adhesion_uavs=glues, **shape)
+    plan = make_plan(bp)
+    d = simulate(plan, list(bp.fleet), policy, seed, p_fail, losses)
+    if p_fail == 0.0 and losses == 0:
+        assert d.finished, f"not finished: remaining {d.remaining}"
+    else:
+        assert d.finished or d.blocked
+    # weighted by expected durations, as mission control runs it: just as safe, and it finishes
+    durations = estimate_durations_s(plan, bp.fleet)
+    assert simulate(plan, list(bp.fleet), policy, seed + 1, 0.0, 0, durations).finished
+
+
+def test_duplicate_edges_count_once() -> None:
+    tasks = (brick(0, 0.0), brick(1, 0.0, z=0.15), brick(2, 0.2))
+    plan = Plan(tasks, (("B1", "B0"), ("B1", "B0")), (("B0", "B2"), ("B2", "B0"), ("B0", "B2")))
+    d = Dispatcher(plan, fleet(bricks=2, glues=0), "fifo")
+    assert ids(d.assign()) == ["B0"]
+    d.complete("B0")
+    assert ids(d.assign()) == ["B1", "B2"]  # one completion released B1's only prerequisite and B2's blocker

@@ -123,6 +123,7 @@ def estimate_durations_s(
     spray_descent_s: float = 4.0,
     brick_handling_s: float = 4.0,
     adhesion_handling_s: float = 1.5,
+    include_approach: bool = True,
 ) -> dict[str, float]:
     """Expected duration of every not-done task, from the flight it implies (defaults match ``UavConfig``).
 
@@ -132,7 +133,8 @@ def estimate_durations_s(
     climb, and ``brick_handling_s`` of settling, estimation and grasp/release dwells. An adhesion task: a descent
     of ``spray_descent_s``, the segment at ``spray_speed_mps``, the climb, and ``adhesion_handling_s``; its
     approach counts as zero (consecutive segments are neighbours). Horizontal legs use ``cruise_speed_mps``,
-    climbs ``vertical_speed_mps``.
+    climbs ``vertical_speed_mps``. With ``include_approach=False`` no approach is counted (for a model that
+    adds the real flight to each task's start, as :func:`dispatch_makespan_s` with ``cruise_speed_mps`` does).
 
     Returns:
         task id -> seconds, for every not-done task.
@@ -171,7 +173,7 @@ def estimate_durations_s(
         if isinstance(t, BrickTask):
             pickup = t.pickup_m if t.pickup_m is not None else t.position_m
             carry = horizontal(pickup, t.position_m)
-            approach = min([carry] + [horizontal(h, pickup) for h in brick_homes])
+            approach = min([carry] + [horizontal(h, pickup) for h in brick_homes]) if include_approach else 0.0
             out[t.id] = (
                 (approach + carry) / cruise_speed_mps
                 + 2.0 * descent_s
