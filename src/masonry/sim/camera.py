@@ -68,31 +68,25 @@ def R_world_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarra
     )
 
 
-def _rotvec_to_matrix(w: np.ndarray) -> np.ndarray:
-    theta = float(np.linalg.norm(w))
-    if theta < 1e-12:
-        return np.eye(3)
-    k = w / theta
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * (K @ K)
-
-
 def marker_layout(
     bricks: Sequence[SimBrick], markers: MarkerSpec
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Marker ids (m,), centres (m, 3) and corners (m, 4, 3) in the world for the bricks' top faces."""
-    ids = np.empty(2 * len(bricks), dtype=int)
-    centres = np.empty((2 * len(bricks), 3))
-    yaws = np.empty(2 * len(bricks))
+    n = len(bricks)
+    bid = np.fromiter((b.id for b in bricks), dtype=int, count=n)
+    pose = np.array([(*b.position_m, b.yaw_rad, b.blueprint.size_m[2]) for b in bricks], dtype=float).reshape(
+        n, 5
+    )
+    ids = np.stack([2 * bid, 2 * bid + 1], axis=1).reshape(-1)
     half = markers.spacing_m / 2.0
-    for i, b in enumerate(bricks):
-        c, s = math.cos(b.yaw_rad), math.sin(b.yaw_rad)
-        x, y, _ = b.position_m
-        top = b.top_z_m
-        ids[2 * i], ids[2 * i + 1] = 2 * b.id, 2 * b.id + 1
-        centres[2 * i] = (x + c * half, y + s * half, top)
-        centres[2 * i + 1] = (x - c * half, y - s * half, top)
-        yaws[2 * i] = yaws[2 * i + 1] = b.yaw_rad
+    cb, sb = np.cos(pose[:, 3]), np.sin(pose[:, 3])
+    pairs = np.empty((n, 2, 3))
+    for j, sign in ((0, 1.0), (1, -1.0)):
+        pairs[:, j, 0] = pose[:, 0] + sign * half * cb
+        pairs[:, j, 1] = pose[:, 1] + sign * half * sb
+        pairs[:, j, 2] = pose[:, 2] + pose[:, 4] / 2.0
+    centres = pairs.reshape(-1, 3)
+    yaws = np.repeat(pose[:, 3], 2)
     h = markers.size_m / 2.0
     local = np.array([[-h, h], [h, h], [h, -h], [-h, -h]])  # top-left, top-right, bottom-right, bottom-left
     cos, sin = np.cos(yaws), np.sin(yaws)
@@ -154,22 +148,34 @@ def observe_markers(
         index = np.array([i for i in index if not _behind(occluder, c_w, centres[i])], dtype=int)
     if not len(index):
         return ()
-    yaw_of = {2 * b.id: b.yaw_rad for b in bricks} | {2 * b.id + 1: b.yaw_rad for b in bricks}
+    d = dist[index]
     noise = rng.standard_normal((len(index), 6))
-    out = []
-    for row, i in enumerate(index):
-        d = float(dist[i])
-        lat = config.lateral_noise_m + config.lateral_noise_per_m * d
-        dep = config.depth_noise_m + config.depth_noise_per_m * d
-        ang = config.angle_noise_rad + config.angle_noise_per_m * d
-        n = noise[row]
-        pos = p_c[i] + np.array([lat * n[0], lat * n[1], dep * n[2]])
-        yaw = yaw_of[int(ids[i])]
-        cy, sy = math.cos(yaw), math.sin(yaw)
-        R_world_marker = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
-        R = R_wc.T @ R_world_marker @ _rotvec_to_matrix(ang * n[3:6])
-        out.append(TagPose(marker_id=int(ids[i]), position_m=pos, R_cam_marker=R))
-    return tuple(out)
+    lat = config.lateral_noise_m + config.lateral_noise_per_m * d
+    dep = config.depth_noise_m + config.depth_noise_per_m * d
+    ang = config.angle_noise_rad + config.angle_noise_per_m * d
+    pos = p_c[index] + noise[:, :3] * np.stack([lat, lat, dep], axis=1)
+    yaw = np.repeat(np.array([b.yaw_rad for b in bricks]), 2)[index]
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    R_wm = np.zeros((len(index), 3, 3))
+    R_wm[:, 0, 0], R_wm[:, 0, 1], R_wm[:, 1, 0], R_wm[:, 1, 1], R_wm[:, 2, 2] = cy, -sy, sy, cy, 1.0
+    R = np.einsum("ji,njk,nkl->nil", R_wc, R_wm, _rotvecs_to_matrices(noise[:, 3:] * ang[:, None]))
+    return tuple(
+        TagPose(marker_id=int(ids[i]), position_m=pos[row], R_cam_marker=R[row])
+        for row, i in enumerate(index)
+    )
+
+
+def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula for a batch of rotation vectors (n, 3) -> (n, 3, 3)."""
+    theta = np.linalg.norm(w, axis=1)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    k = w / safe[:, None]
+    K = np.zeros((len(w), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
+    cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
+    return np.eye(3)[None] + sin * K + cos * (K @ K)  # type: ignore[no-any-return]
 
 
 def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:
