@@ -28,8 +28,9 @@ import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Any, Literal
 
+from masonry.adapters.pose_source import PoseSource
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
 from masonry.ports import Telemetry, Vec3
 
@@ -211,12 +212,6 @@ def mavutil_module() -> Any:
     if mavutil.mavlink.WIRE_PROTOCOL_VERSION != "2.0":  # imported earlier without MAVLINK20
         mavutil.set_dialect("ardupilotmega")
     return mavutil
-
-
-class PoseSource(Protocol):
-    """Motion-capture poses in the world frame (see :mod:`masonry.adapters.pose_source`)."""
-
-    def latest(self) -> Any: ...
 
 
 class LinkClock:

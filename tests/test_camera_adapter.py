@@ -1,0 +1,152 @@
+"""OpenCV camera adapter: a recorded video of rendered bricks replays through the real ArUco pipeline."""
+
+from __future__ import annotations
+
+import json
+import socket
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+from masonry.adapters.camera import OpenCvCamera, parse_source
+from masonry.adapters.pose_source import MocapPose, UdpPoseSource, parse_pose, quaternion_to_euler, send_pose
+from masonry.blueprint import MarkerSpec
+from masonry.errors import DeviceNotFound, InputError
+from masonry.perception.aruco import detect_tags
+from masonry.perception.calibration import write_calibration
+from masonry.perception.render import RenderedBrick, look_down, render_frame
+from masonry.perception.types import CameraIntrinsics
+from masonry.ports import Camera
+
+INTR = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
+MARKERS = MarkerSpec()
+
+
+class StepClock:
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def now_s(self) -> float:
+        self.t += 0.1
+        return self.t
+
+    def sleep(self, duration_s: float) -> None:
+        self.t += duration_s
+
+
+@pytest.fixture()
+def recording(tmp_path):
+    """A 5-frame MJPG video of brick 3 seen from 1.0 m above its top, and its calibration file."""
+    brick = RenderedBrick(3, (0.0, 0.0, 0.05), 0.3)
+    path = tmp_path / "flight.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 10.0, (640, 480))
+    assert writer.isOpened()
+    for i in range(5):
+        grey = render_frame(INTR, look_down((0.02 * i, 0.0, 1.1)), [brick], MARKERS, rng=i)
+        writer.write(cv2.cvtColor(grey, cv2.COLOR_GRAY2BGR))
+    writer.release()
+    calibration = tmp_path / "camera.yaml"
+    write_calibration(calibration, INTR)
+    return path, calibration
+
+
+def test_a_video_file_goes_through_the_aruco_pipeline(recording) -> None:
+    video, calibration = recording
+    clock = StepClock()
+    with OpenCvCamera(str(video), calibration=calibration, clock=clock) as cam:
+        assert isinstance(cam, Camera)
+        assert cam.intrinsics == INTR
+        assert cam.T_body_cam.shape == (4, 4)
+        frames = []
+        while (frame := cam.read()) is not None:
+            frames.append(frame)
+    assert len(frames) == 5
+    times = [f.time_s for f in frames]
+    assert times == sorted(times) and times[0] > 100.0  # stamped by the injected clock
+    for frame in frames:
+        assert frame.image is not None and frame.image.shape == (480, 640, 3)
+        tags = detect_tags(frame.image, INTR, MARKERS)
+        assert sorted(t.marker_id for t in tags) == [6, 7]
+        for tag in tags:
+            assert tag.position_m[2] == pytest.approx(1.0, abs=0.03)  # 1.1 m camera, brick top at 0.1 m
+
+
+def test_threaded_reading_returns_only_new_frames(recording) -> None:
+    video, calibration = recording
+    with OpenCvCamera(str(video), calibration=calibration, threaded=True) as cam:
+        seen = []
+        deadline = time.monotonic() + 2.0
+        while cam.frames_read < 5 and time.monotonic() < deadline:
+            frame = cam.read()
+            if frame is not None:
+                seen.append(frame)
+            time.sleep(0.001)
+        time.sleep(0.05)
+        last = cam.read()
+        if last is not None:
+            seen.append(last)
+        assert cam.read() is None  # nothing new after the end
+    assert 1 <= len(seen) <= 5
+    assert len({id(f) for f in seen}) == len(seen)
+
+
+def test_resolution_must_match_the_calibration(recording, tmp_path) -> None:
+    video, _ = recording
+    other = tmp_path / "hd.yaml"
+    write_calibration(other, CameraIntrinsics(900.0, 900.0, 639.5, 359.5, width_px=1280, height_px=720))
+    with OpenCvCamera(str(video), calibration=other) as cam:
+        with pytest.raises(InputError, match="640x480 frames but the calibration is for 1280x720"):
+            cam.read()
+
+
+def test_missing_inputs_are_clear_errors(tmp_path, recording) -> None:
+    _, calibration = recording
+    with pytest.raises(InputError, match="--calibration"):
+        OpenCvCamera(0)
+    with pytest.raises(InputError, match="nothing.mp4: video file not found"):
+        OpenCvCamera(str(tmp_path / "nothing.mp4"), calibration=calibration).connect()
+    with pytest.raises(InputError, match="calibration file not found"):
+        OpenCvCamera(0, calibration=tmp_path / "none.yaml").connect()
+    junk = tmp_path / "junk.avi"
+    junk.write_bytes(b"this is not a video")
+    with pytest.raises(DeviceNotFound, match="junk.avi: cannot open"):
+        OpenCvCamera(str(junk), calibration=calibration).connect()
+    with pytest.raises(DeviceNotFound, match="camera 63: cannot open"):
+        OpenCvCamera(63, calibration=calibration).connect()
+
+
+def test_source_kinds() -> None:
+    assert parse_source("0") == ("index", 0)
+    assert parse_source(2) == ("index", 2)
+    assert parse_source("v4l2src device=/dev/video0 ! videoconvert ! appsink")[0] == "gstreamer"
+    assert parse_source("/data/flight.mp4") == ("file", "/data/flight.mp4")
+
+
+def test_udp_pose_source_keeps_the_newest_pose_of_its_body() -> None:
+    with UdpPoseSource(0, body="brick-1", max_age_s=0.5) as source, socket.socket(
+        socket.AF_INET, socket.SOCK_DGRAM
+    ) as tx:
+        address = ("127.0.0.1", source.port)
+        assert source.latest() is None
+        send_pose(tx, address, MocapPose("brick-2", 1.0, (9.0, 9.0, 9.0), (0.0, 0.0, 0.0)))
+        send_pose(tx, address, MocapPose("brick-1", 1.0, (1.0, 2.0, 0.5), (0.0, 0.0, 0.3)))
+        tx.sendto(b"{not json", address)
+        tx.sendto(json.dumps({"body": "brick-1", "position_m": [1, 2]}).encode(), address)
+        deadline = time.monotonic() + 1.0
+        while (source.received < 1 or source.rejected < 2) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        pose = source.latest()
+        assert pose == MocapPose("brick-1", 1.0, (1.0, 2.0, 0.5), (0.0, 0.0, 0.3))
+        assert source.rejected == 2 and "position_m must be a list of 3 numbers" in (source.last_error or "")
+
+
+def test_pose_parsing() -> None:
+    pose = parse_pose(b'{"position_m": [0, 0, 1], "quaternion": [0.7071068, 0, 0, 0.7071068]}', received_s=5.0)
+    assert pose.time_s == 5.0 and pose.attitude_rad == pytest.approx((0.0, 0.0, np.pi / 2))
+    assert quaternion_to_euler(1, 0, 0, 0) == (0.0, 0.0, 0.0)
+    with pytest.raises(InputError, match="time_s"):
+        parse_pose(b'{"position_m": [0, 0, 1], "time_s": "now"}', received_s=0.0)
+    with pytest.raises(InputError, match="finite"):
+        parse_pose(b'{"position_m": [0, NaN, 1]}', received_s=0.0)
