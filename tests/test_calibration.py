@@ -22,7 +22,9 @@ from masonry.perception.types import CameraIntrinsics
 TRUE = CameraIntrinsics(610.0, 605.0, 322.0, 236.0, width_px=640, height_px=480)
 
 
-def chessboard_view(board: ChessboardSpec, intr: CameraIntrinsics, rvec: np.ndarray, tvec: np.ndarray) -> np.ndarray:
+def chessboard_view(
+    board: ChessboardSpec, intr: CameraIntrinsics, rvec: np.ndarray, tvec: np.ndarray
+) -> np.ndarray:
     """A grey image of ``board`` (one white square of margin) seen by a distortion-free camera."""
     p = 24  # texture pixels per square
     nx, ny = board.cols + 1 + 2, board.rows + 1 + 2
@@ -45,7 +47,10 @@ def views(board: ChessboardSpec) -> list[tuple[str, np.ndarray]]:
         rvec = np.array([rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45), rng.uniform(-0.3, 0.3)])
         centre = np.array([(board.cols - 1) * board.square_m / 2, (board.rows - 1) * board.square_m / 2, 0.0])
         R = cv2.Rodrigues(rvec)[0]
-        tvec = np.array([rng.uniform(-0.03, 0.03), rng.uniform(-0.03, 0.03), rng.uniform(0.45, 0.6)]) - R @ centre
+        tvec = (
+            np.array([rng.uniform(-0.03, 0.03), rng.uniform(-0.03, 0.03), rng.uniform(0.45, 0.6)])
+            - R @ centre
+        )
         out.append((f"view{i}.png", chessboard_view(board, TRUE, rvec, tvec)))
     return out
 
@@ -115,7 +120,8 @@ def test_missing_calibration_file(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(
-    "text", ["chessboard:9x6", "board:9x6:0.025", "chessboard:2x6:0.025", "chessboard:9x6:0", "chessboard:9x6:2"]
+    "text",
+    ["chessboard:9x6", "board:9x6:0.025", "chessboard:2x6:0.025", "chessboard:9x6:0", "chessboard:9x6:2"],
 )
 def test_bad_board_specs(text: str) -> None:
     with pytest.raises(InputError, match="--board"):

@@ -172,11 +172,17 @@ def write_marker_sheets(
         raise InputError(f"--dpi: {dpi} is out of range 30..2400")
     if markers.size_m <= 0 or markers.spacing_m <= 0:
         raise InputError("marker size and spacing must be > 0")
-    cells = None
-    for brick_id in brick_ids:  # validate every id before writing anything
-        cells = _marker_bits(markers.dictionary, 2 * brick_id + 1).shape[0]
-        _marker_bits(markers.dictionary, 2 * brick_id)
-    assert cells is not None
+    from masonry.perception.aruco import aruco_dictionary
+
+    dictionary = aruco_dictionary(markers.dictionary)
+    count = dictionary.bytesList.shape[0]
+    too_big = [b for b in brick_ids if 2 * b + 1 >= count]
+    if too_big:
+        raise PerceptionError(
+            f"brick {too_big[0]} needs marker ids {2 * too_big[0]} and {2 * too_big[0] + 1}, but "
+            f"{markers.dictionary} holds ids 0..{count - 1} (bricks 0..{count // 2 - 1}); use a larger dictionary"
+        )
+    cells = dictionary.markerSize + 2
     sticker = markers.size_m + 2 * markers.size_m / cells
     if markers.spacing_m < sticker:
         raise InputError(

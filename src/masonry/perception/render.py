@@ -26,7 +26,7 @@ from masonry.errors import PerceptionError
 from masonry.perception.aruco import aruco_dictionary
 from masonry.perception.types import CameraIntrinsics
 
-__all__ = ["RenderedBrick", "render_frame"]
+__all__ = ["RenderedBrick", "look_down", "random_view", "render_frame"]
 
 _NEAR_M = 0.02  # near clipping plane in front of the camera
 _SUN = np.array([0.35, 0.2, 0.915])  # direction toward the sun (world ENU), about 66 degrees high
@@ -119,6 +119,98 @@ def render_frame(
     if noise_sigma > 0.0:
         out += _noise_window(gen, w, h) * float(noise_sigma)
     return np.clip(out, 0.0, 255.0).astype(np.uint8)  # type: ignore[no-any-return]
+
+
+def look_down(
+    position_m: tuple[float, float, float] | np.ndarray,
+    yaw_rad: float = 0.0,
+    tilt_rad: float = 0.0,
+    tilt_azimuth_rad: float = 0.0,
+) -> np.ndarray:
+    """4x4 ``T_world_cam`` of a camera at ``position_m`` looking down (optical axis along world -z).
+
+    The image's x axis points along world (cos yaw, sin yaw, 0); the optical axis is then tilted ``tilt_rad``
+    away from vertical, toward the horizontal direction at ``tilt_azimuth_rad`` in the camera's image plane.
+    """
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    Rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    R_down = np.diag([1.0, -1.0, -1.0])
+    axis = np.array([-math.sin(tilt_azimuth_rad), math.cos(tilt_azimuth_rad), 0.0])  # in the image plane
+    R_tilt = cv2.Rodrigues(axis * tilt_rad)[0]
+    T = np.eye(4)
+    T[:3, :3] = Rz @ R_down @ R_tilt
+    T[:3, 3] = np.asarray(position_m, dtype=float)
+    return T
+
+
+def random_view(
+    rng: np.random.Generator,
+    intrinsics: CameraIntrinsics,
+    markers: MarkerSpec,
+    *,
+    n_bricks: int = 2,
+    height_m: float = 1.2,
+    max_tilt_rad: float = math.radians(5.0),
+    brick_size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M,
+    margin_px: float = 12.0,
+    max_brick_id: int | None = None,
+) -> tuple[np.ndarray, list[RenderedBrick]]:
+    """A random test view: camera ``height_m`` above the tops of up to ``n_bricks`` bricks lying on the ground.
+
+    Bricks get distinct random ids (their markers within the dictionary), random yaw, no overlap, and both
+    markers inside the image by ``margin_px``; the camera has a random heading and up to ``max_tilt_rad`` of
+    tilt. Returns ``(T_world_cam, bricks)`` for :func:`render_frame`.
+    """
+    count = aruco_dictionary(markers.dictionary).bytesList.shape[0] // 2
+    if max_brick_id is not None:
+        count = min(count, max_brick_id + 1)
+    top_z = brick_size_m[2]
+    T = look_down(
+        (0.0, 0.0, top_z + height_m),
+        float(rng.uniform(-math.pi, math.pi)),
+        float(rng.uniform(0.0, max_tilt_rad)),
+        float(rng.uniform(-math.pi, math.pi)),
+    )
+    R_cw, t_cw = T[:3, :3].T, -T[:3, :3].T @ T[:3, 3]
+    K = intrinsics.matrix()
+    half_w = height_m * intrinsics.width_px / (2.0 * intrinsics.fx)
+    half_h = height_m * intrinsics.height_px / (2.0 * intrinsics.fy)
+    reach = max(half_w, half_h)
+    bricks: list[RenderedBrick] = []
+    ids = [int(i) for i in rng.permutation(count)[: max(n_bricks, 1) * 4]]
+    for _ in range(200 * max(n_bricks, 1)):
+        if len(bricks) >= n_bricks or not ids:
+            break
+        b = RenderedBrick(
+            ids[-1],
+            (float(rng.uniform(-reach, reach)), float(rng.uniform(-reach, reach)), brick_size_m[2] / 2.0),
+            float(rng.uniform(-math.pi, math.pi)),
+            brick_size_m,
+        )
+        if any(
+            math.dist(b.position_m[:2], o.position_m[:2]) < 1.15 * math.hypot(*brick_size_m[:2])
+            for o in bricks
+        ):
+            continue
+        R_wb = _brick_rotation(b.yaw_rad)
+        top = np.asarray(b.position_m) + np.array([0.0, 0.0, brick_size_m[2] / 2.0])
+        half = markers.spacing_m / 2.0 + markers.size_m
+        pts = (
+            np.array([[sx * half, sy * markers.size_m, 0.0] for sx in (-1, 1) for sy in (-1, 1)]) @ R_wb.T
+            + top
+        )
+        uvw = (pts @ R_cw.T + t_cw) @ K.T
+        uv = uvw[:, :2] / uvw[:, 2:3]
+        inside = (
+            (uv[:, 0] > margin_px).all()
+            and (uv[:, 0] < intrinsics.width_px - 1 - margin_px).all()
+            and (uv[:, 1] > margin_px).all()
+            and (uv[:, 1] < intrinsics.height_px - 1 - margin_px).all()
+        )
+        if inside:
+            bricks.append(b)
+            ids.pop()
+    return T, bricks
 
 
 class _Camera:
