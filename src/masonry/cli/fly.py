@@ -86,7 +86,8 @@ def fly(
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
     blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
-    task: str = typer.Option(..., "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...)."),
+    task: Optional[str] = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
+                                       "not with --mission."),
     name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
@@ -95,6 +96,13 @@ def fly(
     fmt: str = typer.Option("text", "--format", help="text | json."),
     dt: float = typer.Option(0.05, "--dt", help="Control tick, seconds."),
     timeout: float = typer.Option(900.0, "--timeout", help="Give up after this much flight time, seconds."),
+    mission: Optional[str] = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
+                                          "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission."),
+    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "
+                                     "listen endpoint(s)."),
+    mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
+    wait: float = typer.Option(60.0, "--wait", help="Mission mode: wall seconds to wait for mission control."),
 ) -> None:
     """Fly one UAV through one task: state trace with times, then the result (exit 1 if the task failed)."""
     from masonry.blueprint import load_blueprint
@@ -111,6 +119,16 @@ def fly(
     if not dt > 0.0 or not timeout > 0.0:
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
+    if mission is not None:
+        if task is not None:
+            raise InputError("--task and --mission exclude each other: in mission mode tasks come from mission control")
+        if not sim:
+            raise InputError("no hardware adapters are configured: pass --sim to fly in the simulated world")
+        _fly_mission(bp, _pick_uav(bp, uav, name), mission, listen=listen, mission_name=mission_name, seed=seed,
+                     camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt)
+        return
+    if task is None:
+        raise InputError("--task is required (or --mission tcp/HOST:PORT to take tasks from mission control)")
     the_plan = plan(bp)
     try:
         the_task = the_plan.task(task)
@@ -172,4 +190,28 @@ def fly(
         line += f": {out['reason']}"
     typer.echo(line)
     if status != "done":
+        raise typer.Exit(1)
+
+
+def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], mission_name: str, seed: int, camera: str,
+                 faults: Any, dt: float, time_scale: float, wait: float, fmt: str) -> None:
+    """Mission mode: a simulated UAV taking its tasks from mission control over Zenoh (masonry.mission.remote)."""
+    from masonry.mission.remote import run_remote_uav
+
+    echo = None if fmt == "json" else typer.echo
+    if echo is not None:
+        echo(f"{spec.name} joins the mission at {endpoint} (simulated, seed {seed}, x{time_scale:g} real time)")
+    run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
+                         camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
+                         max_time_s=float("inf"), echo=echo)
+    tasks = [{"task": e.task_id, "attempt": e.attempt, "start_s": round(e.start_s, 2),
+              "end_s": None if e.end_s is None else round(e.end_s, 2), "status": e.status} for e in run.executions]
+    if fmt == "json":
+        typer.echo(json.dumps({"uav": spec.name, "mission_ended": run.mission_ended,
+                               "mission_completed": run.mission_completed, "state": run.state, "tasks": tasks}))
+    else:
+        for t in tasks:
+            typer.echo(f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s")
+        typer.echo(f"mission {'ended' if run.mission_ended else 'did not end'}; {spec.name} is {run.state}")
+    if not run.mission_ended:
         raise typer.Exit(1)

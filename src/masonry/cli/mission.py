@@ -21,11 +21,13 @@ def mission_control(
     journal: Optional[Path] = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
-    mission: str = typer.Option("default", "--mission", help="Mission name (Zenoh key prefix)."),
-    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help="Seconds of silence before a UAV is lost."),
+    mission_name: str = typer.Option("default", "--mission-name", help="Mission name (Zenoh key prefix)."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help="Mission seconds per wall second (match the "
+                                     "UAVs' --time-scale when they are simulated faster than real time)."),
+    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help="Wall seconds of silence before a UAV is lost."),
     startup_timeout: float = typer.Option(60.0, "--startup-timeout",
-                                          help="Seconds to wait for the whole fleet before starting without the rest."),
-    max_time: Optional[float] = typer.Option(None, "--max-time", help="Give up after this many seconds."),
+                                          help="Wall seconds to wait for the whole fleet before starting without the rest."),
+    max_time: Optional[float] = typer.Option(None, "--max-time", help="Give up after this many mission seconds."),
     tick: float = typer.Option(0.05, "--tick", help="Control period, seconds."),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write the JSON report to this file."),
@@ -48,8 +50,8 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    if tick <= 0:
-        raise InputError(f"--tick must be > 0, got {tick}")
+    if tick <= 0 or time_scale <= 0:
+        raise InputError(f"--tick and --time-scale must be > 0, got {tick} and {time_scale}")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
@@ -71,34 +73,34 @@ def mission_control(
                                    "or give another --journal file")
             if not resume:
                 state = None
-    transport = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission)
+    transport = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name)
     transport.connect()
     try:
         mc = MissionControl(the_plan, bp.fleet, transport, policy=policy, journal=jr,
                             durations_s=priority_durations_s(
                                 estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)),
-                            heartbeat_timeout_s=heartbeat_timeout,
-                            startup_timeout_s=startup_timeout)
+                            heartbeat_timeout_s=heartbeat_timeout * time_scale,
+                            startup_timeout_s=startup_timeout * time_scale)
         offset = 0.0
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
-        typer.echo(f"mission control listening on {', '.join(listen)}: {len(the_plan.tasks)} tasks, "
+        typer.echo(f"mission control listening on {', '.join(listen)}: {sum(1 for t in the_plan.tasks if not t.done)} tasks, "
                    f"fleet {', '.join(u.name for u in bp.fleet)}"
                    + (f", resumed at {offset:.1f} s" if state is not None else ""), err=True)
         t0 = time.monotonic()
         linger_until = None
         while True:
-            now = offset + time.monotonic() - t0
+            now = offset + (time.monotonic() - t0) * time_scale
             mc.step(now)
             if mc.ended_at_s is not None:
                 # keep answering heartbeats a moment so every handler hears MissionEnd
-                linger_until = linger_until or now + 2.0
+                linger_until = linger_until or now + 2.0 * time_scale
                 if now >= linger_until:
                     break
             if max_time is not None and now - offset >= max_time:
                 break
-            time.sleep(max(0.0, t0 + (now - offset) + tick - time.monotonic()))
+            time.sleep(tick)
     finally:
         transport.close()
         if jr is not None:

@@ -100,6 +100,11 @@ class UavHandler:
         return self._last_mc_s is None or self.now_s - self._last_mc_s > self.heartbeat_timeout_s
 
     @property
+    def mission_control_heard_s(self) -> float | None:
+        """When mission control was last heard from (None: never)."""
+        return self._last_mc_s
+
+    @property
     def busy(self) -> bool:
         """A task is queued or in hand."""
         return bool(self._queue) or self._current is not None

@@ -281,7 +281,9 @@ def control_report(
         status = "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
         stuck.append(t.id)
         tasks.append(TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind))
-    makespan = max((a.end_s for a in done_att.values() if a.end_s is not None), default=0.0)
+    # the mission starts with its first assignment (mission control may have waited for its fleet before)
+    start = min((a.start_s for a in attempts), default=0.0)
+    makespan = max((a.end_s - start for a in done_att.values() if a.end_s is not None), default=0.0)
     durations = {tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
     fleet_size: dict[str, int] = {}
     for spec in mc.fleet:
