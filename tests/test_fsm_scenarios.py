@@ -143,6 +143,7 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
     assert "battery" in (rig.uav.halt_reason or "")
     # Out of service: a new task is refused at once.
     rig.link.push(brick_task("B8", brick=8))
+    rig.clock.advance(0.1)
     rig.uav.step(rig.clock.now_s())
     assert rig.link.results[-1].task_id == "B8" and "out of service" in (rig.link.results[-1].reason or "")
 

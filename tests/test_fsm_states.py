@@ -139,7 +139,9 @@ def test_every_declared_transition(kind: str, index: int, source: str) -> None:
         assert rig.link.results[n_results].status == "failed"
         assert rig.link.results[n_results].reason == "scripted"
     # The new state's tick runs without error.
+    rig.clock.advance(0.1)
     uav.step(rig.clock.now_s())
+    assert uav._last_step_s == rig.clock.now_s()
 
 
 def test_machines_are_built_from_copies_of_the_data() -> None:

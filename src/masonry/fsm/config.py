@@ -26,6 +26,7 @@ class UavConfig:
     markers: MarkerSpec = MarkerSpec()
     airframe: Airframe = DEFAULT_AIRFRAME
     # Flight
+    control_period_s: float = 0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
     cruise_speed_mps: float = 1.0  # average speed of a lateral min-jerk leg (its peak is 1.875 x this)
     vertical_speed_mps: float = 0.4  # average speed of a climb leg
     arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end

@@ -1,0 +1,59 @@
+"""Per-tick cost of the UAV state machines (``step``) in the simulated world, and a whole single-task flight.
+
+Prints: microseconds per ``step`` by machine state group, world step cost for comparison, and the real-time
+factor of ``masonry fly``-style runs. Run: ``python benchmarks/bench_fsm.py``.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from masonry.blueprint import load_blueprint
+from masonry.fakes import QueueMissionLink
+from masonry.fsm import UavConfig, build_uav
+from masonry.planner import plan
+from masonry.sim import World
+
+CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+
+
+def profile(task_id: str, seed: int = 0, camera: str = "geometric") -> None:
+    bp = load_blueprint(CASE_STUDY)
+    task = plan(bp).task(task_id)
+    world = World(bp, seed=seed, camera=camera)  # type: ignore[arg-type]
+    spec = next(u for u in bp.fleet if u.role == task.kind)
+    su = world.add_uav(spec)
+    link = QueueMissionLink([task])
+    uav = build_uav(UavConfig.from_spec(spec, markers=bp.markers), fc=su.fc, link=link, clock=world.clock,
+                    gripper=su.gripper, camera=su.camera, sprayer=su.sprayer)
+    per_state: dict[str, list[float]] = defaultdict(lambda: [0.0, 0])
+    world_s = 0.0
+    ticks = 0
+    t_wall = time.perf_counter()
+    while not (link.results and uav.finished) and world.clock.now_s() < 400:
+        state = uav.state
+        t0 = time.perf_counter()
+        uav.step(world.clock.now_s())
+        t1 = time.perf_counter()
+        world.step(0.05)
+        world_s += time.perf_counter() - t1
+        acc = per_state[state.split("_")[0] if state.startswith(("pickup_estimate",)) is False else state]
+        acc[0] += t1 - t0
+        acc[1] += 1
+        ticks += 1
+    wall = time.perf_counter() - t_wall
+    sim_s = world.clock.now_s()
+    total_step = sum(v[0] for v in per_state.values())
+    print(f"{task_id} ({camera}): {ticks} ticks, {sim_s:.1f} s simulated in {wall:.3f} s wall "
+          f"(real-time factor {sim_s / wall:.0f}x)")
+    print(f"  uav.step mean {1e6 * total_step / ticks:.1f} us/tick, world.step mean {1e6 * world_s / ticks:.1f} us/tick")
+    for state, (secs, n) in sorted(per_state.items(), key=lambda kv: -kv[1][0] / kv[1][1]):
+        print(f"    {state:18s} {1e6 * secs / n:8.1f} us/tick over {n} ticks")
+
+
+if __name__ == "__main__":
+    profile("B0")
+    profile("A0")
+    profile("B0", camera="render")
