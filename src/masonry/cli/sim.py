@@ -31,7 +31,10 @@ def sim(
     plot3d: Optional[Path] = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     dt: float = typer.Option(0.05, "--dt", help="Simulation tick, seconds."),
 ) -> None:
-    """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks)."""
+    """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
+
+    Exit status 0 when the wall is complete, 1 when it is not (stuck tasks are listed), 2 on bad input.
+    """
     from masonry.blueprint import load_blueprint
     from masonry.mission.simulate import simulate
     from masonry.sim import Faults
@@ -61,12 +64,9 @@ def sim(
         from masonry.viz.plot3d import draw_plot3d
 
         draw_plot3d(bp, result, plot3d, title=f"{bp.name or blueprint.name}: wall and flown paths")
-    if fmt == "json":
-        typer.echo(result.to_json())
-    else:
-        typer.echo(result.summary())
-        if not result.completed:
-            raise typer.Exit(1)
+    typer.echo(result.to_json() if fmt == "json" else result.summary())
+    if not result.completed:
+        raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
 
 
 def _progress_bar(enabled: bool) -> tuple[Any, Any]:
