@@ -756,22 +756,22 @@ class MavlinkFlightController:
             self._setpoint = None
 
     def takeoff(self, altitude_m: float) -> None:
-        """Climb to ``altitude_m`` (world z); velocity setpoints are held back until it is reached.
+        """Climb ``altitude_m`` above where the UAV stands (the port's convention); setpoints wait until then.
 
         ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream.
         """
         self._check_link("takeoff")
+        if not (math.isfinite(altitude_m) and altitude_m > 0.0):
+            raise CommandRejected("takeoff", f"altitude must be > 0 m, got {altitude_m!r}")
         with self._lock:
             position = self._state.position_ned
         ground_world = self.frame.position_to_world(position) if position is not None else self.frame.offset_m
         if self.autopilot == "ardupilot":
-            # NAV_TAKEOFF's altitude is relative to the current position (home) in GUIDED
-            relative = max(0.1, altitude_m - ground_world[2])
-            self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, relative))
+            self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
         with self._lock:
             self._setpoint = None
             self._streaming = True
-            self._takeoff_target_m = altitude_m
+            self._takeoff_target_m = ground_world[2] + altitude_m
             self._takeoff_started_s = time.monotonic()
 
     def land(self) -> None:

@@ -11,6 +11,7 @@ _MODULES = (
     "perception",  # masonry estimate, markers, calibrate
     "fly",  # masonry fly
     "fsm",  # masonry fsm diagram
+    "hardware",  # masonry sitl
 )
 
 for _name in _MODULES:

@@ -1,0 +1,421 @@
+"""Open the adapters one UAV flies with, each chosen on its own, and check them before flight.
+
+``masonry fly`` calls :func:`open_adapters` with a :class:`HardwareConfig` (from ``--fc``, ``--actuators``,
+``--camera``, ``--calibration`` and ``--config uav.yaml``), then :func:`preflight`, which prints what is connected
+and refuses to arm with a clear reason. Any adapter left at ``sim`` comes from the simulated world; when the
+flight controller is real, that world follows the position the autopilot reports, so the simulated camera renders
+the bricks as seen from there and the simulated magnet grips a brick the real UAV's tool reaches.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import Any
+
+from masonry.errors import CommandRejected, HardwareError, InputError
+from masonry.ports import Telemetry
+
+SIM = "sim"
+SIM_CAMERA_MODES = ("sim", "geometric", "render")
+
+
+@dataclass(frozen=True)
+class HardwareConfig:
+    """Which adapter drives each port, and their settings (the keys of ``uav.yaml``)."""
+
+    fc: str = SIM  # "sim" or a MAVLink connection string (udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:...)
+    actuators: str = SIM  # "sim" or the Arduino's serial port
+    camera: str = SIM  # "sim" | "geometric" | "render" (simulated) or a device index, video file, GStreamer string
+    calibration: str | None = None  # camera calibration (``masonry calibrate``): required for a real camera
+    fc_baud: int = 115200
+    autopilot: str = "auto"  # auto | ardupilot | px4
+    signing_key: str | None = None  # MAVLink 2 signing key file
+    heartbeat_timeout_s: float = 1.0
+    origin_m: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the autopilot's local origin in the world (ENU)
+    origin_yaw_rad: float = 0.0
+    mocap_port: int | None = None  # forward motion-capture poses from this UDP port to the autopilot
+    mocap_host: str = "0.0.0.0"
+    mocap_body: str | None = None  # rigid-body name (default: the UAV's name)
+    actuator_baud: int = 115200
+    min_battery: float = 0.5  # pre-flight: refuse to arm below this charge fraction
+    estimate_wait_s: float = 10.0  # pre-flight: wait this long for the autopilot's position estimate
+
+    @property
+    def sim_fc(self) -> bool:
+        return self.fc == SIM
+
+    @property
+    def sim_actuators(self) -> bool:
+        return self.actuators == SIM
+
+    @property
+    def sim_camera(self) -> bool:
+        return self.camera in SIM_CAMERA_MODES
+
+    @property
+    def all_sim(self) -> bool:
+        return self.sim_fc and self.sim_actuators and self.sim_camera
+
+
+#: Keys a ``--config uav.yaml`` may hold besides the HardwareConfig fields (read by ``masonry fly`` itself).
+EXTRA_CONFIG_KEYS = ("name", "mission")
+
+
+def load_uav_config(path: str | Path) -> dict[str, Any]:
+    """Read ``uav.yaml``: a mapping of HardwareConfig field names (plus ``name``, ``mission``) to values.
+
+    Raises:
+        InputError: unreadable, not a mapping, an unknown key, or a value of the wrong type (named).
+    """
+    import yaml
+
+    p = Path(path)
+    try:
+        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read the UAV configuration: {exc.strerror or exc}") from exc
+    except yaml.YAMLError as exc:
+        raise InputError(f"{p}: not valid YAML: {str(exc).splitlines()[0]}") from exc
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise InputError(f"{p}: a UAV configuration is a mapping of settings (fc: ..., actuators: ...)")
+    known = {f.name: f for f in fields(HardwareConfig)}
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        name = str(key).replace("-", "_")
+        if name in EXTRA_CONFIG_KEYS:
+            if not isinstance(value, str):
+                raise InputError(f"{p}: {key} must be a string")
+            out[name] = value
+            continue
+        if name not in known:
+            raise InputError(
+                f"{p}: unknown setting {key!r} (known: {', '.join(sorted([*known, *EXTRA_CONFIG_KEYS]))})"
+            )
+        out[name] = _coerce(p, name, value, getattr(HardwareConfig, name, None))
+    return out
+
+
+def _coerce(p: Path, name: str, value: Any, default: Any) -> Any:
+    if value is None:
+        return None
+    if name == "origin_m":
+        if not isinstance(value, (list, tuple)) or len(value) != 3:
+            raise InputError(f"{p}: origin_m must be a list of 3 numbers [x, y, z]")
+        try:
+            return tuple(float(v) for v in value)
+        except (TypeError, ValueError) as exc:
+            raise InputError(f"{p}: origin_m must hold numbers") from exc
+    if name in ("fc_baud", "actuator_baud", "mocap_port"):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"{p}: {name} must be an integer, got {value!r}")
+        return value
+    if isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise InputError(f"{p}: {name} must be a number, got {value!r}")
+        return float(value)
+    return str(value)  # fc, actuators, camera (an index may be written as a number), paths, names
+
+
+def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = None) -> HardwareConfig:
+    """Command-line values (None = not given) over ``uav.yaml`` values over the defaults; checked."""
+    merged: dict[str, Any] = {}
+    for f in fields(HardwareConfig):
+        if cli.get(f.name) is not None:
+            merged[f.name] = cli[f.name]
+        elif file_settings and file_settings.get(f.name) is not None:
+            merged[f.name] = file_settings[f.name]
+    hw = HardwareConfig(**merged)
+    if hw.autopilot not in ("auto", "ardupilot", "px4"):
+        raise InputError(f"autopilot must be auto, ardupilot or px4, not {hw.autopilot!r}")
+    if not hw.sim_camera and hw.calibration is None:
+        raise InputError(f"--camera {hw.camera} needs --calibration FILE (the camera calibration from `masonry calibrate`)")
+    if not 0.0 <= hw.min_battery <= 1.0:
+        raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
+    if not hw.heartbeat_timeout_s > 0.0:
+        raise InputError("heartbeat_timeout_s must be > 0")
+    return hw
+
+
+@dataclass
+class OpenAdapters:
+    """The ports of one UAV, its clock and tick, the simulated world if any, and how to close it all."""
+
+    fc: Any
+    gripper: Any
+    sprayer: Any
+    camera: Any
+    clock: Any
+    advance: Callable[[float], None]
+    world: Any = None
+    descriptions: dict[str, str] = field(default_factory=dict)
+    _closers: list[Callable[[], None]] = field(default_factory=list)
+
+    def close(self) -> None:
+        """Close what was opened, newest first; never raises (a shutdown path)."""
+        while self._closers:
+            closer = self._closers.pop()
+            try:
+                closer()
+            except Exception:  # noqa: BLE001 - closing must go on whatever one adapter does
+                pass
+
+
+def _follow_autopilot(uav: Any, fc: Any) -> None:
+    """Make the simulated UAV's body follow the real autopilot's telemetry (its tools and camera go along)."""
+    from masonry.sim.vehicle import SimVehicle
+
+    class TelemetryVehicle(SimVehicle):
+        """A SimVehicle whose state is copied from a FlightController's telemetry at every step."""
+
+        def step(self, dt_s: float) -> None:
+            self._t += dt_s
+            tel: Telemetry = fc.telemetry()
+            self._x, self._y, self._z = (float(c) for c in tel.position_m)
+            self._vx, self._vy, self._vz = (float(c) for c in tel.velocity_mps)
+            self._yaw = float(tel.attitude_rad[2])
+            self.armed = tel.armed
+            self.on_ground = tel.on_ground
+            self.mode = tel.mode
+            if math.isfinite(tel.battery_fraction):
+                self.battery_fraction = tel.battery_fraction
+
+    old = uav.vehicle
+    uav.vehicle = TelemetryVehicle(old.config, position_m=old.position_m, yaw_rad=old.yaw_rad)
+
+
+def open_adapters(
+    hw: HardwareConfig,
+    *,
+    blueprint: Any,
+    spec: Any,
+    seed: int = 0,
+    faults: Any = None,
+) -> OpenAdapters:
+    """Build and open the adapters of ``spec`` as ``hw`` says (each port on its own).
+
+    Raises:
+        DeviceNotFound / LinkLost / CommandTimeout: a real device cannot be reached (its error names it).
+        InputError: a setting is unusable (calibration, signing key file).
+    """
+    from masonry.sim import Faults, World
+
+    faults = faults if faults is not None else Faults()
+    camera_mode = "render" if hw.camera == "render" else "geometric"
+    opened = OpenAdapters(None, None, None, None, None, lambda dt: None)
+    try:
+        fc = None
+        link_clock = None
+        if not hw.sim_fc:
+            fc = _open_mavlink(hw, spec, opened)
+            link_clock = fc.clock
+        need_world = hw.sim_fc or hw.sim_actuators or hw.sim_camera
+        world = None
+        uav = None
+        if need_world:
+            start_s = link_clock.now_s() if link_clock is not None else 0.0
+            world = World(blueprint, seed=seed, camera=camera_mode, faults=faults, start_s=start_s)  # type: ignore[arg-type]
+            faults.check_uavs([spec.name])
+            uav = world.add_uav(spec)
+            if fc is not None:
+                _follow_autopilot(uav, fc)
+        if fc is None:
+            assert uav is not None and world is not None
+            opened.fc, opened.clock, opened.advance = uav.fc, world.clock, world.step
+            opened.descriptions["flight controller"] = "simulated"
+        else:
+            opened.fc, opened.clock = fc, link_clock
+
+            def advance(dt_s: float, world: Any = world, clock: Any = link_clock) -> None:
+                clock.sleep(dt_s)
+                if world is not None:  # keep the simulated world on the autopilot's time
+                    step = clock.now_s() - world.clock.now_s()
+                    if step > 1e-6:
+                        world.step(step)
+
+            opened.advance = advance
+        if hw.sim_actuators:
+            assert uav is not None
+            opened.gripper, opened.sprayer = uav.gripper, uav.sprayer
+            opened.descriptions["actuators"] = "simulated"
+        else:
+            from masonry.adapters.arduino import ArduinoActuators
+
+            board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud)
+            board.connect()
+            opened._closers.append(board.close)
+            opened.gripper = opened.sprayer = board
+            opened.descriptions["actuators"] = f"Arduino on {hw.actuators} (protocol v{board.version})"
+        if hw.sim_camera:
+            assert uav is not None
+            opened.camera = uav.camera
+            where = "the autopilot's reported position" if fc is not None else "the simulated UAV"
+            opened.descriptions["camera"] = f"simulated ({camera_mode}), seen from {where}"
+        else:
+            from masonry.adapters.camera import OpenCvCamera
+
+            cam = OpenCvCamera(hw.camera, calibration=hw.calibration, clock=opened.clock)
+            cam.connect()
+            opened._closers.append(cam.close)
+            opened.camera = cam
+            intr = cam.intrinsics
+            opened.descriptions["camera"] = f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
+        opened.world = world
+        return opened
+    except BaseException:
+        opened.close()
+        raise
+
+
+def _open_mavlink(hw: HardwareConfig, spec: Any, opened: OpenAdapters) -> Any:
+    from masonry.adapters.mavlink import FrameTransform, MavlinkFlightController, load_signing_key
+
+    pose_source = None
+    if hw.mocap_port is not None:
+        from masonry.adapters.pose_source import UdpPoseSource
+
+        pose_source = UdpPoseSource(hw.mocap_port, host=hw.mocap_host, body=hw.mocap_body or spec.name)
+        pose_source.start()
+        opened._closers.append(pose_source.close)
+    fc = MavlinkFlightController(
+        hw.fc,
+        baud=hw.fc_baud,
+        autopilot=hw.autopilot,  # type: ignore[arg-type]
+        heartbeat_timeout_s=hw.heartbeat_timeout_s,
+        frame=FrameTransform(hw.origin_m, hw.origin_yaw_rad),
+        signing_key=load_signing_key(hw.signing_key) if hw.signing_key else None,
+        pose_source=pose_source,
+    )
+    fc.connect()
+    opened._closers.append(fc.close)
+    who = f"{fc.autopilot} system {fc.target_system}"
+    extras = []
+    if hw.signing_key:
+        extras.append("signed")
+    if pose_source is not None:
+        extras.append(f"motion capture from udp:{hw.mocap_host}:{pose_source.port}")
+    opened.descriptions["flight controller"] = f"MAVLink {hw.fc}: {who}" + (f" ({', '.join(extras)})" if extras else "")
+    return fc
+
+
+@dataclass(frozen=True)
+class CheckItem:
+    """One line of the pre-flight report."""
+
+    name: str
+    ok: bool
+    detail: str
+    blocking: bool = True
+
+
+@dataclass(frozen=True)
+class PreflightReport:
+    """What is connected and whether the UAV may arm."""
+
+    items: tuple[CheckItem, ...]
+
+    @property
+    def ok(self) -> bool:
+        return all(item.ok or not item.blocking for item in self.items)
+
+    @property
+    def reasons(self) -> list[str]:
+        return [f"{item.name}: {item.detail}" for item in self.items if item.blocking and not item.ok]
+
+    def lines(self) -> list[str]:
+        out = ["pre-flight check:"]
+        for item in self.items:
+            mark = "ok  " if item.ok else ("FAIL" if item.blocking else "warn")
+            out.append(f"  [{mark}] {item.name}: {item.detail}")
+        out.append("  -> ready to arm" if self.ok else "  -> refusing to arm")
+        return out
+
+    def raise_if_failed(self) -> None:
+        """Raises CommandRejected("arm", ...) naming every blocking failure."""
+        if not self.ok:
+            raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons))
+
+
+def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick") -> PreflightReport:
+    """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames."""
+    items: list[CheckItem] = []
+    items.append(CheckItem("flight controller", True, adapters.descriptions.get("flight controller", "?")))
+    fc = adapters.fc
+    if not hw.sim_fc:
+        try:
+            fc.wait_for_estimate(hw.estimate_wait_s)
+            items.append(CheckItem("position estimate", True, "usable (EKF reports horizontal and vertical position)"))
+        except HardwareError as exc:
+            detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
+            items.append(CheckItem("position estimate", False, detail))
+        tel = fc.telemetry()
+        items.append(CheckItem("link", tel.link_ok, "heartbeat and telemetry flowing" if tel.link_ok
+                               else f"silent for more than {hw.heartbeat_timeout_s:.1f} s"))
+        items.append(CheckItem("disarmed on the ground", not tel.armed and tel.on_ground,
+                               f"mode {tel.mode}, {'armed' if tel.armed else 'disarmed'}, "
+                               f"{'on the ground' if tel.on_ground else 'in the air'}"))
+        items.append(CheckItem("position", True, "x %.2f, y %.2f, z %.2f m (world ENU)" % tel.position_m, False))
+        battery = tel.battery_fraction
+        if math.isnan(battery):
+            items.append(CheckItem("battery", False, "charge unknown (no battery monitor configured?)", False))
+        else:
+            items.append(CheckItem("battery", battery >= hw.min_battery,
+                                   f"{battery:.0%} (minimum {hw.min_battery:.0%})"))
+    items.append(_check_actuators(adapters, hw, role))
+    items.append(_check_camera(adapters, hw))
+    return PreflightReport(tuple(items))
+
+
+def _check_actuators(adapters: OpenAdapters, hw: HardwareConfig, role: str) -> CheckItem:
+    if hw.sim_actuators:
+        return CheckItem("actuators", True, "simulated")
+    try:
+        status = adapters.gripper.status()
+    except HardwareError as exc:
+        return CheckItem("actuators", False, f"not answering: {exc}")
+    detail = (f"{adapters.descriptions.get('actuators')}: magnet {'on' if status.magnet_on else 'off'}, "
+              f"joint {'locked' if status.joint_locked else 'unlocked'}, valve {'open' if status.valve_open else 'closed'}, "
+              f"brick {'attached' if status.attached else 'not attached'}")
+    if role == "adhesion" and status.valve_open:
+        return CheckItem("actuators", False, detail + " (the valve must be closed before take-off)")
+    return CheckItem("actuators", True, detail)
+
+
+def _check_camera(adapters: OpenAdapters, hw: HardwareConfig, wait_s: float = 3.0) -> CheckItem:
+    description = adapters.descriptions.get("camera", "?")
+    if hw.sim_camera:
+        return CheckItem("camera", True, description)
+    deadline = time.monotonic() + wait_s
+    while time.monotonic() < deadline:
+        try:
+            frame = adapters.camera.read()
+        except InputError as exc:
+            return CheckItem("camera", False, str(exc))
+        if frame is not None and frame.image is not None:
+            h, w = frame.image.shape[:2]
+            return CheckItem("camera", True, f"{description}: {w}x{h} frames")
+        time.sleep(0.02)
+    return CheckItem("camera", False, f"{description}: no frame within {wait_s:.0f} s")
+
+
+def describe(hw: HardwareConfig) -> str:
+    """One line: which adapter drives each port."""
+    return f"fc {hw.fc}, actuators {hw.actuators}, camera {hw.camera}"
+
+
+__all__ = [
+    "CheckItem",
+    "HardwareConfig",
+    "OpenAdapters",
+    "PreflightReport",
+    "describe",
+    "hardware_config",
+    "load_uav_config",
+    "open_adapters",
+    "preflight",
+]

@@ -1,0 +1,92 @@
+"""``masonry sitl``: the simulator's UAV behind a real MAVLink 2 endpoint, for trying ``masonry fly --fc`` on a PC."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Optional
+
+import typer
+
+from masonry.cli.app import command
+from masonry.errors import InputError
+
+
+def sitl_home(blueprint: Any, role: str, name: str | None) -> tuple[tuple[float, float, float], str]:
+    """The home (and name) of the UAV a SITL stands in for: ``name`` or the first of ``role`` in the fleet."""
+    for spec in blueprint.fleet:
+        if (name is None and spec.role == role) or spec.name == name:
+            if spec.role != role:
+                raise InputError(f"--name {name}: {name} is a {spec.role} UAV, not a {role} UAV")
+            return tuple(spec.home_m), spec.name  # type: ignore[return-value]
+    who = f"named {name}" if name is not None else f"of role {role}"
+    raise InputError(f"{blueprint.source}: the fleet has no UAV {who}")
+
+
+def build_sitl(
+    *,
+    port: int,
+    host: str = "127.0.0.1",
+    uav: str = "brick",
+    blueprint: Path | None = None,
+    name: str | None = None,
+    time_scale: float = 1.0,
+    signing_key: Path | None = None,
+    prearm_failure: str | None = None,
+    seed: int = 0,
+) -> tuple[Any, str]:
+    """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it."""
+    from masonry.adapters.mavlink import load_signing_key
+    from masonry.adapters.sitl import MavlinkSitl, SitlConfig
+
+    if uav not in ("brick", "adhesion"):
+        raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
+    if not 0 <= port <= 65535:
+        raise InputError(f"--port must be a UDP port number, got {port}")
+    if not (time_scale > 0.0 and time_scale <= 100.0):
+        raise InputError(f"--time-scale must be in (0, 100], got {time_scale}")
+    home: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    who = f"a {uav} UAV"
+    if blueprint is not None:
+        from masonry.blueprint import load_blueprint
+
+        bp = load_blueprint(blueprint)
+        home, uav_name = sitl_home(bp, uav, name)
+        who = f"{uav_name} ({uav}) of {bp.source}"
+    key = load_signing_key(signing_key) if signing_key is not None else None
+    sitl = MavlinkSitl(
+        port,
+        host,
+        home_m=home,
+        time_scale=time_scale,
+        signing_key=key,
+        config=SitlConfig(prearm_failure=prearm_failure),
+        seed=seed,
+    )
+    description = (
+        f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, ArduCopter-style MAVLink 2 to "
+        f"udp {host}:{port}{' (signed)' if key else ''}, x{time_scale:g} real time"
+    )
+    return sitl, description
+
+
+@command("sitl")
+def sitl(
+    port: int = typer.Option(14550, "--port", help="UDP port the ground station listens on (the SITL sends there)."),
+    host: str = typer.Option("127.0.0.1", "--host", help="Address of the ground station."),
+    uav: str = typer.Option("brick", "--uav", help="brick | adhesion: which fleet member to stand in for."),
+    blueprint: Optional[Path] = typer.Option(None, "--blueprint", help="Start at this blueprint's UAV home."),
+    name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of --uav)."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help="Simulated seconds per wall second."),
+    signing_key: Optional[Path] = typer.Option(None, "--signing-key", help="MAVLink 2 signing key file "
+                                               "(32 bytes, 64 hex digits, or a passphrase)."),
+    prearm_failure: Optional[str] = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
+                                                 "reason (to rehearse a pre-arm failure)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the motion-capture noise."),
+) -> None:
+    """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
+    server, description = build_sitl(port=port, host=host, uav=uav, blueprint=blueprint, name=name,
+                                     time_scale=time_scale, signing_key=signing_key,
+                                     prearm_failure=prearm_failure, seed=seed)
+    typer.echo(description)
+    typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")
+    server.serve_forever()
