@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from masonry.blueprint import Blueprint, Brick, UavSpec
-from masonry.errors import InputError
+from masonry.errors import CommandRejected, InputError
 from masonry.planner.tasks import AdhesionTask
 from masonry.ports import Camera, FlightController, Gripper, Sprayer
 from masonry.sim import Faults, SimUav, World, WorldConfig
@@ -377,6 +377,20 @@ def test_battery_fault_drains_faster() -> None:
         hover(w, uav, 10.0)
         levels[drain] = uav.fc.telemetry().battery_fraction
     assert levels[0.01] < levels[None] - 0.08
+
+
+def test_battery_swap_only_on_the_ground() -> None:
+    w = world(seed=1, faults=Faults(battery_drain_per_s=0.01))
+    uav = w.uavs["brick-1"]
+    take_off(w, uav)
+    hover(w, uav, 5.0)
+    with pytest.raises(CommandRejected):
+        w.swap_battery("brick-1")
+    uav.fc.land()
+    w.run(10.0)
+    assert uav.vehicle.on_ground and uav.fc.telemetry().battery_fraction < 0.95
+    w.swap_battery("brick-1")
+    assert uav.fc.telemetry().battery_fraction == 1.0
 
 
 def test_link_loss_fault() -> None:

@@ -157,6 +157,7 @@ class BrickField:
     def __init__(self, cell_m: float = 0.5) -> None:
         self.bricks: dict[int, SimBrick] = {}
         self._hash = SpatialHash(cell_m)
+        self.max_top_z_m = GROUND_Z_M  # highest brick top ever indexed: nothing rests above it
 
     def __iter__(self) -> Iterator[SimBrick]:
         return iter(self.bricks.values())
@@ -170,6 +171,7 @@ class BrickField:
             self._index(brick)
 
     def _index(self, brick: SimBrick) -> None:
+        self.max_top_z_m = max(self.max_top_z_m, brick.top_z_m)
         xs, ys = zip(*rect_corners(*brick.rect()))
         self._hash.insert(brick.id, min(xs), min(ys), max(xs), max(ys))
 

@@ -103,6 +103,15 @@ class _Gauss:
         self._i += 1
         return value
 
+    def take(self, k: int) -> list[float]:
+        """``k`` draws at once."""
+        if self._i + k > len(self._buf):
+            self._buf = self._buf[self._i :] + self._rng.standard_normal(4096).tolist()
+            self._i = 0
+        out = self._buf[self._i : self._i + k]
+        self._i += k
+        return out
+
 
 class SimVehicle:
     """One simulated multirotor with its autopilot (state + ``step(dt_s)`` + commands).
@@ -162,6 +171,7 @@ class SimVehicle:
         self.distance_m = 0.0
         self.airborne_s = 0.0
         self._lag_dt = -1.0
+        self._tel: tuple[bool, Telemetry] | None = None
         self._lag_k = self._yaw_k = 0.0
 
     # ------------------------------------------------------------------ state
@@ -214,6 +224,7 @@ class SimVehicle:
     # --------------------------------------------------------------- commands
     def arm(self) -> None:
         """Arm the motors (on the ground, with enough battery); GUIDED mode."""
+        self._tel = None
         if self.failed:
             raise CommandRejected("arm", "the vehicle has failed")
         if self.armed:
@@ -230,6 +241,7 @@ class SimVehicle:
 
     def disarm(self, force: bool = False) -> None:
         """Disarm; refused in the air unless ``force`` (then the vehicle falls)."""
+        self._tel = None
         if not self.armed:
             return
         if not self.on_ground and not force:
@@ -239,6 +251,7 @@ class SimVehicle:
 
     def takeoff(self, altitude_m: float) -> None:
         """Climb on its own to ``altitude_m`` above the ground it stands on."""
+        self._tel = None
         if not (math.isfinite(altitude_m) and altitude_m > 0):
             raise CommandRejected("takeoff", f"altitude must be > 0 m, got {altitude_m!r}")
         if self.failed:
@@ -254,6 +267,7 @@ class SimVehicle:
 
     def land(self) -> None:
         """Switch to LAND: descend where it is and disarm on touchdown."""
+        self._tel = None
         if self.failed:
             raise CommandRejected("land", "the vehicle has failed")
         if not self.armed:
@@ -281,6 +295,7 @@ class SimVehicle:
 
     def fail(self) -> None:
         """The motors stop now (power or ESC failure): the vehicle disarms and falls."""
+        self._tel = None
         self.failed = True
         self.armed = False
         self.mode = "FAILED"
@@ -288,11 +303,13 @@ class SimVehicle:
 
     def lose_link(self) -> None:
         """The ground link goes silent: no more setpoints; hover, then land after ``link_failsafe_s``."""
+        self._tel = None
         if self._link_lost_at is None:
             self._link_lost_at = self._t
 
     def swap_battery(self) -> None:
         """A fresh pack (ground crew): only landed and disarmed."""
+        self._tel = None
         if self.armed or not self.on_ground:
             raise CommandRejected("swap battery", "only on the ground and disarmed")
         self.battery_fraction = 1.0
@@ -300,6 +317,7 @@ class SimVehicle:
     def hold_above(self, z_min_m: float) -> None:
         """Contact: the world stops the airframe from going below ``z_min_m`` (e.g. the rod on a brick)."""
         if self._z < z_min_m:
+            self._tel = None
             self._z = z_min_m
             self._vz = max(self._vz, 0.0)
             self._held = True
@@ -307,6 +325,7 @@ class SimVehicle:
     # ------------------------------------------------------------------- step
     def step(self, dt_s: float) -> None:
         """Advance the vehicle by ``dt_s`` seconds."""
+        self._tel = None
         cfg = self.config
         self._t += dt_s
         if self.failed:
@@ -450,16 +469,23 @@ class SimVehicle:
 
     # -------------------------------------------------------------- telemetry
     def telemetry(self, *, link_ok: bool = True) -> Telemetry:
-        """What the autopilot reports now: the true state plus motion-capture noise."""
+        """What the autopilot reports now: the true state plus motion-capture noise.
+
+        One sample per instant: asking again before the state changes (a step or a command) returns the same
+        sample, as reading the latest message of a telemetry stream would.
+        """
+        cached = self._tel
+        if cached is not None and cached[0] == link_ok:
+            return cached[1]
         cfg = self.config
-        g = self._gauss
+        g = self._gauss.take(7)
         n, v = cfg.mocap_noise_m, cfg.velocity_noise_mps
         roll, pitch, yaw = self.attitude_rad
-        return Telemetry(
+        tel = Telemetry(
             time_s=self._t,
-            position_m=(self._x + n * g(), self._y + n * g(), self._z + n * g()),
-            velocity_mps=(self._vx + v * g(), self._vy + v * g(), self._vz + v * g()),
-            attitude_rad=(roll, pitch, wrap_angle_rad(yaw + cfg.yaw_noise_rad * g())),
+            position_m=(self._x + n * g[0], self._y + n * g[1], self._z + n * g[2]),
+            velocity_mps=(self._vx + v * g[3], self._vy + v * g[4], self._vz + v * g[5]),
+            attitude_rad=(roll, pitch, wrap_angle_rad(yaw + cfg.yaw_noise_rad * g[6])),
             armed=self.armed,
             mode=self.mode,
             battery_fraction=self.battery_fraction,
@@ -467,3 +493,5 @@ class SimVehicle:
             position_ok=not self.failed,
             on_ground=self.on_ground,
         )
+        self._tel = (link_ok, tel)
+        return tel

@@ -239,6 +239,10 @@ class World:
         self.faults.check_uavs([s.name for s in specs] + list(self.uavs))
         return [self.add_uav(s) for s in specs]
 
+    def swap_battery(self, name: str) -> None:
+        """Ground crew puts a full pack in the UAV (it must be landed and disarmed: else CommandRejected)."""
+        self.uavs[name].vehicle.swap_battery()
+
     # ------------------------------------------------------------------ step
     def step(self, dt_s: float) -> None:
         """Advance the clock and the physics of every UAV and brick by ``dt_s`` seconds."""
@@ -246,10 +250,11 @@ class World:
             raise ValueError(f"World.step needs a finite dt_s > 0, got {dt_s!r}")
         now = self.clock.now_s() + dt_s
         faults = self.faults
+        timed_faults = bool(faults.uav_loss_at_s) or bool(faults.link_loss_at_s)
         airborne: list[Vec3] = []
         for uav in self.uavs.values():
             vehicle = uav.vehicle
-            if not uav.failed:
+            if timed_faults and not uav.failed:
                 at = faults.uav_loss_at_s.get(uav.name)
                 if at is not None and now >= at:
                     self._fail(uav)
@@ -303,9 +308,12 @@ class World:
         """Keep the tool from passing through brick tops, and a carried brick through bricks or the ground."""
         vehicle = uav.vehicle
         tol = 0.06
+        clear_z = self.field.max_top_z_m + tol  # above this nothing can be touched
         if uav.carried_brick is not None:
             brick = self.field.bricks[uav.carried_brick]
             self._carry_pose(uav, brick)
+            if brick.bottom_z_m > clear_z:
+                return
             support = self.field.support_under(
                 brick.rect(self.config.support_margin_m), below_z_m=brick.bottom_z_m, tol_m=tol
             )
@@ -314,6 +322,8 @@ class World:
                 self._carry_pose(uav, brick)
             return
         tool = uav.effector_m() if uav.role == "brick" else uav.nozzle_m()
+        if tool[2] > clear_z:
+            return
         support = self.field.support_at(tool[0], tool[1], below_z_m=tool[2], tol_m=tol)
         # Bricks only: on the ground the landing gear, not the rod, takes the vehicle's weight.
         if support > GROUND_Z_M and tool[2] < support:
