@@ -53,7 +53,43 @@ def profile(task_id: str, seed: int = 0, camera: str = "geometric") -> None:
         print(f"    {state:18s} {1e6 * secs / n:8.1f} us/tick over {n} ticks")
 
 
+
+def steady_flight(n: int = 2000) -> None:
+    """Cost of one control step in flight (a long transport leg on fakes): the machine's own cost + PID."""
+    from masonry.fakes import FakeBrick, FakeCamera, FakeClock, FakeFlightController, FakeGripper
+    from masonry.fsm import BrickUav
+    from masonry.planner.tasks import BrickTask
+
+    clock = FakeClock()
+    fc = FakeFlightController(clock, velocity_time_constant_s=0.0)
+    task = BrickTask("B0", 0, False, (500.0, 0.0, 0.05), 0.0, (0.0, 0.0, 0.05))
+    link = QueueMissionLink([task])
+    uav = BrickUav(UavConfig("b", "brick", (0.0, 0.0, 0.0)), fc, FakeGripper(), FakeCamera(fc, [FakeBrick(0, (0, 0, .1))]),
+                   link, clock)
+    while uav.state != "transport":
+        uav.step(clock.now_s())
+        clock.advance(0.1)
+    best = float("inf")
+    for _ in range(3):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            uav.step(clock.now_s())
+            clock.advance(0.1)
+        best = min(best, (time.perf_counter() - t0) / n)
+    assert uav.state == "transport"
+    print(f"steady flight: {1e6 * best:.1f} us per control step (fake flight controller, best of 3 x {n})")
+    import masonry.motion as motion
+
+    pid = motion.PID()
+    t0 = time.perf_counter()
+    for i in range(n):
+        pid.step(i * 0.1, (0.0, 0.0, 1.0), (0.1, 0.0, 1.0), velocity_ff_mps=(0.0, 0.0, 0.0), yaw_rad=0.0,
+                 target_yaw_rad=0.0)
+    print(f"  of which PID.step: {1e6 * (time.perf_counter() - t0) / n:.1f} us")
+
+
 if __name__ == "__main__":
     profile("B0")
     profile("A0")
     profile("B0", camera="render")
+    steady_flight()

@@ -252,3 +252,30 @@ def test_scenarios_visit_every_state() -> None:
     adhesion |= Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run().visited()
     adhesion |= Rig("adhesion", fc={"arm_rejection": "no"}).run().visited()
     assert adhesion == set(leaf_states(ADHESION_STATES))
+
+
+def test_a_leg_that_cannot_be_flown_fails_the_task() -> None:
+    blocked = {"on": False}
+
+    def push_up(r: Rig) -> None:
+        if r.uav.state == "pickup_goto" and not blocked["on"]:
+            r.fc.floor_z_m = 1.6  # something keeps the UAV from its cruise altitude
+            blocked["on"] = True
+        elif r.uav.state == "home":
+            r.fc.floor_z_m = 0.0
+
+    rig = Rig("brick").run(on_tick=push_up)
+    (result,) = rig.link.results
+    assert result.status == "failed" and "could not reach the pickup" in (result.reason or "")
+    assert rig.states[-4:] == ["failsafe", "home", "land", "idle"]
+
+
+def test_control_runs_at_its_own_rate_whatever_the_tick() -> None:
+    rig = Rig("adhesion", config={"control_period_s": 0.1})
+    rig.run(max_s=20.0, dt_s=0.02)
+    n = rig.fc.velocity_commands
+    assert 0 < n <= 20.0 / 0.1 + 1
+    # Stepping again at the same instant does nothing.
+    before = (rig.fc.velocity_commands, len(rig.uav.trace))
+    rig.uav.step(rig.clock.now_s())
+    assert (rig.fc.velocity_commands, len(rig.uav.trace)) == before

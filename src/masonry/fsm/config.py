@@ -35,7 +35,7 @@ class UavConfig:
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
     takeoff_timeout_s: float = 30.0
-    leg_timeout_s: float = 60.0  # a lateral leg or an alignment that takes longer than this aborts the task
+    leg_timeout_s: float = 30.0  # a leg (or an alignment) not over this long after its planned end fails the task
     battery_low_fraction: float = 0.20  # below this a task is aborted and the UAV goes home
     battery_critical_fraction: float = 0.10  # below this it lands where it is
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this

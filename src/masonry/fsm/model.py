@@ -621,7 +621,7 @@ class BrickUav(UavModel):
     def do_pickup_goto(self, tel: Telemetry) -> None:
         if self._leg_done(tel):
             self.arrived()
-        elif self._now_s - self._entered_s > self.config.leg_timeout_s:
+        elif self._now_s > self._traj_end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the pickup of {self.brick_task.id}")
 
     def climb_step(self, *args: Any, **kwargs: Any) -> None:
@@ -715,7 +715,7 @@ class BrickUav(UavModel):
         cfg = self.config
         if self._aligned(tel):
             self.aligned()
-        elif self._now_s - self._entered_s > cfg.leg_timeout_s:
+        elif self._now_s > self._traj_end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not align above brick {self.brick_task.brick}")
 
     def _aligned(self, tel: Telemetry) -> bool:
@@ -805,7 +805,7 @@ class BrickUav(UavModel):
     def do_transport(self, tel: Telemetry) -> None:
         if self._leg_done(tel):
             self.arrived()
-        elif self._now_s - self._entered_s > self.config.leg_timeout_s:
+        elif self._now_s > self._traj_end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the drop-off of {self.brick_task.id}")
 
     def enter_place_align(self, *args: Any, **kwargs: Any) -> None:
@@ -819,7 +819,7 @@ class BrickUav(UavModel):
     def do_place_align(self, tel: Telemetry) -> None:
         if self._aligned(tel):
             self.aligned()
-        elif self._now_s - self._entered_s > self.config.leg_timeout_s:
+        elif self._now_s > self._traj_end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}")
 
     def enter_place_descend(self, *args: Any, **kwargs: Any) -> None:
@@ -947,7 +947,7 @@ class AdhesionUav(UavModel):
     def do_cruise(self, tel: Telemetry) -> None:
         if self._leg_done(tel):
             self.arrived()
-        elif self._now_s - self._entered_s > self.config.leg_timeout_s:
+        elif self._now_s > self._traj_end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the start of {self.adhesion_task.id}")
 
     def enter_hover(self, *args: Any, **kwargs: Any) -> None:
@@ -971,7 +971,7 @@ class AdhesionUav(UavModel):
         elif self._now_s - self._stable_since_s >= cfg.stable_time_s:
             self.stable()
             return
-        if self._now_s - self._entered_s > cfg.leg_timeout_s:
+        if self._now_s > self._traj_end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}")
 
     def enter_descend(self, *args: Any, **kwargs: Any) -> None:
