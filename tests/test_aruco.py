@@ -15,7 +15,6 @@ from masonry.errors import InputError, PerceptionError
 from masonry.perception.aruco import (
     aruco_dictionary,
     brick_corner_layout,
-    detect_markers,
     detect_tags,
     estimate_bricks,
     yaw_about_rad,

@@ -100,8 +100,10 @@ def test_reads_opencv_sample_key_spellings(tmp_path: Path) -> None:
         ("%YAML:1.0\nimage_width: 640\n", "no camera_matrix"),
         ("this is : not [ yaml", "not an OpenCV FileStorage|cannot open|no camera_matrix"),
         (
-            "%YAML:1.0\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
-            "   data: [ -5., 0., 320., 0., 500., 240., 0., 0., 1. ]\n",
+            (
+                "%YAML:1.0\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
+                "   data: [ -5., 0., 320., 0., 500., 240., 0., 0., 1. ]\n"
+            ),
             "fx, fy > 0",
         ),
     ],

@@ -107,7 +107,7 @@ def test_estimate_video_frames_are_indexed(tmp_path: Path) -> None:
 
 
 def test_estimate_with_calibration_file_and_up(tmp_path: Path) -> None:
-    paths, poses = write_frames(tmp_path, 1)
+    paths, _ = write_frames(tmp_path, 1)
     cal = tmp_path / "camera.yaml"
     write_calibration(cal, INTR)
     res = runner.invoke(app, ["estimate", paths[0], "--calibration", str(cal), "--format", "json"])
