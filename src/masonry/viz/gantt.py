@@ -63,7 +63,7 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
     ax.legend(handles=[Patch(color=KIND_COLOURS["brick"], label="brick"),
                        Patch(color=KIND_COLOURS["adhesion"], label="adhesion"),
                        Patch(facecolor=FAILED_COLOUR, hatch="//", label="failed attempt")],
-              loc="upper right", fontsize=7)
+              loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
     ax.set_title(title or f"mission ({report.policy}, seed {report.seed}): makespan {report.makespan_s:.1f} s")
     fig.tight_layout()
     fig.savefig(path)
