@@ -65,6 +65,7 @@ MAV_RESULT_NAMES = {
     9: "unsupported frame",
 }
 MAV_LANDED_STATE_ON_GROUND = 1
+MAV_LANDED_STATE_LANDING = 4
 MAV_SEVERITY_WARNING = 4
 
 # SET_POSITION_TARGET_LOCAL_NED type mask: a set bit means "ignore this field". Velocity + yaw rate only:
@@ -829,7 +830,11 @@ class MavlinkFlightController:
             velocity = self.frame.velocity_to_world(st.velocity_ned)
             attitude = self.frame.attitude_to_world(*st.attitude)
             if st.landed_state is not None and st.landed_state != 0:
-                on_ground = st.landed_state == MAV_LANDED_STATE_ON_GROUND
+                # disarmed after LANDING is down even if the next EXTENDED_SYS_STATE has not come yet; disarmed
+                # IN_AIR / TAKEOFF is a motor stop in flight: falling, not landed
+                on_ground = st.landed_state == MAV_LANDED_STATE_ON_GROUND or (
+                    not st.armed and st.landed_state == MAV_LANDED_STATE_LANDING
+                )
             else:
                 on_ground = not st.armed or -p_ned[2] < 0.05
             mode = mode_name(self.autopilot or "ardupilot", st.custom_mode) if st.custom_mode >= 0 else "UNKNOWN"
