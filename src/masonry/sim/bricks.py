@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from masonry.blueprint import Brick
@@ -118,6 +118,7 @@ class SimBrick:
     state: BrickState
     carrier: str | None = None
     released: bool = False  # dropped at least once by a UAV: its placement error is measured
+    marker_cache: tuple[object, object] | None = field(default=None, repr=False)  # camera model's, per pose
 
     @property
     def size_m(self) -> tuple[float, float, float]:

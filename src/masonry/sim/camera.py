@@ -68,34 +68,39 @@ def R_world_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarra
     )
 
 
+def _marker_points(brick: SimBrick, markers: MarkerSpec) -> list[tuple[float, float, float]]:
+    """The brick's two marker centres then their 4 + 4 corners (world), cached while the brick does not move."""
+    key = (brick.position_m, brick.yaw_rad, markers)
+    cache = brick.marker_cache
+    if cache is not None and cache[0] == key:
+        return cache[1]  # type: ignore[no-any-return]
+    x, y, _ = brick.position_m
+    top = brick.top_z_m
+    c, s = math.cos(brick.yaw_rad), math.sin(brick.yaw_rad)
+    half = markers.spacing_m / 2.0
+    h = markers.size_m / 2.0
+    centres = [(x + c * half, y + s * half), (x - c * half, y - s * half)]
+    points = [(mx, my, top) for mx, my in centres]
+    for mx, my in centres:
+        # top-left, top-right, bottom-right, bottom-left in the marker's own frame (x along the brick's +x)
+        for dx, dy in ((-h, h), (h, h), (h, -h), (-h, -h)):
+            points.append((mx + c * dx - s * dy, my + s * dx + c * dy, top))
+    brick.marker_cache = (key, points)
+    return points
+
+
 def marker_layout(
     bricks: Sequence[SimBrick], markers: MarkerSpec
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Marker ids (m,), centres (m, 3) and corners (m, 4, 3) in the world for the bricks' top faces."""
     n = len(bricks)
-    bid = np.fromiter((b.id for b in bricks), dtype=int, count=n)
-    pose = np.array([(*b.position_m, b.yaw_rad, b.blueprint.size_m[2]) for b in bricks], dtype=float).reshape(
-        n, 5
-    )
-    ids = np.stack([2 * bid, 2 * bid + 1], axis=1).reshape(-1)
-    half = markers.spacing_m / 2.0
-    cb, sb = np.cos(pose[:, 3]), np.sin(pose[:, 3])
-    pairs = np.empty((n, 2, 3))
-    for j, sign in ((0, 1.0), (1, -1.0)):
-        pairs[:, j, 0] = pose[:, 0] + sign * half * cb
-        pairs[:, j, 1] = pose[:, 1] + sign * half * sb
-        pairs[:, j, 2] = pose[:, 2] + pose[:, 4] / 2.0
-    centres = pairs.reshape(-1, 3)
-    yaws = np.repeat(pose[:, 3], 2)
-    h = markers.size_m / 2.0
-    local = np.array([[-h, h], [h, h], [h, -h], [-h, -h]])  # top-left, top-right, bottom-right, bottom-left
-    cos, sin = np.cos(yaws), np.sin(yaws)
-    ox = cos[:, None] * local[None, :, 0] - sin[:, None] * local[None, :, 1]
-    oy = sin[:, None] * local[None, :, 0] + cos[:, None] * local[None, :, 1]
-    corners = np.repeat(centres[:, None, :], 4, axis=1)
-    corners[:, :, 0] += ox
-    corners[:, :, 1] += oy
-    return ids, centres, corners
+    points: list[tuple[float, float, float]] = []
+    ids: list[int] = []
+    for b in bricks:
+        points.extend(_marker_points(b, markers))
+        ids.extend((2 * b.id, 2 * b.id + 1))
+    P = np.array(points, dtype=float).reshape(n, 10, 3)
+    return np.array(ids, dtype=int), P[:, 0:2].reshape(2 * n, 3), P[:, 2:10].reshape(2 * n, 4, 3)
 
 
 def observe_markers(

@@ -188,6 +188,7 @@ class World:
         self.uavs: dict[str, SimUav] = {}
         self.adhesive = AdhesiveDeposit(bead_radius_m=self.config.bead_radius_m)
         self.field = BrickField(self.config.cell_m)
+        self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
         self._carriers: list[SimUav] = []
         self._lay_out_bricks()
@@ -406,7 +407,7 @@ class World:
         T_wb = np.eye(4)
         T_wb[:3, :3] = R_world_body(*vehicle.attitude_rad)
         T_wb[:3, 3] = vehicle.position_m
-        return T_wb @ self.airframe.T_body_cam()
+        return T_wb @ self._T_body_cam
 
     def _visible_candidates(self, uav: SimUav, T_wc: np.ndarray) -> list[SimBrick]:
         cfg = self.camera_config
