@@ -73,7 +73,7 @@ def _marker_points(brick: SimBrick, markers: MarkerSpec) -> list[tuple[float, fl
     key = (brick.position_m, brick.yaw_rad, markers)
     cache = brick.marker_cache
     if cache is not None and cache[0] == key:
-        return cache[1]  # type: ignore[no-any-return]
+        return cache[1]  # type: ignore[return-value]
     x, y, _ = brick.position_m
     top = brick.top_z_m
     c, s = math.cos(brick.yaw_rad), math.sin(brick.yaw_rad)
