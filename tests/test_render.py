@@ -127,3 +127,16 @@ def test_marker_outside_the_dictionary_is_a_clear_error() -> None:
 def test_bad_pose_shape() -> None:
     with pytest.raises(ValueError, match="4x4"):
         render_frame(INTR, np.eye(3), [], MARKERS, rng=0)
+
+
+def test_perception_package_loads_opencv_lazily() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, masonry.perception as p; before = 'cv2' in sys.modules; "
+        "names = [p.render_frame, p.RenderedBrick, p.estimate_bricks, p.detect_tags, p.read_calibration]; "
+        "print(before, 'cv2' in sys.modules, all(callable(n) for n in names))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["False", "True", "True"]

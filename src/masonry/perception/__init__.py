@@ -31,3 +31,37 @@ __all__ = [
     "refine_markers_bfgs",
     "yaw_about_rad",
 ]
+
+# --- OpenCV front end (image-perception engineer): lazy, so ``import masonry.perception`` does not load cv2. ---
+_LAZY = {
+    "DetectedMarker": "masonry.perception.aruco",
+    "aruco_dictionary": "masonry.perception.aruco",
+    "detect_markers": "masonry.perception.aruco",
+    "detect_tags": "masonry.perception.aruco",
+    "estimate_bricks": "masonry.perception.aruco",
+    "RenderedBrick": "masonry.perception.render",
+    "look_down": "masonry.perception.render",
+    "random_view": "masonry.perception.render",
+    "render_frame": "masonry.perception.render",
+    "ChessboardSpec": "masonry.perception.calibration",
+    "calibrate_chessboard": "masonry.perception.calibration",
+    "read_calibration": "masonry.perception.calibration",
+    "write_calibration": "masonry.perception.calibration",
+    "write_marker_sheets": "masonry.perception.markers_sheet",
+}
+
+
+def __getattr__(name: str) -> object:
+    """Import the OpenCV-based names on first use (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'masonry.perception' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
