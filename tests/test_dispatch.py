@@ -148,6 +148,26 @@ def test_critical_path_breaks_ties_by_distance() -> None:
     assert ids(d.assign()) == ["B2"]
 
 
+def test_critical_path_counts_chains_within_one_typical_task_as_ties() -> None:
+    # median duration 45 s: chains 45 and 50 are in the same step (ties -> nearest), 40 is a step lower.
+    tasks = (
+        BrickTask("B0", 0, False, P(0.0), 0.0, P(0.5)),
+        BrickTask("B1", 1, False, P(0.0), 0.0, P(9.0)),
+        BrickTask("B2", 2, False, P(0.0), 0.0, P(3.0)),
+    )
+    durations = {"B0": 40.0, "B1": 50.0, "B2": 45.0}
+    d = Dispatcher(Plan(tasks, (), ()), [UavSpec("brick-1", "brick", P(0.0))], "critical-path",
+                   durations_s=durations)
+    assert d.tie_step_s == 45.0
+    order = []
+    while not d.finished:
+        (a,) = d.assign()
+        order.append(a.task_id)
+        d.complete(a.task_id)
+    # B2 (nearer) before B1 although B1's chain is 5 s longer; B0, a step lower, last although nearest of all
+    assert order == ["B2", "B1", "B0"]
+
+
 def test_nearest_uses_current_positions_and_last_drop_off() -> None:
     tasks = (glue(0, 10.0, 10.2), glue(1, 0.0, 0.2), glue(2, 5.0, 5.2))
     d = Dispatcher(Plan(tasks, (), ()), fleet(bricks=0, glues=1, home=4.0), "nearest")

@@ -176,6 +176,10 @@ class Dispatcher:
         self._dependents, self._prerequisites, self._neighbours = dependents, prerequisites, neighbours
 
         self._chain = self._chains(durations_s)
+        # critical-path compares chains in steps of one typical task (the median duration; 1 unweighted): tasks
+        # whose remaining chains differ by less than that are ties, and ties go to the shortest flight.
+        self.tie_step_s = self._tie_step(durations_s)
+        self._rank = [math.floor(c / self.tie_step_s + 1e-9) for c in self._chain]
 
         # Fleet.
         self._fleet: dict[str, UavSpec] = {}
@@ -205,11 +209,11 @@ class Dispatcher:
 
         # Available tasks per role (insertion-ordered dict used as a set) and the policy's structures.
         self._available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
-        self._heap: dict[str, list[tuple[float, int]]] = {r: [] for r in ROLES}
+        self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
         self._in_heap = [False] * n
         # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
-        self._buckets: dict[str, dict[float, dict[int, None]]] = {r: {} for r in ROLES}
-        self._heap_values: dict[str, set[float]] = {r: set() for r in ROLES}
+        self._buckets: dict[str, dict[int, dict[int, None]]] = {r: {} for r in ROLES}
+        self._heap_values: dict[str, set[int]] = {r: set() for r in ROLES}
         self._events = 0
         for i in range(n):
             self._maybe_available(i)
@@ -263,6 +267,13 @@ class Dispatcher:
             raise PlanningError(f"the dependency graph has a cycle through task {on_cycle}")
         return chain
 
+    def _tie_step(self, durations_s: Mapping[str, float] | None) -> float:
+        if durations_s is None:
+            return 1.0
+        values = sorted(float(durations_s[t.id]) for t in self._tasks if not t.done)
+        values = [v for v in values if v > 0.0]
+        return values[len(values) // 2] if values else 1.0
+
     # ------------------------------------------------------------------ availability bookkeeping
 
     def _maybe_available(self, i: int) -> None:
@@ -276,9 +287,9 @@ class Dispatcher:
         if self.policy == "fifo":
             if not self._in_heap[i]:
                 self._in_heap[i] = True
-                heapq.heappush(self._heap[role], (float(i), i))
+                heapq.heappush(self._heap[role], (i, i))
         elif self.policy == "critical-path":
-            c = self._chain[i]
+            c = self._rank[i]
             buckets = self._buckets[role]
             bucket = buckets.get(c)
             if bucket is None:
@@ -292,7 +303,7 @@ class Dispatcher:
         role = self._role[i]
         if self._available[role].pop(i, 0) is None and self.policy == "critical-path":
             buckets = self._buckets[role]
-            c = self._chain[i]
+            c = self._rank[i]
             bucket = buckets[c]
             del bucket[i]
             if not bucket:
