@@ -18,6 +18,7 @@ docs/estimation.md for the derivation and ``paper_coefficients`` for both forms.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -32,14 +33,29 @@ MIN_T_GO_S = 0.1
 """Floor on the remaining time used by :meth:`MinJerk.replan`: the coefficients grow like ``1/t_go^5``."""
 
 
-def _vec3(name: str, value: ArrayLike3) -> np.ndarray:
-    arr = np.array(value, dtype=float).reshape(-1)
-    if arr.shape != (3,):
-        raise PlanningError(f"min-jerk {name} must have 3 components, got shape {np.shape(value)}")
-    if not np.all(np.isfinite(arr)):
-        raise PlanningError(f"min-jerk {name} must be finite, got {arr.tolist()}")
+def _floats3(name: str, value: ArrayLike3) -> tuple[float, float, float]:
+    items = value.tolist() if isinstance(value, np.ndarray) else value
+    try:
+        x, y, z = items
+        x, y, z = float(x), float(y), float(z)
+    except (TypeError, ValueError):
+        raise PlanningError(f"min-jerk {name} must have 3 components, got shape {np.shape(value)}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise PlanningError(f"min-jerk {name} must be finite, got {[x, y, z]}")
+    return x, y, z
+
+
+def _frozen(values: Sequence[float] | Sequence[Sequence[float]]) -> np.ndarray:
+    arr = np.array(values, dtype=float)
     arr.flags.writeable = False
     return arr
+
+
+# _HORNER[order]: (i, i!/(i - order)!) from i = 5 down to order: the factor of c_i in the order-th derivative.
+_HORNER = tuple(
+    tuple((i, math.factorial(i) / math.factorial(i - order)) for i in range(5, order - 1, -1))
+    for order in range(4)
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,7 +77,7 @@ class MinJerk:
     vf: np.ndarray
     af: np.ndarray
     duration_s: float
-    _coeffs: np.ndarray = field(init=False, repr=False)
+    _rows: tuple[tuple[tuple[float, float, float], ...], ...] = field(init=False, repr=False)
 
     def __init__(
         self,
@@ -73,44 +89,59 @@ class MinJerk:
         af: ArrayLike3,
         duration_s: float,
     ) -> None:
-        values = {
-            name: _vec3(name, v)
-            for name, v in zip(("r0", "v0", "a0", "rf", "vf", "af"), (r0, v0, a0, rf, vf, af))
-        }
-        duration = float(duration_s)
-        if not (math.isfinite(duration) and duration > 0.0):
+        # Plain floats: a trajectory is re-planned at every control tick, so construction must be cheap.
+        names = ("r0", "v0", "a0", "rf", "vf", "af")
+        states = [_floats3(name, v) for name, v in zip(names, (r0, v0, a0, rf, vf, af))]
+        T = float(duration_s)
+        if not (math.isfinite(T) and T > 0.0):
             raise PlanningError(f"min-jerk duration_s must be positive and finite, got {duration_s!r}")
-        for name, arr in values.items():
-            object.__setattr__(self, name, arr)
-        object.__setattr__(self, "duration_s", duration)
-        T = duration
-        dr = values["rf"] - (values["r0"] + values["v0"] * T + values["a0"] * (T * T / 2.0))
-        dv = values["vf"] - (values["v0"] + values["a0"] * T)
-        da = values["af"] - values["a0"]
-        k3 = (10.0 * dr - 4.0 * dv * T + da * (T * T / 2.0)) / T**3
-        k4 = (-15.0 * dr + 7.0 * dv * T - da * (T * T)) / T**4
-        k5 = (6.0 * dr - 3.0 * dv * T + da * (T * T / 2.0)) / T**5
-        # Rows: coefficients of t^0 .. t^5 (position polynomial), one column per axis.
-        coeffs = np.stack([values["r0"], values["v0"], values["a0"] / 2.0, k3, k4, k5])
-        coeffs.flags.writeable = False
-        object.__setattr__(self, "_coeffs", coeffs)
+        for name, values in zip(names, states):
+            object.__setattr__(self, name, _frozen(values))
+        object.__setattr__(self, "duration_s", T)
+        T2, T3, T4, T5 = T * T, T**3, T**4, T**5
+        cols = []
+        for r0_, v0_, a0_, rf_, vf_, af_ in zip(*states):
+            dr = rf_ - (r0_ + v0_ * T + a0_ * T2 / 2.0)
+            dv = vf_ - (v0_ + a0_ * T)
+            da = af_ - a0_
+            k3 = (10.0 * dr - 4.0 * dv * T + da * T2 / 2.0) / T3
+            k4 = (-15.0 * dr + 7.0 * dv * T - da * T2) / T4
+            k5 = (6.0 * dr - 3.0 * dv * T + da * T2 / 2.0) / T5
+            cols.append((r0_, v0_, a0_ / 2.0, k3, k4, k5))
+        c = list(zip(*cols))  # c[i] = (x, y, z) coefficient of t^i in the position
+        # rows[order]: coefficients (x, y, z) of the order-th derivative, highest power first (Horner order).
+        rows = tuple(
+            tuple((f * c[i][0], f * c[i][1], f * c[i][2]) for i, f in _HORNER[order]) for order in range(4)
+        )
+        object.__setattr__(self, "_rows", rows)
 
-    @property
+    @functools.cached_property
     def coefficients(self) -> np.ndarray:
         """Polynomial coefficients of the position, shape (6, 3): row i multiplies ``t**i``."""
-        return self._coeffs
+        return _frozen(self._rows[0][::-1])
+
+    @functools.cached_property
+    def _deriv(self) -> tuple[np.ndarray, ...]:
+        # Coefficient arrays of the derivatives of order 0..3, row i multiplying t^i (vectorised evaluation).
+        return tuple(_frozen(rows[::-1]) for rows in self._rows)
 
     def _eval(self, t: float | Sequence[float] | np.ndarray, order: int) -> np.ndarray:
-        t_arr = np.asarray(t, dtype=float)
         T = self.duration_s
-        tc = np.clip(t_arr, 0.0, T)
-        # Derivative `order` of sum c_i t^i: sum c_i * i!/(i-order)! * t^(i-order), evaluated by Horner.
-        c = self._coeffs
-        out = np.zeros(tc.shape + (3,))
-        tt = tc[..., None]
-        for i in range(5, order - 1, -1):
-            factor = math.factorial(i) / math.factorial(i - order)
-            out = out * tt + factor * c[i]
+        if isinstance(t, (float, int, np.floating, np.integer)):
+            tf = float(t)
+            if 0.0 <= tf <= T:
+                x = y = z = 0.0
+                for cx, cy, cz in self._rows[order]:
+                    x = x * tf + cx
+                    y = y * tf + cy
+                    z = z * tf + cz
+                return np.array([x, y, z])
+        t_arr = np.asarray(t, dtype=float)
+        tc = np.clip(t_arr, 0.0, T)[..., None]
+        d = self._deriv[order]
+        out = np.zeros(t_arr.shape + (3,))
+        for i in range(len(d) - 1, -1, -1):
+            out = out * tc + d[i]
         outside = (t_arr < 0.0) | (t_arr > T)
         if np.any(outside):
             out = np.where(outside[..., None], self._extrapolate(t_arr, order), out)

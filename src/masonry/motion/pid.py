@@ -90,11 +90,16 @@ class PIDGains:
         )
 
 
-def _vec3(name: str, value: Sequence[float] | np.ndarray) -> np.ndarray:
-    arr = np.asarray(value, dtype=float).reshape(-1)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+def _floats3(name: str, value: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
+    items = value.tolist() if isinstance(value, np.ndarray) else value
+    try:
+        x, y, z = items
+        x, y, z = float(x), float(y), float(z)
+    except (TypeError, ValueError):
+        raise InputError(f"PID {name} must be a finite 3-vector, got {value!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
         raise InputError(f"PID {name} must be a finite 3-vector, got {value!r}")
-    return arr
+    return x, y, z
 
 
 class PID:
@@ -105,20 +110,15 @@ class PID:
 
     def __init__(self, gains: PIDGains | None = None) -> None:
         self.gains = gains if gains is not None else PIDGains()
-        axes = (self.gains.x, self.gains.y, self.gains.z, self.gains.yaw)
-        self._kp = np.array([g.kp for g in axes])
-        self._ki = np.array([g.ki for g in axes])
-        self._kd = np.array([g.kd for g in axes])
-        self._limit = np.array([g.output_limit for g in axes])
-        self._i_limit = np.array([g.integral_limit for g in axes])
+        self._axes = (self.gains.x, self.gains.y, self.gains.z, self.gains.yaw)
         self.reset()
 
     def reset(self) -> None:
         """Forget the integral, the previous measurement and the previous time (e.g. after a mode change)."""
-        self._integral = np.zeros(4)  # ki * integral(e), in output units, axes x, y, z, yaw
-        self._rate = np.zeros(4)  # filtered measured rate (m/s, rad/s)
+        self._integral = [0.0, 0.0, 0.0, 0.0]  # ki * integral(e), in output units, axes x, y, z, yaw
+        self._rate = [0.0, 0.0, 0.0, 0.0]  # filtered measured rate (m/s, rad/s)
         self._prev_t_s: float | None = None
-        self._prev_meas: np.ndarray | None = None  # x, y, z, yaw of the previous call
+        self._prev_meas: list[float] | None = None  # x, y, z, yaw of the previous call
         self._yaw_active = False
 
     @property
@@ -149,11 +149,12 @@ class PID:
         Returns:
             The velocity reference (m/s, shape (3,)) and the yaw-rate reference (rad/s).
         """
-        pos = _vec3("position_m", position_m)
-        tgt = _vec3("target_m", target_m)
-        ff = _vec3("velocity_ff_mps", velocity_ff_mps)
+        pos = _floats3("position_m", position_m)
+        tgt = _floats3("target_m", target_m)
+        ff = _floats3("velocity_ff_mps", velocity_ff_mps)
         yaw = float(yaw_rad)
-        if not math.isfinite(yaw) or not math.isfinite(float(now_s)):
+        now = float(now_s)
+        if not (math.isfinite(yaw) and math.isfinite(now)):
             raise InputError(f"PID yaw_rad and now_s must be finite, got {yaw_rad!r}, {now_s!r}")
 
         yaw_active = target_yaw_rad is not None
@@ -161,33 +162,36 @@ class PID:
             self._integral[3] = 0.0
         self._yaw_active = yaw_active
         yaw_error = wrap_angle_rad(float(target_yaw_rad) - yaw) if target_yaw_rad is not None else 0.0
-        error = np.array([*(tgt - pos), yaw_error])
-        meas = np.array([*pos, yaw])
+        error = (tgt[0] - pos[0], tgt[1] - pos[1], tgt[2] - pos[2], yaw_error)
+        meas = [pos[0], pos[1], pos[2], yaw]
 
-        dt = None if self._prev_t_s is None else float(now_s) - self._prev_t_s
+        dt = None if self._prev_t_s is None else now - self._prev_t_s
         if dt is not None and dt > 0.0 and self._prev_meas is not None:
-            delta = meas - self._prev_meas
-            delta[3] = wrap_angle_rad(delta[3])
-            raw_rate = delta / dt
             tau = self.gains.derivative_tau_s
             alpha = 1.0 if tau == 0.0 else dt / (tau + dt)
-            self._rate = self._rate + alpha * (raw_rate - self._rate)
+            for i in range(4):
+                delta = meas[i] - self._prev_meas[i]
+                if i == 3:
+                    delta = wrap_angle_rad(delta)
+                self._rate[i] += alpha * (delta / dt - self._rate[i])
         if dt is None or dt != 0.0:
-            self._prev_t_s = float(now_s)
+            self._prev_t_s = now
             self._prev_meas = meas
 
-        feed = np.array([*ff, 0.0])
-        derivative = -self._kd * self._rate
-        proportional = self._kp * error
-        if dt is not None and dt > 0.0:
-            candidate = np.clip(self._integral + self._ki * error * dt, -self._i_limit, self._i_limit)
-            unsat = feed + proportional + candidate + derivative
-            # Conditional integration: accept the new integral unless the output saturates and the error pushes it
-            # further into saturation (the classic windup situation).
-            winding = (np.abs(unsat) > self._limit) & (np.sign(unsat) == np.sign(error))
-            self._integral = np.where(winding, self._integral, candidate)
-        if not yaw_active:
-            self._integral[3] = 0.0
-        out = np.clip(feed + proportional + self._integral + derivative, -self._limit, self._limit)
-        yaw_rate = float(out[3]) if yaw_active else 0.0
-        return out[:3].copy(), yaw_rate
+        integrate = dt is not None and dt > 0.0
+        out = [0.0, 0.0, 0.0, 0.0]
+        for i, g in enumerate(self._axes):
+            e = error[i]
+            base = (ff[i] if i < 3 else 0.0) + g.kp * e - g.kd * self._rate[i]
+            if integrate and dt is not None:
+                candidate = min(g.integral_limit, max(-g.integral_limit, self._integral[i] + g.ki * e * dt))
+                unsat = base + candidate
+                # Conditional integration: keep the new integral unless the output saturates and the error pushes
+                # it further into saturation (the classic windup situation).
+                winding = abs(unsat) > g.output_limit and unsat * e > 0.0
+                if not winding:
+                    self._integral[i] = candidate
+            if i == 3 and not yaw_active:
+                self._integral[3] = 0.0
+            out[i] = min(g.output_limit, max(-g.output_limit, base + self._integral[i]))
+        return np.array(out[:3]), (out[3] if yaw_active else 0.0)

@@ -46,7 +46,8 @@ def _xyz(name: str, value: Vec3Like) -> tuple[float, float, float]:
     if isinstance(value, np.ndarray):
         value = value.tolist()  # far faster than float() on numpy scalars
     try:
-        x, y, z = (float(c) for c in value)
+        x, y, z = value
+        x, y, z = float(x), float(y), float(z)
     except (TypeError, ValueError):
         raise InputError(f"{name} must be a 3-vector, got {value!r}") from None
     if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
