@@ -559,3 +559,24 @@ def test_duplicate_edges_count_once() -> None:
     assert ids(d.assign()) == ["B0"]
     d.complete("B0")
     assert ids(d.assign()) == ["B1", "B2"]  # one completion released B1's only prerequisite and B2's blocker
+
+
+@pytest.mark.parametrize("policy", ["fifo", "critical-path", "nearest"])
+@pytest.mark.parametrize("weighted", [False, True])
+def test_bundled_case_study_blueprint_dispatches_in_the_papers_order(policy: str, weighted: bool) -> None:
+    from pathlib import Path
+
+    from masonry.blueprint import load_blueprint
+    from masonry.planner import plan as make_plan
+    from masonry.planner.bounds import estimate_durations_s
+
+    bp = load_blueprint(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
+    plan = make_plan(bp)
+    durations = estimate_durations_s(plan, bp.fleet) if weighted else None
+    d = Dispatcher(plan, bp.fleet, policy, durations_s=durations)
+    steps = []
+    while not d.finished:
+        steps.append(ids(d.assign()))
+        assert len(d.in_progress) == 1  # the case study never runs two tasks at once
+        d.complete(next(iter(d.in_progress)))
+    assert steps == [["A0"], ["B0"], ["A1"], ["B1"]]
