@@ -78,7 +78,7 @@ def steady_flight(n: int = 2000) -> None:
         best = min(best, (time.perf_counter() - t0) / n)
     assert uav.state == "transport"
     print(f"steady flight: {1e6 * best:.1f} us per control step (fake flight controller, best of 3 x {n})")
-    import masonry.motion as motion
+    from masonry import motion
 
     pid = motion.PID()
     t0 = time.perf_counter()

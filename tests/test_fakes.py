@@ -230,7 +230,7 @@ def _fake_fc() -> tuple[object, object, object]:
 
 @pytest.mark.parametrize("make", [_fake_fc, _sim_fc], ids=["fake", "sim"])
 def test_flight_controller_contract(make) -> None:
-    fc, clock, advance = make()
+    fc, _, advance = make()
     fc.connect()
     z0 = fc.telemetry().position_m[2]
     assert fc.telemetry().on_ground

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 
 import pytest
-from fsm_rig import HOME, Rig, adhesion_task, brick_task
 
+from fsm_rig import HOME, Rig, adhesion_task, brick_task
 from masonry.fsm.states import ADHESION_STATES, BRICK_STATES, leaf_states
 
 HAPPY_BRICK = [

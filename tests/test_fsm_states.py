@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from fsm_rig import Rig, brick_task
 
+from fsm_rig import Rig, brick_task
 from masonry.fsm import AdhesionUav, BrickUav, UavModel
 from masonry.fsm.states import MACHINES, leaf_states, triggers
 

@@ -229,8 +229,7 @@ class FakeFlightController(_Scripted):
         floor = max(self.floor_z_m, self.ground_z_m)
         if self._pos[2] <= floor:
             self._pos[2] = floor
-            if self._vel[2] < 0.0:
-                self._vel[2] = 0.0
+            self._vel[2] = max(self._vel[2], 0.0)
             if floor <= self.ground_z_m + 1e-9:
                 self._vel[:2] = 0.0  # ground contact: no sliding
         self._yaw = (self._yaw + cmd_yaw_rate * dt_s + math.pi) % (2.0 * math.pi) - math.pi
@@ -372,9 +371,13 @@ class FakeGripper(_Scripted):
 
     def is_attached(self) -> bool:
         self._tick()
-        if self.magnet_on and not self.attached and self.attempts > self.failures:
-            if self.contact is None or self.contact():
-                self.attached = True
+        if (
+            self.magnet_on
+            and not self.attached
+            and self.attempts > self.failures
+            and (self.contact is None or self.contact())
+        ):
+            self.attached = True
         return self.attached
 
 
@@ -429,7 +432,7 @@ class FakeCamera(_Scripted):
         fc: FakeFlightController,
         bricks: Iterable[FakeBrick] = (),
         *,
-        markers: MarkerSpec = MarkerSpec(),
+        markers: MarkerSpec | None = None,
         intrinsics: CameraIntrinsics = DEFAULT_INTRINSICS,
         T_body_cam: np.ndarray | None = None,
         noise_sigma_m: float = 0.0,
@@ -443,7 +446,7 @@ class FakeCamera(_Scripted):
         self._init_script()
         self.fc = fc
         self.bricks = list(bricks)
-        self.markers = markers
+        self.markers = markers if markers is not None else MarkerSpec()
         self._intrinsics = intrinsics
         self._T_body_cam = camera_mount(DEFAULT_AIRFRAME.camera_offset_m) if T_body_cam is None else T_body_cam
         self.noise_sigma_m = float(noise_sigma_m)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
@@ -23,7 +23,7 @@ class UavConfig:
     role: Role
     home_m: Vec3
     cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
-    markers: MarkerSpec = MarkerSpec()
+    markers: MarkerSpec = field(default_factory=MarkerSpec)
     airframe: Airframe = DEFAULT_AIRFRAME
     # Flight
     control_period_s: float = 0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)

@@ -35,7 +35,16 @@ from masonry.fsm.states import (
 from masonry.motion import PID, MinJerk
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
-from masonry.ports import Camera, Clock, FlightController, Gripper, MissionLink, Sprayer, TaskResult, Telemetry
+from masonry.ports import (
+    Camera,
+    Clock,
+    FlightController,
+    Gripper,
+    MissionLink,
+    Sprayer,
+    TaskResult,
+    Telemetry,
+)
 
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
@@ -236,9 +245,6 @@ class UavModel:
         self.results.append(result)
         self.link.report_result(result)
 
-    def _accepts(self, task: Task) -> bool:
-        raise NotImplementedError
-
     def _take(self, task: Task | None) -> Task | None:
         """Vet a task from the link: one of the wrong kind is reported failed at once."""
         if task is None:
@@ -375,6 +381,8 @@ class UavModel:
 
     def _track(self, tel: Telemetry) -> None:
         now = self._now_s
+        ref: Any
+        ff: Any
         if self._traj is not None:
             t = min(max(now - self._traj_t0_s, 0.0), self._traj.duration_s)
             ref = [((((c[5] * t + c[4]) * t + c[3]) * t + c[2]) * t + c[1]) * t + c[0] for c in self._coef]
@@ -556,7 +564,8 @@ class BrickUav(UavModel):
         self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
         self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
         self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
-        self._eff = tuple(float(x) for x in config.airframe.effector_offset_m)
+        o = config.airframe.effector_offset_m
+        self._eff: tuple[float, float, float] = (float(o[0]), float(o[1]), float(o[2]))
         self._begin_counters()
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS)
 
@@ -572,7 +581,6 @@ class BrickUav(UavModel):
         self._hover_z = 0.0
         self._deadline_s = 0.0
         self._carry_yaw_rad = 0.0
-        self._grasp_effector = np.zeros(3)
         self._grasp_yaw_rad = 0.0
         self._place_effector_target = np.zeros(3)
         self._release_error_m: float | None = None
@@ -749,7 +757,6 @@ class BrickUav(UavModel):
         # actuator board report it), then climb: the verification happens at cruise altitude.
         self.gripper.is_attached()
         if self._now_s - self._entered_s >= self.config.grasp_dwell_s:
-            self._grasp_effector = self._tool_position(tel, self._eff)
             self._grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
 
@@ -900,7 +907,8 @@ class AdhesionUav(UavModel):
         clock: Clock,
     ) -> None:
         self.sprayer = sprayer
-        self._nozzle = tuple(float(x) for x in config.airframe.nozzle_offset_m)
+        n = config.airframe.nozzle_offset_m
+        self._nozzle: tuple[float, float, float] = (float(n[0]), float(n[1]), float(n[2]))
         self._stable_since_s: float | None = None
         self._yaw_rad = 0.0
         super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS)
