@@ -194,6 +194,10 @@ class UavModel:
             self._link_down_since_s = self._now_s
         state = self.state
         if state == "idle":
+            # Landed with a silent flight controller: out of service, so that tasks go to other UAVs.
+            if self._now_s - self._link_down_since_s > self.config.link_lost_timeout_s:
+                self.halt_reason = "flight controller link lost"
+                self.retire(reason=self.halt_reason)
             return
         if state == "emergency":
             if tel.on_ground or self._now_s - self._link_down_since_s > self.config.link_lost_timeout_s:
