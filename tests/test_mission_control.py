@@ -211,3 +211,61 @@ def test_lower_bound_is_chain_or_role_work():
     d = {"A0": 10.0, "B1": 20.0, "B2": 25.0}
     assert lower_bound_s(plan, d, {"brick": 2, "adhesion": 1}) == pytest.approx(30.0)  # chain A0 -> B1
     assert lower_bound_s(plan, d, {"brick": 1, "adhesion": 1}) == pytest.approx(45.0)  # one brick UAV
+
+
+class HaltingUav(ScriptedUav):
+    """Goes out of service (state ``halted``) after its first task and then refuses every task, like BrickUav."""
+
+    def step(self, now_s):
+        if self.state == "halted":
+            task = self.link.poll_task()
+            if task is not None:
+                self.link.report_result(TaskResult(task.id, "failed", 0.0, reason="out of service: battery low"))
+            return
+        was = self.task
+        super().step(now_s)
+        if was is not None and self.task is None:
+            self.state = "halted"
+
+
+def test_out_of_service_uav_is_retired_without_burning_attempts():
+    plan = Plan(tuple(BrickTask(f"B{i}", i, False, (i * 3.0, 0, 0.1), 0.0, (5, 0, 0.05)) for i in range(4)), (), ())
+    fleet = fleet_of(2, 0)
+    bus = InprocBus()
+    mc = MissionControl(plan, fleet, bus.endpoint(MISSION_CONTROL), policy="fifo")
+    hs = {}
+    for u in fleet:
+        h = UavHandler(u.name, bus.endpoint(u.name))
+        cls = HaltingUav if u.name == "brick-1" else ScriptedUav
+        h.attach(cls(h, {t.id: 5.0 for t in plan.tasks}, random.Random(0)))
+        hs[u.name] = h
+    now = 0.0
+    while mc.ended_at_s is None and now < 200:
+        for h in hs.values():
+            h.step(now)
+        mc.step(now)
+        now += 0.25
+    assert mc.finished
+    assert mc.uavs["brick-1"].status == "out of service"
+    assert not mc.dispatcher.stuck and max(mc.dispatcher.attempts.values()) == 1
+    assert [a.uav for a in mc.history if a.status == "done"].count("brick-1") == 1
+
+
+def test_battery_reserve_holds_the_task_until_the_pack_is_swapped():
+    plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
+    bus = InprocBus()
+    mc = MissionControl(plan, fleet_of(1, 0), bus.endpoint(MISSION_CONTROL))
+    pack = {"charge": 0.3, "swaps_at": 4.0}
+
+    def swap():
+        return h.now_s >= pack["swaps_at"] and pack.update(charge=1.0) is None
+
+    h = UavHandler("brick-1", bus.endpoint("brick-1"), battery=lambda: pack["charge"], swap_battery=swap)
+    h.attach(ScriptedUav(h, {"B0": 2.0}, random.Random(0)))
+    now = 0.0
+    while mc.ended_at_s is None and now < 50:
+        h.step(now)
+        mc.step(now)
+        now += 0.5
+    assert mc.finished and h.battery_swaps == 1
+    assert mc.history[0].start_s < 4.0 <= h.executions[0].start_s  # assigned at once, flown after the swap

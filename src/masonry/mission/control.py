@@ -38,6 +38,9 @@ log = logging.getLogger(__name__)
 Vec3 = tuple[float, float, float]
 AttemptStatus = Literal["running", "done", "failed"]
 
+#: The state a UAV's machine reports when it is out of service for the rest of the mission.
+OUT_OF_SERVICE_STATE = "halted"
+
 
 @dataclass
 class Attempt:
@@ -65,6 +68,7 @@ class UavLink:
     lost: bool = False
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
+    status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -177,6 +181,7 @@ class MissionControl:
             link = self.uavs.get(name)
             if link is not None and not link.lost:
                 link.lost = True
+                link.status = "lost"
                 self.dispatcher.remove_uav(name)
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
@@ -249,6 +254,20 @@ class MissionControl:
         if link.lost:
             return  # a UAV declared lost stays lost; its task has been given to another
         link.last_heard_s = now_s
+        if isinstance(msg, Result):
+            if msg.position_m is not None:
+                link.moved_to(msg.position_m)
+            if msg.state == OUT_OF_SERVICE_STATE and msg.result.status == "failed":
+                # the UAV refused or abandoned the task because it is out of service: not the task's fault
+                self._lose(msg.sender, now_s, status="out of service")
+                return
+            self._on_result(msg, now_s)
+            if msg.state == OUT_OF_SERVICE_STATE:
+                self._lose(msg.sender, now_s, status="out of service")
+            return
+        if msg.state == OUT_OF_SERVICE_STATE:
+            self._lose(msg.sender, now_s, status="out of service")
+            return
         if isinstance(msg, Heartbeat):
             link.state = msg.state
             if msg.position_m is not None:
@@ -258,10 +277,6 @@ class MissionControl:
             link.state = msg.state
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
-        elif isinstance(msg, Result):
-            if msg.position_m is not None:
-                link.moved_to(msg.position_m)
-            self._on_result(msg, now_s)
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
@@ -298,17 +313,19 @@ class MissionControl:
                 log.warning("UAV %s silent for %.1f s: lost", name, now_s - link.last_heard_s)
                 self._lose(name, now_s)
 
-    def _lose(self, name: str, now_s: float) -> None:
+    def _lose(self, name: str, now_s: float, status: str = "lost") -> None:
+        """Take a UAV out of the mission (silent, or out of service); its task goes back to the pool."""
         link = self.uavs[name]
         link.lost = True
         link.lost_at_s = now_s
+        link.status = status
         released = self.dispatcher.remove_uav(name)
         if released is not None:
             att = self._running.pop(released, None)
             if att is not None:
                 att.end_s = now_s
                 att.status = "failed"
-                att.reason = "uav lost"
+                att.reason = f"uav {status}"
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
         self._dirty = True

@@ -6,6 +6,10 @@ messages. ``step(now_s)`` reads the transport, sends the UAV's heartbeat, and ti
 its own trace of what the UAV actually executed (``executions``), from which the simulator measures
 conflict and dependency violations independently of mission control's bookkeeping.
 
+With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the handler keeps a battery reserve:
+below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
+the pack is swapped (mission control sees the task in progress meanwhile).
+
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
 the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
 while mission control is down is lost: a resumed mission control flies that task again (docs/mission.md).
@@ -73,7 +77,14 @@ class UavHandler:
         position: Callable[[], Vec3] | None = None,
         heartbeat_period_s: float = 1.0,
         heartbeat_timeout_s: float = 5.0,
+        battery: Callable[[], float] | None = None,
+        swap_battery: Callable[[], bool] | None = None,
+        reserve_fraction: float = 0.4,
     ) -> None:
+        self._battery = battery
+        self._swap_battery = swap_battery
+        self.reserve_fraction = reserve_fraction
+        self.battery_swaps = 0
         self.name = name
         self.transport = transport
         self._position = position
@@ -118,6 +129,12 @@ class UavHandler:
     def poll_task(self) -> Task | None:
         if self._current is not None or not self._queue:
             return None
+        if self._battery is not None and self._battery() < self.reserve_fraction:
+            # Battery reserve: the task waits while the machine, given nothing, flies home and lands; then
+            # the ground crew (``swap_battery``, True once done) swaps the pack and the task starts.
+            if self._swap_battery is None or not self._swap_battery():
+                return None
+            self.battery_swaps += 1
         task, attempt = self._queue.popleft()
         self._current = Execution(task.id, self.name, attempt, self.now_s)
         self.executions.append(self._current)
@@ -132,7 +149,8 @@ class UavHandler:
             cur.end_s = self.now_s
             cur.status = result.status
             self._current = None
-        self._send(Result(self.name, result, self.now_s, self._where()))
+        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        self._send(Result(self.name, result, self.now_s, self._where(), state=state))
 
     # -- the tick --------------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:

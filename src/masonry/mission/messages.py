@@ -72,6 +72,7 @@ class Result:
     result: TaskResult
     time_s: float
     position_m: Vec3 | None = None
+    state: str = ""  # the UAV's state after the result ("halted": out of service)
 
 
 @dataclass(frozen=True)
@@ -140,6 +141,7 @@ def encode(message: Message) -> bytes:
         body.update(
             time_s=message.time_s,
             position_m=_vec(message.position_m),
+            state=message.state,
             result={
                 "task_id": r.task_id,
                 "status": r.status,
@@ -304,7 +306,8 @@ def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
             placement_error_m=r.num("placement_error_m", optional=True),
             coverage=r.num("coverage", optional=True),
         )
-        return Result(sender, result, f.num("time_s"), f.vec("position_m", optional=True))
+        return Result(sender, result, f.num("time_s"), f.vec("position_m", optional=True),
+                      state=str(data.get("state") or ""))
     if kind == "mission-end":
         return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
     raise ProtocolError(f"unknown message type {kind!r}")

@@ -23,7 +23,7 @@ class UavReport:
     role: str
     busy_s: float
     distance_m: float
-    status: str  # "ok", "lost" (declared lost by mission control) or "failed" (never came online)
+    status: str  # "ok", "lost" (silent past the heartbeat timeout) or "out of service" (it reported so)
 
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "role": self.role, "busy_s": _r(self.busy_s, 2),
@@ -298,7 +298,7 @@ def control_report(
     uavs = tuple(
         UavReport(spec.name, spec.role, busy.get(spec.name, 0.0),
                   float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
-                  "lost" if mc.uavs[spec.name].lost else "ok")
+                  mc.uavs[spec.name].status)
         for spec in mc.fleet
     )
     if placement_error_m is None:

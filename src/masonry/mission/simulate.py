@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
-from masonry.errors import InputError, JournalError
+from masonry.errors import InputError, JournalError, MasonryError
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
@@ -29,6 +29,8 @@ from masonry.planner.tasks import BrickTask, Plan
 
 POLICIES = ("fifo", "critical-path", "nearest")
 
+#: How long the ground crew takes to swap a landed UAV's battery (the handler keeps a reserve, see UavHandler).
+BATTERY_SWAP_S = 60.0
 #: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
 LANDING_GRACE_S = 180.0
 
@@ -100,6 +102,32 @@ def priority_durations_s(durations_s: Mapping[str, float], quantum_s: float = PR
     UAV, go first.
     """
     return {k: max(quantum_s, round(v / quantum_s) * quantum_s) for k, v in durations_s.items()}
+
+
+class _GroundCrew:
+    """Swaps a landed, disarmed UAV's battery, taking ``BATTERY_SWAP_S``; True once the fresh pack is in."""
+
+    def __init__(self, vehicle: Any, clock: Any) -> None:
+        self.vehicle = vehicle
+        self.clock = clock
+        self._since_s: float | None = None
+
+    def __call__(self) -> bool:
+        v = self.vehicle
+        if not (v.on_ground and not v.armed):
+            self._since_s = None
+            return False
+        now = self.clock.now_s()
+        if self._since_s is None:
+            self._since_s = now
+        if now - self._since_s < BATTERY_SWAP_S:
+            return False
+        try:
+            v.swap_battery()
+        except MasonryError:
+            return False
+        self._since_s = None
+        return True
 
 
 def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any) -> Any:
@@ -259,7 +287,9 @@ def _run(
         sim_uavs[spec.name] = sim_uav
         fc = sim_uav.fc
         h = UavHandler(spec.name, bus.endpoint(spec.name), position=lambda fc=fc: fc.telemetry().position_m,
-                       heartbeat_timeout_s=heartbeat_timeout_s)
+                       heartbeat_timeout_s=heartbeat_timeout_s,
+                       battery=lambda v=sim_uav.vehicle: float(v.battery_fraction),
+                       swap_battery=_GroundCrew(sim_uav.vehicle, world.clock))
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock))
         handlers[spec.name] = h
 
