@@ -222,7 +222,7 @@ class UavModel:
     def _reject_tasks(self) -> None:
         task = self.link.poll_task()
         if task is not None:
-            self.link.report_result(
+            self._report(
                 TaskResult(task.id, "failed", 0.0, reason=f"{self.config.name} is out of service: {self.halt_reason}")
             )
 
