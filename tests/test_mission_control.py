@@ -152,14 +152,14 @@ def test_lost_uav_releases_its_task_to_another():
 def test_all_uavs_of_a_role_lost_blocks_the_mission():
     plan = Plan((AdhesionTask("A0", 0, 1, (0, 0, 0.1), (0.3, 0, 0.1), 0.3),
                  BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, (5, 0, 0.05))), (("B1", "A0"),), ())
-    mc, handlers, _ = run_mission(plan, fleet_of(1, 1), lose={"glue-1": 1.0})
+    mc, _handlers, _ = run_mission(plan, fleet_of(1, 1), lose={"glue-1": 1.0})
     assert mc.blocked and not mc.finished
     assert set(mc.dispatcher.remaining) == {"A0", "B1"}
 
 
 def test_stuck_task_after_max_attempts():
     plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
-    mc, handlers, _ = run_mission(plan, fleet_of(1, 0), fail_p=1.0)
+    mc, _handlers, _ = run_mission(plan, fleet_of(1, 0), fail_p=1.0)
     assert mc.blocked and set(mc.dispatcher.stuck) == {"B0"}
     assert [a.attempt for a in mc.history] == [1, 2, 3]
     assert all(a.status == "failed" for a in mc.history)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 import time
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -18,7 +17,7 @@ def mission_control(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."),
     listen: list[str] = typer.Option(["tcp/0.0.0.0:7447"], "--listen", help="Zenoh endpoint(s) to listen on."),
     connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) of peers to connect to."),
-    journal: Optional[Path] = typer.Option(None, "--journal", help="SQLite journal of the mission."),
+    journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission name (Zenoh key prefix)."),
@@ -27,10 +26,10 @@ def mission_control(
     heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help="Wall seconds of silence before a UAV is lost."),
     startup_timeout: float = typer.Option(60.0, "--startup-timeout",
                                           help="Wall seconds to wait for the whole fleet before starting without the rest."),
-    max_time: Optional[float] = typer.Option(None, "--max-time", help="Give up after this many mission seconds."),
+    max_time: float | None = typer.Option(None, "--max-time", help="Give up after this many mission seconds."),
     tick: float = typer.Option(0.05, "--tick", help="Control period, seconds."),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Write the JSON report to this file."),
+    report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
@@ -40,8 +39,8 @@ def mission_control(
     from masonry.mission.messages import MISSION_CONTROL
     from masonry.mission.report import control_report
     from masonry.mission.simulate import POLICIES, priority_durations_s
-    from masonry.planner import estimate_durations_s
     from masonry.mission.zenoh_transport import ZenohTransport
+    from masonry.planner import estimate_durations_s
     from masonry.planner import plan as make_plan
 
     if fmt not in ("text", "json"):

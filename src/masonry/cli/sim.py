@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -15,20 +15,20 @@ from masonry.errors import InputError
 @command("sim")
 def sim(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON)."),
-    brick_uavs: Optional[int] = typer.Option(None, "--brick-uavs", help="Number of brick UAVs (overrides the fleet)."),
-    adhesion_uavs: Optional[int] = typer.Option(None, "--adhesion-uavs",
+    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help="Number of brick UAVs (overrides the fleet)."),
+    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs",
                                                 help="Number of adhesion UAVs (overrides the fleet)."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
     fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
                                     "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R."),
-    journal: Optional[Path] = typer.Option(None, "--journal", help="SQLite journal of the mission."),
+    journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Write the JSON report to this file."),
-    gantt: Optional[Path] = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
-    plot3d: Optional[Path] = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
+    report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
+    gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
+    plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     dt: float = typer.Option(0.05, "--dt", help="Simulation tick, seconds."),
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).

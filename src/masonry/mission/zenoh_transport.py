@@ -14,6 +14,8 @@ from collections import deque
 from collections.abc import Sequence
 from typing import Any
 
+from typing_extensions import Self
+
 from masonry.errors import DeviceNotFound, MissionError
 
 DEFAULT_PORT = 7447
@@ -112,7 +114,7 @@ class ZenohTransport:
             self._session.close()
             self._session = None
 
-    def __enter__(self) -> ZenohTransport:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 
