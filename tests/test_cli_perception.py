@@ -280,3 +280,21 @@ def test_calibrate_errors(tmp_path: Path) -> None:
     junk.write_text("nope")
     code, err = error_of(["calibrate", str(junk), "-o", str(tmp_path / "c.yaml")])
     assert code == 2 and "junk.jpg: cannot read the image" in err
+
+
+def test_missing_camera_is_one_clear_line(tmp_path: Path) -> None:
+    code, err = error_of(["estimate", "--camera", "57", "--intrinsics", K_ARG])
+    assert code == 1 and err == "error: camera 57: cannot open it (is it connected and free?)"
+    paths, _ = write_frames(tmp_path, 1)
+    code, err = error_of(["estimate", paths[0], "--camera", "0", "--intrinsics", K_ARG])
+    assert code == 2 and "either INPUT files or --camera INDEX" in err
+
+
+def test_video_must_be_alone_and_readable(tmp_path: Path) -> None:
+    paths, _ = write_frames(tmp_path, 1)
+    fake = tmp_path / "clip.mp4"
+    fake.write_bytes(b"\x00" * 64)
+    code, err = error_of(["estimate", str(fake), "--intrinsics", K_ARG])
+    assert code == 2 and "clip.mp4" in err and len(err.splitlines()) == 1
+    code, err = error_of(["estimate", str(fake), paths[0], "--intrinsics", K_ARG])
+    assert code == 2 and "a video must be the only INPUT" in err

@@ -74,7 +74,7 @@ def _frames(
     if camera is not None:
         if inputs:
             raise InputError("give either INPUT files or --camera INDEX, not both")
-        cap = cv2.VideoCapture(camera)
+        cap = _quietly(lambda: cv2.VideoCapture(camera))
         if not cap.isOpened():
             raise DeviceNotFound(f"camera {camera}: cannot open it (is it connected and free?)")
         yield from _capture_frames(cap, max_frames)
@@ -88,7 +88,7 @@ def _frames(
     if videos:
         if len(inputs) > 1:
             raise InputError(f"{videos[0]}: a video must be the only INPUT")
-        cap = cv2.VideoCapture(str(videos[0]))
+        cap = _quietly(lambda: cv2.VideoCapture(str(videos[0])))
         if not cap.isOpened():
             raise InputError(f"{videos[0]}: cannot open as a video (unsupported codec or not a video)")
         first = True
@@ -105,6 +105,18 @@ def _frames(
         if still is None:
             raise InputError(f"{p}: cannot read the image (not an image file, or an unsupported format)")
         yield str(p), still
+
+
+def _quietly(open_capture: Any) -> Any:
+    """Run ``open_capture`` with OpenCV's warnings silenced: a failure becomes our one-line error instead."""
+    import cv2
+
+    previous = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    try:
+        return open_capture()
+    finally:
+        cv2.utils.logging.setLogLevel(previous)
 
 
 def _capture_frames(cap: Any, max_frames: int | None) -> Iterator[tuple[int, np.ndarray]]:
