@@ -406,3 +406,10 @@ def test_window_errors() -> None:
         PoseWindow(sigma_tol_m=0.0)
     with pytest.raises(InputError, match="center_m"):
         PoseWindow().add((0.0, float("nan"), 0.0), 0.0)
+
+
+def test_single_tag_with_a_broken_rotation_raises() -> None:
+    with pytest.raises(PerceptionError, match="marker 4 has an invalid rotation"):
+        estimate_brick_pose(TagPose(4, np.zeros(3), np.zeros((3, 3))), None)
+    with pytest.raises(PerceptionError, match="invalid rotation"):
+        estimate_brick_pose(None, TagPose(5, np.zeros(3), np.eye(2)))

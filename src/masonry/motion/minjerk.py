@@ -18,10 +18,8 @@ docs/estimation.md for the derivation and ``paper_coefficients`` for both forms.
 
 from __future__ import annotations
 
-import functools
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -45,7 +43,7 @@ def _floats3(name: str, value: ArrayLike3) -> tuple[float, float, float]:
     return x, y, z
 
 
-def _frozen(values: Sequence[float] | Sequence[Sequence[float]]) -> np.ndarray:
+def _frozen(values: Sequence[float] | Sequence[Sequence[float]] | np.ndarray) -> np.ndarray:
     arr = np.array(values, dtype=float)
     arr.flags.writeable = False
     return arr
@@ -58,26 +56,24 @@ _HORNER = tuple(
 )
 
 
-@dataclass(frozen=True, eq=False)
 class MinJerk:
     """Minimum-jerk quintic from ``(r0, v0, a0)`` to ``(rf, vf, af)`` in ``duration_s`` (3-D, SI units).
 
     Evaluation methods take ``t`` in seconds since the start: a scalar gives shape ``(3,)``, an array of shape
     ``S`` gives ``S + (3,)``. Outside ``[0, duration_s]`` the trajectory continues the boundary state at constant
     acceleration (zero jerk), so position, velocity and acceleration stay consistent and bounded in time.
+    Immutable; the boundary states are exposed as read-only arrays ``r0 v0 a0 rf vf af``.
 
     Raises:
         PlanningError: a state is not a finite 3-vector or ``duration_s`` is not a positive finite number.
     """
 
-    r0: np.ndarray
-    v0: np.ndarray
-    a0: np.ndarray
-    rf: np.ndarray
-    vf: np.ndarray
-    af: np.ndarray
+    __slots__ = ("_arrays", "_rows", "_states", "duration_s")
+
     duration_s: float
-    _rows: tuple[tuple[tuple[float, float, float], ...], ...] = field(init=False, repr=False)
+    _states: tuple[tuple[float, float, float], ...]
+    _rows: tuple[tuple[tuple[float, float, float], ...], ...]
+    _arrays: dict[str, np.ndarray]
 
     def __init__(
         self,
@@ -89,15 +85,18 @@ class MinJerk:
         af: ArrayLike3,
         duration_s: float,
     ) -> None:
-        # Plain floats: a trajectory is re-planned at every control tick, so construction must be cheap.
-        names = ("r0", "v0", "a0", "rf", "vf", "af")
-        states = [_floats3(name, v) for name, v in zip(names, (r0, v0, a0, rf, vf, af))]
+        # Plain floats throughout: a trajectory is re-planned at every control tick, so construction must be cheap.
+        states = (
+            _floats3("r0", r0),
+            _floats3("v0", v0),
+            _floats3("a0", a0),
+            _floats3("rf", rf),
+            _floats3("vf", vf),
+            _floats3("af", af),
+        )
         T = float(duration_s)
         if not (math.isfinite(T) and T > 0.0):
             raise PlanningError(f"min-jerk duration_s must be positive and finite, got {duration_s!r}")
-        for name, values in zip(names, states):
-            object.__setattr__(self, name, _frozen(values))
-        object.__setattr__(self, "duration_s", T)
         T2, T3, T4, T5 = T * T, T**3, T**4, T**5
         cols = []
         for r0_, v0_, a0_, rf_, vf_, af_ in zip(*states):
@@ -113,17 +112,62 @@ class MinJerk:
         rows = tuple(
             tuple((f * c[i][0], f * c[i][1], f * c[i][2]) for i, f in _HORNER[order]) for order in range(4)
         )
+        object.__setattr__(self, "duration_s", T)
+        object.__setattr__(self, "_states", states)
         object.__setattr__(self, "_rows", rows)
+        object.__setattr__(self, "_arrays", {})
 
-    @functools.cached_property
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"MinJerk is immutable: cannot set {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"MinJerk is immutable: cannot delete {name!r}")
+
+    def _array(self, key: str, build: Callable[[], np.ndarray]) -> np.ndarray:
+        arr = self._arrays.get(key)
+        if arr is None:
+            arr = _frozen(build())
+            self._arrays[key] = arr
+        return arr
+
+    @property
+    def r0(self) -> np.ndarray:
+        """Start position (m)."""
+        return self._array("r0", lambda: np.array(self._states[0]))
+
+    @property
+    def v0(self) -> np.ndarray:
+        """Start velocity (m/s)."""
+        return self._array("v0", lambda: np.array(self._states[1]))
+
+    @property
+    def a0(self) -> np.ndarray:
+        """Start acceleration (m/s^2)."""
+        return self._array("a0", lambda: np.array(self._states[2]))
+
+    @property
+    def rf(self) -> np.ndarray:
+        """Target position (m)."""
+        return self._array("rf", lambda: np.array(self._states[3]))
+
+    @property
+    def vf(self) -> np.ndarray:
+        """Target velocity (m/s)."""
+        return self._array("vf", lambda: np.array(self._states[4]))
+
+    @property
+    def af(self) -> np.ndarray:
+        """Target acceleration (m/s^2)."""
+        return self._array("af", lambda: np.array(self._states[5]))
+
+    @property
     def coefficients(self) -> np.ndarray:
         """Polynomial coefficients of the position, shape (6, 3): row i multiplies ``t**i``."""
-        return _frozen(self._rows[0][::-1])
+        return self._array("c", lambda: np.array(self._rows[0][::-1]))
 
-    @functools.cached_property
-    def _deriv(self) -> tuple[np.ndarray, ...]:
-        # Coefficient arrays of the derivatives of order 0..3, row i multiplying t^i (vectorised evaluation).
-        return tuple(_frozen(rows[::-1]) for rows in self._rows)
+    def _deriv(self, order: int) -> np.ndarray:
+        # Coefficients of the order-th derivative, row i multiplying t^i (vectorised evaluation).
+        return self._array(f"d{order}", lambda: np.array(self._rows[order][::-1]))
 
     def _eval(self, t: float | Sequence[float] | np.ndarray, order: int) -> np.ndarray:
         T = self.duration_s
@@ -138,7 +182,7 @@ class MinJerk:
                 return np.array([x, y, z])
         t_arr = np.asarray(t, dtype=float)
         tc = np.clip(t_arr, 0.0, T)[..., None]
-        d = self._deriv[order]
+        d = self._deriv(order)
         out = np.zeros(t_arr.shape + (3,))
         for i in range(len(d) - 1, -1, -1):
             out = out * tc + d[i]
@@ -213,7 +257,8 @@ class MinJerk:
         t_go = float(t_go_s)
         if math.isnan(t_go):
             raise PlanningError("min-jerk t_go_s is NaN")
-        return MinJerk(r, v, a, self.rf, self.vf, self.af, max(t_go, min_t_go_s))
+        _, _, _, rf, vf, af = self._states
+        return MinJerk(r, v, a, rf, vf, af, max(t_go, min_t_go_s))
 
     def __repr__(self) -> str:
         return (

@@ -330,15 +330,19 @@ def estimate_brick_pose(
         yaw = yaw_about_rad(p1_hat - p2_hat, cfg.up)
         return BrickEstimate(ids[0] // 2, center, yaw, (ids[0], ids[1]))
     tag = tags[0]
-    position = np.array(_xyz("tag position_m", tag.position_m))
-    x_axis = np.asarray(tag.R_cam_marker, dtype=float)[:, 0]
-    norm = float(np.linalg.norm(x_axis))
+    px, py, pz = _xyz("tag position_m", tag.position_m)
+    try:
+        rotation = np.asarray(tag.R_cam_marker, dtype=float)
+        ax, ay, az = (float(v) for v in rotation[:, 0].tolist())
+    except (TypeError, ValueError, IndexError):
+        raise PerceptionError(f"marker {tag.marker_id} has an invalid rotation") from None
+    norm = math.sqrt(ax * ax + ay * ay + az * az)
     if not (math.isfinite(norm) and norm > 0.0):
         raise PerceptionError(f"marker {tag.marker_id} has an invalid rotation")
-    x_axis = x_axis / norm
-    sign = -1.0 if tag.marker_id % 2 == 0 else 1.0  # marker 2k sits at +spacing/2, so the centre is behind it
-    center = position + sign * (cfg.spacing_m / 2.0) * x_axis
-    return BrickEstimate(tag.marker_id // 2, center, yaw_about_rad(x_axis, cfg.up), (tag.marker_id,))
+    # Marker 2k sits at +spacing/2 along the brick's +x, so the centre is behind it; marker 2k+1 the other way.
+    offset = (-1.0 if tag.marker_id % 2 == 0 else 1.0) * cfg.spacing_m / 2.0 / norm
+    center = np.array([px + offset * ax, py + offset * ay, pz + offset * az])
+    return BrickEstimate(tag.marker_id // 2, center, yaw_about_rad((ax, ay, az), cfg.up), (tag.marker_id,))
 
 
 class PoseWindow:
