@@ -322,3 +322,16 @@ def test_any_brick_pose_is_placed_on_target(pickup_yaw, target_yaw, offset, targ
     # The UAV grasped the brick aligned with it: at release the UAV's yaw is the brick's target yaw.
     error = math.remainder(seen["yaw"] - target_yaw, 2 * math.pi)  # type: ignore[operator]
     assert abs(error) <= 0.08
+
+
+def test_the_notebook_example_in_the_package_docstring_runs() -> None:
+    import textwrap
+
+    import masonry.fsm
+
+    doc = masonry.fsm.__doc__ or ""
+    code = textwrap.dedent(doc.split("::", 1)[1])
+    namespace: dict[str, object] = {}
+    exec(compile(code, "masonry.fsm docstring", "exec"), namespace)  # noqa: S102 (our own docstring)
+    uav = namespace["uav"]
+    assert uav.trace[-1][1] == "idle" and namespace["link"].results[0].status == "done"  # type: ignore[attr-defined]
