@@ -379,6 +379,17 @@ def test_battery_fault_drains_faster() -> None:
     assert levels[0.01] < levels[None] - 0.08
 
 
+def test_an_empty_battery_in_the_air_is_a_uav_failure() -> None:
+    w = world(seed=1, faults=Faults(battery_drain_per_s=0.2))
+    uav = w.uavs["brick-1"]
+    take_off(w, uav)  # ~2 s of climbing: 40 % of the pack
+    uav.vehicle.battery_fraction = 0.051  # just above the LAND threshold, 1 m up
+    hover(w, uav, 3.0)
+    assert uav.failed and not uav.fc.telemetry().link_ok
+    w.run(2.0)
+    assert uav.vehicle.on_ground
+
+
 def test_battery_swap_only_on_the_ground() -> None:
     w = world(seed=1, faults=Faults(battery_drain_per_s=0.01))
     uav = w.uavs["brick-1"]

@@ -61,7 +61,7 @@ class WorldConfig:
     cell_m: float = 0.5  # spatial hash cell
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, repr=False)
 class SimUav:
     """One UAV in a world: its autopilot model, its tool state and its ports.
 
@@ -88,6 +88,12 @@ class SimUav:
     _stale: Telemetry | None = None
     _path: list[tuple[float, float, float, float]] = field(default_factory=list)
     _next_sample_s: float = -math.inf
+
+    def __repr__(self) -> str:
+        return (
+            f"SimUav(name={self.name!r}, role={self.role!r}, position_m={self.position_m!r}, "
+            f"failed={self.failed}, link_ok={self.link_ok}, carried_brick={self.carried_brick})"
+        )
 
     def __post_init__(self) -> None:
         self.fc = SimFlightController(self)
@@ -193,6 +199,12 @@ class World:
         self._carriers: list[SimUav] = []
         self._lay_out_bricks()
 
+    def __repr__(self) -> str:
+        return (
+            f"World(t={self.clock.now_s():.2f} s, bricks={len(self.field)}, uavs={list(self.uavs)}, "
+            f"seed={self.seed}, camera={self.camera_mode!r})"
+        )
+
     # ---------------------------------------------------------------- layout
     def _lay_out_bricks(self) -> None:
         cfg = self.config
@@ -269,6 +281,8 @@ class World:
                 vehicle.step(dt_s)  # parked: nothing moves
             else:
                 vehicle.step(dt_s)
+                if vehicle.failed and not uav.failed:
+                    self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
                 self._contact(uav)
                 if uav.role == "brick":
                     self._grip(uav)
@@ -296,7 +310,8 @@ class World:
             self.step(dt_s)
 
     def _fail(self, uav: SimUav) -> None:
-        uav._stale = uav.vehicle.telemetry()
+        if uav._stale is None or uav.link_ok:
+            uav._stale = uav.vehicle.telemetry()
         uav.failed = True
         uav.link_ok = False
         uav.vehicle.fail()
