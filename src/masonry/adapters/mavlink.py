@@ -228,6 +228,7 @@ class LinkClock:
         self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
         self._last: tuple[float, float] | None = None
         self._returned = -math.inf
+        self._created = time.monotonic()
 
     def observe(self, boot_s: float, monotonic_s: float) -> None:
         with self._lock:
@@ -252,12 +253,17 @@ class LinkClock:
     def now_s(self) -> float:
         rate = self.rate
         with self._lock:
-            if self._last is None:
-                now = time.monotonic()
-            else:  # extrapolated over one telemetry period at most; never runs backwards
-                now = self._last[0] + (time.monotonic() - self._last[1]) * rate
+            if self._last is None:  # nothing heard yet: seconds since this clock was made
+                return time.monotonic() - self._created
+            # extrapolated over one telemetry period at most; never runs backwards
+            now = self._last[0] + (time.monotonic() - self._last[1]) * rate
             self._returned = max(self._returned, now)
             return self._returned
+
+    @property
+    def anchored(self) -> bool:
+        """Whether a time-stamped message from the autopilot has been seen."""
+        return self._last is not None
 
     def sleep(self, duration_s: float) -> None:
         if duration_s > 0.0:
@@ -426,6 +432,11 @@ class MavlinkFlightController:
         for thread in self._threads:
             thread.start()
         self._request_rates()
+        deadline = time.monotonic() + self.connect_timeout_s
+        while not self.clock.anchored and time.monotonic() < deadline:  # the machines run on this clock
+            self._stop.wait(0.01)
+        if not self.clock.anchored:
+            self.warnings.append("no time-stamped telemetry (ATTITUDE / LOCAL_POSITION_NED) after connecting")
 
     def close(self) -> None:
         """Stop the threads and close the link (the autopilot's own failsafes take over if still flying)."""

@@ -166,6 +166,20 @@ class OpenAdapters:
                 pass
 
 
+class ZeroedClock:
+    """A clock reading zero when made (``masonry fly`` traces start at 0 s on any time base)."""
+
+    def __init__(self, base: Any) -> None:
+        self.base = base
+        self.start_s = base.now_s()
+
+    def now_s(self) -> float:
+        return float(self.base.now_s() - self.start_s)
+
+    def sleep(self, duration_s: float) -> None:
+        self.base.sleep(duration_s)
+
+
 def _follow_autopilot(uav: Any, fc: Any) -> None:
     """Make the simulated UAV's body follow the real autopilot's telemetry (its tools and camera go along)."""
     from masonry.sim.vehicle import SimVehicle
@@ -213,7 +227,7 @@ def open_adapters(
         link_clock = None
         if not hw.sim_fc:
             fc = _open_mavlink(hw, spec, opened)
-            link_clock = fc.clock
+            link_clock = ZeroedClock(fc.clock)
         need_world = hw.sim_fc or hw.sim_actuators or hw.sim_camera
         world = None
         uav = None
@@ -353,6 +367,9 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
         except HardwareError as exc:
             detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
             items.append(CheckItem("position estimate", False, detail))
+        deadline = time.monotonic() + 1.5
+        while math.isnan(fc.telemetry().battery_fraction) and time.monotonic() < deadline:
+            time.sleep(0.02)  # SYS_STATUS comes at 2 Hz
         tel = fc.telemetry()
         items.append(CheckItem("link", tel.link_ok, "heartbeat and telemetry flowing" if tel.link_ok
                                else f"silent for more than {hw.heartbeat_timeout_s:.1f} s"))

@@ -30,15 +30,32 @@ class Adapters:
     clock: Any
     advance: Callable[[float], None]
     world: Any = None  # the simulated World when --sim (for the measured placement error / coverage)
+    close: Callable[[], None] = lambda: None  # closes real devices (hardware adapters)
 
 
-def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any) -> Adapters:
-    """Choose and build the adapters for the UAV ``spec``: today the simulated world (``--sim``).
-
-    Real hardware adapters (MAVLink flight controller, serial actuators, OpenCV camera) plug in here.
+def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any,
+                    hardware: Any = None) -> Adapters:
+    """Choose and build the adapters for the UAV ``spec``: the simulated world (``--sim``), or each port on its
+    own (``hardware``: a :class:`masonry.adapters.wiring.HardwareConfig` from --fc/--actuators/--camera), checked
+    by the pre-flight check (printed on stderr; a failure refuses to arm).
     """
+    if hardware is not None and not hardware.all_sim:
+        from masonry.adapters.wiring import open_adapters, preflight
+
+        opened = open_adapters(hardware, blueprint=blueprint, spec=spec, seed=seed, faults=faults)
+        try:
+            report = preflight(opened, hardware, role=spec.role)
+            for line in report.lines():
+                typer.echo(line, err=True)
+            report.raise_if_failed()
+        except BaseException:
+            opened.close()
+            raise
+        return Adapters(opened.fc, opened.gripper, opened.sprayer, opened.camera, opened.clock, opened.advance,
+                        opened.world, opened.close)
     if not sim:
-        raise InputError("no hardware adapters are configured: pass --sim to fly in the simulated world")
+        raise InputError("no adapters chosen: pass --sim to fly in the simulated world, or pick hardware with "
+                         "--fc URL / --actuators PORT / --camera INDEX|FILE")
     from masonry.sim import World
 
     world = World(blueprint, seed=seed, camera=camera, faults=faults)  # type: ignore[arg-type]
@@ -81,6 +98,34 @@ def _prerequisites(plan: Any, task_id: str) -> set[str]:
     return seen
 
 
+@dataclass(frozen=True)
+class _Hardware:
+    hw: Any  # masonry.adapters.wiring.HardwareConfig
+    name: str | None
+    mission: str | None
+
+
+def _hardware_options(*, sim: bool, fc: str | None, actuators: str | None, camera: str | None,
+                      calibration: Path | None, config: Path | None) -> _Hardware:
+    """--fc/--actuators/--camera/--calibration over --config uav.yaml over "sim" (the adapter wiring's defaults)."""
+    from masonry.adapters.wiring import hardware_config, load_uav_config
+
+    if sim and camera is not None and camera not in ("sim", "geometric", "render"):
+        raise InputError(f"--camera {camera}: with --sim the camera must be geometric, render or sim (for a real "
+                         f"camera drop --sim and give a device INDEX or a video FILE with --calibration)")
+    settings = load_uav_config(config) if config is not None else {}
+    cli = {"fc": fc, "actuators": actuators, "camera": camera,
+           "calibration": str(calibration) if calibration is not None else None}
+    hw = hardware_config(cli, settings)
+    if sim and not hw.all_sim:
+        raise InputError("--sim simulates every adapter: drop --sim to use --fc / --actuators / a real --camera")
+    return _Hardware(hw, settings.get("name"), settings.get("mission"))
+
+
+def _describe(hw: Any) -> str:
+    return f"fc {hw.fc}, actuators {hw.actuators}, camera {hw.camera}"
+
+
 @command("fly")
 def fly(
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
@@ -90,7 +135,17 @@ def fly(
                                        "not with --mission."),
     name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
-    camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
+    camera: Optional[str] = typer.Option(None, "--camera", help="Simulated: geometric (default) | render (images + "
+                                         "ArUco, slower) | sim; real: a device INDEX, a video FILE or a GStreamer "
+                                         "pipeline (needs --calibration)."),
+    fc: Optional[str] = typer.Option(None, "--fc", help="Flight controller: sim, or a MAVLink connection "
+                                     "(udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:HOST:5760)."),
+    actuators: Optional[str] = typer.Option(None, "--actuators", help="Gripper/valve: sim, or the actuator "
+                                            "Arduino's serial port (/dev/ttyACM0)."),
+    calibration: Optional[Path] = typer.Option(None, "--calibration", help="Camera calibration from "
+                                               "`masonry calibrate` (for a real camera)."),
+    config: Optional[Path] = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "
+                                          "camera, calibration, signing_key, mocap_port, ...); flags override it."),
     fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "
                                     "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
@@ -114,8 +169,13 @@ def fly(
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
-    if camera not in ("geometric", "render"):
-        raise InputError(f"--camera must be geometric or render, got {camera!r}")
+    hardware = _hardware_options(sim=sim, fc=fc, actuators=actuators, camera=camera, calibration=calibration,
+                                 config=config)
+    if name is None and hardware.name is not None:
+        name = hardware.name
+    if mission is None and hardware.mission is not None and task is None:
+        mission = hardware.mission
+    camera = "render" if hardware.hw.camera == "render" else "geometric"
     if not dt > 0.0 or not timeout > 0.0:
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
@@ -123,7 +183,8 @@ def fly(
         if task is not None:
             raise InputError("--task and --mission exclude each other: in mission mode tasks come from mission control")
         if not sim:
-            raise InputError("no hardware adapters are configured: pass --sim to fly in the simulated world")
+            raise InputError("mission mode flies simulated UAVs so far: pass --sim (hardware adapters --fc, "
+                             "--actuators, --camera work in single-task mode, --task ID)")
         _fly_mission(bp, _pick_uav(bp, uav, name), mission, listen=listen, mission_name=mission_name, seed=seed,
                      camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt)
         return
@@ -148,11 +209,15 @@ def fly(
     bricks = tuple(replace(b, placed=True) if f"B{b.id}" in before else b for b in bp.bricks)
     world_bp = replace(bp, bricks=bricks)
 
-    adapters = select_adapters(sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults)
-    config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
-    run = fly_task(config, the_task, fc=adapters.fc, clock=adapters.clock, gripper=adapters.gripper,
-                   camera=adapters.camera, sprayer=adapters.sprayer, dt_s=dt, advance=adapters.advance,
-                   timeout_s=timeout)
+    adapters = select_adapters(sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults,
+                               hardware=hardware.hw)
+    uav_config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
+    try:
+        run = fly_task(uav_config, the_task, fc=adapters.fc, clock=adapters.clock, gripper=adapters.gripper,
+                       camera=adapters.camera, sprayer=adapters.sprayer, dt_s=dt, advance=adapters.advance,
+                       timeout_s=timeout)
+    finally:
+        adapters.close()
 
     result = run.result
     status = result.status if result is not None else "failed"
@@ -177,8 +242,8 @@ def fly(
     if fmt == "json":
         typer.echo(json.dumps(out))
         return
-    typer.echo(f"{spec.name} flies {the_task.id} ({'simulated, seed ' + str(seed) if sim else 'hardware'}, "
-               f"{camera} camera)")
+    where = f"simulated, seed {seed}, {camera} camera" if hardware.hw.all_sim else _describe(hardware.hw)
+    typer.echo(f"{spec.name} flies {the_task.id} ({where})")
     for t, s in run.trace:
         typer.echo(f"{t:8.2f} s  {s}")
     line = f"{the_task.id}: {status} in {out['duration_s']:.1f} s"

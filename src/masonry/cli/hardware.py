@@ -16,7 +16,8 @@ def sitl_home(blueprint: Any, role: str, name: str | None) -> tuple[tuple[float,
     for spec in blueprint.fleet:
         if (name is None and spec.role == role) or spec.name == name:
             if spec.role != role:
-                raise InputError(f"--name {name}: {name} is a {spec.role} UAV, not a {role} UAV")
+                article = "an" if spec.role[:1] in "aeiou" else "a"
+                raise InputError(f"--name {name}: {name} is not a {role} UAV (it is {article} {spec.role} UAV)")
             return tuple(spec.home_m), spec.name  # type: ignore[return-value]
     who = f"named {name}" if name is not None else f"of role {role}"
     raise InputError(f"{blueprint.source}: the fleet has no UAV {who}")

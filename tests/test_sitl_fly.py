@@ -1,0 +1,153 @@
+"""``masonry fly`` on the MAVLink adapter against the SITL, ``masonry sitl`` itself, and the adapter wiring."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from masonry.adapters.mavlink import MavlinkFlightController
+from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+from masonry.adapters.wiring import HardwareConfig, hardware_config, load_uav_config
+from masonry.cli import app
+from masonry.cli.hardware import build_sitl
+from masonry.errors import InputError
+
+CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
+runner = CliRunner()
+
+
+def test_fly_completes_a_brick_task_against_the_sitl() -> None:
+    port = free_udp_port()
+    sitl, description = build_sitl(port=port, uav="brick", blueprint=Path(CASE_STUDY), time_scale=10.0)
+    assert "brick-1 (brick)" in description and "(2.00, -2.50, 0.00)" in description
+    sitl.start()
+    try:
+        res = runner.invoke(app, [
+            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
+            "--fc", f"udpin:127.0.0.1:{port}", "--actuators", "sim", "--camera", "sim", "--format", "json",
+        ])  # fmt: skip
+    finally:
+        sitl.stop()
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["status"] == "done", out
+    assert out["uav"] == "brick-1" and out["task"] == "B0"
+    assert out["placement_error_m"] is not None and out["placement_error_m"] < 0.03
+    states = [e["state"] for e in out["trace"]]
+    for state in ("takeoff", "pickup_estimate", "pickup_descend", "pickup_grasp", "place_release", "land"):
+        assert state in states
+    assert "[ok  ] position estimate" in res.stderr and "-> ready to arm" in res.stderr
+    assert sitl.setpoints_received > 100 and not sitl.vehicle.armed  # flown by velocity, landed and disarmed
+
+
+def test_pre_flight_check_refuses_to_arm_without_a_position_estimate(tmp_path) -> None:
+    port = free_udp_port()
+    config = tmp_path / "uav.yaml"
+    config.write_text(f"fc: udpin:127.0.0.1:{port}\nestimate_wait_s: 0.3\nname: brick-1\n")
+    # the autopilot waits for motion capture that never comes
+    sitl = MavlinkSitl(port, time_scale=5.0, config=SitlConfig(position_source="vision"))
+    sitl.start()
+    try:
+        res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
+                                  "--config", str(config)])
+    finally:
+        sitl.stop()
+    assert res.exit_code == 1
+    assert "[FAIL] position estimate: no usable position estimate" in res.stderr
+    assert "-> refusing to arm" in res.stderr
+    last = res.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: arm rejected: pre-flight check failed: position estimate: no usable")
+    assert not sitl.vehicle.armed
+
+
+def test_a_missing_device_is_one_line_naming_it() -> None:
+    res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
+                              "--actuators", "/dev/ttyMASONRY7"])
+    assert res.exit_code == 1
+    assert res.stderr.startswith("error: /dev/ttyMASONRY7: cannot open the actuator board's serial port")
+    assert len(res.stderr.strip().splitlines()) == 1
+
+
+def test_option_conflicts_are_input_errors(tmp_path) -> None:
+    res = runner.invoke(app, ["fly", "--sim", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
+                              "--fc", "udpin:0.0.0.0:14550"])
+    assert res.exit_code == 2 and "--sim simulates every adapter" in res.stderr
+    res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--camera", "0"])
+    assert res.exit_code == 2 and "--camera 0 needs --calibration FILE" in res.stderr
+    res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0"])
+    assert res.exit_code == 2 and "pass --sim" in res.stderr
+
+
+def test_uav_config_file(tmp_path) -> None:
+    good = tmp_path / "uav.yaml"
+    good.write_text("fc: /dev/ttyACM1\nfc_baud: 921600\ncamera: 0\ncalibration: cam.yaml\n"
+                    "origin_m: [1, 2, 0]\nmin_battery: 0.4\nname: brick-2\nmocap-port: 5005\n")
+    settings = load_uav_config(good)
+    assert settings["camera"] == "0" and settings["origin_m"] == (1.0, 2.0, 0.0) and settings["mocap_port"] == 5005
+    hw = hardware_config({"fc": "udpin:0.0.0.0:14550", "camera": None}, settings)  # the flag wins
+    assert hw.fc == "udpin:0.0.0.0:14550" and hw.camera == "0" and hw.fc_baud == 921600 and hw.min_battery == 0.4
+    assert not hw.all_sim and hw.sim_actuators
+    assert HardwareConfig().all_sim
+    for text, message in [
+        ("fcc: sim\n", "unknown setting 'fcc'"),
+        ("fc_baud: fast\n", "fc_baud must be an integer"),
+        ("origin_m: [1, 2]\n", "origin_m must be a list of 3 numbers"),
+        ("min_battery: lots\n", "min_battery must be a number"),
+        ("- fc\n", "a UAV configuration is a mapping"),
+        ("fc: [unclosed\n", "not valid YAML"),
+    ]:
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(text)
+        with pytest.raises(InputError, match=message):
+            load_uav_config(bad)
+    with pytest.raises(InputError, match="cannot read"):
+        load_uav_config(tmp_path / "missing.yaml")
+    with pytest.raises(InputError, match="autopilot must be"):
+        hardware_config({"autopilot": "inav"})
+
+
+def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None:
+    port = free_udp_port()
+    key = tmp_path / "key"
+    key.write_text("masonry test passphrase\n")
+    proc = subprocess.Popen(
+        [str(Path(sys.executable).parent / "masonry"), "sitl", "--port", str(port), "--blueprint", CASE_STUDY,
+         "--uav", "adhesion", "--time-scale", "5", "--signing-key", str(key)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        from masonry.adapters.mavlink import load_signing_key
+
+        fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=10.0,
+                                     signing_key=load_signing_key(key))
+        fc.connect()
+        try:
+            fc.wait_for_estimate(3.0)
+            tel = fc.telemetry()
+            assert fc.autopilot == "ardupilot"
+            assert tel.position_m == pytest.approx((0.0, -2.5, 0.0), abs=0.02)  # glue-1's home
+        finally:
+            fc.close()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=10)
+    assert "glue-1 (adhesion)" in out and "(signed)" in out and f"udpin:0.0.0.0:{port}" in out
+    assert proc.returncode in (130, 0, 1), err
+    assert "Traceback" not in err
+
+
+def test_sitl_command_bad_input() -> None:
+    res = runner.invoke(app, ["sitl", "--uav", "tank"])
+    assert res.exit_code == 2 and "--uav must be brick or adhesion" in res.stderr
+    res = runner.invoke(app, ["sitl", "--time-scale", "0"])
+    assert res.exit_code == 2 and "--time-scale" in res.stderr
+    res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "glue-1"])
+    assert res.exit_code == 2 and "--name glue-1: glue-1 is not a brick UAV (it is an adhesion UAV)" in res.stderr
+    res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "nobody"])
+    assert res.exit_code == 2 and "the fleet has no UAV named nobody" in res.stderr
