@@ -166,6 +166,31 @@ def makespan_table(seed: int) -> None:
                   + "".join(f"{r:>15.3f}" for r in ratios))
 
 
+def journal_rate(records: int) -> None:
+    """Durable journal records per second (assignment + completion pairs) in a temporary directory."""
+    import tempfile
+    from pathlib import Path
+
+    from masonry.mission.journal import Journal, read_journal
+
+    n = 2 * (records // 2)
+    for sync in ("full", "normal"):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "bench.sqlite"
+            with Journal(path, sync=sync) as journal:  # type: ignore[arg-type]
+                t0 = time.perf_counter()
+                for i in range(n // 2):
+                    journal.record_assignment(float(i), f"B{i}", "brick-1", 1)
+                    journal.record_completion(i + 0.5, f"B{i}", "brick-1", placement_error_m=0.01)
+                dt = time.perf_counter() - t0
+            t0 = time.perf_counter()
+            state = read_journal(path)
+            replay_s = time.perf_counter() - t0
+        print(f"journal sync={sync}: {n} records in {dt:.2f} s = {n / dt:.0f} records/s "
+              f"({1e3 * dt / n:.2f} ms each, one commit per record); "
+              f"replay of {len(state.records)} records {1e3 * replay_s:.0f} ms")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--courses", type=int, default=40)
@@ -178,9 +203,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--direct", action="store_true", help="build the Plan directly, not with the planner")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--makespan", action="store_true", help="print the policy makespan table instead")
+    ap.add_argument("--journal", type=int, metavar="N", help="time N durable journal records instead")
     args = ap.parse_args(argv)
     if args.makespan:
         makespan_table(args.seed)
+        return 0
+    if args.journal:
+        journal_rate(args.journal)
         return 0
 
     print(f"python {platform.python_version()} on {platform.machine()}, {args.courses} courses x "

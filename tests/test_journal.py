@@ -121,14 +121,15 @@ def test_resume_restores_the_dispatcher_without_repeating_or_losing_tasks(tmp_pa
     assert state.last_time_s == 21.0
 
 
-def test_durable_after_kill_9_mid_write_loop(tmp_path: Path) -> None:
+@pytest.mark.parametrize("sync", ["full", "normal"])
+def test_durable_after_kill_9_mid_write_loop(tmp_path: Path, sync: str) -> None:
     """Every record the child acknowledged (printed after its commit returned) is in the journal after kill -9."""
     path = tmp_path / "killed.sqlite"
     child = textwrap.dedent(
         f"""
         import sys
         from masonry.mission.journal import Journal
-        j = Journal({str(path)!r}).open()
+        j = Journal({str(path)!r}, sync={sync!r}).open()
         i = 0
         while True:
             j.record_assignment(float(i), "B%d" % i, "brick-1", 1)
@@ -210,6 +211,8 @@ def test_missing_file_directory_and_closed_journal(tmp_path: Path) -> None:
     j = Journal(tmp_path / "j.sqlite")
     with pytest.raises(JournalError, match="not open"):
         j.record_uav_lost(1.0, "brick-1")
+    with pytest.raises(JournalError, match="sync must be 'full' or 'normal'"):
+        Journal(tmp_path / "j.sqlite", sync="off")  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(
