@@ -413,3 +413,27 @@ def test_single_tag_with_a_broken_rotation_raises() -> None:
         estimate_brick_pose(TagPose(4, np.zeros(3), np.zeros((3, 3))), None)
     with pytest.raises(PerceptionError, match="invalid rotation"):
         estimate_brick_pose(None, TagPose(5, np.zeros(3), np.eye(2)))
+
+
+def test_pure_packages_import_no_heavy_library() -> None:
+    """The estimation math and the motion core import neither OpenCV nor scipy (scipy only inside the reference)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; import masonry.perception, masonry.motion; "
+        "from masonry.perception import refine_markers, estimate_brick_pose, PoseWindow, EstimatorConfig, C_TH; "
+        "from masonry.motion import MinJerk, PID, PIDGains, AxisGains; "
+        "print(','.join(m for m in ('cv2', 'scipy', 'matplotlib') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
+def test_subpackage_all_resolves() -> None:
+    import masonry.motion
+    import masonry.perception.estimation
+
+    for module in (masonry.motion, masonry.perception.estimation):
+        assert len(set(module.__all__)) == len(module.__all__)
+        assert all(hasattr(module, name) for name in module.__all__)
