@@ -497,3 +497,10 @@ def test_ports_satisfy_the_protocols_and_bad_arguments_are_refused() -> None:
         w.add_uav(blueprint().fleet[0])
     with pytest.raises(ValueError):
         w.step(0.0)
+
+
+def test_sim_public_names_resolve() -> None:
+    from masonry import sim
+
+    assert len(sim.__all__) == len(set(sim.__all__))
+    assert [name for name in sim.__all__ if not hasattr(sim, name)] == []
