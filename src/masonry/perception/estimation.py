@@ -8,7 +8,8 @@ The paper runs BFGS from the raw detections. With ``m = (p1^ + p2^)/2`` and ``d 
 ``2 w_prox |m - m_meas|^2 + w_prox/2 |d - d_meas|^2`` and the other terms involve ``d`` only, so the midpoint is
 exactly the measured one and ``d`` solves a 3-D problem that reduces to a trust-region-like secular equation in one
 unknown with a unique root, found by a monotone Newton iteration (docs/estimation.md has the derivation). The result
-is the global minimum, not a local one, in a few microseconds.
+is the global minimum, not a local one, in a few microseconds. A consequence worth knowing: the filter keeps the
+midpoint and the in-plane direction of the marker pair, so the two-tag centre and yaw are those of the raw detections.
 
 Pure: numpy and the standard library only (scipy only inside the BFGS reference, imported on call).
 """
