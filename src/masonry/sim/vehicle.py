@@ -323,6 +323,15 @@ class SimVehicle:
             self._held = True
 
     # ------------------------------------------------------------------- step
+    def idle(self, dt_s: float) -> None:
+        """Advance the clock of a vehicle that cannot move (disarmed on the ground): ``step`` in less time."""
+        if self.armed or not self.on_ground:
+            self.step(dt_s)
+            return
+        self._tel = None
+        self._t += dt_s
+        self._held = False
+
     def step(self, dt_s: float) -> None:
         """Advance the vehicle by ``dt_s`` seconds."""
         self._tel = None

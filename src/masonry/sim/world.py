@@ -265,35 +265,28 @@ class World:
         faults = self.faults
         timed_faults = bool(faults.uav_loss_at_s) or bool(faults.link_loss_at_s)
         airborne: list[Vec3] = []
+        sample_s = self.config.path_sample_s
         for uav in self.uavs.values():
             vehicle = uav.vehicle
             if timed_faults and not uav.failed:
-                at = faults.uav_loss_at_s.get(uav.name)
-                if at is not None and now >= at:
-                    self._fail(uav)
-                elif uav.link_ok:
-                    at = faults.link_loss_at_s.get(uav.name)
-                    if at is not None and now >= at:
-                        uav._stale = vehicle.telemetry()
-                        uav.link_ok = False
-                        vehicle.lose_link()
-            if vehicle.on_ground and not vehicle.armed and not vehicle.taking_off and not uav.failed:
-                vehicle.step(dt_s)  # parked: nothing moves
-            else:
+                self._timed_faults(uav, now)
+            if vehicle.armed or not vehicle.on_ground:
                 vehicle.step(dt_s)
                 if vehicle.failed and not uav.failed:
                     self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
                 self._contact(uav)
                 if uav.role == "brick":
-                    self._grip(uav)
+                    if uav.magnet_on:
+                        self._grip(uav)
                 elif uav.valve_open:
                     self._spray(uav)
+                if vehicle.armed and not vehicle.on_ground:
+                    airborne.append((vehicle._x, vehicle._y, vehicle._z))
+            else:
+                vehicle.idle(dt_s)  # parked (or fallen): only its clock moves
             if now >= uav._next_sample_s:
-                x, y, z = vehicle.position_m
-                uav._path.append((now, x, y, z))
-                uav._next_sample_s = now + self.config.path_sample_s
-            if vehicle.airborne:
-                airborne.append(vehicle.position_m)
+                uav._path.append((now, vehicle._x, vehicle._y, vehicle._z))
+                uav._next_sample_s = now + sample_s
         if len(airborne) > 1:
             best = self._min_sep if self._min_sep is not None else math.inf
             for i in range(len(airborne) - 1):
@@ -303,6 +296,18 @@ class World:
                     best = min(best, d)
             self._min_sep = best
         self.clock.advance(dt_s)
+
+    def _timed_faults(self, uav: SimUav, now: float) -> None:
+        faults = self.faults
+        at = faults.uav_loss_at_s.get(uav.name)
+        if at is not None and now >= at:
+            self._fail(uav)
+        elif uav.link_ok:
+            at = faults.link_loss_at_s.get(uav.name)
+            if at is not None and now >= at:
+                uav._stale = uav.vehicle.telemetry()
+                uav.link_ok = False
+                uav.vehicle.lose_link()
 
     def run(self, duration_s: float, dt_s: float = 0.05) -> None:
         """Step for ``duration_s`` seconds (no controllers: for tests and notebooks)."""
@@ -337,9 +342,10 @@ class World:
                 vehicle.hold_above(vehicle.position_m[2] + support - brick.bottom_z_m)
                 self._carry_pose(uav, brick)
             return
-        tool = uav.effector_m() if uav.role == "brick" else uav.nozzle_m()
-        if tool[2] > clear_z:
+        offset = self.airframe.effector_offset_m if uav.role == "brick" else self.airframe.nozzle_offset_m
+        if vehicle._z + offset[2] > clear_z:
             return
+        tool = uav.tool_point_m(offset)
         support = self.field.support_at(tool[0], tool[1], below_z_m=tool[2], tol_m=tol)
         # Bricks only: on the ground the landing gear, not the rod, takes the vehicle's weight.
         if support > GROUND_Z_M and tool[2] < support:
