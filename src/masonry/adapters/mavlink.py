@@ -777,6 +777,9 @@ class MavlinkFlightController:
             raise CommandRejected("takeoff", f"altitude must be > 0 m, got {altitude_m!r}")
         with self._lock:
             position = self._state.position_ned
+            armed = self._state.armed
+        if not armed:  # the autopilot would refuse too, with a less direct reason (ArduPilot: mode first)
+            raise CommandRejected("takeoff", "not armed (arm first)")
         ground_world = self.frame.position_to_world(position) if position is not None else self.frame.offset_m
         if self.autopilot == "ardupilot":
             self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))

@@ -187,8 +187,12 @@ def _follow_autopilot(uav: Any, fc: Any) -> None:
     class TelemetryVehicle(SimVehicle):
         """A SimVehicle whose state is copied from a FlightController's telemetry at every step."""
 
+        def idle(self, dt_s: float) -> None:  # the world's fast path for a parked vehicle: it may take off
+            self.step(dt_s)
+
         def step(self, dt_s: float) -> None:
             self._t += dt_s
+            self._tel = None  # SimVehicle's telemetry cache
             tel: Telemetry = fc.telemetry()
             self._x, self._y, self._z = (float(c) for c in tel.position_m)
             self._vx, self._vy, self._vz = (float(c) for c in tel.velocity_mps)

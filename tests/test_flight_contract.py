@@ -1,0 +1,130 @@
+"""One FlightController contract, run against the simulator's port and the MAVLink adapter on the SITL (UDP loopback).
+
+Time is the port's own: the simulated world steps its clock; the MAVLink rig sleeps on the autopilot's clock
+(the SITL runs ``TIME_SCALE`` times faster than real time). The assertions are in autopilot seconds for both.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from masonry.blueprint import load_blueprint
+from masonry.errors import CommandRejected
+from masonry.ports import FlightController, Telemetry
+
+CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+TIME_SCALE = 4.0
+
+
+@dataclass
+class Rig:
+    fc: FlightController
+    now_s: Callable[[], float]
+    step: Callable[[float], None]  # let dt_s of the port's time pass
+    home_m: tuple[float, float, float]
+
+    def run(self, duration_s: float, each: Callable[[], None] | None = None, dt_s: float = 0.05) -> None:
+        end = self.now_s() + duration_s
+        while self.now_s() < end:
+            if each is not None:
+                each()
+            self.step(dt_s)
+
+    def until(self, predicate: Callable[[Telemetry], bool], timeout_s: float, what: str,
+              each: Callable[[], None] | None = None) -> float:
+        start = self.now_s()
+        while not predicate(self.fc.telemetry()):
+            if self.now_s() - start > timeout_s:
+                raise AssertionError(f"{what}: not within {timeout_s} s; last {self.fc.telemetry()}")
+            if each is not None:
+                each()
+            self.step(0.05)
+        return self.now_s() - start
+
+
+@pytest.fixture(params=["sim", "mavlink"])
+def rig(request) -> Iterator[Rig]:
+    bp = load_blueprint(CASE_STUDY)
+    spec = bp.uavs("brick")[0]
+    if request.param == "sim":
+        from masonry.sim import World
+
+        world = World(bp, seed=1)
+        uav = world.add_uav(spec)
+        uav.fc.connect()
+        yield Rig(uav.fc, world.clock.now_s, world.step, spec.home_m)
+        uav.fc.close()
+        return
+    from masonry.adapters.mavlink import MavlinkFlightController
+    from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+
+    port = free_udp_port()
+    sitl = MavlinkSitl(port, home_m=spec.home_m, time_scale=TIME_SCALE, config=SitlConfig(heartbeat_hz=4.0))
+    sitl.start()
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=3.0, setpoint_hold_s=0.3)
+    try:
+        fc.connect()
+        fc.wait_for_estimate(3.0)
+        yield Rig(fc, fc.clock.now_s, fc.clock.sleep, spec.home_m)
+    finally:
+        fc.close()
+        sitl.stop()
+
+
+def test_starts_landed_disarmed_at_home(rig: Rig) -> None:
+    tel = rig.fc.telemetry()
+    assert tel.link_ok and tel.position_ok
+    assert tel.on_ground and not tel.armed
+    assert tel.position_m == pytest.approx(rig.home_m, abs=0.02)
+    assert tel.battery_fraction == pytest.approx(1.0, abs=0.01)
+
+
+def test_takeoff_requires_arming(rig: Rig) -> None:
+    with pytest.raises(CommandRejected) as info:
+        rig.fc.takeoff(1.0)
+    assert "not armed" in info.value.reason
+
+
+def test_flight_arm_takeoff_move_turn_stop_land(rig: Rig) -> None:
+    fc = rig.fc
+    fc.arm()
+    assert fc.telemetry().armed
+    fc.takeoff(1.0)  # metres above the ground it stands on
+    rig.until(lambda t: not t.on_ground and t.position_m[2] > 0.95 and abs(t.velocity_mps[2]) < 0.1, 8.0, "takeoff")
+    assert fc.telemetry().position_m[2] == pytest.approx(1.0, abs=0.08)
+
+    with pytest.raises(CommandRejected):
+        fc.disarm()  # flying
+    assert fc.telemetry().armed
+
+    start = fc.telemetry()
+    rig.run(2.0, each=lambda: fc.send_velocity((0.5, 0.0, 0.0), 0.4))  # east, turning left (counter-clockwise)
+    moved = fc.telemetry()
+    dx, dy = moved.position_m[0] - start.position_m[0], moved.position_m[1] - start.position_m[1]
+    assert 0.6 < dx < 1.1 and abs(dy) < 0.1
+    assert moved.velocity_mps[0] == pytest.approx(0.5, abs=0.1)
+    turned = math.remainder(moved.attitude_rad[2] - start.attitude_rad[2], math.tau)
+    assert 0.4 < turned < 0.85
+    assert moved.position_m[2] == pytest.approx(1.0, abs=0.08)
+
+    # no more setpoints: the autopilot stops the UAV (guided timeout / the adapter's stale-setpoint hold)
+    rig.until(lambda t: math.hypot(*t.velocity_mps) < 0.05, 6.0, "stop when setpoints cease")
+    assert not fc.telemetry().on_ground
+
+    fc.land()
+    rig.until(lambda t: t.on_ground and not t.armed, 8.0, "landing and auto-disarm")
+    assert fc.telemetry().position_m[2] == pytest.approx(0.0, abs=0.03)
+
+
+def test_velocity_setpoints_are_ignored_on_the_ground(rig: Rig) -> None:
+    rig.fc.arm()
+    rig.run(1.0, each=lambda: rig.fc.send_velocity((0.5, 0.5, 0.0), 0.0))
+    tel = rig.fc.telemetry()
+    assert tel.on_ground
+    assert tel.position_m == pytest.approx(rig.home_m, abs=0.02)
