@@ -95,3 +95,20 @@ def test_field_of_view_edges() -> None:
     # Facing away: a camera below the markers' plane looking up sees nothing.
     R_up = np.diag([1.0, 1.0, 1.0])
     assert observe_markers(R_up, np.array([0.0, 0.0, -1.0]), [brick], markers, cfg, rng) == ()
+
+
+def test_markers_under_a_brick_are_not_seen() -> None:
+    bp = Blueprint(
+        bricks=(
+            Brick(0, (0.0, 0.0, 0.05), placed=True),
+            Brick(1, (0.15, 0.0, 0.15), placed=True),  # covers brick 0's marker 0 (at x = +0.0875)
+        ),
+        fleet=(UavSpec("brick-1", "brick", (-1.0, 0.0, 0.0)),),
+    )
+    w = World(bp, seed=0)
+    uav = w.add_fleet()[0]
+    take_off(w, uav)
+    fly_to(w, uav, (-0.05, 0.0, 1.2), tol_m=0.01)
+    frame = uav.camera.read()
+    assert frame is not None and frame.tags is not None
+    assert {t.marker_id for t in frame.tags} == {1, 2, 3}

@@ -213,6 +213,15 @@ class BrickField:
                 top = t
         return top
 
+    def covered_at(self, x: float, y: float, z: float, tol_m: float = 1e-3) -> bool:
+        """Whether a resting brick sits on the surface point (x, y, z) (its bottom at z, its footprint over it)."""
+        bricks = self.bricks
+        for k in self._hash.query_point(x, y) or ():
+            b = bricks[k]
+            if abs(b.bottom_z_m - z) <= tol_m and point_in_rect(x, y, *b.rect()):
+                return True
+        return False
+
     def support_under(
         self, rect: tuple[float, float, float, float, float], below_z_m: float = math.inf, tol_m: float = 0.02
     ) -> float:

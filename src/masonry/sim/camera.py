@@ -2,8 +2,9 @@
 
 A marker is seen when all four of its corners project inside the image, it faces the camera within
 ``max_view_angle_rad``, its smallest projected side is at least ``min_marker_px`` pixels (so there is a range
-limit: 500 px focal length, 5 cm markers, 10 px -> 2.5 m), and the brick the UAV carries does not hide it.
-Other bricks do not occlude (markers sit on top faces; a brick above another covers its markers anyway).
+limit: 500 px focal length, 5 cm markers, 10 px -> 2.5 m), no brick rests on it (``covered``), and the brick the
+UAV carries does not hide it. Other bricks in the line of sight do not occlude (markers sit on top faces, and
+the camera looks down).
 
 Noise on a seen marker's pose (camera frame), growing with the distance d in metres:
 lateral (x, y) ``lateral_noise_m + lateral_noise_per_m * d``, depth (z) ``depth_noise_m + depth_noise_per_m * d``,
@@ -13,7 +14,7 @@ and a small random rotation of ``angle_noise_rad + angle_noise_per_m * d`` per a
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -113,6 +114,7 @@ def observe_markers(
     *,
     hidden: frozenset[int] | set[int] = frozenset(),
     occluder: SimBrick | None = None,
+    covered: Callable[[float, float, float], bool] | None = None,
 ) -> tuple[TagPose, ...]:
     """Noisy camera-frame poses of the markers of ``bricks`` seen by a camera at ``c_w`` with rotation ``R_wc``.
 
@@ -125,6 +127,7 @@ def observe_markers(
         rng: randomness for the measurement noise.
         hidden: marker ids not to report (occlusion fault).
         occluder: the brick this UAV carries: markers behind it are not seen.
+        covered: whether a marker centre (x, y, z) lies under a brick resting on it.
     """
     if not bricks:
         return ()
@@ -149,6 +152,8 @@ def observe_markers(
     index = np.flatnonzero(ok)
     if hidden:
         index = np.array([i for i in index if int(ids[i]) not in hidden], dtype=int)
+    if covered is not None and len(index):
+        index = np.array([i for i in index if not covered(*centres[i].tolist())], dtype=int)
     if occluder is not None and len(index):
         index = np.array([i for i in index if not _behind(occluder, c_w, centres[i])], dtype=int)
     if not len(index):

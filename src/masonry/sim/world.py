@@ -481,6 +481,7 @@ class World:
             rng,
             hidden=hidden,
             occluder=occluder,
+            covered=self.field.covered_at,
         )
         return CameraFrame(time_s=now, tags=tags)
 
