@@ -156,7 +156,11 @@ def _edge_points(grey_f: np.ndarray, corners: np.ndarray, cells: int) -> np.ndar
     mid = _PROFILE_SAMPLES // 2
     dark = prof[:, :mid].min(axis=1)
     light = prof[:, mid + 1 :].max(axis=1)
-    level = (dark + light) / 2.0
+    # One level per side (medians over its profiles): steadier than per profile under noise.
+    per_side = (m * 4, _EDGE_SAMPLES)
+    side_dark = np.median(dark.reshape(per_side), axis=1)
+    side_light = np.median(light.reshape(per_side), axis=1)
+    level = np.repeat((side_dark + side_light) / 2.0, _EDGE_SAMPLES)
     cross = (prof[:, :-1] < level[:, None]) & (prof[:, 1:] >= level[:, None])
     rank = np.where(cross, np.abs(np.arange(_PROFILE_SAMPLES - 1) + 0.5 - mid), np.inf)
     j = np.argmin(rank, axis=1)
