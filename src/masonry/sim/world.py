@@ -16,7 +16,7 @@ import math
 import zlib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -32,9 +32,6 @@ from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
-
-if TYPE_CHECKING:
-    from masonry.planner.tasks import BrickTask
 
 __all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
 
@@ -533,8 +530,3 @@ class World:
     def min_separation_m(self) -> float | None:
         """Smallest distance seen between two airborne UAVs so far (None until two have flown at once)."""
         return self._min_sep
-
-    def brick_task_target_m(self, task: BrickTask) -> Vec3:
-        """Where the effector must be to put ``task``'s brick on its blueprint pose: the top-face centre."""
-        x, y, z = task.position_m
-        return (x, y, z + task.size_m[2] / 2.0)
