@@ -147,9 +147,10 @@ def load_blueprint(path: str | Path) -> Blueprint:
         raise BlueprintError(source, "", "is a directory, not a blueprint file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise BlueprintError(source, "", f"cannot read: {exc}") from None
-    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    from masonry.blueprint_yaml import safe_load
+
     try:
-        data = yaml.load(text, Loader=loader)  # noqa: S506 (a safe loader)
+        data = safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""

@@ -13,7 +13,7 @@ from masonry.errors import InputError
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint
-    from masonry.planner.tasks import Plan
+    from masonry.planner.graphs import PlanGraphs
 
 GRAPH_FORMATS = (".png", ".svg", ".dot", ".graphml")
 #: Plans with at most this many tasks to do list every task in the text summary.
@@ -31,14 +31,14 @@ def plan_command(
 ) -> None:
     """Plan a wall: tasks, dependency graph G^d, conflict graph G^c (paper Section III)."""
     from masonry.blueprint import load_blueprint
-    from masonry.planner import plan
+    from masonry.planner.graphs import plan_graphs
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
     if graph is not None and graph.suffix.lower() not in GRAPH_FORMATS:
         raise InputError(f"--graph {graph}: the file must end in {', '.join(GRAPH_FORMATS)}")
     bp = load_blueprint(blueprint)
-    result = plan(bp)
+    result = plan_graphs(bp)  # conflicts stay arrays: a 20,000-brick wall has millions of them
     if fmt == "json":
         from masonry.planner.export import iter_plan_json
 
@@ -48,7 +48,7 @@ def plan_command(
     if graph is not None:
         from masonry.viz.graph_drawing import export_graphs
 
-        export_graphs(result, graph, title=bp.name or blueprint.name)
+        export_graphs(result.to_plan(), graph, title=bp.name or blueprint.name)
 
 
 def _write(pieces: Any, output: Path | None) -> None:
@@ -65,31 +65,34 @@ def _write(pieces: Any, output: Path | None) -> None:
         raise InputError(f"--output {output}: cannot write: {exc.strerror or exc}") from None
 
 
-def summary(bp: Blueprint, result: Plan) -> str:
+def summary(bp: Blueprint, result: PlanGraphs) -> str:
     """The human summary of a plan: counts, tasks available at the start, the longest chain."""
+    from masonry.planner.tasks import available, longest_chain
+
     bricks = bp.bricks
     placed = sum(1 for b in bricks if b.placed)
     todo = [t for t in result.tasks if not t.done]
     n_brick = sum(1 for t in todo if t.kind == "brick")
     n_adh = len(todo) - n_brick
-    available = result.available()
-    chain = result.longest_chain()
+    ready = available(result.tasks, result.dependencies)
+    chain = longest_chain(result.tasks, result.dependencies)
     fleet = ", ".join(f"{u.name} ({u.role})" for u in bp.fleet) or "none"
     lines = [
         f"{bp.name or Path(bp.source).stem}  ({bp.source})",
         f"  bricks          {len(bricks)}: {placed} placed, {len(bricks) - placed} to place",
         f"  tasks to do     {len(todo)}: {n_brick} brick, {n_adh} adhesion",
         f"  dependencies    {len(result.dependencies)} edges in G^d",
-        f"  conflicts       {len(result.conflicts)} pairs in G^c (clearance r_c = {bp.clearance_m:g} m)",
+        f"  conflicts       {result.conflict_count} pairs in G^c (clearance r_c = {bp.clearance_m:g} m)",
         f"  fleet           {fleet}",
-        f"  available now   {_id_list(available)}",
+        f"  available now   {_id_list(ready)}",
         f"  longest chain   {len(chain)} tasks: {_chain(chain)}",
     ]
     if 0 < len(todo) <= DETAIL_LIMIT:
-        prereq = result.prerequisites()
+        full = result.to_plan()
+        prereq = full.prerequisites()
         done = {x.id for x in result.tasks if x.done}
         conflicts: dict[str, list[str]] = {t.id: [] for t in todo}
-        for a, b in result.conflicts:
+        for a, b in full.conflicts:
             conflicts[a].append(b)
             conflicts[b].append(a)
         lines.append("")

@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
+
+if TYPE_CHECKING:
+    from masonry.planner.graphs import PlanGraphs
 
 
 def _r(value: float) -> float:
@@ -64,8 +67,11 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
     }
 
 
-def iter_plan_json(plan: Plan) -> Iterator[str]:
-    """The plan's JSON text in pieces (one task per line; the pair lists in large chunks)."""
+def iter_plan_json(plan: Plan | PlanGraphs) -> Iterator[str]:
+    """The plan's JSON text in pieces (one task per line; the pair lists in large chunks).
+
+    Takes a :class:`Plan` or, for very large walls, the :class:`PlanGraphs` from ``plan_graphs()``.
+    """
     yield '{"tasks": ['
     for k, task in enumerate(plan.tasks):
         yield ("\n  " if k == 0 else ",\n  ") + json.dumps(task_to_dict(task))
@@ -74,20 +80,26 @@ def iter_plan_json(plan: Plan) -> Iterator[str]:
     yield from _pairs_json(plan, plan.dependencies, None)
     yield ",\n"
     yield ' "conflicts": '
-    yield from _pairs_json(plan, plan.conflicts, plan.conflict_indices)
+    if isinstance(plan, Plan):
+        yield from _pairs_json(plan, plan.conflicts, plan.conflict_indices)
+    else:
+        yield from _pairs_json(plan, None, plan.conflict_indices)
     yield "}\n"
 
 
-def plan_json(plan: Plan) -> str:
+def plan_json(plan: Plan | PlanGraphs) -> str:
     """The plan's whole JSON text."""
     return "".join(iter_plan_json(plan))
 
 
-def _pairs_json(plan: Plan, pairs: Sequence[tuple[str, str]], indices: Any, chunk: int = 1_000_000) -> Iterator[str]:
-    if not pairs:
+def _pairs_json(
+    plan: Plan | PlanGraphs, pairs: Sequence[tuple[str, str]] | None, indices: Any, chunk: int = 1_000_000
+) -> Iterator[str]:
+    count = len(pairs) if pairs is not None else len(indices[0])
+    if count == 0:
         yield "[]"
         return
-    if indices is None or len(indices[0]) != len(pairs):
+    if pairs is not None and (indices is None or len(indices[0]) != len(pairs)):
         position = {t.id: k for k, t in enumerate(plan.tasks)}
         a = np.fromiter((position[p[0]] for p in pairs), dtype=np.int64, count=len(pairs))
         b = np.fromiter((position[p[1]] for p in pairs), dtype=np.int64, count=len(pairs))

@@ -17,6 +17,7 @@ import gc
 import math
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,6 +37,31 @@ def brick_arrays(blueprint: Blueprint) -> BrickArrays:
     return BrickArrays.of([b.position_m for b in bricks], [b.size_m for b in bricks], [b.yaw_rad for b in bricks])
 
 
+@dataclass(frozen=True)
+class PlanGraphs:
+    """A plan with G^c still as index arrays: what :func:`plan` computes before making id pairs.
+
+    Millions of conflict pairs cost seconds and hundreds of MB as Python tuples; the CLI writes JSON straight
+    from the arrays. ``conflict_indices`` = (a, b): integer arrays of indices into ``tasks``, a < b, sorted.
+    """
+
+    tasks: tuple[Task, ...]
+    dependencies: tuple[tuple[str, str], ...]
+    conflict_indices: tuple[IntArray, IntArray]
+
+    @property
+    def conflict_count(self) -> int:
+        return len(self.conflict_indices[0])
+
+    def to_plan(self) -> Plan:
+        """The :class:`Plan` value (conflicts as (id, id) tuples in task order)."""
+        ca, cb = self.conflict_indices
+        ids = np.array([t.id for t in self.tasks], dtype=object)
+        with _gc_paused():  # millions of small tuples: the cyclic collector would rescan them again and again
+            pairs = tuple(zip(ids[ca].tolist(), ids[cb].tolist()))
+        return Plan(tasks=self.tasks, dependencies=self.dependencies, conflicts=pairs, conflict_indices=(ca, cb))
+
+
 def plan(blueprint: Blueprint) -> Plan:
     """Tasks, G^d and G^c of a blueprint (pure; no I/O).
 
@@ -45,6 +71,11 @@ def plan(blueprint: Blueprint) -> Plan:
     Raises:
         BlueprintError: the blueprint's geometry or fleet is invalid (see :func:`validate_blueprint`).
     """
+    return plan_graphs(blueprint).to_plan()
+
+
+def plan_graphs(blueprint: Blueprint) -> PlanGraphs:
+    """Like :func:`plan`, with the conflict pairs left as index arrays (fast for very large walls)."""
     arrays = brick_arrays(blueprint)
     contacts = find_contacts(arrays)
     validate_blueprint(blueprint, contacts)
@@ -85,10 +116,7 @@ def plan(blueprint: Blueprint) -> Plan:
         dependencies.append((aid, f"B{bricks[j].id}"))
 
     ca, cb = _conflicts(blueprint, arrays, placed, upper, lower, start, end)
-    ids = np.array([t.id for t in tasks], dtype=object)
-    with _gc_paused():  # millions of small tuples: the cyclic collector would rescan them again and again
-        pairs = tuple(zip(ids[ca].tolist(), ids[cb].tolist()))
-    return Plan(tasks=tuple(tasks), dependencies=tuple(dependencies), conflicts=pairs, conflict_indices=(ca, cb))
+    return PlanGraphs(tasks=tuple(tasks), dependencies=tuple(dependencies), conflict_indices=(ca, cb))
 
 
 @contextmanager
@@ -130,11 +158,9 @@ def _conflicts(
     eu = np.concatenate([local_of_brick[upper], adhesion_local[lower_todo]])
     ev = np.concatenate([adhesion_local, lower_local[lower_todo]])
     a, b = conflict_pairs(loc_start, loc_end, blueprint.clearance_m, (eu, ev))
+    # Local -> global is increasing (bricks, then adhesion tasks, each in order): order and a < b survive.
     global_of_local = np.concatenate([todo_bricks, n_bricks + np.arange(m)])
-    ga, gb = global_of_local[a], global_of_local[b]
-    lo, hi = np.minimum(ga, gb), np.maximum(ga, gb)
-    order = np.lexsort((hi, lo))
-    return lo[order], hi[order]
+    return global_of_local[a], global_of_local[b]
 
 
 def adhesion_segments(arrays: BrickArrays, upper: IntArray, lower: IntArray) -> tuple[FloatArray, FloatArray]:

@@ -30,7 +30,7 @@ def cell_coordinates(points: NDArray[np.float64], cell_size: NDArray[np.float64]
 
 
 def neighbour_pairs(
-    cells: IntArray, chunk_pairs: int = 2_000_000, reach: int = 1
+    cells: IntArray, chunk_pairs: int = 2_000_000, reach: int = 1, max_gap: float | None = None
 ) -> Iterator[tuple[IntArray, IntArray]]:
     """Yield index arrays ``(a, b)`` of every unordered pair of items at most ``reach`` cells apart, once each.
 
@@ -38,6 +38,8 @@ def neighbour_pairs(
         cells: (n, 3) integer cell coordinates, one row per item.
         chunk_pairs: soft upper bound on the number of pairs yielded per chunk.
         reach: how many cells away (per axis) a neighbour may be; 1 is the 27-cell neighbourhood.
+        max_gap: with ``cell_size``, skip cell offsets whose cells are farther apart than this (the corners of
+            a large ``reach``): give it as a multiple of cells, i.e. ``max_gap / cell_size``.
     """
     cells = np.asarray(cells, dtype=np.int64).reshape(-1, 3)
     n = len(cells)
@@ -62,6 +64,10 @@ def neighbour_pairs(
     pair_cb: list[IntArray] = [counts]
     pair_self: list[NDArray[np.bool_]] = [np.ones(len(ucode), dtype=bool)]
     for offset in _forward_offsets(reach):
+        if max_gap is not None:
+            gap = sum(max(abs(d) - 1, 0) ** 2 for d in offset) ** 0.5  # closest approach, in cells
+            if gap > max_gap:
+                continue
         valid = np.ones(len(ucode), dtype=bool)
         nranks = np.empty_like(cell_ranks)
         for k in range(3):

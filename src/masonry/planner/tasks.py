@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Union
 
@@ -78,10 +78,7 @@ class Plan:
 
     def prerequisites(self) -> dict[str, list[str]]:
         """For every task id, the ids it waits for (its successors in G^d), in edge order."""
-        out: dict[str, list[str]] = {t.id: [] for t in self.tasks}
-        for u, v in self.dependencies:
-            out[u].append(v)
-        return out
+        return prerequisites(self.tasks, self.dependencies)
 
     def available(self, done: Iterable[str] = ()) -> list[str]:
         """Ids of tasks not done whose prerequisites are all done (tasks with ``done=True`` count as done).
@@ -89,43 +86,61 @@ class Plan:
         This is the paper's availability rule; conflicts are not considered (they only forbid running two
         tasks at once).
         """
-        finished = {t.id for t in self.tasks if t.done} | set(done)
-        prereq = self.prerequisites()
-        return [t.id for t in self.tasks if t.id not in finished and all(v in finished for v in prereq[t.id])]
+        return available(self.tasks, self.dependencies, done)
 
     def longest_chain(self) -> list[str]:
         """The longest chain of tasks still to do, each waiting for the next (top first; empty if none)."""
-        todo = {t.id for t in self.tasks if not t.done}
-        prereq = self.prerequisites()
-        # Kahn's order from the bottom (tasks with no pending prerequisite) upwards.
-        pending = {tid: sum(1 for v in prereq[tid] if v in todo) for tid in todo}
-        dependants: dict[str, list[str]] = {tid: [] for tid in todo}
-        for u, v in self.dependencies:
-            if u in todo and v in todo:
-                dependants[v].append(u)
-        best: dict[str, int] = {}
-        nxt: dict[str, str | None] = {}
-        queue = [tid for tid in todo if pending[tid] == 0]
-        order: list[str] = []
-        while queue:
-            tid = queue.pop()
-            order.append(tid)
-            for u in dependants[tid]:
-                pending[u] -= 1
-                if pending[u] == 0:
-                    queue.append(u)
-        for tid in order:
-            below = [v for v in prereq[tid] if v in todo]
-            if below:
-                v = max(below, key=lambda x: best[x])
-                best[tid], nxt[tid] = best[v] + 1, v
-            else:
-                best[tid], nxt[tid] = 1, None
-        if not best:
-            return []
-        rank = {t.id: k for k, t in enumerate(self.tasks)}
-        top = max(best, key=lambda x: (best[x], -rank[x]))
-        chain = [top]
-        while nxt[chain[-1]] is not None:
-            chain.append(nxt[chain[-1]])  # type: ignore[arg-type]
-        return chain
+        return longest_chain(self.tasks, self.dependencies)
+
+
+def prerequisites(tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]]) -> dict[str, list[str]]:
+    """For every task id, the ids it waits for (its successors in G^d), in edge order."""
+    out: dict[str, list[str]] = {t.id: [] for t in tasks}
+    for u, v in dependencies:
+        out[u].append(v)
+    return out
+
+
+def available(tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]], done: Iterable[str] = ()) -> list[str]:
+    """Ids of tasks not done whose prerequisites are all done (see :meth:`Plan.available`)."""
+    finished = {t.id for t in tasks if t.done} | set(done)
+    prereq = prerequisites(tasks, dependencies)
+    return [t.id for t in tasks if t.id not in finished and all(v in finished for v in prereq[t.id])]
+
+
+def longest_chain(tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]]) -> list[str]:
+    """The longest chain of tasks still to do, each waiting for the next (top first; empty if none)."""
+    todo = {t.id for t in tasks if not t.done}
+    prereq = prerequisites(tasks, dependencies)
+    # Kahn's order from the bottom (tasks with no pending prerequisite) upwards.
+    pending = {tid: sum(1 for v in prereq[tid] if v in todo) for tid in todo}
+    dependants: dict[str, list[str]] = {tid: [] for tid in todo}
+    for u, v in dependencies:
+        if u in todo and v in todo:
+            dependants[v].append(u)
+    best: dict[str, int] = {}
+    nxt: dict[str, str | None] = {}
+    queue = [tid for tid in todo if pending[tid] == 0]
+    order: list[str] = []
+    while queue:
+        tid = queue.pop()
+        order.append(tid)
+        for u in dependants[tid]:
+            pending[u] -= 1
+            if pending[u] == 0:
+                queue.append(u)
+    for tid in order:
+        below = [v for v in prereq[tid] if v in todo]
+        if below:
+            v = max(below, key=lambda x: best[x])
+            best[tid], nxt[tid] = best[v] + 1, v
+        else:
+            best[tid], nxt[tid] = 1, None
+    if not best:
+        return []
+    rank = {t.id: k for k, t in enumerate(tasks)}
+    top = max(best, key=lambda x: (best[x], -rank[x]))
+    chain = [top]
+    while nxt[chain[-1]] is not None:
+        chain.append(nxt[chain[-1]])  # type: ignore[arg-type]
+    return chain
