@@ -297,7 +297,8 @@ def _run(
     if max_time_s is None:
         max_time_s = (resumed_from or 0.0) + 600.0 + 150.0 * total
     dead: dict[str, float] = {}
-    done_seen = len(mc.dispatcher.done) - sum(1 for t in the_plan.tasks if t.done)
+    pre_done = sum(1 for t in the_plan.tasks if t.done)
+    done_seen = len(mc.dispatcher.done) - pre_done
     mission_end_s: float | None = None
 
     while True:
@@ -313,7 +314,7 @@ def _run(
             h.step(now)
         mc.step(now)
         if progress is not None:
-            n_done = len(mc.dispatcher.done) - sum(1 for t in the_plan.tasks if t.done)
+            n_done = len(mc.dispatcher.done) - pre_done
             if n_done != done_seen:
                 done_seen = n_done
                 progress(n_done, total, now)
