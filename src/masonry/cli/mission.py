@@ -72,12 +72,13 @@ def mission_control(
                                    "or give another --journal file")
             if not resume:
                 state = None
+    expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     transport = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name)
     transport.connect()
     try:
         mc = MissionControl(the_plan, bp.fleet, transport, policy=policy, journal=jr,
                             durations_s=priority_durations_s(
-                                estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)),
+                                expected_s),
                             heartbeat_timeout_s=heartbeat_timeout * time_scale,
                             startup_timeout_s=startup_timeout * time_scale)
         offset = 0.0
@@ -104,7 +105,7 @@ def mission_control(
         transport.close()
         if jr is not None:
             jr.close()
-    result = control_report(mc, the_plan, policy=policy)
+    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
     if report is not None:
         report.write_text(result.to_json(indent=1) + "\n")
     typer.echo(result.to_json() if fmt == "json" else result.summary())

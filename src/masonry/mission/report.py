@@ -246,6 +246,7 @@ def control_report(
     placement_error_m: Mapping[str, float] | None = None,
     min_separation_m: float | None = None,
     now_s: float | None = None,
+    durations_s: Mapping[str, float] | None = None,
     **extra: Any,
 ) -> MissionReport:
     """Build the report from a :class:`~masonry.mission.control.MissionControl`'s history.
@@ -258,6 +259,8 @@ def control_report(
         intervals: (uav, task id, start_s, end_s) executed by the UAVs (default: mission control's attempts).
         distances_m, placement_error_m, min_separation_m: measured values overriding the reported ones.
         now_s: end of the trace for attempts still running (default: mission control's last step).
+        durations_s: expected task durations for the lower bound (``masonry.planner.estimate_durations_s``:
+            the same bound for every policy and seed); default: the durations measured in this run.
     """
     now = mc.now_s if now_s is None else now_s
     kinds = {t.id: t.kind for t in plan.tasks}
@@ -284,7 +287,8 @@ def control_report(
     # the mission starts with its first assignment (mission control may have waited for its fleet before)
     start = min((a.start_s for a in attempts), default=0.0)
     makespan = max((a.end_s - start for a in done_att.values() if a.end_s is not None), default=0.0)
-    durations = {tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
+    durations = dict(durations_s) if durations_s is not None else {
+        tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
     fleet_size: dict[str, int] = {}
     for spec in mc.fleet:
         fleet_size[spec.role] = fleet_size.get(spec.role, 0) + 1

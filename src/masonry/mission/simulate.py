@@ -270,12 +270,12 @@ def _run(
         resumed_from = float(state.last_time_s or 0.0)
 
     world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
+    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m)
     bus = InprocBus()
     mc = MissionControl(
         the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, journal=journal,
         max_attempts=max_attempts,
-        durations_s=priority_durations_s(estimate_durations_s(the_plan, fleet,
-                                                              cruise_altitude_m=blueprint.cruise_altitude_m)),
+        durations_s=priority_durations_s(expected_s),
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
     )
     if state is not None:
@@ -331,7 +331,7 @@ def _run(
     return _report(
         blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
         sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
-        resumed_from=resumed_from, messages=bus.sent,
+        resumed_from=resumed_from, messages=bus.sent, expected_s=expected_s,
     )
 
 
@@ -350,6 +350,7 @@ def _report(
     wall_time_s: float,
     resumed_from: float | None,
     messages: int,
+    expected_s: Mapping[str, float],
 ) -> MissionReport:
     now = world.clock.now_s()
     # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
@@ -376,7 +377,7 @@ def _report(
     return control_report(
         mc, the_plan, policy=policy, seed=seed, intervals=intervals,
         distances_m={u.name: float(world.distance_flown_m(u.name)) for u in fleet},
-        placement_error_m=placement, min_separation_m=sep, now_s=now,
+        placement_error_m=placement, min_separation_m=sep, now_s=now, durations_s=expected_s,
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
     )
