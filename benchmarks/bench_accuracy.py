@@ -62,8 +62,9 @@ def opencv_plain(image: np.ndarray) -> dict[int, tuple[np.ndarray, float]]:
     obj = np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
     centres: dict[int, np.ndarray] = {}
     for c, i in zip(corners, [] if ids is None else ids.ravel()):
-        ok, _rvec, tvec = cv2.solvePnP(obj, c.reshape(4, 2), INTR.matrix(), INTR.dist_coeffs(),
-                                       flags=cv2.SOLVEPNP_IPPE_SQUARE)
+        ok, _rvec, tvec = cv2.solvePnP(
+            obj, c.reshape(4, 2), INTR.matrix(), INTR.dist_coeffs(), flags=cv2.SOLVEPNP_IPPE_SQUARE
+        )
         if ok:
             centres[int(i)] = tvec.ravel()
     out = {}
@@ -80,14 +81,26 @@ def truth(T: np.ndarray, b: RenderedBrick) -> tuple[np.ndarray, float]:
     return top, yaw_about_rad(x_cam)
 
 
-def run(method: Method, frames: int, seed: int, hide_one: bool, blur: tuple[float, float], height: float) -> None:
+def run(
+    method: Method, frames: int, seed: int, hide_one: bool, blur: tuple[float, float], height: float
+) -> None:
     rng = np.random.default_rng(seed)
     e2, e3, ey, missed, total = [], [], [], 0, 0
     for _ in range(frames):
         T, bricks = random_view(rng, INTR, MARKERS, n_bricks=2, height_m=height)
-        hidden = frozenset(2 * b.brick_id + int(rng.integers(0, 2)) for b in bricks) if hide_one else frozenset()
-        image = render_frame(INTR, T, bricks, MARKERS, rng=rng, blur_sigma_px=float(rng.uniform(*blur)),
-                             noise_sigma=2.0, hidden_markers=hidden)
+        hidden = (
+            frozenset(2 * b.brick_id + int(rng.integers(0, 2)) for b in bricks) if hide_one else frozenset()
+        )
+        image = render_frame(
+            INTR,
+            T,
+            bricks,
+            MARKERS,
+            rng=rng,
+            blur_sigma_px=float(rng.uniform(*blur)),
+            noise_sigma=2.0,
+            hidden_markers=hidden,
+        )
         found = method(image)
         for b in bricks:
             total += 1
@@ -101,9 +114,11 @@ def run(method: Method, frames: int, seed: int, hide_one: bool, blur: tuple[floa
             e3.append(float(np.linalg.norm(centre_w - top_w)))
             ey.append(abs(math.remainder(yaw - yaw_true, math.tau)))
     a2, a3, ay = np.array(e2) * 100.0, np.array(e3) * 100.0, np.degrees(ey)
-    print(f"  2-D centre cm: mean {a2.mean():.3f}  p95 {np.percentile(a2, 95):.3f}  max {a2.max():.3f} | "
-          f"3-D cm: mean {a3.mean():.3f}  max {a3.max():.3f} | yaw deg: mean {ay.mean():.3f}  max {ay.max():.3f} | "
-          f"found {total - missed}/{total}")
+    print(
+        f"  2-D centre cm: mean {a2.mean():.3f}  p95 {np.percentile(a2, 95):.3f}  max {a2.max():.3f} | "
+        f"3-D cm: mean {a3.mean():.3f}  max {a3.max():.3f} | yaw deg: mean {ay.mean():.3f}  max {ay.max():.3f} | "
+        f"found {total - missed}/{total}"
+    )
 
 
 def main() -> None:
@@ -114,8 +129,10 @@ def main() -> None:
     ap.add_argument("--height", type=float, default=1.2, help="camera height above the brick tops, m")
     args = ap.parse_args()
     blur = (args.blur[0], args.blur[1])
-    print(f"# {args.frames} frames x 2 bricks, camera {args.height} m above the tops, tilt <= 5 deg, "
-          f"blur {blur[0]}-{blur[1]} px, noise 2 grey levels, 640x480 f=600 px")
+    print(
+        f"# {args.frames} frames x 2 bricks, camera {args.height} m above the tops, tilt <= 5 deg, "
+        f"blur {blur[0]}-{blur[1]} px, noise 2 grey levels, 640x480 f=600 px"
+    )
     for name, method, hide in (
         ("joint fit (estimate_bricks), both markers", joint, False),
         ("joint fit (estimate_bricks), one marker hidden", joint, True),

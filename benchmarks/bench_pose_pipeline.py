@@ -65,7 +65,9 @@ def main() -> None:
         ("render_frame", lambda: [render_frame(intr, T, b, markers, rng=rng) for T, b in scenes] and None),
     ]
     found = sum(len(estimate_bricks(im, intr, markers)) for im in images)
-    print(f"# {platform.python_version()} opencv {cv2.__version__} {platform.machine()}, one thread, CPU time")
+    print(
+        f"# {platform.python_version()} opencv {cv2.__version__} {platform.machine()}, one thread, CPU time"
+    )
     print(f"# {n} frames 640x480, {args.bricks} bricks each ({found} of {n * args.bricks} bricks found)")
     for name, fn in rows:
         s = per_call_s(fn, args.repeats) / n

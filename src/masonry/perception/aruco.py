@@ -114,9 +114,8 @@ def _subpix_corners(grey: np.ndarray, corners: np.ndarray) -> np.ndarray:
     refined = cv2.cornerSubPix(
         grey, corners.reshape(-1, 1, 2).astype(np.float32), (half, half), (-1, -1), _SUBPIX_CRITERIA
     ).reshape(4, 2)
-    moved = np.linalg.norm(
-        refined - corners, axis=1
-    )  # it can jump to a neighbouring feature on a tiny marker
+    # cornerSubPix can jump to a neighbouring feature on a tiny marker: keep only small moves.
+    moved = np.linalg.norm(refined - corners, axis=1)
     return np.where((moved < 0.25 * half + 1.0)[:, None], refined, corners).astype(np.float64)  # type: ignore[no-any-return]
 
 
@@ -226,7 +225,8 @@ def _corners_from_edges(
         out[i] = ((A[1, 1] * b0 - A[0, 1] * b1) / det, (A[0, 0] * b1 - A[1, 0] * b0) / det)
     if K is not None and dist is not None and distorted:
         norm = np.column_stack([(out[:, 0] - K[0, 2]) / K[0, 0], (out[:, 1] - K[1, 2]) / K[1, 1], np.ones(4)])
-        out = np.asarray(cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, dist)[0], dtype=float).reshape(4, 2)
+        projected = cv2.projectPoints(norm, np.zeros(3), np.zeros(3), K, dist)[0]
+        out = np.asarray(projected, dtype=float).reshape(4, 2)
     if float(np.max(np.linalg.norm(out - corners, axis=1))) > 2.0:
         return None  # the lines met far from the detected corner: something else shares the edge
     return out
