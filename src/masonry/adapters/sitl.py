@@ -356,6 +356,7 @@ class MavlinkSitl:
                 self._rates_hz[msg_id] = DEFAULT_RATES_HZ[msg_id]
             else:
                 self._rates_hz[msg_id] = min(100.0, 1e6 / interval_us)
+            self._next_due.pop(msg_id, None)  # the new rate starts now
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         else:
             self._ack(cmd, MAV_RESULT_UNSUPPORTED)
