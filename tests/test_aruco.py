@@ -222,3 +222,18 @@ def test_yaw_convention_matches_the_estimation_math(
 def test_yaw_about_z_is_atan2() -> None:
     assert yaw_about_rad(np.array([0.0, 1.0, 0.3])) == pytest.approx(math.pi / 2)
     assert yaw_about_rad(np.array([1.0, 1.0, 0.0]), (0.0, 0.0, -1.0)) == pytest.approx(-math.pi / 4)
+
+
+def test_markers_of_two_bricks_with_one_id_are_not_fused() -> None:
+    """Marker 2k of one brick and 2k+1 of another (same id printed twice) do not fit one layout: use one marker."""
+    T = look_down((0.0, 0.0, 1.3))
+    near = RenderedBrick(4, (0.25, 0.1, 0.35), 0.2)  # shows only marker 9
+    far = RenderedBrick(4, (-0.3, -0.2, 0.05), -0.4)  # shows only marker 8 (drawn smaller)
+    image = render_frame(INTR, T, [near, far], MARKERS, rng=1, hidden_markers=frozenset({8}))
+    image_far = render_frame(INTR, T, [far], MARKERS, rng=1, hidden_markers=frozenset({9}))
+    image = np.where(image_far < 60, image_far, image)  # far brick's marker 8 pasted in (its black cells)
+    found = estimate_bricks(image, INTR, MARKERS)
+    assert len(found) == 1
+    centre_w = T[:3, :3] @ found[0].center_m + T[:3, 3]
+    assert np.linalg.norm(centre_w - [0.25, 0.1, 0.40]) < 0.01  # the larger (nearer) marker's brick
+    assert found[0].tags == (9,)

@@ -39,6 +39,9 @@ __all__ = [
     "yaw_about_rad",
 ]
 
+_MAX_JOINT_RMS_PX = (
+    2.0  # reprojection RMS above which a brick's two markers are not taken as one rigid layout
+)
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 0.001)
 
 
@@ -372,8 +375,8 @@ def _square_pose(
 
 def _fit_brick(
     obs: list[DetectedMarker], markers: MarkerSpec, K: np.ndarray, dist: np.ndarray, up: np.ndarray | None
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """One pose (R_cam_brick, top-face centre) for the corners of one brick's visible markers."""
+) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]] | None:
+    """One pose (R_cam_brick, top-face centre, marker ids used) for the corners of one brick's markers."""
     ids = tuple(m.marker_id for m in obs)
     obj = brick_corner_layout(markers, ids)
     img = np.vstack([m.corners_px for m in obs])
@@ -383,12 +386,18 @@ def _fit_brick(
         if pose is None:
             return None
         R, t = pose
-        return R, t - R @ obj[:4].mean(axis=0)
+        return R, t - R @ obj[:4].mean(axis=0), ids
     ok, rvec, tvec = cv2.solvePnP(obj, img, K, dist, flags=cv2.SOLVEPNP_IPPE)
-    if not ok:
-        return None
-    rvec, tvec = cv2.solvePnPRefineLM(obj, img, K, dist, rvec, tvec)
-    return _rotation(rvec), np.asarray(tvec, dtype=float).reshape(3)
+    if ok:
+        rvec, tvec = cv2.solvePnPRefineLM(obj, img, K, dist, rvec, tvec)
+        projected = cv2.projectPoints(obj, rvec, tvec, K, dist)[0].reshape(-1, 2)
+        rms_px = float(np.sqrt(np.mean(np.sum((projected - img) ** 2, axis=1))))
+        if rms_px <= _MAX_JOINT_RMS_PX:
+            return _rotation(rvec), np.asarray(tvec, dtype=float).reshape(3), ids
+    # The two markers do not fit one brick (two bricks printed with the same id, a marker on a tilted sticker):
+    # trust the larger marker alone.
+    larger = max(obs, key=lambda m: _perimeter(m.corners_px))
+    return _fit_brick([larger], markers, K, dist, up)
 
 
 def estimate_bricks(
@@ -401,7 +410,9 @@ def estimate_bricks(
 
     All visible corners of a brick's markers are fitted jointly with their known layout (``markers.size_m`` and
     ``markers.spacing_m``). The yaw is the angle of the brick's +x axis about ``config.up`` (default the optical
-    axis, i.e. in the image's x-y plane).
+    axis, i.e. in the image's x-y plane). ``tags`` lists the marker ids the estimate rests on: those seen, except
+    when two seen markers do not fit one brick (reprojection RMS above 2 px, e.g. an id printed on two bricks);
+    then only the larger marker is used.
 
     Raises:
         PerceptionError: unknown dictionary.
@@ -418,8 +429,6 @@ def estimate_bricks(
         fit = _fit_brick(obs, markers, K, dist, up / np.linalg.norm(up))
         if fit is None:
             continue
-        R, centre = fit
-        estimates.append(
-            BrickEstimate(brick_id, centre, yaw_about_rad(R[:, 0], up), tuple(m.marker_id for m in obs))
-        )
+        R, centre, used = fit
+        estimates.append(BrickEstimate(brick_id, centre, yaw_about_rad(R[:, 0], up), used))
     return estimates
