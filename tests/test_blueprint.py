@@ -101,7 +101,7 @@ def test_paper_case_study_matches_the_paper() -> None:
     ],
     ids=["running-bond", "towers", "pyramid", "generate"],
 )
-def test_generated_blueprints_are_valid_and_round_trip(bp, tmp_path: Path) -> None:  # noqa: ANN001
+def test_generated_blueprints_are_valid_and_round_trip(bp, tmp_path: Path) -> None:
     path = tmp_path / "gen.yaml"
     path.write_text(format_blueprint(bp))
     again = load_blueprint(path)

@@ -26,7 +26,7 @@ fleet:
 """
 
 
-def _invoke(*args: str):  # noqa: ANN202
+def _invoke(*args: str):
     return runner.invoke(app, list(args))
 
 
@@ -35,7 +35,7 @@ def test_paper_case_study_summary_shows_start_tasks_and_cross_conflicts() -> Non
     assert result.exit_code == 0, result.stderr
     out = result.stdout
     assert "available now   2: A0, A1" in out
-    rows = {line.split()[0]: line for line in out.splitlines() if line.startswith("  B") or line.startswith("  A")}
+    rows = {line.split()[0]: line for line in out.splitlines() if line.startswith(("  B", "  A"))}
     # B0 sits on the stack glued by A0, B1 on the one glued by A1: each conflicts with the other stack's task.
     assert "A1" in rows["B0"].split("A0", 1)[1] and "A0" in rows["B1"].split("A1", 1)[1]
 
@@ -190,8 +190,11 @@ INVALID = {
         ["brick 1", "placed but rests on brick 0"],
     ),
     "no-pickup": ("bricks:\n  - {id: 0, position: [0, 0, 0.05]}\n" + FLEET, ["brick 0", "pickup"]),
-    "no-brick-uav": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], pickup: [3, 0, 0.05]}\n"
-                     "fleet:\n  - {name: g, role: adhesion, home: [0, 0, 0]}\n", ["fleet", "role `brick`"]),
+    "no-brick-uav": (
+        ("bricks:\n  - {id: 0, position: [0, 0, 0.05], pickup: [3, 0, 0.05]}\n"
+         "fleet:\n  - {name: g, role: adhesion, home: [0, 0, 0]}\n"),
+        ["fleet", "role `brick`"],
+    ),
     "no-adhesion-uav": (
         "bricks:\n" + BRICK0 + "  - {id: 1, position: [0, 0, 0.15], pickup: [3, 0, 0.05]}\n"
         "fleet:\n  - {name: b, role: brick, home: [0, 0, 0]}\n",

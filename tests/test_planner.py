@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from masonry.blueprint import Blueprint, Brick, BlueprintError, UavSpec, load_blueprint, validate_blueprint
+from masonry.blueprint import Blueprint, BlueprintError, Brick, UavSpec, load_blueprint, validate_blueprint
 from masonry.blueprint_gen import pyramid, running_bond, towers
 from masonry.planner import AdhesionTask, BrickTask, plan
 from masonry.planner.overlap import segment_distances
@@ -89,7 +89,7 @@ def test_longest_chain_and_available_on_a_wall() -> None:
     chain = p.longest_chain()
     assert len(chain) == 4  # B(course 2) -> A -> B(course 1) -> A
     deps = set(p.dependencies)
-    assert all((u, v) in deps for u, v in zip(chain, chain[1:]))
+    assert all((u, v) in deps for u, v in itertools.pairwise(chain))
     assert all(t.startswith("A") for t in p.available())
     assert p.available(done=p.available()) != p.available()
 
@@ -130,7 +130,7 @@ def walls(draw: st.DrawFn, max_bricks: int = 18) -> Blueprint:
     return _bp(bricks, clearance)
 
 
-def _graph(p):  # noqa: ANN001, ANN202
+def _graph(p):
     g = nx.DiGraph()
     g.add_nodes_from(t.id for t in p.tasks)
     g.add_edges_from(p.dependencies)
@@ -182,13 +182,13 @@ def test_random_walls_adhesion_segments_on_lower_top_face_inside_both_footprints
                 assert _inside(point[:2], lower) and _inside(point[:2], upper), (t, point)
 
 
-def _oracle(p, clearance: float) -> set[tuple[str, str]]:  # noqa: ANN001
+def _oracle(p, clearance: float) -> set[tuple[str, str]]:
     """All pairs of tasks to do within r_c, minus pairs joined by a path in G^d: the brute-force definition."""
     closure = nx.transitive_closure_dag(_graph(p))
     index = {t.id: k for k, t in enumerate(p.tasks)}
     todo = [t for t in p.tasks if not t.done]
 
-    def seg(t):  # noqa: ANN001, ANN202
+    def seg(t):
         return (t.position_m, t.position_m) if isinstance(t, BrickTask) else (t.start_m, t.end_m)
 
     out = set()

@@ -36,7 +36,7 @@ def test_neighbour_pairs_equal_brute_force(n: int, reach: int, cell: float, seed
     assert len(got) == len(set(got)) and set(got) == want
 
 
-def _sampled_distance(p0, p1, q0, q1, k: int = 301) -> float:  # noqa: ANN001
+def _sampled_distance(p0, p1, q0, q1, k: int = 301) -> float:
     t = np.linspace(0.0, 1.0, k)[:, None]
     a = p0 + t * (p1 - p0)
     b = q0 + t * (q1 - q0)
@@ -71,7 +71,7 @@ def test_clip_area_principal_axis_and_chord() -> None:
     poly = clip_convex(a, b)
     area, centroid = polygon_area_centroid(poly)
     assert math.isclose(area, 0.25) and np.allclose(centroid, (0.25, 0.0))
-    (cx, cy), (dx, dy) = principal_axis(poly)
+    (cx, cy), (dx, _) = principal_axis(poly)
     assert math.isclose(abs(dx), 1.0, abs_tol=1e-9)
     assert np.allclose(chord(poly, (cx, cy), (1.0, 0.0)), (-0.25, 0.25))
     assert clip_convex(a, rectangle_corners((3.0, 0.0), (0.5, 0.25), 0.3)) == []

@@ -10,7 +10,7 @@ apart.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from masonry.blueprint import (
     DEFAULT_BRICK_SIZE_M,
@@ -173,10 +173,10 @@ def _dictionary_for(n_bricks: int) -> str:
 
 def generate(kind: str, **options: object) -> Blueprint:
     """Dispatch on the generator name ("running-bond", "towers" or "pyramid")."""
-    funcs = {"running-bond": running_bond, "towers": towers, "pyramid": pyramid}
+    funcs: dict[str, Callable[..., Blueprint]] = {"running-bond": running_bond, "towers": towers, "pyramid": pyramid}
     if kind not in funcs:
         raise BlueprintError("<generator>", "kind", f"unknown generator {kind!r} (one of {', '.join(GENERATORS)})")
-    return funcs[kind](**options)  # type: ignore[arg-type]
+    return funcs[kind](**options)
 
 
 def bricks_of(blueprint: Blueprint) -> Sequence[Brick]:

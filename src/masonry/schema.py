@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from masonry.blueprint import ARUCO_DICTIONARIES, DEFAULT_BRICK_SIZE_M, DEFAULT_CLEARANCE_M, DEFAULT_CRUISE_ALTITUDE_M
+from masonry.blueprint import (
+    ARUCO_DICTIONARIES,
+    DEFAULT_BRICK_SIZE_M,
+    DEFAULT_CLEARANCE_M,
+    DEFAULT_CRUISE_ALTITUDE_M,
+)
 
 SCHEMA_ID = "https://masonry.example/schemas/blueprint.schema.json"
 

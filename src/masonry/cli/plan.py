@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any
 
 import typer
 
@@ -24,8 +24,8 @@ DETAIL_LIMIT = 40
 def plan_command(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML; see docs/blueprint-format.md)."),
     fmt: str = typer.Option("text", "--format", help="text (a human summary) | json."),
-    output: Optional[Path] = typer.Option(None, "--output", "-o", help="Write the output to this file."),
-    graph: Optional[Path] = typer.Option(
+    output: Path | None = typer.Option(None, "--output", "-o", help="Write the output to this file."),
+    graph: Path | None = typer.Option(
         None, "--graph", help="Draw/export G^d and G^c together: .png, .svg, .dot or .graphml."
     ),
 ) -> None:
@@ -143,8 +143,8 @@ app.add_typer(blueprint_app, name="blueprint")
 
 
 def _common(
-    output: Optional[Path],
-    brick_size: Optional[tuple[float, float, float]],
+    output: Path | None,
+    brick_size: tuple[float, float, float] | None,
     joint: float,
     yaw: float,
     origin: tuple[float, float],
@@ -154,7 +154,7 @@ def _common(
     adhesion_uavs: int,
     clearance: float,
     cruise_altitude: float,
-    name: Optional[str],
+    name: str | None,
 ) -> dict[str, Any]:
     options: dict[str, Any] = {
         "joint_m": joint,
@@ -191,7 +191,7 @@ def _argv(options: dict[str, Any]) -> str:
     return " " + " ".join(parts) if parts else ""
 
 
-def _emit(kind: str, options: dict[str, Any], output: Optional[Path]) -> None:
+def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     from masonry.blueprint import format_blueprint, validate_blueprint
     from masonry.blueprint_gen import generate
     from masonry.errors import BlueprintError
@@ -231,8 +231,8 @@ _NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bric
 def running_bond_command(
     courses: int = typer.Option(4, "--courses", help="Number of courses (rows)."),
     bricks_per_course: int = typer.Option(6, "--bricks-per-course", help="Bricks in each course."),
-    output: Optional[Path] = _OUT,
-    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    output: Path | None = _OUT,
+    brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,
     yaw: float = _YAW,
     origin: tuple[float, float] = _ORIGIN,
@@ -242,7 +242,7 @@ def running_bond_command(
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
     cruise_altitude: float = _CRUISE,
-    name: Optional[str] = _NAME,
+    name: str | None = _NAME,
 ) -> None:
     """A straight running-bond wall: every other course shifted by half a brick."""
     options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,
@@ -256,8 +256,8 @@ def towers_command(
     towers: int = typer.Option(2, "--towers", help="Number of towers."),
     height: int = typer.Option(3, "--height", help="Bricks per tower."),
     spacing: float = typer.Option(1.0, "--spacing", help="Distance between tower centres, metres."),
-    output: Optional[Path] = _OUT,
-    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    output: Path | None = _OUT,
+    brick_size: tuple[float, float, float] | None = _SIZE,
     yaw: float = _YAW,
     origin: tuple[float, float] = _ORIGIN,
     placed_courses: int = _PLACED,
@@ -266,7 +266,7 @@ def towers_command(
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
     cruise_altitude: float = _CRUISE,
-    name: Optional[str] = _NAME,
+    name: str | None = _NAME,
 ) -> None:
     """Separate stacks of bricks in a row (the paper's case study is --towers 2 --height 3 --placed-courses 2)."""
     options = _common(output, brick_size, 0.0, yaw, origin, placed_courses, pallet_columns, brick_uavs,
@@ -279,8 +279,8 @@ def towers_command(
 @command("pyramid", typer_app=blueprint_app)
 def pyramid_command(
     base: int = typer.Option(5, "--base", help="Bricks in the bottom course (one fewer per course above)."),
-    output: Optional[Path] = _OUT,
-    brick_size: Optional[tuple[float, float, float]] = _SIZE,
+    output: Path | None = _OUT,
+    brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,
     yaw: float = _YAW,
     origin: tuple[float, float] = _ORIGIN,
@@ -290,7 +290,7 @@ def pyramid_command(
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
     cruise_altitude: float = _CRUISE,
-    name: Optional[str] = _NAME,
+    name: str | None = _NAME,
 ) -> None:
     """A stepped pyramid wall."""
     options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,

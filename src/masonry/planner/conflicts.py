@@ -156,7 +156,8 @@ class DescendantWindows:
         index = np.where(inside, self._offset[src] + (dst >> 6) - self._w0[src], 0)
         words = self._bits[index]
         bit = (words >> (dst & 63).astype(np.uint64)) & np.uint64(1)
-        return inside & (bit == 1)
+        found: NDArray[np.bool_] = inside & (bit == 1)
+        return found
 
     def dependent(self, a: IntArray, b: IntArray) -> NDArray[np.bool_]:
         """Whether either rank of each pair is reachable from the other."""

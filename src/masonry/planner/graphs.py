@@ -107,8 +107,8 @@ def plan_graphs(blueprint: Blueprint) -> PlanGraphs:
                 id=aid,
                 below=bricks[j].id,
                 above=bricks[i].id,
-                start_m=tuple(starts[m]),  # type: ignore[arg-type]
-                end_m=tuple(ends[m]),  # type: ignore[arg-type]
+                start_m=(starts[m][0], starts[m][1], starts[m][2]),
+                end_m=(ends[m][0], ends[m][1], ends[m][2]),
                 length_m=lengths[m],
             )
         )

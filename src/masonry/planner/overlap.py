@@ -60,16 +60,12 @@ def clip_convex(subject: Sequence[Point2], clip: Sequence[Point2]) -> list[Point
             break
         (x1, y1), (x2, y2) = clip[k], clip[(k + 1) % n]
         ex, ey = x2 - x1, y2 - y1
-
-        def side(p: Point2) -> float:
-            return ex * (p[1] - y1) - ey * (p[0] - x1)
-
         inp = output
         output = []
         prev = inp[-1]
-        sp = side(prev)
+        sp = ex * (prev[1] - y1) - ey * (prev[0] - x1)  # > 0: left of the edge, inside
         for cur in inp:
-            sc = side(cur)
+            sc = ex * (cur[1] - y1) - ey * (cur[0] - x1)
             if sc >= 0.0:
                 if sp < 0.0:
                     t = sp / (sp - sc)
@@ -103,7 +99,7 @@ def polygon_area_centroid(poly: Sequence[Point2]) -> tuple[float, Point2]:
 
 def principal_axis(poly: Sequence[Point2]) -> tuple[Point2, Point2]:
     """Centroid and unit direction of the major principal axis of a polygon's area (second moments)."""
-    area, (cx, cy) = polygon_area_centroid(poly)
+    _, (cx, cy) = polygon_area_centroid(poly)
     sxx = syy = sxy = 0.0
     n = len(poly)
     for k in range(n):
@@ -176,4 +172,5 @@ def segment_distances(p0: FloatArray, p1: FloatArray, q0: FloatArray, q1: FloatA
     t = np.where(e_zero, 0.0, t)
     s = np.where(e_zero & ~a_zero, np.clip(-c / safe_a, 0.0, 1.0), s)
     closest = (p0 + d1 * s[:, None]) - (q0 + d2 * t[:, None])
-    return np.sqrt(np.einsum("ij,ij->i", closest, closest))
+    distance: FloatArray = np.sqrt(np.einsum("ij,ij->i", closest, closest))
+    return distance

@@ -20,13 +20,14 @@ IntArray = NDArray[np.int64]
 def _forward_offsets(reach: int) -> tuple[tuple[int, int, int], ...]:
     """Half of the neighbour offsets within ``reach`` cells (the other half gives the same pairs reversed)."""
     steps = range(-reach, reach + 1)
-    return tuple(d for d in product(steps, repeat=3) if d > (0, 0, 0))
+    return tuple((dx, dy, dz) for dx, dy, dz in product(steps, repeat=3) if (dx, dy, dz) > (0, 0, 0))
 
 
 def cell_coordinates(points: NDArray[np.float64], cell_size: NDArray[np.float64] | float) -> IntArray:
     """Integer cell of each point (n, 3) for a grid of ``cell_size`` (scalar or per axis)."""
     size = np.broadcast_to(np.asarray(cell_size, dtype=float), (3,))
-    return np.floor(np.asarray(points, dtype=float) / size).astype(np.int64)
+    cells: IntArray = np.floor(np.asarray(points, dtype=float) / size).astype(np.int64)
+    return cells
 
 
 def neighbour_pairs(
