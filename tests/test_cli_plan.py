@@ -202,6 +202,10 @@ INVALID = {
     ),
     "unknown-role": ("bricks:\n" + BRICK0 + "fleet:\n  - {name: x, role: mortar, home: [0, 0, 0]}\n",
                      ["fleet UAV 'x': role", "unknown role 'mortar'"]),
+    "thin-brick": ("bricks:\n  - {id: 0, position: [0, 0, 0.004], size: [0.3, 0.15, 0.008], placed: true}\n" + FLEET,
+                   ["brick 0: size", "must exceed 0.01 m"]),
+    "markers-do-not-fit": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], size: [0.2, 0.1, 0.1], placed: true}\n"
+                           + FLEET, ["brick 0: size", "do not fit"]),
     "bad-dictionary": ("brick: {markers: {dictionary: DICT_9X9_7}}\nbricks:\n" + BRICK0 + FLEET,
                        ["brick.markers.dictionary", "unknown ArUco dictionary"]),
 }
