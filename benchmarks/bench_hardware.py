@@ -44,15 +44,19 @@ def mavlink() -> None:
                 time.sleep(0.2)
             got = (sitl.setpoints_received - before) / (time.monotonic() - t0)
             calls = window / 0.2
-            print(f"setpoint stream at {rate_hz:.0f} Hz configured: {got:.1f} Hz received by the autopilot "
-                  f"(of which {calls / window:.0f} Hz sent directly by send_velocity)")
+            print(
+                f"setpoint stream at {rate_hz:.0f} Hz configured: {got:.1f} Hz received by the autopilot "
+                f"(of which {calls / window:.0f} Hz sent directly by send_velocity)"
+            )
         rtts = []
         for _ in range(200):
             t = time.perf_counter()
             fc.command("rate", MAV_CMD_SET_MESSAGE_INTERVAL, (32, 1e6 / 30.0))
             rtts.append((time.perf_counter() - t) * 1000)
-        print(f"COMMAND_LONG -> COMMAND_ACK round trip (loopback): median {statistics.median(rtts):.2f} ms, "
-              f"p95 {percentile(rtts, 0.95):.2f} ms, max {max(rtts):.2f} ms")
+        print(
+            f"COMMAND_LONG -> COMMAND_ACK round trip (loopback): median {statistics.median(rtts):.2f} ms, "
+            f"p95 {percentile(rtts, 0.95):.2f} ms, max {max(rtts):.2f} ms"
+        )
         fc.land()
     finally:
         fc.close()
@@ -69,8 +73,10 @@ def actuators() -> None:
             else:
                 board.set_magnet(i % 4 == 0)
             rtts.append((time.perf_counter() - t) * 1000)
-        print(f"actuator command round trip (pty fake, 115200 baud nominal): median {statistics.median(rtts):.2f} ms, "
-              f"p95 {percentile(rtts, 0.95):.2f} ms")
+        print(
+            f"actuator command round trip (pty fake, 115200 baud nominal): median {statistics.median(rtts):.2f} ms, "
+            f"p95 {percentile(rtts, 0.95):.2f} ms"
+        )
 
 
 if __name__ == "__main__":

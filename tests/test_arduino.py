@@ -107,7 +107,9 @@ def test_every_command(fake: FakeArduino) -> None:
     with open_board(fake.port) as act:
         assert isinstance(act, Gripper) and isinstance(act, Sprayer)
         assert act.version == 1
-        assert act.status() == ActuatorStatus(magnet_on=False, joint_locked=True, valve_open=False, attached=False)
+        assert act.status() == ActuatorStatus(
+            magnet_on=False, joint_locked=True, valve_open=False, attached=False
+        )
         act.set_joint_locked(False)
         act.set_magnet(True)
         assert not act.is_attached()
@@ -115,11 +117,15 @@ def test_every_command(fake: FakeArduino) -> None:
         assert act.is_attached()
         act.set_valve(True)
         assert act.is_valve_open()
-        assert act.status() == ActuatorStatus(magnet_on=True, joint_locked=False, valve_open=True, attached=True)
+        assert act.status() == ActuatorStatus(
+            magnet_on=True, joint_locked=False, valve_open=True, attached=True
+        )
         act.set_valve(False)
         act.set_joint_locked(True)
         act.set_magnet(False)
-        assert act.status() == ActuatorStatus(magnet_on=False, joint_locked=True, valve_open=False, attached=False)
+        assert act.status() == ActuatorStatus(
+            magnet_on=False, joint_locked=True, valve_open=False, attached=False
+        )
         assert act.ping() == ("masonry-actuators", "1")
         assert [r.command for r in fake.logic.executed].count("MAG") == 2
 
@@ -137,7 +143,9 @@ def test_silence_times_out_after_the_retries(fake: FakeArduino) -> None:
     with open_board(fake.port, retries=2) as act:
         fake.silent = True
         started = time.monotonic()
-        with pytest.raises(CommandTimeout, match=rf"{fake.port}: actuator board did not answer MAG ON \(3 tries"):
+        with pytest.raises(
+            CommandTimeout, match=rf"{fake.port}: actuator board did not answer MAG ON \(3 tries"
+        ):
             act.set_magnet(True)
         assert 0.25 <= time.monotonic() - started < 1.0
         assert len([r for r in fake.received if b"MAG ON" in r]) == 3

@@ -37,6 +37,7 @@ def run(binary: Path, lines: list[bytes], attached: bool = False) -> tuple[list[
         input=b"".join(lines),
         capture_output=True,
         timeout=20,
+        check=False,
         env={"MASONRY_SHIM_ATTACHED": "1" if attached else "0"},
     )
     assert out.returncode == 0
@@ -86,7 +87,9 @@ def _xor(data: bytes) -> int:
 def test_firmware_answers_like_the_reference(firmware: Path, attached: bool) -> None:
     lines = conversation()
     got, pins = run(firmware, lines, attached)
-    reference = DeviceLogic(release_drops_brick=False)  # the test holds the sensor pin, as the firmware reads it
+    reference = DeviceLogic(
+        release_drops_brick=False
+    )  # the test holds the sensor pin, as the firmware reads it
     reference.set_attached(attached)
     expected = [reference.hello()] + [reference.handle(line) for line in lines]
     assert len(got) == len(expected)

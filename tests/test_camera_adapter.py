@@ -96,9 +96,11 @@ def test_resolution_must_match_the_calibration(recording, tmp_path) -> None:
     video, _ = recording
     other = tmp_path / "hd.yaml"
     write_calibration(other, CameraIntrinsics(900.0, 900.0, 639.5, 359.5, width_px=1280, height_px=720))
-    with OpenCvCamera(str(video), calibration=other) as cam:
-        with pytest.raises(InputError, match="640x480 frames but the calibration is for 1280x720"):
-            cam.read()
+    with (
+        OpenCvCamera(str(video), calibration=other) as cam,
+        pytest.raises(InputError, match="640x480 frames but the calibration is for 1280x720"),
+    ):
+        cam.read()
 
 
 def test_missing_inputs_are_clear_errors(tmp_path, recording) -> None:
@@ -125,9 +127,10 @@ def test_source_kinds() -> None:
 
 
 def test_udp_pose_source_keeps_the_newest_pose_of_its_body() -> None:
-    with UdpPoseSource(0, body="brick-1", max_age_s=0.5) as source, socket.socket(
-        socket.AF_INET, socket.SOCK_DGRAM
-    ) as tx:
+    with (
+        UdpPoseSource(0, body="brick-1", max_age_s=0.5) as source,
+        socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx,
+    ):
         address = ("127.0.0.1", source.port)
         assert source.latest() is None
         send_pose(tx, address, MocapPose("brick-2", 1.0, (9.0, 9.0, 9.0), (0.0, 0.0, 0.0)))
@@ -143,7 +146,9 @@ def test_udp_pose_source_keeps_the_newest_pose_of_its_body() -> None:
 
 
 def test_pose_parsing() -> None:
-    pose = parse_pose(b'{"position_m": [0, 0, 1], "quaternion": [0.7071068, 0, 0, 0.7071068]}', received_s=5.0)
+    pose = parse_pose(
+        b'{"position_m": [0, 0, 1], "quaternion": [0.7071068, 0, 0, 0.7071068]}', received_s=5.0
+    )
     assert pose.time_s == 5.0 and pose.attitude_rad == pytest.approx((0.0, 0.0, np.pi / 2))
     assert quaternion_to_euler(1, 0, 0, 0) == (0.0, 0.0, 0.0)
     with pytest.raises(InputError, match="time_s"):

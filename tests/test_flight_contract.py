@@ -7,7 +7,6 @@ Time is the port's own: the simulated world steps its clock; the MAVLink rig sle
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,8 +35,13 @@ class Rig:
                 each()
             self.step(dt_s)
 
-    def until(self, predicate: Callable[[Telemetry], bool], timeout_s: float, what: str,
-              each: Callable[[], None] | None = None) -> float:
+    def until(
+        self,
+        predicate: Callable[[Telemetry], bool],
+        timeout_s: float,
+        what: str,
+        each: Callable[[], None] | None = None,
+    ) -> float:
         start = self.now_s()
         while not predicate(self.fc.telemetry()):
             if self.now_s() - start > timeout_s:
@@ -96,7 +100,9 @@ def test_flight_arm_takeoff_move_turn_stop_land(rig: Rig) -> None:
     fc.arm()
     assert fc.telemetry().armed
     fc.takeoff(1.0)  # metres above the ground it stands on
-    rig.until(lambda t: not t.on_ground and t.position_m[2] > 0.95 and abs(t.velocity_mps[2]) < 0.1, 8.0, "takeoff")
+    rig.until(
+        lambda t: not t.on_ground and t.position_m[2] > 0.95 and abs(t.velocity_mps[2]) < 0.1, 8.0, "takeoff"
+    )
     assert fc.telemetry().position_m[2] == pytest.approx(1.0, abs=0.08)
 
     with pytest.raises(CommandRejected):
@@ -104,7 +110,9 @@ def test_flight_arm_takeoff_move_turn_stop_land(rig: Rig) -> None:
     assert fc.telemetry().armed
 
     start = fc.telemetry()
-    rig.run(2.0, each=lambda: fc.send_velocity((0.5, 0.0, 0.0), 0.4))  # east, turning left (counter-clockwise)
+    rig.run(
+        2.0, each=lambda: fc.send_velocity((0.5, 0.0, 0.0), 0.4)
+    )  # east, turning left (counter-clockwise)
     moved = fc.telemetry()
     dx, dy = moved.position_m[0] - start.position_m[0], moved.position_m[1] - start.position_m[1]
     assert 0.6 < dx < 1.1 and abs(dy) < 0.1

@@ -54,8 +54,9 @@ def test_pre_flight_check_refuses_to_arm_without_a_position_estimate(tmp_path) -
     sitl = MavlinkSitl(port, time_scale=5.0, config=SitlConfig(position_source="vision"))
     sitl.start()
     try:
-        res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
-                                  "--config", str(config)])
+        res = runner.invoke(
+            app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--config", str(config)]
+        )
     finally:
         sitl.stop()
     assert res.exit_code == 1
@@ -67,18 +68,45 @@ def test_pre_flight_check_refuses_to_arm_without_a_position_estimate(tmp_path) -
 
 
 def test_a_missing_device_is_one_line_naming_it() -> None:
-    res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
-                              "--actuators", "/dev/ttyMASONRY7"])
+    res = runner.invoke(
+        app,
+        [
+            "fly",
+            "--uav",
+            "brick",
+            "--blueprint",
+            CASE_STUDY,
+            "--task",
+            "B0",
+            "--actuators",
+            "/dev/ttyMASONRY7",
+        ],
+    )
     assert res.exit_code == 1
     assert res.stderr.startswith("error: /dev/ttyMASONRY7: cannot open the actuator board's serial port")
     assert len(res.stderr.strip().splitlines()) == 1
 
 
 def test_option_conflicts_are_input_errors(tmp_path) -> None:
-    res = runner.invoke(app, ["fly", "--sim", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
-                              "--fc", "udpin:0.0.0.0:14550"])
+    res = runner.invoke(
+        app,
+        [
+            "fly",
+            "--sim",
+            "--uav",
+            "brick",
+            "--blueprint",
+            CASE_STUDY,
+            "--task",
+            "B0",
+            "--fc",
+            "udpin:0.0.0.0:14550",
+        ],
+    )
     assert res.exit_code == 2 and "--sim simulates every adapter" in res.stderr
-    res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--camera", "0"])
+    res = runner.invoke(
+        app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--camera", "0"]
+    )
     assert res.exit_code == 2 and "--camera 0 needs --calibration FILE" in res.stderr
     res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0"])
     assert res.exit_code == 2 and "pass --sim" in res.stderr
@@ -86,12 +114,20 @@ def test_option_conflicts_are_input_errors(tmp_path) -> None:
 
 def test_uav_config_file(tmp_path) -> None:
     good = tmp_path / "uav.yaml"
-    good.write_text("fc: /dev/ttyACM1\nfc_baud: 921600\ncamera: 0\ncalibration: cam.yaml\n"
-                    "origin_m: [1, 2, 0]\nmin_battery: 0.4\nname: brick-2\nmocap-port: 5005\n")
+    good.write_text(
+        "fc: /dev/ttyACM1\nfc_baud: 921600\ncamera: 0\ncalibration: cam.yaml\n"
+        "origin_m: [1, 2, 0]\nmin_battery: 0.4\nname: brick-2\nmocap-port: 5005\n"
+    )
     settings = load_uav_config(good)
-    assert settings["camera"] == "0" and settings["origin_m"] == (1.0, 2.0, 0.0) and settings["mocap_port"] == 5005
+    assert (
+        settings["camera"] == "0"
+        and settings["origin_m"] == (1.0, 2.0, 0.0)
+        and settings["mocap_port"] == 5005
+    )
     hw = hardware_config({"fc": "udpin:0.0.0.0:14550", "camera": None}, settings)  # the flag wins
-    assert hw.fc == "udpin:0.0.0.0:14550" and hw.camera == "0" and hw.fc_baud == 921600 and hw.min_battery == 0.4
+    assert (
+        hw.fc == "udpin:0.0.0.0:14550" and hw.camera == "0" and hw.fc_baud == 921600 and hw.min_battery == 0.4
+    )
     assert not hw.all_sim and hw.sim_actuators
     assert HardwareConfig().all_sim
     for text, message in [
@@ -124,8 +160,9 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
     try:
         from masonry.adapters.mavlink import load_signing_key
 
-        fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=10.0,
-                                     signing_key=load_signing_key(key))
+        fc = MavlinkFlightController(
+            f"udpin:127.0.0.1:{port}", connect_timeout_s=10.0, signing_key=load_signing_key(key)
+        )
         fc.connect()
         try:
             fc.wait_for_estimate(3.0)
@@ -148,6 +185,9 @@ def test_sitl_command_bad_input() -> None:
     res = runner.invoke(app, ["sitl", "--time-scale", "0"])
     assert res.exit_code == 2 and "--time-scale" in res.stderr
     res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "glue-1"])
-    assert res.exit_code == 2 and "--name glue-1: glue-1 is not a brick UAV (it is an adhesion UAV)" in res.stderr
+    assert (
+        res.exit_code == 2
+        and "--name glue-1: glue-1 is not a brick UAV (it is an adhesion UAV)" in res.stderr
+    )
     res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "nobody"])
     assert res.exit_code == 2 and "the fleet has no UAV named nobody" in res.stderr

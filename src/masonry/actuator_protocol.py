@@ -179,7 +179,12 @@ def parse_status(fields: tuple[str, ...]) -> ActuatorStatus:
         if not eq:
             raise FrameError(f"status field {field!r} is not key=value")
         values[key.lower()] = value.upper()
-    allowed = {"mag": ("0", "1"), "joint": ("LOCK", "UNLOCK"), "valve": ("OPEN", "CLOSE"), "attached": ("0", "1")}
+    allowed = {
+        "mag": ("0", "1"),
+        "joint": ("LOCK", "UNLOCK"),
+        "valve": ("OPEN", "CLOSE"),
+        "attached": ("0", "1"),
+    }
     for key, options in allowed.items():
         if values.get(key) not in options:
             raise FrameError(f"status field {key}={values.get(key)!r} not one of {'/'.join(options)}")

@@ -90,7 +90,9 @@ class ArduinoActuators:
         import serial
 
         try:
-            self._serial = serial.serial_for_url(self.port, baudrate=self.baud, timeout=0.02, write_timeout=1.0)
+            self._serial = serial.serial_for_url(
+                self.port, baudrate=self.baud, timeout=0.02, write_timeout=1.0
+            )
         except (serial.SerialException, OSError, ValueError) as exc:
             raise DeviceNotFound(f"{self.port}: cannot open the actuator board's serial port: {exc}") from exc
         try:
@@ -103,7 +105,9 @@ class ArduinoActuators:
             ) from exc
         if len(reply.fields) < 2 or reply.fields[0] != PROTOCOL_NAME:
             self.close()
-            raise DeviceNotFound(f"{self.port}: the device is not a {PROTOCOL_NAME} board (PING: {reply.fields})")
+            raise DeviceNotFound(
+                f"{self.port}: the device is not a {PROTOCOL_NAME} board (PING: {reply.fields})"
+            )
         self.version = int(reply.fields[1]) if reply.fields[1].isdigit() else None
         if self.version != PROTOCOL_VERSION:
             self.close()
@@ -198,7 +202,9 @@ class ArduinoActuators:
                     if reply.seq != request.seq:
                         continue  # a late answer to an earlier try, or an error about garbage (seq 0)
                     if not reply.ok:
-                        raise CommandRejected(f"{text} on {self.port}", f"{reply.code} {reply.message}".strip())
+                        raise CommandRejected(
+                            f"{text} on {self.port}", f"{reply.code} {reply.message}".strip()
+                        )
                     return reply
             raise CommandTimeout(
                 f"{self.port}: actuator board did not answer {text} ({tries} tries of {self.timeout_s:.2f} s)"

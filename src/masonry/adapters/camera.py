@@ -69,7 +69,9 @@ class OpenCvCamera:
         check_size: bool = True,
     ) -> None:
         if intrinsics is None and calibration is None:
-            raise InputError("a camera needs its intrinsics: give --calibration FILE (from `masonry calibrate`)")
+            raise InputError(
+                "a camera needs its intrinsics: give --calibration FILE (from `masonry calibrate`)"
+            )
         self.source = source
         self.kind, self.target = parse_source(source)
         self._intrinsics = intrinsics
@@ -124,7 +126,9 @@ class OpenCvCamera:
 
         _ = self.intrinsics  # a bad calibration fails now, not in flight
         if self.kind == "file" and not Path(str(self.target)).is_file():
-            raise InputError(f"{self.target}: video file not found (for a camera device give its index, e.g. 0)")
+            raise InputError(
+                f"{self.target}: video file not found (for a camera device give its index, e.g. 0)"
+            )
         try:
             if self.kind == "gstreamer":
                 capture = cv2.VideoCapture(str(self.target), cv2.CAP_GSTREAMER)

@@ -118,7 +118,11 @@ def mode_name(autopilot: str, custom_mode: int) -> str:
             return name
     if autopilot == "px4":  # PX4 sub mode 0 with an AUTO main mode: compare the main mode only
         for name, number in table.items():
-            if number >> 16 & 0xFF == custom_mode >> 16 & 0xFF and number >> 24 == 0 and custom_mode >> 24 == 0:
+            if (
+                number >> 16 & 0xFF == custom_mode >> 16 & 0xFF
+                and number >> 24 == 0
+                and custom_mode >> 24 == 0
+            ):
                 return name
     return f"MODE({custom_mode})"
 
@@ -488,7 +492,9 @@ class MavlinkFlightController:
         deadline = sent_at + self.command_timeout_s
         with self._acks:
             while time.monotonic() < deadline:
-                answered = [a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL]
+                answered = [
+                    a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL
+                ]
                 if len(answered) >= len(rates):
                     break
                 self._acks.wait(timeout=max(0.0, deadline - time.monotonic()))
@@ -538,7 +544,9 @@ class MavlinkFlightController:
                 self.clock.observe(msg.time_boot_ms / 1000.0, now)
             elif kind == "SYS_STATUS":
                 st.battery_fraction = math.nan if msg.battery_remaining < 0 else msg.battery_remaining / 100.0
-                st.battery_voltage_v = msg.voltage_battery / 1000.0 if msg.voltage_battery != 65535 else math.nan
+                st.battery_voltage_v = (
+                    msg.voltage_battery / 1000.0 if msg.voltage_battery != 65535 else math.nan
+                )
             elif kind in ("EKF_STATUS_REPORT", "ESTIMATOR_STATUS"):
                 st.estimate_flags = int(msg.flags)
             elif kind == "EXTENDED_SYS_STATE":
@@ -655,7 +663,9 @@ class MavlinkFlightController:
 
     def _latest_warning(self, since: float) -> str | None:
         with self._lock:
-            texts = [t for t in (self._state.status_texts or []) if t[0] >= since and t[1] <= MAV_SEVERITY_WARNING]
+            texts = [
+                t for t in (self._state.status_texts or []) if t[0] >= since and t[1] <= MAV_SEVERITY_WARNING
+            ]
         return texts[-1][2] if texts else None
 
     def command(self, name: str, command: int, params: tuple[float, ...] = ()) -> None:
@@ -735,8 +745,9 @@ class MavlinkFlightController:
                 return
             if time.monotonic() >= deadline:
                 raise CommandRejected(
-                    "arm", f"no usable position estimate from the autopilot after {timeout_s:.1f} s "
-                    "(is the position source (motion capture / vision) feeding the EKF?)"
+                    "arm",
+                    f"no usable position estimate from the autopilot after {timeout_s:.1f} s "
+                    "(is the position source (motion capture / vision) feeding the EKF?)",
                 )
             self._stop.wait(0.02)
 
@@ -828,9 +839,14 @@ class MavlinkFlightController:
         if st.position_ned is None or now - st.position_time_s > max(0.5, self.heartbeat_timeout_s):
             return False
         if st.estimate_flags is None:
-            return True  # no estimator report requested/received: a streaming LOCAL_POSITION_NED is the signal
+            return (
+                True  # no estimator report requested/received: a streaming LOCAL_POSITION_NED is the signal
+            )
         flags = st.estimate_flags
-        return flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED and not flags & ESTIMATE_FLAG_UNINITIALIZED
+        return (
+            flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED
+            and not flags & ESTIMATE_FLAG_UNINITIALIZED
+        )
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""
@@ -840,7 +856,9 @@ class MavlinkFlightController:
             link_ok = self._conn is not None and now - st.last_message_s <= self.heartbeat_timeout_s
             position_ok = link_ok and self._position_ok(now)
             p_ned = st.position_ned or (0.0, 0.0, 0.0)
-            position = self.frame.position_to_world(p_ned) if st.position_ned is not None else self.frame.offset_m
+            position = (
+                self.frame.position_to_world(p_ned) if st.position_ned is not None else self.frame.offset_m
+            )
             velocity = self.frame.velocity_to_world(st.velocity_ned)
             attitude = self.frame.attitude_to_world(*st.attitude)
             if st.landed_state is not None and st.landed_state != 0:
@@ -851,7 +869,9 @@ class MavlinkFlightController:
                 )
             else:
                 on_ground = not st.armed or -p_ned[2] < 0.05
-            mode = mode_name(self.autopilot or "ardupilot", st.custom_mode) if st.custom_mode >= 0 else "UNKNOWN"
+            mode = (
+                mode_name(self.autopilot or "ardupilot", st.custom_mode) if st.custom_mode >= 0 else "UNKNOWN"
+            )
             return Telemetry(
                 time_s=self.clock.now_s(),
                 position_m=position,
@@ -873,4 +893,3 @@ class MavlinkFlightController:
         """The autopilot's recent STATUSTEXT messages, oldest first."""
         with self._lock:
             return [t[2] for t in self._state.status_texts or []]
-

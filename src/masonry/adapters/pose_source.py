@@ -79,6 +79,7 @@ def parse_pose(data: bytes | str, *, received_s: float) -> MocapPose:
     if not isinstance(body, str):
         raise InputError("pose field body must be a string")
     position = vector("position_m", 3)
+    attitude: tuple[float, ...]
     if "quaternion" in obj:
         try:
             attitude = quaternion_to_euler(*vector("quaternion", 4))
@@ -113,7 +114,9 @@ class UdpPoseSource:
         max_age_s: ``latest()`` returns None for a pose older than this (the tracker lost the body).
     """
 
-    def __init__(self, port: int, *, host: str = "127.0.0.1", body: str | None = None, max_age_s: float = 0.5):
+    def __init__(
+        self, port: int, *, host: str = "127.0.0.1", body: str | None = None, max_age_s: float = 0.5
+    ):
         self.port = port
         self.host = host
         self.body = body
@@ -162,7 +165,7 @@ class UdpPoseSource:
         while not self._stop.is_set():
             try:
                 data, _addr = self._sock.recvfrom(65536)
-            except socket.timeout:
+            except TimeoutError:
                 continue
             except OSError:
                 return

@@ -91,7 +91,9 @@ class SitlConfig:
     guided_timeout_s: float = 3.0  # GUID_TIMEOUT
     gcs_failsafe_s: float = 5.0  # FS_GCS_TIMEOUT (FS_GCS_ENABLE = LAND)
     ekf_converge_s: float = 0.5
-    position_source: str = "internal"  # "internal" (always available) or "vision" (needs VISION_POSITION_ESTIMATE)
+    position_source: str = (
+        "internal"  # "internal" (always available) or "vision" (needs VISION_POSITION_ESTIMATE)
+    )
     arm_min_battery: float = 0.2  # BATT_ARM_MAH-like: refuse to arm below this fraction
     prearm_failure: str | None = None  # e.g. "Compass not calibrated": every arm attempt fails with it
     heartbeat_hz: float = 1.0
@@ -325,7 +327,13 @@ class MavlinkSitl:
                 self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_TAKEOFF:
             if self.mode != "GUIDED" or not v.armed or not v.on_ground:
-                why = "not in GUIDED" if self.mode != "GUIDED" else "not armed" if not v.armed else "already flying"
+                why = (
+                    "not in GUIDED"
+                    if self.mode != "GUIDED"
+                    else "not armed"
+                    if not v.armed
+                    else "already flying"
+                )
                 self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
@@ -385,12 +393,17 @@ class MavlinkSitl:
         if name == "LAND":
             v.land()
         elif v.mode != "FAILED":
-            v.mode = name  # GUIDED follows setpoints; the other modes hold where the vehicle is (no pilot here)
+            v.mode = (
+                name  # GUIDED follows setpoints; the other modes hold where the vehicle is (no pilot here)
+            )
 
     def _position_target(self, msg: Any) -> None:
         if self.mode != "GUIDED" or not self.vehicle.armed or self.vehicle.on_ground:
             return
-        if msg.coordinate_frame != MAV_FRAME_LOCAL_NED or msg.type_mask & VELOCITY_ONLY_IGNORED != VELOCITY_ONLY_IGNORED:
+        if (
+            msg.coordinate_frame != MAV_FRAME_LOCAL_NED
+            or msg.type_mask & VELOCITY_ONLY_IGNORED != VELOCITY_ONLY_IGNORED
+        ):
             return  # position targets and other frames are not modelled
         self.setpoints_received += 1
         v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
@@ -434,11 +447,13 @@ class MavlinkSitl:
                 mav.local_position_ned_send(boot_ms, x, y, z, vx, vy, vz)
         elif msg_id == MSG_ATTITUDE:
             roll, pitch, yaw = self.frame.attitude_to_ned(*v.attitude_rad)
-            mav.attitude_send(boot_ms, roll, pitch, yaw, 0.0, 0.0, FrameTransform.yaw_rate_to_ned(v.yaw_rate_radps))
+            mav.attitude_send(
+                boot_ms, roll, pitch, yaw, 0.0, 0.0, FrameTransform.yaw_rate_to_ned(v.yaw_rate_radps)
+            )
         elif msg_id == MSG_SYS_STATUS:
             fraction = v.battery_fraction
             voltage_mv = int((3.5 + 0.7 * fraction) * 4 * 1000)  # a 4S pack between 14.0 and 16.8 V
-            mav.sys_status_send(0, 0, 0, 500, voltage_mv, 1500 if v.armed else 50, int(round(fraction * 100)),
+            mav.sys_status_send(0, 0, 0, 500, voltage_mv, 1500 if v.armed else 50, round(fraction * 100),
                                 0, 0, 0, 0, 0, 0)  # fmt: skip
         elif msg_id == MSG_EKF_STATUS_REPORT:
             flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 1024

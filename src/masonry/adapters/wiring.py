@@ -29,7 +29,9 @@ class HardwareConfig:
 
     fc: str = SIM  # "sim" or a MAVLink connection string (udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:...)
     actuators: str = SIM  # "sim" or the Arduino's serial port
-    camera: str = SIM  # "sim" | "geometric" | "render" (simulated) or a device index, video file, GStreamer string
+    camera: str = (
+        SIM  # "sim" | "geometric" | "render" (simulated) or a device index, video file, GStreamer string
+    )
     calibration: str | None = None  # camera calibration (``masonry calibrate``): required for a real camera
     fc_baud: int = 115200
     autopilot: str = "auto"  # auto | ardupilot | px4
@@ -134,7 +136,9 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
     if hw.autopilot not in ("auto", "ardupilot", "px4"):
         raise InputError(f"autopilot must be auto, ardupilot or px4, not {hw.autopilot!r}")
     if not hw.sim_camera and hw.calibration is None:
-        raise InputError(f"--camera {hw.camera} needs --calibration FILE (the camera calibration from `masonry calibrate`)")
+        raise InputError(
+            f"--camera {hw.camera} needs --calibration FILE (the camera calibration from `masonry calibrate`)"
+        )
     if not 0.0 <= hw.min_battery <= 1.0:
         raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
     if not hw.heartbeat_timeout_s > 0.0:
@@ -282,7 +286,9 @@ def open_adapters(
             opened._closers.append(cam.close)
             opened.camera = cam
             intr = cam.intrinsics
-            opened.descriptions["camera"] = f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
+            opened.descriptions["camera"] = (
+                f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
+            )
         opened.world = world
         return opened
     except BaseException:
@@ -317,7 +323,9 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: OpenAdapters) -> Any:
         extras.append("signed")
     if pose_source is not None:
         extras.append(f"motion capture from udp:{hw.mocap_host}:{pose_source.port}")
-    opened.descriptions["flight controller"] = f"MAVLink {hw.fc}: {who}" + (f" ({', '.join(extras)})" if extras else "")
+    opened.descriptions["flight controller"] = f"MAVLink {hw.fc}: {who}" + (
+        f" ({', '.join(extras)})" if extras else ""
+    )
     return fc
 
 
@@ -367,7 +375,9 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
     if not hw.sim_fc:
         try:
             fc.wait_for_estimate(hw.estimate_wait_s)
-            items.append(CheckItem("position estimate", True, "usable (EKF reports horizontal and vertical position)"))
+            items.append(
+                CheckItem("position estimate", True, "usable (EKF reports horizontal and vertical position)")
+            )
         except HardwareError as exc:
             detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
             items.append(CheckItem("position estimate", False, detail))
@@ -375,18 +385,39 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
         while math.isnan(fc.telemetry().battery_fraction) and time.monotonic() < deadline:
             time.sleep(0.02)  # SYS_STATUS comes at 2 Hz
         tel = fc.telemetry()
-        items.append(CheckItem("link", tel.link_ok, "heartbeat and telemetry flowing" if tel.link_ok
-                               else f"silent for more than {hw.heartbeat_timeout_s:.1f} s"))
-        items.append(CheckItem("disarmed on the ground", not tel.armed and tel.on_ground,
-                               f"mode {tel.mode}, {'armed' if tel.armed else 'disarmed'}, "
-                               f"{'on the ground' if tel.on_ground else 'in the air'}"))
-        items.append(CheckItem("position", True, "x %.2f, y %.2f, z %.2f m (world ENU)" % tel.position_m, False))
+        items.append(
+            CheckItem(
+                "link",
+                tel.link_ok,
+                "heartbeat and telemetry flowing"
+                if tel.link_ok
+                else f"silent for more than {hw.heartbeat_timeout_s:.1f} s",
+            )
+        )
+        items.append(
+            CheckItem(
+                "disarmed on the ground",
+                not tel.armed and tel.on_ground,
+                f"mode {tel.mode}, {'armed' if tel.armed else 'disarmed'}, "
+                f"{'on the ground' if tel.on_ground else 'in the air'}",
+            )
+        )
+        items.append(
+            CheckItem(
+                "position", True, "x {:.2f}, y {:.2f}, z {:.2f} m (world ENU)".format(*tel.position_m), False
+            )
+        )
         battery = tel.battery_fraction
         if math.isnan(battery):
-            items.append(CheckItem("battery", False, "charge unknown (no battery monitor configured?)", False))
+            items.append(
+                CheckItem("battery", False, "charge unknown (no battery monitor configured?)", False)
+            )
         else:
-            items.append(CheckItem("battery", battery >= hw.min_battery,
-                                   f"{battery:.0%} (minimum {hw.min_battery:.0%})"))
+            items.append(
+                CheckItem(
+                    "battery", battery >= hw.min_battery, f"{battery:.0%} (minimum {hw.min_battery:.0%})"
+                )
+            )
     items.append(_check_actuators(adapters, hw, role))
     items.append(_check_camera(adapters, hw))
     return PreflightReport(tuple(items))
@@ -399,9 +430,11 @@ def _check_actuators(adapters: OpenAdapters, hw: HardwareConfig, role: str) -> C
         status = adapters.gripper.status()
     except HardwareError as exc:
         return CheckItem("actuators", False, f"not answering: {exc}")
-    detail = (f"{adapters.descriptions.get('actuators')}: magnet {'on' if status.magnet_on else 'off'}, "
-              f"joint {'locked' if status.joint_locked else 'unlocked'}, valve {'open' if status.valve_open else 'closed'}, "
-              f"brick {'attached' if status.attached else 'not attached'}")
+    detail = (
+        f"{adapters.descriptions.get('actuators')}: magnet {'on' if status.magnet_on else 'off'}, "
+        f"joint {'locked' if status.joint_locked else 'unlocked'}, valve {'open' if status.valve_open else 'closed'}, "
+        f"brick {'attached' if status.attached else 'not attached'}"
+    )
     if role == "adhesion" and status.valve_open:
         return CheckItem("actuators", False, detail + " (the valve must be closed before take-off)")
     return CheckItem("actuators", True, detail)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -75,12 +75,12 @@ def sitl(
     port: int = typer.Option(14550, "--port", help="UDP port the ground station listens on (the SITL sends there)."),
     host: str = typer.Option("127.0.0.1", "--host", help="Address of the ground station."),
     uav: str = typer.Option("brick", "--uav", help="brick | adhesion: which fleet member to stand in for."),
-    blueprint: Optional[Path] = typer.Option(None, "--blueprint", help="Start at this blueprint's UAV home."),
-    name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of --uav)."),
+    blueprint: Path | None = typer.Option(None, "--blueprint", help="Start at this blueprint's UAV home."),
+    name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of --uav)."),
     time_scale: float = typer.Option(1.0, "--time-scale", help="Simulated seconds per wall second."),
-    signing_key: Optional[Path] = typer.Option(None, "--signing-key", help="MAVLink 2 signing key file "
+    signing_key: Path | None = typer.Option(None, "--signing-key", help="MAVLink 2 signing key file "
                                                "(32 bytes, 64 hex digits, or a passphrase)."),
-    prearm_failure: Optional[str] = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
+    prearm_failure: str | None = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
                                                  "reason (to rehearse a pre-arm failure)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the motion-capture noise."),
 ) -> None:
