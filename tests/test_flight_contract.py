@@ -1,4 +1,5 @@
-"""One FlightController contract, run against the simulator's port and the MAVLink adapter on the SITL (UDP loopback).
+"""One FlightController contract, run against the simulator's port and the MAVLink adapter on the SITL (UDP loopback)
+as ArduCopter (GUIDED) and as PX4 (OFFBOARD).
 
 Time is the port's own: the simulated world steps its clock; the MAVLink rig sleeps on the autopilot's clock
 (the SITL runs ``TIME_SCALE`` times faster than real time). The assertions are in autopilot seconds for both.
@@ -52,7 +53,7 @@ class Rig:
         return self.now_s() - start
 
 
-@pytest.fixture(params=["sim", "mavlink"])
+@pytest.fixture(params=["sim", "mavlink", "mavlink-px4"])
 def rig(request) -> Iterator[Rig]:
     bp = load_blueprint(CASE_STUDY)
     spec = bp.uavs("brick")[0]
@@ -69,11 +70,14 @@ def rig(request) -> Iterator[Rig]:
     from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 
     port = free_udp_port()
-    sitl = MavlinkSitl(port, home_m=spec.home_m, time_scale=TIME_SCALE, config=SitlConfig(heartbeat_hz=4.0))
+    autopilot = "px4" if request.param == "mavlink-px4" else "ardupilot"
+    config = SitlConfig(heartbeat_hz=4.0, autopilot=autopilot)
+    sitl = MavlinkSitl(port, home_m=spec.home_m, time_scale=TIME_SCALE, config=config)
     sitl.start()
     fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=3.0, setpoint_hold_s=0.3)
     try:
         fc.connect()
+        assert fc.autopilot == autopilot  # detected from the HEARTBEAT
         fc.wait_for_estimate(3.0)
         yield Rig(fc, fc.clock.now_s, fc.clock.sleep, spec.home_m)
     finally:

@@ -314,3 +314,21 @@ def test_vision_positions_feed_the_estimate() -> None:
             time.sleep(0.01)
         assert fc.telemetry().position_ok
         assert sitl.vision_received > 0 and fc.vision_sent >= sitl.vision_received
+
+
+def test_px4_offboard_rules() -> None:
+    with flight(SitlConfig(autopilot="px4", offboard_loss_s=0.3)) as (sitl, fc):
+        fc.connect()
+        assert fc.autopilot == "px4" and fc.offboard_mode == "OFFBOARD"
+        fc.wait_for_estimate(2.0)
+        # PX4 enters OFFBOARD only while setpoints stream (arm() streams them first)
+        with pytest.raises(
+            CommandRejected, match="set mode OFFBOARD rejected: failed: Switching to Offboard"
+        ):
+            fc.set_mode("OFFBOARD")
+        take_off(fc, 1.0)  # climbs by the setpoint stream inside OFFBOARD
+        assert fc.telemetry().mode == "OFFBOARD"
+        fc._stop.set()  # the onboard program hangs: the setpoint stream stops
+        fc._threads[1].join(timeout=2.0)
+        wait_until(lambda: sitl.mode == "AUTO.LOITER", 2.0, "PX4's offboard-loss failsafe")
+        assert "Offboard setpoints lost: holding position" in sitl.status_log

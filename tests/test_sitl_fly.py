@@ -182,6 +182,8 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
 def test_sitl_command_bad_input() -> None:
     res = runner.invoke(app, ["sitl", "--uav", "tank"])
     assert res.exit_code == 2 and "--uav must be brick or adhesion" in res.stderr
+    res = runner.invoke(app, ["sitl", "--autopilot", "inav"])
+    assert res.exit_code == 2 and "--autopilot must be ardupilot or px4" in res.stderr
     res = runner.invoke(app, ["sitl", "--time-scale", "0"])
     assert res.exit_code == 2 and "--time-scale" in res.stderr
     res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "glue-1"])

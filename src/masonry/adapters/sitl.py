@@ -35,6 +35,8 @@ import numpy as np
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     MAV_AUTOPILOT_ARDUPILOTMEGA,
+    MAV_AUTOPILOT_PX4,
+    PX4_MODES,
     MAV_CMD_COMPONENT_ARM_DISARM,
     MAV_CMD_DO_SET_MODE,
     MAV_CMD_NAV_LAND,
@@ -46,6 +48,7 @@ from masonry.adapters.mavlink import (
     MAV_TYPE_GCS,
     MSG_ATTITUDE,
     MSG_EKF_STATUS_REPORT,
+    MSG_ESTIMATOR_STATUS,
     MSG_EXTENDED_SYS_STATE,
     MSG_HEARTBEAT,
     MSG_LOCAL_POSITION_NED,
@@ -97,6 +100,8 @@ class SitlConfig:
     arm_min_battery: float = 0.2  # BATT_ARM_MAH-like: refuse to arm below this fraction
     prearm_failure: str | None = None  # e.g. "Compass not calibrated": every arm attempt fails with it
     heartbeat_hz: float = 1.0
+    autopilot: str = "ardupilot"  # or "px4": PX4 modes, OFFBOARD rules, ESTIMATOR_STATUS
+    offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
     system_id: int = 1
     component_id: int = 1
 
@@ -149,13 +154,23 @@ class MavlinkSitl:
         self.physics_dt_s = physics_dt_s
         self.frame = FrameTransform()
         self.sim_time_s = 0.0
-        self.mode = "STABILIZE"
+        if self.config.autopilot not in ("ardupilot", "px4"):
+            raise ValueError(f"autopilot must be ardupilot or px4, not {self.config.autopilot!r}")
+        self.px4 = self.config.autopilot == "px4"
+        self._modes = PX4_MODES if self.px4 else ARDUPILOT_MODES
+        self._offboard_mode = "OFFBOARD" if self.px4 else "GUIDED"
+        self._land_mode = "AUTO.LAND" if self.px4 else "LAND"
+        self.mode = "POSCTL" if self.px4 else "STABILIZE"
+        self._last_setpoint_wall_s = -math.inf
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
         self.vision_received = 0
         self.setpoints_received = 0
         self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
-        self._rates_hz = dict(DEFAULT_RATES_HZ)
+        self._defaults_hz = dict(DEFAULT_RATES_HZ)
+        if self.px4:
+            self._defaults_hz[MSG_ESTIMATOR_STATUS] = self._defaults_hz.pop(MSG_EKF_STATUS_REPORT)
+        self._rates_hz = dict(self._defaults_hz)
         self._next_due: dict[int, float] = {}
         self._conn: Any = None
         self._thread: threading.Thread | None = None
@@ -234,9 +249,9 @@ class MavlinkSitl:
             self._gcs_failsafe()
             was_armed = v.armed
             v.step(h)
-            if v.mode == "LAND" and self.mode != "LAND":  # the vehicle's battery failsafe
+            if v.mode == "LAND" and self.mode != self._land_mode:  # the vehicle's battery failsafe
                 self._text(MAV_SEVERITY_CRITICAL, "Battery failsafe: landing")
-                self.mode = "LAND"
+                self.mode = self._land_mode
             if was_armed and not v.armed:
                 self._text(MAV_SEVERITY_INFO, "Land complete, disarming" if v.on_ground else "Motors stopped")
 
@@ -247,10 +262,19 @@ class MavlinkSitl:
             and not v.on_ground
             and self._last_gcs_wall_s is not None
             and time.monotonic() - self._last_gcs_wall_s > self.config.gcs_failsafe_s
-            and self.mode != "LAND"
+            and self.mode != self._land_mode
         ):
             self._text(MAV_SEVERITY_CRITICAL, "GCS Failsafe")
-            self._set_mode("LAND")
+            self._set_mode(self._land_mode)
+        if (
+            self.px4
+            and self.mode == "OFFBOARD"
+            and v.armed
+            and not v.on_ground
+            and time.monotonic() - self._last_setpoint_wall_s > self.config.offboard_loss_s
+        ):
+            self._text(MAV_SEVERITY_CRITICAL, "Offboard setpoints lost: holding position")
+            self._set_mode("AUTO.LOITER")
 
     def _ekf_ok(self) -> bool:
         if self.sim_time_s < self.config.ekf_converge_s:
@@ -315,7 +339,8 @@ class MavlinkSitl:
                     self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {exc.reason}")
                     self._ack(cmd, MAV_RESULT_FAILED)
                     return
-                v.mode = self.mode  # the vehicle model arms into GUIDED; keep the autopilot's mode
+                # the vehicle model arms into its GUIDED; keep the autopilot's mode
+                v.mode = "GUIDED" if self.mode == self._offboard_mode else self.mode
                 self._ack(cmd, MAV_RESULT_ACCEPTED)
                 self._text(MAV_SEVERITY_INFO, "Arming motors")
             else:
@@ -326,14 +351,9 @@ class MavlinkSitl:
                 v.disarm(force=int(msg.param2) == DISARM_MAGIC)
                 self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_TAKEOFF:
-            if self.mode != "GUIDED" or not v.armed or not v.on_ground:
-                why = (
-                    "not in GUIDED"
-                    if self.mode != "GUIDED"
-                    else "not armed"
-                    if not v.armed
-                    else "already flying"
-                )
+            mode_ok = self.px4 or self.mode == "GUIDED"  # PX4 switches to AUTO.TAKEOFF by itself
+            if not mode_ok or not v.armed or not v.on_ground:
+                why = "not in GUIDED" if not mode_ok else "not armed" if not v.armed else "already flying"
                 self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
@@ -343,16 +363,21 @@ class MavlinkSitl:
                 self._text(MAV_SEVERITY_WARNING, f"Takeoff: {exc.reason}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
+            if self.px4:
+                self.mode = "AUTO.TAKEOFF"
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_LAND:
-            self._set_mode("LAND")
+            self._set_mode(self._land_mode)
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_DO_SET_MODE:
-            ok = self._set_mode_by_number(int(msg.param2))
+            if self.px4:  # param2 main mode, param3 sub mode
+                ok = self._set_mode_by_number((int(msg.param2) << 16) | (int(msg.param3) << 24))
+            else:
+                ok = self._set_mode_by_number(int(msg.param2))
             self._ack(cmd, MAV_RESULT_ACCEPTED if ok else MAV_RESULT_FAILED)
         elif cmd == MAV_CMD_SET_MESSAGE_INTERVAL:
             msg_id, interval_us = int(msg.param1), float(msg.param2)
-            if msg_id not in DEFAULT_RATES_HZ and msg_id != MSG_HEARTBEAT:
+            if msg_id not in self._defaults_hz and msg_id != MSG_HEARTBEAT:
                 self._ack(cmd, MAV_RESULT_DENIED)
                 return
             if msg_id == MSG_HEARTBEAT:
@@ -361,7 +386,7 @@ class MavlinkSitl:
             if interval_us < 0:
                 self._rates_hz[msg_id] = 0.0
             elif interval_us == 0:
-                self._rates_hz[msg_id] = DEFAULT_RATES_HZ[msg_id]
+                self._rates_hz[msg_id] = self._defaults_hz[msg_id]
             else:
                 self._rates_hz[msg_id] = min(100.0, 1e6 / interval_us)
             self._next_due.pop(msg_id, None)  # the new rate starts now
@@ -377,10 +402,14 @@ class MavlinkSitl:
         return None  # battery and the vehicle's own checks: SimVehicle.arm()
 
     def _set_mode_by_number(self, custom_mode: int) -> bool:
-        for name, number in ARDUPILOT_MODES.items():
+        for name, number in self._modes.items():
             if number == custom_mode:
-                if name == "GUIDED" and not self._ekf_ok():
-                    self._text(MAV_SEVERITY_WARNING, "Mode change to GUIDED failed: requires position")
+                if name == self._offboard_mode and not self._ekf_ok():
+                    self._text(MAV_SEVERITY_WARNING, f"Mode change to {name} failed: requires position")
+                    return False
+                if name == "OFFBOARD" and time.monotonic() - self._last_setpoint_wall_s > 0.5:
+                    # PX4 enters OFFBOARD only while setpoints are streaming
+                    self._text(MAV_SEVERITY_WARNING, "Switching to Offboard is not possible: no setpoints")
                     return False
                 self._set_mode(name)
                 return True
@@ -390,23 +419,26 @@ class MavlinkSitl:
     def _set_mode(self, name: str) -> None:
         self.mode = name
         v = self.vehicle
-        if name == "LAND":
+        if name == self._land_mode:
             v.land()
         elif v.mode != "FAILED":
-            v.mode = (
-                name  # GUIDED follows setpoints; the other modes hold where the vehicle is (no pilot here)
-            )
+            # the vehicle model follows setpoints in its GUIDED; the other modes hold where it is (no pilot here)
+            v.mode = "GUIDED" if name == self._offboard_mode else name
 
     def _position_target(self, msg: Any) -> None:
-        if self.mode != "GUIDED" or not self.vehicle.armed or self.vehicle.on_ground:
-            return
         if (
             msg.coordinate_frame != MAV_FRAME_LOCAL_NED
             or msg.type_mask & VELOCITY_ONLY_IGNORED != VELOCITY_ONLY_IGNORED
         ):
             return  # position targets and other frames are not modelled
-        self.setpoints_received += 1
+        self._last_setpoint_wall_s = time.monotonic()
         v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
+        vehicle = self.vehicle
+        if self.px4 and self.mode == "OFFBOARD" and vehicle.armed and vehicle.on_ground and v_world[2] > 0.05:
+            vehicle.takeoff(0.2)  # PX4 lifts off on an upward offboard velocity; setpoints rule once airborne
+        if self.mode != self._offboard_mode or not vehicle.armed or vehicle.on_ground:
+            return
+        self.setpoints_received += 1
         yaw_rate = 0.0 if msg.type_mask & 2048 else FrameTransform.yaw_rate_to_world(msg.yaw_rate)
         self.vehicle.command_velocity(v_world, yaw_rate, self.vehicle.time_s)
         self.last_setpoint_mps = v_world
@@ -418,9 +450,9 @@ class MavlinkSitl:
         base = MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (MAV_MODE_FLAG_SAFETY_ARMED if v.armed else 0)
         self._conn.mav.heartbeat_send(
             MAV_TYPE_QUADROTOR,
-            MAV_AUTOPILOT_ARDUPILOTMEGA,
+            MAV_AUTOPILOT_PX4 if self.px4 else MAV_AUTOPILOT_ARDUPILOTMEGA,
             base,
-            ARDUPILOT_MODES[self.mode],
+            self._modes[self.mode],
             MAV_STATE_ACTIVE if v.armed else MAV_STATE_STANDBY,
         )
 
@@ -458,12 +490,17 @@ class MavlinkSitl:
         elif msg_id == MSG_EKF_STATUS_REPORT:
             flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 1024
             mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
+        elif msg_id == MSG_ESTIMATOR_STATUS:
+            flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 0  # ESTIMATOR_STATUS_FLAGS
+            mav.estimator_status_send(
+                int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01
+            )
         elif msg_id == MSG_EXTENDED_SYS_STATE:
             if not v.armed or v.on_ground:
                 landed = MAV_LANDED_STATE_ON_GROUND
             elif v.taking_off:
                 landed = MAV_LANDED_STATE_TAKEOFF
-            elif self.mode == "LAND":
+            elif self.mode == self._land_mode:
                 landed = MAV_LANDED_STATE_LANDING
             else:
                 landed = MAV_LANDED_STATE_IN_AIR

@@ -34,6 +34,7 @@ def build_sitl(
     signing_key: Path | None = None,
     prearm_failure: str | None = None,
     seed: int = 0,
+    autopilot: str = "ardupilot",
 ) -> tuple[Any, str]:
     """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it."""
     from masonry.adapters.mavlink import load_signing_key
@@ -41,6 +42,8 @@ def build_sitl(
 
     if uav not in ("brick", "adhesion"):
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
+    if autopilot not in ("ardupilot", "px4"):
+        raise InputError(f"--autopilot must be ardupilot or px4, got {autopilot!r}")
     if not 0 <= port <= 65535:
         raise InputError(f"--port must be a UDP port number, got {port}")
     if not (time_scale > 0.0 and time_scale <= 100.0):
@@ -60,11 +63,12 @@ def build_sitl(
         home_m=home,
         time_scale=time_scale,
         signing_key=key,
-        config=SitlConfig(prearm_failure=prearm_failure),
+        config=SitlConfig(prearm_failure=prearm_failure, autopilot=autopilot),
         seed=seed,
     )
     description = (
-        f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, ArduCopter-style MAVLink 2 to "
+        f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, "
+        f"{'PX4' if autopilot == 'px4' else 'ArduCopter'}-style MAVLink 2 to "
         f"udp {host}:{port}{' (signed)' if key else ''}, x{time_scale:g} real time"
     )
     return sitl, description
@@ -83,11 +87,12 @@ def sitl(
     prearm_failure: str | None = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
                                                  "reason (to rehearse a pre-arm failure)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the motion-capture noise."),
+    autopilot: str = typer.Option("ardupilot", "--autopilot", help="ardupilot (GUIDED) | px4 (OFFBOARD)."),
 ) -> None:
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
     server, description = build_sitl(port=port, host=host, uav=uav, blueprint=blueprint, name=name,
                                      time_scale=time_scale, signing_key=signing_key,
-                                     prearm_failure=prearm_failure, seed=seed)
+                                     prearm_failure=prearm_failure, seed=seed, autopilot=autopilot)
     typer.echo(description)
     typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")
     server.serve_forever()
