@@ -26,8 +26,15 @@ def profile(task_id: str, seed: int = 0, camera: str = "geometric") -> None:
     spec = next(u for u in bp.fleet if u.role == task.kind)
     su = world.add_uav(spec)
     link = QueueMissionLink([task])
-    uav = build_uav(UavConfig.from_spec(spec, markers=bp.markers), fc=su.fc, link=link, clock=world.clock,
-                    gripper=su.gripper, camera=su.camera, sprayer=su.sprayer)
+    uav = build_uav(
+        UavConfig.from_spec(spec, markers=bp.markers),
+        fc=su.fc,
+        link=link,
+        clock=world.clock,
+        gripper=su.gripper,
+        camera=su.camera,
+        sprayer=su.sprayer,
+    )
     per_state: dict[str, list[float]] = defaultdict(lambda: [0.0, 0])
     world_s = 0.0
     ticks = 0
@@ -46,12 +53,15 @@ def profile(task_id: str, seed: int = 0, camera: str = "geometric") -> None:
     wall = time.perf_counter() - t_wall
     sim_s = world.clock.now_s()
     total_step = sum(v[0] for v in per_state.values())
-    print(f"{task_id} ({camera}): {ticks} ticks, {sim_s:.1f} s simulated in {wall:.3f} s wall "
-          f"(real-time factor {sim_s / wall:.0f}x)")
-    print(f"  uav.step mean {1e6 * total_step / ticks:.1f} us/tick, world.step mean {1e6 * world_s / ticks:.1f} us/tick")
+    print(
+        f"{task_id} ({camera}): {ticks} ticks, {sim_s:.1f} s simulated in {wall:.3f} s wall "
+        f"(real-time factor {sim_s / wall:.0f}x)"
+    )
+    print(
+        f"  uav.step mean {1e6 * total_step / ticks:.1f} us/tick, world.step mean {1e6 * world_s / ticks:.1f} us/tick"
+    )
     for state, (secs, n) in sorted(per_state.items(), key=lambda kv: -kv[1][0] / kv[1][1]):
         print(f"    {state:18s} {1e6 * secs / n:8.1f} us/tick over {n} ticks")
-
 
 
 def steady_flight(n: int = 2000) -> None:
@@ -64,8 +74,14 @@ def steady_flight(n: int = 2000) -> None:
     fc = FakeFlightController(clock, velocity_time_constant_s=0.0)
     task = BrickTask("B0", 0, False, (500.0, 0.0, 0.05), 0.0, (0.0, 0.0, 0.05))
     link = QueueMissionLink([task])
-    uav = BrickUav(UavConfig("b", "brick", (0.0, 0.0, 0.0)), fc, FakeGripper(), FakeCamera(fc, [FakeBrick(0, (0, 0, .1))]),
-                   link, clock)
+    uav = BrickUav(
+        UavConfig("b", "brick", (0.0, 0.0, 0.0)),
+        fc,
+        FakeGripper(),
+        FakeCamera(fc, [FakeBrick(0, (0, 0, 0.1))]),
+        link,
+        clock,
+    )
     while uav.state != "transport":
         uav.step(clock.now_s())
         clock.advance(0.1)
@@ -83,8 +99,14 @@ def steady_flight(n: int = 2000) -> None:
     pid = motion.PID()
     t0 = time.perf_counter()
     for i in range(n):
-        pid.step(i * 0.1, (0.0, 0.0, 1.0), (0.1, 0.0, 1.0), velocity_ff_mps=(0.0, 0.0, 0.0), yaw_rad=0.0,
-                 target_yaw_rad=0.0)
+        pid.step(
+            i * 0.1,
+            (0.0, 0.0, 1.0),
+            (0.1, 0.0, 1.0),
+            velocity_ff_mps=(0.0, 0.0, 0.0),
+            yaw_rad=0.0,
+            target_yaw_rad=0.0,
+        )
     print(f"  of which PID.step: {1e6 * (time.perf_counter() - t0) / n:.1f} us")
 
 

@@ -23,8 +23,9 @@ PICKUP = (3.0, 1.0, 0.05)
 BRICK_ID = 7
 
 
-def brick_task(task_id: str = "B7", brick: int = BRICK_ID, position=(0.0, 0.5, 0.25), yaw_rad: float = 0.0,
-               pickup=PICKUP) -> BrickTask:
+def brick_task(
+    task_id: str = "B7", brick: int = BRICK_ID, position=(0.0, 0.5, 0.25), yaw_rad: float = 0.0, pickup=PICKUP
+) -> BrickTask:
     return BrickTask(task_id, brick, False, position, yaw_rad, pickup, (0.30, 0.15, 0.10))
 
 
@@ -49,8 +50,9 @@ class Rig:
     ) -> None:
         self.clock = FakeClock()
         self.fc = FakeFlightController(self.clock, position_m=HOME, **(fc or {}))
-        self.link = QueueMissionLink(tasks if tasks is not None else [brick_task() if kind == "brick" else
-                                                                      adhesion_task()])
+        self.link = QueueMissionLink(
+            tasks if tasks is not None else [brick_task() if kind == "brick" else adhesion_task()]
+        )
         cfg = UavConfig(f"{kind}-1", kind, HOME, **(config or {}))  # type: ignore[arg-type]
         self.config = cfg
         if kind == "brick":
@@ -69,15 +71,24 @@ class Rig:
         x, y, z = self.fc.position_m
         yaw = self.fc.yaw_rad
         ox, oy, oz = self.config.airframe.effector_offset_m
-        return (x + math.cos(yaw) * ox - math.sin(yaw) * oy, y + math.sin(yaw) * ox + math.cos(yaw) * oy, z + oz)
+        return (
+            x + math.cos(yaw) * ox - math.sin(yaw) * oy,
+            y + math.sin(yaw) * ox + math.cos(yaw) * oy,
+            z + oz,
+        )
 
     def _touching(self) -> bool:
         ex, ey, ez = self.effector_m()
         tx, ty, tz = self.brick.top_center_m
         return math.hypot(ex - tx, ey - ty) <= 0.03 and abs(ez - tz) <= 0.015
 
-    def run(self, max_s: float = 400.0, dt_s: float = 0.05, on_tick: Callable[[Rig], None] | None = None,
-            results: int = 1) -> Rig:
+    def run(
+        self,
+        max_s: float = 400.0,
+        dt_s: float = 0.05,
+        on_tick: Callable[[Rig], None] | None = None,
+        results: int = 1,
+    ) -> Rig:
         """Tick until ``results`` results are in and the UAV is at rest (or ``max_s`` passes)."""
         while self.clock.now_s() < max_s:
             self.uav.step(self.clock.now_s())

@@ -168,7 +168,9 @@ def test_camera_sees_markers_where_they_are() -> None:
     for tag in frame.tags:
         p_world = T[:3, :3] @ tag.position_m + T[:3, 3]
         sign = 1.0 if tag.marker_id == 6 else -1.0
-        expected = np.array(brick.top_center_m) + sign * 0.0875 * np.array([math.cos(0.4), math.sin(0.4), 0.0])
+        expected = np.array(brick.top_center_m) + sign * 0.0875 * np.array(
+            [math.cos(0.4), math.sin(0.4), 0.0]
+        )
         assert np.allclose(p_world, expected, atol=1e-9)
         R_world_marker = T[:3, :3] @ tag.R_cam_marker
         assert math.atan2(R_world_marker[1, 0], R_world_marker[0, 0]) == pytest.approx(0.4)
@@ -216,8 +218,11 @@ def test_queue_mission_link() -> None:
 def _sim_fc() -> tuple[object, object, object]:
     from masonry.sim import World
 
-    bp = Blueprint(bricks=(Brick(0, (5.0, 5.0, 0.05), placed=True),), fleet=(UavSpec("u", "brick", (0.0, 0.0, 0.0)),),
-                   markers=MarkerSpec())
+    bp = Blueprint(
+        bricks=(Brick(0, (5.0, 5.0, 0.05), placed=True),),
+        fleet=(UavSpec("u", "brick", (0.0, 0.0, 0.0)),),
+        markers=MarkerSpec(),
+    )
     world = World(bp, seed=1)
     uav = world.add_uav(bp.fleet[0])
     return uav.fc, world.clock, world.step

@@ -12,9 +12,24 @@ from fsm_rig import HOME, Rig, adhesion_task, brick_task
 from masonry.fsm.states import ADHESION_STATES, BRICK_STATES, leaf_states
 
 HAPPY_BRICK = [
-    "idle", "takeoff", "pickup_goto", "pickup_estimate", "pickup_align", "pickup_descend", "pickup_grasp",
-    "pickup_ascend", "pickup_verify", "transport", "place_align", "place_descend", "place_release",
-    "place_verify", "place_ascend", "home", "land", "idle",
+    "idle",
+    "takeoff",
+    "pickup_goto",
+    "pickup_estimate",
+    "pickup_align",
+    "pickup_descend",
+    "pickup_grasp",
+    "pickup_ascend",
+    "pickup_verify",
+    "transport",
+    "place_align",
+    "place_descend",
+    "place_release",
+    "place_verify",
+    "place_ascend",
+    "home",
+    "land",
+    "idle",
 ]
 
 
@@ -151,8 +166,11 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
 
 
 def test_critical_battery_in_failsafe_lands_where_it_is() -> None:
-    rig = Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008},
-              config={"battery_critical_fraction": 0.25}).run()
+    rig = Rig(
+        "brick",
+        fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008},
+        config={"battery_critical_fraction": 0.25},
+    ).run()
     assert rig.followed("failsafe", "emergency")
     assert rig.states[-1] == "halted"
 
@@ -184,7 +202,9 @@ def test_next_task_is_flown_without_landing() -> None:
 def test_task_of_the_wrong_kind_is_refused() -> None:
     rig = Rig("brick", tasks=[adhesion_task()])
     rig.uav.step(0.0)
-    assert rig.link.results[0].status == "failed" and "cannot fly adhesion task" in (rig.link.results[0].reason or "")
+    assert rig.link.results[0].status == "failed" and "cannot fly adhesion task" in (
+        rig.link.results[0].reason or ""
+    )
     assert rig.uav.state == "idle" and rig.uav.finished
 
 
@@ -194,7 +214,19 @@ def test_brick_task_without_pickup_is_refused() -> None:
     assert rig.link.results[0].status == "failed" and "no pickup" in (rig.link.results[0].reason or "")
 
 
-HAPPY_ADHESION = ["idle", "takeoff", "cruise", "hover", "descend", "spray", "close", "ascend", "home", "land", "idle"]
+HAPPY_ADHESION = [
+    "idle",
+    "takeoff",
+    "cruise",
+    "hover",
+    "descend",
+    "spray",
+    "close",
+    "ascend",
+    "home",
+    "land",
+    "idle",
+]
 
 
 def test_adhesion_happy_path_sprays_along_the_segment() -> None:
@@ -238,7 +270,9 @@ def test_adhesion_low_battery_closes_the_valve_and_goes_home() -> None:
 
 
 def test_adhesion_next_task_goes_straight_to_the_next_segment() -> None:
-    rig = Rig("adhesion", tasks=[adhesion_task("A0"), adhesion_task("A1", (-0.15, -0.5, 0.2), (0.15, -0.5, 0.2))])
+    rig = Rig(
+        "adhesion", tasks=[adhesion_task("A0"), adhesion_task("A1", (-0.15, -0.5, 0.2), (0.15, -0.5, 0.2))]
+    )
     rig.run(results=2)
     assert [r.status for r in rig.link.results] == ["done", "done"]
     assert rig.followed("ascend", "cruise")

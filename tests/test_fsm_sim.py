@@ -22,8 +22,15 @@ def _fly(task_id: str, seed: int, faults: Faults | None = None, camera: str = "g
     spec = next(u for u in bp.fleet if u.role == task.kind)
     sim_uav = world.add_uav(spec)
     link = QueueMissionLink([task])
-    uav = build_uav(UavConfig.from_spec(spec, markers=bp.markers), fc=sim_uav.fc, link=link, clock=world.clock,
-                    gripper=sim_uav.gripper, camera=sim_uav.camera, sprayer=sim_uav.sprayer)
+    uav = build_uav(
+        UavConfig.from_spec(spec, markers=bp.markers),
+        fc=sim_uav.fc,
+        link=link,
+        clock=world.clock,
+        gripper=sim_uav.gripper,
+        camera=sim_uav.camera,
+        sprayer=sim_uav.sprayer,
+    )
     run = run_single_task(uav, world.clock, advance=world.step, dt_s=0.05, timeout_s=400.0)
     return run, world, task, uav
 
@@ -63,7 +70,9 @@ def test_detection_dropout_and_occlusion_still_place_the_brick() -> None:
 
 def test_link_loss_in_the_world_fails_the_task_and_the_uav_lands() -> None:
     run, world, _, uav = _fly("B0", 0, Faults(link_loss_at_s={"brick-1": 15.0}))
-    assert run.result is not None and run.result.status == "failed" and "link lost" in (run.result.reason or "")
+    assert (
+        run.result is not None and run.result.status == "failed" and "link lost" in (run.result.reason or "")
+    )
     assert uav.state == "halted"
     world.run(20.0)  # the autopilot's own failsafe: hover, then land
     assert world.uavs["brick-1"].vehicle.on_ground

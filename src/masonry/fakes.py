@@ -448,7 +448,9 @@ class FakeCamera(_Scripted):
         self.bricks = list(bricks)
         self.markers = markers if markers is not None else MarkerSpec()
         self._intrinsics = intrinsics
-        self._T_body_cam = camera_mount(DEFAULT_AIRFRAME.camera_offset_m) if T_body_cam is None else T_body_cam
+        self._T_body_cam = (
+            camera_mount(DEFAULT_AIRFRAME.camera_offset_m) if T_body_cam is None else T_body_cam
+        )
         self.noise_sigma_m = float(noise_sigma_m)
         self.yaw_noise_sigma_rad = float(yaw_noise_sigma_rad)
         self.dropout = float(dropout)

@@ -16,7 +16,9 @@ app.add_typer(fsm_app, name="fsm")
 @command("diagram", typer_app=fsm_app)
 def diagram(
     machine: str = typer.Argument(..., help="brick | adhesion."),
-    output: Path = typer.Option(..., "-o", "--output", help="Output file: .svg, .png (need graphviz's dot) or .dot."),
+    output: Path = typer.Option(
+        ..., "-o", "--output", help="Output file: .svg, .png (need graphviz's dot) or .dot."
+    ),
 ) -> None:
     """Render a UAV's nested state machine (states, triggers, [conditions]) with graphviz."""
     from masonry.fsm.diagram import FORMATS, dot_available, write_diagram
@@ -28,8 +30,11 @@ def diagram(
     if fmt not in FORMATS:
         raise InputError(f"{output}: the file must end in .svg, .png or .dot")
     if fmt != "dot" and not dot_available():
-        raise fail(f"graphviz's `dot` is not installed, so {output.name} cannot be rendered: install graphviz "
-                   f"(apt install graphviz) or write a .dot file instead", 1)
+        raise fail(
+            f"graphviz's `dot` is not installed, so {output.name} cannot be rendered: install graphviz "
+            f"(apt install graphviz) or write a .dot file instead",
+            1,
+        )
     try:
         write_diagram(machine, output)
     except OSError as exc:

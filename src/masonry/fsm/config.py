@@ -26,7 +26,9 @@ class UavConfig:
     markers: MarkerSpec = field(default_factory=MarkerSpec)
     airframe: Airframe = DEFAULT_AIRFRAME
     # Flight
-    control_period_s: float = 0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
+    control_period_s: float = (
+        0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
+    )
     cruise_speed_mps: float = 1.0  # average speed of a lateral min-jerk leg (its peak is 1.875 x this)
     vertical_speed_mps: float = 0.4  # average speed of a climb leg
     arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end
@@ -35,7 +37,9 @@ class UavConfig:
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
     takeoff_timeout_s: float = 30.0
-    leg_timeout_s: float = 30.0  # a leg (or an alignment) not over this long after its planned end fails the task
+    leg_timeout_s: float = (
+        30.0  # a leg (or an alignment) not over this long after its planned end fails the task
+    )
     battery_low_fraction: float = 0.20  # below this a task is aborted and the UAV goes home
     battery_critical_fraction: float = 0.10  # below this it lands where it is
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this

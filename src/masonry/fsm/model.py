@@ -148,7 +148,9 @@ class UavModel:
             ignore_invalid_triggers=True,
             after_state_change="_record_state",
         )
-        self._do: dict[str, Callable[[Telemetry], None]] = {n: getattr(self, "do_" + n) for n in self._leaf_names}
+        self._do: dict[str, Callable[[Telemetry], None]] = {
+            n: getattr(self, "do_" + n) for n in self._leaf_names
+        }
         self.trace.append((self._now_s, self.state))
 
     # -- public ---------------------------------------------------------------------------------------------
@@ -179,7 +181,10 @@ class UavModel:
                 self._link_down(tel)
                 return
             self._link_down_since_s = None
-            if self.state in self._TASK_STATES_SET and tel.battery_fraction < self.config.battery_low_fraction:
+            if (
+                self.state in self._TASK_STATES_SET
+                and tel.battery_fraction < self.config.battery_low_fraction
+            ):
                 self._halt_after_landing = f"battery low ({tel.battery_fraction:.0%})"
                 self.abort(reason=f"battery low ({tel.battery_fraction:.0%})")
             self._do[self.state](tel)
@@ -223,7 +228,9 @@ class UavModel:
         task = self.link.poll_task()
         if task is not None:
             self._report(
-                TaskResult(task.id, "failed", 0.0, reason=f"{self.config.name} is out of service: {self.halt_reason}")
+                TaskResult(
+                    task.id, "failed", 0.0, reason=f"{self.config.name} is out of service: {self.halt_reason}"
+                )
             )
 
     def fail_task(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
@@ -255,8 +262,13 @@ class UavModel:
             return None
         if task.kind != self.KIND:
             self._report(
-                TaskResult(task.id, "failed", 0.0, reason=f"{self.config.name} is a {self.KIND} UAV, "
-                           f"it cannot fly {task.kind} task {task.id}")
+                TaskResult(
+                    task.id,
+                    "failed",
+                    0.0,
+                    reason=f"{self.config.name} is a {self.KIND} UAV, "
+                    f"it cannot fly {task.kind} task {task.id}",
+                )
             )
             return None
         problem = self._task_problem(task)
@@ -305,8 +317,13 @@ class UavModel:
         self._target_yaw = tel.attitude_rad[2] if yaw_rad is None else yaw_rad
         self._motion = True
 
-    def _fly_to(self, tel: Telemetry, target_m: np.ndarray, duration_s: float | None = None,
-                yaw_rad: float | None = None) -> None:
+    def _fly_to(
+        self,
+        tel: Telemetry,
+        target_m: np.ndarray,
+        duration_s: float | None = None,
+        yaw_rad: float | None = None,
+    ) -> None:
         """One minimum-jerk leg from the current state to rest at ``target_m``."""
         if not self._motion:
             self._pid.reset()
@@ -337,7 +354,9 @@ class UavModel:
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
         d_z = abs(target[2] - start[2])
         # A rest-to-rest minimum-jerk leg peaks at 1.875 x its average speed.
-        return max(1.0, 1.875 * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps))
+        return max(
+            1.0, 1.875 * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps)
+        )
 
     def _start_leg(self, tel: Telemetry, target: np.ndarray, duration_s: float | None) -> None:
         p = np.asarray(tel.position_m, dtype=float)
@@ -391,8 +410,10 @@ class UavModel:
             t = min(max(now - self._traj_t0_s, 0.0), self._traj.duration_s)
             ref = [((((c[5] * t + c[4]) * t + c[3]) * t + c[2]) * t + c[1]) * t + c[0] for c in self._coef]
             if t < self._traj.duration_s:
-                ff = [(((5.0 * c[5] * t + 4.0 * c[4]) * t + 3.0 * c[3]) * t + 2.0 * c[2]) * t + c[1]
-                      for c in self._coef]
+                ff = [
+                    (((5.0 * c[5] * t + 4.0 * c[4]) * t + 3.0 * c[3]) * t + 2.0 * c[2]) * t + c[1]
+                    for c in self._coef
+                ]
             else:
                 ff = _ZERO3
         elif self._line is not None:
@@ -406,18 +427,28 @@ class UavModel:
         else:
             ref, ff = self._target, _ZERO3
         v, yaw_rate = self._pid.step(
-            now, tel.position_m, ref, velocity_ff_mps=ff, yaw_rad=tel.attitude_rad[2], target_yaw_rad=self._target_yaw
+            now,
+            tel.position_m,
+            ref,
+            velocity_ff_mps=ff,
+            yaw_rad=tel.attitude_rad[2],
+            target_yaw_rad=self._target_yaw,
         )
         self.fc.send_velocity((float(v[0]), float(v[1]), float(v[2])), yaw_rate)
 
-    def _tool_body_target(self, tool_target_m: np.ndarray, offset_body_m: tuple[float, float, float],
-                          yaw_rad: float) -> np.ndarray:
+    def _tool_body_target(
+        self, tool_target_m: np.ndarray, offset_body_m: tuple[float, float, float], yaw_rad: float
+    ) -> np.ndarray:
         """Body position that puts a tool at ``offset_body_m`` (FLU) on ``tool_target_m`` at heading ``yaw_rad``."""
-        return np.asarray(tool_target_m, dtype=float) - _rot_z(yaw_rad) @ np.asarray(offset_body_m, dtype=float)
+        return np.asarray(tool_target_m, dtype=float) - _rot_z(yaw_rad) @ np.asarray(
+            offset_body_m, dtype=float
+        )
 
     def _tool_position(self, tel: Telemetry, offset_body_m: tuple[float, float, float]) -> np.ndarray:
         roll, pitch, yaw = tel.attitude_rad
-        return np.asarray(tel.position_m, dtype=float) + _rot_rpy(roll, pitch, yaw) @ np.asarray(offset_body_m)
+        return np.asarray(tel.position_m, dtype=float) + _rot_rpy(roll, pitch, yaw) @ np.asarray(
+            offset_body_m
+        )
 
     # -- common states -------------------------------------------------------------------------------------
     def enter_idle(self, *args: Any, **kwargs: Any) -> None:
@@ -448,8 +479,10 @@ class UavModel:
         if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - 0.1:
             self.airborne()
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
-            self.abort(reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
-                       f"within {self.config.takeoff_timeout_s:.0f} s")
+            self.abort(
+                reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
+                f"within {self.config.takeoff_timeout_s:.0f} s"
+            )
 
     def _transit_altitude_m(self) -> float:
         return self.config.cruise_altitude_m
@@ -672,12 +705,16 @@ class BrickUav(UavModel):
             if self.climbs < cfg.max_climbs:
                 self.widen()
             elif self.estimates_seen == 0:
-                self.abort(reason=f"brick {self.brick_task.brick} not seen near its pickup "
-                           f"after {self.climbs} climbs")
+                self.abort(
+                    reason=f"brick {self.brick_task.brick} not seen near its pickup "
+                    f"after {self.climbs} climbs"
+                )
             else:
-                self.abort(reason=f"brick {self.brick_task.brick} pose confidence "
-                           f"{conf if conf is not None else 0.0:.2f} stayed below {cfg.confidence_threshold:.2f} "
-                           f"after {self.climbs} climbs")
+                self.abort(
+                    reason=f"brick {self.brick_task.brick} pose confidence "
+                    f"{conf if conf is not None else 0.0:.2f} stayed below {cfg.confidence_threshold:.2f} "
+                    f"after {self.climbs} climbs"
+                )
 
     def _collect(self, tel: Telemetry) -> None:
         frame = self.camera.read()
@@ -791,7 +828,9 @@ class BrickUav(UavModel):
         self.grasp_attempts += 1
         self.gripper.set_magnet(False)
         if self.grasp_attempts >= self.config.max_grasp_attempts:
-            self.abort(reason=f"brick {self.brick_task.brick} not attached after {self.grasp_attempts} grasps")
+            self.abort(
+                reason=f"brick {self.brick_task.brick} not attached after {self.grasp_attempts} grasps"
+            )
         else:
             self.climbs = 0
             self._hover_z = self.config.cruise_altitude_m
@@ -851,8 +890,10 @@ class BrickUav(UavModel):
         elif self._now_s > self._traj_end_s + cfg.release_timeout_s:
             self.place_attempts += 1
             if self.place_attempts >= cfg.max_place_attempts:
-                self.abort(reason=f"drop-off of {self.brick_task.id} not reached within "
-                           f"{cfg.placement_radius_m * 100:.1f} cm after {self.place_attempts} descents")
+                self.abort(
+                    reason=f"drop-off of {self.brick_task.id} not reached within "
+                    f"{cfg.placement_radius_m * 100:.1f} cm after {self.place_attempts} descents"
+                )
             else:
                 self.timeout()
 
@@ -872,8 +913,9 @@ class BrickUav(UavModel):
             return
         self.release_attempts += 1
         if self.release_attempts >= self.config.max_release_attempts:
-            self.abort(reason=f"brick {self.brick_task.brick} still attached after "
-                       f"{self.release_attempts} releases")
+            self.abort(
+                reason=f"brick {self.brick_task.brick} still attached after {self.release_attempts} releases"
+            )
         else:
             self.stuck()
 
@@ -935,7 +977,9 @@ class AdhesionUav(UavModel):
         if isinstance(self.task, AdhesionTask):
             t = self.task
             surface = max(t.start_m[2], t.end_m[2])
-            z = max(z, surface + self.config.airframe.spray_height_m - self._nozzle[2] + self.config.clearance_m)
+            z = max(
+                z, surface + self.config.airframe.spray_height_m - self._nozzle[2] + self.config.clearance_m
+            )
         return z
 
     def _nozzle_body(self, point_m: tuple[float, float, float] | np.ndarray) -> np.ndarray:
@@ -989,7 +1033,9 @@ class AdhesionUav(UavModel):
     def enter_descend(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
         assert tel is not None
-        self._fly_to(tel, self._nozzle_body(self.adhesion_task.start_m), self.config.spray_descent_s, self._yaw_rad)
+        self._fly_to(
+            tel, self._nozzle_body(self.adhesion_task.start_m), self.config.spray_descent_s, self._yaw_rad
+        )
 
     def do_descend(self, tel: Telemetry) -> None:
         if self._leg_done(tel, self.config.spray_tolerance_m):
@@ -1002,11 +1048,16 @@ class AdhesionUav(UavModel):
         assert tel is not None
         t = self.adhesion_task
         self.sprayer.set_valve(True)
-        self._fly_line(tel, self._nozzle_body(t.start_m), self._nozzle_body(t.end_m), self.config.spray_speed_mps)
+        self._fly_line(
+            tel, self._nozzle_body(t.start_m), self._nozzle_body(t.end_m), self.config.spray_speed_mps
+        )
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
-        if self._leg_done(tel, cfg.spray_tolerance_m) or self._now_s > self._traj_end_s + cfg.release_timeout_s:
+        if (
+            self._leg_done(tel, cfg.spray_tolerance_m)
+            or self._now_s > self._traj_end_s + cfg.release_timeout_s
+        ):
             self.sprayed()
 
     def enter_close(self, *args: Any, **kwargs: Any) -> None:

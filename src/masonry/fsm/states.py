@@ -100,8 +100,12 @@ BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "landed", "source": "land", "dest": "idle"},
     {"trigger": "abort", "source": BRICK_TASK_STATES, "dest": "failsafe", "before": "fail_task"},
     {"trigger": "recover", "source": "failsafe", "dest": "home"},
-    {"trigger": "lost", "source": [*BRICK_TASK_STATES, *_AIRBORNE_COMMON], "dest": "emergency",
-     "before": "fail_task"},
+    {
+        "trigger": "lost",
+        "source": [*BRICK_TASK_STATES, *_AIRBORNE_COMMON],
+        "dest": "emergency",
+        "before": "fail_task",
+    },
     {"trigger": "landed", "source": "emergency", "dest": "halted"},
     {"trigger": "giveup", "source": "emergency", "dest": "halted"},
 ]
@@ -136,8 +140,12 @@ ADHESION_TRANSITIONS: list[Transition] = [
     {"trigger": "landed", "source": "land", "dest": "idle"},
     {"trigger": "abort", "source": ADHESION_TASK_STATES, "dest": "failsafe", "before": "fail_task"},
     {"trigger": "recover", "source": "failsafe", "dest": "home"},
-    {"trigger": "lost", "source": [*ADHESION_TASK_STATES, *_AIRBORNE_COMMON], "dest": "emergency",
-     "before": "fail_task"},
+    {
+        "trigger": "lost",
+        "source": [*ADHESION_TASK_STATES, *_AIRBORNE_COMMON],
+        "dest": "emergency",
+        "before": "fail_task",
+    },
     {"trigger": "landed", "source": "emergency", "dest": "halted"},
     {"trigger": "giveup", "source": "emergency", "dest": "halted"},
 ]
