@@ -27,8 +27,8 @@ def conflict_pairs(
     end: FloatArray,
     clearance_m: float,
     edges: tuple[IntArray, IntArray],
-    chunk_pairs: int = 2_000_000,
-    reach: int = 2,
+    chunk_pairs: int = 250_000,
+    reach: int = 3,
 ) -> tuple[IntArray, IntArray]:
     """Pairs (a, b), a < b, of tasks within ``clearance_m`` of each other that are not dependent.
 
