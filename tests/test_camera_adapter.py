@@ -155,3 +155,35 @@ def test_pose_parsing() -> None:
         parse_pose(b'{"position_m": [0, 0, 1], "time_s": "now"}', received_s=0.0)
     with pytest.raises(InputError, match="finite"):
         parse_pose(b'{"position_m": [0, NaN, 1]}', received_s=0.0)
+
+
+def test_a_real_camera_in_the_pre_flight_check(recording, tmp_path) -> None:
+    from pathlib import Path
+
+    from masonry.adapters.wiring import HardwareConfig, open_adapters, preflight
+    from masonry.blueprint import load_blueprint
+
+    video, calibration = recording
+    bp = load_blueprint(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
+    spec = bp.uavs("brick")[0]
+    hw = HardwareConfig(camera=str(video), calibration=str(calibration))
+    opened = open_adapters(hw, blueprint=bp, spec=spec)
+    try:
+        report = preflight(opened, hw)
+        assert isinstance(opened.camera, OpenCvCamera) and opened.camera.clock is opened.clock
+    finally:
+        opened.close()
+    assert report.ok
+    assert any(
+        line.startswith("  [ok  ] camera: OpenCV file") and "640x480 frames" in line
+        for line in report.lines()
+    )
+    other = tmp_path / "hd.yaml"
+    write_calibration(other, CameraIntrinsics(900.0, 900.0, 639.5, 359.5, width_px=1280, height_px=720))
+    hw = HardwareConfig(camera=str(video), calibration=str(other))
+    opened = open_adapters(hw, blueprint=bp, spec=spec)
+    try:
+        report = preflight(opened, hw)
+    finally:
+        opened.close()
+    assert not report.ok and "calibration is for 1280x720" in report.reasons[0]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import signal
 import subprocess
+import time
 import sys
 from pathlib import Path
 
@@ -193,3 +194,89 @@ def test_sitl_command_bad_input() -> None:
     )
     res = runner.invoke(app, ["sitl", "--blueprint", CASE_STUDY, "--name", "nobody"])
     assert res.exit_code == 2 and "the fleet has no UAV named nobody" in res.stderr
+
+
+def _blueprint_and_spec():
+    from masonry.blueprint import load_blueprint
+
+    bp = load_blueprint(CASE_STUDY)
+    return bp, bp.uavs("brick")[0]
+
+
+def test_pre_flight_lists_every_blocking_problem() -> None:
+    from masonry.adapters.arduino_fake import FakeArduino
+    from masonry.adapters.wiring import open_adapters, preflight
+    from masonry.errors import CommandRejected
+
+    bp, spec = _blueprint_and_spec()
+    port = free_udp_port()
+    sitl = MavlinkSitl(port, time_scale=4.0, home_m=spec.home_m)
+    sitl.vehicle.battery_fraction = 0.3
+    with FakeArduino() as board:
+        sitl.start()
+        try:
+            hw = HardwareConfig(
+                fc=f"udpin:127.0.0.1:{port}", actuators=board.port, min_battery=0.5, actuator_boot_wait_s=0.1
+            )
+            opened = open_adapters(hw, blueprint=bp, spec=spec)
+            try:
+                board.silent = True  # the board stops answering after the connection
+                report = preflight(opened, hw, role="brick")
+            finally:
+                opened.close()
+        finally:
+            sitl.stop()
+    assert not report.ok
+    text = "\n".join(report.lines())
+    assert "[FAIL] battery: 30% (minimum 50%)" in text
+    assert "[FAIL] actuators: not answering" in text
+    assert "[ok  ] position estimate" in text and "-> refusing to arm" in text
+    with pytest.raises(
+        CommandRejected, match=r"arm rejected: pre-flight check failed: battery: 30% .*; actuators"
+    ):
+        report.raise_if_failed()
+
+
+def test_motion_capture_is_forwarded_to_the_autopilot() -> None:
+    import socket
+    import threading
+
+    from masonry.adapters.pose_source import MocapPose, send_pose
+    from masonry.adapters.wiring import open_adapters, preflight
+
+    bp, spec = _blueprint_and_spec()
+    port, mocap_port = free_udp_port(), free_udp_port()
+    sitl = MavlinkSitl(port, time_scale=4.0, home_m=spec.home_m, config=SitlConfig(position_source="vision"))
+    stop = threading.Event()
+
+    def tracker() -> None:  # a motion-capture PC streaming the UAV's pose (and another body's) at 50 Hz
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+            while not stop.is_set():
+                now = time.monotonic()
+                send_pose(
+                    tx, ("127.0.0.1", mocap_port), MocapPose("brick-1", now, spec.home_m, (0.0, 0.0, 0.0))
+                )
+                send_pose(
+                    tx, ("127.0.0.1", mocap_port), MocapPose("other", now, (9.0, 9.0, 9.0), (0.0, 0.0, 0.0))
+                )
+                stop.wait(0.02)
+
+    thread = threading.Thread(target=tracker, daemon=True)
+    sitl.start()
+    thread.start()
+    try:
+        hw = HardwareConfig(fc=f"udpin:127.0.0.1:{port}", mocap_port=mocap_port, mocap_host="127.0.0.1",
+                            estimate_wait_s=3.0)  # fmt: skip
+        opened = open_adapters(hw, blueprint=bp, spec=spec)
+        try:
+            report = preflight(opened, hw)
+            assert "motion capture from udp:127.0.0.1" in opened.descriptions["flight controller"]
+        finally:
+            opened.close()
+    finally:
+        stop.set()
+        thread.join()
+        sitl.stop()
+    assert report.ok, report.lines()
+    assert sitl.vision_received >= 1
+    assert sitl.last_vision_m == pytest.approx(spec.home_m, abs=1e-4)  # this UAV's body, not the other one

@@ -164,6 +164,7 @@ class MavlinkSitl:
         self._last_setpoint_wall_s = -math.inf
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
         self.vision_received = 0
+        self.last_vision_m: Vec3 | None = None  # world ENU position of the last VISION_POSITION_ESTIMATE
         self.setpoints_received = 0
         self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
@@ -313,6 +314,7 @@ class MavlinkSitl:
                 self._position_target(msg)
         elif kind == "VISION_POSITION_ESTIMATE":
             self.vision_received += 1
+            self.last_vision_m = self.frame.position_to_world((msg.x, msg.y, msg.z))
             self._last_vision_sim_s = self.sim_time_s
 
     def _ack(self, command: int, result: int) -> None:

@@ -43,6 +43,7 @@ class HardwareConfig:
     mocap_host: str = "0.0.0.0"
     mocap_body: str | None = None  # rigid-body name (default: the UAV's name)
     actuator_baud: int = 115200
+    actuator_boot_wait_s: float = 2.0  # opening the port resets an Uno/Nano: wait for its HELLO this long
     min_battery: float = 0.5  # pre-flight: refuse to arm below this charge fraction
     estimate_wait_s: float = 10.0  # pre-flight: wait this long for the autopilot's position estimate
 
@@ -268,7 +269,7 @@ def open_adapters(
         else:
             from masonry.adapters.arduino import ArduinoActuators
 
-            board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud)
+            board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud, boot_wait_s=hw.actuator_boot_wait_s)
             board.connect()
             opened._closers.append(board.close)
             opened.gripper = opened.sprayer = board
