@@ -36,7 +36,6 @@ from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     MAV_AUTOPILOT_ARDUPILOTMEGA,
     MAV_AUTOPILOT_PX4,
-    PX4_MODES,
     MAV_CMD_COMPONENT_ARM_DISARM,
     MAV_CMD_DO_SET_MODE,
     MAV_CMD_NAV_LAND,
@@ -53,6 +52,7 @@ from masonry.adapters.mavlink import (
     MSG_HEARTBEAT,
     MSG_LOCAL_POSITION_NED,
     MSG_SYS_STATUS,
+    PX4_MODES,
     FrameTransform,
     mavutil_module,
 )
