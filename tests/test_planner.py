@@ -217,3 +217,18 @@ def test_random_walls_conflicts_equal_brute_force_oracle(bp: Blueprint) -> None:
 def test_generated_walls_equal_oracle(bp: Blueprint) -> None:
     p = plan(bp)
     assert set(p.conflicts) == _oracle(p, bp.clearance_m)
+
+
+def test_json_fast_path_equals_plain_conversion() -> None:
+    import json
+
+    from masonry.planner.export import _pairs_json, plan_json, plan_to_dict
+    from masonry.planner.graphs import plan_graphs
+
+    bp = running_bond(6, 12, placed_courses=1, yaw_rad=0.2)
+    p = plan(bp)
+    assert json.loads(plan_json(p)) == plan_to_dict(p)
+    assert json.loads(plan_json(plan_graphs(bp))) == plan_to_dict(p)
+    chunked = "".join(_pairs_json(p, None, p.conflict_indices, chunk=7))
+    assert json.loads(chunked) == [list(c) for c in p.conflicts]
+    assert plan_graphs(bp).to_plan() == p
