@@ -332,3 +332,18 @@ def test_px4_offboard_rules() -> None:
         fc._threads[1].join(timeout=2.0)
         wait_until(lambda: sitl.mode == "AUTO.LOITER", 2.0, "PX4's offboard-loss failsafe")
         assert "Offboard setpoints lost: holding position" in sitl.status_log
+
+
+def test_a_failing_pose_source_does_not_stop_the_setpoint_stream() -> None:
+    class Broken:
+        def latest(self):
+            raise RuntimeError("tracker SDK crashed")
+
+    with flight(pose_source=Broken()) as (sitl, fc):
+        fc.connect()
+        take_off(fc, 0.8)
+        fc.send_velocity((0.2, 0.0, 0.0), 0.0)
+        before = sitl.setpoints_received
+        time.sleep(0.3)
+        assert sitl.setpoints_received - before >= 4
+        assert fc.pose_errors > 3 and fc.last_pose_error == "RuntimeError: tracker SDK crashed"

@@ -371,6 +371,8 @@ class MavlinkFlightController:
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
+        self.pose_errors = 0
+        self.last_pose_error: str | None = None
         self._conn: Any = None
         self._mavlink: Any = None
         self._lock = threading.Lock()
@@ -518,7 +520,10 @@ class MavlinkFlightController:
                 time.sleep(0.05)
                 continue
             if msg is not None:
-                self._handle(msg, time.monotonic())
+                try:
+                    self._handle(msg, time.monotonic())
+                except (AttributeError, TypeError, ValueError):
+                    pass  # a message without the fields we expect (another dialect): ignore it, keep listening
 
     def _handle(self, msg: Any, now: float) -> None:
         kind = msg.get_type()
@@ -576,8 +581,12 @@ class MavlinkFlightController:
                     if next_setpoint < now:  # fell behind (suspended?): don't burst
                         next_setpoint = now + period
                 if self.pose_source is not None and now >= next_vision:
-                    self._forward_pose()
                     next_vision = now + vision_period
+                    try:
+                        self._forward_pose()
+                    except Exception as exc:  # noqa: BLE001 - a bad pose must not stop the setpoint stream
+                        self.pose_errors += 1
+                        self.last_pose_error = f"{type(exc).__name__}: {exc}"
             except (OSError, ValueError, AttributeError):
                 if self._stop.is_set():
                     return
