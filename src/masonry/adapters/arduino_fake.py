@@ -16,7 +16,6 @@ import os
 import select
 import sys
 import threading
-import tty
 
 from masonry.actuator_protocol import DeviceLogic
 
@@ -46,6 +45,8 @@ class FakeArduino:
         self.stop()
 
     def start(self) -> None:
+        import tty  # POSIX only: the fake board needs a pseudo-terminal
+
         master, slave = os.openpty()
         tty.setraw(slave)  # no echo, no line editing: a serial line, as a USB CDC device looks
         self._master, self._slave = master, slave
