@@ -283,7 +283,7 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
         if not upper.placed:
             has_adhesion = True
     roles = {u.role for u in blueprint.fleet}
-    if any(not b.placed for b in bricks) and "brick" not in roles:
+    if "brick" not in roles:
         raise BlueprintError(source, "fleet", "has no UAV with role `brick` to place the bricks")
     if has_adhesion and "adhesion" not in roles:
         raise BlueprintError(
