@@ -280,3 +280,40 @@ def test_motion_capture_is_forwarded_to_the_autopilot() -> None:
     assert report.ok, report.lines()
     assert sitl.vision_received >= 1
     assert sitl.last_vision_m == pytest.approx(spec.home_m, abs=1e-4)  # this UAV's body, not the other one
+
+
+def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
+    import threading
+
+    bp, spec = _blueprint_and_spec()
+    port = free_udp_port()
+    sitl = MavlinkSitl(port, time_scale=10.0, home_m=spec.home_m, config=SitlConfig(gcs_failsafe_s=1.5))
+
+    def radio_outage() -> None:  # once the UAV is cruising, the telemetry radio dies for good
+        deadline = time.monotonic() + 20.0
+        while not (sitl.vehicle.armed and sitl.vehicle.position_m[2] > 1.0) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        time.sleep(0.2)
+        sitl.link_down = True
+
+    sitl.start()
+    outage = threading.Thread(target=radio_outage, daemon=True)
+    outage.start()
+    try:
+        res = runner.invoke(app, [
+            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0",
+            "--fc", f"udpin:127.0.0.1:{port}", "--format", "json",
+        ])  # fmt: skip
+        outage.join()
+        assert res.exit_code == 0, res.output
+        out = json.loads(res.stdout)
+        assert out["status"] == "failed" and out["reason"] == "flight controller link lost"
+        assert out["trace"][-2]["state"] == "emergency" and out["trace"][-1]["state"] == "halted"
+        # meanwhile the autopilot stopped on its guided timeout, then its GCS failsafe landed it
+        deadline = time.monotonic() + 5.0
+        while sitl.vehicle.armed and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert not sitl.vehicle.armed and sitl.vehicle.on_ground and sitl.mode == "LAND"
+        assert "GCS Failsafe" in sitl.status_log
+    finally:
+        sitl.stop()

@@ -15,8 +15,9 @@ What it models (ArduCopter semantics; names from ArduPilot):
   (FS_GCS_TIMEOUT, 5 s without a GCS heartbeat while flying -> LAND), battery drain in SYS_STATUS,
   MAV_CMD_SET_MESSAGE_INTERVAL, MAVLink 2 signing.
 - ``time_scale``: simulated seconds per wall second, so tests fly a whole takeoff in a fraction of a second.
-  The link timeouts (guided timeout, GCS failsafe) run on wall time: a ground station streams at wall rates, and
-  scaling them would trip the failsafes of a correctly behaving ground station.
+  The guided timeout runs on simulated time (it bounds how far the UAV flies on a stale setpoint; a ground
+  station streaming at 10-20 Hz of wall time stays well within it), the GCS failsafe on wall time (ground
+  stations send their heartbeat at 1 Hz of wall time, which scaled would trip it).
 
 The vehicle dynamics are the simulator's multirotor, :class:`masonry.sim.vehicle.SimVehicle` (velocity lag with
 limits, takeoff, landing, ground contact, battery, motion-capture noise); this module adds the autopilot around it.
@@ -113,7 +114,7 @@ class MavlinkSitl:
         port: UDP port the stream is sent to (where the ground station listens).
         host: address of the ground station.
         vehicle: the dynamics; default a :class:`~masonry.sim.vehicle.SimVehicle` standing at ``home_m`` whose
-            setpoint timeout is the guided timeout (in simulated seconds: ``guided_timeout_s * time_scale``).
+            setpoint timeout is the guided timeout (simulated seconds: how far a UAV flies on a stale command).
         home_m: start position (world ENU = the autopilot's local frame, as with motion capture fed to it).
         time_scale: simulated seconds per wall second.
         signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
@@ -143,7 +144,7 @@ class MavlinkSitl:
 
             vehicle = SimVehicle(
                 VehicleConfig(
-                    setpoint_timeout_s=self.config.guided_timeout_s * time_scale,
+                    setpoint_timeout_s=self.config.guided_timeout_s,
                     link_failsafe_s=math.inf,  # the GCS failsafe below decides
                     battery_arm_min_fraction=self.config.arm_min_battery,
                 ),
