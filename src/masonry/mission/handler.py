@@ -67,6 +67,10 @@ class UavHandler:
             ``nearest`` policy uses it).
         heartbeat_period_s: how often the handler sends its heartbeat.
         heartbeat_timeout_s: mission control silent for longer counts as lost.
+        battery, swap_battery, reserve_fraction: the battery reserve (see the module docstring).
+        after_result: called right after a result is sent; the in-process simulation steps mission control
+            there, so that the answer (the next task) is in the inbox when the machine polls for it, as with a
+            network round trip shorter than a tick.
     """
 
     def __init__(
@@ -80,7 +84,9 @@ class UavHandler:
         battery: Callable[[], float] | None = None,
         swap_battery: Callable[[], bool] | None = None,
         reserve_fraction: float = 0.4,
+        after_result: Callable[[], None] | None = None,
     ) -> None:
+        self._after_result = after_result
         self._battery = battery
         self._swap_battery = swap_battery
         self.reserve_fraction = reserve_fraction
@@ -127,8 +133,14 @@ class UavHandler:
 
     # -- MissionLink -----------------------------------------------------------------------------------
     def poll_task(self) -> Task | None:
-        if self._current is not None or not self._queue:
+        if self._current is not None:
             return None
+        if not self._queue:
+            # the answer to a result just sent may already be here (the machine polls right after reporting)
+            for raw in self.transport.receive():
+                self._handle(raw, self.now_s)
+            if not self._queue:
+                return None
         if self._battery is not None and self._battery() < self.reserve_fraction:
             # Battery reserve: the task waits while the machine, given nothing, flies home and lands; then
             # the ground crew (``swap_battery``, True once done) swaps the pack and the task starts.
@@ -151,6 +163,8 @@ class UavHandler:
             self._current = None
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
         self._send(Result(self.name, result, self.now_s, self._where(), state=state))
+        if self._after_result is not None:
+            self._after_result()
 
     # -- the tick --------------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:

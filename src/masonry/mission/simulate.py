@@ -289,7 +289,8 @@ def _run(
         h = UavHandler(spec.name, bus.endpoint(spec.name), position=lambda fc=fc: fc.telemetry().position_m,
                        heartbeat_timeout_s=heartbeat_timeout_s,
                        battery=lambda v=sim_uav.vehicle: float(v.battery_fraction),
-                       swap_battery=_GroundCrew(sim_uav.vehicle, world.clock))
+                       swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
+                       after_result=lambda: mc.step(world.clock.now_s()))
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock))
         handlers[spec.name] = h
 
