@@ -137,8 +137,7 @@ class UavHandler:
             return None
         if not self._queue:
             # the answer to a result just sent may already be here (the machine polls right after reporting)
-            for raw in self.transport.receive():
-                self._handle(raw, self.now_s)
+            self.pump()
             if not self._queue:
                 return None
         if self._battery is not None and self._battery() < self.reserve_fraction:
@@ -165,6 +164,12 @@ class UavHandler:
         self._send(Result(self.name, result, self.now_s, self._where(), state=state))
         if self._after_result is not None:
             self._after_result()
+
+    def pump(self) -> bool:
+        """Read what has arrived now (between ticks); True if a task is waiting for the machine."""
+        for raw in self.transport.receive():
+            self._handle(raw, self.now_s)
+        return bool(self._queue)
 
     # -- the tick --------------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:

@@ -44,6 +44,7 @@ def run_remote_uav(
     max_time_s: float = 3600.0,
     heartbeat_period_s: float = 1.0,
     heartbeat_timeout_s: float = 5.0,
+    turnaround_s: float = 0.2,
     echo: Any = None,
 ) -> RemoteRun:
     """Fly one simulated UAV for a remote mission control until it ends the mission and the UAV has landed.
@@ -58,6 +59,7 @@ def run_remote_uav(
         wait_s: wall seconds to wait for mission control's first message before giving up.
         max_time_s: simulated seconds after which the UAV stops regardless.
         heartbeat_period_s, heartbeat_timeout_s: in simulated (mission) seconds.
+        turnaround_s: wall seconds to wait, after reporting a result, for mission control's next assignment.
         echo: called with one line per state change (the process's log), or None.
 
     Raises:
@@ -75,8 +77,17 @@ def run_remote_uav(
     transport = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name)
     transport.connect()
     fc = sim_uav.fc
+
+    def await_answer() -> None:
+        # the machine polls for its next task right after reporting: give mission control a network round
+        # trip and one of its ticks to answer, so that the UAV chains tasks instead of flying home
+        deadline = time.monotonic() + turnaround_s
+        while not handler.pump() and time.monotonic() < deadline:
+            time.sleep(0.002)
+
     handler = UavHandler(spec.name, transport, position=lambda: fc.telemetry().position_m,
-                         heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s)
+                         heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s,
+                         after_result=await_answer)
     config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers)
     model = build_uav(config, fc=fc, link=handler, clock=world.clock, gripper=sim_uav.gripper,
                       camera=sim_uav.camera, sprayer=sim_uav.sprayer)
