@@ -103,7 +103,7 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
     clearance = float(options.get("clearance_m", DEFAULT_CLEARANCE_M))  # type: ignore[arg-type]
     cruise = float(options.get("cruise_altitude_m", DEFAULT_CRUISE_ALTITUDE_M))  # type: ignore[arg-type]
     pallet_distance = float(options.get("pallet_distance_m", clearance + 1.0))  # type: ignore[arg-type]
-    markers = options.get("markers") or MarkerSpec(dictionary=_dictionary_for(len(layout)))
+    markers = options.get("markers") or _markers_for(size, len(layout))
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
     if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
@@ -160,6 +160,17 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
         brick_size_m=size,
         markers=markers,  # type: ignore[arg-type]
         source=f"<{kind}>",
+    )
+
+
+def _markers_for(size: Vec3, n_bricks: int) -> MarkerSpec:
+    """The default marker layout, shrunk if needed to fit the top face, with a dictionary numbering every brick."""
+    default = MarkerSpec()
+    scale = min(1.0, 0.9 * size[0] / (default.spacing_m + default.size_m), 0.9 * size[1] / default.size_m)
+    return MarkerSpec(
+        dictionary=_dictionary_for(n_bricks),
+        size_m=round(default.size_m * scale, 4),
+        spacing_m=round(default.spacing_m * scale, 4),
     )
 
 
