@@ -180,6 +180,11 @@ def test_random_walls_adhesion_segments_on_lower_top_face_inside_both_footprints
             assert t.length_m > 0
             for point in (t.start_m, t.end_m, t.location_m):
                 assert _inside(point[:2], lower) and _inside(point[:2], upper), (t, point)
+            if abs(math.sin(upper.yaw_rad - lower.yaw_rad)) < 1e-12 and t.length_m > 1e-9:
+                # Parallel bricks: along the lower brick's length axis.
+                direction = np.subtract(t.end_m, t.start_m)[:2] / t.length_m
+                axis = (math.cos(lower.yaw_rad), math.sin(lower.yaw_rad))
+                assert abs(direction[0] * axis[1] - direction[1] * axis[0]) < 1e-9
 
 
 def _oracle(p, clearance: float) -> set[tuple[str, str]]:
