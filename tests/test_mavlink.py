@@ -13,6 +13,7 @@ from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     PX4_MODES,
     TYPE_MASK_VELOCITY_YAW_RATE,
+    estimate_usable,
     FrameTransform,
     LinkClock,
     MavlinkFlightController,
@@ -175,3 +176,18 @@ def test_link_clock_sleep_is_scaled() -> None:
     clock.sleep(0.5)
     assert 0.03 <= time.monotonic() - started < 0.3
     assert clock.now_s() == pytest.approx(10.0 + 10 * (time.monotonic() - now), abs=0.2)
+
+
+def test_estimate_flags() -> None:
+    m = mavutil_module().mavlink
+    indoor = (
+        m.EKF_ATTITUDE | m.EKF_VELOCITY_HORIZ | m.EKF_VELOCITY_VERT | m.EKF_POS_HORIZ_REL | m.EKF_POS_VERT_ABS
+    )
+    assert estimate_usable(indoor)  # motion capture, no GPS: no absolute horizontal position needed
+    assert estimate_usable(indoor | m.EKF_POS_HORIZ_ABS | m.EKF_PRED_POS_HORIZ_REL)
+    assert not estimate_usable(indoor | m.EKF_CONST_POS_MODE)
+    assert not estimate_usable(indoor | m.EKF_UNINITIALIZED)
+    assert not estimate_usable(indoor & ~m.EKF_POS_HORIZ_REL)
+    assert not estimate_usable(indoor & ~m.EKF_POS_VERT_ABS)
+    assert not estimate_usable(m.ESTIMATOR_ATTITUDE | m.ESTIMATOR_ACCEL_ERROR | indoor)
+    assert not estimate_usable(0)

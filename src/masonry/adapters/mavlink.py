@@ -72,10 +72,19 @@ MAV_SEVERITY_WARNING = 4
 # ignore x, y, z (1|2|4), ax, ay, az (64|128|256) and yaw (1024); keep vx, vy, vz (8|16|32) and yaw rate (2048).
 TYPE_MASK_VELOCITY_YAW_RATE = 1 | 2 | 4 | 64 | 128 | 256 | 1024
 
-# EKF_STATUS_REPORT (ArduPilot) / ESTIMATOR_STATUS (PX4) flags that make a local position usable for flight:
-# attitude, horizontal velocity, horizontal relative position and vertical position.
-ESTIMATE_FLAGS_REQUIRED = 1 | 2 | 8 | 16
-ESTIMATE_FLAG_UNINITIALIZED = 1024  # EKF_UNINITIALIZED (ArduPilot)
+# EKF_STATUS_REPORT (ArduPilot) / ESTIMATOR_STATUS (PX4) flags (same bits up to 512) that make a local position
+# usable for flight: attitude (1), horizontal and vertical velocity (2, 4), relative horizontal position (8) and
+# vertical position (32). Absolute horizontal position (16) is not required: indoors, with motion capture and no
+# GPS, there is none. Disqualifying: constant-position mode (128, the EKF does not know where it is),
+# EKF_UNINITIALIZED (1024, ArduPilot) / GPS glitch (1024, PX4), accelerometer error (2048, PX4).
+ESTIMATE_FLAGS_REQUIRED = 1 | 2 | 4 | 8 | 32
+ESTIMATE_FLAGS_BAD = 128 | 1024 | 2048
+
+
+def estimate_usable(flags: int) -> bool:
+    """Whether EKF_STATUS_REPORT / ESTIMATOR_STATUS ``flags`` describe a position estimate fit to fly on."""
+    return flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED and not flags & ESTIMATE_FLAGS_BAD
+
 
 # ArduCopter custom modes and PX4 custom modes (main mode << 16 | sub mode << 24).
 ARDUPILOT_MODES = {
@@ -847,15 +856,11 @@ class MavlinkFlightController:
         st = self._state
         if st.position_ned is None or now - st.position_time_s > max(0.5, self.heartbeat_timeout_s):
             return False
-        if st.estimate_flags is None:
-            return (
-                True  # no estimator report requested/received: a streaming LOCAL_POSITION_NED is the signal
-            )
-        flags = st.estimate_flags
-        return (
-            flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED
-            and not flags & ESTIMATE_FLAG_UNINITIALIZED
-        )
+        if (
+            st.estimate_flags is None
+        ):  # no estimator report (yet): a streaming LOCAL_POSITION_NED is the signal
+            return True
+        return estimate_usable(st.estimate_flags)
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""

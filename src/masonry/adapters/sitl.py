@@ -491,10 +491,10 @@ class MavlinkSitl:
             mav.sys_status_send(0, 0, 0, 500, voltage_mv, 1500 if v.armed else 50, round(fraction * 100),
                                 0, 0, 0, 0, 0, 0)  # fmt: skip
         elif msg_id == MSG_EKF_STATUS_REPORT:
-            flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 1024
+            flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128 | 1024)  # no GPS: no absolute position
             mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
         elif msg_id == MSG_ESTIMATOR_STATUS:
-            flags = (1 | 2 | 4 | 8 | 16 | 32 | 128) if ekf_ok else 0  # ESTIMATOR_STATUS_FLAGS
+            flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128)  # ESTIMATOR_STATUS_FLAGS
             mav.estimator_status_send(
                 int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01
             )
