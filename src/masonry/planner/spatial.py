@@ -97,6 +97,10 @@ def neighbour_pairs(
     keep = sizes > 0
     sa, ca, sb, cb, same, sizes = sa[keep], ca[keep], sb[keep], cb[keep], same[keep], sizes[keep]
     bounds = np.cumsum(sizes)
+    # Within a chunk the arithmetic fits int32 (half the memory traffic of int64) unless a cell pair is huge.
+    small = int(sizes.max()) < 2**31 - 1
+    it = np.int32 if small else np.int64
+    sa, ca, sb, cb = sa.astype(it), ca.astype(it), sb.astype(it), cb.astype(it)
     begin = 0
     while begin < len(sizes):
         base = bounds[begin - 1] if begin else 0
@@ -105,8 +109,8 @@ def neighbour_pairs(
         sl = slice(begin, end)
         m = sizes[sl]
         total = int(m.sum())
-        which = np.repeat(np.arange(end - begin), m)
-        t = np.arange(total, dtype=np.int64) - np.repeat(np.cumsum(m) - m, m)
+        which = np.repeat(np.arange(end - begin, dtype=it), m)
+        t = np.arange(total, dtype=np.int64 if total >= 2**31 - 1 else it) - np.repeat((np.cumsum(m) - m).astype(it), m)
         cbw = cb[sl][which]
         ia = t // cbw
         ib = t % cbw
