@@ -176,6 +176,7 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=10)
     assert "glue-1 (adhesion)" in out and "(signed)" in out and f"udpin:0.0.0.0:{port}" in out
+    assert "ground station connected (system 255)" in out
     assert proc.returncode in (130, 0, 1), err
     assert "Traceback" not in err
 

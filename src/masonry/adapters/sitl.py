@@ -29,6 +29,7 @@ import math
 import threading
 import time
 from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -119,6 +120,7 @@ class MavlinkSitl:
         time_scale: simulated seconds per wall second.
         signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
         config: autopilot knobs.
+        log: called with one line per event (mode change, STATUSTEXT), e.g. ``print``.
     """
 
     def __init__(
@@ -133,6 +135,7 @@ class MavlinkSitl:
         config: SitlConfig | None = None,
         physics_dt_s: float = 0.01,
         seed: int = 0,
+        log: Callable[[str], None] | None = None,
     ) -> None:
         self.port = port
         self.host = host
@@ -164,6 +167,7 @@ class MavlinkSitl:
         self.mode = "POSCTL" if self.px4 else "STABILIZE"
         self._last_setpoint_wall_s = -math.inf
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
+        self.log = log  # a line per event (mode change, STATUSTEXT), e.g. print
         self.vision_received = 0
         self.last_vision_m: Vec3 | None = None  # world ENU position of the last VISION_POSITION_ESTIMATE
         self.setpoints_received = 0
@@ -303,6 +307,8 @@ class MavlinkSitl:
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             if msg.type == MAV_TYPE_GCS:
+                if self._last_gcs_wall_s is None:
+                    self._log(f"ground station connected (system {msg.get_srcSystem()})")
                 self._last_gcs_wall_s = time.monotonic()
         elif kind == "COMMAND_LONG":
             if msg.target_system in (0, self.config.system_id):
@@ -321,8 +327,13 @@ class MavlinkSitl:
     def _ack(self, command: int, result: int) -> None:
         self._conn.mav.command_ack_send(command, result)
 
+    def _log(self, text: str) -> None:
+        if self.log is not None:
+            self.log(f"{self.sim_time_s:9.2f} s  {text}")
+
     def _text(self, severity: int, text: str) -> None:
         self.status_log.append(text)
+        self._log(text)
         if not self.link_down and self._conn is not None:
             self._conn.mav.statustext_send(severity, text.encode("ascii", errors="replace")[:50])
 
@@ -368,6 +379,7 @@ class MavlinkSitl:
                 return
             if self.px4:
                 self.mode = "AUTO.TAKEOFF"
+            self._log(f"takeoff to {float(msg.param7):.2f} m")
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_LAND:
             self._set_mode(self._land_mode)
@@ -420,6 +432,8 @@ class MavlinkSitl:
         return False
 
     def _set_mode(self, name: str) -> None:
+        if name != self.mode:
+            self._log(f"mode {name}")
         self.mode = name
         v = self.vehicle
         if name == self._land_mode:

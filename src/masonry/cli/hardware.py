@@ -35,6 +35,7 @@ def build_sitl(
     prearm_failure: str | None = None,
     seed: int = 0,
     autopilot: str = "ardupilot",
+    log: Any = None,
 ) -> tuple[Any, str]:
     """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it."""
     from masonry.adapters.mavlink import load_signing_key
@@ -65,6 +66,7 @@ def build_sitl(
         signing_key=key,
         config=SitlConfig(prearm_failure=prearm_failure, autopilot=autopilot),
         seed=seed,
+        log=log,
     )
     description = (
         f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, "
@@ -92,7 +94,8 @@ def sitl(
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
     server, description = build_sitl(port=port, host=host, uav=uav, blueprint=blueprint, name=name,
                                      time_scale=time_scale, signing_key=signing_key,
-                                     prearm_failure=prearm_failure, seed=seed, autopilot=autopilot)
+                                     prearm_failure=prearm_failure, seed=seed, autopilot=autopilot,
+                                     log=typer.echo)
     typer.echo(description)
     typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")
     server.serve_forever()
