@@ -347,3 +347,12 @@ def test_a_failing_pose_source_does_not_stop_the_setpoint_stream() -> None:
         time.sleep(0.3)
         assert sitl.setpoints_received - before >= 4
         assert fc.pose_errors > 3 and fc.last_pose_error == "RuntimeError: tracker SDK crashed"
+
+
+def test_closing_while_flying_lands() -> None:
+    with flight() as (sitl, fc):
+        fc.connect()
+        take_off(fc, 0.8)
+        fc.close()  # e.g. Ctrl-C in the middle of a task
+        assert sitl.mode == "LAND"
+        wait_until(lambda: not sitl.vehicle.armed, 3.0, "the landing")

@@ -325,6 +325,7 @@ class MavlinkFlightController:
         vision_rate_hz: forwarding rate for ``pose_source``.
         source_system: our MAVLink system id (255 = ground station convention).
         telemetry_rate_hz: rate requested for LOCAL_POSITION_NED and ATTITUDE.
+        land_on_close: :meth:`close` while flying commands LAND first.
     """
 
     def __init__(
@@ -348,6 +349,7 @@ class MavlinkFlightController:
         source_system: int = 255,
         source_component: int = 190,  # MAV_COMP_ID_MISSIONPLANNER
         telemetry_rate_hz: float = 30.0,
+        land_on_close: bool = True,
     ) -> None:
         if autopilot not in ("auto", "ardupilot", "px4"):
             raise InputError(f"autopilot must be auto, ardupilot or px4, not {autopilot!r}")
@@ -374,6 +376,7 @@ class MavlinkFlightController:
         self.source_system = source_system
         self.source_component = source_component
         self.telemetry_rate_hz = telemetry_rate_hz
+        self.land_on_close = land_on_close
         self.target_system = 0
         self.target_component = 0
         self.clock = LinkClock()
@@ -454,7 +457,18 @@ class MavlinkFlightController:
             self.warnings.append("no time-stamped telemetry (ATTITUDE / LOCAL_POSITION_NED) after connecting")
 
     def close(self) -> None:
-        """Stop the threads and close the link (the autopilot's own failsafes take over if still flying)."""
+        """Stop the threads and close the link; still flying, command LAND first (``land_on_close``).
+
+        A program interrupted in flight (Ctrl-C, an exception) so lands the UAV where it is instead of leaving it
+        to the guided timeout and the link-loss failsafe.
+        """
+        if self.land_on_close and self._conn is not None and self._threads:
+            tel = self.telemetry()
+            if tel.link_ok and tel.armed and not tel.on_ground and tel.mode not in ("LAND", "AUTO.LAND"):
+                try:
+                    self.land()
+                except (CommandRejected, CommandTimeout, LinkLost):
+                    pass  # the autopilot's failsafes remain
         self._stop.set()
         for thread in self._threads:
             thread.join(timeout=2.0)
