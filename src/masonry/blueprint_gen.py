@@ -10,7 +10,9 @@ apart.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
 
 from masonry.blueprint import (
     DEFAULT_BRICK_SIZE_M,
@@ -19,6 +21,7 @@ from masonry.blueprint import (
     Blueprint,
     Brick,
     MarkerSpec,
+    Role,
     UavSpec,
 )
 from masonry.errors import BlueprintError
@@ -30,13 +33,34 @@ _Layout = list[tuple[float, float, int, float]]
 GENERATORS: tuple[str, ...] = ("running-bond", "towers", "pyramid")
 
 
-def running_bond(courses: int = 4, bricks_per_course: int = 6, **options: object) -> Blueprint:
-    """A straight wall of stretchers; every other course is shifted by half a brick (running bond)."""
+@dataclass(frozen=True)
+class Site:
+    """Where and how a generated wall is laid out, and the fleet that builds it (every generator's options)."""
+
+    brick_size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
+    yaw_rad: float = 0.0
+    origin_m: tuple[float, ...] = (0.0, 0.0)
+    placed_courses: int = 0
+    brick_uavs: int = 1
+    adhesion_uavs: int = 1
+    clearance_m: float = DEFAULT_CLEARANCE_M
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
+    pallet_columns: int = 0  # 0: 10 columns up to 40 bricks to place, else 20
+    pallet_distance_m: float | None = None  # from the wall's face to the pallet; default r_c + 1 m
+    name: str | None = None
+    markers: MarkerSpec | None = None  # default: fitted to the brick, dictionary numbering every brick
+
+
+def running_bond(courses: int = 4, bricks_per_course: int = 6, *, joint_m: float = 0.0, **site: Any) -> Blueprint:
+    """A straight wall of stretchers; every other course is shifted by half a brick (running bond).
+
+    ``joint_m`` is the gap between neighbours in a course; ``site`` takes the fields of :class:`Site`.
+    """
+    options = Site(**site)
     _check_count("courses", courses)
     _check_count("bricks per course", bricks_per_course)
     length, _, _ = _size(options)
-    joint = float(options.get("joint_m", 0.0))  # type: ignore[arg-type]
-    pitch = length + joint
+    pitch = length + joint_m
     layout: _Layout = []
     for course in range(courses):
         shift = pitch / 2.0 if course % 2 else 0.0
@@ -45,26 +69,26 @@ def running_bond(courses: int = 4, bricks_per_course: int = 6, **options: object
     return _build("running-bond", layout, options)
 
 
-def towers(towers: int = 2, height: int = 3, spacing_m: float = 1.0, **options: object) -> Blueprint:
+def towers(towers: int = 2, height: int = 3, spacing_m: float = 1.0, **site: Any) -> Blueprint:
     """``towers`` stacks of ``height`` bricks each, ``spacing_m`` apart along the wall line."""
+    options = Site(**site)
     _check_count("towers", towers)
     _check_count("height", height)
-    length, width, _ = _size(options)
+    length, _, _ = _size(options)
     if not (math.isfinite(spacing_m) and spacing_m > 0.0):
         raise BlueprintError("<generator>", "spacing", f"must be > 0, got {spacing_m}")
-    layout: _Layout = [(t * spacing_m, 0.0, course, 0.0) for t in range(towers) for course in range(height)]
     if towers > 1 and spacing_m < length:
         raise BlueprintError("<generator>", "spacing", f"{spacing_m} m is less than the brick length {length} m")
-    del width
+    layout: _Layout = [(t * spacing_m, 0.0, course, 0.0) for t in range(towers) for course in range(height)]
     return _build("towers", layout, options)
 
 
-def pyramid(base: int = 5, **options: object) -> Blueprint:
+def pyramid(base: int = 5, *, joint_m: float = 0.0, **site: Any) -> Blueprint:
     """A stepped pyramid wall: ``base`` bricks in the first course, one fewer in each course above."""
+    options = Site(**site)
     _check_count("base", base)
     length, _, _ = _size(options)
-    joint = float(options.get("joint_m", 0.0))  # type: ignore[arg-type]
-    pitch = length + joint
+    pitch = length + joint_m
     layout: _Layout = []
     for course in range(base):
         for k in range(base - course):
@@ -77,33 +101,26 @@ def _check_count(what: str, value: int) -> None:
         raise BlueprintError("<generator>", what, f"must be an integer >= 1, got {value!r}")
 
 
-def _size(options: dict[str, object]) -> Vec3:
-    size = options.get("brick_size_m", DEFAULT_BRICK_SIZE_M)
-    values = tuple(float(v) for v in size)  # type: ignore[attr-defined]
+def _size(options: Site) -> Vec3:
+    size = options.brick_size_m
+    values = tuple(float(v) for v in size)
     if len(values) != 3 or not all(math.isfinite(v) and v > 0.0 for v in values):
         raise BlueprintError("<generator>", "brick size", f"must be 3 positive numbers, got {size!r}")
     return (values[0], values[1], values[2])
 
 
-def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
-    allowed = {
-        "brick_size_m", "joint_m", "yaw_rad", "origin_m", "placed_courses", "brick_uavs", "adhesion_uavs",
-        "clearance_m", "cruise_altitude_m", "pallet_columns", "pallet_distance_m", "name", "markers",
-    }
-    unknown = set(options) - allowed
-    if unknown:
-        raise TypeError(f"unknown generator options: {', '.join(sorted(unknown))}")
+def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     size = _size(options)
     length, width, height = size
-    yaw = float(options.get("yaw_rad", 0.0))  # type: ignore[arg-type]
-    origin = tuple(float(v) for v in options.get("origin_m", (0.0, 0.0)))  # type: ignore[attr-defined]
-    placed_courses = int(options.get("placed_courses", 0))  # type: ignore[call-overload]
-    brick_uavs = int(options.get("brick_uavs", 1))  # type: ignore[call-overload]
-    adhesion_uavs = int(options.get("adhesion_uavs", 1))  # type: ignore[call-overload]
-    clearance = float(options.get("clearance_m", DEFAULT_CLEARANCE_M))  # type: ignore[arg-type]
-    cruise = float(options.get("cruise_altitude_m", DEFAULT_CRUISE_ALTITUDE_M))  # type: ignore[arg-type]
-    pallet_distance = float(options.get("pallet_distance_m", clearance + 1.0))  # type: ignore[arg-type]
-    markers = options.get("markers") or _markers_for(size, len(layout))
+    yaw = float(options.yaw_rad)
+    origin = tuple(float(v) for v in options.origin_m)
+    placed_courses = int(options.placed_courses)
+    brick_uavs = int(options.brick_uavs)
+    adhesion_uavs = int(options.adhesion_uavs)
+    clearance = float(options.clearance_m)
+    cruise = float(options.cruise_altitude_m)
+    pallet_distance = clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
+    markers = options.markers or _markers_for(size, len(layout))
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
     if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
@@ -119,7 +136,7 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
     us = [u for u, _, _, _ in layout]
     u_mid = (min(us) + max(us)) / 2.0
     todo = [i for i, (_, _, course, _) in enumerate(layout) if course >= placed_courses]
-    columns = int(options.get("pallet_columns", 0)) or max(1, min(len(todo), 10 if len(todo) <= 40 else 20))  # type: ignore[call-overload]
+    columns = int(options.pallet_columns) or max(1, min(len(todo), 10 if len(todo) <= 40 else 20))
     pallet_pitch_u = length + 0.2
     pallet_pitch_v = width + 0.3
     pickups: dict[int, Vec3] = {}
@@ -143,14 +160,14 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
         )
     rows = math.ceil(len(todo) / columns) if todo else 0
     home_v = -(width / 2.0 + pallet_distance + max(rows - 1, 0) * pallet_pitch_v + clearance + 1.0)
-    names = [f"brick-{k + 1}" for k in range(brick_uavs)] + [f"glue-{k + 1}" for k in range(adhesion_uavs)]
-    roles = ["brick"] * brick_uavs + ["adhesion"] * adhesion_uavs
+    crew: list[tuple[str, Role]] = [(f"brick-{k + 1}", "brick") for k in range(brick_uavs)]
+    crew += [(f"glue-{k + 1}", "adhesion") for k in range(adhesion_uavs)]
     step = clearance + 0.5
     fleet = tuple(
-        UavSpec(name=n, role=r, home_m=world((k - (len(names) - 1) / 2.0) * step, home_v, 0.0))  # type: ignore[arg-type]
-        for k, (n, r) in enumerate(zip(names, roles))
+        UavSpec(name=n, role=r, home_m=world((k - (len(crew) - 1) / 2.0) * step, home_v, 0.0))
+        for k, (n, r) in enumerate(crew)
     )
-    name = options.get("name") or f"{kind}-{len(bricks)}"
+    name = options.name or f"{kind}-{len(bricks)}"
     return Blueprint(
         bricks=tuple(bricks),
         fleet=fleet,
@@ -158,7 +175,7 @@ def _build(kind: str, layout: _Layout, options: dict[str, object]) -> Blueprint:
         clearance_m=clearance,
         cruise_altitude_m=cruise,
         brick_size_m=size,
-        markers=markers,  # type: ignore[arg-type]
+        markers=markers,
         source=f"<{kind}>",
     )
 
@@ -182,14 +199,9 @@ def _dictionary_for(n_bricks: int) -> str:
     return "DICT_4X4_1000"
 
 
-def generate(kind: str, **options: object) -> Blueprint:
+def generate(kind: str, **options: Any) -> Blueprint:
     """Dispatch on the generator name ("running-bond", "towers" or "pyramid")."""
     funcs: dict[str, Callable[..., Blueprint]] = {"running-bond": running_bond, "towers": towers, "pyramid": pyramid}
     if kind not in funcs:
         raise BlueprintError("<generator>", "kind", f"unknown generator {kind!r} (one of {', '.join(GENERATORS)})")
     return funcs[kind](**options)
-
-
-def bricks_of(blueprint: Blueprint) -> Sequence[Brick]:
-    """The blueprint's bricks (a convenience for notebooks)."""
-    return blueprint.bricks
