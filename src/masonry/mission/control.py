@@ -265,7 +265,7 @@ class MissionControl:
             if msg.state == OUT_OF_SERVICE_STATE:
                 self._lose(msg.sender, now_s, status="out of service")
             return
-        if msg.state == OUT_OF_SERVICE_STATE:
+        if isinstance(msg, (Heartbeat, Progress)) and msg.state == OUT_OF_SERVICE_STATE:
             self._lose(msg.sender, now_s, status="out of service")
             return
         if isinstance(msg, Heartbeat):

@@ -104,6 +104,16 @@ def priority_durations_s(durations_s: Mapping[str, float], quantum_s: float = PR
     return {k: max(quantum_s, round(v / quantum_s) * quantum_s) for k, v in durations_s.items()}
 
 
+def _position_of(sim_uav: Any) -> Callable[[], tuple[float, float, float]]:
+    fc = sim_uav.fc
+    return lambda: fc.telemetry().position_m  # type: ignore[no-any-return]
+
+
+def _battery_of(sim_uav: Any) -> Callable[[], float]:
+    vehicle = sim_uav.vehicle
+    return lambda: float(vehicle.battery_fraction)
+
+
 class _GroundCrew:
     """Swaps a landed, disarmed UAV's battery, taking ``BATTERY_SWAP_S``; True once the fresh pack is in."""
 
@@ -285,10 +295,9 @@ def _run(
     sim_uavs: dict[str, Any] = {}
     for spec, sim_uav in zip(fleet, world.add_fleet(fleet)):
         sim_uavs[spec.name] = sim_uav
-        fc = sim_uav.fc
-        h = UavHandler(spec.name, bus.endpoint(spec.name), position=lambda fc=fc: fc.telemetry().position_m,
+        h = UavHandler(spec.name, bus.endpoint(spec.name), position=_position_of(sim_uav),
                        heartbeat_timeout_s=heartbeat_timeout_s,
-                       battery=lambda v=sim_uav.vehicle: float(v.battery_fraction),
+                       battery=_battery_of(sim_uav),
                        swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
                        after_result=lambda: mc.step(world.clock.now_s()))
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock))
