@@ -356,3 +356,14 @@ def test_closing_while_flying_lands() -> None:
         fc.close()  # e.g. Ctrl-C in the middle of a task
         assert sitl.mode == "LAND"
         wait_until(lambda: not sitl.vehicle.armed, 3.0, "the landing")
+
+
+def test_telemetry_without_heartbeats_is_a_lost_link() -> None:
+    with flight() as (sitl, fc):
+        fc.connect()
+        fc.wait_for_estimate(2.0)
+        sitl.config = replace(sitl.config, heartbeat_hz=0.05)  # streams go on, heartbeats (almost) stop
+        lost_after = wait_until(lambda: not fc.telemetry().link_ok, 4.0, "link_ok to drop")
+        assert 2.0 <= lost_after <= 3.0
+        with pytest.raises(LinkLost, match="no HEARTBEAT from the autopilot"):
+            fc.send_velocity((0.0, 0.0, 0.0), 0.0)

@@ -65,6 +65,7 @@ MAV_RESULT_NAMES = {
     9: "unsupported frame",
 }
 MAV_LANDED_STATE_ON_GROUND = 1
+HEARTBEAT_MISSING_S = 2.5  # telemetry without a HEARTBEAT for this long also counts as a lost link
 MAV_LANDED_STATE_LANDING = 4
 MAV_SEVERITY_WARNING = 4
 
@@ -311,7 +312,8 @@ class MavlinkFlightController:
             ``udpout:192.168.1.10:14550``, ``tcp:127.0.0.1:5760``, ``/dev/ttyACM0`` (with ``baud``).
         baud: serial baud rate (serial URLs only).
         autopilot: ``"auto"`` (from the HEARTBEAT's autopilot field), ``"ardupilot"`` or ``"px4"``.
-        heartbeat_timeout_s: the link watchdog; no message from the autopilot for this long -> link lost.
+        heartbeat_timeout_s: the link watchdog; no message from the autopilot for this long (or no HEARTBEAT
+            for 2.5 s, autopilots beating at 1 Hz) -> link lost.
         connect_timeout_s: how long :meth:`connect` waits for the first heartbeat.
         command_timeout_s: how long to wait for each COMMAND_ACK (one try).
         command_retries: resends of an unanswered command (MAVLink's ``confirmation`` field counts them).
@@ -413,6 +415,12 @@ class MavlinkFlightController:
     @property
     def connected(self) -> bool:
         return self._conn is not None
+
+    @property
+    def _heartbeat_missing_s(self) -> float:
+        # Autopilots beat at 1 Hz: the watchdog proper counts every message (telemetry streams at 30 Hz); a
+        # stream without heartbeats (a confused autopilot, or another component) counts as lost after 2.5 beats.
+        return max(self.heartbeat_timeout_s, HEARTBEAT_MISSING_S)
 
     def connect(self) -> None:
         """Open the link, wait for the autopilot's heartbeat, request message rates, start the threads.
@@ -689,9 +697,13 @@ class MavlinkFlightController:
     def _check_link(self, what: str) -> None:
         if self._conn is None:
             raise LinkLost(f"{what}: not connected to {self.url} (call connect() first)")
-        silent_s = time.monotonic() - self._state.last_message_s
+        now = time.monotonic()
+        silent_s = now - self._state.last_message_s
         if silent_s > self.heartbeat_timeout_s:
             raise LinkLost(f"{what}: no message from the autopilot on {self.url} for {silent_s:.1f} s")
+        beatless_s = now - self._state.last_heartbeat_s
+        if beatless_s > self._heartbeat_missing_s:
+            raise LinkLost(f"{what}: no HEARTBEAT from the autopilot on {self.url} for {beatless_s:.1f} s")
 
     def _latest_warning(self, since: float) -> str | None:
         with self._lock:
@@ -881,7 +893,11 @@ class MavlinkFlightController:
         now = time.monotonic()
         with self._lock:
             st = self._state
-            link_ok = self._conn is not None and now - st.last_message_s <= self.heartbeat_timeout_s
+            link_ok = (
+                self._conn is not None
+                and now - st.last_message_s <= self.heartbeat_timeout_s
+                and now - st.last_heartbeat_s <= self._heartbeat_missing_s
+            )
             position_ok = link_ok and self._position_ok(now)
             p_ned = st.position_ned or (0.0, 0.0, 0.0)
             position = (
