@@ -293,7 +293,7 @@ def test_motion_capture_is_forwarded_to_the_autopilot() -> None:
 def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
     import threading
 
-    bp, spec = _blueprint_and_spec()
+    _, spec = _blueprint_and_spec()
     port = free_udp_port()
     sitl = MavlinkSitl(port, time_scale=10.0, home_m=spec.home_m, config=SitlConfig(gcs_failsafe_s=1.5))
 
@@ -325,3 +325,30 @@ def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
         assert "GCS Failsafe" in sitl.status_log
     finally:
         sitl.stop()
+
+
+def test_adhesion_task_with_the_serial_valve_against_the_sitl(tmp_path) -> None:
+    """The bench demo: SITL autopilot, the actuator protocol over a pseudo-terminal, simulated camera."""
+    from masonry.adapters.arduino_fake import FakeArduino
+
+    port = free_udp_port()
+    sitl, _ = build_sitl(port=port, uav="adhesion", blueprint=Path(CASE_STUDY), time_scale=10.0)
+    with FakeArduino() as board:
+        config = tmp_path / "glue-1.yaml"
+        config.write_text(
+            f"fc: udpin:127.0.0.1:{port}\nactuators: {board.port}\nactuator_boot_wait_s: 0.05\n"
+        )
+        sitl.start()
+        try:
+            res = runner.invoke(app, ["fly", "--uav", "adhesion", "--blueprint", CASE_STUDY, "--task", "A1",
+                                      "--config", str(config), "--format", "json"])  # fmt: skip
+        finally:
+            sitl.stop()
+        commands = [" ".join((r.command, *r.args)) for r in board.logic.executed if r.command != "STATUS"]
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.stdout)
+    assert out["status"] == "done", out
+    assert "[ok  ] actuators: Arduino on " in res.stderr
+    opened = commands.index("VALVE OPEN")  # the valve was opened over the serial line ...
+    assert "VALVE CLOSE" in commands[opened:]  # ... and closed again
+    assert not board.logic.status.valve_open
