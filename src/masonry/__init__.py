@@ -1,8 +1,16 @@
-"""masonry: autonomous aerial masonry with heterogeneous UAV teams (planner, state machines, perception, sim)."""
+"""masonry: autonomous aerial masonry with heterogeneous UAV teams (planner, state machines, perception, sim).
+
+The pure core (blueprint, planner, motion, estimation math), the state machines, the simulator and mission
+control are importable from here. Hardware adapters are loaded on first use, so ``import masonry`` never
+imports pymavlink, pyserial or OpenCV.
+"""
 
 from __future__ import annotations
 
-from masonry.blueprint import Blueprint, Brick, MarkerSpec, UavSpec
+from typing import Any
+
+from masonry.airframe import DEFAULT_AIRFRAME, Airframe
+from masonry.blueprint import Blueprint, Brick, MarkerSpec, UavSpec, format_blueprint, load_blueprint, parse_blueprint
 from masonry.errors import (
     BlueprintError,
     CommandRejected,
@@ -18,27 +26,134 @@ from masonry.errors import (
     PlanningError,
     ProtocolError,
 )
+from masonry.fsm import AdhesionUav, BrickUav, UavConfig, fly_task, run_single_task
+from masonry.mission import Journal, JournalState, MissionControl, MissionReport, UavHandler, simulate
+from masonry.motion import PID, AxisGains, MinJerk, PIDGains
+from masonry.perception import (
+    C_TH,
+    BrickEstimate,
+    CameraIntrinsics,
+    EstimatorConfig,
+    PoseWindow,
+    TagPose,
+    estimate_brick_pose,
+    refine_markers,
+)
+from masonry.planner import (
+    AdhesionTask,
+    Assignment,
+    BrickTask,
+    Dispatcher,
+    Plan,
+    Task,
+    estimate_durations_s,
+    lower_bound_s,
+    plan,
+)
+from masonry.ports import (
+    Camera,
+    CameraFrame,
+    Clock,
+    FlightController,
+    Gripper,
+    MissionLink,
+    Sprayer,
+    TaskResult,
+    Telemetry,
+)
+from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
 
 __version__ = "0.1.0.dev0"
 
+#: Hardware adapters, imported on first access (they pull in pymavlink, pyserial, OpenCV).
+_LAZY = {
+    "ArduinoActuators": "masonry.adapters",
+    "HardwareConfig": "masonry.adapters",
+    "MavlinkFlightController": "masonry.adapters",
+    "MavlinkSitl": "masonry.adapters",
+    "OpenCvCamera": "masonry.adapters",
+    "UdpPoseSource": "masonry.adapters",
+}
+
 __all__ = sorted(
     [
+        "C_TH",
+        "DEFAULT_AIRFRAME",
+        "AdhesionTask",
+        "AdhesionUav",
+        "Airframe",
+        "Assignment",
+        "AxisGains",
         "Blueprint",
         "BlueprintError",
         "Brick",
+        "BrickEstimate",
+        "BrickTask",
+        "BrickUav",
+        "Camera",
+        "CameraFrame",
+        "CameraIntrinsics",
+        "Clock",
         "CommandRejected",
         "CommandTimeout",
         "DeviceNotFound",
+        "Dispatcher",
+        "EstimatorConfig",
+        "Faults",
+        "FlightController",
+        "Gripper",
         "HardwareError",
         "InputError",
+        "Journal",
         "JournalError",
+        "JournalState",
         "LinkLost",
         "MarkerSpec",
         "MasonryError",
+        "MinJerk",
+        "MissionControl",
         "MissionError",
+        "MissionLink",
+        "MissionReport",
+        "PID",
+        "PIDGains",
         "PerceptionError",
+        "Plan",
         "PlanningError",
+        "PoseWindow",
         "ProtocolError",
+        "SimClock",
+        "SimUav",
+        "SimVehicle",
+        "Sprayer",
+        "TagPose",
+        "Task",
+        "TaskResult",
+        "Telemetry",
+        "UavConfig",
+        "UavHandler",
         "UavSpec",
+        "World",
+        "estimate_brick_pose",
+        "estimate_durations_s",
+        "fly_task",
+        "format_blueprint",
+        "load_blueprint",
+        "lower_bound_s",
+        "parse_blueprint",
+        "plan",
+        "refine_markers",
+        "run_single_task",
+        "simulate",
+        *_LAZY,
     ]
 )
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'masonry' has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module), name)
