@@ -167,7 +167,7 @@ class OpenAdapters:
             closer = self._closers.pop()
             try:
                 closer()
-            except Exception:  # noqa: BLE001 - closing must go on whatever one adapter does
+            except Exception:  # noqa: BLE001, S110 - closing must go on whatever one adapter does
                 pass
 
 
@@ -190,23 +190,23 @@ def _follow_autopilot(uav: Any, fc: Any) -> None:
     from masonry.sim.vehicle import SimVehicle
 
     class TelemetryVehicle(SimVehicle):
-        """A SimVehicle whose state is copied from a FlightController's telemetry at every step."""
+        """A SimVehicle whose state is the FlightController's telemetry at every step (``SimVehicle.follow``)."""
 
         def idle(self, dt_s: float) -> None:  # the world's fast path for a parked vehicle: it may take off
             self.step(dt_s)
 
         def step(self, dt_s: float) -> None:
-            self._t += dt_s
-            self._tel = None  # SimVehicle's telemetry cache
             tel: Telemetry = fc.telemetry()
-            self._x, self._y, self._z = (float(c) for c in tel.position_m)
-            self._vx, self._vy, self._vz = (float(c) for c in tel.velocity_mps)
-            self._yaw = float(tel.attitude_rad[2])
-            self.armed = tel.armed
-            self.on_ground = tel.on_ground
-            self.mode = tel.mode
-            if math.isfinite(tel.battery_fraction):
-                self.battery_fraction = tel.battery_fraction
+            self.follow(
+                tel.position_m,
+                tel.velocity_mps,
+                tel.attitude_rad,
+                on_ground=tel.on_ground,
+                armed=tel.armed,
+                mode=tel.mode,
+                battery_fraction=tel.battery_fraction,
+                dt_s=dt_s,
+            )
 
     old = uav.vehicle
     uav.vehicle = TelemetryVehicle(old.config, position_m=old.position_m, yaw_rad=old.yaw_rad)

@@ -332,6 +332,70 @@ class SimVehicle:
         self._t += dt_s
         self._held = False
 
+    def follow(
+        self,
+        position_m: Vec3,
+        velocity_mps: Vec3,
+        attitude_rad: Vec3,
+        *,
+        on_ground: bool,
+        armed: bool,
+        mode: str | None = None,
+        battery_fraction: float | None = None,
+        dt_s: float = 0.0,
+    ) -> None:
+        """Take the state measured elsewhere (a real autopilot's telemetry) instead of integrating the model.
+
+        The simulated world then moves with a real UAV: its simulated camera sees from there and its simulated
+        magnet reaches what the real tool reaches (``masonry fly --fc URL --camera sim``). Roll and pitch are
+        kept as the horizontal acceleration they imply (the tilt convention of :attr:`attitude_rad`), so
+        ``attitude_rad`` reads back what was given (tilts are clamped to ±80°).
+
+        Args:
+            position_m, velocity_mps: ENU, metres and m/s.
+            attitude_rad: roll, pitch, yaw (body FLU).
+            on_ground, armed: as the autopilot reports them.
+            mode: the autopilot's mode name (None: unchanged).
+            battery_fraction: the charge (None: unchanged, e.g. no battery monitor).
+            dt_s: time since the previous sample: the vehicle's clock advances by it, and so does its airborne
+                time when it flies.
+
+        Raises:
+            ValueError: a non-finite position, velocity or attitude, or a negative ``dt_s``.
+        """
+        x, y, z = (float(c) for c in position_m)
+        vx, vy, vz = (float(c) for c in velocity_mps)
+        roll, pitch, yaw = (float(c) for c in attitude_rad)
+        if not math.isfinite(x + y + z + vx + vy + vz + roll + pitch + yaw) or not dt_s >= 0.0:
+            raise ValueError(
+                f"follow: state must be finite and dt_s >= 0, got {position_m}, {velocity_mps}, "
+                f"{attitude_rad}, dt_s={dt_s}"
+            )
+        self._tel = None
+        self._t += dt_s
+        if armed and not on_ground:
+            self.airborne_s += dt_s
+        self.distance_m += math.sqrt((x - self._x) ** 2 + (y - self._y) ** 2 + (z - self._z) ** 2)
+        self._x, self._y, self._z = x, y, z
+        self._vx, self._vy, self._vz = vx, vy, vz
+        self._yaw = wrap_angle_rad(yaw)
+        limit = math.radians(80.0)
+        a_fwd = GRAVITY_MPS2 * math.tan(min(limit, max(-limit, pitch)))
+        a_left = -GRAVITY_MPS2 * math.tan(min(limit, max(-limit, roll)))
+        c, s = math.cos(self._yaw), math.sin(self._yaw)
+        self._ax, self._ay = c * a_fwd - s * a_left, s * a_fwd + c * a_left
+        self._yaw_rate = 0.0
+        self.armed = bool(armed)
+        self.on_ground = bool(on_ground)
+        if mode is not None:
+            self.mode = mode
+        if battery_fraction is not None and math.isfinite(battery_fraction):
+            self.battery_fraction = float(battery_fraction)
+        self._takeoff_z = None
+        self._hold = None
+        self._held = False
+        self._contact_s = 0.0
+
     def step(self, dt_s: float) -> None:
         """Advance the vehicle by ``dt_s`` seconds."""
         self._tel = None
