@@ -495,6 +495,14 @@ class UavModel:
         self._route(tel, np.array([home[0], home[1], z]))
 
     def do_home(self, tel: Telemetry) -> None:
+        # A task assigned on the way home turns the UAV back at once (instead of landing, idling and taking
+        # off again), unless the UAV is to retire or its battery is low.
+        if self._halt_after_landing is None and tel.battery_fraction >= self.config.battery_low_fraction:
+            task = self._take(self.link.poll_task())
+            if task is not None:
+                self._start_task(task)
+                self.assign(task=task)
+                return
         if self._leg_done(tel):
             self.arrived()
 
@@ -537,20 +545,39 @@ class UavModel:
             self._safe_actuators()
         except HardwareError:
             pass
+        tel = self._tel
+        # LAND is commanded once. It is tried again only while it has not gone through (rejected, unanswered,
+        # link down) and the autopilot is still in the mode it was in here: a pilot who has switched modes
+        # (or the autopilot's own failsafe) has the UAV, and masonry never fights a mode change.
+        self._emergency_mode = tel.mode if tel is not None else None
+        self._land_pending = True
+        self._land_tried_s = -math.inf
+        self._command_land(tel)
+
+    #: Seconds between tries of a LAND command that did not go through (emergency).
+    LAND_RETRY_S = 1.0
+
+    def _command_land(self, tel: Telemetry | None) -> None:
+        if tel is not None and (tel.landing or tel.on_ground):
+            self._land_pending = False  # already landing (the autopilot's failsafe) or down
+            return
+        self._land_tried_s = self._now_s
         try:
             self.fc.land()
         except HardwareError:
-            pass  # the autopilot's own failsafe lands it
+            return  # tried again later; meanwhile the autopilot's own failsafe lands it
+        self._land_pending = False
 
     def do_emergency(self, tel: Telemetry) -> None:
         if tel.on_ground:
             self.landed()
-        elif tel.mode != "LAND" and self._now_s - self._entered_s > 1.0:
-            try:
-                self.fc.land()
-            except HardwareError:
-                pass
-            self._entered_s = self._now_s
+            return
+        if not self._land_pending:
+            return
+        if tel.landing or tel.mode != self._emergency_mode:
+            self._land_pending = False  # landing, or a pilot took over: never re-send LAND
+        elif self._now_s - self._land_tried_s >= self.LAND_RETRY_S:
+            self._command_land(tel)
 
     def enter_halted(self, *args: Any, reason: str | None = None, **kwargs: Any) -> None:
         self._stop()

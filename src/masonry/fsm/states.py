@@ -10,10 +10,12 @@ Brick UAV (paper, Section IV)::
 
     idle -> takeoff -> pickup {goto, estimate, align, descend, grasp, ascend, verify}
          -> transport -> place {align, descend, release, verify, ascend} -> (pickup | home) -> land -> idle
+    (a task assigned while flying home turns the UAV back: home -> pickup)
 
 Adhesion UAV (paper, Section V)::
 
     idle -> takeoff -> cruise -> hover -> descend -> spray -> close -> ascend -> (cruise | home) -> land -> idle
+    (home -> cruise likewise)
 
 Failsafes, both machines: ``abort`` -> failsafe -> (home | emergency); ``lost`` -> emergency -> halted
 (``landed``, or ``giveup`` when the flight controller stays silent: its own failsafe lands it).
@@ -95,6 +97,7 @@ BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "stuck", "source": "place_verify", "dest": "place_release"},
     {"trigger": "finish", "source": "place_ascend", "dest": "pickup", "conditions": "has_next_task"},
     {"trigger": "finish", "source": "place_ascend", "dest": "home"},
+    {"trigger": "assign", "source": "home", "dest": "pickup"},
     {"trigger": "arrived", "source": "home", "dest": "land"},
     {"trigger": "landed", "source": "land", "dest": "halted", "conditions": "must_halt"},
     {"trigger": "landed", "source": "land", "dest": "idle"},
@@ -135,6 +138,7 @@ ADHESION_TRANSITIONS: list[Transition] = [
     {"trigger": "closed", "source": "close", "dest": "ascend"},
     {"trigger": "finish", "source": "ascend", "dest": "cruise", "conditions": "has_next_task"},
     {"trigger": "finish", "source": "ascend", "dest": "home"},
+    {"trigger": "assign", "source": "home", "dest": "cruise"},
     {"trigger": "arrived", "source": "home", "dest": "land"},
     {"trigger": "landed", "source": "land", "dest": "halted", "conditions": "must_halt"},
     {"trigger": "landed", "source": "land", "dest": "idle"},
