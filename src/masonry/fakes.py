@@ -33,7 +33,7 @@ import numpy as np
 
 from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
-from masonry.errors import CommandRejected, HardwareError, LinkLost
+from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
 from masonry.perception.types import CameraIntrinsics, TagPose
 from masonry.planner.tasks import Task
 from masonry.ports import CameraFrame, Clock, TaskResult, Telemetry
@@ -119,7 +119,9 @@ class FakeFlightController(_Scripted):
 
     Scriptable faults (``fc.at(t, ...)``): ``link_ok=False`` (commands raise LinkLost, the autopilot lands by
     itself), ``failure="motor failure"`` (every call raises HardwareError, the vehicle falls),
-    ``battery_fraction``, ``battery_drain_per_s``, ``floor_z_m``, ``wind_mps``, ``arm_rejection``.
+    ``battery_fraction``, ``battery_drain_per_s``, ``floor_z_m``, ``wind_mps``, ``arm_rejection``,
+    ``land_failures=N`` (the next N ``land()`` calls go unanswered: CommandTimeout), ``mode="LOITER"`` (a pilot's
+    mode switch: the vehicle holds where it is; ``mode="LAND"`` lands it).
     """
 
     def __init__(
@@ -151,6 +153,7 @@ class FakeFlightController(_Scripted):
         self.land_rate_mps = float(land_rate_mps)
         self.command_timeout_s = float(command_timeout_s)
         self.arm_rejection = arm_rejection
+        self.land_failures = 0
         self.position_ok = position_ok
         self.link_ok = True
         self.failure: str | None = None
@@ -214,6 +217,8 @@ class FakeFlightController(_Scripted):
             cmd = np.array([0.0, 0.0, min(self.climb_rate_mps, max(-self.climb_rate_mps, 1.5 * error))])
             if abs(error) < 0.02 and abs(self._vel[2]) < 0.05:
                 self._takeoff_z_m = None
+        elif self.mode != "GUIDED":
+            cmd = np.zeros(3)  # a pilot's mode (LOITER...): setpoints are ignored, the vehicle holds
         elif self._t_s - self._cmd_time_s <= self.command_timeout_s:
             cmd = self._cmd_vel + np.asarray(self.wind_mps)
             cmd_yaw_rate = self._cmd_yaw_rate
@@ -286,6 +291,10 @@ class FakeFlightController(_Scripted):
 
     def land(self) -> None:
         self._check("land")
+        if self.land_failures > 0:
+            self.land_failures -= 1
+            self._log("land", "unanswered")
+            raise CommandTimeout("land: no answer from the autopilot")
         self.mode = "LAND"
         self._takeoff_z_m = None
         self._log("land")
@@ -318,6 +327,7 @@ class FakeFlightController(_Scripted):
             link_ok=self.link_ok,
             position_ok=self.position_ok,
             on_ground=self.on_ground,
+            landing=self.mode == "LAND",
         )
 
 

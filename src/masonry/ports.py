@@ -33,6 +33,9 @@ class Telemetry:
     link_ok: bool
     position_ok: bool  # the autopilot's position estimate is usable
     on_ground: bool
+    # The autopilot is in its landing mode (ArduPilot LAND, PX4 AUTO.LAND; also its failsafe landings): it
+    # descends on its own authority. The adapters set it, so the state machines never match mode names.
+    landing: bool = False
 
 
 @dataclass(frozen=True, eq=False)

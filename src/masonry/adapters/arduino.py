@@ -18,6 +18,8 @@ import threading
 import time
 from typing import Any
 
+from typing_extensions import Self
+
 from masonry.actuator_protocol import (
     PROTOCOL_NAME,
     PROTOCOL_VERSION,
@@ -67,7 +69,7 @@ class ArduinoActuators:
         self._buffer = b""
         self._status: ActuatorStatus | None = None
 
-    def __enter__(self) -> ArduinoActuators:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 

@@ -17,6 +17,8 @@ import select
 import sys
 import threading
 
+from typing_extensions import Self
+
 from masonry.actuator_protocol import DeviceLogic
 
 
@@ -37,7 +39,7 @@ class FakeArduino:
         self._stop = threading.Event()
         self._lock = threading.Lock()
 
-    def __enter__(self) -> FakeArduino:
+    def __enter__(self) -> Self:
         self.start()
         return self
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from typing_extensions import Self
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.errors import DeviceNotFound, InputError
@@ -89,7 +90,7 @@ class OpenCvCamera:
         self._thread: threading.Thread | None = None
         self._size_checked = False
 
-    def __enter__(self) -> OpenCvCamera:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from typing_extensions import Self
+
 from masonry.adapters.pose_source import PoseSource
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
 from masonry.ports import Telemetry, Vec3
@@ -109,6 +111,9 @@ PX4_MODES = {
     "AUTO.TAKEOFF": (4 << 16) | (2 << 24),
     "OFFBOARD": 6 << 16,
 }
+
+#: The modes in which the autopilot lands on its own (``Telemetry.landing``): ArduPilot LAND, PX4 AUTO.LAND.
+LANDING_MODES = frozenset({"LAND", "AUTO.LAND"})
 
 # Messages and the rates (Hz) requested with MAV_CMD_SET_MESSAGE_INTERVAL on connect.
 MSG_HEARTBEAT = 0
@@ -327,7 +332,8 @@ class MavlinkFlightController:
         vision_rate_hz: forwarding rate for ``pose_source``.
         source_system: our MAVLink system id (255 = ground station convention).
         telemetry_rate_hz: rate requested for LOCAL_POSITION_NED and ATTITUDE.
-        land_on_close: :meth:`close` while flying commands LAND first.
+        land_on_close: :meth:`close` while flying in GUIDED/OFFBOARD commands LAND first (a pilot's mode is left
+            alone).
     """
 
     def __init__(
@@ -405,7 +411,7 @@ class MavlinkFlightController:
 
     # ----------------------------------------------------------------------------------------------- lifecycle
 
-    def __enter__(self) -> MavlinkFlightController:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 
@@ -465,14 +471,16 @@ class MavlinkFlightController:
             self.warnings.append("no time-stamped telemetry (ATTITUDE / LOCAL_POSITION_NED) after connecting")
 
     def close(self) -> None:
-        """Stop the threads and close the link; still flying, command LAND first (``land_on_close``).
+        """Stop the threads and close the link; still flying in GUIDED/OFFBOARD, command LAND first (``land_on_close``).
 
         A program interrupted in flight (Ctrl-C, an exception) so lands the UAV where it is instead of leaving it
         to the guided timeout and the link-loss failsafe.
         """
         if self.land_on_close and self._conn is not None and self._threads:
             tel = self.telemetry()
-            if tel.link_ok and tel.armed and not tel.on_ground and tel.mode not in ("LAND", "AUTO.LAND"):
+            # only while masonry flies it (GUIDED/OFFBOARD): a pilot's mode is the pilot's
+            flying_ours = tel.mode == self.offboard_mode or self._takeoff_target_m is not None
+            if tel.link_ok and tel.armed and not tel.on_ground and not tel.landing and flying_ours:
                 try:
                     self.land()
                 except (CommandRejected, CommandTimeout, LinkLost):
@@ -927,6 +935,7 @@ class MavlinkFlightController:
                 link_ok=link_ok,
                 position_ok=position_ok,
                 on_ground=on_ground,
+                landing=mode in LANDING_MODES or st.landed_state == MAV_LANDED_STATE_LANDING,
             )
 
     @property

@@ -22,6 +22,8 @@ import time
 from dataclasses import dataclass
 from typing import Protocol
 
+from typing_extensions import Self
+
 from masonry.errors import DeviceNotFound, InputError
 from masonry.ports import Vec3
 
@@ -130,7 +132,7 @@ class UdpPoseSource:
         self._stop = threading.Event()
         self._lock = threading.Lock()
 
-    def __enter__(self) -> UdpPoseSource:
+    def __enter__(self) -> Self:
         self.start()
         return self
 

@@ -28,11 +28,12 @@ from __future__ import annotations
 import math
 import threading
 import time
-from dataclasses import dataclass
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from typing_extensions import Self
 
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
@@ -173,6 +174,7 @@ class MavlinkSitl:
         self.setpoints_received = 0
         self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
+        self.land_requests = 0  # LAND asked by the ground station (MAV_CMD_NAV_LAND or a mode change)
         self._defaults_hz = dict(DEFAULT_RATES_HZ)
         if self.px4:
             self._defaults_hz[MSG_ESTIMATOR_STATUS] = self._defaults_hz.pop(MSG_EKF_STATUS_REPORT)
@@ -187,7 +189,7 @@ class MavlinkSitl:
 
     # ------------------------------------------------------------------------------------------- lifecycle
 
-    def __enter__(self) -> MavlinkSitl:
+    def __enter__(self) -> Self:
         self.start()
         return self
 
@@ -382,6 +384,7 @@ class MavlinkSitl:
             self._log(f"takeoff to {float(msg.param7):.2f} m")
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_NAV_LAND:
+            self.land_requests += 1
             self._set_mode(self._land_mode)
             self._ack(cmd, MAV_RESULT_ACCEPTED)
         elif cmd == MAV_CMD_DO_SET_MODE:
@@ -426,10 +429,22 @@ class MavlinkSitl:
                     # PX4 enters OFFBOARD only while setpoints are streaming
                     self._text(MAV_SEVERITY_WARNING, "Switching to Offboard is not possible: no setpoints")
                     return False
+                if name == self._land_mode:
+                    self.land_requests += 1
                 self._set_mode(name)
                 return True
         self._text(MAV_SEVERITY_WARNING, f"Mode change to {custom_mode} failed: unknown mode")
         return False
+
+    def pilot_mode(self, name: str) -> None:
+        """The safety pilot flips the RC mode switch: the autopilot enters ``name`` (no ground station involved)."""
+        if name not in self._modes:
+            raise ValueError(
+                f"unknown {self.config.autopilot} mode {name!r}; known: {', '.join(self._modes)}"
+            )
+        with self._lock:
+            self._log(f"pilot selects {name}")
+            self._set_mode(name)
 
     def _set_mode(self, name: str) -> None:
         if name != self.mode:

@@ -124,6 +124,9 @@ class UavModel:
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
+        self._emergency_mode: str | None = None  # the autopilot's mode when the emergency began
+        self._land_pending = False  # emergency: LAND still to be commanded
+        self._land_tried_s = -math.inf
         self._link_down_since_s: float | None = None
         self._pid = PID(config.pid_gains)
         self._motion = False

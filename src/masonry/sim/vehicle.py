@@ -565,6 +565,7 @@ class SimVehicle:
             link_ok=link_ok and self._link_lost_at is None and not self.failed,
             position_ok=not self.failed,
             on_ground=self.on_ground,
+            landing=self.mode == "LAND",
         )
         self._tel = (link_ok, tel)
         return tel
