@@ -34,6 +34,11 @@ class UavConfig:
     arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end
     align_tolerance_m: float = 0.015  # horizontal alignment of the tool before a descent
     align_yaw_tolerance_rad: float = 0.05
+    # In gusts the tool rarely sits within align_tolerance_m at a tick: after hovering align_patience_s past the
+    # leg's end, alignment accepts align_relaxed_tolerance_m (inside the 3 cm grasp tolerance) and twice
+    # settle_speed_mps.
+    align_patience_s: float = 3.0
+    align_relaxed_tolerance_m: float = 0.025
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
     takeoff_timeout_s: float = 30.0

@@ -429,7 +429,7 @@ class UavModel:
                 ref, ff = self._target, _ZERO3
         else:
             ref, ff = self._target, _ZERO3
-        v, yaw_rate = self._pid.step(
+        vx, vy, vz, yaw_rate = self._pid.step_floats(
             now,
             tel.position_m,
             ref,
@@ -437,7 +437,7 @@ class UavModel:
             yaw_rad=tel.attitude_rad[2],
             target_yaw_rad=self._target_yaw,
         )
-        self.fc.send_velocity((float(v[0]), float(v[1]), float(v[2])), yaw_rate)
+        self.fc.send_velocity((vx, vy, vz), yaw_rate)
 
     def _tool_body_target(
         self, tool_target_m: np.ndarray, offset_body_m: tuple[float, float, float], yaw_rad: float
@@ -802,10 +802,10 @@ class BrickUav(UavModel):
         if self._now_s < self._traj_end_s or self._yaw_error(tel) > cfg.align_yaw_tolerance_rad:
             return False
         p, t, v = tel.position_m, self._target, tel.velocity_mps
-        return (
-            math.hypot(p[0] - t[0], p[1] - t[1]) <= cfg.align_tolerance_m
-            and math.hypot(v[0], v[1]) <= cfg.settle_speed_mps
-        )
+        tolerance, speed = cfg.align_tolerance_m, cfg.settle_speed_mps
+        if self._now_s > self._traj_end_s + cfg.align_patience_s:
+            tolerance, speed = max(tolerance, cfg.align_relaxed_tolerance_m), 2.0 * speed
+        return math.hypot(p[0] - t[0], p[1] - t[1]) <= tolerance and math.hypot(v[0], v[1]) <= speed
 
     def enter_pickup_descend(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
