@@ -11,7 +11,7 @@ import json
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -130,30 +130,30 @@ def _describe(hw: Any) -> str:
 def fly(
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
-    blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
-    task: Optional[str] = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
+    blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),  # noqa: B008
+    task: str | None = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
                                        "not with --mission."),
-    name: Optional[str] = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
+    name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
     seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
-    camera: Optional[str] = typer.Option(None, "--camera", help="Simulated: geometric (default) | render (images + "
+    camera: str | None = typer.Option(None, "--camera", help="Simulated: geometric (default) | render (images + "
                                          "ArUco, slower) | sim; real: a device INDEX, a video FILE or a GStreamer "
                                          "pipeline (needs --calibration)."),
-    fc: Optional[str] = typer.Option(None, "--fc", help="Flight controller: sim, or a MAVLink connection "
+    fc: str | None = typer.Option(None, "--fc", help="Flight controller: sim, or a MAVLink connection "
                                      "(udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:HOST:5760)."),
-    actuators: Optional[str] = typer.Option(None, "--actuators", help="Gripper/valve: sim, or the actuator "
+    actuators: str | None = typer.Option(None, "--actuators", help="Gripper/valve: sim, or the actuator "
                                             "Arduino's serial port (/dev/ttyACM0)."),
-    calibration: Optional[Path] = typer.Option(None, "--calibration", help="Camera calibration from "
+    calibration: Path | None = typer.Option(None, "--calibration", help="Camera calibration from "  # noqa: B008
                                                "`masonry calibrate` (for a real camera)."),
-    config: Optional[Path] = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "
+    config: Path | None = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "  # noqa: B008
                                           "camera, calibration, signing_key, mocap_port, ...); flags override it."),
-    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "
+    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "  # noqa: B008
                                     "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
     dt: float = typer.Option(0.05, "--dt", help="Control tick, seconds."),
     timeout: float = typer.Option(900.0, "--timeout", help="Give up after this much flight time, seconds."),
-    mission: Optional[str] = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
+    mission: str | None = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
                                           "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission."),
-    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "
+    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "  # noqa: B008
                                      "listen endpoint(s)."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
     time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
@@ -163,6 +163,7 @@ def fly(
     from masonry.blueprint import load_blueprint
     from masonry.fsm import UavConfig, fly_task
     from masonry.planner import plan
+    from masonry.planner.tasks import BrickTask
     from masonry.sim import Faults
 
     if uav not in ("brick", "adhesion"):
@@ -182,11 +183,15 @@ def fly(
     if mission is not None:
         if task is not None:
             raise InputError("--task and --mission exclude each other: in mission mode tasks come from mission control")
-        if not sim:
-            raise InputError("mission mode flies simulated UAVs so far: pass --sim (hardware adapters --fc, "
-                             "--actuators, --camera work in single-task mode, --task ID)")
+        if not (time_scale > 0.0):
+            raise InputError(f"--time-scale must be > 0, got {time_scale}")
+        if not hardware.hw.sim_fc and time_scale != 1.0:
+            raise InputError("--time-scale is for a simulated UAV: with --fc URL the autopilot's clock sets the "
+                             "pace (give `masonry sitl --time-scale` and `masonry mission-control --time-scale` "
+                             "the same factor instead)")
         _fly_mission(bp, _pick_uav(bp, uav, name), mission, listen=listen, mission_name=mission_name, seed=seed,
-                     camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt)
+                     camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt,
+                     sim=sim, hardware=hardware.hw)
         return
     if task is None:
         raise InputError("--task is required (or --mission tcp/HOST:PORT to take tasks from mission control)")
@@ -229,11 +234,19 @@ def fly(
         "placement_error_m": None,
     }
     world = adapters.world
-    if the_task.kind == "brick":
-        error = world.placement_error_m(the_task.brick) if world is not None else result and result.placement_error_m
+    if isinstance(the_task, BrickTask):
+        error: float | None
+        if world is not None:
+            error = world.placement_error_m(the_task.brick)
+        else:
+            error = result.placement_error_m if result is not None else None
         out["placement_error_m"] = None if error is None else round(float(error), 4)
     else:
-        coverage = world.coverage(the_task) if world is not None else result and result.coverage
+        coverage: float | None
+        if world is not None:
+            coverage = world.coverage(the_task)
+        else:
+            coverage = result.coverage if result is not None else None
         out["coverage"] = None if coverage is None else round(float(coverage), 3)
     if status != "done":
         out["reason"] = result.reason if result is not None else f"no result after {timeout:g} s"
@@ -259,16 +272,33 @@ def fly(
 
 
 def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], mission_name: str, seed: int, camera: str,
-                 faults: Any, dt: float, time_scale: float, wait: float, fmt: str) -> None:
-    """Mission mode: a simulated UAV taking its tasks from mission control over Zenoh (masonry.mission.remote)."""
-    from masonry.mission.remote import run_remote_uav
+                 faults: Any, dt: float, time_scale: float, wait: float, fmt: str, sim: bool = True,
+                 hardware: Any = None) -> None:
+    """Mission mode: one UAV taking its tasks from mission control over Zenoh (masonry.mission.remote).
+
+    ``--sim``: a simulated world paced at ``time_scale``. Otherwise the adapters chosen with --fc/--actuators/
+    --camera, checked by the pre-flight check (a failure refuses to arm before joining), on the autopilot's clock.
+    """
+    from masonry.mission.remote import paced, run_remote_uav
 
     echo = None if fmt == "json" else typer.echo
-    if echo is not None:
-        echo(f"{spec.name} joins the mission at {endpoint} (simulated, seed {seed}, x{time_scale:g} real time)")
-    run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
-                         camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
-                         max_time_s=float("inf"), echo=echo)
+    adapters = None
+    if not sim:
+        adapters = select_adapters(sim=False, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=faults,
+                                   hardware=hardware)
+        if hardware.sim_fc:  # a simulated autopilot (with real actuators or camera) keeps time with the wall
+            adapters.advance = paced(adapters.clock, adapters.advance, time_scale)
+    try:
+        if echo is not None:
+            where = (f"simulated, seed {seed}, x{time_scale:g} real time" if adapters is None
+                     else _describe(hardware) + ("" if hardware.sim_fc else ", on the autopilot's clock"))
+            echo(f"{spec.name} joins the mission at {endpoint} ({where})")
+        run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
+                             camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
+                             max_time_s=float("inf"), echo=echo, adapters=adapters)
+    finally:
+        if adapters is not None:
+            adapters.close()
     tasks = [{"task": e.task_id, "attempt": e.attempt, "start_s": round(e.start_s, 2),
               "end_s": None if e.end_s is None else round(e.end_s, 2), "status": e.status} for e in run.executions]
     if fmt == "json":

@@ -1,14 +1,16 @@
-"""A simulated UAV as a mission participant in its own process: ``masonry fly --sim --mission tcp/HOST:7447``.
+"""A UAV as a mission participant in its own process: ``masonry fly --mission tcp/HOST:7447``.
 
-The UAV's simulated world runs in wall time, ``time_scale`` simulated seconds per wall second, so that a
-handler process keeps pace with a mission control on another process or computer. Its state machine is
-driven by a :class:`~masonry.mission.handler.UavHandler` on a :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
+Simulated (``--sim``): the UAV's world runs in wall time, ``time_scale`` simulated seconds per wall second, so
+that a handler process keeps pace with a mission control on another process or computer. With hardware
+(``--fc URL --actuators PORT --camera ...``): the ports opened by :mod:`masonry.adapters.wiring`, on the
+autopilot's clock. Either way the state machine is driven by a :class:`~masonry.mission.handler.UavHandler` on
+a :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +28,24 @@ class RemoteRun:
     mission_completed: bool | None
     state: str
     sim_time_s: float
+
+
+def paced(clock: Any, step: Callable[[float], None], time_scale: float) -> Callable[[float], None]:
+    """``step`` (which moves ``clock``), slowed so that ``clock`` runs ``time_scale`` times as fast as the wall.
+
+    A simulated world paced like this keeps time with processes on other computers (mission control).
+    """
+    anchor: list[float] = []
+
+    def advance(dt_s: float) -> None:
+        if not anchor:
+            anchor.extend((time.monotonic(), clock.now_s()))
+        step(dt_s)
+        lag = anchor[0] + (clock.now_s() - anchor[1]) / time_scale - time.monotonic()
+        if lag > 0:
+            time.sleep(lag)
+
+    return advance
 
 
 def run_remote_uav(
@@ -46,8 +66,9 @@ def run_remote_uav(
     heartbeat_timeout_s: float = 5.0,
     turnaround_s: float = 0.2,
     echo: Any = None,
+    adapters: Any = None,
 ) -> RemoteRun:
-    """Fly one simulated UAV for a remote mission control until it ends the mission and the UAV has landed.
+    """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
     Args:
         blueprint: the wall (the simulated world lays out its bricks).
@@ -55,12 +76,20 @@ def run_remote_uav(
         connect: mission control's Zenoh endpoint(s), e.g. ``["tcp/10.0.0.1:7447"]``.
         listen: this process's own listen endpoint(s) (loopback by default).
         mission_name: Zenoh key prefix shared with mission control.
-        time_scale: simulated seconds per wall second (1.0: real time).
-        wait_s: wall seconds to wait for mission control's first message before giving up.
-        max_time_s: simulated seconds after which the UAV stops regardless.
-        heartbeat_period_s, heartbeat_timeout_s: in simulated (mission) seconds.
+        seed, camera, faults: the simulated world's (without ``adapters``).
+        dt_s: control tick, seconds of the UAV's clock.
+        time_scale: simulated seconds per wall second (1.0: real time), for the simulated world built here.
+        wait_s: wall seconds to wait for mission control's first message before giving up, and, once landed
+            and idle, for mission control to speak again before leaving.
+        max_time_s: seconds of the UAV's clock after which it stops regardless.
+        heartbeat_period_s, heartbeat_timeout_s: in mission seconds (the UAV's clock).
         turnaround_s: wall seconds to wait, after reporting a result, for mission control's next assignment.
         echo: called with one line per state change (the process's log), or None.
+        adapters: the UAV's ports instead of a simulated world: an object with ``fc``, ``gripper``, ``sprayer``,
+            ``camera``, ``clock`` and ``advance(dt_s)``, as :func:`masonry.adapters.wiring.open_adapters` gives
+            for ``masonry fly --fc URL --actuators PORT --camera ...``. Its ``advance`` moves time on its clock
+            (the autopilot's: wall time on hardware, the SITL's scaled time on a bench), so ``time_scale`` does
+            not apply; the caller checks the adapters before flight and closes them afterwards.
 
     Raises:
         InputError: a bad ``time_scale`` or ``dt_s``.
@@ -68,15 +97,22 @@ def run_remote_uav(
     """
     from masonry.fsm import UavConfig, build_uav
     from masonry.mission.zenoh_transport import ZenohTransport
-    from masonry.sim import Faults, World
 
     if not (time_scale > 0 and dt_s > 0):
         raise InputError(f"--time-scale and --dt must be > 0, got {time_scale} and {dt_s}")
-    world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
-    sim_uav = world.add_uav(spec)
+    if adapters is None:
+        from masonry.sim import Faults, World
+
+        world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
+        sim_uav = world.add_uav(spec)
+        fc, gripper, sprayer, cam = sim_uav.fc, sim_uav.gripper, sim_uav.sprayer, sim_uav.camera
+        clock: Any = world.clock
+        advance = paced(world.clock, world.step, time_scale)
+    else:
+        fc, gripper, sprayer, cam = adapters.fc, adapters.gripper, adapters.sprayer, adapters.camera
+        clock, advance = adapters.clock, adapters.advance
     transport = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name)
     transport.connect()
-    fc = sim_uav.fc
 
     def await_answer() -> None:
         # the machine polls for its next task right after reporting: give mission control a network round
@@ -89,37 +125,36 @@ def run_remote_uav(
                          heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s,
                          after_result=await_answer)
     config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers)
-    model = build_uav(config, fc=fc, link=handler, clock=world.clock, gripper=sim_uav.gripper,
-                      camera=sim_uav.camera, sprayer=sim_uav.sprayer)
+    model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
-    fc.connect()
     wall0 = time.monotonic()
-    sim0 = world.clock.now_s()
+    t0 = clock.now_s()
     last_state = model.state
+    heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
+    heard_wall = wall0
     try:
+        fc.connect()
         while True:
-            now = world.clock.now_s()
+            now = clock.now_s()
             handler.step(now)
             if echo is not None and model.state != last_state:
                 last_state = model.state
                 echo(f"{now:8.2f} s  {last_state}")
-            last_mc = handler.mission_control_heard_s
+            if handler.mission_control_heard_s != heard_s:
+                heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
             if handler.finished:
                 break
-            if last_mc is None:
+            if heard_s is None:
                 if time.monotonic() - wall0 > wait_s:
                     raise LinkLost(f"{spec.name}: no word from mission control at {', '.join(connect)} "
                                    f"within {wait_s:g} s")
-            elif model.finished and (now - last_mc) / time_scale > wait_s:
+            elif model.finished and time.monotonic() - heard_wall > wait_s:
                 break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
-            if now - sim0 >= max_time_s:
+            if now - t0 >= max_time_s:
                 break
-            world.step(dt_s)
-            lag = wall0 + (world.clock.now_s() - sim0) / time_scale - time.monotonic()
-            if lag > 0:
-                time.sleep(lag)
+            advance(dt_s)
     finally:
         fc.close()
         transport.close()
     return RemoteRun(tuple(handler.executions), handler.mission_ended, handler.mission_completed, model.state,
-                     world.clock.now_s() - sim0)
+                     clock.now_s() - t0)

@@ -1,0 +1,121 @@
+"""Mission mode on the hardware adapters: ``masonry fly --mission --fc udp:...`` against ``masonry sitl``.
+
+Four processes on loopback, every wait bounded: ``masonry sitl`` (the brick UAV's autopilot, ArduCopter-like, 10x
+real time), ``masonry mission-control`` on a one-brick wall, ``masonry fly --uav brick --mission ... --fc udp:...
+--actuators sim --camera sim`` (the MAVLink adapter, the pre-flight check, the machines on the autopilot's clock)
+and ``masonry fly --uav adhesion --sim --mission ...`` (a simulated adhesion UAV at the same time scale).
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from masonry.adapters.sitl import free_udp_port
+
+MAIN = "from masonry.cli import main; main()"
+SCALE = "10"
+
+ONE_BRICK = """\
+name: one-brick
+clearance: 1.5
+cruise_altitude: 1.2
+brick:
+  size: [0.30, 0.15, 0.10]
+  markers: {dictionary: DICT_4X4_50, size: 0.05, spacing: 0.175}
+bricks:
+  - {id: 2, position: [0.0, -0.5, 0.05], placed: true}
+  - {id: 0, position: [0.0, -0.5, 0.15], pickup: [2.0, -0.5, 0.05]}
+fleet:
+  - {name: brick-1, role: brick, home: [2.0, -2.0, 0.0]}
+  - {name: glue-1, role: adhesion, home: [0.0, -2.0, 0.0]}
+"""
+
+
+def free_tcp_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def masonry(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-c", MAIN, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> None:
+    blueprint = tmp_path / "one-brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    mav_port, zenoh_port = free_udp_port(), free_tcp_port()
+    endpoint = f"tcp/127.0.0.1:{zenoh_port}"
+    name = ["--mission-name", f"hw-{zenoh_port}"]
+    started = time.monotonic()
+    sitl = masonry("sitl", "--port", str(mav_port), "--blueprint", str(blueprint), "--uav", "brick",
+                   "--time-scale", SCALE)  # fmt: skip
+    mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", "--time-scale", SCALE,
+                 "--startup-timeout", "20", "--heartbeat-timeout", "5", "--max-time", "1200", *name)  # fmt: skip
+    brick = masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint), "--mission", endpoint,
+                    "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", f"udp:127.0.0.1:{mav_port}",
+                    "--actuators", "sim", "--camera", "sim", "--wait", "20", "--format", "json", *name)  # fmt: skip
+    glue = masonry("fly", "--uav", "adhesion", "--name", "glue-1", "--sim", "--blueprint", str(blueprint),
+                   "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--time-scale", SCALE,
+                   "--wait", "20", "--format", "json", *name)  # fmt: skip
+    procs = [mc, brick, glue]
+    try:
+        mc_out, mc_err = mc.communicate(timeout=60)
+        brick_out, brick_err = brick.communicate(timeout=20)
+        glue_out, glue_err = glue.communicate(timeout=20)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        sitl.send_signal(signal.SIGINT)
+        sitl_log, _ = sitl.communicate(timeout=10)
+    wall_s = time.monotonic() - started
+    assert mc.returncode == 0, mc_err + brick_err
+    report = json.loads(mc_out)
+    assert report["completed"] is True
+    assert [(t["id"], t["uav"], t["status"]) for t in report["tasks"]] == [
+        ("B0", "brick-1", "done"),
+        ("A0", "glue-1", "done"),
+    ]
+    assert report["placement_error_m"]["B0"] < 0.03
+    assert report["dependency_violations"] == 0 and all(u["status"] == "ok" for u in report["uavs"])
+    assert brick.returncode == 0, brick_err
+    run = json.loads(brick_out)
+    assert run["uav"] == "brick-1" and run["mission_ended"] and run["mission_completed"]
+    assert [t["task"] for t in run["tasks"] if t["status"] == "done"] == ["B0"]
+    assert "-> ready to arm" in brick_err and "[ok  ] position estimate" in brick_err
+    assert glue.returncode == 0, glue_err
+    # the autopilot flew it: armed in GUIDED, took off, landed and disarmed, in that order
+    events = ["ground station connected", "mode GUIDED", "Arming motors", "takeoff to", "mode LAND",
+              "Land complete, disarming"]  # fmt: skip
+    positions = [sitl_log.find(e) for e in events]
+    assert all(p >= 0 for p in positions) and positions == sorted(positions), sitl_log
+    print(f"mission over zenoh with the brick UAV on the SITL: {wall_s:.1f} s wall, makespan "
+          f"{report['makespan_s']} s at x{SCALE}")  # fmt: skip
+
+
+def test_time_scale_is_refused_with_a_real_autopilot(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from masonry.cli import app
+
+    blueprint = tmp_path / "one-brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    res = CliRunner().invoke(app, ["fly", "--uav", "brick", "--blueprint", str(blueprint), "--mission",
+                                   "tcp/127.0.0.1:7447", "--fc", "udp:127.0.0.1:14550", "--time-scale", "10"])  # fmt: skip
+    assert res.exit_code == 2 and "--time-scale is for a simulated UAV" in res.stderr
+    res = CliRunner().invoke(app, ["fly", "--uav", "brick", "--blueprint", str(blueprint), "--mission",
+                                   "tcp/127.0.0.1:7447"])  # fmt: skip
+    assert res.exit_code == 2 and "pass --sim" in res.stderr
