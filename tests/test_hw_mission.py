@@ -97,6 +97,7 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
     assert [t["task"] for t in run["tasks"] if t["status"] == "done"] == ["B0"]
     assert "-> ready to arm" in brick_err and "[ok  ] position estimate" in brick_err
     assert glue.returncode == 0, glue_err
+    assert [t["task"] for t in json.loads(glue_out)["tasks"] if t["status"] == "done"] == ["A0"]
     # the autopilot flew it: armed in GUIDED, took off, landed and disarmed, in that order
     events = ["ground station connected", "mode GUIDED", "Arming motors", "takeoff to", "mode LAND",
               "Land complete, disarming"]  # fmt: skip

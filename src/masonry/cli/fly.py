@@ -130,7 +130,7 @@ def _describe(hw: Any) -> str:
 def fly(
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
-    blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),  # noqa: B008
+    blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
     task: str | None = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
                                        "not with --mission."),
     name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
@@ -142,18 +142,18 @@ def fly(
                                      "(udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:HOST:5760)."),
     actuators: str | None = typer.Option(None, "--actuators", help="Gripper/valve: sim, or the actuator "
                                             "Arduino's serial port (/dev/ttyACM0)."),
-    calibration: Path | None = typer.Option(None, "--calibration", help="Camera calibration from "  # noqa: B008
+    calibration: Path | None = typer.Option(None, "--calibration", help="Camera calibration from "
                                                "`masonry calibrate` (for a real camera)."),
-    config: Path | None = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "  # noqa: B008
+    config: Path | None = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "
                                           "camera, calibration, signing_key, mocap_port, ...); flags override it."),
-    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "  # noqa: B008
+    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "
                                     "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
     dt: float = typer.Option(0.05, "--dt", help="Control tick, seconds."),
     timeout: float = typer.Option(900.0, "--timeout", help="Give up after this much flight time, seconds."),
     mission: str | None = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
                                           "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission."),
-    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "  # noqa: B008
+    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "
                                      "listen endpoint(s)."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
     time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
