@@ -120,3 +120,29 @@ def test_time_scale_is_refused_with_a_real_autopilot(tmp_path: Path) -> None:
     res = CliRunner().invoke(app, ["fly", "--uav", "brick", "--blueprint", str(blueprint), "--mission",
                                    "tcp/127.0.0.1:7447"])  # fmt: skip
     assert res.exit_code == 2 and "pass --sim" in res.stderr
+
+
+def test_mission_mode_keeps_the_pre_flight_check(tmp_path: Path) -> None:
+    """A UAV whose autopilot has no position estimate never joins the mission: one clear line, exit 1."""
+    from typer.testing import CliRunner
+
+    from masonry.adapters.sitl import MavlinkSitl, SitlConfig
+    from masonry.cli import app
+
+    blueprint = tmp_path / "one-brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    port = free_udp_port()
+    config = tmp_path / "brick-1.yaml"
+    config.write_text(f"name: brick-1\nfc: udpin:127.0.0.1:{port}\nestimate_wait_s: 0.3\n"
+                      f"mission: tcp/127.0.0.1:{free_tcp_port()}\n")  # fmt: skip
+    sitl = MavlinkSitl(port, time_scale=5.0, home_m=(2.0, -2.0, 0.0), config=SitlConfig(position_source="vision"))
+    sitl.start()
+    try:
+        res = CliRunner().invoke(app, ["fly", "--uav", "brick", "--blueprint", str(blueprint), "--config",
+                                       str(config), "--wait", "1"])  # fmt: skip
+    finally:
+        sitl.stop()
+    assert res.exit_code == 1, res.output
+    assert "-> refusing to arm" in res.stderr and "joins the mission" not in res.stdout
+    assert res.stderr.strip().splitlines()[-1].startswith("error: arm rejected: pre-flight check failed: position")
+    assert not sitl.vehicle.armed and sitl.status_log == []
