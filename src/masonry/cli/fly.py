@@ -159,7 +159,8 @@ def fly(
     time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
     wait: float = typer.Option(60.0, "--wait", help="Mission mode: wall seconds to wait for mission control."),
 ) -> None:
-    """Fly one UAV through one task: state trace with times, then the result (exit 1 if the task failed)."""
+    """Fly one UAV: one task (--task ID: state trace, then the result; exit 1 if it failed), or a mission's tasks
+    from mission control (--mission tcp/HOST:7447; exit 1 if mission control did not end the mission)."""
     from masonry.blueprint import load_blueprint
     from masonry.fsm import UavConfig, fly_task
     from masonry.planner import plan
