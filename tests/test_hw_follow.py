@@ -79,3 +79,19 @@ def test_world_follows_the_flight_controller_and_the_camera_sees_from_there() ->
     assert world.distance_flown_m(spec.name) > 2.0
     frame = uav.camera.read()
     assert frame is not None and frame.time_s == pytest.approx(world.clock.now_s())
+
+
+def test_sim_telemetry_carries_every_field_and_the_landing_flag() -> None:
+    from dataclasses import fields
+
+    from masonry.ports import Telemetry
+
+    v = SimVehicle(rng=np.random.default_rng(0))
+    v.arm()
+    v.takeoff(1.0)
+    for _ in range(60):
+        v.step(0.05)
+    tel = v.telemetry()
+    assert set(vars(tel)) == {f.name for f in fields(Telemetry)} and not tel.landing
+    v.land()
+    assert v.telemetry().landing and v.telemetry().mode == "LAND"
