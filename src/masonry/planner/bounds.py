@@ -191,6 +191,118 @@ def estimate_durations_s(
     return out
 
 
+def _min_jerk_time_to_within(distance_m: float, tolerance_m: float) -> float:
+    """Fraction of a rest-to-rest minimum-jerk move after which the reference is within ``tolerance_m`` of its end."""
+    if distance_m <= tolerance_m:
+        return 0.0
+    goal = 1.0 - tolerance_m / distance_m
+    lo, hi = 0.0, 1.0
+    for _ in range(50):  # s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5 is increasing on [0, 1]
+        mid = 0.5 * (lo + hi)
+        if mid * mid * mid * (10.0 + mid * (-15.0 + 6.0 * mid)) < goal:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+def min_durations_s(
+    plan: Plan,
+    *,
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
+    cruise_speed_mps: float = 1.0,
+    vertical_speed_mps: float = 0.4,
+    leg_peak_factor: float = 1.875,
+    min_leg_s: float = 1.0,
+    control_period_s: float = 0.1,
+    clearance_m: float = 0.30,
+    settle_time_s: float = 0.5,
+    min_estimates: int = 10,
+    descent_s: float = 7.0,
+    grasp_press_m: float = 0.005,
+    grasp_dwell_s: float = 0.5,
+    placement_radius_m: float = 0.015,
+    release_dwell_s: float = 0.5,
+    stable_time_s: float = 1.0,
+    spray_descent_s: float = 4.0,
+    spray_speed_mps: float = 0.15,
+    close_dwell_s: float = 0.3,
+    effector_offset_z_m: float | None = None,
+    nozzle_offset_z_m: float | None = None,
+    spray_height_m: float | None = None,
+) -> dict[str, float]:
+    """The least time the state machines (``masonry.fsm``, defaults of ``UavConfig``) can take for each task.
+
+    A sound per-task lower bound for :func:`lower_bound_s` (``masonry sim`` reports the bound with these): every
+    state of a task is counted at its shortest, with perfect tracking and no wait, from assignment to the
+    result. The flight to the task's start counts as one minimum leg (``min_leg_s``): a UAV may be turned
+    back to a task from anywhere on its way home, even right above it. A lateral or vertical leg of the machines
+    is a rest-to-rest minimum-jerk move lasting ``leg_peak_factor`` x distance / speed (at least ``min_leg_s``);
+    the placing descent counts until its reference is within the release radius.
+
+    Brick task: approach, estimate (settle + ``min_estimates`` frames at the control rate), align, descent
+    (``descent_s``), grasp dwell, climb to the transit altitude, the carry to the drop-off, align, descent to the
+    release, release dwell, verify, climb. Adhesion task: approach, hover ``stable_time_s``, descent
+    (``spray_descent_s``), the segment at ``spray_speed_mps``, ``close_dwell_s``, climb.
+
+    Returns:
+        task id -> seconds, for every not-done task.
+    """
+    from masonry.airframe import DEFAULT_AIRFRAME
+
+    eff_z = DEFAULT_AIRFRAME.effector_offset_m[2] if effector_offset_z_m is None else effector_offset_z_m
+    noz_z = DEFAULT_AIRFRAME.nozzle_offset_m[2] if nozzle_offset_z_m is None else nozzle_offset_z_m
+    spray_h = DEFAULT_AIRFRAME.spray_height_m if spray_height_m is None else spray_height_m
+
+    def lateral(d_m: float) -> float:
+        return max(min_leg_s, leg_peak_factor * d_m / cruise_speed_mps)
+
+    def vertical(dz_m: float) -> float:
+        return max(min_leg_s, leg_peak_factor * max(dz_m, 0.0) / vertical_speed_mps)
+
+    tick = control_period_s
+    out: dict[str, float] = {}
+    for t in plan.tasks:
+        if t.done:
+            continue
+        if isinstance(t, BrickTask):
+            h = t.size_m[2]
+            pickup = t.pickup_m if t.pickup_m is not None else t.position_m
+            top_drop = t.position_m[2] + h / 2.0
+            transit = max(cruise_altitude_m, top_drop - eff_z + h + clearance_m)
+            # the brick lies on the ground (or higher, as the pickup says): its top at least h up
+            top_pick = max(pickup[2] + h / 2.0, h)
+            grasp_body_z = top_pick - grasp_press_m - eff_z
+            release_body_z = top_drop - eff_z
+            drop = transit - release_body_z
+            out[t.id] = (
+                min_leg_s  # approach
+                + settle_time_s + (min_estimates - 1) * tick  # estimate
+                + min_leg_s  # align
+                + descent_s + grasp_dwell_s
+                + vertical(transit - grasp_body_z)
+                + tick  # verify
+                + lateral(math.hypot(t.position_m[0] - pickup[0], t.position_m[1] - pickup[1]))
+                + min_leg_s  # align above the drop-off
+                + descent_s * _min_jerk_time_to_within(drop, placement_radius_m)
+                + release_dwell_s + tick  # release, verify
+                + vertical(drop - placement_radius_m)
+            )
+        else:
+            surface = max(t.start_m[2], t.end_m[2])
+            body_z = t.end_m[2] + spray_h - noz_z
+            transit = max(cruise_altitude_m, surface + spray_h - noz_z + clearance_m)
+            out[t.id] = (
+                min_leg_s  # approach
+                + stable_time_s
+                + spray_descent_s
+                + t.length_m / spray_speed_mps
+                + close_dwell_s
+                + vertical(transit - body_z)
+            )
+    return out
+
+
 def dispatch_makespan_s(
     plan: Plan,
     fleet: Sequence[UavSpec],
