@@ -73,6 +73,8 @@ def mission_control(
             if not resume:
                 state = None
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
+    from masonry.mission.airspace import layer_base_m
+
     transport = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name)
     transport.connect()
     try:
@@ -80,7 +82,8 @@ def mission_control(
                             durations_s=priority_durations_s(
                                 expected_s),
                             heartbeat_timeout_s=heartbeat_timeout * time_scale,
-                            startup_timeout_s=startup_timeout * time_scale)
+                            startup_timeout_s=startup_timeout * time_scale,
+                            column_radius_m=bp.clearance_m, layer_base_m=layer_base_m(bp))
         offset = 0.0
         if state is not None:
             mc.restore(state)

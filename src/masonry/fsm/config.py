@@ -41,6 +41,12 @@ class UavConfig:
     align_relaxed_tolerance_m: float = 0.025
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
+    # Transit layer (docs/safety.md): mission control hands out the altitude of each lateral leg; this one is for
+    # a link without clearances (or mission control silent): lateral legs longer than ``layer_min_leg_m`` fly at
+    # it, climbing to it first and descending from it last. None: no fixed layer.
+    lateral_altitude_m: float | None = None
+    layer_min_leg_m: float = 0.3
+    layer_vertical_speed_mps: float = 0.5  # average speed of the climbs to and descents from the layer
     takeoff_timeout_s: float = 30.0
     leg_timeout_s: float = (
         30.0  # a leg (or an alignment) not over this long after its planned end fails the task

@@ -140,6 +140,10 @@ class UavModel:
         self._target_yaw: float | None = None
         self._ref_speed_mps = 0.0
         self._line: tuple[np.ndarray, np.ndarray, float] | None = None  # start, unit direction, length
+        # a transit in progress (docs/safety.md): (phase "ask" | "hold" | "down", site, layer altitude)
+        self._transit: tuple[str, tuple[float, float, float], float | None] | None = None
+        self._gate_at = 0  # != 0: the legs of a layer route start from rest
+        self._request_clearance: Callable[[Any], Any] | None = getattr(link, "request_clearance", None)
         self._leaf_names = leaf_states(states)
         self.machine = HierarchicalMachine(
             model=self,
@@ -303,6 +307,7 @@ class UavModel:
 
     # -- motion --------------------------------------------------------------------------------------------
     def _stop(self) -> None:
+        self._transit = None
         self._motion = False
         self._traj = None
         self._line = None
@@ -340,18 +345,92 @@ class UavModel:
         self._motion = True
 
     def _route(self, tel: Telemetry, target_m: np.ndarray, yaw_rad: float | None = None) -> None:
-        """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal)."""
+        """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal).
+
+        With a link that hands out clearances (mission control's airspace, docs/safety.md) a lateral move is a
+        *transit*: the UAV first asks for the column over the target, hovering where it is; then climbs (or
+        descends) to the layer it is given, flies there, and descends over the target once the column is its
+        (until then it waits at its layer at the hold point it is given). Without one, with a fixed
+        ``config.lateral_altitude_m``, the lateral leg flies at that altitude.
+        """
         p = np.asarray(tel.position_m, dtype=float)
         target = np.asarray(target_m, dtype=float)
+        self._transit = None
+        self._gate_at = 0
+        d_xy = math.hypot(target[0] - p[0], target[1] - p[1])
+        if self._request_clearance is not None and d_xy > 0.05:
+            self._transit = ("ask", (float(target[0]), float(target[1]), float(target[2])), None)
+            self._fly_to(tel, p, 0.1, yaw_rad=yaw_rad)  # hover here until mission control answers
+            return
+        layer = self.config.lateral_altitude_m
+        if layer is not None and d_xy > self.config.layer_min_leg_m:
+            self._layer_legs(tel, p, target, layer, yaw_rad)
+            return
+        legs = self._low_legs(p, target)
+        self._fly_to(tel, legs[0], yaw_rad=yaw_rad)
+        self._legs = [(leg, None) for leg in legs[1:]]
+
+    def _layer_legs(
+        self, tel: Telemetry, p: np.ndarray, target: np.ndarray, layer: float, yaw_rad: float | None
+    ) -> None:
+        """Climb (or descend) to ``layer`` where the UAV is, fly there above ``target``, descend to it."""
+        v_z = self.config.layer_vertical_speed_mps
+        legs: list[tuple[np.ndarray, float | None]] = []
+        if math.hypot(target[0] - p[0], target[1] - p[1]) > 0.05:
+            legs.append((np.array([target[0], target[1], layer]), None))
+        if abs(target[2] - layer) > 0.05:
+            legs.append((target, max(1.0, 1.875 * abs(layer - target[2]) / v_z)))
+        self._gate_at = -1  # legs start from rest: a corner is turned where the UAV is, never cut
+        if abs(p[2] - layer) > 0.05 or not legs:
+            self._fly_to(tel, np.array([p[0], p[1], layer]), max(1.0, 1.875 * abs(layer - p[2]) / v_z),
+                         yaw_rad=yaw_rad)
+            self._legs = legs
+        else:
+            self._fly_to(tel, legs[0][0], legs[0][1], yaw_rad=yaw_rad)
+            self._legs = legs[1:]
+
+    @staticmethod
+    def _low_legs(p: np.ndarray, target: np.ndarray) -> list[np.ndarray]:
+        """Legs from ``p`` to ``target``: climb first if it is higher, descend last if it is lower."""
         if target[2] > p[2] + 0.05:
             legs = [np.array([p[0], p[1], target[2]]), target]
         elif target[2] < p[2] - 0.05:
             legs = [np.array([target[0], target[1], p[2]]), target]
         else:
             legs = [target]
-        legs = [leg for i, leg in enumerate(legs) if i == len(legs) - 1 or np.linalg.norm(leg - p) > 0.05]
-        self._fly_to(tel, legs[0], yaw_rad=yaw_rad)
-        self._legs = [(leg, None) for leg in legs[1:]]
+        return [leg for i, leg in enumerate(legs) if i == len(legs) - 1 or np.linalg.norm(leg - p) > 0.05]
+
+    def _transit_step(self, tel: Telemetry) -> bool:
+        """A transit's motion is over (see :meth:`_route`): ask, go on, or finish; True when it has arrived."""
+        assert self._transit is not None and self._request_clearance is not None
+        phase, site, layer = self._transit
+        if phase == "down":
+            self._transit = None
+            end = getattr(self.link, "end_transit", None)
+            if end is not None:
+                end(site)
+            return True
+        answer = self._request_clearance(site)
+        if answer is None:
+            self._traj_end_s = self._now_s  # no answer yet: hover (a leg timeout does not run meanwhile)
+            return False
+        target = np.array(site)
+        p = np.asarray(tel.position_m, dtype=float)
+        if layer is None:
+            layer = answer.layer_m
+            if layer is None:  # no layers: the altitude it is at (or the target's, if higher)
+                layer = self.config.lateral_altitude_m or max(float(p[2]), float(target[2]))
+        if answer.granted:
+            self._transit = ("down", site, layer)
+            self._layer_legs(tel, p, target, layer, self._target_yaw)
+            return False
+        hold = answer.hold_m
+        if hold is not None and (phase == "ask" or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
+            self._transit = ("hold", site, layer)
+            self._layer_legs(tel, p, np.array([hold[0], hold[1], layer]), layer, self._target_yaw)
+        else:
+            self._traj_end_s = self._now_s
+        return False
 
     def _leg_duration_s(self, start: np.ndarray, target: np.ndarray) -> float:
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
@@ -361,9 +440,12 @@ class UavModel:
             1.0, 1.875 * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps)
         )
 
-    def _start_leg(self, tel: Telemetry, target: np.ndarray, duration_s: float | None) -> None:
+    def _start_leg(
+        self, tel: Telemetry, target: np.ndarray, duration_s: float | None, from_rest: bool = False
+    ) -> None:
         p = np.asarray(tel.position_m, dtype=float)
-        v = np.asarray(tel.velocity_mps, dtype=float)
+        # from rest: the reference turns the corner where the UAV is (a layer route never cuts diagonally)
+        v = _ZERO3 if from_rest else np.asarray(tel.velocity_mps, dtype=float)
         T = self._leg_duration_s(p, target) if duration_s is None else float(duration_s)
         self._traj = MinJerk(p, v, _ZERO3, target, _ZERO3, _ZERO3, T)
         # Per-axis polynomial coefficients as floats: evaluating them by hand each tick is ~10x cheaper than
@@ -396,8 +478,10 @@ class UavModel:
         close = (p[0] - t[0]) ** 2 + (p[1] - t[1]) ** 2 + (p[2] - t[2]) ** 2 <= tol * tol
         if close and self._legs:
             target, duration = self._legs.pop(0)
-            self._start_leg(tel, target, duration)
+            self._start_leg(tel, target, duration, from_rest=self._gate_at != 0)
             return False
+        if close and self._transit is not None:
+            return self._transit_step(tel)
         return close
 
     def _yaw_error(self, tel: Telemetry) -> float:
@@ -495,6 +579,8 @@ class UavModel:
         assert tel is not None
         home = self.config.home_m
         z = max(self.config.cruise_altitude_m, tel.position_m[2])
+        if self.config.lateral_altitude_m is not None or self._request_clearance is not None:
+            z = self.config.cruise_altitude_m  # down from the layer over home (with clearance), then land
         self._route(tel, np.array([home[0], home[1], z]))
 
     def do_home(self, tel: Telemetry) -> None:

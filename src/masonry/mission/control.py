@@ -6,6 +6,11 @@ to idle UAVs through the dispatcher, journal every assignment, completion, failu
 assignments, and send its own heartbeat. The loop around it is thin (``masonry sim`` steps it in simulated
 time, ``masonry mission-control`` in wall time), so the same code runs in both.
 
+Airspace: a UAV setting off for a site asks for the column there (``ClearanceRequest``); mission control
+grants columns first come, first served, never two within ``column_radius_m`` of each other, or tells the UAV
+where to wait (:class:`~masonry.mission.airspace.ColumnClearance`), and frees a lost UAV's columns
+(docs/safety.md).
+
 Startup: a UAV takes tasks once it has been heard from. Mission control waits until the whole fleet is
 online, or ``startup_timeout_s`` after its first step, then removes the UAVs never heard from.
 """
@@ -23,6 +28,8 @@ from masonry.errors import MissionError, ProtocolError
 from masonry.mission.messages import (
     MISSION_CONTROL,
     Assign,
+    Clearance,
+    ClearanceRequest,
     Heartbeat,
     MissionEnd,
     Progress,
@@ -101,6 +108,10 @@ class MissionControl:
         heartbeat_period_s: how often mission control sends its heartbeat.
         heartbeat_timeout_s: a UAV silent for longer is declared lost.
         startup_timeout_s: how long to wait for the whole fleet before starting without the missing UAVs.
+        column_radius_m: two site columns (UAVs below their transit layer) are never granted closer than
+            this horizontally (the blueprint's clearance r_c is the natural value; 0 grants every request).
+        layer_base_m, layer_spacing_m: transit layers handed out per flight, at ``layer_base_m + k *
+            layer_spacing_m`` (``masonry.mission.airspace.work_altitude_m`` gives the base); None: no layers.
     """
 
     def __init__(
@@ -116,7 +127,11 @@ class MissionControl:
         heartbeat_period_s: float = 1.0,
         heartbeat_timeout_s: float = 5.0,
         startup_timeout_s: float = 30.0,
+        column_radius_m: float = 1.5,
+        layer_base_m: float | None = None,
+        layer_spacing_m: float = 1.0,
     ) -> None:
+        from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
 
         names = [u.name for u in fleet]
@@ -144,6 +159,7 @@ class MissionControl:
         self.ended_at_s: float | None = None
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
+        self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m)
 
     # -- resume ----------------------------------------------------------------------------------------
     def restore(self, state: Any) -> None:
@@ -215,6 +231,11 @@ class MissionControl:
         for raw in self.transport.receive():
             self._handle(raw, now_s)
         self._check_heartbeats(now_s)
+        if self.columns.waiting:
+            for g in self.columns.grant(now_s):
+                self._send(g.uav, Clearance(MISSION_CONTROL, g.uav, g.site_m, self.columns.radius_m, now_s,
+                                            layer_m=g.layer_m))
+                log.debug("column at (%.2f, %.2f) granted to %s", g.site_m[0], g.site_m[1], g.uav)
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
@@ -254,6 +275,17 @@ class MissionControl:
         if link.lost:
             return  # a UAV declared lost stays lost; its task has been given to another
         link.last_heard_s = now_s
+        if isinstance(msg, ClearanceRequest):
+            if msg.release:
+                self.columns.release(msg.sender, msg.site_m)
+                return
+            if msg.arrived:
+                self.columns.end_transit(msg.sender)
+                return
+            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m)
+            self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.radius_m, now_s,
+                                             g.granted, g.hold_m, g.layer_m))
+            return
         if isinstance(msg, Result):
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
@@ -319,6 +351,7 @@ class MissionControl:
         link.lost = True
         link.lost_at_s = now_s
         link.status = status
+        self.columns.release(name)  # a lost or retired UAV is on the ground (or fell): its column is free
         released = self.dispatcher.remove_uav(name)
         if released is not None:
             att = self._running.pop(released, None)

@@ -10,6 +10,13 @@ With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the han
 below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
 the pack is swapped (mission control sees the task in progress meanwhile).
 
+Airspace (docs/safety.md): ``request_clearance(site_m)`` is how the state machine asks for the column over a
+site before leaving its transit layer; the handler sends a ``ClearanceRequest`` (again every heartbeat period
+while unanswered), answers True once mission control's ``Clearance`` has come, and frees the column by itself
+once the UAV is ``radius_m`` away from it horizontally or has landed. The answer also gives the altitude of the
+lateral leg (a transit layer) and, while the column is taken, a hold point where the machine waits at that
+layer; ``end_transit`` tells mission control the flight is down (its layer is free).
+
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
 the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
 while mission control is down is lost: a resumed mission control flies that task again (docs/mission.md).
@@ -27,6 +34,8 @@ from masonry.errors import ProtocolError
 from masonry.mission.messages import (
     MISSION_CONTROL,
     Assign,
+    Clearance,
+    ClearanceRequest,
     Heartbeat,
     MissionEnd,
     Progress,
@@ -106,6 +115,14 @@ class UavHandler:
         self.executions: list[Execution] = []
         self.rejected = 0
         self.now_s = 0.0
+        self._column: Vec3 | None = None  # site of the column last asked for (granted or not)
+        self._column_granted = False
+        self._column_answer: Clearance | None = None
+        self._columns_left: list[Vec3] = []  # granted earlier, freed once the UAV is out of them
+        self._column_radius_m = 0.0
+        self._column_sent_s = -1e18
+        self._column_checked_s = -1e18
+        self.clearance_requests = 0
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -151,6 +168,74 @@ class UavHandler:
         self.executions.append(self._current)
         return task
 
+    def request_clearance(self, site_m: Vec3) -> Clearance | None:
+        """The UAV sets off for ``site_m``: mission control's answer (layer, column granted or hold point), or None.
+
+        The first call for a site sends the request (again every heartbeat period while unanswered); the answer
+        is None until mission control's has come, then the latest one (``granted`` turns true when the column
+        is given). Without mission control (never heard, or silent past the timeout) there is nobody to ask:
+        granted, no layer, so the UAV can finish its task and land (docs/safety.md).
+        """
+        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+        col = self._column
+        same = col is not None and abs(col[0] - site[0]) < 1e-3 and abs(col[1] - site[1]) < 1e-3
+        if same and self._column_granted:
+            return self._column_answer
+        if self.mission_control_lost:
+            return Clearance(MISSION_CONTROL, self.name, site, 0.0, self.now_s, True, None, None)
+        if not same:
+            if col is not None and self._column_granted:
+                self._columns_left.append(col)  # freed once the UAV is out of it
+            elif col is not None:
+                self._send(ClearanceRequest(self.name, col, self.now_s, release=True))  # no longer wanted
+            self._column = site
+            self._column_granted = False
+            self._column_answer = None
+            self._column_sent_s = self.now_s
+            self.clearance_requests += 1
+            self._send(ClearanceRequest(self.name, site, self.now_s, self._where()))
+        elif self.now_s - self._column_sent_s >= self.heartbeat_period_s:
+            self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
+            self._send(ClearanceRequest(self.name, site, self.now_s, self._where()))
+        self.pump()  # in-process, the answer may already be here
+        return self._column_answer
+
+    def end_transit(self, site_m: Vec3) -> None:
+        """The flight to ``site_m`` has come down there: its layer is free."""
+        self._send(ClearanceRequest(self.name, (float(site_m[0]), float(site_m[1]), float(site_m[2])), self.now_s,
+                                    arrived=True))
+
+    @property
+    def columns(self) -> tuple[Vec3, ...]:
+        """Sites of the columns this UAV holds."""
+        cur = (self._column,) if self._column is not None and self._column_granted else ()
+        return tuple(self._columns_left) + cur  # type: ignore[operator]
+
+    def _check_columns(self, now_s: float) -> None:
+        """Free columns the UAV has left (``radius_m`` away horizontally); all of them once it has landed."""
+        if now_s - self._column_checked_s < 0.2:
+            return
+        self._column_checked_s = now_s
+        model = self.model
+        if model is not None and bool(model.finished):
+            for col in [*self._columns_left, *([self._column] if self._column is not None else [])]:
+                self._send(ClearanceRequest(self.name, col, now_s, release=True))
+            self._columns_left = []
+            self._column = None
+            self._column_granted = False
+            return
+        if not self._columns_left or self._position is None:
+            return
+        p = self._position()
+        r2 = self._column_radius_m ** 2
+        keep = []
+        for col in self._columns_left:
+            if (p[0] - col[0]) ** 2 + (p[1] - col[1]) ** 2 >= r2:
+                self._send(ClearanceRequest(self.name, col, now_s, release=True))
+            else:
+                keep.append(col)
+        self._columns_left = keep
+
     def report_progress(self, task_id: str, state: str, time_s: float) -> None:
         self._send(Progress(self.name, task_id, state, time_s, self._where()))
 
@@ -183,6 +268,8 @@ class UavHandler:
             state = str(getattr(self.model, "state", "")) if self.model is not None else ""
             self._send(Heartbeat(self.name, now_s, state=state, task_id=cur.task_id if cur else None,
                                  position_m=self._where()))
+        if self._column is not None or self._columns_left:
+            self._check_columns(now_s)
         model = self.model
         if model is not None and (self._queue or self._current is not None or not model.finished):
             model.step(now_s)
@@ -204,6 +291,14 @@ class UavHandler:
                 return
             self._queue.append((msg.task, msg.attempt))
             self.mission_ended = False
+        elif isinstance(msg, Clearance):
+            col = self._column
+            if msg.uav == self.name and col is not None and abs(col[0] - msg.site_m[0]) < 1e-3 \
+                    and abs(col[1] - msg.site_m[1]) < 1e-3:
+                self._column_radius_m = msg.radius_m
+                if msg.granted or not self._column_granted:
+                    self._column_answer = msg
+                    self._column_granted = msg.granted
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed

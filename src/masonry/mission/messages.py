@@ -1,6 +1,6 @@
 """The mission protocol: versioned, validated messages between mission control and UAV handlers.
 
-Every message travels as one JSON object with an envelope ``{"v": 1, "type": ..., "sender": ...}``.
+Every message travels as one JSON object with an envelope ``{"v": 2, "type": ..., "sender": ...}``.
 :func:`decode` checks the version, the type, every field's type and, when the fleet is given, that the
 sender (and the addressed UAV) belongs to it; anything else raises :class:`~masonry.errors.ProtocolError`.
 
@@ -11,6 +11,15 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`Progress` UAV -> mission control: the UAV's state machine entered ``state`` while on ``task_id``.
 - :class:`Result` UAV -> mission control: the task is done or failed (a :class:`~masonry.ports.TaskResult`).
 - :class:`MissionEnd` mission control -> UAV: nothing more will come; go home and land.
+- :class:`ClearanceRequest` UAV -> mission control: I set off for ``site_m``; may I leave my transit layer
+  there (a site column, :mod:`masonry.mission.airspace`)? With ``release`` true: I left that column; with
+  ``arrived`` true: my flight there is down (its layer is free).
+- :class:`Clearance` mission control -> UAV: fly your lateral leg at ``layer_m``; the column over ``site_m``
+  is yours (``granted``), or wait at your layer over ``hold_m``; ``radius_m``: free a column once that far
+  from it.
+
+Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
+so the version changes and a mixed pair refuses each other's messages at once instead of half-working).
 """
 
 from __future__ import annotations
@@ -25,7 +34,7 @@ from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import TaskResult
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 MISSION_CONTROL = "mission-control"
 
 Vec3 = tuple[float, float, float]
@@ -84,7 +93,33 @@ class MissionEnd:
     completed: bool
 
 
-Message = Union[Heartbeat, Assign, Progress, Result, MissionEnd]
+@dataclass(frozen=True)
+class ClearanceRequest:
+    """A UAV asks for the column over ``site_m`` (it will leave its layer there); ``release``: it left it."""
+
+    sender: str
+    site_m: Vec3
+    time_s: float
+    position_m: Vec3 | None = None
+    release: bool = False
+    arrived: bool = False
+
+
+@dataclass(frozen=True)
+class Clearance:
+    """Mission control's answer: the column over ``site_m`` is ``uav``'s (``granted``), or hold over ``hold_m``."""
+
+    sender: str
+    uav: str
+    site_m: Vec3
+    radius_m: float
+    time_s: float
+    granted: bool = True
+    hold_m: Vec3 | None = None
+    layer_m: float | None = None
+
+
+Message = Union[Heartbeat, Assign, Progress, Result, MissionEnd, ClearanceRequest, Clearance]
 
 _TYPE_NAMES: dict[type, str] = {
     Heartbeat: "heartbeat",
@@ -92,6 +127,8 @@ _TYPE_NAMES: dict[type, str] = {
     Progress: "progress",
     Result: "result",
     MissionEnd: "mission-end",
+    ClearanceRequest: "clearance-request",
+    Clearance: "clearance",
 }
 
 
@@ -151,6 +188,13 @@ def encode(message: Message) -> bytes:
                 "coverage": r.coverage,
             },
         )
+    elif isinstance(message, ClearanceRequest):
+        body.update(site_m=_vec(message.site_m), time_s=message.time_s, position_m=_vec(message.position_m),
+                    release=message.release, arrived=message.arrived)
+    elif isinstance(message, Clearance):
+        body.update(uav=message.uav, site_m=_vec(message.site_m), radius_m=message.radius_m,
+                    time_s=message.time_s, granted=message.granted, hold_m=_vec(message.hold_m),
+                    layer_m=message.layer_m)
     else:
         body.update(time_s=message.time_s, completed=message.completed)
     return json.dumps(body, separators=(",", ":"), allow_nan=False).encode()
@@ -279,7 +323,7 @@ def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
             check_uav(sender, "sender")
         return Heartbeat(sender, f.num("time_s"), state=str(data.get("state") or ""),
                          task_id=f.str_("task_id", optional=True), position_m=f.vec("position_m", optional=True))
-    if kind in ("assign", "mission-end") and sender != MISSION_CONTROL:
+    if kind in ("assign", "mission-end", "clearance") and sender != MISSION_CONTROL:
         raise ProtocolError(f"{kind} message: only {MISSION_CONTROL!r} may send it, not {sender!r}")
     if kind == "assign":
         uav = f.str_("uav")
@@ -310,4 +354,16 @@ def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
                       state=str(data.get("state") or ""))
     if kind == "mission-end":
         return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
+    if kind == "clearance-request":
+        check_uav(sender, "sender")
+        return ClearanceRequest(sender, f.vec("site_m"), f.num("time_s"), f.vec("position_m", optional=True),
+                                f.bool_("release"), f.bool_("arrived"))
+    if kind == "clearance":
+        uav = f.str_("uav")
+        check_uav(uav, "uav")
+        radius = f.num("radius_m")
+        if radius < 0.0:
+            raise f.fail("radius_m", f"must be >= 0, got {radius}")
+        return Clearance(sender, uav, f.vec("site_m"), radius, f.num("time_s"), f.bool_("granted"),
+                         f.vec("hold_m", optional=True), f.num("layer_m", optional=True))
     raise ProtocolError(f"unknown message type {kind!r}")

@@ -124,7 +124,12 @@ def run_remote_uav(
     handler = UavHandler(spec.name, transport, position=lambda: fc.telemetry().position_m,
                          heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s,
                          after_result=await_answer)
-    config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers)
+    from masonry.mission.airspace import transit_layers_m
+
+    # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
+    # fleet, the same in every process) is for when mission control is silent (docs/safety.md)
+    config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
+                                 lateral_altitude_m=transit_layers_m(blueprint).get(spec.name))
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
     wall0 = time.monotonic()

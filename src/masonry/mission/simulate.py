@@ -20,6 +20,7 @@ from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, JournalError, MasonryError
+from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
@@ -141,7 +142,8 @@ class _GroundCrew:
         return True
 
 
-def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any) -> Any:
+def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any,
+                   lateral_altitude_m: float | None = None) -> Any:
     from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 
     config = UavConfig(
@@ -150,6 +152,7 @@ def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: U
         home_m=spec.home_m,
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
+        lateral_altitude_m=lateral_altitude_m,
     )
     if spec.role == "brick":
         return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock)
@@ -172,6 +175,7 @@ def simulate(
     heartbeat_timeout_s: float = 5.0,
     max_attempts: int = 3,
     progress: ProgressFn | None = None,
+    separation: bool = True,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it.
 
@@ -190,6 +194,8 @@ def simulate(
         heartbeat_timeout_s: a UAV silent that long is declared lost.
         max_attempts: failed attempts before a task is stuck.
         progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion.
+        separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
+            work altitude with no column clearance, as before they existed (for comparisons).
 
     Raises:
         InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
@@ -240,7 +246,7 @@ def simulate(
             blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
             journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
             heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
-            wall0=wall0, World=World, estimate_durations_s=estimate_durations_s,
+            wall0=wall0, World=World, estimate_durations_s=estimate_durations_s, separation=separation,
         )
     finally:
         if journal is not None:
@@ -267,6 +273,7 @@ def _run(
     wall0: float,
     World: Any,
     estimate_durations_s: Any,
+    separation: bool = True,
 ) -> MissionReport:
     resumed_from = None
     world_blueprint = blueprint
@@ -288,7 +295,10 @@ def _run(
         max_attempts=max_attempts,
         durations_s=priority_durations_s(expected_s),
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
+        column_radius_m=blueprint.clearance_m if separation else 0.0,
+        layer_base_m=layer_base_m(blueprint) if separation else None,
     )
+    layers = transit_layers_m(blueprint, fleet) if separation else {}
     if state is not None:
         mc.restore(state)
 
@@ -301,7 +311,7 @@ def _run(
                        battery=_battery_of(sim_uav),
                        swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
                        after_result=lambda: mc.step(world.clock.now_s()))
-        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock))
+        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name)))
         handlers[spec.name] = h
 
     total = len(todo)
