@@ -29,8 +29,8 @@ from masonry.blueprint import Blueprint, UavSpec
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
 
-#: Vertical distance between two transit layers: a little over the wingspan of the paper's UAVs (~0.8 m).
-DEFAULT_LAYER_SPACING_M = 1.0
+#: Vertical distance between two transit layers: the 1 m separation target plus tracking error and gusts.
+DEFAULT_LAYER_SPACING_M = 1.1
 
 
 def work_altitude_m(blueprint: Blueprint) -> float:
@@ -54,6 +54,9 @@ def work_altitude_m(blueprint: Blueprint) -> float:
     return z
 
 
+#: Average vertical speed of a climb to a layer (``masonry.fsm.UavConfig.layer_vertical_speed_mps``).
+CLIMB_SPEED_MPS = 0.5
+
 #: Layer 0 (and so every layer) starts this far above the highest work altitude: overshoot margin.
 LAYER_MARGIN_M = 0.1
 
@@ -76,7 +79,7 @@ def transit_layers_m(
     if not (spacing_m >= 0.0 and math.isfinite(spacing_m)):
         raise ValueError(f"layer spacing must be a finite number >= 0, got {spacing_m!r}")
     members = tuple(blueprint.fleet if fleet is None else fleet)
-    base = work_altitude_m(blueprint)
+    base = layer_base_m(blueprint)
     return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}
 
 
@@ -103,10 +106,11 @@ class ColumnClearance:
       next site when it sets off (``request``) and keeps the columns it holds until it has left them
       (``release``, sent by its handler once ``radius_m`` away, or on landing).
     - **Layers**: each flight gets an altitude for its lateral leg, held until the flight has come down at its
-      site (``end_transit``). Layer 0 is ``base_m`` (the work altitude): given only when the straight path
-      keeps ``radius_m`` from every other column and every other layer-0 path, so such a flight passes nobody.
-      Otherwise the lowest of ``base_m + k * spacing_m`` (k >= 1) that no other flight holds: lateral legs in
-      flight at the same time are ``spacing_m`` apart vertically, and above everyone working at a site.
+      site (``end_transit``). Layer 0 is ``base_m`` (just above the work altitude): given only when the straight
+      path keeps ``path_clearance_m`` from every other column, layer-0 path, and point where another flight
+      climbs or descends, so such a flight meets nobody. Otherwise the UAV's own layer ``base_m + k *
+      spacing_m`` (k >= 1, the lowest no other UAV owns when it first needs one, then kept): lateral legs of
+      two UAVs are ``spacing_m`` apart vertically, and above everyone working at a site.
     - A request whose column is taken is answered with a hold point outside every held column and other hold
       point: the UAV waits there at its layer, so nobody climbs or descends through it; since every waiting UAV
       leaves the columns it held, no two UAVs can wait for each other for ever.
@@ -132,11 +136,21 @@ class ColumnClearance:
         # uav -> (layer index, path segments, points where it climbs or descends) of its flight in progress
         self._transit: dict[str, tuple[int, list[tuple[XY, XY]], list[XY]]] = {}
         self.refused = 0  # requests answered "wait where you are": no layer fits
+        #: a layer-0 path keeps this far from other columns and layer-0 paths (a UAV working in its column stays
+        #: within a few centimetres of its site, so the separation plus a margin is enough; columns keep radius_m)
+        self.path_clearance_m = 1.2
+        #: a flight held back this long (it would cross another) goes anyway: liveness over a rare near miss
+        self.max_refusal_s = 30.0
+        self.forced = 0
+        self._refused_since: dict[str, tuple[XY | None, float]] = {}
+        self._climb_until: dict[str, float] = {}
+        self._now_s = 0.0
         self.granted_count = 0
         self.held_back = 0  # requests not granted at once
         self.wait_s = 0.0  # summed time between request and grant
         self.max_wait_s = 0.0
         self.layer_counts: dict[int, int] = {}  # flights per layer index
+        self._own_layer: dict[str, int] = {}  # uav -> its layer above 0, handed out on first need
 
     @property
     def held(self) -> dict[str, tuple[Vec3, ...]]:
@@ -166,27 +180,31 @@ class ColumnClearance:
         A repeated request (same site) gets the same answer and keeps its place in the queue; one for another
         site replaces the UAV's pending one and ends its previous flight.
         """
+        self._now_s = now_s
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+        origin = (float(position_m[0]), float(position_m[1])) if position_m is not None else (site[0], site[1])
+        target = (site[0], site[1])
         if any(self._same(h, site) for h in self._held.get(uav, ())):
-            return Grant(uav, site, layer_m=self.layer_m(uav))  # already granted (the answer was lost?)
+            # its own column already (a repeated request, or back to a site it has not left): a flight there
+            if uav not in self._transit and not self._fly(uav, [(origin, target)], [origin, target], low_ok=True,
+                                                          now_s=now_s, site=site):
+                return Grant(uav, site, False)
+            return Grant(uav, site, layer_m=self.layer_m(uav))
         pending = self._waiting.get(uav)
         if pending is not None and self._same(pending[0], site):
             return Grant(uav, site, False, pending[3], self.layer_m(uav))
         self._waiting.pop(uav, None)
         self._transit.pop(uav, None)
-        origin = (float(position_m[0]), float(position_m[1])) if position_m is not None else (site[0], site[1])
-        target = (site[0], site[1])
         if not self._blocked(uav, site):
-            if not self._fly(uav, [(origin, target)], [origin, target], low_ok=True):
-                self.refused += 1
-                return Grant(uav, site, False)  # no layer fits now: wait where you are, ask again
+            if not self._fly(uav, [(origin, target)], [origin, target], low_ok=True, now_s=now_s, site=site):
+                return Grant(uav, site, False)  # it would cross another flight now: wait where you are, ask again
             self._held.setdefault(uav, []).append(site)
             self.granted_count += 1
             return Grant(uav, site, layer_m=self.layer_m(uav))
         hold = self.hold_point(uav, site, position_m)
         hxy = (hold[0], hold[1])
-        if not self._fly(uav, [(origin, hxy), (hxy, target)], [origin, target], low_ok=False):
-            self.refused += 1
+        # to the hold point now; the leg on to the site is checked when the column is granted
+        if not self._fly(uav, [(origin, hxy)], [origin], low_ok=False, now_s=now_s, site=site):
             return Grant(uav, site, False)
         self._waiting[uav] = (site, position_m, now_s, hold)
         self.held_back += 1
@@ -216,10 +234,22 @@ class ColumnClearance:
 
         The UAV keeps the layer it waits at for the rest of its flight.
         """
+        self._now_s = now_s
         out: list[Grant] = []
-        for uav, (site, _pos, since_s, _hold) in list(self._waiting.items()):
+        for uav, (site, _pos, since_s, hold) in list(self._waiting.items()):
             if self._blocked(uav, site):
                 continue
+            t = self._transit.get(uav)
+            if t is not None and hold is not None:
+                leg = [((hold[0], hold[1]), (site[0], site[1]))]
+                if self._crossing(uav, t[0], leg, [(site[0], site[1])]):
+                    first = self._refused_since.setdefault(uav, ((site[0], site[1]), now_s))
+                    if now_s - first[1] < self.max_refusal_s:
+                        continue  # it would cross a flight still in progress: wait a little longer
+                    self.forced += 1
+                self._refused_since.pop(uav, None)
+                # the UAV may still be on its way to the hold point: keep that leg in its path
+                self._transit[uav] = (t[0], t[1] + leg, t[2] + [(site[0], site[1])])
             del self._waiting[uav]
             self._held.setdefault(uav, []).append(site)
             waited = max(0.0, now_s - since_s)
@@ -267,40 +297,68 @@ class ColumnClearance:
         return (float(best[0]), float(best[1]), float(site_m[2]))
 
     # -- internals --------------------------------------------------------------------------------------------
-    def _fly(self, uav: str, path: list[tuple[XY, XY]], vertical: list[XY], *, low_ok: bool) -> bool:
+    def _fly(self, uav: str, path: list[tuple[XY, XY]], vertical: list[XY], *, low_ok: bool,
+             now_s: float = 0.0, site: Vec3 | None = None) -> bool:
         """Give ``uav`` a layer for a flight along ``path`` that climbs or descends at ``vertical`` points.
 
-        Layer 0 if allowed and its path keeps clear of every other column and layer-0 path. Otherwise the
-        lowest free layer k >= 1 that flies above every flight in progress whose climb or descent points it
-        passes near, and below every one that passes near its own: nobody crosses a lateral leg vertically.
-        False (and no layer) if no layer fits now.
+        Layer 0 (``base_m``) if allowed and its path keeps clear of every other column, layer-0 path and point
+        where a flight in progress climbs or descends: such a flight meets nobody. Otherwise the UAV's own layer,
+        ``1 + its index in the fleet``: lateral legs of two UAVs above layer 0 are always ``spacing_m`` apart.
+        False (no flight) when it would cross another flight in progress (:meth:`_crossing`): the UAV waits where
+        it is and asks again; after ``max_refusal_s`` of that it flies anyway (counted in ``forced``).
         """
         if self.base_m is None:
             return True
-        r = self.radius_m
         if low_ok and self._low_path_clear(uav, path[0][0], path[-1][1]):
             k = 0
         else:
-            low, high, used = 1, math.inf, set()
-            for other, (k_o, path_o, vert_o) in self._transit.items():
-                if other == uav:
-                    continue
-                used.add(k_o)
-                if any(_point_segment_m(v, a, b) < r for v in vert_o for a, b in path):
-                    low = max(low, k_o + 1)  # we pass over where it climbs or descends: fly above its layer
-                if any(_point_segment_m(v, a, b) < r for v in vertical for a, b in path_o):
-                    high = min(high, k_o)  # it passes over where we climb or descend: stay below it
-            k = low
-            while k in used:
-                k += 1
-            if k >= high:
-                return False
+            k = self._own_layer.get(uav)
+            if k is None:  # its own layer: the lowest no other UAV owns (first come, kept for the mission)
+                owned = set(self._own_layer.values())
+                k = 1
+                while k in owned:
+                    k += 1
+                self._own_layer[uav] = k
+            if self._crossing(uav, k, path, vertical):
+                key = (site[0], site[1]) if site is not None else None
+                first = self._refused_since.get(uav)
+                if first is None or first[0] != key:
+                    self._refused_since[uav] = first = (key, now_s)
+                if now_s - first[1] < self.max_refusal_s:
+                    self.refused += 1
+                    return False
+                self.forced += 1
+        self._refused_since.pop(uav, None)
         self._transit[uav] = (k, path, vertical)
+        # its departure (the first vertical point) counts until it should have climbed to its layer
+        self._climb_until[uav] = now_s + 3.0 + 1.875 * (k * self.spacing_m + 0.3) / CLIMB_SPEED_MPS
         self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
         return True
 
+    def _vertical(self, other: str) -> list[XY]:
+        """Where a flight in progress still climbs or descends (its departure only until it has climbed)."""
+        v = self._transit[other][2]
+        return v if self._now_s < self._climb_until.get(other, math.inf) else v[1:]
+
+    def _crossing(self, uav: str, k: int, path: list[tuple[XY, XY]], vertical: list[XY]) -> bool:
+        """Would a flight at layer ``k`` along ``path``, climbing or descending at ``vertical``, cross another?
+
+        Yes if a lower flight passes near where it goes through the lower layer, or a higher one climbs or
+        descends near its path (within ``path_clearance_m``).
+        """
+        d = min(self.radius_m, self.path_clearance_m)
+        for other, (k_o, path_o, _v) in self._transit.items():
+            if other == uav or k_o == k:
+                continue
+            vert_o = self._vertical(other)
+            if k_o < k and any(_point_segment_m(v, a, b) < d for v in vertical for a, b in path_o):
+                return True
+            if k_o > k and any(_point_segment_m(v, a, b) < d for v in vert_o for a, b in path):
+                return True
+        return False
+
     def _low_path_clear(self, uav: str, a: XY, b: XY) -> bool:
-        r = self.radius_m
+        r = min(self.radius_m, self.path_clearance_m)
         for other, hs in self._held.items():
             if other != uav:
                 for h in hs:
@@ -311,7 +369,7 @@ class ColumnClearance:
                 continue
             if t[0] == 0 and _segment_segment_m(a, b, t[1][0][0], t[1][-1][1]) < r:
                 return False
-            if any(_point_segment_m(v, a, b) < r for v in t[2]):
+            if any(_point_segment_m(v, a, b) < r for v in self._vertical(other)):
                 return False  # it climbs or descends on our way
         return True
 

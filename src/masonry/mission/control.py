@@ -129,7 +129,7 @@ class MissionControl:
         startup_timeout_s: float = 30.0,
         column_radius_m: float = 1.5,
         layer_base_m: float | None = None,
-        layer_spacing_m: float = 1.0,
+        layer_spacing_m: float = 1.1,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher

@@ -1,0 +1,53 @@
+"""Separation between UAVs in whole-mission simulations, with and without the airspace rules (docs/safety.md).
+
+For each bundled blueprint (its own fleet, and larger fleets on the running bonds) it runs ``masonry sim``'s
+``simulate`` twice: ``separation=False`` (every lateral leg at the work altitude, no site columns: the plain
+conflict graph) and ``separation=True`` (the default). It prints makespan and the minimum distance between two
+airborne UAVs, plus how often columns were waited for. Usage:
+
+    .venv/bin/python benchmarks/bench_separation.py [--quick]
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from masonry.blueprint import load_blueprint
+from masonry.mission.simulate import simulate
+
+ROOT = Path(__file__).resolve().parent.parent
+CASES = [
+    ("paper_case_study", None, None),
+    ("towers", None, None),
+    ("pyramid", None, None),
+    ("running_bond_small", None, None),
+    ("running_bond_small", 3, 2),
+    ("running_bond_200", None, None),
+    ("running_bond_200", 3, 2),
+]
+
+
+def main() -> None:
+    quick = "--quick" in sys.argv
+    cases = CASES[:5] if quick else CASES
+    print(f"{'blueprint':<20} {'fleet':>5} | {'makespan off':>12} {'min sep off':>11} | {'makespan on':>11} "
+          f"{'min sep on':>10} {'ratio':>6} | wall s")
+    for name, nb, na in cases:
+        bp = load_blueprint(ROOT / "blueprints" / f"{name}.yaml")
+        row = []
+        t0 = time.perf_counter()
+        for sep in (False, True):
+            r = simulate(bp, brick_uavs=nb, adhesion_uavs=na, separation=sep).to_dict()
+            row.append((r["makespan_s"], r["min_separation_m"], r["completed"]))
+        fleet = f"{nb}+{na}" if nb is not None else "own"
+        (m0, s0, c0), (m1, s1, c1) = row
+        flag = "" if c0 and c1 else "  (incomplete!)"
+        print(f"{name:<20} {fleet:>5} | {m0:>12.1f} {s0 if s0 is not None else float('nan'):>11.3f} | {m1:>11.1f} "
+              f"{s1 if s1 is not None else float('nan'):>10.3f} {m1 / m0:>6.2f} | {time.perf_counter() - t0:.0f}{flag}",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
