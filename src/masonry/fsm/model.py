@@ -379,10 +379,10 @@ class UavModel:
         if math.hypot(target[0] - p[0], target[1] - p[1]) > 0.05:
             legs.append((np.array([target[0], target[1], layer]), None))
         if abs(target[2] - layer) > 0.05:
-            legs.append((target, max(1.0, 1.875 * abs(layer - target[2]) / v_z)))
+            legs.append((target, max(0.5, 1.875 * abs(layer - target[2]) / v_z)))
         self._gate_at = -1  # legs start from rest: a corner is turned where the UAV is, never cut
         if abs(p[2] - layer) > 0.05 or not legs:
-            self._fly_to(tel, np.array([p[0], p[1], layer]), max(1.0, 1.875 * abs(layer - p[2]) / v_z),
+            self._fly_to(tel, np.array([p[0], p[1], layer]), max(0.5, 1.875 * abs(layer - p[2]) / v_z),
                          yaw_rad=yaw_rad)
             self._legs = legs
         else:

@@ -21,7 +21,7 @@ Everything here is pure (no I/O, no clock).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from masonry.blueprint import Blueprint, UavSpec
@@ -57,8 +57,9 @@ def work_altitude_m(blueprint: Blueprint) -> float:
 #: Average vertical speed of a climb to a layer (``masonry.fsm.UavConfig.layer_vertical_speed_mps``).
 CLIMB_SPEED_MPS = 0.5
 
-#: Layer 0 (and so every layer) starts this far above the highest work altitude: overshoot margin.
-LAYER_MARGIN_M = 0.1
+#: Layer 0 starts this far above the highest work altitude (the spacing of the layers above it has its own
+#: margin over the separation target).
+LAYER_MARGIN_M = 0.0
 
 
 def layer_base_m(blueprint: Blueprint) -> float:
@@ -119,10 +120,12 @@ class ColumnClearance:
         radius_m: horizontal distance within which two columns exclude each other.
         base_m: altitude of layer 0 (None: no layers are handed out).
         spacing_m: vertical distance between layers.
+        homes: each UAV's home: a UAV takes off there without asking (up to the work altitude), so layer-0
+            paths keep clear of the other UAVs' homes.
     """
 
     def __init__(self, radius_m: float, base_m: float | None = None,
-                 spacing_m: float = DEFAULT_LAYER_SPACING_M) -> None:
+                 spacing_m: float = DEFAULT_LAYER_SPACING_M, homes: Mapping[str, Vec3] | None = None) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
         if not (spacing_m > 0.0 and math.isfinite(spacing_m)):
@@ -151,6 +154,13 @@ class ColumnClearance:
         self.max_wait_s = 0.0
         self.layer_counts: dict[int, int] = {}  # flights per layer index
         self._own_layer: dict[str, int] = {}  # uav -> its layer above 0, handed out on first need
+        self._homes: dict[str, XY] = {u: (float(h[0]), float(h[1])) for u, h in (homes or {}).items()}
+
+    @property
+    def release_radius_m(self) -> float:
+        """A UAV frees a column once this far from it: then nobody descending nearby meets it (the flights are
+        checked against each other), so the separation plus a margin is enough."""
+        return min(self.radius_m, self.path_clearance_m)
 
     @property
     def held(self) -> dict[str, tuple[Vec3, ...]]:
@@ -359,6 +369,9 @@ class ColumnClearance:
 
     def _low_path_clear(self, uav: str, a: XY, b: XY) -> bool:
         r = min(self.radius_m, self.path_clearance_m)
+        for other, home in self._homes.items():
+            if other != uav and _point_segment_m(home, a, b) < r:
+                return False
         for other, hs in self._held.items():
             if other != uav:
                 for h in hs:
@@ -382,7 +395,7 @@ class ColumnClearance:
         if w is not None and w[3] is not None and _d2(w[3], site) < r2:
             return True
         t = self._transit.get(other)
-        if t is not None and t[0] == 0 and any(_point_segment_m((site[0], site[1]), a, b) < self.radius_m
+        if t is not None and t[0] == 0 and any(_point_segment_m((site[0], site[1]), a, b) < self.release_radius_m
                                                for a, b in t[1]):
             return True  # a layer-0 flight passes there
         return False

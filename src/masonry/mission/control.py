@@ -159,7 +159,8 @@ class MissionControl:
         self.ended_at_s: float | None = None
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
-        self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m)
+        self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m,
+                                       homes={u.name: u.home_m for u in self.fleet})
 
     # -- resume ----------------------------------------------------------------------------------------
     def restore(self, state: Any) -> None:
@@ -233,7 +234,7 @@ class MissionControl:
         self._check_heartbeats(now_s)
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
-                self._send(g.uav, Clearance(MISSION_CONTROL, g.uav, g.site_m, self.columns.radius_m, now_s,
+                self._send(g.uav, Clearance(MISSION_CONTROL, g.uav, g.site_m, self.columns.release_radius_m, now_s,
                                             layer_m=g.layer_m))
                 log.debug("column at (%.2f, %.2f) granted to %s", g.site_m[0], g.site_m[1], g.uav)
         if self.started_at_s is None:
@@ -283,8 +284,8 @@ class MissionControl:
                 self.columns.end_transit(msg.sender)
                 return
             g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m)
-            self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.radius_m, now_s,
-                                             g.granted, g.hold_m, g.layer_m))
+            self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.release_radius_m,
+                                             now_s, g.granted, g.hold_m, g.layer_m))
             return
         if isinstance(msg, Result):
             if msg.position_m is not None:

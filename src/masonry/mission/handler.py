@@ -194,7 +194,9 @@ class UavHandler:
             self._column_sent_s = self.now_s
             self.clearance_requests += 1
             self._send(ClearanceRequest(self.name, site, self.now_s, self._where()))
-        elif self.now_s - self._column_sent_s >= self.heartbeat_period_s:
+        elif self.now_s - self._column_sent_s >= (
+            0.25 if self._column_answer is not None and self._column_answer.hold_m is None else self.heartbeat_period_s
+        ):  # refused for now (another flight in the way): ask again soon
             self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
             self._send(ClearanceRequest(self.name, site, self.now_s, self._where()))
         self.pump()  # in-process, the answer may already be here
