@@ -139,10 +139,10 @@ def test_columns_never_overlap_and_layers_above_zero_are_never_shared(ops):
         assert len(high) == len(set(high))
 
 
-def test_layers_start_above_the_highest_work_altitude():
+def test_layers_start_at_the_highest_work_altitude():
     bp = running_bond(3, 4, brick_uavs=2, adhesion_uavs=1)
     base = layer_base_m(bp)
-    assert base > work_altitude_m(bp) >= bp.cruise_altitude_m
+    assert base >= work_altitude_m(bp) >= bp.cruise_altitude_m
     fixed = transit_layers_m(bp)
     assert sorted(fixed.values()) == pytest.approx([base + (k + 1) * 1.1 for k in range(len(bp.fleet))])
 
