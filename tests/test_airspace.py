@@ -9,13 +9,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fsm_rig import HOME, PICKUP, Rig
 from masonry.blueprint_gen import running_bond, towers
 from masonry.errors import ProtocolError
 from masonry.fakes import QueueMissionLink
 from masonry.mission.airspace import ColumnClearance, layer_base_m, transit_layers_m, work_altitude_m
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, decode, encode
 from masonry.mission.simulate import simulate
-from fsm_rig import HOME, PICKUP, Rig
 
 R = 1.5
 BASE = 1.35
@@ -69,33 +69,37 @@ def test_layer_zero_only_for_a_path_clear_of_other_columns_else_the_uavs_own_lay
     assert abs(d.layer_m - over.layer_m) >= S - 1e-9  # two UAVs above layer 0: never the same layer
 
 
-def test_a_flight_that_would_cross_another_waits_until_that_one_is_down():
+def _crossing_setup(c):
+    assert c.request("x", (0.0, 0.0, 1.2), 0.0, (0.0, 0.0, 1.2)).granted
+    c.end_transit("x")  # x works in its column at (0, 0)
+    a = c.request("a", (3.0, 0.6, 1.2), 0.0, (-3.0, 0.3, 1.2))  # passes x: not layer 0
+    assert a.granted and a.layer_m == pytest.approx(BASE + S)
+
+
+def test_a_flight_takes_the_lowest_layer_on_which_it_crosses_nobody():
     c = ColumnClearance(R, BASE, S)
-    # high: a UAV with a high layer (its own is taken first by nobody else: make two flights to push it up)
-    assert c.request("x", (0.0, 5.0, 1.2), 0.0, (0.0, 4.0, 1.2)).granted
-    c.end_transit("x")  # x works at (0, 5)
-    first = c.request("low", (-4.0, 5.5, 1.2), 0.0, (4.0, 5.5, 1.2))  # passes over x: own layer 1
-    assert first.granted and first.layer_m == pytest.approx(BASE + S)
-    c.end_transit("low")
-    high = c.request("high", (0.0, 0.0, 1.2), 0.0, (0.0, 5.2, 1.2))  # passes over x too: own layer 2
-    assert high.granted and high.layer_m == pytest.approx(BASE + 2 * S)
-    # "low" now wants to fly right over the point where "high" will descend through layer 1: not yet
-    refused = c.request("low", (-3.0, -0.2, 1.2), 1.0, (3.0, -0.2, 1.2))
-    assert not refused.granted and refused.hold_m is None and c.refused == 1
-    c.end_transit("high")  # high is down at its site
-    assert c.request("low", (-3.0, -0.2, 1.2), 2.0, (3.0, -0.2, 1.2)).granted
+    _crossing_setup(c)
+    # b sets off from (0, 0.9), right under a's path: on layer 2 it would climb through a's layer 1 there, and
+    # layer 1 is a's: not now
+    b = c.request("b", (0.0, 4.0, 1.2), 1.0, (0.0, 0.9, 1.2))
+    assert not b.granted and b.hold_m is None and b.layer_m is None and c.refused == 1
+    c.end_transit("a")  # a is down at its site
+    b = c.request("b", (0.0, 4.0, 1.2), 2.0, (0.0, 0.9, 1.2))
+    assert b.granted and b.layer_m == pytest.approx(BASE + S)
+    # a flight that passes over b's climb point takes a layer above b's
+    d = c.request("d", (5.0, 1.2, 1.2), 3.0, (-5.0, 1.0, 1.2))
+    assert d.granted and d.layer_m == pytest.approx(BASE + 2 * S)
 
 
-def test_a_flight_held_back_too_long_goes_anyway_and_is_counted():
+def test_a_uav_held_back_is_kept_clear_of_and_flies_anyway_after_the_limit():
     c = ColumnClearance(R, BASE, S)
     c.max_refusal_s = 5.0
-    c.request("x", (0.0, 5.0, 1.2), 0.0, (0.0, 4.0, 1.2))
-    c.end_transit("x")
-    c.request("low", (-4.0, 5.5, 1.2), 0.0, (4.0, 5.5, 1.2))
-    c.end_transit("low")
-    c.request("high", (0.0, 0.0, 1.2), 0.0, (0.0, 5.2, 1.2))
-    assert not c.request("low", (-3.0, -0.2, 1.2), 1.0, (3.0, -0.2, 1.2)).granted
-    assert c.request("low", (-3.0, -0.2, 1.2), 6.5, (3.0, -0.2, 1.2)).granted
+    _crossing_setup(c)
+    assert not c.request("b", (0.0, 4.0, 1.2), 1.0, (0.0, 0.9, 1.2)).granted
+    # while b hovers at (0, 0.9) a layer-0 flight may not pass there
+    e = c.request("e", (2.0, 2.0, 1.2), 2.0, (-2.0, 2.0, 1.2))
+    assert e.granted and e.layer_m > BASE + 1e-9
+    assert c.request("b", (0.0, 4.0, 1.2), 6.5, (0.0, 0.9, 1.2)).granted
     assert c.forced == 1
 
 

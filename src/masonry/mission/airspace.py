@@ -109,9 +109,9 @@ class ColumnClearance:
     - **Layers**: each flight gets an altitude for its lateral leg, held until the flight has come down at its
       site (``end_transit``). Layer 0 is ``base_m`` (just above the work altitude): given only when the straight
       path keeps ``path_clearance_m`` from every other column, layer-0 path, and point where another flight
-      climbs or descends, so such a flight meets nobody. Otherwise the UAV's own layer ``base_m + k *
-      spacing_m`` (k >= 1, the lowest no other UAV owns when it first needs one, then kept): lateral legs of
-      two UAVs are ``spacing_m`` apart vertically, and above everyone working at a site.
+      climbs or descends, so such a flight meets nobody. Otherwise the lowest layer ``base_m + k * spacing_m``
+      (k >= 1) that no other flight in progress uses and on which it crosses no other flight: lateral legs of
+      two flights are ``spacing_m`` apart vertically, and above everyone working at a site.
     - A request whose column is taken is answered with a hold point outside every held column and other hold
       point: the UAV waits there at its layer, so nobody climbs or descends through it; since every waiting UAV
       leaves the columns it held, no two UAVs can wait for each other for ever.
@@ -147,13 +147,13 @@ class ColumnClearance:
         self.forced = 0
         self._refused_since: dict[str, tuple[XY | None, float]] = {}
         self._climb_until: dict[str, float] = {}
+        self._hover: dict[str, Vec3] = {}  # UAVs held back, hovering where they asked (kept clear of)
         self._now_s = 0.0
         self.granted_count = 0
         self.held_back = 0  # requests not granted at once
         self.wait_s = 0.0  # summed time between request and grant
         self.max_wait_s = 0.0
         self.layer_counts: dict[int, int] = {}  # flights per layer index
-        self._own_layer: dict[str, int] = {}  # uav -> its layer above 0, handed out on first need
         self._homes: dict[str, XY] = {u: (float(h[0]), float(h[1])) for u, h in (homes or {}).items()}
 
     @property
@@ -197,7 +197,7 @@ class ColumnClearance:
         if any(self._same(h, site) for h in self._held.get(uav, ())):
             # its own column already (a repeated request, or back to a site it has not left): a flight there
             if uav not in self._transit and not self._fly(uav, [(origin, target)], [origin, target], low_ok=True,
-                                                          now_s=now_s, site=site):
+                                                          now_s=now_s, site=site, position_m=position_m):
                 return Grant(uav, site, False)
             return Grant(uav, site, layer_m=self.layer_m(uav))
         pending = self._waiting.get(uav)
@@ -206,7 +206,8 @@ class ColumnClearance:
         self._waiting.pop(uav, None)
         self._transit.pop(uav, None)
         if not self._blocked(uav, site):
-            if not self._fly(uav, [(origin, target)], [origin, target], low_ok=True, now_s=now_s, site=site):
+            if not self._fly(uav, [(origin, target)], [origin, target], low_ok=True, now_s=now_s, site=site,
+                             position_m=position_m):
                 return Grant(uav, site, False)  # it would cross another flight now: wait where you are, ask again
             self._held.setdefault(uav, []).append(site)
             self.granted_count += 1
@@ -214,7 +215,8 @@ class ColumnClearance:
         hold = self.hold_point(uav, site, position_m)
         hxy = (hold[0], hold[1])
         # to the hold point now; the leg on to the site is checked when the column is granted
-        if not self._fly(uav, [(origin, hxy)], [origin], low_ok=False, now_s=now_s, site=site):
+        if not self._fly(uav, [(origin, hxy)], [origin], low_ok=False, now_s=now_s, site=site,
+                         position_m=position_m):
             return Grant(uav, site, False)
         self._waiting[uav] = (site, position_m, now_s, hold)
         self.held_back += 1
@@ -230,6 +232,7 @@ class ColumnClearance:
             self._held.pop(uav, None)
             self._waiting.pop(uav, None)
             self._transit.pop(uav, None)
+            self._hover.pop(uav, None)
             return
         held = self._held.get(uav)
         if held:
@@ -275,10 +278,13 @@ class ColumnClearance:
 
     def hold_point(self, uav: str, site_m: Vec3, position_m: Vec3 | None) -> Vec3:
         """Where ``uav`` waits for the column over ``site_m``: the point nearest to it that is at least 1.1
-        ``radius_m`` from every column held (its own too: it leaves them) and from other hold points.
+        ``radius_m`` from every column held (its own too: it leaves them), other hold points and the sites other
+        UAVs wait for.
         """
         keep_out = [h for hs in self._held.values() for h in hs]
         keep_out += [w[3] for o, w in self._waiting.items() if o != uav and w[3] is not None]
+        # and the sites others wait for: a hold point there would block them (two UAVs could wait for each other)
+        keep_out += [w[0] for o, w in self._waiting.items() if o != uav]
         r = 1.1 * self.radius_m
         r2 = r * r
         origin = position_m if position_m is not None else site_m
@@ -308,27 +314,27 @@ class ColumnClearance:
 
     # -- internals --------------------------------------------------------------------------------------------
     def _fly(self, uav: str, path: list[tuple[XY, XY]], vertical: list[XY], *, low_ok: bool,
-             now_s: float = 0.0, site: Vec3 | None = None) -> bool:
+             now_s: float = 0.0, site: Vec3 | None = None, position_m: Vec3 | None = None) -> bool:
         """Give ``uav`` a layer for a flight along ``path`` that climbs or descends at ``vertical`` points.
 
         Layer 0 (``base_m``) if allowed and its path keeps clear of every other column, layer-0 path and point
-        where a flight in progress climbs or descends: such a flight meets nobody. Otherwise the UAV's own layer,
-        ``1 + its index in the fleet``: lateral legs of two UAVs above layer 0 are always ``spacing_m`` apart.
+        where a flight in progress climbs or descends: such a flight meets nobody. Otherwise the lowest layer
+        above 0 that no other flight in progress uses and on which it crosses nobody: lateral legs of two flights
+        above layer 0 are always ``spacing_m`` apart.
         False (no flight) when it would cross another flight in progress (:meth:`_crossing`): the UAV waits where
-        it is and asks again; after ``max_refusal_s`` of that it flies anyway (counted in ``forced``).
+        it is and asks again; after ``max_refusal_s`` of that it flies anyway (counted in ``forced``). While it
+        waits there, other flights keep clear of it.
         """
         if self.base_m is None:
             return True
         if low_ok and self._low_path_clear(uav, path[0][0], path[-1][1]):
             k = 0
         else:
-            k = self._own_layer.get(uav)
-            if k is None:  # its own layer: the lowest no other UAV owns (first come, kept for the mission)
-                owned = set(self._own_layer.values())
-                k = 1
-                while k in owned:
-                    k += 1
-                self._own_layer[uav] = k
+            # the lowest layer above 0 that no other flight in progress uses and on which this one crosses nobody
+            used = {t[0] for o, t in self._transit.items() if o != uav}
+            top = len(self._transit) + len(self._hover) + 2
+            free = [j for j in range(1, top + 1) if j not in used]
+            k = next((j for j in free if not self._crossing(uav, j, path, vertical)), free[0])
             if self._crossing(uav, k, path, vertical):
                 key = (site[0], site[1]) if site is not None else None
                 first = self._refused_since.get(uav)
@@ -336,9 +342,12 @@ class ColumnClearance:
                     self._refused_since[uav] = first = (key, now_s)
                 if now_s - first[1] < self.max_refusal_s:
                     self.refused += 1
+                    if position_m is not None:
+                        self._hover[uav] = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
                     return False
                 self.forced += 1
         self._refused_since.pop(uav, None)
+        self._hover.pop(uav, None)
         self._transit[uav] = (k, path, vertical)
         # its departure (the first vertical point) counts until it should have climbed to its layer
         self._climb_until[uav] = now_s + 3.0 + 1.875 * (k * self.spacing_m + 0.3) / CLIMB_SPEED_MPS
@@ -357,6 +366,14 @@ class ColumnClearance:
         descends near its path (within ``path_clearance_m``).
         """
         d = min(self.radius_m, self.path_clearance_m)
+        alt = (self.base_m or 0.0) + k * self.spacing_m
+        for other, h in self._hover.items():
+            if other == uav:
+                continue
+            if any(_point_segment_m((h[0], h[1]), a, b) < d for a, b in path) and abs(alt - h[2]) < self.spacing_m:
+                return True  # it hovers on our way at our altitude
+            if any(math.hypot(v[0] - h[0], v[1] - h[1]) < d for v in vertical):
+                return True  # we would climb or descend next to it
         for other, (k_o, path_o, _v) in self._transit.items():
             if other == uav or k_o == k:
                 continue
@@ -369,6 +386,9 @@ class ColumnClearance:
 
     def _low_path_clear(self, uav: str, a: XY, b: XY) -> bool:
         r = min(self.radius_m, self.path_clearance_m)
+        for other, h in self._hover.items():
+            if other != uav and _point_segment_m((h[0], h[1]), a, b) < r:
+                return False
         for other, home in self._homes.items():
             if other != uav and _point_segment_m(home, a, b) < r:
                 return False
@@ -394,11 +414,9 @@ class ColumnClearance:
         w = self._waiting.get(other)
         if w is not None and w[3] is not None and _d2(w[3], site) < r2:
             return True
-        t = self._transit.get(other)
-        if t is not None and t[0] == 0 and any(_point_segment_m((site[0], site[1]), a, b) < self.release_radius_m
-                                               for a, b in t[1]):
-            return True  # a layer-0 flight passes there
-        return False
+        t = self._transit.get(other)  # a layer-0 flight passing there?
+        return t is not None and t[0] == 0 and any(
+            _point_segment_m((site[0], site[1]), a, b) < self.release_radius_m for a, b in t[1])
 
     def _blocked(self, uav: str, site: Vec3) -> bool:
         for other in {**self._held, **self._waiting, **self._transit}:
@@ -447,11 +465,12 @@ def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
 
 
 __all__ = [
+    "CLIMB_SPEED_MPS",
     "DEFAULT_LAYER_SPACING_M",
-    "ColumnClearance",
     "LAYER_MARGIN_M",
-    "layer_base_m",
+    "ColumnClearance",
     "Grant",
+    "layer_base_m",
     "min_pairwise_separation_m",
     "transit_layers_m",
     "work_altitude_m",
