@@ -285,13 +285,16 @@ class World:
                 uav._path.append((now, vehicle._x, vehicle._y, vehicle._z))
                 uav._next_sample_s = now + sample_s
         if len(airborne) > 1:
-            best = self._min_sep if self._min_sep is not None else math.inf
+            best2 = math.inf  # smallest squared distance this step (one square root, not one per pair)
             for i in range(len(airborne) - 1):
-                a = airborne[i]
-                for b in airborne[i + 1 :]:
-                    d = math.dist(a, b)
-                    best = min(best, d)
-            self._min_sep = best
+                ax, ay, az = airborne[i]
+                for bx, by, bz in airborne[i + 1 :]:
+                    d2 = (ax - bx) * (ax - bx) + (ay - by) * (ay - by) + (az - bz) * (az - bz)
+                    if d2 < best2:
+                        best2 = d2
+            d = math.sqrt(best2)
+            if self._min_sep is None or d < self._min_sep:
+                self._min_sep = d
         self.clock.advance(dt_s)
 
     def _timed_faults(self, uav: SimUav, now: float) -> None:
