@@ -270,3 +270,47 @@ def test_min_separation_keeps_the_bound_over_random_walls_fleets_and_seeds(kind,
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
     if r.min_separation_m is not None:  # two UAVs were airborne together
         assert r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m
+
+
+def test_mission_control_and_a_handler_exchange_clearances_over_the_transport():
+    from masonry.mission.control import MissionControl
+    from masonry.mission.handler import UavHandler
+    from masonry.mission.inproc import InprocBus
+    from masonry.planner import plan
+
+    bp = running_bond(1, 2, brick_uavs=2, adhesion_uavs=1)
+    fleet = bp.fleet
+    bus = InprocBus()
+    mc = MissionControl(plan(bp), fleet, bus.endpoint(MISSION_CONTROL), column_radius_m=R, layer_base_m=BASE,
+                        startup_timeout_s=100.0)
+    where = {u.name: (u.home_m[0], u.home_m[1], 1.2) for u in fleet}
+    handlers = {u.name: UavHandler(u.name, bus.endpoint(u.name), position=lambda n=u.name: where[n])
+                for u in fleet}
+    a, b = [u.name for u in fleet][:2]
+    for h in handlers.values():
+        h.step(0.0)
+    mc.step(0.0)
+    for h in handlers.values():
+        h.step(0.1)  # mission control heard
+    site = (0.0, -2.0, 1.2)
+    assert handlers[a].request_clearance(site) is None  # asked; the answer comes with mission control's tick
+    mc.step(0.2)
+    ans = handlers[a].request_clearance(site)
+    assert ans is not None and ans.granted and ans.layer_m is not None
+    assert handlers[a].columns == (site,)
+    near = (0.5, -2.0, 1.2)
+    handlers[b].request_clearance(near)
+    mc.step(0.3)
+    wait = handlers[b].request_clearance(near)
+    assert wait is not None and not wait.granted and wait.hold_m is not None
+    # a comes down, works, sets off for its next site and flies away: its handler frees the column, b gets it
+    handlers[a].end_transit(site)
+    handlers[a].request_clearance((5.0, -2.0, 1.2))
+    mc.step(0.45)
+    assert handlers[b].request_clearance(near).granted is False  # a is still there
+    where[a] = (5.0, -2.0, 1.2)
+    handlers[a].step(0.5)
+    mc.step(0.6)
+    handlers[b].step(0.7)
+    assert handlers[b].request_clearance(near).granted
+    assert mc.columns.held == {a: ((5.0, -2.0, 1.2),), b: (near,)}
