@@ -1,9 +1,9 @@
 """A whole mission in simulated time: World + one handler and state machine per UAV + MissionControl, in-process.
 
-``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every tick (``dt_s`` of simulated time):
-each live UAV handler reads its messages and ticks its state machine, mission control steps, then the
-world advances. Nothing sleeps, so a mission runs as fast as the machine allows and is deterministic for a
-given seed.
+``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every control tick (``CONTROL_PERIOD_S``, 0.1 s
+of simulated time): each live UAV handler reads its messages and ticks its state machine, mission control
+steps, then the world advances in steps of ``dt_s``. Nothing sleeps, so a mission runs as fast as the
+machine allows and is deterministic for a given seed.
 
 Safety checks in the report are measured independently of mission control: conflict and dependency
 violations from the intervals the UAV handlers actually executed, separation from the world's vehicles.
@@ -35,6 +35,10 @@ POLICIES = ("fifo", "critical-path", "nearest")
 BATTERY_SWAP_S = 60.0
 #: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
 LANDING_GRACE_S = 180.0
+
+#: The state machines' control period (``UavConfig.control_period_s``): UAV handlers and mission control step
+#: at this period, the world at ``dt_s``.
+CONTROL_PERIOD_S = 0.1
 
 ProgressFn = Callable[[int, int, float], None]
 
@@ -189,7 +193,7 @@ def simulate(
         journal_path: SQLite journal to write (and, with ``resume``, to continue from).
         resume: continue the mission recorded in ``journal_path``: its done tasks stay done (their bricks
             are in place in the world), its clock continues, the report covers the whole mission.
-        dt_s: simulation tick, seconds.
+        dt_s: physics step of the world, seconds (handlers and mission control step every ``CONTROL_PERIOD_S``).
         max_time_s: give up at this simulated time (default: generous, from the number of tasks).
         heartbeat_timeout_s: a UAV silent that long is declared lost.
         max_attempts: failed attempts before a task is stuck.
@@ -317,6 +321,10 @@ def _run(
     total = len(todo)
     if max_time_s is None:
         max_time_s = (resumed_from or 0.0) + 600.0 + 150.0 * total
+    # Handlers and mission control tick at the machines' control rate; the world's physics at dt_s in between.
+    # A tick of theirs in between would do nothing the next one does not (the machines act every
+    # control_period_s, and an answer to a result is handled at once through ``after_result``).
+    substeps = max(1, int(round(CONTROL_PERIOD_S / dt_s))) if dt_s < CONTROL_PERIOD_S else 1
     dead: dict[str, float] = {}
     pre_done = sum(1 for t in the_plan.tasks if t.done)
     done_seen = len(mc.dispatcher.done) - pre_done
@@ -347,7 +355,8 @@ def _run(
                 break
         if now >= max_time_s:
             break
-        world.step(dt_s)
+        for _ in range(substeps):
+            world.step(dt_s)
 
     return _report(
         blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
