@@ -8,7 +8,8 @@ adapters, call the public API and print. Heavy libraries are imported inside the
 from __future__ import annotations
 
 import functools
-from typing import Any, Callable, TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import typer
 
