@@ -116,7 +116,7 @@ def policies(quick: bool, separation: bool) -> None:
     print(f"makespan / lower bound per policy (seed 0, separation {'on' if separation else 'off'}); "
           "clearance = serialised-set bound (see the docstring)")
     print(f"  {'wall':<30} {'policy':<14} {'makespan':>9} {'bound':>7} {'ratio':>6} {'clearance':>9} "
-          f"{'ratio*':>6} {'wall s':>7} {'cpu s':>6}")
+          f"{'ratio*':>6} {'done':>7} {'wall s':>7} {'cpu s':>6}")
     for label, bp in walls:
         if bp is None:
             from masonry.blueprint import load_blueprint
@@ -131,8 +131,9 @@ def policies(quick: bool, separation: bool) -> None:
             both = max(r.lower_bound_s, clear)
             print(f"  {label:<30} {policy:<14} {r.makespan_s:9.1f} {r.lower_bound_s:7.1f} "
                   f"{r.makespan_s / max(r.lower_bound_s, 1e-9):6.2f} {clear:9.1f} {r.makespan_s / both:6.2f} "
-                  f"{wall:7.1f} {cpu:6.1f}")
-    print("  ratio = makespan / lower_bound_s (the issue's bound); ratio* = makespan / max(bound, clearance)")
+                  f"{sum(t.status == 'done' for t in r.tasks):3d}/{len(r.tasks):<3d} {wall:7.1f} {cpu:6.1f}")
+    print("  ratio = makespan / lower_bound_s (the issue's bound); ratio* = makespan / max(bound, clearance); "
+          "an incomplete run (done < all) has a meaningless makespan")
 
 
 def gusts(seeds: int) -> None:
