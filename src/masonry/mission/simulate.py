@@ -324,7 +324,7 @@ def _run(
     # Handlers and mission control tick at the machines' control rate; the world's physics at dt_s in between.
     # A tick of theirs in between would do nothing the next one does not (the machines act every
     # control_period_s, and an answer to a result is handled at once through ``after_result``).
-    substeps = max(1, int(round(CONTROL_PERIOD_S / dt_s))) if dt_s < CONTROL_PERIOD_S else 1
+    substeps = max(1, round(CONTROL_PERIOD_S / dt_s)) if dt_s < CONTROL_PERIOD_S else 1
     dead: dict[str, float] = {}
     pre_done = sum(1 for t in the_plan.tasks if t.done)
     done_seen = len(mc.dispatcher.done) - pre_done

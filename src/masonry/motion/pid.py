@@ -229,7 +229,7 @@ class PID:
                 candidate = integral[i] + ki * e * dt  # type: ignore[operator]
                 if not candidate >= -int_lim:
                     candidate = -int_lim
-                if candidate > int_lim:
+                if candidate > int_lim:  # noqa: PLR1730 (no min() call: hot loop)
                     candidate = int_lim
                 unsat = base + candidate
                 # Conditional integration: keep the new integral unless the output saturates and the error pushes
@@ -239,7 +239,7 @@ class PID:
             u = base + integral[i]
             if not u >= -out_lim:
                 u = -out_lim
-            if u > out_lim:
+            if u > out_lim:  # noqa: PLR1730 (no min() call: hot loop)
                 u = out_lim
             out[i] = u
         if not yaw_active:

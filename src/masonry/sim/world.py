@@ -290,7 +290,7 @@ class World:
                 ax, ay, az = airborne[i]
                 for bx, by, bz in airborne[i + 1 :]:
                     d2 = (ax - bx) * (ax - bx) + (ay - by) * (ay - by) + (az - bz) * (az - bz)
-                    if d2 < best2:
+                    if d2 < best2:  # noqa: PLR1730 (no min() call: hot loop)
                         best2 = d2
             d = math.sqrt(best2)
             if self._min_sep is None or d < self._min_sep:
