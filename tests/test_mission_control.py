@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import random
 
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -18,7 +17,7 @@ from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
-from masonry.mission.report import count_violations, lower_bound_s
+from masonry.mission.report import count_violations
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 from masonry.ports import TaskResult
 
@@ -202,15 +201,6 @@ def test_count_violations_detects_overlaps_and_early_starts():
     assert count_violations(plan, [("B0", 0, 10), ("B1", 10, 20), ("B2", 10, 15)]) == (0, 0)
     assert count_violations(plan, [("B0", 0, 10), ("B1", 9, 20), ("B2", 9.5, 15)]) == (1, 1)
     assert count_violations(plan, [("B0", 0, None), ("B2", 50, 60)]) == (1, 0)  # B0 never ended
-
-
-def test_lower_bound_is_chain_or_role_work():
-    plan = Plan((AdhesionTask("A0", 0, 1, (0, 0, 0), (1, 0, 0), 1.0),
-                 BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, None),
-                 BrickTask("B2", 2, False, (3, 0, 0.2), 0.0, None)), (("B1", "A0"),), ())
-    d = {"A0": 10.0, "B1": 20.0, "B2": 25.0}
-    assert lower_bound_s(plan, d, {"brick": 2, "adhesion": 1}) == pytest.approx(30.0)  # chain A0 -> B1
-    assert lower_bound_s(plan, d, {"brick": 1, "adhesion": 1}) == pytest.approx(45.0)  # one brick UAV
 
 
 class HaltingUav(ScriptedUav):

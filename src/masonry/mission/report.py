@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from masonry.planner.bounds import lower_bound_s
 from masonry.planner.tasks import Plan
 
 
@@ -192,43 +193,6 @@ def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | N
     return conflicts, deps
 
 
-def lower_bound_s(plan: Plan, durations_s: Mapping[str, float], fleet_size: Mapping[str, int]) -> float:
-    """A makespan lower bound: max(longest dependency chain of durations, each role's work / its fleet size).
-
-    Args:
-        plan: the plan (its ``done`` tasks cost nothing).
-        durations_s: duration of each task to be done (task id -> s); tasks missing count 0.
-        fleet_size: number of UAVs per role ("brick", "adhesion") at the start of the mission.
-    """
-    todo = {t.id: t for t in plan.tasks if not t.done}
-    prereqs: dict[str, list[str]] = {}
-    for u, v in plan.dependencies:
-        if u in todo and v in todo:
-            prereqs.setdefault(u, []).append(v)
-    # longest chain by memoised DFS in topological order (iterative: walls can be deep)
-    finish: dict[str, float] = {}
-    for root in todo:
-        if root in finish:
-            continue
-        stack: list[tuple[str, bool]] = [(root, False)]
-        while stack:
-            node, expanded = stack.pop()
-            if node in finish:
-                continue
-            if expanded:
-                finish[node] = durations_s.get(node, 0.0) + max((finish[p] for p in prereqs.get(node, ())),
-                                                                 default=0.0)
-                continue
-            stack.append((node, True))
-            stack.extend((p, False) for p in prereqs.get(node, ()) if p not in finish)
-    chain = max(finish.values(), default=0.0)
-    work: dict[str, float] = {}
-    for t in todo.values():
-        work[t.kind] = work.get(t.kind, 0.0) + durations_s.get(t.id, 0.0)
-    per_role = max((w / fleet_size[k] for k, w in work.items() if fleet_size.get(k, 0) > 0), default=0.0)
-    return max(chain, per_role)
-
-
 def makespan_s(attempts: Sequence[AttemptReport], start_s: float = 0.0) -> float:
     """Time from ``start_s`` to the last completion."""
     ends = [a.end_s for a in attempts if a.status == "done" and a.end_s is not None]
@@ -289,10 +253,8 @@ def control_report(
     makespan = max((a.end_s - start for a in done_att.values() if a.end_s is not None), default=0.0)
     durations = dict(durations_s) if durations_s is not None else {
         tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
-    fleet_size: dict[str, int] = {}
-    for spec in mc.fleet:
-        fleet_size[spec.role] = fleet_size.get(spec.role, 0) + 1
-    bound = lower_bound_s(plan, durations, fleet_size)
+    # tasks that never completed (a stuck mission) weigh nothing in a bound from measured durations
+    bound = lower_bound_s(plan, mc.fleet, {t.id: durations.get(t.id, 0.0) for t in plan.tasks if not t.done})
     if intervals is None:
         intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
     conflicts, deps = count_violations(plan, [(tid, s, e) for _, tid, s, e in intervals])
