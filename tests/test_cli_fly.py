@@ -114,7 +114,7 @@ def test_fsm_diagram_renders(tmp_path: Path, kind: str, ext: str) -> None:
 
 
 def test_fsm_diagram_without_dot_degrades_with_one_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import masonry.fsm.diagram as diagram
+    from masonry.fsm import diagram
 
     monkeypatch.setattr(diagram.shutil, "which", lambda name: None)
     res = runner.invoke(app, ["fsm", "diagram", "brick", "-o", str(tmp_path / "b.svg")])

@@ -34,6 +34,7 @@ import numpy as np
 from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
 from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
+from masonry.geometry import R_world_body
 from masonry.perception.types import CameraIntrinsics, TagPose
 from masonry.planner.tasks import Task
 from masonry.ports import CameraFrame, Clock, TaskResult, Telemetry
@@ -92,20 +93,6 @@ class FakeClock:
         if duration_s < 0.0:
             raise ValueError(f"cannot advance a clock by a negative duration ({duration_s} s)")
         self._now_s += duration_s
-
-
-def _rotation_rpy(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
-    """World-from-body rotation Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll_rad), math.sin(roll_rad)
-    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
-    cy, sy = math.cos(yaw_rad), math.sin(yaw_rad)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 class FakeFlightController(_Scripted):
@@ -482,7 +469,7 @@ class FakeCamera(_Scripted):
     def T_world_cam(self) -> np.ndarray:
         """The camera's true pose in the world (from the fake flight controller's true pose)."""
         T_world_body = np.eye(4)
-        T_world_body[:3, :3] = _rotation_rpy(0.0, 0.0, self.fc.yaw_rad)
+        T_world_body[:3, :3] = R_world_body(0.0, 0.0, self.fc.yaw_rad)
         T_world_body[:3, 3] = self.fc.position_m
         return T_world_body @ self._T_body_cam
 

@@ -1,8 +1,10 @@
-"""Small pure geometry helpers shared by the planner, the simulator and perception (ENU world, z up)."""
+"""Small pure geometry helpers shared by the state machines, the simulator and the fakes (ENU world, z up)."""
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 Vec3 = tuple[float, float, float]
 
@@ -12,7 +14,21 @@ def wrap_angle_rad(angle_rad: float) -> float:
     return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def rot_z(yaw_rad: float) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]:
-    """Rotation matrix about z by ``yaw_rad`` as nested tuples (row major)."""
+def rot_z(yaw_rad: float) -> np.ndarray:
+    """3x3 rotation about world z by ``yaw_rad``."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-    return ((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0))
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def R_world_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
+    """Rotation of the FLU body in the ENU world: Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr = math.cos(roll_rad), math.sin(roll_rad)
+    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
+    cy, sy = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )

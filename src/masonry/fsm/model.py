@@ -32,6 +32,7 @@ from masonry.fsm.states import (
     Transition,
     leaf_states,
 )
+from masonry.geometry import R_world_body, rot_z
 from masonry.motion import PID, MinJerk
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
@@ -48,25 +49,6 @@ from masonry.ports import (
 
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
-
-
-def _rot_z(yaw_rad: float) -> np.ndarray:
-    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _rot_rpy(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
-    """World-from-body rotation Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll_rad), math.sin(roll_rad)
-    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
-    cy, sy = math.cos(yaw_rad), math.sin(yaw_rad)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def _wrap(angle_rad: float) -> float:
@@ -527,13 +509,13 @@ class UavModel:
         self, tool_target_m: np.ndarray, offset_body_m: tuple[float, float, float], yaw_rad: float
     ) -> np.ndarray:
         """Body position that puts a tool at ``offset_body_m`` (FLU) on ``tool_target_m`` at heading ``yaw_rad``."""
-        return np.asarray(tool_target_m, dtype=float) - _rot_z(yaw_rad) @ np.asarray(
+        return np.asarray(tool_target_m, dtype=float) - rot_z(yaw_rad) @ np.asarray(
             offset_body_m, dtype=float
         )
 
     def _tool_position(self, tel: Telemetry, offset_body_m: tuple[float, float, float]) -> np.ndarray:
         roll, pitch, yaw = tel.attitude_rad
-        return np.asarray(tel.position_m, dtype=float) + _rot_rpy(roll, pitch, yaw) @ np.asarray(
+        return np.asarray(tel.position_m, dtype=float) + R_world_body(roll, pitch, yaw) @ np.asarray(
             offset_body_m
         )
 
@@ -855,7 +837,7 @@ class BrickUav(UavModel):
         from masonry.perception.estimation import estimate_brick_pose
 
         roll, pitch, yaw = tel.attitude_rad
-        R_wb = _rot_rpy(roll, pitch, yaw)
+        R_wb = R_world_body(roll, pitch, yaw)
         R_wc = R_wb @ self._T_body_cam[:3, :3]
         t_wc = np.asarray(tel.position_m, dtype=float) + R_wb @ self._T_body_cam[:3, 3]
 

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from masonry.blueprint import MarkerSpec
+from masonry.geometry import R_world_body
 from masonry.perception.types import CameraIntrinsics, TagPose
 from masonry.sim.bricks import SimBrick, point_in_rect
 
@@ -53,20 +54,6 @@ class CameraConfig:
         """Tangent of the half-angle from the optical axis to the farthest image corner."""
         i = self.intrinsics
         return math.hypot(max(i.cx, i.width_px - i.cx) / i.fx, max(i.cy, i.height_px - i.cy) / i.fy)
-
-
-def R_world_body(roll_rad: float, pitch_rad: float, yaw_rad: float) -> np.ndarray:
-    """Rotation of the FLU body in the ENU world: Rz(yaw) Ry(pitch) Rx(roll)."""
-    cr, sr = math.cos(roll_rad), math.sin(roll_rad)
-    cp, sp = math.cos(pitch_rad), math.sin(pitch_rad)
-    cy, sy = math.cos(yaw_rad), math.sin(yaw_rad)
-    return np.array(
-        [
-            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr],
-        ]
-    )
 
 
 def _marker_points(brick: SimBrick, markers: MarkerSpec) -> list[tuple[float, float, float]]:
