@@ -15,6 +15,9 @@ from typing import Any
 from masonry.planner.bounds import lower_bound_s
 from masonry.planner.tasks import Plan
 
+#: Rows of the attempt trace in the text summary (the JSON report has every attempt).
+TIMELINE_ROWS = 40
+
 
 @dataclass(frozen=True)
 class UavReport:
@@ -111,6 +114,18 @@ class MissionReport:
     def to_json(self, indent: int | None = None) -> str:
         return json.dumps(self.to_dict(), indent=indent)
 
+    def timeline(self, most: int = TIMELINE_ROWS) -> list[str]:
+        """The attempts in the order they started (the trace of the mission), at most ``most`` rows."""
+        rows = sorted(self.attempts, key=lambda a: (a.start_s, a.task_id))
+        lines = ["trace (attempts in start order):"]
+        for a in rows[:most]:
+            end = "..." if a.end_s is None else f"{a.end_s:7.1f} s"
+            reason = f" ({a.reason})" if a.status == "failed" and a.reason else ""
+            lines.append(f"  {a.start_s:7.1f} s -> {end}  {a.task_id:<6} {a.uav:<12} {a.status}{reason}")
+        if len(rows) > most:
+            lines.append(f"  ... {len(rows) - most} more (the JSON report and --gantt show them all)")
+        return lines
+
     def summary(self) -> str:
         """A few human lines: outcome, makespan against the bound, fleet, checks."""
         done = sum(1 for t in self.tasks if t.status == "done")
@@ -133,6 +148,7 @@ class MissionReport:
         failures = sum(1 for a in self.attempts if a.status == "failed")
         if failures:
             lines.append(f"failed attempts: {failures}")
+        lines.extend(self.timeline())
         if not self.completed:
             lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
         if self.wall_time_s > 0:
