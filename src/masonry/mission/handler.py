@@ -49,6 +49,9 @@ from masonry.ports import TaskResult
 
 log = logging.getLogger(__name__)
 
+#: The state a machine reports when it is out of service for the rest of the mission (as in control.py).
+OUT_OF_SERVICE_STATE = "halted"
+
 Vec3 = tuple[float, float, float]
 
 
@@ -139,6 +142,15 @@ class UavHandler:
         return self._last_mc_s
 
     @property
+    def out_of_service(self) -> bool:
+        """The machine is out of service (state ``halted``): it refuses every task it is handed, at once.
+
+        Such a UAV is handed its queued tasks without the battery reserve's hold, so that the refusal is not
+        delayed past the moment mission control (told by the ``halted`` heartbeat) has released the task.
+        """
+        return self.model is not None and str(getattr(self.model, "state", "")) == OUT_OF_SERVICE_STATE
+
+    @property
     def busy(self) -> bool:
         """A task is queued or in hand."""
         return bool(self._queue) or self._current is not None
@@ -157,7 +169,7 @@ class UavHandler:
             self.pump()
             if not self._queue:
                 return None
-        if self._battery is not None and self._battery() < self.reserve_fraction:
+        if self._battery is not None and self._battery() < self.reserve_fraction and not self.out_of_service:
             # Battery reserve: the task waits while the machine, given nothing, flies home and lands; then
             # the ground crew (``swap_battery``, True once done) swaps the pack and the task starts.
             if self._swap_battery is None or not self._swap_battery():

@@ -173,7 +173,8 @@ def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | N
 
     Returns:
         (conflict_violations, dependency_violations): the number of pairs of conflicting tasks whose
-        intervals overlap (each pair counted once), and the number of attempts that started before every
+        intervals overlap for a positive time (each pair counted once; a zero-length attempt, refused at
+        once, was never in progress), and the number of attempts that started before every
         prerequisite had completed (a prerequisite done before the mission, ``done`` in the plan, counts as
         completed at -inf).
     """
@@ -185,7 +186,10 @@ def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | N
         ia, ib = by_task.get(a), by_task.get(b)
         if not ia or not ib:
             continue
-        if any(s1 < e2 and s2 < e1 for s1, e1 in ia for s2, e2 in ib):
+        # Two attempts overlap when they share time: max(starts) < min(ends). An attempt refused at once
+        # (start == end: a machine out of service, or of the wrong kind, reporting it failed when handed it)
+        # was never in progress, so it overlaps nothing; any overlap of positive length is counted.
+        if any(max(s1, s2) < min(e1, e2) for s1, e1 in ia for s2, e2 in ib):
             conflicts += 1
     # completion time of each task = end of its last interval (the successful one closes the task)
     pre_done = {t.id for t in plan.tasks if t.done}

@@ -1,0 +1,69 @@
+"""A UAV that goes out of service with a task queued (battery run down waiting for a column in the air).
+
+Regression: on separation-on walls such a UAV's handler held the queued task back for the battery reserve's
+ground-crew swap (60 s) although the machine was ``halted``, then handed it over and the machine refused it at
+once, long after mission control had released it (on the ``halted`` heartbeat) and given a conflicting task to
+another UAV. The zero-length refusal was counted as a conflict violation (2-4 on the 1,000-brick wall).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+from masonry.blueprint_gen import running_bond
+from masonry.mission.report import count_violations
+from masonry.mission.simulate import simulate
+from masonry.planner import plan
+from masonry.sim import Faults
+
+
+def _conflict_pair() -> tuple[object, str, str]:
+    p = plan(running_bond(2, 4))
+    a, b = next(iter(p.conflicts))
+    return p, a, b
+
+
+def test_a_zero_length_refusal_is_never_in_progress():
+    p, a, b = _conflict_pair()
+    assert count_violations(p, [(a, 0.0, 10.0), (b, 5.0, 5.0)]) == (0, 0)  # refused at once, inside a's interval
+    assert count_violations(p, [(a, 0.0, None), (b, 5.0, 5.0)]) == (0, 0)  # inside an open interval
+    assert count_violations(p, [(a, 0.0, 5.0), (b, 5.0, 8.0)]) == (0, 0)  # one ends as the other starts
+
+
+def test_any_overlap_of_positive_length_is_still_counted():
+    p, a, b = _conflict_pair()
+    assert count_violations(p, [(a, 0.0, 10.0), (b, 9.9, 12.0)])[0] == 1
+    assert count_violations(p, [(a, 0.0, None), (b, 50.0, 51.0)])[0] == 1
+    assert count_violations(p, [(a, 5.0, 5.5), (b, 0.0, 10.0), (a, 20.0, 30.0)])[0] == 1  # counted once per pair
+
+
+def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatch):
+    """Batteries drain fast: adhesion UAVs run down waiting in the air and retire with a task queued."""
+    sim_module = sys.modules["masonry.mission.simulate"]
+    seen: dict[str, object] = {}
+    real = sim_module.control_report
+
+    def spy(mc, the_plan, **kwargs):
+        seen["intervals"] = kwargs["intervals"]
+        seen["plan"] = the_plan
+        return real(mc, the_plan, **kwargs)
+
+    monkeypatch.setattr(sim_module, "control_report", spy)
+    report = simulate(running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=2,
+                      faults=Faults(battery_drain_per_s=0.004))
+    retired = [a for a in report.attempts if a.reason == "uav out of service"]
+    assert retired, "the scenario must retire a UAV holding a task"
+    assert report.conflict_violations == 0
+    assert report.dependency_violations == 0
+    # Independently of the measurement's rule for zero-length attempts: no executed interval, refusals included,
+    # meets a conflicting one even at a single instant inside it (the refusal is not delayed past the release).
+    by_task: dict[str, list[tuple[float, float]]] = {}
+    for _uav, task_id, start, end in seen["intervals"]:  # type: ignore[attr-defined]
+        by_task.setdefault(task_id, []).append((start, math.inf if end is None else end))
+    for a, b in seen["plan"].conflicts:  # type: ignore[attr-defined]
+        for s1, e1 in by_task.get(a, ()):
+            for s2, e2 in by_task.get(b, ()):
+                assert not (s1 < e2 and s2 < e1), (a, (s1, e1), b, (s2, e2))
+    done = [t.id for t in report.tasks if t.status == "done"]
+    assert len(done) == len(set(done))
