@@ -12,6 +12,7 @@ import math
 import sys
 
 from masonry.blueprint_gen import running_bond
+from masonry.mission.handler import UavHandler
 from masonry.mission.report import count_violations
 from masonry.mission.simulate import simulate
 from masonry.planner import plan
@@ -39,7 +40,12 @@ def test_any_overlap_of_positive_length_is_still_counted():
 
 
 def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatch):
-    """Batteries drain fast: adhesion UAVs run down waiting in the air and retire with a task queued."""
+    """Batteries drain fast: adhesion UAVs run down waiting in the air and retire with a task queued.
+
+    The machines are told there is no battery service (as on a link without a ground crew), so that a low
+    battery retires them, while the handler's reserve would still wait for a swap before handing a task over.
+    """
+    monkeypatch.setattr(UavHandler, "swaps_batteries", property(lambda self: False))
     sim_module = sys.modules["masonry.mission.simulate"]
     seen: dict[str, object] = {}
     real = sim_module.control_report
@@ -67,3 +73,18 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
                 assert not (s1 < e2 and s2 < e1), (a, (s1, e1), b, (s2, e2))
     done = [t.id for t in report.tasks if t.status == "done"]
     assert len(done) == len(set(done))
+
+
+def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
+    """With the ground crew, a UAV whose battery runs low waiting for a column lands, gets a pack, flies on.
+
+    Before, the state machine retired it (out of service) after landing; on this wall three of six did.
+    """
+    report = simulate(running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0,
+                      faults=Faults(battery_drain_per_s=0.0033))
+    assert [u.status for u in report.uavs] == ["ok"] * 6
+    assert report.completed
+    assert (report.conflict_violations, report.dependency_violations) == (0, 0)
+    assert report.makespan_s > 1500.0  # five packs' worth of flying (300 s each): the UAVs were swapped
+    done = [t.id for t in report.tasks if t.status == "done"]
+    assert len(done) == len(set(done)) == len(report.tasks)

@@ -126,6 +126,9 @@ class UavModel:
         self._transit: tuple[str, tuple[float, float, float], float | None] | None = None
         self._gate_at = 0  # != 0: the legs of a layer route start from rest
         self._request_clearance: Callable[[Any], Any] | None = getattr(link, "request_clearance", None)
+        # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
+        # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
+        self._battery_service = getattr(link, "swaps_batteries", False) is True
         self._leaf_names = leaf_states(states)
         self.machine = HierarchicalMachine(
             model=self,
@@ -174,7 +177,8 @@ class UavModel:
                 self.state in self._TASK_STATES_SET
                 and tel.battery_fraction < self.config.battery_low_fraction
             ):
-                self._halt_after_landing = f"battery low ({tel.battery_fraction:.0%})"
+                if not self._battery_service:
+                    self._halt_after_landing = f"battery low ({tel.battery_fraction:.0%})"
                 self.abort(reason=f"battery low ({tel.battery_fraction:.0%})")
             self._do[self.state](tel)
             if self._motion:
@@ -526,11 +530,11 @@ class UavModel:
     def do_idle(self, tel: Telemetry) -> None:
         if not tel.on_ground and tel.armed:
             return  # not ours to fly (should not happen)
-        if tel.battery_fraction < self.config.battery_low_fraction:
+        if tel.battery_fraction < self.config.battery_low_fraction and not self._battery_service:
             self.halt_reason = f"battery low ({tel.battery_fraction:.0%})"
             self.retire(reason=self.halt_reason)
             return
-        task = self._take(self.link.poll_task())
+        task = self._take(self.link.poll_task())  # with a battery service: handed over once the pack is swapped
         if task is not None:
             self._start_task(task)
             self.assign(task=task)

@@ -142,6 +142,16 @@ class UavHandler:
         return self._last_mc_s
 
     @property
+    def swaps_batteries(self) -> bool:
+        """A ground crew swaps the battery before a task starts (the reserve): a low battery needs no retirement.
+
+        The state machine reads this: with it, a battery run low in the air (e.g. waiting for a site column)
+        aborts the task and lands the UAV at home, where the next task it is handed waits for the swap,
+        instead of taking the UAV out of service.
+        """
+        return self._battery is not None and self._swap_battery is not None
+
+    @property
     def out_of_service(self) -> bool:
         """The machine is out of service (state ``halted``): it refuses every task it is handed, at once.
 
