@@ -335,7 +335,8 @@ def test_yaw_about_z_is_atan2(direction) -> None:
 @given(vec(1.0), unit_vectors)
 def test_yaw_convention_matches_the_image_pipeline(direction, up) -> None:
     assume(np.linalg.norm(direction - (direction @ up) * up) > 1e-3)  # the angle of a vector along up is moot
-    aruco = pytest.importorskip("masonry.perception.aruco")
+    from masonry.perception import aruco
+
     assert angle_diff(yaw_about_rad(direction, up), aruco.yaw_about_rad(direction, up)) < 1e-9
 
 

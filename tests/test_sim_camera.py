@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -57,7 +56,6 @@ def test_estimated_pose_from_simulated_tags_matches_the_true_brick(yaw: float, s
 
 
 def test_rendered_frame_is_detected_where_the_geometric_camera_sees_the_markers() -> None:
-    pytest.importorskip("cv2")
     from masonry.perception.aruco import detect_tags
 
     w = one_brick_world(0.4, seed=3, camera="render")
