@@ -42,3 +42,48 @@ def test_minimum_grows_with_the_work() -> None:
     # a higher transit altitude only lengthens the climbs
     assert all(v >= base[k] for k, v in min_durations_s(p, cruise_altitude_m=2.0).items())
     assert set(base) == set(estimate_durations_s(p, bp.fleet)) == {t.id for t in p.tasks if not t.done}
+
+
+def _cases():
+    from masonry.sim import Faults
+
+    small = running_bond(2, 5, brick_uavs=2, adhesion_uavs=1)
+    tower = towers(2, 2, spacing_m=2.0, brick_uavs=2, adhesion_uavs=1)
+    return [
+        pytest.param(small, 0, False, None, id="bond-2x5-seed0-nosep"),
+        pytest.param(small, 1, True, None, id="bond-2x5-seed1-sep"),
+        pytest.param(small, 2, False, Faults(grasp_failure=0.3), id="bond-2x5-seed2-nosep-grasp0.3"),
+        pytest.param(small, 3, True, Faults(grasp_failure=0.3), id="bond-2x5-seed3-sep-grasp0.3"),
+        pytest.param(tower, 4, False, Faults(grasp_failure=0.3), id="towers-seed4-nosep-grasp0.3"),
+        pytest.param(tower, 5, True, None, id="towers-seed5-sep"),
+    ]
+
+
+@pytest.mark.parametrize(("blueprint", "seed", "separation", "faults"), _cases())
+def test_timeline_never_beats_the_cycles(blueprint, seed, separation, faults) -> None:
+    """What the bound assumes per UAV: each completed task, with the stretch since that UAV's previous completed
+    task (or the mission's start), lasts at least its cycle; each task at least its minimum duration; so the
+    makespan is never below the bound (with faults too: failed attempts only add time)."""
+    from masonry.planner.bounds import lower_bound_s, min_cycles_s
+
+    report = simulate(blueprint, seed=seed, separation=separation, faults=faults)
+    assert report.completed
+    p = plan(blueprint)
+    minimum = min_durations_s(p, cruise_altitude_m=blueprint.cruise_altitude_m)
+    cycles = min_cycles_s(p, blueprint.fleet, minimum)
+    assert all(cycles[k] >= minimum[k] for k in minimum)
+    assert any(cycles[k] > minimum[k] for k in minimum)  # the approach term is not empty on these walls
+    start = min(a.start_s for a in report.attempts)
+    by_uav: dict[str, list] = {}
+    for t in report.tasks:
+        assert t.end_s - t.start_s >= minimum[t.id], (t.id, t.end_s - t.start_s, minimum[t.id])
+        by_uav.setdefault(t.uav, []).append(t)
+    for uav, done in by_uav.items():
+        previous = start
+        for t in sorted(done, key=lambda t: t.end_s):
+            assert t.end_s - previous >= cycles[t.id], (uav, t.id, t.end_s - previous, cycles[t.id])
+            previous = t.end_s
+    bound = lower_bound_s(p, blueprint.fleet, minimum, work_s=cycles)
+    assert report.lower_bound_s == pytest.approx(bound, abs=1e-6)
+    assert bound <= report.makespan_s
+    assert bound >= lower_bound_s(p, blueprint.fleet, minimum)

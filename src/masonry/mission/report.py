@@ -231,6 +231,7 @@ def control_report(
     min_separation_m: float | None = None,
     now_s: float | None = None,
     durations_s: Mapping[str, float] | None = None,
+    work_s: Mapping[str, float] | None = None,
     **extra: Any,
 ) -> MissionReport:
     """Build the report from a :class:`~masonry.mission.control.MissionControl`'s history.
@@ -245,6 +246,9 @@ def control_report(
         now_s: end of the trace for attempts still running (default: mission control's last step).
         durations_s: expected task durations for the lower bound (``masonry.planner.estimate_durations_s``:
             the same bound for every policy and seed); default: the durations measured in this run.
+        work_s: what each task takes out of its UAV's timeline for the bound's role term
+            (``masonry.planner.min_cycles_s``, with ``durations_s`` from ``min_durations_s``); default:
+            the durations.
     """
     now = mc.now_s if now_s is None else now_s
     kinds = {t.id: t.kind for t in plan.tasks}
@@ -274,7 +278,9 @@ def control_report(
     durations = dict(durations_s) if durations_s is not None else {
         tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
     # tasks that never completed (a stuck mission) weigh nothing in a bound from measured durations
-    bound = lower_bound_s(plan, mc.fleet, {t.id: durations.get(t.id, 0.0) for t in plan.tasks if not t.done})
+    todo_ids = [t.id for t in plan.tasks if not t.done]
+    bound = lower_bound_s(plan, mc.fleet, {tid: durations.get(tid, 0.0) for tid in todo_ids},
+                          work_s=None if work_s is None else {tid: work_s.get(tid, 0.0) for tid in todo_ids})
     if intervals is None:
         intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
     conflicts, deps = count_violations(plan, [(tid, s, e) for _, tid, s, e in intervals])

@@ -26,7 +26,7 @@ from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport, control_report
-from masonry.planner.bounds import min_durations_s
+from masonry.planner.bounds import min_cycles_s, min_durations_s
 from masonry.planner.tasks import BrickTask, Plan
 
 POLICIES = ("fifo", "critical-path", "nearest")
@@ -402,13 +402,14 @@ def _report(
             err = journaled[t.id] if t.id in journaled else world.placement_error_m(t.brick)
             if err is not None:
                 placement[t.id] = float(err)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
     sep = world.min_separation_m
     sep = None if sep is None or not math.isfinite(sep) else float(sep)
     return control_report(
         mc, the_plan, policy=policy, seed=seed, intervals=intervals,
         distances_m={u.name: float(world.distance_flown_m(u.name)) for u in fleet},
         placement_error_m=placement, min_separation_m=sep, now_s=now,
-        durations_s=min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m),
+        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s),
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
     )

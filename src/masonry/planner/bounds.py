@@ -7,6 +7,11 @@ The bound (issue 5, section 3) is the larger of
   it perfectly).
 
 Conflicts only make the true optimum larger, so both terms stay valid lower bounds for any dispatcher.
+
+The role term may weigh each task by more than its own duration: ``work_s`` (from :func:`min_cycles_s`) adds
+the flight a brick UAV must make to reach the task's pickup, which happens partly *before* the task's assignment
+(on the way home from its previous drop-off) and so is not in the task's duration. The chain term never counts
+it (in a chain the UAV may already be right above the next pickup). docs/dispatch.md explains the argument.
 """
 
 from __future__ import annotations
@@ -76,14 +81,23 @@ def longest_chain_s(plan: Plan, durations_s: Mapping[str, float]) -> float:
     return max(finish, default=0.0)
 
 
-def lower_bound_s(plan: Plan, fleet: Sequence[UavSpec], durations_s: Mapping[str, float]) -> float:
+def lower_bound_s(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    durations_s: Mapping[str, float],
+    *,
+    work_s: Mapping[str, float] | None = None,
+) -> float:
     """A makespan lower bound: max(longest dependency chain, each role's total work / its number of UAVs).
 
     Args:
         plan: the plan; its done tasks (pre-placed bricks) cost nothing.
         fleet: the UAVs at the start of the mission.
         durations_s: the duration of every not-done task (e.g. from :func:`estimate_durations_s`, or the
-            durations measured in a run).
+            durations measured in a run); the chain term adds these.
+        work_s: the time each not-done task takes out of its UAV's timeline, for the role term (default:
+            ``durations_s``); e.g. :func:`min_cycles_s`, which adds the flight to the pickup that a
+            minimum duration cannot count. Only sound with durations that leave that flight out.
 
     Returns:
         The bound in seconds (0.0 for a plan with nothing to do).
@@ -93,6 +107,7 @@ def lower_bound_s(plan: Plan, fleet: Sequence[UavSpec], durations_s: Mapping[str
             a role has work but no UAV (no makespan is finite then).
     """
     dur = _check_durations(plan, durations_s)
+    per_task = dur if work_s is None else _check_durations(plan, work_s)
     count = {r: 0 for r in ROLES}
     for spec in fleet:
         count[spec.role] = count.get(spec.role, 0) + 1
@@ -100,7 +115,7 @@ def lower_bound_s(plan: Plan, fleet: Sequence[UavSpec], durations_s: Mapping[str
     tasks_of = {r: 0 for r in ROLES}
     for t in plan.tasks:
         if not t.done:
-            work[t.kind] += dur[t.id]
+            work[t.kind] += per_task[t.id]
             tasks_of[t.kind] += 1
     per_role = 0.0
     for role in ROLES:
@@ -300,6 +315,79 @@ def min_durations_s(
                 + close_dwell_s
                 + vertical(transit - body_z)
             )
+    return out
+
+
+def min_cycles_s(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    durations_s: Mapping[str, float] | None = None,
+    *,
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
+    cruise_speed_mps: float = 1.0,
+    min_leg_s: float = 1.0,
+    arrive_tolerance_m: float = 0.08,
+    effector_offset_m: Sequence[float] | None = None,
+) -> dict[str, float]:
+    """The least time each task takes out of its UAV's timeline: its minimum duration plus the unseen approach.
+
+    For :func:`lower_bound_s`'s ``work_s``. Between the end of a brick UAV's previous completed task (it is then
+    above that task's drop-off) -- or the start of the mission (it is at its home) -- and its arrival above the
+    pickup of its next completed task j, the UAV must cover the horizontal distance from there to the pickup.
+    Whatever it flies meanwhile (home and turned back, failed attempts), its reference never moves faster than
+    a minimum-jerk leg's peak speed, ``cruise_speed_mps`` (a leg lasts 1.875 x distance / speed), and each end
+    may be off by ``arrive_tolerance_m`` (and the effector's horizontal offset). So that stretch lasts at least
+    (d_j - slack) / ``cruise_speed_mps``, where d_j is the distance from the pickup to the nearest possible
+    start: any other brick's drop-off or any brick UAV's home. These stretches and the rest of the tasks are
+    disjoint on the UAV's timeline. ``durations_s`` (default :func:`min_durations_s`) already counts the last
+    approach leg as ``min_leg_s``, so a brick task weighs its duration + max(0, flight - ``min_leg_s``).
+    Adhesion tasks weigh their duration (consecutive segments touch: no sound approach term).
+
+    Returns:
+        task id -> seconds, for every not-done task (>= ``durations_s``).
+
+    Raises:
+        PlanningError: a bad speed or tolerance, or a missing or bad duration.
+    """
+    import numpy as np
+    from scipy.spatial import cKDTree
+
+    if not math.isfinite(cruise_speed_mps) or cruise_speed_mps <= 0.0:
+        raise PlanningError(f"cruise_speed_mps must be finite and > 0, got {cruise_speed_mps!r}")
+    for name, value in (("min_leg_s", min_leg_s), ("arrive_tolerance_m", arrive_tolerance_m)):
+        if not math.isfinite(value) or value < 0.0:
+            raise PlanningError(f"{name} must be finite and >= 0, got {value!r}")
+    if durations_s is None:
+        durations_s = min_durations_s(plan, cruise_altitude_m=cruise_altitude_m, cruise_speed_mps=cruise_speed_mps,
+                                      min_leg_s=min_leg_s)
+    out = dict(_check_durations(plan, durations_s))
+    if effector_offset_m is None:
+        from masonry.airframe import DEFAULT_AIRFRAME
+
+        effector_offset_m = DEFAULT_AIRFRAME.effector_offset_m
+    slack = 2.0 * arrive_tolerance_m + math.hypot(effector_offset_m[0], effector_offset_m[1])
+    bricks = [t for t in plan.tasks if isinstance(t, BrickTask)]
+    todo = [i for i, t in enumerate(bricks) if not t.done]
+    if not todo:
+        return out
+    homes = np.array([s.home_m[:2] for s in fleet if s.role == "brick"], dtype=float).reshape(-1, 2)
+    drops = np.array([t.position_m[:2] for t in bricks], dtype=float)
+    picks = np.array([(t.pickup_m if t.pickup_m is not None else t.position_m)[:2] for t in bricks], dtype=float)
+    # nearest drop-off other than the brick's own (the UAV cannot have completed the task it is about to do)
+    k = min(2, len(bricks))
+    dist, idx = cKDTree(drops).query(picks[todo], k=k)
+    dist = np.asarray(dist, dtype=float).reshape(len(todo), k)
+    idx = np.asarray(idx).reshape(len(todo), k)
+    own = idx[:, 0] == np.asarray(todo)
+    nearest_drop = np.where(own, dist[:, 1] if k > 1 else np.inf, dist[:, 0])
+    if len(homes):
+        d_home = np.sqrt(((picks[todo][:, None, :] - homes[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+        nearest = np.minimum(nearest_drop, d_home)
+    else:
+        nearest = nearest_drop
+    for row, i in enumerate(todo):
+        flight = max(0.0, float(nearest[row]) - slack) / cruise_speed_mps
+        out[bricks[i].id] += max(0.0, flight - min_leg_s)
     return out
 
 
