@@ -142,3 +142,37 @@ def test_lower_bound_never_exceeds_a_dispatched_makespan(
     assert bound <= span + 1e-9
     # and the bound is attained by some term: at least the longest single task
     assert bound >= max(durations.values(), default=0.0) - 1e-9
+
+
+def test_min_cycles_add_the_flight_from_the_nearest_drop_off_or_home() -> None:
+    from masonry.planner.bounds import min_cycles_s
+
+    # two bricks whose pickups are 4 m behind the wall, homes 6 m behind them: the nearest start of B0's flight
+    # is B1's drop-off, 1 m along the wall (sqrt(17) m away); B1's is B0's drop-off (same distance)
+    tasks = (
+        BrickTask("B0", 0, False, (0.0, 0.0, 0.05), 0.0, (0.0, -4.0, 0.05)),
+        BrickTask("B1", 1, False, (1.0, 0.0, 0.05), 0.0, (1.0, -4.0, 0.05)),
+        glue(0, 5.0),
+    )
+    plan = Plan(tasks, (), ())
+    fleet = [UavSpec("brick-1", "brick", (0.0, -10.0, 0.0)), UavSpec("glue-1", "adhesion", (5.0, -10.0, 0.0))]
+    base = {"B0": 30.0, "B1": 31.0, "A0": 10.0}
+    cycles = min_cycles_s(plan, fleet, base, cruise_speed_mps=1.0, min_leg_s=1.0, arrive_tolerance_m=0.1)
+    flight = math.hypot(1.0, 4.0) - 0.2  # peak speed 1 m/s; 0.1 m of slack at each end
+    assert cycles["B0"] == pytest.approx(30.0 + flight - 1.0)
+    assert cycles["B1"] == pytest.approx(31.0 + flight - 1.0)
+    assert cycles["A0"] == 10.0  # no sound approach term for adhesion
+    # the home is nearer when it is right behind the pickup
+    near_home = [UavSpec("brick-1", "brick", (0.0, -4.5, 0.0)), fleet[1]]
+    cycles = min_cycles_s(plan, near_home, base, arrive_tolerance_m=0.1)
+    assert cycles["B0"] == pytest.approx(30.0)  # 0.5 m - slack: less than the last leg's 1 s, nothing added
+    # the role term uses them, the chain term does not
+    seq = Plan(tasks, (("B1", "B0"),), ())
+    assert lower_bound_s(seq, fleet, base) == pytest.approx(61.0)
+    work = min_cycles_s(seq, fleet, base, arrive_tolerance_m=0.1)
+    assert lower_bound_s(seq, fleet, base, work_s=work) == pytest.approx(61.0 + 2 * (flight - 1.0))
+    assert longest_chain_s(seq, base) == pytest.approx(61.0)
+    with pytest.raises(PlanningError, match="work_s|durations_s"):
+        lower_bound_s(seq, fleet, base, work_s={"B0": 1.0})
+    with pytest.raises(PlanningError, match="cruise_speed_mps"):
+        min_cycles_s(seq, fleet, base, cruise_speed_mps=0.0)

@@ -11,7 +11,8 @@ from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 __all__ = ["AdhesionTask", "BrickTask", "Plan", "Task", "adhesion_segments", "plan"]
 
 # The dispatcher (issue 5) adds its names below this line.
-from masonry.planner.bounds import estimate_durations_s, lower_bound_s, min_durations_s
+from masonry.planner.bounds import estimate_durations_s, lower_bound_s, min_cycles_s, min_durations_s
 from masonry.planner.dispatch import POLICIES, Assignment, Dispatcher
 
-__all__ += ["POLICIES", "Assignment", "Dispatcher", "estimate_durations_s", "lower_bound_s", "min_durations_s"]
+__all__ += ["POLICIES", "Assignment", "Dispatcher", "estimate_durations_s", "lower_bound_s", "min_cycles_s",
+            "min_durations_s"]
