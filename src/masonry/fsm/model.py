@@ -479,14 +479,26 @@ class UavModel:
         now = self._now_s
         ref: Any
         ff: Any
-        if self._traj is not None:
-            t = min(max(now - self._traj_t0_s, 0.0), self._traj.duration_s)
-            ref = [((((c[5] * t + c[4]) * t + c[3]) * t + c[2]) * t + c[1]) * t + c[0] for c in self._coef]
-            if t < self._traj.duration_s:
-                ff = [
-                    (((5.0 * c[5] * t + 4.0 * c[4]) * t + 3.0 * c[3]) * t + 2.0 * c[2]) * t + c[1]
-                    for c in self._coef
-                ]
+        traj = self._traj
+        if traj is not None:
+            duration = traj.duration_s
+            t = now - self._traj_t0_s  # min(max(t, 0.0), duration), written out (every tick of a flight)
+            if t < 0.0:
+                t = 0.0
+            if duration < t:
+                t = duration
+            (a0, a1, a2, a3, a4, a5), (b0, b1, b2, b3, b4, b5), (c0, c1, c2, c3, c4, c5) = self._coef
+            ref = (
+                ((((a5 * t + a4) * t + a3) * t + a2) * t + a1) * t + a0,
+                ((((b5 * t + b4) * t + b3) * t + b2) * t + b1) * t + b0,
+                ((((c5 * t + c4) * t + c3) * t + c2) * t + c1) * t + c0,
+            )
+            if t < duration:
+                ff = (
+                    (((5.0 * a5 * t + 4.0 * a4) * t + 3.0 * a3) * t + 2.0 * a2) * t + a1,
+                    (((5.0 * b5 * t + 4.0 * b4) * t + 3.0 * b3) * t + 2.0 * b2) * t + b1,
+                    (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1,
+                )
             else:
                 ff = _ZERO3
         elif self._line is not None:

@@ -59,12 +59,16 @@ class SimFlightController:
             self._uav.vehicle.land()
 
     def send_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float) -> None:
-        if self._listening():
-            vehicle = self._uav.vehicle
-            vehicle.command_velocity(velocity_mps, yaw_rate_radps, vehicle.time_s)
+        uav = self._uav
+        if uav.link_ok:  # _listening(), inline: every control tick
+            vehicle = uav.vehicle
+            vehicle.command_velocity(velocity_mps, yaw_rate_radps, vehicle._t)
 
     def telemetry(self) -> Telemetry:
-        return self._uav.telemetry()
+        uav = self._uav
+        if uav.link_ok:  # SimUav.telemetry's common case, inline: every control tick
+            return uav.vehicle.telemetry()
+        return uav.telemetry()
 
 
 class SimGripper:

@@ -37,6 +37,8 @@ __all__ = ["GRAVITY_MPS2", "SimVehicle", "VehicleConfig"]
 GRAVITY_MPS2 = 9.81
 
 _new_telemetry = object.__new__
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
 
 
 @dataclass(frozen=True)
@@ -400,9 +402,11 @@ class SimVehicle:
 
     def step(self, dt_s: float) -> None:
         """Advance the vehicle by ``dt_s`` seconds."""
+        # Hot path (every airborne vehicle, every physics step): clamps are written as comparisons with the
+        # semantics of the builtins (``max(a, b)`` is ``b if b > a else a``), no helper calls.
         self._tel = None
         cfg = self.config
-        self._t += dt_s
+        t = self._t = self._t + dt_s
         if self.failed:
             self._fall(dt_s)
             return
@@ -411,54 +415,62 @@ class SimVehicle:
             if not self.on_ground:
                 self._fall(dt_s)
             return
-        if self.on_ground and self._takeoff_z is None:
+        on_ground = self.on_ground
+        if on_ground and self._takeoff_z is None:
             self._vx = self._vy = self._vz = self._ax = self._ay = self._yaw_rate = 0.0
             return
-        if not self.on_ground:
+        mode = self.mode
+        if not on_ground:
             self.airborne_s += dt_s
-            self.battery_fraction = max(0.0, self.battery_fraction - self._drain * dt_s)
-            if self.battery_fraction <= 0.0:
+            battery = self.battery_fraction - self._drain * dt_s
+            if not battery > 0.0:  # max(0.0, battery)
+                battery = 0.0
+            self.battery_fraction = battery
+            if battery <= 0.0:
                 self.fail()
                 self._fall(dt_s)
                 return
-            if self.battery_fraction <= cfg.battery_land_fraction and self.mode != "LAND":
-                self.mode = "LAND"
+            if battery <= cfg.battery_land_fraction and mode != "LAND":
+                mode = self.mode = "LAND"
                 self._takeoff_z = None
-            if (
-                self._link_lost_at is not None
-                and self.mode != "LAND"
-                and self._t - self._link_lost_at >= cfg.link_failsafe_s
-            ):
-                self.mode = "LAND"
+            if self._link_lost_at is not None and mode != "LAND" and t - self._link_lost_at >= cfg.link_failsafe_s:
+                mode = self.mode = "LAND"
                 self._takeoff_z = None
         if dt_s != self._lag_dt:
             self._lag_dt = dt_s
             self._lag_k = (1.0 - math.exp(-dt_s / cfg.velocity_tau_s)) / dt_s
             self._yaw_k = 1.0 - math.exp(-dt_s / cfg.yaw_tau_s)
 
+        x, y, z = self._x, self._y, self._z
+        vx, vy, vz = self._vx, self._vy, self._vz
+        max_descent = cfg.max_descent_mps
         # Target velocity from the active mode.
         tyaw = 0.0
-        if self.mode == "LAND":
+        if mode == "LAND":
             tx = ty = 0.0
             tz = -cfg.land_speed_mps
         elif self._takeoff_z is not None:
             tx = ty = 0.0
-            err = self._takeoff_z - self._z
-            tz = min(cfg.takeoff_speed_mps, max(-cfg.max_descent_mps, 1.5 * err))
-            if abs(err) < 0.03 and abs(self._vz) < 0.1:
+            err = self._takeoff_z - z
+            tz = 1.5 * err
+            if not tz > -max_descent:  # min(takeoff_speed, max(-max_descent, 1.5 * err))
+                tz = -max_descent
+            if cfg.takeoff_speed_mps < tz:
+                tz = cfg.takeoff_speed_mps
+            if abs(err) < 0.03 and abs(vz) < 0.1:
                 self._takeoff_z = None
-                self._hold = (self._x, self._y, self._z)
-        elif self._t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
+                self._hold = (x, y, z)
+        elif t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
             tx, ty, tz, tyaw = self._sp
         else:
             hold = self._hold
             if hold is None:
                 tx = ty = tz = 0.0
-                if self._vx * self._vx + self._vy * self._vy + self._vz * self._vz < 0.01:
-                    self._hold = (self._x, self._y, self._z)
+                if vx * vx + vy * vy + vz * vz < 0.01:
+                    self._hold = (x, y, z)
             else:
                 g = cfg.hold_gain_per_s
-                tx, ty, tz = g * (hold[0] - self._x), g * (hold[1] - self._y), g * (hold[2] - self._z)
+                tx, ty, tz = g * (hold[0] - x), g * (hold[1] - y), g * (hold[2] - z)
                 n = math.sqrt(tx * tx + ty * ty + tz * tz)
                 if n > cfg.hold_max_speed_mps:
                     f = cfg.hold_max_speed_mps / n
@@ -469,16 +481,23 @@ class SimVehicle:
         if sxy > cfg.max_speed_xy_mps:
             f = cfg.max_speed_xy_mps / sxy
             tx, ty = tx * f, ty * f
-        tz = min(cfg.max_climb_mps, max(-cfg.max_descent_mps, tz))
+        if not tz > -max_descent:  # min(max_climb, max(-max_descent, tz))
+            tz = -max_descent
+        if cfg.max_climb_mps < tz:
+            tz = cfg.max_climb_mps
 
         # First-order lag, then acceleration limits.
         k = self._lag_k
-        ax, ay, az = (tx - self._vx) * k, (ty - self._vy) * k, (tz - self._vz) * k
+        ax, ay, az = (tx - vx) * k, (ty - vy) * k, (tz - vz) * k
         axy = math.sqrt(ax * ax + ay * ay)
         if axy > cfg.max_accel_xy_mps2:
             f = cfg.max_accel_xy_mps2 / axy
             ax, ay = ax * f, ay * f
-        az = min(cfg.max_accel_z_mps2, max(-cfg.max_accel_z_mps2, az))
+        amax = cfg.max_accel_z_mps2
+        if not az > -amax:  # min(amax, max(-amax, az))
+            az = -amax
+        if amax < az:
+            az = amax
         if self.gusts_mps > 0.0:
             a = dt_s / cfg.gust_tau_s
             b = self.gusts_mps * math.sqrt(2.0 * a)
@@ -487,30 +506,39 @@ class SimVehicle:
             ax += cfg.drag_per_s * self._wx
             ay += cfg.drag_per_s * self._wy
         self._ax, self._ay = ax, ay
-        self._vx += ax * dt_s
-        self._vy += ay * dt_s
-        self._vz += az * dt_s
-        dx, dy, dz = self._vx * dt_s, self._vy * dt_s, self._vz * dt_s
-        self._x += dx
-        self._y += dy
-        self._z += dz
+        vx += ax * dt_s
+        vy += ay * dt_s
+        vz += az * dt_s
+        self._vx, self._vy, self._vz = vx, vy, vz
+        dx, dy, dz = vx * dt_s, vy * dt_s, vz * dt_s
+        x += dx
+        y += dy
+        z += dz
+        self._x, self._y = x, y
         self.distance_m += math.sqrt(dx * dx + dy * dy + dz * dz)
 
-        tyaw = min(cfg.max_yaw_rate_radps, max(-cfg.max_yaw_rate_radps, tyaw))
-        self._yaw_rate += (tyaw - self._yaw_rate) * self._yaw_k
-        self._yaw = wrap_angle_rad(self._yaw + self._yaw_rate * dt_s)
+        ymax = cfg.max_yaw_rate_radps
+        if not tyaw > -ymax:  # min(ymax, max(-ymax, tyaw))
+            tyaw = -ymax
+        if ymax < tyaw:
+            tyaw = ymax
+        rate = self._yaw_rate = self._yaw_rate + (tyaw - self._yaw_rate) * self._yaw_k
+        self._yaw = (self._yaw + rate * dt_s + _PI) % _TWO_PI - _PI  # wrap_angle_rad, inline
 
         # Ground contact, or resting on a support (hold_above) in LAND mode.
-        if self._z <= self.ground_z_m:
-            self._z = self.ground_z_m
+        ground = self.ground_z_m
+        if z <= ground:
+            self._z = ground
             self._touchdown()
-        elif held and self.mode == "LAND":
+            return
+        self._z = z
+        if held and mode == "LAND":
             self._contact_s += dt_s
             if self._contact_s >= cfg.land_detect_s:
                 self._touchdown()
         else:
             self._contact_s = 0.0
-            if self.on_ground and self._z > self.ground_z_m + 0.01:
+            if on_ground and z > ground + 0.01:
                 self.on_ground = False
 
     def _touchdown(self) -> None:
@@ -553,9 +581,19 @@ class SimVehicle:
         if cached is not None and cached[0] == link_ok:
             return cached[1]
         cfg = self.config
-        g = self._gauss.take(7)
+        gauss = self._gauss  # seven draws, as ``gauss.take(7)`` (inline: one sample per UAV per control tick)
+        i = gauss._i
+        if i + 7 > len(gauss._buf):
+            g = gauss.take(7)
+        else:
+            gauss._i = i + 7
+            g = gauss._buf[i : i + 7]
         n, v = cfg.mocap_noise_m, cfg.velocity_noise_mps
-        roll, pitch, yaw = self.attitude_rad
+        yaw = self._yaw
+        c, s = math.cos(yaw), math.sin(yaw)  # attitude_rad, inline
+        ax, ay = self._ax, self._ay
+        roll = -math.atan2(-s * ax + c * ay, GRAVITY_MPS2)
+        pitch = math.atan2(c * ax + s * ay, GRAVITY_MPS2)
         # Telemetry is a frozen dataclass without validation; filling its __dict__ directly is the same value
         # built 8x faster than through the generated __init__ (one sample per UAV per control tick).
         tel = _new_telemetry(Telemetry)
@@ -563,7 +601,7 @@ class SimVehicle:
             time_s=self._t,
             position_m=(self._x + n * g[0], self._y + n * g[1], self._z + n * g[2]),
             velocity_mps=(self._vx + v * g[3], self._vy + v * g[4], self._vz + v * g[5]),
-            attitude_rad=(roll, pitch, wrap_angle_rad(yaw + cfg.yaw_noise_rad * g[6])),
+            attitude_rad=(roll, pitch, (yaw + cfg.yaw_noise_rad * g[6] + _PI) % _TWO_PI - _PI),
             armed=self.armed,
             mode=self.mode,
             battery_fraction=self.battery_fraction,

@@ -37,6 +37,9 @@ __all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
 
 CameraMode = Literal["geometric", "render"]
 
+#: A tool (or a carried brick) within this height above the highest brick top is checked for contact.
+_CONTACT_TOL_M = 0.06
+
 
 @dataclass(frozen=True)
 class WorldConfig:
@@ -93,6 +96,10 @@ class SimUav:
         )
 
     def __post_init__(self) -> None:
+        # per-UAV constants of the world's physics step
+        self._brick_role = self.spec.role == "brick"
+        airframe = self.world.airframe
+        self._tool_dz_m = (airframe.effector_offset_m if self._brick_role else airframe.nozzle_offset_m)[2]
         self.fc = SimFlightController(self)
         self.gripper = SimGripper(self)
         self.sprayer = SimSprayer(self)
@@ -263,6 +270,7 @@ class World:
         timed_faults = bool(faults.uav_loss_at_s) or bool(faults.link_loss_at_s)
         airborne: list[Vec3] = []
         sample_s = self.config.path_sample_s
+        field = self.field
         for uav in self.uavs.values():
             vehicle = uav.vehicle
             if timed_faults and not uav.failed:
@@ -271,9 +279,12 @@ class World:
                 vehicle.step(dt_s)
                 if vehicle.failed and not uav.failed:
                     self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
-                self._contact(uav)
-                if uav.role == "brick":
-                    if uav.magnet_on:
+                # _contact's own early exit, checked here first (most steps: a tool high above every brick)
+                if uav.carried_brick is not None or vehicle._z + uav._tool_dz_m <= field.max_top_z_m + _CONTACT_TOL_M:
+                    self._contact(uav)
+                if uav._brick_role:
+                    # _grip's own guard, checked here first (the magnet stays on while a brick is carried)
+                    if uav.magnet_on and uav.carried_brick is None and not uav.joint_locked and not uav.failed:
                         self._grip(uav)
                 elif uav.valve_open:
                     self._spray(uav)
@@ -328,7 +339,7 @@ class World:
     def _contact(self, uav: SimUav) -> None:
         """Keep the tool from passing through brick tops, and a carried brick through bricks or the ground."""
         vehicle = uav.vehicle
-        tol = 0.06
+        tol = _CONTACT_TOL_M
         clear_z = self.field.max_top_z_m + tol  # above this nothing can be touched
         if uav.carried_brick is not None:
             brick = self.field.bricks[uav.carried_brick]
@@ -352,9 +363,11 @@ class World:
             vehicle.hold_above(vehicle.position_m[2] + support - tool[2])
 
     def _carry_pose(self, uav: SimUav, brick: SimBrick) -> None:
-        ex, ey, ez = uav.effector_m()
-        yaw = uav.vehicle.yaw_rad
+        vehicle = uav.vehicle
+        yaw = vehicle._yaw
         c, s = math.cos(yaw), math.sin(yaw)
+        ox, oy, oz = self.airframe.effector_offset_m  # uav.effector_m(), inline (same cos and sin)
+        ex, ey, ez = vehicle._x + c * ox - s * oy, vehicle._y + s * ox + c * oy, vehicle._z + oz
         bx, by, dyaw = uav._carry_offset
         brick.position_m = (ex + c * bx - s * by, ey + s * bx + c * by, ez - brick.size_m[2] / 2.0)
         brick.yaw_rad = math.remainder(yaw + dyaw, 2.0 * math.pi)

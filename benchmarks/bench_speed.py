@@ -1,0 +1,60 @@
+"""CPU cost per simulated second of a whole mission (issue 5, section 4): prints its figures, asserts nothing.
+
+Runs ``masonry.mission.simulate`` on a running bond (geometric camera, no faults) and prints CPU (process) time,
+wall time, simulated time, real-time factors and the behaviour figures to compare before/after a speed-up
+(makespan, tasks done, min separation, mean placement error, a digest of the task schedule).
+
+Usage: python benchmarks/bench_speed.py [--courses 6] [--per-course 50] [--brick-uavs 4] [--adhesion-uavs 2]
+       [--seed 0] [--no-separation] [--profile FILE.prof]
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import statistics
+import time
+
+from masonry.blueprint_gen import running_bond
+from masonry.mission.simulate import simulate
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--courses", type=int, default=6)
+    ap.add_argument("--per-course", type=int, default=50)
+    ap.add_argument("--brick-uavs", type=int, default=4)
+    ap.add_argument("--adhesion-uavs", type=int, default=2)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--no-separation", action="store_true")
+    ap.add_argument("--profile", default=None, help="write a cProfile of the run to this file")
+    args = ap.parse_args()
+    bp = running_bond(args.courses, args.per_course, brick_uavs=args.brick_uavs, adhesion_uavs=args.adhesion_uavs)
+    kwargs = dict(camera="geometric", seed=args.seed, separation=not args.no_separation)
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    if args.profile:
+        import cProfile
+
+        prof = cProfile.Profile()
+        report = prof.runcall(simulate, bp, **kwargs)
+        prof.dump_stats(args.profile)
+    else:
+        report = simulate(bp, **kwargs)
+    cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
+    done = sum(1 for t in report.tasks if t.status == "done")
+    errs = list(report.placement_error_m.values())
+    sched = ";".join(f"{t.id},{t.uav},{t.start_s:.2f},{t.end_s}" for t in report.tasks)
+    print(f"wall {args.courses}x{args.per_course}, {args.brick_uavs}+{args.adhesion_uavs} UAVs, seed {args.seed}, "
+          f"separation {'off' if args.no_separation else 'on'}")
+    print(f"  completed {report.completed}, tasks done {done}/{len(report.tasks)}, makespan {report.makespan_s:.1f} s, "
+          f"simulated {report.sim_time_s:.1f} s, messages {report.messages}")
+    print(f"  min_separation_m {report.min_separation_m}, placement error mean "
+          f"{statistics.fmean(errs) if errs else float('nan'):.5f} m, "
+          f"violations {report.conflict_violations}/{report.dependency_violations}")
+    print(f"  schedule digest {hashlib.sha1(sched.encode()).hexdigest()[:12]}")
+    print(f"  CPU {cpu:.1f} s, wall {wall:.1f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "
+          f"x{report.sim_time_s / wall:.0f} (wall), {cpu / report.sim_time_s * 1e3:.2f} ms CPU per simulated s")
+
+
+if __name__ == "__main__":
+    main()
