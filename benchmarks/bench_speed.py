@@ -52,7 +52,7 @@ def main() -> None:
           f"{statistics.fmean(errs) if errs else float('nan'):.5f} m, "
           f"violations {report.conflict_violations}/{report.dependency_violations}")
     print(f"  schedule digest {hashlib.sha1(sched.encode()).hexdigest()[:12]}")
-    print(f"  CPU {cpu:.1f} s, wall {wall:.1f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "
+    print(f"  CPU {cpu:.2f} s, wall {wall:.2f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "
           f"x{report.sim_time_s / wall:.0f} (wall), {cpu / report.sim_time_s * 1e3:.2f} ms CPU per simulated s")
 
 

@@ -97,13 +97,23 @@ def rects_overlap(
     a: tuple[float, float, float, float, float], b: tuple[float, float, float, float, float]
 ) -> bool:
     """Whether two yawed rectangles (x, y, yaw, hx, hy) overlap with positive area (separating axis test)."""
-    ca, cb = rect_corners(*a), rect_corners(*b)
-    for yaw in (a[2], b[2]):
-        for ux, uy in ((math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))):
-            pa = [ux * px + uy * py for px, py in ca]
-            pb = [ux * px + uy * py for px, py in cb]
-            if max(pa) <= min(pb) + 1e-9 or max(pb) <= min(pa) + 1e-9:
-                return False
+    # The arithmetic of ``rect_corners`` and of the projections, written out (a falling or carried brick tests
+    # its neighbours every physics step): same corners, same axes, same comparisons.
+    ax, ay, ayaw, ahx, ahy = a
+    bx, by, byaw, bhx, bhy = b
+    ac, as_ = math.cos(ayaw), math.sin(ayaw)
+    bc, bs = math.cos(byaw), math.sin(byaw)
+    ca = [(ax + ac * dx - as_ * dy, ay + as_ * dx + ac * dy)
+          for dx, dy in ((-ahx, -ahy), (ahx, -ahy), (ahx, ahy), (-ahx, ahy))]
+    cb = [(bx + bc * dx - bs * dy, by + bs * dx + bc * dy)
+          for dx, dy in ((-bhx, -bhy), (bhx, -bhy), (bhx, bhy), (-bhx, bhy))]
+    for ux, uy in ((ac, as_), (-as_, ac), (bc, bs), (-bs, bc)):
+        (p0x, p0y), (p1x, p1y), (p2x, p2y), (p3x, p3y) = ca
+        a0, a1, a2, a3 = ux * p0x + uy * p0y, ux * p1x + uy * p1y, ux * p2x + uy * p2y, ux * p3x + uy * p3y
+        (p0x, p0y), (p1x, p1y), (p2x, p2y), (p3x, p3y) = cb
+        b0, b1, b2, b3 = ux * p0x + uy * p0y, ux * p1x + uy * p1y, ux * p2x + uy * p2y, ux * p3x + uy * p3y
+        if max(a0, a1, a2, a3) <= min(b0, b1, b2, b3) + 1e-9 or max(b0, b1, b2, b3) <= min(a0, a1, a2, a3) + 1e-9:
+            return False
     return True
 
 
@@ -208,9 +218,21 @@ class BrickField:
         bricks = self.bricks
         for k in self._hash.query_point(x, y) or ():
             b = bricks[k]
-            t = b.top_z_m
-            if top < t <= limit and point_in_rect(x, y, *b.rect()):
-                top = t
+            bx, by, bz = b.position_m
+            sx, sy, sz = b.blueprint.size_m
+            t = bz + sz / 2.0  # b.top_z_m
+            if top < t <= limit:
+                # point_in_rect(x, y, *b.rect()), inline (a tool near the bricks asks every physics step)
+                hx, hy = sx / 2.0 - 0.0, sy / 2.0 - 0.0
+                if hx < 1e-4:
+                    hx = 1e-4
+                if hy < 1e-4:
+                    hy = 1e-4
+                yaw = b.yaw_rad
+                c, s = math.cos(yaw), math.sin(yaw)
+                dx, dy = x - bx, y - by
+                if abs(c * dx + s * dy) <= hx and abs(-s * dx + c * dy) <= hy:
+                    top = t
         return top
 
     def covered_at(self, x: float, y: float, z: float, tol_m: float = 1e-3) -> bool:

@@ -56,8 +56,8 @@ class CameraConfig:
         return math.hypot(max(i.cx, i.width_px - i.cx) / i.fx, max(i.cy, i.height_px - i.cy) / i.fy)
 
 
-def _marker_points(brick: SimBrick, markers: MarkerSpec) -> list[tuple[float, float, float]]:
-    """The brick's two marker centres then their 4 + 4 corners (world), cached while the brick does not move."""
+def _marker_points(brick: SimBrick, markers: MarkerSpec) -> np.ndarray:
+    """The brick's two marker centres then their 4 + 4 corners (world, (10, 3)), cached while the brick does not move."""
     key = (brick.position_m, brick.yaw_rad, markers)
     cache = brick.marker_cache
     if cache is not None and cache[0] == key:
@@ -73,8 +73,9 @@ def _marker_points(brick: SimBrick, markers: MarkerSpec) -> list[tuple[float, fl
         # top-left, top-right, bottom-right, bottom-left in the marker's own frame (x along the brick's +x)
         for dx, dy in ((-h, h), (h, h), (h, -h), (-h, -h)):
             points.append((mx + c * dx - s * dy, my + s * dx + c * dy, top))
-    brick.marker_cache = (key, points)
-    return points
+    array = np.array(points, dtype=float)  # converted once per pose, not on every frame
+    brick.marker_cache = (key, array)
+    return array
 
 
 def marker_layout(
@@ -82,12 +83,10 @@ def marker_layout(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Marker ids (m,), centres (m, 3) and corners (m, 4, 3) in the world for the bricks' top faces."""
     n = len(bricks)
-    points: list[tuple[float, float, float]] = []
     ids: list[int] = []
     for b in bricks:
-        points.extend(_marker_points(b, markers))
         ids.extend((2 * b.id, 2 * b.id + 1))
-    P = np.array(points, dtype=float).reshape(n, 10, 3)
+    P = np.array([_marker_points(b, markers) for b in bricks], dtype=float).reshape(n, 10, 3)
     return np.array(ids, dtype=int), P[:, 0:2].reshape(2 * n, 3), P[:, 2:10].reshape(2 * n, 4, 3)
 
 
