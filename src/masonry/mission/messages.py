@@ -331,44 +331,6 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     return hb
 
 
-_new_message = object.__new__
-
-
-def _finite_number(v: Any) -> bool:
-    return (type(v) is float or type(v) is int) and math.isfinite(v)
-
-
-def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Heartbeat | None:
-    """A well-formed heartbeat (the bulk of the traffic) decoded with the checks of :func:`decode` written out.
-
-    None when any check fails: :func:`decode` then runs its general path, which raises the precise error.
-    """
-    sender = data.get("sender")
-    if type(sender) is not str or not sender:
-        return None
-    if fleet is not None and sender != MISSION_CONTROL and sender not in fleet:
-        return None
-    time_s = data.get("time_s")
-    if not _finite_number(time_s):
-        return None
-    task_id = data.get("task_id")
-    if task_id is not None and (type(task_id) is not str or not task_id):
-        return None
-    p = data.get("position_m")
-    if p is not None:
-        if type(p) is not list or len(p) != 3:
-            return None
-        x, y, z = p
-        if not (_finite_number(x) and _finite_number(y) and _finite_number(z)):
-            return None
-        p = (float(x), float(y), float(z))
-    # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
-    hb: Heartbeat = _new_message(Heartbeat)
-    hb.__dict__.update(sender=sender, time_s=float(time_s), state=str(data.get("state") or ""), task_id=task_id,
-                       position_m=p)
-    return hb
-
-
 def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
     """Parse and validate one wire message.
 
