@@ -9,6 +9,7 @@ vehicle still takes off, a tool still rests on a brick), and the camera's per-po
 from __future__ import annotations
 
 import json
+import re
 import math
 
 import numpy as np
@@ -229,3 +230,105 @@ def test_marker_arrays_follow_the_brick():
     _, turned, _ = marker_layout([b], markers)
     half = markers.spacing_m / 2.0
     assert np.allclose(turned[:, :2], [[1.0, 0.5 + half], [1.0, 0.5 - half]])
+
+
+def _reference_rects_overlap(a, b):
+    """The separating axis test as first written (corners from rect_corners, list projections)."""
+    from masonry.sim.bricks import rect_corners
+
+    ca, cb = rect_corners(*a), rect_corners(*b)
+    for yaw in (a[2], b[2]):
+        for ux, uy in ((math.cos(yaw), math.sin(yaw)), (-math.sin(yaw), math.cos(yaw))):
+            pa = [ux * px + uy * py for px, py in ca]
+            pb = [ux * px + uy * py for px, py in cb]
+            if max(pa) <= min(pb) + 1e-9 or max(pb) <= min(pa) + 1e-9:
+                return False
+    return True
+
+
+rects = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-4, 4), st.floats(1e-4, 0.5), st.floats(1e-4, 0.5))
+
+
+@given(rects, rects)
+def test_rects_overlap_matches_the_reference(a, b):
+    from masonry.sim.bricks import rects_overlap
+
+    assert rects_overlap(a, b) == _reference_rects_overlap(a, b)
+    assert rects_overlap(a, a)
+
+
+@settings(max_examples=40)
+@given(st.lists(st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6), st.integers(0, 3), st.floats(-3.2, 3.2)),
+                min_size=1, max_size=25),
+       st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)), st.floats(0.0, 0.5))
+def test_support_queries_match_a_plain_scan(placed, probe, below_z):
+    from masonry.sim.bricks import BrickField, point_in_rect, rects_overlap
+
+    field = BrickField(0.5)
+    size = (0.3, 0.15, 0.1)
+    for i, (x, y, course, yaw) in enumerate(placed):
+        z = 0.05 + 0.1 * course
+        field.add(SimBrick(i, Brick(i, (x, y, z), size), (x, y, z), yaw, "placed"))
+    px, py, pyaw = probe
+    rect = (px, py, pyaw, 0.15 - 0.025, 0.075 - 0.025)
+    expected = 0.0
+    for b in field:
+        t = b.top_z_m
+        if 0.0 < t <= below_z + 0.02 and rects_overlap(rect, b.rect()) and t > expected:
+            expected = t
+    assert field.support_under(rect, below_z_m=below_z) == expected
+    expected_at = 0.0
+    for b in field:
+        t = b.top_z_m
+        if 0.0 < t <= below_z + 0.02 and point_in_rect(px, py, *b.rect()) and t > expected_at:
+            expected_at = t
+    assert field.support_at(px, py, below_z_m=below_z) == expected_at
+
+
+def test_min_separation_is_the_minimum_over_every_physics_step():
+    from masonry.blueprint_gen import running_bond
+    from masonry.sim import World
+
+    world = World(running_bond(1, 2, brick_uavs=3, adhesion_uavs=2), seed=3)
+    uavs = world.add_fleet()
+    rng = np.random.default_rng(1)
+    for u in uavs:
+        u.fc.arm()
+        u.fc.takeoff(1.0 + rng.random())
+    expected = math.inf
+    for k in range(700):
+        if k >= 100 and k % 10 == 0:
+            for u in uavs:
+                u.fc.send_velocity(tuple(rng.uniform(-1.5, 1.5, 3) * (1.0, 1.0, 0.3)), 0.0)
+        world.step(0.05)
+        flying = [u.vehicle.position_m for u in uavs if u.vehicle.armed and not u.vehicle.on_ground]
+        best2 = math.inf
+        for i in range(len(flying)):
+            for j in range(i + 1, len(flying)):
+                (ax, ay, az), (bx, by, bz) = flying[i], flying[j]
+                best2 = min(best2, (ax - bx) * (ax - bx) + (ay - by) * (ay - by) + (az - bz) * (az - bz))
+        expected = min(expected, math.sqrt(best2))
+        assert world.min_separation_m == (None if expected == math.inf else expected)
+    assert expected < 3.0  # they did come close: the record moved during the run
+
+
+@pytest.mark.parametrize("raw", [
+    b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}',
+    b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}  ',
+    b'{"a":1} x',
+    b'{"a":',
+    b'{"a":"\xff"}',
+    b'\xef\xbb\xbf{"a":1}',
+    '{"a":1}',
+    b'[1, 2]',
+])
+def test_loads_is_json_loads(raw):
+    from masonry.mission.messages import _loads
+
+    try:
+        expected = json.loads(raw)
+    except ValueError as exc:
+        with pytest.raises(type(exc), match=re.escape(str(exc))):
+            _loads(raw)
+    else:
+        assert _loads(raw) == expected

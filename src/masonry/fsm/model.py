@@ -49,6 +49,7 @@ from masonry.ports import (
 
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
+_ZERO_FF = (0.0, 0.0, 0.0)  # no velocity feed-forward, as plain floats for the PID
 
 
 def _wrap(angle_rad: float) -> float:
@@ -461,6 +462,8 @@ class UavModel:
         tol = self.config.arrive_tolerance_m if tolerance_m is None else tolerance_m
         p = tel.position_m
         t = self._target
+        if type(t) is np.ndarray:
+            t = t.tolist()  # plain floats: the same squares, without a numpy scalar per element
         close = (p[0] - t[0]) ** 2 + (p[1] - t[1]) ** 2 + (p[2] - t[2]) ** 2 <= tol * tol
         if close and self._legs:
             target, duration = self._legs.pop(0)
@@ -500,17 +503,19 @@ class UavModel:
                     (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1,
                 )
             else:
-                ff = _ZERO3
+                ff = _ZERO_FF
         elif self._line is not None:
             start, direction, length = self._line
             s = (now - self._traj_t0_s) * self._ref_speed_mps
             if s < length:
-                ref = start + direction * s
-                ff = direction * self._ref_speed_mps
+                ref = (start + direction * s).tolist()
+                ff = (direction * self._ref_speed_mps).tolist()
             else:
-                ref, ff = self._target, _ZERO3
+                ref, ff = self._target, _ZERO_FF
         else:
-            ref, ff = self._target, _ZERO3
+            ref, ff = self._target, _ZERO_FF
+        if type(ref) is np.ndarray:
+            ref = ref.tolist()  # the PID takes floats: hand it floats, not numpy scalars to convert
         vx, vy, vz, yaw_rate = self._pid.step_floats(
             now,
             tel.position_m,

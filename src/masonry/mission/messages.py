@@ -296,6 +296,26 @@ def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
 _new_message = object.__new__
 
 
+_JSON = json.JSONDecoder()
+
+
+def _loads(raw: bytes | str) -> Any:
+    """``json.loads(raw)``, with a direct path for the common case: UTF-8 bytes holding one JSON object.
+
+    ``json.loads`` detects the encoding (UTF-8 for bytes starting ``{"``), decodes, then parses and checks that
+    nothing follows; anything else (another encoding, trailing whitespace, an error) goes through it as is.
+    """
+    if type(raw) is bytes and raw[:2] == b'{"':
+        try:
+            s = raw.decode("utf-8", "surrogatepass")
+            data, end = _JSON.raw_decode(s)
+        except ValueError:  # UnicodeDecodeError, JSONDecodeError: json.loads raises its own error
+            return json.loads(raw)
+        if end == len(s):
+            return data
+    return json.loads(raw)
+
+
 def _finite_number(v: Any) -> bool:
     return (type(v) is float or type(v) is int) and math.isfinite(v)
 
@@ -372,7 +392,7 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
             not in ``fleet``.
     """
     try:
-        data = json.loads(raw)
+        data = _loads(raw)
     except (ValueError, UnicodeDecodeError) as exc:
         raise ProtocolError(f"message is not valid JSON: {exc}") from exc
     if not isinstance(data, dict):

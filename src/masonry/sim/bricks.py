@@ -249,12 +249,20 @@ class BrickField:
     ) -> float:
         """Height of the highest surface under a footprint, at or below ``below_z_m`` (+ ``tol_m``)."""
         xs, ys = zip(*rect_corners(*rect))
-        top = GROUND_Z_M
         limit = below_z_m + tol_m
         bricks = self.bricks
+        # The answer is the highest top among the overlapping candidates: test them highest first and stop at
+        # the first overlap (a carried brick over a wall asks every physics step; the lower courses under it
+        # need no overlap test). The maximum does not depend on the order, so this is the plain scan's answer.
+        tops: list[tuple[float, int]] = []
         for k in self._hash.query(min(xs), min(ys), max(xs), max(ys)):
             b = bricks[k]
-            t = b.top_z_m
-            if top < t <= limit and rects_overlap(rect, b.rect()):
-                top = t
-        return top
+            t = b.position_m[2] + b.blueprint.size_m[2] / 2.0  # b.top_z_m
+            if GROUND_Z_M < t <= limit:
+                tops.append((t, k))
+        if len(tops) > 1:
+            tops.sort(reverse=True)
+        for t, k in tops:
+            if rects_overlap(rect, bricks[k].rect()):
+                return t
+        return GROUND_Z_M

@@ -131,9 +131,8 @@ def observe_markers(
     normal_c = R_wc[2, :]  # world +z (the markers' face normal) in the camera frame
     cos_view = -(p_c @ normal_c) / np.maximum(dist, 1e-9)
     ok &= cos_view >= math.cos(config.max_view_angle_rad)
-    side = np.hypot(
-        np.diff(np.concatenate([u, u[:, :1]], axis=1)), np.diff(np.concatenate([v, v[:, :1]], axis=1))
-    )
+    # side lengths corner k -> k+1 (cyclic): the differences np.diff gives on [u0, u1, u2, u3, u0]
+    side = np.hypot(u[:, _NEXT_CORNER] - u, v[:, _NEXT_CORNER] - v)
     ok &= side.min(axis=1) >= config.min_marker_px
     index = np.flatnonzero(ok)
     if hidden:
@@ -159,6 +158,9 @@ def observe_markers(
         TagPose(marker_id=int(ids[i]), position_m=pos[row], R_cam_marker=R[row])
         for row, i in enumerate(index)
     )
+
+
+_NEXT_CORNER = np.array([1, 2, 3, 0])
 
 
 def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:

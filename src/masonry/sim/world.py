@@ -297,10 +297,19 @@ class World:
                 uav._next_sample_s = now + sample_s
         if len(airborne) > 1:
             best2 = math.inf  # smallest squared distance this step (one square root, not one per pair)
+            # A pair whose x distance alone reaches the smallest separation so far cannot lower it: skip it after
+            # one product. The margin keeps the square root's rounding out of it: if every pair is skipped, the
+            # step's true minimum is above the record and would not have replaced it either.
+            record = self._min_sep
+            skip2 = math.inf if record is None else record * record * (1.0 + 1e-9)
             for i in range(len(airborne) - 1):
                 ax, ay, az = airborne[i]
                 for bx, by, bz in airborne[i + 1 :]:
-                    d2 = (ax - bx) * (ax - bx) + (ay - by) * (ay - by) + (az - bz) * (az - bz)
+                    dx = ax - bx
+                    d2 = dx * dx
+                    if d2 >= skip2:
+                        continue
+                    d2 = d2 + (ay - by) * (ay - by) + (az - bz) * (az - bz)  # the same sum, left to right
                     if d2 < best2:  # noqa: PLR1730 (no min() call: hot loop)
                         best2 = d2
             d = math.sqrt(best2)
