@@ -332,3 +332,18 @@ def test_loads_is_json_loads(raw):
             _loads(raw)
     else:
         assert _loads(raw) == expected
+
+
+@given(st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)),
+       st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)),
+       st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.5, 0.0)),
+       st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)))
+def test_tool_distance_is_the_numpy_tool_position_distance(attitude, position, offset, target):
+    from masonry.fsm.model import UavModel
+    from masonry.ports import Telemetry
+
+    tel = Telemetry(0.0, position, (0.0, 0.0, 0.0), attitude, True, "GUIDED", 1.0, True, True, False)
+    target_m = np.array(target)
+    expected = float(np.linalg.norm(UavModel._tool_position(None, tel, offset) - target_m))  # type: ignore[arg-type]
+    got = UavModel._tool_distance_m(None, tel, offset, target_m)  # type: ignore[arg-type]
+    assert got == pytest.approx(expected, rel=1e-12, abs=1e-12)

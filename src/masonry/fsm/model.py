@@ -540,6 +540,26 @@ class UavModel:
             offset_body_m
         )
 
+    def _tool_distance_m(
+        self, tel: Telemetry, offset_body_m: tuple[float, float, float], target_m: np.ndarray
+    ) -> float:
+        """Distance from the tool at ``offset_body_m`` to ``target_m``: ``|_tool_position - target|`` on floats.
+
+        Every tick of a descent; the same rotation (``R_world_body``) written out, equal to the numpy form to
+        rounding (~1e-16 m).
+        """
+        roll, pitch, yaw = tel.attitude_rad
+        cr, sr = math.cos(roll), math.sin(roll)
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        ox, oy, oz = offset_body_m
+        px, py, pz = tel.position_m
+        tx, ty, tz = target_m.tolist() if type(target_m) is np.ndarray else target_m
+        dx = px + (cy * cp * ox + (cy * sp * sr - sy * cr) * oy + (cy * sp * cr + sy * sr) * oz) - tx
+        dy = py + (sy * cp * ox + (sy * sp * sr + cy * cr) * oy + (sy * sp * cr - cy * sr) * oz) - ty
+        dz = pz + (-sp * ox + cp * sr * oy + cp * cr * oz) - tz
+        return math.sqrt(dx * dx + dy * dy + dz * dz)
+
     # -- common states -------------------------------------------------------------------------------------
     def enter_idle(self, *args: Any, **kwargs: Any) -> None:
         self._stop()
@@ -1002,7 +1022,7 @@ class BrickUav(UavModel):
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
-        error = float(np.linalg.norm(self._tool_position(tel, self._eff) - self._place_effector_target))
+        error = self._tool_distance_m(tel, self._eff, self._place_effector_target)
         if error <= cfg.placement_radius_m:
             self._release_error_m = error
             self.reached()
