@@ -3,7 +3,10 @@
 Every generator lays the wall in its own frame (u along the wall, v across it, z up), then rotates it by
 ``yaw_rad`` about z and moves it to ``origin_m``. Bricks of the lowest ``placed_courses`` courses are placed
 already; every other brick gets a pickup point on a pallet: a grid on the ground on the -v side of the wall,
-``pallet_distance_m`` (default r_c + 1 m) away from it. UAV homes are in a row beyond the pallet, r_c + 0.5 m
+``pallet_distance_m`` (default r_c + 1 m) away from it. Along a long wall (>= 4.5 m) the pallet is as wide as the
+wall and each brick lies on the free slot nearest to its place (short carries; bricks placed together, r_c
+apart, are picked up about as far apart); a shorter wall's pallet is 10 slots wide (wider than the wall, so the
+bricks fetched together are spread across it), filled row by row; so is one of ``pallet_columns`` columns. UAV homes are in a row beyond the pallet, r_c + 0.5 m
 apart.
 """
 
@@ -31,6 +34,9 @@ Vec3 = tuple[float, float, float]
 _Layout = list[tuple[float, float, int, float]]
 
 GENERATORS: tuple[str, ...] = ("running-bond", "towers", "pyramid")
+#: A wall at least this many pallet columns long (0.5 m each: 4.5 m with the default brick) gets a pallet as wide
+#: as itself, each brick facing its place; a shorter one the old 10-column pallet filled row by row.
+PALLET_MIN_COLUMNS = 10
 
 
 @dataclass(frozen=True)
@@ -45,7 +51,7 @@ class Site:
     adhesion_uavs: int = 1
     clearance_m: float = DEFAULT_CLEARANCE_M
     cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
-    pallet_columns: int = 0  # 0: 10 columns up to 40 bricks to place, else 20
+    pallet_columns: int = 0  # 0: as wide as a long wall, else 10 (20 beyond 40 bricks); given: row by row
     pallet_distance_m: float | None = None  # from the wall's face to the pallet; default r_c + 1 m
     name: str | None = None
     markers: MarkerSpec | None = None  # default: fitted to the brick, dictionary numbering every brick
@@ -136,12 +142,22 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     us = [u for u, _, _, _ in layout]
     u_mid = (min(us) + max(us)) / 2.0
     todo = [i for i, (_, _, course, _) in enumerate(layout) if course >= placed_courses]
-    columns = int(options.pallet_columns) or max(1, min(len(todo), 10 if len(todo) <= 40 else 20))
     pallet_pitch_u = length + 0.2
     pallet_pitch_v = width + 0.3
+    todo_u = [layout[i][0] - u_mid for i in todo]
+    span = (max(todo_u) - min(todo_u)) if todo else 0.0
+    wall_columns = int(span / pallet_pitch_u + 1e-9) + 1
+    if options.pallet_columns or wall_columns < PALLET_MIN_COLUMNS:
+        # a short wall (or a pallet of a given width): filled row by row in brick order, 10 columns (20 beyond
+        # 40 bricks), wider than the wall, so that the bricks fetched together are spread across it
+        columns = int(options.pallet_columns) or max(1, min(len(todo), 10 if len(todo) <= 40 else 20))
+        slots = [divmod(k, columns) for k in range(len(todo))]
+    else:
+        # a long wall: a pallet as wide as the wall, each brick facing its place
+        columns = wall_columns
+        slots = _pallet_slots(todo_u, columns, pallet_pitch_u, pallet_pitch_v, pallet_distance + width / 2.0)
     pickups: dict[int, Vec3] = {}
-    for slot, index in enumerate(todo):
-        row, col = divmod(slot, columns)
+    for index, (row, col) in zip(todo, slots):
         u = (col - (columns - 1) / 2.0) * pallet_pitch_u
         v = -(width / 2.0 + pallet_distance + row * pallet_pitch_v)
         pickups[index] = world(u, v, height / 2.0)
@@ -158,7 +174,7 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
                 pickup_m=None if placed else pickups[index],
             )
         )
-    rows = math.ceil(len(todo) / columns) if todo else 0
+    rows = max((row for row, _ in slots), default=-1) + 1
     home_v = -(width / 2.0 + pallet_distance + max(rows - 1, 0) * pallet_pitch_v + clearance + 1.0)
     crew: list[tuple[str, Role]] = [(f"brick-{k + 1}", "brick") for k in range(brick_uavs)]
     crew += [(f"glue-{k + 1}", "adhesion") for k in range(adhesion_uavs)]
@@ -178,6 +194,41 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         markers=markers,
         source=f"<{kind}>",
     )
+
+
+def _pallet_slots(
+    todo_u: list[float], columns: int, pitch_u: float, pitch_v: float, front_v: float
+) -> list[tuple[int, int]]:
+    """Pallet slots (row, column), in brick order, each brick on the free slot nearest to its place on the wall.
+
+    A column is a stack of rows going away from the wall; its next free slot is its front-most empty one. In
+    brick order (course by course), each brick takes the column whose next free slot is the nearest (in the
+    plane) to the brick's place at along-wall coordinate u, the wall being ``front_v`` in front of row 0. So the
+    carry is short (about the pallet's distance, not a walk along the pallet), and bricks that are placed at the
+    same time -- at least r_c apart on the wall, else they conflict -- are picked up about as far apart.
+    """
+    offset = (columns - 1) / 2.0
+    height = [0] * columns
+    out: list[tuple[int, int]] = []
+    for u in todo_u:
+        near = min(columns - 1, max(0, round(u / pitch_u + offset)))
+        best, best_d = near, math.inf
+        # scan outwards from the nearest column; stop once the along-wall offset alone is no better
+        for step in range(columns):
+            done = True
+            for col in {near - step, near + step}:
+                if 0 <= col < columns:
+                    du = abs((col - offset) * pitch_u - u)
+                    if du < best_d:
+                        done = False
+                        d = math.hypot(du, front_v + height[col] * pitch_v)
+                        if d < best_d or (d == best_d and col < best):
+                            best, best_d = col, d
+            if done:
+                break
+        out.append((height[best], best))
+        height[best] += 1
+    return out
 
 
 def _markers_for(size: Vec3, n_bricks: int) -> MarkerSpec:
