@@ -30,117 +30,161 @@ def _xy(p):
 
 
 # -- the pure rules ---------------------------------------------------------------------------------------------
-def test_a_column_within_the_radius_waits_at_a_hold_point_outside_every_column():
+def _working(c, uav, site, t=0.0):
+    """``uav`` flies to ``site`` (from above it) and comes down there: it holds the zone."""
+    g = c.request(uav, site, t, (site[0], site[1], site[2]))
+    assert g.granted, (uav, site)
+    c.end_transit(uav)
+
+
+def test_a_site_near_a_zone_gets_a_hold_flight_and_the_rest_once_the_zone_is_left():
     c = ColumnClearance(R, BASE, S)
-    a = c.request("a", (0.0, 0.0, 1.2), 0.0, (5.0, 0.0, 1.2))
-    assert a.granted
+    _working(c, "a", (0.0, 0.0, 1.2))
     b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2))
-    assert not b.granted and b.hold_m is not None
+    assert not b.granted and b.hold_m is not None and b.layer_m is not None
     assert math.dist(_xy(b.hold_m), (0.0, 0.0)) >= 1.1 * R - 1e-9
-    assert c.grant(2.0) == []  # still held
-    c.end_transit("a")  # a is down at its site...
-    assert c.grant(2.5) == []
-    c.release("a", (0.0, 0.0, 1.2))  # ... and has left it
+    assert c.grant(2.0) == []  # a still works there
+    # a sets off for a far site from where it works: its climb there still blocks b's column
+    assert c.request("a", (0.0, 8.0, 1.2), 2.5, (0.0, 0.0, 1.2)).granted
+    assert c.grant(2.6) == []
+    c.release("a", (0.0, 0.0, 1.2))  # a is 1.2 m away: its climb is over...
+    c.progress("a", (0.0, 3.0, c.layer_m("a")))  # ... and it reports itself 3 m along its leg
+    assert c.grant(2.8) == []  # b is not at its hold point yet: it would not read the answer before
+    c.progress("b", (b.hold_m[0], b.hold_m[1], b.layer_m))
     g = c.grant(3.0)
-    assert [x.uav for x in g] == ["b"] and g[0].granted
+    assert [x.uav for x in g] == ["b"] and g[0].granted and g[0].layer_m is not None
     assert c.max_wait_s == pytest.approx(2.0) and c.held_back == 1
+    assert c.conflicts() == []
 
 
-def test_columns_apart_are_both_granted_and_a_repeated_request_gets_the_same_answer():
+def test_sites_apart_are_both_granted_and_a_repeated_request_gets_the_same_answer():
     c = ColumnClearance(R, BASE, S)
     assert c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -4.0, 1.2)).granted
-    assert c.request("b", (R + 0.01, 0.0, 1.2), 0.0, (3.0, -4.0, 1.2)).granted
+    assert c.request("b", (R + 0.01, 4.0, 1.2), 0.0, (3.0, -4.0, 1.2)).granted
     again = c.request("a", (0.0, 0.0, 1.2), 1.0, (0.0, -4.0, 1.2))
     assert again.granted and again.layer_m == c.layer_m("a")
     assert set(c.held) == {"a", "b"}
 
 
-def test_layer_zero_only_for_a_path_clear_of_other_columns_else_the_uavs_own_layer():
+def test_layer_zero_for_a_clear_flight_and_a_higher_one_to_pass_over_a_zone():
     c = ColumnClearance(R, BASE, S)
-    assert c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, 0.0, 1.2)).granted
-    c.end_transit("a")  # a works in its column at (0, 0)
+    _working(c, "a", (0.0, 0.0, 1.2))
     far = c.request("b", (10.0, 5.0, 1.2), 0.0, (10.0, 0.0, 1.2))
-    assert far.granted and far.layer_m == pytest.approx(BASE)  # nobody near: layer 0, just above the work altitude
+    assert far.granted and far.layer_m == pytest.approx(BASE)  # nobody near: layer 0, the work altitude
     c.end_transit("b")
-    over = c.request("c", (3.0, 0.6, 1.2), 1.0, (-3.0, 0.3, 1.2))  # passes 0.45 m from a's column
-    assert over.granted and over.layer_m >= BASE + S - 1e-9
-    d = c.request("d", (0.3, 3.0, 1.2), 2.0, (0.0, -3.0, 1.2))  # over a too, and across c (not near its ends)
-    assert d.granted and d.layer_m >= BASE + S - 1e-9
-    assert abs(d.layer_m - over.layer_m) >= S - 1e-9  # two UAVs above layer 0: never the same layer
+    over = c.request("c", (3.0, 0.6, 1.2), 1.0, (-3.0, 0.3, 1.2))  # passes 0.45 m from a's zone
+    # a's zone reaches 1.2 m: layer 0 (1.35 m) is too close above it, layer 1 (2.45 m) is 1.25 m above
+    assert over.granted and over.layer_m == pytest.approx(BASE + S)
+    d = c.request("d", (0.3, 3.0, 1.2), 2.0, (0.0, -3.0, 1.2))  # over a too, and across c's leg
+    assert d.granted and d.layer_m == pytest.approx(BASE + 2 * S)  # above c's layer
+    assert c.conflicts() == []
 
 
-def _crossing_setup(c):
-    assert c.request("x", (0.0, 0.0, 1.2), 0.0, (0.0, 0.0, 1.2)).granted
-    c.end_transit("x")  # x works in its column at (0, 0)
-    a = c.request("a", (3.0, 0.6, 1.2), 0.0, (-3.0, 0.3, 1.2))  # passes x: not layer 0
-    assert a.granted and a.layer_m == pytest.approx(BASE + S)
-
-
-def test_a_flight_takes_the_lowest_layer_on_which_it_crosses_nobody():
+def test_a_higher_work_top_is_kept_clear_of():
     c = ColumnClearance(R, BASE, S)
-    _crossing_setup(c)
-    # b sets off from (0, 0.9), right under a's path: on layer 2 it would climb through a's layer 1 there, and
-    # layer 1 is a's: not now
-    b = c.request("b", (0.0, 4.0, 1.2), 1.0, (0.0, 0.9, 1.2))
-    assert not b.granted and b.hold_m is None and b.layer_m is None and c.refused == 1
-    c.end_transit("a")  # a is down at its site
-    b = c.request("b", (0.0, 4.0, 1.2), 2.0, (0.0, 0.9, 1.2))
-    assert b.granted and b.layer_m == pytest.approx(BASE + S)
-    # a flight that passes over b's climb point takes a layer above b's
-    d = c.request("d", (5.0, 1.2, 1.2), 3.0, (-5.0, 1.0, 1.2))
-    assert d.granted and d.layer_m == pytest.approx(BASE + 2 * S)
+    c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, 0.0, 1.2), top_m=2.1)  # it may climb to 2.1 m there
+    c.end_transit("a")
+    over = c.request("c", (3.0, 0.6, 1.2), 1.0, (-3.0, 0.3, 1.2))
+    assert over.granted and over.layer_m == pytest.approx(BASE + 2 * S)  # 2.45 m is not 1.1 m above 2.1 m
 
 
-def test_a_uav_held_back_is_kept_clear_of_and_flies_anyway_after_the_limit():
+def test_the_part_of_a_flight_behind_the_uav_is_freed_as_it_reports_where_it_is():
     c = ColumnClearance(R, BASE, S)
-    c.max_refusal_s = 5.0
-    _crossing_setup(c)
-    assert not c.request("b", (0.0, 4.0, 1.2), 1.0, (0.0, 0.9, 1.2)).granted
-    # while b hovers at (0, 0.9) a layer-0 flight may not pass there
-    e = c.request("e", (2.0, 2.0, 1.2), 2.0, (-2.0, 2.0, 1.2))
-    assert e.granted and e.layer_m > BASE + 1e-9
-    assert c.request("b", (0.0, 4.0, 1.2), 6.5, (0.0, 0.9, 1.2)).granted
-    assert c.forced == 1
+    # x is on its way down to (0, 0); b wants to come down right next to it: a hold flight from (6, 0)
+    assert c.request("x", (0.0, 0.0, 1.2), 0.0, (-6.0, 0.0, 1.2)).granted
+    b = c.request("b", (0.6, 0.0, 1.2), 1.0, (6.0, 0.0, 1.2))
+    assert not b.granted and b.hold_m is not None
+    # y wants to come down where b set off: not while b may still be climbing there
+    y = c.request("y", (6.0, 0.5, 1.2), 1.5, (6.0, 6.0, 1.2))
+    assert not y.granted and y.hold_m is not None
+    c.progress("y", (y.hold_m[0], y.hold_m[1], y.layer_m))  # y waits at its hold point
+    c.progress("b", (6.0, 0.0, 1.2))  # a report from before it set off: ignored
+    assert c.grant(1.6) == []
+    c.progress("b", (3.5, 0.0, b.layer_m))  # on its leg, 2.5 m along: the climb and the leg behind are free
+    assert [(g.uav, g.granted) for g in c.grant(1.7)] == [("y", True)]
+    assert c.conflicts() == []
 
 
-def test_a_lost_uav_frees_everything_and_a_given_up_request_stops_blocking():
+def test_first_come_first_served_near_a_waited_site():
     c = ColumnClearance(R, BASE, S)
-    c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -3.0, 1.2))
-    hold = c.request("b", (0.3, 0.0, 1.2), 0.0, (0.0, 3.0, 1.2)).hold_m
-    assert hold is not None
-    c.release("b", (0.3, 0.0, 1.2))  # b gave up (it was sent elsewhere)
-    assert c.waiting == ()
+    _working(c, "a", (0.0, 0.0, 1.2))
+    assert not c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -5.0, 1.2)).granted  # waits for a
+    # c asks later for a site near b's (but clear of a): it waits for b to have had its turn
+    late = c.request("c", (1.2, 1.3, 1.2), 2.0, (6.0, 6.0, 1.2))
+    assert not late.granted
+    assert c.waiting == ("b", "c")
+
+
+def test_a_lost_uav_frees_everything_and_a_given_up_request_stops_waiting():
+    c = ColumnClearance(R, BASE, S)
+    _working(c, "a", (0.0, 0.0, 1.2))
+    hold = c.request("b", (0.3, 0.0, 1.2), 0.0, (0.0, 3.0, 1.2))
+    assert c.waiting == ("b",) and hold.hold_m is not None
     c.release("a")  # a is lost
-    assert c.held == {} and c.layers == {}
-    assert c.request("c", (0.2, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2)).granted
+    assert "a" not in c.held and c.volumes("a") == ()
+    c.progress("b", (hold.hold_m[0], hold.hold_m[1], hold.layer_m))  # at its hold point
+    assert [g.uav for g in c.grant(1.0)] == ["b"]
+    c.request("d", (5.0, 5.0, 1.2), 1.0, (0.0, 3.0, 1.2))
+    c.release("d", (5.0, 5.0, 1.2))  # d gave up asking (it was sent elsewhere)
+    assert "d" not in c.waiting
+
+
+def test_homes_are_zones_from_the_start():
+    c = ColumnClearance(R, BASE, S, homes={"a": (0.0, -6.0, 0.0), "b": (2.0, -6.0, 0.0)})
+    # a flight passing over b's home at layer 0 would meet b taking off: it goes higher
+    g = c.request("a", (4.0, -6.0, 1.2), 0.0, (0.0, -6.0, 1.2))
+    assert g.granted and g.layer_m == pytest.approx(BASE + S)
+    assert c.conflicts() == []
 
 
 SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))
 
 
-@settings(max_examples=60, deadline=None)
-@given(st.lists(st.tuples(st.sampled_from(["a", "b", "c", "d"]), st.sampled_from(["req", "rel", "end", "tick"]),
-                          SITES, SITES), max_size=40))
-def test_columns_never_overlap_and_layers_above_zero_are_never_shared(ops):
-    c = ColumnClearance(R, BASE, S)
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(["a", "b", "c", "d"]),
+                          st.sampled_from(["req", "end", "away", "move", "lost", "tick"]),
+                          SITES, SITES, st.floats(1.2, 2.4)), max_size=40))
+def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
+    c = ColumnClearance(R, BASE, S, homes={"a": (-6.0, -8.0, 0.0), "b": (-3.0, -8.0, 0.0)})
     t = 0.0
-    for uav, op, site, pos in ops:
+    for uav, op, site, pos, top in ops:
         t += 1.0
         if op == "req":
-            c.request(uav, (*site, 1.2), t, (*pos, 1.2))
-        elif op == "rel":
-            for h in c.held.get(uav, ()):
-                c.release(uav, h)
+            c.request(uav, (*site, 1.2), t, (*pos, 1.2), top_m=top)
         elif op == "end":
             c.end_transit(uav)
+        elif op == "away":
+            for h in c.held.get(uav, ()):
+                c.release(uav, h)
+        elif op == "move":
+            layer = c.layer_m(uav)
+            if layer is not None:
+                c.progress(uav, (*pos, layer))
+        elif op == "lost":
+            c.release(uav)
         c.grant(t)
-        cols = [(u, h) for u, hs in c.held.items() for h in hs]
-        for i, (u1, h1) in enumerate(cols):
-            for u2, h2 in cols[i + 1:]:
+        assert c.conflicts() == []
+        zones = [(u, v) for u in "abcd" for v in c.volumes(u) if v.kind == "zone"]
+        for i, (u1, v1) in enumerate(zones):
+            for u2, v2 in zones[i + 1:]:
                 if u1 != u2:
-                    assert math.dist(_xy(h1), _xy(h2)) >= R - 1e-9, (u1, h1, u2, h2)
-        high = [k for k in c.layers.values() if k > 0]
-        assert len(high) == len(set(high))
+                    assert math.dist(v1.a, v2.a) >= R - 1e-9, (u1, v1, u2, v2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)), st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+       st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)), st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+       st.floats(0, 1), st.floats(0, 1))
+def test_points_in_volumes_that_do_not_conflict_keep_the_separation(p0, p1, q0, q1, s, u):
+    from masonry.mission.airspace import Volume, volumes_conflict
+
+    # a lateral leg and a vertical move (the shapes flights are made of)
+    leg = Volume((p0[0], p0[1]), (p1[0], p1[1]), p0[2], p0[2])
+    climb = Volume((q0[0], q0[1]), (q0[0], q0[1]), min(q0[2], q1[2]), max(q0[2], q1[2]))
+    a = (p0[0] + s * (p1[0] - p0[0]), p0[1] + s * (p1[1] - p0[1]), p0[2])
+    b = (q0[0], q0[1], climb.z0_m + u * (climb.z1_m - climb.z0_m))
+    if not volumes_conflict(leg, climb, 1.2, 1.1):
+        assert math.dist(a, b) >= 1.1 - 1e-9
 
 
 def test_layers_start_at_the_highest_work_altitude():
@@ -190,7 +234,7 @@ class ClearanceLink(QueueMissionLink):
         self.asked: dict[tuple[float, float, float], float] = {}
         self.arrived: list[tuple[float, float, float]] = []
 
-    def request_clearance(self, site_m):
+    def request_clearance(self, site_m, top_m=None):
         first = self.asked.setdefault(tuple(site_m), self.clock.now_s())
         waited = self.clock.now_s() - first
         if waited < self.answer_after_s:
@@ -305,12 +349,17 @@ def test_mission_control_and_a_handler_exchange_clearances_over_the_transport():
     assert wait is not None and not wait.granted and wait.hold_m is not None
     # a comes down, works, sets off for its next site and flies away: its handler frees the column, b gets it
     handlers[a].end_transit(site)
+    where[a] = site
     handlers[a].request_clearance((5.0, -2.0, 1.2))
     mc.step(0.45)
     assert handlers[b].request_clearance(near).granted is False  # a is still there
     where[a] = (5.0, -2.0, 1.2)
     handlers[a].step(0.5)
     mc.step(0.6)
-    handlers[b].step(0.7)
+    assert handlers[b].request_clearance(near).granted is False  # b has not said it is at its hold point
+    where[b] = (wait.hold_m[0], wait.hold_m[1], wait.layer_m)
+    handlers[b].step(1.7)  # its heartbeat tells where it is
+    mc.step(1.8)
+    handlers[b].step(1.9)
     assert handlers[b].request_clearance(near).granted
     assert mc.columns.held == {a: ((5.0, -2.0, 1.2),), b: (near,)}

@@ -164,6 +164,35 @@ def test_stuck_task_after_max_attempts():
     assert all(a.status == "failed" for a in mc.history)
 
 
+def test_a_task_abandoned_for_the_battery_is_not_an_attempt_of_the_task():
+    class LowBatteryFirst(ScriptedUav):
+        """Abandons its first five tasks for its battery, then works."""
+
+        aborted = 0
+
+        def step(self, now_s):
+            if self.task is not None and LowBatteryFirst.aborted < 5:
+                LowBatteryFirst.aborted += 1
+                self.link.report_result(TaskResult(self.task.id, "failed", 0.0, reason="battery low (19%)"))
+                self.task = None
+                return
+            super().step(now_s)
+
+    plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
+    bus = InprocBus()
+    mc = MissionControl(plan, fleet_of(1, 0), bus.endpoint(MISSION_CONTROL), max_attempts=3)
+    h = UavHandler("brick-1", bus.endpoint("brick-1"), position=lambda: (0.0, -3.0, 0.0))
+    h.attach(LowBatteryFirst(h, {"B0": 2.0}, random.Random(0)))
+    now = 0.0
+    while mc.ended_at_s is None and now < 200.0:
+        h.step(now)
+        mc.step(now)
+        now += 0.5
+    assert mc.finished and "B0" in mc.dispatcher.done
+    assert [a.status for a in mc.history] == ["failed"] * 5 + ["done"]  # five battery aborts, none counted
+    assert mc.dispatcher.attempts.get("B0") == 1  # only the attempt that placed it counts
+
+
 def test_unknown_uav_and_garbage_are_rejected_not_fatal():
     plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
     bus = InprocBus()

@@ -47,6 +47,11 @@ class CameraFrame:
     tags: tuple[TagPose, ...] | None = None
 
 
+#: A failed task's ``reason`` starts with this when the UAV abandoned it for its battery: the UAV's fault, not
+#: the task's, so mission control does not count it as an attempt of the task.
+BATTERY_LOW_REASON = "battery low"
+
+
 @dataclass(frozen=True)
 class TaskResult:
     """What a UAV reports when it finishes or abandons a task."""

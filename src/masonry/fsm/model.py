@@ -37,6 +37,7 @@ from masonry.motion import PID, MinJerk
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import (
+    BATTERY_LOW_REASON,
     Camera,
     Clock,
     FlightController,
@@ -126,6 +127,7 @@ class UavModel:
         # a transit in progress (docs/safety.md): (phase "ask" | "hold" | "down", site, layer altitude)
         self._transit: tuple[str, tuple[float, float, float], float | None] | None = None
         self._gate_at = 0  # != 0: the legs of a layer route start from rest
+        self._transit_top_m: float | None = None  # top of the work at the transit's site (see _route)
         self._request_clearance: Callable[[Any], Any] | None = getattr(link, "request_clearance", None)
         # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
@@ -179,8 +181,8 @@ class UavModel:
                 and tel.battery_fraction < self.config.battery_low_fraction
             ):
                 if not self._battery_service:
-                    self._halt_after_landing = f"battery low ({tel.battery_fraction:.0%})"
-                self.abort(reason=f"battery low ({tel.battery_fraction:.0%})")
+                    self._halt_after_landing = f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
+                self.abort(reason=f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})")
             self._do[self.state](tel)
             if self._motion:
                 self._track(tel)
@@ -318,27 +320,31 @@ class UavModel:
         target_m: np.ndarray,
         duration_s: float | None = None,
         yaw_rad: float | None = None,
+        from_rest: bool = False,
     ) -> None:
-        """One minimum-jerk leg from the current state to rest at ``target_m``."""
+        """One minimum-jerk leg from the current state (``from_rest``: from rest where the UAV is) to rest at
+        ``target_m``."""
         if not self._motion:
             self._pid.reset()
         self._legs = []
         self._line = None
-        self._start_leg(tel, np.asarray(target_m, dtype=float), duration_s)
+        self._start_leg(tel, np.asarray(target_m, dtype=float), duration_s, from_rest=from_rest)
         if yaw_rad is not None:
             self._target_yaw = yaw_rad
         elif not self._motion:
             self._target_yaw = tel.attitude_rad[2]
         self._motion = True
 
-    def _route(self, tel: Telemetry, target_m: np.ndarray, yaw_rad: float | None = None) -> None:
+    def _route(self, tel: Telemetry, target_m: np.ndarray, yaw_rad: float | None = None,
+               top_m: float | None = None) -> None:
         """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal).
 
         With a link that hands out clearances (mission control's airspace, docs/safety.md) a lateral move is a
         *transit*: the UAV first asks for the column over the target, hovering where it is; then climbs (or
         descends) to the layer it is given, flies there, and descends over the target once the column is its
         (until then it waits at its layer at the hold point it is given). Without one, with a fixed
-        ``config.lateral_altitude_m``, the lateral leg flies at that altitude.
+        ``config.lateral_altitude_m``, the lateral leg flies at that altitude. ``top_m``: the highest altitude
+        the UAV will reach while working at the target (default: the target's), which mission control reserves.
         """
         p = np.asarray(tel.position_m, dtype=float)
         target = np.asarray(target_m, dtype=float)
@@ -347,7 +353,10 @@ class UavModel:
         d_xy = math.hypot(target[0] - p[0], target[1] - p[1])
         if self._request_clearance is not None and d_xy > 0.05:
             self._transit = ("ask", (float(target[0]), float(target[1]), float(target[2])), None)
-            self._fly_to(tel, p, 0.1, yaw_rad=yaw_rad)  # hover here until mission control answers
+            self._transit_top_m = top_m
+            # hover here until mission control answers (from rest: a UAV still moving, say climbing out of its
+            # site, must not carry that motion into the reference of the flight it is granted)
+            self._fly_to(tel, p, 0.1, yaw_rad=yaw_rad, from_rest=True)
             return
         layer = self.config.lateral_altitude_m
         if layer is not None and d_xy > self.config.layer_min_leg_m:
@@ -370,10 +379,10 @@ class UavModel:
         self._gate_at = -1  # legs start from rest: a corner is turned where the UAV is, never cut
         if abs(p[2] - layer) > 0.05 or not legs:
             self._fly_to(tel, np.array([p[0], p[1], layer]), max(0.5, 1.875 * abs(layer - p[2]) / v_z),
-                         yaw_rad=yaw_rad)
+                         yaw_rad=yaw_rad, from_rest=True)
             self._legs = legs
         else:
-            self._fly_to(tel, legs[0][0], legs[0][1], yaw_rad=yaw_rad)
+            self._fly_to(tel, legs[0][0], legs[0][1], yaw_rad=yaw_rad, from_rest=True)
             self._legs = legs[1:]
 
     @staticmethod
@@ -397,7 +406,7 @@ class UavModel:
             if end is not None:
                 end(site)
             return True
-        answer = self._request_clearance(site)
+        answer = self._request_clearance(site, self._transit_top_m)
         if answer is None:
             self._traj_end_s = self._now_s  # no answer yet: hover (a leg timeout does not run meanwhile)
             return False
@@ -408,6 +417,9 @@ class UavModel:
             if layer is None:  # no layers: the altitude it is at (or the target's, if higher)
                 layer = self.config.lateral_altitude_m or max(float(p[2]), float(target[2]))
         if answer.granted:
+            # from a hold point the rest of the flight may come with another layer than the hold flight's
+            if answer.layer_m is not None:
+                layer = answer.layer_m
             self._transit = ("down", site, layer)
             self._layer_legs(tel, p, target, layer, self._target_yaw)
             return False
@@ -486,9 +498,9 @@ class UavModel:
         if traj is not None:
             duration = traj.duration_s
             t = now - self._traj_t0_s  # min(max(t, 0.0), duration), written out (every tick of a flight)
-            if t < 0.0:
+            if t < 0.0:  # noqa: PLR1730 (no min/max call: hot loop)
                 t = 0.0
-            if duration < t:
+            if duration < t:  # noqa: PLR1730
                 t = duration
             (a0, a1, a2, a3, a4, a5), (b0, b1, b2, b3, b4, b5), (c0, c1, c2, c3, c4, c5) = self._coef
             ref = (
@@ -568,7 +580,7 @@ class UavModel:
         if not tel.on_ground and tel.armed:
             return  # not ours to fly (should not happen)
         if tel.battery_fraction < self.config.battery_low_fraction and not self._battery_service:
-            self.halt_reason = f"battery low ({tel.battery_fraction:.0%})"
+            self.halt_reason = f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
             self.retire(reason=self.halt_reason)
             return
         task = self._take(self.link.poll_task())  # with a battery service: handed over once the pack is swapped
@@ -800,7 +812,9 @@ class BrickUav(UavModel):
         pickup = self.brick_task.pickup_m
         assert pickup is not None
         self._hover_z = self.config.cruise_altitude_m
-        self._route(tel, np.array([pickup[0], pickup[1], self._hover_z]))
+        # it may climb max_climbs steps there to widen the camera's view: that is part of its column
+        top = self._hover_z + self.config.max_climbs * self.config.climb_step_m
+        self._route(tel, np.array([pickup[0], pickup[1], self._hover_z]), top_m=top)
 
     def do_pickup_goto(self, tel: Telemetry) -> None:
         if self._leg_done(tel):

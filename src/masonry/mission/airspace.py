@@ -1,19 +1,24 @@
-"""Airspace separation between UAVs: transit layers (static) and site columns (mission control, at run time).
+"""Airspace separation between UAVs: reserved volumes, handed out by mission control at run time.
 
 The paper's conflict graph G^c keeps the task *locations* (drop-off points, adhesion segments) r_c apart; it
-says nothing about the flights between them nor about the shared pickup pallet. Two mechanisms close that gap
-(docs/safety.md):
+says nothing about the flights between them nor about the shared pickup pallet. :class:`ColumnClearance`
+closes that gap (docs/safety.md):
 
-- **Transit layers**: every UAV flies its lateral legs (between pickup, drop-off, segment and home) at its own
-  altitude, ``base + (k + 1) * spacing`` for the k-th UAV of the fleet, where ``base`` is the highest altitude
-  at which any task of the wall is worked (:func:`work_altitude_m`). Lateral legs of two UAVs are therefore
-  at least ``spacing`` apart vertically, and above every UAV working at a site. The state machines climb to the
-  layer before a lateral leg and descend after it (vertically, never diagonally).
-- **Site columns**: leaving the layer at a site (to pick up, place, spray, or land at home) needs a clearance
-  from mission control for a vertical *column* there. :class:`ColumnClearance` grants columns first come, first
-  served, never two within ``radius_m`` (horizontally) of each other; the UAV hovers at its layer until granted
-  and frees its column once it is ``radius_m`` away from it (or has landed). Mission control runs it, so it
-  works the same in-process and across Zenoh (messages ``clearance-request`` / ``clearance``).
+- Every UAV holds a set of :class:`Volume` s: the **zone** where it works (the column over its site, from the
+  ground to the highest altitude it reaches there), or the whole **flight** it was granted (a vertical climb where
+  it is, a lateral leg at its layer, the column over the site it flies to).
+- A flight is granted only if every one of its volumes keeps the separation from every volume of every other
+  UAV (:func:`volumes_conflict`): two UAVs that stay in their volumes are never closer than the separation.
+- Lateral legs fly on **layers** ``base + k * spacing``; ``base`` is the highest altitude at which any task of
+  the wall is worked (:func:`work_altitude_m`), and a flight takes the lowest layer on which all of it fits.
+- A UAV that cannot have its flight because the site is busy gets a **hold flight** to a point near it, out of
+  everyone's way, and the rest of the flight when it fits; first come, first served.
+- Volumes shrink as the UAV reports where it is: the part of its leg behind it is freed, and the flight becomes
+  the zone at its site once it is down.
+
+The state machines fly exactly these shapes: climb (or descend) vertically where they are, fly straight at the
+layer, come down vertically over the site (``masonry.fsm``). Mission control runs the rules, so they work the
+same in-process and across Zenoh (messages ``clearance-request`` / ``clearance``).
 
 Everything here is pure (no I/O, no clock).
 """
@@ -54,8 +59,9 @@ def work_altitude_m(blueprint: Blueprint) -> float:
     return z
 
 
-#: Average vertical speed of a climb to a layer (``masonry.fsm.UavConfig.layer_vertical_speed_mps``).
-CLIMB_SPEED_MPS = 0.5
+#: How far a UAV may be off its reserved path (tracking error, a report a little late): what lies further behind
+#: it on its leg is freed (:meth:`ColumnClearance.progress`).
+TRACK_M = 0.3
 
 #: Layer 0 starts this far above the highest work altitude (the spacing of the layers above it has its own
 #: margin over the separation target).
@@ -85,12 +91,47 @@ def transit_layers_m(
 
 
 @dataclass(frozen=True)
+class Volume:
+    """A piece of airspace reserved for one UAV: every point within ``slack_m`` (horizontally) of the 2-D
+    segment ``a``-``b``, between altitudes ``z0_m`` and ``z1_m``.
+
+    A vertical move is a degenerate segment (``a == b``) over an altitude range, a lateral leg a segment at one
+    altitude, a site's work zone a vertical column from the ground with the work's horizontal ``slack_m``.
+    """
+
+    a: XY
+    b: XY
+    z0_m: float
+    z1_m: float
+    slack_m: float = 0.0
+    kind: str = "leg"  # "climb", "leg", "zone", "hover": what it is, for diagnostics and early release
+
+
+def volumes_conflict(p: Volume, q: Volume, sep_xy_m: float, sep_z_m: float) -> bool:
+    """Could a UAV in ``p`` come within the separation of one in ``q``?
+
+    No if their altitude ranges are ``sep_z_m`` apart, or their horizontal footprints ``sep_xy_m`` (plus both
+    slacks) apart. Two UAVs in volumes that do not conflict are at least min(sep_xy_m, sep_z_m) apart.
+    """
+    if p.z0_m - q.z1_m >= sep_z_m or q.z0_m - p.z1_m >= sep_z_m:
+        return False
+    need = sep_xy_m + p.slack_m + q.slack_m
+    # cheap reject on the bounding boxes before the exact segment distance
+    if (min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
+            or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
+            or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need):
+        return False
+    return _segment_segment_m(p.a, p.b, q.a, q.b) < need
+
+
+@dataclass(frozen=True)
 class Grant:
     """Mission control's answer to a UAV setting off for ``site_m``.
 
-    ``layer_m``: the altitude of its lateral leg (None: no layers, fly as you like). ``granted`` True: the column
-    over the site is the UAV's, go down there. False: fly (at ``layer_m``) to ``hold_m``, a point outside every
-    column held, wait there and ask again.
+    ``layer_m``: the altitude of its lateral leg (None: no layers, fly as you like, or no flight yet).
+    ``granted`` True: fly there (climb where you are to ``layer_m``, fly over the site, come down). False with a
+    ``hold_m``: fly (at ``layer_m``) to ``hold_m`` and wait there, the rest comes later. False without: hover
+    where you are and ask again.
     """
 
     uav: str
@@ -100,333 +141,448 @@ class Grant:
     layer_m: float | None = None
 
 
-class ColumnClearance:
-    """The airspace at run time: site columns, first come first served, and transit layers handed out per flight.
+@dataclass
+class _Pending:
+    site: Vec3
+    top_m: float
+    position: Vec3 | None
+    since_s: float
+    hold: Vec3 | None = None  # the hold point of its hold flight (granted), if any
+    layer: int | None = None  # the layer of that hold flight
+    at_hold: bool = False
+    seen_version: int = -1  # airspace version at its last evaluation (nothing changed since: same answer)
+    answer: Grant | None = None
 
-    - **Columns**: never two within ``radius_m`` (horizontally) of each other. A UAV asks for the column of its
-      next site when it sets off (``request``) and keeps the columns it holds until it has left them
-      (``release``, sent by its handler once ``radius_m`` away, or on landing).
-    - **Layers**: each flight gets an altitude for its lateral leg, held until the flight has come down at its
-      site (``end_transit``). Layer 0 is ``base_m`` (just above the work altitude): given only when the straight
-      path keeps ``path_clearance_m`` from every other column, layer-0 path, and point where another flight
-      climbs or descends, so such a flight meets nobody. Otherwise the lowest layer ``base_m + k * spacing_m``
-      (k >= 1) that no other flight in progress uses and on which it crosses no other flight: lateral legs of
-      two flights are ``spacing_m`` apart vertically, and above everyone working at a site.
-    - A request whose column is taken is answered with a hold point outside every held column and other hold
-      point: the UAV waits there at its layer, so nobody climbs or descends through it; since every waiting UAV
-      leaves the columns it held, no two UAVs can wait for each other for ever.
+
+class ColumnClearance:
+    """The airspace at run time: every UAV's reserved volumes, never within the separation of another's.
+
+    Each UAV holds a set of :class:`Volume`: where it is working (a *zone*: the column over its site, from the
+    ground to the highest altitude it reaches there, with the work's horizontal slack), or the whole of a flight
+    it was granted: the climb where it set off, the lateral leg at its layer, the column over its site. A flight
+    is granted only if all of it keeps the separation from every volume of every other UAV, so two UAVs that
+    stay in their volumes never come closer than min(``sep_xy_m``, ``spacing_m``). Volumes shrink as the UAV
+    reports progress: the climb is freed once it is ``release_radius_m`` away (``release``), the flight becomes
+    the zone at its site once it is down (``end_transit``).
+
+    - **Layers**: a flight's lateral leg flies at ``base_m + k * spacing_m``, the lowest k >= 0 on which the
+      whole flight fits. ``base_m`` is the highest work altitude of the wall, so layer 0 is just above every
+      zone; a flight goes higher only where it would pass another UAV.
+    - **Waiting**: when no layer fits because the site's column is not free (another UAV works or is about to
+      come down there), the UAV gets a *hold flight* to a hold point near the site, at least ``radius_m``
+      (horizontally) from every zone and every site another UAV waits for, where it hovers at its layer until the
+      rest of the flight (the leg on to the site and the descent) fits. A UAV whose hold flight does not fit
+      either hovers where it is and asks again.
+    - **Order**: requests are served first come, first served: a flight may not come down within ``radius_m`` of
+      the site of a UAV that asked earlier and still waits.
+    - **Liveness**: a hold point never blocks a climb out of a zone nor the site of a waiting UAV; a UAV waiting
+      in a zone can always leave it for a hold point once the flights in progress near it are down, and flights
+      in progress need nothing more. So every waiting UAV waits for flights that end and for work that ends,
+      never for another waiting UAV for ever (docs/safety.md).
 
     Args:
-        radius_m: horizontal distance within which two columns exclude each other.
-        base_m: altitude of layer 0 (None: no layers are handed out).
-        spacing_m: vertical distance between layers.
-        homes: each UAV's home: a UAV takes off there without asking (up to the work altitude), so layer-0
-            paths keep clear of the other UAVs' homes.
+        radius_m: two zones never closer than this horizontally (the blueprint's clearance r_c); hold points
+            this far from zones and waited sites.
+        base_m: altitude of layer 0 (None: no airspace rules: every request is granted, with no layer).
+        spacing_m: vertical distance between layers; two volumes this far apart vertically never conflict.
+        homes: each UAV's home: it starts in the zone over it (it takes off and lands there).
+        sep_xy_m: horizontal separation between volumes (the 1 m target plus the horizontal tracking error).
     """
 
     def __init__(self, radius_m: float, base_m: float | None = None,
-                 spacing_m: float = DEFAULT_LAYER_SPACING_M, homes: Mapping[str, Vec3] | None = None) -> None:
+                 spacing_m: float = DEFAULT_LAYER_SPACING_M, homes: Mapping[str, Vec3] | None = None,
+                 sep_xy_m: float = 1.2) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
         if not (spacing_m > 0.0 and math.isfinite(spacing_m)):
             raise ValueError(f"layer spacing must be a finite number > 0, got {spacing_m!r}")
+        if not (sep_xy_m > 0.0 and math.isfinite(sep_xy_m)):
+            raise ValueError(f"separation must be a finite number > 0, got {sep_xy_m!r}")
         self.radius_m = float(radius_m)
         self.base_m = None if base_m is None else float(base_m)
         self.spacing_m = float(spacing_m)
-        self._held: dict[str, list[Vec3]] = {}
-        # uav -> (site, position when asking, requested at, hold point); insertion order = FIFO
-        self._waiting: dict[str, tuple[Vec3, Vec3 | None, float, Vec3 | None]] = {}
-        # uav -> (layer index, path segments, points where it climbs or descends) of its flight in progress
-        self._transit: dict[str, tuple[int, list[tuple[XY, XY]], list[XY]]] = {}
-        self.refused = 0  # requests answered "wait where you are": no layer fits
-        #: a layer-0 path keeps this far from other columns and layer-0 paths (a UAV working in its column stays
-        #: within a few centimetres of its site, so the separation plus a margin is enough; columns keep radius_m)
-        self.path_clearance_m = 1.2
-        #: a flight held back this long (it would cross another) goes anyway: liveness over a rare near miss
-        self.max_refusal_s = 30.0
-        self.forced = 0
-        self._refused_since: dict[str, tuple[XY | None, float]] = {}
-        self._climb_until: dict[str, float] = {}
-        self._hover: dict[str, Vec3] = {}  # UAVs held back, hovering where they asked (kept clear of)
-        self._now_s = 0.0
+        self.sep_xy_m = float(sep_xy_m)
+        #: horizontal slack of a zone: two zones are ``radius_m`` apart
+        self.zone_slack_m = max(0.0, (self.radius_m - self.sep_xy_m) / 2.0)
+        self.max_layers = 12
+        self._volumes: dict[str, list[Volume]] = {}
+        self._zone: dict[str, Vec3] = {}  # uav -> site of the zone it works in
+        self._flight: dict[str, tuple[Vec3, int]] = {}  # uav -> (site, layer index) of its granted flight
+        self._origin: dict[str, Vec3] = {}  # uav -> site it set off from (its climb is freed once away)
+        self._waiting: dict[str, _Pending] = {}  # insertion order = first come, first served
+        self._homes: dict[str, Vec3] = {u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()}
+        self._tops: dict[str, float] = {}  # uav -> top of the zone at the site of its granted flight
+        self._version = 0
         self.granted_count = 0
-        self.held_back = 0  # requests not granted at once
+        self.held_back = 0  # hold flights given (a UAV sent to wait near its site)
+        self.refused = 0  # requests answered "hover where you are"
         self.wait_s = 0.0  # summed time between request and grant
         self.max_wait_s = 0.0
-        self.layer_counts: dict[int, int] = {}  # flights per layer index
-        self._homes: dict[str, XY] = {u: (float(h[0]), float(h[1])) for u, h in (homes or {}).items()}
+        self.layer_counts: dict[int, int] = {}  # granted flights per layer index
+        if self.base_m is not None:
+            for uav, home in self._homes.items():
+                self._set_zone(uav, home, self.base_m)
 
+    # -- what is reserved ---------------------------------------------------------------------------------------
     @property
     def release_radius_m(self) -> float:
-        """A UAV frees a column once this far from it: then nobody descending nearby meets it (the flights are
-        checked against each other), so the separation plus a margin is enough."""
-        return min(self.radius_m, self.path_clearance_m)
+        """A UAV frees the climb of its flight once this far (horizontally) from where it set off."""
+        return self.sep_xy_m
 
     @property
     def held(self) -> dict[str, tuple[Vec3, ...]]:
-        """UAV -> the sites of the columns it holds."""
-        return {u: tuple(s) for u, s in self._held.items() if s}
+        """UAV -> the site it holds: the one it flies to, or the one it works at."""
+        out: dict[str, tuple[Vec3, ...]] = {}
+        for uav in self._volumes:
+            f = self._flight.get(uav)
+            if f is not None:
+                out[uav] = (f[0],)
+            elif uav in self._zone and self._zone[uav] != self._homes.get(uav):
+                out[uav] = (self._zone[uav],)
+        return out
 
     @property
     def waiting(self) -> tuple[str, ...]:
-        """UAVs waiting for a column, in request order."""
+        """UAVs waiting for their flight, in request order."""
         return tuple(self._waiting)
 
     @property
     def layers(self) -> dict[str, int]:
-        """UAV -> layer index of its flight in progress."""
-        return {u: t[0] for u, t in self._transit.items()}
+        """UAV -> layer index of its flight in progress (granted, or to its hold point)."""
+        out = {u: f[1] for u, f in self._flight.items()}
+        out.update({u: w.layer for u, w in self._waiting.items() if w.layer is not None})
+        return out
+
+    def volumes(self, uav: str) -> tuple[Volume, ...]:
+        """The volumes ``uav`` holds now."""
+        return tuple(self._volumes.get(uav, ()))
 
     def layer_m(self, uav: str) -> float | None:
         """Altitude of ``uav``'s flight in progress (None: none, or no layers)."""
-        t = self._transit.get(uav)
-        if t is None or self.base_m is None:
-            return None
-        return self.base_m + t[0] * self.spacing_m
+        k = self.layers.get(uav)
+        return None if k is None or self.base_m is None else self._alt(k)
 
-    def request(self, uav: str, site_m: Vec3, now_s: float, position_m: Vec3 | None = None) -> Grant:
-        """``uav`` (now at ``position_m``) sets off for ``site_m``: a layer, and the column or a hold point.
-
-        A repeated request (same site) gets the same answer and keeps its place in the queue; one for another
-        site replaces the UAV's pending one and ends its previous flight.
-        """
-        self._now_s = now_s
-        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-        origin = (float(position_m[0]), float(position_m[1])) if position_m is not None else (site[0], site[1])
-        target = (site[0], site[1])
-        if any(self._same(h, site) for h in self._held.get(uav, ())):
-            # its own column already (a repeated request, or back to a site it has not left): a flight there
-            if uav not in self._transit and not self._fly(uav, [(origin, target)], [origin, target], low_ok=True,
-                                                          now_s=now_s, site=site, position_m=position_m):
-                return Grant(uav, site, False)
-            return Grant(uav, site, layer_m=self.layer_m(uav))
-        pending = self._waiting.get(uav)
-        if pending is not None and self._same(pending[0], site):
-            return Grant(uav, site, False, pending[3], self.layer_m(uav))
-        self._waiting.pop(uav, None)
-        self._transit.pop(uav, None)
-        if not self._blocked(uav, site):
-            if not self._fly(uav, [(origin, target)], [origin, target], low_ok=True, now_s=now_s, site=site,
-                             position_m=position_m):
-                return Grant(uav, site, False)  # it would cross another flight now: wait where you are, ask again
-            self._held.setdefault(uav, []).append(site)
-            self.granted_count += 1
-            return Grant(uav, site, layer_m=self.layer_m(uav))
-        hold = self.hold_point(uav, site, position_m)
-        hxy = (hold[0], hold[1])
-        # to the hold point now; the leg on to the site is checked when the column is granted
-        if not self._fly(uav, [(origin, hxy)], [origin], low_ok=False, now_s=now_s, site=site,
-                         position_m=position_m):
-            return Grant(uav, site, False)
-        self._waiting[uav] = (site, position_m, now_s, hold)
-        self.held_back += 1
-        return Grant(uav, site, False, hold, self.layer_m(uav))
-
-    def end_transit(self, uav: str) -> None:
-        """``uav``'s flight came down at its site: its layer is free."""
-        self._transit.pop(uav, None)
-
-    def release(self, uav: str, site_m: Vec3 | None = None) -> None:
-        """``uav`` left the column over ``site_m`` or gave up asking for it (None: everything: it is out)."""
-        if site_m is None:
-            self._held.pop(uav, None)
-            self._waiting.pop(uav, None)
-            self._transit.pop(uav, None)
-            self._hover.pop(uav, None)
-            return
-        held = self._held.get(uav)
-        if held:
-            held[:] = [h for h in held if not self._same(h, site_m)]
-        pending = self._waiting.get(uav)
-        if pending is not None and self._same(pending[0], site_m):
-            del self._waiting[uav]  # given up before it was granted
-            self._transit.pop(uav, None)
-
-    def grant(self, now_s: float) -> list[Grant]:
-        """Grant waiting requests, in order, that no other UAV's column (or hold point) blocks any more.
-
-        The UAV keeps the layer it waits at for the rest of its flight.
-        """
-        self._now_s = now_s
-        out: list[Grant] = []
-        for uav, (site, _pos, since_s, hold) in list(self._waiting.items()):
-            if self._blocked(uav, site):
-                continue
-            t = self._transit.get(uav)
-            if t is not None and hold is not None:
-                leg = [((hold[0], hold[1]), (site[0], site[1]))]
-                if self._crossing(uav, t[0], leg, [(site[0], site[1])]):
-                    first = self._refused_since.setdefault(uav, ((site[0], site[1]), now_s))
-                    if now_s - first[1] < self.max_refusal_s:
-                        continue  # it would cross a flight still in progress: wait a little longer
-                    self.forced += 1
-                self._refused_since.pop(uav, None)
-                # the UAV may still be on its way to the hold point: keep that leg in its path
-                self._transit[uav] = (t[0], t[1] + leg, t[2] + [(site[0], site[1])])
-            del self._waiting[uav]
-            self._held.setdefault(uav, []).append(site)
-            waited = max(0.0, now_s - since_s)
-            self.wait_s += waited
-            self.max_wait_s = max(self.max_wait_s, waited)
-            self.granted_count += 1
-            out.append(Grant(uav, site, layer_m=self.layer_m(uav)))
+    def conflicts(self) -> list[tuple[str, str]]:
+        """Pairs of UAVs whose volumes conflict now: always empty (the invariant the tests check)."""
+        names = list(self._volumes)
+        out = []
+        for i, u in enumerate(names):
+            for w in names[i + 1:]:
+                if any(volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
+                       for p in self._volumes[u] for q in self._volumes[w]):
+                    out.append((u, w))
         return out
 
-    def blocking(self, uav: str, site_m: Vec3) -> list[str]:
-        """The UAVs whose columns, hold points or layer-0 paths keep ``uav`` from a column over ``site_m``."""
-        return [o for o in {**self._held, **self._waiting, **self._transit} if o != uav and self._blocks(o, site_m)]
+    # -- the protocol -----------------------------------------------------------------------------------------
+    def request(self, uav: str, site_m: Vec3, now_s: float, position_m: Vec3 | None = None,
+                top_m: float | None = None) -> Grant:
+        """``uav`` (now at ``position_m``) sets off for ``site_m``, where it will work up to ``top_m``.
 
-    def hold_point(self, uav: str, site_m: Vec3, position_m: Vec3 | None) -> Vec3:
-        """Where ``uav`` waits for the column over ``site_m``: the point nearest to it that is at least 1.1
-        ``radius_m`` from every column held (its own too: it leaves them), other hold points and the sites other
-        UAVs wait for.
+        A repeated request (same site) gets the same answer unless something changed, and keeps its place in the
+        queue; one for another site replaces the UAV's pending one (its volumes stay until the new flight is
+        granted: it is still where they are).
         """
-        keep_out = [h for hs in self._held.values() for h in hs]
-        keep_out += [w[3] for o, w in self._waiting.items() if o != uav and w[3] is not None]
-        # and the sites others wait for: a hold point there would block them (two UAVs could wait for each other)
-        keep_out += [w[0] for o, w in self._waiting.items() if o != uav]
+        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+        top = max(site[2], float(top_m) if top_m is not None else site[2])
+        if self.base_m is None:
+            self.granted_count += 1
+            return Grant(uav, site)
+        f = self._flight.get(uav)
+        if f is not None:
+            if _same(f[0], site):
+                return Grant(uav, site, layer_m=self._alt(f[1]))
+            # turned back for another site: it keeps the volumes of that flight until it has a new one
+            del self._flight[uav]
+            self._tops.pop(uav, None)
+        pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+        w = self._waiting.get(uav)
+        if w is not None and _same(w.site, site):
+            if pos is not None and w.hold is None:
+                w.position = pos
+            return self._evaluate(uav, w, now_s)
+        if w is not None:
+            del self._waiting[uav]
+        w = _Pending(site, top, pos, now_s)
+        self._waiting[uav] = w
+        return self._evaluate(uav, w, now_s)
+
+    def grant(self, now_s: float) -> list[Grant]:
+        """Answer waiting UAVs, in request order, whose answer changed (a flight granted, or a hold flight)."""
+        out: list[Grant] = []
+        for uav, w in list(self._waiting.items()):
+            if w.seen_version == self._version:
+                continue
+            before = w.answer
+            g = self._evaluate(uav, w, now_s)
+            if g.granted or (g.hold_m is not None and (before is None or before.hold_m is None)):
+                out.append(g)
+        return out
+
+    def end_transit(self, uav: str) -> None:
+        """``uav``'s flight came down at its site: it holds the zone there now."""
+        f = self._flight.pop(uav, None)
+        if f is None:
+            return
+        self._origin.pop(uav, None)
+        site, _k = f
+        top = self._tops.pop(uav, site[2])
+        self._set_zone(uav, site, top)
+
+    def release(self, uav: str, site_m: Vec3 | None = None) -> None:
+        """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
+        up asking for it; None: it is out of the mission (on the ground or fallen): everything is freed."""
+        if site_m is None:
+            for table in (self._volumes, self._zone, self._flight, self._origin, self._waiting, self._tops):
+                table.pop(uav, None)  # type: ignore[attr-defined]
+            self._version += 1
+            return
+        w = self._waiting.get(uav)
+        if w is not None and _same(w.site, site_m) and w.hold is None:
+            del self._waiting[uav]  # given up before anything was granted
+            return
+        origin = self._origin.get(uav)
+        if origin is not None and _same(origin, site_m):
+            del self._origin[uav]
+            vols = self._volumes.get(uav, [])
+            kept = [v for v in vols if v.kind != "climb"]
+            if len(kept) != len(vols):
+                self._volumes[uav] = kept
+                self._version += 1
+
+    def progress(self, uav: str, position_m: Vec3) -> None:
+        """``uav`` reports where it is: the part of its flight behind it is freed.
+
+        Only a position on the flight's lateral leg (at its layer, within ``TRACK_M`` of the leg) or in the
+        descent over its site counts; anything else (a report sent before the flight was granted, say) is ignored.
+        A UAV flies its legs forward from rest to rest, so what lies more than ``TRACK_M`` behind it is left.
+        """
+        vols = self._volumes.get(uav)
+        if not vols or self.base_m is None:
+            return
+        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
+        w = self._waiting.get(uav)
+        if w is not None and w.hold is not None and not w.at_hold and w.layer is not None \
+                and math.hypot(x - w.hold[0], y - w.hold[1]) < TRACK_M and abs(z - self._alt(w.layer)) < 0.2:
+            self._arrive_at_hold(uav, w)  # it hovers at its hold point
+            return
+        kept: list[Volume] | None = None
+        last_leg: Volume | None = None
+        for i, v in enumerate(vols):
+            if v.kind != "leg":
+                continue
+            last_leg = v
+            (ax, ay), (bx, by) = v.a, v.b
+            dx, dy = bx - ax, by - ay
+            length = math.hypot(dx, dy)
+            if length < 1e-9 or abs(z - v.z0_m) >= 0.2:
+                continue
+            along = ((x - ax) * dx + (y - ay) * dy) / length
+            across = abs((x - ax) * dy - (y - ay) * dx) / length
+            if across > TRACK_M or along > length + TRACK_M:
+                continue
+            cut = along - TRACK_M
+            if cut <= 0.0:
+                return  # at the start of this leg: it may still be climbing (or stopped climbing) to it
+            # on this leg: everything before it (its climb, earlier legs, a hover) is behind it
+            rest = [w for w in vols[i + 1:]]
+            if cut < length:
+                f = max(0.0, cut) / length
+                rest.insert(0, Volume((ax + f * dx, ay + f * dy), v.b, v.z0_m, v.z1_m, 0.0, "leg"))
+            kept = rest
+            break
+        if kept is None:
+            if last_leg is None or z >= last_leg.z0_m - 0.2 or \
+                    math.hypot(x - last_leg.b[0], y - last_leg.b[1]) >= TRACK_M:
+                return
+            kept = [v for v in vols if v.kind == "zone"]  # coming down over its site
+        if len(kept) != len(vols) or any(k is not v for k, v in zip(kept, vols)):
+            self._volumes[uav] = kept
+            self._version += 1
+
+    def blocking(self, uav: str, site_m: Vec3) -> list[str]:
+        """The UAVs whose volumes keep ``uav`` from coming down at ``site_m`` now."""
+        col = self._column(site_m, self.base_m or site_m[2])
+        return [o for o, vols in self._volumes.items()
+                if o != uav and any(self._conflict(col, v) for v in vols)]
+
+    def hold_point(self, uav: str, site_m: Vec3, position_m: Vec3 | None = None) -> Vec3:
+        """The point nearest to ``site_m`` at least ``radius_m`` from every other UAV's zone, flight site, hold
+        point and the sites other UAVs wait for (the hover altitude is the layer; see :meth:`request`)."""
+        return next(iter(self._hold_candidates(uav, site_m)))
+
+    # -- internals --------------------------------------------------------------------------------------------
+    def _alt(self, k: int) -> float:
+        assert self.base_m is not None
+        return self.base_m + k * self.spacing_m
+
+    def _conflict(self, p: Volume, q: Volume) -> bool:
+        return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
+
+    def _column(self, site: Vec3, top: float) -> Volume:
+        xy = (site[0], site[1])
+        return Volume(xy, xy, 0.0, top, self.zone_slack_m, "zone")
+
+    def _set_zone(self, uav: str, site: Vec3, top: float) -> None:
+        if uav in self._homes and _same(self._homes[uav], site) and self.base_m is not None:
+            top = max(top, self.base_m)  # it takes off here up to its transit altitude
+        self._zone[uav] = site
+        self._volumes[uav] = [self._column(site, top)]
+        self._version += 1
+
+    def _free(self, uav: str, vols: list[Volume]) -> bool:
+        for other, theirs in self._volumes.items():
+            if other == uav:
+                continue
+            for v in vols:
+                for q in theirs:
+                    if self._conflict(v, q):
+                        return False
+        return True
+
+    def _queued_before(self, uav: str) -> list[_Pending]:
+        out = []
+        for other, w in self._waiting.items():
+            if other == uav:
+                break
+            out.append(w)
+        return out
+
+    def _flight_volumes(self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None
+                        ) -> list[Volume]:
+        """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
+        alt = self._alt(k)
+        sxy = (start[0], start[1])
+        vols = [Volume(sxy, sxy, min(start[2], alt), max(start[2], alt), 0.0, "climb")]
+        end = hold if hold is not None else (target[0], target[1]) if target is not None else sxy
+        if math.hypot(end[0] - sxy[0], end[1] - sxy[1]) > 1e-6:
+            vols.append(Volume(sxy, end, alt, alt, 0.0, "leg"))
+        if hold is not None:
+            vols.append(Volume(end, end, alt, alt, 0.0, "hover"))
+        elif target is not None:
+            vols.append(self._column(target, max(top, alt)))
+        return vols
+
+    def _evaluate(self, uav: str, w: _Pending, now_s: float) -> Grant:
+        """Grant ``uav``'s flight if it fits, else a hold flight, else "hover where you are"."""
+        if w.seen_version == self._version and w.answer is not None:
+            return w.answer
+        w.seen_version = self._version
+        earlier = self._queued_before(uav)
+        blocked_site = any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m
+                           for e in earlier)
+        if not blocked_site:
+            if w.hold is not None and w.at_hold:
+                # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
+                # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
+                # answer, and one that never saw its hold answer (a later one came first) would fly straight.
+                assert w.layer is not None
+                hold = (w.hold[0], w.hold[1], self._alt(w.layer))
+                for k in range(self.max_layers):
+                    extra = self._flight_volumes(hold, w.site, w.top_m, k, None)
+                    if self._free(uav, extra):
+                        self._volumes[uav] = self._volumes.get(uav, []) + extra
+                        self._version += 1
+                        return self._granted(uav, w, k, now_s)
+            elif w.hold is None:
+                start = w.position if w.position is not None else w.site
+                for k in range(self.max_layers):
+                    vols = self._flight_volumes(start, w.site, w.top_m, k, None)
+                    if self._free(uav, vols):
+                        self._take(uav, vols, start)
+                        return self._granted(uav, w, k, now_s)
+        if w.hold is None:
+            g = self._hold_flight(uav, w)
+            if g is not None:
+                w.answer = g
+                self.held_back += 1
+                return g
+            self.refused += 1
+            w.answer = Grant(uav, w.site, False)
+            return w.answer
+        assert w.layer is not None
+        w.answer = Grant(uav, w.site, False, w.hold, self._alt(w.layer))
+        return w.answer
+
+    def _take(self, uav: str, vols: list[Volume], start: Vec3) -> None:
+        zone = self._zone.pop(uav, None)
+        self._origin.pop(uav, None)  # a climb from mid-air (a UAV turned back) is kept until it is down
+        if zone is not None:
+            self._origin[uav] = zone
+        self._volumes[uav] = vols
+        self._version += 1
+
+    def _granted(self, uav: str, w: _Pending, k: int, now_s: float) -> Grant:
+        del self._waiting[uav]
+        self._flight[uav] = (w.site, k)
+        self._tops[uav] = w.top_m
+        waited = max(0.0, now_s - w.since_s)
+        self.wait_s += waited
+        self.max_wait_s = max(self.max_wait_s, waited)
+        self.granted_count += 1
+        self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
+        self._version += 1
+        return Grant(uav, w.site, layer_m=self._alt(k))
+
+    def _hold_candidates(self, uav: str, site: Vec3) -> list[Vec3]:
+        keep_out: list[XY] = []
+        for other, zone in self._zone.items():
+            if other != uav:
+                keep_out.append((zone[0], zone[1]))
+        for other, (fsite, _k) in self._flight.items():
+            if other != uav:
+                keep_out.append((fsite[0], fsite[1]))
+        for other, ow in self._waiting.items():
+            if other != uav:
+                keep_out.append((ow.site[0], ow.site[1]))
+                if ow.hold is not None:
+                    keep_out.append((ow.hold[0], ow.hold[1]))
         r = 1.1 * self.radius_m
         r2 = r * r
-        origin = position_m if position_m is not None else site_m
 
-        def free(p: tuple[float, float]) -> bool:
+        def free(p: XY) -> bool:
             return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out)
 
-        if free((origin[0], origin[1])):
-            return (float(origin[0]), float(origin[1]), float(site_m[2]))
-        best: tuple[float, float] | None = None
-        best_d = math.inf
         step = max(self.radius_m, 0.25)
+        out: list[tuple[float, Vec3]] = []
         for ring in range(1, 9):
             for a in range(24):
                 ang = 2.0 * math.pi * a / 24.0
-                for cx, cy in ((origin[0], origin[1]), (site_m[0], site_m[1])):
-                    c = (cx + ring * step * math.cos(ang), cy + ring * step * math.sin(ang))
-                    if free(c):
-                        d = math.hypot(c[0] - origin[0], c[1] - origin[1])
-                        if d < best_d:
-                            best, best_d = c, d
-            if best is not None:
+                c = (site[0] + ring * step * math.cos(ang), site[1] + ring * step * math.sin(ang))
+                if free(c):
+                    out.append((ring * step, (c[0], c[1], site[2])))
+            if len(out) >= 6:
                 break
-        if best is None:  # pragma: no cover - eight rings always leave free space around a finite set
-            best = (origin[0], origin[1])
-        return (float(best[0]), float(best[1]), float(site_m[2]))
+        return [p for _d, p in sorted(out, key=lambda x: x[0])] or [(site[0] + 8 * step, site[1], site[2])]
 
-    # -- internals --------------------------------------------------------------------------------------------
-    def _fly(self, uav: str, path: list[tuple[XY, XY]], vertical: list[XY], *, low_ok: bool,
-             now_s: float = 0.0, site: Vec3 | None = None, position_m: Vec3 | None = None) -> bool:
-        """Give ``uav`` a layer for a flight along ``path`` that climbs or descends at ``vertical`` points.
+    def _hold_flight(self, uav: str, w: _Pending) -> Grant | None:
+        """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""
+        start = w.position if w.position is not None else w.site
+        for k in range(self.max_layers):
+            for hold in self._hold_candidates(uav, w.site)[:6]:
+                vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
+                if self._free(uav, vols):
+                    self._take(uav, vols, start)
+                    w.hold = hold
+                    w.layer = k
+                    w.at_hold = False
+                    self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
+                    return Grant(uav, w.site, False, hold, self._alt(k))
+        return None
 
-        Layer 0 (``base_m``) if allowed and its path keeps clear of every other column, layer-0 path and point
-        where a flight in progress climbs or descends: such a flight meets nobody. Otherwise the lowest layer
-        above 0 that no other flight in progress uses and on which it crosses nobody: lateral legs of two flights
-        above layer 0 are always ``spacing_m`` apart.
-        False (no flight) when it would cross another flight in progress (:meth:`_crossing`): the UAV waits where
-        it is and asks again; after ``max_refusal_s`` of that it flies anyway (counted in ``forced``). While it
-        waits there, other flights keep clear of it.
-        """
-        if self.base_m is None:
-            return True
-        if low_ok and self._low_path_clear(uav, path[0][0], path[-1][1]):
-            k = 0
-        else:
-            # the lowest layer above 0 that no other flight in progress uses and on which this one crosses nobody
-            used = {t[0] for o, t in self._transit.items() if o != uav}
-            top = len(self._transit) + len(self._hover) + 2
-            free = [j for j in range(1, top + 1) if j not in used]
-            k = next((j for j in free if not self._crossing(uav, j, path, vertical)), free[0])
-            if self._crossing(uav, k, path, vertical):
-                key = (site[0], site[1]) if site is not None else None
-                first = self._refused_since.get(uav)
-                if first is None or first[0] != key:
-                    self._refused_since[uav] = first = (key, now_s)
-                if now_s - first[1] < self.max_refusal_s:
-                    self.refused += 1
-                    if position_m is not None:
-                        self._hover[uav] = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
-                    return False
-                self.forced += 1
-        self._refused_since.pop(uav, None)
-        self._hover.pop(uav, None)
-        self._transit[uav] = (k, path, vertical)
-        # its departure (the first vertical point) counts until it should have climbed to its layer
-        self._climb_until[uav] = now_s + 3.0 + 1.875 * (k * self.spacing_m + 0.3) / CLIMB_SPEED_MPS
-        self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
-        return True
+    def _arrive_at_hold(self, uav: str, w: _Pending) -> None:
+        """It hovers at its hold point: only the hover is its now."""
+        assert w.hold is not None and w.layer is not None
+        w.at_hold = True
+        self._origin.pop(uav, None)
+        hxy = (w.hold[0], w.hold[1])
+        alt = self._alt(w.layer)
+        self._volumes[uav] = [Volume(hxy, hxy, alt, alt, 0.0, "hover")]
+        self._version += 1
 
-    def _vertical(self, other: str) -> list[XY]:
-        """Where a flight in progress still climbs or descends (its departure only until it has climbed)."""
-        v = self._transit[other][2]
-        return v if self._now_s < self._climb_until.get(other, math.inf) else v[1:]
 
-    def _crossing(self, uav: str, k: int, path: list[tuple[XY, XY]], vertical: list[XY]) -> bool:
-        """Would a flight at layer ``k`` along ``path``, climbing or descending at ``vertical``, cross another?
-
-        Yes if a lower flight passes near where it goes through the lower layer, or a higher one climbs or
-        descends near its path (within ``path_clearance_m``).
-        """
-        d = min(self.radius_m, self.path_clearance_m)
-        alt = (self.base_m or 0.0) + k * self.spacing_m
-        for other, h in self._hover.items():
-            if other == uav:
-                continue
-            if any(_point_segment_m((h[0], h[1]), a, b) < d for a, b in path) and abs(alt - h[2]) < self.spacing_m:
-                return True  # it hovers on our way at our altitude
-            if any(math.hypot(v[0] - h[0], v[1] - h[1]) < d for v in vertical):
-                return True  # we would climb or descend next to it
-        for other, (k_o, path_o, _v) in self._transit.items():
-            if other == uav or k_o == k:
-                continue
-            vert_o = self._vertical(other)
-            if k_o < k and any(_point_segment_m(v, a, b) < d for v in vertical for a, b in path_o):
-                return True
-            if k_o > k and any(_point_segment_m(v, a, b) < d for v in vert_o for a, b in path):
-                return True
-        return False
-
-    def _low_path_clear(self, uav: str, a: XY, b: XY) -> bool:
-        r = min(self.radius_m, self.path_clearance_m)
-        for other, h in self._hover.items():
-            if other != uav and _point_segment_m((h[0], h[1]), a, b) < r:
-                return False
-        for other, home in self._homes.items():
-            if other != uav and _point_segment_m(home, a, b) < r:
-                return False
-        for other, hs in self._held.items():
-            if other != uav:
-                for h in hs:
-                    if _point_segment_m((h[0], h[1]), a, b) < r:
-                        return False
-        for other, t in self._transit.items():
-            if other == uav:
-                continue
-            if t[0] == 0 and _segment_segment_m(a, b, t[1][0][0], t[1][-1][1]) < r:
-                return False
-            if any(_point_segment_m(v, a, b) < r for v in self._vertical(other)):
-                return False  # it climbs or descends on our way
-        return True
-
-    def _blocks(self, other: str, site: Vec3) -> bool:
-        r2 = self.radius_m**2
-        for h in self._held.get(other, ()):
-            if _d2(h, site) < r2:
-                return True
-        w = self._waiting.get(other)
-        if w is not None and w[3] is not None and _d2(w[3], site) < r2:
-            return True
-        t = self._transit.get(other)  # a layer-0 flight passing there?
-        return t is not None and t[0] == 0 and any(
-            _point_segment_m((site[0], site[1]), a, b) < self.release_radius_m for a, b in t[1])
-
-    def _blocked(self, uav: str, site: Vec3) -> bool:
-        for other in {**self._held, **self._waiting, **self._transit}:
-            if other != uav and self._blocks(other, site):
-                return True
-        return False
-
-    @staticmethod
-    def _same(a: Vec3, b: Vec3) -> bool:
-        return math.hypot(a[0] - b[0], a[1] - b[1]) < 1e-3
+def _same(a: Vec3, b: Vec3) -> bool:
+    """The same site (column): the same point horizontally."""
+    return math.hypot(a[0] - b[0], a[1] - b[1]) < 1e-3
 
 
 def _point_segment_m(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
@@ -450,10 +606,6 @@ def _segment_segment_m(a: tuple[float, float], b: tuple[float, float], c: tuple[
                _point_segment_m(b, c, d))
 
 
-def _d2(a: Vec3, b: Vec3) -> float:
-    return (a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2
-
-
 def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
     """Smallest distance between two of ``points`` (inf for fewer than two): a helper for tests and reports."""
     pts = list(points)
@@ -465,13 +617,15 @@ def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
 
 
 __all__ = [
-    "CLIMB_SPEED_MPS",
     "DEFAULT_LAYER_SPACING_M",
     "LAYER_MARGIN_M",
+    "TRACK_M",
     "ColumnClearance",
     "Grant",
+    "Volume",
     "layer_base_m",
     "min_pairwise_separation_m",
     "transit_layers_m",
+    "volumes_conflict",
     "work_altitude_m",
 ]

@@ -39,6 +39,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
+from masonry.ports import BATTERY_LOW_REASON
 
 log = logging.getLogger(__name__)
 
@@ -235,8 +236,9 @@ class MissionControl:
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
                 self._send(g.uav, Clearance(MISSION_CONTROL, g.uav, g.site_m, self.columns.release_radius_m, now_s,
-                                            layer_m=g.layer_m))
-                log.debug("column at (%.2f, %.2f) granted to %s", g.site_m[0], g.site_m[1], g.uav)
+                                            g.granted, g.hold_m, g.layer_m))
+                log.debug("flight to (%.2f, %.2f) %s to %s", g.site_m[0], g.site_m[1],
+                          "granted" if g.granted else "held", g.uav)
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
@@ -283,7 +285,9 @@ class MissionControl:
             if msg.arrived:
                 self.columns.end_transit(msg.sender)
                 return
-            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m)
+            if msg.position_m is not None:
+                self.columns.progress(msg.sender, msg.position_m)
+            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m)
             self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.release_radius_m,
                                              now_s, g.granted, g.hold_m, g.layer_m))
             return
@@ -305,11 +309,13 @@ class MissionControl:
             link.state = msg.state
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
+                self.columns.progress(msg.sender, msg.position_m)
         elif isinstance(msg, Progress):
             self.events.progress += 1
             link.state = msg.state
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
+                self.columns.progress(msg.sender, msg.position_m)
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
@@ -333,7 +339,8 @@ class MissionControl:
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
-            self.dispatcher.fail(r.task_id)
+            # abandoned for the UAV's battery: not an attempt of the task (its UAV lands for a fresh pack)
+            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(BATTERY_LOW_REASON))
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
         self._dirty = True

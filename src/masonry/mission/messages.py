@@ -103,6 +103,8 @@ class ClearanceRequest:
     position_m: Vec3 | None = None
     release: bool = False
     arrived: bool = False
+    #: the highest altitude the UAV will reach while working at the site (None: the site's own altitude)
+    top_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -190,7 +192,7 @@ def encode(message: Message) -> bytes:
         )
     elif isinstance(message, ClearanceRequest):
         body.update(site_m=_vec(message.site_m), time_s=message.time_s, position_m=_vec(message.position_m),
-                    release=message.release, arrived=message.arrived)
+                    release=message.release, arrived=message.arrived, top_m=message.top_m)
     elif isinstance(message, Clearance):
         body.update(uav=message.uav, site_m=_vec(message.site_m), radius_m=message.radius_m,
                     time_s=message.time_s, granted=message.granted, hold_m=_vec(message.hold_m),
@@ -330,7 +332,7 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         return None
     if fleet is not None and sender != MISSION_CONTROL and sender not in fleet:
         return None
-    time_s = data.get("time_s")
+    time_s: Any = data.get("time_s")
     if not _finite_number(time_s):
         return None
     task_id = data.get("task_id")
@@ -451,7 +453,7 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
     if kind == "clearance-request":
         check_uav(sender, "sender")
         return ClearanceRequest(sender, f.vec("site_m"), f.num("time_s"), f.vec("position_m", optional=True),
-                                f.bool_("release"), f.bool_("arrived"))
+                                f.bool_("release"), f.bool_("arrived"), f.num("top_m", optional=True))
     if kind == "clearance":
         uav = f.str_("uav")
         check_uav(uav, "uav")

@@ -436,8 +436,11 @@ class Dispatcher:
             if prereqs[d] == 0:
                 self._maybe_available(d)
 
-    def fail(self, task_id: str) -> bool:
+    def fail(self, task_id: str, *, count: bool = True) -> bool:
         """Count a failed attempt of an in-progress task and free its UAV.
+
+        ``count`` False: the attempt failed for a reason that is not the task's (the UAV's battery): the task
+        returns to the pool without counting it.
 
         Returns:
             True if the task went back to the pool, False if it reached ``max_attempts`` and is now stuck.
@@ -447,6 +450,9 @@ class Dispatcher:
         """
         i = self._running(task_id, "fail")
         self._stop(i)
+        if not count:
+            self._maybe_available(i)
+            return True
         n = self._attempts.get(task_id, 0) + 1
         self._attempts[task_id] = n
         if n >= self.max_attempts:
