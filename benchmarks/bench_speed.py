@@ -30,7 +30,7 @@ def main() -> None:
     ap.add_argument("--profile", default=None, help="write a cProfile of the run to this file")
     args = ap.parse_args()
     bp = running_bond(args.courses, args.per_course, brick_uavs=args.brick_uavs, adhesion_uavs=args.adhesion_uavs)
-    kwargs = dict(camera="geometric", seed=args.seed, separation=not args.no_separation)
+    kwargs = {"camera": "geometric", "seed": args.seed, "separation": not args.no_separation}
     cpu0, wall0 = time.process_time(), time.perf_counter()
     if args.profile:
         import cProfile

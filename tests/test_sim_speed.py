@@ -9,8 +9,8 @@ vehicle still takes off, a tool still rests on a brick), and the camera's per-po
 from __future__ import annotations
 
 import json
-import re
 import math
+import re
 
 import numpy as np
 import pytest

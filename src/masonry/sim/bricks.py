@@ -224,9 +224,9 @@ class BrickField:
             if top < t <= limit:
                 # point_in_rect(x, y, *b.rect()), inline (a tool near the bricks asks every physics step)
                 hx, hy = sx / 2.0 - 0.0, sy / 2.0 - 0.0
-                if hx < 1e-4:
+                if hx < 1e-4:  # noqa: PLR1730 (no min/max call: hot loop)
                     hx = 1e-4
-                if hy < 1e-4:
+                if hy < 1e-4:  # noqa: PLR1730 (no min/max call: hot loop)
                     hy = 1e-4
                 yaw = b.yaw_rad
                 c, s = math.cos(yaw), math.sin(yaw)

@@ -455,7 +455,7 @@ class SimVehicle:
             tz = 1.5 * err
             if not tz > -max_descent:  # min(takeoff_speed, max(-max_descent, 1.5 * err))
                 tz = -max_descent
-            if cfg.takeoff_speed_mps < tz:
+            if cfg.takeoff_speed_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
                 tz = cfg.takeoff_speed_mps
             if abs(err) < 0.03 and abs(vz) < 0.1:
                 self._takeoff_z = None
@@ -483,7 +483,7 @@ class SimVehicle:
             tx, ty = tx * f, ty * f
         if not tz > -max_descent:  # min(max_climb, max(-max_descent, tz))
             tz = -max_descent
-        if cfg.max_climb_mps < tz:
+        if cfg.max_climb_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
             tz = cfg.max_climb_mps
 
         # First-order lag, then acceleration limits.
@@ -496,7 +496,7 @@ class SimVehicle:
         amax = cfg.max_accel_z_mps2
         if not az > -amax:  # min(amax, max(-amax, az))
             az = -amax
-        if amax < az:
+        if amax < az:  # noqa: PLR1730 (no min/max call: hot loop)
             az = amax
         if self.gusts_mps > 0.0:
             a = dt_s / cfg.gust_tau_s
@@ -520,7 +520,7 @@ class SimVehicle:
         ymax = cfg.max_yaw_rate_radps
         if not tyaw > -ymax:  # min(ymax, max(-ymax, tyaw))
             tyaw = -ymax
-        if ymax < tyaw:
+        if ymax < tyaw:  # noqa: PLR1730 (no min/max call: hot loop)
             tyaw = ymax
         rate = self._yaw_rate = self._yaw_rate + (tyaw - self._yaw_rate) * self._yaw_k
         self._yaw = (self._yaw + rate * dt_s + _PI) % _TWO_PI - _PI  # wrap_angle_rad, inline
