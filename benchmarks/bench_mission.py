@@ -112,16 +112,18 @@ def policies(quick: bool, separation: bool) -> None:
             ("running bond 3x12, 4+2", running_bond(3, 12, brick_uavs=4, adhesion_uavs=2)),
             ("running bond 2x30, 2+1", running_bond(2, 30, brick_uavs=2, adhesion_uavs=1)),
             ("running bond 4x25, 4+2", running_bond(4, 25, brick_uavs=4, adhesion_uavs=2)),
+            ("running_bond_200.yaml, 3+2", "running_bond_200.yaml"),
         ]
     print(f"makespan / lower bound per policy (seed 0, separation {'on' if separation else 'off'}); "
           "clearance = serialised-set bound (see the docstring)")
     print(f"  {'wall':<30} {'policy':<14} {'makespan':>9} {'bound0':>7} {'bound':>7} {'ratio':>6} {'clearance':>9} "
           f"{'ratio*':>6} {'done':>7} {'wall s':>7} {'cpu s':>6}")
     for label, bp in walls:
-        if bp is None:
+        if bp is None or isinstance(bp, str):
             from masonry.blueprint import load_blueprint
 
-            bp = load_blueprint(os.path.join(os.path.dirname(__file__), "..", "blueprints", "paper_case_study.yaml"))
+            bp = load_blueprint(os.path.join(os.path.dirname(__file__), "..", "blueprints",
+                                             bp or "paper_case_study.yaml"))
         p = make_plan(bp)
         minimum = min_durations_s(p, cruise_altitude_m=bp.cruise_altitude_m)
         clear = clearance_bound_s(p, minimum)
