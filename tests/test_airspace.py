@@ -234,7 +234,7 @@ class ClearanceLink(QueueMissionLink):
         self.asked: dict[tuple[float, float, float], float] = {}
         self.arrived: list[tuple[float, float, float]] = []
 
-    def request_clearance(self, site_m, top_m=None):
+    def request_clearance(self, site_m, top_m=None, to_m=None):
         first = self.asked.setdefault(tuple(site_m), self.clock.now_s())
         waited = self.clock.now_s() - first
         if waited < self.answer_after_s:

@@ -128,6 +128,7 @@ class UavModel:
         self._transit: tuple[str, tuple[float, float, float], float | None] | None = None
         self._gate_at = 0  # != 0: the legs of a layer route start from rest
         self._transit_top_m: float | None = None  # top of the work at the transit's site (see _route)
+        self._transit_to_m: tuple[float, float, float] | None = None  # where that work ends (see _route)
         self._request_clearance: Callable[[Any], Any] | None = getattr(link, "request_clearance", None)
         # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
@@ -336,7 +337,7 @@ class UavModel:
         self._motion = True
 
     def _route(self, tel: Telemetry, target_m: np.ndarray, yaw_rad: float | None = None,
-               top_m: float | None = None) -> None:
+               top_m: float | None = None, to_m: np.ndarray | None = None) -> None:
         """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal).
 
         With a link that hands out clearances (mission control's airspace, docs/safety.md) a lateral move is a
@@ -344,7 +345,8 @@ class UavModel:
         descends) to the layer it is given, flies there, and descends over the target once the column is its
         (until then it waits at its layer at the hold point it is given). Without one, with a fixed
         ``config.lateral_altitude_m``, the lateral leg flies at that altitude. ``top_m``: the highest altitude
-        the UAV will reach while working at the target (default: the target's), which mission control reserves.
+        the UAV will reach while working at the target (default: the target's), ``to_m`` where that work ends if
+        it moves along a segment (an adhesion UAV spraying): mission control reserves both.
         """
         p = np.asarray(tel.position_m, dtype=float)
         target = np.asarray(target_m, dtype=float)
@@ -354,6 +356,7 @@ class UavModel:
         if self._request_clearance is not None and d_xy > 0.05:
             self._transit = ("ask", (float(target[0]), float(target[1]), float(target[2])), None)
             self._transit_top_m = top_m
+            self._transit_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
             # hover here until mission control answers (from rest: a UAV still moving, say climbing out of its
             # site, must not carry that motion into the reference of the flight it is granted)
             self._fly_to(tel, p, 0.1, yaw_rad=yaw_rad, from_rest=True)
@@ -406,7 +409,7 @@ class UavModel:
             if end is not None:
                 end(site)
             return True
-        answer = self._request_clearance(site, self._transit_top_m)
+        answer = self._request_clearance(site, self._transit_top_m, self._transit_to_m)
         if answer is None:
             self._traj_end_s = self._now_s  # no answer yet: hover (a leg timeout does not run meanwhile)
             return False
@@ -1151,7 +1154,9 @@ class AdhesionUav(UavModel):
         assert tel is not None
         self._yaw_rad = tel.attitude_rad[2]
         start = self._nozzle_body(self.adhesion_task.start_m)
-        self._route(tel, np.array([start[0], start[1], self._transit_altitude_m()]), yaw_rad=self._yaw_rad)
+        end = self._nozzle_body(self.adhesion_task.end_m)  # it sprays along to there: part of its zone
+        self._route(tel, np.array([start[0], start[1], self._transit_altitude_m()]), yaw_rad=self._yaw_rad,
+                    to_m=end)
 
     def do_cruise(self, tel: Telemetry) -> None:
         if self._leg_done(tel):

@@ -63,6 +63,10 @@ def work_altitude_m(blueprint: Blueprint) -> float:
 #: it on its leg is freed (:meth:`ColumnClearance.progress`).
 TRACK_M = 0.3
 
+#: A UAV within this of its hold point (horizontally) hovers there: the state machines count a leg as done
+#: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
+AT_HOLD_M = 0.1
+
 #: Layer 0 starts this far above the highest work altitude (the spacing of the layers above it has its own
 #: margin over the separation target).
 LAYER_MARGIN_M = 0.0
@@ -147,6 +151,7 @@ class _Pending:
     top_m: float
     position: Vec3 | None
     since_s: float
+    to: XY | None = None  # the work at the site spans from it to here (an adhesion segment)
     hold: Vec3 | None = None  # the hold point of its hold flight (granted), if any
     layer: int | None = None  # the layer of that hold flight
     at_hold: bool = False
@@ -211,7 +216,8 @@ class ColumnClearance:
         self._origin: dict[str, Vec3] = {}  # uav -> site it set off from (its climb is freed once away)
         self._waiting: dict[str, _Pending] = {}  # insertion order = first come, first served
         self._homes: dict[str, Vec3] = {u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()}
-        self._tops: dict[str, float] = {}  # uav -> top of the zone at the site of its granted flight
+        # uav -> (top, end of the work's span) of the zone at the site of its granted flight
+        self._tops: dict[str, tuple[float, XY | None]] = {}
         self._version = 0
         self.granted_count = 0
         self.held_back = 0  # hold flights given (a UAV sent to wait near its site)
@@ -275,8 +281,9 @@ class ColumnClearance:
 
     # -- the protocol -----------------------------------------------------------------------------------------
     def request(self, uav: str, site_m: Vec3, now_s: float, position_m: Vec3 | None = None,
-                top_m: float | None = None) -> Grant:
-        """``uav`` (now at ``position_m``) sets off for ``site_m``, where it will work up to ``top_m``.
+                top_m: float | None = None, to_m: Vec3 | None = None) -> Grant:
+        """``uav`` (now at ``position_m``) sets off for ``site_m``, where it will work up to ``top_m`` (and along
+        to ``to_m``: an adhesion UAV sprays from its site to there).
 
         A repeated request (same site) gets the same answer unless something changed, and keeps its place in the
         queue; one for another site replaces the UAV's pending one (its volumes stay until the new flight is
@@ -297,13 +304,17 @@ class ColumnClearance:
         pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
         w = self._waiting.get(uav)
         if w is not None and _same(w.site, site):
-            if pos is not None and w.hold is None:
+            if pos is not None and w.hold is None and pos != w.position:
                 w.position = pos
+                w.seen_version = -1  # where it asks from changed: look again
             return self._evaluate(uav, w, now_s)
         if w is not None:
             del self._waiting[uav]
         w = _Pending(site, top, pos, now_s)
+        if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
+            w.to = (float(to_m[0]), float(to_m[1]))
         self._waiting[uav] = w
+        self._version += 1  # the queue changed: answers of those behind it may change
         return self._evaluate(uav, w, now_s)
 
     def grant(self, now_s: float) -> list[Grant]:
@@ -325,8 +336,8 @@ class ColumnClearance:
             return
         self._origin.pop(uav, None)
         site, _k = f
-        top = self._tops.pop(uav, site[2])
-        self._set_zone(uav, site, top)
+        top, to = self._tops.pop(uav, (site[2], None))
+        self._set_zone(uav, site, top, to)
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
@@ -339,6 +350,7 @@ class ColumnClearance:
         w = self._waiting.get(uav)
         if w is not None and _same(w.site, site_m) and w.hold is None:
             del self._waiting[uav]  # given up before anything was granted
+            self._version += 1
             return
         origin = self._origin.get(uav)
         if origin is not None and _same(origin, site_m):
@@ -362,7 +374,7 @@ class ColumnClearance:
         x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
         w = self._waiting.get(uav)
         if w is not None and w.hold is not None and not w.at_hold and w.layer is not None \
-                and math.hypot(x - w.hold[0], y - w.hold[1]) < TRACK_M and abs(z - self._alt(w.layer)) < 0.2:
+                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and abs(z - self._alt(w.layer)) < 0.2:
             self._arrive_at_hold(uav, w)  # it hovers at its hold point
             return
         kept: list[Volume] | None = None
@@ -391,10 +403,13 @@ class ColumnClearance:
             kept = rest
             break
         if kept is None:
-            if last_leg is None or z >= last_leg.z0_m - 0.2 or \
-                    math.hypot(x - last_leg.b[0], y - last_leg.b[1]) >= TRACK_M:
+            # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
+            zone = vols[-1]
+            if last_leg is None or zone.kind != "zone" or z >= last_leg.z0_m - 0.2 or \
+                    math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M or \
+                    math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6:
                 return
-            kept = [v for v in vols if v.kind == "zone"]  # coming down over its site
+            kept = [zone]
         if len(kept) != len(vols) or any(k is not v for k, v in zip(kept, vols)):
             self._volumes[uav] = kept
             self._version += 1
@@ -418,15 +433,15 @@ class ColumnClearance:
     def _conflict(self, p: Volume, q: Volume) -> bool:
         return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
 
-    def _column(self, site: Vec3, top: float) -> Volume:
+    def _column(self, site: Vec3, top: float, to: XY | None = None) -> Volume:
         xy = (site[0], site[1])
-        return Volume(xy, xy, 0.0, top, self.zone_slack_m, "zone")
+        return Volume(xy, xy if to is None else to, 0.0, top, self.zone_slack_m, "zone")
 
-    def _set_zone(self, uav: str, site: Vec3, top: float) -> None:
+    def _set_zone(self, uav: str, site: Vec3, top: float, to: XY | None = None) -> None:
         if uav in self._homes and _same(self._homes[uav], site) and self.base_m is not None:
             top = max(top, self.base_m)  # it takes off here up to its transit altitude
         self._zone[uav] = site
-        self._volumes[uav] = [self._column(site, top)]
+        self._volumes[uav] = [self._column(site, top, to)]
         self._version += 1
 
     def _free(self, uav: str, vols: list[Volume]) -> bool:
@@ -447,8 +462,8 @@ class ColumnClearance:
             out.append(w)
         return out
 
-    def _flight_volumes(self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None
-                        ) -> list[Volume]:
+    def _flight_volumes(self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None,
+                        to: XY | None = None) -> list[Volume]:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
         alt = self._alt(k)
         sxy = (start[0], start[1])
@@ -459,7 +474,7 @@ class ColumnClearance:
         if hold is not None:
             vols.append(Volume(end, end, alt, alt, 0.0, "hover"))
         elif target is not None:
-            vols.append(self._column(target, max(top, alt)))
+            vols.append(self._column(target, max(top, alt), to))
         return vols
 
     def _evaluate(self, uav: str, w: _Pending, now_s: float) -> Grant:
@@ -478,7 +493,7 @@ class ColumnClearance:
                 assert w.layer is not None
                 hold = (w.hold[0], w.hold[1], self._alt(w.layer))
                 for k in range(self.max_layers):
-                    extra = self._flight_volumes(hold, w.site, w.top_m, k, None)
+                    extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to)
                     if self._free(uav, extra):
                         self._volumes[uav] = self._volumes.get(uav, []) + extra
                         self._version += 1
@@ -486,7 +501,7 @@ class ColumnClearance:
             elif w.hold is None:
                 start = w.position if w.position is not None else w.site
                 for k in range(self.max_layers):
-                    vols = self._flight_volumes(start, w.site, w.top_m, k, None)
+                    vols = self._flight_volumes(start, w.site, w.top_m, k, None, w.to)
                     if self._free(uav, vols):
                         self._take(uav, vols, start)
                         return self._granted(uav, w, k, now_s)
@@ -514,7 +529,7 @@ class ColumnClearance:
     def _granted(self, uav: str, w: _Pending, k: int, now_s: float) -> Grant:
         del self._waiting[uav]
         self._flight[uav] = (w.site, k)
-        self._tops[uav] = w.top_m
+        self._tops[uav] = (w.top_m, w.to)
         waited = max(0.0, now_s - w.since_s)
         self.wait_s += waited
         self.max_wait_s = max(self.max_wait_s, waited)
@@ -527,6 +542,7 @@ class ColumnClearance:
         keep_out: list[XY] = []
         for other, zone in self._zone.items():
             if other != uav:
+                keep_out.extend(v.b for v in self._volumes.get(other, ()) if v.kind == "zone")
                 keep_out.append((zone[0], zone[1]))
         for other, (fsite, _k) in self._flight.items():
             if other != uav:
@@ -617,6 +633,7 @@ def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
 
 
 __all__ = [
+    "AT_HOLD_M",
     "DEFAULT_LAYER_SPACING_M",
     "LAYER_MARGIN_M",
     "TRACK_M",

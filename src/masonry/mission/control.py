@@ -287,7 +287,7 @@ class MissionControl:
                 return
             if msg.position_m is not None:
                 self.columns.progress(msg.sender, msg.position_m)
-            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m)
+            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
             self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.release_radius_m,
                                              now_s, g.granted, g.hold_m, g.layer_m))
             return

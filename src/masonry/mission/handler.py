@@ -125,6 +125,7 @@ class UavHandler:
         self._column_radius_m = 0.0
         self._column_sent_s = -1e18
         self._column_top_m: float | None = None
+        self._column_to_m: Vec3 | None = None
         self._column_checked_s = -1e18
         self.clearance_requests = 0
 
@@ -191,7 +192,8 @@ class UavHandler:
         self.executions.append(self._current)
         return task
 
-    def request_clearance(self, site_m: Vec3, top_m: float | None = None) -> Clearance | None:
+    def request_clearance(self, site_m: Vec3, top_m: float | None = None,
+                          to_m: Vec3 | None = None) -> Clearance | None:
         """The UAV sets off for ``site_m``: mission control's answer (layer, column granted or hold point), or None.
 
         The first call for a site sends the request (again every heartbeat period while unanswered); the answer
@@ -217,12 +219,15 @@ class UavHandler:
             self._column_sent_s = self.now_s
             self.clearance_requests += 1
             self._column_top_m = top_m
-            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=top_m))
+            self._column_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
+            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=top_m,
+                                        to_m=self._column_to_m))
         elif self.now_s - self._column_sent_s >= (
             0.25 if self._column_answer is not None and self._column_answer.hold_m is None else self.heartbeat_period_s
         ):  # refused for now (another flight in the way): ask again soon
             self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
-            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=self._column_top_m))
+            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=self._column_top_m,
+                                        to_m=self._column_to_m))
         self.pump()  # in-process, the answer may already be here
         return self._column_answer
 

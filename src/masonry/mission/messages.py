@@ -105,6 +105,8 @@ class ClearanceRequest:
     arrived: bool = False
     #: the highest altitude the UAV will reach while working at the site (None: the site's own altitude)
     top_m: float | None = None
+    #: where the work at the site ends, if it moves along a segment (an adhesion UAV spraying); None: at the site
+    to_m: Vec3 | None = None
 
 
 @dataclass(frozen=True)
@@ -192,7 +194,8 @@ def encode(message: Message) -> bytes:
         )
     elif isinstance(message, ClearanceRequest):
         body.update(site_m=_vec(message.site_m), time_s=message.time_s, position_m=_vec(message.position_m),
-                    release=message.release, arrived=message.arrived, top_m=message.top_m)
+                    release=message.release, arrived=message.arrived, top_m=message.top_m,
+                    to_m=_vec(message.to_m))
     elif isinstance(message, Clearance):
         body.update(uav=message.uav, site_m=_vec(message.site_m), radius_m=message.radius_m,
                     time_s=message.time_s, granted=message.granted, hold_m=_vec(message.hold_m),
@@ -453,7 +456,8 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
     if kind == "clearance-request":
         check_uav(sender, "sender")
         return ClearanceRequest(sender, f.vec("site_m"), f.num("time_s"), f.vec("position_m", optional=True),
-                                f.bool_("release"), f.bool_("arrived"), f.num("top_m", optional=True))
+                                f.bool_("release"), f.bool_("arrived"), f.num("top_m", optional=True),
+                                f.vec("to_m", optional=True))
     if kind == "clearance":
         uav = f.str_("uav")
         check_uav(uav, "uav")
