@@ -353,7 +353,9 @@ class UavModel:
         self._transit = None
         self._gate_at = 0
         d_xy = math.hypot(target[0] - p[0], target[1] - p[1])
-        if self._request_clearance is not None and d_xy > 0.05:
+        if self._request_clearance is not None:
+            # even a move of a few centimetres (the next adhesion segment starts where the last one ended): the
+            # work there is another span of airspace, which mission control must reserve
             self._transit = ("ask", (float(target[0]), float(target[1]), float(target[2])), None)
             self._transit_top_m = top_m
             self._transit_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
@@ -424,7 +426,12 @@ class UavModel:
             if answer.layer_m is not None:
                 layer = answer.layer_m
             self._transit = ("down", site, layer)
-            self._layer_legs(tel, p, target, layer, self._target_yaw)
+            if math.hypot(target[0] - p[0], target[1] - p[1]) <= 0.05:
+                legs = self._low_legs(p, target)  # already over the site: no lateral leg, no layer
+                self._fly_to(tel, legs[0], yaw_rad=self._target_yaw, from_rest=True)
+                self._legs = [(leg, None) for leg in legs[1:]]
+            else:
+                self._layer_legs(tel, p, target, layer, self._target_yaw)
             return False
         hold = answer.hold_m
         if hold is not None and (phase == "ask" or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):

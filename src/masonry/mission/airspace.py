@@ -63,6 +63,12 @@ def work_altitude_m(blueprint: Blueprint) -> float:
 #: it on its leg is freed (:meth:`ColumnClearance.progress`).
 TRACK_M = 0.3
 
+#: A UAV that stopped mid-flight to ask for another site (it turned back) holds this much around where it is.
+HOVER_SLACK_M = 0.3
+
+#: A UAV reported within this of a layer's altitude is at the layer: the overshoot of a climb that stopped.
+SNAP_M = 0.12
+
 #: A UAV within this of its hold point (horizontally) hovers there: the state machines count a leg as done
 #: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
 AT_HOLD_M = 0.1
@@ -310,6 +316,8 @@ class ColumnClearance:
             return self._evaluate(uav, w, now_s)
         if w is not None:
             del self._waiting[uav]
+        if pos is not None and uav not in self._zone:
+            self._hover_where(uav, pos)  # it turned back mid-flight: it stays where it is until answered
         w = _Pending(site, top, pos, now_s)
         if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
             w.to = (float(to_m[0]), float(to_m[1]))
@@ -430,6 +438,14 @@ class ColumnClearance:
         assert self.base_m is not None
         return self.base_m + k * self.spacing_m
 
+    def _snap(self, z: float) -> float:
+        """A UAV hovering within ``SNAP_M`` of a layer is at that layer (its tracking error, not a place)."""
+        assert self.base_m is not None
+        j = round((z - self.base_m) / self.spacing_m)
+        if j >= 0 and abs(z - self._alt(j)) < SNAP_M:
+            return self._alt(j)
+        return z
+
     def _conflict(self, p: Volume, q: Volume) -> bool:
         return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
 
@@ -467,7 +483,8 @@ class ColumnClearance:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
         alt = self._alt(k)
         sxy = (start[0], start[1])
-        vols = [Volume(sxy, sxy, min(start[2], alt), max(start[2], alt), 0.0, "climb")]
+        z0 = self._snap(start[2])
+        vols = [Volume(sxy, sxy, min(z0, alt), max(z0, alt), 0.0, "climb")]
         end = hold if hold is not None else (target[0], target[1]) if target is not None else sxy
         if math.hypot(end[0] - sxy[0], end[1] - sxy[1]) > 1e-6:
             vols.append(Volume(sxy, end, alt, alt, 0.0, "leg"))
@@ -552,11 +569,16 @@ class ColumnClearance:
                 keep_out.append((ow.site[0], ow.site[1]))
                 if ow.hold is not None:
                     keep_out.append((ow.hold[0], ow.hold[1]))
+        # and wherever another UAV climbs, hovers or works: a UAV waiting there must be able to leave vertically
+        # without passing the hold point (else the two could wait for each other)
+        spans = [(v.a, v.b) for other, vols in self._volumes.items() if other != uav
+                 for v in vols if v.kind != "leg"]
         r = 1.1 * self.radius_m
         r2 = r * r
 
         def free(p: XY) -> bool:
-            return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out)
+            return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out) and \
+                all(_point_segment_m(p, a, b) >= r for a, b in spans)
 
         step = max(self.radius_m, 0.25)
         out: list[tuple[float, Vec3]] = []
@@ -584,6 +606,22 @@ class ColumnClearance:
                     self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
                     return Grant(uav, w.site, False, hold, self._alt(k))
         return None
+
+    def _hover_where(self, uav: str, pos: Vec3) -> None:
+        """``uav`` stopped at ``pos`` (it asks from there, hovering): only a small volume there is its now, if
+        that fits (it should: it was inside its volumes), else it keeps what it held."""
+        vols = self._volumes.get(uav)
+        if not vols:
+            return
+        z = self._snap(pos[2])
+        xy = (pos[0], pos[1])
+        here = [Volume(xy, xy, z - HOVER_SLACK_M, z + HOVER_SLACK_M, HOVER_SLACK_M, "hover")]
+        if len(vols) == 1 and vols[0].kind == "hover":
+            return
+        if self._free(uav, here):
+            self._volumes[uav] = here
+            self._origin.pop(uav, None)
+            self._version += 1
 
     def _arrive_at_hold(self, uav: str, w: _Pending) -> None:
         """It hovers at its hold point: only the hover is its now."""
@@ -635,7 +673,9 @@ def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
 __all__ = [
     "AT_HOLD_M",
     "DEFAULT_LAYER_SPACING_M",
+    "HOVER_SLACK_M",
     "LAYER_MARGIN_M",
+    "SNAP_M",
     "TRACK_M",
     "ColumnClearance",
     "Grant",
