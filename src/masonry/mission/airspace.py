@@ -489,7 +489,7 @@ class ColumnClearance:
         if math.hypot(end[0] - sxy[0], end[1] - sxy[1]) > 1e-6:
             vols.append(Volume(sxy, end, alt, alt, 0.0, "leg"))
         if hold is not None:
-            vols.append(Volume(end, end, alt, alt, 0.0, "hover"))
+            vols.append(Volume(end, end, alt, alt, self.zone_slack_m, "hover"))  # it may overshoot a little
         elif target is not None:
             vols.append(self._column(target, max(top, alt), to))
         return vols
@@ -630,7 +630,7 @@ class ColumnClearance:
         self._origin.pop(uav, None)
         hxy = (w.hold[0], w.hold[1])
         alt = self._alt(w.layer)
-        self._volumes[uav] = [Volume(hxy, hxy, alt, alt, 0.0, "hover")]
+        self._volumes[uav] = [Volume(hxy, hxy, alt, alt, self.zone_slack_m, "hover")]
         self._version += 1
 
 
