@@ -822,8 +822,9 @@ class BrickUav(UavModel):
         pickup = self.brick_task.pickup_m
         assert pickup is not None
         self._hover_z = self.config.cruise_altitude_m
-        # it may climb max_climbs steps there to widen the camera's view: that is part of its column
-        top = self._hover_z + self.config.max_climbs * self.config.climb_step_m
+        # it may climb max_climbs steps there to widen the camera's view, and it climbs out with the brick to its
+        # transit altitude: both are part of its column
+        top = max(self._hover_z + self.config.max_climbs * self.config.climb_step_m, self._transit_altitude_m())
         self._route(tel, np.array([pickup[0], pickup[1], self._hover_z]), top_m=top)
 
     def do_pickup_goto(self, tel: Telemetry) -> None:
