@@ -461,13 +461,25 @@ class ColumnClearance:
         self._version += 1
 
     def _free(self, uav: str, vols: list[Volume]) -> bool:
-        for other, theirs in self._volumes.items():
-            if other == uav:
-                continue
-            for v in vols:
-                for q in theirs:
-                    if self._conflict(v, q):
-                        return False
+        """No volume of ``vols`` conflicts with another UAV's (:func:`volumes_conflict`, written out: this is
+        mission control's inner loop)."""
+        sep_xy, sep_z = self.sep_xy_m, self.spacing_m - 1e-9
+        others = [q for other, theirs in self._volumes.items() if other != uav for q in theirs]
+        for v in vols:
+            vz0, vz1, vs = v.z0_m, v.z1_m, v.slack_m
+            (ax, ay), (bx, by) = v.a, v.b
+            vx0, vx1 = (ax, bx) if ax <= bx else (bx, ax)
+            vy0, vy1 = (ay, by) if ay <= by else (by, ay)
+            for q in others:
+                if vz0 - q.z1_m >= sep_z or q.z0_m - vz1 >= sep_z:
+                    continue
+                need = sep_xy + vs + q.slack_m
+                (cx, cy), (dx, dy) = q.a, q.b
+                if (cx if cx <= dx else dx) - vx1 >= need or vx0 - (cx if cx >= dx else dx) >= need \
+                        or (cy if cy <= dy else dy) - vy1 >= need or vy0 - (cy if cy >= dy else dy) >= need:
+                    continue
+                if _segment_segment_m(v.a, v.b, q.a, q.b) < need:
+                    return False
         return True
 
     def _queued_before(self, uav: str) -> list[_Pending]:
@@ -595,8 +607,9 @@ class ColumnClearance:
     def _hold_flight(self, uav: str, w: _Pending) -> Grant | None:
         """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""
         start = w.position if w.position is not None else w.site
+        candidates = self._hold_candidates(uav, w.site)[:6]
         for k in range(self.max_layers):
-            for hold in self._hold_candidates(uav, w.site)[:6]:
+            for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
                 if self._free(uav, vols):
                     self._take(uav, vols, start)
