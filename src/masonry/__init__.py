@@ -56,6 +56,7 @@ from masonry.planner import (
     Task,
     estimate_durations_s,
     lower_bound_s,
+    min_cycles_s,
     min_durations_s,
     plan,
 )
@@ -154,6 +155,7 @@ __all__ = [
     "format_blueprint",
     "load_blueprint",
     "lower_bound_s",
+    "min_cycles_s",
     "min_durations_s",
     "parse_blueprint",
     "plan",
