@@ -66,6 +66,9 @@ TRACK_M = 0.3
 #: A UAV that stopped mid-flight to ask for another site (it turned back) holds this much around where it is.
 HOVER_SLACK_M = 0.3
 
+#: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
+STOP_M = 1.0
+
 #: A UAV reported within this of a layer's altitude is at the layer: the overshoot of a climb that stopped.
 SNAP_M = 0.12
 
@@ -404,7 +407,7 @@ class ColumnClearance:
             if cut <= 0.0:
                 return  # at the start of this leg: it may still be climbing (or stopped climbing) to it
             # on this leg: everything before it (its climb, earlier legs, a hover) is behind it
-            rest = [w for w in vols[i + 1:]]
+            rest = list(vols[i + 1:])
             if cut < length:
                 f = max(0.0, cut) / length
                 rest.insert(0, Volume((ax + f * dx, ay + f * dy), v.b, v.z0_m, v.z1_m, 0.0, "leg"))
@@ -631,6 +634,17 @@ class ColumnClearance:
         here = [Volume(xy, xy, z - HOVER_SLACK_M, z + HOVER_SLACK_M, HOVER_SLACK_M, "hover")]
         if len(vols) == 1 and vols[0].kind == "hover":
             return
+        for v in vols:  # stopping on a leg, it may coast on along it: keep STOP_M of the leg ahead
+            length = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
+            if v.kind != "leg" or length < 1e-9 or abs(z - v.z0_m) >= 0.2 \
+                    or _point_segment_m(xy, v.a, v.b) > TRACK_M:
+                continue
+            ux, uy = (v.b[0] - v.a[0]) / length, (v.b[1] - v.a[1]) / length
+            along = (xy[0] - v.a[0]) * ux + (xy[1] - v.a[1]) * uy
+            end = min(length, along + STOP_M)
+            if end > along:
+                here.append(Volume(xy, (v.a[0] + end * ux, v.a[1] + end * uy), v.z0_m, v.z1_m, 0.0, "leg"))
+            break
         if self._free(uav, here):
             self._volumes[uav] = here
             self._origin.pop(uav, None)
@@ -689,6 +703,7 @@ __all__ = [
     "HOVER_SLACK_M",
     "LAYER_MARGIN_M",
     "SNAP_M",
+    "STOP_M",
     "TRACK_M",
     "ColumnClearance",
     "Grant",
