@@ -74,6 +74,18 @@ def test_replay_folds_assignments_completions_failures_and_losses(tmp_path: Path
     assert state.meta == {"blueprint": {"name": "case", "bricks": 2}}
 
 
+def test_a_failure_for_the_uavs_battery_is_not_replayed_as_an_attempt(tmp_path: Path) -> None:
+    path = tmp_path / "mission.sqlite"
+    with Journal(path) as j:
+        j.record_assignment(0.0, "B0", "brick-1", 1)
+        j.record_failure(30.0, "B0", "brick-1", "battery low (19%)")
+        j.record_assignment(95.0, "B0", "brick-1", 1)
+        j.record_failure(99.0, "B0", "brick-1", "grasp failed")
+    state = read_journal(path)
+    assert dict(state.attempts) == {"B0": 1}  # the grasp failure only, as mission control counted
+    assert [f.reason for f in state.failures] == ["battery low (19%)", "grasp failed"]
+
+
 def test_reopening_appends_to_the_same_journal(tmp_path: Path) -> None:
     path = tmp_path / "j.sqlite"
     with Journal(path) as j:

@@ -25,6 +25,7 @@ from types import MappingProxyType, TracebackType
 from typing import Any, Literal
 
 from masonry.errors import JournalError
+from masonry.ports import BATTERY_LOW_REASON
 
 SCHEMA_VERSION = 1
 APPLICATION_ID = 0x4D534E4A  # "MSNJ": masonry journal
@@ -376,7 +377,8 @@ def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ..
             start = running.pop(task_id, None)
             start_s = start[1] if start is not None and start[0] == uav else None
             number = start[2] if start is not None and start[0] == uav else attempts.get(task_id, 0) + 1
-            attempts[task_id] = attempts.get(task_id, 0) + 1
+            if kind == "complete" or not str(data.get("reason", "")).startswith(BATTERY_LOW_REASON):
+                attempts[task_id] = attempts.get(task_id, 0) + 1  # (the UAV's battery is not the task's fault)
             if kind == "complete":
                 if task_id not in done:
                     done[task_id] = DoneRecord(task_id, uav, rec.time_s, start_s, number, MappingProxyType(data))
