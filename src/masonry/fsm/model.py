@@ -129,7 +129,7 @@ class UavModel:
         self._gate_at = 0  # != 0: the legs of a layer route start from rest
         self._transit_top_m: float | None = None  # top of the work at the transit's site (see _route)
         self._transit_to_m: tuple[float, float, float] | None = None  # where that work ends (see _route)
-        self._request_clearance: Callable[[Any], Any] | None = getattr(link, "request_clearance", None)
+        self._request_clearance: Callable[..., Any] | None = getattr(link, "request_clearance", None)
         # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
         self._battery_service = getattr(link, "swaps_batteries", False) is True
