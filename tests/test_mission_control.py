@@ -84,6 +84,15 @@ def run_mission(plan, fleet, *, seed=0, fail_p=0.0, lose=None, policy="critical-
     return mc, handlers, intervals
 
 
+def _fly_until_the_end(mc, h, t_max, dt=0.5):
+    """Step one UAV handler and mission control every ``dt`` until the mission ends or ``t_max``."""
+    now = 0.0
+    while mc.ended_at_s is None and now < t_max:
+        h.step(now)
+        mc.step(now)
+        now += dt
+
+
 def fleet_of(nb, na):
     return tuple([UavSpec(f"brick-{i + 1}", "brick", (i * 3.0, -3.0, 0.0)) for i in range(nb)]
                  + [UavSpec(f"glue-{i + 1}", "adhesion", (i * 3.0, -6.0, 0.0)) for i in range(na)])
@@ -183,11 +192,7 @@ def test_a_task_abandoned_for_the_battery_is_not_an_attempt_of_the_task():
     mc = MissionControl(plan, fleet_of(1, 0), bus.endpoint(MISSION_CONTROL), max_attempts=3)
     h = UavHandler("brick-1", bus.endpoint("brick-1"), position=lambda: (0.0, -3.0, 0.0))
     h.attach(LowBatteryFirst(h, {"B0": 2.0}, random.Random(0)))
-    now = 0.0
-    while mc.ended_at_s is None and now < 200.0:
-        h.step(now)
-        mc.step(now)
-        now += 0.5
+    _fly_until_the_end(mc, h, 200.0)
     assert mc.finished and "B0" in mc.dispatcher.done
     assert [a.status for a in mc.history] == ["failed"] * 5 + ["done"]  # five battery aborts, none counted
     assert mc.dispatcher.attempts.get("B0") == 1  # only the attempt that placed it counts
@@ -281,10 +286,6 @@ def test_battery_reserve_holds_the_task_until_the_pack_is_swapped():
 
     h = UavHandler("brick-1", bus.endpoint("brick-1"), battery=lambda: pack["charge"], swap_battery=swap)
     h.attach(ScriptedUav(h, {"B0": 2.0}, random.Random(0)))
-    now = 0.0
-    while mc.ended_at_s is None and now < 50:
-        h.step(now)
-        mc.step(now)
-        now += 0.5
+    _fly_until_the_end(mc, h, 50.0)
     assert mc.finished and h.battery_swaps == 1
     assert mc.history[0].start_s < 4.0 <= h.executions[0].start_s  # assigned at once, flown after the swap

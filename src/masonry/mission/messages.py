@@ -385,17 +385,7 @@ _last_decoded: list[tuple[bytes | str, Message] | None] = [None]
 
 
 def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
-    """Parse and validate one wire message.
-
-    Args:
-        raw: the JSON bytes as received.
-        fleet: the UAV names of the blueprint's fleet; when given, a UAV sender or addressee outside it is
-            rejected.
-
-    Raises:
-        ProtocolError: malformed JSON, another protocol version, an unknown type, a bad field, or a UAV name
-            not in ``fleet``.
-    """
+    """:func:`decode` without its cache of the last broadcast (same arguments, result and errors)."""
     try:
         data = _loads(raw)
     except (ValueError, UnicodeDecodeError) as exc:
