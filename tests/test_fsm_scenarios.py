@@ -278,6 +278,101 @@ def test_adhesion_next_task_goes_straight_to_the_next_segment() -> None:
     assert rig.followed("ascend", "cruise")
 
 
+def _altitudes_between_sprays(rig: Rig) -> tuple[list[float], list[float]]:
+    """Body altitudes while the valve is open, and between the first close and the second open."""
+    spraying: list[float] = []
+    between: list[float] = []
+    phase = {"sprays": 0, "open": False}
+
+    def record(r: Rig) -> None:
+        z = r.fc.position_m[2]
+        is_open = r.sprayer.is_valve_open()
+        if is_open and not phase["open"]:
+            phase["sprays"] += 1
+        phase["open"] = is_open
+        if is_open:
+            spraying.append(z)
+        elif phase["sprays"] == 1:
+            between.append(z)
+
+    rig.run(on_tick=record, results=2)
+    return spraying, between
+
+
+def test_adhesion_next_segment_where_the_last_ended_is_sprayed_without_climbing_out() -> None:
+    """Paper, Section V: "it continues to the next assigned task": the next overlap along the course starts where
+    the last segment ended, so the UAV stays down (a short leg, a short descent), instead of climbing to the
+    transit altitude and coming down again."""
+    a0 = adhesion_task("A0", (-0.15, 0.5, 0.2), (0.15, 0.5, 0.2))
+    a1 = adhesion_task("A1", (0.15, 0.5, 0.2), (0.45, 0.5, 0.2))
+    rig = Rig("adhesion", tasks=[a0, a1])
+    spraying, between = _altitudes_between_sprays(rig)
+    assert [r.status for r in rig.link.results] == ["done", "done"]
+    assert len(rig.sprayer.intervals) == 2
+    spray_z = 0.2 + 0.10 + 0.35  # surface + spraying height + nozzle below the body
+    assert all(abs(z - spray_z) < 0.02 for z in spraying)
+    assert max(between) < spray_z + 0.03  # never climbed out
+    cfg = rig.config
+    # A1: a short leg, the hover, a short descent, the segment, the valve closing (no 4 s descent, no climb)
+    a1_s = rig.link.results[1].duration_s
+    assert a1_s < 1.0 + cfg.stable_time_s + cfg.chain_descent_s + 0.3 / cfg.spray_speed_mps + cfg.close_dwell_s + 1.0
+    s = rig.states
+    second = s.index("spray", s.index("spray") + 1)
+    assert s[second - 4:second + 1] == ["ascend", "cruise", "hover", "descend", "spray"]
+
+
+def test_adhesion_task_is_done_when_the_valve_closes_before_the_climb() -> None:
+    rig = Rig("adhesion")
+    at_result: list[float] = []
+
+    def record(r: Rig) -> None:
+        if r.link.results and not at_result:
+            at_result.append(r.fc.position_m[2])
+
+    rig.run(on_tick=record)
+    assert rig.link.results[0].status == "done"
+    assert at_result[0] == pytest.approx(0.2 + 0.10 + 0.35, abs=0.02)  # still down at the segment's end
+    assert rig.states == HAPPY_ADHESION  # then climbed out (ascend) and went home
+
+
+def test_adhesion_segment_elsewhere_is_reached_from_the_transit_altitude() -> None:
+    a0 = adhesion_task("A0", (-0.15, 0.5, 0.2), (0.15, 0.5, 0.2))
+    a1 = adhesion_task("A1", (0.25, 0.5, 0.2), (0.55, 0.5, 0.2))  # 10 cm beyond A0's end: not chained
+    rig = Rig("adhesion", tasks=[a0, a1])
+    _, between = _altitudes_between_sprays(rig)
+    assert [r.status for r in rig.link.results] == ["done", "done"]
+    assert max(between) > rig.config.cruise_altitude_m - 0.1
+
+
+def test_adhesion_next_task_arriving_while_it_waits_down_is_chained() -> None:
+    """Mission control answers a completion after a round trip: a task that arrives within ``chain_wait_s`` of
+    the valve closing is still chained; after that the UAV has started to climb out."""
+    a0 = adhesion_task("A0", (-0.15, 0.5, 0.2), (0.15, 0.5, 0.2))
+    a1 = adhesion_task("A1", (0.15, 0.5, 0.2), (0.45, 0.5, 0.2))
+    for delay_s, chained in ((0.3, True), (1.5, False)):
+        rig = Rig("adhesion", tasks=[a0])
+        sent = {"at": None}
+
+        def deliver(r: Rig, delay_s: float = delay_s, sent: dict = sent) -> None:
+            if r.link.results and sent["at"] is None:
+                sent["at"] = r.clock.now_s()
+            if sent["at"] is not None and r.clock.now_s() - sent["at"] >= delay_s and r.link.pending == 0 \
+                    and len(r.link.results) == 1 and r.uav.task is None:
+                r.link.push(a1)
+
+        heights: list[float] = []
+
+        def tick(r: Rig, heights: list[float] = heights) -> None:
+            deliver(r)
+            if len(r.link.results) == 1:
+                heights.append(r.fc.position_m[2])
+
+        rig.run(on_tick=tick, results=2)
+        assert [r.status for r in rig.link.results] == ["done", "done"], delay_s
+        climbed = max(heights) > 0.2 + 0.10 + 0.35 + 0.1
+        assert climbed is not chained, (delay_s, max(heights))
+
+
 def test_scenarios_visit_every_state() -> None:
     """Together the scenarios above reach every leaf state of both machines (checked on a few here)."""
     brick = set(HAPPY_BRICK)

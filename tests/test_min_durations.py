@@ -7,6 +7,7 @@ import dataclasses
 import pytest
 
 from masonry.blueprint_gen import running_bond, towers
+from masonry.fsm import UavConfig
 from masonry.mission.simulate import simulate
 from masonry.planner import plan
 from masonry.planner.bounds import estimate_durations_s, min_durations_s
@@ -29,6 +30,25 @@ def test_no_simulated_task_is_faster_than_its_minimum(blueprint, seed) -> None:
         assert t.end_s is not None and t.start_s is not None
         assert t.end_s - t.start_s >= minimum[t.id], (t.id, t.end_s - t.start_s, minimum[t.id])
     assert report.lower_bound_s <= report.makespan_s
+
+
+def test_chained_adhesion_tasks_keep_to_their_minimum() -> None:
+    """On a longer wall adhesion UAVs chain segments (no climb out, a short descent): those tasks, the shortest
+    of all, still never beat their minimum."""
+    blueprint = running_bond(4, 25, brick_uavs=4, adhesion_uavs=2)
+    report = simulate(blueprint, seed=0)
+    assert report.completed
+    p = plan(blueprint)
+    minimum = min_durations_s(p, cruise_altitude_m=blueprint.cruise_altitude_m)
+    kinds = {t.id: t.kind for t in p.tasks}
+    durations = {t.id: t.end_s - t.start_s for t in report.tasks}
+    cfg = UavConfig("glue-1", "adhesion", (0.0, 0.0, 0.0))
+    # an unchained task takes at least a leg, the hover and the whole descent, before spraying anything
+    unchained_s = 1.0 + cfg.stable_time_s + cfg.spray_descent_s
+    chained = [k for k, d in durations.items() if kinds[k] == "adhesion" and d < unchained_s]
+    assert len(chained) >= 5
+    for k, d in durations.items():
+        assert d >= minimum[k], (k, d, minimum[k])
 
 
 def test_minimum_grows_with_the_work() -> None:

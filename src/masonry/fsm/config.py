@@ -79,6 +79,13 @@ class UavConfig:
     stable_time_s: float = 1.0  # hover still this long over the segment start before descending
     spray_tolerance_m: float = 0.015
     close_dwell_s: float = 0.3
+    # Chaining (paper, Section V: "it continues to the next assigned task"): the task is reported done once the
+    # valve is closed; the UAV hovers there up to ``chain_wait_s`` for its next task, and a segment starting
+    # within ``chain_distance_m`` of the nozzle (the next overlap along the same course) is sprayed without
+    # climbing out and coming down again: a short leg there and a ``chain_descent_s`` descent.
+    chain_wait_s: float = 0.5
+    chain_distance_m: float = 0.05
+    chain_descent_s: float = 0.5
     # Control (None: the motion layer's defaults)
     pid_gains: Any = None
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -1121,6 +1121,8 @@ class AdhesionUav(UavModel):
         self._nozzle: tuple[float, float, float] = (float(n[0]), float(n[1]), float(n[2]))
         self._stable_since_s: float | None = None
         self._yaw_rad = 0.0
+        self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
+        self._climb_to_m = config.cruise_altitude_m  # in ``ascend``: the transit altitude of the task just done
         super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS)
 
     _TASK_STATES_SET = frozenset(ADHESION_TASK_STATES)
@@ -1163,8 +1165,21 @@ class AdhesionUav(UavModel):
         self._yaw_rad = tel.attitude_rad[2]
         start = self._nozzle_body(self.adhesion_task.start_m)
         end = self._nozzle_body(self.adhesion_task.end_m)  # it sprays along to there: part of its zone
-        self._route(tel, np.array([start[0], start[1], self._transit_altitude_m()]), yaw_rad=self._yaw_rad,
-                    to_m=end)
+        top = self._transit_altitude_m()
+        if self._chains(tel.position_m, start):
+            # still down at the end of the last segment, which is where this one starts: stay down
+            self._route(tel, start, yaw_rad=self._yaw_rad, top_m=top, to_m=end)
+            return
+        self._route(tel, np.array([start[0], start[1], top]), yaw_rad=self._yaw_rad, to_m=end)
+
+    def _chains(self, position_m: Sequence[float], start_body_m: Sequence[float] | np.ndarray) -> bool:
+        """The body at ``position_m`` is within ``chain_distance_m`` (horizontally and vertically) of the body
+        position that sprays the segment's start: the UAV sprays it without climbing out."""
+        d = self.config.chain_distance_m
+        return (
+            math.hypot(position_m[0] - start_body_m[0], position_m[1] - start_body_m[1]) <= d
+            and abs(position_m[2] - start_body_m[2]) <= d
+        )
 
     def do_cruise(self, tel: Telemetry) -> None:
         if self._leg_done(tel):
@@ -1199,8 +1214,11 @@ class AdhesionUav(UavModel):
     def enter_descend(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
         assert tel is not None
+        start = self._nozzle_body(self.adhesion_task.start_m)
+        # a chained segment: the UAV hovers at the spraying height already
+        short = abs(tel.position_m[2] - start[2]) <= self.config.chain_distance_m
         self._fly_to(
-            tel, self._nozzle_body(self.adhesion_task.start_m), self.config.spray_descent_s, self._yaw_rad
+            tel, start, self.config.chain_descent_s if short else self.config.spray_descent_s, self._yaw_rad
         )
 
     def do_descend(self, tel: Telemetry) -> None:
@@ -1237,11 +1255,42 @@ class AdhesionUav(UavModel):
             self.closed()
 
     def enter_ascend(self, *args: Any, **kwargs: Any) -> None:
+        # The segment is sprayed and the valve closed: the task is done, reported now so that mission control
+        # can hand over the next one while the UAV is still down here (see ``do_ascend``).
         tel = self._tel
-        assert tel is not None
-        p = tel.position_m
-        self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
+        assert tel is not None and self.task is not None
+        self._climb_to_m = self._transit_altitude_m()
+        self._report(TaskResult(self.task.id, "done", self._now_s - self._task_start_s))
+        self.task = None
+        self._next_task = None
+        self._climbing = False
+        self._hold(tel, self._target.copy(), self._yaw_rad)
 
     def do_ascend(self, tel: Telemetry) -> None:
+        """After a segment: hover up to ``chain_wait_s`` for the next task; one starting where the nozzle is goes
+        on from down here (``cruise`` stays low), anything else (or nothing) climbs to the transit altitude first,
+        then goes to it (or home)."""
+        if self._next_task is None and self._halt_after_landing is None \
+                and tel.battery_fraction >= self.config.battery_low_fraction:
+            task = self._take(self.link.poll_task())
+            if task is not None:
+                self._next_task = task
+                self._start_task(task)
+        if not self._climbing:
+            nxt = self._next_task
+            if isinstance(nxt, AdhesionTask) and self._chains(tel.position_m, self._nozzle_body(nxt.start_m)):
+                self._leave_ascend()
+                return
+            if nxt is None and self._now_s - self._entered_s < self.config.chain_wait_s:
+                return
+            self._climbing = True
+            p = tel.position_m
+            top = max(self._climb_to_m, self._transit_altitude_m())  # the next task's, if it is higher
+            self._fly_to(tel, np.array([p[0], p[1], top]))
+            return
         if self._leg_done(tel):
-            self._complete_task()
+            self._leave_ascend()
+
+    def _leave_ascend(self) -> None:
+        self.finish()  # to the next task's cruise, or home
+        self._next_task = None

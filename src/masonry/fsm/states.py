@@ -15,7 +15,8 @@ Brick UAV (paper, Section IV)::
 Adhesion UAV (paper, Section V)::
 
     idle -> takeoff -> cruise -> hover -> descend -> spray -> close -> ascend -> (cruise | home) -> land -> idle
-    (home -> cruise likewise)
+    (home -> cruise likewise; the task is reported done on entering ascend, and a next segment starting where the
+    nozzle is goes ascend -> cruise without climbing: "chaining", docs/state-machines.md)
 
 Failsafes, both machines: ``abort`` -> failsafe -> (home | emergency); ``lost`` -> emergency -> halted
 (``landed``, or ``giveup`` when the flight controller stays silent: its own failsafe lands it).

@@ -242,9 +242,8 @@ def min_durations_s(
     spray_descent_s: float = 4.0,
     spray_speed_mps: float = 0.15,
     close_dwell_s: float = 0.3,
+    chain_descent_s: float = 0.5,
     effector_offset_z_m: float | None = None,
-    nozzle_offset_z_m: float | None = None,
-    spray_height_m: float | None = None,
 ) -> dict[str, float]:
     """The least time the state machines (``masonry.fsm``, defaults of ``UavConfig``) can take for each task.
 
@@ -257,8 +256,10 @@ def min_durations_s(
 
     Brick task: approach, estimate (settle + ``min_estimates`` frames at the control rate), align, descent
     (``descent_s``), grasp dwell, climb to the transit altitude, the carry to the drop-off, align, descent to the
-    release, release dwell, verify, climb. Adhesion task: approach, hover ``stable_time_s``, descent
-    (``spray_descent_s``), the segment at ``spray_speed_mps``, ``close_dwell_s``, climb.
+    release, release dwell, verify, climb. Adhesion task: approach, hover ``stable_time_s``, descent (the
+    shorter of ``spray_descent_s`` and ``chain_descent_s``: a segment that starts where the UAV's last one
+    ended is sprayed without climbing out), the segment at ``spray_speed_mps``, ``close_dwell_s``; an adhesion
+    UAV reports the task done once the valve is closed, so its climb out is not part of the task.
 
     Returns:
         task id -> seconds, for every not-done task.
@@ -266,8 +267,6 @@ def min_durations_s(
     from masonry.airframe import DEFAULT_AIRFRAME
 
     eff_z = DEFAULT_AIRFRAME.effector_offset_m[2] if effector_offset_z_m is None else effector_offset_z_m
-    noz_z = DEFAULT_AIRFRAME.nozzle_offset_m[2] if nozzle_offset_z_m is None else nozzle_offset_z_m
-    spray_h = DEFAULT_AIRFRAME.spray_height_m if spray_height_m is None else spray_height_m
 
     def lateral(d_m: float) -> float:
         return max(min_leg_s, leg_peak_factor * d_m / cruise_speed_mps)
@@ -304,16 +303,12 @@ def min_durations_s(
                 + vertical(drop - placement_radius_m)
             )
         else:
-            surface = max(t.start_m[2], t.end_m[2])
-            body_z = t.end_m[2] + spray_h - noz_z
-            transit = max(cruise_altitude_m, surface + spray_h - noz_z + clearance_m)
             out[t.id] = (
                 min_leg_s  # approach
                 + stable_time_s
-                + spray_descent_s
+                + min(spray_descent_s, chain_descent_s)
                 + t.length_m / spray_speed_mps
                 + close_dwell_s
-                + vertical(transit - body_z)
             )
     return out
 
