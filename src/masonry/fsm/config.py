@@ -29,7 +29,7 @@ class UavConfig:
     control_period_s: float = (
         0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
     )
-    cruise_speed_mps: float = 1.0  # average speed of a lateral min-jerk leg (its peak is 1.875 x this)
+    cruise_speed_mps: float = 1.0  # peak speed of a lateral min-jerk leg (which lasts 1.875 x distance / this)
     vertical_speed_mps: float = 0.4  # average speed of a climb leg
     arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end
     align_tolerance_m: float = 0.015  # horizontal alignment of the tool before a descent
