@@ -285,10 +285,18 @@ class UavModel:
     def _begin_task(self, task: Task) -> None:
         """Reset the per-task counters (subclasses)."""
 
-    def _complete_task(self, **fields: Any) -> None:
+    def _report_done(self, **fields: Any) -> None:
+        """Report the task in hand done (with ``fields``); the UAV has no task any more."""
         assert self.task is not None
         self._report(TaskResult(self.task.id, "done", self._now_s - self._task_start_s, **fields))
         self.task = None
+
+    def _may_take_task(self, tel: Telemetry) -> bool:
+        """A task may be started now: the UAV is not to retire and its battery is not low."""
+        return self._halt_after_landing is None and tel.battery_fraction >= self.config.battery_low_fraction
+
+    def _complete_task(self, **fields: Any) -> None:
+        self._report_done(**fields)
         self._next_task = self._take(self.link.poll_task())
         if self._next_task is not None:
             self._start_task(self._next_task)
@@ -631,7 +639,7 @@ class UavModel:
     def do_home(self, tel: Telemetry) -> None:
         # A task assigned on the way home turns the UAV back at once (instead of landing, idling and taking
         # off again), unless the UAV is to retire or its battery is low.
-        if self._halt_after_landing is None and tel.battery_fraction >= self.config.battery_low_fraction:
+        if self._may_take_task(tel):
             task = self._take(self.link.poll_task())
             if task is not None:
                 self._start_task(task)
@@ -1258,10 +1266,9 @@ class AdhesionUav(UavModel):
         # The segment is sprayed and the valve closed: the task is done, reported now so that mission control
         # can hand over the next one while the UAV is still down here (see ``do_ascend``).
         tel = self._tel
-        assert tel is not None and self.task is not None
+        assert tel is not None
         self._climb_to_m = self._transit_altitude_m()
-        self._report(TaskResult(self.task.id, "done", self._now_s - self._task_start_s))
-        self.task = None
+        self._report_done()
         self._next_task = None
         self._climbing = False
         self._hold(tel, self._target.copy(), self._yaw_rad)
@@ -1270,8 +1277,7 @@ class AdhesionUav(UavModel):
         """After a segment: hover up to ``chain_wait_s`` for the next task; one starting where the nozzle is goes
         on from down here (``cruise`` stays low), anything else (or nothing) climbs to the transit altitude first,
         then goes to it (or home)."""
-        if self._next_task is None and self._halt_after_landing is None \
-                and tel.battery_fraction >= self.config.battery_low_fraction:
+        if self._next_task is None and self._may_take_task(tel):
             task = self._take(self.link.poll_task())
             if task is not None:
                 self._next_task = task
