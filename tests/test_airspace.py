@@ -409,3 +409,103 @@ def test_mission_control_and_a_handler_exchange_clearances_over_the_transport():
     handlers[b].step(1.9)
     assert handlers[b].request_clearance(near).granted
     assert mc.columns.held == {a: ((5.0, -2.0, 1.2),), b: (near,)}
+
+
+# -- layers that rise with the wall -----------------------------------------------------------------------------
+def test_layer_zero_rises_with_the_wall_and_granted_flights_keep_their_altitude():
+    c = ColumnClearance(R, 3.0, S, start_base_m=BASE)
+    a = c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -4.0, 1.2))
+    assert a.granted and a.layer_m == pytest.approx(BASE)  # the wall is low yet: layer 0 is low
+    c.raise_base(2.0)
+    c.raise_base(1.5)  # never down
+    b = c.request("b", (6.0, 0.0, 1.2), 1.0, (6.0, -4.0, 1.2))
+    assert b.granted and b.layer_m == pytest.approx(2.0)
+    again = c.request("a", (0.0, 0.0, 1.2), 2.0, (0.0, -3.0, BASE))
+    assert again.granted and again.layer_m == pytest.approx(BASE) and c.layer_m("a") == pytest.approx(BASE)
+    c.raise_base(9.0)  # never above the finished wall's work altitude
+    assert c.layer_base_m == pytest.approx(3.0)
+    assert c.conflicts() == []
+
+
+def test_a_hold_flight_keeps_its_altitude_when_the_layers_rise():
+    c = ColumnClearance(R, 3.0, S, start_base_m=BASE)
+    _working(c, "a", (0.0, 0.0, 1.2))
+    b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -4.0, 1.2))
+    assert not b.granted and b.hold_m is not None and b.layer_m == pytest.approx(BASE)
+    c.raise_base(2.5)
+    c.progress("b", (b.hold_m[0], b.hold_m[1], BASE))  # it hovers at its hold point, at the old layer 0
+    assert c.request("b", (0.5, 0.0, 1.2), 2.0, (b.hold_m[0], b.hold_m[1], BASE)).layer_m == pytest.approx(BASE)
+    c.request("a", (0.0, 8.0, 1.2), 3.0, (0.0, 0.0, 1.2))
+    c.release("a", (0.0, 0.0, 1.2))
+    c.progress("a", (0.0, 4.0, c.layer_m("a")))
+    g = [x for x in c.grant(4.0) if x.uav == "b"]
+    assert g and g[0].granted
+    climb = next(v for v in c.volumes("b") if v.kind == "climb")
+    assert min(climb.z0_m, climb.z1_m) == pytest.approx(BASE)  # from where it hovers, up to the layer given
+    assert max(climb.z0_m, climb.z1_m) == pytest.approx(g[0].layer_m) and g[0].layer_m >= 2.5 - 1e-9
+    assert c.conflicts() == []
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(1, 8), st.integers(1, 6), st.sampled_from(["running-bond", "towers", "pyramid"]))
+def test_the_work_altitude_of_the_wall_is_the_highest_of_its_tasks(courses, per, kind):
+    from masonry.blueprint_gen import pyramid
+    from masonry.mission.airspace import task_work_altitude_m
+    from masonry.planner import plan
+
+    bp = {"running-bond": lambda: running_bond(courses, per), "towers": lambda: towers(per, courses),
+          "pyramid": lambda: pyramid(courses)}[kind]()
+    tasks = plan(bp).tasks
+    assert max(task_work_altitude_m(t, bp.cruise_altitude_m) for t in tasks) == pytest.approx(work_altitude_m(bp))
+    for t in tasks:  # a brick task counts its brick's top, which is higher than the surface it rests on
+        if t.kind == "adhesion":
+            assert task_work_altitude_m(t, bp.cruise_altitude_m) >= bp.cruise_altitude_m
+
+
+def test_with_rising_layers_no_flight_passes_low_over_the_wall_and_the_low_layers_are_used(monkeypatch):
+    """A tall wall: the first flights get layers below the finished wall's work altitude, and every lateral
+    flight keeps its lowest point (carried brick, rod or nozzle) well above the bricks under it."""
+    from masonry.mission import airspace
+    from masonry.sim import world
+
+    granted: list[float] = []
+    grant = airspace.ColumnClearance._granted
+
+    def spy_granted(self, *args, **kwargs):
+        g = grant(self, *args, **kwargs)
+        granted.append(g.layer_m)
+        return g
+
+    lowest_gap = {}
+    last_xy = {}
+    step = world.World.step
+
+    def spy_step(self, dt_s):
+        step(self, dt_s)
+        for name, u in self.uavs.items():
+            v = u.vehicle
+            x, y, _z = v.position_m
+            prev = last_xy.get(name)
+            last_xy[name] = (x, y)
+            if not v.armed or v.on_ground or prev is None or math.hypot(x - prev[0], y - prev[1]) < 0.25 * dt_s:
+                continue  # only lateral flight: the work at a site comes down to the wall on purpose
+            if u.carried_brick is not None:
+                brick = self.field.bricks[u.carried_brick]
+                gap = brick.bottom_z_m - self.field.support_under(brick.rect(0.0))
+            else:
+                offset = self.airframe.effector_offset_m if u.role == "brick" else self.airframe.nozzle_offset_m
+                tool = u.tool_point_m(offset)
+                gap = tool[2] - self.field.support_at(tool[0], tool[1])
+            lowest_gap[name] = min(lowest_gap.get(name, math.inf), gap)
+
+    monkeypatch.setattr(airspace.ColumnClearance, "_granted", spy_granted)
+    monkeypatch.setattr(world.World, "step", spy_step)
+    bp = running_bond(8, 3, brick_uavs=2, adhesion_uavs=1)
+    r = simulate(bp)
+    assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
+    final = layer_base_m(bp)
+    assert min(granted) < final - 0.3  # the low layers were used
+    assert max(granted) >= final - 1e-9  # and the layers rose to the finished wall's
+    # the work altitude keeps a carried brick 0.3 m over the wall's top: tracking error only eats into that
+    assert min(lowest_gap.values()) > 0.15, lowest_gap
+    assert r.min_separation_m is None or r.min_separation_m >= SEPARATION_BOUND_M

@@ -83,7 +83,8 @@ def mission_control(
                                 expected_s),
                             heartbeat_timeout_s=heartbeat_timeout * time_scale,
                             startup_timeout_s=startup_timeout * time_scale,
-                            column_radius_m=bp.clearance_m, layer_base_m=layer_base_m(bp))
+                            column_radius_m=bp.clearance_m, layer_base_m=layer_base_m(bp),
+                            layer_floor_m=bp.cruise_altitude_m)
         offset = 0.0
         if state is not None:
             mc.restore(state)

@@ -46,7 +46,7 @@ class UavConfig:
     # it, climbing to it first and descending from it last. None: no fixed layer.
     lateral_altitude_m: float | None = None
     layer_min_leg_m: float = 0.3
-    layer_vertical_speed_mps: float = 0.5  # average speed of the climbs to and descents from the layer
+    layer_vertical_speed_mps: float = 0.5  # peak speed of the climbs to and descents from the layer
     takeoff_timeout_s: float = 30.0
     leg_timeout_s: float = (
         30.0  # a leg (or an alignment) not over this long after its planned end fails the task

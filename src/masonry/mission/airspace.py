@@ -25,11 +25,13 @@ Everything here is pure (no I/O, no clock).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from masonry.blueprint import Blueprint, UavSpec
+from masonry.planner.tasks import Task
 
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
@@ -45,18 +47,48 @@ def work_altitude_m(blueprint: Blueprint) -> float:
     UAV keeps the carried brick ``clearance_m`` above the drop-off, an adhesion UAV its nozzle ``clearance_m``
     above the spraying height.
     """
-    from masonry.fsm.config import UavConfig
-
-    cfg = UavConfig(name="-", role="brick", home_m=(0.0, 0.0, 0.0))
-    eff_z = cfg.airframe.effector_offset_m[2]
-    nozzle_z = cfg.airframe.nozzle_offset_m[2]
     z = float(blueprint.cruise_altitude_m)
     for b in blueprint.bricks:
         size_z = float(b.size_m[2])
-        top = float(b.position_m[2]) + size_z / 2.0
-        z = max(z, top - eff_z + size_z + cfg.clearance_m)
-        z = max(z, top + cfg.airframe.spray_height_m - nozzle_z + cfg.clearance_m)
+        z = max(z, _work_altitude_over_m(float(b.position_m[2]) + size_z / 2.0, size_z))
     return z
+
+
+def task_work_altitude_m(task: Task, cruise_altitude_m: float) -> float:
+    """The highest altitude at which a UAV works ``task``, as :func:`work_altitude_m` counts it for its brick
+    (a brick task: carrying its brick over its drop-off, and spraying on its top later) or its surface (an
+    adhesion task); at least ``cruise_altitude_m``.
+
+    Once the task is assigned its brick may be on the wall: a transit layer at or above this clears it.
+    """
+    from masonry.planner.tasks import BrickTask
+
+    if isinstance(task, BrickTask):
+        size_z = float(task.size_m[2])
+        top = float(task.position_m[2]) + size_z / 2.0
+        return max(float(cruise_altitude_m), _work_altitude_over_m(top, size_z))
+    surface = max(float(task.start_m[2]), float(task.end_m[2]))
+    return max(float(cruise_altitude_m), _work_altitude_over_m(surface, 0.0))
+
+
+def _work_altitude_over_m(top_m: float, size_z_m: float) -> float:
+    """Where a UAV works over a brick top at ``top_m``: carrying a brick ``size_z_m`` high down onto it (0: no
+    brick), or spraying it."""
+    eff_z, nozzle_z, spray_height, clearance = _work_offsets_m()
+    z = top_m + spray_height - nozzle_z + clearance
+    if size_z_m > 0.0:
+        z = max(z, top_m - eff_z + size_z_m + clearance)
+    return z
+
+
+@functools.cache
+def _work_offsets_m() -> tuple[float, float, float, float]:
+    """Effector and nozzle heights in the body frame, spraying height, clearance (defaults of ``UavConfig``)."""
+    from masonry.fsm.config import UavConfig
+
+    cfg = UavConfig(name="-", role="brick", home_m=(0.0, 0.0, 0.0))
+    return (float(cfg.airframe.effector_offset_m[2]), float(cfg.airframe.nozzle_offset_m[2]),
+            float(cfg.airframe.spray_height_m), float(cfg.clearance_m))
 
 
 #: How far a UAV may be off its reserved path (tracking error, a report a little late): what lies further behind
@@ -163,6 +195,7 @@ class _Pending:
     to: XY | None = None  # the work at the site spans from it to here (an adhesion segment)
     hold: Vec3 | None = None  # the hold point of its hold flight (granted), if any
     layer: int | None = None  # the layer of that hold flight
+    layer_alt: float | None = None  # its altitude (the layer base may have risen since)
     at_hold: bool = False
     seen_version: int = -1  # airspace version at its last evaluation (nothing changed since: same answer)
     answer: Grant | None = None
@@ -205,7 +238,7 @@ class ColumnClearance:
 
     def __init__(self, radius_m: float, base_m: float | None = None,
                  spacing_m: float = DEFAULT_LAYER_SPACING_M, homes: Mapping[str, Vec3] | None = None,
-                 sep_xy_m: float = 1.2) -> None:
+                 sep_xy_m: float = 1.2, start_base_m: float | None = None) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
         if not (spacing_m > 0.0 and math.isfinite(spacing_m)):
@@ -214,6 +247,10 @@ class ColumnClearance:
             raise ValueError(f"separation must be a finite number > 0, got {sep_xy_m!r}")
         self.radius_m = float(radius_m)
         self.base_m = None if base_m is None else float(base_m)
+        #: altitude of layer 0 now: from ``start_base_m`` up to ``base_m`` as the wall rises (:meth:`raise_base`)
+        self.layer_base_m = self.base_m
+        if self.base_m is not None and start_base_m is not None:
+            self.layer_base_m = min(self.base_m, float(start_base_m))
         self.spacing_m = float(spacing_m)
         self.sep_xy_m = float(sep_xy_m)
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
@@ -221,7 +258,8 @@ class ColumnClearance:
         self.max_layers = 12
         self._volumes: dict[str, list[Volume]] = {}
         self._zone: dict[str, Vec3] = {}  # uav -> site of the zone it works in
-        self._flight: dict[str, tuple[Vec3, int]] = {}  # uav -> (site, layer index) of its granted flight
+        # uav -> (site, layer index, layer altitude) of its granted flight
+        self._flight: dict[str, tuple[Vec3, int, float]] = {}
         self._origin: dict[str, Vec3] = {}  # uav -> site it set off from (its climb is freed once away)
         self._waiting: dict[str, _Pending] = {}  # insertion order = first come, first served
         self._homes: dict[str, Vec3] = {u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()}
@@ -237,6 +275,20 @@ class ColumnClearance:
         if self.base_m is not None:
             for uav, home in self._homes.items():
                 self._set_zone(uav, home, self.base_m)
+
+    def raise_base(self, altitude_m: float) -> None:
+        """The wall may now reach ``altitude_m`` (a work altitude, :func:`task_work_altitude_m`): layer 0 of the
+        flights granted from now on is at least that high (never above ``base_m``, never lower than it was).
+
+        Flights already granted keep their altitudes: their volumes are reserved, and whatever is worked under
+        them (the work that could raise the wall) needs a zone that must keep clear of them first.
+        """
+        if self.base_m is None or self.layer_base_m is None:
+            return
+        z = min(self.base_m, float(altitude_m))
+        if z > self.layer_base_m:
+            self.layer_base_m = z
+            self._version += 1
 
     # -- what is reserved ---------------------------------------------------------------------------------------
     @property
@@ -274,8 +326,13 @@ class ColumnClearance:
 
     def layer_m(self, uav: str) -> float | None:
         """Altitude of ``uav``'s flight in progress (None: none, or no layers)."""
-        k = self.layers.get(uav)
-        return None if k is None or self.base_m is None else self._alt(k)
+        if self.base_m is None:
+            return None
+        f = self._flight.get(uav)
+        if f is not None:
+            return f[2]
+        w = self._waiting.get(uav)
+        return None if w is None else w.layer_alt
 
     def conflicts(self) -> list[tuple[str, str]]:
         """Pairs of UAVs whose volumes conflict now: always empty (the invariant the tests check)."""
@@ -306,7 +363,7 @@ class ColumnClearance:
         f = self._flight.get(uav)
         if f is not None:
             if _same(f[0], site):
-                return Grant(uav, site, layer_m=self._alt(f[1]))
+                return Grant(uav, site, layer_m=f[2])
             # turned back for another site: it keeps the volumes of that flight until it has a new one
             del self._flight[uav]
             self._tops.pop(uav, None)
@@ -346,7 +403,7 @@ class ColumnClearance:
         if f is None:
             return
         self._origin.pop(uav, None)
-        site, _k = f
+        site = f[0]
         top, to = self._tops.pop(uav, (site[2], None))
         self._set_zone(uav, site, top, to)
 
@@ -385,7 +442,8 @@ class ColumnClearance:
         x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
         w = self._waiting.get(uav)
         if w is not None and w.hold is not None and not w.at_hold and w.layer is not None \
-                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and abs(z - self._alt(w.layer)) < 0.2:
+                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and w.layer_alt is not None \
+                and abs(z - w.layer_alt) < 0.2:
             self._arrive_at_hold(uav, w)  # it hovers at its hold point
             return
         kept: list[Volume] | None = None
@@ -438,13 +496,13 @@ class ColumnClearance:
 
     # -- internals --------------------------------------------------------------------------------------------
     def _alt(self, k: int) -> float:
-        assert self.base_m is not None
-        return self.base_m + k * self.spacing_m
+        assert self.layer_base_m is not None
+        return self.layer_base_m + k * self.spacing_m
 
     def _snap(self, z: float) -> float:
         """A UAV hovering within ``SNAP_M`` of a layer is at that layer (its tracking error, not a place)."""
-        assert self.base_m is not None
-        j = round((z - self.base_m) / self.spacing_m)
+        assert self.layer_base_m is not None
+        j = round((z - self.layer_base_m) / self.spacing_m)
         if j >= 0 and abs(z - self._alt(j)) < SNAP_M:
             return self._alt(j)
         return z
@@ -522,8 +580,8 @@ class ColumnClearance:
                 # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
                 # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
                 # answer, and one that never saw its hold answer (a later one came first) would fly straight.
-                assert w.layer is not None
-                hold = (w.hold[0], w.hold[1], self._alt(w.layer))
+                assert w.layer_alt is not None
+                hold = (w.hold[0], w.hold[1], w.layer_alt)
                 for k in range(self.max_layers):
                     extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to)
                     if self._free(uav, extra):
@@ -546,8 +604,8 @@ class ColumnClearance:
             self.refused += 1
             w.answer = Grant(uav, w.site, False)
             return w.answer
-        assert w.layer is not None
-        w.answer = Grant(uav, w.site, False, w.hold, self._alt(w.layer))
+        assert w.layer_alt is not None
+        w.answer = Grant(uav, w.site, False, w.hold, w.layer_alt)
         return w.answer
 
     def _take(self, uav: str, vols: list[Volume], start: Vec3) -> None:
@@ -560,7 +618,7 @@ class ColumnClearance:
 
     def _granted(self, uav: str, w: _Pending, k: int, now_s: float) -> Grant:
         del self._waiting[uav]
-        self._flight[uav] = (w.site, k)
+        self._flight[uav] = (w.site, k, self._alt(k))
         self._tops[uav] = (w.top_m, w.to)
         waited = max(0.0, now_s - w.since_s)
         self.wait_s += waited
@@ -576,7 +634,7 @@ class ColumnClearance:
             if other != uav:
                 keep_out.extend(v.b for v in self._volumes.get(other, ()) if v.kind == "zone")
                 keep_out.append((zone[0], zone[1]))
-        for other, (fsite, _k) in self._flight.items():
+        for other, (fsite, _k, _alt) in self._flight.items():
             if other != uav:
                 keep_out.append((fsite[0], fsite[1]))
         for other, ow in self._waiting.items():
@@ -618,6 +676,7 @@ class ColumnClearance:
                     self._take(uav, vols, start)
                     w.hold = hold
                     w.layer = k
+                    w.layer_alt = self._alt(k)
                     w.at_hold = False
                     self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
                     return Grant(uav, w.site, False, hold, self._alt(k))
@@ -652,11 +711,11 @@ class ColumnClearance:
 
     def _arrive_at_hold(self, uav: str, w: _Pending) -> None:
         """It hovers at its hold point: only the hover is its now."""
-        assert w.hold is not None and w.layer is not None
+        assert w.hold is not None and w.layer_alt is not None
         w.at_hold = True
         self._origin.pop(uav, None)
         hxy = (w.hold[0], w.hold[1])
-        alt = self._alt(w.layer)
+        alt = w.layer_alt
         self._volumes[uav] = [Volume(hxy, hxy, alt, alt, self.zone_slack_m, "hover")]
         self._version += 1
 
@@ -710,6 +769,7 @@ __all__ = [
     "Volume",
     "layer_base_m",
     "min_pairwise_separation_m",
+    "task_work_altitude_m",
     "transit_layers_m",
     "volumes_conflict",
     "work_altitude_m",

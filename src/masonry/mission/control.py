@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -113,6 +113,9 @@ class MissionControl:
             this horizontally (the blueprint's clearance r_c is the natural value; 0 grants every request).
         layer_base_m, layer_spacing_m: transit layers handed out per flight, at ``layer_base_m + k *
             layer_spacing_m`` (``masonry.mission.airspace.work_altitude_m`` gives the base); None: no layers.
+        layer_floor_m: with it, layer 0 rises with the wall instead: it is at the highest work altitude of the
+            tasks done or ever assigned (``masonry.mission.airspace.task_work_altitude_m``), at least this (the
+            blueprint's cruise altitude), at most ``layer_base_m``. None: layer 0 stays at ``layer_base_m``.
     """
 
     def __init__(
@@ -131,6 +134,7 @@ class MissionControl:
         column_radius_m: float = 1.5,
         layer_base_m: float | None = None,
         layer_spacing_m: float = 1.1,
+        layer_floor_m: float | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -161,7 +165,9 @@ class MissionControl:
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
         self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m,
-                                       homes={u.name: u.home_m for u in self.fleet})
+                                       homes={u.name: u.home_m for u in self.fleet}, start_base_m=layer_floor_m)
+        self._layer_floor_m = layer_floor_m
+        self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
     def restore(self, state: Any) -> None:
@@ -203,6 +209,8 @@ class MissionControl:
                 self.dispatcher.remove_uav(name)
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
+        # what the previous run may have built: done tasks, and every task it ever assigned
+        self._raise_layers([*done, *attempts, *getattr(state, "in_progress", {})])
 
     # -- properties ------------------------------------------------------------------------------------
     @property
@@ -379,9 +387,20 @@ class MissionControl:
             att = Attempt(a.task_id, a.uav, attempt, now_s)
             self.history.append(att)
             self._running[a.task_id] = att
+            self._raise_layers((a.task_id,))
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
             self._send(a.uav, Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s))
+
+    def _raise_layers(self, task_ids: Iterable[str]) -> None:
+        """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
+        if self._layer_floor_m is None:
+            return
+        from masonry.mission.airspace import task_work_altitude_m
+
+        top = max((task_work_altitude_m(self._tasks[tid], self._layer_floor_m) for tid in task_ids), default=None)
+        if top is not None:
+            self.columns.raise_base(top)
 
     def _send(self, to: str, msg: Any) -> None:
         self.transport.send(to, encode(msg))

@@ -180,6 +180,7 @@ def simulate(
     max_attempts: int = 3,
     progress: ProgressFn | None = None,
     separation: bool = True,
+    rising_layers: bool = True,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it.
 
@@ -200,6 +201,8 @@ def simulate(
         progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion.
         separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
             work altitude with no column clearance, as before they existed (for comparisons).
+        rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned so
+            far) instead of staying above the finished wall from the start (False, for comparisons).
 
     Raises:
         InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
@@ -251,6 +254,7 @@ def simulate(
             journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
             heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
             wall0=wall0, World=World, estimate_durations_s=estimate_durations_s, separation=separation,
+            rising_layers=rising_layers,
         )
     finally:
         if journal is not None:
@@ -278,6 +282,7 @@ def _run(
     World: Any,
     estimate_durations_s: Any,
     separation: bool = True,
+    rising_layers: bool = True,
 ) -> MissionReport:
     resumed_from = None
     world_blueprint = blueprint
@@ -301,6 +306,7 @@ def _run(
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
         column_radius_m=blueprint.clearance_m if separation else 0.0,
         layer_base_m=layer_base_m(blueprint) if separation else None,
+        layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
     )
     layers = transit_layers_m(blueprint, fleet) if separation else {}
     if state is not None:
