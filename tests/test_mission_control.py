@@ -289,3 +289,37 @@ def test_battery_reserve_holds_the_task_until_the_pack_is_swapped():
     _fly_until_the_end(mc, h, 50.0)
     assert mc.finished and h.battery_swaps == 1
     assert mc.history[0].start_s < 4.0 <= h.executions[0].start_s  # assigned at once, flown after the swap
+
+
+def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a_resumed_journal(tmp_path):
+    from masonry.blueprint_gen import running_bond
+    from masonry.mission.airspace import layer_base_m, task_work_altitude_m
+    from masonry.mission.journal import Journal
+    from masonry.planner import plan as make_plan
+
+    bp = running_bond(8, 2, placed_courses=2, brick_uavs=1, adhesion_uavs=1)
+    plan = make_plan(bp)
+    final, cruise = layer_base_m(bp), bp.cruise_altitude_m
+
+    def work(ids):
+        return max(task_work_altitude_m(plan.task(i), cruise) for i in ids)
+
+    placed = [t.id for t in plan.tasks if t.done]
+    mc = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
+                        layer_floor_m=cruise)
+    assert mc.columns.layer_base_m == max(cruise, work(placed)) < final
+    mc._dispatch(0.0)  # both UAVs take their first task
+    assert mc._running and mc.columns.layer_base_m == max(cruise, work(placed + list(mc._running)))
+    # a resumed mission starts over everything the journal says was done or was being worked on
+    high = [t.id for t in plan.tasks if not t.done and t.kind == "brick"][-3:]
+    with Journal(tmp_path / "j.sqlite") as j:
+        j.record_assignment(1.0, high[0], "brick-1", 1)
+        j.record_completion(9.0, high[0], "brick-1")
+        j.record_assignment(10.0, high[1], "brick-1", 1)
+        state = j.replay()
+    resumed = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
+                             layer_floor_m=cruise)
+    resumed.restore(state)
+    assert resumed.columns.layer_base_m == work(high[:2]) > work(placed)
+    fixed = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final)
+    assert fixed.columns.layer_base_m == final  # without a floor: above the finished wall from the start

@@ -210,7 +210,7 @@ class MissionControl:
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
         # what the previous run may have built: done tasks, and every task it ever assigned
-        self._raise_layers([*done, *attempts, *getattr(state, "in_progress", {})])
+        self._raise_layers([*done, *attempts, *state.in_progress])
 
     # -- properties ------------------------------------------------------------------------------------
     @property
