@@ -31,7 +31,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from masonry.blueprint import Blueprint, UavSpec
-from masonry.planner.tasks import Task
+from masonry.planner.tasks import BrickTask, Task
 
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
@@ -61,8 +61,6 @@ def task_work_altitude_m(task: Task, cruise_altitude_m: float) -> float:
 
     Once the task is assigned its brick may be on the wall: a transit layer at or above this clears it.
     """
-    from masonry.planner.tasks import BrickTask
-
     if isinstance(task, BrickTask):
         size_z = float(task.size_m[2])
         top = float(task.position_m[2]) + size_z / 2.0
@@ -212,9 +210,11 @@ class ColumnClearance:
     reports progress: the climb is freed once it is ``release_radius_m`` away (``release``), the flight becomes
     the zone at its site once it is down (``end_transit``).
 
-    - **Layers**: a flight's lateral leg flies at ``base_m + k * spacing_m``, the lowest k >= 0 on which the
-      whole flight fits. ``base_m`` is the highest work altitude of the wall, so layer 0 is just above every
-      zone; a flight goes higher only where it would pass another UAV.
+    - **Layers**: a flight's lateral leg flies at ``layer_base_m + k * spacing_m``, the lowest k >= 0 on which
+      the whole flight fits; a flight goes higher only where it would pass another UAV. ``layer_base_m`` is
+      ``base_m``, the highest work altitude of the finished wall, or, given ``start_base_m``, starts there and
+      rises with the wall (:meth:`raise_base`, called by mission control as tasks are assigned) up to ``base_m``;
+      a flight keeps the altitude it was given.
     - **Waiting**: when no layer fits because the site's column is not free (another UAV works or is about to
       come down there), the UAV gets a *hold flight* to a hold point near the site, at least ``radius_m``
       (horizontally) from every zone and every site another UAV waits for, where it hovers at its layer until the
@@ -230,10 +230,13 @@ class ColumnClearance:
     Args:
         radius_m: two zones never closer than this horizontally (the blueprint's clearance r_c); hold points
             this far from zones and waited sites.
-        base_m: altitude of layer 0 (None: no airspace rules: every request is granted, with no layer).
+        base_m: altitude of layer 0 over the finished wall (None: no airspace rules: every request is granted,
+            with no layer); the zones over the homes reach it (a UAV takes off there up to its layer).
         spacing_m: vertical distance between layers; two volumes this far apart vertically never conflict.
         homes: each UAV's home: it starts in the zone over it (it takes off and lands there).
         sep_xy_m: horizontal separation between volumes (the 1 m target plus the horizontal tracking error).
+        start_base_m: altitude of layer 0 at the start (e.g. the cruise altitude), raised by :meth:`raise_base`
+            (None: ``base_m`` throughout).
     """
 
     def __init__(self, radius_m: float, base_m: float | None = None,
