@@ -444,9 +444,8 @@ class ColumnClearance:
             return
         x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
         w = self._waiting.get(uav)
-        if w is not None and w.hold is not None and not w.at_hold and w.layer is not None \
-                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and w.layer_alt is not None \
-                and abs(z - w.layer_alt) < 0.2:
+        if w is not None and w.hold is not None and not w.at_hold and w.layer_alt is not None \
+                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and abs(z - w.layer_alt) < 0.2:
             self._arrive_at_hold(uav, w)  # it hovers at its hold point
             return
         kept: list[Volume] | None = None
