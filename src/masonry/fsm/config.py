@@ -40,6 +40,13 @@ class UavConfig:
     align_patience_s: float = 3.0
     align_relaxed_tolerance_m: float = 0.025
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
+    # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
+    # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is
+    ask_settle_tolerance_m: float = 0.03
+    # The autopilot's velocity loop lags its setpoint (about a first-order lag of this time constant; the
+    # simulated vehicle's ``velocity_tau_s``): a leg's reference acceleration times this is added to its velocity
+    # feed-forward, so the UAV does not trail the reference and overshoot its end (0: velocity feed-forward only)
+    velocity_lag_s: float = 0.3
     clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
     # Transit layer (docs/safety.md): mission control hands out the altitude of each lateral leg; this one is for
     # a link without clearances (or mission control silent): lateral legs longer than ``layer_min_leg_m`` fly at

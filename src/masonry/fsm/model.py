@@ -51,6 +51,10 @@ from masonry.ports import (
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
 _ZERO_FF = (0.0, 0.0, 0.0)  # no velocity feed-forward, as plain floats for the PID
+#: The takeoff is over this close under its altitude (the autopilot flies it; the machine then takes over).
+_TAKEOFF_SHORT_M = 0.1
+#: A UAV this close to the end of its leg (or takeoff) when it asks for a transit hovers at that end.
+_END_NEAR_M = 0.15
 
 
 def _wrap(angle_rad: float) -> float:
@@ -113,6 +117,7 @@ class UavModel:
         self._land_tried_s = -math.inf
         self._link_down_since_s: float | None = None
         self._pid = PID(config.pid_gains)
+        self._velocity_lag_s = float(config.velocity_lag_s)
         self._motion = False
         self._legs: list[tuple[np.ndarray, float | None]] = []
         self._traj: MinJerk | None = None
@@ -127,6 +132,7 @@ class UavModel:
         # a transit in progress (docs/safety.md): (phase "ask" | "hold" | "down", site, layer altitude)
         self._transit: tuple[str, tuple[float, float, float], float | None] | None = None
         self._gate_at = 0  # != 0: the legs of a layer route start from rest
+        self._settling_since_s: float | None = None  # when the current hover began waiting to settle
         self._transit_top_m: float | None = None  # top of the work at the transit's site (see _route)
         self._transit_to_m: tuple[float, float, float] | None = None  # where that work ends (see _route)
         self._request_clearance: Callable[..., Any] | None = getattr(link, "request_clearance", None)
@@ -367,9 +373,9 @@ class UavModel:
             self._transit = ("ask", (float(target[0]), float(target[1]), float(target[2])), None)
             self._transit_top_m = top_m
             self._transit_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
-            # hover here until mission control answers (from rest: a UAV still moving, say climbing out of its
-            # site, must not carry that motion into the reference of the flight it is granted)
-            self._fly_to(tel, p, 0.1, yaw_rad=yaw_rad, from_rest=True)
+            # hover until mission control answers, once come to rest smoothly: it asks once settled
+            # (_still_enough_to_ask), and the flight it is granted starts from rest where it says it is
+            self._fly_to(tel, self._stop_point_m(tel), yaw_rad=yaw_rad)
             return
         layer = self.config.lateral_altitude_m
         if layer is not None and d_xy > self.config.layer_min_leg_m:
@@ -419,6 +425,9 @@ class UavModel:
             if end is not None:
                 end(site)
             return True
+        if not self._still_enough_to_ask(tel):
+            self._traj_end_s = self._now_s  # let it settle first (a leg timeout does not run meanwhile)
+            return False
         answer = self._request_clearance(site, self._transit_top_m, self._transit_to_m)
         if answer is None:
             self._traj_end_s = self._now_s  # no answer yet: hover (a leg timeout does not run meanwhile)
@@ -449,6 +458,53 @@ class UavModel:
             self._traj_end_s = self._now_s
         return False
 
+    def _stop_point_m(self, tel: Telemetry) -> np.ndarray:
+        """Where the UAV comes to rest when it stops to ask for a transit (its current leg's end or on the way).
+
+        Near the end of its leg or takeoff (within ``_END_NEAR_M``; a takeoff is over 0.1 m short, climbing), at
+        that end. Stopped mid-flight (it was flying home and got a task), on along its velocity as far as a
+        one-second smooth stop takes it (half a second's flight, a deceleration of at most 1.5 x speed per
+        second), never past the leg's end: stopping dead from cruise speed swung it 0.1-0.2 m past the point and
+        back, slowly, vertically. Mission control keeps the leg ahead of a UAV for it until it asks (and the
+        next metre after: ``STOP_M``).
+        """
+        p = np.asarray(tel.position_m, dtype=float)
+        end = np.asarray(self._target, dtype=float)
+        to_end = float(np.linalg.norm(end - p))
+        if to_end <= _END_NEAR_M:
+            return end
+        v = np.asarray(tel.velocity_mps, dtype=float)
+        coast = 0.5 * v  # a 1 s quintic from (p, v) to rest at p + v / 2 decelerates monotonically
+        if float(np.linalg.norm(coast)) > to_end:
+            coast *= to_end / float(np.linalg.norm(coast))
+        return p + coast
+
+    def _still_enough_to_ask(self, tel: Telemetry) -> bool:
+        """The UAV has come to rest where it hovers, so that the flight it asks for starts where it says it is.
+
+        Mission control reserves the climb of a granted flight (or of a hold flight) where the request says the UAV
+        is, and the flight starts from rest there. A UAV that stopped from cruise speed to ask (it was flying home
+        and got a task) swings 0.1-0.2 m past its hover point and back: asking then put the climb's volume where
+        the swing was, and the UAV left it by up to 0.15 m (slow at the turning point of the swing is not at
+        rest). So it asks once within ``ask_settle_tolerance_m`` of its hover point and slower than
+        ``settle_speed_mps`` (twice both after ``align_patience_s``, and anyhow after twice that time: gusts may
+        never let it settle, and waiting for ever would strand it).
+        """
+        if self._settling_since_s is None:
+            self._settling_since_s = self._now_s
+        waited = self._now_s - self._settling_since_s
+        cfg = self.config
+        if waited >= 2.0 * cfg.align_patience_s:
+            return True
+        k = 1.0 if waited < cfg.align_patience_s else 2.0
+        vx, vy, vz = tel.velocity_mps
+        speed = k * cfg.settle_speed_mps
+        if vx * vx + vy * vy + vz * vz > speed * speed:
+            return False
+        p, t = tel.position_m, self._target
+        tol = k * cfg.ask_settle_tolerance_m
+        return (p[0] - t[0]) ** 2 + (p[1] - t[1]) ** 2 + (p[2] - t[2]) ** 2 <= tol * tol
+
     def _leg_duration_s(self, start: np.ndarray, target: np.ndarray) -> float:
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
         d_z = abs(target[2] - start[2])
@@ -471,6 +527,7 @@ class UavModel:
         self._traj_t0_s = self._now_s
         self._traj_end_s = self._now_s + T
         self._target = target
+        self._settling_since_s = None
 
     def _fly_line(self, tel: Telemetry, start_m: np.ndarray, end_m: np.ndarray, speed_mps: float) -> None:
         """Track ``start -> end`` at constant ``speed_mps`` (reference starts at ``start`` now)."""
@@ -527,10 +584,17 @@ class UavModel:
                 ((((c5 * t + c4) * t + c3) * t + c2) * t + c1) * t + c0,
             )
             if t < duration:
+                # velocity, plus the acceleration times the autopilot's velocity lag: a first-order velocity
+                # loop then follows the reference's velocity instead of trailing it by lag x acceleration,
+                # which the integral would otherwise make up for as an overshoot at the end of the leg
+                lag = self._velocity_lag_s
                 ff = (
-                    (((5.0 * a5 * t + 4.0 * a4) * t + 3.0 * a3) * t + 2.0 * a2) * t + a1,
-                    (((5.0 * b5 * t + 4.0 * b4) * t + 3.0 * b3) * t + 2.0 * b2) * t + b1,
-                    (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1,
+                    (((5.0 * a5 * t + 4.0 * a4) * t + 3.0 * a3) * t + 2.0 * a2) * t + a1
+                    + lag * (((20.0 * a5 * t + 12.0 * a4) * t + 6.0 * a3) * t + 2.0 * a2),
+                    (((5.0 * b5 * t + 4.0 * b4) * t + 3.0 * b3) * t + 2.0 * b2) * t + b1
+                    + lag * (((20.0 * b5 * t + 12.0 * b4) * t + 6.0 * b3) * t + 2.0 * b2),
+                    (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1
+                    + lag * (((20.0 * c5 * t + 12.0 * c4) * t + 6.0 * c3) * t + 2.0 * c2),
                 )
             else:
                 ff = _ZERO_FF
@@ -613,10 +677,13 @@ class UavModel:
         self._pid.reset()
         if not tel.armed:
             self.fc.arm()
-        self.fc.takeoff(max(0.3, self._transit_altitude_m() - tel.position_m[2]))
+        climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
+        self.fc.takeoff(climb_m)
+        x, y, z = tel.position_m
+        self._target = np.array([x, y, z + climb_m])  # where the autopilot takes it (the machine hovers there next)
 
     def do_takeoff(self, tel: Telemetry) -> None:
-        if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - 0.1:
+        if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:
             self.airborne()
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
             self.abort(
