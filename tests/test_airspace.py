@@ -187,6 +187,17 @@ def test_points_in_volumes_that_do_not_conflict_keep_the_separation(p0, p1, q0, 
         assert math.dist(a, b) >= 1.1 - 1e-9
 
 
+def test_a_uav_reported_off_its_layer_holds_its_climb_from_where_it_is():
+    c = ColumnClearance(radius_m=R, base_m=BASE)
+    # at rest 0.11 m over layer 0 (it stopped a climb there): not counted at the layer
+    c.request("u1", (4.0, 0.0, 0.5), 0.0, (0.0, 0.0, BASE + 0.11))
+    climb = c.volumes("u1")[0]
+    assert climb.kind == "climb" and climb.z1_m == pytest.approx(BASE + 0.11)
+    # a few centimetres off (hover noise) is at the layer
+    c.request("u2", (-4.0, 6.0, 0.5), 0.0, (0.0, 6.0, BASE + 0.03))
+    assert [v.z1_m for v in c.volumes("u2") if v.kind == "climb"] == [pytest.approx(BASE)]
+
+
 def test_layers_start_at_the_highest_work_altitude():
     bp = running_bond(3, 4, brick_uavs=2, adhesion_uavs=1)
     base = layer_base_m(bp)
@@ -308,7 +319,8 @@ def _outside_m(columns, uav, p):
     return best
 
 
-@pytest.mark.parametrize("courses,per,nb,na,seed", [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11)])
+@pytest.mark.parametrize("courses,per,nb,na,seed",
+                         [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)])
 def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(monkeypatch, courses, per, nb, na,
                                                                                   seed):
     import masonry.mission.control as control
@@ -337,9 +349,11 @@ def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them
     r = simulate(running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed)
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
     assert mcs[0].columns.conflicts() == []
-    # tracking error only: the separation rule keeps 0.1 m over the 1.0 m target for it
-    assert max(worst.values()) < 0.12, worst
-    assert r.min_separation_m is None or r.min_separation_m >= SEPARATION_BOUND_M
+    # tracking error only: the separation rule keeps 0.1 m over the 1.0 m target for it. Measured 0.02-0.05 m
+    # since legs feed the acceleration forward and UAVs ask at rest; up to 0.17 m before (4x25, seed 1)
+    assert max(worst.values()) < 0.07, worst
+    # so two UAVs keep the layer spacing less twice that (0.96-1.02 m on 4x25 before)
+    assert r.min_separation_m is None or r.min_separation_m >= S - 2 * 0.07
 
 
 @settings(max_examples=10, deadline=None)

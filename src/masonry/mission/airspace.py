@@ -99,8 +99,10 @@ HOVER_SLACK_M = 0.3
 #: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
 STOP_M = 1.0
 
-#: A UAV reported within this of a layer's altitude is at the layer: the overshoot of a climb that stopped.
-SNAP_M = 0.12
+#: A UAV reported within this of a layer's altitude is at the layer (hover noise). UAVs come to rest where they
+#: stop before they ask (``masonry.fsm``), so a UAV reported farther from a layer is where it says: a UAV at rest
+#: 0.11 m over layer 0 after stopping a climb, counted at the layer, was 0.11 m outside its climb.
+SNAP_M = 0.05
 
 #: A UAV within this of its hold point (horizontally) hovers there: the state machines count a leg as done
 #: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
