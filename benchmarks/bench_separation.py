@@ -3,9 +3,12 @@
 For each bundled blueprint (its own fleet, and larger fleets on the running bonds) it runs ``masonry sim``'s
 ``simulate`` twice: ``separation=False`` (every lateral leg at the work altitude, no site columns: the plain
 conflict graph) and ``separation=True`` (the default). It prints makespan and the minimum distance between two
-airborne UAVs, plus how often columns were waited for. Usage:
+airborne UAVs, plus how often columns were waited for. ``--sweep`` instead runs the busier walls of the
+separation sweep in docs/performance.md (2x30 and 4x25 running bonds with 4 + 2 UAVs, the 200-brick blueprint
+with 3 + 2; fifo and critical-path; seeds 0, 1, 2) with separation on, and prints each run's makespan and
+minimum separation, then how many runs came closer than 1.0 m. Usage:
 
-    .venv/bin/python benchmarks/bench_separation.py [--quick]
+    .venv/bin/python benchmarks/bench_separation.py [--quick | --sweep]
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ import time
 from pathlib import Path
 
 from masonry.blueprint import load_blueprint
+from masonry.blueprint_gen import running_bond
 from masonry.mission.simulate import simulate
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -29,7 +33,34 @@ CASES = [
 ]
 
 
+def sweep() -> None:
+    walls = [
+        ("2x30 running bond", lambda: running_bond(2, 30), 4, 2),
+        ("4x25 running bond", lambda: running_bond(4, 25), 4, 2),
+        ("running_bond_200", lambda: load_blueprint(ROOT / "blueprints" / "running_bond_200.yaml"), 3, 2),
+    ]
+    print(f"{'wall':<18} {'fleet':>5} {'policy':<13} {'seed':>4} | {'makespan':>9} {'min sep':>8} | wall s")
+    seps = []
+    for label, make, nb, na in walls:
+        bp = make()
+        for policy in ("fifo", "critical-path"):
+            for seed in (0, 1, 2):
+                t0 = time.perf_counter()
+                r = simulate(bp, brick_uavs=nb, adhesion_uavs=na, policy=policy, seed=seed).to_dict()
+                sep = r["min_separation_m"]
+                seps.append(sep)
+                flag = "" if r["completed"] and r["conflict_violations"] == 0 else "  (incomplete or violation!)"
+                print(f"{label:<18} {nb}+{na:<3} {policy:<13} {seed:>4} | {r['makespan_s']:>9.1f} {sep:>8.3f} | "
+                      f"{time.perf_counter() - t0:.0f}{flag}", flush=True)
+    below = [x for x in seps if x is not None and x < 1.0]
+    print(f"{len(seps)} runs: min separation {min(x for x in seps if x is not None):.3f} m, "
+          f"{len(below)} below 1.0 m")
+
+
 def main() -> None:
+    if "--sweep" in sys.argv:
+        sweep()
+        return
     quick = "--quick" in sys.argv
     cases = CASES[:5] if quick else CASES
     print(f"{'blueprint':<20} {'fleet':>5} | {'makespan off':>12} {'min sep off':>11} | {'makespan on':>11} "

@@ -18,6 +18,7 @@ from masonry.adapters.wiring import HardwareConfig, hardware_config, load_uav_co
 from masonry.cli import app
 from masonry.cli.hardware import build_sitl
 from masonry.errors import InputError
+from masonry.fsm import UavConfig
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 runner = CliRunner()
@@ -154,6 +155,13 @@ def test_uav_config_file(tmp_path) -> None:
         load_uav_config(tmp_path / "missing.yaml")
     with pytest.raises(InputError, match="autopilot must be"):
         hardware_config({"autopilot": "inav"})
+    # the autopilot's velocity lag, fed forward by the state machines: settable, and checked
+    lag = tmp_path / "lag.yaml"
+    lag.write_text("velocity_lag_s: 0.2\n")
+    assert hardware_config({}, load_uav_config(lag)).velocity_lag_s == 0.2
+    assert HardwareConfig().velocity_lag_s == UavConfig("u", "brick", (0.0, 0.0, 0.0)).velocity_lag_s
+    with pytest.raises(InputError, match="velocity_lag_s must be between 0 and 2 s"):
+        hardware_config({}, {"velocity_lag_s": -0.1})
 
 
 def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None:

@@ -46,6 +46,9 @@ class HardwareConfig:
     actuator_boot_wait_s: float = 2.0  # opening the port resets an Uno/Nano: wait for its HELLO this long
     min_battery: float = 0.5  # pre-flight: refuse to arm below this charge fraction
     estimate_wait_s: float = 10.0  # pre-flight: wait this long for the autopilot's position estimate
+    # the autopilot's velocity loop time constant: the state machines feed a leg's acceleration x this forward
+    # (``UavConfig.velocity_lag_s``, docs/state-machines.md); 0 for none
+    velocity_lag_s: float = 0.3
 
     @property
     def sim_fc(self) -> bool:
@@ -144,6 +147,9 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
     if not hw.heartbeat_timeout_s > 0.0:
         raise InputError("heartbeat_timeout_s must be > 0")
+    if not 0.0 <= hw.velocity_lag_s <= 2.0:
+        raise InputError(f"velocity_lag_s must be between 0 and 2 s (the autopilot's velocity loop time constant), "
+                         f"not {hw.velocity_lag_s}")
     return hw
 
 

@@ -217,7 +217,8 @@ def fly(
 
     adapters = select_adapters(sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults,
                                hardware=hardware.hw)
-    uav_config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
+    uav_config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers,
+                                     velocity_lag_s=hardware.hw.velocity_lag_s)
     try:
         run = fly_task(uav_config, the_task, fc=adapters.fc, clock=adapters.clock, gripper=adapters.gripper,
                        camera=adapters.camera, sprayer=adapters.sprayer, dt_s=dt, advance=adapters.advance,
@@ -296,7 +297,8 @@ def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], missio
             echo(f"{spec.name} joins the mission at {endpoint} ({where})")
         run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
                              camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
-                             max_time_s=float("inf"), echo=echo, adapters=adapters)
+                             max_time_s=float("inf"), echo=echo, adapters=adapters,
+                             uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s})
     finally:
         if adapters is not None:
             adapters.close()

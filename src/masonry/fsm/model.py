@@ -375,7 +375,13 @@ class UavModel:
             self._transit_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
             # hover until mission control answers, once come to rest smoothly: it asks once settled
             # (_still_enough_to_ask), and the flight it is granted starts from rest where it says it is
-            self._fly_to(tel, self._stop_point_m(tel), yaw_rad=yaw_rad)
+            stop = self._stop_point_m(tel)
+            v = tel.velocity_mps
+            if float(np.linalg.norm(stop - p)) <= self.config.ask_settle_tolerance_m and \
+                    v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= self.config.settle_speed_mps ** 2:
+                self._fly_to(tel, stop, 0.1, yaw_rad=yaw_rad, from_rest=True)  # at rest there already
+            else:
+                self._fly_to(tel, stop, yaw_rad=yaw_rad)
             return
         layer = self.config.lateral_altitude_m
         if layer is not None and d_xy > self.config.layer_min_leg_m:

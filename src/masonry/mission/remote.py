@@ -10,7 +10,7 @@ a :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -67,6 +67,7 @@ def run_remote_uav(
     turnaround_s: float = 0.2,
     echo: Any = None,
     adapters: Any = None,
+    uav_settings: Mapping[str, Any] | None = None,
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -90,6 +91,8 @@ def run_remote_uav(
             for ``masonry fly --fc URL --actuators PORT --camera ...``. Its ``advance`` moves time on its clock
             (the autopilot's: wall time on hardware, the SITL's scaled time on a bench), so ``time_scale`` does
             not apply; the caller checks the adapters before flight and closes them afterwards.
+        uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml
+            ``velocity_lag_s``).
 
     Raises:
         InputError: a bad ``time_scale`` or ``dt_s``.
@@ -129,7 +132,8 @@ def run_remote_uav(
     # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
     # fleet, the same in every process) is for when mission control is silent (docs/safety.md)
     config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
-                                 lateral_altitude_m=transit_layers_m(blueprint).get(spec.name))
+                                 lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
+                                 **dict(uav_settings or {}))
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
     wall0 = time.monotonic()
