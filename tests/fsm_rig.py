@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from masonry.fakes import (
@@ -110,3 +111,39 @@ class Rig:
         """State ``b`` was entered right after ``a`` somewhere in the trace."""
         s = self.states
         return any(s[i] == a and s[i + 1] == b for i in range(len(s) - 1))
+
+
+@dataclass
+class _Answer:
+    """What mission control's airspace answers (the fields the state machines read)."""
+
+
+    granted: bool
+    layer_m: float | None
+    hold_m: tuple[float, float, float] | None = None
+
+
+class ClearanceLink(QueueMissionLink):
+    """A link whose mission control answers after ``answer_after_s`` and grants the column at ``grant_after_s``."""
+
+    def __init__(self, tasks, clock, *, layer_m=2.6, answer_after_s=0.0, grant_after_s=0.0, hold_m=None):
+        super().__init__(tasks)
+        self.clock = clock
+        self.layer_m = layer_m
+        self.answer_after_s = answer_after_s
+        self.grant_after_s = grant_after_s
+        self.hold_m = hold_m
+        self.asked: dict[tuple[float, float, float], float] = {}
+        self.arrived: list[tuple[float, float, float]] = []
+
+    def request_clearance(self, site_m, top_m=None, to_m=None):
+        first = self.asked.setdefault(tuple(site_m), self.clock.now_s())
+        waited = self.clock.now_s() - first
+        if waited < self.answer_after_s:
+            return None
+        if waited < self.grant_after_s:
+            return _Answer(False, self.layer_m, self.hold_m)
+        return _Answer(True, self.layer_m)
+
+    def end_transit(self, site_m):
+        self.arrived.append(tuple(site_m))

@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fsm_rig import HOME, PICKUP, Rig
+from fsm_rig import HOME, PICKUP, ClearanceLink, Rig
 from masonry.blueprint_gen import running_bond, towers
 from masonry.errors import ProtocolError
-from masonry.fakes import QueueMissionLink
 from masonry.mission.airspace import ColumnClearance, layer_base_m, transit_layers_m, work_altitude_m
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, decode, encode
 from masonry.mission.simulate import simulate
@@ -225,39 +223,6 @@ def test_clearance_messages_round_trip_and_only_mission_control_grants():
 
 
 # -- the state machine ------------------------------------------------------------------------------------------
-@dataclass
-class _Answer:
-    granted: bool
-    layer_m: float | None
-    hold_m: tuple[float, float, float] | None = None
-
-
-class ClearanceLink(QueueMissionLink):
-    """A link whose mission control answers after ``answer_after_s`` and grants the column at ``grant_after_s``."""
-
-    def __init__(self, tasks, clock, *, layer_m=2.6, answer_after_s=0.0, grant_after_s=0.0, hold_m=None):
-        super().__init__(tasks)
-        self.clock = clock
-        self.layer_m = layer_m
-        self.answer_after_s = answer_after_s
-        self.grant_after_s = grant_after_s
-        self.hold_m = hold_m
-        self.asked: dict[tuple[float, float, float], float] = {}
-        self.arrived: list[tuple[float, float, float]] = []
-
-    def request_clearance(self, site_m, top_m=None, to_m=None):
-        first = self.asked.setdefault(tuple(site_m), self.clock.now_s())
-        waited = self.clock.now_s() - first
-        if waited < self.answer_after_s:
-            return None
-        if waited < self.grant_after_s:
-            return _Answer(False, self.layer_m, self.hold_m)
-        return _Answer(True, self.layer_m)
-
-    def end_transit(self, site_m):
-        self.arrived.append(tuple(site_m))
-
-
 def _rig_with(link_kwargs):
     rig = Rig("brick")
     link = ClearanceLink([rig.link.poll_task()], rig.clock, **link_kwargs)
@@ -323,8 +288,8 @@ def _outside_m(columns, uav, p):
                          [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)])
 def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(monkeypatch, courses, per, nb, na,
                                                                                   seed):
-    import masonry.mission.control as control
-    import masonry.sim.world as world
+    from masonry.mission import control
+    from masonry.sim import world
 
     mcs = []
     init = control.MissionControl.__init__

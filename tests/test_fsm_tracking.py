@@ -12,8 +12,7 @@ import math
 
 import pytest
 
-from fsm_rig import HOME, Rig
-from test_airspace import ClearanceLink
+from fsm_rig import HOME, ClearanceLink, Rig
 
 LAYER_M = 2.6
 
