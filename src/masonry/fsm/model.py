@@ -376,9 +376,7 @@ class UavModel:
             # hover until mission control answers, once come to rest smoothly: it asks once settled
             # (_still_enough_to_ask), and the flight it is granted starts from rest where it says it is
             stop = self._stop_point_m(tel)
-            v = tel.velocity_mps
-            if float(np.linalg.norm(stop - p)) <= self.config.ask_settle_tolerance_m and \
-                    v[0] * v[0] + v[1] * v[1] + v[2] * v[2] <= self.config.settle_speed_mps ** 2:
+            if self._rests_at(tel, stop):
                 self._fly_to(tel, stop, 0.1, yaw_rad=yaw_rad, from_rest=True)  # at rest there already
             else:
                 self._fly_to(tel, stop, yaw_rad=yaw_rad)
@@ -481,8 +479,9 @@ class UavModel:
             return end
         v = np.asarray(tel.velocity_mps, dtype=float)
         coast = 0.5 * v  # a 1 s quintic from (p, v) to rest at p + v / 2 decelerates monotonically
-        if float(np.linalg.norm(coast)) > to_end:
-            coast *= to_end / float(np.linalg.norm(coast))
+        length = float(np.linalg.norm(coast))
+        if length > to_end:
+            coast *= to_end / length
         return p + coast
 
     def _still_enough_to_ask(self, tel: Telemetry) -> bool:
@@ -502,13 +501,17 @@ class UavModel:
         cfg = self.config
         if waited >= 2.0 * cfg.align_patience_s:
             return True
-        k = 1.0 if waited < cfg.align_patience_s else 2.0
+        return self._rests_at(tel, self._target, 1.0 if waited < cfg.align_patience_s else 2.0)
+
+    def _rests_at(self, tel: Telemetry, point_m: Sequence[float] | np.ndarray, scale: float = 1.0) -> bool:
+        """Within ``scale`` x ``ask_settle_tolerance_m`` of ``point_m`` and slower than ``scale`` x
+        ``settle_speed_mps``."""
         vx, vy, vz = tel.velocity_mps
-        speed = k * cfg.settle_speed_mps
+        speed = scale * self.config.settle_speed_mps
         if vx * vx + vy * vy + vz * vz > speed * speed:
             return False
-        p, t = tel.position_m, self._target
-        tol = k * cfg.ask_settle_tolerance_m
+        p, t = tel.position_m, point_m
+        tol = scale * self.config.ask_settle_tolerance_m
         return (p[0] - t[0]) ** 2 + (p[1] - t[1]) ** 2 + (p[2] - t[2]) ** 2 <= tol * tol
 
     def _leg_duration_s(self, start: np.ndarray, target: np.ndarray) -> float:
