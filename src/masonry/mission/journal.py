@@ -530,14 +530,7 @@ def _check_fingerprint(
 ) -> None:
     stored_wall = state.meta.get("wall_digest")
     stored_fleet = state.meta.get("fleet_digest")
-    if stored_wall is None and not state.empty:
-        message = (f"{where} has no fingerprint of its wall and fleet (written by an earlier masonry): resuming "
-                   "it unchecked against this blueprint; it records this blueprint's fingerprint from now on")
-        if warn is not None:
-            warn(message)
-        else:
-            warnings.warn(message, UserWarning, stacklevel=3)
-    elif stored_wall is not None and stored_wall != wall_digest:
+    if stored_wall is not None and stored_wall != wall_digest:
         raise JournalUnusable(
             f"{where} was written for another wall (wall digest {stored_wall}, this blueprint's is "
             f"{wall_digest}): resume it with the blueprint it was written for, or give another --journal file")
@@ -559,3 +552,12 @@ def _check_fingerprint(
         if strangers:
             raise JournalUnusable(f"{where} names UAVs that are not in this mission's fleet: "
                                   f"{', '.join(strangers[:5])}")
+    if stored_wall is None and not state.empty:
+        # written before journals had a fingerprint: its tasks and UAVs are this mission's (checked above), but
+        # a brick moved or a clearance changed cannot be seen; say so and resume (docs/mission.md says why)
+        message = (f"{where} has no fingerprint of its wall and fleet (written by an earlier masonry): resuming "
+                   "it checked only by task ids and UAV names; it records this blueprint's fingerprint from now on")
+        if warn is not None:
+            warn(message)
+        else:
+            warnings.warn(message, UserWarning, stacklevel=3)
