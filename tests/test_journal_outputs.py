@@ -230,6 +230,8 @@ def test_read_only_journal_says_so_in_the_library_too(case_journal, tmp_path):
     read_only.chmod(0o444)
     with pytest.raises(JournalUnusable, match="is read-only"):
         Journal(read_only).open()
+    # reading it (to look at a finished mission) still works
+    assert [r.task_id for r in read_journal(read_only).done] == [r.task_id for r in read_journal(case_journal[0]).done]
 
 
 # ---------------------------------------------------------------- output paths: checked first, written atomically

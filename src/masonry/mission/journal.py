@@ -385,8 +385,30 @@ def read_journal(path: str | PathLike[str]) -> JournalState:
     p = Path(path)
     if not p.exists():
         raise JournalUnusable(f"journal {p}: no such file")
+    if p.is_file() and not p.stat().st_mode & 0o222:
+        return _read_only_replay(p)  # an archived, read-only journal can still be read
     with Journal(p) as journal:
         return journal.replay()
+
+
+def _read_only_replay(p: Path) -> JournalState:
+    where = f"journal {p}"
+    try:
+        conn = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro", uri=True)
+    except sqlite3.Error as exc:
+        raise JournalUnusable(f"{where}: cannot open: {_reason(exc)}") from exc
+    try:
+        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        if app_id != APPLICATION_ID or version != SCHEMA_VERSION:
+            raise JournalUnusable(f"{where}: not a masonry journal of schema version {SCHEMA_VERSION}")
+        rows = conn.execute("SELECT seq, kind, time_s, task_id, uav, attempt, data FROM records ORDER BY seq").fetchall()
+        meta_rows = conn.execute("SELECT key, value FROM meta ORDER BY key").fetchall()
+    except sqlite3.Error as exc:
+        raise JournalUnusable(f"{where}: cannot read: {_reason(exc)}") from exc
+    finally:
+        conn.close()
+    return _fold(str(p), rows, meta_rows)
 
 
 def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ...]]) -> JournalState:
@@ -536,10 +558,10 @@ def _check_fingerprint(
             f"{wall_digest}): resume it with the blueprint it was written for, or give another --journal file")
     elif stored_fleet is not None and stored_fleet != fleet_digest:
         before = state.meta.get("fleet")
-        names = f" ({', '.join(map(str, before))}; this one: {', '.join(fleet_names)})" if isinstance(
-            before, list) and fleet_names else ""
+        then = f"{', '.join(map(str, before))}, " if isinstance(before, list) and before else ""
+        now = f"{', '.join(fleet_names)}, " if fleet_names else ""
         raise JournalUnusable(
-            f"{where} was written for another fleet{names} (fleet digest {stored_fleet}, this one's is "
+            f"{where} was written for another fleet ({then}digest {stored_fleet}; this one: {now}digest "
             f"{fleet_digest}): resume with the same fleet (names, roles, homes; in sim the same --brick-uavs "
             "and --adhesion-uavs)")
     if task_ids is not None:
