@@ -156,6 +156,14 @@ def test_a_journal_without_fingerprint_naming_other_tasks_is_one_line_exit_2(cas
     assert "names tasks that are not in this blueprint's plan" in line and "B0" in line
 
 
+def test_simulate_refuses_a_journal_of_another_wall(case_journal, tmp_path):
+    journal = copy_journal(case_journal[0], tmp_path / "j.db")
+    with pytest.raises(JournalUnusable, match="written for another wall"):
+        simulate(load_blueprint(moved_case_study(tmp_path)), journal_path=journal, resume=True)
+    with pytest.raises(JournalUnusable, match="written for another fleet"):
+        simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True, adhesion_uavs=2)
+
+
 # ---------------------------------------------------------------- a resumed report equals the original
 
 
@@ -170,7 +178,7 @@ class _Stop(Exception):
     pass
 
 
-@pytest.mark.parametrize("after", [2, 3])
+@pytest.mark.parametrize("after", [2, 3, "60 s"])
 def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before(case_journal, tmp_path, after):
     full = case_journal[1]
     journal = tmp_path / "j.db"
@@ -179,11 +187,15 @@ def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before
         if done >= after:
             raise _Stop  # the process dies here: the journal holds `after` completions
 
-    with pytest.raises(_Stop):
-        simulate(load_blueprint(CASE_STUDY), journal_path=journal, progress=stop_after)
+    if after == "60 s":  # the run stops at 60 s of mission time (max_time_s), B1 and A1 unfinished
+        stopped = simulate(load_blueprint(CASE_STUDY), journal_path=journal, max_time_s=60.0)
+        assert not stopped.completed
+    else:
+        with pytest.raises(_Stop):
+            simulate(load_blueprint(CASE_STUDY), journal_path=journal, progress=stop_after)
     before = read_journal(journal)
     finished = [r.task_id for r in before.done]
-    assert len(finished) == after and "B0" in finished
+    assert len(finished) == (2 if after == "60 s" else after) and "B0" in finished
     resumed = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True).to_dict()
     assert resumed["completed"]
     full_tasks = {t["id"]: t for t in full["tasks"]}
