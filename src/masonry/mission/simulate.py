@@ -246,7 +246,8 @@ def simulate(
     if journal_path is not None:
         journal, state = open_mission_journal(
             Path(journal_path), resume=resume, wall_digest=wall_digest(blueprint),
-            fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet], task_ids=[t.id for t in the_plan.tasks], warn=warn)
+            fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet],
+            task_ids=[t.id for t in the_plan.tasks], warn=warn)
     try:
         return _run(
             blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
@@ -265,8 +266,8 @@ class _MeasuredJournal:
 
     Each record carries ``measured``: the distance each UAV has flown, its busy time (the tasks its handler
     executed) and the minimum separation so far (over the whole mission: a resumed run adds the values the
-    journal had), and a brick's completion its true placement error. A resumed report takes them from the journal (:func:`_report`) instead of the UAVs'
-    own estimates or a rebuilt world that has flown nothing yet.
+    journal had), and a brick's completion its true placement error. A resumed report takes them from the
+    journal (:func:`_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
     """
 
     def __init__(self, journal: Any, world: Any, plan: Plan, before: Mapping[str, Any]) -> None:
@@ -319,6 +320,9 @@ class _MeasuredJournal:
 
     def record_uav_lost(self, time_s: float, uav: str) -> None:
         self.journal.record_uav_lost(time_s, uav, measured=self._measured())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.journal, name)  # anything else mission control asks of the journal
 
 
 def _floats(value: Any) -> dict[str, float]:
