@@ -64,7 +64,7 @@ def test_sim_journal_and_resume(tmp_path):
     first = sim("--journal", str(journal), "--format", "json")
     assert first.exit_code == 0, first.output
     again = sim("--journal", str(journal), "--format", "json")
-    assert again.exit_code == 1 and "already holds a mission" in again.stderr
+    assert again.exit_code == 2 and "already holds a mission" in again.stderr
     resumed = sim("--journal", str(journal), "--resume", "--format", "json")
     assert resumed.exit_code == 0, resumed.output
     assert json.loads(resumed.stdout)["tasks"] == json.loads(first.stdout)["tasks"]

@@ -97,7 +97,8 @@ def test_resume_with_a_placed_brick_keeps_it_in_place(tmp_path):
     run_and_kill(journal, after=2)
     before = read_journal(journal)
     assert [r.task_id for r in before.done] == ["A0", "B0"]
-    journaled_error = before.done[1].fields["placement_error_m"]
+    # the world's true placement error, journaled with the completion (not the UAV's release-point estimate)
+    journaled_error = before.done[1].fields["measured"]["placement_error_m"]
     report = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True)
     assert report.completed
     assert report.placement_error_m["B0"] == pytest.approx(journaled_error)

@@ -15,6 +15,8 @@
     └── MissionError            mission control or its transport/journal failed
         ├── ProtocolError       a message is malformed, of another version, or from an unknown UAV
         └── JournalError        the journal cannot be read, written or resumed
+            └── JournalUnusable the journal file given cannot serve this mission (corrupt, another
+                                program's, read-only, of another wall or fleet, already holding a mission)
 
 Adapters translate library failures at the boundary with ``raise ... from exc``; the CLI
 prints ``str(error)`` as one line and exits with status 2 (bad input) or 1 (runtime failure).
@@ -85,3 +87,12 @@ class ProtocolError(MissionError):
 
 class JournalError(MissionError):
     """The mission journal cannot be read, written or resumed."""
+
+
+class JournalUnusable(JournalError):
+    """The journal file the user gave cannot serve this mission: a bad input (exit 2), not a runtime failure.
+
+    Corrupt or not a journal, a database of another program, read-only or in a location that cannot be
+    written, written for another wall or fleet, already holding a mission (without ``--resume``), or missing
+    (with ``--resume``). The message names the file.
+    """

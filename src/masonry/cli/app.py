@@ -13,7 +13,14 @@ from typing import Any, TypeVar
 
 import typer
 
-from masonry.errors import BlueprintError, InputError, MasonryError, PerceptionError, ProtocolError
+from masonry.errors import (
+    BlueprintError,
+    InputError,
+    JournalUnusable,
+    MasonryError,
+    PerceptionError,
+    ProtocolError,
+)
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -26,7 +33,8 @@ app = typer.Typer(
 )
 
 #: Errors caused by what the user gave us exit with 2 (like a usage error); the rest exit with 1.
-USER_ERRORS: tuple[type[MasonryError], ...] = (BlueprintError, InputError, PerceptionError, ProtocolError)
+USER_ERRORS: tuple[type[MasonryError], ...] = (
+    BlueprintError, InputError, JournalUnusable, PerceptionError, ProtocolError)
 
 
 def fail(message: str, code: int = 2) -> typer.Exit:

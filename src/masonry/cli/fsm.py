@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 
 from masonry.cli.app import app, command, fail
+from masonry.cli.outputs import atomic_path, check_output_path
 from masonry.errors import InputError
 
 fsm_app = typer.Typer(help="The UAVs' state machines.", no_args_is_help=True)
@@ -29,6 +30,7 @@ def diagram(
     fmt = output.suffix.lower().lstrip(".")
     if fmt not in FORMATS:
         raise InputError(f"{output}: the file must end in .svg, .png or .dot")
+    check_output_path(output, "--output")
     if fmt != "dot" and not dot_available():
         raise fail(
             f"graphviz's `dot` is not installed, so {output.name} cannot be rendered: install graphviz "
@@ -36,7 +38,8 @@ def diagram(
             1,
         )
     try:
-        write_diagram(machine, output)
+        with atomic_path(output, "--output") as tmp:
+            write_diagram(machine, tmp)
     except OSError as exc:
         raise InputError(f"{output}: cannot write the diagram ({exc.strerror or exc})") from exc
     typer.echo(f"wrote {output}")

@@ -34,8 +34,10 @@ def mission_control(
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
     from masonry.blueprint import load_blueprint
+    from masonry.cli.outputs import check_output_path, write_atomic
+    from masonry.fingerprint import fleet_digest, wall_digest
     from masonry.mission.control import MissionControl
-    from masonry.mission.journal import Journal
+    from masonry.mission.journal import open_mission_journal
     from masonry.mission.messages import MISSION_CONTROL
     from masonry.mission.report import control_report
     from masonry.mission.simulate import POLICIES, priority_durations_s
@@ -51,6 +53,7 @@ def mission_control(
         raise InputError("--resume needs --journal FILE")
     if tick <= 0 or time_scale <= 0:
         raise InputError(f"--tick and --time-scale must be > 0, got {tick} and {time_scale}")
+    check_output_path(report, "--report")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
@@ -58,20 +61,11 @@ def mission_control(
     jr = None
     state = None
     if journal is not None:
-        from masonry.errors import JournalError
-
-        existed = journal.exists() and journal.stat().st_size > 0
-        if resume and not existed:
-            raise JournalError(f"{journal}: no journal to resume from")
-        jr = Journal(journal).open()
-        if existed:
-            state = jr.replay()
-            if not resume and not state.empty:
-                jr.close()
-                raise JournalError(f"{journal} already holds a mission: pass --resume to continue it, "
-                                   "or give another --journal file")
-            if not resume:
-                state = None
+        # the journal knows its wall and fleet: a resume with another blueprint is refused (exit 2)
+        jr, state = open_mission_journal(
+            journal, resume=resume, wall_digest=wall_digest(bp), fleet_digest=fleet_digest(bp),
+            fleet_names=[u.name for u in bp.fleet], task_ids=[t.id for t in the_plan.tasks],
+            warn=lambda m: typer.echo(f"warning: {m}", err=True))
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     from masonry.mission.airspace import layer_base_m
 
@@ -111,7 +105,7 @@ def mission_control(
             jr.close()
     result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
     if report is not None:
-        report.write_text(result.to_json(indent=1) + "\n")
+        write_atomic(report, result.to_json(indent=1) + "\n", "--report")
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.outputs import atomic_path, check_output_path
 from masonry.errors import DeviceNotFound, InputError
 
 if TYPE_CHECKING:
@@ -244,14 +245,20 @@ def markers_cmd(
     from masonry.blueprint import MarkerSpec
     from masonry.perception.markers_sheet import parse_id_ranges, write_marker_sheets
 
+    check_output_path(output, "--output")
     ids = parse_id_ranges(bricks)
     size = parse_floats("--brick-size", brick_size, 3, "length,width,height in metres")
     if min(size) <= 0:
         raise InputError(f"--brick-size: every dimension must be > 0, got {brick_size!r}")
     spec = MarkerSpec(dictionary=dictionary, size_m=marker_size, spacing_m=spacing)
-    written = write_marker_sheets(
-        output, ids, spec, brick_size_m=(size[0], size[1], size[2]), paper=paper, dpi=dpi
-    )
+    if output.suffix.lower() == ".pdf" or len(ids) == 1:
+        with atomic_path(output, "--output") as tmp:
+            write_marker_sheets(tmp, ids, spec, brick_size_m=(size[0], size[1], size[2]), paper=paper, dpi=dpi)
+        written = [output]
+    else:  # one PNG per brick, named after the output
+        written = write_marker_sheets(
+            output, ids, spec, brick_size_m=(size[0], size[1], size[2]), paper=paper, dpi=dpi
+        )
     for p in written:
         typer.echo(f"wrote {p}")
     typer.echo(
@@ -276,6 +283,7 @@ def calibrate(
 
     from masonry.perception.calibration import calibrate_chessboard, parse_board, write_calibration
 
+    check_output_path(output, "--output")
     spec = parse_board(board)
     loaded = []
     for p in images:
@@ -286,7 +294,8 @@ def calibrate(
             raise InputError(f"{p}: cannot read the image (not an image file, or an unsupported format)")
         loaded.append((str(p), grey))
     result = calibrate_chessboard(loaded, spec)
-    write_calibration(output, result.intrinsics, rms_px=result.rms_px, image_count=len(result.used))
+    with atomic_path(output, "--output") as tmp:
+        write_calibration(tmp, result.intrinsics, rms_px=result.rms_px, image_count=len(result.used))
     i = result.intrinsics
     typer.echo(
         f"board found in {len(result.used)} of {len(images)} images; RMS reprojection error "

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.app import app, command
+from masonry.cli.outputs import atomic_path, check_output_path, check_output_paths, write_atomic
 from masonry.errors import InputError
 
 if TYPE_CHECKING:
@@ -37,6 +38,7 @@ def plan_command(
         raise InputError(f"--format must be text or json, got {fmt!r}")
     if graph is not None and graph.suffix.lower() not in GRAPH_FORMATS:
         raise InputError(f"--graph {graph}: the file must end in {', '.join(GRAPH_FORMATS)}")
+    check_output_paths([("--output", output), ("--graph", graph)])
     bp = load_blueprint(blueprint)
     result = plan_graphs(bp)  # conflicts stay arrays: a 20,000-brick wall has millions of them
     if fmt == "json":
@@ -48,7 +50,8 @@ def plan_command(
     if graph is not None:
         from masonry.viz.graph_drawing import export_graphs
 
-        export_graphs(result.to_plan(), graph, title=bp.name or blueprint.name)
+        with atomic_path(graph, "--graph") as tmp:
+            export_graphs(result.to_plan(), tmp, title=bp.name or blueprint.name)
 
 
 def _write(pieces: Any, output: Path | None) -> None:
@@ -57,12 +60,9 @@ def _write(pieces: Any, output: Path | None) -> None:
             sys.stdout.write(piece)
         sys.stdout.flush()
         return
-    try:
-        with output.open("w", encoding="utf-8") as fh:
-            for piece in pieces:
-                fh.write(piece)
-    except OSError as exc:
-        raise InputError(f"--output {output}: cannot write: {exc.strerror or exc}") from None
+    with atomic_path(output, "--output") as tmp, tmp.open("w", encoding="utf-8") as fh:
+        for piece in pieces:
+            fh.write(piece)
 
 
 def summary(bp: Blueprint, result: PlanGraphs) -> str:
@@ -196,6 +196,7 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     from masonry.blueprint_gen import generate
     from masonry.errors import BlueprintError
 
+    check_output_path(output, "--output")
     try:
         bp = generate(kind, **options)
         validate_blueprint(bp)
@@ -205,10 +206,7 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     if output is None:
         sys.stdout.write(text)
         return
-    try:
-        output.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"-o {output}: cannot write: {exc.strerror or exc}") from None
+    write_atomic(output, text, "--output")
     n_todo = sum(1 for b in bp.bricks if not b.placed)
     typer.echo(f"wrote {output}: {len(bp.bricks)} bricks ({n_todo} to place), {len(bp.fleet)} UAVs", err=True)
 

@@ -9,6 +9,7 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
 from masonry.errors import InputError
 
 
@@ -44,6 +45,10 @@ def sim(
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
+    # before the work: a long simulation must not end in an unwritable report
+    check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d)])
+    if journal is not None and any(p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)):
+        raise InputError(f"--journal {journal}: the same file as an output")
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
 
@@ -51,19 +56,21 @@ def sim(
     try:
         result = simulate(bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed,
                           camera=camera, faults=faults, journal_path=journal, resume=resume, dt_s=dt,
-                          progress=progress_cb)
+                          progress=progress_cb, warn=lambda m: typer.echo(f"warning: {m}", err=True))
     finally:
         finish()
     if report is not None:
-        report.write_text(result.to_json(indent=1) + "\n")
+        write_atomic(report, result.to_json(indent=1) + "\n", "--report")
     if gantt is not None:
         from masonry.viz.gantt import draw_gantt
 
-        draw_gantt(result, gantt, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
+        with atomic_path(gantt, "--gantt") as tmp:
+            draw_gantt(result, tmp, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
     if plot3d is not None:
         from masonry.viz.plot3d import draw_plot3d
 
-        draw_plot3d(bp, result, plot3d, title=f"{bp.name or blueprint.name}: wall and flown paths")
+        with atomic_path(plot3d, "--plot3d") as tmp:
+            draw_plot3d(bp, result, tmp, title=f"{bp.name or blueprint.name}: wall and flown paths")
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished

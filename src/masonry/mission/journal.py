@@ -9,22 +9,32 @@ journal of an unknown version raises :class:`~masonry.errors.JournalError` namin
 :meth:`Journal.replay` folds the records into a :class:`JournalState`, what ``--resume`` needs: the completed
 tasks with their times, the attempt counts (as :meth:`masonry.planner.Dispatcher.restore` takes them), the
 UAVs declared lost and the last mission time.
+
+:func:`open_mission_journal` is how ``masonry sim`` and ``masonry mission-control`` open a journal: a new
+journal stores the fingerprint of its wall and fleet (:mod:`masonry.fingerprint`), and a resume is refused
+when the blueprint's fingerprint is another one (docs/mission.md, "The journal").
+
+Errors that come from the file the user gave (not a journal, another program's database, corrupt, read-only,
+of another wall or fleet, already holding a mission) are :class:`~masonry.errors.JournalUnusable` (exit 2 in
+the CLI); a failure to write during the mission (a full disk) stays a plain :class:`JournalError`.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import sqlite3
 import threading
-from collections.abc import Mapping
+import warnings
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from types import MappingProxyType, TracebackType
 from typing import Any, Literal
 
-from masonry.errors import JournalError
+from masonry.errors import JournalError, JournalUnusable
 from masonry.ports import BATTERY_LOW_REASON
 
 SCHEMA_VERSION = 1
@@ -108,6 +118,8 @@ class JournalState:
         last_time_s: the latest mission time in any record (0.0 for an empty journal): the resumed clock.
         records: every record, in write order.
         meta: the key/value pairs stored with :meth:`Journal.set_meta`.
+        measured: the latest ``measured`` snapshot any record carries (what a simulator measured when it
+            wrote the record: ``distances_m`` per UAV, ``min_separation_m``); empty if none does.
     """
 
     done: tuple[DoneRecord, ...] = ()
@@ -118,6 +130,17 @@ class JournalState:
     last_time_s: float = 0.0
     records: tuple[JournalRecord, ...] = ()
     meta: Mapping[str, Any] = field(default_factory=dict)
+    measured: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def task_ids(self) -> frozenset[str]:
+        """Ids of every task any record names."""
+        return frozenset(r.task_id for r in self.records if r.task_id is not None)
+
+    @property
+    def uav_names(self) -> frozenset[str]:
+        """Names of every UAV any record names."""
+        return frozenset(r.uav for r in self.records)
 
     @property
     def done_ids(self) -> frozenset[str]:
@@ -171,12 +194,26 @@ class Journal:
         """Open (creating if absent) the journal file; returns ``self``."""
         if self._conn is not None:
             return self
+        where = f"journal {self.path}"
         if self.path.is_dir():
-            raise JournalError(f"journal {self.path}: is a directory")
+            raise JournalUnusable(f"{where}: is a directory")
+        parent = self.path.parent
+        if not parent.is_dir():
+            raise JournalUnusable(f"{where}: cannot open: the directory {parent} does not exist")
+        if self.path.exists() and not self.path.is_file():
+            raise JournalUnusable(f"{where}: is not a regular file")
+        # every record is written as it happens: a journal that cannot be written is refused up front (the
+        # mode bits count even for root, who could write anyway: a file made read-only is meant to stay so)
+        if self.path.exists() and (not os.access(self.path, os.W_OK) or not self.path.stat().st_mode & 0o222):
+            raise JournalUnusable(f"{where}: is read-only (the mission cannot be recorded): make it writable "
+                                  "or give another --journal file")
+        if not os.access(parent, os.W_OK | os.X_OK):
+            raise JournalUnusable(f"{where}: the directory {parent} is read-only (SQLite writes its WAL file "
+                                  "beside the journal): give a --journal file in a writable directory")
         try:
             conn = sqlite3.connect(str(self.path), isolation_level=None, check_same_thread=False, timeout=10.0)
         except sqlite3.Error as exc:
-            raise JournalError(f"journal {self.path}: cannot open: {exc}") from exc
+            raise JournalUnusable(f"{where}: cannot open: {_reason(exc)}") from exc
         try:
             self._check_or_create(conn)
         except BaseException:
@@ -192,7 +229,7 @@ class Journal:
             version = conn.execute("PRAGMA user_version").fetchone()[0]
             tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
         except sqlite3.DatabaseError as exc:
-            raise JournalError(f"{where}: not a masonry journal ({exc})") from exc
+            raise JournalUnusable(f"{where}: not a masonry journal ({_reason(exc)})") from exc
         tables.discard("sqlite_sequence")
         if app_id == 0 and not tables:
             try:
@@ -205,22 +242,23 @@ class Journal:
                 conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
                 conn.execute("COMMIT")
             except sqlite3.Error as exc:
-                raise JournalError(f"{where}: cannot create: {exc}") from exc
+                raise JournalUnusable(f"{where}: cannot create: {_reason(exc)}") from exc
         elif app_id != APPLICATION_ID:
-            raise JournalError(f"{where}: not a masonry journal (an SQLite database of another program)")
+            raise JournalUnusable(f"{where}: not a masonry journal (an SQLite database of another program)")
         elif version != SCHEMA_VERSION:
-            raise JournalError(
+            raise JournalUnusable(
                 f"{where}: journal schema version {version}, this masonry reads version {SCHEMA_VERSION}"
             )
         elif not _TABLES <= tables:
-            raise JournalError(f"{where}: damaged journal (tables missing: {', '.join(sorted(_TABLES - tables))})")
+            raise JournalUnusable(
+                f"{where}: damaged journal (tables missing: {', '.join(sorted(_TABLES - tables))})")
         try:
             mode = conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
             conn.execute(f"PRAGMA synchronous = {self.sync.upper()}")
         except sqlite3.Error as exc:
-            raise JournalError(f"{where}: cannot set up durability: {exc}") from exc
+            raise JournalUnusable(f"{where}: cannot set up durability: {_reason(exc)}") from exc
         if str(mode).lower() != "wal":
-            raise JournalError(f"{where}: cannot switch to WAL mode (got {mode!r})")
+            raise JournalUnusable(f"{where}: cannot switch to WAL mode (got {mode!r})")
 
     def close(self) -> None:
         """Close the file (idempotent)."""
@@ -276,23 +314,23 @@ class Journal:
                     (kind, float(time_s), task_id, uav, attempt, text),
                 )
             except sqlite3.Error as exc:
-                raise JournalError(f"journal {self.path}: cannot write a {kind} record: {exc}") from exc
+                raise JournalError(f"journal {self.path}: cannot write a {kind} record: {_reason(exc)}") from exc
 
-    def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
+    def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int, **fields: Any) -> None:
         """Task ``task_id`` was given to ``uav`` at mission time ``time_s`` as attempt ``attempt`` (from 1)."""
-        self._insert("assign", time_s, task_id, uav, attempt, {})
+        self._insert("assign", time_s, task_id, uav, attempt, fields)
 
     def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
         """``uav`` completed ``task_id`` at ``time_s``; ``fields`` (JSON values) are kept with the record."""
         self._insert("complete", time_s, task_id, uav, None, fields)
 
-    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str) -> None:
+    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str, **fields: Any) -> None:
         """An attempt of ``task_id`` by ``uav`` failed at ``time_s`` for ``reason``."""
-        self._insert("fail", time_s, task_id, uav, None, {"reason": str(reason)})
+        self._insert("fail", time_s, task_id, uav, None, {**fields, "reason": str(reason)})
 
-    def record_uav_lost(self, time_s: float, uav: str) -> None:
+    def record_uav_lost(self, time_s: float, uav: str, **fields: Any) -> None:
         """``uav`` was declared lost at ``time_s`` (its task, if any, was released without counting an attempt)."""
-        self._insert("uav_lost", time_s, None, uav, None, {})
+        self._insert("uav_lost", time_s, None, uav, None, fields)
 
     def set_meta(self, key: str, value: Any) -> None:
         """Store a JSON value under ``key`` (e.g. the blueprint, policy and seed a resume must match); durable."""
@@ -334,7 +372,7 @@ class Journal:
                 ).fetchall()
                 meta_rows = self._conn.execute("SELECT key, value FROM meta ORDER BY key").fetchall()
             except sqlite3.Error as exc:
-                raise JournalError(f"journal {self.path}: cannot read: {exc}") from exc
+                raise JournalUnusable(f"journal {self.path}: cannot read: {_reason(exc)}") from exc
         return _fold(str(self.path), rows, meta_rows)
 
 
@@ -346,9 +384,31 @@ def read_journal(path: str | PathLike[str]) -> JournalState:
     """
     p = Path(path)
     if not p.exists():
-        raise JournalError(f"journal {p}: no such file")
+        raise JournalUnusable(f"journal {p}: no such file")
+    if p.is_file() and not p.stat().st_mode & 0o222:
+        return _read_only_replay(p)  # an archived, read-only journal can still be read
     with Journal(p) as journal:
         return journal.replay()
+
+
+def _read_only_replay(p: Path) -> JournalState:
+    where = f"journal {p}"
+    try:
+        conn = sqlite3.connect(f"{p.resolve().as_uri()}?mode=ro", uri=True)
+    except sqlite3.Error as exc:
+        raise JournalUnusable(f"{where}: cannot open: {_reason(exc)}") from exc
+    try:
+        app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        if app_id != APPLICATION_ID or version != SCHEMA_VERSION:
+            raise JournalUnusable(f"{where}: not a masonry journal of schema version {SCHEMA_VERSION}")
+        rows = conn.execute("SELECT seq, kind, time_s, task_id, uav, attempt, data FROM records ORDER BY seq").fetchall()
+        meta_rows = conn.execute("SELECT key, value FROM meta ORDER BY key").fetchall()
+    except sqlite3.Error as exc:
+        raise JournalUnusable(f"{where}: cannot read: {_reason(exc)}") from exc
+    finally:
+        conn.close()
+    return _fold(str(p), rows, meta_rows)
 
 
 def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ...]]) -> JournalState:
@@ -359,15 +419,18 @@ def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ..
     running: dict[str, tuple[str, float, int]] = {}  # task -> (uav, start_s, attempt)
     lost: list[str] = []
     last = 0.0
+    measured: dict[str, Any] = {}
     for seq, kind, time_s, task_id, uav, attempt, data_text in rows:
         try:
             data = json.loads(data_text)
         except (TypeError, ValueError) as exc:
-            raise JournalError(f"journal {where}: record {seq}: unreadable data ({exc})") from exc
+            raise JournalUnusable(f"journal {where}: record {seq}: unreadable data ({exc})") from exc
         if not isinstance(data, dict) or not isinstance(time_s, (int, float)) or not isinstance(uav, str):
-            raise JournalError(f"journal {where}: record {seq}: malformed")
+            raise JournalUnusable(f"journal {where}: record {seq}: malformed")
         if kind != "uav_lost" and not isinstance(task_id, str):
-            raise JournalError(f"journal {where}: record {seq}: {kind} record without a task id")
+            raise JournalUnusable(f"journal {where}: record {seq}: {kind} record without a task id")
+        if isinstance(data.get("measured"), dict):
+            measured = data["measured"]
         rec = JournalRecord(int(seq), kind, float(time_s), task_id, uav, attempt, MappingProxyType(data))
         records.append(rec)
         last = max(last, rec.time_s)
@@ -394,7 +457,10 @@ def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ..
         try:
             meta[key] = json.loads(value)
         except (TypeError, ValueError) as exc:
-            raise JournalError(f"journal {where}: meta {key!r}: unreadable ({exc})") from exc
+            raise JournalUnusable(f"journal {where}: meta {key!r}: unreadable ({exc})") from exc
+    end = meta.get("measured")  # written when a run ends: later than its last record (the UAVs flew home)
+    if isinstance(end, dict) and isinstance(end.get("time_s"), (int, float)) and end["time_s"] >= last:
+        measured = {k: v for k, v in end.items() if k != "time_s"}
     return JournalState(
         done=tuple(done.values()),
         attempts=MappingProxyType(attempts),
@@ -404,4 +470,116 @@ def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ..
         last_time_s=last,
         records=tuple(records),
         meta=MappingProxyType(meta),
+        measured=MappingProxyType(measured),
     )
+
+
+def _reason(exc: BaseException) -> str:
+    """SQLite's message, with a read-only location said in plain words."""
+    text = str(exc)
+    if "readonly" in text.replace(" ", "").lower():
+        return f"the journal is read-only ({text})"
+    return text
+
+
+def open_mission_journal(
+    path: str | PathLike[str],
+    *,
+    resume: bool,
+    wall_digest: str,
+    fleet_digest: str,
+    fleet_names: Collection[str] = (),
+    task_ids: Collection[str] | None = None,
+    sync: Literal["full", "normal"] = "full",
+    warn: Callable[[str], None] | None = None,
+) -> tuple[Journal, JournalState | None]:
+    """Open the journal of a mission: a new one, or (``resume``) the one of this very wall and fleet.
+
+    A new (or empty) journal gets the fingerprint ``wall_digest`` / ``fleet_digest``
+    (:func:`masonry.fingerprint.wall_digest`, :func:`~masonry.fingerprint.fleet_digest`) in its meta table. On
+    ``resume`` the journal's fingerprint must be the blueprint's. A journal written before fingerprints existed
+    (no ``wall_digest``) is resumed with a warning (``warn``, default :func:`warnings.warn`) if every task and
+    UAV it names is in this mission, and then gets this mission's fingerprint (docs/mission.md says why).
+
+    Args:
+        path: the journal file (created if absent).
+        resume: continue the mission the journal holds (it must exist); without it, the journal must hold none.
+        wall_digest, fleet_digest: the fingerprint of this mission's blueprint and fleet.
+        fleet_names: the fleet's UAV names (stored, and quoted when the fleet differs).
+        task_ids: the plan's task ids: a journal naming another task is refused (None: not checked).
+        sync: see :class:`Journal`.
+        warn: where the warning about a journal without a fingerprint goes.
+
+    Returns:
+        The open journal (the caller closes it) and its replayed state (None for a new mission).
+
+    Raises:
+        JournalUnusable: no journal to resume, one that already holds a mission, one of another wall or fleet,
+            or any reason :meth:`Journal.open` refuses the file. The message names the file.
+    """
+    p = Path(path)
+    where = f"journal {p}"
+    existed = p.is_file() and p.stat().st_size > 0
+    if resume and not existed:
+        raise JournalUnusable(f"{where}: no journal to resume from")
+    journal = Journal(p, sync=sync).open()
+    try:
+        state = journal.replay() if existed else None
+        if state is not None and not resume:
+            if not state.empty:
+                raise JournalUnusable(f"{where} already holds a mission: pass --resume to continue it, "
+                                      "or give another --journal file")
+            state = None
+        if state is not None:
+            _check_fingerprint(where, state, wall_digest, fleet_digest, fleet_names, task_ids, warn)
+        journal.set_meta("wall_digest", wall_digest)
+        journal.set_meta("fleet_digest", fleet_digest)
+        journal.set_meta("fleet", list(fleet_names))
+    except BaseException:
+        journal.close()
+        raise
+    return journal, state
+
+
+def _check_fingerprint(
+    where: str,
+    state: JournalState,
+    wall_digest: str,
+    fleet_digest: str,
+    fleet_names: Collection[str],
+    task_ids: Collection[str] | None,
+    warn: Callable[[str], None] | None,
+) -> None:
+    stored_wall = state.meta.get("wall_digest")
+    stored_fleet = state.meta.get("fleet_digest")
+    if stored_wall is not None and stored_wall != wall_digest:
+        raise JournalUnusable(
+            f"{where} was written for another wall (wall digest {stored_wall}, this blueprint's is "
+            f"{wall_digest}): resume it with the blueprint it was written for, or give another --journal file")
+    elif stored_fleet is not None and stored_fleet != fleet_digest:
+        before = state.meta.get("fleet")
+        then = f"{', '.join(map(str, before))}, " if isinstance(before, list) and before else ""
+        now = f"{', '.join(fleet_names)}, " if fleet_names else ""
+        raise JournalUnusable(
+            f"{where} was written for another fleet ({then}digest {stored_fleet}; this one: {now}digest "
+            f"{fleet_digest}): resume with the same fleet (names, roles, homes; in sim the same --brick-uavs "
+            "and --adhesion-uavs)")
+    if task_ids is not None:
+        unknown = sorted(state.task_ids - set(task_ids))
+        if unknown:
+            shown = ", ".join(unknown[:5]) + (f" and {len(unknown) - 5} more" if len(unknown) > 5 else "")
+            raise JournalUnusable(f"{where} names tasks that are not in this blueprint's plan: {shown}")
+    if fleet_names:
+        strangers = sorted(state.uav_names - set(fleet_names))
+        if strangers:
+            raise JournalUnusable(f"{where} names UAVs that are not in this mission's fleet: "
+                                  f"{', '.join(strangers[:5])}")
+    if stored_wall is None and not state.empty:
+        # written before journals had a fingerprint: its tasks and UAVs are this mission's (checked above), but
+        # a brick moved or a clearance changed cannot be seen; say so and resume (docs/mission.md says why)
+        message = (f"{where} has no fingerprint of its wall and fleet (written by an earlier masonry): resuming "
+                   "it checked only by task ids and UAV names; it records this blueprint's fingerprint from now on")
+        if warn is not None:
+            warn(message)
+        else:
+            warnings.warn(message, UserWarning, stacklevel=3)

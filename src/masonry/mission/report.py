@@ -232,6 +232,7 @@ def control_report(
     now_s: float | None = None,
     durations_s: Mapping[str, float] | None = None,
     work_s: Mapping[str, float] | None = None,
+    busy_s: Mapping[str, float] | None = None,
     **extra: Any,
 ) -> MissionReport:
     """Build the report from a :class:`~masonry.mission.control.MissionControl`'s history.
@@ -243,6 +244,8 @@ def control_report(
     Args:
         intervals: (uav, task id, start_s, end_s) executed by the UAVs (default: mission control's attempts).
         distances_m, placement_error_m, min_separation_m: measured values overriding the reported ones.
+        busy_s: time on tasks per UAV, overriding the sum of ``intervals`` (a resumed simulation passes the
+            journaled time before the crash plus this run's).
         now_s: end of the trace for attempts still running (default: mission control's last step).
         durations_s: expected task durations for the lower bound (``masonry.planner.estimate_durations_s``:
             the same bound for every policy and seed); default: the durations measured in this run.
@@ -287,6 +290,8 @@ def control_report(
     busy: dict[str, float] = {}
     for uav, _, s, e in intervals:
         busy[uav] = busy.get(uav, 0.0) + ((e if e is not None else now) - s)
+    if busy_s is not None:
+        busy = dict(busy_s)
     uavs = tuple(
         UavReport(spec.name, spec.role, busy.get(spec.name, 0.0),
                   float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),

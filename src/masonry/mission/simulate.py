@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
-from masonry.errors import InputError, JournalError, MasonryError
+from masonry.errors import InputError, MasonryError
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
@@ -181,6 +181,7 @@ def simulate(
     progress: ProgressFn | None = None,
     separation: bool = True,
     rising_layers: bool = True,
+    warn: Callable[[str], None] | None = None,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it.
 
@@ -203,12 +204,21 @@ def simulate(
             work altitude with no column clearance, as before they existed (for comparisons).
         rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned so
             far) instead of staying above the finished wall from the start (False, for comparisons).
+        warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
+
+    The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
+    :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
+    true placement error of a brick, the distance each UAV has flown, the minimum separation), so that a
+    resumed report says for the work done before the crash what the run that did it would have said.
 
     Raises:
         InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
-        JournalError: the journal cannot be used (e.g. it already holds a mission and ``resume`` is off).
+        JournalUnusable: the journal cannot serve this mission (it already holds one and ``resume`` is off, it
+            was written for another wall or fleet, it is not a journal, it is read-only).
+        JournalError: the journal cannot be written during the mission.
     """
-    from masonry.mission.journal import Journal
+    from masonry.fingerprint import fleet_digest, wall_digest
+    from masonry.mission.journal import open_mission_journal
     from masonry.planner import estimate_durations_s
     from masonry.planner import plan as make_plan
     from masonry.sim import Faults, World
@@ -234,20 +244,10 @@ def simulate(
     journal = None
     state = None
     if journal_path is not None:
-        journal_path = Path(journal_path)
-        existed = journal_path.exists() and journal_path.stat().st_size > 0
-        if resume and not existed:
-            raise JournalError(f"{journal_path}: no journal to resume from")
-        journal = Journal(journal_path)
-        journal.__enter__()
-        if existed:
-            state = journal.replay()
-            if not resume and not state.empty:
-                journal.__exit__(None, None, None)
-                raise JournalError(f"{journal_path} already holds a mission: pass --resume to continue it, "
-                                   "or give another --journal file")
-            if not resume:
-                state = None
+        journal, state = open_mission_journal(
+            Path(journal_path), resume=resume, wall_digest=wall_digest(blueprint),
+            fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet],
+            task_ids=[t.id for t in the_plan.tasks], warn=warn)
     try:
         return _run(
             blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
@@ -258,7 +258,77 @@ def simulate(
         )
     finally:
         if journal is not None:
-            journal.__exit__(None, None, None)
+            journal.close()
+
+
+class _MeasuredJournal:
+    """The journal as mission control sees it, with what the world measured added to every record.
+
+    Each record carries ``measured``: the distance each UAV has flown, its busy time (the tasks its handler
+    executed) and the minimum separation so far (over the whole mission: a resumed run adds the values the
+    journal had), and a brick's completion its true placement error. A resumed report takes them from the
+    journal (:func:`_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
+    """
+
+    def __init__(self, journal: Any, world: Any, plan: Plan, before: Mapping[str, Any]) -> None:
+        self.journal = journal
+        self.world = world
+        self._bricks = {t.id: t.brick for t in plan.tasks if isinstance(t, BrickTask)}
+        self.before_distances_m = _floats(before.get("distances_m"))
+        self.before_busy_s = _floats(before.get("busy_s"))
+        sep = before.get("min_separation_m")
+        self.before_min_separation_m = float(sep) if isinstance(sep, (int, float)) else None
+        self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
+        self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
+
+    def distances_m(self) -> dict[str, float]:
+        return {n: self.before_distances_m.get(n, 0.0) + float(self.world.distance_flown_m(n))
+                for n in self.world.uavs}
+
+    def busy_s(self) -> dict[str, float]:
+        """Time each UAV spent on tasks, as its handler executed them (a running task counts until now)."""
+        now = self.world.clock.now_s()
+        out = dict(self.before_busy_s)
+        for name, h in self.handlers.items():
+            end_open = self.dead.get(name, now)
+            out[name] = out.get(name, 0.0) + sum(
+                (e.end_s if e.end_s is not None else end_open) - e.start_s for e in h.executions)
+        return out
+
+    def min_separation_m(self) -> float | None:
+        seps = [s for s in (self.before_min_separation_m, self.world.min_separation_m)
+                if s is not None and math.isfinite(s)]
+        return float(min(seps)) if seps else None
+
+    def _measured(self, task_id: str | None = None) -> dict[str, Any]:
+        out: dict[str, Any] = {"distances_m": self.distances_m(), "busy_s": self.busy_s(),
+                               "min_separation_m": self.min_separation_m()}
+        if task_id in self._bricks:
+            err = self.world.placement_error_m(self._bricks[task_id])
+            if err is not None:
+                out["placement_error_m"] = float(err)
+        return out
+
+    def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
+        self.journal.record_assignment(time_s, task_id, uav, attempt, measured=self._measured())
+
+    def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
+        self.journal.record_completion(time_s, task_id, uav, **fields, measured=self._measured(task_id))
+
+    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str) -> None:
+        self.journal.record_failure(time_s, task_id, uav, reason, measured=self._measured())
+
+    def record_uav_lost(self, time_s: float, uav: str) -> None:
+        self.journal.record_uav_lost(time_s, uav, measured=self._measured())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.journal, name)  # anything else mission control asks of the journal
+
+
+def _floats(value: Any) -> dict[str, float]:
+    """A journaled name -> number mapping (anything else in it is ignored)."""
+    items = value.items() if isinstance(value, Mapping) else ()
+    return {str(k): float(v) for k, v in items if isinstance(v, (int, float)) and math.isfinite(v)}
 
 
 def _run(
@@ -297,10 +367,12 @@ def _run(
         resumed_from = float(state.last_time_s or 0.0)
 
     world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
+    measured = _MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
     expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m)
     bus = InprocBus()
     mc = MissionControl(
-        the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, journal=journal,
+        the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy,
+        journal=measured if journal is not None else None,
         max_attempts=max_attempts,
         durations_s=priority_durations_s(expected_s),
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
@@ -323,6 +395,7 @@ def _run(
                        after_result=lambda: mc.step(world.clock.now_s()))
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name)))
         handlers[spec.name] = h
+    measured.handlers = handlers
 
     total = len(todo)
     if max_time_s is None:
@@ -332,6 +405,7 @@ def _run(
     # control_period_s, and an answer to a result is handled at once through ``after_result``).
     substeps = max(1, round(CONTROL_PERIOD_S / dt_s)) if dt_s < CONTROL_PERIOD_S else 1
     dead: dict[str, float] = {}
+    measured.dead = dead
     pre_done = sum(1 for t in the_plan.tasks if t.done)
     done_seen = len(mc.dispatcher.done) - pre_done
     mission_end_s: float | None = None
@@ -364,11 +438,28 @@ def _run(
         for _ in range(substeps):
             world.step(dt_s)
 
+    if journal is not None:
+        # the end of the run, for a later resume of a finished mission (no record follows the landing)
+        journal.set_meta("measured", {**measured._measured(), "time_s": world.clock.now_s()})
     return _report(
         blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
         sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
-        resumed_from=resumed_from, messages=bus.sent, expected_s=expected_s,
+        resumed_from=resumed_from, messages=bus.sent, expected_s=expected_s, measured=measured,
+        journaled_errors_m=_journaled_errors_m(state),
     )
+
+
+def _journaled_errors_m(state: Any) -> dict[str, float]:
+    """Placement errors of the bricks done before a resume: the world's true one when the journal has it."""
+    out: dict[str, float] = {}
+    for rec in state.done if state is not None else ():
+        m = rec.fields.get("measured")
+        err = m.get("placement_error_m") if isinstance(m, Mapping) else None
+        if err is None:
+            err = rec.fields.get("placement_error_m")  # a journal without measurements: the UAV's estimate
+        if isinstance(err, (int, float)):
+            out[rec.task_id] = float(err)
+    return out
 
 
 def _report(
@@ -387,6 +478,8 @@ def _report(
     resumed_from: float | None,
     messages: int,
     expected_s: Mapping[str, float],
+    measured: _MeasuredJournal,
+    journaled_errors_m: Mapping[str, float],
 ) -> MissionReport:
     now = world.clock.now_s()
     # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
@@ -396,24 +489,23 @@ def _report(
         for e in h.executions:
             intervals.append((name, e.task_id, e.start_s, e.end_s if e.end_s is not None else dead.get(name)))
     if resumed_from is not None:
+        # the attempts the journal holds (done and failed) were flown before the resume: they count as then
         intervals.extend((a.uav, a.task_id, a.start_s, a.end_s) for a in mc.history
-                         if a.end_s is not None and a.end_s <= resumed_from and a.status == "done")
-    journaled = {a.task_id: a.placement_error_m for a in mc.history
-                 if resumed_from is not None and a.status == "done" and (a.end_s or 0.0) <= resumed_from}
+                         if a.end_s is not None and a.end_s <= resumed_from and a.status in ("done", "failed"))
     done = {a.task_id for a in mc.history if a.status == "done"}
     placement: dict[str, float] = {}
     for t in the_plan.tasks:
         if isinstance(t, BrickTask) and t.id in done:
-            # a brick placed before the resume was rebuilt in place: its error is the one journaled then
-            err = journaled[t.id] if t.id in journaled else world.placement_error_m(t.brick)
+            # a brick placed before the resume was rebuilt in place: its error is the one measured then
+            err = journaled_errors_m[t.id] if t.id in journaled_errors_m else world.placement_error_m(t.brick)
             if err is not None:
                 placement[t.id] = float(err)
     minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
-    sep = world.min_separation_m
-    sep = None if sep is None or not math.isfinite(sep) else float(sep)
+    sep = measured.min_separation_m()
+    distances = measured.distances_m()
     return control_report(
-        mc, the_plan, policy=policy, seed=seed, intervals=intervals,
-        distances_m={u.name: float(world.distance_flown_m(u.name)) for u in fleet},
+        mc, the_plan, policy=policy, seed=seed, intervals=intervals, busy_s=measured.busy_s(),
+        distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
         placement_error_m=placement, min_separation_m=sep, now_s=now,
         durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s),
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
