@@ -20,6 +20,7 @@ from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, JournalError, MasonryError
+from masonry.fingerprint import wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
@@ -298,6 +299,8 @@ def _run(
 
     world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
     expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
+    wall = wall_digest(blueprint)
     bus = InprocBus()
     mc = MissionControl(
         the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, journal=journal,
@@ -307,6 +310,7 @@ def _run(
         column_radius_m=blueprint.clearance_m if separation else 0.0,
         layer_base_m=layer_base_m(blueprint) if separation else None,
         layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
+        wall_digest=wall, min_durations_s=minimum_s,
     )
     layers = transit_layers_m(blueprint, fleet) if separation else {}
     if state is not None:
@@ -320,7 +324,8 @@ def _run(
                        heartbeat_timeout_s=heartbeat_timeout_s,
                        battery=_battery_of(sim_uav),
                        swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
-                       after_result=lambda: mc.step(world.clock.now_s()))
+                       after_result=lambda: mc.step(world.clock.now_s()),
+                       tasks=the_plan.tasks, role=spec.role, wall_digest=wall)
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name)))
         handlers[spec.name] = h
 
