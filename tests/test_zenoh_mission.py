@@ -217,3 +217,35 @@ def test_case_study_across_three_processes(tmp_path, mode):
         assert run["refused"] == [] and run["dropped"] == {}
         flown[run["uav"]] = [t["task"] for t in run["tasks"] if t["status"] == "done"]
     assert flown == {"brick-1": ["B0", "B1"], "glue-1": ["A0", "A1"]}
+
+
+@pytest.mark.parametrize("uav_key, hint", [(b"k" * 32, "frames failed authentication: is --key-file the same"),
+                                           (None, "messages unreadable: does mission control use --key-file?")])
+def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
+    import threading
+
+    from masonry.blueprint import load_blueprint
+    from masonry.errors import LinkLost
+    from masonry.mission.remote import run_remote_uav
+
+    bp = load_blueprint(CASE_STUDY)
+    port = free_port()
+    stop = threading.Event()
+    with ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t4") as z:
+        mc = AuthenticatedTransport(z, os.urandom(32), mission="t4")
+
+        def beat():
+            while not stop.is_set():
+                for u in bp.fleet:
+                    mc.send(u.name, encode(Heartbeat(MISSION_CONTROL, 0.0)))
+                time.sleep(0.05)
+
+        t = threading.Thread(target=beat, daemon=True)
+        t.start()
+        try:
+            with pytest.raises(LinkLost, match=hint.replace("?", r"\?")):
+                run_remote_uav(bp, bp.fleet[0], connect=[f"tcp/127.0.0.1:{port}"], mission_name="t4",
+                               key=uav_key, wait_s=2.0)
+        finally:
+            stop.set()
+            t.join()
