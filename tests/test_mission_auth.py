@@ -316,6 +316,12 @@ def test_cli_refuses_a_network_endpoint_without_a_key(tmp_path):
         f"error: --key-file {bad}: a key file holds 64 hexadecimal digits (make one with masonry keygen -o FILE)"]
     r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--zenoh-config", str(tmp_path / "none.json5")])
     assert r.exit_code == 2 and "--zenoh-config" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    broken = tmp_path / "broken.json5"
+    broken.write_text("{ transport:\n")
+    r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--zenoh-config", str(broken)])
+    assert r.exit_code == 2 and r.stderr.strip().splitlines() == [
+        (f"error: --zenoh-config {broken}: not a valid Zenoh configuration: line 2, column 1: expected array, "
+         "boolean, null, number, object, or string")]
 
 
 def test_default_listen_is_loopback():

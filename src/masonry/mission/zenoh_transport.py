@@ -14,6 +14,7 @@ scouting given here are then set over it.
 from __future__ import annotations
 
 import json
+import re
 import threading
 from collections import deque
 from collections.abc import Sequence
@@ -37,6 +38,16 @@ def check_endpoint(endpoint: str) -> str:
     if not 0 <= int(port) <= 65535:
         raise MissionError(f"endpoint {endpoint!r}: port {port} out of range")
     return endpoint
+
+
+def _one_line(exc: Exception) -> str:
+    """Zenoh's multi-line configuration error (a JSON5 parser's caret diagram) as one line, without Rust paths."""
+    text = re.sub(r" at /\S+\.rs:\d+\.?", "", str(exc)).strip()
+    where = re.search(r"--> (\d+):(\d+)", text)
+    what = re.search(r"^\s*= (.+)$", text, re.MULTILINE)
+    if where and what:
+        return f"line {where.group(1)}, column {where.group(2)}: {what.group(1).strip()}"
+    return text.splitlines()[0] if text else type(exc).__name__
 
 
 class ZenohTransport:
@@ -113,8 +124,8 @@ class ZenohTransport:
         try:
             return zenoh.Config.from_file(str(path))
         except Exception as exc:  # zenoh raises ZError for a syntax error or an unknown key
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(f"--zenoh-config {path}: not a valid Zenoh configuration: {first}") from exc
+            raise InputError(f"--zenoh-config {path}: not a valid Zenoh configuration: {_one_line(exc)}") \
+                from exc
 
     def send(self, to: str, payload: bytes) -> None:
         if self._session is None:
