@@ -249,3 +249,51 @@ def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
         finally:
             stop.set()
             t.join()
+
+
+@pytest.mark.parametrize("keyed", [True, False])
+def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
+    """The issue's attack: a Zenoh client reads the assignments on ``to/**`` and answers them in the UAVs' names."""
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    mission_name = f"forge-{port}"
+    opts = ["--key-file", str(write_key_file(tmp_path / "m.key"))] if keyed else []
+    mc = subprocess.Popen(
+        [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
+         "--startup-timeout", "1", "--max-time", "4", "--mission-name", mission_name, *opts],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen: list[bytes] = []
+    try:
+        with ZenohTransport("eve", connect=[endpoint], mission=mission_name) as eve:
+            eve._session.declare_subscriber(f"masonry/{mission_name}/to/**",
+                                            lambda s: seen.append(s.payload.to_bytes()))
+            end = time.monotonic() + 3.5
+            answered: set[bytes] = set()
+            while time.monotonic() < end:
+                for name in ("brick-1", "glue-1"):
+                    eve.send(MISSION_CONTROL, encode(Heartbeat(name, 0.0)))
+                for raw in list(seen):
+                    start = raw.find(b'{"v"')  # inside a frame the message is in clear: integrity, not secrecy
+                    body = json.loads(raw[start:raw.rindex(b"}") + 1]) if start >= 0 else {}
+                    if body.get("type") == "assign" and raw not in answered:
+                        answered.add(raw)
+                        eve.send(MISSION_CONTROL, json.dumps({
+                            "v": body["v"], "type": "result", "sender": body["uav"], "time_s": 1.0,
+                            "position_m": None, "state": "idle", "attempt": body["attempt"],
+                            "result": {"task_id": body["task"]["id"], "status": "done", "duration_s": 0.2,
+                                       "reason": None, "placement_error_m": 0.0, "coverage": None}}).encode())
+                time.sleep(0.05)
+        out, err = mc.communicate(timeout=30)
+    finally:
+        if mc.poll() is None:
+            mc.kill()
+            mc.wait()
+    d = json.loads(out)
+    assert mc.returncode == 1 and d["completed"] is False
+    assert not any(t["status"] == "done" for t in d["tasks"])
+    if keyed:  # nothing the forger sent was heard: no UAV ever came online, no task was assigned
+        assert d["security"]["dropped"]["malformed"] > 10 and not d["security"]["ignored"]
+        assert all(u["status"] == "lost" for u in d["uavs"])
+    else:  # loopback without a key: the forger is heard, but its completions are too early to be true
+        assert d["security"]["ignored"]["too-short"] >= 1
+        assert "dropped" in err or "ignored" in err
