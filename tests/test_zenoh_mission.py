@@ -272,7 +272,7 @@ def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
             while time.monotonic() < end:
                 for name in ("brick-1", "glue-1"):
                     eve.send(MISSION_CONTROL, encode(Heartbeat(name, 0.0)))
-                for raw in list(seen):
+                for raw in seen[:]:  # a copy: the subscriber thread appends meanwhile
                     start = raw.find(b'{"v"')  # inside a frame the message is in clear: integrity, not secrecy
                     body = json.loads(raw[start:raw.rindex(b"}") + 1]) if start >= 0 else {}
                     if body.get("type") == "assign" and raw not in answered:
