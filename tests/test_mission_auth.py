@@ -261,6 +261,12 @@ def test_a_uav_refuses_a_task_that_is_not_its_blueprints_and_reports_it(forge, w
     mc.send(spec.name, encode(good))  # the real assignment is taken
     h.step(0.1)
     assert h.poll_task() == brick
+    # while B0 is in hand, a forgery of B0 is refused without an answer (which would cancel the real one)
+    forged = forge(good, bp)
+    mc.send(spec.name, encode(forged))
+    h.step(0.2)
+    answers = [m for m in map(decode, mc.receive()) if isinstance(m, Result)]
+    assert len(h.refused) == 2 and len(answers) == (0 if forged.task.id == brick.id else 1)
 
 
 # -- key files, the CLI ------------------------------------------------------------------------------------

@@ -21,7 +21,8 @@ Assignments are checked against the UAV's own blueprint (docs/security.md): give
 ``wall_digest``, the handler takes a task only if the assignment carries the same wall digest, the task is one
 of the blueprint's tasks (same id, same geometry) and of the UAV's role. Anything else is refused: counted in
 ``refused`` (one line each), logged, and answered with a failed result naming the reason, so that mission
-control learns of it (its checks drop the answer to a forged assignment: not that UAV's current attempt).
+control learns of it (a genuine mismatch: two blueprint files), unless that task is in hand or queued here:
+then the refused message cannot be mission control's and the answer would cancel the real assignment.
 
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
 the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
@@ -59,6 +60,9 @@ log = logging.getLogger(__name__)
 OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
+
+#: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
+MAX_REFUSALS_KEPT = 1000
 
 
 @dataclass
@@ -374,8 +378,12 @@ class UavHandler:
 
     def _refuse(self, msg: Assign, why: str) -> None:
         self.rejected += 1
-        self.refused.append(why)
-        log.warning("%s refused an assignment: %s", self.name, why)
+        if len(self.refused) < MAX_REFUSALS_KEPT:
+            self.refused.append(why)
+            log.warning("%s refused an assignment: %s", self.name, why)
+        tid = msg.task.id
+        if (self._current is not None and self._current.task_id == tid) or any(t.id == tid for t, _ in self._queue):
+            return  # the real assignment of that task is here: a failed result would cancel it
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
         self._send(Result(self.name, TaskResult(msg.task.id, "failed", 0.0, reason=f"refused: {why}"), self.now_s,
                           self._where(), state=state, attempt=msg.attempt))
