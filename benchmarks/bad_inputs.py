@@ -454,6 +454,11 @@ def _journal_cases() -> list[Case]:
 # ------------------------------------------------------------------------------------------ configs, keys, network
 
 
+CONFIG_BOMB = b"a: &a [1,1,1,1,1,1,1,1,1]\n" + b"".join(
+    f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join(['*' + chr(97 + i)] * 9)}]\n".encode() for i in range(7)
+) + b"velocity_lag_s: *h\n"
+
+
 def _config_cases() -> list[Case]:
     cs = str(CASE_STUDY)
     fly = ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--task", "B0", "--config", "{d}/uav.yaml")
@@ -467,11 +472,7 @@ def _config_cases() -> list[Case]:
         ("uav.yaml velocity_lag_s 1e9", b"velocity_lag_s: 1.0e9\n"),
         ("uav.yaml syntax error", b"fc: [sim\n"),
         ("uav.yaml duplicate key", b"velocity_lag_s: 0.3\nvelocity_lag_s: 30\n"),
-        ("uav.yaml billion laughs", b"a: &a [1,1,1,1,1,1,1,1,1]\nb: &b [*a,*a,*a,*a,*a,*a,*a,*a,*a]\n"
-                                    b"c: &c [*b,*b,*b,*b,*b,*b,*b,*b,*b]\nd: &d [*c,*c,*c,*c,*c,*c,*c,*c,*c]\n"
-                                    b"e: &e [*d,*d,*d,*d,*d,*d,*d,*d,*d]\nf: &f [*e,*e,*e,*e,*e,*e,*e,*e,*e]\n"
-                                    b"g: &g [*f,*f,*f,*f,*f,*f,*f,*f,*f]\nh: &h [*g,*g,*g,*g,*g,*g,*g,*g,*g]\n"
-                                    b"velocity_lag_s: *h\n"),
+        ("uav.yaml billion laughs", CONFIG_BOMB),
     ]
     cases = [Case("configs", name, fly, _write("uav.yaml", content)) for name, content in rows]
     cases.append(Case("configs", "uav.yaml missing", fly))
@@ -548,8 +549,10 @@ def run_case(case: Case, workdir: Path, time_limit_s: float = TIME_LIMIT_S) -> O
         env = {**os.environ, "COLUMNS": "200", "NO_COLOR": "1", **dict(case.env)}
         t0 = time.monotonic()
         timed_out = False
+        # preexec_fn is safe here: this script starts no threads
         proc = subprocess.Popen([*_masonry(), *argv], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, env=env, cwd=d, preexec_fn=_limits,
+                                stderr=subprocess.PIPE, env=env, cwd=d,
+                                preexec_fn=_limits,  # noqa: PLW1509
                                 start_new_session=True)
         try:
             out_b, err_b = proc.communicate(timeout=time_limit_s)

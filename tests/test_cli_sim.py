@@ -99,7 +99,7 @@ def test_mission_control_bad_input(tmp_path):
     res = runner.invoke(app, ["mission-control", CASE_STUDY, "--resume"])
     assert res.exit_code == 2 and "--resume needs --journal" in res.stderr
     res = runner.invoke(app, ["mission-control", CASE_STUDY, "--listen", "localhost:7447"])
-    assert res.exit_code == 1 and "tcp/HOST:PORT" in res.stderr
+    assert res.exit_code == 2 and "tcp/HOST:PORT" in res.stderr  # a bad endpoint is bad input
 
 
 def test_fly_mission_mode_bad_input():

@@ -2,12 +2,16 @@
 
 The multi-process test runs ``masonry mission-control`` and two ``masonry fly --sim --mission`` handler
 processes (brick-1 and glue-1) for the paper's case study, with the simulated UAVs at 25x real time, on free
-loopback ports, every wait bounded.
+loopback ports, every wait bounded: unauthenticated, with a mission key, and over Zenoh's TLS (certificates
+made here with ``cryptography``) with a key.
 """
 
 from __future__ import annotations
 
+import datetime
+import ipaddress
 import json
+import os
 import socket
 import subprocess
 import sys
@@ -17,6 +21,7 @@ from pathlib import Path
 import pytest
 
 from masonry.errors import MissionError
+from masonry.mission.auth import AuthenticatedTransport, write_key_file
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
 from masonry.mission.zenoh_transport import ZenohTransport, check_endpoint
 
@@ -70,23 +75,118 @@ def test_send_before_connect_is_an_error():
         ZenohTransport("brick-1").send(MISSION_CONTROL, b"x")
 
 
-@pytest.mark.slow
-def test_case_study_across_three_processes(tmp_path):
+def test_authenticated_endpoints_over_zenoh_drop_a_forged_heartbeat():
     port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
+    key = os.urandom(32)
+    with ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t2") as mc_z, \
+            ZenohTransport("brick-1", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as uav_z, \
+            ZenohTransport("eve", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as eve:
+        mc = AuthenticatedTransport(mc_z, key, mission="t2")
+        uav = AuthenticatedTransport(uav_z, key, mission="t2")
+        got: list[bytes] = []
+
+        def ping():
+            eve.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 0.0)))  # the forgery: plain, in brick-1's name
+            uav.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 1.0)))
+            got.extend(mc.receive())
+            return got and mc.dropped.get("malformed")
+
+        assert wait_for(ping)
+        assert {decode(m, {"brick-1"}) for m in got} == {Heartbeat("brick-1", 1.0)}
+        mc.send("brick-1", encode(Heartbeat(MISSION_CONTROL, 2.0)))
+        assert [decode(m) for m in wait_for(uav.receive)] == [Heartbeat(MISSION_CONTROL, 2.0)]
+
+
+def make_tls_files(d: Path) -> tuple[Path, Path]:
+    """A test CA and a certificate for 127.0.0.1/localhost signed by it; Zenoh configurations for both ends."""
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    now = datetime.datetime.now(datetime.timezone.utc)
+    valid = (now - datetime.timedelta(minutes=5), now + datetime.timedelta(hours=1))
+
+    def build(subject, issuer, public_key, signer, *, ca, names=()):
+        b = (x509.CertificateBuilder().subject_name(subject).issuer_name(issuer).public_key(public_key)
+             .serial_number(x509.random_serial_number()).not_valid_before(valid[0]).not_valid_after(valid[1])
+             .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True))
+        if names:
+            b = b.add_extension(x509.SubjectAlternativeName(list(names)), critical=False)
+        return b.sign(signer, hashes.SHA256())
+
+    ca_key = ec.generate_private_key(ec.SECP256R1())
+    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "masonry test CA")])
+    ca = build(ca_name, ca_name, ca_key.public_key(), ca_key, ca=True)
+    key = ec.generate_private_key(ec.SECP256R1())
+    cert = build(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "mission-control")]), ca_name,
+                 key.public_key(), ca_key, ca=False,
+                 names=(x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))))
+    pem = serialization.Encoding.PEM
+    (d / "ca.pem").write_bytes(ca.public_bytes(pem))
+    (d / "mc.pem").write_bytes(cert.public_bytes(pem))
+    (d / "mc.key").write_bytes(key.private_bytes(pem, serialization.PrivateFormat.PKCS8,
+                                                 serialization.NoEncryption()))
+    mc_conf, uav_conf = d / "mission-control.json5", d / "uav.json5"
+    mc_conf.write_text(json.dumps({"transport": {"link": {"tls": {
+        "listen_certificate": str(d / "mc.pem"), "listen_private_key": str(d / "mc.key"),
+        "root_ca_certificate": str(d / "ca.pem")}}}}))
+    uav_conf.write_text(json.dumps({"transport": {"link": {"tls": {"root_ca_certificate": str(d / "ca.pem")}}}}))
+    return mc_conf, uav_conf
+
+
+def test_tls_needs_the_certificate_authority(tmp_path):
+    mc_conf, uav_conf = make_tls_files(tmp_path)
+    port = free_port()
+    endpoint = f"tls/127.0.0.1:{port}"
+    with ZenohTransport(MISSION_CONTROL, listen=[endpoint], config_file=mc_conf, mission="t3") as mc, \
+            ZenohTransport("brick-1", connect=[endpoint], config_file=uav_conf, mission="t3") as uav, \
+            ZenohTransport("eve", connect=[endpoint], mission="t3") as eve:  # no CA: the TLS handshake fails
+        got: list[bytes] = []
+
+        def ping():
+            eve.send(MISSION_CONTROL, b"eve")
+            uav.send(MISSION_CONTROL, b"brick-1")
+            got.extend(mc.receive())
+            return b"brick-1" in got
+
+        assert wait_for(ping)
+        time.sleep(0.5)  # eve had as long as brick-1, and more
+        eve.send(MISSION_CONTROL, b"eve")
+        time.sleep(0.3)
+        got.extend(mc.receive())
+        assert b"eve" not in got
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["plain", "key", "tls"])
+def test_case_study_across_three_processes(tmp_path, mode):
+    port = free_port()
+    scheme = "tls" if mode == "tls" else "tcp"
+    endpoint = f"{scheme}/127.0.0.1:{port}"
     report = tmp_path / "report.json"
     common = ["--time-scale", "25"]
+    mc_opts: list[str] = []
+    uav_opts: list[str] = []
+    if mode in ("key", "tls"):
+        key_file = write_key_file(tmp_path / "mission.key")
+        mc_opts += ["--key-file", str(key_file)]
+        uav_opts += ["--key-file", str(key_file)]
+    if mode == "tls":
+        mc_conf, uav_conf = make_tls_files(tmp_path)
+        mc_opts += ["--zenoh-config", str(mc_conf)]
+        uav_opts += ["--zenoh-config", str(uav_conf)]
     mission_name = f"test-{port}"
     mc = subprocess.Popen(
         [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
          "--report", str(report), "--startup-timeout", "20", "--heartbeat-timeout", "3", "--max-time", "1500",
-         "--mission-name", mission_name, *common],
+         "--mission-name", mission_name, *common, *mc_opts],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     uavs = [
         subprocess.Popen(
             [sys.executable, "-c", MAIN, "fly", "--uav", role, "--name", name, "--sim", "--blueprint", str(CASE_STUDY),
              "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_port()}", "--mission-name", mission_name,
-             "--wait", "20", "--format", "json", *common],
+             "--wait", "20", "--format", "json", *common, *uav_opts],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         for role, name in (("brick", "brick-1"), ("adhesion", "glue-1"))
     ]
@@ -107,10 +207,102 @@ def test_case_study_across_three_processes(tmp_path):
     assert order == ["A0", "B0", "A1", "B1"]
     assert d["conflict_violations"] == 0 and d["dependency_violations"] == 0
     assert all(u["status"] == "ok" for u in d["uavs"])
+    assert d["security"] == {"dropped": {}, "ignored": {}}
+    assert ("messages authenticated" if mode != "plain" else "messages NOT authenticated") in mc_err
     flown = {}
     for p, (out, err) in zip(uavs, outs):
         assert p.returncode == 0, err
         run = json.loads(out)
         assert run["mission_ended"] is True and run["mission_completed"] is True
+        assert run["refused"] == [] and run["dropped"] == {}
         flown[run["uav"]] = [t["task"] for t in run["tasks"] if t["status"] == "done"]
     assert flown == {"brick-1": ["B0", "B1"], "glue-1": ["A0", "A1"]}
+
+
+@pytest.mark.parametrize("uav_key, hint", [(b"k" * 32, "frames failed authentication: is --key-file the same"),
+                                           (None, "messages unreadable: does mission control use --key-file?")])
+def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
+    import threading
+
+    from masonry.blueprint import load_blueprint
+    from masonry.errors import LinkLost
+    from masonry.mission.remote import run_remote_uav
+
+    bp = load_blueprint(CASE_STUDY)
+    port = free_port()
+    stop = threading.Event()
+    with ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t4") as z:
+        mc = AuthenticatedTransport(z, os.urandom(32), mission="t4")
+
+        def beat():
+            while not stop.is_set():
+                for u in bp.fleet:
+                    mc.send(u.name, encode(Heartbeat(MISSION_CONTROL, 0.0)))
+                time.sleep(0.05)
+
+        t = threading.Thread(target=beat, daemon=True)
+        t.start()
+        try:
+            with pytest.raises(LinkLost, match=hint.replace("?", r"\?")):
+                run_remote_uav(bp, bp.fleet[0], connect=[f"tcp/127.0.0.1:{port}"], mission_name="t4",
+                               key=uav_key, wait_s=2.0)
+        finally:
+            stop.set()
+            t.join()
+
+
+def message_in(raw: bytes) -> dict:
+    """What a listener reads of a message: inside a frame it is in clear (a key gives integrity, not secrecy)."""
+    if raw[:4] == b"MSN1":
+        raw = raw[5 + raw[4] + 8:-32]  # magic, sender, counter ... HMAC
+    try:
+        return json.loads(raw)
+    except ValueError:
+        return {}
+
+
+@pytest.mark.parametrize("keyed", [True, False])
+def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
+    """The issue's attack: a Zenoh client reads the assignments on ``to/**`` and answers them in the UAVs' names."""
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    mission_name = f"forge-{port}"
+    opts = ["--key-file", str(write_key_file(tmp_path / "m.key"))] if keyed else []
+    mc = subprocess.Popen(
+        [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
+         "--startup-timeout", "2", "--max-time", "6", "--mission-name", mission_name, *opts],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen: list[bytes] = []
+    try:
+        with ZenohTransport("eve", connect=[endpoint], mission=mission_name) as eve:
+            eve._session.declare_subscriber(f"masonry/{mission_name}/to/**",
+                                            lambda s: seen.append(s.payload.to_bytes()))
+            end = time.monotonic() + 40.0  # until mission control gives up (--max-time), bounded
+            answered: set[bytes] = set()
+            while mc.poll() is None and time.monotonic() < end:
+                for name in ("brick-1", "glue-1"):
+                    eve.send(MISSION_CONTROL, encode(Heartbeat(name, 0.0)))
+                for raw in seen[:]:  # a copy: the subscriber thread appends meanwhile
+                    body = message_in(raw)
+                    if body.get("type") == "assign" and raw not in answered:
+                        answered.add(raw)
+                        eve.send(MISSION_CONTROL, json.dumps({
+                            "v": body["v"], "type": "result", "sender": body["uav"], "time_s": 1.0,
+                            "position_m": None, "state": "idle", "attempt": body["attempt"],
+                            "result": {"task_id": body["task"]["id"], "status": "done", "duration_s": 0.2,
+                                       "reason": None, "placement_error_m": 0.0, "coverage": None}}).encode())
+                time.sleep(0.05)
+        out, err = mc.communicate(timeout=30)
+    finally:
+        if mc.poll() is None:
+            mc.kill()
+            mc.wait()
+    d = json.loads(out)
+    assert mc.returncode == 1 and d["completed"] is False
+    assert not any(t["status"] == "done" for t in d["tasks"])
+    if keyed:  # nothing the forger sent was heard: no UAV ever came online, no task was assigned
+        assert d["security"]["dropped"]["malformed"] > 10 and not d["security"]["ignored"]
+        assert all(u["status"] == "lost" for u in d["uavs"])
+    else:  # loopback without a key: the forger is heard, but its completions are too early to be true
+        assert d["security"]["ignored"]["too-short"] >= 1
+        assert "dropped" in err or "ignored" in err

@@ -158,6 +158,12 @@ def fly(
     mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
     time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
     wait: float = typer.Option(60.0, "--wait", help="Mission mode: wall seconds to wait for mission control."),
+    key_file: Path | None = typer.Option(None, "--key-file", help="Mission mode: the mission key (masonry keygen "
+                                         "-o FILE), the same file as mission control's."),
+    insecure: bool = typer.Option(False, "--insecure", help="Mission mode: allow a non-loopback mission control "
+                                  "or --listen without a key."),
+    zenoh_config: Path | None = typer.Option(None, "--zenoh-config", help="Mission mode: Zenoh configuration "
+                                             "file (JSON5): TLS, access control (docs/security.md)."),
 ) -> None:
     """Fly one UAV: one task (--task ID: state trace, then the result; exit 1 if it failed), or a mission's tasks
     from mission control (--mission tcp/HOST:7447; exit 1 if mission control did not end the mission)."""
@@ -190,9 +196,12 @@ def fly(
             raise InputError("--time-scale is for a simulated UAV: with --fc URL the autopilot's clock sets the "
                              "pace (give `masonry sitl --time-scale` and `masonry mission-control --time-scale` "
                              "the same factor instead)")
+        from masonry.cli.mission import network_options
+
+        key = network_options(key_file, insecure, [mission, *listen], "--mission/--listen")
         _fly_mission(bp, _pick_uav(bp, uav, name), mission, listen=listen, mission_name=mission_name, seed=seed,
                      camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt,
-                     sim=sim, hardware=hardware.hw)
+                     sim=sim, hardware=hardware.hw, key=key, zenoh_config=zenoh_config)
         return
     if task is None:
         raise InputError("--task is required (or --mission tcp/HOST:PORT to take tasks from mission control)")
@@ -275,7 +284,7 @@ def fly(
 
 def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], mission_name: str, seed: int, camera: str,
                  faults: Any, dt: float, time_scale: float, wait: float, fmt: str, sim: bool = True,
-                 hardware: Any = None) -> None:
+                 hardware: Any = None, key: bytes | None = None, zenoh_config: Path | None = None) -> None:
     """Mission mode: one UAV taking its tasks from mission control over Zenoh (masonry.mission.remote).
 
     ``--sim``: a simulated world paced at ``time_scale``. Otherwise the adapters chosen with --fc/--actuators/
@@ -297,7 +306,8 @@ def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], missio
             echo(f"{spec.name} joins the mission at {endpoint} ({where})")
         run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
                              camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
-                             max_time_s=float("inf"), echo=echo, adapters=adapters,
+                             max_time_s=float("inf"), echo=echo, adapters=adapters, key=key,
+                             zenoh_config=zenoh_config,
                              uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s})
     finally:
         if adapters is not None:
@@ -306,10 +316,14 @@ def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], missio
               "end_s": None if e.end_s is None else round(e.end_s, 2), "status": e.status} for e in run.executions]
     if fmt == "json":
         typer.echo(json.dumps({"uav": spec.name, "mission_ended": run.mission_ended,
-                               "mission_completed": run.mission_completed, "state": run.state, "tasks": tasks}))
+                               "mission_completed": run.mission_completed, "state": run.state, "tasks": tasks,
+                               "refused": list(run.refused), "dropped": run.dropped}))
     else:
         for t in tasks:
             typer.echo(f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s")
+        if run.dropped:
+            typer.echo(f"dropped {sum(run.dropped.values())} frames that failed authentication ("
+                       + ", ".join(f"{k} {v}" for k, v in sorted(run.dropped.items())) + ")")
         typer.echo(f"mission {'ended' if run.mission_ended else 'did not end'}; {spec.name} is {run.state}")
     if not run.mission_ended:
         raise typer.Exit(1)

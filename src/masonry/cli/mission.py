@@ -1,7 +1,11 @@
-"""``masonry mission-control``: mission control as its own process, talking to UAV handlers over Zenoh."""
+"""``masonry mission-control``: mission control as its own process, talking to UAV handlers over Zenoh.
+
+``masonry keygen``: a new mission key for ``--key-file`` (docs/security.md).
+"""
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from pathlib import Path
@@ -11,12 +15,60 @@ import typer
 from masonry.cli.app import command
 from masonry.errors import InputError
 
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+
+
+def network_options(key_file: Path | None, insecure: bool, endpoints: list[str], what: str) -> bytes | None:
+    """The mission key from ``--key-file`` (None without one), after refusing a non-loopback endpoint without it.
+
+    Shared by ``mission-control`` and ``fly --mission`` (docs/security.md).
+    """
+    from masonry.errors import MissionError
+    from masonry.mission.auth import load_key, require_key_or_loopback
+    from masonry.mission.zenoh_transport import check_endpoint
+
+    try:
+        for e in endpoints:
+            check_endpoint(e)
+    except MissionError as exc:
+        raise InputError(str(exc)) from None
+    key = load_key(key_file) if key_file is not None else None
+    require_key_or_loopback(key, insecure, endpoints, what)
+    if key is None and insecure:
+        typer.echo("warning: --insecure: mission messages are not authenticated; anyone who reaches "
+                   f"{', '.join(endpoints) or 'this process'} can command the mission", err=True)
+    return key
+
+
+def security_summary(transport: object, ignored: dict[str, int] | None = None) -> dict[str, dict[str, int]]:
+    """Frames dropped by the authentication layer and results ignored by mission control, by reason."""
+    dropped = dict(getattr(transport, "dropped", {}) or {})
+    return {"dropped": dropped, "ignored": dict(ignored or {})}
+
+
+@command("keygen")
+def keygen(
+    output: Path = typer.Option(..., "--output", "-o", help="Key file to write (64 hex digits, mode 0600)."),
+    force: bool = typer.Option(False, "--force", help="Replace an existing key file."),
+) -> None:
+    """Write a new random mission key (32 bytes) for --key-file of mission-control and fly --mission."""
+    from masonry.mission.auth import write_key_file
+
+    write_key_file(output, force=force)
+    typer.echo(f"wrote {output} (copy it to every UAV of the mission; keep it private)", err=True)
+
 
 @command("mission-control")
 def mission_control(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."),
-    listen: list[str] = typer.Option(["tcp/0.0.0.0:7447"], "--listen", help="Zenoh endpoint(s) to listen on."),
+    listen: list[str] = typer.Option([DEFAULT_LISTEN], "--listen", help="Zenoh endpoint(s) to listen on "
+                                     "(a real interface, e.g. tcp/10.0.0.1:7447, needs --key-file or --insecure)."),
     connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) of peers to connect to."),
+    key_file: Path | None = typer.Option(None, "--key-file", help="Mission key (masonry keygen -o FILE): "
+                                         "every message is authenticated with it."),
+    insecure: bool = typer.Option(False, "--insecure", help="Allow non-loopback endpoints without a key."),
+    zenoh_config: Path | None = typer.Option(None, "--zenoh-config", help="Zenoh configuration file (JSON5): "
+                                             "TLS, access control (docs/security.md)."),
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
@@ -54,6 +106,7 @@ def mission_control(
     if tick <= 0 or time_scale <= 0:
         raise InputError(f"--tick and --time-scale must be > 0, got {tick} and {time_scale}")
     check_output_path(report, "--report")
+    key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
@@ -68,9 +121,13 @@ def mission_control(
             warn=lambda m: typer.echo(f"warning: {m}", err=True))
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     from masonry.mission.airspace import layer_base_m
+    from masonry.mission.auth import wrap
+    from masonry.planner import min_durations_s
 
-    transport = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name)
-    transport.connect()
+    zenoh = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name,
+                           config_file=zenoh_config)
+    transport = wrap(zenoh, key, mission_name)
+    zenoh.connect()
     try:
         mc = MissionControl(the_plan, bp.fleet, transport, policy=policy, journal=jr,
                             durations_s=priority_durations_s(
@@ -78,14 +135,16 @@ def mission_control(
                             heartbeat_timeout_s=heartbeat_timeout * time_scale,
                             startup_timeout_s=startup_timeout * time_scale,
                             column_radius_m=bp.clearance_m, layer_base_m=layer_base_m(bp),
-                            layer_floor_m=bp.cruise_altitude_m)
+                            layer_floor_m=bp.cruise_altitude_m, wall_digest=wall_digest(bp),
+                            min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m))
         offset = 0.0
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
         typer.echo(f"mission control listening on {', '.join(listen)}: {sum(1 for t in the_plan.tasks if not t.done)} tasks, "
                    f"fleet {', '.join(u.name for u in bp.fleet)}"
-                   + (f", resumed at {offset:.1f} s" if state is not None else ""), err=True)
+                   + (f", resumed at {offset:.1f} s" if state is not None else "")
+                   + (", messages authenticated" if key is not None else ", messages NOT authenticated"), err=True)
         t0 = time.monotonic()
         linger_until = None
         while True:
@@ -104,8 +163,15 @@ def mission_control(
         if jr is not None:
             jr.close()
     result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
+    security = security_summary(transport, mc.events.ignored)
+    for what, counts in security.items():
+        if counts:
+            typer.echo(f"{what} {sum(counts.values())} "
+                       + ("frames that failed authentication" if what == "dropped" else "results")
+                       + f" ({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))})", err=True)
+    out = {**result.to_dict(), "security": security}
     if report is not None:
-        write_atomic(report, result.to_json(indent=1) + "\n", "--report")
-    typer.echo(result.to_json() if fmt == "json" else result.summary())
+        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
+    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from masonry.mission.auth import AuthenticatedTransport
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus, InprocTransport
@@ -18,6 +19,7 @@ from masonry.mission.transport import Transport
 
 __all__ = [
     "PROTOCOL_VERSION",
+    "AuthenticatedTransport",
     "InprocBus",
     "InprocTransport",
     "Journal",

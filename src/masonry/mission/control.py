@@ -11,6 +11,11 @@ grants columns first come, first served, never two within ``column_radius_m`` of
 where to wait (:class:`~masonry.mission.airspace.ColumnClearance`), and frees a lost UAV's columns
 (docs/safety.md).
 
+Results (docs/security.md): a completion counts only if it comes from the UAV the task is assigned to, for the
+current attempt, and no sooner after the assignment than ``min_fraction`` of the least time the task can take
+(``min_durations_s``, :func:`masonry.planner.min_durations_s`). Anything else is ignored and counted by reason
+in ``events.ignored``; the task stays assigned. These checks hold with or without a mission key.
+
 Startup: a UAV takes tasks once it has been heard from. Mission control waits until the whole fleet is
 online, or ``startup_timeout_s`` after its first step, then removes the UAVs never heard from.
 """
@@ -93,6 +98,8 @@ class MissionEvents:
     sent: int = 0
     progress: int = 0
     errors: list[str] = field(default_factory=list)
+    #: results not acted on, by reason: "not-assigned", "wrong-attempt", "too-short"
+    ignored: dict[str, int] = field(default_factory=dict)
 
 
 class MissionControl:
@@ -116,6 +123,11 @@ class MissionControl:
         layer_floor_m: with it, layer 0 rises with the wall instead: it is at the highest work altitude of the
             tasks done or ever assigned (``masonry.mission.airspace.task_work_altitude_m``), at least this (the
             blueprint's cruise altitude), at most ``layer_base_m``. None: layer 0 stays at ``layer_base_m``.
+        wall_digest: :func:`masonry.fingerprint.wall_digest` of the blueprint, sent with every assignment (the
+            UAV refuses a task of another wall).
+        min_durations_s: the least time each task can take (task id -> s); a completion that arrives sooner
+            after its assignment than ``min_fraction`` of it is ignored. None: no such check.
+        min_fraction: the margin on ``min_durations_s`` (two processes' clocks and ticks).
     """
 
     def __init__(
@@ -135,6 +147,9 @@ class MissionControl:
         layer_base_m: float | None = None,
         layer_spacing_m: float = 1.1,
         layer_floor_m: float | None = None,
+        wall_digest: str = "",
+        min_durations_s: Mapping[str, float] | None = None,
+        min_fraction: float = 0.9,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -145,6 +160,9 @@ class MissionControl:
         self.plan = plan
         self.fleet = tuple(fleet)
         self.transport = transport
+        self.wall_digest = wall_digest
+        self.min_durations_s = dict(min_durations_s or {})
+        self.min_fraction = min_fraction
         self.policy = policy
         self.journal = journal
         self.heartbeat_period_s = heartbeat_period_s
@@ -328,9 +346,19 @@ class MissionControl:
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
         if self.dispatcher.in_progress.get(r.task_id) != msg.sender:
-            log.info("ignoring a result for %s from %s: not its task now", r.task_id, msg.sender)
+            self._ignore("not-assigned", f"a result for {r.task_id} from {msg.sender}: not its task now")
             return
-        att = self._running.pop(r.task_id)
+        att = self._running[r.task_id]
+        if msg.attempt != att.attempt:
+            self._ignore("wrong-attempt", f"a result for {r.task_id} from {msg.sender} for attempt {msg.attempt}: "
+                         f"the current one is {att.attempt}")
+            return
+        least = self.min_durations_s.get(r.task_id)
+        if r.status == "done" and least is not None and now_s - att.start_s < self.min_fraction * least:
+            self._ignore("too-short", f"{r.task_id} reported done by {msg.sender} {now_s - att.start_s:.2f} s "
+                         f"after its assignment: it takes at least {least:.1f} s")
+            return
+        del self._running[r.task_id]
         att.end_s = now_s
         att.placement_error_m = r.placement_error_m
         att.coverage = r.coverage
@@ -352,6 +380,10 @@ class MissionControl:
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
         self._dirty = True
+
+    def _ignore(self, reason: str, detail: str) -> None:
+        self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
+        log.warning("ignoring %s", detail)
 
     def _check_heartbeats(self, now_s: float) -> None:
         for name, link in self.uavs.items():
@@ -390,7 +422,8 @@ class MissionControl:
             self._raise_layers((a.task_id,))
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
-            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s))
+            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s,
+                                           self.wall_digest))
 
     def _raise_layers(self, task_ids: Iterable[str]) -> None:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""

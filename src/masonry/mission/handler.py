@@ -17,6 +17,13 @@ once the UAV is ``radius_m`` away from it horizontally or has landed. The answer
 lateral leg (a transit layer) and, while the column is taken, a hold point where the machine waits at that
 layer; ``end_transit`` tells mission control the flight is down (its layer is free).
 
+Assignments are checked against the UAV's own blueprint (docs/security.md): given its ``tasks``, ``role`` and
+``wall_digest``, the handler takes a task only if the assignment carries the same wall digest, the task is one
+of the blueprint's tasks (same id, same geometry) and of the UAV's role. Anything else is refused: counted in
+``refused`` (one line each), logged, and answered with a failed result naming the reason, so that mission
+control learns of it (a genuine mismatch: two blueprint files), unless that task is in hand or queued here:
+then the refused message cannot be mission control's and the answer would cancel the real assignment.
+
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
 the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
 while mission control is down is lost: a resumed mission control flies that task again (docs/mission.md).
@@ -26,8 +33,8 @@ from __future__ import annotations
 
 import logging
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, replace
 from typing import Any
 
 from masonry.errors import ProtocolError
@@ -44,7 +51,7 @@ from masonry.mission.messages import (
     encode,
 )
 from masonry.mission.transport import Transport
-from masonry.planner.tasks import Task
+from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import TaskResult
 
 log = logging.getLogger(__name__)
@@ -53,6 +60,9 @@ log = logging.getLogger(__name__)
 OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
+
+#: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
+MAX_REFUSALS_KEPT = 1000
 
 
 @dataclass
@@ -83,6 +93,8 @@ class UavHandler:
         after_result: called right after a result is sent; the in-process simulation steps mission control
             there, so that the answer (the next task) is in the inbox when the machine polls for it, as with a
             network round trip shorter than a tick.
+        tasks, role, wall_digest: the UAV's blueprint, to check every assignment against (its plan's tasks, this
+            UAV's role, :func:`masonry.fingerprint.wall_digest`); None: that check is not made.
     """
 
     def __init__(
@@ -97,8 +109,15 @@ class UavHandler:
         swap_battery: Callable[[], bool] | None = None,
         reserve_fraction: float = 0.4,
         after_result: Callable[[], None] | None = None,
+        tasks: Iterable[Task] | None = None,
+        role: str | None = None,
+        wall_digest: str | None = None,
     ) -> None:
         self._after_result = after_result
+        self._tasks = None if tasks is None else {t.id: t for t in tasks}
+        self._role = role
+        self._wall_digest = wall_digest
+        self.refused: list[str] = []
         self._battery = battery
         self._swap_battery = swap_battery
         self.reserve_fraction = reserve_fraction
@@ -276,8 +295,9 @@ class UavHandler:
             cur.end_s = self.now_s
             cur.status = result.status
             self._current = None
+        attempt = cur.attempt if cur is not None and cur.task_id == result.task_id else 0
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
-        self._send(Result(self.name, result, self.now_s, self._where(), state=state))
+        self._send(Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt))
         if self._after_result is not None:
             self._after_result()
 
@@ -320,6 +340,10 @@ class UavHandler:
                 self.rejected += 1
                 log.warning("%s got an assignment addressed to %s", self.name, msg.uav)
                 return
+            why = self._refusal(msg)
+            if why is not None:
+                self._refuse(msg, why)
+                return
             self._queue.append((msg.task, msg.attempt))
             self.mission_ended = False
         elif isinstance(msg, Clearance):
@@ -333,6 +357,36 @@ class UavHandler:
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed
+
+    def _refusal(self, msg: Assign) -> str | None:
+        """Why this assignment is not one of this UAV's blueprint's tasks for its role (None: it is)."""
+        task = msg.task
+        if self._wall_digest is not None and msg.wall != self._wall_digest:
+            return (f"task {task.id} is for the wall {msg.wall or '(none given)'}, this UAV's blueprint is "
+                    f"{self._wall_digest}")
+        if self._role is not None and task.kind != self._role:
+            return f"task {task.id} is {task.kind} work, this UAV is {'an' if self._role[:1] == 'a' else 'a'} " \
+                   f"{self._role} UAV"
+        if self._tasks is not None:
+            mine = self._tasks.get(task.id)
+            if mine is None:
+                return f"task {task.id} is not a task of this UAV's blueprint"
+            if replace(task, done=mine.done) != mine:
+                what = "brick" if isinstance(task, BrickTask) else "segment"
+                return f"task {task.id}: its {what} geometry differs from this UAV's blueprint"
+        return None
+
+    def _refuse(self, msg: Assign, why: str) -> None:
+        self.rejected += 1
+        if len(self.refused) < MAX_REFUSALS_KEPT:
+            self.refused.append(why)
+            log.warning("%s refused an assignment: %s", self.name, why)
+        tid = msg.task.id
+        if (self._current is not None and self._current.task_id == tid) or any(t.id == tid for t, _ in self._queue):
+            return  # the real assignment of that task is here: a failed result would cancel it
+        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        self._send(Result(self.name, TaskResult(msg.task.id, "failed", 0.0, reason=f"refused: {why}"), self.now_s,
+                          self._where(), state=state, attempt=msg.attempt))
 
     def _where(self) -> Vec3 | None:
         if self._position is None:

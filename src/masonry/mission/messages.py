@@ -7,9 +7,11 @@ sender (and the addressed UAV) belongs to it; anything else raises :class:`~maso
 Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 
 - :class:`Heartbeat` both ways, every ``heartbeat_period_s``: a silent peer is declared lost.
-- :class:`Assign` mission control -> UAV: one task (the whole task value) and its attempt number.
+- :class:`Assign` mission control -> UAV: one task (the whole task value), its attempt number and the digest of
+  the blueprint's wall (:func:`masonry.fingerprint.wall_digest`), so that a UAV flies only its own wall's tasks.
 - :class:`Progress` UAV -> mission control: the UAV's state machine entered ``state`` while on ``task_id``.
-- :class:`Result` UAV -> mission control: the task is done or failed (a :class:`~masonry.ports.TaskResult`).
+- :class:`Result` UAV -> mission control: the task is done or failed (a :class:`~masonry.ports.TaskResult`),
+  for the attempt it was assigned with.
 - :class:`MissionEnd` mission control -> UAV: nothing more will come; go home and land.
 - :class:`ClearanceRequest` UAV -> mission control: I set off for ``site_m``; may I leave my transit layer
   there (a site column, :mod:`masonry.mission.airspace`)? With ``release`` true: I left that column; with
@@ -19,7 +21,9 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
   from it.
 
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
-so the version changes and a mixed pair refuses each other's messages at once instead of half-working).
+so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
+``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
+blueprint, mission control accepts a result only for the current attempt).
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import TaskResult
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 MISSION_CONTROL = "mission-control"
 
 Vec3 = tuple[float, float, float]
@@ -53,13 +57,17 @@ class Heartbeat:
 
 @dataclass(frozen=True)
 class Assign:
-    """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1)."""
+    """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1) of the wall ``wall``.
+
+    ``wall`` is :func:`masonry.fingerprint.wall_digest` of mission control's blueprint ("" when it has none).
+    """
 
     sender: str
     uav: str
     task: Task
     attempt: int
     time_s: float
+    wall: str = ""
 
 
 @dataclass(frozen=True)
@@ -82,6 +90,7 @@ class Result:
     time_s: float
     position_m: Vec3 | None = None
     state: str = ""  # the UAV's state after the result ("halted": out of service)
+    attempt: int = 0  # the attempt of the assignment this result answers (0: unknown, never accepted)
 
 
 @dataclass(frozen=True)
@@ -173,7 +182,7 @@ def encode(message: Message) -> bytes:
                     position_m=_vec(message.position_m))
     elif isinstance(message, Assign):
         body.update(uav=message.uav, task=task_to_dict(message.task), attempt=message.attempt,
-                    time_s=message.time_s)
+                    time_s=message.time_s, wall=message.wall)
     elif isinstance(message, Progress):
         body.update(task_id=message.task_id, state=message.state, time_s=message.time_s,
                     position_m=_vec(message.position_m))
@@ -183,6 +192,7 @@ def encode(message: Message) -> bytes:
             time_s=message.time_s,
             position_m=_vec(message.position_m),
             state=message.state,
+            attempt=message.attempt,
             result={
                 "task_id": r.task_id,
                 "status": r.status,
@@ -420,7 +430,10 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
         attempt = f.int_("attempt")
         if attempt < 1:
             raise f.fail("attempt", f"must be >= 1, got {attempt}")
-        return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"))
+        wall = data.get("wall", "")
+        if not isinstance(wall, str):
+            raise f.fail("wall", f"must be a string, got {wall!r}")
+        return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"), wall)
     if kind == "progress":
         check_uav(sender, "sender")
         return Progress(sender, f.str_("task_id"), f.str_("state"), f.num("time_s"),
@@ -439,8 +452,11 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
             placement_error_m=r.num("placement_error_m", optional=True),
             coverage=r.num("coverage", optional=True),
         )
+        attempt = f.int_("attempt")
+        if attempt < 0:
+            raise f.fail("attempt", f"must be >= 0, got {attempt}")
         return Result(sender, result, f.num("time_s"), f.vec("position_m", optional=True),
-                      state=str(data.get("state") or ""))
+                      state=str(data.get("state") or ""), attempt=attempt)
     if kind == "mission-end":
         return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
     if kind == "clearance-request":

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
@@ -21,13 +22,15 @@ from masonry.mission.handler import UavHandler
 
 @dataclass(frozen=True)
 class RemoteRun:
-    """What a handler process did: its executions, whether the mission ended, its last state."""
+    """What a handler process did: its executions, whether the mission ended, its last state, what it refused."""
 
     executions: tuple[Any, ...]
     mission_ended: bool
     mission_completed: bool | None
     state: str
     sim_time_s: float
+    refused: tuple[str, ...] = ()  # assignments refused (not of this UAV's blueprint), one line each
+    dropped: dict[str, int] = field(default_factory=dict)  # frames that failed authentication, by reason
 
 
 def paced(clock: Any, step: Callable[[float], None], time_scale: float) -> Callable[[float], None]:
@@ -46,6 +49,17 @@ def paced(clock: Any, step: Callable[[float], None], time_scale: float) -> Calla
             time.sleep(lag)
 
     return advance
+
+
+def _key_hint(transport: Any, handler: UavHandler) -> str:
+    """Why mission control may be unheard although it speaks: the two sides' keys differ (docs/security.md)."""
+    dropped = getattr(transport, "dropped", None)
+    if dropped:
+        return (f" ({sum(dropped.values())} frames failed authentication: is --key-file the same file as mission "
+                "control's?)")
+    if dropped is None and handler.rejected:
+        return f" ({handler.rejected} messages unreadable: does mission control use --key-file?)"
+    return ""
 
 
 def run_remote_uav(
@@ -68,6 +82,8 @@ def run_remote_uav(
     echo: Any = None,
     adapters: Any = None,
     uav_settings: Mapping[str, Any] | None = None,
+    key: bytes | None = None,
+    zenoh_config: str | Path | None = None,
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -93,13 +109,19 @@ def run_remote_uav(
             not apply; the caller checks the adapters before flight and closes them afterwards.
         uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml
             ``velocity_lag_s``).
+        key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
+        zenoh_config: a Zenoh configuration file (TLS, access control), see
+            :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
 
     Raises:
         InputError: a bad ``time_scale`` or ``dt_s``.
         LinkLost: mission control was never heard within ``wait_s``.
     """
+    from masonry.fingerprint import wall_digest
     from masonry.fsm import UavConfig, build_uav
+    from masonry.mission.auth import AuthenticatedTransport, wrap
     from masonry.mission.zenoh_transport import ZenohTransport
+    from masonry.planner import plan
 
     if not (time_scale > 0 and dt_s > 0):
         raise InputError(f"--time-scale and --dt must be > 0, got {time_scale} and {dt_s}")
@@ -114,8 +136,10 @@ def run_remote_uav(
     else:
         fc, gripper, sprayer, cam = adapters.fc, adapters.gripper, adapters.sprayer, adapters.camera
         clock, advance = adapters.clock, adapters.advance
-    transport = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name)
-    transport.connect()
+    tasks = plan(blueprint).tasks
+    zenoh = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config)
+    transport = wrap(zenoh, key, mission_name)
+    zenoh.connect()
 
     def await_answer() -> None:
         # the machine polls for its next task right after reporting: give mission control a network round
@@ -126,7 +150,8 @@ def run_remote_uav(
 
     handler = UavHandler(spec.name, transport, position=lambda: fc.telemetry().position_m,
                          heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s,
-                         after_result=await_answer)
+                         after_result=await_answer, tasks=tasks, role=spec.role,
+                         wall_digest=wall_digest(blueprint))
     from masonry.mission.airspace import transit_layers_m
 
     # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
@@ -141,11 +166,15 @@ def run_remote_uav(
     last_state = model.state
     heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
     heard_wall = wall0
+    refused_shown = 0
     try:
         fc.connect()
         while True:
             now = clock.now_s()
             handler.step(now)
+            while echo is not None and len(handler.refused) > refused_shown:
+                echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
+                refused_shown += 1
             if echo is not None and model.state != last_state:
                 last_state = model.state
                 echo(f"{now:8.2f} s  {last_state}")
@@ -156,7 +185,7 @@ def run_remote_uav(
             if heard_s is None:
                 if time.monotonic() - wall0 > wait_s:
                     raise LinkLost(f"{spec.name}: no word from mission control at {', '.join(connect)} "
-                                   f"within {wait_s:g} s")
+                                   f"within {wait_s:g} s{_key_hint(transport, handler)}")
             elif model.finished and time.monotonic() - heard_wall > wait_s:
                 break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
             if now - t0 >= max_time_s:
@@ -165,5 +194,6 @@ def run_remote_uav(
     finally:
         fc.close()
         transport.close()
+    dropped = dict(transport.dropped) if isinstance(transport, AuthenticatedTransport) else {}
     return RemoteRun(tuple(handler.executions), handler.mission_ended, handler.mission_completed, model.state,
-                     clock.now_s() - t0)
+                     clock.now_s() - t0, tuple(handler.refused), dropped)

@@ -20,6 +20,7 @@ from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, MasonryError
+from masonry.fingerprint import wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
@@ -217,7 +218,7 @@ def simulate(
             was written for another wall or fleet, it is not a journal, it is read-only).
         JournalError: the journal cannot be written during the mission.
     """
-    from masonry.fingerprint import fleet_digest, wall_digest
+    from masonry.fingerprint import fleet_digest
     from masonry.mission.journal import open_mission_journal
     from masonry.planner import estimate_durations_s
     from masonry.planner import plan as make_plan
@@ -369,6 +370,8 @@ def _run(
     world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
     measured = _MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
     expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
+    wall = wall_digest(blueprint)
     bus = InprocBus()
     mc = MissionControl(
         the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy,
@@ -379,6 +382,7 @@ def _run(
         column_radius_m=blueprint.clearance_m if separation else 0.0,
         layer_base_m=layer_base_m(blueprint) if separation else None,
         layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
+        wall_digest=wall, min_durations_s=minimum_s,
     )
     layers = transit_layers_m(blueprint, fleet) if separation else {}
     if state is not None:
@@ -392,7 +396,8 @@ def _run(
                        heartbeat_timeout_s=heartbeat_timeout_s,
                        battery=_battery_of(sim_uav),
                        swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
-                       after_result=lambda: mc.step(world.clock.now_s()))
+                       after_result=lambda: mc.step(world.clock.now_s()),
+                       tasks=the_plan.tasks, role=spec.role, wall_digest=wall)
         h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name)))
         handlers[spec.name] = h
     measured.handlers = handlers

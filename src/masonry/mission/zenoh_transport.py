@@ -2,21 +2,28 @@
 
 The only module of masonry that imports ``zenoh``. Each endpoint subscribes to
 ``masonry/<mission>/to/<its name>`` and sends by putting on the addressee's key. Mission control listens
-(``listen=["tcp/0.0.0.0:7447"]``); a UAV handler connects to it (``connect=["tcp/HOST:7447"]``) and listens
-only on loopback (an ephemeral port) unless told otherwise, so it is not reachable from the network by accident.
+(``listen=["tcp/127.0.0.1:7447"]`` by default; a site network needs a real interface and a mission key,
+docs/security.md); a UAV handler connects to it (``connect=["tcp/HOST:7447"]``) and listens only on loopback
+(an ephemeral port) unless told otherwise, so it is not reachable from the network by accident.
+
+``config_file``: a Zenoh configuration file (JSON5) read first, for what masonry does not set itself: TLS
+certificates (``transport/link/tls``), access control (``access_control``), ... The endpoints, the mode and
+scouting given here are then set over it.
 """
 
 from __future__ import annotations
 
 import json
+import re
 import threading
 from collections import deque
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from typing_extensions import Self
 
-from masonry.errors import DeviceNotFound, MissionError
+from masonry.errors import DeviceNotFound, InputError, MissionError
 
 DEFAULT_PORT = 7447
 _HANDLER_LISTEN = ("tcp/127.0.0.1:0",)
@@ -33,6 +40,16 @@ def check_endpoint(endpoint: str) -> str:
     return endpoint
 
 
+def _one_line(exc: Exception) -> str:
+    """Zenoh's multi-line configuration error (a JSON5 parser's caret diagram) as one line, without Rust paths."""
+    text = re.sub(r" at /\S+\.rs:\d+\.?", "", str(exc)).strip()
+    where = re.search(r"--> (\d+):(\d+)", text)
+    what = re.search(r"^\s*= (.+)$", text, re.MULTILINE)
+    if where and what:
+        return f"line {where.group(1)}, column {where.group(2)}: {what.group(1).strip()}"
+    return text.splitlines()[0] if text else type(exc).__name__
+
+
 class ZenohTransport:
     """A named endpoint on a Zenoh peer session (implements :class:`~masonry.mission.transport.Transport`).
 
@@ -43,6 +60,7 @@ class ZenohTransport:
         listen: locators to listen on (default: loopback, ephemeral port).
         connect: locators of peers to connect to (retried until they appear).
         mission: key-space prefix, so several missions can share a network.
+        config_file: a Zenoh configuration file read before the settings above (TLS, access control).
     """
 
     def __init__(
@@ -52,8 +70,10 @@ class ZenohTransport:
         listen: Sequence[str] = _HANDLER_LISTEN,
         connect: Sequence[str] = (),
         mission: str = "default",
+        config_file: str | Path | None = None,
     ) -> None:
         self._name = name
+        self._config_file = None if config_file is None else Path(config_file)
         self._listen = [check_endpoint(e) for e in listen]
         self._connect = [check_endpoint(e) for e in connect]
         self._prefix = f"masonry/{mission}/to"
@@ -79,7 +99,7 @@ class ZenohTransport:
         """Open the Zenoh session and subscribe to this endpoint's key."""
         import zenoh
 
-        config = zenoh.Config()
+        config = self._base_config(zenoh)
         try:
             for key, value in self.config_json().items():
                 config.insert_json5(key, json.dumps(value))
@@ -94,6 +114,18 @@ class ZenohTransport:
                 self._inbox.append(data)
 
         self._subscriber = self._session.declare_subscriber(f"{self._prefix}/{self._name}", on_sample)
+
+    def _base_config(self, zenoh: Any) -> Any:
+        path = self._config_file
+        if path is None:
+            return zenoh.Config()
+        if not path.is_file():
+            raise InputError(f"--zenoh-config {path}: no such file")
+        try:
+            return zenoh.Config.from_file(str(path))
+        except Exception as exc:  # zenoh raises ZError for a syntax error or an unknown key
+            raise InputError(f"--zenoh-config {path}: not a valid Zenoh configuration: {_one_line(exc)}") \
+                from exc
 
     def send(self, to: str, payload: bytes) -> None:
         if self._session is None:
