@@ -354,9 +354,12 @@ def _check_ranges(blueprint: Blueprint) -> None:
     for b in blueprint.bricks:
         where = f"brick {b.id}"
         if isinstance(b.id, bool) or not isinstance(b.id, int) or not 0 <= 2 * b.id + 1 < capacity:
+            largest = max(ARUCO_DICTIONARY_SIZES.values())
+            hint = ("choose a larger dictionary" if capacity < largest else
+                    f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)")
             raise BlueprintError(
                 source, f"brick {quote(b.id)}", f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
-                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); choose a larger dictionary"
+                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}"
             )
         _check_point(b.position_m, SITE_MAX_HEIGHT_M, source, f"{where}: position")
         if not all(0.0 < v <= MAX_BRICK_DIMENSION_M for v in b.size_m):
@@ -483,7 +486,7 @@ def _check_sites(blueprint: Blueprint) -> None:
     if pair is not None:
         a, b = sorted(pair)
         raise BlueprintError(
-            source, f"fleet UAV {quote(fleet[b].name)}: home", f"is {quote(fleet[a].name)}'s home too "
+            source, f"fleet UAV {quote(fleet[b].name)}: home", f"is the home of {quote(fleet[a].name)} too "
             f"(less than {_fmt(MIN_HOME_SEPARATION_M)} m apart horizontally)"
         )
 
