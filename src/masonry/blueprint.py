@@ -351,7 +351,7 @@ def _check_ranges(blueprint: Blueprint) -> None:
     capacity = ARUCO_DICTIONARY_SIZES.get(dictionary)
     if capacity is None:
         raise BlueprintError(source, "brick.markers.dictionary", f"unknown ArUco dictionary {quote(dictionary)}")
-    for b in blueprint.bricks:
+    for b in _suspects(blueprint.bricks, capacity):
         where = f"brick {b.id}"
         if isinstance(b.id, bool) or not isinstance(b.id, int) or not 0 <= 2 * b.id + 1 < capacity:
             largest = max(ARUCO_DICTIONARY_SIZES.values())
@@ -382,6 +382,29 @@ def _check_ranges(blueprint: Blueprint) -> None:
         if u.home_m[2] < -RESTING_TOL_M:
             raise BlueprintError(source, f"fleet UAV {quote(u.name)}: home", f"z = {_fmt(u.home_m[2])} m is below "
                                  "the ground")
+
+
+def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
+    """The bricks from the first one that may break a range rule on (all checked one by one), found vectorised."""
+    import numpy as np
+
+    try:
+        ids = np.array([b.id for b in bricks], dtype=np.int64)
+    except (OverflowError, TypeError, ValueError):
+        return bricks
+    pos = np.array([b.position_m for b in bricks], dtype=float)
+    size = np.array([b.size_m for b in bricks], dtype=float)
+    yaw = np.array([b.yaw_rad for b in bricks], dtype=float)
+    pick = np.array([b.pickup_m if b.pickup_m is not None else (0.0, 0.0, 1.0) for b in bricks], dtype=float)
+    with np.errstate(invalid="ignore"):
+        ok = (ids >= 0) & (2 * ids + 1 < capacity)
+        ok &= (np.abs(pos[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pos[:, 2]) <= SITE_MAX_HEIGHT_M)
+        ok &= ((size > 0.0) & (size <= MAX_BRICK_DIMENSION_M)).all(axis=1) & (np.abs(yaw) <= MAX_ABS_YAW_RAD)
+        ok &= (np.abs(pick[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pick[:, 2]) <= MAX_PICKUP_HEIGHT_M)
+        ok &= pick[:, 2] - size[:, 2] / 2.0 >= -RESTING_TOL_M
+    if ok.all():
+        return ()
+    return bricks[int(np.argmin(ok)):]
 
 
 def _check_point(p: tuple[float, float, float], max_z_m: float, source: str, where: str) -> None:
@@ -457,9 +480,14 @@ def _check_sites(blueprint: Blueprint) -> None:
             source, "cruise_altitude", f"{_fmt(blueprint.cruise_altitude_m)} m is not above the finished wall's top "
             f"(z = {_fmt(top.top_z_m)} m, brick {top.id}): the UAVs would cruise through the wall"
         )
+    from scipy.spatial import cKDTree
+
+    center = np.array([b.position_m[:2] for b in bricks], dtype=float)
+    footprints = (center, np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0,
+                  np.array([b.yaw_rad for b in bricks], dtype=float), cKDTree(center))
     todo = [b for b in bricks if b.pickup_m is not None and not b.placed]
     pickups = np.array([b.pickup_m for b in todo], dtype=float).reshape(-1, 3)
-    hit = _inside_footprints(pickups[:, :2], bricks)
+    hit = _inside_footprints(pickups[:, :2], footprints)
     if hit is not None:
         k, j = hit
         raise BlueprintError(source, f"brick {todo[k].id}: pickup", f"lies inside the wall's footprint (under "
@@ -475,7 +503,7 @@ def _check_sites(blueprint: Blueprint) -> None:
         )
     fleet = blueprint.fleet
     homes = np.array([u.home_m for u in fleet], dtype=float).reshape(-1, 3)
-    hit = _inside_footprints(homes[:, :2], bricks)
+    hit = _inside_footprints(homes[:, :2], footprints)
     if hit is not None:
         k, j = hit
         raise BlueprintError(source, f"fleet UAV {quote(fleet[k].name)}: home", f"lies inside the wall's "
@@ -491,52 +519,48 @@ def _check_sites(blueprint: Blueprint) -> None:
         )
 
 
-def _inside_footprints(points_xy: Any, bricks: tuple[Brick, ...]) -> tuple[int, int] | None:
-    """(point index, brick index) of the first point strictly inside a brick's footprint, if any."""
+def _inside_footprints(points_xy: Any, footprints: tuple[Any, Any, Any, Any]) -> tuple[int, int] | None:
+    """(point index, brick index) of the first point strictly inside a brick's footprint, if any.
+
+    ``footprints``: the bricks' (n, 2) centres, (n, 2) half sizes, (n,) yaws, and a KD-tree of the centres.
+    """
     import numpy as np
 
-    from masonry.planner.spatial import cell_coordinates, neighbour_pairs
-
-    m, n = len(points_xy), len(bricks)
-    if m == 0:
+    points_xy = np.asarray(points_xy, dtype=float).reshape(-1, 2)
+    if len(points_xy) == 0:
         return None
-    center = np.array([b.position_m[:2] for b in bricks], dtype=float)
-    half = np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0
-    yaw = np.array([b.yaw_rad for b in bricks], dtype=float)
+    center, half, yaw, tree = footprints
     radius = float(np.hypot(half[:, 0], half[:, 1]).max())
-    xy = np.concatenate([center, np.asarray(points_xy, dtype=float)])
-    cells = cell_coordinates(np.column_stack([xy, np.zeros(len(xy))]), max(radius, 1e-6))
-    hits: list[tuple[int, int]] = []
-    for a, b in neighbour_pairs(cells):
-        # one of each pair a brick (index < n), the other a point (index >= n)
-        keep = (a < n) != (b < n)
-        brick = np.where(a < n, a, b)[keep]
-        point = np.where(a < n, b, a)[keep]
-        d = xy[point] - center[brick]
-        c, s = np.cos(yaw[brick]), np.sin(yaw[brick])
-        u = c * d[:, 0] + s * d[:, 1]
-        v = -s * d[:, 0] + c * d[:, 1]
-        inside = (np.abs(u) < half[brick, 0] - 1e-9) & (np.abs(v) < half[brick, 1] - 1e-9)
-        hits.extend(zip((point[inside] - n).tolist(), brick[inside].tolist()))
-    return min(hits) if hits else None
+    near = tree.query_ball_point(points_xy, r=radius)
+    counts = np.array([len(n) for n in near], dtype=np.int64)
+    if counts.sum() == 0:
+        return None
+    point = np.repeat(np.arange(len(points_xy)), counts)
+    brick = np.concatenate([np.asarray(n, dtype=np.int64) for n in near if n])
+    d = points_xy[point] - center[brick]
+    c, s = np.cos(yaw[brick]), np.sin(yaw[brick])
+    u = c * d[:, 0] + s * d[:, 1]
+    v = -s * d[:, 0] + c * d[:, 1]
+    inside = (np.abs(u) < half[brick, 0] - 1e-9) & (np.abs(v) < half[brick, 1] - 1e-9)
+    hits = sorted(zip(point[inside].tolist(), brick[inside].tolist()))
+    return hits[0] if hits else None
 
 
 def _close_pair(points: Any, room: Any) -> tuple[int, int] | None:
-    """The first pair (i, j) of points closer than min(room[i], room[j]), if any."""
+    """The first pair (i, j), i < j, of points closer than min(room[i], room[j]), if any."""
     import numpy as np
-
-    from masonry.planner.spatial import cell_coordinates, neighbour_pairs
+    from scipy.spatial import cKDTree
 
     points = np.asarray(points, dtype=float).reshape(-1, 3)
     if len(points) < 2 or float(room.max()) <= 0.0:
         return None
-    cells = cell_coordinates(points, float(room.max()))
-    found: list[tuple[int, int]] = []
-    for a, b in neighbour_pairs(cells):
-        d = np.linalg.norm(points[a] - points[b], axis=1)
-        close = d < np.minimum(room[a], room[b])
-        found.extend(zip(np.minimum(a, b)[close].tolist(), np.maximum(a, b)[close].tolist()))
-    return min(found) if found else None
+    pairs = cKDTree(points).query_pairs(r=float(room.max()), output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    a, b = pairs[:, 0], pairs[:, 1]
+    close = np.linalg.norm(points[a] - points[b], axis=1) < np.minimum(room[a], room[b])
+    found = sorted(zip(np.minimum(a, b)[close].tolist(), np.maximum(a, b)[close].tolist()))
+    return found[0] if found else None
 
 
 #: Same values as masonry.planner.contacts (kept here so the messages need no planner import).
