@@ -279,8 +279,10 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
     ``contacts`` (from :func:`masonry.planner.contacts.find_contacts` on the same bricks) saves recomputing.
 
     Raises:
-        BlueprintError: interpenetrating bricks, a floating brick, a placed brick on an unplaced one, an
-            unplaced brick without pickup, a marker layout that does not fit, or a fleet missing a role.
+        BlueprintError: a value beyond the site limits or a marker id beyond its dictionary, a UAV name that is
+            not a Zenoh key chunk, interpenetrating bricks, a floating or barely supported brick, a placed brick
+            on an unplaced one, an unplaced brick without pickup, a marker layout that does not fit, a fleet
+            missing a role, a pickup or home inside the wall or shared, or a cruise altitude below the wall's top.
     """
     from masonry.planner.contacts import BrickArrays, find_contacts
 
