@@ -27,7 +27,8 @@ def _bp(bricks: list[Brick], clearance: float = 1.5) -> Blueprint:
 
 def _brick(bid: int, x: float, y: float, z: float, *, yaw: float = 0.0, placed: bool = False,
            size: tuple[float, float, float] = (0.30, 0.15, 0.10)) -> Brick:
-    return Brick(bid, (x, y, z), size, yaw, placed, None if placed else (5.0, 5.0, size[2] / 2))
+    # every brick its own pickup (two bricks cannot lie at one spot), off the wall
+    return Brick(bid, (x, y, z), size, yaw, placed, None if placed else (5.0 + 0.5 * bid, 5.0, size[2] / 2))
 
 
 def test_paper_case_study() -> None:
@@ -199,7 +200,7 @@ def _oracle(p, clearance: float) -> set[tuple[str, str]]:
     out = set()
     for x, y in itertools.combinations(todo, 2):
         d = segment_distances(*(np.array([v], dtype=float) for v in (*seg(x), *seg(y))))[0]
-        if d <= clearance and not closure.has_edge(x.id, y.id) and not closure.has_edge(y.id, x.id):
+        if d <= clearance + 1e-9 and not closure.has_edge(x.id, y.id) and not closure.has_edge(y.id, x.id):
             out.add(tuple(sorted((x.id, y.id), key=index.__getitem__)))
     return out
 

@@ -11,6 +11,7 @@ naming the file, the brick id or field, and the problem, on the first error foun
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,8 +35,43 @@ ARUCO_DICTIONARIES: tuple[str, ...] = tuple(
     + ["DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9", "DICT_APRILTAG_36h10"]
     + ["DICT_APRILTAG_36h11", "DICT_ARUCO_MIP_36h12"]
 )
+#: Number of markers in each dictionary (OpenCV's predefined sets): brick k needs ids 2k and 2k+1 in it.
+ARUCO_DICTIONARY_SIZES: dict[str, int] = {
+    **{f"DICT_{n}X{n}_{k}": k for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)},
+    "DICT_ARUCO_ORIGINAL": 1024, "DICT_APRILTAG_16h5": 30, "DICT_APRILTAG_25h9": 35,
+    "DICT_APRILTAG_36h10": 2320, "DICT_APRILTAG_36h11": 587, "DICT_ARUCO_MIP_36h12": 250,
+}
 #: Bricks must be taller than twice the 5 mm resting tolerance so "rests on" is unambiguous and G^d acyclic.
 MIN_BRICK_HEIGHT_M = 0.01
+
+# Limits of a real site (docs/blueprint-format.md, "Limits"): values beyond them are typing mistakes or hostile
+# input, and far beyond them they overflow the motion and camera arithmetic.
+#: Every x and y (brick, pickup, home) lies within this distance of the site origin: a 2 km square site.
+SITE_HALF_EXTENT_M = 1000.0
+#: Every z lies below this (a 30-storey building); brick centres and the cruise altitude too.
+SITE_MAX_HEIGHT_M = 100.0
+#: The largest brick dimension (a concrete block is 0.4 m; a 5 m "brick" is a beam, not masonry).
+MAX_BRICK_DIMENSION_M = 5.0
+#: |yaw| of a brick at most two turns.
+MAX_ABS_YAW_RAD = 2.0 * math.tau
+#: The clearance r_c: above 10 m two UAVs on one wall could never work at once (the paper uses 1.5 m).
+MAX_CLEARANCE_M = 10.0
+#: A pickup's brick and a home stand on the ground or a platform no higher than this (a truck bed, a scaffold).
+MAX_PICKUP_HEIGHT_M = 10.0
+MAX_HOME_HEIGHT_M = 10.0
+#: Two homes closer than this are the same take-off point (two airframes ~0.5 m across cannot share it).
+MIN_HOME_SEPARATION_M = 0.5
+#: A brick that does not stand on the ground must have at least this fraction of its footprint on the bricks
+#: under it: a running-bond end brick over a half-brick offset has 0.5; below a quarter the adhesive, not the
+#: brick below, would have to hold it (and the centre of mass is then far out over the edge).
+MIN_SUPPORT_FRACTION = 0.25
+#: UAV names: part of every Zenoh key (masonry/<mission>/to/<name>), so letters, digits, `-`, `_`, `.` only
+#: (no key-expression characters `*`, `$`, `/`, `#`, `?`), starting with a letter or digit, 1-64 characters.
+UAV_NAME_PATTERN = r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}"
+#: Mission control's own endpoint name (masonry.mission.messages.MISSION_CONTROL): no UAV may take it.
+RESERVED_UAV_NAMES: tuple[str, ...] = ("mission-control",)
+#: A value quoted in an error line is cut to this many characters.
+QUOTE_MAX_CHARS = 80
 
 
 @dataclass(frozen=True)
@@ -138,24 +174,30 @@ def load_blueprint(path: str | Path) -> Blueprint:
     """
     import yaml
 
+    from masonry.blueprint_yaml import FileLimitError, YamlLimitError, read_text_limited, safe_load
+
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text_limited(path)
     except FileNotFoundError:
         raise BlueprintError(source, "", "no such file") from None
     except IsADirectoryError:
         raise BlueprintError(source, "", "is a directory, not a blueprint file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise BlueprintError(source, "", f"cannot read: {exc}") from None
-    from masonry.blueprint_yaml import safe_load
-
+    except FileLimitError as exc:
+        raise BlueprintError(source, "", str(exc)) from None
+    except UnicodeDecodeError as exc:
+        raise BlueprintError(source, "", f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+                                         f"{exc.start}): a blueprint is a YAML or JSON file") from None
+    except OSError as exc:
+        raise BlueprintError(source, "", f"cannot read: {exc.strerror or exc}") from None
     try:
         data = safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise BlueprintError(source, where, f"YAML syntax error: {problem}") from None
+        label = "" if isinstance(exc, YamlLimitError) else "YAML syntax error: "
+        raise BlueprintError(source, where, f"{label}{_cut(problem)}") from None
     return parse_blueprint(data, source)
 
 
@@ -213,7 +255,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>") -> Blueprint:
     for index, raw in enumerate(raw_fleet):
         uav = _uav(raw, index, source)
         if uav.name in seen_names:
-            raise BlueprintError(source, f"fleet UAV {uav.name!r}", "duplicate UAV name")
+            raise BlueprintError(source, f"fleet UAV {quote(uav.name)}", "duplicate UAV name")
         seen_names.add(uav.name)
         fleet.append(uav)
 
@@ -237,14 +279,17 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
     ``contacts`` (from :func:`masonry.planner.contacts.find_contacts` on the same bricks) saves recomputing.
 
     Raises:
-        BlueprintError: interpenetrating bricks, a floating brick, a placed brick on an unplaced one, an
-            unplaced brick without pickup, a marker layout that does not fit, or a fleet missing a role.
+        BlueprintError: a value beyond the site limits or a marker id beyond its dictionary, a UAV name that is
+            not a Zenoh key chunk, interpenetrating bricks, a floating or barely supported brick, a placed brick
+            on an unplaced one, an unplaced brick without pickup, a marker layout that does not fit, a fleet
+            missing a role, a pickup or home inside the wall or shared, or a cruise altitude below the wall's top.
     """
     from masonry.planner.contacts import BrickArrays, find_contacts
 
     source = blueprint.source
     bricks = blueprint.bricks
     markers = blueprint.markers
+    _check_ranges(blueprint)  # first: the geometry below must not compute with absurd values
     for b in bricks:
         _check_brick_markers(b, markers, source)
         if not b.placed and b.pickup_m is None:
@@ -289,6 +334,235 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
         raise BlueprintError(
             source, "fleet", "has no UAV with role `adhesion`, but the plan has adhesion tasks"
         )
+    _check_support(bricks, contacts, source)
+    _check_sites(blueprint)
+
+
+def _check_ranges(blueprint: Blueprint) -> None:
+    """Every number within the limits of a real site, every marker id in its dictionary, every UAV name a key."""
+    source = blueprint.source
+    c = blueprint.clearance_m
+    if not 0.0 < c <= MAX_CLEARANCE_M:
+        raise BlueprintError(source, "clearance", f"{_fmt(c)} m is outside (0, {_fmt(MAX_CLEARANCE_M)}] m")
+    cruise = blueprint.cruise_altitude_m
+    if not 0.0 < cruise <= SITE_MAX_HEIGHT_M:
+        raise BlueprintError(
+            source, "cruise_altitude", f"{_fmt(cruise)} m is outside (0, {_fmt(SITE_MAX_HEIGHT_M)}] m"
+        )
+    dictionary = blueprint.markers.dictionary
+    capacity = ARUCO_DICTIONARY_SIZES.get(dictionary)
+    if capacity is None:
+        raise BlueprintError(source, "brick.markers.dictionary", f"unknown ArUco dictionary {quote(dictionary)}")
+    for b in _suspects(blueprint.bricks, capacity):
+        where = f"brick {b.id}"
+        if isinstance(b.id, bool) or not isinstance(b.id, int) or not 0 <= 2 * b.id + 1 < capacity:
+            largest = max(ARUCO_DICTIONARY_SIZES.values())
+            hint = ("choose a larger dictionary" if capacity < largest else
+                    f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)")
+            raise BlueprintError(
+                source, f"brick {quote(b.id)}", f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
+                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}"
+            )
+        _check_point(b.position_m, SITE_MAX_HEIGHT_M, source, f"{where}: position")
+        if not all(0.0 < v <= MAX_BRICK_DIMENSION_M for v in b.size_m):
+            raise BlueprintError(
+                source, f"{where}: size", f"every dimension must be in (0, {_fmt(MAX_BRICK_DIMENSION_M)}] m, "
+                f"got {quote(list(b.size_m))}"
+            )
+        if not abs(b.yaw_rad) <= MAX_ABS_YAW_RAD:
+            raise BlueprintError(source, f"{where}: yaw", f"|yaw| must be at most {_fmt(MAX_ABS_YAW_RAD)} rad "
+                                 f"(two turns), got {_fmt(b.yaw_rad)}")
+        if b.pickup_m is not None:
+            _check_point(b.pickup_m, MAX_PICKUP_HEIGHT_M, source, f"{where}: pickup")
+            bottom = b.pickup_m[2] - b.size_m[2] / 2.0
+            if bottom < -RESTING_TOL_M:
+                raise BlueprintError(source, f"{where}: pickup", f"the brick would be below the ground there "
+                                     f"(its centre at z = {_fmt(b.pickup_m[2])} m, bottom at {_fmt(bottom)} m)")
+    for u in blueprint.fleet:
+        _check_uav_name(u.name, source, f"fleet UAV {quote(u.name)}: name")
+        _check_point(u.home_m, MAX_HOME_HEIGHT_M, source, f"fleet UAV {quote(u.name)}: home")
+        if u.home_m[2] < -RESTING_TOL_M:
+            raise BlueprintError(source, f"fleet UAV {quote(u.name)}: home", f"z = {_fmt(u.home_m[2])} m is below "
+                                 "the ground")
+
+
+def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
+    """The bricks from the first one that may break a range rule on (all checked one by one), found vectorised."""
+    import numpy as np
+
+    try:
+        ids = np.array([b.id for b in bricks], dtype=np.int64)
+    except (OverflowError, TypeError, ValueError):
+        return bricks
+    pos = np.array([b.position_m for b in bricks], dtype=float)
+    size = np.array([b.size_m for b in bricks], dtype=float)
+    yaw = np.array([b.yaw_rad for b in bricks], dtype=float)
+    pick = np.array([b.pickup_m if b.pickup_m is not None else (0.0, 0.0, 1.0) for b in bricks], dtype=float)
+    with np.errstate(invalid="ignore"):
+        ok = (ids >= 0) & (2 * ids + 1 < capacity)
+        ok &= (np.abs(pos[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pos[:, 2]) <= SITE_MAX_HEIGHT_M)
+        ok &= ((size > 0.0) & (size <= MAX_BRICK_DIMENSION_M)).all(axis=1) & (np.abs(yaw) <= MAX_ABS_YAW_RAD)
+        ok &= (np.abs(pick[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pick[:, 2]) <= MAX_PICKUP_HEIGHT_M)
+        ok &= pick[:, 2] - size[:, 2] / 2.0 >= -RESTING_TOL_M
+    if ok.all():
+        return ()
+    return bricks[int(np.argmin(ok)):]
+
+
+def _check_point(p: tuple[float, float, float], max_z_m: float, source: str, where: str) -> None:
+    x, y, z = p
+    if not (abs(x) <= SITE_HALF_EXTENT_M and abs(y) <= SITE_HALF_EXTENT_M):
+        raise BlueprintError(source, where, f"({_fmt(x)}, {_fmt(y)}) is off the site: |x| and |y| must be at most "
+                             f"{_fmt(SITE_HALF_EXTENT_M)} m")
+    if not abs(z) <= max_z_m:
+        raise BlueprintError(source, where, f"z = {_fmt(z)} m is out of range: at most {_fmt(max_z_m)} m")
+
+
+def _check_uav_name(name: Any, source: str, where: str) -> None:
+    if not isinstance(name, str) or not re.fullmatch(UAV_NAME_PATTERN, name):
+        raise BlueprintError(source, where, f"{quote(name)} is not a UAV name: 1-64 letters, digits, `-`, `_` or "
+                             "`.`, starting with a letter or digit (it is part of the mission's Zenoh keys)")
+    if name in RESERVED_UAV_NAMES:
+        raise BlueprintError(source, where, f"{quote(name)} is mission control's own name")
+
+
+def _check_support(bricks: tuple[Brick, ...], contacts: Contacts, source: str) -> None:
+    """A brick off the ground needs MIN_SUPPORT_FRACTION of its footprint on the bricks it rests on."""
+    import numpy as np
+
+    upper = np.asarray(contacts.upper, dtype=np.int64)
+    lower = np.asarray(contacts.lower, dtype=np.int64)
+    if len(upper) == 0:
+        return
+    center = np.array([b.position_m[:2] for b in bricks], dtype=float)
+    half = np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0
+    yaw = np.array([b.yaw_rad for b in bricks], dtype=float)
+    # Axis-aligned footprints (yaw a multiple of pi/2, the usual case): rectangle overlap, vectorised.
+    quarter = np.round(yaw / (math.pi / 2.0))
+    aligned = np.abs(yaw - quarter * (math.pi / 2.0)) < 1e-9
+    swap = (quarter.astype(np.int64) % 2) == 1
+    ext = np.where(swap[:, None], half[:, ::-1], half)
+    both = aligned[upper] & aligned[lower]
+    lo = np.maximum(center[upper] - ext[upper], center[lower] - ext[lower])
+    hi = np.minimum(center[upper] + ext[upper], center[lower] + ext[lower])
+    area = np.where(both, np.prod(np.clip(hi - lo, 0.0, None), axis=1), 0.0)
+    if not both.all():
+        from masonry.planner.overlap import clip_convex, polygon_area_centroid, rectangle_corners
+
+        for k in np.nonzero(~both)[0].tolist():
+            u, v = int(upper[k]), int(lower[k])
+            a = rectangle_corners(tuple(center[u]), tuple(half[u]), float(yaw[u]))
+            b = rectangle_corners(tuple(center[v]), tuple(half[v]), float(yaw[v]))
+            poly = clip_convex(a, b)
+            area[k] = polygon_area_centroid(poly)[0] if len(poly) >= 3 else 0.0
+    supported = np.bincount(upper, weights=area, minlength=len(bricks))
+    fraction = supported / (4.0 * half[:, 0] * half[:, 1])
+    rests = np.zeros(len(bricks), dtype=bool)
+    rests[upper] = True
+    weak = np.nonzero(rests & (fraction < MIN_SUPPORT_FRACTION))[0]
+    if len(weak):
+        i = int(weak[0])
+        under = sorted(bricks[int(v)].id for v in lower[upper == i])
+        raise BlueprintError(
+            source, f"brick {bricks[i].id}",
+            f"only {fraction[i] * 100:.1f} % of its footprint rests on brick(s) {', '.join(map(str, under))} "
+            f"(at least {MIN_SUPPORT_FRACTION * 100:.0f} % must)",
+        )
+
+
+def _check_sites(blueprint: Blueprint) -> None:
+    """Cruise above the wall; pickups and homes off the wall's footprint; no shared pickup; homes apart."""
+    import numpy as np
+
+    source = blueprint.source
+    bricks = blueprint.bricks
+    top = max(bricks, key=lambda b: b.top_z_m)
+    if not blueprint.cruise_altitude_m > top.top_z_m:
+        raise BlueprintError(
+            source, "cruise_altitude", f"{_fmt(blueprint.cruise_altitude_m)} m is not above the finished wall's top "
+            f"(z = {_fmt(top.top_z_m)} m, brick {top.id}): the UAVs would cruise through the wall"
+        )
+    from scipy.spatial import cKDTree
+
+    center = np.array([b.position_m[:2] for b in bricks], dtype=float)
+    footprints = (center, np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0,
+                  np.array([b.yaw_rad for b in bricks], dtype=float), cKDTree(center))
+    todo = [b for b in bricks if b.pickup_m is not None and not b.placed]
+    pickups = np.array([b.pickup_m for b in todo], dtype=float).reshape(-1, 3)
+    hit = _inside_footprints(pickups[:, :2], footprints)
+    if hit is not None:
+        k, j = hit
+        raise BlueprintError(source, f"brick {todo[k].id}: pickup", f"lies inside the wall's footprint (under "
+                             f"brick {bricks[j].id})")
+    # Two bricks whose pickup centres are closer than the smaller one's smallest side would interpenetrate there.
+    room = np.array([min(b.size_m) for b in todo], dtype=float) - 2.0 * PENETRATION_TOL_M
+    pair = _close_pair(pickups, room)
+    if pair is not None:
+        a, b = sorted(pair, key=lambda k: todo[k].id)
+        raise BlueprintError(
+            source, f"brick {todo[b].id}: pickup", f"is brick {todo[a].id}'s pickup too: the two bricks would "
+            f"overlap there ({_fmt(float(np.linalg.norm(pickups[a] - pickups[b])))} m apart)"
+        )
+    fleet = blueprint.fleet
+    homes = np.array([u.home_m for u in fleet], dtype=float).reshape(-1, 3)
+    hit = _inside_footprints(homes[:, :2], footprints)
+    if hit is not None:
+        k, j = hit
+        raise BlueprintError(source, f"fleet UAV {quote(fleet[k].name)}: home", f"lies inside the wall's "
+                             f"footprint (under brick {bricks[j].id})")
+    flat = homes.copy()
+    flat[:, 2] = 0.0
+    pair = _close_pair(flat, np.full(len(fleet), MIN_HOME_SEPARATION_M))
+    if pair is not None:
+        a, b = sorted(pair)
+        raise BlueprintError(
+            source, f"fleet UAV {quote(fleet[b].name)}: home", f"is the home of {quote(fleet[a].name)} too "
+            f"(less than {_fmt(MIN_HOME_SEPARATION_M)} m apart horizontally)"
+        )
+
+
+def _inside_footprints(points_xy: Any, footprints: tuple[Any, Any, Any, Any]) -> tuple[int, int] | None:
+    """(point index, brick index) of the first point strictly inside a brick's footprint, if any.
+
+    ``footprints``: the bricks' (n, 2) centres, (n, 2) half sizes, (n,) yaws, and a KD-tree of the centres.
+    """
+    import numpy as np
+
+    points_xy = np.asarray(points_xy, dtype=float).reshape(-1, 2)
+    if len(points_xy) == 0:
+        return None
+    center, half, yaw, tree = footprints
+    radius = float(np.hypot(half[:, 0], half[:, 1]).max())
+    near = tree.query_ball_point(points_xy, r=radius)
+    counts = np.array([len(n) for n in near], dtype=np.int64)
+    if counts.sum() == 0:
+        return None
+    point = np.repeat(np.arange(len(points_xy)), counts)
+    brick = np.concatenate([np.asarray(n, dtype=np.int64) for n in near if n])
+    d = points_xy[point] - center[brick]
+    c, s = np.cos(yaw[brick]), np.sin(yaw[brick])
+    u = c * d[:, 0] + s * d[:, 1]
+    v = -s * d[:, 0] + c * d[:, 1]
+    inside = (np.abs(u) < half[brick, 0] - 1e-9) & (np.abs(v) < half[brick, 1] - 1e-9)
+    hits = sorted(zip(point[inside].tolist(), brick[inside].tolist()))
+    return hits[0] if hits else None
+
+
+def _close_pair(points: Any, room: Any) -> tuple[int, int] | None:
+    """The first pair (i, j), i < j, of points closer than min(room[i], room[j]), if any."""
+    import numpy as np
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    if len(points) < 2 or float(room.max()) <= 0.0:
+        return None
+    pairs = cKDTree(points).query_pairs(r=float(room.max()), output_type="ndarray")
+    if len(pairs) == 0:
+        return None
+    a, b = pairs[:, 0], pairs[:, 1]
+    close = np.linalg.norm(points[a] - points[b], axis=1) < np.minimum(room[a], room[b])
+    found = sorted(zip(np.minimum(a, b)[close].tolist(), np.maximum(a, b)[close].tolist()))
+    return found[0] if found else None
 
 
 #: Same values as masonry.planner.contacts (kept here so the messages need no planner import).
@@ -318,7 +592,7 @@ def _brick(raw: Any, index: int, default_size: tuple[float, float, float], sourc
     if "id" in raw:
         bid = raw["id"]
         if isinstance(bid, bool) or not isinstance(bid, int) or bid < 0:
-            raise BlueprintError(source, f"{where}: id", f"must be an integer >= 0, got {bid!r}")
+            raise BlueprintError(source, f"{where}: id", f"must be an integer >= 0, got {quote(bid)}")
         where = f"brick {bid}"
     _check_keys(raw, BRICK_KEYS, ("id", "position"), source, where)
     position = _vec3(raw["position"], source, f"{where}: position")
@@ -326,7 +600,7 @@ def _brick(raw: Any, index: int, default_size: tuple[float, float, float], sourc
     yaw = _number(raw.get("yaw", 0.0), source, f"{where}: yaw")
     placed = raw.get("placed", False)
     if not isinstance(placed, bool):
-        raise BlueprintError(source, f"{where}: placed", f"must be true or false, got {placed!r}")
+        raise BlueprintError(source, f"{where}: placed", f"must be true or false, got {quote(placed)}")
     pickup = raw.get("pickup")
     pickup_m = None if pickup is None else _vec3(pickup, source, f"{where}: pickup")
     return Brick(id=int(raw["id"]), position_m=position, size_m=size, yaw_rad=yaw, placed=placed, pickup_m=pickup_m)
@@ -338,13 +612,14 @@ def _uav(raw: Any, index: int, source: str) -> UavSpec:
         raise BlueprintError(source, where, f"must be a mapping, got {_kind(raw)}")
     name = raw.get("name")
     if isinstance(name, str) and name.strip():
-        where = f"fleet UAV {name!r}"
+        where = f"fleet UAV {quote(name)}"
     _check_keys(raw, UAV_KEYS, ("name", "role", "home"), source, where)
     if not isinstance(name, str) or not name.strip():
-        raise BlueprintError(source, f"{where}: name", f"must be a non-empty string, got {name!r}")
+        raise BlueprintError(source, f"{where}: name", f"must be a non-empty string, got {quote(name)}")
+    _check_uav_name(name, source, f"{where}: name")
     role = raw["role"]
     if role not in ROLES:
-        raise BlueprintError(source, f"{where}: role", f"unknown role {role!r} (expected one of: {', '.join(ROLES)})")
+        raise BlueprintError(source, f"{where}: role", f"unknown role {quote(role)} (expected one of: {', '.join(ROLES)})")
     home = _vec3(raw["home"], source, f"{where}: home")
     return UavSpec(name=name, role=role, home_m=home)
 
@@ -357,7 +632,7 @@ def _markers(raw: Any, source: str) -> MarkerSpec:
     dictionary = raw.get("dictionary", MarkerSpec.dictionary)
     if dictionary not in ARUCO_DICTIONARIES:
         raise BlueprintError(
-            source, f"{where}.dictionary", f"unknown ArUco dictionary {dictionary!r} (e.g. DICT_4X4_50)"
+            source, f"{where}.dictionary", f"unknown ArUco dictionary {quote(dictionary)} (e.g. DICT_4X4_50)"
         )
     size = _positive(raw.get("size", MarkerSpec.size_m), source, f"{where}.size")
     spacing = _positive(raw.get("spacing", MarkerSpec.spacing_m), source, f"{where}.spacing")
@@ -367,13 +642,13 @@ def _markers(raw: Any, source: str) -> MarkerSpec:
 def _check_keys(raw: Mapping[Any, Any], allowed: tuple[str, ...], required: tuple[str, ...], source: str, where: str) -> None:
     for key in raw:
         if key not in allowed:
-            hint = _close_match(str(key), allowed)
-            problem = f"unknown key {key!r}" + (f" (did you mean {hint!r}?)" if hint else "")
+            hint = _close_match(str(key)[:100], allowed)
+            problem = f"unknown key {quote(key)}" + (f" (did you mean {hint!r}?)" if hint else "")
             problem += f"; allowed: {', '.join(allowed)}"
             raise BlueprintError(source, where, problem)
     for key in required:
         if key not in raw:
-            raise BlueprintError(source, where, f"missing key {key!r}")
+            raise BlueprintError(source, where, f"missing key {quote(key)}")
 
 
 def _close_match(key: str, allowed: tuple[str, ...]) -> str | None:
@@ -385,23 +660,23 @@ def _close_match(key: str, allowed: tuple[str, ...]) -> str | None:
 
 def _number(raw: Any, source: str, where: str) -> float:
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-        raise BlueprintError(source, where, f"must be a number, got {_kind(raw)} {raw!r}")
+        raise BlueprintError(source, where, f"must be a number, got {_kind(raw)} {quote(raw)}")
     value = float(raw)
     if not math.isfinite(value):
-        raise BlueprintError(source, where, f"must be a finite number, got {raw!r}")
+        raise BlueprintError(source, where, f"must be a finite number, got {quote(raw)}")
     return value
 
 
 def _positive(raw: Any, source: str, where: str) -> float:
     value = _number(raw, source, where)
     if value <= 0.0:
-        raise BlueprintError(source, where, f"must be > 0, got {raw!r}")
+        raise BlueprintError(source, where, f"must be > 0, got {quote(raw)}")
     return value
 
 
 def _vec3(raw: Any, source: str, where: str) -> tuple[float, float, float]:
     if not isinstance(raw, (list, tuple)) or len(raw) != 3:
-        raise BlueprintError(source, where, f"must be a list of 3 numbers [x, y, z] in metres, got {raw!r}")
+        raise BlueprintError(source, where, f"must be a list of 3 numbers [x, y, z] in metres, got {quote(raw)}")
     x, y, z = (_number(v, source, where) for v in raw)
     return (x, y, z)
 
@@ -409,11 +684,11 @@ def _vec3(raw: Any, source: str, where: str) -> tuple[float, float, float]:
 def _size(raw: Any, source: str, where: str) -> tuple[float, float, float]:
     if not isinstance(raw, (list, tuple)) or len(raw) != 3:
         raise BlueprintError(
-            source, where, f"must be a list of 3 numbers [length, width, height] in metres, got {raw!r}"
+            source, where, f"must be a list of 3 numbers [length, width, height] in metres, got {quote(raw)}"
         )
     values = tuple(_number(v, source, where) for v in raw)
     if any(v <= 0.0 for v in values):
-        raise BlueprintError(source, where, f"every dimension must be > 0, got {list(raw)!r}")
+        raise BlueprintError(source, where, f"every dimension must be > 0, got {quote(list(raw))}")
     return (values[0], values[1], values[2])
 
 
@@ -435,6 +710,26 @@ def _kind(value: Any) -> str:
 
 def _fmt(value: float) -> str:
     return f"{value:.6g}"
+
+
+def _cut(text: str, limit: int = 2 * QUOTE_MAX_CHARS) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def quote(value: Any, limit: int = QUOTE_MAX_CHARS) -> str:
+    """``repr(value)`` for an error line, at most ``limit`` characters whatever the value's size.
+
+    The work is bounded too: a list of 200,000 numbers or an alias-built tree is never rendered whole.
+    """
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxlevel, r.maxlist, r.maxtuple, r.maxdict, r.maxset = 3, 6, 6, 4, 4
+    r.maxstring, r.maxother, r.maxlong = limit, limit, 40
+    text = r.repr(value)
+    if isinstance(value, (list, tuple, dict)) and len(value) > 6:
+        text += f" ({len(value)} items)"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 # ---------------------------------------------------------------------------------------------- writing

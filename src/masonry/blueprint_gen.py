@@ -37,6 +37,8 @@ GENERATORS: tuple[str, ...] = ("running-bond", "towers", "pyramid")
 #: A wall at least this many pallet columns long (0.5 m each: 4.5 m with the default brick) gets a pallet as wide
 #: as itself, each brick facing its place; a shorter one the old 10-column pallet filled row by row.
 PALLET_MIN_COLUMNS = 10
+#: A wall taller than the default cruise altitude is cruised over this much above its top (unless one is given).
+CRUISE_OVER_WALL_M = 0.5
 
 
 @dataclass(frozen=True)
@@ -50,7 +52,7 @@ class Site:
     brick_uavs: int = 1
     adhesion_uavs: int = 1
     clearance_m: float = DEFAULT_CLEARANCE_M
-    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
+    cruise_altitude_m: float | None = None  # None: DEFAULT_CRUISE_ALTITUDE_M, or CRUISE_OVER_WALL_M over a taller wall
     pallet_columns: int = 0  # 0: as wide as a long wall, else 10 (20 beyond 40 bricks); given: row by row
     pallet_distance_m: float | None = None  # from the wall's face to the pallet; default r_c + 1 m
     name: str | None = None
@@ -124,7 +126,11 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     brick_uavs = int(options.brick_uavs)
     adhesion_uavs = int(options.adhesion_uavs)
     clearance = float(options.clearance_m)
-    cruise = float(options.cruise_altitude_m)
+    top = (origin[2] if len(origin) == 3 else 0.0) + max((c for _, _, c, _ in layout), default=0) * height + height
+    if options.cruise_altitude_m is not None:
+        cruise = float(options.cruise_altitude_m)
+    else:
+        cruise = DEFAULT_CRUISE_ALTITUDE_M if top < DEFAULT_CRUISE_ALTITUDE_M else top + CRUISE_OVER_WALL_M
     pallet_distance = clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
     markers = options.markers or _markers_for(size, len(layout))
     if len(origin) not in (2, 3):
@@ -243,11 +249,12 @@ def _markers_for(size: Vec3, n_bricks: int) -> MarkerSpec:
 
 
 def _dictionary_for(n_bricks: int) -> str:
-    """The smallest 4x4 ArUco dictionary holding markers 0 .. 2n-1 (DICT_4X4_1000 beyond 500 bricks)."""
+    """The smallest 4x4 ArUco dictionary holding markers 0 .. 2n-1, DICT_APRILTAG_36h10 (2320 markers) beyond 500
+    bricks; beyond 1160 bricks no predefined dictionary numbers every brick (the blueprint does not validate)."""
     for size in (50, 100, 250, 1000):
         if 2 * n_bricks <= size:
             return f"DICT_4X4_{size}"
-    return "DICT_4X4_1000"
+    return "DICT_APRILTAG_36h10"
 
 
 def generate(kind: str, **options: Any) -> Blueprint:

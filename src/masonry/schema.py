@@ -1,7 +1,9 @@
 """The JSON Schema of the blueprint format (``masonry schema`` prints it for editors and validators).
 
-The schema checks structure and types; geometric rules (interpenetration, support, pickups of unplaced bricks,
-fleet roles) are checked by :func:`masonry.blueprint.parse_blueprint`, which is the authority.
+The schema checks structure, types and the per-value limits (site size, brick size, clearance, UAV names);
+geometric rules (interpenetration, support fraction, pickups of unplaced bricks, pickups and homes off the wall,
+marker ids within the dictionary, fleet roles) are checked by :func:`masonry.blueprint.parse_blueprint`, which is
+the authority.
 """
 
 from __future__ import annotations
@@ -10,18 +12,32 @@ from typing import Any
 
 from masonry.blueprint import (
     ARUCO_DICTIONARIES,
+    ARUCO_DICTIONARY_SIZES,
     DEFAULT_BRICK_SIZE_M,
     DEFAULT_CLEARANCE_M,
     DEFAULT_CRUISE_ALTITUDE_M,
+    MAX_ABS_YAW_RAD,
+    MAX_BRICK_DIMENSION_M,
+    MAX_CLEARANCE_M,
+    MAX_HOME_HEIGHT_M,
+    MAX_PICKUP_HEIGHT_M,
+    RESERVED_UAV_NAMES,
+    RESTING_TOL_M,
+    SITE_HALF_EXTENT_M,
+    SITE_MAX_HEIGHT_M,
+    UAV_NAME_PATTERN,
 )
 
 SCHEMA_ID = "https://masonry.example/schemas/blueprint.schema.json"
 
 
-def _vec3(description: str) -> dict[str, Any]:
+def _vec3(description: str, max_z_m: float, min_z_m: float | None = None) -> dict[str, Any]:
+    xy = {"type": "number", "minimum": -SITE_HALF_EXTENT_M, "maximum": SITE_HALF_EXTENT_M}
+    z = {"type": "number", "minimum": -max_z_m if min_z_m is None else min_z_m, "maximum": max_z_m}
     return {
         "type": "array",
-        "items": {"type": "number"},
+        "prefixItems": [xy, xy, z],
+        "items": False,
         "minItems": 3,
         "maxItems": 3,
         "description": description,
@@ -31,7 +47,7 @@ def _vec3(description: str) -> dict[str, Any]:
 def _size(description: str) -> dict[str, Any]:
     return {
         "type": "array",
-        "items": {"type": "number", "exclusiveMinimum": 0},
+        "items": {"type": "number", "exclusiveMinimum": 0, "maximum": MAX_BRICK_DIMENSION_M},
         "minItems": 3,
         "maxItems": 3,
         "description": description,
@@ -53,14 +69,16 @@ def blueprint_schema() -> dict[str, Any]:
             "clearance": {
                 "type": "number",
                 "exclusiveMinimum": 0,
+                "maximum": MAX_CLEARANCE_M,
                 "default": DEFAULT_CLEARANCE_M,
                 "description": "Minimum clearance r_c between UAVs, metres.",
             },
             "cruise_altitude": {
                 "type": "number",
                 "exclusiveMinimum": 0,
+                "maximum": SITE_MAX_HEIGHT_M,
                 "default": DEFAULT_CRUISE_ALTITUDE_M,
-                "description": "Cruise altitude of the UAVs, metres.",
+                "description": "Cruise altitude of the UAVs, metres (above the finished wall's top).",
             },
             "brick": {
                 "type": "object",
@@ -93,14 +111,19 @@ def blueprint_schema() -> dict[str, Any]:
                     "additionalProperties": False,
                     "required": ["id", "position"],
                     "properties": {
-                        "id": {"type": "integer", "minimum": 0, "description": "Unique brick id."},
-                        "position": _vec3("Geometric centre of the brick, world ENU frame, metres."),
-                        "yaw": {"type": "number", "default": 0.0,
+                        "id": {"type": "integer", "minimum": 0,
+                               "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
+                               "description": "Unique brick id; its markers 2k, 2k+1 must be in the dictionary."},
+                        "position": _vec3("Geometric centre of the brick, world ENU frame, metres.",
+                                          SITE_MAX_HEIGHT_M),
+                        "yaw": {"type": "number", "default": 0.0, "minimum": -MAX_ABS_YAW_RAD,
+                                "maximum": MAX_ABS_YAW_RAD,
                                 "description": "Rotation of the brick's length axis about z, radians."},
                         "placed": {"type": "boolean", "default": False,
                                    "description": "Already in place when the mission starts."},
                         "size": _size("Per-brick override of brick.size, metres."),
-                        "pickup": _vec3("Approximate centre of the brick at its pickup site (required unless placed)."),
+                        "pickup": _vec3("Approximate centre of the brick at its pickup site (required unless "
+                                        "placed).", MAX_PICKUP_HEIGHT_M),
                     },
                 },
             },
@@ -111,9 +134,11 @@ def blueprint_schema() -> dict[str, Any]:
                     "additionalProperties": False,
                     "required": ["name", "role", "home"],
                     "properties": {
-                        "name": {"type": "string", "minLength": 1},
+                        "name": {"type": "string", "pattern": f"^{UAV_NAME_PATTERN}$",
+                                 "not": {"enum": list(RESERVED_UAV_NAMES)},
+                                 "description": "Part of the mission's Zenoh keys."},
                         "role": {"enum": ["brick", "adhesion"]},
-                        "home": _vec3("Take-off and landing point, metres."),
+                        "home": _vec3("Take-off and landing point, metres.", MAX_HOME_HEIGHT_M, -RESTING_TOL_M),
                     },
                 },
             },

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from masonry.blueprint import quote
 from masonry.errors import CommandRejected, HardwareError, InputError
 from masonry.ports import Telemetry
 
@@ -79,13 +80,23 @@ def load_uav_config(path: str | Path) -> dict[str, Any]:
     """
     import yaml
 
+    from masonry.blueprint_yaml import FileLimitError, read_text_limited, safe_load
+
     p = Path(path)
     try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
+        data = safe_load(read_text_limited(p))
+    except FileLimitError as exc:
+        raise InputError(f"{p}: cannot read the UAV configuration: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{p}: not a UAV configuration: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+                         f"offset {exc.start})") from None
     except OSError as exc:
         raise InputError(f"{p}: cannot read the UAV configuration: {exc.strerror or exc}") from exc
     except yaml.YAMLError as exc:
-        raise InputError(f"{p}: not valid YAML: {str(exc).splitlines()[0]}") from exc
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise InputError(f"{p}: not valid YAML{where}: {problem[:160]}") from None
     if data is None:
         return {}
     if not isinstance(data, dict):
@@ -101,7 +112,7 @@ def load_uav_config(path: str | Path) -> dict[str, Any]:
             continue
         if name not in known:
             raise InputError(
-                f"{p}: unknown setting {key!r} (known: {', '.join(sorted([*known, *EXTRA_CONFIG_KEYS]))})"
+                f"{p}: unknown setting {quote(key)} (known: {', '.join(sorted([*known, *EXTRA_CONFIG_KEYS]))})"
             )
         out[name] = _coerce(p, name, value, getattr(HardwareConfig, name, None))
     return out
@@ -112,18 +123,18 @@ def _coerce(p: Path, name: str, value: Any, default: Any) -> Any:
         return None
     if name == "origin_m":
         if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise InputError(f"{p}: origin_m must be a list of 3 numbers [x, y, z]")
+            raise InputError(f"{p}: origin_m must be a list of 3 numbers [x, y, z], got {quote(value)}")
         try:
             return tuple(float(v) for v in value)
         except (TypeError, ValueError) as exc:
             raise InputError(f"{p}: origin_m must hold numbers") from exc
     if name in ("fc_baud", "actuator_baud", "mocap_port"):
         if isinstance(value, bool) or not isinstance(value, int):
-            raise InputError(f"{p}: {name} must be an integer, got {value!r}")
+            raise InputError(f"{p}: {name} must be an integer, got {quote(value)}")
         return value
     if isinstance(default, float):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise InputError(f"{p}: {name} must be a number, got {value!r}")
+            raise InputError(f"{p}: {name} must be a number, got {quote(value)}")
         return float(value)
     return str(value)  # fc, actuators, camera (an index may be written as a number), paths, names
 

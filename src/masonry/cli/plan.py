@@ -153,7 +153,7 @@ def _common(
     brick_uavs: int,
     adhesion_uavs: int,
     clearance: float,
-    cruise_altitude: float,
+    cruise_altitude: float | None,
     name: str | None,
 ) -> dict[str, Any]:
     options: dict[str, Any] = {
@@ -165,8 +165,9 @@ def _common(
         "brick_uavs": brick_uavs,
         "adhesion_uavs": adhesion_uavs,
         "clearance_m": clearance,
-        "cruise_altitude_m": cruise_altitude,
     }
+    if cruise_altitude is not None:
+        options["cruise_altitude_m"] = cruise_altitude
     if brick_size is not None:
         options["brick_size_m"] = brick_size
     if name:
@@ -221,7 +222,8 @@ _PALLET = typer.Option(0, "--pallet-columns", help="Pickup pallet columns (0: au
 _BUAV = typer.Option(1, "--brick-uavs", help="Number of brick UAVs in the fleet.")
 _AUAV = typer.Option(1, "--adhesion-uavs", help="Number of adhesion UAVs in the fleet.")
 _CLEAR = typer.Option(1.5, "--clearance", help="Minimum clearance r_c between UAVs, metres.")
-_CRUISE = typer.Option(1.2, "--cruise-altitude", help="Cruise altitude, metres.")
+_CRUISE = typer.Option(None, "--cruise-altitude", help="Cruise altitude, metres (default 1.2, or 0.5 m over a "
+                       "taller wall).")
 _NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bricks>).")
 
 
@@ -239,7 +241,7 @@ def running_bond_command(
     brick_uavs: int = _BUAV,
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
-    cruise_altitude: float = _CRUISE,
+    cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
 ) -> None:
     """A straight running-bond wall: every other course shifted by half a brick."""
@@ -263,7 +265,7 @@ def towers_command(
     brick_uavs: int = _BUAV,
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
-    cruise_altitude: float = _CRUISE,
+    cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
 ) -> None:
     """Separate stacks of bricks in a row (the paper's case study is --towers 2 --height 3 --placed-courses 2)."""
@@ -287,7 +289,7 @@ def pyramid_command(
     brick_uavs: int = _BUAV,
     adhesion_uavs: int = _AUAV,
     clearance: float = _CLEAR,
-    cruise_altitude: float = _CRUISE,
+    cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
 ) -> None:
     """A stepped pyramid wall."""

@@ -18,6 +18,10 @@ from masonry.errors import PlanningError
 from masonry.planner.overlap import segment_distances
 from masonry.planner.spatial import cell_coordinates, neighbour_pairs
 
+#: Pairs at distance <= r_c + this conflict (the paper's dist <= r_c): a pair laid out exactly r_c apart must not be
+#: lost to rounding (1.5 m from 0.3 m bricks comes out as 1.5000000000000002 m).
+CONFLICT_TOLERANCE_M = 1e-9
+
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 
@@ -35,7 +39,7 @@ def conflict_pairs(
     Args:
         start, end: (n, 3) task locations: equal rows for a point (a brick's drop-off), else a segment
             (an adhesion line).
-        clearance_m: r_c; pairs at distance <= r_c conflict.
+        clearance_m: r_c; pairs at distance <= r_c (+ CONFLICT_TOLERANCE_M) conflict.
         edges: (u, v) index arrays of G^d restricted to these tasks: u can start only after v; every edge
             must go strictly downwards in z.
         chunk_pairs: bound on candidate pairs handled at once (memory).
@@ -55,14 +59,15 @@ def conflict_pairs(
     order = np.argsort(z_all, kind="stable")
     rank = np.empty(n, dtype=np.int64)
     rank[order] = np.arange(n)
-    windows = DescendantWindows(z_all[order], clearance_m, (rank[edges[0]], rank[edges[1]]))
+    r_c = clearance_m + CONFLICT_TOLERANCE_M
+    windows = DescendantWindows(z_all[order], r_c, (rank[edges[0]], rank[edges[1]]))
     start = start[order]
     end = end[order]
     mid = (start + end) / 2.0
     half_len = np.sqrt(((end - start) ** 2).sum(axis=1)) / 2.0
     longest = float(half_len.max())
     # A little slack so rounding never puts a pair at exactly r_c + 2 * longest one cell too far apart.
-    cell = (clearance_m + 2.0 * longest) * (1.0 + 1e-9) / reach + 1e-12
+    cell = (r_c + 2.0 * longest) * (1.0 + 1e-9) / reach + 1e-12
     cells = cell_coordinates(mid, cell)
     # Lay the tasks out cell by cell so the gathers below read nearby memory (a cell's tasks are contiguous).
     by_cell = np.lexsort((cells[:, 2], cells[:, 1], cells[:, 0]))
@@ -72,7 +77,7 @@ def conflict_pairs(
     rank_c = by_cell  # the rank (height order) of each cell-ordered task
     # One contiguous array per axis: gathering scalars is several times faster than gathering (n, 3) rows.
     mx, my, mz = (np.ascontiguousarray(mid_c[:, k]) for k in range(3))
-    r2 = clearance_m * clearance_m
+    r2 = r_c * r_c
     keys: list[IntArray] = []
     for a, b in neighbour_pairs(cells, chunk_pairs, reach, max_gap=float(reach)):
         d = mx[a] - mx[b]
@@ -85,11 +90,11 @@ def conflict_pairs(
         # lengths cannot be one; only the band between needs the exact segment distance.
         sure = d2 <= r2
         if longest > 0.0:
-            bound = clearance_m + half_c[a] + half_c[b] + 1e-9
+            bound = r_c + half_c[a] + half_c[b] + 1e-9
             band = np.nonzero(~sure & (d2 <= bound * bound))[0]
             if len(band):
                 ia, ib = a[band], b[band]
-                sure[band] = segment_distances(start_c[ia], end_c[ia], start_c[ib], end_c[ib]) <= clearance_m
+                sure[band] = segment_distances(start_c[ia], end_c[ia], start_c[ib], end_c[ib]) <= r_c
         ra, rb = rank_c[a[sure]], rank_c[b[sure]]
         hi, lo = np.maximum(ra, rb), np.minimum(ra, rb)
         keep = ~windows.reaches(hi, lo)
