@@ -20,7 +20,7 @@ def diagram(
         ..., "-o", "--output", help="Output file: .svg, .png (need graphviz's dot) or .dot."
     ),
 ) -> None:
-    """Render a UAV's nested state machine (states, triggers, [conditions]) with graphviz."""
+    r"""Render a UAV's nested state machine (states, triggers, \[conditions]) as SVG, PNG or DOT."""
     from masonry.fsm.diagram import FORMATS, dot_available, write_diagram
     from masonry.fsm.states import MACHINES
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check_all, help_text, plural
 from masonry.errors import InputError
 
 
@@ -21,13 +22,17 @@ def mission_control(
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission name (Zenoh key prefix)."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help="Mission seconds per wall second (match the "
-                                     "UAVs' --time-scale when they are simulated faster than real time)."),
-    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help="Wall seconds of silence before a UAV is lost."),
-    startup_timeout: float = typer.Option(60.0, "--startup-timeout",
-                                          help="Wall seconds to wait for the whole fleet before starting without the rest."),
-    max_time: float | None = typer.Option(None, "--max-time", help="Give up after this many mission seconds."),
-    tick: float = typer.Option(0.05, "--tick", help="Control period, seconds."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
+        "mission-control", "--time-scale", "Mission seconds per wall second (match the UAVs' --time-scale when "
+        "they are simulated faster than real time).")),
+    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help=help_text(
+        "mission-control", "--heartbeat-timeout", "Wall seconds of silence before a UAV is lost.")),
+    startup_timeout: float = typer.Option(60.0, "--startup-timeout", help=help_text(
+        "mission-control", "--startup-timeout",
+        "Wall seconds to wait for the whole fleet before starting without the rest.")),
+    max_time: float | None = typer.Option(None, "--max-time", help=help_text(
+        "mission-control", "--max-time", "Give up after this many mission seconds.")),
+    tick: float = typer.Option(0.05, "--tick", help=help_text("mission-control", "--tick", "Control period, seconds.")),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
@@ -49,8 +54,8 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    if tick <= 0 or time_scale <= 0:
-        raise InputError(f"--tick and --time-scale must be > 0, got {tick} and {time_scale}")
+    check_all("mission-control", {"--time-scale": time_scale, "--heartbeat-timeout": heartbeat_timeout,
+                                  "--startup-timeout": startup_timeout, "--max-time": max_time, "--tick": tick})
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
@@ -89,7 +94,7 @@ def mission_control(
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
-        typer.echo(f"mission control listening on {', '.join(listen)}: {sum(1 for t in the_plan.tasks if not t.done)} tasks, "
+        typer.echo(f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
                    f"fleet {', '.join(u.name for u in bp.fleet)}"
                    + (f", resumed at {offset:.1f} s" if state is not None else ""), err=True)
         t0 = time.monotonic()
@@ -112,6 +117,7 @@ def mission_control(
     result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
     if report is not None:
         report.write_text(result.to_json(indent=1) + "\n")
+        typer.echo(f"wrote {report}", err=True)
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)

@@ -9,19 +9,21 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check_all, help_text
 from masonry.errors import InputError
 
 
 @command("sim")
 def sim(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON)."),
-    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help="Number of brick UAVs (overrides the fleet)."),
-    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs",
-                                                help="Number of adhesion UAVs (overrides the fleet)."),
+    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help=help_text(
+        "sim", "--brick-uavs", "Number of brick UAVs (overrides the fleet).")),
+    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs", help=help_text(
+        "sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet).")),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
+    seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
-    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
+    fault: list[str] = typer.Option([], "--fault", metavar="KEY=VALUE", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
                                     "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R."),
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
@@ -29,7 +31,7 @@ def sim(
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
-    dt: float = typer.Option(0.05, "--dt", help="Simulation tick, seconds."),
+    dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
 
@@ -41,6 +43,7 @@ def sim(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    check_all("sim", {"--brick-uavs": brick_uavs, "--adhesion-uavs": adhesion_uavs, "--seed": seed, "--dt": dt})
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
@@ -56,14 +59,17 @@ def sim(
         finish()
     if report is not None:
         report.write_text(result.to_json(indent=1) + "\n")
+        typer.echo(f"wrote {report}", err=True)
     if gantt is not None:
         from masonry.viz.gantt import draw_gantt
 
         draw_gantt(result, gantt, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
+        typer.echo(f"wrote {gantt}", err=True)
     if plot3d is not None:
         from masonry.viz.plot3d import draw_plot3d
 
         draw_plot3d(bp, result, plot3d, title=f"{bp.name or blueprint.name}: wall and flown paths")
+        typer.echo(f"wrote {plot3d}", err=True)
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished

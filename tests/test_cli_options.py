@@ -1,0 +1,171 @@
+"""Commands and options (issue 13, section 4): option ranges, help text, --version, "wrote FILE", plurals,
+the progress line, the estimator wait of ``fly --fc`` and diagrams without a system graphviz."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from masonry.cli import app
+from masonry.cli.options import RANGES, Bound, bound, check, plural
+
+ROOT = Path(__file__).resolve().parents[1]
+CASE_STUDY = str(ROOT / "blueprints" / "paper_case_study.yaml")
+runner = CliRunner()
+
+
+def one_line_exit_2(res, *needles: str) -> None:
+    assert res.exit_code == 2, (res.exit_code, res.output)
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), res.stderr
+    assert "Traceback" not in res.output
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+
+
+# ------------------------------------------------------------------------------------------------ bounds
+
+@pytest.mark.parametrize(
+    ("argv", "needles"),
+    [
+        (["sim", CASE_STUDY, "--dt", "1e-6"], ["--dt 1e-06", "0.001 to 0.2 s"]),
+        (["sim", CASE_STUDY, "--dt", "nan"], ["--dt nan"]),
+        (["sim", CASE_STUDY, "--brick-uavs", "100000"], ["--brick-uavs 100000", "0 to 100"]),
+        (["sim", CASE_STUDY, "--seed", "-1"], ["--seed -1"]),
+        (["sim", CASE_STUDY, "--fault", "gusts=1e6"], ["gusts", "at most 15 m/s"]),
+        (["sim", CASE_STUDY, "--fault", "battery=5"], ["battery", "at most 0.1 per second"]),
+        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--mission", "tcp/127.0.0.1:1",
+          "--wait", "-1"], ["--wait -1", "> 0 to 3600 s"]),
+        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--dt", "1e-6"],
+         ["--dt 1e-06"]),
+        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--timeout", "1e9"],
+         ["--timeout 1e+09"]),
+        (["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--fc", "udpin:127.0.0.1:1",
+          "--estimate-wait", "0"], ["--estimate-wait 0"]),
+        (["mission-control", CASE_STUDY, "--heartbeat-timeout", "0"], ["--heartbeat-timeout 0"]),
+        (["mission-control", CASE_STUDY, "--startup-timeout", "-5"], ["--startup-timeout -5"]),
+        (["mission-control", CASE_STUDY, "--max-time", "0"], ["--max-time 0"]),
+        (["mission-control", CASE_STUDY, "--tick", "1e-6"], ["--tick 1e-06"]),
+        (["blueprint", "towers", "--height", "3", "--placed-courses", "5"],
+         ["--placed-courses 5", "more than the wall's 3 courses"]),
+        (["blueprint", "running-bond", "--courses", "4", "--placed-courses", "7"], ["--placed-courses 7"]),
+        (["blueprint", "running-bond", "--brick-uavs", "100000"], ["--brick-uavs 100000", "1 to 100"]),
+        (["blueprint", "running-bond", "--courses", "1000", "--bricks-per-course", "1000"], ["1000000 bricks"]),
+        (["blueprint", "pyramid", "--base", "0"], ["--base 0"]),
+        (["blueprint", "towers", "--brick-size", "0.3", "0", "0.1"], ["--brick-size 0.3 0 0.1"]),
+        (["blueprint", "towers", "--origin", "1e9", "0"], ["--origin 1e+09 0"]),
+        (["blueprint", "towers", "--spacing", "-1"], ["--spacing -1"]),
+        (["markers", "--bricks", "0-3", "-o", "m.pdf", "--marker-size", "5"], ["--marker-size 5"]),
+        (["markers", "--bricks", "0-100000000", "-o", "m.pdf"], ["more than 100000 bricks"]),
+        (["estimate", "--camera", "-3", "--intrinsics", "600,600,320,240"], ["--camera -3"]),
+        (["calibrate", "x.png", "--board", "chessboard:100000x6:0.02", "-o", "c.yaml"], ["at most 100x100"]),
+        (["sitl", "--seed", "-2"], ["--seed -2"]),
+        (["sitl", "--port", "70000"], ["--port 70000"]),
+    ],
+)
+def test_an_option_out_of_range_is_one_line_and_exit_2(argv, needles, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    one_line_exit_2(runner.invoke(app, argv), *needles)
+
+
+def test_every_range_is_well_formed_and_shown_in_help():
+    for key, b in RANGES.items():
+        assert key.split()[-1].startswith("--") and b.low < b.high, key
+    assert bound("sim", "--dt") != bound("fly", "--dt")  # a command's own range wins over the shared one
+    assert bound("towers", "--seed") == bound("sim", "--seed")
+    with pytest.raises(KeyError):
+        bound("sim", "--no-such-option")
+    res = runner.invoke(app, ["sim", "--help"], env={"COLUMNS": "200"})
+    assert "Range 0.001 to 0.2 s." in res.stdout
+    res = runner.invoke(app, ["fly", "--help"], env={"COLUMNS": "200"})
+    assert "--estimate-wait" in res.stdout and "Range > 0 to 600 s." in res.stdout
+
+
+def test_check_accepts_the_ends_of_a_range_and_names_what_is_wrong():
+    check("sim", "--dt", 0.001)
+    check("sim", "--dt", 0.2)
+    check("fly", "--wait", 3600.0)
+    check("fly", "--wait", None)
+    with pytest.raises(Exception, match=r"--wait 0: out of range, expected > 0 to 3600 s"):
+        check("fly", "--wait", 0.0)
+    assert Bound(0, 1, "m").text() == "0 to 1 m" and Bound(0.0, 2.5, low_open=True).text() == "> 0 to 2.5"
+
+
+def test_values_inside_the_ranges_still_work(tmp_path):
+    out = tmp_path / "t.yaml"
+    res = runner.invoke(app, ["blueprint", "towers", "--height", "3", "--placed-courses", "3", "--brick-size",
+                              "0.3", "0.15", "0.1", "--origin", "1", "2", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "--brick-size 0.3 0.15 0.1" in out.read_text()
+
+
+# -------------------------------------------------------------------------------------------------- help
+
+def test_help_shows_flags_without_a_value_and_repeatable_options_by_their_form():
+    res = runner.invoke(app, ["sim", "--help"], env={"COLUMNS": "200"})
+    assert res.exit_code == 0
+    resume = next(line for line in res.stdout.splitlines() if "--resume" in line)
+    assert "<bool>" not in resume and "Continue the mission" in resume
+    fault = next(line for line in res.stdout.splitlines() if "--fault" in line)
+    assert "KEY=VALUE" in fault and "list[" not in fault
+    assert "<bool>" not in res.stdout and "list[str]" not in res.stdout
+    res = runner.invoke(app, ["mission-control", "--help"], env={"COLUMNS": "200"})
+    assert "list[str]" not in res.stdout and "<bool>" not in res.stdout
+
+
+def test_brick_size_help_shows_the_form_it_accepts():
+    res = runner.invoke(app, ["blueprint", "towers", "--help"], env={"COLUMNS": "200"})
+    line = next(line for line in res.stdout.splitlines() if "--brick-size" in line)
+    assert "float,float,float" not in line and "L W H" in line and "separated by spaces" in line
+
+
+def test_fsm_diagram_help_keeps_conditions_in_brackets():
+    res = runner.invoke(app, ["fsm", "diagram", "--help"], env={"COLUMNS": "200"})
+    assert "[conditions]" in res.stdout
+
+
+def test_version():
+    from importlib.metadata import version
+
+    res = runner.invoke(app, ["--version"])
+    assert res.exit_code == 0 and res.stdout.strip() == f"masonry {version('masonry')}"
+
+
+def test_plural():
+    assert plural(1, "task") == "1 task" and plural(0, "task") == "0 tasks" and plural(2, "pass", "passes") == \
+        "2 passes"
+
+
+def test_plan_summary_says_1_task_and_lists_the_longest_chain_in_execution_order(tmp_path):
+    bp = tmp_path / "t.yaml"
+    assert runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "2", "--placed-courses", "1",
+                               "-o", str(bp)]).exit_code == 0
+    res = runner.invoke(app, ["plan", str(bp)])
+    assert res.exit_code == 0, res.output
+    assert "dependencies    2 edges in G^d" in res.stdout
+    # A0 (the glue on brick 0) must be done before B1 goes on top of it
+    assert "longest chain   2 tasks: A0 -> B1" in res.stdout
+    one = tmp_path / "one.yaml"
+    assert runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "1", "-o", str(one)]).exit_code == 0
+    res = runner.invoke(app, ["plan", str(one)])
+    assert "longest chain   1 task: B0" in res.stdout and "0 pairs in G^c" in res.stdout
+
+
+def test_every_command_that_writes_a_file_says_so(tmp_path):
+    report, gantt, plot = tmp_path / "r.json", tmp_path / "g.svg", tmp_path / "p.png"
+    res = runner.invoke(app, ["sim", CASE_STUDY, "--report", str(report), "--gantt", str(gantt), "--plot3d",
+                              str(plot), "--format", "json"])
+    assert res.exit_code == 0, res.output
+    for p in (report, gantt, plot):
+        assert f"wrote {p}" in res.stderr and p.exists()
+    assert "wrote" not in res.stdout  # stdout stays the JSON report
+    out, graph = tmp_path / "plan.json", tmp_path / "plan.dot"
+    res = runner.invoke(app, ["plan", CASE_STUDY, "--format", "json", "-o", str(out), "--graph", str(graph)])
+    assert res.exit_code == 0, res.output
+    assert f"wrote {out}" in res.stderr and f"wrote {graph}" in res.stderr
+    res = runner.invoke(app, ["markers", "--bricks", "0", "-o", str(tmp_path / "m.png"), "--dpi", "60"])
+    assert res.exit_code == 0, res.output
+    assert "1 brick, markers 0..1" in res.stdout and re.search(r"wrote .*m\.png", res.stdout)
