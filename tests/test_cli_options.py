@@ -169,3 +169,62 @@ def test_every_command_that_writes_a_file_says_so(tmp_path):
     res = runner.invoke(app, ["markers", "--bricks", "0", "-o", str(tmp_path / "m.png"), "--dpi", "60"])
     assert res.exit_code == 0, res.output
     assert "1 brick, markers 0..1" in res.stdout and re.search(r"wrote .*m\.png", res.stdout)
+
+
+# ---------------------------------------------------------------------------------------------- progress
+
+class FakeClock:
+    def __init__(self) -> None:
+        self.t = 1000.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def test_progress_lines_come_every_few_seconds_with_an_eta():
+    import io
+
+    from masonry.cli.progress import ProgressLines
+
+    clock, out = FakeClock(), io.StringIO()
+    lines = ProgressLines(out, interval_s=5.0, clock=clock)
+    lines(0, 10, 0.0)
+    clock.t += 4.9
+    lines(0, 10, 30.0)
+    assert out.getvalue() == ""  # not yet 5 s
+    clock.t += 0.1
+    lines(0, 10, 31.0)
+    assert out.getvalue() == "sim: 0/10 tasks done, simulated 31 s, 5 s elapsed, ETA unknown\n"
+    clock.t += 1.0
+    lines(2, 10, 60.0)  # 1 s after the last line: nothing
+    clock.t += 119.0  # 125 s in, 2 of 10 done: 62.5 s a task, 8 to go -> 500 s
+    lines(2, 10, 400.0)
+    assert out.getvalue().splitlines()[-1] == \
+        "sim: 2/10 tasks done, simulated 400 s, 2 min 05 s elapsed, ETA 8 min 20 s"
+
+
+def test_progress_display_picks_bar_lines_or_nothing():
+    from masonry.cli.progress import ProgressLines, progress_display
+
+    assert isinstance(progress_display(None, stderr_tty=False)[0], ProgressLines)
+    assert isinstance(progress_display(True, stderr_tty=True)[0], ProgressLines)
+    assert progress_display(False, stderr_tty=False)[0] is None
+    bar, finish = progress_display(None, stderr_tty=True)
+    assert bar is not None and not isinstance(bar, ProgressLines)
+    finish()
+
+
+def test_sim_without_a_terminal_prints_progress_lines_on_stderr_never_stdout(monkeypatch):
+    import json
+
+    import masonry.cli.progress as progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # every call prints: no need to wait for seconds
+    res = runner.invoke(app, ["sim", CASE_STUDY, "--format", "json"])
+    assert res.exit_code == 0, res.output
+    json.loads(res.stdout)  # stdout is the report alone
+    lines = [line for line in res.stderr.splitlines() if line.startswith("sim: ")]
+    assert len(lines) > 4 and lines[-1].startswith("sim: 4/4 tasks done") and "ETA 0 s" in lines[-1]
+    # between completions too (at least once per simulated second): more lines than the 4 completions
+    res = runner.invoke(app, ["sim", CASE_STUDY, "--no-progress"])
+    assert res.exit_code == 0 and "sim: " not in res.stderr

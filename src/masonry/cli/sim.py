@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import Any
 
 import typer
 
@@ -32,6 +30,9 @@ def sim(
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
+    progress: bool | None = typer.Option(None, "--progress/--no-progress", help="Progress on stderr: a line "
+                                         "every few seconds (--progress), or nothing (--no-progress). Default: a "
+                                         "bar with an ETA on a terminal, the lines when stderr is not one."),
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
 
@@ -50,7 +51,9 @@ def sim(
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
 
-    progress_cb, finish = _progress_bar(enabled=sys.stderr.isatty())
+    from masonry.cli.progress import progress_display
+
+    progress_cb, finish = progress_display(progress)
     try:
         result = simulate(bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed,
                           camera=camera, faults=faults, journal_path=journal, resume=resume, dt_s=dt,
@@ -74,26 +77,3 @@ def sim(
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
 
-
-def _progress_bar(enabled: bool) -> tuple[Any, Any]:
-    """A rich progress bar on stderr (a terminal only): tasks done out of total, with simulated time."""
-    if not enabled:
-        return None, lambda: None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    bar = Progress(TextColumn("mission"), BarColumn(), MofNCompleteColumn(), TextColumn("sim {task.fields[t]:.0f} s"),
-                   TimeElapsedColumn(), console=Console(stderr=True), transient=True)
-    state: dict[str, Any] = {}
-
-    def update(done: int, total: int, now_s: float) -> None:
-        if "id" not in state:
-            bar.start()
-            state["id"] = bar.add_task("mission", total=total, t=now_s)
-        bar.update(state["id"], completed=done, t=now_s)
-
-    def finish() -> None:
-        if "id" in state:
-            bar.stop()
-
-    return update, finish
