@@ -228,3 +228,46 @@ def test_sim_without_a_terminal_prints_progress_lines_on_stderr_never_stdout(mon
     # between completions too (at least once per simulated second): more lines than the 4 completions
     res = runner.invoke(app, ["sim", CASE_STUDY, "--no-progress"])
     assert res.exit_code == 0 and "sim: " not in res.stderr
+
+
+# ------------------------------------------------------------------------------------------ fsm diagram
+
+@pytest.mark.parametrize("kind", ["brick", "adhesion"])
+def test_fsm_diagram_renders_svg_and_png_without_graphviz(kind, tmp_path, monkeypatch):
+    import xml.etree.ElementTree as ET
+
+    from masonry.fsm import diagram
+    from masonry.fsm.states import MACHINES
+
+    monkeypatch.setattr(diagram.shutil, "which", lambda name: None)  # a machine without Debian's graphviz
+    monkeypatch.setenv("PATH", str(tmp_path))
+    svg, png = tmp_path / f"{kind}.svg", tmp_path / f"{kind}.png"
+    for out in (svg, png):
+        res = runner.invoke(app, ["fsm", "diagram", kind, "-o", str(out)])
+        assert res.exit_code == 0, res.output
+        assert res.stdout.strip() == f"wrote {out}"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    root = ET.parse(svg).getroot()  # well-formed XML
+    assert root.tag.endswith("svg")
+    texts = {"".join(t.itertext()).strip() for t in root.iter() if t.tag.endswith("text")}
+    states, transitions = MACHINES[kind]
+    for state in states:  # every state (and every nested state's children) is named in the drawing
+        assert state["name"] in texts, state["name"]
+        for child in state.get("children", []):
+            assert child["name"] in texts
+    for t in transitions:
+        assert any(t["trigger"] in text for text in texts), t["trigger"]
+    assert any("[has_next_task]" in text for text in texts)  # conditions shown, as graphviz shows them
+
+
+def test_write_diagram_engines(tmp_path, monkeypatch):
+    from masonry.fsm import diagram
+
+    assert diagram.write_diagram("brick", tmp_path / "b.dot") == "text"
+    assert diagram.write_diagram("brick", tmp_path / "b.svg", engine="builtin") == "builtin"
+    monkeypatch.setattr(diagram.shutil, "which", lambda name: None)
+    assert diagram.write_diagram("adhesion", tmp_path / "a.png") == "builtin"
+    with pytest.raises(FileNotFoundError):
+        diagram.write_diagram("brick", tmp_path / "b.png", engine="dot")
+    with pytest.raises(ValueError, match="unknown diagram engine"):
+        diagram.write_diagram("brick", tmp_path / "b.png", engine="neato")
