@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
+from typing_extensions import Self
 
 from masonry.cli import app
 from masonry.cli.options import RANGES, Bound, bound, check, plural
@@ -217,7 +218,7 @@ def test_progress_display_picks_bar_lines_or_nothing():
 def test_sim_without_a_terminal_prints_progress_lines_on_stderr_never_stdout(monkeypatch):
     import json
 
-    import masonry.cli.progress as progress
+    from masonry.cli import progress
 
     monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)  # every call prints: no need to wait for seconds
     res = runner.invoke(app, ["sim", CASE_STUDY, "--format", "json"])
@@ -271,3 +272,135 @@ def test_write_diagram_engines(tmp_path, monkeypatch):
         diagram.write_diagram("brick", tmp_path / "b.png", engine="dot")
     with pytest.raises(ValueError, match="unknown diagram engine"):
         diagram.write_diagram("brick", tmp_path / "b.png", engine="neato")
+
+
+# ------------------------------------------------------------------------- fly --fc: the estimator wait
+
+class ScriptedAutopilot:
+    """A MAVLink peer on loopback that plays an ArduCopter's boot: heartbeats only ("booting"), then
+    LOCAL_POSITION_NED with EKF flags that are not yet usable ("converging"), then a usable EKF ("ready")."""
+
+    BAD_FLAGS = 1 | 128 | 1024  # attitude only, constant-position mode, not initialised
+    GOOD_FLAGS = 1 | 2 | 4 | 8 | 32
+
+    def __init__(self, port: int) -> None:
+        import threading
+
+        from masonry.adapters.mavlink import mavutil_module
+
+        self.phase = "booting"
+        self.peer = mavutil_module().mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1,
+                                                        source_component=1)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._t0 = 0.0
+
+    def __enter__(self) -> Self:
+        import time
+
+        self._t0 = time.monotonic()
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.peer.close()
+
+    def _run(self) -> None:
+        import time
+
+        mav = self.peer.mav
+        while not self._stop.is_set():
+            boot_ms = int((time.monotonic() - self._t0) * 1000)
+            mav.heartbeat_send(2, 3, 0, 0, 3)  # quadrotor, ArduPilot, disarmed, standby
+            mav.sys_status_send(0, 0, 0, 500, 12600, -1, 80, 0, 0, 0, 0, 0, 0)
+            mav.attitude_send(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # "ArduPilot Ready": attitude comes first
+            if self.phase != "booting":
+                mav.local_position_ned_send(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                flags = self.GOOD_FLAGS if self.phase == "ready" else self.BAD_FLAGS
+                mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
+            while self.peer.recv_msg() is not None:
+                pass
+            self._stop.wait(0.05)
+
+
+def _controller(port: int):
+    from masonry.adapters.mavlink import MavlinkFlightController
+
+    return MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.5, command_timeout_s=0.1)
+
+
+def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
+    import threading
+
+    from masonry.adapters.sitl import free_udp_port
+
+    port = free_udp_port()
+    lines: list[str] = []
+    with ScriptedAutopilot(port) as autopilot:
+        fc = _controller(port)
+        try:
+            fc.connect()
+            def play() -> None:  # the boot, in half-second steps (bounded waits, not sleeps to time anything)
+                pause = threading.Event()
+                pause.wait(0.5)
+                autopilot.phase = "converging"
+                pause.wait(0.5)
+                autopilot.phase = "ready"
+
+            player = threading.Thread(target=play)
+            player.start()
+            fc.wait_for_estimate(5.0, progress=lines.append, report_every_s=0.2)
+            player.join()
+        finally:
+            fc.close()
+    assert lines, "no countdown"
+    assert lines[0].startswith("waiting for the position estimate: no local position yet (LOCAL_POSITION_NED")
+    converging = [line for line in lines if "local position streaming" in line]
+    assert converging, lines
+    assert ("EKF flags 0x0481: missing horizontal velocity, vertical velocity, relative horizontal position, "
+            "vertical position; constant-position mode, not initialised / GPS glitch") in converging[0]
+    left = [float(re.search(r"\((\d+) s left\)", line).group(1)) for line in lines]
+    assert left == sorted(left, reverse=True) and left[0] in (4.0, 5.0)  # a countdown
+    assert len(lines) >= 4  # repeated every 0.2 s while nothing changes, not only on changes
+
+
+@pytest.mark.parametrize(("phase", "missing"), [
+    ("booting", "no local position yet (LOCAL_POSITION_NED not streaming)"),
+    ("converging", "local position streaming, EKF flags 0x0481: missing horizontal velocity"),
+])
+def test_the_estimate_wait_error_names_what_was_missing(phase, missing):
+    from masonry.adapters.sitl import free_udp_port
+    from masonry.errors import CommandRejected
+
+    port = free_udp_port()
+    with ScriptedAutopilot(port) as autopilot:
+        autopilot.phase = phase
+        fc = _controller(port)
+        try:
+            fc.connect()
+            with pytest.raises(CommandRejected) as info:
+                fc.wait_for_estimate(0.6)
+        finally:
+            fc.close()
+    reason = info.value.reason
+    assert reason.startswith(f"no usable position estimate from the autopilot after 0.6 s: {missing}"), reason
+    assert "--estimate-wait" in reason and "motion capture" not in reason  # no motion capture configured
+
+
+def test_fly_fc_waits_estimate_wait_seconds_with_a_visible_countdown(tmp_path):
+    from masonry.adapters.sitl import free_udp_port
+    from masonry.adapters.wiring import HardwareConfig
+
+    assert HardwareConfig().estimate_wait_s == 90.0  # enough for ArduPilot SITL (~40 s) and a cold Pixhawk
+    port = free_udp_port()
+    with ScriptedAutopilot(port):
+        res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--fc",
+                                  f"udpin:127.0.0.1:{port}", "--estimate-wait", "0.5"])
+    assert res.exit_code == 1, res.output
+    assert "waiting for the position estimate: no local position yet" in res.stderr
+    assert "s left)" in res.stderr
+    assert ("[FAIL] position estimate: no usable position estimate from the autopilot after 0.5 s: no local "
+            "position yet") in res.stderr
+    assert "motion capture" not in res.stderr.splitlines()[-1]

@@ -45,7 +45,7 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
 
         opened = open_adapters(hardware, blueprint=blueprint, spec=spec, seed=seed, faults=faults)
         try:
-            report = preflight(opened, hardware, role=spec.role)
+            report = preflight(opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True))
             for line in report.lines():
                 typer.echo(line, err=True)
             report.raise_if_failed()
