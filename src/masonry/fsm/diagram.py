@@ -88,6 +88,23 @@ class _Box:
     y: float
     w: float
     h: float
+    row: int = -1  # the row of the task flow (-1: the failsafe column)
+
+    @property
+    def top(self) -> float:
+        return self.y + self.h / 2
+
+    @property
+    def bottom(self) -> float:
+        return self.y - self.h / 2
+
+    @property
+    def left(self) -> float:
+        return self.x - self.w / 2
+
+    @property
+    def right(self) -> float:
+        return self.x + self.w / 2
 
     def edge_point(self, tx: float, ty: float) -> tuple[float, float]:
         """Where the line from the centre towards (tx, ty) leaves the box."""
@@ -100,40 +117,43 @@ class _Box:
         return self.x + dx * s, self.y + dy * s
 
 
+_LEAF_W, _LEAF_H, _GAP_X, _ROW_H = 1.25, 0.5, 1.0, 1.9
+
+
 def layout(kind: str) -> tuple[dict[str, _Box], dict[str, _Box]]:
     """Boxes of the leaf states (full names, ``pickup_goto``) and of the nested states, in drawing units."""
     states, _ = MACHINES[kind]
-    leaf_w, leaf_h, gap_x, row_h = 1.5, 0.55, 0.35, 1.35
     leaves: dict[str, _Box] = {}
     parents: dict[str, _Box] = {}
-    row = 0
     main = [s for s in states if s["name"] not in _SIDE_STATES]
     side = [s for s in states if s["name"] in _SIDE_STATES]
-    for state in main:
-        y = -row * row_h
+    for row, state in enumerate(main):
+        y = -row * _ROW_H
         children = state.get("children") or []
         if children:
             n = len(children)
-            width = n * leaf_w + (n - 1) * gap_x
-            x0 = -width / 2 + leaf_w / 2
+            width = n * _LEAF_W + (n - 1) * _GAP_X
+            x0 = -width / 2 + _LEAF_W / 2
             for i, child in enumerate(children):
-                leaves[f"{state['name']}_{child['name']}"] = _Box(x0 + i * (leaf_w + gap_x), y, leaf_w, leaf_h)
-            parents[state["name"]] = _Box(0.0, y + 0.12, width + 0.5, leaf_h + 0.75)
+                leaves[f"{state['name']}_{child['name']}"] = _Box(x0 + i * (_LEAF_W + _GAP_X), y, _LEAF_W,
+                                                                  _LEAF_H, row)
+            parents[state["name"]] = _Box(0.0, y + 0.1, width + 0.5, _LEAF_H + 0.7, row)
         else:
-            leaves[state["name"]] = _Box(0.0, y, leaf_w, leaf_h)
-        row += 1
-    widest = max([b.w for b in parents.values()] + [leaf_w])
-    side_x = widest / 2 + 2.2
+            leaves[state["name"]] = _Box(0.0, y, _LEAF_W, _LEAF_H, row)
+    main_right = max(b.right for b in [*leaves.values(), *parents.values()])
+    side_x = main_right + 3.4
+    first = len(main) - len(side)
     for i, state in enumerate(side):
-        leaves[state["name"]] = _Box(side_x, -(row - len(side) + i) * row_h, leaf_w, leaf_h)
+        leaves[state["name"]] = _Box(side_x, -(first + i) * _ROW_H, _LEAF_W, _LEAF_H)
     return leaves, parents
 
 
-def _edges(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[tuple[str, str, str]]:
-    """(source, dest, label) per drawn arrow; a nested state as source is its box, as dest its initial child."""
+def _edges(kind: str) -> list[tuple[str, str, str, str]]:
+    """(source, dest, trigger, label) per drawn arrow; a nested state as source is its box, as dest its initial
+    child; a transition from several sources is one arrow from each."""
     states, transitions = MACHINES[kind]
     initial = {s["name"]: f"{s['name']}_{s['initial']}" for s in states if s.get("children")}
-    out: list[tuple[str, str, str]] = []
+    out: list[tuple[str, str, str, str]] = []
     for t in transitions:
         sources = t["source"] if isinstance(t["source"], list) else [t["source"]]
         conditions = t.get("conditions")
@@ -143,9 +163,116 @@ def _edges(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list
             label += " [" + " & ".join(conds) + "]"
         for src in sources:
             dest = src if t["dest"] == "=" else t["dest"]
-            dest = initial.get(dest, dest)
-            out.append((src, dest, label))
+            out.append((src, initial.get(dest, dest), t["trigger"], label))
     return out
+
+
+def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[dict[str, Any]]:
+    """Each arrow as a polyline (or an arc) with its label's place: the task flow's arrows run between rows, a
+    long one along a lane on the left; the arrows into the failsafe column run along one bus per trigger."""
+    boxes = {**leaves, **parents}
+    rows: dict[int, list[_Box]] = {}
+    for b in boxes.values():
+        if b.row >= 0:
+            rows.setdefault(b.row, []).append(b)
+    top = {r: max(b.top for b in bs) + (0.25 if any(b in parents.values() for b in bs) else 0.0)
+           for r, bs in rows.items()}
+    bottom = {r: min(b.bottom for b in bs) for r, bs in rows.items()}
+
+    def corridor_above(r: int) -> float:
+        return top[r] + (0.45 if r == 0 else (bottom[r - 1] - top[r]) / 2)
+
+    main_left = min(b.left for b in boxes.values() if b.row >= 0)
+
+    def leftmost(box: _Box) -> bool:  # nothing of its row to its left: a lane on the left reaches it directly
+        return all(o.left >= box.left - 1e-9 for o in leaves.values() if o.row == box.row)
+
+    main_right = max(b.right for b in boxes.values() if b.row >= 0)
+    edges = _edges(kind)
+    side_triggers = list(dict.fromkeys(trig for src, dest, trig, _ in edges
+                                       if dest in _SIDE_STATES and src not in _SIDE_STATES))
+    bus_x = {trig: main_right + 0.7 + 0.45 * i for i, trig in enumerate(side_triggers)}
+    into_side: dict[str, list[str]] = {}
+    for src, dest, trig, _ in edges:
+        if dest in _SIDE_STATES and src not in _SIDE_STATES and trig not in into_side.setdefault(dest, []):
+            into_side[dest].append(trig)
+    routes: list[dict[str, Any]] = []
+    seen: dict[tuple[str, str], int] = {}
+    labelled: set[tuple[str, str]] = set()
+    lane = 0
+    for src, dest, trig, label in edges:
+        a, b = boxes[src], boxes[dest]
+        n = seen.get((src, dest), 0)
+        seen[(src, dest)] = n + 1
+        route: dict[str, Any] = {"label": label, "side": src in _SIDE_STATES}
+        if src == dest:  # a self-transition: a loop over the box's top edge
+            route.update(arc=((a.x - 0.3, a.top), (a.x + 0.3, a.top), -1.8), at=(a.x, a.top + 0.4))
+        elif dest in _SIDE_STATES and src not in _SIDE_STATES:
+            k = side_triggers.index(trig)
+            y0 = a.y + 0.08 * (k - (len(side_triggers) - 1) / 2)
+            into = into_side[dest]  # the triggers arriving at this state, one height of its edge each
+            off = 0.16 * (into.index(trig) - (len(into) - 1) / 2)
+            y1 = b.y + off
+            bx = bus_x[trig]
+            route["path"] = [(a.right, y0), (bx, y0), (bx, y1), (b.left, y1)]
+            route["bus"] = True
+            if (trig, dest) in labelled:
+                route["label"] = ""
+            else:
+                labelled.add((trig, dest))
+                route["at"] = ((bx + b.left) / 2, y1 + (0.12 if off >= 0 else -0.12))
+        elif a.row < 0 or b.row < 0:  # inside the failsafe column, or out of it (recover -> home)
+            p0, p1 = a.edge_point(b.x, b.y), b.edge_point(a.x, a.y)
+            rad = 0.3 * (1 if n % 2 == 0 else -1) * (1 + n // 2)
+            route.update(arc=(p0, p1, rad), at=_arc_label(p0, p1, rad))
+        elif a.row == b.row:
+            if 0 < b.x - a.x <= _LEAF_W + _GAP_X + 1e-9:  # the next state of the row: straight across
+                route["path"] = [(a.right, a.y), (b.left, b.y)]
+                route["at"] = ((a.right + b.left) / 2, a.y + 0.14)
+            else:  # back along the row: an arc under it, bottom to bottom
+                p0, p1 = (a.x, a.bottom), (b.x, b.bottom)
+                span = abs(p1[0] - p0[0])
+                rad = (0.5 + 0.1 * n) / span * 2 * (-1 if p1[0] < p0[0] else 1)
+                route.update(arc=(p0, p1, rad), at=_arc_label(p0, p1, rad))
+        elif b.row == a.row + 1:  # down to the next row: a straight arrow
+            p0, p1 = (a.x, a.bottom), (b.x, b.top)
+            if n:
+                route.update(arc=(p0, p1, 0.25 * n), at=_arc_label(p0, p1, 0.25 * n))
+            else:
+                route["path"] = [p0, p1]
+                route["at"] = ((p0[0] + p1[0]) / 2 + 0.1, (p0[1] + p1[1]) / 2)
+                route["ha"] = "left"
+        else:  # up, or down past other rows: along a lane left of the flow, between the rows
+            lx = main_left - 0.5 - 0.4 * lane
+            lane += 1
+            wiggle = 0.08 * ((lane % 3) - 1)
+            if leftmost(a):  # straight out to the lane, level with the state
+                head = [(a.left, a.y + wiggle), (lx, a.y + wiggle)]
+                route["at"] = ((a.left + lx) / 2, a.y + wiggle + 0.13)
+            else:  # out of the row first, into the gap between it and the next row
+                if b.row < a.row:
+                    y0 = corridor_above(a.row) + wiggle
+                    start = (a.x, a.top)
+                else:
+                    y0 = (corridor_above(a.row + 1) if a.row + 1 in top else a.bottom - 0.5) + wiggle
+                    start = (a.x, a.bottom)
+                head = [start, (a.x, y0), (lx, y0)]
+                route["at"] = ((a.x + lx) / 2, y0 + 0.13)
+            if leftmost(b):
+                tail = [(lx, b.y - wiggle), (b.left, b.y - wiggle)]
+            else:
+                y1 = corridor_above(b.row) + wiggle
+                tail = [(lx, y1), (b.x, y1), (b.x, b.top)]
+            route["path"] = head + tail
+        routes.append(route)
+    return routes
+
+
+def _arc_label(p0: tuple[float, float], p1: tuple[float, float], rad: float) -> tuple[float, float]:
+    """The middle of matplotlib's arc3 curve from p0 to p1 (half-way to its control point)."""
+    mx, my = (p0[0] + p1[0]) / 2, (p0[1] + p1[1]) / 2
+    dx, dy = p1[0] - p0[0], p1[1] - p0[1]
+    return mx + rad * dy / 2, my - rad * dx / 2
 
 
 def draw_builtin(kind: str, path: Path) -> None:
@@ -154,13 +281,16 @@ def draw_builtin(kind: str, path: Path) -> None:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
+    from matplotlib.path import Path as MplPath
 
     leaves, parents = layout(kind)
     boxes = {**leaves, **parents}
-    xs = [b.x - b.w / 2 for b in boxes.values()] + [b.x + b.w / 2 for b in boxes.values()]
-    ys = [b.y - b.h / 2 for b in boxes.values()] + [b.y + b.h / 2 for b in boxes.values()]
-    x_min, x_max, y_min, y_max = min(xs) - 1.6, max(xs) + 1.6, min(ys) - 0.6, max(ys) + 0.9
-    scale = 0.85  # inches per drawing unit
+    routes = _routes(kind, leaves, parents)
+    xs = [b.left for b in boxes.values()] + [b.right for b in boxes.values()]
+    xs += [x for r in routes for x, _ in r.get("path", ())]
+    ys = [b.bottom for b in boxes.values()] + [b.top for b in boxes.values()]
+    x_min, x_max, y_min, y_max = min(xs) - 0.9, max(xs) + 0.6, min(ys) - 0.5, max(ys) + 1.4
+    scale = 0.8  # inches per drawing unit
     with matplotlib.rc_context({"svg.fonttype": "none", "font.size": 7}):
         fig = Figure(figsize=((x_max - x_min) * scale, (y_max - y_min) * scale))
         FigureCanvasAgg(fig)
@@ -168,37 +298,31 @@ def draw_builtin(kind: str, path: Path) -> None:
         ax.set_xlim(x_min, x_max)
         ax.set_ylim(y_min, y_max)
         ax.set_axis_off()
-        ax.text((x_min + x_max) / 2, y_max - 0.35, f"masonry {kind} UAV", ha="center", va="center", fontsize=11,
+        ax.text((x_min + x_max) / 2, y_max - 0.4, f"masonry {kind} UAV", ha="center", va="center", fontsize=11,
                 fontweight="bold")
         for name, b in parents.items():
-            ax.add_patch(FancyBboxPatch((b.x - b.w / 2, b.y - b.h / 2), b.w, b.h, boxstyle="round,pad=0.02",
-                                        fc="#f2f2f2", ec="#7f7f7f", lw=0.8, zorder=0))
-            ax.text(b.x - b.w / 2 + 0.12, b.y + b.h / 2 - 0.16, name, ha="left", va="center", fontsize=8,
-                    fontweight="bold", zorder=1)
+            ax.add_patch(FancyBboxPatch((b.left, b.bottom), b.w, b.h, boxstyle="round,pad=0.02", fc="#f2f2f2",
+                                        ec="#7f7f7f", lw=0.8, zorder=0))
+            ax.text(b.left + 0.12, b.top - 0.17, name, ha="left", va="center", fontsize=8, fontweight="bold",
+                    zorder=1)
         for name, b in leaves.items():
-            side = name in _SIDE_STATES
-            ax.add_patch(FancyBboxPatch((b.x - b.w / 2, b.y - b.h / 2), b.w, b.h, boxstyle="round,pad=0.02",
-                                        fc="#fde9d9" if side else ("#dbe5f1" if name == "idle" else "white"),
+            fill = "#fde9d9" if name in _SIDE_STATES else ("#dbe5f1" if name == "idle" else "white")
+            ax.add_patch(FancyBboxPatch((b.left, b.bottom), b.w, b.h, boxstyle="round,pad=0.02", fc=fill,
                                         ec="#404040", lw=1.0, zorder=2))
             ax.text(b.x, b.y, name.rsplit("_", 1)[-1], ha="center", va="center", fontsize=8, zorder=3)
-        seen: dict[tuple[str, str], int] = {}
-        for src, dest, label in _edges(kind, leaves, parents):
-            a, b = boxes[src], boxes[dest]
-            n = seen.get((src, dest), 0)
-            seen[(src, dest)] = n + 1
-            if src == dest:  # a self-transition: a loop over the box's top edge
-                p0, p1 = (a.x - 0.3, a.y + a.h / 2), (a.x + 0.3, a.y + a.h / 2)
-                rad, lx, ly = -1.6, a.x, a.y + a.h / 2 + 0.42
+        for r in routes:
+            colour = "#c0504d" if r.get("bus") or r["side"] else "#1f497d"
+            style = {"arrowstyle": "-|>", "mutation_scale": 8, "lw": 0.7, "color": colour, "zorder": 1,
+                     "shrinkA": 0, "shrinkB": 1}
+            if "arc" in r:
+                p0, p1, rad = r["arc"]
+                ax.add_patch(FancyArrowPatch(p0, p1, connectionstyle=f"arc3,rad={rad}", **style))
             else:
-                p0, p1 = a.edge_point(b.x, b.y), b.edge_point(a.x, a.y)
-                # the same pair twice (e.g. "finish [has_next_task]" and "finish") bends apart
-                rad = 0.18 + 0.22 * n
-                mx, my = (p0[0] + p1[0]) / 2, (p0[1] + p1[1]) / 2
-                dx, dy = p1[0] - p0[0], p1[1] - p0[1]
-                lx, ly = mx + rad * dy / 2, my - rad * dx / 2
-            ax.add_patch(FancyArrowPatch(p0, p1, connectionstyle=f"arc3,rad={rad}", arrowstyle="-|>",
-                                         mutation_scale=8, lw=0.7, color="#1f497d" if src not in _SIDE_STATES
-                                         else "#c0504d", zorder=1, shrinkA=1, shrinkB=1))
-            ax.text(lx, ly, label, ha="center", va="center", fontsize=6, color="#1f1f1f", zorder=4,
-                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8})
+                pts = r["path"]
+                codes = [MplPath.MOVETO] + [MplPath.LINETO] * (len(pts) - 1)
+                ax.add_patch(FancyArrowPatch(path=MplPath(pts, codes), **style))
+            if r["label"] and "at" in r:
+                x, y = r["at"]
+                ax.text(x, y, r["label"], ha=r.get("ha", "center"), va="center", fontsize=6, color="#1f1f1f",
+                        zorder=4, bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85})
         fig.savefig(path, format=path.suffix.lower().lstrip("."), dpi=150)
