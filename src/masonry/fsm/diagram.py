@@ -162,7 +162,7 @@ def _edges(kind: str) -> list[tuple[str, str, str, str]]:
             conds = conditions if isinstance(conditions, list) else [conditions]
             label += " [" + " & ".join(conds) + "]"
         for src in sources:
-            dest = src if t["dest"] == "=" else t["dest"]
+            dest: str = src if t["dest"] == "=" else t["dest"]
             out.append((src, initial.get(dest, dest), t["trigger"], label))
     return out
 
@@ -312,7 +312,7 @@ def draw_builtin(kind: str, path: Path) -> None:
             ax.text(b.x, b.y, name.rsplit("_", 1)[-1], ha="center", va="center", fontsize=8, zorder=3)
         for r in routes:
             colour = "#c0504d" if r.get("bus") or r["side"] else "#1f497d"
-            style = {"arrowstyle": "-|>", "mutation_scale": 8, "lw": 0.7, "color": colour, "zorder": 1,
+            style: dict[str, Any] = {"arrowstyle": "-|>", "mutation_scale": 8, "lw": 0.7, "color": colour, "zorder": 1,
                      "shrinkA": 0, "shrinkB": 1}
             if "arc" in r:
                 p0, p1, rad = r["arc"]
