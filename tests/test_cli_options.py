@@ -37,7 +37,7 @@ def one_line_exit_2(res, *needles: str) -> None:
         (["sim", CASE_STUDY, "--brick-uavs", "100000"], ["--brick-uavs 100000", "0 to 100"]),
         (["sim", CASE_STUDY, "--seed", "-1"], ["--seed -1"]),
         (["sim", CASE_STUDY, "--fault", "gusts=1e6"], ["gusts", "at most 15 m/s"]),
-        (["sim", CASE_STUDY, "--fault", "battery=5"], ["battery", "at most 0.1 per second"]),
+        (["sim", CASE_STUDY, "--fault", "battery=5"], ["battery", "at most 1 per second"]),
         (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--mission", "tcp/127.0.0.1:1",
           "--wait", "-1"], ["--wait -1", "> 0 to 3600 s"]),
         (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--dt", "1e-6"],

@@ -49,7 +49,7 @@ _PROBABILITIES = ("grasp_failure", "dropout", "occlusion")
 #: Upper bounds of the other scalar faults: beyond them the value can only be a typing mistake (gusts of
 #: 1e6 m/s, a pack drained in a millisecond). 15 m/s gusts (std) ground any small UAV already.
 MAX_GUSTS_MPS = 15.0
-MAX_BATTERY_DRAIN_PER_S = 0.1  # a full pack in 10 s
+MAX_BATTERY_DRAIN_PER_S = 1.0  # a full pack in 1 s (tests drain one in 5 s)
 
 
 @dataclass(frozen=True)
