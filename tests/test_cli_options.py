@@ -153,6 +153,12 @@ def test_plan_summary_says_1_task_and_lists_the_longest_chain_in_execution_order
     assert runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "1", "-o", str(one)]).exit_code == 0
     res = runner.invoke(app, ["plan", str(one)])
     assert "longest chain   1 task: B0" in res.stdout and "0 pairs in G^c" in res.stdout
+    res = runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "1", "--brick-uavs", "1",
+                              "--adhesion-uavs", "1", "-o", str(one)])
+    assert f"wrote {one}: 1 brick (1 to place), 2 UAVs" in res.stderr
+    res = runner.invoke(app, ["sim", str(one)])
+    assert res.exit_code == 0, res.output
+    assert "mission completed: 1/1 task, " in res.stdout
 
 
 def test_every_command_that_writes_a_file_says_so(tmp_path):

@@ -240,7 +240,8 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     except OSError as exc:
         raise InputError(f"-o {output}: cannot write: {exc.strerror or exc}") from None
     n_todo = sum(1 for b in bp.bricks if not b.placed)
-    typer.echo(f"wrote {output}: {len(bp.bricks)} bricks ({n_todo} to place), {len(bp.fleet)} UAVs", err=True)
+    typer.echo(f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
+               f"{plural(len(bp.fleet), 'UAV')}", err=True)
 
 
 _OUT = typer.Option(None, "--output", "-o", help="Write the blueprint here (default: stdout).")
