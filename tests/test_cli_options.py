@@ -115,6 +115,8 @@ def test_help_shows_flags_without_a_value_and_repeatable_options_by_their_form()
     assert "<bool>" not in res.stdout and "list[str]" not in res.stdout
     res = runner.invoke(app, ["mission-control", "--help"], env={"COLUMNS": "200"})
     assert "list[str]" not in res.stdout and "<bool>" not in res.stdout
+    res = runner.invoke(app, ["calibrate", "--help"], env={"COLUMNS": "200"})  # a list argument
+    assert "images..." in res.stdout and "list[" not in res.stdout and "<path>" in res.stdout
 
 
 def test_brick_size_help_shows_the_form_it_accepts():

@@ -48,9 +48,9 @@ def _main(
 def _option_type(self: Any, ctx: Any) -> str | None:
     """What ``--help`` shows after an option: nothing for a flag, ``<str>`` for a repeatable option (not
     ``<list[str]>``), ``<float> <float> <float>`` for a tuple (the values are separate words, not commas)."""
-    if self.metavar is not None:
+    if self.metavar is not None and not isinstance(self, _TyperArgument):  # an argument's metavar is its name
         return str(self.metavar)
-    if self.is_flag:
+    if getattr(self, "is_flag", False):
         return None
     desc = self.type_descriptor
     if desc.is_tuple and not desc.is_list:
@@ -61,15 +61,18 @@ def _option_type(self: Any, ctx: Any) -> str | None:
         from typing import get_args
 
         args = get_args(desc.annotation)
-        return f"<{self._bare_type(args[0])}>" if len(args) == 1 else _typer_display_type_rich(self, ctx)
-    return _typer_display_type_rich(self, ctx)
+        return f"<{self._bare_type(args[0]).lower()}>" if len(args) == 1 else _original[type(self)](self, ctx)
+    return _original[type(self)](self, ctx)
 
 
+_original: dict[type, Any] = {}
 try:  # typer 0.2x prints a type after every option; the defaults mislead for flags, lists and tuples
+    from typer.core import TyperArgument as _TyperArgument
     from typer.core import TyperOption as _TyperOption
 
-    _typer_display_type_rich = _TyperOption.display_type_rich
-    _TyperOption.display_type_rich = _option_type  # type: ignore[method-assign]
+    for _cls in (_TyperOption, _TyperArgument):
+        _original[_cls] = _cls.display_type_rich
+        _cls.display_type_rich = _option_type  # type: ignore[method-assign]
 except (ImportError, AttributeError):  # another typer: keep its own rendering
     pass
 
