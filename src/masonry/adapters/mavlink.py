@@ -26,6 +26,7 @@ import math
 import os
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -87,6 +88,23 @@ ESTIMATE_FLAGS_BAD = 128 | 1024 | 2048
 def estimate_usable(flags: int) -> bool:
     """Whether EKF_STATUS_REPORT / ESTIMATOR_STATUS ``flags`` describe a position estimate fit to fly on."""
     return flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED and not flags & ESTIMATE_FLAGS_BAD
+
+
+_FLAG_NAMES = {1: "attitude", 2: "horizontal velocity", 4: "vertical velocity", 8: "relative horizontal position",
+               32: "vertical position", 128: "constant-position mode", 1024: "not initialised / GPS glitch",
+               2048: "accelerometer error"}
+
+
+def describe_estimate_flags(flags: int) -> str:
+    """What EKF ``flags`` lack for flight, in words: ``EKF flags 0x0081: missing horizontal velocity, ...``."""
+    missing = [name for bit, name in _FLAG_NAMES.items() if bit & ESTIMATE_FLAGS_REQUIRED and not flags & bit]
+    bad = [name for bit, name in _FLAG_NAMES.items() if bit & ESTIMATE_FLAGS_BAD and flags & bit]
+    parts = []
+    if missing:
+        parts.append("missing " + ", ".join(missing))
+    if bad:
+        parts.append(", ".join(bad))
+    return f"EKF flags 0x{flags:04x}" + (": " + "; ".join(parts) if parts else ": usable")
 
 
 # ArduCopter custom modes and PX4 custom modes (main mode << 16 | sub mode << 24).
@@ -782,25 +800,57 @@ class MavlinkFlightController:
         """The mode velocity setpoints are flown in: GUIDED (ArduPilot) or OFFBOARD (PX4)."""
         return "OFFBOARD" if self.autopilot == "px4" else "GUIDED"
 
-    def wait_for_estimate(self, timeout_s: float | None = None) -> None:
+    def estimate_status(self) -> str:
+        """What the estimate lacks now, in words: no local position yet, or what the EKF flags miss."""
+        now = time.monotonic()
+        with self._lock:
+            st = self._state
+            flags = st.estimate_flags
+            streaming = st.position_ned is not None and now - st.position_time_s <= max(0.5, self.heartbeat_timeout_s)
+        if flags is not None and not estimate_usable(flags):
+            return ("no local position yet, " if not streaming else "local position streaming, ") + \
+                describe_estimate_flags(flags)
+        if not streaming:
+            return "no local position yet (LOCAL_POSITION_NED not streaming)" + \
+                ("" if flags is None else f", {describe_estimate_flags(flags)}")
+        return "usable" if flags is None else describe_estimate_flags(flags)
+
+    def wait_for_estimate(self, timeout_s: float | None = None, *, progress: Callable[[str], None] | None = None,
+                          report_every_s: float = 5.0) -> None:
         """Block until the autopilot reports a usable local position estimate.
 
+        ArduCopter SITL streams LOCAL_POSITION_NED about 19 s after its first client connects and its EKF is
+        usable at about 40 s (docs/hardware.md), so a pre-flight check waits that long with a countdown.
+
+        Args:
+            progress: called with one line (what is missing, the seconds left) when that changes and every
+                ``report_every_s``; e.g. the pre-flight check's echo to stderr.
+
         Raises:
-            CommandRejected: no usable estimate within ``timeout_s`` (default ``estimate_timeout_s``).
+            CommandRejected: no usable estimate within ``timeout_s`` (default ``estimate_timeout_s``), naming
+                what was missing at the end.
             LinkLost: the link went silent meanwhile.
         """
         timeout_s = self.estimate_timeout_s if timeout_s is None else timeout_s
-        deadline = time.monotonic() + timeout_s
+        start = time.monotonic()
+        deadline = start + timeout_s
+        last_status, last_report = "", start
         while True:
             self._check_link("wait for position estimate")
-            if self._position_ok(time.monotonic()):
+            now = time.monotonic()
+            if self._position_ok(now):
                 return
-            if time.monotonic() >= deadline:
+            status = self.estimate_status()
+            if now >= deadline:
+                hint = ("is motion capture feeding the EKF?" if self.pose_source is not None else
+                        "an ArduPilot SITL needs about 40 s after its first connection, a cold Pixhawk about as "
+                        "long: give more with --estimate-wait; indoors, is the position source feeding the EKF?")
                 raise CommandRejected(
-                    "arm",
-                    f"no usable position estimate from the autopilot after {timeout_s:.1f} s "
-                    "(is the position source (motion capture / vision) feeding the EKF?)",
+                    "arm", f"no usable position estimate from the autopilot after {timeout_s:.1f} s: {status} ({hint})"
                 )
+            if progress is not None and (status != last_status or now - last_report >= report_every_s):
+                progress(f"waiting for the position estimate: {status} ({max(0.0, deadline - now):.0f} s left)")
+                last_status, last_report = status, now
             self._stop.wait(0.02)
 
     def arm(self) -> None:

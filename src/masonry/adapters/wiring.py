@@ -46,7 +46,9 @@ class HardwareConfig:
     actuator_baud: int = 115200
     actuator_boot_wait_s: float = 2.0  # opening the port resets an Uno/Nano: wait for its HELLO this long
     min_battery: float = 0.5  # pre-flight: refuse to arm below this charge fraction
-    estimate_wait_s: float = 10.0  # pre-flight: wait this long for the autopilot's position estimate
+    # pre-flight: wait this long for the autopilot's position estimate (``--estimate-wait``): ArduCopter SITL needs
+    # ~40 s from its first connection (DEPENDENCY-NOTES), a cold Pixhawk about as long; 90 s covers both
+    estimate_wait_s: float = 90.0
     # the autopilot's velocity loop time constant: the state machines feed a leg's acceleration x this forward
     # (``UavConfig.velocity_lag_s``, docs/state-machines.md); 0 for none
     velocity_lag_s: float = 0.3
@@ -158,6 +160,8 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
     if not hw.heartbeat_timeout_s > 0.0:
         raise InputError("heartbeat_timeout_s must be > 0")
+    if not 0.0 < hw.estimate_wait_s <= 600.0:
+        raise InputError(f"estimate_wait_s must be > 0 and at most 600 s, not {hw.estimate_wait_s}")
     if not 0.0 <= hw.velocity_lag_s <= 2.0:
         raise InputError(f"velocity_lag_s must be between 0 and 2 s (the autopilot's velocity loop time constant), "
                          f"not {hw.velocity_lag_s}")
@@ -385,14 +389,18 @@ class PreflightReport:
             raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons))
 
 
-def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick") -> PreflightReport:
-    """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames."""
+def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick",
+              progress: Callable[[str], None] | None = None) -> PreflightReport:
+    """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames.
+
+    ``progress`` gets the countdown of the wait for the position estimate (what is missing, seconds left).
+    """
     items: list[CheckItem] = []
     items.append(CheckItem("flight controller", True, adapters.descriptions.get("flight controller", "?")))
     fc = adapters.fc
     if not hw.sim_fc:
         try:
-            fc.wait_for_estimate(hw.estimate_wait_s)
+            fc.wait_for_estimate(hw.estimate_wait_s, progress=progress)
             items.append(
                 CheckItem("position estimate", True, "usable (EKF reports horizontal and vertical position)")
             )

@@ -32,6 +32,57 @@ app = typer.Typer(
     add_completion=False,
 )
 
+
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            typer.echo(f"masonry {version('masonry')}")
+        except PackageNotFoundError:  # run from a source tree that was never installed
+            typer.echo("masonry (not installed)")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    show_version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
+                                      help="Print the version and exit."),
+) -> None:
+    """Autonomous aerial masonry: plan walls, fly brick and adhesion UAVs, simulate whole missions."""
+
+
+def _option_type(self: Any, ctx: Any) -> str | None:
+    """What ``--help`` shows after an option: nothing for a flag, ``<str>`` for a repeatable option (not
+    ``<list[str]>``), ``<float> <float> <float>`` for a tuple (the values are separate words, not commas)."""
+    if self.metavar is not None and not isinstance(self, _TyperArgument):  # an argument's metavar is its name
+        return str(self.metavar)
+    if getattr(self, "is_flag", False):
+        return None
+    desc = self.type_descriptor
+    if desc.is_tuple and not desc.is_list:
+        from typing import get_args
+
+        return " ".join(f"<{self._bare_type(arg)}>" for arg in get_args(desc.annotation))
+    if desc.is_list and not desc.is_choice:
+        from typing import get_args
+
+        args = get_args(desc.annotation)
+        return f"<{self._bare_type(args[0]).lower()}>" if len(args) == 1 else _original[type(self)](self, ctx)
+    return _original[type(self)](self, ctx)
+
+
+_original: dict[type, Any] = {}
+try:  # typer 0.2x prints a type after every option; the defaults mislead for flags, lists and tuples
+    from typer.core import TyperArgument as _TyperArgument
+    from typer.core import TyperOption as _TyperOption
+
+    for _cls in (_TyperOption, _TyperArgument):
+        _original[_cls] = _cls.display_type_rich
+        _cls.display_type_rich = _option_type  # type: ignore[method-assign]
+except (ImportError, AttributeError):  # another typer: keep its own rendering
+    pass
+
 #: Errors caused by what the user gave us exit with 2 (like a usage error); the rest exit with 1.
 USER_ERRORS: tuple[type[MasonryError], ...] = (
     BlueprintError, InputError, JournalUnusable, PerceptionError, ProtocolError)

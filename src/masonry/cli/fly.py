@@ -16,6 +16,7 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check_all, help_text
 from masonry.errors import InputError
 
 
@@ -44,7 +45,7 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
 
         opened = open_adapters(hardware, blueprint=blueprint, spec=spec, seed=seed, faults=faults)
         try:
-            report = preflight(opened, hardware, role=spec.role)
+            report = preflight(opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True))
             for line in report.lines():
                 typer.echo(line, err=True)
             report.raise_if_failed()
@@ -106,7 +107,8 @@ class _Hardware:
 
 
 def _hardware_options(*, sim: bool, fc: str | None, actuators: str | None, camera: str | None,
-                      calibration: Path | None, config: Path | None) -> _Hardware:
+                      calibration: Path | None, config: Path | None,
+                      estimate_wait: float | None = None) -> _Hardware:
     """--fc/--actuators/--camera/--calibration over --config uav.yaml over "sim" (the adapter wiring's defaults)."""
     from masonry.adapters.wiring import hardware_config, load_uav_config
 
@@ -115,7 +117,7 @@ def _hardware_options(*, sim: bool, fc: str | None, actuators: str | None, camer
                          f"camera drop --sim and give a device INDEX or a video FILE with --calibration)")
     settings = load_uav_config(config) if config is not None else {}
     cli = {"fc": fc, "actuators": actuators, "camera": camera,
-           "calibration": str(calibration) if calibration is not None else None}
+           "calibration": str(calibration) if calibration is not None else None, "estimate_wait_s": estimate_wait}
     hw = hardware_config(cli, settings)
     if sim and not hw.all_sim:
         raise InputError("--sim simulates every adapter: drop --sim to use --fc / --actuators / a real --camera")
@@ -134,7 +136,7 @@ def fly(
     task: str | None = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
                                        "not with --mission."),
     name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
+    seed: int = typer.Option(0, "--seed", help=help_text("fly", "--seed", "Seed of the simulated world.")),
     camera: str | None = typer.Option(None, "--camera", help="Simulated: geometric (default) | render (images + "
                                          "ArUco, slower) | sim; real: a device INDEX, a video FILE or a GStreamer "
                                          "pipeline (needs --calibration)."),
@@ -146,18 +148,24 @@ def fly(
                                                "`masonry calibrate` (for a real camera)."),
     config: Path | None = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "
                                           "camera, calibration, signing_key, mocap_port, ...); flags override it."),
-    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable, as for `masonry sim` "
+    fault: list[str] = typer.Option([], "--fault", metavar="KEY=VALUE", help="KEY=VALUE, repeatable, as for `masonry sim` "
                                     "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
-    dt: float = typer.Option(0.05, "--dt", help="Control tick, seconds."),
-    timeout: float = typer.Option(900.0, "--timeout", help="Give up after this much flight time, seconds."),
+    dt: float = typer.Option(0.05, "--dt", help=help_text("fly", "--dt", "Control tick, seconds.")),
+    timeout: float = typer.Option(900.0, "--timeout", help=help_text(
+        "fly", "--timeout", "Give up after this much flight time, seconds.")),
+    estimate_wait: float | None = typer.Option(None, "--estimate-wait", help=help_text(
+        "fly", "--estimate-wait", "With --fc: how long the pre-flight check waits for the autopilot's position "
+        "estimate, seconds (default 90: ArduPilot SITL needs about 40 s, a cold Pixhawk about as long).")),
     mission: str | None = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
                                           "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission."),
     listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "
                                      "listen endpoint(s)."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help="Mission mode: simulated seconds per wall second."),
-    wait: float = typer.Option(60.0, "--wait", help="Mission mode: wall seconds to wait for mission control."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
+        "fly", "--time-scale", "Mission mode: simulated seconds per wall second.")),
+    wait: float = typer.Option(60.0, "--wait", help=help_text(
+        "fly", "--wait", "Mission mode: wall seconds to wait for mission control.")),
     key_file: Path | None = typer.Option(None, "--key-file", help="Mission mode: the mission key (masonry keygen "
                                          "-o FILE), the same file as mission control's."),
     insecure: bool = typer.Option(False, "--insecure", help="Mission mode: allow a non-loopback mission control "
@@ -177,8 +185,10 @@ def fly(
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    check_all("fly", {"--seed": seed, "--dt": dt, "--timeout": timeout, "--time-scale": time_scale, "--wait": wait,
+                      "--estimate-wait": estimate_wait})
     hardware = _hardware_options(sim=sim, fc=fc, actuators=actuators, camera=camera, calibration=calibration,
-                                 config=config)
+                                 config=config, estimate_wait=estimate_wait)
     if name is None and hardware.name is not None:
         name = hardware.name
     if mission is None and hardware.mission is not None and task is None:

@@ -8,6 +8,7 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check, help_text
 from masonry.errors import InputError
 
 
@@ -45,10 +46,9 @@ def build_sitl(
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if autopilot not in ("ardupilot", "px4"):
         raise InputError(f"--autopilot must be ardupilot or px4, got {autopilot!r}")
-    if not 0 <= port <= 65535:
-        raise InputError(f"--port must be a UDP port number, got {port}")
-    if not (time_scale > 0.0 and time_scale <= 100.0):
-        raise InputError(f"--time-scale must be in (0, 100], got {time_scale}")
+    check("sitl", "--port", port)
+    check("sitl", "--time-scale", time_scale)
+    check("sitl", "--seed", seed)
     home: tuple[float, float, float] = (0.0, 0.0, 0.0)
     who = f"a {uav} UAV"
     if blueprint is not None:
@@ -78,17 +78,19 @@ def build_sitl(
 
 @command("sitl")
 def sitl(
-    port: int = typer.Option(14550, "--port", help="UDP port the ground station listens on (the SITL sends there)."),
+    port: int = typer.Option(14550, "--port", help=help_text(
+        "sitl", "--port", "UDP port the ground station listens on (the SITL sends there).")),
     host: str = typer.Option("127.0.0.1", "--host", help="Address of the ground station."),
     uav: str = typer.Option("brick", "--uav", help="brick | adhesion: which fleet member to stand in for."),
     blueprint: Path | None = typer.Option(None, "--blueprint", help="Start at this blueprint's UAV home."),
     name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of --uav)."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help="Simulated seconds per wall second."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
+        "sitl", "--time-scale", "Simulated seconds per wall second.")),
     signing_key: Path | None = typer.Option(None, "--signing-key", help="MAVLink 2 signing key file "
                                                "(32 bytes, 64 hex digits, or a passphrase)."),
     prearm_failure: str | None = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
                                                  "reason (to rehearse a pre-arm failure)."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the motion-capture noise."),
+    seed: int = typer.Option(0, "--seed", help=help_text("sitl", "--seed", "Seed of the motion-capture noise.")),
     autopilot: str = typer.Option("ardupilot", "--autopilot", help="ardupilot (GUIDED) | px4 (OFFBOARD)."),
 ) -> None:
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""

@@ -13,6 +13,7 @@ from pathlib import Path
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check_all, help_text, plural
 from masonry.errors import InputError
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -73,13 +74,17 @@ def mission_control(
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission name (Zenoh key prefix)."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help="Mission seconds per wall second (match the "
-                                     "UAVs' --time-scale when they are simulated faster than real time)."),
-    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help="Wall seconds of silence before a UAV is lost."),
-    startup_timeout: float = typer.Option(60.0, "--startup-timeout",
-                                          help="Wall seconds to wait for the whole fleet before starting without the rest."),
-    max_time: float | None = typer.Option(None, "--max-time", help="Give up after this many mission seconds."),
-    tick: float = typer.Option(0.05, "--tick", help="Control period, seconds."),
+    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
+        "mission-control", "--time-scale", "Mission seconds per wall second (match the UAVs' --time-scale when "
+        "they are simulated faster than real time).")),
+    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help=help_text(
+        "mission-control", "--heartbeat-timeout", "Wall seconds of silence before a UAV is lost.")),
+    startup_timeout: float = typer.Option(60.0, "--startup-timeout", help=help_text(
+        "mission-control", "--startup-timeout",
+        "Wall seconds to wait for the whole fleet before starting without the rest.")),
+    max_time: float | None = typer.Option(None, "--max-time", help=help_text(
+        "mission-control", "--max-time", "Give up after this many mission seconds.")),
+    tick: float = typer.Option(0.05, "--tick", help=help_text("mission-control", "--tick", "Control period, seconds.")),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
@@ -103,8 +108,8 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    if tick <= 0 or time_scale <= 0:
-        raise InputError(f"--tick and --time-scale must be > 0, got {tick} and {time_scale}")
+    check_all("mission-control", {"--time-scale": time_scale, "--heartbeat-timeout": heartbeat_timeout,
+                                  "--startup-timeout": startup_timeout, "--max-time": max_time, "--tick": tick})
     check_output_path(report, "--report")
     key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
@@ -141,7 +146,7 @@ def mission_control(
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
-        typer.echo(f"mission control listening on {', '.join(listen)}: {sum(1 for t in the_plan.tasks if not t.done)} tasks, "
+        typer.echo(f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
                    f"fleet {', '.join(u.name for u in bp.fleet)}"
                    + (f", resumed at {offset:.1f} s" if state is not None else "")
                    + (", messages authenticated" if key is not None else ", messages NOT authenticated"), err=True)
@@ -172,6 +177,7 @@ def mission_control(
     out = {**result.to_dict(), "security": security}
     if report is not None:
         write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
+        typer.echo(f"wrote {report}", err=True)
     typer.echo(json.dumps(out) if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)

@@ -12,6 +12,7 @@ import typer
 
 from masonry.cli.app import command
 from masonry.cli.outputs import atomic_path, check_output_path
+from masonry.cli.options import check_all, help_text, plural
 from masonry.errors import DeviceNotFound, InputError
 
 if TYPE_CHECKING:
@@ -138,17 +139,18 @@ def _capture_frames(cap: Any, max_frames: int | None) -> Iterator[tuple[int, np.
 @command("estimate")
 def estimate(
     inputs: list[Path] = typer.Argument(None, help="Image files, or one video file.", show_default=False),
-    camera: int | None = typer.Option(None, "--camera", help="Live camera index (instead of INPUT)."),
+    camera: int | None = typer.Option(None, "--camera", help=help_text(
+        "estimate", "--camera", "Live camera index (instead of INPUT).")),
     intrinsics: str | None = typer.Option(None, "--intrinsics", help="fx,fy,cx,cy in pixels."),
     distortion: str | None = typer.Option(None, "--distortion", help="k1,k2,p1,p2,k3 (OpenCV model)."),
     calibration: Path | None = typer.Option(
         None, "--calibration", help="OpenCV FileStorage YAML from `masonry calibrate`."
     ),
     marker_size: float = typer.Option(
-        0.05, "--marker-size", help="Marker side (black border included), metres."
+        0.05, "--marker-size", help=help_text("estimate", "--marker-size", "Marker side (black border included), metres.")
     ),
     spacing: float = typer.Option(
-        0.175, "--spacing", help="Distance between a brick's two marker centres, m."
+        0.175, "--spacing", help=help_text("estimate", "--spacing", "Distance between a brick's two marker centres, m.")
     ),
     dictionary: str = typer.Option("DICT_4X4_50", "--dictionary", help="OpenCV ArUco dictionary name."),
     up: str | None = typer.Option(
@@ -157,7 +159,7 @@ def estimate(
         help="x,y,z normal of the bricks' plane in the camera frame (default: the optical axis, 0,0,1).",
     ),
     fmt: str = typer.Option("text", "--format", help="text | json (one JSON object per frame and line)."),
-    frames: int | None = typer.Option(None, "--frames", help="Stop after this many frames."),
+    frames: int | None = typer.Option(None, "--frames", help=help_text("estimate", "--frames", "Stop after this many frames.")),
 ) -> None:
     """Estimate brick poses (top-face centre, yaw) from ArUco markers, in the camera frame (x right, y down, z fwd)."""
     from masonry.blueprint import MarkerSpec
@@ -166,6 +168,7 @@ def estimate(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    check_all("estimate", {"--camera": camera, "--frames": frames})
     if not (0.0 < marker_size < 1.0):
         raise InputError(f"--marker-size: {marker_size} m is out of range (0, 1) m")
     if not (marker_size < spacing < 10.0):
@@ -230,22 +233,23 @@ def markers_cmd(
         ..., "--bricks", help="Brick ids, e.g. 0-9 or 0,2,5-7 (brick k: markers 2k, 2k+1)."
     ),
     output: Path = typer.Option(..., "-o", "--output", help="FILE.pdf (one page per brick) or FILE.png."),
-    marker_size: float = typer.Option(0.05, "--marker-size", help="Marker side, metres."),
+    marker_size: float = typer.Option(0.05, "--marker-size", help=help_text("markers", "--marker-size", "Marker side, metres.")),
     spacing: float = typer.Option(
-        0.175, "--spacing", help="Distance between the two marker centres, metres."
+        0.175, "--spacing", help=help_text("markers", "--spacing", "Distance between the two marker centres, metres.")
     ),
     dictionary: str = typer.Option("DICT_4X4_50", "--dictionary", help="OpenCV ArUco dictionary name."),
     brick_size: str = typer.Option(
         "0.30,0.15,0.10", "--brick-size", help="Brick length,width,height, metres."
     ),
     paper: str = typer.Option("a4", "--paper", help="a4 | a3 | letter (landscape)."),
-    dpi: int = typer.Option(300, "--dpi", help="Resolution of PNG output."),
+    dpi: int = typer.Option(300, "--dpi", help=help_text("markers", "--dpi", "Resolution of PNG output.")),
 ) -> None:
     """Write printable true-scale marker sheets: each brick's outline with its two markers in place."""
     from masonry.blueprint import MarkerSpec
     from masonry.perception.markers_sheet import parse_id_ranges, write_marker_sheets
 
     check_output_path(output, "--output")
+    check_all("markers", {"--marker-size": marker_size, "--spacing": spacing, "--dpi": dpi})
     ids = parse_id_ranges(bricks)
     size = parse_floats("--brick-size", brick_size, 3, "length,width,height in metres")
     if min(size) <= 0:
@@ -262,7 +266,7 @@ def markers_cmd(
     for p in written:
         typer.echo(f"wrote {p}")
     typer.echo(
-        f"{len(ids)} brick(s), markers {2 * ids[0]}..{2 * ids[-1] + 1} of {dictionary}; print at 100 %"
+        f"{plural(len(ids), 'brick')}, markers {2 * ids[0]}..{2 * ids[-1] + 1} of {dictionary}; print at 100 %"
     )
 
 

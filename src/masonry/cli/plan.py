@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.app import app, command
+from masonry.cli.options import MAX_GENERATED_BRICKS, check_all, help_text, plural
 from masonry.cli.outputs import atomic_path, check_output_path, check_output_paths, write_atomic
 from masonry.errors import InputError
 
@@ -52,6 +53,7 @@ def plan_command(
 
         with atomic_path(graph, "--graph") as tmp:
             export_graphs(result.to_plan(), tmp, title=bp.name or blueprint.name)
+        typer.echo(f"wrote {graph}", err=True)
 
 
 def _write(pieces: Any, output: Path | None) -> None:
@@ -63,6 +65,7 @@ def _write(pieces: Any, output: Path | None) -> None:
     with atomic_path(output, "--output") as tmp, tmp.open("w", encoding="utf-8") as fh:
         for piece in pieces:
             fh.write(piece)
+    typer.echo(f"wrote {output}", err=True)
 
 
 def summary(bp: Blueprint, result: PlanGraphs) -> str:
@@ -81,11 +84,12 @@ def summary(bp: Blueprint, result: PlanGraphs) -> str:
         f"{bp.name or Path(bp.source).stem}  ({bp.source})",
         f"  bricks          {len(bricks)}: {placed} placed, {len(bricks) - placed} to place",
         f"  tasks to do     {len(todo)}: {n_brick} brick, {n_adh} adhesion",
-        f"  dependencies    {len(result.dependencies)} edges in G^d",
-        f"  conflicts       {result.conflict_count} pairs in G^c (clearance r_c = {bp.clearance_m:g} m)",
+        f"  dependencies    {plural(len(result.dependencies), 'edge')} in G^d",
+        f"  conflicts       {plural(result.conflict_count, 'pair')} in G^c (clearance r_c = {bp.clearance_m:g} m)",
         f"  fleet           {fleet}",
         f"  available now   {_id_list(ready)}",
-        f"  longest chain   {len(chain)} tasks: {_chain(chain)}",
+        # longest_chain lists the top task first; shown in execution order (the first task to do first)
+        f"  longest chain   {plural(len(chain), 'task')}: {_chain(chain[::-1])}",
     ]
     if 0 < len(todo) <= DETAIL_LIMIT:
         full = result.to_plan()
@@ -192,11 +196,37 @@ def _argv(options: dict[str, Any]) -> str:
     return " " + " ".join(parts) if parts else ""
 
 
+#: The generator keyword of each range-checked option (docs/cli.md lists the ranges).
+_GEN_FLAGS = {"courses": "--courses", "bricks_per_course": "--bricks-per-course", "towers": "--towers",
+              "height": "--height", "base": "--base", "spacing_m": "--spacing", "brick_size_m": "--brick-size",
+              "joint_m": "--joint", "yaw_rad": "--yaw", "origin_m": "--origin", "placed_courses": "--placed-courses",
+              "pallet_columns": "--pallet-columns", "brick_uavs": "--brick-uavs", "adhesion_uavs": "--adhesion-uavs",
+              "clearance_m": "--clearance", "cruise_altitude_m": "--cruise-altitude"}
+
+
+def _check_options(kind: str, options: dict[str, Any]) -> None:
+    """Each option within its range, --placed-courses below the wall's courses, the wall not absurdly large."""
+    check_all("blueprint", {flag: options[key] for key, flag in _GEN_FLAGS.items() if key in options})
+    courses = {"running-bond": options.get("courses"), "towers": options.get("height"),
+               "pyramid": options.get("base")}[kind]
+    what = {"running-bond": "--courses", "towers": "--height", "pyramid": "--base"}[kind]
+    if options["placed_courses"] > courses:
+        raise InputError(f"--placed-courses {options['placed_courses']}: more than the wall's {courses} "
+                         f"courses ({what} {courses})")
+    bricks = {"running-bond": lambda o: o["courses"] * o["bricks_per_course"],
+              "towers": lambda o: o["towers"] * o["height"],
+              "pyramid": lambda o: o["base"] * (o["base"] + 1) // 2}[kind](options)
+    if bricks > MAX_GENERATED_BRICKS:
+        raise InputError(f"masonry blueprint {kind}: {bricks} bricks is more than {MAX_GENERATED_BRICKS} "
+                         f"(the most a generated wall may hold)")
+
+
 def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     from masonry.blueprint import format_blueprint, validate_blueprint
     from masonry.blueprint_gen import generate
     from masonry.errors import BlueprintError
 
+    _check_options(kind, options)
     check_output_path(output, "--output")
     try:
         bp = generate(kind, **options)
@@ -209,28 +239,39 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
         return
     write_atomic(output, text, "--output")
     n_todo = sum(1 for b in bp.bricks if not b.placed)
-    typer.echo(f"wrote {output}: {len(bp.bricks)} bricks ({n_todo} to place), {len(bp.fleet)} UAVs", err=True)
+    typer.echo(f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
+               f"{plural(len(bp.fleet), 'UAV')}", err=True)
 
 
 _OUT = typer.Option(None, "--output", "-o", help="Write the blueprint here (default: stdout).")
-_SIZE = typer.Option(None, "--brick-size", help="Brick length, width, height in metres (default 0.30 0.15 0.10).")
-_JOINT = typer.Option(0.0, "--joint", help="Gap between neighbouring bricks of a course, metres.")
-_YAW = typer.Option(0.0, "--yaw", help="Direction of the wall (and its bricks' length axis), radians.")
-_ORIGIN = typer.Option((0.0, 0.0), "--origin", help="x y of the wall's centre on the ground, metres.")
-_PLACED = typer.Option(0, "--placed-courses", help="How many bottom courses are already in place.")
-_PALLET = typer.Option(0, "--pallet-columns", help="Pickup pallet columns (0: automatic).")
-_BUAV = typer.Option(1, "--brick-uavs", help="Number of brick UAVs in the fleet.")
-_AUAV = typer.Option(1, "--adhesion-uavs", help="Number of adhesion UAVs in the fleet.")
-_CLEAR = typer.Option(1.5, "--clearance", help="Minimum clearance r_c between UAVs, metres.")
-_CRUISE = typer.Option(None, "--cruise-altitude", help="Cruise altitude, metres (default 1.2, or 0.5 m over a "
-                       "taller wall).")
+_BP = "blueprint"
+_SIZE = typer.Option(None, "--brick-size", metavar="L W H", help=help_text(
+    _BP, "--brick-size", "Brick length, width, height in metres, three numbers separated by spaces "
+    "(default 0.30 0.15 0.10)."))
+_JOINT = typer.Option(0.0, "--joint", help=help_text(_BP, "--joint", "Gap between neighbouring bricks of a course, metres."))
+_YAW = typer.Option(0.0, "--yaw", help=help_text(
+    _BP, "--yaw", "Direction of the wall (and its bricks' length axis), radians."))
+_ORIGIN = typer.Option((0.0, 0.0), "--origin", metavar="X Y", help=help_text(
+    _BP, "--origin", "x y of the wall's centre on the ground, metres, two numbers separated by a space."))
+_PLACED = typer.Option(0, "--placed-courses", help=help_text(
+    _BP, "--placed-courses", "How many bottom courses are already in place (at most the wall's courses)."))
+_PALLET = typer.Option(0, "--pallet-columns", help=help_text(
+    _BP, "--pallet-columns", "Pickup pallet columns (0: automatic)."))
+_BUAV = typer.Option(1, "--brick-uavs", help=help_text(_BP, "--brick-uavs", "Number of brick UAVs in the fleet."))
+_AUAV = typer.Option(1, "--adhesion-uavs", help=help_text(
+    _BP, "--adhesion-uavs", "Number of adhesion UAVs in the fleet."))
+_CLEAR = typer.Option(1.5, "--clearance", help=help_text(
+    _BP, "--clearance", "Minimum clearance r_c between UAVs, metres."))
+_CRUISE = typer.Option(None, "--cruise-altitude", help=help_text(
+    _BP, "--cruise-altitude", "Cruise altitude, metres (default 1.2, or 0.5 m over a taller wall)."))
 _NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bricks>).")
 
 
 @command("running-bond", typer_app=blueprint_app)
 def running_bond_command(
-    courses: int = typer.Option(4, "--courses", help="Number of courses (rows)."),
-    bricks_per_course: int = typer.Option(6, "--bricks-per-course", help="Bricks in each course."),
+    courses: int = typer.Option(4, "--courses", help=help_text(_BP, "--courses", "Number of courses (rows).")),
+    bricks_per_course: int = typer.Option(6, "--bricks-per-course", help=help_text(
+        _BP, "--bricks-per-course", "Bricks in each course.")),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,
@@ -253,9 +294,10 @@ def running_bond_command(
 
 @command("towers", typer_app=blueprint_app)
 def towers_command(
-    towers: int = typer.Option(2, "--towers", help="Number of towers."),
-    height: int = typer.Option(3, "--height", help="Bricks per tower."),
-    spacing: float = typer.Option(1.0, "--spacing", help="Distance between tower centres, metres."),
+    towers: int = typer.Option(2, "--towers", help=help_text(_BP, "--towers", "Number of towers.")),
+    height: int = typer.Option(3, "--height", help=help_text(_BP, "--height", "Bricks per tower.")),
+    spacing: float = typer.Option(1.0, "--spacing", help=help_text(
+        _BP, "--spacing", "Distance between tower centres, metres.")),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     yaw: float = _YAW,
@@ -278,7 +320,8 @@ def towers_command(
 
 @command("pyramid", typer_app=blueprint_app)
 def pyramid_command(
-    base: int = typer.Option(5, "--base", help="Bricks in the bottom course (one fewer per course above)."),
+    base: int = typer.Option(5, "--base", help=help_text(
+        _BP, "--base", "Bricks in the bottom course (one fewer per course above).")),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,

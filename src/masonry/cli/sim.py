@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
-from typing import Any
 
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
 from masonry.errors import InputError
 
@@ -16,13 +15,14 @@ from masonry.errors import InputError
 @command("sim")
 def sim(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON)."),
-    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help="Number of brick UAVs (overrides the fleet)."),
-    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs",
-                                                help="Number of adhesion UAVs (overrides the fleet)."),
+    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help=help_text(
+        "sim", "--brick-uavs", "Number of brick UAVs (overrides the fleet).")),
+    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs", help=help_text(
+        "sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet).")),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the simulated world."),
+    seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
-    fault: list[str] = typer.Option([], "--fault", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
+    fault: list[str] = typer.Option([], "--fault", metavar="KEY=VALUE", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
                                     "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R."),
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
@@ -30,7 +30,10 @@ def sim(
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
-    dt: float = typer.Option(0.05, "--dt", help="Simulation tick, seconds."),
+    dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
+    progress: bool | None = typer.Option(None, "--progress/--no-progress", help="Progress on stderr: a line "
+                                         "every few seconds (--progress), or nothing (--no-progress). Default: a "
+                                         "bar with an ETA on a terminal, the lines when stderr is not one."),
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
 
@@ -42,6 +45,7 @@ def sim(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    check_all("sim", {"--brick-uavs": brick_uavs, "--adhesion-uavs": adhesion_uavs, "--seed": seed, "--dt": dt})
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
@@ -52,7 +56,9 @@ def sim(
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
 
-    progress_cb, finish = _progress_bar(enabled=sys.stderr.isatty())
+    from masonry.cli.progress import progress_display
+
+    progress_cb, finish = progress_display(progress)
     try:
         result = simulate(bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed,
                           camera=camera, faults=faults, journal_path=journal, resume=resume, dt_s=dt,
@@ -61,40 +67,20 @@ def sim(
         finish()
     if report is not None:
         write_atomic(report, result.to_json(indent=1) + "\n", "--report")
+        typer.echo(f"wrote {report}", err=True)
     if gantt is not None:
         from masonry.viz.gantt import draw_gantt
 
         with atomic_path(gantt, "--gantt") as tmp:
             draw_gantt(result, tmp, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
+        typer.echo(f"wrote {gantt}", err=True)
     if plot3d is not None:
         from masonry.viz.plot3d import draw_plot3d
 
         with atomic_path(plot3d, "--plot3d") as tmp:
             draw_plot3d(bp, result, tmp, title=f"{bp.name or blueprint.name}: wall and flown paths")
+        typer.echo(f"wrote {plot3d}", err=True)
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
 
-
-def _progress_bar(enabled: bool) -> tuple[Any, Any]:
-    """A rich progress bar on stderr (a terminal only): tasks done out of total, with simulated time."""
-    if not enabled:
-        return None, lambda: None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    bar = Progress(TextColumn("mission"), BarColumn(), MofNCompleteColumn(), TextColumn("sim {task.fields[t]:.0f} s"),
-                   TimeElapsedColumn(), console=Console(stderr=True), transient=True)
-    state: dict[str, Any] = {}
-
-    def update(done: int, total: int, now_s: float) -> None:
-        if "id" not in state:
-            bar.start()
-            state["id"] = bar.add_task("mission", total=total, t=now_s)
-        bar.update(state["id"], completed=done, t=now_s)
-
-    def finish() -> None:
-        if "id" in state:
-            bar.stop()
-
-    return update, finish

@@ -131,7 +131,7 @@ class MissionReport:
         done = sum(1 for t in self.tasks if t.status == "done")
         ratio = self.makespan_s / self.lower_bound_s if self.lower_bound_s > 0 else float("nan")
         lines = [
-            (f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} tasks, "
+            (f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} task{'' if len(self.tasks) == 1 else 's'}, "
             f"policy {self.policy}, seed {self.seed}"),
             f"makespan {self.makespan_s:.1f} s (lower bound {self.lower_bound_s:.1f} s, ratio {ratio:.2f})",
         ]

@@ -200,7 +200,8 @@ def simulate(
         max_time_s: give up at this simulated time (default: generous, from the number of tasks).
         heartbeat_timeout_s: a UAV silent that long is declared lost.
         max_attempts: failed attempts before a task is stuck.
-        progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion.
+        progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion, and at least
+            once per simulated second between them (so a progress display can keep time on a slow task).
         separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
             work altitude with no column clearance, as before they existed (for comparisons).
         rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned so
@@ -413,6 +414,7 @@ def _run(
     measured.dead = dead
     pre_done = sum(1 for t in the_plan.tasks if t.done)
     done_seen = len(mc.dispatcher.done) - pre_done
+    progress_s = world.clock.now_s()
     mission_end_s: float | None = None
 
     while True:
@@ -429,8 +431,9 @@ def _run(
         mc.step(now)
         if progress is not None:
             n_done = len(mc.dispatcher.done) - pre_done
-            if n_done != done_seen:
+            if n_done != done_seen or now - progress_s >= 1.0:
                 done_seen = n_done
+                progress_s = now
                 progress(n_done, total, now)
         if mc.ended_at_s is not None:
             if mission_end_s is None:

@@ -82,6 +82,8 @@ def parse_board(text: str) -> ChessboardSpec:
     cols, rows, square = int(m.group(1)), int(m.group(2)), float(m.group(3))
     if cols < 3 or rows < 3:
         raise InputError(f"--board: a chessboard needs at least 3x3 inner corners, got {cols}x{rows}")
+    if cols > 100 or rows > 100:
+        raise InputError(f"--board: at most 100x100 inner corners, got {cols}x{rows}")
     if not 0.0 < square < 1.0:
         raise InputError(f"--board: square side {square} m is out of range (0, 1) m")
     return ChessboardSpec(cols, rows, square)

@@ -46,6 +46,8 @@ def parse_id_ranges(text: str) -> list[int]:
                 lo, hi = int(lo_text), int(hi_text)
                 if hi < lo:
                     raise InputError(f"--bricks: range {part!r} runs backwards")
+                if hi - lo >= 100_000:  # no ArUco dictionary has 200,000 markers: fail before building the set
+                    raise InputError(f"--bricks: range {part!r} holds more than 100000 bricks")
                 ids.update(range(lo, hi + 1))
             else:
                 ids.add(int(part))

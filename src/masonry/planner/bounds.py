@@ -120,7 +120,7 @@ def lower_bound_s(
     per_role = 0.0
     for role in ROLES:
         if tasks_of[role] and not count[role]:
-            raise PlanningError(f"no {role} UAV in the fleet for {tasks_of[role]} {role} task(s)")
+            raise PlanningError(f"no {role} UAV in the fleet for {tasks_of[role]} {role} task{'' if tasks_of[role] == 1 else 's'}")
         if count[role]:
             per_role = max(per_role, work[role] / count[role])
     return max(longest_chain_s(plan, dur), per_role)
@@ -433,5 +433,5 @@ def dispatch_makespan_s(
         t = d.task(tid)
         where[uav] = t.position_m if isinstance(t, BrickTask) else t.end_m
     if not d.finished:
-        raise PlanningError(f"the plan cannot finish with this fleet: {len(d.remaining)} task(s) left")
+        raise PlanningError(f"the plan cannot finish with this fleet: {len(d.remaining)} task{'' if len(d.remaining) == 1 else 's'} left")
     return now

@@ -46,6 +46,10 @@ _SCALAR_FIELD = {
 }
 _TIMED_FIELD = {"link-loss": "link_loss_at_s", "uav-loss": "uav_loss_at_s"}
 _PROBABILITIES = ("grasp_failure", "dropout", "occlusion")
+#: Upper bounds of the other scalar faults: beyond them the value can only be a typing mistake (gusts of
+#: 1e6 m/s, a pack drained in a millisecond). 15 m/s gusts (std) ground any small UAV already.
+MAX_GUSTS_MPS = 15.0
+MAX_BATTERY_DRAIN_PER_S = 1.0  # a full pack in 1 s (tests drain one in 5 s)
 
 
 @dataclass(frozen=True)
@@ -77,15 +81,18 @@ class Faults:
             if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
                 raise InputError(f"fault {name}: a probability must be in [0, 1], got {value!r}")
         if not (
-            isinstance(self.gusts_mps, (int, float)) and math.isfinite(self.gusts_mps) and self.gusts_mps >= 0
+            isinstance(self.gusts_mps, (int, float)) and math.isfinite(self.gusts_mps)
+            and 0 <= self.gusts_mps <= MAX_GUSTS_MPS
         ):
-            raise InputError(f"fault gusts_mps: must be a finite speed >= 0 m/s, got {self.gusts_mps!r}")
+            raise InputError(f"fault gusts_mps: must be a speed from 0 to {MAX_GUSTS_MPS:g} m/s, "
+                             f"got {self.gusts_mps!r}")
         drain = self.battery_drain_per_s
         if drain is not None and not (
-            isinstance(drain, (int, float)) and math.isfinite(drain) and drain >= 0
+            isinstance(drain, (int, float)) and math.isfinite(drain) and 0 <= drain <= MAX_BATTERY_DRAIN_PER_S
         ):
             raise InputError(
-                f"fault battery_drain_per_s: must be a finite rate >= 0 per second, got {drain!r}"
+                f"fault battery_drain_per_s: must be a rate from 0 to {MAX_BATTERY_DRAIN_PER_S:g} per second, "
+                f"got {drain!r}"
             )
         for name in ("link_loss_at_s", "uav_loss_at_s"):
             table = dict(getattr(self, name))
@@ -159,6 +166,10 @@ class Faults:
                     raise InputError(f"fault {text!r}: {key} is a probability and must be in [0, 1]")
                 if number < 0.0:
                     raise InputError(f"fault {text!r}: {key} must be >= 0")
+                high = {"gusts": MAX_GUSTS_MPS, "battery": MAX_BATTERY_DRAIN_PER_S}.get(key)
+                if high is not None and number > high:
+                    raise InputError(f"fault {text!r}: {key} must be at most {high:g}"
+                                     f"{' m/s' if key == 'gusts' else ' per second'}")
                 changes[name] = number
             elif key in _TIMED_FIELD:
                 uav, at, when = value.rpartition("@")
