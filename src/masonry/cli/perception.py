@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.app import command
-from masonry.cli.outputs import atomic_path, check_output_path
 from masonry.cli.options import check_all, help_text, plural
+from masonry.cli.outputs import atomic_path, check_output_path
 from masonry.errors import DeviceNotFound, InputError
 
 if TYPE_CHECKING:
