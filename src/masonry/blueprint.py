@@ -43,6 +43,10 @@ ARUCO_DICTIONARY_SIZES: dict[str, int] = {
 }
 #: Bricks must be taller than twice the 5 mm resting tolerance so "rests on" is unambiguous and G^d acyclic.
 MIN_BRICK_HEIGHT_M = 0.01
+#: The most bricks any ArUco dictionary can number (DICT_APRILTAG_36h10: 2320 markers, two per brick).
+MAX_MARKED_BRICKS = 1160
+#: Brick ids of a planner-only study (``validate_blueprint(..., check_marker_ids=False)``) stay below this.
+MAX_BRICK_ID = 10**9 - 1
 
 # Limits of a real site (docs/blueprint-format.md, "Limits"): values beyond them are typing mistakes or hostile
 # input, and far beyond them they overflow the motion and camera arithmetic.
@@ -165,8 +169,8 @@ BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
 UAV_KEYS = ("name", "role", "home")
 
 
-def load_blueprint(path: str | Path) -> Blueprint:
-    """Read, parse and validate a YAML blueprint file.
+def load_blueprint(path: str | Path, *, check_marker_ids: bool = True) -> Blueprint:
+    """Read, parse and validate a YAML blueprint file (``check_marker_ids``: see :func:`validate_blueprint`).
 
     Raises:
         BlueprintError: the file is unreadable, not YAML, or not a valid blueprint (one line naming the
@@ -198,10 +202,10 @@ def load_blueprint(path: str | Path) -> Blueprint:
         problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
         label = "" if isinstance(exc, YamlLimitError) else "YAML syntax error: "
         raise BlueprintError(source, where, f"{label}{_cut(problem)}") from None
-    return parse_blueprint(data, source)
+    return parse_blueprint(data, source, check_marker_ids=check_marker_ids)
 
 
-def parse_blueprint(data: Any, source: str = "<blueprint>") -> Blueprint:
+def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids: bool = True) -> Blueprint:
     """Build and validate a :class:`Blueprint` from already-parsed YAML/JSON data.
 
     Raises:
@@ -269,14 +273,19 @@ def parse_blueprint(data: Any, source: str = "<blueprint>") -> Blueprint:
         markers=markers,
         source=source,
     )
-    validate_blueprint(blueprint)
+    validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
 
 
-def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -> None:
+def validate_blueprint(
+    blueprint: Blueprint, contacts: Contacts | None = None, *, check_marker_ids: bool = True
+) -> None:
     """Check a blueprint's geometry and fleet (what the value types alone cannot guarantee).
 
     ``contacts`` (from :func:`masonry.planner.contacts.find_contacts` on the same bricks) saves recomputing.
+    ``check_marker_ids=False`` is for studies of the planner alone on walls larger than any ArUco dictionary
+    can number (over ``MAX_MARKED_BRICKS`` bricks): brick ids are then only bounded by ``MAX_BRICK_ID``. Every
+    command that flies or simulates keeps the check (docs/blueprint-format.md, "Limits").
 
     Raises:
         BlueprintError: a value beyond the site limits or a marker id beyond its dictionary, a UAV name that is
@@ -289,7 +298,7 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
     source = blueprint.source
     bricks = blueprint.bricks
     markers = blueprint.markers
-    _check_ranges(blueprint)  # first: the geometry below must not compute with absurd values
+    _check_ranges(blueprint, check_marker_ids)  # first: the geometry below must not compute with absurd values
     for b in bricks:
         _check_brick_markers(b, markers, source)
         if not b.placed and b.pickup_m is None:
@@ -338,7 +347,7 @@ def validate_blueprint(blueprint: Blueprint, contacts: Contacts | None = None) -
     _check_sites(blueprint)
 
 
-def _check_ranges(blueprint: Blueprint) -> None:
+def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
     """Every number within the limits of a real site, every marker id in its dictionary, every UAV name a key."""
     source = blueprint.source
     c = blueprint.clearance_m
@@ -353,9 +362,13 @@ def _check_ranges(blueprint: Blueprint) -> None:
     capacity = ARUCO_DICTIONARY_SIZES.get(dictionary)
     if capacity is None:
         raise BlueprintError(source, "brick.markers.dictionary", f"unknown ArUco dictionary {quote(dictionary)}")
+    if not check_marker_ids:
+        capacity = 2 * MAX_BRICK_ID + 2
     for b in _suspects(blueprint.bricks, capacity):
         where = f"brick {b.id}"
         if isinstance(b.id, bool) or not isinstance(b.id, int) or not 0 <= 2 * b.id + 1 < capacity:
+            if not check_marker_ids:
+                raise BlueprintError(source, f"brick {quote(b.id)}", f"id must be in 0..{MAX_BRICK_ID}")
             largest = max(ARUCO_DICTIONARY_SIZES.values())
             hint = ("choose a larger dictionary" if capacity < largest else
                     f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)")

@@ -30,6 +30,10 @@ def plan_command(
     graph: Path | None = typer.Option(
         None, "--graph", help="Draw/export G^d and G^c together: .png, .svg, .dot or .graphml."
     ),
+    planner_only: bool = typer.Option(
+        False, "--planner-only", help="Plan a wall larger than any ArUco dictionary can number (over 1160 "
+        "bricks): skips the marker-id check, for planner studies; such a wall cannot be flown."
+    ),
 ) -> None:
     """Plan a wall: tasks, dependency graph G^d, conflict graph G^c (paper Section III)."""
     from masonry.blueprint import load_blueprint
@@ -40,8 +44,9 @@ def plan_command(
     if graph is not None and graph.suffix.lower() not in GRAPH_FORMATS:
         raise InputError(f"--graph {graph}: the file must end in {', '.join(GRAPH_FORMATS)}")
     check_output_paths([("--output", output), ("--graph", graph)])
-    bp = load_blueprint(blueprint)
-    result = plan_graphs(bp)  # conflicts stay arrays: a 20,000-brick wall has millions of them
+    bp = load_blueprint(blueprint, check_marker_ids=not planner_only)
+    # conflicts stay arrays: a 20,000-brick wall has millions of them
+    result = plan_graphs(bp, check_marker_ids=not planner_only)
     if fmt == "json":
         from masonry.planner.export import iter_plan_json
 

@@ -62,7 +62,7 @@ class PlanGraphs:
         return Plan(tasks=self.tasks, dependencies=self.dependencies, conflicts=pairs, conflict_indices=(ca, cb))
 
 
-def plan(blueprint: Blueprint) -> Plan:
+def plan(blueprint: Blueprint, *, check_marker_ids: bool = True) -> Plan:
     """Tasks, G^d and G^c of a blueprint (pure; no I/O).
 
     Tasks: one BrickTask per brick in blueprint order ("B<id>", placed bricks with done=True), then the
@@ -71,14 +71,14 @@ def plan(blueprint: Blueprint) -> Plan:
     Raises:
         BlueprintError: the blueprint's geometry or fleet is invalid (see :func:`validate_blueprint`).
     """
-    return plan_graphs(blueprint).to_plan()
+    return plan_graphs(blueprint, check_marker_ids=check_marker_ids).to_plan()
 
 
-def plan_graphs(blueprint: Blueprint) -> PlanGraphs:
+def plan_graphs(blueprint: Blueprint, *, check_marker_ids: bool = True) -> PlanGraphs:
     """Like :func:`plan`, with the conflict pairs left as index arrays (fast for very large walls)."""
     arrays = brick_arrays(blueprint)
     contacts = find_contacts(arrays)
-    validate_blueprint(blueprint, contacts)
+    validate_blueprint(blueprint, contacts, check_marker_ids=check_marker_ids)
     bricks = blueprint.bricks
     placed = np.array([b.placed for b in bricks], dtype=bool)
     keep = ~placed[contacts.upper]
