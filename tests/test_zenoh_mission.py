@@ -270,14 +270,16 @@ def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
     opts = ["--key-file", str(write_key_file(tmp_path / "m.key"))] if keyed else []
     mc = subprocess.Popen(
         [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
-         "--startup-timeout", "2", "--max-time", "6", "--mission-name", mission_name, *opts],
+         # without a key the forger must be heard and answer an assignment: time for that on a busy machine
+         "--startup-timeout", "2" if keyed else "20", "--max-time", "6" if keyed else "30",
+         "--mission-name", mission_name, *opts],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     seen: list[bytes] = []
     try:
         with ZenohTransport("eve", connect=[endpoint], mission=mission_name) as eve:
             eve._session.declare_subscriber(f"masonry/{mission_name}/to/**",
                                             lambda s: seen.append(s.payload.to_bytes()))
-            end = time.monotonic() + 40.0  # until mission control gives up (--max-time), bounded
+            end = time.monotonic() + 90.0  # until mission control gives up (--max-time), bounded
             answered: set[bytes] = set()
             while mc.poll() is None and time.monotonic() < end:
                 for name in ("brick-1", "glue-1"):
@@ -304,5 +306,5 @@ def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
         assert d["security"]["dropped"]["malformed"] > 10 and not d["security"]["ignored"]
         assert all(u["status"] == "lost" for u in d["uavs"])
     else:  # loopback without a key: the forger is heard, but its completions are too early to be true
-        assert d["security"]["ignored"]["too-short"] >= 1
+        assert d["security"]["ignored"].get("too-short", 0) >= 1, (d["security"], err[-2000:])
         assert "dropped" in err or "ignored" in err
