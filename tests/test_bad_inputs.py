@@ -39,6 +39,8 @@ SAMPLE = [
     ("journals", "resume a journal of the same ids, other geometry"),
     ("configs", "uav.yaml billion laughs"),
     ("configs", "uav.yaml binary"),
+    ("configs", "--calibration missing"),
+    ("network", "mission-control --zenoh-config unknown key"),
     ("network", "mission-control on all interfaces without a key"),
     ("network", "mission-control --key-file too short"),
 ]

@@ -115,6 +115,11 @@ def _hardware_options(*, sim: bool, fc: str | None, actuators: str | None, camer
     if sim and camera is not None and camera not in ("sim", "geometric", "render"):
         raise InputError(f"--camera {camera}: with --sim the camera must be geometric, render or sim (for a real "
                          f"camera drop --sim and give a device INDEX or a video FILE with --calibration)")
+    if calibration is not None and not calibration.is_file():
+        raise InputError(f"--calibration {calibration}: no such file")
+    if sim and calibration is not None:
+        raise InputError("--calibration is for a real camera: the simulated camera has its own intrinsics (drop "
+                         "--calibration, or drop --sim to fly a real camera)")
     settings = load_uav_config(config) if config is not None else {}
     cli = {"fc": fc, "actuators": actuators, "camera": camera,
            "calibration": str(calibration) if calibration is not None else None, "estimate_wait_s": estimate_wait}

@@ -40,14 +40,20 @@ def check_endpoint(endpoint: str) -> str:
     return endpoint
 
 
+_ERROR_CHARS = 160
+
+
 def _one_line(exc: Exception) -> str:
     """Zenoh's multi-line configuration error (a JSON5 parser's caret diagram) as one line, without Rust paths."""
     text = re.sub(r" at /\S+\.rs:\d+\.?", "", str(exc)).strip()
     where = re.search(r"--> (\d+):(\d+)", text)
     what = re.search(r"^\s*= (.+)$", text, re.MULTILINE)
     if where and what:
-        return f"line {where.group(1)}, column {where.group(2)}: {what.group(1).strip()}"
-    return text.splitlines()[0] if text else type(exc).__name__
+        line = f"line {where.group(1)}, column {where.group(2)}: {what.group(1).strip()}"
+    else:
+        line = text.splitlines()[0] if text else type(exc).__name__
+    # an unknown key makes zenoh list every key it knows: keep the line short
+    return line if len(line) <= _ERROR_CHARS else line[:_ERROR_CHARS] + "..."
 
 
 class ZenohTransport:
