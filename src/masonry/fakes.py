@@ -162,7 +162,7 @@ class FakeFlightController(_Scripted):
     # -- dynamics ---------------------------------------------------------------------------------------
     @property
     def on_ground(self) -> bool:
-        return self._pos[2] <= self.ground_z_m + 1e-3 and self._vel[2] <= 1e-6
+        return bool(self._pos[2] <= self.ground_z_m + 1e-3 and self._vel[2] <= 1e-6)
 
     @property
     def position_m(self) -> Vec3:
@@ -471,7 +471,8 @@ class FakeCamera(_Scripted):
         T_world_body = np.eye(4)
         T_world_body[:3, :3] = R_world_body(0.0, 0.0, self.fc.yaw_rad)
         T_world_body[:3, 3] = self.fc.position_m
-        return T_world_body @ self._T_body_cam
+        T_world_cam: np.ndarray = T_world_body @ self._T_body_cam
+        return T_world_cam
 
     def read(self) -> CameraFrame | None:
         now_s = self.fc.clock.now_s()

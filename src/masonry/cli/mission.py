@@ -60,7 +60,7 @@ def keygen(
 
 
 @command("mission-control")
-def mission_control(
+def mission_control(  # noqa: PLR0915 - a command: its options checked in order, then the call
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."),
     listen: list[str] = typer.Option([DEFAULT_LISTEN], "--listen", help="Zenoh endpoint(s) to listen on "
                                      "(a real interface, e.g. tcp/10.0.0.1:7447, needs --key-file or --insecure)."),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Union
+from typing import Any, Literal
 
 TaskKind = Literal["brick", "adhesion"]
 
@@ -49,7 +49,7 @@ class AdhesionTask:
         return tuple((a + b) / 2.0 for a, b in zip(self.start_m, self.end_m))  # type: ignore[return-value]
 
 
-Task = Union[BrickTask, AdhesionTask]
+Task = BrickTask | AdhesionTask
 
 
 @dataclass(frozen=True)

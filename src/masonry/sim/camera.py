@@ -173,7 +173,7 @@ def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
     sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
     cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
-    return np.eye(3)[None] + sin * K + cos * (K @ K)  # type: ignore[no-any-return]
+    return np.eye(3)[None] + sin * K + cos * (K @ K)
 
 
 def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:
