@@ -35,14 +35,11 @@ from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
 from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
 from masonry.geometry import R_world_body
-from masonry.perception.types import CameraIntrinsics, TagPose
+from masonry.perception.types import DEFAULT_INTRINSICS, CameraIntrinsics, TagPose
 from masonry.planner.tasks import Task
 from masonry.ports import CameraFrame, Clock, TaskResult, Telemetry
 
 Vec3 = tuple[float, float, float]
-
-#: A 640x480 pinhole camera with a ~56 x 44 degree field of view.
-DEFAULT_INTRINSICS = CameraIntrinsics(fx=600.0, fy=600.0, cx=320.0, cy=240.0)
 
 
 class _Scripted:

@@ -6,6 +6,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from masonry.blueprint import DEFAULT_BRICK_SIZE_M
+
 TaskKind = Literal["brick", "adhesion"]
 
 
@@ -19,7 +21,7 @@ class BrickTask:
     position_m: tuple[float, float, float]
     yaw_rad: float
     pickup_m: tuple[float, float, float] | None
-    size_m: tuple[float, float, float] = (0.30, 0.15, 0.10)
+    size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
 
     kind: TaskKind = "brick"
 

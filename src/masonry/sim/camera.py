@@ -21,13 +21,10 @@ import numpy as np
 
 from masonry.blueprint import MarkerSpec
 from masonry.geometry import R_world_body
-from masonry.perception.types import CameraIntrinsics, TagPose
+from masonry.perception.types import DEFAULT_INTRINSICS, CameraIntrinsics, TagPose
 from masonry.sim.bricks import SimBrick, point_in_rect
 
 __all__ = ["DEFAULT_INTRINSICS", "CameraConfig", "R_world_body", "observe_markers"]
-
-DEFAULT_INTRINSICS = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
-"""640x480, 500 px focal length: about 65 degrees horizontal field of view."""
 
 
 @dataclass(frozen=True)
