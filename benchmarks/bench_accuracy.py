@@ -1,4 +1,4 @@
-"""Brick pose accuracy on rendered frames against the truth (issue 3, section 5).
+"""Brick pose accuracy on rendered frames against the truth.
 
 Random views (default 250 frames, 2 bricks each): camera 1.2 m above the brick tops, up to 5 degrees of tilt,
 random heading; Gaussian blur sigma uniform in 0.5-1.0 px, sensor noise sigma 2 grey levels; 640x480, f = 600 px;

@@ -1,4 +1,4 @@
-"""Dispatcher throughput on a large wall: events per second for each policy (issue 5, section 4).
+"""Dispatcher throughput on a large wall: events per second for each policy.
 
 Builds a running-bond wall (20,000 bricks by default) with the planner (``masonry.blueprint_gen`` +
 ``masonry.planner.plan``; a direct Plan builder is the fallback when those are absent), then runs the whole

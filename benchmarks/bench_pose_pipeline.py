@@ -1,4 +1,4 @@
-"""Pose pipeline throughput at 640x480 on one core: detection + sub-pixel corners + pose (issue 3, section 5).
+"""Pose pipeline throughput at 640x480 on one core: detection + sub-pixel corners + pose.
 
 Renders a set of frames (2 bricks each, camera 1.2 m above them) once, then times, per frame:
 

@@ -1,4 +1,4 @@
-"""CPU cost per simulated second of a whole mission (issue 5, section 4): prints its figures, asserts nothing.
+"""CPU cost per simulated second of a whole mission: prints its figures, asserts nothing.
 
 Runs ``masonry.mission.simulate`` on a running bond (geometric camera, no faults) and prints CPU (process) time,
 wall time, simulated time, real-time factors and the behaviour figures to compare before/after a speed-up

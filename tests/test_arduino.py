@@ -28,6 +28,7 @@ from masonry.adapters.arduino import ArduinoActuators
 from masonry.adapters.arduino_fake import FakeArduino
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.ports import Gripper, Sprayer
+from waiting import wait_until
 
 requests = st.builds(
     Request,
@@ -174,7 +175,7 @@ def test_garbage_on_the_line_is_ignored(fake: FakeArduino) -> None:
 def test_garbage_sent_to_the_board_gets_an_error_not_an_action(fake: FakeArduino) -> None:
     with open_board(fake.port) as act:
         os.write(os.open(fake.port, os.O_WRONLY | os.O_NOCTTY), b"MAG ON please\n")  # another writer
-        time.sleep(0.05)
+        wait_until(lambda: b"MAG ON please\n" in fake.received, 5.0, "the board to read the stray line")
         assert act.status().magnet_on is False
 
 

@@ -93,7 +93,7 @@ def test_firmware_answers_like_the_reference(firmware: Path, attached: bool) -> 
     reference.set_attached(attached)
     expected = [reference.hello()] + [reference.handle(line) for line in lines]
     assert len(got) == len(expected)
-    for sent, mine, theirs in zip([b"<boot>"] + lines, got, expected):
+    for sent, mine, theirs in zip([b"<boot>", *lines], got, expected):
         assert summary(mine) == summary(theirs), f"after {sent!r}: firmware {mine!r}, reference {theirs!r}"
     assert "SERVO 9 20" in pins and "SERVO 10 0" in pins  # joint locked, valve closed at boot
     assert "PIN 7 1" in pins  # the magnet was switched on at some point

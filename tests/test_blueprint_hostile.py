@@ -1,4 +1,4 @@
-"""Hostile and physically impossible blueprint files (issue 13, section 2, and the UAV names of section 1).
+"""Hostile and physically impossible blueprint files, and UAV names that could confuse the mission network.
 
 Each gets one short line naming the file, the field or id and the problem, and exit status 2 from `masonry plan`,
 `masonry sim` and `masonry fly` alike: never a traceback, a hang, unbounded memory or a silent wrong answer.

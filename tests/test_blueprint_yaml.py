@@ -59,5 +59,5 @@ def test_exponent_floats_are_numbers() -> None:
 
 @pytest.mark.parametrize("text", ["a: 1\na: 2\n", "{a: 1, a: 2}", "a: &x 1\nb: {c: *x, c: 2}\n"])
 def test_duplicate_keys_are_errors(text: str) -> None:
-    with pytest.raises(yaml.YAMLError, match="duplicate key 'a'|duplicate key 'c'"):
+    with pytest.raises(yaml.YAMLError, match=r"duplicate key 'a'|duplicate key 'c'"):
         safe_load(text)

@@ -45,7 +45,7 @@ def test_chain_term_dominates_a_sequential_plan() -> None:
 
 
 def test_work_term_dominates_independent_tasks() -> None:
-    tasks = tuple(brick(i, 2.0 * i) for i in range(6)) + (glue(0, 0.0),)
+    tasks = (*tuple(brick(i, 2.0 * i) for i in range(6)), glue(0, 0.0))
     durations = {f"B{i}": 10.0 for i in range(6)} | {"A0": 5.0}
     plan = Plan(tasks, (), ())
     assert lower_bound_s(plan, uavs(2, 1), durations) == 30.0
@@ -172,7 +172,7 @@ def test_min_cycles_add_the_flight_from_the_nearest_drop_off_or_home() -> None:
     work = min_cycles_s(seq, fleet, base, arrive_tolerance_m=0.1)
     assert lower_bound_s(seq, fleet, base, work_s=work) == pytest.approx(61.0 + 2 * (flight - 1.0))
     assert longest_chain_s(seq, base) == pytest.approx(61.0)
-    with pytest.raises(PlanningError, match="work_s|durations_s"):
+    with pytest.raises(PlanningError, match=r"work_s|durations_s"):
         lower_bound_s(seq, fleet, base, work_s={"B0": 1.0})
     with pytest.raises(PlanningError, match="cruise_speed_mps"):
         min_cycles_s(seq, fleet, base, cruise_speed_mps=0.0)

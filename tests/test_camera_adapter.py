@@ -107,13 +107,13 @@ def test_missing_inputs_are_clear_errors(tmp_path, recording) -> None:
     _, calibration = recording
     with pytest.raises(InputError, match="--calibration"):
         OpenCvCamera(0)
-    with pytest.raises(InputError, match="nothing.mp4: video file not found"):
+    with pytest.raises(InputError, match=r"nothing\.mp4: video file not found"):
         OpenCvCamera(str(tmp_path / "nothing.mp4"), calibration=calibration).connect()
     with pytest.raises(InputError, match="calibration file not found"):
         OpenCvCamera(0, calibration=tmp_path / "none.yaml").connect()
     junk = tmp_path / "junk.avi"
     junk.write_bytes(b"this is not a video")
-    with pytest.raises(DeviceNotFound, match="junk.avi: cannot open"):
+    with pytest.raises(DeviceNotFound, match=r"junk\.avi: cannot open"):
         OpenCvCamera(str(junk), calibration=calibration).connect()
     with pytest.raises(DeviceNotFound, match="camera 63: cannot open"):
         OpenCvCamera(63, calibration=calibration).connect()

@@ -1,4 +1,4 @@
-"""Commands and options (issue 13, section 4): option ranges, help text, --version, "wrote FILE", plurals,
+"""Commands and options: option ranges, help text, --version, "wrote FILE", plurals,
 the progress line, the estimator wait of ``fly --fc`` and diagrams without a system graphviz."""
 
 from __future__ import annotations

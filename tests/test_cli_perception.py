@@ -46,7 +46,7 @@ def write_frames(tmp_path: Path, n: int) -> tuple[list[str], list[np.ndarray]]:
 
 def expected(T: np.ndarray, brick: RenderedBrick) -> tuple[np.ndarray, float]:
     R_cw = T[:3, :3].T
-    top = np.asarray(brick.position_m) + [0.0, 0.0, 0.05]
+    top = np.asarray(brick.position_m) + np.array([0.0, 0.0, 0.05])
     x_cam = R_cw @ np.array([math.cos(brick.yaw_rad), math.sin(brick.yaw_rad), 0.0])
     return R_cw @ (top - T[:3, 3]), yaw_about_rad(x_cam)
 

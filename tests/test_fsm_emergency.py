@@ -15,6 +15,7 @@ import pytest
 
 from fsm_rig import Rig
 from masonry.fakes import FakeSprayer, QueueMissionLink
+from waiting import wait_until
 
 
 def lands(rig: Rig) -> list[float]:
@@ -191,12 +192,9 @@ def test_mavlink_telemetry_flags_ardupilot_land_as_landing() -> None:
             MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=5.0) as fc:  # fmt: skip
         fc.arm()
         fc.takeoff(1.0)
-        deadline = time.monotonic() + 10.0
-        while fc.telemetry().position_m[2] < 0.8 and time.monotonic() < deadline:
-            time.sleep(0.01)
+        wait_until(lambda: fc.telemetry().position_m[2] >= 0.8, 10.0, "the climb to 0.8 m")
         assert fc.telemetry().mode == "GUIDED" and not fc.telemetry().landing
         fc.land()
-        while not fc.telemetry().landing and time.monotonic() < deadline:
-            time.sleep(0.01)
+        wait_until(lambda: fc.telemetry().landing, 10.0, "the landing flag")
         tel = fc.telemetry()
         assert tel.landing and tel.mode == "LAND" and sitl.land_requests == 1

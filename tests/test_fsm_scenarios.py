@@ -461,6 +461,6 @@ def test_the_notebook_example_in_the_package_docstring_runs() -> None:
     doc = masonry.fsm.__doc__ or ""
     code = textwrap.dedent(doc.split("::", 1)[1])
     namespace: dict[str, object] = {}
-    exec(compile(code, "masonry.fsm docstring", "exec"), namespace)  # noqa: S102 (our own docstring)
+    exec(compile(code, "masonry.fsm docstring", "exec"), namespace)  # our own docstring
     uav = namespace["uav"]
     assert uav.trace[-1][1] == "idle" and namespace["link"].results[0].status == "done"  # type: ignore[attr-defined]

@@ -1,4 +1,4 @@
-"""Wind gusts: brick tasks succeed in moderate gusts with the default controller (issue 4, faults).
+"""Wind gusts: brick tasks succeed in moderate gusts with the default controller.
 
 The simulated wind (``gusts=S``: an Ornstein-Uhlenbeck horizontal wind of standard deviation S m/s) pushes the
 airframe; the autopilot's velocity loop only partly rejects it, so the position PID needs integral action and

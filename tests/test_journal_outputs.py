@@ -1,4 +1,4 @@
-"""Issue 13, section 3: journals that know their wall, output files checked first and written atomically,
+"""Journals that know their wall, output files checked first and written atomically,
 resumed reports equal to the run that wrote the journal, and journal errors of the user's making exit 2.
 """
 
@@ -206,7 +206,7 @@ def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before
             # was: the UAV's release-point estimate instead of the world's true error
             assert resumed["placement_error_m"][tid] == full["placement_error_m"][tid]
     # the UAVs' busy time and distance cover the flying done before the crash (was: only after the resume)
-    done_before = {u: m for u, m in before.measured["distances_m"].items()}
+    done_before = dict(before.measured["distances_m"].items())
     for u in resumed["uavs"]:
         assert u["distance_m"] >= round(done_before[u["name"]], 2) > 0
         assert u["busy_s"] >= round(before.measured["busy_s"][u["name"]], 2) > 0

@@ -1,4 +1,4 @@
-"""The mission network under attack (issue 13, section 1): authenticated frames, result checks, task checks.
+"""The mission network under attack: authenticated frames, result checks, task checks.
 
 Mission control and the UAVs run over the in-process bus, each endpoint wrapped in an
 :class:`~masonry.mission.auth.AuthenticatedTransport`; an attacker has a raw endpoint on the same bus (like a

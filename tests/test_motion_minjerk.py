@@ -126,7 +126,7 @@ def test_vectorised_shapes(shape) -> None:
     t = np.random.default_rng(0).uniform(-1.0, 4.0, size=shape)
     for method in (traj.position, traj.velocity, traj.acceleration, traj.jerk):
         out = method(t)
-        assert out.shape == tuple(shape) + (3,)
+        assert out.shape == (*tuple(shape), 3)
         flat = t.reshape(-1)
         rows = out.reshape(-1, 3)
         for i in range(min(len(flat), 5)):

@@ -165,7 +165,7 @@ def test_vehicle_step_matches_the_builtin_clamps(velocity, yaw_rate):
     for _ in range(5):
         v.command_velocity(velocity, yaw_rate, v.time_s)
         battery = max(0.0, v.battery_fraction - v.config.battery_drain_per_s * 0.05)
-        expected = _reference_step(v, 0.05)[:-1] + (battery,)
+        expected = (*_reference_step(v, 0.05)[:-1], battery)
         v.step(0.05)
         got = (v._x, v._y, v._z, v._vx, v._vy, v._vz, v._yaw_rate, v._yaw, v.battery_fraction)
         assert got == expected
@@ -178,7 +178,7 @@ def test_telemetry_is_the_state_plus_seven_noise_draws():
     v.takeoff(2.0)
     draws = np.random.default_rng(5).standard_normal(4096 * 3).tolist()
     used = 0
-    for i in range(1500):  # past the end of the first 4096-draw block
+    for _ in range(1500):  # past the end of the first 4096-draw block
         v.step(0.05)
         v.command_velocity((0.3, -0.2, 0.0), 0.4, v.time_s)
         tel = v.telemetry()

@@ -17,6 +17,7 @@ from masonry.adapters.mavlink import MavlinkFlightController, mavutil_module
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
+from waiting import wait_until
 
 TIME_SCALE = 8.0
 KEY = bytes(range(32))
@@ -45,15 +46,6 @@ def flight(
     finally:
         fc.close()
         sitl.stop()
-
-
-def wait_until(predicate, timeout_s: float, what: str) -> float:
-    started = time.monotonic()
-    while not predicate():
-        if time.monotonic() - started > timeout_s:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
-        time.sleep(0.01)
-    return time.monotonic() - started
 
 
 def take_off(fc: MavlinkFlightController, altitude_m: float = 1.2) -> None:
@@ -121,13 +113,15 @@ def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> 
         fc.connect()
         take_off(fc, 1.0)
         fc.send_velocity((0.3, 0.0, 0.0), 0.0)
-        before = sitl.setpoints_received
-        time.sleep(0.2)
+        before, started = sitl.setpoints_received, time.monotonic()
+        wait_until(lambda: sitl.setpoints_received >= before + 2, 5.0, "repeated setpoints")
         assert sitl.last_setpoint_mps == pytest.approx((0.3, 0.0, 0.0), abs=1e-6)  # repeated while fresh
-        time.sleep(0.8)
-        rate_hz = (sitl.setpoints_received - before) / 1.0
+        wait_until(lambda: sitl.last_setpoint_mps == pytest.approx((0.0, 0.0, 0.0), abs=1e-6), 5.0,
+                   "the stale setpoint to go to zero")  # caller silent: hover
+        wait_until(lambda: time.monotonic() - started >= 1.0, 5.0, "one second of streaming")
+        # the rate over the time that really passed, not over the time a sleep was asked for
+        rate_hz = (sitl.setpoints_received - before) / (time.monotonic() - started)
         assert rate_hz >= 15.0  # >= 10 Hz required by the autopilots; configured 20 Hz
-        assert sitl.last_setpoint_mps == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)  # caller silent: hover
 
 
 def test_link_loss_fires_the_watchdog_and_the_autopilot_failsafe() -> None:
@@ -164,7 +158,7 @@ def test_arming_waits_for_the_position_estimate() -> None:
     with flight(SitlConfig(ekf_converge_s=1000.0), estimate_timeout_s=0.4) as (_sitl, fc):
         fc.connect()
         assert fc.telemetry().position_ok is False
-        with pytest.raises(CommandRejected, match="no usable position estimate .* after 0.4 s"):
+        with pytest.raises(CommandRejected, match=r"no usable position estimate .* after 0\.4 s"):
             fc.arm()
 
 
@@ -208,7 +202,7 @@ def test_a_silent_autopilot_times_out_after_retries() -> None:
     try:
         fc.connect()
         started = time.monotonic()
-        with pytest.raises(CommandTimeout, match="set mode GUIDED: no COMMAND_ACK .* after 3 tries"):
+        with pytest.raises(CommandTimeout, match=r"set mode GUIDED: no COMMAND_ACK .* after 3 tries"):
             fc.set_mode("GUIDED")
         assert 0.4 <= time.monotonic() - started < 1.0
         assert any("SET_MESSAGE_INTERVAL" in w for w in fc.warnings)  # rates were not acknowledged either
@@ -246,6 +240,7 @@ def test_signing_on_both_ends_and_a_wrongly_signed_peer_is_ignored() -> None:
                 rogue.setup_signing(key, sign_outgoing=True)
             rogue.mav.command_long_send(1, 1, 176, 0, 1, 4, 0, 0, 0, 0, 0)  # GUIDED
             rogue.mav.command_long_send(1, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0)  # arm
+            # Something not happening has no event to wait for: give the rogue's datagrams time to arrive.
             time.sleep(0.3)
             rogue.close()
             assert not sitl.vehicle.armed and sitl.mode == "STABILIZE"
@@ -319,7 +314,8 @@ def test_a_failing_pose_source_does_not_stop_the_setpoint_stream() -> None:
         take_off(fc, 0.8)
         fc.send_velocity((0.2, 0.0, 0.0), 0.0)
         before = sitl.setpoints_received
-        time.sleep(0.3)
+        wait_until(lambda: sitl.setpoints_received - before >= 4 and fc.pose_errors > 3, 5.0,
+                   "setpoints and pose errors")
         assert sitl.setpoints_received - before >= 4
         assert fc.pose_errors > 3 and fc.last_pose_error == "RuntimeError: tracker SDK crashed"
 

@@ -20,6 +20,9 @@ from typing import TYPE_CHECKING, Any, Literal
 from masonry.errors import BlueprintError
 
 if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import ArrayLike
+
     from masonry.planner.contacts import Contacts
 
 Role = Literal["brick", "adhesion"]
@@ -534,7 +537,9 @@ def _check_sites(blueprint: Blueprint) -> None:
         )
 
 
-def _inside_footprints(points_xy: Any, footprints: tuple[Any, Any, Any, Any]) -> tuple[int, int] | None:
+def _inside_footprints(
+    points_xy: ArrayLike, footprints: tuple[np.ndarray, np.ndarray, np.ndarray, Any]
+) -> tuple[int, int] | None:
     """(point index, brick index) of the first point strictly inside a brick's footprint, if any.
 
     ``footprints``: the bricks' (n, 2) centres, (n, 2) half sizes, (n,) yaws, and a KD-tree of the centres.
@@ -561,7 +566,7 @@ def _inside_footprints(points_xy: Any, footprints: tuple[Any, Any, Any, Any]) ->
     return hits[0] if hits else None
 
 
-def _close_pair(points: Any, room: Any) -> tuple[int, int] | None:
+def _close_pair(points: ArrayLike, room: np.ndarray) -> tuple[int, int] | None:
     """The first pair (i, j), i < j, of points closer than min(room[i], room[j]), if any."""
     import numpy as np
     from scipy.spatial import cKDTree

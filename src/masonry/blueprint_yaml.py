@@ -106,7 +106,7 @@ def _check_duplicates(loader: Any, node: Any) -> None:
             continue
         key = loader.construct_object(key_node)
         try:
-            first = seen.setdefault(key, key_node.start_mark)
+            first: Any = seen.setdefault(key, key_node.start_mark)
         except TypeError:
             continue  # an unhashable key: the constructor reports it
         if first is not key_node.start_mark:
@@ -198,7 +198,7 @@ def safe_load(text: str) -> Any:
         return yaml.load(text, Loader=GuardedLoader)
 
 
-def _build(text: str) -> Any:
+def _build(text: str) -> Any:  # noqa: C901 - one branch per YAML event kind
     stack: list[Any] = []
     keys: list[Any] = []
     # Per open mapping: key -> line of its first occurrence (duplicate keys are errors naming both lines).
@@ -230,6 +230,7 @@ def _build(text: str) -> Any:
             top[keys[-1]] = value
             keys[-1] = _NO_KEY
 
+    event: Any  # a ScalarEvent or a collection event: each branch reads the attributes its kind has
     for event in yaml.parse(text, Loader=_BASE_LOADER):
         kind = type(event)
         if kind is yaml.ScalarEvent:

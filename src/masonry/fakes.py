@@ -35,14 +35,11 @@ from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
 from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
 from masonry.geometry import R_world_body
-from masonry.perception.types import CameraIntrinsics, TagPose
+from masonry.perception.types import DEFAULT_INTRINSICS, CameraIntrinsics, TagPose
 from masonry.planner.tasks import Task
 from masonry.ports import CameraFrame, Clock, TaskResult, Telemetry
 
 Vec3 = tuple[float, float, float]
-
-#: A 640x480 pinhole camera with a ~56 x 44 degree field of view.
-DEFAULT_INTRINSICS = CameraIntrinsics(fx=600.0, fy=600.0, cx=320.0, cy=240.0)
 
 
 class _Scripted:
@@ -162,7 +159,7 @@ class FakeFlightController(_Scripted):
     # -- dynamics ---------------------------------------------------------------------------------------
     @property
     def on_ground(self) -> bool:
-        return self._pos[2] <= self.ground_z_m + 1e-3 and self._vel[2] <= 1e-6
+        return bool(self._pos[2] <= self.ground_z_m + 1e-3 and self._vel[2] <= 1e-6)
 
     @property
     def position_m(self) -> Vec3:
@@ -471,7 +468,8 @@ class FakeCamera(_Scripted):
         T_world_body = np.eye(4)
         T_world_body[:3, :3] = R_world_body(0.0, 0.0, self.fc.yaw_rad)
         T_world_body[:3, 3] = self.fc.position_m
-        return T_world_body @ self._T_body_cam
+        T_world_cam: np.ndarray = T_world_body @ self._T_body_cam
+        return T_world_cam
 
     def read(self) -> CameraFrame | None:
         now_s = self.fc.clock.now_s()

@@ -20,7 +20,7 @@ import socket
 import threading
 import time
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 from typing_extensions import Self
 
@@ -99,7 +99,7 @@ def parse_pose(data: bytes | str, *, received_s: float) -> MocapPose:
     return MocapPose(body, float(t), position, attitude)  # type: ignore[arg-type]
 
 
-def _scalar(obj: dict, name: str) -> float:
+def _scalar(obj: dict[str, Any], name: str) -> float:
     value = obj.get(name)
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise InputError(f"pose field {name} must be a number")

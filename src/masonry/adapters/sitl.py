@@ -339,7 +339,7 @@ class MavlinkSitl:
         if not self.link_down and self._conn is not None:
             self._conn.mav.statustext_send(severity, text.encode("ascii", errors="replace")[:50])
 
-    def _command(self, msg: Any) -> None:
+    def _command(self, msg: Any) -> None:  # noqa: C901, PLR0915 - one branch per MAVLink command the SITL answers
         cmd = int(msg.command)
         v = self.vehicle
         if cmd == MAV_CMD_COMPONENT_ARM_DISARM:

@@ -188,7 +188,7 @@ class OpenAdapters:
             closer = self._closers.pop()
             try:
                 closer()
-            except Exception:  # noqa: BLE001, S110 - closing must go on whatever one adapter does
+            except Exception:  # closing must go on whatever one adapter does
                 pass
 
 
@@ -233,7 +233,7 @@ def _follow_autopilot(uav: Any, fc: Any) -> None:
     uav.vehicle = TelemetryVehicle(old.config, position_m=old.position_m, yaw_rad=old.yaw_rad)
 
 
-def open_adapters(
+def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the opened ones on failure
     hw: HardwareConfig,
     *,
     blueprint: Any,

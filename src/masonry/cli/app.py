@@ -68,8 +68,10 @@ def _option_type(self: Any, ctx: Any) -> str | None:
         from typing import get_args
 
         args = get_args(desc.annotation)
-        return f"<{self._bare_type(args[0]).lower()}>" if len(args) == 1 else _original[type(self)](self, ctx)
-    return _original[type(self)](self, ctx)
+        if len(args) == 1:
+            return f"<{self._bare_type(args[0]).lower()}>"
+    metavar: str | None = _original[type(self)](self, ctx)
+    return metavar
 
 
 _original: dict[type, Any] = {}

@@ -134,7 +134,7 @@ def _describe(hw: Any) -> str:
 
 
 @command("fly")
-def fly(
+def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then the call
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
     blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),

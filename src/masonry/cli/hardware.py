@@ -19,7 +19,7 @@ def sitl_home(blueprint: Any, role: str, name: str | None) -> tuple[tuple[float,
             if spec.role != role:
                 article = "an" if spec.role[:1] in "aeiou" else "a"
                 raise InputError(f"--name {name}: {name} is not a {role} UAV (it is {article} {spec.role} UAV)")
-            return tuple(spec.home_m), spec.name  # type: ignore[return-value]
+            return tuple(spec.home_m), spec.name
     who = f"named {name}" if name is not None else f"of role {role}"
     raise InputError(f"{blueprint.source}: the fleet has no UAV {who}")
 

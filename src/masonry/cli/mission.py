@@ -60,7 +60,7 @@ def keygen(
 
 
 @command("mission-control")
-def mission_control(
+def mission_control(  # noqa: PLR0915 - a command: its options checked in order, then the call
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."),
     listen: list[str] = typer.Option([DEFAULT_LISTEN], "--listen", help="Zenoh endpoint(s) to listen on "
                                      "(a real interface, e.g. tcp/10.0.0.1:7447, needs --key-file or --insecure)."),
@@ -97,9 +97,9 @@ def mission_control(
     from masonry.mission.journal import open_mission_journal
     from masonry.mission.messages import MISSION_CONTROL
     from masonry.mission.report import control_report
-    from masonry.mission.simulate import POLICIES, priority_durations_s
+    from masonry.mission.simulate import priority_durations_s
     from masonry.mission.zenoh_transport import ZenohTransport
-    from masonry.planner import estimate_durations_s
+    from masonry.planner import POLICIES, estimate_durations_s
     from masonry.planner import plan as make_plan
 
     if fmt not in ("text", "json"):

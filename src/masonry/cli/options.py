@@ -28,7 +28,7 @@ class Bound:
         """The range as help and errors show it: ``0.001 to 1 s``, ``> 0 to 100``."""
 
         def fmt(v: float) -> str:
-            return f"{int(v):d}" if self.integer or float(v).is_integer() and abs(v) < 1e15 else f"{v:g}"
+            return f"{int(v):d}" if self.integer or (float(v).is_integer() and abs(v) < 1e15) else f"{v:g}"
 
         unit = f" {self.unit}" if self.unit else ""
         low = f"> {fmt(self.low)}" if self.low_open else fmt(self.low)

@@ -10,10 +10,13 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
+from masonry.blueprint import DEFAULT_BRICK_SIZE_M, MarkerSpec
 from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text, plural
 from masonry.cli.outputs import atomic_path, check_output_path
 from masonry.errors import DeviceNotFound, InputError
+
+_MARKERS = MarkerSpec()  # the options' defaults are the blueprint's marker defaults
 
 if TYPE_CHECKING:
     import numpy as np
@@ -147,12 +150,12 @@ def estimate(
         None, "--calibration", help="OpenCV FileStorage YAML from `masonry calibrate`."
     ),
     marker_size: float = typer.Option(
-        0.05, "--marker-size", help=help_text("estimate", "--marker-size", "Marker side (black border included), metres.")
+        _MARKERS.size_m, "--marker-size", help=help_text("estimate", "--marker-size", "Marker side (black border included), metres.")
     ),
     spacing: float = typer.Option(
-        0.175, "--spacing", help=help_text("estimate", "--spacing", "Distance between a brick's two marker centres, m.")
+        _MARKERS.spacing_m, "--spacing", help=help_text("estimate", "--spacing", "Distance between a brick's two marker centres, m.")
     ),
-    dictionary: str = typer.Option("DICT_4X4_50", "--dictionary", help="OpenCV ArUco dictionary name."),
+    dictionary: str = typer.Option(_MARKERS.dictionary, "--dictionary", help="OpenCV ArUco dictionary name."),
     up: str | None = typer.Option(
         None,
         "--up",
@@ -233,13 +236,13 @@ def markers_cmd(
         ..., "--bricks", help="Brick ids, e.g. 0-9 or 0,2,5-7 (brick k: markers 2k, 2k+1)."
     ),
     output: Path = typer.Option(..., "-o", "--output", help="FILE.pdf (one page per brick) or FILE.png."),
-    marker_size: float = typer.Option(0.05, "--marker-size", help=help_text("markers", "--marker-size", "Marker side, metres.")),
+    marker_size: float = typer.Option(_MARKERS.size_m, "--marker-size", help=help_text("markers", "--marker-size", "Marker side, metres.")),
     spacing: float = typer.Option(
-        0.175, "--spacing", help=help_text("markers", "--spacing", "Distance between the two marker centres, metres.")
+        _MARKERS.spacing_m, "--spacing", help=help_text("markers", "--spacing", "Distance between the two marker centres, metres.")
     ),
-    dictionary: str = typer.Option("DICT_4X4_50", "--dictionary", help="OpenCV ArUco dictionary name."),
+    dictionary: str = typer.Option(_MARKERS.dictionary, "--dictionary", help="OpenCV ArUco dictionary name."),
     brick_size: str = typer.Option(
-        "0.30,0.15,0.10", "--brick-size", help="Brick length,width,height, metres."
+        ",".join(f"{v:.2f}" for v in DEFAULT_BRICK_SIZE_M), "--brick-size", help="Brick length,width,height, metres."
     ),
     paper: str = typer.Option("a4", "--paper", help="a4 | a3 | letter (landscape)."),
     dpi: int = typer.Option(300, "--dpi", help=help_text("markers", "--dpi", "Resolution of PNG output.")),

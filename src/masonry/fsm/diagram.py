@@ -167,7 +167,7 @@ def _edges(kind: str) -> list[tuple[str, str, str, str]]:
     return out
 
 
-def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[dict[str, Any]]:
+def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[dict[str, Any]]:  # noqa: C901, PLR0915 - one case per edge shape of the layout
     """Each arrow as a polyline (or an arc) with its label's place: the task flow's arrows run between rows, a
     long one along a lane on the left; the arrows into the failsafe column run along one bus per trigger."""
     boxes = {**leaves, **parents}

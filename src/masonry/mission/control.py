@@ -197,7 +197,7 @@ class MissionControl:
         from masonry.errors import JournalError
 
         done = {rec.task_id: rec for rec in state.done}
-        unknown = sorted(({t for t in done} | {f.task_id for f in state.failures}) - set(self._tasks))
+        unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self._tasks))
         if unknown:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
         attempts = {k: int(v) for k, v in state.attempts.items()}
@@ -289,7 +289,7 @@ class MissionControl:
         self.started_at_s = now_s
         self._dirty = True
 
-    def _handle(self, raw: bytes, now_s: float) -> None:
+    def _handle(self, raw: bytes, now_s: float) -> None:  # noqa: C901 - one branch per message type
         try:
             msg = decode(raw, self.uavs.keys())
         except ProtocolError as exc:

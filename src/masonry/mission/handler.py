@@ -259,7 +259,7 @@ class UavHandler:
     def columns(self) -> tuple[Vec3, ...]:
         """Sites of the columns this UAV holds."""
         cur = (self._column,) if self._column is not None and self._column_granted else ()
-        return tuple(self._columns_left) + cur  # type: ignore[operator]
+        return tuple(self._columns_left) + cur
 
     def _check_columns(self, now_s: float) -> None:
         """Free columns the UAV has left (``radius_m`` away horizontally); all of them once it has landed."""

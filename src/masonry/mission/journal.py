@@ -249,7 +249,7 @@ class Journal:
             raise JournalUnusable(
                 f"{where}: journal schema version {version}, this masonry reads version {SCHEMA_VERSION}"
             )
-        elif not _TABLES <= tables:
+        elif not tables >= _TABLES:
             raise JournalUnusable(
                 f"{where}: damaged journal (tables missing: {', '.join(sorted(_TABLES - tables))})")
         try:
@@ -269,7 +269,7 @@ class Journal:
                 finally:
                     self._conn = None
 
-    def __enter__(self) -> Journal:  # noqa: PYI034 - Self needs Python 3.11
+    def __enter__(self) -> Journal:  # not Self: that needs Python 3.11
         return self.open()
 
     def __exit__(
@@ -411,7 +411,7 @@ def _read_only_replay(p: Path) -> JournalState:
     return _fold(str(p), rows, meta_rows)
 
 
-def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ...]]) -> JournalState:
+def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ...]]) -> JournalState:  # noqa: C901 - one branch per journal row kind
     records: list[JournalRecord] = []
     done: dict[str, DoneRecord] = {}
     attempts: dict[str, int] = {}

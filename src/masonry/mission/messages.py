@@ -32,7 +32,7 @@ import json
 import math
 from collections.abc import Collection
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
@@ -132,7 +132,7 @@ class Clearance:
     layer_m: float | None = None
 
 
-Message = Union[Heartbeat, Assign, Progress, Result, MissionEnd, ClearanceRequest, Clearance]
+Message = Heartbeat | Assign | Progress | Result | MissionEnd | ClearanceRequest | Clearance
 
 _TYPE_NAMES: dict[type, str] = {
     Heartbeat: "heartbeat",
@@ -394,7 +394,7 @@ def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
 _last_decoded: list[tuple[bytes | str, Message] | None] = [None]
 
 
-def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
+def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:  # noqa: C901 - one branch per message type
     """:func:`decode` without its cache of the last broadcast (same arguments, result and errors)."""
     try:
         data = _loads(raw)

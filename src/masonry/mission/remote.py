@@ -62,7 +62,7 @@ def _key_hint(transport: Any, handler: UavHandler) -> str:
     return ""
 
 
-def run_remote_uav(
+def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     blueprint: Blueprint,
     spec: UavSpec,
     *,

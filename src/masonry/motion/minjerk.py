@@ -183,7 +183,7 @@ class MinJerk:
         t_arr = np.asarray(t, dtype=float)
         tc = np.clip(t_arr, 0.0, T)[..., None]
         d = self._deriv(order)
-        out = np.zeros(t_arr.shape + (3,))
+        out = np.zeros((*t_arr.shape, 3))
         for i in range(len(d) - 1, -1, -1):
             out = out * tc + d[i]
         outside = (t_arr < 0.0) | (t_arr > T)

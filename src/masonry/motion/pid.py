@@ -159,7 +159,7 @@ class PID:
         )
         return np.array((vx, vy, vz)), w
 
-    def step_floats(
+    def step_floats(  # noqa: PLR0915 - the hot path, inlined on purpose (benchmarks/bench_motion.py)
         self,
         now_s: float,
         position_m: Sequence[float] | np.ndarray,

@@ -16,10 +16,11 @@ from masonry.perception.estimation import (
     refine_markers_bfgs,
     yaw_about_rad,
 )
-from masonry.perception.types import BrickEstimate, CameraIntrinsics, TagPose
+from masonry.perception.types import DEFAULT_INTRINSICS, BrickEstimate, CameraIntrinsics, TagPose
 
 __all__ = [
     "C_TH",
+    "DEFAULT_INTRINSICS",
     "BrickEstimate",
     "CameraIntrinsics",
     "EstimatorConfig",

@@ -119,7 +119,7 @@ def _subpix_corners(grey: np.ndarray, corners: np.ndarray) -> np.ndarray:
     ).reshape(4, 2)
     # cornerSubPix can jump to a neighbouring feature on a tiny marker: keep only small moves.
     moved = np.linalg.norm(refined - corners, axis=1)
-    return np.where((moved < 0.25 * half + 1.0)[:, None], refined, corners).astype(np.float64)  # type: ignore[no-any-return]
+    return np.where((moved < 0.25 * half + 1.0)[:, None], refined, corners).astype(np.float64)
 
 
 _EDGE_SAMPLES = 12  # profiles per side, spread over its middle (away from the rounded-off corners)
@@ -296,7 +296,7 @@ def brick_corner_layout(markers: MarkerSpec, marker_ids: tuple[int, ...]) -> np.
 
 
 def _rotation(rvec: np.ndarray) -> np.ndarray:
-    return cv2.Rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3))[0]  # type: ignore[no-any-return]
+    return cv2.Rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3))[0]
 
 
 def detect_tags(

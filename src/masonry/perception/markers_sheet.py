@@ -69,7 +69,7 @@ def _marker_bits(dictionary: str, marker_id: int) -> np.ndarray:
     if not 0 <= marker_id < count:
         raise PerceptionError(f"marker id {marker_id} is not in {dictionary} (ids 0..{count - 1})")
     cells = d.markerSize + 2
-    return cv2.aruco.generateImageMarker(d, marker_id, cells, borderBits=1)  # type: ignore[no-any-return]
+    return cv2.aruco.generateImageMarker(d, marker_id, cells, borderBits=1)
 
 
 def _draw_page(

@@ -118,7 +118,7 @@ def render_frame(
     out *= _vignette(w, h) * gain
     if noise_sigma > 0.0:
         out += _noise_window(gen, w, h) * float(noise_sigma)
-    return np.clip(out, 0.0, 255.0).astype(np.uint8)  # type: ignore[no-any-return]
+    return np.clip(out, 0.0, 255.0).astype(np.uint8)
 
 
 def look_down(
@@ -277,7 +277,8 @@ def _ground_texture() -> np.ndarray:
     field = (field - field.mean()) / field.std()
     grit = gen.standard_normal((n, n)) * 0.35  # fine grain of the surface
     albedo = _GROUND_ALBEDO * (1.0 + 0.18 * field + 0.06 * grit)
-    return np.clip(albedo * _EXPOSURE * _shade(np.array([0.0, 0.0, 1.0])), 0, 255).astype(np.uint8)
+    ground: np.ndarray = np.clip(albedo * _EXPOSURE * _shade(np.array([0.0, 0.0, 1.0])), 0, 255)
+    return ground.astype(np.uint8)
 
 
 def _draw_ground(cam: _Camera, bricks: Sequence[RenderedBrick]) -> np.ndarray:
@@ -319,7 +320,7 @@ def _draw_ground(cam: _Camera, bricks: Sequence[RenderedBrick]) -> np.ndarray:
                 px = cam.project_cam(pts_c)
                 _fill(shadow, (px - 0.5) @ to_half, dark)
         half = cv2.multiply(half, shadow, scale=1.0 / 255.0)
-    return cv2.resize(half, (w, h), interpolation=cv2.INTER_LINEAR)  # type: ignore[no-any-return]
+    return cv2.resize(half, (w, h), interpolation=cv2.INTER_LINEAR)
 
 
 def _brick_rotation(yaw_rad: float) -> np.ndarray:
@@ -397,7 +398,7 @@ def _sticker_texture(dictionary: str, marker_id: int, px_per_cell: int) -> np.nd
     img = cv2.copyMakeBorder(
         img, px_per_cell, px_per_cell, px_per_cell, px_per_cell, cv2.BORDER_CONSTANT, value=255
     )
-    return np.where(img > 127, _PAPER_ALBEDO, _INK_ALBEDO).astype(np.float32)  # type: ignore[no-any-return]
+    return np.where(img > 127, _PAPER_ALBEDO, _INK_ALBEDO).astype(np.float32)
 
 
 def sticker_half_size_m(markers: MarkerSpec, marker_cells: int) -> float:

@@ -26,6 +26,10 @@ class CameraIntrinsics:
         return np.asarray(self.distortion, dtype=float)
 
 
+DEFAULT_INTRINSICS = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
+"""640x480, 500 px focal length: about 65 degrees horizontal field of view (the simulated and the fake camera)."""
+
+
 @dataclass(frozen=True, eq=False)
 class TagPose:
     """Pose of one ArUco marker in the camera frame: centre ``position_m`` (3,), rotation ``R_cam_marker`` (3, 3).

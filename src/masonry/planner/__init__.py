@@ -10,7 +10,7 @@ from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 
 __all__ = ["AdhesionTask", "BrickTask", "Plan", "Task", "adhesion_segments", "plan"]
 
-# The dispatcher (issue 5) adds its names below this line.
+# After the plan values: the bounds and the dispatcher, which build on them.
 from masonry.planner.bounds import estimate_durations_s, lower_bound_s, min_cycles_s, min_durations_s
 from masonry.planner.dispatch import POLICIES, Assignment, Dispatcher
 

@@ -1,6 +1,6 @@
 """Makespan lower bound of a plan for a fleet, and expected task durations to feed it and the dispatcher.
 
-The bound (issue 5, section 3) is the larger of
+The bound is the larger of
 
 * the longest dependency chain of task durations (no schedule can run a chain faster than its sum), and
 * for each role, the total work of that role divided by the number of UAVs of that role (they can at best share
@@ -108,11 +108,11 @@ def lower_bound_s(
     """
     dur = _check_durations(plan, durations_s)
     per_task = dur if work_s is None else _check_durations(plan, work_s)
-    count = {r: 0 for r in ROLES}
+    count = dict.fromkeys(ROLES, 0)
     for spec in fleet:
         count[spec.role] = count.get(spec.role, 0) + 1
-    work = {r: 0.0 for r in ROLES}
-    tasks_of = {r: 0 for r in ROLES}
+    work = dict.fromkeys(ROLES, 0.0)
+    tasks_of = dict.fromkeys(ROLES, 0)
     for t in plan.tasks:
         if not t.done:
             work[t.kind] += per_task[t.id]

@@ -108,7 +108,7 @@ class Dispatcher:
             a dependency cycle, or bad durations.
     """
 
-    def __init__(
+    def __init__(  # noqa: C901, PLR0915 - builds the dispatcher's tables in one pass
         self,
         plan: Plan,
         fleet: Sequence[UavSpec],
@@ -194,7 +194,7 @@ class Dispatcher:
         }
         self._live: set[str] = set(self._fleet)
         self._uav_task: dict[str, int] = {}
-        self._live_count: dict[str, int] = {r: 0 for r in ROLES}
+        self._live_count: dict[str, int] = dict.fromkeys(ROLES, 0)
         for s in self._fleet.values():
             self._live_count[s.role] += 1
 

@@ -93,9 +93,16 @@ def plan_json(plan: Plan | PlanGraphs) -> str:
 
 
 def _pairs_json(
-    plan: Plan | PlanGraphs, pairs: Sequence[tuple[str, str]] | None, indices: Any, chunk: int = 1_000_000
+    plan: Plan | PlanGraphs,
+    pairs: Sequence[tuple[str, str]] | None,
+    indices: tuple[np.ndarray, np.ndarray] | None,
+    chunk: int = 1_000_000,
 ) -> Iterator[str]:
-    count = len(pairs) if pairs is not None else len(indices[0])
+    if pairs is None:
+        assert indices is not None, "the pairs or their indices"
+        count = len(indices[0])
+    else:
+        count = len(pairs)
     if count == 0:
         yield "[]"
         return
@@ -104,6 +111,7 @@ def _pairs_json(
         a = np.fromiter((position[p[0]] for p in pairs), dtype=np.int64, count=len(pairs))
         b = np.fromiter((position[p[1]] for p in pairs), dtype=np.int64, count=len(pairs))
     else:
+        assert indices is not None  # pairs is None here, or indices match the pairs
         a, b = np.asarray(indices[0], dtype=np.int64), np.asarray(indices[1], dtype=np.int64)
     # Each id as its quoted JSON bytes, NUL-padded to a fixed width; a pair is then a fixed-width record whose
     # NULs are dropped at the end. Ids here are "B<int>" / "A<int>", so json.dumps adds no escapes.

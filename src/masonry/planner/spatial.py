@@ -30,7 +30,7 @@ def cell_coordinates(points: NDArray[np.float64], cell_size: NDArray[np.float64]
     return cells
 
 
-def neighbour_pairs(
+def neighbour_pairs(  # noqa: PLR0915 - one vectorised sweep over the grid cells
     cells: IntArray, chunk_pairs: int = 2_000_000, reach: int = 1, max_gap: float | None = None
 ) -> Iterator[tuple[IntArray, IntArray]]:
     """Yield index arrays ``(a, b)`` of every unordered pair of items at most ``reach`` cells apart, once each.

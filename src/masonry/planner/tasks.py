@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, Union
+from typing import Any, Literal
+
+from masonry.blueprint import DEFAULT_BRICK_SIZE_M
 
 TaskKind = Literal["brick", "adhesion"]
 
@@ -19,7 +21,7 @@ class BrickTask:
     position_m: tuple[float, float, float]
     yaw_rad: float
     pickup_m: tuple[float, float, float] | None
-    size_m: tuple[float, float, float] = (0.30, 0.15, 0.10)
+    size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
 
     kind: TaskKind = "brick"
 
@@ -49,7 +51,7 @@ class AdhesionTask:
         return tuple((a + b) / 2.0 for a, b in zip(self.start_m, self.end_m))  # type: ignore[return-value]
 
 
-Task = Union[BrickTask, AdhesionTask]
+Task = BrickTask | AdhesionTask
 
 
 @dataclass(frozen=True)

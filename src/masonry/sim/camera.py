@@ -21,13 +21,10 @@ import numpy as np
 
 from masonry.blueprint import MarkerSpec
 from masonry.geometry import R_world_body
-from masonry.perception.types import CameraIntrinsics, TagPose
+from masonry.perception.types import DEFAULT_INTRINSICS, CameraIntrinsics, TagPose
 from masonry.sim.bricks import SimBrick, point_in_rect
 
 __all__ = ["DEFAULT_INTRINSICS", "CameraConfig", "R_world_body", "observe_markers"]
-
-DEFAULT_INTRINSICS = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
-"""640x480, 500 px focal length: about 65 degrees horizontal field of view."""
 
 
 @dataclass(frozen=True)
@@ -173,7 +170,7 @@ def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
     sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
     cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
-    return np.eye(3)[None] + sin * K + cos * (K @ K)  # type: ignore[no-any-return]
+    return np.eye(3)[None] + sin * K + cos * (K @ K)
 
 
 def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:

@@ -400,7 +400,7 @@ class SimVehicle:
         self._held = False
         self._contact_s = 0.0
 
-    def step(self, dt_s: float) -> None:
+    def step(self, dt_s: float) -> None:  # noqa: C901, PLR0915 - the physics step, inlined for speed (benchmarks/bench_sim_world.py)
         """Advance the vehicle by ``dt_s`` seconds."""
         # Hot path (every airborne vehicle, every physics step): clamps are written as comparisons with the
         # semantics of the builtins (``max(a, b)`` is ``b if b > a else a``), no helper calls.

@@ -152,7 +152,8 @@ def draw_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> Pa
     if drawn:
         dense = drawn > 100 or not labels
         ax.add_collection(
-            LineCollection(np.stack([xy[ca], xy[cb]], axis=1), colors=CONFLICT_COLOUR,
+            # an (N, 2, 2) array is what LineCollection draws; its stub only names a Sequence of segments
+            LineCollection(np.stack([xy[ca], xy[cb]], axis=1), colors=CONFLICT_COLOUR,  # type: ignore[arg-type]
                            linestyles="solid" if drawn > 2000 else "dashed",  # dashes cost minutes when dense
                            linewidths=0.4 if dense else 0.9, alpha=0.2 if dense else 0.8, zorder=1)
         )
@@ -165,8 +166,8 @@ def draw_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> Pa
     elif plan.dependencies:
         du = np.array([index[u] for u, _ in plan.dependencies], dtype=np.int64)
         dv = np.array([index[v] for _, v in plan.dependencies], dtype=np.int64)
-        ax.add_collection(LineCollection(np.stack([xy[du], xy[dv]], axis=1), colors="black", linewidths=0.4,
-                                         zorder=2))
+        segments = np.stack([xy[du], xy[dv]], axis=1)
+        ax.add_collection(LineCollection(segments, colors="black", linewidths=0.4, zorder=2))  # type: ignore[arg-type]
     size = 600 if labels else max(4.0, 6000.0 / max(n, 1))
     for kind in ("brick", "adhesion"):
         for done in (False, True):
