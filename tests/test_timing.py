@@ -182,3 +182,24 @@ def _machine_requests(kind: str, config: UavConfig, task) -> list[float]:
             sites.append((site[0], site[1], max(site[2], site[2] if top is None else float(top))))
     assert len(sites) >= want, (rig.states, link.requests)
     return [s[2] for s in sites]
+
+
+def test_mission_control_raises_its_layers_with_the_uavs_timing() -> None:
+    """Layer 0 rises over the work done with the altitudes of the UAVs' timing, not the default one."""
+    from masonry.mission.airspace import layer_base_m
+    from masonry.mission.control import MissionControl
+    from masonry.mission.inproc import InprocBus
+    from masonry.mission.messages import MISSION_CONTROL
+
+    bp = running_bond(8, 2, placed_courses=2, brick_uavs=1, adhesion_uavs=1)
+    p = plan(bp)
+    cruise = bp.cruise_altitude_m
+    placed = [t for t in p.tasks if t.done]
+    for timing in (DEFAULT_TIMING, dataclasses.replace(DEFAULT_TIMING, clearance_m=0.6, spray_height_m=0.2)):
+        final = layer_base_m(bp, timing=timing)
+        mc = MissionControl(p, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
+                            layer_floor_m=cruise, timing=timing)
+        built = max(task_work_altitude_m(t, cruise, timing=timing) for t in placed)
+        assert mc.columns.layer_base_m == pytest.approx(max(cruise, built))
+        assert mc.columns.layer_base_m < final
+    assert layer_base_m(bp, timing=timing) >= layer_base_m(bp) + 0.3 - 1e-9  # the clearance is 0.3 m higher
