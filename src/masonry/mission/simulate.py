@@ -155,10 +155,11 @@ def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: U
                    lateral_altitude_m: float | None = None, template: UavConfig | None = None) -> Any:
     from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 
-    own = {"name": spec.name, "role": spec.role, "home_m": spec.home_m,
-           "cruise_altitude_m": blueprint.cruise_altitude_m, "markers": blueprint.markers,
-           "lateral_altitude_m": lateral_altitude_m}
-    config = UavConfig(**own) if template is None else dataclasses.replace(template, **own)  # type: ignore[arg-type]
+    # the template's tuning (default: UavConfig's), with this UAV's identity, home, layer and the blueprint's
+    base = template if template is not None else UavConfig(spec.name, spec.role, spec.home_m)
+    config = dataclasses.replace(base, name=spec.name, role=spec.role, home_m=spec.home_m,
+                                 cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
+                                 lateral_altitude_m=lateral_altitude_m)
     if spec.role == "brick":
         return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock)
     return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock)
@@ -375,9 +376,11 @@ def _run(
         resumed_from = float(state.last_time_s or 0.0)
 
     airframe = {} if uav_config is None else {"airframe": uav_config.airframe}
-    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0, **airframe)
+    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0,
+                  **airframe)
     measured = _MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
-    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
+    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m,
+                                      timing=timing)
     minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
     wall = wall_digest(blueprint)
     bus = InprocBus()
