@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 
@@ -18,6 +19,11 @@ from masonry.planner.bounds import (
     lower_bound_s,
 )
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
+from masonry.timing import DEFAULT_TIMING
+
+
+def timing(**fields: float):
+    return dataclasses.replace(DEFAULT_TIMING, **fields)
 
 
 def brick(i: int, x: float, *, done: bool = False, z: float = 0.05) -> BrickTask:
@@ -91,10 +97,10 @@ def test_estimates_follow_the_flight() -> None:
     assert est["B1"] - est["B0"] == pytest.approx((5.0 + math.hypot(1.0, 3.0)) - (1.0 + 1.0))
     assert est["B2"] < est["B0"]  # a higher drop-off: a shorter climb back to cruise altitude
     assert est["A1"] - est["A0"] == pytest.approx(0.45 / 0.15)
-    faster = estimate_durations_s(plan, uavs(1, 1), cruise_speed_mps=2.0)
+    faster = estimate_durations_s(plan, uavs(1, 1), timing=timing(cruise_speed_mps=2.0))
     assert faster["B1"] < est["B1"] and faster["A0"] == est["A0"]
     with pytest.raises(PlanningError, match="cruise_speed_mps must be finite and > 0"):
-        estimate_durations_s(plan, uavs(1, 1), cruise_speed_mps=0.0)
+        estimate_durations_s(plan, uavs(1, 1), timing=timing(cruise_speed_mps=0.0))
 
 
 def test_estimate_approach_uses_the_nearest_brick_home_or_the_drop_off() -> None:
@@ -157,22 +163,59 @@ def test_min_cycles_add_the_flight_from_the_nearest_drop_off_or_home() -> None:
     plan = Plan(tasks, (), ())
     fleet = [UavSpec("brick-1", "brick", (0.0, -10.0, 0.0)), UavSpec("glue-1", "adhesion", (5.0, -10.0, 0.0))]
     base = {"B0": 30.0, "B1": 31.0, "A0": 10.0}
-    cycles = min_cycles_s(plan, fleet, base, cruise_speed_mps=1.0, min_leg_s=1.0, arrive_tolerance_m=0.1)
+    cycles = min_cycles_s(plan, fleet, base, timing=timing(cruise_speed_mps=1.0, arrive_tolerance_m=0.1), min_leg_s=1.0)
     flight = math.hypot(1.0, 4.0) - 0.2  # peak speed 1 m/s; 0.1 m of slack at each end
     assert cycles["B0"] == pytest.approx(30.0 + flight - 1.0)
     assert cycles["B1"] == pytest.approx(31.0 + flight - 1.0)
     assert cycles["A0"] == 10.0  # no sound approach term for adhesion
     # the home is nearer when it is right behind the pickup
     near_home = [UavSpec("brick-1", "brick", (0.0, -4.5, 0.0)), fleet[1]]
-    cycles = min_cycles_s(plan, near_home, base, arrive_tolerance_m=0.1)
+    cycles = min_cycles_s(plan, near_home, base, timing=timing(arrive_tolerance_m=0.1))
     assert cycles["B0"] == pytest.approx(30.0)  # 0.5 m - slack: less than the last leg's 1 s, nothing added
     # the role term uses them, the chain term does not
     seq = Plan(tasks, (("B1", "B0"),), ())
     assert lower_bound_s(seq, fleet, base) == pytest.approx(61.0)
-    work = min_cycles_s(seq, fleet, base, arrive_tolerance_m=0.1)
+    work = min_cycles_s(seq, fleet, base, timing=timing(arrive_tolerance_m=0.1))
     assert lower_bound_s(seq, fleet, base, work_s=work) == pytest.approx(61.0 + 2 * (flight - 1.0))
     assert longest_chain_s(seq, base) == pytest.approx(61.0)
     with pytest.raises(PlanningError, match=r"work_s|durations_s"):
         lower_bound_s(seq, fleet, base, work_s={"B0": 1.0})
     with pytest.raises(PlanningError, match="cruise_speed_mps"):
-        min_cycles_s(seq, fleet, base, cruise_speed_mps=0.0)
+        min_cycles_s(seq, fleet, base, timing=timing(cruise_speed_mps=0.0))
+
+
+def test_the_old_keywords_still_work_with_a_deprecation_warning() -> None:
+    from masonry.planner.bounds import min_cycles_s, min_durations_s
+
+    plan = Plan((brick(0, 1.0), brick(1, 2.0), glue(0, 0.0)), (), ())
+    fleet = uavs(1, 1)
+    with pytest.warns(DeprecationWarning, match=r"descent_s=.*timing=.*descent_duration_s=\.\.\."):
+        old = min_durations_s(plan, descent_s=5.0, effector_offset_z_m=-0.5)
+    assert old == min_durations_s(plan, timing=timing(descent_duration_s=5.0, effector_offset_m=(0.0, 0.0, -0.5)))
+    with pytest.warns(DeprecationWarning, match="leg_peak_factor"):
+        faster = min_durations_s(plan, leg_peak_factor=1.0)
+    assert all(faster[k] <= v for k, v in min_durations_s(plan).items())
+    with pytest.warns(DeprecationWarning, match="cruise_speed_mps="):
+        old_est = estimate_durations_s(plan, fleet, cruise_speed_mps=2.0, spray_descent_s=1.0)
+    assert old_est == estimate_durations_s(plan, fleet, timing=timing(cruise_speed_mps=2.0, spray_descent_s=1.0))
+    with pytest.warns(DeprecationWarning, match="arrive_tolerance_m="):
+        old_cycles = min_cycles_s(plan, fleet, arrive_tolerance_m=0.2, effector_offset_m=(0.1, 0.0, -0.45))
+    assert old_cycles == min_cycles_s(plan, fleet, timing=timing(arrive_tolerance_m=0.2,
+                                                                  effector_offset_m=(0.1, 0.0, -0.45)))
+    with pytest.raises(TypeError, match="unexpected keyword argument 'descent_duration_s'"):
+        min_durations_s(plan, descent_duration_s=5.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'clearance_m'"):
+        estimate_durations_s(plan, fleet, clearance_m=0.5)
+
+
+def test_the_default_timing_is_the_default_uav_config() -> None:
+    """The bounds' default numbers are the machines' (``UavConfig``'s defaults come from ``TaskTiming``)."""
+    from masonry.fsm import UavConfig
+    from masonry.planner.bounds import min_durations_s
+
+    plan = Plan((brick(0, 1.0), glue(0, 0.0)), (), ())
+    config_timing = UavConfig("b", "brick", (0.0, 0.0, 0.0)).timing()
+    assert config_timing == DEFAULT_TIMING
+    assert min_durations_s(plan) == min_durations_s(plan, timing=config_timing)
+    slower = min_durations_s(plan, timing=timing(descent_duration_s=9.0))
+    assert slower["B0"] > min_durations_s(plan)["B0"] and slower["A0"] == min_durations_s(plan)["A0"]

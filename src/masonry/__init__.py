@@ -73,6 +73,7 @@ from masonry.ports import (
     Telemetry,
 )
 from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
+from masonry.timing import TaskTiming
 
 __version__ = "0.1.0.dev0"
 
@@ -145,6 +146,7 @@ __all__ = [
     "TagPose",
     "Task",
     "TaskResult",
+    "TaskTiming",
     "Telemetry",
     "UavConfig",
     "UavHandler",

@@ -7,6 +7,8 @@ from typing import Any
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, MarkerSpec, Role, UavSpec
+from masonry.timing import DEFAULT_TIMING as _T
+from masonry.timing import TaskTiming
 
 Vec3 = tuple[float, float, float]
 
@@ -16,7 +18,9 @@ class UavConfig:
     """One UAV: identity, home, airframe, and the tuning of its task sequence (SI units).
 
     Defaults follow the paper where it gives a value (C_th = 0.75, minimum-jerk descent t_f = 7 s) and are
-    otherwise chosen for the paper's indoor arena (a motion-capture volume of a few metres).
+    otherwise chosen for the paper's indoor arena (a motion-capture volume of a few metres). The fields the
+    makespan bound and the airspace count take their defaults from :class:`masonry.timing.TaskTiming`
+    (:meth:`timing`).
     """
 
     name: str
@@ -26,12 +30,12 @@ class UavConfig:
     markers: MarkerSpec = field(default_factory=MarkerSpec)
     airframe: Airframe = DEFAULT_AIRFRAME
     # Flight
-    control_period_s: float = (
-        0.1  # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
-    )
-    cruise_speed_mps: float = 1.0  # peak speed of a lateral min-jerk leg (which lasts 1.875 x distance / this)
-    vertical_speed_mps: float = 0.4  # average speed of a climb leg
-    arrive_tolerance_m: float = 0.08  # a leg is over when the body is this close to its end
+    # control loop period: 10 Hz setpoints (ArduPilot guided and PX4 offboard need > 2 Hz)
+    control_period_s: float = _T.control_period_s
+    # peak speed of a lateral min-jerk leg, which lasts MIN_JERK_PEAK_TO_MEAN_SPEED (1.875) x distance / this
+    cruise_speed_mps: float = _T.cruise_speed_mps
+    vertical_speed_mps: float = _T.vertical_speed_mps  # peak speed of a climb leg (as cruise_speed_mps)
+    arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
     align_tolerance_m: float = 0.015  # horizontal alignment of the tool before a descent
     align_yaw_tolerance_rad: float = 0.05
     # In gusts the tool rarely sits within align_tolerance_m at a tick: after hovering align_patience_s past the
@@ -47,7 +51,7 @@ class UavConfig:
     # simulated vehicle's ``velocity_tau_s``): a leg's reference acceleration times this is added to its velocity
     # feed-forward, so the UAV does not trail the reference and overshoot its end (0: velocity feed-forward only)
     velocity_lag_s: float = 0.3
-    clearance_m: float = 0.30  # transit altitude keeps a carried brick this far above the drop-off
+    clearance_m: float = _T.clearance_m  # transit altitude keeps a carried brick this far above the drop-off
     # Transit layer (docs/safety.md): mission control hands out the altitude of each lateral leg; this one is for
     # a link without clearances (or mission control silent): lateral legs longer than ``layer_min_leg_m`` fly at
     # it, climbing to it first and descending from it last. None: no fixed layer.
@@ -63,38 +67,42 @@ class UavConfig:
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this
     # Brick pickup (paper, Section IV)
     confidence_threshold: float = 0.75  # C_th
-    min_estimates: int = 10  # estimates in the window before its confidence counts
+    min_estimates: int = _T.min_estimates  # estimates in the window before its confidence counts
     window_size: int = 30  # N^W
     sigma_tol_m: float = 0.04  # sigma_tol of the confidence metric
-    settle_time_s: float = 0.5  # hover this long before collecting estimates
+    settle_time_s: float = _T.settle_time_s  # hover this long before collecting estimates
     estimate_timeout_s: float = 5.0  # without C >= C_th by then, climb one step
     climb_step_m: float = 0.3
     max_climbs: int = 3  # then the task fails
-    descent_duration_s: float = 7.0  # t_f of the minimum-jerk descent
-    grasp_press_m: float = 0.005  # aim the effector this far below the brick's top face
-    grasp_dwell_s: float = 0.5  # hold on the brick with the magnet on before climbing
+    descent_duration_s: float = _T.descent_duration_s  # t_f of the minimum-jerk descent
+    grasp_press_m: float = _T.grasp_press_m  # aim the effector this far below the brick's top face
+    grasp_dwell_s: float = _T.grasp_dwell_s  # hold on the brick with the magnet on before climbing
     max_grasp_attempts: int = 3
     # Brick placement
-    placement_radius_m: float = 0.015  # r_pl: release when the effector is this close to its target
+    placement_radius_m: float = _T.placement_radius_m  # r_pl: release when the effector is this close to it
     release_timeout_s: float = 4.0  # after the descent's t_f; then hover above and try again
     max_place_attempts: int = 3
-    release_dwell_s: float = 0.5
+    release_dwell_s: float = _T.release_dwell_s
     max_release_attempts: int = 3
     # Adhesion (paper, Section V)
-    spray_speed_mps: float = 0.15
-    spray_descent_s: float = 4.0
-    stable_time_s: float = 1.0  # hover still this long over the segment start before descending
+    spray_speed_mps: float = _T.spray_speed_mps
+    spray_descent_s: float = _T.spray_descent_s
+    stable_time_s: float = _T.stable_time_s  # hover still this long over the segment start before descending
     spray_tolerance_m: float = 0.015
-    close_dwell_s: float = 0.3
+    close_dwell_s: float = _T.close_dwell_s
     # Chaining (paper, Section V: "it continues to the next assigned task"): the task is reported done once the
     # valve is closed; the UAV hovers there up to ``chain_wait_s`` for its next task, and a segment starting
     # within ``chain_distance_m`` of the nozzle (the next overlap along the same course) is sprayed without
     # climbing out and coming down again: a short leg there and a ``chain_descent_s`` descent.
     chain_wait_s: float = 0.5
     chain_distance_m: float = 0.05
-    chain_descent_s: float = 0.5
+    chain_descent_s: float = _T.chain_descent_s
     # Control (None: the motion layer's defaults)
     pid_gains: Any = None
+
+    def timing(self) -> TaskTiming:
+        """The durations, speeds and tool geometry of this UAV's tasks, for the bound and the airspace."""
+        return TaskTiming.from_config(self)
 
     @classmethod
     def from_spec(cls, spec: UavSpec, **overrides: Any) -> UavConfig:

@@ -47,6 +47,7 @@ from masonry.ports import (
     TaskResult,
     Telemetry,
 )
+from masonry.timing import MIN_JERK_PEAK_TO_MEAN_SPEED, MIN_LEG_S
 
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
@@ -398,10 +399,10 @@ class UavModel:
         if math.hypot(target[0] - p[0], target[1] - p[1]) > 0.05:
             legs.append((np.array([target[0], target[1], layer]), None))
         if abs(target[2] - layer) > 0.05:
-            legs.append((target, max(0.5, 1.875 * abs(layer - target[2]) / v_z)))
+            legs.append((target, max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - target[2]) / v_z)))
         self._gate_at = -1  # legs start from rest: a corner is turned where the UAV is, never cut
         if abs(p[2] - layer) > 0.05 or not legs:
-            self._fly_to(tel, np.array([p[0], p[1], layer]), max(0.5, 1.875 * abs(layer - p[2]) / v_z),
+            self._fly_to(tel, np.array([p[0], p[1], layer]), max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - p[2]) / v_z),
                          yaw_rad=yaw_rad, from_rest=True)
             self._legs = legs
         else:
@@ -519,7 +520,7 @@ class UavModel:
         d_z = abs(target[2] - start[2])
         # A rest-to-rest minimum-jerk leg peaks at 1.875 x its average speed.
         return max(
-            1.0, 1.875 * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps)
+            MIN_LEG_S, MIN_JERK_PEAK_TO_MEAN_SPEED * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps)
         )
 
     def _start_leg(

@@ -25,13 +25,13 @@ Everything here is pure (no I/O, no clock).
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.planner.tasks import BrickTask, Task
+from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
@@ -40,53 +40,45 @@ XY = tuple[float, float]
 DEFAULT_LAYER_SPACING_M = 1.1
 
 
-def work_altitude_m(blueprint: Blueprint) -> float:
+def work_altitude_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
     """The highest altitude at which a UAV works any task of ``blueprint`` (cruise altitude at least).
 
-    The same formulas as the state machines' site altitudes (``masonry.fsm``, defaults of ``UavConfig``): a brick
-    UAV keeps the carried brick ``clearance_m`` above the drop-off, an adhesion UAV its nozzle ``clearance_m``
-    above the spraying height.
+    The same formulas as the state machines' site altitudes (``masonry.fsm``, flying ``timing``, default:
+    ``UavConfig``'s): a brick UAV keeps the carried brick ``clearance_m`` above the drop-off
+    (:meth:`TaskTiming.carry_altitude_m`), an adhesion UAV its nozzle ``clearance_m`` above the spraying height
+    (:meth:`TaskTiming.spray_altitude_m`).
     """
+    t = DEFAULT_TIMING if timing is None else timing
     z = float(blueprint.cruise_altitude_m)
     for b in blueprint.bricks:
         size_z = float(b.size_m[2])
-        z = max(z, _work_altitude_over_m(float(b.position_m[2]) + size_z / 2.0, size_z))
+        z = max(z, _work_altitude_over_m(float(b.position_m[2]) + size_z / 2.0, size_z, t))
     return z
 
 
-def task_work_altitude_m(task: Task, cruise_altitude_m: float) -> float:
+def task_work_altitude_m(task: Task, cruise_altitude_m: float, *, timing: TaskTiming | None = None) -> float:
     """The highest altitude at which a UAV works ``task``, as :func:`work_altitude_m` counts it for its brick
     (a brick task: carrying its brick over its drop-off, and spraying on its top later) or its surface (an
     adhesion task); at least ``cruise_altitude_m``.
 
     Once the task is assigned its brick may be on the wall: a transit layer at or above this clears it.
     """
+    t = DEFAULT_TIMING if timing is None else timing
     if isinstance(task, BrickTask):
         size_z = float(task.size_m[2])
         top = float(task.position_m[2]) + size_z / 2.0
-        return max(float(cruise_altitude_m), _work_altitude_over_m(top, size_z))
+        return max(float(cruise_altitude_m), _work_altitude_over_m(top, size_z, t))
     surface = max(float(task.start_m[2]), float(task.end_m[2]))
-    return max(float(cruise_altitude_m), _work_altitude_over_m(surface, 0.0))
+    return max(float(cruise_altitude_m), _work_altitude_over_m(surface, 0.0, t))
 
 
-def _work_altitude_over_m(top_m: float, size_z_m: float) -> float:
+def _work_altitude_over_m(top_m: float, size_z_m: float, timing: TaskTiming) -> float:
     """Where a UAV works over a brick top at ``top_m``: carrying a brick ``size_z_m`` high down onto it (0: no
     brick), or spraying it."""
-    eff_z, nozzle_z, spray_height, clearance = _work_offsets_m()
-    z = top_m + spray_height - nozzle_z + clearance
+    z = timing.spray_altitude_m(top_m)
     if size_z_m > 0.0:
-        z = max(z, top_m - eff_z + size_z_m + clearance)
+        z = max(z, timing.carry_altitude_m(top_m, size_z_m))
     return z
-
-
-@functools.cache
-def _work_offsets_m() -> tuple[float, float, float, float]:
-    """Effector and nozzle heights in the body frame, spraying height, clearance (defaults of ``UavConfig``)."""
-    from masonry.fsm.config import UavConfig
-
-    cfg = UavConfig(name="-", role="brick", home_m=(0.0, 0.0, 0.0))
-    return (float(cfg.airframe.effector_offset_m[2]), float(cfg.airframe.nozzle_offset_m[2]),
-            float(cfg.airframe.spray_height_m), float(cfg.clearance_m))
 
 
 #: How far a UAV may be off its reserved path (tracking error, a report a little late): what lies further behind
@@ -113,25 +105,28 @@ AT_HOLD_M = 0.1
 LAYER_MARGIN_M = 0.0
 
 
-def layer_base_m(blueprint: Blueprint) -> float:
+def layer_base_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
     """Altitude of transit layer 0 for ``blueprint``: :func:`work_altitude_m` plus :data:`LAYER_MARGIN_M`."""
-    return work_altitude_m(blueprint) + LAYER_MARGIN_M
+    return work_altitude_m(blueprint, timing=timing) + LAYER_MARGIN_M
 
 
 def transit_layers_m(
     blueprint: Blueprint,
     fleet: Sequence[UavSpec] | None = None,
     spacing_m: float = DEFAULT_LAYER_SPACING_M,
+    *,
+    timing: TaskTiming | None = None,
 ) -> dict[str, float]:
     """Altitude of each UAV's lateral legs: ``work_altitude_m + (k + 1) * spacing_m``, k its index in ``fleet``.
 
     ``fleet`` defaults to the blueprint's. A UAV flying its own mission process (``masonry fly --mission``) gets
-    the same layer as in ``masonry sim``, because both number the blueprint's fleet the same way.
+    the same layer as in ``masonry sim``, because both number the blueprint's fleet the same way. ``timing``:
+    the UAVs' (default: ``UavConfig``'s), for the work altitude.
     """
     if not (spacing_m >= 0.0 and math.isfinite(spacing_m)):
         raise ValueError(f"layer spacing must be a finite number >= 0, got {spacing_m!r}")
     members = tuple(blueprint.fleet if fleet is None else fleet)
-    base = layer_base_m(blueprint)
+    base = layer_base_m(blueprint, timing=timing)
     return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}
 
 

@@ -45,6 +45,7 @@ from masonry.mission.messages import (
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
 from masonry.ports import BATTERY_LOW_REASON
+from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
 
@@ -128,6 +129,8 @@ class MissionControl:
         min_durations_s: the least time each task can take (task id -> s); a completion that arrives sooner
             after its assignment than ``min_fraction`` of it is ignored. None: no such check.
         min_fraction: the margin on ``min_durations_s`` (two processes' clocks and ticks).
+        timing: the UAVs' task timing and tool geometry (:class:`masonry.timing.TaskTiming`; default:
+            ``UavConfig``'s), for the work altitudes ``layer_floor_m`` rises to.
     """
 
     def __init__(
@@ -150,6 +153,7 @@ class MissionControl:
         wall_digest: str = "",
         min_durations_s: Mapping[str, float] | None = None,
         min_fraction: float = 0.9,
+        timing: TaskTiming | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -185,6 +189,7 @@ class MissionControl:
         self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m,
                                        homes={u.name: u.home_m for u in self.fleet}, start_base_m=layer_floor_m)
         self._layer_floor_m = layer_floor_m
+        self.timing = timing
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
@@ -431,7 +436,8 @@ class MissionControl:
             return
         from masonry.mission.airspace import task_work_altitude_m
 
-        top = max((task_work_altitude_m(self._tasks[tid], self._layer_floor_m) for tid in task_ids), default=None)
+        top = max((task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)
+                   for tid in task_ids), default=None)
         if top is not None:
             self.columns.raise_base(top)
 

@@ -16,7 +16,7 @@ import math
 import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, MasonryError
@@ -29,6 +29,10 @@ from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport, control_report
 from masonry.planner.bounds import min_cycles_s, min_durations_s
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+if TYPE_CHECKING:
+    from masonry.fsm.config import UavConfig
 
 POLICIES = ("fifo", "critical-path", "nearest")
 
@@ -148,17 +152,14 @@ class _GroundCrew:
 
 
 def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any,
-                   lateral_altitude_m: float | None = None) -> Any:
+                   lateral_altitude_m: float | None = None, template: UavConfig | None = None) -> Any:
     from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 
-    config = UavConfig(
-        name=spec.name,
-        role=spec.role,
-        home_m=spec.home_m,
-        cruise_altitude_m=blueprint.cruise_altitude_m,
-        markers=blueprint.markers,
-        lateral_altitude_m=lateral_altitude_m,
-    )
+    # the template's tuning (default: UavConfig's), with this UAV's identity, home, layer and the blueprint's
+    base = template if template is not None else UavConfig(spec.name, spec.role, spec.home_m)
+    config = dataclasses.replace(base, name=spec.name, role=spec.role, home_m=spec.home_m,
+                                 cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
+                                 lateral_altitude_m=lateral_altitude_m)
     if spec.role == "brick":
         return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock)
     return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock)
@@ -183,6 +184,7 @@ def simulate(
     separation: bool = True,
     rising_layers: bool = True,
     warn: Callable[[str], None] | None = None,
+    uav_config: UavConfig | None = None,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it.
 
@@ -207,6 +209,9 @@ def simulate(
         rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned so
             far) instead of staying above the finished wall from the start (False, for comparisons).
         warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
+        uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name, role,
+            home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs get its
+            airframe; the lower bound, the expected durations and the airspace its timing (``timing()``).
 
     The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
     :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -256,7 +261,7 @@ def simulate(
             journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
             heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
             wall0=wall0, World=World, estimate_durations_s=estimate_durations_s, separation=separation,
-            rising_layers=rising_layers,
+            rising_layers=rising_layers, uav_config=uav_config,
         )
     finally:
         if journal is not None:
@@ -355,7 +360,9 @@ def _run(
     estimate_durations_s: Any,
     separation: bool = True,
     rising_layers: bool = True,
+    uav_config: UavConfig | None = None,
 ) -> MissionReport:
+    timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
     resumed_from = None
     world_blueprint = blueprint
     if state is not None:
@@ -368,10 +375,13 @@ def _run(
         )
         resumed_from = float(state.last_time_s or 0.0)
 
-    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0)
+    airframe = {} if uav_config is None else {"airframe": uav_config.airframe}
+    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0,
+                  **airframe)
     measured = _MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
-    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m)
-    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
+    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m,
+                                      timing=timing)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
     wall = wall_digest(blueprint)
     bus = InprocBus()
     mc = MissionControl(
@@ -381,11 +391,11 @@ def _run(
         durations_s=priority_durations_s(expected_s),
         heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
         column_radius_m=blueprint.clearance_m if separation else 0.0,
-        layer_base_m=layer_base_m(blueprint) if separation else None,
+        layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
         layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
-        wall_digest=wall, min_durations_s=minimum_s,
+        wall_digest=wall, min_durations_s=minimum_s, timing=timing,
     )
-    layers = transit_layers_m(blueprint, fleet) if separation else {}
+    layers = transit_layers_m(blueprint, fleet, timing=timing) if separation else {}
     if state is not None:
         mc.restore(state)
 
@@ -399,7 +409,7 @@ def _run(
                        swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
                        after_result=lambda: mc.step(world.clock.now_s()),
                        tasks=the_plan.tasks, role=spec.role, wall_digest=wall)
-        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name)))
+        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name), uav_config))
         handlers[spec.name] = h
     measured.handlers = handlers
 
@@ -453,7 +463,7 @@ def _run(
         blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
         sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
         resumed_from=resumed_from, messages=bus.sent, expected_s=expected_s, measured=measured,
-        journaled_errors_m=_journaled_errors_m(state),
+        journaled_errors_m=_journaled_errors_m(state), timing=timing,
     )
 
 
@@ -488,6 +498,7 @@ def _report(
     expected_s: Mapping[str, float],
     measured: _MeasuredJournal,
     journaled_errors_m: Mapping[str, float],
+    timing: TaskTiming = DEFAULT_TIMING,
 ) -> MissionReport:
     now = world.clock.now_s()
     # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
@@ -508,14 +519,14 @@ def _report(
             err = journaled_errors_m[t.id] if t.id in journaled_errors_m else world.placement_error_m(t.brick)
             if err is not None:
                 placement[t.id] = float(err)
-    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
     sep = measured.min_separation_m()
     distances = measured.distances_m()
     return control_report(
         mc, the_plan, policy=policy, seed=seed, intervals=intervals, busy_s=measured.busy_s(),
         distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
         placement_error_m=placement, min_separation_m=sep, now_s=now,
-        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s),
+        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
     )

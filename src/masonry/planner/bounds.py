@@ -16,12 +16,16 @@ it (in a chain the UAV may already be right above the next pickup). docs/dispatc
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import warnings
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.timing import DEFAULT_TIMING, MIN_JERK_PEAK_TO_MEAN_SPEED, MIN_LEG_S, TaskTiming
 
 
 def _check_durations(plan: Plan, durations_s: Mapping[str, float]) -> dict[str, float]:
@@ -126,30 +130,101 @@ def lower_bound_s(
     return max(longest_chain_s(plan, dur), per_role)
 
 
+#: Keywords the duration functions took before :class:`~masonry.timing.TaskTiming`: old name -> its field.
+_LEGACY_FIELDS = {
+    "cruise_speed_mps": "cruise_speed_mps",
+    "vertical_speed_mps": "vertical_speed_mps",
+    "control_period_s": "control_period_s",
+    "clearance_m": "clearance_m",
+    "settle_time_s": "settle_time_s",
+    "min_estimates": "min_estimates",
+    "descent_s": "descent_duration_s",
+    "grasp_press_m": "grasp_press_m",
+    "grasp_dwell_s": "grasp_dwell_s",
+    "placement_radius_m": "placement_radius_m",
+    "release_dwell_s": "release_dwell_s",
+    "stable_time_s": "stable_time_s",
+    "spray_descent_s": "spray_descent_s",
+    "spray_speed_mps": "spray_speed_mps",
+    "close_dwell_s": "close_dwell_s",
+    "chain_descent_s": "chain_descent_s",
+    "arrive_tolerance_m": "arrive_tolerance_m",
+}
+
+
+def _timing(func: str, timing: TaskTiming | None, legacy: dict[str, Any], allowed: tuple[str, ...]) -> TaskTiming:
+    """``timing`` (default: ``UavConfig``'s), with the deprecated keywords ``legacy`` of ``func`` applied.
+
+    ``legacy`` is left with the keywords that are not fields (``leg_peak_factor``, ``min_leg_s``) for the caller.
+    """
+    base = DEFAULT_TIMING if timing is None else timing
+    unknown = sorted(k for k in legacy if k not in allowed)
+    if unknown:
+        raise TypeError(f"{func}() got an unexpected keyword argument {unknown[0]!r}")
+    given = {k: v for k, v in legacy.items() if v is not None}
+    legacy.clear()
+    if not given:
+        return base
+    changes: dict[str, Any] = {}
+    for key, value in given.items():
+        if key == "effector_offset_z_m":
+            x, y, _z = base.effector_offset_m
+            changes["effector_offset_m"] = (x, y, float(value))
+        elif key == "effector_offset_m":
+            changes["effector_offset_m"] = (float(value[0]), float(value[1]), float(value[2]))
+        elif key in _LEGACY_FIELDS:
+            changes[_LEGACY_FIELDS[key]] = value
+        else:
+            legacy[key] = value
+    fields = ", ".join(f"{_LEGACY_FIELDS.get(k, k)}=..." for k in given if k in _LEGACY_FIELDS) or "..."
+    warnings.warn(
+        f"{func}({', '.join(f'{k}=' for k in given)}) is deprecated: pass timing=, a masonry.timing.TaskTiming "
+        f"(UavConfig.timing(), or dataclasses.replace(DEFAULT_TIMING, {fields}))",
+        DeprecationWarning,
+        stacklevel=3,
+    )
+    return dataclasses.replace(base, **changes)
+
+
+def _check_timing(timing: TaskTiming, positive: tuple[str, ...], non_negative: tuple[str, ...]) -> None:
+    for name in positive:
+        value = getattr(timing, name)
+        if not math.isfinite(value) or value <= 0.0:
+            raise PlanningError(f"timing.{name} must be finite and > 0, got {value!r}")
+    for name in non_negative:
+        value = getattr(timing, name)
+        if not math.isfinite(value) or value < 0.0:
+            raise PlanningError(f"timing.{name} must be finite and >= 0, got {value!r}")
+
+
 def estimate_durations_s(
     plan: Plan,
     fleet: Sequence[UavSpec],
     *,
-    cruise_speed_mps: float = 1.0,
-    vertical_speed_mps: float = 0.4,
+    timing: TaskTiming | None = None,
     cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
-    descent_s: float = 7.0,
-    spray_speed_mps: float = 0.15,
-    spray_descent_s: float = 4.0,
     brick_handling_s: float = 4.0,
     adhesion_handling_s: float = 1.5,
     include_approach: bool = True,
+    **deprecated: Any,
 ) -> dict[str, float]:
-    """Expected duration of every not-done task, from the flight it implies (defaults match ``UavConfig``).
+    """Expected duration of every not-done task, from the flight it implies.
 
     A brick task: the approach to the pickup (from the nearest brick UAV home or, if nearer, from its own
-    drop-off, where a UAV coming back from the previous placement is), a minimum-jerk descent of ``descent_s``,
-    the climb back to cruise altitude, the carry to the drop-off at ``cruise_speed_mps``, a second descent, the
-    climb, and ``brick_handling_s`` of settling, estimation and grasp/release dwells. An adhesion task: a descent
-    of ``spray_descent_s``, the segment at ``spray_speed_mps``, the climb, and ``adhesion_handling_s``; its
-    approach counts as zero (consecutive segments are neighbours). Horizontal legs use ``cruise_speed_mps``,
-    climbs ``vertical_speed_mps``. With ``include_approach=False`` no approach is counted (for a model that
-    adds the real flight to each task's start, as :func:`dispatch_makespan_s` with ``cruise_speed_mps`` does).
+    drop-off, where a UAV coming back from the previous placement is), a minimum-jerk descent of
+    ``timing.descent_duration_s``, the climb back to cruise altitude, the carry to the drop-off at
+    ``timing.cruise_speed_mps``, a second descent, the climb, and ``brick_handling_s`` of settling, estimation
+    and grasp/release dwells. An adhesion task: a descent of ``timing.spray_descent_s``, the segment at
+    ``timing.spray_speed_mps``, the climb, and ``adhesion_handling_s``; its approach counts as zero (consecutive
+    segments are neighbours). Horizontal legs use the cruise speed, climbs ``timing.vertical_speed_mps`` (as
+    mean speeds: an estimate, not a bound). With ``include_approach=False`` no approach is counted (for a
+    model that adds the real flight to each task's start, as :func:`dispatch_makespan_s` with
+    ``cruise_speed_mps`` does).
+
+    Args:
+        timing: the UAVs' task timing (default: ``UavConfig``'s, :data:`masonry.timing.DEFAULT_TIMING`).
+        deprecated: the old keywords ``cruise_speed_mps``, ``vertical_speed_mps``, ``descent_s``,
+            ``spray_speed_mps``, ``spray_descent_s`` (a DeprecationWarning; they replace those of ``timing``).
 
     Returns:
         task id -> seconds, for every not-done task.
@@ -157,22 +232,19 @@ def estimate_durations_s(
     Raises:
         PlanningError: a speed or time is not finite and positive (times: >= 0).
     """
-    for name, value in (
-        ("cruise_speed_mps", cruise_speed_mps),
-        ("vertical_speed_mps", vertical_speed_mps),
-        ("spray_speed_mps", spray_speed_mps),
-    ):
-        if not math.isfinite(value) or value <= 0.0:
-            raise PlanningError(f"{name} must be finite and > 0, got {value!r}")
+    t_ = _timing("estimate_durations_s", timing, deprecated,
+                 ("cruise_speed_mps", "vertical_speed_mps", "descent_s", "spray_speed_mps", "spray_descent_s"))
+    _check_timing(t_, ("cruise_speed_mps", "vertical_speed_mps", "spray_speed_mps"),
+                  ("descent_duration_s", "spray_descent_s"))
     for name, value in (
         ("cruise_altitude_m", cruise_altitude_m),
-        ("descent_s", descent_s),
-        ("spray_descent_s", spray_descent_s),
         ("brick_handling_s", brick_handling_s),
         ("adhesion_handling_s", adhesion_handling_s),
     ):
         if not math.isfinite(value) or value < 0.0:
             raise PlanningError(f"{name} must be finite and >= 0, got {value!r}")
+    cruise_speed_mps, vertical_speed_mps = t_.cruise_speed_mps, t_.vertical_speed_mps
+    descent_s, spray_descent_s, spray_speed_mps = t_.descent_duration_s, t_.spray_descent_s, t_.spray_speed_mps
     brick_homes = [spec.home_m for spec in fleet if spec.role == "brick"]
 
     def horizontal(a: Sequence[float], b: Sequence[float]) -> float:
@@ -221,60 +293,65 @@ def _min_jerk_time_to_within(distance_m: float, tolerance_m: float) -> float:
     return lo
 
 
+_MIN_DURATION_KEYWORDS = (
+    "cruise_speed_mps", "vertical_speed_mps", "leg_peak_factor", "min_leg_s", "control_period_s", "clearance_m",
+    "settle_time_s", "min_estimates", "descent_s", "grasp_press_m", "grasp_dwell_s", "placement_radius_m",
+    "release_dwell_s", "stable_time_s", "spray_descent_s", "spray_speed_mps", "close_dwell_s", "chain_descent_s",
+    "effector_offset_z_m",
+)
+
+
 def min_durations_s(
     plan: Plan,
     *,
+    timing: TaskTiming | None = None,
     cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
-    cruise_speed_mps: float = 1.0,
-    vertical_speed_mps: float = 0.4,
-    leg_peak_factor: float = 1.875,
-    min_leg_s: float = 1.0,
-    control_period_s: float = 0.1,
-    clearance_m: float = 0.30,
-    settle_time_s: float = 0.5,
-    min_estimates: int = 10,
-    descent_s: float = 7.0,
-    grasp_press_m: float = 0.005,
-    grasp_dwell_s: float = 0.5,
-    placement_radius_m: float = 0.015,
-    release_dwell_s: float = 0.5,
-    stable_time_s: float = 1.0,
-    spray_descent_s: float = 4.0,
-    spray_speed_mps: float = 0.15,
-    close_dwell_s: float = 0.3,
-    chain_descent_s: float = 0.5,
-    effector_offset_z_m: float | None = None,
+    **deprecated: Any,
 ) -> dict[str, float]:
-    """The least time the state machines (``masonry.fsm``, defaults of ``UavConfig``) can take for each task.
+    """The least time the state machines (``masonry.fsm``, flying ``timing``) can take for each task.
 
     A sound per-task lower bound for :func:`lower_bound_s` (``masonry sim`` reports the bound with these): every
     state of a task is counted at its shortest, with perfect tracking and no wait, from assignment to the
-    result. The flight to the task's start counts as one minimum leg (``min_leg_s``): a UAV may be turned
-    back to a task from anywhere on its way home, even right above it. A lateral or vertical leg of the machines
-    is a rest-to-rest minimum-jerk move lasting ``leg_peak_factor`` x distance / speed (at least ``min_leg_s``);
-    the placing descent counts until its reference is within the release radius.
+    result. The flight to the task's start counts as one minimum leg (:data:`~masonry.timing.MIN_LEG_S`): a UAV
+    may be turned back to a task from anywhere on its way home, even right above it. A lateral or vertical leg
+    of the machines is a rest-to-rest minimum-jerk move lasting :func:`~masonry.timing.min_jerk_leg_s` (1.875 x
+    distance / peak speed, at least ``MIN_LEG_S``); the placing descent counts until its reference is within
+    the release radius. docs/planner.md lists the terms and where their numbers come from.
 
     Brick task: approach, estimate (settle + ``min_estimates`` frames at the control rate), align, descent
-    (``descent_s``), grasp dwell, climb to the transit altitude, the carry to the drop-off, align, descent to the
-    release, release dwell, verify, climb. Adhesion task: approach, hover ``stable_time_s``, descent (the
-    shorter of ``spray_descent_s`` and ``chain_descent_s``: a segment that starts where the UAV's last one
-    ended is sprayed without climbing out), the segment at ``spray_speed_mps``, ``close_dwell_s``; an adhesion
-    UAV reports the task done once the valve is closed, so its climb out is not part of the task.
+    (``descent_duration_s``), grasp dwell, climb to the transit altitude (:meth:`TaskTiming.carry_altitude_m`),
+    the carry to the drop-off, align, descent to the release, release dwell, verify, climb. Adhesion task:
+    approach, hover ``stable_time_s``, descent (the shorter of ``spray_descent_s`` and ``chain_descent_s``: a
+    segment that starts where the UAV's last one ended is sprayed without climbing out), the segment at
+    ``spray_speed_mps``, ``close_dwell_s``; an adhesion UAV reports the task done once the valve is closed, so
+    its climb out is not part of the task.
+
+    Args:
+        timing: the UAVs' task timing (default: ``UavConfig``'s, :data:`masonry.timing.DEFAULT_TIMING`).
+        cruise_altitude_m: the blueprint's cruise altitude (the UAVs' ``UavConfig.cruise_altitude_m``).
+        deprecated: the old keywords (``descent_s``, ``cruise_speed_mps``, ..., ``effector_offset_z_m``,
+            ``leg_peak_factor``, ``min_leg_s``): a DeprecationWarning; they replace those of ``timing``.
 
     Returns:
         task id -> seconds, for every not-done task.
     """
-    from masonry.airframe import DEFAULT_AIRFRAME
+    t_ = _timing("min_durations_s", timing, deprecated, _MIN_DURATION_KEYWORDS)
+    return _min_durations_s(plan, t_, cruise_altitude_m,
+                            float(deprecated.get("leg_peak_factor", MIN_JERK_PEAK_TO_MEAN_SPEED)),
+                            float(deprecated.get("min_leg_s", MIN_LEG_S)))
 
-    eff_z = DEFAULT_AIRFRAME.effector_offset_m[2] if effector_offset_z_m is None else effector_offset_z_m
+
+def _min_durations_s(plan: Plan, timing: TaskTiming, cruise_altitude_m: float, leg_peak_factor: float,
+                     min_leg_s: float) -> dict[str, float]:
+    eff_z = timing.effector_offset_m[2]
 
     def lateral(d_m: float) -> float:
-        return max(min_leg_s, leg_peak_factor * d_m / cruise_speed_mps)
+        return max(min_leg_s, leg_peak_factor * d_m / timing.cruise_speed_mps)
 
     def vertical(dz_m: float) -> float:
-        return max(min_leg_s, leg_peak_factor * max(dz_m, 0.0) / vertical_speed_mps)
+        return max(min_leg_s, leg_peak_factor * max(dz_m, 0.0) / timing.vertical_speed_mps)
 
-    tick = control_period_s
+    tick = timing.control_period_s
     out: dict[str, float] = {}
     for t in plan.tasks:
         if t.done:
@@ -283,32 +360,32 @@ def min_durations_s(
             h = t.size_m[2]
             pickup = t.pickup_m if t.pickup_m is not None else t.position_m
             top_drop = t.position_m[2] + h / 2.0
-            transit = max(cruise_altitude_m, top_drop - eff_z + h + clearance_m)
+            transit = max(cruise_altitude_m, timing.carry_altitude_m(top_drop, h))
             # the brick lies on the ground (or higher, as the pickup says): its top at least h up
             top_pick = max(pickup[2] + h / 2.0, h)
-            grasp_body_z = top_pick - grasp_press_m - eff_z
+            grasp_body_z = top_pick - timing.grasp_press_m - eff_z
             release_body_z = top_drop - eff_z
             drop = transit - release_body_z
             out[t.id] = (
                 min_leg_s  # approach
-                + settle_time_s + (min_estimates - 1) * tick  # estimate
+                + timing.settle_time_s + (timing.min_estimates - 1) * tick  # estimate
                 + min_leg_s  # align
-                + descent_s + grasp_dwell_s
+                + timing.descent_duration_s + timing.grasp_dwell_s
                 + vertical(transit - grasp_body_z)
                 + tick  # verify
                 + lateral(math.hypot(t.position_m[0] - pickup[0], t.position_m[1] - pickup[1]))
                 + min_leg_s  # align above the drop-off
-                + descent_s * _min_jerk_time_to_within(drop, placement_radius_m)
-                + release_dwell_s + tick  # release, verify
-                + vertical(drop - placement_radius_m)
+                + timing.descent_duration_s * _min_jerk_time_to_within(drop, timing.placement_radius_m)
+                + timing.release_dwell_s + tick  # release, verify
+                + vertical(drop - timing.placement_radius_m)
             )
         else:
             out[t.id] = (
                 min_leg_s  # approach
-                + stable_time_s
-                + min(spray_descent_s, chain_descent_s)
-                + t.length_m / spray_speed_mps
-                + close_dwell_s
+                + timing.stable_time_s
+                + min(timing.spray_descent_s, timing.chain_descent_s)
+                + t.length_m / timing.spray_speed_mps
+                + timing.close_dwell_s
             )
     return out
 
@@ -318,11 +395,10 @@ def min_cycles_s(
     fleet: Sequence[UavSpec],
     durations_s: Mapping[str, float] | None = None,
     *,
+    timing: TaskTiming | None = None,
     cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
-    cruise_speed_mps: float = 1.0,
-    min_leg_s: float = 1.0,
-    arrive_tolerance_m: float = 0.08,
-    effector_offset_m: Sequence[float] | None = None,
+    min_leg_s: float = MIN_LEG_S,
+    **deprecated: Any,
 ) -> dict[str, float]:
     """The least time each task takes out of its UAV's timeline: its minimum duration plus the unseen approach.
 
@@ -330,13 +406,19 @@ def min_cycles_s(
     above that task's drop-off) -- or the start of the mission (it is at its home) -- and its arrival above the
     pickup of its next completed task j, the UAV must cover the horizontal distance from there to the pickup.
     Whatever it flies meanwhile (home and turned back, failed attempts), its reference never moves faster than
-    a minimum-jerk leg's peak speed, ``cruise_speed_mps`` (a leg lasts 1.875 x distance / speed), and each end
-    may be off by ``arrive_tolerance_m`` (and the effector's horizontal offset). So that stretch lasts at least
-    (d_j - slack) / ``cruise_speed_mps``, where d_j is the distance from the pickup to the nearest possible
-    start: any other brick's drop-off or any brick UAV's home. These stretches and the rest of the tasks are
-    disjoint on the UAV's timeline. ``durations_s`` (default :func:`min_durations_s`) already counts the last
-    approach leg as ``min_leg_s``, so a brick task weighs its duration + max(0, flight - ``min_leg_s``).
+    a minimum-jerk leg's peak speed, ``timing.cruise_speed_mps`` (a leg lasts
+    :data:`~masonry.timing.MIN_JERK_PEAK_TO_MEAN_SPEED` x distance / speed), and each end may be off by
+    ``timing.arrive_tolerance_m`` (and the effector's horizontal offset). So that stretch lasts at least
+    (d_j - slack) / cruise speed, where d_j is the distance from the pickup to the nearest possible start: any
+    other brick's drop-off or any brick UAV's home. These stretches and the rest of the tasks are disjoint on
+    the UAV's timeline. ``durations_s`` (default :func:`min_durations_s` with ``timing``) already counts the
+    last approach leg as ``min_leg_s``, so a brick task weighs its duration + max(0, flight - ``min_leg_s``).
     Adhesion tasks weigh their duration (consecutive segments touch: no sound approach term).
+
+    Args:
+        timing: the UAVs' task timing (default: ``UavConfig``'s, :data:`masonry.timing.DEFAULT_TIMING`).
+        deprecated: the old keywords ``cruise_speed_mps``, ``arrive_tolerance_m``, ``effector_offset_m`` (a
+            DeprecationWarning; they replace those of ``timing``).
 
     Returns:
         task id -> seconds, for every not-done task (>= ``durations_s``).
@@ -347,20 +429,16 @@ def min_cycles_s(
     import numpy as np
     from scipy.spatial import cKDTree
 
-    if not math.isfinite(cruise_speed_mps) or cruise_speed_mps <= 0.0:
-        raise PlanningError(f"cruise_speed_mps must be finite and > 0, got {cruise_speed_mps!r}")
-    for name, value in (("min_leg_s", min_leg_s), ("arrive_tolerance_m", arrive_tolerance_m)):
-        if not math.isfinite(value) or value < 0.0:
-            raise PlanningError(f"{name} must be finite and >= 0, got {value!r}")
+    t_ = _timing("min_cycles_s", timing, deprecated, ("cruise_speed_mps", "arrive_tolerance_m", "effector_offset_m"))
+    _check_timing(t_, ("cruise_speed_mps",), ("arrive_tolerance_m",))
+    cruise_speed_mps = t_.cruise_speed_mps
+    if not math.isfinite(min_leg_s) or min_leg_s < 0.0:
+        raise PlanningError(f"min_leg_s must be finite and >= 0, got {min_leg_s!r}")
     if durations_s is None:
-        durations_s = min_durations_s(plan, cruise_altitude_m=cruise_altitude_m, cruise_speed_mps=cruise_speed_mps,
-                                      min_leg_s=min_leg_s)
+        durations_s = _min_durations_s(plan, t_, cruise_altitude_m, MIN_JERK_PEAK_TO_MEAN_SPEED, min_leg_s)
     out = dict(_check_durations(plan, durations_s))
-    if effector_offset_m is None:
-        from masonry.airframe import DEFAULT_AIRFRAME
-
-        effector_offset_m = DEFAULT_AIRFRAME.effector_offset_m
-    slack = 2.0 * arrive_tolerance_m + math.hypot(effector_offset_m[0], effector_offset_m[1])
+    effector_offset_m = t_.effector_offset_m
+    slack = 2.0 * t_.arrive_tolerance_m + math.hypot(effector_offset_m[0], effector_offset_m[1])
     bricks = [t for t in plan.tasks if isinstance(t, BrickTask)]
     todo = [i for i, t in enumerate(bricks) if not t.done]
     if not todo:
