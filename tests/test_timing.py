@@ -72,7 +72,10 @@ def test_the_timing_follows_its_config() -> None:
 @st.composite
 def uav_configs(draw: st.DrawFn, geometry: bool = True) -> UavConfig:
     """A ``UavConfig`` with every number the bound and the airspace count drawn within sane ranges."""
-    u = lambda lo, hi: draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+
+    def u(lo: float, hi: float) -> float:
+        return draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
+
     airframe = DEFAULT_AIRFRAME
     if geometry:
         airframe = dataclasses.replace(
