@@ -7,6 +7,8 @@
     ├── PlanningError           the planner or dispatcher was asked something impossible
     ├── InputError              a command-line input (image, intrinsics, calibration, option) is unusable
     ├── PerceptionError         the vision pipeline cannot run (unknown dictionary, bad calibration)
+    ├── InvalidArgument         a library call got a value outside its domain (also a ValueError): a
+    │                           VehicleConfig time constant <= 0, a non-finite state to follow
     ├── HardwareError           a port's device failed
     │   ├── DeviceNotFound      the device or endpoint is absent or is not the expected device
     │   ├── CommandRejected     the device answered "no" to a command (carries the reason)
@@ -50,6 +52,13 @@ class InputError(MasonryError):
 
 class PerceptionError(MasonryError):
     """The perception pipeline cannot run with the given configuration."""
+
+
+class InvalidArgument(MasonryError, ValueError):
+    """A library call or configuration value is outside its domain (non-finite, non-positive, negative time).
+
+    Also a :class:`ValueError`, so code that caught the ``ValueError`` raised before keeps working.
+    """
 
 
 class HardwareError(MasonryError):
