@@ -404,11 +404,12 @@ class MavlinkFlightController(MavlinkLink):
                     "is motion capture feeding the EKF?"
                     if self.pose_source is not None
                     else "an ArduPilot SITL needs about 40 s after its first connection, a cold Pixhawk about as "
-                    "long: give more with --estimate-wait; indoors, is the position source feeding the EKF?"
+                    "long: give more with `estimate_timeout_s`; indoors, is the position source feeding the EKF?"
                 )
                 raise CommandRejected(
                     "arm",
                     f"no usable position estimate from the autopilot after {timeout_s:.1f} s: {status} ({hint})",
+                    options=() if self.pose_source is not None else ("estimate_timeout_s",),
                 )
             if progress is not None and (status != last_status or now - last_report >= report_every_s):
                 progress(

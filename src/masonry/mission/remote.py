@@ -124,7 +124,7 @@ def run_remote_uav(
     from masonry.planner import plan
 
     if not (time_scale > 0 and dt_s > 0):
-        raise InputError(f"--time-scale and --dt must be > 0, got {time_scale} and {dt_s}")
+        raise InputError(f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt"))
     if adapters is None:
         from masonry.sim import Faults, World
 
