@@ -126,8 +126,11 @@ def test_missing_calibration_file(tmp_path: Path) -> None:
     ["chessboard:9x6", "board:9x6:0.025", "chessboard:2x6:0.025", "chessboard:9x6:0", "chessboard:9x6:2"],
 )
 def test_bad_board_specs(text: str) -> None:
-    with pytest.raises(InputError, match="--board"):
+    from masonry.cli.app import cli_message
+
+    with pytest.raises(InputError, match="^`board`: ") as info:
         parse_board(text)
+    assert info.value.options == ("board",) and cli_message(info.value).startswith("--board: ")  # the CLI's term
 
 
 def test_board_spec() -> None:

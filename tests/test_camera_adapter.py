@@ -105,8 +105,11 @@ def test_resolution_must_match_the_calibration(recording, tmp_path) -> None:
 
 def test_missing_inputs_are_clear_errors(tmp_path, recording) -> None:
     _, calibration = recording
-    with pytest.raises(InputError, match="--calibration"):
+    from masonry.cli.app import cli_message
+
+    with pytest.raises(InputError, match="give `calibration` FILE") as info:
         OpenCvCamera(0)
+    assert "give --calibration FILE" in cli_message(info.value)  # the CLI names its flag
     with pytest.raises(InputError, match=r"nothing\.mp4: video file not found"):
         OpenCvCamera(str(tmp_path / "nothing.mp4"), calibration=calibration).connect()
     with pytest.raises(InputError, match="calibration file not found"):

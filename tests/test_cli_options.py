@@ -394,7 +394,10 @@ def test_the_estimate_wait_error_names_what_was_missing(phase, missing):
             fc.close()
     reason = info.value.reason
     assert reason.startswith(f"no usable position estimate from the autopilot after 0.6 s: {missing}"), reason
-    assert "--estimate-wait" in reason and "motion capture" not in reason  # no motion capture configured
+    assert "`estimate_timeout_s`" in reason and "motion capture" not in reason  # no motion capture configured
+    from masonry.cli.app import cli_message
+
+    assert "give more with --estimate-wait;" in cli_message(info.value)  # the CLI names its flag
 
 
 def test_fly_fc_waits_estimate_wait_seconds_with_a_visible_countdown(tmp_path):

@@ -1,7 +1,7 @@
-"""One FlightController contract, run against the simulator's port and the MAVLink adapter on the SITL (UDP loopback)
-as ArduCopter (GUIDED) and as PX4 (OFFBOARD).
+"""One FlightController contract, run against the scripted fake, the simulator's port and the MAVLink adapter on the
+SITL (UDP loopback) as ArduCopter (GUIDED) and as PX4 (OFFBOARD).
 
-Time is the port's own: the simulated world steps its clock; the MAVLink rig sleeps on the autopilot's clock
+Time is the port's own: the fake's clock and the simulated world advance when told; the MAVLink rig sleeps on the autopilot's clock
 (the SITL runs ``TIME_SCALE`` times faster than real time). The assertions are in autopilot seconds for both.
 """
 
@@ -53,10 +53,19 @@ class Rig:
         return self.now_s() - start
 
 
-@pytest.fixture(params=["sim", "mavlink", "mavlink-px4"])
+@pytest.fixture(params=["fake", "sim", "mavlink", "mavlink-px4"])
 def rig(request) -> Iterator[Rig]:
     bp = load_blueprint(CASE_STUDY)
     spec = bp.uavs("brick")[0]
+    if request.param == "fake":
+        from masonry.fakes import FakeClock, FakeFlightController
+
+        clock = FakeClock()
+        fake = FakeFlightController(clock, position_m=spec.home_m, ground_z_m=spec.home_m[2])
+        fake.connect()
+        yield Rig(fake, clock.now_s, clock.advance, spec.home_m)
+        fake.close()
+        return
     if request.param == "sim":
         from masonry.sim import World
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 import math
+import threading
 import time
 
 import pytest
@@ -198,3 +200,112 @@ def test_estimate_flags() -> None:
     assert not estimate_usable(indoor & ~m.EKF_POS_VERT_ABS)
     assert not estimate_usable(m.ESTIMATOR_ATTITUDE | m.ESTIMATOR_ACCEL_ERROR | indoor)
     assert not estimate_usable(0)
+
+
+# -- the link's threads count and log every error they meet (none are dropped) -----------------------------
+
+
+class _Msg:
+    """A received message as pymavlink presents one: ``get_type``, source ids and the fields given."""
+
+    def __init__(self, kind: str, src_system: int = 1, **fields: object) -> None:
+        self._kind = kind
+        self._src = src_system
+        self.__dict__.update(fields)
+
+    def get_type(self) -> str:
+        return self._kind
+
+    def get_srcSystem(self) -> int:
+        return self._src
+
+    def get_srcComponent(self) -> int:
+        return 1
+
+
+class _Conn:
+    """A connection that hands out ``messages`` (then nothing) and fails every send with ``send_error``."""
+
+    def __init__(self, messages: list[_Msg], send_error: Exception | None = None, after: int = 1) -> None:
+        self.messages = list(messages)
+        self.send_error = send_error
+        self.sends = 0
+        self.after = after
+        self.drained = threading.Event()
+        self.sent = threading.Event()
+        self.mav = self
+
+    def recv_match(self, blocking: bool = True, timeout: float = 0.05) -> _Msg | None:
+        if self.messages:
+            return self.messages.pop(0)
+        self.drained.set()
+        return None
+
+    def _send(self, *args: object) -> None:
+        self.sends += 1
+        if self.sends >= self.after:
+            self.sent.set()
+        if self.send_error is not None:
+            raise self.send_error
+
+    heartbeat_send = set_position_target_local_ned_send = command_long_send = _send
+
+    def close(self) -> None:
+        pass
+
+
+def _link_on(conn: _Conn) -> MavlinkFlightController:
+    fc = MavlinkFlightController("udpin:127.0.0.1:9")
+    fc.target_system = fc.target_component = 1
+    fc._conn = conn
+    return fc
+
+
+def test_a_message_the_handler_cannot_read_is_counted_and_logged(caplog) -> None:
+    fc = _link_on(_Conn([]))
+    assert fc.status().errors == 0 and fc.status().last_error is None
+    with caplog.at_level(logging.WARNING, logger="masonry.adapters.mavlink_link"):
+        fc._receive(_Msg("LOCAL_POSITION_NED", time_boot_ms=10), 1.0)  # no x, y, z: another dialect
+        fc._receive(_Msg("SYS_STATUS", battery_remaining="full", voltage_battery=12000), 1.0)  # ill-typed
+    status = fc.status()
+    assert status.handler_errors == 2 and status.errors == 2
+    assert status.last_error is not None and status.last_error.startswith("unhandled message: TypeError")
+    assert sum("unhandled message" in r.getMessage() for r in caplog.records) == 2
+    fc._receive(_Msg("ATTITUDE", roll=0.1, pitch=0.0, yaw=0.0, time_boot_ms=20), 1.0)  # still listening
+    assert fc._state.attitude == (0.1, 0.0, 0.0) and fc.status().handler_errors == 2
+
+
+def test_the_receiver_thread_counts_bad_messages_and_keeps_listening() -> None:
+    bad = [_Msg("LOCAL_POSITION_NED", time_boot_ms=10) for _ in range(5)]
+    good = _Msg("ATTITUDE", roll=0.0, pitch=0.2, yaw=0.0, time_boot_ms=30)
+    conn = _Conn([*bad, good])
+    fc = _link_on(conn)
+    thread = threading.Thread(target=fc._receive_loop, daemon=True)
+    thread.start()
+    try:
+        assert conn.drained.wait(timeout=10.0), "the receiver did not drain the connection"
+    finally:
+        fc._stop.set()
+        thread.join(timeout=10.0)
+    assert not thread.is_alive()
+    assert fc.status().handler_errors == 5
+    assert fc._state.attitude == (0.0, 0.2, 0.0)
+
+
+def test_the_sender_thread_counts_failed_sends_and_keeps_streaming(caplog) -> None:
+    conn = _Conn([], send_error=OSError("network is unreachable"), after=4)
+    fc = _link_on(conn)
+    fc._streaming = fc._state.armed = True  # the setpoint stream runs (20 Hz), each send fails
+    thread = threading.Thread(target=fc._send_loop, daemon=True)
+    with caplog.at_level(logging.WARNING, logger="masonry.adapters.mavlink_link"):
+        thread.start()
+        try:
+            assert conn.sent.wait(timeout=10.0), "the sender stopped after a failed send"
+        finally:
+            fc._stop.set()
+            thread.join(timeout=10.0)
+    assert not thread.is_alive()
+    status = fc.status()
+    assert status.send_errors >= 3 and status.setpoints_sent == 0
+    assert status.last_error == "send error: OSError: network is unreachable"
+    assert any("send error" in r.getMessage() for r in caplog.records)

@@ -279,3 +279,13 @@ def test_non_finite_setpoint_is_rejected() -> None:
     v = flying()
     with pytest.raises(CommandRejected):
         v.command_velocity((math.nan, 0.0, 0.0), 0.0, v.time_s)
+
+
+def test_bad_values_raise_the_error_tree_and_stay_value_errors() -> None:
+    from masonry.errors import InvalidArgument, MasonryError
+
+    with pytest.raises(InvalidArgument, match="velocity_tau_s") as info:
+        VehicleConfig(velocity_tau_s=0.0)
+    assert isinstance(info.value, MasonryError) and isinstance(info.value, ValueError)
+    with pytest.raises(InvalidArgument, match="finite"):
+        SimVehicle().follow((math.inf, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), on_ground=True, armed=False)

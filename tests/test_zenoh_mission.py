@@ -243,9 +243,12 @@ def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
         t = threading.Thread(target=beat, daemon=True)
         t.start()
         try:
-            with pytest.raises(LinkLost, match=hint.replace("?", r"\?")):
+            with pytest.raises(LinkLost, match=hint.replace("--key-file", "`key_file`").replace("?", r"\?")) as info:
                 run_remote_uav(bp, bp.fleet[0], connect=[f"tcp/127.0.0.1:{port}"], mission_name="t4",
                                key=uav_key, wait_s=2.0)
+            from masonry.cli.app import cli_message
+
+            assert hint in cli_message(info.value)  # the CLI names its flag
         finally:
             stop.set()
             t.join()

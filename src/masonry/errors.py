@@ -7,6 +7,8 @@
     ├── PlanningError           the planner or dispatcher was asked something impossible
     ├── InputError              a command-line input (image, intrinsics, calibration, option) is unusable
     ├── PerceptionError         the vision pipeline cannot run (unknown dictionary, bad calibration)
+    ├── InvalidArgument         a library call got a value outside its domain (also a ValueError): a
+    │                           VehicleConfig time constant <= 0, a non-finite state to follow
     ├── HardwareError           a port's device failed
     │   ├── DeviceNotFound      the device or endpoint is absent or is not the expected device
     │   ├── CommandRejected     the device answered "no" to a command (carries the reason)
@@ -20,13 +22,26 @@
 
 Adapters translate library failures at the boundary with ``raise ... from exc``; the CLI
 prints ``str(error)`` as one line and exits with status 2 (bad input) or 1 (runtime failure).
+
+Library errors name no command-line flag: an error about a parameter writes its Python name in backticks
+(```key_file` /etc/k: not a regular file``) and lists it in ``options``; the CLI translates each into its flag
+(``--key-file /etc/k: not a regular file``, :func:`masonry.cli.app.cli_message`).
 """
 
 from __future__ import annotations
 
 
 class MasonryError(Exception):
-    """Base of every error masonry raises on purpose."""
+    """Base of every error masonry raises on purpose.
+
+    Args:
+        options: the parameters the message names, each written in backticks (```key_file```), so a front end
+            can name them in its own terms (the CLI's flags).
+    """
+
+    def __init__(self, *args: object, options: tuple[str, ...] = ()) -> None:
+        super().__init__(*args)
+        self.options = tuple(options)
 
 
 class BlueprintError(MasonryError):
@@ -52,6 +67,13 @@ class PerceptionError(MasonryError):
     """The perception pipeline cannot run with the given configuration."""
 
 
+class InvalidArgument(MasonryError, ValueError):
+    """A library call or configuration value is outside its domain (non-finite, non-positive, negative time).
+
+    Also a :class:`ValueError`, so code that caught the ``ValueError`` raised before keeps working.
+    """
+
+
 class HardwareError(MasonryError):
     """A hardware port failed."""
 
@@ -63,10 +85,10 @@ class DeviceNotFound(HardwareError):
 class CommandRejected(HardwareError):
     """The device refused a command; ``reason`` says why."""
 
-    def __init__(self, command: str, reason: str) -> None:
+    def __init__(self, command: str, reason: str, *, options: tuple[str, ...] = ()) -> None:
         self.command = command
         self.reason = reason
-        super().__init__(f"{command} rejected: {reason}")
+        super().__init__(f"{command} rejected: {reason}", options=options)
 
 
 class CommandTimeout(HardwareError):

@@ -106,6 +106,15 @@ class FakeFlightController(_Scripted):
     ``battery_fraction``, ``battery_drain_per_s``, ``floor_z_m``, ``wind_mps``, ``arm_rejection``,
     ``land_failures=N`` (the next N ``land()`` calls go unanswered: CommandTimeout), ``mode="LOITER"`` (a pilot's
     mode switch: the vehicle holds where it is; ``mode="LAND"`` lands it).
+
+    Why a physics of its own and not a layer over :class:`~masonry.sim.vehicle.SimVehicle`: this fake is the
+    scripted one, whose few knobs (a lag, a speed limit, a climb and a land rate, a constant wind, a floor) a
+    test sets to make a scenario exact, and whose faults (a failure that makes every call raise, a pilot's
+    mode switch, unanswered LANDs, rejected arming) the simulated autopilot does not have; ``SimVehicle`` is
+    the simulator's autopilot, with failsafes, gusts, acceleration limits and noise, bit-identical for the
+    pinned missions. The two agree where a state machine can tell: both run the one FlightController
+    contract suite (``tests/test_flight_contract.py``), with the MAVLink adapter on the SITL, so a
+    difference there fails a test (e.g. velocity setpoints are ignored on the ground by all of them).
     """
 
     def __init__(
@@ -289,11 +298,13 @@ class FakeFlightController(_Scripted):
             raise CommandRejected("velocity", "not armed")
         if self.mode == "LAND":
             raise CommandRejected("velocity", "vehicle is landing")
+        self.velocity_commands += 1
+        if self.on_ground:
+            return  # ignored on the ground, as by ArduPilot (only takeoff lifts it): the FlightController contract
         self._takeoff_z_m = None  # a new guided command replaces a takeoff in progress
         self._cmd_vel[0], self._cmd_vel[1], self._cmd_vel[2] = velocity_mps
         self._cmd_yaw_rate = float(yaw_rate_radps)
         self._cmd_time_s = self._t_s
-        self.velocity_commands += 1
 
     def telemetry(self) -> Telemetry:
         self._advance()

@@ -2,7 +2,9 @@
 
 Heavy libraries are imported when a device is opened, not when this package is imported.
 
-- :class:`~masonry.adapters.mavlink.MavlinkFlightController`: FlightController over MAVLink 2 (ArduPilot, PX4).
+- :class:`~masonry.adapters.mavlink.MavlinkFlightController`: FlightController over MAVLink 2 (ArduPilot, PX4), on
+  :class:`~masonry.adapters.mavlink_link.MavlinkLink` (connection, threads, error counters in ``status()``) and
+  :mod:`~masonry.adapters.mavlink_protocol` (MAVLink numbers and modes).
 - :class:`~masonry.adapters.sitl.MavlinkSitl`: the simulator's UAV behind a MAVLink endpoint (``masonry sitl``).
 - :class:`~masonry.adapters.arduino.ArduinoActuators`: Gripper and Sprayer on the actuator Arduino.
 - :class:`~masonry.adapters.arduino_fake.FakeArduino`: that Arduino on a pseudo-terminal, for tests and demos.

@@ -71,7 +71,8 @@ class OpenCvCamera:
     ) -> None:
         if intrinsics is None and calibration is None:
             raise InputError(
-                "a camera needs its intrinsics: give --calibration FILE (from `masonry calibrate`)"
+                "a camera needs its intrinsics: give `calibration` FILE (from `masonry calibrate`)",
+                options=("calibration",),
             )
         self.source = source
         self.kind, self.target = parse_source(source)

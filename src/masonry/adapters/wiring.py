@@ -154,7 +154,8 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         raise InputError(f"autopilot must be auto, ardupilot or px4, not {hw.autopilot!r}")
     if not hw.sim_camera and hw.calibration is None:
         raise InputError(
-            f"--camera {hw.camera} needs --calibration FILE (the camera calibration from `masonry calibrate`)"
+            f"`camera` {hw.camera} needs `calibration` FILE (the camera calibration from `masonry calibrate`)",
+            options=("camera", "calibration"),
         )
     if not 0.0 <= hw.min_battery <= 1.0:
         raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
@@ -359,6 +360,7 @@ class CheckItem:
     ok: bool
     detail: str
     blocking: bool = True
+    options: tuple[str, ...] = ()  # parameters the detail names (``MasonryError.options``), for the CLI
 
 
 @dataclass(frozen=True)
@@ -370,6 +372,11 @@ class PreflightReport:
     @property
     def ok(self) -> bool:
         return all(item.ok or not item.blocking for item in self.items)
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        """The parameters the report's lines name (each in backticks), for a front end to translate."""
+        return tuple(dict.fromkeys(o for item in self.items for o in item.options))
 
     @property
     def reasons(self) -> list[str]:
@@ -386,7 +393,7 @@ class PreflightReport:
     def raise_if_failed(self) -> None:
         """Raises CommandRejected("arm", ...) naming every blocking failure."""
         if not self.ok:
-            raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons))
+            raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons), options=self.options)
 
 
 def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick",
@@ -406,7 +413,7 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
             )
         except HardwareError as exc:
             detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
-            items.append(CheckItem("position estimate", False, detail))
+            items.append(CheckItem("position estimate", False, detail, options=exc.options))
         deadline = time.monotonic() + 1.5
         while math.isnan(fc.telemetry().battery_fraction) and time.monotonic() < deadline:
             time.sleep(0.02)  # SYS_STATUS comes at 2 Hz

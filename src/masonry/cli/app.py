@@ -90,6 +90,23 @@ USER_ERRORS: tuple[type[MasonryError], ...] = (
     BlueprintError, InputError, JournalUnusable, PerceptionError, ProtocolError)
 
 
+#: Library parameters named in errors (``MasonryError.options``) whose flag is not ``--`` + the name with dashes.
+OPTION_FLAGS = {"estimate_timeout_s": "--estimate-wait"}
+
+
+def cli_text(text: str, options: tuple[str, ...]) -> str:
+    """``text`` in the CLI's terms: each parameter of ``options`` it names (```key_file```) becomes its flag."""
+    for name in options:
+        flag = OPTION_FLAGS.get(name, "--" + name.replace("_", "-"))
+        text = text.replace(f"`{name}`", flag)
+    return text
+
+
+def cli_message(exc: MasonryError) -> str:
+    """The error's line in the CLI's terms (:func:`cli_text` of its ``options``)."""
+    return cli_text(str(exc), exc.options)
+
+
 def fail(message: str, code: int = 2) -> typer.Exit:
     """Print ``message`` as one line on stderr and return the Exit to raise."""
     typer.echo(f"error: {message}", err=True)
@@ -104,7 +121,7 @@ def guarded(func: F) -> F:
         try:
             return func(*args, **kwargs)
         except MasonryError as exc:
-            raise fail(str(exc), 2 if isinstance(exc, USER_ERRORS) else 1) from exc
+            raise fail(cli_message(exc), 2 if isinstance(exc, USER_ERRORS) else 1) from exc
         except KeyboardInterrupt:
             raise fail("interrupted", 130) from None
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import typer
 
-from masonry.cli.app import command
+from masonry.cli.app import cli_text, command
 from masonry.cli.options import check_all, help_text
 from masonry.errors import InputError
 
@@ -47,7 +47,7 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
         try:
             report = preflight(opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True))
             for line in report.lines():
-                typer.echo(line, err=True)
+                typer.echo(cli_text(line, report.options), err=True)
             report.raise_if_failed()
         except BaseException:
             opened.close()

@@ -166,7 +166,7 @@ def write_key_file(path: str | Path, *, force: bool = False) -> Path:
     try:
         fd = os.open(p, flags, 0o600)
     except FileExistsError:
-        raise InputError(f"{p} already exists: pass --force to replace it (every peer then needs the new key)") \
+        raise InputError(f"{p} already exists: pass `force` to replace it (every peer then needs the new key)", options=("force",)) \
             from None
     except OSError as exc:
         raise InputError(f"{p}: cannot write the key file: {exc.strerror}") from exc
@@ -188,25 +188,25 @@ def load_key(path: str | Path) -> bytes:
     try:
         st = p.stat()
     except OSError as exc:
-        raise InputError(f"--key-file {p}: {exc.strerror}") from exc
+        raise InputError(f"`key_file` {p}: {exc.strerror}", options=("key_file",)) from exc
     if not stat.S_ISREG(st.st_mode):
-        raise InputError(f"--key-file {p}: not a regular file")
+        raise InputError(f"`key_file` {p}: not a regular file", options=("key_file",))
     if os.name == "posix" and st.st_mode & 0o077:
-        raise InputError(f"--key-file {p}: readable by group or others (mode {stat.S_IMODE(st.st_mode):04o}); "
-                         f"run chmod 600 {p}")
+        raise InputError(f"`key_file` {p}: readable by group or others (mode {stat.S_IMODE(st.st_mode):04o}); "
+                         f"run chmod 600 {p}", options=("key_file",))
     try:
         with p.open("rb") as f:
             raw = f.read(1024)
     except OSError as exc:
-        raise InputError(f"--key-file {p}: {exc.strerror}") from exc
+        raise InputError(f"`key_file` {p}: {exc.strerror}", options=("key_file",)) from exc
     text = raw.strip()
     try:
         key = bytes.fromhex(text.decode("ascii"))
     except (UnicodeDecodeError, ValueError):
         key = b""
     if len(key) != KEY_BYTES or len(text) != 2 * KEY_BYTES:
-        raise InputError(f"--key-file {p}: a key file holds {2 * KEY_BYTES} hexadecimal digits "
-                         f"(make one with masonry keygen -o FILE)")
+        raise InputError(f"`key_file` {p}: a key file holds {2 * KEY_BYTES} hexadecimal digits "
+                         f"(make one with masonry keygen -o FILE)", options=("key_file",))
     return key
 
 
@@ -234,8 +234,8 @@ def require_key_or_loopback(key: bytes | None, insecure: bool, endpoints: Iterab
         return
     for e in endpoints:
         if not is_loopback(e):
-            raise InputError(f"{what} {e} is not loopback: give --key-file FILE (masonry keygen -o FILE) to "
-                             "authenticate the mission, or --insecure to run it unauthenticated")
+            raise InputError(f"{what} {e} is not loopback: give `key_file` FILE (masonry keygen -o FILE) to "
+                             "authenticate the mission, or `insecure` to run it unauthenticated", options=("key_file", "insecure"))
 
 
 def wrap(transport: Transport, key: bytes | None, mission: str) -> Transport:

@@ -206,10 +206,10 @@ class Journal:
         # mode bits count even for root, who could write anyway: a file made read-only is meant to stay so)
         if self.path.exists() and (not os.access(self.path, os.W_OK) or not self.path.stat().st_mode & 0o222):
             raise JournalUnusable(f"{where}: is read-only (the mission cannot be recorded): make it writable "
-                                  "or give another --journal file")
+                                  "or give another `journal` file", options=("journal",))
         if not os.access(parent, os.W_OK | os.X_OK):
             raise JournalUnusable(f"{where}: the directory {parent} is read-only (SQLite writes its WAL file "
-                                  "beside the journal): give a --journal file in a writable directory")
+                                  "beside the journal): give a `journal` file in a writable directory", options=("journal",))
         try:
             conn = sqlite3.connect(str(self.path), isolation_level=None, check_same_thread=False, timeout=10.0)
         except sqlite3.Error as exc:
@@ -527,8 +527,8 @@ def open_mission_journal(
         state = journal.replay() if existed else None
         if state is not None and not resume:
             if not state.empty:
-                raise JournalUnusable(f"{where} already holds a mission: pass --resume to continue it, "
-                                      "or give another --journal file")
+                raise JournalUnusable(f"{where} already holds a mission: pass `resume` to continue it, "
+                                      "or give another `journal` file", options=("resume", "journal"))
             state = None
         if state is not None:
             _check_fingerprint(where, state, wall_digest, fleet_digest, fleet_names, task_ids, warn)
@@ -555,15 +555,15 @@ def _check_fingerprint(
     if stored_wall is not None and stored_wall != wall_digest:
         raise JournalUnusable(
             f"{where} was written for another wall (wall digest {stored_wall}, this blueprint's is "
-            f"{wall_digest}): resume it with the blueprint it was written for, or give another --journal file")
+            f"{wall_digest}): resume it with the blueprint it was written for, or give another `journal` file", options=("journal",))
     elif stored_fleet is not None and stored_fleet != fleet_digest:
         before = state.meta.get("fleet")
         then = f"{', '.join(map(str, before))}, " if isinstance(before, list) and before else ""
         now = f"{', '.join(fleet_names)}, " if fleet_names else ""
         raise JournalUnusable(
             f"{where} was written for another fleet ({then}digest {stored_fleet}; this one: {now}digest "
-            f"{fleet_digest}): resume with the same fleet (names, roles, homes; in sim the same --brick-uavs "
-            "and --adhesion-uavs)")
+            f"{fleet_digest}): resume with the same fleet (names, roles, homes; in sim the same `brick_uavs` "
+            "and `adhesion_uavs`)", options=("brick_uavs", "adhesion_uavs"))
     if task_ids is not None:
         unknown = sorted(state.task_ids - set(task_ids))
         if unknown:

@@ -55,10 +55,10 @@ def _key_hint(transport: Any, handler: UavHandler) -> str:
     """Why mission control may be unheard although it speaks: the two sides' keys differ (docs/security.md)."""
     dropped = getattr(transport, "dropped", None)
     if dropped:
-        return (f" ({sum(dropped.values())} frames failed authentication: is --key-file the same file as mission "
+        return (f" ({sum(dropped.values())} frames failed authentication: is `key_file` the same file as mission "
                 "control's?)")
     if dropped is None and handler.rejected:
-        return f" ({handler.rejected} messages unreadable: does mission control use --key-file?)"
+        return f" ({handler.rejected} messages unreadable: does mission control use `key_file`?)"
     return ""
 
 
@@ -124,7 +124,7 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     from masonry.planner import plan
 
     if not (time_scale > 0 and dt_s > 0):
-        raise InputError(f"--time-scale and --dt must be > 0, got {time_scale} and {dt_s}")
+        raise InputError(f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt"))
     if adapters is None:
         from masonry.sim import Faults, World
 
@@ -184,8 +184,9 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
                 break
             if heard_s is None:
                 if time.monotonic() - wall0 > wait_s:
+                    hint = _key_hint(transport, handler)
                     raise LinkLost(f"{spec.name}: no word from mission control at {', '.join(connect)} "
-                                   f"within {wait_s:g} s{_key_hint(transport, handler)}")
+                                   f"within {wait_s:g} s{hint}", options=("key_file",) if hint else ())
             elif model.finished and time.monotonic() - heard_wall > wait_s:
                 break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
             if now - t0 >= max_time_s:

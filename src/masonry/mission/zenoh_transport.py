@@ -126,11 +126,11 @@ class ZenohTransport:
         if path is None:
             return zenoh.Config()
         if not path.is_file():
-            raise InputError(f"--zenoh-config {path}: no such file")
+            raise InputError(f"`zenoh_config` {path}: no such file", options=("zenoh_config",))
         try:
             return zenoh.Config.from_file(str(path))
         except Exception as exc:  # zenoh raises ZError for a syntax error or an unknown key
-            raise InputError(f"--zenoh-config {path}: not a valid Zenoh configuration: {_one_line(exc)}") \
+            raise InputError(f"`zenoh_config` {path}: not a valid Zenoh configuration: {_one_line(exc)}", options=("zenoh_config",)) \
                 from exc
 
     def send(self, to: str, payload: bytes) -> None:

@@ -76,16 +76,19 @@ def parse_board(text: str) -> ChessboardSpec:
     m = re.fullmatch(r"\s*chessboard:(\d+)[xX](\d+):([0-9]*\.?[0-9]+(?:[eE][-+]?\d+)?)\s*", text)
     if m is None:
         raise InputError(
-            f"--board: expected chessboard:COLSxROWS:SQUARE_M (inner corners, metres), e.g. chessboard:9x6:0.025; "
-            f"got {text!r}"
+            f"`board`: expected chessboard:COLSxROWS:SQUARE_M (inner corners, metres), e.g. chessboard:9x6:0.025; "
+            f"got {text!r}",
+            options=("board",),
         )
     cols, rows, square = int(m.group(1)), int(m.group(2)), float(m.group(3))
     if cols < 3 or rows < 3:
-        raise InputError(f"--board: a chessboard needs at least 3x3 inner corners, got {cols}x{rows}")
+        raise InputError(
+            f"`board`: a chessboard needs at least 3x3 inner corners, got {cols}x{rows}", options=("board",)
+        )
     if cols > 100 or rows > 100:
-        raise InputError(f"--board: at most 100x100 inner corners, got {cols}x{rows}")
+        raise InputError(f"`board`: at most 100x100 inner corners, got {cols}x{rows}", options=("board",))
     if not 0.0 < square < 1.0:
-        raise InputError(f"--board: square side {square} m is out of range (0, 1) m")
+        raise InputError(f"`board`: square side {square} m is out of range (0, 1) m", options=("board",))
     return ChessboardSpec(cols, rows, square)
 
 

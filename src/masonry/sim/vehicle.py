@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from masonry.errors import CommandRejected
+from masonry.errors import CommandRejected, InvalidArgument
 from masonry.geometry import wrap_angle_rad
 from masonry.ports import Telemetry, Vec3
 
@@ -86,7 +86,7 @@ class VehicleConfig:
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
+                raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
 
 
 class _Gauss:
@@ -365,13 +365,13 @@ class SimVehicle:
                 time when it flies.
 
         Raises:
-            ValueError: a non-finite position, velocity or attitude, or a negative ``dt_s``.
+            InvalidArgument: (a ValueError) a non-finite position, velocity or attitude, or a negative ``dt_s``.
         """
         x, y, z = (float(c) for c in position_m)
         vx, vy, vz = (float(c) for c in velocity_mps)
         roll, pitch, yaw = (float(c) for c in attitude_rad)
         if not math.isfinite(x + y + z + vx + vy + vz + roll + pitch + yaw) or not dt_s >= 0.0:
-            raise ValueError(
+            raise InvalidArgument(
                 f"follow: state must be finite and dt_s >= 0, got {position_m}, {velocity_mps}, "
                 f"{attitude_rad}, dt_s={dt_s}"
             )

@@ -22,7 +22,7 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
     """
     path = Path(path)
     if path.suffix.lower() not in (".png", ".svg"):
-        raise InputError(f"--gantt {path}: the file must end in .png or .svg")
+        raise InputError(f"`gantt` {path}: the file must end in .png or .svg", options=("gantt",))
     import matplotlib
 
     matplotlib.use("Agg")

@@ -37,7 +37,7 @@ def export_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> 
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in FORMATS:
-        raise InputError(f"--graph {path}: the file must end in {', '.join(FORMATS)}")
+        raise InputError(f"`graph` {path}: the file must end in {', '.join(FORMATS)}", options=("graph",))
     try:
         if suffix == ".dot":
             path.write_text(graph_dot(plan, title=title), encoding="utf-8")
@@ -48,7 +48,7 @@ def export_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> 
         else:
             draw_graphs(plan, path, title=title)
     except OSError as exc:
-        raise InputError(f"--graph {path}: cannot write: {exc.strerror or exc}") from None
+        raise InputError(f"`graph` {path}: cannot write: {exc.strerror or exc}", options=("graph",)) from None
     return path
 
 

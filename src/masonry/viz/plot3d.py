@@ -33,7 +33,7 @@ def draw_plot3d(blueprint: Any, report: Any, path: str | Path, *, title: str | N
     """
     path = Path(path)
     if path.suffix.lower() not in (".png", ".svg"):
-        raise InputError(f"--plot3d {path}: the file must end in .png or .svg")
+        raise InputError(f"`plot3d` {path}: the file must end in .png or .svg", options=("plot3d",))
     import matplotlib
 
     matplotlib.use("Agg")

@@ -1,0 +1,591 @@
+"""The MAVLink 2 link under :class:`~masonry.adapters.mavlink.MavlinkFlightController`: connection, threads, acks.
+
+:class:`MavlinkLink` opens the pymavlink connection (optionally signed), waits for the autopilot's heartbeat,
+requests message rates, and runs two threads: the receiver records what the autopilot says (:class:`_State`,
+raw MAVLink fields: the NED frame conversion lives in :mod:`masonry.adapters.mavlink` only) and the sender
+beats our heartbeat and streams whatever the flight controller above wants streamed. ``command`` sends a
+COMMAND_LONG and checks its COMMAND_ACK.
+
+Nothing the threads meet is silent: a message the receiver cannot handle, a failed receive and a failed send
+are each counted and logged (:meth:`MavlinkLink.status`), and the threads keep going.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from typing_extensions import Self
+
+from masonry.adapters.mavlink_protocol import (
+    HEARTBEAT_MISSING_S,
+    MAV_AUTOPILOT_INVALID,
+    MAV_AUTOPILOT_PX4,
+    MAV_CMD_SET_MESSAGE_INTERVAL,
+    MAV_FRAME_LOCAL_NED,
+    MAV_MODE_FLAG_SAFETY_ARMED,
+    MAV_RESULT_ACCEPTED,
+    MAV_RESULT_IN_PROGRESS,
+    MAV_RESULT_NAMES,
+    MAV_SEVERITY_WARNING,
+    MAV_TYPE_GCS,
+    MSG_ATTITUDE,
+    MSG_EKF_STATUS_REPORT,
+    MSG_ESTIMATOR_STATUS,
+    MSG_EXTENDED_SYS_STATE,
+    MSG_LOCAL_POSITION_NED,
+    MSG_SYS_STATUS,
+    TYPE_MASK_VELOCITY_YAW_RATE,
+    Autopilot,
+)
+from masonry.adapters.pose_source import PoseSource
+from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
+from masonry.ports import Vec3
+
+_log = logging.getLogger(__name__)
+
+
+def load_signing_key(path: str | os.PathLike[str]) -> bytes:
+    """Read a MAVLink 2 signing key: 32 raw bytes, 64 hex digits, or a passphrase (SHA-256, as MAVProxy does).
+
+    Raises:
+        InputError: the file is missing or empty.
+    """
+    import hashlib
+
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read signing key: {exc.strerror or exc}") from exc
+    if len(raw) == 32:
+        return raw
+    text = raw.decode("utf-8", errors="replace").strip()
+    if not text:
+        raise InputError(f"{p}: signing key file is empty")
+    if len(text) == 64 and all(ch in "0123456789abcdefABCDEF" for ch in text):
+        return bytes.fromhex(text)
+    return hashlib.sha256(text.encode("utf-8")).digest()
+
+
+def mavutil_module() -> Any:
+    """``pymavlink.mavutil`` with the MAVLink 2 dialect loaded (sets MAVLINK20=1 before the first import)."""
+    os.environ["MAVLINK20"] = "1"
+    from pymavlink import mavutil
+
+    if mavutil.mavlink.WIRE_PROTOCOL_VERSION != "2.0":  # imported earlier without MAVLINK20
+        mavutil.set_dialect("ardupilotmega")
+    return mavutil
+
+
+class LinkClock:
+    """The autopilot's clock (``time_boot_ms``) seen from this computer: a Clock for the state machines.
+
+    ``now_s`` extrapolates the last boot time received at the rate measured between the autopilot's and the
+    local monotonic clock (1.0 for real hardware, the time-scale factor for a faster-than-real-time SITL);
+    ``sleep`` sleeps the wall time that corresponds to ``duration_s`` of autopilot time.
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
+        self._last: tuple[float, float] | None = None
+        self._returned = -math.inf
+        self._created = time.monotonic()
+
+    def observe(self, boot_s: float, monotonic_s: float) -> None:
+        with self._lock:
+            if self._last is not None and boot_s < self._last[0] - 1.0:  # autopilot rebooted
+                self._first = None
+                self._returned = -math.inf
+            if self._first is None:
+                self._first = (boot_s, monotonic_s)
+            self._last = (boot_s, monotonic_s)
+
+    @property
+    def rate(self) -> float:
+        """Autopilot seconds per local second (1.0 until 0.2 s of samples exist)."""
+        with self._lock:
+            if self._first is None or self._last is None:
+                return 1.0
+            dt_local = self._last[1] - self._first[1]
+            if dt_local < 0.2:
+                return 1.0
+            return max(1e-3, (self._last[0] - self._first[0]) / dt_local)
+
+    def now_s(self) -> float:
+        rate = self.rate
+        with self._lock:
+            if self._last is None:  # nothing heard yet: seconds since this clock was made
+                return time.monotonic() - self._created
+            # extrapolated over one telemetry period at most; never runs backwards
+            now = self._last[0] + (time.monotonic() - self._last[1]) * rate
+            self._returned = max(self._returned, now)
+            return self._returned
+
+    @property
+    def anchored(self) -> bool:
+        """Whether a time-stamped message from the autopilot has been seen."""
+        return self._last is not None
+
+    def sleep(self, duration_s: float) -> None:
+        if duration_s > 0.0:
+            time.sleep(duration_s / self.rate)
+
+
+@dataclass
+class _State:
+    """What the receiver thread has learned (guarded by the controller's lock)."""
+
+    last_message_s: float = -math.inf
+    last_heartbeat_s: float = -math.inf
+    armed: bool = False
+    custom_mode: int = -1
+    base_mode: int = 0
+    position_ned: Vec3 | None = None
+    velocity_ned: Vec3 = (0.0, 0.0, 0.0)
+    position_time_s: float = -math.inf
+    attitude: Vec3 = (0.0, 0.0, 0.0)  # roll, pitch, yaw (FRD / NED)
+    battery_fraction: float = math.nan
+    battery_voltage_v: float = math.nan
+    estimate_flags: int | None = None
+    landed_state: int | None = None
+    status_texts: list[tuple[float, int, str]] | None = None
+
+
+#: Log the first few errors of a kind, then every this-many-th (a 30 Hz stream of bad messages must not flood).
+_LOG_EVERY = 100
+
+
+@dataclass(frozen=True)
+class LinkStatus:
+    """What the link's threads have done and met so far (counters since construction)."""
+
+    connected: bool
+    autopilot: str | None
+    setpoints_sent: int
+    vision_sent: int
+    handler_errors: int  # messages the receiver could not handle (missing or ill-typed fields)
+    receive_errors: int  # failed reads from the connection
+    send_errors: int  # failed sends of the background stream (heartbeat, setpoints)
+    pose_errors: int  # failed pose reads or forwards (``pose_source``)
+    last_error: str | None
+
+    @property
+    def errors(self) -> int:
+        """All errors the threads met."""
+        return self.handler_errors + self.receive_errors + self.send_errors + self.pose_errors
+
+
+class MavlinkLink:
+    """A MAVLink 2 connection to one autopilot: heartbeat both ways, message rates, receiver and sender threads.
+
+    Args: as :class:`~masonry.adapters.mavlink.MavlinkFlightController` (which adds the commands and the frame).
+    """
+
+    def __init__(
+        self,
+        url: str,
+        *,
+        baud: int = 115200,
+        autopilot: Autopilot = "auto",
+        heartbeat_timeout_s: float = 1.0,
+        connect_timeout_s: float = 10.0,
+        command_timeout_s: float = 1.0,
+        command_retries: int = 2,
+        setpoint_rate_hz: float = 20.0,
+        signing_key: bytes | None = None,
+        pose_source: PoseSource | None = None,
+        vision_rate_hz: float = 30.0,
+        source_system: int = 255,
+        source_component: int = 190,  # MAV_COMP_ID_MISSIONPLANNER
+        telemetry_rate_hz: float = 30.0,
+    ) -> None:
+        if autopilot not in ("auto", "ardupilot", "px4"):
+            raise InputError(f"autopilot must be auto, ardupilot or px4, not {autopilot!r}")
+        if setpoint_rate_hz < 10.0:
+            raise InputError(f"setpoint rate must be at least 10 Hz, not {setpoint_rate_hz}")
+        if signing_key is not None and len(signing_key) != 32:
+            raise InputError(f"a MAVLink signing key has 32 bytes, not {len(signing_key)}")
+        self.url = url
+        self.baud = baud
+        self.autopilot_setting: Autopilot = autopilot
+        self.autopilot: str | None = None
+        self.heartbeat_timeout_s = heartbeat_timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self.command_timeout_s = command_timeout_s
+        self.command_retries = command_retries
+        self.setpoint_rate_hz = setpoint_rate_hz
+        self.signing_key = signing_key
+        self.pose_source = pose_source
+        self.vision_rate_hz = vision_rate_hz
+        self.source_system = source_system
+        self.source_component = source_component
+        self.telemetry_rate_hz = telemetry_rate_hz
+        self.target_system = 0
+        self.target_component = 0
+        self.clock = LinkClock()
+        self.warnings: list[str] = []
+        self.setpoints_sent = 0
+        self.vision_sent = 0
+        self.pose_errors = 0
+        self.last_pose_error: str | None = None
+        self.handler_errors = 0
+        self.receive_errors = 0
+        self.send_errors = 0
+        self.last_error: str | None = None
+        self._conn: Any = None
+        self._mavlink: Any = None
+        self._lock = threading.Lock()
+        self._send_lock = threading.Lock()
+        self._acks = threading.Condition(self._lock)
+        self._ack_log: list[tuple[float, int, int]] = []  # (monotonic_s, command, result)
+        self._state = _State(status_texts=[])
+        self._stop = threading.Event()
+        self._threads: list[threading.Thread] = []
+
+    def status(self) -> LinkStatus:
+        """The link's counters now: what was sent, and every error the threads met (none are dropped)."""
+        return LinkStatus(
+            connected=self._conn is not None,
+            autopilot=self.autopilot,
+            setpoints_sent=self.setpoints_sent,
+            vision_sent=self.vision_sent,
+            handler_errors=self.handler_errors,
+            receive_errors=self.receive_errors,
+            send_errors=self.send_errors,
+            pose_errors=self.pose_errors,
+            last_error=self.last_error,
+        )
+
+    def _count_error(self, kind: str, count: int, exc: BaseException) -> None:
+        """Record one error of ``kind`` (its new ``count``) and log it (the first three, then every 100th)."""
+        self.last_error = f"{kind}: {type(exc).__name__}: {exc}"
+        if count <= 3 or count % _LOG_EVERY == 0:
+            _log.warning(
+                "MAVLink %s on %s (%d so far): %s: %s", kind, self.url, count, type(exc).__name__, exc
+            )
+
+    def __enter__(self) -> Self:
+        self.connect()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def connected(self) -> bool:
+        return self._conn is not None
+
+    @property
+    def _heartbeat_missing_s(self) -> float:
+        # Autopilots beat at 1 Hz: the watchdog proper counts every message (telemetry streams at 30 Hz); a
+        # stream without heartbeats (a confused autopilot, or another component) counts as lost after 2.5 beats.
+        return max(self.heartbeat_timeout_s, HEARTBEAT_MISSING_S)
+
+    def connect(self) -> None:
+        """Open the link, wait for the autopilot's heartbeat, request message rates, start the threads.
+
+        Raises:
+            DeviceNotFound: the endpoint cannot be opened or no autopilot heartbeat arrives in time.
+        """
+        if self._conn is not None:
+            return
+        mavutil = mavutil_module()
+        self._mavlink = mavutil.mavlink
+        try:
+            conn = mavutil.mavlink_connection(
+                self.url,
+                baud=self.baud,
+                source_system=self.source_system,
+                source_component=self.source_component,
+                autoreconnect=False,
+            )
+        except (OSError, ValueError) as exc:
+            raise DeviceNotFound(f"cannot open MAVLink endpoint {self.url}: {exc}") from exc
+        if self.signing_key is not None:
+            conn.setup_signing(self.signing_key, sign_outgoing=True, allow_unsigned_callback=None)
+        self._conn = conn
+        self._stop.clear()
+        try:
+            self._await_first_heartbeat()
+        except BaseException:
+            self._conn = None
+            conn.close()
+            raise
+        receiver = threading.Thread(target=self._receive_loop, name="mavlink-rx", daemon=True)
+        sender = threading.Thread(target=self._send_loop, name="mavlink-tx", daemon=True)
+        self._threads = [receiver, sender]
+        for thread in self._threads:
+            thread.start()
+        self._request_rates()
+        deadline = time.monotonic() + self.connect_timeout_s
+        while not self.clock.anchored and time.monotonic() < deadline:  # the machines run on this clock
+            self._stop.wait(0.01)
+        if not self.clock.anchored:
+            self.warnings.append("no time-stamped telemetry (ATTITUDE / LOCAL_POSITION_NED) after connecting")
+
+    def close(self) -> None:
+        """Stop the threads and close the connection."""
+        self._stop.set()
+        for thread in self._threads:
+            thread.join(timeout=2.0)
+        self._threads = []
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+    def _await_first_heartbeat(self) -> None:
+        deadline = time.monotonic() + self.connect_timeout_s
+        next_beat = 0.0
+        while time.monotonic() < deadline:
+            now = time.monotonic()
+            if now >= next_beat:  # a udpout/udpin peer learns our address from our first packet
+                self._send_heartbeat()
+                next_beat = now + 0.25
+            msg = self._conn.recv_match(blocking=True, timeout=0.05)
+            if msg is None or msg.get_type() != "HEARTBEAT":
+                continue
+            if msg.type == MAV_TYPE_GCS or msg.autopilot == MAV_AUTOPILOT_INVALID:
+                continue  # another ground station, not an autopilot
+            self.target_system = msg.get_srcSystem()
+            self.target_component = msg.get_srcComponent()
+            if self.autopilot_setting == "auto":
+                self.autopilot = "px4" if msg.autopilot == MAV_AUTOPILOT_PX4 else "ardupilot"
+            else:
+                self.autopilot = self.autopilot_setting
+            self._handle(msg, time.monotonic())
+            return
+        hint = " (is the signing key the same on both ends?)" if self.signing_key is not None else ""
+        raise DeviceNotFound(
+            f"no autopilot heartbeat on {self.url} within {self.connect_timeout_s:.1f} s{hint}"
+        )
+
+    def _request_rates(self) -> None:
+        rates = {
+            MSG_LOCAL_POSITION_NED: self.telemetry_rate_hz,
+            MSG_ATTITUDE: self.telemetry_rate_hz,
+            MSG_SYS_STATUS: 2.0,
+            MSG_EXTENDED_SYS_STATE: 10.0,
+            MSG_EKF_STATUS_REPORT if self.autopilot == "ardupilot" else MSG_ESTIMATOR_STATUS: 5.0,
+        }
+        sent_at = time.monotonic()
+        for msg_id, rate_hz in rates.items():
+            self._send_command(MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0), 0)
+        deadline = sent_at + self.command_timeout_s
+        with self._acks:
+            while time.monotonic() < deadline:
+                answered = [
+                    a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL
+                ]
+                if len(answered) >= len(rates):
+                    break
+                self._acks.wait(timeout=max(0.0, deadline - time.monotonic()))
+            answered = [a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL]
+        refused = [a for a in answered if a[2] != MAV_RESULT_ACCEPTED]
+        if len(answered) < len(rates) or refused:
+            self.warnings.append(
+                f"message rates: {len(answered) - len(refused)} of {len(rates)} SET_MESSAGE_INTERVAL accepted; "
+                "telemetry may come at the autopilot's default stream rates"
+            )
+
+    # ---------------------------------------------------------------------------------------------- threads
+
+    def _receive_loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                msg = self._conn.recv_match(blocking=True, timeout=0.05)
+            except (OSError, ValueError, AttributeError) as exc:
+                if self._stop.is_set():
+                    return
+                self.receive_errors += 1
+                self._count_error("receive error", self.receive_errors, exc)
+                self._stop.wait(0.05)
+                continue
+            if msg is not None:
+                self._receive(msg, time.monotonic())
+
+    def _receive(self, msg: Any, now: float) -> None:
+        """Handle one received message; one the handler cannot read (another dialect, a bad field) is counted."""
+        try:
+            self._handle(msg, now)
+        except (AttributeError, TypeError, ValueError) as exc:
+            self.handler_errors += 1
+            self._count_error("unhandled message", self.handler_errors, exc)
+
+    def _handle(self, msg: Any, now: float) -> None:
+        kind = msg.get_type()
+        if kind == "BAD_DATA" or msg.get_srcSystem() != self.target_system:
+            return
+        with self._lock:
+            st = self._state
+            st.last_message_s = now
+            if kind == "HEARTBEAT":
+                if msg.get_srcComponent() != self.target_component:
+                    return
+                st.last_heartbeat_s = now
+                st.armed = bool(msg.base_mode & MAV_MODE_FLAG_SAFETY_ARMED)
+                st.base_mode = msg.base_mode
+                st.custom_mode = msg.custom_mode
+            elif kind == "LOCAL_POSITION_NED":
+                st.position_ned = (msg.x, msg.y, msg.z)
+                st.velocity_ned = (msg.vx, msg.vy, msg.vz)
+                st.position_time_s = now
+                self.clock.observe(msg.time_boot_ms / 1000.0, now)
+            elif kind == "ATTITUDE":
+                st.attitude = (msg.roll, msg.pitch, msg.yaw)
+                self.clock.observe(msg.time_boot_ms / 1000.0, now)
+            elif kind == "SYS_STATUS":
+                st.battery_fraction = math.nan if msg.battery_remaining < 0 else msg.battery_remaining / 100.0
+                st.battery_voltage_v = (
+                    msg.voltage_battery / 1000.0 if msg.voltage_battery != 65535 else math.nan
+                )
+            elif kind in ("EKF_STATUS_REPORT", "ESTIMATOR_STATUS"):
+                st.estimate_flags = int(msg.flags)
+            elif kind == "EXTENDED_SYS_STATE":
+                st.landed_state = int(msg.landed_state)
+            elif kind == "STATUSTEXT":
+                assert st.status_texts is not None
+                st.status_texts.append((now, int(msg.severity), str(msg.text)))
+                del st.status_texts[:-20]
+            elif kind == "COMMAND_ACK":
+                self._ack_log.append((now, int(msg.command), int(msg.result)))
+                del self._ack_log[:-64]
+                self._acks.notify_all()
+
+    def _send_loop(self) -> None:
+        period = 1.0 / self.setpoint_rate_hz
+        vision_period = 1.0 / self.vision_rate_hz
+        next_setpoint = next_beat = next_vision = time.monotonic()
+        while not self._stop.is_set():
+            now = time.monotonic()
+            try:
+                if now >= next_beat:
+                    next_beat = now + 1.0
+                    self._send_heartbeat()
+                if now >= next_setpoint:
+                    next_setpoint += period
+                    if next_setpoint < now:  # fell behind (suspended?): don't burst
+                        next_setpoint = now + period
+                    self._stream_setpoint(now)
+                if self.pose_source is not None and now >= next_vision:
+                    next_vision = now + vision_period
+                    try:
+                        self._forward_pose()
+                    except Exception as exc:  # noqa: BLE001 - a bad pose must not stop the setpoint stream
+                        self.pose_errors += 1
+                        self.last_pose_error = f"{type(exc).__name__}: {exc}"
+                        self._count_error("pose forward error", self.pose_errors, exc)
+            except (OSError, ValueError, AttributeError) as exc:
+                if self._stop.is_set():
+                    return
+                self.send_errors += 1
+                self._count_error("send error", self.send_errors, exc)
+            wake = min(next_setpoint, next_beat, next_vision if self.pose_source is not None else next_beat)
+            self._stop.wait(max(0.0, wake - time.monotonic()))
+
+    def _stream_setpoint(self, now: float) -> None:
+        """The sender's hook, once per setpoint period: a bare link streams nothing but its heartbeat."""
+
+    def _forward_pose(self) -> None:
+        """The sender's hook for ``pose_source`` (the flight controller forwards it in the autopilot's frame)."""
+
+    def _send_position_target(self, v_ned: Vec3, yaw_rate_ned: float) -> None:
+        with self._send_lock:
+            self._conn.mav.set_position_target_local_ned_send(
+                int(time.monotonic() * 1000) & 0xFFFFFFFF,
+                self.target_system,
+                self.target_component,
+                MAV_FRAME_LOCAL_NED,
+                TYPE_MASK_VELOCITY_YAW_RATE,
+                0.0, 0.0, 0.0,
+                float(v_ned[0]), float(v_ned[1]), float(v_ned[2]),
+                0.0, 0.0, 0.0,
+                0.0, float(yaw_rate_ned),
+            )  # fmt: skip
+        self.setpoints_sent += 1
+
+    def _send_heartbeat(self) -> None:
+        with self._send_lock:
+            self._conn.mav.heartbeat_send(MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, 0, 0, 4)  # MAV_STATE_ACTIVE
+
+    def _send_command(self, command: int, params: tuple[float, ...], confirmation: int) -> None:
+        with self._send_lock:
+            self._conn.mav.command_long_send(
+                self.target_system, self.target_component, command, confirmation, *map(float, params)
+            )
+
+    def _check_link(self, what: str) -> None:
+        if self._conn is None:
+            raise LinkLost(f"{what}: not connected to {self.url} (call connect() first)")
+        now = time.monotonic()
+        silent_s = now - self._state.last_message_s
+        if silent_s > self.heartbeat_timeout_s:
+            raise LinkLost(f"{what}: no message from the autopilot on {self.url} for {silent_s:.1f} s")
+        beatless_s = now - self._state.last_heartbeat_s
+        if beatless_s > self._heartbeat_missing_s:
+            raise LinkLost(f"{what}: no HEARTBEAT from the autopilot on {self.url} for {beatless_s:.1f} s")
+
+    def _latest_warning(self, since: float) -> str | None:
+        with self._lock:
+            texts = [
+                t for t in (self._state.status_texts or []) if t[0] >= since and t[1] <= MAV_SEVERITY_WARNING
+            ]
+        return texts[-1][2] if texts else None
+
+    def command(self, name: str, command: int, params: tuple[float, ...] = ()) -> None:
+        """Send COMMAND_LONG ``command`` and wait for its COMMAND_ACK.
+
+        Raises:
+            CommandRejected: the autopilot answered with anything but ACCEPTED (reason: result and warning).
+            CommandTimeout: no answer after ``command_retries`` resends.
+            LinkLost: the link watchdog has fired.
+        """
+        self._check_link(name)
+        params = tuple(params) + (0.0,) * (7 - len(params))
+        started = time.monotonic()
+        for attempt in range(self.command_retries + 1):
+            sent_at = time.monotonic()
+            self._send_command(command, params, attempt)
+            result = self._wait_ack(command, sent_at, sent_at + self.command_timeout_s)
+            if result is None:
+                continue
+            if result == MAV_RESULT_ACCEPTED:
+                return
+            reason = MAV_RESULT_NAMES.get(result, f"result {result}")
+            warning = self._latest_warning(started - 0.5)
+            raise CommandRejected(name, f"{reason}: {warning}" if warning else reason)
+        self._check_link(name)
+        raise CommandTimeout(
+            f"{name}: no COMMAND_ACK from the autopilot on {self.url} after {self.command_retries + 1} tries "
+            f"of {self.command_timeout_s:.1f} s"
+        )
+
+    def _wait_ack(self, command: int, since: float, deadline: float) -> int | None:
+        with self._acks:
+            while True:
+                for t, cmd, result in reversed(self._ack_log):
+                    if t >= since and cmd == command and result != MAV_RESULT_IN_PROGRESS:
+                        return result
+                remaining = deadline - time.monotonic()
+                if remaining <= 0.0:
+                    return None
+                in_progress = any(t >= since and c == command for t, c, _ in self._ack_log)
+                if in_progress:  # IN_PROGRESS extends the wait (ArduPilot: long calibrations; harmless here)
+                    deadline = max(deadline, time.monotonic() + self.command_timeout_s)
+                self._acks.wait(timeout=min(remaining, 0.1))
+
+    @property
+    def battery_voltage_v(self) -> float:
+        return self._state.battery_voltage_v
+
+    def status_texts(self) -> list[str]:
+        """The autopilot's recent STATUSTEXT messages, oldest first."""
+        with self._lock:
+            return [t[2] for t in self._state.status_texts or []]
