@@ -128,7 +128,7 @@ def test_missing_calibration_file(tmp_path: Path) -> None:
 def test_bad_board_specs(text: str) -> None:
     from masonry.cli.app import cli_message
 
-    with pytest.raises(InputError, match="^`board`: ") as info:
+    with pytest.raises(InputError, match=r"^`board`: ") as info:
         parse_board(text)
     assert info.value.options == ("board",) and cli_message(info.value).startswith("--board: ")  # the CLI's term
 

@@ -478,7 +478,7 @@ class MavlinkLink:
                     next_vision = now + vision_period
                     try:
                         self._forward_pose()
-                    except Exception as exc:  # noqa: BLE001 - a bad pose must not stop the setpoint stream
+                    except Exception as exc:  # a bad pose must not stop the setpoint stream
                         self.pose_errors += 1
                         self.last_pose_error = f"{type(exc).__name__}: {exc}"
                         self._count_error("pose forward error", self.pose_errors, exc)
