@@ -64,6 +64,7 @@ from masonry.planner import (
 from masonry.ports import (
     Camera,
     CameraFrame,
+    ClearanceLink,
     Clock,
     FlightController,
     Gripper,
@@ -105,6 +106,7 @@ __all__ = [
     "Camera",
     "CameraFrame",
     "CameraIntrinsics",
+    "ClearanceLink",
     "Clock",
     "CommandRejected",
     "CommandTimeout",
