@@ -11,6 +11,7 @@ import numpy as np
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
+from masonry.fsm.tool import Tool
 from masonry.planner.tasks import AdhesionTask, Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
 
@@ -40,8 +41,7 @@ class AdhesionUav(UavModel):
         clearance: ClearanceLink | None = None,
     ) -> None:
         self.sprayer = sprayer
-        n = config.airframe.nozzle_offset_m
-        self._nozzle: tuple[float, float, float] = (float(n[0]), float(n[1]), float(n[2]))
+        self.nozzle = Tool.at(config.airframe.nozzle_offset_m)
         self._stable_since_s: float | None = None
         self._yaw_rad = 0.0
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
@@ -67,13 +67,13 @@ class AdhesionUav(UavModel):
             t = self.task
             surface = max(t.start_m[2], t.end_m[2])
             z = max(
-                z, surface + self.config.airframe.spray_height_m - self._nozzle[2] + self.config.clearance_m
+                z, surface + self.config.airframe.spray_height_m - self.nozzle.offset_body_m[2] + self.config.clearance_m
             )
         return z
 
     def _nozzle_body(self, point_m: tuple[float, float, float] | np.ndarray) -> np.ndarray:
         p = np.array([point_m[0], point_m[1], point_m[2] + self.config.airframe.spray_height_m])
-        return self._tool_body_target(p, self._nozzle, self._yaw_rad)
+        return self.nozzle.body_target(p, self._yaw_rad)
 
     def _safe_actuators(self) -> None:
         self.sprayer.set_valve(False)

@@ -11,6 +11,7 @@ import numpy as np
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
+from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import BrickTask, Task
@@ -58,8 +59,7 @@ class BrickUav(UavModel):
         self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
         self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
         self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
-        o = config.airframe.effector_offset_m
-        self._eff: tuple[float, float, float] = (float(o[0]), float(o[1]), float(o[2]))
+        self.effector = Tool.at(config.airframe.effector_offset_m)
         self._begin_counters()
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
@@ -99,7 +99,7 @@ class BrickUav(UavModel):
         if isinstance(self.task, BrickTask):
             t = self.task
             top_z = t.position_m[2] + t.size_m[2] / 2.0
-            z = max(z, top_z - self._eff[2] + t.size_m[2] + self.config.clearance_m)
+            z = max(z, top_z - self.effector.offset_body_m[2] + t.size_m[2] + self.config.clearance_m)
         return z
 
     def _safe_actuators(self) -> None:
@@ -217,8 +217,8 @@ class BrickUav(UavModel):
         tel = self._tel
         assert tel is not None and self.brick_estimate is not None
         center, yaw = self.brick_estimate
-        above = np.array([center[0], center[1], tel.position_m[2] + self._eff[2]])
-        self._fly_to(tel, self._tool_body_target(above, self._eff, yaw), yaw_rad=yaw)
+        above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
+        self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
 
     def do_pickup_align(self, tel: Telemetry) -> None:
         cfg = self.config
@@ -244,7 +244,7 @@ class BrickUav(UavModel):
         self.gripper.set_joint_locked(False)
         self.gripper.set_magnet(True)
         grasp = np.array([center[0], center[1], center[2] - self.config.grasp_press_m])
-        self._fly_to(tel, self._tool_body_target(grasp, self._eff, yaw), self.config.descent_duration_s, yaw)
+        self._fly_to(tel, self.effector.body_target(grasp, yaw), self.config.descent_duration_s, yaw)
 
     def do_pickup_descend(self, tel: Telemetry) -> None:
         if self._now_s >= self.nav.end_s:
@@ -309,7 +309,7 @@ class BrickUav(UavModel):
         assert tel is not None
         yaw = self._place_yaw_rad()
         eff = self._place_effector_target_m()
-        body = self._tool_body_target(eff, self._eff, yaw)
+        body = self.effector.body_target(eff, yaw)
         self._route(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
 
     def do_transport(self, tel: Telemetry) -> None:
@@ -323,7 +323,7 @@ class BrickUav(UavModel):
         assert tel is not None
         self.gripper.set_joint_locked(True)
         yaw = self._place_yaw_rad()
-        body = self._tool_body_target(self._place_effector_target_m(), self._eff, yaw)
+        body = self.effector.body_target(self._place_effector_target_m(), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
 
     def do_place_align(self, tel: Telemetry) -> None:
@@ -338,12 +338,12 @@ class BrickUav(UavModel):
         self.gripper.set_joint_locked(False)
         yaw = self._place_yaw_rad()
         self._place_effector_target = self._place_effector_target_m()
-        body = self._tool_body_target(self._place_effector_target, self._eff, yaw)
+        body = self.effector.body_target(self._place_effector_target, yaw)
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
-        error = self._tool_distance_m(tel, self._eff, self._place_effector_target)
+        error = self.effector.distance_m(tel, self._place_effector_target)
         if error <= cfg.placement_radius_m:
             self._release_error_m = error
             self.reached()

@@ -27,7 +27,6 @@ from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
 from masonry.fsm.states import State, Transition, leaf_states
 from masonry.fsm.transit import Transit
-from masonry.geometry import R_world_body, body_to_world_floats, rot_z
 from masonry.planner.tasks import Task
 from masonry.ports import (
     BATTERY_LOW_REASON,
@@ -419,33 +418,6 @@ class UavModel:
                                  self.nav.target_yaw_rad)
         else:
             self.nav.wait(self._now_s)
-
-    # -- tool geometry ---------------------------------------------------------------------------------
-    def _tool_body_target(
-        self, tool_target_m: np.ndarray, offset_body_m: tuple[float, float, float], yaw_rad: float
-    ) -> np.ndarray:
-        """Body position that puts a tool at ``offset_body_m`` (FLU) on ``tool_target_m`` at heading ``yaw_rad``."""
-        return np.asarray(tool_target_m, dtype=float) - rot_z(yaw_rad) @ np.asarray(
-            offset_body_m, dtype=float
-        )
-
-    def _tool_position(self, tel: Telemetry, offset_body_m: tuple[float, float, float]) -> np.ndarray:
-        roll, pitch, yaw = tel.attitude_rad
-        return np.asarray(tel.position_m, dtype=float) + R_world_body(roll, pitch, yaw) @ np.asarray(
-            offset_body_m
-        )
-
-    def _tool_distance_m(
-        self, tel: Telemetry, offset_body_m: tuple[float, float, float], target_m: np.ndarray
-    ) -> float:
-        """Distance from the tool at ``offset_body_m`` to ``target_m``: ``|_tool_position - target|`` on floats."""
-        rx, ry, rz = body_to_world_floats(tel.attitude_rad, offset_body_m)
-        px, py, pz = tel.position_m
-        tx, ty, tz = target_m.tolist() if type(target_m) is np.ndarray else target_m
-        dx = px + rx - tx
-        dy = py + ry - ty
-        dz = pz + rz - tz
-        return math.sqrt(dx * dx + dy * dy + dz * dz)
 
     # -- common states -------------------------------------------------------------------------------------
     def enter_idle(self, *args: Any, **kwargs: Any) -> None:
