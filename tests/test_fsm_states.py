@@ -102,8 +102,8 @@ def _airborne_rig(kind: str) -> Rig:
     assert task is not None
     uav._start_task(task)
     if isinstance(uav, BrickUav):
-        uav.brick_estimate = (np.array(rig.brick.top_center_m), 0.6)
-        uav._hover_z = 1.2
+        uav.attempt.brick_estimate = (np.array(rig.brick.top_center_m), 0.6)
+        uav.attempt.hover_z = 1.2
     return rig
 
 

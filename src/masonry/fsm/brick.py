@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -16,6 +17,25 @@ from masonry.geometry import R_world_body, wrap_angle_rad
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
+
+
+@dataclass
+class BrickAttempt:
+    """What a brick UAV has done of the task in hand: counters, the brick's estimate, the heights and yaws it
+    flies (reset for each task)."""
+
+    climbs: int = 0
+    grasp_attempts: int = 0
+    place_attempts: int = 0
+    release_attempts: int = 0
+    brick_estimate: tuple[np.ndarray, float] | None = None  # top-face centre (world, m), yaw (rad)
+    estimates_seen: int = 0
+    hover_z: float = 0.0  # the estimate hover's altitude (0: where the UAV is)
+    deadline_s: float = 0.0  # of the estimate
+    carry_yaw_rad: float = 0.0  # the carried brick's yaw relative to the body
+    grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
+    place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    release_error_m: float | None = None  # the effector's distance to its target at the release
 
 
 class BrickUav(UavModel):
@@ -66,18 +86,33 @@ class BrickUav(UavModel):
     _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
 
     def _begin_counters(self) -> None:
-        self.climbs = 0
-        self.grasp_attempts = 0
-        self.place_attempts = 0
-        self.release_attempts = 0
-        self.brick_estimate: tuple[np.ndarray, float] | None = None
-        self.estimates_seen = 0
-        self._hover_z = 0.0
-        self._deadline_s = 0.0
-        self._carry_yaw_rad = 0.0
-        self._grasp_yaw_rad = 0.0
-        self._place_effector_target = np.zeros(3)
-        self._release_error_m: float | None = None
+        self.attempt = BrickAttempt()
+
+    @property
+    def climbs(self) -> int:
+        """Climbs made to widen the camera's view (this task)."""
+        return self.attempt.climbs
+
+    @property
+    def grasp_attempts(self) -> int:
+        return self.attempt.grasp_attempts
+
+    @property
+    def place_attempts(self) -> int:
+        return self.attempt.place_attempts
+
+    @property
+    def release_attempts(self) -> int:
+        return self.attempt.release_attempts
+
+    @property
+    def brick_estimate(self) -> tuple[np.ndarray, float] | None:
+        """The brick's estimated top-face centre (world, m) and yaw (rad), once estimated."""
+        return self.attempt.brick_estimate
+
+    @property
+    def estimates_seen(self) -> int:
+        return self.attempt.estimates_seen
 
     def _begin_task(self, task: Task) -> None:
         self._begin_counters()
@@ -117,11 +152,11 @@ class BrickUav(UavModel):
         self.gripper.set_joint_locked(True)
         pickup = self.brick_task.pickup_m
         assert pickup is not None
-        self._hover_z = self.config.cruise_altitude_m
+        self.attempt.hover_z = self.config.cruise_altitude_m
         # it may climb max_climbs steps there to widen the camera's view, and it climbs out with the brick to its
         # transit altitude: both are part of its column
-        top = max(self._hover_z + self.config.max_climbs * self.config.climb_step_m, self._transit_altitude_m())
-        self._route(tel, np.array([pickup[0], pickup[1], self._hover_z]), top_m=top)
+        top = max(self.attempt.hover_z + self.config.max_climbs * self.config.climb_step_m, self._transit_altitude_m())
+        self._route(tel, np.array([pickup[0], pickup[1], self.attempt.hover_z]), top_m=top)
 
     def do_pickup_goto(self, tel: Telemetry) -> None:
         if self._advance(tel):
@@ -131,25 +166,25 @@ class BrickUav(UavModel):
 
     def climb_step(self, *args: Any, **kwargs: Any) -> None:
         """Before re-entering ``estimate``: one step up to widen the camera's view."""
-        self.climbs += 1
-        self._hover_z += self.config.climb_step_m
+        self.attempt.climbs += 1
+        self.attempt.hover_z += self.config.climb_step_m
 
     def enter_pickup_estimate(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
         assert tel is not None
         p = tel.position_m
-        if self._hover_z == 0.0:
-            self._hover_z = p[2]
-        target = np.array([p[0], p[1], self._hover_z])
-        if abs(self._hover_z - p[2]) > 0.05:
+        if self.attempt.hover_z == 0.0:
+            self.attempt.hover_z = p[2]
+        target = np.array([p[0], p[1], self.attempt.hover_z])
+        if abs(self.attempt.hover_z - p[2]) > 0.05:
             self._fly_to(tel, target)
         else:
             self._hold(tel, target)
         self.window.clear()
-        self.estimates_seen = 0
-        self._deadline_s = self._now_s + self.config.settle_time_s + self.config.estimate_timeout_s
+        self.attempt.estimates_seen = 0
+        self.attempt.deadline_s = self._now_s + self.config.settle_time_s + self.config.estimate_timeout_s
         if self.nav.traj is not None:
-            self._deadline_s += self.nav.traj.duration_s
+            self.attempt.deadline_s += self.nav.traj.duration_s
 
     def do_pickup_estimate(self, tel: Telemetry) -> None:
         cfg = self.config
@@ -159,21 +194,21 @@ class BrickUav(UavModel):
         conf = self.window.confidence()
         if conf is not None and conf >= cfg.confidence_threshold and self.window.count >= cfg.min_estimates:
             center, yaw = self.window.mean()
-            self.brick_estimate = (np.array(center, dtype=float), float(yaw))
+            self.attempt.brick_estimate = (np.array(center, dtype=float), float(yaw))
             self.estimated()
-        elif self._now_s >= self._deadline_s:
-            if self.climbs < cfg.max_climbs:
+        elif self._now_s >= self.attempt.deadline_s:
+            if self.attempt.climbs < cfg.max_climbs:
                 self.widen()
-            elif self.estimates_seen == 0:
+            elif self.attempt.estimates_seen == 0:
                 self.abort(
                     reason=f"brick {self.brick_task.brick} not seen near its pickup "
-                    f"after {self.climbs} climbs"
+                    f"after {self.attempt.climbs} climbs"
                 )
             else:
                 self.abort(
                     reason=f"brick {self.brick_task.brick} pose confidence "
                     f"{conf if conf is not None else 0.0:.2f} stayed below {cfg.confidence_threshold:.2f} "
-                    f"after {self.climbs} climbs"
+                    f"after {self.attempt.climbs} climbs"
                 )
 
     def _collect(self, tel: Telemetry) -> None:
@@ -211,12 +246,12 @@ class BrickUav(UavModel):
         est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
         if est is not None:
             self.window.add(est.center_m, est.yaw_rad)
-            self.estimates_seen += 1
+            self.attempt.estimates_seen += 1
 
     def enter_pickup_align(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
-        assert tel is not None and self.brick_estimate is not None
-        center, yaw = self.brick_estimate
+        assert tel is not None and self.attempt.brick_estimate is not None
+        center, yaw = self.attempt.brick_estimate
         above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
         self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
 
@@ -239,8 +274,8 @@ class BrickUav(UavModel):
 
     def enter_pickup_descend(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
-        assert tel is not None and self.brick_estimate is not None
-        center, yaw = self.brick_estimate
+        assert tel is not None and self.attempt.brick_estimate is not None
+        center, yaw = self.attempt.brick_estimate
         self.gripper.set_joint_locked(False)
         self.gripper.set_magnet(True)
         grasp = np.array([center[0], center[1], center[2] - self.config.grasp_press_m])
@@ -258,7 +293,7 @@ class BrickUav(UavModel):
         # actuator board report it), then climb: the verification happens at cruise altitude.
         self.gripper.is_attached()
         if self._now_s - self._entered_s >= self.config.grasp_dwell_s:
-            self._grasp_yaw_rad = tel.attitude_rad[2]
+            self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
 
     def enter_pickup_ascend(self, *args: Any, **kwargs: Any) -> None:
@@ -279,26 +314,26 @@ class BrickUav(UavModel):
 
     def do_pickup_verify(self, tel: Telemetry) -> None:
         if self.gripper.is_attached():
-            assert self.brick_estimate is not None
+            assert self.attempt.brick_estimate is not None
             # The flange keeps the brick from turning on the magnet: remember its yaw relative to the body. Its
             # position is not compensated: the conical guide centres the brick under the effector (paper, IV).
-            self._carry_yaw_rad = wrap_angle_rad(self.brick_estimate[1] - self._grasp_yaw_rad)
+            self.attempt.carry_yaw_rad = wrap_angle_rad(self.attempt.brick_estimate[1] - self.attempt.grasp_yaw_rad)
             self.attached()
             return
-        self.grasp_attempts += 1
+        self.attempt.grasp_attempts += 1
         self.gripper.set_magnet(False)
-        if self.grasp_attempts >= self.config.max_grasp_attempts:
+        if self.attempt.grasp_attempts >= self.config.max_grasp_attempts:
             self.abort(
-                reason=f"brick {self.brick_task.brick} not attached after {self.grasp_attempts} grasps"
+                reason=f"brick {self.brick_task.brick} not attached after {self.attempt.grasp_attempts} grasps"
             )
         else:
-            self.climbs = 0
-            self._hover_z = self.config.cruise_altitude_m
+            self.attempt.climbs = 0
+            self.attempt.hover_z = self.config.cruise_altitude_m
             self.missed()
 
     # -- transport and place -------------------------------------------------------------------------------
     def _place_yaw_rad(self) -> float:
-        return wrap_angle_rad(self.brick_task.yaw_rad - self._carry_yaw_rad)
+        return wrap_angle_rad(self.brick_task.yaw_rad - self.attempt.carry_yaw_rad)
 
     def _place_effector_target_m(self) -> np.ndarray:
         t = self.brick_task
@@ -337,22 +372,22 @@ class BrickUav(UavModel):
         assert tel is not None
         self.gripper.set_joint_locked(False)
         yaw = self._place_yaw_rad()
-        self._place_effector_target = self._place_effector_target_m()
-        body = self.effector.body_target(self._place_effector_target, yaw)
+        self.attempt.place_effector_target_m = self._place_effector_target_m()
+        body = self.effector.body_target(self.attempt.place_effector_target_m, yaw)
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
-        error = self.effector.distance_m(tel, self._place_effector_target)
+        error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
-            self._release_error_m = error
+            self.attempt.release_error_m = error
             self.reached()
         elif self._now_s > self.nav.end_s + cfg.release_timeout_s:
-            self.place_attempts += 1
-            if self.place_attempts >= cfg.max_place_attempts:
+            self.attempt.place_attempts += 1
+            if self.attempt.place_attempts >= cfg.max_place_attempts:
                 self.abort(
                     reason=f"drop-off of {self.brick_task.id} not reached within "
-                    f"{cfg.placement_radius_m * 100:.1f} cm after {self.place_attempts} descents"
+                    f"{cfg.placement_radius_m * 100:.1f} cm after {self.attempt.place_attempts} descents"
                 )
             else:
                 self.timeout()
@@ -371,10 +406,10 @@ class BrickUav(UavModel):
         if not self.gripper.is_attached():
             self.deposited()
             return
-        self.release_attempts += 1
-        if self.release_attempts >= self.config.max_release_attempts:
+        self.attempt.release_attempts += 1
+        if self.attempt.release_attempts >= self.config.max_release_attempts:
             self.abort(
-                reason=f"brick {self.brick_task.brick} still attached after {self.release_attempts} releases"
+                reason=f"brick {self.brick_task.brick} still attached after {self.attempt.release_attempts} releases"
             )
         else:
             self.stuck()
@@ -388,4 +423,4 @@ class BrickUav(UavModel):
 
     def do_place_ascend(self, tel: Telemetry) -> None:
         if self._advance(tel):
-            self._complete_task(placement_error_m=self._release_error_m)
+            self._complete_task(placement_error_m=self.attempt.release_error_m)
