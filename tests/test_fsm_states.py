@@ -206,3 +206,28 @@ def test_the_diagram_machine_nests_the_transit_states() -> None:
         assert "transit_ask" in leaf_states(states) and "transit_down" in leaf_states(states)
         assert {"trigger": "grant", "source": ["transit_ask", "transit_hold"], "dest": "transit_down"} in transitions
         assert len(transitions) == len(MACHINES[kind][1]) + 5
+
+
+def test_build_uav_takes_the_clearance_link_explicitly_or_from_the_link() -> None:
+    from masonry.fakes import (
+        FakeClock,
+        FakeFlightController,
+        FakeSprayer,
+        QueueMissionLink,
+        ScriptedClearanceLink,
+    )
+    from masonry.fsm import UavConfig, build_uav
+
+    clock = FakeClock()
+    cfg = UavConfig("glue-1", "adhesion", (0.0, 0.0, 0.0))
+
+    def build(link, **kw):
+        return build_uav(cfg, fc=FakeFlightController(clock), link=link, clock=clock, sprayer=FakeSprayer(clock), **kw)
+
+    airspace = ScriptedClearanceLink([], clock, swaps_batteries=True)
+    assert build(airspace).clearance is airspace  # the link implements ClearanceLink too (a mission handler)
+    assert build(airspace)._battery_service
+    assert build(airspace, clearance=None).clearance is None  # said explicitly: no airspace
+    plain = QueueMissionLink([])
+    assert build(plain).clearance is None and not build(plain)._battery_service
+    assert build(plain, clearance=airspace).clearance is airspace
