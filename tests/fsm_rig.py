@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from masonry.fakes import (
@@ -15,6 +14,7 @@ from masonry.fakes import (
     FakeGripper,
     FakeSprayer,
     QueueMissionLink,
+    ScriptedClearanceLink,
 )
 from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 from masonry.planner.tasks import AdhesionTask, BrickTask
@@ -48,12 +48,17 @@ class Rig:
         gripper: dict[str, Any] | None = None,
         fc: dict[str, Any] | None = None,
         config: dict[str, Any] | None = None,
+        clearance: dict[str, Any] | None = None,
     ) -> None:
         self.clock = FakeClock()
         self.fc = FakeFlightController(self.clock, position_m=HOME, **(fc or {}))
-        self.link = QueueMissionLink(
-            tasks if tasks is not None else [brick_task() if kind == "brick" else adhesion_task()]
+        queued = tasks if tasks is not None else [brick_task() if kind == "brick" else adhesion_task()]
+        # clearance: the link is a ScriptedClearanceLink (mission control's airspace) with these settings
+        self.link: Any = (
+            QueueMissionLink(queued) if clearance is None
+            else ScriptedClearanceLink(queued, self.clock, **clearance)
         )
+        airspace = None if clearance is None else self.link
         cfg = UavConfig(f"{kind}-1", kind, HOME, **(config or {}))  # type: ignore[arg-type]
         self.config = cfg
         if kind == "brick":
@@ -63,10 +68,11 @@ class Rig:
             cam_kwargs.update(camera or {})
             self.camera = FakeCamera(self.fc, [self.brick], markers=cfg.markers, **cam_kwargs)
             self.gripper = FakeGripper(contact=self._touching, clock=self.clock, **(gripper or {}))
-            self.uav: Any = BrickUav(cfg, self.fc, self.gripper, self.camera, self.link, self.clock)
+            self.uav: Any = BrickUav(cfg, self.fc, self.gripper, self.camera, self.link, self.clock,
+                                     clearance=airspace)
         else:
             self.sprayer = FakeSprayer(self.clock)
-            self.uav = AdhesionUav(cfg, self.fc, self.sprayer, self.link, self.clock)
+            self.uav = AdhesionUav(cfg, self.fc, self.sprayer, self.link, self.clock, clearance=airspace)
 
     def effector_m(self) -> tuple[float, float, float]:
         x, y, z = self.fc.position_m
@@ -111,39 +117,3 @@ class Rig:
         """State ``b`` was entered right after ``a`` somewhere in the trace."""
         s = self.states
         return any(s[i] == a and s[i + 1] == b for i in range(len(s) - 1))
-
-
-@dataclass
-class _Answer:
-    """What mission control's airspace answers (the fields the state machines read)."""
-
-
-    granted: bool
-    layer_m: float | None
-    hold_m: tuple[float, float, float] | None = None
-
-
-class ClearanceLink(QueueMissionLink):
-    """A link whose mission control answers after ``answer_after_s`` and grants the column at ``grant_after_s``."""
-
-    def __init__(self, tasks, clock, *, layer_m=2.6, answer_after_s=0.0, grant_after_s=0.0, hold_m=None):
-        super().__init__(tasks)
-        self.clock = clock
-        self.layer_m = layer_m
-        self.answer_after_s = answer_after_s
-        self.grant_after_s = grant_after_s
-        self.hold_m = hold_m
-        self.asked: dict[tuple[float, float, float], float] = {}
-        self.arrived: list[tuple[float, float, float]] = []
-
-    def request_clearance(self, site_m, top_m=None, to_m=None):
-        first = self.asked.setdefault(tuple(site_m), self.clock.now_s())
-        waited = self.clock.now_s() - first
-        if waited < self.answer_after_s:
-            return None
-        if waited < self.grant_after_s:
-            return _Answer(False, self.layer_m, self.hold_m)
-        return _Answer(True, self.layer_m)
-
-    def end_transit(self, site_m):
-        self.arrived.append(tuple(site_m))

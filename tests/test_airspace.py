@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from fsm_rig import HOME, PICKUP, ClearanceLink, Rig
+from fsm_rig import HOME, PICKUP, Rig
 from masonry.blueprint_gen import running_bond, towers
 from masonry.errors import ProtocolError
 from masonry.mission.airspace import ColumnClearance, layer_base_m, transit_layers_m, work_altitude_m
@@ -224,11 +224,8 @@ def test_clearance_messages_round_trip_and_only_mission_control_grants():
 
 # -- the state machine ------------------------------------------------------------------------------------------
 def _rig_with(link_kwargs):
-    rig = Rig("brick")
-    link = ClearanceLink([rig.link.poll_task()], rig.clock, **link_kwargs)
-    rig.link = rig.uav.link = link
-    rig.uav._request_clearance = link.request_clearance
-    return rig, link
+    rig = Rig("brick", clearance=dict(link_kwargs))
+    return rig, rig.link
 
 
 def test_lateral_legs_fly_at_the_given_layer_and_wait_for_the_answer_where_they_are():

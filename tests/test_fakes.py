@@ -257,3 +257,25 @@ def test_flight_controller_contract(make) -> None:
     tel = fc.telemetry()
     assert tel.on_ground and not tel.armed
     fc.close()
+
+
+def test_scripted_clearance_link_answers_then_grants() -> None:
+    from masonry.fakes import ScriptedClearanceLink
+    from masonry.ports import ClearanceLink
+
+    clock = FakeClock()
+    link = ScriptedClearanceLink([], clock, layer_m=2.4, answer_after_s=1.0, grant_after_s=3.0, hold_m=(1, 1, 2.4))
+    assert isinstance(link, ClearanceLink) and isinstance(link, MissionLink) and not link.swaps_batteries
+    site = (2.0, 0.0, 1.2)
+    assert link.request_clearance(site) is None
+    clock.advance(1.5)
+    answer = link.request_clearance(site, 2.0)
+    assert answer is not None and not answer.granted and answer.layer_m == 2.4 and answer.hold_m == (1, 1, 2.4)
+    clock.advance(1.5)
+    answer = link.request_clearance(site)
+    assert answer is not None and answer.granted and answer.hold_m is None
+    assert link.asked == {site: 0.0}
+    link.end_transit(site)
+    assert link.arrived == [site]
+    assert ScriptedClearanceLink([], clock, swaps_batteries=True).swaps_batteries
+    assert not isinstance(QueueMissionLink([]), ClearanceLink)

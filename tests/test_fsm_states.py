@@ -102,8 +102,8 @@ def _airborne_rig(kind: str) -> Rig:
     assert task is not None
     uav._start_task(task)
     if isinstance(uav, BrickUav):
-        uav.brick_estimate = (np.array(rig.brick.top_center_m), 0.6)
-        uav._hover_z = 1.2
+        uav.attempt.brick_estimate = (np.array(rig.brick.top_center_m), 0.6)
+        uav.attempt.hover_z = 1.2
     return rig
 
 
@@ -149,3 +149,85 @@ def test_machines_are_built_from_copies_of_the_data() -> None:
     Rig("brick")
     Rig("adhesion")
     assert before == MACHINES
+
+
+# -- the transit machine ---------------------------------------------------------------------------------------
+def _transit_cases() -> list[tuple[int, str]]:
+    from masonry.fsm.states import TRANSIT_TRANSITIONS
+
+    return [(i, src) for i, t in enumerate(TRANSIT_TRANSITIONS)
+            for src in (t["source"] if isinstance(t["source"], list) else [t["source"]])]
+
+
+@pytest.mark.parametrize(("index", "source"), _transit_cases())
+def test_every_declared_transit_transition(index: int, source: str) -> None:
+    from masonry.fsm.states import TRANSIT_TRANSITIONS
+    from masonry.fsm.transit import Transit
+
+    t = TRANSIT_TRANSITIONS[index]
+    transit = Transit(ignore_invalid_triggers=False)
+    transit.machine.set_state(source)
+    getattr(transit, t["trigger"])()
+    assert transit.state == t["dest"]
+    assert transit.active == (t["dest"] != "clear")
+
+
+def test_transit_triggers_from_a_wrong_phase_are_loud_when_strict() -> None:
+    from transitions import MachineError
+
+    from masonry.fsm.transit import Transit
+
+    transit = Transit(ignore_invalid_triggers=False)
+    with pytest.raises(MachineError):
+        transit.grant()  # nothing was asked for
+    transit.begin((1.0, 2.0, 1.2), 2.0, None)
+    assert (transit.state, transit.site_m, transit.top_m, transit.layer_m) == ("ask", (1.0, 2.0, 1.2), 2.0, None)
+    with pytest.raises(MachineError):
+        transit.arrive()  # not down yet
+    transit.drop()
+    transit.drop()  # dropping no transit is no trigger at all
+    assert transit.state == "clear"
+
+
+def test_a_uav_machine_in_the_tests_is_strict() -> None:
+    from transitions import MachineError
+
+    rig = Rig("brick")
+    assert rig.uav.strict_triggers and not rig.uav.machine.ignore_invalid_triggers
+    with pytest.raises(MachineError):
+        rig.uav.touched()  # idle has no ``touched``
+
+
+def test_the_diagram_machine_nests_the_transit_states() -> None:
+    from masonry.fsm.states import diagram_machine
+
+    for kind in MACHINES:
+        states, transitions = diagram_machine(kind)
+        assert "transit_ask" in leaf_states(states) and "transit_down" in leaf_states(states)
+        assert {"trigger": "grant", "source": ["transit_ask", "transit_hold"], "dest": "transit_down"} in transitions
+        assert len(transitions) == len(MACHINES[kind][1]) + 5
+
+
+def test_build_uav_takes_the_clearance_link_explicitly_or_from_the_link() -> None:
+    from masonry.fakes import (
+        FakeClock,
+        FakeFlightController,
+        FakeSprayer,
+        QueueMissionLink,
+        ScriptedClearanceLink,
+    )
+    from masonry.fsm import UavConfig, build_uav
+
+    clock = FakeClock()
+    cfg = UavConfig("glue-1", "adhesion", (0.0, 0.0, 0.0))
+
+    def build(link, **kw):
+        return build_uav(cfg, fc=FakeFlightController(clock), link=link, clock=clock, sprayer=FakeSprayer(clock), **kw)
+
+    airspace = ScriptedClearanceLink([], clock, swaps_batteries=True)
+    assert build(airspace).clearance is airspace  # the link implements ClearanceLink too (a mission handler)
+    assert build(airspace)._battery_service
+    assert build(airspace, clearance=None).clearance is None  # said explicitly: no airspace
+    plain = QueueMissionLink([])
+    assert build(plain).clearance is None and not build(plain)._battery_service
+    assert build(plain, clearance=airspace).clearance is airspace

@@ -12,18 +12,16 @@ import math
 
 import pytest
 
-from fsm_rig import HOME, ClearanceLink, Rig
+from fsm_rig import HOME, Rig
 
 LAYER_M = 2.6
 
 
 def _rig(config=None, **link_kwargs):
     # the fake autopilot's velocity loop with the simulated vehicle's 0.3 s lag (the default velocity_lag_s)
-    rig = Rig("brick", fc={"velocity_time_constant_s": 0.3}, config=config)
-    link = ClearanceLink([rig.link.poll_task()], rig.clock, layer_m=LAYER_M, **link_kwargs)
-    rig.link = rig.uav.link = link
-    rig.uav._request_clearance = link.request_clearance
-    return rig, link
+    rig = Rig("brick", fc={"velocity_time_constant_s": 0.3}, config=config,
+              clearance={"layer_m": LAYER_M, **link_kwargs})
+    return rig, rig.link
 
 
 def _climb_overshoot_m(config=None) -> float:
@@ -70,10 +68,10 @@ def test_a_uav_asks_for_its_transit_at_rest_where_its_flight_starts(answer_after
             at_ask.append((tel.position_m, tel.velocity_mps))
         return ask(site_m, top_m, to_m)
 
-    rig.uav._request_clearance = spy
+    link.request_clearance = spy  # the model asks its clearance link, this one
     starts = []
-    rig.run(max_s=60.0, on_tick=lambda r: starts.append(r.fc.position_m) if r.uav._transit and
-            r.uav._transit[0] == "down" and len(starts) < 1 else None)
+    rig.run(max_s=60.0, on_tick=lambda r: starts.append(r.fc.position_m) if r.uav.transit.state == "down"
+            and len(starts) < 1 else None)
     (p, v), = at_ask
     cruise = rig.config.cruise_altitude_m
     assert abs(p[2] - cruise) < 0.03, p

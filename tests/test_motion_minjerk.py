@@ -236,3 +236,15 @@ def test_states_are_read_only() -> None:
         traj.rf[0] = 5.0
     with pytest.raises(AttributeError):
         traj.duration_s = 3.0  # type: ignore[misc]
+
+
+@given(states, st.floats(-5.0, 40.0))
+def test_sample_floats_is_the_vectorised_evaluation_bit_for_bit(state, t) -> None:
+    r0, v0, a0, rf, vf, af, T = state
+    traj = MinJerk(r0, v0, a0, rf, vf, af, T)
+    p, v, a = traj.sample_floats(t)
+    tc = min(max(t, 0.0), T)  # held at the ends
+    assert p == tuple(traj.position(tc).tolist())
+    assert v == tuple(traj.velocity(tc).tolist())
+    assert a == tuple(traj.acceleration(tc).tolist())
+    assert all(type(x) is float for x in (*p, *v, *a))

@@ -339,11 +339,12 @@ def test_loads_is_json_loads(raw):
        st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.5, 0.0)),
        st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)))
 def test_tool_distance_is_the_numpy_tool_position_distance(attitude, position, offset, target):
-    from masonry.fsm.model import UavModel
+    from masonry.fsm.tool import Tool
     from masonry.ports import Telemetry
 
     tel = Telemetry(0.0, position, (0.0, 0.0, 0.0), attitude, True, "GUIDED", 1.0, True, True, False)
     target_m = np.array(target)
-    expected = float(np.linalg.norm(UavModel._tool_position(None, tel, offset) - target_m))  # type: ignore[arg-type]
-    got = UavModel._tool_distance_m(None, tel, offset, target_m)  # type: ignore[arg-type]
+    tool = Tool(offset)
+    expected = float(np.linalg.norm(tool.position(tel) - target_m))
+    got = tool.distance_m(tel, target_m)
     assert got == pytest.approx(expected, rel=1e-12, abs=1e-12)

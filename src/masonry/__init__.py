@@ -65,6 +65,7 @@ from masonry.planner import (
 from masonry.ports import (
     Camera,
     CameraFrame,
+    ClearanceLink,
     Clock,
     FlightController,
     Gripper,
@@ -107,6 +108,7 @@ __all__ = [
     "Camera",
     "CameraFrame",
     "CameraIntrinsics",
+    "ClearanceLink",
     "Clock",
     "CommandRejected",
     "CommandTimeout",

@@ -11,6 +11,7 @@ at ``time_s`` the named attributes take the given values (for example ``fc.at(30
 - :class:`FakeGripper`, :class:`FakeSprayer`: actuators that record what they were told.
 - :class:`FakeCamera`: marker observations of static bricks computed from the flight controller's pose.
 - :class:`QueueMissionLink`: tasks from a queue in, progress and results collected.
+- :class:`ScriptedClearanceLink`: a QueueMissionLink whose airspace answers (and grants) after scripted delays.
 
 Example (a notebook)::
 
@@ -551,3 +552,63 @@ class QueueMissionLink:
 
     def report_result(self, result: TaskResult) -> None:
         self.results.append(result)
+
+
+@dataclass(frozen=True)
+class FakeClearance:
+    """A ClearanceAnswer: what mission control's airspace answers (the fields the state machines read)."""
+
+    granted: bool
+    layer_m: float | None
+    hold_m: Vec3 | None = None
+
+
+class ScriptedClearanceLink(QueueMissionLink):
+    """MissionLink and ClearanceLink fake: mission control answers after ``answer_after_s`` (hold at
+    ``hold_m``, or where the UAV is) and grants the column at ``grant_after_s``, both counted from the first
+    request for a site.
+
+    Attributes:
+        asked: the first request time of every site asked for.
+        arrived: the sites of every transit ended (``end_transit``), in order.
+    """
+
+    def __init__(
+        self,
+        tasks: Sequence[Task],
+        clock: Clock,
+        *,
+        layer_m: float | None = 2.6,
+        answer_after_s: float = 0.0,
+        grant_after_s: float = 0.0,
+        hold_m: Vec3 | None = None,
+        swaps_batteries: bool = False,
+    ) -> None:
+        super().__init__(tasks)
+        self.clock = clock
+        self.layer_m = layer_m
+        self.answer_after_s = answer_after_s
+        self.grant_after_s = grant_after_s
+        self.hold_m = hold_m
+        self._swaps_batteries = swaps_batteries
+        self.asked: dict[Vec3, float] = {}
+        self.arrived: list[Vec3] = []
+
+    @property
+    def swaps_batteries(self) -> bool:
+        return self._swaps_batteries
+
+    def request_clearance(
+        self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
+    ) -> FakeClearance | None:
+        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+        first = self.asked.setdefault(site, self.clock.now_s())
+        waited = self.clock.now_s() - first
+        if waited < self.answer_after_s:
+            return None
+        if waited < self.grant_after_s:
+            return FakeClearance(False, self.layer_m, self.hold_m)
+        return FakeClearance(True, self.layer_m)
+
+    def end_transit(self, site_m: Vec3) -> None:
+        self.arrived.append((float(site_m[0]), float(site_m[1]), float(site_m[2])))

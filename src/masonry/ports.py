@@ -136,3 +136,40 @@ class MissionLink(Protocol):
     def report_progress(self, task_id: str, state: str, time_s: float) -> None: ...
 
     def report_result(self, result: TaskResult) -> None: ...
+
+
+class ClearanceAnswer(Protocol):
+    """Mission control's answer to a transit request (:class:`masonry.mission.messages.Clearance` is one)."""
+
+    @property
+    def granted(self) -> bool: ...  # the column over the site is the UAV's: it may come down there
+
+    @property
+    def layer_m(self) -> float | None: ...  # the altitude of its lateral leg (None: no layers)
+
+    @property
+    def hold_m(self) -> Vec3 | None: ...  # not granted yet: where to wait at the layer (None: where it is)
+
+
+@runtime_checkable
+class ClearanceLink(Protocol):
+    """A UAV handler's line to mission control's airspace (docs/safety.md): transits asked for and ended.
+
+    A machine built without one (``clearance=None``) flies with no separation from other UAVs: a single UAV,
+    or a fixed ``UavConfig.lateral_altitude_m`` layer per UAV.
+    """
+
+    def request_clearance(
+        self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
+    ) -> ClearanceAnswer | None:
+        """Ask (again) for the column over ``site_m``; None while mission control has not answered."""
+        ...
+
+    def end_transit(self, site_m: Vec3) -> None:
+        """The flight to ``site_m`` has come down there: its layer is free."""
+        ...
+
+    @property
+    def swaps_batteries(self) -> bool:
+        """A ground crew swaps the battery of a landed UAV before its next task (a low battery: land, not retire)."""
+        ...

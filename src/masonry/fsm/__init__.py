@@ -19,8 +19,10 @@ by hand in a notebook::
 
 from __future__ import annotations
 
+from masonry.fsm.adhesion import AdhesionUav
+from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
-from masonry.fsm.model import AdhesionUav, BrickUav, UavModel
+from masonry.fsm.model import UavModel
 from masonry.fsm.runner import SingleTaskRun, build_uav, fly_task, run_single_task
 from masonry.fsm.states import MACHINES, leaf_states
 

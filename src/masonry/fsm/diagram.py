@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from masonry.fsm.states import MACHINES
+from masonry.fsm.states import MACHINES, diagram_machine
 
 FORMATS = ("svg", "png", "dot")
 ENGINES = ("auto", "dot", "builtin")
@@ -30,7 +30,7 @@ def machine_graph(kind: str) -> Any:
 
     if kind not in MACHINES:
         raise ValueError(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
-    states, transitions = MACHINES[kind]
+    states, transitions = diagram_machine(kind)
     machine = HierarchicalGraphMachine(
         states=copy.deepcopy(states),
         transitions=copy.deepcopy(transitions),
@@ -122,7 +122,7 @@ _LEAF_W, _LEAF_H, _GAP_X, _ROW_H = 1.25, 0.5, 1.0, 1.9
 
 def layout(kind: str) -> tuple[dict[str, _Box], dict[str, _Box]]:
     """Boxes of the leaf states (full names, ``pickup_goto``) and of the nested states, in drawing units."""
-    states, _ = MACHINES[kind]
+    states, _ = diagram_machine(kind)
     leaves: dict[str, _Box] = {}
     parents: dict[str, _Box] = {}
     main = [s for s in states if s["name"] not in _SIDE_STATES]
@@ -151,7 +151,7 @@ def layout(kind: str) -> tuple[dict[str, _Box], dict[str, _Box]]:
 def _edges(kind: str) -> list[tuple[str, str, str, str]]:
     """(source, dest, trigger, label) per drawn arrow; a nested state as source is its box, as dest its initial
     child; a transition from several sources is one arrow from each."""
-    states, transitions = MACHINES[kind]
+    states, transitions = diagram_machine(kind)
     initial = {s["name"]: f"{s['name']}_{s['initial']}" for s in states if s.get("children")}
     out: list[tuple[str, str, str, str]] = []
     for t in transitions:
@@ -167,9 +167,29 @@ def _edges(kind: str) -> list[tuple[str, str, str, str]]:
     return out
 
 
-def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[dict[str, Any]]:  # noqa: C901, PLR0915 - one case per edge shape of the layout
-    """Each arrow as a polyline (or an arc) with its label's place: the task flow's arrows run between rows, a
-    long one along a lane on the left; the arrows into the failsafe column run along one bus per trigger."""
+@dataclass
+class _Routing:
+    """What the arrows of one drawing share: the boxes, the rows' extents, the buses into the failsafe column."""
+
+    leaves: dict[str, _Box]
+    boxes: dict[str, _Box]
+    top: dict[int, float]
+    bottom: dict[int, float]
+    main_left: float
+    side_triggers: list[str]
+    bus_x: dict[str, float]
+    into_side: dict[str, list[str]]
+    labelled: set[tuple[str, str]]
+    lane: int = 0
+
+    def corridor_above(self, r: int) -> float:
+        return self.top[r] + (0.45 if r == 0 else (self.bottom[r - 1] - self.top[r]) / 2)
+
+    def leftmost(self, box: _Box) -> bool:  # nothing of its row to its left: a lane on the left reaches it directly
+        return all(o.left >= box.left - 1e-9 for o in self.leaves.values() if o.row == box.row)
+
+
+def _routing(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> _Routing:
     boxes = {**leaves, **parents}
     rows: dict[int, list[_Box]] = {}
     for b in boxes.values():
@@ -178,15 +198,7 @@ def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> lis
     top = {r: max(b.top for b in bs) + (0.25 if any(b in parents.values() for b in bs) else 0.0)
            for r, bs in rows.items()}
     bottom = {r: min(b.bottom for b in bs) for r, bs in rows.items()}
-
-    def corridor_above(r: int) -> float:
-        return top[r] + (0.45 if r == 0 else (bottom[r - 1] - top[r]) / 2)
-
     main_left = min(b.left for b in boxes.values() if b.row >= 0)
-
-    def leftmost(box: _Box) -> bool:  # nothing of its row to its left: a lane on the left reaches it directly
-        return all(o.left >= box.left - 1e-9 for o in leaves.values() if o.row == box.row)
-
     main_right = max(b.right for b in boxes.values() if b.row >= 0)
     edges = _edges(kind)
     side_triggers = list(dict.fromkeys(trig for src, dest, trig, _ in edges
@@ -196,76 +208,101 @@ def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> lis
     for src, dest, trig, _ in edges:
         if dest in _SIDE_STATES and src not in _SIDE_STATES and trig not in into_side.setdefault(dest, []):
             into_side[dest].append(trig)
+    return _Routing(leaves, boxes, top, bottom, main_left, side_triggers, bus_x, into_side, set())
+
+
+def _routes(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> list[dict[str, Any]]:
+    """Each arrow as a polyline (or an arc) with its label's place: the task flow's arrows run between rows, a
+    long one along a lane on the left; the arrows into the failsafe column run along one bus per trigger."""
+    ctx = _routing(kind, leaves, parents)
     routes: list[dict[str, Any]] = []
     seen: dict[tuple[str, str], int] = {}
-    labelled: set[tuple[str, str]] = set()
-    lane = 0
-    for src, dest, trig, label in edges:
-        a, b = boxes[src], boxes[dest]
+    for src, dest, trig, label in _edges(kind):
+        a, b = ctx.boxes[src], ctx.boxes[dest]
         n = seen.get((src, dest), 0)
         seen[(src, dest)] = n + 1
         route: dict[str, Any] = {"label": label, "side": src in _SIDE_STATES}
         if src == dest:  # a self-transition: a loop over the box's top edge
             route.update(arc=((a.x - 0.3, a.top), (a.x + 0.3, a.top), -1.8), at=(a.x, a.top + 0.4))
         elif dest in _SIDE_STATES and src not in _SIDE_STATES:
-            k = side_triggers.index(trig)
-            y0 = a.y + 0.08 * (k - (len(side_triggers) - 1) / 2)
-            into = into_side[dest]  # the triggers arriving at this state, one height of its edge each
-            off = 0.16 * (into.index(trig) - (len(into) - 1) / 2)
-            y1 = b.y + off
-            bx = bus_x[trig]
-            route["path"] = [(a.right, y0), (bx, y0), (bx, y1), (b.left, y1)]
-            route["bus"] = True
-            if (trig, dest) in labelled:
-                route["label"] = ""
-            else:
-                labelled.add((trig, dest))
-                route["at"] = ((bx + b.left) / 2, y1 + (0.12 if off >= 0 else -0.12))
+            _bus_route(ctx, route, a, b, trig, dest)
         elif a.row < 0 or b.row < 0:  # inside the failsafe column, or out of it (recover -> home)
             p0, p1 = a.edge_point(b.x, b.y), b.edge_point(a.x, a.y)
             rad = 0.3 * (1 if n % 2 == 0 else -1) * (1 + n // 2)
             route.update(arc=(p0, p1, rad), at=_arc_label(p0, p1, rad))
         elif a.row == b.row:
-            if 0 < b.x - a.x <= _LEAF_W + _GAP_X + 1e-9:  # the next state of the row: straight across
-                route["path"] = [(a.right, a.y), (b.left, b.y)]
-                route["at"] = ((a.right + b.left) / 2, a.y + 0.14)
-            else:  # back along the row: an arc under it, bottom to bottom
-                p0, p1 = (a.x, a.bottom), (b.x, b.bottom)
-                span = abs(p1[0] - p0[0])
-                rad = (0.5 + 0.1 * n) / span * 2 * (-1 if p1[0] < p0[0] else 1)
-                route.update(arc=(p0, p1, rad), at=_arc_label(p0, p1, rad))
+            _row_route(route, a, b, n)
         elif b.row == a.row + 1:  # down to the next row: a straight arrow
-            p0, p1 = (a.x, a.bottom), (b.x, b.top)
-            if n:
-                route.update(arc=(p0, p1, 0.25 * n), at=_arc_label(p0, p1, 0.25 * n))
-            else:
-                route["path"] = [p0, p1]
-                route["at"] = ((p0[0] + p1[0]) / 2 + 0.1, (p0[1] + p1[1]) / 2)
-                route["ha"] = "left"
+            _down_route(route, a, b, n)
         else:  # up, or down past other rows: along a lane left of the flow, between the rows
-            lx = main_left - 0.5 - 0.4 * lane
-            lane += 1
-            wiggle = 0.08 * ((lane % 3) - 1)
-            if leftmost(a):  # straight out to the lane, level with the state
-                head = [(a.left, a.y + wiggle), (lx, a.y + wiggle)]
-                route["at"] = ((a.left + lx) / 2, a.y + wiggle + 0.13)
-            else:  # out of the row first, into the gap between it and the next row
-                if b.row < a.row:
-                    y0 = corridor_above(a.row) + wiggle
-                    start = (a.x, a.top)
-                else:
-                    y0 = (corridor_above(a.row + 1) if a.row + 1 in top else a.bottom - 0.5) + wiggle
-                    start = (a.x, a.bottom)
-                head = [start, (a.x, y0), (lx, y0)]
-                route["at"] = ((a.x + lx) / 2, y0 + 0.13)
-            if leftmost(b):
-                tail = [(lx, b.y - wiggle), (b.left, b.y - wiggle)]
-            else:
-                y1 = corridor_above(b.row) + wiggle
-                tail = [(lx, y1), (b.x, y1), (b.x, b.top)]
-            route["path"] = head + tail
+            _lane_route(ctx, route, a, b)
         routes.append(route)
     return routes
+
+
+def _bus_route(ctx: _Routing, route: dict[str, Any], a: _Box, b: _Box, trig: str, dest: str) -> None:
+    """Into the failsafe column along the trigger's bus, at one height of the state's edge per trigger."""
+    k = ctx.side_triggers.index(trig)
+    y0 = a.y + 0.08 * (k - (len(ctx.side_triggers) - 1) / 2)
+    into = ctx.into_side[dest]  # the triggers arriving at this state, one height of its edge each
+    off = 0.16 * (into.index(trig) - (len(into) - 1) / 2)
+    y1 = b.y + off
+    bx = ctx.bus_x[trig]
+    route["path"] = [(a.right, y0), (bx, y0), (bx, y1), (b.left, y1)]
+    route["bus"] = True
+    if (trig, dest) in ctx.labelled:
+        route["label"] = ""
+    else:
+        ctx.labelled.add((trig, dest))
+        route["at"] = ((bx + b.left) / 2, y1 + (0.12 if off >= 0 else -0.12))
+
+
+def _row_route(route: dict[str, Any], a: _Box, b: _Box, n: int) -> None:
+    """Within a row: straight across to the next state, else an arc under the row, bottom to bottom."""
+    if 0 < b.x - a.x <= _LEAF_W + _GAP_X + 1e-9:
+        route["path"] = [(a.right, a.y), (b.left, b.y)]
+        route["at"] = ((a.right + b.left) / 2, a.y + 0.14)
+    else:
+        p0, p1 = (a.x, a.bottom), (b.x, b.bottom)
+        span = abs(p1[0] - p0[0])
+        rad = (0.5 + 0.1 * n) / span * 2 * (-1 if p1[0] < p0[0] else 1)
+        route.update(arc=(p0, p1, rad), at=_arc_label(p0, p1, rad))
+
+
+def _down_route(route: dict[str, Any], a: _Box, b: _Box, n: int) -> None:
+    p0, p1 = (a.x, a.bottom), (b.x, b.top)
+    if n:
+        route.update(arc=(p0, p1, 0.25 * n), at=_arc_label(p0, p1, 0.25 * n))
+    else:
+        route["path"] = [p0, p1]
+        route["at"] = ((p0[0] + p1[0]) / 2 + 0.1, (p0[1] + p1[1]) / 2)
+        route["ha"] = "left"
+
+
+def _lane_route(ctx: _Routing, route: dict[str, Any], a: _Box, b: _Box) -> None:
+    """Out to a lane left of the flow (straight from a leftmost state, else via the gap between rows), along it,
+    and in again."""
+    lx = ctx.main_left - 0.5 - 0.4 * ctx.lane
+    ctx.lane += 1
+    wiggle = 0.08 * ((ctx.lane % 3) - 1)
+    if ctx.leftmost(a):  # straight out to the lane, level with the state
+        head = [(a.left, a.y + wiggle), (lx, a.y + wiggle)]
+        route["at"] = ((a.left + lx) / 2, a.y + wiggle + 0.13)
+    else:  # out of the row first, into the gap between it and the next row
+        if b.row < a.row:
+            y0 = ctx.corridor_above(a.row) + wiggle
+            start = (a.x, a.top)
+        else:
+            y0 = (ctx.corridor_above(a.row + 1) if a.row + 1 in ctx.top else a.bottom - 0.5) + wiggle
+            start = (a.x, a.bottom)
+        head = [start, (a.x, y0), (lx, y0)]
+        route["at"] = ((a.x + lx) / 2, y0 + 0.13)
+    if ctx.leftmost(b):
+        tail = [(lx, b.y - wiggle), (b.left, b.y - wiggle)]
+    else:
+        y1 = ctx.corridor_above(b.row) + wiggle
+        tail = [(lx, y1), (b.x, y1), (b.x, b.top)]
+    route["path"] = head + tail
 
 
 def _arc_label(p0: tuple[float, float], p1: tuple[float, float], rad: float) -> tuple[float, float]:

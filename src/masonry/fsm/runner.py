@@ -8,11 +8,26 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
+from masonry.fsm.adhesion import AdhesionUav
+from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
-from masonry.fsm.model import AdhesionUav, BrickUav, UavModel
+from masonry.fsm.model import UavModel
 from masonry.planner.tasks import Task
-from masonry.ports import Camera, Clock, FlightController, Gripper, MissionLink, Sprayer, TaskResult
+from masonry.ports import (
+    Camera,
+    ClearanceLink,
+    Clock,
+    FlightController,
+    Gripper,
+    MissionLink,
+    Sprayer,
+    TaskResult,
+)
+
+#: ``build_uav(clearance=FROM_LINK)``: the link is the clearance link too, if it is one (a mission handler).
+FROM_LINK: Any = "from-link"
 
 
 @dataclass(frozen=True)
@@ -75,17 +90,26 @@ def build_uav(
     gripper: Gripper | None = None,
     camera: Camera | None = None,
     sprayer: Sprayer | None = None,
+    clearance: ClearanceLink | None = FROM_LINK,
 ) -> UavModel:
     """The model for ``config.role`` on the given ports (a brick UAV needs a gripper and a camera, an adhesion
-    UAV a sprayer)."""
+    UAV a sprayer).
+
+    Args:
+        clearance: mission control's airspace; None: no airspace, the UAV flies without separation from
+            others (one UAV, or fixed ``lateral_altitude_m`` layers). By default the link, when it implements
+            :class:`~masonry.ports.ClearanceLink` too (a :class:`~masonry.mission.handler.UavHandler`), else None.
+    """
+    if clearance is FROM_LINK:
+        clearance = link if isinstance(link, ClearanceLink) else None
     if config.role == "brick":
         if gripper is None or camera is None:
             raise ValueError(f"brick UAV {config.name} needs a gripper and a camera")
-        return BrickUav(config, fc, gripper, camera, link, clock)
+        return BrickUav(config, fc, gripper, camera, link, clock, clearance=clearance)
     if config.role == "adhesion":
         if sprayer is None:
             raise ValueError(f"adhesion UAV {config.name} needs a sprayer")
-        return AdhesionUav(config, fc, sprayer, link, clock)
+        return AdhesionUav(config, fc, sprayer, link, clock, clearance=clearance)
     raise ValueError(f"unknown UAV role {config.role!r}")
 
 
@@ -109,7 +133,8 @@ def fly_task(
     from masonry.fakes import QueueMissionLink
 
     link = QueueMissionLink([task])
-    uav = build_uav(config, fc=fc, link=link, clock=clock, gripper=gripper, camera=camera, sprayer=sprayer)
+    uav = build_uav(config, fc=fc, link=link, clock=clock, gripper=gripper, camera=camera, sprayer=sprayer,
+                    clearance=None)
     fc.connect()
     try:
         return run_single_task(uav, clock, dt_s=dt_s, advance=advance, timeout_s=timeout_s)

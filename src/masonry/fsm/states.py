@@ -155,10 +155,44 @@ ADHESION_TRANSITIONS: list[Transition] = [
     {"trigger": "giveup", "source": "emergency", "dest": "halted"},
 ]
 
+#: The airspace transit protocol (docs/safety.md), a machine of its own beside the task machine: a lateral move
+#: with a clearance link asks for the column over its site (``ask``, hovering where it stopped), may be sent to
+#: wait at a hold point on its layer (``hold``), and once granted flies its layer route and comes down there
+#: (``down``), then ends the transit (``arrive``, freeing its layer). Every move (``cancel``) drops it.
+TRANSIT_STATES: list[State] = [
+    {"name": "clear"},
+    {"name": "ask"},
+    {"name": "hold"},
+    {"name": "down"},
+]
+
+TRANSIT_TRANSITIONS: list[Transition] = [
+    {"trigger": "request", "source": ["clear", "ask", "hold", "down"], "dest": "ask"},
+    {"trigger": "wait", "source": ["ask", "hold"], "dest": "hold"},
+    {"trigger": "grant", "source": ["ask", "hold"], "dest": "down"},
+    {"trigger": "arrive", "source": "down", "dest": "clear"},
+    {"trigger": "cancel", "source": ["ask", "hold", "down"], "dest": "clear"},
+]
+
+#: The transit machine as one nested state, for the diagrams (``masonry fsm diagram``).
+TRANSIT: State = {"name": "transit", "initial": "clear", "children": TRANSIT_STATES}
+
 MACHINES: dict[str, tuple[list[State], list[Transition]]] = {
     "brick": (BRICK_STATES, BRICK_TRANSITIONS),
     "adhesion": (ADHESION_STATES, ADHESION_TRANSITIONS),
 }
+
+
+def diagram_machine(kind: str) -> tuple[list[State], list[Transition]]:
+    """The states and transitions drawn for machine ``kind``: its own, and the transit machine nested beside them
+    (a brick or adhesion UAV runs both)."""
+    states, transitions = MACHINES[kind]
+    transit = [
+        {**t, "source": [f"transit_{s}" for s in (t["source"] if isinstance(t["source"], list) else [t["source"]])],
+         "dest": f"transit_{t['dest']}"}
+        for t in TRANSIT_TRANSITIONS
+    ]
+    return [*states, TRANSIT], [*transitions, *transit]
 
 
 def leaf_states(states: list[State], prefix: str = "") -> list[str]:

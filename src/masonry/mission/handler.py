@@ -52,7 +52,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import TaskResult
+from masonry.ports import ClearanceLink, MissionLink, TaskResult
 
 log = logging.getLogger(__name__)
 
@@ -77,7 +77,7 @@ class Execution:
     status: str = "running"
 
 
-class UavHandler:
+class UavHandler(MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.

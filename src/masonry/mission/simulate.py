@@ -161,8 +161,8 @@ def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: U
                                  cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
                                  lateral_altitude_m=lateral_altitude_m)
     if spec.role == "brick":
-        return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock)
-    return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock)
+        return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock, clearance=handler)
+    return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock, clearance=handler)
 
 
 def simulate(

@@ -26,6 +26,7 @@ import numpy as np
 from masonry.errors import PlanningError
 
 ArrayLike3 = Sequence[float] | np.ndarray
+Vec3f = tuple[float, float, float]
 
 MIN_T_GO_S = 0.1
 """Floor on the remaining time used by :meth:`MinJerk.replan`: the coefficients grow like ``1/t_go^5``."""
@@ -204,6 +205,39 @@ class MinJerk:
         if order == 2:
             return a + 0.0 * dt
         return np.zeros(np.broadcast_shapes(dt.shape, (3,)))
+
+    def sample_floats(self, t_s: float) -> tuple[Vec3f, Vec3f, Vec3f]:
+        """Position, velocity and acceleration at ``t_s`` clamped to ``[0, duration_s]``, as plain float tuples.
+
+        The per-tick form (a control loop evaluates one sample of its leg every tick): the same Horner sums as
+        :meth:`position`, :meth:`velocity` and :meth:`acceleration` inside the interval, bit for bit, without a
+        numpy array per call (``benchmarks/bench_motion.py``). Unlike them it holds the end states outside the
+        interval instead of extrapolating.
+        """
+        T = self.duration_s
+        t = t_s
+        if t < 0.0:  # noqa: PLR1730 (no min/max call: one sample per control tick)
+            t = 0.0
+        if t > T:  # noqa: PLR1730
+            t = T
+        (p5, p4, p3, p2, p1, p0), (v5, v4, v3, v2, v1), (a5, a4, a3, a2) = self._rows[:3]
+        return (
+            (
+                ((((p5[0] * t + p4[0]) * t + p3[0]) * t + p2[0]) * t + p1[0]) * t + p0[0],
+                ((((p5[1] * t + p4[1]) * t + p3[1]) * t + p2[1]) * t + p1[1]) * t + p0[1],
+                ((((p5[2] * t + p4[2]) * t + p3[2]) * t + p2[2]) * t + p1[2]) * t + p0[2],
+            ),
+            (
+                (((v5[0] * t + v4[0]) * t + v3[0]) * t + v2[0]) * t + v1[0],
+                (((v5[1] * t + v4[1]) * t + v3[1]) * t + v2[1]) * t + v1[1],
+                (((v5[2] * t + v4[2]) * t + v3[2]) * t + v2[2]) * t + v1[2],
+            ),
+            (
+                ((a5[0] * t + a4[0]) * t + a3[0]) * t + a2[0],
+                ((a5[1] * t + a4[1]) * t + a3[1]) * t + a2[1],
+                ((a5[2] * t + a4[2]) * t + a3[2]) * t + a2[2],
+            ),
+        )
 
     def position(self, t: float | Sequence[float] | np.ndarray) -> np.ndarray:
         """Position in metres at ``t`` seconds since the start."""

@@ -1,0 +1,217 @@
+"""The adhesion UAV (paper, Section V): the callbacks of the adhesion machine (:data:`states.ADHESION_STATES`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from masonry.fsm.config import UavConfig
+from masonry.fsm.model import UavModel
+from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
+from masonry.fsm.tool import Tool
+from masonry.planner.tasks import AdhesionTask, Task
+from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
+
+
+class AdhesionUav(UavModel):
+    """The adhesion UAV (paper, Section V): spray a bead of adhesive along a segment.
+
+    Args:
+        config: the UAV (name, home, airframe, tuning).
+        fc, sprayer, link, clock: its ports.
+        clearance: mission control's airspace (None: no airspace, it flies with no separation from others).
+    """
+
+    KIND = "adhesion"
+    stable: Callable[..., bool]
+    sprayed: Callable[..., bool]
+    closed: Callable[..., bool]
+
+    def __init__(
+        self,
+        config: UavConfig,
+        fc: FlightController,
+        sprayer: Sprayer,
+        link: MissionLink,
+        clock: Clock,
+        *,
+        clearance: ClearanceLink | None = None,
+    ) -> None:
+        self.sprayer = sprayer
+        self.nozzle = Tool.at(config.airframe.nozzle_offset_m)
+        self._stable_since_s: float | None = None
+        self._yaw_rad = 0.0
+        self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
+        self._climb_to_m = config.cruise_altitude_m  # in ``ascend``: the transit altitude of the task just done
+        super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS, clearance=clearance)
+
+    _TASK_STATES_SET = frozenset(ADHESION_TASK_STATES)
+
+    @property
+    def adhesion_task(self) -> AdhesionTask:
+        assert isinstance(self.task, AdhesionTask)
+        return self.task
+
+    def _task_problem(self, task: Task) -> str | None:
+        assert isinstance(task, AdhesionTask)
+        if math.dist(task.start_m, task.end_m) < 1e-6:
+            return f"adhesion task {task.id} has an empty segment"
+        return None
+
+    def _transit_altitude_m(self) -> float:
+        z = self.config.cruise_altitude_m
+        if isinstance(self.task, AdhesionTask):
+            t = self.task
+            surface = max(t.start_m[2], t.end_m[2])
+            z = max(
+                z, surface + self.config.airframe.spray_height_m - self.nozzle.offset_body_m[2] + self.config.clearance_m
+            )
+        return z
+
+    def _nozzle_body(self, point_m: tuple[float, float, float] | np.ndarray) -> np.ndarray:
+        p = np.array([point_m[0], point_m[1], point_m[2] + self.config.airframe.spray_height_m])
+        return self.nozzle.body_target(p, self._yaw_rad)
+
+    def _safe_actuators(self) -> None:
+        self.sprayer.set_valve(False)
+
+    def _on_landed(self) -> None:
+        if self.sprayer.is_valve_open():
+            self.sprayer.set_valve(False)
+
+    def enter_cruise(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self._yaw_rad = tel.attitude_rad[2]
+        start = self._nozzle_body(self.adhesion_task.start_m)
+        end = self._nozzle_body(self.adhesion_task.end_m)  # it sprays along to there: part of its zone
+        top = self._transit_altitude_m()
+        if self._chains(tel.position_m, start):
+            # still down at the end of the last segment, which is where this one starts: stay down
+            self._route(tel, start, yaw_rad=self._yaw_rad, top_m=top, to_m=end)
+            return
+        self._route(tel, np.array([start[0], start[1], top]), yaw_rad=self._yaw_rad, to_m=end)
+
+    def _chains(self, position_m: Sequence[float], start_body_m: Sequence[float] | np.ndarray) -> bool:
+        """The body at ``position_m`` is within ``chain_distance_m`` (horizontally and vertically) of the body
+        position that sprays the segment's start: the UAV sprays it without climbing out."""
+        d = self.config.chain_distance_m
+        return (
+            math.hypot(position_m[0] - start_body_m[0], position_m[1] - start_body_m[1]) <= d
+            and abs(position_m[2] - start_body_m[2]) <= d
+        )
+
+    def do_cruise(self, tel: Telemetry) -> None:
+        if self._advance(tel):
+            self.arrived()
+        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
+            self.abort(reason=f"could not reach the start of {self.adhesion_task.id}")
+
+    def enter_hover(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self._stable_since_s = None
+        self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
+
+    def do_hover(self, tel: Telemetry) -> None:
+        cfg = self.config
+        p, t, v = tel.position_m, self.nav.target_m, tel.velocity_mps
+        still = (
+            math.dist(p, t) <= 2.0 * cfg.align_tolerance_m
+            and math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) <= cfg.settle_speed_mps
+            and self._yaw_error(tel) <= cfg.align_yaw_tolerance_rad
+        )
+        if not still:
+            self._stable_since_s = None
+        elif self._stable_since_s is None:
+            self._stable_since_s = self._now_s
+        elif self._now_s - self._stable_since_s >= cfg.stable_time_s:
+            self.stable()
+            return
+        if self._now_s > self.nav.end_s + cfg.leg_timeout_s:
+            self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}")
+
+    def enter_descend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        start = self._nozzle_body(self.adhesion_task.start_m)
+        # a chained segment: the UAV hovers at the spraying height already
+        short = abs(tel.position_m[2] - start[2]) <= self.config.chain_distance_m
+        self._fly_to(
+            tel, start, self.config.chain_descent_s if short else self.config.spray_descent_s, self._yaw_rad
+        )
+
+    def do_descend(self, tel: Telemetry) -> None:
+        if self._advance(tel, self.config.spray_tolerance_m):
+            self.reached()
+        elif self._now_s > self.nav.end_s + self.config.release_timeout_s:
+            self.abort(reason=f"could not reach the spraying height over {self.adhesion_task.id}")
+
+    def enter_spray(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        t = self.adhesion_task
+        self.sprayer.set_valve(True)
+        self._fly_line(
+            tel, self._nozzle_body(t.start_m), self._nozzle_body(t.end_m), self.config.spray_speed_mps
+        )
+
+    def do_spray(self, tel: Telemetry) -> None:
+        cfg = self.config
+        if (
+            self._advance(tel, cfg.spray_tolerance_m)
+            or self._now_s > self.nav.end_s + cfg.release_timeout_s
+        ):
+            self.sprayed()
+
+    def enter_close(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.sprayer.set_valve(False)
+        self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
+
+    def do_close(self, tel: Telemetry) -> None:
+        if self._now_s - self._entered_s >= self.config.close_dwell_s:
+            self.closed()
+
+    def enter_ascend(self, *args: Any, **kwargs: Any) -> None:
+        # The segment is sprayed and the valve closed: the task is done, reported now so that mission control
+        # can hand over the next one while the UAV is still down here (see ``do_ascend``).
+        tel = self._tel
+        assert tel is not None
+        self._climb_to_m = self._transit_altitude_m()
+        self._report_done()
+        self._next_task = None
+        self._climbing = False
+        self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
+
+    def do_ascend(self, tel: Telemetry) -> None:
+        """After a segment: hover up to ``chain_wait_s`` for the next task; one starting where the nozzle is goes
+        on from down here (``cruise`` stays low), anything else (or nothing) climbs to the transit altitude first,
+        then goes to it (or home)."""
+        if self._next_task is None and self._may_take_task(tel):
+            task = self._take(self.link.poll_task())
+            if task is not None:
+                self._next_task = task
+                self._start_task(task)
+        if not self._climbing:
+            nxt = self._next_task
+            if isinstance(nxt, AdhesionTask) and self._chains(tel.position_m, self._nozzle_body(nxt.start_m)):
+                self._leave_ascend()
+                return
+            if nxt is None and self._now_s - self._entered_s < self.config.chain_wait_s:
+                return
+            self._climbing = True
+            p = tel.position_m
+            top = max(self._climb_to_m, self._transit_altitude_m())  # the next task's, if it is higher
+            self._fly_to(tel, np.array([p[0], p[1], top]))
+            return
+        if self._advance(tel):
+            self._leave_ascend()
+
+    def _leave_ascend(self) -> None:
+        self.finish()  # to the next task's cruise, or home
+        self._next_task = None

@@ -1,0 +1,426 @@
+"""The brick-carrier UAV (paper, Section IV): the callbacks of the brick machine (:data:`states.BRICK_STATES`)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from masonry.fsm.config import UavConfig
+from masonry.fsm.model import UavModel
+from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
+from masonry.fsm.tool import Tool
+from masonry.geometry import R_world_body, wrap_angle_rad
+from masonry.perception.types import TagPose
+from masonry.planner.tasks import BrickTask, Task
+from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
+
+
+@dataclass
+class BrickAttempt:
+    """What a brick UAV has done of the task in hand: counters, the brick's estimate, the heights and yaws it
+    flies (reset for each task)."""
+
+    climbs: int = 0
+    grasp_attempts: int = 0
+    place_attempts: int = 0
+    release_attempts: int = 0
+    brick_estimate: tuple[np.ndarray, float] | None = None  # top-face centre (world, m), yaw (rad)
+    estimates_seen: int = 0
+    hover_z: float = 0.0  # the estimate hover's altitude (0: where the UAV is)
+    deadline_s: float = 0.0  # of the estimate
+    carry_yaw_rad: float = 0.0  # the carried brick's yaw relative to the body
+    grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
+    place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    release_error_m: float | None = None  # the effector's distance to its target at the release
+
+
+class BrickUav(UavModel):
+    """The brick-carrier UAV (paper, Section IV): pick a brick up near ``pickup_m``, place it on the wall.
+
+    Args:
+        config: the UAV (name, home, airframe, tuning).
+        fc, gripper, camera, link, clock: its ports.
+        clearance: mission control's airspace (None: no airspace, it flies with no separation from others).
+    """
+
+    KIND = "brick"
+    touched: Callable[..., bool]
+    grasped: Callable[..., bool]
+    ascended: Callable[..., bool]
+    attached: Callable[..., bool]
+    missed: Callable[..., bool]
+    widen: Callable[..., bool]
+    estimated: Callable[..., bool]
+    aligned: Callable[..., bool]
+    timeout: Callable[..., bool]
+    released: Callable[..., bool]
+    deposited: Callable[..., bool]
+    stuck: Callable[..., bool]
+
+    def __init__(
+        self,
+        config: UavConfig,
+        fc: FlightController,
+        gripper: Gripper,
+        camera: Camera,
+        link: MissionLink,
+        clock: Clock,
+        *,
+        clearance: ClearanceLink | None = None,
+    ) -> None:
+        from masonry.perception.estimation import EstimatorConfig, PoseWindow
+
+        self.gripper = gripper
+        self.camera = camera
+        self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
+        self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
+        self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
+        self.effector = Tool.at(config.airframe.effector_offset_m)
+        self._begin_counters()
+        super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
+
+    _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
+
+    def _begin_counters(self) -> None:
+        self.attempt = BrickAttempt()
+
+    @property
+    def climbs(self) -> int:
+        """Climbs made to widen the camera's view (this task)."""
+        return self.attempt.climbs
+
+    @property
+    def grasp_attempts(self) -> int:
+        return self.attempt.grasp_attempts
+
+    @property
+    def place_attempts(self) -> int:
+        return self.attempt.place_attempts
+
+    @property
+    def release_attempts(self) -> int:
+        return self.attempt.release_attempts
+
+    @property
+    def brick_estimate(self) -> tuple[np.ndarray, float] | None:
+        """The brick's estimated top-face centre (world, m) and yaw (rad), once estimated."""
+        return self.attempt.brick_estimate
+
+    @property
+    def estimates_seen(self) -> int:
+        return self.attempt.estimates_seen
+
+    def _begin_task(self, task: Task) -> None:
+        self._begin_counters()
+
+    def _task_problem(self, task: Task) -> str | None:
+        assert isinstance(task, BrickTask)
+        if task.pickup_m is None:
+            return f"brick task {task.id} has no pickup location"
+        return None
+
+    @property
+    def brick_task(self) -> BrickTask:
+        assert isinstance(self.task, BrickTask)
+        return self.task
+
+    def _transit_altitude_m(self) -> float:
+        """Cruise altitude, raised so a carried brick clears the drop-off by ``clearance_m``."""
+        z = self.config.cruise_altitude_m
+        if isinstance(self.task, BrickTask):
+            t = self.task
+            top_z = t.position_m[2] + t.size_m[2] / 2.0
+            z = max(z, top_z - self.effector.offset_body_m[2] + t.size_m[2] + self.config.clearance_m)
+        return z
+
+    def _safe_actuators(self) -> None:
+        self.gripper.set_joint_locked(True)  # keep a carried brick; it is put down after landing
+
+    def _on_landed(self) -> None:
+        self.gripper.set_magnet(False)
+        self.gripper.set_joint_locked(True)
+
+    # -- pickup --------------------------------------------------------------------------------------------
+    def enter_pickup_goto(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_magnet(False)
+        self.gripper.set_joint_locked(True)
+        pickup = self.brick_task.pickup_m
+        assert pickup is not None
+        self.attempt.hover_z = self.config.cruise_altitude_m
+        # it may climb max_climbs steps there to widen the camera's view, and it climbs out with the brick to its
+        # transit altitude: both are part of its column
+        top = max(self.attempt.hover_z + self.config.max_climbs * self.config.climb_step_m, self._transit_altitude_m())
+        self._route(tel, np.array([pickup[0], pickup[1], self.attempt.hover_z]), top_m=top)
+
+    def do_pickup_goto(self, tel: Telemetry) -> None:
+        if self._advance(tel):
+            self.arrived()
+        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
+            self.abort(reason=f"could not reach the pickup of {self.brick_task.id}")
+
+    def climb_step(self, *args: Any, **kwargs: Any) -> None:
+        """Before re-entering ``estimate``: one step up to widen the camera's view."""
+        self.attempt.climbs += 1
+        self.attempt.hover_z += self.config.climb_step_m
+
+    def enter_pickup_estimate(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        p = tel.position_m
+        if self.attempt.hover_z == 0.0:
+            self.attempt.hover_z = p[2]
+        target = np.array([p[0], p[1], self.attempt.hover_z])
+        if abs(self.attempt.hover_z - p[2]) > 0.05:
+            self._fly_to(tel, target)
+        else:
+            self._hold(tel, target)
+        self.window.clear()
+        self.attempt.estimates_seen = 0
+        self.attempt.deadline_s = self._now_s + self.config.settle_time_s + self.config.estimate_timeout_s
+        if self.nav.traj is not None:
+            self.attempt.deadline_s += self.nav.traj.duration_s
+
+    def do_pickup_estimate(self, tel: Telemetry) -> None:
+        cfg = self.config
+        settling = self._now_s < self.nav.end_s + cfg.settle_time_s
+        if not settling:
+            self._collect(tel)
+        conf = self.window.confidence()
+        if conf is not None and conf >= cfg.confidence_threshold and self.window.count >= cfg.min_estimates:
+            center, yaw = self.window.mean()
+            self.attempt.brick_estimate = (np.array(center, dtype=float), float(yaw))
+            self.estimated()
+        elif self._now_s >= self.attempt.deadline_s:
+            if self.attempt.climbs < cfg.max_climbs:
+                self.widen()
+            elif self.attempt.estimates_seen == 0:
+                self.abort(
+                    reason=f"brick {self.brick_task.brick} not seen near its pickup "
+                    f"after {self.attempt.climbs} climbs"
+                )
+            else:
+                self.abort(
+                    reason=f"brick {self.brick_task.brick} pose confidence "
+                    f"{conf if conf is not None else 0.0:.2f} stayed below {cfg.confidence_threshold:.2f} "
+                    f"after {self.attempt.climbs} climbs"
+                )
+
+    def _collect(self, tel: Telemetry) -> None:
+        frame = self.camera.read()
+        if frame is None:
+            return
+        tags = frame.tags
+        if tags is None:
+            if frame.image is None:
+                return
+            from masonry.perception.aruco import detect_tags
+
+            tags = tuple(detect_tags(frame.image, self.camera.intrinsics, self.config.markers))
+        id1, id2 = 2 * self.brick_task.brick, 2 * self.brick_task.brick + 1
+        tag1 = tag2 = None
+        for tag in tags:
+            if tag.marker_id == id1:
+                tag1 = tag
+            elif tag.marker_id == id2:
+                tag2 = tag
+        if tag1 is None and tag2 is None:
+            return
+        from masonry.perception.estimation import estimate_brick_pose
+
+        roll, pitch, yaw = tel.attitude_rad
+        R_wb = R_world_body(roll, pitch, yaw)
+        R_wc = R_wb @ self._T_body_cam[:3, :3]
+        t_wc = np.asarray(tel.position_m, dtype=float) + R_wb @ self._T_body_cam[:3, 3]
+
+        def to_world(tag: TagPose | None) -> TagPose | None:
+            if tag is None:
+                return None
+            return TagPose(tag.marker_id, R_wc @ np.asarray(tag.position_m) + t_wc, R_wc @ tag.R_cam_marker)
+
+        est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
+        if est is not None:
+            self.window.add(est.center_m, est.yaw_rad)
+            self.attempt.estimates_seen += 1
+
+    def enter_pickup_align(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None and self.attempt.brick_estimate is not None
+        center, yaw = self.attempt.brick_estimate
+        above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
+        self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
+
+    def do_pickup_align(self, tel: Telemetry) -> None:
+        cfg = self.config
+        if self._aligned(tel):
+            self.aligned()
+        elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:
+            self.abort(reason=f"could not align above brick {self.brick_task.brick}")
+
+    def _aligned(self, tel: Telemetry) -> bool:
+        cfg = self.config
+        if self._now_s < self.nav.end_s or self._yaw_error(tel) > cfg.align_yaw_tolerance_rad:
+            return False
+        p, t, v = tel.position_m, self.nav.target_m, tel.velocity_mps
+        tolerance, speed = cfg.align_tolerance_m, cfg.settle_speed_mps
+        if self._now_s > self.nav.end_s + cfg.align_patience_s:
+            tolerance, speed = max(tolerance, cfg.align_relaxed_tolerance_m), 2.0 * speed
+        return math.hypot(p[0] - t[0], p[1] - t[1]) <= tolerance and math.hypot(v[0], v[1]) <= speed
+
+    def enter_pickup_descend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None and self.attempt.brick_estimate is not None
+        center, yaw = self.attempt.brick_estimate
+        self.gripper.set_joint_locked(False)
+        self.gripper.set_magnet(True)
+        grasp = np.array([center[0], center[1], center[2] - self.config.grasp_press_m])
+        self._fly_to(tel, self.effector.body_target(grasp, yaw), self.config.descent_duration_s, yaw)
+
+    def do_pickup_descend(self, tel: Telemetry) -> None:
+        if self._now_s >= self.nav.end_s:
+            self.touched()
+
+    def enter_pickup_grasp(self, *args: Any, **kwargs: Any) -> None:
+        pass  # keep tracking the descent's end point (pressing on the brick) with the magnet on
+
+    def do_pickup_grasp(self, tel: Telemetry) -> None:
+        # Press on the brick with the magnet on for the dwell (the magnet grips on contact; polling lets an
+        # actuator board report it), then climb: the verification happens at cruise altitude.
+        self.gripper.is_attached()
+        if self._now_s - self._entered_s >= self.config.grasp_dwell_s:
+            self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
+            self.grasped()
+
+    def enter_pickup_ascend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(True)
+        p = tel.position_m
+        self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
+
+    def do_pickup_ascend(self, tel: Telemetry) -> None:
+        if self._advance(tel):
+            self.ascended()
+
+    def enter_pickup_verify(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self._hold(tel)
+
+    def do_pickup_verify(self, tel: Telemetry) -> None:
+        if self.gripper.is_attached():
+            assert self.attempt.brick_estimate is not None
+            # The flange keeps the brick from turning on the magnet: remember its yaw relative to the body. Its
+            # position is not compensated: the conical guide centres the brick under the effector (paper, IV).
+            self.attempt.carry_yaw_rad = wrap_angle_rad(self.attempt.brick_estimate[1] - self.attempt.grasp_yaw_rad)
+            self.attached()
+            return
+        self.attempt.grasp_attempts += 1
+        self.gripper.set_magnet(False)
+        if self.attempt.grasp_attempts >= self.config.max_grasp_attempts:
+            self.abort(
+                reason=f"brick {self.brick_task.brick} not attached after {self.attempt.grasp_attempts} grasps"
+            )
+        else:
+            self.attempt.climbs = 0
+            self.attempt.hover_z = self.config.cruise_altitude_m
+            self.missed()
+
+    # -- transport and place -------------------------------------------------------------------------------
+    def _place_yaw_rad(self) -> float:
+        return wrap_angle_rad(self.brick_task.yaw_rad - self.attempt.carry_yaw_rad)
+
+    def _place_effector_target_m(self) -> np.ndarray:
+        t = self.brick_task
+        return np.array([t.position_m[0], t.position_m[1], t.position_m[2] + t.size_m[2] / 2.0])
+
+    def enter_transport(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        yaw = self._place_yaw_rad()
+        eff = self._place_effector_target_m()
+        body = self.effector.body_target(eff, yaw)
+        self._route(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+
+    def do_transport(self, tel: Telemetry) -> None:
+        if self._advance(tel):
+            self.arrived()
+        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
+            self.abort(reason=f"could not reach the drop-off of {self.brick_task.id}")
+
+    def enter_place_align(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(True)
+        yaw = self._place_yaw_rad()
+        body = self.effector.body_target(self._place_effector_target_m(), yaw)
+        self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+
+    def do_place_align(self, tel: Telemetry) -> None:
+        if self._aligned(tel):
+            self.aligned()
+        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
+            self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}")
+
+    def enter_place_descend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(False)
+        yaw = self._place_yaw_rad()
+        self.attempt.place_effector_target_m = self._place_effector_target_m()
+        body = self.effector.body_target(self.attempt.place_effector_target_m, yaw)
+        self._fly_to(tel, body, self.config.descent_duration_s, yaw)
+
+    def do_place_descend(self, tel: Telemetry) -> None:
+        cfg = self.config
+        error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
+        if error <= cfg.placement_radius_m:
+            self.attempt.release_error_m = error
+            self.reached()
+        elif self._now_s > self.nav.end_s + cfg.release_timeout_s:
+            self.attempt.place_attempts += 1
+            if self.attempt.place_attempts >= cfg.max_place_attempts:
+                self.abort(
+                    reason=f"drop-off of {self.brick_task.id} not reached within "
+                    f"{cfg.placement_radius_m * 100:.1f} cm after {self.attempt.place_attempts} descents"
+                )
+            else:
+                self.timeout()
+
+    def enter_place_release(self, *args: Any, **kwargs: Any) -> None:
+        self.gripper.set_magnet(False)
+
+    def do_place_release(self, tel: Telemetry) -> None:
+        if self._now_s - self._entered_s >= self.config.release_dwell_s:
+            self.released()
+
+    def enter_place_verify(self, *args: Any, **kwargs: Any) -> None:
+        pass
+
+    def do_place_verify(self, tel: Telemetry) -> None:
+        if not self.gripper.is_attached():
+            self.deposited()
+            return
+        self.attempt.release_attempts += 1
+        if self.attempt.release_attempts >= self.config.max_release_attempts:
+            self.abort(
+                reason=f"brick {self.brick_task.brick} still attached after {self.attempt.release_attempts} releases"
+            )
+        else:
+            self.stuck()
+
+    def enter_place_ascend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(True)
+        p = tel.position_m
+        self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
+
+    def do_place_ascend(self, tel: Telemetry) -> None:
+        if self._advance(tel):
+            self._complete_task(placement_error_m=self.attempt.release_error_m)
