@@ -16,10 +16,11 @@ import pytest
 from hypothesis import HealthCheck, given, note, settings
 from hypothesis import strategies as st
 
-from fsm_rig import ClearanceLink, Rig, adhesion_task, brick_task
+from fsm_rig import Rig, adhesion_task, brick_task
 from masonry.airframe import DEFAULT_AIRFRAME
 from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
+from masonry.fakes import ScriptedClearanceLink
 from masonry.fsm import UavConfig
 from masonry.mission.airspace import task_work_altitude_m, work_altitude_m
 from masonry.mission.simulate import simulate
@@ -132,7 +133,7 @@ def test_the_bound_stays_below_a_running_bond_for_random_configs(config: UavConf
     _bound_holds(running_bond(2, 6, brick_uavs=2, adhesion_uavs=1), config)
 
 
-class _RecordingLink(ClearanceLink):
+class _RecordingLink(ScriptedClearanceLink):
     """Grants every transit at once and records what the machine asked for: (site, top, to)."""
 
     def __init__(self, tasks, clock) -> None:
@@ -173,8 +174,7 @@ def _machine_requests(kind: str, config: UavConfig, task) -> list[float]:
     rig = Rig(kind, tasks=[task], config={f.name: getattr(config, f.name) for f in dataclasses.fields(config)
                                           if f.name not in ("name", "role", "home_m")})
     link = _RecordingLink([rig.link.poll_task()], rig.clock)
-    rig.link = rig.uav.link = link
-    rig.uav._request_clearance = link.request_clearance
+    rig.link = rig.uav.link = rig.uav.clearance = link
     want = 2 if kind == "brick" else 1
     while rig.clock.now_s() < 300.0 and len(link.requests) < want and not link.results:
         rig.uav.step(rig.clock.now_s())
