@@ -71,6 +71,7 @@ from masonry.ports import (
     Sprayer,
     TaskResult,
     Telemetry,
+    UavPorts,
 )
 from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
 
@@ -148,6 +149,7 @@ __all__ = [
     "Telemetry",
     "UavConfig",
     "UavHandler",
+    "UavPorts",
     "UavSpec",
     "UdpPoseSource",
     "World",

@@ -24,7 +24,7 @@ from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError
 from masonry.planner.tasks import AdhesionTask
-from masonry.ports import CameraFrame, Telemetry, Vec3
+from masonry.ports import CameraFrame, Telemetry, UavPorts, Vec3
 from masonry.sim.adhesive import AdhesiveDeposit
 from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
 from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
@@ -65,9 +65,11 @@ class WorldConfig:
 class SimUav:
     """One UAV in a world: its autopilot model, its tool state and its ports.
 
-    Ports: ``fc`` (FlightController), ``gripper`` (Gripper), ``sprayer`` (Sprayer), ``camera`` (Camera).
-    Every UAV has all four; the world moves bricks only for ``role == "brick"`` and deposits adhesive only for
-    ``role == "adhesion"``.
+    ``ports`` (:class:`masonry.ports.UavPorts`) is what a state machine flies with: ``fc`` (FlightController),
+    ``gripper`` (Gripper), ``sprayer`` (Sprayer), ``camera`` (Camera), the world's clock and step. Every UAV has
+    all four; the world moves bricks only for ``role == "brick"`` and deposits adhesive only for
+    ``role == "adhesion"``. What only a simulation has (the ``vehicle`` whose battery the ground crew swaps,
+    ``failed``, the true position) stays here, beside the ports.
     """
 
     name: str
@@ -104,6 +106,9 @@ class SimUav:
         self.gripper = SimGripper(self)
         self.sprayer = SimSprayer(self)
         self.camera = SimCamera(self)
+        self.ports = UavPorts(self.fc, self.gripper, self.sprayer, self.camera, self.world.clock,
+                              self.world.step, self.world, {"flight controller": "simulated",
+                                                            "actuators": "simulated", "camera": "simulated"})
 
     @property
     def role(self) -> str:
