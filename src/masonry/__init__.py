@@ -36,7 +36,15 @@ from masonry.errors import (
     ProtocolError,
 )
 from masonry.fsm import AdhesionUav, BrickUav, UavConfig, fly_task, run_single_task
-from masonry.mission import Journal, JournalState, MissionControl, MissionReport, UavHandler, simulate
+from masonry.mission import (
+    Journal,
+    JournalState,
+    MissionControl,
+    MissionReport,
+    SimulatedMission,
+    UavHandler,
+    simulate,
+)
 from masonry.motion import PID, AxisGains, MinJerk, PIDGains
 from masonry.perception import (
     C_TH,
@@ -142,6 +150,7 @@ __all__ = [
     "SimClock",
     "SimUav",
     "SimVehicle",
+    "SimulatedMission",
     "Sprayer",
     "TagPose",
     "Task",
