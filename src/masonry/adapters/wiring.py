@@ -399,7 +399,7 @@ def preflight(adapters: UavPorts, hw: HardwareConfig, *, role: str = "brick",
     """
     items: list[CheckItem] = []
     items.append(CheckItem("flight controller", True, adapters.descriptions.get("flight controller", "?")))
-    fc = adapters.fc
+    fc: Any = adapters.fc  # a MAVLink adapter when not simulated (its estimate wait)
     if not hw.sim_fc:
         try:
             fc.wait_for_estimate(hw.estimate_wait_s, progress=progress)
@@ -455,7 +455,8 @@ def _check_actuators(adapters: UavPorts, hw: HardwareConfig, role: str) -> Check
     if hw.sim_actuators:
         return CheckItem("actuators", True, "simulated")
     try:
-        status = adapters.gripper.status()
+        board: Any = adapters.gripper  # the Arduino board when not simulated
+        status = board.status()
     except HardwareError as exc:
         return CheckItem("actuators", False, f"not answering: {exc}")
     detail = (

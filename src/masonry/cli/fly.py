@@ -241,7 +241,7 @@ def fly(
         "duration_s": round(result.duration_s if result is not None else run.duration_s, 2),
         "placement_error_m": None,
     }
-    world = adapters.world
+    world: Any = adapters.world
     if isinstance(the_task, BrickTask):
         error: float | None
         if world is not None:
