@@ -55,6 +55,31 @@ def test_a_site_near_a_zone_gets_a_hold_flight_and_the_rest_once_the_zone_is_lef
     assert c.conflicts() == []
 
 
+def test_each_uav_goes_through_the_phases_of_the_transit_protocol():
+    from masonry.mission.airspace import Phase
+
+    c = ColumnClearance(R, BASE, S)
+    assert c.phase("a") is Phase.PARKED  # holds nothing yet
+    _working(c, "a", (0.0, 0.0, 1.2))
+    assert c.phase("a") is Phase.PARKED
+    b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2))
+    assert b.hold_m is not None and c.phase("b") is Phase.TO_HOLD
+    c.progress("b", (b.hold_m[0], b.hold_m[1], b.layer_m))
+    assert c.phase("b") is Phase.AT_HOLD
+    far = c.request("d", (9.0, 9.0, 1.2), 1.0, (0.5, -3.0, 1.2))  # far away: its leg passes over b's hover
+    assert far.granted and far.layer_m == pytest.approx(BASE + S) and c.phase("d") is Phase.FLYING
+    c.release("a")  # a is gone: b's site is free, b may come down
+    assert [g.uav for g in c.grant(2.0) if g.granted] == ["b"] and c.phase("b") is Phase.FLYING
+    assert c.waiting == ()
+    c.end_transit("b")
+    assert c.phase("b") is Phase.PARKED and c.held["b"] == ((0.5, 0.0, 1.2),)
+    e = c.request("e", (0.6, 0.1, 1.2), 3.0, (0.0, 5.0, 1.2))  # b works there now: e cannot come down
+    assert e.hold_m is not None and c.phase("e") is Phase.TO_HOLD and c.waiting == ("e",)
+    c.release("e")  # e is out of the mission: its record goes
+    assert c.phase("e") is Phase.PARKED and c.volumes("e") == () and c.waiting == ()
+    assert c.conflicts() == []
+
+
 def test_sites_apart_are_both_granted_and_a_repeated_request_gets_the_same_answer():
     c = ColumnClearance(R, BASE, S)
     assert c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -4.0, 1.2)).granted
