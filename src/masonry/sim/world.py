@@ -457,7 +457,7 @@ class World:
         T_wb[:3, 3] = vehicle.position_m
         return T_wb @ self._T_body_cam
 
-    def _visible_candidates(self, uav: SimUav, T_wc: np.ndarray) -> list[SimBrick]:
+    def _visible_candidates(self, T_wc: np.ndarray) -> list[SimBrick]:
         cfg = self.camera_config
         cx, cy, cz = T_wc[:3, 3]
         reach = min(cfg.max_range_m(self.blueprint.markers.size_m), max(cz, 0.0) + 0.1)
@@ -473,7 +473,7 @@ class World:
             return None
         now = self.clock.now_s()
         T_wc = self.camera_pose(uav)
-        bricks = self._visible_candidates(uav, T_wc)
+        bricks = self._visible_candidates(T_wc)
         rng = uav.rng
         faults = self.faults
         dropped = faults.dropout > 0.0 and rng.random() < faults.dropout
