@@ -114,3 +114,17 @@ def test_a_failed_build_closes_the_journal(tmp_path, monkeypatch):
         SimulatedMission.from_blueprint(running_bond(1, 2, brick_uavs=1, adhesion_uavs=1),
                                         journal_path=tmp_path / "c.db")
     assert len(opened) == 1 and opened[0]._conn is None
+
+
+def test_journaled_errors_prefer_the_world_measurement_over_the_uav_estimate():
+    from types import SimpleNamespace
+
+    from masonry.mission.measured import journaled_errors_m
+
+    state = SimpleNamespace(done=[
+        SimpleNamespace(task_id="B0", fields={"measured": {"placement_error_m": 0.004}, "placement_error_m": 0.01}),
+        SimpleNamespace(task_id="B1", fields={"placement_error_m": 0.02}),  # a journal without measurements
+        SimpleNamespace(task_id="A0", fields={"coverage": 0.9}),
+    ])
+    assert journaled_errors_m(state) == {"B0": 0.004, "B1": 0.02}
+    assert journaled_errors_m(None) == {}
