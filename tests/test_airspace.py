@@ -55,6 +55,31 @@ def test_a_site_near_a_zone_gets_a_hold_flight_and_the_rest_once_the_zone_is_lef
     assert c.conflicts() == []
 
 
+def test_each_uav_goes_through_the_phases_of_the_transit_protocol():
+    from masonry.mission.airspace import Phase
+
+    c = ColumnClearance(R, BASE, S)
+    assert c.phase("a") is Phase.PARKED  # holds nothing yet
+    _working(c, "a", (0.0, 0.0, 1.2))
+    assert c.phase("a") is Phase.PARKED
+    b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2))
+    assert b.hold_m is not None and c.phase("b") is Phase.TO_HOLD
+    c.progress("b", (b.hold_m[0], b.hold_m[1], b.layer_m))
+    assert c.phase("b") is Phase.AT_HOLD
+    far = c.request("d", (9.0, 9.0, 1.2), 1.0, (0.5, -3.0, 1.2))  # far away: its leg passes over b's hover
+    assert far.granted and far.layer_m == pytest.approx(BASE + S) and c.phase("d") is Phase.FLYING
+    c.release("a")  # a is gone: b's site is free, b may come down
+    assert [g.uav for g in c.grant(2.0) if g.granted] == ["b"] and c.phase("b") is Phase.FLYING
+    assert c.waiting == ()
+    c.end_transit("b")
+    assert c.phase("b") is Phase.PARKED and c.held["b"] == ((0.5, 0.0, 1.2),)
+    e = c.request("e", (0.6, 0.1, 1.2), 3.0, (0.0, 5.0, 1.2))  # b works there now: e cannot come down
+    assert e.hold_m is not None and c.phase("e") is Phase.TO_HOLD and c.waiting == ("e",)
+    c.release("e")  # e is out of the mission: its record goes
+    assert c.phase("e") is Phase.PARKED and c.volumes("e") == () and c.waiting == ()
+    assert c.conflicts() == []
+
+
 def test_sites_apart_are_both_granted_and_a_repeated_request_gets_the_same_answer():
     c = ColumnClearance(R, BASE, S)
     assert c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -4.0, 1.2)).granted
@@ -285,32 +310,25 @@ def _outside_m(columns, uav, p):
                          [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)])
 def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(monkeypatch, courses, per, nb, na,
                                                                                   seed):
-    from masonry.mission import control
-    from masonry.sim import world
+    from masonry.mission.simulate import SimulatedMission
 
-    mcs = []
-    init = control.MissionControl.__init__
-
-    def spy_init(self, *args, **kwargs):
-        init(self, *args, **kwargs)
-        mcs.append(self)
-
+    mission = SimulatedMission.from_blueprint(running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed)
+    columns = mission.control.columns
+    world = mission.world
     worst = {}
-    step = world.World.step
+    step = world.step
 
-    def spy_step(self, dt_s):
-        step(self, dt_s)
-        columns = mcs[0].columns
-        for name, u in self.uavs.items():
+    def spy_step(dt_s):
+        step(dt_s)
+        for name, u in world.uavs.items():
             v = u.vehicle
             if v.armed and not v.on_ground:
                 worst[name] = max(worst.get(name, 0.0), _outside_m(columns, name, v.position_m))
 
-    monkeypatch.setattr(control.MissionControl, "__init__", spy_init)
-    monkeypatch.setattr(world.World, "step", spy_step)
-    r = simulate(running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed)
+    monkeypatch.setattr(world, "step", spy_step)
+    r = mission.run()
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
-    assert mcs[0].columns.conflicts() == []
+    assert columns.conflicts() == []
     # tracking error only: the separation rule keeps 0.1 m over the 1.0 m target for it. Measured 0.02-0.05 m
     # since legs feed the acceleration forward and UAVs ask at rest; up to 0.17 m before (4x25, seed 1)
     assert max(worst.values()) < 0.07, worst

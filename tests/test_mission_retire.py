@@ -46,7 +46,7 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
     battery retires them, while the handler's reserve would still wait for a swap before handing a task over.
     """
     monkeypatch.setattr(UavHandler, "swaps_batteries", property(lambda self: False))
-    sim_module = sys.modules["masonry.mission.simulate"]
+    sim_module = sys.modules["masonry.mission.measured"]  # where the simulated report is built
     seen: dict[str, object] = {}
     real = sim_module.control_report
 

@@ -37,7 +37,15 @@ from masonry.errors import (
     ProtocolError,
 )
 from masonry.fsm import AdhesionUav, BrickUav, UavConfig, fly_task, run_single_task
-from masonry.mission import Journal, JournalState, MissionControl, MissionReport, UavHandler, simulate
+from masonry.mission import (
+    Journal,
+    JournalState,
+    MissionControl,
+    MissionReport,
+    SimulatedMission,
+    UavHandler,
+    simulate,
+)
 from masonry.motion import PID, AxisGains, MinJerk, PIDGains
 from masonry.perception import (
     C_TH,
@@ -73,6 +81,7 @@ from masonry.ports import (
     Sprayer,
     TaskResult,
     Telemetry,
+    UavPorts,
 )
 from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
 from masonry.timing import TaskTiming
@@ -146,6 +155,7 @@ __all__ = [
     "SimClock",
     "SimUav",
     "SimVehicle",
+    "SimulatedMission",
     "Sprayer",
     "TagPose",
     "Task",
@@ -154,6 +164,7 @@ __all__ = [
     "Telemetry",
     "UavConfig",
     "UavHandler",
+    "UavPorts",
     "UavSpec",
     "UdpPoseSource",
     "World",

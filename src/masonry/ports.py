@@ -7,7 +7,8 @@ simulator (``masonry.sim``) and the scripted fakes (``masonry.fakes``) implement
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
@@ -173,3 +174,40 @@ class ClearanceLink(Protocol):
     def swaps_batteries(self) -> bool:
         """A ground crew swaps the battery of a landed UAV before its next task (a low battery: land, not retire)."""
         ...
+
+
+def _no_tick(dt_s: float) -> None:
+    """A time base that moves on by itself (nothing to advance)."""
+
+
+def _nothing_to_close() -> None:
+    """Ports that hold no resource."""
+
+
+@dataclass(frozen=True)
+class UavPorts:
+    """The ports one UAV flies with, its clock, how to move time on by one tick, and how to close it all.
+
+    What every producer of a UAV's ports returns (the simulated world's :attr:`masonry.sim.SimUav.ports`,
+    :func:`masonry.adapters.wiring.open_adapters`) and every consumer takes (``masonry.simulate``'s mission,
+    :func:`masonry.mission.remote.run_remote_uav`, ``masonry fly``).
+
+    Attributes:
+        fc, gripper, sprayer, camera: the ports (one board may be both ``gripper`` and ``sprayer``).
+        clock: the time base the machine reads.
+        advance: moves time on by ``dt_s`` seconds: the simulated world's step, or a sleep on a wall clock.
+        world: the simulated world behind any simulated port (for what only it can measure: the true placement
+            error, the adhesive coverage), None when every port is real hardware.
+        descriptions: port name -> what drives it (for the pre-flight report).
+        close: closes what was opened, newest first; never raises (a shutdown path).
+    """
+
+    fc: FlightController
+    gripper: Gripper
+    sprayer: Sprayer
+    camera: Camera
+    clock: Clock
+    advance: Callable[[float], None] = _no_tick
+    world: object | None = None
+    descriptions: Mapping[str, str] = field(default_factory=dict)
+    close: Callable[[], None] = _nothing_to_close

@@ -18,7 +18,7 @@ from typing import Any
 
 from masonry.blueprint import quote
 from masonry.errors import CommandRejected, HardwareError, InputError
-from masonry.ports import Telemetry
+from masonry.ports import Telemetry, UavPorts
 
 SIM = "sim"
 SIM_CAMERA_MODES = ("sim", "geometric", "render")
@@ -169,24 +169,21 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
     return hw
 
 
-@dataclass
-class OpenAdapters:
-    """The ports of one UAV, its clock and tick, the simulated world if any, and how to close it all."""
+#: The old name of the record :func:`open_adapters` returns (it is :class:`masonry.ports.UavPorts` now).
+OpenAdapters = UavPorts
 
-    fc: Any
-    gripper: Any
-    sprayer: Any
-    camera: Any
-    clock: Any
-    advance: Callable[[float], None]
-    world: Any = None
+
+@dataclass
+class _Opening:
+    """What :func:`open_adapters` has opened so far: the closers (newest last) and the descriptions."""
+
     descriptions: dict[str, str] = field(default_factory=dict)
-    _closers: list[Callable[[], None]] = field(default_factory=list)
+    closers: list[Callable[[], None]] = field(default_factory=list)
 
     def close(self) -> None:
         """Close what was opened, newest first; never raises (a shutdown path)."""
-        while self._closers:
-            closer = self._closers.pop()
+        while self.closers:
+            closer = self.closers.pop()
             try:
                 closer()
             except Exception:  # closing must go on whatever one adapter does
@@ -241,8 +238,9 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
     spec: Any,
     seed: int = 0,
     faults: Any = None,
-) -> OpenAdapters:
-    """Build and open the adapters of ``spec`` as ``hw`` says (each port on its own).
+) -> UavPorts:
+    """Build and open the adapters of ``spec`` as ``hw`` says (each port on its own); the caller closes them
+    (``UavPorts.close``).
 
     Raises:
         DeviceNotFound / LinkLost / CommandTimeout: a real device cannot be reached (its error names it).
@@ -252,7 +250,7 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
 
     faults = faults if faults is not None else Faults()
     camera_mode = "render" if hw.camera == "render" else "geometric"
-    opened = OpenAdapters(None, None, None, None, None, lambda dt: None)
+    opened = _Opening()
     try:
         fc = None
         link_clock = None
@@ -269,12 +267,14 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
             uav = world.add_uav(spec)
             if fc is not None:
                 _follow_autopilot(uav, fc)
+        clock: Any
+        advance: Callable[[float], None]
         if fc is None:
             assert uav is not None and world is not None
-            opened.fc, opened.clock, opened.advance = uav.fc, world.clock, world.step
+            fc, clock, advance = uav.fc, world.clock, world.step
             opened.descriptions["flight controller"] = "simulated"
         else:
-            opened.fc, opened.clock = fc, link_clock
+            clock = link_clock
 
             def advance(dt_s: float, world: Any = world, clock: Any = link_clock) -> None:
                 clock.sleep(dt_s)
@@ -283,43 +283,45 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
                     if step > 1e-6:
                         world.step(step)
 
-            opened.advance = advance
+        gripper: Any
+        sprayer: Any
         if hw.sim_actuators:
             assert uav is not None
-            opened.gripper, opened.sprayer = uav.gripper, uav.sprayer
+            gripper, sprayer = uav.gripper, uav.sprayer
             opened.descriptions["actuators"] = "simulated"
         else:
             from masonry.adapters.arduino import ArduinoActuators
 
             board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud, boot_wait_s=hw.actuator_boot_wait_s)
             board.connect()
-            opened._closers.append(board.close)
-            opened.gripper = opened.sprayer = board
+            opened.closers.append(board.close)
+            gripper = sprayer = board
             opened.descriptions["actuators"] = f"Arduino on {hw.actuators} (protocol v{board.version})"
+        camera: Any
         if hw.sim_camera:
             assert uav is not None
-            opened.camera = uav.camera
+            camera = uav.camera
             where = "the autopilot's reported position" if fc is not None else "the simulated UAV"
             opened.descriptions["camera"] = f"simulated ({camera_mode}), seen from {where}"
         else:
             from masonry.adapters.camera import OpenCvCamera
 
-            cam = OpenCvCamera(hw.camera, calibration=hw.calibration, clock=opened.clock)
+            cam = OpenCvCamera(hw.camera, calibration=hw.calibration, clock=clock)
             cam.connect()
-            opened._closers.append(cam.close)
-            opened.camera = cam
+            opened.closers.append(cam.close)
+            camera = cam
             intr = cam.intrinsics
             opened.descriptions["camera"] = (
                 f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
             )
-        opened.world = world
-        return opened
+        return UavPorts(fc, gripper, sprayer, camera, clock, advance, world, dict(opened.descriptions),
+                        opened.close)
     except BaseException:
         opened.close()
         raise
 
 
-def _open_mavlink(hw: HardwareConfig, spec: Any, opened: OpenAdapters) -> Any:
+def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
     from masonry.adapters.mavlink import FrameTransform, MavlinkFlightController, load_signing_key
 
     pose_source = None
@@ -328,7 +330,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: OpenAdapters) -> Any:
 
         pose_source = UdpPoseSource(hw.mocap_port, host=hw.mocap_host, body=hw.mocap_body or spec.name)
         pose_source.start()
-        opened._closers.append(pose_source.close)
+        opened.closers.append(pose_source.close)
     fc = MavlinkFlightController(
         hw.fc,
         baud=hw.fc_baud,
@@ -339,7 +341,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: OpenAdapters) -> Any:
         pose_source=pose_source,
     )
     fc.connect()
-    opened._closers.append(fc.close)
+    opened.closers.append(fc.close)
     who = f"{fc.autopilot} system {fc.target_system}"
     extras = []
     if hw.signing_key:
@@ -396,7 +398,7 @@ class PreflightReport:
             raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons), options=self.options)
 
 
-def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick",
+def preflight(adapters: UavPorts, hw: HardwareConfig, *, role: str = "brick",
               progress: Callable[[str], None] | None = None) -> PreflightReport:
     """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames.
 
@@ -404,7 +406,7 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
     """
     items: list[CheckItem] = []
     items.append(CheckItem("flight controller", True, adapters.descriptions.get("flight controller", "?")))
-    fc = adapters.fc
+    fc: Any = adapters.fc  # a MAVLink adapter when not simulated (its estimate wait)
     if not hw.sim_fc:
         try:
             fc.wait_for_estimate(hw.estimate_wait_s, progress=progress)
@@ -456,11 +458,12 @@ def preflight(adapters: OpenAdapters, hw: HardwareConfig, *, role: str = "brick"
     return PreflightReport(tuple(items))
 
 
-def _check_actuators(adapters: OpenAdapters, hw: HardwareConfig, role: str) -> CheckItem:
+def _check_actuators(adapters: UavPorts, hw: HardwareConfig, role: str) -> CheckItem:
     if hw.sim_actuators:
         return CheckItem("actuators", True, "simulated")
     try:
-        status = adapters.gripper.status()
+        board: Any = adapters.gripper  # the Arduino board when not simulated
+        status = board.status()
     except HardwareError as exc:
         return CheckItem("actuators", False, f"not answering: {exc}")
     detail = (
@@ -473,7 +476,7 @@ def _check_actuators(adapters: OpenAdapters, hw: HardwareConfig, role: str) -> C
     return CheckItem("actuators", True, detail)
 
 
-def _check_camera(adapters: OpenAdapters, hw: HardwareConfig, wait_s: float = 3.0) -> CheckItem:
+def _check_camera(adapters: UavPorts, hw: HardwareConfig, wait_s: float = 3.0) -> CheckItem:
     description = adapters.descriptions.get("camera", "?")
     if hw.sim_camera:
         return CheckItem("camera", True, description)

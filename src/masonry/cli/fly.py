@@ -8,7 +8,6 @@ place that decides what drives the flight controller, the actuators and the came
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -18,24 +17,14 @@ import typer
 from masonry.cli.app import cli_text, command
 from masonry.cli.options import check_all, help_text
 from masonry.errors import InputError
+from masonry.ports import UavPorts
 
-
-@dataclass
-class Adapters:
-    """The ports one UAV flies with, the clock and how to move time forward by one tick."""
-
-    fc: Any
-    gripper: Any
-    sprayer: Any
-    camera: Any
-    clock: Any
-    advance: Callable[[float], None]
-    world: Any = None  # the simulated World when --sim (for the measured placement error / coverage)
-    close: Callable[[], None] = lambda: None  # closes real devices (hardware adapters)
+#: The old name of what :func:`select_adapters` returns (it is :class:`masonry.ports.UavPorts` now).
+Adapters = UavPorts
 
 
 def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any,
-                    hardware: Any = None) -> Adapters:
+                    hardware: Any = None) -> UavPorts:
     """Choose and build the adapters for the UAV ``spec``: the simulated world (``--sim``), or each port on its
     own (``hardware``: a :class:`masonry.adapters.wiring.HardwareConfig` from --fc/--actuators/--camera), checked
     by the pre-flight check (printed on stderr; a failure refuses to arm).
@@ -52,8 +41,7 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
         except BaseException:
             opened.close()
             raise
-        return Adapters(opened.fc, opened.gripper, opened.sprayer, opened.camera, opened.clock, opened.advance,
-                        opened.world, opened.close)
+        return opened
     if not sim:
         raise InputError("no adapters chosen: pass --sim to fly in the simulated world, or pick hardware with "
                          "--fc URL / --actuators PORT / --camera INDEX|FILE")
@@ -61,8 +49,7 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
 
     world = World(blueprint, seed=seed, camera=camera, faults=faults)  # type: ignore[arg-type]
     faults.check_uavs([spec.name])
-    uav = world.add_uav(spec)
-    return Adapters(uav.fc, uav.gripper, uav.sprayer, uav.camera, world.clock, world.step, world)
+    return world.add_uav(spec).ports
 
 
 def _a(word: str) -> str:
@@ -259,7 +246,7 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
         "duration_s": round(result.duration_s if result is not None else run.duration_s, 2),
         "placement_error_m": None,
     }
-    world = adapters.world
+    world: Any = adapters.world
     if isinstance(the_task, BrickTask):
         error: float | None
         if world is not None:
@@ -313,7 +300,7 @@ def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], missio
         adapters = select_adapters(sim=False, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=faults,
                                    hardware=hardware)
         if hardware.sim_fc:  # a simulated autopilot (with real actuators or camera) keeps time with the wall
-            adapters.advance = paced(adapters.clock, adapters.advance, time_scale)
+            adapters = replace(adapters, advance=paced(adapters.clock, adapters.advance, time_scale))
     try:
         if echo is not None:
             where = (f"simulated, seed {seed}, x{time_scale:g} real time" if adapters is None

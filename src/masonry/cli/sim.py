@@ -40,7 +40,7 @@ def sim(
     Exit status 0 when the wall is complete, 1 when it is not (stuck tasks are listed), 2 on bad input.
     """
     from masonry.blueprint import load_blueprint
-    from masonry.mission.simulate import simulate
+    from masonry.mission.simulate import SimulatedMission
     from masonry.sim import Faults
 
     if fmt not in ("text", "json"):
@@ -60,9 +60,11 @@ def sim(
 
     progress_cb, finish = progress_display(progress)
     try:
-        result = simulate(bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed,
-                          camera=camera, faults=faults, journal_path=journal, resume=resume, dt_s=dt,
-                          progress=progress_cb, warn=lambda m: typer.echo(f"warning: {m}", err=True))
+        mission = SimulatedMission.from_blueprint(
+            bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed, camera=camera,
+            faults=faults, journal_path=journal, resume=resume, dt_s=dt, progress=progress_cb,
+            warn=lambda m: typer.echo(f"warning: {m}", err=True))
+        result = mission.run()
     finally:
         finish()
     if report is not None:

@@ -25,16 +25,30 @@ Everything here is pure (no I/O, no clock).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 
 from masonry.blueprint import Blueprint, UavSpec
+from masonry.mission.airspace_state import FlightRequest, Grant, GrantedFlight, HoldFlight, Phase, UavAirspace
+from masonry.mission.volumes import (
+    HOVER_SLACK_M,
+    STOP_M,
+    TRACK_M,
+    XY,
+    Vec3,
+    Volume,
+    ahead_of,
+    column,
+    flight_volumes,
+    hold_points,
+    stopped_at,
+    volumes_clear,
+    volumes_conflict,
+)
+from masonry.mission.volumes import point_segment_m as _point_segment_m  # noqa: F401 - the tests' name
 from masonry.planner.tasks import BrickTask, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
-
-Vec3 = tuple[float, float, float]
-XY = tuple[float, float]
 
 #: Vertical distance between two transit layers: the 1 m separation target plus tracking error and gusts.
 DEFAULT_LAYER_SPACING_M = 1.1
@@ -81,15 +95,6 @@ def _work_altitude_over_m(top_m: float, size_z_m: float, timing: TaskTiming) -> 
     return z
 
 
-#: How far a UAV may be off its reserved path (tracking error, a report a little late): what lies further behind
-#: it on its leg is freed (:meth:`ColumnClearance.progress`).
-TRACK_M = 0.3
-
-#: A UAV that stopped mid-flight to ask for another site (it turned back) holds this much around where it is.
-HOVER_SLACK_M = 0.3
-
-#: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
-STOP_M = 1.0
 
 #: A UAV reported within this of a layer's altitude is at the layer (hover noise). UAVs come to rest where they
 #: stop before they ask (``masonry.fsm``), so a UAV reported farther from a layer is where it says: a UAV at rest
@@ -100,14 +105,10 @@ SNAP_M = 0.05
 #: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
 AT_HOLD_M = 0.1
 
-#: Layer 0 starts this far above the highest work altitude (the spacing of the layers above it has its own
-#: margin over the separation target).
-LAYER_MARGIN_M = 0.0
-
-
 def layer_base_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
-    """Altitude of transit layer 0 for ``blueprint``: :func:`work_altitude_m` plus :data:`LAYER_MARGIN_M`."""
-    return work_altitude_m(blueprint, timing=timing) + LAYER_MARGIN_M
+    """Altitude of transit layer 0 for ``blueprint``: :func:`work_altitude_m` (the spacing of the layers above it
+    has its own margin over the separation target)."""
+    return work_altitude_m(blueprint, timing=timing)
 
 
 def transit_layers_m(
@@ -128,72 +129,6 @@ def transit_layers_m(
     members = tuple(blueprint.fleet if fleet is None else fleet)
     base = layer_base_m(blueprint, timing=timing)
     return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}
-
-
-@dataclass(frozen=True)
-class Volume:
-    """A piece of airspace reserved for one UAV: every point within ``slack_m`` (horizontally) of the 2-D
-    segment ``a``-``b``, between altitudes ``z0_m`` and ``z1_m``.
-
-    A vertical move is a degenerate segment (``a == b``) over an altitude range, a lateral leg a segment at one
-    altitude, a site's work zone a vertical column from the ground with the work's horizontal ``slack_m``.
-    """
-
-    a: XY
-    b: XY
-    z0_m: float
-    z1_m: float
-    slack_m: float = 0.0
-    kind: str = "leg"  # "climb", "leg", "zone", "hover": what it is, for diagnostics and early release
-
-
-def volumes_conflict(p: Volume, q: Volume, sep_xy_m: float, sep_z_m: float) -> bool:
-    """Could a UAV in ``p`` come within the separation of one in ``q``?
-
-    No if their altitude ranges are ``sep_z_m`` apart, or their horizontal footprints ``sep_xy_m`` (plus both
-    slacks) apart. Two UAVs in volumes that do not conflict are at least min(sep_xy_m, sep_z_m) apart.
-    """
-    if p.z0_m - q.z1_m >= sep_z_m or q.z0_m - p.z1_m >= sep_z_m:
-        return False
-    need = sep_xy_m + p.slack_m + q.slack_m
-    # cheap reject on the bounding boxes before the exact segment distance
-    if (min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
-            or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
-            or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need):
-        return False
-    return _segment_segment_m(p.a, p.b, q.a, q.b) < need
-
-
-@dataclass(frozen=True)
-class Grant:
-    """Mission control's answer to a UAV setting off for ``site_m``.
-
-    ``layer_m``: the altitude of its lateral leg (None: no layers, fly as you like, or no flight yet).
-    ``granted`` True: fly there (climb where you are to ``layer_m``, fly over the site, come down). False with a
-    ``hold_m``: fly (at ``layer_m``) to ``hold_m`` and wait there, the rest comes later. False without: hover
-    where you are and ask again.
-    """
-
-    uav: str
-    site_m: Vec3
-    granted: bool = True
-    hold_m: Vec3 | None = None
-    layer_m: float | None = None
-
-
-@dataclass
-class _Pending:
-    site: Vec3
-    top_m: float
-    position: Vec3 | None
-    since_s: float
-    to: XY | None = None  # the work at the site spans from it to here (an adhesion segment)
-    hold: Vec3 | None = None  # the hold point of its hold flight (granted), if any
-    layer: int | None = None  # the layer of that hold flight
-    layer_alt: float | None = None  # its altitude (the layer base may have risen since)
-    at_hold: bool = False
-    seen_version: int = -1  # airspace version at its last evaluation (nothing changed since: same answer)
-    answer: Grant | None = None
 
 
 class ColumnClearance:
@@ -256,15 +191,9 @@ class ColumnClearance:
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
         self.zone_slack_m = max(0.0, (self.radius_m - self.sep_xy_m) / 2.0)
         self.max_layers = 12
-        self._volumes: dict[str, list[Volume]] = {}
-        self._zone: dict[str, Vec3] = {}  # uav -> site of the zone it works in
-        # uav -> (site, layer index, layer altitude) of its granted flight
-        self._flight: dict[str, tuple[Vec3, int, float]] = {}
-        self._origin: dict[str, Vec3] = {}  # uav -> site it set off from (its climb is freed once away)
-        self._waiting: dict[str, _Pending] = {}  # insertion order = first come, first served
+        self._uavs: dict[str, UavAirspace] = {}
         self._homes: dict[str, Vec3] = {u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()}
-        # uav -> (top, end of the work's span) of the zone at the site of its granted flight
-        self._tops: dict[str, tuple[float, XY | None]] = {}
+        self._seq = 0  # requests made so far (their order)
         self._version = 0
         self.granted_count = 0
         self.held_back = 0  # hold flights given (a UAV sent to wait near its site)
@@ -300,48 +229,53 @@ class ColumnClearance:
     def held(self) -> dict[str, tuple[Vec3, ...]]:
         """UAV -> the site it holds: the one it flies to, or the one it works at."""
         out: dict[str, tuple[Vec3, ...]] = {}
-        for uav in self._volumes:
-            f = self._flight.get(uav)
-            if f is not None:
-                out[uav] = (f[0],)
-            elif uav in self._zone and self._zone[uav] != self._homes.get(uav):
-                out[uav] = (self._zone[uav],)
+        for uav, u in self._uavs.items():
+            if u.flight is not None:
+                out[uav] = (u.flight.site,)
+            elif u.zone is not None and u.zone != self._homes.get(uav):
+                out[uav] = (u.zone,)
         return out
 
     @property
     def waiting(self) -> tuple[str, ...]:
         """UAVs waiting for their flight, in request order."""
-        return tuple(self._waiting)
+        return tuple(uav for uav, _u in self._waiting())
 
     @property
     def layers(self) -> dict[str, int]:
         """UAV -> layer index of its flight in progress (granted, or to its hold point)."""
-        out = {u: f[1] for u, f in self._flight.items()}
-        out.update({u: w.layer for u, w in self._waiting.items() if w.layer is not None})
-        return out
+        return {uav: u.flight.layer if u.flight is not None else u.hold.layer  # type: ignore[union-attr]
+                for uav, u in self._uavs.items() if u.flight is not None or u.hold is not None}
+
+    def phase(self, uav: str) -> Phase:
+        """Where ``uav`` is in the transit protocol (a UAV holding nothing is ``PARKED``)."""
+        u = self._uavs.get(uav)
+        return Phase.PARKED if u is None else u.phase
 
     def volumes(self, uav: str) -> tuple[Volume, ...]:
         """The volumes ``uav`` holds now."""
-        return tuple(self._volumes.get(uav, ()))
+        u = self._uavs.get(uav)
+        return () if u is None else tuple(u.volumes)
 
     def layer_m(self, uav: str) -> float | None:
         """Altitude of ``uav``'s flight in progress (None: none, or no layers)."""
         if self.base_m is None:
             return None
-        f = self._flight.get(uav)
-        if f is not None:
-            return f[2]
-        w = self._waiting.get(uav)
-        return None if w is None else w.layer_alt
+        u = self._uavs.get(uav)
+        if u is None:
+            return None
+        if u.flight is not None:
+            return u.flight.layer_m
+        return None if u.hold is None else u.hold.layer_m
 
     def conflicts(self) -> list[tuple[str, str]]:
         """Pairs of UAVs whose volumes conflict now: always empty (the invariant the tests check)."""
-        names = list(self._volumes)
+        names = list(self._uavs)
         out = []
         for i, u in enumerate(names):
             for w in names[i + 1:]:
                 if any(volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
-                       for p in self._volumes[u] for q in self._volumes[w]):
+                       for p in self._uavs[u].volumes for q in self._uavs[w].volumes):
                     out.append((u, w))
         return out
 
@@ -360,73 +294,71 @@ class ColumnClearance:
         if self.base_m is None:
             self.granted_count += 1
             return Grant(uav, site)
-        f = self._flight.get(uav)
-        if f is not None:
-            if _same(f[0], site):
-                return Grant(uav, site, layer_m=f[2])
+        u = self._uav(uav)
+        if u.flight is not None:
+            if _same(u.flight.site, site):
+                return Grant(uav, site, layer_m=u.flight.layer_m)
             # turned back for another site: it keeps the volumes of that flight until it has a new one
-            del self._flight[uav]
-            self._tops.pop(uav, None)
+            u.flight = None
+            u.phase = Phase.PARKED
         pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
-        w = self._waiting.get(uav)
+        w = u.request
         if w is not None and _same(w.site, site):
-            if pos is not None and w.hold is None and pos != w.position:
-                w.position = pos
-                w.seen_version = -1  # where it asks from changed: look again
-            return self._evaluate(uav, w, now_s)
-        if w is not None:
-            del self._waiting[uav]
-        if pos is not None and uav not in self._zone:
+            if pos is not None and u.phase is Phase.ASKING and pos != w.position:
+                u.request = dataclasses.replace(w, position=pos)
+                u.seen_version = -1  # where it asks from changed: look again
+            return self._evaluate(uav, u, now_s)
+        if pos is not None and u.zone is None:
             self._hover_where(uav, pos)  # it turned back mid-flight: it stays where it is until answered
-        w = _Pending(site, top, pos, now_s)
+        to = None
         if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
-            w.to = (float(to_m[0]), float(to_m[1]))
-        self._waiting[uav] = w
+            to = (float(to_m[0]), float(to_m[1]))
+        self._seq += 1
+        u.request, u.hold, u.phase = FlightRequest(site, top, pos, now_s, self._seq, to), None, Phase.ASKING
+        u.seen_version, u.answer = -1, None
         self._version += 1  # the queue changed: answers of those behind it may change
-        return self._evaluate(uav, w, now_s)
+        return self._evaluate(uav, u, now_s)
 
     def grant(self, now_s: float) -> list[Grant]:
         """Answer waiting UAVs, in request order, whose answer changed (a flight granted, or a hold flight)."""
         out: list[Grant] = []
-        for uav, w in list(self._waiting.items()):
-            if w.seen_version == self._version:
+        for uav, u in self._waiting():
+            if u.seen_version == self._version:
                 continue
-            before = w.answer
-            g = self._evaluate(uav, w, now_s)
+            before = u.answer
+            g = self._evaluate(uav, u, now_s)
             if g.granted or (g.hold_m is not None and (before is None or before.hold_m is None)):
                 out.append(g)
         return out
 
     def end_transit(self, uav: str) -> None:
         """``uav``'s flight came down at its site: it holds the zone there now."""
-        f = self._flight.pop(uav, None)
-        if f is None:
+        u = self._uavs.get(uav)
+        if u is None or u.flight is None:
             return
-        self._origin.pop(uav, None)
-        site = f[0]
-        top, to = self._tops.pop(uav, (site[2], None))
-        self._set_zone(uav, site, top, to)
+        f = u.flight
+        u.flight, u.origin, u.phase = None, None, Phase.PARKED
+        self._set_zone(uav, f.site, f.top_m, f.to)
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
         up asking for it; None: it is out of the mission (on the ground or fallen): everything is freed."""
         if site_m is None:
-            for table in (self._volumes, self._zone, self._flight, self._origin, self._waiting, self._tops):
-                table.pop(uav, None)  # type: ignore[attr-defined]
+            self._uavs.pop(uav, None)
             self._version += 1
             return
-        w = self._waiting.get(uav)
-        if w is not None and _same(w.site, site_m) and w.hold is None:
-            del self._waiting[uav]  # given up before anything was granted
+        u = self._uavs.get(uav)
+        if u is None:
+            return
+        if u.request is not None and _same(u.request.site, site_m) and u.phase is Phase.ASKING:
+            u.request, u.phase = None, Phase.PARKED  # given up before anything was granted
             self._version += 1
             return
-        origin = self._origin.get(uav)
-        if origin is not None and _same(origin, site_m):
-            del self._origin[uav]
-            vols = self._volumes.get(uav, [])
-            kept = [v for v in vols if v.kind != "climb"]
-            if len(kept) != len(vols):
-                self._volumes[uav] = kept
+        if u.origin is not None and _same(u.origin, site_m):
+            u.origin = None
+            kept = [v for v in u.volumes if v.kind != "climb"]
+            if len(kept) != len(u.volumes):
+                u.volumes = kept
                 self._version += 1
 
     def progress(self, uav: str, position_m: Vec3) -> None:
@@ -436,62 +368,22 @@ class ColumnClearance:
         descent over its site counts; anything else (a report sent before the flight was granted, say) is ignored.
         A UAV flies its legs forward from rest to rest, so what lies more than ``TRACK_M`` behind it is left.
         """
-        vols = self._volumes.get(uav)
-        if not vols or self.base_m is None:
+        u = self._uavs.get(uav)
+        vols = None if u is None else u.volumes
+        if not vols or u is None or self.base_m is None:
             return
         x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
-        w = self._waiting.get(uav)
-        if w is not None and w.hold is not None and not w.at_hold and w.layer_alt is not None \
-                and math.hypot(x - w.hold[0], y - w.hold[1]) < AT_HOLD_M and abs(z - w.layer_alt) < 0.2:
-            self._arrive_at_hold(uav, w)  # it hovers at its hold point
+        h = u.hold
+        if u.phase is Phase.TO_HOLD and h is not None \
+                and math.hypot(x - h.point_m[0], y - h.point_m[1]) < AT_HOLD_M and abs(z - h.layer_m) < 0.2:
+            self._arrive_at_hold(u)  # it hovers at its hold point
             return
-        kept: list[Volume] | None = None
-        last_leg: Volume | None = None
-        for i, v in enumerate(vols):
-            if v.kind != "leg":
-                continue
-            last_leg = v
-            (ax, ay), (bx, by) = v.a, v.b
-            dx, dy = bx - ax, by - ay
-            length = math.hypot(dx, dy)
-            if length < 1e-9 or abs(z - v.z0_m) >= 0.2:
-                continue
-            along = ((x - ax) * dx + (y - ay) * dy) / length
-            across = abs((x - ax) * dy - (y - ay) * dx) / length
-            if across > TRACK_M or along > length + TRACK_M:
-                continue
-            cut = along - TRACK_M
-            if cut <= 0.0:
-                return  # at the start of this leg: it may still be climbing (or stopped climbing) to it
-            # on this leg: everything before it (its climb, earlier legs, a hover) is behind it
-            rest = list(vols[i + 1:])
-            if cut < length:
-                f = max(0.0, cut) / length
-                rest.insert(0, Volume((ax + f * dx, ay + f * dy), v.b, v.z0_m, v.z1_m, 0.0, "leg"))
-            kept = rest
-            break
+        kept = ahead_of(vols, x, y, z)
         if kept is None:
-            # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
-            zone = vols[-1]
-            if last_leg is None or zone.kind != "zone" or z >= last_leg.z0_m - 0.2 or \
-                    math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M or \
-                    math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6:
-                return
-            kept = [zone]
+            return
         if len(kept) != len(vols) or any(k is not v for k, v in zip(kept, vols)):
-            self._volumes[uav] = kept
+            u.volumes = kept
             self._version += 1
-
-    def blocking(self, uav: str, site_m: Vec3) -> list[str]:
-        """The UAVs whose volumes keep ``uav`` from coming down at ``site_m`` now."""
-        col = self._column(site_m, self.base_m or site_m[2])
-        return [o for o, vols in self._volumes.items()
-                if o != uav and any(self._conflict(col, v) for v in vols)]
-
-    def hold_point(self, uav: str, site_m: Vec3, position_m: Vec3 | None = None) -> Vec3:
-        """The point nearest to ``site_m`` at least ``radius_m`` from every other UAV's zone, flight site, hold
-        point and the sites other UAVs wait for (the hover altitude is the layer; see :meth:`request`)."""
-        return next(iter(self._hold_candidates(uav, site_m)))
 
     # -- internals --------------------------------------------------------------------------------------------
     def _alt(self, k: int) -> float:
@@ -510,115 +402,96 @@ class ColumnClearance:
         return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
 
     def _column(self, site: Vec3, top: float, to: XY | None = None) -> Volume:
-        xy = (site[0], site[1])
-        return Volume(xy, xy if to is None else to, 0.0, top, self.zone_slack_m, "zone")
+        return column(site, top, to, self.zone_slack_m)
 
     def _set_zone(self, uav: str, site: Vec3, top: float, to: XY | None = None) -> None:
         if uav in self._homes and _same(self._homes[uav], site) and self.base_m is not None:
             top = max(top, self.base_m)  # it takes off here up to its transit altitude
-        self._zone[uav] = site
-        self._volumes[uav] = [self._column(site, top, to)]
+        u = self._uav(uav)
+        u.zone = site
+        u.volumes = [self._column(site, top, to)]
         self._version += 1
 
     def _free(self, uav: str, vols: list[Volume]) -> bool:
-        """No volume of ``vols`` conflicts with another UAV's (:func:`volumes_conflict`, written out: this is
-        mission control's inner loop)."""
-        sep_xy, sep_z = self.sep_xy_m, self.spacing_m - 1e-9
-        others = [q for other, theirs in self._volumes.items() if other != uav for q in theirs]
-        for v in vols:
-            vz0, vz1, vs = v.z0_m, v.z1_m, v.slack_m
-            (ax, ay), (bx, by) = v.a, v.b
-            vx0, vx1 = (ax, bx) if ax <= bx else (bx, ax)
-            vy0, vy1 = (ay, by) if ay <= by else (by, ay)
-            for q in others:
-                if vz0 - q.z1_m >= sep_z or q.z0_m - vz1 >= sep_z:
-                    continue
-                need = sep_xy + vs + q.slack_m
-                (cx, cy), (dx, dy) = q.a, q.b
-                if (cx if cx <= dx else dx) - vx1 >= need or vx0 - (cx if cx >= dx else dx) >= need \
-                        or (cy if cy <= dy else dy) - vy1 >= need or vy0 - (cy if cy >= dy else dy) >= need:
-                    continue
-                if _segment_segment_m(v.a, v.b, q.a, q.b) < need:
-                    return False
-        return True
+        """No volume of ``vols`` conflicts with another UAV's (:func:`volumes_clear`)."""
+        others = [q for other, u in self._uavs.items() if other != uav for q in u.volumes]
+        return volumes_clear(vols, others, self.sep_xy_m, self.spacing_m - 1e-9)
 
-    def _queued_before(self, uav: str) -> list[_Pending]:
-        out = []
-        for other, w in self._waiting.items():
-            if other == uav:
-                break
-            out.append(w)
-        return out
+    def _uav(self, uav: str) -> UavAirspace:
+        """``uav``'s record (a new one, holding nothing, for a UAV not seen since it left)."""
+        u = self._uavs.get(uav)
+        if u is None:
+            u = self._uavs[uav] = UavAirspace()
+        return u
+
+    def _waiting(self) -> list[tuple[str, UavAirspace]]:
+        """The UAVs with a request, in request order."""
+        return sorted(((n, u) for n, u in self._uavs.items() if u.request is not None),
+                      key=lambda nu: nu[1].request.seq)  # type: ignore[union-attr]
+
+    def _queued_before(self, seq: int) -> list[FlightRequest]:
+        return [u.request for _n, u in self._waiting() if u.request is not None and u.request.seq < seq]
 
     def _flight_volumes(self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None,
                         to: XY | None = None) -> list[Volume]:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
-        alt = self._alt(k)
-        sxy = (start[0], start[1])
-        z0 = self._snap(start[2])
-        vols = [Volume(sxy, sxy, min(z0, alt), max(z0, alt), 0.0, "climb")]
-        end = hold if hold is not None else (target[0], target[1]) if target is not None else sxy
-        if math.hypot(end[0] - sxy[0], end[1] - sxy[1]) > 1e-6:
-            vols.append(Volume(sxy, end, alt, alt, 0.0, "leg"))
-        if hold is not None:
-            vols.append(Volume(end, end, alt, alt, self.zone_slack_m, "hover"))  # it may overshoot a little
-        elif target is not None:
-            vols.append(self._column(target, max(top, alt), to))
-        return vols
+        return flight_volumes((start[0], start[1]), self._snap(start[2]), self._alt(k), target, top, hold, to,
+                              self.zone_slack_m)
 
-    def _evaluate(self, uav: str, w: _Pending, now_s: float) -> Grant:
+    def _evaluate(self, uav: str, u: UavAirspace, now_s: float) -> Grant:
         """Grant ``uav``'s flight if it fits, else a hold flight, else "hover where you are"."""
-        if w.seen_version == self._version and w.answer is not None:
-            return w.answer
-        w.seen_version = self._version
-        earlier = self._queued_before(uav)
+        w = u.request
+        assert w is not None
+        if u.seen_version == self._version and u.answer is not None:
+            return u.answer
+        u.seen_version = self._version
+        earlier = self._queued_before(w.seq)
         blocked_site = any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m
                            for e in earlier)
         if not blocked_site:
-            if w.hold is not None and w.at_hold:
+            if u.phase is Phase.AT_HOLD:
                 # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
                 # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
                 # answer, and one that never saw its hold answer (a later one came first) would fly straight.
-                assert w.layer_alt is not None
-                hold = (w.hold[0], w.hold[1], w.layer_alt)
+                assert u.hold is not None
+                hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
                 for k in range(self.max_layers):
                     extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to)
                     if self._free(uav, extra):
-                        self._volumes[uav] = self._volumes.get(uav, []) + extra
+                        u.volumes = u.volumes + extra
                         self._version += 1
-                        return self._granted(uav, w, k, now_s)
-            elif w.hold is None:
+                        return self._granted(uav, u, k, now_s)
+            elif u.phase is Phase.ASKING:
                 start = w.position if w.position is not None else w.site
                 for k in range(self.max_layers):
                     vols = self._flight_volumes(start, w.site, w.top_m, k, None, w.to)
                     if self._free(uav, vols):
-                        self._take(uav, vols, start)
-                        return self._granted(uav, w, k, now_s)
-        if w.hold is None:
-            g = self._hold_flight(uav, w)
+                        self._take(u, vols)
+                        return self._granted(uav, u, k, now_s)
+        if u.phase is Phase.ASKING:
+            g = self._hold_flight(uav, u)
             if g is not None:
-                w.answer = g
+                u.answer = g
                 self.held_back += 1
                 return g
             self.refused += 1
-            w.answer = Grant(uav, w.site, False)
-            return w.answer
-        assert w.layer_alt is not None
-        w.answer = Grant(uav, w.site, False, w.hold, w.layer_alt)
-        return w.answer
+            u.answer = Grant(uav, w.site, False)
+            return u.answer
+        assert u.hold is not None
+        u.answer = Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
+        return u.answer
 
-    def _take(self, uav: str, vols: list[Volume], start: Vec3) -> None:
-        zone = self._zone.pop(uav, None)
-        self._origin.pop(uav, None)  # a climb from mid-air (a UAV turned back) is kept until it is down
-        if zone is not None:
-            self._origin[uav] = zone
-        self._volumes[uav] = vols
+    def _take(self, u: UavAirspace, vols: list[Volume]) -> None:
+        # a climb from mid-air (a UAV turned back) is kept until it is down
+        u.origin, u.zone = u.zone, None
+        u.volumes = vols
         self._version += 1
 
-    def _granted(self, uav: str, w: _Pending, k: int, now_s: float) -> Grant:
-        del self._waiting[uav]
-        self._flight[uav] = (w.site, k, self._alt(k))
-        self._tops[uav] = (w.top_m, w.to)
+    def _granted(self, uav: str, u: UavAirspace, k: int, now_s: float) -> Grant:
+        w = u.request
+        assert w is not None
+        u.flight = GrantedFlight(w.site, k, self._alt(k), w.top_m, w.to)
+        u.request, u.hold, u.phase = None, None, Phase.FLYING
         waited = max(0.0, now_s - w.since_s)
         self.wait_s += waited
         self.max_wait_s = max(self.max_wait_s, waited)
@@ -629,54 +502,36 @@ class ColumnClearance:
 
     def _hold_candidates(self, uav: str, site: Vec3) -> list[Vec3]:
         keep_out: list[XY] = []
-        for other, zone in self._zone.items():
-            if other != uav:
-                keep_out.extend(v.b for v in self._volumes.get(other, ()) if v.kind == "zone")
-                keep_out.append((zone[0], zone[1]))
-        for other, (fsite, _k, _alt) in self._flight.items():
-            if other != uav:
-                keep_out.append((fsite[0], fsite[1]))
-        for other, ow in self._waiting.items():
-            if other != uav:
-                keep_out.append((ow.site[0], ow.site[1]))
-                if ow.hold is not None:
-                    keep_out.append((ow.hold[0], ow.hold[1]))
+        for other, o in self._uavs.items():
+            if other == uav:
+                continue
+            if o.zone is not None:
+                keep_out.extend(v.b for v in o.volumes if v.kind == "zone")
+                keep_out.append((o.zone[0], o.zone[1]))
+            if o.flight is not None:
+                keep_out.append((o.flight.site[0], o.flight.site[1]))
+            if o.request is not None:
+                keep_out.append((o.request.site[0], o.request.site[1]))
+                if o.hold is not None:
+                    keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
         # and wherever another UAV climbs, hovers or works: a UAV waiting there must be able to leave vertically
         # without passing the hold point (else the two could wait for each other)
-        spans = [(v.a, v.b) for other, vols in self._volumes.items() if other != uav
-                 for v in vols if v.kind != "leg"]
-        r = 1.1 * self.radius_m
-        r2 = r * r
+        spans = [(v.a, v.b) for other, o in self._uavs.items() if other != uav
+                 for v in o.volumes if v.kind != "leg"]
+        return hold_points(site, keep_out, spans, self.radius_m)
 
-        def free(p: XY) -> bool:
-            return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out) and \
-                all(_point_segment_m(p, a, b) >= r for a, b in spans)
-
-        step = max(self.radius_m, 0.25)
-        out: list[tuple[float, Vec3]] = []
-        for ring in range(1, 9):
-            for a in range(24):
-                ang = 2.0 * math.pi * a / 24.0
-                c = (site[0] + ring * step * math.cos(ang), site[1] + ring * step * math.sin(ang))
-                if free(c):
-                    out.append((ring * step, (c[0], c[1], site[2])))
-            if len(out) >= 6:
-                break
-        return [p for _d, p in sorted(out, key=lambda x: x[0])] or [(site[0] + 8 * step, site[1], site[2])]
-
-    def _hold_flight(self, uav: str, w: _Pending) -> Grant | None:
+    def _hold_flight(self, uav: str, u: UavAirspace) -> Grant | None:
         """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""
+        w = u.request
+        assert w is not None
         start = w.position if w.position is not None else w.site
         candidates = self._hold_candidates(uav, w.site)[:6]
         for k in range(self.max_layers):
             for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
                 if self._free(uav, vols):
-                    self._take(uav, vols, start)
-                    w.hold = hold
-                    w.layer = k
-                    w.layer_alt = self._alt(k)
-                    w.at_hold = False
+                    self._take(u, vols)
+                    u.hold, u.phase = HoldFlight(hold, k, self._alt(k)), Phase.TO_HOLD
                     self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
                     return Grant(uav, w.site, False, hold, self._alt(k))
         return None
@@ -684,38 +539,26 @@ class ColumnClearance:
     def _hover_where(self, uav: str, pos: Vec3) -> None:
         """``uav`` stopped at ``pos`` (it asks from there, hovering): only a small volume there is its now, if
         that fits (it should: it was inside its volumes), else it keeps what it held."""
-        vols = self._volumes.get(uav)
-        if not vols:
+        u = self._uavs.get(uav)
+        vols = None if u is None else u.volumes
+        if not vols or u is None:
             return
-        z = self._snap(pos[2])
-        xy = (pos[0], pos[1])
-        here = [Volume(xy, xy, z - HOVER_SLACK_M, z + HOVER_SLACK_M, HOVER_SLACK_M, "hover")]
         if len(vols) == 1 and vols[0].kind == "hover":
             return
-        for v in vols:  # stopping on a leg, it may coast on along it: keep STOP_M of the leg ahead
-            length = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
-            if v.kind != "leg" or length < 1e-9 or abs(z - v.z0_m) >= 0.2 \
-                    or _point_segment_m(xy, v.a, v.b) > TRACK_M:
-                continue
-            ux, uy = (v.b[0] - v.a[0]) / length, (v.b[1] - v.a[1]) / length
-            along = (xy[0] - v.a[0]) * ux + (xy[1] - v.a[1]) * uy
-            end = min(length, along + STOP_M)
-            if end > along:
-                here.append(Volume(xy, (v.a[0] + end * ux, v.a[1] + end * uy), v.z0_m, v.z1_m, 0.0, "leg"))
-            break
+        here = stopped_at((pos[0], pos[1]), self._snap(pos[2]), vols)
         if self._free(uav, here):
-            self._volumes[uav] = here
-            self._origin.pop(uav, None)
+            u.volumes = here
+            u.origin = None
             self._version += 1
 
-    def _arrive_at_hold(self, uav: str, w: _Pending) -> None:
+    def _arrive_at_hold(self, u: UavAirspace) -> None:
         """It hovers at its hold point: only the hover is its now."""
-        assert w.hold is not None and w.layer_alt is not None
-        w.at_hold = True
-        self._origin.pop(uav, None)
-        hxy = (w.hold[0], w.hold[1])
-        alt = w.layer_alt
-        self._volumes[uav] = [Volume(hxy, hxy, alt, alt, self.zone_slack_m, "hover")]
+        assert u.hold is not None
+        u.phase = Phase.AT_HOLD
+        u.origin = None
+        hxy = (u.hold.point_m[0], u.hold.point_m[1])
+        alt = u.hold.layer_m
+        u.volumes = [Volume(hxy, hxy, alt, alt, self.zone_slack_m, "hover")]
         self._version += 1
 
 
@@ -724,50 +567,18 @@ def _same(a: Vec3, b: Vec3) -> bool:
     return math.hypot(a[0] - b[0], a[1] - b[1]) < 1e-3
 
 
-def _point_segment_m(p: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
-    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    n2 = dx * dx + dy * dy
-    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
-    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
-
-
-def _segment_segment_m(a: tuple[float, float], b: tuple[float, float], c: tuple[float, float],
-                       d: tuple[float, float]) -> float:
-    """Horizontal distance between segments ``a``-``b`` and ``c``-``d``."""
-    def orient(p: tuple[float, float], q: tuple[float, float], r: tuple[float, float]) -> float:
-        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-
-    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
-    if o1 * o2 < 0.0 and o3 * o4 < 0.0:
-        return 0.0  # they cross
-    return min(_point_segment_m(c, a, b), _point_segment_m(d, a, b), _point_segment_m(a, c, d),
-               _point_segment_m(b, c, d))
-
-
-def min_pairwise_separation_m(points: Iterable[Vec3]) -> float:
-    """Smallest distance between two of ``points`` (inf for fewer than two): a helper for tests and reports."""
-    pts = list(points)
-    best = math.inf
-    for i in range(len(pts) - 1):
-        for j in range(i + 1, len(pts)):
-            best = min(best, math.dist(pts[i], pts[j]))
-    return best
-
-
 __all__ = [
     "AT_HOLD_M",
     "DEFAULT_LAYER_SPACING_M",
     "HOVER_SLACK_M",
-    "LAYER_MARGIN_M",
     "SNAP_M",
     "STOP_M",
     "TRACK_M",
     "ColumnClearance",
     "Grant",
+    "Phase",
     "Volume",
     "layer_base_m",
-    "min_pairwise_separation_m",
     "task_work_altitude_m",
     "transit_layers_m",
     "volumes_conflict",

@@ -9,6 +9,7 @@ a :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ from typing import Any
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, LinkLost
 from masonry.mission.handler import UavHandler
+from masonry.ports import UavPorts
 
 
 @dataclass(frozen=True)
@@ -80,7 +82,7 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     heartbeat_timeout_s: float = 5.0,
     turnaround_s: float = 0.2,
     echo: Any = None,
-    adapters: Any = None,
+    adapters: UavPorts | None = None,
     uav_settings: Mapping[str, Any] | None = None,
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
@@ -102,8 +104,8 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         heartbeat_period_s, heartbeat_timeout_s: in mission seconds (the UAV's clock).
         turnaround_s: wall seconds to wait, after reporting a result, for mission control's next assignment.
         echo: called with one line per state change (the process's log), or None.
-        adapters: the UAV's ports instead of a simulated world: an object with ``fc``, ``gripper``, ``sprayer``,
-            ``camera``, ``clock`` and ``advance(dt_s)``, as :func:`masonry.adapters.wiring.open_adapters` gives
+        adapters: the UAV's ports (:class:`masonry.ports.UavPorts`) instead of a simulated world, as
+            :func:`masonry.adapters.wiring.open_adapters` gives
             for ``masonry fly --fc URL --actuators PORT --camera ...``. Its ``advance`` moves time on its clock
             (the autopilot's: wall time on hardware, the SITL's scaled time on a bench), so ``time_scale`` does
             not apply; the caller checks the adapters before flight and closes them afterwards.
@@ -129,13 +131,13 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         from masonry.sim import Faults, World
 
         world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
-        sim_uav = world.add_uav(spec)
-        fc, gripper, sprayer, cam = sim_uav.fc, sim_uav.gripper, sim_uav.sprayer, sim_uav.camera
-        clock: Any = world.clock
-        advance = paced(world.clock, world.step, time_scale)
+        ports = world.add_uav(spec).ports
+        ports = dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
     else:
-        fc, gripper, sprayer, cam = adapters.fc, adapters.gripper, adapters.sprayer, adapters.camera
-        clock, advance = adapters.clock, adapters.advance
+        ports = adapters
+    fc, gripper, sprayer, cam = ports.fc, ports.gripper, ports.sprayer, ports.camera
+    clock: Any = ports.clock
+    advance = ports.advance
     tasks = plan(blueprint).tasks
     zenoh = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config)
     transport = wrap(zenoh, key, mission_name)

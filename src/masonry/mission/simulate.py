@@ -11,6 +11,7 @@ violations from the intervals the UAV handlers actually executed, separation fro
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
@@ -18,6 +19,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from masonry.airframe import DEFAULT_AIRFRAME
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, MasonryError
 from masonry.fingerprint import wall_digest
@@ -25,14 +27,17 @@ from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
+from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
-from masonry.mission.report import MissionReport, control_report
-from masonry.planner.bounds import min_cycles_s, min_durations_s
+from masonry.mission.report import MissionReport
+from masonry.planner.bounds import min_durations_s
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.ports import Clock, UavPorts
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
     from masonry.fsm.config import UavConfig
+    from masonry.sim import World
 
 POLICIES = ("fifo", "critical-path", "nearest")
 
@@ -115,9 +120,9 @@ def priority_durations_s(durations_s: Mapping[str, float], quantum_s: float = PR
     return {k: max(quantum_s, round(v / quantum_s) * quantum_s) for k, v in durations_s.items()}
 
 
-def _position_of(sim_uav: Any) -> Callable[[], tuple[float, float, float]]:
-    fc = sim_uav.fc
-    return lambda: fc.telemetry().position_m  # type: ignore[no-any-return]
+def _position_of(ports: UavPorts) -> Callable[[], tuple[float, float, float]]:
+    fc = ports.fc
+    return lambda: fc.telemetry().position_m
 
 
 def _battery_of(sim_uav: Any) -> Callable[[], float]:
@@ -151,7 +156,7 @@ class _GroundCrew:
         return True
 
 
-def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: UavHandler, clock: Any,
+def _build_machine(spec: UavSpec, ports: UavPorts, blueprint: Blueprint, handler: UavHandler, clock: Clock,
                    lateral_altitude_m: float | None = None, template: UavConfig | None = None) -> Any:
     from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 
@@ -161,8 +166,8 @@ def _build_machine(spec: UavSpec, sim_uav: Any, blueprint: Blueprint, handler: U
                                  cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
                                  lateral_altitude_m=lateral_altitude_m)
     if spec.role == "brick":
-        return BrickUav(config, sim_uav.fc, sim_uav.gripper, sim_uav.camera, handler, clock, clearance=handler)
-    return AdhesionUav(config, sim_uav.fc, sim_uav.sprayer, handler, clock, clearance=handler)
+        return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
+    return AdhesionUav(config, ports.fc, ports.sprayer, handler, clock, clearance=handler)
 
 
 def simulate(
@@ -186,350 +191,344 @@ def simulate(
     warn: Callable[[str], None] | None = None,
     uav_config: UavConfig | None = None,
 ) -> MissionReport:
-    """Run a whole mission in simulated time and report it.
+    """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
+
+    The arguments, and what it raises, are those of :meth:`SimulatedMission.from_blueprint`.
+    """
+    return SimulatedMission.from_blueprint(
+        blueprint, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed, camera=camera,
+        faults=faults, journal_path=journal_path, resume=resume, dt_s=dt_s, max_time_s=max_time_s,
+        heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
+        separation=separation, rising_layers=rising_layers, warn=warn, uav_config=uav_config,
+    ).run()
+
+
+class SimulatedMission:
+    """A whole mission in simulated time, from its components: a world, mission control on an in-process bus,
+    and one :class:`masonry.ports.UavPorts` per UAV of the fleet, each flown by a UAV handler and its machine.
+
+    :meth:`from_blueprint` builds the components the way ``masonry sim`` does; :meth:`run` flies the mission
+    and reports it. Build the parts yourself to look inside (``mission.control``, ``mission.world``) or to swap
+    one (another UAV's ports, another mission control), then ``run()``.
 
     Args:
-        blueprint: the wall and its fleet.
-        brick_uavs, adhesion_uavs: override the fleet's size per role (see :func:`fleet_for`).
-        policy: dispatcher priority: ``fifo``, ``critical-path`` or ``nearest``.
-        seed: seed of the world (brick offsets, noise, faults).
-        camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
-        faults: a :class:`masonry.sim.Faults` (None: no fault).
-        journal_path: SQLite journal to write (and, with ``resume``, to continue from).
-        resume: continue the mission recorded in ``journal_path``: its done tasks stay done (their bricks
-            are in place in the world), its clock continues, the report covers the whole mission.
+        blueprint: the wall, with the fleet that flies it.
+        plan: its plan (the tasks mission control dispatches).
+        world: the simulated world, every UAV of the fleet in it (its vehicle, battery and failures).
+        control: mission control, on an endpoint of ``bus``.
+        bus: the in-process bus; each UAV handler gets the endpoint of its name.
+        ports: UAV name -> the ports its machine flies with (default: the world UAV's own, ``SimUav.ports``).
+        clock: the time handlers and mission control read (default: the world's clock, which ``world.step``
+            moves on).
+        policy, seed: for the report.
         dt_s: physics step of the world, seconds (handlers and mission control step every ``CONTROL_PERIOD_S``).
         max_time_s: give up at this simulated time (default: generous, from the number of tasks).
-        heartbeat_timeout_s: a UAV silent that long is declared lost.
-        max_attempts: failed attempts before a task is stuck.
-        progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion, and at least
-            once per simulated second between them (so a progress display can keep time on a slow task).
-        separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
-            work altitude with no column clearance, as before they existed (for comparisons).
-        rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned so
-            far) instead of staying above the finished wall from the start (False, for comparisons).
-        warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
-        uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name, role,
-            home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs get its
-            airframe; the lower bound, the expected durations and the airspace its timing (``timing()``).
-
-    The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
-    :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
-    true placement error of a brick, the distance each UAV has flown, the minimum separation), so that a
-    resumed report says for the work done before the crash what the run that did it would have said.
-
-    Raises:
-        InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
-        JournalUnusable: the journal cannot serve this mission (it already holds one and ``resume`` is off, it
-            was written for another wall or fleet, it is not a journal, it is read-only).
-        JournalError: the journal cannot be written during the mission.
-    """
-    from masonry.fingerprint import fleet_digest
-    from masonry.mission.journal import open_mission_journal
-    from masonry.planner import estimate_durations_s
-    from masonry.planner import plan as make_plan
-    from masonry.sim import Faults, World
-
-    if policy not in POLICIES:
-        raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
-    if camera not in ("geometric", "render"):
-        raise InputError(f"--camera must be geometric or render, got {camera!r}")
-    if not (dt_s > 0 and math.isfinite(dt_s)):
-        raise InputError(f"dt_s must be > 0, got {dt_s!r}")
-    if resume and journal_path is None:
-        raise InputError("--resume needs --journal FILE")
-    faults = faults if faults is not None else Faults()
-    wall0 = time.perf_counter()
-
-    fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
-    if not fleet:
-        raise InputError("the fleet is empty: give --brick-uavs / --adhesion-uavs or a fleet in the blueprint")
-    blueprint = dataclasses.replace(blueprint, fleet=fleet)
-    the_plan = make_plan(blueprint)
-    todo = [t for t in the_plan.tasks if not t.done]
-
-    journal = None
-    state = None
-    if journal_path is not None:
-        journal, state = open_mission_journal(
-            Path(journal_path), resume=resume, wall_digest=wall_digest(blueprint),
-            fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet],
-            task_ids=[t.id for t in the_plan.tasks], warn=warn)
-    try:
-        return _run(
-            blueprint, the_plan, fleet, todo, policy=policy, seed=seed, camera=camera, faults=faults,
-            journal=journal, state=state, dt_s=dt_s, max_time_s=max_time_s,
-            heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
-            wall0=wall0, World=World, estimate_durations_s=estimate_durations_s, separation=separation,
-            rising_layers=rising_layers, uav_config=uav_config,
-        )
-    finally:
-        if journal is not None:
-            journal.close()
-
-
-class _MeasuredJournal:
-    """The journal as mission control sees it, with what the world measured added to every record.
-
-    Each record carries ``measured``: the distance each UAV has flown, its busy time (the tasks its handler
-    executed) and the minimum separation so far (over the whole mission: a resumed run adds the values the
-    journal had), and a brick's completion its true placement error. A resumed report takes them from the
-    journal (:func:`_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
+        heartbeat_timeout_s: a UAV silent that long is declared lost (by its handler's heartbeats).
+        progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` (see :func:`simulate`).
+        layers_m: UAV name -> altitude of its lateral legs (:func:`masonry.mission.airspace.transit_layers_m`;
+            empty: no transit layers).
+        measured: the journal mission control writes to, with the world's measurements (None: a plain one with
+            no journal behind it, for the report's measurements).
+        resumed_from: the simulated time the mission resumed at (None: a fresh mission).
+        journaled_errors_m: placement errors of the bricks done before a resume (from the journal).
+        resources: closed when the run ends (the journal, by :meth:`from_blueprint`).
+        uav_config: the tuning every UAV's machine flies with (None: ``UavConfig``'s defaults); the report's
+            bound counts its timing (``uav_config.timing()``).
     """
 
-    def __init__(self, journal: Any, world: Any, plan: Plan, before: Mapping[str, Any]) -> None:
-        self.journal = journal
+    def __init__(
+        self,
+        blueprint: Blueprint,
+        plan: Plan,
+        *,
+        world: World,
+        control: MissionControl,
+        bus: InprocBus,
+        ports: Mapping[str, UavPorts] | None = None,
+        clock: Clock | None = None,
+        policy: str = "critical-path",
+        seed: int = 0,
+        dt_s: float = 0.05,
+        max_time_s: float | None = None,
+        heartbeat_timeout_s: float = 5.0,
+        progress: ProgressFn | None = None,
+        layers_m: Mapping[str, float] | None = None,
+        measured: MeasuredJournal | None = None,
+        resumed_from: float | None = None,
+        journaled_errors_m: Mapping[str, float] | None = None,
+        resources: contextlib.ExitStack | None = None,
+        uav_config: UavConfig | None = None,
+    ) -> None:
+        if not (dt_s > 0 and math.isfinite(dt_s)):
+            raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+        self.blueprint = blueprint
+        self.plan = plan
+        self.fleet = tuple(blueprint.fleet)
         self.world = world
-        self._bricks = {t.id: t.brick for t in plan.tasks if isinstance(t, BrickTask)}
-        self.before_distances_m = _floats(before.get("distances_m"))
-        self.before_busy_s = _floats(before.get("busy_s"))
-        sep = before.get("min_separation_m")
-        self.before_min_separation_m = float(sep) if isinstance(sep, (int, float)) else None
-        self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
-        self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
+        self.control = control
+        self.bus = bus
+        self.clock: Clock = clock if clock is not None else world.clock
+        self.policy = policy
+        self.seed = seed
+        self.dt_s = dt_s
+        self.progress = progress
+        self.resumed_from = resumed_from
+        self.journaled_errors_m = dict(journaled_errors_m or {})
+        self.uav_config = uav_config
+        self.timing: TaskTiming = DEFAULT_TIMING if uav_config is None else uav_config.timing()
+        self.measured = measured if measured is not None else MeasuredJournal(None, world, plan, {})
+        self._resources = resources if resources is not None else contextlib.ExitStack()
+        self._ran = False
+        self.started_wall_s = time.perf_counter()
+        total = sum(1 for t in plan.tasks if not t.done)
+        self.max_time_s = max_time_s if max_time_s is not None else (resumed_from or 0.0) + 600.0 + 150.0 * total
+        missing = [u.name for u in self.fleet if u.name not in world.uavs]
+        if missing:
+            raise InputError(f"the world has no UAV named {', '.join(missing)}: add the fleet first")
+        ports = ports if ports is not None else {}
+        layers = layers_m if layers_m is not None else {}
+        wall = wall_digest(blueprint)
+        self.ports: dict[str, UavPorts] = {}
+        self.handlers: dict[str, UavHandler] = {}
+        for spec in self.fleet:
+            sim_uav = world.uavs[spec.name]
+            uav_ports = ports.get(spec.name, sim_uav.ports)
+            h = UavHandler(spec.name, bus.endpoint(spec.name), position=_position_of(uav_ports),
+                           heartbeat_timeout_s=heartbeat_timeout_s,
+                           battery=_battery_of(sim_uav),
+                           swap_battery=_GroundCrew(sim_uav.vehicle, self.clock),
+                           after_result=self._step_control,
+                           tasks=plan.tasks, role=spec.role, wall_digest=wall)
+            h.attach(_build_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config))
+            self.ports[spec.name] = uav_ports
+            self.handlers[spec.name] = h
+        self.measured.handlers = self.handlers
+        #: UAV -> the simulated time it failed (it flies, and says, nothing more)
+        self.dead: dict[str, float] = {}
+        self.measured.dead = self.dead
 
-    def distances_m(self) -> dict[str, float]:
-        return {n: self.before_distances_m.get(n, 0.0) + float(self.world.distance_flown_m(n))
-                for n in self.world.uavs}
+    def _step_control(self) -> None:
+        self.control.step(self.clock.now_s())
 
-    def busy_s(self) -> dict[str, float]:
-        """Time each UAV spent on tasks, as its handler executed them (a running task counts until now)."""
-        now = self.world.clock.now_s()
-        out = dict(self.before_busy_s)
-        for name, h in self.handlers.items():
-            end_open = self.dead.get(name, now)
-            out[name] = out.get(name, 0.0) + sum(
-                (e.end_s if e.end_s is not None else end_open) - e.start_s for e in h.executions)
-        return out
+    @classmethod
+    def from_blueprint(
+        cls,
+        blueprint: Blueprint,
+        *,
+        brick_uavs: int | None = None,
+        adhesion_uavs: int | None = None,
+        policy: str = "critical-path",
+        seed: int = 0,
+        camera: str = "geometric",
+        faults: Any = None,
+        journal_path: str | Path | None = None,
+        resume: bool = False,
+        dt_s: float = 0.05,
+        max_time_s: float | None = None,
+        heartbeat_timeout_s: float = 5.0,
+        max_attempts: int = 3,
+        progress: ProgressFn | None = None,
+        separation: bool = True,
+        rising_layers: bool = True,
+        warn: Callable[[str], None] | None = None,
+        uav_config: UavConfig | None = None,
+    ) -> SimulatedMission:
+        """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
-    def min_separation_m(self) -> float | None:
-        seps = [s for s in (self.before_min_separation_m, self.world.min_separation_m)
-                if s is not None and math.isfinite(s)]
-        return float(min(seps)) if seps else None
+        Args:
+            blueprint: the wall and its fleet.
+            brick_uavs, adhesion_uavs: override the fleet's size per role (see :func:`fleet_for`).
+            policy: dispatcher priority: ``fifo``, ``critical-path`` or ``nearest``.
+            seed: seed of the world (brick offsets, noise, faults).
+            camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
+            faults: a :class:`masonry.sim.Faults` (None: no fault).
+            journal_path: SQLite journal to write (and, with ``resume``, to continue from); held open until the
+                run ends (or :meth:`close`).
+            resume: continue the mission recorded in ``journal_path``: its done tasks stay done (their bricks
+                are in place in the world), its clock continues, the report covers the whole mission.
+            dt_s: physics step of the world, seconds (handlers and mission control step every
+                ``CONTROL_PERIOD_S``).
+            max_time_s: give up at this simulated time (default: generous, from the number of tasks).
+            heartbeat_timeout_s: a UAV silent that long is declared lost.
+            max_attempts: failed attempts before a task is stuck.
+            progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion, and at
+                least once per simulated second between them (so a progress display can keep time on a slow task).
+            separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
+                work altitude with no column clearance, as before they existed (for comparisons).
+            rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned
+                so far) instead of staying above the finished wall from the start (False, for comparisons).
+            warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
+            uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name,
+                role, home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs
+                get its airframe; the lower bound, the expected durations and the airspace its timing.
 
-    def _measured(self, task_id: str | None = None) -> dict[str, Any]:
-        out: dict[str, Any] = {"distances_m": self.distances_m(), "busy_s": self.busy_s(),
-                               "min_separation_m": self.min_separation_m()}
-        if task_id in self._bricks:
-            err = self.world.placement_error_m(self._bricks[task_id])
-            if err is not None:
-                out["placement_error_m"] = float(err)
-        return out
+        The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
+        :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
+        true placement error of a brick, the distance each UAV has flown, the minimum separation), so that a
+        resumed report says for the work done before the crash what the run that did it would have said.
 
-    def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
-        self.journal.record_assignment(time_s, task_id, uav, attempt, measured=self._measured())
+        Raises:
+            InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
+            JournalUnusable: the journal cannot serve this mission (it already holds one and ``resume`` is off,
+                it was written for another wall or fleet, it is not a journal, it is read-only).
+            JournalError: the journal cannot be written during the mission.
+        """
+        from masonry.fingerprint import fleet_digest
+        from masonry.mission.journal import open_mission_journal
+        from masonry.planner import estimate_durations_s
+        from masonry.planner import plan as make_plan
+        from masonry.sim import Faults, World
 
-    def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
-        self.journal.record_completion(time_s, task_id, uav, **fields, measured=self._measured(task_id))
+        if policy not in POLICIES:
+            raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
+        if camera not in ("geometric", "render"):
+            raise InputError(f"--camera must be geometric or render, got {camera!r}")
+        if not (dt_s > 0 and math.isfinite(dt_s)):
+            raise InputError(f"dt_s must be > 0, got {dt_s!r}")
+        if resume and journal_path is None:
+            raise InputError("--resume needs --journal FILE")
+        faults = faults if faults is not None else Faults()
+        wall0 = time.perf_counter()
+        timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
-    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str) -> None:
-        self.journal.record_failure(time_s, task_id, uav, reason, measured=self._measured())
+        fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
+        if not fleet:
+            raise InputError("the fleet is empty: give --brick-uavs / --adhesion-uavs or a fleet in the blueprint")
+        blueprint = dataclasses.replace(blueprint, fleet=fleet)
+        the_plan = make_plan(blueprint)
 
-    def record_uav_lost(self, time_s: float, uav: str) -> None:
-        self.journal.record_uav_lost(time_s, uav, measured=self._measured())
+        with contextlib.ExitStack() as resources:
+            journal = None
+            state = None
+            if journal_path is not None:
+                journal, state = open_mission_journal(
+                    Path(journal_path), resume=resume, wall_digest=wall_digest(blueprint),
+                    fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet],
+                    task_ids=[t.id for t in the_plan.tasks], warn=warn)
+                resources.callback(journal.close)
 
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self.journal, name)  # anything else mission control asks of the journal
+            resumed_from = None
+            world_blueprint = blueprint
+            if state is not None:
+                # bricks the journal says are placed are in place in the rebuilt world
+                placed = {the_plan.task(r.task_id).brick for r in state.done  # type: ignore[union-attr]
+                          if isinstance(the_plan.task(r.task_id), BrickTask)}
+                world_blueprint = dataclasses.replace(
+                    blueprint,
+                    bricks=tuple(dataclasses.replace(b, placed=True) if b.id in placed else b
+                                 for b in blueprint.bricks),
+                )
+                resumed_from = float(state.last_time_s or 0.0)
 
+            world = World(world_blueprint, seed=seed, camera=camera, faults=faults,  # type: ignore[arg-type]
+                          start_s=resumed_from or 0.0,
+                          airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe)
+            measured = MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
+            expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m,
+                                              timing=timing)
+            bus = InprocBus()
+            mc = MissionControl(
+                the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy,
+                journal=measured if journal is not None else None,
+                max_attempts=max_attempts,
+                durations_s=priority_durations_s(expected_s),
+                heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
+                column_radius_m=blueprint.clearance_m if separation else 0.0,
+                layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
+                layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
+                wall_digest=wall_digest(blueprint),
+                min_durations_s=min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m,
+                                                timing=timing),
+                timing=timing,
+            )
+            if state is not None:
+                mc.restore(state)
+            world.add_fleet(fleet)
+            mission = cls(
+                blueprint, the_plan, world=world, control=mc, bus=bus, policy=policy, seed=seed, dt_s=dt_s,
+                max_time_s=max_time_s, heartbeat_timeout_s=heartbeat_timeout_s, progress=progress,
+                layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
+                measured=measured, resumed_from=resumed_from, journaled_errors_m=journaled_errors_m(state),
+                resources=resources.pop_all(), uav_config=uav_config,
+            )
+        mission.started_wall_s = wall0
+        return mission
 
-def _floats(value: Any) -> dict[str, float]:
-    """A journaled name -> number mapping (anything else in it is ignored)."""
-    items = value.items() if isinstance(value, Mapping) else ()
-    return {str(k): float(v) for k, v in items if isinstance(v, (int, float)) and math.isfinite(v)}
+    def close(self) -> None:
+        """Close what the mission holds (its journal); :meth:`run` does it when it ends."""
+        self._resources.close()
 
+    def __enter__(self) -> SimulatedMission:
+        return self
 
-def _run(
-    blueprint: Blueprint,
-    the_plan: Plan,
-    fleet: tuple[UavSpec, ...],
-    todo: list[Any],
-    *,
-    policy: str,
-    seed: int,
-    camera: str,
-    faults: Any,
-    journal: Any,
-    state: Any,
-    dt_s: float,
-    max_time_s: float | None,
-    heartbeat_timeout_s: float,
-    max_attempts: int,
-    progress: ProgressFn | None,
-    wall0: float,
-    World: Any,
-    estimate_durations_s: Any,
-    separation: bool = True,
-    rising_layers: bool = True,
-    uav_config: UavConfig | None = None,
-) -> MissionReport:
-    timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
-    resumed_from = None
-    world_blueprint = blueprint
-    if state is not None:
-        # bricks the journal says are placed are in place in the rebuilt world
-        placed = {the_plan.task(r.task_id).brick for r in state.done  # type: ignore[union-attr]
-                  if isinstance(the_plan.task(r.task_id), BrickTask)}
-        world_blueprint = dataclasses.replace(
-            blueprint,
-            bricks=tuple(dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks),
-        )
-        resumed_from = float(state.last_time_s or 0.0)
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
-    airframe = {} if uav_config is None else {"airframe": uav_config.airframe}
-    world = World(world_blueprint, seed=seed, camera=camera, faults=faults, start_s=resumed_from or 0.0,
-                  **airframe)
-    measured = _MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
-    expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m,
-                                      timing=timing)
-    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
-    wall = wall_digest(blueprint)
-    bus = InprocBus()
-    mc = MissionControl(
-        the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy,
-        journal=measured if journal is not None else None,
-        max_attempts=max_attempts,
-        durations_s=priority_durations_s(expected_s),
-        heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
-        column_radius_m=blueprint.clearance_m if separation else 0.0,
-        layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
-        layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
-        wall_digest=wall, min_durations_s=minimum_s, timing=timing,
-    )
-    layers = transit_layers_m(blueprint, fleet, timing=timing) if separation else {}
-    if state is not None:
-        mc.restore(state)
+    def run(self) -> MissionReport:
+        """Fly the mission to its end (or ``max_time_s``) and report it; closes the journal.
 
-    handlers: dict[str, UavHandler] = {}
-    sim_uavs: dict[str, Any] = {}
-    for spec, sim_uav in zip(fleet, world.add_fleet(fleet)):
-        sim_uavs[spec.name] = sim_uav
-        h = UavHandler(spec.name, bus.endpoint(spec.name), position=_position_of(sim_uav),
-                       heartbeat_timeout_s=heartbeat_timeout_s,
-                       battery=_battery_of(sim_uav),
-                       swap_battery=_GroundCrew(sim_uav.vehicle, world.clock),
-                       after_result=lambda: mc.step(world.clock.now_s()),
-                       tasks=the_plan.tasks, role=spec.role, wall_digest=wall)
-        h.attach(_build_machine(spec, sim_uav, blueprint, h, world.clock, layers.get(spec.name), uav_config))
-        handlers[spec.name] = h
-    measured.handlers = handlers
+        Raises:
+            InputError: the mission was run already (a world flies once).
+            JournalError: the journal cannot be written during the mission.
+        """
+        if self._ran:
+            raise InputError("this mission has run already: build another one")
+        self._ran = True
+        with self._resources:
+            self._fly()
+            if self.measured.journal is not None:
+                # the end of the run, for a later resume of a finished mission (no record follows the landing)
+                self.measured.journal.set_meta(
+                    "measured", {**self.measured.measurements(), "time_s": self.clock.now_s()})
+            return simulated_report(
+                self.blueprint, self.plan, self.fleet, self.control, self.handlers, self.world, self.dead,
+                policy=self.policy, seed=self.seed, sim_time_s=self.clock.now_s() - (self.resumed_from or 0.0),
+                wall_time_s=time.perf_counter() - self.started_wall_s, resumed_from=self.resumed_from,
+                messages=self.bus.sent, measured=self.measured, journaled_errors_m=self.journaled_errors_m,
+                timing=self.timing,
+            )
 
-    total = len(todo)
-    if max_time_s is None:
-        max_time_s = (resumed_from or 0.0) + 600.0 + 150.0 * total
-    # Handlers and mission control tick at the machines' control rate; the world's physics at dt_s in between.
-    # A tick of theirs in between would do nothing the next one does not (the machines act every
-    # control_period_s, and an answer to a result is handled at once through ``after_result``).
-    substeps = max(1, round(CONTROL_PERIOD_S / dt_s)) if dt_s < CONTROL_PERIOD_S else 1
-    dead: dict[str, float] = {}
-    measured.dead = dead
-    pre_done = sum(1 for t in the_plan.tasks if t.done)
-    done_seen = len(mc.dispatcher.done) - pre_done
-    progress_s = world.clock.now_s()
-    mission_end_s: float | None = None
-
-    while True:
-        now = world.clock.now_s()
-        for name, h in handlers.items():
-            if name in dead:
-                continue
-            if sim_uavs[name].failed:
-                # a failed UAV (``uav-loss``) says nothing more: mission control must notice the silence
-                dead[name] = now
-                bus.cut(name)
-                continue
-            h.step(now)
-        mc.step(now)
-        if progress is not None:
-            n_done = len(mc.dispatcher.done) - pre_done
-            if n_done != done_seen or now - progress_s >= 1.0:
-                done_seen = n_done
-                progress_s = now
-                progress(n_done, total, now)
-        if mc.ended_at_s is not None:
-            if mission_end_s is None:
-                mission_end_s = now
-            landed = all(h.finished for n, h in handlers.items() if n not in dead)
-            if landed or now - mission_end_s > LANDING_GRACE_S:
+    def _fly(self) -> None:
+        """The loop: handlers and mission control at the control period, the world's physics at ``dt_s``."""
+        mc, world, clock, handlers, dead = self.control, self.world, self.clock, self.handlers, self.dead
+        total = sum(1 for t in self.plan.tasks if not t.done)
+        # Handlers and mission control tick at the machines' control rate; the world's physics at dt_s in
+        # between. A tick of theirs in between would do nothing the next one does not (the machines act every
+        # control_period_s, and an answer to a result is handled at once through ``after_result``).
+        dt_s = self.dt_s
+        substeps = max(1, round(CONTROL_PERIOD_S / dt_s)) if dt_s < CONTROL_PERIOD_S else 1
+        pre_done = sum(1 for t in self.plan.tasks if t.done)
+        done_seen = len(mc.dispatcher.done) - pre_done
+        progress_s = clock.now_s()
+        mission_end_s: float | None = None
+        while True:
+            now = clock.now_s()
+            for name, h in handlers.items():
+                if name in dead:
+                    continue
+                if world.uavs[name].failed:
+                    # a failed UAV (``uav-loss``) says nothing more: mission control must notice the silence
+                    dead[name] = now
+                    self.bus.cut(name)
+                    continue
+                h.step(now)
+            mc.step(now)
+            if self.progress is not None:
+                n_done = len(mc.dispatcher.done) - pre_done
+                if n_done != done_seen or now - progress_s >= 1.0:
+                    done_seen = n_done
+                    progress_s = now
+                    self.progress(n_done, total, now)
+            if mc.ended_at_s is not None:
+                if mission_end_s is None:
+                    mission_end_s = now
+                landed = all(h.finished for n, h in handlers.items() if n not in dead)
+                if landed or now - mission_end_s > LANDING_GRACE_S:
+                    break
+            if now >= self.max_time_s:
                 break
-        if now >= max_time_s:
-            break
-        for _ in range(substeps):
-            world.step(dt_s)
-
-    if journal is not None:
-        # the end of the run, for a later resume of a finished mission (no record follows the landing)
-        journal.set_meta("measured", {**measured._measured(), "time_s": world.clock.now_s()})
-    return _report(
-        blueprint, the_plan, fleet, mc, handlers, world, dead, policy=policy, seed=seed,
-        sim_time_s=world.clock.now_s() - (resumed_from or 0.0), wall_time_s=time.perf_counter() - wall0,
-        resumed_from=resumed_from, messages=bus.sent, expected_s=expected_s, measured=measured,
-        journaled_errors_m=_journaled_errors_m(state), timing=timing,
-    )
+            for _ in range(substeps):
+                world.step(dt_s)
 
 
-def _journaled_errors_m(state: Any) -> dict[str, float]:
-    """Placement errors of the bricks done before a resume: the world's true one when the journal has it."""
-    out: dict[str, float] = {}
-    for rec in state.done if state is not None else ():
-        m = rec.fields.get("measured")
-        err = m.get("placement_error_m") if isinstance(m, Mapping) else None
-        if err is None:
-            err = rec.fields.get("placement_error_m")  # a journal without measurements: the UAV's estimate
-        if isinstance(err, (int, float)):
-            out[rec.task_id] = float(err)
-    return out
-
-
-def _report(
-    blueprint: Blueprint,
-    the_plan: Plan,
-    fleet: tuple[UavSpec, ...],
-    mc: MissionControl,
-    handlers: Mapping[str, UavHandler],
-    world: Any,
-    dead: Mapping[str, float],
-    *,
-    policy: str,
-    seed: int,
-    sim_time_s: float,
-    wall_time_s: float,
-    resumed_from: float | None,
-    messages: int,
-    expected_s: Mapping[str, float],
-    measured: _MeasuredJournal,
-    journaled_errors_m: Mapping[str, float],
-    timing: TaskTiming = DEFAULT_TIMING,
-) -> MissionReport:
-    now = world.clock.now_s()
-    # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
-    # flying when it failed), plus the completed attempts of the run before a resume (from the journal).
-    intervals: list[tuple[str, str, float, float | None]] = []
-    for name, h in handlers.items():
-        for e in h.executions:
-            intervals.append((name, e.task_id, e.start_s, e.end_s if e.end_s is not None else dead.get(name)))
-    if resumed_from is not None:
-        # the attempts the journal holds (done and failed) were flown before the resume: they count as then
-        intervals.extend((a.uav, a.task_id, a.start_s, a.end_s) for a in mc.history
-                         if a.end_s is not None and a.end_s <= resumed_from and a.status in ("done", "failed"))
-    done = {a.task_id for a in mc.history if a.status == "done"}
-    placement: dict[str, float] = {}
-    for t in the_plan.tasks:
-        if isinstance(t, BrickTask) and t.id in done:
-            # a brick placed before the resume was rebuilt in place: its error is the one measured then
-            err = journaled_errors_m[t.id] if t.id in journaled_errors_m else world.placement_error_m(t.brick)
-            if err is not None:
-                placement[t.id] = float(err)
-    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
-    sep = measured.min_separation_m()
-    distances = measured.distances_m()
-    return control_report(
-        mc, the_plan, policy=policy, seed=seed, intervals=intervals, busy_s=measured.busy_s(),
-        distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
-        placement_error_m=placement, min_separation_m=sep, now_s=now,
-        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
-        paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
-        sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
-    )
-
-
-__all__ = ["POLICIES", "fleet_for", "simulate"]
+__all__ = ["POLICIES", "SimulatedMission", "fleet_for", "simulate"]

@@ -24,7 +24,7 @@ from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError
 from masonry.planner.tasks import AdhesionTask
-from masonry.ports import CameraFrame, Telemetry, Vec3
+from masonry.ports import CameraFrame, Telemetry, UavPorts, Vec3
 from masonry.sim.adhesive import AdhesiveDeposit
 from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
 from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
@@ -65,9 +65,11 @@ class WorldConfig:
 class SimUav:
     """One UAV in a world: its autopilot model, its tool state and its ports.
 
-    Ports: ``fc`` (FlightController), ``gripper`` (Gripper), ``sprayer`` (Sprayer), ``camera`` (Camera).
-    Every UAV has all four; the world moves bricks only for ``role == "brick"`` and deposits adhesive only for
-    ``role == "adhesion"``.
+    ``ports`` (:class:`masonry.ports.UavPorts`) is what a state machine flies with: ``fc`` (FlightController),
+    ``gripper`` (Gripper), ``sprayer`` (Sprayer), ``camera`` (Camera), the world's clock and step. Every UAV has
+    all four; the world moves bricks only for ``role == "brick"`` and deposits adhesive only for
+    ``role == "adhesion"``. What only a simulation has (the ``vehicle`` whose battery the ground crew swaps,
+    ``failed``, the true position) stays here, beside the ports.
     """
 
     name: str
@@ -104,6 +106,9 @@ class SimUav:
         self.gripper = SimGripper(self)
         self.sprayer = SimSprayer(self)
         self.camera = SimCamera(self)
+        self.ports = UavPorts(self.fc, self.gripper, self.sprayer, self.camera, self.world.clock,
+                              self.world.step, self.world, {"flight controller": "simulated",
+                                                            "actuators": "simulated", "camera": "simulated"})
 
     @property
     def role(self) -> str:
@@ -452,7 +457,7 @@ class World:
         T_wb[:3, 3] = vehicle.position_m
         return T_wb @ self._T_body_cam
 
-    def _visible_candidates(self, uav: SimUav, T_wc: np.ndarray) -> list[SimBrick]:
+    def _visible_candidates(self, T_wc: np.ndarray) -> list[SimBrick]:
         cfg = self.camera_config
         cx, cy, cz = T_wc[:3, 3]
         reach = min(cfg.max_range_m(self.blueprint.markers.size_m), max(cz, 0.0) + 0.1)
@@ -468,7 +473,7 @@ class World:
             return None
         now = self.clock.now_s()
         T_wc = self.camera_pose(uav)
-        bricks = self._visible_candidates(uav, T_wc)
+        bricks = self._visible_candidates(T_wc)
         rng = uav.rng
         faults = self.faults
         dropped = faults.dropout > 0.0 and rng.random() < faults.dropout

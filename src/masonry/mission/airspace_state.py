@@ -1,0 +1,87 @@
+"""The airspace's state, one record per UAV (:class:`masonry.mission.airspace.ColumnClearance` keeps them), and
+its answers (:class:`Grant`). Pure values: no I/O, no clock.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from masonry.mission.volumes import XY, Vec3, Volume
+
+
+@dataclass(frozen=True)
+class Grant:
+    """Mission control's answer to a UAV setting off for ``site_m``.
+
+    ``layer_m``: the altitude of its lateral leg (None: no layers, fly as you like, or no flight yet).
+    ``granted`` True: fly there (climb where you are to ``layer_m``, fly over the site, come down). False with a
+    ``hold_m``: fly (at ``layer_m``) to ``hold_m`` and wait there, the rest comes later. False without: hover
+    where you are and ask again.
+    """
+
+    uav: str
+    site_m: Vec3
+    granted: bool = True
+    hold_m: Vec3 | None = None
+    layer_m: float | None = None
+
+
+class Phase(enum.Enum):
+    """Where a UAV is in the transit protocol (:class:`ColumnClearance`)."""
+
+    PARKED = "parked"  # nothing asked, nothing granted: in the zone at its site (or where it stopped)
+    ASKING = "asking"  # asked for a flight, nothing granted yet: it hovers where it is
+    TO_HOLD = "to-hold"  # its hold flight is granted: it flies to the hold point near its site
+    AT_HOLD = "at-hold"  # it hovers at its hold point until the rest of the flight fits
+    FLYING = "flying"  # its flight is granted: over to its site and down
+
+
+@dataclass(frozen=True)
+class FlightRequest:
+    """A UAV's request for a flight to ``site``, where it works up to ``top_m`` (and along to ``to``)."""
+
+    site: Vec3
+    top_m: float
+    position: Vec3 | None  # where it asked from (None: at its site)
+    since_s: float
+    seq: int  # the order of the requests: first come, first served
+    to: XY | None = None  # the work at the site spans from it to here (an adhesion segment)
+
+
+@dataclass(frozen=True)
+class HoldFlight:
+    """The hold flight a waiting UAV was granted: to ``point_m`` at layer ``layer`` (``layer_m`` high)."""
+
+    point_m: Vec3
+    layer: int
+    layer_m: float  # its altitude then (the layer base may have risen since)
+
+
+@dataclass(frozen=True)
+class GrantedFlight:
+    """A granted flight: to ``site`` at layer ``layer`` (``layer_m`` high), then the zone there up to ``top_m``."""
+
+    site: Vec3
+    layer: int
+    layer_m: float
+    top_m: float
+    to: XY | None = None
+
+
+@dataclass
+class UavAirspace:
+    """One UAV's share of the airspace: its phase, its volumes and what they are for."""
+
+    phase: Phase = Phase.PARKED
+    volumes: list[Volume] = field(default_factory=list)
+    zone: Vec3 | None = None  # the site of the zone it works in
+    origin: Vec3 | None = None  # the site it set off from (its climb is freed once away)
+    request: FlightRequest | None = None  # ASKING, TO_HOLD, AT_HOLD
+    hold: HoldFlight | None = None  # TO_HOLD, AT_HOLD
+    flight: GrantedFlight | None = None  # FLYING
+    seen_version: int = -1  # airspace version at the last evaluation of its request (unchanged: same answer)
+    answer: Grant | None = None
+
+
+__all__ = ["FlightRequest", "Grant", "GrantedFlight", "HoldFlight", "Phase", "UavAirspace"]

@@ -1,0 +1,159 @@
+"""What the simulated world measured, beside what mission control knows: into the journal and the report.
+
+:class:`MeasuredJournal` adds the world's measurements to every record mission control journals (so that a
+resumed report says what the run that did the work would have said); :func:`simulated_report` builds the
+mission's report with the safety checks measured independently of mission control (the intervals the UAV
+handlers executed, the separation of the world's vehicles).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from masonry.blueprint import Blueprint, UavSpec
+from masonry.mission.control import MissionControl
+from masonry.mission.handler import UavHandler
+from masonry.mission.report import MissionReport, control_report
+from masonry.planner.bounds import min_cycles_s, min_durations_s
+from masonry.planner.tasks import BrickTask, Plan
+from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+
+class MeasuredJournal:
+    """The journal as mission control sees it, with what the world measured added to every record.
+
+    Each record carries ``measured``: the distance each UAV has flown, its busy time (the tasks its handler
+    executed) and the minimum separation so far (over the whole mission: a resumed run adds the values the
+    journal had), and a brick's completion its true placement error. A resumed report takes them from the
+    journal (:func:`simulated_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
+    """
+
+    def __init__(self, journal: Any, world: Any, plan: Plan, before: Mapping[str, Any]) -> None:
+        self.journal = journal
+        self.world = world
+        self._bricks = {t.id: t.brick for t in plan.tasks if isinstance(t, BrickTask)}
+        self.before_distances_m = _floats(before.get("distances_m"))
+        self.before_busy_s = _floats(before.get("busy_s"))
+        sep = before.get("min_separation_m")
+        self.before_min_separation_m = float(sep) if isinstance(sep, (int, float)) else None
+        self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
+        self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
+
+    def distances_m(self) -> dict[str, float]:
+        return {n: self.before_distances_m.get(n, 0.0) + float(self.world.distance_flown_m(n))
+                for n in self.world.uavs}
+
+    def busy_s(self) -> dict[str, float]:
+        """Time each UAV spent on tasks, as its handler executed them (a running task counts until now)."""
+        now = self.world.clock.now_s()
+        out = dict(self.before_busy_s)
+        for name, h in self.handlers.items():
+            end_open = self.dead.get(name, now)
+            out[name] = out.get(name, 0.0) + sum(
+                (e.end_s if e.end_s is not None else end_open) - e.start_s for e in h.executions)
+        return out
+
+    def min_separation_m(self) -> float | None:
+        seps = [s for s in (self.before_min_separation_m, self.world.min_separation_m)
+                if s is not None and math.isfinite(s)]
+        return float(min(seps)) if seps else None
+
+    def measurements(self, task_id: str | None = None) -> dict[str, Any]:
+        """What the world measured so far (and, for a brick task, its true placement error)."""
+        out: dict[str, Any] = {"distances_m": self.distances_m(), "busy_s": self.busy_s(),
+                               "min_separation_m": self.min_separation_m()}
+        if task_id in self._bricks:
+            err = self.world.placement_error_m(self._bricks[task_id])
+            if err is not None:
+                out["placement_error_m"] = float(err)
+        return out
+
+    def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
+        self.journal.record_assignment(time_s, task_id, uav, attempt, measured=self.measurements())
+
+    def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
+        self.journal.record_completion(time_s, task_id, uav, **fields, measured=self.measurements(task_id))
+
+    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str) -> None:
+        self.journal.record_failure(time_s, task_id, uav, reason, measured=self.measurements())
+
+    def record_uav_lost(self, time_s: float, uav: str) -> None:
+        self.journal.record_uav_lost(time_s, uav, measured=self.measurements())
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.journal, name)  # anything else mission control asks of the journal
+
+
+def _floats(value: Any) -> dict[str, float]:
+    """A journaled name -> number mapping (anything else in it is ignored)."""
+    items = value.items() if isinstance(value, Mapping) else ()
+    return {str(k): float(v) for k, v in items if isinstance(v, (int, float)) and math.isfinite(v)}
+
+
+def journaled_errors_m(state: Any) -> dict[str, float]:
+    """Placement errors of the bricks done before a resume: the world's true one when the journal has it."""
+    out: dict[str, float] = {}
+    for rec in state.done if state is not None else ():
+        m = rec.fields.get("measured")
+        err = m.get("placement_error_m") if isinstance(m, Mapping) else None
+        if err is None:
+            err = rec.fields.get("placement_error_m")  # a journal without measurements: the UAV's estimate
+        if isinstance(err, (int, float)):
+            out[rec.task_id] = float(err)
+    return out
+
+
+def simulated_report(
+    blueprint: Blueprint,
+    the_plan: Plan,
+    fleet: tuple[UavSpec, ...],
+    mc: MissionControl,
+    handlers: Mapping[str, UavHandler],
+    world: Any,
+    dead: Mapping[str, float],
+    *,
+    policy: str,
+    seed: int,
+    sim_time_s: float,
+    wall_time_s: float,
+    resumed_from: float | None,
+    messages: int,
+    measured: MeasuredJournal,
+    journaled_errors_m: Mapping[str, float],
+    timing: TaskTiming = DEFAULT_TIMING,
+) -> MissionReport:
+    now = world.clock.now_s()
+    # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
+    # flying when it failed), plus the completed attempts of the run before a resume (from the journal).
+    intervals: list[tuple[str, str, float, float | None]] = []
+    for name, h in handlers.items():
+        for e in h.executions:
+            intervals.append((name, e.task_id, e.start_s, e.end_s if e.end_s is not None else dead.get(name)))
+    if resumed_from is not None:
+        # the attempts the journal holds (done and failed) were flown before the resume: they count as then
+        intervals.extend((a.uav, a.task_id, a.start_s, a.end_s) for a in mc.history
+                         if a.end_s is not None and a.end_s <= resumed_from and a.status in ("done", "failed"))
+    done = {a.task_id for a in mc.history if a.status == "done"}
+    placement: dict[str, float] = {}
+    for t in the_plan.tasks:
+        if isinstance(t, BrickTask) and t.id in done:
+            # a brick placed before the resume was rebuilt in place: its error is the one measured then
+            err = journaled_errors_m[t.id] if t.id in journaled_errors_m else world.placement_error_m(t.brick)
+            if err is not None:
+                placement[t.id] = float(err)
+    minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
+    sep = measured.min_separation_m()
+    distances = measured.distances_m()
+    return control_report(
+        mc, the_plan, policy=policy, seed=seed, intervals=intervals, busy_s=measured.busy_s(),
+        distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
+        placement_error_m=placement, min_separation_m=sep, now_s=now,
+        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
+        paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
+        sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
+    )
+
+
+__all__ = ["MeasuredJournal", "journaled_errors_m", "simulated_report"]

@@ -1,0 +1,228 @@
+"""Reserved airspace volumes and the geometry that keeps them apart (pure: no I/O, no clock).
+
+A :class:`Volume` is what :class:`masonry.mission.airspace.ColumnClearance` hands a UAV: a horizontal segment
+thickened by a slack, between two altitudes. :func:`volumes_conflict` says whether two volumes could bring
+their UAVs within the separation; :func:`volumes_clear` answers the same for many pairs at once (mission
+control's inner loop: ``benchmarks/bench_airspace.py`` measures what writing it out saves).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+Vec3 = tuple[float, float, float]
+XY = tuple[float, float]
+
+#: How far a UAV may be off its reserved path (tracking error, a report a little late): what lies further behind
+#: it on its leg is freed (:meth:`ColumnClearance.progress`).
+TRACK_M = 0.3
+
+#: A UAV that stopped mid-flight to ask for another site (it turned back) holds this much around where it is.
+HOVER_SLACK_M = 0.3
+
+#: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
+STOP_M = 1.0
+
+
+@dataclass(frozen=True)
+class Volume:
+    """A piece of airspace reserved for one UAV: every point within ``slack_m`` (horizontally) of the 2-D
+    segment ``a``-``b``, between altitudes ``z0_m`` and ``z1_m``.
+
+    A vertical move is a degenerate segment (``a == b``) over an altitude range, a lateral leg a segment at one
+    altitude, a site's work zone a vertical column from the ground with the work's horizontal ``slack_m``.
+    """
+
+    a: XY
+    b: XY
+    z0_m: float
+    z1_m: float
+    slack_m: float = 0.0
+    kind: str = "leg"  # "climb", "leg", "zone", "hover": what it is, for diagnostics and early release
+
+
+def volumes_conflict(p: Volume, q: Volume, sep_xy_m: float, sep_z_m: float) -> bool:
+    """Could a UAV in ``p`` come within the separation of one in ``q``?
+
+    No if their altitude ranges are ``sep_z_m`` apart, or their horizontal footprints ``sep_xy_m`` (plus both
+    slacks) apart. Two UAVs in volumes that do not conflict are at least min(sep_xy_m, sep_z_m) apart.
+    """
+    if p.z0_m - q.z1_m >= sep_z_m or q.z0_m - p.z1_m >= sep_z_m:
+        return False
+    need = sep_xy_m + p.slack_m + q.slack_m
+    # cheap reject on the bounding boxes before the exact segment distance
+    if (min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
+            or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
+            or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need):
+        return False
+    return segment_segment_m(p.a, p.b, q.a, q.b) < need
+
+
+def volumes_clear(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: float, sep_z_m: float) -> bool:
+    """No volume of ``vols`` conflicts with one of ``others``: ``not any(volumes_conflict(v, q, ...))``.
+
+    The same tests as :func:`volumes_conflict` in the same order, written out over the pairs (mission control
+    asks this for every candidate flight, layer and hold point; ``tests/test_volumes.py`` checks the two agree).
+    """
+    for v in vols:
+        vz0, vz1, vs = v.z0_m, v.z1_m, v.slack_m
+        (ax, ay), (bx, by) = v.a, v.b
+        vx0, vx1 = min(ax, bx), max(ax, bx)
+        vy0, vy1 = min(ay, by), max(ay, by)
+        for q in others:
+            if vz0 - q.z1_m >= sep_z_m or q.z0_m - vz1 >= sep_z_m:
+                continue
+            need = sep_xy_m + vs + q.slack_m
+            (cx, cy), (dx, dy) = q.a, q.b
+            if (cx if cx <= dx else dx) - vx1 >= need or vx0 - (cx if cx >= dx else dx) >= need \
+                    or (cy if cy <= dy else dy) - vy1 >= need or vy0 - (cy if cy >= dy else dy) >= need:
+                continue
+            if segment_segment_m(v.a, v.b, q.a, q.b) < need:
+                return False
+    return True
+
+
+def point_segment_m(p: XY, a: XY, b: XY) -> float:
+    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    n2 = dx * dx + dy * dy
+    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
+    """Horizontal distance between segments ``a``-``b`` and ``c``-``d``."""
+    def orient(p: XY, q: XY, r: XY) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    if o1 * o2 < 0.0 and o3 * o4 < 0.0:
+        return 0.0  # they cross
+    return min(point_segment_m(c, a, b), point_segment_m(d, a, b), point_segment_m(a, c, d),
+               point_segment_m(b, c, d))
+
+
+def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volume] | None:
+    """What of a flight's volumes ``vols`` a UAV reported at ``(x, y, z)`` still needs: the rest of the lateral leg
+    it is on (from ``TRACK_M`` behind it) and what follows, or the zone it is coming down into.
+
+    None: nothing is behind it (at the start of a leg, or not on the flight: a report sent before it was granted).
+    """
+    kept: list[Volume] | None = None
+    last_leg: Volume | None = None
+    for i, v in enumerate(vols):
+        if v.kind != "leg":
+            continue
+        last_leg = v
+        (ax, ay), (bx, by) = v.a, v.b
+        dx, dy = bx - ax, by - ay
+        length = math.hypot(dx, dy)
+        if length < 1e-9 or abs(z - v.z0_m) >= 0.2:
+            continue
+        along = ((x - ax) * dx + (y - ay) * dy) / length
+        across = abs((x - ax) * dy - (y - ay) * dx) / length
+        if across > TRACK_M or along > length + TRACK_M:
+            continue
+        cut = along - TRACK_M
+        if cut <= 0.0:
+            return None  # at the start of this leg: it may still be climbing (or stopped climbing) to it
+        # on this leg: everything before it (its climb, earlier legs, a hover) is behind it
+        rest = list(vols[i + 1:])
+        if cut < length:
+            f = max(0.0, cut) / length
+            rest.insert(0, Volume((ax + f * dx, ay + f * dy), v.b, v.z0_m, v.z1_m, 0.0, "leg"))
+        kept = rest
+        break
+    if kept is None:
+        # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
+        zone = vols[-1]
+        if last_leg is None or zone.kind != "zone" or z >= last_leg.z0_m - 0.2 or \
+                math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M or \
+                math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6:
+            return None
+        kept = [zone]
+    return kept
+
+
+def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
+    """The zone over ``site``: from the ground up to ``top_m``, along to ``to`` (an adhesion segment), ``slack_m``
+    wide."""
+    xy = (site[0], site[1])
+    return Volume(xy, xy if to is None else to, 0.0, top_m, slack_m, "zone")
+
+
+def flight_volumes(start: XY, z0_m: float, alt_m: float, target: Vec3 | None, top_m: float, hold: XY | None,
+                   to: XY | None, slack_m: float) -> list[Volume]:
+    """A flight's volumes: the climb at ``start`` from ``z0_m`` to ``alt_m``, the leg there to the target (or the
+    hold point), and the target's column up to ``top_m`` (or the hover at the hold point, ``slack_m`` wide)."""
+    vols = [Volume(start, start, min(z0_m, alt_m), max(z0_m, alt_m), 0.0, "climb")]
+    end = hold if hold is not None else (target[0], target[1]) if target is not None else start
+    if math.hypot(end[0] - start[0], end[1] - start[1]) > 1e-6:
+        vols.append(Volume(start, end, alt_m, alt_m, 0.0, "leg"))
+    if hold is not None:
+        vols.append(Volume(end, end, alt_m, alt_m, slack_m, "hover"))  # it may overshoot a little
+    elif target is not None:
+        vols.append(column(target, max(top_m, alt_m), to, slack_m))
+    return vols
+
+
+def stopped_at(xy: XY, z: float, vols: Sequence[Volume]) -> list[Volume]:
+    """The volumes of a UAV that stopped at ``xy`` (``z`` high) inside ``vols``: a hover there, and ``STOP_M`` of
+    the lateral leg ahead if it stopped on one (it may coast on along it)."""
+    here = [Volume(xy, xy, z - HOVER_SLACK_M, z + HOVER_SLACK_M, HOVER_SLACK_M, "hover")]
+    for v in vols:
+        length = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
+        if v.kind != "leg" or length < 1e-9 or abs(z - v.z0_m) >= 0.2 \
+                or point_segment_m(xy, v.a, v.b) > TRACK_M:
+            continue
+        ux, uy = (v.b[0] - v.a[0]) / length, (v.b[1] - v.a[1]) / length
+        along = (xy[0] - v.a[0]) * ux + (xy[1] - v.a[1]) * uy
+        end = min(length, along + STOP_M)
+        if end > along:
+            here.append(Volume(xy, (v.a[0] + end * ux, v.a[1] + end * uy), v.z0_m, v.z1_m, 0.0, "leg"))
+        break
+    return here
+
+
+def hold_points(site: Vec3, keep_out: Sequence[XY], spans: Sequence[tuple[XY, XY]], radius_m: float) -> list[Vec3]:
+    """Points around ``site`` (rings ``radius_m`` apart, nearest first, at least six when there are) at least
+    1.1 ``radius_m`` from every point of ``keep_out`` and every segment of ``spans``; one far point if none is."""
+    r = 1.1 * radius_m
+    r2 = r * r
+
+    def free(p: XY) -> bool:
+        return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out) and \
+            all(point_segment_m(p, a, b) >= r for a, b in spans)
+
+    step = max(radius_m, 0.25)
+    out: list[tuple[float, Vec3]] = []
+    for ring in range(1, 9):
+        for a in range(24):
+            ang = 2.0 * math.pi * a / 24.0
+            c = (site[0] + ring * step * math.cos(ang), site[1] + ring * step * math.sin(ang))
+            if free(c):
+                out.append((ring * step, (c[0], c[1], site[2])))
+        if len(out) >= 6:
+            break
+    return [p for _d, p in sorted(out, key=lambda x: x[0])] or [(site[0] + 8 * step, site[1], site[2])]
+
+
+__all__ = [
+    "HOVER_SLACK_M",
+    "STOP_M",
+    "TRACK_M",
+    "XY",
+    "Vec3",
+    "Volume",
+    "ahead_of",
+    "column",
+    "flight_volumes",
+    "hold_points",
+    "point_segment_m",
+    "segment_segment_m",
+    "stopped_at",
+    "volumes_clear",
+    "volumes_conflict",
+]
