@@ -10,8 +10,8 @@ from masonry.cli.app import OPTION_FLAGS, cli_message, cli_text
 from masonry.errors import CommandRejected, InputError, MasonryError
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "masonry"
-#: Modules whose errors still name flags (owned by another change now; to shrink): the check below skips them.
-NOT_YET = {"mission/simulate.py"}
+#: Modules whose errors may still name flags: none left (the check below would skip them).
+NOT_YET: set[str] = set()
 
 
 def test_options_become_flags_only_where_named_in_backticks() -> None:

@@ -120,11 +120,11 @@ def test_fleet_override_adds_uavs_clear_of_each_other():
 
 def test_bad_options_are_input_errors(tmp_path):
     bp = load_blueprint(CASE_STUDY)
-    with pytest.raises(InputError, match="--policy"):
+    with pytest.raises(InputError, match="`policy`"):
         simulate(bp, policy="random")
-    with pytest.raises(InputError, match="--camera"):
+    with pytest.raises(InputError, match="`camera`"):
         simulate(bp, camera="lidar")
-    with pytest.raises(InputError, match="--resume needs --journal"):
+    with pytest.raises(InputError, match="`resume` needs `journal_path`"):
         simulate(bp, resume=True)
     with pytest.raises(JournalError, match="no journal to resume from"):
         simulate(bp, resume=True, journal_path=tmp_path / "none.db")

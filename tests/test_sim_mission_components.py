@@ -128,3 +128,15 @@ def test_journaled_errors_prefer_the_world_measurement_over_the_uav_estimate():
     ])
     assert journaled_errors_m(state) == {"B0": 0.004, "B1": 0.02}
     assert journaled_errors_m(None) == {}
+
+
+def test_mission_control_without_the_walls_digest_is_refused_at_once():
+    """Built by hand without ``wall_digest``, every UAV would refuse every task: say so instead of hanging."""
+    bp = small()
+    p = plan(bp)
+    world = World(bp)
+    world.add_fleet(bp.fleet)
+    bus = InprocBus()
+    mc = MissionControl(p, bp.fleet, bus.endpoint(MISSION_CONTROL))
+    with pytest.raises(InputError, match="built for another wall"):
+        SimulatedMission(bp, p, world=world, control=mc, bus=bus)

@@ -91,7 +91,7 @@ USER_ERRORS: tuple[type[MasonryError], ...] = (
 
 
 #: Library parameters named in errors (``MasonryError.options``) whose flag is not ``--`` + the name with dashes.
-OPTION_FLAGS = {"estimate_timeout_s": "--estimate-wait"}
+OPTION_FLAGS = {"estimate_timeout_s": "--estimate-wait", "journal_path": "--journal"}
 
 
 def cli_text(text: str, options: tuple[str, ...]) -> str:

@@ -31,6 +31,7 @@ from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simula
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.planner.bounds import min_durations_s
+from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import Clock, UavPorts
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -39,16 +40,17 @@ if TYPE_CHECKING:
     from masonry.fsm.config import UavConfig
     from masonry.sim import World
 
-POLICIES = ("fifo", "critical-path", "nearest")
+#: The dispatch policies (the planner's, named here for the callers of ``simulate``).
+POLICIES = DISPATCH_POLICIES
 
 #: How long the ground crew takes to swap a landed UAV's battery (the handler keeps a reserve, see UavHandler).
 BATTERY_SWAP_S = 60.0
 #: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
 LANDING_GRACE_S = 180.0
 
-#: The state machines' control period (``UavConfig.control_period_s``): UAV handlers and mission control step
-#: at this period, the world at ``dt_s``.
-CONTROL_PERIOD_S = 0.1
+#: The state machines' control period (``UavConfig.control_period_s``, from :data:`masonry.timing.DEFAULT_TIMING`):
+#: UAV handlers and mission control step at this period, the world at ``dt_s``.
+CONTROL_PERIOD_S = DEFAULT_TIMING.control_period_s
 
 ProgressFn = Callable[[int, int, float], None]
 
@@ -69,7 +71,7 @@ def fleet_for(blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs
             out.extend(existing)
             continue
         if count < 0:
-            raise InputError(f"--{role}-uavs must be >= 0, got {count}")
+            raise InputError(f"`{role}_uavs` must be >= 0, got {count}", options=(f"{role}_uavs",))
         kept = existing[:count]
         out.extend(kept)
         if len(kept) < count:
@@ -288,6 +290,11 @@ class SimulatedMission:
         ports = ports if ports is not None else {}
         layers = layers_m if layers_m is not None else {}
         wall = wall_digest(blueprint)
+        if control.wall_digest != wall:
+            # the handlers check every assignment against the wall: each would refuse each task, and the
+            # mission would never progress
+            raise InputError("mission control was built for another wall: pass it "
+                             "`wall_digest=masonry.fingerprint.wall_digest(blueprint)`")
         self.ports: dict[str, UavPorts] = {}
         self.handlers: dict[str, UavHandler] = {}
         for spec in self.fleet:
@@ -380,20 +387,21 @@ class SimulatedMission:
         from masonry.sim import Faults, World
 
         if policy not in POLICIES:
-            raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
+            raise InputError(f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",))
         if camera not in ("geometric", "render"):
-            raise InputError(f"--camera must be geometric or render, got {camera!r}")
+            raise InputError(f"`camera` must be geometric or render, got {camera!r}", options=("camera",))
         if not (dt_s > 0 and math.isfinite(dt_s)):
             raise InputError(f"dt_s must be > 0, got {dt_s!r}")
         if resume and journal_path is None:
-            raise InputError("--resume needs --journal FILE")
+            raise InputError("`resume` needs `journal_path`", options=("resume", "journal_path"))
         faults = faults if faults is not None else Faults()
         wall0 = time.perf_counter()
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
         fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
         if not fleet:
-            raise InputError("the fleet is empty: give --brick-uavs / --adhesion-uavs or a fleet in the blueprint")
+            raise InputError("the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
+                             options=("brick_uavs", "adhesion_uavs"))
         blueprint = dataclasses.replace(blueprint, fleet=fleet)
         the_plan = make_plan(blueprint)
 
