@@ -438,3 +438,15 @@ def test_subpackage_all_resolves() -> None:
     for module in (masonry.motion, masonry.perception.estimation):
         assert len(set(module.__all__)) == len(module.__all__)
         assert all(hasattr(module, name) for name in module.__all__)
+
+
+@pytest.mark.parametrize("eps", [0.0, 3e-16, -4e-16, 1e-15])
+def test_filter_with_the_markers_along_the_normal_is_the_optimum(eps) -> None:
+    """The measured markers one above the other along ``up``: what is left off the normal is rounding noise, and
+    the filter must not take its direction for the markers' (it is not even perpendicular to ``up``)."""
+    p1, p2 = np.array([0.0, 0.0, 0.0]), np.array([0.5, 1.0, 0.0])
+    up = np.array([1.0 / math.sqrt(5.0) + eps, 2.0 / math.sqrt(5.0), 0.0])
+    args = (0.5, 1.0, 1.0, 2.0, up)
+    ours = marker_cost(*refine_markers(p1, p2, *args), p1, p2, *args)
+    bfgs = marker_cost(*refine_markers_bfgs(p1, p2, *args, fallback=False), p1, p2, *args)
+    assert ours <= bfgs + 1e-9

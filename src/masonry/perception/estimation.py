@@ -27,6 +27,8 @@ from masonry.errors import InputError, PerceptionError
 from masonry.perception.types import BrickEstimate, TagPose
 
 C_TH = 0.75
+#: The marker difference counts as along the plane normal below this fraction of its length off it (rounding).
+_PARALLEL_TOL = 1e-9
 """The paper's confidence threshold: an estimate is trusted once its window's confidence reaches C_TH."""
 
 Vec3Like = Sequence[float] | np.ndarray
@@ -198,9 +200,12 @@ def refine_markers(
     qn = qx * nx + qy * ny + qz * nz
     ux, uy, uz = qx - qn * nx, qy - qn * ny, qz - qn * nz
     qu = math.sqrt(ux * ux + uy * uy + uz * uz)
-    if qu > 0.0:
+    # q (nearly) along n leaves u as rounding noise, whose direction is arbitrary and need not be perpendicular
+    # to n: take a true perpendicular then (every one is as good, by symmetry about n) and treat qu as 0
+    if qu > _PARALLEL_TOL * math.sqrt(qx * qx + qy * qy + qz * qz):
         ex, ey, ez = ux / qu, uy / qu, uz / qu
     else:
+        qu = 0.0
         ex, ey, ez = _perpendicular(nx, ny, nz)
     along, normal = _solve_difference(qu, qn, spacing, w_prox / 2.0, w_dist, w_plane)
     hx = (along * ex + normal * nx) / 2.0
