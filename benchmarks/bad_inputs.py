@@ -48,7 +48,10 @@ BASE: dict[str, Any] = {
     "name": "bad-input",
     "clearance": 1.5,
     "cruise_altitude": 1.2,
-    "brick": {"size": [0.30, 0.15, 0.10], "markers": {"dictionary": "DICT_4X4_50", "size": 0.05, "spacing": 0.175}},
+    "brick": {
+        "size": [0.30, 0.15, 0.10],
+        "markers": {"dictionary": "DICT_4X4_50", "size": 0.05, "spacing": 0.175},
+    },
     "bricks": [
         {"id": 2, "position": [0.0, -0.5, 0.05], "placed": True},
         {"id": 3, "position": [0.0, -0.5, 0.15], "placed": True},
@@ -142,8 +145,11 @@ def _json_bytes(data: Any) -> bytes:
 CASE_STUDY_TEXT = CASE_STUDY.read_text()
 BOMB = (
     "a: &a [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]\n"
-    + "".join(f"{chr(98 + i)}: &{chr(98 + i)} [*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, "
-              f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n" for i in range(8))
+    + "".join(
+        f"{chr(98 + i)}: &{chr(98 + i)} [*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, "
+        f"*{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}, *{chr(97 + i)}]\n"
+        for i in range(8)
+    )
     + CASE_STUDY_TEXT.replace("position: [0.0, -0.5, 0.25]", "position: *i")
 )
 
@@ -160,16 +166,52 @@ BLUEPRINT_FILES: list[tuple[str, str, bytes]] = [
     ("not UTF-8", "bp.yaml", CASE_STUDY_TEXT.replace("paper-case-study", "caf\xe9").encode("latin-1")),
     ("a NUL byte", "bp.yaml", CASE_STUDY_TEXT.encode()[:200] + b"\x00" + CASE_STUDY_TEXT.encode()[200:]),
     ("billion laughs in a position", "bp.yaml", BOMB.encode()),
-    ("duplicate top-level key", "bp.yaml", CASE_STUDY_TEXT.replace("clearance: 1.5", "clearance: 1.5\nclearance: 0.001").encode()),
-    ("duplicate key in a brick", "bp.yaml", CASE_STUDY_TEXT.replace("{id: 0, position:", "{id: 0, id: 7, position:").encode()),
-    ("a YAML python tag", "bp.yaml", CASE_STUDY_TEXT.replace("clearance: 1.5", "clearance: !!python/object/apply:os.system ['true']").encode()),
-    ("a YAML timestamp as clearance", "bp.yaml", CASE_STUDY_TEXT.replace("clearance: 1.5", "clearance: 2001-12-14").encode()),
-    ("deep nesting", "bp.yaml", CASE_STUDY_TEXT.replace("name: paper-case-study", "name: " + "[" * 5000 + "]" * 5000).encode()),
-    ("200,000-element position", "bp.yaml", CASE_STUDY_TEXT.replace("position: [0.0, -0.5, 0.25]", "position: [" + ", ".join(["0.5"] * 200_000) + "]").encode()),
-    ("a 100 kB name", "bp.yaml", CASE_STUDY_TEXT.replace("name: paper-case-study", "name: [" + "x" * 100_000 + "]").encode()),
+    (
+        "duplicate top-level key",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace("clearance: 1.5", "clearance: 1.5\nclearance: 0.001").encode(),
+    ),
+    (
+        "duplicate key in a brick",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace("{id: 0, position:", "{id: 0, id: 7, position:").encode(),
+    ),
+    (
+        "a YAML python tag",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace(
+            "clearance: 1.5", "clearance: !!python/object/apply:os.system ['true']"
+        ).encode(),
+    ),
+    (
+        "a YAML timestamp as clearance",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace("clearance: 1.5", "clearance: 2001-12-14").encode(),
+    ),
+    (
+        "deep nesting",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace("name: paper-case-study", "name: " + "[" * 5000 + "]" * 5000).encode(),
+    ),
+    (
+        "200,000-element position",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace(
+            "position: [0.0, -0.5, 0.25]", "position: [" + ", ".join(["0.5"] * 200_000) + "]"
+        ).encode(),
+    ),
+    (
+        "a 100 kB name",
+        "bp.yaml",
+        CASE_STUDY_TEXT.replace("name: paper-case-study", "name: [" + "x" * 100_000 + "]").encode(),
+    ),
     ("truncated JSON", "bp.json", _json_bytes(BASE)[:-40]),
     ("JSON with NaN clearance", "bp.json", _json_bytes(_with(_set("clearance", float("nan"))))),
-    ("JSON with infinite position", "bp.json", _json_bytes(_with(_set("bricks.4.position", [float("inf"), 0, 0.25])))),
+    (
+        "JSON with infinite position",
+        "bp.json",
+        _json_bytes(_with(_set("bricks.4.position", [float("inf"), 0, 0.25]))),
+    ),
 ]
 
 #: (name, mutation of BASE) for value-level breakage, written as JSON
@@ -289,8 +331,14 @@ def _blueprint_cases() -> list[Case]:
         path = fname if fname.startswith("/") else "{d}/" + fname
         cases.append(Case("blueprint/plan", name, ("plan", path), setup))
         cases.append(Case("blueprint/sim", name, ("sim", path), setup))
-        cases.append(Case("blueprint/fly", name, ("fly", "--uav", "brick", "--sim", "--blueprint", path,
-                                                  "--task", "B0"), setup))
+        cases.append(
+            Case(
+                "blueprint/fly",
+                name,
+                ("fly", "--uav", "brick", "--sim", "--blueprint", path, "--task", "B0"),
+                setup,
+            )
+        )
     return cases
 
 
@@ -332,22 +380,65 @@ def _option_cases() -> list[Case]:
         ("fly --timeout -1", (*fly, "--timeout", "-1")),
         ("fly --uav painter", ("fly", "--uav", "painter", "--sim", "--blueprint", cs, "--task", "B0")),
         ("fly --task B99", ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--task", "B99")),
-        ("fly adhesion UAV on a brick task", ("fly", "--uav", "adhesion", "--sim", "--blueprint", cs, "--task", "B0")),
+        (
+            "fly adhesion UAV on a brick task",
+            ("fly", "--uav", "adhesion", "--sim", "--blueprint", cs, "--task", "B0"),
+        ),
         ("fly --name nobody", (*fly, "--name", "nobody")),
         ("fly --fault grasp=5", (*fly, "--fault", "grasp=5")),
-        ("fly --wait -1 (mission)", ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission",
-                                     "tcp/127.0.0.1:1", "--wait", "-1")),
-        ("fly --time-scale 0 (mission)", ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission",
-                                          "tcp/127.0.0.1:1", "--time-scale", "0")),
-        ("fly --mission not-an-endpoint", ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission", "nowhere")),
-        ("fly --mission port 99999", ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission",
-                                      "tcp/127.0.0.1:99999")),
-        ("blueprint --placed-courses > --courses", (*gen, "--courses", "2", "--placed-courses", "3", "-o", "{d}/w.yaml")),
+        (
+            "fly --wait -1 (mission)",
+            (
+                "fly",
+                "--uav",
+                "brick",
+                "--sim",
+                "--blueprint",
+                cs,
+                "--mission",
+                "tcp/127.0.0.1:1",
+                "--wait",
+                "-1",
+            ),
+        ),
+        (
+            "fly --time-scale 0 (mission)",
+            (
+                "fly",
+                "--uav",
+                "brick",
+                "--sim",
+                "--blueprint",
+                cs,
+                "--mission",
+                "tcp/127.0.0.1:1",
+                "--time-scale",
+                "0",
+            ),
+        ),
+        (
+            "fly --mission not-an-endpoint",
+            ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission", "nowhere"),
+        ),
+        (
+            "fly --mission port 99999",
+            ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission", "tcp/127.0.0.1:99999"),
+        ),
+        (
+            "blueprint --placed-courses > --courses",
+            (*gen, "--courses", "2", "--placed-courses", "3", "-o", "{d}/w.yaml"),
+        ),
         ("blueprint --courses 0", (*gen, "--courses", "0", "-o", "{d}/w.yaml")),
         ("blueprint --courses -3", (*gen, "--courses", "-3", "-o", "{d}/w.yaml")),
         ("blueprint --bricks-per-course 0", (*gen, "--bricks-per-course", "0", "-o", "{d}/w.yaml")),
-        ("blueprint --bricks-per-course 10**9", (*gen, "--bricks-per-course", "1000000000", "-o", "{d}/w.yaml")),
-        ("blueprint --brick-size negative", (*gen, "--brick-size", "-0.3", "0.15", "0.1", "-o", "{d}/w.yaml")),
+        (
+            "blueprint --bricks-per-course 10**9",
+            (*gen, "--bricks-per-course", "1000000000", "-o", "{d}/w.yaml"),
+        ),
+        (
+            "blueprint --brick-size negative",
+            (*gen, "--brick-size", "-0.3", "0.15", "0.1", "-o", "{d}/w.yaml"),
+        ),
         ("plan --format xml", ("plan", cs, "--format", "xml")),
         ("plan --graph .bmp", ("plan", cs, "--graph", "{d}/g.bmp")),
         ("mission-control --tick 0", ("mission-control", cs, "--tick", "0")),
@@ -375,11 +466,26 @@ def _output_cases() -> list[Case]:
         ("sim --journal into a missing folder", ("sim", cs, "--journal", "{d}/no/such/j.db"), lambda d: None),
         ("plan -o into a missing folder", ("plan", cs, "-o", "{d}/no/such/p.txt"), lambda d: None),
         ("plan --graph into a missing folder", ("plan", cs, "--graph", "{d}/no/such/g.svg"), lambda d: None),
-        ("blueprint -o into a missing folder", ("blueprint", "running-bond", "-o", "{d}/no/such/w.yaml"), lambda d: None),
-        ("markers -o into a missing folder", ("markers", "--bricks", "0-1", "-o", "{d}/no/such/m.pdf"), lambda d: None),
-        ("fsm diagram -o into a missing folder", ("fsm", "diagram", "brick", "-o", "{d}/no/such/b.dot"), lambda d: None),
-        ("mission-control --report into a missing folder",
-         ("mission-control", cs, "--report", "{d}/no/such/r.json", "--max-time", "0.1"), lambda d: None),
+        (
+            "blueprint -o into a missing folder",
+            ("blueprint", "running-bond", "-o", "{d}/no/such/w.yaml"),
+            lambda d: None,
+        ),
+        (
+            "markers -o into a missing folder",
+            ("markers", "--bricks", "0-1", "-o", "{d}/no/such/m.pdf"),
+            lambda d: None,
+        ),
+        (
+            "fsm diagram -o into a missing folder",
+            ("fsm", "diagram", "brick", "-o", "{d}/no/such/b.dot"),
+            lambda d: None,
+        ),
+        (
+            "mission-control --report into a missing folder",
+            ("mission-control", cs, "--report", "{d}/no/such/r.json", "--max-time", "0.1"),
+            lambda d: None,
+        ),
     ]
     return [Case("outputs", name, argv, setup) for name, argv, setup in rows]
 
@@ -392,24 +498,40 @@ def _journal_cases() -> list[Case]:
     small = str(ROOT / "blueprints" / "running_bond_small.yaml")
 
     def other_wall(d: Path) -> None:
-        subprocess.run([*_masonry(), "sim", small, "--journal", str(d / "j.db"), "--format", "json"],
-                       capture_output=True, timeout=300, check=False)
+        subprocess.run(
+            [*_masonry(), "sim", small, "--journal", str(d / "j.db"), "--format", "json"],
+            capture_output=True,
+            timeout=300,
+            check=False,
+        )
 
     def same_ids_other_geometry(d: Path) -> None:
         moved = CASE_STUDY_TEXT.replace("pickup: [3.0, -0.5, 0.05]", "pickup: [3.5, -0.5, 0.05]")
         (d / "moved.yaml").write_text(moved)
-        subprocess.run([*_masonry(), "sim", str(d / "moved.yaml"), "--journal", str(d / "j.db")],
-                       capture_output=True, timeout=120, check=False)
+        subprocess.run(
+            [*_masonry(), "sim", str(d / "moved.yaml"), "--journal", str(d / "j.db")],
+            capture_output=True,
+            timeout=120,
+            check=False,
+        )
 
     def other_fleet(d: Path) -> None:
         other = CASE_STUDY_TEXT.replace("name: glue-1", "name: glue-9")
         (d / "other.yaml").write_text(other)
-        subprocess.run([*_masonry(), "sim", str(d / "other.yaml"), "--journal", str(d / "j.db")],
-                       capture_output=True, timeout=120, check=False)
+        subprocess.run(
+            [*_masonry(), "sim", str(d / "other.yaml"), "--journal", str(d / "j.db")],
+            capture_output=True,
+            timeout=120,
+            check=False,
+        )
 
     def finished(d: Path) -> None:
-        subprocess.run([*_masonry(), "sim", cs, "--journal", str(d / "j.db")], capture_output=True,
-                       timeout=120, check=False)
+        subprocess.run(
+            [*_masonry(), "sim", cs, "--journal", str(d / "j.db")],
+            capture_output=True,
+            timeout=120,
+            check=False,
+        )
 
     def corrupt(d: Path) -> None:
         (d / "j.db").write_bytes(b"SQLite format 3\x00" + os.urandom(4096))
@@ -431,8 +553,11 @@ def _journal_cases() -> list[Case]:
 
     rows: list[tuple[str, tuple[str, ...], Callable[[Path], None]]] = [
         ("resume a journal of another wall", ("sim", cs, "--journal", "{d}/j.db", "--resume"), other_wall),
-        ("resume a journal of the same ids, other geometry", ("sim", cs, "--journal", "{d}/j.db", "--resume"),
-         same_ids_other_geometry),
+        (
+            "resume a journal of the same ids, other geometry",
+            ("sim", cs, "--journal", "{d}/j.db", "--resume"),
+            same_ids_other_geometry,
+        ),
         ("resume a journal of another fleet", ("sim", cs, "--journal", "{d}/j.db", "--resume"), other_fleet),
         ("journal already holds a mission", ("sim", cs, "--journal", "{d}/j.db"), finished),
         ("resume a missing journal", ("sim", cs, "--journal", "{d}/none.db", "--resume"), lambda d: None),
@@ -441,10 +566,16 @@ def _journal_cases() -> list[Case]:
         ("another program's database", ("sim", cs, "--journal", "{d}/j.db", "--resume"), foreign_db),
         ("another program's database, new mission", ("sim", cs, "--journal", "{d}/j.db"), foreign_db),
         ("journal is a folder", ("sim", cs, "--journal", "{d}/jdir"), lambda d: (d / "jdir").mkdir()),
-        ("mission-control resumes another wall", ("mission-control", cs, "--journal", "{d}/j.db", "--resume",
-                                                  "--max-time", "0.1"), other_wall),
-        ("mission-control on another program's database",
-         ("mission-control", cs, "--journal", "{d}/j.db", "--max-time", "0.1"), foreign_db),
+        (
+            "mission-control resumes another wall",
+            ("mission-control", cs, "--journal", "{d}/j.db", "--resume", "--max-time", "0.1"),
+            other_wall,
+        ),
+        (
+            "mission-control on another program's database",
+            ("mission-control", cs, "--journal", "{d}/j.db", "--max-time", "0.1"),
+            foreign_db,
+        ),
     ]
     if os.geteuid() != 0:
         rows.append(("read-only journal", ("sim", cs, "--journal", "{d}/j.db", "--resume"), read_only))
@@ -454,9 +585,13 @@ def _journal_cases() -> list[Case]:
 # ------------------------------------------------------------------------------------------ configs, keys, network
 
 
-CONFIG_BOMB = b"a: &a [1,1,1,1,1,1,1,1,1]\n" + b"".join(
-    f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join(['*' + chr(97 + i)] * 9)}]\n".encode() for i in range(7)
-) + b"velocity_lag_s: *h\n"
+CONFIG_BOMB = (
+    b"a: &a [1,1,1,1,1,1,1,1,1]\n"
+    + b"".join(
+        f"{chr(98 + i)}: &{chr(98 + i)} [{', '.join(['*' + chr(97 + i)] * 9)}]\n".encode() for i in range(7)
+    )
+    + b"velocity_lag_s: *h\n"
+)
 
 
 def _config_cases() -> list[Case]:
@@ -476,31 +611,76 @@ def _config_cases() -> list[Case]:
     ]
     cases = [Case("configs", name, fly, _write("uav.yaml", content)) for name, content in rows]
     cases.append(Case("configs", "uav.yaml missing", fly))
-    cases.append(Case("configs", "--calibration missing", ("fly", "--uav", "brick", "--sim", "--blueprint", cs,
-                                                           "--task", "B0", "--camera", "render", "--calibration",
-                                                           "{d}/none.yaml")))
+    cases.append(
+        Case(
+            "configs",
+            "--calibration missing",
+            (
+                "fly",
+                "--uav",
+                "brick",
+                "--sim",
+                "--blueprint",
+                cs,
+                "--task",
+                "B0",
+                "--camera",
+                "render",
+                "--calibration",
+                "{d}/none.yaml",
+            ),
+        )
+    )
     return cases
 
 
 def _network_cases() -> list[Case]:
     cs = str(CASE_STUDY)
     mc = ("mission-control", cs, "--max-time", "0.1")
-    fly = ("fly", "--uav", "brick", "--sim", "--blueprint", cs, "--mission", "tcp/127.0.0.1:7447", "--wait", "0.1")
+    fly = (
+        "fly",
+        "--uav",
+        "brick",
+        "--sim",
+        "--blueprint",
+        cs,
+        "--mission",
+        "tcp/127.0.0.1:7447",
+        "--wait",
+        "0.1",
+    )
     rows: list[tuple[str, tuple[str, ...], Callable[[Path], None]]] = [
-        ("mission-control on all interfaces without a key", (*mc, "--listen", "tcp/0.0.0.0:7447"), lambda d: None),
-        ("fly --mission listening on all interfaces without a key", (*fly, "--listen", "tcp/0.0.0.0:0"),
-         lambda d: None),
+        (
+            "mission-control on all interfaces without a key",
+            (*mc, "--listen", "tcp/0.0.0.0:7447"),
+            lambda d: None,
+        ),
+        (
+            "fly --mission listening on all interfaces without a key",
+            (*fly, "--listen", "tcp/0.0.0.0:0"),
+            lambda d: None,
+        ),
         ("mission-control --key-file missing", (*mc, "--key-file", "{d}/none.key"), lambda d: None),
         ("mission-control --key-file too short", (*mc, "--key-file", "{d}/k.key"), _write("k.key", b"short")),
         ("mission-control --key-file empty", (*mc, "--key-file", "{d}/k.key"), _write("k.key", b"")),
-        ("mission-control --key-file is a folder", (*mc, "--key-file", "{d}/kdir"), lambda d: (d / "kdir").mkdir()),
+        (
+            "mission-control --key-file is a folder",
+            (*mc, "--key-file", "{d}/kdir"),
+            lambda d: (d / "kdir").mkdir(),
+        ),
         ("fly --key-file missing", (*fly, "--key-file", "{d}/none.key"), lambda d: None),
         ("fly --key-file 1 MB", (*fly, "--key-file", "{d}/k.key"), _write("k.key", os.urandom(1 << 20))),
         ("mission-control --zenoh-config missing", (*mc, "--zenoh-config", "{d}/none.json5"), lambda d: None),
-        ("mission-control --zenoh-config garbage", (*mc, "--zenoh-config", "{d}/z.json5"),
-         _write("z.json5", b"{ this is : not json5 ")),
-        ("mission-control --zenoh-config unknown key", (*mc, "--zenoh-config", "{d}/z.json5"),
-         _write("z.json5", b'{ "warp": { "drive": true } }')),
+        (
+            "mission-control --zenoh-config garbage",
+            (*mc, "--zenoh-config", "{d}/z.json5"),
+            _write("z.json5", b"{ this is : not json5 "),
+        ),
+        (
+            "mission-control --zenoh-config unknown key",
+            (*mc, "--zenoh-config", "{d}/z.json5"),
+            _write("z.json5", b'{ "warp": { "drive": true } }'),
+        ),
         ("keygen -o into a missing folder", ("keygen", "-o", "{d}/no/such/k.key"), lambda d: None),
         ("keygen -o over an existing file", ("keygen", "-o", "{d}/k.key"), _write("k.key", b"precious")),
     ]
@@ -509,8 +689,14 @@ def _network_cases() -> list[Case]:
 
 def all_cases() -> list[Case]:
     """Every case of the campaign, in a fixed order."""
-    return _blueprint_cases() + _option_cases() + _output_cases() + _journal_cases() + _config_cases() \
+    return (
+        _blueprint_cases()
+        + _option_cases()
+        + _output_cases()
+        + _journal_cases()
+        + _config_cases()
         + _network_cases()
+    )
 
 
 # ------------------------------------------------------------------------------------------ running
@@ -550,10 +736,16 @@ def run_case(case: Case, workdir: Path, time_limit_s: float = TIME_LIMIT_S) -> O
         t0 = time.monotonic()
         timed_out = False
         # preexec_fn is safe here: this script starts no threads
-        proc = subprocess.Popen([*_masonry(), *argv], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                stderr=subprocess.PIPE, env=env, cwd=d,
-                                preexec_fn=_limits,  # noqa: PLW1509
-                                start_new_session=True)
+        proc = subprocess.Popen(
+            [*_masonry(), *argv],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env=env,
+            cwd=d,
+            preexec_fn=_limits,  # noqa: PLW1509
+            start_new_session=True,
+        )
         try:
             out_b, err_b = proc.communicate(timeout=time_limit_s)
         except subprocess.TimeoutExpired:
@@ -588,8 +780,11 @@ def main(argv: list[str] | None = None) -> int:
             o = run_case(case, Path(tmp), args.time_limit)
             outcomes.append(o)
             if args.verbose or o.kind != "clean":
-                print(f"[{i}/{len(cases)}] {o.kind:9s} {case.category:15s} {case.name}: exit {o.status}, "
-                      f"{o.seconds:.1f} s: {o.first_line[:160]}", flush=True)
+                print(
+                    f"[{i}/{len(cases)}] {o.kind:9s} {case.category:15s} {case.name}: exit {o.status}, "
+                    f"{o.seconds:.1f} s: {o.first_line[:160]}",
+                    flush=True,
+                )
     by_cat: dict[str, Counter[str]] = {}
     for o in outcomes:
         by_cat.setdefault(o.case.category, Counter())[o.kind] += 1
@@ -600,12 +795,30 @@ def main(argv: list[str] | None = None) -> int:
     total = Counter(o.kind for o in outcomes)
     print(f"{'all':16s} {len(outcomes):6d} " + " ".join(f"{total[k]:9d}" for k in kinds))
     slowest = max(outcomes, key=lambda o: o.seconds, default=None)
-    print(f"\n{len(outcomes)} cases in {time.monotonic() - t0:.0f} s; slowest {slowest.seconds:.1f} s "
-          f"({slowest.case.category}: {slowest.case.name})" if slowest else "no cases")
+    print(
+        f"\n{len(outcomes)} cases in {time.monotonic() - t0:.0f} s; slowest {slowest.seconds:.1f} s "
+        f"({slowest.case.category}: {slowest.case.name})"
+        if slowest
+        else "no cases"
+    )
     if args.json:
-        args.json.write_text(json.dumps([
-            {"category": o.case.category, "name": o.case.name, "kind": o.kind, "status": o.status,
-             "seconds": round(o.seconds, 2), "line": o.first_line} for o in outcomes], indent=1) + "\n")
+        args.json.write_text(
+            json.dumps(
+                [
+                    {
+                        "category": o.case.category,
+                        "name": o.case.name,
+                        "kind": o.kind,
+                        "status": o.status,
+                        "seconds": round(o.seconds, 2),
+                        "line": o.first_line,
+                    }
+                    for o in outcomes
+                ],
+                indent=1,
+            )
+            + "\n"
+        )
     return 0 if total["clean"] == len(outcomes) else 1
 
 

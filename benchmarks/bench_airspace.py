@@ -27,8 +27,11 @@ def plain_clear(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: floa
 
 def main(argv: list[str]) -> int:
     quick = "--quick" in argv
-    bp = running_bond(2, 8, brick_uavs=2, adhesion_uavs=1) if quick else running_bond(2, 30, brick_uavs=4,
-                                                                                       adhesion_uavs=2)
+    bp = (
+        running_bond(2, 8, brick_uavs=2, adhesion_uavs=1)
+        if quick
+        else running_bond(2, 30, brick_uavs=4, adhesion_uavs=2)
+    )
     calls: list[tuple[list[Volume], list[Volume], float, float]] = []
 
     def recording(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: float, sep_z_m: float) -> bool:
@@ -41,7 +44,9 @@ def main(argv: list[str]) -> int:
     finally:
         airspace.volumes_clear = volumes_clear
     pairs = sum(len(v) * len(o) for v, o, _x, _z in calls)
-    print(f"{len(calls)} questions recorded ({pairs} volume pairs, {pairs / max(1, len(calls)):.1f} per question)")
+    print(
+        f"{len(calls)} questions recorded ({pairs} volume pairs, {pairs / max(1, len(calls)):.1f} per question)"
+    )
     assert all(volumes_clear(*c) == plain_clear(*c) for c in calls), "the two disagree"
     timings = {}
     for name, fn in (("volumes_clear (written out)", volumes_clear), ("any(volumes_conflict)", plain_clear)):
@@ -52,7 +57,9 @@ def main(argv: list[str]) -> int:
                 fn(*c)
             best = min(best, time.perf_counter() - t0)
         timings[name] = best
-        print(f"  {name:30s} {best * 1e3:8.1f} ms for all, {best / max(1, len(calls)) * 1e6:6.2f} us per question")
+        print(
+            f"  {name:30s} {best * 1e3:8.1f} ms for all, {best / max(1, len(calls)) * 1e6:6.2f} us per question"
+        )
     fast, plain = timings.values()
     print(f"  speed-up x{plain / fast:.2f}")
     for name, fn in (("volumes_clear (written out)", volumes_clear), ("any(volumes_conflict)", plain_clear)):
@@ -60,7 +67,9 @@ def main(argv: list[str]) -> int:
         try:
             t0 = time.perf_counter()
             r = simulate(bp, seed=0)
-            print(f"  mission with {name:30s} {time.perf_counter() - t0:6.1f} s wall, makespan {r.makespan_s:.1f} s")
+            print(
+                f"  mission with {name:30s} {time.perf_counter() - t0:6.1f} s wall, makespan {r.makespan_s:.1f} s"
+            )
         finally:
             airspace.volumes_clear = volumes_clear
     return 0

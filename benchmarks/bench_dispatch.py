@@ -29,12 +29,17 @@ from masonry.planner.dispatch import POLICIES, Dispatcher
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 
 
-def planner_wall(courses: int, per_course: int, brick_uavs: int, adhesion_uavs: int) -> tuple[Plan, list[UavSpec]]:
+def planner_wall(
+    courses: int, per_course: int, brick_uavs: int, adhesion_uavs: int
+) -> tuple[Plan, list[UavSpec]]:
     from masonry.blueprint_gen import running_bond
     from masonry.planner import plan
 
     bp = running_bond(
-        courses=courses, bricks_per_course=per_course, placed_courses=1, brick_uavs=brick_uavs,
+        courses=courses,
+        bricks_per_course=per_course,
+        placed_courses=1,
+        brick_uavs=brick_uavs,
         adhesion_uavs=adhesion_uavs,
     )
     return plan(bp, check_marker_ids=False), list(bp.fleet)  # up to 20,000 bricks: a planner-only study
@@ -103,8 +108,15 @@ def direct_wall(
     return Plan(tuple(tasks), tuple(deps), tuple(conflicts)), fleet
 
 
-def run(plan: Plan, fleet: list[UavSpec], policy: str, durations: dict[str, float] | None,
-        model_durations: dict[str, float], fail_rate: float, seed: int) -> dict[str, float]:
+def run(
+    plan: Plan,
+    fleet: list[UavSpec],
+    policy: str,
+    durations: dict[str, float] | None,
+    model_durations: dict[str, float],
+    fail_rate: float,
+    seed: int,
+) -> dict[str, float]:
     rng = random.Random(seed)
     t0 = time.perf_counter()
     d = Dispatcher(plan, fleet, policy, max_attempts=1000, durations_s=durations)
@@ -140,8 +152,14 @@ def run(plan: Plan, fleet: list[UavSpec], policy: str, durations: dict[str, floa
     per_event.sort()
     p50 = per_event[len(per_event) // 2]
     p99 = per_event[int(0.99 * (len(per_event) - 1))]
-    return {"build_s": build_s, "events": d.events, "inside_s": inside, "makespan_s": now, "p50_s": p50,
-            "p99_s": p99}
+    return {
+        "build_s": build_s,
+        "events": d.events,
+        "inside_s": inside,
+        "makespan_s": now,
+        "p50_s": p50,
+        "p99_s": p99,
+    }
 
 
 def makespan_table(seed: int) -> None:
@@ -150,20 +168,31 @@ def makespan_table(seed: int) -> None:
     from masonry.planner import plan as make_plan
     from masonry.planner.bounds import dispatch_makespan_s
 
-    print("makespan / lower bound in model time: task durations from estimate_durations_s without the approach,")
+    print(
+        "makespan / lower bound in model time: task durations from estimate_durations_s without the approach,"
+    )
     print("plus the flight from each UAV's position to the task's start at 1 m/s; no faults")
     print(f"{'wall':<22}{'fleet':>8}{'LB s':>9}" + "".join(f"{p:>15}" for p in POLICIES))
     for courses, per in ((4, 6), (10, 30), (20, 60)):
         for brick_uavs, adhesion_uavs in ((1, 1), (2, 1), (4, 2), (8, 4)):
-            bp = running_bond(courses=courses, bricks_per_course=per, placed_courses=1, brick_uavs=brick_uavs,
-                              adhesion_uavs=adhesion_uavs)
+            bp = running_bond(
+                courses=courses,
+                bricks_per_course=per,
+                placed_courses=1,
+                brick_uavs=brick_uavs,
+                adhesion_uavs=adhesion_uavs,
+            )
             plan = make_plan(bp, check_marker_ids=False)
             durations = estimate_durations_s(plan, bp.fleet, include_approach=False)
             bound = lower_bound_s(plan, bp.fleet, durations)
-            ratios = [dispatch_makespan_s(plan, bp.fleet, durations, p, cruise_speed_mps=1.0) / bound
-                      for p in POLICIES]
-            print(f"{f'{courses}x{per} running bond':<22}{f'{brick_uavs}+{adhesion_uavs}':>8}{bound:>9.0f}"
-                  + "".join(f"{r:>15.3f}" for r in ratios))
+            ratios = [
+                dispatch_makespan_s(plan, bp.fleet, durations, p, cruise_speed_mps=1.0) / bound
+                for p in POLICIES
+            ]
+            print(
+                f"{f'{courses}x{per} running bond':<22}{f'{brick_uavs}+{adhesion_uavs}':>8}{bound:>9.0f}"
+                + "".join(f"{r:>15.3f}" for r in ratios)
+            )
 
 
 def journal_rate(records: int) -> None:
@@ -186,9 +215,11 @@ def journal_rate(records: int) -> None:
             t0 = time.perf_counter()
             state = read_journal(path)
             replay_s = time.perf_counter() - t0
-        print(f"journal sync={sync}: {n} records in {dt:.2f} s = {n / dt:.0f} records/s "
-              f"({1e3 * dt / n:.2f} ms each, one commit per record); "
-              f"replay of {len(state.records)} records {1e3 * replay_s:.0f} ms")
+        print(
+            f"journal sync={sync}: {n} records in {dt:.2f} s = {n / dt:.0f} records/s "
+            f"({1e3 * dt / n:.2f} ms each, one commit per record); "
+            f"replay of {len(state.records)} records {1e3 * replay_s:.0f} ms"
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -212,9 +243,11 @@ def main(argv: list[str] | None = None) -> int:
         journal_rate(args.journal)
         return 0
 
-    print(f"python {platform.python_version()} on {platform.machine()}, {args.courses} courses x "
-          f"{args.per_course} bricks, {args.brick_uavs} brick + {args.adhesion_uavs} adhesion UAVs, "
-          f"fail rate {args.fail_rate}")
+    print(
+        f"python {platform.python_version()} on {platform.machine()}, {args.courses} courses x "
+        f"{args.per_course} bricks, {args.brick_uavs} brick + {args.adhesion_uavs} adhesion UAVs, "
+        f"fail rate {args.fail_rate}"
+    )
     t0 = time.perf_counter()
     source = "direct"
     if not args.direct:
@@ -227,19 +260,27 @@ def main(argv: list[str] | None = None) -> int:
         plan, fleet = direct_wall(args.courses, args.per_course, args.brick_uavs, args.adhesion_uavs)
     plan_s = time.perf_counter() - t0
     bricks = sum(1 for t in plan.tasks if isinstance(t, BrickTask))
-    print(f"plan ({source}): {bricks} bricks, {len(plan.tasks)} tasks, {len(plan.dependencies)} dependencies, "
-          f"{len(plan.conflicts)} conflicts, built in {plan_s:.1f} s")
+    print(
+        f"plan ({source}): {bricks} bricks, {len(plan.tasks)} tasks, {len(plan.dependencies)} dependencies, "
+        f"{len(plan.conflicts)} conflicts, built in {plan_s:.1f} s"
+    )
     durations = estimate_durations_s(plan, fleet)
     bound = lower_bound_s(plan, fleet, durations)
     print(f"lower bound {bound / 3600:.1f} h of model time")
-    print(f"{'policy':<15}{'init s':>8}{'events':>9}{'events/s':>11}{'mean us':>9}{'p50 us':>8}{'p99 us':>8}"
-          f"{'makespan/LB':>13}")
+    print(
+        f"{'policy':<15}{'init s':>8}{'events':>9}{'events/s':>11}{'mean us':>9}{'p50 us':>8}{'p99 us':>8}"
+        f"{'makespan/LB':>13}"
+    )
     for policy in args.policies:
-        r = run(plan, fleet, policy, None if args.unweighted else durations, durations, args.fail_rate, args.seed)
+        r = run(
+            plan, fleet, policy, None if args.unweighted else durations, durations, args.fail_rate, args.seed
+        )
         rate = r["events"] / r["inside_s"]
-        print(f"{policy:<15}{r['build_s']:>8.1f}{int(r['events']):>9}{rate:>11.0f}"
-              f"{1e6 * r['inside_s'] / r['events']:>9.1f}{1e6 * r['p50_s']:>8.0f}{1e6 * r['p99_s']:>8.0f}"
-              f"{r['makespan_s'] / bound:>13.3f}")
+        print(
+            f"{policy:<15}{r['build_s']:>8.1f}{int(r['events']):>9}{rate:>11.0f}"
+            f"{1e6 * r['inside_s'] / r['events']:>9.1f}{1e6 * r['p50_s']:>8.0f}{1e6 * r['p99_s']:>8.0f}"
+            f"{r['makespan_s'] / bound:>13.3f}"
+        )
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak memory {peak_mb:.0f} MB")
     return 0

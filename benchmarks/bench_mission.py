@@ -98,7 +98,11 @@ def _sep(separation: bool) -> dict[str, bool]:
     """``separation=False`` for simulate() when asked (and when this version of simulate has the option)."""
     import inspect
 
-    return {} if separation or "separation" not in inspect.signature(simulate).parameters else {"separation": False}
+    return (
+        {}
+        if separation or "separation" not in inspect.signature(simulate).parameters
+        else {"separation": False}
+    )
 
 
 def policies(quick: bool, separation: bool) -> None:
@@ -114,16 +118,21 @@ def policies(quick: bool, separation: bool) -> None:
             ("running bond 4x25, 4+2", running_bond(4, 25, brick_uavs=4, adhesion_uavs=2)),
             ("running_bond_200.yaml, 3+2", "running_bond_200.yaml"),
         ]
-    print(f"makespan / lower bound per policy (seed 0, separation {'on' if separation else 'off'}); "
-          "clearance = serialised-set bound (see the docstring)")
-    print(f"  {'wall':<30} {'policy':<14} {'makespan':>9} {'bound0':>7} {'bound':>7} {'ratio':>6} {'clearance':>9} "
-          f"{'ratio*':>6} {'done':>7} {'wall s':>7} {'cpu s':>6}")
+    print(
+        f"makespan / lower bound per policy (seed 0, separation {'on' if separation else 'off'}); "
+        "clearance = serialised-set bound (see the docstring)"
+    )
+    print(
+        f"  {'wall':<30} {'policy':<14} {'makespan':>9} {'bound0':>7} {'bound':>7} {'ratio':>6} {'clearance':>9} "
+        f"{'ratio*':>6} {'done':>7} {'wall s':>7} {'cpu s':>6}"
+    )
     for label, bp in walls:
         if bp is None or isinstance(bp, str):
             from masonry.blueprint import load_blueprint
 
-            bp = load_blueprint(os.path.join(os.path.dirname(__file__), "..", "blueprints",
-                                             bp or "paper_case_study.yaml"))
+            bp = load_blueprint(
+                os.path.join(os.path.dirname(__file__), "..", "blueprints", bp or "paper_case_study.yaml")
+            )
         p = make_plan(bp)
         minimum = min_durations_s(p, cruise_altitude_m=bp.cruise_altitude_m)
         clear = clearance_bound_s(p, minimum)
@@ -133,12 +142,16 @@ def policies(quick: bool, separation: bool) -> None:
             r = simulate(bp, policy=policy, **_sep(separation))
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             both = max(r.lower_bound_s, clear)
-            print(f"  {label:<30} {policy:<14} {r.makespan_s:9.1f} {bound0:7.1f} {r.lower_bound_s:7.1f} "
-                  f"{r.makespan_s / max(r.lower_bound_s, 1e-9):6.2f} {clear:9.1f} {r.makespan_s / both:6.2f} "
-                  f"{sum(t.status == 'done' for t in r.tasks):3d}/{len(r.tasks):<3d} {wall:7.1f} {cpu:6.1f}")
-    print("  bound0 = lower_bound_s over min_durations_s only (before min_cycles_s); bound = the report's "
-          "lower_bound_s (role term over min_cycles_s); ratio = makespan / bound; ratio* = makespan / max(bound, "
-          "clearance); an incomplete run (done < all) has a meaningless makespan")
+            print(
+                f"  {label:<30} {policy:<14} {r.makespan_s:9.1f} {bound0:7.1f} {r.lower_bound_s:7.1f} "
+                f"{r.makespan_s / max(r.lower_bound_s, 1e-9):6.2f} {clear:9.1f} {r.makespan_s / both:6.2f} "
+                f"{sum(t.status == 'done' for t in r.tasks):3d}/{len(r.tasks):<3d} {wall:7.1f} {cpu:6.1f}"
+            )
+    print(
+        "  bound0 = lower_bound_s over min_durations_s only (before min_cycles_s); bound = the report's "
+        "lower_bound_s (role term over min_cycles_s); ratio = makespan / bound; ratio* = makespan / max(bound, "
+        "clearance); an incomplete run (done < all) has a meaningless makespan"
+    )
 
 
 def gusts(seeds: int) -> None:
@@ -148,8 +161,12 @@ def gusts(seeds: int) -> None:
 
     bp = load_blueprint(os.path.join(os.path.dirname(__file__), "..", "blueprints", "paper_case_study.yaml"))
     p = make_plan(bp)
-    print(f"gusts: one task of the paper's case study, {seeds} seeds each (masonry fly --sim --fault gusts=S)")
-    print(f"  {'task':<5} {'gusts m/s':>9} {'done':>6} {'error/coverage mean':>20} {'max':>7} {'duration s':>10}  failures")
+    print(
+        f"gusts: one task of the paper's case study, {seeds} seeds each (masonry fly --sim --fault gusts=S)"
+    )
+    print(
+        f"  {'task':<5} {'gusts m/s':>9} {'done':>6} {'error/coverage mean':>20} {'max':>7} {'duration s':>10}  failures"
+    )
     for task_id in ("B0", "A0"):
         task = p.task(task_id)
         for g in (0.0, 0.5, 1.0, 1.5, 2.0):
@@ -157,15 +174,28 @@ def gusts(seeds: int) -> None:
             for seed in range(seeds):
                 world = World(bp, seed=seed, faults=Faults(gusts_mps=g))
                 uav = world.add_uav(next(u for u in bp.fleet if u.role == task.kind))
-                cfg = UavConfig.from_spec(uav.spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
-                run = fly_task(cfg, task, fc=uav.fc, clock=world.clock, gripper=uav.gripper, camera=uav.camera,
-                               sprayer=uav.sprayer, advance=world.step)
+                cfg = UavConfig.from_spec(
+                    uav.spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers
+                )
+                run = fly_task(
+                    cfg,
+                    task,
+                    fc=uav.fc,
+                    clock=world.clock,
+                    gripper=uav.gripper,
+                    camera=uav.camera,
+                    sprayer=uav.sprayer,
+                    advance=world.step,
+                )
                 res = run.result
                 if res is not None and res.status == "done":
                     ok += 1
                     durations.append(res.duration_s)
-                    values.append(world.placement_error_m(task.brick) if task.kind == "brick"  # type: ignore[union-attr]
-                                  else world.coverage(task))  # type: ignore[arg-type]
+                    values.append(
+                        world.placement_error_m(task.brick)
+                        if task.kind == "brick"  # type: ignore[union-attr]
+                        else world.coverage(task)
+                    )  # type: ignore[arg-type]
                 else:
                     why = res.reason if res is not None else "no result"
                     why = why.split(" of ")[0].split(" brick ")[0].split(" over ")[0]
@@ -173,9 +203,13 @@ def gusts(seeds: int) -> None:
             unit = "mm" if task.kind == "brick" else ""
             scale = 1000.0 if task.kind == "brick" else 1.0
             mean = f"{statistics.mean(values) * scale:.{1 if unit else 2}f} {unit}" if values else "-"
-            worst = (f"{(max(values) if unit else min(values)) * scale:.{1 if unit else 2}f}" if values else "-")
+            worst = (
+                f"{(max(values) if unit else min(values)) * scale:.{1 if unit else 2}f}" if values else "-"
+            )
             dur = f"{statistics.mean(durations):.1f}" if durations else "-"
-            print(f"  {task_id:<5} {g:9.1f} {ok:3d}/{seeds:<2d} {mean:>20} {worst:>7} {dur:>10}  {reasons or ''}")
+            print(
+                f"  {task_id:<5} {g:9.1f} {ok:3d}/{seeds:<2d} {mean:>20} {worst:>7} {dur:>10}  {reasons or ''}"
+            )
     print("  (brick: placement error, max; adhesion: coverage, min)")
 
 
@@ -185,15 +219,23 @@ def big_wall(courses: int, per_course: int, separation: bool) -> None:
     r = simulate(bp, camera="geometric", **_sep(separation))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     done = sum(1 for t in r.tasks if t.status == "done")
-    print(f"running bond {courses}x{per_course} = {len(bp.bricks)} bricks, 4 brick + 2 adhesion UAVs, geometric camera, "
-          f"separation {'on' if separation else 'off'}")
+    print(
+        f"running bond {courses}x{per_course} = {len(bp.bricks)} bricks, 4 brick + 2 adhesion UAVs, geometric camera, "
+        f"separation {'on' if separation else 'off'}"
+    )
     print(f"  tasks done {done}/{len(r.tasks)}, completed {r.completed}")
-    print(f"  simulated {r.sim_time_s:.0f} s in {wall:.1f} s wall ({cpu:.1f} s CPU; load average before "
-          f"{_load_before:.1f}): real-time factor x{r.sim_time_s / wall:.0f} (x{r.sim_time_s / cpu:.0f} per CPU second)")
-    print(f"  makespan {r.makespan_s:.0f} s, lower bound {r.lower_bound_s:.0f} s, "
-          f"ratio {r.makespan_s / max(r.lower_bound_s, 1e-9):.2f}")
-    print(f"  messages {r.messages}, violations: conflict {r.conflict_violations}, "
-          f"dependency {r.dependency_violations}, min separation {r.min_separation_m}")
+    print(
+        f"  simulated {r.sim_time_s:.0f} s in {wall:.1f} s wall ({cpu:.1f} s CPU; load average before "
+        f"{_load_before:.1f}): real-time factor x{r.sim_time_s / wall:.0f} (x{r.sim_time_s / cpu:.0f} per CPU second)"
+    )
+    print(
+        f"  makespan {r.makespan_s:.0f} s, lower bound {r.lower_bound_s:.0f} s, "
+        f"ratio {r.makespan_s / max(r.lower_bound_s, 1e-9):.2f}"
+    )
+    print(
+        f"  messages {r.messages}, violations: conflict {r.conflict_violations}, "
+        f"dependency {r.dependency_violations}, min separation {r.min_separation_m}"
+    )
 
 
 _load_before = 0.0
@@ -206,8 +248,11 @@ def main() -> None:
     ap.add_argument("--skip-big", action="store_true", help="skip the 1,000-brick wall")
     ap.add_argument("--skip-gusts", action="store_true")
     ap.add_argument("--skip-policies", action="store_true")
-    ap.add_argument("--no-separation", action="store_true",
-                    help="simulate(separation=False): no transit layers or site columns (docs/safety.md)")
+    ap.add_argument(
+        "--no-separation",
+        action="store_true",
+        help="simulate(separation=False): no transit layers or site columns (docs/safety.md)",
+    )
     ap.add_argument("--courses", type=int, default=20)
     ap.add_argument("--per-course", type=int, default=50)
     args = ap.parse_args()

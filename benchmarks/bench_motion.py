@@ -73,7 +73,9 @@ def main() -> None:
     print(f"body_to_world_floats                  {t_rot_fl:7.2f} us  (x{t_rot_np / t_rot_fl:.1f})")
 
 
-def _inlined(coef: list[list[float]], t: float, duration: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def _inlined(
+    coef: list[list[float]], t: float, duration: float
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """The Horner sums fsm/model.py wrote out per tick before ``sample_floats`` (reference and feed-forward)."""
     if t < 0.0:  # noqa: PLR1730
         t = 0.0
@@ -87,11 +89,14 @@ def _inlined(coef: list[list[float]], t: float, duration: float) -> tuple[tuple[
         ((((c5 * t + c4) * t + c3) * t + c2) * t + c1) * t + c0,
     )
     ff = (
-        (((5.0 * a5 * t + 4.0 * a4) * t + 3.0 * a3) * t + 2.0 * a2) * t + a1
+        (((5.0 * a5 * t + 4.0 * a4) * t + 3.0 * a3) * t + 2.0 * a2) * t
+        + a1
         + lag * (((20.0 * a5 * t + 12.0 * a4) * t + 6.0 * a3) * t + 2.0 * a2),
-        (((5.0 * b5 * t + 4.0 * b4) * t + 3.0 * b3) * t + 2.0 * b2) * t + b1
+        (((5.0 * b5 * t + 4.0 * b4) * t + 3.0 * b3) * t + 2.0 * b2) * t
+        + b1
         + lag * (((20.0 * b5 * t + 12.0 * b4) * t + 6.0 * b3) * t + 2.0 * b2),
-        (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t + c1
+        (((5.0 * c5 * t + 4.0 * c4) * t + 3.0 * c3) * t + 2.0 * c2) * t
+        + c1
         + lag * (((20.0 * c5 * t + 12.0 * c4) * t + 6.0 * c3) * t + 2.0 * c2),
     )
     return ref, ff

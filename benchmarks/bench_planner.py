@@ -71,10 +71,13 @@ def cli_run(tmp: Path) -> float:
     path.write_text(format_blueprint(running_bond(courses, per_course, placed_courses=1)))
     out = tmp / "plan_cli.json"
     masonry = Path(sys.executable).with_name("masonry")
-    command = [str(masonry)] if masonry.exists() else [sys.executable, "-c", "from masonry.cli import main; main()"]
+    command = (
+        [str(masonry)] if masonry.exists() else [sys.executable, "-c", "from masonry.cli import main; main()"]
+    )
     t0 = time.perf_counter()
-    subprocess.run([*command, "plan", str(path), "--planner-only", "--format", "json", "--output", str(out)],
-                   check=True)
+    subprocess.run(
+        [*command, "plan", str(path), "--planner-only", "--format", "json", "--output", str(out)], check=True
+    )
     elapsed = time.perf_counter() - t0
     with out.open() as fh:
         data = json.load(fh)
@@ -87,17 +90,24 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="1k and 10k bricks only, no CLI run")
     args = parser.parse_args()
     sizes = [1_000, 10_000] if args.quick else [1_000, 10_000, 100_000]
-    print(f"planner benchmark on {os.cpu_count()} CPUs, python {sys.version.split()[0]}, load {os.getloadavg()[0]:.1f}")
+    print(
+        f"planner benchmark on {os.cpu_count()} CPUs, python {sys.version.split()[0]}, load {os.getloadavg()[0]:.1f}"
+    )
     header = f"{'bricks':>8} {'tasks':>8} {'conflicts':>10} {'load s':>7} {'plan s':>7} {'json s':>7} {'total s':>8} {'bricks/s':>9}"
     print(header)
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         for n in sizes:
             r = bench(n, tmp)
-            print(f"{r['bricks']:>8} {r['tasks']:>8} {r['conflicts']:>10} {r['load_s']:>7.2f} {r['plan_s']:>7.2f} "
-                  f"{r['json_s']:>7.2f} {r['total_s']:>8.2f} {r['bricks_per_s']:>9.0f}", flush=True)
+            print(
+                f"{r['bricks']:>8} {r['tasks']:>8} {r['conflicts']:>10} {r['load_s']:>7.2f} {r['plan_s']:>7.2f} "
+                f"{r['json_s']:>7.2f} {r['total_s']:>8.2f} {r['bricks_per_s']:>9.0f}",
+                flush=True,
+            )
         if not args.quick:
-            print("masonry plan --planner-only on the 20,000-brick wall (100 courses x 200), --format json --output FILE:")
+            print(
+                "masonry plan --planner-only on the 20,000-brick wall (100 courses x 200), --format json --output FILE:"
+            )
             print(f"  {cli_run(tmp):.2f} s wall clock, process start included")
 
 

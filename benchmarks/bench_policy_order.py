@@ -32,7 +32,9 @@ def column_order(bp: Blueprint) -> Blueprint:
 def main() -> None:
     walls = [(2, 30)] if "--quick" in sys.argv else [(4, 25), (2, 30)]
     seeds = (0, 1, 2)
-    print(f"{'wall':<6} {'listed':<8} {'policy':<13} | makespans (seeds {', '.join(map(str, seeds))}) | mean | wall s")
+    print(
+        f"{'wall':<6} {'listed':<8} {'policy':<13} | makespans (seeds {', '.join(map(str, seeds))}) | mean | wall s"
+    )
     for courses, per in walls:
         base = running_bond(courses, per)
         for listed, bp in (("courses", base), ("columns", column_order(base))):
@@ -45,8 +47,11 @@ def main() -> None:
                     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
                     ms.append(r.makespan_s)
                 means[policy] = statistics.mean(ms)
-                print(f"{courses}x{per:<4} {listed:<8} {policy:<13} | {' '.join(f'{m:8.1f}' for m in ms)} | "
-                      f"{means[policy]:8.1f} | {time.perf_counter() - t0:.0f}", flush=True)
+                print(
+                    f"{courses}x{per:<4} {listed:<8} {policy:<13} | {' '.join(f'{m:8.1f}' for m in ms)} | "
+                    f"{means[policy]:8.1f} | {time.perf_counter() - t0:.0f}",
+                    flush=True,
+                )
             gain = means["critical-path"] / means["fifo"] - 1.0
             print(f"{courses}x{per:<4} {listed:<8} critical-path against fifo: {gain:+.1%}", flush=True)
 

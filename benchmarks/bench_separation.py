@@ -49,12 +49,19 @@ def sweep() -> None:
                 r = simulate(bp, brick_uavs=nb, adhesion_uavs=na, policy=policy, seed=seed).to_dict()
                 sep = r["min_separation_m"]
                 seps.append(sep)
-                flag = "" if r["completed"] and r["conflict_violations"] == 0 else "  (incomplete or violation!)"
-                print(f"{label:<18} {nb}+{na:<3} {policy:<13} {seed:>4} | {r['makespan_s']:>9.1f} {sep:>8.3f} | "
-                      f"{time.perf_counter() - t0:.0f}{flag}", flush=True)
+                flag = (
+                    "" if r["completed"] and r["conflict_violations"] == 0 else "  (incomplete or violation!)"
+                )
+                print(
+                    f"{label:<18} {nb}+{na:<3} {policy:<13} {seed:>4} | {r['makespan_s']:>9.1f} {sep:>8.3f} | "
+                    f"{time.perf_counter() - t0:.0f}{flag}",
+                    flush=True,
+                )
     below = [x for x in seps if x is not None and x < 1.0]
-    print(f"{len(seps)} runs: min separation {min(x for x in seps if x is not None):.3f} m, "
-          f"{len(below)} below 1.0 m")
+    print(
+        f"{len(seps)} runs: min separation {min(x for x in seps if x is not None):.3f} m, "
+        f"{len(below)} below 1.0 m"
+    )
 
 
 def main() -> None:
@@ -63,8 +70,10 @@ def main() -> None:
         return
     quick = "--quick" in sys.argv
     cases = CASES[:5] if quick else CASES
-    print(f"{'blueprint':<20} {'fleet':>5} | {'makespan off':>12} {'min sep off':>11} | {'makespan on':>11} "
-          f"{'min sep on':>10} {'ratio':>6} | wall s")
+    print(
+        f"{'blueprint':<20} {'fleet':>5} | {'makespan off':>12} {'min sep off':>11} | {'makespan on':>11} "
+        f"{'min sep on':>10} {'ratio':>6} | wall s"
+    )
     for name, nb, na in cases:
         bp = load_blueprint(ROOT / "blueprints" / f"{name}.yaml")
         row = []
@@ -75,9 +84,11 @@ def main() -> None:
         fleet = f"{nb}+{na}" if nb is not None else "own"
         (m0, s0, c0), (m1, s1, c1) = row
         flag = "" if c0 and c1 else "  (incomplete!)"
-        print(f"{name:<20} {fleet:>5} | {m0:>12.1f} {s0 if s0 is not None else float('nan'):>11.3f} | {m1:>11.1f} "
-              f"{s1 if s1 is not None else float('nan'):>10.3f} {m1 / m0:>6.2f} | {time.perf_counter() - t0:.0f}{flag}",
-              flush=True)
+        print(
+            f"{name:<20} {fleet:>5} | {m0:>12.1f} {s0 if s0 is not None else float('nan'):>11.3f} | {m1:>11.1f} "
+            f"{s1 if s1 is not None else float('nan'):>10.3f} {m1 / m0:>6.2f} | {time.perf_counter() - t0:.0f}{flag}",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -29,7 +29,9 @@ def main() -> None:
     ap.add_argument("--no-separation", action="store_true")
     ap.add_argument("--profile", default=None, help="write a cProfile of the run to this file")
     args = ap.parse_args()
-    bp = running_bond(args.courses, args.per_course, brick_uavs=args.brick_uavs, adhesion_uavs=args.adhesion_uavs)
+    bp = running_bond(
+        args.courses, args.per_course, brick_uavs=args.brick_uavs, adhesion_uavs=args.adhesion_uavs
+    )
     kwargs = {"camera": "geometric", "seed": args.seed, "separation": not args.no_separation}
     cpu0, wall0 = time.process_time(), time.perf_counter()
     if args.profile:
@@ -44,16 +46,24 @@ def main() -> None:
     done = sum(1 for t in report.tasks if t.status == "done")
     errs = list(report.placement_error_m.values())
     sched = ";".join(f"{t.id},{t.uav},{t.start_s:.2f},{t.end_s}" for t in report.tasks)
-    print(f"wall {args.courses}x{args.per_course}, {args.brick_uavs}+{args.adhesion_uavs} UAVs, seed {args.seed}, "
-          f"separation {'off' if args.no_separation else 'on'}")
-    print(f"  completed {report.completed}, tasks done {done}/{len(report.tasks)}, makespan {report.makespan_s:.1f} s, "
-          f"simulated {report.sim_time_s:.1f} s, messages {report.messages}")
-    print(f"  min_separation_m {report.min_separation_m}, placement error mean "
-          f"{statistics.fmean(errs) if errs else float('nan'):.5f} m, "
-          f"violations {report.conflict_violations}/{report.dependency_violations}")
+    print(
+        f"wall {args.courses}x{args.per_course}, {args.brick_uavs}+{args.adhesion_uavs} UAVs, seed {args.seed}, "
+        f"separation {'off' if args.no_separation else 'on'}"
+    )
+    print(
+        f"  completed {report.completed}, tasks done {done}/{len(report.tasks)}, makespan {report.makespan_s:.1f} s, "
+        f"simulated {report.sim_time_s:.1f} s, messages {report.messages}"
+    )
+    print(
+        f"  min_separation_m {report.min_separation_m}, placement error mean "
+        f"{statistics.fmean(errs) if errs else float('nan'):.5f} m, "
+        f"violations {report.conflict_violations}/{report.dependency_violations}"
+    )
     print(f"  schedule digest {hashlib.sha1(sched.encode()).hexdigest()[:12]}")
-    print(f"  CPU {cpu:.2f} s, wall {wall:.2f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "
-          f"x{report.sim_time_s / wall:.0f} (wall), {cpu / report.sim_time_s * 1e3:.2f} ms CPU per simulated s")
+    print(
+        f"  CPU {cpu:.2f} s, wall {wall:.2f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "
+        f"x{report.sim_time_s / wall:.0f} (wall), {cpu / report.sim_time_s * 1e3:.2f} ms CPU per simulated s"
+    )
 
 
 if __name__ == "__main__":

@@ -55,7 +55,8 @@ class Rig:
         queued = tasks if tasks is not None else [brick_task() if kind == "brick" else adhesion_task()]
         # clearance: the link is a ScriptedClearanceLink (mission control's airspace) with these settings
         self.link: Any = (
-            QueueMissionLink(queued) if clearance is None
+            QueueMissionLink(queued)
+            if clearance is None
             else ScriptedClearanceLink(queued, self.clock, **clearance)
         )
         airspace = None if clearance is None else self.link
@@ -68,8 +69,9 @@ class Rig:
             cam_kwargs.update(camera or {})
             self.camera = FakeCamera(self.fc, [self.brick], markers=cfg.markers, **cam_kwargs)
             self.gripper = FakeGripper(contact=self._touching, clock=self.clock, **(gripper or {}))
-            self.uav: Any = BrickUav(cfg, self.fc, self.gripper, self.camera, self.link, self.clock,
-                                     clearance=airspace)
+            self.uav: Any = BrickUav(
+                cfg, self.fc, self.gripper, self.camera, self.link, self.clock, clearance=airspace
+            )
         else:
             self.sprayer = FakeSprayer(self.clock)
             self.uav = AdhesionUav(cfg, self.fc, self.sprayer, self.link, self.clock, clearance=airspace)

@@ -164,9 +164,18 @@ SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))
 
 
 @settings(max_examples=80, deadline=None)
-@given(st.lists(st.tuples(st.sampled_from(["a", "b", "c", "d"]),
-                          st.sampled_from(["req", "end", "away", "move", "lost", "tick"]),
-                          SITES, SITES, st.floats(1.2, 2.4)), max_size=40))
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["a", "b", "c", "d"]),
+            st.sampled_from(["req", "end", "away", "move", "lost", "tick"]),
+            SITES,
+            SITES,
+            st.floats(1.2, 2.4),
+        ),
+        max_size=40,
+    )
+)
 def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
     c = ColumnClearance(R, BASE, S, homes={"a": (-6.0, -8.0, 0.0), "b": (-3.0, -8.0, 0.0)})
     t = 0.0
@@ -189,15 +198,20 @@ def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
         assert c.conflicts() == []
         zones = [(u, v) for u in "abcd" for v in c.volumes(u) if v.kind == "zone"]
         for i, (u1, v1) in enumerate(zones):
-            for u2, v2 in zones[i + 1:]:
+            for u2, v2 in zones[i + 1 :]:
                 if u1 != u2:
                     assert math.dist(v1.a, v2.a) >= R - 1e-9, (u1, v1, u2, v2)
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)), st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
-       st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)), st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
-       st.floats(0, 1), st.floats(0, 1))
+@given(
+    st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+    st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+    st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+    st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0, 4)),
+    st.floats(0, 1),
+    st.floats(0, 1),
+)
 def test_points_in_volumes_that_do_not_conflict_keep_the_separation(p0, p1, q0, q1, s, u):
     from masonry.mission.airspace import Volume, volumes_conflict
 
@@ -263,8 +277,13 @@ def test_lateral_legs_fly_at_the_given_layer_and_wait_for_the_answer_where_they_
     early = [p for p in track if asked <= p[0] < asked + 2.9]
     assert early and all(math.hypot(p[1] - HOME[0], p[2] - HOME[1]) < 0.1 for p in early)
     # every lateral move (more than 0.5 m from both home and the pickup, on the way out) is at the layer
-    out = [p for p in track if p[4] == "pickup_goto" and math.hypot(p[1] - HOME[0], p[2] - HOME[1]) > 0.5
-           and math.hypot(p[1] - PICKUP[0], p[2] - PICKUP[1]) > 0.5]
+    out = [
+        p
+        for p in track
+        if p[4] == "pickup_goto"
+        and math.hypot(p[1] - HOME[0], p[2] - HOME[1]) > 0.5
+        and math.hypot(p[1] - PICKUP[0], p[2] - PICKUP[1]) > 0.5
+    ]
     assert out and all(abs(p[3] - 2.6) < 0.1 for p in out)
     assert PICKUP[:2] in [s[:2] for s in link.arrived]  # it said when it was down at the pickup
 
@@ -277,10 +296,13 @@ def test_a_uav_without_the_column_waits_at_its_layer_over_the_hold_point():
     assert [x.status for x in link.results] == ["done"]
     first = min(link.asked.values())
     waiting = [p for p in track if first + 20.0 <= p[0] < first + 39.0]
-    assert waiting and all(math.hypot(p[1] - hold[0], p[2] - hold[1]) < 0.15 and abs(p[3] - 2.6) < 0.1
-                           for p in waiting)
+    assert waiting and all(
+        math.hypot(p[1] - hold[0], p[2] - hold[1]) < 0.15 and abs(p[3] - 2.6) < 0.1 for p in waiting
+    )
     # it never went below its layer near the pickup before the grant
-    before = [p for p in track if p[0] < first + 40.0 and math.hypot(p[1] - PICKUP[0], p[2] - PICKUP[1]) < 1.0]
+    before = [
+        p for p in track if p[0] < first + 40.0 and math.hypot(p[1] - PICKUP[0], p[2] - PICKUP[1]) < 1.0
+    ]
     assert all(p[3] > 2.4 for p in before)
 
 
@@ -306,13 +328,17 @@ def _outside_m(columns, uav, p):
     return best
 
 
-@pytest.mark.parametrize("courses,per,nb,na,seed",
-                         [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)])
-def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(monkeypatch, courses, per, nb, na,
-                                                                                  seed):
+@pytest.mark.parametrize(
+    "courses,per,nb,na,seed", [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)]
+)
+def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(
+    monkeypatch, courses, per, nb, na, seed
+):
     from masonry.mission.simulate import SimulatedMission
 
-    mission = SimulatedMission.from_blueprint(running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed)
+    mission = SimulatedMission.from_blueprint(
+        running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed
+    )
     columns = mission.control.columns
     world = mission.world
     worst = {}
@@ -365,11 +391,18 @@ def test_mission_control_and_a_handler_exchange_clearances_over_the_transport():
     bp = running_bond(1, 2, brick_uavs=2, adhesion_uavs=1)
     fleet = bp.fleet
     bus = InprocBus()
-    mc = MissionControl(plan(bp), fleet, bus.endpoint(MISSION_CONTROL), column_radius_m=R, layer_base_m=BASE,
-                        startup_timeout_s=100.0)
+    mc = MissionControl(
+        plan(bp),
+        fleet,
+        bus.endpoint(MISSION_CONTROL),
+        column_radius_m=R,
+        layer_base_m=BASE,
+        startup_timeout_s=100.0,
+    )
     where = {u.name: (u.home_m[0], u.home_m[1], 1.2) for u in fleet}
-    handlers = {u.name: UavHandler(u.name, bus.endpoint(u.name), position=lambda n=u.name: where[n])
-                for u in fleet}
+    handlers = {
+        u.name: UavHandler(u.name, bus.endpoint(u.name), position=lambda n=u.name: where[n]) for u in fleet
+    }
     a, b = [u.name for u in fleet][:2]
     for h in handlers.values():
         h.step(0.0)
@@ -428,7 +461,9 @@ def test_a_hold_flight_keeps_its_altitude_when_the_layers_rise():
     assert not b.granted and b.hold_m is not None and b.layer_m == pytest.approx(BASE)
     c.raise_base(2.5)
     c.progress("b", (b.hold_m[0], b.hold_m[1], BASE))  # it hovers at its hold point, at the old layer 0
-    assert c.request("b", (0.5, 0.0, 1.2), 2.0, (b.hold_m[0], b.hold_m[1], BASE)).layer_m == pytest.approx(BASE)
+    assert c.request("b", (0.5, 0.0, 1.2), 2.0, (b.hold_m[0], b.hold_m[1], BASE)).layer_m == pytest.approx(
+        BASE
+    )
     c.request("a", (0.0, 8.0, 1.2), 3.0, (0.0, 0.0, 1.2))
     c.release("a", (0.0, 0.0, 1.2))
     c.progress("a", (0.0, 4.0, c.layer_m("a")))
@@ -447,10 +482,15 @@ def test_the_work_altitude_of_the_wall_is_the_highest_of_its_tasks(courses, per,
     from masonry.mission.airspace import task_work_altitude_m
     from masonry.planner import plan
 
-    bp = {"running-bond": lambda: running_bond(courses, per), "towers": lambda: towers(per, courses),
-          "pyramid": lambda: pyramid(courses)}[kind]()
+    bp = {
+        "running-bond": lambda: running_bond(courses, per),
+        "towers": lambda: towers(per, courses),
+        "pyramid": lambda: pyramid(courses),
+    }[kind]()
     tasks = plan(bp).tasks
-    assert max(task_work_altitude_m(t, bp.cruise_altitude_m) for t in tasks) == pytest.approx(work_altitude_m(bp))
+    assert max(task_work_altitude_m(t, bp.cruise_altitude_m) for t in tasks) == pytest.approx(
+        work_altitude_m(bp)
+    )
     for t in tasks:  # a brick task counts its brick's top, which is higher than the surface it rests on
         if t.kind == "adhesion":
             assert task_work_altitude_m(t, bp.cruise_altitude_m) >= bp.cruise_altitude_m
@@ -481,13 +521,20 @@ def test_with_rising_layers_no_flight_passes_low_over_the_wall_and_the_low_layer
             x, y, _z = v.position_m
             prev = last_xy.get(name)
             last_xy[name] = (x, y)
-            if not v.armed or v.on_ground or prev is None or math.hypot(x - prev[0], y - prev[1]) < 0.25 * dt_s:
+            if (
+                not v.armed
+                or v.on_ground
+                or prev is None
+                or math.hypot(x - prev[0], y - prev[1]) < 0.25 * dt_s
+            ):
                 continue  # only lateral flight: the work at a site comes down to the wall on purpose
             if u.carried_brick is not None:
                 brick = self.field.bricks[u.carried_brick]
                 gap = brick.bottom_z_m - self.field.support_under(brick.rect(0.0))
             else:
-                offset = self.airframe.effector_offset_m if u.role == "brick" else self.airframe.nozzle_offset_m
+                offset = (
+                    self.airframe.effector_offset_m if u.role == "brick" else self.airframe.nozzle_offset_m
+                )
                 tool = u.tool_point_m(offset)
                 gap = tool[2] - self.field.support_at(tool[0], tool[1])
             lowest_gap[name] = min(lowest_gap.get(name, math.inf), gap)

@@ -58,13 +58,16 @@ def test_bad_input_is_one_clean_line(key, tmp_path):
     assert outcome.kind == "clean", f"{key}: {outcome.kind}, exit {outcome.status}: {outcome.first_line}"
 
 
-@pytest.mark.parametrize(("status", "stderr", "timed_out", "kind"), [
-    (2, "error: bad.yaml: clearance: must be > 0\n", False, "clean"),
-    (2, "error: one\nerror: two\n", False, "other"),
-    (1, "Traceback (most recent call last):\n  ...\n", False, "traceback"),
-    (0, "", False, "accepted"),
-    (None, "", True, "hang"),
-    (2, "error: " + "x" * 500 + "\n", False, "other"),
-])
+@pytest.mark.parametrize(
+    ("status", "stderr", "timed_out", "kind"),
+    [
+        (2, "error: bad.yaml: clearance: must be > 0\n", False, "clean"),
+        (2, "error: one\nerror: two\n", False, "other"),
+        (1, "Traceback (most recent call last):\n  ...\n", False, "traceback"),
+        (0, "", False, "accepted"),
+        (None, "", True, "hang"),
+        (2, "error: " + "x" * 500 + "\n", False, "other"),
+    ],
+)
 def test_the_classifier(status, stderr, timed_out, kind):
     assert bad_inputs.classify(status, "", stderr, timed_out)[0] == kind

@@ -51,8 +51,11 @@ def _case_study() -> Blueprint:
 
 
 def _pins() -> list[Pin]:
-    pins = [Pin(f"case-study/{policy}/seed{seed}", _case_study, {"policy": policy, "seed": seed})
-            for policy in ("fifo", "critical-path") for seed in (0, 1, 2)]
+    pins = [
+        Pin(f"case-study/{policy}/seed{seed}", _case_study, {"policy": policy, "seed": seed})
+        for policy in ("fifo", "critical-path")
+        for seed in (0, 1, 2)
+    ]
     walls: list[tuple[str, Callable[[], Blueprint], int, int]] = [
         ("2x30", lambda: running_bond(2, 30), 4, 2),
         ("4x25", lambda: running_bond(4, 25), 4, 2),
@@ -61,15 +64,38 @@ def _pins() -> list[Pin]:
     for name, make, brick, adhesion in walls:
         for policy in ("fifo", "critical-path"):
             for seed in (0, 1, 2):
-                pins.append(Pin(f"{name}/{brick}+{adhesion}/{policy}/seed{seed}", make,
-                                {"brick_uavs": brick, "adhesion_uavs": adhesion, "policy": policy, "seed": seed,
-                                 "max_time_s": HORIZON_S}))
-    pins.append(Pin("case-study/faults", _case_study,
-                    {"seed": 1, "faults": Faults(grasp_failure=0.3, dropout=0.2, occlusion=0.2)}))
-    pins.append(Pin("running-bond-small/uav-loss",
-                    lambda: load_blueprint(ROOT / "blueprints" / "running_bond_small.yaml"),
-                    {"brick_uavs": 2, "adhesion_uavs": 1, "seed": 0,
-                     "faults": Faults(uav_loss_at_s={"brick-2": 120.0})}))
+                pins.append(
+                    Pin(
+                        f"{name}/{brick}+{adhesion}/{policy}/seed{seed}",
+                        make,
+                        {
+                            "brick_uavs": brick,
+                            "adhesion_uavs": adhesion,
+                            "policy": policy,
+                            "seed": seed,
+                            "max_time_s": HORIZON_S,
+                        },
+                    )
+                )
+    pins.append(
+        Pin(
+            "case-study/faults",
+            _case_study,
+            {"seed": 1, "faults": Faults(grasp_failure=0.3, dropout=0.2, occlusion=0.2)},
+        )
+    )
+    pins.append(
+        Pin(
+            "running-bond-small/uav-loss",
+            lambda: load_blueprint(ROOT / "blueprints" / "running_bond_small.yaml"),
+            {
+                "brick_uavs": 2,
+                "adhesion_uavs": 1,
+                "seed": 0,
+                "faults": Faults(uav_loss_at_s={"brick-2": 120.0}),
+            },
+        )
+    )
     return pins
 
 
@@ -82,8 +108,10 @@ def _r(value: float | None, digits: int) -> str:
 
 def schedule_digest(report: MissionReport) -> str:
     """The digest of what a user sees of a mission: its attempts, placement errors and minimum separation."""
-    rows = [f"{a.task_id},{a.uav},{a.attempt},{_r(a.start_s, 2)},{_r(a.end_s, 2)},{a.status}"
-            for a in sorted(report.attempts, key=lambda a: (a.start_s, a.task_id, a.attempt))]
+    rows = [
+        f"{a.task_id},{a.uav},{a.attempt},{_r(a.start_s, 2)},{_r(a.end_s, 2)},{a.status}"
+        for a in sorted(report.attempts, key=lambda a: (a.start_s, a.task_id, a.attempt))
+    ]
     rows += [f"{k}:{_r(v, 4)}" for k, v in sorted(report.placement_error_m.items())]
     rows.append(f"sep:{_r(report.min_separation_m, 3)} completed:{report.completed}")
     return hashlib.sha256("\n".join(rows).encode()).hexdigest()[:16]
@@ -98,7 +126,9 @@ def _recorded() -> dict[str, str]:
 
 
 def test_every_pin_is_recorded():
-    assert sorted(_recorded()) == sorted(p.name for p in PINS), "re-record: python tests/test_behaviour_pinned.py --record"
+    assert sorted(_recorded()) == sorted(p.name for p in PINS), (
+        "re-record: python tests/test_behaviour_pinned.py --record"
+    )
 
 
 @pytest.mark.slow
@@ -106,8 +136,10 @@ def test_every_pin_is_recorded():
 def test_schedule_is_unchanged(pin: Pin):
     recorded = _recorded().get(pin.name)
     assert recorded is not None, f"{pin.name} has no recorded digest"
-    assert run_pin(pin) == recorded, (f"{pin.name}: the schedule changed; if that is meant, re-record in its own "
-                                      "commit and say why in the CHANGELOG")
+    assert run_pin(pin) == recorded, (
+        f"{pin.name}: the schedule changed; if that is meant, re-record in its own "
+        "commit and say why in the CHANGELOG"
+    )
 
 
 def test_the_digest_sees_a_change_of_one_attempt():

@@ -28,10 +28,19 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = {
     "name": "two",
     "clearance": 1.0,
-    "brick": {"size": [0.2, 0.1, 0.05], "markers": {"dictionary": "DICT_4X4_100", "size": 0.04, "spacing": 0.12}},
+    "brick": {
+        "size": [0.2, 0.1, 0.05],
+        "markers": {"dictionary": "DICT_4X4_100", "size": 0.04, "spacing": 0.12},
+    },
     "bricks": [
         {"id": 3, "position": [0.0, 0.0, 0.025], "placed": True},
-        {"id": 7, "position": [0.0, 0.0, 0.075], "yaw": 0.0, "size": [0.2, 0.1, 0.05], "pickup": [2.0, 0.0, 0.025]},
+        {
+            "id": 7,
+            "position": [0.0, 0.0, 0.075],
+            "yaw": 0.0,
+            "size": [0.2, 0.1, 0.05],
+            "pickup": [2.0, 0.0, 0.025],
+        },
     ],
     "fleet": [
         {"name": "b1", "role": "brick", "home": [1.0, -2.0, 0.0]},
@@ -94,7 +103,9 @@ def test_paper_case_study_matches_the_paper() -> None:
 @pytest.mark.parametrize(
     "bp",
     [
-        running_bond(5, 7, placed_courses=2, yaw_rad=0.3, origin_m=(4.0, -1.0), brick_uavs=2, adhesion_uavs=2),
+        running_bond(
+            5, 7, placed_courses=2, yaw_rad=0.3, origin_m=(4.0, -1.0), brick_uavs=2, adhesion_uavs=2
+        ),
         towers(3, 4, spacing_m=1.2),
         pyramid(6, joint_m=0.01),
         generate("running-bond", courses=2, bricks_per_course=3, brick_size_m=(0.25, 0.12, 0.08)),
@@ -112,7 +123,7 @@ def test_generated_blueprints_are_valid_and_round_trip(bp, tmp_path: Path) -> No
     names = [u.name for u in bp.fleet]
     homes = [u.home_m for u in bp.fleet]
     assert len(set(names)) == len(names)
-    assert all(math.dist(p, q) > bp.clearance_m for i, p in enumerate(homes) for q in homes[i + 1:])
+    assert all(math.dist(p, q) > bp.clearance_m for i, p in enumerate(homes) for q in homes[i + 1 :])
 
 
 def test_running_bond_shape() -> None:

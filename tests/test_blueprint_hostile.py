@@ -76,13 +76,23 @@ def _masonry(*args: str, timeout_s: float = 60.0) -> subprocess.CompletedProcess
     """`masonry ARGS` in a child process with a memory cap and a timeout (a hang fails the test, not the run)."""
     code = "import sys; from masonry.cli import app; sys.argv = ['masonry', *sys.argv[1:]]; app()"
     env = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
-    return subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=timeout_s,
-                          preexec_fn=_limit_memory, env=env, check=False)
+    return subprocess.run(
+        [sys.executable, "-c", code, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        preexec_fn=_limit_memory,
+        env=env,
+        check=False,
+    )
 
 
 def _commands(path: Path) -> list[list[str]]:
-    return [["plan", str(path)], ["sim", str(path)],
-            ["fly", "--sim", "--uav", "brick", "--blueprint", str(path), "--task", "B2"]]
+    return [
+        ["plan", str(path)],
+        ["sim", str(path)],
+        ["fly", "--sim", "--uav", "brick", "--blueprint", str(path), "--task", "B2"],
+    ]
 
 
 def _one_line_exit_2(result: subprocess.CompletedProcess[str] | object) -> str:
@@ -124,7 +134,11 @@ def test_alias_bomb_is_one_line_from_plan_sim_and_fly(tmp_path: Path) -> None:
 
 
 def test_an_alias_within_the_limit_is_fine(tmp_path: Path) -> None:
-    text = HEAD + "brick:\n  size: &s [0.3, 0.15, 0.1]\n" + BRICKS.replace("placed: true}", "placed: true, size: *s}")
+    text = (
+        HEAD
+        + "brick:\n  size: &s [0.3, 0.15, 0.1]\n"
+        + BRICKS.replace("placed: true}", "placed: true, size: *s}")
+    )
     assert load_blueprint(_write(tmp_path, text + FLEET)).bricks[0].size_m == (0.3, 0.15, 0.1)
 
 
@@ -166,7 +180,9 @@ def test_duplicate_key_in_a_flow_mapping(tmp_path: Path) -> None:
 
 
 def test_exponent_numbers_are_numbers(tmp_path: Path) -> None:
-    text = GOOD.replace("clearance: 1.5", "clearance: 15e-1").replace("[0.0, -3.0, 0.05]", "[0.0, -3.0, 5e-2]")
+    text = GOOD.replace("clearance: 1.5", "clearance: 15e-1").replace(
+        "[0.0, -3.0, 0.05]", "[0.0, -3.0, 5e-2]"
+    )
     bp = load_blueprint(_write(tmp_path, text))
     assert bp.clearance_m == 1.5 and bp.brick(2).pickup_m == (0.0, -3.0, 0.05)
     message = _error(tmp_path, GOOD.replace("[0.0, -3.0, 0.05]", "[1e9, -3.0, 0.05]"))
@@ -188,7 +204,10 @@ def test_huge_id_is_not_in_its_dictionary(tmp_path: Path) -> None:
 
 def test_each_brick_marker_ids_exist_in_its_dictionary(tmp_path: Path) -> None:
     assert "brick 25" in _error(tmp_path, GOOD.replace("{id: 2,", "{id: 25,"))  # markers 50, 51 of 0..49
-    assert load_blueprint(_write(tmp_path, GOOD.replace("{id: 2,", "{id: 24,"))).brick(24).marker_ids() == (48, 49)
+    assert load_blueprint(_write(tmp_path, GOOD.replace("{id: 2,", "{id: 24,"))).brick(24).marker_ids() == (
+        48,
+        49,
+    )
 
 
 def test_generated_walls_pick_a_dictionary_that_numbers_every_brick() -> None:
@@ -211,38 +230,54 @@ def test_pickup_inside_the_walls_footprint(tmp_path: Path) -> None:
 
 
 def test_two_bricks_sharing_one_pickup(tmp_path: Path) -> None:
-    text = GOOD.replace(FLEET, "") + "  - {id: 3, position: [0.45, 0.0, 0.15], pickup: [0.0, -3.0, 0.05]}\n" + FLEET
-    text = text.replace("{id: 1, position: [0.3, 0.0, 0.05], placed: true}",
-                        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}\n"
-                        "  - {id: 4, position: [0.6, 0.0, 0.05], placed: true}")
+    text = (
+        GOOD.replace(FLEET, "")
+        + "  - {id: 3, position: [0.45, 0.0, 0.15], pickup: [0.0, -3.0, 0.05]}\n"
+        + FLEET
+    )
+    text = text.replace(
+        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}",
+        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}\n"
+        "  - {id: 4, position: [0.6, 0.0, 0.05], placed: true}",
+    )
     message = _error(tmp_path, text)
     assert "brick 3: pickup" in message and "brick 2's pickup too" in message
 
 
 def test_stacked_pickups_are_fine(tmp_path: Path) -> None:
-    text = GOOD.replace(FLEET, "") + "  - {id: 3, position: [0.45, 0.0, 0.15], pickup: [0.0, -3.0, 0.15]}\n" + FLEET
-    text = text.replace("{id: 1, position: [0.3, 0.0, 0.05], placed: true}",
-                        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}\n"
-                        "  - {id: 4, position: [0.6, 0.0, 0.05], placed: true}")
+    text = (
+        GOOD.replace(FLEET, "")
+        + "  - {id: 3, position: [0.45, 0.0, 0.15], pickup: [0.0, -3.0, 0.15]}\n"
+        + FLEET
+    )
+    text = text.replace(
+        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}",
+        "{id: 1, position: [0.3, 0.0, 0.05], placed: true}\n"
+        "  - {id: 4, position: [0.6, 0.0, 0.05], placed: true}",
+    )
     assert len(load_blueprint(_write(tmp_path, text)).bricks) == 5
 
 
-@pytest.mark.parametrize(("pickup", "fragment"), [("[0.0, -3.0, -0.5]", "below the ground"),
-                                                  ("[0.0, -3.0, 50.0]", "at most 10 m")])
+@pytest.mark.parametrize(
+    ("pickup", "fragment"), [("[0.0, -3.0, -0.5]", "below the ground"), ("[0.0, -3.0, 50.0]", "at most 10 m")]
+)
 def test_pickup_height(tmp_path: Path, pickup: str, fragment: str) -> None:
     message = _error(tmp_path, GOOD.replace("[0.0, -3.0, 0.05]", pickup))
     assert "brick 2: pickup" in message and fragment in message
 
 
-@pytest.mark.parametrize(("home", "fragment"), [("[2.0, -4.0, -1.0]", "below the ground"),
-                                                ("[2.0, -4.0, 40.0]", "at most 10 m")])
+@pytest.mark.parametrize(
+    ("home", "fragment"), [("[2.0, -4.0, -1.0]", "below the ground"), ("[2.0, -4.0, 40.0]", "at most 10 m")]
+)
 def test_home_height(tmp_path: Path, home: str, fragment: str) -> None:
     message = _error(tmp_path, GOOD.replace("[2.0, -4.0, 0.0]", home))
     assert "'brick-1': home" in message and fragment in message
 
 
 def test_brick_on_a_1_mm_overlap(tmp_path: Path) -> None:
-    text = GOOD.replace("[0.15, 0.0, 0.15]", "[0.599, 0.0, 0.15]").replace("[0.0, -3.0, 0.05]", "[1.0, -3.0, 0.05]")
+    text = GOOD.replace("[0.15, 0.0, 0.15]", "[0.599, 0.0, 0.15]").replace(
+        "[0.0, -3.0, 0.05]", "[1.0, -3.0, 0.05]"
+    )
     message = _error(tmp_path, text)
     assert "brick 2" in message and "0.3 % of its footprint rests on brick(s) 1" in message
     assert f"at least {MIN_SUPPORT_FRACTION * 100:.0f} %" in message
@@ -265,7 +300,9 @@ def test_home_inside_the_wall(tmp_path: Path) -> None:
 
 def test_cruise_below_the_finished_walls_top(tmp_path: Path) -> None:
     message = _error(tmp_path, GOOD.replace("cruise_altitude: 1.2", "cruise_altitude: 0.15"))
-    assert "cruise_altitude" in message and "not above the finished wall's top (z = 0.2 m, brick 2)" in message
+    assert (
+        "cruise_altitude" in message and "not above the finished wall's top (z = 0.2 m, brick 2)" in message
+    )
 
 
 def test_generated_tall_wall_cruises_over_it() -> None:
@@ -280,7 +317,10 @@ def test_generated_tall_wall_cruises_over_it() -> None:
 def test_pairs_at_exactly_r_c_conflict() -> None:
     # 9 x 0.3 and 14 x 0.3 are 1.5000000000000004 m apart in floating point: the paper's dist <= r_c holds.
     a, b = 9 * 0.3, 14 * 0.3
-    bricks = (Brick(0, (a, 0.0, 0.05), pickup_m=(0.0, -3.0, 0.05)), Brick(1, (b, 0.0, 0.05), pickup_m=(1.0, -3.0, 0.05)))
+    bricks = (
+        Brick(0, (a, 0.0, 0.05), pickup_m=(0.0, -3.0, 0.05)),
+        Brick(1, (b, 0.0, 0.05), pickup_m=(1.0, -3.0, 0.05)),
+    )
     fleet = (UavSpec("b", "brick", (0.0, -5.0, 0.0)), UavSpec("g", "adhesion", (2.0, -5.0, 0.0)))
     assert b - a > 1.5
     assert plan(Blueprint(bricks=bricks, fleet=fleet, clearance_m=1.5)).conflicts == (("B0", "B1"),)
@@ -318,12 +358,26 @@ def test_non_utf8_blueprint(tmp_path: Path) -> None:
     assert "not UTF-8 text" in line
 
 
-@pytest.mark.parametrize("content", [bytes(range(256)) * 8, "fc: caf\xe9\n".encode("latin-1"), b"\x89PNG\r\n\x1a\n\0\0"])
+@pytest.mark.parametrize(
+    "content", [bytes(range(256)) * 8, "fc: caf\xe9\n".encode("latin-1"), b"\x89PNG\r\n\x1a\n\0\0"]
+)
 def test_fly_config_binary_or_not_utf8(tmp_path: Path, content: bytes) -> None:
     config = tmp_path / "uav.yaml"
     config.write_bytes(content)
-    result = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", str(ROOT / "blueprints" / "paper_case_study.yaml"),
-                                 "--task", "B0", "--config", str(config)])
+    result = runner.invoke(
+        app,
+        [
+            "fly",
+            "--uav",
+            "brick",
+            "--blueprint",
+            str(ROOT / "blueprints" / "paper_case_study.yaml"),
+            "--task",
+            "B0",
+            "--config",
+            str(config),
+        ],
+    )
     line = _one_line_exit_2(result)
     assert str(config) in line
 
@@ -344,8 +398,9 @@ def test_fly_config_long_value_is_a_short_line(tmp_path: Path) -> None:
 # -- UAV names (section 1) ---------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["b*", "b$1", "a/b", "b#", "b?", "**", "-x", "b 1", "mission-control", "x" * 65,
-                                  "ünï"])
+@pytest.mark.parametrize(
+    "name", ["b*", "b$1", "a/b", "b#", "b?", "**", "-x", "b 1", "mission-control", "x" * 65, "ünï"]
+)
 def test_uav_name_that_is_not_a_zenoh_key_chunk(tmp_path: Path, name: str) -> None:
     message = _error(tmp_path, GOOD.replace("name: glue-1", f"name: {name!r}"))
     assert "name" in message and ("not a UAV name" in message or "mission control's own name" in message)
@@ -353,7 +408,10 @@ def test_uav_name_that_is_not_a_zenoh_key_chunk(tmp_path: Path, name: str) -> No
 
 @pytest.mark.parametrize("name", ["glue-1", "G_2", "uav.3", "7", "x" * 64])
 def test_uav_names_that_are_fine(tmp_path: Path, name: str) -> None:
-    assert load_blueprint(_write(tmp_path, GOOD.replace("name: glue-1", f"name: {name!r}"))).fleet[1].name == name
+    assert (
+        load_blueprint(_write(tmp_path, GOOD.replace("name: glue-1", f"name: {name!r}"))).fleet[1].name
+        == name
+    )
 
 
 def test_uav_name_checked_on_values_too() -> None:

@@ -45,8 +45,14 @@ def test_bundled_blueprints(path: Path) -> None:
     assert safe_load(text) == yaml.safe_load(text)
 
 
-@pytest.mark.parametrize("text", [*DOCUMENTS, "c: [1e+3, 5e-2, 1e9, -2E4, .5e1, 1.e2, -.5e+2, '1e9', 1e9x]\n",
-                                  "base: &b {x: 1, y: 2}\nc: {<<: *b, y: 3}\n"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        *DOCUMENTS,
+        "c: [1e+3, 5e-2, 1e9, -2E4, .5e1, 1.e2, -.5e+2, '1e9', 1e9x]\n",
+        "base: &b {x: 1, y: 2}\nc: {<<: *b, y: 3}\n",
+    ],
+)
 def test_fast_path_same_as_guarded_pyyaml(text: str) -> None:
     """The fast path and PyYAML with the same rules (the fallback for anchors, tags, merges) agree."""
     assert repr(safe_load(text)) == repr(yaml.load(text, Loader=GuardedLoader))

@@ -163,7 +163,9 @@ def test_min_cycles_add_the_flight_from_the_nearest_drop_off_or_home() -> None:
     plan = Plan(tasks, (), ())
     fleet = [UavSpec("brick-1", "brick", (0.0, -10.0, 0.0)), UavSpec("glue-1", "adhesion", (5.0, -10.0, 0.0))]
     base = {"B0": 30.0, "B1": 31.0, "A0": 10.0}
-    cycles = min_cycles_s(plan, fleet, base, timing=timing(cruise_speed_mps=1.0, arrive_tolerance_m=0.1), min_leg_s=1.0)
+    cycles = min_cycles_s(
+        plan, fleet, base, timing=timing(cruise_speed_mps=1.0, arrive_tolerance_m=0.1), min_leg_s=1.0
+    )
     flight = math.hypot(1.0, 4.0) - 0.2  # peak speed 1 m/s; 0.1 m of slack at each end
     assert cycles["B0"] == pytest.approx(30.0 + flight - 1.0)
     assert cycles["B1"] == pytest.approx(31.0 + flight - 1.0)
@@ -191,17 +193,22 @@ def test_the_old_keywords_still_work_with_a_deprecation_warning() -> None:
     fleet = uavs(1, 1)
     with pytest.warns(DeprecationWarning, match=r"descent_s=.*timing=.*descent_duration_s=\.\.\."):
         old = min_durations_s(plan, descent_s=5.0, effector_offset_z_m=-0.5)
-    assert old == min_durations_s(plan, timing=timing(descent_duration_s=5.0, effector_offset_m=(0.0, 0.0, -0.5)))
+    assert old == min_durations_s(
+        plan, timing=timing(descent_duration_s=5.0, effector_offset_m=(0.0, 0.0, -0.5))
+    )
     with pytest.warns(DeprecationWarning, match="leg_peak_factor"):
         faster = min_durations_s(plan, leg_peak_factor=1.0)
     assert all(faster[k] <= v for k, v in min_durations_s(plan).items())
     with pytest.warns(DeprecationWarning, match="cruise_speed_mps="):
         old_est = estimate_durations_s(plan, fleet, cruise_speed_mps=2.0, spray_descent_s=1.0)
-    assert old_est == estimate_durations_s(plan, fleet, timing=timing(cruise_speed_mps=2.0, spray_descent_s=1.0))
+    assert old_est == estimate_durations_s(
+        plan, fleet, timing=timing(cruise_speed_mps=2.0, spray_descent_s=1.0)
+    )
     with pytest.warns(DeprecationWarning, match="arrive_tolerance_m="):
         old_cycles = min_cycles_s(plan, fleet, arrive_tolerance_m=0.2, effector_offset_m=(0.1, 0.0, -0.45))
-    assert old_cycles == min_cycles_s(plan, fleet, timing=timing(arrive_tolerance_m=0.2,
-                                                                  effector_offset_m=(0.1, 0.0, -0.45)))
+    assert old_cycles == min_cycles_s(
+        plan, fleet, timing=timing(arrive_tolerance_m=0.2, effector_offset_m=(0.1, 0.0, -0.45))
+    )
     with pytest.raises(TypeError, match="unexpected keyword argument 'descent_duration_s'"):
         min_durations_s(plan, descent_duration_s=5.0)
     with pytest.raises(TypeError, match="unexpected keyword argument 'clearance_m'"):

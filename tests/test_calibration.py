@@ -130,7 +130,9 @@ def test_bad_board_specs(text: str) -> None:
 
     with pytest.raises(InputError, match=r"^`board`: ") as info:
         parse_board(text)
-    assert info.value.options == ("board",) and cli_message(info.value).startswith("--board: ")  # the CLI's term
+    assert info.value.options == ("board",) and cli_message(info.value).startswith(
+        "--board: "
+    )  # the CLI's term
 
 
 def test_board_spec() -> None:

@@ -85,8 +85,9 @@ def test_fly_without_sim_needs_adapters() -> None:
 
 
 def test_fly_unreadable_blueprint(tmp_path: Path) -> None:
-    res = runner.invoke(app, ["fly", "--sim", "--uav", "brick", "--blueprint", str(tmp_path / "no.yaml"),
-                              "--task", "B0"])
+    res = runner.invoke(
+        app, ["fly", "--sim", "--uav", "brick", "--blueprint", str(tmp_path / "no.yaml"), "--task", "B0"]
+    )
     assert res.exit_code == 2 and "no.yaml" in res.stderr
 
 
@@ -107,8 +108,13 @@ def test_fsm_diagram_renders(tmp_path: Path, kind: str, ext: str) -> None:
         assert text.startswith("digraph") and ("pickup" in text if kind == "brick" else "spray" in text)
 
 
-@pytest.mark.parametrize(("args", "message"), [(["rocket", "-o", "x.svg"], "unknown machine"),
-                                               (["brick", "-o", "x.pdf"], "must end in .svg, .png or .dot")])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["rocket", "-o", "x.svg"], "unknown machine"),
+        (["brick", "-o", "x.pdf"], "must end in .svg, .png or .dot"),
+    ],
+)
 def test_fsm_diagram_bad_input(args: list[str], message: str) -> None:
     res = runner.invoke(app, ["fsm", "diagram", *args])
     assert res.exit_code == 2 and message in res.stderr

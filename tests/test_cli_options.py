@@ -29,6 +29,7 @@ def one_line_exit_2(res, *needles: str) -> None:
 
 # ------------------------------------------------------------------------------------------------ bounds
 
+
 @pytest.mark.parametrize(
     ("argv", "needles"),
     [
@@ -38,23 +39,59 @@ def one_line_exit_2(res, *needles: str) -> None:
         (["sim", CASE_STUDY, "--seed", "-1"], ["--seed -1"]),
         (["sim", CASE_STUDY, "--fault", "gusts=1e6"], ["gusts", "at most 15 m/s"]),
         (["sim", CASE_STUDY, "--fault", "battery=5"], ["battery", "at most 1 per second"]),
-        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--mission", "tcp/127.0.0.1:1",
-          "--wait", "-1"], ["--wait -1", "> 0 to 3600 s"]),
-        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--dt", "1e-6"],
-         ["--dt 1e-06"]),
-        (["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--timeout", "1e9"],
-         ["--timeout 1e+09"]),
-        (["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--fc", "udpin:127.0.0.1:1",
-          "--estimate-wait", "0"], ["--estimate-wait 0"]),
+        (
+            [
+                "fly",
+                "--uav",
+                "brick",
+                "--sim",
+                "--blueprint",
+                CASE_STUDY,
+                "--mission",
+                "tcp/127.0.0.1:1",
+                "--wait",
+                "-1",
+            ],
+            ["--wait -1", "> 0 to 3600 s"],
+        ),
+        (
+            ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--dt", "1e-6"],
+            ["--dt 1e-06"],
+        ),
+        (
+            ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--timeout", "1e9"],
+            ["--timeout 1e+09"],
+        ),
+        (
+            [
+                "fly",
+                "--uav",
+                "brick",
+                "--blueprint",
+                CASE_STUDY,
+                "--task",
+                "B0",
+                "--fc",
+                "udpin:127.0.0.1:1",
+                "--estimate-wait",
+                "0",
+            ],
+            ["--estimate-wait 0"],
+        ),
         (["mission-control", CASE_STUDY, "--heartbeat-timeout", "0"], ["--heartbeat-timeout 0"]),
         (["mission-control", CASE_STUDY, "--startup-timeout", "-5"], ["--startup-timeout -5"]),
         (["mission-control", CASE_STUDY, "--max-time", "0"], ["--max-time 0"]),
         (["mission-control", CASE_STUDY, "--tick", "1e-6"], ["--tick 1e-06"]),
-        (["blueprint", "towers", "--height", "3", "--placed-courses", "5"],
-         ["--placed-courses 5", "more than the wall's 3 courses"]),
+        (
+            ["blueprint", "towers", "--height", "3", "--placed-courses", "5"],
+            ["--placed-courses 5", "more than the wall's 3 courses"],
+        ),
         (["blueprint", "running-bond", "--courses", "4", "--placed-courses", "7"], ["--placed-courses 7"]),
         (["blueprint", "running-bond", "--brick-uavs", "100000"], ["--brick-uavs 100000", "1 to 100"]),
-        (["blueprint", "running-bond", "--courses", "1000", "--bricks-per-course", "1000"], ["1000000 bricks"]),
+        (
+            ["blueprint", "running-bond", "--courses", "1000", "--bricks-per-course", "1000"],
+            ["1000000 bricks"],
+        ),
         (["blueprint", "pyramid", "--base", "0"], ["--base 0"]),
         (["blueprint", "towers", "--brick-size", "0.3", "0", "0.1"], ["--brick-size 0.3 0 0.1"]),
         (["blueprint", "towers", "--origin", "1e9", "0"], ["--origin 1e+09 0"]),
@@ -97,13 +134,32 @@ def test_check_accepts_the_ends_of_a_range_and_names_what_is_wrong():
 
 def test_values_inside_the_ranges_still_work(tmp_path):
     out = tmp_path / "t.yaml"
-    res = runner.invoke(app, ["blueprint", "towers", "--height", "3", "--placed-courses", "3", "--brick-size",
-                              "0.3", "0.15", "0.1", "--origin", "1", "2", "-o", str(out)])
+    res = runner.invoke(
+        app,
+        [
+            "blueprint",
+            "towers",
+            "--height",
+            "3",
+            "--placed-courses",
+            "3",
+            "--brick-size",
+            "0.3",
+            "0.15",
+            "0.1",
+            "--origin",
+            "1",
+            "2",
+            "-o",
+            str(out),
+        ],
+    )
     assert res.exit_code == 0, res.output
     assert "--brick-size 0.3 0.15 0.1" in out.read_text()
 
 
 # -------------------------------------------------------------------------------------------------- help
+
 
 def test_help_shows_flags_without_a_value_and_repeatable_options_by_their_form():
     res = runner.invoke(app, ["sim", "--help"], env={"COLUMNS": "200"})
@@ -138,25 +194,53 @@ def test_version():
 
 
 def test_plural():
-    assert plural(1, "task") == "1 task" and plural(0, "task") == "0 tasks" and plural(2, "pass", "passes") == \
-        "2 passes"
+    assert (
+        plural(1, "task") == "1 task"
+        and plural(0, "task") == "0 tasks"
+        and plural(2, "pass", "passes") == "2 passes"
+    )
 
 
 def test_plan_summary_says_1_task_and_lists_the_longest_chain_in_execution_order(tmp_path):
     bp = tmp_path / "t.yaml"
-    assert runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "2", "--placed-courses", "1",
-                               "-o", str(bp)]).exit_code == 0
+    assert (
+        runner.invoke(
+            app,
+            ["blueprint", "towers", "--towers", "1", "--height", "2", "--placed-courses", "1", "-o", str(bp)],
+        ).exit_code
+        == 0
+    )
     res = runner.invoke(app, ["plan", str(bp)])
     assert res.exit_code == 0, res.output
     assert "dependencies    2 edges in G^d" in res.stdout
     # A0 (the glue on brick 0) must be done before B1 goes on top of it
     assert "longest chain   2 tasks: A0 -> B1" in res.stdout
     one = tmp_path / "one.yaml"
-    assert runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "1", "-o", str(one)]).exit_code == 0
+    assert (
+        runner.invoke(
+            app, ["blueprint", "towers", "--towers", "1", "--height", "1", "-o", str(one)]
+        ).exit_code
+        == 0
+    )
     res = runner.invoke(app, ["plan", str(one)])
     assert "longest chain   1 task: B0" in res.stdout and "0 pairs in G^c" in res.stdout
-    res = runner.invoke(app, ["blueprint", "towers", "--towers", "1", "--height", "1", "--brick-uavs", "1",
-                              "--adhesion-uavs", "1", "-o", str(one)])
+    res = runner.invoke(
+        app,
+        [
+            "blueprint",
+            "towers",
+            "--towers",
+            "1",
+            "--height",
+            "1",
+            "--brick-uavs",
+            "1",
+            "--adhesion-uavs",
+            "1",
+            "-o",
+            str(one),
+        ],
+    )
     assert f"wrote {one}: 1 brick (1 to place), 2 UAVs" in res.stderr
     res = runner.invoke(app, ["sim", str(one)])
     assert res.exit_code == 0, res.output
@@ -165,8 +249,21 @@ def test_plan_summary_says_1_task_and_lists_the_longest_chain_in_execution_order
 
 def test_every_command_that_writes_a_file_says_so(tmp_path):
     report, gantt, plot = tmp_path / "r.json", tmp_path / "g.svg", tmp_path / "p.png"
-    res = runner.invoke(app, ["sim", CASE_STUDY, "--report", str(report), "--gantt", str(gantt), "--plot3d",
-                              str(plot), "--format", "json"])
+    res = runner.invoke(
+        app,
+        [
+            "sim",
+            CASE_STUDY,
+            "--report",
+            str(report),
+            "--gantt",
+            str(gantt),
+            "--plot3d",
+            str(plot),
+            "--format",
+            "json",
+        ],
+    )
     assert res.exit_code == 0, res.output
     for p in (report, gantt, plot):
         assert f"wrote {p}" in res.stderr and p.exists()
@@ -181,6 +278,7 @@ def test_every_command_that_writes_a_file_says_so(tmp_path):
 
 
 # ---------------------------------------------------------------------------------------------- progress
+
 
 class FakeClock:
     def __init__(self) -> None:
@@ -208,8 +306,10 @@ def test_progress_lines_come_every_few_seconds_with_an_eta():
     lines(2, 10, 60.0)  # 1 s after the last line: nothing
     clock.t += 119.0  # 125 s in, 2 of 10 done: 62.5 s a task, 8 to go -> 500 s
     lines(2, 10, 400.0)
-    assert out.getvalue().splitlines()[-1] == \
-        "sim: 2/10 tasks done, simulated 400 s, 2 min 05 s elapsed, ETA 8 min 20 s"
+    assert (
+        out.getvalue().splitlines()[-1]
+        == "sim: 2/10 tasks done, simulated 400 s, 2 min 05 s elapsed, ETA 8 min 20 s"
+    )
 
 
 def test_progress_display_picks_bar_lines_or_nothing():
@@ -240,6 +340,7 @@ def test_sim_without_a_terminal_prints_progress_lines_on_stderr_never_stdout(mon
 
 
 # ------------------------------------------------------------------------------------------ fsm diagram
+
 
 @pytest.mark.parametrize("kind", ["brick", "adhesion"])
 def test_fsm_diagram_renders_svg_and_png_without_graphviz(kind, tmp_path, monkeypatch):
@@ -284,6 +385,7 @@ def test_write_diagram_engines(tmp_path, monkeypatch):
 
 # ------------------------------------------------------------------------- fly --fc: the estimator wait
 
+
 class ScriptedAutopilot:
     """A MAVLink peer on loopback that plays an ArduCopter's boot: heartbeats only ("booting"), then
     LOCAL_POSITION_NED with EKF flags that are not yet usable ("converging"), then a usable EKF ("ready")."""
@@ -297,8 +399,9 @@ class ScriptedAutopilot:
         from masonry.adapters.mavlink import mavutil_module
 
         self.phase = "booting"
-        self.peer = mavutil_module().mavlink_connection(f"udpout:127.0.0.1:{port}", source_system=1,
-                                                        source_component=1)
+        self.peer = mavutil_module().mavlink_connection(
+            f"udpout:127.0.0.1:{port}", source_system=1, source_component=1
+        )
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._t0 = 0.0
@@ -323,7 +426,9 @@ class ScriptedAutopilot:
             boot_ms = int((time.monotonic() - self._t0) * 1000)
             mav.heartbeat_send(2, 3, 0, 0, 3)  # quadrotor, ArduPilot, disarmed, standby
             mav.sys_status_send(0, 0, 0, 500, 12600, -1, 80, 0, 0, 0, 0, 0, 0)
-            mav.attitude_send(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)  # "ArduPilot Ready": attitude comes first
+            mav.attitude_send(
+                boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+            )  # "ArduPilot Ready": attitude comes first
             if self.phase != "booting":
                 mav.local_position_ned_send(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
                 flags = self.GOOD_FLAGS if self.phase == "ready" else self.BAD_FLAGS
@@ -350,6 +455,7 @@ def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
         fc = _controller(port)
         try:
             fc.connect()
+
             def play() -> None:  # the boot, in half-second steps (bounded waits, not sleeps to time anything)
                 pause = threading.Event()
                 pause.wait(0.5)
@@ -367,17 +473,22 @@ def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
     assert lines[0].startswith("waiting for the position estimate: no local position yet (LOCAL_POSITION_NED")
     converging = [line for line in lines if "local position streaming" in line]
     assert converging, lines
-    assert ("EKF flags 0x0481: missing horizontal velocity, vertical velocity, relative horizontal position, "
-            "vertical position; constant-position mode, not initialised / GPS glitch") in converging[0]
+    assert (
+        "EKF flags 0x0481: missing horizontal velocity, vertical velocity, relative horizontal position, "
+        "vertical position; constant-position mode, not initialised / GPS glitch"
+    ) in converging[0]
     left = [float(re.search(r"\((\d+) s left\)", line).group(1)) for line in lines]
     assert left == sorted(left, reverse=True) and left[0] in (4.0, 5.0)  # a countdown
     assert len(lines) >= 4  # repeated every 0.2 s while nothing changes, not only on changes
 
 
-@pytest.mark.parametrize(("phase", "missing"), [
-    ("booting", "no local position yet (LOCAL_POSITION_NED not streaming)"),
-    ("converging", "local position streaming, EKF flags 0x0481: missing horizontal velocity"),
-])
+@pytest.mark.parametrize(
+    ("phase", "missing"),
+    [
+        ("booting", "no local position yet (LOCAL_POSITION_NED not streaming)"),
+        ("converging", "local position streaming, EKF flags 0x0481: missing horizontal velocity"),
+    ],
+)
 def test_the_estimate_wait_error_names_what_was_missing(phase, missing):
     from masonry.adapters.sitl import free_udp_port
     from masonry.errors import CommandRejected
@@ -407,11 +518,27 @@ def test_fly_fc_waits_estimate_wait_seconds_with_a_visible_countdown(tmp_path):
     assert HardwareConfig().estimate_wait_s == 90.0  # enough for ArduPilot SITL (~40 s) and a cold Pixhawk
     port = free_udp_port()
     with ScriptedAutopilot(port):
-        res = runner.invoke(app, ["fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B0", "--fc",
-                                  f"udpin:127.0.0.1:{port}", "--estimate-wait", "0.5"])
+        res = runner.invoke(
+            app,
+            [
+                "fly",
+                "--uav",
+                "brick",
+                "--blueprint",
+                CASE_STUDY,
+                "--task",
+                "B0",
+                "--fc",
+                f"udpin:127.0.0.1:{port}",
+                "--estimate-wait",
+                "0.5",
+            ],
+        )
     assert res.exit_code == 1, res.output
     assert "waiting for the position estimate: no local position yet" in res.stderr
     assert "s left)" in res.stderr
-    assert ("[FAIL] position estimate: no usable position estimate from the autopilot after 0.5 s: no local "
-            "position yet") in res.stderr
+    assert (
+        "[FAIL] position estimate: no usable position estimate from the autopilot after 0.5 s: no local "
+        "position yet"
+    ) in res.stderr
     assert "motion capture" not in res.stderr.splitlines()[-1]

@@ -68,12 +68,33 @@ def test_issue_example_json_shape(tmp_path: Path) -> None:
     data = json.loads(out.read_text())
     assert data == {
         "tasks": [
-            {"id": "B0", "kind": "brick", "brick": 0, "done": True, "position": [0.0, 0.0, 0.05], "yaw": 0.0,
-             "pickup": None},
-            {"id": "B1", "kind": "brick", "brick": 1, "done": False, "position": [0.0, 0.0, 0.15], "yaw": 0.0,
-             "pickup": [3.0, 0.0, 0.05]},
-            {"id": "A0", "kind": "adhesion", "below": 0, "above": 1, "start": [-0.15, 0.0, 0.1],
-             "end": [0.15, 0.0, 0.1], "length": 0.3},
+            {
+                "id": "B0",
+                "kind": "brick",
+                "brick": 0,
+                "done": True,
+                "position": [0.0, 0.0, 0.05],
+                "yaw": 0.0,
+                "pickup": None,
+            },
+            {
+                "id": "B1",
+                "kind": "brick",
+                "brick": 1,
+                "done": False,
+                "position": [0.0, 0.0, 0.15],
+                "yaw": 0.0,
+                "pickup": [3.0, 0.0, 0.05],
+            },
+            {
+                "id": "A0",
+                "kind": "adhesion",
+                "below": 0,
+                "above": 1,
+                "start": [-0.15, 0.0, 0.1],
+                "end": [0.15, 0.0, 0.1],
+                "length": 0.3,
+            },
         ],
         "dependencies": [["B1", "A0"], ["A0", "B0"]],
         "conflicts": [],
@@ -154,36 +175,66 @@ INVALID = {
     "empty": ("", ["empty file"]),
     "missing-bricks": (FLEET, ["missing key 'bricks'"]),
     "missing-fleet": ("bricks:\n" + BRICK0, ["missing key 'fleet'"]),
-    "missing-position": ("bricks:\n  - {id: 0, placed: true}\n" + FLEET, ["brick 0", "missing key 'position'"]),
+    "missing-position": (
+        "bricks:\n  - {id: 0, placed: true}\n" + FLEET,
+        ["brick 0", "missing key 'position'"],
+    ),
     "unknown-top": ("clearence: 1.0\nbricks:\n" + BRICK0 + FLEET, ["unknown key 'clearence'", "clearance"]),
     "unknown-brick-key": (
         "bricks:\n  - {id: 0, position: [0, 0, 0.05], placed: true, colour: red}\n" + FLEET,
         ["brick 0", "unknown key 'colour'"],
     ),
-    "wrong-type-position": ("bricks:\n  - {id: 0, position: [0, 0], placed: true}\n" + FLEET, ["brick 0: position"]),
-    "wrong-type-id": ("bricks:\n  - {id: one, position: [0, 0, 0.05], placed: true}\n" + FLEET, ["bricks[0]: id"]),
-    "wrong-type-placed": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], placed: yes please}\n" + FLEET,
-                          ["brick 0: placed"]),
+    "wrong-type-position": (
+        "bricks:\n  - {id: 0, position: [0, 0], placed: true}\n" + FLEET,
+        ["brick 0: position"],
+    ),
+    "wrong-type-id": (
+        "bricks:\n  - {id: one, position: [0, 0, 0.05], placed: true}\n" + FLEET,
+        ["bricks[0]: id"],
+    ),
+    "wrong-type-placed": (
+        "bricks:\n  - {id: 0, position: [0, 0, 0.05], placed: yes please}\n" + FLEET,
+        ["brick 0: placed"],
+    ),
     "wrong-type-clearance": ("clearance: far\nbricks:\n" + BRICK0 + FLEET, ["clearance", "must be a number"]),
-    "nan": ("bricks:\n  - {id: 0, position: [.nan, 0, 0.05], placed: true}\n" + FLEET, ["brick 0: position", "finite"]),
-    "inf": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], yaw: .inf, placed: true}\n" + FLEET, ["brick 0: yaw", "finite"]),
-    "zero-size": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], size: [0.3, 0, 0.1], placed: true}\n" + FLEET,
-                  ["brick 0: size", "> 0"]),
-    "negative-default-size": ("brick: {size: [0.3, 0.15, -0.1]}\nbricks:\n" + BRICK0 + FLEET, ["brick.size", "> 0"]),
+    "nan": (
+        "bricks:\n  - {id: 0, position: [.nan, 0, 0.05], placed: true}\n" + FLEET,
+        ["brick 0: position", "finite"],
+    ),
+    "inf": (
+        "bricks:\n  - {id: 0, position: [0, 0, 0.05], yaw: .inf, placed: true}\n" + FLEET,
+        ["brick 0: yaw", "finite"],
+    ),
+    "zero-size": (
+        "bricks:\n  - {id: 0, position: [0, 0, 0.05], size: [0.3, 0, 0.1], placed: true}\n" + FLEET,
+        ["brick 0: size", "> 0"],
+    ),
+    "negative-default-size": (
+        "brick: {size: [0.3, 0.15, -0.1]}\nbricks:\n" + BRICK0 + FLEET,
+        ["brick.size", "> 0"],
+    ),
     "zero-clearance": ("clearance: 0\nbricks:\n" + BRICK0 + FLEET, ["clearance", "> 0"]),
-    "duplicate-id": ("bricks:\n" + BRICK0 + "  - {id: 0, position: [1, 0, 0.05], placed: true}\n" + FLEET,
-                     ["brick 0", "duplicate brick id"]),
+    "duplicate-id": (
+        "bricks:\n" + BRICK0 + "  - {id: 0, position: [1, 0, 0.05], placed: true}\n" + FLEET,
+        ["brick 0", "duplicate brick id"],
+    ),
     "duplicate-uav": (
         "bricks:\n" + BRICK0 + "fleet:\n  - {name: b, role: brick, home: [0, 0, 0]}\n"
         "  - {name: b, role: adhesion, home: [1, 0, 0]}\n",
         ["'b'", "duplicate UAV name"],
     ),
-    "interpenetrate": ("bricks:\n" + BRICK0 + "  - {id: 1, position: [0.1, 0.0, 0.05], placed: true}\n" + FLEET,
-                       ["brick 0", "interpenetrates brick 1"]),
-    "floating": ("bricks:\n" + BRICK0 + "  - {id: 1, position: [1.0, 0.0, 0.35], pickup: [3, 0, 0.05]}\n" + FLEET,
-                 ["brick 1", "neither on the ground nor resting"]),
-    "below-ground": ("bricks:\n  - {id: 0, position: [0, 0, -0.2], placed: true}\n" + FLEET,
-                     ["brick 0", "below the ground"]),
+    "interpenetrate": (
+        "bricks:\n" + BRICK0 + "  - {id: 1, position: [0.1, 0.0, 0.05], placed: true}\n" + FLEET,
+        ["brick 0", "interpenetrates brick 1"],
+    ),
+    "floating": (
+        "bricks:\n" + BRICK0 + "  - {id: 1, position: [1.0, 0.0, 0.35], pickup: [3, 0, 0.05]}\n" + FLEET,
+        ["brick 1", "neither on the ground nor resting"],
+    ),
+    "below-ground": (
+        "bricks:\n  - {id: 0, position: [0, 0, -0.2], placed: true}\n" + FLEET,
+        ["brick 0", "below the ground"],
+    ),
     "placed-on-unplaced": (
         "bricks:\n  - {id: 0, position: [0, 0, 0.05], pickup: [3, 0, 0.05]}\n"
         "  - {id: 1, position: [0, 0, 0.15], placed: true}\n" + FLEET,
@@ -191,8 +242,10 @@ INVALID = {
     ),
     "no-pickup": ("bricks:\n  - {id: 0, position: [0, 0, 0.05]}\n" + FLEET, ["brick 0", "pickup"]),
     "no-brick-uav": (
-        ("bricks:\n  - {id: 0, position: [0, 0, 0.05], pickup: [3, 0, 0.05]}\n"
-         "fleet:\n  - {name: g, role: adhesion, home: [0, 0, 0]}\n"),
+        (
+            "bricks:\n  - {id: 0, position: [0, 0, 0.05], pickup: [3, 0, 0.05]}\n"
+            "fleet:\n  - {name: g, role: adhesion, home: [0, 0, 0]}\n"
+        ),
         ["fleet", "role `brick`"],
     ),
     "no-adhesion-uav": (
@@ -200,14 +253,22 @@ INVALID = {
         "fleet:\n  - {name: b, role: brick, home: [0, 0, 0]}\n",
         ["fleet", "role `adhesion`"],
     ),
-    "unknown-role": ("bricks:\n" + BRICK0 + "fleet:\n  - {name: x, role: mortar, home: [0, 0, 0]}\n",
-                     ["fleet UAV 'x': role", "unknown role 'mortar'"]),
-    "thin-brick": ("bricks:\n  - {id: 0, position: [0, 0, 0.004], size: [0.3, 0.15, 0.008], placed: true}\n" + FLEET,
-                   ["brick 0: size", "must exceed 0.01 m"]),
-    "markers-do-not-fit": ("bricks:\n  - {id: 0, position: [0, 0, 0.05], size: [0.2, 0.1, 0.1], placed: true}\n"
-                           + FLEET, ["brick 0: size", "do not fit"]),
-    "bad-dictionary": ("brick: {markers: {dictionary: DICT_9X9_7}}\nbricks:\n" + BRICK0 + FLEET,
-                       ["brick.markers.dictionary", "unknown ArUco dictionary"]),
+    "unknown-role": (
+        "bricks:\n" + BRICK0 + "fleet:\n  - {name: x, role: mortar, home: [0, 0, 0]}\n",
+        ["fleet UAV 'x': role", "unknown role 'mortar'"],
+    ),
+    "thin-brick": (
+        "bricks:\n  - {id: 0, position: [0, 0, 0.004], size: [0.3, 0.15, 0.008], placed: true}\n" + FLEET,
+        ["brick 0: size", "must exceed 0.01 m"],
+    ),
+    "markers-do-not-fit": (
+        "bricks:\n  - {id: 0, position: [0, 0, 0.05], size: [0.2, 0.1, 0.1], placed: true}\n" + FLEET,
+        ["brick 0: size", "do not fit"],
+    ),
+    "bad-dictionary": (
+        "brick: {markers: {dictionary: DICT_9X9_7}}\nbricks:\n" + BRICK0 + FLEET,
+        ["brick.markers.dictionary", "unknown ArUco dictionary"],
+    ),
 }
 
 

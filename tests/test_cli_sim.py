@@ -24,8 +24,19 @@ def test_sim_json_is_exactly_the_report(tmp_path):
     res = sim("--format", "json", "--report", str(report))
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
-    assert list(d) == ["completed", "makespan_s", "lower_bound_s", "policy", "seed", "uavs", "tasks",
-                       "placement_error_m", "min_separation_m", "conflict_violations", "dependency_violations"]
+    assert list(d) == [
+        "completed",
+        "makespan_s",
+        "lower_bound_s",
+        "policy",
+        "seed",
+        "uavs",
+        "tasks",
+        "placement_error_m",
+        "min_separation_m",
+        "conflict_violations",
+        "dependency_violations",
+    ]
     assert json.loads(report.read_text()) == d
     assert [t["id"] for t in sorted(d["tasks"], key=lambda t: t["start_s"])] == ["A0", "B0", "A1", "B1"]
 
@@ -44,7 +55,9 @@ def test_sim_text_summary_gantt_and_plot3d(tmp_path):
 
 
 def test_sim_fleet_override_and_faults():
-    res = sim("--brick-uavs", "2", "--adhesion-uavs", "1", "--fault", "grasp=0.3", "--seed", "2", "--format", "json")
+    res = sim(
+        "--brick-uavs", "2", "--adhesion-uavs", "1", "--fault", "grasp=0.3", "--seed", "2", "--format", "json"
+    )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert [u["name"] for u in d["uavs"]] == ["brick-1", "brick-2", "glue-1"]
@@ -103,8 +116,21 @@ def test_mission_control_bad_input(tmp_path):
 
 
 def test_fly_mission_mode_bad_input():
-    res = runner.invoke(app, ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0",
-                              "--mission", "tcp/127.0.0.1:7447"])
+    res = runner.invoke(
+        app,
+        [
+            "fly",
+            "--uav",
+            "brick",
+            "--sim",
+            "--blueprint",
+            CASE_STUDY,
+            "--task",
+            "B0",
+            "--mission",
+            "tcp/127.0.0.1:7447",
+        ],
+    )
     assert res.exit_code == 2 and "exclude each other" in res.stderr
     res = runner.invoke(app, ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY])
     assert res.exit_code == 2 and "--task is required" in res.stderr

@@ -156,8 +156,9 @@ def test_critical_path_counts_chains_within_one_typical_task_as_ties() -> None:
         BrickTask("B2", 2, False, P(0.0), 0.0, P(3.0)),
     )
     durations = {"B0": 40.0, "B1": 50.0, "B2": 45.0}
-    d = Dispatcher(Plan(tasks, (), ()), [UavSpec("brick-1", "brick", P(0.0))], "critical-path",
-                   durations_s=durations)
+    d = Dispatcher(
+        Plan(tasks, (), ()), [UavSpec("brick-1", "brick", P(0.0))], "critical-path", durations_s=durations
+    )
     assert d.tie_step_s == 45.0
     order = []
     while not d.finished:
@@ -528,8 +529,16 @@ def _seeded_plan(rng: random.Random) -> Plan:
     losses=st.integers(0, 1),
 )
 def test_random_walls_from_the_planner_stay_safe(
-    courses: int, per_course: int, placed: int, bricks: int, glues: int, policy: str, kind: str, seed: int,
-    p_fail: float, losses: int,
+    courses: int,
+    per_course: int,
+    placed: int,
+    bricks: int,
+    glues: int,
+    policy: str,
+    kind: str,
+    seed: int,
+    p_fail: float,
+    losses: int,
 ) -> None:
     from masonry.blueprint_gen import generate
     from masonry.planner import plan as make_plan
@@ -540,7 +549,9 @@ def test_random_walls_from_the_planner_stay_safe(
         "pyramid": {"base": per_course},
         "towers": {"towers": per_course, "height": courses, "spacing_m": 0.5},
     }[kind]
-    bp = generate(kind, placed_courses=min(placed, courses - 1), brick_uavs=bricks, adhesion_uavs=glues, **shape)
+    bp = generate(
+        kind, placed_courses=min(placed, courses - 1), brick_uavs=bricks, adhesion_uavs=glues, **shape
+    )
     plan = make_plan(bp)
     d = simulate(plan, list(bp.fleet), policy, seed, p_fail, losses)
     if p_fail == 0.0 and losses == 0:

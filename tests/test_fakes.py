@@ -264,13 +264,17 @@ def test_scripted_clearance_link_answers_then_grants() -> None:
     from masonry.ports import ClearanceLink
 
     clock = FakeClock()
-    link = ScriptedClearanceLink([], clock, layer_m=2.4, answer_after_s=1.0, grant_after_s=3.0, hold_m=(1, 1, 2.4))
+    link = ScriptedClearanceLink(
+        [], clock, layer_m=2.4, answer_after_s=1.0, grant_after_s=3.0, hold_m=(1, 1, 2.4)
+    )
     assert isinstance(link, ClearanceLink) and isinstance(link, MissionLink) and not link.swaps_batteries
     site = (2.0, 0.0, 1.2)
     assert link.request_clearance(site) is None
     clock.advance(1.5)
     answer = link.request_clearance(site, 2.0)
-    assert answer is not None and not answer.granted and answer.layer_m == 2.4 and answer.hold_m == (1, 1, 2.4)
+    assert (
+        answer is not None and not answer.granted and answer.layer_m == 2.4 and answer.hold_m == (1, 1, 2.4)
+    )
     clock.advance(1.5)
     answer = link.request_clearance(site)
     assert answer is not None and answer.granted and answer.hold_m is None

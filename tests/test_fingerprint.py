@@ -20,7 +20,13 @@ def test_same_wall_written_again_has_the_same_digests(tmp_path):
 def test_a_moved_brick_or_another_clearance_changes_the_wall_digest_only():
     bp = load_blueprint("blueprints/paper_case_study.yaml")
     b0 = bp.bricks[-1]
-    moved = dataclasses.replace(bp, bricks=(*bp.bricks[:-1], dataclasses.replace(b0, position_m=(b0.position_m[0] + 1e-6, *b0.position_m[1:]))))
+    moved = dataclasses.replace(
+        bp,
+        bricks=(
+            *bp.bricks[:-1],
+            dataclasses.replace(b0, position_m=(b0.position_m[0] + 1e-6, *b0.position_m[1:])),
+        ),
+    )
     assert wall_digest(moved) != wall_digest(bp)
     assert fleet_digest(moved) == fleet_digest(bp)
     assert wall_digest(dataclasses.replace(bp, clearance_m=bp.clearance_m + 0.1)) != wall_digest(bp)

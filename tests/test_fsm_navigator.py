@@ -31,7 +31,9 @@ def test_a_leg_is_a_min_jerk_reference_with_velocity_and_lag_feed_forward():
     ref, ff = nav.reference(11.5)
     assert ref == pytest.approx(expected.position(1.5).tolist(), abs=1e-12)
     lag = nav.velocity_lag_s
-    assert ff == pytest.approx((expected.velocity(1.5) + lag * expected.acceleration(1.5)).tolist(), abs=1e-12)
+    assert ff == pytest.approx(
+        (expected.velocity(1.5) + lag * expected.acceleration(1.5)).tolist(), abs=1e-12
+    )
     ref, ff = nav.reference(20.0)  # after the leg: its end, no feed-forward
     assert ref == pytest.approx([2.0, 1.0, 1.0]) and ff == (0.0, 0.0, 0.0)
 
@@ -67,7 +69,10 @@ def test_a_route_climbs_first_and_its_legs_are_flown_one_by_one():
 
 def test_a_route_down_descends_last_and_a_level_one_is_one_leg():
     p = np.array([0.0, 0.0, 2.0])
-    assert [leg.tolist() for leg in Navigator.low_legs(p, np.array([1.0, 1.0, 1.0]))] == [[1, 1, 2], [1, 1, 1]]
+    assert [leg.tolist() for leg in Navigator.low_legs(p, np.array([1.0, 1.0, 1.0]))] == [
+        [1, 1, 2],
+        [1, 1, 1],
+    ]
     assert [leg.tolist() for leg in Navigator.low_legs(p, np.array([1.0, 1.0, 2.02]))] == [[1, 1, 2.02]]
     # a vertical move needs no lateral leg
     assert [leg.tolist() for leg in Navigator.low_legs(p, np.array([0.0, 0.0, 1.0]))] == [[0, 0, 1]]

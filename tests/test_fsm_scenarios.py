@@ -315,10 +315,13 @@ def test_adhesion_next_segment_where_the_last_ended_is_sprayed_without_climbing_
     cfg = rig.config
     # A1: a short leg, the hover, a short descent, the segment, the valve closing (no 4 s descent, no climb)
     a1_s = rig.link.results[1].duration_s
-    assert a1_s < 1.0 + cfg.stable_time_s + cfg.chain_descent_s + 0.3 / cfg.spray_speed_mps + cfg.close_dwell_s + 1.0
+    assert (
+        a1_s
+        < 1.0 + cfg.stable_time_s + cfg.chain_descent_s + 0.3 / cfg.spray_speed_mps + cfg.close_dwell_s + 1.0
+    )
     s = rig.states
     second = s.index("spray", s.index("spray") + 1)
-    assert s[second - 4:second + 1] == ["ascend", "cruise", "hover", "descend", "spray"]
+    assert s[second - 4 : second + 1] == ["ascend", "cruise", "hover", "descend", "spray"]
 
 
 def test_adhesion_task_is_done_when_the_valve_closes_before_the_climb() -> None:
@@ -356,8 +359,13 @@ def test_adhesion_next_task_arriving_while_it_waits_down_is_chained() -> None:
         def deliver(r: Rig, delay_s: float = delay_s, sent: dict = sent) -> None:
             if r.link.results and sent["at"] is None:
                 sent["at"] = r.clock.now_s()
-            if sent["at"] is not None and r.clock.now_s() - sent["at"] >= delay_s and r.link.pending == 0 \
-                    and len(r.link.results) == 1 and r.uav.task is None:
+            if (
+                sent["at"] is not None
+                and r.clock.now_s() - sent["at"] >= delay_s
+                and r.link.pending == 0
+                and len(r.link.results) == 1
+                and r.uav.task is None
+            ):
                 r.link.push(a1)
 
         heights: list[float] = []

@@ -155,8 +155,11 @@ def test_machines_are_built_from_copies_of_the_data() -> None:
 def _transit_cases() -> list[tuple[int, str]]:
     from masonry.fsm.states import TRANSIT_TRANSITIONS
 
-    return [(i, src) for i, t in enumerate(TRANSIT_TRANSITIONS)
-            for src in (t["source"] if isinstance(t["source"], list) else [t["source"]])]
+    return [
+        (i, src)
+        for i, t in enumerate(TRANSIT_TRANSITIONS)
+        for src in (t["source"] if isinstance(t["source"], list) else [t["source"]])
+    ]
 
 
 @pytest.mark.parametrize(("index", "source"), _transit_cases())
@@ -181,7 +184,12 @@ def test_transit_triggers_from_a_wrong_phase_are_loud_when_strict() -> None:
     with pytest.raises(MachineError):
         transit.grant()  # nothing was asked for
     transit.begin((1.0, 2.0, 1.2), 2.0, None)
-    assert (transit.state, transit.site_m, transit.top_m, transit.layer_m) == ("ask", (1.0, 2.0, 1.2), 2.0, None)
+    assert (transit.state, transit.site_m, transit.top_m, transit.layer_m) == (
+        "ask",
+        (1.0, 2.0, 1.2),
+        2.0,
+        None,
+    )
     with pytest.raises(MachineError):
         transit.arrive()  # not down yet
     transit.drop()
@@ -204,7 +212,11 @@ def test_the_diagram_machine_nests_the_transit_states() -> None:
     for kind in MACHINES:
         states, transitions = diagram_machine(kind)
         assert "transit_ask" in leaf_states(states) and "transit_down" in leaf_states(states)
-        assert {"trigger": "grant", "source": ["transit_ask", "transit_hold"], "dest": "transit_down"} in transitions
+        assert {
+            "trigger": "grant",
+            "source": ["transit_ask", "transit_hold"],
+            "dest": "transit_down",
+        } in transitions
         assert len(transitions) == len(MACHINES[kind][1]) + 5
 
 
@@ -222,7 +234,9 @@ def test_build_uav_takes_the_clearance_link_explicitly_or_from_the_link() -> Non
     cfg = UavConfig("glue-1", "adhesion", (0.0, 0.0, 0.0))
 
     def build(link, **kw):
-        return build_uav(cfg, fc=FakeFlightController(clock), link=link, clock=clock, sprayer=FakeSprayer(clock), **kw)
+        return build_uav(
+            cfg, fc=FakeFlightController(clock), link=link, clock=clock, sprayer=FakeSprayer(clock), **kw
+        )
 
     airspace = ScriptedClearanceLink([], clock, swaps_batteries=True)
     assert build(airspace).clearance is airspace  # the link implements ClearanceLink too (a mission handler)

@@ -15,8 +15,18 @@ coords = st.floats(-5.0, 5.0)
 
 
 def _tel(position, yaw_rad, roll_rad=0.0, pitch_rad=0.0) -> Telemetry:
-    return Telemetry(0.0, tuple(position), (0.0, 0.0, 0.0), (roll_rad, pitch_rad, yaw_rad), True, "GUIDED", 1.0,
-                     True, True, False)
+    return Telemetry(
+        0.0,
+        tuple(position),
+        (0.0, 0.0, 0.0),
+        (roll_rad, pitch_rad, yaw_rad),
+        True,
+        "GUIDED",
+        1.0,
+        True,
+        True,
+        False,
+    )
 
 
 @given(st.tuples(coords, coords, coords), st.floats(-3.2, 3.2))

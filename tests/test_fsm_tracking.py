@@ -19,8 +19,12 @@ LAYER_M = 2.6
 
 def _rig(config=None, **link_kwargs):
     # the fake autopilot's velocity loop with the simulated vehicle's 0.3 s lag (the default velocity_lag_s)
-    rig = Rig("brick", fc={"velocity_time_constant_s": 0.3}, config=config,
-              clearance={"layer_m": LAYER_M, **link_kwargs})
+    rig = Rig(
+        "brick",
+        fc={"velocity_time_constant_s": 0.3},
+        config=config,
+        clearance={"layer_m": LAYER_M, **link_kwargs},
+    )
     return rig, rig.link
 
 
@@ -70,9 +74,13 @@ def test_a_uav_asks_for_its_transit_at_rest_where_its_flight_starts(answer_after
 
     link.request_clearance = spy  # the model asks its clearance link, this one
     starts = []
-    rig.run(max_s=60.0, on_tick=lambda r: starts.append(r.fc.position_m) if r.uav.transit.state == "down"
-            and len(starts) < 1 else None)
-    (p, v), = at_ask
+    rig.run(
+        max_s=60.0,
+        on_tick=lambda r: (
+            starts.append(r.fc.position_m) if r.uav.transit.state == "down" and len(starts) < 1 else None
+        ),
+    )
+    ((p, v),) = at_ask
     cruise = rig.config.cruise_altitude_m
     assert abs(p[2] - cruise) < 0.03, p
     assert math.hypot(*v) < rig.config.settle_speed_mps

@@ -135,7 +135,9 @@ def test_mission_mode_keeps_the_pre_flight_check(tmp_path: Path) -> None:
     config = tmp_path / "brick-1.yaml"
     config.write_text(f"name: brick-1\nfc: udpin:127.0.0.1:{port}\nestimate_wait_s: 0.3\n"
                       f"mission: tcp/127.0.0.1:{free_tcp_port()}\n")  # fmt: skip
-    sitl = MavlinkSitl(port, time_scale=5.0, home_m=(2.0, -2.0, 0.0), config=SitlConfig(position_source="vision"))
+    sitl = MavlinkSitl(
+        port, time_scale=5.0, home_m=(2.0, -2.0, 0.0), config=SitlConfig(position_source="vision")
+    )
     sitl.start()
     try:
         res = CliRunner().invoke(app, ["fly", "--uav", "brick", "--blueprint", str(blueprint), "--config",
@@ -144,5 +146,9 @@ def test_mission_mode_keeps_the_pre_flight_check(tmp_path: Path) -> None:
         sitl.stop()
     assert res.exit_code == 1, res.output
     assert "-> refusing to arm" in res.stderr and "joins the mission" not in res.stdout
-    assert res.stderr.strip().splitlines()[-1].startswith("error: arm rejected: pre-flight check failed: position")
+    assert (
+        res.stderr.strip()
+        .splitlines()[-1]
+        .startswith("error: arm rejected: pre-flight check failed: position")
+    )
     assert not sitl.vehicle.armed and sitl.status_log == []

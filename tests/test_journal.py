@@ -69,7 +69,15 @@ def test_replay_folds_assignments_completions_failures_and_losses(tmp_path: Path
     assert state.lost_uavs == ("brick-2",)
     assert state.last_time_s == 95.0
     assert [r.kind for r in state.records] == [
-        "assign", "complete", "assign", "fail", "assign", "complete", "assign", "assign", "uav_lost"
+        "assign",
+        "complete",
+        "assign",
+        "fail",
+        "assign",
+        "complete",
+        "assign",
+        "assign",
+        "uav_lost",
     ]
     assert state.meta == {"blueprint": {"name": "case", "bricks": 2}}
 
@@ -185,7 +193,9 @@ def test_a_foreign_sqlite_database_raises_journal_error(tmp_path: Path) -> None:
     conn.execute("CREATE TABLE customers (id INTEGER)")
     conn.commit()
     conn.close()
-    with pytest.raises(JournalError, match=r"other\.db: not a masonry journal \(an SQLite database of another"):
+    with pytest.raises(
+        JournalError, match=r"other\.db: not a masonry journal \(an SQLite database of another"
+    ):
         read_journal(path)
 
 
@@ -234,7 +244,10 @@ def test_missing_file_directory_and_closed_journal(tmp_path: Path) -> None:
         (lambda j: j.record_assignment(1.0, "B0", "brick-1", 0), "attempt must be an integer >= 1"),
         (lambda j: j.record_assignment(1.0, "", "brick-1", 1), "bad task id"),
         (lambda j: j.record_failure(1.0, "B0", "", "x"), "bad UAV name"),
-        (lambda j: j.record_completion(1.0, "B0", "brick-1", blob=object()), "object is not JSON serialisable"),
+        (
+            lambda j: j.record_completion(1.0, "B0", "brick-1", blob=object()),
+            "object is not JSON serialisable",
+        ),
     ],
 )
 def test_bad_records_raise_journal_error(tmp_path: Path, call, message: str) -> None:  # type: ignore[no-untyped-def]

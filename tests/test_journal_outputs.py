@@ -42,7 +42,9 @@ def one_line_error(res, code: int = 2) -> str:
 
 def moved_case_study(tmp_path: Path) -> Path:
     """The case study with the same task ids and one brick moved 5 cm: another wall."""
-    text = CASE_STUDY.read_text().replace("{id: 1, position: [0.0, 0.5, 0.25]", "{id: 1, position: [0.05, 0.5, 0.25]")
+    text = CASE_STUDY.read_text().replace(
+        "{id: 1, position: [0.0, 0.5, 0.25]", "{id: 1, position: [0.05, 0.5, 0.25]"
+    )
     assert text != CASE_STUDY.read_text()
     p = tmp_path / "moved.yaml"
     p.write_text(text)
@@ -51,8 +53,11 @@ def moved_case_study(tmp_path: Path) -> Path:
 
 def renumbered_case_study(tmp_path: Path) -> Path:
     """The case study with its two bricks renumbered 10 and 11: brick tasks B10, B11, not the journal's B0, B1."""
-    text = CASE_STUDY.read_text().replace("{id: 0, position", "{id: 10, position").replace(
-        "{id: 1, position", "{id: 11, position")
+    text = (
+        CASE_STUDY.read_text()
+        .replace("{id: 0, position", "{id: 10, position")
+        .replace("{id: 1, position", "{id: 11, position")
+    )
     p = tmp_path / "renumbered.yaml"
     p.write_text(text)
     assert {t.id for t in make_plan(load_blueprint(p)).tasks if not t.done} == {"A0", "B10", "A1", "B11"}
@@ -87,18 +92,23 @@ def test_journal_stores_the_fingerprint_of_wall_and_fleet(case_journal):
 
 def test_resume_with_another_wall_of_other_task_ids_is_one_line_exit_2(case_journal, tmp_path):
     journal = copy_journal(case_journal[0], tmp_path / "j.db")
-    res = sim(renumbered_case_study(tmp_path), "--journal", str(journal), "--resume")  # was: KeyError traceback
+    res = sim(
+        renumbered_case_study(tmp_path), "--journal", str(journal), "--resume"
+    )  # was: KeyError traceback
     line = one_line_error(res)
     assert str(journal) in line and "written for another wall" in line
 
 
 def test_resume_with_another_wall_of_the_same_task_ids_is_refused(case_journal, tmp_path):
     journal = copy_journal(case_journal[0], tmp_path / "j.db")
-    res = sim(moved_case_study(tmp_path), "--journal", str(journal), "--resume")  # was: exit 0, other wall's tasks done
+    res = sim(
+        moved_case_study(tmp_path), "--journal", str(journal), "--resume"
+    )  # was: exit 0, other wall's tasks done
     line = one_line_error(res)
     assert "written for another wall" in line and wall_digest(load_blueprint(CASE_STUDY)) in line
-    assert len(read_journal(journal).records) == len(read_journal(case_journal[0]).records), \
+    assert len(read_journal(journal).records) == len(read_journal(case_journal[0]).records), (
         "the refused resume wrote to the journal"
+    )
 
 
 def test_resume_with_another_fleet_is_refused(case_journal, tmp_path):
@@ -117,9 +127,22 @@ def _free_port() -> int:
 def test_mission_control_refuses_a_journal_of_another_wall(case_journal, tmp_path, other):
     journal = copy_journal(case_journal[0], tmp_path / "j.db")
     blueprint = renumbered_case_study(tmp_path) if other == "renumbered" else moved_case_study(tmp_path)
-    res = runner.invoke(app, ["mission-control", str(blueprint), "--journal", str(journal), "--resume",
-                              "--listen", f"tcp/127.0.0.1:{_free_port()}", "--startup-timeout", "0.5",
-                              "--max-time", "0.5"])
+    res = runner.invoke(
+        app,
+        [
+            "mission-control",
+            str(blueprint),
+            "--journal",
+            str(journal),
+            "--resume",
+            "--listen",
+            f"tcp/127.0.0.1:{_free_port()}",
+            "--startup-timeout",
+            "0.5",
+            "--max-time",
+            "0.5",
+        ],
+    )
     line = one_line_error(res)
     assert "written for another wall" in line
 
@@ -137,7 +160,9 @@ def legacy_journal(case_journal, dst: Path) -> Path:
     return dst
 
 
-def test_a_journal_without_fingerprint_resumes_with_a_warning_and_adopts_the_fingerprint(case_journal, tmp_path):
+def test_a_journal_without_fingerprint_resumes_with_a_warning_and_adopts_the_fingerprint(
+    case_journal, tmp_path
+):
     journal = legacy_journal(case_journal, tmp_path / "old.db")
     res = sim(CASE_STUDY, "--journal", str(journal), "--resume", "--format", "json")
     assert res.exit_code == 0, res.output
@@ -145,8 +170,9 @@ def test_a_journal_without_fingerprint_resumes_with_a_warning_and_adopts_the_fin
     assert len(warnings) == 1 and "no fingerprint" in warnings[0] and str(journal) in warnings[0]
     assert read_journal(journal).meta["wall_digest"] == wall_digest(load_blueprint(CASE_STUDY))
     # from now on it is checked
-    assert "written for another wall" in one_line_error(sim(moved_case_study(tmp_path), "--journal", str(journal),
-                                                            "--resume"))
+    assert "written for another wall" in one_line_error(
+        sim(moved_case_study(tmp_path), "--journal", str(journal), "--resume")
+    )
 
 
 def test_a_journal_without_fingerprint_naming_other_tasks_is_one_line_exit_2(case_journal, tmp_path):
@@ -179,7 +205,9 @@ class _Stop(Exception):
 
 
 @pytest.mark.parametrize("after", [2, 3, "60 s"])
-def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before(case_journal, tmp_path, after):
+def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before(
+    case_journal, tmp_path, after
+):
     full = case_journal[1]
     journal = tmp_path / "j.db"
 
@@ -243,7 +271,9 @@ def test_read_only_journal_says_so_in_the_library_too(case_journal, tmp_path):
     with pytest.raises(JournalUnusable, match="is read-only"):
         Journal(read_only).open()
     # reading it (to look at a finished mission) still works
-    assert [r.task_id for r in read_journal(read_only).done] == [r.task_id for r in read_journal(case_journal[0]).done]
+    assert [r.task_id for r in read_journal(read_only).done] == [
+        r.task_id for r in read_journal(case_journal[0]).done
+    ]
 
 
 # ---------------------------------------------------------------- output paths: checked first, written atomically
@@ -279,8 +309,21 @@ def test_sim_refuses_a_read_only_report_before_simulating(tmp_path):
         (["fsm", "diagram", "brick", "-o", "{bad}/b.dot"], "--output"),
         (["markers", "--bricks", "0", "-o", "{bad}/m.pdf"], "--output"),
         (["calibrate", "{img}", "-o", "{bad}/c.yaml"], "--output"),
-        (["mission-control", str(CASE_STUDY), "--report", "{bad}/r.json", "--listen", "tcp/127.0.0.1:{port}",
-          "--startup-timeout", "0.2", "--max-time", "0.2"], "--report"),
+        (
+            [
+                "mission-control",
+                str(CASE_STUDY),
+                "--report",
+                "{bad}/r.json",
+                "--listen",
+                "tcp/127.0.0.1:{port}",
+                "--startup-timeout",
+                "0.2",
+                "--max-time",
+                "0.2",
+            ],
+            "--report",
+        ),
     ],
 )
 def test_every_command_that_writes_a_file_checks_it_first(tmp_path, argv, flag):

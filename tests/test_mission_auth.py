@@ -119,8 +119,16 @@ def _mission(key=KEY, **kw):
     p = plan(bp)
     bus = InprocBus()
     mc_t, _ = keyed(bus, MISSION_CONTROL, key=key) if key else (bus.endpoint(MISSION_CONTROL), None)
-    mc = MissionControl(p, bp.fleet, mc_t, heartbeat_timeout_s=5.0, startup_timeout_s=30.0,
-                        wall_digest=wall_digest(bp), min_durations_s=min_durations_s(p), **kw)
+    mc = MissionControl(
+        p,
+        bp.fleet,
+        mc_t,
+        heartbeat_timeout_s=5.0,
+        startup_timeout_s=30.0,
+        wall_digest=wall_digest(bp),
+        min_durations_s=min_durations_s(p),
+        **kw,
+    )
     return bp, p, bus, mc
 
 
@@ -176,7 +184,9 @@ def test_forged_completions_are_dropped_or_ignored_and_the_mission_runs_as_witho
 
     # the attacks, all while the task is in flight
     eve.send(MISSION_CONTROL, done(holder, tid, attempt, 0.5))  # no key
-    AuthenticatedTransport(bus.endpoint("wrong"), OTHER_KEY).send(MISSION_CONTROL, done(holder, tid, attempt, 0.5))
+    AuthenticatedTransport(bus.endpoint("wrong"), OTHER_KEY).send(
+        MISSION_CONTROL, done(holder, tid, attempt, 0.5)
+    )
     uavs[holder].send(MISSION_CONTROL, encode(Heartbeat(holder, 0.5)))
     replayable = keyed_uavs[holder][1].sent[-1][1]
     uavs[other].send(MISSION_CONTROL, done(other, tid, attempt, 0.5))  # not the assigned UAV
@@ -234,20 +244,28 @@ class Idle:
         pass
 
 
-@pytest.mark.parametrize("forge, why", [
-    (lambda a, bp: replace(a, task=replace(a.task, id="B99")), "not a task of this UAV's blueprint"),
-    (lambda a, bp: replace(a, task=replace(a.task, position_m=(30.0, 30.0, 0.1))), "geometry differs"),
-    (lambda a, bp: replace(a, wall="0123456789abcdef"), "is for the wall 0123456789abcdef"),
-    (lambda a, bp: replace(a, wall=""), "(none given)"),
-    (lambda a, bp: replace(a, task=next(t for t in plan(bp).tasks if t.kind == "adhesion")), "is adhesion work"),
-])
+@pytest.mark.parametrize(
+    "forge, why",
+    [
+        (lambda a, bp: replace(a, task=replace(a.task, id="B99")), "not a task of this UAV's blueprint"),
+        (lambda a, bp: replace(a, task=replace(a.task, position_m=(30.0, 30.0, 0.1))), "geometry differs"),
+        (lambda a, bp: replace(a, wall="0123456789abcdef"), "is for the wall 0123456789abcdef"),
+        (lambda a, bp: replace(a, wall=""), "(none given)"),
+        (
+            lambda a, bp: replace(a, task=next(t for t in plan(bp).tasks if t.kind == "adhesion")),
+            "is adhesion work",
+        ),
+    ],
+)
 def test_a_uav_refuses_a_task_that_is_not_its_blueprints_and_reports_it(forge, why):
     bp = load_blueprint(CASE_STUDY)
     p = plan(bp)
     spec = next(u for u in bp.fleet if u.role == "brick")
     bus = InprocBus()
     mc = bus.endpoint(MISSION_CONTROL)
-    h = UavHandler(spec.name, bus.endpoint(spec.name), tasks=p.tasks, role=spec.role, wall_digest=wall_digest(bp))
+    h = UavHandler(
+        spec.name, bus.endpoint(spec.name), tasks=p.tasks, role=spec.role, wall_digest=wall_digest(bp)
+    )
     h.attach(Idle())
     brick = next(t for t in p.tasks if t.kind == "brick")
     good = Assign(MISSION_CONTROL, spec.name, brick, 1, 0.0, wall_digest(bp))
@@ -292,11 +310,20 @@ def test_key_files(tmp_path):
         load_key(tmp_path / "missing.key")
 
 
-@pytest.mark.parametrize("endpoint, loop", [
-    ("tcp/127.0.0.1:7447", True), ("tcp/127.1.2.3:1", True), ("tcp/localhost:7447", True),
-    ("tcp/[::1]:7447", True), ("tls/127.0.0.1:7447", True), ("tcp/0.0.0.0:7447", False),
-    ("tcp/10.0.0.1:7447", False), ("tcp/[::]:7447", False), ("tcp/uav-base.local:7447", False),
-])
+@pytest.mark.parametrize(
+    "endpoint, loop",
+    [
+        ("tcp/127.0.0.1:7447", True),
+        ("tcp/127.1.2.3:1", True),
+        ("tcp/localhost:7447", True),
+        ("tcp/[::1]:7447", True),
+        ("tls/127.0.0.1:7447", True),
+        ("tcp/0.0.0.0:7447", False),
+        ("tcp/10.0.0.1:7447", False),
+        ("tcp/[::]:7447", False),
+        ("tcp/uav-base.local:7447", False),
+    ],
+)
 def test_loopback_endpoints(endpoint, loop):
     assert is_loopback(endpoint) is loop
 
@@ -308,10 +335,15 @@ def test_cli_refuses_a_network_endpoint_without_a_key(tmp_path):
     r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--listen", "tcp/0.0.0.0:7447"])
     assert r.exit_code == 2
     assert r.stderr.strip().splitlines() == [
-        ("error: --listen/--connect tcp/0.0.0.0:7447 is not loopback: give --key-file FILE (masonry keygen -o "
-         "FILE) to authenticate the mission, or --insecure to run it unauthenticated")]
-    r = runner.invoke(app, ["fly", "--uav", "brick", "--sim", "--blueprint", str(CASE_STUDY),
-                            "--mission", "tcp/10.0.0.1:7447"])
+        (
+            "error: --listen/--connect tcp/0.0.0.0:7447 is not loopback: give --key-file FILE (masonry keygen -o "
+            "FILE) to authenticate the mission, or --insecure to run it unauthenticated"
+        )
+    ]
+    r = runner.invoke(
+        app,
+        ["fly", "--uav", "brick", "--sim", "--blueprint", str(CASE_STUDY), "--mission", "tcp/10.0.0.1:7447"],
+    )
     assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1
     assert "--mission/--listen tcp/10.0.0.1:7447 is not loopback" in r.stderr
     bad = tmp_path / "k"
@@ -319,15 +351,21 @@ def test_cli_refuses_a_network_endpoint_without_a_key(tmp_path):
     os.chmod(bad, 0o600)
     r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--key-file", str(bad)])
     assert r.exit_code == 2 and r.stderr.strip().splitlines() == [
-        f"error: --key-file {bad}: a key file holds 64 hexadecimal digits (make one with masonry keygen -o FILE)"]
-    r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--zenoh-config", str(tmp_path / "none.json5")])
+        f"error: --key-file {bad}: a key file holds 64 hexadecimal digits (make one with masonry keygen -o FILE)"
+    ]
+    r = runner.invoke(
+        app, ["mission-control", str(CASE_STUDY), "--zenoh-config", str(tmp_path / "none.json5")]
+    )
     assert r.exit_code == 2 and "--zenoh-config" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     broken = tmp_path / "broken.json5"
     broken.write_text("{ transport:\n")
     r = runner.invoke(app, ["mission-control", str(CASE_STUDY), "--zenoh-config", str(broken)])
     assert r.exit_code == 2 and r.stderr.strip().splitlines() == [
-        (f"error: --zenoh-config {broken}: not a valid Zenoh configuration: line 2, column 1: expected array, "
-         "boolean, null, number, object, or string")]
+        (
+            f"error: --zenoh-config {broken}: not a valid Zenoh configuration: line 2, column 1: expected array, "
+            "boolean, null, number, object, or string"
+        )
+    ]
 
 
 def test_default_listen_is_loopback():
@@ -345,7 +383,8 @@ def test_keygen_writes_a_key_and_refuses_to_overwrite_it(tmp_path):
     assert len(key) == 32 and f"wrote {out}" in r.stderr
     r = runner.invoke(app, ["keygen", "-o", str(out)])
     assert r.exit_code == 2 and r.stderr.strip().splitlines() == [
-        f"error: {out} already exists: pass --force to replace it (every peer then needs the new key)"]
+        f"error: {out} already exists: pass --force to replace it (every peer then needs the new key)"
+    ]
     assert load_key(out) == key
     r = runner.invoke(app, ["keygen", "-o", str(out), "--force"])
     assert r.exit_code == 0 and load_key(out) != key

@@ -42,8 +42,14 @@ class ScriptedUav:
             return
         if now_s - self.t0 >= self.durations[self.task.id]:
             status = "failed" if self.rng.random() < self.fail_p else "done"
-            self.link.report_result(TaskResult(self.task.id, status, now_s - self.t0,
-                                               reason="grasp failed" if status == "failed" else None))
+            self.link.report_result(
+                TaskResult(
+                    self.task.id,
+                    status,
+                    now_s - self.t0,
+                    reason="grasp failed" if status == "failed" else None,
+                )
+            )
             self.task, self.state = None, "idle"
 
 
@@ -53,7 +59,9 @@ def random_plan(rng, n):
         if rng.random() < 0.6:
             tasks.append(BrickTask(f"B{i}", i, False, (rng.uniform(0, 5), 0.0, 0.1), 0.0, (8.0, 2.0, 0.05)))
         else:
-            tasks.append(AdhesionTask(f"A{i}", i, i + 1, (rng.uniform(0, 5), 0, 0.1), (rng.uniform(0, 5), 0, 0.1), 0.3))
+            tasks.append(
+                AdhesionTask(f"A{i}", i, i + 1, (rng.uniform(0, 5), 0, 0.1), (rng.uniform(0, 5), 0, 0.1), 0.3)
+            )
     ids = [t.id for t in tasks]
     deps = {(ids[u], ids[v]) for u in range(n) for v in range(u) if rng.random() < 0.15}
     conflicts = {(ids[a], ids[b]) for a in range(n) for b in range(a + 1, n) if rng.random() < 0.2}
@@ -79,8 +87,11 @@ def run_mission(plan, fleet, *, seed=0, fail_p=0.0, lose=None, policy="critical-
         mc.step(now)
         now += dt
     # a UAV that died stopped flying its task when it died
-    intervals = [(e.task_id, e.start_s, e.end_s if e.end_s is not None else lose.get(name))
-                 for name, h in handlers.items() for e in h.executions]
+    intervals = [
+        (e.task_id, e.start_s, e.end_s if e.end_s is not None else lose.get(name))
+        for name, h in handlers.items()
+        for e in h.executions
+    ]
     return mc, handlers, intervals
 
 
@@ -94,13 +105,20 @@ def _fly_until_the_end(mc, h, t_max, dt=0.5):
 
 
 def fleet_of(nb, na):
-    return tuple([UavSpec(f"brick-{i + 1}", "brick", (i * 3.0, -3.0, 0.0)) for i in range(nb)]
-                 + [UavSpec(f"glue-{i + 1}", "adhesion", (i * 3.0, -6.0, 0.0)) for i in range(na)])
+    return tuple(
+        [UavSpec(f"brick-{i + 1}", "brick", (i * 3.0, -3.0, 0.0)) for i in range(nb)]
+        + [UavSpec(f"glue-{i + 1}", "adhesion", (i * 3.0, -6.0, 0.0)) for i in range(na)]
+    )
 
 
 @settings(max_examples=40)
-@given(st.integers(1, 30), st.integers(1, 4), st.integers(1, 3), st.integers(0, 10**6),
-       st.sampled_from(["fifo", "critical-path", "nearest"]))
+@given(
+    st.integers(1, 30),
+    st.integers(1, 4),
+    st.integers(1, 3),
+    st.integers(0, 10**6),
+    st.sampled_from(["fifo", "critical-path", "nearest"]),
+)
 def test_invariants_without_faults(n, nb, na, seed, policy):
     plan = random_plan(random.Random(seed), n)
     mc, handlers, intervals = run_mission(plan, fleet_of(nb, na), seed=seed, policy=policy)
@@ -111,12 +129,20 @@ def test_invariants_without_faults(n, nb, na, seed, policy):
 
 
 @settings(max_examples=40)
-@given(st.integers(1, 25), st.integers(1, 3), st.integers(1, 3), st.integers(0, 10**6),
-       st.floats(0.0, 0.4), st.data())
+@given(
+    st.integers(1, 25),
+    st.integers(1, 3),
+    st.integers(1, 3),
+    st.integers(0, 10**6),
+    st.floats(0.0, 0.4),
+    st.data(),
+)
 def test_invariants_with_failures_and_lost_uavs(n, nb, na, seed, fail_p, data):
     plan = random_plan(random.Random(seed), n)
     fleet = fleet_of(nb, na)
-    lose = data.draw(st.dictionaries(st.sampled_from([u.name for u in fleet]), st.floats(0.0, 60.0), max_size=2))
+    lose = data.draw(
+        st.dictionaries(st.sampled_from([u.name for u in fleet]), st.floats(0.0, 60.0), max_size=2)
+    )
     mc, handlers, intervals = run_mission(plan, fleet, seed=seed, fail_p=fail_p, lose=lose)
     assert mc.ended_at_s is not None, "mission control must end: finished or blocked"
     assert count_violations(plan, intervals) == (0, 0)
@@ -153,13 +179,21 @@ def test_lost_uav_releases_its_task_to_another():
     # last heartbeat at 2 s (period 1 s), timeout 2 s
     assert mc.uavs["brick-1"].lost and 4.0 < mc.uavs["brick-1"].lost_at_s <= 4.5
     assert [(a.uav, a.status, a.reason) for a in mc.history] == [
-        ("brick-1", "failed", "uav lost"), ("brick-2", "done", None)]
+        ("brick-1", "failed", "uav lost"),
+        ("brick-2", "done", None),
+    ]
     assert mc.history[1].start_s == mc.uavs["brick-1"].lost_at_s
 
 
 def test_all_uavs_of_a_role_lost_blocks_the_mission():
-    plan = Plan((AdhesionTask("A0", 0, 1, (0, 0, 0.1), (0.3, 0, 0.1), 0.3),
-                 BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, (5, 0, 0.05))), (("B1", "A0"),), ())
+    plan = Plan(
+        (
+            AdhesionTask("A0", 0, 1, (0, 0, 0.1), (0.3, 0, 0.1), 0.3),
+            BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, (5, 0, 0.05)),
+        ),
+        (("B1", "A0"),),
+        (),
+    )
     mc, _handlers, _ = run_mission(plan, fleet_of(1, 1), lose={"glue-1": 1.0})
     assert mc.blocked and not mc.finished
     assert set(mc.dispatcher.remaining) == {"A0", "B1"}
@@ -229,9 +263,15 @@ def test_mission_control_waits_for_the_fleet_then_starts_without_the_missing():
 
 
 def test_count_violations_detects_overlaps_and_early_starts():
-    plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, None),
-                 BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, None),
-                 BrickTask("B2", 2, False, (9, 0, 0.1), 0.0, None)), (("B1", "B0"),), (("B0", "B2"),))
+    plan = Plan(
+        (
+            BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, None),
+            BrickTask("B1", 1, False, (0, 0, 0.2), 0.0, None),
+            BrickTask("B2", 2, False, (9, 0, 0.1), 0.0, None),
+        ),
+        (("B1", "B0"),),
+        (("B0", "B2"),),
+    )
     assert count_violations(plan, [("B0", 0, 10), ("B1", 10, 20), ("B2", 10, 15)]) == (0, 0)
     assert count_violations(plan, [("B0", 0, 10), ("B1", 9, 20), ("B2", 9.5, 15)]) == (1, 1)
     assert count_violations(plan, [("B0", 0, None), ("B2", 50, 60)]) == (1, 0)  # B0 never ended
@@ -244,7 +284,9 @@ class HaltingUav(ScriptedUav):
         if self.state == "halted":
             task = self.link.poll_task()
             if task is not None:
-                self.link.report_result(TaskResult(task.id, "failed", 0.0, reason="out of service: battery low"))
+                self.link.report_result(
+                    TaskResult(task.id, "failed", 0.0, reason="out of service: battery low")
+                )
             return
         was = self.task
         super().step(now_s)
@@ -253,7 +295,9 @@ class HaltingUav(ScriptedUav):
 
 
 def test_out_of_service_uav_is_retired_without_burning_attempts():
-    plan = Plan(tuple(BrickTask(f"B{i}", i, False, (i * 3.0, 0, 0.1), 0.0, (5, 0, 0.05)) for i in range(4)), (), ())
+    plan = Plan(
+        tuple(BrickTask(f"B{i}", i, False, (i * 3.0, 0, 0.1), 0.0, (5, 0, 0.05)) for i in range(4)), (), ()
+    )
     fleet = fleet_of(2, 0)
     bus = InprocBus()
     mc = MissionControl(plan, fleet, bus.endpoint(MISSION_CONTROL), policy="fifo")
@@ -305,8 +349,9 @@ def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a
         return max(task_work_altitude_m(plan.task(i), cruise) for i in ids)
 
     placed = [t.id for t in plan.tasks if t.done]
-    mc = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
-                        layer_floor_m=cruise)
+    mc = MissionControl(
+        plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final, layer_floor_m=cruise
+    )
     assert mc.columns.layer_base_m == max(cruise, work(placed)) < final
     mc._dispatch(0.0)  # both UAVs take their first task
     assert mc._running and mc.columns.layer_base_m == max(cruise, work(placed + list(mc._running)))
@@ -317,8 +362,9 @@ def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a
         j.record_completion(9.0, high[0], "brick-1")
         j.record_assignment(10.0, high[1], "brick-1", 1)
         state = j.replay()
-    resumed = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
-                             layer_floor_m=cruise)
+    resumed = MissionControl(
+        plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final, layer_floor_m=cruise
+    )
     resumed.restore(state)
     assert resumed.columns.layer_base_m == work(high[:2]) > work(placed)
     fixed = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final)

@@ -42,8 +42,11 @@ CHILD = textwrap.dedent(
 
 
 def run_and_kill(journal: Path, after: int) -> None:
-    proc = subprocess.Popen([sys.executable, "-c", CHILD, str(CASE_STUDY), str(journal), str(after)], stdout=subprocess.PIPE,
-                            text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", CHILD, str(CASE_STUDY), str(journal), str(after)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 30.0
         seen = 0
@@ -83,7 +86,10 @@ def test_resume_after_kill_9_repeats_nothing_and_loses_nothing(tmp_path):
     a0 = before.done[0]
     # the task done before the crash keeps its UAV and times; the clock continues from the journal
     assert (by_id["A0"].uav, by_id["A0"].start_s, by_id["A0"].end_s) == (
-        a0.uav, pytest.approx(a0.start_s, abs=0.01), pytest.approx(a0.end_s, abs=0.01))
+        a0.uav,
+        pytest.approx(a0.start_s, abs=0.01),
+        pytest.approx(a0.end_s, abs=0.01),
+    )
     for tid in ("B0", "A1", "B1"):
         assert by_id[tid].start_s >= crash_s - 1e-9
     assert report.makespan_s == max(t.end_s for t in report.tasks) > crash_s

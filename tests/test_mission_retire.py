@@ -27,7 +27,10 @@ def _conflict_pair() -> tuple[object, str, str]:
 
 def test_a_zero_length_refusal_is_never_in_progress():
     p, a, b = _conflict_pair()
-    assert count_violations(p, [(a, 0.0, 10.0), (b, 5.0, 5.0)]) == (0, 0)  # refused at once, inside a's interval
+    assert count_violations(p, [(a, 0.0, 10.0), (b, 5.0, 5.0)]) == (
+        0,
+        0,
+    )  # refused at once, inside a's interval
     assert count_violations(p, [(a, 0.0, None), (b, 5.0, 5.0)]) == (0, 0)  # inside an open interval
     assert count_violations(p, [(a, 0.0, 5.0), (b, 5.0, 8.0)]) == (0, 0)  # one ends as the other starts
 
@@ -36,7 +39,9 @@ def test_any_overlap_of_positive_length_is_still_counted():
     p, a, b = _conflict_pair()
     assert count_violations(p, [(a, 0.0, 10.0), (b, 9.9, 12.0)])[0] == 1
     assert count_violations(p, [(a, 0.0, None), (b, 50.0, 51.0)])[0] == 1
-    assert count_violations(p, [(a, 5.0, 5.5), (b, 0.0, 10.0), (a, 20.0, 30.0)])[0] == 1  # counted once per pair
+    assert (
+        count_violations(p, [(a, 5.0, 5.5), (b, 0.0, 10.0), (a, 20.0, 30.0)])[0] == 1
+    )  # counted once per pair
 
 
 def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatch):
@@ -56,8 +61,9 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
         return real(mc, the_plan, **kwargs)
 
     monkeypatch.setattr(sim_module, "control_report", spy)
-    report = simulate(running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=2,
-                      faults=Faults(battery_drain_per_s=0.004))
+    report = simulate(
+        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=2, faults=Faults(battery_drain_per_s=0.004)
+    )
     retired = [a for a in report.attempts if a.reason == "uav out of service"]
     assert retired, "the scenario must retire a UAV holding a task"
     assert report.conflict_violations == 0
@@ -80,8 +86,9 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
 
     Before, the state machine retired it (out of service) after landing; on this wall three of six did.
     """
-    report = simulate(running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0,
-                      faults=Faults(battery_drain_per_s=0.0033))
+    report = simulate(
+        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0, faults=Faults(battery_drain_per_s=0.0033)
+    )
     assert [u.status for u in report.uavs] == ["ok"] * 6
     assert report.completed
     assert (report.conflict_violations, report.dependency_violations) == (0, 0)

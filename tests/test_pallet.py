@@ -12,10 +12,19 @@ from masonry.blueprint_gen import PALLET_MIN_COLUMNS, running_bond, towers
 
 
 @settings(max_examples=25, deadline=None)
-@given(courses=st.integers(1, 6), per_course=st.integers(1, 40), placed=st.integers(0, 2),
-       yaw=st.floats(-3.0, 3.0), uavs=st.integers(1, 5))
-def test_pickups_unique_compact_and_clear(courses: int, per_course: int, placed: int, yaw: float, uavs: int) -> None:
-    bp = running_bond(courses, per_course, placed_courses=min(placed, courses - 1), yaw_rad=yaw, brick_uavs=uavs)
+@given(
+    courses=st.integers(1, 6),
+    per_course=st.integers(1, 40),
+    placed=st.integers(0, 2),
+    yaw=st.floats(-3.0, 3.0),
+    uavs=st.integers(1, 5),
+)
+def test_pickups_unique_compact_and_clear(
+    courses: int, per_course: int, placed: int, yaw: float, uavs: int
+) -> None:
+    bp = running_bond(
+        courses, per_course, placed_courses=min(placed, courses - 1), yaw_rad=yaw, brick_uavs=uavs
+    )
     todo = [b for b in bp.bricks if not b.placed]
     picks = [b.pickup_m for b in todo]
     assert all(p is not None for p in picks)
@@ -39,7 +48,9 @@ def test_long_wall_bricks_face_their_places() -> None:
         return [math.dist(b.pickup_m[:2], b.position_m[:2]) for b in bp.bricks if not b.placed]  # type: ignore[index]
 
     aligned = carries(running_bond(6, 30))  # 9 m: a pallet as wide as the wall
-    rows = carries(running_bond(6, 30, pallet_columns=20))  # the same bricks on a 20-column pallet, row by row
+    rows = carries(
+        running_bond(6, 30, pallet_columns=20)
+    )  # the same bricks on a 20-column pallet, row by row
     assert sum(aligned) / len(aligned) < 0.9 * sum(rows) / len(rows)  # 4.7 m against 5.5 m
     bp = running_bond(6, 30)
     todo = [b for b in bp.bricks if not b.placed]

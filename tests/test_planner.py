@@ -25,8 +25,16 @@ def _bp(bricks: list[Brick], clearance: float = 1.5) -> Blueprint:
     return Blueprint(bricks=tuple(bricks), fleet=FLEET, clearance_m=clearance, source="<test>")
 
 
-def _brick(bid: int, x: float, y: float, z: float, *, yaw: float = 0.0, placed: bool = False,
-           size: tuple[float, float, float] = (0.30, 0.15, 0.10)) -> Brick:
+def _brick(
+    bid: int,
+    x: float,
+    y: float,
+    z: float,
+    *,
+    yaw: float = 0.0,
+    placed: bool = False,
+    size: tuple[float, float, float] = (0.30, 0.15, 0.10),
+) -> Brick:
     # every brick its own pickup (two bricks cannot lie at one spot), off the wall
     return Brick(bid, (x, y, z), size, yaw, placed, None if placed else (5.0 + 0.5 * bid, 5.0, size[2] / 2))
 
@@ -115,8 +123,14 @@ def walls(draw: st.DrawFn, max_bricks: int = 18) -> Blueprint:
             y = draw(st.floats(-0.05, 0.05))
             z = course * height + height / 2 + draw(st.sampled_from([0.0, 0.0, 0.003, -0.004]))
             extent = abs(math.cos(yaw)) * length + abs(math.sin(yaw)) * width  # footprint along x
-            candidate = Brick(len(bricks), (x + extent / 2, y, z), (length, width, height), yaw,
-                              course < placed_courses, None if course < placed_courses else (9.0, 9.0, height / 2))
+            candidate = Brick(
+                len(bricks),
+                (x + extent / 2, y, z),
+                (length, width, height),
+                yaw,
+                course < placed_courses,
+                None if course < placed_courses else (9.0, 9.0, height / 2),
+            )
             try:
                 validate_blueprint(_bp([*bricks, candidate], clearance))
             except BlueprintError:
@@ -127,7 +141,9 @@ def walls(draw: st.DrawFn, max_bricks: int = 18) -> Blueprint:
             if len(bricks) >= max_bricks:
                 break
     if not bricks:
-        bricks.append(Brick(0, (0.0, 0.0, height / 2), (0.3, 0.15, height), 0.0, False, (9.0, 9.0, height / 2)))
+        bricks.append(
+            Brick(0, (0.0, 0.0, height / 2), (0.3, 0.15, height), 0.0, False, (9.0, 9.0, height / 2))
+        )
     return _bp(bricks, clearance)
 
 
@@ -217,7 +233,12 @@ def test_random_walls_conflicts_equal_brute_force_oracle(bp: Blueprint) -> None:
 
 @pytest.mark.parametrize(
     "bp",
-    [running_bond(6, 9, placed_courses=2), pyramid(7, yaw_rad=0.4), towers(5, 5, spacing_m=0.9), running_bond(5, 7, clearance_m=0.4)],
+    [
+        running_bond(6, 9, placed_courses=2),
+        pyramid(7, yaw_rad=0.4),
+        towers(5, 5, spacing_m=0.9),
+        running_bond(5, 7, clearance_m=0.4),
+    ],
     ids=["running-bond", "pyramid-rotated", "towers", "small-clearance"],
 )
 def test_generated_walls_equal_oracle(bp: Blueprint) -> None:

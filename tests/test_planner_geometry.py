@@ -32,7 +32,9 @@ def test_neighbour_pairs_equal_brute_force(n: int, reach: int, cell: float, seed
     got: list[tuple[int, int]] = []
     for a, b in neighbour_pairs(cells, chunk_pairs=50, reach=reach):
         got.extend((min(x, y), max(x, y)) for x, y in zip(a.tolist(), b.tolist()))
-    want = {(i, j) for i, j in itertools.combinations(range(n), 2) if np.abs(cells[i] - cells[j]).max() <= reach}
+    want = {
+        (i, j) for i, j in itertools.combinations(range(n), 2) if np.abs(cells[i] - cells[j]).max() <= reach
+    }
     assert len(got) == len(set(got)) and set(got) == want
 
 
@@ -54,7 +56,9 @@ def test_segment_distance_matches_sampling(seed: int) -> None:
     for i in range(40):
         sampled = _sampled_distance(p0[i], p1[i], q0[i], q1[i])
         assert d[i] <= sampled + 1e-12
-        assert d[i] >= sampled - 0.02 * (np.linalg.norm(p1[i] - p0[i]) + np.linalg.norm(q1[i] - q0[i])) - 1e-12
+        assert (
+            d[i] >= sampled - 0.02 * (np.linalg.norm(p1[i] - p0[i]) + np.linalg.norm(q1[i] - q0[i])) - 1e-12
+        )
 
 
 def test_segment_distance_parallel_and_crossing() -> None:
@@ -87,8 +91,10 @@ def test_sat_depth_sign_matches_polygon_clipping(seed: int) -> None:
     ya, yb = rng.uniform(-3, 3, n), rng.uniform(-3, 3, n)
     depth = sat_depth(ca, ha, ya, cb, hb, yb)
     for i in range(n):
-        poly = clip_convex(rectangle_corners(tuple(ca[i]), tuple(ha[i]), ya[i]),
-                           rectangle_corners(tuple(cb[i]), tuple(hb[i]), yb[i]))
+        poly = clip_convex(
+            rectangle_corners(tuple(ca[i]), tuple(ha[i]), ya[i]),
+            rectangle_corners(tuple(cb[i]), tuple(hb[i]), yb[i]),
+        )
         area = polygon_area_centroid(poly)[0] if len(poly) >= 3 else 0.0
         if depth[i] > 1e-6:
             assert area > 0.0
@@ -121,8 +127,9 @@ def layered_dags(draw: st.DrawFn) -> tuple[np.ndarray, list[tuple[int, int]]]:
 
 @settings(max_examples=60)
 @given(layered_dags(), st.floats(0.1, 3.5))
-def test_descendant_windows_equal_networkx_reachability(dag: tuple[np.ndarray, list[tuple[int, int]]],
-                                                        window: float) -> None:
+def test_descendant_windows_equal_networkx_reachability(
+    dag: tuple[np.ndarray, list[tuple[int, int]]], window: float
+) -> None:
     z, edges = dag
     g = nx.DiGraph()
     g.add_nodes_from(range(len(z)))

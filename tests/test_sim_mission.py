@@ -19,8 +19,19 @@ from masonry.sim import Faults
 ROOT = Path(__file__).resolve().parents[1]
 CASE_STUDY = ROOT / "blueprints" / "paper_case_study.yaml"
 
-REPORT_KEYS = ["completed", "makespan_s", "lower_bound_s", "policy", "seed", "uavs", "tasks", "placement_error_m",
-               "min_separation_m", "conflict_violations", "dependency_violations"]
+REPORT_KEYS = [
+    "completed",
+    "makespan_s",
+    "lower_bound_s",
+    "policy",
+    "seed",
+    "uavs",
+    "tasks",
+    "placement_error_m",
+    "min_separation_m",
+    "conflict_violations",
+    "dependency_violations",
+]
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +60,9 @@ def test_case_study_report_is_the_exact_json(case_study):
     assert d["policy"] == "critical-path" and d["seed"] == 0 and d["completed"] is True
     assert [list(u) for u in d["uavs"]] == [["name", "role", "busy_s", "distance_m", "status"]] * 2
     assert {u["name"]: (u["role"], u["status"]) for u in d["uavs"]} == {
-        "brick-1": ("brick", "ok"), "glue-1": ("adhesion", "ok")}
+        "brick-1": ("brick", "ok"),
+        "glue-1": ("adhesion", "ok"),
+    }
     assert all(list(t) == ["id", "uav", "start_s", "end_s", "status", "attempts"] for t in d["tasks"])
     assert {t["id"] for t in d["tasks"]} == {"A0", "A1", "B0", "B1"}
     assert all(t["status"] == "done" and t["attempts"] == 1 for t in d["tasks"])
@@ -78,8 +91,9 @@ def test_case_study_is_deterministic(case_study):
     grasp=st.sampled_from([0.0, 0.3]),
     lose_at=st.one_of(st.none(), st.floats(10.0, 80.0)),
 )
-def test_safety_invariants_over_random_walls_fleets_seeds_and_faults(kind, size, nb, na, seed, policy, grasp,
-                                                                     lose_at):
+def test_safety_invariants_over_random_walls_fleets_seeds_and_faults(
+    kind, size, nb, na, seed, policy, grasp, lose_at
+):
     if kind == "towers":
         bp = towers(2, size, spacing_m=2.0, brick_uavs=nb, adhesion_uavs=na)
     else:
@@ -113,8 +127,11 @@ def test_fleet_override_adds_uavs_clear_of_each_other():
     fleet = fleet_for(bp, brick_uavs=3, adhesion_uavs=2)
     assert [u.name for u in fleet] == ["brick-1", "brick-2", "brick-3", "glue-1", "glue-2"]
     homes = [u.home_m for u in fleet]
-    assert all(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 >= bp.clearance_m
-               for i, a in enumerate(homes) for b in homes[i + 1:])
+    assert all(
+        ((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5 >= bp.clearance_m
+        for i, a in enumerate(homes)
+        for b in homes[i + 1 :]
+    )
     assert [u.name for u in fleet_for(bp, brick_uavs=0)] == ["glue-1"]
 
 
@@ -141,5 +158,6 @@ def test_journal_refuses_to_restart_a_mission_without_resume(tmp_path):
     again = simulate(bp, journal_path=j, resume=True)
     assert again.completed
     assert [(t.id, t.uav, t.start_s, t.end_s) for t in again.tasks] == [
-        (t.id, t.uav, t.start_s, t.end_s) for t in r.tasks]
+        (t.id, t.uav, t.start_s, t.end_s) for t in r.tasks
+    ]
     assert again.resumed_from_s == pytest.approx(r.makespan_s, abs=0.01)

@@ -52,8 +52,9 @@ def test_components_are_injected_mission_control_world_and_one_uav_ports_each():
     world = World(bp, seed=1)
     world.add_fleet()
     bus = InprocBus()
-    mc = MissionControl(the_plan, bp.fleet, bus.endpoint(MISSION_CONTROL), startup_timeout_s=1.0,
-                        wall_digest=wall_digest(bp))  # the handlers refuse tasks of another wall
+    mc = MissionControl(
+        the_plan, bp.fleet, bus.endpoint(MISSION_CONTROL), startup_timeout_s=1.0, wall_digest=wall_digest(bp)
+    )  # the handlers refuse tasks of another wall
     name = bp.fleet[0].name
     counting = CountingFc(world.uavs[name].fc)
     ports = {name: dataclasses.replace(world.uavs[name].ports, fc=counting)}
@@ -95,6 +96,7 @@ def test_the_journal_is_closed_when_the_run_ends_or_the_mission_is_closed(tmp_pa
 
 def test_a_failed_build_closes_the_journal(tmp_path, monkeypatch):
     from masonry.mission import journal as journal_module
+
     simulate_module = importlib.import_module("masonry.mission.simulate")
 
     opened = []
@@ -111,8 +113,9 @@ def test_a_failed_build_closes_the_journal(tmp_path, monkeypatch):
     monkeypatch.setattr(journal_module, "open_mission_journal", spy_open)
     monkeypatch.setattr(simulate_module, "MissionControl", broken)
     with pytest.raises(InputError, match="no mission control today"):
-        SimulatedMission.from_blueprint(running_bond(1, 2, brick_uavs=1, adhesion_uavs=1),
-                                        journal_path=tmp_path / "c.db")
+        SimulatedMission.from_blueprint(
+            running_bond(1, 2, brick_uavs=1, adhesion_uavs=1), journal_path=tmp_path / "c.db"
+        )
     assert len(opened) == 1 and opened[0]._conn is None
 
 
@@ -121,11 +124,17 @@ def test_journaled_errors_prefer_the_world_measurement_over_the_uav_estimate():
 
     from masonry.mission.measured import journaled_errors_m
 
-    state = SimpleNamespace(done=[
-        SimpleNamespace(task_id="B0", fields={"measured": {"placement_error_m": 0.004}, "placement_error_m": 0.01}),
-        SimpleNamespace(task_id="B1", fields={"placement_error_m": 0.02}),  # a journal without measurements
-        SimpleNamespace(task_id="A0", fields={"coverage": 0.9}),
-    ])
+    state = SimpleNamespace(
+        done=[
+            SimpleNamespace(
+                task_id="B0", fields={"measured": {"placement_error_m": 0.004}, "placement_error_m": 0.01}
+            ),
+            SimpleNamespace(
+                task_id="B1", fields={"placement_error_m": 0.02}
+            ),  # a journal without measurements
+            SimpleNamespace(task_id="A0", fields={"coverage": 0.9}),
+        ]
+    )
     assert journaled_errors_m(state) == {"B0": 0.004, "B1": 0.02}
     assert journaled_errors_m(None) == {}
 

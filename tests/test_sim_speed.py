@@ -49,8 +49,13 @@ def _reference_encode(msg: object) -> bytes:
     return json.dumps(body, separators=(",", ":"), allow_nan=False).encode()
 
 
-@given(names, finite, st.text(max_size=8), st.one_of(st.none(), st.text(min_size=1, max_size=5)),
-       st.one_of(st.none(), st.tuples(finite, finite, finite)))
+@given(
+    names,
+    finite,
+    st.text(max_size=8),
+    st.one_of(st.none(), st.text(min_size=1, max_size=5)),
+    st.one_of(st.none(), st.tuples(finite, finite, finite)),
+)
 def test_heartbeat_round_trip_and_bytes(sender, t, state, task_id, position):
     msg = Heartbeat(sender, t, state=state, task_id=task_id, position_m=position)
     raw = encode(msg)
@@ -61,12 +66,16 @@ def test_heartbeat_round_trip_and_bytes(sender, t, state, task_id, position):
         assert vars(out) == vars(Heartbeat(sender, t, state=state, task_id=task_id, position_m=position))
 
 
-@pytest.mark.parametrize("msg", [
-    Assign(MISSION_CONTROL, "brick-1", BRICK, 2, 10.0),
-    Progress("glue-1", "A0", "spray", 12.25, (0.8, 2.0, 0.45)),
-    Result("brick-1", TaskResult("B3", "done", 71.4, placement_error_m=0.012), 80.0, (1.0, 2.0, 1.2)),
-    MissionEnd(MISSION_CONTROL, 400.0, True),
-], ids=lambda m: type(m).__name__)
+@pytest.mark.parametrize(
+    "msg",
+    [
+        Assign(MISSION_CONTROL, "brick-1", BRICK, 2, 10.0),
+        Progress("glue-1", "A0", "spray", 12.25, (0.8, 2.0, 0.45)),
+        Result("brick-1", TaskResult("B3", "done", 71.4, placement_error_m=0.012), 80.0, (1.0, 2.0, 1.2)),
+        MissionEnd(MISSION_CONTROL, 400.0, True),
+    ],
+    ids=lambda m: type(m).__name__,
+)
 def test_encode_gives_the_json_dumps_bytes(msg):
     assert encode(msg) == _reference_encode(msg)
     assert decode(encode(msg)) == msg
@@ -77,17 +86,20 @@ def test_encode_still_refuses_non_finite_numbers():
         encode(Heartbeat("brick-1", math.inf))
 
 
-@pytest.mark.parametrize("field, value, match", [
-    ("sender", "", "'sender' must be a non-empty string"),
-    ("sender", 3, "'sender' must be a non-empty string"),
-    ("time_s", True, "'time_s' must be a finite number"),
-    ("time_s", None, "'time_s' must be a finite number"),
-    ("task_id", "", "'task_id' must be a non-empty string"),
-    ("task_id", 7, "'task_id' must be a non-empty string"),
-    ("position_m", [1.0, 2.0, True], "'position_m' must be a list of 3"),
-    ("position_m", [1.0, 2.0, "x"], "'position_m' must be a list of 3"),
-    ("position_m", (1.0, 2.0, 3.0), None),  # a JSON list either way
-])
+@pytest.mark.parametrize(
+    "field, value, match",
+    [
+        ("sender", "", "'sender' must be a non-empty string"),
+        ("sender", 3, "'sender' must be a non-empty string"),
+        ("time_s", True, "'time_s' must be a finite number"),
+        ("time_s", None, "'time_s' must be a finite number"),
+        ("task_id", "", "'task_id' must be a non-empty string"),
+        ("task_id", 7, "'task_id' must be a non-empty string"),
+        ("position_m", [1.0, 2.0, True], "'position_m' must be a list of 3"),
+        ("position_m", [1.0, 2.0, "x"], "'position_m' must be a list of 3"),
+        ("position_m", (1.0, 2.0, 3.0), None),  # a JSON list either way
+    ],
+)
 def test_bad_heartbeat_fields_get_the_general_path_errors(field, value, match):
     d = json.loads(encode(Heartbeat("brick-1", 1.5, state="s", task_id="B3", position_m=(1.0, 2.0, 3.0))))
     d[field] = value
@@ -183,12 +195,15 @@ def test_telemetry_is_the_state_plus_seven_noise_draws():
         v.command_velocity((0.3, -0.2, 0.0), 0.4, v.time_s)
         tel = v.telemetry()
         assert v.telemetry() is tel  # one sample per instant
-        g = draws[used: used + 7]
+        g = draws[used : used + 7]
         used += 7
         cfg = v.config
         roll, pitch, yaw = v.attitude_rad
-        assert tel.position_m == (v._x + cfg.mocap_noise_m * g[0], v._y + cfg.mocap_noise_m * g[1],
-                                  v._z + cfg.mocap_noise_m * g[2])
+        assert tel.position_m == (
+            v._x + cfg.mocap_noise_m * g[0],
+            v._y + cfg.mocap_noise_m * g[1],
+            v._z + cfg.mocap_noise_m * g[2],
+        )
         assert tel.velocity_mps[2] == v._vz + cfg.velocity_noise_mps * g[5]
         assert tel.attitude_rad == (roll, pitch, wrap_angle_rad(yaw + cfg.yaw_noise_rad * g[6]))
         assert abs(roll) < math.atan2(3.0, GRAVITY_MPS2) and tel.time_s == v.time_s
@@ -246,7 +261,9 @@ def _reference_rects_overlap(a, b):
     return True
 
 
-rects = st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-4, 4), st.floats(1e-4, 0.5), st.floats(1e-4, 0.5))
+rects = st.tuples(
+    st.floats(-1, 1), st.floats(-1, 1), st.floats(-4, 4), st.floats(1e-4, 0.5), st.floats(1e-4, 0.5)
+)
 
 
 @given(rects, rects)
@@ -258,9 +275,15 @@ def test_rects_overlap_matches_the_reference(a, b):
 
 
 @settings(max_examples=40)
-@given(st.lists(st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6), st.integers(0, 3), st.floats(-3.2, 3.2)),
-                min_size=1, max_size=25),
-       st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)), st.floats(0.0, 0.5))
+@given(
+    st.lists(
+        st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6), st.integers(0, 3), st.floats(-3.2, 3.2)),
+        min_size=1,
+        max_size=25,
+    ),
+    st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)),
+    st.floats(0.0, 0.5),
+)
 def test_support_queries_match_a_plain_scan(placed, probe, below_z):
     from masonry.sim.bricks import BrickField, point_in_rect, rects_overlap
 
@@ -312,16 +335,19 @@ def test_min_separation_is_the_minimum_over_every_physics_step():
     assert expected < 3.0  # they did come close: the record moved during the run
 
 
-@pytest.mark.parametrize("raw", [
-    b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}',
-    b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}  ',
-    b'{"a":1} x',
-    b'{"a":',
-    b'{"a":"\xff"}',
-    b'\xef\xbb\xbf{"a":1}',
-    '{"a":1}',
-    b'[1, 2]',
-])
+@pytest.mark.parametrize(
+    "raw",
+    [
+        b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}',
+        b'{"v":2,"type":"heartbeat","sender":"brick-1","time_s":1.0}  ',
+        b'{"a":1} x',
+        b'{"a":',
+        b'{"a":"\xff"}',
+        b'\xef\xbb\xbf{"a":1}',
+        '{"a":1}',
+        b"[1, 2]",
+    ],
+)
 def test_loads_is_json_loads(raw):
     from masonry.mission.messages import _loads
 
@@ -334,10 +360,12 @@ def test_loads_is_json_loads(raw):
         assert _loads(raw) == expected
 
 
-@given(st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)),
-       st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)),
-       st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.5, 0.0)),
-       st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)))
+@given(
+    st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3.2, 3.2)),
+    st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)),
+    st.tuples(st.floats(-0.3, 0.3), st.floats(-0.3, 0.3), st.floats(-0.5, 0.0)),
+    st.tuples(st.floats(-10, 10), st.floats(-10, 10), st.floats(0, 5)),
+)
 def test_tool_distance_is_the_numpy_tool_position_distance(attitude, position, offset, target):
     from masonry.fsm.tool import Tool
     from masonry.ports import Telemetry

@@ -288,4 +288,6 @@ def test_bad_values_raise_the_error_tree_and_stay_value_errors() -> None:
         VehicleConfig(velocity_tau_s=0.0)
     assert isinstance(info.value, MasonryError) and isinstance(info.value, ValueError)
     with pytest.raises(InvalidArgument, match="finite"):
-        SimVehicle().follow((math.inf, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), on_ground=True, armed=False)
+        SimVehicle().follow(
+            (math.inf, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), on_ground=True, armed=False
+        )

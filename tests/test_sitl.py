@@ -116,8 +116,11 @@ def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> 
         before, started = sitl.setpoints_received, time.monotonic()
         wait_until(lambda: sitl.setpoints_received >= before + 2, 5.0, "repeated setpoints")
         assert sitl.last_setpoint_mps == pytest.approx((0.3, 0.0, 0.0), abs=1e-6)  # repeated while fresh
-        wait_until(lambda: sitl.last_setpoint_mps == pytest.approx((0.0, 0.0, 0.0), abs=1e-6), 5.0,
-                   "the stale setpoint to go to zero")  # caller silent: hover
+        wait_until(
+            lambda: sitl.last_setpoint_mps == pytest.approx((0.0, 0.0, 0.0), abs=1e-6),
+            5.0,
+            "the stale setpoint to go to zero",
+        )  # caller silent: hover
         wait_until(lambda: time.monotonic() - started >= 1.0, 5.0, "one second of streaming")
         # the rate over the time that really passed, not over the time a sleep was asked for
         rate_hz = (sitl.setpoints_received - before) / (time.monotonic() - started)
@@ -314,8 +317,11 @@ def test_a_failing_pose_source_does_not_stop_the_setpoint_stream() -> None:
         take_off(fc, 0.8)
         fc.send_velocity((0.2, 0.0, 0.0), 0.0)
         before = sitl.setpoints_received
-        wait_until(lambda: sitl.setpoints_received - before >= 4 and fc.pose_errors > 3, 5.0,
-                   "setpoints and pose errors")
+        wait_until(
+            lambda: sitl.setpoints_received - before >= 4 and fc.pose_errors > 3,
+            5.0,
+            "setpoints and pose errors",
+        )
         assert sitl.setpoints_received - before >= 4
         assert fc.pose_errors > 3 and fc.last_pose_error == "RuntimeError: tracker SDK crashed"
 

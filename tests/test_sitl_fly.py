@@ -327,7 +327,9 @@ def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
         # on the next setpoint, whichever comes first on this (wall-clock) run: both name the lost link.
         assert out["status"] == "failed"
         watchdog = "velocity setpoint: no message from the autopilot"
-        assert out["reason"] == "flight controller link lost" or out["reason"].startswith(watchdog), out["reason"]
+        assert out["reason"] == "flight controller link lost" or out["reason"].startswith(watchdog), out[
+            "reason"
+        ]
         assert out["trace"][-2]["state"] == "emergency" and out["trace"][-1]["state"] == "halted"
         # meanwhile the autopilot stopped on its guided timeout, then its GCS failsafe landed it
         deadline = time.monotonic() + 5.0

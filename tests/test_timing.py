@@ -35,7 +35,9 @@ ROOT = Path(__file__).resolve().parents[1]
 # -- the value ---------------------------------------------------------------------------------------------------
 def test_the_peak_of_a_min_jerk_leg_is_1_875_times_its_mean_speed() -> None:
     d_m, T_s = 3.0, 4.0
-    leg = MinJerk(np.zeros(3), np.zeros(3), np.zeros(3), np.array([d_m, 0.0, 0.0]), np.zeros(3), np.zeros(3), T_s)
+    leg = MinJerk(
+        np.zeros(3), np.zeros(3), np.zeros(3), np.array([d_m, 0.0, 0.0]), np.zeros(3), np.zeros(3), T_s
+    )
     t = np.linspace(0.0, T_s, 4001)
     peak_mps = float(np.max(np.linalg.norm(leg.velocity(t), axis=-1)))
     assert peak_mps / (d_m / T_s) == pytest.approx(MIN_JERK_PEAK_TO_MEAN_SPEED, rel=1e-6)
@@ -86,7 +88,9 @@ def uav_configs(draw: st.DrawFn, geometry: bool = True) -> UavConfig:
             spray_height_m=u(0.06, 0.15),
         )
     return UavConfig(
-        "template", "brick", (0.0, 0.0, 0.0),
+        "template",
+        "brick",
+        (0.0, 0.0, 0.0),
         airframe=airframe,
         control_period_s=draw(st.sampled_from([0.1, 0.2])),
         cruise_speed_mps=u(0.6, 1.4),
@@ -110,15 +114,21 @@ def _bound_holds(blueprint, config: UavConfig) -> None:
     note(f"config: {config!r}")
     report = simulate(blueprint, seed=0, uav_config=config)
     assert report.completed, [t for t in report.tasks if t.end_s is None]
-    minimum = min_durations_s(plan(blueprint), timing=config.timing(), cruise_altitude_m=blueprint.cruise_altitude_m)
+    minimum = min_durations_s(
+        plan(blueprint), timing=config.timing(), cruise_altitude_m=blueprint.cruise_altitude_m
+    )
     for t in report.tasks:
         assert t.start_s is not None and t.end_s is not None
         assert t.end_s - t.start_s >= minimum[t.id] - 1e-6, (t.id, t.end_s - t.start_s, minimum[t.id])
     assert 0.0 < report.lower_bound_s <= report.makespan_s
 
 
-_SLOW = {"deadline": None, "derandomize": True, "suppress_health_check": [HealthCheck.too_slow],
-         "database": None}
+_SLOW = {
+    "deadline": None,
+    "derandomize": True,
+    "suppress_health_check": [HealthCheck.too_slow],
+    "database": None,
+}
 
 
 @settings(max_examples=24, **_SLOW)
@@ -166,13 +176,21 @@ def test_the_airspace_altitudes_are_the_machines(config: UavConfig, z_m: float, 
     # and the blueprint's work altitude (layer 0) is the highest of them
     bp = dataclasses.replace(running_bond(1, 2, brick_uavs=1, adhesion_uavs=1), cruise_altitude_m=cruise)
     assert work_altitude_m(bp, timing=timing) == pytest.approx(
-        max(task_work_altitude_m(t, cruise, timing=timing) for t in plan(bp).tasks), abs=1e-9)
+        max(task_work_altitude_m(t, cruise, timing=timing) for t in plan(bp).tasks), abs=1e-9
+    )
 
 
 def _machine_requests(kind: str, config: UavConfig, task) -> list[float]:
     """The altitudes the machine asked for, up to the end of its task (brick: pickup, drop-off)."""
-    rig = Rig(kind, tasks=[task], config={f.name: getattr(config, f.name) for f in dataclasses.fields(config)
-                                          if f.name not in ("name", "role", "home_m")})
+    rig = Rig(
+        kind,
+        tasks=[task],
+        config={
+            f.name: getattr(config, f.name)
+            for f in dataclasses.fields(config)
+            if f.name not in ("name", "role", "home_m")
+        },
+    )
     link = _RecordingLink([rig.link.poll_task()], rig.clock)
     rig.link = rig.uav.link = rig.uav.clearance = link
     want = 2 if kind == "brick" else 1
@@ -200,8 +218,14 @@ def test_mission_control_raises_its_layers_with_the_uavs_timing() -> None:
     placed = [t for t in p.tasks if t.done]
     for timing in (DEFAULT_TIMING, dataclasses.replace(DEFAULT_TIMING, clearance_m=0.6, spray_height_m=0.2)):
         final = layer_base_m(bp, timing=timing)
-        mc = MissionControl(p, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final,
-                            layer_floor_m=cruise, timing=timing)
+        mc = MissionControl(
+            p,
+            bp.fleet,
+            InprocBus().endpoint(MISSION_CONTROL),
+            layer_base_m=final,
+            layer_floor_m=cruise,
+            timing=timing,
+        )
         built = max(task_work_altitude_m(t, cruise, timing=timing) for t in placed)
         assert mc.columns.layer_base_m == pytest.approx(max(cruise, built))
         assert mc.columns.layer_base_m < final

@@ -17,7 +17,12 @@ def test_a_simulated_uav_holds_its_ports_on_the_world_clock_and_step() -> None:
     uav = world.add_fleet()[0]
     ports = uav.ports
     assert isinstance(ports, UavPorts)
-    assert (ports.fc, ports.gripper, ports.sprayer, ports.camera) == (uav.fc, uav.gripper, uav.sprayer, uav.camera)
+    assert (ports.fc, ports.gripper, ports.sprayer, ports.camera) == (
+        uav.fc,
+        uav.gripper,
+        uav.sprayer,
+        uav.camera,
+    )
     assert ports.clock is world.clock and ports.world is world
     assert isinstance(ports.fc, FlightController) and isinstance(ports.gripper, Gripper)
     assert isinstance(ports.sprayer, Sprayer) and isinstance(ports.camera, Camera)
@@ -50,5 +55,7 @@ def test_the_cli_and_the_remote_uav_take_the_same_record() -> None:
     from masonry.sim import Faults
 
     bp = running_bond(1, 2, brick_uavs=1, adhesion_uavs=0)
-    ports = select_adapters(sim=True, blueprint=bp, spec=bp.fleet[0], seed=0, camera="geometric", faults=Faults())
+    ports = select_adapters(
+        sim=True, blueprint=bp, spec=bp.fleet[0], seed=0, camera="geometric", faults=Faults()
+    )
     assert isinstance(ports, UavPorts) and ports.world is not None

@@ -16,7 +16,9 @@ from masonry.mission.volumes import (
     volumes_conflict,
 )
 
-coord = st.floats(-6.0, 6.0, allow_nan=False).map(lambda v: round(v, 2))  # rounded: ties at the boundaries occur
+coord = st.floats(-6.0, 6.0, allow_nan=False).map(
+    lambda v: round(v, 2)
+)  # rounded: ties at the boundaries occur
 alt = st.floats(0.0, 6.0, allow_nan=False).map(lambda v: round(v, 1))
 
 
@@ -32,8 +34,12 @@ def volumes(draw):
 
 
 @settings(max_examples=400, deadline=None, derandomize=True)
-@given(vols=st.lists(volumes(), max_size=4), others=st.lists(volumes(), max_size=8),
-       sep_xy=st.sampled_from([0.5, 1.0, 1.2]), sep_z=st.sampled_from([1.0, 1.1 - 1e-9]))
+@given(
+    vols=st.lists(volumes(), max_size=4),
+    others=st.lists(volumes(), max_size=8),
+    sep_xy=st.sampled_from([0.5, 1.0, 1.2]),
+    sep_z=st.sampled_from([1.0, 1.1 - 1e-9]),
+)
 def test_volumes_clear_is_no_pair_in_conflict(vols, others, sep_xy, sep_z):
     expected = not any(volumes_conflict(v, q, sep_xy, sep_z) for v in vols for q in others)
     assert volumes_clear(vols, others, sep_xy, sep_z) == expected, (vols, others, sep_xy, sep_z)

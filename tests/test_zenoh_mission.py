@@ -47,9 +47,16 @@ def wait_for(pred, timeout_s=5.0):
 
 def test_two_endpoints_exchange_messages_over_loopback():
     port = free_port()
-    with ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t1") as mc, \
-            ZenohTransport("brick-1", listen=[f"tcp/127.0.0.1:{free_port()}"], connect=[f"tcp/127.0.0.1:{port}"],
-                           mission="t1") as uav:
+    with (
+        ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t1") as mc,
+        ZenohTransport(
+            "brick-1",
+            listen=[f"tcp/127.0.0.1:{free_port()}"],
+            connect=[f"tcp/127.0.0.1:{port}"],
+            mission="t1",
+        ) as uav,
+    ):
+
         def ping():
             uav.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 1.0)))
             return mc.receive()
@@ -78,15 +85,19 @@ def test_send_before_connect_is_an_error():
 def test_authenticated_endpoints_over_zenoh_drop_a_forged_heartbeat():
     port = free_port()
     key = os.urandom(32)
-    with ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t2") as mc_z, \
-            ZenohTransport("brick-1", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as uav_z, \
-            ZenohTransport("eve", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as eve:
+    with (
+        ZenohTransport(MISSION_CONTROL, listen=[f"tcp/127.0.0.1:{port}"], mission="t2") as mc_z,
+        ZenohTransport("brick-1", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as uav_z,
+        ZenohTransport("eve", connect=[f"tcp/127.0.0.1:{port}"], mission="t2") as eve,
+    ):
         mc = AuthenticatedTransport(mc_z, key, mission="t2")
         uav = AuthenticatedTransport(uav_z, key, mission="t2")
         got: list[bytes] = []
 
         def ping():
-            eve.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 0.0)))  # the forgery: plain, in brick-1's name
+            eve.send(
+                MISSION_CONTROL, encode(Heartbeat("brick-1", 0.0))
+            )  # the forgery: plain, in brick-1's name
             uav.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 1.0)))
             got.extend(mc.receive())
             return got and mc.dropped.get("malformed")
@@ -108,9 +119,16 @@ def make_tls_files(d: Path) -> tuple[Path, Path]:
     valid = (now - datetime.timedelta(minutes=5), now + datetime.timedelta(hours=1))
 
     def build(subject, issuer, public_key, signer, *, ca, names=()):
-        b = (x509.CertificateBuilder().subject_name(subject).issuer_name(issuer).public_key(public_key)
-             .serial_number(x509.random_serial_number()).not_valid_before(valid[0]).not_valid_after(valid[1])
-             .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True))
+        b = (
+            x509.CertificateBuilder()
+            .subject_name(subject)
+            .issuer_name(issuer)
+            .public_key(public_key)
+            .serial_number(x509.random_serial_number())
+            .not_valid_before(valid[0])
+            .not_valid_after(valid[1])
+            .add_extension(x509.BasicConstraints(ca=ca, path_length=None), critical=True)
+        )
         if names:
             b = b.add_extension(x509.SubjectAlternativeName(list(names)), critical=False)
         return b.sign(signer, hashes.SHA256())
@@ -119,19 +137,39 @@ def make_tls_files(d: Path) -> tuple[Path, Path]:
     ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "masonry test CA")])
     ca = build(ca_name, ca_name, ca_key.public_key(), ca_key, ca=True)
     key = ec.generate_private_key(ec.SECP256R1())
-    cert = build(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "mission-control")]), ca_name,
-                 key.public_key(), ca_key, ca=False,
-                 names=(x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))))
+    cert = build(
+        x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "mission-control")]),
+        ca_name,
+        key.public_key(),
+        ca_key,
+        ca=False,
+        names=(x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))),
+    )
     pem = serialization.Encoding.PEM
     (d / "ca.pem").write_bytes(ca.public_bytes(pem))
     (d / "mc.pem").write_bytes(cert.public_bytes(pem))
-    (d / "mc.key").write_bytes(key.private_bytes(pem, serialization.PrivateFormat.PKCS8,
-                                                 serialization.NoEncryption()))
+    (d / "mc.key").write_bytes(
+        key.private_bytes(pem, serialization.PrivateFormat.PKCS8, serialization.NoEncryption())
+    )
     mc_conf, uav_conf = d / "mission-control.json5", d / "uav.json5"
-    mc_conf.write_text(json.dumps({"transport": {"link": {"tls": {
-        "listen_certificate": str(d / "mc.pem"), "listen_private_key": str(d / "mc.key"),
-        "root_ca_certificate": str(d / "ca.pem")}}}}))
-    uav_conf.write_text(json.dumps({"transport": {"link": {"tls": {"root_ca_certificate": str(d / "ca.pem")}}}}))
+    mc_conf.write_text(
+        json.dumps(
+            {
+                "transport": {
+                    "link": {
+                        "tls": {
+                            "listen_certificate": str(d / "mc.pem"),
+                            "listen_private_key": str(d / "mc.key"),
+                            "root_ca_certificate": str(d / "ca.pem"),
+                        }
+                    }
+                }
+            }
+        )
+    )
+    uav_conf.write_text(
+        json.dumps({"transport": {"link": {"tls": {"root_ca_certificate": str(d / "ca.pem")}}}})
+    )
     return mc_conf, uav_conf
 
 
@@ -139,9 +177,11 @@ def test_tls_needs_the_certificate_authority(tmp_path):
     mc_conf, uav_conf = make_tls_files(tmp_path)
     port = free_port()
     endpoint = f"tls/127.0.0.1:{port}"
-    with ZenohTransport(MISSION_CONTROL, listen=[endpoint], config_file=mc_conf, mission="t3") as mc, \
-            ZenohTransport("brick-1", connect=[endpoint], config_file=uav_conf, mission="t3") as uav, \
-            ZenohTransport("eve", connect=[endpoint], mission="t3") as eve:  # no CA: the TLS handshake fails
+    with (
+        ZenohTransport(MISSION_CONTROL, listen=[endpoint], config_file=mc_conf, mission="t3") as mc,
+        ZenohTransport("brick-1", connect=[endpoint], config_file=uav_conf, mission="t3") as uav,
+        ZenohTransport("eve", connect=[endpoint], mission="t3") as eve,
+    ):  # no CA: the TLS handshake fails
         got: list[bytes] = []
 
         def ping():
@@ -178,16 +218,64 @@ def test_case_study_across_three_processes(tmp_path, mode):
         uav_opts += ["--zenoh-config", str(uav_conf)]
     mission_name = f"test-{port}"
     mc = subprocess.Popen(
-        [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
-         "--report", str(report), "--startup-timeout", "20", "--heartbeat-timeout", "3", "--max-time", "1500",
-         "--mission-name", mission_name, *common, *mc_opts],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-c",
+            MAIN,
+            "mission-control",
+            str(CASE_STUDY),
+            "--listen",
+            endpoint,
+            "--format",
+            "json",
+            "--report",
+            str(report),
+            "--startup-timeout",
+            "20",
+            "--heartbeat-timeout",
+            "3",
+            "--max-time",
+            "1500",
+            "--mission-name",
+            mission_name,
+            *common,
+            *mc_opts,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     uavs = [
         subprocess.Popen(
-            [sys.executable, "-c", MAIN, "fly", "--uav", role, "--name", name, "--sim", "--blueprint", str(CASE_STUDY),
-             "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_port()}", "--mission-name", mission_name,
-             "--wait", "20", "--format", "json", *common, *uav_opts],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            [
+                sys.executable,
+                "-c",
+                MAIN,
+                "fly",
+                "--uav",
+                role,
+                "--name",
+                name,
+                "--sim",
+                "--blueprint",
+                str(CASE_STUDY),
+                "--mission",
+                endpoint,
+                "--listen",
+                f"tcp/127.0.0.1:{free_port()}",
+                "--mission-name",
+                mission_name,
+                "--wait",
+                "20",
+                "--format",
+                "json",
+                *common,
+                *uav_opts,
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         for role, name in (("brick", "brick-1"), ("adhesion", "glue-1"))
     ]
     procs = [mc, *uavs]
@@ -219,8 +307,13 @@ def test_case_study_across_three_processes(tmp_path, mode):
     assert flown == {"brick-1": ["B0", "B1"], "glue-1": ["A0", "A1"]}
 
 
-@pytest.mark.parametrize("uav_key, hint", [(b"k" * 32, "frames failed authentication: is --key-file the same"),
-                                           (None, "messages unreadable: does mission control use --key-file?")])
+@pytest.mark.parametrize(
+    "uav_key, hint",
+    [
+        (b"k" * 32, "frames failed authentication: is --key-file the same"),
+        (None, "messages unreadable: does mission control use --key-file?"),
+    ],
+)
 def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
     import threading
 
@@ -243,9 +336,17 @@ def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
         t = threading.Thread(target=beat, daemon=True)
         t.start()
         try:
-            with pytest.raises(LinkLost, match=hint.replace("--key-file", "`key_file`").replace("?", r"\?")) as info:
-                run_remote_uav(bp, bp.fleet[0], connect=[f"tcp/127.0.0.1:{port}"], mission_name="t4",
-                               key=uav_key, wait_s=2.0)
+            with pytest.raises(
+                LinkLost, match=hint.replace("--key-file", "`key_file`").replace("?", r"\?")
+            ) as info:
+                run_remote_uav(
+                    bp,
+                    bp.fleet[0],
+                    connect=[f"tcp/127.0.0.1:{port}"],
+                    mission_name="t4",
+                    key=uav_key,
+                    wait_s=2.0,
+                )
             from masonry.cli.app import cli_message
 
             assert hint in cli_message(info.value)  # the CLI names its flag
@@ -257,7 +358,7 @@ def test_a_uav_with_another_key_than_mission_control_says_so(uav_key, hint):
 def message_in(raw: bytes) -> dict:
     """What a listener reads of a message: inside a frame it is in clear (a key gives integrity, not secrecy)."""
     if raw[:4] == b"MSN1":
-        raw = raw[5 + raw[4] + 8:-32]  # magic, sender, counter ... HMAC
+        raw = raw[5 + raw[4] + 8 : -32]  # magic, sender, counter ... HMAC
     try:
         return json.loads(raw)
     except ValueError:
@@ -272,16 +373,35 @@ def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
     mission_name = f"forge-{port}"
     opts = ["--key-file", str(write_key_file(tmp_path / "m.key"))] if keyed else []
     mc = subprocess.Popen(
-        [sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint, "--format", "json",
-         # without a key the forger must be heard and answer an assignment: time for that on a busy machine
-         "--startup-timeout", "2" if keyed else "20", "--max-time", "6" if keyed else "30",
-         "--mission-name", mission_name, *opts],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-c",
+            MAIN,
+            "mission-control",
+            str(CASE_STUDY),
+            "--listen",
+            endpoint,
+            "--format",
+            "json",
+            # without a key the forger must be heard and answer an assignment: time for that on a busy machine
+            "--startup-timeout",
+            "2" if keyed else "20",
+            "--max-time",
+            "6" if keyed else "30",
+            "--mission-name",
+            mission_name,
+            *opts,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     seen: list[bytes] = []
     try:
         with ZenohTransport("eve", connect=[endpoint], mission=mission_name) as eve:
-            eve._session.declare_subscriber(f"masonry/{mission_name}/to/**",
-                                            lambda s: seen.append(s.payload.to_bytes()))
+            eve._session.declare_subscriber(
+                f"masonry/{mission_name}/to/**", lambda s: seen.append(s.payload.to_bytes())
+            )
             end = time.monotonic() + 90.0  # until mission control gives up (--max-time), bounded
             answered: set[bytes] = set()
             while mc.poll() is None and time.monotonic() < end:
@@ -291,11 +411,28 @@ def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
                     body = message_in(raw)
                     if body.get("type") == "assign" and raw not in answered:
                         answered.add(raw)
-                        eve.send(MISSION_CONTROL, json.dumps({
-                            "v": body["v"], "type": "result", "sender": body["uav"], "time_s": 1.0,
-                            "position_m": None, "state": "idle", "attempt": body["attempt"],
-                            "result": {"task_id": body["task"]["id"], "status": "done", "duration_s": 0.2,
-                                       "reason": None, "placement_error_m": 0.0, "coverage": None}}).encode())
+                        eve.send(
+                            MISSION_CONTROL,
+                            json.dumps(
+                                {
+                                    "v": body["v"],
+                                    "type": "result",
+                                    "sender": body["uav"],
+                                    "time_s": 1.0,
+                                    "position_m": None,
+                                    "state": "idle",
+                                    "attempt": body["attempt"],
+                                    "result": {
+                                        "task_id": body["task"]["id"],
+                                        "status": "done",
+                                        "duration_s": 0.2,
+                                        "reason": None,
+                                        "placement_error_m": 0.0,
+                                        "coverage": None,
+                                    },
+                                }
+                            ).encode(),
+                        )
                 time.sleep(0.05)
         out, err = mc.communicate(timeout=30)
     finally:

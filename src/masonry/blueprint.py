@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING, Any, Literal
 from masonry.errors import BlueprintError
 
 if TYPE_CHECKING:
-
     from masonry.planner.contacts import Contacts
 
 Role = Literal["brick", "adhesion"]
@@ -39,8 +38,12 @@ ARUCO_DICTIONARIES: tuple[str, ...] = tuple(
 #: Number of markers in each dictionary (OpenCV's predefined sets): brick k needs ids 2k and 2k+1 in it.
 ARUCO_DICTIONARY_SIZES: dict[str, int] = {
     **{f"DICT_{n}X{n}_{k}": k for n in (4, 5, 6, 7) for k in (50, 100, 250, 1000)},
-    "DICT_ARUCO_ORIGINAL": 1024, "DICT_APRILTAG_16h5": 30, "DICT_APRILTAG_25h9": 35,
-    "DICT_APRILTAG_36h10": 2320, "DICT_APRILTAG_36h11": 587, "DICT_ARUCO_MIP_36h12": 250,
+    "DICT_ARUCO_ORIGINAL": 1024,
+    "DICT_APRILTAG_16h5": 30,
+    "DICT_APRILTAG_25h9": 35,
+    "DICT_APRILTAG_36h10": 2320,
+    "DICT_APRILTAG_36h11": 587,
+    "DICT_ARUCO_MIP_36h12": 250,
 }
 #: Bricks must be taller than twice the 5 mm resting tolerance so "rests on" is unambiguous and G^d acyclic.
 MIN_BRICK_HEIGHT_M = 0.01
@@ -191,8 +194,12 @@ def load_blueprint(path: str | Path, *, check_marker_ids: bool = True) -> Bluepr
     except FileLimitError as exc:
         raise BlueprintError(source, "", str(exc)) from None
     except UnicodeDecodeError as exc:
-        raise BlueprintError(source, "", f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
-                                         f"{exc.start}): a blueprint is a YAML or JSON file") from None
+        raise BlueprintError(
+            source,
+            "",
+            f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset "
+            f"{exc.start}): a blueprint is a YAML or JSON file",
+        ) from None
     except OSError as exc:
         raise BlueprintError(source, "", f"cannot read: {exc.strerror or exc}") from None
     try:
@@ -301,8 +308,12 @@ def validate_blueprint(
 
 def _check_uav_name(name: Any, source: str, where: str) -> None:
     if not isinstance(name, str) or not re.fullmatch(UAV_NAME_PATTERN, name):
-        raise BlueprintError(source, where, f"{quote(name)} is not a UAV name: 1-64 letters, digits, `-`, `_` or "
-                             "`.`, starting with a letter or digit (it is part of the mission's Zenoh keys)")
+        raise BlueprintError(
+            source,
+            where,
+            f"{quote(name)} is not a UAV name: 1-64 letters, digits, `-`, `_` or "
+            "`.`, starting with a letter or digit (it is part of the mission's Zenoh keys)",
+        )
     if name in RESERVED_UAV_NAMES:
         raise BlueprintError(source, where, f"{quote(name)} is mission control's own name")
 
@@ -329,7 +340,9 @@ def _brick(raw: Any, index: int, default_size: tuple[float, float, float], sourc
         raise BlueprintError(source, f"{where}: placed", f"must be true or false, got {quote(placed)}")
     pickup = raw.get("pickup")
     pickup_m = None if pickup is None else _vec3(pickup, source, f"{where}: pickup")
-    return Brick(id=int(raw["id"]), position_m=position, size_m=size, yaw_rad=yaw, placed=placed, pickup_m=pickup_m)
+    return Brick(
+        id=int(raw["id"]), position_m=position, size_m=size, yaw_rad=yaw, placed=placed, pickup_m=pickup_m
+    )
 
 
 def _uav(raw: Any, index: int, source: str) -> UavSpec:
@@ -345,7 +358,9 @@ def _uav(raw: Any, index: int, source: str) -> UavSpec:
     _check_uav_name(name, source, f"{where}: name")
     role = raw["role"]
     if role not in ROLES:
-        raise BlueprintError(source, f"{where}: role", f"unknown role {quote(role)} (expected one of: {', '.join(ROLES)})")
+        raise BlueprintError(
+            source, f"{where}: role", f"unknown role {quote(role)} (expected one of: {', '.join(ROLES)})"
+        )
     home = _vec3(raw["home"], source, f"{where}: home")
     return UavSpec(name=name, role=role, home_m=home)
 
@@ -365,7 +380,9 @@ def _markers(raw: Any, source: str) -> MarkerSpec:
     return MarkerSpec(dictionary=dictionary, size_m=size, spacing_m=spacing)
 
 
-def _check_keys(raw: Mapping[Any, Any], allowed: tuple[str, ...], required: tuple[str, ...], source: str, where: str) -> None:
+def _check_keys(
+    raw: Mapping[Any, Any], allowed: tuple[str, ...], required: tuple[str, ...], source: str, where: str
+) -> None:
     for key in raw:
         if key not in allowed:
             hint = _close_match(str(key)[:100], allowed)
@@ -402,7 +419,9 @@ def _positive(raw: Any, source: str, where: str) -> float:
 
 def _vec3(raw: Any, source: str, where: str) -> tuple[float, float, float]:
     if not isinstance(raw, (list, tuple)) or len(raw) != 3:
-        raise BlueprintError(source, where, f"must be a list of 3 numbers [x, y, z] in metres, got {quote(raw)}")
+        raise BlueprintError(
+            source, where, f"must be a list of 3 numbers [x, y, z] in metres, got {quote(raw)}"
+        )
     x, y, z = (_number(v, source, where) for v in raw)
     return (x, y, z)
 
@@ -475,7 +494,9 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
     m = blueprint.markers
     lines.append("brick:")
     lines.append(f"  size: {_vec(blueprint.brick_size_m)}")
-    lines.append(f"  markers: {{dictionary: {m.dictionary}, size: {_num(m.size_m)}, spacing: {_num(m.spacing_m)}}}")
+    lines.append(
+        f"  markers: {{dictionary: {m.dictionary}, size: {_num(m.size_m)}, spacing: {_num(m.spacing_m)}}}"
+    )
     lines.append("bricks:")
     for b in blueprint.bricks:
         parts = [f"id: {b.id}", f"position: {_vec(b.position_m)}"]

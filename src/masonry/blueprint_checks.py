@@ -40,21 +40,29 @@ if TYPE_CHECKING:
     from masonry.planner.contacts import Contacts
 
 
-def validate(blueprint: Blueprint, contacts: Contacts | None = None, *, check_marker_ids: bool = True) -> None:
+def validate(
+    blueprint: Blueprint, contacts: Contacts | None = None, *, check_marker_ids: bool = True
+) -> None:
     """The checks of :func:`masonry.blueprint.validate_blueprint` (see there), in the order they run."""
     from masonry.planner.contacts import BrickArrays, find_contacts
 
     source = blueprint.source
     bricks = blueprint.bricks
     markers = blueprint.markers
-    _check_ranges(blueprint, check_marker_ids)  # first: the geometry below must not compute with absurd values
+    _check_ranges(
+        blueprint, check_marker_ids
+    )  # first: the geometry below must not compute with absurd values
     for b in bricks:
         _check_brick_markers(b, markers, source)
         if not b.placed and b.pickup_m is None:
-            raise BlueprintError(source, f"brick {b.id}", "`pickup` is required for a brick that is not placed")
+            raise BlueprintError(
+                source, f"brick {b.id}", "`pickup` is required for a brick that is not placed"
+            )
     if contacts is None:
         positions = [b.position_m for b in bricks]
-        contacts = find_contacts(BrickArrays.of(positions, [b.size_m for b in bricks], [b.yaw_rad for b in bricks]))
+        contacts = find_contacts(
+            BrickArrays.of(positions, [b.size_m for b in bricks], [b.yaw_rad for b in bricks])
+        )
     if len(contacts.penetrating):
         i, j = (int(k) for k in contacts.penetrating[0])
         raise BlueprintError(
@@ -110,7 +118,9 @@ def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
     dictionary = blueprint.markers.dictionary
     capacity = ARUCO_DICTIONARY_SIZES.get(dictionary)
     if capacity is None:
-        raise BlueprintError(source, "brick.markers.dictionary", f"unknown ArUco dictionary {quote(dictionary)}")
+        raise BlueprintError(
+            source, "brick.markers.dictionary", f"unknown ArUco dictionary {quote(dictionary)}"
+        )
     if not check_marker_ids:
         capacity = 2 * MAX_BRICK_ID + 2
     for b in _suspects(blueprint.bricks, capacity):
@@ -119,33 +129,48 @@ def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
             if not check_marker_ids:
                 raise BlueprintError(source, f"brick {quote(b.id)}", f"id must be in 0..{MAX_BRICK_ID}")
             largest = max(ARUCO_DICTIONARY_SIZES.values())
-            hint = ("choose a larger dictionary" if capacity < largest else
-                    f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)")
+            hint = (
+                "choose a larger dictionary"
+                if capacity < largest
+                else f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)"
+            )
             raise BlueprintError(
-                source, f"brick {quote(b.id)}", f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
-                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}"
+                source,
+                f"brick {quote(b.id)}",
+                f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
+                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}",
             )
         _check_point(b.position_m, SITE_MAX_HEIGHT_M, source, f"{where}: position")
         if not all(0.0 < v <= MAX_BRICK_DIMENSION_M for v in b.size_m):
             raise BlueprintError(
-                source, f"{where}: size", f"every dimension must be in (0, {_fmt(MAX_BRICK_DIMENSION_M)}] m, "
-                f"got {quote(list(b.size_m))}"
+                source,
+                f"{where}: size",
+                f"every dimension must be in (0, {_fmt(MAX_BRICK_DIMENSION_M)}] m, "
+                f"got {quote(list(b.size_m))}",
             )
         if not abs(b.yaw_rad) <= MAX_ABS_YAW_RAD:
-            raise BlueprintError(source, f"{where}: yaw", f"|yaw| must be at most {_fmt(MAX_ABS_YAW_RAD)} rad "
-                                 f"(two turns), got {_fmt(b.yaw_rad)}")
+            raise BlueprintError(
+                source,
+                f"{where}: yaw",
+                f"|yaw| must be at most {_fmt(MAX_ABS_YAW_RAD)} rad (two turns), got {_fmt(b.yaw_rad)}",
+            )
         if b.pickup_m is not None:
             _check_point(b.pickup_m, MAX_PICKUP_HEIGHT_M, source, f"{where}: pickup")
             bottom = b.pickup_m[2] - b.size_m[2] / 2.0
             if bottom < -RESTING_TOL_M:
-                raise BlueprintError(source, f"{where}: pickup", f"the brick would be below the ground there "
-                                     f"(its centre at z = {_fmt(b.pickup_m[2])} m, bottom at {_fmt(bottom)} m)")
+                raise BlueprintError(
+                    source,
+                    f"{where}: pickup",
+                    f"the brick would be below the ground there "
+                    f"(its centre at z = {_fmt(b.pickup_m[2])} m, bottom at {_fmt(bottom)} m)",
+                )
     for u in blueprint.fleet:
         _check_uav_name(u.name, source, f"fleet UAV {quote(u.name)}: name")
         _check_point(u.home_m, MAX_HOME_HEIGHT_M, source, f"fleet UAV {quote(u.name)}: home")
         if u.home_m[2] < -RESTING_TOL_M:
-            raise BlueprintError(source, f"fleet UAV {quote(u.name)}: home", f"z = {_fmt(u.home_m[2])} m is below "
-                                 "the ground")
+            raise BlueprintError(
+                source, f"fleet UAV {quote(u.name)}: home", f"z = {_fmt(u.home_m[2])} m is below the ground"
+            )
 
 
 def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
@@ -162,20 +187,28 @@ def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
     pick = np.array([b.pickup_m if b.pickup_m is not None else (0.0, 0.0, 1.0) for b in bricks], dtype=float)
     with np.errstate(invalid="ignore"):
         ok = (ids >= 0) & (2 * ids + 1 < capacity)
-        ok &= (np.abs(pos[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pos[:, 2]) <= SITE_MAX_HEIGHT_M)
+        ok &= (np.abs(pos[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (
+            np.abs(pos[:, 2]) <= SITE_MAX_HEIGHT_M
+        )
         ok &= ((size > 0.0) & (size <= MAX_BRICK_DIMENSION_M)).all(axis=1) & (np.abs(yaw) <= MAX_ABS_YAW_RAD)
-        ok &= (np.abs(pick[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (np.abs(pick[:, 2]) <= MAX_PICKUP_HEIGHT_M)
+        ok &= (np.abs(pick[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (
+            np.abs(pick[:, 2]) <= MAX_PICKUP_HEIGHT_M
+        )
         ok &= pick[:, 2] - size[:, 2] / 2.0 >= -RESTING_TOL_M
     if ok.all():
         return ()
-    return bricks[int(np.argmin(ok)):]
+    return bricks[int(np.argmin(ok)) :]
 
 
 def _check_point(p: tuple[float, float, float], max_z_m: float, source: str, where: str) -> None:
     x, y, z = p
     if not (abs(x) <= SITE_HALF_EXTENT_M and abs(y) <= SITE_HALF_EXTENT_M):
-        raise BlueprintError(source, where, f"({_fmt(x)}, {_fmt(y)}) is off the site: |x| and |y| must be at most "
-                             f"{_fmt(SITE_HALF_EXTENT_M)} m")
+        raise BlueprintError(
+            source,
+            where,
+            f"({_fmt(x)}, {_fmt(y)}) is off the site: |x| and |y| must be at most "
+            f"{_fmt(SITE_HALF_EXTENT_M)} m",
+        )
     if not abs(z) <= max_z_m:
         raise BlueprintError(source, where, f"z = {_fmt(z)} m is out of range: at most {_fmt(max_z_m)} m")
 
@@ -218,7 +251,8 @@ def _check_support(bricks: tuple[Brick, ...], contacts: Contacts, source: str) -
         i = int(weak[0])
         under = sorted(bricks[int(v)].id for v in lower[upper == i])
         raise BlueprintError(
-            source, f"brick {bricks[i].id}",
+            source,
+            f"brick {bricks[i].id}",
             f"only {fraction[i] * 100:.1f} % of its footprint rests on brick(s) {', '.join(map(str, under))} "
             f"(at least {MIN_SUPPORT_FRACTION * 100:.0f} % must)",
         )
@@ -233,45 +267,61 @@ def _check_sites(blueprint: Blueprint) -> None:
     top = max(bricks, key=lambda b: b.top_z_m)
     if not blueprint.cruise_altitude_m > top.top_z_m:
         raise BlueprintError(
-            source, "cruise_altitude", f"{_fmt(blueprint.cruise_altitude_m)} m is not above the finished wall's top "
-            f"(z = {_fmt(top.top_z_m)} m, brick {top.id}): the UAVs would cruise through the wall"
+            source,
+            "cruise_altitude",
+            f"{_fmt(blueprint.cruise_altitude_m)} m is not above the finished wall's top "
+            f"(z = {_fmt(top.top_z_m)} m, brick {top.id}): the UAVs would cruise through the wall",
         )
     from scipy.spatial import cKDTree
 
     center = np.array([b.position_m[:2] for b in bricks], dtype=float)
-    footprints = (center, np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0,
-                  np.array([b.yaw_rad for b in bricks], dtype=float), cKDTree(center))
+    footprints = (
+        center,
+        np.array([b.size_m[:2] for b in bricks], dtype=float) / 2.0,
+        np.array([b.yaw_rad for b in bricks], dtype=float),
+        cKDTree(center),
+    )
     todo = [b for b in bricks if b.pickup_m is not None and not b.placed]
     pickups = np.array([b.pickup_m for b in todo], dtype=float).reshape(-1, 3)
     hit = _inside_footprints(pickups[:, :2], footprints)
     if hit is not None:
         k, j = hit
-        raise BlueprintError(source, f"brick {todo[k].id}: pickup", f"lies inside the wall's footprint (under "
-                             f"brick {bricks[j].id})")
+        raise BlueprintError(
+            source,
+            f"brick {todo[k].id}: pickup",
+            f"lies inside the wall's footprint (under brick {bricks[j].id})",
+        )
     # Two bricks whose pickup centres are closer than the smaller one's smallest side would interpenetrate there.
     room = np.array([min(b.size_m) for b in todo], dtype=float) - 2.0 * PENETRATION_TOL_M
     pair = _close_pair(pickups, room)
     if pair is not None:
         a, b = sorted(pair, key=lambda k: todo[k].id)
         raise BlueprintError(
-            source, f"brick {todo[b].id}: pickup", f"is brick {todo[a].id}'s pickup too: the two bricks would "
-            f"overlap there ({_fmt(float(np.linalg.norm(pickups[a] - pickups[b])))} m apart)"
+            source,
+            f"brick {todo[b].id}: pickup",
+            f"is brick {todo[a].id}'s pickup too: the two bricks would "
+            f"overlap there ({_fmt(float(np.linalg.norm(pickups[a] - pickups[b])))} m apart)",
         )
     fleet = blueprint.fleet
     homes = np.array([u.home_m for u in fleet], dtype=float).reshape(-1, 3)
     hit = _inside_footprints(homes[:, :2], footprints)
     if hit is not None:
         k, j = hit
-        raise BlueprintError(source, f"fleet UAV {quote(fleet[k].name)}: home", f"lies inside the wall's "
-                             f"footprint (under brick {bricks[j].id})")
+        raise BlueprintError(
+            source,
+            f"fleet UAV {quote(fleet[k].name)}: home",
+            f"lies inside the wall's footprint (under brick {bricks[j].id})",
+        )
     flat = homes.copy()
     flat[:, 2] = 0.0
     pair = _close_pair(flat, np.full(len(fleet), MIN_HOME_SEPARATION_M))
     if pair is not None:
         a, b = sorted(pair)
         raise BlueprintError(
-            source, f"fleet UAV {quote(fleet[b].name)}: home", f"is the home of {quote(fleet[a].name)} too "
-            f"(less than {_fmt(MIN_HOME_SEPARATION_M)} m apart horizontally)"
+            source,
+            f"fleet UAV {quote(fleet[b].name)}: home",
+            f"is the home of {quote(fleet[a].name)} too "
+            f"(less than {_fmt(MIN_HOME_SEPARATION_M)} m apart horizontally)",
         )
 
 

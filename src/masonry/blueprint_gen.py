@@ -52,14 +52,18 @@ class Site:
     brick_uavs: int = 1
     adhesion_uavs: int = 1
     clearance_m: float = DEFAULT_CLEARANCE_M
-    cruise_altitude_m: float | None = None  # None: DEFAULT_CRUISE_ALTITUDE_M, or CRUISE_OVER_WALL_M over a taller wall
+    cruise_altitude_m: float | None = (
+        None  # None: DEFAULT_CRUISE_ALTITUDE_M, or CRUISE_OVER_WALL_M over a taller wall
+    )
     pallet_columns: int = 0  # 0: as wide as a long wall, else 10 (20 beyond 40 bricks); given: row by row
     pallet_distance_m: float | None = None  # from the wall's face to the pallet; default r_c + 1 m
     name: str | None = None
     markers: MarkerSpec | None = None  # default: fitted to the brick, dictionary numbering every brick
 
 
-def running_bond(courses: int = 4, bricks_per_course: int = 6, *, joint_m: float = 0.0, **site: Any) -> Blueprint:
+def running_bond(
+    courses: int = 4, bricks_per_course: int = 6, *, joint_m: float = 0.0, **site: Any
+) -> Blueprint:
     """A straight wall of stretchers; every other course is shifted by half a brick (running bond).
 
     ``joint_m`` is the gap between neighbours in a course; ``site`` takes the fields of :class:`Site`.
@@ -86,7 +90,9 @@ def towers(towers: int = 2, height: int = 3, spacing_m: float = 1.0, **site: Any
     if not (math.isfinite(spacing_m) and spacing_m > 0.0):
         raise BlueprintError("<generator>", "spacing", f"must be > 0, got {spacing_m}")
     if towers > 1 and spacing_m < length:
-        raise BlueprintError("<generator>", "spacing", f"{spacing_m} m is less than the brick length {length} m")
+        raise BlueprintError(
+            "<generator>", "spacing", f"{spacing_m} m is less than the brick length {length} m"
+        )
     layout: _Layout = [(t * spacing_m, 0.0, course, 0.0) for t in range(towers) for course in range(height)]
     return _build("towers", layout, options)
 
@@ -126,12 +132,18 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     brick_uavs = int(options.brick_uavs)
     adhesion_uavs = int(options.adhesion_uavs)
     clearance = float(options.clearance_m)
-    top = (origin[2] if len(origin) == 3 else 0.0) + max((c for _, _, c, _ in layout), default=0) * height + height
+    top = (
+        (origin[2] if len(origin) == 3 else 0.0)
+        + max((c for _, _, c, _ in layout), default=0) * height
+        + height
+    )
     if options.cruise_altitude_m is not None:
         cruise = float(options.cruise_altitude_m)
     else:
         cruise = DEFAULT_CRUISE_ALTITUDE_M if top < DEFAULT_CRUISE_ALTITUDE_M else top + CRUISE_OVER_WALL_M
-    pallet_distance = clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
+    pallet_distance = (
+        clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
+    )
     markers = options.markers or _markers_for(size, len(layout))
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
@@ -259,7 +271,13 @@ def _dictionary_for(n_bricks: int) -> str:
 
 def generate(kind: str, **options: Any) -> Blueprint:
     """Dispatch on the generator name ("running-bond", "towers" or "pyramid")."""
-    funcs: dict[str, Callable[..., Blueprint]] = {"running-bond": running_bond, "towers": towers, "pyramid": pyramid}
+    funcs: dict[str, Callable[..., Blueprint]] = {
+        "running-bond": running_bond,
+        "towers": towers,
+        "pyramid": pyramid,
+    }
     if kind not in funcs:
-        raise BlueprintError("<generator>", "kind", f"unknown generator {kind!r} (one of {', '.join(GENERATORS)})")
+        raise BlueprintError(
+            "<generator>", "kind", f"unknown generator {kind!r} (one of {', '.join(GENERATORS)})"
+        )
     return funcs[kind](**options)

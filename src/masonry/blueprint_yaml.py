@@ -95,7 +95,9 @@ class GuardedLoader(_BASE_LOADER):  # type: ignore[misc, valid-type]
         return super().construct_mapping(node, deep=deep)
 
 
-GuardedLoader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(_EXP_FLOAT_TEXT), list("-+.0123456789"))
+GuardedLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float", re.compile(_EXP_FLOAT_TEXT), list("-+.0123456789")
+)
 
 
 def _check_duplicates(loader: Any, node: Any) -> None:

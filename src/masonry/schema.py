@@ -95,10 +95,18 @@ def blueprint_schema() -> dict[str, Any]:
                         "description": "ArUco markers 2k and 2k+1 on brick k's top face, on its length axis.",
                         "properties": {
                             "dictionary": {"enum": list(ARUCO_DICTIONARIES), "default": "DICT_4X4_50"},
-                            "size": {"type": "number", "exclusiveMinimum": 0, "default": 0.05,
-                                     "description": "Marker side, metres."},
-                            "spacing": {"type": "number", "exclusiveMinimum": 0, "default": 0.175,
-                                        "description": "Distance between the two marker centres, metres."},
+                            "size": {
+                                "type": "number",
+                                "exclusiveMinimum": 0,
+                                "default": 0.05,
+                                "description": "Marker side, metres.",
+                            },
+                            "spacing": {
+                                "type": "number",
+                                "exclusiveMinimum": 0,
+                                "default": 0.175,
+                                "description": "Distance between the two marker centres, metres.",
+                            },
                         },
                     },
                 },
@@ -111,19 +119,32 @@ def blueprint_schema() -> dict[str, Any]:
                     "additionalProperties": False,
                     "required": ["id", "position"],
                     "properties": {
-                        "id": {"type": "integer", "minimum": 0,
-                               "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
-                               "description": "Unique brick id; its markers 2k, 2k+1 must be in the dictionary."},
-                        "position": _vec3("Geometric centre of the brick, world ENU frame, metres.",
-                                          SITE_MAX_HEIGHT_M),
-                        "yaw": {"type": "number", "default": 0.0, "minimum": -MAX_ABS_YAW_RAD,
-                                "maximum": MAX_ABS_YAW_RAD,
-                                "description": "Rotation of the brick's length axis about z, radians."},
-                        "placed": {"type": "boolean", "default": False,
-                                   "description": "Already in place when the mission starts."},
+                        "id": {
+                            "type": "integer",
+                            "minimum": 0,
+                            "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
+                            "description": "Unique brick id; its markers 2k, 2k+1 must be in the dictionary.",
+                        },
+                        "position": _vec3(
+                            "Geometric centre of the brick, world ENU frame, metres.", SITE_MAX_HEIGHT_M
+                        ),
+                        "yaw": {
+                            "type": "number",
+                            "default": 0.0,
+                            "minimum": -MAX_ABS_YAW_RAD,
+                            "maximum": MAX_ABS_YAW_RAD,
+                            "description": "Rotation of the brick's length axis about z, radians.",
+                        },
+                        "placed": {
+                            "type": "boolean",
+                            "default": False,
+                            "description": "Already in place when the mission starts.",
+                        },
                         "size": _size("Per-brick override of brick.size, metres."),
-                        "pickup": _vec3("Approximate centre of the brick at its pickup site (required unless "
-                                        "placed).", MAX_PICKUP_HEIGHT_M),
+                        "pickup": _vec3(
+                            "Approximate centre of the brick at its pickup site (required unless placed).",
+                            MAX_PICKUP_HEIGHT_M,
+                        ),
                     },
                 },
             },
@@ -134,11 +155,16 @@ def blueprint_schema() -> dict[str, Any]:
                     "additionalProperties": False,
                     "required": ["name", "role", "home"],
                     "properties": {
-                        "name": {"type": "string", "pattern": f"^{UAV_NAME_PATTERN}$",
-                                 "not": {"enum": list(RESERVED_UAV_NAMES)},
-                                 "description": "Part of the mission's Zenoh keys."},
+                        "name": {
+                            "type": "string",
+                            "pattern": f"^{UAV_NAME_PATTERN}$",
+                            "not": {"enum": list(RESERVED_UAV_NAMES)},
+                            "description": "Part of the mission's Zenoh keys.",
+                        },
                         "role": {"enum": ["brick", "adhesion"]},
-                        "home": _vec3("Take-off and landing point, metres.", MAX_HOME_HEIGHT_M, -RESTING_TOL_M),
+                        "home": _vec3(
+                            "Take-off and landing point, metres.", MAX_HOME_HEIGHT_M, -RESTING_TOL_M
+                        ),
                     },
                 },
             },

@@ -107,10 +107,23 @@ def _vec3(v: tuple[float, ...]) -> Vec3:
 
 #: The fields of TaskTiming that ``UavConfig`` has under the same name (the rest come from its airframe).
 _CONFIG_FIELDS = (
-    "control_period_s", "cruise_speed_mps", "vertical_speed_mps", "arrive_tolerance_m", "clearance_m",
-    "settle_time_s", "min_estimates", "descent_duration_s", "grasp_press_m", "grasp_dwell_s",
-    "placement_radius_m", "release_dwell_s", "stable_time_s", "spray_descent_s", "spray_speed_mps",
-    "close_dwell_s", "chain_descent_s",
+    "control_period_s",
+    "cruise_speed_mps",
+    "vertical_speed_mps",
+    "arrive_tolerance_m",
+    "clearance_m",
+    "settle_time_s",
+    "min_estimates",
+    "descent_duration_s",
+    "grasp_press_m",
+    "grasp_dwell_s",
+    "placement_radius_m",
+    "release_dwell_s",
+    "stable_time_s",
+    "spray_descent_s",
+    "spray_speed_mps",
+    "close_dwell_s",
+    "chain_descent_s",
 )
 
 #: The timing of a ``UavConfig`` with its defaults (and of the default airframe).

@@ -90,8 +90,10 @@ def load_uav_config(path: str | Path) -> dict[str, Any]:
     except FileLimitError as exc:
         raise InputError(f"{p}: cannot read the UAV configuration: {exc}") from None
     except UnicodeDecodeError as exc:
-        raise InputError(f"{p}: not a UAV configuration: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
-                         f"offset {exc.start})") from None
+        raise InputError(
+            f"{p}: not a UAV configuration: not UTF-8 text (byte {exc.object[exc.start]:#04x} at "
+            f"offset {exc.start})"
+        ) from None
     except OSError as exc:
         raise InputError(f"{p}: cannot read the UAV configuration: {exc.strerror or exc}") from exc
     except yaml.YAMLError as exc:
@@ -164,8 +166,10 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
     if not 0.0 < hw.estimate_wait_s <= 600.0:
         raise InputError(f"estimate_wait_s must be > 0 and at most 600 s, not {hw.estimate_wait_s}")
     if not 0.0 <= hw.velocity_lag_s <= 2.0:
-        raise InputError(f"velocity_lag_s must be between 0 and 2 s (the autopilot's velocity loop time constant), "
-                         f"not {hw.velocity_lag_s}")
+        raise InputError(
+            f"velocity_lag_s must be between 0 and 2 s (the autopilot's velocity loop time constant), "
+            f"not {hw.velocity_lag_s}"
+        )
     return hw
 
 
@@ -314,8 +318,9 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
             opened.descriptions["camera"] = (
                 f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
             )
-        return UavPorts(fc, gripper, sprayer, camera, clock, advance, world, dict(opened.descriptions),
-                        opened.close)
+        return UavPorts(
+            fc, gripper, sprayer, camera, clock, advance, world, dict(opened.descriptions), opened.close
+        )
     except BaseException:
         opened.close()
         raise
@@ -395,11 +400,18 @@ class PreflightReport:
     def raise_if_failed(self) -> None:
         """Raises CommandRejected("arm", ...) naming every blocking failure."""
         if not self.ok:
-            raise CommandRejected("arm", "pre-flight check failed: " + "; ".join(self.reasons), options=self.options)
+            raise CommandRejected(
+                "arm", "pre-flight check failed: " + "; ".join(self.reasons), options=self.options
+            )
 
 
-def preflight(adapters: UavPorts, hw: HardwareConfig, *, role: str = "brick",
-              progress: Callable[[str], None] | None = None) -> PreflightReport:
+def preflight(
+    adapters: UavPorts,
+    hw: HardwareConfig,
+    *,
+    role: str = "brick",
+    progress: Callable[[str], None] | None = None,
+) -> PreflightReport:
     """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames.
 
     ``progress`` gets the countdown of the wait for the position estimate (what is missing, seconds left).

@@ -46,8 +46,9 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _main(
-    show_version: bool = typer.Option(False, "--version", callback=_version, is_eager=True,
-                                      help="Print the version and exit."),
+    show_version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
 ) -> None:
     """Autonomous aerial masonry: plan walls, fly brick and adhesion UAVs, simulate whole missions."""
 
@@ -87,7 +88,12 @@ except (ImportError, AttributeError):  # another typer: keep its own rendering
 
 #: Errors caused by what the user gave us exit with 2 (like a usage error); the rest exit with 1.
 USER_ERRORS: tuple[type[MasonryError], ...] = (
-    BlueprintError, InputError, JournalUnusable, PerceptionError, ProtocolError)
+    BlueprintError,
+    InputError,
+    JournalUnusable,
+    PerceptionError,
+    ProtocolError,
+)
 
 
 #: Library parameters named in errors (``MasonryError.options``) whose flag is not ``--`` + the name with dashes.

@@ -23,8 +23,9 @@ from masonry.ports import UavPorts
 Adapters = UavPorts
 
 
-def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any,
-                    hardware: Any = None) -> UavPorts:
+def select_adapters(
+    *, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any, hardware: Any = None
+) -> UavPorts:
     """Choose and build the adapters for the UAV ``spec``: the simulated world (``--sim``), or each port on its
     own (``hardware``: a :class:`masonry.adapters.wiring.HardwareConfig` from --fc/--actuators/--camera), checked
     by the pre-flight check (printed on stderr; a failure refuses to arm).
@@ -34,7 +35,9 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
 
         opened = open_adapters(hardware, blueprint=blueprint, spec=spec, seed=seed, faults=faults)
         try:
-            report = preflight(opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True))
+            report = preflight(
+                opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True)
+            )
             for line in report.lines():
                 typer.echo(cli_text(line, report.options), err=True)
             report.raise_if_failed()
@@ -43,8 +46,10 @@ def select_adapters(*, sim: bool, blueprint: Any, spec: Any, seed: int, camera: 
             raise
         return opened
     if not sim:
-        raise InputError("no adapters chosen: pass --sim to fly in the simulated world, or pick hardware with "
-                         "--fc URL / --actuators PORT / --camera INDEX|FILE")
+        raise InputError(
+            "no adapters chosen: pass --sim to fly in the simulated world, or pick hardware with "
+            "--fc URL / --actuators PORT / --camera INDEX|FILE"
+        )
     from masonry.sim import World
 
     world = World(blueprint, seed=seed, camera=camera, faults=faults)  # type: ignore[arg-type]
@@ -63,8 +68,10 @@ def _pick_uav(blueprint: Any, role: str, name: str | None) -> Any:
                 if spec.role != role:
                     raise InputError(f"--name {name}: {name} is {_a(spec.role)} UAV, not {_a(role)} UAV")
                 return spec
-        raise InputError(f"--name {name}: no UAV of that name in the fleet of {blueprint.source} "
-                         f"({', '.join(u.name for u in blueprint.fleet) or 'empty fleet'})")
+        raise InputError(
+            f"--name {name}: no UAV of that name in the fleet of {blueprint.source} "
+            f"({', '.join(u.name for u in blueprint.fleet) or 'empty fleet'})"
+        )
     for spec in blueprint.fleet:
         if spec.role == role:
             return spec
@@ -93,26 +100,44 @@ class _Hardware:
     mission: str | None
 
 
-def _hardware_options(*, sim: bool, fc: str | None, actuators: str | None, camera: str | None,
-                      calibration: Path | None, config: Path | None,
-                      estimate_wait: float | None = None) -> _Hardware:
+def _hardware_options(
+    *,
+    sim: bool,
+    fc: str | None,
+    actuators: str | None,
+    camera: str | None,
+    calibration: Path | None,
+    config: Path | None,
+    estimate_wait: float | None = None,
+) -> _Hardware:
     """--fc/--actuators/--camera/--calibration over --config uav.yaml over "sim" (the adapter wiring's defaults)."""
     from masonry.adapters.wiring import hardware_config, load_uav_config
 
     if sim and camera is not None and camera not in ("sim", "geometric", "render"):
-        raise InputError(f"--camera {camera}: with --sim the camera must be geometric, render or sim (for a real "
-                         f"camera drop --sim and give a device INDEX or a video FILE with --calibration)")
+        raise InputError(
+            f"--camera {camera}: with --sim the camera must be geometric, render or sim (for a real "
+            f"camera drop --sim and give a device INDEX or a video FILE with --calibration)"
+        )
     if calibration is not None and not calibration.is_file():
         raise InputError(f"--calibration {calibration}: no such file")
     if sim and calibration is not None:
-        raise InputError("--calibration is for a real camera: the simulated camera has its own intrinsics (drop "
-                         "--calibration, or drop --sim to fly a real camera)")
+        raise InputError(
+            "--calibration is for a real camera: the simulated camera has its own intrinsics (drop "
+            "--calibration, or drop --sim to fly a real camera)"
+        )
     settings = load_uav_config(config) if config is not None else {}
-    cli = {"fc": fc, "actuators": actuators, "camera": camera,
-           "calibration": str(calibration) if calibration is not None else None, "estimate_wait_s": estimate_wait}
+    cli = {
+        "fc": fc,
+        "actuators": actuators,
+        "camera": camera,
+        "calibration": str(calibration) if calibration is not None else None,
+        "estimate_wait_s": estimate_wait,
+    }
     hw = hardware_config(cli, settings)
     if sim and not hw.all_sim:
-        raise InputError("--sim simulates every adapter: drop --sim to use --fc / --actuators / a real --camera")
+        raise InputError(
+            "--sim simulates every adapter: drop --sim to use --fc / --actuators / a real --camera"
+        )
     return _Hardware(hw, settings.get("name"), settings.get("mission"))
 
 
@@ -125,45 +150,97 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
     blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
-    task: str | None = typer.Option(None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); "
-                                       "not with --mission."),
-    name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of its role)."),
+    task: str | None = typer.Option(
+        None, "--task", help="Task id, as `masonry plan` lists them (B3, A0, ...); not with --mission."
+    ),
+    name: str | None = typer.Option(
+        None, "--name", help="The UAV of the fleet (default: the first of its role)."
+    ),
     seed: int = typer.Option(0, "--seed", help=help_text("fly", "--seed", "Seed of the simulated world.")),
-    camera: str | None = typer.Option(None, "--camera", help="Simulated: geometric (default) | render (images + "
-                                         "ArUco, slower) | sim; real: a device INDEX, a video FILE or a GStreamer "
-                                         "pipeline (needs --calibration)."),
-    fc: str | None = typer.Option(None, "--fc", help="Flight controller: sim, or a MAVLink connection "
-                                     "(udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:HOST:5760)."),
-    actuators: str | None = typer.Option(None, "--actuators", help="Gripper/valve: sim, or the actuator "
-                                            "Arduino's serial port (/dev/ttyACM0)."),
-    calibration: Path | None = typer.Option(None, "--calibration", help="Camera calibration from "
-                                               "`masonry calibrate` (for a real camera)."),
-    config: Path | None = typer.Option(None, "--config", help="UAV settings file (uav.yaml: fc, actuators, "
-                                          "camera, calibration, signing_key, mocap_port, ...); flags override it."),
-    fault: list[str] = typer.Option([], "--fault", metavar="KEY=VALUE", help="KEY=VALUE, repeatable, as for `masonry sim` "
-                                    "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30)."),
+    camera: str | None = typer.Option(
+        None,
+        "--camera",
+        help="Simulated: geometric (default) | render (images + "
+        "ArUco, slower) | sim; real: a device INDEX, a video FILE or a GStreamer "
+        "pipeline (needs --calibration).",
+    ),
+    fc: str | None = typer.Option(
+        None,
+        "--fc",
+        help="Flight controller: sim, or a MAVLink connection "
+        "(udpin:0.0.0.0:14550, /dev/ttyACM0, tcp:HOST:5760).",
+    ),
+    actuators: str | None = typer.Option(
+        None, "--actuators", help="Gripper/valve: sim, or the actuator Arduino's serial port (/dev/ttyACM0)."
+    ),
+    calibration: Path | None = typer.Option(
+        None, "--calibration", help="Camera calibration from `masonry calibrate` (for a real camera)."
+    ),
+    config: Path | None = typer.Option(
+        None,
+        "--config",
+        help="UAV settings file (uav.yaml: fc, actuators, "
+        "camera, calibration, signing_key, mocap_port, ...); flags override it.",
+    ),
+    fault: list[str] = typer.Option(
+        [],
+        "--fault",
+        metavar="KEY=VALUE",
+        help="KEY=VALUE, repeatable, as for `masonry sim` "
+        "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30).",
+    ),
     fmt: str = typer.Option("text", "--format", help="text | json."),
     dt: float = typer.Option(0.05, "--dt", help=help_text("fly", "--dt", "Control tick, seconds.")),
-    timeout: float = typer.Option(900.0, "--timeout", help=help_text(
-        "fly", "--timeout", "Give up after this much flight time, seconds.")),
-    estimate_wait: float | None = typer.Option(None, "--estimate-wait", help=help_text(
-        "fly", "--estimate-wait", "With --fc: how long the pre-flight check waits for the autopilot's position "
-        "estimate, seconds (default 90: ArduPilot SITL needs about 40 s, a cold Pixhawk about as long).")),
-    mission: str | None = typer.Option(None, "--mission", help="Mission mode: take tasks from mission control "
-                                          "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission."),
-    listen: list[str] = typer.Option(["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh "
-                                     "listen endpoint(s)."),
+    timeout: float = typer.Option(
+        900.0,
+        "--timeout",
+        help=help_text("fly", "--timeout", "Give up after this much flight time, seconds."),
+    ),
+    estimate_wait: float | None = typer.Option(
+        None,
+        "--estimate-wait",
+        help=help_text(
+            "fly",
+            "--estimate-wait",
+            "With --fc: how long the pre-flight check waits for the autopilot's position "
+            "estimate, seconds (default 90: ArduPilot SITL needs about 40 s, a cold Pixhawk about as long).",
+        ),
+    ),
+    mission: str | None = typer.Option(
+        None,
+        "--mission",
+        help="Mission mode: take tasks from mission control "
+        "at this Zenoh endpoint (tcp/HOST:7447) until it ends the mission.",
+    ),
+    listen: list[str] = typer.Option(
+        ["tcp/127.0.0.1:0"], "--listen", help="Mission mode: this UAV's own Zenoh listen endpoint(s)."
+    ),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission mode: Zenoh key prefix."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
-        "fly", "--time-scale", "Mission mode: simulated seconds per wall second.")),
-    wait: float = typer.Option(60.0, "--wait", help=help_text(
-        "fly", "--wait", "Mission mode: wall seconds to wait for mission control.")),
-    key_file: Path | None = typer.Option(None, "--key-file", help="Mission mode: the mission key (masonry keygen "
-                                         "-o FILE), the same file as mission control's."),
-    insecure: bool = typer.Option(False, "--insecure", help="Mission mode: allow a non-loopback mission control "
-                                  "or --listen without a key."),
-    zenoh_config: Path | None = typer.Option(None, "--zenoh-config", help="Mission mode: Zenoh configuration "
-                                             "file (JSON5): TLS, access control (docs/security.md)."),
+    time_scale: float = typer.Option(
+        1.0,
+        "--time-scale",
+        help=help_text("fly", "--time-scale", "Mission mode: simulated seconds per wall second."),
+    ),
+    wait: float = typer.Option(
+        60.0,
+        "--wait",
+        help=help_text("fly", "--wait", "Mission mode: wall seconds to wait for mission control."),
+    ),
+    key_file: Path | None = typer.Option(
+        None,
+        "--key-file",
+        help="Mission mode: the mission key (masonry keygen -o FILE), the same file as mission control's.",
+    ),
+    insecure: bool = typer.Option(
+        False,
+        "--insecure",
+        help="Mission mode: allow a non-loopback mission control or --listen without a key.",
+    ),
+    zenoh_config: Path | None = typer.Option(
+        None,
+        "--zenoh-config",
+        help="Mission mode: Zenoh configuration file (JSON5): TLS, access control (docs/security.md).",
+    ),
 ) -> None:
     """Fly one UAV: one task (--task ID: state trace, then the result; exit 1 if it failed), or a mission's tasks
     from mission control (--mission tcp/HOST:7447; exit 1 if mission control did not end the mission)."""
@@ -177,10 +254,26 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
-    check_all("fly", {"--seed": seed, "--dt": dt, "--timeout": timeout, "--time-scale": time_scale, "--wait": wait,
-                      "--estimate-wait": estimate_wait})
-    hardware = _hardware_options(sim=sim, fc=fc, actuators=actuators, camera=camera, calibration=calibration,
-                                 config=config, estimate_wait=estimate_wait)
+    check_all(
+        "fly",
+        {
+            "--seed": seed,
+            "--dt": dt,
+            "--timeout": timeout,
+            "--time-scale": time_scale,
+            "--wait": wait,
+            "--estimate-wait": estimate_wait,
+        },
+    )
+    hardware = _hardware_options(
+        sim=sim,
+        fc=fc,
+        actuators=actuators,
+        camera=camera,
+        calibration=calibration,
+        config=config,
+        estimate_wait=estimate_wait,
+    )
     if name is None and hardware.name is not None:
         name = hardware.name
     if mission is None and hardware.mission is not None and task is None:
@@ -191,19 +284,38 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     bp = load_blueprint(blueprint)
     if mission is not None:
         if task is not None:
-            raise InputError("--task and --mission exclude each other: in mission mode tasks come from mission control")
+            raise InputError(
+                "--task and --mission exclude each other: in mission mode tasks come from mission control"
+            )
         if not (time_scale > 0.0):
             raise InputError(f"--time-scale must be > 0, got {time_scale}")
         if not hardware.hw.sim_fc and time_scale != 1.0:
-            raise InputError("--time-scale is for a simulated UAV: with --fc URL the autopilot's clock sets the "
-                             "pace (give `masonry sitl --time-scale` and `masonry mission-control --time-scale` "
-                             "the same factor instead)")
+            raise InputError(
+                "--time-scale is for a simulated UAV: with --fc URL the autopilot's clock sets the "
+                "pace (give `masonry sitl --time-scale` and `masonry mission-control --time-scale` "
+                "the same factor instead)"
+            )
         from masonry.cli.mission import network_options
 
         key = network_options(key_file, insecure, [mission, *listen], "--mission/--listen")
-        _fly_mission(bp, _pick_uav(bp, uav, name), mission, listen=listen, mission_name=mission_name, seed=seed,
-                     camera=camera, faults=Faults.parse(fault), dt=dt, time_scale=time_scale, wait=wait, fmt=fmt,
-                     sim=sim, hardware=hardware.hw, key=key, zenoh_config=zenoh_config)
+        _fly_mission(
+            bp,
+            _pick_uav(bp, uav, name),
+            mission,
+            listen=listen,
+            mission_name=mission_name,
+            seed=seed,
+            camera=camera,
+            faults=Faults.parse(fault),
+            dt=dt,
+            time_scale=time_scale,
+            wait=wait,
+            fmt=fmt,
+            sim=sim,
+            hardware=hardware.hw,
+            key=key,
+            zenoh_config=zenoh_config,
+        )
         return
     if task is None:
         raise InputError("--task is required (or --mission tcp/HOST:PORT to take tasks from mission control)")
@@ -226,14 +338,28 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     bricks = tuple(replace(b, placed=True) if f"B{b.id}" in before else b for b in bp.bricks)
     world_bp = replace(bp, bricks=bricks)
 
-    adapters = select_adapters(sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults,
-                               hardware=hardware.hw)
-    uav_config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers,
-                                     velocity_lag_s=hardware.hw.velocity_lag_s)
+    adapters = select_adapters(
+        sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware.hw
+    )
+    uav_config = UavConfig.from_spec(
+        spec,
+        cruise_altitude_m=bp.cruise_altitude_m,
+        markers=bp.markers,
+        velocity_lag_s=hardware.hw.velocity_lag_s,
+    )
     try:
-        run = fly_task(uav_config, the_task, fc=adapters.fc, clock=adapters.clock, gripper=adapters.gripper,
-                       camera=adapters.camera, sprayer=adapters.sprayer, dt_s=dt, advance=adapters.advance,
-                       timeout_s=timeout)
+        run = fly_task(
+            uav_config,
+            the_task,
+            fc=adapters.fc,
+            clock=adapters.clock,
+            gripper=adapters.gripper,
+            camera=adapters.camera,
+            sprayer=adapters.sprayer,
+            dt_s=dt,
+            advance=adapters.advance,
+            timeout_s=timeout,
+        )
     finally:
         adapters.close()
 
@@ -284,9 +410,25 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
         raise typer.Exit(1)
 
 
-def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], mission_name: str, seed: int, camera: str,
-                 faults: Any, dt: float, time_scale: float, wait: float, fmt: str, sim: bool = True,
-                 hardware: Any = None, key: bytes | None = None, zenoh_config: Path | None = None) -> None:
+def _fly_mission(
+    bp: Any,
+    spec: Any,
+    endpoint: str,
+    *,
+    listen: list[str],
+    mission_name: str,
+    seed: int,
+    camera: str,
+    faults: Any,
+    dt: float,
+    time_scale: float,
+    wait: float,
+    fmt: str,
+    sim: bool = True,
+    hardware: Any = None,
+    key: bytes | None = None,
+    zenoh_config: Path | None = None,
+) -> None:
     """Mission mode: one UAV taking its tasks from mission control over Zenoh (masonry.mission.remote).
 
     ``--sim``: a simulated world paced at ``time_scale``. Otherwise the adapters chosen with --fc/--actuators/
@@ -297,35 +439,76 @@ def _fly_mission(bp: Any, spec: Any, endpoint: str, *, listen: list[str], missio
     echo = None if fmt == "json" else typer.echo
     adapters = None
     if not sim:
-        adapters = select_adapters(sim=False, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=faults,
-                                   hardware=hardware)
+        adapters = select_adapters(
+            sim=False, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware
+        )
         if hardware.sim_fc:  # a simulated autopilot (with real actuators or camera) keeps time with the wall
             adapters = replace(adapters, advance=paced(adapters.clock, adapters.advance, time_scale))
     try:
         if echo is not None:
-            where = (f"simulated, seed {seed}, x{time_scale:g} real time" if adapters is None
-                     else _describe(hardware) + ("" if hardware.sim_fc else ", on the autopilot's clock"))
+            where = (
+                f"simulated, seed {seed}, x{time_scale:g} real time"
+                if adapters is None
+                else _describe(hardware) + ("" if hardware.sim_fc else ", on the autopilot's clock")
+            )
             echo(f"{spec.name} joins the mission at {endpoint} ({where})")
-        run = run_remote_uav(bp, spec, connect=[endpoint], listen=listen, mission_name=mission_name, seed=seed,
-                             camera=camera, faults=faults, dt_s=dt, time_scale=time_scale, wait_s=wait,
-                             max_time_s=float("inf"), echo=echo, adapters=adapters, key=key,
-                             zenoh_config=zenoh_config,
-                             uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s})
+        run = run_remote_uav(
+            bp,
+            spec,
+            connect=[endpoint],
+            listen=listen,
+            mission_name=mission_name,
+            seed=seed,
+            camera=camera,
+            faults=faults,
+            dt_s=dt,
+            time_scale=time_scale,
+            wait_s=wait,
+            max_time_s=float("inf"),
+            echo=echo,
+            adapters=adapters,
+            key=key,
+            zenoh_config=zenoh_config,
+            uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s},
+        )
     finally:
         if adapters is not None:
             adapters.close()
-    tasks = [{"task": e.task_id, "attempt": e.attempt, "start_s": round(e.start_s, 2),
-              "end_s": None if e.end_s is None else round(e.end_s, 2), "status": e.status} for e in run.executions]
+    tasks = [
+        {
+            "task": e.task_id,
+            "attempt": e.attempt,
+            "start_s": round(e.start_s, 2),
+            "end_s": None if e.end_s is None else round(e.end_s, 2),
+            "status": e.status,
+        }
+        for e in run.executions
+    ]
     if fmt == "json":
-        typer.echo(json.dumps({"uav": spec.name, "mission_ended": run.mission_ended,
-                               "mission_completed": run.mission_completed, "state": run.state, "tasks": tasks,
-                               "refused": list(run.refused), "dropped": run.dropped}))
+        typer.echo(
+            json.dumps(
+                {
+                    "uav": spec.name,
+                    "mission_ended": run.mission_ended,
+                    "mission_completed": run.mission_completed,
+                    "state": run.state,
+                    "tasks": tasks,
+                    "refused": list(run.refused),
+                    "dropped": run.dropped,
+                }
+            )
+        )
     else:
         for t in tasks:
-            typer.echo(f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s")
+            typer.echo(
+                f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s"
+            )
         if run.dropped:
-            typer.echo(f"dropped {sum(run.dropped.values())} frames that failed authentication ("
-                       + ", ".join(f"{k} {v}" for k, v in sorted(run.dropped.items())) + ")")
+            typer.echo(
+                f"dropped {sum(run.dropped.values())} frames that failed authentication ("
+                + ", ".join(f"{k} {v}" for k, v in sorted(run.dropped.items()))
+                + ")"
+            )
         typer.echo(f"mission {'ended' if run.mission_ended else 'did not end'}; {spec.name} is {run.state}")
     if not run.mission_ended:
         raise typer.Exit(1)

@@ -18,8 +18,11 @@ app.add_typer(fsm_app, name="fsm")
 def diagram(
     machine: str = typer.Argument(..., help="brick | adhesion."),
     output: Path = typer.Option(
-        ..., "-o", "--output", help="Output file: .svg, .png or .dot (graphviz text). SVG/PNG are drawn "
-        "by graphviz's dot when it is installed, else by a built-in layout."
+        ...,
+        "-o",
+        "--output",
+        help="Output file: .svg, .png or .dot (graphviz text). SVG/PNG are drawn "
+        "by graphviz's dot when it is installed, else by a built-in layout.",
     ),
 ) -> None:
     r"""Render a UAV's nested state machine (states, triggers, \[conditions]) as SVG, PNG or DOT."""

@@ -18,7 +18,9 @@ def sitl_home(blueprint: Any, role: str, name: str | None) -> tuple[tuple[float,
         if (name is None and spec.role == role) or spec.name == name:
             if spec.role != role:
                 article = "an" if spec.role[:1] in "aeiou" else "a"
-                raise InputError(f"--name {name}: {name} is not a {role} UAV (it is {article} {spec.role} UAV)")
+                raise InputError(
+                    f"--name {name}: {name} is not a {role} UAV (it is {article} {spec.role} UAV)"
+                )
             return tuple(spec.home_m), spec.name
     who = f"named {name}" if name is not None else f"of role {role}"
     raise InputError(f"{blueprint.source}: the fleet has no UAV {who}")
@@ -78,26 +80,45 @@ def build_sitl(
 
 @command("sitl")
 def sitl(
-    port: int = typer.Option(14550, "--port", help=help_text(
-        "sitl", "--port", "UDP port the ground station listens on (the SITL sends there).")),
+    port: int = typer.Option(
+        14550,
+        "--port",
+        help=help_text("sitl", "--port", "UDP port the ground station listens on (the SITL sends there)."),
+    ),
     host: str = typer.Option("127.0.0.1", "--host", help="Address of the ground station."),
     uav: str = typer.Option("brick", "--uav", help="brick | adhesion: which fleet member to stand in for."),
     blueprint: Path | None = typer.Option(None, "--blueprint", help="Start at this blueprint's UAV home."),
-    name: str | None = typer.Option(None, "--name", help="The UAV of the fleet (default: the first of --uav)."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
-        "sitl", "--time-scale", "Simulated seconds per wall second.")),
-    signing_key: Path | None = typer.Option(None, "--signing-key", help="MAVLink 2 signing key file "
-                                               "(32 bytes, 64 hex digits, or a passphrase)."),
-    prearm_failure: str | None = typer.Option(None, "--prearm-failure", help="Refuse every arming with this "
-                                                 "reason (to rehearse a pre-arm failure)."),
-    seed: int = typer.Option(0, "--seed", help=help_text("sitl", "--seed", "Seed of the motion-capture noise.")),
+    name: str | None = typer.Option(
+        None, "--name", help="The UAV of the fleet (default: the first of --uav)."
+    ),
+    time_scale: float = typer.Option(
+        1.0, "--time-scale", help=help_text("sitl", "--time-scale", "Simulated seconds per wall second.")
+    ),
+    signing_key: Path | None = typer.Option(
+        None, "--signing-key", help="MAVLink 2 signing key file (32 bytes, 64 hex digits, or a passphrase)."
+    ),
+    prearm_failure: str | None = typer.Option(
+        None, "--prearm-failure", help="Refuse every arming with this reason (to rehearse a pre-arm failure)."
+    ),
+    seed: int = typer.Option(
+        0, "--seed", help=help_text("sitl", "--seed", "Seed of the motion-capture noise.")
+    ),
     autopilot: str = typer.Option("ardupilot", "--autopilot", help="ardupilot (GUIDED) | px4 (OFFBOARD)."),
 ) -> None:
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
-    server, description = build_sitl(port=port, host=host, uav=uav, blueprint=blueprint, name=name,
-                                     time_scale=time_scale, signing_key=signing_key,
-                                     prearm_failure=prearm_failure, seed=seed, autopilot=autopilot,
-                                     log=typer.echo)
+    server, description = build_sitl(
+        port=port,
+        host=host,
+        uav=uav,
+        blueprint=blueprint,
+        name=name,
+        time_scale=time_scale,
+        signing_key=signing_key,
+        prearm_failure=prearm_failure,
+        seed=seed,
+        autopilot=autopilot,
+        log=typer.echo,
+    )
     typer.echo(description)
     typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")
     server.serve_forever()

@@ -36,8 +36,11 @@ def network_options(key_file: Path | None, insecure: bool, endpoints: list[str],
     key = load_key(key_file) if key_file is not None else None
     require_key_or_loopback(key, insecure, endpoints, what)
     if key is None and insecure:
-        typer.echo("warning: --insecure: mission messages are not authenticated; anyone who reaches "
-                   f"{', '.join(endpoints) or 'this process'} can command the mission", err=True)
+        typer.echo(
+            "warning: --insecure: mission messages are not authenticated; anyone who reaches "
+            f"{', '.join(endpoints) or 'this process'} can command the mission",
+            err=True,
+        )
     return key
 
 
@@ -61,30 +64,65 @@ def keygen(
 
 @command("mission-control")
 def mission_control(  # noqa: PLR0915 - a command: its options checked in order, then the call
-    blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."),
-    listen: list[str] = typer.Option([DEFAULT_LISTEN], "--listen", help="Zenoh endpoint(s) to listen on "
-                                     "(a real interface, e.g. tcp/10.0.0.1:7447, needs --key-file or --insecure)."),
+    blueprint: Path = typer.Argument(
+        ..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."
+    ),
+    listen: list[str] = typer.Option(
+        [DEFAULT_LISTEN],
+        "--listen",
+        help="Zenoh endpoint(s) to listen on "
+        "(a real interface, e.g. tcp/10.0.0.1:7447, needs --key-file or --insecure).",
+    ),
     connect: list[str] = typer.Option([], "--connect", help="Zenoh endpoint(s) of peers to connect to."),
-    key_file: Path | None = typer.Option(None, "--key-file", help="Mission key (masonry keygen -o FILE): "
-                                         "every message is authenticated with it."),
+    key_file: Path | None = typer.Option(
+        None,
+        "--key-file",
+        help="Mission key (masonry keygen -o FILE): every message is authenticated with it.",
+    ),
     insecure: bool = typer.Option(False, "--insecure", help="Allow non-loopback endpoints without a key."),
-    zenoh_config: Path | None = typer.Option(None, "--zenoh-config", help="Zenoh configuration file (JSON5): "
-                                             "TLS, access control (docs/security.md)."),
+    zenoh_config: Path | None = typer.Option(
+        None,
+        "--zenoh-config",
+        help="Zenoh configuration file (JSON5): TLS, access control (docs/security.md).",
+    ),
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     mission_name: str = typer.Option("default", "--mission-name", help="Mission name (Zenoh key prefix)."),
-    time_scale: float = typer.Option(1.0, "--time-scale", help=help_text(
-        "mission-control", "--time-scale", "Mission seconds per wall second (match the UAVs' --time-scale when "
-        "they are simulated faster than real time).")),
-    heartbeat_timeout: float = typer.Option(5.0, "--heartbeat-timeout", help=help_text(
-        "mission-control", "--heartbeat-timeout", "Wall seconds of silence before a UAV is lost.")),
-    startup_timeout: float = typer.Option(60.0, "--startup-timeout", help=help_text(
-        "mission-control", "--startup-timeout",
-        "Wall seconds to wait for the whole fleet before starting without the rest.")),
-    max_time: float | None = typer.Option(None, "--max-time", help=help_text(
-        "mission-control", "--max-time", "Give up after this many mission seconds.")),
-    tick: float = typer.Option(0.05, "--tick", help=help_text("mission-control", "--tick", "Control period, seconds.")),
+    time_scale: float = typer.Option(
+        1.0,
+        "--time-scale",
+        help=help_text(
+            "mission-control",
+            "--time-scale",
+            "Mission seconds per wall second (match the UAVs' --time-scale when "
+            "they are simulated faster than real time).",
+        ),
+    ),
+    heartbeat_timeout: float = typer.Option(
+        5.0,
+        "--heartbeat-timeout",
+        help=help_text(
+            "mission-control", "--heartbeat-timeout", "Wall seconds of silence before a UAV is lost."
+        ),
+    ),
+    startup_timeout: float = typer.Option(
+        60.0,
+        "--startup-timeout",
+        help=help_text(
+            "mission-control",
+            "--startup-timeout",
+            "Wall seconds to wait for the whole fleet before starting without the rest.",
+        ),
+    ),
+    max_time: float | None = typer.Option(
+        None,
+        "--max-time",
+        help=help_text("mission-control", "--max-time", "Give up after this many mission seconds."),
+    ),
+    tick: float = typer.Option(
+        0.05, "--tick", help=help_text("mission-control", "--tick", "Control period, seconds.")
+    ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
@@ -108,8 +146,16 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    check_all("mission-control", {"--time-scale": time_scale, "--heartbeat-timeout": heartbeat_timeout,
-                                  "--startup-timeout": startup_timeout, "--max-time": max_time, "--tick": tick})
+    check_all(
+        "mission-control",
+        {
+            "--time-scale": time_scale,
+            "--heartbeat-timeout": heartbeat_timeout,
+            "--startup-timeout": startup_timeout,
+            "--max-time": max_time,
+            "--tick": tick,
+        },
+    )
     check_output_path(report, "--report")
     key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
@@ -121,35 +167,51 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
     if journal is not None:
         # the journal knows its wall and fleet: a resume with another blueprint is refused (exit 2)
         jr, state = open_mission_journal(
-            journal, resume=resume, wall_digest=wall_digest(bp), fleet_digest=fleet_digest(bp),
-            fleet_names=[u.name for u in bp.fleet], task_ids=[t.id for t in the_plan.tasks],
-            warn=lambda m: typer.echo(f"warning: {m}", err=True))
+            journal,
+            resume=resume,
+            wall_digest=wall_digest(bp),
+            fleet_digest=fleet_digest(bp),
+            fleet_names=[u.name for u in bp.fleet],
+            task_ids=[t.id for t in the_plan.tasks],
+            warn=lambda m: typer.echo(f"warning: {m}", err=True),
+        )
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     from masonry.mission.airspace import layer_base_m
     from masonry.mission.auth import wrap
     from masonry.planner import min_durations_s
 
-    zenoh = ZenohTransport(MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name,
-                           config_file=zenoh_config)
+    zenoh = ZenohTransport(
+        MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config
+    )
     transport = wrap(zenoh, key, mission_name)
     zenoh.connect()
     try:
-        mc = MissionControl(the_plan, bp.fleet, transport, policy=policy, journal=jr,
-                            durations_s=priority_durations_s(
-                                expected_s),
-                            heartbeat_timeout_s=heartbeat_timeout * time_scale,
-                            startup_timeout_s=startup_timeout * time_scale,
-                            column_radius_m=bp.clearance_m, layer_base_m=layer_base_m(bp),
-                            layer_floor_m=bp.cruise_altitude_m, wall_digest=wall_digest(bp),
-                            min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m))
+        mc = MissionControl(
+            the_plan,
+            bp.fleet,
+            transport,
+            policy=policy,
+            journal=jr,
+            durations_s=priority_durations_s(expected_s),
+            heartbeat_timeout_s=heartbeat_timeout * time_scale,
+            startup_timeout_s=startup_timeout * time_scale,
+            column_radius_m=bp.clearance_m,
+            layer_base_m=layer_base_m(bp),
+            layer_floor_m=bp.cruise_altitude_m,
+            wall_digest=wall_digest(bp),
+            min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
+        )
         offset = 0.0
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
-        typer.echo(f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
-                   f"fleet {', '.join(u.name for u in bp.fleet)}"
-                   + (f", resumed at {offset:.1f} s" if state is not None else "")
-                   + (", messages authenticated" if key is not None else ", messages NOT authenticated"), err=True)
+        typer.echo(
+            f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
+            f"fleet {', '.join(u.name for u in bp.fleet)}"
+            + (f", resumed at {offset:.1f} s" if state is not None else "")
+            + (", messages authenticated" if key is not None else ", messages NOT authenticated"),
+            err=True,
+        )
         t0 = time.monotonic()
         linger_until = None
         while True:
@@ -171,9 +233,12 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
     security = security_summary(transport, mc.events.ignored)
     for what, counts in security.items():
         if counts:
-            typer.echo(f"{what} {sum(counts.values())} "
-                       + ("frames that failed authentication" if what == "dropped" else "results")
-                       + f" ({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))})", err=True)
+            typer.echo(
+                f"{what} {sum(counts.values())} "
+                + ("frames that failed authentication" if what == "dropped" else "results")
+                + f" ({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))})",
+                err=True,
+            )
     out = {**result.to_dict(), "security": security}
     if report is not None:
         write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")

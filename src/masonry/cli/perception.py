@@ -142,18 +142,23 @@ def _capture_frames(cap: Any, max_frames: int | None) -> Iterator[tuple[int, np.
 @command("estimate")
 def estimate(
     inputs: list[Path] = typer.Argument(None, help="Image files, or one video file.", show_default=False),
-    camera: int | None = typer.Option(None, "--camera", help=help_text(
-        "estimate", "--camera", "Live camera index (instead of INPUT).")),
+    camera: int | None = typer.Option(
+        None, "--camera", help=help_text("estimate", "--camera", "Live camera index (instead of INPUT).")
+    ),
     intrinsics: str | None = typer.Option(None, "--intrinsics", help="fx,fy,cx,cy in pixels."),
     distortion: str | None = typer.Option(None, "--distortion", help="k1,k2,p1,p2,k3 (OpenCV model)."),
     calibration: Path | None = typer.Option(
         None, "--calibration", help="OpenCV FileStorage YAML from `masonry calibrate`."
     ),
     marker_size: float = typer.Option(
-        _MARKERS.size_m, "--marker-size", help=help_text("estimate", "--marker-size", "Marker side (black border included), metres.")
+        _MARKERS.size_m,
+        "--marker-size",
+        help=help_text("estimate", "--marker-size", "Marker side (black border included), metres."),
     ),
     spacing: float = typer.Option(
-        _MARKERS.spacing_m, "--spacing", help=help_text("estimate", "--spacing", "Distance between a brick's two marker centres, m.")
+        _MARKERS.spacing_m,
+        "--spacing",
+        help=help_text("estimate", "--spacing", "Distance between a brick's two marker centres, m."),
     ),
     dictionary: str = typer.Option(_MARKERS.dictionary, "--dictionary", help="OpenCV ArUco dictionary name."),
     up: str | None = typer.Option(
@@ -162,7 +167,9 @@ def estimate(
         help="x,y,z normal of the bricks' plane in the camera frame (default: the optical axis, 0,0,1).",
     ),
     fmt: str = typer.Option("text", "--format", help="text | json (one JSON object per frame and line)."),
-    frames: int | None = typer.Option(None, "--frames", help=help_text("estimate", "--frames", "Stop after this many frames.")),
+    frames: int | None = typer.Option(
+        None, "--frames", help=help_text("estimate", "--frames", "Stop after this many frames.")
+    ),
 ) -> None:
     """Estimate brick poses (top-face centre, yaw) from ArUco markers, in the camera frame (x right, y down, z fwd)."""
     from masonry.blueprint import MarkerSpec
@@ -236,13 +243,19 @@ def markers_cmd(
         ..., "--bricks", help="Brick ids, e.g. 0-9 or 0,2,5-7 (brick k: markers 2k, 2k+1)."
     ),
     output: Path = typer.Option(..., "-o", "--output", help="FILE.pdf (one page per brick) or FILE.png."),
-    marker_size: float = typer.Option(_MARKERS.size_m, "--marker-size", help=help_text("markers", "--marker-size", "Marker side, metres.")),
+    marker_size: float = typer.Option(
+        _MARKERS.size_m, "--marker-size", help=help_text("markers", "--marker-size", "Marker side, metres.")
+    ),
     spacing: float = typer.Option(
-        _MARKERS.spacing_m, "--spacing", help=help_text("markers", "--spacing", "Distance between the two marker centres, metres.")
+        _MARKERS.spacing_m,
+        "--spacing",
+        help=help_text("markers", "--spacing", "Distance between the two marker centres, metres."),
     ),
     dictionary: str = typer.Option(_MARKERS.dictionary, "--dictionary", help="OpenCV ArUco dictionary name."),
     brick_size: str = typer.Option(
-        ",".join(f"{v:.2f}" for v in DEFAULT_BRICK_SIZE_M), "--brick-size", help="Brick length,width,height, metres."
+        ",".join(f"{v:.2f}" for v in DEFAULT_BRICK_SIZE_M),
+        "--brick-size",
+        help="Brick length,width,height, metres.",
     ),
     paper: str = typer.Option("a4", "--paper", help="a4 | a3 | letter (landscape)."),
     dpi: int = typer.Option(300, "--dpi", help=help_text("markers", "--dpi", "Resolution of PNG output.")),
@@ -260,7 +273,9 @@ def markers_cmd(
     spec = MarkerSpec(dictionary=dictionary, size_m=marker_size, spacing_m=spacing)
     if output.suffix.lower() == ".pdf" or len(ids) == 1:
         with atomic_path(output, "--output") as tmp:
-            write_marker_sheets(tmp, ids, spec, brick_size_m=(size[0], size[1], size[2]), paper=paper, dpi=dpi)
+            write_marker_sheets(
+                tmp, ids, spec, brick_size_m=(size[0], size[1], size[2]), paper=paper, dpi=dpi
+            )
         written = [output]
     else:  # one PNG per brick, named after the output
         written = write_marker_sheets(

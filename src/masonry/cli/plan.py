@@ -31,8 +31,10 @@ def plan_command(
         None, "--graph", help="Draw/export G^d and G^c together: .png, .svg, .dot or .graphml."
     ),
     planner_only: bool = typer.Option(
-        False, "--planner-only", help="Plan a wall larger than any ArUco dictionary can number (over 1160 "
-        "bricks): skips the marker-id check, for planner studies; such a wall cannot be flown."
+        False,
+        "--planner-only",
+        help="Plan a wall larger than any ArUco dictionary can number (over 1160 "
+        "bricks): skips the marker-id check, for planner studies; such a wall cannot be flown.",
     ),
 ) -> None:
     """Plan a wall: tasks, dependency graph G^d, conflict graph G^c (paper Section III)."""
@@ -186,8 +188,15 @@ def _common(
 
 def _argv(options: dict[str, Any]) -> str:
     """The generator options as command-line flags (recorded in the file's header)."""
-    flags = {"joint_m": "joint", "yaw_rad": "yaw", "origin_m": "origin", "spacing_m": "spacing",
-             "clearance_m": "clearance", "cruise_altitude_m": "cruise-altitude", "brick_size_m": "brick-size"}
+    flags = {
+        "joint_m": "joint",
+        "yaw_rad": "yaw",
+        "origin_m": "origin",
+        "spacing_m": "spacing",
+        "clearance_m": "clearance",
+        "cruise_altitude_m": "cruise-altitude",
+        "brick_size_m": "brick-size",
+    }
     parts = []
     for key, value in options.items():
         flag = flags.get(key, key.replace("_", "-"))
@@ -202,28 +211,50 @@ def _argv(options: dict[str, Any]) -> str:
 
 
 #: The generator keyword of each range-checked option (docs/cli.md lists the ranges).
-_GEN_FLAGS = {"courses": "--courses", "bricks_per_course": "--bricks-per-course", "towers": "--towers",
-              "height": "--height", "base": "--base", "spacing_m": "--spacing", "brick_size_m": "--brick-size",
-              "joint_m": "--joint", "yaw_rad": "--yaw", "origin_m": "--origin", "placed_courses": "--placed-courses",
-              "pallet_columns": "--pallet-columns", "brick_uavs": "--brick-uavs", "adhesion_uavs": "--adhesion-uavs",
-              "clearance_m": "--clearance", "cruise_altitude_m": "--cruise-altitude"}
+_GEN_FLAGS = {
+    "courses": "--courses",
+    "bricks_per_course": "--bricks-per-course",
+    "towers": "--towers",
+    "height": "--height",
+    "base": "--base",
+    "spacing_m": "--spacing",
+    "brick_size_m": "--brick-size",
+    "joint_m": "--joint",
+    "yaw_rad": "--yaw",
+    "origin_m": "--origin",
+    "placed_courses": "--placed-courses",
+    "pallet_columns": "--pallet-columns",
+    "brick_uavs": "--brick-uavs",
+    "adhesion_uavs": "--adhesion-uavs",
+    "clearance_m": "--clearance",
+    "cruise_altitude_m": "--cruise-altitude",
+}
 
 
 def _check_options(kind: str, options: dict[str, Any]) -> None:
     """Each option within its range, --placed-courses below the wall's courses, the wall not absurdly large."""
     check_all("blueprint", {flag: options[key] for key, flag in _GEN_FLAGS.items() if key in options})
-    courses = {"running-bond": options.get("courses"), "towers": options.get("height"),
-               "pyramid": options.get("base")}[kind]
+    courses = {
+        "running-bond": options.get("courses"),
+        "towers": options.get("height"),
+        "pyramid": options.get("base"),
+    }[kind]
     what = {"running-bond": "--courses", "towers": "--height", "pyramid": "--base"}[kind]
     if options["placed_courses"] > courses:
-        raise InputError(f"--placed-courses {options['placed_courses']}: more than the wall's {courses} "
-                         f"courses ({what} {courses})")
-    bricks = {"running-bond": lambda o: o["courses"] * o["bricks_per_course"],
-              "towers": lambda o: o["towers"] * o["height"],
-              "pyramid": lambda o: o["base"] * (o["base"] + 1) // 2}[kind](options)
+        raise InputError(
+            f"--placed-courses {options['placed_courses']}: more than the wall's {courses} "
+            f"courses ({what} {courses})"
+        )
+    bricks = {
+        "running-bond": lambda o: o["courses"] * o["bricks_per_course"],
+        "towers": lambda o: o["towers"] * o["height"],
+        "pyramid": lambda o: o["base"] * (o["base"] + 1) // 2,
+    }[kind](options)
     if bricks > MAX_GENERATED_BRICKS:
-        raise InputError(f"masonry blueprint {kind}: {bricks} bricks is more than {MAX_GENERATED_BRICKS} "
-                         f"(the most a generated wall may hold)")
+        raise InputError(
+            f"masonry blueprint {kind}: {bricks} bricks is more than {MAX_GENERATED_BRICKS} "
+            f"(the most a generated wall may hold)"
+        )
 
 
 def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
@@ -244,39 +275,78 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
         return
     write_atomic(output, text, "--output")
     n_todo = sum(1 for b in bp.bricks if not b.placed)
-    typer.echo(f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
-               f"{plural(len(bp.fleet), 'UAV')}", err=True)
+    typer.echo(
+        f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
+        f"{plural(len(bp.fleet), 'UAV')}",
+        err=True,
+    )
 
 
 _OUT = typer.Option(None, "--output", "-o", help="Write the blueprint here (default: stdout).")
 _BP = "blueprint"
-_SIZE = typer.Option(None, "--brick-size", metavar="L W H", help=help_text(
-    _BP, "--brick-size", "Brick length, width, height in metres, three numbers separated by spaces "
-    "(default 0.30 0.15 0.10)."))
-_JOINT = typer.Option(0.0, "--joint", help=help_text(_BP, "--joint", "Gap between neighbouring bricks of a course, metres."))
-_YAW = typer.Option(0.0, "--yaw", help=help_text(
-    _BP, "--yaw", "Direction of the wall (and its bricks' length axis), radians."))
-_ORIGIN = typer.Option((0.0, 0.0), "--origin", metavar="X Y", help=help_text(
-    _BP, "--origin", "x y of the wall's centre on the ground, metres, two numbers separated by a space."))
-_PLACED = typer.Option(0, "--placed-courses", help=help_text(
-    _BP, "--placed-courses", "How many bottom courses are already in place (at most the wall's courses)."))
-_PALLET = typer.Option(0, "--pallet-columns", help=help_text(
-    _BP, "--pallet-columns", "Pickup pallet columns (0: automatic)."))
-_BUAV = typer.Option(1, "--brick-uavs", help=help_text(_BP, "--brick-uavs", "Number of brick UAVs in the fleet."))
-_AUAV = typer.Option(1, "--adhesion-uavs", help=help_text(
-    _BP, "--adhesion-uavs", "Number of adhesion UAVs in the fleet."))
-_CLEAR = typer.Option(1.5, "--clearance", help=help_text(
-    _BP, "--clearance", "Minimum clearance r_c between UAVs, metres."))
-_CRUISE = typer.Option(None, "--cruise-altitude", help=help_text(
-    _BP, "--cruise-altitude", "Cruise altitude, metres (default 1.2, or 0.5 m over a taller wall)."))
+_SIZE = typer.Option(
+    None,
+    "--brick-size",
+    metavar="L W H",
+    help=help_text(
+        _BP,
+        "--brick-size",
+        "Brick length, width, height in metres, three numbers separated by spaces (default 0.30 0.15 0.10).",
+    ),
+)
+_JOINT = typer.Option(
+    0.0, "--joint", help=help_text(_BP, "--joint", "Gap between neighbouring bricks of a course, metres.")
+)
+_YAW = typer.Option(
+    0.0,
+    "--yaw",
+    help=help_text(_BP, "--yaw", "Direction of the wall (and its bricks' length axis), radians."),
+)
+_ORIGIN = typer.Option(
+    (0.0, 0.0),
+    "--origin",
+    metavar="X Y",
+    help=help_text(
+        _BP, "--origin", "x y of the wall's centre on the ground, metres, two numbers separated by a space."
+    ),
+)
+_PLACED = typer.Option(
+    0,
+    "--placed-courses",
+    help=help_text(
+        _BP, "--placed-courses", "How many bottom courses are already in place (at most the wall's courses)."
+    ),
+)
+_PALLET = typer.Option(
+    0, "--pallet-columns", help=help_text(_BP, "--pallet-columns", "Pickup pallet columns (0: automatic).")
+)
+_BUAV = typer.Option(
+    1, "--brick-uavs", help=help_text(_BP, "--brick-uavs", "Number of brick UAVs in the fleet.")
+)
+_AUAV = typer.Option(
+    1, "--adhesion-uavs", help=help_text(_BP, "--adhesion-uavs", "Number of adhesion UAVs in the fleet.")
+)
+_CLEAR = typer.Option(
+    1.5, "--clearance", help=help_text(_BP, "--clearance", "Minimum clearance r_c between UAVs, metres.")
+)
+_CRUISE = typer.Option(
+    None,
+    "--cruise-altitude",
+    help=help_text(
+        _BP, "--cruise-altitude", "Cruise altitude, metres (default 1.2, or 0.5 m over a taller wall)."
+    ),
+)
 _NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bricks>).")
 
 
 @command("running-bond", typer_app=blueprint_app)
 def running_bond_command(
-    courses: int = typer.Option(4, "--courses", help=help_text(_BP, "--courses", "Number of courses (rows).")),
-    bricks_per_course: int = typer.Option(6, "--bricks-per-course", help=help_text(
-        _BP, "--bricks-per-course", "Bricks in each course.")),
+    courses: int = typer.Option(
+        4, "--courses", help=help_text(_BP, "--courses", "Number of courses (rows).")
+    ),
+    bricks_per_course: int = typer.Option(
+        6, "--bricks-per-course", help=help_text(_BP, "--bricks-per-course", "Bricks in each course.")
+    ),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,
@@ -291,8 +361,20 @@ def running_bond_command(
     name: str | None = _NAME,
 ) -> None:
     """A straight running-bond wall: every other course shifted by half a brick."""
-    options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,
-                      adhesion_uavs, clearance, cruise_altitude, name)
+    options = _common(
+        output,
+        brick_size,
+        joint,
+        yaw,
+        origin,
+        placed_courses,
+        pallet_columns,
+        brick_uavs,
+        adhesion_uavs,
+        clearance,
+        cruise_altitude,
+        name,
+    )
     options.update(courses=courses, bricks_per_course=bricks_per_course)
     _emit("running-bond", options, output)
 
@@ -301,8 +383,9 @@ def running_bond_command(
 def towers_command(
     towers: int = typer.Option(2, "--towers", help=help_text(_BP, "--towers", "Number of towers.")),
     height: int = typer.Option(3, "--height", help=help_text(_BP, "--height", "Bricks per tower.")),
-    spacing: float = typer.Option(1.0, "--spacing", help=help_text(
-        _BP, "--spacing", "Distance between tower centres, metres.")),
+    spacing: float = typer.Option(
+        1.0, "--spacing", help=help_text(_BP, "--spacing", "Distance between tower centres, metres.")
+    ),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     yaw: float = _YAW,
@@ -316,8 +399,20 @@ def towers_command(
     name: str | None = _NAME,
 ) -> None:
     """Separate stacks of bricks in a row (the paper's case study is --towers 2 --height 3 --placed-courses 2)."""
-    options = _common(output, brick_size, 0.0, yaw, origin, placed_courses, pallet_columns, brick_uavs,
-                      adhesion_uavs, clearance, cruise_altitude, name)
+    options = _common(
+        output,
+        brick_size,
+        0.0,
+        yaw,
+        origin,
+        placed_courses,
+        pallet_columns,
+        brick_uavs,
+        adhesion_uavs,
+        clearance,
+        cruise_altitude,
+        name,
+    )
     options.pop("joint_m")
     options.update(towers=towers, height=height, spacing_m=spacing)
     _emit("towers", options, output)
@@ -325,8 +420,11 @@ def towers_command(
 
 @command("pyramid", typer_app=blueprint_app)
 def pyramid_command(
-    base: int = typer.Option(5, "--base", help=help_text(
-        _BP, "--base", "Bricks in the bottom course (one fewer per course above).")),
+    base: int = typer.Option(
+        5,
+        "--base",
+        help=help_text(_BP, "--base", "Bricks in the bottom course (one fewer per course above)."),
+    ),
     output: Path | None = _OUT,
     brick_size: tuple[float, float, float] | None = _SIZE,
     joint: float = _JOINT,
@@ -341,7 +439,19 @@ def pyramid_command(
     name: str | None = _NAME,
 ) -> None:
     """A stepped pyramid wall."""
-    options = _common(output, brick_size, joint, yaw, origin, placed_courses, pallet_columns, brick_uavs,
-                      adhesion_uavs, clearance, cruise_altitude, name)
+    options = _common(
+        output,
+        brick_size,
+        joint,
+        yaw,
+        origin,
+        placed_courses,
+        pallet_columns,
+        brick_uavs,
+        adhesion_uavs,
+        clearance,
+        cruise_altitude,
+        name,
+    )
     options.update(base=base)
     _emit("pyramid", options, output)

@@ -30,8 +30,13 @@ class ProgressLines:
     ``clock`` is injected (``time.monotonic`` by default) so that tests need no sleeps.
     """
 
-    def __init__(self, stream: TextIO | None = None, *, interval_s: float = LINE_INTERVAL_S,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        stream: TextIO | None = None,
+        *,
+        interval_s: float = LINE_INTERVAL_S,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.stream = stream
         self.interval_s = interval_s
         self.clock = clock
@@ -48,8 +53,10 @@ class ProgressLines:
             eta = "ETA 0 s"
         elif done > 0:
             eta = f"ETA {_duration(elapsed / done * (total - done))}"
-        return (f"sim: {done}/{total} task{'' if total == 1 else 's'} done, simulated {sim_s:.0f} s, "
-                f"{_duration(elapsed)} elapsed, {eta}")
+        return (
+            f"sim: {done}/{total} task{'' if total == 1 else 's'} done, simulated {sim_s:.0f} s, "
+            f"{_duration(elapsed)} elapsed, {eta}"
+        )
 
     def __call__(self, done: int, total: int, sim_s: float) -> None:
         now = self.clock()
@@ -61,8 +68,9 @@ class ProgressLines:
         stream.flush()
 
 
-def progress_display(mode: bool | None, *, stderr_tty: bool | None = None,
-                     clock: Callable[[], float] = time.monotonic) -> tuple[ProgressFn | None, Callable[[], None]]:
+def progress_display(
+    mode: bool | None, *, stderr_tty: bool | None = None, clock: Callable[[], float] = time.monotonic
+) -> tuple[ProgressFn | None, Callable[[], None]]:
     """The progress callback and its finish function for ``masonry sim``.
 
     ``mode`` is ``--progress/--no-progress``: True prints the plain lines every few seconds (even on a terminal:
@@ -89,9 +97,17 @@ def _progress_bar() -> tuple[ProgressFn, Callable[[], None]]:
         TimeRemainingColumn,
     )
 
-    bar = Progress(TextColumn("mission"), BarColumn(), MofNCompleteColumn(), TextColumn("sim {task.fields[t]:.0f} s"),
-                   TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(), console=Console(stderr=True),
-                   transient=True)
+    bar = Progress(
+        TextColumn("mission"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("sim {task.fields[t]:.0f} s"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    )
     state: dict[str, Any] = {}
 
     def update(done: int, total: int, now_s: float) -> None:

@@ -15,15 +15,26 @@ from masonry.errors import InputError
 @command("sim")
 def sim(
     blueprint: Path = typer.Argument(..., help="Wall blueprint (YAML or JSON)."),
-    brick_uavs: int | None = typer.Option(None, "--brick-uavs", help=help_text(
-        "sim", "--brick-uavs", "Number of brick UAVs (overrides the fleet).")),
-    adhesion_uavs: int | None = typer.Option(None, "--adhesion-uavs", help=help_text(
-        "sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet).")),
+    brick_uavs: int | None = typer.Option(
+        None,
+        "--brick-uavs",
+        help=help_text("sim", "--brick-uavs", "Number of brick UAVs (overrides the fleet)."),
+    ),
+    adhesion_uavs: int | None = typer.Option(
+        None,
+        "--adhesion-uavs",
+        help=help_text("sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet)."),
+    ),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
-    fault: list[str] = typer.Option([], "--fault", metavar="KEY=VALUE", help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
-                                    "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R."),
+    fault: list[str] = typer.Option(
+        [],
+        "--fault",
+        metavar="KEY=VALUE",
+        help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
+        "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R.",
+    ),
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
@@ -31,9 +42,13 @@ def sim(
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
-    progress: bool | None = typer.Option(None, "--progress/--no-progress", help="Progress on stderr: a line "
-                                         "every few seconds (--progress), or nothing (--no-progress). Default: a "
-                                         "bar with an ETA on a terminal, the lines when stderr is not one."),
+    progress: bool | None = typer.Option(
+        None,
+        "--progress/--no-progress",
+        help="Progress on stderr: a line "
+        "every few seconds (--progress), or nothing (--no-progress). Default: a "
+        "bar with an ETA on a terminal, the lines when stderr is not one.",
+    ),
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
 
@@ -45,13 +60,17 @@ def sim(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
-    check_all("sim", {"--brick-uavs": brick_uavs, "--adhesion-uavs": adhesion_uavs, "--seed": seed, "--dt": dt})
+    check_all(
+        "sim", {"--brick-uavs": brick_uavs, "--adhesion-uavs": adhesion_uavs, "--seed": seed, "--dt": dt}
+    )
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
     # before the work: a long simulation must not end in an unwritable report
     check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d)])
-    if journal is not None and any(p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)):
+    if journal is not None and any(
+        p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)
+    ):
         raise InputError(f"--journal {journal}: the same file as an output")
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
@@ -61,9 +80,19 @@ def sim(
     progress_cb, finish = progress_display(progress)
     try:
         mission = SimulatedMission.from_blueprint(
-            bp, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed, camera=camera,
-            faults=faults, journal_path=journal, resume=resume, dt_s=dt, progress=progress_cb,
-            warn=lambda m: typer.echo(f"warning: {m}", err=True))
+            bp,
+            brick_uavs=brick_uavs,
+            adhesion_uavs=adhesion_uavs,
+            policy=policy,
+            seed=seed,
+            camera=camera,
+            faults=faults,
+            journal_path=journal,
+            resume=resume,
+            dt_s=dt,
+            progress=progress_cb,
+            warn=lambda m: typer.echo(f"warning: {m}", err=True),
+        )
         result = mission.run()
     finally:
         finish()
@@ -85,4 +114,3 @@ def sim(
     typer.echo(result.to_json() if fmt == "json" else result.summary())
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
-

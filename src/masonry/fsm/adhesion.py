@@ -45,7 +45,9 @@ class AdhesionUav(UavModel):
         self._stable_since_s: float | None = None
         self._yaw_rad = 0.0
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
-        self._climb_to_m = config.cruise_altitude_m  # in ``ascend``: the transit altitude of the task just done
+        self._climb_to_m = (
+            config.cruise_altitude_m
+        )  # in ``ascend``: the transit altitude of the task just done
         super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(ADHESION_TASK_STATES)
@@ -67,7 +69,11 @@ class AdhesionUav(UavModel):
             t = self.task
             surface = max(t.start_m[2], t.end_m[2])
             z = max(
-                z, surface + self.config.airframe.spray_height_m - self.nozzle.offset_body_m[2] + self.config.clearance_m
+                z,
+                surface
+                + self.config.airframe.spray_height_m
+                - self.nozzle.offset_body_m[2]
+                + self.config.clearance_m,
             )
         return z
 
@@ -161,10 +167,7 @@ class AdhesionUav(UavModel):
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
-        if (
-            self._advance(tel, cfg.spray_tolerance_m)
-            or self._now_s > self.nav.end_s + cfg.release_timeout_s
-        ):
+        if self._advance(tel, cfg.spray_tolerance_m) or self._now_s > self.nav.end_s + cfg.release_timeout_s:
             self.sprayed()
 
     def enter_close(self, *args: Any, **kwargs: Any) -> None:

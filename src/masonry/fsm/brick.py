@@ -155,7 +155,10 @@ class BrickUav(UavModel):
         self.attempt.hover_z = self.config.cruise_altitude_m
         # it may climb max_climbs steps there to widen the camera's view, and it climbs out with the brick to its
         # transit altitude: both are part of its column
-        top = max(self.attempt.hover_z + self.config.max_climbs * self.config.climb_step_m, self._transit_altitude_m())
+        top = max(
+            self.attempt.hover_z + self.config.max_climbs * self.config.climb_step_m,
+            self._transit_altitude_m(),
+        )
         self._route(tel, np.array([pickup[0], pickup[1], self.attempt.hover_z]), top_m=top)
 
     def do_pickup_goto(self, tel: Telemetry) -> None:
@@ -317,7 +320,9 @@ class BrickUav(UavModel):
             assert self.attempt.brick_estimate is not None
             # The flange keeps the brick from turning on the magnet: remember its yaw relative to the body. Its
             # position is not compensated: the conical guide centres the brick under the effector (paper, IV).
-            self.attempt.carry_yaw_rad = wrap_angle_rad(self.attempt.brick_estimate[1] - self.attempt.grasp_yaw_rad)
+            self.attempt.carry_yaw_rad = wrap_angle_rad(
+                self.attempt.brick_estimate[1] - self.attempt.grasp_yaw_rad
+            )
             self.attached()
             return
         self.attempt.grasp_attempts += 1

@@ -135,8 +135,9 @@ def layout(kind: str) -> tuple[dict[str, _Box], dict[str, _Box]]:
             width = n * _LEAF_W + (n - 1) * _GAP_X
             x0 = -width / 2 + _LEAF_W / 2
             for i, child in enumerate(children):
-                leaves[f"{state['name']}_{child['name']}"] = _Box(x0 + i * (_LEAF_W + _GAP_X), y, _LEAF_W,
-                                                                  _LEAF_H, row)
+                leaves[f"{state['name']}_{child['name']}"] = _Box(
+                    x0 + i * (_LEAF_W + _GAP_X), y, _LEAF_W, _LEAF_H, row
+                )
             parents[state["name"]] = _Box(0.0, y + 0.1, width + 0.5, _LEAF_H + 0.7, row)
         else:
             leaves[state["name"]] = _Box(0.0, y, _LEAF_W, _LEAF_H, row)
@@ -185,7 +186,9 @@ class _Routing:
     def corridor_above(self, r: int) -> float:
         return self.top[r] + (0.45 if r == 0 else (self.bottom[r - 1] - self.top[r]) / 2)
 
-    def leftmost(self, box: _Box) -> bool:  # nothing of its row to its left: a lane on the left reaches it directly
+    def leftmost(
+        self, box: _Box
+    ) -> bool:  # nothing of its row to its left: a lane on the left reaches it directly
         return all(o.left >= box.left - 1e-9 for o in self.leaves.values() if o.row == box.row)
 
 
@@ -195,14 +198,19 @@ def _routing(kind: str, leaves: dict[str, _Box], parents: dict[str, _Box]) -> _R
     for b in boxes.values():
         if b.row >= 0:
             rows.setdefault(b.row, []).append(b)
-    top = {r: max(b.top for b in bs) + (0.25 if any(b in parents.values() for b in bs) else 0.0)
-           for r, bs in rows.items()}
+    top = {
+        r: max(b.top for b in bs) + (0.25 if any(b in parents.values() for b in bs) else 0.0)
+        for r, bs in rows.items()
+    }
     bottom = {r: min(b.bottom for b in bs) for r, bs in rows.items()}
     main_left = min(b.left for b in boxes.values() if b.row >= 0)
     main_right = max(b.right for b in boxes.values() if b.row >= 0)
     edges = _edges(kind)
-    side_triggers = list(dict.fromkeys(trig for src, dest, trig, _ in edges
-                                       if dest in _SIDE_STATES and src not in _SIDE_STATES))
+    side_triggers = list(
+        dict.fromkeys(
+            trig for src, dest, trig, _ in edges if dest in _SIDE_STATES and src not in _SIDE_STATES
+        )
+    )
     bus_x = {trig: main_right + 0.7 + 0.45 * i for i, trig in enumerate(side_triggers)}
     into_side: dict[str, list[str]] = {}
     for src, dest, trig, _ in edges:
@@ -335,22 +343,64 @@ def draw_builtin(kind: str, path: Path) -> None:
         ax.set_xlim(x_min, x_max)
         ax.set_ylim(y_min, y_max)
         ax.set_axis_off()
-        ax.text((x_min + x_max) / 2, y_max - 0.4, f"masonry {kind} UAV", ha="center", va="center", fontsize=11,
-                fontweight="bold")
+        ax.text(
+            (x_min + x_max) / 2,
+            y_max - 0.4,
+            f"masonry {kind} UAV",
+            ha="center",
+            va="center",
+            fontsize=11,
+            fontweight="bold",
+        )
         for name, b in parents.items():
-            ax.add_patch(FancyBboxPatch((b.left, b.bottom), b.w, b.h, boxstyle="round,pad=0.02", fc="#f2f2f2",
-                                        ec="#7f7f7f", lw=0.8, zorder=0))
-            ax.text(b.left + 0.12, b.top - 0.17, name, ha="left", va="center", fontsize=8, fontweight="bold",
-                    zorder=1)
+            ax.add_patch(
+                FancyBboxPatch(
+                    (b.left, b.bottom),
+                    b.w,
+                    b.h,
+                    boxstyle="round,pad=0.02",
+                    fc="#f2f2f2",
+                    ec="#7f7f7f",
+                    lw=0.8,
+                    zorder=0,
+                )
+            )
+            ax.text(
+                b.left + 0.12,
+                b.top - 0.17,
+                name,
+                ha="left",
+                va="center",
+                fontsize=8,
+                fontweight="bold",
+                zorder=1,
+            )
         for name, b in leaves.items():
             fill = "#fde9d9" if name in _SIDE_STATES else ("#dbe5f1" if name == "idle" else "white")
-            ax.add_patch(FancyBboxPatch((b.left, b.bottom), b.w, b.h, boxstyle="round,pad=0.02", fc=fill,
-                                        ec="#404040", lw=1.0, zorder=2))
+            ax.add_patch(
+                FancyBboxPatch(
+                    (b.left, b.bottom),
+                    b.w,
+                    b.h,
+                    boxstyle="round,pad=0.02",
+                    fc=fill,
+                    ec="#404040",
+                    lw=1.0,
+                    zorder=2,
+                )
+            )
             ax.text(b.x, b.y, name.rsplit("_", 1)[-1], ha="center", va="center", fontsize=8, zorder=3)
         for r in routes:
             colour = "#c0504d" if r.get("bus") or r["side"] else "#1f497d"
-            style: dict[str, Any] = {"arrowstyle": "-|>", "mutation_scale": 8, "lw": 0.7, "color": colour, "zorder": 1,
-                     "shrinkA": 0, "shrinkB": 1}
+            style: dict[str, Any] = {
+                "arrowstyle": "-|>",
+                "mutation_scale": 8,
+                "lw": 0.7,
+                "color": colour,
+                "zorder": 1,
+                "shrinkA": 0,
+                "shrinkB": 1,
+            }
             if "arc" in r:
                 p0, p1, rad = r["arc"]
                 ax.add_patch(FancyArrowPatch(p0, p1, connectionstyle=f"arc3,rad={rad}", **style))
@@ -360,6 +410,15 @@ def draw_builtin(kind: str, path: Path) -> None:
                 ax.add_patch(FancyArrowPatch(path=MplPath(pts, codes), **style))
             if r["label"] and "at" in r:
                 x, y = r["at"]
-                ax.text(x, y, r["label"], ha=r.get("ha", "center"), va="center", fontsize=6, color="#1f1f1f",
-                        zorder=4, bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85})
+                ax.text(
+                    x,
+                    y,
+                    r["label"],
+                    ha=r.get("ha", "center"),
+                    va="center",
+                    fontsize=6,
+                    color="#1f1f1f",
+                    zorder=4,
+                    bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
+                )
         fig.savefig(path, format=path.suffix.lower().lstrip("."), dpi=150)

@@ -164,7 +164,10 @@ class UavModel:
                 self._link_down(tel)
                 return
             self.failsafe.link_down_since_s = None
-            if self.state in self._TASK_STATES_SET and tel.battery_fraction < self.config.battery_low_fraction:
+            if (
+                self.state in self._TASK_STATES_SET
+                and tel.battery_fraction < self.config.battery_low_fraction
+            ):
                 self._battery_low(tel)
             self._do[self.state](tel)
             if self.nav.active:
@@ -321,8 +324,14 @@ class UavModel:
     def _yaw_error(self, tel: Telemetry) -> float:
         return self.nav.yaw_error_rad(tel)
 
-    def _route(self, tel: Telemetry, target_m: np.ndarray, yaw_rad: float | None = None,
-               top_m: float | None = None, to_m: np.ndarray | None = None) -> None:
+    def _route(
+        self,
+        tel: Telemetry,
+        target_m: np.ndarray,
+        yaw_rad: float | None = None,
+        top_m: float | None = None,
+        to_m: np.ndarray | None = None,
+    ) -> None:
         """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal).
 
         With a clearance link (mission control's airspace, docs/safety.md) a lateral move is a *transit*: the
@@ -341,8 +350,11 @@ class UavModel:
         # work there is another span of airspace, which mission control must reserve
         target = np.asarray(target_m, dtype=float)
         self.nav.legs_from_rest = False
-        self.transit.begin((float(target[0]), float(target[1]), float(target[2])), top_m,
-                           None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2])))
+        self.transit.begin(
+            (float(target[0]), float(target[1]), float(target[2])),
+            top_m,
+            None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2])),
+        )
         # hover until mission control answers, once come to rest smoothly: it asks once settled, and the flight
         # it is granted starts from rest where it says it is
         stop = self.nav.stop_point_m(tel)
@@ -414,8 +426,9 @@ class UavModel:
         if hold is not None and (first or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
             self.transit.layer_m = layer
             self.transit.wait()
-            self.nav.layer_route(self._now_s, tel, p, np.array([hold[0], hold[1], layer]), layer,
-                                 self.nav.target_yaw_rad)
+            self.nav.layer_route(
+                self._now_s, tel, p, np.array([hold[0], hold[1], layer]), layer, self.nav.target_yaw_rad
+            )
         else:
             self.nav.wait(self._now_s)
 
@@ -430,7 +443,9 @@ class UavModel:
             self.halt_reason = f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
             self.retire(reason=self.halt_reason)
             return
-        task = self._take(self.link.poll_task())  # with a battery service: handed over once the pack is swapped
+        task = self._take(
+            self.link.poll_task()
+        )  # with a battery service: handed over once the pack is swapped
         if task is not None:
             self._start_task(task)
             self.assign(task=task)
@@ -445,7 +460,9 @@ class UavModel:
         climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
         self.fc.takeoff(climb_m)
         x, y, z = tel.position_m
-        self.nav.target_m = np.array([x, y, z + climb_m])  # where the autopilot takes it (the machine hovers there next)
+        self.nav.target_m = np.array(
+            [x, y, z + climb_m]
+        )  # where the autopilot takes it (the machine hovers there next)
 
     def do_takeoff(self, tel: Telemetry) -> None:
         if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:

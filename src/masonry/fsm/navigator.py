@@ -138,15 +138,28 @@ class Navigator:
             return
         self.low_route(now_s, tel, p, target, yaw_rad)
 
-    def low_route(self, now_s: float, tel: Telemetry, p: np.ndarray, target: np.ndarray,
-                  yaw_rad: float | None, from_rest: bool = False) -> None:
+    def low_route(
+        self,
+        now_s: float,
+        tel: Telemetry,
+        p: np.ndarray,
+        target: np.ndarray,
+        yaw_rad: float | None,
+        from_rest: bool = False,
+    ) -> None:
         """Fly :meth:`low_legs` from ``p`` to ``target`` (the first leg ``from_rest``: see :meth:`fly_to`)."""
         legs = self.low_legs(p, target)
         self.fly_to(now_s, tel, legs[0], yaw_rad=yaw_rad, from_rest=from_rest)
         self.legs = [(leg, None) for leg in legs[1:]]
 
     def layer_route(
-        self, now_s: float, tel: Telemetry, p: np.ndarray, target: np.ndarray, layer: float, yaw_rad: float | None
+        self,
+        now_s: float,
+        tel: Telemetry,
+        p: np.ndarray,
+        target: np.ndarray,
+        layer: float,
+        yaw_rad: float | None,
     ) -> None:
         """Climb (or descend) to ``layer`` where the UAV is, fly there above ``target``, descend to it."""
         v_z = self.config.layer_vertical_speed_mps
@@ -157,8 +170,14 @@ class Navigator:
             legs.append((target, max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - target[2]) / v_z)))
         self.legs_from_rest = True  # legs start from rest: a corner is turned where the UAV is, never cut
         if abs(p[2] - layer) > _SAME_M or not legs:
-            self.fly_to(now_s, tel, np.array([p[0], p[1], layer]), max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - p[2]) / v_z),
-                        yaw_rad=yaw_rad, from_rest=True)
+            self.fly_to(
+                now_s,
+                tel,
+                np.array([p[0], p[1], layer]),
+                max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - p[2]) / v_z),
+                yaw_rad=yaw_rad,
+                from_rest=True,
+            )
             self.legs = legs
         else:
             self.fly_to(now_s, tel, legs[0][0], legs[0][1], yaw_rad=yaw_rad, from_rest=True)
@@ -189,11 +208,18 @@ class Navigator:
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
         d_z = abs(target[2] - start[2])
         return max(
-            MIN_LEG_S, MIN_JERK_PEAK_TO_MEAN_SPEED * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps)
+            MIN_LEG_S,
+            MIN_JERK_PEAK_TO_MEAN_SPEED
+            * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps),
         )
 
     def _start_leg(
-        self, now_s: float, tel: Telemetry, target: np.ndarray, duration_s: float | None, from_rest: bool = False
+        self,
+        now_s: float,
+        tel: Telemetry,
+        target: np.ndarray,
+        duration_s: float | None,
+        from_rest: bool = False,
     ) -> None:
         p = np.asarray(tel.position_m, dtype=float)
         # from rest: the reference turns the corner where the UAV is (a layer route never cuts diagonally)

@@ -133,8 +133,9 @@ def fly_task(
     from masonry.fakes import QueueMissionLink
 
     link = QueueMissionLink([task])
-    uav = build_uav(config, fc=fc, link=link, clock=clock, gripper=gripper, camera=camera, sprayer=sprayer,
-                    clearance=None)
+    uav = build_uav(
+        config, fc=fc, link=link, clock=clock, gripper=gripper, camera=camera, sprayer=sprayer, clearance=None
+    )
     fc.connect()
     try:
         return run_single_task(uav, clock, dt_s=dt_s, advance=advance, timeout_s=timeout_s)

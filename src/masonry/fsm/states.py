@@ -188,8 +188,13 @@ def diagram_machine(kind: str) -> tuple[list[State], list[Transition]]:
     (a brick or adhesion UAV runs both)."""
     states, transitions = MACHINES[kind]
     transit = [
-        {**t, "source": [f"transit_{s}" for s in (t["source"] if isinstance(t["source"], list) else [t["source"]])],
-         "dest": f"transit_{t['dest']}"}
+        {
+            **t,
+            "source": [
+                f"transit_{s}" for s in (t["source"] if isinstance(t["source"], list) else [t["source"]])
+            ],
+            "dest": f"transit_{t['dest']}",
+        }
         for t in TRANSIT_TRANSITIONS
     ]
     return [*states, TRANSIT], [*transitions, *transit]

@@ -27,7 +27,9 @@ class Tool:
 
     def body_target(self, tool_target_m: Sequence[float] | np.ndarray, yaw_rad: float) -> np.ndarray:
         """Body position that puts the tool on ``tool_target_m`` at heading ``yaw_rad`` (level)."""
-        return np.asarray(tool_target_m, dtype=float) - rot_z(yaw_rad) @ np.asarray(self.offset_body_m, dtype=float)
+        return np.asarray(tool_target_m, dtype=float) - rot_z(yaw_rad) @ np.asarray(
+            self.offset_body_m, dtype=float
+        )
 
     def position(self, tel: Telemetry) -> np.ndarray:
         """Where the tool is (world ENU), from the telemetry's pose."""

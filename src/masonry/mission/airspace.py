@@ -95,7 +95,6 @@ def _work_altitude_over_m(top_m: float, size_z_m: float, timing: TaskTiming) -> 
     return z
 
 
-
 #: A UAV reported within this of a layer's altitude is at the layer (hover noise). UAVs come to rest where they
 #: stop before they ask (``masonry.fsm``), so a UAV reported farther from a layer is where it says: a UAV at rest
 #: 0.11 m over layer 0 after stopping a climb, counted at the layer, was 0.11 m outside its climb.
@@ -104,6 +103,7 @@ SNAP_M = 0.05
 #: A UAV within this of its hold point (horizontally) hovers there: the state machines count a leg as done
 #: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
 AT_HOLD_M = 0.1
+
 
 def layer_base_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
     """Altitude of transit layer 0 for ``blueprint``: :func:`work_altitude_m` (the spacing of the layers above it
@@ -171,9 +171,15 @@ class ColumnClearance:
             (None: ``base_m`` throughout).
     """
 
-    def __init__(self, radius_m: float, base_m: float | None = None,
-                 spacing_m: float = DEFAULT_LAYER_SPACING_M, homes: Mapping[str, Vec3] | None = None,
-                 sep_xy_m: float = 1.2, start_base_m: float | None = None) -> None:
+    def __init__(
+        self,
+        radius_m: float,
+        base_m: float | None = None,
+        spacing_m: float = DEFAULT_LAYER_SPACING_M,
+        homes: Mapping[str, Vec3] | None = None,
+        sep_xy_m: float = 1.2,
+        start_base_m: float | None = None,
+    ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
         if not (spacing_m > 0.0 and math.isfinite(spacing_m)):
@@ -192,7 +198,9 @@ class ColumnClearance:
         self.zone_slack_m = max(0.0, (self.radius_m - self.sep_xy_m) / 2.0)
         self.max_layers = 12
         self._uavs: dict[str, UavAirspace] = {}
-        self._homes: dict[str, Vec3] = {u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()}
+        self._homes: dict[str, Vec3] = {
+            u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
+        }
         self._seq = 0  # requests made so far (their order)
         self._version = 0
         self.granted_count = 0
@@ -244,8 +252,11 @@ class ColumnClearance:
     @property
     def layers(self) -> dict[str, int]:
         """UAV -> layer index of its flight in progress (granted, or to its hold point)."""
-        return {uav: u.flight.layer if u.flight is not None else u.hold.layer  # type: ignore[union-attr]
-                for uav, u in self._uavs.items() if u.flight is not None or u.hold is not None}
+        return {
+            uav: u.flight.layer if u.flight is not None else u.hold.layer  # type: ignore[union-attr]
+            for uav, u in self._uavs.items()
+            if u.flight is not None or u.hold is not None
+        }
 
     def phase(self, uav: str) -> Phase:
         """Where ``uav`` is in the transit protocol (a UAV holding nothing is ``PARKED``)."""
@@ -273,15 +284,25 @@ class ColumnClearance:
         names = list(self._uavs)
         out = []
         for i, u in enumerate(names):
-            for w in names[i + 1:]:
-                if any(volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
-                       for p in self._uavs[u].volumes for q in self._uavs[w].volumes):
+            for w in names[i + 1 :]:
+                if any(
+                    volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
+                    for p in self._uavs[u].volumes
+                    for q in self._uavs[w].volumes
+                ):
                     out.append((u, w))
         return out
 
     # -- the protocol -----------------------------------------------------------------------------------------
-    def request(self, uav: str, site_m: Vec3, now_s: float, position_m: Vec3 | None = None,
-                top_m: float | None = None, to_m: Vec3 | None = None) -> Grant:
+    def request(
+        self,
+        uav: str,
+        site_m: Vec3,
+        now_s: float,
+        position_m: Vec3 | None = None,
+        top_m: float | None = None,
+        to_m: Vec3 | None = None,
+    ) -> Grant:
         """``uav`` (now at ``position_m``) sets off for ``site_m``, where it will work up to ``top_m`` (and along
         to ``to_m``: an adhesion UAV sprays from its site to there).
 
@@ -301,7 +322,9 @@ class ColumnClearance:
             # turned back for another site: it keeps the volumes of that flight until it has a new one
             u.flight = None
             u.phase = Phase.PARKED
-        pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+        pos = (
+            None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+        )
         w = u.request
         if w is not None and _same(w.site, site):
             if pos is not None and u.phase is Phase.ASKING and pos != w.position:
@@ -374,8 +397,12 @@ class ColumnClearance:
             return
         x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
         h = u.hold
-        if u.phase is Phase.TO_HOLD and h is not None \
-                and math.hypot(x - h.point_m[0], y - h.point_m[1]) < AT_HOLD_M and abs(z - h.layer_m) < 0.2:
+        if (
+            u.phase is Phase.TO_HOLD
+            and h is not None
+            and math.hypot(x - h.point_m[0], y - h.point_m[1]) < AT_HOLD_M
+            and abs(z - h.layer_m) < 0.2
+        ):
             self._arrive_at_hold(u)  # it hovers at its hold point
             return
         kept = ahead_of(vols, x, y, z)
@@ -426,17 +453,21 @@ class ColumnClearance:
 
     def _waiting(self) -> list[tuple[str, UavAirspace]]:
         """The UAVs with a request, in request order."""
-        return sorted(((n, u) for n, u in self._uavs.items() if u.request is not None),
-                      key=lambda nu: nu[1].request.seq)  # type: ignore[union-attr]
+        return sorted(
+            ((n, u) for n, u in self._uavs.items() if u.request is not None),
+            key=lambda nu: nu[1].request.seq,  # type: ignore[union-attr]
+        )
 
     def _queued_before(self, seq: int) -> list[FlightRequest]:
         return [u.request for _n, u in self._waiting() if u.request is not None and u.request.seq < seq]
 
-    def _flight_volumes(self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None,
-                        to: XY | None = None) -> list[Volume]:
+    def _flight_volumes(
+        self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None, to: XY | None = None
+    ) -> list[Volume]:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
-        return flight_volumes((start[0], start[1]), self._snap(start[2]), self._alt(k), target, top, hold, to,
-                              self.zone_slack_m)
+        return flight_volumes(
+            (start[0], start[1]), self._snap(start[2]), self._alt(k), target, top, hold, to, self.zone_slack_m
+        )
 
     def _evaluate(self, uav: str, u: UavAirspace, now_s: float) -> Grant:
         """Grant ``uav``'s flight if it fits, else a hold flight, else "hover where you are"."""
@@ -446,8 +477,9 @@ class ColumnClearance:
             return u.answer
         u.seen_version = self._version
         earlier = self._queued_before(w.seq)
-        blocked_site = any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m
-                           for e in earlier)
+        blocked_site = any(
+            math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m for e in earlier
+        )
         if not blocked_site:
             if u.phase is Phase.AT_HOLD:
                 # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
@@ -516,8 +548,13 @@ class ColumnClearance:
                     keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
         # and wherever another UAV climbs, hovers or works: a UAV waiting there must be able to leave vertically
         # without passing the hold point (else the two could wait for each other)
-        spans = [(v.a, v.b) for other, o in self._uavs.items() if other != uav
-                 for v in o.volumes if v.kind != "leg"]
+        spans = [
+            (v.a, v.b)
+            for other, o in self._uavs.items()
+            if other != uav
+            for v in o.volumes
+            if v.kind != "leg"
+        ]
         return hold_points(site, keep_out, spans, self.radius_m)
 
     def _hold_flight(self, uav: str, u: UavAirspace) -> Grant | None:

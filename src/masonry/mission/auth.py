@@ -61,8 +61,14 @@ class AuthenticatedTransport:
             check; the counters still have to increase).
     """
 
-    def __init__(self, inner: Transport, key: bytes, *, mission: str = "default",
-                 max_age_s: float | None = DEFAULT_MAX_AGE_S) -> None:
+    def __init__(
+        self,
+        inner: Transport,
+        key: bytes,
+        *,
+        mission: str = "default",
+        max_age_s: float | None = DEFAULT_MAX_AGE_S,
+    ) -> None:
         if len(key) != KEY_BYTES:
             raise InputError(f"a mission key is {KEY_BYTES} bytes, got {len(key)}")
         self._inner = inner
@@ -112,7 +118,9 @@ class AuthenticatedTransport:
     def _drop(self, reason: str, detail: str) -> None:
         self.dropped[reason] += 1
         n = self.dropped[reason]
-        if n == 1 or (n >= 10 and str(n).strip("0") == "1"):  # 1, 10, 100, ...: a flood does not flood the log
+        if n == 1 or (
+            n >= 10 and str(n).strip("0") == "1"
+        ):  # 1, 10, 100, ...: a flood does not flood the log
             log.warning("%s dropped a frame (%s, %d so far): %s", self.name, reason, n, detail)
 
     def _open(self, frame: bytes) -> bytes | None:
@@ -129,8 +137,8 @@ class AuthenticatedTransport:
         if not hmac.compare_digest(mac, self._mac(self.name.encode(), body)):
             self._drop("bad-mac", "wrong key, altered, or meant for another endpoint or mission")
             return None
-        sender = body[5:5 + n].decode("utf-8", "replace")
-        counter = int.from_bytes(body[5 + n:start], "big")
+        sender = body[5 : 5 + n].decode("utf-8", "replace")
+        counter = int.from_bytes(body[5 + n : start], "big")
         payload = body[start:]
         try:
             inner = json.loads(payload).get("sender")
@@ -166,8 +174,10 @@ def write_key_file(path: str | Path, *, force: bool = False) -> Path:
     try:
         fd = os.open(p, flags, 0o600)
     except FileExistsError:
-        raise InputError(f"{p} already exists: pass `force` to replace it (every peer then needs the new key)", options=("force",)) \
-            from None
+        raise InputError(
+            f"{p} already exists: pass `force` to replace it (every peer then needs the new key)",
+            options=("force",),
+        ) from None
     except OSError as exc:
         raise InputError(f"{p}: cannot write the key file: {exc.strerror}") from exc
     try:
@@ -192,8 +202,11 @@ def load_key(path: str | Path) -> bytes:
     if not stat.S_ISREG(st.st_mode):
         raise InputError(f"`key_file` {p}: not a regular file", options=("key_file",))
     if os.name == "posix" and st.st_mode & 0o077:
-        raise InputError(f"`key_file` {p}: readable by group or others (mode {stat.S_IMODE(st.st_mode):04o}); "
-                         f"run chmod 600 {p}", options=("key_file",))
+        raise InputError(
+            f"`key_file` {p}: readable by group or others (mode {stat.S_IMODE(st.st_mode):04o}); "
+            f"run chmod 600 {p}",
+            options=("key_file",),
+        )
     try:
         with p.open("rb") as f:
             raw = f.read(1024)
@@ -205,8 +218,11 @@ def load_key(path: str | Path) -> bytes:
     except (UnicodeDecodeError, ValueError):
         key = b""
     if len(key) != KEY_BYTES or len(text) != 2 * KEY_BYTES:
-        raise InputError(f"`key_file` {p}: a key file holds {2 * KEY_BYTES} hexadecimal digits "
-                         f"(make one with masonry keygen -o FILE)", options=("key_file",))
+        raise InputError(
+            f"`key_file` {p}: a key file holds {2 * KEY_BYTES} hexadecimal digits "
+            f"(make one with masonry keygen -o FILE)",
+            options=("key_file",),
+        )
     return key
 
 
@@ -234,8 +250,11 @@ def require_key_or_loopback(key: bytes | None, insecure: bool, endpoints: Iterab
         return
     for e in endpoints:
         if not is_loopback(e):
-            raise InputError(f"{what} {e} is not loopback: give `key_file` FILE (masonry keygen -o FILE) to "
-                             "authenticate the mission, or `insecure` to run it unauthenticated", options=("key_file", "insecure"))
+            raise InputError(
+                f"{what} {e} is not loopback: give `key_file` FILE (masonry keygen -o FILE) to "
+                "authenticate the mission, or `insecure` to run it unauthenticated",
+                options=("key_file", "insecure"),
+            )
 
 
 def wrap(transport: Transport, key: bytes | None, mission: str) -> Transport:
@@ -243,5 +262,15 @@ def wrap(transport: Transport, key: bytes | None, mission: str) -> Transport:
     return transport if key is None else AuthenticatedTransport(transport, key, mission=mission)
 
 
-__all__ = ["DEFAULT_MAX_AGE_S", "DROP_REASONS", "KEY_BYTES", "AuthenticatedTransport", "generate_key",
-           "is_loopback", "load_key", "require_key_or_loopback", "wrap", "write_key_file"]
+__all__ = [
+    "DEFAULT_MAX_AGE_S",
+    "DROP_REASONS",
+    "KEY_BYTES",
+    "AuthenticatedTransport",
+    "generate_key",
+    "is_loopback",
+    "load_key",
+    "require_key_or_loopback",
+    "wrap",
+    "write_key_file",
+]

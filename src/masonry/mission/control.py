@@ -172,8 +172,9 @@ class MissionControl:
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
-        self.dispatcher = Dispatcher(plan, self.fleet, policy=policy, max_attempts=max_attempts,
-                                     durations_s=durations_s)
+        self.dispatcher = Dispatcher(
+            plan, self.fleet, policy=policy, max_attempts=max_attempts, durations_s=durations_s
+        )
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
@@ -186,8 +187,13 @@ class MissionControl:
         self.ended_at_s: float | None = None
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
-        self.columns = ColumnClearance(column_radius_m, layer_base_m, layer_spacing_m,
-                                       homes={u.name: u.home_m for u in self.fleet}, start_base_m=layer_floor_m)
+        self.columns = ColumnClearance(
+            column_radius_m,
+            layer_base_m,
+            layer_spacing_m,
+            homes={u.name: u.home_m for u in self.fleet},
+            start_base_m=layer_floor_m,
+        )
         self._layer_floor_m = layer_floor_m
         self.timing = timing
         self._raise_layers(t.id for t in plan.tasks if t.done)
@@ -208,8 +214,17 @@ class MissionControl:
         attempts = {k: int(v) for k, v in state.attempts.items()}
         self.dispatcher.restore(list(done), attempts)
         for f in state.failures:
-            self.history.append(Attempt(f.task_id, f.uav, f.attempt, f.start_s if f.start_s is not None
-                                        else f.time_s, f.time_s, "failed", f.reason))
+            self.history.append(
+                Attempt(
+                    f.task_id,
+                    f.uav,
+                    f.attempt,
+                    f.start_s if f.start_s is not None else f.time_s,
+                    f.time_s,
+                    "failed",
+                    f.reason,
+                )
+            )
         for task_id, rec in done.items():
             fields = dict(rec.fields)
             self.history.append(
@@ -266,10 +281,26 @@ class MissionControl:
         self._check_heartbeats(now_s)
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
-                self._send(g.uav, Clearance(MISSION_CONTROL, g.uav, g.site_m, self.columns.release_radius_m, now_s,
-                                            g.granted, g.hold_m, g.layer_m))
-                log.debug("flight to (%.2f, %.2f) %s to %s", g.site_m[0], g.site_m[1],
-                          "granted" if g.granted else "held", g.uav)
+                self._send(
+                    g.uav,
+                    Clearance(
+                        MISSION_CONTROL,
+                        g.uav,
+                        g.site_m,
+                        self.columns.release_radius_m,
+                        now_s,
+                        g.granted,
+                        g.hold_m,
+                        g.layer_m,
+                    ),
+                )
+                log.debug(
+                    "flight to (%.2f, %.2f) %s to %s",
+                    g.site_m[0],
+                    g.site_m[1],
+                    "granted" if g.granted else "held",
+                    g.uav,
+                )
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
@@ -280,8 +311,9 @@ class MissionControl:
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
         if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:
             self._last_heartbeat_s = now_s
-            self._broadcast(Heartbeat(MISSION_CONTROL, now_s, state="running" if self.ended_at_s is None
-                                      else "ended"))
+            self._broadcast(
+                Heartbeat(MISSION_CONTROL, now_s, state="running" if self.ended_at_s is None else "ended")
+            )
 
     def _maybe_start(self, now_s: float) -> None:
         missing = [n for n, u in self.uavs.items() if u.last_heard_s is None and not u.lost]
@@ -319,8 +351,19 @@ class MissionControl:
             if msg.position_m is not None:
                 self.columns.progress(msg.sender, msg.position_m)
             g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
-            self._send(msg.sender, Clearance(MISSION_CONTROL, msg.sender, g.site_m, self.columns.release_radius_m,
-                                             now_s, g.granted, g.hold_m, g.layer_m))
+            self._send(
+                msg.sender,
+                Clearance(
+                    MISSION_CONTROL,
+                    msg.sender,
+                    g.site_m,
+                    self.columns.release_radius_m,
+                    now_s,
+                    g.granted,
+                    g.hold_m,
+                    g.layer_m,
+                ),
+            )
             return
         if isinstance(msg, Result):
             if msg.position_m is not None:
@@ -355,13 +398,19 @@ class MissionControl:
             return
         att = self._running[r.task_id]
         if msg.attempt != att.attempt:
-            self._ignore("wrong-attempt", f"a result for {r.task_id} from {msg.sender} for attempt {msg.attempt}: "
-                         f"the current one is {att.attempt}")
+            self._ignore(
+                "wrong-attempt",
+                f"a result for {r.task_id} from {msg.sender} for attempt {msg.attempt}: "
+                f"the current one is {att.attempt}",
+            )
             return
         least = self.min_durations_s.get(r.task_id)
         if r.status == "done" and least is not None and now_s - att.start_s < self.min_fraction * least:
-            self._ignore("too-short", f"{r.task_id} reported done by {msg.sender} {now_s - att.start_s:.2f} s "
-                         f"after its assignment: it takes at least {least:.1f} s")
+            self._ignore(
+                "too-short",
+                f"{r.task_id} reported done by {msg.sender} {now_s - att.start_s:.2f} s "
+                f"after its assignment: it takes at least {least:.1f} s",
+            )
             return
         del self._running[r.task_id]
         att.end_s = now_s
@@ -427,8 +476,10 @@ class MissionControl:
             self._raise_layers((a.task_id,))
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
-            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s,
-                                           self.wall_digest))
+            self._send(
+                a.uav,
+                Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s, self.wall_digest),
+            )
 
     def _raise_layers(self, task_ids: Iterable[str]) -> None:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
@@ -436,8 +487,13 @@ class MissionControl:
             return
         from masonry.mission.airspace import task_work_altitude_m
 
-        top = max((task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)
-                   for tid in task_ids), default=None)
+        top = max(
+            (
+                task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)
+                for tid in task_ids
+            ),
+            default=None,
+        )
         if top is not None:
             self.columns.raise_base(top)
 

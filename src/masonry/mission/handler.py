@@ -211,8 +211,9 @@ class UavHandler(MissionLink, ClearanceLink):
         self.executions.append(self._current)
         return task
 
-    def request_clearance(self, site_m: Vec3, top_m: float | None = None,
-                          to_m: Vec3 | None = None) -> Clearance | None:
+    def request_clearance(
+        self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
+    ) -> Clearance | None:
         """The UAV sets off for ``site_m``: mission control's answer (layer, column granted or hold point), or None.
 
         The first call for a site sends the request (again every heartbeat period while unanswered); the answer
@@ -239,21 +240,37 @@ class UavHandler(MissionLink, ClearanceLink):
             self.clearance_requests += 1
             self._column_top_m = top_m
             self._column_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
-            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=top_m,
-                                        to_m=self._column_to_m))
+            self._send(
+                ClearanceRequest(
+                    self.name, site, self.now_s, self._where(), top_m=top_m, to_m=self._column_to_m
+                )
+            )
         elif self.now_s - self._column_sent_s >= (
-            0.25 if self._column_answer is not None and self._column_answer.hold_m is None else self.heartbeat_period_s
+            0.25
+            if self._column_answer is not None and self._column_answer.hold_m is None
+            else self.heartbeat_period_s
         ):  # refused for now (another flight in the way): ask again soon
             self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
-            self._send(ClearanceRequest(self.name, site, self.now_s, self._where(), top_m=self._column_top_m,
-                                        to_m=self._column_to_m))
+            self._send(
+                ClearanceRequest(
+                    self.name,
+                    site,
+                    self.now_s,
+                    self._where(),
+                    top_m=self._column_top_m,
+                    to_m=self._column_to_m,
+                )
+            )
         self.pump()  # in-process, the answer may already be here
         return self._column_answer
 
     def end_transit(self, site_m: Vec3) -> None:
         """The flight to ``site_m`` has come down there: its layer is free."""
-        self._send(ClearanceRequest(self.name, (float(site_m[0]), float(site_m[1]), float(site_m[2])), self.now_s,
-                                    arrived=True))
+        self._send(
+            ClearanceRequest(
+                self.name, (float(site_m[0]), float(site_m[1]), float(site_m[2])), self.now_s, arrived=True
+            )
+        )
 
     @property
     def columns(self) -> tuple[Vec3, ...]:
@@ -277,7 +294,7 @@ class UavHandler(MissionLink, ClearanceLink):
         if not self._columns_left or self._position is None:
             return
         p = self._position()
-        r2 = self._column_radius_m ** 2
+        r2 = self._column_radius_m**2
         keep = []
         for col in self._columns_left:
             if (p[0] - col[0]) ** 2 + (p[1] - col[1]) ** 2 >= r2:
@@ -317,8 +334,15 @@ class UavHandler(MissionLink, ClearanceLink):
             self._last_sent_hb_s = now_s
             cur = self._current
             state = str(getattr(self.model, "state", "")) if self.model is not None else ""
-            self._send(Heartbeat(self.name, now_s, state=state, task_id=cur.task_id if cur else None,
-                                 position_m=self._where()))
+            self._send(
+                Heartbeat(
+                    self.name,
+                    now_s,
+                    state=state,
+                    task_id=cur.task_id if cur else None,
+                    position_m=self._where(),
+                )
+            )
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
         model = self.model
@@ -348,8 +372,12 @@ class UavHandler(MissionLink, ClearanceLink):
             self.mission_ended = False
         elif isinstance(msg, Clearance):
             col = self._column
-            if msg.uav == self.name and col is not None and abs(col[0] - msg.site_m[0]) < 1e-3 \
-                    and abs(col[1] - msg.site_m[1]) < 1e-3:
+            if (
+                msg.uav == self.name
+                and col is not None
+                and abs(col[0] - msg.site_m[0]) < 1e-3
+                and abs(col[1] - msg.site_m[1]) < 1e-3
+            ):
                 self._column_radius_m = msg.radius_m
                 if msg.granted or not self._column_granted:
                     self._column_answer = msg
@@ -362,11 +390,15 @@ class UavHandler(MissionLink, ClearanceLink):
         """Why this assignment is not one of this UAV's blueprint's tasks for its role (None: it is)."""
         task = msg.task
         if self._wall_digest is not None and msg.wall != self._wall_digest:
-            return (f"task {task.id} is for the wall {msg.wall or '(none given)'}, this UAV's blueprint is "
-                    f"{self._wall_digest}")
+            return (
+                f"task {task.id} is for the wall {msg.wall or '(none given)'}, this UAV's blueprint is "
+                f"{self._wall_digest}"
+            )
         if self._role is not None and task.kind != self._role:
-            return f"task {task.id} is {task.kind} work, this UAV is {'an' if self._role[:1] == 'a' else 'a'} " \
-                   f"{self._role} UAV"
+            return (
+                f"task {task.id} is {task.kind} work, this UAV is {'an' if self._role[:1] == 'a' else 'a'} "
+                f"{self._role} UAV"
+            )
         if self._tasks is not None:
             mine = self._tasks.get(task.id)
             if mine is None:
@@ -382,11 +414,21 @@ class UavHandler(MissionLink, ClearanceLink):
             self.refused.append(why)
             log.warning("%s refused an assignment: %s", self.name, why)
         tid = msg.task.id
-        if (self._current is not None and self._current.task_id == tid) or any(t.id == tid for t, _ in self._queue):
+        if (self._current is not None and self._current.task_id == tid) or any(
+            t.id == tid for t, _ in self._queue
+        ):
             return  # the real assignment of that task is here: a failed result would cancel it
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
-        self._send(Result(self.name, TaskResult(msg.task.id, "failed", 0.0, reason=f"refused: {why}"), self.now_s,
-                          self._where(), state=state, attempt=msg.attempt))
+        self._send(
+            Result(
+                self.name,
+                TaskResult(msg.task.id, "failed", 0.0, reason=f"refused: {why}"),
+                self.now_s,
+                self._where(),
+                state=state,
+                attempt=msg.attempt,
+            )
+        )
 
     def _where(self) -> Vec3 | None:
         if self._position is None:

@@ -205,13 +205,21 @@ class Journal:
         # every record is written as it happens: a journal that cannot be written is refused up front (the
         # mode bits count even for root, who could write anyway: a file made read-only is meant to stay so)
         if self.path.exists() and (not os.access(self.path, os.W_OK) or not self.path.stat().st_mode & 0o222):
-            raise JournalUnusable(f"{where}: is read-only (the mission cannot be recorded): make it writable "
-                                  "or give another `journal` file", options=("journal",))
+            raise JournalUnusable(
+                f"{where}: is read-only (the mission cannot be recorded): make it writable "
+                "or give another `journal` file",
+                options=("journal",),
+            )
         if not os.access(parent, os.W_OK | os.X_OK):
-            raise JournalUnusable(f"{where}: the directory {parent} is read-only (SQLite writes its WAL file "
-                                  "beside the journal): give a `journal` file in a writable directory", options=("journal",))
+            raise JournalUnusable(
+                f"{where}: the directory {parent} is read-only (SQLite writes its WAL file "
+                "beside the journal): give a `journal` file in a writable directory",
+                options=("journal",),
+            )
         try:
-            conn = sqlite3.connect(str(self.path), isolation_level=None, check_same_thread=False, timeout=10.0)
+            conn = sqlite3.connect(
+                str(self.path), isolation_level=None, check_same_thread=False, timeout=10.0
+            )
         except sqlite3.Error as exc:
             raise JournalUnusable(f"{where}: cannot open: {_reason(exc)}") from exc
         try:
@@ -251,7 +259,8 @@ class Journal:
             )
         elif not tables >= _TABLES:
             raise JournalUnusable(
-                f"{where}: damaged journal (tables missing: {', '.join(sorted(_TABLES - tables))})")
+                f"{where}: damaged journal (tables missing: {', '.join(sorted(_TABLES - tables))})"
+            )
         try:
             mode = conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
             conn.execute(f"PRAGMA synchronous = {self.sync.upper()}")
@@ -293,13 +302,17 @@ class Journal:
         data: Mapping[str, Any],
     ) -> None:
         if isinstance(time_s, bool) or not isinstance(time_s, (int, float)) or not math.isfinite(time_s):
-            raise JournalError(f"journal {self.path}: {kind} record: time_s must be a finite number, got {time_s!r}")
+            raise JournalError(
+                f"journal {self.path}: {kind} record: time_s must be a finite number, got {time_s!r}"
+            )
         if task_id is not None and (not isinstance(task_id, str) or not task_id):
             raise JournalError(f"journal {self.path}: {kind} record: bad task id {task_id!r}")
         if not isinstance(uav, str) or not uav:
             raise JournalError(f"journal {self.path}: {kind} record: bad UAV name {uav!r}")
         if attempt is not None and (isinstance(attempt, bool) or not isinstance(attempt, int) or attempt < 1):
-            raise JournalError(f"journal {self.path}: {kind} record: attempt must be an integer >= 1, got {attempt!r}")
+            raise JournalError(
+                f"journal {self.path}: {kind} record: attempt must be an integer >= 1, got {attempt!r}"
+            )
         try:
             text = json.dumps(dict(data), default=_json_default, sort_keys=True)
         except (TypeError, ValueError) as exc:
@@ -314,7 +327,9 @@ class Journal:
                     (kind, float(time_s), task_id, uav, attempt, text),
                 )
             except sqlite3.Error as exc:
-                raise JournalError(f"journal {self.path}: cannot write a {kind} record: {_reason(exc)}") from exc
+                raise JournalError(
+                    f"journal {self.path}: cannot write a {kind} record: {_reason(exc)}"
+                ) from exc
 
     def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int, **fields: Any) -> None:
         """Task ``task_id`` was given to ``uav`` at mission time ``time_s`` as attempt ``attempt`` (from 1)."""
@@ -402,7 +417,9 @@ def _read_only_replay(p: Path) -> JournalState:
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         if app_id != APPLICATION_ID or version != SCHEMA_VERSION:
             raise JournalUnusable(f"{where}: not a masonry journal of schema version {SCHEMA_VERSION}")
-        rows = conn.execute("SELECT seq, kind, time_s, task_id, uav, attempt, data FROM records ORDER BY seq").fetchall()
+        rows = conn.execute(
+            "SELECT seq, kind, time_s, task_id, uav, attempt, data FROM records ORDER BY seq"
+        ).fetchall()
         meta_rows = conn.execute("SELECT key, value FROM meta ORDER BY key").fetchall()
     except sqlite3.Error as exc:
         raise JournalUnusable(f"{where}: cannot read: {_reason(exc)}") from exc
@@ -441,12 +458,18 @@ def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ..
             start_s = start[1] if start is not None and start[0] == uav else None
             number = start[2] if start is not None and start[0] == uav else attempts.get(task_id, 0) + 1
             if kind == "complete" or not str(data.get("reason", "")).startswith(BATTERY_LOW_REASON):
-                attempts[task_id] = attempts.get(task_id, 0) + 1  # (the UAV's battery is not the task's fault)
+                attempts[task_id] = (
+                    attempts.get(task_id, 0) + 1
+                )  # (the UAV's battery is not the task's fault)
             if kind == "complete":
                 if task_id not in done:
-                    done[task_id] = DoneRecord(task_id, uav, rec.time_s, start_s, number, MappingProxyType(data))
+                    done[task_id] = DoneRecord(
+                        task_id, uav, rec.time_s, start_s, number, MappingProxyType(data)
+                    )
             else:
-                failures.append(FailureRecord(task_id, uav, rec.time_s, start_s, number, str(data.get("reason", ""))))
+                failures.append(
+                    FailureRecord(task_id, uav, rec.time_s, start_s, number, str(data.get("reason", "")))
+                )
         else:  # uav_lost: its running task is released, not counted
             if uav not in lost:
                 lost.append(uav)
@@ -527,8 +550,11 @@ def open_mission_journal(
         state = journal.replay() if existed else None
         if state is not None and not resume:
             if not state.empty:
-                raise JournalUnusable(f"{where} already holds a mission: pass `resume` to continue it, "
-                                      "or give another `journal` file", options=("resume", "journal"))
+                raise JournalUnusable(
+                    f"{where} already holds a mission: pass `resume` to continue it, "
+                    "or give another `journal` file",
+                    options=("resume", "journal"),
+                )
             state = None
         if state is not None:
             _check_fingerprint(where, state, wall_digest, fleet_digest, fleet_names, task_ids, warn)
@@ -555,7 +581,9 @@ def _check_fingerprint(
     if stored_wall is not None and stored_wall != wall_digest:
         raise JournalUnusable(
             f"{where} was written for another wall (wall digest {stored_wall}, this blueprint's is "
-            f"{wall_digest}): resume it with the blueprint it was written for, or give another `journal` file", options=("journal",))
+            f"{wall_digest}): resume it with the blueprint it was written for, or give another `journal` file",
+            options=("journal",),
+        )
     elif stored_fleet is not None and stored_fleet != fleet_digest:
         before = state.meta.get("fleet")
         then = f"{', '.join(map(str, before))}, " if isinstance(before, list) and before else ""
@@ -563,7 +591,9 @@ def _check_fingerprint(
         raise JournalUnusable(
             f"{where} was written for another fleet ({then}digest {stored_fleet}; this one: {now}digest "
             f"{fleet_digest}): resume with the same fleet (names, roles, homes; in sim the same `brick_uavs` "
-            "and `adhesion_uavs`)", options=("brick_uavs", "adhesion_uavs"))
+            "and `adhesion_uavs`)",
+            options=("brick_uavs", "adhesion_uavs"),
+        )
     if task_ids is not None:
         unknown = sorted(state.task_ids - set(task_ids))
         if unknown:
@@ -572,13 +602,16 @@ def _check_fingerprint(
     if fleet_names:
         strangers = sorted(state.uav_names - set(fleet_names))
         if strangers:
-            raise JournalUnusable(f"{where} names UAVs that are not in this mission's fleet: "
-                                  f"{', '.join(strangers[:5])}")
+            raise JournalUnusable(
+                f"{where} names UAVs that are not in this mission's fleet: {', '.join(strangers[:5])}"
+            )
     if stored_wall is None and not state.empty:
         # written before journals had a fingerprint: its tasks and UAVs are this mission's (checked above), but
         # a brick moved or a clearance changed cannot be seen; say so and resume (docs/mission.md says why)
-        message = (f"{where} has no fingerprint of its wall and fleet (written by an earlier masonry): resuming "
-                   "it checked only by task ids and UAV names; it records this blueprint's fingerprint from now on")
+        message = (
+            f"{where} has no fingerprint of its wall and fleet (written by an earlier masonry): resuming "
+            "it checked only by task ids and UAV names; it records this blueprint's fingerprint from now on"
+        )
         if warn is not None:
             warn(message)
         else:

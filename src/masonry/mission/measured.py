@@ -42,8 +42,10 @@ class MeasuredJournal:
         self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
 
     def distances_m(self) -> dict[str, float]:
-        return {n: self.before_distances_m.get(n, 0.0) + float(self.world.distance_flown_m(n))
-                for n in self.world.uavs}
+        return {
+            n: self.before_distances_m.get(n, 0.0) + float(self.world.distance_flown_m(n))
+            for n in self.world.uavs
+        }
 
     def busy_s(self) -> dict[str, float]:
         """Time each UAV spent on tasks, as its handler executed them (a running task counts until now)."""
@@ -52,18 +54,25 @@ class MeasuredJournal:
         for name, h in self.handlers.items():
             end_open = self.dead.get(name, now)
             out[name] = out.get(name, 0.0) + sum(
-                (e.end_s if e.end_s is not None else end_open) - e.start_s for e in h.executions)
+                (e.end_s if e.end_s is not None else end_open) - e.start_s for e in h.executions
+            )
         return out
 
     def min_separation_m(self) -> float | None:
-        seps = [s for s in (self.before_min_separation_m, self.world.min_separation_m)
-                if s is not None and math.isfinite(s)]
+        seps = [
+            s
+            for s in (self.before_min_separation_m, self.world.min_separation_m)
+            if s is not None and math.isfinite(s)
+        ]
         return float(min(seps)) if seps else None
 
     def measurements(self, task_id: str | None = None) -> dict[str, Any]:
         """What the world measured so far (and, for a brick task, its true placement error)."""
-        out: dict[str, Any] = {"distances_m": self.distances_m(), "busy_s": self.busy_s(),
-                               "min_separation_m": self.min_separation_m()}
+        out: dict[str, Any] = {
+            "distances_m": self.distances_m(),
+            "busy_s": self.busy_s(),
+            "min_separation_m": self.min_separation_m(),
+        }
         if task_id in self._bricks:
             err = self.world.placement_error_m(self._bricks[task_id])
             if err is not None:
@@ -133,8 +142,11 @@ def simulated_report(
             intervals.append((name, e.task_id, e.start_s, e.end_s if e.end_s is not None else dead.get(name)))
     if resumed_from is not None:
         # the attempts the journal holds (done and failed) were flown before the resume: they count as then
-        intervals.extend((a.uav, a.task_id, a.start_s, a.end_s) for a in mc.history
-                         if a.end_s is not None and a.end_s <= resumed_from and a.status in ("done", "failed"))
+        intervals.extend(
+            (a.uav, a.task_id, a.start_s, a.end_s)
+            for a in mc.history
+            if a.end_s is not None and a.end_s <= resumed_from and a.status in ("done", "failed")
+        )
     done = {a.task_id for a in mc.history if a.status == "done"}
     placement: dict[str, float] = {}
     for t in the_plan.tasks:
@@ -147,12 +159,22 @@ def simulated_report(
     sep = measured.min_separation_m()
     distances = measured.distances_m()
     return control_report(
-        mc, the_plan, policy=policy, seed=seed, intervals=intervals, busy_s=measured.busy_s(),
+        mc,
+        the_plan,
+        policy=policy,
+        seed=seed,
+        intervals=intervals,
+        busy_s=measured.busy_s(),
         distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
-        placement_error_m=placement, min_separation_m=sep, now_s=now,
-        durations_s=minimum_s, work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
+        placement_error_m=placement,
+        min_separation_m=sep,
+        now_s=now,
+        durations_s=minimum_s,
+        work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
-        sim_time_s=sim_time_s, wall_time_s=wall_time_s, messages=messages,
+        sim_time_s=sim_time_s,
+        wall_time_s=wall_time_s,
+        messages=messages,
     )
 
 

@@ -176,16 +176,33 @@ def task_to_dict(task: Task) -> dict[str, Any]:
 
 def encode(message: Message) -> bytes:
     """Serialise one message to its JSON wire form (UTF-8)."""
-    body: dict[str, Any] = {"v": PROTOCOL_VERSION, "type": _TYPE_NAMES[type(message)], "sender": message.sender}
+    body: dict[str, Any] = {
+        "v": PROTOCOL_VERSION,
+        "type": _TYPE_NAMES[type(message)],
+        "sender": message.sender,
+    }
     if isinstance(message, Heartbeat):
-        body.update(time_s=message.time_s, state=message.state, task_id=message.task_id,
-                    position_m=_vec(message.position_m))
+        body.update(
+            time_s=message.time_s,
+            state=message.state,
+            task_id=message.task_id,
+            position_m=_vec(message.position_m),
+        )
     elif isinstance(message, Assign):
-        body.update(uav=message.uav, task=task_to_dict(message.task), attempt=message.attempt,
-                    time_s=message.time_s, wall=message.wall)
+        body.update(
+            uav=message.uav,
+            task=task_to_dict(message.task),
+            attempt=message.attempt,
+            time_s=message.time_s,
+            wall=message.wall,
+        )
     elif isinstance(message, Progress):
-        body.update(task_id=message.task_id, state=message.state, time_s=message.time_s,
-                    position_m=_vec(message.position_m))
+        body.update(
+            task_id=message.task_id,
+            state=message.state,
+            time_s=message.time_s,
+            position_m=_vec(message.position_m),
+        )
     elif isinstance(message, Result):
         r = message.result
         body.update(
@@ -203,13 +220,25 @@ def encode(message: Message) -> bytes:
             },
         )
     elif isinstance(message, ClearanceRequest):
-        body.update(site_m=_vec(message.site_m), time_s=message.time_s, position_m=_vec(message.position_m),
-                    release=message.release, arrived=message.arrived, top_m=message.top_m,
-                    to_m=_vec(message.to_m))
+        body.update(
+            site_m=_vec(message.site_m),
+            time_s=message.time_s,
+            position_m=_vec(message.position_m),
+            release=message.release,
+            arrived=message.arrived,
+            top_m=message.top_m,
+            to_m=_vec(message.to_m),
+        )
     elif isinstance(message, Clearance):
-        body.update(uav=message.uav, site_m=_vec(message.site_m), radius_m=message.radius_m,
-                    time_s=message.time_s, granted=message.granted, hold_m=_vec(message.hold_m),
-                    layer_m=message.layer_m)
+        body.update(
+            uav=message.uav,
+            site_m=_vec(message.site_m),
+            radius_m=message.radius_m,
+            time_s=message.time_s,
+            granted=message.granted,
+            hold_m=_vec(message.hold_m),
+            layer_m=message.layer_m,
+        )
     else:
         body.update(time_s=message.time_s, completed=message.completed)
     return _ENCODER.encode(body).encode()
@@ -361,8 +390,9 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         p = (float(x), float(y), float(z))
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
-    hb.__dict__.update(sender=sender, time_s=float(time_s), state=str(data.get("state") or ""), task_id=task_id,
-                       position_m=p)
+    hb.__dict__.update(
+        sender=sender, time_s=float(time_s), state=str(data.get("state") or ""), task_id=task_id, position_m=p
+    )
     return hb
 
 
@@ -420,8 +450,13 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message: 
     if kind == "heartbeat":
         if sender != MISSION_CONTROL:
             check_uav(sender, "sender")
-        return Heartbeat(sender, f.num("time_s"), state=str(data.get("state") or ""),
-                         task_id=f.str_("task_id", optional=True), position_m=f.vec("position_m", optional=True))
+        return Heartbeat(
+            sender,
+            f.num("time_s"),
+            state=str(data.get("state") or ""),
+            task_id=f.str_("task_id", optional=True),
+            position_m=f.vec("position_m", optional=True),
+        )
     if kind in ("assign", "mission-end", "clearance") and sender != MISSION_CONTROL:
         raise ProtocolError(f"{kind} message: only {MISSION_CONTROL!r} may send it, not {sender!r}")
     if kind == "assign":
@@ -436,8 +471,9 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message: 
         return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"), wall)
     if kind == "progress":
         check_uav(sender, "sender")
-        return Progress(sender, f.str_("task_id"), f.str_("state"), f.num("time_s"),
-                        f.vec("position_m", optional=True))
+        return Progress(
+            sender, f.str_("task_id"), f.str_("state"), f.num("time_s"), f.vec("position_m", optional=True)
+        )
     if kind == "result":
         check_uav(sender, "sender")
         r = _Fields(f.obj("result"), "result result")
@@ -455,21 +491,42 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message: 
         attempt = f.int_("attempt")
         if attempt < 0:
             raise f.fail("attempt", f"must be >= 0, got {attempt}")
-        return Result(sender, result, f.num("time_s"), f.vec("position_m", optional=True),
-                      state=str(data.get("state") or ""), attempt=attempt)
+        return Result(
+            sender,
+            result,
+            f.num("time_s"),
+            f.vec("position_m", optional=True),
+            state=str(data.get("state") or ""),
+            attempt=attempt,
+        )
     if kind == "mission-end":
         return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
     if kind == "clearance-request":
         check_uav(sender, "sender")
-        return ClearanceRequest(sender, f.vec("site_m"), f.num("time_s"), f.vec("position_m", optional=True),
-                                f.bool_("release"), f.bool_("arrived"), f.num("top_m", optional=True),
-                                f.vec("to_m", optional=True))
+        return ClearanceRequest(
+            sender,
+            f.vec("site_m"),
+            f.num("time_s"),
+            f.vec("position_m", optional=True),
+            f.bool_("release"),
+            f.bool_("arrived"),
+            f.num("top_m", optional=True),
+            f.vec("to_m", optional=True),
+        )
     if kind == "clearance":
         uav = f.str_("uav")
         check_uav(uav, "uav")
         radius = f.num("radius_m")
         if radius < 0.0:
             raise f.fail("radius_m", f"must be >= 0, got {radius}")
-        return Clearance(sender, uav, f.vec("site_m"), radius, f.num("time_s"), f.bool_("granted"),
-                         f.vec("hold_m", optional=True), f.num("layer_m", optional=True))
+        return Clearance(
+            sender,
+            uav,
+            f.vec("site_m"),
+            radius,
+            f.num("time_s"),
+            f.bool_("granted"),
+            f.vec("hold_m", optional=True),
+            f.num("layer_m", optional=True),
+        )
     raise ProtocolError(f"unknown message type {kind!r}")

@@ -57,8 +57,10 @@ def _key_hint(transport: Any, handler: UavHandler) -> str:
     """Why mission control may be unheard although it speaks: the two sides' keys differ (docs/security.md)."""
     dropped = getattr(transport, "dropped", None)
     if dropped:
-        return (f" ({sum(dropped.values())} frames failed authentication: is `key_file` the same file as mission "
-                "control's?)")
+        return (
+            f" ({sum(dropped.values())} frames failed authentication: is `key_file` the same file as mission "
+            "control's?)"
+        )
     if dropped is None and handler.rejected:
         return f" ({handler.rejected} messages unreadable: does mission control use `key_file`?)"
     return ""
@@ -126,7 +128,9 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     from masonry.planner import plan
 
     if not (time_scale > 0 and dt_s > 0):
-        raise InputError(f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt"))
+        raise InputError(
+            f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt")
+        )
     if adapters is None:
         from masonry.sim import Faults, World
 
@@ -139,7 +143,9 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     clock: Any = ports.clock
     advance = ports.advance
     tasks = plan(blueprint).tasks
-    zenoh = ZenohTransport(spec.name, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config)
+    zenoh = ZenohTransport(
+        spec.name, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config
+    )
     transport = wrap(zenoh, key, mission_name)
     zenoh.connect()
 
@@ -150,17 +156,28 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         while not handler.pump() and time.monotonic() < deadline:
             time.sleep(0.002)
 
-    handler = UavHandler(spec.name, transport, position=lambda: fc.telemetry().position_m,
-                         heartbeat_period_s=heartbeat_period_s, heartbeat_timeout_s=heartbeat_timeout_s,
-                         after_result=await_answer, tasks=tasks, role=spec.role,
-                         wall_digest=wall_digest(blueprint))
+    handler = UavHandler(
+        spec.name,
+        transport,
+        position=lambda: fc.telemetry().position_m,
+        heartbeat_period_s=heartbeat_period_s,
+        heartbeat_timeout_s=heartbeat_timeout_s,
+        after_result=await_answer,
+        tasks=tasks,
+        role=spec.role,
+        wall_digest=wall_digest(blueprint),
+    )
     from masonry.mission.airspace import transit_layers_m
 
     # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
     # fleet, the same in every process) is for when mission control is silent (docs/safety.md)
-    config = UavConfig.from_spec(spec, cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
-                                 lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
-                                 **dict(uav_settings or {}))
+    config = UavConfig.from_spec(
+        spec,
+        cruise_altitude_m=blueprint.cruise_altitude_m,
+        markers=blueprint.markers,
+        lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
+        **dict(uav_settings or {}),
+    )
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
     wall0 = time.monotonic()
@@ -187,8 +204,11 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
             if heard_s is None:
                 if time.monotonic() - wall0 > wait_s:
                     hint = _key_hint(transport, handler)
-                    raise LinkLost(f"{spec.name}: no word from mission control at {', '.join(connect)} "
-                                   f"within {wait_s:g} s{hint}", options=("key_file",) if hint else ())
+                    raise LinkLost(
+                        f"{spec.name}: no word from mission control at {', '.join(connect)} "
+                        f"within {wait_s:g} s{hint}",
+                        options=("key_file",) if hint else (),
+                    )
             elif model.finished and time.monotonic() - heard_wall > wait_s:
                 break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
             if now - t0 >= max_time_s:
@@ -198,5 +218,12 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         fc.close()
         transport.close()
     dropped = dict(transport.dropped) if isinstance(transport, AuthenticatedTransport) else {}
-    return RemoteRun(tuple(handler.executions), handler.mission_ended, handler.mission_completed, model.state,
-                     clock.now_s() - t0, tuple(handler.refused), dropped)
+    return RemoteRun(
+        tuple(handler.executions),
+        handler.mission_ended,
+        handler.mission_completed,
+        model.state,
+        clock.now_s() - t0,
+        tuple(handler.refused),
+        dropped,
+    )

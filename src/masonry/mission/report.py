@@ -30,8 +30,13 @@ class UavReport:
     status: str  # "ok", "lost" (silent past the heartbeat timeout) or "out of service" (it reported so)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "role": self.role, "busy_s": _r(self.busy_s, 2),
-                "distance_m": _r(self.distance_m, 2), "status": self.status}
+        return {
+            "name": self.name,
+            "role": self.role,
+            "busy_s": _r(self.busy_s, 2),
+            "distance_m": _r(self.distance_m, 2),
+            "status": self.status,
+        }
 
 
 @dataclass(frozen=True)
@@ -47,8 +52,14 @@ class TaskReport:
     kind: str = "brick"
 
     def to_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "uav": self.uav, "start_s": _r(self.start_s, 2), "end_s": _r(self.end_s, 2),
-                "status": self.status, "attempts": self.attempts}
+        return {
+            "id": self.id,
+            "uav": self.uav,
+            "start_s": _r(self.start_s, 2),
+            "end_s": _r(self.end_s, 2),
+            "status": self.status,
+            "attempts": self.attempts,
+        }
 
 
 @dataclass(frozen=True)
@@ -131,20 +142,28 @@ class MissionReport:
         done = sum(1 for t in self.tasks if t.status == "done")
         ratio = self.makespan_s / self.lower_bound_s if self.lower_bound_s > 0 else float("nan")
         lines = [
-            (f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} task{'' if len(self.tasks) == 1 else 's'}, "
-            f"policy {self.policy}, seed {self.seed}"),
+            (
+                f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} task{'' if len(self.tasks) == 1 else 's'}, "
+                f"policy {self.policy}, seed {self.seed}"
+            ),
             f"makespan {self.makespan_s:.1f} s (lower bound {self.lower_bound_s:.1f} s, ratio {ratio:.2f})",
         ]
         if self.resumed_from_s is not None:
             lines.append(f"resumed from the journal at {self.resumed_from_s:.1f} s")
         for u in self.uavs:
-            lines.append(f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}")
+            lines.append(
+                f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}"
+            )
         errs = list(self.placement_error_m.values())
         if errs:
-            lines.append(f"placement error: mean {sum(errs) / len(errs) * 100:.1f} cm, max {max(errs) * 100:.1f} cm")
+            lines.append(
+                f"placement error: mean {sum(errs) / len(errs) * 100:.1f} cm, max {max(errs) * 100:.1f} cm"
+            )
         sep = "n/a" if self.min_separation_m is None else f"{self.min_separation_m:.2f} m"
-        lines.append(f"min separation {sep}; conflict violations {self.conflict_violations}, "
-                     f"dependency violations {self.dependency_violations}")
+        lines.append(
+            f"min separation {sep}; conflict violations {self.conflict_violations}, "
+            f"dependency violations {self.dependency_violations}"
+        )
         failures = sum(1 for a in self.attempts if a.status == "failed")
         if failures:
             lines.append(f"failed attempts: {failures}")
@@ -152,8 +171,10 @@ class MissionReport:
         if not self.completed:
             lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
         if self.wall_time_s > 0:
-            lines.append(f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
-                         f"(x{self.real_time_factor:.0f} real time)")
+            lines.append(
+                f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
+                f"(x{self.real_time_factor:.0f} real time)"
+            )
         return "\n".join(lines)
 
 
@@ -272,18 +293,27 @@ def control_report(
             tasks.append(TaskReport(t.id, a.uav, a.start_s, a.end_s, "done", n, t.kind))
             continue
         last = tries[-1] if tries else None
-        status = "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
+        status = (
+            "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
+        )
         stuck.append(t.id)
         tasks.append(TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind))
     # the mission starts with its first assignment (mission control may have waited for its fleet before)
     start = min((a.start_s for a in attempts), default=0.0)
     makespan = max((a.end_s - start for a in done_att.values() if a.end_s is not None), default=0.0)
-    durations = dict(durations_s) if durations_s is not None else {
-        tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
+    durations = (
+        dict(durations_s)
+        if durations_s is not None
+        else {tid: (a.end_s or a.start_s) - a.start_s for tid, a in done_att.items()}
+    )
     # tasks that never completed (a stuck mission) weigh nothing in a bound from measured durations
     todo_ids = [t.id for t in plan.tasks if not t.done]
-    bound = lower_bound_s(plan, mc.fleet, {tid: durations.get(tid, 0.0) for tid in todo_ids},
-                          work_s=None if work_s is None else {tid: work_s.get(tid, 0.0) for tid in todo_ids})
+    bound = lower_bound_s(
+        plan,
+        mc.fleet,
+        {tid: durations.get(tid, 0.0) for tid in todo_ids},
+        work_s=None if work_s is None else {tid: work_s.get(tid, 0.0) for tid in todo_ids},
+    )
     if intervals is None:
         intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
     conflicts, deps = count_violations(plan, [(tid, s, e) for _, tid, s, e in intervals])
@@ -293,14 +323,21 @@ def control_report(
     if busy_s is not None:
         busy = dict(busy_s)
     uavs = tuple(
-        UavReport(spec.name, spec.role, busy.get(spec.name, 0.0),
-                  float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
-                  mc.uavs[spec.name].status)
+        UavReport(
+            spec.name,
+            spec.role,
+            busy.get(spec.name, 0.0),
+            float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
+            mc.uavs[spec.name].status,
+        )
         for spec in mc.fleet
     )
     if placement_error_m is None:
-        placement_error_m = {a.task_id: a.placement_error_m for a in mc.history
-                              if a.status == "done" and a.placement_error_m is not None}
+        placement_error_m = {
+            a.task_id: a.placement_error_m
+            for a in mc.history
+            if a.status == "done" and a.placement_error_m is not None
+        }
     ordered = {t.id: placement_error_m[t.id] for t in plan.tasks if t.id in placement_error_m}
     return MissionReport(
         completed=not stuck,

@@ -55,7 +55,9 @@ CONTROL_PERIOD_S = DEFAULT_TIMING.control_period_s
 ProgressFn = Callable[[int, int, float], None]
 
 
-def fleet_for(blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None) -> tuple[UavSpec, ...]:
+def fleet_for(
+    blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None
+) -> tuple[UavSpec, ...]:
     """The blueprint's fleet, or one with ``brick_uavs`` / ``adhesion_uavs`` UAVs of each role.
 
     UAVs the blueprint names are kept (first ones of their role); extra ones are named ``brick-N`` /
@@ -111,7 +113,9 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
 PRIORITY_QUANTUM_S = 5.0
 
 
-def priority_durations_s(durations_s: Mapping[str, float], quantum_s: float = PRIORITY_QUANTUM_S) -> dict[str, float]:
+def priority_durations_s(
+    durations_s: Mapping[str, float], quantum_s: float = PRIORITY_QUANTUM_S
+) -> dict[str, float]:
     """Expected durations rounded to ``quantum_s`` for the dispatcher's critical-path priority.
 
     The estimates are a model, good to several seconds; comparing chains that differ by less than that
@@ -158,15 +162,28 @@ class _GroundCrew:
         return True
 
 
-def _build_machine(spec: UavSpec, ports: UavPorts, blueprint: Blueprint, handler: UavHandler, clock: Clock,
-                   lateral_altitude_m: float | None = None, template: UavConfig | None = None) -> Any:
+def _build_machine(
+    spec: UavSpec,
+    ports: UavPorts,
+    blueprint: Blueprint,
+    handler: UavHandler,
+    clock: Clock,
+    lateral_altitude_m: float | None = None,
+    template: UavConfig | None = None,
+) -> Any:
     from masonry.fsm import AdhesionUav, BrickUav, UavConfig
 
     # the template's tuning (default: UavConfig's), with this UAV's identity, home, layer and the blueprint's
     base = template if template is not None else UavConfig(spec.name, spec.role, spec.home_m)
-    config = dataclasses.replace(base, name=spec.name, role=spec.role, home_m=spec.home_m,
-                                 cruise_altitude_m=blueprint.cruise_altitude_m, markers=blueprint.markers,
-                                 lateral_altitude_m=lateral_altitude_m)
+    config = dataclasses.replace(
+        base,
+        name=spec.name,
+        role=spec.role,
+        home_m=spec.home_m,
+        cruise_altitude_m=blueprint.cruise_altitude_m,
+        markers=blueprint.markers,
+        lateral_altitude_m=lateral_altitude_m,
+    )
     if spec.role == "brick":
         return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
     return AdhesionUav(config, ports.fc, ports.sprayer, handler, clock, clearance=handler)
@@ -198,10 +215,24 @@ def simulate(
     The arguments, and what it raises, are those of :meth:`SimulatedMission.from_blueprint`.
     """
     return SimulatedMission.from_blueprint(
-        blueprint, brick_uavs=brick_uavs, adhesion_uavs=adhesion_uavs, policy=policy, seed=seed, camera=camera,
-        faults=faults, journal_path=journal_path, resume=resume, dt_s=dt_s, max_time_s=max_time_s,
-        heartbeat_timeout_s=heartbeat_timeout_s, max_attempts=max_attempts, progress=progress,
-        separation=separation, rising_layers=rising_layers, warn=warn, uav_config=uav_config,
+        blueprint,
+        brick_uavs=brick_uavs,
+        adhesion_uavs=adhesion_uavs,
+        policy=policy,
+        seed=seed,
+        camera=camera,
+        faults=faults,
+        journal_path=journal_path,
+        resume=resume,
+        dt_s=dt_s,
+        max_time_s=max_time_s,
+        heartbeat_timeout_s=heartbeat_timeout_s,
+        max_attempts=max_attempts,
+        progress=progress,
+        separation=separation,
+        rising_layers=rising_layers,
+        warn=warn,
+        uav_config=uav_config,
     ).run()
 
 
@@ -283,7 +314,9 @@ class SimulatedMission:
         self._ran = False
         self.started_wall_s = time.perf_counter()
         total = sum(1 for t in plan.tasks if not t.done)
-        self.max_time_s = max_time_s if max_time_s is not None else (resumed_from or 0.0) + 600.0 + 150.0 * total
+        self.max_time_s = (
+            max_time_s if max_time_s is not None else (resumed_from or 0.0) + 600.0 + 150.0 * total
+        )
         missing = [u.name for u in self.fleet if u.name not in world.uavs]
         if missing:
             raise InputError(f"the world has no UAV named {', '.join(missing)}: add the fleet first")
@@ -293,20 +326,30 @@ class SimulatedMission:
         if control.wall_digest != wall:
             # the handlers check every assignment against the wall: each would refuse each task, and the
             # mission would never progress
-            raise InputError("mission control was built for another wall: pass it "
-                             "`wall_digest=masonry.fingerprint.wall_digest(blueprint)`")
+            raise InputError(
+                "mission control was built for another wall: pass it "
+                "`wall_digest=masonry.fingerprint.wall_digest(blueprint)`"
+            )
         self.ports: dict[str, UavPorts] = {}
         self.handlers: dict[str, UavHandler] = {}
         for spec in self.fleet:
             sim_uav = world.uavs[spec.name]
             uav_ports = ports.get(spec.name, sim_uav.ports)
-            h = UavHandler(spec.name, bus.endpoint(spec.name), position=_position_of(uav_ports),
-                           heartbeat_timeout_s=heartbeat_timeout_s,
-                           battery=_battery_of(sim_uav),
-                           swap_battery=_GroundCrew(sim_uav.vehicle, self.clock),
-                           after_result=self._step_control,
-                           tasks=plan.tasks, role=spec.role, wall_digest=wall)
-            h.attach(_build_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config))
+            h = UavHandler(
+                spec.name,
+                bus.endpoint(spec.name),
+                position=_position_of(uav_ports),
+                heartbeat_timeout_s=heartbeat_timeout_s,
+                battery=_battery_of(sim_uav),
+                swap_battery=_GroundCrew(sim_uav.vehicle, self.clock),
+                after_result=self._step_control,
+                tasks=plan.tasks,
+                role=spec.role,
+                wall_digest=wall,
+            )
+            h.attach(
+                _build_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config)
+            )
             self.ports[spec.name] = uav_ports
             self.handlers[spec.name] = h
         self.measured.handlers = self.handlers
@@ -387,7 +430,9 @@ class SimulatedMission:
         from masonry.sim import Faults, World
 
         if policy not in POLICIES:
-            raise InputError(f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",))
+            raise InputError(
+                f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",)
+            )
         if camera not in ("geometric", "render"):
             raise InputError(f"`camera` must be geometric or render, got {camera!r}", options=("camera",))
         if not (dt_s > 0 and math.isfinite(dt_s)):
@@ -400,8 +445,10 @@ class SimulatedMission:
 
         fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
         if not fleet:
-            raise InputError("the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
-                             options=("brick_uavs", "adhesion_uavs"))
+            raise InputError(
+                "the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
+                options=("brick_uavs", "adhesion_uavs"),
+            )
         blueprint = dataclasses.replace(blueprint, fleet=fleet)
         the_plan = make_plan(blueprint)
 
@@ -410,54 +457,86 @@ class SimulatedMission:
             state = None
             if journal_path is not None:
                 journal, state = open_mission_journal(
-                    Path(journal_path), resume=resume, wall_digest=wall_digest(blueprint),
-                    fleet_digest=fleet_digest(blueprint), fleet_names=[u.name for u in fleet],
-                    task_ids=[t.id for t in the_plan.tasks], warn=warn)
+                    Path(journal_path),
+                    resume=resume,
+                    wall_digest=wall_digest(blueprint),
+                    fleet_digest=fleet_digest(blueprint),
+                    fleet_names=[u.name for u in fleet],
+                    task_ids=[t.id for t in the_plan.tasks],
+                    warn=warn,
+                )
                 resources.callback(journal.close)
 
             resumed_from = None
             world_blueprint = blueprint
             if state is not None:
                 # bricks the journal says are placed are in place in the rebuilt world
-                placed = {the_plan.task(r.task_id).brick for r in state.done  # type: ignore[union-attr]
-                          if isinstance(the_plan.task(r.task_id), BrickTask)}
+                placed = {
+                    the_plan.task(r.task_id).brick  # type: ignore[union-attr]
+                    for r in state.done
+                    if isinstance(the_plan.task(r.task_id), BrickTask)
+                }
                 world_blueprint = dataclasses.replace(
                     blueprint,
-                    bricks=tuple(dataclasses.replace(b, placed=True) if b.id in placed else b
-                                 for b in blueprint.bricks),
+                    bricks=tuple(
+                        dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks
+                    ),
                 )
                 resumed_from = float(state.last_time_s or 0.0)
 
-            world = World(world_blueprint, seed=seed, camera=camera, faults=faults,  # type: ignore[arg-type]
-                          start_s=resumed_from or 0.0,
-                          airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe)
+            world = World(
+                world_blueprint,
+                seed=seed,
+                camera=camera,  # type: ignore[arg-type]
+                faults=faults,
+                start_s=resumed_from or 0.0,
+                airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe,
+            )
             measured = MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
-            expected_s = estimate_durations_s(the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m,
-                                              timing=timing)
+            expected_s = estimate_durations_s(
+                the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing
+            )
             bus = InprocBus()
             mc = MissionControl(
-                the_plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy,
+                the_plan,
+                fleet,
+                bus.endpoint(MISSION_CONTROL),
+                policy=policy,
                 journal=measured if journal is not None else None,
                 max_attempts=max_attempts,
                 durations_s=priority_durations_s(expected_s),
-                heartbeat_timeout_s=heartbeat_timeout_s, startup_timeout_s=max(10 * dt_s, 1.0),
+                heartbeat_timeout_s=heartbeat_timeout_s,
+                startup_timeout_s=max(10 * dt_s, 1.0),
                 column_radius_m=blueprint.clearance_m if separation else 0.0,
                 layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
                 layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
                 wall_digest=wall_digest(blueprint),
-                min_durations_s=min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m,
-                                                timing=timing),
+                min_durations_s=min_durations_s(
+                    the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing
+                ),
                 timing=timing,
             )
             if state is not None:
                 mc.restore(state)
             world.add_fleet(fleet)
             mission = cls(
-                blueprint, the_plan, world=world, control=mc, bus=bus, policy=policy, seed=seed, dt_s=dt_s,
-                max_time_s=max_time_s, heartbeat_timeout_s=heartbeat_timeout_s, progress=progress,
+                blueprint,
+                the_plan,
+                world=world,
+                control=mc,
+                bus=bus,
+                policy=policy,
+                seed=seed,
+                dt_s=dt_s,
+                max_time_s=max_time_s,
+                heartbeat_timeout_s=heartbeat_timeout_s,
+                progress=progress,
                 layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
-                measured=measured, resumed_from=resumed_from, journaled_errors_m=journaled_errors_m(state),
-                resources=resources.pop_all(), uav_config=uav_config,
+                measured=measured,
+                resumed_from=resumed_from,
+                journaled_errors_m=journaled_errors_m(state),
+                resources=resources.pop_all(),
+                uav_config=uav_config,
             )
         mission.started_wall_s = wall0
         return mission
@@ -487,12 +566,24 @@ class SimulatedMission:
             if self.measured.journal is not None:
                 # the end of the run, for a later resume of a finished mission (no record follows the landing)
                 self.measured.journal.set_meta(
-                    "measured", {**self.measured.measurements(), "time_s": self.clock.now_s()})
+                    "measured", {**self.measured.measurements(), "time_s": self.clock.now_s()}
+                )
             return simulated_report(
-                self.blueprint, self.plan, self.fleet, self.control, self.handlers, self.world, self.dead,
-                policy=self.policy, seed=self.seed, sim_time_s=self.clock.now_s() - (self.resumed_from or 0.0),
-                wall_time_s=time.perf_counter() - self.started_wall_s, resumed_from=self.resumed_from,
-                messages=self.bus.sent, measured=self.measured, journaled_errors_m=self.journaled_errors_m,
+                self.blueprint,
+                self.plan,
+                self.fleet,
+                self.control,
+                self.handlers,
+                self.world,
+                self.dead,
+                policy=self.policy,
+                seed=self.seed,
+                sim_time_s=self.clock.now_s() - (self.resumed_from or 0.0),
+                wall_time_s=time.perf_counter() - self.started_wall_s,
+                resumed_from=self.resumed_from,
+                messages=self.bus.sent,
+                measured=self.measured,
+                journaled_errors_m=self.journaled_errors_m,
                 timing=self.timing,
             )
 

@@ -53,9 +53,12 @@ def volumes_conflict(p: Volume, q: Volume, sep_xy_m: float, sep_z_m: float) -> b
         return False
     need = sep_xy_m + p.slack_m + q.slack_m
     # cheap reject on the bounding boxes before the exact segment distance
-    if (min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
-            or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
-            or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need):
+    if (
+        min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need
+        or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
+        or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
+        or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need
+    ):
         return False
     return segment_segment_m(p.a, p.b, q.a, q.b) < need
 
@@ -76,8 +79,12 @@ def volumes_clear(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: fl
                 continue
             need = sep_xy_m + vs + q.slack_m
             (cx, cy), (dx, dy) = q.a, q.b
-            if (cx if cx <= dx else dx) - vx1 >= need or vx0 - (cx if cx >= dx else dx) >= need \
-                    or (cy if cy <= dy else dy) - vy1 >= need or vy0 - (cy if cy >= dy else dy) >= need:
+            if (
+                (cx if cx <= dx else dx) - vx1 >= need
+                or vx0 - (cx if cx >= dx else dx) >= need
+                or (cy if cy <= dy else dy) - vy1 >= need
+                or vy0 - (cy if cy >= dy else dy) >= need
+            ):
                 continue
             if segment_segment_m(v.a, v.b, q.a, q.b) < need:
                 return False
@@ -94,14 +101,16 @@ def point_segment_m(p: XY, a: XY, b: XY) -> float:
 
 def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
     """Horizontal distance between segments ``a``-``b`` and ``c``-``d``."""
+
     def orient(p: XY, q: XY, r: XY) -> float:
         return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
 
     o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
     if o1 * o2 < 0.0 and o3 * o4 < 0.0:
         return 0.0  # they cross
-    return min(point_segment_m(c, a, b), point_segment_m(d, a, b), point_segment_m(a, c, d),
-               point_segment_m(b, c, d))
+    return min(
+        point_segment_m(c, a, b), point_segment_m(d, a, b), point_segment_m(a, c, d), point_segment_m(b, c, d)
+    )
 
 
 def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volume] | None:
@@ -129,7 +138,7 @@ def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volum
         if cut <= 0.0:
             return None  # at the start of this leg: it may still be climbing (or stopped climbing) to it
         # on this leg: everything before it (its climb, earlier legs, a hover) is behind it
-        rest = list(vols[i + 1:])
+        rest = list(vols[i + 1 :])
         if cut < length:
             f = max(0.0, cut) / length
             rest.insert(0, Volume((ax + f * dx, ay + f * dy), v.b, v.z0_m, v.z1_m, 0.0, "leg"))
@@ -138,9 +147,13 @@ def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volum
     if kept is None:
         # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
         zone = vols[-1]
-        if last_leg is None or zone.kind != "zone" or z >= last_leg.z0_m - 0.2 or \
-                math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M or \
-                math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6:
+        if (
+            last_leg is None
+            or zone.kind != "zone"
+            or z >= last_leg.z0_m - 0.2
+            or math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M
+            or math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6
+        ):
             return None
         kept = [zone]
     return kept
@@ -153,8 +166,16 @@ def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
     return Volume(xy, xy if to is None else to, 0.0, top_m, slack_m, "zone")
 
 
-def flight_volumes(start: XY, z0_m: float, alt_m: float, target: Vec3 | None, top_m: float, hold: XY | None,
-                   to: XY | None, slack_m: float) -> list[Volume]:
+def flight_volumes(
+    start: XY,
+    z0_m: float,
+    alt_m: float,
+    target: Vec3 | None,
+    top_m: float,
+    hold: XY | None,
+    to: XY | None,
+    slack_m: float,
+) -> list[Volume]:
     """A flight's volumes: the climb at ``start`` from ``z0_m`` to ``alt_m``, the leg there to the target (or the
     hold point), and the target's column up to ``top_m`` (or the hover at the hold point, ``slack_m`` wide)."""
     vols = [Volume(start, start, min(z0_m, alt_m), max(z0_m, alt_m), 0.0, "climb")]
@@ -174,8 +195,12 @@ def stopped_at(xy: XY, z: float, vols: Sequence[Volume]) -> list[Volume]:
     here = [Volume(xy, xy, z - HOVER_SLACK_M, z + HOVER_SLACK_M, HOVER_SLACK_M, "hover")]
     for v in vols:
         length = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
-        if v.kind != "leg" or length < 1e-9 or abs(z - v.z0_m) >= 0.2 \
-                or point_segment_m(xy, v.a, v.b) > TRACK_M:
+        if (
+            v.kind != "leg"
+            or length < 1e-9
+            or abs(z - v.z0_m) >= 0.2
+            or point_segment_m(xy, v.a, v.b) > TRACK_M
+        ):
             continue
         ux, uy = (v.b[0] - v.a[0]) / length, (v.b[1] - v.a[1]) / length
         along = (xy[0] - v.a[0]) * ux + (xy[1] - v.a[1]) * uy
@@ -186,15 +211,18 @@ def stopped_at(xy: XY, z: float, vols: Sequence[Volume]) -> list[Volume]:
     return here
 
 
-def hold_points(site: Vec3, keep_out: Sequence[XY], spans: Sequence[tuple[XY, XY]], radius_m: float) -> list[Vec3]:
+def hold_points(
+    site: Vec3, keep_out: Sequence[XY], spans: Sequence[tuple[XY, XY]], radius_m: float
+) -> list[Vec3]:
     """Points around ``site`` (rings ``radius_m`` apart, nearest first, at least six when there are) at least
     1.1 ``radius_m`` from every point of ``keep_out`` and every segment of ``spans``; one far point if none is."""
     r = 1.1 * radius_m
     r2 = r * r
 
     def free(p: XY) -> bool:
-        return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out) and \
-            all(point_segment_m(p, a, b) >= r for a, b in spans)
+        return all((p[0] - k[0]) ** 2 + (p[1] - k[1]) ** 2 >= r2 for k in keep_out) and all(
+            point_segment_m(p, a, b) >= r for a, b in spans
+        )
 
     step = max(radius_m, 0.25)
     out: list[tuple[float, Vec3]] = []

@@ -111,8 +111,9 @@ class ZenohTransport:
                 config.insert_json5(key, json.dumps(value))
             self._session = zenoh.open(config)
         except Exception as exc:  # zenoh raises ZError for a busy port or a bad locator
-            raise DeviceNotFound(f"zenoh: cannot open a peer session on {self._listen or self._connect}: {exc}") \
-                from exc
+            raise DeviceNotFound(
+                f"zenoh: cannot open a peer session on {self._listen or self._connect}: {exc}"
+            ) from exc
 
         def on_sample(sample: Any) -> None:
             data = sample.payload.to_bytes()
@@ -130,8 +131,10 @@ class ZenohTransport:
         try:
             return zenoh.Config.from_file(str(path))
         except Exception as exc:  # zenoh raises ZError for a syntax error or an unknown key
-            raise InputError(f"`zenoh_config` {path}: not a valid Zenoh configuration: {_one_line(exc)}", options=("zenoh_config",)) \
-                from exc
+            raise InputError(
+                f"`zenoh_config` {path}: not a valid Zenoh configuration: {_one_line(exc)}",
+                options=("zenoh_config",),
+            ) from exc
 
     def send(self, to: str, payload: bytes) -> None:
         if self._session is None:

@@ -154,7 +154,11 @@ class PID:
             The velocity reference (m/s, shape (3,)) and the yaw-rate reference (rad/s).
         """
         vx, vy, vz, w = self.step_floats(
-            now_s, position_m, target_m, velocity_ff_mps=velocity_ff_mps, yaw_rad=yaw_rad,
+            now_s,
+            position_m,
+            target_m,
+            velocity_ff_mps=velocity_ff_mps,
+            yaw_rad=yaw_rad,
             target_yaw_rad=target_yaw_rad,
         )
         return np.array((vx, vy, vz)), w
@@ -181,8 +185,15 @@ class PID:
             px, py, pz, tx, ty, tz = float(px), float(py), float(pz), float(tx), float(ty), float(tz)
             fx, fy, fz = float(fx), float(fy), float(fz)
             ok = (
-                isfinite(px) and isfinite(py) and isfinite(pz) and isfinite(tx) and isfinite(ty)
-                and isfinite(tz) and isfinite(fx) and isfinite(fy) and isfinite(fz)
+                isfinite(px)
+                and isfinite(py)
+                and isfinite(pz)
+                and isfinite(tx)
+                and isfinite(ty)
+                and isfinite(tz)
+                and isfinite(fx)
+                and isfinite(fy)
+                and isfinite(fz)
             )
         except (TypeError, ValueError):
             ok = False

@@ -46,13 +46,19 @@ def parse_id_ranges(text: str) -> list[int]:
                 lo, hi = int(lo_text), int(hi_text)
                 if hi < lo:
                     raise InputError(f"`bricks`: range {part!r} runs backwards", options=("bricks",))
-                if hi - lo >= 100_000:  # no ArUco dictionary has 200,000 markers: fail before building the set
-                    raise InputError(f"`bricks`: range {part!r} holds more than 100000 bricks", options=("bricks",))
+                if (
+                    hi - lo >= 100_000
+                ):  # no ArUco dictionary has 200,000 markers: fail before building the set
+                    raise InputError(
+                        f"`bricks`: range {part!r} holds more than 100000 bricks", options=("bricks",)
+                    )
                 ids.update(range(lo, hi + 1))
             else:
                 ids.add(int(part))
         except ValueError:
-            raise InputError(f"`bricks`: expected ids like 0-9 or 0,2,5-7; got {text!r}", options=("bricks",)) from None
+            raise InputError(
+                f"`bricks`: expected ids like 0-9 or 0,2,5-7; got {text!r}", options=("bricks",)
+            ) from None
     if any(i < 0 for i in ids):
         raise InputError(f"`bricks`: ids must be >= 0; got {text!r}", options=("bricks",))
     return sorted(ids)
@@ -167,7 +173,9 @@ def write_marker_sheets(
     if suffix not in (".pdf", ".png"):
         raise InputError(f"{p}: output must end in .pdf or .png")
     if paper not in PAPER_SIZES_MM:
-        raise InputError(f"`paper`: unknown paper {paper!r}; use one of {', '.join(PAPER_SIZES_MM)}", options=("paper",))
+        raise InputError(
+            f"`paper`: unknown paper {paper!r}; use one of {', '.join(PAPER_SIZES_MM)}", options=("paper",)
+        )
     if not brick_ids:
         raise InputError("`bricks`: no brick ids given", options=("bricks",))
     if not 30 <= dpi <= 2400:

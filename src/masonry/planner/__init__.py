@@ -14,5 +14,12 @@ __all__ = ["AdhesionTask", "BrickTask", "Plan", "Task", "adhesion_segments", "pl
 from masonry.planner.bounds import estimate_durations_s, lower_bound_s, min_cycles_s, min_durations_s
 from masonry.planner.dispatch import POLICIES, Assignment, Dispatcher
 
-__all__ += ["POLICIES", "Assignment", "Dispatcher", "estimate_durations_s", "lower_bound_s", "min_cycles_s",
-            "min_durations_s"]
+__all__ += [
+    "POLICIES",
+    "Assignment",
+    "Dispatcher",
+    "estimate_durations_s",
+    "lower_bound_s",
+    "min_cycles_s",
+    "min_durations_s",
+]

@@ -81,7 +81,9 @@ def longest_chain_s(plan: Plan, durations_s: Mapping[str, float]) -> float:
             if missing[d] == 0:
                 order.append(d)
     if len(order) != n:
-        raise PlanningError(f"the dependency graph has a cycle through task {ids[missing.index(max(missing))]}")
+        raise PlanningError(
+            f"the dependency graph has a cycle through task {ids[missing.index(max(missing))]}"
+        )
     return max(finish, default=0.0)
 
 
@@ -124,7 +126,9 @@ def lower_bound_s(
     per_role = 0.0
     for role in ROLES:
         if tasks_of[role] and not count[role]:
-            raise PlanningError(f"no {role} UAV in the fleet for {tasks_of[role]} {role} task{'' if tasks_of[role] == 1 else 's'}")
+            raise PlanningError(
+                f"no {role} UAV in the fleet for {tasks_of[role]} {role} task{'' if tasks_of[role] == 1 else 's'}"
+            )
         if count[role]:
             per_role = max(per_role, work[role] / count[role])
     return max(longest_chain_s(plan, dur), per_role)
@@ -152,7 +156,9 @@ _LEGACY_FIELDS = {
 }
 
 
-def _timing(func: str, timing: TaskTiming | None, legacy: dict[str, Any], allowed: tuple[str, ...]) -> TaskTiming:
+def _timing(
+    func: str, timing: TaskTiming | None, legacy: dict[str, Any], allowed: tuple[str, ...]
+) -> TaskTiming:
     """``timing`` (default: ``UavConfig``'s), with the deprecated keywords ``legacy`` of ``func`` applied.
 
     ``legacy`` is left with the keywords that are not fields (``leg_peak_factor``, ``min_leg_s``) for the caller.
@@ -232,10 +238,17 @@ def estimate_durations_s(
     Raises:
         PlanningError: a speed or time is not finite and positive (times: >= 0).
     """
-    t_ = _timing("estimate_durations_s", timing, deprecated,
-                 ("cruise_speed_mps", "vertical_speed_mps", "descent_s", "spray_speed_mps", "spray_descent_s"))
-    _check_timing(t_, ("cruise_speed_mps", "vertical_speed_mps", "spray_speed_mps"),
-                  ("descent_duration_s", "spray_descent_s"))
+    t_ = _timing(
+        "estimate_durations_s",
+        timing,
+        deprecated,
+        ("cruise_speed_mps", "vertical_speed_mps", "descent_s", "spray_speed_mps", "spray_descent_s"),
+    )
+    _check_timing(
+        t_,
+        ("cruise_speed_mps", "vertical_speed_mps", "spray_speed_mps"),
+        ("descent_duration_s", "spray_descent_s"),
+    )
     for name, value in (
         ("cruise_altitude_m", cruise_altitude_m),
         ("brick_handling_s", brick_handling_s),
@@ -244,7 +257,11 @@ def estimate_durations_s(
         if not math.isfinite(value) or value < 0.0:
             raise PlanningError(f"{name} must be finite and >= 0, got {value!r}")
     cruise_speed_mps, vertical_speed_mps = t_.cruise_speed_mps, t_.vertical_speed_mps
-    descent_s, spray_descent_s, spray_speed_mps = t_.descent_duration_s, t_.spray_descent_s, t_.spray_speed_mps
+    descent_s, spray_descent_s, spray_speed_mps = (
+        t_.descent_duration_s,
+        t_.spray_descent_s,
+        t_.spray_speed_mps,
+    )
     brick_homes = [spec.home_m for spec in fleet if spec.role == "brick"]
 
     def horizontal(a: Sequence[float], b: Sequence[float]) -> float:
@@ -260,7 +277,9 @@ def estimate_durations_s(
         if isinstance(t, BrickTask):
             pickup = t.pickup_m if t.pickup_m is not None else t.position_m
             carry = horizontal(pickup, t.position_m)
-            approach = min([carry] + [horizontal(h, pickup) for h in brick_homes]) if include_approach else 0.0
+            approach = (
+                min([carry] + [horizontal(h, pickup) for h in brick_homes]) if include_approach else 0.0
+            )
             out[t.id] = (
                 (approach + carry) / cruise_speed_mps
                 + 2.0 * descent_s
@@ -294,9 +313,24 @@ def _min_jerk_time_to_within(distance_m: float, tolerance_m: float) -> float:
 
 
 _MIN_DURATION_KEYWORDS = (
-    "cruise_speed_mps", "vertical_speed_mps", "leg_peak_factor", "min_leg_s", "control_period_s", "clearance_m",
-    "settle_time_s", "min_estimates", "descent_s", "grasp_press_m", "grasp_dwell_s", "placement_radius_m",
-    "release_dwell_s", "stable_time_s", "spray_descent_s", "spray_speed_mps", "close_dwell_s", "chain_descent_s",
+    "cruise_speed_mps",
+    "vertical_speed_mps",
+    "leg_peak_factor",
+    "min_leg_s",
+    "control_period_s",
+    "clearance_m",
+    "settle_time_s",
+    "min_estimates",
+    "descent_s",
+    "grasp_press_m",
+    "grasp_dwell_s",
+    "placement_radius_m",
+    "release_dwell_s",
+    "stable_time_s",
+    "spray_descent_s",
+    "spray_speed_mps",
+    "close_dwell_s",
+    "chain_descent_s",
     "effector_offset_z_m",
 )
 
@@ -336,13 +370,18 @@ def min_durations_s(
         task id -> seconds, for every not-done task.
     """
     t_ = _timing("min_durations_s", timing, deprecated, _MIN_DURATION_KEYWORDS)
-    return _min_durations_s(plan, t_, cruise_altitude_m,
-                            float(deprecated.get("leg_peak_factor", MIN_JERK_PEAK_TO_MEAN_SPEED)),
-                            float(deprecated.get("min_leg_s", MIN_LEG_S)))
+    return _min_durations_s(
+        plan,
+        t_,
+        cruise_altitude_m,
+        float(deprecated.get("leg_peak_factor", MIN_JERK_PEAK_TO_MEAN_SPEED)),
+        float(deprecated.get("min_leg_s", MIN_LEG_S)),
+    )
 
 
-def _min_durations_s(plan: Plan, timing: TaskTiming, cruise_altitude_m: float, leg_peak_factor: float,
-                     min_leg_s: float) -> dict[str, float]:
+def _min_durations_s(
+    plan: Plan, timing: TaskTiming, cruise_altitude_m: float, leg_peak_factor: float, min_leg_s: float
+) -> dict[str, float]:
     eff_z = timing.effector_offset_m[2]
 
     def lateral(d_m: float) -> float:
@@ -368,15 +407,18 @@ def _min_durations_s(plan: Plan, timing: TaskTiming, cruise_altitude_m: float, l
             drop = transit - release_body_z
             out[t.id] = (
                 min_leg_s  # approach
-                + timing.settle_time_s + (timing.min_estimates - 1) * tick  # estimate
+                + timing.settle_time_s
+                + (timing.min_estimates - 1) * tick  # estimate
                 + min_leg_s  # align
-                + timing.descent_duration_s + timing.grasp_dwell_s
+                + timing.descent_duration_s
+                + timing.grasp_dwell_s
                 + vertical(transit - grasp_body_z)
                 + tick  # verify
                 + lateral(math.hypot(t.position_m[0] - pickup[0], t.position_m[1] - pickup[1]))
                 + min_leg_s  # align above the drop-off
                 + timing.descent_duration_s * _min_jerk_time_to_within(drop, timing.placement_radius_m)
-                + timing.release_dwell_s + tick  # release, verify
+                + timing.release_dwell_s
+                + tick  # release, verify
                 + vertical(drop - timing.placement_radius_m)
             )
         else:
@@ -429,7 +471,9 @@ def min_cycles_s(
     import numpy as np
     from scipy.spatial import cKDTree
 
-    t_ = _timing("min_cycles_s", timing, deprecated, ("cruise_speed_mps", "arrive_tolerance_m", "effector_offset_m"))
+    t_ = _timing(
+        "min_cycles_s", timing, deprecated, ("cruise_speed_mps", "arrive_tolerance_m", "effector_offset_m")
+    )
     _check_timing(t_, ("cruise_speed_mps",), ("arrive_tolerance_m",))
     cruise_speed_mps = t_.cruise_speed_mps
     if not math.isfinite(min_leg_s) or min_leg_s < 0.0:
@@ -445,7 +489,9 @@ def min_cycles_s(
         return out
     homes = np.array([s.home_m[:2] for s in fleet if s.role == "brick"], dtype=float).reshape(-1, 2)
     drops = np.array([t.position_m[:2] for t in bricks], dtype=float)
-    picks = np.array([(t.pickup_m if t.pickup_m is not None else t.position_m)[:2] for t in bricks], dtype=float)
+    picks = np.array(
+        [(t.pickup_m if t.pickup_m is not None else t.position_m)[:2] for t in bricks], dtype=float
+    )
     # nearest drop-off other than the brick's own (the UAV cannot have completed the task it is about to do)
     k = min(2, len(bricks))
     dist, idx = cKDTree(drops).query(picks[todo], k=k)
@@ -511,5 +557,7 @@ def dispatch_makespan_s(
         t = d.task(tid)
         where[uav] = t.position_m if isinstance(t, BrickTask) else t.end_m
     if not d.finished:
-        raise PlanningError(f"the plan cannot finish with this fleet: {len(d.remaining)} task{'' if len(d.remaining) == 1 else 's'} left")
+        raise PlanningError(
+            f"the plan cannot finish with this fleet: {len(d.remaining)} task{'' if len(d.remaining) == 1 else 's'} left"
+        )
     return now

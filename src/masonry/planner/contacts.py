@@ -33,7 +33,9 @@ class BrickArrays:
     yaw: NDArray[np.float64]  # (n,)
 
     @classmethod
-    def of(cls, positions: Sequence[Sequence[float]], sizes: Sequence[Sequence[float]], yaws: Sequence[float]) -> BrickArrays:
+    def of(
+        cls, positions: Sequence[Sequence[float]], sizes: Sequence[Sequence[float]], yaws: Sequence[float]
+    ) -> BrickArrays:
         center = np.asarray(positions, dtype=float).reshape(-1, 3)
         half = np.asarray(sizes, dtype=float).reshape(-1, 3) / 2.0
         return cls(center, half, np.asarray(yaws, dtype=float).reshape(-1))

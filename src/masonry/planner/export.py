@@ -118,7 +118,9 @@ def _pairs_json(
     quoted = [json.dumps(t.id).encode() for t in plan.tasks]
     width = max(len(q) for q in quoted)
     table = np.array(quoted, dtype=f"S{width}")
-    record = np.dtype([("open", "S1"), ("a", f"S{width}"), ("sep", "S2"), ("b", f"S{width}"), ("close", "S3")])
+    record = np.dtype(
+        [("open", "S1"), ("a", f"S{width}"), ("sep", "S2"), ("b", f"S{width}"), ("close", "S3")]
+    )
     yield "["
     for begin in range(0, len(a), chunk):
         sl = slice(begin, begin + chunk)

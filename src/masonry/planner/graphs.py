@@ -34,7 +34,9 @@ IntArray = NDArray[np.int64]
 def brick_arrays(blueprint: Blueprint) -> BrickArrays:
     """Column arrays (centres, half sizes, yaws) of a blueprint's bricks, in blueprint order."""
     bricks = blueprint.bricks
-    return BrickArrays.of([b.position_m for b in bricks], [b.size_m for b in bricks], [b.yaw_rad for b in bricks])
+    return BrickArrays.of(
+        [b.position_m for b in bricks], [b.size_m for b in bricks], [b.yaw_rad for b in bricks]
+    )
 
 
 @dataclass(frozen=True)
@@ -59,7 +61,9 @@ class PlanGraphs:
         ids = np.array([t.id for t in self.tasks], dtype=object)
         with _gc_paused():  # millions of small tuples: the cyclic collector would rescan them again and again
             pairs = tuple(zip(ids[ca].tolist(), ids[cb].tolist()))
-        return Plan(tasks=self.tasks, dependencies=self.dependencies, conflicts=pairs, conflict_indices=(ca, cb))
+        return Plan(
+            tasks=self.tasks, dependencies=self.dependencies, conflicts=pairs, conflict_indices=(ca, cb)
+        )
 
 
 def plan(blueprint: Blueprint, *, check_marker_ids: bool = True) -> Plan:
@@ -204,8 +208,12 @@ def adhesion_segments(arrays: BrickArrays, upper: IntArray, lower: IntArray) -> 
         out[:, 2] = top
     for k in np.nonzero(~aligned)[0].tolist():
         poly = clip_convex(
-            rectangle_corners((float(ci[k, 0]), float(ci[k, 1])), (float(hi[k, 0]), float(hi[k, 1])), float(yi[k])),
-            rectangle_corners((float(cj[k, 0]), float(cj[k, 1])), (float(hj[k, 0]), float(hj[k, 1])), float(yj[k])),
+            rectangle_corners(
+                (float(ci[k, 0]), float(ci[k, 1])), (float(hi[k, 0]), float(hi[k, 1])), float(yi[k])
+            ),
+            rectangle_corners(
+                (float(cj[k, 0]), float(cj[k, 1])), (float(hj[k, 0]), float(hj[k, 1])), float(yj[k])
+            ),
         )
         centroid, direction = principal_axis(poly)
         # A deterministic orientation: the direction's angle in (-pi/2, pi/2].

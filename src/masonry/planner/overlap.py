@@ -36,8 +36,12 @@ def sat_depth(
     d = cb - ca
     depth = np.full(len(d), np.inf)
     for axis in (ua, va, ub, vb):
-        ra = ha[:, 0] * np.abs(np.einsum("ij,ij->i", axis, ua)) + ha[:, 1] * np.abs(np.einsum("ij,ij->i", axis, va))
-        rb = hb[:, 0] * np.abs(np.einsum("ij,ij->i", axis, ub)) + hb[:, 1] * np.abs(np.einsum("ij,ij->i", axis, vb))
+        ra = ha[:, 0] * np.abs(np.einsum("ij,ij->i", axis, ua)) + ha[:, 1] * np.abs(
+            np.einsum("ij,ij->i", axis, va)
+        )
+        rb = hb[:, 0] * np.abs(np.einsum("ij,ij->i", axis, ub)) + hb[:, 1] * np.abs(
+            np.einsum("ij,ij->i", axis, vb)
+        )
         depth = np.minimum(depth, ra + rb - np.abs(np.einsum("ij,ij->i", axis, d)))
     return depth
 

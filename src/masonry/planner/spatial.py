@@ -16,7 +16,6 @@ from numpy.typing import NDArray
 IntArray = NDArray[np.int64]
 
 
-
 def _forward_offsets(reach: int) -> tuple[tuple[int, int, int], ...]:
     """Half of the neighbour offsets within ``reach`` cells (the other half gives the same pairs reversed)."""
     steps = range(-reach, reach + 1)
@@ -110,7 +109,9 @@ def neighbour_pairs(  # noqa: PLR0915 - one vectorised sweep over the grid cells
         m = sizes[sl]
         total = int(m.sum())
         which = np.repeat(np.arange(end - begin, dtype=it), m)
-        t = np.arange(total, dtype=np.int64 if total >= 2**31 - 1 else it) - np.repeat((np.cumsum(m) - m).astype(it), m)
+        t = np.arange(total, dtype=np.int64 if total >= 2**31 - 1 else it) - np.repeat(
+            (np.cumsum(m) - m).astype(it), m
+        )
         cbw = cb[sl][which]
         ia = t // cbw
         ib = t % cbw

@@ -103,7 +103,9 @@ def prerequisites(tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]]
     return out
 
 
-def available(tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]], done: Iterable[str] = ()) -> list[str]:
+def available(
+    tasks: Sequence[Task], dependencies: Sequence[tuple[str, str]], done: Iterable[str] = ()
+) -> list[str]:
     """Ids of tasks not done whose prerequisites are all done (see :meth:`Plan.available`)."""
     finished = {t.id for t in tasks if t.done} | set(done)
     prereq = prerequisites(tasks, dependencies)

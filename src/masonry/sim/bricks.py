@@ -103,16 +103,23 @@ def rects_overlap(
     bx, by, byaw, bhx, bhy = b
     ac, as_ = math.cos(ayaw), math.sin(ayaw)
     bc, bs = math.cos(byaw), math.sin(byaw)
-    ca = [(ax + ac * dx - as_ * dy, ay + as_ * dx + ac * dy)
-          for dx, dy in ((-ahx, -ahy), (ahx, -ahy), (ahx, ahy), (-ahx, ahy))]
-    cb = [(bx + bc * dx - bs * dy, by + bs * dx + bc * dy)
-          for dx, dy in ((-bhx, -bhy), (bhx, -bhy), (bhx, bhy), (-bhx, bhy))]
+    ca = [
+        (ax + ac * dx - as_ * dy, ay + as_ * dx + ac * dy)
+        for dx, dy in ((-ahx, -ahy), (ahx, -ahy), (ahx, ahy), (-ahx, ahy))
+    ]
+    cb = [
+        (bx + bc * dx - bs * dy, by + bs * dx + bc * dy)
+        for dx, dy in ((-bhx, -bhy), (bhx, -bhy), (bhx, bhy), (-bhx, bhy))
+    ]
     for ux, uy in ((ac, as_), (-as_, ac), (bc, bs), (-bs, bc)):
         (p0x, p0y), (p1x, p1y), (p2x, p2y), (p3x, p3y) = ca
         a0, a1, a2, a3 = ux * p0x + uy * p0y, ux * p1x + uy * p1y, ux * p2x + uy * p2y, ux * p3x + uy * p3y
         (p0x, p0y), (p1x, p1y), (p2x, p2y), (p3x, p3y) = cb
         b0, b1, b2, b3 = ux * p0x + uy * p0y, ux * p1x + uy * p1y, ux * p2x + uy * p2y, ux * p3x + uy * p3y
-        if max(a0, a1, a2, a3) <= min(b0, b1, b2, b3) + 1e-9 or max(b0, b1, b2, b3) <= min(a0, a1, a2, a3) + 1e-9:
+        if (
+            max(a0, a1, a2, a3) <= min(b0, b1, b2, b3) + 1e-9
+            or max(b0, b1, b2, b3) <= min(a0, a1, a2, a3) + 1e-9
+        ):
             return False
     return True
 

@@ -81,11 +81,13 @@ class Faults:
             if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
                 raise InputError(f"fault {name}: a probability must be in [0, 1], got {value!r}")
         if not (
-            isinstance(self.gusts_mps, (int, float)) and math.isfinite(self.gusts_mps)
+            isinstance(self.gusts_mps, (int, float))
+            and math.isfinite(self.gusts_mps)
             and 0 <= self.gusts_mps <= MAX_GUSTS_MPS
         ):
-            raise InputError(f"fault gusts_mps: must be a speed from 0 to {MAX_GUSTS_MPS:g} m/s, "
-                             f"got {self.gusts_mps!r}")
+            raise InputError(
+                f"fault gusts_mps: must be a speed from 0 to {MAX_GUSTS_MPS:g} m/s, got {self.gusts_mps!r}"
+            )
         drain = self.battery_drain_per_s
         if drain is not None and not (
             isinstance(drain, (int, float)) and math.isfinite(drain) and 0 <= drain <= MAX_BATTERY_DRAIN_PER_S
@@ -168,8 +170,10 @@ class Faults:
                     raise InputError(f"fault {text!r}: {key} must be >= 0")
                 high = {"gusts": MAX_GUSTS_MPS, "battery": MAX_BATTERY_DRAIN_PER_S}.get(key)
                 if high is not None and number > high:
-                    raise InputError(f"fault {text!r}: {key} must be at most {high:g}"
-                                     f"{' m/s' if key == 'gusts' else ' per second'}")
+                    raise InputError(
+                        f"fault {text!r}: {key} must be at most {high:g}"
+                        f"{' m/s' if key == 'gusts' else ' per second'}"
+                    )
                 changes[name] = number
             elif key in _TIMED_FIELD:
                 uav, at, when = value.rpartition("@")

@@ -433,7 +433,11 @@ class SimVehicle:
             if battery <= cfg.battery_land_fraction and mode != "LAND":
                 mode = self.mode = "LAND"
                 self._takeoff_z = None
-            if self._link_lost_at is not None and mode != "LAND" and t - self._link_lost_at >= cfg.link_failsafe_s:
+            if (
+                self._link_lost_at is not None
+                and mode != "LAND"
+                and t - self._link_lost_at >= cfg.link_failsafe_s
+            ):
                 mode = self.mode = "LAND"
                 self._takeoff_z = None
         if dt_s != self._lag_dt:

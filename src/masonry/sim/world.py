@@ -106,9 +106,16 @@ class SimUav:
         self.gripper = SimGripper(self)
         self.sprayer = SimSprayer(self)
         self.camera = SimCamera(self)
-        self.ports = UavPorts(self.fc, self.gripper, self.sprayer, self.camera, self.world.clock,
-                              self.world.step, self.world, {"flight controller": "simulated",
-                                                            "actuators": "simulated", "camera": "simulated"})
+        self.ports = UavPorts(
+            self.fc,
+            self.gripper,
+            self.sprayer,
+            self.camera,
+            self.world.clock,
+            self.world.step,
+            self.world,
+            {"flight controller": "simulated", "actuators": "simulated", "camera": "simulated"},
+        )
 
     @property
     def role(self) -> str:
@@ -285,11 +292,19 @@ class World:
                 if vehicle.failed and not uav.failed:
                     self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
                 # _contact's own early exit, checked here first (most steps: a tool high above every brick)
-                if uav.carried_brick is not None or vehicle._z + uav._tool_dz_m <= field.max_top_z_m + _CONTACT_TOL_M:
+                if (
+                    uav.carried_brick is not None
+                    or vehicle._z + uav._tool_dz_m <= field.max_top_z_m + _CONTACT_TOL_M
+                ):
                     self._contact(uav)
                 if uav._brick_role:
                     # _grip's own guard, checked here first (the magnet stays on while a brick is carried)
-                    if uav.magnet_on and uav.carried_brick is None and not uav.joint_locked and not uav.failed:
+                    if (
+                        uav.magnet_on
+                        and uav.carried_brick is None
+                        and not uav.joint_locked
+                        and not uav.failed
+                    ):
                         self._grip(uav)
                 elif uav.valve_open:
                     self._spray(uav)

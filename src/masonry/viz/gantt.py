@@ -32,8 +32,9 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
     uavs = [u.name for u in report.uavs]
     row = {name: i for i, name in enumerate(uavs)}
     end = max([report.makespan_s] + [a.end_s or a.start_s for a in report.attempts] + [1.0])
-    fig, ax = plt.subplots(figsize=(max(8.0, min(24.0, 6.0 + len(report.attempts) * 0.08)),
-                                    1.0 + 0.6 * max(1, len(uavs))))
+    fig, ax = plt.subplots(
+        figsize=(max(8.0, min(24.0, 6.0 + len(report.attempts) * 0.08)), 1.0 + 0.6 * max(1, len(uavs)))
+    )
     for a in report.attempts:
         y = row.get(a.uav)
         if y is None:
@@ -41,16 +42,33 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
         stop = a.end_s if a.end_s is not None else end
         width = max(stop - a.start_s, end * 1e-3)
         if a.status == "failed":
-            ax.barh(y, width, left=a.start_s, height=0.6, color=FAILED_COLOUR, hatch="//", edgecolor="black",
-                    linewidth=0.5)
+            ax.barh(
+                y,
+                width,
+                left=a.start_s,
+                height=0.6,
+                color=FAILED_COLOUR,
+                hatch="//",
+                edgecolor="black",
+                linewidth=0.5,
+            )
             ax.plot([stop], [y], marker="x", color="black", markersize=8)
             if a.reason:
                 ax.annotate(a.reason, (stop, y + 0.35), fontsize=6, ha="center")
         else:
-            ax.barh(y, width, left=a.start_s, height=0.6, color=KIND_COLOURS.get(a.kind, "#9bbb59"),
-                    edgecolor="black", linewidth=0.5)
+            ax.barh(
+                y,
+                width,
+                left=a.start_s,
+                height=0.6,
+                color=KIND_COLOURS.get(a.kind, "#9bbb59"),
+                edgecolor="black",
+                linewidth=0.5,
+            )
         if len(report.attempts) <= 60:
-            ax.text(a.start_s + width / 2.0, y, a.task_id, ha="center", va="center", fontsize=7, color="white")
+            ax.text(
+                a.start_s + width / 2.0, y, a.task_id, ha="center", va="center", fontsize=7, color="white"
+            )
     for u in report.uavs:
         if u.status != "ok":
             ax.plot([end], [row[u.name]], marker="|", color="black", markersize=16)
@@ -60,11 +78,19 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
     ax.set_xlabel("mission time [s]")
     ax.set_xlim(0.0, end * 1.02)
     ax.grid(axis="x", alpha=0.3)
-    ax.legend(handles=[Patch(color=KIND_COLOURS["brick"], label="brick"),
-                       Patch(color=KIND_COLOURS["adhesion"], label="adhesion"),
-                       Patch(facecolor=FAILED_COLOUR, hatch="//", label="failed attempt")],
-              loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
-    ax.set_title(title or f"mission ({report.policy}, seed {report.seed}): makespan {report.makespan_s:.1f} s")
+    ax.legend(
+        handles=[
+            Patch(color=KIND_COLOURS["brick"], label="brick"),
+            Patch(color=KIND_COLOURS["adhesion"], label="adhesion"),
+            Patch(facecolor=FAILED_COLOUR, hatch="//", label="failed attempt"),
+        ],
+        loc="upper left",
+        bbox_to_anchor=(1.0, 1.0),
+        fontsize=7,
+    )
+    ax.set_title(
+        title or f"mission ({report.policy}, seed {report.seed}): makespan {report.makespan_s:.1f} s"
+    )
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)

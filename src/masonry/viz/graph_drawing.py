@@ -92,7 +92,9 @@ def graph_dot(plan: Plan, *, title: str | None = None) -> str:
     for u, v in plan.dependencies:
         lines.append(f"  {_q(u)} -> {_q(v)};")
     for a, b in plan.conflicts:
-        lines.append(f'  {_q(a)} -> {_q(b)} [dir=none, style=dashed, color="{CONFLICT_COLOUR}", constraint=false];')
+        lines.append(
+            f'  {_q(a)} -> {_q(b)} [dir=none, style=dashed, color="{CONFLICT_COLOUR}", constraint=false];'
+        )
     lines.append("}")
     return "\n".join(lines) + "\n"
 
@@ -135,7 +137,9 @@ def draw_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> Pa
     labels = n <= LABEL_LIMIT
     levels = max((p[1] for p in pos.values()), default=0.0)
     width = max((p[0] for p in pos.values()), default=0.0) - min((p[0] for p in pos.values()), default=0.0)
-    fig, ax = plt.subplots(figsize=(min(24.0, max(6.0, 2.0 + width * 1.2)), min(18.0, max(4.0, 1.5 + levels * 0.9))))
+    fig, ax = plt.subplots(
+        figsize=(min(24.0, max(6.0, 2.0 + width * 1.2)), min(18.0, max(4.0, 1.5 + levels * 0.9)))
+    )
     index = {t.id: k for k, t in enumerate(plan.tasks)}
     xy = np.array([pos[t.id] for t in plan.tasks], dtype=float).reshape(-1, 2)
     # G^c: every pair when it is drawable, else an evenly spaced sample (said so in the title).
@@ -153,14 +157,22 @@ def draw_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> Pa
         dense = drawn > 100 or not labels
         ax.add_collection(
             # an (N, 2, 2) array is what LineCollection draws; its stub only names a Sequence of segments
-            LineCollection(np.stack([xy[ca], xy[cb]], axis=1), colors=CONFLICT_COLOUR,  # type: ignore[arg-type]
-                           linestyles="solid" if drawn > 2000 else "dashed",  # dashes cost minutes when dense
-                           linewidths=0.4 if dense else 0.9, alpha=0.2 if dense else 0.8, zorder=1)
+            LineCollection(
+                np.stack([xy[ca], xy[cb]], axis=1),  # type: ignore[arg-type]
+                colors=CONFLICT_COLOUR,
+                linestyles="solid" if drawn > 2000 else "dashed",  # dashes cost minutes when dense
+                linewidths=0.4 if dense else 0.9,
+                alpha=0.2 if dense else 0.8,
+                zorder=1,
+            )
         )
     if labels:
         for u, v in plan.dependencies:
             ax.annotate(
-                "", xy=pos[v], xytext=pos[u], zorder=2,
+                "",
+                xy=pos[v],
+                xytext=pos[u],
+                zorder=2,
                 arrowprops={"arrowstyle": "-|>", "color": "black", "lw": 1.0, "shrinkA": 11, "shrinkB": 11},
             )
     elif plan.dependencies:
@@ -173,25 +185,58 @@ def draw_graphs(plan: Plan, path: str | Path, *, title: str | None = None) -> Pa
         for done in (False, True):
             members = [k for k, t in enumerate(plan.tasks) if t.kind == kind and bool(t.done) == done]
             if members:
-                ax.scatter(xy[members, 0], xy[members, 1], s=size, marker="s" if kind == "brick" else "o",
-                           c=DONE_COLOUR if done else KIND_COLOURS[kind], edgecolors="black",
-                           linewidths=0.6 if labels else 0.0, zorder=3)
+                ax.scatter(
+                    xy[members, 0],
+                    xy[members, 1],
+                    s=size,
+                    marker="s" if kind == "brick" else "o",
+                    c=DONE_COLOUR if done else KIND_COLOURS[kind],
+                    edgecolors="black",
+                    linewidths=0.6 if labels else 0.0,
+                    zorder=3,
+                )
     if labels:
         for task in plan.tasks:
             x, y = pos[task.id]
             text = task.id + (" \u2713" if task.done else "")
-            ax.text(x, y, text, ha="center", va="center", fontsize=7, zorder=4,
-                    color="black" if task.done else "white")
+            ax.text(
+                x,
+                y,
+                text,
+                ha="center",
+                va="center",
+                fontsize=7,
+                zorder=4,
+                color="black" if task.done else "white",
+            )
     ax.legend(
         handles=[
-            Line2D([], [], marker="s", linestyle="", color=KIND_COLOURS["brick"], markersize=9, label="brick task"),
-            Line2D([], [], marker="o", linestyle="", color=KIND_COLOURS["adhesion"], markersize=9,
-                   label="adhesion task"),
+            Line2D(
+                [],
+                [],
+                marker="s",
+                linestyle="",
+                color=KIND_COLOURS["brick"],
+                markersize=9,
+                label="brick task",
+            ),
+            Line2D(
+                [],
+                [],
+                marker="o",
+                linestyle="",
+                color=KIND_COLOURS["adhesion"],
+                markersize=9,
+                label="adhesion task",
+            ),
             Line2D([], [], marker="s", linestyle="", color=DONE_COLOUR, markersize=9, label="done (placed)"),
             Line2D([], [], color="black", label="dependency (waits for)"),
             Line2D([], [], color=CONFLICT_COLOUR, linestyle="dashed", label="conflict"),
         ],
-        loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        fontsize=8,
+        frameon=False,
     )
     heading = title or "dependency graph G^d and conflict graph G^c"
     if drawn < len(plan.conflicts):

@@ -52,11 +52,15 @@ def draw_plot3d(blueprint: Any, report: Any, path: str | Path, *, title: str | N
             faces_done.extend(f)
         else:
             faces_todo.extend(f)
-    for faces, colour, alpha in ((faces_pre, "#a0a0a0", 0.8), (faces_done, "#c0504d", 0.9),
-                                 (faces_todo, "none", 0.2)):
+    for faces, colour, alpha in (
+        (faces_pre, "#a0a0a0", 0.8),
+        (faces_done, "#c0504d", 0.9),
+        (faces_todo, "none", 0.2),
+    ):
         if faces:
-            ax.add_collection3d(Poly3DCollection(faces, facecolors=colour, edgecolors="black", linewidths=0.2,
-                                                 alpha=alpha))
+            ax.add_collection3d(
+                Poly3DCollection(faces, facecolors=colour, edgecolors="black", linewidths=0.2, alpha=alpha)
+            )
     pts = [np.asarray(b.position_m) for b in blueprint.bricks]
     cmap = plt.get_cmap("tab10")
     for i, (name, p) in enumerate(sorted(report.paths_m.items())):
