@@ -497,41 +497,32 @@ def _journal_cases() -> list[Case]:
     cs = str(CASE_STUDY)
     small = str(ROOT / "blueprints" / "running_bond_small.yaml")
 
-    def other_wall(d: Path) -> None:
+    def journal_of(blueprint: str, d: Path) -> None:
+        """A journal in ``d`` written by a whole ``masonry sim`` of ``blueprint``."""
         subprocess.run(
-            [*_masonry(), "sim", small, "--journal", str(d / "j.db"), "--format", "json"],
+            [*_masonry(), "sim", blueprint, "--journal", str(d / "j.db")],
             capture_output=True,
             timeout=300,
             check=False,
         )
 
-    def same_ids_other_geometry(d: Path) -> None:
-        moved = CASE_STUDY_TEXT.replace("pickup: [3.0, -0.5, 0.05]", "pickup: [3.5, -0.5, 0.05]")
-        (d / "moved.yaml").write_text(moved)
-        subprocess.run(
-            [*_masonry(), "sim", str(d / "moved.yaml"), "--journal", str(d / "j.db")],
-            capture_output=True,
-            timeout=120,
-            check=False,
-        )
+    def edited(old: str, new: str) -> Callable[[Path], None]:
+        """A journal of the case study with ``old`` replaced by ``new`` in its text."""
 
-    def other_fleet(d: Path) -> None:
-        other = CASE_STUDY_TEXT.replace("name: glue-1", "name: glue-9")
-        (d / "other.yaml").write_text(other)
-        subprocess.run(
-            [*_masonry(), "sim", str(d / "other.yaml"), "--journal", str(d / "j.db")],
-            capture_output=True,
-            timeout=120,
-            check=False,
-        )
+        def setup(d: Path) -> None:
+            (d / "edited.yaml").write_text(CASE_STUDY_TEXT.replace(old, new))
+            journal_of(str(d / "edited.yaml"), d)
+
+        return setup
+
+    def other_wall(d: Path) -> None:
+        journal_of(small, d)
+
+    same_ids_other_geometry = edited("pickup: [3.0, -0.5, 0.05]", "pickup: [3.5, -0.5, 0.05]")
+    other_fleet = edited("name: glue-1", "name: glue-9")
 
     def finished(d: Path) -> None:
-        subprocess.run(
-            [*_masonry(), "sim", cs, "--journal", str(d / "j.db")],
-            capture_output=True,
-            timeout=120,
-            check=False,
-        )
+        journal_of(cs, d)
 
     def corrupt(d: Path) -> None:
         (d / "j.db").write_bytes(b"SQLite format 3\x00" + os.urandom(4096))
