@@ -152,12 +152,48 @@ def test_a_lost_uav_frees_everything_and_a_given_up_request_stops_waiting():
     assert "d" not in c.waiting
 
 
-def test_homes_are_zones_from_the_start():
-    c = ColumnClearance(R, BASE, S, homes={"a": (0.0, -6.0, 0.0), "b": (2.0, -6.0, 0.0)})
-    # a flight passing over b's home at layer 0 would meet b taking off: it goes higher
-    g = c.request("a", (4.0, -6.0, 1.2), 0.0, (0.0, -6.0, 1.2))
-    assert g.granted and g.layer_m == pytest.approx(BASE + S)
+def test_a_landed_uav_holds_only_its_pad_and_takes_off_when_its_column_is_free():
+    homes = {"a": (0.0, -6.0, 0.0), "b": (1.0, -6.0, 0.0), "c": (2.0, -6.0, 0.0)}  # pads 1 m apart
+    c = ColumnClearance(R, BASE, S, homes=homes)
+    assert [c.phase(u).value for u in homes] == ["landed"] * 3
+    assert [v.kind for v in c.volumes("b")] == ["pad"]
+    # beside landed neighbours 1 m away, a may take off (the pads keep its airframe clear) ...
+    assert c.take_off("a")
+    assert c.phase("a").value == "parked" and [v.kind for v in c.volumes("a")] == ["zone"]
+    # ... but b, 1 m from a's take-off column, waits for it: neighbouring take-offs are sequenced
+    assert not c.can_take_off("b") and not c.take_off("b")
+    assert c.phase("b").value == "landed"
+    # c, 2 m from a, may go at once
+    assert c.take_off("c")
     assert c.conflicts() == []
+    # a flight over the landed b's pad at layer 0 (1.35 m up: above any pad) ...
+    g = c.request("a", (6.0, -6.0, 1.2), 0.0, (0.0, -6.0, 1.2))
+    # ... would pass c's take-off column: it goes a layer higher
+    assert g.granted and g.layer_m == pytest.approx(BASE + S)
+    assert not c.take_off("b")  # a's climb is still beside b
+    c.progress("a", (1.5, -6.0, BASE + S))  # on its leg, 1.5 m from its pad: its climb is behind it
+    assert not c.take_off("b")  # c still hovers over its pad 1 m away
+    assert c.landed("c", homes["c"])  # it did not fly after all
+    assert c.take_off("b")
+    assert c.conflicts() == []
+
+
+def test_a_uav_lands_back_on_its_pad_only_out_of_its_flight_home():
+    homes = {"a": (0.0, -6.0, 0.0), "b": (1.0, -6.0, 0.0)}
+    c = ColumnClearance(R, BASE, S, homes=homes)
+    assert c.take_off("a")
+    assert not c.landed("a", (3.0, -6.0, 0.0))  # not on its pad
+    g = c.request("a", (4.0, -3.0, 1.2), 0.0, (0.0, -6.0, 1.2))
+    assert g.granted
+    assert not c.landed("a", (0.0, -6.0, 0.0))  # its flight is to the site, not home
+    c.end_transit("a")
+    g = c.request("a", homes["a"], 10.0, (4.0, -3.0, 1.2))
+    assert g.granted
+    home_column = c.volumes("a")[-1]
+    assert home_column.kind == "zone" and home_column.slack_m == 0.0  # no work at home: no work slack
+    assert c.landed("a", (0.02, -6.01, 0.04))  # down at home (even without its `arrived`)
+    assert [v.kind for v in c.volumes("a")] == ["pad"]
+    assert c.take_off("b") and c.conflicts() == []
 
 
 SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))
@@ -168,7 +204,7 @@ SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))
     st.lists(
         st.tuples(
             st.sampled_from(["a", "b", "c", "d"]),
-            st.sampled_from(["req", "end", "away", "move", "lost", "tick"]),
+            st.sampled_from(["req", "end", "away", "move", "lost", "tick", "takeoff", "land"]),
             SITES,
             SITES,
             st.floats(1.2, 2.4),
@@ -177,7 +213,8 @@ SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))
     )
 )
 def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
-    c = ColumnClearance(R, BASE, S, homes={"a": (-6.0, -8.0, 0.0), "b": (-3.0, -8.0, 0.0)})
+    homes = {"a": (-6.0, -8.0, 0.0), "b": (-5.0, -8.0, 0.0), "c": (-3.0, -8.0, 0.0)}  # a and b 1 m apart
+    c = ColumnClearance(R, BASE, S, homes=homes)
     t = 0.0
     for uav, op, site, pos, top in ops:
         t += 1.0
@@ -194,9 +231,19 @@ def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
                 c.progress(uav, (*pos, layer))
         elif op == "lost":
             c.release(uav)
+        elif op == "takeoff":
+            c.take_off(uav)
+        elif op == "land" and uav in homes:
+            c.landed(uav, homes[uav])
         c.grant(t)
         assert c.conflicts() == []
-        zones = [(u, v) for u in "abcd" for v in c.volumes(u) if v.kind == "zone"]
+        # work zones (not the columns over pads, where no one works) keep r_c
+        zones = [
+            (u, v)
+            for u in "abcd"
+            for v in c.volumes(u)
+            if v.kind == "zone" and not (u in homes and _xy(homes[u]) == v.a)
+        ]
         for i, (u1, v1) in enumerate(zones):
             for u2, v2 in zones[i + 1 :]:
                 if u1 != u2:

@@ -34,6 +34,7 @@ class Airframe:
     camera_offset_m: Vec3 = (0.10, 0.0, -0.05)
     grasp_tolerance_m: float = 0.03  # the conical guide forgives about 3 cm (paper, Section IV)
     spray_height_m: float = 0.10  # nozzle height above the surface while spraying
+    span_m: float = 0.8  # propeller tip to tip: what a landed UAV needs beside it (masonry.separation)
 
     def T_body_cam(self) -> np.ndarray:
         return camera_mount(self.camera_offset_m)

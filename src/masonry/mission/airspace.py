@@ -48,10 +48,15 @@ from masonry.mission.volumes import (
 )
 from masonry.mission.volumes import point_segment_m as _point_segment_m  # noqa: F401 - the tests' name
 from masonry.planner.tasks import BrickTask, Task
+from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_m, zone_slack_m
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 #: Vertical distance between two transit layers: the 1 m separation target plus tracking error and gusts.
-DEFAULT_LAYER_SPACING_M = 1.1
+DEFAULT_LAYER_SPACING_M = LAYER_SPACING_M
+
+#: A UAV reported this close to its home (horizontally) and this low is on its pad.
+ON_PAD_XY_M = 0.3
+ON_PAD_Z_M = 0.3
 
 
 def work_altitude_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
@@ -165,10 +170,13 @@ class ColumnClearance:
         base_m: altitude of layer 0 over the finished wall (None: no airspace rules: every request is granted,
             with no layer); the zones over the homes reach it (a UAV takes off there up to its layer).
         spacing_m: vertical distance between layers; two volumes this far apart vertically never conflict.
-        homes: each UAV's home: it starts in the zone over it (it takes off and lands there).
+        homes: each UAV's home (its pad): it starts landed there, holding only the pad; it takes off once
+            :meth:`take_off` gave it the column over the pad, and holds the pad again once :meth:`landed`.
         sep_xy_m: horizontal separation between volumes (the 1 m target plus the horizontal tracking error).
         start_base_m: altitude of layer 0 at the start (e.g. the cruise altitude), raised by :meth:`raise_base`
             (None: ``base_m`` throughout).
+        pad_separation_m: how close (centre to centre) another UAV may come to a landed one
+            (:func:`masonry.separation.pad_separation_m`: the airframe's span plus a margin).
     """
 
     def __init__(
@@ -177,8 +185,9 @@ class ColumnClearance:
         base_m: float | None = None,
         spacing_m: float = DEFAULT_LAYER_SPACING_M,
         homes: Mapping[str, Vec3] | None = None,
-        sep_xy_m: float = 1.2,
+        sep_xy_m: float = SEPARATION_XY_M,
         start_base_m: float | None = None,
+        pad_separation_m: float = pad_separation_m(),
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
@@ -186,6 +195,8 @@ class ColumnClearance:
             raise ValueError(f"layer spacing must be a finite number > 0, got {spacing_m!r}")
         if not (sep_xy_m > 0.0 and math.isfinite(sep_xy_m)):
             raise ValueError(f"separation must be a finite number > 0, got {sep_xy_m!r}")
+        if not (0.0 < pad_separation_m <= sep_xy_m and math.isfinite(pad_separation_m)):
+            raise ValueError(f"pad separation must be in (0, {sep_xy_m}] m, got {pad_separation_m!r}")
         self.radius_m = float(radius_m)
         self.base_m = None if base_m is None else float(base_m)
         #: altitude of layer 0 now: from ``start_base_m`` up to ``base_m`` as the wall rises (:meth:`raise_base`)
@@ -195,7 +206,9 @@ class ColumnClearance:
         self.spacing_m = float(spacing_m)
         self.sep_xy_m = float(sep_xy_m)
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
-        self.zone_slack_m = max(0.0, (self.radius_m - self.sep_xy_m) / 2.0)
+        self.zone_slack_m = zone_slack_m(self.radius_m, self.sep_xy_m)
+        #: a pad's (negative) slack: another volume needs only ``pad_separation_m`` from it, not ``sep_xy_m``
+        self.pad_slack_m = float(pad_separation_m) - self.sep_xy_m - 1e-6
         self.max_layers = 12
         self._uavs: dict[str, UavAirspace] = {}
         self._homes: dict[str, Vec3] = {
@@ -210,8 +223,8 @@ class ColumnClearance:
         self.max_wait_s = 0.0
         self.layer_counts: dict[int, int] = {}  # granted flights per layer index
         if self.base_m is not None:
-            for uav, home in self._homes.items():
-                self._set_zone(uav, home, self.base_m)
+            for uav in self._homes:
+                self._set_pad(uav)
 
     def raise_base(self, altitude_m: float) -> None:
         """The wall may now reach ``altitude_m`` (a work altitude, :func:`task_work_altitude_m`): layer 0 of the
@@ -363,6 +376,47 @@ class ColumnClearance:
         u.flight, u.origin, u.phase = None, None, Phase.PARKED
         self._set_zone(uav, f.site, f.top_m, f.to)
 
+    @property
+    def version(self) -> int:
+        """Changes whenever a reservation changes (a take-off refused before may fit after it changed)."""
+        return self._version
+
+    def can_take_off(self, uav: str) -> bool:
+        """``uav`` may take off now: it holds more than its pad already, or the column over its pad is free."""
+        u = self._uavs.get(uav)
+        if self.base_m is None or u is None or u.phase is not Phase.LANDED:
+            return True
+        return self._free(uav, [self._home_column(uav)])
+
+    def take_off(self, uav: str) -> bool:
+        """``uav``, landed on its pad, is about to take off: it holds the column over its pad up to the transit
+        altitude, if that is free (True), else it stays on its pad (False: ask again once :attr:`version`
+        changed). A UAV that is not landed already holds what it needs (True)."""
+        if not self.can_take_off(uav):
+            return False
+        u = self._uavs.get(uav)
+        if u is not None and u.phase is Phase.LANDED:
+            self._set_zone(uav, self._homes[uav], self._home_top_m())
+        return True
+
+    def landed(self, uav: str, position_m: Vec3) -> bool:
+        """``uav`` says it is on the ground at ``position_m``, done flying: if that is on its pad, it holds only
+        the pad from now on (True). A UAV whose flight home is still reserved (its ``arrived`` was lost) lands
+        out of it too."""
+        home = self._homes.get(uav)
+        u = self._uavs.get(uav)
+        if self.base_m is None or home is None or u is None or u.phase is Phase.LANDED:
+            return False
+        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
+        if math.hypot(x - home[0], y - home[1]) > ON_PAD_XY_M or z - home[2] > ON_PAD_Z_M:
+            return False
+        at_home = u.zone is not None and _same(u.zone, home)
+        flying_home = u.flight is not None and _same(u.flight.site, home)
+        if u.request is not None or not (at_home or flying_home):
+            return False
+        self._set_pad(uav)
+        return True
+
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
         up asking for it; None: it is out of the mission (on the ground or fallen): everything is freed."""
@@ -432,11 +486,37 @@ class ColumnClearance:
         return column(site, top, to, self.zone_slack_m)
 
     def _set_zone(self, uav: str, site: Vec3, top: float, to: XY | None = None) -> None:
-        if uav in self._homes and _same(self._homes[uav], site) and self.base_m is not None:
-            top = max(top, self.base_m)  # it takes off here up to its transit altitude
         u = self._uav(uav)
         u.zone = site
-        u.volumes = [self._column(site, top, to)]
+        if self._is_home(uav, site):
+            u.volumes = [self._home_column(uav, top)]
+        else:
+            u.volumes = [self._column(site, top, to)]
+        if u.phase is Phase.LANDED:
+            u.phase = Phase.PARKED
+        self._version += 1
+
+    def _is_home(self, uav: str, site: Vec3) -> bool:
+        home = self._homes.get(uav)
+        return home is not None and _same(home, site)
+
+    def _home_top_m(self) -> float:
+        assert self.base_m is not None
+        return self.base_m
+
+    def _home_column(self, uav: str, top: float = 0.0) -> Volume:
+        """The column over ``uav``'s pad, up to its transit altitude: no work there, so no work slack (a UAV
+        taking off or landing keeps ``pad_separation_m`` from a neighbour landed on its pad)."""
+        home = self._homes[uav]
+        return column(home, max(top, self._home_top_m()), None, 0.0)
+
+    def _set_pad(self, uav: str) -> None:
+        """``uav`` is on its pad: it holds only the pad (others keep ``pad_separation_m`` from it)."""
+        u = self._uav(uav)
+        home = self._homes[uav]
+        xy = (home[0], home[1])
+        u.phase, u.zone, u.origin, u.flight, u.hold = Phase.LANDED, None, None, None, None
+        u.volumes = [Volume(xy, xy, home[2], home[2], self.pad_slack_m, "pad")]
         self._version += 1
 
     def _free(self, uav: str, vols: list[Volume]) -> bool:
@@ -462,12 +542,24 @@ class ColumnClearance:
         return [u.request for _n, u in self._waiting() if u.request is not None and u.request.seq < seq]
 
     def _flight_volumes(
-        self, start: Vec3, target: Vec3 | None, top: float, k: int, hold: XY | None, to: XY | None = None
+        self,
+        start: Vec3,
+        target: Vec3 | None,
+        top: float,
+        k: int,
+        hold: XY | None,
+        to: XY | None = None,
+        *,
+        home: bool = False,
     ) -> list[Volume]:
-        """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover)."""
-        return flight_volumes(
+        """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover; the
+        column over a UAV's own pad, ``home``, has no work slack)."""
+        vols = flight_volumes(
             (start[0], start[1]), self._snap(start[2]), self._alt(k), target, top, hold, to, self.zone_slack_m
         )
+        if home and target is not None and hold is None:
+            vols[-1] = dataclasses.replace(vols[-1], slack_m=0.0)
+        return vols
 
     def _evaluate(self, uav: str, u: UavAirspace, now_s: float) -> Grant:
         """Grant ``uav``'s flight if it fits, else a hold flight, else "hover where you are"."""
@@ -481,6 +573,7 @@ class ColumnClearance:
             math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m for e in earlier
         )
         if not blocked_site:
+            home = self._is_home(uav, w.site)
             if u.phase is Phase.AT_HOLD:
                 # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
                 # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
@@ -488,7 +581,7 @@ class ColumnClearance:
                 assert u.hold is not None
                 hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
                 for k in range(self.max_layers):
-                    extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to)
+                    extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to, home=home)
                     if self._free(uav, extra):
                         u.volumes = u.volumes + extra
                         self._version += 1
@@ -496,7 +589,7 @@ class ColumnClearance:
             elif u.phase is Phase.ASKING:
                 start = w.position if w.position is not None else w.site
                 for k in range(self.max_layers):
-                    vols = self._flight_volumes(start, w.site, w.top_m, k, None, w.to)
+                    vols = self._flight_volumes(start, w.site, w.top_m, k, None, w.to, home=home)
                     if self._free(uav, vols):
                         self._take(u, vols)
                         return self._granted(uav, u, k, now_s)
@@ -553,7 +646,7 @@ class ColumnClearance:
             for other, o in self._uavs.items()
             if other != uav
             for v in o.volumes
-            if v.kind != "leg"
+            if v.kind not in ("leg", "pad")  # a hold hover is a layer (>= 1.1 m) above any pad
         ]
         return hold_points(site, keep_out, spans, self.radius_m)
 

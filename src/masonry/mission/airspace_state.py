@@ -30,6 +30,7 @@ class Grant:
 class Phase(enum.Enum):
     """Where a UAV is in the transit protocol (:class:`ColumnClearance`)."""
 
+    LANDED = "landed"  # on its pad at home: it holds only the pad (a take-off needs the column over it)
     PARKED = "parked"  # nothing asked, nothing granted: in the zone at its site (or where it stopped)
     ASKING = "asking"  # asked for a flight, nothing granted yet: it hovers where it is
     TO_HOLD = "to-hold"  # its hold flight is granted: it flies to the hold point near its site

@@ -30,6 +30,7 @@ from typing import Any, Literal
 
 from masonry.blueprint import UavSpec
 from masonry.errors import MissionError, ProtocolError
+from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.messages import (
     MISSION_CONTROL,
     Assign,
@@ -54,6 +55,9 @@ AttemptStatus = Literal["running", "done", "failed"]
 
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
+
+#: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
+LANDED_STATE = "idle"
 
 
 @dataclass
@@ -83,6 +87,9 @@ class UavLink:
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
     status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
+    #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
+    #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
+    taking_off: bool = False
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -196,6 +203,7 @@ class MissionControl:
         )
         self._layer_floor_m = layer_floor_m
         self.timing = timing
+        self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
@@ -304,7 +312,7 @@ class MissionControl:
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
-            if self._dirty:
+            if self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version):
                 self._dispatch(now_s)
             if self.over:
                 self.ended_at_s = now_s
@@ -326,7 +334,7 @@ class MissionControl:
         self.started_at_s = now_s
         self._dirty = True
 
-    def _handle(self, raw: bytes, now_s: float) -> None:  # noqa: C901 - one branch per message type
+    def _handle(self, raw: bytes, now_s: float) -> None:
         try:
             msg = decode(raw, self.uavs.keys())
         except ProtocolError as exc:
@@ -366,6 +374,7 @@ class MissionControl:
             )
             return
         if isinstance(msg, Result):
+            link.taking_off = False
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
             if msg.state == OUT_OF_SERVICE_STATE and msg.result.status == "failed":
@@ -379,17 +388,25 @@ class MissionControl:
         if isinstance(msg, (Heartbeat, Progress)) and msg.state == OUT_OF_SERVICE_STATE:
             self._lose(msg.sender, now_s, status="out of service")
             return
-        if isinstance(msg, Heartbeat):
-            link.state = msg.state
-            if msg.position_m is not None:
-                link.moved_to(msg.position_m)
-                self.columns.progress(msg.sender, msg.position_m)
-        elif isinstance(msg, Progress):
-            self.events.progress += 1
-            link.state = msg.state
-            if msg.position_m is not None:
-                link.moved_to(msg.position_m)
-                self.columns.progress(msg.sender, msg.position_m)
+        if isinstance(msg, (Heartbeat, Progress)):
+            if isinstance(msg, Progress):
+                self.events.progress += 1
+            self._report(link, msg.state, msg.position_m)
+
+    def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:
+        """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
+        flying, it holds only the pad."""
+        link.state = state
+        if position_m is None:
+            return
+        link.moved_to(position_m)
+        name = link.spec.name
+        if position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
+            link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
+        self.columns.progress(name, position_m)
+        if state == LANDED_STATE and not link.taking_off and self.dispatcher.task_of(name) is None:
+            # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
+            self.columns.landed(name, position_m)
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
@@ -468,7 +485,8 @@ class MissionControl:
     def _dispatch(self, now_s: float) -> None:
         self._dirty = False
         positions = {n: u.position_m for n, u in self.uavs.items() if u.position_m is not None and not u.lost}
-        for a in self.dispatcher.assign(positions or None):
+        self._deferred_at = None
+        for a in self.dispatcher.assign(positions or None, may_start=self._may_take_off):
             attempt = a.attempt
             att = Attempt(a.task_id, a.uav, attempt, now_s)
             self.history.append(att)
@@ -480,6 +498,18 @@ class MissionControl:
                 a.uav,
                 Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s, self.wall_digest),
             )
+
+    def _may_take_off(self, name: str) -> bool:
+        """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
+        here): take-offs from neighbouring pads go one after the other."""
+        from masonry.mission.airspace import Phase
+
+        if self.columns.phase(name) is Phase.LANDED and not self.columns.take_off(name):
+            self._deferred_at = self.columns.version
+            return False
+        # from now on a report that it is landed may predate the assignment (it lands, then reads it)
+        self.uavs[name].taking_off = True
+        return True
 
     def _raise_layers(self, task_ids: Iterable[str]) -> None:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""

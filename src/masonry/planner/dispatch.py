@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -348,7 +348,11 @@ class Dispatcher:
 
     # ------------------------------------------------------------------ events
 
-    def assign(self, uav_positions_m: Mapping[str, Vec3] | None = None) -> list[Assignment]:
+    def assign(
+        self,
+        uav_positions_m: Mapping[str, Vec3] | None = None,
+        may_start: Callable[[str], bool] | None = None,
+    ) -> list[Assignment]:
         """Give available, mutually non-conflicting tasks to idle UAVs and mark them in progress.
 
         Roles are served brick first, then adhesion (the order of the paper's Algorithm 1), idle UAVs in fleet
@@ -357,6 +361,8 @@ class Dispatcher:
         Args:
             uav_positions_m: current positions of (some) UAVs for the distance-based choices; a UAV not listed
                 is taken to be where its last task ended (its home before the first one).
+            may_start: asked once a task is chosen for an idle UAV: False keeps the UAV idle for now and the
+                task available (mission control: a landed UAV whose take-off column is not free).
 
         Returns:
             The new assignments (possibly empty).
@@ -379,6 +385,8 @@ class Dispatcher:
                 i = self._select(role, name)
                 if i is None:
                     break
+                if may_start is not None and not may_start(name):
+                    continue
                 self._start(i, name)
                 tid = self._ids[i]
                 out.append(Assignment(name, tid, self._attempts.get(tid, 0) + 1))
