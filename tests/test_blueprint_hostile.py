@@ -290,7 +290,19 @@ def test_a_running_bond_end_brick_half_supported_is_fine(tmp_path: Path) -> None
 
 def test_two_uavs_with_the_same_home(tmp_path: Path) -> None:
     message = _error(tmp_path, GOOD.replace("[-2.0, -4.0, 0.0]", "[2.0, -4.0, 0.0]"))
-    assert "'glue-1': home" in message and "is the home of 'brick-1' too" in message
+    assert "'glue-1': home" in message and "is 0 m from the home of 'brick-1'" in message
+    assert "pads must be at least 1 m apart (the airframe's 0.8 m span plus 0.2 m)" in message
+
+
+def test_pads_too_close_for_two_airframes_or_to_the_work(tmp_path: Path) -> None:
+    # GOOD: brick-1's home at (2, -4), the wall around the origin, pickups at y = -2
+    message = _error(tmp_path, GOOD.replace("[-2.0, -4.0, 0.0]", "[2.0, -4.95, 0.0]"))
+    assert "'glue-1': home: is 0.95 m from the home of 'brick-1'" in message
+    load_blueprint(_write(tmp_path, GOOD.replace("[-2.0, -4.0, 0.0]", "[2.0, -5.0, 0.0]")))  # 1 m: fine
+    message = _error(tmp_path, GOOD.replace("[-2.0, -4.0, 0.0]", "[-0.5, -1.0, 0.0]"))
+    assert "'glue-1': home: is 0.989 m from the wall (brick 0): a pad must be at least 1.15 m" in message
+    message = _error(tmp_path, GOOD.replace("[-2.0, -4.0, 0.0]", "[0.5, -3.5, 0.0]"))
+    assert "'glue-1': home: is 0.707 m from brick 2's pickup: a pad must be at least 1.15 m" in message
 
 
 def test_home_inside_the_wall(tmp_path: Path) -> None:

@@ -67,8 +67,6 @@ MAX_CLEARANCE_M = 10.0
 #: A pickup's brick and a home stand on the ground or a platform no higher than this (a truck bed, a scaffold).
 MAX_PICKUP_HEIGHT_M = 10.0
 MAX_HOME_HEIGHT_M = 10.0
-#: Two homes closer than this are the same take-off point (two airframes ~0.5 m across cannot share it).
-MIN_HOME_SEPARATION_M = 0.5
 #: A brick that does not stand on the ground must have at least this fraction of its footprint on the bricks
 #: under it: a running-bond end brick over a half-brick offset has 0.5; below a quarter the adhesive, not the
 #: brick below, would have to hold it (and the centre of mass is then far out over the edge).

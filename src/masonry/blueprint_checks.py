@@ -18,7 +18,6 @@ from masonry.blueprint import (
     MAX_HOME_HEIGHT_M,
     MAX_PICKUP_HEIGHT_M,
     MIN_BRICK_HEIGHT_M,
-    MIN_HOME_SEPARATION_M,
     MIN_SUPPORT_FRACTION,
     PENETRATION_TOL_M,
     RESTING_TOL_M,
@@ -32,6 +31,7 @@ from masonry.blueprint import (
     quote,
 )
 from masonry.errors import BlueprintError
+from masonry.separation import PAD_MARGIN_M, pad_separation_m, pad_site_distance_m, zone_slack_m
 
 if TYPE_CHECKING:
     import numpy as np
@@ -259,7 +259,8 @@ def _check_support(bricks: tuple[Brick, ...], contacts: Contacts, source: str) -
 
 
 def _check_sites(blueprint: Blueprint) -> None:
-    """Cruise above the wall; pickups and homes off the wall's footprint; no shared pickup; homes apart."""
+    """Cruise above the wall; pickups and homes off the wall's footprint; no shared pickup; pads apart and clear
+    of the work (``masonry.separation``)."""
     import numpy as np
 
     source = blueprint.source
@@ -302,7 +303,20 @@ def _check_sites(blueprint: Blueprint) -> None:
             f"is brick {todo[a].id}'s pickup too: the two bricks would "
             f"overlap there ({_fmt(float(np.linalg.norm(pickups[a] - pickups[b])))} m apart)",
         )
-    fleet = blueprint.fleet
+    _check_pads(blueprint, footprints, pickups, todo)
+
+
+def _check_pads(
+    blueprint: Blueprint,
+    footprints: tuple[np.ndarray, np.ndarray, np.ndarray, Any],
+    pickups: np.ndarray,
+    todo: list[Brick],
+) -> None:
+    """Pads (homes) off the wall, far enough apart for two airframes, and far enough from the wall and every
+    pickup that a landed UAV never blocks the work there: what validates can be flown (docs/safety.md)."""
+    import numpy as np
+
+    source, bricks, fleet = blueprint.source, blueprint.bricks, blueprint.fleet
     homes = np.array([u.home_m for u in fleet], dtype=float).reshape(-1, 3)
     hit = _inside_footprints(homes[:, :2], footprints)
     if hit is not None:
@@ -314,21 +328,64 @@ def _check_sites(blueprint: Blueprint) -> None:
         )
     flat = homes.copy()
     flat[:, 2] = 0.0
-    pair = _close_pair(flat, np.full(len(fleet), MIN_HOME_SEPARATION_M))
+    apart_m = pad_separation_m()
+    pair = _close_pair(flat, np.full(len(fleet), apart_m - 1e-9))
     if pair is not None:
         a, b = sorted(pair)
+        gap = float(np.linalg.norm(flat[a] - flat[b]))
         raise BlueprintError(
             source,
             f"fleet UAV {quote(fleet[b].name)}: home",
-            f"is the home of {quote(fleet[a].name)} too "
-            f"(less than {_fmt(MIN_HOME_SEPARATION_M)} m apart horizontally)",
+            f"is {_fmt(round(gap, 3))} m from the home of {quote(fleet[a].name)}: pads must be at least "
+            f"{_fmt(apart_m)} m apart (the airframe's {_fmt(apart_m - PAD_MARGIN_M)} m span plus "
+            f"{_fmt(PAD_MARGIN_M)} m)",
         )
+    clear_m = pad_site_distance_m(blueprint.clearance_m)
+    why = (
+        f"a pad must be at least {_fmt(round(clear_m, 3))} m from the wall and from every pickup "
+        f"({_fmt(apart_m)} m from a landed UAV plus the {_fmt(round(zone_slack_m(blueprint.clearance_m), 3))} m "
+        "a UAV working there may drift), or a UAV on it blocks the work"
+    )
+    near = _inside_footprints(homes[:, :2], footprints, margin_m=clear_m)
+    if near is not None:
+        k, j = near
+        raise BlueprintError(
+            source,
+            f"fleet UAV {quote(fleet[k].name)}: home",
+            f"is {_fmt(round(_footprint_distance_m(homes[k, :2], footprints, j), 3))} m from the wall "
+            f"(brick {bricks[j].id}): {why}",
+        )
+    if len(todo):
+        from scipy.spatial import cKDTree
+
+        d, i = cKDTree(pickups[:, :2]).query(homes[:, :2])
+        for k in np.argsort(d, kind="stable")[:1]:
+            if d[k] < clear_m - 1e-9:
+                raise BlueprintError(
+                    source,
+                    f"fleet UAV {quote(fleet[k].name)}: home",
+                    f"is {_fmt(round(float(d[k]), 3))} m from brick {todo[int(i[k])].id}'s pickup: {why}",
+                )
+
+
+def _footprint_distance_m(
+    point_xy: ArrayLike, footprints: tuple[np.ndarray, np.ndarray, np.ndarray, Any], j: int
+) -> float:
+    """Horizontal distance from ``point_xy`` to brick ``j``'s footprint (0 inside)."""
+    import numpy as np
+
+    center, half, yaw, _tree = footprints
+    d = np.asarray(point_xy, dtype=float) - center[j]
+    c, s = math.cos(float(yaw[j])), math.sin(float(yaw[j]))
+    u, v = abs(c * d[0] + s * d[1]), abs(-s * d[0] + c * d[1])
+    return math.hypot(max(0.0, u - float(half[j, 0])), max(0.0, v - float(half[j, 1])))
 
 
 def _inside_footprints(
-    points_xy: ArrayLike, footprints: tuple[np.ndarray, np.ndarray, np.ndarray, Any]
+    points_xy: ArrayLike, footprints: tuple[np.ndarray, np.ndarray, np.ndarray, Any], margin_m: float = 0.0
 ) -> tuple[int, int] | None:
-    """(point index, brick index) of the first point strictly inside a brick's footprint, if any.
+    """(point index, brick index) of the first point strictly inside a brick's footprint (or, with
+    ``margin_m``, closer to it than that), if any.
 
     ``footprints``: the bricks' (n, 2) centres, (n, 2) half sizes, (n,) yaws, and a KD-tree of the centres.
     """
@@ -338,7 +395,7 @@ def _inside_footprints(
     if len(points_xy) == 0:
         return None
     center, half, yaw, tree = footprints
-    radius = float(np.hypot(half[:, 0], half[:, 1]).max())
+    radius = float(np.hypot(half[:, 0], half[:, 1]).max()) + margin_m
     near = tree.query_ball_point(points_xy, r=radius)
     counts = np.array([len(n) for n in near], dtype=np.int64)
     if counts.sum() == 0:
@@ -349,7 +406,13 @@ def _inside_footprints(
     c, s = np.cos(yaw[brick]), np.sin(yaw[brick])
     u = c * d[:, 0] + s * d[:, 1]
     v = -s * d[:, 0] + c * d[:, 1]
-    inside = (np.abs(u) < half[brick, 0] - 1e-9) & (np.abs(v) < half[brick, 1] - 1e-9)
+    if margin_m > 0.0:
+        gap = np.hypot(
+            np.maximum(np.abs(u) - half[brick, 0], 0.0), np.maximum(np.abs(v) - half[brick, 1], 0.0)
+        )
+        inside = gap < margin_m - 1e-9
+    else:
+        inside = (np.abs(u) < half[brick, 0] - 1e-9) & (np.abs(v) < half[brick, 1] - 1e-9)
     hits = sorted(zip(point[inside].tolist(), brick[inside].tolist()))
     return hits[0] if hits else None
 

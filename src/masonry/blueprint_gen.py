@@ -7,7 +7,7 @@ already; every other brick gets a pickup point on a pallet: a grid on the ground
 wall and each brick lies on the free slot nearest to its place (short carries; bricks placed together, r_c
 apart, are picked up about as far apart); a shorter wall's pallet is 10 slots wide (wider than the wall, so the
 bricks fetched together are spread across it), filled row by row; so is one of ``pallet_columns`` columns. UAV homes are in a row beyond the pallet, r_c + 0.5 m
-apart.
+apart (at least ``masonry.separation.pad_separation_m``, 1 m).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from masonry.blueprint import (
     UavSpec,
 )
 from masonry.errors import BlueprintError
+from masonry.separation import pad_separation_m
 
 Vec3 = tuple[float, float, float]
 #: (u, v, course) of each brick in the wall frame, plus its yaw relative to the wall.
@@ -196,7 +197,7 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     home_v = -(width / 2.0 + pallet_distance + max(rows - 1, 0) * pallet_pitch_v + clearance + 1.0)
     crew: list[tuple[str, Role]] = [(f"brick-{k + 1}", "brick") for k in range(brick_uavs)]
     crew += [(f"glue-{k + 1}", "adhesion") for k in range(adhesion_uavs)]
-    step = clearance + 0.5
+    step = max(clearance + 0.5, pad_separation_m())
     fleet = tuple(
         UavSpec(name=n, role=r, home_m=world((k - (len(crew) - 1) / 2.0) * step, home_v, 0.0))
         for k, (n, r) in enumerate(crew)
