@@ -134,3 +134,20 @@ def test_fly_mission_mode_bad_input():
     assert res.exit_code == 2 and "exclude each other" in res.stderr
     res = runner.invoke(app, ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY])
     assert res.exit_code == 2 and "--task is required" in res.stderr
+
+
+def test_sim_stops_a_mission_that_stalls_and_says_who_waits_for_whom():
+    # 3 s with nothing changing happens early in any mission (glue-1 cruises, brick-1 waits on its pad for A0):
+    # the watchdog stops it there
+    res = sim("--stall-timeout", "3", "--format", "json")
+    assert res.exit_code == 1, res.output
+    d = json.loads(res.stdout)
+    assert not d["completed"]
+    stall = d["stall"]
+    assert stall["timeout_s"] == 3.0 and stall["at_s"] - stall["since_s"] >= 3.0
+    assert {w["uav"] for w in stall["waits"]} == {"brick-1", "glue-1"}
+    assert all(set(w) >= {"state", "task", "airspace", "asked_for_m", "blocked_by"} for w in stall["waits"])
+    text = sim("--stall-timeout", "3")
+    assert text.exit_code == 1 and "stalled: no progress for 3 s" in text.stdout
+    bad = sim("--stall-timeout", "-1")
+    assert bad.exit_code == 2 and "--stall-timeout -1: out of range" in bad.output

@@ -68,11 +68,15 @@ def random_plan(rng, n):
     return Plan(tuple(tasks), tuple(sorted(deps)), tuple(sorted(conflicts)))
 
 
-def run_mission(plan, fleet, *, seed=0, fail_p=0.0, lose=None, policy="critical-path", dt=0.5, t_max=5000.0):
+def run_mission(
+    plan, fleet, *, seed=0, fail_p=0.0, lose=None, policy="critical-path", dt=0.5, t_max=5000.0, **mc_options
+):
     rng = random.Random(seed)
     durations = {t.id: rng.uniform(2.0, 20.0) for t in plan.tasks}
     bus = InprocBus()
-    mc = MissionControl(plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, heartbeat_timeout_s=3.0)
+    mc = MissionControl(
+        plan, fleet, bus.endpoint(MISSION_CONTROL), policy=policy, heartbeat_timeout_s=3.0, **mc_options
+    )
     handlers = {}
     for u in fleet:
         h = UavHandler(u.name, bus.endpoint(u.name), position=lambda u=u: u.home_m)

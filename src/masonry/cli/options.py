@@ -64,6 +64,7 @@ RANGES: dict[str, Bound] = {
     "mission-control --startup-timeout": Bound(0.0, 3600.0, "s"),
     "mission-control --max-time": Bound(0.0, 10 * 86_400.0, "s", low_open=True),
     "mission-control --tick": Bound(0.005, 1.0, "s"),
+    "--stall-timeout": Bound(0.0, 10 * 86_400.0, "s"),  # 0: no watchdog
     # blueprint generators
     "--courses": Bound(1, 1000, integer=True),
     "--bricks-per-course": Bound(1, 1000, integer=True),

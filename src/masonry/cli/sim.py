@@ -10,6 +10,7 @@ from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
 from masonry.errors import InputError
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
 
 @command("sim")
@@ -42,6 +43,16 @@ def sim(
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
+    stall_timeout: float = typer.Option(
+        DEFAULT_STALL_TIMEOUT_S,
+        "--stall-timeout",
+        help=help_text(
+            "sim",
+            "--stall-timeout",
+            "Stop the mission, not completed, when nothing progresses for this many simulated seconds, and "
+            "report who waits for whom (`stall` in the JSON); 0: never.",
+        ),
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -52,7 +63,8 @@ def sim(
 ) -> None:
     """Simulate a whole mission: plan, dispatch, fly every UAV, report (makespan, errors, safety checks).
 
-    Exit status 0 when the wall is complete, 1 when it is not (stuck tasks are listed), 2 on bad input.
+    Exit status 0 when the wall is complete, 1 when it is not (stuck tasks are listed; a stalled mission says
+    who waits for whom), 2 on bad input.
     """
     from masonry.blueprint import load_blueprint
     from masonry.mission.simulate import SimulatedMission
@@ -61,7 +73,14 @@ def sim(
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
     check_all(
-        "sim", {"--brick-uavs": brick_uavs, "--adhesion-uavs": adhesion_uavs, "--seed": seed, "--dt": dt}
+        "sim",
+        {
+            "--brick-uavs": brick_uavs,
+            "--adhesion-uavs": adhesion_uavs,
+            "--seed": seed,
+            "--dt": dt,
+            "--stall-timeout": stall_timeout,
+        },
     )
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
@@ -92,6 +111,7 @@ def sim(
             dt_s=dt,
             progress=progress_cb,
             warn=lambda m: typer.echo(f"warning: {m}", err=True),
+            stall_timeout_s=stall_timeout,
         )
         result = mission.run()
     finally:

@@ -376,6 +376,48 @@ class ColumnClearance:
         u.flight, u.origin, u.phase = None, None, Phase.PARKED
         self._set_zone(uav, f.site, f.top_m, f.to)
 
+    def asked_for(self, uav: str) -> Vec3 | None:
+        """The site ``uav`` waits to fly to (None: it waits for nothing)."""
+        u = self._uavs.get(uav)
+        return None if u is None or u.request is None else u.request.site
+
+    def blockers(self, uav: str) -> list[tuple[str, str]]:
+        """Who is in the way of what ``uav`` waits for, and with what: ``(other UAV, volume kind)`` for every
+        other UAV whose volumes conflict with its flight at the lowest layer (or, landed, with its take-off
+        column), and ``(other, "earlier-request")`` for one that asked first for a site within the radius.
+        Empty: nothing blocks it (it is not waiting, or its answer is on the way). For the stall report."""
+        u = self._uavs.get(uav)
+        if self.base_m is None or u is None:
+            return []
+        out: list[tuple[str, str]] = []
+        if u.phase is Phase.LANDED:
+            wanted = [self._home_column(uav)]
+        elif u.request is not None:
+            w = u.request
+            out = [
+                (other, "earlier-request")
+                for other, o in self._waiting()
+                if other != uav
+                and o.request is not None
+                and o.request.seq < w.seq
+                and math.hypot(o.request.site[0] - w.site[0], o.request.site[1] - w.site[1]) < self.radius_m
+            ]
+            if u.phase is Phase.AT_HOLD and u.hold is not None:
+                start = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
+            else:
+                start = w.position if w.position is not None else w.site
+            home = self._is_home(uav, w.site)
+            wanted = self._flight_volumes(start, w.site, w.top_m, 0, None, w.to, home=home)
+        else:
+            return []
+        for other, o in self._uavs.items():
+            if other == uav:
+                continue
+            kind = next((q.kind for q in o.volumes for v in wanted if self._conflict(v, q)), None)
+            if kind is not None:
+                out.append((other, kind))
+        return out
+
     @property
     def version(self) -> int:
         """Changes whenever a reservation changes (a take-off refused before may fit after it changed)."""

@@ -43,6 +43,7 @@ from masonry.mission.messages import (
     decode,
     encode,
 )
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Blocker, Stall, StallWatch, Wait
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
 from masonry.ports import BATTERY_LOW_REASON
@@ -138,6 +139,9 @@ class MissionControl:
         min_fraction: the margin on ``min_durations_s`` (two processes' clocks and ticks).
         timing: the UAVs' task timing and tool geometry (:class:`masonry.timing.TaskTiming`; default:
             ``UavConfig``'s), for the work altitudes ``layer_floor_m`` rises to.
+        stall_timeout_s: when no task ends, no flight is granted and no UAV's state changes for this long,
+            the mission stops, not completed, with :attr:`stall` saying who waits for whom
+            (:mod:`masonry.mission.stall`); None or 0: never.
     """
 
     def __init__(
@@ -161,6 +165,7 @@ class MissionControl:
         min_durations_s: Mapping[str, float] | None = None,
         min_fraction: float = 0.9,
         timing: TaskTiming | None = None,
+        stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -204,6 +209,10 @@ class MissionControl:
         self._layer_floor_m = layer_floor_m
         self.timing = timing
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
+        self._watch = StallWatch(stall_timeout_s)
+        self._results = 0  # results acted on (done or failed): progress for the watchdog
+        #: set when the progress watchdog stopped the mission: who waited for whom
+        self.stall: Stall | None = None
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
@@ -271,8 +280,8 @@ class MissionControl:
 
     @property
     def over(self) -> bool:
-        """Finished or blocked: mission control has sent (or will send) MissionEnd."""
-        return self.finished or self.blocked
+        """Finished, blocked or stalled: mission control has sent (or will send) MissionEnd."""
+        return self.finished or self.blocked or self.stall is not None
 
     @property
     def online(self) -> list[str]:
@@ -314,6 +323,7 @@ class MissionControl:
         if self.started_at_s is not None and self.ended_at_s is None:
             if self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version):
                 self._dispatch(now_s)
+            self._watch_progress(now_s)
             if self.over:
                 self.ended_at_s = now_s
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
@@ -430,6 +440,7 @@ class MissionControl:
             )
             return
         del self._running[r.task_id]
+        self._results += 1
         att.end_s = now_s
         att.placement_error_m = r.placement_error_m
         att.coverage = r.coverage
@@ -510,6 +521,35 @@ class MissionControl:
         # from now on a report that it is landed may predate the assignment (it lands, then reads it)
         self.uavs[name].taking_off = True
         return True
+
+    def _watch_progress(self, now_s: float) -> None:
+        """The watchdog: progress is a task done or failed, a flight or hold flight granted, a UAV's state
+        changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
+        signature = (
+            self._results,
+            self.columns.granted_count,
+            self.columns.held_back,
+            tuple((link.state, link.lost) for link in self.uavs.values()),
+        )
+        if not self._watch.observe(now_s, signature) or self.finished:
+            return
+        assert self._watch.since_s is not None and self._watch.timeout_s is not None
+        waits = tuple(
+            Wait(
+                name,
+                link.state,
+                self.dispatcher.task_of(name),
+                self.columns.phase(name).value,
+                self.columns.asked_for(name),
+                tuple(Blocker(other, kind) for other, kind in self.columns.blockers(name)),
+            )
+            for name, link in self.uavs.items()
+            if not link.lost
+        )
+        self.stall = Stall(
+            now_s, self._watch.since_s, self._watch.timeout_s, waits, self.dispatcher.available
+        )
+        log.warning("%s", self.stall.line())
 
     def _raise_layers(self, task_ids: Iterable[str]) -> None:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""

@@ -98,6 +98,8 @@ class MissionReport:
     wall_time_s: float = 0.0
     resumed_from_s: float | None = None
     messages: int = 0
+    #: the progress watchdog stopped the mission: who waited for whom (``masonry.mission.stall.Stall.to_dict``)
+    stall: Mapping[str, Any] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -120,6 +122,8 @@ class MissionReport:
         }
         if not self.completed:
             out["stuck"] = list(self.stuck)
+        if self.stall is not None:
+            out["stall"] = dict(self.stall)
         return out
 
     def to_json(self, indent: int | None = None) -> str:
@@ -170,6 +174,8 @@ class MissionReport:
         lines.extend(self.timeline())
         if not self.completed:
             lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
+        if self.stall is not None:
+            lines.append(str(self.stall.get("line", "stalled")))
         if self.wall_time_s > 0:
             lines.append(
                 f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
@@ -354,5 +360,6 @@ def control_report(
         stuck=tuple(stuck),
         attempts=attempts,
         resumed_from_s=mc.resumed_at_s,
+        stall=None if getattr(mc, "stall", None) is None else {**mc.stall.to_dict(), "line": mc.stall.line()},
         **extra,
     )

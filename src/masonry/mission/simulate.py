@@ -30,6 +30,7 @@ from masonry.mission.inproc import InprocBus
 from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 from masonry.planner.bounds import min_durations_s
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.tasks import BrickTask, Plan
@@ -209,6 +210,7 @@ def simulate(
     rising_layers: bool = True,
     warn: Callable[[str], None] | None = None,
     uav_config: UavConfig | None = None,
+    stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -233,6 +235,7 @@ def simulate(
         rising_layers=rising_layers,
         warn=warn,
         uav_config=uav_config,
+        stall_timeout_s=stall_timeout_s,
     ).run()
 
 
@@ -382,6 +385,7 @@ class SimulatedMission:
         rising_layers: bool = True,
         warn: Callable[[str], None] | None = None,
         uav_config: UavConfig | None = None,
+        stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -411,6 +415,8 @@ class SimulatedMission:
             uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name,
                 role, home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs
                 get its airframe; the lower bound, the expected durations and the airspace its timing.
+            stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
+                (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -515,6 +521,7 @@ class SimulatedMission:
                     the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing
                 ),
                 timing=timing,
+                stall_timeout_s=stall_timeout_s,
             )
             if state is not None:
                 mc.restore(state)
