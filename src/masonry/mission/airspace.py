@@ -207,6 +207,11 @@ class ColumnClearance:
         self.sep_xy_m = float(sep_xy_m)
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
         self.zone_slack_m = zone_slack_m(self.radius_m, self.sep_xy_m)
+        #: how far a waiting UAV keeps from the sites others wait for (first come, first served) and hold points
+        #: from everyone's sites: two zones' separation, r_c, or more when r_c is below the separation (a hold
+        #: hover 1.1 r_c = 0.94 m from another's site at r_c 0.85 m blocked its descent, and that one's hold
+        #: hover blocked this one's: two UAVs waited at their hold points for each other for ever)
+        self.wait_radius_m = max(self.radius_m, self.sep_xy_m + 2.0 * self.zone_slack_m)
         #: a pad's (negative) slack: another volume needs only ``pad_separation_m`` from it, not ``sep_xy_m``
         self.pad_slack_m = float(pad_separation_m) - self.sep_xy_m - 1e-6
         self.max_layers = 12
@@ -400,7 +405,8 @@ class ColumnClearance:
                 if other != uav
                 and o.request is not None
                 and o.request.seq < w.seq
-                and math.hypot(o.request.site[0] - w.site[0], o.request.site[1] - w.site[1]) < self.radius_m
+                and math.hypot(o.request.site[0] - w.site[0], o.request.site[1] - w.site[1])
+                < self.wait_radius_m
             ]
             if u.phase is Phase.AT_HOLD and u.hold is not None:
                 start = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
@@ -612,7 +618,7 @@ class ColumnClearance:
         u.seen_version = self._version
         earlier = self._queued_before(w.seq)
         blocked_site = any(
-            math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.radius_m for e in earlier
+            math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.wait_radius_m for e in earlier
         )
         if not blocked_site:
             home = self._is_home(uav, w.site)
@@ -690,7 +696,7 @@ class ColumnClearance:
             for v in o.volumes
             if v.kind not in ("leg", "pad")  # a hold hover is a layer (>= 1.1 m) above any pad
         ]
-        return hold_points(site, keep_out, spans, self.radius_m)
+        return hold_points(site, keep_out, spans, self.wait_radius_m)
 
     def _hold_flight(self, uav: str, u: UavAirspace) -> Grant | None:
         """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""

@@ -19,6 +19,7 @@ uav-loss      NAME@SECONDS        the UAV fails (falls, disarms) at that simulat
 from __future__ import annotations
 
 import math
+import random
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
@@ -131,6 +132,21 @@ class Faults:
                     raise InputError(
                         f"fault {key}={uav}@{table[uav]:g}: no UAV named {uav!r} (fleet: {', '.join(sorted(known))})"
                     )
+
+    @classmethod
+    def mild(cls, rng: random.Random) -> Faults:
+        """Random mild faults of the kinds a site always has (grasp misses, dropped and occluded frames, light
+        gusts), each present half the time: for property tests and sweeps over random layouts."""
+        spec = []
+        if rng.random() < 0.5:
+            spec.append(f"grasp={rng.uniform(0.0, 0.2):.2f}")
+        if rng.random() < 0.5:
+            spec.append(f"dropout={rng.uniform(0.0, 0.3):.2f}")
+        if rng.random() < 0.5:
+            spec.append(f"occlusion={rng.uniform(0.0, 0.3):.2f}")
+        if rng.random() < 0.3:
+            spec.append(f"gusts={rng.uniform(0.0, 0.5):.2f}")
+        return cls.parse(spec)
 
     @classmethod
     def parse(cls, items: Iterable[str], base: Faults | None = None) -> Faults:

@@ -1,0 +1,91 @@
+"""Fly random site layouts (masonry.blueprint_random) and print what happened to each: the sweep behind the
+property test tests/test_random_layouts.py, on more and larger layouts.
+
+    python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults]
+
+A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
+violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import random
+import time
+
+from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.mission.simulate import simulate
+from masonry.separation import pad_separation_m
+from masonry.sim import Faults
+
+#: What the property test asserts (the airspace's 1.1-1.2 m less tracking error; docs/safety.md).
+SEPARATION_BOUND_M = 1.0
+
+
+def fly(seed: int, limits: LayoutLimits, faults: bool) -> dict[str, object]:
+    rng = random.Random(seed)
+    bp = random_layout(rng, limits)
+    f = Faults.mild(rng) if faults else Faults()
+    homes = [u.home_m for u in bp.fleet]
+    spacing = min(
+        (math.dist(a[:2], b[:2]) for i, a in enumerate(homes) for b in homes[i + 1 :]), default=float("nan")
+    )
+    t0 = time.perf_counter()
+    r = simulate(bp, seed=seed, faults=f)
+    return {
+        "seed": seed,
+        "wall": bp.name,
+        "fleet": f"{len(bp.uavs('brick'))}+{len(bp.uavs('adhesion'))}",
+        "r_c": bp.clearance_m,
+        "pads_m": spacing,
+        "completed": r.completed,
+        "stalled": r.stall is not None,
+        "conflicts": r.conflict_violations,
+        "deps": r.dependency_violations,
+        "min_sep": r.min_separation_m,
+        "makespan": r.makespan_s,
+        "bound": r.lower_bound_s,
+        "wall_s": time.perf_counter() - t0,
+        "stuck": r.stuck,
+        "stall": (r.stall or {}).get("line"),
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=40)
+    ap.add_argument("--first-seed", type=int, default=0)
+    ap.add_argument("--large", action="store_true", help="walls up to 6 courses x 12 bricks")
+    ap.add_argument("--faults", action="store_true", help="mild random faults")
+    args = ap.parse_args()
+    limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
+    print(f"pad separation {pad_separation_m():.2f} m; limits {limits}")
+    print(
+        "seed  wall                       fleet  r_c   pads   done  stall conf deps min_sep makespan bound  wall_s"
+    )
+    bad = 0
+    for seed in range(args.first_seed, args.first_seed + args.n):
+        row = fly(seed, limits, args.faults)
+        sep = row["min_sep"]
+        ok = (
+            (row["completed"] or args.faults)
+            and not row["stalled"]
+            and row["conflicts"] == 0
+            and row["deps"] == 0
+            and (sep is None or sep >= SEPARATION_BOUND_M)
+        )
+        bad += not ok
+        print(
+            f"{row['seed']:<5} {row['wall']:<26} {row['fleet']:<6} {row['r_c']:<5.2f} {row['pads_m']:<6.2f} "
+            f"{'yes' if row['completed'] else 'NO':<5} {'YES' if row['stalled'] else 'no':<5} "
+            f"{row['conflicts']:<4} {row['deps']:<4} {'-' if sep is None else f'{sep:.3f}':<7} "
+            f"{row['makespan']:<8.1f} {row['bound']:<6.1f} {row['wall_s']:.1f}"
+            + ("" if ok else f"   <-- {row['stall'] or 'stuck: ' + ', '.join(row['stuck'])}"),
+            flush=True,
+        )
+    print(f"{bad} of {args.n} layouts failed")
+
+
+if __name__ == "__main__":
+    main()
