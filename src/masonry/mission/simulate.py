@@ -56,6 +56,23 @@ CONTROL_PERIOD_S = DEFAULT_TIMING.control_period_s
 ProgressFn = Callable[[int, int, float], None]
 
 
+def _with_fleet(blueprint: Blueprint, fleet: tuple[UavSpec, ...]) -> Blueprint:
+    """``blueprint`` flown by ``fleet`` (the sizes asked for): its added pads must pass validation too."""
+    from masonry.blueprint import validate_blueprint
+    from masonry.errors import BlueprintError
+
+    out = dataclasses.replace(blueprint, fleet=fleet)
+    try:
+        validate_blueprint(out)
+    except BlueprintError as exc:
+        raise InputError(
+            f"the pads made for the UAVs added by `brick_uavs` / `adhesion_uavs` do not fit this site: {exc}; "
+            "give the blueprint a fleet with their homes instead",
+            options=("brick_uavs", "adhesion_uavs"),
+        ) from exc
+    return out
+
+
 def fleet_for(
     blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None
 ) -> tuple[UavSpec, ...]:
@@ -455,7 +472,8 @@ class SimulatedMission:
                 "the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
                 options=("brick_uavs", "adhesion_uavs"),
             )
-        blueprint = dataclasses.replace(blueprint, fleet=fleet)
+        if fleet != blueprint.fleet:
+            blueprint = _with_fleet(blueprint, fleet)
         the_plan = make_plan(blueprint)
 
         with contextlib.ExitStack() as resources:
