@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
+from typing import Protocol
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.mission.airspace_state import FlightRequest, Grant, GrantedFlight, HoldFlight, Phase, UavAirspace
@@ -136,6 +137,19 @@ def transit_layers_m(
     return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}
 
 
+class SiteGate(Protocol):
+    """Who else decides whether a UAV may come down at a site (mission control's site intervals: conflicting
+    tasks never work at their sites at once, ``--reservation site``)."""
+
+    def may_enter(self, uav: str, site_m: Vec3) -> bool:
+        """``uav`` may come down at ``site_m`` now (False: it waits, at a hold point, as for a busy site)."""
+        ...
+
+    def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
+        """``uav`` was granted its flight down to ``site_m`` at ``now_s``."""
+        ...
+
+
 class ColumnClearance:
     """The airspace at run time: every UAV's reserved volumes, never within the separation of another's.
 
@@ -177,6 +191,8 @@ class ColumnClearance:
             (None: ``base_m`` throughout).
         pad_separation_m: how close (centre to centre) another UAV may come to a landed one
             (:func:`masonry.separation.pad_separation_m`: the airframe's span plus a margin).
+        gate: asked before a flight down to a site is granted, and told when it is (:class:`SiteGate`); call
+            :meth:`touch` when its answers may have changed.
     """
 
     def __init__(
@@ -188,6 +204,7 @@ class ColumnClearance:
         sep_xy_m: float = SEPARATION_XY_M,
         start_base_m: float | None = None,
         pad_separation_m: float = pad_separation_m(),
+        gate: SiteGate | None = None,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
@@ -215,6 +232,7 @@ class ColumnClearance:
         #: a pad's (negative) slack: another volume needs only ``pad_separation_m`` from it, not ``sep_xy_m``
         self.pad_slack_m = float(pad_separation_m) - self.sep_xy_m - 1e-6
         self.max_layers = 12
+        self.gate = gate
         self._uavs: dict[str, UavAirspace] = {}
         self._homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -331,6 +349,11 @@ class ColumnClearance:
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         top = max(site[2], float(top_m) if top_m is not None else site[2])
         if self.base_m is None:
+            if self.gate is not None:
+                if not self.gate.may_enter(uav, site):
+                    self.refused += 1
+                    return Grant(uav, site, False)
+                self.gate.entered(uav, site, now_s)
             self.granted_count += 1
             return Grant(uav, site)
         u = self._uav(uav)
@@ -428,6 +451,11 @@ class ColumnClearance:
     def version(self) -> int:
         """Changes whenever a reservation changes (a take-off refused before may fit after it changed)."""
         return self._version
+
+    def touch(self) -> None:
+        """Something outside the reservations changed (the :class:`SiteGate`'s answers): look at every waiting
+        request again."""
+        self._version += 1
 
     def can_take_off(self, uav: str) -> bool:
         """``uav`` may take off now: it holds more than its pad already, or the column over its pad is free."""
@@ -619,7 +647,7 @@ class ColumnClearance:
         earlier = self._queued_before(w.seq)
         blocked_site = any(
             math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.wait_radius_m for e in earlier
-        )
+        ) or (self.gate is not None and not self.gate.may_enter(uav, w.site))
         if not blocked_site:
             home = self._is_home(uav, w.site)
             if u.phase is Phase.AT_HOLD:
@@ -671,6 +699,8 @@ class ColumnClearance:
         self.granted_count += 1
         self.layer_counts[k] = self.layer_counts.get(k, 0) + 1
         self._version += 1
+        if self.gate is not None:
+            self.gate.entered(uav, w.site, now_s)
         return Grant(uav, w.site, layer_m=self._alt(k))
 
     def _hold_candidates(self, uav: str, site: Vec3) -> list[Vec3]:
@@ -755,6 +785,7 @@ __all__ = [
     "ColumnClearance",
     "Grant",
     "Phase",
+    "SiteGate",
     "Volume",
     "layer_base_m",
     "task_work_altitude_m",

@@ -43,6 +43,7 @@ from masonry.mission.messages import (
     decode,
     encode,
 )
+from masonry.mission.sites import SiteIntervals
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Blocker, Stall, StallWatch, Wait
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
@@ -142,6 +143,9 @@ class MissionControl:
         stall_timeout_s: when no task ends, no flight is granted and no UAV's state changes for this long,
             the mission stops, not completed, with :attr:`stall` saying who waits for whom
             (:mod:`masonry.mission.stall`); None or 0: never.
+        reservation: ``task`` (the paper: conflicting tasks never run at once) or ``site`` (they may; their
+            UAVs never work at their sites at once: :mod:`masonry.mission.sites`). Site intervals are recorded
+            either way (:attr:`sites`).
     """
 
     def __init__(
@@ -166,6 +170,7 @@ class MissionControl:
         min_fraction: float = 0.9,
         timing: TaskTiming | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
+        reservation: str = "task",
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -185,8 +190,15 @@ class MissionControl:
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
         self.dispatcher = Dispatcher(
-            plan, self.fleet, policy=policy, max_attempts=max_attempts, durations_s=durations_s
+            plan,
+            self.fleet,
+            policy=policy,
+            max_attempts=max_attempts,
+            durations_s=durations_s,
+            reservation=reservation,
         )
+        self.reservation = reservation
+        self.sites = SiteIntervals(plan, self.dispatcher.task_of, exclusive=reservation == "site")
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
@@ -205,6 +217,7 @@ class MissionControl:
             layer_spacing_m,
             homes={u.name: u.home_m for u in self.fleet},
             start_base_m=layer_floor_m,
+            gate=self.sites,
         )
         self._layer_floor_m = layer_floor_m
         self.timing = timing
@@ -360,28 +373,7 @@ class MissionControl:
             return  # a UAV declared lost stays lost; its task has been given to another
         link.last_heard_s = now_s
         if isinstance(msg, ClearanceRequest):
-            if msg.release:
-                self.columns.release(msg.sender, msg.site_m)
-                return
-            if msg.arrived:
-                self.columns.end_transit(msg.sender)
-                return
-            if msg.position_m is not None:
-                self.columns.progress(msg.sender, msg.position_m)
-            g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
-            self._send(
-                msg.sender,
-                Clearance(
-                    MISSION_CONTROL,
-                    msg.sender,
-                    g.site_m,
-                    self.columns.release_radius_m,
-                    now_s,
-                    g.granted,
-                    g.hold_m,
-                    g.layer_m,
-                ),
-            )
+            self._on_clearance_request(msg, now_s)
             return
         if isinstance(msg, Result):
             link.taking_off = False
@@ -417,6 +409,35 @@ class MissionControl:
         if state == LANDED_STATE and not link.taking_off and self.dispatcher.task_of(name) is None:
             # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
             self.columns.landed(name, position_m)
+
+    def _on_clearance_request(self, msg: ClearanceRequest, now_s: float) -> None:
+        """A UAV asks for a flight (or says it left a column, or came down): the airspace answers."""
+        if msg.release:
+            self.columns.release(msg.sender, msg.site_m)
+            if self.sites.released(msg.sender, msg.site_m, now_s):
+                self.columns.touch()
+            return
+        if msg.arrived:
+            self.columns.end_transit(msg.sender)
+            return
+        if msg.position_m is not None:
+            self.columns.progress(msg.sender, msg.position_m)
+        if self.sites.leaving(msg.sender, msg.site_m, now_s):
+            self.columns.touch()  # a site is free: who waits for it may go now
+        g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+        self._send(
+            msg.sender,
+            Clearance(
+                MISSION_CONTROL,
+                msg.sender,
+                g.site_m,
+                self.columns.release_radius_m,
+                now_s,
+                g.granted,
+                g.hold_m,
+                g.layer_m,
+            ),
+        )
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
@@ -482,6 +503,8 @@ class MissionControl:
         link.lost_at_s = now_s
         link.status = status
         self.columns.release(name)  # a lost or retired UAV is on the ground (or fell): its column is free
+        if self.sites.left(name, now_s):
+            self.columns.touch()
         released = self.dispatcher.remove_uav(name)
         if released is not None:
             att = self._running.pop(released, None)

@@ -32,6 +32,7 @@ from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 from masonry.planner.bounds import min_durations_s
+from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import Clock, UavPorts
@@ -228,6 +229,7 @@ def simulate(
     warn: Callable[[str], None] | None = None,
     uav_config: UavConfig | None = None,
     stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
+    reservation: str = DEFAULT_RESERVATION,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -253,6 +255,7 @@ def simulate(
         warn=warn,
         uav_config=uav_config,
         stall_timeout_s=stall_timeout_s,
+        reservation=reservation,
     ).run()
 
 
@@ -403,6 +406,7 @@ class SimulatedMission:
         warn: Callable[[str], None] | None = None,
         uav_config: UavConfig | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
+        reservation: str = DEFAULT_RESERVATION,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -434,6 +438,8 @@ class SimulatedMission:
                 get its airframe; the lower bound, the expected durations and the airspace its timing.
             stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
+            reservation: ``site`` (default: conflicting tasks' UAVs never work at their sites at once) or
+                ``task`` (the paper: conflicting tasks never run at once); docs/safety.md.
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -452,6 +458,11 @@ class SimulatedMission:
         from masonry.planner import plan as make_plan
         from masonry.sim import Faults, World
 
+        if reservation not in RESERVATIONS:
+            raise InputError(
+                f"`reservation` must be one of {', '.join(RESERVATIONS)}, got {reservation!r}",
+                options=("reservation",),
+            )
         if policy not in POLICIES:
             raise InputError(
                 f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",)
@@ -540,6 +551,7 @@ class SimulatedMission:
                 ),
                 timing=timing,
                 stall_timeout_s=stall_timeout_s,
+                reservation=reservation,
             )
             if state is not None:
                 mc.restore(state)

@@ -12,10 +12,12 @@ __all__ = ["AdhesionTask", "BrickTask", "Plan", "Task", "adhesion_segments", "pl
 
 # After the plan values: the bounds and the dispatcher, which build on them.
 from masonry.planner.bounds import estimate_durations_s, lower_bound_s, min_cycles_s, min_durations_s
-from masonry.planner.dispatch import POLICIES, Assignment, Dispatcher
+from masonry.planner.dispatch import DEFAULT_RESERVATION, POLICIES, RESERVATIONS, Assignment, Dispatcher
 
 __all__ += [
+    "DEFAULT_RESERVATION",
     "POLICIES",
+    "RESERVATIONS",
     "Assignment",
     "Dispatcher",
     "estimate_durations_s",

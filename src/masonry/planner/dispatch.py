@@ -29,6 +29,10 @@ from masonry.planner.tasks import BrickTask, Plan, Task
 Policy = Literal["fifo", "critical-path", "nearest"]
 POLICIES: tuple[str, ...] = ("fifo", "critical-path", "nearest")
 DEFAULT_POLICY: Policy = "critical-path"
+#: How conflicting tasks are kept apart: for their whole duration (``task``, the paper) or for the time their
+#: UAVs work at their sites (``site``, mission control's site intervals; docs/safety.md).
+RESERVATIONS: tuple[str, ...] = ("site", "task")
+DEFAULT_RESERVATION = "site"
 
 Vec3 = Sequence[float]
 
@@ -102,6 +106,10 @@ class Dispatcher:
         max_attempts: a task that failed this many times is *stuck* and never assigned again.
         durations_s: expected duration per task id, used by ``critical-path`` to weight the chain (each
             not-done task must be present); without it every task weighs 1.
+        reservation: ``"task"`` (the paper: a task blocks its conflicting tasks from assignment to completion)
+            or ``"site"`` (conflicting tasks may run at once; mission control keeps their *site intervals*
+            apart): a UAV with no non-conflicting task available then takes a conflicting one (it fetches its
+            brick while the site is busy). Both prefer tasks that conflict with nothing in progress.
 
     Raises:
         PlanningError: unknown policy, duplicate task or UAV names, unknown ids or self-loops in the graphs,
@@ -115,7 +123,12 @@ class Dispatcher:
         policy: str = DEFAULT_POLICY,
         max_attempts: int = 3,
         durations_s: Mapping[str, float] | None = None,
+        reservation: str = "task",
     ) -> None:
+        if reservation not in RESERVATIONS:
+            raise PlanningError(
+                f"unknown reservation {reservation!r}; expected one of {', '.join(RESERVATIONS)}"
+            )
         if policy not in POLICIES:
             raise PlanningError(f"unknown dispatch policy {policy!r}; expected one of {', '.join(POLICIES)}")
         if isinstance(max_attempts, bool) or not isinstance(max_attempts, int) or max_attempts < 1:
@@ -123,6 +136,7 @@ class Dispatcher:
         self.plan = plan
         self.policy: str = policy
         self.max_attempts = max_attempts
+        self.reservation = reservation
 
         tasks = plan.tasks
         n = len(tasks)
@@ -209,6 +223,8 @@ class Dispatcher:
 
         # Available tasks per role (insertion-ordered dict used as a set) and the policy's structures.
         self._available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
+        # pending tasks whose prerequisites are done, blocked by a conflict or not (``site`` reservation)
+        self._ready: dict[str, dict[int, None]] = {r: {} for r in ROLES}
         self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
         self._in_heap = [False] * n
         # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
@@ -277,9 +293,12 @@ class Dispatcher:
     # ------------------------------------------------------------------ availability bookkeeping
 
     def _maybe_available(self, i: int) -> None:
-        if self._status[i] != _PENDING or self._prereqs[i] or self._blockers[i]:
+        if self._status[i] != _PENDING or self._prereqs[i]:
             return
         role = self._role[i]
+        self._ready[role][i] = None
+        if self._blockers[i]:
+            return
         avail = self._available[role]
         if i in avail:
             return
@@ -346,6 +365,22 @@ class Dispatcher:
                 best, best_cost = i, cost
         return best
 
+    def _select_conflicting(self, role: str, uav: str) -> int | None:
+        """``site`` reservation, nothing else available: the best ready task that conflicts with one in
+        progress (highest chain for ``critical-path``, plan order for ``fifo``; then the shortest flight)."""
+        avail = self._available[role]
+        candidates = [i for i in self._ready[role] if i not in avail]
+        if not candidates:
+            return None
+        if self.policy == "critical-path":
+            top = max(self._rank[i] for i in candidates)
+            candidates = [i for i in candidates if self._rank[i] == top]
+        elif self.policy == "fifo":
+            return min(candidates)
+        pos = self._position[uav]
+        start, leg, dist = self._start_m, self._leg_m, math.dist
+        return min(candidates, key=lambda i: (dist(pos, start[i]) + leg[i], i))
+
     # ------------------------------------------------------------------ events
 
     def assign(
@@ -383,6 +418,8 @@ class Dispatcher:
                 if spec.role != role or name not in self._live or name in self._uav_task:
                     continue
                 i = self._select(role, name)
+                if i is None and self.reservation == "site":
+                    i = self._select_conflicting(role, name)
                 if i is None:
                     break
                 if may_start is not None and not may_start(name):
@@ -395,6 +432,7 @@ class Dispatcher:
     def _start(self, i: int, uav: str) -> None:
         self._events += 1
         self._unavailable(i)
+        self._ready[self._role[i]].pop(i, None)
         self._status[i] = _RUNNING
         self._uav_task[uav] = i
         self._in_progress[self._ids[i]] = uav
@@ -464,6 +502,7 @@ class Dispatcher:
         n = self._attempts.get(task_id, 0) + 1
         self._attempts[task_id] = n
         if n >= self.max_attempts:
+            self._ready[self._role[i]].pop(i, None)
             self._status[i] = _STUCK
             self._stuck.add(task_id)
             return False
@@ -508,6 +547,7 @@ class Dispatcher:
             if self._status[i] == _DONE:
                 continue
             self._unavailable(i)
+            self._ready[self._role[i]].pop(i, None)
             self._status[i] = _DONE
             self._stuck.discard(tid)
             self._done.add(tid)
@@ -522,6 +562,7 @@ class Dispatcher:
             else:
                 self._attempts.pop(tid, None)
             if self._status[i] == _PENDING and n >= self.max_attempts:
+                self._ready[self._role[i]].pop(i, None)
                 self._unavailable(i)
                 self._status[i] = _STUCK
                 self._stuck.add(tid)
@@ -529,6 +570,8 @@ class Dispatcher:
         for role in ROLES:
             for i in [i for i in self._available[role] if self._status[i] != _PENDING or self._prereqs[i]]:
                 self._unavailable(i)
+        for role in ROLES:
+            self._ready[role].clear()
         for i in range(len(self._tasks)):
             self._maybe_available(i)
 

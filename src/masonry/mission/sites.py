@@ -1,0 +1,129 @@
+"""Site intervals: when each task's UAV works at its site, and (``--reservation site``) the rule that conflicting
+tasks never work at their sites at once.
+
+The paper keeps conflicting tasks (G^c: sites within r_c) from running at the same time at all. A brick task is
+mostly spent away from its drop-off, though (the flight to the pallet, the pose estimate, the grasp), so with the
+``site`` reservation the dispatcher may give conflicting tasks to two UAVs and mission control keeps only their
+*site intervals* apart: from the grant of a UAV's flight down to its task's site (the drop-off, or the start of
+the adhesion segment) to the moment it asks to fly elsewhere (or its task or the UAV ends). A UAV whose site is
+busy waits for it like for a busy column, at a hold point (:class:`masonry.mission.airspace.SiteGate`).
+
+Pure: no I/O, no clock (times are passed in).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from masonry.planner.tasks import BrickTask, Plan, Task
+
+Vec3 = tuple[float, float, float]
+
+#: A flight to within this (horizontally) of a task's work point goes to its site (pickups and homes are
+#: metres away: validation keeps pads 1 m from the wall, generated pallets are r_c + 1 m from it).
+AT_SITE_M = 0.5
+
+
+def work_point_m(task: Task) -> Vec3:
+    """Where a task's UAV works: a brick's drop-off, an adhesion segment's start."""
+    p = task.position_m if isinstance(task, BrickTask) else task.start_m
+    return (float(p[0]), float(p[1]), float(p[2]))
+
+
+@dataclass
+class SiteVisit:
+    """One stay of a task's UAV at its site."""
+
+    task_id: str
+    uav: str
+    start_s: float
+    end_s: float | None = None
+
+
+class SiteIntervals:
+    """The site intervals of a mission, and its :class:`~masonry.mission.airspace.SiteGate`.
+
+    Args:
+        plan: the tasks and their conflicts.
+        task_of: UAV name -> the task it works on now (None: none).
+        exclusive: keep conflicting tasks' site intervals apart (``site`` reservation); False only records them
+            (``task``: the dispatcher already keeps conflicting tasks apart for their whole duration).
+    """
+
+    def __init__(self, plan: Plan, task_of: Callable[[str], str | None], *, exclusive: bool) -> None:
+        self._tasks = {t.id: t for t in plan.tasks}
+        self._work = {t.id: work_point_m(t) for t in plan.tasks}
+        self._neighbours: dict[str, set[str]] = {t.id: set() for t in plan.tasks}
+        for a, b in plan.conflicts:
+            self._neighbours[a].add(b)
+            self._neighbours[b].add(a)
+        self._task_of = task_of
+        self.exclusive = exclusive
+        self.on_site: dict[str, SiteVisit] = {}  # task id -> its visit in progress
+        self._uav_visit: dict[str, SiteVisit] = {}  # UAV -> its visit in progress
+        self.visits: list[SiteVisit] = []
+
+    def _work_task(self, uav: str, site_m: Vec3) -> str | None:
+        tid = self._task_of(uav)
+        if tid is None:
+            return None
+        w = self._work[tid]
+        return tid if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) < AT_SITE_M else None
+
+    def may_enter(self, uav: str, site_m: Vec3) -> bool:
+        """No conflicting task's UAV is at its site (``exclusive``); any other flight may go."""
+        if not self.exclusive:
+            return True
+        tid = self._work_task(uav, site_m)
+        if tid is None:
+            return True
+        on_site = self.on_site
+        return not any(n in on_site and on_site[n].uav != uav for n in self._neighbours[tid])
+
+    def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
+        """``uav``'s flight down to ``site_m`` was granted: if that is its task's site, its visit starts."""
+        tid = self._work_task(uav, site_m)
+        if tid is None:
+            return
+        current = self._uav_visit.get(uav)
+        if current is not None and current.task_id == tid:
+            return  # the same stay (a hold flight, then the rest)
+        self.left(uav, now_s)
+        visit = SiteVisit(tid, uav, now_s)
+        self.on_site[tid] = visit
+        self._uav_visit[uav] = visit
+        self.visits.append(visit)
+
+    def left(self, uav: str, now_s: float) -> bool:
+        """``uav`` leaves its site (it asked to fly elsewhere, or it is out of the mission); True if a visit ended."""
+        visit = self._uav_visit.pop(uav, None)
+        if visit is None:
+            return False
+        visit.end_s = now_s
+        self.on_site.pop(visit.task_id, None)
+        return True
+
+    def released(self, uav: str, site_m: Vec3, now_s: float) -> bool:
+        """``uav`` is out of the column over ``site_m`` (or gave it up): if that was its site, its visit ends."""
+        visit = self._uav_visit.get(uav)
+        if visit is None:
+            return False
+        w = self._work[visit.task_id]
+        if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) >= AT_SITE_M:
+            return False
+        return self.left(uav, now_s)
+
+    def leaving(self, uav: str, site_m: Vec3, now_s: float) -> bool:
+        """``uav`` asks to fly to ``site_m``: a visit elsewhere ends (True if one did)."""
+        visit = self._uav_visit.get(uav)
+        if visit is None:
+            return False
+        w = self._work[visit.task_id]
+        if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) < AT_SITE_M:
+            return False
+        return self.left(uav, now_s)
+
+
+__all__ = ["AT_SITE_M", "SiteIntervals", "SiteVisit", "work_point_m"]
