@@ -41,10 +41,11 @@ from masonry.mission.messages import (
     Result,
     decode,
     encode,
+    phases_from_dict,
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import BATTERY_LOW_REASON
+from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -69,6 +70,7 @@ class Attempt:
     reason: str | None = None
     placement_error_m: float | None = None
     coverage: float | None = None
+    phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
 
 
 @dataclass
@@ -227,6 +229,7 @@ class MissionControl:
             )
         for task_id, rec in done.items():
             fields = dict(rec.fields)
+            phases = _journaled_phases(fields.get("phases"))
             self.history.append(
                 Attempt(
                     task_id=task_id,
@@ -237,6 +240,7 @@ class MissionControl:
                     status="done",
                     placement_error_m=fields.get("placement_error_m"),
                     coverage=fields.get("coverage"),
+                    phases=phases,
                 )
             )
         for name in state.lost_uavs:
@@ -416,6 +420,7 @@ class MissionControl:
         att.end_s = now_s
         att.placement_error_m = r.placement_error_m
         att.coverage = r.coverage
+        att.phases = r.phases
         if r.status == "done":
             att.status = "done"
             self.dispatcher.complete(r.task_id)
@@ -425,6 +430,8 @@ class MissionControl:
                     fields["placement_error_m"] = r.placement_error_m
                 if r.coverage is not None:
                     fields["coverage"] = r.coverage
+                if r.phases is not None:
+                    fields["phases"] = r.phases.as_dict()
                 self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
         else:
             att.status = "failed"
@@ -507,3 +514,14 @@ class MissionControl:
             if not link.lost:
                 self.transport.send(name, data)
                 self.events.sent += 1
+
+
+def _journaled_phases(value: Any) -> PhaseTimes | None:
+    """The phases a journal kept with a completion (None: none kept, or not phases: a journal is a file)."""
+    if value is None:
+        return None
+    try:
+        return phases_from_dict(value, "journal complete")
+    except ProtocolError:
+        log.warning("ignoring the journaled phases %r", value)
+        return None
