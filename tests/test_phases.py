@@ -94,6 +94,17 @@ def test_the_clock_s_phases_add_up_to_the_time_from_start_to_stop(ticks):
     assert clock.so_far() == times
 
 
+def test_the_tabulated_tick_is_phase_of():
+    for state in STATE_PHASES:
+        for transit in TRANSIT_PHASES:
+            by_table, by_name = PhaseClock(), PhaseClock()
+            by_table.start(0.0)
+            by_name.start(0.0)
+            by_table.tick_in(1.5, state, transit)
+            by_name.tick(1.5, phase_of(state, transit))
+            assert by_table.stop() == by_name.stop() != PhaseTimes()
+
+
 def test_phase_times_add_and_list_in_order():
     a, b = PhaseTimes(transit=2.0, waiting=1.0), PhaseTimes(waiting=0.5, holding=4.0)
     total = a + b

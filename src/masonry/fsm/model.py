@@ -25,7 +25,7 @@ from transitions.extensions import HierarchicalMachine
 from masonry.errors import HardwareError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
-from masonry.fsm.phases import PhaseClock, phase_of
+from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
 from masonry.fsm.transit import Transit
 from masonry.planner.tasks import Task
@@ -158,7 +158,7 @@ class UavModel:
         self._last_step_s = now_s
         self._now_s = float(now_s)
         if self.task is not None:  # the time since the last tick, in the phase the UAV was in meanwhile
-            self.phase_clock.tick(self._now_s, phase_of(self.state, self.transit.state))
+            self.phase_clock.tick_in(self._now_s, self.state, self.transit.state)
         if self.state == "halted":
             self._reject_tasks()
             return

@@ -74,6 +74,12 @@ def phase_of(state: str, transit: str) -> str:
     return imposed if imposed is not None else STATE_PHASES[state]
 
 
+#: (task state, transit state) -> the index of its phase in PHASES: :func:`phase_of`, tabulated.
+_STATE_INDEX = {
+    (state, transit): _INDEX[phase_of(state, transit)] for state in STATE_PHASES for transit in TRANSIT_PHASES
+}
+
+
 class PhaseClock:
     """Seconds per phase of the task in hand, on the machine's own clock (its ticks' times).
 
@@ -102,6 +108,15 @@ class PhaseClock:
             return
         if now_s > mark:
             self._s[_INDEX[phase]] += now_s - mark
+        self._mark_s = now_s
+
+    def tick_in(self, now_s: float, state: str, transit: str) -> None:
+        """:meth:`tick` with the phase of ``phase_of(state, transit)`` (one lookup: it runs at every control tick)."""
+        mark = self._mark_s
+        if mark is None:
+            return
+        if now_s > mark:
+            self._s[_STATE_INDEX[state, transit]] += now_s - mark
         self._mark_s = now_s
 
     def stop(self) -> PhaseTimes:
