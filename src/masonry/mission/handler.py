@@ -8,7 +8,8 @@ conflict and dependency violations independently of mission control's bookkeepin
 
 With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the handler keeps a battery reserve:
 below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
-the pack is swapped (mission control sees the task in progress meanwhile).
+the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
+the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
 
 Airspace (docs/safety.md): ``request_clearance(site_m)`` is how the state machine asks for the column over a
 site before leaving its transit layer; the handler sends a ``ClearanceRequest`` (again every heartbeat period
