@@ -14,6 +14,7 @@ from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond, towers
 from masonry.errors import InputError, JournalError
 from masonry.mission.simulate import fleet_for, simulate
+from masonry.ports import PHASES
 from masonry.sim import Faults
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,12 +59,17 @@ def test_case_study_report_is_the_exact_json(case_study):
     d = json.loads(case_study.to_json())
     assert list(d) == REPORT_KEYS
     assert d["policy"] == "critical-path" and d["seed"] == 0 and d["completed"] is True
-    assert [list(u) for u in d["uavs"]] == [["name", "role", "busy_s", "distance_m", "status"]] * 2
+    assert [list(u) for u in d["uavs"]] == [
+        ["name", "role", "busy_s", "idle_s", "waiting_s", "distance_m", "status"]
+    ] * 2
     assert {u["name"]: (u["role"], u["status"]) for u in d["uavs"]} == {
         "brick-1": ("brick", "ok"),
         "glue-1": ("adhesion", "ok"),
     }
-    assert all(list(t) == ["id", "uav", "start_s", "end_s", "status", "attempts"] for t in d["tasks"])
+    assert all(
+        list(t) == ["id", "uav", "start_s", "end_s", "status", "attempts", "phases"] for t in d["tasks"]
+    )
+    assert all(list(t["phases"]) == list(PHASES) for t in d["tasks"])
     assert {t["id"] for t in d["tasks"]} == {"A0", "A1", "B0", "B1"}
     assert all(t["status"] == "done" and t["attempts"] == 1 for t in d["tasks"])
     assert set(d["placement_error_m"]) == {"B0", "B1"}

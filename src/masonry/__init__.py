@@ -71,6 +71,7 @@ from masonry.planner import (
     plan,
 )
 from masonry.ports import (
+    PHASES,
     Camera,
     CameraFrame,
     ClearanceLink,
@@ -78,6 +79,7 @@ from masonry.ports import (
     FlightController,
     Gripper,
     MissionLink,
+    PhaseTimes,
     Sprayer,
     TaskResult,
     Telemetry,
@@ -101,6 +103,7 @@ _LAZY = {
 __all__ = [
     "C_TH",
     "DEFAULT_AIRFRAME",
+    "PHASES",
     "PID",
     "AdhesionTask",
     "AdhesionUav",
@@ -148,6 +151,7 @@ __all__ = [
     "OpenCvCamera",
     "PIDGains",
     "PerceptionError",
+    "PhaseTimes",
     "Plan",
     "PlanningError",
     "PoseWindow",

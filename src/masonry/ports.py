@@ -53,9 +53,76 @@ class CameraFrame:
 BATTERY_LOW_REASON = "battery low"
 
 
+#: The phases a task attempt's time is split into (docs/mission.md, "Where the time goes"), in the order a task
+#: goes through them. ``queued``: assigned, not yet started by the machine (the handler holds it for a battery
+#: swap); ``waiting``: hovering until mission control grants the flight's site column; ``holding``: sent to a hold
+#: point (flying there, waiting there); ``other``: a state that never holds a task for long (``idle``, ``land``,
+#: the failsafes), so that the phases always add up to the attempt. :func:`masonry.fsm.phases.phase_of` maps the
+#: machines' states to them.
+PHASES: tuple[str, ...] = (
+    "queued",
+    "takeoff",
+    "transit",
+    "waiting",
+    "holding",
+    "estimating",
+    "aligning",
+    "descending",
+    "grasping",
+    "spraying",
+    "placing",
+    "ascending",
+    "other",
+)
+
+
+@dataclass(frozen=True)
+class PhaseTimes:
+    """Seconds one task attempt spent in each phase of :data:`PHASES` (each >= 0; they add up to the attempt)."""
+
+    queued: float = 0.0
+    takeoff: float = 0.0
+    transit: float = 0.0
+    waiting: float = 0.0
+    holding: float = 0.0
+    estimating: float = 0.0
+    aligning: float = 0.0
+    descending: float = 0.0
+    grasping: float = 0.0
+    spraying: float = 0.0
+    placing: float = 0.0
+    ascending: float = 0.0
+    other: float = 0.0
+
+    @property
+    def total_s(self) -> float:
+        """All the phases together: the attempt's duration."""
+        return float(sum(getattr(self, name) for name in PHASES))
+
+    @property
+    def clearance_s(self) -> float:
+        """Seconds spent waiting for the airspace: ``waiting`` plus ``holding``."""
+        return self.waiting + self.holding
+
+    def items(self) -> tuple[tuple[str, float], ...]:
+        """``(phase, seconds)`` in the order of :data:`PHASES`."""
+        return tuple((name, float(getattr(self, name))) for name in PHASES)
+
+    def as_dict(self) -> dict[str, float]:
+        """Phase name -> seconds, every phase (the form of the wire, the journal and the JSON report)."""
+        return dict(self.items())
+
+    def __add__(self, other: PhaseTimes) -> PhaseTimes:
+        return PhaseTimes(*(a + b for (_, a), (_, b) in zip(self.items(), other.items(), strict=True)))
+
+
 @dataclass(frozen=True)
 class TaskResult:
-    """What a UAV reports when it finishes or abandons a task."""
+    """What a UAV reports when it finishes or abandons a task.
+
+    ``phases``: where the attempt's time went (the machine's ticks, from taking the task to this result); None
+    from a UAV that does not measure it.
+    """
 
     task_id: str
     status: Literal["done", "failed"]
@@ -63,6 +130,7 @@ class TaskResult:
     reason: str | None = None
     placement_error_m: float | None = None
     coverage: float | None = None
+    phases: PhaseTimes | None = None
 
 
 @runtime_checkable

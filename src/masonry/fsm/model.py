@@ -25,6 +25,7 @@ from transitions.extensions import HierarchicalMachine
 from masonry.errors import HardwareError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
+from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
 from masonry.fsm.transit import Transit
 from masonry.planner.tasks import Task
@@ -63,6 +64,7 @@ class UavModel:
         results: every TaskResult reported, in order.
         task: the task in hand, or None.
         halt_reason: why the UAV went out of service (state ``halted``), or None.
+        phase_clock: the seconds per phase of the task in hand (:mod:`masonry.fsm.phases`), sent with its result.
     """
 
     state: str
@@ -115,6 +117,7 @@ class UavModel:
         self.failsafe = _Failsafe()
         self.nav = Navigator(config)
         self.transit = Transit(ignore_invalid_triggers=not self.strict_triggers)
+        self.phase_clock = PhaseClock()
         self.clearance = clearance
         # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
@@ -154,6 +157,8 @@ class UavModel:
             return  # called faster than the control rate
         self._last_step_s = now_s
         self._now_s = float(now_s)
+        if self.task is not None:  # the time since the last tick, in the phase the UAV was in meanwhile
+            self.phase_clock.tick_in(self._now_s, self.state, self.transit.state)
         if self.state == "halted":
             self._reject_tasks()
             return
@@ -227,7 +232,15 @@ class UavModel:
     def fail_task(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
         """Report the task in hand (if any) as failed with ``reason``."""
         if self.task is not None:
-            self._report(TaskResult(self.task.id, "failed", self._now_s - self._task_start_s, reason=reason))
+            self._report(
+                TaskResult(
+                    self.task.id,
+                    "failed",
+                    self._now_s - self._task_start_s,
+                    reason=reason,
+                    phases=self.phase_clock.stop(),
+                )
+            )
             self.task = None
 
     def has_next_task(self, *args: Any, **kwargs: Any) -> bool:
@@ -274,6 +287,7 @@ class UavModel:
     def _start_task(self, task: Task) -> None:
         self.task = task
         self._task_start_s = self._now_s
+        self.phase_clock.start(self._now_s)
         self._begin_task(task)
 
     def _begin_task(self, task: Task) -> None:
@@ -282,7 +296,15 @@ class UavModel:
     def _report_done(self, **fields: Any) -> None:
         """Report the task in hand done (with ``fields``); the UAV has no task any more."""
         assert self.task is not None
-        self._report(TaskResult(self.task.id, "done", self._now_s - self._task_start_s, **fields))
+        self._report(
+            TaskResult(
+                self.task.id,
+                "done",
+                self._now_s - self._task_start_s,
+                phases=self.phase_clock.stop(),
+                **fields,
+            )
+        )
         self.task = None
 
     def _may_take_task(self, tel: Telemetry) -> bool:

@@ -42,12 +42,13 @@ from masonry.mission.messages import (
     Result,
     decode,
     encode,
+    phases_from_dict,
 )
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Blocker, Stall, StallWatch, Wait
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import BATTERY_LOW_REASON
+from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -75,6 +76,7 @@ class Attempt:
     reason: str | None = None
     placement_error_m: float | None = None
     coverage: float | None = None
+    phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
 
 
 @dataclass
@@ -257,6 +259,7 @@ class MissionControl:
             )
         for task_id, rec in done.items():
             fields = dict(rec.fields)
+            phases = _journaled_phases(fields.get("phases"))
             self.history.append(
                 Attempt(
                     task_id=task_id,
@@ -267,6 +270,7 @@ class MissionControl:
                     status="done",
                     placement_error_m=fields.get("placement_error_m"),
                     coverage=fields.get("coverage"),
+                    phases=phases,
                 )
             )
         for name in state.lost_uavs:
@@ -465,6 +469,7 @@ class MissionControl:
         att.end_s = now_s
         att.placement_error_m = r.placement_error_m
         att.coverage = r.coverage
+        att.phases = r.phases
         if r.status == "done":
             att.status = "done"
             self.dispatcher.complete(r.task_id)
@@ -474,6 +479,8 @@ class MissionControl:
                     fields["placement_error_m"] = r.placement_error_m
                 if r.coverage is not None:
                     fields["coverage"] = r.coverage
+                if r.phases is not None:
+                    fields["phases"] = r.phases.as_dict()
                 self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
         else:
             att.status = "failed"
@@ -600,3 +607,14 @@ class MissionControl:
             if not link.lost:
                 self.transport.send(name, data)
                 self.events.sent += 1
+
+
+def _journaled_phases(value: Any) -> PhaseTimes | None:
+    """The phases a journal kept with a completion (None: none kept, or not phases: a journal is a file)."""
+    if value is None:
+        return None
+    try:
+        return phases_from_dict(value, "journal complete")
+    except ProtocolError:
+        log.warning("ignoring the journaled phases %r", value)
+        return None

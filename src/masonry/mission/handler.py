@@ -8,7 +8,8 @@ conflict and dependency violations independently of mission control's bookkeepin
 
 With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the handler keeps a battery reserve:
 below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
-the pack is swapped (mission control sees the task in progress meanwhile).
+the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
+the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
 
 Airspace (docs/safety.md): ``request_clearance(site_m)`` is how the state machine asks for the column over a
 site before leaving its transit layer; the handler sends a ``ClearanceRequest`` (again every heartbeat period
@@ -67,7 +68,10 @@ MAX_REFUSALS_KEPT = 1000
 
 @dataclass
 class Execution:
-    """One task as the UAV flew it: handed to the machine at ``start_s``, reported at ``end_s``."""
+    """One task as the UAV flew it: handed to the machine at ``start_s``, reported at ``end_s``.
+
+    ``queued_s``: how long its assignment waited here before the machine took it (the battery reserve's hold).
+    """
 
     task_id: str
     uav: str
@@ -75,6 +79,7 @@ class Execution:
     start_s: float
     end_s: float | None = None
     status: str = "running"
+    queued_s: float = 0.0
 
 
 class UavHandler(MissionLink, ClearanceLink):
@@ -128,7 +133,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.model: Any = None
-        self._queue: deque[tuple[Task, int]] = deque()
+        self._queue: deque[tuple[Task, int, float]] = deque()  # task, attempt, when its assignment came
         self._current: Execution | None = None
         self._last_sent_hb_s: float | None = None
         self._last_mc_s: float | None = None
@@ -206,8 +211,10 @@ class UavHandler(MissionLink, ClearanceLink):
             if self._swap_battery is None or not self._swap_battery():
                 return None
             self.battery_swaps += 1
-        task, attempt = self._queue.popleft()
-        self._current = Execution(task.id, self.name, attempt, self.now_s)
+        task, attempt, received_s = self._queue.popleft()
+        self._current = Execution(
+            task.id, self.name, attempt, self.now_s, queued_s=max(0.0, self.now_s - received_s)
+        )
         self.executions.append(self._current)
         return task
 
@@ -312,6 +319,11 @@ class UavHandler(MissionLink, ClearanceLink):
             cur.end_s = self.now_s
             cur.status = result.status
             self._current = None
+            if result.phases is not None and cur.queued_s > 0.0:
+                # the machine measured from taking the task; the attempt began when its assignment came
+                result = replace(
+                    result, phases=replace(result.phases, queued=result.phases.queued + cur.queued_s)
+                )
         attempt = cur.attempt if cur is not None and cur.task_id == result.task_id else 0
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
         self._send(Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt))
@@ -368,7 +380,7 @@ class UavHandler(MissionLink, ClearanceLink):
             if why is not None:
                 self._refuse(msg, why)
                 return
-            self._queue.append((msg.task, msg.attempt))
+            self._queue.append((msg.task, msg.attempt, now_s))
             self.mission_ended = False
         elif isinstance(msg, Clearance):
             col = self._column
@@ -415,7 +427,7 @@ class UavHandler(MissionLink, ClearanceLink):
             log.warning("%s refused an assignment: %s", self.name, why)
         tid = msg.task.id
         if (self._current is not None and self._current.task_id == tid) or any(
-            t.id == tid for t, _ in self._queue
+            t.id == tid for t, _, _ in self._queue
         ):
             return  # the real assignment of that task is here: a failed result would cancel it
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""

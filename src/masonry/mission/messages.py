@@ -23,7 +23,9 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
 so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
 ``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
-blueprint, mission control accepts a result only for the current attempt).
+blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
+``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
+without it leaves it out and one that does not know it ignores it, so the version stays.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
-from masonry.ports import TaskResult
+from masonry.ports import PHASES, PhaseTimes, TaskResult
 
 PROTOCOL_VERSION = 3
 MISSION_CONTROL = "mission-control"
@@ -217,6 +219,7 @@ def encode(message: Message) -> bytes:
                 "reason": r.reason,
                 "placement_error_m": r.placement_error_m,
                 "coverage": r.coverage,
+                **({} if r.phases is None else {"phases": r.phases.as_dict()}),
             },
         )
     elif isinstance(message, ClearanceRequest):
@@ -308,6 +311,33 @@ class _Fields:
         if not isinstance(v, dict):
             raise self.fail(field, f"must be an object, got {type(v).__name__}")
         return v
+
+
+_PHASE_NAMES = frozenset(PHASES)
+
+
+def phases_from_dict(data: Any, what: str = "result result") -> PhaseTimes:
+    """Rebuild :class:`~masonry.ports.PhaseTimes` from its ``as_dict`` form (raises ProtocolError).
+
+    Every key must be a phase of :data:`~masonry.ports.PHASES` and every value a finite number >= 0; a phase left
+    out is 0 s.
+    """
+    if not isinstance(data, dict):
+        raise ProtocolError(f"{what} message: field 'phases' must be an object, got {type(data).__name__}")
+    unknown = sorted(str(k) for k in data if k not in _PHASE_NAMES)
+    if unknown:
+        raise ProtocolError(
+            f"{what} message: field 'phases' has unknown phase {', '.join(map(repr, unknown))} "
+            f"(known: {', '.join(PHASES)})"
+        )
+    seconds: dict[str, float] = {}
+    for name, v in data.items():
+        if not _finite_number(v) or v < 0:
+            raise ProtocolError(
+                f"{what} message: field 'phases' phase {name!r} must be a finite number >= 0, got {v!r}"
+            )
+        seconds[name] = float(v)
+    return PhaseTimes(**seconds)
 
 
 def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
@@ -487,6 +517,7 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message: 
             reason=r.str_("reason", optional=True),
             placement_error_m=r.num("placement_error_m", optional=True),
             coverage=r.num("coverage", optional=True),
+            phases=None if r.data.get("phases") is None else phases_from_dict(r.data["phases"]),
         )
         attempt = f.int_("attempt")
         if attempt < 0:

@@ -1,5 +1,9 @@
 """The mission report: what ``masonry sim --format json`` prints, plus what the Gantt chart and 3-D plot need.
 
+Where the time goes (docs/mission.md): every attempt carries the seconds its UAV spent in each phase
+(:class:`~masonry.ports.PhaseTimes`), every task those of the attempt that completed it, every UAV its ``idle_s``
+(mission time with no task assigned) and ``waiting_s`` (its attempts' ``waiting`` and ``holding`` phases).
+
 Also the two checks the report carries, computed from a trace of executed intervals independently of the
 dispatcher that produced it (:func:`count_violations`), and the makespan lower bound (:func:`lower_bound_s`).
 """
@@ -14,6 +18,7 @@ from typing import Any
 
 from masonry.planner.bounds import lower_bound_s
 from masonry.planner.tasks import Plan
+from masonry.ports import PhaseTimes
 
 #: Rows of the attempt trace in the text summary (the JSON report has every attempt).
 TIMELINE_ROWS = 40
@@ -28,12 +33,16 @@ class UavReport:
     busy_s: float
     distance_m: float
     status: str  # "ok", "lost" (silent past the heartbeat timeout) or "out of service" (it reported so)
+    idle_s: float = 0.0  # mission time with no task assigned (on the ground, hovering or flying home)
+    waiting_s: float = 0.0  # its attempts' seconds waiting for clearance and holding (PhaseTimes.clearance_s)
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,
             "role": self.role,
             "busy_s": _r(self.busy_s, 2),
+            "idle_s": _r(self.idle_s, 2),
+            "waiting_s": _r(self.waiting_s, 2),
             "distance_m": _r(self.distance_m, 2),
             "status": self.status,
         }
@@ -50,6 +59,7 @@ class TaskReport:
     status: str  # "done", "stuck" (attempt limit reached or no UAV of its role left) or "pending"
     attempts: int
     kind: str = "brick"
+    phases: PhaseTimes | None = None  # of the attempt that completed it (None: not done, or not reported)
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -59,6 +69,7 @@ class TaskReport:
             "end_s": _r(self.end_s, 2),
             "status": self.status,
             "attempts": self.attempts,
+            "phases": _phases(self.phases),
         }
 
 
@@ -74,6 +85,7 @@ class AttemptReport:
     status: str  # "done", "failed", "running" (the mission ended first)
     kind: str
     reason: str | None = None
+    phases: PhaseTimes | None = None  # as its UAV measured them (None: not reported, or still running)
 
 
 @dataclass(frozen=True)
@@ -156,8 +168,13 @@ class MissionReport:
             lines.append(f"resumed from the journal at {self.resumed_from_s:.1f} s")
         for u in self.uavs:
             lines.append(
-                f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}"
+                f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  idle {u.idle_s:7.1f} s  "
+                f"waiting {u.waiting_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}"
             )
+        totals = phase_totals(self.attempts)
+        if totals.total_s > 0:
+            spent = ", ".join(f"{name} {sec:.0f} s" for name, sec in totals.items() if sec >= 0.5)
+            lines.append(f"time per phase (every attempt): {spent}")
         errs = list(self.placement_error_m.values())
         if errs:
             lines.append(
@@ -188,6 +205,33 @@ def _r(v: float | None, nd: int) -> float | None:
     if v is None or not math.isfinite(v):
         return None
     return round(float(v), nd)
+
+
+def _phases(phases: PhaseTimes | None) -> dict[str, float | None] | None:
+    return None if phases is None else {name: _r(s, 2) for name, s in phases.items()}
+
+
+def phase_totals(attempts: Iterable[AttemptReport]) -> PhaseTimes:
+    """The phases of ``attempts`` summed (those that reported none count nothing)."""
+    total = PhaseTimes()
+    for a in attempts:
+        if a.phases is not None:
+            total = total + a.phases
+    return total
+
+
+def idle_s(attempts: Sequence[AttemptReport], uav: str, start_s: float, end_s: float) -> float:
+    """Seconds of ``[start_s, end_s]`` in which ``uav`` had no attempt assigned (mission control's times).
+
+    A UAV has one attempt at a time, so its idle time and its attempts' phases add up to the window.
+    """
+    busy = 0.0
+    for a in attempts:
+        if a.uav != uav:
+            continue
+        s, e = max(a.start_s, start_s), min(end_s if a.end_s is None else a.end_s, end_s)
+        busy += max(0.0, e - s)
+    return max(0.0, end_s - start_s - busy)
 
 
 def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | None]]) -> tuple[int, int]:
@@ -240,6 +284,12 @@ def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | N
     return conflicts, deps
 
 
+def _until(link: Any, end_s: float) -> float:
+    """The end of a UAV's part in the mission: ``end_s``, or its loss if sooner."""
+    lost = getattr(link, "lost_at_s", None)
+    return end_s if lost is None else min(end_s, float(lost))
+
+
 def makespan_s(attempts: Sequence[AttemptReport], start_s: float = 0.0) -> float:
     """Time from ``start_s`` to the last completion."""
     ends = [a.end_s for a in attempts if a.status == "done" and a.end_s is not None]
@@ -283,7 +333,17 @@ def control_report(
     now = mc.now_s if now_s is None else now_s
     kinds = {t.id: t.kind for t in plan.tasks}
     attempts = tuple(
-        AttemptReport(a.task_id, a.uav, a.attempt, a.start_s, a.end_s, a.status, kinds[a.task_id], a.reason)
+        AttemptReport(
+            a.task_id,
+            a.uav,
+            a.attempt,
+            a.start_s,
+            a.end_s,
+            a.status,
+            kinds[a.task_id],
+            a.reason,
+            a.phases,
+        )
         for a in sorted(mc.history, key=lambda a: (a.start_s, a.task_id))
     )
     done_att = {a.task_id: a for a in attempts if a.status == "done"}
@@ -296,7 +356,7 @@ def control_report(
         n = max((a.attempt for a in tries), default=0)
         a = done_att.get(t.id)
         if a is not None:
-            tasks.append(TaskReport(t.id, a.uav, a.start_s, a.end_s, "done", n, t.kind))
+            tasks.append(TaskReport(t.id, a.uav, a.start_s, a.end_s, "done", n, t.kind, a.phases))
             continue
         last = tries[-1] if tries else None
         status = (
@@ -328,6 +388,8 @@ def control_report(
         busy[uav] = busy.get(uav, 0.0) + ((e if e is not None else now) - s)
     if busy_s is not None:
         busy = dict(busy_s)
+    # idle: from the mission's start to its last completion (to now, if it did not complete), or to the UAV's loss
+    end = start + makespan if not stuck else max(now, start)
     uavs = tuple(
         UavReport(
             spec.name,
@@ -335,6 +397,8 @@ def control_report(
             busy.get(spec.name, 0.0),
             float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
             mc.uavs[spec.name].status,
+            idle_s=idle_s(attempts, spec.name, start, _until(mc.uavs[spec.name], end)),
+            waiting_s=phase_totals(a for a in attempts if a.uav == spec.name).clearance_s,
         )
         for spec in mc.fleet
     )

@@ -1,0 +1,156 @@
+"""Fleet scaling (issue 15): makespan against the number of UAVs, and where the time goes; prints, asserts nothing.
+
+Two running bonds from :mod:`masonry.blueprint_gen`, one course pre-placed: the 12 m wall (``masonry blueprint
+running-bond --courses 3 --bricks-per-course 40 --placed-courses 1``: 80 bricks and 158 adhesion tasks to do)
+and a 6-course wall of 30 bricks per course (150 bricks to do). Each is flown by fleets of 1+1, 2+1, 4+2, 6+3 and
+8+4 (brick + adhesion) UAVs with the default policy, seed 1, geometric camera (``masonry.mission.simulate``).
+
+Printed per wall, as Markdown tables (docs/performance.md, "Fleet scaling"):
+
+1. fleet, makespan, speed-up over 1+1, ``lower_bound_s``, ratio, ``min_separation_m``, the mean brick and
+   adhesion attempt, the UAVs' mean ``idle_s`` and ``waiting_s``, simulated and wall seconds;
+2. the phase totals: seconds per phase (docs/mission.md, "Where the time goes") summed over every attempt of
+   the mission (failed ones too), and the share of waiting + holding.
+
+Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--walls 12m,6x30]
+       [--fleets 1+1,2+1,4+2,6+3,8+4]
+``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from masonry.blueprint import Blueprint
+from masonry.blueprint_gen import running_bond
+from masonry.mission.report import MissionReport, phase_totals
+from masonry.mission.simulate import simulate
+from masonry.ports import PHASES
+
+#: name -> (description, generator): the walls of the issue
+WALLS: dict[str, tuple[str, Callable[[], Blueprint]]] = {
+    "12m": ("12 m running bond, 3 x 40, 1 placed course", lambda: running_bond(3, 40, placed_courses=1)),
+    "6x30": ("running bond 6 x 30, 1 placed course", lambda: running_bond(6, 30, placed_courses=1)),
+    "quick": ("running bond 2 x 12, 1 placed course", lambda: running_bond(2, 12, placed_courses=1)),
+}
+FLEETS = ((1, 1), (2, 1), (4, 2), (6, 3), (8, 4))
+QUICK_FLEETS = ((1, 1), (2, 1), (4, 2))
+
+
+@dataclass(frozen=True)
+class Run:
+    """One mission of the sweep and what it took."""
+
+    bricks: int
+    adhesion: int
+    report: MissionReport
+    wall_s: float
+
+    @property
+    def fleet(self) -> str:
+        return f"{self.bricks} + {self.adhesion}"
+
+
+def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, policy: str) -> Run:
+    wall0 = time.perf_counter()
+    report = simulate(
+        blueprint, brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, policy=policy, camera="geometric"
+    )
+    return Run(bricks, adhesion, report, time.perf_counter() - wall0)
+
+
+def _mean_attempt_s(report: MissionReport, kind: str) -> float:
+    spans = [a.end_s - a.start_s for a in report.attempts if a.kind == kind and a.end_s is not None]
+    return statistics.fmean(spans) if spans else float("nan")
+
+
+def _sep(v: float | None) -> str:
+    return "-" if v is None else f"{v:.2f}"
+
+
+def scaling_table(runs: list[Run]) -> list[str]:
+    base = runs[0].report.makespan_s if runs and runs[0].report.completed else float("nan")
+    lines = [
+        "| fleet (brick + adhesion) | makespan | speed-up over 1 + 1 | lower_bound_s | ratio | min_separation_m "
+        "| mean brick attempt | mean adhesion attempt | mean idle_s | mean waiting_s | done | simulated | wall |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in runs:
+        rep = r.report
+        done = sum(1 for t in rep.tasks if t.status == "done")
+        ratio = rep.makespan_s / rep.lower_bound_s if rep.lower_bound_s > 0 else float("nan")
+        speedup = base / rep.makespan_s if rep.makespan_s > 0 else float("nan")
+        idle = statistics.fmean(u.idle_s for u in rep.uavs)
+        waiting = statistics.fmean(u.waiting_s for u in rep.uavs)
+        lines.append(
+            f"| {r.fleet} | {rep.makespan_s:,.0f} s | {speedup:.2f} | {rep.lower_bound_s:,.0f} s | {ratio:.2f} "
+            f"| {_sep(rep.min_separation_m)} | {_mean_attempt_s(rep, 'brick'):.1f} s "
+            f"| {_mean_attempt_s(rep, 'adhesion'):.1f} s | {idle:,.0f} s | {waiting:,.0f} s "
+            f"| {done}/{len(rep.tasks)}{'' if rep.completed else ' (NOT completed)'} "
+            f"| {rep.sim_time_s:,.0f} s | {r.wall_s:.0f} s |"
+        )
+    return lines
+
+
+def phase_table(runs: list[Run]) -> list[str]:
+    shown = [p for p in PHASES if any(getattr(phase_totals(r.report.attempts), p) > 0 for r in runs)]
+    lines = [
+        "| fleet | " + " | ".join(shown) + " | all | waiting + holding |",
+        "|---|" + "---|" * (len(shown) + 2),
+    ]
+    for r in runs:
+        totals = phase_totals(r.report.attempts)
+        share = totals.clearance_s / totals.total_s if totals.total_s > 0 else float("nan")
+        cells = " | ".join(f"{getattr(totals, p):,.0f}" for p in shown)
+        lines.append(f"| {r.fleet} | {cells} | {totals.total_s:,.0f} | {share:.0%} |")
+    return lines
+
+
+def _pairs(text: str) -> tuple[tuple[int, int], ...]:
+    out = []
+    for item in text.split(","):
+        b, a = item.split("+")
+        out.append((int(b), int(a)))
+    return tuple(out)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="a small wall and three fleets")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--policy", default="critical-path")
+    ap.add_argument("--walls", default=None, help=f"comma-separated, of {', '.join(WALLS)}")
+    ap.add_argument("--fleets", default=None, help="comma-separated brick+adhesion pairs, e.g. 1+1,2+1")
+    args = ap.parse_args()
+    walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30"])
+    fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
+    print(
+        f"bench_fleet: seed {args.seed}, policy {args.policy}, geometric camera; "
+        f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
+    )
+    for key in walls:
+        what, make = WALLS[key]
+        blueprint = make()
+        todo = sum(1 for b in blueprint.bricks if not b.placed)
+        print(f"\n## {what} ({todo} bricks to place)\n", flush=True)
+        runs = []
+        for bricks, adhesion in fleets:
+            run = fly(blueprint, bricks, adhesion, args.seed, args.policy)
+            runs.append(run)
+            print(
+                f"  flown {run.fleet}: makespan {run.report.makespan_s:,.0f} s in {run.wall_s:.0f} s wall",
+                flush=True,
+            )
+        print()
+        print("\n".join(scaling_table(runs)))
+        print("\nPhase totals (seconds, summed over every attempt):\n")
+        print("\n".join(phase_table(runs)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
