@@ -67,8 +67,12 @@ def test_case_study_report_is_the_exact_json(case_study):
         "glue-1": ("adhesion", "ok"),
     }
     assert all(
-        list(t) == ["id", "uav", "start_s", "end_s", "status", "attempts", "phases"] for t in d["tasks"]
+        list(t)
+        == ["id", "uav", "start_s", "end_s", "site_start_s", "site_end_s", "status", "attempts", "phases"]
+        for t in d["tasks"]
     )
+    # each task's site interval lies within its run (a UAV asks to leave once its task is done, or just after)
+    assert all(t["start_s"] < t["site_start_s"] < t["site_end_s"] <= t["end_s"] + 5.0 for t in d["tasks"])
     assert all(list(t["phases"]) == list(PHASES) for t in d["tasks"])
     assert {t["id"] for t in d["tasks"]} == {"A0", "A1", "B0", "B1"}
     assert all(t["status"] == "done" and t["attempts"] == 1 for t in d["tasks"])

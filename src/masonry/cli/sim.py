@@ -27,6 +27,12 @@ def sim(
         help=help_text("sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet)."),
     ),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
+    reservation: str = typer.Option(
+        "task",
+        "--reservation",
+        help="task | site: keep conflicting tasks apart for their whole duration, as the paper (task), or "
+        "only while their UAVs work at their sites (site). docs/safety.md.",
+    ),
     seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
     camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
     fault: list[str] = typer.Option(
@@ -72,6 +78,8 @@ def sim(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    if reservation not in ("site", "task"):
+        raise InputError(f"--reservation must be site or task, got {reservation!r}")
     check_all(
         "sim",
         {
@@ -112,6 +120,7 @@ def sim(
             progress=progress_cb,
             warn=lambda m: typer.echo(f"warning: {m}", err=True),
             stall_timeout_s=stall_timeout,
+            reservation=reservation,
         )
         result = mission.run()
     finally:

@@ -44,7 +44,7 @@ from masonry.mission.messages import (
     encode,
     phases_from_dict,
 )
-from masonry.mission.sites import SiteIntervals
+from masonry.mission.sites import SiteIntervals, SiteVisit
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Blocker, Stall, StallWatch, Wait
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
@@ -58,6 +58,26 @@ AttemptStatus = Literal["running", "done", "failed"]
 
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
+
+#: Journal meta keys of the site intervals: ``site/<task id>`` -> the task's last visit.
+SITE_META_PREFIX = "site/"
+
+
+def _journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float | None) -> list[SiteVisit]:
+    """The site visits of the tasks a journal says are done (one still open at the crash ends then)."""
+    out = []
+    for key, v in meta.items():
+        tid = key[len(SITE_META_PREFIX) :]
+        if not key.startswith(SITE_META_PREFIX) or tid not in done or not isinstance(v, dict):
+            continue
+        start, end, uav = v.get("start_s"), v.get("end_s"), v.get("uav")
+        if not isinstance(start, (int, float)) or not isinstance(uav, str):
+            continue
+        if not isinstance(end, (int, float)):
+            end = last_time_s
+        out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end)))
+    return sorted(out, key=lambda v: (v.start_s, v.task_id))
+
 
 #: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
 LANDED_STATE = "idle"
@@ -200,7 +220,9 @@ class MissionControl:
             reservation=reservation,
         )
         self.reservation = reservation
-        self.sites = SiteIntervals(plan, self.dispatcher.task_of, exclusive=reservation == "site")
+        self.sites = SiteIntervals(
+            plan, self.dispatcher.task_of, exclusive=reservation == "site", on_visit=self._journal_visit
+        )
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
@@ -281,6 +303,7 @@ class MissionControl:
                 self.dispatcher.remove_uav(name)
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
+        self.sites.restore(_journaled_visits(state.meta, set(done), state.last_time_s))
         # what the previous run may have built: done tasks, and every task it ever assigned
         self._raise_layers([*done, *attempts, *state.in_progress])
 
@@ -580,6 +603,14 @@ class MissionControl:
             now_s, self._watch.since_s, self._watch.timeout_s, waits, self.dispatcher.available
         )
         log.warning("%s", self.stall.line())
+
+    def _journal_visit(self, visit: SiteVisit) -> None:
+        """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
+        if self.journal is not None:
+            self.journal.set_meta(
+                f"{SITE_META_PREFIX}{visit.task_id}",
+                {"uav": visit.uav, "start_s": visit.start_s, "end_s": visit.end_s},
+            )
 
     def _raise_layers(self, task_ids: Iterable[str]) -> None:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""

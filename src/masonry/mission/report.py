@@ -60,6 +60,9 @@ class TaskReport:
     attempts: int
     kind: str = "brick"
     phases: PhaseTimes | None = None  # of the attempt that completed it (None: not done, or not reported)
+    #: when its UAV worked at its site: from the grant of its flight down there to its asking to leave
+    site_start_s: float | None = None
+    site_end_s: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -67,6 +70,8 @@ class TaskReport:
             "uav": self.uav,
             "start_s": _r(self.start_s, 2),
             "end_s": _r(self.end_s, 2),
+            "site_start_s": _r(self.site_start_s, 2),
+            "site_end_s": _r(self.site_end_s, 2),
             "status": self.status,
             "attempts": self.attempts,
             "phases": _phases(self.phases),
@@ -284,6 +289,32 @@ def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | N
     return conflicts, deps
 
 
+def count_site_violations(
+    plan: Plan,
+    site_intervals: Iterable[tuple[str, float, float | None]],
+    task_intervals: Iterable[tuple[str, float, float | None]],
+) -> tuple[int, int]:
+    """Violations under the ``site`` reservation: pairs of conflicting tasks whose *site* intervals overlap, and
+    site intervals that started before a prerequisite completed (completions: the ends of ``task_intervals``,
+    as in :func:`count_violations`)."""
+    sites = list(site_intervals)
+    conflicts, _ = count_violations(plan, sites)
+    completion: dict[str, float] = {}
+    for task_id, _start, end in task_intervals:
+        if end is not None:
+            completion[task_id] = max(completion.get(task_id, -math.inf), end)
+    pre_done = {t.id for t in plan.tasks if t.done}
+    prereqs: dict[str, list[str]] = {}
+    for u, v in plan.dependencies:
+        prereqs.setdefault(u, []).append(v)
+    deps = sum(
+        1
+        for task_id, start, _end in sites
+        if any(v not in pre_done and completion.get(v, math.inf) > start for v in prereqs.get(task_id, ()))
+    )
+    return conflicts, deps
+
+
 def _until(link: Any, end_s: float) -> float:
     """The end of a UAV's part in the mission: ``end_s``, or its loss if sooner."""
     lost = getattr(link, "lost_at_s", None)
@@ -347,6 +378,9 @@ def control_report(
         for a in sorted(mc.history, key=lambda a: (a.start_s, a.task_id))
     )
     done_att = {a.task_id: a for a in attempts if a.status == "done"}
+    visits = list(getattr(getattr(mc, "sites", None), "visits", ()))
+    site_intervals = [(v.task_id, v.start_s, v.end_s) for v in visits]
+    last_visit = {(v.task_id, v.uav): (v.start_s, v.end_s) for v in visits}  # the last one of each wins
     tasks: list[TaskReport] = []
     stuck: list[str] = []
     for t in plan.tasks:
@@ -356,7 +390,21 @@ def control_report(
         n = max((a.attempt for a in tries), default=0)
         a = done_att.get(t.id)
         if a is not None:
-            tasks.append(TaskReport(t.id, a.uav, a.start_s, a.end_s, "done", n, t.kind, a.phases))
+            visit = last_visit.get((t.id, a.uav))
+            tasks.append(
+                TaskReport(
+                    t.id,
+                    a.uav,
+                    a.start_s,
+                    a.end_s,
+                    "done",
+                    n,
+                    t.kind,
+                    a.phases,
+                    None if visit is None else visit[0],
+                    None if visit is None else (now if visit[1] is None else visit[1]),
+                )
+            )
             continue
         last = tries[-1] if tries else None
         status = (
@@ -382,7 +430,12 @@ def control_report(
     )
     if intervals is None:
         intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
-    conflicts, deps = count_violations(plan, [(tid, s, e) for _, tid, s, e in intervals])
+    task_intervals = [(tid, s, e) for _, tid, s, e in intervals]
+    conflicts, deps = count_violations(plan, task_intervals)
+    if getattr(mc, "reservation", "task") == "site":
+        # conflicting tasks may run at once: what must never overlap is their work at their sites, and no site
+        # interval may start before a prerequisite completed
+        conflicts, deps = count_site_violations(plan, site_intervals, task_intervals)
     busy: dict[str, float] = {}
     for uav, _, s, e in intervals:
         busy[uav] = busy.get(uav, 0.0) + ((e if e is not None else now) - s)

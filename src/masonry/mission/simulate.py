@@ -438,8 +438,8 @@ class SimulatedMission:
                 get its airframe; the lower bound, the expected durations and the airspace its timing.
             stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
-            reservation: ``site`` (default: conflicting tasks' UAVs never work at their sites at once) or
-                ``task`` (the paper: conflicting tasks never run at once); docs/safety.md.
+            reservation: ``task`` (default, the paper: conflicting tasks never run at once) or ``site``
+                (conflicting tasks may run at once; their UAVs never work at their sites at once); docs/safety.md.
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the

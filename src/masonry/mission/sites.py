@@ -50,9 +50,17 @@ class SiteIntervals:
         task_of: UAV name -> the task it works on now (None: none).
         exclusive: keep conflicting tasks' site intervals apart (``site`` reservation); False only records them
             (``task``: the dispatcher already keeps conflicting tasks apart for their whole duration).
+        on_visit: called when a visit starts and when it ends (mission control journals them).
     """
 
-    def __init__(self, plan: Plan, task_of: Callable[[str], str | None], *, exclusive: bool) -> None:
+    def __init__(
+        self,
+        plan: Plan,
+        task_of: Callable[[str], str | None],
+        *,
+        exclusive: bool,
+        on_visit: Callable[[SiteVisit], None] | None = None,
+    ) -> None:
         self._tasks = {t.id: t for t in plan.tasks}
         self._work = {t.id: work_point_m(t) for t in plan.tasks}
         self._neighbours: dict[str, set[str]] = {t.id: set() for t in plan.tasks}
@@ -61,6 +69,7 @@ class SiteIntervals:
             self._neighbours[b].add(a)
         self._task_of = task_of
         self.exclusive = exclusive
+        self._on_visit = on_visit
         self.on_site: dict[str, SiteVisit] = {}  # task id -> its visit in progress
         self._uav_visit: dict[str, SiteVisit] = {}  # UAV -> its visit in progress
         self.visits: list[SiteVisit] = []
@@ -95,6 +104,8 @@ class SiteIntervals:
         self.on_site[tid] = visit
         self._uav_visit[uav] = visit
         self.visits.append(visit)
+        if self._on_visit is not None:
+            self._on_visit(visit)
 
     def left(self, uav: str, now_s: float) -> bool:
         """``uav`` leaves its site (it asked to fly elsewhere, or it is out of the mission); True if a visit ended."""
@@ -103,7 +114,13 @@ class SiteIntervals:
             return False
         visit.end_s = now_s
         self.on_site.pop(visit.task_id, None)
+        if self._on_visit is not None:
+            self._on_visit(visit)
         return True
+
+    def restore(self, visits: list[SiteVisit]) -> None:
+        """The visits a previous run journaled (before a resume): for the report only; none is in progress."""
+        self.visits = [*visits, *self.visits]
 
     def released(self, uav: str, site_m: Vec3, now_s: float) -> bool:
         """``uav`` is out of the column over ``site_m`` (or gave it up): if that was its site, its visit ends."""

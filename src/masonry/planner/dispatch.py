@@ -32,7 +32,7 @@ DEFAULT_POLICY: Policy = "critical-path"
 #: How conflicting tasks are kept apart: for their whole duration (``task``, the paper) or for the time their
 #: UAVs work at their sites (``site``, mission control's site intervals; docs/safety.md).
 RESERVATIONS: tuple[str, ...] = ("site", "task")
-DEFAULT_RESERVATION = "site"
+DEFAULT_RESERVATION = "task"
 
 Vec3 = Sequence[float]
 
