@@ -305,7 +305,7 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
         if hw.sim_camera:
             assert uav is not None
             camera = uav.camera
-            where = "the autopilot's reported position" if fc is not None else "the simulated UAV"
+            where = "the autopilot's reported position" if not hw.sim_fc else "the simulated UAV"
             opened.descriptions["camera"] = f"simulated ({camera_mode}), seen from {where}"
         else:
             from masonry.adapters.camera import OpenCvCamera
