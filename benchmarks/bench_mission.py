@@ -18,7 +18,7 @@ import argparse
 import os
 import statistics
 import time
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 from masonry.blueprint_gen import running_bond, towers
 from masonry.mission.simulate import simulate
@@ -27,7 +27,7 @@ from masonry.planner.bounds import lower_bound_s, min_durations_s
 from masonry.planner.tasks import Plan
 
 
-def clearance_bound_s(plan: Plan, durations_s: Mapping[str, float]) -> float:  # noqa: C901 - a benchmark's reference bound, written as one pass
+def clearance_bound_s(plan: Plan, durations_s: Mapping[str, float]) -> float:
     """Total duration of a heavy set of tasks no two of which may ever run together (a valid lower bound).
 
     Two tasks never overlap when they conflict (G^c) or when one depends on the other, directly or not (G^d's
@@ -41,11 +41,28 @@ def clearance_bound_s(plan: Plan, durations_s: Mapping[str, float]) -> float:  #
     for u, v in plan.dependencies:
         if u in index and v in index:
             prereqs[index[u]].append(index[v])
-    # ancestors as int bitsets, in an order where prerequisites come first
+    adj = _exclusive_bits(_ancestor_bits(prereqs), plan.conflicts, index)
+    weight = [float(durations_s[tid]) for tid in todo]
+    best = 0.0
+    for i in range(n):
+        neigh = [j for j in range(n) if adj[i] >> j & 1]
+        neigh.sort(key=lambda j: -weight[j])
+        chosen = 1 << i
+        total = weight[i]
+        for j in neigh:
+            if chosen & ~adj[j] == 0:
+                chosen |= 1 << j
+                total += weight[j]
+        best = max(best, total)
+    return best
+
+
+def _ancestor_bits(prereqs: list[list[int]]) -> list[int]:
+    """Per task, its prerequisites (direct or not) as an int bitset, from the direct ones (depth-first)."""
+    n = len(prereqs)
     anc = [0] * n
     done = [False] * n
-
-    def ancestors(i: int) -> int:
+    for i in range(n):
         stack = [(i, False)]
         while stack:
             j, expanded = stack.pop()
@@ -60,12 +77,16 @@ def clearance_bound_s(plan: Plan, durations_s: Mapping[str, float]) -> float:  #
             else:
                 stack.append((j, True))
                 stack.extend((p, False) for p in prereqs[j] if not done[p])
-        return anc[i]
+    return anc
 
-    for i in range(n):
-        ancestors(i)
+
+def _exclusive_bits(
+    anc: list[int], conflicts: Iterable[tuple[str, str]], index: Mapping[str, int]
+) -> list[int]:
+    """Per task, the tasks it may never run with as an int bitset: its conflicts, ancestors and descendants."""
+    n = len(anc)
     adj = [0] * n
-    for a, b in plan.conflicts:
+    for a, b in conflicts:
         if a in index and b in index:
             ia, ib = index[a], index[b]
             adj[ia] |= 1 << ib
@@ -79,19 +100,7 @@ def clearance_bound_s(plan: Plan, durations_s: Mapping[str, float]) -> float:  #
                 adj[j] |= 1 << i
             bits >>= 1
             j += 1
-    weight = [float(durations_s[tid]) for tid in todo]
-    best = 0.0
-    for i in range(n):
-        neigh = [j for j in range(n) if adj[i] >> j & 1]
-        neigh.sort(key=lambda j: -weight[j])
-        chosen = 1 << i
-        total = weight[i]
-        for j in neigh:
-            if chosen & ~adj[j] == 0:
-                chosen |= 1 << j
-                total += weight[j]
-        best = max(best, total)
-    return best
+    return adj
 
 
 def _sep(separation: bool) -> dict[str, bool]:

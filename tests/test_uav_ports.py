@@ -47,6 +47,8 @@ def test_open_adapters_returns_the_record_and_closes_newest_first() -> None:
     assert isinstance(opened, UavPorts)
     assert opened.world is not None and opened.clock is opened.world.clock  # type: ignore[attr-defined]
     assert set(opened.descriptions) == {"flight controller", "actuators", "camera"}
+    # a simulated flight controller: the simulated camera sees from the simulated UAV, not from an autopilot
+    assert opened.descriptions["camera"] == "simulated (geometric), seen from the simulated UAV"
     opened.close()
 
 

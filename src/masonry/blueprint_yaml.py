@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 import re
 import stat
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -200,26 +201,52 @@ def safe_load(text: str) -> Any:
         return yaml.load(text, Loader=GuardedLoader)
 
 
-def _build(text: str) -> Any:  # noqa: C901 - one branch per YAML event kind
-    stack: list[Any] = []
-    keys: list[Any] = []
-    # Per open mapping: key -> line of its first occurrence (duplicate keys are errors naming both lines).
-    lines: list[dict[Any, int] | None] = []
-    root: Any = None
-    documents = 0
+def _build(text: str) -> Any:
+    builder = _Builder()
+    handlers = builder.handlers
+    for event in yaml.parse(text, Loader=_BASE_LOADER):
+        handler = handlers.get(type(event))
+        if handler is not None:  # stream and document ends carry nothing
+            handler(event)
+    return builder.root
 
-    def add(value: Any, event: Any) -> None:
-        nonlocal root
+
+class _Builder:
+    """Python data built from libyaml's events, one method per event kind (``handlers``); ``root`` at the end.
+
+    Each method reads the attributes its event kind has (ScalarEvent, collection start and end events, ...).
+    """
+
+    def __init__(self) -> None:
+        self.stack: list[Any] = []
+        self.keys: list[Any] = []
+        # Per open mapping: key -> line of its first occurrence (duplicate keys are errors naming both lines).
+        self.lines: list[dict[Any, int] | None] = []
+        self.root: Any = None
+        self.documents = 0
+        self.handlers: dict[type, Callable[[Any], None]] = {
+            yaml.ScalarEvent: self.scalar,
+            yaml.MappingStartEvent: self.start,
+            yaml.SequenceStartEvent: self.start,
+            yaml.MappingEndEvent: self.end,
+            yaml.SequenceEndEvent: self.end,
+            yaml.AliasEvent: self.alias,
+            yaml.DocumentStartEvent: self.document,
+        }
+
+    def add(self, value: Any, event: Any) -> None:
+        stack = self.stack
         if not stack:
-            root = value
+            self.root = value
             return
         top = stack[-1]
+        keys = self.keys
         if isinstance(top, list):
             top.append(value)
         elif keys[-1] is _NO_KEY:
             if isinstance(value, (dict, list)):
                 raise _Fallback  # complex keys: leave them to PyYAML
-            seen = lines[-1]
+            seen = self.lines[-1]
             assert seen is not None
             try:
                 if value in top:
@@ -232,32 +259,33 @@ def _build(text: str) -> Any:  # noqa: C901 - one branch per YAML event kind
             top[keys[-1]] = value
             keys[-1] = _NO_KEY
 
-    event: Any  # a ScalarEvent or a collection event: each branch reads the attributes its kind has
-    for event in yaml.parse(text, Loader=_BASE_LOADER):
-        kind = type(event)
-        if kind is yaml.ScalarEvent:
-            if event.anchor is not None or (event.tag is not None and event.tag != "!"):
-                raise _Fallback
-            add(_plain(event.value) if event.implicit[0] and not event.style else event.value, event)
-        elif kind is yaml.MappingStartEvent or kind is yaml.SequenceStartEvent:
-            if event.anchor is not None or (event.tag is not None and not event.implicit):
-                raise _Fallback
-            container: Any = {} if kind is yaml.MappingStartEvent else []
-            add(container, event)
-            stack.append(container)
-            keys.append(_NO_KEY)
-            lines.append({} if kind is yaml.MappingStartEvent else None)
-        elif kind is yaml.MappingEndEvent or kind is yaml.SequenceEndEvent:
-            stack.pop()
-            keys.pop()
-            lines.pop()
-        elif kind is yaml.AliasEvent:
+    def scalar(self, event: Any) -> None:
+        if event.anchor is not None or (event.tag is not None and event.tag != "!"):
             raise _Fallback
-        elif kind is yaml.DocumentStartEvent:
-            documents += 1
-            if documents > 1:
-                raise _Fallback  # let PyYAML report "expected a single document"
-    return root
+        self.add(_plain(event.value) if event.implicit[0] and not event.style else event.value, event)
+
+    def start(self, event: Any) -> None:
+        if event.anchor is not None or (event.tag is not None and not event.implicit):
+            raise _Fallback
+        mapping = type(event) is yaml.MappingStartEvent
+        container: Any = {} if mapping else []
+        self.add(container, event)
+        self.stack.append(container)
+        self.keys.append(_NO_KEY)
+        self.lines.append({} if mapping else None)
+
+    def end(self, event: Any) -> None:
+        self.stack.pop()
+        self.keys.pop()
+        self.lines.pop()
+
+    def alias(self, event: Any) -> None:
+        raise _Fallback
+
+    def document(self, event: Any) -> None:
+        self.documents += 1
+        if self.documents > 1:
+            raise _Fallback  # let PyYAML report "expected a single document"
 
 
 _NO_KEY = object()

@@ -30,7 +30,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from typing_extensions import Self
@@ -339,78 +339,96 @@ class MavlinkSitl:
         if not self.link_down and self._conn is not None:
             self._conn.mav.statustext_send(severity, text.encode("ascii", errors="replace")[:50])
 
-    def _command(self, msg: Any) -> None:  # noqa: C901, PLR0915 - one branch per MAVLink command the SITL answers
+    def _command(self, msg: Any) -> None:
         cmd = int(msg.command)
+        answer = self._COMMANDS.get(cmd)
+        if answer is None:
+            self._ack(cmd, MAV_RESULT_UNSUPPORTED)
+            return
+        answer(self, msg, cmd)
+
+    def _arm_disarm(self, msg: Any, cmd: int) -> None:
         v = self.vehicle
-        if cmd == MAV_CMD_COMPONENT_ARM_DISARM:
-            if msg.param1 >= 0.5:
-                problem = self._prearm_problem()
-                if problem is not None:
-                    self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")
-                    self._ack(cmd, MAV_RESULT_FAILED)
-                    return
-                try:
-                    v.arm()
-                except CommandRejected as exc:
-                    self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {exc.reason}")
-                    self._ack(cmd, MAV_RESULT_FAILED)
-                    return
-                # the vehicle model arms into its GUIDED; keep the autopilot's mode
-                v.mode = "GUIDED" if self.mode == self._offboard_mode else self.mode
-                self._ack(cmd, MAV_RESULT_ACCEPTED)
-                self._text(MAV_SEVERITY_INFO, "Arming motors")
-            else:
-                if not v.on_ground and int(msg.param2) != DISARM_MAGIC:
-                    self._text(MAV_SEVERITY_CRITICAL, "Disarm: vehicle is flying")
-                    self._ack(cmd, MAV_RESULT_FAILED)
-                    return
-                v.disarm(force=int(msg.param2) == DISARM_MAGIC)
-                self._ack(cmd, MAV_RESULT_ACCEPTED)
-        elif cmd == MAV_CMD_NAV_TAKEOFF:
-            mode_ok = self.px4 or self.mode == "GUIDED"  # PX4 switches to AUTO.TAKEOFF by itself
-            if not mode_ok or not v.armed or not v.on_ground:
-                why = "not in GUIDED" if not mode_ok else "not armed" if not v.armed else "already flying"
-                self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
+        if msg.param1 >= 0.5:
+            problem = self._prearm_problem()
+            if problem is not None:
+                self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
             try:
-                v.takeoff(float(msg.param7))  # NAV_TAKEOFF altitude: above home (the ground it stands on)
+                v.arm()
             except CommandRejected as exc:
-                self._text(MAV_SEVERITY_WARNING, f"Takeoff: {exc.reason}")
+                self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {exc.reason}")
                 self._ack(cmd, MAV_RESULT_FAILED)
                 return
-            if self.px4:
-                self.mode = "AUTO.TAKEOFF"
-            self._log(f"takeoff to {float(msg.param7):.2f} m")
+            # the vehicle model arms into its GUIDED; keep the autopilot's mode
+            v.mode = "GUIDED" if self.mode == self._offboard_mode else self.mode
             self._ack(cmd, MAV_RESULT_ACCEPTED)
-        elif cmd == MAV_CMD_NAV_LAND:
-            self.land_requests += 1
-            self._set_mode(self._land_mode)
-            self._ack(cmd, MAV_RESULT_ACCEPTED)
-        elif cmd == MAV_CMD_DO_SET_MODE:
-            if self.px4:  # param2 main mode, param3 sub mode
-                ok = self._set_mode_by_number((int(msg.param2) << 16) | (int(msg.param3) << 24))
-            else:
-                ok = self._set_mode_by_number(int(msg.param2))
-            self._ack(cmd, MAV_RESULT_ACCEPTED if ok else MAV_RESULT_FAILED)
-        elif cmd == MAV_CMD_SET_MESSAGE_INTERVAL:
-            msg_id, interval_us = int(msg.param1), float(msg.param2)
-            if msg_id not in self._defaults_hz and msg_id != MSG_HEARTBEAT:
-                self._ack(cmd, MAV_RESULT_DENIED)
-                return
-            if msg_id == MSG_HEARTBEAT:
-                self._ack(cmd, MAV_RESULT_ACCEPTED)  # heartbeat stays at 1 Hz, as on ArduPilot
-                return
-            if interval_us < 0:
-                self._rates_hz[msg_id] = 0.0
-            elif interval_us == 0:
-                self._rates_hz[msg_id] = self._defaults_hz[msg_id]
-            else:
-                self._rates_hz[msg_id] = min(100.0, 1e6 / interval_us)
-            self._next_due.pop(msg_id, None)  # the new rate starts now
-            self._ack(cmd, MAV_RESULT_ACCEPTED)
+            self._text(MAV_SEVERITY_INFO, "Arming motors")
         else:
-            self._ack(cmd, MAV_RESULT_UNSUPPORTED)
+            if not v.on_ground and int(msg.param2) != DISARM_MAGIC:
+                self._text(MAV_SEVERITY_CRITICAL, "Disarm: vehicle is flying")
+                self._ack(cmd, MAV_RESULT_FAILED)
+                return
+            v.disarm(force=int(msg.param2) == DISARM_MAGIC)
+            self._ack(cmd, MAV_RESULT_ACCEPTED)
+
+    def _takeoff(self, msg: Any, cmd: int) -> None:
+        v = self.vehicle
+        mode_ok = self.px4 or self.mode == "GUIDED"  # PX4 switches to AUTO.TAKEOFF by itself
+        if not mode_ok or not v.armed or not v.on_ground:
+            why = "not in GUIDED" if not mode_ok else "not armed" if not v.armed else "already flying"
+            self._text(MAV_SEVERITY_WARNING, f"Takeoff: {why}")
+            self._ack(cmd, MAV_RESULT_FAILED)
+            return
+        try:
+            v.takeoff(float(msg.param7))  # NAV_TAKEOFF altitude: above home (the ground it stands on)
+        except CommandRejected as exc:
+            self._text(MAV_SEVERITY_WARNING, f"Takeoff: {exc.reason}")
+            self._ack(cmd, MAV_RESULT_FAILED)
+            return
+        if self.px4:
+            self.mode = "AUTO.TAKEOFF"
+        self._log(f"takeoff to {float(msg.param7):.2f} m")
+        self._ack(cmd, MAV_RESULT_ACCEPTED)
+
+    def _land(self, msg: Any, cmd: int) -> None:
+        self.land_requests += 1
+        self._set_mode(self._land_mode)
+        self._ack(cmd, MAV_RESULT_ACCEPTED)
+
+    def _do_set_mode(self, msg: Any, cmd: int) -> None:
+        if self.px4:  # param2 main mode, param3 sub mode
+            ok = self._set_mode_by_number((int(msg.param2) << 16) | (int(msg.param3) << 24))
+        else:
+            ok = self._set_mode_by_number(int(msg.param2))
+        self._ack(cmd, MAV_RESULT_ACCEPTED if ok else MAV_RESULT_FAILED)
+
+    def _set_message_interval(self, msg: Any, cmd: int) -> None:
+        msg_id, interval_us = int(msg.param1), float(msg.param2)
+        if msg_id not in self._defaults_hz and msg_id != MSG_HEARTBEAT:
+            self._ack(cmd, MAV_RESULT_DENIED)
+            return
+        if msg_id == MSG_HEARTBEAT:
+            self._ack(cmd, MAV_RESULT_ACCEPTED)  # heartbeat stays at 1 Hz, as on ArduPilot
+            return
+        if interval_us < 0:
+            self._rates_hz[msg_id] = 0.0
+        elif interval_us == 0:
+            self._rates_hz[msg_id] = self._defaults_hz[msg_id]
+        else:
+            self._rates_hz[msg_id] = min(100.0, 1e6 / interval_us)
+        self._next_due.pop(msg_id, None)  # the new rate starts now
+        self._ack(cmd, MAV_RESULT_ACCEPTED)
+
+    #: The COMMAND_LONG commands the SITL answers, one method each; any other gets MAV_RESULT_UNSUPPORTED.
+    _COMMANDS: ClassVar[dict[int, Callable[[MavlinkSitl, Any, int], None]]] = {
+        MAV_CMD_COMPONENT_ARM_DISARM: _arm_disarm,
+        MAV_CMD_NAV_TAKEOFF: _takeoff,
+        MAV_CMD_NAV_LAND: _land,
+        MAV_CMD_DO_SET_MODE: _do_set_mode,
+        MAV_CMD_SET_MESSAGE_INTERVAL: _set_message_interval,
+    }
 
     def _prearm_problem(self) -> str | None:
         if self.config.prearm_failure:

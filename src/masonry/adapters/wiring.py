@@ -235,7 +235,7 @@ def _follow_autopilot(uav: Any, fc: Any) -> None:
     uav.vehicle = TelemetryVehicle(old.config, position_m=old.position_m, yaw_rad=old.yaw_rad)
 
 
-def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the opened ones on failure
+def open_adapters(
     hw: HardwareConfig,
     *,
     blueprint: Any,
@@ -278,52 +278,64 @@ def open_adapters(  # noqa: PLR0915 - opens each adapter in turn, closing the op
             fc, clock, advance = uav.fc, world.clock, world.step
             opened.descriptions["flight controller"] = "simulated"
         else:
-            clock = link_clock
-
-            def advance(dt_s: float, world: Any = world, clock: Any = link_clock) -> None:
-                clock.sleep(dt_s)
-                if world is not None:  # keep the simulated world on the autopilot's time
-                    step = clock.now_s() - world.clock.now_s()
-                    if step > 1e-6:
-                        world.step(step)
-
-        gripper: Any
-        sprayer: Any
-        if hw.sim_actuators:
-            assert uav is not None
-            gripper, sprayer = uav.gripper, uav.sprayer
-            opened.descriptions["actuators"] = "simulated"
-        else:
-            from masonry.adapters.arduino import ArduinoActuators
-
-            board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud, boot_wait_s=hw.actuator_boot_wait_s)
-            board.connect()
-            opened.closers.append(board.close)
-            gripper = sprayer = board
-            opened.descriptions["actuators"] = f"Arduino on {hw.actuators} (protocol v{board.version})"
-        camera: Any
-        if hw.sim_camera:
-            assert uav is not None
-            camera = uav.camera
-            where = "the autopilot's reported position" if fc is not None else "the simulated UAV"
-            opened.descriptions["camera"] = f"simulated ({camera_mode}), seen from {where}"
-        else:
-            from masonry.adapters.camera import OpenCvCamera
-
-            cam = OpenCvCamera(hw.camera, calibration=hw.calibration, clock=clock)
-            cam.connect()
-            opened.closers.append(cam.close)
-            camera = cam
-            intr = cam.intrinsics
-            opened.descriptions["camera"] = (
-                f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
-            )
+            clock, advance = link_clock, _advance_on(link_clock, world)
+        gripper, sprayer = _open_actuators(hw, uav, opened)
+        camera = _open_camera(hw, uav, clock, opened, camera_mode, sim_fc=hw.sim_fc)
         return UavPorts(
             fc, gripper, sprayer, camera, clock, advance, world, dict(opened.descriptions), opened.close
         )
     except BaseException:
         opened.close()
         raise
+
+
+def _advance_on(clock: Any, world: Any) -> Callable[[float], None]:
+    """``advance`` on the autopilot's clock: wait ``dt_s`` of it, then bring the simulated world (if any) level."""
+
+    def advance(dt_s: float) -> None:
+        clock.sleep(dt_s)
+        if world is not None:  # keep the simulated world on the autopilot's time
+            step = clock.now_s() - world.clock.now_s()
+            if step > 1e-6:
+                world.step(step)
+
+    return advance
+
+
+def _open_actuators(hw: HardwareConfig, uav: Any, opened: _Opening) -> tuple[Any, Any]:
+    """The gripper and the sprayer: the simulated UAV's, or the actuator Arduino (one board for both)."""
+    if hw.sim_actuators:
+        assert uav is not None
+        opened.descriptions["actuators"] = "simulated"
+        return uav.gripper, uav.sprayer
+    from masonry.adapters.arduino import ArduinoActuators
+
+    board = ArduinoActuators(hw.actuators, baud=hw.actuator_baud, boot_wait_s=hw.actuator_boot_wait_s)
+    board.connect()
+    opened.closers.append(board.close)
+    opened.descriptions["actuators"] = f"Arduino on {hw.actuators} (protocol v{board.version})"
+    return board, board
+
+
+def _open_camera(
+    hw: HardwareConfig, uav: Any, clock: Any, opened: _Opening, camera_mode: str, *, sim_fc: bool
+) -> Any:
+    """The camera: the simulated UAV's (seen from where the flight controller says it is), or an OpenCV one."""
+    if hw.sim_camera:
+        assert uav is not None
+        where = "the autopilot's reported position" if not sim_fc else "the simulated UAV"
+        opened.descriptions["camera"] = f"simulated ({camera_mode}), seen from {where}"
+        return uav.camera
+    from masonry.adapters.camera import OpenCvCamera
+
+    cam = OpenCvCamera(hw.camera, calibration=hw.calibration, clock=clock)
+    cam.connect()
+    opened.closers.append(cam.close)
+    intr = cam.intrinsics
+    opened.descriptions["camera"] = (
+        f"OpenCV {cam.kind} {hw.camera} ({intr.width_px}x{intr.height_px}, {hw.calibration})"
+    )
+    return cam
 
 
 def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:

@@ -146,7 +146,7 @@ def _describe(hw: Any) -> str:
 
 
 @command("fly")
-def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then the call
+def fly(
     uav: str = typer.Option(..., "--uav", help="brick | adhesion: the kind of UAV to fly."),
     sim: bool = typer.Option(False, "--sim", help="Fly in the simulated world (all adapters simulated)."),
     blueprint: Path = typer.Option(..., "--blueprint", help="Wall blueprint (YAML or JSON)."),
@@ -245,10 +245,6 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     """Fly one UAV: one task (--task ID: state trace, then the result; exit 1 if it failed), or a mission's tasks
     from mission control (--mission tcp/HOST:7447; exit 1 if mission control did not end the mission)."""
     from masonry.blueprint import load_blueprint
-    from masonry.fsm import UavConfig, fly_task
-    from masonry.planner import plan
-    from masonry.planner.tasks import BrickTask
-    from masonry.sim import Faults
 
     if uav not in ("brick", "adhesion"):
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
@@ -296,6 +292,7 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
                 "the same factor instead)"
             )
         from masonry.cli.mission import network_options
+        from masonry.sim import Faults
 
         key = network_options(key_file, insecure, [mission, *listen], "--mission/--listen")
         _fly_mission(
@@ -319,17 +316,44 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
         return
     if task is None:
         raise InputError("--task is required (or --mission tcp/HOST:PORT to take tasks from mission control)")
+    _fly_one_task(
+        bp,
+        task,
+        uav,
+        name,
+        sim=sim,
+        seed=seed,
+        camera=camera,
+        fault=fault,
+        dt=dt,
+        timeout=timeout,
+        fmt=fmt,
+        hardware=hardware.hw,
+    )
+
+
+def _fly_one_task(
+    bp: Any,
+    task: str,
+    uav: str,
+    name: str | None,
+    *,
+    sim: bool,
+    seed: int,
+    camera: str,
+    fault: list[str],
+    dt: float,
+    timeout: float,
+    fmt: str,
+    hardware: Any,
+) -> None:
+    """Single-task mode: fly ``task`` with the UAV of role ``uav`` (``name``); print the trace and the result."""
+    from masonry.fsm import UavConfig, fly_task
+    from masonry.planner import plan
+    from masonry.sim import Faults
+
     the_plan = plan(bp)
-    try:
-        the_task = the_plan.task(task)
-    except KeyError:
-        ids = [t.id for t in the_plan.tasks if not t.done]
-        shown = ", ".join(ids[:12]) + (", ..." if len(ids) > 12 else "")
-        raise InputError(f"--task {task}: no such task in {bp.source} (tasks: {shown or 'none'})") from None
-    if the_task.kind != uav:
-        raise InputError(f"--task {task} is {_a(the_task.kind)} task: fly it with --uav {the_task.kind}")
-    if the_task.done:
-        raise InputError(f"--task {task}: brick {task[1:]} is already in place in {bp.source}")
+    the_task = _pick_task(bp, the_plan, task, uav)
     spec = _pick_uav(bp, uav, name)
     faults = Faults.parse(fault)
 
@@ -339,13 +363,13 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     world_bp = replace(bp, bricks=bricks)
 
     adapters = select_adapters(
-        sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware.hw
+        sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware
     )
     uav_config = UavConfig.from_spec(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
-        velocity_lag_s=hardware.hw.velocity_lag_s,
+        velocity_lag_s=hardware.velocity_lag_s,
     )
     try:
         run = fly_task(
@@ -363,16 +387,54 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     finally:
         adapters.close()
 
+    out = _task_outcome(run, the_task, spec.name, adapters.world, timeout)
+    if fmt == "json":
+        typer.echo(json.dumps(out))
+        return
+    where = f"simulated, seed {seed}, {camera} camera" if hardware.all_sim else _describe(hardware)
+    typer.echo(f"{spec.name} flies {the_task.id} ({where})")
+    for t, s in run.trace:
+        typer.echo(f"{t:8.2f} s  {s}")
+    line = f"{the_task.id}: {out['status']} in {out['duration_s']:.1f} s"
+    if out.get("placement_error_m") is not None:
+        line += f", placement error {out['placement_error_m'] * 1000:.1f} mm"
+    if out.get("coverage") is not None:
+        line += f", coverage {out['coverage']:.0%}"
+    if "reason" in out:
+        line += f": {out['reason']}"
+    typer.echo(line)
+    if out["status"] != "done":
+        raise typer.Exit(1)
+
+
+def _pick_task(bp: Any, the_plan: Any, task: str, uav: str) -> Any:
+    """The task ``--task`` names, if the plan has it, it is of the UAV's kind and not already done."""
+    try:
+        the_task = the_plan.task(task)
+    except KeyError:
+        ids = [t.id for t in the_plan.tasks if not t.done]
+        shown = ", ".join(ids[:12]) + (", ..." if len(ids) > 12 else "")
+        raise InputError(f"--task {task}: no such task in {bp.source} (tasks: {shown or 'none'})") from None
+    if the_task.kind != uav:
+        raise InputError(f"--task {task} is {_a(the_task.kind)} task: fly it with --uav {the_task.kind}")
+    if the_task.done:
+        raise InputError(f"--task {task}: brick {task[1:]} is already in place in {bp.source}")
+    return the_task
+
+
+def _task_outcome(run: Any, the_task: Any, uav_name: str, world: Any, timeout: float) -> dict[str, Any]:
+    """The result of a single-task flight as ``--format json`` prints it (the world measures, if there is one)."""
+    from masonry.planner.tasks import BrickTask
+
     result = run.result
     status = result.status if result is not None else "failed"
     out: dict[str, Any] = {
-        "uav": spec.name,
+        "uav": uav_name,
         "task": the_task.id,
         "status": status,
         "duration_s": round(result.duration_s if result is not None else run.duration_s, 2),
         "placement_error_m": None,
     }
-    world: Any = adapters.world
     if isinstance(the_task, BrickTask):
         error: float | None
         if world is not None:
@@ -390,24 +452,7 @@ def fly(  # noqa: C901, PLR0915 - a command: its options checked in order, then 
     if status != "done":
         out["reason"] = result.reason if result is not None else f"no result after {timeout:g} s"
     out["trace"] = [{"t_s": round(t, 2), "state": s} for t, s in run.trace]
-
-    if fmt == "json":
-        typer.echo(json.dumps(out))
-        return
-    where = f"simulated, seed {seed}, {camera} camera" if hardware.hw.all_sim else _describe(hardware.hw)
-    typer.echo(f"{spec.name} flies {the_task.id} ({where})")
-    for t, s in run.trace:
-        typer.echo(f"{t:8.2f} s  {s}")
-    line = f"{the_task.id}: {status} in {out['duration_s']:.1f} s"
-    if out.get("placement_error_m") is not None:
-        line += f", placement error {out['placement_error_m'] * 1000:.1f} mm"
-    if out.get("coverage") is not None:
-        line += f", coverage {out['coverage']:.0%}"
-    if "reason" in out:
-        line += f": {out['reason']}"
-    typer.echo(line)
-    if status != "done":
-        raise typer.Exit(1)
+    return out
 
 
 def _fly_mission(

@@ -9,6 +9,7 @@ import json
 import logging
 import time
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -63,7 +64,7 @@ def keygen(
 
 
 @command("mission-control")
-def mission_control(  # noqa: PLR0915 - a command: its options checked in order, then the call
+def mission_control(
     blueprint: Path = typer.Argument(
         ..., help="Wall blueprint (YAML or JSON); its fleet is the mission's fleet."
     ),
@@ -130,9 +131,8 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
     from masonry.blueprint import load_blueprint
     from masonry.cli.outputs import check_output_path, write_atomic
-    from masonry.fingerprint import fleet_digest, wall_digest
+    from masonry.fingerprint import wall_digest
     from masonry.mission.control import MissionControl
-    from masonry.mission.journal import open_mission_journal
     from masonry.mission.messages import MISSION_CONTROL
     from masonry.mission.report import control_report
     from masonry.mission.simulate import priority_durations_s
@@ -162,19 +162,7 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
 
-    jr = None
-    state = None
-    if journal is not None:
-        # the journal knows its wall and fleet: a resume with another blueprint is refused (exit 2)
-        jr, state = open_mission_journal(
-            journal,
-            resume=resume,
-            wall_digest=wall_digest(bp),
-            fleet_digest=fleet_digest(bp),
-            fleet_names=[u.name for u in bp.fleet],
-            task_ids=[t.id for t in the_plan.tasks],
-            warn=lambda m: typer.echo(f"warning: {m}", err=True),
-        )
+    jr, state = _open_journal(journal, resume, bp, the_plan)
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     from masonry.mission.airspace import layer_base_m
     from masonry.mission.auth import wrap
@@ -212,25 +200,63 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
             + (", messages authenticated" if key is not None else ", messages NOT authenticated"),
             err=True,
         )
-        t0 = time.monotonic()
-        linger_until = None
-        while True:
-            now = offset + (time.monotonic() - t0) * time_scale
-            mc.step(now)
-            if mc.ended_at_s is not None:
-                # keep answering heartbeats a moment so every handler hears MissionEnd
-                linger_until = linger_until or now + 2.0 * time_scale
-                if now >= linger_until:
-                    break
-            if max_time is not None and now - offset >= max_time:
-                break
-            time.sleep(tick)
+        _run_in_wall_time(mc, offset, time_scale=time_scale, max_time_s=max_time, tick_s=tick)
     finally:
         transport.close()
         if jr is not None:
             jr.close()
     result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
     security = security_summary(transport, mc.events.ignored)
+    _echo_security(security)
+    out = {**result.to_dict(), "security": security}
+    if report is not None:
+        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
+        typer.echo(f"wrote {report}", err=True)
+    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
+    if not result.completed:
+        raise typer.Exit(1)
+
+
+def _open_journal(journal: Path | None, resume: bool, bp: Any, the_plan: Any) -> tuple[Any, Any]:
+    """The mission's journal and its replayed state (None, None without ``--journal``)."""
+    if journal is None:
+        return None, None
+    from masonry.fingerprint import fleet_digest, wall_digest
+    from masonry.mission.journal import open_mission_journal
+
+    # the journal knows its wall and fleet: a resume with another blueprint is refused (exit 2)
+    return open_mission_journal(
+        journal,
+        resume=resume,
+        wall_digest=wall_digest(bp),
+        fleet_digest=fleet_digest(bp),
+        fleet_names=[u.name for u in bp.fleet],
+        task_ids=[t.id for t in the_plan.tasks],
+        warn=lambda m: typer.echo(f"warning: {m}", err=True),
+    )
+
+
+def _run_in_wall_time(
+    mc: Any, offset_s: float, *, time_scale: float, max_time_s: float | None, tick_s: float
+) -> None:
+    """Step mission control on the wall clock (mission time from ``offset_s``) until it ends or ``--max-time``."""
+    t0 = time.monotonic()
+    linger_until = None
+    while True:
+        now = offset_s + (time.monotonic() - t0) * time_scale
+        mc.step(now)
+        if mc.ended_at_s is not None:
+            # keep answering heartbeats a moment so every handler hears MissionEnd
+            linger_until = linger_until or now + 2.0 * time_scale
+            if now >= linger_until:
+                break
+        if max_time_s is not None and now - offset_s >= max_time_s:
+            break
+        time.sleep(tick_s)
+
+
+def _echo_security(security: dict[str, dict[str, int]]) -> None:
+    """One stderr line per non-empty count of :func:`security_summary`."""
     for what, counts in security.items():
         if counts:
             typer.echo(
@@ -239,10 +265,3 @@ def mission_control(  # noqa: PLR0915 - a command: its options checked in order,
                 + f" ({', '.join(f'{k} {v}' for k, v in sorted(counts.items()))})",
                 err=True,
             )
-    out = {**result.to_dict(), "security": security}
-    if report is not None:
-        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
-        typer.echo(f"wrote {report}", err=True)
-    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
-    if not result.completed:
-        raise typer.Exit(1)

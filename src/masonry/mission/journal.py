@@ -28,19 +28,36 @@ import sqlite3
 import threading
 import warnings
 from collections.abc import Callable, Collection, Mapping
-from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from types import MappingProxyType, TracebackType
+from types import TracebackType
 from typing import Any, Literal
 
 from masonry.errors import JournalError, JournalUnusable
-from masonry.ports import BATTERY_LOW_REASON
+from masonry.mission.journal_state import (
+    DoneRecord,
+    FailureRecord,
+    JournalRecord,
+    JournalState,
+    RecordKind,
+    fold_records,
+)
+
+__all__ = [
+    "APPLICATION_ID",
+    "SCHEMA_VERSION",
+    "DoneRecord",
+    "FailureRecord",
+    "Journal",
+    "JournalRecord",
+    "JournalState",
+    "RecordKind",
+    "open_mission_journal",
+    "read_journal",
+]
 
 SCHEMA_VERSION = 1
 APPLICATION_ID = 0x4D534E4A  # "MSNJ": masonry journal
-
-RecordKind = Literal["assign", "complete", "fail", "uav_lost"]
 
 _SCHEMA = """
 CREATE TABLE records (
@@ -55,102 +72,6 @@ CREATE TABLE records (
 CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 """
 _TABLES = {"records", "meta"}
-
-
-@dataclass(frozen=True)
-class JournalRecord:
-    """One journal line as written: ``kind`` is assign, complete, fail or uav_lost; ``data`` the extra fields."""
-
-    seq: int
-    kind: RecordKind
-    time_s: float
-    task_id: str | None
-    uav: str
-    attempt: int | None
-    data: Mapping[str, Any] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class DoneRecord:
-    """A completed task: the UAV, the completion time ``time_s``, the start of the attempt that completed it.
-
-    ``start_s`` is the time of the matching assignment record (None if the journal has none); ``fields`` holds
-    what :meth:`Journal.record_completion` was given (placement error, coverage, ...).
-    """
-
-    task_id: str
-    uav: str
-    time_s: float
-    start_s: float | None
-    attempt: int
-    fields: Mapping[str, Any] = field(default_factory=dict)
-
-    @property
-    def end_s(self) -> float:
-        """The completion time (same as ``time_s``)."""
-        return self.time_s
-
-
-@dataclass(frozen=True)
-class FailureRecord:
-    """A failed attempt: task, UAV, failure time, start of the attempt (if journaled), attempt number, reason."""
-
-    task_id: str
-    uav: str
-    time_s: float
-    start_s: float | None
-    attempt: int
-    reason: str
-
-
-@dataclass(frozen=True)
-class JournalState:
-    """What a journal says happened, folded for ``--resume``.
-
-    Attributes:
-        done: completed tasks in completion order (a task completed twice keeps its first completion).
-        attempts: finished (completed or failed) attempts per task id: the ``attempts`` argument of
-            ``Dispatcher.restore``. Attempts cut short by a lost UAV or a crash are not counted.
-        failures: every failed attempt, in order.
-        in_progress: task id -> UAV of attempts assigned but neither completed, failed nor released by a UAV
-            loss when the journal ends (the previous run stopped while they flew; they are flown again).
-        lost_uavs: UAVs declared lost, in order.
-        last_time_s: the latest mission time in any record (0.0 for an empty journal): the resumed clock.
-        records: every record, in write order.
-        meta: the key/value pairs stored with :meth:`Journal.set_meta`.
-        measured: the latest ``measured`` snapshot any record carries (what a simulator measured when it
-            wrote the record: ``distances_m`` per UAV, ``min_separation_m``); empty if none does.
-    """
-
-    done: tuple[DoneRecord, ...] = ()
-    attempts: Mapping[str, int] = field(default_factory=dict)
-    failures: tuple[FailureRecord, ...] = ()
-    in_progress: Mapping[str, str] = field(default_factory=dict)
-    lost_uavs: tuple[str, ...] = ()
-    last_time_s: float = 0.0
-    records: tuple[JournalRecord, ...] = ()
-    meta: Mapping[str, Any] = field(default_factory=dict)
-    measured: Mapping[str, Any] = field(default_factory=dict)
-
-    @property
-    def task_ids(self) -> frozenset[str]:
-        """Ids of every task any record names."""
-        return frozenset(r.task_id for r in self.records if r.task_id is not None)
-
-    @property
-    def uav_names(self) -> frozenset[str]:
-        """Names of every UAV any record names."""
-        return frozenset(r.uav for r in self.records)
-
-    @property
-    def done_ids(self) -> frozenset[str]:
-        """Ids of the completed tasks."""
-        return frozenset(r.task_id for r in self.done)
-
-    @property
-    def empty(self) -> bool:
-        """True when the journal holds no record."""
-        return not self.records
 
 
 def _json_default(value: Any) -> Any:
@@ -388,7 +309,7 @@ class Journal:
                 meta_rows = self._conn.execute("SELECT key, value FROM meta ORDER BY key").fetchall()
             except sqlite3.Error as exc:
                 raise JournalUnusable(f"journal {self.path}: cannot read: {_reason(exc)}") from exc
-        return _fold(str(self.path), rows, meta_rows)
+        return fold_records(str(self.path), rows, meta_rows)
 
 
 def read_journal(path: str | PathLike[str]) -> JournalState:
@@ -425,76 +346,7 @@ def _read_only_replay(p: Path) -> JournalState:
         raise JournalUnusable(f"{where}: cannot read: {_reason(exc)}") from exc
     finally:
         conn.close()
-    return _fold(str(p), rows, meta_rows)
-
-
-def _fold(where: str, rows: list[tuple[Any, ...]], meta_rows: list[tuple[Any, ...]]) -> JournalState:  # noqa: C901 - one branch per journal row kind
-    records: list[JournalRecord] = []
-    done: dict[str, DoneRecord] = {}
-    attempts: dict[str, int] = {}
-    failures: list[FailureRecord] = []
-    running: dict[str, tuple[str, float, int]] = {}  # task -> (uav, start_s, attempt)
-    lost: list[str] = []
-    last = 0.0
-    measured: dict[str, Any] = {}
-    for seq, kind, time_s, task_id, uav, attempt, data_text in rows:
-        try:
-            data = json.loads(data_text)
-        except (TypeError, ValueError) as exc:
-            raise JournalUnusable(f"journal {where}: record {seq}: unreadable data ({exc})") from exc
-        if not isinstance(data, dict) or not isinstance(time_s, (int, float)) or not isinstance(uav, str):
-            raise JournalUnusable(f"journal {where}: record {seq}: malformed")
-        if kind != "uav_lost" and not isinstance(task_id, str):
-            raise JournalUnusable(f"journal {where}: record {seq}: {kind} record without a task id")
-        if isinstance(data.get("measured"), dict):
-            measured = data["measured"]
-        rec = JournalRecord(int(seq), kind, float(time_s), task_id, uav, attempt, MappingProxyType(data))
-        records.append(rec)
-        last = max(last, rec.time_s)
-        if kind == "assign":
-            running[task_id] = (uav, rec.time_s, int(attempt) if attempt else attempts.get(task_id, 0) + 1)
-        elif kind in ("complete", "fail"):
-            start = running.pop(task_id, None)
-            start_s = start[1] if start is not None and start[0] == uav else None
-            number = start[2] if start is not None and start[0] == uav else attempts.get(task_id, 0) + 1
-            if kind == "complete" or not str(data.get("reason", "")).startswith(BATTERY_LOW_REASON):
-                attempts[task_id] = (
-                    attempts.get(task_id, 0) + 1
-                )  # (the UAV's battery is not the task's fault)
-            if kind == "complete":
-                if task_id not in done:
-                    done[task_id] = DoneRecord(
-                        task_id, uav, rec.time_s, start_s, number, MappingProxyType(data)
-                    )
-            else:
-                failures.append(
-                    FailureRecord(task_id, uav, rec.time_s, start_s, number, str(data.get("reason", "")))
-                )
-        else:  # uav_lost: its running task is released, not counted
-            if uav not in lost:
-                lost.append(uav)
-            for tid in [t for t, (u, _, _) in running.items() if u == uav]:
-                del running[tid]
-    meta: dict[str, Any] = {}
-    for key, value in meta_rows:
-        try:
-            meta[key] = json.loads(value)
-        except (TypeError, ValueError) as exc:
-            raise JournalUnusable(f"journal {where}: meta {key!r}: unreadable ({exc})") from exc
-    end = meta.get("measured")  # written when a run ends: later than its last record (the UAVs flew home)
-    if isinstance(end, dict) and isinstance(end.get("time_s"), (int, float)) and end["time_s"] >= last:
-        measured = {k: v for k, v in end.items() if k != "time_s"}
-    return JournalState(
-        done=tuple(done.values()),
-        attempts=MappingProxyType(attempts),
-        failures=tuple(failures),
-        in_progress=MappingProxyType({t: u for t, (u, _, _) in running.items()}),
-        lost_uavs=tuple(lost),
-        last_time_s=last,
-        records=tuple(records),
-        meta=MappingProxyType(meta),
-        measured=MappingProxyType(measured),
-    )
+    return fold_records(str(p), rows, meta_rows)
 
 
 def _reason(exc: BaseException) -> str:

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import Any
 
@@ -454,7 +454,7 @@ def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
 _last_decoded: list[tuple[bytes | str, Message] | None] = [None]
 
 
-def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:  # noqa: C901 - one branch per message type
+def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
     """:func:`decode` without its cache of the last broadcast (same arguments, result and errors)."""
     try:
         data = _loads(raw)
@@ -472,92 +472,127 @@ def _decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message: 
             return hb
     f = _Fields(data, str(kind))
     sender = f.str_("sender")
+    body = _BODIES.get(kind) if isinstance(kind, str) else None
+    if body is None:
+        raise ProtocolError(f"unknown message type {kind!r}")
+    return body(f, sender, fleet)
 
-    def check_uav(name: str, field: str) -> None:
-        if fleet is not None and name not in fleet:
-            raise ProtocolError(f"{kind} message: {field} {name!r} is not a UAV of the blueprint's fleet")
 
-    if kind == "heartbeat":
-        if sender != MISSION_CONTROL:
-            check_uav(sender, "sender")
-        return Heartbeat(
-            sender,
-            f.num("time_s"),
-            state=str(data.get("state") or ""),
-            task_id=f.str_("task_id", optional=True),
-            position_m=f.vec("position_m", optional=True),
-        )
-    if kind in ("assign", "mission-end", "clearance") and sender != MISSION_CONTROL:
-        raise ProtocolError(f"{kind} message: only {MISSION_CONTROL!r} may send it, not {sender!r}")
-    if kind == "assign":
-        uav = f.str_("uav")
-        check_uav(uav, "uav")
-        attempt = f.int_("attempt")
-        if attempt < 1:
-            raise f.fail("attempt", f"must be >= 1, got {attempt}")
-        wall = data.get("wall", "")
-        if not isinstance(wall, str):
-            raise f.fail("wall", f"must be a string, got {wall!r}")
-        return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"), wall)
-    if kind == "progress":
-        check_uav(sender, "sender")
-        return Progress(
-            sender, f.str_("task_id"), f.str_("state"), f.num("time_s"), f.vec("position_m", optional=True)
-        )
-    if kind == "result":
-        check_uav(sender, "sender")
-        r = _Fields(f.obj("result"), "result result")
-        status = r.get("status")
-        if status not in ("done", "failed"):
-            raise r.fail("status", f"must be 'done' or 'failed', got {status!r}")
-        result = TaskResult(
-            task_id=r.str_("task_id"),
-            status=status,
-            duration_s=r.num("duration_s"),
-            reason=r.str_("reason", optional=True),
-            placement_error_m=r.num("placement_error_m", optional=True),
-            coverage=r.num("coverage", optional=True),
-            phases=None if r.data.get("phases") is None else phases_from_dict(r.data["phases"]),
-        )
-        attempt = f.int_("attempt")
-        if attempt < 0:
-            raise f.fail("attempt", f"must be >= 0, got {attempt}")
-        return Result(
-            sender,
-            result,
-            f.num("time_s"),
-            f.vec("position_m", optional=True),
-            state=str(data.get("state") or ""),
-            attempt=attempt,
-        )
-    if kind == "mission-end":
-        return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
-    if kind == "clearance-request":
-        check_uav(sender, "sender")
-        return ClearanceRequest(
-            sender,
-            f.vec("site_m"),
-            f.num("time_s"),
-            f.vec("position_m", optional=True),
-            f.bool_("release"),
-            f.bool_("arrived"),
-            f.num("top_m", optional=True),
-            f.vec("to_m", optional=True),
-        )
-    if kind == "clearance":
-        uav = f.str_("uav")
-        check_uav(uav, "uav")
-        radius = f.num("radius_m")
-        if radius < 0.0:
-            raise f.fail("radius_m", f"must be >= 0, got {radius}")
-        return Clearance(
-            sender,
-            uav,
-            f.vec("site_m"),
-            radius,
-            f.num("time_s"),
-            f.bool_("granted"),
-            f.vec("hold_m", optional=True),
-            f.num("layer_m", optional=True),
-        )
-    raise ProtocolError(f"unknown message type {kind!r}")
+def _check_uav(f: _Fields, fleet: Collection[str] | None, name: str, field: str) -> None:
+    if fleet is not None and name not in fleet:
+        raise ProtocolError(f"{f.what} message: {field} {name!r} is not a UAV of the blueprint's fleet")
+
+
+def _check_from_mission_control(f: _Fields, sender: str) -> None:
+    if sender != MISSION_CONTROL:
+        raise ProtocolError(f"{f.what} message: only {MISSION_CONTROL!r} may send it, not {sender!r}")
+
+
+def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartbeat:
+    if sender != MISSION_CONTROL:
+        _check_uav(f, fleet, sender, "sender")
+    return Heartbeat(
+        sender,
+        f.num("time_s"),
+        state=str(f.data.get("state") or ""),
+        task_id=f.str_("task_id", optional=True),
+        position_m=f.vec("position_m", optional=True),
+    )
+
+
+def _assign(f: _Fields, sender: str, fleet: Collection[str] | None) -> Assign:
+    _check_from_mission_control(f, sender)
+    uav = f.str_("uav")
+    _check_uav(f, fleet, uav, "uav")
+    attempt = f.int_("attempt")
+    if attempt < 1:
+        raise f.fail("attempt", f"must be >= 1, got {attempt}")
+    wall = f.data.get("wall", "")
+    if not isinstance(wall, str):
+        raise f.fail("wall", f"must be a string, got {wall!r}")
+    return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"), wall)
+
+
+def _progress(f: _Fields, sender: str, fleet: Collection[str] | None) -> Progress:
+    _check_uav(f, fleet, sender, "sender")
+    return Progress(
+        sender, f.str_("task_id"), f.str_("state"), f.num("time_s"), f.vec("position_m", optional=True)
+    )
+
+
+def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
+    _check_uav(f, fleet, sender, "sender")
+    r = _Fields(f.obj("result"), "result result")
+    status = r.get("status")
+    if status not in ("done", "failed"):
+        raise r.fail("status", f"must be 'done' or 'failed', got {status!r}")
+    result = TaskResult(
+        task_id=r.str_("task_id"),
+        status=status,
+        duration_s=r.num("duration_s"),
+        reason=r.str_("reason", optional=True),
+        placement_error_m=r.num("placement_error_m", optional=True),
+        coverage=r.num("coverage", optional=True),
+        phases=None if r.data.get("phases") is None else phases_from_dict(r.data["phases"]),
+    )
+    attempt = f.int_("attempt")
+    if attempt < 0:
+        raise f.fail("attempt", f"must be >= 0, got {attempt}")
+    return Result(
+        sender,
+        result,
+        f.num("time_s"),
+        f.vec("position_m", optional=True),
+        state=str(f.data.get("state") or ""),
+        attempt=attempt,
+    )
+
+
+def _mission_end(f: _Fields, sender: str, fleet: Collection[str] | None) -> MissionEnd:
+    _check_from_mission_control(f, sender)
+    return MissionEnd(sender, f.num("time_s"), f.bool_("completed"))
+
+
+def _clearance_request(f: _Fields, sender: str, fleet: Collection[str] | None) -> ClearanceRequest:
+    _check_uav(f, fleet, sender, "sender")
+    return ClearanceRequest(
+        sender,
+        f.vec("site_m"),
+        f.num("time_s"),
+        f.vec("position_m", optional=True),
+        f.bool_("release"),
+        f.bool_("arrived"),
+        f.num("top_m", optional=True),
+        f.vec("to_m", optional=True),
+    )
+
+
+def _clearance(f: _Fields, sender: str, fleet: Collection[str] | None) -> Clearance:
+    _check_from_mission_control(f, sender)
+    uav = f.str_("uav")
+    _check_uav(f, fleet, uav, "uav")
+    radius = f.num("radius_m")
+    if radius < 0.0:
+        raise f.fail("radius_m", f"must be >= 0, got {radius}")
+    return Clearance(
+        sender,
+        uav,
+        f.vec("site_m"),
+        radius,
+        f.num("time_s"),
+        f.bool_("granted"),
+        f.vec("hold_m", optional=True),
+        f.num("layer_m", optional=True),
+    )
+
+
+#: How the body of each message type is read, after the envelope (version, type, sender): one function per type.
+_BODIES: dict[str, Callable[[_Fields, str, Collection[str] | None], Message]] = {
+    "heartbeat": _heartbeat,
+    "assign": _assign,
+    "progress": _progress,
+    "result": _result,
+    "mission-end": _mission_end,
+    "clearance-request": _clearance_request,
+    "clearance": _clearance,
+}

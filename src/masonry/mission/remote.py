@@ -66,7 +66,7 @@ def _key_hint(transport: Any, handler: UavHandler) -> str:
     return ""
 
 
-def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
+def run_remote_uav(
     blueprint: Blueprint,
     spec: UavSpec,
     *,
@@ -131,14 +131,9 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         raise InputError(
             f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt")
         )
-    if adapters is None:
-        from masonry.sim import Faults, World
-
-        world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
-        ports = world.add_uav(spec).ports
-        ports = dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
-    else:
-        ports = adapters
+    ports = (
+        adapters if adapters is not None else _paced_world(blueprint, spec, seed, camera, faults, time_scale)
+    )
     fc, gripper, sprayer, cam = ports.fc, ports.gripper, ports.sprayer, ports.camera
     clock: Any = ports.clock
     advance = ports.advance
@@ -182,38 +177,28 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
     handler.attach(model)
     wall0 = time.monotonic()
     t0 = clock.now_s()
-    last_state = model.state
-    heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
-    heard_wall = wall0
-    refused_shown = 0
+
+    def not_heard() -> LinkLost:
+        hint = _key_hint(transport, handler)
+        return LinkLost(
+            f"{spec.name}: no word from mission control at {', '.join(connect)} within {wait_s:g} s{hint}",
+            options=("key_file",) if hint else (),
+        )
+
     try:
         fc.connect()
-        while True:
-            now = clock.now_s()
-            handler.step(now)
-            while echo is not None and len(handler.refused) > refused_shown:
-                echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
-                refused_shown += 1
-            if echo is not None and model.state != last_state:
-                last_state = model.state
-                echo(f"{now:8.2f} s  {last_state}")
-            if handler.mission_control_heard_s != heard_s:
-                heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
-            if handler.finished:
-                break
-            if heard_s is None:
-                if time.monotonic() - wall0 > wait_s:
-                    hint = _key_hint(transport, handler)
-                    raise LinkLost(
-                        f"{spec.name}: no word from mission control at {', '.join(connect)} "
-                        f"within {wait_s:g} s{hint}",
-                        options=("key_file",) if hint else (),
-                    )
-            elif model.finished and time.monotonic() - heard_wall > wait_s:
-                break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
-            if now - t0 >= max_time_s:
-                break
-            advance(dt_s)
+        _fly_until_done(
+            handler,
+            model,
+            clock,
+            advance,
+            dt_s=dt_s,
+            start=(t0, wall0),
+            wait_s=wait_s,
+            max_time_s=max_time_s,
+            echo=echo,
+            not_heard=not_heard,
+        )
     finally:
         fc.close()
         transport.close()
@@ -227,3 +212,61 @@ def run_remote_uav(  # noqa: PLR0915 - the wiring of one remote UAV, in order
         tuple(handler.refused),
         dropped,
     )
+
+
+def _paced_world(
+    blueprint: Blueprint, spec: UavSpec, seed: int, camera: str, faults: Any, time_scale: float
+) -> UavPorts:
+    """The ports of ``spec`` in a simulated world of its own, paced at ``time_scale`` (see :func:`paced`)."""
+    from masonry.sim import Faults, World
+
+    world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
+    ports = world.add_uav(spec).ports
+    return dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
+
+
+def _fly_until_done(
+    handler: UavHandler,
+    model: Any,
+    clock: Any,
+    advance: Callable[[float], None],
+    *,
+    dt_s: float,
+    start: tuple[float, float],
+    wait_s: float,
+    max_time_s: float,
+    echo: Any,
+    not_heard: Callable[[], LinkLost],
+) -> None:
+    """The control loop of :func:`run_remote_uav`: tick the handler until the mission ends for this UAV.
+
+    It ends when the handler is finished, when the UAV has landed and mission control has been silent for
+    ``wait_s`` of wall time, or after ``max_time_s`` of the UAV's clock; ``start`` is (clock, wall) time at
+    the start. Raises ``not_heard()`` when mission control was never heard within ``wait_s``.
+    """
+    t0, wall0 = start
+    last_state = model.state
+    heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
+    heard_wall = wall0
+    refused_shown = 0
+    while True:
+        now = clock.now_s()
+        handler.step(now)
+        while echo is not None and len(handler.refused) > refused_shown:
+            echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
+            refused_shown += 1
+        if echo is not None and model.state != last_state:
+            last_state = model.state
+            echo(f"{now:8.2f} s  {last_state}")
+        if handler.mission_control_heard_s != heard_s:
+            heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
+        if handler.finished:
+            break
+        if heard_s is None:
+            if time.monotonic() - wall0 > wait_s:
+                raise not_heard()
+        elif model.finished and time.monotonic() - heard_wall > wait_s:
+            break  # landed, idle, and mission control silent for wait_s of wall time (it may resume)
+        if now - t0 >= max_time_s:
+            break
+        advance(dt_s)

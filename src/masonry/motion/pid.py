@@ -105,6 +105,41 @@ def _floats3(name: str, value: Sequence[float] | np.ndarray) -> tuple[float, flo
     return x, y, z
 
 
+def _floats9(
+    position_m: Sequence[float] | np.ndarray,
+    target_m: Sequence[float] | np.ndarray,
+    velocity_ff_mps: Sequence[float] | np.ndarray,
+) -> tuple[float, float, float, float, float, float, float, float, float]:
+    """The three 3-vectors of :meth:`PID.step_floats` as nine finite floats (InputError names a bad one)."""
+    isfinite = math.isfinite
+    try:  # the common case, inline: three finite numbers each
+        px, py, pz = position_m
+        tx, ty, tz = target_m
+        fx, fy, fz = velocity_ff_mps
+        px, py, pz, tx, ty, tz = float(px), float(py), float(pz), float(tx), float(ty), float(tz)
+        fx, fy, fz = float(fx), float(fy), float(fz)
+        if (
+            isfinite(px)
+            and isfinite(py)
+            and isfinite(pz)
+            and isfinite(tx)
+            and isfinite(ty)
+            and isfinite(tz)
+            and isfinite(fx)
+            and isfinite(fy)
+            and isfinite(fz)
+        ):
+            return px, py, pz, tx, ty, tz, fx, fy, fz
+    except (TypeError, ValueError):
+        pass
+    # say which argument is wrong
+    return (
+        *_floats3("position_m", position_m),
+        *_floats3("target_m", target_m),
+        *_floats3("velocity_ff_mps", velocity_ff_mps),
+    )
+
+
 class PID:
     """Position-to-velocity PID with per-axis gains, clamping, anti-windup and wrapped yaw.
 
@@ -163,7 +198,7 @@ class PID:
         )
         return np.array((vx, vy, vz)), w
 
-    def step_floats(  # noqa: PLR0915 - the hot path, inlined on purpose (benchmarks/bench_motion.py)
+    def step_floats(
         self,
         now_s: float,
         position_m: Sequence[float] | np.ndarray,
@@ -177,33 +212,10 @@ class PID:
 
         The control loops call this one (a few microseconds instead of ~20 µs on numpy 3-vectors).
         """
-        isfinite = math.isfinite
-        try:  # the common case, inline: three finite numbers each
-            px, py, pz = position_m
-            tx, ty, tz = target_m
-            fx, fy, fz = velocity_ff_mps
-            px, py, pz, tx, ty, tz = float(px), float(py), float(pz), float(tx), float(ty), float(tz)
-            fx, fy, fz = float(fx), float(fy), float(fz)
-            ok = (
-                isfinite(px)
-                and isfinite(py)
-                and isfinite(pz)
-                and isfinite(tx)
-                and isfinite(ty)
-                and isfinite(tz)
-                and isfinite(fx)
-                and isfinite(fy)
-                and isfinite(fz)
-            )
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:  # say which argument is wrong
-            px, py, pz = _floats3("position_m", position_m)
-            tx, ty, tz = _floats3("target_m", target_m)
-            fx, fy, fz = _floats3("velocity_ff_mps", velocity_ff_mps)
+        px, py, pz, tx, ty, tz, fx, fy, fz = _floats9(position_m, target_m, velocity_ff_mps)
         yaw = float(yaw_rad)
         now = float(now_s)
-        if not (isfinite(yaw) and isfinite(now)):
+        if not (math.isfinite(yaw) and math.isfinite(now)):
             raise InputError(f"PID yaw_rad and now_s must be finite, got {yaw_rad!r}, {now_s!r}")
 
         integral = self._integral
@@ -214,20 +226,7 @@ class PID:
         self._yaw_active = yaw_active
         yaw_error = wrap_angle_rad(float(target_yaw_rad) - yaw) if target_yaw_rad is not None else 0.0
         error = (tx - px, ty - py, tz - pz, yaw_error)
-
-        prev_t = self._prev_t_s
-        dt = None if prev_t is None else now - prev_t
-        prev = self._prev_meas
-        if dt is not None and dt > 0.0 and prev is not None:
-            tau = self.gains.derivative_tau_s
-            alpha = 1.0 if tau == 0.0 else dt / (tau + dt)
-            rate[0] += alpha * ((px - prev[0]) / dt - rate[0])
-            rate[1] += alpha * ((py - prev[1]) / dt - rate[1])
-            rate[2] += alpha * ((pz - prev[2]) / dt - rate[2])
-            rate[3] += alpha * (wrap_angle_rad(yaw - prev[3]) / dt - rate[3])
-        if dt is None or dt != 0.0:
-            self._prev_t_s = now
-            self._prev_meas = [px, py, pz, yaw]
+        dt = self._measure(now, px, py, pz, yaw)
 
         integrate = dt is not None and dt > 0.0
         ff = (fx, fy, fz, 0.0)
@@ -258,3 +257,21 @@ class PID:
             # the yaw output was computed with the integral before it was zeroed; it is not used
             return out[0], out[1], out[2], 0.0
         return out[0], out[1], out[2], out[3]
+
+    def _measure(self, now: float, px: float, py: float, pz: float, yaw: float) -> float | None:
+        """Update the filtered rates from the previous measurement; return the time since it (None: none yet)."""
+        prev_t = self._prev_t_s
+        dt = None if prev_t is None else now - prev_t
+        prev = self._prev_meas
+        if dt is not None and dt > 0.0 and prev is not None:
+            rate = self._rate
+            tau = self.gains.derivative_tau_s
+            alpha = 1.0 if tau == 0.0 else dt / (tau + dt)
+            rate[0] += alpha * ((px - prev[0]) / dt - rate[0])
+            rate[1] += alpha * ((py - prev[1]) / dt - rate[1])
+            rate[2] += alpha * ((pz - prev[2]) / dt - rate[2])
+            rate[3] += alpha * (wrap_angle_rad(yaw - prev[3]) / dt - rate[3])
+        if dt is None or dt != 0.0:
+            self._prev_t_s = now
+            self._prev_meas = [px, py, pz, yaw]
+        return dt

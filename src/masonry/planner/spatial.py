@@ -29,7 +29,7 @@ def cell_coordinates(points: NDArray[np.float64], cell_size: NDArray[np.float64]
     return cells
 
 
-def neighbour_pairs(  # noqa: PLR0915 - one vectorised sweep over the grid cells
+def neighbour_pairs(
     cells: IntArray, chunk_pairs: int = 2_000_000, reach: int = 1, max_gap: float | None = None
 ) -> Iterator[tuple[IntArray, IntArray]]:
     """Yield index arrays ``(a, b)`` of every unordered pair of items at most ``reach`` cells apart, once each.
@@ -45,6 +45,18 @@ def neighbour_pairs(  # noqa: PLR0915 - one vectorised sweep over the grid cells
     n = len(cells)
     if n < 2:
         return
+    yield from _item_pairs(*_cell_pairs(cells, reach, max_gap), chunk_pairs)
+
+
+def _cell_pairs(
+    cells: IntArray, reach: int, max_gap: float | None
+) -> tuple[IntArray, IntArray, IntArray, IntArray, IntArray, NDArray[np.bool_]]:
+    """The pairs of occupied cells to pair items from (each cell with itself, then with each forward neighbour).
+
+    Returns:
+        ``order`` (the items sorted by cell), then per cell pair the first index into ``order`` and the item
+        count of its two cells (``sa, ca, sb, cb``), and whether it is a cell with itself (``same``).
+    """
     # Compress each axis to ranks so the combined cell code never overflows, whatever the coordinates.
     uniques = [np.unique(cells[:, k]) for k in range(3)]
     ranks = np.stack([np.searchsorted(uniques[k], cells[:, k]) for k in range(3)], axis=1)
@@ -87,11 +99,26 @@ def neighbour_pairs(  # noqa: PLR0915 - one vectorised sweep over the grid cells
         pair_cb.append(counts[dst])
         pair_self.append(np.zeros(len(src), dtype=bool))
 
-    sa = np.concatenate(pair_sa)
-    ca = np.concatenate(pair_ca)
-    sb = np.concatenate(pair_sb)
-    cb = np.concatenate(pair_cb)
-    same = np.concatenate(pair_self)
+    return (
+        order,
+        np.concatenate(pair_sa),
+        np.concatenate(pair_ca),
+        np.concatenate(pair_sb),
+        np.concatenate(pair_cb),
+        np.concatenate(pair_self),
+    )
+
+
+def _item_pairs(
+    order: IntArray,
+    sa: IntArray,
+    ca: IntArray,
+    sb: IntArray,
+    cb: IntArray,
+    same: NDArray[np.bool_],
+    chunk_pairs: int,
+) -> Iterator[tuple[IntArray, IntArray]]:
+    """Expand the cell pairs of :func:`_cell_pairs` into item index pairs, about ``chunk_pairs`` per chunk."""
     sizes = ca * cb
     keep = sizes > 0
     sa, ca, sb, cb, same, sizes = sa[keep], ca[keep], sb[keep], cb[keep], same[keep], sizes[keep]

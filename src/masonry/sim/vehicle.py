@@ -24,13 +24,13 @@ body frame FLU, so accelerating forward is a positive pitch and accelerating lef
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from masonry.errors import CommandRejected, InvalidArgument
 from masonry.geometry import wrap_angle_rad
 from masonry.ports import Telemetry, Vec3
+from masonry.sim.vehicle_config import VehicleConfig
 
 __all__ = ["GRAVITY_MPS2", "SimVehicle", "VehicleConfig"]
 
@@ -39,54 +39,6 @@ GRAVITY_MPS2 = 9.81
 _new_telemetry = object.__new__
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
-
-
-@dataclass(frozen=True)
-class VehicleConfig:
-    """Parameters of the simulated multirotor and its autopilot (SI units in the names)."""
-
-    velocity_tau_s: float = 0.3
-    max_speed_xy_mps: float = 2.0
-    max_climb_mps: float = 1.0
-    max_descent_mps: float = 1.0
-    max_accel_xy_mps2: float = 2.5
-    max_accel_z_mps2: float = 2.0
-    yaw_tau_s: float = 0.15
-    max_yaw_rate_radps: float = 1.5
-    takeoff_speed_mps: float = 0.6
-    land_speed_mps: float = 0.4
-    setpoint_timeout_s: float = 0.5
-    hold_gain_per_s: float = 1.0  # position hold after the setpoint timeout: v = gain * error
-    hold_max_speed_mps: float = 0.5
-    link_failsafe_s: float = 5.0  # ArduPilot FS_GCS_TIMEOUT: hover this long after the link goes, then land
-    land_detect_s: float = 1.0
-    battery_drain_per_s: float = 1.0 / 1200.0  # a full pack lasts 20 minutes airborne
-    battery_arm_min_fraction: float = 0.15
-    battery_land_fraction: float = 0.05
-    drag_per_s: float = 0.5
-    gust_tau_s: float = 2.0
-    mocap_noise_m: float = 0.0015
-    velocity_noise_mps: float = 0.005
-    yaw_noise_rad: float = 0.002
-
-    def __post_init__(self) -> None:
-        for name in (
-            "velocity_tau_s",
-            "max_speed_xy_mps",
-            "max_climb_mps",
-            "max_descent_mps",
-            "max_accel_xy_mps2",
-            "max_accel_z_mps2",
-            "yaw_tau_s",
-            "max_yaw_rate_radps",
-            "takeoff_speed_mps",
-            "land_speed_mps",
-            "setpoint_timeout_s",
-            "gust_tau_s",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
 
 
 class _Gauss:
@@ -400,12 +352,13 @@ class SimVehicle:
         self._held = False
         self._contact_s = 0.0
 
-    def step(self, dt_s: float) -> None:  # noqa: C901, PLR0915 - the physics step, inlined for speed (benchmarks/bench_sim_world.py)
+    def step(self, dt_s: float) -> None:
         """Advance the vehicle by ``dt_s`` seconds."""
-        # Hot path (every airborne vehicle, every physics step): clamps are written as comparisons with the
-        # semantics of the builtins (``max(a, b)`` is ``b if b > a else a``), no helper calls.
+        # Hot path (every airborne vehicle, every physics step). Here: the guards, the battery and the velocity
+        # the active mode asks for; then the autopilot's velocity loop and the contacts (``_fly``). One call on
+        # the common paths (the climb and the failsafes have their own); clamps are written as comparisons with
+        # the semantics of the builtins (``max(a, b)`` is ``b if b > a else a``).
         self._tel = None
-        cfg = self.config
         t = self._t = self._t + dt_s
         if self.failed:
             self._fall(dt_s)
@@ -415,12 +368,12 @@ class SimVehicle:
             if not self.on_ground:
                 self._fall(dt_s)
             return
-        on_ground = self.on_ground
-        if on_ground and self._takeoff_z is None:
+        if self.on_ground and self._takeoff_z is None:
             self._vx = self._vy = self._vz = self._ax = self._ay = self._yaw_rate = 0.0
             return
+        cfg = self.config
         mode = self.mode
-        if not on_ground:
+        if not self.on_ground:
             self.airborne_s += dt_s
             battery = self.battery_fraction - self._drain * dt_s
             if not battery > 0.0:  # max(0.0, battery)
@@ -430,24 +383,9 @@ class SimVehicle:
                 self.fail()
                 self._fall(dt_s)
                 return
-            if battery <= cfg.battery_land_fraction and mode != "LAND":
-                mode = self.mode = "LAND"
-                self._takeoff_z = None
-            if (
-                self._link_lost_at is not None
-                and mode != "LAND"
-                and t - self._link_lost_at >= cfg.link_failsafe_s
-            ):
-                mode = self.mode = "LAND"
-                self._takeoff_z = None
-        if dt_s != self._lag_dt:
-            self._lag_dt = dt_s
-            self._lag_k = (1.0 - math.exp(-dt_s / cfg.velocity_tau_s)) / dt_s
-            self._yaw_k = 1.0 - math.exp(-dt_s / cfg.yaw_tau_s)
+            if battery <= cfg.battery_land_fraction or self._link_lost_at is not None:
+                mode = self._failsafes(t, mode)
 
-        x, y, z = self._x, self._y, self._z
-        vx, vy, vz = self._vx, self._vy, self._vz
-        max_descent = cfg.max_descent_mps
         # Target velocity from the active mode.
         tyaw = 0.0
         if mode == "LAND":
@@ -455,36 +393,71 @@ class SimVehicle:
             tz = -cfg.land_speed_mps
         elif self._takeoff_z is not None:
             tx = ty = 0.0
-            err = self._takeoff_z - z
-            tz = 1.5 * err
-            if not tz > -max_descent:  # min(takeoff_speed, max(-max_descent, 1.5 * err))
-                tz = -max_descent
-            if cfg.takeoff_speed_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
-                tz = cfg.takeoff_speed_mps
-            if abs(err) < 0.03 and abs(vz) < 0.1:
-                self._takeoff_z = None
-                self._hold = (x, y, z)
+            tz = self._climb(self._takeoff_z)
         elif t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
             tx, ty, tz, tyaw = self._sp
-        else:
+        else:  # hold the position where the vehicle stopped
             hold = self._hold
             if hold is None:
                 tx = ty = tz = 0.0
-                if vx * vx + vy * vy + vz * vz < 0.01:
-                    self._hold = (x, y, z)
+                if self._vx * self._vx + self._vy * self._vy + self._vz * self._vz < 0.01:
+                    self._hold = (self._x, self._y, self._z)
             else:
                 g = cfg.hold_gain_per_s
-                tx, ty, tz = g * (hold[0] - x), g * (hold[1] - y), g * (hold[2] - z)
+                tx, ty, tz = g * (hold[0] - self._x), g * (hold[1] - self._y), g * (hold[2] - self._z)
                 n = math.sqrt(tx * tx + ty * ty + tz * tz)
                 if n > cfg.hold_max_speed_mps:
                     f = cfg.hold_max_speed_mps / n
                     tx, ty, tz = tx * f, ty * f, tz * f
+        self._fly(tx, ty, tz, tyaw, dt_s, held and mode == "LAND")
 
+    def _failsafes(self, t: float, mode: str) -> str:
+        """The battery and link failsafes of a step in the air (the battery is low or the link lost): the mode."""
+        cfg = self.config
+        if self.battery_fraction <= cfg.battery_land_fraction and mode != "LAND":
+            mode = self.mode = "LAND"
+            self._takeoff_z = None
+        if (
+            self._link_lost_at is not None
+            and mode != "LAND"
+            and t - self._link_lost_at >= cfg.link_failsafe_s
+        ):
+            mode = self.mode = "LAND"
+            self._takeoff_z = None
+        return mode
+
+    def _climb(self, takeoff_z: float) -> float:
+        """The vertical speed of the automatic climb of ``takeoff`` to ``takeoff_z``; there it ends in a hold."""
+        cfg = self.config
+        err = takeoff_z - self._z
+        tz = 1.5 * err
+        if not tz > -cfg.max_descent_mps:  # min(takeoff_speed, max(-max_descent, 1.5 * err))
+            tz = -cfg.max_descent_mps
+        if cfg.takeoff_speed_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
+            tz = cfg.takeoff_speed_mps
+        if abs(err) < 0.03 and abs(self._vz) < 0.1:
+            self._takeoff_z = None
+            self._hold = (self._x, self._y, self._z)
+        return tz
+
+    def _fly(self, tx: float, ty: float, tz: float, tyaw: float, dt_s: float, resting: bool) -> None:
+        """The autopilot's velocity loop toward a target velocity and yaw rate for one step, then the contacts.
+
+        Speed limits, the first-order lag, acceleration limits, the wind, the motion; then ground contact or, with
+        ``resting`` (held up by a support in LAND mode), the landing detector.
+        """
+        cfg = self.config
+        if dt_s != self._lag_dt:
+            self._lag_dt = dt_s
+            self._lag_k = (1.0 - math.exp(-dt_s / cfg.velocity_tau_s)) / dt_s
+            self._yaw_k = 1.0 - math.exp(-dt_s / cfg.yaw_tau_s)
+        vx, vy, vz = self._vx, self._vy, self._vz
         # Speed limits.
         sxy = math.sqrt(tx * tx + ty * ty)
         if sxy > cfg.max_speed_xy_mps:
             f = cfg.max_speed_xy_mps / sxy
             tx, ty = tx * f, ty * f
+        max_descent = cfg.max_descent_mps
         if not tz > -max_descent:  # min(max_climb, max(-max_descent, tz))
             tz = -max_descent
         if cfg.max_climb_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
@@ -503,22 +476,16 @@ class SimVehicle:
         if amax < az:  # noqa: PLR1730 (no min/max call: hot loop)
             az = amax
         if self.gusts_mps > 0.0:
-            a = dt_s / cfg.gust_tau_s
-            b = self.gusts_mps * math.sqrt(2.0 * a)
-            self._wx += -self._wx * a + b * self._gauss()
-            self._wy += -self._wy * a + b * self._gauss()
-            ax += cfg.drag_per_s * self._wx
-            ay += cfg.drag_per_s * self._wy
+            gx, gy = self._gust(dt_s)
+            ax += gx
+            ay += gy
         self._ax, self._ay = ax, ay
-        vx += ax * dt_s
-        vy += ay * dt_s
-        vz += az * dt_s
+        vx, vy, vz = vx + ax * dt_s, vy + ay * dt_s, vz + az * dt_s
         self._vx, self._vy, self._vz = vx, vy, vz
         dx, dy, dz = vx * dt_s, vy * dt_s, vz * dt_s
-        x += dx
-        y += dy
-        z += dz
-        self._x, self._y = x, y
+        self._x += dx
+        self._y += dy
+        z = self._z + dz
         self.distance_m += math.sqrt(dx * dx + dy * dy + dz * dz)
 
         ymax = cfg.max_yaw_rate_radps
@@ -536,14 +503,23 @@ class SimVehicle:
             self._touchdown()
             return
         self._z = z
-        if held and mode == "LAND":
+        if resting:
             self._contact_s += dt_s
             if self._contact_s >= cfg.land_detect_s:
                 self._touchdown()
         else:
             self._contact_s = 0.0
-            if on_ground and z > ground + 0.01:
+            if self.on_ground and z > ground + 0.01:
                 self.on_ground = False
+
+    def _gust(self, dt_s: float) -> tuple[float, float]:
+        """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag."""
+        cfg = self.config
+        a = dt_s / cfg.gust_tau_s
+        b = self.gusts_mps * math.sqrt(2.0 * a)
+        self._wx += -self._wx * a + b * self._gauss()
+        self._wy += -self._wy * a + b * self._gauss()
+        return cfg.drag_per_s * self._wx, cfg.drag_per_s * self._wy
 
     def _touchdown(self) -> None:
         climbing = self._takeoff_z is not None and self._vz > 0.0

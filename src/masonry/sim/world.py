@@ -273,7 +273,7 @@ class World:
         self.uavs[name].vehicle.swap_battery()
 
     # ------------------------------------------------------------------ step
-    def step(self, dt_s: float) -> None:  # noqa: C901 - one branch per fault and contact kind of a physics step, in the order they act
+    def step(self, dt_s: float) -> None:
         """Advance the clock and the physics of every UAV and brick by ``dt_s`` seconds."""
         if not (dt_s > 0.0 and math.isfinite(dt_s)):
             raise ValueError(f"World.step needs a finite dt_s > 0, got {dt_s!r}")
@@ -316,26 +316,30 @@ class World:
                 uav._path.append((now, vehicle._x, vehicle._y, vehicle._z))
                 uav._next_sample_s = now + sample_s
         if len(airborne) > 1:
-            best2 = math.inf  # smallest squared distance this step (one square root, not one per pair)
-            # A pair whose x distance alone reaches the smallest separation so far cannot lower it: skip it after
-            # one product. The margin keeps the square root's rounding out of it: if every pair is skipped, the
-            # step's true minimum is above the record and would not have replaced it either.
-            record = self._min_sep
-            skip2 = math.inf if record is None else record * record * (1.0 + 1e-9)
-            for i in range(len(airborne) - 1):
-                ax, ay, az = airborne[i]
-                for bx, by, bz in airborne[i + 1 :]:
-                    dx = ax - bx
-                    d2 = dx * dx
-                    if d2 >= skip2:
-                        continue
-                    d2 = d2 + (ay - by) * (ay - by) + (az - bz) * (az - bz)  # the same sum, left to right
-                    if d2 < best2:  # noqa: PLR1730 (no min() call: hot loop)
-                        best2 = d2
-            d = math.sqrt(best2)
-            if self._min_sep is None or d < self._min_sep:
-                self._min_sep = d
+            self._record_separation(airborne)
         self.clock.advance(dt_s)
+
+    def _record_separation(self, airborne: list[Vec3]) -> None:
+        """Lower the smallest separation seen so far to the closest pair of ``airborne`` positions (two or more)."""
+        best2 = math.inf  # smallest squared distance this step (one square root, not one per pair)
+        # A pair whose x distance alone reaches the smallest separation so far cannot lower it: skip it after
+        # one product. The margin keeps the square root's rounding out of it: if every pair is skipped, the
+        # step's true minimum is above the record and would not have replaced it either.
+        record = self._min_sep
+        skip2 = math.inf if record is None else record * record * (1.0 + 1e-9)
+        for i in range(len(airborne) - 1):
+            ax, ay, az = airborne[i]
+            for bx, by, bz in airborne[i + 1 :]:
+                dx = ax - bx
+                d2 = dx * dx
+                if d2 >= skip2:
+                    continue
+                d2 = d2 + (ay - by) * (ay - by) + (az - bz) * (az - bz)  # the same sum, left to right
+                if d2 < best2:  # noqa: PLR1730 (no min() call: hot loop)
+                    best2 = d2
+        d = math.sqrt(best2)
+        if self._min_sep is None or d < self._min_sep:
+            self._min_sep = d
 
     def _timed_faults(self, uav: SimUav, now: float) -> None:
         faults = self.faults

@@ -1,0 +1,61 @@
+"""The parameters of the simulated multirotor and its autopilot (:class:`masonry.sim.vehicle.SimVehicle`).
+
+The module docstring of :mod:`masonry.sim.vehicle` says what each one does in the model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from masonry.errors import InvalidArgument
+
+__all__ = ["VehicleConfig"]
+
+
+@dataclass(frozen=True)
+class VehicleConfig:
+    """Parameters of the simulated multirotor and its autopilot (SI units in the names)."""
+
+    velocity_tau_s: float = 0.3
+    max_speed_xy_mps: float = 2.0
+    max_climb_mps: float = 1.0
+    max_descent_mps: float = 1.0
+    max_accel_xy_mps2: float = 2.5
+    max_accel_z_mps2: float = 2.0
+    yaw_tau_s: float = 0.15
+    max_yaw_rate_radps: float = 1.5
+    takeoff_speed_mps: float = 0.6
+    land_speed_mps: float = 0.4
+    setpoint_timeout_s: float = 0.5
+    hold_gain_per_s: float = 1.0  # position hold after the setpoint timeout: v = gain * error
+    hold_max_speed_mps: float = 0.5
+    link_failsafe_s: float = 5.0  # ArduPilot FS_GCS_TIMEOUT: hover this long after the link goes, then land
+    land_detect_s: float = 1.0
+    battery_drain_per_s: float = 1.0 / 1200.0  # a full pack lasts 20 minutes airborne
+    battery_arm_min_fraction: float = 0.15
+    battery_land_fraction: float = 0.05
+    drag_per_s: float = 0.5
+    gust_tau_s: float = 2.0
+    mocap_noise_m: float = 0.0015
+    velocity_noise_mps: float = 0.005
+    yaw_noise_rad: float = 0.002
+
+    def __post_init__(self) -> None:
+        for name in (
+            "velocity_tau_s",
+            "max_speed_xy_mps",
+            "max_climb_mps",
+            "max_descent_mps",
+            "max_accel_xy_mps2",
+            "max_accel_z_mps2",
+            "yaw_tau_s",
+            "max_yaw_rate_radps",
+            "takeoff_speed_mps",
+            "land_speed_mps",
+            "setpoint_timeout_s",
+            "gust_tau_s",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
