@@ -120,6 +120,9 @@ class SimVehicle:
         self._sp: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         self._sp_time = -math.inf
         self._takeoff_z: float | None = None
+        #: where LAND or the automatic climb of ``takeoff`` began: both hold it horizontally (as ArduCopter's
+        #: LAND and take-off do with a position estimate), so a gust does not set the vehicle down off its pad
+        self._anchor_xy: tuple[float, float] | None = None
         self._hold: tuple[float, float, float] | None = None
         self._link_lost_at: float | None = None
         self._contact_s = 0.0
@@ -218,6 +221,7 @@ class SimVehicle:
             raise CommandRejected("takeoff", "already flying")
         self.mode = "GUIDED"
         self._takeoff_z = self._z + float(altitude_m)
+        self._anchor_xy = (self._x, self._y)
         self._hold = None
         self._sp_time = -math.inf
 
@@ -233,6 +237,7 @@ class SimVehicle:
             return
         self.mode = "LAND"
         self._takeoff_z = None
+        self._anchor_xy = (self._x, self._y)
 
     def command_velocity(self, velocity_mps: Vec3, yaw_rate_radps: float, now_s: float) -> None:
         """A velocity (ENU, m/s) and yaw-rate (rad/s) setpoint, valid for ``setpoint_timeout_s`` from ``now_s``.
@@ -389,10 +394,10 @@ class SimVehicle:
         # Target velocity from the active mode.
         tyaw = 0.0
         if mode == "LAND":
-            tx = ty = 0.0
+            tx, ty = self._anchored()
             tz = -cfg.land_speed_mps
         elif self._takeoff_z is not None:
-            tx = ty = 0.0
+            tx, ty = self._anchored()
             tz = self._climb(self._takeoff_z)
         elif t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
             tx, ty, tz, tyaw = self._sp
@@ -411,12 +416,26 @@ class SimVehicle:
                     tx, ty, tz = tx * f, ty * f, tz * f
         self._fly(tx, ty, tz, tyaw, dt_s, held and mode == "LAND")
 
+    def _anchored(self) -> tuple[float, float]:
+        """The horizontal velocity that holds the vehicle over where LAND or the take-off climb began."""
+        anchor = self._anchor_xy
+        if anchor is None:
+            anchor = self._anchor_xy = (self._x, self._y)
+        g = self.config.hold_gain_per_s
+        tx, ty = g * (anchor[0] - self._x), g * (anchor[1] - self._y)
+        n = math.sqrt(tx * tx + ty * ty)
+        if n > self.config.hold_max_speed_mps:
+            f = self.config.hold_max_speed_mps / n
+            tx, ty = tx * f, ty * f
+        return tx, ty
+
     def _failsafes(self, t: float, mode: str) -> str:
         """The battery and link failsafes of a step in the air (the battery is low or the link lost): the mode."""
         cfg = self.config
         if self.battery_fraction <= cfg.battery_land_fraction and mode != "LAND":
             mode = self.mode = "LAND"
             self._takeoff_z = None
+            self._anchor_xy = (self._x, self._y)
         if (
             self._link_lost_at is not None
             and mode != "LAND"
@@ -424,6 +443,7 @@ class SimVehicle:
         ):
             mode = self.mode = "LAND"
             self._takeoff_z = None
+            self._anchor_xy = (self._x, self._y)
         return mode
 
     def _climb(self, takeoff_z: float) -> float:
