@@ -151,3 +151,12 @@ def test_sim_stops_a_mission_that_stalls_and_says_who_waits_for_whom():
     assert text.exit_code == 1 and "stalled: no progress for 3 s" in text.stdout
     bad = sim("--stall-timeout", "-1")
     assert bad.exit_code == 2 and "--stall-timeout -1: out of range" in bad.output
+
+
+def test_mission_control_checks_its_watchdog_and_reservation_options():
+    res = runner.invoke(app, ["mission-control", CASE_STUDY, "--stall-timeout", "-3"])
+    assert res.exit_code == 2 and "--stall-timeout -3: out of range, expected 0 to 864000 s" in res.output
+    res = runner.invoke(app, ["mission-control", CASE_STUDY, "--reservation", "x"])
+    assert res.exit_code == 2 and "--reservation must be site or task, got 'x'" in res.output
+    res = sim("--reservation", "x")
+    assert res.exit_code == 2 and "--reservation must be site or task, got 'x'" in res.output

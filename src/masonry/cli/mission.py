@@ -16,6 +16,7 @@ import typer
 from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text, plural
 from masonry.errors import InputError
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
 
@@ -124,6 +125,22 @@ def mission_control(
     tick: float = typer.Option(
         0.05, "--tick", help=help_text("mission-control", "--tick", "Control period, seconds.")
     ),
+    stall_timeout: float = typer.Option(
+        DEFAULT_STALL_TIMEOUT_S,
+        "--stall-timeout",
+        help=help_text(
+            "mission-control",
+            "--stall-timeout",
+            "Stop the mission, not completed, when nothing progresses for this many mission seconds, and "
+            "report who waits for whom (`stall` in the JSON); 0: never.",
+        ),
+    ),
+    reservation: str = typer.Option(
+        "task",
+        "--reservation",
+        help="task | site: keep conflicting tasks apart for their whole duration (task, the paper) or only "
+        "while their UAVs work at their sites (site). docs/safety.md.",
+    ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
@@ -146,6 +163,8 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
+    if reservation not in ("site", "task"):
+        raise InputError(f"--reservation must be site or task, got {reservation!r}")
     check_all(
         "mission-control",
         {
@@ -154,6 +173,7 @@ def mission_control(
             "--startup-timeout": startup_timeout,
             "--max-time": max_time,
             "--tick": tick,
+            "--stall-timeout": stall_timeout,
         },
     )
     check_output_path(report, "--report")
@@ -188,6 +208,8 @@ def mission_control(
             layer_floor_m=bp.cruise_altitude_m,
             wall_digest=wall_digest(bp),
             min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
+            stall_timeout_s=stall_timeout,
+            reservation=reservation,
         )
         offset = 0.0
         if state is not None:
