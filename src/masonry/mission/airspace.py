@@ -27,11 +27,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
-from typing import Protocol
+from collections.abc import Mapping
 
-from masonry.blueprint import Blueprint, UavSpec
 from masonry.mission.airspace_state import FlightRequest, Grant, GrantedFlight, HoldFlight, Phase, UavAirspace
+from masonry.mission.altitudes import layer_base_m, task_work_altitude_m, transit_layers_m, work_altitude_m
+from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import (
     HOVER_SLACK_M,
     STOP_M,
@@ -48,9 +48,7 @@ from masonry.mission.volumes import (
     volumes_conflict,
 )
 from masonry.mission.volumes import point_segment_m as _point_segment_m  # noqa: F401 - the tests' name
-from masonry.planner.tasks import BrickTask, Task
 from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_m, zone_slack_m
-from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 #: Vertical distance between two transit layers: the 1 m separation target plus tracking error and gusts.
 DEFAULT_LAYER_SPACING_M = LAYER_SPACING_M
@@ -58,47 +56,6 @@ DEFAULT_LAYER_SPACING_M = LAYER_SPACING_M
 #: A UAV reported this close to its home (horizontally) and this low is on its pad.
 ON_PAD_XY_M = 0.3
 ON_PAD_Z_M = 0.3
-
-
-def work_altitude_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
-    """The highest altitude at which a UAV works any task of ``blueprint`` (cruise altitude at least).
-
-    The same formulas as the state machines' site altitudes (``masonry.fsm``, flying ``timing``, default:
-    ``UavConfig``'s): a brick UAV keeps the carried brick ``clearance_m`` above the drop-off
-    (:meth:`TaskTiming.carry_altitude_m`), an adhesion UAV its nozzle ``clearance_m`` above the spraying height
-    (:meth:`TaskTiming.spray_altitude_m`).
-    """
-    t = DEFAULT_TIMING if timing is None else timing
-    z = float(blueprint.cruise_altitude_m)
-    for b in blueprint.bricks:
-        size_z = float(b.size_m[2])
-        z = max(z, _work_altitude_over_m(float(b.position_m[2]) + size_z / 2.0, size_z, t))
-    return z
-
-
-def task_work_altitude_m(task: Task, cruise_altitude_m: float, *, timing: TaskTiming | None = None) -> float:
-    """The highest altitude at which a UAV works ``task``, as :func:`work_altitude_m` counts it for its brick
-    (a brick task: carrying its brick over its drop-off, and spraying on its top later) or its surface (an
-    adhesion task); at least ``cruise_altitude_m``.
-
-    Once the task is assigned its brick may be on the wall: a transit layer at or above this clears it.
-    """
-    t = DEFAULT_TIMING if timing is None else timing
-    if isinstance(task, BrickTask):
-        size_z = float(task.size_m[2])
-        top = float(task.position_m[2]) + size_z / 2.0
-        return max(float(cruise_altitude_m), _work_altitude_over_m(top, size_z, t))
-    surface = max(float(task.start_m[2]), float(task.end_m[2]))
-    return max(float(cruise_altitude_m), _work_altitude_over_m(surface, 0.0, t))
-
-
-def _work_altitude_over_m(top_m: float, size_z_m: float, timing: TaskTiming) -> float:
-    """Where a UAV works over a brick top at ``top_m``: carrying a brick ``size_z_m`` high down onto it (0: no
-    brick), or spraying it."""
-    z = timing.spray_altitude_m(top_m)
-    if size_z_m > 0.0:
-        z = max(z, timing.carry_altitude_m(top_m, size_z_m))
-    return z
 
 
 #: A UAV reported within this of a layer's altitude is at the layer (hover noise). UAVs come to rest where they
@@ -109,45 +66,6 @@ SNAP_M = 0.05
 #: A UAV within this of its hold point (horizontally) hovers there: the state machines count a leg as done
 #: within 0.08 m (``UavConfig.arrive_tolerance_m``), and only then read the rest of their flight.
 AT_HOLD_M = 0.1
-
-
-def layer_base_m(blueprint: Blueprint, *, timing: TaskTiming | None = None) -> float:
-    """Altitude of transit layer 0 for ``blueprint``: :func:`work_altitude_m` (the spacing of the layers above it
-    has its own margin over the separation target)."""
-    return work_altitude_m(blueprint, timing=timing)
-
-
-def transit_layers_m(
-    blueprint: Blueprint,
-    fleet: Sequence[UavSpec] | None = None,
-    spacing_m: float = DEFAULT_LAYER_SPACING_M,
-    *,
-    timing: TaskTiming | None = None,
-) -> dict[str, float]:
-    """Altitude of each UAV's lateral legs: ``work_altitude_m + (k + 1) * spacing_m``, k its index in ``fleet``.
-
-    ``fleet`` defaults to the blueprint's. A UAV flying its own mission process (``masonry fly --mission``) gets
-    the same layer as in ``masonry sim``, because both number the blueprint's fleet the same way. ``timing``:
-    the UAVs' (default: ``UavConfig``'s), for the work altitude.
-    """
-    if not (spacing_m >= 0.0 and math.isfinite(spacing_m)):
-        raise ValueError(f"layer spacing must be a finite number >= 0, got {spacing_m!r}")
-    members = tuple(blueprint.fleet if fleet is None else fleet)
-    base = layer_base_m(blueprint, timing=timing)
-    return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}
-
-
-class SiteGate(Protocol):
-    """Who else decides whether a UAV may come down at a site (mission control's site intervals: conflicting
-    tasks never work at their sites at once, ``--reservation site``)."""
-
-    def may_enter(self, uav: str, site_m: Vec3) -> bool:
-        """``uav`` may come down at ``site_m`` now (False: it waits, at a hold point, as for a busy site)."""
-        ...
-
-    def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
-        """``uav`` was granted its flight down to ``site_m`` at ``now_s``."""
-        ...
 
 
 class ColumnClearance:

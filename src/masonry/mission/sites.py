@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from masonry.planner.tasks import BrickTask, Plan, Task
 
@@ -30,6 +31,19 @@ def work_point_m(task: Task) -> Vec3:
     """Where a task's UAV works: a brick's drop-off, an adhesion segment's start."""
     p = task.position_m if isinstance(task, BrickTask) else task.start_m
     return (float(p[0]), float(p[1]), float(p[2]))
+
+
+class SiteGate(Protocol):
+    """Who else decides whether a UAV may come down at a site (mission control's site intervals: conflicting
+    tasks never work at their sites at once, ``--reservation site``)."""
+
+    def may_enter(self, uav: str, site_m: Vec3) -> bool:
+        """``uav`` may come down at ``site_m`` now (False: it waits, at a hold point, as for a busy site)."""
+        ...
+
+    def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
+        """``uav`` was granted its flight down to ``site_m`` at ``now_s``."""
+        ...
 
 
 @dataclass
@@ -143,4 +157,4 @@ class SiteIntervals:
         return self.left(uav, now_s)
 
 
-__all__ = ["AT_SITE_M", "SiteIntervals", "SiteVisit", "work_point_m"]
+__all__ = ["AT_SITE_M", "SiteGate", "SiteIntervals", "SiteVisit", "work_point_m"]

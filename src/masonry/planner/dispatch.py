@@ -116,7 +116,7 @@ class Dispatcher:
             a dependency cycle, or bad durations.
     """
 
-    def __init__(  # noqa: C901, PLR0915 - builds the dispatcher's tables in one pass
+    def __init__(
         self,
         plan: Plan,
         fleet: Sequence[UavSpec],
@@ -137,7 +137,20 @@ class Dispatcher:
         self.policy: str = policy
         self.max_attempts = max_attempts
         self.reservation = reservation
+        self._index_tasks(plan)
+        self._build_graphs(plan)
+        self._chain = self._chains(durations_s)
+        # critical-path compares chains in steps of one typical task (the median duration; 1 unweighted): tasks
+        # whose remaining chains differ by less than that are ties, and ties go to the shortest flight.
+        self.tie_step_s = self._tie_step(durations_s)
+        self._rank = [math.floor(c / self.tie_step_s + 1e-9) for c in self._chain]
+        self._add_fleet(fleet)
+        self._init_state()
 
+    # ------------------------------------------------------------------ construction helpers
+
+    def _index_tasks(self, plan: Plan) -> None:
+        """Task ids, roles and the places a UAV flies to for each (one pass over the plan)."""
         tasks = plan.tasks
         n = len(tasks)
         self._tasks: tuple[Task, ...] = tasks
@@ -159,8 +172,10 @@ class Dispatcher:
             math.dist(self._start_m[i], self._end_m[i]) if self._role[i] == "brick" else 0.0 for i in range(n)
         ]
 
-        # Adjacency, built once: O(size of the plan). Duplicate edges are dropped per task afterwards (cheaper
-        # than a global set of pairs on a wall with millions of conflicts).
+    def _build_graphs(self, plan: Plan) -> None:
+        """Adjacency, built once: O(size of the plan). Duplicate edges are dropped per task afterwards (cheaper
+        than a global set of pairs on a wall with millions of conflicts)."""
+        n = len(plan.tasks)
         index = self._index
         dependents: list[list[int]] = [[] for _ in range(n)]
         prerequisites: list[list[int]] = [[] for _ in range(n)]
@@ -189,13 +204,7 @@ class Dispatcher:
                     lists[i] = list(dict.fromkeys(items))
         self._dependents, self._prerequisites, self._neighbours = dependents, prerequisites, neighbours
 
-        self._chain = self._chains(durations_s)
-        # critical-path compares chains in steps of one typical task (the median duration; 1 unweighted): tasks
-        # whose remaining chains differ by less than that are ties, and ties go to the shortest flight.
-        self.tie_step_s = self._tie_step(durations_s)
-        self._rank = [math.floor(c / self.tie_step_s + 1e-9) for c in self._chain]
-
-        # Fleet.
+    def _add_fleet(self, fleet: Sequence[UavSpec]) -> None:
         self._fleet: dict[str, UavSpec] = {}
         for spec in fleet:
             if spec.name in self._fleet:
@@ -212,7 +221,10 @@ class Dispatcher:
         for s in self._fleet.values():
             self._live_count[s.role] += 1
 
-        # Per-task state.
+    def _init_state(self) -> None:
+        """Per-task state and the policy's structures; the tasks available from the start."""
+        tasks = self._tasks
+        n = len(tasks)
         self._status = [_DONE if t.done else _PENDING for t in tasks]
         self._prereqs = [sum(1 for p in self._prerequisites[i] if self._status[p] != _DONE) for i in range(n)]
         self._blockers = [0] * n
@@ -233,8 +245,6 @@ class Dispatcher:
         self._events = 0
         for i in range(n):
             self._maybe_available(i)
-
-    # ------------------------------------------------------------------ construction helpers
 
     def _lookup(self, task_id: str, graph: str) -> int:
         try:
