@@ -44,8 +44,8 @@ from masonry.mission.messages import (
     encode,
     phases_from_dict,
 )
-from masonry.mission.sites import SiteIntervals, SiteVisit
-from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Blocker, Stall, StallWatch, Wait
+from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
 from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
@@ -58,26 +58,6 @@ AttemptStatus = Literal["running", "done", "failed"]
 
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
-
-#: Journal meta keys of the site intervals: ``site/<task id>`` -> the task's last visit.
-SITE_META_PREFIX = "site/"
-
-
-def _journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float | None) -> list[SiteVisit]:
-    """The site visits of the tasks a journal says are done (one still open at the crash ends then)."""
-    out = []
-    for key, v in meta.items():
-        tid = key[len(SITE_META_PREFIX) :]
-        if not key.startswith(SITE_META_PREFIX) or tid not in done or not isinstance(v, dict):
-            continue
-        start, end, uav = v.get("start_s"), v.get("end_s"), v.get("uav")
-        if not isinstance(start, (int, float)) or not isinstance(uav, str):
-            continue
-        if not isinstance(end, (int, float)):
-            end = last_time_s
-        out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end)))
-    return sorted(out, key=lambda v: (v.start_s, v.task_id))
-
 
 #: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
 LANDED_STATE = "idle"
@@ -303,7 +283,7 @@ class MissionControl:
                 self.dispatcher.remove_uav(name)
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
-        self.sites.restore(_journaled_visits(state.meta, set(done), state.last_time_s))
+        self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
         # what the previous run may have built: done tasks, and every task it ever assigned
         self._raise_layers([*done, *attempts, *state.in_progress])
 
@@ -587,20 +567,9 @@ class MissionControl:
         if not self._watch.observe(now_s, signature) or self.finished:
             return
         assert self._watch.since_s is not None and self._watch.timeout_s is not None
-        waits = tuple(
-            Wait(
-                name,
-                link.state,
-                self.dispatcher.task_of(name),
-                self.columns.phase(name).value,
-                self.columns.asked_for(name),
-                tuple(Blocker(other, kind) for other, kind in self.columns.blockers(name)),
-            )
-            for name, link in self.uavs.items()
-            if not link.lost
-        )
-        self.stall = Stall(
-            now_s, self._watch.since_s, self._watch.timeout_s, waits, self.dispatcher.available
+        live = [(name, link.state) for name, link in self.uavs.items() if not link.lost]
+        self.stall = stall_of(
+            now_s, self._watch.since_s, self._watch.timeout_s, live, self.dispatcher, self.columns
         )
         log.warning("%s", self.stall.line())
 

@@ -14,9 +14,9 @@ Pure: no I/O, no clock (times are passed in).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 from masonry.planner.tasks import BrickTask, Plan, Task
 
@@ -157,4 +157,32 @@ class SiteIntervals:
         return self.left(uav, now_s)
 
 
-__all__ = ["AT_SITE_M", "SiteGate", "SiteIntervals", "SiteVisit", "work_point_m"]
+#: Journal meta keys of the site intervals: ``site/<task id>`` -> the task's last visit.
+SITE_META_PREFIX = "site/"
+
+
+def journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float | None) -> list[SiteVisit]:
+    """The site visits of the tasks a journal says are done (one still open at the crash ends then)."""
+    out = []
+    for key, v in meta.items():
+        tid = key[len(SITE_META_PREFIX) :]
+        if not key.startswith(SITE_META_PREFIX) or tid not in done or not isinstance(v, dict):
+            continue
+        start, end, uav = v.get("start_s"), v.get("end_s"), v.get("uav")
+        if not isinstance(start, (int, float)) or not isinstance(uav, str):
+            continue
+        if not isinstance(end, (int, float)):
+            end = last_time_s
+        out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end)))
+    return sorted(out, key=lambda v: (v.start_s, v.task_id))
+
+
+__all__ = [
+    "AT_SITE_M",
+    "SITE_META_PREFIX",
+    "SiteGate",
+    "SiteIntervals",
+    "SiteVisit",
+    "journaled_visits",
+    "work_point_m",
+]

@@ -12,7 +12,7 @@ Pure: no I/O, no clock (times are passed in).
 from __future__ import annotations
 
 import math
-from collections.abc import Hashable
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -111,4 +111,28 @@ class StallWatch:
         return self.timeout_s is not None and now_s - self.since_s >= self.timeout_s
 
 
-__all__ = ["DEFAULT_STALL_TIMEOUT_S", "Blocker", "Stall", "StallWatch", "Wait"]
+def stall_of(
+    now_s: float,
+    since_s: float,
+    timeout_s: float,
+    uavs: Sequence[tuple[str, str]],
+    dispatcher: Any,
+    columns: Any,
+) -> Stall:
+    """The stall at ``now_s``: for every UAV ``(name, reported state)`` still in the mission, its task (from the
+    dispatcher), its airspace phase, what it asked for and who blocks it (from the airspace)."""
+    waits = tuple(
+        Wait(
+            name,
+            state,
+            dispatcher.task_of(name),
+            columns.phase(name).value,
+            columns.asked_for(name),
+            tuple(Blocker(other, kind) for other, kind in columns.blockers(name)),
+        )
+        for name, state in uavs
+    )
+    return Stall(now_s, since_s, timeout_s, waits, tuple(dispatcher.available))
+
+
+__all__ = ["DEFAULT_STALL_TIMEOUT_S", "Blocker", "Stall", "StallWatch", "Wait", "stall_of"]

@@ -16,15 +16,15 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
-from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
-from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.planner.dispatch_values import Assignment, SetView, task_end_m, task_start_m, vec3
+from masonry.planner.tasks import Plan, Task
 
 Policy = Literal["fifo", "critical-path", "nearest"]
 POLICIES: tuple[str, ...] = ("fifo", "critical-path", "nearest")
@@ -37,60 +37,6 @@ DEFAULT_RESERVATION = "task"
 Vec3 = Sequence[float]
 
 _PENDING, _RUNNING, _DONE, _STUCK = 0, 1, 2, 3
-
-
-@dataclass(frozen=True)
-class Assignment:
-    """Task ``task_id`` goes to UAV ``uav``; ``attempt`` counts from 1 (failed attempts before it + 1)."""
-
-    uav: str
-    task_id: str
-    attempt: int = 1
-
-
-class _SetView(AbstractSet[str]):
-    """A live, read-only view of a set of task ids held by the dispatcher (O(1) to obtain)."""
-
-    __slots__ = ("_data",)
-
-    def __init__(self, data: AbstractSet[str]) -> None:
-        self._data = data
-
-    def __contains__(self, item: object) -> bool:
-        return item in self._data
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._data)
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def __repr__(self) -> str:
-        return f"{{{', '.join(sorted(self._data))}}}"
-
-
-def task_start_m(task: Task) -> tuple[float, float, float]:
-    """Where a UAV has to fly to begin ``task``: the pickup (or the drop-off if unknown) or the segment start."""
-    if isinstance(task, BrickTask):
-        return task.pickup_m if task.pickup_m is not None else task.position_m
-    return task.start_m
-
-
-def task_end_m(task: Task) -> tuple[float, float, float]:
-    """Where a UAV is when ``task`` is complete: the drop-off or the segment end."""
-    if isinstance(task, BrickTask):
-        return task.position_m
-    return task.end_m
-
-
-def _vec3(value: Vec3, what: str) -> tuple[float, float, float]:
-    try:
-        x, y, z = (float(v) for v in value)
-    except (TypeError, ValueError) as exc:
-        raise PlanningError(f"{what}: expected 3 coordinates in metres, got {value!r}") from exc
-    if not all(math.isfinite(c) for c in (x, y, z)):
-        raise PlanningError(f"{what}: coordinates must be finite, got {value!r}")
-    return (x, y, z)
 
 
 class Dispatcher:
@@ -213,7 +159,7 @@ class Dispatcher:
                 raise PlanningError(f"UAV {spec.name}: unknown role {spec.role!r}")
             self._fleet[spec.name] = spec
         self._position: dict[str, tuple[float, float, float]] = {
-            s.name: _vec3(s.home_m, f"UAV {s.name} home_m") for s in self._fleet.values()
+            s.name: vec3(s.home_m, f"UAV {s.name} home_m") for s in self._fleet.values()
         }
         self._live: set[str] = set(self._fleet)
         self._uav_task: dict[str, int] = {}
@@ -419,7 +365,7 @@ class Dispatcher:
             for name, p in uav_positions_m.items():
                 if name not in self._fleet:
                     raise PlanningError(f"position given for unknown UAV {name!r}")
-                self._position[name] = _vec3(p, f"position of UAV {name}")
+                self._position[name] = vec3(p, f"position of UAV {name}")
         out: list[Assignment] = []
         for role in ROLES:
             if not self._available[role]:
@@ -590,7 +536,7 @@ class Dispatcher:
     @property
     def done(self) -> AbstractSet[str]:
         """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
-        return _SetView(self._done)
+        return SetView(self._done)
 
     @property
     def in_progress(self) -> Mapping[str, str]:
@@ -600,7 +546,7 @@ class Dispatcher:
     @property
     def stuck(self) -> AbstractSet[str]:
         """Ids of tasks that failed ``max_attempts`` times; a live read-only view."""
-        return _SetView(self._stuck)
+        return SetView(self._stuck)
 
     @property
     def attempts(self) -> Mapping[str, int]:
@@ -665,3 +611,16 @@ class Dispatcher:
     def chain_s(self, task_id: str) -> float:
         """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
         return self._chain[self._lookup(task_id, "query")]
+
+
+__all__ = [
+    "DEFAULT_POLICY",
+    "DEFAULT_RESERVATION",
+    "POLICIES",
+    "RESERVATIONS",
+    "Assignment",
+    "Dispatcher",
+    "Policy",
+    "task_end_m",
+    "task_start_m",
+]
