@@ -1,26 +1,10 @@
 """Airspace separation between UAVs: reserved volumes, handed out by mission control at run time.
 
-The paper's conflict graph G^c keeps the task *locations* (drop-off points, adhesion segments) r_c apart; it
-says nothing about the flights between them nor about the shared pickup pallet. :class:`ColumnClearance`
-closes that gap (docs/safety.md):
-
-- Every UAV holds a set of :class:`Volume` s: the **zone** where it works (the column over its site, from the
-  ground to the highest altitude it reaches there), or the whole **flight** it was granted (a vertical climb where
-  it is, a lateral leg at its layer, the column over the site it flies to).
-- A flight is granted only if every one of its volumes keeps the separation from every volume of every other
-  UAV (:func:`volumes_conflict`): two UAVs that stay in their volumes are never closer than the separation.
-- Lateral legs fly on **layers** ``base + k * spacing``; ``base`` is the highest altitude at which any task of
-  the wall is worked (:func:`work_altitude_m`), and a flight takes the lowest layer on which all of it fits.
-- A UAV that cannot have its flight because the site is busy gets a **hold flight** to a point near it, out of
-  everyone's way, and the rest of the flight when it fits; first come, first served.
-- Volumes shrink as the UAV reports where it is: the part of its leg behind it is freed, and the flight becomes
-  the zone at its site once it is down.
-
-The state machines fly exactly these shapes: climb (or descend) vertically where they are, fly straight at the
-layer, come down vertically over the site (``masonry.fsm``). Mission control runs the rules, so they work the
-same in-process and across Zenoh (messages ``clearance-request`` / ``clearance``).
-
-Everything here is pure (no I/O, no clock).
+The paper's conflict graph G^c keeps the task *locations* r_c apart; it says nothing about the flights between
+them, the shared pallet or the pads. :class:`ColumnClearance` closes that gap (docs/safety.md). The state
+machines fly exactly its shapes: climb (or descend) vertically where they are, fly straight at the layer, come
+down vertically over the site (``masonry.fsm``). Mission control runs the rules, so they work the same in-process
+and across Zenoh (messages ``clearance-request`` / ``clearance``). Everything here is pure (no I/O, no clock).
 """
 
 from __future__ import annotations
@@ -29,7 +13,15 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
-from masonry.mission.airspace_state import FlightRequest, Grant, GrantedFlight, HoldFlight, Phase, UavAirspace
+from masonry.mission.airspace_state import (
+    FlightRequest,
+    Grant,
+    GrantedFlight,
+    HoldFlight,
+    Phase,
+    UavAirspace,
+    hold_candidates,
+)
 from masonry.mission.altitudes import layer_base_m, task_work_altitude_m, transit_layers_m, work_altitude_m
 from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import (
@@ -42,7 +34,6 @@ from masonry.mission.volumes import (
     ahead_of,
     column,
     flight_volumes,
-    hold_points,
     stopped_at,
     volumes_clear,
     volumes_conflict,
@@ -84,13 +75,15 @@ class ColumnClearance:
       ``base_m``, the highest work altitude of the finished wall, or, given ``start_base_m``, starts there and
       rises with the wall (:meth:`raise_base`, called by mission control as tasks are assigned) up to ``base_m``;
       a flight keeps the altitude it was given.
+    - **Pads**: a UAV landed on its pad holds only the pad; it takes off with the column over it (:meth:`take_off`),
+      so take-offs and landings from neighbouring pads are sequenced.
     - **Waiting**: when no layer fits because the site's column is not free (another UAV works or is about to
-      come down there), the UAV gets a *hold flight* to a hold point near the site, at least ``radius_m``
-      (horizontally) from every zone and every site another UAV waits for, where it hovers at its layer until the
-      rest of the flight (the leg on to the site and the descent) fits. A UAV whose hold flight does not fit
-      either hovers where it is and asks again.
-    - **Order**: requests are served first come, first served: a flight may not come down within ``radius_m`` of
-      the site of a UAV that asked earlier and still waits.
+      come down there, or the :class:`SiteGate` says no), the UAV gets a *hold flight* to a hold point near the
+      site, ``1.1 wait_radius_m`` (horizontally) from every zone and every site another UAV waits for, where it
+      hovers at its layer until the rest of the flight fits. A UAV whose hold flight does not fit either hovers
+      where it is and asks again.
+    - **Order**: requests are served first come, first served: a flight may not come down within
+      ``wait_radius_m`` of the site of a UAV that asked earlier and still waits.
     - **Liveness**: a hold point never blocks a climb out of a zone nor the site of a waiting UAV; a UAV waiting
       in a zone can always leave it for a hold point once the flights in progress near it are down, and flights
       in progress need nothing more. So every waiting UAV waits for flights that end and for work that ends,
@@ -621,37 +614,14 @@ class ColumnClearance:
             self.gate.entered(uav, w.site, now_s)
         return Grant(uav, w.site, layer_m=self._alt(k))
 
-    def _hold_candidates(self, uav: str, site: Vec3) -> list[Vec3]:
-        keep_out: list[XY] = []
-        for other, o in self._uavs.items():
-            if other == uav:
-                continue
-            if o.zone is not None:
-                keep_out.extend(v.b for v in o.volumes if v.kind == "zone")
-                keep_out.append((o.zone[0], o.zone[1]))
-            if o.flight is not None:
-                keep_out.append((o.flight.site[0], o.flight.site[1]))
-            if o.request is not None:
-                keep_out.append((o.request.site[0], o.request.site[1]))
-                if o.hold is not None:
-                    keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
-        # and wherever another UAV climbs, hovers or works: a UAV waiting there must be able to leave vertically
-        # without passing the hold point (else the two could wait for each other)
-        spans = [
-            (v.a, v.b)
-            for other, o in self._uavs.items()
-            if other != uav
-            for v in o.volumes
-            if v.kind not in ("leg", "pad")  # a hold hover is a layer (>= 1.1 m) above any pad
-        ]
-        return hold_points(site, keep_out, spans, self.wait_radius_m)
-
     def _hold_flight(self, uav: str, u: UavAirspace) -> Grant | None:
         """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""
         w = u.request
         assert w is not None
         start = w.position if w.position is not None else w.site
-        candidates = self._hold_candidates(uav, w.site)[:6]
+        candidates = hold_candidates(
+            w.site, [o for n, o in self._uavs.items() if n != uav], self.wait_radius_m
+        )[:6]
         for k in range(self.max_layers):
             for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))

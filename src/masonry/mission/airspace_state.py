@@ -5,9 +5,10 @@ its answers (:class:`Grant`). Pure values: no I/O, no clock.
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from masonry.mission.volumes import XY, Vec3, Volume
+from masonry.mission.volumes import XY, Vec3, Volume, hold_points
 
 
 @dataclass(frozen=True)
@@ -85,4 +86,26 @@ class UavAirspace:
     answer: Grant | None = None
 
 
-__all__ = ["FlightRequest", "Grant", "GrantedFlight", "HoldFlight", "Phase", "UavAirspace"]
+def hold_candidates(site: Vec3, others: Iterable[UavAirspace], radius_m: float) -> list[Vec3]:
+    """Hold points near ``site`` for a UAV that must wait (:func:`masonry.mission.volumes.hold_points`), kept
+    ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, and from wherever they climb,
+    hover or work: a UAV waiting there must be able to leave vertically without passing the hold point (else
+    the two could wait for each other)."""
+    keep_out: list[XY] = []
+    spans: list[tuple[XY, XY]] = []
+    for o in others:
+        if o.zone is not None:
+            keep_out.extend(v.b for v in o.volumes if v.kind == "zone")
+            keep_out.append((o.zone[0], o.zone[1]))
+        if o.flight is not None:
+            keep_out.append((o.flight.site[0], o.flight.site[1]))
+        if o.request is not None:
+            keep_out.append((o.request.site[0], o.request.site[1]))
+            if o.hold is not None:
+                keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
+        # a hold hover is a layer (>= 1.1 m) above any pad, and legs are passed at another layer
+        spans.extend((v.a, v.b) for v in o.volumes if v.kind not in ("leg", "pad"))
+    return hold_points(site, keep_out, spans, radius_m)
+
+
+__all__ = ["FlightRequest", "Grant", "GrantedFlight", "HoldFlight", "Phase", "UavAirspace", "hold_candidates"]
