@@ -1,7 +1,7 @@
 """Fly random site layouts (masonry.blueprint_random) and print what happened to each: the sweep behind the
 property test tests/test_random_layouts.py, on more and larger layouts.
 
-    python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults]
+    python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults] [--reservation site]
 
 A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
 violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
@@ -23,7 +23,7 @@ from masonry.sim import Faults
 SEPARATION_BOUND_M = 1.0
 
 
-def fly(seed: int, limits: LayoutLimits, faults: bool) -> dict[str, object]:
+def fly(seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task") -> dict[str, object]:
     rng = random.Random(seed)
     bp = random_layout(rng, limits)
     f = Faults.mild(rng) if faults else Faults()
@@ -32,7 +32,7 @@ def fly(seed: int, limits: LayoutLimits, faults: bool) -> dict[str, object]:
         (math.dist(a[:2], b[:2]) for i, a in enumerate(homes) for b in homes[i + 1 :]), default=float("nan")
     )
     t0 = time.perf_counter()
-    r = simulate(bp, seed=seed, faults=f)
+    r = simulate(bp, seed=seed, faults=f, reservation=reservation)
     return {
         "seed": seed,
         "wall": bp.name,
@@ -58,6 +58,7 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--large", action="store_true", help="walls up to 6 courses x 12 bricks")
     ap.add_argument("--faults", action="store_true", help="mild random faults")
+    ap.add_argument("--reservation", choices=("task", "site"), default="task")
     args = ap.parse_args()
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     print(f"pad separation {pad_separation_m():.2f} m; limits {limits}")
@@ -66,7 +67,7 @@ def main() -> None:
     )
     bad = 0
     for seed in range(args.first_seed, args.first_seed + args.n):
-        row = fly(seed, limits, args.faults)
+        row = fly(seed, limits, args.faults, args.reservation)
         sep = row["min_sep"]
         ok = (
             (row["completed"] or args.faults)

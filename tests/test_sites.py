@@ -85,10 +85,13 @@ def test_conflicting_tasks_run_at_once_but_never_work_at_their_sites_at_once(see
     deps = {}
     for u, v in p.dependencies:
         deps.setdefault(u, []).append(v)
+    prefetched = 0
     for tid, t in tasks.items():
         for v in deps.get(tid, ()):
             if v in tasks:
                 assert tasks[v].end_s <= t.site_start_s  # a site interval starts after its prerequisites
+        prefetched += any(v in tasks and tasks[v].end_s > t.start_s for v in deps.get(tid, ()))
+    assert prefetched > 0  # bricks were fetched while the glue under them was still being sprayed
 
 
 def test_the_paper_reservation_keeps_conflicting_tasks_apart_for_their_whole_duration():

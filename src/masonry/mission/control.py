@@ -201,7 +201,11 @@ class MissionControl:
         )
         self.reservation = reservation
         self.sites = SiteIntervals(
-            plan, self.dispatcher.task_of, exclusive=reservation == "site", on_visit=self._journal_visit
+            plan,
+            self.dispatcher.task_of,
+            exclusive=reservation == "site",
+            on_visit=self._journal_visit,
+            is_done=self.dispatcher.done.__contains__,
         )
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}

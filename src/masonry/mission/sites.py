@@ -74,6 +74,7 @@ class SiteIntervals:
         *,
         exclusive: bool,
         on_visit: Callable[[SiteVisit], None] | None = None,
+        is_done: Callable[[str], bool] | None = None,
     ) -> None:
         self._tasks = {t.id: t for t in plan.tasks}
         self._work = {t.id: work_point_m(t) for t in plan.tasks}
@@ -83,6 +84,10 @@ class SiteIntervals:
             self._neighbours[b].add(a)
         self._task_of = task_of
         self.exclusive = exclusive
+        self._is_done = is_done
+        self._prerequisites: dict[str, list[str]] = {}
+        for u, v in plan.dependencies:
+            self._prerequisites.setdefault(u, []).append(v)
         self._on_visit = on_visit
         self.on_site: dict[str, SiteVisit] = {}  # task id -> its visit in progress
         self._uav_visit: dict[str, SiteVisit] = {}  # UAV -> its visit in progress
@@ -103,7 +108,10 @@ class SiteIntervals:
         if tid is None:
             return True
         on_site = self.on_site
-        return not any(n in on_site and on_site[n].uav != uav for n in self._neighbours[tid])
+        if any(n in on_site and on_site[n].uav != uav for n in self._neighbours[tid]):
+            return False
+        done = self._is_done
+        return done is None or all(done(p) for p in self._prerequisites.get(tid, ()))
 
     def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
         """``uav``'s flight down to ``site_m`` was granted: if that is its task's site, its visit starts."""

@@ -83,6 +83,9 @@ class Dispatcher:
         self.policy: str = policy
         self.max_attempts = max_attempts
         self.reservation = reservation
+        #: ``site`` only: may give a task whose prerequisites are still in progress (mission control's site
+        #: gate then keeps its UAV off the site until they are done)
+        self.prefetch = reservation == "site"
         self._index_tasks(plan)
         self._build_graphs(plan)
         self._chain = self._chains(durations_s)
@@ -323,9 +326,13 @@ class Dispatcher:
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
-        progress (highest chain for ``critical-path``, plan order for ``fifo``; then the shortest flight)."""
+        progress, or else (``prefetch``) a task whose every prerequisite is done or in progress (its UAV
+        fetches the brick while the glue is sprayed; its site interval waits for them). Highest chain for
+        ``critical-path``, plan order for ``fifo``; then the shortest flight."""
         avail = self._available[role]
         candidates = [i for i in self._ready[role] if i not in avail]
+        if not candidates and self.prefetch:
+            candidates = self._prefetchable(role)
         if not candidates:
             return None
         if self.policy == "critical-path":
@@ -336,6 +343,19 @@ class Dispatcher:
         pos = self._position[uav]
         start, leg, dist = self._start_m, self._leg_m, math.dist
         return min(candidates, key=lambda i: (dist(pos, start[i]) + leg[i], i))
+
+    def _prefetchable(self, role: str) -> list[int]:
+        """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
+        status, out = self._status, []
+        seen: set[int] = set()
+        for r in self._uav_task.values():
+            for d in self._dependents[r]:
+                if d in seen or self._role[d] != role or status[d] != _PENDING:
+                    continue
+                seen.add(d)
+                if all(status[p] in (_DONE, _RUNNING) for p in self._prerequisites[d]):
+                    out.append(d)
+        return out
 
     # ------------------------------------------------------------------ events
 
