@@ -526,7 +526,18 @@ class ColumnClearance:
         )
 
     def _queued_before(self, seq: int) -> list[FlightRequest]:
-        return [u.request for _n, u in self._waiting() if u.request is not None and u.request.seq < seq]
+        """The requests made before ``seq`` that wait for the airspace: one the :class:`SiteGate` holds back (its
+        site is busy with conflicting work, or its prerequisites are not done) waits for work, not for the
+        airspace, and keeps no one else from coming down near its site (else the two could wait for each other:
+        an adhesion UAV waiting for the brick under its segment, whose UAV waited for the adhesion UAV's turn)."""
+        gate = self.gate
+        return [
+            u.request
+            for n, u in self._waiting()
+            if u.request is not None
+            and u.request.seq < seq
+            and (gate is None or gate.may_enter(n, u.request.site))
+        ]
 
     def _flight_volumes(
         self,
@@ -619,9 +630,9 @@ class ColumnClearance:
         w = u.request
         assert w is not None
         start = w.position if w.position is not None else w.site
-        candidates = hold_candidates(
-            w.site, [o for n, o in self._uavs.items() if n != uav], self.wait_radius_m
-        )[:6]
+        others = [o for n, o in self._uavs.items() if n != uav]
+        pads = [(h[0], h[1]) for n, h in self._homes.items() if n != uav]
+        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)[:6]
         for k in range(self.max_layers):
             for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))

@@ -86,12 +86,15 @@ class UavAirspace:
     answer: Grant | None = None
 
 
-def hold_candidates(site: Vec3, others: Iterable[UavAirspace], radius_m: float) -> list[Vec3]:
+def hold_candidates(
+    site: Vec3, others: Iterable[UavAirspace], radius_m: float, pads: Iterable[XY] = ()
+) -> list[Vec3]:
     """Hold points near ``site`` for a UAV that must wait (:func:`masonry.mission.volumes.hold_points`), kept
-    ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, and from wherever they climb,
-    hover or work: a UAV waiting there must be able to leave vertically without passing the hold point (else
-    the two could wait for each other)."""
-    keep_out: list[XY] = []
+    ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, from wherever they climb, hover or
+    work, and from their ``pads``: a UAV waiting there must be able to leave vertically, and to come home,
+    without passing the hold point (else the two could wait for each other: a UAV holding beside another's pad
+    blocked the column that one needed to land, while it waited for that one's zone)."""
+    keep_out: list[XY] = list(pads)
     spans: list[tuple[XY, XY]] = []
     for o in others:
         if o.zone is not None:

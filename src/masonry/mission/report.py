@@ -380,7 +380,10 @@ def control_report(
     done_att = {a.task_id: a for a in attempts if a.status == "done"}
     visits = list(getattr(getattr(mc, "sites", None), "visits", ()))
     site_intervals = [(v.task_id, v.start_s, v.end_s) for v in visits]
-    last_visit = {(v.task_id, v.uav): (v.start_s, v.end_s) for v in visits}  # the last one of each wins
+    # the last one of each wins; one still open ends now, unless a crash cut it (not known when it would have)
+    last_visit = {
+        (v.task_id, v.uav): (v.start_s, v.end_s if v.end_s is not None or v.restored else now) for v in visits
+    }
     tasks: list[TaskReport] = []
     stuck: list[str] = []
     for t in plan.tasks:
@@ -402,7 +405,7 @@ def control_report(
                     t.kind,
                     a.phases,
                     None if visit is None else visit[0],
-                    None if visit is None else (now if visit[1] is None else visit[1]),
+                    None if visit is None else visit[1],
                 )
             )
             continue

@@ -54,6 +54,8 @@ class SiteVisit:
     uav: str
     start_s: float
     end_s: float | None = None
+    #: journaled by a run before a resume (an open one was cut by the crash: its end is not known)
+    restored: bool = False
 
 
 class SiteIntervals:
@@ -170,7 +172,7 @@ SITE_META_PREFIX = "site/"
 
 
 def journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float | None) -> list[SiteVisit]:
-    """The site visits of the tasks a journal says are done (one still open at the crash ends then)."""
+    """The site visits of the tasks a journal says are done (one still open at the crash has no end)."""
     out = []
     for key, v in meta.items():
         tid = key[len(SITE_META_PREFIX) :]
@@ -180,8 +182,8 @@ def journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float
         if not isinstance(start, (int, float)) or not isinstance(uav, str):
             continue
         if not isinstance(end, (int, float)):
-            end = last_time_s
-        out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end)))
+            end = None  # its UAV was still there at the crash: when it would have left is not known
+        out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end), restored=True))
     return sorted(out, key=lambda v: (v.start_s, v.task_id))
 
 

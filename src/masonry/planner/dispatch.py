@@ -83,8 +83,9 @@ class Dispatcher:
         self.policy: str = policy
         self.max_attempts = max_attempts
         self.reservation = reservation
-        #: ``site`` only: may give a task whose prerequisites are still in progress (mission control's site
-        #: gate then keeps its UAV off the site until they are done)
+        #: ``site`` only: may give a brick task whose prerequisites are still in progress (its UAV fetches the
+        #: brick; mission control's site gate keeps it off the site until they are done). Not adhesion: it has
+        #: nothing to fetch, and would only hold a place in the airspace's queue.
         self.prefetch = reservation == "site"
         self._index_tasks(plan)
         self._build_graphs(plan)
@@ -331,7 +332,7 @@ class Dispatcher:
         ``critical-path``, plan order for ``fifo``; then the shortest flight."""
         avail = self._available[role]
         candidates = [i for i in self._ready[role] if i not in avail]
-        if not candidates and self.prefetch:
+        if not candidates and self.prefetch and role == "brick":
             candidates = self._prefetchable(role)
         if not candidates:
             return None
