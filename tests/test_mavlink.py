@@ -144,12 +144,26 @@ def test_constructor_validates_and_does_not_connect() -> None:
 def test_silent_endpoint_is_a_clear_error() -> None:
     from masonry.adapters.sitl import free_udp_port
 
+    class SteppingClock:
+        """Each read is 10 ms after the one before, however long the machine took between them."""
+
+        def __init__(self) -> None:
+            self.now_s = 100.0
+
+        def __call__(self) -> float:
+            self.now_s += 0.01
+            return self.now_s
+
     port = free_udp_port()
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.3)
-    started = time.monotonic()
-    with pytest.raises(DeviceNotFound, match=f"no autopilot heartbeat on udpin:127.0.0.1:{port}"):
+    clock = SteppingClock()
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.3, monotonic=clock)
+    started_s = clock.now_s
+    with pytest.raises(
+        DeviceNotFound, match=rf"no autopilot heartbeat on udpin:127.0.0.1:{port} within 0\.3 s"
+    ):
         fc.connect()
-    assert time.monotonic() - started < 1.5
+    # it gave up at its timeout on its clock, within one poll (two reads) of it: not before, not later
+    assert 0.3 <= clock.now_s - started_s <= 0.3 + 3 * 0.01 + 1e-9
     assert not fc.connected
 
 
