@@ -1,4 +1,9 @@
-"""Shared test configuration: hypothesis is seeded (derandomised) so CI runs are reproducible."""
+"""Shared test configuration: hypothesis is seeded (derandomised) so CI runs are reproducible, and the long
+tests start first so that the two xdist workers (pyproject's ``addopts``) finish together.
+
+Under xdist every worker loads the ``ci`` profile: ``derandomize=True`` implies ``database=None``, so the
+workers share no example database and each test draws the same examples on whichever worker runs it.
+"""
 
 from __future__ import annotations
 
@@ -25,3 +30,12 @@ def _strict_triggers(monkeypatch: pytest.MonkeyPatch) -> None:
     from masonry.fsm.model import UavModel
 
     monkeypatch.setattr(UavModel, "strict_triggers", True)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The ``slow`` tests first (a stable sort: the rest keep their order).
+
+    xdist hands tests out in collection order, so a long mission collected last would run alone on one worker
+    while the other has finished: longest first is what lets both end together (docs/performance.md).
+    """
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
