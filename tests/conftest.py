@@ -8,6 +8,7 @@ workers share no example database and each test draws the same examples on which
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -21,6 +22,17 @@ settings.register_profile(
 )
 settings.register_profile("dev", deadline=None, print_blob=True)
 settings.load_profile(os.environ.get("MASONRY_HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """SIGINT back to Python's default when the shell that started pytest ignored it.
+
+    A shell that runs a command in the background (``pytest &``, a script's ``&``) starts it with SIGINT ignored,
+    and every child inherits that: the tests that stop ``masonry sitl`` as Ctrl-C does would then wait on a child
+    that cannot hear it. Each xdist worker runs this too (it is a process of its own).
+    """
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(autouse=True)
