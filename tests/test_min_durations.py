@@ -32,6 +32,7 @@ def test_no_simulated_task_is_faster_than_its_minimum(blueprint, seed) -> None:
     assert report.lower_bound_s <= report.makespan_s
 
 
+@pytest.mark.slow
 def test_chained_adhesion_tasks_keep_to_their_minimum() -> None:
     """On a longer wall adhesion UAVs chain segments (no climb out, a short descent): those tasks, the shortest
     of all, still never beat their minimum.

@@ -365,6 +365,7 @@ def message_in(raw: bytes) -> dict:
         return {}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("keyed", [True, False])
 def test_a_forger_on_the_port_does_not_complete_the_mission(tmp_path, keyed):
     """The issue's attack: a Zenoh client reads the assignments on ``to/**`` and answers them in the UAVs' names."""
