@@ -24,6 +24,7 @@ from masonry.adapters.mavlink import (
     mode_name,
 )
 from masonry.errors import DeviceNotFound, InputError, LinkLost
+from waiting import SteppingClock
 
 finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False)
 angles = st.floats(min_value=-math.pi, max_value=math.pi, allow_nan=False)
@@ -144,18 +145,8 @@ def test_constructor_validates_and_does_not_connect() -> None:
 def test_silent_endpoint_is_a_clear_error() -> None:
     from masonry.adapters.sitl import free_udp_port
 
-    class SteppingClock:
-        """Each read is 10 ms after the one before, however long the machine took between them."""
-
-        def __init__(self) -> None:
-            self.now_s = 100.0
-
-        def __call__(self) -> float:
-            self.now_s += 0.01
-            return self.now_s
-
     port = free_udp_port()
-    clock = SteppingClock()
+    clock = SteppingClock(0.01)
     fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.3, monotonic=clock)
     started_s = clock.now_s
     with pytest.raises(

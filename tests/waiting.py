@@ -49,3 +49,19 @@ class HeldClock:
             yield
         finally:
             self._held_s = None
+
+
+class SteppingClock:
+    """A monotonic clock (s) that moves ``step_s`` on every read and never otherwise.
+
+    Injected into an adapter whose waits poll its clock, it makes a timeout a count of polls: where the adapter
+    gave up is then exact on this clock, however long the machine took between the polls.
+    """
+
+    def __init__(self, step_s: float = 0.01, start_s: float = 100.0) -> None:
+        self.step_s = step_s
+        self.now_s = start_s
+
+    def __call__(self) -> float:
+        self.now_s += self.step_s
+        return self.now_s
