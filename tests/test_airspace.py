@@ -354,6 +354,7 @@ def test_a_uav_without_the_column_waits_at_its_layer_over_the_hold_point():
 
 
 # -- whole missions ---------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_without_the_airspace_rules_uavs_collide_and_with_them_they_keep_the_bound():
     bp = towers(3, 2, spacing_m=1.6, brick_uavs=2, adhesion_uavs=2)
     off = simulate(bp, separation=False)
@@ -375,6 +376,7 @@ def _outside_m(columns, uav, p):
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "courses,per,nb,na,seed", [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)]
 )
@@ -409,6 +411,7 @@ def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them
     assert r.min_separation_m is None or r.min_separation_m >= S - 2 * 0.07
 
 
+@pytest.mark.slow
 @settings(max_examples=10, deadline=None)
 @given(
     kind=st.sampled_from(["towers", "bond"]),
@@ -543,6 +546,7 @@ def test_the_work_altitude_of_the_wall_is_the_highest_of_its_tasks(courses, per,
             assert task_work_altitude_m(t, bp.cruise_altitude_m) >= bp.cruise_altitude_m
 
 
+@pytest.mark.slow
 def test_with_rising_layers_no_flight_passes_low_over_the_wall_and_the_low_layers_are_used(monkeypatch):
     """A tall wall: the first flights get layers below the finished wall's work altitude, and every lateral
     flight keeps its lowest point (carried brick, rod or nozzle) well above the bricks under it."""

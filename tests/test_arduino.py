@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import time
 
 import pytest
 from hypothesis import given
@@ -28,7 +27,7 @@ from masonry.adapters.arduino import ArduinoActuators
 from masonry.adapters.arduino_fake import FakeArduino
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.ports import Gripper, Sprayer
-from waiting import wait_until
+from waiting import SteppingClock, wait_until
 
 requests = st.builds(
     Request,
@@ -141,14 +140,17 @@ def test_an_error_reply_is_a_rejection_with_the_reason(fake: FakeArduino) -> Non
 
 
 def test_silence_times_out_after_the_retries(fake: FakeArduino) -> None:
-    with open_board(fake.port, retries=2) as act:
+    clock = SteppingClock(0.01)
+    with open_board(fake.port, retries=2, monotonic=clock) as act:
         fake.silent = True
-        started = time.monotonic()
+        started_s = clock.now_s
         with pytest.raises(
-            CommandTimeout, match=rf"{fake.port}: actuator board did not answer MAG ON \(3 tries"
+            CommandTimeout, match=rf"{fake.port}: actuator board did not answer MAG ON \(3 tries of 0\.10 s"
         ):
             act.set_magnet(True)
-        assert 0.25 <= time.monotonic() - started < 1.0
+        # three tries of 0.1 s on the adapter's clock, each ending within a few polls of its deadline
+        assert 3 * 0.1 <= clock.now_s - started_s <= 3 * (0.1 + 4 * 0.01)
+        wait_until(lambda: len([r for r in fake.received if b"MAG ON" in r]) >= 3, 5.0, "the three tries")
         assert len([r for r in fake.received if b"MAG ON" in r]) == 3
 
 
@@ -213,10 +215,12 @@ def test_wrong_device_names_the_port(fake: FakeArduino) -> None:
 
 def test_a_silent_device_is_not_found(fake: FakeArduino) -> None:
     fake.silent = True
-    started = time.monotonic()
-    with pytest.raises(DeviceNotFound, match="wrong port or firmware"):
-        open_board(fake.port)
-    assert time.monotonic() - started < 1.0
+    clock = SteppingClock(0.01)
+    started_s = clock.now_s
+    with pytest.raises(DeviceNotFound, match=r"wrong port or firmware.*3 tries of 0\.10 s"):
+        open_board(fake.port, monotonic=clock)
+    # the boot wait (0.05 s) and three PINGs of 0.1 s on the adapter's clock: it gives up then, not later
+    assert 0.05 + 3 * 0.1 <= clock.now_s - started_s <= 0.05 + 3 * 0.1 + 4 * 4 * 0.01
 
 
 def test_loopback_url_is_not_a_board() -> None:

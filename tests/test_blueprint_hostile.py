@@ -10,7 +10,6 @@ import os
 import resource
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -126,10 +125,8 @@ BOMB = (
 def test_alias_bomb_is_one_line_from_plan_sim_and_fly(tmp_path: Path) -> None:
     path = _write(tmp_path, BOMB)
     assert len(BOMB.encode()) < 1200  # a ~1 KB file that expands to 9^9 strings
-    for args in _commands(path):
-        start = time.monotonic()
+    for args in _commands(path):  # each within _masonry's timeout: 9^9 strings would take far longer
         line = _one_line_exit_2(_masonry(*args))
-        assert time.monotonic() - start < 30.0
         assert "aliases expand the document" in line and str(path) in line
 
 
@@ -343,11 +340,20 @@ def test_pairs_at_exactly_r_c_conflict() -> None:
 
 def test_quote_is_bounded() -> None:
     big = [0.0] * 200_000
-    start = time.monotonic()
     text = quote(big)
     assert len(text) <= QUOTE_MAX_CHARS and "200000 items" in text
-    assert time.monotonic() - start < 0.1
     assert len(quote("x" * 10**6)) <= QUOTE_MAX_CHARS
+
+    class Counted:
+        rendered = 0
+
+        def __repr__(self) -> str:
+            Counted.rendered += 1
+            return "c"
+
+    # the work is bounded, not only the text: a handful of the 200,000 items is rendered, never the list whole
+    assert "200000 items" in quote([Counted() for _ in range(200_000)])
+    assert 1 <= Counted.rendered <= 6
 
 
 def test_200000_element_position_is_a_short_line(tmp_path: Path) -> None:

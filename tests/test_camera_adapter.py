@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import socket
-import time
 
 import cv2
 import numpy as np
@@ -19,6 +18,7 @@ from masonry.perception.calibration import write_calibration
 from masonry.perception.render import RenderedBrick, look_down, render_frame
 from masonry.perception.types import CameraIntrinsics
 from masonry.ports import Camera
+from waiting import wait_until
 
 INTR = CameraIntrinsics(fx=500.0, fy=500.0, cx=319.5, cy=239.5, width_px=640, height_px=480)
 MARKERS = MarkerSpec()
@@ -75,21 +75,23 @@ def test_a_video_file_goes_through_the_aruco_pipeline(recording) -> None:
 
 def test_threaded_reading_returns_only_new_frames(recording) -> None:
     video, calibration = recording
-    with OpenCvCamera(str(video), calibration=calibration, threaded=True) as cam:
+    clock = StepClock()  # stamps 100.1, 100.2, ...: the fifth frame grabbed is the one stamped 100.5
+    with OpenCvCamera(str(video), calibration=calibration, threaded=True, clock=clock) as cam:
         seen = []
-        deadline = time.monotonic() + 2.0
-        while cam.frames_read < 5 and time.monotonic() < deadline:
+
+        def last_frame_seen() -> bool:
             frame = cam.read()
             if frame is not None:
                 seen.append(frame)
-            time.sleep(0.001)
-        time.sleep(0.05)
-        last = cam.read()
-        if last is not None:
-            seen.append(last)
-        assert cam.read() is None  # nothing new after the end
+            return bool(seen) and seen[-1].time_s == pytest.approx(100.5)
+
+        wait_until(last_frame_seen, 10.0, "the video's last frame")
+        assert cam.frames_read == 5
+        assert cam.read() is None  # nothing new after the end: the grabber holds no frame not returned
     assert 1 <= len(seen) <= 5
     assert len({id(f) for f in seen}) == len(seen)
+    times = [f.time_s for f in seen]
+    assert times == sorted(times)  # newest only, never an older one again
 
 
 def test_resolution_must_match_the_calibration(recording, tmp_path) -> None:
@@ -140,9 +142,7 @@ def test_udp_pose_source_keeps_the_newest_pose_of_its_body() -> None:
         send_pose(tx, address, MocapPose("brick-1", 1.0, (1.0, 2.0, 0.5), (0.0, 0.0, 0.3)))
         tx.sendto(b"{not json", address)
         tx.sendto(json.dumps({"body": "brick-1", "position_m": [1, 2]}).encode(), address)
-        deadline = time.monotonic() + 1.0
-        while (source.received < 1 or source.rejected < 2) and time.monotonic() < deadline:
-            time.sleep(0.005)
+        wait_until(lambda: source.received >= 1 and source.rejected >= 2, 5.0, "the four datagrams")
         pose = source.latest()
         assert pose == MocapPose("brick-1", 1.0, (1.0, 2.0, 0.5), (0.0, 0.0, 0.3))
         assert source.rejected == 2 and "position_m must be a list of 3 numbers" in (source.last_error or "")

@@ -24,6 +24,7 @@ from masonry.adapters.mavlink import (
     mode_name,
 )
 from masonry.errors import DeviceNotFound, InputError, LinkLost
+from waiting import SteppingClock
 
 finite = st.floats(min_value=-1e3, max_value=1e3, allow_nan=False)
 angles = st.floats(min_value=-math.pi, max_value=math.pi, allow_nan=False)
@@ -145,11 +146,15 @@ def test_silent_endpoint_is_a_clear_error() -> None:
     from masonry.adapters.sitl import free_udp_port
 
     port = free_udp_port()
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.3)
-    started = time.monotonic()
-    with pytest.raises(DeviceNotFound, match=f"no autopilot heartbeat on udpin:127.0.0.1:{port}"):
+    clock = SteppingClock(0.01)
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=0.3, monotonic=clock)
+    started_s = clock.now_s
+    with pytest.raises(
+        DeviceNotFound, match=rf"no autopilot heartbeat on udpin:127.0.0.1:{port} within 0\.3 s"
+    ):
         fc.connect()
-    assert time.monotonic() - started < 1.5
+    # it gave up at its timeout on its clock, within one poll (two reads) of it: not before, not later
+    assert 0.3 <= clock.now_s - started_s <= 0.3 + 3 * 0.01 + 1e-9
     assert not fc.connected
 
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import math
 import sys
 
+import pytest
+
 from masonry.blueprint_gen import running_bond
 from masonry.mission.handler import UavHandler
 from masonry.mission.report import count_violations
@@ -44,6 +46,7 @@ def test_any_overlap_of_positive_length_is_still_counted():
     )  # counted once per pair
 
 
+@pytest.mark.slow
 def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatch):
     """Batteries drain fast: adhesion UAVs run down waiting in the air and retire with a task queued.
 
@@ -81,6 +84,7 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
     assert len(done) == len(set(done))
 
 
+@pytest.mark.slow
 def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     """With the ground crew, a UAV whose battery runs low waiting for a column lands, gets a pack, flies on.
 

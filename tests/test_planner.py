@@ -161,6 +161,7 @@ def _inside(point: tuple[float, float], brick: Brick, tol: float = 1e-7) -> bool
     return abs(u) <= brick.size_m[0] / 2 + tol and abs(v) <= brick.size_m[1] / 2 + tol
 
 
+@pytest.mark.slow
 @settings(max_examples=60)
 @given(walls())
 def test_random_walls_graph_invariants(bp: Blueprint) -> None:
@@ -186,6 +187,7 @@ def test_random_walls_graph_invariants(bp: Blueprint) -> None:
         assert not closure.has_edge(a, b) and not closure.has_edge(b, a)
 
 
+@pytest.mark.slow
 @settings(max_examples=60)
 @given(walls())
 def test_random_walls_adhesion_segments_on_lower_top_face_inside_both_footprints(bp: Blueprint) -> None:
@@ -221,6 +223,7 @@ def _oracle(p, clearance: float) -> set[tuple[str, str]]:
     return out
 
 
+@pytest.mark.slow
 @settings(max_examples=60)
 @given(walls())
 def test_random_walls_conflicts_equal_brute_force_oracle(bp: Blueprint) -> None:

@@ -13,11 +13,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from masonry.adapters.mavlink import MavlinkFlightController, mavutil_module
+from masonry.adapters.mavlink import HEARTBEAT_MISSING_S, MavlinkFlightController, mavutil_module
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
-from waiting import wait_until
+from waiting import HeldClock, wait_until
 
 TIME_SCALE = 8.0
 KEY = bytes(range(32))
@@ -128,14 +128,20 @@ def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> 
 
 
 def test_link_loss_fires_the_watchdog_and_the_autopilot_failsafe() -> None:
-    with flight(SitlConfig(gcs_failsafe_s=1.5), heartbeat_timeout_s=1.0) as (sitl, fc):
+    clock = HeldClock()
+    with flight(SitlConfig(gcs_failsafe_s=1.5), heartbeat_timeout_s=1.0, monotonic=clock) as (sitl, fc):
         fc.connect()
         take_off(fc, 1.0)
         sitl.link_down = True  # radio outage: nothing gets through either way
-        lost_after = wait_until(lambda: not fc.telemetry().link_ok, 2.0, "link_ok to drop")
-        assert 0.9 <= lost_after <= 1.3  # within the watchdog time (plus the last message's age)
-        with pytest.raises(LinkLost, match="no message from the autopilot"):
-            fc.send_velocity((0.0, 0.0, 0.0), 0.0)
+        wait_until(lambda: not fc.telemetry().link_ok, 5.0, "link_ok to drop")
+        # nothing arrives any more: the watchdog's window, at its edges, from the last message heard
+        last_s = fc._state.last_message_s
+        with clock.held_at(last_s + 0.99):
+            assert fc.telemetry().link_ok  # not before the watchdog time (1 s)
+        with clock.held_at(last_s + 1.01):
+            assert not fc.telemetry().link_ok  # and not later
+            with pytest.raises(LinkLost, match=r"no message from the autopilot .* for 1\.0 s"):
+                fc.send_velocity((0.0, 0.0, 0.0), 0.0)
         with pytest.raises(LinkLost):
             fc.land()
         assert fc.telemetry().position_ok is False
@@ -192,13 +198,15 @@ def test_a_silent_autopilot_times_out_after_retries() -> None:
     import threading
 
     stop = threading.Event()
+    heard: list[int] = []  # the confirmation field of each DO_SET_MODE the peer receives
 
     def beat() -> None:
         while not stop.is_set():
             peer.mav.heartbeat_send(2, 3, 0, 0, 3)
-            while peer.recv_msg() is not None:
-                pass
-            stop.wait(0.1)
+            while (msg := peer.recv_msg()) is not None:
+                if msg.get_type() == "COMMAND_LONG" and msg.command == 176:
+                    heard.append(int(msg.confirmation))
+            stop.wait(0.01)
 
     thread = threading.Thread(target=beat, daemon=True)
     thread.start()
@@ -207,7 +215,10 @@ def test_a_silent_autopilot_times_out_after_retries() -> None:
         started = time.monotonic()
         with pytest.raises(CommandTimeout, match=r"set mode GUIDED: no COMMAND_ACK .* after 3 tries"):
             fc.set_mode("GUIDED")
-        assert 0.4 <= time.monotonic() - started < 1.0
+        assert time.monotonic() - started >= 3 * 0.15  # each try waited its command timeout
+        # the first send and two retries, numbered in MAVLink's confirmation field
+        wait_until(lambda: len(heard) >= 3, 5.0, "the peer to receive the three tries")
+        assert heard == [0, 1, 2]
         assert any("SET_MESSAGE_INTERVAL" in w for w in fc.warnings)  # rates were not acknowledged either
         assert any("no time-stamped telemetry" in w for w in fc.warnings)
     finally:
@@ -241,13 +252,20 @@ def test_signing_on_both_ends_and_a_wrongly_signed_peer_is_ignored() -> None:
             rogue = mavutil.mavlink_connection(f"udpout:127.0.0.1:{sitl_port(sitl)}", source_system=200)
             if key is not None:
                 rogue.setup_signing(key, sign_outgoing=True)
+            mav = sitl._conn.mav
+            refused_before = mav.total_receive_errors
             rogue.mav.command_long_send(1, 1, 176, 0, 1, 4, 0, 0, 0, 0, 0)  # GUIDED
             rogue.mav.command_long_send(1, 1, 400, 0, 1, 0, 0, 0, 0, 0, 0)  # arm
-            # Something not happening has no event to wait for: give the rogue's datagrams time to arrive.
-            time.sleep(0.3)
+            # the evidence that both arrived and were dropped unread: the SITL's parser refused them
+            wait_until(
+                lambda: mav.total_receive_errors >= refused_before + 2,  # noqa: B023
+                5.0,
+                "the SITL to refuse the rogue's two commands",
+            )
             rogue.close()
             assert not sitl.vehicle.armed and sitl.mode == "STABILIZE"
-        assert sitl._conn.mav.signing.badsig_count + sitl._conn.mav.signing.unsigned_count >= 2
+        # the wrong key's two were refused on their signature (the unsigned ones are refused unread)
+        assert sitl._conn.mav.signing.badsig_count >= 2
         fc.arm()  # signing on both ends: the right peer's commands go through, and it hears the autopilot
         assert sitl.vehicle.armed
         assert sitl._conn.mav.signing.goodsig_count > 5
@@ -281,11 +299,12 @@ def test_vision_positions_feed_the_estimate() -> None:
         fc.connect()
         with pytest.raises(CommandRejected, match="position estimate"):
             fc.arm()  # no motion capture yet
-        stop = time.monotonic() + 3.0
-        while not fc.telemetry().position_ok and time.monotonic() < stop:
-            source.pose = Pose(time.monotonic(), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # a new sample each time
-            time.sleep(0.01)
-        assert fc.telemetry().position_ok
+
+        def fed_and_estimated() -> bool:
+            source.pose = Pose(time.monotonic(), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # a new sample each poll
+            return fc.telemetry().position_ok
+
+        wait_until(fed_and_estimated, 5.0, "the estimate from the vision positions")
         assert sitl.vision_received > 0 and fc.vision_sent >= sitl.vision_received
 
 
@@ -336,11 +355,17 @@ def test_closing_while_flying_lands() -> None:
 
 
 def test_telemetry_without_heartbeats_is_a_lost_link() -> None:
-    with flight() as (sitl, fc):
+    clock = HeldClock()
+    with flight(monotonic=clock) as (sitl, fc):
         fc.connect()
         fc.wait_for_estimate(2.0)
         sitl.config = replace(sitl.config, heartbeat_hz=0.05)  # streams go on, heartbeats (almost) stop
-        lost_after = wait_until(lambda: not fc.telemetry().link_ok, 4.0, "link_ok to drop")
-        assert 2.0 <= lost_after <= 3.0
-        with pytest.raises(LinkLost, match="no HEARTBEAT from the autopilot"):
-            fc.send_velocity((0.0, 0.0, 0.0), 0.0)
+        wait_until(lambda: not fc.telemetry().link_ok, 5.0, "link_ok to drop")
+        # the next heartbeat is 20 s away: the window (HEARTBEAT_MISSING_S) from the last one, at its edges
+        beat_s = fc._state.last_heartbeat_s
+        with clock.held_at(beat_s + HEARTBEAT_MISSING_S - 0.01):
+            assert fc.telemetry().link_ok  # the streams alone keep it up that long
+        with clock.held_at(beat_s + HEARTBEAT_MISSING_S + 0.01):
+            assert not fc.telemetry().link_ok
+            with pytest.raises(LinkLost, match=r"no HEARTBEAT from the autopilot .* for 2\.5 s"):
+                fc.send_velocity((0.0, 0.0, 0.0), 0.0)

@@ -19,11 +19,13 @@ from masonry.cli import app
 from masonry.cli.hardware import build_sitl
 from masonry.errors import InputError
 from masonry.fsm import UavConfig
+from waiting import wait_until
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_fly_completes_a_brick_task_against_masonry_sitl() -> None:
     port = free_udp_port()
     sitl = subprocess.Popen(
@@ -306,10 +308,9 @@ def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
     sitl = MavlinkSitl(port, time_scale=10.0, home_m=spec.home_m, config=SitlConfig(gcs_failsafe_s=1.5))
 
     def radio_outage() -> None:  # once the UAV is cruising, the telemetry radio dies for good
-        deadline = time.monotonic() + 20.0
-        while not (sitl.vehicle.armed and sitl.vehicle.position_m[2] > 1.0) and time.monotonic() < deadline:
-            time.sleep(0.01)
-        time.sleep(0.2)
+        wait_until(lambda: sitl.vehicle.armed and sitl.vehicle.position_m[2] > 1.0, 20.0, "the climb")
+        climbed_s = sitl.sim_time_s  # two autopilot seconds later (not a wall time a busy machine stretches)
+        wait_until(lambda: sitl.sim_time_s >= climbed_s + 2.0, 10.0, "two seconds of cruise")
         sitl.link_down = True
 
     sitl.start()
@@ -332,10 +333,8 @@ def test_link_loss_in_flight_fails_the_task_and_the_autopilot_lands() -> None:
         ]
         assert out["trace"][-2]["state"] == "emergency" and out["trace"][-1]["state"] == "halted"
         # meanwhile the autopilot stopped on its guided timeout, then its GCS failsafe landed it
-        deadline = time.monotonic() + 5.0
-        while sitl.vehicle.armed and time.monotonic() < deadline:
-            time.sleep(0.02)
-        assert not sitl.vehicle.armed and sitl.vehicle.on_ground and sitl.mode == "LAND"
+        wait_until(lambda: not sitl.vehicle.armed, 5.0, "the failsafe landing to disarm")
+        assert sitl.vehicle.on_ground and sitl.mode == "LAND"
         assert "GCS Failsafe" in sitl.status_log
     finally:
         sitl.stop()

@@ -131,12 +131,14 @@ _SLOW = {
 }
 
 
+@pytest.mark.slow
 @settings(max_examples=24, **_SLOW)
 @given(config=uav_configs())
 def test_the_bound_stays_below_the_case_study_for_random_configs(config: UavConfig) -> None:
     _bound_holds(load_blueprint(ROOT / "blueprints" / "paper_case_study.yaml"), config)
 
 
+@pytest.mark.slow
 @settings(max_examples=6, **_SLOW)
 @given(config=uav_configs())
 def test_the_bound_stays_below_a_running_bond_for_random_configs(config: UavConfig) -> None:

@@ -7,7 +7,8 @@ is wrong and the test flakes. ``wait_until`` waits for the evidence itself and f
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 POLL_S = 0.005
 
@@ -24,3 +25,43 @@ def wait_until(predicate: Callable[[], object], timeout_s: float, what: str = "t
             raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
         time.sleep(POLL_S)
     return time.monotonic() - started
+
+
+class HeldClock:
+    """A monotonic clock (s) a test can hold still at an instant it chooses, to ask what a deadline says then.
+
+    Injected where an adapter reads its local clock (``MavlinkFlightController(monotonic=...)``), it follows
+    ``time.monotonic`` until held: a watchdog window is then checked at its edges, exactly, however busy the machine.
+    """
+
+    def __init__(self) -> None:
+        self._held_s: float | None = None
+
+    def __call__(self) -> float:
+        held_s = self._held_s
+        return time.monotonic() if held_s is None else held_s
+
+    @contextmanager
+    def held_at(self, t_s: float) -> Iterator[None]:
+        """Read ``t_s`` (and only that) inside the block; follow the wall again after it."""
+        self._held_s = t_s
+        try:
+            yield
+        finally:
+            self._held_s = None
+
+
+class SteppingClock:
+    """A monotonic clock (s) that moves ``step_s`` on every read and never otherwise.
+
+    Injected into an adapter whose waits poll its clock, it makes a timeout a count of polls: where the adapter
+    gave up is then exact on this clock, however long the machine took between the polls.
+    """
+
+    def __init__(self, step_s: float = 0.01, start_s: float = 100.0) -> None:
+        self.step_s = step_s
+        self.now_s = start_s
+
+    def __call__(self) -> float:
+        self.now_s += self.step_s
+        return self.now_s

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from typing_extensions import Self
@@ -44,6 +45,8 @@ class ArduinoActuators:
         retries: re-sends of an unanswered command.
         boot_wait_s: how long to wait for the board after opening (an Uno/Nano resets when the port opens and
             its bootloader takes ~1.5 s; the HELLO banner ends the wait early).
+        monotonic: the clock (s) the boot wait and the reply timeouts are measured on (a test injects one it
+            steps; the reads themselves stay bounded polls of the port).
     """
 
     def __init__(
@@ -54,8 +57,10 @@ class ArduinoActuators:
         timeout_s: float = 0.3,
         retries: int = 2,
         boot_wait_s: float = 2.0,
+        monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         self.port = port
+        self._monotonic = monotonic
         self.baud = baud
         self.timeout_s = timeout_s
         self.retries = retries
@@ -127,9 +132,9 @@ class ArduinoActuators:
             self._serial = None
 
     def _await_boot(self) -> None:
-        deadline = time.monotonic() + self.boot_wait_s
-        while time.monotonic() < deadline:
-            line = self._read_line(max(0.0, min(0.1, deadline - time.monotonic())))
+        deadline = self._monotonic() + self.boot_wait_s
+        while self._monotonic() < deadline:
+            line = self._read_line(max(0.0, min(0.1, deadline - self._monotonic())))
             if line is None:
                 continue  # still in the bootloader, or a board that does not reset on open: wait it out
             try:
@@ -144,9 +149,9 @@ class ArduinoActuators:
     def _read_line(self, timeout_s: float) -> bytes | None:
         import serial
 
-        deadline = time.monotonic() + timeout_s
+        deadline = self._monotonic() + timeout_s
         while b"\n" not in self._buffer:
-            remaining = deadline - time.monotonic()
+            remaining = deadline - self._monotonic()
             if remaining <= 0:
                 return None
             try:
@@ -185,8 +190,8 @@ class ArduinoActuators:
             tries = (self.retries if retries is None else retries) + 1
             for _ in range(tries):
                 self._write(line)
-                deadline = time.monotonic() + self.timeout_s
-                while (remaining := deadline - time.monotonic()) > 0:
+                deadline = self._monotonic() + self.timeout_s
+                while (remaining := deadline - self._monotonic()) > 0:
                     raw = self._read_line(remaining)
                     if raw is None:
                         break

@@ -210,6 +210,9 @@ class MavlinkFlightController(MavlinkLink):
         telemetry_rate_hz: rate requested for LOCAL_POSITION_NED and ATTITUDE.
         land_on_close: :meth:`close` while flying in GUIDED/OFFBOARD commands LAND first (a pilot's mode is left
             alone).
+        monotonic: the local monotonic clock (s) that stamps what arrives and that the link watchdog, the
+            connect, command, estimate and takeoff timeouts and the setpoint hold are measured on (a test injects
+            one it can hold still; the waits themselves stay bounded polls of wall time).
     """
 
     def __init__(
@@ -234,6 +237,7 @@ class MavlinkFlightController(MavlinkLink):
         source_component: int = 190,  # MAV_COMP_ID_MISSIONPLANNER
         telemetry_rate_hz: float = 30.0,
         land_on_close: bool = True,
+        monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         super().__init__(
             url,
@@ -250,6 +254,7 @@ class MavlinkFlightController(MavlinkLink):
             source_system=source_system,
             source_component=source_component,
             telemetry_rate_hz=telemetry_rate_hz,
+            monotonic=monotonic,
         )
         self.estimate_timeout_s = estimate_timeout_s
         self.takeoff_timeout_s = takeoff_timeout_s
@@ -298,7 +303,7 @@ class MavlinkFlightController(MavlinkLink):
             with self._lock:
                 climb_rate = -self._state.velocity_ned[2]
             reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
-            if reached or time.monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
+            if reached or self._monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
                 with self._lock:
                     self._takeoff_target_m = None
             elif self.autopilot == "px4":
@@ -351,7 +356,7 @@ class MavlinkFlightController(MavlinkLink):
 
     def estimate_status(self) -> str:
         """What the estimate lacks now, in words: no local position yet, or what the EKF flags miss."""
-        now = time.monotonic()
+        now = self._monotonic()
         with self._lock:
             st = self._state
             flags = st.estimate_flags
@@ -390,12 +395,12 @@ class MavlinkFlightController(MavlinkLink):
             LinkLost: the link went silent meanwhile.
         """
         timeout_s = self.estimate_timeout_s if timeout_s is None else timeout_s
-        start = time.monotonic()
+        start = self._monotonic()
         deadline = start + timeout_s
         last_status, last_report = "", start
         while True:
             self._check_link("wait for position estimate")
-            now = time.monotonic()
+            now = self._monotonic()
             if self._position_ok(now):
                 return
             status = self.estimate_status()
@@ -465,7 +470,7 @@ class MavlinkFlightController(MavlinkLink):
             self._setpoint = None
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
-            self._takeoff_started_s = time.monotonic()
+            self._takeoff_started_s = self._monotonic()
 
     def land(self) -> None:
         """Land where the UAV is (ArduPilot LAND mode; PX4 MAV_CMD_NAV_LAND); the setpoint stream stops."""
@@ -491,7 +496,7 @@ class MavlinkFlightController(MavlinkLink):
             raise InputError(f"velocity setpoint must be finite, not {velocity_mps}, {yaw_rate_radps}")
         with self._lock:
             self._setpoint = (v, FrameTransform.yaw_rate_to_ned(float(yaw_rate_radps)))
-            self._setpoint_time_s = time.monotonic()
+            self._setpoint_time_s = self._monotonic()
             if not self._state.armed:
                 return
             self._streaming = True
@@ -513,7 +518,7 @@ class MavlinkFlightController(MavlinkLink):
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""
-        now = time.monotonic()
+        now = self._monotonic()
         with self._lock:
             st = self._state
             link_ok = (

@@ -17,6 +17,7 @@ import math
 import os
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -90,14 +91,18 @@ class LinkClock:
     ``now_s`` extrapolates the last boot time received at the rate measured between the autopilot's and the
     local monotonic clock (1.0 for real hardware, the time-scale factor for a faster-than-real-time SITL);
     ``sleep`` sleeps the wall time that corresponds to ``duration_s`` of autopilot time.
+
+    Args:
+        monotonic: the local clock (s) the samples are stamped on (the link's: a test may inject one it holds).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, monotonic: Callable[[], float] = time.monotonic) -> None:
+        self._monotonic = monotonic
         self._lock = threading.Lock()
         self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
         self._last: tuple[float, float] | None = None
         self._returned = -math.inf
-        self._created = time.monotonic()
+        self._created = self._monotonic()
 
     def observe(self, boot_s: float, monotonic_s: float) -> None:
         with self._lock:
@@ -123,9 +128,9 @@ class LinkClock:
         rate = self.rate
         with self._lock:
             if self._last is None:  # nothing heard yet: seconds since this clock was made
-                return time.monotonic() - self._created
+                return self._monotonic() - self._created
             # extrapolated over one telemetry period at most; never runs backwards
-            now = self._last[0] + (time.monotonic() - self._last[1]) * rate
+            now = self._last[0] + (self._monotonic() - self._last[1]) * rate
             self._returned = max(self._returned, now)
             return self._returned
 
@@ -206,6 +211,7 @@ class MavlinkLink:
         source_system: int = 255,
         source_component: int = 190,  # MAV_COMP_ID_MISSIONPLANNER
         telemetry_rate_hz: float = 30.0,
+        monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         if autopilot not in ("auto", "ardupilot", "px4"):
             raise InputError(f"autopilot must be auto, ardupilot or px4, not {autopilot!r}")
@@ -230,7 +236,8 @@ class MavlinkLink:
         self.telemetry_rate_hz = telemetry_rate_hz
         self.target_system = 0
         self.target_component = 0
-        self.clock = LinkClock()
+        self._monotonic = monotonic
+        self.clock = LinkClock(monotonic)
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -325,8 +332,8 @@ class MavlinkLink:
         for thread in self._threads:
             thread.start()
         self._request_rates()
-        deadline = time.monotonic() + self.connect_timeout_s
-        while not self.clock.anchored and time.monotonic() < deadline:  # the machines run on this clock
+        deadline = self._monotonic() + self.connect_timeout_s
+        while not self.clock.anchored and self._monotonic() < deadline:  # the machines run on this clock
             self._stop.wait(0.01)
         if not self.clock.anchored:
             self.warnings.append("no time-stamped telemetry (ATTITUDE / LOCAL_POSITION_NED) after connecting")
@@ -342,10 +349,10 @@ class MavlinkLink:
             self._conn = None
 
     def _await_first_heartbeat(self) -> None:
-        deadline = time.monotonic() + self.connect_timeout_s
+        deadline = self._monotonic() + self.connect_timeout_s
         next_beat = 0.0
-        while time.monotonic() < deadline:
-            now = time.monotonic()
+        while self._monotonic() < deadline:
+            now = self._monotonic()
             if now >= next_beat:  # a udpout/udpin peer learns our address from our first packet
                 self._send_heartbeat()
                 next_beat = now + 0.25
@@ -360,7 +367,7 @@ class MavlinkLink:
                 self.autopilot = "px4" if msg.autopilot == MAV_AUTOPILOT_PX4 else "ardupilot"
             else:
                 self.autopilot = self.autopilot_setting
-            self._handle(msg, time.monotonic())
+            self._handle(msg, self._monotonic())
             return
         hint = " (is the signing key the same on both ends?)" if self.signing_key is not None else ""
         raise DeviceNotFound(
@@ -375,18 +382,18 @@ class MavlinkLink:
             MSG_EXTENDED_SYS_STATE: 10.0,
             MSG_EKF_STATUS_REPORT if self.autopilot == "ardupilot" else MSG_ESTIMATOR_STATUS: 5.0,
         }
-        sent_at = time.monotonic()
+        sent_at = self._monotonic()
         for msg_id, rate_hz in rates.items():
             self._send_command(MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0), 0)
         deadline = sent_at + self.command_timeout_s
         with self._acks:
-            while time.monotonic() < deadline:
+            while self._monotonic() < deadline:
                 answered = [
                     a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL
                 ]
                 if len(answered) >= len(rates):
                     break
-                self._acks.wait(timeout=max(0.0, deadline - time.monotonic()))
+                self._acks.wait(timeout=max(0.0, deadline - self._monotonic()))
             answered = [a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL]
         refused = [a for a in answered if a[2] != MAV_RESULT_ACCEPTED]
         if len(answered) < len(rates) or refused:
@@ -409,7 +416,7 @@ class MavlinkLink:
                 self._stop.wait(0.05)
                 continue
             if msg is not None:
-                self._receive(msg, time.monotonic())
+                self._receive(msg, self._monotonic())
 
     def _receive(self, msg: Any, now: float) -> None:
         """Handle one received message; one the handler cannot read (another dialect, a bad field) is counted."""
@@ -462,9 +469,9 @@ class MavlinkLink:
     def _send_loop(self) -> None:
         period = 1.0 / self.setpoint_rate_hz
         vision_period = 1.0 / self.vision_rate_hz
-        next_setpoint = next_beat = next_vision = time.monotonic()
+        next_setpoint = next_beat = next_vision = self._monotonic()
         while not self._stop.is_set():
-            now = time.monotonic()
+            now = self._monotonic()
             try:
                 if now >= next_beat:
                     next_beat = now + 1.0
@@ -488,7 +495,7 @@ class MavlinkLink:
                 self.send_errors += 1
                 self._count_error("send error", self.send_errors, exc)
             wake = min(next_setpoint, next_beat, next_vision if self.pose_source is not None else next_beat)
-            self._stop.wait(max(0.0, wake - time.monotonic()))
+            self._stop.wait(max(0.0, wake - self._monotonic()))
 
     def _stream_setpoint(self, now: float) -> None:
         """The sender's hook, once per setpoint period: a bare link streams nothing but its heartbeat."""
@@ -499,7 +506,7 @@ class MavlinkLink:
     def _send_position_target(self, v_ned: Vec3, yaw_rate_ned: float) -> None:
         with self._send_lock:
             self._conn.mav.set_position_target_local_ned_send(
-                int(time.monotonic() * 1000) & 0xFFFFFFFF,
+                int(self._monotonic() * 1000) & 0xFFFFFFFF,
                 self.target_system,
                 self.target_component,
                 MAV_FRAME_LOCAL_NED,
@@ -524,7 +531,7 @@ class MavlinkLink:
     def _check_link(self, what: str) -> None:
         if self._conn is None:
             raise LinkLost(f"{what}: not connected to {self.url} (call connect() first)")
-        now = time.monotonic()
+        now = self._monotonic()
         silent_s = now - self._state.last_message_s
         if silent_s > self.heartbeat_timeout_s:
             raise LinkLost(f"{what}: no message from the autopilot on {self.url} for {silent_s:.1f} s")
@@ -549,9 +556,9 @@ class MavlinkLink:
         """
         self._check_link(name)
         params = tuple(params) + (0.0,) * (7 - len(params))
-        started = time.monotonic()
+        started = self._monotonic()
         for attempt in range(self.command_retries + 1):
-            sent_at = time.monotonic()
+            sent_at = self._monotonic()
             self._send_command(command, params, attempt)
             result = self._wait_ack(command, sent_at, sent_at + self.command_timeout_s)
             if result is None:
@@ -573,12 +580,12 @@ class MavlinkLink:
                 for t, cmd, result in reversed(self._ack_log):
                     if t >= since and cmd == command and result != MAV_RESULT_IN_PROGRESS:
                         return result
-                remaining = deadline - time.monotonic()
+                remaining = deadline - self._monotonic()
                 if remaining <= 0.0:
                     return None
                 in_progress = any(t >= since and c == command for t, c, _ in self._ack_log)
                 if in_progress:  # IN_PROGRESS extends the wait (ArduPilot: long calibrations; harmless here)
-                    deadline = max(deadline, time.monotonic() + self.command_timeout_s)
+                    deadline = max(deadline, self._monotonic() + self.command_timeout_s)
                 self._acks.wait(timeout=min(remaining, 0.1))
 
     @property
