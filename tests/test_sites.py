@@ -64,6 +64,7 @@ def _overlap(a, b):
     return max(a[0], b[0]) < min(a[1], b[1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_conflicting_tasks_run_at_once_but_never_work_at_their_sites_at_once(seed):
     bp = running_bond(3, 12, placed_courses=1, brick_uavs=4, adhesion_uavs=2)
@@ -94,6 +95,7 @@ def test_conflicting_tasks_run_at_once_but_never_work_at_their_sites_at_once(see
     assert prefetched > 0  # bricks were fetched while the glue under them was still being sprayed
 
 
+@pytest.mark.slow
 def test_the_paper_reservation_keeps_conflicting_tasks_apart_for_their_whole_duration():
     bp = running_bond(3, 12, placed_courses=1, brick_uavs=4, adhesion_uavs=2)
     r = simulate(bp, seed=1, reservation="task")
