@@ -165,6 +165,27 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
     assert rig.link.results[-1].task_id == "B8" and "out of service" in (rig.link.results[-1].reason or "")
 
 
+def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> None:
+    rig = Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason == "battery low (20%); brick 7 put back at its pickup"
+    assert rig.followed("transport", "putback_goto")
+    putback = rig.states[rig.states.index("putback_goto") :]
+    assert putback[:4] == ["putback_goto", "putback_descend", "putback_release", "putback_ascend"]
+    assert putback[4:] == ["home", "land", "halted"]
+    assert not rig.gripper.magnet_on  # let go of at the pickup
+
+
+def test_a_battery_draining_too_fast_to_put_the_brick_back_flies_home_with_it() -> None:
+    """At 0.8 %/s the 10 % left above critical last 12.5 s: less than twice what putting back and flying home
+    take (the drain is measured over the task so far)."""
+    rig = Rig("brick", fc={"battery_fraction": 0.4, "battery_drain_per_s": 0.008}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason == "battery low (20%)"
+    assert rig.followed("transport", "failsafe") and "putback_goto" not in rig.states
+    assert rig.states[-3:] == ["home", "land", "halted"]
+
+
 def test_critical_battery_in_failsafe_lands_where_it_is() -> None:
     rig = Rig(
         "brick",
@@ -386,6 +407,7 @@ def test_scenarios_visit_every_state() -> None:
     brick = set(HAPPY_BRICK)
     brick |= Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008}).run().visited()
     brick |= Rig("brick", fc={"arm_rejection": "no"}).run().visited()
+    brick |= Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run().visited()
     assert brick == set(leaf_states(BRICK_STATES))
     adhesion = set(HAPPY_ADHESION)
     adhesion |= Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run().visited()
