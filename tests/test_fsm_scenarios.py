@@ -176,6 +176,19 @@ def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> No
     assert not rig.gripper.magnet_on  # let go of at the pickup
 
 
+def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
+    """Asking for its drop-off's column at 38 %, a UAV whose pack drains 0.6 %/s has 46 s left above critical:
+    less than twice what putting the brick back and flying home take, so it gives the task up there (a battery
+    reason: mission control does not count it as an attempt) and lands with the battery above critical."""
+    rig = Rig("brick", fc={"battery_fraction": 0.6, "battery_drain_per_s": 0.006}, clearance={}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed"
+    assert result.reason == "battery low (38%): the reserve to put brick 7 back; brick 7 put back at its pickup"
+    assert rig.followed("transport", "putback_goto")
+    assert rig.states[-3:] == ["home", "land", "halted"]
+    assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction
+
+
 def test_a_battery_draining_too_fast_to_put_the_brick_back_flies_home_with_it() -> None:
     """At 0.8 %/s the 10 % left above critical last 12.5 s: less than twice what putting back and flying home
     take (the drain is measured over the task so far)."""

@@ -17,7 +17,25 @@ from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
+from masonry.ports import (
+    BATTERY_LOW_REASON,
+    Camera,
+    ClearanceLink,
+    Clock,
+    FlightController,
+    Gripper,
+    MissionLink,
+    Telemetry,
+)
+
+#: States in which the brick is on the magnet (checked at pickup_verify), far from its pickup.
+_RESERVE_STATES = frozenset({"transport", "place_align", "place_descend"})
+#: Putting a brick back needs this many times its estimated duration of flight left above the critical battery
+#: (the reserve: the task is given up below it) and at least this many (else the UAV flies home with it).
+_PUTBACK_RESERVE = 2.0
+#: Transit states of a UAV that waits for mission control (asking for a column, or sent to a hold point).
+_WAITING = frozenset({"ask", "hold"})
+_PUTBACK_AFFORD = 1.5
 
 
 @dataclass
@@ -447,16 +465,16 @@ class BrickUav(UavModel):
         except HardwareError:
             return False  # the general abort: failsafe, then home (or the emergency)
 
-    def _putback_affordable(self) -> bool:
-        """At the battery's drain so far this task, the UAV can put the brick back and fly home with time to
-        spare (twice the estimate) before the battery is critical; else it flies home with the brick."""
+    def _putback_budget_s(self) -> tuple[float, float] | None:
+        """(seconds of flight left above the critical battery at the drain measured over this task, seconds
+        that putting the brick back and flying home take); None: no drain measured yet."""
         tel, cfg = self._tel, self.config
-        if tel is None or self.attempt.battery_at_start is None:
-            return True
+        if tel is None or self.attempt.battery_at_start is None or self.attempt.brick_estimate is None:
+            return None
         start_s, start_fraction = self.attempt.battery_at_start
         used = start_fraction - tel.battery_fraction
         if self._now_s <= start_s or used <= 0.0:
-            return True  # no drain measured
+            return None
         left_s = (tel.battery_fraction - cfg.battery_critical_fraction) * (self._now_s - start_s) / used
         pickup_m, _ = self._putback_pose()
         here = tel.position_m
@@ -467,7 +485,28 @@ class BrickUav(UavModel):
             + cfg.release_dwell_s
             + 2.0 * cfg.cruise_altitude_m / cfg.vertical_speed_mps  # down at home and a climb, at most
         )
-        return left_s >= 2.0 * need_s
+        return left_s, need_s
+
+    def _putback_affordable(self) -> bool:
+        """The UAV can put the brick back and fly home before its battery is critical, with half as much again
+        to spare; else it flies home with the brick."""
+        budget = self._putback_budget_s()
+        return budget is None or budget[0] >= _PUTBACK_AFFORD * budget[1]
+
+    def _battery_short(self, tel: Telemetry) -> str | None:
+        """Also short: a UAV waiting with a brick (for its drop-off's column or site) gives the task up while it
+        can still put the brick back (twice what that takes), before the battery is low by the threshold. Once
+        it flies on toward the drop-off only the threshold counts: placing the brick is the shorter way."""
+        short = super()._battery_short(tel)
+        if short is not None or self.state not in _RESERVE_STATES or self.transit.state not in _WAITING:
+            return short
+        budget = self._putback_budget_s()
+        if budget is not None and budget[0] < _PUTBACK_RESERVE * budget[1]:
+            return (
+                f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): the reserve to put brick "
+                f"{self.brick_task.brick} back"
+            )
+        return None
 
     def defer_failure(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
         """The task is reported failed once the brick is back on its pallet (mission control then re-queues it

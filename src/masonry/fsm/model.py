@@ -169,11 +169,10 @@ class UavModel:
                 self._link_down(tel)
                 return
             self.failsafe.link_down_since_s = None
-            if (
-                self.state in self._TASK_STATES_SET
-                and tel.battery_fraction < self.config.battery_low_fraction
-            ):
-                self._battery_low(tel)
+            if self.state in self._TASK_STATES_SET:
+                short = self._battery_short(tel)
+                if short is not None:
+                    self._battery_low(tel, short)
             self._do[self.state](tel)
             if self.nav.active:
                 velocity_mps, yaw_rate_radps = self.nav.step(self._now_s, tel)
@@ -181,8 +180,14 @@ class UavModel:
         except HardwareError as exc:
             self._hardware_failure(str(exc))
 
-    def _battery_low(self, tel: Telemetry) -> None:
-        reason = f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
+    def _battery_short(self, tel: Telemetry) -> str | None:
+        """Why the battery cannot carry on with the task (None: it can); the reason starts with
+        :data:`BATTERY_LOW_REASON` (mission control does not count such a failure as an attempt)."""
+        if tel.battery_fraction < self.config.battery_low_fraction:
+            return f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
+        return None
+
+    def _battery_low(self, tel: Telemetry, reason: str) -> None:
         if not self._battery_service:
             self._halt_after_landing = reason
         self.abort(reason=reason)
