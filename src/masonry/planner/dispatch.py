@@ -32,7 +32,9 @@ DEFAULT_POLICY: Policy = "critical-path"
 #: How conflicting tasks are kept apart: for their whole duration (``task``, the paper) or for the time their
 #: UAVs work at their sites (``site``, mission control's site intervals; docs/safety.md).
 RESERVATIONS: tuple[str, ...] = ("site", "task")
-DEFAULT_RESERVATION = "task"
+#: Mission control's default (``masonry sim``, ``mission-control``, :func:`masonry.mission.simulate`): site
+#: intervals, which need mission control's site gate. The dispatcher alone defaults to ``task`` (Algorithm 1).
+DEFAULT_RESERVATION = "site"
 
 Vec3 = Sequence[float]
 
