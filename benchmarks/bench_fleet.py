@@ -12,7 +12,8 @@ Printed per wall, as Markdown tables (docs/performance.md, "Fleet scaling"):
 2. the phase totals: seconds per phase (docs/mission.md, "Where the time goes") summed over every attempt of
    the mission (failed ones too), and the share of waiting + holding.
 
-Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--walls 12m,6x30]
+Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--reservation site|task]
+       [--walls 12m,6x30]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
@@ -30,6 +31,7 @@ from masonry.blueprint import Blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.simulate import simulate
+from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.ports import PHASES
 
 #: name -> (description, generator): the walls of the issue
@@ -56,10 +58,16 @@ class Run:
         return f"{self.bricks} + {self.adhesion}"
 
 
-def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, policy: str) -> Run:
+def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, policy: str, reservation: str) -> Run:
     wall0 = time.perf_counter()
     report = simulate(
-        blueprint, brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, policy=policy, camera="geometric"
+        blueprint,
+        brick_uavs=bricks,
+        adhesion_uavs=adhesion,
+        seed=seed,
+        policy=policy,
+        camera="geometric",
+        reservation=reservation,
     )
     return Run(bricks, adhesion, report, time.perf_counter() - wall0)
 
@@ -124,13 +132,14 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="a small wall and three fleets")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--policy", default="critical-path")
+    ap.add_argument("--reservation", default=DEFAULT_RESERVATION, choices=RESERVATIONS)
     ap.add_argument("--walls", default=None, help=f"comma-separated, of {', '.join(WALLS)}")
     ap.add_argument("--fleets", default=None, help="comma-separated brick+adhesion pairs, e.g. 1+1,2+1")
     args = ap.parse_args()
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30"])
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
-        f"bench_fleet: seed {args.seed}, policy {args.policy}, geometric camera; "
+        f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, geometric camera; "
         f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
     )
     for key in walls:
@@ -140,7 +149,7 @@ def main() -> None:
         print(f"\n## {what} ({todo} bricks to place)\n", flush=True)
         runs = []
         for bricks, adhesion in fleets:
-            run = fly(blueprint, bricks, adhesion, args.seed, args.policy)
+            run = fly(blueprint, bricks, adhesion, args.seed, args.policy, args.reservation)
             runs.append(run)
             print(
                 f"  flown {run.fleet}: makespan {run.report.makespan_s:,.0f} s in {run.wall_s:.0f} s wall",

@@ -16,6 +16,7 @@ import time
 
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.mission.simulate import simulate
+from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.separation import pad_separation_m
 from masonry.sim import Faults
 
@@ -58,7 +59,7 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=0)
     ap.add_argument("--large", action="store_true", help="walls up to 6 courses x 12 bricks")
     ap.add_argument("--faults", action="store_true", help="mild random faults")
-    ap.add_argument("--reservation", choices=("task", "site"), default="task")
+    ap.add_argument("--reservation", choices=RESERVATIONS, default=DEFAULT_RESERVATION)
     args = ap.parse_args()
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     print(f"pad separation {pad_separation_m():.2f} m; limits {limits}")

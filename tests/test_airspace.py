@@ -357,8 +357,9 @@ def test_a_uav_without_the_column_waits_at_its_layer_over_the_hold_point():
 @pytest.mark.slow
 def test_without_the_airspace_rules_uavs_collide_and_with_them_they_keep_the_bound():
     bp = towers(3, 2, spacing_m=1.6, brick_uavs=2, adhesion_uavs=2)
-    off = simulate(bp, separation=False)
-    on = simulate(bp)
+    # the paper's reservation: conflicting tasks never run at once, so only the airspace keeps the flights apart
+    off = simulate(bp, separation=False, reservation="task")
+    on = simulate(bp, reservation="task")
     assert off.min_separation_m is not None and off.min_separation_m < 0.8  # the problem this solves
     assert on.completed and on.conflict_violations == 0
     assert on.min_separation_m is not None and on.min_separation_m >= SEPARATION_BOUND_M

@@ -21,7 +21,7 @@ def sim(*args: str):
 
 def test_sim_json_is_exactly_the_report(tmp_path):
     report = tmp_path / "r.json"
-    res = sim("--format", "json", "--report", str(report))
+    res = sim("--format", "json", "--report", str(report), "--reservation", "task")
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert list(d) == [
@@ -81,6 +81,24 @@ def test_sim_journal_and_resume(tmp_path):
     resumed = sim("--journal", str(journal), "--resume", "--format", "json")
     assert resumed.exit_code == 0, resumed.output
     assert json.loads(resumed.stdout)["tasks"] == json.loads(first.stdout)["tasks"]
+
+
+def test_a_journal_resumes_only_with_its_reservation(tmp_path):
+    """Site intervals and running tasks in a journal follow its reservation's rule: resuming it with the other
+    one is refused with one line naming the flag (the default is ``site``)."""
+    journal = tmp_path / "m.db"
+    first = sim("--journal", str(journal), "--reservation", "task", "--format", "json")
+    assert first.exit_code == 0, first.output
+    other = sim("--journal", str(journal), "--resume", "--format", "json")
+    assert other.exit_code == 2, other.output
+    err = other.stderr.strip()
+    assert err == (
+        f"error: journal {journal} was written with the task reservation, not site: resume it with "
+        "--reservation task"
+    )
+    same = sim("--journal", str(journal), "--resume", "--reservation", "task", "--format", "json")
+    assert same.exit_code == 0, same.output
+    assert json.loads(same.stdout)["tasks"] == json.loads(first.stdout)["tasks"]
 
 
 @pytest.mark.parametrize(

@@ -165,6 +165,59 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
     assert rig.link.results[-1].task_id == "B8" and "out of service" in (rig.link.results[-1].reason or "")
 
 
+def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> None:
+    rig = Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason == "battery low (20%); brick 7 put back at its pickup"
+    assert rig.followed("transport", "putback_goto")
+    putback = rig.states[rig.states.index("putback_goto") :]
+    assert putback[:4] == ["putback_goto", "putback_descend", "putback_release", "putback_ascend"]
+    assert putback[4:] == ["home", "land", "halted"]
+    assert not rig.gripper.magnet_on  # let go of at the pickup
+
+
+@pytest.mark.parametrize("kind", ["brick", "adhesion"])
+def test_a_task_held_longer_than_the_patience_is_given_up(kind: str) -> None:
+    """Mission control never grants the column: after ``hold_patience_s`` of waiting the task fails with the
+    reason (the attempt counts) and the UAV flies home, freeing its hold volume for others."""
+    rig = Rig(kind, clearance={"grant_after_s": 1000.0}, config={"hold_patience_s": 30.0}).run(max_s=200.0)
+    (result,) = rig.link.results
+    assert result.status == "failed"
+    assert result.reason is not None and result.reason.startswith("held 30 s for clearance to (")
+    assert result.reason.endswith("longer than hold_patience_s")
+    assert rig.states[-2:] == ["failsafe", "home"]
+
+
+def test_without_a_hold_patience_a_task_waits_for_its_grant() -> None:
+    rig = Rig("brick", clearance={"grant_after_s": 100.0}, config={"hold_patience_s": None}).run()
+    assert [r.status for r in rig.link.results] == ["done"]
+
+
+def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
+    """Asking for its drop-off's column at 38 %, a UAV whose pack drains 0.6 %/s has 46 s left above critical:
+    less than twice what putting the brick back and flying home take, so it gives the task up there (a battery
+    reason: mission control does not count it as an attempt) and lands with the battery above critical."""
+    rig = Rig("brick", fc={"battery_fraction": 0.6, "battery_drain_per_s": 0.006}, clearance={}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed"
+    assert (
+        result.reason == "battery low (38%): the reserve to put brick 7 back; brick 7 put back at its pickup"
+    )
+    assert rig.followed("transport", "putback_goto")
+    assert rig.states[-3:] == ["home", "land", "halted"]
+    assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction
+
+
+def test_a_battery_draining_too_fast_to_put_the_brick_back_flies_home_with_it() -> None:
+    """At 0.8 %/s the 10 % left above critical last 12.5 s: less than twice what putting back and flying home
+    take (the drain is measured over the task so far)."""
+    rig = Rig("brick", fc={"battery_fraction": 0.4, "battery_drain_per_s": 0.008}).run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason == "battery low (20%)"
+    assert rig.followed("transport", "failsafe") and "putback_goto" not in rig.states
+    assert rig.states[-3:] == ["home", "land", "halted"]
+
+
 def test_critical_battery_in_failsafe_lands_where_it_is() -> None:
     rig = Rig(
         "brick",
@@ -386,6 +439,7 @@ def test_scenarios_visit_every_state() -> None:
     brick = set(HAPPY_BRICK)
     brick |= Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008}).run().visited()
     brick |= Rig("brick", fc={"arm_rejection": "no"}).run().visited()
+    brick |= Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run().visited()
     assert brick == set(leaf_states(BRICK_STATES))
     adhesion = set(HAPPY_ADHESION)
     adhesion |= Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run().visited()

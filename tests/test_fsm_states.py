@@ -130,6 +130,11 @@ def test_every_declared_transition(kind: str, index: int, source: str) -> None:
     # Make this transition's condition hold, and the conditions of earlier ones with the same trigger fail.
     uav._next_task = brick_task("B9") if t.get("conditions") == "has_next_task" else None
     uav._halt_after_landing = "test" if t.get("conditions") == "must_halt" else None
+    if isinstance(uav, BrickUav) and t["trigger"] == "abort":  # the brick on the magnet: it is put back first
+        if t.get("conditions") == "may_put_back":
+            uav.gripper.is_attached = lambda: True  # type: ignore[method-assign]
+        else:
+            uav.attempt.brick_estimate = None  # no pickup pose to put it back at
     n_results = len(rig.link.results)
     getattr(uav, t["trigger"])(reason="scripted")
     expected = source if t["dest"] == "=" else _entry_leaf(t["dest"], tree)

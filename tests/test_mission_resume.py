@@ -36,7 +36,7 @@ CHILD = textwrap.dedent(
         if done >= int(sys.argv[3]):
             time.sleep(60)  # hold still mid-mission: the parent kills us here
 
-    simulate(load_blueprint(sys.argv[1]), journal_path=sys.argv[2], progress=progress)
+    simulate(load_blueprint(sys.argv[1]), journal_path=sys.argv[2], progress=progress, reservation="task")
     """
 )
 
@@ -75,7 +75,7 @@ def test_resume_after_kill_9_repeats_nothing_and_loses_nothing(tmp_path):
     crash_s = before.last_time_s
     assert crash_s > 0
 
-    report = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True)
+    report = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True, reservation="task")
     assert report.completed
     assert report.resumed_from_s == pytest.approx(crash_s)
     after = read_journal(journal)
@@ -105,7 +105,7 @@ def test_resume_with_a_placed_brick_keeps_it_in_place(tmp_path):
     assert [r.task_id for r in before.done] == ["A0", "B0"]
     # the world's true placement error, journaled with the completion (not the UAV's release-point estimate)
     journaled_error = before.done[1].fields["measured"]["placement_error_m"]
-    report = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True)
+    report = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True, reservation="task")
     assert report.completed
     assert report.placement_error_m["B0"] == pytest.approx(journaled_error)
     done = Counter(r.task_id for r in read_journal(journal).records if r.kind == "complete")

@@ -65,7 +65,10 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
 
     monkeypatch.setattr(sim_module, "control_report", spy)
     report = simulate(
-        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=2, faults=Faults(battery_drain_per_s=0.004)
+        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2),
+        seed=2,
+        faults=Faults(battery_drain_per_s=0.004),
+        reservation="task",  # the executed intervals of conflicting tasks are checked below (the paper's rule)
     )
     retired = [a for a in report.attempts if a.reason == "uav out of service"]
     assert retired, "the scenario must retire a UAV holding a task"

@@ -13,7 +13,7 @@ CASE_STUDY = Path(__file__).resolve().parent.parent / "blueprints" / "paper_case
 
 
 def test_text_summary_lists_attempts_in_start_order() -> None:
-    result = CliRunner().invoke(app, ["sim", str(CASE_STUDY)])
+    result = CliRunner().invoke(app, ["sim", str(CASE_STUDY), "--reservation", "task"])  # the paper's rule
     assert result.exit_code == 0, result.output
     rows = re.findall(r"^\s+([\d.]+) s ->\s+([\d.]+) s\s+(\S+)\s+(\S+)\s+done$", result.output, re.MULTILINE)
     assert [task for _, _, task, _ in rows] == ["A0", "B0", "A1", "B1"]

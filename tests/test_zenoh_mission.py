@@ -238,6 +238,8 @@ def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subp
             "1500",
             "--mission-name",
             mission_name,
+            "--reservation",
+            "task",  # the paper's rule: Section VI's order is checked below
             *common,
             *mc_opts,
         ],

@@ -136,7 +136,7 @@ def mission_control(
         ),
     ),
     reservation: str = typer.Option(
-        "task",
+        "site",
         "--reservation",
         help="task | site: keep conflicting tasks apart for their whole duration (task, the paper) or only "
         "while their UAVs work at their sites (site). docs/safety.md.",
@@ -182,7 +182,7 @@ def mission_control(
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
 
-    jr, state = _open_journal(journal, resume, bp, the_plan)
+    jr, state = _open_journal(journal, resume, bp, the_plan, reservation)
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
     from masonry.mission.airspace import layer_base_m
     from masonry.mission.auth import wrap
@@ -239,7 +239,9 @@ def mission_control(
         raise typer.Exit(1)
 
 
-def _open_journal(journal: Path | None, resume: bool, bp: Any, the_plan: Any) -> tuple[Any, Any]:
+def _open_journal(
+    journal: Path | None, resume: bool, bp: Any, the_plan: Any, reservation: str
+) -> tuple[Any, Any]:
     """The mission's journal and its replayed state (None, None without ``--journal``)."""
     if journal is None:
         return None, None
@@ -254,6 +256,7 @@ def _open_journal(journal: Path | None, resume: bool, bp: Any, the_plan: Any) ->
         fleet_digest=fleet_digest(bp),
         fleet_names=[u.name for u in bp.fleet],
         task_ids=[t.id for t in the_plan.tasks],
+        reservation=reservation,
         warn=lambda m: typer.echo(f"warning: {m}", err=True),
     )
 

@@ -28,7 +28,7 @@ def sim(
     ),
     policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
     reservation: str = typer.Option(
-        "task",
+        "site",
         "--reservation",
         help="task | site: keep conflicting tasks apart for their whole duration, as the paper (task), or "
         "only while their UAVs work at their sites (site). docs/safety.md.",

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from masonry.errors import HardwareError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
@@ -16,7 +17,25 @@ from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
+from masonry.ports import (
+    BATTERY_LOW_REASON,
+    Camera,
+    ClearanceLink,
+    Clock,
+    FlightController,
+    Gripper,
+    MissionLink,
+    Telemetry,
+)
+
+#: States in which the brick is on the magnet (checked at pickup_verify), far from its pickup.
+_RESERVE_STATES = frozenset({"transport", "place_align", "place_descend"})
+#: Putting a brick back needs this many times its estimated duration of flight left above the critical battery
+#: (the reserve: the task is given up below it) and at least this many (else the UAV flies home with it).
+_PUTBACK_RESERVE = 2.0
+#: Transit states of a UAV that waits for mission control (asking for a column, or sent to a hold point).
+_WAITING = frozenset({"ask", "hold"})
+_PUTBACK_AFFORD = 1.5
 
 
 @dataclass
@@ -36,6 +55,8 @@ class BrickAttempt:
     grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
     place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
     release_error_m: float | None = None  # the effector's distance to its target at the release
+    putback_reason: str = ""  # why the task was given up while the brick is being put back
+    battery_at_start: tuple[float, float] | None = None  # (time s, fraction) when the task was taken
 
 
 class BrickUav(UavModel):
@@ -60,6 +81,7 @@ class BrickUav(UavModel):
     released: Callable[..., bool]
     deposited: Callable[..., bool]
     stuck: Callable[..., bool]
+    stow: Callable[..., bool]
 
     def __init__(
         self,
@@ -116,6 +138,8 @@ class BrickUav(UavModel):
 
     def _begin_task(self, task: Task) -> None:
         self._begin_counters()
+        if self._tel is not None:
+            self.attempt.battery_at_start = (self._now_s, self._tel.battery_fraction)
 
     def _task_problem(self, task: Task) -> str | None:
         assert isinstance(task, BrickTask)
@@ -429,3 +453,144 @@ class BrickUav(UavModel):
     def do_place_ascend(self, tel: Telemetry) -> None:
         if self._advance(tel):
             self._complete_task(placement_error_m=self.attempt.release_error_m)
+
+    # -- putting a brick back (a task given up with the brick on the magnet) ------------------------------
+    def may_put_back(self, *args: Any, **kwargs: Any) -> bool:
+        """The task is given up with the brick on the magnet and its pickup pose known: put it back there
+        (else it would come home on the UAV, and the task's retry would not find it on its pallet)."""
+        if self.attempt.brick_estimate is None or not self._putback_affordable():
+            return False
+        try:
+            return self.gripper.is_attached()
+        except HardwareError:
+            return False  # the general abort: failsafe, then home (or the emergency)
+
+    def _putback_budget_s(self) -> tuple[float, float] | None:
+        """(seconds of flight left above the critical battery at the drain measured over this task, seconds
+        that putting the brick back and flying home take); None: no drain measured yet."""
+        tel, cfg = self._tel, self.config
+        if tel is None or self.attempt.battery_at_start is None or self.attempt.brick_estimate is None:
+            return None
+        start_s, start_fraction = self.attempt.battery_at_start
+        used = start_fraction - tel.battery_fraction
+        if self._now_s <= start_s or used <= 0.0:
+            return None
+        left_s = (tel.battery_fraction - cfg.battery_critical_fraction) * (self._now_s - start_s) / used
+        pickup_m, _ = self._putback_pose()
+        here = tel.position_m
+        lateral_m = math.dist(here[:2], pickup_m[:2]) + math.dist(pickup_m[:2], cfg.home_m[:2])
+        need_s = (
+            lateral_m / cfg.cruise_speed_mps
+            + 2.0 * cfg.descent_duration_s
+            + cfg.release_dwell_s
+            + 2.0 * cfg.cruise_altitude_m / cfg.vertical_speed_mps  # down at home and a climb, at most
+        )
+        return left_s, need_s
+
+    def _putback_affordable(self) -> bool:
+        """The UAV can put the brick back and fly home before its battery is critical, with half as much again
+        to spare; else it flies home with the brick."""
+        budget = self._putback_budget_s()
+        return budget is None or budget[0] >= _PUTBACK_AFFORD * budget[1]
+
+    def _battery_short(self, tel: Telemetry) -> str | None:
+        """Also short: a UAV waiting with a brick (for its drop-off's column or site) gives the task up while it
+        can still put the brick back (twice what that takes), before the battery is low by the threshold. Once
+        it flies on toward the drop-off only the threshold counts: placing the brick is the shorter way."""
+        short = super()._battery_short(tel)
+        if short is not None or self.state not in _RESERVE_STATES or self.transit.state not in _WAITING:
+            return short
+        budget = self._putback_budget_s()
+        if budget is not None and budget[0] < _PUTBACK_RESERVE * budget[1]:
+            return (
+                f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): the reserve to put brick "
+                f"{self.brick_task.brick} back"
+            )
+        return None
+
+    def defer_failure(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
+        """The task is reported failed once the brick is back on its pallet (mission control then re-queues it
+        and no other UAV comes for the brick while this one still carries it)."""
+        self.attempt.putback_reason = reason
+        self._safe_actuators()
+
+    def _putback_pose(self) -> tuple[np.ndarray, float]:
+        """Where the effector puts the brick back (its top face where it was picked up) and the body's yaw."""
+        assert self.attempt.brick_estimate is not None
+        center, yaw = self.attempt.brick_estimate
+        return np.asarray(center, dtype=float), wrap_angle_rad(yaw - self.attempt.carry_yaw_rad)
+
+    def _putback_given_up(self, what: str) -> None:
+        self.stow(
+            reason=f"{self.attempt.putback_reason}; {what}, brick {self.brick_task.brick} kept on board"
+        )
+
+    def _putback_battery_ok(self, tel: Telemetry) -> bool:
+        if tel.battery_fraction >= self.config.battery_critical_fraction:
+            return True
+        self._halt_after_landing = f"battery critical ({tel.battery_fraction:.0%})"
+        self.lost(reason=self._halt_after_landing)
+        return False
+
+    def enter_putback_goto(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        effector_m, yaw = self._putback_pose()
+        body = self.effector.body_target(effector_m, yaw)
+        self._route(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+
+    def do_putback_goto(self, tel: Telemetry) -> None:
+        if not self._putback_battery_ok(tel):
+            return
+        if self._advance(tel):
+            self.arrived()
+        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
+            self._putback_given_up("could not reach its pickup")
+
+    def enter_putback_descend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(False)
+        effector_m, yaw = self._putback_pose()
+        self._fly_to(tel, self.effector.body_target(effector_m, yaw), self.config.descent_duration_s, yaw)
+
+    def do_putback_descend(self, tel: Telemetry) -> None:
+        if not self._putback_battery_ok(tel):
+            return
+        error_m = self.effector.distance_m(tel, self._putback_pose()[0])
+        # On the pallet a few centimetres off does not matter (the retry estimates the brick's pose again):
+        # after the descent's time-out it is let go where it is.
+        if (
+            error_m <= self.config.placement_radius_m
+            or self._now_s > self.nav.end_s + self.config.release_timeout_s
+        ):
+            self.reached()
+
+    def enter_putback_release(self, *args: Any, **kwargs: Any) -> None:
+        self.gripper.set_magnet(False)
+
+    def do_putback_release(self, tel: Telemetry) -> None:
+        if not self._putback_battery_ok(tel):
+            return
+        dwell_s = self.config.release_dwell_s
+        if self._now_s - self._entered_s < dwell_s:
+            return
+        if not self.gripper.is_attached():
+            self.released()
+        elif self._now_s - self._entered_s >= dwell_s * self.config.max_release_attempts:
+            self._putback_given_up("the magnet did not let go at its pickup")
+
+    def enter_putback_ascend(self, *args: Any, **kwargs: Any) -> None:
+        tel = self._tel
+        assert tel is not None
+        self.gripper.set_joint_locked(True)
+        p = tel.position_m
+        self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
+
+    def do_putback_ascend(self, tel: Telemetry) -> None:
+        if not self._putback_battery_ok(tel):
+            return
+        if self._advance(tel):
+            self.finish(
+                reason=f"{self.attempt.putback_reason}; brick {self.brick_task.brick} put back at its pickup"
+            )

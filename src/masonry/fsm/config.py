@@ -59,6 +59,9 @@ class UavConfig:
     layer_min_leg_m: float = 0.3
     layer_vertical_speed_mps: float = 0.5  # peak speed of the climbs to and descents from the layer
     takeoff_timeout_s: float = 30.0
+    # A task whose transit waits for clearance longer than this is given up (the attempt counts; None: never):
+    # it frees the UAV's hold volume, which another waiting UAV's flight may need (docs/safety.md)
+    hold_patience_s: float | None = 240.0
     leg_timeout_s: float = (
         30.0  # a leg (or an alignment) not over this long after its planned end fails the task
     )

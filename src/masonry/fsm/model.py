@@ -123,6 +123,7 @@ class UavModel:
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
         self._battery_service = clearance is not None and clearance.swaps_batteries is True
         self._last_step_s = -math.inf
+        self._held_since_s: float | None = None  # since when the task's transit has waited for clearance
         self._leaf_names = leaf_states(states)
         self.machine = HierarchicalMachine(
             model=self,
@@ -169,11 +170,17 @@ class UavModel:
                 self._link_down(tel)
                 return
             self.failsafe.link_down_since_s = None
-            if (
-                self.state in self._TASK_STATES_SET
-                and tel.battery_fraction < self.config.battery_low_fraction
-            ):
-                self._battery_low(tel)
+            if self.state in self._TASK_STATES_SET:
+                short = self._battery_short(tel)
+                if short is not None:
+                    self._battery_low(tel, short)
+                elif (
+                    self._held_too_long()
+                ):  # (the check runs in task states only: reset there and at a start)
+                    self.abort(
+                        reason=f"held {self._now_s - self._held_since_s:.0f} s for clearance to "  # type: ignore[operator]
+                        f"{self._site_text()}, longer than hold_patience_s"
+                    )
             self._do[self.state](tel)
             if self.nav.active:
                 velocity_mps, yaw_rate_radps = self.nav.step(self._now_s, tel)
@@ -181,8 +188,30 @@ class UavModel:
         except HardwareError as exc:
             self._hardware_failure(str(exc))
 
-    def _battery_low(self, tel: Telemetry) -> None:
-        reason = f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
+    def _held_too_long(self) -> bool:
+        """The task's transit has waited for clearance (asking, or at a hold point) for more than
+        ``hold_patience_s``: the task is given up, which frees the UAV's hold volume. UAVs that hold where each
+        other's sites are can otherwise wait for each other until their batteries run low (docs/safety.md)."""
+        patience_s = self.config.hold_patience_s
+        if self.task is None or self.transit.state not in ("ask", "hold") or patience_s is None:
+            self._held_since_s = None
+            return False
+        if self._held_since_s is None:
+            self._held_since_s = self._now_s
+        return self._now_s - self._held_since_s > patience_s
+
+    def _site_text(self) -> str:
+        x, y, z = self.transit.site_m
+        return f"({x:.2f}, {y:.2f}, {z:.2f})"
+
+    def _battery_short(self, tel: Telemetry) -> str | None:
+        """Why the battery cannot carry on with the task (None: it can); the reason starts with
+        :data:`BATTERY_LOW_REASON` (mission control does not count such a failure as an attempt)."""
+        if tel.battery_fraction < self.config.battery_low_fraction:
+            return f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%})"
+        return None
+
+    def _battery_low(self, tel: Telemetry, reason: str) -> None:
         if not self._battery_service:
             self._halt_after_landing = reason
         self.abort(reason=reason)
@@ -286,6 +315,7 @@ class UavModel:
 
     def _start_task(self, task: Task) -> None:
         self.task = task
+        self._held_since_s = None
         self._task_start_s = self._now_s
         self.phase_clock.start(self._now_s)
         self._begin_task(task)

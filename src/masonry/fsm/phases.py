@@ -41,6 +41,10 @@ STATE_PHASES: Mapping[str, str] = MappingProxyType(
         "place_release": "placing",
         "place_verify": "placing",
         "place_ascend": "ascending",
+        "putback_goto": "transit",  # a task given up with the brick on the magnet: it goes back to its pallet
+        "putback_descend": "descending",
+        "putback_release": "placing",
+        "putback_ascend": "ascending",
         # adhesion UAV (paper, Section V)
         "cruise": "transit",
         "hover": "aligning",  # still over the segment's start before the descent

@@ -11,6 +11,8 @@ Brick UAV (paper, Section IV)::
     idle -> takeoff -> pickup {goto, estimate, align, descend, grasp, ascend, verify}
          -> transport -> place {align, descend, release, verify, ascend} -> (pickup | home) -> land -> idle
     (a task assigned while flying home turns the UAV back: home -> pickup)
+    (a task given up with the brick on the magnet puts it back first: -> putback {goto, descend, release,
+    ascend} -> home, so that the retry finds it on its pallet)
 
 Adhesion UAV (paper, Section V)::
 
@@ -68,6 +70,18 @@ BRICK_STATES: list[State] = [
             {"name": "ascend", "on_enter": "enter_place_ascend"},
         ],
     },
+    {
+        # A task given up while the brick is on the magnet (battery low, a drop-off not reached): the brick goes
+        # back where it was picked up, then the UAV flies home (docs/state-machines.md, "Putting a brick back").
+        "name": "putback",
+        "initial": "goto",
+        "children": [
+            {"name": "goto", "on_enter": "enter_putback_goto"},
+            {"name": "descend", "on_enter": "enter_putback_descend"},
+            {"name": "release", "on_enter": "enter_putback_release"},
+            {"name": "ascend", "on_enter": "enter_putback_ascend"},
+        ],
+    },
     *_COMMON_STATES[2:],
 ]
 
@@ -75,6 +89,15 @@ BRICK_STATES: list[State] = [
 BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place"]
 #: States in which the UAV is (or may be) in the air under our control (``lost`` fires from these).
 _AIRBORNE_COMMON: list[str] = ["home", "land", "failsafe"]
+#: Brick task states in which the brick may be on the magnet (an ``abort`` there puts it back if it is).
+BRICK_LOADED_STATES: list[str] = [
+    "pickup_grasp",
+    "pickup_ascend",
+    "pickup_verify",
+    "transport",
+    "place_align",
+    "place_descend",
+]
 
 BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "assign", "source": "idle", "dest": "takeoff"},
@@ -102,11 +125,24 @@ BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "arrived", "source": "home", "dest": "land"},
     {"trigger": "landed", "source": "land", "dest": "halted", "conditions": "must_halt"},
     {"trigger": "landed", "source": "land", "dest": "idle"},
+    # before the general abort: transitions tries these first (a leaf's, then its parent's)
+    {
+        "trigger": "abort",
+        "source": BRICK_LOADED_STATES,
+        "dest": "putback",
+        "conditions": "may_put_back",
+        "before": "defer_failure",
+    },
     {"trigger": "abort", "source": BRICK_TASK_STATES, "dest": "failsafe", "before": "fail_task"},
     {"trigger": "recover", "source": "failsafe", "dest": "home"},
+    {"trigger": "arrived", "source": "putback_goto", "dest": "putback_descend"},
+    {"trigger": "reached", "source": "putback_descend", "dest": "putback_release"},
+    {"trigger": "released", "source": "putback_release", "dest": "putback_ascend"},
+    {"trigger": "finish", "source": "putback_ascend", "dest": "home", "before": "fail_task"},
+    {"trigger": "stow", "source": "putback", "dest": "home", "before": "fail_task"},
     {
         "trigger": "lost",
-        "source": [*BRICK_TASK_STATES, *_AIRBORNE_COMMON],
+        "source": [*BRICK_TASK_STATES, "putback", *_AIRBORNE_COMMON],
         "dest": "emergency",
         "before": "fail_task",
     },

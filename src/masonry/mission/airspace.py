@@ -442,7 +442,7 @@ class ColumnClearance:
             u.phase is Phase.TO_HOLD
             and h is not None
             and math.hypot(x - h.point_m[0], y - h.point_m[1]) < AT_HOLD_M
-            and abs(z - h.layer_m) < 0.2
+            and abs(z - h.layer_m) < SNAP_M  # at the layer: it may still be coming down to it from above
         ):
             self._arrive_at_hold(u)  # it hovers at its hold point
             return

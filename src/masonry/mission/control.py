@@ -47,6 +47,7 @@ from masonry.mission.messages import (
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
+from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
 from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
 from masonry.timing import TaskTiming
@@ -172,7 +173,7 @@ class MissionControl:
         min_fraction: float = 0.9,
         timing: TaskTiming | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
-        reservation: str = "task",
+        reservation: str = DEFAULT_RESERVATION,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher

@@ -367,6 +367,7 @@ def open_mission_journal(
     task_ids: Collection[str] | None = None,
     sync: Literal["full", "normal"] = "full",
     warn: Callable[[str], None] | None = None,
+    reservation: str | None = None,
 ) -> tuple[Journal, JournalState | None]:
     """Open the journal of a mission: a new one, or (``resume``) the one of this very wall and fleet.
 
@@ -384,6 +385,8 @@ def open_mission_journal(
         task_ids: the plan's task ids: a journal naming another task is refused (None: not checked).
         sync: see :class:`Journal`.
         warn: where the warning about a journal without a fingerprint goes.
+        reservation: the mission's ``site`` / ``task`` reservation (stored; a resume with another one is refused,
+            since the journal's site intervals and running tasks follow its rule). None: not checked.
 
     Returns:
         The open journal (the caller closes it) and its replayed state (None for a new mission).
@@ -410,13 +413,26 @@ def open_mission_journal(
             state = None
         if state is not None:
             _check_fingerprint(where, state, wall_digest, fleet_digest, fleet_names, task_ids, warn)
+            _check_reservation(where, state, reservation)
         journal.set_meta("wall_digest", wall_digest)
         journal.set_meta("fleet_digest", fleet_digest)
         journal.set_meta("fleet", list(fleet_names))
+        if reservation is not None:
+            journal.set_meta("reservation", reservation)
     except BaseException:
         journal.close()
         raise
     return journal, state
+
+
+def _check_reservation(where: str, state: JournalState, reservation: str | None) -> None:
+    stored = state.meta.get("reservation")
+    if reservation is not None and stored is not None and stored != reservation:
+        raise JournalUnusable(
+            f"{where} was written with the {stored} reservation, not {reservation}: resume it with "
+            f"`reservation` {stored}",
+            options=("reservation",),
+        )
 
 
 def _check_fingerprint(

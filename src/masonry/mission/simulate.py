@@ -428,6 +428,7 @@ class SimulatedMission:
                     fleet_digest=fleet_digest(blueprint),
                     fleet_names=[u.name for u in fleet],
                     task_ids=[t.id for t in the_plan.tasks],
+                    reservation=reservation,
                     warn=warn,
                 )
                 resources.callback(journal.close)

@@ -172,7 +172,9 @@ SITE_META_PREFIX = "site/"
 
 
 def journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float | None) -> list[SiteVisit]:
-    """The site visits of the tasks a journal says are done (one still open at the crash has no end)."""
+    """The site visits of the tasks a journal says are done; one still open at the crash ends at it
+    (``last_time_s``, the journal's last record): the resumed mission control holds no reservation of the run
+    before, so every UAV asks again for any column and site (in simulation it restarts on its pad)."""
     out = []
     for key, v in meta.items():
         tid = key[len(SITE_META_PREFIX) :]
@@ -182,7 +184,7 @@ def journaled_visits(meta: Mapping[str, Any], done: set[str], last_time_s: float
         if not isinstance(start, (int, float)) or not isinstance(uav, str):
             continue
         if not isinstance(end, (int, float)):
-            end = None  # its UAV was still there at the crash: when it would have left is not known
+            end = last_time_s  # its UAV was still there at the crash (None: the journal has no time)
         out.append(SiteVisit(tid, uav, float(start), None if end is None else float(end), restored=True))
     return sorted(out, key=lambda v: (v.start_s, v.task_id))
 

@@ -32,7 +32,9 @@ DEFAULT_POLICY: Policy = "critical-path"
 #: How conflicting tasks are kept apart: for their whole duration (``task``, the paper) or for the time their
 #: UAVs work at their sites (``site``, mission control's site intervals; docs/safety.md).
 RESERVATIONS: tuple[str, ...] = ("site", "task")
-DEFAULT_RESERVATION = "task"
+#: Mission control's default (``masonry sim``, ``mission-control``, :func:`masonry.mission.simulate`): site
+#: intervals, which need mission control's site gate. The dispatcher alone defaults to ``task`` (Algorithm 1).
+DEFAULT_RESERVATION = "site"
 
 Vec3 = Sequence[float]
 
@@ -388,9 +390,10 @@ class Dispatcher:
                     raise PlanningError(f"position given for unknown UAV {name!r}")
                 self._position[name] = vec3(p, f"position of UAV {name}")
         out: list[Assignment] = []
-        for role in ROLES:
-            if not self._available[role]:
-                continue
+        # ``prefetch``: brick UAVs still idle look again once adhesion tasks have started (bricks on them)
+        for role in (*ROLES, "brick") if self.prefetch else ROLES:
+            if not self._available[role] and self.reservation != "site":
+                continue  # (``site``: a conflicting ready task, or a brick to prefetch, may still be given)
             for name, spec in self._fleet.items():
                 if spec.role != role or name not in self._live or name in self._uav_task:
                     continue
