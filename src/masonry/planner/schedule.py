@@ -129,7 +129,7 @@ def _problem(
     )
 
 
-def _parts(p: _Problem, decomposition: str, max_full: int) -> list[list[int]]:
+def _parts(p: _Problem, decomposition: str, max_full: int, part_tasks: int) -> list[list[int]]:
     """The whole plan as one part, or (``course``) whole courses in order, gathered up to :data:`PART_TASKS`."""
     n = len(p.tasks)
     if decomposition == "none" or (decomposition == "auto" and n <= max_full):
@@ -158,7 +158,7 @@ def _parts(p: _Problem, decomposition: str, max_full: int) -> list[list[int]]:
         by_level.setdefault(part[i], []).append(i)
     out: list[list[int]] = []
     for k in sorted(by_level):
-        if out and len(out[-1]) + len(by_level[k]) <= PART_TASKS:
+        if out and len(out[-1]) + len(by_level[k]) <= part_tasks:
             out[-1].extend(by_level[k])
         else:
             out.append(list(by_level[k]))
@@ -470,6 +470,7 @@ def solve_schedule(
     decomposition: str = "auto",
     tick_s: float = DEFAULT_TICK_S,
     max_full_tasks: int = FULL_MODEL_MAX_TASKS,
+    part_tasks: int = PART_TASKS,
 ) -> OfflineSchedule:
     """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
 
@@ -481,6 +482,8 @@ def solve_schedule(
             schedule on every run that ends before the limit).
         decomposition: ``auto`` (the whole model up to ``max_full_tasks`` tasks, else ``course``), ``none``
             or ``course`` (courses in order, each part solved after the earlier ones are fixed).
+        max_full_tasks, part_tasks: ``auto`` decomposes plans with more tasks than ``max_full_tasks``; a part
+            gathers whole courses up to ``part_tasks`` tasks (a course larger than that is one part).
         tick_s: the model's time unit; durations and flights are rounded down to it (the bound stays valid).
 
     Returns:
@@ -509,7 +512,7 @@ def solve_schedule(
     t_ = DEFAULT_TIMING if timing is None else timing
     t0 = time.perf_counter()
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
-    parts = _parts(p, decomposition, max_full_tasks)
+    parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
     reports: list[dict[str, Any]] = []
     last = _PartResult({}, "optimal", 0, 0.0)

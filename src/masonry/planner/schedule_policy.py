@@ -9,7 +9,8 @@ critical-path:
   available takes the best unclaimed one (critical-path order, then the shortest flight);
 * a failed task goes back to the pool and stays its UAV's next one (it is retried by the same UAV);
 * when nothing is in progress and a UAV's next task is still not available (it can only wait for something
-  that will not happen: a stuck prerequisite), it takes any available task, critical-path.
+  that will not happen: a stuck prerequisite), it takes any available task that is not the next one of its
+  own idle UAV, critical-path.
 
 Otherwise a UAV whose next task is not available yet waits for it (the schedule's order holds, so waiting
 cannot dead-lock: every wait is for a task planned earlier, or for one in progress). :attr:`followed` counts
@@ -118,9 +119,24 @@ class ScheduleDispatcher(Dispatcher):
         pick = self._best([i for i in avail if self._unclaimed(i)], uav)
         if pick is not None:
             return pick
-        if not self._in_progress and (nxt is None or nxt not in self._ready[role]):
-            return super()._select(role, uav)  # waiting would wait forever
+        if not self._in_progress and (nxt is None or nxt not in self._ready[role]) and not self._someone_starts():
+            # waiting would wait forever: any available task, but not one its own idle UAV is about to take
+            return self._best([i for i in avail if not self._taken_next(i)], uav)
         return None
+
+    def _someone_starts(self) -> bool:
+        """An idle UAV's next planned task is available: it is about to start it (later in this assignment)."""
+        for name in self._live:
+            if name in self._uav_task:
+                continue
+            i = self._next(name)
+            if i is not None and i in self._available[self._role[i]]:
+                return True
+        return False
+
+    def _taken_next(self, i: int) -> bool:
+        owner = self._owner.get(i)
+        return owner is not None and owner in self._live and owner not in self._uav_task and self._next(owner) == i
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         nxt = self._next(uav)
