@@ -63,7 +63,10 @@ def check_feasible(p, fleet, s, cruise_altitude_m):
             if s.reservation == "task":
                 assert x.end_s <= y.start_s + TOL_S or y.end_s <= x.start_s + TOL_S, (a, b)
             else:
-                assert x.site_end_s <= y.site_start_s + TOL_S or y.site_end_s <= x.site_start_s + TOL_S, (a, b)
+                assert x.site_end_s <= y.site_start_s + TOL_S or y.site_end_s <= x.site_start_s + TOL_S, (
+                    a,
+                    b,
+                )
     for u, v in p.dependencies:
         if u in planned and v in planned:
             if s.reservation == "task":
@@ -222,7 +225,19 @@ def test_cli_schedule_then_sim_policy_schedule(tmp_path):
     out, gantt = tmp_path / "s.json", tmp_path / "g.svg"
     runner = CliRunner()
     res = runner.invoke(
-        app, ["schedule", str(CASE_STUDY), "--time-limit", "5", "--workers", "1", "-o", str(out), "--gantt", str(gantt)]
+        app,
+        [
+            "schedule",
+            str(CASE_STUDY),
+            "--time-limit",
+            "5",
+            "--workers",
+            "1",
+            "-o",
+            str(out),
+            "--gantt",
+            str(gantt),
+        ],
     )
     assert res.exit_code == 0, res.output
     assert "schedule optimal" in res.stdout and "<svg" in gantt.read_text()
@@ -231,11 +246,15 @@ def test_cli_schedule_then_sim_policy_schedule(tmp_path):
     assert [u["name"] for u in doc["uavs"]] == ["brick-1", "glue-1"]
     res = runner.invoke(app, ["schedule", str(CASE_STUDY), "--format", "json", "--workers", "1"])
     assert res.exit_code == 0 and json.loads(res.stdout)["makespan_s"] == doc["makespan_s"]
-    res = runner.invoke(app, ["sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--format", "json"])
+    res = runner.invoke(
+        app, ["sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--format", "json"]
+    )
     assert res.exit_code == 0, res.output
     report = json.loads(res.stdout)
     assert report["policy"] == "schedule" and report["schedule"] == {"followed": 4, "assignments": 4}
-    assert report["lower_bound_kind"] == "cp-sat" and report["lower_bound_s"] == pytest.approx(doc["bound_s"], abs=0.01)
+    assert report["lower_bound_kind"] == "cp-sat" and report["lower_bound_s"] == pytest.approx(
+        doc["bound_s"], abs=0.01
+    )
     assert report["conflict_violations"] == 0 and report["dependency_violations"] == 0
     # another fleet: refused in one line
     res = runner.invoke(

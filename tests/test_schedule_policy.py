@@ -86,14 +86,18 @@ def test_schedule_policy_needs_a_schedule_and_the_plan(wall):
 @settings(max_examples=4, deadline=None, derandomize=True)
 @given(st.integers(0, 2**32 - 1))
 def test_bound_below_optimum_below_simulated(seed):
-    bp = random_layout(random.Random(seed), LayoutLimits(max_courses=2, max_per_course=3, max_uavs_per_role=2))
+    bp = random_layout(
+        random.Random(seed), LayoutLimits(max_courses=2, max_per_course=3, max_uavs_per_role=2)
+    )
     fleet = fleet_for(bp)  # the fleet as masonry sim and masonry schedule order it
     bp = with_fleet(bp, fleet) if fleet != bp.fleet else bp
     p = make_plan(bp)
     if not any(not t.done for t in p.tasks):
         return
     s = stamp_schedule(
-        solve_schedule(p, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m, time_limit_s=2.0, workers=1, seed=1),
+        solve_schedule(
+            p, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m, time_limit_s=2.0, workers=1, seed=1
+        ),
         bp,
     )
     md = min_durations_s(p, cruise_altitude_m=bp.cruise_altitude_m)

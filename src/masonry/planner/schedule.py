@@ -351,6 +351,8 @@ def _solve_part(
     solver.parameters.max_time_in_seconds = max(0.1, float(time_limit_s))
     solver.parameters.random_seed = int(seed)
     solver.parameters.num_workers = int(workers)
+    # probing spent 14 of 15 s in presolve on a 69-task wall (and found nothing): the search does better
+    solver.parameters.cp_model_probing_level = 0
     code = solver.solve(m)
     solve_s = time.perf_counter() - t_start
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
