@@ -342,6 +342,15 @@ def _solve_part(
     _precedences(p, part, m, s_var, e_var, a_var)
     for clique in _clique_cover(p.conflicts, part):
         m.add_no_overlap([keep[i] for i in clique])
+    # conflicting tasks of earlier parts are fixed intervals: a task may fill a gap before one of them
+    fixed: dict[int, Any] = {}
+    for i in part:
+        for c in p.conflicts[i]:
+            if c in p.end and c not in s_var:
+                if c not in fixed:
+                    lo = p.site_start[c] if site else p.start[c]
+                    fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
+                m.add_no_overlap([keep[i], fixed[c]])
     lits = _machines(p, part, m, s_var, e_var, hint)
     makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
     for i in part:
@@ -375,7 +384,7 @@ def _precedences(
     e_var: Mapping[int, Any],
     a_var: Mapping[int, Any],
 ) -> None:
-    """G^d inside the part, and what the placed tasks (earlier parts) impose: prerequisites and conflicts."""
+    """G^d inside the part, and the prerequisites placed in earlier parts."""
     site = p.reservation == "site"
     for i in part:
         lo_s, lo_a = 0, 0
@@ -395,12 +404,6 @@ def _precedences(
                 else:
                     lo_s = max(lo_s, p.end[v])
                     lo_a = max(lo_a, p.end[v])
-        for c in p.conflicts[i]:
-            if c in p.end and c not in s_var:  # placed in an earlier part: this one comes after it
-                if site:
-                    lo_a = max(lo_a, p.site_start[c] + p.site[c])
-                else:
-                    lo_s = max(lo_s, p.end[c])
         if lo_s:
             m.add(s_var[i] >= lo_s)
         if site and lo_a:
