@@ -64,13 +64,13 @@ def check_schedule(schedule: OfflineSchedule, blueprint: Blueprint, reservation:
     if schedule.fleet_digest != fleet_digest(blueprint):
         raise InputError(
             "`schedule` was computed for another fleet (names, roles or homes differ): give the same "
-            "--brick-uavs / --adhesion-uavs as to masonry schedule",
-            options=("schedule",),
+            "`brick_uavs` / `adhesion_uavs` as to masonry schedule",
+            options=("schedule", "brick_uavs", "adhesion_uavs"),
         )
     if schedule.reservation != reservation:
         raise InputError(
-            f"`schedule` was computed for --reservation {schedule.reservation}, the mission has {reservation}",
-            options=("schedule",),
+            f"`schedule` was computed for `reservation` {schedule.reservation}, the mission has {reservation}",
+            options=("schedule", "reservation"),
         )
 
 
