@@ -275,3 +275,9 @@ def test_cli_schedule_bad_options(tmp_path):
     ):
         res = runner.invoke(app, ["schedule", str(CASE_STUDY), *args])
         assert res.exit_code == 2 and word in res.stderr, (args, res.output)
+
+
+def test_nothing_to_do_is_an_empty_optimal_schedule():
+    bp = running_bond(2, 2, placed_courses=2)
+    s = solve_schedule(make_plan(bp), bp.fleet, workers=1)
+    assert s.status == "optimal" and s.makespan_s == 0.0 and all(not u.tasks for u in s.uavs)
