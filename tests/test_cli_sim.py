@@ -28,6 +28,7 @@ def test_sim_json_is_exactly_the_report(tmp_path):
         "completed",
         "makespan_s",
         "lower_bound_s",
+        "lower_bound_kind",
         "policy",
         "seed",
         "uavs",

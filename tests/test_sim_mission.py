@@ -24,6 +24,7 @@ REPORT_KEYS = [
     "completed",
     "makespan_s",
     "lower_bound_s",
+    "lower_bound_kind",
     "policy",
     "seed",
     "uavs",

@@ -7,6 +7,7 @@ import importlib
 _MODULES = (
     "plan",  # masonry plan, schema, blueprint
     "sim",  # masonry sim
+    "schedule",  # masonry schedule
     "mission",  # masonry mission-control
     "perception",  # masonry estimate, markers, calibrate
     "fly",  # masonry fly

@@ -54,6 +54,10 @@ RANGES: dict[str, Bound] = {
     "fly --dt": Bound(0.005, 0.5, "s"),  # the control tick (an autopilot link streams at 10-50 Hz)
     "sim --brick-uavs": _UAVS,
     "sim --adhesion-uavs": _UAVS,
+    "schedule --brick-uavs": _UAVS,
+    "schedule --adhesion-uavs": _UAVS,
+    "schedule --time-limit": Bound(0.0, 86_400.0, "s", low_open=True),
+    "schedule --workers": Bound(1, 64, integer=True),
     "fly --timeout": Bound(0.0, 86_400.0, "s", low_open=True),
     "fly --time-scale": _TIME_SCALE,
     "fly --wait": Bound(0.0, 3600.0, "s", low_open=True),

@@ -26,7 +26,16 @@ def sim(
         "--adhesion-uavs",
         help=help_text("sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet)."),
     ),
-    policy: str = typer.Option("critical-path", "--policy", help="fifo | critical-path | nearest."),
+    policy: str = typer.Option(
+        "critical-path",
+        "--policy",
+        help="fifo | critical-path | nearest | schedule (follow --schedule, falling back to critical-path).",
+    ),
+    schedule_file: Path | None = typer.Option(
+        None,
+        "--schedule",
+        help="Offline schedule (JSON from masonry schedule) that --policy schedule follows.",
+    ),
     reservation: str = typer.Option(
         "site",
         "--reservation",
@@ -99,8 +108,15 @@ def sim(
         p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)
     ):
         raise InputError(f"--journal {journal}: the same file as an output")
+    if (policy == "schedule") != (schedule_file is not None):
+        raise InputError("--policy schedule and --schedule FILE go together")
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
+    offline = None
+    if schedule_file is not None:
+        from masonry.mission.schedule_file import read_schedule
+
+        offline = read_schedule(schedule_file)
 
     from masonry.cli.progress import progress_display
 
@@ -121,6 +137,7 @@ def sim(
             warn=lambda m: typer.echo(f"warning: {m}", err=True),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
+            schedule=offline,
         )
         result = mission.run()
     finally:

@@ -149,6 +149,8 @@ class MissionControl:
         reservation: ``task`` (the paper: conflicting tasks never run at once) or ``site`` (they may; their
             UAVs never work at their sites at once: :mod:`masonry.mission.sites`). Site intervals are recorded
             either way (:attr:`sites`).
+        schedule: the offline schedule (:class:`masonry.planner.schedule_values.OfflineSchedule`) that
+            ``policy="schedule"`` follows (:mod:`masonry.planner.schedule_policy`).
     """
 
     def __init__(
@@ -174,9 +176,10 @@ class MissionControl:
         timing: TaskTiming | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = DEFAULT_RESERVATION,
+        schedule: Any = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
-        from masonry.planner.dispatch import Dispatcher
+        from masonry.planner.schedule_policy import make_dispatcher
 
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
@@ -192,10 +195,11 @@ class MissionControl:
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
-        self.dispatcher = Dispatcher(
+        self.dispatcher = make_dispatcher(
             plan,
             self.fleet,
-            policy=policy,
+            policy,
+            schedule=schedule,
             max_attempts=max_attempts,
             durations_s=durations_s,
             reservation=reservation,

@@ -16,7 +16,7 @@ from masonry.blueprint import Blueprint, UavSpec
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.report import MissionReport, control_report
-from masonry.planner.bounds import min_cycles_s, min_durations_s
+from masonry.planner.bounds import min_cycles_s, min_durations_s, min_site_s
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
@@ -132,6 +132,7 @@ def simulated_report(
     measured: MeasuredJournal,
     journaled_errors_m: Mapping[str, float],
     timing: TaskTiming = DEFAULT_TIMING,
+    cp_sat_bound_s: float | None = None,
 ) -> MissionReport:
     now = world.clock.now_s()
     # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
@@ -171,6 +172,12 @@ def simulated_report(
         now_s=now,
         durations_s=minimum_s,
         work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),
+        clique_weights_s=(
+            min_site_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)
+            if mc.reservation == "site"
+            else None
+        ),
+        cp_sat_bound_s=cp_sat_bound_s,
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s,
         wall_time_s=wall_time_s,

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from masonry.planner.bounds import lower_bound_s
+from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
 from masonry.ports import PhaseTimes
 
@@ -117,6 +117,11 @@ class MissionReport:
     messages: int = 0
     #: the progress watchdog stopped the mission: who waited for whom (``masonry.mission.stall.Stall.to_dict``)
     stall: Mapping[str, Any] | None = None
+    #: the term of the bound that won (``masonry.planner.bound_terms.KINDS``)
+    lower_bound_kind: str = "role"
+    #: ``--policy schedule``: assignments that were their UAV's next planned task, of all assignments
+    schedule_followed: int | None = None
+    schedule_assignments: int | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -128,6 +133,7 @@ class MissionReport:
             "completed": self.completed,
             "makespan_s": _r(self.makespan_s, 2),
             "lower_bound_s": _r(self.lower_bound_s, 2),
+            "lower_bound_kind": self.lower_bound_kind,
             "policy": self.policy,
             "seed": self.seed,
             "uavs": [u.to_dict() for u in self.uavs],
@@ -141,6 +147,8 @@ class MissionReport:
             out["stuck"] = list(self.stuck)
         if self.stall is not None:
             out["stall"] = dict(self.stall)
+        if self.schedule_followed is not None:
+            out["schedule"] = {"followed": self.schedule_followed, "assignments": self.schedule_assignments}
         return out
 
     def to_json(self, indent: int | None = None) -> str:
@@ -167,8 +175,13 @@ class MissionReport:
                 f"mission {'completed' if self.completed else 'NOT completed'}: {done}/{len(self.tasks)} task{'' if len(self.tasks) == 1 else 's'}, "
                 f"policy {self.policy}, seed {self.seed}"
             ),
-            f"makespan {self.makespan_s:.1f} s (lower bound {self.lower_bound_s:.1f} s, ratio {ratio:.2f})",
+            f"makespan {self.makespan_s:.1f} s (lower bound {self.lower_bound_s:.1f} s, "
+            f"{self.lower_bound_kind}, ratio {ratio:.2f})",
         ]
+        if self.schedule_followed is not None:
+            lines.append(
+                f"schedule followed by {self.schedule_followed}/{self.schedule_assignments} assignments"
+            )
         if self.resumed_from_s is not None:
             lines.append(f"resumed from the journal at {self.resumed_from_s:.1f} s")
         for u in self.uavs:
@@ -341,6 +354,8 @@ def control_report(
     durations_s: Mapping[str, float] | None = None,
     work_s: Mapping[str, float] | None = None,
     busy_s: Mapping[str, float] | None = None,
+    clique_weights_s: Mapping[str, float] | None = None,
+    cp_sat_bound_s: float | None = None,
     **extra: Any,
 ) -> MissionReport:
     """Build the report from a :class:`~masonry.mission.control.MissionControl`'s history.
@@ -360,6 +375,11 @@ def control_report(
         work_s: what each task takes out of its UAV's timeline for the bound's role term
             (``masonry.planner.min_cycles_s``, with ``durations_s`` from ``min_durations_s``); default:
             the durations.
+        clique_weights_s: what each task weighs in the bound's conflict-clique term
+            (``masonry.planner.bound_terms``); default: the durations (``task`` reservation) or nothing
+            (``site``: conflicting tasks may overlap, only their site parts, ``min_site_s``, may not).
+        cp_sat_bound_s: CP-SAT's proven bound of an offline schedule for this wall, fleet and ``task``
+            reservation (a fourth term).
     """
     now = mc.now_s if now_s is None else now_s
     kinds = {t.id: t.kind for t in plan.tasks}
@@ -425,12 +445,16 @@ def control_report(
     )
     # tasks that never completed (a stuck mission) weigh nothing in a bound from measured durations
     todo_ids = [t.id for t in plan.tasks if not t.done]
-    bound = lower_bound_s(
+    site = getattr(mc, "reservation", "task") == "site"
+    terms = bound_terms(
         plan,
         mc.fleet,
         {tid: durations.get(tid, 0.0) for tid in todo_ids},
         work_s=None if work_s is None else {tid: work_s.get(tid, 0.0) for tid in todo_ids},
+        clique_weights_s=clique_weights_s if clique_weights_s is not None else ({} if site else None),
+        cp_sat_s=cp_sat_bound_s,
     )
+    bound = terms.value_s
     if intervals is None:
         intervals = [(a.uav, a.task_id, a.start_s, a.end_s) for a in attempts]
     task_intervals = [(tid, s, e) for _, tid, s, e in intervals]
@@ -469,6 +493,7 @@ def control_report(
         completed=not stuck,
         makespan_s=makespan,
         lower_bound_s=bound,
+        lower_bound_kind=terms.kind,
         policy=policy,
         seed=seed,
         uavs=uavs,

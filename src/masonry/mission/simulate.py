@@ -31,16 +31,19 @@ from masonry.mission.inproc import InprocBus
 from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
+from masonry.mission.schedule_file import check_schedule, with_schedule_counts
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 from masonry.planner.bounds import min_durations_s
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
+from masonry.planner.schedule_policy import SCHEDULE_POLICY
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import Clock, UavPorts
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
     from masonry.fsm.config import UavConfig
+    from masonry.planner.schedule_values import OfflineSchedule
     from masonry.sim import World
 
 #: The dispatch policies (the planner's, named here for the callers of ``simulate``).
@@ -160,6 +163,7 @@ def simulate(
     uav_config: UavConfig | None = None,
     stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
     reservation: str = DEFAULT_RESERVATION,
+    schedule: OfflineSchedule | None = None,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -186,6 +190,7 @@ def simulate(
         uav_config=uav_config,
         stall_timeout_s=stall_timeout_s,
         reservation=reservation,
+        schedule=schedule,
     ).run()
 
 
@@ -309,6 +314,8 @@ class SimulatedMission:
         #: UAV -> the simulated time it failed (it flies, and says, nothing more)
         self.dead: dict[str, float] = {}
         self.measured.dead = self.dead
+        #: an offline schedule's proven bound for the report (``from_blueprint`` with a ``task`` schedule)
+        self.cp_sat_bound_s: float | None = None
 
     def _step_control(self) -> None:
         self.control.step(self.clock.now_s())
@@ -337,6 +344,7 @@ class SimulatedMission:
         uav_config: UavConfig | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = DEFAULT_RESERVATION,
+        schedule: OfflineSchedule | None = None,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -370,6 +378,8 @@ class SimulatedMission:
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
             reservation: ``task`` (default, the paper: conflicting tasks never run at once) or ``site``
                 (conflicting tasks may run at once; their UAVs never work at their sites at once); docs/safety.md.
+            schedule: the offline schedule ``policy="schedule"`` follows (``masonry schedule``; computed for
+                this wall, fleet and reservation: :func:`masonry.mission.schedule_file.check_schedule`).
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -393,7 +403,11 @@ class SimulatedMission:
                 f"`reservation` must be one of {', '.join(RESERVATIONS)}, got {reservation!r}",
                 options=("reservation",),
             )
-        if policy not in POLICIES:
+        if policy == SCHEDULE_POLICY and schedule is None:
+            raise InputError(
+                "`policy` schedule needs `schedule` (masonry schedule)", options=("policy", "schedule")
+            )
+        if policy not in POLICIES and policy != SCHEDULE_POLICY:
             raise InputError(
                 f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",)
             )
@@ -416,6 +430,8 @@ class SimulatedMission:
         if fleet != blueprint.fleet:
             blueprint = with_fleet(blueprint, fleet)
         the_plan = make_plan(blueprint)
+        if policy == SCHEDULE_POLICY and schedule is not None:
+            check_schedule(schedule, blueprint, reservation)
 
         with contextlib.ExitStack() as resources:
             journal = None
@@ -483,6 +499,7 @@ class SimulatedMission:
                 timing=timing,
                 stall_timeout_s=stall_timeout_s,
                 reservation=reservation,
+                schedule=schedule if policy == SCHEDULE_POLICY else None,
             )
             if state is not None:
                 mc.restore(state)
@@ -507,6 +524,8 @@ class SimulatedMission:
                 uav_config=uav_config,
             )
         mission.started_wall_s = wall0
+        if schedule is not None and reservation == "task" and uav_config is None and state is None:
+            mission.cp_sat_bound_s = schedule.bound_s  # the same timing model, wall and fleet: a valid term
         return mission
 
     def close(self) -> None:
@@ -536,7 +555,7 @@ class SimulatedMission:
                 self.measured.journal.set_meta(
                     "measured", {**self.measured.measurements(), "time_s": self.clock.now_s()}
                 )
-            return simulated_report(
+            report = simulated_report(
                 self.blueprint,
                 self.plan,
                 self.fleet,
@@ -553,7 +572,9 @@ class SimulatedMission:
                 measured=self.measured,
                 journaled_errors_m=self.journaled_errors_m,
                 timing=self.timing,
+                cp_sat_bound_s=self.cp_sat_bound_s,
             )
+            return with_schedule_counts(report, self.control.dispatcher)
 
     def _fly(self) -> None:
         """The loop: handlers and mission control at the control period, the world's physics at ``dt_s``."""

@@ -432,6 +432,68 @@ def _min_durations_s(
     return out
 
 
+def flight_slack_m(timing: TaskTiming) -> float:
+    """How far a UAV may be from a point it is said to be at: both ends' arrive tolerance and the effector's
+    horizontal offset (for the sound flight times of :func:`min_cycles_s` and :func:`empty_flight_s`)."""
+    x, y, _z = timing.effector_offset_m
+    return 2.0 * timing.arrive_tolerance_m + math.hypot(x, y)
+
+
+def empty_flight_s(
+    from_m: Sequence[float],
+    to_m: Sequence[float],
+    *,
+    timing: TaskTiming | None = None,
+    min_leg_s: float = MIN_LEG_S,
+) -> float:
+    """The least time between a UAV at ``from_m`` (the end of its last task, or its home) and the start of a task
+    at ``to_m`` that is not already in that task's :func:`min_durations_s`.
+
+    The argument of :func:`min_cycles_s` for one known predecessor: the UAV covers the horizontal distance
+    (less :func:`flight_slack_m`) no faster than ``timing.cruise_speed_mps``, and the task's minimum duration
+    already counts its approach as one ``min_leg_s``. The offline schedule's sequence-dependent empty flights
+    (:mod:`masonry.planner.schedule`) are these.
+    """
+    t_ = DEFAULT_TIMING if timing is None else timing
+    d_m = math.hypot(from_m[0] - to_m[0], from_m[1] - to_m[1])
+    return max(0.0, max(0.0, d_m - flight_slack_m(t_)) / t_.cruise_speed_mps - min_leg_s)
+
+
+def min_site_s(
+    plan: Plan, *, timing: TaskTiming | None = None, cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M
+) -> dict[str, float]:
+    """The least part of each task's :func:`min_durations_s` that its UAV spends at the task's site.
+
+    What ``--reservation site`` keeps apart (:mod:`masonry.mission.sites`: from the grant of the flight down to
+    the site to the request to leave it). Counted at its shortest and without the ends that may fall outside
+    the visit: a brick's placing descent (until the release radius), release dwell and verify; an adhesion
+    segment's descent, spray and valve close. Always <= the task's minimum duration (a part of it).
+    """
+    t_ = DEFAULT_TIMING if timing is None else timing
+    eff_z = t_.effector_offset_m[2]
+    out: dict[str, float] = {}
+    for t in plan.tasks:
+        if t.done:
+            continue
+        if isinstance(t, BrickTask):
+            h = t.size_m[2]
+            top_drop = t.position_m[2] + h / 2.0
+            transit = max(cruise_altitude_m, t_.carry_altitude_m(top_drop, h))
+            drop = transit - (top_drop - eff_z)
+            out[t.id] = (
+                t_.descent_duration_s * _min_jerk_time_to_within(drop, t_.placement_radius_m)
+                + t_.release_dwell_s
+                + t_.control_period_s
+            )
+        else:
+            out[t.id] = (
+                min(t_.spray_descent_s, t_.chain_descent_s)
+                + t.length_m / t_.spray_speed_mps
+                + t_.close_dwell_s
+            )
+    return out
+
+
 def min_cycles_s(
     plan: Plan,
     fleet: Sequence[UavSpec],
@@ -481,8 +543,7 @@ def min_cycles_s(
     if durations_s is None:
         durations_s = _min_durations_s(plan, t_, cruise_altitude_m, MIN_JERK_PEAK_TO_MEAN_SPEED, min_leg_s)
     out = dict(_check_durations(plan, durations_s))
-    effector_offset_m = t_.effector_offset_m
-    slack = 2.0 * t_.arrive_tolerance_m + math.hypot(effector_offset_m[0], effector_offset_m[1])
+    slack = flight_slack_m(t_)
     bricks = [t for t in plan.tasks if isinstance(t, BrickTask)]
     todo = [i for i, t in enumerate(bricks) if not t.done]
     if not todo:

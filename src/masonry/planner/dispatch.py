@@ -64,6 +64,9 @@ class Dispatcher:
             a dependency cycle, or bad durations.
     """
 
+    #: each UAV chooses for itself (``--policy schedule``): one UAV left idle does not mean the next one is
+    _per_uav_choice = False
+
     def __init__(
         self,
         plan: Plan,
@@ -401,6 +404,8 @@ class Dispatcher:
                 if i is None and self.reservation == "site":
                     i = self._select_conflicting(role, name)
                 if i is None:
+                    if self._per_uav_choice:
+                        continue
                     break
                 if may_start is not None and not may_start(name):
                     continue

@@ -1,0 +1,625 @@
+"""The offline schedule of a plan for a fleet, with OR-Tools CP-SAT (``masonry schedule``; docs/schedule.md).
+
+The model, per part of the plan (the whole plan, or one course after another on large walls):
+
+* one interval per task, of its minimum duration (:func:`~masonry.planner.bounds.min_durations_s`, the
+  project's single timing model), in ticks of ``tick_s`` rounded down;
+* precedences from G^d (``task``: a task starts after its prerequisites end; ``site``: its site part starts
+  after they end, and a brick task, which may fetch its brick meanwhile, starts after they start);
+* no overlap of conflicting tasks (G^c, covered by cliques): their task intervals (``task``) or their site
+  parts (``site``, :func:`~masonry.planner.bounds.min_site_s`, somewhere inside the task);
+* each task on exactly one UAV of its role (optional intervals, a NoOverlap per UAV);
+* per UAV a circuit through a depot node (its home) and its tasks, whose arcs carry the sequence-dependent
+  empty flight from the end of one task (or the home) to the start of the next
+  (:func:`~masonry.planner.bounds.empty_flight_s`).
+
+Every term is a lower bound of what the state machines fly, so with ``task`` the model is a relaxation of a
+mission: CP-SAT's proven bound is a valid lower bound of every mission's makespan. A greedy list schedule (the
+same constraints) gives the solver its hint and is the answer of a part where CP-SAT found nothing in time.
+
+ortools is imported here only, inside :func:`solve_schedule`: the rest of the planner stays importable without
+it (:class:`ScheduleUnavailable` says so).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
+from masonry.errors import PlanningError
+from masonry.planner.bound_terms import bound_terms
+from masonry.planner.bounds import empty_flight_s, min_cycles_s, min_durations_s, min_site_s
+from masonry.planner.dispatch_values import task_end_m, task_start_m
+from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
+from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+#: Plans with more not-done tasks than this are solved course by course (``decomposition="auto"``).
+FULL_MODEL_MAX_TASKS = 110
+#: A part of a decomposition gathers whole courses up to about this many tasks.
+PART_TASKS = 60
+DEFAULT_TICK_S = 0.01
+DEFAULT_TIME_LIMIT_S = 30.0
+
+
+class ScheduleUnavailable(PlanningError):
+    """The offline schedule needs OR-Tools: ``pip install 'masonry[schedule]'``."""
+
+
+@dataclass
+class _Problem:
+    """The not-done tasks in ticks, the graphs among them, and where the UAVs are."""
+
+    tasks: list[Task]
+    dur: list[int]
+    site: list[int]  # ticks of the site part (``site``; 0 for ``task``)
+    prereqs: list[list[int]]
+    conflicts: list[set[int]]
+    uavs: list[UavSpec]
+    reservation: str
+    timing: TaskTiming
+    tick_s: float
+    # the schedule so far (ticks): per task, per UAV
+    start: dict[int, int] = field(default_factory=dict)
+    end: dict[int, int] = field(default_factory=dict)
+    site_start: dict[int, int] = field(default_factory=dict)
+    uav_of: dict[int, int] = field(default_factory=dict)
+    ready: list[int] = field(default_factory=list)
+    pos: list[tuple[float, float, float]] = field(default_factory=list)
+
+    def flight(self, from_m: Sequence[float], i: int) -> int:
+        return math.floor(
+            empty_flight_s(from_m, task_start_m(self.tasks[i]), timing=self.timing) / self.tick_s
+        )
+
+    def prefetch(self, i: int) -> bool:
+        return self.reservation == "site" and isinstance(self.tasks[i], BrickTask)
+
+    def site_offset_max(self, i: int) -> int:
+        return self.dur[i] - self.site[i]
+
+
+def _problem(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    timing: TaskTiming,
+    cruise_altitude_m: float,
+    reservation: str,
+    tick_s: float,
+) -> _Problem:
+    tasks = [t for t in plan.tasks if not t.done]
+    index = {t.id: i for i, t in enumerate(tasks)}
+    md = min_durations_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m)
+    site = (
+        min_site_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m) if reservation == "site" else {}
+    )
+    prereqs: list[list[int]] = [[] for _ in tasks]
+    for u, v in plan.dependencies:
+        if u in index and v in index:
+            prereqs[index[u]].append(index[v])
+    conflicts: list[set[int]] = [set() for _ in tasks]
+    for a, b in plan.conflicts:
+        ia, ib = index.get(a), index.get(b)
+        if ia is not None and ib is not None and ia != ib:
+            conflicts[ia].add(ib)
+            conflicts[ib].add(ia)
+    for role in ROLES:
+        n_tasks = sum(1 for t in tasks if t.kind == role)
+        if n_tasks and not any(s.role == role for s in fleet):
+            raise PlanningError(
+                f"no {role} UAV in the fleet for {n_tasks} {role} task{'' if n_tasks == 1 else 's'}"
+            )
+    dur = [math.floor(md[t.id] / tick_s) for t in tasks]
+    return _Problem(
+        tasks=tasks,
+        dur=dur,
+        site=[min(dur[i], math.floor(site.get(t.id, 0.0) / tick_s)) for i, t in enumerate(tasks)],
+        prereqs=prereqs,
+        conflicts=conflicts,
+        uavs=list(fleet),
+        reservation=reservation,
+        timing=timing,
+        tick_s=tick_s,
+        ready=[0] * len(fleet),
+        pos=[(float(s.home_m[0]), float(s.home_m[1]), float(s.home_m[2])) for s in fleet],
+    )
+
+
+def _parts(p: _Problem, decomposition: str, max_full: int, part_tasks: int) -> list[list[int]]:
+    """The whole plan as one part, or (``course``) whole courses in order, gathered up to :data:`PART_TASKS`."""
+    n = len(p.tasks)
+    if decomposition == "none" or (decomposition == "auto" and n <= max_full):
+        return [list(range(n))]
+
+    def level(i: int) -> float:
+        t = p.tasks[i]
+        if isinstance(t, BrickTask):
+            return round(t.position_m[2], 3)
+        return round(min(t.start_m[2], t.end_m[2]), 3)  # glue on top of the course below
+
+    levels = sorted({level(i) for i in range(n)})
+    rank = {z: k for k, z in enumerate(levels)}
+    part = [rank[level(i)] for i in range(n)]
+    # a prerequisite is never in a later part than its dependent (glue on top of a course sits higher)
+    changed = True
+    while changed:
+        changed = False
+        for i in range(n):
+            for v in p.prereqs[i]:
+                if part[v] > part[i]:
+                    part[i] = part[v]
+                    changed = True
+    by_level: dict[int, list[int]] = {}
+    for i in range(n):
+        by_level.setdefault(part[i], []).append(i)
+    out: list[list[int]] = []
+    for k in sorted(by_level):
+        if out and len(out[-1]) + len(by_level[k]) <= part_tasks:
+            out[-1].extend(by_level[k])
+        else:
+            out.append(list(by_level[k]))
+    return out
+
+
+def _earliest(
+    p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
+) -> tuple[int, int]:
+    """Earliest (start, site start) of task ``i`` from ``t0`` (and its site part from ``a0``) clear of the
+    placed conflicting intervals (``placed``: task -> its kept-apart interval)."""
+    off = p.site_offset_max(i) if p.reservation == "site" else 0
+    length = p.site[i] if p.reservation == "site" else p.dur[i]
+    t = max(t0, a0 - off)
+    others = sorted(placed[j] for j in p.conflicts[i] if j in placed)
+    moved = True
+    while moved:
+        moved = False
+        for s, e in others:
+            x = t + off
+            if x < e and s < x + length:
+                t = e - off
+                moved = True
+    return t, t + off
+
+
+def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, int]]:
+    """A list schedule of ``part`` after what is placed: task -> (uav, start, end, site start), ticks.
+
+    Highest remaining chain first; each task on the UAV of its role where it ends first.
+    """
+    in_part = set(part)
+    dependents: dict[int, list[int]] = {i: [] for i in part}
+    missing = dict.fromkeys(part, 0)
+    for i in part:
+        for v in p.prereqs[i]:
+            if v in in_part:
+                dependents[v].append(i)
+                missing[i] += 1
+    chain: dict[int, int] = {}
+    for i in sorted(part, key=lambda i: -_depth(p, i, in_part)):
+        chain[i] = p.dur[i] + max((chain[d] for d in dependents[i] if d in chain), default=0)
+    ready = list(p.ready)
+    pos = list(p.pos)
+    kept = {
+        j: (
+            (p.site_start[j], p.site_start[j] + p.site[j])
+            if p.reservation == "site"
+            else (p.start[j], p.end[j])
+        )
+        for j in p.start
+    }
+    start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
+    out: dict[int, tuple[int, int, int, int]] = {}
+    avail = [i for i in part if missing[i] == 0]
+    while avail:
+        avail.sort(key=lambda i: (-chain[i], i))
+        i = avail.pop(0)
+        t0 = a0 = 0
+        for v in p.prereqs[i]:
+            if p.prefetch(i):
+                t0, a0 = max(t0, start[v]), max(a0, end[v])
+            else:
+                t0 = max(t0, end[v])
+        best: tuple[int, int, int] | None = None
+        for k, spec in enumerate(p.uavs):
+            if spec.role != p.tasks[i].kind:
+                continue
+            s, a = _earliest(p, i, max(t0, ready[k] + p.flight(pos[k], i)), a0, kept)
+            if best is None or s < best[1]:
+                best = (k, s, a)
+        assert best is not None  # _problem checked every role has a UAV
+        k, s, a = best
+        e = s + p.dur[i]
+        start[i], end[i], site_start[i] = s, e, a
+        kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
+        ready[k], pos[k] = e, task_end_m(p.tasks[i])
+        out[i] = (k, s, e, a)
+        for d in dependents[i]:
+            missing[d] -= 1
+            if missing[d] == 0:
+                avail.append(d)
+    return out
+
+
+def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
+    """How many prerequisites deep ``i`` sits within the part (for a dependents-first order)."""
+    depth, frontier = 0, [i]
+    seen = {i}
+    while frontier:
+        nxt = [v for j in frontier for v in p.prereqs[j] if v in in_part and v not in seen]
+        seen.update(nxt)
+        if nxt:
+            depth += 1
+        frontier = nxt
+    return depth
+
+
+def _ancestors(p: _Problem, part: Sequence[int]) -> dict[int, set[int]]:
+    in_part = set(part)
+    memo: dict[int, set[int]] = {}
+
+    def of(i: int) -> set[int]:
+        stack = [i]
+        while stack:
+            j = stack[-1]
+            todo = [v for v in p.prereqs[j] if v in in_part and v not in memo]
+            if todo:
+                stack.extend(todo)
+                continue
+            acc: set[int] = set()
+            for v in p.prereqs[j]:
+                if v in in_part:
+                    acc.add(v)
+                    acc |= memo[v]
+            memo[j] = acc
+            stack.pop()
+        return memo[i]
+
+    return {i: of(i) for i in part}
+
+
+def _clique_cover(conflicts: Sequence[set[int]], part: Sequence[int]) -> list[list[int]]:
+    """Cliques of G^c within ``part`` that cover each of its conflict edges (greedy)."""
+    in_part = set(part)
+    covered: set[tuple[int, int]] = set()
+    out: list[list[int]] = []
+    for i in part:
+        for j in sorted(conflicts[i] & in_part):
+            if j < i or (i, j) in covered:
+                continue
+            clique = [i, j]
+            common = conflicts[i] & conflicts[j] & in_part
+            for k in sorted(common):
+                if all(k in conflicts[m] for m in clique):
+                    clique.append(k)
+            for a in clique:
+                for b in clique:
+                    if a < b:
+                        covered.add((a, b))
+            out.append(clique)
+    return out
+
+
+@dataclass
+class _PartResult:
+    placed: dict[int, tuple[int, int, int, int]]
+    status: str
+    bound: int | None
+    solve_s: float
+
+
+def _solve_part(
+    p: _Problem, part: Sequence[int], time_limit_s: float, seed: int, workers: int
+) -> _PartResult:
+    from ortools.sat.python import cp_model
+
+    t_start = time.perf_counter()
+    hint = _greedy(p, part)
+    horizon = max(e for _, _, e, _ in hint.values())
+    m = cp_model.CpModel()
+    s_var: dict[int, Any] = {}
+    e_var: dict[int, Any] = {}
+    a_var: dict[int, Any] = {}
+    keep: dict[int, Any] = {}
+    site = p.reservation == "site"
+    for i in part:
+        s_var[i] = m.new_int_var(0, horizon, f"s{i}")
+        e_var[i] = m.new_int_var(0, horizon, f"e{i}")
+        m.new_interval_var(s_var[i], p.dur[i], e_var[i], f"t{i}")
+        if site:
+            a_var[i] = m.new_int_var(0, horizon, f"a{i}")
+            m.add(a_var[i] >= s_var[i])
+            m.add(a_var[i] + p.site[i] <= e_var[i])
+            keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
+        else:
+            keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
+        m.add_hint(s_var[i], hint[i][1])
+        if site:
+            m.add_hint(a_var[i], hint[i][3])
+    _precedences(p, part, m, s_var, e_var, a_var)
+    for clique in _clique_cover(p.conflicts, part):
+        m.add_no_overlap([keep[i] for i in clique])
+    # conflicting tasks of earlier parts are fixed intervals: a task may fill a gap before one of them
+    fixed: dict[int, Any] = {}
+    for i in part:
+        for c in p.conflicts[i]:
+            if c in p.end and c not in s_var:
+                if c not in fixed:
+                    lo = p.site_start[c] if site else p.start[c]
+                    fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
+                m.add_no_overlap([keep[i], fixed[c]])
+    lits = _machines(p, part, m, s_var, e_var, hint)
+    makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
+    for i in part:
+        m.add(makespan >= e_var[i])
+    m.minimize(makespan)
+    solver = cp_model.CpSolver()
+    solver.parameters.max_time_in_seconds = max(0.1, float(time_limit_s))
+    solver.parameters.random_seed = int(seed)
+    solver.parameters.num_workers = int(workers)
+    # probing spent 14 of 15 s in presolve on a 69-task wall (and found nothing): the search does better
+    solver.parameters.cp_model_probing_level = 0
+    code = solver.solve(m)
+    solve_s = time.perf_counter() - t_start
+    if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
+        return _PartResult(hint, "greedy", None, solve_s)
+    placed: dict[int, tuple[int, int, int, int]] = {}
+    for i in part:
+        k = next(k for k, lit in lits[i].items() if solver.boolean_value(lit))
+        s = int(solver.value(s_var[i]))
+        a = int(solver.value(a_var[i])) if site else s
+        placed[i] = (k, s, s + p.dur[i], a)
+    status = "optimal" if code == cp_model.OPTIMAL else "feasible"
+    return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s)
+
+
+def _precedences(
+    p: _Problem,
+    part: Sequence[int],
+    m: Any,
+    s_var: Mapping[int, Any],
+    e_var: Mapping[int, Any],
+    a_var: Mapping[int, Any],
+) -> None:
+    """G^d inside the part, and the prerequisites placed in earlier parts."""
+    site = p.reservation == "site"
+    for i in part:
+        lo_s, lo_a = 0, 0
+        for v in p.prereqs[i]:
+            if v in s_var:
+                if p.prefetch(i):
+                    m.add(s_var[i] >= s_var[v])
+                    m.add(a_var[i] >= e_var[v])
+                elif site:
+                    m.add(s_var[i] >= e_var[v])
+                    m.add(a_var[i] >= e_var[v])
+                else:
+                    m.add(s_var[i] >= e_var[v])
+            elif v in p.end:
+                if p.prefetch(i):
+                    lo_s, lo_a = max(lo_s, p.start[v]), max(lo_a, p.end[v])
+                else:
+                    lo_s = max(lo_s, p.end[v])
+                    lo_a = max(lo_a, p.end[v])
+        if lo_s:
+            m.add(s_var[i] >= lo_s)
+        if site and lo_a:
+            m.add(a_var[i] >= lo_a)
+
+
+def _machines(
+    p: _Problem,
+    part: Sequence[int],
+    m: Any,
+    s_var: Mapping[int, Any],
+    e_var: Mapping[int, Any],
+    hint: Mapping[int, tuple[int, int, int, int]],
+) -> dict[int, dict[int, Any]]:
+    """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights."""
+    lits: dict[int, dict[int, Any]] = {i: {} for i in part}
+    anc = _ancestors(p, part)
+    for k, spec in enumerate(p.uavs):
+        mine = [i for i in part if p.tasks[i].kind == spec.role]
+        if not mine:
+            continue
+        order = sorted((i for i in mine if hint[i][0] == k), key=lambda i: hint[i][1])
+        hinted_arcs = set(zip([-1, *order], [*order, -1]))
+        node = {i: n + 1 for n, i in enumerate(mine)}
+        arcs: list[tuple[int, int, Any]] = []
+        optional = []
+        for i in mine:
+            x = m.new_bool_var(f"x{i}_{k}")
+            lits[i][k] = x
+            m.add_hint(x, int(hint[i][0] == k))
+            optional.append(m.new_optional_interval_var(s_var[i], p.dur[i], e_var[i], x, f"o{i}_{k}"))
+            arcs.append((node[i], node[i], x.Not()))
+            first = m.new_bool_var(f"f{i}_{k}")
+            m.add(s_var[i] >= p.ready[k] + p.flight(p.pos[k], i)).only_enforce_if(first)
+            m.add_hint(first, int((-1, i) in hinted_arcs))
+            arcs.append((0, node[i], first))
+            last = m.new_bool_var(f"l{i}_{k}")
+            m.add_hint(last, int((i, -1) in hinted_arcs))
+            arcs.append((node[i], 0, last))
+        empty = m.new_bool_var(f"empty_{k}")
+        m.add_hint(empty, int(not order))
+        arcs.append((0, 0, empty))
+        for i in mine:
+            end_i = task_end_m(p.tasks[i])
+            for j in mine:
+                if i == j or j in anc[i]:
+                    continue  # j must end before i starts: never right after it on one UAV
+                lit = m.new_bool_var(f"y{i}_{j}_{k}")
+                m.add(s_var[j] >= e_var[i] + p.flight(end_i, j)).only_enforce_if(lit)
+                m.add_hint(lit, int((i, j) in hinted_arcs))
+                arcs.append((node[i], node[j], lit))
+        m.add_circuit(arcs)
+        m.add_no_overlap(optional)
+    for i in part:
+        m.add_exactly_one(lits[i].values())
+    return lits
+
+
+def solve_schedule(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    *,
+    timing: TaskTiming | None = None,
+    cruise_altitude_m: float = DEFAULT_CRUISE_ALTITUDE_M,
+    reservation: str = "task",
+    time_limit_s: float = DEFAULT_TIME_LIMIT_S,
+    seed: int = 0,
+    workers: int = 2,
+    decomposition: str = "auto",
+    tick_s: float = DEFAULT_TICK_S,
+    max_full_tasks: int = FULL_MODEL_MAX_TASKS,
+    part_tasks: int = PART_TASKS,
+) -> OfflineSchedule:
+    """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
+
+    Args:
+        reservation: ``task`` or ``site``, as ``masonry sim`` (what conflicting tasks must keep apart).
+        time_limit_s: CP-SAT's time for the whole plan (shared between the parts of a decomposition, by
+            their number of tasks).
+        seed, workers: CP-SAT's ``random_seed`` and ``num_workers`` (1 worker and a fixed seed: the same
+            schedule on every run that ends before the limit).
+        decomposition: ``auto`` (the whole model up to ``max_full_tasks`` tasks, else ``course``), ``none``
+            or ``course`` (courses in order, each part solved after the earlier ones are fixed).
+        max_full_tasks, part_tasks: ``auto`` decomposes plans with more tasks than ``max_full_tasks``; a part
+            gathers whole courses up to ``part_tasks`` tasks (a course larger than that is one part).
+        tick_s: the model's time unit; durations and flights are rounded down to it (the bound stays valid).
+
+    Returns:
+        The schedule; no digest (the caller, who has the blueprint, adds them).
+
+    Raises:
+        ScheduleUnavailable: OR-Tools is not installed.
+        PlanningError: bad arguments, or a role with tasks has no UAV.
+    """
+    try:
+        import ortools.sat.python.cp_model  # noqa: F401
+    except ImportError:
+        raise ScheduleUnavailable(
+            "the offline schedule needs OR-Tools: pip install 'masonry[schedule]' (or 'ortools')"
+        ) from None
+    if reservation not in ("site", "task"):
+        raise PlanningError(f"reservation must be site or task, got {reservation!r}")
+    if decomposition not in ("auto", "none", "course"):
+        raise PlanningError(f"decomposition must be auto, none or course, got {decomposition!r}")
+    if not (math.isfinite(time_limit_s) and time_limit_s > 0):
+        raise PlanningError(f"time_limit_s must be > 0, got {time_limit_s!r}")
+    if not (math.isfinite(tick_s) and tick_s > 0):
+        raise PlanningError(f"tick_s must be > 0, got {tick_s!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise PlanningError(f"workers must be an integer >= 1, got {workers!r}")
+    t_ = DEFAULT_TIMING if timing is None else timing
+    t0 = time.perf_counter()
+    p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    parts = _parts(p, decomposition, max_full_tasks, part_tasks)
+    n = max(1, len(p.tasks))
+    reports: list[dict[str, Any]] = []
+    last = _PartResult({}, "optimal", 0, 0.0)
+    for part in parts:
+        if not part:
+            continue
+        budget = time_limit_s * len(part) / n
+        last = _solve_part(p, part, budget, seed, workers)
+        for i, (k, s, e, a) in last.placed.items():
+            p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
+        for k in range(len(p.uavs)):
+            mine = [i for i in part if last.placed[i][0] == k]
+            if mine:
+                j = max(mine, key=lambda i: p.end[i])
+                p.ready[k], p.pos[k] = p.end[j], task_end_m(p.tasks[j])
+        reports.append({"tasks": len(part), "status": last.status, "solve_time_s": round(last.solve_s, 3)})
+    return _assemble(
+        plan,
+        fleet,
+        p,
+        parts,
+        last,
+        reports,
+        t_,
+        cruise_altitude_m,
+        time_limit_s,
+        seed,
+        time.perf_counter() - t0,
+    )
+
+
+def _assemble(
+    plan: Plan,
+    fleet: Sequence[UavSpec],
+    p: _Problem,
+    parts: Sequence[Sequence[int]],
+    last: _PartResult,
+    reports: list[dict[str, Any]],
+    timing: TaskTiming,
+    cruise_altitude_m: float,
+    time_limit_s: float,
+    seed: int,
+    solve_s: float,
+) -> OfflineSchedule:
+    tick = p.tick_s
+    makespan = max(p.end.values(), default=0) * tick
+    md = min_durations_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m)
+    site_w = (
+        min_site_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m)
+        if p.reservation == "site"
+        else None
+    )
+    terms = bound_terms(
+        plan, fleet, md, work_s=min_cycles_s(plan, fleet, md, timing=timing), clique_weights_s=site_w
+    )
+    whole = len(parts) == 1
+    cp_bound = last.bound * tick if whole and last.bound is not None else None
+    bound, kind = terms.value_s, terms.kind
+    if cp_bound is not None and cp_bound >= bound:
+        bound, kind = cp_bound, "cp-sat"
+    bound = min(bound, makespan) if whole and last.status == "optimal" else bound
+    status = "optimal" if makespan <= bound + 1e-9 else "feasible"
+    uavs = []
+    for k, spec in enumerate(p.uavs):
+        mine = sorted((i for i, u in p.uav_of.items() if u == k), key=lambda i: (p.start[i], i))
+        uavs.append(
+            UavSchedule(
+                spec.name,
+                spec.role,
+                tuple(
+                    ScheduledTask(
+                        p.tasks[i].id,
+                        p.start[i] * tick,
+                        p.end[i] * tick,
+                        p.site_start[i] * tick if p.reservation == "site" else None,
+                        (p.site_start[i] + p.site[i]) * tick if p.reservation == "site" else None,
+                    )
+                    for i in mine
+                ),
+            )
+        )
+    return OfflineSchedule(
+        uavs=tuple(uavs),
+        makespan_s=makespan,
+        bound_s=bound,
+        bound_kind=kind,
+        status=status,
+        solve_time_s=solve_s,
+        decomposition="none" if whole else "course",
+        reservation=p.reservation,
+        time_limit_s=time_limit_s,
+        seed=seed,
+        tick_s=tick,
+        parts=tuple(reports) if not whole else (),
+    )
+
+
+__all__ = [
+    "DEFAULT_TICK_S",
+    "DEFAULT_TIME_LIMIT_S",
+    "FULL_MODEL_MAX_TASKS",
+    "PART_TASKS",
+    "ScheduleUnavailable",
+    "solve_schedule",
+]
