@@ -221,6 +221,9 @@ def test_clique_term_counts_conflicts_and_dependencies():
 # --------------------------------------------------------------------------- CLI
 
 
+TASK = ("--reservation", "task")
+
+
 def test_cli_schedule_then_sim_policy_schedule(tmp_path):
     out, gantt = tmp_path / "s.json", tmp_path / "g.svg"
     runner = CliRunner()
@@ -252,8 +255,10 @@ def test_cli_schedule_then_sim_policy_schedule(tmp_path):
     assert res.exit_code == 0 and json.loads(res.stdout)["makespan_s"] == doc["makespan_s"]
     res = runner.invoke(
         app,
-        ["sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--format", "json"]
-        + ["--reservation", "task"],
+        [
+            *("sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--format", "json"),
+            *TASK,
+        ],
     )
     assert res.exit_code == 0, res.output
     report = json.loads(res.stdout)
@@ -265,8 +270,10 @@ def test_cli_schedule_then_sim_policy_schedule(tmp_path):
     # another fleet: refused in one line
     res = runner.invoke(
         app,
-        ["sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--brick-uavs", "2"]
-        + ["--reservation", "task"],
+        [
+            *("sim", str(CASE_STUDY), "--policy", "schedule", "--schedule", str(out), "--brick-uavs", "2"),
+            *TASK,
+        ],
     )
     assert res.exit_code == 2 and "another fleet" in res.stderr
     # computed for the paper's rule, flown under the default (site): refused in one line
