@@ -10,6 +10,7 @@ _MODULES = (
     "mission",  # masonry mission-control
     "perception",  # masonry estimate, markers, calibrate
     "fly",  # masonry fly
+    "replay",  # masonry replay
     "fsm",  # masonry fsm diagram
     "hardware",  # masonry sitl
 )

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
+from typing import Any
 
 import typer
 
 from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text
-from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
+from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
@@ -59,6 +61,13 @@ def sim(
             "report who waits for whom (`stall` in the JSON); 0: never.",
         ),
     ),
+    log: Path | None = typer.Option(
+        None,
+        "--log",
+        metavar="FILE.mcap",
+        help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
+        "docs/logging.md).",
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -94,13 +103,16 @@ def sim(
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
     # before the work: a long simulation must not end in an unwritable report
-    check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d)])
+    if log is not None and log.suffix.lower() != ".mcap":
+        raise InputError(f"--log {log}: the file must end in .mcap")
+    check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d), ("--log", log)])
     if journal is not None and any(
-        p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)
+        p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d, log)
     ):
         raise InputError(f"--journal {journal}: the same file as an output")
     bp = load_blueprint(blueprint)
     faults = Faults.parse(fault)
+    name = bp.name or blueprint.name
 
     from masonry.cli.progress import progress_display
 
@@ -122,24 +134,30 @@ def sim(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
         )
-        result = mission.run()
+        with contextlib.ExitStack() as watchers:
+            if log is not None:
+                mission_log = watchers.enter_context(open_log(log, mission.plan, blueprint, name, "sim"))
+                mission.control.sink = mission_log
+            result = mission.run()
+            if log is not None:
+                mission_log.finish(result)
     finally:
         finish()
-    if report is not None:
-        write_atomic(report, result.to_json(indent=1) + "\n", "--report")
-        typer.echo(f"wrote {report}", err=True)
-    if gantt is not None:
-        from masonry.viz.gantt import draw_gantt
-
-        with atomic_path(gantt, "--gantt") as tmp:
-            draw_gantt(result, tmp, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
-        typer.echo(f"wrote {gantt}", err=True)
-    if plot3d is not None:
-        from masonry.viz.plot3d import draw_plot3d
-
-        with atomic_path(plot3d, "--plot3d") as tmp:
-            draw_plot3d(bp, result, tmp, title=f"{bp.name or blueprint.name}: wall and flown paths")
-        typer.echo(f"wrote {plot3d}", err=True)
-    typer.echo(result.to_json() if fmt == "json" else result.summary())
+    if log is not None:
+        typer.echo(f"wrote {log}", err=True)
+    write_mission_outputs(result, bp, name, fmt=fmt, report=report, gantt=gantt, plot3d=plot3d)
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
+
+
+def open_log(path: Path, plan: Any, blueprint: Path, name: str, command: str) -> Any:
+    """The MCAP log of a mission (``--log``), to open (``with``): it records the blueprint file's text for ``masonry replay``."""
+    try:
+        from masonry.observe.mcap_log import McapLog
+    except ImportError as exc:  # the `observe` extra is not installed
+        raise InputError(f"--log needs the mcap package (pip install 'masonry[observe]'): {exc}") from None
+    from masonry.blueprint_yaml import read_text_limited
+
+    return McapLog(
+        path, plan, read_text_limited(blueprint), title=name, command=f"masonry {command} {blueprint}"
+    )

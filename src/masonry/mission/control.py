@@ -31,6 +31,7 @@ from typing import Any, Literal
 from masonry.blueprint import UavSpec
 from masonry.errors import MissionError, ProtocolError
 from masonry.mission.airspace import ON_PAD_Z_M
+from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.messages import (
     MISSION_CONTROL,
     Assign,
@@ -148,6 +149,8 @@ class MissionControl:
         reservation: ``task`` (the paper: conflicting tasks never run at once) or ``site`` (they may; their
             UAVs never work at their sites at once: :mod:`masonry.mission.sites`). Site intervals are recorded
             either way (:attr:`sites`).
+        events_sink: gets every :class:`~masonry.mission.events.MissionEvent` (assignments, results,
+            clearances, UAV reports, losses, the stall, the end) for a log or a live view; it only watches.
     """
 
     def __init__(
@@ -173,6 +176,7 @@ class MissionControl:
         timing: TaskTiming | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = "task",
+        events_sink: EventSink | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.dispatch import Dispatcher
@@ -181,6 +185,7 @@ class MissionControl:
         if len(set(names)) != len(names):
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
+        self.sink = events_sink
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest
@@ -335,6 +340,7 @@ class MissionControl:
                         g.layer_m,
                     ),
                 )
+                self._emit_clearance(now_s, g)
                 log.debug(
                     "flight to (%.2f, %.2f) %s to %s",
                     g.site_m[0],
@@ -351,6 +357,7 @@ class MissionControl:
             if self.over:
                 self.ended_at_s = now_s
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
+                self._emit(now_s, "end", completed=self.finished)
         if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:
             self._last_heartbeat_s = now_s
             self._broadcast(
@@ -367,6 +374,7 @@ class MissionControl:
             self._lose(name, now_s)
         self.started_at_s = now_s
         self._dirty = True
+        self._emit(now_s, "start", fleet=[n for n, u in self.uavs.items() if not u.lost])
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -405,6 +413,8 @@ class MissionControl:
             if isinstance(msg, Progress):
                 self.events.progress += 1
             self._report(link, msg.state, msg.position_m)
+            if self.sink is not None:
+                self._emit_uav(now_s, link)
 
     def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:
         """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
@@ -436,6 +446,7 @@ class MissionControl:
         if self.sites.leaving(msg.sender, msg.site_m, now_s):
             self.columns.touch()  # a site is free: who waits for it may go now
         g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+        self._emit_clearance(now_s, g)
         self._send(
             msg.sender,
             Clearance(
@@ -489,6 +500,15 @@ class MissionControl:
                 if r.phases is not None:
                     fields["phases"] = r.phases.as_dict()
                 self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+            self._emit(
+                now_s,
+                "completed",
+                msg.sender,
+                r.task_id,
+                attempt=att.attempt,
+                placement_error_m=r.placement_error_m,
+                coverage=r.coverage,
+            )
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
@@ -496,6 +516,7 @@ class MissionControl:
             self.dispatcher.fail(r.task_id, count=not att.reason.startswith(BATTERY_LOW_REASON))
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
+            self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=att.reason)
         self._dirty = True
 
     def _ignore(self, reason: str, detail: str) -> None:
@@ -528,6 +549,7 @@ class MissionControl:
                 att.reason = f"uav {status}"
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
+        self._emit(now_s, "lost", name, released, status=status)
         self._dirty = True
 
     def _dispatch(self, now_s: float) -> None:
@@ -542,6 +564,7 @@ class MissionControl:
             self._raise_layers((a.task_id,))
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
+            self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
             self._send(
                 a.uav,
                 Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s, self.wall_digest),
@@ -576,6 +599,7 @@ class MissionControl:
             now_s, self._watch.since_s, self._watch.timeout_s, live, self.dispatcher, self.columns
         )
         log.warning("%s", self.stall.line())
+        self._emit(now_s, "stall", line=self.stall.line())
 
     def _journal_visit(self, visit: SiteVisit) -> None:
         """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
@@ -600,6 +624,55 @@ class MissionControl:
         )
         if top is not None:
             self.columns.raise_base(top)
+
+    def _emit(
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+    ) -> None:
+        """Hand an event to the sink, if any (it only watches)."""
+        if self.sink is not None:
+            self.sink.emit(MissionEvent(now_s, kind, uav, task_id, fields))
+
+    def _emit_clearance(self, now_s: float, g: Any) -> None:
+        if self.sink is not None:
+            self._emit(
+                now_s,
+                "clearance",
+                g.uav,
+                self.dispatcher.task_of(g.uav),
+                site_m=list(g.site_m),
+                granted=g.granted,
+                hold_m=None if g.hold_m is None else list(g.hold_m),
+                layer_m=g.layer_m,
+                volumes=volume_list(self.columns.volumes(g.uav)),
+            )
+
+    def _emit_uav(
+        self, now_s: float, link: UavLink, position_m: Vec3 | None = None, battery: float | None = None
+    ) -> None:
+        """A UAV's state, position, task and airspace as mission control knows them (its position and battery
+        as measured elsewhere, if given)."""
+        name = link.spec.name
+        p = link.position_m if position_m is None else position_m
+        self._emit(
+            now_s,
+            "uav",
+            name,
+            self.dispatcher.task_of(name),
+            state=link.state,
+            position_m=None if p is None else list(p),
+            battery=battery,
+            status=link.status,
+            volumes=volume_list(self.columns.volumes(name)),
+        )
+
+    def sample(self, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]) -> None:
+        """Hand the sink a ``uav`` event per live UAV, with its position and battery measured outside mission
+        control (the simulator's world); mission control's own view is unchanged."""
+        if self.sink is None:
+            return
+        for name, link in self.uavs.items():
+            if name in positions_m and not link.lost:
+                self._emit_uav(now_s, link, positions_m[name], batteries.get(name))
 
     def _send(self, to: str, msg: Any) -> None:
         self.transport.send(to, encode(msg))
