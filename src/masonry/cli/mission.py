@@ -5,7 +5,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -143,11 +142,19 @@ def mission_control(
     ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
+    log: Path | None = typer.Option(
+        None,
+        "--log",
+        metavar="FILE.mcap",
+        help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
+        "docs/logging.md).",
+    ),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
     from masonry.blueprint import load_blueprint
-    from masonry.cli.outputs import check_output_path, write_atomic
+    from masonry.cli.outputs import check_output_paths, write_mission_outputs
+    from masonry.cli.sim import check_log_option, open_log
     from masonry.fingerprint import wall_digest
     from masonry.mission.control import MissionControl
     from masonry.mission.messages import MISSION_CONTROL
@@ -176,7 +183,7 @@ def mission_control(
             "--stall-timeout": stall_timeout,
         },
     )
-    check_output_path(report, "--report")
+    check_output_paths([("--report", report), ("--log", check_log_option(log))])
     key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
@@ -192,6 +199,11 @@ def mission_control(
         MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config
     )
     transport = wrap(zenoh, key, mission_name)
+    mission_log = (
+        open_log(log, the_plan, blueprint, bp.name or blueprint.name, "mission-control").open()
+        if log
+        else None
+    )
     zenoh.connect()
     try:
         mc = MissionControl(
@@ -210,6 +222,7 @@ def mission_control(
             min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
+            events_sink=mission_log,
         )
         offset = 0.0
         if state is not None:
@@ -223,18 +236,28 @@ def mission_control(
             err=True,
         )
         _run_in_wall_time(mc, offset, time_scale=time_scale, max_time_s=max_time, tick_s=tick)
+        result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
+        security = security_summary(transport, mc.events.ignored)
+        if mission_log is not None:
+            mission_log.finish(result, {"security": security})
     finally:
         transport.close()
         if jr is not None:
             jr.close()
-    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
-    security = security_summary(transport, mc.events.ignored)
+        if mission_log is not None:
+            mission_log.close()
+            typer.echo(f"wrote {log}", err=True)
     _echo_security(security)
-    out = {**result.to_dict(), "security": security}
-    if report is not None:
-        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
-        typer.echo(f"wrote {report}", err=True)
-    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
+    write_mission_outputs(
+        result,
+        bp,
+        bp.name or blueprint.name,
+        fmt=fmt,
+        report=report,
+        gantt=None,
+        plot3d=None,
+        extra={"security": security},
+    )
     if not result.completed:
         raise typer.Exit(1)
 

@@ -103,9 +103,9 @@ def sim(
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
     # before the work: a long simulation must not end in an unwritable report
-    if log is not None and log.suffix.lower() != ".mcap":
-        raise InputError(f"--log {log}: the file must end in .mcap")
-    check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d), ("--log", log)])
+    check_output_paths(
+        [("--report", report), ("--gantt", gantt), ("--plot3d", plot3d), ("--log", check_log_option(log))]
+    )
     if journal is not None and any(
         p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d, log)
     ):
@@ -161,3 +161,10 @@ def open_log(path: Path, plan: Any, blueprint: Path, name: str, command: str) ->
     return McapLog(
         path, plan, read_text_limited(blueprint), title=name, command=f"masonry {command} {blueprint}"
     )
+
+
+def check_log_option(log: Path | None) -> Path | None:
+    """``--log``, if given, must name a ``.mcap`` file (returned as given)."""
+    if log is not None and log.suffix.lower() != ".mcap":
+        raise InputError(f"--log {log}: the file must end in .mcap")
+    return log
