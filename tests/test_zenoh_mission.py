@@ -312,6 +312,7 @@ def _check_mission(
             capture_output=True,
             text=True,
             timeout=60,
+            check=False,
         )
         assert replayed.returncode == 0, replayed.stderr
         assert replayed.stdout == mc_out, mode
@@ -320,6 +321,7 @@ def _check_mission(
             capture_output=True,
             text=True,
             timeout=60,
+            check=False,
         )
         assert "mission completed; tasks: todo 0, running 0, done 4" in at.stdout, at.stdout
     assert mode != "key" or log.exists(), "the keyed mission's mission control writes --log"

@@ -149,18 +149,24 @@ def mission_control(
         help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
         "docs/logging.md).",
     ),
+    serve: str | None = typer.Option(
+        None,
+        "--serve",
+        metavar="[HOST:]PORT",
+        help="Serve the mission's live page here (host 127.0.0.1 by default); docs/observe.md.",
+    ),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
     from masonry.blueprint import load_blueprint
     from masonry.cli.outputs import check_output_paths, write_mission_outputs
-    from masonry.cli.sim import check_log_option, open_log
+    from masonry.cli.watch import Watchers, check_log_option
     from masonry.fingerprint import wall_digest
     from masonry.mission.control import MissionControl
     from masonry.mission.messages import MISSION_CONTROL
-    from masonry.mission.report import control_report
     from masonry.mission.simulate import priority_durations_s
     from masonry.mission.zenoh_transport import ZenohTransport
+    from masonry.observe.web import parse_serve
     from masonry.planner import POLICIES, estimate_durations_s
     from masonry.planner import plan as make_plan
 
@@ -199,10 +205,8 @@ def mission_control(
         MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config
     )
     transport = wrap(zenoh, key, mission_name)
-    mission_log = (
-        open_log(log, the_plan, blueprint, bp.name or blueprint.name, "mission-control").open()
-        if log
-        else None
+    watch = Watchers(
+        log, parse_serve(serve) if serve else None, blueprint, bp.name or blueprint.name, "mission-control"
     )
     zenoh.connect()
     try:
@@ -222,8 +226,8 @@ def mission_control(
             min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
-            events_sink=mission_log,
         )
+        watch.attach(mc, the_plan, bp.fleet)
         offset = 0.0
         if state is not None:
             mc.restore(state)
@@ -236,17 +240,15 @@ def mission_control(
             err=True,
         )
         _run_in_wall_time(mc, offset, time_scale=time_scale, max_time_s=max_time, tick_s=tick)
-        result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
-        security = security_summary(transport, mc.events.ignored)
-        if mission_log is not None:
-            mission_log.finish(result, {"security": security})
+        result, security = _final_report(mc, the_plan, policy, expected_s, transport, watch)
+    except BaseException:
+        watch.stop()
+        raise
     finally:
         transport.close()
         if jr is not None:
             jr.close()
-        if mission_log is not None:
-            mission_log.close()
-            typer.echo(f"wrote {log}", err=True)
+        watch.close()
     _echo_security(security)
     write_mission_outputs(
         result,
@@ -258,8 +260,19 @@ def mission_control(
         plot3d=None,
         extra={"security": security},
     )
+    watch.linger()
     if not result.completed:
         raise typer.Exit(1)
+
+
+def _final_report(mc: Any, the_plan: Any, policy: str, expected_s: Any, transport: Any, watch: Any) -> Any:
+    """The mission's report and security counts, also into the log."""
+    from masonry.mission.report import control_report
+
+    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
+    security = security_summary(transport, mc.events.ignored)
+    watch.finish(result, {"security": security})
+    return result, security
 
 
 def _open_journal(journal: Path | None, resume: bool, bp: Any, the_plan: Any) -> tuple[Any, Any]:

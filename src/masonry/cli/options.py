@@ -54,6 +54,7 @@ RANGES: dict[str, Bound] = {
     "fly --dt": Bound(0.005, 0.5, "s"),  # the control tick (an autopilot link streams at 10-50 Hz)
     "sim --brick-uavs": _UAVS,
     "sim --adhesion-uavs": _UAVS,
+    "sim --time-scale": _TIME_SCALE,  # with --serve
     "fly --timeout": Bound(0.0, 86_400.0, "s", low_open=True),
     "fly --time-scale": _TIME_SCALE,
     "fly --wait": Bound(0.0, 3600.0, "s", low_open=True),

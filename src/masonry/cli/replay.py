@@ -3,7 +3,9 @@ run that wrote it, or the mission's state at a time (``--at``)."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -21,6 +23,12 @@ def replay(
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     at: float | None = typer.Option(
         None, "--at", metavar="T", help="Print the mission's state at mission time T (seconds) instead."
+    ),
+    serve: str | None = typer.Option(
+        None,
+        "--serve",
+        metavar="[HOST:]PORT",
+        help="Play the log back in the live page, with a time slider, until Ctrl-C (docs/observe.md).",
     ),
 ) -> None:
     """Replay a mission log: print the summary (or JSON) and write the report and drawings the live run did.
@@ -53,10 +61,13 @@ def replay(
         bp = parse_blueprint(safe_load(recorded.blueprint_yaml), f"{log} (its blueprint)")
     except Exception as exc:  # a YAML error or a BlueprintError: the log's record is bad
         raise InputError(f"{log}: its blueprint record is unusable: {exc}") from None
+    the_plan = make_plan(bp)
+    task_ids = [t.id for t in the_plan.tasks if not t.done]
     if at is not None:
-        the_plan = make_plan(bp)
-        view = view_at(recorded.events, at, [t.id for t in the_plan.tasks if not t.done])
-        typer.echo("\n".join(view.lines()))
+        typer.echo("\n".join(view_at(recorded.events, at, task_ids).lines()))
+        return
+    if serve is not None:
+        _serve(recorded, the_plan, bp, task_ids, serve)
         return
     if recorded.report is None:
         raise InputError(
@@ -74,3 +85,29 @@ def replay(
     )
     if not recorded.report.completed:
         raise typer.Exit(1)
+
+
+def _serve(recorded: Any, the_plan: Any, bp: Any, task_ids: list[str], serve: str) -> None:
+    """The log in the live page, at the slider's time, until Ctrl-C."""
+    from masonry.mission.view import view_at, wall_layout
+    from masonry.observe.web import ViewServer, parse_serve
+
+    events = recorded.events
+    end_s = max((e.time_s for e in events), default=0.0)
+    server = ViewServer(
+        *parse_serve(serve),
+        layout=wall_layout(the_plan, bp.fleet, recorded.title),
+        state=lambda t: view_at(events, end_s if t is None else t, task_ids).snapshot(),
+        version=lambda: 0,
+        replay=end_s,
+    ).start()
+    try:
+        typer.echo(
+            f"playing {recorded.path} back at {server.url} (0 to {end_s:.1f} s): Ctrl-C to stop", err=True
+        )
+        while True:
+            time.sleep(0.5)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        server.stop()

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
-from typing import Any
 
 import typer
 
 from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
+from masonry.cli.watch import check_log_option
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
@@ -68,6 +67,20 @@ def sim(
         help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
         "docs/logging.md).",
     ),
+    serve: str | None = typer.Option(
+        None,
+        "--serve",
+        metavar="[HOST:]PORT",
+        help="Serve the mission's live page here (host 127.0.0.1 by default) and fly it at --time-scale; "
+        "docs/observe.md.",
+    ),
+    time_scale: float = typer.Option(
+        1.0,
+        "--time-scale",
+        help=help_text(
+            "sim", "--time-scale", "With --serve: mission seconds per wall second (1: real time, to watch)."
+        ),
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -97,6 +110,7 @@ def sim(
             "--seed": seed,
             "--dt": dt,
             "--stall-timeout": stall_timeout,
+            "--time-scale": time_scale,
         },
     )
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
@@ -115,7 +129,10 @@ def sim(
     name = bp.name or blueprint.name
 
     from masonry.cli.progress import progress_display
+    from masonry.cli.watch import Watchers
+    from masonry.observe.web import Pacer, parse_serve
 
+    watch = Watchers(log, parse_serve(serve) if serve is not None else None, blueprint, name, "sim")
     progress_cb, finish = progress_display(progress)
     try:
         mission = SimulatedMission.from_blueprint(
@@ -134,37 +151,18 @@ def sim(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
         )
-        with contextlib.ExitStack() as watchers:
-            if log is not None:
-                mission_log = watchers.enter_context(open_log(log, mission.plan, blueprint, name, "sim"))
-                mission.control.sink = mission_log
-            result = mission.run()
-            if log is not None:
-                mission_log.finish(result)
+        watch.attach(mission.control, mission.plan, mission.fleet)
+        if serve is not None:
+            mission.tick_hooks.append(Pacer(time_scale))
+        result = mission.run()
+        watch.finish(result)
+    except BaseException:
+        watch.stop()
+        raise
     finally:
         finish()
-    if log is not None:
-        typer.echo(f"wrote {log}", err=True)
+        watch.close()
     write_mission_outputs(result, bp, name, fmt=fmt, report=report, gantt=gantt, plot3d=plot3d)
+    watch.linger()
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
-
-
-def open_log(path: Path, plan: Any, blueprint: Path, name: str, command: str) -> Any:
-    """The MCAP log of a mission (``--log``), to open (``with``): it records the blueprint file's text for ``masonry replay``."""
-    try:
-        from masonry.observe.mcap_log import McapLog
-    except ImportError as exc:  # the `observe` extra is not installed
-        raise InputError(f"--log needs the mcap package (pip install 'masonry[observe]'): {exc}") from None
-    from masonry.blueprint_yaml import read_text_limited
-
-    return McapLog(
-        path, plan, read_text_limited(blueprint), title=name, command=f"masonry {command} {blueprint}"
-    )
-
-
-def check_log_option(log: Path | None) -> Path | None:
-    """``--log``, if given, must name a ``.mcap`` file (returned as given)."""
-    if log is not None and log.suffix.lower() != ".mcap":
-        raise InputError(f"--log {log}: the file must end in .mcap")
-    return log
