@@ -171,6 +171,16 @@ def test_the_page_of_a_served_sim_fills_up_in_chromium(tmp_path):
             placed_before = page.locator("#side rect.done").count()
             done_before = int(page.get_attribute("#counts", "data-done") or 0)
             assert done_before < 4
+            # the operator pauses it and resumes it from the page
+            page.click("button[data-command=pause]")
+            page.wait_for_function("document.getElementById('answer').textContent === 'pause: accepted'")
+            page.wait_for_function("document.getElementById('status').textContent === 'paused'")
+            page.click("button[data-command=pause]")
+            page.wait_for_function(
+                "document.getElementById('answer').textContent === 'pause: refused (already paused)'"
+            )
+            page.click("button[data-command=resume]")
+            page.wait_for_function("document.getElementById('answer').textContent === 'resume: accepted'")
             # the task counter rises to every task done, the side view's wall fills up with placed bricks
             page.wait_for_function("document.getElementById('counts').dataset.done === '4'", timeout=120_000)
             assert page.locator("#side rect.done").count() > placed_before
@@ -193,7 +203,9 @@ def test_the_page_of_a_served_sim_fills_up_in_chromium(tmp_path):
         proc.send_signal(signal.SIGINT)  # the page stays up after the mission until Ctrl-C
         out, err = proc.communicate(timeout=30)
     assert proc.returncode == 0, err
-    assert json.loads(out)["completed"] is True
+    report = json.loads(out)
+    assert report["completed"] is True
+    assert report["conflict_violations"] == 0 and report["dependency_violations"] == 0
 
 
 def test_replay_serves_the_log_with_its_time_slider(tmp_path):

@@ -11,6 +11,7 @@ _MODULES = (
     "perception",  # masonry estimate, markers, calibrate
     "fly",  # masonry fly
     "replay",  # masonry replay
+    "ctl",  # masonry ctl
     "fsm",  # masonry fsm diagram
     "hardware",  # masonry sitl
 )

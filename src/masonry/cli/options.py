@@ -89,6 +89,7 @@ RANGES: dict[str, Bound] = {
     "--dpi": Bound(30, 2400, integer=True),
     "--frames": Bound(1, 10_000_000, integer=True),
     "estimate --camera": Bound(0, 255, integer=True),
+    "ctl --timeout": Bound(0.0, 3600.0, "s", low_open=True),
     # sitl
     "--port": Bound(0, 65535, integer=True),
     "sitl --time-scale": _TIME_SCALE,

@@ -77,12 +77,20 @@ class Watchers:
 
             self.view = MissionView([t.id for t in plan.tasks if not t.done])
             view = self.view
+            commands = self.commands
+            if commands is None and _loopback(self.serve[0]):
+                # the page's buttons: on loopback only (the page is not authenticated; docs/observe.md)
+                def commands(c: Mapping[str, Any]) -> Mapping[str, Any]:
+                    if control.ended_at_s is not None:
+                        return {"accepted": False, "reason": "the mission is over"}
+                    return dict(control.operator.ask(c).to_dict())
+
             self.server = ViewServer(
                 *self.serve,
                 layout=wall_layout(plan, fleet, self.name),
-                state=lambda _t: {**view.snapshot(), "paused": bool(getattr(control, "paused", False))},
-                version=lambda: view.events * 2 + int(bool(getattr(control, "paused", False))),
-                commands=self.commands,
+                state=lambda _t: {**view.snapshot(), "paused": bool(control.operator.paused)},
+                version=lambda: view.events * 2 + int(bool(control.operator.paused)),
+                commands=commands,
             ).start()
             sinks.append(self.view)
             typer.echo(f"serving the mission's page at {self.server.url}", err=True)
@@ -119,6 +127,17 @@ class Watchers:
         if self.server is not None:
             self.server.stop()
             self.server = None
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
 
 
 __all__ = ["Watchers", "check_log_option", "open_log"]

@@ -34,22 +34,27 @@ from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.messages import (
     MISSION_CONTROL,
+    OPERATOR,
     Assign,
     Clearance,
     ClearanceRequest,
+    CommandAnswer,
     Heartbeat,
     MissionEnd,
+    OperatorCommand,
     Progress,
+    Recall,
     Result,
     decode,
     encode,
     phases_from_dict,
 )
+from masonry.mission.operator import Operator
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
+from masonry.ports import UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -186,6 +191,8 @@ class MissionControl:
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
         self.sink = events_sink
+        #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
+        self.operator = Operator()
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest
@@ -309,8 +316,8 @@ class MissionControl:
 
     @property
     def over(self) -> bool:
-        """Finished, blocked or stalled: mission control has sent (or will send) MissionEnd."""
-        return self.finished or self.blocked or self.stall is not None
+        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd."""
+        return self.finished or self.blocked or self.stall is not None or self.operator.aborted
 
     @property
     def online(self) -> list[str]:
@@ -324,6 +331,7 @@ class MissionControl:
             self._first_step_s = now_s
         for raw in self.transport.receive():
             self._handle(raw, now_s)
+        self.operator.step(self, now_s)
         self._check_heartbeats(now_s)
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
@@ -351,7 +359,9 @@ class MissionControl:
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
-            if self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version):
+            if (
+                self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
+            ) and not self.operator.holds_dispatch():
                 self._dispatch(now_s)
             self._watch_progress(now_s)
             if self.over:
@@ -385,7 +395,10 @@ class MissionControl:
             log.warning("rejected message: %s", exc)
             return
         self.events.received += 1
-        if msg.sender == MISSION_CONTROL:
+        if isinstance(msg, OperatorCommand):
+            self._on_command(msg, now_s)
+            return
+        if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
         if link.lost:
@@ -512,8 +525,9 @@ class MissionControl:
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
-            # abandoned for the UAV's battery: not an attempt of the task (its UAV lands for a fresh pack)
-            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(BATTERY_LOW_REASON))
+            # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
+            # attempt of the task
+            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(UNCOUNTED_REASONS))
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
             self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=att.reason)
@@ -575,6 +589,8 @@ class MissionControl:
         here): take-offs from neighbouring pads go one after the other."""
         from masonry.mission.airspace import Phase
 
+        if not self.operator.may_fly(self, name):
+            return False  # recalled, or its role at the operator's fleet limit
         if self.columns.phase(name) is Phase.LANDED and not self.columns.take_off(name):
             self._deferred_at = self.columns.version
             return False
@@ -585,7 +601,10 @@ class MissionControl:
     def _watch_progress(self, now_s: float) -> None:
         """The watchdog: progress is a task done or failed, a flight or hold flight granted, a UAV's state
         changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
+        if self.operator.paused or self.operator.held or self.operator.aborting:
+            return  # waiting for the operator is no stall
         signature = (
+            self.operator.version,
             self._results,
             self.columns.granted_count,
             self.columns.held_back,
@@ -624,6 +643,34 @@ class MissionControl:
         )
         if top is not None:
             self.columns.raise_base(top)
+
+    def _on_command(self, msg: OperatorCommand, now_s: float) -> None:
+        """An operator's command over the network: applied now, answered to the operator. ``masonry ctl`` sends
+        it again until it hears the answer: a command already answered (its ``id``) is answered again, not
+        applied twice."""
+        answer = self.operator.answered.get(msg.id) if msg.id else None
+        if answer is None:
+            command = {"command": msg.command, "uav": msg.uav, "role": msg.role, "limit": msg.limit}
+            out = self.operator.apply(self, {k: v for k, v in command.items() if v is not None}, now_s)
+            answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
+            if msg.id:
+                self.operator.answered[msg.id] = answer
+        self.transport.send(OPERATOR, encode(answer))
+        self.events.sent += 1
+
+    def wake(self) -> None:
+        """Dispatch again at the next step (the operator resumed, or changed a limit)."""
+        self._dirty = True
+
+    def recall(self, uav: str, now_s: float, reason: str) -> None:
+        """Tell ``uav`` to drop its task, fly home and land (the operator's recall)."""
+        self._send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
+
+    def emit_event(
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+    ) -> None:
+        """Hand an event to the sink, if any (the operator's commands)."""
+        self._emit(now_s, kind, uav, task_id, **fields)
 
     def _emit(
         self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any

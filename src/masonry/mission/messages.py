@@ -19,13 +19,18 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`Clearance` mission control -> UAV: fly your lateral leg at ``layer_m``; the column over ``site_m``
   is yours (``granted``), or wait at your layer over ``hold_m``; ``radius_m``: free a column once that far
   from it.
+- :class:`OperatorCommand` operator (:data:`OPERATOR`, ``masonry ctl``) -> mission control: pause, resume,
+  abort, recall a UAV, return all, set a role's fleet limit (:mod:`masonry.mission.operator`).
+- :class:`CommandAnswer` mission control -> operator: that command accepted, or refused with a reason.
+- :class:`Recall` mission control -> UAV: drop your task (it is reported failed, ``reason``), fly home and land.
 
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
 so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
 ``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
 blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
 ``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
-without it leaves it out and one that does not know it ignores it, so the version stays.
+without it leaves it out and one that does not know it ignores it, so the version stays. 4 adds the operator's
+messages (a version-3 UAV would reject a recall as an unknown type and fly on).
 """
 
 from __future__ import annotations
@@ -40,8 +45,12 @@ from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import PHASES, PhaseTimes, TaskResult
 
-PROTOCOL_VERSION = 3
+PROTOCOL_VERSION = 4
 MISSION_CONTROL = "mission-control"
+#: The sender name of an operator's commands (``masonry ctl``); mission control answers to it.
+OPERATOR = "operator"
+#: What an operator may ask (:class:`OperatorCommand`).
+OPERATOR_COMMANDS = ("pause", "resume", "abort", "recall", "return-all", "limit")
 
 Vec3 = tuple[float, float, float]
 
@@ -134,7 +143,57 @@ class Clearance:
     layer_m: float | None = None
 
 
-Message = Heartbeat | Assign | Progress | Result | MissionEnd | ClearanceRequest | Clearance
+@dataclass(frozen=True)
+class OperatorCommand:
+    """An operator asks mission control to ``command`` (one of :data:`OPERATOR_COMMANDS`).
+
+    ``uav``: the UAV to recall; ``role`` and ``limit``: how many UAVs of that role may fly at once (``limit``;
+    ``limit`` -1 lifts it); ``id``: echoed in the answer.
+    """
+
+    sender: str
+    command: str
+    time_s: float
+    id: str = ""
+    uav: str | None = None
+    role: str | None = None
+    limit: int | None = None
+
+
+@dataclass(frozen=True)
+class CommandAnswer:
+    """Mission control's answer to the operator's command ``id``: ``accepted``, or not and ``reason``."""
+
+    sender: str
+    id: str
+    command: str
+    accepted: bool
+    reason: str
+    time_s: float
+
+
+@dataclass(frozen=True)
+class Recall:
+    """Mission control tells ``uav`` to drop its task (reported failed with ``reason``), fly home and land."""
+
+    sender: str
+    uav: str
+    time_s: float
+    reason: str
+
+
+Message = (
+    Heartbeat
+    | Assign
+    | Progress
+    | Result
+    | MissionEnd
+    | ClearanceRequest
+    | Clearance
+    | OperatorCommand
+    | CommandAnswer
+    | Recall
+)
 
 _TYPE_NAMES: dict[type, str] = {
     Heartbeat: "heartbeat",
@@ -144,6 +203,9 @@ _TYPE_NAMES: dict[type, str] = {
     MissionEnd: "mission-end",
     ClearanceRequest: "clearance-request",
     Clearance: "clearance",
+    OperatorCommand: "operator-command",
+    CommandAnswer: "command-answer",
+    Recall: "recall",
 }
 
 
@@ -242,9 +304,32 @@ def encode(message: Message) -> bytes:
             hold_m=_vec(message.hold_m),
             layer_m=message.layer_m,
         )
-    else:
+    elif isinstance(message, MissionEnd):
         body.update(time_s=message.time_s, completed=message.completed)
+    else:
+        body.update(_operator_body(message))
     return _ENCODER.encode(body).encode()
+
+
+def _operator_body(message: OperatorCommand | CommandAnswer | Recall) -> dict[str, Any]:
+    if isinstance(message, OperatorCommand):
+        return {
+            "command": message.command,
+            "time_s": message.time_s,
+            "id": message.id,
+            "uav": message.uav,
+            "role": message.role,
+            "limit": message.limit,
+        }
+    if isinstance(message, CommandAnswer):
+        return {
+            "id": message.id,
+            "command": message.command,
+            "accepted": message.accepted,
+            "reason": message.reason,
+            "time_s": message.time_s,
+        }
+    return {"uav": message.uav, "time_s": message.time_s, "reason": message.reason}
 
 
 #: What ``json.dumps(body, separators=(",", ":"), allow_nan=False)`` builds on every call, built once.
@@ -586,6 +671,46 @@ def _clearance(f: _Fields, sender: str, fleet: Collection[str] | None) -> Cleara
     )
 
 
+def _operator_command(f: _Fields, sender: str, fleet: Collection[str] | None) -> OperatorCommand:
+    if sender != OPERATOR:
+        raise f.fail("sender", f"only {OPERATOR!r} sends commands, not {sender!r}")
+    command = f.str_("command")
+    if command not in OPERATOR_COMMANDS:
+        raise f.fail("command", f"must be one of {', '.join(OPERATOR_COMMANDS)}, got {command!r}")
+    uav = f.str_("uav", optional=True)  # a UAV not of the fleet is refused by mission control, with a reason
+    limit = f.data.get("limit")
+    if limit is not None and (type(limit) is not int or limit < -1):
+        raise f.fail("limit", f"must be an integer >= -1, got {limit!r}")
+    return OperatorCommand(
+        sender,
+        command,
+        f.num("time_s"),
+        str(f.data.get("id") or ""),
+        uav,
+        f.str_("role", optional=True),
+        limit,
+    )
+
+
+def _command_answer(f: _Fields, sender: str, fleet: Collection[str] | None) -> CommandAnswer:
+    _check_from_mission_control(f, sender)
+    return CommandAnswer(
+        sender,
+        str(f.data.get("id") or ""),
+        f.str_("command"),
+        f.bool_("accepted"),
+        str(f.data.get("reason") or ""),
+        f.num("time_s"),
+    )
+
+
+def _recall(f: _Fields, sender: str, fleet: Collection[str] | None) -> Recall:
+    _check_from_mission_control(f, sender)
+    uav = f.str_("uav")
+    _check_uav(f, fleet, uav, "uav")
+    return Recall(sender, uav, f.num("time_s"), str(f.data.get("reason") or "recalled"))
+
+
 #: How the body of each message type is read, after the envelope (version, type, sender): one function per type.
 _BODIES: dict[str, Callable[[_Fields, str, Collection[str] | None], Message]] = {
     "heartbeat": _heartbeat,
@@ -595,4 +720,7 @@ _BODIES: dict[str, Callable[[_Fields, str, Collection[str] | None], Message]] = 
     "mission-end": _mission_end,
     "clearance-request": _clearance_request,
     "clearance": _clearance,
+    "operator-command": _operator_command,
+    "command-answer": _command_answer,
+    "recall": _recall,
 }
