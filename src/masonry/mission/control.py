@@ -193,6 +193,9 @@ class MissionControl:
         self.sink = events_sink
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
+        #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
+        #: for the sink, :meth:`sample`, turns this off: its samples are the better measure)
+        self.uav_events = True
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest
@@ -426,7 +429,7 @@ class MissionControl:
             if isinstance(msg, Progress):
                 self.events.progress += 1
             self._report(link, msg.state, msg.position_m)
-            if self.sink is not None:
+            if self.sink is not None and self.uav_events:
                 self._emit_uav(now_s, link)
 
     def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:

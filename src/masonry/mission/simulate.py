@@ -578,6 +578,7 @@ class SimulatedMission:
         progress_s = clock.now_s()
         mission_end_s: float | None = None
         next_sample_s = clock.now_s()
+        mc.uav_events = False  # the world's samples below tell the sink where each UAV is
         while True:
             now = clock.now_s()
             for name, h in handlers.items():

@@ -59,6 +59,11 @@ TOPICS: dict[str, str] = {
     "/uav/NAME/state": "masonry.UavState",
 }
 
+#: ``/tf`` carries each UAV's frame at most this often (its pose topic has every sample), mission seconds.
+TF_PERIOD_S = 1.0
+#: ``/uav/NAME/state`` is written when the state, task, status or airspace changes, else this often.
+STATE_PERIOD_S = 2.0
+
 _LEVELS = {"failed": 3, "lost": 3, "stall": 4, "end": 2}
 
 
@@ -136,6 +141,8 @@ class McapLog:
         self._last_s = 0.0
         self._tasks = {t.id: t for t in plan.tasks}
         self._volumes: dict[str, Any] = {}
+        self._tf_s: dict[str, float] = {}
+        self._states: dict[str, tuple[Any, float]] = {}
         self.messages = 0
 
     def open(self) -> McapLog:
@@ -217,31 +224,38 @@ class McapLog:
             self._write(
                 f"/uav/{name}/pose", t, {"timestamp": _stamp(t), "frame_id": WORLD_FRAME, "pose": pose}
             )
+            last_tf = self._tf_s.get(name)
+            if last_tf is None or t - last_tf >= TF_PERIOD_S:
+                self._tf_s[name] = t
+                self._write(
+                    "/tf",
+                    t,
+                    {
+                        "timestamp": _stamp(t),
+                        "parent_frame_id": WORLD_FRAME,
+                        "child_frame_id": name,
+                        "translation": _vec(p),
+                        "rotation": _yaw(0.0),
+                    },
+                )
+        vols = f.get("volumes", [])
+        state = (f.get("state", ""), event.task_id, f.get("status", "ok"), len(vols))
+        last = self._states.get(name)
+        if last is None or last[0] != state or t - last[1] >= STATE_PERIOD_S:
+            self._states[name] = (state, t)
             self._write(
-                "/tf",
+                f"/uav/{name}/state",
                 t,
                 {
                     "timestamp": _stamp(t),
-                    "parent_frame_id": WORLD_FRAME,
-                    "child_frame_id": name,
-                    "translation": _vec(p),
-                    "rotation": _yaw(0.0),
+                    "uav": name,
+                    "state": state[0],
+                    "task_id": event.task_id,
+                    "battery": f.get("battery"),
+                    "status": state[2],
+                    "volumes": state[3],
                 },
             )
-        vols = f.get("volumes", [])
-        self._write(
-            f"/uav/{name}/state",
-            t,
-            {
-                "timestamp": _stamp(t),
-                "uav": name,
-                "state": f.get("state", ""),
-                "task_id": event.task_id,
-                "battery": f.get("battery"),
-                "status": f.get("status", "ok"),
-                "volumes": len(vols),
-            },
-        )
         self._airspace(t, name, vols)
 
     def _airspace(self, t: float, uav: str, volumes: Any) -> None:
