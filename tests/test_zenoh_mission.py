@@ -273,6 +273,8 @@ def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subp
                 "json",
                 *common,
                 *uav_opts,
+                # the brick UAV's own log, read back below
+                *(["--log", str(d / f"{name}.mcap")] if mode == "key" and role == "brick" else []),
             ],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -324,6 +326,26 @@ def _check_mission(
             check=False,
         )
         assert "mission completed; tasks: todo 0, running 0, done 4" in at.stdout, at.stdout
+        # the brick UAV's log: its own two tasks done, its state at the end, no mission report
+        uav_log = report.parent / "brick-1.mcap"
+        at = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(uav_log), "--at", "1e9"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert at.returncode == 0, at.stderr
+        assert "done 2" in at.stdout.splitlines()[0], at.stdout
+        assert at.stdout.splitlines()[1].split()[:2] == ["brick-1", "idle"], at.stdout
+        whole = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(uav_log)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert whole.returncode == 2 and "a UAV's log (masonry fly) holds no mission report" in whole.stderr
     assert mode != "key" or log.exists(), "the keyed mission's mission control writes --log"
 
 

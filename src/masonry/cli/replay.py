@@ -69,6 +69,10 @@ def replay(
     if serve is not None:
         _serve(recorded, the_plan, bp, task_ids, serve)
         return
+    if recorded.report is None and recorded.command.startswith("masonry fly"):
+        raise InputError(
+            f"{log}: a UAV's log (masonry fly) holds no mission report; --at T and --serve replay it"
+        )
     if recorded.report is None:
         raise InputError(
             f"{log}: the log ends before the mission's report (the run was cut short); --at T still reads it"
