@@ -3,9 +3,11 @@ signed with the mission's key (another key gets no answer), and a command sent a
 
 from __future__ import annotations
 
+import json
 import socket
 import subprocess
 import sys
+import urllib.request
 from pathlib import Path
 
 import pytest
@@ -55,15 +57,24 @@ def test_ctl_commands_a_running_mission_control(tmp_path):
             "120",
             "--format",
             "json",
+            "--serve",
+            "127.0.0.1:0",
         ],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
     try:
+        assert mc.stderr is not None
+        line = mc.stderr.readline()  # mission control's page, served while it waits for its fleet
+        assert "serving the mission's page at http://" in line, line
+        page = line.rsplit(" ", 1)[-1].strip()
         common = ["--mission", endpoint, "--key-file", str(key), "--mission-name", name]
         first = _ctl("pause", *common)
         assert (first.returncode, first.stdout) == (0, "pause: accepted\n"), first.stderr
+        with urllib.request.urlopen(page + "state.json", timeout=10) as r:
+            state = json.loads(r.read())
+        assert state["paused"] is True and state["operator"][0].endswith("operator: pause: accepted")
         again = _ctl("pause", *common)
         assert (again.returncode, again.stdout) == (1, "pause: refused: already paused\n"), again.stderr
         ghost = _ctl("recall", "brick-9", *common)

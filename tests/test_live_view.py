@@ -54,8 +54,27 @@ def test_serve_is_host_and_port(text, expected):
 
 @pytest.mark.parametrize("bad", ["http", "host:", "70000", "1.2.3.4:-1"])
 def test_a_bad_serve_is_refused(bad):
-    with pytest.raises(InputError, match="--serve"):
+    with pytest.raises(InputError, match="`serve`"):
         parse_serve(bad)
+
+
+def test_the_cli_names_the_flag_of_a_bad_serve_and_of_a_port_in_use():
+    import socket
+
+    from typer.testing import CliRunner
+
+    from masonry.cli import app
+
+    res = CliRunner().invoke(app, ["sim", str(CASE_STUDY), "--serve", "http"])
+    assert res.exit_code == 2 and "--serve 'http': give [HOST:]PORT" in res.output, res.output
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        res = CliRunner().invoke(
+            app, ["sim", str(CASE_STUDY), "--serve", f"127.0.0.1:{port}", "--no-progress"]
+        )
+    assert res.exit_code == 2 and f"--serve 127.0.0.1:{port}: cannot listen" in res.output, res.output
 
 
 def test_the_pacer_keeps_mission_time_at_the_time_scale_of_the_wall():

@@ -50,9 +50,11 @@ def parse_serve(text: str) -> tuple[str, int]:
     try:
         n = int(port)
     except ValueError:
-        raise InputError(f"--serve {text!r}: give [HOST:]PORT, e.g. 8080 or 127.0.0.1:8080") from None
+        raise InputError(
+            f"`serve` {text!r}: give [HOST:]PORT, e.g. 8080 or 127.0.0.1:8080", options=("serve",)
+        ) from None
     if not 0 <= n <= 65535:
-        raise InputError(f"--serve {text!r}: the port must be in 0..65535")
+        raise InputError(f"`serve` {text!r}: the port must be in 0..65535", options=("serve",))
     return host, n
 
 
@@ -110,7 +112,7 @@ class ViewServer:
             self._server = ThreadingHTTPServer((self.host, self.port), handler)
         except OSError as exc:
             raise InputError(
-                f"--serve {self.host}:{self.port}: cannot listen ({exc.strerror or exc})"
+                f"`serve` {self.host}:{self.port}: cannot listen ({exc.strerror or exc})", options=("serve",)
             ) from None
         self._server.daemon_threads = True
         self.port = int(self._server.server_address[1])
@@ -237,7 +239,7 @@ class Pacer:
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
         if not time_scale > 0:
-            raise InputError(f"--time-scale must be > 0, got {time_scale!r}")
+            raise InputError(f"`time_scale` must be > 0, got {time_scale!r}", options=("time_scale",))
         self.time_scale = time_scale
         self._monotonic = monotonic
         self._sleep = sleep
