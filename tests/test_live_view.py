@@ -260,3 +260,52 @@ def test_replay_serves_the_log_with_its_time_slider(tmp_path):
         proc.send_signal(signal.SIGINT)
         proc.communicate(timeout=30)
     assert proc.returncode == 0
+
+
+def test_the_operator_keys_in_the_terminal_of_a_served_sim():
+    """``masonry sim --serve`` in a terminal (a pty): p pauses, p again is refused, r resumes, 1 recalls the first
+    UAV; each answer is a line on stderr, and the mission still completes."""
+    import os
+    import pty
+
+    master, slave = pty.openpty()
+    proc = subprocess.Popen(
+        [
+            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY)),
+            *("--serve", "127.0.0.1:0", "--time-scale", "10", "--no-progress", "--format", "json"),
+        ],
+        stdin=slave,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    os.close(slave)
+    assert proc.stderr is not None
+
+    def line_with(text: str) -> str:
+        line = proc.stderr.readline()  # bounded: the process writes the line or ends (EOF)
+        while line and text not in line:
+            line = proc.stderr.readline()
+        assert text in line, f"no line with {text!r}"
+        return line
+
+    try:
+        assert "recall: 1 brick-1, 2 glue-1" in line_with("keys: p pause")
+        for key, answer in ((b"p", "pause: accepted"), (b"p", "pause: refused (already paused)")):
+            os.write(master, key)
+            line_with(answer)
+        os.write(master, b"r")
+        line_with("resume: accepted")
+        os.write(master, b"9x")  # not keys of ours: nothing
+        os.write(master, b"1")
+        line_with("recall brick-1: accepted")
+        os.write(master, b"r")
+        line_with("resume: accepted")
+        line_with("its page stays up")
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=60)
+        os.close(master)
+    assert proc.returncode == 0
+    report = json.loads(out)
+    assert report["completed"] is True and report["conflict_violations"] == 0

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -154,7 +156,8 @@ def sim(
         watch.attach(mission.control, mission.plan, mission.fleet)
         if serve is not None:
             mission.tick_hooks.append(Pacer(time_scale))
-        result = mission.run()
+        with _keys(mission, serve is not None):
+            result = mission.run()
         watch.finish(result)
     except BaseException:
         watch.stop()
@@ -166,3 +169,14 @@ def sim(
     watch.linger()
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
+
+
+def _keys(mission: Any, served: bool) -> Any:
+    """The operator's keys in the terminal while a served mission runs (``masonry.cli.keys``)."""
+    if not served:
+        return contextlib.nullcontext()
+    from masonry.cli.keys import TerminalKeys
+
+    return TerminalKeys(
+        mission.control.operator, [u.name for u in mission.fleet], lambda m: typer.echo(m, err=True)
+    )
