@@ -241,3 +241,26 @@ def test_an_event_reads_back_and_a_bad_one_is_refused():
     ):
         with pytest.raises(MissionError):
             MissionEvent.from_dict(bad)
+
+
+def test_a_resumed_missions_log_starts_with_the_tasks_done_before(tmp_path):
+    journal, log = tmp_path / "j.db", tmp_path / "r.mcap"
+    first = runner.invoke(app, ["sim", str(CASE_STUDY), "--journal", str(journal), "--no-progress"])
+    assert first.exit_code == 0, first.output
+    again = runner.invoke(
+        app,
+        ["sim", str(CASE_STUDY), "--journal", str(journal), "--resume", "--log", str(log), "--no-progress"],
+    )
+    assert again.exit_code == 0, again.output
+    at = runner.invoke(app, ["replay", str(log), "--at", "0"])
+    assert "tasks: todo 0, running 0, done 4, stuck 0" in at.stdout, at.stdout
+    with open(log, "rb") as f:
+        first_wall = json.loads(next(iter(make_reader(f).iter_messages(topics=["/wall"])))[2].data)
+    from masonry.observe.mcap_log import COLOURS
+
+    done = dict(zip("rgba", COLOURS["done"]))
+    sprayed = dict(zip("rgba", COLOURS["adhesion_done"]))
+    assert len(first_wall["entities"]) == 8  # 4 placed beforehand, 4 done by the first run
+    for e in first_wall["entities"]:
+        colour = (e.get("cubes") or e.get("lines"))[0]["color"]
+        assert colour == (done if "cubes" in e else sprayed), e["id"]

@@ -227,11 +227,11 @@ def mission_control(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
         )
-        watch.attach(mc, the_plan, bp.fleet)
         offset = 0.0
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
+        watch.attach(mc, the_plan, bp.fleet)  # (after the restore: a resumed mission's done tasks show done)
         typer.echo(
             f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
             f"fleet {', '.join(u.name for u in bp.fleet)}"

@@ -64,7 +64,7 @@ def replay(
     the_plan = make_plan(bp)
     task_ids = [t.id for t in the_plan.tasks if not t.done]
     if at is not None:
-        typer.echo("\n".join(view_at(recorded.events, at, task_ids).lines()))
+        typer.echo("\n".join(view_at(recorded.events, at, task_ids, recorded.done).lines()))
         return
     if serve is not None:
         _serve(recorded, the_plan, bp, task_ids, serve)
@@ -101,7 +101,7 @@ def _serve(recorded: Any, the_plan: Any, bp: Any, task_ids: list[str], serve: st
     server = ViewServer(
         *parse_serve(serve),
         layout=wall_layout(the_plan, bp.fleet, recorded.title),
-        state=lambda t: view_at(events, end_s if t is None else t, task_ids).snapshot(),
+        state=lambda t: view_at(events, end_s if t is None else t, task_ids, recorded.done).snapshot(),
         version=lambda: 0,
         replay=end_s,
     ).start()

@@ -68,14 +68,18 @@ class Watchers:
         from masonry.mission.events import EventFanout
 
         sinks: list[Any] = []
+        # the tasks a resumed mission did before (the plan's own done ones, bricks placed beforehand, aside)
+        done = set(control.dispatcher.done) - {t.id for t in plan.tasks if t.done}
         if self.log_path is not None:
-            self.log = open_log(self.log_path, plan, self.blueprint, self.name, self.command).open()
+            self.log = open_log(self.log_path, plan, self.blueprint, self.name, self.command)
+            self.log.done = done
+            self.log.open()
             sinks.append(self.log)
         if self.serve is not None:
             from masonry.mission.view import MissionView, wall_layout
             from masonry.observe.web import ViewServer
 
-            self.view = MissionView([t.id for t in plan.tasks if not t.done])
+            self.view = MissionView([t.id for t in plan.tasks if not t.done], done=done)
             view = self.view
             commands = self.commands
             if commands is None and _loopback(self.serve[0]):

@@ -195,9 +195,11 @@ class MissionView:
             return out
 
 
-def view_at(events: Iterable[MissionEvent], time_s: float, task_ids: Iterable[str] = ()) -> MissionView:
-    """The view after every event of ``events`` at or before ``time_s``."""
-    view = MissionView(task_ids)
+def view_at(
+    events: Iterable[MissionEvent], time_s: float, task_ids: Iterable[str] = (), done: Iterable[str] = ()
+) -> MissionView:
+    """The view after every event of ``events`` at or before ``time_s`` (``done``: tasks done before them)."""
+    view = MissionView(task_ids, done)
     for e in events:
         if e.time_s > time_s:
             break

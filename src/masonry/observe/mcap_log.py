@@ -140,6 +140,8 @@ class McapLog:
         self._channels: dict[str, int] = {}
         self._last_s = 0.0
         self._tasks = {t.id: t for t in plan.tasks}
+        #: tasks done before the log opens (a resumed mission's), drawn done on the wall from the start
+        self.done: set[str] = set()
         self._volumes: dict[str, Any] = {}
         self._tf_s: dict[str, float] = {}
         self._states: dict[str, tuple[Any, float]] = {}
@@ -165,7 +167,13 @@ class McapLog:
         self._write(
             "/mission/blueprint",
             0.0,
-            {"yaml": self.blueprint_yaml, "title": self.title, "source": "", "command": self.command},
+            {
+                "yaml": self.blueprint_yaml,
+                "title": self.title,
+                "source": "",
+                "command": self.command,
+                "done": sorted(self.done),
+            },
         )
         self._write(
             "/wall",
@@ -173,7 +181,8 @@ class McapLog:
             {
                 "deletions": [],
                 "entities": [
-                    self._task_entity(0.0, t.id, "done" if t.done else "todo") for t in self.plan.tasks
+                    self._task_entity(0.0, t.id, "done" if t.done or t.id in self.done else "todo")
+                    for t in self.plan.tasks
                 ],
             },
         )
@@ -361,6 +370,7 @@ class RecordedMission:
     events: tuple[MissionEvent, ...]
     report: MissionReport | None  # None: the log ends before the mission did
     extra: Mapping[str, Any] = field(default_factory=dict)
+    done: tuple[str, ...] = ()  # tasks done before the log began (a resumed mission)
 
 
 def read_log(path: str | Path) -> RecordedMission:
@@ -408,6 +418,7 @@ def read_log(path: str | Path) -> RecordedMission:
         tuple(events),
         report,
         extra,
+        tuple(str(t) for t in blueprint.get("done") or ()),
     )
 
 

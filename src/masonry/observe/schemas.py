@@ -122,7 +122,13 @@ MASONRY: dict[str, dict[str, Any]] = {
     "masonry.Blueprint": {
         "title": "masonry.Blueprint",
         "type": "object",
-        "properties": {"yaml": _STR, "title": _STR, "source": _STR, "command": _STR},
+        "properties": {
+            "yaml": _STR,
+            "title": _STR,
+            "source": _STR,
+            "command": _STR,
+            "done": {"type": "array", "items": _STR},
+        },
         "required": ["yaml", "title"],
     },
     "masonry.MissionReport": {
