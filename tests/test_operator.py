@@ -164,3 +164,16 @@ def test_the_operator_messages_round_trip_and_are_checked():
             decode(json.dumps({**bad, **change}), fleet)
     with pytest.raises(ProtocolError, match="only 'mission-control'"):
         decode(encode(Recall("brick-1", "glue-1", 1.0, "x")), fleet)
+
+
+def test_a_heartbeat_may_carry_the_battery():
+    from masonry.mission.messages import Heartbeat
+
+    fleet = ["brick-1"]
+    hb = Heartbeat("brick-1", 3.0, "idle", None, (1.0, 2.0, 0.0), battery=0.75)
+    assert decode(encode(hb), fleet) == hb
+    assert "battery" not in json.loads(encode(Heartbeat("brick-1", 3.0)))  # left out when unknown
+    bad = json.loads(encode(hb))
+    for value in (1.5, -0.1, "full", True):
+        with pytest.raises(ProtocolError, match="battery"):
+            decode(json.dumps({**bad, "battery": value}), fleet)

@@ -96,6 +96,7 @@ class UavLink:
     lost: bool = False
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
+    battery: float | None = None  # as its heartbeats report it (None: they do not)
     status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
@@ -428,6 +429,8 @@ class MissionControl:
         if isinstance(msg, (Heartbeat, Progress)):
             if isinstance(msg, Progress):
                 self.events.progress += 1
+            elif msg.battery is not None:
+                link.battery = msg.battery
             self._report(link, msg.state, msg.position_m)
             if self.sink is not None and self.uav_events:
                 self._emit_uav(now_s, link)
@@ -710,7 +713,7 @@ class MissionControl:
             self.dispatcher.task_of(name),
             state=link.state,
             position_m=None if p is None else list(p),
-            battery=battery,
+            battery=link.battery if battery is None else battery,
             status=link.status,
             volumes=volume_list(self.columns.volumes(name)),
         )

@@ -96,6 +96,8 @@ class UavHandler(MissionLink, ClearanceLink):
         heartbeat_period_s: how often the handler sends its heartbeat.
         heartbeat_timeout_s: mission control silent for longer counts as lost.
         battery, swap_battery, reserve_fraction: the battery reserve (see the module docstring).
+        report_battery: the battery (0..1) the heartbeats report, without a reserve (a remote UAV's autopilot);
+            default ``battery``.
         after_result: called right after a result is sent; the in-process simulation steps mission control
             there, so that the answer (the next task) is in the inbox when the machine polls for it, as with a
             network round trip shorter than a tick.
@@ -113,6 +115,7 @@ class UavHandler(MissionLink, ClearanceLink):
         heartbeat_timeout_s: float = 5.0,
         battery: Callable[[], float] | None = None,
         swap_battery: Callable[[], bool] | None = None,
+        report_battery: Callable[[], float] | None = None,
         reserve_fraction: float = 0.4,
         after_result: Callable[[], None] | None = None,
         tasks: Iterable[Task] | None = None,
@@ -126,6 +129,8 @@ class UavHandler(MissionLink, ClearanceLink):
         self.refused: list[str] = []
         self._battery = battery
         self._swap_battery = swap_battery
+        #: what the heartbeats say of the battery (the reserve's, or ``report_battery``'s)
+        self._report_battery = report_battery if report_battery is not None else battery
         self.reserve_fraction = reserve_fraction
         self.battery_swaps = 0
         self.name = name
@@ -356,6 +361,9 @@ class UavHandler(MissionLink, ClearanceLink):
                     state=state,
                     task_id=cur.task_id if cur else None,
                     position_m=self._where(),
+                    battery=None
+                    if self._report_battery is None
+                    else min(1.0, max(0.0, float(self._report_battery()))),
                 )
             )
         if self._column is not None or self._columns_left:

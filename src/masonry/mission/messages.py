@@ -64,6 +64,8 @@ class Heartbeat:
     state: str = ""
     task_id: str | None = None
     position_m: Vec3 | None = None
+    #: the UAV's battery, 0..1 (None: not reported; optional on the wire, for the log and the live page)
+    battery: float | None = None
 
 
 @dataclass(frozen=True)
@@ -252,6 +254,8 @@ def encode(message: Message) -> bytes:
             task_id=message.task_id,
             position_m=_vec(message.position_m),
         )
+        if message.battery is not None:
+            body["battery"] = message.battery
     elif isinstance(message, Assign):
         body.update(
             uav=message.uav,
@@ -503,10 +507,20 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         if not (_finite_number(x) and _finite_number(y) and _finite_number(z)):
             return None
         p = (float(x), float(y), float(z))
+    battery: Any = data.get("battery")
+    if battery is not None:
+        if not _finite_number(battery) or not 0.0 <= battery <= 1.0:
+            return None
+        battery = float(battery)
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
     hb.__dict__.update(
-        sender=sender, time_s=float(time_s), state=str(data.get("state") or ""), task_id=task_id, position_m=p
+        sender=sender,
+        time_s=float(time_s),
+        state=str(data.get("state") or ""),
+        task_id=task_id,
+        position_m=p,
+        battery=battery,
     )
     return hb
 
@@ -582,7 +596,15 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         state=str(f.data.get("state") or ""),
         task_id=f.str_("task_id", optional=True),
         position_m=f.vec("position_m", optional=True),
+        battery=_battery(f),
     )
+
+
+def _battery(f: _Fields) -> float | None:
+    battery = f.num("battery", optional=True)
+    if battery is not None and not 0.0 <= battery <= 1.0:
+        raise f.fail("battery", f"must be in 0..1, got {battery}")
+    return None if battery is None else float(battery)
 
 
 def _assign(f: _Fields, sender: str, fleet: Collection[str] | None) -> Assign:

@@ -158,6 +158,7 @@ def run_remote_uav(
         spec.name,
         transport,
         position=lambda: fc.telemetry().position_m,
+        report_battery=lambda: fc.telemetry().battery_fraction,
         heartbeat_period_s=heartbeat_period_s,
         heartbeat_timeout_s=heartbeat_timeout_s,
         after_result=await_answer,
