@@ -326,7 +326,9 @@ def _check_mission(
             check=False,
         )
         assert "mission completed; tasks: todo 0, running 0, done 4" in at.stdout, at.stdout
-        assert all("battery" in line for line in at.stdout.splitlines()[1:3]), at.stdout  # from the heartbeats
+        assert all("battery" in line for line in at.stdout.splitlines()[1:3]), (
+            at.stdout
+        )  # from the heartbeats
         # the brick UAV's log: its own two tasks done, its state at the end, no mission report
         uav_log = report.parent / "brick-1.mcap"
         at = subprocess.run(
