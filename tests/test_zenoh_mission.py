@@ -212,6 +212,8 @@ def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subp
         key_file = write_key_file(d / "mission.key")
         mc_opts += ["--key-file", str(key_file)]
         uav_opts += ["--key-file", str(key_file)]
+    if mode == "key":
+        mc_opts += ["--log", str(d / "mission.mcap")]  # mission control's log, read back below
     if mode == "tls":
         mc_conf, uav_conf = make_tls_files(d)
         mc_opts += ["--zenoh-config", str(mc_conf)]
@@ -273,6 +275,8 @@ def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subp
                 "json",
                 *common,
                 *uav_opts,
+                # the brick UAV's own log, read back below
+                *(["--log", str(d / f"{name}.mcap")] if mode == "key" and role == "brick" else []),
             ],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -304,6 +308,50 @@ def _check_mission(
         assert run["refused"] == [] and run["dropped"] == {}, mode
         flown[run["uav"]] = [t["task"] for t in run["tasks"] if t["status"] == "done"]
     assert flown == {"brick-1": ["B0", "B1"], "glue-1": ["A0", "A1"]}, mode
+    log = report.parent / "mission.mcap"
+    if log.exists():
+        # mission control's log replays to the report it printed, security counts included
+        replayed = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(log), "--format", "json"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert replayed.returncode == 0, replayed.stderr
+        assert replayed.stdout == mc_out, mode
+        at = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(log), "--at", "1e9"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert "mission completed; tasks: todo 0, running 0, done 4" in at.stdout, at.stdout
+        assert all("battery" in line for line in at.stdout.splitlines()[1:3]), (
+            at.stdout
+        )  # from the heartbeats
+        # the brick UAV's log: its own two tasks done, its state at the end, no mission report
+        uav_log = report.parent / "brick-1.mcap"
+        at = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(uav_log), "--at", "1e9"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert at.returncode == 0, at.stderr
+        assert "done 2" in at.stdout.splitlines()[0], at.stdout
+        assert at.stdout.splitlines()[1].split()[:2] == ["brick-1", "idle"], at.stdout
+        whole = subprocess.run(
+            [sys.executable, "-c", MAIN, "replay", str(uav_log)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert whole.returncode == 2 and "a UAV's log (masonry fly) holds no mission report" in whole.stderr
+    assert mode != "key" or log.exists(), "the keyed mission's mission control writes --log"
 
 
 @pytest.mark.slow

@@ -51,6 +51,10 @@ class CameraFrame:
 #: A failed task's ``reason`` starts with this when the UAV abandoned it for its battery: the UAV's fault, not
 #: the task's, so mission control does not count it as an attempt of the task.
 BATTERY_LOW_REASON = "battery low"
+#: ... and with this when the operator recalled the UAV (``masonry ctl recall``): not the task's fault either.
+RECALL_REASON = "recalled by the operator"
+#: The reasons of a failure that costs its task no attempt.
+UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON)
 
 
 #: The phases a task attempt's time is split into (docs/mission.md, "Where the time goes"), in the order a task

@@ -11,6 +11,8 @@ _MODULES = (
     "mission",  # masonry mission-control
     "perception",  # masonry estimate, markers, calibrate
     "fly",  # masonry fly
+    "replay",  # masonry replay
+    "ctl",  # masonry ctl
     "fsm",  # masonry fsm diagram
     "hardware",  # masonry sitl
 )

@@ -241,6 +241,13 @@ def fly(
         "--zenoh-config",
         help="Mission mode: Zenoh configuration file (JSON5): TLS, access control (docs/security.md).",
     ),
+    log: Path | None = typer.Option(
+        None,
+        "--log",
+        metavar="FILE.mcap",
+        help="Mission mode: write this UAV's log (its tasks, state, pose, battery) to this MCAP file "
+        "(docs/logging.md).",
+    ),
 ) -> None:
     """Fly one UAV: one task (--task ID: state trace, then the result; exit 1 if it failed), or a mission's tasks
     from mission control (--mission tcp/HOST:7447; exit 1 if mission control did not end the mission)."""
@@ -278,6 +285,7 @@ def fly(
     if not dt > 0.0 or not timeout > 0.0:
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
+    _check_log(log, mission)
     if mission is not None:
         if task is not None:
             raise InputError(
@@ -312,6 +320,8 @@ def fly(
             hardware=hardware.hw,
             key=key,
             zenoh_config=zenoh_config,
+            log=log,
+            blueprint_path=blueprint,
         )
         return
     if task is None:
@@ -330,6 +340,18 @@ def fly(
         fmt=fmt,
         hardware=hardware.hw,
     )
+
+
+def _check_log(log: Path | None, mission: str | None) -> None:
+    """``--log``: mission mode only, a writable ``.mcap`` file."""
+    if log is None:
+        return
+    if mission is None:
+        raise InputError("--log is for mission mode (--mission tcp/HOST:PORT)")
+    from masonry.cli.outputs import check_output_path
+    from masonry.cli.watch import check_log_option
+
+    check_output_path(check_log_option(log), "--log")
 
 
 def _fly_one_task(
@@ -473,6 +495,8 @@ def _fly_mission(
     hardware: Any = None,
     key: bytes | None = None,
     zenoh_config: Path | None = None,
+    log: Path | None = None,
+    blueprint_path: Path | None = None,
 ) -> None:
     """Mission mode: one UAV taking its tasks from mission control over Zenoh (masonry.mission.remote).
 
@@ -483,6 +507,12 @@ def _fly_mission(
 
     echo = None if fmt == "json" else typer.echo
     adapters = None
+    mission_log = None
+    if log is not None and blueprint_path is not None:
+        from masonry.cli.watch import open_log
+        from masonry.planner import plan
+
+        mission_log = open_log(log, plan(bp), blueprint_path, spec.name, "fly").open()
     if not sim:
         adapters = select_adapters(
             sim=False, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware
@@ -515,10 +545,14 @@ def _fly_mission(
             key=key,
             zenoh_config=zenoh_config,
             uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s},
+            events_sink=mission_log,
         )
     finally:
         if adapters is not None:
             adapters.close()
+        if mission_log is not None:
+            mission_log.close()
+            typer.echo(f"wrote {log}", err=True)
     tasks = [
         {
             "task": e.task_id,

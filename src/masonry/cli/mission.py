@@ -5,7 +5,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import time
 from pathlib import Path
@@ -143,17 +142,31 @@ def mission_control(
     ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
+    log: Path | None = typer.Option(
+        None,
+        "--log",
+        metavar="FILE.mcap",
+        help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
+        "docs/logging.md).",
+    ),
+    serve: str | None = typer.Option(
+        None,
+        "--serve",
+        metavar="[HOST:]PORT",
+        help="Serve the mission's live page here (host 127.0.0.1 by default); docs/observe.md.",
+    ),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
     from masonry.blueprint import load_blueprint
-    from masonry.cli.outputs import check_output_path, write_atomic
+    from masonry.cli.outputs import check_output_paths, write_mission_outputs
+    from masonry.cli.watch import Watchers, check_log_option
     from masonry.fingerprint import wall_digest
     from masonry.mission.control import MissionControl
     from masonry.mission.messages import MISSION_CONTROL
-    from masonry.mission.report import control_report
     from masonry.mission.simulate import priority_durations_s
     from masonry.mission.zenoh_transport import ZenohTransport
+    from masonry.observe.web import parse_serve
     from masonry.planner import POLICIES, estimate_durations_s
     from masonry.planner import plan as make_plan
 
@@ -176,7 +189,7 @@ def mission_control(
             "--stall-timeout": stall_timeout,
         },
     )
-    check_output_path(report, "--report")
+    check_output_paths([("--report", report), ("--log", check_log_option(log))])
     key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
@@ -192,6 +205,9 @@ def mission_control(
         MISSION_CONTROL, listen=listen, connect=connect, mission=mission_name, config_file=zenoh_config
     )
     transport = wrap(zenoh, key, mission_name)
+    watch = Watchers(
+        log, parse_serve(serve) if serve else None, blueprint, bp.name or blueprint.name, "mission-control"
+    )
     zenoh.connect()
     try:
         mc = MissionControl(
@@ -215,6 +231,7 @@ def mission_control(
         if state is not None:
             mc.restore(state)
             offset = state.last_time_s
+        watch.attach(mc, the_plan, bp.fleet)  # (after the restore: a resumed mission's done tasks show done)
         typer.echo(
             f"mission control listening on {', '.join(listen)}: {plural(sum(1 for t in the_plan.tasks if not t.done), 'task')}, "
             f"fleet {', '.join(u.name for u in bp.fleet)}"
@@ -223,20 +240,39 @@ def mission_control(
             err=True,
         )
         _run_in_wall_time(mc, offset, time_scale=time_scale, max_time_s=max_time, tick_s=tick)
+        result, security = _final_report(mc, the_plan, policy, expected_s, transport, watch)
+    except BaseException:
+        watch.stop()
+        raise
     finally:
         transport.close()
         if jr is not None:
             jr.close()
-    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
-    security = security_summary(transport, mc.events.ignored)
+        watch.close()
     _echo_security(security)
-    out = {**result.to_dict(), "security": security}
-    if report is not None:
-        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
-        typer.echo(f"wrote {report}", err=True)
-    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
+    write_mission_outputs(
+        result,
+        bp,
+        bp.name or blueprint.name,
+        fmt=fmt,
+        report=report,
+        gantt=None,
+        plot3d=None,
+        extra={"security": security},
+    )
+    watch.linger()
     if not result.completed:
         raise typer.Exit(1)
+
+
+def _final_report(mc: Any, the_plan: Any, policy: str, expected_s: Any, transport: Any, watch: Any) -> Any:
+    """The mission's report and security counts, also into the log."""
+    from masonry.mission.report import control_report
+
+    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
+    security = security_summary(transport, mc.events.ignored)
+    watch.finish(result, {"security": security})
+    return result, security
 
 
 def _open_journal(

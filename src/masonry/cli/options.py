@@ -58,6 +58,7 @@ RANGES: dict[str, Bound] = {
     "schedule --adhesion-uavs": _UAVS,
     "schedule --time-limit": Bound(0.0, 86_400.0, "s", low_open=True),
     "schedule --workers": Bound(1, 64, integer=True),
+    "sim --time-scale": _TIME_SCALE,  # with --serve
     "fly --timeout": Bound(0.0, 86_400.0, "s", low_open=True),
     "fly --time-scale": _TIME_SCALE,
     "fly --wait": Bound(0.0, 3600.0, "s", low_open=True),
@@ -92,6 +93,7 @@ RANGES: dict[str, Bound] = {
     "--dpi": Bound(30, 2400, integer=True),
     "--frames": Bound(1, 10_000_000, integer=True),
     "estimate --camera": Bound(0, 255, integer=True),
+    "ctl --timeout": Bound(0.0, 3600.0, "s", low_open=True),
     # sitl
     "--port": Bound(0, 65535, integer=True),
     "sitl --time-scale": _TIME_SCALE,

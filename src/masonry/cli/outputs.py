@@ -12,8 +12,9 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
+from typing import Any
 
 from masonry.errors import InputError
 
@@ -107,4 +108,43 @@ def _umask() -> int:
     return mask
 
 
-__all__ = ["atomic_path", "check_output_path", "check_output_paths", "write_atomic"]
+def write_mission_outputs(
+    result: Any,
+    blueprint: Any,
+    name: str,
+    *,
+    fmt: str,
+    report: Path | None,
+    gantt: Path | None,
+    plot3d: Path | None,
+    extra: Mapping[str, Any] | None = None,
+) -> None:
+    """A simulated mission's outputs, the same from ``masonry sim`` and ``masonry replay``: ``--report``,
+    ``--gantt``, ``--plot3d`` (titled with ``name``), then the summary or the JSON on stdout.
+
+    ``extra``: more keys of the JSON report (``mission-control``'s ``security``).
+    """
+    import json
+
+    import typer
+
+    out = result.to_dict() if not extra else {**result.to_dict(), **extra}
+    if report is not None:
+        write_atomic(report, json.dumps(out, indent=1) + "\n", "--report")
+        typer.echo(f"wrote {report}", err=True)
+    if gantt is not None:
+        from masonry.viz.gantt import draw_gantt
+
+        with atomic_path(gantt, "--gantt") as tmp:
+            draw_gantt(result, tmp, title=f"{name}: {result.policy}, seed {result.seed}")
+        typer.echo(f"wrote {gantt}", err=True)
+    if plot3d is not None:
+        from masonry.viz.plot3d import draw_plot3d
+
+        with atomic_path(plot3d, "--plot3d") as tmp:
+            draw_plot3d(blueprint, result, tmp, title=f"{name}: wall and flown paths")
+        typer.echo(f"wrote {plot3d}", err=True)
+    typer.echo(json.dumps(out) if fmt == "json" else result.summary())
+
+
+__all__ = ["atomic_path", "check_output_path", "check_output_paths", "write_atomic", "write_mission_outputs"]

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
+from typing import Any
 
 import typer
 
 from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text
-from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
+from masonry.cli.outputs import check_output_paths, write_mission_outputs
+from masonry.cli.watch import check_log_option
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
@@ -68,6 +71,27 @@ def sim(
             "report who waits for whom (`stall` in the JSON); 0: never.",
         ),
     ),
+    log: Path | None = typer.Option(
+        None,
+        "--log",
+        metavar="FILE.mcap",
+        help="Write the mission's log to this MCAP file (Foxglove opens it; `masonry replay` reads it back; "
+        "docs/logging.md).",
+    ),
+    serve: str | None = typer.Option(
+        None,
+        "--serve",
+        metavar="[HOST:]PORT",
+        help="Serve the mission's live page here (host 127.0.0.1 by default) and fly it at --time-scale; "
+        "docs/observe.md.",
+    ),
+    time_scale: float = typer.Option(
+        1.0,
+        "--time-scale",
+        help=help_text(
+            "sim", "--time-scale", "With --serve: mission seconds per wall second (1: real time, to watch)."
+        ),
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -97,15 +121,18 @@ def sim(
             "--seed": seed,
             "--dt": dt,
             "--stall-timeout": stall_timeout,
+            "--time-scale": time_scale,
         },
     )
     for opt, p, exts in (("--gantt", gantt, (".png", ".svg")), ("--plot3d", plot3d, (".png", ".svg"))):
         if p is not None and p.suffix.lower() not in exts:
             raise InputError(f"{opt} {p}: the file must end in {' or '.join(exts)}")
     # before the work: a long simulation must not end in an unwritable report
-    check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d)])
+    check_output_paths(
+        [("--report", report), ("--gantt", gantt), ("--plot3d", plot3d), ("--log", check_log_option(log))]
+    )
     if journal is not None and any(
-        p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d)
+        p is not None and p.resolve() == journal.resolve() for p in (report, gantt, plot3d, log)
     ):
         raise InputError(f"--journal {journal}: the same file as an output")
     if (policy == "schedule") != (schedule_file is not None):
@@ -117,9 +144,13 @@ def sim(
         from masonry.mission.schedule_file import read_schedule
 
         offline = read_schedule(schedule_file)
+    name = bp.name or blueprint.name
 
     from masonry.cli.progress import progress_display
+    from masonry.cli.watch import Watchers
+    from masonry.observe.web import Pacer, parse_serve
 
+    watch = Watchers(log, parse_serve(serve) if serve is not None else None, blueprint, name, "sim")
     progress_cb, finish = progress_display(progress)
     try:
         mission = SimulatedMission.from_blueprint(
@@ -139,24 +170,30 @@ def sim(
             reservation=reservation,
             schedule=offline,
         )
-        result = mission.run()
+        watch.attach(mission.control, mission.plan, mission.fleet)
+        if serve is not None:
+            mission.tick_hooks.append(Pacer(time_scale))
+        with _keys(mission, serve is not None):
+            result = mission.run()
+        watch.finish(result)
+    except BaseException:
+        watch.stop()
+        raise
     finally:
         finish()
-    if report is not None:
-        write_atomic(report, result.to_json(indent=1) + "\n", "--report")
-        typer.echo(f"wrote {report}", err=True)
-    if gantt is not None:
-        from masonry.viz.gantt import draw_gantt
-
-        with atomic_path(gantt, "--gantt") as tmp:
-            draw_gantt(result, tmp, title=f"{bp.name or blueprint.name}: {result.policy}, seed {result.seed}")
-        typer.echo(f"wrote {gantt}", err=True)
-    if plot3d is not None:
-        from masonry.viz.plot3d import draw_plot3d
-
-        with atomic_path(plot3d, "--plot3d") as tmp:
-            draw_plot3d(bp, result, tmp, title=f"{bp.name or blueprint.name}: wall and flown paths")
-        typer.echo(f"wrote {plot3d}", err=True)
-    typer.echo(result.to_json() if fmt == "json" else result.summary())
+        watch.close()
+    write_mission_outputs(result, bp, name, fmt=fmt, report=report, gantt=gantt, plot3d=plot3d)
+    watch.linger()
     if not result.completed:
         raise typer.Exit(1)  # the report is printed; the status says the wall is not finished
+
+
+def _keys(mission: Any, served: bool) -> Any:
+    """The operator's keys in the terminal while a served mission runs (``masonry.cli.keys``)."""
+    if not served:
+        return contextlib.nullcontext()
+    from masonry.cli.keys import TerminalKeys
+
+    return TerminalKeys(
+        mission.control.operator, [u.name for u in mission.fleet], lambda m: typer.echo(m, err=True)
+    )

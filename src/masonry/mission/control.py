@@ -31,25 +31,31 @@ from typing import Any, Literal
 from masonry.blueprint import UavSpec
 from masonry.errors import MissionError, ProtocolError
 from masonry.mission.airspace import ON_PAD_Z_M
+from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.messages import (
     MISSION_CONTROL,
+    OPERATOR,
     Assign,
     Clearance,
     ClearanceRequest,
+    CommandAnswer,
     Heartbeat,
     MissionEnd,
+    OperatorCommand,
     Progress,
+    Recall,
     Result,
     decode,
     encode,
     phases_from_dict,
 )
+from masonry.mission.operator import Operator
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import BATTERY_LOW_REASON, PhaseTimes
+from masonry.ports import UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -91,6 +97,7 @@ class UavLink:
     lost: bool = False
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
+    battery: float | None = None  # as its heartbeats report it (None: they do not)
     status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
@@ -151,6 +158,8 @@ class MissionControl:
             either way (:attr:`sites`).
         schedule: the offline schedule (:class:`masonry.planner.schedule_values.OfflineSchedule`) that
             ``policy="schedule"`` follows (:mod:`masonry.planner.schedule_policy`).
+        events_sink: gets every :class:`~masonry.mission.events.MissionEvent` (assignments, results,
+            clearances, UAV reports, losses, the stall, the end) for a log or a live view; it only watches.
     """
 
     def __init__(
@@ -177,6 +186,7 @@ class MissionControl:
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = DEFAULT_RESERVATION,
         schedule: Any = None,
+        events_sink: EventSink | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.schedule_policy import make_dispatcher
@@ -185,6 +195,12 @@ class MissionControl:
         if len(set(names)) != len(names):
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
+        self.sink = events_sink
+        #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
+        self.operator = Operator()
+        #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
+        #: for the sink, :meth:`sample`, turns this off: its samples are the better measure)
+        self.uav_events = True
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest
@@ -309,8 +325,8 @@ class MissionControl:
 
     @property
     def over(self) -> bool:
-        """Finished, blocked or stalled: mission control has sent (or will send) MissionEnd."""
-        return self.finished or self.blocked or self.stall is not None
+        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd."""
+        return self.finished or self.blocked or self.stall is not None or self.operator.aborted
 
     @property
     def online(self) -> list[str]:
@@ -324,6 +340,7 @@ class MissionControl:
             self._first_step_s = now_s
         for raw in self.transport.receive():
             self._handle(raw, now_s)
+        self.operator.step(self, now_s)
         self._check_heartbeats(now_s)
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
@@ -340,6 +357,7 @@ class MissionControl:
                         g.layer_m,
                     ),
                 )
+                self._emit_clearance(now_s, g)
                 log.debug(
                     "flight to (%.2f, %.2f) %s to %s",
                     g.site_m[0],
@@ -350,12 +368,15 @@ class MissionControl:
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
-            if self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version):
+            if (
+                self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
+            ) and not self.operator.holds_dispatch():
                 self._dispatch(now_s)
             self._watch_progress(now_s)
             if self.over:
                 self.ended_at_s = now_s
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
+                self._emit(now_s, "end", completed=self.finished)
         if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:
             self._last_heartbeat_s = now_s
             self._broadcast(
@@ -372,6 +393,7 @@ class MissionControl:
             self._lose(name, now_s)
         self.started_at_s = now_s
         self._dirty = True
+        self._emit(now_s, "start", fleet=[n for n, u in self.uavs.items() if not u.lost])
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -382,7 +404,10 @@ class MissionControl:
             log.warning("rejected message: %s", exc)
             return
         self.events.received += 1
-        if msg.sender == MISSION_CONTROL:
+        if isinstance(msg, OperatorCommand):
+            self._on_command(msg, now_s)
+            return
+        if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
         if link.lost:
@@ -409,7 +434,11 @@ class MissionControl:
         if isinstance(msg, (Heartbeat, Progress)):
             if isinstance(msg, Progress):
                 self.events.progress += 1
+            elif msg.battery is not None:
+                link.battery = msg.battery
             self._report(link, msg.state, msg.position_m)
+            if self.sink is not None and self.uav_events:
+                self._emit_uav(now_s, link)
 
     def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:
         """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
@@ -441,6 +470,7 @@ class MissionControl:
         if self.sites.leaving(msg.sender, msg.site_m, now_s):
             self.columns.touch()  # a site is free: who waits for it may go now
         g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+        self._emit_clearance(now_s, g)
         self._send(
             msg.sender,
             Clearance(
@@ -494,13 +524,24 @@ class MissionControl:
                 if r.phases is not None:
                     fields["phases"] = r.phases.as_dict()
                 self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+            self._emit(
+                now_s,
+                "completed",
+                msg.sender,
+                r.task_id,
+                attempt=att.attempt,
+                placement_error_m=r.placement_error_m,
+                coverage=r.coverage,
+            )
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
-            # abandoned for the UAV's battery: not an attempt of the task (its UAV lands for a fresh pack)
-            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(BATTERY_LOW_REASON))
+            # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
+            # attempt of the task
+            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(UNCOUNTED_REASONS))
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
+            self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=att.reason)
         self._dirty = True
 
     def _ignore(self, reason: str, detail: str) -> None:
@@ -533,6 +574,7 @@ class MissionControl:
                 att.reason = f"uav {status}"
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
+        self._emit(now_s, "lost", name, released, status=status)
         self._dirty = True
 
     def _dispatch(self, now_s: float) -> None:
@@ -547,6 +589,7 @@ class MissionControl:
             self._raise_layers((a.task_id,))
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
+            self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
             self._send(
                 a.uav,
                 Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s, self.wall_digest),
@@ -557,6 +600,8 @@ class MissionControl:
         here): take-offs from neighbouring pads go one after the other."""
         from masonry.mission.airspace import Phase
 
+        if not self.operator.may_fly(self, name):
+            return False  # recalled, or its role at the operator's fleet limit
         if self.columns.phase(name) is Phase.LANDED and not self.columns.take_off(name):
             self._deferred_at = self.columns.version
             return False
@@ -567,7 +612,10 @@ class MissionControl:
     def _watch_progress(self, now_s: float) -> None:
         """The watchdog: progress is a task done or failed, a flight or hold flight granted, a UAV's state
         changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
+        if self.operator.paused or self.operator.held or self.operator.aborting:
+            return  # waiting for the operator is no stall
         signature = (
+            self.operator.version,
             self._results,
             self.columns.granted_count,
             self.columns.held_back,
@@ -581,6 +629,7 @@ class MissionControl:
             now_s, self._watch.since_s, self._watch.timeout_s, live, self.dispatcher, self.columns
         )
         log.warning("%s", self.stall.line())
+        self._emit(now_s, "stall", line=self.stall.line())
 
     def _journal_visit(self, visit: SiteVisit) -> None:
         """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
@@ -605,6 +654,83 @@ class MissionControl:
         )
         if top is not None:
             self.columns.raise_base(top)
+
+    def _on_command(self, msg: OperatorCommand, now_s: float) -> None:
+        """An operator's command over the network: applied now, answered to the operator. ``masonry ctl`` sends
+        it again until it hears the answer: a command already answered (its ``id``) is answered again, not
+        applied twice."""
+        answer = self.operator.answered.get(msg.id) if msg.id else None
+        if answer is None:
+            command = {"command": msg.command, "uav": msg.uav, "role": msg.role, "limit": msg.limit}
+            out = self.operator.apply(self, {k: v for k, v in command.items() if v is not None}, now_s)
+            answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
+            if msg.id:
+                self.operator.answered[msg.id] = answer
+        self.transport.send(OPERATOR, encode(answer))
+        self.events.sent += 1
+
+    def wake(self) -> None:
+        """Dispatch again at the next step (the operator resumed, or changed a limit)."""
+        self._dirty = True
+
+    def recall(self, uav: str, now_s: float, reason: str) -> None:
+        """Tell ``uav`` to drop its task, fly home and land (the operator's recall)."""
+        self._send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
+
+    def emit_event(
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+    ) -> None:
+        """Hand an event to the sink, if any (the operator's commands)."""
+        self._emit(now_s, kind, uav, task_id, **fields)
+
+    def _emit(
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+    ) -> None:
+        """Hand an event to the sink, if any (it only watches)."""
+        if self.sink is not None:
+            self.sink.emit(MissionEvent(now_s, kind, uav, task_id, fields))
+
+    def _emit_clearance(self, now_s: float, g: Any) -> None:
+        if self.sink is not None:
+            self._emit(
+                now_s,
+                "clearance",
+                g.uav,
+                self.dispatcher.task_of(g.uav),
+                site_m=list(g.site_m),
+                granted=g.granted,
+                hold_m=None if g.hold_m is None else list(g.hold_m),
+                layer_m=g.layer_m,
+                volumes=volume_list(self.columns.volumes(g.uav)),
+            )
+
+    def _emit_uav(
+        self, now_s: float, link: UavLink, position_m: Vec3 | None = None, battery: float | None = None
+    ) -> None:
+        """A UAV's state, position, task and airspace as mission control knows them (its position and battery
+        as measured elsewhere, if given)."""
+        name = link.spec.name
+        p = link.position_m if position_m is None else position_m
+        self._emit(
+            now_s,
+            "uav",
+            name,
+            self.dispatcher.task_of(name),
+            state=link.state,
+            position_m=None if p is None else list(p),
+            battery=link.battery if battery is None else battery,
+            status=link.status,
+            volumes=volume_list(self.columns.volumes(name)),
+        )
+
+    def sample(self, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]) -> None:
+        """Hand the sink a ``uav`` event per live UAV, with its position and battery measured outside mission
+        control (the simulator's world); mission control's own view is unchanged."""
+        if self.sink is None:
+            return
+        for name, link in self.uavs.items():
+            if name in positions_m and not link.lost:
+                self._emit_uav(now_s, link, positions_m[name], batteries.get(name))
 
     def _send(self, to: str, msg: Any) -> None:
         self.transport.send(to, encode(msg))

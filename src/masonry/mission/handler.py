@@ -47,6 +47,7 @@ from masonry.mission.messages import (
     Heartbeat,
     MissionEnd,
     Progress,
+    Recall,
     Result,
     decode,
     encode,
@@ -95,6 +96,8 @@ class UavHandler(MissionLink, ClearanceLink):
         heartbeat_period_s: how often the handler sends its heartbeat.
         heartbeat_timeout_s: mission control silent for longer counts as lost.
         battery, swap_battery, reserve_fraction: the battery reserve (see the module docstring).
+        report_battery: the battery (0..1) the heartbeats report, without a reserve (a remote UAV's autopilot);
+            default ``battery``.
         after_result: called right after a result is sent; the in-process simulation steps mission control
             there, so that the answer (the next task) is in the inbox when the machine polls for it, as with a
             network round trip shorter than a tick.
@@ -112,6 +115,7 @@ class UavHandler(MissionLink, ClearanceLink):
         heartbeat_timeout_s: float = 5.0,
         battery: Callable[[], float] | None = None,
         swap_battery: Callable[[], bool] | None = None,
+        report_battery: Callable[[], float] | None = None,
         reserve_fraction: float = 0.4,
         after_result: Callable[[], None] | None = None,
         tasks: Iterable[Task] | None = None,
@@ -125,6 +129,8 @@ class UavHandler(MissionLink, ClearanceLink):
         self.refused: list[str] = []
         self._battery = battery
         self._swap_battery = swap_battery
+        #: what the heartbeats say of the battery (the reserve's, or ``report_battery``'s)
+        self._report_battery = report_battery if report_battery is not None else battery
         self.reserve_fraction = reserve_fraction
         self.battery_swaps = 0
         self.name = name
@@ -135,6 +141,8 @@ class UavHandler(MissionLink, ClearanceLink):
         self.model: Any = None
         self._queue: deque[tuple[Task, int, float]] = deque()  # task, attempt, when its assignment came
         self._current: Execution | None = None
+        #: the operator recalled this UAV (the reason): its task is dropped at the next tick it can be
+        self._recall: str | None = None
         self._last_sent_hb_s: float | None = None
         self._last_mc_s: float | None = None
         self.mission_ended = False
@@ -353,13 +361,41 @@ class UavHandler(MissionLink, ClearanceLink):
                     state=state,
                     task_id=cur.task_id if cur else None,
                     position_m=self._where(),
+                    battery=None
+                    if self._report_battery is None
+                    else min(1.0, max(0.0, float(self._report_battery()))),
                 )
             )
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
+        if self._recall is not None:
+            self._apply_recall(self._recall)
         model = self.model
         if model is not None and (self._queue or self._current is not None or not model.finished):
             model.step(now_s)
+
+    def _apply_recall(self, reason: str) -> None:
+        """The operator's recall: assignments not started are failed back, the task in hand is aborted (the
+        machine reports it failed with ``reason`` and flies home); once nothing is left, done."""
+        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        while self._queue:
+            task, attempt, _ = self._queue.popleft()
+            self._send(
+                Result(
+                    self.name,
+                    TaskResult(task.id, "failed", 0.0, reason=reason),
+                    self.now_s,
+                    self._where(),
+                    state=state,
+                    attempt=attempt,
+                )
+            )
+        model = self.model
+        if self._current is None:
+            self._recall = None
+        elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
+            model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
+            self._recall = None
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -397,6 +433,8 @@ class UavHandler(MissionLink, ClearanceLink):
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed
+        elif isinstance(msg, Recall) and msg.uav == self.name:
+            self._recall = msg.reason  # applied at the next tick, outside the machine's callbacks
 
     def _refusal(self, msg: Assign) -> str | None:
         """Why this assignment is not one of this UAV's blueprint's tasks for its role (None: it is)."""

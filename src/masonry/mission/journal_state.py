@@ -12,7 +12,7 @@ from types import MappingProxyType
 from typing import Any, Literal
 
 from masonry.errors import JournalUnusable
-from masonry.ports import BATTERY_LOW_REASON
+from masonry.ports import UNCOUNTED_REASONS
 
 __all__ = ["DoneRecord", "FailureRecord", "JournalRecord", "JournalState", "RecordKind", "fold_records"]
 
@@ -176,7 +176,7 @@ class _Fold:
         start = self.running.pop(task_id, None)
         start_s = start[1] if start is not None and start[0] == uav else None
         number = start[2] if start is not None and start[0] == uav else attempts.get(task_id, 0) + 1
-        if rec.kind == "complete" or not str(data.get("reason", "")).startswith(BATTERY_LOW_REASON):
+        if rec.kind == "complete" or not str(data.get("reason", "")).startswith(UNCOUNTED_REASONS):
             attempts[task_id] = attempts.get(task_id, 0) + 1  # (the UAV's battery is not the task's fault)
         if rec.kind == "complete":
             if task_id not in self.done:

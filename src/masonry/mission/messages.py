@@ -19,13 +19,18 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`Clearance` mission control -> UAV: fly your lateral leg at ``layer_m``; the column over ``site_m``
   is yours (``granted``), or wait at your layer over ``hold_m``; ``radius_m``: free a column once that far
   from it.
+- :class:`OperatorCommand` operator (:data:`OPERATOR`, ``masonry ctl``) -> mission control: pause, resume,
+  abort, recall a UAV, return all, set a role's fleet limit (:mod:`masonry.mission.operator`).
+- :class:`CommandAnswer` mission control -> operator: that command accepted, or refused with a reason.
+- :class:`Recall` mission control -> UAV: drop your task (it is reported failed, ``reason``), fly home and land.
 
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
 so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
 ``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
 blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
 ``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
-without it leaves it out and one that does not know it ignores it, so the version stays.
+without it leaves it out and one that does not know it ignores it, so the version stays. 4 adds the operator's
+messages (a version-3 UAV would reject a recall as an unknown type and fly on).
 """
 
 from __future__ import annotations
@@ -40,8 +45,12 @@ from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import PHASES, PhaseTimes, TaskResult
 
-PROTOCOL_VERSION = 3
+PROTOCOL_VERSION = 4
 MISSION_CONTROL = "mission-control"
+#: The sender name of an operator's commands (``masonry ctl``); mission control answers to it.
+OPERATOR = "operator"
+#: What an operator may ask (:class:`OperatorCommand`).
+OPERATOR_COMMANDS = ("pause", "resume", "abort", "recall", "return-all", "limit")
 
 Vec3 = tuple[float, float, float]
 
@@ -55,6 +64,8 @@ class Heartbeat:
     state: str = ""
     task_id: str | None = None
     position_m: Vec3 | None = None
+    #: the UAV's battery, 0..1 (None: not reported; optional on the wire, for the log and the live page)
+    battery: float | None = None
 
 
 @dataclass(frozen=True)
@@ -134,7 +145,57 @@ class Clearance:
     layer_m: float | None = None
 
 
-Message = Heartbeat | Assign | Progress | Result | MissionEnd | ClearanceRequest | Clearance
+@dataclass(frozen=True)
+class OperatorCommand:
+    """An operator asks mission control to ``command`` (one of :data:`OPERATOR_COMMANDS`).
+
+    ``uav``: the UAV to recall; ``role`` and ``limit``: how many UAVs of that role may fly at once (``limit``;
+    ``limit`` -1 lifts it); ``id``: echoed in the answer.
+    """
+
+    sender: str
+    command: str
+    time_s: float
+    id: str = ""
+    uav: str | None = None
+    role: str | None = None
+    limit: int | None = None
+
+
+@dataclass(frozen=True)
+class CommandAnswer:
+    """Mission control's answer to the operator's command ``id``: ``accepted``, or not and ``reason``."""
+
+    sender: str
+    id: str
+    command: str
+    accepted: bool
+    reason: str
+    time_s: float
+
+
+@dataclass(frozen=True)
+class Recall:
+    """Mission control tells ``uav`` to drop its task (reported failed with ``reason``), fly home and land."""
+
+    sender: str
+    uav: str
+    time_s: float
+    reason: str
+
+
+Message = (
+    Heartbeat
+    | Assign
+    | Progress
+    | Result
+    | MissionEnd
+    | ClearanceRequest
+    | Clearance
+    | OperatorCommand
+    | CommandAnswer
+    | Recall
+)
 
 _TYPE_NAMES: dict[type, str] = {
     Heartbeat: "heartbeat",
@@ -144,6 +205,9 @@ _TYPE_NAMES: dict[type, str] = {
     MissionEnd: "mission-end",
     ClearanceRequest: "clearance-request",
     Clearance: "clearance",
+    OperatorCommand: "operator-command",
+    CommandAnswer: "command-answer",
+    Recall: "recall",
 }
 
 
@@ -190,6 +254,8 @@ def encode(message: Message) -> bytes:
             task_id=message.task_id,
             position_m=_vec(message.position_m),
         )
+        if message.battery is not None:
+            body["battery"] = message.battery
     elif isinstance(message, Assign):
         body.update(
             uav=message.uav,
@@ -242,9 +308,32 @@ def encode(message: Message) -> bytes:
             hold_m=_vec(message.hold_m),
             layer_m=message.layer_m,
         )
-    else:
+    elif isinstance(message, MissionEnd):
         body.update(time_s=message.time_s, completed=message.completed)
+    else:
+        body.update(_operator_body(message))
     return _ENCODER.encode(body).encode()
+
+
+def _operator_body(message: OperatorCommand | CommandAnswer | Recall) -> dict[str, Any]:
+    if isinstance(message, OperatorCommand):
+        return {
+            "command": message.command,
+            "time_s": message.time_s,
+            "id": message.id,
+            "uav": message.uav,
+            "role": message.role,
+            "limit": message.limit,
+        }
+    if isinstance(message, CommandAnswer):
+        return {
+            "id": message.id,
+            "command": message.command,
+            "accepted": message.accepted,
+            "reason": message.reason,
+            "time_s": message.time_s,
+        }
+    return {"uav": message.uav, "time_s": message.time_s, "reason": message.reason}
 
 
 #: What ``json.dumps(body, separators=(",", ":"), allow_nan=False)`` builds on every call, built once.
@@ -418,10 +507,20 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         if not (_finite_number(x) and _finite_number(y) and _finite_number(z)):
             return None
         p = (float(x), float(y), float(z))
+    battery: Any = data.get("battery")
+    if battery is not None:
+        if not _finite_number(battery) or not 0.0 <= battery <= 1.0:
+            return None
+        battery = float(battery)
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
     hb.__dict__.update(
-        sender=sender, time_s=float(time_s), state=str(data.get("state") or ""), task_id=task_id, position_m=p
+        sender=sender,
+        time_s=float(time_s),
+        state=str(data.get("state") or ""),
+        task_id=task_id,
+        position_m=p,
+        battery=battery,
     )
     return hb
 
@@ -497,7 +596,15 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         state=str(f.data.get("state") or ""),
         task_id=f.str_("task_id", optional=True),
         position_m=f.vec("position_m", optional=True),
+        battery=_battery(f),
     )
+
+
+def _battery(f: _Fields) -> float | None:
+    battery = f.num("battery", optional=True)
+    if battery is not None and not 0.0 <= battery <= 1.0:
+        raise f.fail("battery", f"must be in 0..1, got {battery}")
+    return None if battery is None else float(battery)
 
 
 def _assign(f: _Fields, sender: str, fleet: Collection[str] | None) -> Assign:
@@ -586,6 +693,46 @@ def _clearance(f: _Fields, sender: str, fleet: Collection[str] | None) -> Cleara
     )
 
 
+def _operator_command(f: _Fields, sender: str, fleet: Collection[str] | None) -> OperatorCommand:
+    if sender != OPERATOR:
+        raise f.fail("sender", f"only {OPERATOR!r} sends commands, not {sender!r}")
+    command = f.str_("command")
+    if command not in OPERATOR_COMMANDS:
+        raise f.fail("command", f"must be one of {', '.join(OPERATOR_COMMANDS)}, got {command!r}")
+    uav = f.str_("uav", optional=True)  # a UAV not of the fleet is refused by mission control, with a reason
+    limit = f.data.get("limit")
+    if limit is not None and (type(limit) is not int or limit < -1):
+        raise f.fail("limit", f"must be an integer >= -1, got {limit!r}")
+    return OperatorCommand(
+        sender,
+        command,
+        f.num("time_s"),
+        str(f.data.get("id") or ""),
+        uav,
+        f.str_("role", optional=True),
+        limit,
+    )
+
+
+def _command_answer(f: _Fields, sender: str, fleet: Collection[str] | None) -> CommandAnswer:
+    _check_from_mission_control(f, sender)
+    return CommandAnswer(
+        sender,
+        str(f.data.get("id") or ""),
+        f.str_("command"),
+        f.bool_("accepted"),
+        str(f.data.get("reason") or ""),
+        f.num("time_s"),
+    )
+
+
+def _recall(f: _Fields, sender: str, fleet: Collection[str] | None) -> Recall:
+    _check_from_mission_control(f, sender)
+    uav = f.str_("uav")
+    _check_uav(f, fleet, uav, "uav")
+    return Recall(sender, uav, f.num("time_s"), str(f.data.get("reason") or "recalled"))
+
+
 #: How the body of each message type is read, after the envelope (version, type, sender): one function per type.
 _BODIES: dict[str, Callable[[_Fields, str, Collection[str] | None], Message]] = {
     "heartbeat": _heartbeat,
@@ -595,4 +742,7 @@ _BODIES: dict[str, Callable[[_Fields, str, Collection[str] | None], Message]] = 
     "mission-end": _mission_end,
     "clearance-request": _clearance_request,
     "clearance": _clearance,
+    "operator-command": _operator_command,
+    "command-answer": _command_answer,
+    "recall": _recall,
 }

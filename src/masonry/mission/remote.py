@@ -88,6 +88,7 @@ def run_remote_uav(
     uav_settings: Mapping[str, Any] | None = None,
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
+    events_sink: Any = None,
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -116,6 +117,8 @@ def run_remote_uav(
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
+        events_sink: gets this UAV's events (:class:`masonry.mission.uav_events.UavWatch`: its tasks, and its
+            state, position and battery every ``SAMPLE_PERIOD_S``), for its log; None: none.
 
     Raises:
         InputError: a bad ``time_scale`` or ``dt_s``.
@@ -155,6 +158,7 @@ def run_remote_uav(
         spec.name,
         transport,
         position=lambda: fc.telemetry().position_m,
+        report_battery=lambda: fc.telemetry().battery_fraction,
         heartbeat_period_s=heartbeat_period_s,
         heartbeat_timeout_s=heartbeat_timeout_s,
         after_result=await_answer,
@@ -187,6 +191,11 @@ def run_remote_uav(
 
     try:
         fc.connect()
+        watch = None
+        if events_sink is not None:
+            from masonry.mission.uav_events import UavWatch
+
+            watch = UavWatch(handler, model, fc.telemetry, events_sink)
         _fly_until_done(
             handler,
             model,
@@ -198,7 +207,10 @@ def run_remote_uav(
             max_time_s=max_time_s,
             echo=echo,
             not_heard=not_heard,
+            watch=watch,
         )
+        if watch is not None:
+            watch.tick(clock.now_s(), sample=True)  # where it ended: landed
     finally:
         fc.close()
         transport.close()
@@ -237,6 +249,7 @@ def _fly_until_done(
     max_time_s: float,
     echo: Any,
     not_heard: Callable[[], LinkLost],
+    watch: Any = None,
 ) -> None:
     """The control loop of :func:`run_remote_uav`: tick the handler until the mission ends for this UAV.
 
@@ -252,6 +265,8 @@ def _fly_until_done(
     while True:
         now = clock.now_s()
         handler.step(now)
+        if watch is not None:
+            watch.tick(now)
         while echo is not None and len(handler.refused) > refused_shown:
             echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
             refused_shown += 1

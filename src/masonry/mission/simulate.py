@@ -25,6 +25,7 @@ from masonry.errors import InputError, MasonryError
 from masonry.fingerprint import wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
+from masonry.mission.events import SAMPLE_PERIOD_S, EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
@@ -164,6 +165,7 @@ def simulate(
     stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
     reservation: str = DEFAULT_RESERVATION,
     schedule: OfflineSchedule | None = None,
+    events_sink: EventSink | None = None,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -191,6 +193,7 @@ def simulate(
         stall_timeout_s=stall_timeout_s,
         reservation=reservation,
         schedule=schedule,
+        events_sink=events_sink,
     ).run()
 
 
@@ -271,6 +274,9 @@ class SimulatedMission:
         self._resources = resources if resources is not None else contextlib.ExitStack()
         self._ran = False
         self.started_wall_s = time.perf_counter()
+        #: called as ``hook(now_s)`` after every control tick (a live view paces the mission against the wall
+        #: clock, an operator pauses it); they may sleep, never change the mission's state
+        self.tick_hooks: list[Callable[[float], None]] = []
         total = sum(1 for t in plan.tasks if not t.done)
         self.max_time_s = (
             max_time_s if max_time_s is not None else (resumed_from or 0.0) + 600.0 + 150.0 * total
@@ -345,6 +351,7 @@ class SimulatedMission:
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = DEFAULT_RESERVATION,
         schedule: OfflineSchedule | None = None,
+        events_sink: EventSink | None = None,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -380,6 +387,8 @@ class SimulatedMission:
                 (conflicting tasks may run at once; their UAVs never work at their sites at once); docs/safety.md.
             schedule: the offline schedule ``policy="schedule"`` follows (``masonry schedule``; computed for
                 this wall, fleet and reservation: :func:`masonry.mission.schedule_file.check_schedule`).
+            events_sink: gets mission control's events (:mod:`masonry.mission.events`) and, every
+                ``SAMPLE_PERIOD_S``, each UAV's pose and battery as the world has them (a log, a live view).
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -500,6 +509,7 @@ class SimulatedMission:
                 stall_timeout_s=stall_timeout_s,
                 reservation=reservation,
                 schedule=schedule if policy == SCHEDULE_POLICY else None,
+                events_sink=events_sink,
             )
             if state is not None:
                 mc.restore(state)
@@ -589,6 +599,8 @@ class SimulatedMission:
         done_seen = len(mc.dispatcher.done) - pre_done
         progress_s = clock.now_s()
         mission_end_s: float | None = None
+        next_sample_s = clock.now_s()
+        mc.uav_events = False  # the world's samples below tell the sink where each UAV is
         while True:
             now = clock.now_s()
             for name, h in handlers.items():
@@ -601,6 +613,12 @@ class SimulatedMission:
                     continue
                 h.step(now)
             mc.step(now)
+            if mc.sink is not None and now >= next_sample_s - 1e-9:
+                next_sample_s = max(next_sample_s + SAMPLE_PERIOD_S, now)
+                live = [(n, u.vehicle) for n, u in world.uavs.items() if n not in dead]
+                mc.sample(now, {n: v.position_m for n, v in live}, {n: v.battery_fraction for n, v in live})
+            for hook in self.tick_hooks:
+                hook(now)
             if self.progress is not None:
                 n_done = len(mc.dispatcher.done) - pre_done
                 if n_done != done_seen or now - progress_s >= 1.0:

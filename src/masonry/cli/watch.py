@@ -1,0 +1,147 @@
+"""``--log FILE.mcap`` and ``--serve [HOST:]PORT`` of a running mission (``masonry sim``, ``masonry
+mission-control``): the log and the live view, both event sinks of mission control (docs/observe.md)."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from masonry.errors import InputError
+
+
+def check_log_option(log: Path | None) -> Path | None:
+    """``--log``, if given, must name a ``.mcap`` file (returned as given)."""
+    if log is not None and log.suffix.lower() != ".mcap":
+        raise InputError(f"--log {log}: the file must end in .mcap")
+    return log
+
+
+def open_log(path: Path, plan: Any, blueprint: Path, name: str, command: str) -> Any:
+    """The MCAP log of a mission (``--log``), to open: it records the blueprint file's text for ``masonry replay``."""
+    try:
+        from masonry.observe.mcap_log import McapLog
+    except ImportError as exc:  # the `observe` extra is not installed
+        raise InputError(f"--log needs the mcap package (pip install 'masonry[observe]'): {exc}") from None
+    from masonry.blueprint_yaml import read_text_limited
+
+    return McapLog(
+        path, plan, read_text_limited(blueprint), title=name, command=f"masonry {command} {blueprint}"
+    )
+
+
+class Watchers:
+    """The log and the live view of one mission: :meth:`attach` to mission control, :meth:`finish`, :meth:`close`.
+
+    Args:
+        log: ``--log`` (None: no log).
+        serve: ``--serve`` as (host, port) (None: no page).
+        blueprint: the blueprint file (its text goes into the log), name: the mission's name.
+        command: ``sim`` or ``mission-control``.
+        commands: takes an operator's command from the page (None: the page has no buttons).
+    """
+
+    def __init__(
+        self,
+        log: Path | None,
+        serve: tuple[str, int] | None,
+        blueprint: Path,
+        name: str,
+        command: str,
+        commands: Callable[[Mapping[str, Any]], Mapping[str, Any]] | None = None,
+    ) -> None:
+        self.log_path = log
+        self.serve = serve
+        self.blueprint = blueprint
+        self.name = name
+        self.command = command
+        self.commands = commands
+        self.log: Any = None
+        self.view: Any = None
+        self.server: Any = None
+
+    def attach(self, control: Any, plan: Any, fleet: Any) -> None:
+        """Open the log, start the page, and make them mission control's event sink."""
+        from masonry.mission.events import EventFanout
+
+        sinks: list[Any] = []
+        # the tasks a resumed mission did before (the plan's own done ones, bricks placed beforehand, aside)
+        done = set(control.dispatcher.done) - {t.id for t in plan.tasks if t.done}
+        if self.log_path is not None:
+            self.log = open_log(self.log_path, plan, self.blueprint, self.name, self.command)
+            self.log.done = done
+            self.log.open()
+            sinks.append(self.log)
+        if self.serve is not None:
+            from masonry.mission.view import MissionView, wall_layout
+            from masonry.observe.web import ViewServer
+
+            self.view = MissionView([t.id for t in plan.tasks if not t.done], done=done)
+            view = self.view
+            commands = self.commands
+            if commands is None and _loopback(self.serve[0]):
+                # the page's buttons: on loopback only (the page is not authenticated; docs/observe.md)
+                def commands(c: Mapping[str, Any]) -> Mapping[str, Any]:
+                    if control.ended_at_s is not None:
+                        return {"accepted": False, "reason": "the mission is over"}
+                    return dict(control.operator.ask(c).to_dict())
+
+            self.server = ViewServer(
+                *self.serve,
+                layout=wall_layout(plan, fleet, self.name),
+                state=lambda _t: {**view.snapshot(), "paused": bool(control.operator.paused)},
+                version=lambda: view.events * 2 + int(bool(control.operator.paused)),
+                commands=commands,
+            ).start()
+            sinks.append(self.view)
+            typer.echo(f"serving the mission's page at {self.server.url}", err=True)
+        control.sink = sinks[0] if len(sinks) == 1 else (EventFanout(*sinks) if sinks else None)
+
+    def finish(self, result: Any, extra: Mapping[str, Any] | None = None) -> None:
+        """The mission's report into the log."""
+        if self.log is not None:
+            self.log.finish(result, extra)
+
+    def close(self) -> None:
+        """Close the log (the page stays up until :meth:`linger` or :meth:`stop`)."""
+        if self.log is not None:
+            self.log.close()
+            self.log = None
+            typer.echo(f"wrote {self.log_path}", err=True)
+
+    def linger(self, until: threading.Event | None = None) -> None:
+        """With a page: keep serving the mission's last state until Ctrl-C (or ``until`` is set), then stop."""
+        if self.server is None:
+            return
+        done = until or threading.Event()
+        try:  # (before the line: Ctrl-C may come as soon as it is read)
+            typer.echo(
+                f"the mission is over; its page stays up at {self.server.url}: Ctrl-C to stop", err=True
+            )
+            while not done.wait(0.5):
+                pass
+        except KeyboardInterrupt:
+            pass
+        self.stop()
+
+    def stop(self) -> None:
+        if self.server is not None:
+            self.server.stop()
+            self.server = None
+
+
+def _loopback(host: str) -> bool:
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+__all__ = ["Watchers", "check_log_option", "open_log"]

@@ -1,0 +1,128 @@
+"""A :class:`~masonry.mission.report.MissionReport` as JSON and back, losslessly (pure: no I/O).
+
+The JSON report (``MissionReport.to_dict``) rounds and leaves out what the Gantt chart and the 3-D plot need (every
+attempt, the flown paths). A log keeps :func:`report_to_record` instead, so that ``masonry replay`` runs the same
+output code on the same value: the same summary, the same ``--format json`` bytes, the same drawings. Floats go
+through JSON as Python writes them (``repr``, which reads back to the same float); the non-finite ones, which
+JSON has not, as the strings ``"inf"``, ``"-inf"`` and ``"nan"``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from masonry.errors import MissionError
+from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
+from masonry.ports import PhaseTimes
+
+#: Bumped when the record's form changes; a reader refuses another.
+REPORT_RECORD_VERSION = 1
+
+
+def _num_out(v: Any) -> Any:
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    return v
+
+
+def _num_in(v: Any) -> Any:
+    if isinstance(v, str) and v in ("inf", "-inf", "nan"):
+        return float(v)
+    return v
+
+
+def _row_out(value: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(value):
+        v = getattr(value, f.name)
+        out[f.name] = v.as_dict() if isinstance(v, PhaseTimes) else _num_out(v)
+    return out
+
+
+def _row_in(cls: Any, data: Any) -> Any:
+    if not isinstance(data, Mapping):
+        raise MissionError(f"a {cls.__name__} record must be an object, got {type(data).__name__}")
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = set(data) - names
+    if unknown:
+        raise MissionError(f"a {cls.__name__} record has unknown fields {sorted(unknown)}")
+    kw = {k: _num_in(v) for k, v in data.items()}
+    if kw.get("phases") is not None:
+        kw["phases"] = PhaseTimes(**kw["phases"])
+    try:
+        return cls(**kw)
+    except TypeError as exc:
+        raise MissionError(f"a {cls.__name__} record is incomplete: {exc}") from None
+
+
+def report_to_record(report: MissionReport) -> dict[str, Any]:
+    """Everything in ``report`` as JSON values (:func:`report_from_record` reads it back equal)."""
+    return {
+        "version": REPORT_RECORD_VERSION,
+        "completed": report.completed,
+        "makespan_s": _num_out(report.makespan_s),
+        "lower_bound_s": _num_out(report.lower_bound_s),
+        "policy": report.policy,
+        "seed": report.seed,
+        "uavs": [_row_out(u) for u in report.uavs],
+        "tasks": [_row_out(t) for t in report.tasks],
+        "placement_error_m": {k: _num_out(v) for k, v in report.placement_error_m.items()},
+        "min_separation_m": _num_out(report.min_separation_m),
+        "conflict_violations": report.conflict_violations,
+        "dependency_violations": report.dependency_violations,
+        "stuck": list(report.stuck),
+        "attempts": [_row_out(a) for a in report.attempts],
+        "paths_m": {k: np.asarray(v, dtype=float).tolist() for k, v in report.paths_m.items()},
+        "sim_time_s": _num_out(report.sim_time_s),
+        "wall_time_s": _num_out(report.wall_time_s),
+        "resumed_from_s": _num_out(report.resumed_from_s),
+        "messages": report.messages,
+        "stall": None if report.stall is None else dict(report.stall),
+    }
+
+
+def report_from_record(data: Any) -> MissionReport:
+    """The report :func:`report_to_record` wrote.
+
+    Raises:
+        MissionError: not such a record (another version, a field missing or malformed).
+    """
+    if not isinstance(data, Mapping):
+        raise MissionError(f"a report record must be an object, got {type(data).__name__}")
+    if data.get("version") != REPORT_RECORD_VERSION:
+        raise MissionError(
+            f"a report record of version {data.get('version')!r}; this masonry reads {REPORT_RECORD_VERSION}"
+        )
+    try:
+        paths = {str(k): np.asarray(v, dtype=float).reshape(-1, 3) for k, v in dict(data["paths_m"]).items()}
+        return MissionReport(
+            completed=bool(data["completed"]),
+            makespan_s=float(_num_in(data["makespan_s"])),
+            lower_bound_s=float(_num_in(data["lower_bound_s"])),
+            policy=str(data["policy"]),
+            seed=int(data["seed"]),
+            uavs=tuple(_row_in(UavReport, u) for u in data["uavs"]),
+            tasks=tuple(_row_in(TaskReport, t) for t in data["tasks"]),
+            placement_error_m={str(k): float(_num_in(v)) for k, v in dict(data["placement_error_m"]).items()},
+            min_separation_m=_num_in(data["min_separation_m"]),
+            conflict_violations=int(data["conflict_violations"]),
+            dependency_violations=int(data["dependency_violations"]),
+            stuck=tuple(str(s) for s in data["stuck"]),
+            attempts=tuple(_row_in(AttemptReport, a) for a in data["attempts"]),
+            paths_m=paths,
+            sim_time_s=float(_num_in(data["sim_time_s"])),
+            wall_time_s=float(_num_in(data["wall_time_s"])),
+            resumed_from_s=_num_in(data["resumed_from_s"]),
+            messages=int(data["messages"]),
+            stall=None if data["stall"] is None else dict(data["stall"]),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None
+
+
+__all__ = ["REPORT_RECORD_VERSION", "report_from_record", "report_to_record"]

@@ -1,0 +1,211 @@
+"""The mission as it stands, folded from its events (pure): for the live web view and ``masonry replay --at``.
+
+:class:`MissionView` is an :class:`~masonry.mission.events.EventSink`: hand it the events of a running mission
+(it is thread-safe: the mission's loop emits, a web server reads :meth:`MissionView.snapshot`) or those of a log
+up to a time (:func:`view_at`). :func:`wall_layout` is the geometry the page draws: every task's brick or
+adhesion segment and every UAV's home.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import deque
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+from masonry.blueprint import UavSpec
+from masonry.mission.events import MissionEvent
+from masonry.planner.tasks import BrickTask, Plan
+
+#: Task states in the view.
+TASK_STATES = ("todo", "running", "done", "stuck")
+
+#: How many of the latest event lines the view keeps (the page's log, ``--at``).
+RECENT_LINES = 12
+
+
+def wall_layout(plan: Plan, fleet: Sequence[UavSpec], name: str = "") -> dict[str, Any]:
+    """The geometry of the mission as JSON: bricks (centre, size, yaw), adhesion segments, UAV homes."""
+    tasks: list[dict[str, Any]] = []
+    for t in plan.tasks:
+        if isinstance(t, BrickTask):
+            tasks.append(
+                {
+                    "id": t.id,
+                    "kind": "brick",
+                    "done": t.done,
+                    "position_m": list(t.position_m),
+                    "size_m": list(t.size_m),
+                    "yaw_rad": t.yaw_rad,
+                }
+            )
+        else:
+            tasks.append(
+                {
+                    "id": t.id,
+                    "kind": "adhesion",
+                    "done": t.done,
+                    "start_m": list(t.start_m),
+                    "end_m": list(t.end_m),
+                }
+            )
+    return {
+        "name": name,
+        "tasks": tasks,
+        "uavs": [{"name": u.name, "role": u.role, "home_m": list(u.home_m)} for u in fleet],
+    }
+
+
+class MissionView:
+    """The state of a mission after the events it has been given.
+
+    Args:
+        task_ids: the mission's tasks (all ``todo`` at first); ``done`` ones already done (a resumed mission).
+        done: tasks done before the first event.
+    """
+
+    def __init__(self, task_ids: Iterable[str] = (), done: Iterable[str] = ()) -> None:
+        self._lock = threading.Lock()
+        self.time_s = 0.0
+        self.tasks: dict[str, str] = dict.fromkeys(task_ids, "todo")
+        for tid in done:
+            self.tasks[tid] = "done"
+        self.uavs: dict[str, dict[str, Any]] = {}
+        self.bars: list[dict[str, Any]] = []  # one per attempt: uav, task_id, attempt, start_s, end_s, status
+        self._open: dict[str, int] = {}  # task id -> index in bars of its running attempt
+        self.stall: str | None = None
+        self.completed: bool | None = None  # None: still running
+        self.operator: list[str] = []
+        self.recent: deque[str] = deque(maxlen=RECENT_LINES)
+        self.events = 0
+
+    def emit(self, event: MissionEvent) -> None:
+        """Fold one event in."""
+        with self._lock:
+            self._apply(event)
+
+    def _apply(self, e: MissionEvent) -> None:
+        self.events += 1
+        self.time_s = max(self.time_s, e.time_s)
+        f = e.fields
+        if e.kind != "uav":
+            self.recent.append(e.line())
+        if e.kind == "uav" and e.uav is not None:
+            u = self.uavs.setdefault(e.uav, {"name": e.uav})
+            u.update(
+                state=f.get("state", ""),
+                task_id=e.task_id,
+                status=f.get("status", "ok"),
+                volumes=f.get("volumes", []),
+            )
+            if f.get("position_m") is not None:
+                u["position_m"] = f["position_m"]
+            if f.get("battery") is not None:
+                u["battery"] = f["battery"]
+        elif e.kind == "assigned" and e.task_id is not None:
+            self.tasks[e.task_id] = "running"
+            self._open[e.task_id] = len(self.bars)
+            self.bars.append(
+                {
+                    "uav": e.uav,
+                    "task_id": e.task_id,
+                    "attempt": f.get("attempt", 0),
+                    "start_s": e.time_s,
+                    "end_s": None,
+                    "status": "running",
+                }
+            )
+            self.uavs.setdefault(e.uav or "", {"name": e.uav})["task_id"] = e.task_id
+        elif e.kind in ("completed", "failed") and e.task_id is not None:
+            self.tasks[e.task_id] = "done" if e.kind == "completed" else "todo"
+            self._close(e.task_id, e.time_s, "done" if e.kind == "completed" else "failed")
+        elif e.kind == "clearance" and e.uav is not None:
+            self.uavs.setdefault(e.uav, {"name": e.uav})["volumes"] = f.get("volumes", [])
+        elif e.kind == "lost" and e.uav is not None:
+            u = self.uavs.setdefault(e.uav, {"name": e.uav})
+            u.update(status=f.get("status", "lost"), volumes=[], task_id=None)
+            if e.task_id is not None:
+                self.tasks[e.task_id] = "todo"
+                self._close(e.task_id, e.time_s, "failed")
+        elif e.kind == "stall":
+            self.stall = str(f.get("line", "stalled"))
+        elif e.kind == "end":
+            self.completed = bool(f.get("completed"))
+            for tid, state in self.tasks.items():
+                if state != "done":
+                    self.tasks[tid] = "stuck"
+        elif e.kind == "operator":
+            self.operator.append(e.line().strip())
+
+    def _close(self, task_id: str, time_s: float, status: str) -> None:
+        i = self._open.pop(task_id, None)
+        if i is not None:
+            self.bars[i].update(end_s=time_s, status=status)
+
+    def counts(self) -> dict[str, int]:
+        """Tasks per state (:data:`TASK_STATES`)."""
+        out = dict.fromkeys(TASK_STATES, 0)
+        for s in self.tasks.values():
+            out[s] = out.get(s, 0) + 1
+        return out
+
+    def snapshot(self) -> dict[str, Any]:
+        """The whole view as JSON values (what the page draws)."""
+        with self._lock:
+            return {
+                "time_s": self.time_s,
+                "counts": self.counts(),
+                "tasks": dict(self.tasks),
+                "uavs": [dict(u) for _, u in sorted(self.uavs.items())],
+                "bars": [dict(b) for b in self.bars],
+                "stall": self.stall,
+                "completed": self.completed,
+                "operator": list(self.operator),
+                "recent": list(self.recent),
+            }
+
+    def lines(self) -> list[str]:
+        """The view as text (``masonry replay --at``)."""
+        with self._lock:
+            c = self.counts()
+            state = (
+                "running" if self.completed is None else ("completed" if self.completed else "NOT completed")
+            )
+            out = [
+                f"at {self.time_s:.1f} s: mission {state}; tasks: "
+                + ", ".join(f"{k} {v}" for k, v in c.items())
+            ]
+            for name, u in sorted(self.uavs.items()):
+                p = u.get("position_m")
+                where = "?" if p is None else f"({p[0]:.2f}, {p[1]:.2f}, {p[2]:.2f})"
+                battery = u.get("battery")
+                out.append(
+                    f"  {name:<12} {u.get('state') or '-':<14} task {u.get('task_id') or '-':<6} at {where}"
+                    + ("" if battery is None else f"  battery {battery:.0%}")
+                    + f"  volumes {len(u.get('volumes') or [])}  {u.get('status', 'ok')}"
+                )
+            running = sorted(t for t, s in self.tasks.items() if s == "running")
+            if running:
+                out.append(f"  running: {', '.join(running)}")
+            if self.stall:
+                out.append(f"  {self.stall}")
+            if self.recent:
+                out.append("  latest events:")
+                out.extend(f"  {line}" for line in self.recent)
+            return out
+
+
+def view_at(
+    events: Iterable[MissionEvent], time_s: float, task_ids: Iterable[str] = (), done: Iterable[str] = ()
+) -> MissionView:
+    """The view after every event of ``events`` at or before ``time_s`` (``done``: tasks done before them)."""
+    view = MissionView(task_ids, done)
+    for e in events:
+        if e.time_s > time_s:
+            break
+        view.emit(e)
+    view.time_s = max(view.time_s, time_s) if view.events else time_s
+    return view
+
+
+__all__ = ["TASK_STATES", "MissionView", "view_at", "wall_layout"]
