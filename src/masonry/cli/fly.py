@@ -526,6 +526,7 @@ def _fly_mission(
             "start_s": round(e.start_s, 2),
             "end_s": None if e.end_s is None else round(e.end_s, 2),
             "status": e.status,
+            "reason": getattr(e, "reason", None),
         }
         for e in run.executions
     ]
@@ -545,8 +546,9 @@ def _fly_mission(
         )
     else:
         for t in tasks:
+            why = f": {t['reason']}" if t["reason"] else ""
             typer.echo(
-                f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s"
+                f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s{why}"
             )
         if run.dropped:
             typer.echo(

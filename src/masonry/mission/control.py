@@ -479,6 +479,7 @@ class MissionControl:
         att.phases = r.phases
         if r.status == "done":
             att.status = "done"
+            log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
             self.dispatcher.complete(r.task_id)
             if self.journal is not None:
                 fields: dict[str, Any] = {}
@@ -492,6 +493,15 @@ class MissionControl:
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
+            log.info(
+                "%s failed on %s (attempt %d, %.1f-%.1f s): %s",
+                r.task_id,
+                msg.sender,
+                att.attempt,
+                att.start_s,
+                now_s,
+                att.reason,
+            )
             # abandoned for the UAV's battery: not an attempt of the task (its UAV lands for a fresh pack)
             self.dispatcher.fail(r.task_id, count=not att.reason.startswith(BATTERY_LOW_REASON))
             if self.journal is not None:
@@ -526,6 +536,7 @@ class MissionControl:
                 att.end_s = now_s
                 att.status = "failed"
                 att.reason = f"uav {status}"
+                log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
         self._dirty = True
@@ -540,6 +551,7 @@ class MissionControl:
             self.history.append(att)
             self._running[a.task_id] = att
             self._raise_layers((a.task_id,))
+            log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
             self._send(

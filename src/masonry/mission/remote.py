@@ -225,6 +225,17 @@ def _paced_world(
     return dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
 
 
+def _echo_failures(handler: UavHandler, shown: int, now_s: float, echo: Callable[[str], None]) -> int:
+    """Echo the reason of every execution that ended failed since the first ``shown``; the new count."""
+    done = handler.executions
+    while shown < len(done) and done[shown].end_s is not None:
+        e = done[shown]
+        if e.status != "done":
+            echo(f"{now_s:8.2f} s  {e.task_id} (attempt {e.attempt}) failed: {e.reason or 'no reason given'}")
+        shown += 1
+    return shown
+
+
 def _fly_until_done(
     handler: UavHandler,
     model: Any,
@@ -249,12 +260,15 @@ def _fly_until_done(
     heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
     heard_wall = wall0
     refused_shown = 0
+    failed_shown = 0  # executions already looked at for a failure to echo
     while True:
         now = clock.now_s()
         handler.step(now)
         while echo is not None and len(handler.refused) > refused_shown:
             echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
             refused_shown += 1
+        if echo is not None:
+            failed_shown = _echo_failures(handler, failed_shown, now, echo)
         if echo is not None and model.state != last_state:
             last_state = model.state
             echo(f"{now:8.2f} s  {last_state}")
