@@ -369,7 +369,7 @@ def _fly_one_task(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
-        velocity_lag_s=hardware.velocity_lag_s,
+        **hardware.uav_settings(),
     )
     try:
         run = fly_task(
@@ -514,7 +514,7 @@ def _fly_mission(
             adapters=adapters,
             key=key,
             zenoh_config=zenoh_config,
-            uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s},
+            uav_settings=None if hardware is None else hardware.uav_settings(),
         )
     finally:
         if adapters is not None:

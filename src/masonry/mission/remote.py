@@ -111,8 +111,8 @@ def run_remote_uav(
             for ``masonry fly --fc URL --actuators PORT --camera ...``. Its ``advance`` moves time on its clock
             (the autopilot's: wall time on hardware, the SITL's scaled time on a bench), so ``time_scale`` does
             not apply; the caller checks the adapters before flight and closes them afterwards.
-        uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml
-            ``velocity_lag_s``).
+        uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml's
+            tuning, ``HardwareConfig.uav_settings``: the same as in single-task mode).
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
