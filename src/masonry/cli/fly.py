@@ -236,6 +236,12 @@ def fly(
         "--insecure",
         help="Mission mode: allow a non-loopback mission control or --listen without a key.",
     ),
+    identify: bool = typer.Option(
+        False,
+        "--identify",
+        help="Measure the autopilot's velocity response instead of flying a task: take off, velocity steps "
+        "in a safe hover, land; print the lag and the tuning it suggests (docs/hardware.md).",
+    ),
     zenoh_config: Path | None = typer.Option(
         None,
         "--zenoh-config",
@@ -278,6 +284,20 @@ def fly(
     if not dt > 0.0 or not timeout > 0.0:
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
+    if identify:
+        if task is not None or mission is not None:
+            raise InputError("--identify flies its own steps: drop --task and --mission")
+        _identify(
+            bp,
+            _pick_uav(bp, uav, name),
+            sim=sim,
+            seed=seed,
+            camera=camera,
+            dt=dt,
+            fmt=fmt,
+            hardware=hardware.hw,
+        )
+        return
     if mission is not None:
         if task is not None:
             raise InputError(
@@ -330,6 +350,32 @@ def fly(
         fmt=fmt,
         hardware=hardware.hw,
     )
+
+
+def _identify(
+    bp: Any, spec: Any, *, sim: bool, seed: int, camera: str, dt: float, fmt: str, hardware: Any
+) -> None:
+    """``--identify``: velocity steps in a hover on the chosen flight controller; the lag and the suggested tuning."""
+    from masonry.fsm import UavConfig
+    from masonry.fsm.identify import identify
+    from masonry.sim import Faults
+
+    adapters = select_adapters(
+        sim=sim, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=Faults(), hardware=hardware
+    )
+    config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, **hardware.uav_settings())
+    try:
+        adapters.fc.connect()
+        found = identify(adapters.fc, adapters.clock, adapters.advance, config=config, dt_s=dt)
+    finally:
+        adapters.close()
+    if fmt == "json":
+        typer.echo(json.dumps({"uav": spec.name, **found.to_dict()}))
+        return
+    where = f"simulated, seed {seed}" if hardware.all_sim else _describe(hardware)
+    typer.echo(f"{spec.name}: velocity response ({where})")
+    for line in found.lines():
+        typer.echo(line)
 
 
 def _fly_one_task(
