@@ -57,18 +57,19 @@ class HardwareConfig:
     velocity_lag_s: float | None = None
     # the state machines' tuning (masonry.fsm.tuning): a preset (ideal | arducopter), then any UavConfig field
     # (``control``) and the position controller's gains per axis (``pid``) over it
-    control_preset: str = "ideal"
+    control_preset: str | None = None  # None: ``ideal``, or the simulated vehicle's preset with ``--vehicle``
     control: dict[str, Any] = field(default_factory=dict)
     pid: dict[str, Any] = field(default_factory=dict)
 
-    def uav_settings(self) -> dict[str, Any]:
-        """The :class:`~masonry.fsm.UavConfig` overrides this configuration asks for (both modes of ``fly``)."""
+    def uav_settings(self, default_preset: str = "ideal") -> dict[str, Any]:
+        """The :class:`~masonry.fsm.UavConfig` overrides this configuration asks for (both modes of ``fly``);
+        ``default_preset`` when it names none (``fly --sim --vehicle arducopter`` flies the arducopter tuning)."""
         from masonry.fsm.tuning import uav_settings
 
         control = dict(self.control)
         if self.velocity_lag_s is not None:
             control.setdefault("velocity_lag_s", self.velocity_lag_s)
-        return uav_settings(self.control_preset, control, self.pid)
+        return uav_settings(self.control_preset or default_preset, control, self.pid)
 
     def origin_for(self, home_m: tuple[float, float, float]) -> tuple[float, float, float]:
         """Where the autopilot's local origin is in the world for a UAV whose blueprint home is ``home_m``."""

@@ -59,6 +59,12 @@ def sim(
             "report who waits for whom (`stall` in the JSON); 0: never.",
         ),
     ),
+    vehicle: str = typer.Option(
+        "ideal",
+        "--vehicle",
+        help="ideal | arducopter: the simulated autopilot (arducopter: its setpoint shaping, delay and GPS-like "
+        "noise, fitted to ArduCopter SITL, flown with the arducopter control preset).",
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -73,6 +79,9 @@ def sim(
     who waits for whom), 2 on bad input.
     """
     from masonry.blueprint import load_blueprint
+    from masonry.cli.fly import _check_vehicle
+
+    _check_vehicle(vehicle)
     from masonry.mission.simulate import SimulatedMission
     from masonry.sim import Faults
 
@@ -121,6 +130,7 @@ def sim(
             warn=lambda m: typer.echo(f"warning: {m}", err=True),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
+            vehicle=vehicle,
         )
         result = mission.run()
     finally:

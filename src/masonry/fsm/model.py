@@ -14,6 +14,7 @@ Frames: world ENU, body FLU; tool offsets (effector, nozzle, camera) come from t
 from __future__ import annotations
 
 import copy
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,8 +42,12 @@ from masonry.ports import (
 )
 
 Vec3 = tuple[float, float, float]
+log = logging.getLogger(__name__)
 #: The takeoff is over this close under its altitude (the autopilot flies it; the machine then takes over).
 _TAKEOFF_SHORT_M = 0.1
+#: Disarmed on the ground this long after a take-off was asked for: arm and ask again, at most this often.
+_TAKEOFF_RETRY_S = 2.0
+_TAKEOFF_RETRIES = 2
 
 
 @dataclass
@@ -111,6 +116,7 @@ class UavModel:
         self._now_s = clock.now_s()
         self._task_start_s = 0.0
         self._entered_s = self._now_s
+        self._takeoff_tries: list[Any] = [self._now_s, 1, 0.0]  # the take-off asked at, tries, climb (m)
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
@@ -481,6 +487,7 @@ class UavModel:
             self.fc.arm()
         climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
         self.fc.takeoff(climb_m)
+        self._takeoff_tries = [self._now_s, 1, climb_m]  # when and how often it was asked, and the climb
         x, y, z = tel.position_m
         self.nav.target_m = np.array(
             [x, y, z + climb_m]
@@ -489,11 +496,32 @@ class UavModel:
     def do_takeoff(self, tel: Telemetry) -> None:
         if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:
             self.airborne()
+        elif tel.on_ground and not tel.armed and self._retry_takeoff():
+            pass
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
             self.abort(
                 reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
                 f"within {self.config.takeoff_timeout_s:.0f} s"
             )
+
+    def _retry_takeoff(self) -> bool:
+        """Disarmed on the ground after asking for the take-off: arm and ask again (at most twice, 2 s apart).
+
+        ArduCopter SITL, flown by a new connection right after a landing, sometimes armed, took the take-off
+        command and disarmed again ("Arming motors", "Disarming motors"): the take-off then timed out (issue 19).
+        """
+        asked_s, tries, climb_m = self._takeoff_tries
+        if self._now_s - asked_s < _TAKEOFF_RETRY_S or tries > _TAKEOFF_RETRIES:
+            return False
+        log.warning(
+            "%s: disarmed on the ground %.1f s after the take-off: arming again",
+            self.config.name,
+            self._now_s - asked_s,
+        )
+        self.fc.arm()
+        self.fc.takeoff(climb_m)
+        self._takeoff_tries = [self._now_s, tries + 1, climb_m]
+        return True
 
     def _transit_altitude_m(self) -> float:
         return self.config.cruise_altitude_m

@@ -88,6 +88,7 @@ def run_remote_uav(
     uav_settings: Mapping[str, Any] | None = None,
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
+    vehicle: str = "ideal",
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -98,6 +99,7 @@ def run_remote_uav(
         listen: this process's own listen endpoint(s) (loopback by default).
         mission_name: Zenoh key prefix shared with mission control.
         seed, camera, faults: the simulated world's (without ``adapters``).
+        vehicle: the simulated world's autopilot preset (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`).
         dt_s: control tick, seconds of the UAV's clock.
         time_scale: simulated seconds per wall second (1.0: real time), for the simulated world built here.
         wait_s: wall seconds to wait for mission control's first message before giving up, and, once landed
@@ -132,7 +134,9 @@ def run_remote_uav(
             f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt")
         )
     ports = (
-        adapters if adapters is not None else _paced_world(blueprint, spec, seed, camera, faults, time_scale)
+        adapters
+        if adapters is not None
+        else _paced_world(blueprint, spec, seed, camera, faults, time_scale, vehicle)
     )
     fc, gripper, sprayer, cam = ports.fc, ports.gripper, ports.sprayer, ports.camera
     clock: Any = ports.clock
@@ -215,12 +219,25 @@ def run_remote_uav(
 
 
 def _paced_world(
-    blueprint: Blueprint, spec: UavSpec, seed: int, camera: str, faults: Any, time_scale: float
+    blueprint: Blueprint,
+    spec: UavSpec,
+    seed: int,
+    camera: str,
+    faults: Any,
+    time_scale: float,
+    vehicle: str = "ideal",
 ) -> UavPorts:
     """The ports of ``spec`` in a simulated world of its own, paced at ``time_scale`` (see :func:`paced`)."""
     from masonry.sim import Faults, World
+    from masonry.sim.vehicle_config import vehicle_preset
 
-    world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
+    world = World(
+        blueprint,
+        seed=seed,
+        camera=camera,  # type: ignore[arg-type]
+        faults=faults or Faults(),
+        vehicle=vehicle_preset(vehicle),
+    )
     ports = world.add_uav(spec).ports
     return dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
 
