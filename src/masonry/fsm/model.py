@@ -117,6 +117,11 @@ class UavModel:
         self._task_start_s = 0.0
         self._entered_s = self._now_s
         self._takeoff_tries: list[Any] = [self._now_s, 1, 0.0]  # the take-off asked at, tries, climb (m)
+        self._swing: list[float] = [
+            math.nan,
+            0.0,
+            0.0,
+        ]  # the gate's state entered at, last tick, mean speed^2
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
@@ -503,6 +508,29 @@ class UavModel:
                 reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
                 f"within {self.config.takeoff_timeout_s:.0f} s"
             )
+
+    def _swinging(self, tel: Telemetry) -> str | None:
+        """The reason to fail a gate (hover, alignment) now: the UAV swings instead of settling (or None).
+
+        The mean squared speed over ``swing_window_s`` (exponentially weighted), from the gate state's entry; past
+        ``swing_patience_s`` after the leg's planned end, its root above ``swing_speed_mps`` fails the attempt.
+        """
+        cfg = self.config
+        swing = self._swing
+        if swing[0] != self._entered_s:
+            swing[0], swing[1], swing[2] = self._entered_s, self._now_s, 0.0
+        dt = self._now_s - swing[1]
+        swing[1] = self._now_s
+        vx, vy, vz = tel.velocity_mps
+        swing[2] += min(1.0, dt / cfg.swing_window_s) * (vx * vx + vy * vy + vz * vz - swing[2])
+        if self._now_s < self.nav.end_s + cfg.swing_patience_s or swing[2] <= cfg.swing_speed_mps**2:
+            return None
+        off_m = math.dist(tel.position_m, self.nav.target_m)
+        return (
+            f"swinging at {math.sqrt(swing[2]):.2f} m/s rms, {off_m:.2f} m off, "
+            f"{self._now_s - self.nav.end_s:.0f} s after the leg's end: the position loop is too fast for "
+            f"this autopilot's lag (measure it: masonry fly --identify; docs/hardware.md)"
+        )
 
     def _retry_takeoff(self) -> bool:
         """Disarmed on the ground after asking for the take-off: arm and ask again (at most twice, 2 s apart).
