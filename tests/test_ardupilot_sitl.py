@@ -133,4 +133,7 @@ def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path) -> 
     for p, (out, err) in zip(uavs, runs):
         assert p.returncode == 0, err[-2000:]
         assert json.loads(out)["mission_completed"]
-    print(f"case study on two ArduCopter SITLs: makespan {report['makespan_s']} s (mission time, x{scale})")
+    errors = ", ".join(f"{k} {v * 100:.2f} cm" for k, v in report["placement_error_m"].items())
+    print(
+        f"case study on two ArduCopter SITLs: makespan {report['makespan_s']} s (mission time, x{scale}); {errors}"
+    )

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from masonry.blueprint import load_blueprint
@@ -35,15 +36,17 @@ def test_a_swinging_hover_fails_fast_with_its_reason(tmp_path):
 
 
 class _DroppedTakeoff:
-    """The flight controller port of a simulated UAV whose autopilot drops the first take-off: it disarms."""
+    """The flight controller port of a simulated UAV whose autopilot drops the first take-off: it stays on the
+    ground armed, or disarms (``disarm``)."""
 
-    def __init__(self, fc, vehicle):
-        self._fc, self._vehicle, self.takeoffs = fc, vehicle, 0
+    def __init__(self, fc, vehicle, disarm):
+        self._fc, self._vehicle, self._disarm, self.takeoffs = fc, vehicle, disarm, 0
 
     def takeoff(self, altitude_m):
         self.takeoffs += 1
         if self.takeoffs == 1:
-            self._vehicle.disarm()
+            if self._disarm:
+                self._vehicle.disarm()
             return
         self._fc.takeoff(altitude_m)
 
@@ -51,13 +54,14 @@ class _DroppedTakeoff:
         return getattr(self._fc, name)
 
 
-def test_a_dropped_take_off_is_asked_for_again():
+@pytest.mark.parametrize("disarm", [True, False])
+def test_a_dropped_take_off_is_asked_for_again(disarm):
     bp = load_blueprint(CASE_STUDY)
     spec = next(u for u in bp.fleet if u.role == "adhesion")
     world = World(bp, seed=0)
     uav = world.add_uav(spec)
     ports = uav.ports
-    fc = _DroppedTakeoff(ports.fc, uav.vehicle)
+    fc = _DroppedTakeoff(ports.fc, uav.vehicle, disarm)
     task = next(t for t in plan(bp).tasks if t.id == "A0")
     config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
     run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)

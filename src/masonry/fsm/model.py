@@ -48,6 +48,7 @@ _TAKEOFF_SHORT_M = 0.1
 #: Disarmed on the ground this long after a take-off was asked for: arm and ask again, at most this often.
 _TAKEOFF_RETRY_S = 2.0
 _TAKEOFF_RETRIES = 2
+_TAKEOFF_STUCK_S = 6.0
 
 
 @dataclass
@@ -501,7 +502,7 @@ class UavModel:
     def do_takeoff(self, tel: Telemetry) -> None:
         if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:
             self.airborne()
-        elif tel.on_ground and not tel.armed and self._retry_takeoff():
+        elif tel.on_ground and self._retry_takeoff(tel):
             pass
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
             self.abort(
@@ -532,21 +533,27 @@ class UavModel:
             f"this autopilot's lag (measure it: masonry fly --identify; docs/hardware.md)"
         )
 
-    def _retry_takeoff(self) -> bool:
-        """Disarmed on the ground after asking for the take-off: arm and ask again (at most twice, 2 s apart).
+    def _retry_takeoff(self, tel: Telemetry) -> bool:
+        """Still on the ground after asking for the take-off: ask again (at most twice), arming first if the
+        autopilot disarmed; after ``_TAKEOFF_RETRY_S`` disarmed, ``_TAKEOFF_STUCK_S`` armed (motors spool up
+        first: ArduCopter leaves the ground about 3.5 s after arming).
 
-        ArduCopter SITL, flown by a new connection right after a landing, sometimes armed, took the take-off
-        command and disarmed again ("Arming motors", "Disarming motors"): the take-off then timed out (issue 19).
+        ArduCopter SITL sometimes armed, acknowledged the take-off and stayed on the ground until its
+        DISARM_DELAY (10 s) disarmed it ("Arming motors", "Disarming motors"): the take-off then timed out
+        (issue 19).
         """
         asked_s, tries, climb_m = self._takeoff_tries
-        if self._now_s - asked_s < _TAKEOFF_RETRY_S or tries > _TAKEOFF_RETRIES:
+        waited = self._now_s - asked_s
+        if tries > _TAKEOFF_RETRIES or waited < (_TAKEOFF_STUCK_S if tel.armed else _TAKEOFF_RETRY_S):
             return False
         log.warning(
-            "%s: disarmed on the ground %.1f s after the take-off: arming again",
+            "%s: still on the ground %.1f s after the take-off (%s): asking again",
             self.config.name,
-            self._now_s - asked_s,
+            waited,
+            "armed" if tel.armed else "disarmed",
         )
-        self.fc.arm()
+        if not tel.armed:
+            self.fc.arm()
         self.fc.takeoff(climb_m)
         self._takeoff_tries = [self._now_s, tries + 1, climb_m]
         return True
