@@ -85,7 +85,10 @@ def rig(request) -> Iterator[Rig]:
     sitl.start()
     # the SITL's local frame starts at its home, as a real autopilot's on GPS (masonry fly's default origin)
     fc = MavlinkFlightController(
-        f"udpin:127.0.0.1:{port}", connect_timeout_s=3.0, setpoint_hold_s=0.3, frame=FrameTransform(spec.home_m)
+        f"udpin:127.0.0.1:{port}",
+        connect_timeout_s=3.0,
+        setpoint_hold_s=0.3,
+        frame=FrameTransform(spec.home_m),
     )
     try:
         fc.connect()
