@@ -75,7 +75,7 @@ def rig(request) -> Iterator[Rig]:
         yield Rig(uav.fc, world.clock.now_s, world.step, spec.home_m)
         uav.fc.close()
         return
-    from masonry.adapters.mavlink import MavlinkFlightController
+    from masonry.adapters.mavlink import FrameTransform, MavlinkFlightController
     from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 
     port = free_udp_port()
@@ -83,7 +83,13 @@ def rig(request) -> Iterator[Rig]:
     config = SitlConfig(heartbeat_hz=4.0, autopilot=autopilot)
     sitl = MavlinkSitl(port, home_m=spec.home_m, time_scale=TIME_SCALE, config=config)
     sitl.start()
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=3.0, setpoint_hold_s=0.3)
+    # the SITL's local frame starts at its home, as a real autopilot's on GPS (masonry fly's default origin)
+    fc = MavlinkFlightController(
+        f"udpin:127.0.0.1:{port}",
+        connect_timeout_s=3.0,
+        setpoint_hold_s=0.3,
+        frame=FrameTransform(spec.home_m),
+    )
     try:
         fc.connect()
         assert fc.autopilot == autopilot  # detected from the HEARTBEAT

@@ -112,7 +112,7 @@ def test_the_stop_point_is_the_legs_end_near_it_else_a_smooth_coast():
     assert nav.stop_point_m(_tel((1.7, 0.0, 1.0), (1.0, 0.0, 0.0))).tolist() == pytest.approx([2.0, 0.0, 1.0])
 
 
-def test_settled_needs_rest_at_the_end_then_relaxes_then_gives_in():
+def test_settled_needs_rest_at_the_end_then_relaxes_then_gives_in_once_slow():
     cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0))
     nav = Navigator(cfg)
     nav.hold(0.0, _tel((0.0, 0.0, 1.0)))
@@ -123,7 +123,11 @@ def test_settled_needs_rest_at_the_end_then_relaxes_then_gives_in():
     assert nav.settled(cfg.align_patience_s + 0.1, off)  # twice the tolerance after the patience
     far = _tel((1.0, 0.0, 1.0), (1.0, 0.0, 0.0))
     assert not nav.settled(cfg.align_patience_s + 0.1, far)
-    assert nav.settled(2.0 * cfg.align_patience_s, far)  # and anyhow after twice that
+    # after twice that anywhere, once slower than swing_speed_mps (issue 19: not while swinging through at 1 m/s)
+    assert not nav.settled(2.0 * cfg.align_patience_s, far)
+    slow = _tel((1.0, 0.0, 1.0), (0.9 * cfg.swing_speed_mps, 0.0, 0.0))
+    assert nav.settled(2.0 * cfg.align_patience_s, slow)
+    assert nav.settled(cfg.leg_timeout_s, far)  # and anyhow after the leg timeout
 
 
 @given(

@@ -69,7 +69,18 @@ def test_case_study_report_is_the_exact_json(case_study):
     }
     assert all(
         list(t)
-        == ["id", "uav", "start_s", "end_s", "site_start_s", "site_end_s", "status", "attempts", "phases"]
+        == [
+            "id",
+            "uav",
+            "start_s",
+            "end_s",
+            "site_start_s",
+            "site_end_s",
+            "status",
+            "attempts",
+            "attempts_detail",
+            "phases",
+        ]
         for t in d["tasks"]
     )
     # each task's site interval lies within its run (a UAV asks to leave once its task is done, or just after)

@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.adapters.wiring import HardwareConfig, hardware_config, load_uav_config
+from masonry.blueprint import UavSpec
 from masonry.cli import app
 from masonry.cli.hardware import build_sitl
 from masonry.errors import InputError
@@ -161,9 +162,49 @@ def test_uav_config_file(tmp_path) -> None:
     lag = tmp_path / "lag.yaml"
     lag.write_text("velocity_lag_s: 0.2\n")
     assert hardware_config({}, load_uav_config(lag)).velocity_lag_s == 0.2
-    assert HardwareConfig().velocity_lag_s == UavConfig("u", "brick", (0.0, 0.0, 0.0)).velocity_lag_s
+    assert HardwareConfig().uav_settings() == {}  # the ideal preset: UavConfig's defaults
+    assert hardware_config({}, load_uav_config(lag)).uav_settings() == {"velocity_lag_s": 0.2}
     with pytest.raises(InputError, match="velocity_lag_s must be between 0 and 2 s"):
         hardware_config({}, {"velocity_lag_s": -0.1})
+
+
+def test_uav_config_reaches_every_control_setting_and_the_gains(tmp_path) -> None:
+    tuned = tmp_path / "uav.yaml"
+    tuned.write_text(
+        "control_preset: arducopter\nvelocity_lag_s: 0.5\n"
+        "control: {settle_speed_mps: 0.2, leg-timeout-s: 40, max_climbs: 2}\n"
+        "pid: {xy: {kp: 0.8}, yaw: {kp: 1.0}}\n"
+    )
+    settings = hardware_config({}, load_uav_config(tuned)).uav_settings()
+    config = UavConfig.from_spec(UavSpec("brick-1", "brick", (2.0, -2.5, 0.0)), **settings)
+    assert config.velocity_lag_s == 0.5  # uav.yaml over the preset (0.57)
+    assert config.settle_speed_mps == 0.2 and config.leg_timeout_s == 40.0 and config.max_climbs == 2
+    assert config.ask_settle_tolerance_m == 0.05  # the preset's
+    gains = config.pid_gains
+    assert (gains.x.kp, gains.y.kp, gains.x.ki, gains.yaw.kp) == (0.8, 0.8, 0.2, 1.0)  # ki from the preset
+    assert gains.z.kp == 1.0
+    for text, message in [
+        ("control_preset: betaflight\n", "control_preset must be one of ideal, arducopter"),
+        ("control: {settle_speed: 1}\n", "unknown setting 'settle_speed'"),
+        ("control: {name: x}\n", "unknown setting 'name'"),
+        ("control: {max_climbs: 1.5}\n", "max_climbs must be a whole number"),
+        ("control: {leg_timeout_s: soon}\n", "leg_timeout_s must be a number"),
+        ("control: 3\n", "control must be a mapping"),
+        ("pid: {roll: {kp: 1}}\n", "unknown axis 'roll'"),
+        ("pid: {x: {gain: 1}}\n", "unknown gain 'gain'"),
+        ("pid: {x: {kp: -1}}\n", "kp must be a finite non-negative number"),
+    ]:
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(text)
+        with pytest.raises(InputError, match=message):
+            hardware_config({}, load_uav_config(bad))
+
+
+def test_the_autopilots_origin_is_the_uavs_home_unless_given_or_fed_motion_capture() -> None:
+    home = (2.0, -2.5, 0.0)
+    assert HardwareConfig().origin_for(home) == home  # on GPS the local frame starts where it stands
+    assert HardwareConfig(mocap_port=5005).origin_for(home) == (0.0, 0.0, 0.0)  # world-frame poses fed to it
+    assert HardwareConfig(origin_m=(1.0, 1.0, 0.0), mocap_port=5005).origin_for(home) == (1.0, 1.0, 0.0)
 
 
 def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None:
@@ -186,13 +227,14 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
             fc.wait_for_estimate(3.0)
             tel = fc.telemetry()
             assert fc.autopilot == "ardupilot"
-            assert tel.position_m == pytest.approx((0.0, -2.5, 0.0), abs=0.02)  # glue-1's home
+            assert tel.position_m == pytest.approx((0.0, 0.0, 0.0), abs=0.02)  # local origin: where it stands
         finally:
             fc.close()
     finally:
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=10)
-    assert "glue-1 (adhesion)" in out and "(signed)" in out and f"udpin:0.0.0.0:{port}" in out
+    assert "glue-1 (adhesion) of" in out and "at (0.00, -2.50, 0.00) m" in out  # glue-1's home
+    assert "(signed)" in out and f"udpin:0.0.0.0:{port}" in out
     assert "ground station connected (system 255)" in out
     assert proc.returncode in (130, 0, 1), err
     assert "Traceback" not in err

@@ -117,7 +117,9 @@ class MavlinkSitl:
         host: address of the ground station.
         vehicle: the dynamics; default a :class:`~masonry.sim.vehicle.SimVehicle` standing at ``home_m`` whose
             setpoint timeout is the guided timeout (simulated seconds: how far a UAV flies on a stale command).
-        home_m: start position (world ENU = the autopilot's local frame, as with motion capture fed to it).
+        home_m: start position (world ENU). With ``position_source="internal"`` (the default, like GPS) the local frame's origin is
+            there, as a real autopilot's on GPS (LOCAL_POSITION_NED is 0, 0, 0 at home); with ``"vision"`` the
+            local frame is the world's (motion capture poses are fed to it in the world frame).
         time_scale: simulated seconds per wall second.
         signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
         config: autopilot knobs.
@@ -157,7 +159,10 @@ class MavlinkSitl:
             )
         self.vehicle = vehicle
         self.physics_dt_s = physics_dt_s
-        self.frame = FrameTransform()
+        origin = (
+            tuple(float(c) for c in home_m) if self.config.position_source == "internal" else (0.0, 0.0, 0.0)
+        )
+        self.frame = FrameTransform(origin)  # type: ignore[arg-type]
         self.sim_time_s = 0.0
         if self.config.autopilot not in ("ardupilot", "px4"):
             raise ValueError(f"autopilot must be ardupilot or px4, not {self.config.autopilot!r}")

@@ -38,7 +38,10 @@ class HardwareConfig:
     autopilot: str = "auto"  # auto | ardupilot | px4
     signing_key: str | None = None  # MAVLink 2 signing key file
     heartbeat_timeout_s: float = 1.0
-    origin_m: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the autopilot's local origin in the world (ENU)
+    # the autopilot's local origin in the world (ENU); None: the UAV's blueprint home (an autopilot on GPS starts
+    # its local frame where it stands, ArduCopter and PX4 alike), or the world's origin with motion capture
+    # forwarded to it (``mocap_port``: it is fed world-frame poses)
+    origin_m: tuple[float, float, float] | None = None
     origin_yaw_rad: float = 0.0
     mocap_port: int | None = None  # forward motion-capture poses from this UDP port to the autopilot
     mocap_host: str = "0.0.0.0"
@@ -50,8 +53,33 @@ class HardwareConfig:
     # ~40 s from its first connection (DEPENDENCY-NOTES), a cold Pixhawk about as long; 90 s covers both
     estimate_wait_s: float = 90.0
     # the autopilot's velocity loop time constant: the state machines feed a leg's acceleration x this forward
-    # (``UavConfig.velocity_lag_s``, docs/state-machines.md); 0 for none
-    velocity_lag_s: float = 0.3
+    # (``UavConfig.velocity_lag_s``, docs/state-machines.md); 0 for none; None: the control preset's
+    velocity_lag_s: float | None = None
+    # the state machines' tuning (masonry.fsm.tuning): a preset (ideal | arducopter), then any UavConfig field
+    # (``control``) and the position controller's gains per axis (``pid``) over it
+    control_preset: str | None = None  # None: ``ideal``, or the simulated vehicle's preset with ``--vehicle``
+    control: dict[str, Any] = field(default_factory=dict)
+    pid: dict[str, Any] = field(default_factory=dict)
+
+    def uav_settings(self, default_preset: str = "ideal") -> dict[str, Any]:
+        """The :class:`~masonry.fsm.UavConfig` overrides this configuration asks for (both modes of ``fly``);
+        ``default_preset`` when it names none (``fly --sim --vehicle arducopter`` flies the arducopter tuning)."""
+        from masonry.fsm.tuning import uav_settings
+
+        control = dict(self.control)
+        if self.velocity_lag_s is not None:
+            control.setdefault("velocity_lag_s", self.velocity_lag_s)
+        return uav_settings(self.control_preset or default_preset, control, self.pid)
+
+    def origin_for(self, home_m: tuple[float, float, float]) -> tuple[float, float, float]:
+        """Where the autopilot's local origin is in the world for a UAV whose blueprint home is ``home_m``."""
+        if self.origin_m is not None:
+            return self.origin_m
+        return (
+            (0.0, 0.0, 0.0)
+            if self.mocap_port is not None
+            else (float(home_m[0]), float(home_m[1]), float(home_m[2]))
+        )
 
     @property
     def sim_fc(self) -> bool:
@@ -132,11 +160,15 @@ def _coerce(p: Path, name: str, value: Any, default: Any) -> Any:
             return tuple(float(v) for v in value)
         except (TypeError, ValueError) as exc:
             raise InputError(f"{p}: origin_m must hold numbers") from exc
+    if name in ("control", "pid"):
+        if not isinstance(value, dict):
+            raise InputError(f"{p}: {name} must be a mapping (setting: value), got {quote(value)}")
+        return {str(k).replace("-", "_"): v for k, v in value.items()}
     if name in ("fc_baud", "actuator_baud", "mocap_port"):
         if isinstance(value, bool) or not isinstance(value, int):
             raise InputError(f"{p}: {name} must be an integer, got {quote(value)}")
         return value
-    if isinstance(default, float):
+    if isinstance(default, float) or name == "velocity_lag_s":  # (its default, None, is the preset's)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise InputError(f"{p}: {name} must be a number, got {quote(value)}")
         return float(value)
@@ -165,11 +197,12 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         raise InputError("heartbeat_timeout_s must be > 0")
     if not 0.0 < hw.estimate_wait_s <= 600.0:
         raise InputError(f"estimate_wait_s must be > 0 and at most 600 s, not {hw.estimate_wait_s}")
-    if not 0.0 <= hw.velocity_lag_s <= 2.0:
+    if hw.velocity_lag_s is not None and not 0.0 <= hw.velocity_lag_s <= 2.0:
         raise InputError(
             f"velocity_lag_s must be between 0 and 2 s (the autopilot's velocity loop time constant), "
             f"not {hw.velocity_lag_s}"
         )
+    hw.uav_settings()  # an unknown preset, setting or gain is an input error now, not in flight
     return hw
 
 
@@ -353,7 +386,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
         baud=hw.fc_baud,
         autopilot=hw.autopilot,  # type: ignore[arg-type]
         heartbeat_timeout_s=hw.heartbeat_timeout_s,
-        frame=FrameTransform(hw.origin_m, hw.origin_yaw_rad),
+        frame=FrameTransform(hw.origin_for(spec.home_m), hw.origin_yaw_rad),
         signing_key=load_signing_key(hw.signing_key) if hw.signing_key else None,
         pose_source=pose_source,
     )

@@ -24,7 +24,15 @@ Adapters = UavPorts
 
 
 def select_adapters(
-    *, sim: bool, blueprint: Any, spec: Any, seed: int, camera: str, faults: Any, hardware: Any = None
+    *,
+    sim: bool,
+    blueprint: Any,
+    spec: Any,
+    seed: int,
+    camera: str,
+    faults: Any,
+    hardware: Any = None,
+    vehicle: str = "ideal",
 ) -> UavPorts:
     """Choose and build the adapters for the UAV ``spec``: the simulated world (``--sim``), or each port on its
     own (``hardware``: a :class:`masonry.adapters.wiring.HardwareConfig` from --fc/--actuators/--camera), checked
@@ -51,10 +59,21 @@ def select_adapters(
             "--fc URL / --actuators PORT / --camera INDEX|FILE"
         )
     from masonry.sim import World
+    from masonry.sim.vehicle_config import vehicle_preset
 
-    world = World(blueprint, seed=seed, camera=camera, faults=faults)  # type: ignore[arg-type]
+    world = World(blueprint, seed=seed, camera=camera, faults=faults, vehicle=vehicle_preset(vehicle))  # type: ignore[arg-type]
     faults.check_uavs([spec.name])
     return world.add_uav(spec).ports
+
+
+def _check_vehicle(vehicle: str, sim: bool = True) -> None:
+    """``--vehicle``: one of the simulated presets, and only for a simulated flight controller."""
+    from masonry.sim.vehicle_config import VEHICLE_PRESETS
+
+    if vehicle not in VEHICLE_PRESETS:
+        raise InputError(f"--vehicle must be one of {', '.join(VEHICLE_PRESETS)}, got {vehicle!r}")
+    if vehicle != "ideal" and not sim:
+        raise InputError("--vehicle picks the simulated autopilot: it needs --sim (a real one is what it is)")
 
 
 def _a(word: str) -> str:
@@ -236,6 +255,18 @@ def fly(
         "--insecure",
         help="Mission mode: allow a non-loopback mission control or --listen without a key.",
     ),
+    vehicle: str = typer.Option(
+        "ideal",
+        "--vehicle",
+        help="With --sim: the simulated autopilot, ideal (a 0.3 s first-order velocity lag) | arducopter "
+        "(ArduCopter's setpoint shaping, delay and GPS-like noise, fitted to its SITL).",
+    ),
+    identify: bool = typer.Option(
+        False,
+        "--identify",
+        help="Measure the autopilot's velocity response instead of flying a task: take off, velocity steps "
+        "in a safe hover, land; print the lag and the tuning it suggests (docs/hardware.md).",
+    ),
     zenoh_config: Path | None = typer.Option(
         None,
         "--zenoh-config",
@@ -257,6 +288,7 @@ def fly(
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
+    _check_vehicle(vehicle, sim)
     check_all(
         "fly",
         {
@@ -286,6 +318,14 @@ def fly(
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
     _check_log(log, mission)
+    if identify:
+        if task is not None or mission is not None:
+            raise InputError("--identify flies its own steps: drop --task and --mission")
+        _identify(
+            bp, _pick_uav(bp, uav, name), sim=sim, seed=seed, camera=camera, dt=dt, fmt=fmt, hardware=hardware.hw,
+            vehicle=vehicle,
+        )  # fmt: skip
+        return
     if mission is not None:
         if task is not None:
             raise InputError(
@@ -319,6 +359,7 @@ def fly(
             sim=sim,
             hardware=hardware.hw,
             key=key,
+            vehicle=vehicle,
             zenoh_config=zenoh_config,
             log=log,
             blueprint_path=blueprint,
@@ -339,6 +380,7 @@ def fly(
         timeout=timeout,
         fmt=fmt,
         hardware=hardware.hw,
+        vehicle=vehicle,
     )
 
 
@@ -352,6 +394,35 @@ def _check_log(log: Path | None, mission: str | None) -> None:
     from masonry.cli.watch import check_log_option
 
     check_output_path(check_log_option(log), "--log")
+
+
+def _identify(
+    bp: Any, spec: Any, *, sim: bool, seed: int, camera: str, dt: float, fmt: str, hardware: Any, vehicle: str
+) -> None:
+    """``--identify``: velocity steps in a hover on the chosen flight controller; the lag and the suggested tuning."""
+    from masonry.fsm import UavConfig
+    from masonry.fsm.identify import identify
+    from masonry.sim import Faults
+
+    adapters = select_adapters(
+        sim=sim, blueprint=bp, spec=spec, seed=seed, camera=camera, faults=Faults(), hardware=hardware,
+        vehicle=vehicle,
+    )  # fmt: skip
+    config = UavConfig.from_spec(
+        spec, cruise_altitude_m=bp.cruise_altitude_m, **hardware.uav_settings(vehicle)
+    )
+    try:
+        adapters.fc.connect()
+        found = identify(adapters.fc, adapters.clock, adapters.advance, config=config, dt_s=dt)
+    finally:
+        adapters.close()
+    if fmt == "json":
+        typer.echo(json.dumps({"uav": spec.name, **found.to_dict()}))
+        return
+    where = f"simulated, seed {seed}" if hardware.all_sim else _describe(hardware)
+    typer.echo(f"{spec.name}: velocity response ({where})")
+    for line in found.lines():
+        typer.echo(line)
 
 
 def _fly_one_task(
@@ -368,6 +439,7 @@ def _fly_one_task(
     timeout: float,
     fmt: str,
     hardware: Any,
+    vehicle: str = "ideal",
 ) -> None:
     """Single-task mode: fly ``task`` with the UAV of role ``uav`` (``name``); print the trace and the result."""
     from masonry.fsm import UavConfig, fly_task
@@ -385,13 +457,14 @@ def _fly_one_task(
     world_bp = replace(bp, bricks=bricks)
 
     adapters = select_adapters(
-        sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware
-    )
+        sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware,
+        vehicle=vehicle,
+    )  # fmt: skip
     uav_config = UavConfig.from_spec(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
-        velocity_lag_s=hardware.velocity_lag_s,
+        **hardware.uav_settings(vehicle),
     )
     try:
         run = fly_task(
@@ -497,6 +570,7 @@ def _fly_mission(
     zenoh_config: Path | None = None,
     log: Path | None = None,
     blueprint_path: Path | None = None,
+    vehicle: str = "ideal",
 ) -> None:
     """Mission mode: one UAV taking its tasks from mission control over Zenoh (masonry.mission.remote).
 
@@ -544,8 +618,9 @@ def _fly_mission(
             adapters=adapters,
             key=key,
             zenoh_config=zenoh_config,
-            uav_settings=None if hardware is None else {"velocity_lag_s": hardware.velocity_lag_s},
+            uav_settings=hardware.uav_settings(vehicle) if hardware is not None else None,
             events_sink=mission_log,
+            vehicle=vehicle,
         )
     finally:
         if adapters is not None:
@@ -560,6 +635,7 @@ def _fly_mission(
             "start_s": round(e.start_s, 2),
             "end_s": None if e.end_s is None else round(e.end_s, 2),
             "status": e.status,
+            "reason": getattr(e, "reason", None),
         }
         for e in run.executions
     ]
@@ -579,8 +655,9 @@ def _fly_mission(
         )
     else:
         for t in tasks:
+            why = f": {t['reason']}" if t["reason"] else ""
             typer.echo(
-                f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s"
+                f"{t['task']} (attempt {t['attempt']}): {t['status']} {t['start_s']} -> {t['end_s']} s{why}"
             )
         if run.dropped:
             typer.echo(

@@ -92,6 +92,12 @@ def sim(
             "sim", "--time-scale", "With --serve: mission seconds per wall second (1: real time, to watch)."
         ),
     ),
+    vehicle: str = typer.Option(
+        "ideal",
+        "--vehicle",
+        help="ideal | arducopter: the simulated autopilot (arducopter: its setpoint shaping, delay and GPS-like "
+        "noise, fitted to ArduCopter SITL, flown with the arducopter control preset).",
+    ),
     progress: bool | None = typer.Option(
         None,
         "--progress/--no-progress",
@@ -106,6 +112,9 @@ def sim(
     who waits for whom), 2 on bad input.
     """
     from masonry.blueprint import load_blueprint
+    from masonry.cli.fly import _check_vehicle
+
+    _check_vehicle(vehicle)
     from masonry.mission.simulate import SimulatedMission
     from masonry.sim import Faults
 
@@ -169,6 +178,7 @@ def sim(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
             schedule=offline,
+            vehicle=vehicle,
         )
         watch.attach(mission.control, mission.plan, mission.fleet)
         if serve is not None:

@@ -137,7 +137,10 @@ class AdhesionUav(UavModel):
         elif self._now_s - self._stable_since_s >= cfg.stable_time_s:
             self.stable()
             return
-        if self._now_s > self.nav.end_s + cfg.leg_timeout_s:
+        swinging = self._swinging(tel)
+        if swinging is not None:
+            self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}: {swinging}")
+        elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}")
 
     def enter_descend(self, *args: Any, **kwargs: Any) -> None:

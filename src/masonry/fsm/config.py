@@ -58,6 +58,12 @@ class UavConfig:
     lateral_altitude_m: float | None = None
     layer_min_leg_m: float = 0.3
     layer_vertical_speed_mps: float = 0.5  # peak speed of the climbs to and descents from the layer
+    # A gate (hover, alignment) that sees the UAV swing fails the attempt at once instead of after
+    # leg_timeout_s: an rms speed (over swing_window_s) above swing_speed_mps, swing_patience_s after the leg's
+    # planned end, is a position loop too fast for the autopilot's lag (issue 19), not something waiting cures
+    swing_speed_mps: float = 0.2
+    swing_patience_s: float = 8.0
+    swing_window_s: float = 2.0
     takeoff_timeout_s: float = 30.0
     # A task whose transit waits for clearance longer than this is given up (the attempt counts; None: never):
     # it frees the UAV's hold volume, which another waiting UAV's flight may need (docs/safety.md)

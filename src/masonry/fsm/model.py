@@ -14,6 +14,7 @@ Frames: world ENU, body FLU; tool offsets (effector, nozzle, camera) come from t
 from __future__ import annotations
 
 import copy
+import logging
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,8 +42,13 @@ from masonry.ports import (
 )
 
 Vec3 = tuple[float, float, float]
+log = logging.getLogger(__name__)
 #: The takeoff is over this close under its altitude (the autopilot flies it; the machine then takes over).
 _TAKEOFF_SHORT_M = 0.1
+#: Disarmed on the ground this long after a take-off was asked for: arm and ask again, at most this often.
+_TAKEOFF_RETRY_S = 2.0
+_TAKEOFF_RETRIES = 2
+_TAKEOFF_STUCK_S = 6.0
 
 
 @dataclass
@@ -111,6 +117,12 @@ class UavModel:
         self._now_s = clock.now_s()
         self._task_start_s = 0.0
         self._entered_s = self._now_s
+        self._takeoff_tries: list[Any] = [self._now_s, 1, 0.0]  # the take-off asked at, tries, climb (m)
+        self._swing: list[float] = [
+            math.nan,
+            0.0,
+            0.0,
+        ]  # the gate's state entered at, last tick, mean speed^2
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
@@ -511,6 +523,7 @@ class UavModel:
             self.fc.arm()
         climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
         self.fc.takeoff(climb_m)
+        self._takeoff_tries = [self._now_s, 1, climb_m]  # when and how often it was asked, and the climb
         x, y, z = tel.position_m
         self.nav.target_m = np.array(
             [x, y, z + climb_m]
@@ -519,11 +532,61 @@ class UavModel:
     def do_takeoff(self, tel: Telemetry) -> None:
         if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:
             self.airborne()
+        elif tel.on_ground and self._retry_takeoff(tel):
+            pass
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
             self.abort(
                 reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
                 f"within {self.config.takeoff_timeout_s:.0f} s"
             )
+
+    def _swinging(self, tel: Telemetry) -> str | None:
+        """The reason to fail a gate (hover, alignment) now: the UAV swings instead of settling (or None).
+
+        The mean squared speed over ``swing_window_s`` (exponentially weighted), from the gate state's entry; past
+        ``swing_patience_s`` after the leg's planned end, its root above ``swing_speed_mps`` fails the attempt.
+        """
+        cfg = self.config
+        swing = self._swing
+        if swing[0] != self._entered_s:
+            swing[0], swing[1], swing[2] = self._entered_s, self._now_s, 0.0
+        dt = self._now_s - swing[1]
+        swing[1] = self._now_s
+        vx, vy, vz = tel.velocity_mps
+        swing[2] += min(1.0, dt / cfg.swing_window_s) * (vx * vx + vy * vy + vz * vz - swing[2])
+        if self._now_s < self.nav.end_s + cfg.swing_patience_s or swing[2] <= cfg.swing_speed_mps**2:
+            return None
+        off_m = math.dist(tel.position_m, self.nav.target_m)
+        return (
+            f"swinging at {math.sqrt(swing[2]):.2f} m/s rms, {off_m:.2f} m off, "
+            f"{self._now_s - self.nav.end_s:.0f} s after the leg's end: the position loop is too fast for "
+            f"this autopilot's lag (measure it: masonry fly --identify; docs/hardware.md)"
+        )
+
+    def _retry_takeoff(self, tel: Telemetry) -> bool:
+        """Still on the ground after asking for the take-off: ask again (at most twice), arming first if the
+        autopilot disarmed; after ``_TAKEOFF_RETRY_S`` disarmed, ``_TAKEOFF_STUCK_S`` armed (motors spool up
+        first: ArduCopter leaves the ground about 3.5 s after arming).
+
+        ArduCopter SITL sometimes armed, acknowledged the take-off and stayed on the ground until its
+        DISARM_DELAY (10 s) disarmed it ("Arming motors", "Disarming motors"): the take-off then timed out
+        (issue 19).
+        """
+        asked_s, tries, climb_m = self._takeoff_tries
+        waited = self._now_s - asked_s
+        if tries > _TAKEOFF_RETRIES or waited < (_TAKEOFF_STUCK_S if tel.armed else _TAKEOFF_RETRY_S):
+            return False
+        log.warning(
+            "%s: still on the ground %.1f s after the take-off (%s): asking again",
+            self.config.name,
+            waited,
+            "armed" if tel.armed else "disarmed",
+        )
+        if not tel.armed:
+            self.fc.arm()
+        self.fc.takeoff(climb_m)
+        self._takeoff_tries = [self._now_s, tries + 1, climb_m]
+        return True
 
     def _transit_altitude_m(self) -> float:
         return self.config.cruise_altitude_m

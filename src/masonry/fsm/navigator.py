@@ -286,13 +286,16 @@ class Navigator:
         """The UAV has come to rest at the end of its leg, waiting since ``settling_since_s`` (started).
 
         Within ``ask_settle_tolerance_m`` of it and slower than ``settle_speed_mps``; twice both after
-        ``align_patience_s``, and anyhow after twice that time (gusts may never let it settle).
+        ``align_patience_s``; after twice that time anywhere slower than ``swing_speed_mps`` (gusts may never let
+        it settle), and anyhow after ``leg_timeout_s``. A UAV swinging through the point at 1.7 m/s on an
+        autopilot it is tuned too fast for no longer asks for its transit then (issue 19).
         """
         assert self.settling_since_s is not None
         waited = now_s - self.settling_since_s
         cfg = self.config
         if waited >= 2.0 * cfg.align_patience_s:
-            return True
+            vx, vy, vz = tel.velocity_mps
+            return vx * vx + vy * vy + vz * vz <= cfg.swing_speed_mps**2 or waited >= cfg.leg_timeout_s
         return self.rests_at(tel, self.target_m, 1.0 if waited < cfg.align_patience_s else 2.0)
 
     # -- the tick ------------------------------------------------------------------------------------------

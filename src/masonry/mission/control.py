@@ -514,6 +514,7 @@ class MissionControl:
         att.phases = r.phases
         if r.status == "done":
             att.status = "done"
+            log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
             self.dispatcher.complete(r.task_id)
             if self.journal is not None:
                 fields: dict[str, Any] = {}
@@ -536,6 +537,15 @@ class MissionControl:
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
+            log.info(
+                "%s failed on %s (attempt %d, %.1f-%.1f s): %s",
+                r.task_id,
+                msg.sender,
+                att.attempt,
+                att.start_s,
+                now_s,
+                att.reason,
+            )
             # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
             # attempt of the task
             self.dispatcher.fail(r.task_id, count=not att.reason.startswith(UNCOUNTED_REASONS))
@@ -572,6 +582,7 @@ class MissionControl:
                 att.end_s = now_s
                 att.status = "failed"
                 att.reason = f"uav {status}"
+                log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
         self._emit(now_s, "lost", name, released, status=status)
@@ -587,6 +598,7 @@ class MissionControl:
             self.history.append(att)
             self._running[a.task_id] = att
             self._raise_layers((a.task_id,))
+            log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
             self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)

@@ -81,6 +81,7 @@ class Execution:
     end_s: float | None = None
     status: str = "running"
     queued_s: float = 0.0
+    reason: str | None = None  # why it failed, as the machine reported it
 
 
 class UavHandler(MissionLink, ClearanceLink):
@@ -326,6 +327,7 @@ class UavHandler(MissionLink, ClearanceLink):
         if cur is not None and cur.task_id == result.task_id:
             cur.end_s = self.now_s
             cur.status = result.status
+            cur.reason = None if result.status == "done" else (result.reason or "no reason given")
             self._current = None
             if result.phases is not None and cur.queued_s > 0.0:
                 # the machine measured from taking the task; the attempt began when its assignment came
@@ -334,6 +336,18 @@ class UavHandler(MissionLink, ClearanceLink):
                 )
         attempt = cur.attempt if cur is not None and cur.task_id == result.task_id else 0
         state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        if result.status == "done":
+            log.info("%s: %s attempt %d done at %.1f s", self.name, result.task_id, attempt, self.now_s)
+        else:
+            log.info(
+                "%s: %s attempt %d failed at %.1f s in state %s: %s",
+                self.name,
+                result.task_id,
+                attempt,
+                self.now_s,
+                state or "-",
+                result.reason or "no reason given",
+            )
         self._send(Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt))
         if self._after_result is not None:
             self._after_result()

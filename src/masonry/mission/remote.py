@@ -89,6 +89,7 @@ def run_remote_uav(
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
     events_sink: Any = None,
+    vehicle: str = "ideal",
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -99,6 +100,7 @@ def run_remote_uav(
         listen: this process's own listen endpoint(s) (loopback by default).
         mission_name: Zenoh key prefix shared with mission control.
         seed, camera, faults: the simulated world's (without ``adapters``).
+        vehicle: the simulated world's autopilot preset (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`).
         dt_s: control tick, seconds of the UAV's clock.
         time_scale: simulated seconds per wall second (1.0: real time), for the simulated world built here.
         wait_s: wall seconds to wait for mission control's first message before giving up, and, once landed
@@ -112,8 +114,8 @@ def run_remote_uav(
             for ``masonry fly --fc URL --actuators PORT --camera ...``. Its ``advance`` moves time on its clock
             (the autopilot's: wall time on hardware, the SITL's scaled time on a bench), so ``time_scale`` does
             not apply; the caller checks the adapters before flight and closes them afterwards.
-        uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml
-            ``velocity_lag_s``).
+        uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml's
+            tuning, ``HardwareConfig.uav_settings``: the same as in single-task mode).
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
@@ -135,7 +137,9 @@ def run_remote_uav(
             f"`time_scale` and `dt` must be > 0, got {time_scale} and {dt_s}", options=("time_scale", "dt")
         )
     ports = (
-        adapters if adapters is not None else _paced_world(blueprint, spec, seed, camera, faults, time_scale)
+        adapters
+        if adapters is not None
+        else _paced_world(blueprint, spec, seed, camera, faults, time_scale, vehicle)
     )
     fc, gripper, sprayer, cam = ports.fc, ports.gripper, ports.sprayer, ports.camera
     clock: Any = ports.clock
@@ -227,14 +231,38 @@ def run_remote_uav(
 
 
 def _paced_world(
-    blueprint: Blueprint, spec: UavSpec, seed: int, camera: str, faults: Any, time_scale: float
+    blueprint: Blueprint,
+    spec: UavSpec,
+    seed: int,
+    camera: str,
+    faults: Any,
+    time_scale: float,
+    vehicle: str = "ideal",
 ) -> UavPorts:
     """The ports of ``spec`` in a simulated world of its own, paced at ``time_scale`` (see :func:`paced`)."""
     from masonry.sim import Faults, World
+    from masonry.sim.vehicle_config import vehicle_preset
 
-    world = World(blueprint, seed=seed, camera=camera, faults=faults or Faults())  # type: ignore[arg-type]
+    world = World(
+        blueprint,
+        seed=seed,
+        camera=camera,  # type: ignore[arg-type]
+        faults=faults or Faults(),
+        vehicle=vehicle_preset(vehicle),
+    )
     ports = world.add_uav(spec).ports
     return dataclasses.replace(ports, advance=paced(ports.clock, ports.advance, time_scale))
+
+
+def _echo_failures(handler: UavHandler, shown: int, now_s: float, echo: Callable[[str], None]) -> int:
+    """Echo the reason of every execution that ended failed since the first ``shown``; the new count."""
+    done = handler.executions
+    while shown < len(done) and done[shown].end_s is not None:
+        e = done[shown]
+        if e.status != "done":
+            echo(f"{now_s:8.2f} s  {e.task_id} (attempt {e.attempt}) failed: {e.reason or 'no reason given'}")
+        shown += 1
+    return shown
 
 
 def _fly_until_done(
@@ -262,6 +290,7 @@ def _fly_until_done(
     heard_s: float | None = None  # when mission control was last heard (our clock), and the wall time then
     heard_wall = wall0
     refused_shown = 0
+    failed_shown = 0  # executions already looked at for a failure to echo
     while True:
         now = clock.now_s()
         handler.step(now)
@@ -270,6 +299,8 @@ def _fly_until_done(
         while echo is not None and len(handler.refused) > refused_shown:
             echo(f"{now:8.2f} s  refused an assignment: {handler.refused[refused_shown]}")
             refused_shown += 1
+        if echo is not None:
+            failed_shown = _echo_failures(handler, failed_shown, now, echo)
         if echo is not None and model.state != last_state:
             last_state = model.state
             echo(f"{now:8.2f} s  {last_state}")

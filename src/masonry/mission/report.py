@@ -63,6 +63,8 @@ class TaskReport:
     #: when its UAV worked at its site: from the grant of its flight down there to its asking to leave
     site_start_s: float | None = None
     site_end_s: float | None = None
+    #: every attempt at it, in start order (``attempts_detail`` in the JSON: who, when, how, why it failed)
+    tries: tuple[AttemptReport, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -74,6 +76,7 @@ class TaskReport:
             "site_end_s": _r(self.site_end_s, 2),
             "status": self.status,
             "attempts": self.attempts,
+            "attempts_detail": [a.detail() for a in self.tries],
             "phases": _phases(self.phases),
         }
 
@@ -91,6 +94,16 @@ class AttemptReport:
     kind: str
     reason: str | None = None
     phases: PhaseTimes | None = None  # as its UAV measured them (None: not reported, or still running)
+
+    def detail(self) -> dict[str, Any]:
+        """One entry of a task's ``attempts_detail``: ``outcome`` done/failed/running, ``reason`` (failed only)."""
+        return {
+            "uav": self.uav,
+            "start_s": _r(self.start_s, 2),
+            "end_s": _r(self.end_s, 2),
+            "outcome": self.status,
+            "reason": self.reason if self.status == "failed" else None,
+        }
 
 
 @dataclass(frozen=True)
@@ -426,6 +439,7 @@ def control_report(
                     a.phases,
                     None if visit is None else visit[0],
                     None if visit is None else visit[1],
+                    tuple(tries),
                 )
             )
             continue
@@ -434,7 +448,9 @@ def control_report(
             "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
         )
         stuck.append(t.id)
-        tasks.append(TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind))
+        tasks.append(
+            TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind, tries=tuple(tries))
+        )
     # the mission starts with its first assignment (mission control may have waited for its fleet before)
     start = min((a.start_s for a in attempts), default=0.0)
     makespan = max((a.end_s - start for a in done_att.values() if a.end_s is not None), default=0.0)

@@ -166,6 +166,7 @@ def simulate(
     reservation: str = DEFAULT_RESERVATION,
     schedule: OfflineSchedule | None = None,
     events_sink: EventSink | None = None,
+    vehicle: str = "ideal",
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -190,6 +191,7 @@ def simulate(
         rising_layers=rising_layers,
         warn=warn,
         uav_config=uav_config,
+        vehicle=vehicle,
         stall_timeout_s=stall_timeout_s,
         reservation=reservation,
         schedule=schedule,
@@ -352,6 +354,7 @@ class SimulatedMission:
         reservation: str = DEFAULT_RESERVATION,
         schedule: OfflineSchedule | None = None,
         events_sink: EventSink | None = None,
+        vehicle: str = "ideal",
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -381,6 +384,11 @@ class SimulatedMission:
             uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name,
                 role, home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs
                 get its airframe; the lower bound, the expected durations and the airspace its timing.
+                Default with a ``vehicle`` other than ``ideal``: the control preset of that name
+                (:mod:`masonry.fsm.tuning`), the tuning a real UAV on that autopilot flies with.
+            vehicle: the simulated autopilot (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`): ``ideal``
+                (a first-order 0.3 s velocity lag) or ``arducopter`` (ArduCopter's shaping, delay and GPS-like
+                noise, fitted to its SITL: docs/performance.md).
             stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
             reservation: ``task`` (default, the paper: conflicting tasks never run at once) or ``site``
@@ -406,6 +414,7 @@ class SimulatedMission:
         from masonry.planner import estimate_durations_s
         from masonry.planner import plan as make_plan
         from masonry.sim import Faults, World
+        from masonry.sim.vehicle_config import vehicle_preset
 
         if reservation not in RESERVATIONS:
             raise InputError(
@@ -428,6 +437,13 @@ class SimulatedMission:
             raise InputError("`resume` needs `journal_path`", options=("resume", "journal_path"))
         faults = faults if faults is not None else Faults()
         wall0 = time.perf_counter()
+        vehicle_config = vehicle_preset(vehicle)
+        if uav_config is None and vehicle != "ideal":
+            # the tuning a real UAV on that autopilot flies with (masonry.fsm.tuning's preset of the same name)
+            from masonry.fsm import UavConfig
+            from masonry.fsm.tuning import uav_settings
+
+            uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **uav_settings(vehicle))
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
         fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
@@ -482,6 +498,7 @@ class SimulatedMission:
                 faults=faults,
                 start_s=resumed_from or 0.0,
                 airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe,
+                vehicle=vehicle_config,
             )
             measured = MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
             expected_s = estimate_durations_s(

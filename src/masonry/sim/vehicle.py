@@ -30,6 +30,7 @@ import numpy as np
 from masonry.errors import CommandRejected, InvalidArgument
 from masonry.geometry import wrap_angle_rad
 from masonry.ports import Telemetry, Vec3
+from masonry.sim.shaping import Shaper
 from masonry.sim.vehicle_config import VehicleConfig
 
 __all__ = ["GRAVITY_MPS2", "SimVehicle", "VehicleConfig"]
@@ -132,6 +133,7 @@ class SimVehicle:
         self._lag_dt = -1.0
         self._tel: tuple[bool, Telemetry] | None = None
         self._lag_k = self._yaw_k = 0.0
+        self._shaper = Shaper(self.config.shaping) if self.config.shaping is not None else None
 
     # ------------------------------------------------------------------ state
     @property
@@ -375,6 +377,8 @@ class SimVehicle:
             return
         if self.on_ground and self._takeoff_z is None:
             self._vx = self._vy = self._vz = self._ax = self._ay = self._yaw_rate = 0.0
+            if self._shaper is not None:
+                self._shaper.reset()
             return
         cfg = self.config
         mode = self.mode
@@ -401,20 +405,29 @@ class SimVehicle:
             tz = self._climb(self._takeoff_z)
         elif t - self._sp_time <= cfg.setpoint_timeout_s + 1e-9 and self._link_lost_at is None:
             tx, ty, tz, tyaw = self._sp
-        else:  # hold the position where the vehicle stopped
-            hold = self._hold
-            if hold is None:
-                tx = ty = tz = 0.0
-                if self._vx * self._vx + self._vy * self._vy + self._vz * self._vz < 0.01:
-                    self._hold = (self._x, self._y, self._z)
-            else:
-                g = cfg.hold_gain_per_s
-                tx, ty, tz = g * (hold[0] - self._x), g * (hold[1] - self._y), g * (hold[2] - self._z)
-                n = math.sqrt(tx * tx + ty * ty + tz * tz)
-                if n > cfg.hold_max_speed_mps:
-                    f = cfg.hold_max_speed_mps / n
-                    tx, ty, tz = tx * f, ty * f, tz * f
+        else:
+            tx, ty, tz = self._hold_velocity()
+        shaper = self._shaper
+        if shaper is not None:
+            tx, ty, tz = shaper.shape(t, tx, ty, tz, dt_s)
+            shaper.drift(dt_s, self._gauss)
         self._fly(tx, ty, tz, tyaw, dt_s, held and mode == "LAND")
+
+    def _hold_velocity(self) -> tuple[float, float, float]:
+        """The velocity that holds the position where the vehicle stopped (after the setpoint timeout)."""
+        hold = self._hold
+        if hold is None:
+            if self._vx * self._vx + self._vy * self._vy + self._vz * self._vz < 0.01:
+                self._hold = (self._x, self._y, self._z)
+            return 0.0, 0.0, 0.0
+        cfg = self.config
+        g = cfg.hold_gain_per_s
+        tx, ty, tz = g * (hold[0] - self._x), g * (hold[1] - self._y), g * (hold[2] - self._z)
+        n = math.sqrt(tx * tx + ty * ty + tz * tz)
+        if n > cfg.hold_max_speed_mps:
+            f = cfg.hold_max_speed_mps / n
+            tx, ty, tz = tx * f, ty * f, tz * f
+        return tx, ty, tz
 
     def _anchored(self) -> tuple[float, float]:
         """The horizontal velocity that holds the vehicle over where LAND or the take-off climb began."""
@@ -542,7 +555,8 @@ class SimVehicle:
         return cfg.drag_per_s * self._wx, cfg.drag_per_s * self._wy
 
     def _touchdown(self) -> None:
-        climbing = self._takeoff_z is not None and self._vz > 0.0
+        # a take-off starts on the ground: with a shaper's delay the climb begins a few steps after the command
+        climbing = self._takeoff_z is not None and (self._vz > 0.0 or self._shaper is not None)
         if climbing:
             return
         self.on_ground = True
@@ -596,10 +610,14 @@ class SimVehicle:
         pitch = math.atan2(c * ax + s * ay, GRAVITY_MPS2)
         # Telemetry is a frozen dataclass without validation; filling its __dict__ directly is the same value
         # built 8x faster than through the generated __init__ (one sample per UAV per control tick).
+        x, y, z = self._x + n * g[0], self._y + n * g[1], self._z + n * g[2]
+        if self._shaper is not None:
+            e = self._shaper.gps_error_m
+            x, y, z = x + e[0], y + e[1], z + e[2]
         tel = _new_telemetry(Telemetry)
         tel.__dict__.update(
             time_s=self._t,
-            position_m=(self._x + n * g[0], self._y + n * g[1], self._z + n * g[2]),
+            position_m=(x, y, z),
             velocity_mps=(self._vx + v * g[3], self._vy + v * g[4], self._vz + v * g[5]),
             attitude_rad=(roll, pitch, (yaw + cfg.yaw_noise_rad * g[6] + _PI) % _TWO_PI - _PI),
             armed=self.armed,

@@ -9,8 +9,9 @@ import math
 from dataclasses import dataclass
 
 from masonry.errors import InvalidArgument
+from masonry.sim.shaping import ARDUCOPTER, ShapingConfig
 
-__all__ = ["VehicleConfig"]
+__all__ = ["VEHICLE_PRESETS", "VehicleConfig", "vehicle_preset"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,8 @@ class VehicleConfig:
     mocap_noise_m: float = 0.0015
     velocity_noise_mps: float = 0.005
     yaw_noise_rad: float = 0.002
+    #: an autopilot's setpoint shaping, delay and GPS-like noise (masonry.sim.shaping); None: none (``ideal``)
+    shaping: ShapingConfig | None = None
 
     def __post_init__(self) -> None:
         for name in (
@@ -59,3 +62,27 @@ class VehicleConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
+
+
+#: ``--vehicle`` presets. ``ideal``: the first-order 0.3 s lag with motion-capture noise the project was tuned on.
+#: ``arducopter``: ArduCopter's GUIDED shaping and delay (masonry.sim.shaping.ARDUCOPTER) in front of a faster
+#: airframe lag, with the SITL's measured hover noise (docs/performance.md, "The simulated ArduCopter").
+VEHICLE_PRESETS: dict[str, VehicleConfig] = {
+    "ideal": VehicleConfig(),
+    "arducopter": VehicleConfig(
+        velocity_tau_s=0.05,
+        shaping=ARDUCOPTER,
+        mocap_noise_m=0.002,
+        velocity_noise_mps=0.015,
+    ),
+}
+
+
+def vehicle_preset(name: str) -> VehicleConfig:
+    """The :data:`VEHICLE_PRESETS` entry ``name`` (InvalidArgument naming the presets otherwise)."""
+    try:
+        return VEHICLE_PRESETS[name]
+    except KeyError:
+        raise InvalidArgument(
+            f"vehicle must be one of {', '.join(VEHICLE_PRESETS)}, not {name!r}", options=("vehicle",)
+        ) from None

@@ -1,0 +1,148 @@
+"""What a real autopilot does to a velocity setpoint before its airframe follows it (the ``arducopter`` preset).
+
+:class:`~masonry.sim.vehicle.SimVehicle` alone is a first-order lag toward the commanded velocity. ArduCopter's
+GUIDED mode does more (issue 19, measured with ``masonry fly --identify`` on ArduCopter 4.7 SITL: 10 % of a
+0.5 m/s step after 0.31-0.34 s, 63 % after 0.71 s, 90 % after 1.0-1.4 s):
+
+- a transport and loop delay: the link, the 400 Hz loop's scheduling, the EKF's output lag (``delay_s``);
+- jerk- and acceleration-limited shaping of the velocity target (AC_PosControl's ``shape_vel_accel``:
+  ``PSC_JERK_XY`` 5 m/s^3 and ``WPNAV_ACCEL`` 2.5 m/s^2 horizontally, ``PSC_JERK_Z`` 5 m/s^3 and
+  ``PILOT_ACCEL_Z`` 2.5 m/s^2 vertically): the target velocity moves toward the setpoint along a jerk-limited
+  S-curve, never faster than the acceleration limit;
+- GPS-like position noise (``gps_noise_m``, correlated over ``gps_noise_tau_s``: it wanders, unlike
+  motion-capture noise) beside the vehicle's white motion-capture noise.
+
+The vehicle's own first-order lag (``VehicleConfig.velocity_tau_s``) then follows the shaped target. The numbers
+of :data:`ARDUCOPTER` are fitted so that ``masonry fly --identify --sim --vehicle arducopter`` measures what it
+measures on the SITL (``benchmarks/bench_vehicle_fit.py`` prints both; docs/performance.md).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+
+from masonry.errors import InvalidArgument
+
+__all__ = ["ARDUCOPTER", "Shaper", "ShapingConfig"]
+
+
+@dataclass(frozen=True)
+class ShapingConfig:
+    """An autopilot's setpoint shaping and delay (SI units in the names)."""
+
+    delay_s: float = 0.0
+    jerk_xy_mps3: float = math.inf
+    accel_xy_mps2: float = math.inf
+    jerk_z_mps3: float = math.inf
+    accel_z_mps2: float = math.inf
+    gps_noise_m: float = 0.0  # standard deviation of the wandering position error, per axis (0: none)
+    gps_noise_tau_s: float = 2.0  # its correlation time
+
+    def __post_init__(self) -> None:
+        for name in ("jerk_xy_mps3", "accel_xy_mps2", "jerk_z_mps3", "accel_z_mps2", "gps_noise_tau_s"):
+            value = getattr(self, name)
+            if math.isnan(value) or value <= 0:
+                raise InvalidArgument(f"ShapingConfig.{name} must be > 0 (inf for none), got {value!r}")
+        for name in ("delay_s", "gps_noise_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise InvalidArgument(f"ShapingConfig.{name} must be finite and >= 0, got {value!r}")
+
+
+#: ArduCopter 4.7 defaults (PSC_JERK_XY, WPNAV_ACCEL, PSC_JERK_Z, PILOT_ACCEL_Z) with the delay fitted to the SITL.
+ARDUCOPTER = ShapingConfig(
+    delay_s=0.15,
+    jerk_xy_mps3=5.0,
+    accel_xy_mps2=2.5,
+    jerk_z_mps3=5.0,
+    accel_z_mps2=2.5,
+    gps_noise_m=0.003,
+    gps_noise_tau_s=2.0,
+)
+
+
+class _Axis:
+    """One axis of ArduPilot's ``shape_vel_accel``: the shaped velocity ``v`` moves toward its target with the
+    acceleration ``sqrt_controller(error, jerk / accel, jerk)`` (linear, gain jerk / accel, for errors below
+    jerk / gain^2; a jerk-limited braking curve beyond), within the acceleration limit, reached at the jerk limit."""
+
+    __slots__ = ("a", "accel", "gain", "jerk", "v")
+
+    def __init__(self, jerk: float, accel: float) -> None:
+        self.jerk, self.accel = jerk, accel
+        self.gain = jerk / accel if math.isfinite(jerk) and math.isfinite(accel) else math.inf
+        self.v = self.a = 0.0
+
+    def step(self, target: float, dt: float) -> float:
+        e = target - self.v
+        if not math.isfinite(self.gain):  # no shaping on this axis
+            self.v, self.a = target, 0.0
+            return target
+        want = _sqrt_controller(e, self.gain, self.jerk, dt)
+        want = self.accel if want > self.accel else (-self.accel if want < -self.accel else want)
+        da = want - self.a
+        step = self.jerk * dt
+        self.a += step if da > step else (-step if da < -step else da)
+        self.v += self.a * dt
+        return self.v
+
+
+def _sqrt_controller(error: float, p: float, second_order_limit: float, dt: float) -> float:
+    """ArduPilot's ``sqrt_controller`` (AP_Math/control.cpp): linear near zero, square root beyond."""
+    linear = second_order_limit / (p * p)
+    if error > linear:
+        out = math.sqrt(2.0 * second_order_limit * (error - linear / 2.0))
+    elif error < -linear:
+        out = -math.sqrt(2.0 * second_order_limit * (-error - linear / 2.0))
+    else:
+        out = error * p
+    limit = abs(error) / dt  # never past the error in one step
+    return limit if out > limit else (-limit if out < -limit else out)
+
+
+class Shaper:
+    """The state of one vehicle's shaping: the delay line, the shaped velocity and the GPS error."""
+
+    def __init__(self, config: ShapingConfig) -> None:
+        self.config = config
+        self._line: deque[tuple[float, float, float, float]] = deque()
+        self._out = (0.0, 0.0, 0.0)
+        self._axes = (
+            _Axis(config.jerk_xy_mps3, config.accel_xy_mps2),
+            _Axis(config.jerk_xy_mps3, config.accel_xy_mps2),
+            _Axis(config.jerk_z_mps3, config.accel_z_mps2),
+        )
+        self.gps_error_m = [0.0, 0.0, 0.0]
+
+    def reset(self, velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+        """Forget the delay line; the shaped velocity is ``velocity_mps`` (on the ground: zero)."""
+        self._line.clear()
+        self._out = velocity_mps
+        for axis, v in zip(self._axes, velocity_mps):
+            axis.v, axis.a = v, 0.0
+
+    def shape(self, t_s: float, tx: float, ty: float, tz: float, dt_s: float) -> tuple[float, float, float]:
+        """The target velocity the airframe follows at ``t_s``, for the autopilot's target ``(tx, ty, tz)`` now."""
+        line = self._line
+        line.append((t_s, tx, ty, tz))
+        due = t_s - self.config.delay_s + 1e-9
+        out = self._out
+        while line and line[0][0] <= due:
+            _, *vel = line.popleft()
+            out = (vel[0], vel[1], vel[2])
+        self._out = out
+        ax, ay, az = self._axes
+        return ax.step(out[0], dt_s), ay.step(out[1], dt_s), az.step(out[2], dt_s)
+
+    def drift(self, dt_s: float, gauss: object) -> None:
+        """Move the GPS error on by ``dt_s`` (Ornstein-Uhlenbeck; ``gauss()`` a standard normal draw)."""
+        sigma = self.config.gps_noise_m
+        if sigma <= 0.0:
+            return
+        a = dt_s / self.config.gps_noise_tau_s
+        b = sigma * math.sqrt(2.0 * a)
+        err = self.gps_error_m
+        for i in range(3):
+            err[i] += -err[i] * a + b * gauss()  # type: ignore[operator]

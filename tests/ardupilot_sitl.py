@@ -1,0 +1,78 @@
+"""ArduCopter SITL for the tests that fly the real autopilot (issue 19): found, started, stopped.
+
+``MASONRY_ARDUPILOT_SITL`` names the ``arducopter`` binary (``.ci/run`` sets it from ``../shared/sitl/arducopter``
+when that exists; its ``copter.parm`` and ``copter-hexa.parm`` sit beside it). Without it, the tests that need
+it are skipped with one reason. Each instance runs in its own working folder and process group, killed whole
+afterwards; instance numbers 41-49 (MAVLink on TCP 5760 + 10 N) keep clear of a developer's -I0 and of parallel
+tests. ``MASONRY_ARDUPILOT_SITL_WIND=3`` flies them in 3 m/s of wind (SIM_WIND_SPD).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+ENV = "MASONRY_ARDUPILOT_SITL"
+#: Wind for the same tests (m/s, ArduPilot's SIM_WIND_SPD from the north-east): issue 19's windy targets.
+WIND_ENV = "MASONRY_ARDUPILOT_SITL_WIND"
+#: Simulated seconds per wall second: the lag measured with --identify is the same at 1 and 5 (docs/hardware.md).
+SPEEDUP = 5
+#: ArduPilot's SITL home of its examples (Canberra model airfield); the local frame starts here.
+HOME = "-35.363261,149.165230,584,353"
+
+
+def sitl_binary() -> Path:
+    """The SITL binary, or skip (one reason) when it is not configured."""
+    value = os.environ.get(ENV)
+    if not value:
+        pytest.skip(
+            f"ArduCopter SITL not available: set {ENV} to its arducopter binary (../shared/sitl/arducopter)"
+        )
+    path = Path(value)
+    if not path.is_file():
+        pytest.skip(f"ArduCopter SITL not available: {ENV}={value} is not a file")
+    return path
+
+
+@contextlib.contextmanager
+def arducopter(workdir: Path, instance: int, sysid: int, *, speedup: int = SPEEDUP) -> Iterator[str]:
+    """Run one ArduCopter hexacopter SITL (``-I instance``); yields its MAVLink URL (``tcp:127.0.0.1:PORT``)."""
+    binary = sitl_binary()
+    parms = ",".join(str(binary.parent / name) for name in ("copter.parm", "copter-hexa.parm"))
+    workdir.mkdir(parents=True, exist_ok=True)
+    wind = os.environ.get(WIND_ENV)
+    if wind:
+        (workdir / "wind.parm").write_text(f"SIM_WIND_SPD {float(wind)}\nSIM_WIND_DIR 45\n")
+        parms += f",{workdir / 'wind.parm'}"
+    port = 5760 + 10 * instance
+    log = (workdir / "sitl.log").open("w")
+    proc = subprocess.Popen(
+        [str(binary), "--model", "hexa", "--speedup", str(speedup), f"-I{instance}", "--sysid", str(sysid), "-w",
+         "--defaults", parms, "--home", HOME],
+        cwd=workdir, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 20.0
+        while True:  # its TCP port opens once it has started (it boots on the first connection)
+            with socket.socket() as s:
+                if s.connect_ex(("127.0.0.1", port)) == 0:
+                    break
+            if proc.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(
+                    f"ArduCopter SITL -I{instance} did not open TCP {port}: see {workdir / 'sitl.log'}"
+                )
+            time.sleep(0.1)
+        yield f"tcp:127.0.0.1:{port}"
+    finally:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+        log.close()

@@ -1,0 +1,69 @@
+"""Gates that cannot livelock on a real autopilot (issue 19): a swing fails the attempt at once with its reason;
+a take-off the autopilot dropped (disarmed on the ground) is asked for again."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from masonry.blueprint import load_blueprint
+from masonry.cli import app
+from masonry.fsm import UavConfig, fly_task
+from masonry.planner import plan
+from masonry.sim import World
+
+CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+
+
+def test_a_swinging_hover_fails_fast_with_its_reason(tmp_path):
+    # the simulated ArduCopter flown with the gains tuned for the ideal vehicle (kp 3 /s past its stability limit)
+    config = tmp_path / "uav.yaml"
+    config.write_text("control_preset: ideal\n")
+    res = CliRunner().invoke(app, [
+        "fly", "--sim", "--vehicle", "arducopter", "--config", str(config), "--uav", "adhesion", "--task", "A0",
+        "--blueprint", str(CASE_STUDY), "--format", "json",
+    ])  # fmt: skip
+    assert res.exit_code == 0, res.output  # (--format json reports a failed task in the JSON)
+    out = json.loads(res.stdout)
+    assert out["reason"].startswith("could not hover still over the start of A0: swinging at ")
+    assert "masonry fly --identify" in out["reason"]
+    states = {s["state"]: s["t_s"] for s in out["trace"]}
+    # the gate gave up about swing_patience_s after the leg's end, not after leg_timeout_s (30 s)
+    assert states["failsafe"] - states["hover"] < 15.0
+
+
+class _DroppedTakeoff:
+    """The flight controller port of a simulated UAV whose autopilot drops the first take-off: it stays on the
+    ground armed, or disarms (``disarm``)."""
+
+    def __init__(self, fc, vehicle, disarm):
+        self._fc, self._vehicle, self._disarm, self.takeoffs = fc, vehicle, disarm, 0
+
+    def takeoff(self, altitude_m):
+        self.takeoffs += 1
+        if self.takeoffs == 1:
+            if self._disarm:
+                self._vehicle.disarm()
+            return
+        self._fc.takeoff(altitude_m)
+
+    def __getattr__(self, name):
+        return getattr(self._fc, name)
+
+
+@pytest.mark.parametrize("disarm", [True, False])
+def test_a_dropped_take_off_is_asked_for_again(disarm):
+    bp = load_blueprint(CASE_STUDY)
+    spec = next(u for u in bp.fleet if u.role == "adhesion")
+    world = World(bp, seed=0)
+    uav = world.add_uav(spec)
+    ports = uav.ports
+    fc = _DroppedTakeoff(ports.fc, uav.vehicle, disarm)
+    task = next(t for t in plan(bp).tasks if t.id == "A0")
+    config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
+    run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)
+    assert fc.takeoffs == 2
+    assert run.result is not None and run.result.status == "done", run.result
