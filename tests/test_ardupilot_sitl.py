@@ -100,6 +100,7 @@ def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path) -> 
         # heartbeat timeout of 30 mission seconds rides out a loaded machine slowing the SITLs down
         mc = _masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--time-scale", scale,
                       "--startup-timeout", "300", "--heartbeat-timeout", "30", "--max-time", "1500", "--verbose",
+                      "--reservation", "task",  # the paper's rule: Section VI's order is checked below
                       *name)  # fmt: skip
         uavs = [
             _fly_mission(role, uav, url, endpoint, config, name)
