@@ -215,7 +215,7 @@ def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before
         if done >= after:
             raise _Stop  # the process dies here: the journal holds `after` completions
 
-    if after == "60 s":  # the run stops at 60 s of mission time (max_time_s), B1 and A1 unfinished
+    if after == "60 s":  # the run stops at 60 s of mission time (max_time_s), B1 unfinished
         stopped = simulate(load_blueprint(CASE_STUDY), journal_path=journal, max_time_s=60.0)
         assert not stopped.completed
     else:
@@ -223,16 +223,18 @@ def test_report_of_an_interrupted_and_resumed_mission_keeps_what_was_done_before
             simulate(load_blueprint(CASE_STUDY), journal_path=journal, progress=stop_after)
     before = read_journal(journal)
     finished = [r.task_id for r in before.done]
-    assert len(finished) == (2 if after == "60 s" else after) and "B0" in finished
+    # the default (site) reservation: A0, A1, B0 complete by 60 s (the paper's rule: A0, B0)
+    assert len(finished) == (3 if after == "60 s" else after) and "B1" not in finished
     resumed = simulate(load_blueprint(CASE_STUDY), journal_path=journal, resume=True).to_dict()
     assert resumed["completed"]
     full_tasks = {t["id"]: t for t in full["tasks"]}
     resumed_tasks = {t["id"]: t for t in resumed["tasks"]}
     for tid in finished:
-        # a site interval the crash cut (its UAV was still over the site) has no end: when the UAV would have
-        # left is not in the journal; everything else is what the uninterrupted run said
+        # a site interval the crash cut (its UAV was still over the site) ends at the crash: when the UAV would
+        # have left is not in the journal; everything else is what the uninterrupted run said
         got = dict(resumed_tasks[tid])
-        if got["site_end_s"] is None:
+        if got["site_end_s"] != full_tasks[tid]["site_end_s"]:
+            assert got["site_end_s"] == pytest.approx(before.last_time_s, abs=0.01)
             got["site_end_s"] = full_tasks[tid]["site_end_s"]
         assert got == full_tasks[tid]
         if tid in full["placement_error_m"]:

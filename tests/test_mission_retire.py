@@ -99,6 +99,8 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     assert [u.status for u in report.uavs] == ["ok"] * 6
     assert report.completed
     assert (report.conflict_violations, report.dependency_violations) == (0, 0)
-    assert report.makespan_s > 1500.0  # five packs' worth of flying (300 s each): the UAVs were swapped
+    # packs of 300 s: the UAVs ran low (and were swapped, since all are in service) several times
+    assert report.makespan_s > 1000.0
+    assert sum(1 for a in report.attempts if (a.reason or "").startswith("battery low")) >= 3
     done = [t.id for t in report.tasks if t.status == "done"]
     assert len(done) == len(set(done)) == len(report.tasks)

@@ -99,7 +99,8 @@ def test_abort_lands_every_uav_at_home_and_the_journal_resumes_to_completion(tmp
         assert math.dist(v.position_m[:2], spec.home_m[:2]) < 0.3, (spec.name, v.position_m)
     # the recalled attempt failed for the operator, not for the task
     recalled = [a for a in r.attempts if a.status == "failed"]
-    assert recalled and all(a.reason == RECALL_REASON for a in recalled)
+    # (a brick on the magnet is put back at its pickup first: the reason says so after the operator's)
+    assert recalled and all(a.reason is not None and a.reason.startswith(RECALL_REASON) for a in recalled)
     import sqlite3
 
     with sqlite3.connect(journal) as db:
@@ -122,7 +123,8 @@ def test_recall_mid_task_requeues_the_task_and_the_mission_completes():
     )
     assert [o.accepted for _, _, o in answers] == [True, True]
     b0 = [a for a in r.attempts if a.task_id == "B0"]
-    assert [(a.status, a.reason) for a in b0] == [("failed", RECALL_REASON), ("done", None)]
+    assert [a.status for a in b0] == ["failed", "done"]
+    assert b0[0].reason in (RECALL_REASON, f"{RECALL_REASON}; brick 0 put back at its pickup")
     # a recall costs the task no attempt (as a battery swap does): it is attempt 1 again
     assert b0[1].attempt == 1 and b0[0].end_s is not None and b0[0].end_s < 70.0 <= b0[1].start_s
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0

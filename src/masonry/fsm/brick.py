@@ -28,13 +28,11 @@ from masonry.ports import (
     Telemetry,
 )
 
-#: States in which the brick is on the magnet (checked at pickup_verify), far from its pickup.
-_RESERVE_STATES = frozenset({"transport", "place_align", "place_descend"})
+#: States in which a brick UAV keeps the reserve to put its brick back: about to grasp it, or carrying it.
+_RESERVE_STATES = frozenset({"pickup_align", "transport", "place_align", "place_descend"})
 #: Putting a brick back needs this many times its estimated duration of flight left above the critical battery
 #: (the reserve: the task is given up below it) and at least this many (else the UAV flies home with it).
 _PUTBACK_RESERVE = 2.0
-#: Transit states of a UAV that waits for mission control (asking for a column, or sent to a hold point).
-_WAITING = frozenset({"ask", "hold"})
 _PUTBACK_AFFORD = 1.5
 
 
@@ -498,14 +496,15 @@ class BrickUav(UavModel):
         return budget is None or budget[0] >= _PUTBACK_AFFORD * budget[1]
 
     def _battery_short(self, tel: Telemetry) -> str | None:
-        """Also short: a UAV waiting with a brick (for its drop-off's column or site) gives the task up while it
-        can still put the brick back (twice what that takes), before the battery is low by the threshold. Once
-        it flies on toward the drop-off only the threshold counts: placing the brick is the shorter way."""
+        """Also short: a UAV carrying a brick (flying to its drop-off, or waiting for its column or site) gives
+        the task up while it can still put the brick back (twice what that takes), before the battery is low by
+        the threshold: a drop-off it may have to wait for is no safe bet with a pack that short."""
         short = super()._battery_short(tel)
-        if short is not None or self.state not in _RESERVE_STATES or self.transit.state not in _WAITING:
+        if short is not None or self.state not in _RESERVE_STATES:
             return short
         budget = self._putback_budget_s()
-        if budget is not None and budget[0] < _PUTBACK_RESERVE * budget[1]:
+        # (once it no longer affords the put-back either, giving up early gains nothing: it goes on waiting)
+        if budget is not None and _PUTBACK_AFFORD * budget[1] <= budget[0] < _PUTBACK_RESERVE * budget[1]:
             return (
                 f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): the reserve to put brick "
                 f"{self.brick_task.brick} back"

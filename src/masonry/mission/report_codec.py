@@ -40,7 +40,12 @@ def _row_out(value: Any) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for f in dataclasses.fields(value):
         v = getattr(value, f.name)
-        out[f.name] = v.as_dict() if isinstance(v, PhaseTimes) else _num_out(v)
+        if isinstance(v, PhaseTimes):
+            out[f.name] = v.as_dict()
+        elif isinstance(v, tuple) and all(isinstance(a, AttemptReport) for a in v):
+            out[f.name] = [_row_out(a) for a in v]  # a task's attempts (TaskReport.tries)
+        else:
+            out[f.name] = _num_out(v)
     return out
 
 
@@ -54,6 +59,11 @@ def _row_in(cls: Any, data: Any) -> Any:
     kw = {k: _num_in(v) for k, v in data.items()}
     if kw.get("phases") is not None:
         kw["phases"] = PhaseTimes(**kw["phases"])
+    if cls is TaskReport and "tries" in kw:
+        tries = kw["tries"]
+        if not isinstance(tries, list):
+            raise MissionError(f"a TaskReport record's tries must be a list, got {type(tries).__name__}")
+        kw["tries"] = tuple(_row_in(AttemptReport, a) for a in tries)
     try:
         return cls(**kw)
     except TypeError as exc:
