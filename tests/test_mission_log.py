@@ -199,6 +199,16 @@ def test_the_report_record_reads_back_equal():
     assert back.attempts == r.attempts and back.tasks == r.tasks and back.uavs == r.uavs
     assert sorted(back.paths_m) == sorted(r.paths_m)
     assert all(np.array_equal(back.paths_m[k], np.asarray(r.paths_m[k])) for k in r.paths_m)
+    # every field, whichever bound won and with a schedule followed (mission-control's log replayed the bound's
+    # kind as the default "role" before)
+    import dataclasses
+
+    other = dataclasses.replace(r, lower_bound_kind="cp-sat", schedule_followed=3, schedule_assignments=4)
+    again = report_from_record(json.loads(json.dumps(report_to_record(other))))
+    assert [getattr(again, f.name) for f in dataclasses.fields(again) if f.name != "paths_m"] == [
+        getattr(other, f.name) for f in dataclasses.fields(other) if f.name != "paths_m"
+    ]
+    assert again.to_json() == other.to_json()
 
 
 def test_the_event_sink_only_watches_and_sees_every_assignment_and_completion():

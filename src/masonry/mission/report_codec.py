@@ -70,6 +70,10 @@ def _row_in(cls: Any, data: Any) -> Any:
         raise MissionError(f"a {cls.__name__} record is incomplete: {exc}") from None
 
 
+def _opt_int(v: Any) -> int | None:
+    return None if v is None else int(v)
+
+
 def report_to_record(report: MissionReport) -> dict[str, Any]:
     """Everything in ``report`` as JSON values (:func:`report_from_record` reads it back equal)."""
     return {
@@ -93,6 +97,9 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "resumed_from_s": _num_out(report.resumed_from_s),
         "messages": report.messages,
         "stall": None if report.stall is None else dict(report.stall),
+        "lower_bound_kind": report.lower_bound_kind,
+        "schedule_followed": report.schedule_followed,
+        "schedule_assignments": report.schedule_assignments,
     }
 
 
@@ -130,6 +137,9 @@ def report_from_record(data: Any) -> MissionReport:
             resumed_from_s=_num_in(data["resumed_from_s"]),
             messages=int(data["messages"]),
             stall=None if data["stall"] is None else dict(data["stall"]),
+            lower_bound_kind=str(data["lower_bound_kind"]),
+            schedule_followed=_opt_int(data["schedule_followed"]),
+            schedule_assignments=_opt_int(data["schedule_assignments"]),
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None
