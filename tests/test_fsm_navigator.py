@@ -58,6 +58,19 @@ def test_at_end_asks_and_changes_nothing():
     assert nav.end_s == 2.0 and nav.legs == [] and nav.active
 
 
+@given(speed=st.floats(0.0, 3.0), late_s=st.floats(0.0, 20.0), angle=st.floats(0.0, 2 * math.pi))
+def test_a_leg_is_over_only_at_low_speed_and_twice_that_after_the_patience(speed, late_s, angle):
+    """Issue 19: ArduCopter took a leg as over 8 cm from its end still moving at 1 m/s (0.89 m/s measured in the
+    simulated ``arducopter`` vehicle before); the next leg then started from a swing."""
+    nav = _nav()
+    nav.fly_to(0.0, _tel(), np.array([1.0, 0.0, 1.0]), duration_s=2.0)
+    moving = _tel((1.0, 0.0, 1.0), (speed * math.cos(angle), speed * math.sin(angle), 0.0))
+    now = 2.0 + late_s
+    cfg = nav.config
+    limit = cfg.arrive_speed_mps * (1.0 if late_s < cfg.align_patience_s else 2.0)
+    assert nav.at_end(now, moving) == (speed <= limit * (1 - 1e-9)) or abs(speed - limit) < 1e-9
+
+
 def test_a_route_climbs_first_and_its_legs_are_flown_one_by_one():
     nav = _nav()
     nav.route(0.0, _tel(), np.array([2.0, 0.0, 2.0]))

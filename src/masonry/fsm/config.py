@@ -36,6 +36,9 @@ class UavConfig:
     cruise_speed_mps: float = _T.cruise_speed_mps
     vertical_speed_mps: float = _T.vertical_speed_mps  # peak speed of a climb leg (as cruise_speed_mps)
     arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
+    # ... and slower than this (issue 19: on ArduCopter a leg was taken as over at 8 cm while still moving at
+    # 1 m/s, and the next leg started from a swing); twice this after align_patience_s past the leg's planned end
+    arrive_speed_mps: float = 0.3
     align_tolerance_m: float = 0.015  # horizontal alignment of the tool before a descent
     align_yaw_tolerance_rad: float = 0.05
     # In gusts the tool rarely sits within align_tolerance_m at a tick: after hovering align_patience_s past the

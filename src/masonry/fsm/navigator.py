@@ -233,10 +233,16 @@ class Navigator:
 
     # -- questions (no side effects) -----------------------------------------------------------------------
     def at_end(self, now_s: float, tel: Telemetry, tolerance_m: float | None = None) -> bool:
-        """The current leg is over by plan and the UAV is within ``tolerance_m`` of its end."""
+        """The current leg is over by plan and the UAV is within ``tolerance_m`` of its end, slower than
+        ``arrive_speed_mps`` (twice that ``align_patience_s`` after the planned end: gusts)."""
         if now_s < self.end_s:
             return False
-        tol = self.config.arrive_tolerance_m if tolerance_m is None else tolerance_m
+        cfg = self.config
+        vx, vy, vz = tel.velocity_mps
+        speed = cfg.arrive_speed_mps * (1.0 if now_s - self.end_s < cfg.align_patience_s else 2.0)
+        if vx * vx + vy * vy + vz * vz > speed * speed:
+            return False
+        tol = cfg.arrive_tolerance_m if tolerance_m is None else tolerance_m
         p = tel.position_m
         t = self.target_m
         if type(t) is np.ndarray:

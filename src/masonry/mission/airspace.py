@@ -33,6 +33,7 @@ from masonry.mission.volumes import (
     Volume,
     ahead_of,
     column,
+    contains,
     flight_volumes,
     stopped_at,
     volumes_clear,
@@ -268,15 +269,16 @@ class ColumnClearance:
             self.granted_count += 1
             return Grant(uav, site)
         u = self._uav(uav)
-        if u.flight is not None:
-            if _same(u.flight.site, site):
-                return Grant(uav, site, layer_m=u.flight.layer_m)
-            # turned back for another site: it keeps the volumes of that flight until it has a new one
-            u.flight = None
-            u.phase = Phase.PARKED
         pos = (
             None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
         )
+        if u.flight is not None:
+            if _same(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
+                return Grant(uav, site, layer_m=u.flight.layer_m)
+            # turned back for another site, or asks again from outside the flight it was given (a retry after a
+            # failsafe flew it off): it keeps the volumes of that flight until a fresh one is granted
+            u.flight = None
+            u.phase = Phase.PARKED
         w = u.request
         if w is not None and _same(w.site, site):
             if pos is not None and u.phase is Phase.ASKING and pos != w.position:

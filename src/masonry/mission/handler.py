@@ -153,6 +153,8 @@ class UavHandler(MissionLink, ClearanceLink):
         self.now_s = 0.0
         self._column: Vec3 | None = None  # site of the column last asked for (granted or not)
         self._column_granted = False
+        # a new attempt asks again even for the column it was granted last (issue 19): it may have flown off
+        self._column_stale = False
         self._column_answer: Clearance | None = None
         self._columns_left: list[Vec3] = []  # granted earlier, freed once the UAV is out of them
         self._column_radius_m = 0.0
@@ -221,6 +223,7 @@ class UavHandler(MissionLink, ClearanceLink):
                 return None
             self.battery_swaps += 1
         task, attempt, received_s = self._queue.popleft()
+        self._column_stale = self._column is not None and self._column_granted
         self._current = Execution(
             task.id, self.name, attempt, self.now_s, queued_s=max(0.0, self.now_s - received_s)
         )
@@ -240,7 +243,7 @@ class UavHandler(MissionLink, ClearanceLink):
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         col = self._column
         same = col is not None and abs(col[0] - site[0]) < 1e-3 and abs(col[1] - site[1]) < 1e-3
-        if same and self._column_granted:
+        if same and self._column_granted and not self._column_stale:
             return self._column_answer
         if self.mission_control_lost:
             return Clearance(MISSION_CONTROL, self.name, site, 0.0, self.now_s, True, None, None)
@@ -261,11 +264,18 @@ class UavHandler(MissionLink, ClearanceLink):
                     self.name, site, self.now_s, self._where(), top_m=top_m, to_m=self._column_to_m
                 )
             )
-        elif self.now_s - self._column_sent_s >= (
+        elif self._column_stale or self.now_s - self._column_sent_s >= (
             0.25
             if self._column_answer is not None and self._column_answer.hold_m is None
             else self.heartbeat_period_s
         ):  # refused for now (another flight in the way): ask again soon
+            if self._column_stale:  # a new attempt: a fresh request from where it is now, not the old grant
+                self._column_stale = False
+                self._column_granted = False
+                self._column_answer = None
+                self.clearance_requests += 1
+                self._column_top_m = top_m
+                self._column_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
             self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
             self._send(
                 ClearanceRequest(

@@ -159,6 +159,16 @@ def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volum
     return kept
 
 
+def contains(vols: Sequence[Volume], x: float, y: float, z: float, margin_m: float = TRACK_M) -> bool:
+    """``(x, y, z)`` lies in one of ``vols``, or within ``margin_m`` of it (tracking error, a late report)."""
+    for v in vols:
+        if not v.z0_m - margin_m <= z <= v.z1_m + margin_m:
+            continue
+        if point_segment_m((x, y), v.a, v.b) <= v.slack_m + margin_m:
+            return True
+    return False
+
+
 def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
     """The zone over ``site``: from the ground up to ``top_m``, along to ``to`` (an adhesion segment), ``slack_m``
     wide."""
