@@ -377,17 +377,32 @@ def _outside_m(columns, uav, p):
     return best
 
 
+#: How far outside its reserved volumes a UAV may be found, per simulated autopilot: tracking error only. The
+#: separation rule keeps 0.1 m over the 1.0 m target for it. ``ideal``: 0.02-0.05 m measured since legs feed the
+#: acceleration forward and UAVs ask at rest (up to 0.17 m before, 4x25 seed 1). ``arducopter`` (its jerk-limited
+#: shaping and 0.15 s delay): 0.28 m before legs were planned within its jerk and acceleration limits and the
+#: take-off braked ahead of them, 0.07-0.08 m since (docs/safety.md, "Tracking error on a real autopilot").
+OUTSIDE_M = {"ideal": 0.07, "arducopter": 0.09}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
-    "courses,per,nb,na,seed", [(3, 12, 4, 2, 0), (4, 8, 3, 2, 5), (2, 20, 4, 2, 11), (4, 25, 4, 2, 1)]
+    "courses,per,nb,na,seed,vehicle",
+    [
+        (3, 12, 4, 2, 0, "arducopter"),
+        (4, 8, 3, 2, 5, "arducopter"),
+        (2, 20, 4, 2, 11, "ideal"),
+        (4, 25, 4, 2, 1, "ideal"),
+        (2, 20, 4, 2, 11, "arducopter"),
+    ],
 )
 def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them(
-    monkeypatch, courses, per, nb, na, seed
+    monkeypatch, courses, per, nb, na, seed, vehicle
 ):
     from masonry.mission.simulate import SimulatedMission
 
     mission = SimulatedMission.from_blueprint(
-        running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed
+        running_bond(courses, per, brick_uavs=nb, adhesion_uavs=na), seed=seed, vehicle=vehicle
     )
     columns = mission.control.columns
     world = mission.world
@@ -405,11 +420,10 @@ def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them
     r = mission.run()
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
     assert columns.conflicts() == []
-    # tracking error only: the separation rule keeps 0.1 m over the 1.0 m target for it. Measured 0.02-0.05 m
-    # since legs feed the acceleration forward and UAVs ask at rest; up to 0.17 m before (4x25, seed 1)
-    assert max(worst.values()) < 0.07, worst
+    bound = OUTSIDE_M[vehicle]
+    assert max(worst.values()) < bound, worst
     # so two UAVs keep the layer spacing less twice that (0.96-1.02 m on 4x25 before)
-    assert r.min_separation_m is None or r.min_separation_m >= S - 2 * 0.07
+    assert r.min_separation_m is None or r.min_separation_m >= S - 2 * bound
 
 
 @pytest.mark.slow

@@ -47,15 +47,22 @@ def _mission():
     bp = running_bond(1, 2, brick_uavs=1, adhesion_uavs=1)
     bus = InprocBus()
     mc = MissionControl(
-        plan(bp), bp.fleet, bus.endpoint(MISSION_CONTROL), column_radius_m=R, layer_base_m=BASE, startup_timeout_s=100.0
+        plan(bp),
+        bp.fleet,
+        bus.endpoint(MISSION_CONTROL),
+        column_radius_m=R,
+        layer_base_m=BASE,
+        startup_timeout_s=100.0,
     )
     where = {u.name: (u.home_m[0], u.home_m[1], 1.2) for u in bp.fleet}
-    handlers = {u.name: UavHandler(u.name, bus.endpoint(u.name), position=lambda n=u.name: where[n]) for u in bp.fleet}
+    handlers = {
+        u.name: UavHandler(u.name, bus.endpoint(u.name), position=lambda n=u.name: where[n]) for u in bp.fleet
+    }
     return bp, mc, handlers, where, bus
 
 
 def test_a_new_attempt_sends_a_fresh_request_for_the_column_it_was_granted_before():
-    bp, mc, handlers, where, bus = _mission()
+    bp, mc, handlers, where, _bus = _mission()
     name = next(u.name for u in bp.fleet if u.role == "brick")
     h = handlers[name]
     t = 0.0

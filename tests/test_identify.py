@@ -50,16 +50,39 @@ def test_the_suggestion_follows_the_lag_and_the_noise():
         suggest([never], 0.0, 0.0, defaults)
 
 
-def test_identify_on_the_simulated_vehicle_finds_its_lag():
+def _identify(*vehicle: str) -> dict:
     res = CliRunner().invoke(
-        app, ["fly", "--identify", "--sim", "--uav", "brick", "--blueprint", CASE_STUDY, "--format", "json"]
+        app,
+        [
+            "fly",
+            "--identify",
+            "--sim",
+            "--uav",
+            "brick",
+            "--blueprint",
+            CASE_STUDY,
+            "--format",
+            "json",
+            *vehicle,
+        ],
     )
     assert res.exit_code == 0, res.output
-    out = json.loads(res.stdout)
+    return json.loads(res.stdout)
+
+
+def test_identify_on_the_simulated_vehicle_finds_its_lag():
+    out = _identify("--vehicle", "ideal")
     assert out["uav"] == "brick-1" and len(out["steps"]) == 8
-    # the simulated vehicle's velocity loop is a first-order 0.3 s lag, seen on 0.05 s ticks
+    # the ideal vehicle's velocity loop is a first-order 0.3 s lag, seen on 0.05 s ticks
     assert 0.25 <= out["lag_s"] <= 0.4
     assert out["hover_position_std_m"] < 0.01
+    assert out["suggested"]["velocity_lag_s"] == round(out["lag_s"], 2)
+
+
+def test_identify_on_the_default_simulated_vehicle_finds_arducopters_lag():
+    """The default simulated autopilot is the ``arducopter`` preset, fitted to the SITL's 0.71 s to 63 %."""
+    out = _identify()
+    assert 0.6 <= out["lag_s"] <= 0.85, out["lag_s"]
     assert out["suggested"]["velocity_lag_s"] == round(out["lag_s"], 2)
 
 

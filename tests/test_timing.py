@@ -22,6 +22,7 @@ from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.fakes import ScriptedClearanceLink
 from masonry.fsm import UavConfig
+from masonry.fsm.tuning import uav_settings
 from masonry.mission.airspace import task_work_altitude_m, work_altitude_m
 from masonry.mission.simulate import simulate
 from masonry.motion import MinJerk
@@ -73,8 +74,9 @@ def test_the_timing_follows_its_config() -> None:
 
 # -- random configurations ---------------------------------------------------------------------------------------
 @st.composite
-def uav_configs(draw: st.DrawFn, geometry: bool = True) -> UavConfig:
-    """A ``UavConfig`` with every number the bound and the airspace count drawn within sane ranges."""
+def uav_configs(draw: st.DrawFn, geometry: bool = True, preset: str = "ideal") -> UavConfig:
+    """A ``UavConfig`` with every number the bound and the airspace count drawn within sane ranges, over the
+    gains and gates of the control ``preset`` (the one of the vehicle it flies)."""
 
     def u(lo: float, hi: float) -> float:
         return draw(st.floats(lo, hi, allow_nan=False, allow_infinity=False))
@@ -91,6 +93,7 @@ def uav_configs(draw: st.DrawFn, geometry: bool = True) -> UavConfig:
         "template",
         "brick",
         (0.0, 0.0, 0.0),
+        **uav_settings(preset),
         airframe=airframe,
         control_period_s=draw(st.sampled_from([0.1, 0.2])),
         cruise_speed_mps=u(0.6, 1.4),
@@ -133,14 +136,14 @@ _SLOW = {
 
 @pytest.mark.slow
 @settings(max_examples=24, **_SLOW)
-@given(config=uav_configs())
+@given(config=uav_configs(preset="arducopter"))  # simulate()'s default vehicle: arducopter
 def test_the_bound_stays_below_the_case_study_for_random_configs(config: UavConfig) -> None:
     _bound_holds(load_blueprint(ROOT / "blueprints" / "paper_case_study.yaml"), config)
 
 
 @pytest.mark.slow
 @settings(max_examples=6, **_SLOW)
-@given(config=uav_configs())
+@given(config=uav_configs(preset="arducopter"))
 def test_the_bound_stays_below_a_running_bond_for_random_configs(config: UavConfig) -> None:
     _bound_holds(running_bond(2, 6, brick_uavs=2, adhesion_uavs=1), config)
 

@@ -66,14 +66,16 @@ def select_adapters(
     return world.add_uav(spec).ports
 
 
-def _check_vehicle(vehicle: str, sim: bool = True) -> None:
-    """``--vehicle``: one of the simulated presets, and only for a simulated flight controller."""
-    from masonry.sim.vehicle_config import VEHICLE_PRESETS
+def _check_vehicle(vehicle: str | None, sim: bool = True) -> str:
+    """``--vehicle``: one of the simulated presets, and only for a simulated flight controller; the preset to fly
+    (unset: ``DEFAULT_VEHICLE`` in simulation; ``ideal``, the default tuning, on a real autopilot)."""
+    from masonry.sim.vehicle_config import VEHICLE_PRESETS, vehicle_name
 
-    if vehicle not in VEHICLE_PRESETS:
+    if vehicle is not None and vehicle not in VEHICLE_PRESETS:
         raise InputError(f"--vehicle must be one of {', '.join(VEHICLE_PRESETS)}, got {vehicle!r}")
-    if vehicle != "ideal" and not sim:
+    if vehicle not in (None, "ideal") and not sim:
         raise InputError("--vehicle picks the simulated autopilot: it needs --sim (a real one is what it is)")
+    return vehicle_name(vehicle) if sim else "ideal"
 
 
 def _a(word: str) -> str:
@@ -255,11 +257,11 @@ def fly(
         "--insecure",
         help="Mission mode: allow a non-loopback mission control or --listen without a key.",
     ),
-    vehicle: str = typer.Option(
-        "ideal",
+    vehicle: str | None = typer.Option(
+        None,
         "--vehicle",
-        help="With --sim: the simulated autopilot, ideal (a 0.3 s first-order velocity lag) | arducopter "
-        "(ArduCopter's setpoint shaping, delay and GPS-like noise, fitted to its SITL).",
+        help="With --sim: the simulated autopilot, arducopter (default: ArduCopter's setpoint shaping, delay and "
+        "GPS-like noise, fitted to its SITL) | ideal (a 0.3 s first-order velocity lag).",
     ),
     identify: bool = typer.Option(
         False,
@@ -288,7 +290,7 @@ def fly(
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
-    _check_vehicle(vehicle, sim)
+    vehicle = _check_vehicle(vehicle, sim)
     check_all(
         "fly",
         {

@@ -92,11 +92,12 @@ def sim(
             "sim", "--time-scale", "With --serve: mission seconds per wall second (1: real time, to watch)."
         ),
     ),
-    vehicle: str = typer.Option(
-        "ideal",
+    vehicle: str | None = typer.Option(
+        None,
         "--vehicle",
-        help="ideal | arducopter: the simulated autopilot (arducopter: its setpoint shaping, delay and GPS-like "
-        "noise, fitted to ArduCopter SITL, flown with the arducopter control preset).",
+        help="arducopter (default) | ideal: the simulated autopilot (arducopter: its setpoint shaping, delay and "
+        "GPS-like noise, fitted to ArduCopter SITL, flown with the arducopter control preset; ideal: a 0.3 s "
+        "first-order velocity lag, the project's old model).",
     ),
     progress: bool | None = typer.Option(
         None,
@@ -114,7 +115,7 @@ def sim(
     from masonry.blueprint import load_blueprint
     from masonry.cli.fly import _check_vehicle
 
-    _check_vehicle(vehicle)
+    vehicle = _check_vehicle(vehicle)
     from masonry.mission.simulate import SimulatedMission
     from masonry.sim import Faults
 

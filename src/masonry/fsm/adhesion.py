@@ -95,11 +95,21 @@ class AdhesionUav(UavModel):
         start = self._nozzle_body(self.adhesion_task.start_m)
         end = self._nozzle_body(self.adhesion_task.end_m)  # it sprays along to there: part of its zone
         top = self._transit_altitude_m()
-        if self._chains(tel.position_m, start):
+        if self._chains(self._resting_at(tel), start):
             # still down at the end of the last segment, which is where this one starts: stay down
             self._route(tel, start, yaw_rad=self._yaw_rad, top_m=top, to_m=end)
             return
         self._route(tel, np.array([start[0], start[1], top]), yaw_rad=self._yaw_rad, to_m=end)
+
+    def _resting_at(self, tel: Telemetry) -> Sequence[float]:
+        """Where the UAV comes to rest: the point it holds, if it is near it (an autopilot that shapes its
+        setpoints coasts a few centimetres past the end of a bead: 4-6 cm on the ``arducopter`` vehicle, which
+        broke chains of 5 cm), else where it is."""
+        held = self.nav.target_m
+        p = tel.position_m
+        if math.dist(p, held) <= 3.0 * self.config.chain_distance_m:
+            return (float(held[0]), float(held[1]), float(held[2]))
+        return p
 
     def _chains(self, position_m: Sequence[float], start_body_m: Sequence[float] | np.ndarray) -> bool:
         """The body at ``position_m`` is within ``chain_distance_m`` (horizontally and vertically) of the body
@@ -205,7 +215,9 @@ class AdhesionUav(UavModel):
                 self._start_task(task)
         if not self._climbing:
             nxt = self._next_task
-            if isinstance(nxt, AdhesionTask) and self._chains(tel.position_m, self._nozzle_body(nxt.start_m)):
+            if isinstance(nxt, AdhesionTask) and self._chains(
+                self._resting_at(tel), self._nozzle_body(nxt.start_m)
+            ):
                 self._leave_ascend()
                 return
             if nxt is None and self._now_s - self._entered_s < self.config.chain_wait_s:

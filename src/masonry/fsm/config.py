@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -35,6 +36,12 @@ class UavConfig:
     # peak speed of a lateral min-jerk leg, which lasts MIN_JERK_PEAK_TO_MEAN_SPEED (1.875) x distance / this
     cruise_speed_mps: float = _T.cruise_speed_mps
     vertical_speed_mps: float = _T.vertical_speed_mps  # peak speed of a climb leg (as cruise_speed_mps)
+    # A leg's planned jerk and acceleration stay within these (a minimum-jerk leg of d metres over T seconds
+    # starts with a jerk of 60 d / T^3 and peaks at 5.77 d / T^2): an autopilot that shapes setpoints with its
+    # own limits (ArduCopter's PSC_JERK_XY 5 m/s^3, WPNAV_ACCEL 2.5 m/s^2) otherwise trails a short fast leg and
+    # overshoots its end (issue 19: 0.3 m past a 0.35 m leg flown in the 1 s minimum). inf: no limit.
+    leg_jerk_mps3: float = math.inf
+    leg_accel_mps2: float = math.inf
     arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
     # ... and slower than this (issue 19: on ArduCopter a leg was taken as over at 8 cm while still moving at
     # 1 m/s, and the next leg started from a swing); twice this after align_patience_s past the leg's planned end

@@ -43,8 +43,11 @@ from masonry.ports import (
 
 Vec3 = tuple[float, float, float]
 log = logging.getLogger(__name__)
-#: The takeoff is over this close under its altitude (the autopilot flies it; the machine then takes over).
+#: The takeoff is over this close under its altitude (the autopilot flies it; the machine then takes over) ...
 _TAKEOFF_SHORT_M = 0.1
+#: ... once climbing slower than this: an autopilot that shapes its climb (ArduCopter's PSC_JERK_Z) and was taken
+#: over at 0.48 m/s rose 0.12 m past the layer its pad's column reaches (issue 19)
+_TAKEOFF_SETTLE_MPS = 0.2
 #: Disarmed on the ground this long after a take-off was asked for: arm and ask again, at most this often.
 _TAKEOFF_RETRY_S = 2.0
 _TAKEOFF_RETRIES = 2
@@ -530,7 +533,11 @@ class UavModel:
         )  # where the autopilot takes it (the machine hovers there next)
 
     def do_takeoff(self, tel: Telemetry) -> None:
-        if not tel.on_ground and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M:
+        if (
+            not tel.on_ground
+            and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M
+            and abs(tel.velocity_mps[2]) <= _TAKEOFF_SETTLE_MPS
+        ):
             self.airborne()
         elif tel.on_ground and self._retry_takeoff(tel):
             pass

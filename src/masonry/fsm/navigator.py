@@ -33,6 +33,12 @@ END_NEAR_M = 0.15
 _SAME_M = 0.05
 
 
+#: A rest-to-rest minimum-jerk leg of d metres over T seconds: its jerk peaks at 60 d / T^3 (at both ends), its
+#: acceleration at 10 / sqrt(3) d / T^2.
+MIN_JERK_PEAK_JERK = 60.0
+MIN_JERK_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
+
+
 class Setpoint(NamedTuple):
     """What the navigator asks of the flight controller for one tick (world ENU)."""
 
@@ -204,13 +210,17 @@ class Navigator:
         self.end_s = now_s
 
     def leg_duration_s(self, start: np.ndarray, target: np.ndarray) -> float:
-        """A rest-to-rest leg's duration: its peak speed within the cruise and vertical speeds, at least 1 s."""
+        """A rest-to-rest leg's duration: its peak speed within the cruise and vertical speeds, its jerk and
+        acceleration within ``leg_jerk_mps3`` and ``leg_accel_mps2``, at least 1 s."""
+        cfg = self.config
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
         d_z = abs(target[2] - start[2])
+        d = math.hypot(d_xy, d_z)
         return max(
             MIN_LEG_S,
-            MIN_JERK_PEAK_TO_MEAN_SPEED
-            * max(d_xy / self.config.cruise_speed_mps, d_z / self.config.vertical_speed_mps),
+            MIN_JERK_PEAK_TO_MEAN_SPEED * max(d_xy / cfg.cruise_speed_mps, d_z / cfg.vertical_speed_mps),
+            (MIN_JERK_PEAK_JERK * d / cfg.leg_jerk_mps3) ** (1.0 / 3.0),
+            math.sqrt(MIN_JERK_PEAK_ACCEL * d / cfg.leg_accel_mps2),
         )
 
     def _start_leg(

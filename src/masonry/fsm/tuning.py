@@ -41,7 +41,9 @@ _COUNTS = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in (
 PRESETS: Mapping[str, Mapping[str, Any]] = {
     "ideal": {},
     "arducopter": {
-        "velocity_lag_s": 0.57,
+        "velocity_lag_s": 0.71,
+        "leg_jerk_mps3": 5.0,
+        "leg_accel_mps2": 2.5,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_relaxed_tolerance_m": 0.028,

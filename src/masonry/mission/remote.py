@@ -89,7 +89,7 @@ def run_remote_uav(
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
     events_sink: Any = None,
-    vehicle: str = "ideal",
+    vehicle: str | None = None,
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -100,7 +100,8 @@ def run_remote_uav(
         listen: this process's own listen endpoint(s) (loopback by default).
         mission_name: Zenoh key prefix shared with mission control.
         seed, camera, faults: the simulated world's (without ``adapters``).
-        vehicle: the simulated world's autopilot preset (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`).
+        vehicle: the simulated world's autopilot preset (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`;
+            None: ``DEFAULT_VEHICLE``).
         dt_s: control tick, seconds of the UAV's clock.
         time_scale: simulated seconds per wall second (1.0: real time), for the simulated world built here.
         wait_s: wall seconds to wait for mission control's first message before giving up, and, once landed
@@ -237,7 +238,7 @@ def _paced_world(
     camera: str,
     faults: Any,
     time_scale: float,
-    vehicle: str = "ideal",
+    vehicle: str | None = None,
 ) -> UavPorts:
     """The ports of ``spec`` in a simulated world of its own, paced at ``time_scale`` (see :func:`paced`)."""
     from masonry.sim import Faults, World

@@ -166,7 +166,7 @@ def simulate(
     reservation: str = DEFAULT_RESERVATION,
     schedule: OfflineSchedule | None = None,
     events_sink: EventSink | None = None,
-    vehicle: str = "ideal",
+    vehicle: str | None = None,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -354,7 +354,7 @@ class SimulatedMission:
         reservation: str = DEFAULT_RESERVATION,
         schedule: OfflineSchedule | None = None,
         events_sink: EventSink | None = None,
-        vehicle: str = "ideal",
+        vehicle: str | None = None,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -388,11 +388,12 @@ class SimulatedMission:
                 (:mod:`masonry.fsm.tuning`), the tuning a real UAV on that autopilot flies with.
             vehicle: the simulated autopilot (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`): ``ideal``
                 (a first-order 0.3 s velocity lag) or ``arducopter`` (ArduCopter's shaping, delay and GPS-like
-                noise, fitted to its SITL: docs/performance.md).
+                noise, fitted to its SITL: docs/performance.md); None (default):
+                :data:`~masonry.sim.vehicle_config.DEFAULT_VEHICLE`, ``arducopter``.
             stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
-            reservation: ``task`` (default, the paper: conflicting tasks never run at once) or ``site``
-                (conflicting tasks may run at once; their UAVs never work at their sites at once); docs/safety.md.
+            reservation: ``site`` (default: conflicting tasks may run at once; their UAVs never work at their
+                sites at once) or ``task`` (the paper: conflicting tasks never run at once); docs/safety.md.
             schedule: the offline schedule ``policy="schedule"`` follows (``masonry schedule``; computed for
                 this wall, fleet and reservation: :func:`masonry.mission.schedule_file.check_schedule`).
             events_sink: gets mission control's events (:mod:`masonry.mission.events`) and, every
@@ -414,7 +415,7 @@ class SimulatedMission:
         from masonry.planner import estimate_durations_s
         from masonry.planner import plan as make_plan
         from masonry.sim import Faults, World
-        from masonry.sim.vehicle_config import vehicle_preset
+        from masonry.sim.vehicle_config import vehicle_name, vehicle_preset
 
         if reservation not in RESERVATIONS:
             raise InputError(
@@ -437,6 +438,7 @@ class SimulatedMission:
             raise InputError("`resume` needs `journal_path`", options=("resume", "journal_path"))
         faults = faults if faults is not None else Faults()
         wall0 = time.perf_counter()
+        vehicle = vehicle_name(vehicle)
         vehicle_config = vehicle_preset(vehicle)
         if uav_config is None and vehicle != "ideal":
             # the tuning a real UAV on that autopilot flies with (masonry.fsm.tuning's preset of the same name)
@@ -551,8 +553,10 @@ class SimulatedMission:
                 uav_config=uav_config,
             )
         mission.started_wall_s = wall0
-        if schedule is not None and reservation == "task" and uav_config is None and state is None:
-            mission.cp_sat_bound_s = schedule.bound_s  # the same timing model, wall and fleet: a valid term
+        if schedule is not None and reservation == "task" and timing == DEFAULT_TIMING and state is None:
+            # the same timing model (a vehicle's control preset may fly other gains over the same minimum
+            # durations), wall and fleet: a valid term
+            mission.cp_sat_bound_s = schedule.bound_s
         return mission
 
     def close(self) -> None:

@@ -463,6 +463,11 @@ class SimVehicle:
         """The vertical speed of the automatic climb of ``takeoff`` to ``takeoff_z``; there it ends in a hold."""
         cfg = self.config
         err = takeoff_z - self._z
+        shaping = cfg.shaping
+        if shaping is not None and math.isfinite(shaping.jerk_z_mps3) and math.isfinite(shaping.accel_z_mps2):
+            # an autopilot that shapes its own climb (ArduCopter's takeoff) brakes ahead of the delay and the
+            # jerk-limited ramp of its deceleration; a plain P law through them rose 0.14 m past its altitude
+            err -= self._vz * (shaping.delay_s + 0.5 * shaping.accel_z_mps2 / shaping.jerk_z_mps3)
         tz = 1.5 * err
         if not tz > -cfg.max_descent_mps:  # min(takeoff_speed, max(-max_descent, 1.5 * err))
             tz = -cfg.max_descent_mps
