@@ -464,6 +464,7 @@ def _fly_one_task(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
+        fence=bp.site,
         **hardware.uav_settings(vehicle),
     )
     try:
