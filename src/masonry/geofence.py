@@ -79,7 +79,8 @@ class Site:
         n = len(pts)
         for i in range(n):
             c, d = pts[i], pts[(i + 1) % n]
-            if _segment_segment_m(a, b, c, d) < margin_m:
+            gap = _segment_segment_m(a, b, c, d)
+            if gap < margin_m or gap == 0.0:  # (with no margin: an edge it crosses or touches)
                 return False
         return True
 
