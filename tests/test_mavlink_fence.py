@@ -78,10 +78,12 @@ def _push_east(fc) -> bool:
         ("corrupt", "read-back differs: sent 4 vertices, got 4 back (other coordinates)"),
     ],
 )
-def test_a_refused_or_altered_fence_is_one_line_and_the_preflight_refuses_to_arm(mode: str, says: str) -> None:
+def test_a_refused_or_altered_fence_is_one_line_and_the_preflight_refuses_to_arm(
+    mode: str, says: str
+) -> None:
     from masonry.adapters.wiring import _check_fence
 
-    with flight(SitlConfig(fence=mode), home_m=HOME, frame=FrameTransform(HOME)) as (sitl, fc):
+    with flight(SitlConfig(fence=mode), home_m=HOME, frame=FrameTransform(HOME)) as (_, fc):
         fc.connect()
         with pytest.raises(CommandRejected) as info:
             fc.upload_fence(SITE)
@@ -110,3 +112,25 @@ def test_a_site_with_more_vertices_than_the_autopilot_stores_is_refused_before_s
         with pytest.raises(CommandRejected, match="300 vertices; the autopilot stores at most 255"):
             fc.upload_fence(Site(ring, 6.0))
         assert sitl.fence.uploads == 0
+
+
+@pytest.mark.slow
+def test_the_fence_on_arducopter_sitl(tmp_path) -> None:
+    """ArduCopter itself takes the fence: accepted, read back vertex for vertex ("Fence Indexed OK"), FENCE_*
+    set; about 10 s of wall time (its EKF must have its GPS origin first)."""
+    from ardupilot_sitl import arducopter, sitl_binary
+    from masonry.adapters.mavlink import MavlinkFlightController
+
+    sitl_binary()  # skips, with the reason, when the binary is not configured
+    with arducopter(tmp_path / "sitl", instance=44, sysid=45) as url:
+        fc = MavlinkFlightController(url, frame=FrameTransform(HOME), connect_timeout_s=30.0)
+        try:
+            fc.connect()
+            fc.wait_for_estimate(90.0)
+            up = fc.upload_fence(SITE)
+            assert up.supported and up.vertices == 4, up
+            # its EKF origin is where it started (the --home of tests/ardupilot_sitl.py)
+            assert up.origin is not None and up.origin.lat_deg == pytest.approx(-35.363261, abs=1e-6)
+            wait_until(lambda: "Fence Indexed OK" in fc.status_texts(), 5.0, "ArduCopter indexing the fence")
+        finally:
+            fc.close()

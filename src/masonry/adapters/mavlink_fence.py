@@ -269,8 +269,8 @@ class _Protocol:
         for seq in range(int(count.count)):
             item = self._exchange(
                 ("MISSION_ITEM_INT",),
-                lambda mav, s=seq: mav.mission_request_int_send(self.ts, self.tc, s, MAV_MISSION_TYPE_FENCE),
-                lambda m, s=seq: _fence_typed(m) and m.seq == s,
+                self._request_item(seq),
+                _item_of(seq),
                 f"MISSION_ITEM_INT {seq} (read-back)",
             )
             if int(item.command) == MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION:
@@ -279,6 +279,9 @@ class _Protocol:
             lambda mav: mav.mission_ack_send(self.ts, self.tc, MAV_MISSION_ACCEPTED, MAV_MISSION_TYPE_FENCE)
         )
         return out
+
+    def _request_item(self, seq: int) -> Callable[[Any], None]:
+        return lambda mav: mav.mission_request_int_send(self.ts, self.tc, seq, MAV_MISSION_TYPE_FENCE)
 
     def set_param(self, name: str, value: float) -> None:
         """PARAM_SET, checked on the PARAM_VALUE echo."""
@@ -294,6 +297,10 @@ class _Protocol:
             raise CommandRejected(
                 "fence", f"{name} is {float(msg.param_value):g}, not {value:g}, after PARAM_SET"
             )
+
+
+def _item_of(seq: int) -> Callable[[Any], bool]:
+    return lambda m: _fence_typed(m) and int(m.seq) == seq
 
 
 def _fence_typed(msg: Any) -> bool:

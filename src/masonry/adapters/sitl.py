@@ -107,7 +107,9 @@ class SitlConfig:
     offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
     system_id: int = 1
     component_id: int = 1
-    fence: str = "accept"  # the fence's answers (masonry.adapters.sitl_fence: accept, unsupported, deny, corrupt)
+    fence: str = (
+        "accept"  # the fence's answers (masonry.adapters.sitl_fence: accept, unsupported, deny, corrupt)
+    )
 
 
 class MavlinkSitl:
