@@ -49,17 +49,41 @@ class Site:
 
     def inside_m(self, x: float, y: float) -> float:
         """How far ``(x, y)`` is inside the boundary: its distance to the nearest edge, negative outside."""
-        d = math.inf
+        best = math.inf  # the squared distance to the nearest edge
         inside = False
-        pts = self.boundary_m
-        n = len(pts)
-        for i in range(n):
-            ax, ay = pts[i]
-            bx, by = pts[(i + 1) % n]
-            if (ay > y) != (by > y) and x < ax + (y - ay) * (bx - ax) / (by - ay):
+        for ax, ay, ex, ey, inv in self._edges():
+            by = ay + ey
+            if (ay > y) != (by > y) and x < ax + (y - ay) * ex / ey:
                 inside = not inside
-            d = min(d, _point_segment_m(x, y, ax, ay, bx, by))
+            dx, dy = x - ax, y - ay
+            t = (dx * ex + dy * ey) * inv
+            if t > 1.0:
+                t = 1.0
+            elif t < 0.0:
+                t = 0.0
+            dx -= t * ex
+            dy -= t * ey
+            d2 = dx * dx + dy * dy
+            if d2 < best:
+                best = d2
+        d = math.sqrt(best)
         return d if inside else -d
+
+    def _edges(self) -> tuple[tuple[float, float, float, float, float], ...]:
+        """Each edge's start, direction and inverse squared length (a cache: the control loop asks every tick)."""
+        edges = self.__dict__.get("_edge_cache")
+        if edges is None:
+            pts = self.boundary_m
+            n = len(pts)
+            out = []
+            for i in range(n):
+                (ax, ay), (bx, by) = pts[i], pts[(i + 1) % n]
+                ex, ey = bx - ax, by - ay
+                ll = ex * ex + ey * ey
+                out.append((ax, ay, ex, ey, 0.0 if ll == 0.0 else 1.0 / ll))
+            edges = tuple(out)
+            object.__setattr__(self, "_edge_cache", edges)  # a cache, not state (the value stays frozen)
+        return edges  # type: ignore[no-any-return]
 
     def outside_by_m(self, p_m: Sequence[float]) -> float:
         """How far the point ``p_m`` (x, y, z) is outside the fence: beyond the boundary or above the altitude

@@ -13,7 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
-from masonry.geofence import Site
+from masonry.geofence import AIRSPACE_MARGIN_M, Site
 from masonry.mission.airspace_state import (
     FlightRequest,
     Grant,
@@ -662,7 +662,11 @@ class ColumnClearance:
         start = w.position if w.position is not None else w.site
         others = [o for n, o in self._uavs.items() if n != uav]
         pads = [(h[0], h[1]) for n, h in self._homes.items() if n != uav]
-        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)[:6]
+        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)
+        if self.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
+            need = AIRSPACE_MARGIN_M + self.zone_slack_m
+            candidates = [h for h in candidates if self.fence.contains(h[0], h[1], need)]
+        candidates = candidates[:6]
         for k in range(self.max_layers):
             for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
