@@ -64,8 +64,7 @@ class Site:
             dx -= t * ex
             dy -= t * ey
             d2 = dx * dx + dy * dy
-            if d2 < best:
-                best = d2
+            best = min(best, d2)
         d = math.sqrt(best)
         return d if inside else -d
 
@@ -83,7 +82,7 @@ class Site:
                 out.append((ax, ay, ex, ey, 0.0 if ll == 0.0 else 1.0 / ll))
             edges = tuple(out)
             object.__setattr__(self, "_edge_cache", edges)  # a cache, not state (the value stays frozen)
-        return edges  # type: ignore[no-any-return]
+        return edges
 
     def outside_by_m(self, p_m: Sequence[float]) -> float:
         """How far the point ``p_m`` (x, y, z) is outside the fence: beyond the boundary or above the altitude
