@@ -341,3 +341,19 @@ def test_setpoints_beyond_the_fence_are_clamped_inside_it(tmp_path: Path, vehicl
         assert x == pytest.approx(4.0 - SETPOINT_MARGIN_M, abs=0.05)
     else:
         assert worst > 1.5 and x > 5.5
+
+
+def test_masonry_sim_with_a_site_from_the_cli(tmp_path: Path) -> None:
+    """`masonry sim` flies a blueprint with a site: the notch's brick tasks fail, the JSON says why."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from masonry.cli import app
+
+    result = CliRunner().invoke(app, ["sim", str(_with_site(tmp_path, NOTCH)), "--format", "json"])
+    assert result.exit_code == 1, result.output
+    report = json.loads(result.stdout)
+    b0 = next(t for t in report["tasks"] if t["id"] == "B0")
+    assert b0["status"] == "stuck"
+    assert all("leaves the site fence" in a["reason"] for a in b0["attempts_detail"])
