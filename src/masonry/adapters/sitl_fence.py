@@ -57,7 +57,6 @@ class SitlFence:
         if self.mode not in _FENCE_MODES:
             raise ValueError(f"fence mode must be one of {', '.join(_FENCE_MODES)}, not {self.mode!r}")
 
-    # -- the messages ----------------------------------------------------------------------------------------
     def handle(self, sitl: Any, msg: Any) -> bool:
         """Answer ``msg`` if it is the fence's (True), else leave it to the SITL (False)."""
         kind = msg.get_type()
@@ -138,7 +137,6 @@ class SitlFence:
             float(len(self.vertices_e7)), 0.0, 0.0, 0.0, x, y, 0.0, MAV_MISSION_TYPE_FENCE,
         )  # fmt: skip
 
-    # -- the fence itself ------------------------------------------------------------------------------------
     def site(self, frame: Any) -> Site | None:
         """The stored fence in the world frame (through the SITL's frame), None without one."""
         key = (tuple(self.vertices_e7), self.params.get("FENCE_ALT_MAX"), frame)
