@@ -44,6 +44,18 @@ def test_vertices_go_world_to_local_to_global() -> None:
     assert global_to_ned(x1 / 1e7, y1 / 1e7, CMAC) == pytest.approx((1.0, 0.0), abs=0.01)  # north
 
 
+@pytest.mark.parametrize("yaw_rad", [0.0, 0.7, -2.0])
+def test_vertices_come_back_to_the_world_through_the_same_frame(yaw_rad: float) -> None:
+    """world -> local NED (offset and yaw) -> latitude/longitude -> local NED -> world: the same points (to the
+    1e-7 degree rounding of MISSION_ITEM_INT)."""
+    frame = FrameTransform((2.0, -2.5, 0.3), yaw_rad)
+    origin = GeoOrigin(52.0, -1.3)
+    for (x, y), (lat_e7, lon_e7) in zip(SITE.boundary_m, fence_vertices_e7(SITE, frame, origin)):
+        north, east = global_to_ned(lat_e7 / 1e7, lon_e7 / 1e7, origin)
+        wx, wy, _ = frame.position_to_world((north, east, 0.0))
+        assert math.hypot(wx - x, wy - y) < 0.01  # 1e-7 degrees is 1.1 cm of latitude
+
+
 def test_the_fence_is_uploaded_accepted_read_back_and_held_by_the_autopilot() -> None:
     with flight(home_m=HOME, frame=FrameTransform(HOME)) as (sitl, fc):
         fc.connect()
