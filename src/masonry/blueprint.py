@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.errors import BlueprintError
+from masonry.geofence import Site
 
 if TYPE_CHECKING:
     from masonry.planner.contacts import Contacts
@@ -148,6 +149,8 @@ class Blueprint:
     brick_size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
     markers: MarkerSpec = field(default_factory=MarkerSpec)
     source: str = "<blueprint>"
+    #: the site's geofence (None: no fence; docs/blueprint-format.md, "Site")
+    site: Site | None = None
 
     def brick(self, brick_id: int) -> Brick:
         """The brick with id ``brick_id`` (KeyError if there is none)."""
@@ -164,7 +167,7 @@ class Blueprint:
 
 # ---------------------------------------------------------------------------------------------- loading
 
-TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet")
+TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site")
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
 BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
@@ -269,6 +272,8 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         seen_names.add(uav.name)
         fleet.append(uav)
 
+    from masonry.site_checks import parse_site
+
     blueprint = Blueprint(
         bricks=tuple(bricks),
         fleet=tuple(fleet),
@@ -278,6 +283,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         brick_size_m=default_size,
         markers=markers,
         source=source,
+        site=parse_site(data.get("site"), source),
     )
     validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
@@ -510,6 +516,10 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
     lines.append("fleet:")
     for u in blueprint.fleet:
         lines.append(f"  - {{name: {_yaml_str(u.name)}, role: {u.role}, home: {_vec(u.home_m)}}}")
+    if blueprint.site is not None:
+        from masonry.site_checks import format_site
+
+        lines.append(format_site(blueprint.site))
     return "\n".join(lines) + "\n"
 
 

@@ -102,6 +102,10 @@ def validate(
         )
     _check_support(bricks, contacts, source)
     _check_sites(blueprint)
+    if blueprint.site is not None:
+        from masonry.site_checks import check_site
+
+        check_site(blueprint)
 
 
 def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:

@@ -27,6 +27,7 @@ from masonry.blueprint import (
     SITE_MAX_HEIGHT_M,
     UAV_NAME_PATTERN,
 )
+from masonry.geofence import MAX_BOUNDARY_VERTICES
 
 SCHEMA_ID = "https://masonry.example/schemas/blueprint.schema.json"
 
@@ -167,6 +168,40 @@ def blueprint_schema() -> dict[str, Any]:
                         ),
                     },
                 },
+            },
+            "site": _site(),
+        },
+    }
+
+
+def _site() -> dict[str, Any]:
+    """The optional ``site`` (the geofence; docs/blueprint-format.md, "Site")."""
+    xy = {"type": "number", "minimum": -SITE_HALF_EXTENT_M, "maximum": SITE_HALF_EXTENT_M}
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "required": ["boundary", "max_altitude"],
+        "description": "The site's geofence: the UAVs never fly outside it (a simple polygon, either orientation; "
+        "the wall, pickups and homes at least 1 m inside).",
+        "properties": {
+            "boundary": {
+                "type": "array",
+                "minItems": 3,
+                "maxItems": MAX_BOUNDARY_VERTICES,
+                "items": {
+                    "type": "array",
+                    "prefixItems": [xy, xy],
+                    "items": False,
+                    "minItems": 2,
+                    "maxItems": 2,
+                },
+                "description": "Vertices [x, y] of the boundary polygon, world ENU frame, metres (not closed).",
+            },
+            "max_altitude": {
+                "type": "number",
+                "exclusiveMinimum": 0,
+                "maximum": SITE_HALF_EXTENT_M,
+                "description": "Altitude limit, metres (0.5 m above the highest transit layer at least).",
             },
         },
     }

@@ -28,7 +28,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from masonry.adapters.mavlink_link import (
     LinkClock,
@@ -78,6 +78,10 @@ from masonry.adapters.mavlink_protocol import (
 from masonry.adapters.pose_source import PoseSource
 from masonry.errors import CommandRejected, CommandTimeout, InputError, LinkLost
 from masonry.ports import Telemetry, Vec3
+
+if TYPE_CHECKING:
+    from masonry.adapters.mavlink_fence import FenceUpload
+    from masonry.geofence import Site
 
 __all__ = [
     "ARDUPILOT_MODES",
@@ -515,6 +519,17 @@ class MavlinkFlightController(MavlinkLink):
         ):  # no estimator report (yet): a streaming LOCAL_POSITION_NED is the signal
             return True
         return estimate_usable(st.estimate_flags)
+
+    def upload_fence(self, site: Site) -> FenceUpload:
+        """Upload the blueprint's site as the autopilot's fence and check it (:mod:`masonry.adapters.mavlink_fence`).
+
+        Raises:
+            CommandRejected: the autopilot refused it or kept something else; CommandTimeout: it did not answer.
+        """
+        from masonry.adapters.mavlink_fence import upload_fence
+
+        self._check_link("fence")
+        return upload_fence(self, site)
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""

@@ -15,9 +15,10 @@ from __future__ import annotations
 import logging
 import math
 import os
+import queue
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -256,6 +257,27 @@ class MavlinkLink:
         self._state = _State(status_texts=[])
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
+        self._listeners: list[tuple[frozenset[str], queue.Queue[Any]]] = []
+
+    def listen(self, kinds: Iterable[str]) -> queue.Queue[Any]:
+        """A queue that gets every message of these types from the autopilot from now on (a protocol run outside
+        the receiver's state, e.g. the fence upload: :mod:`masonry.adapters.mavlink_fence`); :meth:`unlisten`."""
+        q: queue.Queue[Any] = queue.Queue()
+        with self._lock:
+            self._listeners = [*self._listeners, (frozenset(kinds), q)]
+        return q
+
+    def unlisten(self, q: queue.Queue[Any]) -> None:
+        """Stop feeding a :meth:`listen` queue."""
+        with self._lock:
+            self._listeners = [(k, other) for k, other in self._listeners if other is not q]
+
+    def send_message(self, build: Callable[[Any], None]) -> None:
+        """Send what ``build(mav)`` sends on the connection's ``mav`` (under the send lock)."""
+        if self._conn is None:
+            raise LinkLost(f"not connected to {self.url} (call connect() first)")
+        with self._send_lock:
+            build(self._conn.mav)
 
     def status(self) -> LinkStatus:
         """The link's counters now: what was sent, and every error the threads met (none are dropped)."""
@@ -430,6 +452,9 @@ class MavlinkLink:
         kind = msg.get_type()
         if kind == "BAD_DATA" or msg.get_srcSystem() != self.target_system:
             return
+        for kinds, q in self._listeners:
+            if kind in kinds:
+                q.put(msg)
         with self._lock:
             st = self._state
             st.last_message_s = now

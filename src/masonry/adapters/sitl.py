@@ -107,6 +107,9 @@ class SitlConfig:
     offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
     system_id: int = 1
     component_id: int = 1
+    fence: str = (
+        "accept"  # the fence's answers (masonry.adapters.sitl_fence: accept, unsupported, deny, corrupt)
+    )
 
 
 class MavlinkSitl:
@@ -191,6 +194,10 @@ class MavlinkSitl:
         self._lock = threading.Lock()
         self._last_gcs_wall_s: float | None = None
         self._last_vision_sim_s = -math.inf
+        from masonry.adapters.sitl_fence import SitlFence
+
+        #: the fence a ground station uploaded, its parameters and its enforcement (masonry.adapters.sitl_fence)
+        self.fence = SitlFence(mode=self.config.fence)
 
     # ------------------------------------------------------------------------------------------- lifecycle
 
@@ -262,6 +269,7 @@ class MavlinkSitl:
             self._gcs_failsafe()
             was_armed = v.armed
             v.step(h)
+            self.fence.enforce(self)
             if v.mode == "LAND" and self.mode != self._land_mode:  # the vehicle's battery failsafe
                 self._text(MAV_SEVERITY_CRITICAL, "Battery failsafe: landing")
                 self.mode = self._land_mode
@@ -311,6 +319,8 @@ class MavlinkSitl:
             self._handle(msg)
 
     def _handle(self, msg: Any) -> None:
+        if self.fence.handle(self, msg):
+            return
         kind = msg.get_type()
         if kind == "HEARTBEAT":
             if msg.type == MAV_TYPE_GCS:

@@ -456,8 +456,10 @@ def preflight(
     *,
     role: str = "brick",
     progress: Callable[[str], None] | None = None,
+    site: Any = None,
 ) -> PreflightReport:
-    """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames.
+    """Check the opened adapters: link, position estimate, battery, disarmed, actuators answer, camera frames,
+    and, with a ``site`` (``Blueprint.site``), its fence uploaded to the autopilot (a refusal refuses to arm).
 
     ``progress`` gets the countdown of the wait for the position estimate (what is missing, seconds left).
     """
@@ -510,9 +512,23 @@ def preflight(
                     "battery", battery >= hw.min_battery, f"{battery:.0%} (minimum {hw.min_battery:.0%})"
                 )
             )
+        if site is not None:
+            items.append(_check_fence(fc, site))
     items.append(_check_actuators(adapters, hw, role))
     items.append(_check_camera(adapters, hw))
     return PreflightReport(tuple(items))
+
+
+def _check_fence(fc: Any, site: Any) -> CheckItem:
+    """The site's fence uploaded as the autopilot's (``masonry.adapters.mavlink_fence``): accepted, or why not."""
+    try:
+        up = fc.upload_fence(site)
+    except HardwareError as exc:
+        detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
+        return CheckItem("geofence", False, detail)
+    if not up.supported:
+        return CheckItem("geofence", False, f"{up.detail}; masonry's own fence still holds", blocking=False)
+    return CheckItem("geofence", True, up.detail)
 
 
 def _check_actuators(adapters: UavPorts, hw: HardwareConfig, role: str) -> CheckItem:

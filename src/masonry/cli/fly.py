@@ -44,7 +44,11 @@ def select_adapters(
         opened = open_adapters(hardware, blueprint=blueprint, spec=spec, seed=seed, faults=faults)
         try:
             report = preflight(
-                opened, hardware, role=spec.role, progress=lambda line: typer.echo(line, err=True)
+                opened,
+                hardware,
+                role=spec.role,
+                progress=lambda line: typer.echo(line, err=True),
+                site=getattr(blueprint, "site", None),
             )
             for line in report.lines():
                 typer.echo(cli_text(line, report.options), err=True)
@@ -466,6 +470,7 @@ def _fly_one_task(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
+        fence=bp.site,
         **hardware.uav_settings(vehicle),
     )
     try:

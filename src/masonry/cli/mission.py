@@ -226,6 +226,7 @@ def mission_control(
             min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
+            fence=bp.site,
         )
         offset = 0.0
         if state is not None:

@@ -8,6 +8,7 @@ from typing import Any
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, MarkerSpec, Role, UavSpec
+from masonry.geofence import Site
 from masonry.timing import DEFAULT_TIMING as _T
 from masonry.timing import TaskTiming
 
@@ -78,6 +79,11 @@ class UavConfig:
     # A task whose transit waits for clearance longer than this is given up (the attempt counts; None: never):
     # it frees the UAV's hold volume, which another waiting UAV's flight may need (docs/safety.md)
     hold_patience_s: float | None = 240.0
+    # The site's geofence (``Blueprint.site``; None: none): setpoints are clamped inside it; a UAV seen outside it
+    # (beyond ``masonry.geofence.BREACH_MARGIN_M``) gives its task up, and lands where it is if it is not back
+    # inside ``fence_return_s`` later (masonry.fsm.fence)
+    fence: Site | None = None
+    fence_return_s: float = 20.0
     leg_timeout_s: float = (
         30.0  # a leg (or an alignment) not over this long after its planned end fails the task
     )

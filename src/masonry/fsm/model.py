@@ -25,6 +25,7 @@ from transitions.extensions import HierarchicalMachine
 
 from masonry.errors import HardwareError
 from masonry.fsm.config import UavConfig
+from masonry.fsm.fence import FenceWatch, watch_fence
 from masonry.fsm.navigator import Navigator
 from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
@@ -134,6 +135,7 @@ class UavModel:
         self.transit = Transit(ignore_invalid_triggers=not self.strict_triggers)
         self.phase_clock = PhaseClock()
         self.clearance = clearance
+        self.fence_watch = None if config.fence is None else FenceWatch(config.fence)
         # A link whose ground crew swaps the battery of a landed UAV before handing it its next task (the
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
         self._battery_service = clearance is not None and clearance.swaps_batteries is True
@@ -196,6 +198,8 @@ class UavModel:
                         reason=f"held {self._now_s - self._held_since_s:.0f} s for clearance to "  # type: ignore[operator]
                         f"{self._site_text()}, longer than hold_patience_s"
                     )
+            if self.fence_watch is not None and not tel.on_ground:
+                watch_fence(self, self.fence_watch, self._now_s, tel.position_m)
             self._do[self.state](tel)
             if self.nav.active:
                 velocity_mps, yaw_rate_radps = self.nav.step(self._now_s, tel)
@@ -354,7 +358,11 @@ class UavModel:
 
     def _may_take_task(self, tel: Telemetry) -> bool:
         """A task may be started now: the UAV is not to retire and its battery is not low."""
-        return self._halt_after_landing is None and tel.battery_fraction >= self.config.battery_low_fraction
+        return (
+            self._halt_after_landing is None
+            and tel.battery_fraction >= self.config.battery_low_fraction
+            and (self.fence_watch is None or self.fence_watch.since_s is None)  # not while outside its fence
+        )
 
     def _complete_task(self, **fields: Any) -> None:
         self._report_done(**fields)

@@ -16,6 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from masonry.fsm.config import UavConfig
+from masonry.fsm.fence import clamp_reference
 from masonry.geometry import wrap_angle_rad
 from masonry.motion import PID, MinJerk
 from masonry.ports import Telemetry
@@ -75,6 +76,13 @@ class Navigator:
         self.legs: list[Leg] = []
         self.legs_from_rest = False
         self.settling_since_s: float | None = None
+        #: the site's fence (None: none): targets and references are kept inside it (``masonry.fsm.fence``)
+        self.fence = config.fence
+
+    def _inside(self, p_m: Any) -> np.ndarray:
+        """``p_m`` (a target) kept inside the fence."""
+        p, clamped = clamp_reference(self.fence, p_m)
+        return np.array(p, dtype=float) if clamped or not isinstance(p, np.ndarray) else p
 
     # -- what to fly -------------------------------------------------------------------------------------
     def stop(self) -> None:
@@ -92,7 +100,7 @@ class Navigator:
         self.line = None
         self.legs = []
         self.end_s = now_s
-        self.target_m = np.array(tel.position_m if target_m is None else target_m, dtype=float)
+        self.target_m = self._inside(np.array(tel.position_m if target_m is None else target_m, dtype=float))
         self.target_yaw_rad = tel.attitude_rad[2] if yaw_rad is None else yaw_rad
         self.active = True
 
@@ -232,6 +240,8 @@ class Navigator:
         from_rest: bool = False,
     ) -> None:
         p = np.asarray(tel.position_m, dtype=float)
+        if self.fence is not None:
+            target = self._inside(target)
         # from rest: the reference turns the corner where the UAV is (a layer route never cuts diagonally)
         v = _ZERO3 if from_rest else np.asarray(tel.velocity_mps, dtype=float)
         T = self.leg_duration_s(p, target) if duration_s is None else float(duration_s)
@@ -338,6 +348,10 @@ class Navigator:
     def step(self, now_s: float, tel: Telemetry) -> Setpoint:
         """The velocity setpoint at ``now_s``: the PID on the reference, with its feed-forward (``active``)."""
         ref, ff = self.reference(now_s)
+        if self.fence is not None:
+            ref, clamped = clamp_reference(self.fence, ref)
+            if clamped:
+                ff = _ZERO_FF  # held at the fence: no feed-forward out through it
         if type(ref) is np.ndarray:
             ref = ref.tolist()  # the PID takes floats: hand it floats, not numpy scalars to convert
         vx, vy, vz, yaw_rate = self.pid.step_floats(

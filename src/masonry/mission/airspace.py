@@ -13,6 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping
 
+from masonry.geofence import AIRSPACE_MARGIN_M, Site
 from masonry.mission.airspace_state import (
     FlightRequest,
     Grant,
@@ -23,6 +24,7 @@ from masonry.mission.airspace_state import (
     hold_candidates,
 )
 from masonry.mission.altitudes import layer_base_m, task_work_altitude_m, transit_layers_m, work_altitude_m
+from masonry.mission.fence import flight_fence_problem, volumes_in_fence
 from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import (
     HOVER_SLACK_M,
@@ -105,6 +107,9 @@ class ColumnClearance:
             (:func:`masonry.separation.pad_separation_m`: the airframe's span plus a margin).
         gate: asked before a flight down to a site is granted, and told when it is (:class:`SiteGate`); call
             :meth:`touch` when its answers may have changed.
+        fence: the site's geofence (None: none): no flight or hold flight is granted with a volume outside it
+            (:mod:`masonry.mission.fence`), and a flight no layer can fly inside it is answered with the reason
+            (``Grant.refused``).
     """
 
     def __init__(
@@ -117,6 +122,7 @@ class ColumnClearance:
         start_base_m: float | None = None,
         pad_separation_m: float = pad_separation_m(),
         gate: SiteGate | None = None,
+        fence: Site | None = None,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
@@ -145,6 +151,8 @@ class ColumnClearance:
         self.pad_slack_m = float(pad_separation_m) - self.sep_xy_m - 1e-6
         self.max_layers = 12
         self.gate = gate
+        self.fence = fence
+        self._fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
         self._uavs: dict[str, UavAirspace] = {}
         self._homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -292,6 +300,7 @@ class ColumnClearance:
             to = (float(to_m[0]), float(to_m[1]))
         self._seq += 1
         u.request, u.hold, u.phase = FlightRequest(site, top, pos, now_s, self._seq, to), None, Phase.ASKING
+        self._check_fence(uav, u.request)
         u.seen_version, u.answer = -1, None
         self._version += 1  # the queue changed: answers of those behind it may change
         return self._evaluate(uav, u, now_s)
@@ -513,6 +522,22 @@ class ColumnClearance:
         others = [q for other, u in self._uavs.items() if other != uav for q in u.volumes]
         return volumes_clear(vols, others, self.sep_xy_m, self.spacing_m - 1e-9)
 
+    def _fits(self, uav: str, vols: list[Volume]) -> bool:
+        """``vols`` keep inside the fence (if any) and clear of every other UAV's."""
+        return (self.fence is None or volumes_in_fence(self.fence, vols)) and self._free(uav, vols)
+
+    def _check_fence(self, uav: str, w: FlightRequest) -> None:
+        """Note why ``uav``'s new request can never be flown inside the fence, if it cannot (at no layer)."""
+        self._fence_refusals.pop(uav, None)
+        if self.fence is None:
+            return
+        start = w.position if w.position is not None else w.site
+        start = (start[0], start[1], self._snap(start[2]))
+        layers = [self._alt(k) for k in range(self.max_layers)]
+        problem = flight_fence_problem(self.fence, start, w.site, w.top_m, w.to, layers, self.zone_slack_m)
+        if problem is not None:
+            self._fence_refusals[uav] = problem
+
     def _uav(self, uav: str) -> UavAirspace:
         """``uav``'s record (a new one, holding nothing, for a UAV not seen since it left)."""
         u = self._uavs.get(uav)
@@ -568,6 +593,11 @@ class ColumnClearance:
         if u.seen_version == self._version and u.answer is not None:
             return u.answer
         u.seen_version = self._version
+        refused = self._fence_refusals.get(uav)
+        if refused is not None and u.phase is Phase.ASKING:
+            self.refused += 1
+            u.answer = Grant(uav, w.site, False, refused=refused)
+            return u.answer
         earlier = self._queued_before(w.seq)
         blocked_site = any(
             math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < self.wait_radius_m for e in earlier
@@ -582,7 +612,7 @@ class ColumnClearance:
                 hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
                 for k in range(self.max_layers):
                     extra = self._flight_volumes(hold, w.site, w.top_m, k, None, w.to, home=home)
-                    if self._free(uav, extra):
+                    if self._fits(uav, extra):
                         u.volumes = u.volumes + extra
                         self._version += 1
                         return self._granted(uav, u, k, now_s)
@@ -590,7 +620,7 @@ class ColumnClearance:
                 start = w.position if w.position is not None else w.site
                 for k in range(self.max_layers):
                     vols = self._flight_volumes(start, w.site, w.top_m, k, None, w.to, home=home)
-                    if self._free(uav, vols):
+                    if self._fits(uav, vols):
                         self._take(u, vols)
                         return self._granted(uav, u, k, now_s)
         if u.phase is Phase.ASKING:
@@ -634,11 +664,15 @@ class ColumnClearance:
         start = w.position if w.position is not None else w.site
         others = [o for n, o in self._uavs.items() if n != uav]
         pads = [(h[0], h[1]) for n, h in self._homes.items() if n != uav]
-        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)[:6]
+        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)
+        if self.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
+            need = AIRSPACE_MARGIN_M + self.zone_slack_m
+            candidates = [h for h in candidates if self.fence.contains(h[0], h[1], need)]
+        candidates = candidates[:6]
         for k in range(self.max_layers):
             for hold in candidates:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
-                if self._free(uav, vols):
+                if self._fits(uav, vols):
                     self._take(u, vols)
                     u.hold, u.phase = HoldFlight(hold, k, self._alt(k)), Phase.TO_HOLD
                     self.layer_counts[k] = self.layer_counts.get(k, 0) + 1

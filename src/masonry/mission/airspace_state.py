@@ -18,7 +18,8 @@ class Grant:
     ``layer_m``: the altitude of its lateral leg (None: no layers, fly as you like, or no flight yet).
     ``granted`` True: fly there (climb where you are to ``layer_m``, fly over the site, come down). False with a
     ``hold_m``: fly (at ``layer_m``) to ``hold_m`` and wait there, the rest comes later. False without: hover
-    where you are and ask again.
+    where you are and ask again. ``refused``: why the flight can never be granted (it leaves the site's fence
+    at every layer; mission control fails the UAV's task with it).
     """
 
     uav: str
@@ -26,6 +27,7 @@ class Grant:
     granted: bool = True
     hold_m: Vec3 | None = None
     layer_m: float | None = None
+    refused: str | None = None
 
 
 class Phase(enum.Enum):

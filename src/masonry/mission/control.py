@@ -30,6 +30,7 @@ from typing import Any, Literal
 
 from masonry.blueprint import UavSpec
 from masonry.errors import MissionError, ProtocolError
+from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.messages import (
@@ -160,6 +161,8 @@ class MissionControl:
             ``policy="schedule"`` follows (:mod:`masonry.planner.schedule_policy`).
         events_sink: gets every :class:`~masonry.mission.events.MissionEvent` (assignments, results,
             clearances, UAV reports, losses, the stall, the end) for a log or a live view; it only watches.
+        fence: the site's geofence (``Blueprint.site``; None: none): the airspace grants no flight that leaves it,
+            and a task whose flight could only be flown outside it fails with the reason.
     """
 
     def __init__(
@@ -187,6 +190,7 @@ class MissionControl:
         reservation: str = DEFAULT_RESERVATION,
         schedule: Any = None,
         events_sink: EventSink | None = None,
+        fence: Site | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.schedule_policy import make_dispatcher
@@ -247,7 +251,9 @@ class MissionControl:
             homes={u.name: u.home_m for u in self.fleet},
             start_base_m=layer_floor_m,
             gate=self.sites,
+            fence=fence,
         )
+        self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self._layer_floor_m = layer_floor_m
         self.timing = timing
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
@@ -471,6 +477,8 @@ class MissionControl:
             self.columns.touch()  # a site is free: who waits for it may go now
         g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
         self._emit_clearance(now_s, g)
+        if g.refused is not None:
+            self._fail_outside_fence(msg.sender, g.refused, now_s)
         self._send(
             msg.sender,
             Clearance(
@@ -484,6 +492,18 @@ class MissionControl:
                 g.layer_m,
             ),
         )
+
+    def _fail_outside_fence(self, uav: str, reason: str, now_s: float) -> None:
+        """``uav``'s flight can only be flown outside the site's fence: its task fails with the reason (once per
+        task in hand; the attempt counts, so a task no UAV can reach inside the fence ends stuck, saying why)."""
+        task_id = self.dispatcher.task_of(uav)
+        if task_id is None:
+            return
+        key = (uav, task_id, self.dispatcher.attempt_of(task_id))
+        if key in self._fence_failed:
+            return
+        self._fence_failed.add(key)
+        self.recall(uav, now_s, reason)
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result

@@ -180,6 +180,7 @@ def run_remote_uav(
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
         lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
+        fence=blueprint.site,
         **dict(uav_settings or {}),
     )
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)

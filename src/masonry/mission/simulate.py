@@ -136,6 +136,7 @@ def _build_machine(
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
         lateral_altitude_m=lateral_altitude_m,
+        fence=blueprint.site,
     )
     if spec.role == "brick":
         return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
@@ -529,6 +530,7 @@ class SimulatedMission:
                 reservation=reservation,
                 schedule=schedule if policy == SCHEDULE_POLICY else None,
                 events_sink=events_sink,
+                fence=blueprint.site,
             )
             if state is not None:
                 mc.restore(state)

@@ -116,6 +116,8 @@ class SimVehicle:
             self.config.battery_drain_per_s if battery_drain_per_s is None else float(battery_drain_per_s)
         )
         self._wx = self._wy = 0.0
+        self._push: tuple[float, float] = (0.0, 0.0)
+        self._windy = self.gusts_mps > 0.0
         if self.gusts_mps > 0:
             self._wx, self._wy = self.gusts_mps * self._gauss(), self.gusts_mps * self._gauss()
         self._sp: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
@@ -513,7 +515,7 @@ class SimVehicle:
             az = -amax
         if amax < az:  # noqa: PLR1730 (no min/max call: hot loop)
             az = amax
-        if self.gusts_mps > 0.0:
+        if self._windy:
             gx, gy = self._gust(dt_s)
             ax += gx
             ay += gy
@@ -550,14 +552,28 @@ class SimVehicle:
             if self.on_ground and z > ground + 0.01:
                 self.on_ground = False
 
+    @property
+    def push_mps2(self) -> tuple[float, float]:
+        """A steady horizontal push from outside (m/s^2, x and y; a test's steady wind), added to the gusts'."""
+        return self._push
+
+    @push_mps2.setter
+    def push_mps2(self, value: tuple[float, float]) -> None:
+        self._push = (float(value[0]), float(value[1]))
+        self._windy = self.gusts_mps > 0.0 or self._push != (0.0, 0.0)
+
     def _gust(self, dt_s: float) -> tuple[float, float]:
-        """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag."""
+        """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag,
+        plus the steady :attr:`push_mps2`."""
+        px, py = self._push
+        if not self.gusts_mps > 0.0:
+            return px, py
         cfg = self.config
         a = dt_s / cfg.gust_tau_s
         b = self.gusts_mps * math.sqrt(2.0 * a)
         self._wx += -self._wx * a + b * self._gauss()
         self._wy += -self._wy * a + b * self._gauss()
-        return cfg.drag_per_s * self._wx, cfg.drag_per_s * self._wy
+        return cfg.drag_per_s * self._wx + px, cfg.drag_per_s * self._wy + py
 
     def _touchdown(self) -> None:
         # a take-off starts on the ground: with a shaper's delay the climb begins a few steps after the command
