@@ -53,7 +53,7 @@ class ShapingConfig:
 
 #: ArduCopter 4.7 defaults (PSC_JERK_XY, WPNAV_ACCEL, PSC_JERK_Z, PILOT_ACCEL_Z) with the delay fitted to the SITL.
 ARDUCOPTER = ShapingConfig(
-    delay_s=0.15,
+    delay_s=0.10,
     jerk_xy_mps3=5.0,
     accel_xy_mps2=2.5,
     jerk_z_mps3=5.0,
