@@ -53,8 +53,14 @@ class CameraFrame:
 BATTERY_LOW_REASON = "battery low"
 #: ... and with this when the operator recalled the UAV (``masonry ctl recall``): not the task's fault either.
 RECALL_REASON = "recalled by the operator"
+#: ... and with this when the UAV abandoned it because mission control fell silent past the heartbeat timeout
+#: (mission control gives the task to another UAV meanwhile, or a resumed one flies it again).
+MISSION_CONTROL_LOST_REASON = "mission control lost"
+#: ... and with this when mission control released it because its UAV's heartbeats said it held no task (its
+#: handler restarted, the assignment forgotten).
+TASK_DROPPED_REASON = "uav dropped the task"
 #: The reasons of a failure that costs its task no attempt.
-UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON)
+UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON, MISSION_CONTROL_LOST_REASON, TASK_DROPPED_REASON)
 
 
 #: The phases a task attempt's time is split into (docs/mission.md, "Where the time goes"), in the order a task

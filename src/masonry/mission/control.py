@@ -55,7 +55,7 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import UNCOUNTED_REASONS, PhaseTimes
+from masonry.ports import TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -120,6 +120,8 @@ class MissionEvents:
     errors: list[str] = field(default_factory=list)
     #: results not acted on, by reason: "not-assigned", "wrong-attempt", "too-short"
     ignored: dict[str, int] = field(default_factory=dict)
+    #: UAVs declared lost and heard again with no task (back in the mission)
+    rejoined: int = 0
 
 
 class MissionControl:
@@ -136,6 +138,8 @@ class MissionControl:
         heartbeat_period_s: how often mission control sends its heartbeat.
         heartbeat_timeout_s: a UAV silent for longer is declared lost.
         startup_timeout_s: how long to wait for the whole fleet before starting without the missing UAVs.
+        rejoin_timeout_s: how long a mission left without any UAV of a role waits, before it ends, for one of
+            them declared lost for its silence to be heard again and rejoin (default: ``startup_timeout_s``).
         column_radius_m: two site columns (UAVs below their transit layer) are never granted closer than
             this horizontally (the blueprint's clearance r_c is the natural value; 0 grants every request).
         layer_base_m, layer_spacing_m: transit layers handed out per flight, at ``layer_base_m + k *
@@ -175,6 +179,7 @@ class MissionControl:
         heartbeat_period_s: float = 1.0,
         heartbeat_timeout_s: float = 5.0,
         startup_timeout_s: float = 30.0,
+        rejoin_timeout_s: float | None = None,
         column_radius_m: float = 1.5,
         layer_base_m: float | None = None,
         layer_spacing_m: float = 1.1,
@@ -211,6 +216,7 @@ class MissionControl:
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
+        self.rejoin_timeout_s = startup_timeout_s if rejoin_timeout_s is None else rejoin_timeout_s
         self.dispatcher = make_dispatcher(
             plan,
             self.fleet,
@@ -325,8 +331,25 @@ class MissionControl:
 
     @property
     def over(self) -> bool:
-        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd."""
-        return self.finished or self.blocked or self.stall is not None or self.operator.aborted
+        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd.
+
+        Blocked only for want of a UAV of a role whose last one fell silent less than ``startup_timeout_s`` ago
+        is not over yet (``rejoin_timeout_s``): it may come back (a radio out of range, a handler process restarted)
+        and rejoin.
+        """
+        blocked = self.blocked and not self._awaiting_rejoin()
+        return self.finished or blocked or self.stall is not None or self.operator.aborted
+
+    def _awaiting_rejoin(self) -> bool:
+        """A role has no UAV left, and one of its UAVs was declared lost for silence within ``rejoin_timeout_s``."""
+        live = {link.spec.role for link in self.uavs.values() if not link.lost}
+        return any(
+            link.status == "lost"
+            and link.spec.role not in live
+            and link.lost_at_s is not None
+            and self.now_s - link.lost_at_s <= self.rejoin_timeout_s
+            for link in self.uavs.values()
+        )
 
     @property
     def online(self) -> list[str]:
@@ -410,8 +433,8 @@ class MissionControl:
         if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
-        if link.lost:
-            return  # a UAV declared lost stays lost; its task has been given to another
+        if link.lost and not self._readmit(link, msg, now_s):
+            return  # a UAV declared lost stays lost until it says it holds no task; its task went to another
         link.last_heard_s = now_s
         if isinstance(msg, ClearanceRequest):
             self._on_clearance_request(msg, now_s)
@@ -434,8 +457,10 @@ class MissionControl:
         if isinstance(msg, (Heartbeat, Progress)):
             if isinstance(msg, Progress):
                 self.events.progress += 1
-            elif msg.battery is not None:
-                link.battery = msg.battery
+            else:
+                if msg.battery is not None:
+                    link.battery = msg.battery
+                self._check_holds_task(msg, now_s)
             self._report(link, msg.state, msg.position_m)
             if self.sink is not None and self.uav_events:
                 self._emit_uav(now_s, link)
@@ -557,6 +582,50 @@ class MissionControl:
     def _ignore(self, reason: str, detail: str) -> None:
         self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
         log.warning("ignoring %s", detail)
+
+    def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
+        """A UAV's heartbeat says it holds no task (none in hand, none queued) although its assignment went out
+        longer than the heartbeat timeout ago: it has forgotten it (its handler was restarted before it was
+        declared lost). The task goes back to the pool without counting an attempt."""
+        name = msg.sender
+        tid = self.dispatcher.task_of(name)
+        if msg.task_id is not None or tid is None:
+            return
+        att = self._running.get(tid)
+        if att is None or now_s - att.start_s <= self.heartbeat_timeout_s:
+            return  # the assignment may still be on its way
+        reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task {now_s - att.start_s:.1f} s after it)"
+        log.warning("%s: %s: released", name, reason)
+        del self._running[tid]
+        self._results += 1
+        att.end_s = now_s
+        att.status = "failed"
+        att.reason = reason
+        self.dispatcher.fail(tid, count=False)
+        if self.journal is not None:
+            self.journal.record_failure(now_s, tid, name, reason)
+        self._emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
+        self._dirty = True
+
+    def _readmit(self, link: UavLink, msg: Any, now_s: float) -> bool:
+        """A UAV declared lost for its silence is heard again: back in the mission if its heartbeat says it holds
+        no task and is in service (a radio that came back after its task was given away, a handler restarted);
+        anything else it sends stays ignored (a late result of a task that went to another UAV)."""
+        if link.status != "lost" or not isinstance(msg, Heartbeat) or msg.task_id is not None:
+            return False
+        if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
+            return False
+        if not self.dispatcher.readmit_uav(link.spec.name):
+            return False
+        log.warning("UAV %s heard again (%s, no task): back in the mission", link.spec.name, msg.state or "-")
+        link.lost = False
+        link.lost_at_s = None
+        link.status = "ok"
+        link.taking_off = False
+        self.events.rejoined += 1
+        self._emit_uav(now_s, link)  # its status is "ok" again (a log, a live view)
+        self._dirty = True
+        return True
 
     def _check_heartbeats(self, now_s: float) -> None:
         for name, link in self.uavs.items():

@@ -26,8 +26,10 @@ control learns of it (a genuine mismatch: two blueprint files), unless that task
 then the refused message cannot be mission control's and the answer would cancel the real assignment.
 
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
-the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
-while mission control is down is lost: a resumed mission control flies that task again (docs/mission.md).
+the timeout. A UAV that had heard it then abandons the task in hand and any queued (failed, reason ``mission
+control lost``: no attempt counted) and flies home: by then mission control has declared it lost and given the
+task to another UAV, or it has crashed and a resumed one flies the task again, so finishing it would do it
+twice. Heard again with no task, it is taken back into the mission (docs/mission.md).
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import ClearanceLink, MissionLink, TaskResult
+from masonry.ports import MISSION_CONTROL_LOST_REASON, ClearanceLink, MissionLink, TaskResult
 
 log = logging.getLogger(__name__)
 
@@ -82,6 +84,9 @@ class Execution:
     status: str = "running"
     queued_s: float = 0.0
     reason: str | None = None  # why it failed, as the machine reported it
+    #: when the handler abandoned it (mission control silent): from then on the machine only puts the brick back
+    #: or flies home, away from the task's site, until it reports the failure
+    abandoned_s: float | None = None
 
 
 class UavHandler(MissionLink, ClearanceLink):
@@ -170,6 +175,16 @@ class UavHandler(MissionLink, ClearanceLink):
     def mission_control_lost(self) -> bool:
         """Mission control has been silent past the heartbeat timeout (or never heard)."""
         return self._last_mc_s is None or self.now_s - self._last_mc_s > self.heartbeat_timeout_s
+
+    def _mission_control_gone(self) -> bool:
+        """Mission control was heard, then fell silent long enough that it may declare this UAV lost soon (never
+        heard: nothing was assigned).
+
+        Two heartbeat periods before the timeout: mission control may have last heard this UAV up to a period
+        before this UAV last heard it, and it must not give the task to another while this UAV is still on it.
+        """
+        patience_s = max(self.heartbeat_period_s, self.heartbeat_timeout_s - 2.0 * self.heartbeat_period_s)
+        return self._last_mc_s is not None and self.now_s - self._last_mc_s > patience_s
 
     @property
     def mission_control_heard_s(self) -> float | None:
@@ -373,7 +388,9 @@ class UavHandler(MissionLink, ClearanceLink):
                     self.name,
                     now_s,
                     state=state,
-                    task_id=cur.task_id if cur else None,
+                    # the task in hand, or the one queued for it (mission control releases a task its UAV's
+                    # heartbeats say it does not hold: a handler restarted)
+                    task_id=cur.task_id if cur else (self._queue[0][0].id if self._queue else None),
                     position_m=self._where(),
                     battery=None
                     if self._report_battery is None
@@ -382,6 +399,17 @@ class UavHandler(MissionLink, ClearanceLink):
             )
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
+        cur = self._current
+        if (
+            self._recall is None
+            and self.busy
+            and (cur is None or cur.abandoned_s is None)
+            and self._mission_control_gone()
+        ):
+            # mission control has declared this UAV lost by now (the same timeout) and given its task to another
+            # UAV, or it has crashed and a resumed one flies the task again: carrying on would do it twice
+            self._recall = f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
+            log.warning("%s: %s: abandoning its task, flying home", self.name, self._recall)
         if self._recall is not None:
             self._apply_recall(self._recall)
         model = self.model
@@ -408,6 +436,7 @@ class UavHandler(MissionLink, ClearanceLink):
         if self._current is None:
             self._recall = None
         elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
+            self._current.abandoned_s = self.now_s
             model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
             self._recall = None
 

@@ -516,6 +516,23 @@ class Dispatcher:
         self._maybe_available(i)
         return self._ids[i]
 
+    def readmit_uav(self, name: str) -> bool:
+        """Take back a UAV removed as lost (it is heard again, with no task): it may be assigned tasks again.
+
+        Returns:
+            True if it was out of the mission and is back, False if it was in it already.
+
+        Raises:
+            PlanningError: the UAV is not in the fleet.
+        """
+        if name not in self._fleet:
+            raise PlanningError(f"cannot readmit unknown UAV {name!r}")
+        if name in self._live:
+            return False
+        self._live.add(name)
+        self._live_count[self._fleet[name].role] += 1
+        return True
+
     def restore(self, done_ids: Iterable[str], attempts: Mapping[str, int]) -> None:
         """Resume from a journal: mark ``done_ids`` complete and set the attempt counts (see JournalState).
 
