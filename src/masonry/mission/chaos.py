@@ -251,7 +251,11 @@ def _hook(mission: SimulatedMission, drops: Sequence[LinkDrop], stop_s: float | 
 
 
 def check_chaos(outcome: ChaosOutcome) -> list[str]:
-    """What went wrong in a run, one line each (empty: nothing), judged from the traces (module docstring)."""
+    """What went wrong in a run, one line each (empty: nothing), judged from the traces (module docstring).
+
+    Each line starts with its kind: ``done twice``, ``conflict``, ``dependency``, ``separation``, ``report``
+    (the report's done tasks are not the traces'), ``stall`` or ``unexplained`` (a task left undone, not said why).
+    """
     problems: list[str] = []
     trace, the_plan, report = outcome.trace, outcome.plan, outcome.report
     done: dict[str, list[TraceEntry]] = {}
@@ -261,19 +265,19 @@ def check_chaos(outcome: ChaosOutcome) -> list[str]:
     for tid, entries in sorted(done.items()):
         if len(entries) > 1:
             who = ", ".join(f"{e.uav} {e.start_s:.1f}-{e.end_s:.1f} s" for e in entries)
-            problems.append(f"{tid} done {len(entries)} times: {who}")
+            problems.append(f"done twice: {tid} done {len(entries)} times: {who}")
     conflicts, deps = trace_violations(the_plan, trace)
     problems += [f"conflict: {c}" for c in conflicts] + [f"dependency: {d}" for d in deps]
     if outcome.min_separation_m is not None and outcome.min_separation_m < SEPARATION_BOUND_M - 1e-9:
-        problems.append(f"separation {outcome.min_separation_m:.3f} m < {SEPARATION_BOUND_M} m")
+        problems.append(f"separation: {outcome.min_separation_m:.3f} m < {SEPARATION_BOUND_M} m")
     reported = {t.id for t in report.tasks if t.status == "done"}
     if reported != set(done):
         problems.append(
-            f"the report's done tasks differ from the traces': report only {sorted(reported - set(done))}, "
+            f"report: its done tasks differ from the traces': report only {sorted(reported - set(done))}, "
             f"traces only {sorted(set(done) - reported)}"
         )
     if report.stall is not None:
-        problems.append(f"stalled: {report.stall.get('line')}")
+        problems.append(f"stall: {report.stall.get('line')}")
     if not report.completed:
         problems += _unexplained(outcome)
     return problems
@@ -331,7 +335,7 @@ def _unexplained(outcome: ChaosOutcome) -> list[str]:
             continue  # its attempts ran out, each with the reason its UAV gave
         if tid in stuck and _waits_for_stuck(outcome.plan, tid, stuck | _role_less(outcome, alive)):
             continue  # a prerequisite can never be done
-        out.append(f"{tid} not done and not explained (alive roles: {sorted(alive)})")
+        out.append(f"unexplained: {tid} not done, and not said why (roles with a UAV left: {sorted(alive)})")
     return out
 
 

@@ -55,7 +55,7 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
+from masonry.ports import RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -433,6 +433,8 @@ class MissionControl:
         if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
+        if isinstance(msg, Result) and self._late_result(msg, now_s):
+            return
         if link.lost and not self._readmit(link, msg, now_s):
             return  # a UAV declared lost stays lost until it says it holds no task; its task went to another
         link.last_heard_s = now_s
@@ -582,6 +584,47 @@ class MissionControl:
     def _ignore(self, reason: str, detail: str) -> None:
         self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
         log.warning("ignoring %s", detail)
+
+    def _late_result(self, msg: Result, now_s: float) -> bool:
+        """A completion from a UAV its task was released from when it was declared lost: it did the task after
+        all, its result delayed by the link. Taken if the task is not done (or stuck) since: done, and a UAV
+        flying it again is recalled. True if taken."""
+        r = msg.result
+        if r.status != "done" or r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck:
+            return False
+        att = next((a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None)
+        if att is None or att.attempt != msg.attempt or att.status != "failed" or att.reason != "uav lost":
+            return False
+        if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
+            return False  # assigned to it again meanwhile: an ordinary result
+        other = self.dispatcher.complete_late(r.task_id)
+        log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
+        self._results += 1
+        att.end_s = now_s
+        att.status = "done"
+        att.reason = None
+        att.placement_error_m = r.placement_error_m
+        att.coverage = r.coverage
+        att.phases = r.phases
+        if other is not None:
+            again = self._running.pop(r.task_id, None)
+            if again is not None:
+                again.end_s = now_s
+                again.status = "failed"
+                again.reason = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
+                if self.journal is not None:
+                    self.journal.record_failure(now_s, r.task_id, other, again.reason)
+            self.recall(other, now_s, f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}")
+        if self.journal is not None:
+            fields: dict[str, Any] = {}
+            if r.placement_error_m is not None:
+                fields["placement_error_m"] = r.placement_error_m
+            if r.coverage is not None:
+                fields["coverage"] = r.coverage
+            self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+        self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
+        self._dirty = True
+        return True
 
     def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
         """A UAV's heartbeat says it holds no task (none in hand, none queued) although its assignment went out

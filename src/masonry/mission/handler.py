@@ -65,6 +65,10 @@ OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
 
+#: States in which a task's work is done or being finished on the wall (the brick released, the segment sprayed):
+#: an abort there would report failed a task that is done, so it is let finish (docs/mission.md).
+FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
+
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
 
@@ -166,6 +170,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self._column_to_m: Vec3 | None = None
         self._column_checked_s = -1e18
         self.clearance_requests = 0
+        self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -175,6 +180,18 @@ class UavHandler(MissionLink, ClearanceLink):
     def mission_control_lost(self) -> bool:
         """Mission control has been silent past the heartbeat timeout (or never heard)."""
         return self._last_mc_s is None or self.now_s - self._last_mc_s > self.heartbeat_timeout_s
+
+    def _resend_unheard(self, now_s: float) -> None:
+        """While mission control is silent since before the last completion was sent, say the completion again
+        with every heartbeat, ahead of it: the link may be down, and the first thing mission control hears
+        when it is back is then the completion, before the heartbeat that takes this UAV back (a task declared
+        released and given to it again would be flown twice)."""
+        if self._unheard is None:
+            return
+        sent, sent_s = self._unheard
+        last = self._last_mc_s
+        if last is not None and last <= sent_s and now_s - last > 1.5 * self.heartbeat_period_s:
+            self._send(sent)
 
     def _mission_control_gone(self) -> bool:
         """Mission control was heard, then fell silent long enough that it may declare this UAV lost soon (never
@@ -363,7 +380,10 @@ class UavHandler(MissionLink, ClearanceLink):
                 state or "-",
                 result.reason or "no reason given",
             )
-        self._send(Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt))
+        sent = Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt)
+        self._send(sent)
+        if result.status == "done":
+            self._unheard = (sent, self.now_s)  # said again if the link turns out to have been down (_handle)
         if self._after_result is not None:
             self._after_result()
 
@@ -381,6 +401,7 @@ class UavHandler(MissionLink, ClearanceLink):
             self._handle(raw, now_s)
         if self._last_sent_hb_s is None or now_s - self._last_sent_hb_s >= self.heartbeat_period_s:
             self._last_sent_hb_s = now_s
+            self._resend_unheard(now_s)
             cur = self._current
             state = str(getattr(self.model, "state", "")) if self.model is not None else ""
             self._send(
@@ -435,6 +456,8 @@ class UavHandler(MissionLink, ClearanceLink):
         model = self.model
         if self._current is None:
             self._recall = None
+        elif state in FINISHING_STATES:
+            pass  # the work is on the wall: the machine finishes and reports it done, then nothing is left
         elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
             self._current.abandoned_s = self.now_s
             model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
@@ -449,7 +472,16 @@ class UavHandler(MissionLink, ClearanceLink):
             return
         if msg.sender != MISSION_CONTROL:
             return
-        self._last_mc_s = now_s
+        before, self._last_mc_s = self._last_mc_s, now_s
+        if self._unheard is not None:
+            sent, sent_s = self._unheard
+            self._unheard = None
+            if before is not None and before <= sent_s and now_s - before > 1.5 * self.heartbeat_period_s:
+                # mission control's heartbeats stopped around the completion: the link was down, the result may
+                # be lost. Said again: mission control takes it late if the task was released from this UAV
+                # and is not done since, and ignores it if it had it (docs/mission.md, "Heartbeats and time")
+                log.info("%s: %s done while the link was down: reported again", self.name, sent.result.task_id)
+                self._send(sent)
         if isinstance(msg, Assign):
             if msg.uav != self.name:
                 self.rejected += 1

@@ -467,6 +467,34 @@ class Dispatcher:
             if prereqs[d] == 0:
                 self._maybe_available(d)
 
+    def complete_late(self, task_id: str) -> str | None:
+        """Mark a task done that was released from a UAV declared lost, which did it after all (its result came
+        late): in progress with another UAV (freed: it must drop it) or back in the pool.
+
+        Returns:
+            The UAV that was on it now (to be told to drop it), or None.
+
+        Raises:
+            PlanningError: the task is unknown, done already or stuck.
+        """
+        i = self._index.get(task_id)
+        if i is None:
+            raise PlanningError(f"cannot complete unknown task {task_id!r}")
+        if self._status[i] not in (_RUNNING, _PENDING):
+            raise PlanningError(f"cannot complete task {task_id} late: it is done or stuck")
+        uav = self._stop(i) if self._status[i] == _RUNNING else None
+        self._unavailable(i)
+        self._ready[self._role[i]].pop(i, None)
+        self._status[i] = _DONE
+        self._done.add(task_id)
+        self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
+        prereqs = self._prereqs
+        for d in self._dependents[i]:
+            prereqs[d] -= 1
+            if prereqs[d] == 0:
+                self._maybe_available(d)
+        return uav
+
     def fail(self, task_id: str, *, count: bool = True) -> bool:
         """Count a failed attempt of an in-progress task and free its UAV.
 
