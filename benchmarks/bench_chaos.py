@@ -74,11 +74,15 @@ def main() -> None:
     ap.add_argument("--lose-a-role", action="store_true", help="may lose every UAV of a role")
     ap.add_argument("--verbose", action="store_true", help="a line for every run")
     a = ap.parse_args()
-    logging.getLogger("masonry").setLevel(logging.ERROR)  # every loss and rejoin is a warning: the table says it
+    logging.getLogger("masonry").setLevel(
+        logging.ERROR
+    )  # every loss and rejoin is a warning: the table says it
     vehicles = ("ideal", "arducopter") if a.vehicle == "both" else (a.vehicle,)
     rows = [campaign(a.runs, a.first_seed, v, a.lose_a_role, a.verbose) for v in vehicles]
     print()
-    print("| vehicle | runs | faults injected | mc stops | missions completed | tasks lost | runs with a violation |")
+    print(
+        "| vehicle | runs | faults injected | mc stops | missions completed | tasks lost | runs with a violation |"
+    )
     print("| --- | ---: | --- | ---: | ---: | ---: | ---: |")
     for row in rows:
         inj = dict(row["injected"])  # type: ignore[call-overload]

@@ -101,7 +101,8 @@ def test_a_radio_out_for_eight_seconds_mid_task_costs_the_task_once_and_the_uav_
     r = out.report
     assert r.completed and {u.name: u.status for u in r.uavs} == {"brick-1": "ok", "glue-1": "ok"}
     b0 = next(t for t in r.tasks if t.id == "B0")
-    assert [(a.uav, a.status, a.reason) for a in b0.tries][0] == ("brick-1", "failed", "uav lost")
+    first = b0.tries[0]
+    assert (first.uav, first.status, first.reason) == ("brick-1", "failed", "uav lost")
     cut = [e for e in out.trace if e.task_id == "B0" and e.status != "done"]
     assert cut and all(e.site_end_s < 30.0 + 5.0 for e in cut)  # abandoned before mission control's timeout
 
@@ -130,7 +131,9 @@ class Uav:
 
     def done(self, now_s, task_id, attempt):
         res = TaskResult(task_id, "done", 30.0, placement_error_m=0.01)
-        self.t.send(MISSION_CONTROL, encode(Result(self.name, res, now_s, None, state="idle", attempt=attempt)))
+        self.t.send(
+            MISSION_CONTROL, encode(Result(self.name, res, now_s, None, state="idle", attempt=attempt))
+        )
 
 
 def test_a_lost_uav_heard_again_with_no_task_rejoins_and_its_late_completion_counts():
@@ -174,7 +177,10 @@ def test_a_handler_restarted_before_it_is_declared_lost_has_its_task_released():
         b1.beat(now)  # never says it holds B0
         mc.step(now)
         now += 0.5
-    assert [a.task.id for a in b1.assigned][:2] == ["B0", "B0"]  # released after 5.5 s, then given to it again
+    assert [a.task.id for a in b1.assigned][:2] == [
+        "B0",
+        "B0",
+    ]  # released after 5.5 s, then given to it again
     first = mc.history[0]
     assert first.status == "failed" and first.reason.startswith("uav dropped the task")
     assert mc.dispatcher.attempts.get("B0", 0) == 0

@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from masonry.blueprint import Blueprint
+from masonry.blueprint import Blueprint, Role
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.mission.report import MissionReport
 from masonry.mission.simulate import SimulatedMission
@@ -147,10 +147,11 @@ def random_chaos(
     bp = random_layout(rng, limits)
     the_plan = make_plan(bp)
     expected = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
-    per_role = {r: len(bp.uavs(r)) for r in ("brick", "adhesion")}
+    roles: tuple[Role, ...] = ("brick", "adhesion")
+    per_role = {r: len(bp.uavs(r)) for r in roles}
     # a rough makespan: each role's work over its UAVs (the faults happen while there is work)
-    work = {r: sum(expected[t.id] for t in the_plan.tasks if t.kind == r and not t.done) for r in per_role}
-    span_s = max(60.0, max(work[r] / max(1, per_role[r]) for r in per_role))
+    work = {r: sum(expected[t.id] for t in the_plan.tasks if t.kind == r and not t.done) for r in roles}
+    span_s = max([60.0] + [work[r] / max(1, per_role[r]) for r in roles])
     spec = []
     if rng.random() < 0.6:
         spec.append(f"grasp={rng.uniform(0.05, 0.3):.2f}")
@@ -323,7 +324,7 @@ def _unexplained(outcome: ChaosOutcome) -> list[str]:
     """Tasks left undone that the report does not explain (a role without UAVs, or failed attempts with reasons)."""
     report = outcome.report
     fleet_roles = {u.name: u.role for u in outcome.run.blueprint.fleet}
-    alive = {fleet_roles[u.name] for u in report.uavs if u.status == "ok"}
+    alive: set[str] = {fleet_roles[u.name] for u in report.uavs if u.status == "ok"}
     kinds = {t.id: t.kind for t in outcome.plan.tasks}
     failed = {a.task_id for a in report.attempts if a.status == "failed" and a.reason}
     stuck = {t.id for t in report.tasks if t.status == "stuck"}

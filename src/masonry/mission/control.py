@@ -102,6 +102,8 @@ class UavLink:
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
     taking_off: bool = False
+    #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
+    airspace_until_s: float | None = None
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -433,10 +435,8 @@ class MissionControl:
         if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
-        if isinstance(msg, Result) and self._late_result(msg, now_s):
+        if self._screened(link, msg, now_s):
             return
-        if link.lost and not self._readmit(link, msg, now_s):
-            return  # a UAV declared lost stays lost until it says it holds no task; its task went to another
         link.last_heard_s = now_s
         if isinstance(msg, ClearanceRequest):
             self._on_clearance_request(msg, now_s)
@@ -585,6 +585,13 @@ class MissionControl:
         self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
         log.warning("ignoring %s", detail)
 
+    def _screened(self, link: UavLink, msg: Any, now_s: float) -> bool:
+        """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
+        (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
+        if isinstance(msg, Result) and self._late_result(msg, now_s):
+            return True
+        return link.lost and not self._readmit(link, msg, now_s)
+
     def _late_result(self, msg: Result, now_s: float) -> bool:
         """A completion from a UAV its task was released from when it was declared lost: it did the task after
         all, its result delayed by the link. Taken if the task is not done (or stuck) since: done, and a UAV
@@ -592,7 +599,9 @@ class MissionControl:
         r = msg.result
         if r.status != "done" or r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck:
             return False
-        att = next((a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None)
+        att = next(
+            (a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None
+        )
         if att is None or att.attempt != msg.attempt or att.status != "failed" or att.reason != "uav lost":
             return False
         if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
@@ -652,11 +661,14 @@ class MissionControl:
 
     def _readmit(self, link: UavLink, msg: Any, now_s: float) -> bool:
         """A UAV declared lost for its silence is heard again: back in the mission if its heartbeat says it holds
-        no task and is in service (a radio that came back after its task was given away, a handler restarted);
+        no task and is in service (a radio that came back after its task was given away, a handler restarted),
+        holding its pad, or the column where it hovers, in the airspace (``ColumnClearance.rejoined``);
         anything else it sends stays ignored (a late result of a task that went to another UAV)."""
         if link.status != "lost" or not isinstance(msg, Heartbeat) or msg.task_id is not None:
             return False
         if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
+            return False
+        if not self.columns.rejoined(link.spec.name, msg.position_m):
             return False
         if not self.dispatcher.readmit_uav(link.spec.name):
             return False
@@ -672,6 +684,10 @@ class MissionControl:
 
     def _check_heartbeats(self, now_s: float) -> None:
         for name, link in self.uavs.items():
+            if link.airspace_until_s is not None and (not link.lost or now_s >= link.airspace_until_s):
+                if link.lost:
+                    self.columns.release(name)  # not heard again: it fell, or landed where it was
+                link.airspace_until_s = None
             if link.lost or link.last_heard_s is None:
                 continue
             if now_s - link.last_heard_s > self.heartbeat_timeout_s:
@@ -684,7 +700,12 @@ class MissionControl:
         link.lost = True
         link.lost_at_s = now_s
         link.status = status
-        self.columns.release(name)  # a lost or retired UAV is on the ground (or fell): its column is free
+        if status == "lost" and self.columns.volumes(name):
+            # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
+            # mission control is silent): that stays reserved until it is heard again, or rejoin_timeout_s
+            link.airspace_until_s = now_s + self.rejoin_timeout_s
+        else:
+            self.columns.release(name)  # retired (on the ground) or fell: its column is free
         if self.sites.left(name, now_s):
             self.columns.touch()
         released = self.dispatcher.remove_uav(name)

@@ -65,6 +65,10 @@ OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
 
+#: Mission control silent this long (mission seconds) is not coming back: a UAV hovering for its clearance
+#: flies home and lands without one (docs/mission.md, "Heartbeats and time").
+LAST_RESORT_S = 30.0
+
 #: States in which a task's work is done or being finished on the wall (the brick released, the segment sprayed):
 #: an abort there would report failed a task that is done, so it is let finish (docs/mission.md).
 FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
@@ -266,15 +270,17 @@ class UavHandler(MissionLink, ClearanceLink):
 
         The first call for a site sends the request (again every heartbeat period while unanswered); the answer
         is None until mission control's has come, then the latest one (``granted`` turns true when the column
-        is given). Without mission control (never heard, or silent past the timeout) there is nobody to ask:
-        granted, no layer, so the UAV can finish its task and land (docs/safety.md).
+        is given). Mission control silent (a link down) is asked again every heartbeat period: the UAV hovers
+        where it stopped, its task abandoned, until mission control answers. Without mission control (never
+        heard, or silent for ``LAST_RESORT_S``) there is nobody to ask: granted, no layer, so the UAV can land.
         """
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         col = self._column
         same = col is not None and abs(col[0] - site[0]) < 1e-3 and abs(col[1] - site[1]) < 1e-3
         if same and self._column_granted:
             return self._column_answer
-        if self.mission_control_lost:
+        if self._last_mc_s is None or self.now_s - self._last_mc_s > LAST_RESORT_S:
+            # nobody to ask: never heard (no mission), or silent so long it is not coming back
             return Clearance(MISSION_CONTROL, self.name, site, 0.0, self.now_s, True, None, None)
         if not same:
             if col is not None and self._column_granted:
@@ -429,7 +435,9 @@ class UavHandler(MissionLink, ClearanceLink):
         ):
             # mission control has declared this UAV lost by now (the same timeout) and given its task to another
             # UAV, or it has crashed and a resumed one flies the task again: carrying on would do it twice
-            self._recall = f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
+            self._recall = (
+                f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
+            )
             log.warning("%s: %s: abandoning its task, flying home", self.name, self._recall)
         if self._recall is not None:
             self._apply_recall(self._recall)
@@ -480,7 +488,9 @@ class UavHandler(MissionLink, ClearanceLink):
                 # mission control's heartbeats stopped around the completion: the link was down, the result may
                 # be lost. Said again: mission control takes it late if the task was released from this UAV
                 # and is not done since, and ignores it if it had it (docs/mission.md, "Heartbeats and time")
-                log.info("%s: %s done while the link was down: reported again", self.name, sent.result.task_id)
+                log.info(
+                    "%s: %s done while the link was down: reported again", self.name, sent.result.task_id
+                )
                 self._send(sent)
         if isinstance(msg, Assign):
             if msg.uav != self.name:
