@@ -175,6 +175,9 @@ class UavHandler(MissionLink, ClearanceLink):
         self._column_checked_s = -1e18
         self.clearance_requests = 0
         self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
+        self._swallow: str | None = (
+            None  # a task dropped (mission control silent): its machine's report is not sent
+        )
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -362,6 +365,9 @@ class UavHandler(MissionLink, ClearanceLink):
 
     def report_result(self, result: TaskResult) -> None:
         cur = self._current
+        if self._swallow == result.task_id and (cur is None or cur.task_id != result.task_id):
+            self._swallow = None  # the failure of a task dropped when mission control fell silent: sent then
+            return
         if cur is not None and cur.task_id == result.task_id:
             cur.end_s = self.now_s
             cur.status = result.status
@@ -468,8 +474,31 @@ class UavHandler(MissionLink, ClearanceLink):
             pass  # the work is on the wall: the machine finishes and reports it done, then nothing is left
         elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
             self._current.abandoned_s = self.now_s
+            if reason.startswith(MISSION_CONTROL_LOST_REASON):
+                self._drop_current(reason)
             model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
             self._recall = None
+
+    def _drop_current(self, reason: str) -> None:
+        """Off the task now, cut off from mission control: the attempt ends here and is reported failed, so the
+        heartbeats say this UAV holds no task (mission control takes it back when it hears them) while the machine
+        puts the brick back or heads home; the machine's own report of that failure is not sent again."""
+        cur = self._current
+        assert cur is not None
+        cur.end_s, cur.status, cur.reason = self.now_s, "failed", reason
+        self._current = None
+        self._swallow = cur.task_id
+        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        self._send(
+            Result(
+                self.name,
+                TaskResult(cur.task_id, "failed", 0.0, reason=reason),
+                self.now_s,
+                self._where(),
+                state=state,
+                attempt=cur.attempt,
+            )
+        )
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
