@@ -59,6 +59,10 @@ MISSION_CONTROL_LOST_REASON = "mission control lost"
 #: ... and with this when mission control released it because its UAV's heartbeats said it held no task (its
 #: handler restarted, the assignment forgotten).
 TASK_DROPPED_REASON = "uav dropped the task"
+#: The machines' states in which a task's work is done or being finished on the wall (the brick released, the
+#: segment sprayed): an abort there would report failed a task that is done, so a recall or a lost link lets it
+#: finish, and mission control gives a UAV silent in one of them longer before it declares it lost.
+FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
 #: The reasons of a failure that costs its task no attempt.
 UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON, MISSION_CONTROL_LOST_REASON, TASK_DROPPED_REASON)
 

@@ -55,7 +55,7 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
+from masonry.ports import FINISHING_STATES, RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -68,6 +68,9 @@ OUT_OF_SERVICE_STATE = "halted"
 
 #: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
 LANDED_STATE = "idle"
+#: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
+#: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
+MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
 
 
 @dataclass
@@ -690,7 +693,12 @@ class MissionControl:
                 link.airspace_until_s = None
             if link.lost or link.last_heard_s is None:
                 continue
-            if now_s - link.last_heard_s > self.heartbeat_timeout_s:
+            timeout_s = self.heartbeat_timeout_s
+            if link.state in MAY_FINISH_STATES and self.dispatcher.task_of(name) is not None:
+                # its work is (or was about to be) on the wall, and it finishes it even cut off: its completion
+                # may come late, and a conflicting task given out now would work beside it
+                timeout_s += self.rejoin_timeout_s
+            if now_s - link.last_heard_s > timeout_s:
                 log.warning("UAV %s silent for %.1f s: lost", name, now_s - link.last_heard_s)
                 self._lose(name, now_s)
 

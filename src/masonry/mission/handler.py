@@ -56,7 +56,13 @@ from masonry.mission.messages import (
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import MISSION_CONTROL_LOST_REASON, ClearanceLink, MissionLink, TaskResult
+from masonry.ports import (
+    FINISHING_STATES,
+    MISSION_CONTROL_LOST_REASON,
+    ClearanceLink,
+    MissionLink,
+    TaskResult,
+)
 
 log = logging.getLogger(__name__)
 
@@ -68,10 +74,6 @@ Vec3 = tuple[float, float, float]
 #: Mission control silent this long (mission seconds) is not coming back: a UAV hovering for its clearance
 #: flies home and lands without one (docs/mission.md, "Heartbeats and time").
 LAST_RESORT_S = 30.0
-
-#: States in which a task's work is done or being finished on the wall (the brick released, the segment sprayed):
-#: an abort there would report failed a task that is done, so it is let finish (docs/mission.md).
-FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
