@@ -29,7 +29,7 @@ from masonry.mission.chaos import check_chaos, fly_chaos, random_chaos
 def campaign(runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bool) -> dict[str, object]:
     injected: Counter[str] = Counter()
     kinds: Counter[str] = Counter()
-    completed = lost_tasks = failed_runs = segments = 0
+    completed = lost_tasks = left = failed_runs = segments = 0
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as work:
         for seed in range(first, first + runs):
@@ -40,16 +40,16 @@ def campaign(runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bo
             segments += out.segments
             r = out.report
             completed += bool(r.completed)
-            roles = {u.role: 0 for u in run.blueprint.fleet}
-            for u in r.uavs:
-                if u.status == "ok":
-                    roles[u.role] += 1
-            if all(roles.values()):
-                lost_tasks += len(r.stuck)  # every role kept a UAV: a task left undone is lost
-            kinds.update(p.split(":")[0] for p in problems)
-            failed_runs += bool(problems)
-            if problems or verbose:
-                status = "completed" if r.completed else f"NOT completed (left: {', '.join(r.stuck)})"
+            # lost: left undone and not explained; left: undone, the report says why (attempts ran out, each
+            # with its UAV's reason, or the role lost every UAV)
+            lost_tasks += sum(p.startswith("unexplained") for p in problems)
+            left += len(r.stuck)
+            kinds.update(p.split(":")[0] for p in problems if not p.startswith("unexplained"))
+            failed_runs += any(not p.startswith("unexplained") for p in problems)
+            if problems or verbose or not r.completed:
+                why = {a.task_id: a.reason for a in r.attempts if a.status == "failed"}
+                left_why = ", ".join(f"{t} ({why.get(t) or 'its role has no UAV left'})" for t in r.stuck)
+                status = "completed" if r.completed else f"NOT completed, left: {left_why}"
                 print(f"{run.describe()}: {status}, {out.segments} segments")
                 for p in problems:
                     print(f"    {p}")
@@ -60,6 +60,7 @@ def campaign(runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bo
         "segments": segments,
         "completed": completed,
         "lost_tasks": lost_tasks,
+        "left": left,
         "problems": dict(kinds),
         "failed_runs": failed_runs,
         "wall_s": time.perf_counter() - t0,
@@ -81,15 +82,16 @@ def main() -> None:
     rows = [campaign(a.runs, a.first_seed, v, a.lose_a_role, a.verbose) for v in vehicles]
     print()
     print(
-        "| vehicle | runs | faults injected | mc stops | missions completed | tasks lost | runs with a violation |"
+        "| vehicle | runs | faults injected | mc stops | missions completed | tasks left, with why | "
+        "tasks lost | runs with a violation |"
     )
-    print("| --- | ---: | --- | ---: | ---: | ---: | ---: |")
+    print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |")
     for row in rows:
         inj = dict(row["injected"])  # type: ignore[call-overload]
         stops = inj.pop("mc-kill", 0)
         faults = ", ".join(f"{k} {v}" for k, v in sorted(inj.items()))
         print(
-            f"| {row['vehicle']} | {row['runs']} | {faults} | {stops} | {row['completed']} | "
+            f"| {row['vehicle']} | {row['runs']} | {faults} | {stops} | {row['completed']} | {row['left']} | "
             f"{row['lost_tasks']} | {row['failed_runs']} |"
         )
     for row in rows:
