@@ -48,7 +48,9 @@ def campaign(runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bo
             failed_runs += any(not p.startswith("unexplained") for p in problems)
             if problems or verbose or not r.completed:
                 why = {a.task_id: a.reason for a in r.attempts if a.status == "failed"}
-                left_why = ", ".join(f"{t} ({why.get(t) or 'its role has no UAV left'})" for t in r.stuck)
+                left_why = ", ".join(
+                    f"{t} ({why.get(t) or 'never started: a task before it was left'})" for t in r.stuck
+                )
                 status = "completed" if r.completed else f"NOT completed, left: {left_why}"
                 print(f"{run.describe()}: {status}, {out.segments} segments")
                 for p in problems:

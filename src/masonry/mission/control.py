@@ -639,13 +639,13 @@ class MissionControl:
         return True
 
     def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
-        """A UAV's heartbeat says it holds no task (none in hand, none queued) although its assignment went out
+        """A UAV's heartbeat says it is idle and holds no task (none in hand, none queued) although its assignment went out
         longer than the heartbeat timeout ago: it has forgotten it (its handler was restarted before it was
         declared lost). The task goes back to the pool without counting an attempt."""
         name = msg.sender
         tid = self.dispatcher.task_of(name)
-        if msg.task_id is not None or tid is None:
-            return
+        if msg.task_id is not None or tid is None or msg.state != LANDED_STATE:
+            return  # (only an idle machine: a UAV that names no task but is busy flying is not a fresh one)
         att = self._running.get(tid)
         if att is None or now_s - att.start_s <= self.heartbeat_timeout_s:
             return  # the assignment may still be on its way
