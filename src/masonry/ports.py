@@ -53,8 +53,18 @@ class CameraFrame:
 BATTERY_LOW_REASON = "battery low"
 #: ... and with this when the operator recalled the UAV (``masonry ctl recall``): not the task's fault either.
 RECALL_REASON = "recalled by the operator"
+#: ... and with this when the UAV abandoned it because mission control fell silent past the heartbeat timeout
+#: (mission control gives the task to another UAV meanwhile, or a resumed one flies it again).
+MISSION_CONTROL_LOST_REASON = "mission control lost"
+#: ... and with this when mission control released it because its UAV's heartbeats said it held no task (its
+#: handler restarted, the assignment forgotten).
+TASK_DROPPED_REASON = "uav dropped the task"
+#: The machines' states in which a task's work is done or being finished on the wall (the brick released, the
+#: segment sprayed): an abort there would report failed a task that is done, so a recall or a lost link lets it
+#: finish, and mission control gives a UAV silent in one of them longer before it declares it lost.
+FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
 #: The reasons of a failure that costs its task no attempt.
-UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON)
+UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON, MISSION_CONTROL_LOST_REASON, TASK_DROPPED_REASON)
 
 
 #: The phases a task attempt's time is split into (docs/mission.md, "Where the time goes"), in the order a task

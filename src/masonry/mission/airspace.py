@@ -415,6 +415,27 @@ class ColumnClearance:
         self._set_pad(uav)
         return True
 
+    def rejoined(self, uav: str, position_m: Vec3 | None) -> bool:
+        """``uav``, taken out of the mission (:meth:`release` with no site), is heard again at ``position_m``: on
+        its pad it holds the pad again and takes off like the others; in the air (it hovers where it stopped,
+        cut off, and asks for its flight home) it holds the column where it is, up to the transit altitude,
+        as after a take-off there, and asks from there. False: it is down away from its pad (not back yet);
+        with no position known it is taken back holding nothing."""
+        home = self._homes.get(uav)
+        if self.base_m is None or home is None or position_m is None:
+            return True
+        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
+        on_pad = math.hypot(x - home[0], y - home[1]) <= ON_PAD_XY_M
+        if z - home[2] <= ON_PAD_Z_M:
+            if not on_pad:
+                return False
+            u = self._uavs.get(uav)
+            if u is None or u.phase is not Phase.LANDED:
+                self._set_pad(uav)
+            return True
+        self._set_zone(uav, (x, y, home[2]), max(z, self._home_top_m()))
+        return True
+
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
         up asking for it; None: it is out of the mission (on the ground or fallen): everything is freed."""

@@ -56,7 +56,7 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
-from masonry.ports import UNCOUNTED_REASONS, PhaseTimes
+from masonry.ports import FINISHING_STATES, RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -69,6 +69,9 @@ OUT_OF_SERVICE_STATE = "halted"
 
 #: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
 LANDED_STATE = "idle"
+#: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
+#: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
+MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
 
 
 @dataclass
@@ -103,6 +106,8 @@ class UavLink:
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
     taking_off: bool = False
+    #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
+    airspace_until_s: float | None = None
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -121,6 +126,8 @@ class MissionEvents:
     errors: list[str] = field(default_factory=list)
     #: results not acted on, by reason: "not-assigned", "wrong-attempt", "too-short"
     ignored: dict[str, int] = field(default_factory=dict)
+    #: UAVs declared lost and heard again with no task (back in the mission)
+    rejoined: int = 0
 
 
 class MissionControl:
@@ -137,6 +144,8 @@ class MissionControl:
         heartbeat_period_s: how often mission control sends its heartbeat.
         heartbeat_timeout_s: a UAV silent for longer is declared lost.
         startup_timeout_s: how long to wait for the whole fleet before starting without the missing UAVs.
+        rejoin_timeout_s: how long a mission left without any UAV of a role waits, before it ends, for one of
+            them declared lost for its silence to be heard again and rejoin (default: ``startup_timeout_s``).
         column_radius_m: two site columns (UAVs below their transit layer) are never granted closer than
             this horizontally (the blueprint's clearance r_c is the natural value; 0 grants every request).
         layer_base_m, layer_spacing_m: transit layers handed out per flight, at ``layer_base_m + k *
@@ -178,6 +187,7 @@ class MissionControl:
         heartbeat_period_s: float = 1.0,
         heartbeat_timeout_s: float = 5.0,
         startup_timeout_s: float = 30.0,
+        rejoin_timeout_s: float | None = None,
         column_radius_m: float = 1.5,
         layer_base_m: float | None = None,
         layer_spacing_m: float = 1.1,
@@ -215,6 +225,7 @@ class MissionControl:
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
+        self.rejoin_timeout_s = startup_timeout_s if rejoin_timeout_s is None else rejoin_timeout_s
         self.dispatcher = make_dispatcher(
             plan,
             self.fleet,
@@ -331,8 +342,25 @@ class MissionControl:
 
     @property
     def over(self) -> bool:
-        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd."""
-        return self.finished or self.blocked or self.stall is not None or self.operator.aborted
+        """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd.
+
+        Blocked only for want of a UAV of a role whose last one fell silent less than ``startup_timeout_s`` ago
+        is not over yet (``rejoin_timeout_s``): it may come back (a radio out of range, a handler process restarted)
+        and rejoin.
+        """
+        blocked = self.blocked and not self._awaiting_rejoin()
+        return self.finished or blocked or self.stall is not None or self.operator.aborted
+
+    def _awaiting_rejoin(self) -> bool:
+        """A role has no UAV left, and one of its UAVs was declared lost for silence within ``rejoin_timeout_s``."""
+        live = {link.spec.role for link in self.uavs.values() if not link.lost}
+        return any(
+            link.status == "lost"
+            and link.spec.role not in live
+            and link.lost_at_s is not None
+            and self.now_s - link.lost_at_s <= self.rejoin_timeout_s
+            for link in self.uavs.values()
+        )
 
     @property
     def online(self) -> list[str]:
@@ -416,8 +444,8 @@ class MissionControl:
         if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
-        if link.lost:
-            return  # a UAV declared lost stays lost; its task has been given to another
+        if self._screened(link, msg, now_s):
+            return
         link.last_heard_s = now_s
         if isinstance(msg, ClearanceRequest):
             self._on_clearance_request(msg, now_s)
@@ -440,8 +468,10 @@ class MissionControl:
         if isinstance(msg, (Heartbeat, Progress)):
             if isinstance(msg, Progress):
                 self.events.progress += 1
-            elif msg.battery is not None:
-                link.battery = msg.battery
+            else:
+                if msg.battery is not None:
+                    link.battery = msg.battery
+                self._check_holds_task(msg, now_s)
             self._report(link, msg.state, msg.position_m)
             if self.sink is not None and self.uav_events:
                 self._emit_uav(now_s, link)
@@ -578,11 +608,117 @@ class MissionControl:
         self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
         log.warning("ignoring %s", detail)
 
+    def _screened(self, link: UavLink, msg: Any, now_s: float) -> bool:
+        """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
+        (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
+        if isinstance(msg, Result) and self._late_result(msg, now_s):
+            return True
+        return link.lost and not self._readmit(link, msg, now_s)
+
+    def _late_result(self, msg: Result, now_s: float) -> bool:
+        """A completion from a UAV its task was released from when it was declared lost: it did the task after
+        all, its result delayed by the link. Taken if the task is not done (or stuck) since: done, and a UAV
+        flying it again is recalled. True if taken."""
+        r = msg.result
+        if r.status != "done" or r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck:
+            return False
+        att = next(
+            (a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None
+        )
+        if att is None or att.attempt != msg.attempt or att.status != "failed" or att.reason != "uav lost":
+            return False
+        if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
+            return False  # assigned to it again meanwhile: an ordinary result
+        other = self.dispatcher.complete_late(r.task_id)
+        log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
+        self._results += 1
+        att.end_s = now_s
+        att.status = "done"
+        att.reason = None
+        att.placement_error_m = r.placement_error_m
+        att.coverage = r.coverage
+        att.phases = r.phases
+        if other is not None:
+            again = self._running.pop(r.task_id, None)
+            if again is not None:
+                again.end_s = now_s
+                again.status = "failed"
+                again.reason = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
+                if self.journal is not None:
+                    self.journal.record_failure(now_s, r.task_id, other, again.reason)
+            self.recall(other, now_s, f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}")
+        if self.journal is not None:
+            fields: dict[str, Any] = {}
+            if r.placement_error_m is not None:
+                fields["placement_error_m"] = r.placement_error_m
+            if r.coverage is not None:
+                fields["coverage"] = r.coverage
+            self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+        self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
+        self._dirty = True
+        return True
+
+    def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
+        """A UAV's heartbeat says it is idle and holds no task (none in hand, none queued) although its assignment went out
+        longer than the heartbeat timeout ago: it has forgotten it (its handler was restarted before it was
+        declared lost). The task goes back to the pool without counting an attempt."""
+        name = msg.sender
+        tid = self.dispatcher.task_of(name)
+        if msg.task_id is not None or tid is None or msg.state != LANDED_STATE:
+            return  # (only an idle machine: a UAV that names no task but is busy flying is not a fresh one)
+        att = self._running.get(tid)
+        if att is None or now_s - att.start_s <= self.heartbeat_timeout_s:
+            return  # the assignment may still be on its way
+        reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task {now_s - att.start_s:.1f} s after it)"
+        log.warning("%s: %s: released", name, reason)
+        del self._running[tid]
+        self._results += 1
+        att.end_s = now_s
+        att.status = "failed"
+        att.reason = reason
+        self.dispatcher.fail(tid, count=False)
+        if self.journal is not None:
+            self.journal.record_failure(now_s, tid, name, reason)
+        self._emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
+        self._dirty = True
+
+    def _readmit(self, link: UavLink, msg: Any, now_s: float) -> bool:
+        """A UAV declared lost for its silence is heard again: back in the mission if its heartbeat says it holds
+        no task and is in service (a radio that came back after its task was given away, a handler restarted),
+        holding its pad, or the column where it hovers, in the airspace (``ColumnClearance.rejoined``);
+        anything else it sends stays ignored (a late result of a task that went to another UAV)."""
+        if link.status != "lost" or not isinstance(msg, Heartbeat) or msg.task_id is not None:
+            return False
+        if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
+            return False
+        if not self.columns.rejoined(link.spec.name, msg.position_m):
+            return False
+        if not self.dispatcher.readmit_uav(link.spec.name):
+            return False
+        log.warning("UAV %s heard again (%s, no task): back in the mission", link.spec.name, msg.state or "-")
+        link.lost = False
+        link.lost_at_s = None
+        link.status = "ok"
+        link.taking_off = False
+        self.events.rejoined += 1
+        self._emit_uav(now_s, link)  # its status is "ok" again (a log, a live view)
+        self._dirty = True
+        return True
+
     def _check_heartbeats(self, now_s: float) -> None:
         for name, link in self.uavs.items():
+            if link.airspace_until_s is not None and (not link.lost or now_s >= link.airspace_until_s):
+                if link.lost:
+                    self.columns.release(name)  # not heard again: it fell, or landed where it was
+                link.airspace_until_s = None
             if link.lost or link.last_heard_s is None:
                 continue
-            if now_s - link.last_heard_s > self.heartbeat_timeout_s:
+            timeout_s = self.heartbeat_timeout_s
+            if link.state in MAY_FINISH_STATES and self.dispatcher.task_of(name) is not None:
+                # its work is (or was about to be) on the wall, and it finishes it even cut off: its completion
+                # may come late, and a conflicting task given out now would work beside it
+                timeout_s += self.rejoin_timeout_s
+            if now_s - link.last_heard_s > timeout_s:
                 log.warning("UAV %s silent for %.1f s: lost", name, now_s - link.last_heard_s)
                 self._lose(name, now_s)
 
@@ -592,7 +728,12 @@ class MissionControl:
         link.lost = True
         link.lost_at_s = now_s
         link.status = status
-        self.columns.release(name)  # a lost or retired UAV is on the ground (or fell): its column is free
+        if status == "lost" and self.columns.volumes(name):
+            # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
+            # mission control is silent): that stays reserved until it is heard again, or rejoin_timeout_s
+            link.airspace_until_s = now_s + self.rejoin_timeout_s
+        else:
+            self.columns.release(name)  # retired (on the ground) or fell: its column is free
         if self.sites.left(name, now_s):
             self.columns.touch()
         released = self.dispatcher.remove_uav(name)

@@ -26,8 +26,10 @@ control learns of it (a genuine mismatch: two blueprint files), unless that task
 then the refused message cannot be mission control's and the answer would cancel the real assignment.
 
 Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
-the timeout. The UAV then finishes the task in hand and takes no new one (none can come). A result sent
-while mission control is down is lost: a resumed mission control flies that task again (docs/mission.md).
+the timeout. A UAV that had heard it then abandons the task in hand and any queued (failed, reason ``mission
+control lost``: no attempt counted) and flies home: by then mission control has declared it lost and given the
+task to another UAV, or it has crashed and a resumed one flies the task again, so finishing it would do it
+twice. Heard again with no task, it is taken back into the mission (docs/mission.md).
 """
 
 from __future__ import annotations
@@ -54,7 +56,13 @@ from masonry.mission.messages import (
 )
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import ClearanceLink, MissionLink, TaskResult
+from masonry.ports import (
+    FINISHING_STATES,
+    MISSION_CONTROL_LOST_REASON,
+    ClearanceLink,
+    MissionLink,
+    TaskResult,
+)
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +70,10 @@ log = logging.getLogger(__name__)
 OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
+
+#: Mission control silent this long (mission seconds) is not coming back: a UAV hovering for its clearance
+#: flies home and lands without one (docs/mission.md, "Heartbeats and time").
+LAST_RESORT_S = 30.0
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
@@ -82,6 +94,9 @@ class Execution:
     status: str = "running"
     queued_s: float = 0.0
     reason: str | None = None  # why it failed, as the machine reported it
+    #: when the handler abandoned it (mission control silent): from then on the machine only puts the brick back
+    #: or flies home, away from the task's site, until it reports the failure
+    abandoned_s: float | None = None
 
 
 class UavHandler(MissionLink, ClearanceLink):
@@ -163,6 +178,10 @@ class UavHandler(MissionLink, ClearanceLink):
         self._column_to_m: Vec3 | None = None
         self._column_checked_s = -1e18
         self.clearance_requests = 0
+        self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
+        self._swallow: str | None = (
+            None  # a task dropped (mission control silent): its machine's report is not sent
+        )
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -172,6 +191,28 @@ class UavHandler(MissionLink, ClearanceLink):
     def mission_control_lost(self) -> bool:
         """Mission control has been silent past the heartbeat timeout (or never heard)."""
         return self._last_mc_s is None or self.now_s - self._last_mc_s > self.heartbeat_timeout_s
+
+    def _resend_unheard(self, now_s: float) -> None:
+        """While mission control is silent since before the last completion was sent, say the completion again
+        with every heartbeat, ahead of it: the link may be down, and the first thing mission control hears
+        when it is back is then the completion, before the heartbeat that takes this UAV back (a task declared
+        released and given to it again would be flown twice)."""
+        if self._unheard is None:
+            return
+        sent, sent_s = self._unheard
+        last = self._last_mc_s
+        if last is not None and last <= sent_s and now_s - last > 1.5 * self.heartbeat_period_s:
+            self._send(sent)
+
+    def _mission_control_gone(self) -> bool:
+        """Mission control was heard, then fell silent long enough that it may declare this UAV lost soon (never
+        heard: nothing was assigned).
+
+        Two heartbeat periods before the timeout: mission control may have last heard this UAV up to a period
+        before this UAV last heard it, and it must not give the task to another while this UAV is still on it.
+        """
+        patience_s = max(self.heartbeat_period_s, self.heartbeat_timeout_s - 2.0 * self.heartbeat_period_s)
+        return self._last_mc_s is not None and self.now_s - self._last_mc_s > patience_s
 
     @property
     def mission_control_heard_s(self) -> float | None:
@@ -237,15 +278,17 @@ class UavHandler(MissionLink, ClearanceLink):
 
         The first call for a site sends the request (again every heartbeat period while unanswered); the answer
         is None until mission control's has come, then the latest one (``granted`` turns true when the column
-        is given). Without mission control (never heard, or silent past the timeout) there is nobody to ask:
-        granted, no layer, so the UAV can finish its task and land (docs/safety.md).
+        is given). Mission control silent (a link down) is asked again every heartbeat period: the UAV hovers
+        where it stopped, its task abandoned, until mission control answers. Without mission control (never
+        heard, or silent for ``LAST_RESORT_S``) there is nobody to ask: granted, no layer, so the UAV can land.
         """
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         col = self._column
         same = col is not None and abs(col[0] - site[0]) < 1e-3 and abs(col[1] - site[1]) < 1e-3
         if same and self._column_granted and not self._column_stale:
             return self._column_answer
-        if self.mission_control_lost:
+        if self._last_mc_s is None or self.now_s - self._last_mc_s > LAST_RESORT_S:
+            # nobody to ask: never heard (no mission), or silent so long it is not coming back
             return Clearance(MISSION_CONTROL, self.name, site, 0.0, self.now_s, True, None, None)
         if not same:
             if col is not None and self._column_granted:
@@ -334,6 +377,9 @@ class UavHandler(MissionLink, ClearanceLink):
 
     def report_result(self, result: TaskResult) -> None:
         cur = self._current
+        if self._swallow == result.task_id and (cur is None or cur.task_id != result.task_id):
+            self._swallow = None  # the failure of a task dropped when mission control fell silent: sent then
+            return
         if cur is not None and cur.task_id == result.task_id:
             cur.end_s = self.now_s
             cur.status = result.status
@@ -358,7 +404,10 @@ class UavHandler(MissionLink, ClearanceLink):
                 state or "-",
                 result.reason or "no reason given",
             )
-        self._send(Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt))
+        sent = Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt)
+        self._send(sent)
+        if result.status == "done":
+            self._unheard = (sent, self.now_s)  # said again if the link turns out to have been down (_handle)
         if self._after_result is not None:
             self._after_result()
 
@@ -376,6 +425,7 @@ class UavHandler(MissionLink, ClearanceLink):
             self._handle(raw, now_s)
         if self._last_sent_hb_s is None or now_s - self._last_sent_hb_s >= self.heartbeat_period_s:
             self._last_sent_hb_s = now_s
+            self._resend_unheard(now_s)
             cur = self._current
             state = str(getattr(self.model, "state", "")) if self.model is not None else ""
             self._send(
@@ -383,7 +433,9 @@ class UavHandler(MissionLink, ClearanceLink):
                     self.name,
                     now_s,
                     state=state,
-                    task_id=cur.task_id if cur else None,
+                    # the task in hand, or the one queued for it (mission control releases a task its UAV's
+                    # heartbeats say it does not hold: a handler restarted)
+                    task_id=cur.task_id if cur else (self._queue[0][0].id if self._queue else None),
                     position_m=self._where(),
                     battery=None
                     if self._report_battery is None
@@ -392,6 +444,19 @@ class UavHandler(MissionLink, ClearanceLink):
             )
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
+        cur = self._current
+        if (
+            self._recall is None
+            and self.busy
+            and (cur is None or cur.abandoned_s is None)
+            and self._mission_control_gone()
+        ):
+            # mission control has declared this UAV lost by now (the same timeout) and given its task to another
+            # UAV, or it has crashed and a resumed one flies the task again: carrying on would do it twice
+            self._recall = (
+                f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
+            )
+            log.warning("%s: %s: abandoning its task, flying home", self.name, self._recall)
         if self._recall is not None:
             self._apply_recall(self._recall)
         model = self.model
@@ -417,9 +482,35 @@ class UavHandler(MissionLink, ClearanceLink):
         model = self.model
         if self._current is None:
             self._recall = None
+        elif state in FINISHING_STATES:
+            pass  # the work is on the wall: the machine finishes and reports it done, then nothing is left
         elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
+            self._current.abandoned_s = self.now_s
+            if reason.startswith(MISSION_CONTROL_LOST_REASON):
+                self._drop_current(reason)
             model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
             self._recall = None
+
+    def _drop_current(self, reason: str) -> None:
+        """Off the task now, cut off from mission control: the attempt ends here and is reported failed, so the
+        heartbeats say this UAV holds no task (mission control takes it back when it hears them) while the machine
+        puts the brick back or heads home; the machine's own report of that failure is not sent again."""
+        cur = self._current
+        assert cur is not None
+        cur.end_s, cur.status, cur.reason = self.now_s, "failed", reason
+        self._current = None
+        self._swallow = cur.task_id
+        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        self._send(
+            Result(
+                self.name,
+                TaskResult(cur.task_id, "failed", 0.0, reason=reason),
+                self.now_s,
+                self._where(),
+                state=state,
+                attempt=cur.attempt,
+            )
+        )
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -430,7 +521,18 @@ class UavHandler(MissionLink, ClearanceLink):
             return
         if msg.sender != MISSION_CONTROL:
             return
-        self._last_mc_s = now_s
+        before, self._last_mc_s = self._last_mc_s, now_s
+        if self._unheard is not None:
+            sent, sent_s = self._unheard
+            self._unheard = None
+            if before is not None and before <= sent_s and now_s - before > 1.5 * self.heartbeat_period_s:
+                # mission control's heartbeats stopped around the completion: the link was down, the result may
+                # be lost. Said again: mission control takes it late if the task was released from this UAV
+                # and is not done since, and ignores it if it had it (docs/mission.md, "Heartbeats and time")
+                log.info(
+                    "%s: %s done while the link was down: reported again", self.name, sent.result.task_id
+                )
+                self._send(sent)
         if isinstance(msg, Assign):
             if msg.uav != self.name:
                 self.rejected += 1

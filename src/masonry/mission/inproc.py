@@ -26,6 +26,10 @@ class InprocBus:
         """Simulate a dead link: from now on nothing reaches ``name`` and nothing it sends is delivered."""
         self._cut.add(name)
 
+    def restore(self, name: str) -> None:
+        """The link of ``name`` works again (after :meth:`cut`): a radio that dropped out for a while."""
+        self._cut.discard(name)
+
     def _deliver(self, sender: str, to: str, payload: bytes) -> None:
         if sender in self._cut or to in self._cut:
             return

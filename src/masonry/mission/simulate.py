@@ -518,6 +518,8 @@ class SimulatedMission:
                 durations_s=priority_durations_s(expected_s),
                 heartbeat_timeout_s=heartbeat_timeout_s,
                 startup_timeout_s=max(10 * dt_s, 1.0),
+                # a radio that drops out for a few seconds: its UAV, the last of its role, may come back
+                rejoin_timeout_s=2.0 * heartbeat_timeout_s,
                 column_radius_m=blueprint.clearance_m if separation else 0.0,
                 layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
                 layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,

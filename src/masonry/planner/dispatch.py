@@ -467,6 +467,34 @@ class Dispatcher:
             if prereqs[d] == 0:
                 self._maybe_available(d)
 
+    def complete_late(self, task_id: str) -> str | None:
+        """Mark a task done that was released from a UAV declared lost, which did it after all (its result came
+        late): in progress with another UAV (freed: it must drop it) or back in the pool.
+
+        Returns:
+            The UAV that was on it now (to be told to drop it), or None.
+
+        Raises:
+            PlanningError: the task is unknown, done already or stuck.
+        """
+        i = self._index.get(task_id)
+        if i is None:
+            raise PlanningError(f"cannot complete unknown task {task_id!r}")
+        if self._status[i] not in (_RUNNING, _PENDING):
+            raise PlanningError(f"cannot complete task {task_id} late: it is done or stuck")
+        uav = self._stop(i) if self._status[i] == _RUNNING else None
+        self._unavailable(i)
+        self._ready[self._role[i]].pop(i, None)
+        self._status[i] = _DONE
+        self._done.add(task_id)
+        self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
+        prereqs = self._prereqs
+        for d in self._dependents[i]:
+            prereqs[d] -= 1
+            if prereqs[d] == 0:
+                self._maybe_available(d)
+        return uav
+
     def fail(self, task_id: str, *, count: bool = True) -> bool:
         """Count a failed attempt of an in-progress task and free its UAV.
 
@@ -515,6 +543,23 @@ class Dispatcher:
         self._stop(i)
         self._maybe_available(i)
         return self._ids[i]
+
+    def readmit_uav(self, name: str) -> bool:
+        """Take back a UAV removed as lost (it is heard again, with no task): it may be assigned tasks again.
+
+        Returns:
+            True if it was out of the mission and is back, False if it was in it already.
+
+        Raises:
+            PlanningError: the UAV is not in the fleet.
+        """
+        if name not in self._fleet:
+            raise PlanningError(f"cannot readmit unknown UAV {name!r}")
+        if name in self._live:
+            return False
+        self._live.add(name)
+        self._live_count[self._fleet[name].role] += 1
+        return True
 
     def restore(self, done_ids: Iterable[str], attempts: Mapping[str, int]) -> None:
         """Resume from a journal: mark ``done_ids`` complete and set the attempt counts (see JournalState).
