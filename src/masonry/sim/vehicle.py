@@ -134,6 +134,7 @@ class SimVehicle:
         self._tel: tuple[bool, Telemetry] | None = None
         self._lag_k = self._yaw_k = 0.0
         self._shaper = Shaper(self.config.shaping) if self.config.shaping is not None else None
+        self._liftoff_s = -math.inf  # when it last left the ground (the take-off's thrust ramp)
 
     # ------------------------------------------------------------------ state
     @property
@@ -493,8 +494,11 @@ class SimVehicle:
         max_descent = cfg.max_descent_mps
         if not tz > -max_descent:  # min(max_climb, max(-max_descent, tz))
             tz = -max_descent
-        if cfg.max_climb_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
-            tz = cfg.max_climb_mps
+        max_climb = cfg.max_climb_mps
+        if cfg.takeoff_ramp_s > 0.0 and tz > 0.0:
+            max_climb = self._ramped_climb(max_climb)
+        if max_climb < tz:  # noqa: PLR1730 (no min/max call: hot loop)
+            tz = max_climb
 
         # First-order lag, then acceleration limits.
         k = self._lag_k
@@ -544,6 +548,13 @@ class SimVehicle:
             self._contact_s = 0.0
             if self.on_ground and z > ground + 0.01:
                 self.on_ground = False
+                self._liftoff_s = self._t
+
+    def _ramped_climb(self, max_climb: float) -> float:
+        """The climb speed the take-off's thrust ramp allows now (``takeoff_ramp_s`` after leaving the ground)."""
+        since = self._t - self._liftoff_s if not self.on_ground else 0.0
+        ramp = self.config.takeoff_ramp_s
+        return max_climb if since >= ramp else max_climb * (0.1 + 0.9 * since / ramp)
 
     def _gust(self, dt_s: float) -> tuple[float, float]:
         """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag."""
