@@ -467,8 +467,8 @@ class MavlinkFlightController(MavlinkLink):
     def measure_ground(self, ground_m: Vec3, samples: int = 10, timeout_s: float = 2.0) -> float | None:
         """Measure the EKF's height on the ground and shift ``frame`` so that the ground reads ``ground_m[2]``.
 
-        Averages ``samples`` LOCAL_POSITION_NED reports (waiting at most ``timeout_s`` of local time), disarmed
-        on the ground and within 1 m of ``ground_m`` horizontally; otherwise the frame stays as it is.
+        Averages the last ``samples`` LOCAL_POSITION_NED reports received disarmed (waiting at most ``timeout_s``
+        of local time for them), on the ground and within 1 m of ``ground_m`` horizontally; otherwise the frame stays as it is.
 
         Returns:
             The EKF's ground height (local up, m) now in use, or None if it could not be measured.
@@ -476,15 +476,13 @@ class MavlinkFlightController(MavlinkLink):
         tel = self.telemetry()
         if tel.armed or not tel.on_ground or math.dist(tel.position_m[:2], ground_m[:2]) > 1.0:
             return self.ground_offset_m
-        heights: list[float] = []
-        last_s = -math.inf
+        # the receiver keeps the heights reported while disarmed: usually there are enough already (no wait)
         deadline = self._monotonic() + timeout_s
-        while len(heights) < samples and self._monotonic() < deadline:
+        while True:
             with self._lock:
-                p, t = self._state.position_ned, self._state.position_time_s
-            if p is not None and t > last_s:
-                heights.append(-p[2])
-                last_s = t
+                heights = list(self._state.ground_heights)[-samples:]
+            if len(heights) >= samples or self._monotonic() >= deadline:
+                break
             self._stop.wait(0.01)
         if len(heights) < 3:
             self.warnings.append(f"ground height not measured: {len(heights)} position reports in {timeout_s} s")
