@@ -90,7 +90,9 @@ class _Peer:
     stop: threading.Event = field(default_factory=threading.Event)
 
     def run(self) -> None:
-        mav = mavutil_module().mavlink_connection(f"udpout:127.0.0.1:{self.port}", source_system=1, source_component=1)
+        mav = mavutil_module().mavlink_connection(
+            f"udpout:127.0.0.1:{self.port}", source_system=1, source_component=1
+        )
         t0, next_beat = time.monotonic(), 0.0
         try:
             while not self.stop.is_set():
@@ -136,7 +138,9 @@ def test_px4_flag_sequence_through_a_scripted_peer() -> None:
         peer.armed, peer.landed_state = True, 2  # airborne (IN_AIR), EKF2 no longer at rest
         for flags in PX4_FLYING:
             peer.flags = flags
-            wait_until(lambda f=flags: fc._state.estimate_flags == f and fc._state.armed, 3.0, f"flags {flags}")
+            wait_until(
+                lambda f=flags: fc._state.estimate_flags == f and fc._state.armed, 3.0, f"flags {flags}"
+            )
             assert fc.telemetry().position_ok
         peer.flags = PX4_GROUND  # constant-position mode in flight: a fake position
         wait_until(lambda: not fc.telemetry().position_ok, 3.0, "the estimate refused in flight")
@@ -146,7 +150,9 @@ def test_px4_flag_sequence_through_a_scripted_peer() -> None:
 def test_ardupilot_flag_sequence_through_a_scripted_peer() -> None:
     with scripted(3, ARDUPILOT_CONVERGING) as (peer, fc):
         assert fc.autopilot == "ardupilot"
-        with pytest.raises(CommandRejected, match=r"0x00a7: missing relative horizontal position; constant-pos"):
+        with pytest.raises(
+            CommandRejected, match=r"0x00a7: missing relative horizontal position; constant-pos"
+        ):
             fc.wait_for_estimate(0.5)
         peer.flags = ARDUPILOT_READY
         fc.wait_for_estimate(3.0)
@@ -252,7 +258,9 @@ def test_the_px4_vehicle_ramps_its_thrust_on_take_off() -> None:
 
 
 @contextmanager
-def px4_sitl(home_m=(1.0, 2.0, 0.0), time_scale: float = 5.0) -> Iterator[tuple[MavlinkSitl, MavlinkFlightController]]:
+def px4_sitl(
+    home_m=(1.0, 2.0, 0.0), time_scale: float = 5.0
+) -> Iterator[tuple[MavlinkSitl, MavlinkFlightController]]:
     port = free_udp_port()
     sitl = MavlinkSitl(port, time_scale=time_scale, home_m=home_m,
                        config=SitlConfig(**SITL_PRESETS["px4"], heartbeat_hz=4.0), seed=1)  # fmt: skip
@@ -305,7 +313,9 @@ def test_sitl_vehicle_option_is_checked() -> None:
 @pytest.mark.slow
 def test_a_brick_task_against_the_px4_sitl_places_within_2_cm() -> None:
     port = free_udp_port()
-    sitl, _ = build_sitl(port=port, uav="brick", blueprint=Path(CASE_STUDY), time_scale=4.0, vehicle="px4", seed=1)
+    sitl, _ = build_sitl(
+        port=port, uav="brick", blueprint=Path(CASE_STUDY), time_scale=4.0, vehicle="px4", seed=1
+    )
     sitl.start()
     try:
         res = runner.invoke(app, [

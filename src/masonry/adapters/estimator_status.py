@@ -85,7 +85,12 @@ PX4_EKF2 = EstimatorSemantics(
     "ESTIMATOR_STATUS",
     bad=1024 | 2048,
     bad_in_flight=128,
-    names={**_COMMON_NAMES, 128: "constant-position mode in flight", 1024: "GPS glitch", 2048: "accelerometer error"},
+    names={
+        **_COMMON_NAMES,
+        128: "constant-position mode in flight",
+        1024: "GPS glitch",
+        2048: "accelerometer error",
+    },
 )
 
 

@@ -394,9 +394,13 @@ class MavlinkFlightController(MavlinkLink):
             ) + describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
         if not streaming:
             return "no local position yet (LOCAL_POSITION_NED not streaming)" + (
-                "" if flags is None else f", {describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)}"
+                ""
+                if flags is None
+                else f", {describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)}"
             )
-        return "usable" if flags is None else describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
+        return (
+            "usable" if flags is None else describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
+        )
 
     def wait_for_estimate(
         self,
@@ -485,7 +489,9 @@ class MavlinkFlightController(MavlinkLink):
                 break
             self._stop.wait(0.01)
         if len(heights) < 3:
-            self.warnings.append(f"ground height not measured: {len(heights)} position reports in {timeout_s} s")
+            self.warnings.append(
+                f"ground height not measured: {len(heights)} position reports in {timeout_s} s"
+            )
             return self.ground_offset_m
         up = sum(heights) / len(heights)
         ox, oy, _ = self.frame.offset_m

@@ -61,7 +61,9 @@ def estimate_usable(flags: int, autopilot: str | None = "ardupilot", *, on_groun
     return flags_usable(flags, autopilot, on_ground=on_ground)
 
 
-def describe_estimate_flags(flags: int, autopilot: str | None = "ardupilot", *, on_ground: bool = True) -> str:
+def describe_estimate_flags(
+    flags: int, autopilot: str | None = "ardupilot", *, on_ground: bool = True
+) -> str:
     """What ``flags`` lack for flight, in words: ``EKF flags 0x0081: missing horizontal velocity, ...``."""
     return describe_flags(flags, autopilot, on_ground=on_ground)
 

@@ -416,7 +416,9 @@ def _identify(
         vehicle=vehicle,
     )  # fmt: skip
     config = UavConfig.from_spec(
-        spec, cruise_altitude_m=bp.cruise_altitude_m, **hardware.uav_settings(tuning_preset(vehicle, adapters))
+        spec,
+        cruise_altitude_m=bp.cruise_altitude_m,
+        **hardware.uav_settings(tuning_preset(vehicle, adapters)),
     )
     try:
         adapters.fc.connect()
@@ -625,7 +627,9 @@ def _fly_mission(
             adapters=adapters,
             key=key,
             zenoh_config=zenoh_config,
-            uav_settings=hardware.uav_settings(tuning_preset(vehicle, adapters)) if hardware is not None else None,
+            uav_settings=hardware.uav_settings(tuning_preset(vehicle, adapters))
+            if hardware is not None
+            else None,
             events_sink=mission_log,
             vehicle=vehicle,
         )

@@ -116,7 +116,9 @@ def sitl(
         0, "--seed", help=help_text("sitl", "--seed", "Seed of the motion-capture noise.")
     ),
     autopilot: str | None = typer.Option(
-        None, "--autopilot", help="ardupilot (GUIDED) | px4 (OFFBOARD); default: the --vehicle's, else ardupilot."
+        None,
+        "--autopilot",
+        help="ardupilot (GUIDED) | px4 (OFFBOARD); default: the --vehicle's, else ardupilot.",
     ),
     vehicle: str = typer.Option(
         "ideal",

@@ -69,7 +69,9 @@ class Navigator:
         self.legs: list[Leg] = []
         self.legs_from_rest = False
         self.settling_since_s: float | None = None
-        self._shift_m: tuple[float, float, float] | None = None  # added to the leg's reference (:meth:`shift`)
+        self._shift_m: tuple[float, float, float] | None = (
+            None  # added to the leg's reference (:meth:`shift`)
+        )
 
     # -- what to fly -------------------------------------------------------------------------------------
     def shift(self, delta_m: Sequence[float]) -> None:

@@ -408,6 +408,8 @@ class SimVehicle:
             tx, ty, tz, tyaw = self._sp
         else:
             tx, ty, tz = self._hold_velocity()
+        if cfg.takeoff_ramp_s > 0.0 and tz > 0.0:
+            tz = self._ramped_climb(tz)
         shaper = self._shaper
         if shaper is not None:
             tx, ty, tz = shaper.shape(t, tx, ty, tz, dt_s)
@@ -494,11 +496,8 @@ class SimVehicle:
         max_descent = cfg.max_descent_mps
         if not tz > -max_descent:  # min(max_climb, max(-max_descent, tz))
             tz = -max_descent
-        max_climb = cfg.max_climb_mps
-        if cfg.takeoff_ramp_s > 0.0 and tz > 0.0:
-            max_climb = self._ramped_climb(max_climb)
-        if max_climb < tz:  # noqa: PLR1730 (no min/max call: hot loop)
-            tz = max_climb
+        if cfg.max_climb_mps < tz:  # noqa: PLR1730 (no min/max call: hot loop)
+            tz = cfg.max_climb_mps
 
         # First-order lag, then acceleration limits.
         k = self._lag_k
@@ -550,11 +549,14 @@ class SimVehicle:
                 self.on_ground = False
                 self._liftoff_s = self._t
 
-    def _ramped_climb(self, max_climb: float) -> float:
-        """The climb speed the take-off's thrust ramp allows now (``takeoff_ramp_s`` after leaving the ground)."""
+    def _ramped_climb(self, tz: float) -> float:
+        """The climb ``tz`` (m/s) within what the take-off's thrust ramp allows now (``takeoff_ramp_s`` after
+        leaving the ground: from a tenth of ``max_climb_mps`` to all of it)."""
         since = self._t - self._liftoff_s if not self.on_ground else 0.0
-        ramp = self.config.takeoff_ramp_s
-        return max_climb if since >= ramp else max_climb * (0.1 + 0.9 * since / ramp)
+        cfg = self.config
+        if since >= cfg.takeoff_ramp_s:
+            return tz
+        return min(tz, cfg.max_climb_mps * (0.1 + 0.9 * since / cfg.takeoff_ramp_s))
 
     def _gust(self, dt_s: float) -> tuple[float, float]:
         """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag."""

@@ -66,7 +66,9 @@ class VehicleConfig:
             if not (math.isfinite(value) and value > 0):
                 raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
         if not (math.isfinite(self.takeoff_ramp_s) and self.takeoff_ramp_s >= 0):
-            raise InvalidArgument(f"VehicleConfig.takeoff_ramp_s must be finite and >= 0, got {self.takeoff_ramp_s!r}")
+            raise InvalidArgument(
+                f"VehicleConfig.takeoff_ramp_s must be finite and >= 0, got {self.takeoff_ramp_s!r}"
+            )
 
 
 #: ``--vehicle`` presets. ``ideal``: the first-order 0.3 s lag with motion-capture noise the project was tuned on.
