@@ -201,6 +201,13 @@ def test_a_stalled_climb_and_a_slow_one_say_why() -> None:
     assert slow.step(99.0, 0.0, 0.0) == 0.0  # over: nothing more is commanded
 
 
+def test_a_velocity_setpoint_takes_over_only_near_the_altitude() -> None:
+    monitor = ClimbMonitor(0.0, 1.2)
+    assert not monitor.hand_over(0.9, 0.3) and monitor.state == "climbing"  # still climbing: keep on
+    assert not monitor.hand_over(1.15, 0.3)  # near, but not slow yet
+    assert monitor.hand_over(1.15, 0.05) and monitor.state == "reached" and monitor.reason is None
+
+
 # -- the gates that follow the measured noise, the camera's relative estimate --------------------------------
 
 
@@ -329,3 +336,21 @@ def test_a_brick_task_against_the_px4_sitl_places_within_2_cm() -> None:
     assert out["status"] == "done", (out["reason"], [(round(e["t_s"], 1), e["state"]) for e in out["trace"]])
     assert out["placement_error_m"] is not None and out["placement_error_m"] < 0.02
     assert "[ok  ] ground: the EKF reads the ground +0.50 m up" in res.stderr
+
+
+def test_the_frame_model_is_the_same_for_every_mode(tmp_path) -> None:
+    from masonry.adapters.wiring import HardwareConfig, hardware_config, load_uav_config
+    from masonry.errors import InputError
+
+    home = (2.0, -2.5, 0.0)
+    assert HardwareConfig().ground_for(home) == home  # the autopilot positions itself: measure at arming
+    assert HardwareConfig(origin_m=(0.0, 0.0, 0.0)).ground_for(home) is None  # the origin is given
+    assert HardwareConfig(mocap_port=5005).ground_for(home) is None  # fed world-frame poses
+    assert HardwareConfig(mocap_port=5005, measure_ground=True).ground_for(home) == home
+    assert HardwareConfig(measure_ground=False).ground_for(home) is None
+    config = tmp_path / "uav.yaml"
+    config.write_text("measure_ground: false\n")
+    assert hardware_config({}, load_uav_config(config)).ground_for(home) is None
+    config.write_text("measure_ground: sometimes\n")
+    with pytest.raises(InputError, match="measure_ground must be true or false"):
+        load_uav_config(config)

@@ -317,7 +317,11 @@ class MavlinkFlightController(MavlinkLink):
             climb_monitor = self._climb
             if climb_monitor is not None:
                 # PX4 has no GUIDED-style takeoff inside OFFBOARD: the stream climbs, monitored (takeoff.py)
-                climb = climb_monitor.step(self.clock.now_s(), world_alt, climb_rate)
+                # a fresh velocity setpoint takes over once the climb is near its altitude (as ArduPilot's
+                # guided take-off ends on one): the monitor's "steady" would hold it back another second
+                climb = 0.0
+                if not (setpoint is not None and fresh and climb_monitor.hand_over(world_alt, climb_rate)):
+                    climb = climb_monitor.step(self.clock.now_s(), world_alt, climb_rate)
                 if not climb_monitor.done:
                     self._send_position_target((0.0, 0.0, -climb), 0.0)
                     return

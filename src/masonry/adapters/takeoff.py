@@ -103,6 +103,16 @@ class ClimbMonitor:
                 return 0.0
         return self._command(error)
 
+    def hand_over(self, altitude_m: float, climb_mps: float, within_m: float = 0.1) -> bool:
+        """The caller wants to fly on (a velocity setpoint): end the climb as reached if it is within ``within_m``
+        of the target and slower than ``steady_speed_mps`` (True), else keep climbing (False)."""
+        if self.done:
+            return self.state == "reached"
+        near = abs(self.target_m - altitude_m) <= within_m and abs(climb_mps) <= self.config.steady_speed_mps
+        if near:
+            self.state = "reached"
+        return near
+
     def _command(self, error_m: float) -> float:
         cfg = self.config
         v = cfg.approach_gain_per_s * error_m
