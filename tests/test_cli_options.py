@@ -475,7 +475,7 @@ def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
     assert converging, lines
     assert (
         "EKF flags 0x0481: missing horizontal velocity, vertical velocity, relative horizontal position, "
-        "vertical position; constant-position mode, not initialised / GPS glitch"
+        "vertical position; constant-position mode, not initialised"
     ) in converging[0]
     left = [float(re.search(r"\((\d+) s left\)", line).group(1)) for line in lines]
     assert left == sorted(left, reverse=True) and left[0] in (4.0, 5.0)  # a countdown

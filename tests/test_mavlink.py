@@ -203,7 +203,7 @@ def test_estimate_flags() -> None:
     assert not estimate_usable(indoor | m.EKF_UNINITIALIZED)
     assert not estimate_usable(indoor & ~m.EKF_POS_HORIZ_REL)
     assert not estimate_usable(indoor & ~m.EKF_POS_VERT_ABS)
-    assert not estimate_usable(m.ESTIMATOR_ATTITUDE | m.ESTIMATOR_ACCEL_ERROR | indoor)
+    assert not estimate_usable(m.ESTIMATOR_ATTITUDE | m.ESTIMATOR_ACCEL_ERROR | indoor, "px4")
     assert not estimate_usable(0)
 
 

@@ -76,6 +76,7 @@ from masonry.adapters.mavlink_protocol import (
     mode_name,
 )
 from masonry.adapters.pose_source import PoseSource
+from masonry.adapters.takeoff import ClimbConfig, ClimbMonitor
 from masonry.errors import CommandRejected, CommandTimeout, InputError, LinkLost
 from masonry.ports import Telemetry, Vec3
 
@@ -214,6 +215,10 @@ class MavlinkFlightController(MavlinkLink):
         telemetry_rate_hz: rate requested for LOCAL_POSITION_NED and ATTITUDE.
         land_on_close: :meth:`close` while flying in GUIDED/OFFBOARD commands LAND first (a pilot's mode is left
             alone).
+        ground_m: where the UAV stands in the world when it arms (its blueprint home): :meth:`arm` then measures
+            the height the EKF reports on the ground and shifts ``frame`` so that the ground reads ``ground_m``'s
+            z (PX4 on GNSS and baro reported -0.34 to -0.71 m, issue 20). Only within 1 m of it horizontally
+            (a UAV that landed elsewhere keeps the last measurement). None: ``frame`` as given.
         monotonic: the local monotonic clock (s) that stamps what arrives and that the link watchdog, the
             connect, command, estimate and takeoff timeouts and the setpoint hold are measured on (a test injects
             one it can hold still; the waits themselves stay bounded polls of wall time).
@@ -241,6 +246,7 @@ class MavlinkFlightController(MavlinkLink):
         source_component: int = 190,  # MAV_COMP_ID_MISSIONPLANNER
         telemetry_rate_hz: float = 30.0,
         land_on_close: bool = True,
+        ground_m: Vec3 | None = None,
         monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         super().__init__(
@@ -270,6 +276,12 @@ class MavlinkFlightController(MavlinkLink):
         self._streaming = False
         self._takeoff_target_m: float | None = None  # world altitude being climbed to
         self._takeoff_started_s = -math.inf
+        self._climb: ClimbMonitor | None = None  # PX4's take-off climb inside OFFBOARD
+        #: why the last take-off ended short of its altitude (None: it reached it, or none was asked)
+        self.takeoff_problem: str | None = None
+        self.ground_m = ground_m
+        #: the EKF's ground height measured at the last arming (local up, m; None: not measured)
+        self.ground_offset_m: float | None = None
         self._last_vision_stamp: Any = None
 
     # ----------------------------------------------------------------------------------------------- lifecycle
@@ -306,17 +318,33 @@ class MavlinkFlightController(MavlinkLink):
             world_alt = self.frame.position_to_world(position)[2] if position is not None else 0.0
             with self._lock:
                 climb_rate = -self._state.velocity_ned[2]
-            reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
-            if reached or self._monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
+            climb_monitor = self._climb
+            if climb_monitor is not None:
+                # PX4 has no GUIDED-style takeoff inside OFFBOARD: the stream climbs, monitored (takeoff.py)
+                # a fresh velocity setpoint takes over once the climb is near its altitude (as ArduPilot's
+                # guided take-off ends on one): the monitor's "steady" would hold it back another second
+                climb = 0.0
+                if not (setpoint is not None and fresh and climb_monitor.hand_over(world_alt, climb_rate)):
+                    climb = climb_monitor.step(self.clock.now_s(), world_alt, climb_rate)
+                if not climb_monitor.done:
+                    self._send_position_target((0.0, 0.0, -climb), 0.0)
+                    return
                 with self._lock:
                     self._takeoff_target_m = None
-            elif self.autopilot == "px4":
-                # PX4 has no GUIDED-style takeoff inside OFFBOARD: climb with a P law (0.5 m/s max).
-                climb = min(0.5, max(0.0, 1.0 * (takeoff_target - world_alt)))
-                self._send_position_target((0.0, 0.0, -climb), 0.0)
-                return
+                    self.takeoff_problem = climb_monitor.reason
+                    self._climb = None
             else:
-                return  # ArduPilot climbs on its own; a velocity target would abort its takeoff
+                reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
+                if reached or self._monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
+                    with self._lock:
+                        self._takeoff_target_m = None
+                        if not reached:
+                            self.takeoff_problem = (
+                                f"take-off at {world_alt:.2f} m of {takeoff_target:.2f} m after "
+                                f"{self.takeoff_timeout_s:.0f} s"
+                            )
+                else:
+                    return  # ArduPilot climbs on its own; a velocity target would abort its takeoff
         if setpoint is None or not fresh:
             self._send_position_target((0.0, 0.0, 0.0), 0.0)
         else:
@@ -367,15 +395,20 @@ class MavlinkFlightController(MavlinkLink):
             streaming = st.position_ned is not None and now - st.position_time_s <= max(
                 0.5, self.heartbeat_timeout_s
             )
-        if flags is not None and not estimate_usable(flags):
+            at_rest = self._at_rest(st)
+        if flags is not None and not estimate_usable(flags, self.autopilot, on_ground=at_rest):
             return (
                 "no local position yet, " if not streaming else "local position streaming, "
-            ) + describe_estimate_flags(flags)
+            ) + describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
         if not streaming:
             return "no local position yet (LOCAL_POSITION_NED not streaming)" + (
-                "" if flags is None else f", {describe_estimate_flags(flags)}"
+                ""
+                if flags is None
+                else f", {describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)}"
             )
-        return "usable" if flags is None else describe_estimate_flags(flags)
+        return (
+            "usable" if flags is None else describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
+        )
 
     def wait_for_estimate(
         self,
@@ -431,6 +464,8 @@ class MavlinkFlightController(MavlinkLink):
         """Wait for a usable position estimate, enter GUIDED/OFFBOARD, arm; each step checked by COMMAND_ACK."""
         self._check_link("arm")
         self.wait_for_estimate()
+        if self.ground_m is not None:
+            self.measure_ground(self.ground_m)
         with self._lock:
             self._setpoint = None
             self._streaming = True  # PX4 needs a setpoint stream before it accepts OFFBOARD
@@ -440,6 +475,37 @@ class MavlinkFlightController(MavlinkLink):
         self.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
         with self._lock:
             self._state.armed = True  # the ACK said so; the next HEARTBEAT confirms
+
+    def measure_ground(self, ground_m: Vec3, samples: int = 10, timeout_s: float = 2.0) -> float | None:
+        """Measure the EKF's height on the ground and shift ``frame`` so that the ground reads ``ground_m[2]``.
+
+        Averages the last ``samples`` LOCAL_POSITION_NED reports received disarmed (waiting at most ``timeout_s``
+        of local time for them), on the ground and within 1 m of ``ground_m`` horizontally; otherwise the frame stays as it is.
+
+        Returns:
+            The EKF's ground height (local up, m) now in use, or None if it could not be measured.
+        """
+        tel = self.telemetry()
+        if tel.armed or not tel.on_ground or math.dist(tel.position_m[:2], ground_m[:2]) > 1.0:
+            return self.ground_offset_m
+        # the receiver keeps the heights reported while disarmed: usually there are enough already (no wait)
+        deadline = self._monotonic() + timeout_s
+        while True:
+            with self._lock:
+                heights = list(self._state.ground_heights)[-samples:]
+            if len(heights) >= samples or self._monotonic() >= deadline:
+                break
+            self._stop.wait(0.01)
+        if len(heights) < 3:
+            self.warnings.append(
+                f"ground height not measured: {len(heights)} position reports in {timeout_s} s"
+            )
+            return self.ground_offset_m
+        up = sum(heights) / len(heights)
+        ox, oy, _ = self.frame.offset_m
+        self.frame = FrameTransform((ox, oy, float(ground_m[2]) - up), self.frame.yaw_rad)
+        self.ground_offset_m = up
+        return up
 
     def _stream_zero_before_offboard(self) -> None:
         for _ in range(5):
@@ -457,7 +523,9 @@ class MavlinkFlightController(MavlinkLink):
     def takeoff(self, altitude_m: float) -> None:
         """Climb ``altitude_m`` above where the UAV stands (the port's convention); setpoints wait until then.
 
-        ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream.
+        ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream, monitored
+        against its progress (:class:`~masonry.adapters.takeoff.ClimbMonitor`): it ends reached and steady, or
+        with :attr:`takeoff_problem` saying why not.
         """
         self._check_link("takeoff")
         if not (math.isfinite(altitude_m) and altitude_m > 0.0):
@@ -475,6 +543,16 @@ class MavlinkFlightController(MavlinkLink):
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
             self._takeoff_started_s = self._monotonic()
+            self.takeoff_problem = None
+            self._climb = (
+                ClimbMonitor(
+                    self.clock.now_s(),
+                    self._takeoff_target_m,
+                    ClimbConfig(timeout_s=max(self.takeoff_timeout_s, 10.0 + 2.0 * altitude_m / 0.5)),
+                )
+                if self.autopilot == "px4"
+                else None
+            )
 
     def land(self) -> None:
         """Land where the UAV is (ArduPilot LAND mode; PX4 MAV_CMD_NAV_LAND); the setpoint stream stops."""
@@ -483,6 +561,7 @@ class MavlinkFlightController(MavlinkLink):
             self._streaming = False
             self._setpoint = None
             self._takeoff_target_m = None
+            self._climb = None
         if self.autopilot == "ardupilot":
             self.set_mode("LAND")
         else:
@@ -518,7 +597,12 @@ class MavlinkFlightController(MavlinkLink):
             st.estimate_flags is None
         ):  # no estimator report (yet): a streaming LOCAL_POSITION_NED is the signal
             return True
-        return estimate_usable(st.estimate_flags)
+        return estimate_usable(st.estimate_flags, self.autopilot, on_ground=self._at_rest(st))
+
+    @staticmethod
+    def _at_rest(st: Any) -> bool:
+        """Disarmed, or landed by EXTENDED_SYS_STATE: PX4's constant-position flag then means "at rest"."""
+        return not st.armed or st.landed_state == MAV_LANDED_STATE_ON_GROUND
 
     def upload_fence(self, site: Site) -> FenceUpload:
         """Upload the blueprint's site as the autopilot's fence and check it (:mod:`masonry.adapters.mavlink_fence`).

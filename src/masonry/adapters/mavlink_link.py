@@ -18,8 +18,9 @@ import os
 import queue
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -163,6 +164,8 @@ class _State:
     estimate_flags: int | None = None
     landed_state: int | None = None
     status_texts: list[tuple[float, int, str]] | None = None
+    # the latest local heights (up, m) reported while disarmed: the ground as the EKF sees it (issue 20)
+    ground_heights: deque[float] = field(default_factory=lambda: deque(maxlen=15))
 
 
 #: Log the first few errors of a kind, then every this-many-th (a 30 Hz stream of bad messages must not flood).
@@ -469,6 +472,8 @@ class MavlinkLink:
                 st.position_ned = (msg.x, msg.y, msg.z)
                 st.velocity_ned = (msg.vx, msg.vy, msg.vz)
                 st.position_time_s = now
+                if not st.armed:
+                    st.ground_heights.append(-float(msg.z))
                 self.clock.observe(msg.time_boot_ms / 1000.0, now)
             elif kind == "ATTITUDE":
                 st.attitude = (msg.roll, msg.pitch, msg.yaw)

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 from typing import Literal
 
+from masonry.adapters.estimator_status import ARDUPILOT_EKF, PX4_EKF2, describe_flags, flags_usable
+
 Autopilot = Literal["auto", "ardupilot", "px4"]
 
 # MAVLink numbers used below (from common.xml / ardupilotmega.xml), spelled out so this module imports
@@ -46,42 +48,24 @@ MAV_SEVERITY_WARNING = 4
 # ignore x, y, z (1|2|4), ax, ay, az (64|128|256) and yaw (1024); keep vx, vy, vz (8|16|32) and yaw rate (2048).
 TYPE_MASK_VELOCITY_YAW_RATE = 1 | 2 | 4 | 64 | 128 | 256 | 1024
 
-# EKF_STATUS_REPORT (ArduPilot) / ESTIMATOR_STATUS (PX4) flags (same bits up to 512) that make a local position
-# usable for flight: attitude (1), horizontal and vertical velocity (2, 4), relative horizontal position (8) and
-# vertical position (32). Absolute horizontal position (16) is not required: indoors, with motion capture and no
-# GPS, there is none. Disqualifying: constant-position mode (128, the EKF does not know where it is),
-# EKF_UNINITIALIZED (1024, ArduPilot) / GPS glitch (1024, PX4), accelerometer error (2048, PX4).
-ESTIMATE_FLAGS_REQUIRED = 1 | 2 | 4 | 8 | 32
-ESTIMATE_FLAGS_BAD = 128 | 1024 | 2048
+# EKF_STATUS_REPORT (ArduPilot) / ESTIMATOR_STATUS (PX4) flags: what each autopilot's bits mean, and which make
+# a local position usable for flight, is :mod:`masonry.adapters.estimator_status` (issue 20: PX4's EKF2 sets
+# constant-position mode whenever the vehicle is at rest). These two are the flags every autopilot needs, and
+# every bit that disqualifies for one of them (ArduPilot or PX4) in flight.
+ESTIMATE_FLAGS_REQUIRED = ARDUPILOT_EKF.required
+ESTIMATE_FLAGS_BAD = ARDUPILOT_EKF.bad | PX4_EKF2.bad | PX4_EKF2.bad_in_flight
 
 
-def estimate_usable(flags: int) -> bool:
-    """Whether EKF_STATUS_REPORT / ESTIMATOR_STATUS ``flags`` describe a position estimate fit to fly on."""
-    return flags & ESTIMATE_FLAGS_REQUIRED == ESTIMATE_FLAGS_REQUIRED and not flags & ESTIMATE_FLAGS_BAD
+def estimate_usable(flags: int, autopilot: str | None = "ardupilot", *, on_ground: bool = True) -> bool:
+    """Whether ``autopilot``'s EKF_STATUS_REPORT / ESTIMATOR_STATUS ``flags`` describe a position fit to fly on."""
+    return flags_usable(flags, autopilot, on_ground=on_ground)
 
 
-_FLAG_NAMES = {
-    1: "attitude",
-    2: "horizontal velocity",
-    4: "vertical velocity",
-    8: "relative horizontal position",
-    32: "vertical position",
-    128: "constant-position mode",
-    1024: "not initialised / GPS glitch",
-    2048: "accelerometer error",
-}
-
-
-def describe_estimate_flags(flags: int) -> str:
-    """What EKF ``flags`` lack for flight, in words: ``EKF flags 0x0081: missing horizontal velocity, ...``."""
-    missing = [name for bit, name in _FLAG_NAMES.items() if bit & ESTIMATE_FLAGS_REQUIRED and not flags & bit]
-    bad = [name for bit, name in _FLAG_NAMES.items() if bit & ESTIMATE_FLAGS_BAD and flags & bit]
-    parts = []
-    if missing:
-        parts.append("missing " + ", ".join(missing))
-    if bad:
-        parts.append(", ".join(bad))
-    return f"EKF flags 0x{flags:04x}" + (": " + "; ".join(parts) if parts else ": usable")
+def describe_estimate_flags(
+    flags: int, autopilot: str | None = "ardupilot", *, on_ground: bool = True
+) -> str:
+    """What ``flags`` lack for flight, in words: ``EKF flags 0x0081: missing horizontal velocity, ...``."""
+    return describe_flags(flags, autopilot, on_ground=on_ground)
 
 
 # ArduCopter custom modes and PX4 custom modes (main mode << 16 | sub mode << 24).

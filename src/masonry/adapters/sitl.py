@@ -90,6 +90,16 @@ def free_udp_port(host: str = "127.0.0.1") -> int:
         return int(sock.getsockname()[1])
 
 
+#: ``masonry sitl --vehicle NAME``: the autopilot knobs that come with a vehicle preset. ``px4``: PX4 v1.16 on
+#: GNSS as issue 20 met it (OFFBOARD rules, EKF2's at-rest flags, the ground 0.5 m up in its frame, and the
+#: vehicle's thrust ramp and GNSS-grade noise).
+SITL_PRESETS: dict[str, dict[str, Any]] = {
+    "ideal": {},
+    "arducopter": {"vehicle": "arducopter"},
+    "px4": {"vehicle": "px4", "autopilot": "px4", "ekf2_flags": True, "ekf_ground_z_m": -0.5},
+}
+
+
 @dataclass(frozen=True)
 class SitlConfig:
     """Knobs of the simulated autopilot (ArduCopter parameter names in comments)."""
@@ -105,6 +115,12 @@ class SitlConfig:
     heartbeat_hz: float = 1.0
     autopilot: str = "ardupilot"  # or "px4": PX4 modes, OFFBOARD rules, ESTIMATOR_STATUS
     offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
+    # PX4 EKF2's ESTIMATOR_STATUS as PX4 v1.16 SITL sends it (issue 20): 0x3FF at rest (constant-position mode
+    # with everything else), 895 / 831 in flight (height above ground comes and goes)
+    ekf2_flags: bool = False
+    # the EKF's NED z where the vehicle stands (PX4 on GNSS and baro: -0.34 to -0.71 m, issue 20); 0: at home
+    ekf_ground_z_m: float = 0.0
+    vehicle: str = "ideal"  # the simulated vehicle's preset (masonry.sim.vehicle_config.VEHICLE_PRESETS)
     system_id: int = 1
     component_id: int = 1
     fence: str = (
@@ -149,10 +165,14 @@ class MavlinkSitl:
         self.signing_key = signing_key
         self.config = config or SitlConfig()
         if vehicle is None:
-            from masonry.sim.vehicle import SimVehicle, VehicleConfig
+            from dataclasses import replace
+
+            from masonry.sim.vehicle import SimVehicle
+            from masonry.sim.vehicle_config import vehicle_preset
 
             vehicle = SimVehicle(
-                VehicleConfig(
+                replace(
+                    vehicle_preset(self.config.vehicle),
                     setpoint_timeout_s=self.config.guided_timeout_s,
                     link_failsafe_s=math.inf,  # the GCS failsafe below decides
                     battery_arm_min_fraction=self.config.arm_min_battery,
@@ -541,7 +561,7 @@ class MavlinkSitl:
                 tel = v.telemetry()
                 x, y, z = self.frame.position_to_ned(tel.position_m)
                 vx, vy, vz = self.frame.velocity_to_ned(tel.velocity_mps)
-                mav.local_position_ned_send(boot_ms, x, y, z, vx, vy, vz)
+                mav.local_position_ned_send(boot_ms, x, y, z + self.config.ekf_ground_z_m, vx, vy, vz)
         elif msg_id == MSG_ATTITUDE:
             roll, pitch, yaw = self.frame.attitude_to_ned(*v.attitude_rad)
             mav.attitude_send(
@@ -557,6 +577,9 @@ class MavlinkSitl:
             mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
         elif msg_id == MSG_ESTIMATOR_STATUS:
             flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128)  # ESTIMATOR_STATUS_FLAGS
+            if ekf_ok and self.config.ekf2_flags:
+                at_rest = not v.armed or v.on_ground
+                flags = 0x3FF if at_rest else (895 if int(self.sim_time_s) % 2 == 0 else 831)
             mav.estimator_status_send(
                 int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01
             )

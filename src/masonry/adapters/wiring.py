@@ -43,6 +43,10 @@ class HardwareConfig:
     # forwarded to it (``mocap_port``: it is fed world-frame poses)
     origin_m: tuple[float, float, float] | None = None
     origin_yaw_rad: float = 0.0
+    # measure the ground height the autopilot's EKF reports at each arming at home and read it as the home's z
+    # (issue 20: PX4 on GNSS and baro put the ground 0.34-0.71 m up); None: when the autopilot positions itself
+    # (no ``origin_m``, no ``mocap_port``)
+    measure_ground: bool | None = None
     mocap_port: int | None = None  # forward motion-capture poses from this UDP port to the autopilot
     mocap_host: str = "0.0.0.0"
     mocap_body: str | None = None  # rigid-body name (default: the UAV's name)
@@ -80,6 +84,14 @@ class HardwareConfig:
             if self.mocap_port is not None
             else (float(home_m[0]), float(home_m[1]), float(home_m[2]))
         )
+
+    def ground_for(self, home_m: tuple[float, float, float]) -> tuple[float, float, float] | None:
+        """Where the UAV stands when it arms, for the adapter to measure the EKF's ground height against (None:
+        take the frame as ``origin_for`` gives it); the same rule in single-task and mission mode."""
+        measure = self.measure_ground
+        if measure is None:
+            measure = self.origin_m is None and self.mocap_port is None
+        return (float(home_m[0]), float(home_m[1]), float(home_m[2])) if measure else None
 
     @property
     def sim_fc(self) -> bool:
@@ -164,6 +176,10 @@ def _coerce(p: Path, name: str, value: Any, default: Any) -> Any:
         if not isinstance(value, dict):
             raise InputError(f"{p}: {name} must be a mapping (setting: value), got {quote(value)}")
         return {str(k).replace("-", "_"): v for k, v in value.items()}
+    if name == "measure_ground":
+        if not isinstance(value, bool):
+            raise InputError(f"{p}: measure_ground must be true or false, got {quote(value)}")
+        return value
     if name in ("fc_baud", "actuator_baud", "mocap_port"):
         if isinstance(value, bool) or not isinstance(value, int):
             raise InputError(f"{p}: {name} must be an integer, got {quote(value)}")
@@ -387,6 +403,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
         autopilot=hw.autopilot,  # type: ignore[arg-type]
         heartbeat_timeout_s=hw.heartbeat_timeout_s,
         frame=FrameTransform(hw.origin_for(spec.home_m), hw.origin_yaw_rad),
+        ground_m=hw.ground_for(spec.home_m),
         signing_key=load_signing_key(hw.signing_key) if hw.signing_key else None,
         pose_source=pose_source,
     )
@@ -475,6 +492,20 @@ def preflight(
         except HardwareError as exc:
             detail = exc.reason if isinstance(exc, CommandRejected) else str(exc)
             items.append(CheckItem("position estimate", False, detail, options=exc.options))
+        ground = getattr(fc, "ground_m", None)
+        if ground is not None and not fc.telemetry().armed:
+            up = fc.measure_ground(ground)
+            items.append(
+                CheckItem(
+                    "ground",
+                    up is not None,
+                    f"the EKF reads the ground {up:+.2f} m up: taken as z {ground[2]:.2f} m (world), measured "
+                    "again at each arming at home"
+                    if up is not None
+                    else "not measured (no position reports): altitudes are the EKF's own",
+                    False,
+                )
+            )
         deadline = time.monotonic() + 1.5
         while math.isnan(fc.telemetry().battery_fraction) and time.monotonic() < deadline:
             time.sleep(0.02)  # SYS_STATUS comes at 2 Hz

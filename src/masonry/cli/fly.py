@@ -70,6 +70,13 @@ def select_adapters(
     return world.add_uav(spec).ports
 
 
+def tuning_preset(vehicle: str, adapters: Any) -> str:
+    """The control preset a UAV flies when its ``uav.yaml`` names none: ``px4`` on a PX4 autopilot (issue 20:
+    GNSS-grade noise, the camera's relative estimate), else the simulated vehicle's (``--vehicle``)."""
+    fc = adapters.fc if adapters is not None else None
+    return "px4" if getattr(fc, "autopilot", None) == "px4" else vehicle
+
+
 def _check_vehicle(vehicle: str | None, sim: bool = True) -> str:
     """``--vehicle``: one of the simulated presets, and only for a simulated flight controller; the preset to fly
     (unset: ``DEFAULT_VEHICLE`` in simulation; ``ideal``, the default tuning, on a real autopilot)."""
@@ -415,7 +422,9 @@ def _identify(
         vehicle=vehicle,
     )  # fmt: skip
     config = UavConfig.from_spec(
-        spec, cruise_altitude_m=bp.cruise_altitude_m, **hardware.uav_settings(vehicle)
+        spec,
+        cruise_altitude_m=bp.cruise_altitude_m,
+        **hardware.uav_settings(tuning_preset(vehicle, adapters)),
     )
     try:
         adapters.fc.connect()
@@ -471,7 +480,7 @@ def _fly_one_task(
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
         fence=bp.site,
-        **hardware.uav_settings(vehicle),
+        **hardware.uav_settings(tuning_preset(vehicle, adapters)),
     )
     try:
         run = fly_task(
@@ -625,7 +634,9 @@ def _fly_mission(
             adapters=adapters,
             key=key,
             zenoh_config=zenoh_config,
-            uav_settings=hardware.uav_settings(vehicle) if hardware is not None else None,
+            uav_settings=hardware.uav_settings(tuning_preset(vehicle, adapters))
+            if hardware is not None
+            else None,
             events_sink=mission_log,
             vehicle=vehicle,
         )

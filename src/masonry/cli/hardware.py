@@ -37,15 +37,26 @@ def build_sitl(
     signing_key: Path | None = None,
     prearm_failure: str | None = None,
     seed: int = 0,
-    autopilot: str = "ardupilot",
+    autopilot: str | None = None,
+    vehicle: str = "ideal",
     log: Any = None,
 ) -> tuple[Any, str]:
-    """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it."""
+    """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it.
+
+    ``vehicle`` (``--vehicle``): the simulated vehicle's preset with the autopilot knobs that come with it
+    (``px4``: PX4 v1.16 on GNSS, and ``autopilot`` px4 unless given); ``autopilot`` default: the preset's, else
+    ardupilot.
+    """
     from masonry.adapters.mavlink import load_signing_key
-    from masonry.adapters.sitl import MavlinkSitl, SitlConfig
+    from masonry.adapters.sitl import SITL_PRESETS, MavlinkSitl, SitlConfig
 
     if uav not in ("brick", "adhesion"):
         raise InputError(f"--uav must be brick or adhesion, got {uav!r}")
+    if vehicle not in SITL_PRESETS:
+        raise InputError(f"--vehicle must be one of {', '.join(SITL_PRESETS)}, got {vehicle!r}")
+    preset = dict(SITL_PRESETS[vehicle])
+    autopilot = autopilot if autopilot is not None else str(preset.pop("autopilot", "ardupilot"))
+    preset.pop("autopilot", None)
     if autopilot not in ("ardupilot", "px4"):
         raise InputError(f"--autopilot must be ardupilot or px4, got {autopilot!r}")
     check("sitl", "--port", port)
@@ -66,7 +77,7 @@ def build_sitl(
         home_m=home,
         time_scale=time_scale,
         signing_key=key,
-        config=SitlConfig(prearm_failure=prearm_failure, autopilot=autopilot),
+        config=SitlConfig(prearm_failure=prearm_failure, autopilot=autopilot, **preset),
         seed=seed,
         log=log,
     )
@@ -74,6 +85,7 @@ def build_sitl(
         f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, "
         f"{'PX4' if autopilot == 'px4' else 'ArduCopter'}-style MAVLink 2 to "
         f"udp {host}:{port}{' (signed)' if key else ''}, x{time_scale:g} real time"
+        + (f", vehicle {vehicle}" if vehicle != "ideal" else "")
     )
     return sitl, description
 
@@ -103,7 +115,17 @@ def sitl(
     seed: int = typer.Option(
         0, "--seed", help=help_text("sitl", "--seed", "Seed of the motion-capture noise.")
     ),
-    autopilot: str = typer.Option("ardupilot", "--autopilot", help="ardupilot (GUIDED) | px4 (OFFBOARD)."),
+    autopilot: str | None = typer.Option(
+        None,
+        "--autopilot",
+        help="ardupilot (GUIDED) | px4 (OFFBOARD); default: the --vehicle's, else ardupilot.",
+    ),
+    vehicle: str = typer.Option(
+        "ideal",
+        "--vehicle",
+        help="ideal | arducopter | px4: the simulated vehicle (px4: PX4 v1.16 on GNSS: EKF2's flags, the ground "
+        "0.5 m up in its frame, a thrust ramp on take-off, GNSS-grade noise; --autopilot px4).",
+    ),
 ) -> None:
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
     server, description = build_sitl(
@@ -117,6 +139,7 @@ def sitl(
         prearm_failure=prearm_failure,
         seed=seed,
         autopilot=autopilot,
+        vehicle=vehicle,
         log=typer.echo,
     )
     typer.echo(description)

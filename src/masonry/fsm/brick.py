@@ -10,8 +10,10 @@ from typing import Any
 import numpy as np
 
 from masonry.errors import HardwareError
+from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
+from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
@@ -100,6 +102,9 @@ class BrickUav(UavModel):
         self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
         self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
         self.effector = Tool.at(config.airframe.effector_offset_m)
+        self._camera_align = CameraAlign()
+        self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
+        self._gate_entered_s = math.nan
         self._begin_counters()
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
@@ -237,13 +242,20 @@ class BrickUav(UavModel):
                 )
 
     def _collect(self, tel: Telemetry) -> None:
+        est = self._fresh_estimate(tel)
+        if est is not None:
+            self.window.add(est[0], est[1])
+            self.attempt.estimates_seen += 1
+
+    def _fresh_estimate(self, tel: Telemetry) -> tuple[np.ndarray, float] | None:
+        """The brick's top-face centre (world, m) and yaw as the camera sees it now, from ``tel``'s pose."""
         frame = self.camera.read()
         if frame is None:
-            return
+            return None
         tags = frame.tags
         if tags is None:
             if frame.image is None:
-                return
+                return None
             from masonry.perception.aruco import detect_tags
 
             tags = tuple(detect_tags(frame.image, self.camera.intrinsics, self.config.markers))
@@ -255,7 +267,7 @@ class BrickUav(UavModel):
             elif tag.marker_id == id2:
                 tag2 = tag
         if tag1 is None and tag2 is None:
-            return
+            return None
         from masonry.perception.estimation import estimate_brick_pose
 
         roll, pitch, yaw = tel.attitude_rad
@@ -269,9 +281,7 @@ class BrickUav(UavModel):
             return TagPose(tag.marker_id, R_wc @ np.asarray(tag.position_m) + t_wc, R_wc @ tag.R_cam_marker)
 
         est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
-        if est is not None:
-            self.window.add(est.center_m, est.yaw_rad)
-            self.attempt.estimates_seen += 1
+        return None if est is None else (np.asarray(est.center_m, dtype=float), float(est.yaw_rad))
 
     def enter_pickup_align(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
@@ -279,9 +289,12 @@ class BrickUav(UavModel):
         center, yaw = self.attempt.brick_estimate
         above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
         self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
+        self._camera_align.reset(center)
 
     def do_pickup_align(self, tel: Telemetry) -> None:
         cfg = self.config
+        if cfg.align_on_camera:
+            track_brick(self, self._camera_align, tel)
         if self._aligned(tel):
             self.aligned()
         elif (swinging := self._swinging(tel)) is not None:
@@ -297,6 +310,13 @@ class BrickUav(UavModel):
         tolerance, speed = cfg.align_tolerance_m, cfg.settle_speed_mps
         if self._now_s > self.nav.end_s + cfg.align_patience_s:
             tolerance, speed = max(tolerance, cfg.align_relaxed_tolerance_m), 2.0 * speed
+        if cfg.gate_window_s > 0.0:  # the mean over a window, for a noisy position source (noise_gate.py)
+            noise = self._gate_noise
+            if self._gate_entered_s != self._entered_s:
+                self._gate_entered_s = self._entered_s
+                noise.reset()
+            noise.add(self._now_s, (p[0] - t[0], p[1] - t[1]), (v[0], v[1]))
+            return noise_aligned(noise, tolerance, speed)
         return math.hypot(p[0] - t[0], p[1] - t[1]) <= tolerance and math.hypot(v[0], v[1]) <= speed
 
     def enter_pickup_descend(self, *args: Any, **kwargs: Any) -> None:
@@ -309,6 +329,8 @@ class BrickUav(UavModel):
         self._fly_to(tel, self.effector.body_target(grasp, yaw), self.config.descent_duration_s, yaw)
 
     def do_pickup_descend(self, tel: Telemetry) -> None:
+        if self.config.align_on_camera:
+            track_brick(self, self._camera_align, tel)
         if self._now_s >= self.nav.end_s:
             self.touched()
 

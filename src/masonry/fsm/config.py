@@ -54,6 +54,12 @@ class UavConfig:
     # settle_speed_mps.
     align_patience_s: float = 3.0
     align_relaxed_tolerance_m: float = 0.025
+    # Issue 20 (GNSS-grade position noise, masonry.fsm.noise_gate): > 0, the alignment gates ask the mean error
+    # and velocity over this window (with a margin of their measured spread) instead of one tick's; 0: one tick's
+    gate_window_s: float = 0.0
+    # The brick UAV re-estimates the brick from its camera every tick while it aligns and descends and follows it
+    # (masonry.fsm.camera_align): the absolute position's wander cancels; False: the estimate hover's estimate
+    align_on_camera: bool = False
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

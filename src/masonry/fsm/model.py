@@ -550,9 +550,11 @@ class UavModel:
         elif tel.on_ground and self._retry_takeoff(tel):
             pass
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
+            # the flight controller's own account, where it keeps one (the MAVLink adapter's PX4 climb monitor)
+            why = getattr(self.fc, "takeoff_problem", None)
             self.abort(
                 reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
-                f"within {self.config.takeoff_timeout_s:.0f} s"
+                f"within {self.config.takeoff_timeout_s:.0f} s" + (f": {why}" if isinstance(why, str) else "")
             )
 
     def _swinging(self, tel: Telemetry) -> str | None:

@@ -78,6 +78,9 @@ class Navigator:
         self.settling_since_s: float | None = None
         #: the site's fence (None: none): targets and references are kept inside it (``masonry.fsm.fence``)
         self.fence = config.fence
+        self._shift_m: tuple[float, float, float] | None = (
+            None  # added to the leg's reference (:meth:`shift`)
+        )
 
     def _inside(self, p_m: Any) -> np.ndarray:
         """``p_m`` (a target) kept inside the fence."""
@@ -85,6 +88,15 @@ class Navigator:
         return np.array(p, dtype=float) if clamped or not isinstance(p, np.ndarray) else p
 
     # -- what to fly -------------------------------------------------------------------------------------
+    def shift(self, delta_m: Sequence[float]) -> None:
+        """Move the motion in hand, its reference and its end, by ``delta_m``: the point it flies to moved (the
+        brick as the camera sees it now, :mod:`masonry.fsm.camera_align`); its timing stays."""
+        d = (float(delta_m[0]), float(delta_m[1]), float(delta_m[2]))
+        self.target_m = np.asarray(self.target_m, dtype=float) + np.array(d)
+        if self.traj is not None:
+            s = self._shift_m or (0.0, 0.0, 0.0)
+            self._shift_m = (s[0] + d[0], s[1] + d[1], s[2] + d[2])
+
     def stop(self) -> None:
         """No motion: ``step`` has nothing to say."""
         self.active = False
@@ -246,6 +258,7 @@ class Navigator:
         v = _ZERO3 if from_rest else np.asarray(tel.velocity_mps, dtype=float)
         T = self.leg_duration_s(p, target) if duration_s is None else float(duration_s)
         self.traj = MinJerk(p, v, _ZERO3, target, _ZERO3, _ZERO3, T)
+        self._shift_m = None
         self.t0_s = now_s
         self.end_s = now_s + T
         self.target_m = target
@@ -331,6 +344,9 @@ class Navigator:
         if traj is not None:
             t = now_s - self.t0_s
             ref, vel, acc = traj.sample_floats(t)
+            shift = self._shift_m
+            if shift is not None:
+                ref = (ref[0] + shift[0], ref[1] + shift[1], ref[2] + shift[2])
             if t < traj.duration_s:
                 # velocity, plus the acceleration times the autopilot's velocity lag: a first-order velocity
                 # loop then follows the reference's velocity instead of trailing it by lag x acceleration,

@@ -2,7 +2,7 @@
 
 A UAV's ``uav.yaml`` (``masonry fly --config``) may hold, besides its hardware settings:
 
-- ``control_preset: ideal | arducopter``: a named set of :class:`~masonry.fsm.UavConfig` overrides fitted to an
+- ``control_preset: ideal | arducopter | px4``: a named set of :class:`~masonry.fsm.UavConfig` overrides fitted to an
   autopilot (``ideal``: the defaults, tuned for the project's simulated vehicle, a 0.3 s first-order velocity
   lag; ``arducopter``: measured on ArduCopter 4.7 SITL, docs/hardware.md "Control on ArduCopter").
 - ``control:``, a mapping of :class:`~masonry.fsm.UavConfig` field names to numbers (``settle_speed_mps: 0.15``,
@@ -32,6 +32,8 @@ _NOT_TUNING = frozenset(
 )
 #: UavConfig fields that are counts (integers), not measures.
 _COUNTS = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("int", int))
+#: UavConfig fields that are switches (true / false).
+_SWITCHES = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("bool", bool))
 
 #: The presets. ``arducopter``: ArduCopter's GUIDED velocity loop shapes setpoints with its own jerk and
 #: acceleration limits (PSC_JERK_XY, WPNAV_ACCEL), and the link and loop add delay: the velocity response trails
@@ -53,6 +55,16 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
             "xy": {"kp": 1.0, "ki": 0.2, "output_limit": 1.5, "integral_limit": 0.5},
             "z": {"kp": 1.0, "ki": 0.1, "output_limit": 0.7, "integral_limit": 0.3},
         },
+    },
+    # PX4 v1.16 OFFBOARD on GNSS (issue 20): velocity setpoints unshaped (the default gains suit its ~0.3 s
+    # response), a position that wanders +-15 cm and a velocity noisy to +-0.2 m/s: the alignment gates average
+    # over 1.5 s, the brick UAV aligns on its camera's relative estimate, the hover gates allow for the noise.
+    "px4": {
+        "gate_window_s": 1.5,
+        "align_on_camera": True,
+        "ask_settle_tolerance_m": 0.05,
+        "settle_speed_mps": 0.12,
+        "align_patience_s": 4.0,
     },
 }
 
@@ -92,6 +104,11 @@ def _control_fields(values: Mapping[str, Any], source: str) -> dict[str, Any]:
             raise InputError(
                 f"{source}: control: unknown setting {name!r} (known: {', '.join(sorted(known))})"
             )
+        if name in _SWITCHES:
+            if not isinstance(value, bool):
+                raise InputError(f"{source}: control: {name} must be true or false, got {value!r}")
+            out[name] = value
+            continue
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise InputError(f"{source}: control: {name} must be a number, got {value!r}")
         if value < 0:

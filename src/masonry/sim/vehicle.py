@@ -136,6 +136,7 @@ class SimVehicle:
         self._tel: tuple[bool, Telemetry] | None = None
         self._lag_k = self._yaw_k = 0.0
         self._shaper = Shaper(self.config.shaping) if self.config.shaping is not None else None
+        self._liftoff_s = -math.inf  # when it last left the ground (the take-off's thrust ramp)
 
     # ------------------------------------------------------------------ state
     @property
@@ -409,6 +410,8 @@ class SimVehicle:
             tx, ty, tz, tyaw = self._sp
         else:
             tx, ty, tz = self._hold_velocity()
+        if cfg.takeoff_ramp_s > 0.0 and tz > 0.0:
+            tz = self._ramped_climb(tz)
         shaper = self._shaper
         if shaper is not None:
             tx, ty, tz = shaper.shape(t, tx, ty, tz, dt_s)
@@ -551,6 +554,16 @@ class SimVehicle:
             self._contact_s = 0.0
             if self.on_ground and z > ground + 0.01:
                 self.on_ground = False
+                self._liftoff_s = self._t
+
+    def _ramped_climb(self, tz: float) -> float:
+        """The climb ``tz`` (m/s) within what the take-off's thrust ramp allows now (``takeoff_ramp_s`` after
+        leaving the ground: from a tenth of ``max_climb_mps`` to all of it)."""
+        since = self._t - self._liftoff_s if not self.on_ground else 0.0
+        cfg = self.config
+        if since >= cfg.takeoff_ramp_s:
+            return tz
+        return min(tz, cfg.max_climb_mps * (0.1 + 0.9 * since / cfg.takeoff_ramp_s))
 
     @property
     def push_mps2(self) -> tuple[float, float]:

@@ -9,7 +9,7 @@ import math
 from dataclasses import dataclass
 
 from masonry.errors import InvalidArgument
-from masonry.sim.shaping import ARDUCOPTER, ShapingConfig
+from masonry.sim.shaping import ARDUCOPTER, PX4, ShapingConfig
 
 __all__ = ["VEHICLE_PRESETS", "VehicleConfig", "vehicle_preset"]
 
@@ -43,6 +43,9 @@ class VehicleConfig:
     yaw_noise_rad: float = 0.002
     #: an autopilot's setpoint shaping, delay and GPS-like noise (masonry.sim.shaping); None: none (``ideal``)
     shaping: ShapingConfig | None = None
+    #: a take-off's thrust ramp (PX4's smooth take-off, ``MPC_TKO_RAMP_T``): for this long after leaving the
+    #: ground the climb speed it can reach grows from a tenth of ``max_climb_mps`` to all of it (0: none)
+    takeoff_ramp_s: float = 0.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -62,6 +65,10 @@ class VehicleConfig:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise InvalidArgument(f"VehicleConfig.{name} must be finite and > 0, got {value!r}")
+        if not (math.isfinite(self.takeoff_ramp_s) and self.takeoff_ramp_s >= 0):
+            raise InvalidArgument(
+                f"VehicleConfig.takeoff_ramp_s must be finite and >= 0, got {self.takeoff_ramp_s!r}"
+            )
 
 
 #: The simulated autopilot of ``masonry sim``, ``simulate()`` and a simulated ``masonry fly`` unless told otherwise
@@ -72,6 +79,9 @@ DEFAULT_VEHICLE = "arducopter"
 #: ``--vehicle`` presets. ``ideal``: the first-order 0.3 s lag with motion-capture noise the project was tuned on.
 #: ``arducopter``: ArduCopter's GUIDED shaping and delay (masonry.sim.shaping.ARDUCOPTER) in front of a faster
 #: airframe lag, with the SITL's measured hover noise (docs/performance.md, "The simulated ArduCopter").
+#: ``px4``: PX4 v1.16 on GNSS (issue 20): OFFBOARD velocity setpoints unshaped behind a short delay, the smooth
+#: take-off's thrust ramp, and the wandering GNSS-grade position (about +-15 cm) and noisy velocity (vertical
+#: speed up to +-0.2 m/s) its EKF2 reported in a hover.
 VEHICLE_PRESETS: dict[str, VehicleConfig] = {
     "ideal": VehicleConfig(),
     "arducopter": VehicleConfig(
@@ -79,6 +89,13 @@ VEHICLE_PRESETS: dict[str, VehicleConfig] = {
         shaping=ARDUCOPTER,
         mocap_noise_m=0.002,
         velocity_noise_mps=0.015,
+    ),
+    "px4": VehicleConfig(
+        velocity_tau_s=0.2,
+        shaping=PX4,
+        mocap_noise_m=0.004,
+        velocity_noise_mps=0.05,
+        takeoff_ramp_s=3.0,
     ),
 }
 

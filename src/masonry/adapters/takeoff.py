@@ -1,0 +1,121 @@
+"""A take-off climb inside OFFBOARD, monitored against its progress (PX4; issue 20): pure, no I/O.
+
+PX4 has no GUIDED-style take-off inside OFFBOARD: the ground station streams the climb. A P-law on the altitude
+error (the adapter's first climb) commands less and less near the target while PX4's thrust ramps up slowly
+from the ground (its smooth take-off, ``MPC_TKO_RAMP_T``): on PX4 v1.16 SITL it reached 1.09 m of 1.54 m in its
+20 s and sagged back. :class:`ClimbMonitor` commands the climb speed until the approach, never less than
+``min_speed_mps`` while short of the target (so the climb cannot sag short of it), ends on *reached and
+steady* (within ``tolerance_m`` and slower than ``steady_speed_mps`` for ``steady_s``) and says why when it does
+not: no progress over ``progress_window_s`` after the ramp's grace, or the time-out.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Literal
+
+__all__ = ["ClimbConfig", "ClimbMonitor", "ClimbState"]
+
+ClimbState = Literal["climbing", "reached", "stalled", "timeout"]
+
+
+@dataclass(frozen=True)
+class ClimbConfig:
+    """The take-off climb's law and its monitor (SI units)."""
+
+    climb_speed_mps: float = 0.5
+    approach_gain_per_s: float = 1.0  # within climb_speed / gain of the target: v = gain x the error
+    min_speed_mps: float = 0.12  # the least climb while more than tolerance_m short (no sag)
+    tolerance_m: float = 0.05
+    steady_speed_mps: float = 0.1
+    steady_s: float = 1.0
+    grace_s: float = 6.0  # the thrust ramp: no progress is expected before this
+    progress_window_s: float = 4.0
+    min_progress_m: float = 0.05
+    timeout_s: float = 30.0
+
+
+class ClimbMonitor:
+    """One take-off climb from ``start_s`` to ``target_m`` (world altitude): the command each tick, the outcome.
+
+    Args:
+        start_s: when the take-off was asked for (the caller's clock, s).
+        target_m: the altitude to reach (world, m).
+        config: the law and the monitor's limits.
+    """
+
+    def __init__(self, start_s: float, target_m: float, config: ClimbConfig | None = None) -> None:
+        self.config = config or ClimbConfig()
+        self.start_s = float(start_s)
+        self.target_m = float(target_m)
+        self.state: ClimbState = "climbing"
+        self.reason: str | None = None
+        self._history: deque[tuple[float, float]] = deque()
+        self._steady_since_s: float | None = None
+        self._rate_mps = 0.0
+        self._last_s: float | None = None
+
+    @property
+    def done(self) -> bool:
+        """The climb is over: reached, or given up (``reason`` says why)."""
+        return self.state != "climbing"
+
+    def step(self, now_s: float, altitude_m: float, climb_mps: float) -> float:
+        """The climb speed to command now (m/s, up) for the altitude and climb rate measured; 0 once done."""
+        if self.done:
+            return 0.0
+        cfg = self.config
+        dt = 0.0 if self._last_s is None else max(0.0, now_s - self._last_s)
+        self._last_s = now_s
+        # the climb rate smoothed over about a quarter second: EKF2's vertical speed is noisy (+-0.2 m/s)
+        self._rate_mps += min(1.0, dt / 0.25) * (climb_mps - self._rate_mps) if dt > 0.0 else 0.0
+        error = self.target_m - altitude_m
+        if abs(error) <= cfg.tolerance_m and abs(self._rate_mps) <= cfg.steady_speed_mps:
+            if self._steady_since_s is None:
+                self._steady_since_s = now_s
+            if now_s - self._steady_since_s >= cfg.steady_s:
+                self.state = "reached"
+                return 0.0
+        else:
+            self._steady_since_s = None
+        self._history.append((now_s, altitude_m))
+        while self._history and self._history[0][0] < now_s - cfg.progress_window_s:
+            self._history.popleft()
+        elapsed = now_s - self.start_s
+        if elapsed > cfg.timeout_s:
+            self.state = "timeout"
+            self.reason = (
+                f"take-off not steady at {self.target_m:.2f} m within {cfg.timeout_s:.0f} s "
+                f"(at {altitude_m:.2f} m, climbing {self._rate_mps:+.2f} m/s)"
+            )
+            return 0.0
+        if elapsed > cfg.grace_s and error > 2.0 * cfg.tolerance_m:
+            t0, z0 = self._history[0]
+            if now_s - t0 >= 0.9 * cfg.progress_window_s and altitude_m - z0 < cfg.min_progress_m:
+                self.state = "stalled"
+                self.reason = (
+                    f"take-off stalled at {altitude_m:.2f} m of {self.target_m:.2f} m: "
+                    f"{altitude_m - z0:+.2f} m in the last {now_s - t0:.0f} s, {elapsed:.0f} s after it began "
+                    "(is the thrust enough, the vehicle free to climb?)"
+                )
+                return 0.0
+        return self._command(error)
+
+    def hand_over(self, altitude_m: float, climb_mps: float, within_m: float = 0.1) -> bool:
+        """The caller wants to fly on (a velocity setpoint): end the climb as reached if it is within ``within_m``
+        of the target and slower than ``steady_speed_mps`` (True), else keep climbing (False)."""
+        if self.done:
+            return self.state == "reached"
+        near = abs(self.target_m - altitude_m) <= within_m and abs(climb_mps) <= self.config.steady_speed_mps
+        if near:
+            self.state = "reached"
+        return near
+
+    def _command(self, error_m: float) -> float:
+        cfg = self.config
+        v = cfg.approach_gain_per_s * error_m
+        if error_m > cfg.tolerance_m:
+            v = max(v, cfg.min_speed_mps)
+        return math.copysign(min(abs(v), cfg.climb_speed_mps), v)
