@@ -16,6 +16,10 @@ from masonry.planner.tasks import AdhesionTask, Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
 
 
+#: The smallest lean the nozzle's targets allow for (2 degrees: 1.2 cm at the nozzle's 0.35 m).
+_LEAN_MIN_RAD = math.radians(2.0)
+
+
 class AdhesionUav(UavModel):
     """The adhesion UAV (paper, Section V): spray a bead of adhesive along a segment.
 
@@ -84,7 +88,13 @@ class AdhesionUav(UavModel):
         as the UAV leans now (into a wind: 10 degrees at 4 m/s put a rigid nozzle 6 cm downwind of a level one,
         twice the bead's radius; the lean of a hover is that of the spray leg that follows it)."""
         p = np.array([point_m[0], point_m[1], point_m[2] + self.config.airframe.spray_height_m])
-        tilt = None if tel is None else (tel.attitude_rad[0], tel.attitude_rad[1])
+        tilt = None
+        if tel is not None:
+            roll, pitch = tel.attitude_rad[0], tel.attitude_rad[1]
+            # below _LEAN_MIN_RAD the shift (under 1.2 cm) is within the spray tolerance: fly level, as in calm
+            # air (where a hover's tilt is a fraction of a degree of noise, and the schedules stay as they were)
+            if roll * roll + pitch * pitch > _LEAN_MIN_RAD**2:
+                tilt = (roll, pitch)
         return self.nozzle.body_target(p, self._yaw_rad, tilt)
 
     def _safe_actuators(self) -> None:
