@@ -189,14 +189,39 @@ class AdhesionUav(UavModel):
         assert tel is not None
         t = self.adhesion_task
         self.sprayer.set_valve(True)
+        self._spray_track: list[tuple[float, float]] = []
+        self._spray_passes = 1
         self._fly_line(
             tel, self._nozzle_body(t.start_m, tel), self._nozzle_body(t.end_m, tel), self.config.spray_speed_mps
         )
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
+        nozzle = self.nozzle.position(tel)
+        self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
         if self._advance(tel, cfg.spray_tolerance_m) or self._now_s > self.nav.end_s + cfg.release_timeout_s:
+            if self._spray_passes < cfg.max_spray_passes and self._track_coverage() < cfg.spray_min_coverage:
+                # a gust pushed the nozzle off part of the segment: back along it with the valve open
+                self._spray_passes += 1
+                t = self.adhesion_task
+                start, end = (t.end_m, t.start_m) if self._spray_passes % 2 == 0 else (t.start_m, t.end_m)
+                self._fly_line(
+                    tel, self._nozzle_body(start, tel), self._nozzle_body(end, tel), cfg.spray_speed_mps
+                )
+                return
             self.sprayed()
+
+    def _track_coverage(self) -> float:
+        """The fraction of the segment (1 cm samples) within ``spray_check_radius_m`` of the nozzle's track."""
+        t = self.adhesion_task
+        a, b = np.asarray(t.start_m[:2], dtype=float), np.asarray(t.end_m[:2], dtype=float)
+        n = max(2, math.ceil(float(np.linalg.norm(b - a)) / 0.01) + 1)
+        samples = a[None, :] + np.linspace(0.0, 1.0, n)[:, None] * (b - a)[None, :]
+        track = np.asarray(self._spray_track, dtype=float).reshape(-1, 2)
+        if len(track) == 0:
+            return 0.0
+        d2 = ((samples[:, None, :] - track[None, :, :]) ** 2).sum(axis=2)
+        return float(np.mean(d2.min(axis=1) <= self.config.spray_check_radius_m**2))
 
     def enter_close(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
