@@ -43,7 +43,12 @@ def fly(bp: Any, speed_mps: float, turbulence: str, seed: int, vehicle: str) -> 
         world = mission.world
         coverage = [world.coverage(t) for t in mission.plan.tasks if isinstance(t, AdhesionTask)]
     errors = [e for e in report.placement_error_m.values() if e is not None]
-    return {"completed": report.completed, "errors": errors, "coverage": coverage, "makespan": report.makespan_s}
+    return {
+        "completed": report.completed,
+        "errors": errors,
+        "coverage": coverage,
+        "makespan": report.makespan_s,
+    }
 
 
 def row(bp: Any, speed: float, turbulence: str, seeds: int, vehicle: str) -> dict[str, Any]:
@@ -75,7 +80,9 @@ def main() -> None:
     ap.add_argument("--vehicle", default="arducopter", help="ideal | arducopter (default: arducopter)")
     ap.add_argument("--speeds", default="0,2,4,6,8", help="mean wind speeds, m/s at 10 m")
     ap.add_argument("--turbulence", default="light,moderate")
-    ap.add_argument("--targets", action="store_true", help="only the issue's two points (4 light, 2 moderate)")
+    ap.add_argument(
+        "--targets", action="store_true", help="only the issue's two points (4 light, 2 moderate)"
+    )
     args = ap.parse_args()
     if args.targets:
         points = [(4.0, "light"), (2.0, "moderate")]

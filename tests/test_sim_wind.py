@@ -99,7 +99,13 @@ def test_a_schedule_changes_the_mean_over_time() -> None:
 
 @pytest.mark.parametrize(
     ("text", "message"),
-    [("x", "SPEED"), ("4@", "direction"), ("-1", "from 0 to 30"), ("4@400", "-360 to 360"), ("nan", "from 0")],
+    [
+        ("x", "SPEED"),
+        ("4@", "direction"),
+        ("-1", "from 0 to 30"),
+        ("4@400", "-360 to 360"),
+        ("nan", "from 0"),
+    ],
 )
 def test_bad_wind_option(text: str, message: str) -> None:
     with pytest.raises(InputError, match=message):
@@ -155,7 +161,9 @@ def test_still_air_is_the_old_loop() -> None:
     world = World(bp, seed=0, faults=Faults(wind=WindConfig(direction_deg=90.0)))
     assert all(u.vehicle.wind is None for u in world.add_fleet())
     calm = SimVehicle(rng=np.random.default_rng(3))
-    windless = SimVehicle(rng=np.random.default_rng(3), wind=WindField(WindConfig(), np.random.default_rng(0)))
+    windless = SimVehicle(
+        rng=np.random.default_rng(3), wind=WindField(WindConfig(), np.random.default_rng(0))
+    )
     for v in (calm, windless):
         v.arm()
         v.takeoff(1.5)

@@ -15,9 +15,10 @@ from masonry.fsm.tool import Tool
 from masonry.planner.tasks import AdhesionTask, Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
 
-
 #: The smallest lean the nozzle's targets allow for (2 degrees: 1.2 cm at the nozzle's 0.35 m).
 _LEAN_MIN_RAD = math.radians(2.0)
+#: The time the lean is averaged over (turbulence tilts the UAV by as much again for a second or two).
+_LEAN_TAU_S = 3.0
 
 
 class AdhesionUav(UavModel):
@@ -48,6 +49,10 @@ class AdhesionUav(UavModel):
         self.nozzle = Tool.at(config.airframe.nozzle_offset_m)
         self._stable_since_s: float | None = None
         self._yaw_rad = 0.0
+        #: the lean (roll, pitch) averaged over _LEAN_TAU_S from the hover on: a steady wind's, not a gust's
+        self._lean = (0.0, 0.0)
+        self._spray_track: list[tuple[float, float]] = []
+        self._spray_passes = 1
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
             config.cruise_altitude_m
@@ -90,7 +95,7 @@ class AdhesionUav(UavModel):
         p = np.array([point_m[0], point_m[1], point_m[2] + self.config.airframe.spray_height_m])
         tilt = None
         if tel is not None:
-            roll, pitch = tel.attitude_rad[0], tel.attitude_rad[1]
+            roll, pitch = self._lean
             # below _LEAN_MIN_RAD the shift (under 1.2 cm) is within the spray tolerance: fly level, as in calm
             # air (where a hover's tilt is a fraction of a degree of noise, and the schedules stay as they were)
             if roll * roll + pitch * pitch > _LEAN_MIN_RAD**2:
@@ -136,10 +141,17 @@ class AdhesionUav(UavModel):
         tel = self._tel
         assert tel is not None
         self._stable_since_s = None
+        self._lean = (tel.attitude_rad[0], tel.attitude_rad[1])
         self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
+
+    def _follow_lean(self, tel: Telemetry) -> None:
+        k = min(1.0, self.config.control_period_s / _LEAN_TAU_S)
+        roll, pitch = self._lean
+        self._lean = (roll + (tel.attitude_rad[0] - roll) * k, pitch + (tel.attitude_rad[1] - pitch) * k)
 
     def do_hover(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._follow_lean(tel)
         p, t, v = tel.position_m, self.nav.target_m, tel.velocity_mps
         # Patience (issue 19): in turbulence the UAV may never sit within 3 cm and 0.08 m/s for stable_time_s;
         # align_patience_s past the leg's end both limits double (the spray leg then starts from up to 6 cm off
@@ -176,6 +188,7 @@ class AdhesionUav(UavModel):
 
     def do_descend(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._follow_lean(tel)
         # patience, as in the hover: align_patience_s past the descent's end the tolerance doubles; the attempt
         # ends (with its reason) at release_timeout_s or, if later, twice the patience
         late = self._now_s - self.nav.end_s
@@ -189,16 +202,24 @@ class AdhesionUav(UavModel):
         assert tel is not None
         t = self.adhesion_task
         self.sprayer.set_valve(True)
-        self._spray_track: list[tuple[float, float]] = []
+        self._spray_track = []
         self._spray_passes = 1
         self._fly_line(
-            tel, self._nozzle_body(t.start_m, tel), self._nozzle_body(t.end_m, tel), self.config.spray_speed_mps
+            tel,
+            self._nozzle_body(t.start_m, tel),
+            self._nozzle_body(t.end_m, tel),
+            self.config.spray_speed_mps,
         )
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._follow_lean(tel)
         nozzle = self.nozzle.position(tel)
-        self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
+        above = float(nozzle[2]) - self.adhesion_task.start_m[2]
+        if (
+            -0.01 <= above <= cfg.spray_check_height_m
+        ):  # a gust lifting it out of the spray's reach sprays nothing
+            self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
         if self._advance(tel, cfg.spray_tolerance_m) or self._now_s > self.nav.end_s + cfg.release_timeout_s:
             if self._spray_passes < cfg.max_spray_passes and self._track_coverage() < cfg.spray_min_coverage:
                 # a gust pushed the nozzle off part of the segment: back along it with the valve open

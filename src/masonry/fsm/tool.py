@@ -36,7 +36,10 @@ class Tool:
         return (0.0, 0.0, a[2]) if self.plumb else a
 
     def body_target(
-        self, tool_target_m: Sequence[float] | np.ndarray, yaw_rad: float, tilt_rad: tuple[float, float] | None = None
+        self,
+        tool_target_m: Sequence[float] | np.ndarray,
+        yaw_rad: float,
+        tilt_rad: tuple[float, float] | None = None,
     ) -> np.ndarray:
         """Body position that puts the tool on ``tool_target_m`` at heading ``yaw_rad``, level or, with
         ``tilt_rad`` (roll, pitch), leaning so (a rigid tool in a steady wind: the lean is held there)."""

@@ -19,10 +19,9 @@ from masonry.errors import InputError
 
 __all__ = ["DEFAULT_MAX_WIND_MPS", "WindLimit"]
 
-#: A 4.5 kg hexacopter (docs/simulator.md, "Wind"): its 30 degree tilt runs out near 11 m/s (10 m height; 9 m/s
-#: at its 2 m working height), and it keeps its full 2.5 m/s^2 of manoeuvre up to about 6.5 m/s there. 8 m/s
-#: mean at 10 m (6.4 m/s at 2 m) leaves that margin to moderate gusts; manufacturers rate airframes of this
-#: class at 8-10 m/s.
+#: A 4.5 kg hexacopter (docs/simulator.md, "Wind"): its 30 degree tilt runs out at 8.8 m/s of airspeed (11 m/s
+#: mean at 10 m); at 8 m/s (6.4 m/s at its 2 m working height) it keeps 1.8 m/s^2 to manoeuvre and 2.4 m/s of
+#: airspeed for gusts; manufacturers rate airframes of this class at 8-10 m/s.
 DEFAULT_MAX_WIND_MPS = 8.0
 
 

@@ -132,7 +132,7 @@ class SimVehicle:
         self.wind = wind
         self._dhat = [0.0, 0.0, 0.0]  # the autopilot's estimate of the wind's push (its integrators), m/s^2
         self._west = [0.0, 0.0]  # its wind estimate (what the WIND message reports), m/s
-        self._wind_k = (-1.0, 0.0, 0.0)
+        self._wind_k = (-1.0, 0.0, 0.0, 0.0)
         self._sp: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         self._sp_time = -math.inf
         self._takeoff_z: float | None = None
@@ -597,8 +597,9 @@ class SimVehicle:
                 dt_s,
                 1.0 - math.exp(-dt_s / cfg.wind_reject_tau_s),
                 1.0 - math.exp(-dt_s / cfg.wind_estimate_tau_s),
+                1.0 - math.exp(-dt_s / cfg.wind_reject_z_tau_s),
             )
-        _, kr, ke = self._wind_k
+        _, kr, ke, kz = self._wind_k
         d = self._dhat
         # tilt: the thrust's horizontal part (the command minus the push estimate, plus the drag at the ground
         # speed that the still-air loop hides) within the tilt limit
@@ -613,7 +614,7 @@ class SimVehicle:
             d[0] += (px - d[0]) * kr
             d[1] += (py - d[1]) * kr
         net_z = az - d[2] + pz
-        d[2] += (pz - d[2]) * kr
+        d[2] += (pz - d[2]) * kz
         e = self._west
         e[0] += (wx - e[0]) * ke
         e[1] += (wy - e[1]) * ke

@@ -47,6 +47,9 @@ class VehicleConfig:
     max_tilt_rad: float = math.radians(30.0)
     thrust_to_weight: float = 2.0
     wind_reject_tau_s: float = 1.0
+    # vertically the push is taken out faster: ArduCopter's altitude controller closes an acceleration loop on the
+    # IMU (PSC_ACCZ_P 0.5, PSC_ACCZ_I 1.0 at 400 Hz), the horizontal one only through the attitude
+    wind_reject_z_tau_s: float = 0.3
     wind_estimate_tau_s: float = 5.0
     mocap_noise_m: float = 0.0015
     velocity_noise_mps: float = 0.005
@@ -69,6 +72,7 @@ class VehicleConfig:
             "setpoint_timeout_s",
             "max_tilt_rad",
             "wind_reject_tau_s",
+            "wind_reject_z_tau_s",
             "wind_estimate_tau_s",
         ):
             value = getattr(self, name)
