@@ -204,6 +204,7 @@ class AdhesionUav(UavModel):
         self.sprayer.set_valve(True)
         self._spray_track = []
         self._spray_passes = 1
+        self._record_nozzle(tel)  # where the valve opened: the first sample of the track
         self._fly_line(
             tel,
             self._nozzle_body(t.start_m, tel),
@@ -214,14 +215,9 @@ class AdhesionUav(UavModel):
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
         self._follow_lean(tel)
-        nozzle = self.nozzle.position(tel)
-        above = float(nozzle[2]) - self.adhesion_task.start_m[2]
-        if (
-            -0.01 <= above <= cfg.spray_check_height_m
-        ):  # a gust lifting it out of the spray's reach sprays nothing
-            self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
+        self._record_nozzle(tel)
         if self._advance(tel, cfg.spray_tolerance_m) or self._now_s > self.nav.end_s + cfg.release_timeout_s:
-            if self._spray_passes < cfg.max_spray_passes and self._track_coverage() < cfg.spray_min_coverage:
+            if self._spray_passes < cfg.max_spray_passes and self._pushed_off():
                 # a gust pushed the nozzle off part of the segment: back along it with the valve open
                 self._spray_passes += 1
                 t = self.adhesion_task
@@ -231,6 +227,32 @@ class AdhesionUav(UavModel):
                 )
                 return
             self.sprayed()
+
+    def _record_nozzle(self, tel: Telemetry) -> None:
+        """Add the nozzle's position to the track, if it is within the spray's reach of the surface."""
+        nozzle = self.nozzle.position(tel)
+        above = float(nozzle[2]) - self.adhesion_task.start_m[2]
+        if (
+            -0.01 <= above <= self.config.spray_check_height_m
+        ):  # a gust lifting it out of reach sprays nothing
+            self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
+
+    def _pushed_off(self) -> bool:
+        """A gust pushed the nozzle off the segment: its track strayed more than ``spray_check_radius_m`` from the
+        line and covers less than ``spray_min_coverage`` of it. (A track that starts or ends a little short,
+        as a chained segment's does, is not pushed off: calm air sprays one pass.)"""
+        t = self.adhesion_task
+        a, b = np.asarray(t.start_m[:2], dtype=float), np.asarray(t.end_m[:2], dtype=float)
+        track = np.asarray(self._spray_track, dtype=float).reshape(-1, 2)
+        d = b - a
+        length = float(np.linalg.norm(d))
+        if len(track) == 0 or length == 0.0:
+            return False
+        rel = track - a[None, :]
+        cross = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]) / length
+        return bool(cross.max() > self.config.spray_check_radius_m) and (
+            self._track_coverage() < self.config.spray_min_coverage
+        )
 
     def _track_coverage(self) -> float:
         """The fraction of the segment (1 cm samples) within ``spray_check_radius_m`` of the nozzle's track."""

@@ -192,6 +192,7 @@ class _SecondOrder:
         b = (p / 4.0) / a
         c = math.sqrt(max(p / 4.0 - b * b, 0.0))
         self.x1, self.x2 = a * z1, b * z1 + c * z2
+        self._p = p
 
     def _discretise(self, p: float, dt: float) -> None:
         e = math.exp(-p * dt)
