@@ -9,15 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from masonry.cli.wind_options import parse_turbulence, parse_wind
 from masonry.errors import InputError
 from masonry.sim.vehicle import SimVehicle
-from masonry.sim.wind import (
-    WindConfig,
-    WindField,
-    dryden_low_altitude,
-    parse_turbulence,
-    parse_wind,
-)
+from masonry.sim.wind import WindConfig, WindField, dryden_low_altitude
 
 GRID_S = 0.05
 

@@ -103,7 +103,7 @@ class Faults:
         if self.gusts_mps > 0 and self.wind.turbulence != "none":
             raise InputError(
                 f"fault gusts={self.gusts_mps:g} and turbulence {self.wind.turbulence}: give one of the two "
-                "(gusts=S is --turbulence S)"
+                "(gusts=S is turbulence of intensity S)"
             )
         drain = self.battery_drain_per_s
         if drain is not None and not (

@@ -36,8 +36,6 @@ __all__ = [
     "WindConfig",
     "WindField",
     "dryden_low_altitude",
-    "parse_turbulence",
-    "parse_wind",
 ]
 
 _FT = 0.3048
@@ -308,39 +306,3 @@ class WindField:
         d = math.radians(cfg.direction_deg)
         ex, ey = -math.sin(d), -math.cos(d)
         return (mx + u * ex - v * ey, my + u * ey + v * ex, w)
-
-
-def parse_wind(text: str) -> tuple[float, float]:
-    """``--wind SPEED[@DIR_DEG]`` -> (speed m/s, direction deg); InputError (one line) otherwise."""
-    raw = str(text).strip()
-    speed_s, at, dir_s = raw.partition("@")
-    if at and not dir_s.strip():
-        raise InputError(f"--wind {raw!r}: a direction in degrees after @, e.g. 4@270")
-    try:
-        speed = float(speed_s)
-        direction = float(dir_s) if at else 0.0
-    except ValueError:
-        raise InputError(
-            f"--wind {raw!r}: expected SPEED[@DIR_DEG], e.g. 4 or 4@270 (m/s, from degrees clockwise from north)"
-        ) from None
-    if not (math.isfinite(speed) and 0.0 <= speed <= MAX_WIND_MPS):
-        raise InputError(f"--wind {raw!r}: the speed must be from 0 to {MAX_WIND_MPS:g} m/s")
-    if not (math.isfinite(direction) and -360.0 <= direction <= 360.0):
-        raise InputError(f"--wind {raw!r}: the direction must be from -360 to 360 degrees")
-    return speed, direction
-
-
-def parse_turbulence(text: str) -> tuple[str, float]:
-    """``--turbulence light|moderate|severe|none|<m/s>`` -> (level, sigma_u for a number); InputError otherwise."""
-    raw = str(text).strip().lower()
-    if raw in TURBULENCE_LEVELS or raw == "none":
-        return raw, 0.0
-    try:
-        sigma = float(raw)
-    except ValueError:
-        raise InputError(
-            f"--turbulence {text!r}: expected light, moderate, severe, none or an intensity in m/s"
-        ) from None
-    if not (math.isfinite(sigma) and 0.0 <= sigma <= MAX_TURBULENCE_MPS):
-        raise InputError(f"--turbulence {text!r}: the intensity must be from 0 to {MAX_TURBULENCE_MPS:g} m/s")
-    return "custom", sigma
