@@ -39,6 +39,17 @@ def one_line_exit_2(res, *needles: str) -> None:
         (["sim", CASE_STUDY, "--seed", "-1"], ["--seed -1"]),
         (["sim", CASE_STUDY, "--fault", "gusts=1e6"], ["gusts", "at most 15 m/s"]),
         (["sim", CASE_STUDY, "--fault", "battery=5"], ["battery", "at most 1 per second"]),
+        (["sim", CASE_STUDY, "--wind", "fast"], ["--wind 'fast'", "SPEED[@DIR_DEG]"]),
+        (["sim", CASE_STUDY, "--wind", "40@90"], ["--wind '40@90'", "0 to 30 m/s"]),
+        (["sim", CASE_STUDY, "--turbulence", "strong"], ["--turbulence 'strong'", "light, moderate, severe"]),
+        (
+            ["sim", CASE_STUDY, "--turbulence", "light", "--fault", "gusts=1"],
+            ["--turbulence light", "gusts=1", "one of the two"],
+        ),
+        (
+            ["fly", "--uav", "brick", "--sim", "--blueprint", CASE_STUDY, "--task", "B0", "--wind", "4@"],
+            ["--wind '4@'", "direction"],
+        ),
         (
             [
                 "fly",

@@ -16,6 +16,7 @@ import typer
 
 from masonry.cli.app import cli_text, command
 from masonry.cli.options import check_all, help_text
+from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
 from masonry.errors import InputError
 from masonry.ports import UavPorts
 
@@ -221,6 +222,8 @@ def fly(
         help="KEY=VALUE, repeatable, as for `masonry sim` "
         "(grasp=0.3, dropout=0.5, occlusion=0.3, gusts=2.0, link-loss=brick-1@30).",
     ),
+    wind: str | None = WIND_OPTION,
+    turbulence: str | None = TURBULENCE_OPTION,
     fmt: str = typer.Option("text", "--format", help="text | json."),
     dt: float = typer.Option(0.05, "--dt", help=help_text("fly", "--dt", "Control tick, seconds.")),
     timeout: float = typer.Option(
@@ -327,6 +330,9 @@ def fly(
     if mission is None and hardware.mission is not None and task is None:
         mission = hardware.mission
     camera = "render" if hardware.hw.camera == "render" else "geometric"
+    if (wind is not None or turbulence is not None) and not hardware.hw.sim_fc:
+        raise InputError("--wind and --turbulence are for a simulated UAV (--sim): the real sky has its own")
+    faults = site_faults(fault, wind, turbulence)
     if not dt > 0.0 or not timeout > 0.0:
         raise InputError("--dt and --timeout must be > 0")
     bp = load_blueprint(blueprint)
@@ -353,7 +359,6 @@ def fly(
                 "the same factor instead)"
             )
         from masonry.cli.mission import network_options
-        from masonry.sim import Faults
 
         key = network_options(key_file, insecure, [mission, *listen], "--mission/--listen")
         _fly_mission(
@@ -364,7 +369,7 @@ def fly(
             mission_name=mission_name,
             seed=seed,
             camera=camera,
-            faults=Faults.parse(fault),
+            faults=faults,
             dt=dt,
             time_scale=time_scale,
             wait=wait,
@@ -388,7 +393,7 @@ def fly(
         sim=sim,
         seed=seed,
         camera=camera,
-        fault=fault,
+        faults=faults,
         dt=dt,
         timeout=timeout,
         fmt=fmt,
@@ -449,7 +454,7 @@ def _fly_one_task(
     sim: bool,
     seed: int,
     camera: str,
-    fault: list[str],
+    faults: Any,
     dt: float,
     timeout: float,
     fmt: str,
@@ -459,12 +464,10 @@ def _fly_one_task(
     """Single-task mode: fly ``task`` with the UAV of role ``uav`` (``name``); print the trace and the result."""
     from masonry.fsm import UavConfig, fly_task
     from masonry.planner import plan
-    from masonry.sim import Faults
 
     the_plan = plan(bp)
     the_task = _pick_task(bp, the_plan, task, uav)
     spec = _pick_uav(bp, uav, name)
-    faults = Faults.parse(fault)
 
     # Single-task mode: every brick the task depends on is taken as already built.
     before = {t for t in _prerequisites(the_plan, task) if t.startswith("B")}

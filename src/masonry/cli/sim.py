@@ -12,6 +12,7 @@ from masonry.cli.app import command
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.cli.watch import check_log_option
+from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
@@ -54,6 +55,8 @@ def sim(
         help="KEY=VALUE, repeatable: grasp=0.3, dropout=0.5, "
         "occlusion=0.3, gusts=2.0, uav-loss=brick-2@120, link-loss=NAME@S, battery=R.",
     ),
+    wind: str | None = WIND_OPTION,
+    turbulence: str | None = TURBULENCE_OPTION,
     journal: Path | None = typer.Option(None, "--journal", help="SQLite journal of the mission."),
     resume: bool = typer.Option(False, "--resume", help="Continue the mission recorded in --journal."),
     fmt: str = typer.Option("text", "--format", help="text | json."),
@@ -117,7 +120,6 @@ def sim(
 
     vehicle = _check_vehicle(vehicle)
     from masonry.mission.simulate import SimulatedMission
-    from masonry.sim import Faults
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
@@ -147,8 +149,8 @@ def sim(
         raise InputError(f"--journal {journal}: the same file as an output")
     if (policy == "schedule") != (schedule_file is not None):
         raise InputError("--policy schedule and --schedule FILE go together")
+    faults = site_faults(fault, wind, turbulence)
     bp = load_blueprint(blueprint)
-    faults = Faults.parse(fault)
     offline = None
     if schedule_file is not None:
         from masonry.mission.schedule_file import read_schedule

@@ -101,7 +101,8 @@ class BrickUav(UavModel):
         self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
         self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
         self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
-        self.effector = Tool.at(config.airframe.effector_offset_m)
+        # the rod descends on its unlocked ball joint: it hangs plumb however the UAV leans (masonry.fsm.tool)
+        self.effector = Tool.at(config.airframe.effector_offset_m, plumb=True)
         self._camera_align = CameraAlign()
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan

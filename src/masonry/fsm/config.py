@@ -120,6 +120,13 @@ class UavConfig:
     spray_descent_s: float = _T.spray_descent_s
     stable_time_s: float = _T.stable_time_s  # hover still this long over the segment start before descending
     spray_tolerance_m: float = 0.015
+    # What the tool saw (issue 18): the nozzle's track over the segment (telemetry, with the lean) covers a point
+    # of it within spray_check_radius_m (from no higher than spray_check_height_m); below spray_min_coverage of the segment (a gust pushed it off) the UAV
+    # sprays it again, back along it, up to max_spray_passes in all. Calm air: one pass, as before.
+    spray_check_radius_m: float = 0.02
+    spray_check_height_m: float = 0.2  # and only from at most this high above the surface (the spray's reach)
+    spray_min_coverage: float = 0.9
+    max_spray_passes: int = 3
     close_dwell_s: float = _T.close_dwell_s
     # Chaining (paper, Section V: "it continues to the next assigned task"): the task is reported done once the
     # valve is closed; the UAV hovers there up to ``chain_wait_s`` for its next task, and a segment starting

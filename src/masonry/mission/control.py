@@ -201,6 +201,7 @@ class MissionControl:
         schedule: Any = None,
         events_sink: EventSink | None = None,
         fence: Site | None = None,
+        wind_limit: Any = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.schedule_policy import make_dispatcher
@@ -210,6 +211,8 @@ class MissionControl:
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
         self.sink = events_sink
+        #: the wind limit (masonry.mission.wind_limit.WindLimit; None: none)
+        self.wind_limit = wind_limit
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
         #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
@@ -402,6 +405,8 @@ class MissionControl:
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
+            if self.wind_limit is not None and self.wind_limit.update(now_s):
+                self._on_wind(now_s)
             if (
                 self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
             ) and not self.operator.holds_dispatch():
@@ -775,6 +780,8 @@ class MissionControl:
 
         if not self.operator.may_fly(self, name):
             return False  # recalled, or its role at the operator's fleet limit
+        if self.wind_limit is not None and not self.wind_limit.allows(name):
+            return False  # above its max_wind_mps: it finishes its task and lands
         if self.columns.phase(name) is Phase.LANDED and not self.columns.take_off(name):
             self._deferred_at = self.columns.version
             return False
@@ -787,6 +794,10 @@ class MissionControl:
         changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
         if self.operator.paused or self.operator.held or self.operator.aborting:
             return  # waiting for the operator is no stall
+        wind = self.wind_limit
+        if wind is not None and wind.grounded:
+            self._watch.observe(now_s, ("wind", wind.version))
+            return  # waiting for the wind to drop is no stall either
         signature = (
             self.operator.version,
             self._results,
@@ -803,6 +814,18 @@ class MissionControl:
         )
         log.warning("%s", self.stall.line())
         self._emit(now_s, "stall", line=self.stall.line())
+
+    def _on_wind(self, now_s: float) -> None:
+        """The wind grounded or freed UAVs: say so, and dispatch again."""
+        wind = self.wind_limit
+        assert wind is not None
+        self._dirty = True
+        speed = wind.speed_mps if wind.speed_mps is not None else math.nan
+        grounded = sorted(wind.grounded)
+        if grounded:
+            log.warning("wind %.1f m/s: no tasks for %s (above max_wind_mps)", speed, ", ".join(grounded))
+        else:
+            log.info("wind %.1f m/s: every UAV within its max_wind_mps, dispatching again", speed)
 
     def _journal_visit(self, visit: SiteVisit) -> None:
         """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""

@@ -15,7 +15,7 @@ import contextlib
 import dataclasses
 import math
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -356,6 +356,7 @@ class SimulatedMission:
         schedule: OfflineSchedule | None = None,
         events_sink: EventSink | None = None,
         vehicle: str | None = None,
+        max_wind_mps: float | Mapping[str, float] | None = None,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -533,6 +534,7 @@ class SimulatedMission:
                 schedule=schedule if policy == SCHEDULE_POLICY else None,
                 events_sink=events_sink,
                 fence=blueprint.site,
+                wind_limit=_wind_limit(faults, fleet, max_wind_mps),
             )
             if state is not None:
                 mc.restore(state)
@@ -663,3 +665,20 @@ class SimulatedMission:
 
 
 __all__ = ["POLICIES", "SimulatedMission", "fleet_for", "simulate"]
+
+
+def _wind_limit(faults: Any, fleet: Sequence[Any], max_wind_mps: float | Mapping[str, float] | None) -> Any:
+    """Mission control's wind limit for the simulated site (None in still air): each UAV's ``max_wind_mps``
+    (one figure for all, or per name; default :data:`~masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`) against
+    the site's mean wind at 10 m."""
+    from masonry.mission.wind_limit import DEFAULT_MAX_WIND_MPS, WindLimit
+
+    wind = faults.site_wind() if faults is not None else None
+    if wind is None or wind.calm:
+        return None
+    if isinstance(max_wind_mps, Mapping):
+        limits = {u.name: float(max_wind_mps.get(u.name, DEFAULT_MAX_WIND_MPS)) for u in fleet}
+    else:
+        limit = DEFAULT_MAX_WIND_MPS if max_wind_mps is None else float(max_wind_mps)
+        limits = {u.name: limit for u in fleet}
+    return WindLimit(limits, wind.speed_at)

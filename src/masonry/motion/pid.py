@@ -60,8 +60,9 @@ class PIDGains:
 
     Defaults are tuned for a 2-5 kg multirotor tracking mocap positions at 10-50 Hz through an autopilot velocity
     loop with a ~0.3 s lag: horizontally kp 3 /s and a strong integral (ki 2 /s^2, up to 1 m/s) so that wind is
-    rejected (a horizontal wind leaves a velocity error the autopilot does not correct; with kp 1.2, ki 0.1 the
-    UAV could not hold 1.5 cm in 1 m/s gusts, see docs/performance.md), output up to 1.5 m/s. The
+    rejected (the autopilot's own integral takes a steady wind out over a second or so, and this one what
+    is left of gusts; with kp 1.2, ki 0.1, on a loop without integral action, the UAV could not hold 1.5 cm in
+    1 m/s gusts, see docs/performance.md), output up to 1.5 m/s. The
     position ``kd`` defaults to 0: the flight controller's velocity loop already damps the vehicle, and a derivative
     on the measurement would scale down the trajectory's velocity feed-forward while tracking.
     ``derivative_tau_s`` is the time constant of a first-order low-pass on the measured rate (0 for none).

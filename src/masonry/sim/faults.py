@@ -9,11 +9,17 @@ key           value               effect
 grasp         probability [0, 1]  an attach attempt fails (magnet on, touching, nothing attached)
 dropout       probability [0, 1]  a whole camera frame carries no marker observation
 occlusion     probability [0, 1]  in a frame, one marker of every brick is hidden
-gusts         m/s >= 0            standard deviation of the wind gusts (horizontal)
+gusts         m/s >= 0            turbulence of this horizontal intensity (see below)
 battery       1/s >= 0            battery drain while airborne, fraction of a full pack per second
 link-loss     NAME@SECONDS        the UAV's autopilot link goes silent at that simulated time
 uav-loss      NAME@SECONDS        the UAV fails (falls, disarms) at that simulated time
 ============  ==================  ===============================================================
+
+The wind itself (``--wind SPEED[@DIR_DEG]``, ``--turbulence LEVEL|M/S``) is :attr:`Faults.wind`, a
+:class:`masonry.sim.wind.WindConfig`. ``gusts=S`` is kept for old command lines: it is Dryden turbulence of
+horizontal intensity S m/s (``--turbulence S``) in whatever mean wind ``--wind`` gives; with ``--turbulence``
+as well it is refused (one of the two). Before the wind model it was an Ornstein-Uhlenbeck gust of standard
+deviation S and a 2 s correlation time, with no mean wind.
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ from types import MappingProxyType
 from typing import Any
 
 from masonry.errors import InputError
+from masonry.sim.wind import WindConfig
 
 __all__ = ["FAULT_KEYS", "Faults"]
 
@@ -66,6 +73,7 @@ class Faults:
         battery_drain_per_s: battery drain while airborne (fraction of a full pack per second); None keeps the
             vehicle's own figure (``VehicleConfig.battery_drain_per_s``).
         uav_loss_at_s: UAV name -> simulated time at which the UAV fails (motors stop, it falls).
+        wind: the site's mean wind and turbulence (default: still air).
     """
 
     grasp_failure: float = 0.0
@@ -75,6 +83,7 @@ class Faults:
     link_loss_at_s: Mapping[str, float] = field(default_factory=dict)
     battery_drain_per_s: float | None = None
     uav_loss_at_s: Mapping[str, float] = field(default_factory=dict)
+    wind: WindConfig = field(default_factory=WindConfig)
 
     def __post_init__(self) -> None:
         for name in _PROBABILITIES:
@@ -88,6 +97,13 @@ class Faults:
         ):
             raise InputError(
                 f"fault gusts_mps: must be a speed from 0 to {MAX_GUSTS_MPS:g} m/s, got {self.gusts_mps!r}"
+            )
+        if not isinstance(self.wind, WindConfig):
+            raise InputError(f"fault wind: a WindConfig, got {self.wind!r}")
+        if self.gusts_mps > 0 and self.wind.turbulence != "none":
+            raise InputError(
+                f"fault gusts={self.gusts_mps:g} and turbulence {self.wind.turbulence}: give one of the two "
+                "(gusts=S is turbulence of intensity S)"
             )
         drain = self.battery_drain_per_s
         if drain is not None and not (
@@ -118,6 +134,12 @@ class Faults:
     def any(self) -> bool:
         """True when at least one fault is on."""
         return self != Faults()
+
+    def site_wind(self) -> WindConfig:
+        """The wind the world blows: :attr:`wind`, with ``gusts`` as its turbulence intensity."""
+        if self.gusts_mps > 0:
+            return replace(self.wind, turbulence="custom", turbulence_mps=self.gusts_mps)
+        return self.wind
 
     def uav_names(self) -> frozenset[str]:
         """Every UAV name a timed fault refers to."""

@@ -5,8 +5,12 @@ The model (plain floats, no numpy on the hot path: a world steps many of these t
 - The autopilot's velocity loop is a first-order lag with time constant ``velocity_tau_s`` toward the commanded
   velocity, whose magnitude is limited (horizontal speed, climb, descent), and the resulting acceleration is
   limited too (horizontal, vertical). Yaw rate follows its setpoint with its own lag and limit.
-- Wind gusts: a horizontal Ornstein-Uhlenbeck wind (standard deviation ``gusts_mps``, correlation time
-  ``gust_tau_s``) pushes the airframe with acceleration ``drag_per_s * wind``; the velocity loop fights it.
+- Wind (``wind``: a :class:`masonry.sim.wind.WindField`, mean wind and Dryden turbulence): the air pushes the
+  airframe through its drag on the airspeed (linear rotor drag ``drag_per_s`` plus quadratic body drag
+  ``drag_quad_per_m``); the autopilot's integral action estimates that push and takes it out over
+  ``wind_reject_tau_s``, so a steady wind is held against, and the thrust's horizontal part is limited by the
+  tilt limit (``VehicleConfig.tilt_limit_rad``): beyond it the vehicle is blown away, as a real one is. In still
+  air (no ``wind``) none of this runs: the loop is the lag above, exactly.
 - Like ArduPilot's GUIDED mode: a velocity setpoint is followed for ``setpoint_timeout_s``, then the vehicle
   brakes and holds the position where it stopped. ``takeoff`` climbs to the altitude on its own (a velocity
   setpoint during the climb takes over, as on ArduCopter); ``land`` descends at ``land_speed_mps`` and disarms on
@@ -32,6 +36,7 @@ from masonry.geometry import wrap_angle_rad
 from masonry.ports import Telemetry, Vec3
 from masonry.sim.shaping import Shaper
 from masonry.sim.vehicle_config import VehicleConfig
+from masonry.sim.wind import WindConfig, WindField
 
 __all__ = ["GRAVITY_MPS2", "SimVehicle", "VehicleConfig"]
 
@@ -78,7 +83,9 @@ class SimVehicle:
         position_m: where it stands (ENU); it starts landed and disarmed there.
         yaw_rad: initial heading.
         rng: randomness for wind and telemetry noise (own stream: other vehicles are unaffected).
-        gusts_mps: wind gust standard deviation (0: still air).
+        gusts_mps: the old ``gusts`` knob: a Dryden turbulence of this horizontal intensity (m/s) in no mean
+            wind (ignored when ``wind`` is given).
+        wind: the wind this vehicle flies in (None: still air, unless ``gusts_mps``).
         battery_drain_per_s: override of ``config.battery_drain_per_s``.
         ground_z_m: height of the ground under it (default: the starting height).
         start_s: the vehicle's clock at creation (keep it equal to the simulation clock).
@@ -92,6 +99,7 @@ class SimVehicle:
         yaw_rad: float = 0.0,
         rng: np.random.Generator | None = None,
         gusts_mps: float = 0.0,
+        wind: WindField | None = None,
         battery_drain_per_s: float | None = None,
         ground_z_m: float | None = None,
         start_s: float = 0.0,
@@ -115,11 +123,17 @@ class SimVehicle:
         self._drain = (
             self.config.battery_drain_per_s if battery_drain_per_s is None else float(battery_drain_per_s)
         )
-        self._wx = self._wy = 0.0
-        self._push: tuple[float, float] = (0.0, 0.0)
-        self._windy = self.gusts_mps > 0.0
-        if self.gusts_mps > 0:
-            self._wx, self._wy = self.gusts_mps * self._gauss(), self.gusts_mps * self._gauss()
+        self._wx = self._wy = self._wz = 0.0
+        if wind is None and self.gusts_mps > 0:
+            wind_rng = np.random.default_rng(rng.integers(2**63) if rng is not None else 1)
+            wind = WindField(
+                WindConfig(turbulence="custom", turbulence_mps=self.gusts_mps), wind_rng, start_s
+            )
+        self.wind = wind
+        self._dhat = [0.0, 0.0, 0.0]  # the autopilot's estimate of the wind's push (its integrators), m/s^2
+        self._west = [0.0, 0.0]  # its wind estimate (what the WIND message reports), m/s
+        self._wind_k = (-1.0, 0.0, 0.0, 0.0)
+        self._push: tuple[float, float] = (0.0, 0.0)  # SimVehicle.push_mps2
         self._sp: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         self._sp_time = -math.inf
         self._takeoff_z: float | None = None
@@ -170,7 +184,14 @@ class SimVehicle:
 
     @property
     def wind_mps(self) -> tuple[float, float]:
+        """The air's horizontal velocity at the vehicle at its last step (m/s, ENU)."""
         return (self._wx, self._wy)
+
+    @property
+    def wind_estimate_mps(self) -> tuple[float, float]:
+        """The autopilot's wind estimate (ArduPilot's WIND message): the wind, smoothed over
+        ``wind_estimate_tau_s``; (0, 0) in still air."""
+        return (self._west[0], self._west[1])
 
     @property
     def taking_off(self) -> bool:
@@ -518,11 +539,12 @@ class SimVehicle:
             az = -amax
         if amax < az:  # noqa: PLR1730 (no min/max call: hot loop)
             az = amax
-        if self._windy:
-            gx, gy = self._gust(dt_s)
-            ax += gx
-            ay += gy
-        self._ax, self._ay = ax, ay
+        if self.wind is not None:
+            # the tilt (attitude_rad) shows the thrust, leaning into the wind; the motion takes the net push
+            self._ax, self._ay, ax, ay, az = self._wind_push(ax, ay, az, vx, vy, vz, dt_s)
+        else:
+            self._ax, self._ay = ax, ay
+        ax, ay = ax + self._push[0], ay + self._push[1]  # a test's steady push (0.0: the same numbers)
         vx, vy, vz = vx + ax * dt_s, vy + ay * dt_s, vz + az * dt_s
         self._vx, self._vy, self._vz = vx, vy, vz
         dx, dy, dz = vx * dt_s, vy * dt_s, vz * dt_s
@@ -573,20 +595,59 @@ class SimVehicle:
     @push_mps2.setter
     def push_mps2(self, value: tuple[float, float]) -> None:
         self._push = (float(value[0]), float(value[1]))
-        self._windy = self.gusts_mps > 0.0 or self._push != (0.0, 0.0)
 
-    def _gust(self, dt_s: float) -> tuple[float, float]:
-        """The wind's push over one step (m/s^2, x and y): the gusts move on (Ornstein-Uhlenbeck), times the drag,
-        plus the steady :attr:`push_mps2`."""
-        px, py = self._push
-        if not self.gusts_mps > 0.0:
-            return px, py
+    def _wind_push(
+        self, ax: float, ay: float, az: float, vx: float, vy: float, vz: float, dt_s: float
+    ) -> tuple[float, float, float, float, float]:
+        """The tilt's and the net acceleration for the loop's commanded one, in wind: ``(a - push estimate) + push``, with the
+        thrust's horizontal part within the tilt limit.
+
+        The commanded acceleration is what the still-air loop asks of the airframe net of its drag at the ground
+        speed; the wind's push is what the drag at the airspeed adds to that (zero in still air). Returns it and
+        sets the state the wind leaves behind (the push estimate, the wind estimate, the wind seen). The tilt's
+        acceleration is the thrust's net of the drag at the ground speed: the command itself in still air, as
+        :attr:`attitude_rad` reconstructs it there.
+        """
         cfg = self.config
-        a = dt_s / cfg.gust_tau_s
-        b = self.gusts_mps * math.sqrt(2.0 * a)
-        self._wx += -self._wx * a + b * self._gauss()
-        self._wy += -self._wy * a + b * self._gauss()
-        return cfg.drag_per_s * self._wx + px, cfg.drag_per_s * self._wy + py
+        wx, wy, wz = self.wind.at(self._t, self._z - self.ground_z_m)  # type: ignore[union-attr]
+        self._wx, self._wy, self._wz = wx, wy, wz
+        k, q = cfg.drag_per_s, cfg.drag_quad_per_m
+        rx, ry, rz = wx - vx, wy - vy, wz - vz  # the air relative to the airframe
+        rel = math.sqrt(rx * rx + ry * ry + rz * rz)
+        own = math.sqrt(vx * vx + vy * vy + vz * vz)
+        # push = drag(airspeed) - drag(ground speed): k w + q (|w - v| (w - v) + |v| v)
+        px, py, pz = (
+            k * wx + q * (rel * rx + own * vx),
+            k * wy + q * (rel * ry + own * vy),
+            k * wz + q * (rel * rz + own * vz),
+        )
+        if self._wind_k[0] != dt_s:
+            self._wind_k = (
+                dt_s,
+                1.0 - math.exp(-dt_s / cfg.wind_reject_tau_s),
+                1.0 - math.exp(-dt_s / cfg.wind_estimate_tau_s),
+                1.0 - math.exp(-dt_s / cfg.wind_reject_z_tau_s),
+            )
+        _, kr, ke, kz = self._wind_k
+        d = self._dhat
+        # tilt: the thrust's horizontal part (the command minus the push estimate, plus the drag at the ground
+        # speed that the still-air loop hides) within the tilt limit
+        drag_x, drag_y = k * vx + q * own * vx, k * vy + q * own * vy
+        tx, ty = ax - d[0] + drag_x, ay - d[1] + drag_y
+        limit = GRAVITY_MPS2 * math.tan(cfg.tilt_limit_rad)
+        t = math.sqrt(tx * tx + ty * ty)
+        if t > limit:
+            tx, ty = tx * limit / t, ty * limit / t
+            # the integrators stop winding up at the limit (ArduPilot's limit flags)
+        else:
+            d[0] += (px - d[0]) * kr
+            d[1] += (py - d[1]) * kr
+        net_z = az - d[2] + pz
+        d[2] += (pz - d[2]) * kz
+        e = self._west
+        e[0] += (wx - e[0]) * ke
+        e[1] += (wy - e[1]) * ke
+        return tx - drag_x, ty - drag_y, tx - drag_x + px, ty - drag_y + py, net_z
 
     def _touchdown(self) -> None:
         # a take-off starts on the ground: with a shaper's delay the climb begins a few steps after the command

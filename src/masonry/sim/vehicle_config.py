@@ -36,8 +36,21 @@ class VehicleConfig:
     battery_drain_per_s: float = 1.0 / 1200.0  # a full pack lasts 20 minutes airborne
     battery_arm_min_fraction: float = 0.15
     battery_land_fraction: float = 0.05
+    # The airframe in wind (masonry.sim.wind; a 4.5 kg hexacopter, docs/simulator.md "Wind"): rotor drag linear
+    # in airspeed (``drag_per_s``, per unit mass) plus the body's quadratic drag (0.5 rho Cd A / m: Cd A about
+    # 0.12 m^2), a tilt limit (ArduCopter ANGLE_MAX 30 deg) and thrust-to-weight (a tilt beyond acos(1 / T/W)
+    # cannot hold altitude); the autopilot's integral action takes the wind's push out over ``wind_reject_tau_s``
+    # (ArduCopter PSC_VELXY_P 2, PSC_VELXY_I 1: the PI's zero near 1-2 s) and its wind estimate (the WIND
+    # message) follows the wind over ``wind_estimate_tau_s``.
     drag_per_s: float = 0.5
-    gust_tau_s: float = 2.0
+    drag_quad_per_m: float = 0.016
+    max_tilt_rad: float = math.radians(30.0)
+    thrust_to_weight: float = 2.0
+    wind_reject_tau_s: float = 1.0
+    # vertically the push is taken out faster: ArduCopter's altitude controller closes an acceleration loop on the
+    # IMU (PSC_ACCZ_P 0.5, PSC_ACCZ_I 1.0 at 400 Hz), the horizontal one only through the attitude
+    wind_reject_z_tau_s: float = 0.3
+    wind_estimate_tau_s: float = 5.0
     mocap_noise_m: float = 0.0015
     velocity_noise_mps: float = 0.005
     yaw_noise_rad: float = 0.002
@@ -60,7 +73,10 @@ class VehicleConfig:
             "takeoff_speed_mps",
             "land_speed_mps",
             "setpoint_timeout_s",
-            "gust_tau_s",
+            "max_tilt_rad",
+            "wind_reject_tau_s",
+            "wind_reject_z_tau_s",
+            "wind_estimate_tau_s",
         ):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -69,6 +85,17 @@ class VehicleConfig:
             raise InvalidArgument(
                 f"VehicleConfig.takeoff_ramp_s must be finite and >= 0, got {self.takeoff_ramp_s!r}"
             )
+        if not (math.isfinite(self.thrust_to_weight) and self.thrust_to_weight > 1.0):
+            raise InvalidArgument(
+                f"VehicleConfig.thrust_to_weight must be > 1, got {self.thrust_to_weight!r}"
+            )
+        if not (math.isfinite(self.drag_quad_per_m) and self.drag_quad_per_m >= 0.0):
+            raise InvalidArgument(f"VehicleConfig.drag_quad_per_m must be >= 0, got {self.drag_quad_per_m!r}")
+
+    @property
+    def tilt_limit_rad(self) -> float:
+        """The steepest tilt that still holds altitude: ANGLE_MAX or the thrust's limit, whichever is lower."""
+        return min(self.max_tilt_rad, math.acos(1.0 / self.thrust_to_weight))
 
 
 #: The simulated autopilot of ``masonry sim``, ``simulate()`` and a simulated ``masonry fly`` unless told otherwise

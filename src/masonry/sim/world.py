@@ -23,6 +23,7 @@ import numpy as np
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError
+from masonry.geometry import body_to_world_floats
 from masonry.planner.tasks import AdhesionTask
 from masonry.ports import CameraFrame, Telemetry, UavPorts, Vec3
 from masonry.sim.adhesive import AdhesiveDeposit
@@ -32,6 +33,7 @@ from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
+from masonry.sim.wind import WindField
 
 __all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
 
@@ -138,8 +140,11 @@ class SimUav:
         return self.tool_point_m(self.world.airframe.effector_offset_m)
 
     def nozzle_m(self) -> Vec3:
-        """The spray nozzle's outlet in the world."""
-        return self.tool_point_m(self.world.airframe.nozzle_offset_m)
+        """The spray nozzle's outlet in the world: fixed to the body, it leans with it (10-20 degrees into a
+        strong wind: centimetres at the outlet)."""
+        x, y, z = self.vehicle.position_m
+        rx, ry, rz = body_to_world_floats(self.vehicle.attitude_rad, self.world.airframe.nozzle_offset_m)
+        return (x + rx, y + ry, z + rz)
 
     def telemetry(self) -> Telemetry:
         """What the flight controller port reports (stale, with ``link_ok`` False, after link or UAV loss)."""
@@ -248,13 +253,22 @@ class World:
         """Add a UAV landed and disarmed at ``spec.home_m``; its random stream derives from the seed and its name."""
         if spec.name in self.uavs:
             raise InputError(f"a UAV named {spec.name!r} is already in the world")
-        vehicle_ss, uav_ss = np.random.SeedSequence([self.seed, 1, zlib.crc32(spec.name.encode())]).spawn(2)
+        # the third stream (the wind's) leaves the first two as they were before the wind model
+        vehicle_ss, uav_ss, wind_ss = np.random.SeedSequence(
+            [self.seed, 1, zlib.crc32(spec.name.encode())]
+        ).spawn(3)
+        site_wind = self.faults.site_wind()
+        wind = (
+            None
+            if site_wind.calm
+            else WindField(site_wind, np.random.default_rng(wind_ss), self.clock.now_s())
+        )
         vehicle = SimVehicle(
             self.vehicle_config,
             position_m=spec.home_m,
             yaw_rad=yaw_rad,
             rng=np.random.default_rng(vehicle_ss),
-            gusts_mps=self.faults.gusts_mps,
+            wind=wind,
             battery_drain_per_s=self.faults.battery_drain_per_s,
             start_s=self.clock.now_s(),
         )
