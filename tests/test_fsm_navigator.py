@@ -71,6 +71,14 @@ def test_a_leg_is_over_only_at_low_speed_and_twice_that_after_the_patience(speed
     assert nav.at_end(now, moving) == (speed <= limit * (1 - 1e-9)) or abs(speed - limit) < 1e-9
 
 
+def test_the_arrival_tolerance_doubles_after_the_patience():
+    nav = _nav()
+    nav.fly_to(0.0, _tel(), np.array([1.0, 0.0, 1.0]), duration_s=2.0)
+    off = _tel((1.0 + 1.5 * nav.config.arrive_tolerance_m, 0.0, 1.0))
+    assert not nav.at_end(2.0, off)
+    assert nav.at_end(2.0 + nav.config.align_patience_s, off)
+
+
 def test_a_route_climbs_first_and_its_legs_are_flown_one_by_one():
     nav = _nav()
     nav.route(0.0, _tel(), np.array([2.0, 0.0, 2.0]))

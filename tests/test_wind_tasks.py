@@ -47,7 +47,8 @@ def test_a_brick_is_placed_in_a_steady_6_mps_wind(vehicle: str) -> None:
     run, world, _ = _fly("B0", WindConfig(speed_mps=6.0, direction_deg=270.0), 0, vehicle)
     assert run.result is not None and run.result.status == "done", run.result
     error = world.placement_error_m(0)
-    assert error is not None and error <= 0.015, error
+    # seeds 0-4 measured: ideal 0.17-0.68 cm, arducopter 0.60-1.63 cm; issue 18's bound is 3 cm at most
+    assert error is not None and error <= (0.01 if vehicle == "ideal" else 0.02), error
 
 
 @pytest.mark.parametrize(("vehicle", "seed"), [("ideal", 0), ("arducopter", 1), ("arducopter", 2)])

@@ -267,15 +267,20 @@ class Navigator:
     # -- questions (no side effects) -----------------------------------------------------------------------
     def at_end(self, now_s: float, tel: Telemetry, tolerance_m: float | None = None) -> bool:
         """The current leg is over by plan and the UAV is within ``tolerance_m`` of its end, slower than
-        ``arrive_speed_mps`` (twice that ``align_patience_s`` after the planned end: gusts)."""
+        ``arrive_speed_mps``; in turbulence both twice that ``align_patience_s`` after the planned end (a gust
+        that never lets it come within 8 cm fails the leg only at ``leg_timeout_s``, with the state's reason).
+        A ``tolerance_m`` given is the caller's own gate and is not doubled (the spray descent doubles its own)."""
         if now_s < self.end_s:
             return False
         cfg = self.config
+        scale = 1.0 if now_s - self.end_s < cfg.align_patience_s else 2.0
         vx, vy, vz = tel.velocity_mps
-        speed = cfg.arrive_speed_mps * (1.0 if now_s - self.end_s < cfg.align_patience_s else 2.0)
+        speed = cfg.arrive_speed_mps * scale
         if vx * vx + vy * vy + vz * vz > speed * speed:
             return False
-        tol = cfg.arrive_tolerance_m if tolerance_m is None else tolerance_m
+        tol = (
+            scale * cfg.arrive_tolerance_m if tolerance_m is None else tolerance_m
+        )  # a caller's: its own rule
         p = tel.position_m
         t = self.target_m
         if type(t) is np.ndarray:
