@@ -68,6 +68,7 @@ from masonry.adapters.mavlink_protocol import (
     MSG_HEARTBEAT,
     MSG_LOCAL_POSITION_NED,
     MSG_SYS_STATUS,
+    MSG_WIND,
     PX4_MODES,
     TYPE_MASK_VELOCITY_YAW_RATE,
     Autopilot,
@@ -115,6 +116,7 @@ __all__ = [
     "MSG_HEARTBEAT",
     "MSG_LOCAL_POSITION_NED",
     "MSG_SYS_STATUS",
+    "MSG_WIND",
     "PX4_MODES",
     "TYPE_MASK_VELOCITY_YAW_RATE",
     "Autopilot",
@@ -380,6 +382,18 @@ class MavlinkFlightController(MavlinkLink):
         self.command(f"set mode {mode}", MAV_CMD_DO_SET_MODE, params)
         with self._lock:
             self._state.custom_mode = custom  # the ACK said so; the next HEARTBEAT confirms
+
+    #: A WIND message older than this is no reading (ArduPilot streams it at 1 Hz once asked).
+    WIND_FRESH_S = 5.0
+
+    @property
+    def wind_speed_mps(self) -> float | None:
+        """The autopilot's horizontal wind estimate (m/s, its WIND message), None when it reports none."""
+        with self._lock:
+            st = self._state
+            if st.wind_speed_mps is None or self._monotonic() - st.wind_time_s > self.WIND_FRESH_S:
+                return None
+            return st.wind_speed_mps
 
     @property
     def offboard_mode(self) -> str:

@@ -44,6 +44,7 @@ from masonry.adapters.mavlink_protocol import (
     MSG_EXTENDED_SYS_STATE,
     MSG_LOCAL_POSITION_NED,
     MSG_SYS_STATUS,
+    MSG_WIND,
     TYPE_MASK_VELOCITY_YAW_RATE,
     Autopilot,
 )
@@ -163,9 +164,22 @@ class _State:
     battery_voltage_v: float = math.nan
     estimate_flags: int | None = None
     landed_state: int | None = None
+    wind_speed_mps: float | None = None  # the latest WIND message's speed (ArduPilot), and when it came
+    wind_time_s: float = -math.inf
     status_texts: list[tuple[float, int, str]] | None = None
     # the latest local heights (up, m) reported while disarmed: the ground as the EKF sees it (issue 20)
     ground_heights: deque[float] = field(default_factory=lambda: deque(maxlen=15))
+
+
+def _sensed(st: _State, kind: str, msg: Any, now: float) -> None:
+    """A SYS_STATUS (the battery) or a WIND (ArduPilot's wind estimate) into the receiver's state."""
+    if kind == "SYS_STATUS":
+        st.battery_fraction = math.nan if msg.battery_remaining < 0 else msg.battery_remaining / 100.0
+        st.battery_voltage_v = msg.voltage_battery / 1000.0 if msg.voltage_battery != 65535 else math.nan
+        return
+    speed = float(msg.speed)
+    if math.isfinite(speed) and speed >= 0.0:
+        st.wind_speed_mps, st.wind_time_s = speed, now
 
 
 #: Log the first few errors of a kind, then every this-many-th (a 30 Hz stream of bad messages must not flood).
@@ -407,6 +421,8 @@ class MavlinkLink:
             MSG_EXTENDED_SYS_STATE: 10.0,
             MSG_EKF_STATUS_REPORT if self.autopilot == "ardupilot" else MSG_ESTIMATOR_STATUS: 5.0,
         }
+        if self.autopilot == "ardupilot":
+            rates[MSG_WIND] = 1.0  # the wind limit's reading (masonry.mission.wind_limit); PX4 has no WIND
         sent_at = self._monotonic()
         for msg_id, rate_hz in rates.items():
             self._send_command(MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0), 0)
@@ -478,11 +494,8 @@ class MavlinkLink:
             elif kind == "ATTITUDE":
                 st.attitude = (msg.roll, msg.pitch, msg.yaw)
                 self.clock.observe(msg.time_boot_ms / 1000.0, now)
-            elif kind == "SYS_STATUS":
-                st.battery_fraction = math.nan if msg.battery_remaining < 0 else msg.battery_remaining / 100.0
-                st.battery_voltage_v = (
-                    msg.voltage_battery / 1000.0 if msg.voltage_battery != 65535 else math.nan
-                )
+            elif kind in ("SYS_STATUS", "WIND"):
+                _sensed(st, kind, msg, now)
             elif kind in ("EKF_STATUS_REPORT", "ESTIMATOR_STATUS"):
                 st.estimate_flags = int(msg.flags)
             elif kind == "EXTENDED_SYS_STATE":

@@ -102,6 +102,7 @@ MSG_LOCAL_POSITION_NED = 32
 MSG_EKF_STATUS_REPORT = 193
 MSG_ESTIMATOR_STATUS = 230
 MSG_EXTENDED_SYS_STATE = 245
+MSG_WIND = 168  # ardupilotmega's WIND: the EKF's wind estimate (direction it blows from, speed)
 
 
 def mode_name(autopilot: str, custom_mode: int) -> str:

@@ -55,6 +55,7 @@ from masonry.adapters.mavlink import (
     MSG_HEARTBEAT,
     MSG_LOCAL_POSITION_NED,
     MSG_SYS_STATUS,
+    MSG_WIND,
     PX4_MODES,
     FrameTransform,
     mavutil_module,
@@ -78,6 +79,7 @@ DEFAULT_RATES_HZ = {
     MSG_SYS_STATUS: 1.0,
     MSG_EKF_STATUS_REPORT: 1.0,
     MSG_EXTENDED_SYS_STATE: 1.0,
+    MSG_WIND: 1.0,  # ArduPilot's; a px4 SITL does not send it
 }
 
 
@@ -206,6 +208,7 @@ class MavlinkSitl:
         self._defaults_hz = dict(DEFAULT_RATES_HZ)
         if self.px4:
             self._defaults_hz[MSG_ESTIMATOR_STATUS] = self._defaults_hz.pop(MSG_EKF_STATUS_REPORT)
+            del self._defaults_hz[MSG_WIND]
         self._rates_hz = dict(self._defaults_hz)
         self._next_due: dict[int, float] = {}
         self._conn: Any = None
@@ -583,6 +586,10 @@ class MavlinkSitl:
             mav.estimator_status_send(
                 int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01
             )
+        elif msg_id == MSG_WIND:
+            wx, wy = v.wind_estimate_mps  # ENU, where the air goes: it blows from the opposite bearing
+            from_deg = math.degrees(math.atan2(-wx, -wy)) % 360.0 if wx or wy else 0.0
+            mav.wind_send(from_deg, math.hypot(wx, wy), 0.0)
         elif msg_id == MSG_EXTENDED_SYS_STATE:
             if not v.armed or v.on_ground:
                 landed = MAV_LANDED_STATE_ON_GROUND

@@ -59,6 +59,9 @@ class HardwareConfig:
     # the autopilot's velocity loop time constant: the state machines feed a leg's acceleration x this forward
     # (``UavConfig.velocity_lag_s``, docs/state-machines.md); 0 for none; None: the control preset's
     velocity_lag_s: float | None = None
+    # the wind above which mission control gives this UAV no task (issue 18; its heartbeats carry it and the
+    # autopilot's WIND reading): masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS for a 4.5 kg hexacopter
+    max_wind_mps: float = 8.0
     # the state machines' tuning (masonry.fsm.tuning): a preset (ideal | arducopter), then any UavConfig field
     # (``control``) and the position controller's gains per axis (``pid``) over it
     control_preset: str | None = None  # None: ``ideal``, or the simulated vehicle's preset with ``--vehicle``
@@ -211,6 +214,8 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         raise InputError(f"min_battery must be a fraction between 0 and 1, not {hw.min_battery}")
     if not hw.heartbeat_timeout_s > 0.0:
         raise InputError("heartbeat_timeout_s must be > 0")
+    if not 0.0 < hw.max_wind_mps <= 30.0:
+        raise InputError(f"max_wind_mps must be > 0 and at most 30 m/s, not {hw.max_wind_mps}")
     if not 0.0 < hw.estimate_wait_s <= 600.0:
         raise InputError(f"estimate_wait_s must be > 0 and at most 600 s, not {hw.estimate_wait_s}")
     if hw.velocity_lag_s is not None and not 0.0 <= hw.velocity_lag_s <= 2.0:

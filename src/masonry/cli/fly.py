@@ -640,6 +640,7 @@ def _fly_mission(
             uav_settings=hardware.uav_settings(tuning_preset(vehicle, adapters))
             if hardware is not None
             else None,
+            max_wind_mps=hardware.max_wind_mps if hardware is not None else None,
             events_sink=mission_log,
             vehicle=vehicle,
         )

@@ -54,6 +54,7 @@ from masonry.mission.operator import Operator
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
+from masonry.mission.wind_limit import HeardWind
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.tasks import Plan, Task
 from masonry.ports import FINISHING_STATES, RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
@@ -211,7 +212,12 @@ class MissionControl:
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
         self.sink = events_sink
-        #: the wind limit (masonry.mission.wind_limit.WindLimit; None: none)
+        #: the wind limit (masonry.mission.wind_limit.WindLimit). None given: the one the UAVs' heartbeats
+        #: report (their autopilots' wind and their uav.yaml's max_wind_mps; no UAV grounded until they do)
+        self.heard_wind: HeardWind | None = None
+        if wind_limit is None:
+            self.heard_wind = HeardWind()
+            wind_limit = self.heard_wind.limit()
         self.wind_limit = wind_limit
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
@@ -474,9 +480,7 @@ class MissionControl:
             if isinstance(msg, Progress):
                 self.events.progress += 1
             else:
-                if msg.battery is not None:
-                    link.battery = msg.battery
-                self._check_holds_task(msg, now_s)
+                self._on_heartbeat(msg, link, now_s)
             self._report(link, msg.state, msg.position_m)
             if self.sink is not None and self.uav_events:
                 self._emit_uav(now_s, link)
@@ -662,6 +666,15 @@ class MissionControl:
         self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
         self._dirty = True
         return True
+
+    def _on_heartbeat(self, msg: Heartbeat, link: UavLink, now_s: float) -> None:
+        """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
+        wind limit, and the task it holds."""
+        if msg.battery is not None:
+            link.battery = msg.battery
+        if self.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
+            self.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
+        self._check_holds_task(msg, now_s)
 
     def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
         """A UAV's heartbeat says it is idle and holds no task (none in hand, none queued) although its assignment went out

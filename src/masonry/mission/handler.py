@@ -35,6 +35,7 @@ twice. Heard again with no task, it is taken back into the mission (docs/mission
 from __future__ import annotations
 
 import logging
+import math
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
@@ -42,6 +43,7 @@ from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.mission.messages import (
+    MAX_REPORTED_WIND_MPS,
     MISSION_CONTROL,
     Assign,
     Clearance,
@@ -132,6 +134,8 @@ class UavHandler(MissionLink, ClearanceLink):
         battery: Callable[[], float] | None = None,
         swap_battery: Callable[[], bool] | None = None,
         report_battery: Callable[[], float] | None = None,
+        wind: Callable[[], float | None] | None = None,
+        max_wind_mps: float | None = None,
         reserve_fraction: float = 0.4,
         after_result: Callable[[], None] | None = None,
         tasks: Iterable[Task] | None = None,
@@ -147,6 +151,9 @@ class UavHandler(MissionLink, ClearanceLink):
         self._swap_battery = swap_battery
         #: what the heartbeats say of the battery (the reserve's, or ``report_battery``'s)
         self._report_battery = report_battery if report_battery is not None else battery
+        #: what the heartbeats say of the wind (the autopilot's reading) and of this UAV's limit (uav.yaml)
+        self._wind = wind
+        self._max_wind_mps = max_wind_mps
         self.reserve_fraction = reserve_fraction
         self.battery_swaps = 0
         self.name = name
@@ -237,6 +244,15 @@ class UavHandler(MissionLink, ClearanceLink):
         delayed past the moment mission control (told by the ``halted`` heartbeat) has released the task.
         """
         return self.model is not None and str(getattr(self.model, "state", "")) == OUT_OF_SERVICE_STATE
+
+    def _wind_reading(self) -> float | None:
+        """The autopilot's wind now (m/s, within what a heartbeat may carry), or None."""
+        if self._wind is None:
+            return None
+        w = self._wind()
+        if w is None or not math.isfinite(w):
+            return None
+        return min(MAX_REPORTED_WIND_MPS, max(0.0, float(w)))
 
     @property
     def busy(self) -> bool:
@@ -440,6 +456,8 @@ class UavHandler(MissionLink, ClearanceLink):
                     battery=None
                     if self._report_battery is None
                     else min(1.0, max(0.0, float(self._report_battery()))),
+                    wind_mps=self._wind_reading(),
+                    max_wind_mps=self._max_wind_mps,
                 )
             )
         if self._column is not None or self._columns_left:

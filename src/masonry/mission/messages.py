@@ -66,6 +66,10 @@ class Heartbeat:
     position_m: Vec3 | None = None
     #: the UAV's battery, 0..1 (None: not reported; optional on the wire, for the log and the live page)
     battery: float | None = None
+    #: the wind its autopilot reports (MAVLink WIND), m/s, and its ``max_wind_mps`` (uav.yaml): mission control
+    #: gives it no task above that (None: not reported)
+    wind_mps: float | None = None
+    max_wind_mps: float | None = None
 
 
 @dataclass(frozen=True)
@@ -256,6 +260,10 @@ def encode(message: Message) -> bytes:
         )
         if message.battery is not None:
             body["battery"] = message.battery
+        if message.wind_mps is not None:
+            body["wind_mps"] = message.wind_mps
+        if message.max_wind_mps is not None:
+            body["max_wind_mps"] = message.max_wind_mps
     elif isinstance(message, Assign):
         body.update(
             uav=message.uav,
@@ -512,6 +520,10 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         if not _finite_number(battery) or not 0.0 <= battery <= 1.0:
             return None
         battery = float(battery)
+    wind: Any = data.get("wind_mps")
+    limit: Any = data.get("max_wind_mps")
+    if wind is not None or limit is not None:
+        return None  # the checked decoder says what is wrong with them, if anything
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
     hb.__dict__.update(
@@ -521,6 +533,8 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         task_id=task_id,
         position_m=p,
         battery=battery,
+        wind_mps=None,
+        max_wind_mps=None,
     )
     return hb
 
@@ -597,7 +611,26 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         task_id=f.str_("task_id", optional=True),
         position_m=f.vec("position_m", optional=True),
         battery=_battery(f),
+        wind_mps=_speed(f, "wind_mps", 0.0, MAX_REPORTED_WIND_MPS, low_open=False),
+        max_wind_mps=_speed(f, "max_wind_mps", 0.0, MAX_WIND_LIMIT_MPS, low_open=True),
     )
+
+
+#: A wind reading above this is no reading (a hurricane's sustained wind is 33 m/s), and a limit above
+#: ``MAX_WIND_LIMIT_MPS`` no small UAV's (masonry.mission.wind_limit checks the same).
+MAX_REPORTED_WIND_MPS = 60.0
+MAX_WIND_LIMIT_MPS = 30.0
+
+
+def _speed(f: _Fields, name: str, low: float, high: float, *, low_open: bool) -> float | None:
+    value = f.num(name, optional=True)
+    if value is None:
+        return None
+    if not (low < value <= high if low_open else low <= value <= high):
+        raise f.fail(
+            name, f"must be {'>' if low_open else '>='} {low:g} and at most {high:g} m/s, got {value}"
+        )
+    return float(value)
 
 
 def _battery(f: _Fields) -> float | None:

@@ -86,6 +86,7 @@ def run_remote_uav(
     echo: Any = None,
     adapters: UavPorts | None = None,
     uav_settings: Mapping[str, Any] | None = None,
+    max_wind_mps: float | None = None,
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
     events_sink: Any = None,
@@ -117,6 +118,8 @@ def run_remote_uav(
             not apply; the caller checks the adapters before flight and closes them afterwards.
         uav_settings: :class:`masonry.fsm.UavConfig` fields to override (``masonry fly`` passes the uav.yaml's
             tuning, ``HardwareConfig.uav_settings``: the same as in single-task mode).
+        max_wind_mps: this UAV's wind limit (uav.yaml), sent with its heartbeats beside its autopilot's wind
+            reading: mission control gives it no task above it (None: not sent).
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
@@ -164,6 +167,8 @@ def run_remote_uav(
         transport,
         position=lambda: fc.telemetry().position_m,
         report_battery=lambda: fc.telemetry().battery_fraction,
+        wind=lambda: getattr(fc, "wind_speed_mps", None),  # the autopilot's WIND reading (None: none)
+        max_wind_mps=max_wind_mps,
         heartbeat_period_s=heartbeat_period_s,
         heartbeat_timeout_s=heartbeat_timeout_s,
         after_result=await_answer,

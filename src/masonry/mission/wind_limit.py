@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from masonry.errors import InputError
 
-__all__ = ["DEFAULT_MAX_WIND_MPS", "WindLimit"]
+__all__ = ["DEFAULT_MAX_WIND_MPS", "HeardWind", "WindLimit"]
 
 #: A 4.5 kg hexacopter (docs/simulator.md, "Wind"): its 30 degree tilt runs out at 8.8 m/s of airspeed (11 m/s
 #: mean at 10 m); at 8 m/s (6.4 m/s at its 2 m working height) it keeps 1.8 m/s^2 to manoeuvre and 2.4 m/s of
@@ -68,3 +68,33 @@ class WindLimit:
     def allows(self, name: str) -> bool:
         """``name`` may be given a task."""
         return name not in self.grounded
+
+
+#: A UAV's wind report older than this no longer counts (its heartbeats stopped, or stopped saying it).
+HEARD_WIND_FRESH_S = 10.0
+
+
+@dataclass
+class HeardWind:
+    """The wind as the UAVs' heartbeats report it (distributed missions: each autopilot's WIND message) and each
+    UAV's ``max_wind_mps`` (its uav.yaml): a :class:`WindLimit`'s ``limits_mps`` and ``reading``.
+
+    The reading is the strongest fresh report: the site's wind, as its most exposed UAV feels it.
+    """
+
+    limits_mps: dict[str, float] = field(default_factory=dict)
+    reports: dict[str, tuple[float, float]] = field(default_factory=dict)  # name -> (heard at s, wind m/s)
+
+    def heard(self, name: str, now_s: float, wind_mps: float | None, max_wind_mps: float | None) -> None:
+        if max_wind_mps is not None:
+            self.limits_mps[name] = float(max_wind_mps)
+        if wind_mps is not None:
+            self.reports[name] = (now_s, float(wind_mps))
+
+    def reading(self, now_s: float) -> float | None:
+        fresh = [w for t, w in self.reports.values() if now_s - t <= HEARD_WIND_FRESH_S]
+        return max(fresh) if fresh else None
+
+    def limit(self) -> WindLimit:
+        """The mission's wind limit over these reports (its limits follow them as UAVs report theirs)."""
+        return WindLimit(self.limits_mps, self.reading)

@@ -13,6 +13,7 @@ Behaviour a state machine sees, as on the real UAV:
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -63,6 +64,14 @@ class SimFlightController:
         if uav.link_ok:  # _listening(), inline: every control tick
             vehicle = uav.vehicle
             vehicle.command_velocity(velocity_mps, yaw_rate_radps, vehicle._t)
+
+    @property
+    def wind_speed_mps(self) -> float | None:
+        """The autopilot's horizontal wind estimate's speed (what a WIND message reports); None: link down."""
+        if not self._listening():
+            return None
+        wx, wy = self._uav.vehicle.wind_estimate_mps
+        return math.hypot(wx, wy)
 
     def telemetry(self) -> Telemetry:
         uav = self._uav
