@@ -618,6 +618,12 @@ class UavModel:
         self._route(tel, np.array([home[0], home[1], z]))
 
     def do_home(self, tel: Telemetry) -> None:
+        if tel.on_ground and tel.armed:
+            # still on the ground: a task given up before its take-off had lifted it (a recall at once, on
+            # the shaped arducopter vehicle): land (disarm) and take off afresh for the next task, since an
+            # autopilot ignores velocity setpoints on the ground (it flew "pickup_goto" on its pad for 30 s)
+            self.arrived()
+            return
         # A task assigned on the way home turns the UAV back at once (instead of landing, idling and taking
         # off again), unless the UAV is to retire or its battery is low.
         if self._may_take_task(tel):
