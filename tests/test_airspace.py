@@ -381,8 +381,8 @@ def _outside_m(columns, uav, p):
 #: separation rule keeps 0.1 m over the 1.0 m target for it. ``ideal``: 0.02-0.05 m measured since legs feed the
 #: acceleration forward and UAVs ask at rest (up to 0.17 m before, 4x25 seed 1). ``arducopter`` (its jerk-limited
 #: shaping and delay): 0.28 m before legs were planned within its jerk and acceleration limits and the take-off
-#: braked ahead of them, 0.07-0.10 m since: the whole of the rule's allowance (docs/safety.md, "Tracking error on
-#: a real autopilot").
+#: braked ahead of them, 0.05-0.07 m since (0.10 m with a 0.71 s feed-forward lag): within the rule's allowance
+#: (docs/safety.md, "Tracking error on a real autopilot").
 OUTSIDE_M = {"ideal": 0.07, "arducopter": 0.10}
 
 

@@ -43,7 +43,7 @@ _SWITCHES = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in
 PRESETS: Mapping[str, Mapping[str, Any]] = {
     "ideal": {},
     "arducopter": {
-        "velocity_lag_s": 0.71,
+        "velocity_lag_s": 0.57,
         "leg_jerk_mps3": 5.0,
         "leg_accel_mps2": 2.5,
         "ask_settle_tolerance_m": 0.05,
