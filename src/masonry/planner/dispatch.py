@@ -458,6 +458,10 @@ class Dispatcher:
         i = self._running(task_id, "complete")
         uav = self._stop(i)
         self._position[uav] = self._end_m[i]
+        self._mark_done(i, task_id)
+
+    def _mark_done(self, i: int, task_id: str) -> None:
+        """Task ``i`` is done (one more attempt counted): the tasks that waited for it may become available."""
         self._status[i] = _DONE
         self._done.add(task_id)
         self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
@@ -485,14 +489,7 @@ class Dispatcher:
         uav = self._stop(i) if self._status[i] == _RUNNING else None
         self._unavailable(i)
         self._ready[self._role[i]].pop(i, None)
-        self._status[i] = _DONE
-        self._done.add(task_id)
-        self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
-        prereqs = self._prereqs
-        for d in self._dependents[i]:
-            prereqs[d] -= 1
-            if prereqs[d] == 0:
-                self._maybe_available(d)
+        self._mark_done(i, task_id)
         return uav
 
     def fail(self, task_id: str, *, count: bool = True) -> bool:
