@@ -153,6 +153,38 @@ def test_a_task_given_up_with_the_brick_on_board_puts_it_back_on_its_pallet(load
     assert uav.state == "halted" and math.hypot(x - home[0], y - home[1]) < 0.2  # no battery service: retired
 
 
+def test_a_task_given_up_as_the_magnet_takes_the_brick_in_the_descent_puts_it_back() -> None:
+    """Found by the chaos campaign (seed 192): mission control fell silent just as the magnet took the brick, still
+    in ``pickup_descend``; the abort there flew the brick home, and the retry found no brick on the pallet."""
+    bp = load_blueprint(CASE_STUDY)
+    task = plan(bp).task("B0")
+    world = World(bp, seed=0)
+    spec = next(u for u in bp.fleet if u.role == "brick")
+    sim_uav = world.add_uav(spec)
+    uav = _machine(bp, world, sim_uav, task)
+    on_pallet = world.bricks[task.brick].top_center_m
+    aborted: list[str] = []
+
+    def advance(dt_s: float) -> None:
+        if not aborted and uav.state == "pickup_descend" and world.bricks[task.brick].carrier == "brick-1":
+            aborted.append(uav.state)
+            assert uav.may_abort()
+            uav.abort(reason="mission control lost (3.0 s silent)")
+        world.step(dt_s)
+
+    run = run_single_task(uav, world.clock, advance=advance, dt_s=0.05, timeout_s=400.0)
+    assert aborted == ["pickup_descend"]
+    assert run.result is not None and run.result.status == "failed"
+    assert run.result.reason.startswith("mission control lost (3.0 s silent); brick 0 put back")
+    brick = world.bricks[task.brick]
+    assert brick.carrier is None  # released where it was picked up, for the retry
+    assert (
+        math.dist(brick.top_center_m[:2], on_pallet[:2]) < 0.04
+        and abs(brick.top_center_m[2] - on_pallet[2]) < 0.02
+    )
+    assert "putback_release" in [s for _, s in uav.trace]
+
+
 def test_a_brick_put_back_is_picked_up_again_by_the_retry() -> None:
     """The retry (here by the same UAV after a pack swap) finds the brick on its pallet and places it."""
     bp = load_blueprint(CASE_STUDY)

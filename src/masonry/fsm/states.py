@@ -89,8 +89,10 @@ BRICK_STATES: list[State] = [
 BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place"]
 #: States in which the UAV is (or may be) in the air under our control (``lost`` fires from these).
 _AIRBORNE_COMMON: list[str] = ["home", "land", "failsafe"]
-#: Brick task states in which the brick may be on the magnet (an ``abort`` there puts it back if it is).
+#: Brick task states in which the brick may be on the magnet (an ``abort`` there puts it back if it is; the
+#: magnet may take the brick before the descent ends, as the chaos campaign saw, seed 192).
 BRICK_LOADED_STATES: list[str] = [
+    "pickup_descend",
     "pickup_grasp",
     "pickup_ascend",
     "pickup_verify",
