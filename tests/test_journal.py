@@ -14,7 +14,7 @@ import pytest
 
 from masonry.blueprint import UavSpec
 from masonry.errors import JournalError
-from masonry.mission.journal import DoneRecord, Journal, JournalState, read_journal
+from masonry.mission.journal import DoneRecord, Journal, JournalState, RunningRecord, read_journal
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 
@@ -61,11 +61,14 @@ def test_replay_folds_assignments_completions_failures_and_losses(tmp_path: Path
     assert (b0.start_s, b0.end_s, b0.attempt, b0.uav) == (61.0, 90.25, 2, "brick-1")
     assert b0.fields["placement_error_m"] == pytest.approx(0.012)
     assert dict(state.attempts) == {"A0": 1, "B0": 2}
-    assert [(f.task_id, f.attempt, f.start_s, f.reason) for f in state.failures] == [
-        ("B0", 1, 40.5, "grasp failed")
+    # B1's UAV was lost: B1 is released, a failure with the loss's reason, not counted in attempts
+    assert [(f.task_id, f.attempt, f.start_s, f.time_s, f.reason) for f in state.failures] == [
+        ("B0", 1, 40.5, 60.0, "grasp failed"),
+        ("B1", 1, 91.0, 95.0, "uav lost"),
     ]
-    # A1 was flying when the journal ends; B1's UAV was lost so B1 is released, not in progress.
+    # A1 was flying when the journal ends: in progress, with its start and attempt number
     assert dict(state.in_progress) == {"A1": "glue-1"}
+    assert state.running == (RunningRecord("A1", "glue-1", 90.25, 1),)
     assert state.lost_uavs == ("brick-2",)
     assert state.last_time_s == 95.0
     assert [r.kind for r in state.records] == [

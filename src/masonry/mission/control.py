@@ -29,10 +29,11 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from masonry.blueprint import UavSpec
-from masonry.errors import MissionError, ProtocolError
+from masonry.errors import MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.events import EventSink, MissionEvent, volume_list
+from masonry.mission.journal_state import LOST_REASON
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
@@ -89,6 +90,9 @@ class Attempt:
     placement_error_m: float | None = None
     coverage: float | None = None
     phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
+    adopted: bool = (
+        False  # in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
+    )
 
 
 @dataclass
@@ -287,7 +291,10 @@ class MissionControl:
     def restore(self, state: Any) -> None:
         """Continue from a journal's replayed state: done tasks stay done with their times, attempts carry on.
 
-        Tasks that were in progress when the previous run stopped go back to the pool (flown again);
+        Attempts in progress when the previous run stopped stay with their UAVs (:meth:`_adopt`): what each
+        UAV says first decides (its completion, said again, is taken; its heartbeat naming the task keeps it
+        flying; one naming no task gives it back to the pool, not counted; silence declares it lost). Handing
+        them out again at once would fly a task twice whose completion never reached the journal.
         UAVs the journal declared lost stay lost.
         """
         from masonry.errors import JournalError
@@ -332,11 +339,29 @@ class MissionControl:
                 link.lost = True
                 link.status = "lost"
                 self.dispatcher.remove_uav(name)
+        for run in getattr(state, "running", ()):
+            self._adopt(run)
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
         self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
         # what the previous run may have built: done tasks, and every task it ever assigned
         self._raise_layers([*done, *attempts, *state.in_progress])
+
+    def _adopt(self, run: Any) -> None:
+        """A journaled attempt still running at the stop: in progress on its UAV again (unless the UAV is lost,
+        another attempt holds it, or the task cannot run now: then it goes back to the pool as before)."""
+        link = self.uavs.get(run.uav)
+        if link is None or link.lost or run.task_id in self.dispatcher.done:
+            return
+        try:
+            self.dispatcher.adopt(run.task_id, run.uav)
+        except PlanningError as exc:
+            log.warning("%s: not kept on %s after the resume: %s", run.task_id, run.uav, exc)
+            return
+        att = Attempt(run.task_id, run.uav, run.attempt, run.start_s, adopted=True)
+        self.history.append(att)
+        self._running[run.task_id] = att
+        log.info("%s kept on %s (attempt %d) from before the resume", run.task_id, run.uav, run.attempt)
 
     # -- properties ------------------------------------------------------------------------------------
     @property
@@ -634,8 +659,10 @@ class MissionControl:
         att = next(
             (a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None
         )
-        if att is None or att.attempt != msg.attempt or att.status != "failed" or att.reason != "uav lost":
+        if att is None or att.attempt != msg.attempt or att.status != "failed":
             return False
+        if att.reason != LOST_REASON and not (att.reason or "").startswith(TASK_DROPPED_REASON):
+            return False  # (released for its silence, or for a heartbeat that no longer named it: done after all)
         if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
             return False  # assigned to it again meanwhile: an ordinary result
         other = self.dispatcher.complete_late(r.task_id)
@@ -685,9 +712,11 @@ class MissionControl:
         if msg.task_id is not None or tid is None or msg.state != LANDED_STATE:
             return  # (only an idle machine: a UAV that names no task but is busy flying is not a fresh one)
         att = self._running.get(tid)
-        if att is None or now_s - att.start_s <= self.heartbeat_timeout_s:
-            return  # the assignment may still be on its way
+        if att is None or (not att.adopted and now_s - att.start_s <= self.heartbeat_timeout_s):
+            return  # the assignment may still be on its way (none is, for an attempt kept from before a resume)
         reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task {now_s - att.start_s:.1f} s after it)"
+        if att.adopted:
+            reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task after the resume)"
         log.warning("%s: %s: released", name, reason)
         del self._running[tid]
         self._results += 1
@@ -760,7 +789,7 @@ class MissionControl:
             if att is not None:
                 att.end_s = now_s
                 att.status = "failed"
-                att.reason = f"uav {status}"
+                att.reason = LOST_REASON if status == "lost" else f"uav {status}"
                 log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)

@@ -39,7 +39,7 @@ import math
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Protocol
 
 from masonry.errors import ProtocolError
 from masonry.mission.messages import (
@@ -101,6 +101,20 @@ class Execution:
     abandoned_s: float | None = None
 
 
+class ResultKeeper(Protocol):
+    """Where a UAV keeps its last completion until mission control has heard it, across a restart of its handler
+    (a real UAV's companion computer keeps it on its disk; the in-process simulation in its mission's journal
+    file, because a stop of ``masonry sim`` stops its UAVs too)."""
+
+    def kept(self, uav: str) -> bytes | None:
+        """The completion ``uav`` kept (its wire form), or None."""
+        ...
+
+    def keep(self, uav: str, message: bytes | None) -> None:
+        """Keep ``message`` for ``uav`` (None: forget it, mission control heard it); durable when it returns."""
+        ...
+
+
 class UavHandler(MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
@@ -121,6 +135,9 @@ class UavHandler(MissionLink, ClearanceLink):
             network round trip shorter than a tick.
         tasks, role, wall_digest: the UAV's blueprint, to check every assignment against (its plan's tasks, this
             UAV's role, :func:`masonry.fingerprint.wall_digest`); None: that check is not made.
+        keeper: keeps the completion mission control has not heard yet; a completion it kept from before a
+            restart is said first thing, ahead of the first heartbeat, and again when mission control is first
+            heard (mission control ignores what it had).
     """
 
     def __init__(
@@ -141,8 +158,10 @@ class UavHandler(MissionLink, ClearanceLink):
         tasks: Iterable[Task] | None = None,
         role: str | None = None,
         wall_digest: str | None = None,
+        keeper: ResultKeeper | None = None,
     ) -> None:
         self._after_result = after_result
+        self._keeper = keeper
         self._tasks = None if tasks is None else {t.id: t for t in tasks}
         self._role = role
         self._wall_digest = wall_digest
@@ -186,9 +205,38 @@ class UavHandler(MissionLink, ClearanceLink):
         self._column_checked_s = -1e18
         self.clearance_requests = 0
         self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
+        self._kept = self._restore_kept()  # a completion from before a restart: said at the first step
         self._swallow: str | None = (
             None  # a task dropped (mission control silent): its machine's report is not sent
         )
+
+    def _restore_kept(self) -> Result | None:
+        raw = self._keeper.kept(self.name) if self._keeper is not None else None
+        if raw is None:
+            return None
+        try:
+            msg = decode(raw)
+        except ProtocolError as exc:
+            log.warning("%s: the kept completion cannot be read (%s): forgotten", self.name, exc)
+            return None
+        if not isinstance(msg, Result) or msg.sender != self.name or msg.result.status != "done":
+            log.warning("%s: the kept message is not a completion of this UAV: forgotten", self.name)
+            return None
+        return msg
+
+    def _say_kept(self, now_s: float) -> None:
+        """The first step after a restart: the completion mission control may never have heard, ahead of the
+        heartbeat (which names no task: heard first, it would give the task back to the pool)."""
+        kept, self._kept = self._kept, None
+        if kept is None:
+            return
+        log.info("%s: %s done before the restart: reported again", self.name, kept.result.task_id)
+        self._send(kept)
+        self._unheard = (kept, -math.inf)  # said again when mission control is first heard (_handle)
+
+    def _keep(self, sent: Result | None) -> None:
+        if self._keeper is not None:
+            self._keeper.keep(self.name, None if sent is None else encode(sent))
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -424,6 +472,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self._send(sent)
         if result.status == "done":
             self._unheard = (sent, self.now_s)  # said again if the link turns out to have been down (_handle)
+            self._keep(sent)
         if self._after_result is not None:
             self._after_result()
 
@@ -437,6 +486,8 @@ class UavHandler(MissionLink, ClearanceLink):
     def step(self, now_s: float) -> None:
         """Read messages, send the heartbeat when due, tick the machine (skipped while landed and idle)."""
         self.now_s = now_s
+        if self._kept is not None:
+            self._say_kept(now_s)
         for raw in self.transport.receive():
             self._handle(raw, now_s)
         if self._last_sent_hb_s is None or now_s - self._last_sent_hb_s >= self.heartbeat_period_s:
@@ -543,7 +594,10 @@ class UavHandler(MissionLink, ClearanceLink):
         if self._unheard is not None:
             sent, sent_s = self._unheard
             self._unheard = None
-            if before is not None and before <= sent_s and now_s - before > 1.5 * self.heartbeat_period_s:
+            self._keep(None)
+            if sent_s == -math.inf or (
+                before is not None and before <= sent_s and now_s - before > 1.5 * self.heartbeat_period_s
+            ):
                 # mission control's heartbeats stopped around the completion: the link was down, the result may
                 # be lost. Said again: mission control takes it late if the task was released from this UAV
                 # and is not done since, and ignores it if it had it (docs/mission.md, "Heartbeats and time")

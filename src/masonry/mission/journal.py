@@ -40,6 +40,7 @@ from masonry.mission.journal_state import (
     JournalRecord,
     JournalState,
     RecordKind,
+    RunningRecord,
     fold_records,
 )
 
@@ -52,6 +53,7 @@ __all__ = [
     "JournalRecord",
     "JournalState",
     "RecordKind",
+    "RunningRecord",
     "open_mission_journal",
     "read_journal",
 ]

@@ -14,7 +14,19 @@ from typing import Any, Literal
 from masonry.errors import JournalUnusable
 from masonry.ports import UNCOUNTED_REASONS
 
-__all__ = ["DoneRecord", "FailureRecord", "JournalRecord", "JournalState", "RecordKind", "fold_records"]
+__all__ = [
+    "LOST_REASON",
+    "DoneRecord",
+    "FailureRecord",
+    "JournalRecord",
+    "JournalState",
+    "RecordKind",
+    "RunningRecord",
+    "fold_records",
+]
+
+#: the reason of an attempt released because its UAV was declared lost (not counted against the task)
+LOST_REASON = "uav lost"
 
 RecordKind = Literal["assign", "complete", "fail", "uav_lost"]
 
@@ -66,6 +78,16 @@ class FailureRecord:
 
 
 @dataclass(frozen=True)
+class RunningRecord:
+    """An attempt assigned and not finished when the journal ends: task, UAV, assignment time, attempt number."""
+
+    task_id: str
+    uav: str
+    start_s: float
+    attempt: int
+
+
+@dataclass(frozen=True)
 class JournalState:
     """What a journal says happened, folded for ``--resume``.
 
@@ -73,9 +95,12 @@ class JournalState:
         done: completed tasks in completion order (a task completed twice keeps its first completion).
         attempts: finished (completed or failed) attempts per task id: the ``attempts`` argument of
             ``Dispatcher.restore``. Attempts cut short by a lost UAV or a crash are not counted.
-        failures: every failed attempt, in order.
+        failures: every failed attempt, in order; an attempt released by its UAV's loss is one, with the reason
+            :data:`LOST_REASON` (not counted in ``attempts``).
         in_progress: task id -> UAV of attempts assigned but neither completed, failed nor released by a UAV
-            loss when the journal ends (the previous run stopped while they flew; they are flown again).
+            loss when the journal ends (the previous run stopped while they flew).
+        running: the same attempts with their assignment times and numbers (a resumed mission control keeps
+            them with their UAVs until each is heard: ``MissionControl.restore``).
         lost_uavs: UAVs declared lost, in order.
         last_time_s: the latest mission time in any record (0.0 for an empty journal): the resumed clock.
         records: every record, in write order.
@@ -88,6 +113,7 @@ class JournalState:
     attempts: Mapping[str, int] = field(default_factory=dict)
     failures: tuple[FailureRecord, ...] = ()
     in_progress: Mapping[str, str] = field(default_factory=dict)
+    running: tuple[RunningRecord, ...] = ()
     lost_uavs: tuple[str, ...] = ()
     last_time_s: float = 0.0
     records: tuple[JournalRecord, ...] = ()
@@ -189,11 +215,12 @@ class _Fold:
             )
 
     def uav_lost(self, rec: JournalRecord, data: dict[str, Any]) -> None:
-        """The UAV is lost: its running task is released, not counted."""
+        """The UAV is lost: its running task is released, not counted (a failure with :data:`LOST_REASON`)."""
         if rec.uav not in self.lost:
             self.lost.append(rec.uav)
         for tid in [t for t, (u, _, _) in self.running.items() if u == rec.uav]:
-            del self.running[tid]
+            _, start_s, number = self.running.pop(tid)
+            self.failures.append(FailureRecord(tid, rec.uav, rec.time_s, start_s, number, LOST_REASON))
 
     def state(self, meta: dict[str, Any]) -> JournalState:
         measured = self.measured
@@ -209,6 +236,7 @@ class _Fold:
             attempts=MappingProxyType(self.attempts),
             failures=tuple(self.failures),
             in_progress=MappingProxyType({t: u for t, (u, _, _) in self.running.items()}),
+            running=tuple(RunningRecord(t, u, s, n) for t, (u, s, n) in self.running.items()),
             lost_uavs=tuple(self.lost),
             last_time_s=self.last,
             records=tuple(self.records),

@@ -10,11 +10,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
+from masonry.errors import ProtocolError
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
+from masonry.mission.messages import Result, decode
 from masonry.mission.report import MissionReport, control_report
 from masonry.planner.bounds import min_cycles_s, min_durations_s, min_site_s
 from masonry.planner.tasks import BrickTask, Plan
@@ -30,8 +33,17 @@ class MeasuredJournal:
     journal (:func:`simulated_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
     """
 
-    def __init__(self, journal: Any, world: Any, plan: Plan, before: Mapping[str, Any]) -> None:
+    def __init__(
+        self,
+        journal: Any,
+        world: Any,
+        plan: Plan,
+        before: Mapping[str, Any],
+        kept: Mapping[str, KeptCompletion] | None = None,
+    ) -> None:
         self.journal = journal
+        #: UAV -> the completion it kept before the stop this run resumes from (:func:`kept_completions`)
+        self.before_kept = dict(kept or {})
         self.world = world
         self._bricks = {t.id: t.brick for t in plan.tasks if isinstance(t, BrickTask)}
         self.before_distances_m = _floats(before.get("distances_m"))
@@ -73,11 +85,36 @@ class MeasuredJournal:
             "busy_s": self.busy_s(),
             "min_separation_m": self.min_separation_m(),
         }
-        if task_id in self._bricks:
+        kept = next((k for k in self.before_kept.values() if k.task_id == task_id), None)
+        if kept is not None and kept.placement_error_m is not None:
+            out["placement_error_m"] = kept.placement_error_m  # placed before the stop: measured then
+        elif task_id in self._bricks:
             err = self.world.placement_error_m(self._bricks[task_id])
             if err is not None:
                 out["placement_error_m"] = float(err)
         return out
+
+    # -- the UAVs' kept completions (masonry.mission.handler.ResultKeeper) ------------------------------------
+    def kept(self, uav: str) -> bytes | None:
+        """The completion ``uav`` kept in the journal file before a stop, unheard by mission control."""
+        entry = self.before_kept.get(uav)
+        return entry.message if entry is not None else None
+
+    def keep(self, uav: str, message: bytes | None) -> None:
+        """Keep ``uav``'s unheard completion in the journal file's meta table (``unheard/<uav>``), with the
+        world's true placement error of its brick: a stop rebuilds the world, and the brick is on the wall."""
+        if self.journal is None:
+            return
+        if message is None:
+            self.journal.set_meta(KEPT_META_PREFIX + uav, None)
+            return
+        value: dict[str, Any] = {"message": message.decode("utf-8")}
+        task_id = _task_of(message)
+        if task_id in self._bricks:
+            err = self.world.placement_error_m(self._bricks[task_id])
+            if err is not None:
+                value["placement_error_m"] = float(err)
+        self.journal.set_meta(KEPT_META_PREFIX + uav, value)
 
     def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
         self.journal.record_assignment(time_s, task_id, uav, attempt, measured=self.measurements())
@@ -93,6 +130,53 @@ class MeasuredJournal:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.journal, name)  # anything else mission control asks of the journal
+
+
+#: Journal meta keys of the UAVs' kept completions: ``unheard/<uav>`` -> {message, placement_error_m} or null.
+KEPT_META_PREFIX = "unheard/"
+
+
+@dataclass(frozen=True)
+class KeptCompletion:
+    """A completion a UAV kept before a stop, unheard by mission control: its wire form, its task, and the
+    world's true placement error of its brick (None: an adhesion task, or not measured)."""
+
+    uav: str
+    task_id: str
+    time_s: float  # when the UAV finished (a resumed mission's clock starts no earlier)
+    message: bytes
+    placement_error_m: float | None = None
+
+
+def kept_completions(state: Any) -> dict[str, KeptCompletion]:
+    """The completions the UAVs kept in a journal's meta table (anything unreadable in it is ignored)."""
+    out: dict[str, KeptCompletion] = {}
+    for key, value in state.meta.items() if state is not None else ():
+        if not key.startswith(KEPT_META_PREFIX) or not isinstance(value, Mapping):
+            continue
+        text, err = value.get("message"), value.get("placement_error_m")
+        msg = _result_of(text.encode("utf-8")) if isinstance(text, str) else None
+        if msg is None or not isinstance(text, str):
+            continue
+        uav = key[len(KEPT_META_PREFIX) :]
+        error_m = float(err) if isinstance(err, (int, float)) and math.isfinite(err) else None
+        out[uav] = KeptCompletion(uav, msg.result.task_id, float(msg.time_s), text.encode("utf-8"), error_m)
+    return out
+
+
+def _result_of(message: bytes) -> Result | None:
+    """A kept completion, read (None: not a readable result)."""
+    try:
+        msg = decode(message)
+    except ProtocolError:
+        return None
+    return msg if isinstance(msg, Result) else None
+
+
+def _task_of(message: bytes) -> str | None:
+    """The task a kept completion names (None: not a readable result)."""
+    msg = _result_of(message)
+    return msg.result.task_id if msg is not None else None
 
 
 def _floats(value: Any) -> dict[str, float]:
@@ -185,4 +269,11 @@ def simulated_report(
     )
 
 
-__all__ = ["MeasuredJournal", "journaled_errors_m", "simulated_report"]
+__all__ = [
+    "KEPT_META_PREFIX",
+    "KeptCompletion",
+    "MeasuredJournal",
+    "journaled_errors_m",
+    "kept_completions",
+    "simulated_report",
+]

@@ -29,7 +29,13 @@ from masonry.mission.events import SAMPLE_PERIOD_S, EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
-from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
+from masonry.mission.measured import (
+    KeptCompletion,
+    MeasuredJournal,
+    journaled_errors_m,
+    kept_completions,
+    simulated_report,
+)
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
@@ -313,6 +319,7 @@ class SimulatedMission:
                 tasks=plan.tasks,
                 role=spec.role,
                 wall_digest=wall,
+                keeper=self.measured if self.measured.journal is not None else None,
             )
             h.attach(
                 _build_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config)
@@ -478,23 +485,8 @@ class SimulatedMission:
                 )
                 resources.callback(journal.close)
 
-            resumed_from = None
-            world_blueprint = blueprint
-            if state is not None:
-                # bricks the journal says are placed are in place in the rebuilt world
-                placed = {
-                    the_plan.task(r.task_id).brick  # type: ignore[union-attr]
-                    for r in state.done
-                    if isinstance(the_plan.task(r.task_id), BrickTask)
-                }
-                world_blueprint = dataclasses.replace(
-                    blueprint,
-                    bricks=tuple(
-                        dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks
-                    ),
-                )
-                resumed_from = float(state.last_time_s or 0.0)
-
+            kept = _kept(state, the_plan, fleet)
+            world_blueprint, resumed_from = _resumed_world(blueprint, the_plan, state, kept)
             world = World(
                 world_blueprint,
                 seed=seed,
@@ -504,7 +496,9 @@ class SimulatedMission:
                 airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe,
                 vehicle=vehicle_config,
             )
-            measured = MeasuredJournal(journal, world, the_plan, state.measured if state is not None else {})
+            measured = MeasuredJournal(
+                journal, world, the_plan, state.measured if state is not None else {}, kept
+            )
             expected_s = estimate_durations_s(
                 the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing
             )
@@ -554,7 +548,14 @@ class SimulatedMission:
                 layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
                 measured=measured,
                 resumed_from=resumed_from,
-                journaled_errors_m=journaled_errors_m(state),
+                journaled_errors_m={
+                    **{
+                        k.task_id: k.placement_error_m
+                        for k in kept.values()
+                        if k.placement_error_m is not None
+                    },
+                    **journaled_errors_m(state),
+                },
                 resources=resources.pop_all(),
                 uav_config=uav_config,
             )
@@ -682,3 +683,29 @@ def _wind_limit(faults: Any, fleet: Sequence[Any], max_wind_mps: float | Mapping
         limit = DEFAULT_MAX_WIND_MPS if max_wind_mps is None else float(max_wind_mps)
         limits = {u.name: limit for u in fleet}
     return WindLimit(limits, wind.speed_at)
+
+
+def _kept(state: Any, the_plan: Plan, fleet: Sequence[UavSpec]) -> dict[str, KeptCompletion]:
+    """The completions the UAVs kept in the journal file, unheard (of this plan's tasks and this fleet's UAVs)."""
+    ids, names = {t.id for t in the_plan.tasks}, {u.name for u in fleet}
+    return {u: k for u, k in kept_completions(state).items() if k.task_id in ids and u in names}
+
+
+def _resumed_world(
+    blueprint: Blueprint, the_plan: Plan, state: Any, kept: Mapping[str, KeptCompletion]
+) -> tuple[Blueprint, float | None]:
+    """The blueprint the resumed world is built from, and the time it resumes at (None: not a resume).
+
+    Bricks the journal says are placed are in place, and so are those a UAV kept the completion of, unheard (it
+    says it again first thing: mission control takes it); the clock starts no earlier than a kept completion
+    (the UAV finished then, so the mission was running)."""
+    if state is None:
+        return blueprint, None
+    placed = {
+        the_plan.task(tid).brick  # type: ignore[union-attr]
+        for tid in [r.task_id for r in state.done] + [k.task_id for k in kept.values()]
+        if isinstance(the_plan.task(tid), BrickTask)
+    }
+    bricks = tuple(dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks)
+    resumed_from = max([float(state.last_time_s or 0.0), *(k.time_s for k in kept.values())])
+    return dataclasses.replace(blueprint, bricks=bricks), resumed_from
