@@ -9,6 +9,7 @@ from masonry.adapters.wiring import hardware_config
 from masonry.blueprint_gen import running_bond
 from masonry.errors import InputError, ProtocolError
 from masonry.mission.control import MissionControl
+from masonry.mission.events import EventList, MissionEvent
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
@@ -47,7 +48,9 @@ def test_the_reading_is_the_strongest_fresh_report() -> None:
 def _mission(wind: dict[str, float]):
     bp = running_bond(1, 2, brick_uavs=1, adhesion_uavs=1)
     bus = InprocBus()
-    mc = MissionControl(plan(bp), bp.fleet, bus.endpoint(MISSION_CONTROL), startup_timeout_s=100.0)
+    mc = MissionControl(
+        plan(bp), bp.fleet, bus.endpoint(MISSION_CONTROL), startup_timeout_s=100.0, events_sink=EventList()
+    )
     handlers = {
         u.name: UavHandler(
             u.name,
@@ -81,6 +84,14 @@ def test_mission_control_gives_no_task_above_a_uavs_reported_limit_and_resumes_b
         t += 0.1
     assert mc.wind_limit.grounded == set()
     assert mc.dispatcher.in_progress, "no task was assigned once the wind had dropped"
+    # the log says both, as events (an MCAP log's /log topic shows their lines)
+    winds = [e for e in mc.sink.events if e.kind == "wind"]
+    assert [(e.fields["speed_mps"], e.fields["grounded"]) for e in winds] == [
+        (12.0, ["brick-1", "glue-1"]),
+        (5.0, []),
+    ]
+    assert winds[0].line().endswith("wind 12.0 m/s: no tasks for brick-1, glue-1")
+    assert MissionEvent.from_dict(winds[1].to_dict()) == winds[1]
 
 
 def test_the_autopilots_wind_message_is_read_and_goes_stale() -> None:

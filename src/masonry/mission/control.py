@@ -868,6 +868,7 @@ class MissionControl:
             log.warning("wind %.1f m/s: no tasks for %s (above max_wind_mps)", speed, ", ".join(grounded))
         else:
             log.info("wind %.1f m/s: every UAV within its max_wind_mps, dispatching again", speed)
+        self._emit(now_s, "wind", speed_mps=None if math.isnan(speed) else float(speed), grounded=grounded)
 
     def _journal_visit(self, visit: SiteVisit) -> None:
         """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""

@@ -18,6 +18,8 @@ Kinds (``MissionEvent.kind``) and their fields:
 - ``stall``: the watchdog stopped the mission, ``line`` says who waits for whom.
 - ``end``: the mission is over, ``completed``.
 - ``operator``: an operator's command (``command``, ``accepted``, ``reason``).
+- ``wind``: the wind limit grounded or freed UAVs: ``speed_mps`` (the reading, None: none fresh) and
+  ``grounded`` (the UAVs given no task for it: empty once the wind has dropped).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ KINDS = (
     "stall",
     "end",
     "operator",
+    "wind",
 )
 
 
@@ -114,6 +117,11 @@ class MissionEvent:
             extra = ": completed" if f.get("completed") else ": NOT completed"
         elif self.kind == "uav":
             extra = f" {f.get('state', '')}"
+        elif self.kind == "wind":
+            speed = f.get("speed_mps")
+            grounded = f.get("grounded") or []
+            extra = f" {speed:.1f} m/s" if isinstance(speed, (int, float)) else ""
+            extra += f": no tasks for {', '.join(grounded)}" if grounded else ": every UAV within its limit"
         return f"{self.time_s:8.1f} s  {self.kind}{who}{what}{extra}"
 
 
