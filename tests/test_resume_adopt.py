@@ -230,3 +230,13 @@ def test_a_segment_finished_cut_off_is_not_sprayed_again_after_a_stop(tmp_path, 
     a0 = [e for e in out.trace if e.task_id == "A0" and e.status == "done"]
     assert len(a0) == 1 and a0[0].segment == 0  # done before the stop, taken after it
     assert out.report.completed
+
+
+def test_a_kept_attempts_completion_is_taken_however_soon_after_the_resume_it_comes(tmp_path):
+    """The resumed clock starts at the journal's last record (21 s here), not when mission control came back:
+    the completion of an attempt kept from before is not judged too short for its task."""
+    bus, mc = resumed(tmp_path)
+    b1 = Uav(bus, "brick-1")
+    b1.done(21.2, "B0", attempt=2)
+    mc.step(21.2)
+    assert "B0" in mc.dispatcher.done and mc.events.ignored == {}

@@ -261,6 +261,16 @@ def fly(
         "--wait",
         help=help_text("fly", "--wait", "Mission mode: wall seconds to wait for mission control."),
     ),
+    heartbeat_timeout: float = typer.Option(
+        5.0,
+        "--heartbeat-timeout",
+        help=help_text(
+            "fly",
+            "--heartbeat-timeout",
+            "Mission mode: wall seconds of mission control's silence after which it counts as lost (the UAV "
+            "abandons its task two heartbeats before); give mission control's --heartbeat-timeout.",
+        ),
+    ),
     key_file: Path | None = typer.Option(
         None,
         "--key-file",
@@ -313,6 +323,7 @@ def fly(
             "--timeout": timeout,
             "--time-scale": time_scale,
             "--wait": wait,
+            "--heartbeat-timeout": heartbeat_timeout,
             "--estimate-wait": estimate_wait,
         },
     )
@@ -373,6 +384,7 @@ def fly(
             dt=dt,
             time_scale=time_scale,
             wait=wait,
+            heartbeat_timeout=heartbeat_timeout,
             fmt=fmt,
             sim=sim,
             hardware=hardware.hw,
@@ -583,6 +595,7 @@ def _fly_mission(
     time_scale: float,
     wait: float,
     fmt: str,
+    heartbeat_timeout: float = 5.0,
     sim: bool = True,
     hardware: Any = None,
     key: bytes | None = None,
@@ -632,6 +645,9 @@ def _fly_mission(
             dt_s=dt,
             time_scale=time_scale,
             wait_s=wait,
+            # in mission seconds: the UAV's clock runs time_scale faster than the wall (1: a real autopilot)
+            heartbeat_timeout_s=heartbeat_timeout
+            * (time_scale if adapters is None or hardware.sim_fc else 1.0),
             max_time_s=float("inf"),
             echo=echo,
             adapters=adapters,

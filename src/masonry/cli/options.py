@@ -62,6 +62,7 @@ RANGES: dict[str, Bound] = {
     "fly --timeout": Bound(0.0, 86_400.0, "s", low_open=True),
     "fly --time-scale": _TIME_SCALE,
     "fly --wait": Bound(0.0, 3600.0, "s", low_open=True),
+    "fly --heartbeat-timeout": Bound(0.1, 600.0, "s"),
     "fly --estimate-wait": Bound(0.0, 600.0, "s", low_open=True),
     # mission-control
     "mission-control --time-scale": _TIME_SCALE,

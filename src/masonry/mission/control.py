@@ -583,7 +583,14 @@ class MissionControl:
             )
             return
         least = self.min_durations_s.get(r.task_id)
-        if r.status == "done" and least is not None and now_s - att.start_s < self.min_fraction * least:
+        # (not for an attempt kept from before a resume: the clock resumed at the journal's last record, and how
+        # long mission control was down is not known)
+        if (
+            r.status == "done"
+            and least is not None
+            and not att.adopted
+            and now_s - att.start_s < self.min_fraction * least
+        ):
             self._ignore(
                 "too-short",
                 f"{r.task_id} reported done by {msg.sender} {now_s - att.start_s:.2f} s "
