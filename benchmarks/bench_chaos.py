@@ -47,7 +47,10 @@ def campaign(runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bo
             kinds.update(p.split(":")[0] for p in problems if not p.startswith("unexplained"))
             failed_runs += any(not p.startswith("unexplained") for p in problems)
             if problems or verbose or not r.completed:
-                why = {a.task_id: a.reason for a in r.attempts if a.status == "failed"}
+                why: dict[str, str] = {}
+                for a in r.attempts:  # every distinct reason of its failed attempts, in order
+                    if a.status == "failed" and a.reason and a.reason not in why.get(a.task_id, ""):
+                        why[a.task_id] = f"{why[a.task_id]}; {a.reason}" if a.task_id in why else a.reason
                 left_why = ", ".join(
                     f"{t} ({why.get(t) or 'never started: a task before it was left'})" for t in r.stuck
                 )

@@ -261,3 +261,29 @@ def test_a_cut_link_comes_back():
 def test_random_chaos_is_deterministic():
     assert random_chaos(5).describe() == random_chaos(5).describe()
     assert random_chaos(5) == random_chaos(5)
+
+
+def test_a_uav_lost_with_its_brick_on_the_magnet_says_so_in_the_attempts_reason():
+    """The campaign's unfinished runs (seed 152): a brick UAV lost with its brick on the magnet took it down; the
+    retries found no brick on the pallet, "not seen near its pickup". The lost attempt now says what was known."""
+    bus = InprocBus()
+    mc = MissionControl(one_brick(), brick_fleet(2), bus.endpoint(MISSION_CONTROL), heartbeat_timeout_s=5.0)
+    b1, b2 = Uav(bus, "brick-1"), Uav(bus, "brick-2")
+    now = 0.0
+    while now < 2.0:
+        b1.beat(
+            now, b1.assigned[0].task.id if b1.assigned else None, state="transport" if b1.assigned else "idle"
+        )
+        b2.beat(now)
+        mc.step(now)
+        now += 0.5
+    while not mc.uavs["brick-1"].lost:  # brick-1 falls silent in transport
+        b2.beat(now, b2.assigned[0].task.id if b2.assigned else None)
+        mc.step(now)
+        now += 0.5
+    first = mc.history[0]
+    assert (first.uav, first.status) == ("brick-1", "failed")
+    assert first.reason == "uav lost (last heard in transport, with brick 0 on its magnet)"
+    b1.done(now, "B0", attempt=1)  # it had placed it after all: its late completion is still taken
+    mc.step(now)
+    assert "B0" in mc.dispatcher.done

@@ -63,6 +63,19 @@ TASK_DROPPED_REASON = "uav dropped the task"
 #: segment sprayed): an abort there would report failed a task that is done, so a recall or a lost link lets it
 #: finish, and mission control gives a UAV silent in one of them longer before it declares it lost.
 FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
+#: The brick machine's states after the grasp in which the brick is on the magnet (a UAV lost in one of them
+#: may have taken its brick down with it: mission control says so in the attempt's reason).
+CARRYING_STATES = frozenset(
+    {
+        "pickup_ascend",
+        "pickup_verify",
+        "transport",
+        "place_align",
+        "place_descend",
+        "putback_goto",
+        "putback_descend",
+    }
+)
 #: The reasons of a failure that costs its task no attempt.
 UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON, MISSION_CONTROL_LOST_REASON, TASK_DROPPED_REASON)
 

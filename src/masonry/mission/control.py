@@ -57,8 +57,15 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.mission.wind_limit import HeardWind
 from masonry.planner.dispatch import DEFAULT_RESERVATION
-from masonry.planner.tasks import Plan, Task
-from masonry.ports import FINISHING_STATES, RECALL_REASON, TASK_DROPPED_REASON, UNCOUNTED_REASONS, PhaseTimes
+from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.ports import (
+    CARRYING_STATES,
+    FINISHING_STATES,
+    RECALL_REASON,
+    TASK_DROPPED_REASON,
+    UNCOUNTED_REASONS,
+    PhaseTimes,
+)
 from masonry.timing import TaskTiming
 
 log = logging.getLogger(__name__)
@@ -668,7 +675,7 @@ class MissionControl:
         )
         if att is None or att.attempt != msg.attempt or att.status != "failed":
             return False
-        if att.reason != LOST_REASON and not (att.reason or "").startswith(TASK_DROPPED_REASON):
+        if not (att.reason or "").startswith((LOST_REASON, TASK_DROPPED_REASON)):
             return False  # (released for its silence, or for a heartbeat that no longer named it: done after all)
         if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
             return False  # assigned to it again meanwhile: an ordinary result
@@ -797,6 +804,10 @@ class MissionControl:
                 att.end_s = now_s
                 att.status = "failed"
                 att.reason = LOST_REASON if status == "lost" else f"uav {status}"
+                task = self._tasks[released]
+                if status == "lost" and link.state in CARRYING_STATES and isinstance(task, BrickTask):
+                    # its brick may have gone down with it: a retry that finds no brick on the pallet says why
+                    att.reason += f" (last heard in {link.state}, with brick {task.brick} on its magnet)"
                 log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
