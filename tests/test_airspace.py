@@ -14,6 +14,7 @@ from masonry.errors import ProtocolError
 from masonry.mission.airspace import ColumnClearance, layer_base_m, transit_layers_m, work_altitude_m
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, decode, encode
 from masonry.mission.simulate import simulate
+from masonry.mission.volumes import Volume, volumes_conflict
 
 R = 1.5
 BASE = 1.35
@@ -194,6 +195,30 @@ def test_a_uav_lands_back_on_its_pad_only_out_of_its_flight_home():
     assert c.landed("a", (0.02, -6.01, 0.04))  # down at home (even without its `arrived`)
     assert [v.kind for v in c.volumes("a")] == ["pad"]
     assert c.take_off("b") and c.conflicts() == []
+
+
+def test_a_silent_uav_keeps_its_way_home_at_its_fallback_layer_and_lands_out_of_what_it_was_seen_in():
+    """Cut off past LAST_RESORT_S, a UAV flies home on its own at its fallback layer: mission control keeps that
+    way reserved (the climb where it is, the leg at the layer, its pad's column). Heard again on the way, it holds
+    the column where it was heard; landed on its pad, it holds only the pad."""
+    homes = {"a": (0.0, -6.0, 0.0), "b": (1.0, -6.0, 0.0)}
+    c = ColumnClearance(R, BASE, S, homes=homes)
+    assert c.take_off("a")
+    assert c.request("a", (4.0, -3.0, 1.2), 0.0, (0.0, -6.0, 1.2)).granted
+    c.end_transit("a")  # working at the site
+    way_m = c.silent("a", (4.0, -3.0, 1.2), 2.45)
+    assert way_m == pytest.approx(5.0 + 1.25 + 2.45)
+    climb, leg, home = c.volumes("a")[-3:]
+    assert (climb.kind, climb.a, climb.z0_m, climb.z1_m) == ("climb", (4.0, -3.0), 1.2, 2.45)
+    assert (leg.kind, leg.a, leg.b, leg.z0_m) == ("leg", (4.0, -3.0), (0.0, -6.0), 2.45)
+    assert (home.kind, home.a, home.z0_m) == ("zone", (0.0, -6.0), 0.0) and home.z1_m >= 2.45
+    # a leg across it at that layer conflicts with it (no grant is ever given against a reservation)
+    across = Volume((1.0, -2.0), (3.0, -7.0), 2.45, 2.45)
+    assert any(volumes_conflict(across, v, c.sep_xy_m, S - 1e-9) for v in c.volumes("a"))
+    assert c.rejoined("a", (2.0, -4.5, 2.45))  # heard again on its way home: the column where it is
+    assert [v.kind for v in c.volumes("a")] == ["zone"]
+    assert c.landed("a", (0.01, -6.0, 0.03))  # down on its pad: nothing granted in flight, it holds the pad
+    assert [v.kind for v in c.volumes("a")] == ["pad"]
 
 
 SITES = st.tuples(st.floats(-4.0, 4.0), st.floats(-4.0, 4.0))

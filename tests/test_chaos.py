@@ -8,6 +8,7 @@ complete or every task left explained.
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -287,3 +288,23 @@ def test_a_uav_lost_with_its_brick_on_the_magnet_says_so_in_the_attempts_reason(
     b1.done(now, "B0", attempt=1)  # it had placed it after all: its late completion is still taken
     mc.step(now)
     assert "B0" in mc.dispatcher.done
+
+
+def long_drop_run(seed: int, uav: str, at_s: float) -> ChaosRun:
+    run = random_chaos(seed, max_stops=0)
+    return dataclasses.replace(run, link_drops=(LinkDrop(uav, at_s, 40.0),), stops_s=())
+
+
+@pytest.mark.parametrize(("seed", "uav", "at_s"), [(10, "brick-3", 31.4), (2, "glue-3", 14.6)])
+def test_a_radio_out_for_forty_seconds_keeps_the_uavs_apart_and_the_mission_goes_on(
+    tmp_path, seed, uav, at_s
+):
+    """Found with link drops of 40 s (the campaign's are 1-8 s): cut off past LAST_RESORT_S (30 s), a UAV flies
+    home on its own at its fallback layer, which mission control had handed to another UAV's flight: 0.12 m
+    (seed 10, head-on at 2.3 m). Now mission control keeps the silent UAV's way home reserved. Heard again while
+    it flew home on its own (seed 2), it held the column where it was heard for ever, once landed: the next
+    brick there waited 240 s for clearance three times and was left."""
+    out = fly_chaos(long_drop_run(seed, uav, at_s), tmp_path)
+    assert check_chaos(out) == []
+    assert out.min_separation_m is not None and out.min_separation_m >= 1.0
+    assert out.report.completed

@@ -76,6 +76,10 @@ CARRYING_STATES = frozenset(
         "putback_descend",
     }
 )
+#: Mission control silent this long (mission seconds) is not coming back: a UAV hovering for its clearance flies
+#: home and lands without one, at its fixed fallback layer (mission control keeps that way home reserved for
+#: it: docs/safety.md, "A UAV that falls silent").
+LAST_RESORT_S = 30.0
 #: The reasons of a failure that costs its task no attempt.
 UNCOUNTED_REASONS = (BATTERY_LOW_REASON, RECALL_REASON, MISSION_CONTROL_LOST_REASON, TASK_DROPPED_REASON)
 

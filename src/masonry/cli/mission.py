@@ -197,7 +197,7 @@ def mission_control(
 
     jr, state = _open_journal(journal, resume, bp, the_plan, reservation)
     expected_s = estimate_durations_s(the_plan, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m)
-    from masonry.mission.airspace import layer_base_m
+    from masonry.mission.airspace import layer_base_m, transit_layers_m
     from masonry.mission.auth import wrap
     from masonry.planner import min_durations_s
 
@@ -227,6 +227,8 @@ def mission_control(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
             fence=bp.site,
+            # the layer each `masonry fly --mission` UAV flies at without mission control (remote.py's)
+            fallback_layers_m=transit_layers_m(bp),
         )
         offset = 0.0
         if state is not None:

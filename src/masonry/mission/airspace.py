@@ -400,7 +400,7 @@ class ColumnClearance:
     def landed(self, uav: str, position_m: Vec3) -> bool:
         """``uav`` says it is on the ground at ``position_m``, done flying: if that is on its pad, it holds only
         the pad from now on (True). A UAV whose flight home is still reserved (its ``arrived`` was lost) lands
-        out of it too."""
+        out of it too, and so does one holding only where it was last seen (a zone, nothing granted)."""
         home = self._homes.get(uav)
         u = self._uavs.get(uav)
         if self.base_m is None or home is None or u is None or u.phase is Phase.LANDED:
@@ -410,7 +410,10 @@ class ColumnClearance:
             return False
         at_home = u.zone is not None and _same(u.zone, home)
         flying_home = u.flight is not None and _same(u.flight.site, home)
-        if u.request is not None or not (at_home or flying_home):
+        # nothing granted in flight: what it holds is where it was last seen (heard again while it flew home on
+        # its own, cut off past LAST_RESORT_S: the column where it was heard); it is on its pad now
+        seen_elsewhere = u.flight is None and u.hold is None
+        if u.request is not None or not (at_home or flying_home or seen_elsewhere):
             return False
         self._set_pad(uav)
         return True
@@ -435,6 +438,23 @@ class ColumnClearance:
             return True
         self._set_zone(uav, (x, y, home[2]), max(z, self._home_top_m()))
         return True
+
+    def silent(self, uav: str, position_m: Vec3, layer_m: float | None) -> float:
+        """``uav`` fell silent in the air at ``position_m``: besides what it holds it keeps the way home it flies on
+        its own once mission control has been silent for ``LAST_RESORT_S`` (its machine's route without an
+        airspace): the climb or descent where it is to ``layer_m`` (its fixed fallback layer; None: the altitude
+        it is at), the leg there to above its pad, and its pad's column. Heard again (:meth:`rejoined`), it holds
+        only the column where it is. Returns the way's length in metres (lateral plus vertical)."""
+        home = self._homes.get(uav)
+        u = self._uavs.get(uav)
+        if home is None or u is None:
+            return 0.0
+        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
+        alt = float(layer_m) if layer_m is not None else z
+        way = flight_volumes((x, y), z, alt, home, self._home_top_m(), None, None, 0.0)
+        u.volumes = [*u.volumes, *way]
+        self._version += 1
+        return math.hypot(home[0] - x, home[1] - y) + abs(alt - z) + abs(alt - home[2])
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave

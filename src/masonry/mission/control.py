@@ -61,12 +61,13 @@ from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.ports import (
     CARRYING_STATES,
     FINISHING_STATES,
+    LAST_RESORT_S,
     RECALL_REASON,
     TASK_DROPPED_REASON,
     UNCOUNTED_REASONS,
     PhaseTimes,
 )
-from masonry.timing import TaskTiming
+from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 log = logging.getLogger(__name__)
 
@@ -78,6 +79,9 @@ OUT_OF_SERVICE_STATE = "halted"
 
 #: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
 LANDED_STATE = "idle"
+#: Added to the time a silent UAV's way home takes before mission control frees it (never heard again).
+_WAY_HOME_MARGIN_S = 30.0
+
 #: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
 #: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
 MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
@@ -184,6 +188,9 @@ class MissionControl:
             clearances, UAV reports, losses, the stall, the end) for a log or a live view; it only watches.
         fence: the site's geofence (``Blueprint.site``; None: none): the airspace grants no flight that leaves it,
             and a task whose flight could only be flown outside it fails with the reason.
+        fallback_layers_m: each UAV's fixed layer for flights without mission control (its machine's
+            ``lateral_altitude_m``: ``transit_layers_m``); a UAV that falls silent in the air keeps its way home
+            at that layer reserved (:meth:`ColumnClearance.silent`). Not given: the altitude it was last at.
     """
 
     def __init__(
@@ -214,6 +221,7 @@ class MissionControl:
         events_sink: EventSink | None = None,
         fence: Site | None = None,
         wind_limit: Any = None,
+        fallback_layers_m: Mapping[str, float] | None = None,
     ) -> None:
         from masonry.mission.airspace import ColumnClearance
         from masonry.planner.schedule_policy import make_dispatcher
@@ -287,6 +295,8 @@ class MissionControl:
         self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self._layer_floor_m = layer_floor_m
         self.timing = timing
+        #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
+        self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
         self._watch = StallWatch(stall_timeout_s)
         self._results = 0  # results acted on (done or failed): progress for the watchdog
@@ -791,8 +801,17 @@ class MissionControl:
         link.status = status
         if status == "lost" and self.columns.volumes(name):
             # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
-            # mission control is silent): that stays reserved until it is heard again, or rejoin_timeout_s
+            # mission control is silent), and fly home on its own after LAST_RESORT_S: both stay reserved until
+            # it is heard again, or for as long as that flight takes
             link.airspace_until_s = now_s + self.rejoin_timeout_s
+            if link.position_m is not None and link.position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
+                way_m = self.columns.silent(name, link.position_m, self.fallback_layers_m.get(name))
+                way_s = (
+                    LAST_RESORT_S
+                    + way_m / (self.timing or DEFAULT_TIMING).vertical_speed_mps
+                    + _WAY_HOME_MARGIN_S
+                )
+                link.airspace_until_s = now_s + max(self.rejoin_timeout_s, way_s)
         else:
             self.columns.release(name)  # retired (on the ground) or fell: its column is free
         if self.sites.left(name, now_s):

@@ -60,6 +60,7 @@ from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
     FINISHING_STATES,
+    LAST_RESORT_S,
     MISSION_CONTROL_LOST_REASON,
     ClearanceLink,
     MissionLink,
@@ -73,9 +74,6 @@ OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
 
-#: Mission control silent this long (mission seconds) is not coming back: a UAV hovering for its clearance
-#: flies home and lands without one (docs/mission.md, "Heartbeats and time").
-LAST_RESORT_S = 30.0
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000

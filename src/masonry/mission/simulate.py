@@ -529,6 +529,7 @@ class SimulatedMission:
                 events_sink=events_sink,
                 fence=blueprint.site,
                 wind_limit=_wind_limit(faults, fleet, max_wind_mps),
+                fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
             )
             if state is not None:
                 mc.restore(state)
