@@ -130,6 +130,7 @@ def random_chaos(
     limits: LayoutLimits = CHAOS_LIMITS,
     max_stops: int = 3,
     lose_a_role: bool = False,
+    max_drop_s: float = 8.0,
 ) -> ChaosRun:
     """Draw one run of the campaign from ``seed`` (see the module docstring).
 
@@ -139,6 +140,8 @@ def random_chaos(
         limits: how large the sites get.
         max_stops: mission control stops one to this many times (0: never).
         lose_a_role: may lose every UAV of a role (then the report must say which tasks cannot be done).
+        max_drop_s: a mission link drops for 1 s to this long (8: "a few seconds"; above ``LAST_RESORT_S``, 30, a
+            UAV cut off flies home on its own).
     """
     from masonry.planner import estimate_durations_s
     from masonry.sim import Faults
@@ -168,7 +171,7 @@ def random_chaos(
             if rng.random() < 0.7:
                 spec.append(f"uav-loss={name}@{rng.uniform(5.0, span_s):.1f}")
     drops = tuple(
-        LinkDrop(u.name, round(rng.uniform(5.0, span_s), 1), round(rng.uniform(1.0, 8.0), 1))
+        LinkDrop(u.name, round(rng.uniform(5.0, span_s), 1), round(rng.uniform(1.0, max(1.0, max_drop_s)), 1))
         for u in bp.fleet
         if rng.random() < 0.3
     )
