@@ -308,3 +308,12 @@ def test_a_radio_out_for_forty_seconds_keeps_the_uavs_apart_and_the_mission_goes
     assert check_chaos(out) == []
     assert out.min_separation_m is not None and out.min_separation_m >= 1.0
     assert out.report.completed
+
+
+def test_a_uav_cut_off_with_its_brick_keeps_the_pickup_it_puts_it_back_on(tmp_path):
+    """Campaign seed 185 with link drops up to 40 s: brick-1, cut off with its brick on the magnet, put it back
+    on its own after LAST_RESORT_S; heard again on the way, its old flight's `arrived` moved its reservation to
+    its old drop-off, and brick-2 came down on the same pickup: 0.001 m. Now its way home reserved goes through
+    the pickup, and a UAV heard again holds the column where it is, its old flight over."""
+    out = fly_chaos(random_chaos(185, max_drop_s=40.0), tmp_path)
+    assert check_chaos(out) == []

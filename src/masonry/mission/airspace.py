@@ -418,11 +418,17 @@ class ColumnClearance:
         self._set_pad(uav)
         return True
 
-    def rejoined(self, uav: str, position_m: Vec3 | None) -> bool:
+    def rejoined(
+        self,
+        uav: str,
+        position_m: Vec3 | None,
+        way_home: tuple[float | None, Vec3 | None] | None = None,
+    ) -> bool:
         """``uav``, taken out of the mission (:meth:`release` with no site), is heard again at ``position_m``: on
         its pad it holds the pad again and takes off like the others; in the air (it hovers where it stopped,
         cut off, and asks for its flight home) it holds the column where it is, up to the transit altitude,
-        as after a take-off there, and asks from there. False: it is down away from its pad (not back yet);
+        as after a take-off there, and asks from there; with ``way_home`` (it says it is flying home, or putting
+        a brick back, maybe on its own) also that way (:meth:`silent`). False: it is down away from its pad (not back yet);
         with no position known it is taken back holding nothing."""
         home = self._homes.get(uav)
         if self.base_m is None or home is None or position_m is None:
@@ -436,25 +442,52 @@ class ColumnClearance:
             if u is None or u.phase is not Phase.LANDED:
                 self._set_pad(uav)
             return True
+        u = self._uav(uav)
+        # what it was granted before it fell silent is over (its `arrived` would end the old flight at its site)
+        u.flight, u.hold, u.request, u.origin, u.phase = None, None, None, None, Phase.PARKED
         self._set_zone(uav, (x, y, home[2]), max(z, self._home_top_m()))
+        if way_home is not None:
+            # it is flying home on its own (cut off past LAST_RESORT_S, it asks nobody until it is down): the
+            # rest of that way stays its own (``way_home``: its fallback layer and the pickup it calls at first)
+            u.volumes = [*u.volumes, *self._way_home(uav, (x, y, z), way_home[0], way_home[1])[0]]
         return True
 
-    def silent(self, uav: str, position_m: Vec3, layer_m: float | None) -> float:
+    def silent(self, uav: str, position_m: Vec3, layer_m: float | None, via_m: Vec3 | None = None) -> float:
         """``uav`` fell silent in the air at ``position_m``: besides what it holds it keeps the way home it flies on
         its own once mission control has been silent for ``LAST_RESORT_S`` (its machine's route without an
         airspace): the climb or descent where it is to ``layer_m`` (its fixed fallback layer; None: the altitude
-        it is at), the leg there to above its pad, and its pad's column. Heard again (:meth:`rejoined`), it holds
-        only the column where it is. Returns the way's length in metres (lateral plus vertical)."""
-        home = self._homes.get(uav)
+        it is at), the leg there to above its pad, and its pad's column; with ``via_m`` (a brick's pickup: it
+        puts the brick back first) through that site's column. Returns the way's length in metres."""
         u = self._uavs.get(uav)
-        if home is None or u is None:
+        if u is None or uav not in self._homes:
             return 0.0
-        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
-        alt = float(layer_m) if layer_m is not None else z
-        way = flight_volumes((x, y), z, alt, home, self._home_top_m(), None, None, 0.0)
+        way, length_m = self._way_home(uav, position_m, layer_m, via_m)
         u.volumes = [*u.volumes, *way]
         self._version += 1
-        return math.hypot(home[0] - x, home[1] - y) + abs(alt - z) + abs(alt - home[2])
+        return length_m
+
+    def _way_home(
+        self, uav: str, position_m: Vec3, layer_m: float | None, via_m: Vec3 | None
+    ) -> tuple[list[Volume], float]:
+        """The volumes of the flight home without an airspace (see :meth:`silent`), and its length."""
+        home = self._homes[uav]
+        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
+        alt = float(layer_m) if layer_m is not None else z
+        top = self._home_top_m()
+        if via_m is None:
+            way = flight_volumes((x, y), z, alt, home, top, None, None, 0.0)
+            return way, math.hypot(home[0] - x, home[1] - y) + abs(alt - z) + abs(alt - home[2])
+        via = (float(via_m[0]), float(via_m[1]), float(via_m[2]))
+        first = flight_volumes((x, y), z, alt, via, top, None, None, 0.0)
+        then = flight_volumes((via[0], via[1]), via[2], alt, home, top, None, None, 0.0)
+        length_m = (
+            math.hypot(via[0] - x, via[1] - y)
+            + math.hypot(home[0] - via[0], home[1] - via[1])
+            + abs(alt - z)
+            + 2.0 * abs(alt - via[2])
+            + abs(alt - home[2])
+        )
+        return [*first, *then], length_m
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave

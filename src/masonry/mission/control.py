@@ -124,6 +124,9 @@ class UavLink:
     taking_off: bool = False
     #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
     airspace_until_s: float | None = None
+    way_via_m: Vec3 | None = (
+        None  # silent with a brick on its magnet: the pickup it puts it back on, then home
+    )
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -762,7 +765,12 @@ class MissionControl:
             return False
         if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
             return False
-        if not self.columns.rejoined(link.spec.name, msg.position_m):
+        name = link.spec.name
+        way_home = None
+        if msg.state == "home" or msg.state.startswith("putback"):
+            via = link.way_via_m if msg.state in ("putback_goto", "putback_descend") else None
+            way_home = (self.fallback_layers_m.get(name), via)
+        if not self.columns.rejoined(name, msg.position_m, way_home):
             return False
         if not self.dispatcher.readmit_uav(link.spec.name):
             return False
@@ -804,8 +812,16 @@ class MissionControl:
             # mission control is silent), and fly home on its own after LAST_RESORT_S: both stay reserved until
             # it is heard again, or for as long as that flight takes
             link.airspace_until_s = now_s + self.rejoin_timeout_s
+            task_id = self.dispatcher.task_of(name)
+            task = self._tasks[task_id] if task_id is not None else None
+            # carrying its brick, it puts it back on its pallet first (docs/state-machines.md, "Putting a brick
+            # back")
+            carrying = link.state in CARRYING_STATES and isinstance(task, BrickTask)
+            link.way_via_m = task.pickup_m if carrying and isinstance(task, BrickTask) else None
             if link.position_m is not None and link.position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
-                way_m = self.columns.silent(name, link.position_m, self.fallback_layers_m.get(name))
+                way_m = self.columns.silent(
+                    name, link.position_m, self.fallback_layers_m.get(name), link.way_via_m
+                )
                 way_s = (
                     LAST_RESORT_S
                     + way_m / (self.timing or DEFAULT_TIMING).vertical_speed_mps
