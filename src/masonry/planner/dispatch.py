@@ -558,6 +558,29 @@ class Dispatcher:
         self._live_count[self._fleet[name].role] += 1
         return True
 
+    def adopt(self, task_id: str, uav: str) -> None:
+        """Resume from a journal: ``task_id`` was in progress on ``uav`` when the previous run stopped, and stays
+        so (mission control hears from the UAV whether it is still on it, done with it, or forgot it).
+
+        Call after :meth:`restore`, before the first :meth:`assign`. Its conflicting tasks are blocked as by
+        an assignment; the attempt number stays the journal's (finished attempts, plus this one).
+
+        Raises:
+            PlanningError: the task is unknown, not pending or waits for a prerequisite; the UAV is unknown,
+                lost, of the other role or already holds a task.
+        """
+        i = self._lookup(task_id, "adopted attempt")
+        spec = self._fleet.get(uav)
+        if spec is None:
+            raise PlanningError(f"cannot adopt {task_id} on unknown UAV {uav!r}")
+        if uav not in self._live or uav in self._uav_task:
+            raise PlanningError(f"cannot adopt {task_id} on {uav}: it is lost or holds a task")
+        if spec.role != self._role[i]:
+            raise PlanningError(f"cannot adopt {task_id} on {uav}: a {spec.role} UAV")
+        if self._status[i] != _PENDING or self._prereqs[i]:
+            raise PlanningError(f"cannot adopt {task_id}: it is not pending with its prerequisites done")
+        self._start(i, uav)
+
     def restore(self, done_ids: Iterable[str], attempts: Mapping[str, int]) -> None:
         """Resume from a journal: mark ``done_ids`` complete and set the attempt counts (see JournalState).
 
@@ -601,29 +624,6 @@ class Dispatcher:
             self._ready[role].clear()
         for i in range(len(self._tasks)):
             self._maybe_available(i)
-
-    def adopt(self, task_id: str, uav: str) -> None:
-        """Resume from a journal: ``task_id`` was in progress on ``uav`` when the previous run stopped, and stays
-        so (mission control hears from the UAV whether it is still on it, done with it, or forgot it).
-
-        Call after :meth:`restore`, before the first :meth:`assign`. Its conflicting tasks are blocked as by
-        an assignment; the attempt number stays the journal's (finished attempts, plus this one).
-
-        Raises:
-            PlanningError: the task is unknown, not pending or waits for a prerequisite; the UAV is unknown,
-                lost, of the other role or already holds a task.
-        """
-        i = self._lookup(task_id, "adopted attempt")
-        spec = self._fleet.get(uav)
-        if spec is None:
-            raise PlanningError(f"cannot adopt {task_id} on unknown UAV {uav!r}")
-        if uav not in self._live or uav in self._uav_task:
-            raise PlanningError(f"cannot adopt {task_id} on {uav}: it is lost or holds a task")
-        if spec.role != self._role[i]:
-            raise PlanningError(f"cannot adopt {task_id} on {uav}: a {spec.role} UAV")
-        if self._status[i] != _PENDING or self._prereqs[i]:
-            raise PlanningError(f"cannot adopt {task_id}: it is not pending with its prerequisites done")
-        self._start(i, uav)
 
     # ------------------------------------------------------------------ queries
 
