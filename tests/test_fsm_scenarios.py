@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -166,7 +167,11 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
 
 
 def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> None:
-    rig = Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run()
+    """The pack sags to 20.08 % in transport (a step the drain meter does not count as drain): below 20 % the task
+    is given up, and the 10 % left above critical at 0.1 %/s (100 s) afford putting the brick back."""
+    rig = Rig("brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.001})
+    rig.fc.at(26.0, battery_fraction=0.2008)
+    rig.run()
     (result,) = rig.link.results
     assert result.status == "failed" and result.reason == "battery low (20%); brick 7 put back at its pickup"
     assert rig.followed("transport", "putback_goto")
@@ -194,25 +199,76 @@ def test_without_a_hold_patience_a_task_waits_for_its_grant() -> None:
 
 
 def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
-    """Asking for its drop-off's column at 38 %, a UAV whose pack drains 0.6 %/s has 46 s left above critical:
-    less than twice what putting the brick back and flying home take, so it gives the task up there (a battery
-    reason: mission control does not count it as an attempt) and lands with the battery above critical."""
-    rig = Rig("brick", fc={"battery_fraction": 0.6, "battery_drain_per_s": 0.006}, clearance={}).run()
+    """Every column is granted 20 s after it is asked for. Asking for its drop-off's at 56 %, a UAV whose pack
+    drains 0.6 %/s has 77 s left above critical: less than 1.25 times what putting the brick back and flying home
+    take (27 s) plus 45 s of waiting on that way (``battery_return_wait_s``), so it gives the task up there (a
+    battery reason: mission control does not count it as an attempt), waits 20 s for its pickup's column and 20 s
+    for its home's, and lands with the battery above critical."""
+    rig = Rig(
+        "brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.006}, clearance={"grant_after_s": 20.0}
+    )
+    rig.run()
     (result,) = rig.link.results
     assert result.status == "failed"
-    assert (
-        result.reason == "battery low (38%): the reserve to put brick 7 back; brick 7 put back at its pickup"
+    assert result.reason == (
+        "battery low (56%): waited 0 s for clearance to (0.00, 0.50, 1.20); 77 s of flight left, putting brick 7 "
+        "back needs 27 s; brick 7 put back at its pickup"
     )
     assert rig.followed("transport", "putback_goto")
     assert rig.states[-3:] == ["home", "land", "halted"]
     assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction
 
 
+def test_a_uav_that_can_no_longer_afford_the_put_back_flies_home_with_its_brick_at_once() -> None:
+    """Columns granted 30 s after the request: asking for its drop-off's at 50 %, the UAV has 67 s left above
+    critical, short of the put-back and its return wait (27 + 45 s): 4 s later, at 1.25 times the way home plus
+    that wait, it flies home with the brick, instead of waiting on until the battery is critical."""
+    rig = Rig(
+        "brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.006}, clearance={"grant_after_s": 30.0}
+    )
+    rig.run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason is not None
+    assert result.reason.startswith("battery low (48%): waited 4 s for clearance to (0.00, 0.50, 1.20); 64 s")
+    assert result.reason.endswith("the way home needs 15 s")
+    assert "putback_goto" not in rig.states and rig.states[-3:] == ["home", "land", "halted"]
+    assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction
+
+
+def test_an_adhesion_uav_waiting_for_its_segment_gives_up_while_it_can_fly_home() -> None:
+    """The segment's column never comes: the UAV waits until its flight left above critical falls under 1.25 times
+    the way home plus ``battery_return_wait_s``, gives up with a battery reason (well before ``hold_patience_s``)
+    and lands, its home's 10 s wait behind it, above critical."""
+    rig = Rig(
+        "adhesion",
+        fc={"battery_fraction": 0.6, "battery_drain_per_s": 0.004},
+        clearance={"grant_after_s": 10.0},
+    )
+    answer = rig.link.request_clearance
+
+    def segment_never(site_m: Any, top_m: Any = None, to_m: Any = None) -> Any:
+        given = answer(site_m, top_m, to_m)
+        if rig.uav.task is not None and given is not None:
+            return type(given)(granted=False, layer_m=given.layer_m, hold_m=given.hold_m)
+        return given
+
+    rig.link.request_clearance = segment_never
+    rig.run()
+    (result,) = rig.link.results
+    assert result.status == "failed" and result.reason is not None
+    assert result.reason.startswith("battery low (")
+    waited_s = float(result.reason.split("waited ")[1].split(" s")[0])
+    assert 30.0 < waited_s < 240.0, result.reason
+    assert rig.states[-3:] == ["home", "land", "halted"]
+    assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction
+
+
 def test_a_battery_draining_too_fast_to_put_the_brick_back_flies_home_with_it() -> None:
-    """At 0.8 %/s the 10 % left above critical last 12.5 s: less than twice what putting back and flying home
-    take (the drain is measured over the task so far). The pack starts at 41 %, so that 20 % comes in transport
-    (at 40 % it came 0.2 s sooner, in pickup_verify, once the take-off had to slow down before it was over)."""
-    rig = Rig("brick", fc={"battery_fraction": 0.41, "battery_drain_per_s": 0.008}).run()
+    """At 0.8 %/s the 10 % left above critical last 12.5 s: less than putting back and flying home take with the
+    return wait. The pack sags to 20.5 % in transport, so the 20 % comes there."""
+    rig = Rig("brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.008})
+    rig.fc.at(27.0, battery_fraction=0.205)
+    rig.run()
     (result,) = rig.link.results
     assert result.status == "failed" and result.reason == "battery low (20%)"
     assert rig.followed("transport", "failsafe") and "putback_goto" not in rig.states

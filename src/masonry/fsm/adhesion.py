@@ -8,12 +8,15 @@ from typing import Any
 
 import numpy as np
 
+from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
 from masonry.fsm.tool import Tool
 from masonry.planner.tasks import AdhesionTask, Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
+
+Vec3 = tuple[float, float, float]
 
 #: The smallest lean the nozzle's targets allow for (2 degrees: 1.2 cm at the nozzle's 0.35 m).
 _LEAN_MIN_RAD = math.radians(2.0)
@@ -73,18 +76,40 @@ class AdhesionUav(UavModel):
         return None
 
     def _transit_altitude_m(self) -> float:
-        z = self.config.cruise_altitude_m
         if isinstance(self.task, AdhesionTask):
-            t = self.task
-            surface = max(t.start_m[2], t.end_m[2])
-            z = max(
-                z,
-                surface
-                + self.config.airframe.spray_height_m
-                - self.nozzle.offset_body_m[2]
-                + self.config.clearance_m,
-            )
-        return z
+            return self._spray_transit_m(self.task)
+        return self.config.cruise_altitude_m
+
+    def _spray_transit_m(self, t: AdhesionTask) -> float:
+        """The transit altitude of adhesion task ``t``: cruise, raised so the nozzle clears the surface."""
+        surface = max(t.start_m[2], t.end_m[2])
+        return max(
+            self.config.cruise_altitude_m,
+            surface
+            + self.config.airframe.spray_height_m
+            - self.nozzle.offset_body_m[2]
+            + self.config.clearance_m,
+        )
+
+    def _task_flight_s(self, task: Task, from_m: Vec3) -> tuple[float, Vec3]:
+        """To the segment's start, the hover, the descent, the segment, the valve's close and the climb out."""
+        if not isinstance(task, AdhesionTask):
+            return 0.0, from_m
+        cfg = self.config
+        top = self._spray_transit_m(task)
+        start = self._nozzle_body(task.start_m)
+        end = self._nozzle_body(task.end_m)
+        over_start = (float(start[0]), float(start[1]), top)
+        climb_s = self.nav.leg_duration_s(end, np.array([end[0], end[1], top])) + LEG_SETTLE_S
+        work_s = (
+            cfg.stable_time_s
+            + cfg.spray_descent_s
+            + LEG_SETTLE_S
+            + task.length_m / cfg.spray_speed_mps
+            + cfg.close_dwell_s
+            + climb_s
+        )
+        return self._route_s(from_m, over_start) + work_s, (float(end[0]), float(end[1]), top)
 
     def _nozzle_body(
         self, point_m: tuple[float, float, float] | np.ndarray, tel: Telemetry | None = None

@@ -10,11 +10,18 @@ from typing import Any
 import numpy as np
 
 from masonry.errors import HardwareError
+from masonry.fsm.battery import LEG_SETTLE_S, flight_left_s
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
-from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
+from masonry.fsm.states import (
+    BRICK_LOADED_STATES,
+    BRICK_STATES,
+    BRICK_TASK_STATES,
+    BRICK_TRANSITIONS,
+    leaf_states,
+)
 from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
 from masonry.perception.types import TagPose
@@ -30,12 +37,15 @@ from masonry.ports import (
     Telemetry,
 )
 
-#: States in which a brick UAV keeps the reserve to put its brick back: about to grasp it, or carrying it.
-_RESERVE_STATES = frozenset({"pickup_align", "transport", "place_align", "place_descend"})
-#: Putting a brick back needs this many times its estimated duration of flight left above the critical battery
-#: (the reserve: the task is given up below it) and at least this many (else the UAV flies home with it).
-_PUTBACK_RESERVE = 2.0
-_PUTBACK_AFFORD = 1.5
+Vec3 = tuple[float, float, float]
+
+#: States in which the brick is (or may be) on the magnet: a task given up there puts it back first.
+_LOADED_STATES = frozenset(BRICK_LOADED_STATES)
+#: A put-back waiting for its pickup's column goes home with the brick once the flight left above the critical
+#: battery falls under this many times the rest of the put-back and the way home.
+_PUTBACK_LAST_S_FACTOR = 1.1
+#: Hovering and aligning over a brick (estimate, align): seconds the battery budget counts for them.
+_ALIGN_S = 3.0
 
 
 @dataclass
@@ -56,7 +66,6 @@ class BrickAttempt:
     place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
     release_error_m: float | None = None  # the effector's distance to its target at the release
     putback_reason: str = ""  # why the task was given up while the brick is being put back
-    battery_at_start: tuple[float, float] | None = None  # (time s, fraction) when the task was taken
 
 
 class BrickUav(UavModel):
@@ -142,8 +151,6 @@ class BrickUav(UavModel):
 
     def _begin_task(self, task: Task) -> None:
         self._begin_counters()
-        if self._tel is not None:
-            self.attempt.battery_at_start = (self._now_s, self._tel.battery_fraction)
 
     def _task_problem(self, task: Task) -> str | None:
         assert isinstance(task, BrickTask)
@@ -158,12 +165,80 @@ class BrickUav(UavModel):
 
     def _transit_altitude_m(self) -> float:
         """Cruise altitude, raised so a carried brick clears the drop-off by ``clearance_m``."""
-        z = self.config.cruise_altitude_m
         if isinstance(self.task, BrickTask):
-            t = self.task
-            top_z = t.position_m[2] + t.size_m[2] / 2.0
-            z = max(z, top_z - self.effector.offset_body_m[2] + t.size_m[2] + self.config.clearance_m)
-        return z
+            return self._carry_altitude_m(self.task)
+        return self.config.cruise_altitude_m
+
+    def _carry_altitude_m(self, t: BrickTask) -> float:
+        """The transit altitude of brick task ``t``: cruise, raised so the brick clears its drop-off."""
+        top_z = t.position_m[2] + t.size_m[2] / 2.0
+        return max(
+            self.config.cruise_altitude_m,
+            top_z - self.effector.offset_body_m[2] + t.size_m[2] + self.config.clearance_m,
+        )
+
+    # -- the battery budget (masonry.fsm.battery) -----------------------------------------------------------
+    def _vertical_s(self, distance_m: float) -> float:
+        """A climb or descent leg of the task (the navigator's rest-to-rest leg), settled."""
+        return self.nav.leg_duration_s(np.zeros(3), np.array([0.0, 0.0, abs(distance_m)])) + LEG_SETTLE_S
+
+    def _task_flight_s(self, task: Task, from_m: Vec3) -> tuple[float, Vec3]:
+        """To the pickup, the estimate and the grasp, the carry, the placement and the climb out of it."""
+        if not isinstance(task, BrickTask) or task.pickup_m is None:
+            return 0.0, from_m
+        cfg = self.config
+        carry_z = self._carry_altitude_m(task)
+        eff_z = self.effector.offset_body_m[2]
+        hover = (task.pickup_m[0], task.pickup_m[1], cfg.cruise_altitude_m)
+        over_pickup = (hover[0], hover[1], carry_z)
+        over_drop = (task.position_m[0], task.position_m[1], carry_z)
+        at_brick_z = task.pickup_m[2] + task.size_m[2] / 2.0 - eff_z  # the body over the brick's top
+        at_drop_z = task.position_m[2] + task.size_m[2] / 2.0 - eff_z
+        pick_s = (
+            cfg.settle_time_s
+            + cfg.min_estimates * cfg.control_period_s
+            + _ALIGN_S
+            + cfg.descent_duration_s
+            + cfg.grasp_dwell_s
+            + self._vertical_s(carry_z - at_brick_z)
+        )
+        place_s = (
+            _ALIGN_S + cfg.descent_duration_s + cfg.release_dwell_s + self._vertical_s(carry_z - at_drop_z)
+        )
+        flight_s = self._route_s(from_m, hover) + pick_s + self._route_s(over_pickup, over_drop) + place_s
+        return flight_s, over_drop
+
+    def _putback_need_s(self, from_m: Vec3) -> float:
+        """Putting the brick back from ``from_m`` (the flight to its pickup, the descent, the release, the climb)
+        and the way home from there, with no wait."""
+        cfg = self.config
+        effector_m, yaw = self._putback_pose()
+        body = self.effector.body_target(effector_m, yaw)
+        over = (float(body[0]), float(body[1]), self._transit_altitude_m())
+        return (
+            self._route_s(from_m, over)
+            + cfg.descent_duration_s
+            + cfg.release_dwell_s
+            + self._vertical_s(over[2] - float(body[2]))
+            + self._home_s(over)
+        )
+
+    def _flight_left_s(self, floor_fraction: float) -> float | None:
+        """Seconds of flight above ``floor_fraction`` at the measured drain (None: not measured yet)."""
+        drain = self.drain.drain_per_s
+        if self._tel is None or drain is None:
+            return None
+        return flight_left_s(self._tel.battery_fraction, floor_fraction, drain)
+
+    def _exit_s(self, tel: Telemetry) -> tuple[float, str]:
+        """With the brick (maybe) on the magnet and its put-back affordable: the put-back and the way home."""
+        if (
+            self.state in _LOADED_STATES
+            and self.attempt.brick_estimate is not None
+            and self._putback_affordable()
+        ):
+            return self._putback_need_s(tel.position_m), f"putting brick {self.brick_task.brick} back"
+        return super()._exit_s(tel)
 
     def _safe_actuators(self) -> None:
         self.gripper.set_joint_locked(True)  # keep a carried brick; it is put down after landing
@@ -490,49 +565,34 @@ class BrickUav(UavModel):
         except HardwareError:
             return False  # the general abort: failsafe, then home (or the emergency)
 
-    def _putback_budget_s(self) -> tuple[float, float] | None:
-        """(seconds of flight left above the critical battery at the drain measured over this task, seconds
-        that putting the brick back and flying home take); None: no drain measured yet."""
-        tel, cfg = self._tel, self.config
-        if tel is None or self.attempt.battery_at_start is None or self.attempt.brick_estimate is None:
-            return None
-        start_s, start_fraction = self.attempt.battery_at_start
-        used = start_fraction - tel.battery_fraction
-        if self._now_s <= start_s or used <= 0.0:
-            return None
-        left_s = (tel.battery_fraction - cfg.battery_critical_fraction) * (self._now_s - start_s) / used
-        pickup_m, _ = self._putback_pose()
-        here = tel.position_m
-        lateral_m = math.dist(here[:2], pickup_m[:2]) + math.dist(pickup_m[:2], cfg.home_m[:2])
-        need_s = (
-            lateral_m / cfg.cruise_speed_mps
-            + 2.0 * cfg.descent_duration_s
-            + cfg.release_dwell_s
-            + 2.0 * cfg.cruise_altitude_m / cfg.vertical_speed_mps  # down at home and a climb, at most
-        )
-        return left_s, need_s
-
     def _putback_affordable(self) -> bool:
-        """The UAV can put the brick back and fly home before its battery is critical, with half as much again
-        to spare; else it flies home with the brick."""
-        budget = self._putback_budget_s()
-        return budget is None or budget[0] >= _PUTBACK_AFFORD * budget[1]
+        """The UAV can put the brick back and fly home before its battery is critical, with
+        ``battery_return_wait_s`` of waiting for clearance on the way; else it flies home with the brick."""
+        left_s = self._flight_left_s(self.config.battery_critical_fraction)
+        if left_s is None or self._tel is None or self.attempt.brick_estimate is None:
+            return True
+        return left_s >= self._putback_need_s(self._tel.position_m) + self.config.battery_return_wait_s
 
     def _battery_short(self, tel: Telemetry) -> str | None:
-        """Also short: a UAV carrying a brick (flying to its drop-off, or waiting for its column or site) gives
-        the task up while it can still put the brick back (twice what that takes), before the battery is low by
-        the threshold: a drop-off it may have to wait for is no safe bet with a pack that short."""
+        """Also short: about to grasp its brick (``pickup_align``), a UAV whose flight left above
+        ``battery_low_fraction`` no longer covers the rest of the task with what is left of the waiting it was
+        taken with (the pickup's column kept it waiting) and the way home: it gives the task up before it has a
+        brick to put back. Only with a ground crew (``swaps_batteries``): without one, a battery reason retires the
+        UAV after landing, and the waiting rule (:meth:`UavModel._battery_short`) keeps it safe anyway."""
         short = super()._battery_short(tel)
-        if short is not None or self.state not in _RESERVE_STATES:
+        if short is not None or self.state != "pickup_align" or not self._battery_service:
             return short
-        budget = self._putback_budget_s()
-        # (once it no longer affords the put-back either, giving up early gains nothing: it goes on waiting)
-        if budget is not None and _PUTBACK_AFFORD * budget[1] <= budget[0] < _PUTBACK_RESERVE * budget[1]:
-            return (
-                f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): the reserve to put brick "
-                f"{self.brick_task.brick} back"
-            )
-        return None
+        left_s = self._flight_left_s(self.config.battery_low_fraction)
+        rest_s = self._flight_need_s(self.brick_task)
+        if left_s is None or rest_s is None:
+            return None
+        rest_s += max(0.0, self.task_wait_budget_s - self.task_waited_s)
+        if left_s >= rest_s:
+            return None
+        return (
+            f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): waited {self.task_waited_s:.0f} s for clearance; "
+            f"{left_s:.0f} s of flight left, brick {self.brick_task.brick}'s placement needs {rest_s:.0f} s"
+        )
 
     def defer_failure(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
         """The task is reported failed once the brick is back on its pallet (mission control then re-queues it
@@ -568,6 +628,16 @@ class BrickUav(UavModel):
     def do_putback_goto(self, tel: Telemetry) -> None:
         if not self._putback_battery_ok(tel):
             return
+        if self._waiting_since_s is not None:
+            # waiting for its pickup's column: home with the brick while the battery still affords the way
+            # (landing on the pallet at the critical battery loses the brick and the UAV, issue 18)
+            left_s = self._flight_left_s(self.config.battery_critical_fraction)
+            if left_s is not None and left_s < _PUTBACK_LAST_S_FACTOR * self._putback_need_s(tel.position_m):
+                self._putback_given_up(
+                    f"{left_s:.0f} s of flight left after waiting "
+                    f"{self._now_s - self._waiting_since_s:.0f} s for its pickup's column"
+                )
+                return
         if self._advance(tel):
             self.arrived()
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:

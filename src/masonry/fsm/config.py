@@ -95,6 +95,13 @@ class UavConfig:
     )
     battery_low_fraction: float = 0.20  # below this a task is aborted and the UAV goes home
     battery_critical_fraction: float = 0.10  # below this it lands where it is
+    # The battery budget (masonry.fsm.battery): a task is taken (else held for a swap, with a ground crew) only if
+    # the flight left above battery_low_fraction covers it, this much waiting for clearance (at most
+    # hold_patience_s) and the way home; waiting in the air, a UAV gives its task up while the flight left above
+    # battery_critical_fraction covers its way out of it (home, or putting its brick back) and
+    # battery_return_wait_s of waiting for clearance on that way
+    battery_wait_budget_s: float = 60.0
+    battery_return_wait_s: float = 45.0
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this
     # Brick pickup (paper, Section IV)
     confidence_threshold: float = 0.75  # C_th

@@ -173,6 +173,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self._max_wind_mps = max_wind_mps
         self.reserve_fraction = reserve_fraction
         self.battery_swaps = 0
+        self._held_for: str | None = None  # why the battery budget holds the next task (logged once)
         self.name = name
         self.transport = transport
         self._position = position
@@ -319,7 +320,7 @@ class UavHandler(MissionLink, ClearanceLink):
             self.pump()
             if not self._queue:
                 return None
-        if self._battery is not None and self._battery() < self.reserve_fraction and not self.out_of_service:
+        if self._battery is not None and not self.out_of_service and self._needs_swap(self._queue[0][0]):
             # Battery reserve: the task waits while the machine, given nothing, flies home and lands; then
             # the ground crew (``swap_battery``, True once done) swaps the pack and the task starts.
             if self._swap_battery is None or not self._swap_battery():
@@ -332,6 +333,22 @@ class UavHandler(MissionLink, ClearanceLink):
         )
         self.executions.append(self._current)
         return task
+
+    def _needs_swap(self, task: Task) -> bool:
+        """The battery is under ``reserve_fraction``, or (with a ground crew) does not cover ``task``: the
+        machine's battery budget (its ``battery_shortfall``: the task's flight, a budget of waiting for
+        clearance and the way home, at the drain it has measured; docs/state-machines.md, "Battery budget")."""
+        assert self._battery is not None
+        if self._battery() < self.reserve_fraction:
+            return True
+        shortfall = getattr(self.model, "battery_shortfall", None)
+        if self._swap_battery is None or shortfall is None:
+            return False
+        why = shortfall(task)
+        if why is not None and why != self._held_for:
+            log.info("%s: %s holds it for a battery swap", self.name, why)
+        self._held_for = why
+        return why is not None
 
     def request_clearance(
         self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
