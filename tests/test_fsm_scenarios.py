@@ -286,11 +286,14 @@ HAPPY_ADHESION = [
 def test_adhesion_happy_path_sprays_along_the_segment() -> None:
     rig = Rig("adhesion")
     path: list[tuple[float, float, float]] = []
+    was_open = [False]
 
     def record(r: Rig) -> None:
-        if r.sprayer.is_valve_open():
+        # the nozzle wherever the valve was open since the last tick (the tick that closes it ends the bead)
+        if r.sprayer.is_valve_open() or was_open[0]:
             x, y, z = r.fc.position_m
-            path.append((x, y, z - 0.35))  # the nozzle
+            path.append((x, y, z - 0.35))
+        was_open[0] = r.sprayer.is_valve_open()
 
     rig.run(on_tick=record)
     assert rig.states == HAPPY_ADHESION
