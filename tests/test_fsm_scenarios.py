@@ -304,6 +304,48 @@ def test_adhesion_happy_path_sprays_along_the_segment() -> None:
     assert all(abs(p[1] - 0.5) < 0.02 and abs(p[2] - 0.30) < 0.02 for p in path)
 
 
+def test_adhesion_a_gust_mid_pass_closes_the_valve_and_the_next_pass_covers_the_gap() -> None:
+    """Pushed 6 cm off the bead for half a second (the fake's position moved under the machine): the valve closes
+    while the nozzle is off, and the UAV goes back over what it missed before it reports done."""
+    rig = Rig("adhesion")
+    ticks = {"spray": 0}
+    valve_off_the_bead = []
+
+    def gust(r: Rig) -> None:
+        if r.uav.state != "spray":
+            return
+        ticks["spray"] += 1
+        if abs(r.fc.position_m[1] - 0.5) > 0.035:  # where the machine saw it (a little noise aside)
+            valve_off_the_bead.append(r.sprayer.is_valve_open())
+        if ticks["spray"] in (8, 9, 10, 11, 12):
+            r.fc._pos[1] += 0.012  # the gust's push, 6 cm over 5 ticks
+
+    rig.run(on_tick=gust)
+    result = rig.link.results[0]
+    assert result.status == "done" and result.coverage == 1.0, result
+    assert valve_off_the_bead and not any(valve_off_the_bead)
+    assert rig.uav._bead.passes >= 2  # it went back over the gap
+    assert len(rig.sprayer.intervals) >= 2  # the valve closed off the bead and opened again on it
+
+
+def test_adhesion_gusts_that_keep_the_nozzle_off_fail_the_attempt_with_the_coverage() -> None:
+    """Held 5 cm off the bead after its first 0.5 s: no gap ever closes; spray_patience_s later the attempt fails
+    and says how much it sprayed (bounded, no livelock)."""
+    rig = Rig("adhesion")
+
+    def hold_off(r: Rig) -> None:
+        if r.uav.state == "spray" and r.clock.now_s() - r.uav._entered_s > 0.5:
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[1], r.fc._vel[1] = 0.55, 0.0
+
+    rig.run(on_tick=hold_off)
+    result = rig.link.results[0]
+    assert result.status == "failed", result
+    assert result.reason is not None and "of the bead of A0" in result.reason and "gusts" in result.reason
+    assert not rig.sprayer.is_valve_open()
+    assert "spray" in rig.states and rig.states[rig.states.index("spray") + 1] == "failsafe"
+
+
 def test_adhesion_link_loss_while_spraying_closes_the_valve() -> None:
     rig = Rig("adhesion")
     lost = {"done": False}

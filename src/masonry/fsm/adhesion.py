@@ -259,11 +259,21 @@ class AdhesionUav(UavModel):
         cfg = self.config
         over = self._steer_bead(tel)
         bead = self._bead
-        if over and bead.coverage() < 1.0 and bead.passes < cfg.max_spray_passes:
+        if over and bead.coverage() < 1.0:
             bead.turn()  # a gap left (the nozzle pushed off): back along the segment over it, valve on the bead
             over = False
-        if over or self._now_s > self._spray_deadline_s:
+        if over:
             self.sprayed()
+        elif self._now_s > self._spray_deadline_s:
+            # bounded: gusts that never let the nozzle cover the segment end the spray; below spray_min_coverage
+            # the attempt fails (mission control tries again: what was sprayed stays)
+            if bead.coverage() >= cfg.spray_min_coverage:
+                self.sprayed()
+            else:
+                self.abort(
+                    reason=f"sprayed {bead.coverage():.0%} of the bead of {self.adhesion_task.id} in "
+                    f"{self._now_s - self._entered_s:.0f} s, {bead.passes} passes: gusts kept the nozzle off it"
+                )
 
     def enter_close(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel

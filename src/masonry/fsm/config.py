@@ -125,13 +125,14 @@ class UavConfig:
     # flies the point that puts the nozzle on it at the tilt measured at that tick. The valve is open while the
     # nozzle is within spray_valve_radius_m of the segment and no higher than spray_check_height_m above it; its
     # sprayed track covers the points within spray_check_radius_m. Gaps left (a gust pushed it off): passes back
-    # and forth over them, up to max_spray_passes in all; the spray ends spray_patience_s after one pass's time,
-    # covered or not (the UAV reports the coverage it measured).
+    # and forth over them until none is left or, at the latest, spray_patience_s after one pass's time: done then
+    # if the track covers spray_min_coverage of the segment, else the attempt fails. The UAV reports the coverage
+    # it measured.
     spray_check_radius_m: float = 0.02
     spray_check_height_m: float = 0.2
     spray_valve_radius_m: float = 0.03
     spray_lead_m: float = 0.12
-    max_spray_passes: int = 20
+    spray_min_coverage: float = 0.9
     spray_patience_s: float = 25.0
     close_dwell_s: float = _T.close_dwell_s
     # Chaining (paper, Section V: "it continues to the next assigned task"): the task is reported done once the
