@@ -86,6 +86,48 @@ def test_brick_never_seen_fails_after_the_climbs_and_goes_home() -> None:
     assert rig.states[-4:] == ["failsafe", "home", "land", "idle"]
 
 
+def test_brick_estimate_climbs_where_it_hovered_not_where_a_gust_put_it() -> None:
+    """A gust moves the UAV 0.4 m while it estimates (blind camera: it climbs): each climb goes back over the
+    first hover point, and the time blown off does not count against the estimate's deadline."""
+    rig = Rig("brick", camera={"blind": True})
+    hover: list[tuple[float, float]] = []
+    pushed: set[float] = set()
+
+    def gust(r: Rig) -> None:
+        if r.uav.state != "pickup_estimate":
+            return
+        entered = r.uav._entered_s
+        if entered not in pushed and r.uav.attempt.deadline_s - r.clock.now_s() < 0.2:
+            # each estimate (each climb): where it hovers; a push 0.4 m east just before it would climb
+            hover.append((float(r.uav.nav.target_m[0]), float(r.uav.nav.target_m[1])))
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[0] += 0.4
+            pushed.add(entered)
+
+    rig.run(on_tick=gust)
+    (result,) = rig.link.results
+    assert result.status == "failed" and "not seen" in (result.reason or "")
+    assert len(pushed) == 1 + rig.config.max_climbs
+    assert all(math.dist(h, hover[0]) < 1e-9 for h in hover), hover
+    assert rig.uav.attempt.off_s > 0.0
+
+
+def test_brick_estimate_blown_off_for_good_fails_with_the_reason() -> None:
+    """Held 2 m off the pickup while estimating: after leg_timeout_s of it the attempt fails and says so."""
+    rig = Rig("brick", camera={"blind": True})
+
+    def hold_off(r: Rig) -> None:
+        if r.uav.state == "pickup_estimate" and r.clock.now_s() - r.uav._entered_s > 1.0:
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[0], r.fc._vel[0] = r.uav.nav.target_m[0] + 2.0, 0.0
+
+    rig.run(on_tick=hold_off)
+    (result,) = rig.link.results
+    assert result.status == "failed", result
+    assert (result.reason or "").startswith("blown 2.0 m off the pickup of B"), result.reason
+    assert rig.states.count("pickup_estimate") == 1  # no climbs: the deadline did not run while off
+
+
 def test_brick_low_confidence_climbs_then_succeeds() -> None:
     rig = Rig("brick", camera={"noise_sigma_m": 0.08})
 
