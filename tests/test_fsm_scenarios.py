@@ -218,6 +218,35 @@ def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> No
     assert not rig.gripper.magnet_on  # let go of at the pickup
 
 
+def test_a_brick_put_back_is_not_let_go_where_a_gust_dragged_it() -> None:
+    """A gust holds the UAV 1 m off the pickup through its put-back descent's time-out: it does not let go there
+    (the retry would never see the brick) but once back near its place (issue 18)."""
+    rig = Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001})
+    released_at: list[tuple[float, float]] = []
+    held = {"since": None}
+
+    def gust(r: Rig) -> None:
+        if r.uav.state == "putback_descend":
+            if held["since"] is None:
+                held["since"] = r.clock.now_s()
+            if (
+                r.clock.now_s() - held["since"]
+                < r.config.descent_duration_s + r.config.release_timeout_s + 4.0
+            ):
+                _ = r.fc.position_m  # (brought up to now)
+                r.fc._pos[0], r.fc._vel[0] = r.uav._putback_pose()[0][0] + 1.0, 0.0
+        if r.uav.state == "putback_release" and not released_at:
+            released_at.append(r.effector_m()[:2])
+
+    rig.run(on_tick=gust)
+    (result,) = rig.link.results
+    assert (
+        result.status == "failed" and result.reason is not None and "put back at its pickup" in result.reason
+    )
+    target = rig.uav._putback_pose()[0]
+    assert released_at and math.dist(released_at[0], target[:2]) <= 0.2, (released_at, target)
+
+
 @pytest.mark.parametrize("kind", ["brick", "adhesion"])
 def test_a_task_held_longer_than_the_patience_is_given_up(kind: str) -> None:
     """Mission control never grants the column: after ``hold_patience_s`` of waiting the task fails with the

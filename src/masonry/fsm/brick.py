@@ -33,6 +33,9 @@ from masonry.ports import (
 #: A brick UAV this far (horizontally) from its estimate hover point has been blown off it: its camera looks
 #: elsewhere, and the time there does not count against the estimate's deadline.
 _ESTIMATE_OFF_M = 0.25
+#: A brick put back is let go after its descent's time-out only this close (horizontally) to where it was picked
+#: up: the retry's estimate hover must still see it.
+_PUTBACK_NEAR_M = 0.2
 #: States in which a brick UAV keeps the reserve to put its brick back: about to grasp it, or carrying it.
 _RESERVE_STATES = frozenset({"pickup_align", "transport", "place_align", "place_descend"})
 #: Putting a brick back needs this many times its estimated duration of flight left above the critical battery
@@ -606,12 +609,19 @@ class BrickUav(UavModel):
     def do_putback_descend(self, tel: Telemetry) -> None:
         if not self._putback_battery_ok(tel):
             return
-        error_m = self.effector.distance_m(tel, self._putback_pose()[0])
+        target_m = self._putback_pose()[0]
+        error_m = self.effector.distance_m(tel, target_m)
         # On the pallet a few centimetres off does not matter (the retry estimates the brick's pose again):
-        # after the descent's time-out it is let go where it is.
+        # after the descent's time-out it is let go where it is, if that is within _PUTBACK_NEAR_M of its place
+        # (a gust dragged a brick 2 m off its pickup and let it go there: the retries never saw it, issue 18);
+        # farther, it waits for the UAV to come back, and at leg_timeout_s lets go anyway (bounded)
+        late_s = self._now_s - self.nav.end_s
+        p = self.effector.position(tel)
+        near = math.hypot(float(p[0]) - target_m[0], float(p[1]) - target_m[1]) <= _PUTBACK_NEAR_M
         if (
             error_m <= self.config.placement_radius_m
-            or self._now_s > self.nav.end_s + self.config.release_timeout_s
+            or (late_s > self.config.release_timeout_s and near)
+            or late_s > self.config.leg_timeout_s
         ):
             self.reached()
 
