@@ -165,3 +165,18 @@ def test_references_are_finite_and_end_at_the_target(start, velocity, target, du
     assert all(math.isfinite(v) for v in (*ref, *ff))
     end, _ = nav.reference(duration_s + 1.0)
     assert end == pytest.approx(list(target), abs=1e-9)
+
+
+def test_a_steered_reference_is_the_callers_until_another_motion_replaces_it():
+    nav = _nav()
+    nav.fly_line(0.0, np.array([0.0, 0.0, 1.0]), np.array([1.0, 0.0, 1.0]), 0.5)
+    nav.steer(1.0, (0.2, 0.05, 1.0), (0.15, 0.0, 0.0), end_s=3.0)
+    assert nav.active and nav.line is None and nav.traj is None and nav.end_s == 3.0
+    assert nav.reference(1.0) == ((0.2, 0.05, 1.0), (0.15, 0.0, 0.0))
+    assert nav.reference(5.0) == ((0.2, 0.05, 1.0), (0.15, 0.0, 0.0))  # no clock of its own: the caller's
+    assert nav.target_m.tolist() == [0.2, 0.05, 1.0]
+    sp = nav.step(1.0, _tel(position=(0.2, 0.0, 1.0)))
+    assert sp.velocity_mps[0] == pytest.approx(0.15, abs=1e-9) and sp.velocity_mps[1] > 0.0
+    nav.hold(2.0, _tel(position=(0.2, 0.05, 1.0)))
+    assert nav.steered is None
+    assert nav.reference(2.0)[0].tolist() == [0.2, 0.05, 1.0]

@@ -87,6 +87,48 @@ def test_brick_never_seen_fails_after_the_climbs_and_goes_home() -> None:
     assert rig.states[-4:] == ["failsafe", "home", "land", "idle"]
 
 
+def test_brick_estimate_climbs_where_it_hovered_not_where_a_gust_put_it() -> None:
+    """A gust moves the UAV 0.4 m while it estimates (blind camera: it climbs): each climb goes back over the
+    first hover point, and the time blown off does not count against the estimate's deadline."""
+    rig = Rig("brick", camera={"blind": True})
+    hover: list[tuple[float, float]] = []
+    pushed: set[float] = set()
+
+    def gust(r: Rig) -> None:
+        if r.uav.state != "pickup_estimate":
+            return
+        entered = r.uav._entered_s
+        if entered not in pushed and r.uav.attempt.deadline_s - r.clock.now_s() < 0.2:
+            # each estimate (each climb): where it hovers; a push 0.4 m east just before it would climb
+            hover.append((float(r.uav.nav.target_m[0]), float(r.uav.nav.target_m[1])))
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[0] += 0.4
+            pushed.add(entered)
+
+    rig.run(on_tick=gust)
+    (result,) = rig.link.results
+    assert result.status == "failed" and "not seen" in (result.reason or "")
+    assert len(pushed) == 1 + rig.config.max_climbs
+    assert all(math.dist(h, hover[0]) < 1e-9 for h in hover), hover
+    assert rig.uav.attempt.off_s > 0.0
+
+
+def test_brick_estimate_blown_off_for_good_fails_with_the_reason() -> None:
+    """Held 2 m off the pickup while estimating: after leg_timeout_s of it the attempt fails and says so."""
+    rig = Rig("brick", camera={"blind": True})
+
+    def hold_off(r: Rig) -> None:
+        if r.uav.state == "pickup_estimate" and r.clock.now_s() - r.uav._entered_s > 1.0:
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[0], r.fc._vel[0] = r.uav.nav.target_m[0] + 2.0, 0.0
+
+    rig.run(on_tick=hold_off)
+    (result,) = rig.link.results
+    assert result.status == "failed", result
+    assert (result.reason or "").startswith("blown 2.0 m off the pickup of B"), result.reason
+    assert rig.states.count("pickup_estimate") == 1  # no climbs: the deadline did not run while off
+
+
 def test_brick_low_confidence_climbs_then_succeeds() -> None:
     rig = Rig("brick", camera={"noise_sigma_m": 0.08})
 
@@ -179,6 +221,35 @@ def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> No
     assert putback[:4] == ["putback_goto", "putback_descend", "putback_release", "putback_ascend"]
     assert putback[4:] == ["home", "land", "halted"]
     assert not rig.gripper.magnet_on  # let go of at the pickup
+
+
+def test_a_brick_put_back_is_not_let_go_where_a_gust_dragged_it() -> None:
+    """A gust holds the UAV 1 m off the pickup through its put-back descent's time-out: it does not let go there
+    (the retry would never see the brick) but once back near its place (issue 18)."""
+    rig = Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001})
+    released_at: list[tuple[float, float]] = []
+    held = {"since": None}
+
+    def gust(r: Rig) -> None:
+        if r.uav.state == "putback_descend":
+            if held["since"] is None:
+                held["since"] = r.clock.now_s()
+            if (
+                r.clock.now_s() - held["since"]
+                < r.config.descent_duration_s + r.config.release_timeout_s + 4.0
+            ):
+                _ = r.fc.position_m  # (brought up to now)
+                r.fc._pos[0], r.fc._vel[0] = r.uav._putback_pose()[0][0] + 1.0, 0.0
+        if r.uav.state == "putback_release" and not released_at:
+            released_at.append(r.effector_m()[:2])
+
+    rig.run(on_tick=gust)
+    (result,) = rig.link.results
+    assert (
+        result.status == "failed" and result.reason is not None and "put back at its pickup" in result.reason
+    )
+    target = rig.uav._putback_pose()[0]
+    assert released_at and math.dist(released_at[0], target[:2]) <= 0.2, (released_at, target)
 
 
 @pytest.mark.parametrize("kind", ["brick", "adhesion"])
@@ -342,11 +413,14 @@ HAPPY_ADHESION = [
 def test_adhesion_happy_path_sprays_along_the_segment() -> None:
     rig = Rig("adhesion")
     path: list[tuple[float, float, float]] = []
+    was_open = [False]
 
     def record(r: Rig) -> None:
-        if r.sprayer.is_valve_open():
+        # the nozzle wherever the valve was open since the last tick (the tick that closes it ends the bead)
+        if r.sprayer.is_valve_open() or was_open[0]:
             x, y, z = r.fc.position_m
-            path.append((x, y, z - 0.35))  # the nozzle
+            path.append((x, y, z - 0.35))
+        was_open[0] = r.sprayer.is_valve_open()
 
     rig.run(on_tick=record)
     assert rig.states == HAPPY_ADHESION
@@ -355,6 +429,48 @@ def test_adhesion_happy_path_sprays_along_the_segment() -> None:
     # The valve was open along the segment, at the spraying height above it.
     assert path[0][0] == pytest.approx(-0.15, abs=0.02) and path[-1][0] == pytest.approx(0.15, abs=0.02)
     assert all(abs(p[1] - 0.5) < 0.02 and abs(p[2] - 0.30) < 0.02 for p in path)
+
+
+def test_adhesion_a_gust_mid_pass_closes_the_valve_and_the_next_pass_covers_the_gap() -> None:
+    """Pushed 6 cm off the bead for half a second (the fake's position moved under the machine): the valve closes
+    while the nozzle is off, and the UAV goes back over what it missed before it reports done."""
+    rig = Rig("adhesion")
+    ticks = {"spray": 0}
+    valve_off_the_bead = []
+
+    def gust(r: Rig) -> None:
+        if r.uav.state != "spray":
+            return
+        ticks["spray"] += 1
+        if abs(r.fc.position_m[1] - 0.5) > 0.035:  # where the machine saw it (a little noise aside)
+            valve_off_the_bead.append(r.sprayer.is_valve_open())
+        if ticks["spray"] in (8, 9, 10, 11, 12):
+            r.fc._pos[1] += 0.012  # the gust's push, 6 cm over 5 ticks
+
+    rig.run(on_tick=gust)
+    result = rig.link.results[0]
+    assert result.status == "done" and result.coverage == 1.0, result
+    assert valve_off_the_bead and not any(valve_off_the_bead)
+    assert rig.uav._bead.passes >= 2  # it went back over the gap
+    assert len(rig.sprayer.intervals) >= 2  # the valve closed off the bead and opened again on it
+
+
+def test_adhesion_gusts_that_keep_the_nozzle_off_fail_the_attempt_with_the_coverage() -> None:
+    """Held 5 cm off the bead after its first 0.5 s: no gap ever closes; spray_patience_s later the attempt fails
+    and says how much it sprayed (bounded, no livelock)."""
+    rig = Rig("adhesion")
+
+    def hold_off(r: Rig) -> None:
+        if r.uav.state == "spray" and r.clock.now_s() - r.uav._entered_s > 0.5:
+            _ = r.fc.position_m  # (brought up to now)
+            r.fc._pos[1], r.fc._vel[1] = 0.55, 0.0
+
+    rig.run(on_tick=hold_off)
+    result = rig.link.results[0]
+    assert result.status == "failed", result
+    assert result.reason is not None and "of the bead of A0" in result.reason and "gusts" in result.reason
+    assert not rig.sprayer.is_valve_open()
+    assert "spray" in rig.states and rig.states[rig.states.index("spray") + 1] == "failsafe"
 
 
 def test_adhesion_link_loss_while_spraying_closes_the_valve() -> None:

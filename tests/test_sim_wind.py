@@ -169,3 +169,27 @@ def test_still_air_is_the_old_loop() -> None:
             v.step(0.05)
     assert calm.position_m == pytest.approx(windless.position_m, abs=1e-12)
     assert calm.attitude_rad == pytest.approx(windless.attitude_rad, abs=1e-12)
+
+
+def test_a_uav_at_its_tilt_limit_does_not_run_away() -> None:
+    """At the tilt limit the autopilot's wind estimate stops winding up but still unwinds. Left stale (a 10 m/s
+    gust that turned), it kept the thrust saturated along the motion: in moderate turbulence at 2 m/s (the
+    running bond, seed 15) the brick UAV flew off at 17 m/s, 200 m from its pickup (issue 18); now its fastest
+    is 4.1 m/s (the gust blows it a few metres off, it flies back)."""
+    from masonry.blueprint_gen import running_bond
+    from masonry.mission.simulate import SimulatedMission
+    from masonry.sim import Faults
+
+    faults = Faults(wind=WindConfig(speed_mps=2.0, direction_deg=270.0, turbulence="moderate"))
+    fastest = [0.0]
+    with SimulatedMission.from_blueprint(
+        running_bond(2, 5), seed=15, faults=faults, vehicle="arducopter", max_time_s=200.0
+    ) as mission:
+        vehicle = mission.world.uavs["brick-1"].vehicle
+
+        def watch(now_s: float) -> None:
+            fastest[0] = max(fastest[0], math.hypot(*vehicle.velocity_mps[:2]))
+
+        mission.tick_hooks.append(watch)
+        mission.run()
+    assert 2.0 < fastest[0] < 6.0, fastest[0]

@@ -53,18 +53,37 @@ def test_a_brick_is_placed_in_a_steady_6_mps_wind(vehicle: str) -> None:
 
 @pytest.mark.parametrize("vehicle", ["ideal", "arducopter"])
 def test_a_segment_is_sprayed_in_4_mps_light_turbulence(vehicle: str) -> None:
-    """The nozzle's lean is allowed for, the hover and descent gates relax after their patience, and a pass
-    that a gust pushed off the segment is sprayed again. Over seeds 0-5: every segment done, coverage 0.95 on
-    average and never below 0.8 (measured: arducopter 0.869-1.0, mean 0.978; ideal 0.951-1.0). Issue 18's 0.9
-    on every run is not met in turbulence (docs/performance.md, "Wind")."""
-    coverages = []
+    """The pass is measured by the nozzle (masonry.fsm.bead): the body flies the point that puts the nozzle on the
+    bead at the tilt of the moment, the valve is open only on the bead, and passes go back over what a gust made
+    it miss. Over seeds 0-5 (measured): every segment done, the simulator's coverage 1.0 on both vehicles; the
+    UAV's own (2 cm, stricter than the bead's 3 cm) 0.97-1.0, which it reports."""
     for seed in range(6):
         run, world, task = _fly(
             "A0", WindConfig(speed_mps=4.0, direction_deg=270.0, turbulence="light"), seed, vehicle
         )
         assert run.result is not None and run.result.status == "done", (seed, run.result)
-        coverages.append(world.coverage(task))
-    assert min(coverages) >= 0.8 and sum(coverages) / len(coverages) >= 0.95, coverages
+        coverage = world.coverage(task)
+        assert coverage >= 0.95, (seed, coverage)
+        assert run.result.coverage is not None and 0.9 <= run.result.coverage <= 1.0, (seed, run.result)
+
+
+def test_a_segment_is_sprayed_in_2_mps_moderate_turbulence() -> None:
+    """Moderate turbulence (sigma_u 3 m/s) swings the nozzle by 5-10 cm: the passes go on over the gaps until the
+    nozzle's track covers the segment. Seeds 0-5 on the simulated ArduCopter (measured): every segment sprayed
+    has the simulator's coverage 1.0 (seed 3 fails its descent to the spraying height: a gate that mission
+    control retries)."""
+    done = 0
+    for seed in range(6):
+        run, world, task = _fly(
+            "A0", WindConfig(speed_mps=2.0, direction_deg=270.0, turbulence="moderate"), seed, "arducopter"
+        )
+        assert run.result is not None
+        if run.result.status != "done":
+            assert run.result.reason is not None and "A0" in run.result.reason
+            continue
+        done += 1
+        assert world.coverage(task) >= 0.95, (seed, world.coverage(task))
+    assert done >= 5
 
 
 def test_fly_sim_takes_the_wind_from_the_command_line() -> None:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from masonry.fsm.battery import LEG_SETTLE_S
+from masonry.fsm.bead import BeadPass, BeadSettings
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
@@ -54,8 +55,9 @@ class AdhesionUav(UavModel):
         self._yaw_rad = 0.0
         #: the lean (roll, pitch) averaged over _LEAN_TAU_S from the hover on: a steady wind's, not a gust's
         self._lean = (0.0, 0.0)
-        self._spray_track: list[tuple[float, float]] = []
-        self._spray_passes = 1
+        self._bead = BeadPass((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), BeadSettings(speed_mps=1.0))  # enter_spray's
+        self._bead_tick_s = 0.0
+        self._spray_deadline_s = 0.0
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
             config.cruise_altitude_m
@@ -236,70 +238,67 @@ class AdhesionUav(UavModel):
         tel = self._tel
         assert tel is not None
         t = self.adhesion_task
-        self.sprayer.set_valve(True)
-        self._spray_track = []
-        self._spray_passes = 1
-        self._record_nozzle(tel)  # where the valve opened: the first sample of the track
-        self._fly_line(
-            tel,
-            self._nozzle_body(t.start_m, tel),
-            self._nozzle_body(t.end_m, tel),
-            self.config.spray_speed_mps,
+        cfg = self.config
+        self._bead = BeadPass(
+            t.start_m,
+            t.end_m,
+            BeadSettings(
+                speed_mps=cfg.spray_speed_mps,
+                valve_radius_m=cfg.spray_valve_radius_m,
+                check_radius_m=cfg.spray_check_radius_m,
+                lead_m=cfg.spray_lead_m,
+            ),
         )
+        self._bead_tick_s = self._now_s
+        # the spray ends by then, covered or not (bounded: gusts that never let the nozzle cover it end the task,
+        # which reports the coverage it measured)
+        self._spray_deadline_s = (
+            self._now_s + self._bead.length_m / cfg.spray_speed_mps + cfg.spray_patience_s
+        )
+        self._steer_bead(tel)
+
+    def _steer_bead(self, tel: Telemetry) -> bool:
+        """One tick of the pass (:mod:`masonry.fsm.bead`): the nozzle (measured: position, lever arm, tilt) marks
+        what it covered, the valve follows it on and off the bead, and the body flies the point that puts the
+        nozzle on the bead's reference as the UAV leans now (in turbulence the tilt swings by 10-20 degrees within
+        seconds: 6-12 cm at the nozzle's 0.35 m, more than the 3 cm bead radius); True when the pass is over."""
+        cfg = self.config
+        dt = self._now_s - self._bead_tick_s
+        self._bead_tick_s = self._now_s
+        nozzle = self.nozzle.position(tel)
+        above = float(nozzle[2]) - self.adhesion_task.start_m[2]
+        step = self._bead.step(dt, nozzle, -0.01 <= above <= cfg.spray_check_height_m)
+        if step.valve_open != self.sprayer.is_valve_open():
+            self.sprayer.set_valve(step.valve_open)
+        ref = step.nozzle_ref_m
+        body = self.nozzle.body_target(
+            (ref[0], ref[1], ref[2] + cfg.airframe.spray_height_m),
+            self._yaw_rad,
+            (tel.attitude_rad[0], tel.attitude_rad[1]),
+        )
+        remaining_s = abs((self._bead.length_m if self._bead.direction > 0 else 0.0) - self._bead.progress_m)
+        self.nav.steer(self._now_s, body, step.velocity_mps, self._now_s + remaining_s / cfg.spray_speed_mps)
+        return step.pass_over
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
-        self._follow_lean(tel)
-        self._record_nozzle(tel)
-        if self._advance(tel, cfg.spray_tolerance_m) or self._now_s > self.nav.end_s + cfg.release_timeout_s:
-            if self._spray_passes < cfg.max_spray_passes and self._pushed_off():
-                # a gust pushed the nozzle off part of the segment: back along it with the valve open
-                self._spray_passes += 1
-                t = self.adhesion_task
-                start, end = (t.end_m, t.start_m) if self._spray_passes % 2 == 0 else (t.start_m, t.end_m)
-                self._fly_line(
-                    tel, self._nozzle_body(start, tel), self._nozzle_body(end, tel), cfg.spray_speed_mps
-                )
-                return
+        over = self._steer_bead(tel)
+        bead = self._bead
+        if over and bead.coverage() < 1.0:
+            bead.turn()  # a gap left (the nozzle pushed off): back along the segment over it, valve on the bead
+            over = False
+        if over:
             self.sprayed()
-
-    def _record_nozzle(self, tel: Telemetry) -> None:
-        """Add the nozzle's position to the track, if it is within the spray's reach of the surface."""
-        nozzle = self.nozzle.position(tel)
-        above = float(nozzle[2]) - self.adhesion_task.start_m[2]
-        if (
-            -0.01 <= above <= self.config.spray_check_height_m
-        ):  # a gust lifting it out of reach sprays nothing
-            self._spray_track.append((float(nozzle[0]), float(nozzle[1])))
-
-    def _pushed_off(self) -> bool:
-        """A gust pushed the nozzle off the segment: its track strayed more than ``spray_check_radius_m`` from the
-        line and covers less than ``spray_min_coverage`` of it. (A track that starts or ends a little short,
-        as a chained segment's does, is not pushed off: calm air sprays one pass.)"""
-        t = self.adhesion_task
-        a, b = np.asarray(t.start_m[:2], dtype=float), np.asarray(t.end_m[:2], dtype=float)
-        track = np.asarray(self._spray_track, dtype=float).reshape(-1, 2)
-        d = b - a
-        length = float(np.linalg.norm(d))
-        if len(track) == 0 or length == 0.0:
-            return False
-        rel = track - a[None, :]
-        cross = np.abs(rel[:, 0] * d[1] - rel[:, 1] * d[0]) / length
-        return bool(cross.max() > self.config.spray_check_radius_m) and (
-            self._track_coverage() < self.config.spray_min_coverage
-        )
-
-    def _track_coverage(self) -> float:
-        """The fraction of the segment (1 cm samples) within ``spray_check_radius_m`` of the nozzle's track."""
-        t = self.adhesion_task
-        a, b = np.asarray(t.start_m[:2], dtype=float), np.asarray(t.end_m[:2], dtype=float)
-        n = max(2, math.ceil(float(np.linalg.norm(b - a)) / 0.01) + 1)
-        samples = a[None, :] + np.linspace(0.0, 1.0, n)[:, None] * (b - a)[None, :]
-        track = np.asarray(self._spray_track, dtype=float).reshape(-1, 2)
-        if len(track) == 0:
-            return 0.0
-        d2 = ((samples[:, None, :] - track[None, :, :]) ** 2).sum(axis=2)
-        return float(np.mean(d2.min(axis=1) <= self.config.spray_check_radius_m**2))
+        elif self._now_s > self._spray_deadline_s:
+            # bounded: gusts that never let the nozzle cover the segment end the spray; below spray_min_coverage
+            # the attempt fails (mission control tries again: what was sprayed stays)
+            if bead.coverage() >= cfg.spray_min_coverage:
+                self.sprayed()
+            else:
+                self.abort(
+                    reason=f"sprayed {bead.coverage():.0%} of the bead of {self.adhesion_task.id} in "
+                    f"{self._now_s - self._entered_s:.0f} s, {bead.passes} passes: gusts kept the nozzle off it"
+                )
 
     def enter_close(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
@@ -317,7 +316,7 @@ class AdhesionUav(UavModel):
         tel = self._tel
         assert tel is not None
         self._climb_to_m = self._transit_altitude_m()
-        self._report_done()
+        self._report_done(coverage=self._bead.coverage())  # its own measure: what the nozzle's track covered
         self._next_task = None
         self._climbing = False
         self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)

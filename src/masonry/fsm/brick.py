@@ -46,6 +46,12 @@ _LOADED_STATES = frozenset(BRICK_LOADED_STATES)
 _PUTBACK_LAST_S_FACTOR = 1.1
 #: Hovering and aligning over a brick (estimate, align): seconds the battery budget counts for them.
 _ALIGN_S = 3.0
+#: A brick UAV this far (horizontally) from its estimate hover point has been blown off it: its camera looks
+#: elsewhere, and the time there does not count against the estimate's deadline.
+_ESTIMATE_OFF_M = 0.25
+#: A brick put back is let go after its descent's time-out only this close (horizontally) to where it was picked
+#: up: the retry's estimate hover must still see it.
+_PUTBACK_NEAR_M = 0.2
 
 
 @dataclass
@@ -60,7 +66,9 @@ class BrickAttempt:
     brick_estimate: tuple[np.ndarray, float] | None = None  # top-face centre (world, m), yaw (rad)
     estimates_seen: int = 0
     hover_z: float = 0.0  # the estimate hover's altitude (0: where the UAV is)
+    hover_xy: tuple[float, float] | None = None  # where the estimate hovers (None: where the UAV is)
     deadline_s: float = 0.0  # of the estimate
+    off_s: float = 0.0  # the estimate's time blown off its hover point (not counted against its deadline)
     carry_yaw_rad: float = 0.0  # the carried brick's yaw relative to the body
     grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
     place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
@@ -281,7 +289,12 @@ class BrickUav(UavModel):
         p = tel.position_m
         if self.attempt.hover_z == 0.0:
             self.attempt.hover_z = p[2]
-        target = np.array([p[0], p[1], self.attempt.hover_z])
+        # a climb to widen the view climbs where the estimate hovered, not where a gust has put the UAV (each
+        # climb re-anchored there took a brick UAV 20 m off its pickup in moderate turbulence, issue 18)
+        if self.attempt.hover_xy is None:
+            self.attempt.hover_xy = (p[0], p[1])
+        x, y = self.attempt.hover_xy
+        target = np.array([x, y, self.attempt.hover_z])
         if abs(self.attempt.hover_z - p[2]) > 0.05:
             self._fly_to(tel, target)
         else:
@@ -294,6 +307,18 @@ class BrickUav(UavModel):
 
     def do_pickup_estimate(self, tel: Telemetry) -> None:
         cfg = self.config
+        off_m = math.dist(tel.position_m[:2], self.nav.target_m[:2])
+        if off_m > _ESTIMATE_OFF_M:
+            # blown off the hover point by a gust: the camera looks elsewhere, the time does not count against
+            # the estimate's deadline (patience, bounded by leg_timeout_s in all)
+            self.attempt.off_s += cfg.control_period_s
+            self.attempt.deadline_s += cfg.control_period_s
+            if self.attempt.off_s > cfg.leg_timeout_s:
+                self.abort(
+                    reason=f"blown {off_m:.1f} m off the pickup of {self.brick_task.id} "
+                    f"for {self.attempt.off_s:.0f} s while estimating brick {self.brick_task.brick}"
+                )
+                return
         settling = self._now_s < self.nav.end_s + cfg.settle_time_s
         if not settling:
             self._collect(tel)
@@ -456,6 +481,7 @@ class BrickUav(UavModel):
         else:
             self.attempt.climbs = 0
             self.attempt.hover_z = self.config.cruise_altitude_m
+            self.attempt.hover_xy = None
             self.missed()
 
     # -- transport and place -------------------------------------------------------------------------------
@@ -653,12 +679,19 @@ class BrickUav(UavModel):
     def do_putback_descend(self, tel: Telemetry) -> None:
         if not self._putback_battery_ok(tel):
             return
-        error_m = self.effector.distance_m(tel, self._putback_pose()[0])
+        target_m = self._putback_pose()[0]
+        error_m = self.effector.distance_m(tel, target_m)
         # On the pallet a few centimetres off does not matter (the retry estimates the brick's pose again):
-        # after the descent's time-out it is let go where it is.
+        # after the descent's time-out it is let go where it is, if that is within _PUTBACK_NEAR_M of its place
+        # (a gust dragged a brick 2 m off its pickup and let it go there: the retries never saw it, issue 18);
+        # farther, it waits for the UAV to come back, and at leg_timeout_s lets go anyway (bounded)
+        late_s = self._now_s - self.nav.end_s
+        p = self.effector.position(tel)
+        near = math.hypot(float(p[0]) - target_m[0], float(p[1]) - target_m[1]) <= _PUTBACK_NEAR_M
         if (
             error_m <= self.config.placement_radius_m
-            or self._now_s > self.nav.end_s + self.config.release_timeout_s
+            or (late_s > self.config.release_timeout_s and near)
+            or late_s > self.config.leg_timeout_s
         ):
             self.reached()
 

@@ -127,13 +127,20 @@ class UavConfig:
     spray_descent_s: float = _T.spray_descent_s
     stable_time_s: float = _T.stable_time_s  # hover still this long over the segment start before descending
     spray_tolerance_m: float = 0.015
-    # What the tool saw (issue 18): the nozzle's track over the segment (telemetry, with the lean) covers a point
-    # of it within spray_check_radius_m (from no higher than spray_check_height_m); below spray_min_coverage of the segment (a gust pushed it off) the UAV
-    # sprays it again, back along it, up to max_spray_passes in all. Calm air: one pass, as before.
+    # What the tool saw (issue 18, masonry.fsm.bead): the pass moves the nozzle's reference along the segment at
+    # spray_speed_mps, at most spray_lead_m ahead of the nozzle (telemetry: position, lever arm, tilt); the body
+    # flies the point that puts the nozzle on it at the tilt measured at that tick. The valve is open while the
+    # nozzle is within spray_valve_radius_m of the segment and no higher than spray_check_height_m above it; its
+    # sprayed track covers the points within spray_check_radius_m. Gaps left (a gust pushed it off): passes back
+    # and forth over them until none is left or, at the latest, spray_patience_s after one pass's time: done then
+    # if the track covers spray_min_coverage of the segment, else the attempt fails. The UAV reports the coverage
+    # it measured.
     spray_check_radius_m: float = 0.02
-    spray_check_height_m: float = 0.2  # and only from at most this high above the surface (the spray's reach)
+    spray_check_height_m: float = 0.2
+    spray_valve_radius_m: float = 0.03
+    spray_lead_m: float = 0.12
     spray_min_coverage: float = 0.9
-    max_spray_passes: int = 3
+    spray_patience_s: float = 25.0
     close_dwell_s: float = _T.close_dwell_s
     # Chaining (paper, Section V: "it continues to the next assigned task"): the task is reported done once the
     # valve is closed; the UAV hovers there up to ``chain_wait_s`` for its next task, and a segment starting

@@ -59,6 +59,9 @@ _TAKEOFF_SETTLE_MPS = 0.2
 _TAKEOFF_RETRY_S = 2.0
 _TAKEOFF_RETRIES = 2
 _TAKEOFF_STUCK_S = 6.0
+#: A swinging UAV this far off its point when a gate fails was blown off (a position loop too fast for its
+#: autopilot swings about the point, tens of centimetres; gusts in moderate turbulence carried UAVs 1-40 m).
+_BLOWN_OFF_M = 1.0
 
 
 @dataclass
@@ -706,10 +709,16 @@ class UavModel:
         if self._now_s < self.nav.end_s + cfg.swing_patience_s or swing[2] <= cfg.swing_speed_mps**2:
             return None
         off_m = math.dist(tel.position_m, self.nav.target_m)
-        return (
+        head = (
             f"swinging at {math.sqrt(swing[2]):.2f} m/s rms, {off_m:.2f} m off, "
-            f"{self._now_s - self.nav.end_s:.0f} s after the leg's end: the position loop is too fast for "
-            f"this autopilot's lag (measure it: masonry fly --identify; docs/hardware.md)"
+            f"{self._now_s - self.nav.end_s:.0f} s after the leg's end: "
+        )
+        if off_m > _BLOWN_OFF_M:
+            # a loop too fast for its autopilot swings about the point; this far off, the air moved it (issue 18)
+            return head + "blown off by gusts beyond what the autopilot holds against"
+        return head + (
+            "the position loop is too fast for this autopilot's lag (measure it: masonry fly --identify; "
+            "docs/hardware.md), or gusts"
         )
 
     def _retry_takeoff(self, tel: Telemetry) -> bool:

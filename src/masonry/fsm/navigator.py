@@ -71,6 +71,8 @@ class Navigator:
         self.traj: MinJerk | None = None
         self.line: tuple[np.ndarray, np.ndarray, float] | None = None  # start, unit direction, length
         self.line_speed_mps = 0.0
+        #: a reference the model sets every tick (position, velocity feed-forward): :meth:`steer`
+        self.steered: tuple[Vec3, Vec3] | None = None
         self.t0_s = 0.0
         self.end_s = 0.0
         self.legs: list[Leg] = []
@@ -102,6 +104,7 @@ class Navigator:
         self.active = False
         self.traj = None
         self.line = None
+        self.steered = None
         self.legs = []
 
     def hold(self, now_s: float, tel: Telemetry, target_m: Any = None, yaw_rad: float | None = None) -> None:
@@ -110,6 +113,7 @@ class Navigator:
             self.pid.reset()
         self.traj = None
         self.line = None
+        self.steered = None
         self.legs = []
         self.end_s = now_s
         self.target_m = self._inside(np.array(tel.position_m if target_m is None else target_m, dtype=float))
@@ -131,6 +135,7 @@ class Navigator:
             self.pid.reset()
         self.legs = []
         self.line = None
+        self.steered = None
         self._start_leg(now_s, tel, np.asarray(target_m, dtype=float), duration_s, from_rest=from_rest)
         if yaw_rad is not None:
             self.target_yaw_rad = yaw_rad
@@ -144,11 +149,33 @@ class Navigator:
         length = float(np.linalg.norm(d))
         self.legs = []
         self.traj = None
+        self.steered = None
         self.line = (np.array(start_m, dtype=float), d / max(length, 1e-9), length)
         self.line_speed_mps = speed_mps
         self.t0_s = now_s
         self.end_s = now_s + length / speed_mps
         self.target_m = np.array(end_m, dtype=float)
+        self.active = True
+
+    def steer(
+        self,
+        now_s: float,
+        reference_m: Sequence[float] | np.ndarray,
+        velocity_mps: Sequence[float],
+        end_s: float,
+    ) -> None:
+        """Fly the reference the caller sets every tick (a spray pass steered by the nozzle,
+        :mod:`masonry.fsm.bead`): ``reference_m`` now, moving at ``velocity_mps`` (feed-forward); ``end_s``: when
+        the caller expects it to end (its timeouts count from then)."""
+        if not self.active:
+            self.pid.reset()
+        self.legs = []
+        self.traj = None
+        self.line = None
+        ref = (float(reference_m[0]), float(reference_m[1]), float(reference_m[2]))
+        self.steered = (ref, (float(velocity_mps[0]), float(velocity_mps[1]), float(velocity_mps[2])))
+        self.target_m = self._inside(np.array(ref))
+        self.end_s = end_s
         self.active = True
 
     def route(self, now_s: float, tel: Telemetry, target_m: Any, yaw_rad: float | None = None) -> None:
@@ -359,6 +386,8 @@ class Navigator:
                 lag = self.velocity_lag_s
                 return ref, (vel[0] + lag * acc[0], vel[1] + lag * acc[1], vel[2] + lag * acc[2])
             return ref, _ZERO_FF
+        if self.steered is not None:
+            return self.steered
         if self.line is not None:
             start, direction, length = self.line
             s = (now_s - self.t0_s) * self.line_speed_mps

@@ -636,12 +636,17 @@ class SimVehicle:
         tx, ty = ax - d[0] + drag_x, ay - d[1] + drag_y
         limit = GRAVITY_MPS2 * math.tan(cfg.tilt_limit_rad)
         t = math.sqrt(tx * tx + ty * ty)
+        nx, ny = d[0] + (px - d[0]) * kr, d[1] + (py - d[1]) * kr
         if t > limit:
+            # the integrators stop winding up at the limit (ArduPilot's limit flags), but unwind: an estimate
+            # left stale at the limit (a gust that turned) otherwise holds the thrust saturated along the motion
+            # and the vehicle runs away downwind faster than the wind (issue 18: 16 m/s in a 10 m/s gust)
+            ux, uy = ax - nx + drag_x, ay - ny + drag_y
+            if ux * ux + uy * uy < t * t:
+                d[0], d[1] = nx, ny
             tx, ty = tx * limit / t, ty * limit / t
-            # the integrators stop winding up at the limit (ArduPilot's limit flags)
         else:
-            d[0] += (px - d[0]) * kr
-            d[1] += (py - d[1]) * kr
+            d[0], d[1] = nx, ny
         net_z = az - d[2] + pz
         d[2] += (pz - d[2]) * kz
         e = self._west
