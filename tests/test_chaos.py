@@ -317,3 +317,11 @@ def test_a_uav_cut_off_with_its_brick_keeps_the_pickup_it_puts_it_back_on(tmp_pa
     the pickup, and a UAV heard again holds the column where it is, its old flight over."""
     out = fly_chaos(random_chaos(185, max_drop_s=40.0), tmp_path)
     assert check_chaos(out) == []
+
+
+def test_a_uav_cut_off_as_it_took_off_keeps_the_column_over_its_pad(tmp_path):
+    """Campaign seed 47 (arducopter) with link drops up to 40 s: glue-1, last heard on its pad as it took off,
+    hovered over it cut off; mission control freed what it held after rejoin_timeout_s, and brick-2 took off
+    from the pad beside it and flew past at 0.64 m. Now its way home (the column over its pad) stays reserved."""
+    out = fly_chaos(random_chaos(47, vehicle="arducopter", max_drop_s=40.0), tmp_path)
+    assert check_chaos(out) == []

@@ -438,9 +438,7 @@ class ColumnClearance:
         if z - home[2] <= ON_PAD_Z_M:
             if not on_pad:
                 return False
-            u = self._uavs.get(uav)
-            if u is None or u.phase is not Phase.LANDED:
-                self._set_pad(uav)
+            self._set_pad(uav)  # (a silent UAV landed kept the column over its pad too: :meth:`silent`)
             return True
         u = self._uav(uav)
         # what it was granted before it fell silent is over (its `arrived` would end the old flight at its site)

@@ -818,7 +818,8 @@ class MissionControl:
             # back")
             carrying = link.state in CARRYING_STATES and isinstance(task, BrickTask)
             link.way_via_m = task.pickup_m if carrying and isinstance(task, BrickTask) else None
-            if link.position_m is not None and link.position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
+            # (last heard on its pad too: it may have been taking off, and hovers over the pad asking to land)
+            if link.position_m is not None:
                 way_m = self.columns.silent(
                     name, link.position_m, self.fallback_layers_m.get(name), link.way_via_m
                 )
