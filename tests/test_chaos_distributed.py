@@ -187,37 +187,7 @@ def test_a_handler_killed_mid_task_and_restarted_rejoins_and_the_mission_complet
     endpoint = f"tcp/127.0.0.1:{port}"
     mission = f"chaos-{port}"
     report = tmp_path / "report.json"
-    mc = subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            MAIN,
-            "mission-control",
-            str(CASE_STUDY),
-            "--listen",
-            endpoint,
-            "--format",
-            "json",
-            "--report",
-            str(report),
-            "--startup-timeout",
-            "30",
-            "--heartbeat-timeout",
-            "3",
-            "--max-time",
-            "3000",
-            "--mission-name",
-            mission,
-            "--reservation",
-            "task",
-            "--time-scale",
-            "25",
-            "--verbose",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    mc = mission_control(endpoint, mission, report)
     procs = [mc]
     try:
         glue = fly("glue-1", "adhesion", endpoint, mission)

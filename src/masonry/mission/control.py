@@ -101,9 +101,8 @@ class Attempt:
     placement_error_m: float | None = None
     coverage: float | None = None
     phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
-    adopted: bool = (
-        False  # in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
-    )
+    #: in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
+    adopted: bool = False
 
 
 @dataclass
@@ -124,9 +123,8 @@ class UavLink:
     taking_off: bool = False
     #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
     airspace_until_s: float | None = None
-    way_via_m: Vec3 | None = (
-        None  # silent with a brick on its magnet: the pickup it puts it back on, then home
-    )
+    #: silent with a brick on its magnet: the pickup it puts it back on, then home
+    way_via_m: Vec3 | None = None
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -807,17 +805,17 @@ class MissionControl:
         link.lost = True
         link.lost_at_s = now_s
         link.status = status
+        task_id = self.dispatcher.task_of(name)
+        task = self._tasks[task_id] if task_id is not None else None
+        # last heard with its brick on the magnet: it may have taken it down with it, or puts it back first
+        carried = task if link.state in CARRYING_STATES and isinstance(task, BrickTask) else None
         if status == "lost" and self.columns.volumes(name):
             # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
             # mission control is silent), and fly home on its own after LAST_RESORT_S: both stay reserved until
             # it is heard again, or for as long as that flight takes
             link.airspace_until_s = now_s + self.rejoin_timeout_s
-            task_id = self.dispatcher.task_of(name)
-            task = self._tasks[task_id] if task_id is not None else None
-            # carrying its brick, it puts it back on its pallet first (docs/state-machines.md, "Putting a brick
-            # back")
-            carrying = link.state in CARRYING_STATES and isinstance(task, BrickTask)
-            link.way_via_m = task.pickup_m if carrying and isinstance(task, BrickTask) else None
+            # (carrying, it puts the brick back on its pallet first: docs/state-machines.md, "Putting a brick back")
+            link.way_via_m = carried.pickup_m if carried is not None else None
             # (last heard on its pad too: it may have been taking off, and hovers over the pad asking to land)
             if link.position_m is not None:
                 way_m = self.columns.silent(
@@ -840,10 +838,9 @@ class MissionControl:
                 att.end_s = now_s
                 att.status = "failed"
                 att.reason = LOST_REASON if status == "lost" else f"uav {status}"
-                task = self._tasks[released]
-                if status == "lost" and link.state in CARRYING_STATES and isinstance(task, BrickTask):
-                    # its brick may have gone down with it: a retry that finds no brick on the pallet says why
-                    att.reason += f" (last heard in {link.state}, with brick {task.brick} on its magnet)"
+                if status == "lost" and carried is not None:
+                    # a retry that then finds no brick on the pallet says why
+                    att.reason += f" (last heard in {link.state}, with brick {carried.brick} on its magnet)"
                 log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
