@@ -235,6 +235,37 @@ def test_checks_on_results_hold_without_a_key():
     assert mc.events.ignored == {"too-short": 1} and tid in mc.dispatcher.in_progress
 
 
+def test_a_completion_said_again_after_it_was_taken_is_neither_acted_on_nor_counted():
+    """The handler repeats a completion when mission control's heartbeats paused around it (a busy computer
+    does that too): the repeat of a result already taken is no security event, while the same result from
+    another UAV or for another attempt still is."""
+    bp, _, bus, mc = _mission(key=None)
+    least = min_durations_s(plan(bp))
+    eve = bus.endpoint("eve")
+    for u in bp.fleet:
+        eve.send(MISSION_CONTROL, encode(Heartbeat(u.name, 0.0)))
+    mc.step(0.0)
+    tid, uav = next(iter(mc.dispatcher.in_progress.items()))
+    other = next(u.name for u in bp.fleet if u.name != uav)
+    t = least[tid] + 1.0
+    for now in (1.0, 3.0, t):  # heard all along (a silent UAV's results are screened differently)
+        for u in bp.fleet:
+            eve.send(MISSION_CONTROL, encode(Heartbeat(u.name, now, task_id=mc.dispatcher.task_of(u.name))))
+        mc.step(now)
+    done = Result(uav, TaskResult(tid, "done", 1.0), t, attempt=1)
+    eve.send(MISSION_CONTROL, encode(done))
+    mc.step(t)
+    assert tid in mc.dispatcher.done and mc.events.ignored == {}
+    eve.send(MISSION_CONTROL, encode(replace(done, time_s=t + 1.0)))
+    mc.step(t + 1.0)
+    assert mc.events.ignored == {}
+    assert [a.status for a in mc.history if a.task_id == tid] == ["done"]
+    eve.send(MISSION_CONTROL, encode(replace(done, sender=other)))
+    eve.send(MISSION_CONTROL, encode(replace(done, attempt=2)))
+    mc.step(t + 2.0)
+    assert mc.events.ignored == {"not-assigned": 2}
+
+
 # -- the UAV handler ---------------------------------------------------------------------------------------
 class Idle:
     finished = True

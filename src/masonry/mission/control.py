@@ -670,9 +670,19 @@ class MissionControl:
     def _screened(self, link: UavLink, msg: Any, now_s: float) -> bool:
         """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
         (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
-        if isinstance(msg, Result) and self._late_result(msg, now_s):
+        if isinstance(msg, Result) and (self._heard_again(msg) or self._late_result(msg, now_s)):
             return True
         return link.lost and not self._readmit(link, msg, now_s)
+
+    def _heard_again(self, msg: Result) -> bool:
+        """A completion already taken, said again by its UAV (the handler repeats one when mission control's
+        heartbeats paused around it, as a slow link or a busy computer makes them): nothing to do, nothing
+        suspicious."""
+        r = msg.result
+        return r.status == "done" and any(
+            (a.task_id, a.uav, a.attempt, a.status) == (r.task_id, msg.sender, msg.attempt, "done")
+            for a in self.history
+        )
 
     def _late_result(self, msg: Result, now_s: float) -> bool:
         """A completion from a UAV its task was released from when it was declared lost: it did the task after
