@@ -5,7 +5,8 @@ running-bond --courses 3 --bricks-per-course 40 --placed-courses 1``: 80 bricks 
 and a 6-course wall of 30 bricks per course (150 bricks to do). Each is flown by fleets of 1+1, 2+1, 4+2, 6+3 and
 8+4 (brick + adhesion) UAVs with the default policy, seed 1, geometric camera (``masonry.mission.simulate``).
 
-Printed per wall, as Markdown tables (docs/performance.md, "Fleet scaling"):
+Printed per wall, as Markdown tables (docs/performance/fleet.md, "After: `site` as the default"; the first
+figures, before issue 15's fleet work, in docs/performance/history.md):
 
 1. fleet, makespan, speed-up over 1+1, ``lower_bound_s``, ratio, ``min_separation_m``, the mean brick and
    adhesion attempt, the UAVs' mean ``idle_s`` and ``waiting_s``, simulated and wall seconds;

@@ -1,6 +1,6 @@
 """Hardware adapters over loopback: MAVLink setpoint rate and command round trip, actuator round trip over a pty.
 
-Prints its figures (docs/performance.md, "Hardware adapters"). Run: python benchmarks/bench_hardware.py
+Prints its figures (docs/performance/hardware.md). Run: python benchmarks/bench_hardware.py
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The offline schedule against the reactive fleet: prints a table, asserts nothing (docs/performance.md).
+"""The offline schedule against the reactive fleet: prints a table, asserts nothing (docs/performance/schedule.md).
 
 Per wall and fleet: ``masonry schedule``'s makespan and proven bound (CP-SAT, ``task`` reservation), its status
 and solve time, then the simulated makespans of ``fifo``, ``critical-path`` and ``schedule`` (following it),

@@ -4,9 +4,9 @@ For each bundled blueprint (its own fleet, and larger fleets on the running bond
 ``simulate`` twice: ``separation=False`` (every lateral leg at the work altitude, no site columns: the plain
 conflict graph) and ``separation=True`` (the default). It prints makespan and the minimum distance between two
 airborne UAVs, plus how often columns were waited for. ``--sweep`` instead runs the busier walls of the
-separation sweep in docs/performance.md (2x30 and 4x25 running bonds with 4 + 2 UAVs, the 200-brick blueprint
-with 3 + 2; fifo and critical-path; seeds 0, 1, 2) with separation on, and prints each run's makespan and
-minimum separation, then how many runs came closer than 1.0 m. Usage:
+separation sweep in docs/performance/mission.md, "Tracking" (2x30 and 4x25 running bonds with 4 + 2 UAVs, the
+200-brick blueprint with 3 + 2; fifo and critical-path; seeds 0, 1, 2) with separation on, and prints each
+run's makespan and minimum separation, then how many runs came closer than 1.0 m. Usage:
 
     .venv/bin/python benchmarks/bench_separation.py [--quick | --sweep]
 """

@@ -48,6 +48,7 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """The ``slow`` tests first (a stable sort: the rest keep their order).
 
     xdist hands tests out in collection order, so a long mission collected last would run alone on one worker
-    while the other has finished: longest first is what lets both end together (docs/performance.md).
+    while the other has finished: longest first is what lets both end together
+    (docs/performance/test-suite.md).
     """
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)

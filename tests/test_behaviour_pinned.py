@@ -12,7 +12,7 @@ json``. The case study, the faults run and the UAV-loss run are pinned whole. Th
 (4 + 2 and 3 + 2 UAVs, fifo and critical-path, three seeds) are pinned over their first ``HORIZON_S`` of
 mission time: by then every UAV has taken off, flown several tasks, been held and granted by the airspace and
 chained adhesion segments, so any change to the machines, the airspace or the dispatcher shows there, and the
-18 runs cost seconds instead of minutes (docs/performance.md has the suite's time).
+18 runs cost seconds instead of minutes (docs/performance/test-suite.md has the suite's time).
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_st
 def test_a_swinging_hover_fails_fast_with_its_reason(tmp_path):
     # the simulated ArduCopter flown with a position gain far past its stability limit (pi / (2 x lag)). The
     # ideal vehicle's kp 3 /s swings on the SITL (issue 19), but only just on the model: its 0.1 s delay does not
-    # reproduce the SITL's limit cycle (docs/performance.md, "The fit, again")
+    # reproduce the SITL's limit cycle (docs/performance/autopilots.md, "The fit, again")
     config = tmp_path / "uav.yaml"
     config.write_text("control_preset: ideal\npid: {xy: {kp: 7.0}}\n")
     res = CliRunner().invoke(app, [

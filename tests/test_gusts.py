@@ -3,7 +3,7 @@
 The simulated wind (``gusts=S``: Dryden turbulence of horizontal intensity S m/s, masonry.sim.wind) pushes the
 airframe; the autopilot's velocity loop takes the push out with its integral action (as ArduCopter's does), the
 position PID's integral the rest, and the alignment before a descent needs some patience. Figures:
-docs/performance.md.
+docs/performance/wind.md (the earlier gusts model: docs/performance/history.md, "Issue 5: gusts").
 """
 
 from __future__ import annotations

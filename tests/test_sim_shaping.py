@@ -78,7 +78,7 @@ def test_identify_on_the_arducopter_preset_measures_the_sitls_lag():
     ])  # fmt: skip
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    # ArduCopter 4.7 SITL (docs/performance.md): 63 % after 0.71 s, 10 % after 0.31-0.34 s
+    # ArduCopter 4.7 SITL (docs/performance/autopilots.md): 63 % after 0.71 s, 10 % after 0.31-0.34 s
     assert 0.71 * 0.85 <= out["lag_s"] <= 0.71 * 1.15
     assert 0.25 <= out["delay_s"] <= 0.45
 

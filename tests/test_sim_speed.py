@@ -1,4 +1,4 @@
-"""The mission simulation's fast paths give what the general paths give (docs/performance.md, "Speed-ups").
+"""The mission simulation's fast paths give what the general paths give (docs/performance/mission.md).
 
 Covered: the cached JSON encoder (same bytes as ``json.dumps``), the heartbeat decode fast path and the decode
 cache (same values, same errors, the fleet check never skipped), the in-process bus, the vehicle's inlined

@@ -397,7 +397,7 @@ class SimulatedMission:
                 (:mod:`masonry.fsm.tuning`), the tuning a real UAV on that autopilot flies with.
             vehicle: the simulated autopilot (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`): ``ideal``
                 (a first-order 0.3 s velocity lag) or ``arducopter`` (ArduCopter's shaping, delay and GPS-like
-                noise, fitted to its SITL: docs/performance.md); None (default):
+                noise, fitted to its SITL: docs/performance/autopilots.md); None (default):
                 :data:`~masonry.sim.vehicle_config.DEFAULT_VEHICLE`, ``arducopter``.
             stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
                 (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.

@@ -62,7 +62,7 @@ class PIDGains:
     loop with a ~0.3 s lag: horizontally kp 3 /s and a strong integral (ki 2 /s^2, up to 1 m/s) so that wind is
     rejected (the autopilot's own integral takes a steady wind out over a second or so, and this one what
     is left of gusts; with kp 1.2, ki 0.1, on a loop without integral action, the UAV could not hold 1.5 cm in
-    1 m/s gusts, see docs/performance.md), output up to 1.5 m/s. The
+    1 m/s gusts, see docs/performance/history.md, "Issue 5: gusts"), output up to 1.5 m/s. The
     position ``kd`` defaults to 0: the flight controller's velocity loop already damps the vehicle, and a derivative
     on the measurement would scale down the trajectory's velocity feed-forward while tracking.
     ``derivative_tau_s`` is the time constant of a first-order low-pass on the measured rate (0 for none).

@@ -2,13 +2,14 @@
 
 :func:`masonry.planner.bounds.lower_bound_s` takes the larger of the longest dependency chain and each role's
 work shared by its UAVs. Neither sees the conflict graph, which is what binds on short walls
-(docs/performance.md): tasks that pairwise conflict (G^c), or one of which depends on the other (G^d, directly or
-not), never run at the same time, so the total minimum duration of any such set bounds the makespan. The
-heaviest set is a maximum-weight clique of that *exclusion graph*: exact (``networkx.max_weight_clique``) on
-plans of up to :data:`EXACT_CLIQUE_MAX_TASKS` tasks, greedy (any clique is a valid bound) beyond. With
-``--reservation site`` conflicting tasks may run at once and only their site parts are kept apart, so the
-clique weighs each task by its site part (:func:`~masonry.planner.bounds.min_site_s`), which stays valid for
-dependent pairs too (a site part starts after every prerequisite ended). docs/schedule.md explains the terms.
+(docs/performance/mission.md, "Where the gap to the 1.15 target comes from"): tasks that pairwise conflict
+(G^c), or one of which depends on the other (G^d, directly or not), never run at the same time, so the total
+minimum duration of any such set bounds the makespan. The heaviest set is a maximum-weight clique of that
+*exclusion graph*: exact (``networkx.max_weight_clique``) on plans of up to :data:`EXACT_CLIQUE_MAX_TASKS`
+tasks, greedy (any clique is a valid bound) beyond. With ``--reservation site`` conflicting tasks may run at
+once and only their site parts are kept apart, so the clique weighs each task by its site part
+(:func:`~masonry.planner.bounds.min_site_s`), which stays valid for dependent pairs too (a site part starts
+after every prerequisite ended). docs/schedule.md explains the terms.
 """
 
 from __future__ import annotations

@@ -12,9 +12,10 @@ GUIDED mode does more (issue 19, measured with ``masonry fly --identify`` on Ard
 - GPS-like position noise (``gps_noise_m``, correlated over ``gps_noise_tau_s``: it wanders, unlike
   motion-capture noise) beside the vehicle's white motion-capture noise.
 
-The vehicle's own first-order lag (``VehicleConfig.velocity_tau_s``) then follows the shaped target. The numbers
-of :data:`ARDUCOPTER` are fitted so that ``masonry fly --identify --sim --vehicle arducopter`` measures what it
-measures on the SITL (``benchmarks/bench_vehicle_fit.py`` prints both; docs/performance.md).
+The vehicle's own first-order lag (``VehicleConfig.velocity_tau_s``) then follows the shaped target. The
+numbers of :data:`ARDUCOPTER` are fitted so that ``masonry fly --identify --sim --vehicle arducopter``
+measures what it measures on the SITL (``benchmarks/bench_vehicle_fit.py`` prints both;
+docs/performance/autopilots.md, "The fit, again").
 """
 
 from __future__ import annotations

@@ -105,7 +105,7 @@ DEFAULT_VEHICLE = "arducopter"
 
 #: ``--vehicle`` presets. ``ideal``: the first-order 0.3 s lag with motion-capture noise the project was tuned on.
 #: ``arducopter``: ArduCopter's GUIDED shaping and delay (masonry.sim.shaping.ARDUCOPTER) in front of a faster
-#: airframe lag, with the SITL's measured hover noise (docs/performance.md, "The simulated ArduCopter").
+#: airframe lag, with the SITL's measured hover noise (docs/performance/autopilots.md, "The fit, again").
 #: ``px4``: PX4 v1.16 on GNSS (issue 20): OFFBOARD velocity setpoints unshaped behind a short delay, the smooth
 #: take-off's thrust ramp, and the wandering GNSS-grade position (about +-15 cm) and noisy velocity (vertical
 #: speed up to +-0.2 m/s) its EKF2 reported in a hover.
