@@ -248,3 +248,9 @@ def test_decide_is_pure() -> None:
     first = decide(table, request, 0.0, Airspace(LAYERS_M))
     assert isinstance(first, Grant) and first == decide(table, request, 0.0, Airspace(LAYERS_M))
     assert table == start_table({"a": (0.0, 0.0)})
+
+
+def test_the_packages_public_names_resolve() -> None:
+    import masonry.reservation as reservation
+
+    assert [name for name in reservation.__all__ if not hasattr(reservation, name)] == []
