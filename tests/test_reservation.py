@@ -62,6 +62,9 @@ def test_the_site_rule_is_the_papers_r_c() -> None:
     assert not sep.conflict(site((0.0, 0.0), 0.8), site((0.81, 0.0), 0.8))
     assert sep.conflict(site((0.0, 0.0), 0.8, (0.0, 2.0)), site((0.5, 1.0), 0.8))  # an adhesion segment
     assert not sep.conflict(site((0.0, 0.0), 0.8), column((0.0, 0.0), 0.0, 3.0))  # a site holds no air
+    # the 3-D distance, as the planner's G^c: a site 0.5 m over and 0.5 m beside is 0.71 m away
+    assert sep.conflict(site((0.0, 0.0), 0.8, z_m=0.05), site((0.5, 0.0), 0.8, z_m=0.55))
+    assert not sep.conflict(site((0.0, 0.0), 0.8, z_m=0.05), site((0.5, 0.0), 0.8, z_m=0.75))
 
 
 @pytest.mark.parametrize(
@@ -254,3 +257,38 @@ def test_the_packages_public_names_resolve() -> None:
     import masonry.reservation as reservation
 
     assert [name for name in reservation.__all__ if not hasattr(reservation, name)] == []
+
+
+def test_site_volumes_conflict_exactly_as_the_planners_conflict_graph() -> None:
+    """Over a real wall: every pair of G^c conflicts as site volumes, and every pair of site volumes that conflicts
+    but is not in G^c is a dependent pair (the planner drops those: they never run at once anyway)."""
+    import networkx as nx
+
+    from masonry.blueprint_gen import running_bond
+    from masonry.planner import plan as make_plan
+    from masonry.planner.tasks import BrickTask
+
+    bp = running_bond(3, 8, placed_courses=1)
+    p = make_plan(bp)
+    r_c = float(bp.clearance_m)
+
+    def volume(t: object) -> object:
+        if isinstance(t, BrickTask):
+            x, y, z = t.position_m
+            return site((x, y), r_c, z_m=z)
+        (x0, y0, z0), (x1, y1, _z1) = t.start_m, t.end_m  # type: ignore[attr-defined]
+        return site((x0, y0), r_c, (x1, y1), z_m=z0)
+
+    g = nx.DiGraph(p.dependencies)
+    conflicts = {frozenset(c) for c in p.conflicts}
+    assert conflicts, "the wall has conflicts to compare"
+    sep = Separation()
+    vols = {t.id: volume(t) for t in p.tasks}
+    ids = [t.id for t in p.tasks if not t.done]  # G^c is over the tasks still to do
+    for i, a in enumerate(ids):
+        for b in ids[i + 1 :]:
+            ours = sep.conflict(vols[a], vols[b])  # type: ignore[arg-type]
+            if frozenset((a, b)) in conflicts:
+                assert ours, (a, b)
+            elif ours:
+                assert nx.has_path(g, a, b) or nx.has_path(g, b, a), (a, b)

@@ -63,6 +63,8 @@ class Work:
     radius_m: float = 0.0
     clearance_m: float = 0.0
     task: str = ""
+    #: the height of the work point (a brick's drop-off, an adhesion segment), for the site rule's 3-D distance
+    site_z_m: float = 0.0
 
     def zone(self) -> Volume:
         """The column the UAV works in, from the ground to its work altitude."""
@@ -167,7 +169,13 @@ def _parts(request: Request, layer_m: float, air: Airspace) -> list[_Part]:
     done = t + w.duration_s
     if w.clearance_m > 0.0:
         parts.append(
-            (site(w.site_xy, w.clearance_m, w.to_xy), "site", w.task, descent_s, done + air.margin_s)
+            (
+                site(w.site_xy, w.clearance_m, w.to_xy, w.site_z_m),
+                "site",
+                w.task,
+                descent_s,
+                done + air.margin_s,
+            )
         )
     if request.stay is None:
         parts.append((w.zone(), "stay", w.task, t, math.inf))

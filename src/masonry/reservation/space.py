@@ -10,9 +10,10 @@ field, ``kind``, that says which separation applies:
   radii) or :data:`masonry.separation.LAYER_SPACING_M` vertically.
 - ``ground``: a UAV landed on its pad or a parking spot. Anything else keeps the pad separation from it
   (:func:`masonry.separation.pad_separation_m`: the span plus a margin), as a landed UAV holds only its pad.
-- ``site``: the paper's conflict rule (G^c) as a volume: a task's site, which another task's site may not come
-  within r_c of (the horizontal distance, ``<= r_c`` plus the planner's tolerance, as
-  :mod:`masonry.planner.conflicts` counts it). Sites keep apart from sites only; no UAV is in them.
+- ``site``: the paper's conflict rule (G^c) as a volume: a task's site (its work point or level adhesion segment,
+  at its height), which another task's site may not come within r_c of (the 3-D distance, ``<= r_c`` plus the
+  planner's tolerance, as :mod:`masonry.planner.conflicts` counts it). Sites keep apart from sites only; no UAV
+  is in them.
 """
 
 from __future__ import annotations
@@ -78,10 +79,10 @@ def pad(xy: XY, top_m: float = 0.3) -> Volume:
     return Volume(xy, xy, 0.0, top_m, 0.0, "ground")
 
 
-def site(a: XY, clearance_m: float, b: XY | None = None) -> Volume:
-    """A task's site (its work point ``a``, or its adhesion segment ``a``-``b``) under the paper's conflict rule:
-    no other task's site within ``clearance_m`` (r_c)."""
-    return Volume(a, a if b is None else b, 0.0, 0.0, clearance_m, "site")
+def site(a: XY, clearance_m: float, b: XY | None = None, z_m: float = 0.0) -> Volume:
+    """A task's site (its work point ``a``, or its level adhesion segment ``a``-``b``, at height ``z_m``) under
+    the paper's conflict rule: no other task's site within ``clearance_m`` (r_c)."""
+    return Volume(a, a if b is None else b, z_m, z_m, clearance_m, "site")
 
 
 @dataclass(frozen=True)
@@ -104,8 +105,9 @@ class Separation:
         if p.kind == "site" or q.kind == "site":
             if p.kind != q.kind:
                 return False
+            # level segments: the 3-D distance is the horizontal one and the difference in height
             need = max(p.radius_m, q.radius_m) + SITE_TOLERANCE_M
-            return segment_segment_m(p.a, p.b, q.a, q.b) <= need
+            return math.hypot(segment_segment_m(p.a, p.b, q.a, q.b), p.z0_m - q.z0_m) <= need
         if p.z0_m - q.z1_m >= self.z_m or q.z0_m - p.z1_m >= self.z_m:
             return False
         gap = self.pad_m if "ground" in (p.kind, q.kind) else self.xy_m
