@@ -292,3 +292,18 @@ def test_site_volumes_conflict_exactly_as_the_planners_conflict_graph() -> None:
                 assert ours, (a, b)
             elif ours:
                 assert nx.has_path(g, a, b) or nx.has_path(g, b, a), (a, b)
+
+
+def test_layout_problems_name_what_breaks_the_guarantee() -> None:
+    from masonry.reservation import layout_problems
+
+    zone = Work((5.0, 5.0), 1.0, 10.0).zone()
+    assert layout_problems({"a": (0.0, 0.0), "b": (3.0, 0.0)}, [zone], LAYERS_M) == []
+    problems = layout_problems(
+        {"a": (0.0, 0.0), "b": (0.5, 0.0), "c": (5.0, 4.0)}, [zone], (2.0, 3.1), parking={"a": (9.0, 9.0)}
+    )
+    assert problems == [
+        "a's pad and b's pad are closer than the pad separation 1.00 m",
+        "c's pad at (5.0, 4.0) is within the separation of work zone 0 at (5.0, 5.0)",
+        "layer 2.0 m is less than 1.1 m over work zone 0 (1.0 m high)",
+    ]

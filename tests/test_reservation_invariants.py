@@ -12,7 +12,7 @@ from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
 from masonry.errors import PlanningError
-from masonry.reservation import Airspace, Grant, Reservation, Wait, decide, pad
+from masonry.reservation import Airspace, Grant, Reservation, Wait, Work, decide, layout_problems, pad
 from reservation_scenario import LAYERS_M, Scenario, check_table
 
 SITES = [(1.5 * i, y) for i in range(7) for y in (3.0, 4.5)]
@@ -28,6 +28,15 @@ fly = st.tuples(
 tick = st.tuples(st.just("tick"), st.floats(1.0, 20.0))
 late = st.tuples(st.just("late"), st.integers(0, 3), st.floats(1.0, 30.0))
 silent = st.tuples(st.just("silent"), st.integers(0, 3))
+
+
+def test_the_random_layout_meets_the_guarantees_condition() -> None:
+    """The layout below keeps pads and parking spots out of every flight's way (the deadlock-freedom argument's
+    condition, docs/safety.md): four pads 3 m apart, each UAV's parking spot 3 m behind its pad, sites 3 m ahead."""
+    homes = {f"u{i}": (3.0 * i, 0.0) for i in range(4)}
+    parking = {f"u{i}": (3.0 * i, -3.0) for i in range(4)}
+    zones = [Work(xy, 1.0, 1.0).zone() for xy in SITES]
+    assert layout_problems(homes, zones, LAYERS_M, parking=parking) == []
 
 
 def _released(s: Scenario, uav: str) -> tuple[Reservation, ...]:

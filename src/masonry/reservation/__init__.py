@@ -7,7 +7,8 @@
 - :mod:`~masonry.reservation.flight`: :func:`plan_flight`, timed legs at the lowest free layer, earliest start
   first, ending where the UAV may stay;
 - :mod:`~masonry.reservation.decide`: :func:`decide`, grant or wait;
-- :mod:`~masonry.reservation.changes`: running late, silence and loss as reservations.
+- :mod:`~masonry.reservation.changes`: running late, silence and loss as reservations;
+- :mod:`~masonry.reservation.layout`: the layout the deadlock-freedom argument needs.
 
 Mission control does not use it yet (docs/safety.md, "The space-time reservation model"). Pure: standard
 library and masonry's pure values only.
@@ -28,6 +29,7 @@ from masonry.reservation.flight import (
     flight_reservations,
     plan_flight,
 )
+from masonry.reservation.layout import layout_problems
 from masonry.reservation.space import DEFAULT_SEPARATION, Separation, Volume, column, leg, pad, site
 from masonry.reservation.table import PURPOSES, Reservation, Table, clash, violations
 
@@ -54,6 +56,7 @@ __all__ = [
     "earliest_start",
     "extend",
     "flight_reservations",
+    "layout_problems",
     "leg",
     "lose",
     "pad",
