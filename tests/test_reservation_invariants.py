@@ -7,17 +7,33 @@ Hypothesis is derandomised (tests/conftest.py); a failing sequence is printed.""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
 from masonry.errors import PlanningError
-from masonry.reservation import Airspace, Grant, Reservation, Wait, Work, decide, layout_problems, pad
+from masonry.reservation import Airspace, Grant, Reservation, Table, Wait, Work, decide, layout_problems, pad
 from reservation_scenario import LAYERS_M, Scenario, check_table
 
 SITES = [(1.5 * i, y) for i in range(7) for y in (3.0, 4.5)]
 
-fly = st.tuples(
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a random sequence: ``fly`` (to ``site``, working ``seconds``, then staying at ``then``), ``tick``
+    (the clock moves ``seconds`` on), ``late`` (``seconds`` behind) or ``silent``."""
+
+    kind: str
+    uav: int = 0
+    site: int = 0
+    seconds: float = 0.0
+    then: str = "pad"
+    clearance_m: float = 0.0
+
+
+fly = st.builds(
+    Step,
     st.just("fly"),
     st.integers(0, 3),
     st.integers(0, len(SITES) - 1),
@@ -25,9 +41,9 @@ fly = st.tuples(
     st.sampled_from(["pad", "site", "parking", "none"]),
     st.sampled_from([0.0, 1.5]),
 )
-tick = st.tuples(st.just("tick"), st.floats(1.0, 20.0))
-late = st.tuples(st.just("late"), st.integers(0, 3), st.floats(1.0, 30.0))
-silent = st.tuples(st.just("silent"), st.integers(0, 3))
+tick = st.builds(Step, st.just("tick"), seconds=st.floats(1.0, 20.0))
+late = st.builds(Step, st.just("late"), st.integers(0, 3), seconds=st.floats(1.0, 30.0))
+silent = st.builds(Step, st.just("silent"), st.integers(0, 3))
 
 
 def test_the_random_layout_meets_the_guarantees_condition() -> None:
@@ -56,25 +72,24 @@ def _released(s: Scenario, uav: str) -> tuple[Reservation, ...]:
     steps=st.lists(st.one_of(fly, fly, tick, late, silent), min_size=6, max_size=30),
 )
 def test_random_sequences_keep_the_table_sound_and_every_request_is_eventually_granted(
-    n: int, steps: list[tuple[object, ...]]
+    n: int, steps: list[Step]
 ) -> None:
     uavs = [f"u{i}" for i in range(n)]
     s = Scenario({u: (3.0 * i, 0.0) for i, u in enumerate(uavs)})
     for step in steps:
-        kind = step[0]
-        if kind == "tick":
-            s.at(s.now_s + float(step[1]))  # type: ignore[arg-type]
+        if step.kind == "tick":
+            s.at(s.now_s + step.seconds)
             continue
-        uav = uavs[int(step[1]) % n]  # type: ignore[call-overload]
-        if kind == "late":
+        uav = uavs[step.uav % n]
+        if step.kind == "late":
             try:
-                s.late(uav, float(step[2]))  # type: ignore[arg-type]
+                s.late(uav, step.seconds)
                 event(f"late: {'moved others' if {m.uav for m in s.moves} - {uav} else 'moved nobody'}")
             except PlanningError as exc:  # a plan under way in the way: refused, the table as it was
                 event("late: refused")
                 assert "neither can move" in str(exc) or "cannot wait" in str(exc), exc
             continue
-        if kind == "silent":
+        if step.kind == "silent":
             try:
                 s.silent(uav)
                 event(f"way home: {'moved others' if s.moves else 'moved nobody'}")
@@ -84,12 +99,13 @@ def test_random_sequences_keep_the_table_sound_and_every_request_is_eventually_g
                     "neither can move" in str(exc) or "cannot wait" in str(exc) or "no layer" in str(exc)
                 ), exc
             continue
-        _, _, k, work_s, then, clearance_m = step
         x, _y = s.pads[uav]
-        stay: object = {"pad": "pad", "site": "site", "parking": (x, -3.0), "none": "pad"}[then]  # type: ignore[index]
-        to = None if then == "none" else SITES[int(k)]  # type: ignore[call-overload]
-        request = s.request(uav, to, work_s=float(work_s), then=stay, clearance_m=float(clearance_m))  # type: ignore[arg-type]
-        s.fly(uav, to, work_s=float(work_s), then=stay, clearance_m=float(clearance_m))  # type: ignore[arg-type]
+        stay: str | tuple[float, float] = (x, -3.0) if step.then == "parking" else step.then
+        if stay == "none":
+            stay = "pad"
+        to = None if step.then == "none" else SITES[step.site]
+        request = s.request(uav, to, work_s=step.seconds, then=stay, clearance_m=step.clearance_m)
+        s.fly(uav, to, work_s=step.seconds, then=stay, clearance_m=step.clearance_m)
         if isinstance(s.last, Grant):
             plan = s.last.plan
             assert s.now_s <= plan.start_s <= s.now_s + s.horizon_s
@@ -108,7 +124,7 @@ def test_random_sequences_keep_the_table_sound_and_every_request_is_eventually_g
         else:
             assert wait.until_s > s.now_s + s.horizon_s
         # once the others are back on their pads, the request is granted at a finite time
-        released = s.table.__class__(_released(s, uav), s.table.separation)
+        released = Table(_released(s, uav), s.table.separation)
         check_table(released)
         airspace = Airspace(LAYERS_M, margin_s=s.margin_s, horizon_s=math.inf)
         granted = decide(released, request, s.now_s, airspace)
