@@ -306,3 +306,32 @@ def test_layout_problems_name_what_breaks_the_guarantee() -> None:
         "c's pad at (5.0, 4.0) is within the separation of work zone 0 at (5.0, 5.0)",
         "layer 2.0 m is less than 1.1 m over work zone 0 (1.0 m high)",
     ]
+
+
+def test_an_empty_window_overlaps_nothing() -> None:
+    """A stay that ended as it began (the mark of a departure) holds no instant."""
+    mark = Reservation("a", column((0.0, 0.0), 0.0, 3.0), 5.0, 5.0, "stay")
+    crossing = Reservation("b", leg((-5.0, 0.0), (5.0, 0.0), 2.5), 0.0, 10.0, "transit")
+    assert not mark.overlaps_in_time(crossing) and not crossing.overlaps_in_time(mark)
+    assert Table().add(mark, crossing).reservations == (mark, crossing)
+    assert crossing.overlaps_in_time(Reservation("a", mark.volume, 9.9, 10.1, "climb"))
+
+
+def test_the_airspace_flies_the_uavs_timing() -> None:
+    from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+    default = Airspace.from_timing(LAYERS_M)
+    assert (default.cruise_mps, default.vertical_mps) == (
+        DEFAULT_TIMING.cruise_speed_mps,
+        DEFAULT_TIMING.vertical_speed_mps,
+    )
+    assert default == Airspace(LAYERS_M)
+    fast = Airspace.from_timing(LAYERS_M, TaskTiming(cruise_speed_mps=2.0, vertical_speed_mps=0.8))
+    request = Request("a", Place((0.0, 0.0)), Work((6.0, 8.0), 1.0, 20.0))
+    table = start_table({"a": (0.0, 0.0)})
+    slow_plan = decide(table, request, 0.0, default)
+    fast_plan = decide(table, request, 0.0, fast)
+    assert isinstance(slow_plan, Grant) and isinstance(fast_plan, Grant)
+    transit = next(r for r in fast_plan.plan.reservations if r.purpose == "transit")
+    assert transit.t1_s - transit.t0_s == pytest.approx(1.875 * 10.0 / 2.0 + 2.0)
+    assert fast_plan.plan.stay.t0_s < slow_plan.plan.stay.t0_s

@@ -21,7 +21,7 @@ from masonry.errors import InvalidArgument
 from masonry.reservation.space import Volume, column, leg, pad, site
 from masonry.reservation.table import Purpose, Reservation, Table
 from masonry.segments import XY
-from masonry.timing import DEFAULT_TIMING, min_jerk_leg_s
+from masonry.timing import DEFAULT_TIMING, TaskTiming, min_jerk_leg_s
 
 PlaceKind = Literal["pad", "parking", "site", "air"]
 
@@ -95,6 +95,24 @@ class Airspace:
     vertical_mps: float = DEFAULT_TIMING.vertical_speed_mps
     margin_s: float = DEFAULT_MARGIN_S
     horizon_s: float = 60.0
+
+    @classmethod
+    def from_timing(
+        cls,
+        layers_m: Sequence[float],
+        timing: TaskTiming = DEFAULT_TIMING,
+        *,
+        margin_s: float = DEFAULT_MARGIN_S,
+        horizon_s: float = 60.0,
+    ) -> Airspace:
+        """The airspace of UAVs that fly ``timing`` (a ``UavConfig.timing()``): its cruise and vertical speeds."""
+        return cls(
+            tuple(float(z) for z in layers_m),
+            timing.cruise_speed_mps,
+            timing.vertical_speed_mps,
+            margin_s,
+            horizon_s,
+        )
 
     def __post_init__(self) -> None:
         if not self.layers_m or list(self.layers_m) != sorted(self.layers_m):
@@ -199,7 +217,7 @@ def earliest_start(
     in_way: list[Reservation] = []
     sep = table.separation
     for q in table.reservations:
-        if q.uav == uav:
+        if q.uav == uav or q.t1_s <= q.t0_s:
             continue
         for vol, a, b in parts:
             if sep.conflict(vol, q.volume):

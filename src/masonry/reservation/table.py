@@ -54,8 +54,9 @@ class Reservation:
         return math.isinf(self.t1_s)
 
     def overlaps_in_time(self, other: Reservation) -> bool:
-        """Their windows share an instant (windows are half-open: one may start as the other ends)."""
-        return self.t0_s < other.t1_s and other.t0_s < self.t1_s
+        """Their windows share an instant (windows are half-open: one may start as the other ends, and an empty
+        window, a stay that ended as it began, shares none)."""
+        return max(self.t0_s, other.t0_s) < min(self.t1_s, other.t1_s)
 
     def shifted(self, delta_s: float) -> Reservation:
         """The same reservation ``delta_s`` later (an open-ended one stays open-ended)."""
