@@ -12,6 +12,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from masonry.segments import point_segment_m, segment_segment_m
+
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
 
@@ -89,28 +91,6 @@ def volumes_clear(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: fl
             if segment_segment_m(v.a, v.b, q.a, q.b) < need:
                 return False
     return True
-
-
-def point_segment_m(p: XY, a: XY, b: XY) -> float:
-    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    n2 = dx * dx + dy * dy
-    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
-    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
-
-
-def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
-    """Horizontal distance between segments ``a``-``b`` and ``c``-``d``."""
-
-    def orient(p: XY, q: XY, r: XY) -> float:
-        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
-
-    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
-    if o1 * o2 < 0.0 and o3 * o4 < 0.0:
-        return 0.0  # they cross
-    return min(
-        point_segment_m(c, a, b), point_segment_m(d, a, b), point_segment_m(a, c, d), point_segment_m(b, c, d)
-    )
 
 
 def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volume] | None:

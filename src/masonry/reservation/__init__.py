@@ -1,0 +1,69 @@
+"""The space-time reservation model (issue 27): who may be where, and when, as one pure table.
+
+- :mod:`~masonry.reservation.space`: volumes (columns, swept legs, pads, the paper's site rule) and the
+  separation between them;
+- :mod:`~masonry.reservation.table`: :class:`Reservation` and the :class:`Table` that never holds two of
+  different UAVs overlapping in space and time;
+- :mod:`~masonry.reservation.flight`: :func:`plan_flight`, timed legs at the lowest free layer, earliest start
+  first, ending where the UAV may stay;
+- :mod:`~masonry.reservation.decide`: :func:`decide`, grant or wait;
+- :mod:`~masonry.reservation.changes`: running late, silence and loss as reservations;
+- :mod:`~masonry.reservation.layout`: the layout the deadlock-freedom argument needs.
+
+Mission control does not use it yet (docs/safety.md, "The space-time reservation model"). Pure: standard
+library and masonry's pure values only.
+"""
+
+from __future__ import annotations
+
+from masonry.reservation.changes import Move, extend, lose, settle, way_home
+from masonry.reservation.decide import Decision, Grant, Wait, decide, start_table
+from masonry.reservation.flight import (
+    DEFAULT_MARGIN_S,
+    Airspace,
+    FlightPlan,
+    Place,
+    Request,
+    Work,
+    earliest_start,
+    flight_reservations,
+    plan_flight,
+)
+from masonry.reservation.layout import layout_problems
+from masonry.reservation.space import DEFAULT_SEPARATION, Separation, Volume, column, leg, pad, site
+from masonry.reservation.table import PURPOSES, Reservation, Table, clash, violations
+
+__all__ = [
+    "DEFAULT_MARGIN_S",
+    "DEFAULT_SEPARATION",
+    "PURPOSES",
+    "Airspace",
+    "Decision",
+    "FlightPlan",
+    "Grant",
+    "Move",
+    "Place",
+    "Request",
+    "Reservation",
+    "Separation",
+    "Table",
+    "Volume",
+    "Wait",
+    "Work",
+    "clash",
+    "column",
+    "decide",
+    "earliest_start",
+    "extend",
+    "flight_reservations",
+    "layout_problems",
+    "leg",
+    "lose",
+    "pad",
+    "plan_flight",
+    "settle",
+    "site",
+    "start_table",
+    "violations",
+    "way_home",
+]

@@ -1,0 +1,299 @@
+"""Flights planned before they are flown: timed legs, reserved at the lowest layer free when the UAV is there.
+
+A flight is the shape the state machines fly (``masonry.fsm``): climb vertically where the UAV is, fly straight
+at a transit layer, come down vertically over the goal. :func:`plan_flight` times each leg from the UAV's speeds
+(the rest-to-rest minimum-jerk legs of :func:`masonry.timing.min_jerk_leg_s`), reserves each for its duration
+plus a margin, adds the work at the site (and the paper's site rule over it), and ends the plan in an open-ended
+stay: at the site, or, after a second flight, at a parking spot or the pad. It picks the earliest start at which
+every window is free of the other UAVs' reservations, and among equal starts the lowest layer.
+
+Pure: no I/O, no clock (times are passed in).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+from masonry.errors import InvalidArgument
+from masonry.reservation.space import Volume, column, leg, pad, site
+from masonry.reservation.table import Purpose, Reservation, Table
+from masonry.segments import XY
+from masonry.timing import DEFAULT_TIMING, TaskTiming, min_jerk_leg_s
+
+PlaceKind = Literal["pad", "parking", "site", "air"]
+
+#: Seconds added to every window of a plan: a UAV this much behind its plan is still inside it.
+DEFAULT_MARGIN_S = 2.0
+
+
+@dataclass(frozen=True)
+class Place:
+    """Where a UAV is or stays: ``xy`` at altitude ``z_m``.
+
+    ``pad`` and ``parking``: landed (``z_m`` 0), it holds only a ``ground`` volume; ``site``: hovering at its
+    work altitude over a site, it holds the column under it, ``radius_m`` wide; ``air``: hovering anywhere
+    (a start only, e.g. a UAV that stopped), it holds the column from the ground up to where it is.
+    """
+
+    xy: XY
+    z_m: float = 0.0
+    kind: PlaceKind = "pad"
+    radius_m: float = 0.0
+
+    def volume(self) -> Volume:
+        """What a UAV holds while it is here."""
+        if self.kind in ("pad", "parking"):
+            return pad(self.xy)
+        return column(self.xy, 0.0, self.z_m, self.radius_m)
+
+
+@dataclass(frozen=True)
+class Work:
+    """A task's work at its site: ``duration_s`` at altitude ``z_m`` over ``site_xy`` (along to ``to_xy`` for an
+    adhesion segment), in a zone ``radius_m`` wide; ``clearance_m`` (r_c) > 0 also reserves the site's r_c
+    neighbourhood from the descent to the end of the work (the paper's conflict rule on site intervals)."""
+
+    site_xy: XY
+    z_m: float
+    duration_s: float
+    to_xy: XY | None = None
+    radius_m: float = 0.0
+    clearance_m: float = 0.0
+    task: str = ""
+    #: the height of the work point (a brick's drop-off, an adhesion segment), for the site rule's 3-D distance
+    site_z_m: float = 0.0
+
+    def zone(self) -> Volume:
+        """The column the UAV works in, from the ground to its work altitude."""
+        end = self.site_xy if self.to_xy is None else self.to_xy
+        return Volume(self.site_xy, end, 0.0, self.z_m, self.radius_m, "air")
+
+    def end_place(self) -> Place:
+        """Where the UAV is when the work is done (the segment's end for adhesion), as a site stay."""
+        xy = self.site_xy if self.to_xy is None else self.to_xy
+        return Place(xy, self.z_m, "site", self.radius_m)
+
+
+@dataclass(frozen=True)
+class Airspace:
+    """The layers and speeds flights are planned with.
+
+    Attributes:
+        layers_m: transit layer altitudes, lowest first; each must clear every work zone and stay by the vertical
+            separation (e.g. ``masonry.mission.altitudes.layer_base_m`` + k * ``LAYER_SPACING_M``, k >= 1).
+        cruise_mps, vertical_mps: the peak speeds of lateral and vertical legs (``TaskTiming``'s).
+        margin_s: added to every window (how late a UAV may be before its windows are extended).
+        horizon_s: a plan starting later than now + this is not granted: the UAV waits where it is and asks again
+            (the rolling horizon).
+    """
+
+    layers_m: tuple[float, ...]
+    cruise_mps: float = DEFAULT_TIMING.cruise_speed_mps
+    vertical_mps: float = DEFAULT_TIMING.vertical_speed_mps
+    margin_s: float = DEFAULT_MARGIN_S
+    horizon_s: float = 60.0
+
+    @classmethod
+    def from_timing(
+        cls,
+        layers_m: Sequence[float],
+        timing: TaskTiming = DEFAULT_TIMING,
+        *,
+        margin_s: float = DEFAULT_MARGIN_S,
+        horizon_s: float = 60.0,
+    ) -> Airspace:
+        """The airspace of UAVs that fly ``timing`` (a ``UavConfig.timing()``): its cruise and vertical speeds."""
+        return cls(
+            tuple(float(z) for z in layers_m),
+            timing.cruise_speed_mps,
+            timing.vertical_speed_mps,
+            margin_s,
+            horizon_s,
+        )
+
+    def __post_init__(self) -> None:
+        if not self.layers_m or list(self.layers_m) != sorted(self.layers_m):
+            raise InvalidArgument(f"`layers_m` must be a non-empty ascending sequence, got {self.layers_m}")
+        if not (self.cruise_mps > 0 and self.vertical_mps > 0 and self.margin_s >= 0 and self.horizon_s >= 0):
+            raise InvalidArgument("speeds must be > 0, the margin and horizon >= 0")
+
+
+@dataclass(frozen=True)
+class Request:
+    """``uav``, now at ``start``, asks to fly to ``work`` (None: straight to ``stay``) and then stay at ``stay``
+    (None: at the work site)."""
+
+    uav: str
+    start: Place
+    work: Work | None = None
+    stay: Place | None = None
+
+    def __post_init__(self) -> None:
+        if self.work is None and self.stay is None:
+            raise InvalidArgument(f"{self.uav}'s request has neither work nor a place to stay")
+
+
+@dataclass(frozen=True)
+class FlightPlan:
+    """A granted (or grantable) flight: its reservations, in time order, the last one open-ended."""
+
+    uav: str
+    start_s: float
+    layer_m: float
+    reservations: tuple[Reservation, ...]
+
+    @property
+    def stay(self) -> Reservation:
+        """Where it ends (open-ended)."""
+        return self.reservations[-1]
+
+
+# A part of a plan: volume, purpose, task, offset of its start and of its end from the plan's start.
+_Part = tuple[Volume, Purpose, str, float, float]
+
+
+def _hop(
+    a: Place, b: Place, layer_m: float, air: Airspace, at_s: float, task: str
+) -> tuple[list[_Part], float]:
+    """Climb at ``a``, transit at ``layer_m``, descend at ``b``, from offset ``at_s``: the parts and the arrival."""
+    parts: list[_Part] = []
+    m = air.margin_s
+    climb = min_jerk_leg_s(abs(layer_m - a.z_m), air.vertical_mps)
+    parts.append((column(a.xy, a.z_m, layer_m, a.radius_m), "climb", task, at_s, at_s + climb + m))
+    t = at_s + climb
+    dist = math.hypot(b.xy[0] - a.xy[0], b.xy[1] - a.xy[1])
+    if dist > 1e-6:
+        transit = min_jerk_leg_s(dist, air.cruise_mps)
+        parts.append((leg(a.xy, b.xy, layer_m), "transit", task, t, t + transit + m))
+        t += transit
+    descend = min_jerk_leg_s(abs(layer_m - b.z_m), air.vertical_mps)
+    parts.append((column(b.xy, b.z_m, layer_m, b.radius_m), "descend", task, t, t + descend + m))
+    return parts, t + descend
+
+
+def _parts(request: Request, layer_m: float, air: Airspace) -> list[_Part]:
+    """The plan's parts at ``layer_m``, offsets from its start; the last one open-ended."""
+    w = request.work
+    if w is None:
+        assert request.stay is not None
+        parts, t = _hop(request.start, request.stay, layer_m, air, 0.0, "")
+        return [*parts, (request.stay.volume(), "stay", "", t, math.inf)]
+    here = Place(w.site_xy, w.z_m, "site", w.radius_m)
+    parts, t = _hop(request.start, here, layer_m, air, 0.0, w.task)
+    descent_s = parts[-1][3]
+    done = t + w.duration_s
+    if w.clearance_m > 0.0:
+        parts.append(
+            (
+                site(w.site_xy, w.clearance_m, w.to_xy, w.site_z_m),
+                "site",
+                w.task,
+                descent_s,
+                done + air.margin_s,
+            )
+        )
+    if request.stay is None:
+        parts.append((w.zone(), "stay", w.task, t, math.inf))
+        return parts
+    parts.append((w.zone(), "work", w.task, t, done + air.margin_s))
+    home, end = _hop(w.end_place(), request.stay, layer_m, air, done, w.task)
+    return [*parts, *home, (request.stay.volume(), "stay", "", end, math.inf)]
+
+
+def earliest_start(
+    table: Table, uav: str, parts: Sequence[tuple[Volume, float, float]], from_s: float
+) -> tuple[float, tuple[Reservation, ...]]:
+    """The earliest ``t >= from_s`` at which every part (volume, offset of start, offset of end) of a plan
+    starting at ``t`` is free of the other UAVs' reservations (``math.inf``: none, an open-ended reservation is
+    in the way for good), and the reservations in its way at ``from_s``.
+
+    A part ``[t + a, t + b)`` meets a reservation ``[c, d)`` that conflicts with it in space exactly when ``t``
+    lies in the open interval ``(c - b, d - a)``: the earliest start is the first ``t`` outside all of them.
+    """
+    blocked: list[tuple[float, float]] = []
+    in_way: list[Reservation] = []
+    sep = table.separation
+    for q in table.reservations:
+        if q.uav == uav or q.t1_s <= q.t0_s:
+            continue
+        for vol, a, b in parts:
+            if sep.conflict(vol, q.volume):
+                lo, hi = q.t0_s - b, q.t1_s - a
+                blocked.append((lo, hi))
+                if lo < from_s < hi and q not in in_way:
+                    in_way.append(q)
+    t = from_s
+    for lo, hi in sorted(blocked):
+        if lo >= t:
+            break
+        t = max(t, hi)
+    return t, tuple(in_way)
+
+
+def plan_flight(table: Table, request: Request, from_s: float, airspace: Airspace) -> FlightPlan | None:
+    """The flight of ``request`` starting at the earliest time ``>= from_s`` it fits, at the lowest layer of the
+    earliest start; None if no layer ever fits (an open-ended reservation of another UAV is in its way).
+
+    Layers below the start, the work or the stay are skipped. The UAV's own reservations are not in its way (it
+    leaves its stay when the flight starts).
+    """
+    best: tuple[float, float, list[_Part]] | None = None
+    w, s = request.work, request.stay
+    floor = max(request.start.z_m, w.z_m if w is not None else 0.0, s.z_m if s is not None else 0.0)
+    for layer in airspace.layers_m:
+        if layer < floor:
+            continue
+        parts = _parts(request, layer, airspace)
+        t, _ = earliest_start(table, request.uav, [(v, a, b) for v, _p, _t, a, b in parts], from_s)
+        if math.isfinite(t) and (best is None or t < best[0]):
+            best = (t, layer, parts)
+    if best is None:
+        return None
+    t, layer, _parts_at = best
+    return FlightPlan(request.uav, t, layer, flight_reservations(request, t, layer, airspace))
+
+
+def flight_reservations(
+    request: Request, start_s: float, layer_m: float, airspace: Airspace
+) -> tuple[Reservation, ...]:
+    """The reservations of ``request``'s flight at ``layer_m`` starting at ``start_s``, whatever else the table
+    holds (a flight that cannot wait: a silent UAV's way home)."""
+    parts = _parts(request, layer_m, airspace)
+    return tuple(Reservation(request.uav, v, start_s + a, start_s + b, p, task) for v, p, task, a, b in parts)
+
+
+def blockers(
+    table: Table, request: Request, from_s: float, airspace: Airspace, *, standing: bool = False
+) -> tuple[Reservation, ...]:
+    """The other UAVs' reservations in the way of the request's flight at ``from_s`` on its lowest usable layer
+    (``standing``: instead, the open-ended ones in its way at any time)."""
+    w, s = request.work, request.stay
+    floor = max(request.start.z_m, w.z_m if w is not None else 0.0, s.z_m if s is not None else 0.0)
+    layers = [z for z in airspace.layers_m if z >= floor] or [airspace.layers_m[-1]]
+    parts = [(v, a, b) for v, _p, _t, a, b in _parts(request, layers[0], airspace)]
+    if not standing:
+        return earliest_start(table, request.uav, parts, from_s)[1]
+    sep = table.separation
+    return tuple(
+        q
+        for q in table.reservations
+        if q.uav != request.uav and q.open_ended and any(sep.conflict(v, q.volume) for v, _a, _b in parts)
+    )
+
+
+__all__ = [
+    "DEFAULT_MARGIN_S",
+    "Airspace",
+    "FlightPlan",
+    "Place",
+    "PlaceKind",
+    "Request",
+    "Work",
+    "blockers",
+    "earliest_start",
+    "flight_reservations",
+    "plan_flight",
+]

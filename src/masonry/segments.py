@@ -1,0 +1,36 @@
+"""Horizontal distances between points and segments: the geometry that keeps reserved volumes apart.
+
+Mission control's airspace (:mod:`masonry.mission.volumes`) and the space-time reservation model
+(:mod:`masonry.reservation`) both measure with these. Pure: no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+
+XY = tuple[float, float]
+
+
+def point_segment_m(p: XY, a: XY, b: XY) -> float:
+    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    n2 = dx * dx + dy * dy
+    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
+    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+
+
+def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
+    """Horizontal distance between segments ``a``-``b`` and ``c``-``d``."""
+
+    def orient(p: XY, q: XY, r: XY) -> float:
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+    if o1 * o2 < 0.0 and o3 * o4 < 0.0:
+        return 0.0  # they cross
+    return min(
+        point_segment_m(c, a, b), point_segment_m(d, a, b), point_segment_m(a, c, d), point_segment_m(b, c, d)
+    )
+
+
+__all__ = ["XY", "point_segment_m", "segment_segment_m"]

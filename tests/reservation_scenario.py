@@ -1,0 +1,191 @@
+"""A small scenario language over the pure reservation model (issue 27): UAVs on pads, clock steps, requests and
+the grants, waits and moves expected of them. Every step re-checks the table's invariants.
+
+    s = Scenario({"a": (0, 0), "b": (10, 0)})
+    s.at(0).fly("a", to=(10, 4), work_s=20).granted(start_s=0, layer=0)
+    s.fly("b", to=(10.5, 4), work_s=20).waits(for_uavs=("a",))
+    s.at(30).late("a", 15).moved("b")
+
+``fly`` asks for a flight from where the UAV stays now to ``to`` (its work there lasts ``work_s``), then to stay
+``then``: ``"pad"`` (default), ``"site"`` or a parking spot ``(x, y)``; without ``to`` it flies straight there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from masonry.reservation import (
+    Airspace,
+    Decision,
+    FlightPlan,
+    Grant,
+    Move,
+    Place,
+    Request,
+    Table,
+    Wait,
+    Work,
+    decide,
+    extend,
+    lose,
+    start_table,
+    violations,
+    way_home,
+)
+from masonry.reservation.space import Volume
+
+XY = tuple[float, float]
+
+#: Layers over work zones up to 1.2 m (the vertical separation 1.1 m above them and apart)
+LAYERS_M = (2.5, 3.6, 4.7, 5.8)
+
+
+def check_table(table: Table) -> None:
+    """The invariants of a table after any step: no two UAVs' reservations clash; every UAV holds exactly one
+    open-ended reservation, and it is its last (a place it may stay)."""
+    bad = violations(table)
+    assert not bad, "clash: " + "; ".join(f"{p.describe()} / {q.describe()}" for p, q in bad)
+    for uav in table.uavs():
+        mine = table.of(uav)
+        open_ended = [r for r in mine if r.open_ended]
+        assert len(open_ended) == 1, f"{uav} holds {len(open_ended)} open-ended reservations"
+        assert max(r.t0_s for r in mine) == open_ended[0].t0_s, (
+            f"{uav}'s open-ended reservation is not its last"
+        )
+
+
+@dataclass
+class Scenario:
+    """A fleet on its pads, a clock, and the table their requests build."""
+
+    pads: dict[str, XY]
+    layers_m: tuple[float, ...] = LAYERS_M
+    margin_s: float = 2.0
+    horizon_s: float = 60.0
+    now_s: float = 0.0
+    table: Table = field(init=False)
+    where: dict[str, Place] = field(init=False)
+    last: Decision | None = field(init=False, default=None)
+    moves: tuple[Move, ...] = field(init=False, default=())
+    #: the UAV the last change (late, silent, lost) was about
+    about: str = field(init=False, default="")
+    plans: dict[str, FlightPlan] = field(init=False, default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.table = start_table({u: (float(x), float(y)) for u, (x, y) in self.pads.items()}, self.now_s)
+        self.where = {u: Place((float(x), float(y))) for u, (x, y) in self.pads.items()}
+        check_table(self.table)
+
+    @property
+    def airspace(self) -> Airspace:
+        return Airspace(self.layers_m, margin_s=self.margin_s, horizon_s=self.horizon_s)
+
+    def at(self, t_s: float) -> Scenario:
+        """The clock moves on to ``t_s``."""
+        assert t_s >= self.now_s, f"the clock goes forward: {t_s} < {self.now_s}"
+        self.now_s = t_s
+        return self
+
+    def request(
+        self,
+        uav: str,
+        to: XY | None = None,
+        *,
+        work_s: float = 10.0,
+        z_m: float = 1.0,
+        along_to: XY | None = None,
+        clearance_m: float = 0.0,
+        then: str | XY = "pad",
+        task: str = "",
+    ) -> Request:
+        """The request ``fly`` makes."""
+        if then == "site":
+            stay = None
+        elif then == "pad":
+            x, y = self.pads[uav]
+            stay = Place((float(x), float(y)))
+        else:
+            assert not isinstance(then, str), f"then: pad, site or (x, y), got {then!r}"
+            stay = Place((float(then[0]), float(then[1])), kind="parking")
+        work = None
+        if to is not None:
+            work = Work(
+                (float(to[0]), float(to[1])), z_m, work_s, along_to, clearance_m=clearance_m, task=task
+            )
+        return Request(uav, self.where[uav], work, stay)
+
+    def fly(self, uav: str, to: XY | None = None, **kw: object) -> Scenario:
+        """``uav`` asks to fly (see :meth:`request`); a grant updates the table and where it will stay."""
+        request = self.request(uav, to, **kw)  # type: ignore[arg-type]
+        before = self.table
+        self.last = decide(self.table, request, self.now_s, self.airspace)
+        if isinstance(self.last, Grant):
+            self.table = self.last.table
+            self.plans[uav] = self.last.plan
+            assert self.last.plan.stay.open_ended, "a granted plan ends where the UAV may stay"
+            self.where[uav] = request.stay if request.stay is not None else request.work.end_place()  # type: ignore[union-attr]
+        else:
+            assert self.table == before, "a wait changes nothing: the UAV keeps only its stay"
+        check_table(self.table)
+        return self
+
+    def granted(self, *, start_s: float | None = None, layer: int | None = None) -> Scenario:
+        """The last request was granted (starting at ``start_s``, on layer index ``layer``)."""
+        assert isinstance(self.last, Grant), f"expected a grant, got: {self._said()}"
+        if start_s is not None:
+            assert math.isclose(self.last.plan.start_s, start_s, abs_tol=1e-6), self.last.plan.start_s
+        if layer is not None:
+            assert self.last.plan.layer_m == self.layers_m[layer], self.last.plan.layer_m
+        return self
+
+    def waits(self, *, for_uavs: tuple[str, ...] | None = None, until_s: float | None = None) -> Scenario:
+        """The last request was told to wait (for ``for_uavs``' reservations, until ``until_s``)."""
+        assert isinstance(self.last, Wait), f"expected a wait, got: {self._said()}"
+        if for_uavs is not None:
+            assert self.last.blocking_uavs == for_uavs, self.last.describe()
+        if until_s is not None:
+            assert math.isclose(self.last.until_s, until_s, abs_tol=1e-6), self.last.describe()
+        return self
+
+    def late(self, uav: str, late_s: float) -> Scenario:
+        """``uav`` is ``late_s`` behind its plan: its windows extend, others' plans move."""
+        self.table, self.moves = extend(self.table, uav, self.now_s, late_s)
+        self.about = uav
+        check_table(self.table)
+        return self
+
+    def silent(self, uav: str, where: Place | None = None) -> Scenario:
+        """``uav`` fell silent at ``where`` (default: where it stays now): its way home is reserved from now."""
+        x, y = self.pads[uav]
+        at = self.where[uav] if where is None else where
+        self.table, plan, self.moves = way_home(
+            self.table, uav, self.now_s, at, Place((float(x), float(y))), self.airspace
+        )
+        self.plans[uav] = plan
+        self.about = uav
+        self.where[uav] = Place((float(x), float(y)))
+        check_table(self.table)
+        return self
+
+    def lost(self, uav: str, last: Volume) -> Scenario:
+        """``uav`` is lost: its last volume stays reserved."""
+        self.table, self.moves = lose(self.table, uav, self.now_s, last)
+        self.about = uav
+        check_table(self.table)
+        return self
+
+    def moved(self, *uavs: str) -> Scenario:
+        """The last change moved exactly these UAVs' reservations (besides the one it was about)."""
+        got = tuple(sorted({m.uav for m in self.moves} - {self.about}))
+        assert got == tuple(sorted(uavs)), f"moved {got}, expected {uavs}: " + "; ".join(
+            m.describe() for m in self.moves
+        )
+        return self
+
+    def _said(self) -> str:
+        if isinstance(self.last, Wait):
+            return self.last.describe()
+        if isinstance(self.last, Grant):
+            return f"a grant from {self.last.plan.start_s:.1f} s at {self.last.plan.layer_m} m"
+        return "nothing yet"

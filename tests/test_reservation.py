@@ -1,0 +1,337 @@
+"""The space-time reservation model (issue 27, masonry.reservation): named scenarios in the scenario language
+(tests/reservation_scenario.py) and the unit pieces under them."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pytest
+
+from masonry.errors import InvalidArgument, PlanningError
+from masonry.planner.conflicts import CONFLICT_TOLERANCE_M
+from masonry.reservation import (
+    Airspace,
+    Grant,
+    Place,
+    Request,
+    Reservation,
+    Table,
+    Wait,
+    Work,
+    column,
+    decide,
+    leg,
+    pad,
+    site,
+    start_table,
+)
+from masonry.reservation.space import SITE_TOLERANCE_M, Separation
+from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_m
+from reservation_scenario import LAYERS_M, Scenario
+
+# ---- the volumes and the separation
+
+
+def test_separation_defaults_are_the_projects_numbers() -> None:
+    sep = Separation()
+    assert (sep.xy_m, sep.z_m, sep.pad_m) == (SEPARATION_XY_M, LAYER_SPACING_M, pad_separation_m())
+    assert SITE_TOLERANCE_M == CONFLICT_TOLERANCE_M
+
+
+def test_air_volumes_keep_the_horizontal_or_the_vertical_separation() -> None:
+    sep = Separation()
+    a = leg((0.0, 0.0), (10.0, 0.0), 2.5)
+    assert sep.conflict(a, leg((5.0, -5.0), (5.0, 5.0), 2.5))  # crossing at one altitude
+    assert not sep.conflict(a, leg((5.0, -5.0), (5.0, 5.0), 2.5 + LAYER_SPACING_M))  # a layer apart
+    assert sep.conflict(a, leg((0.0, 1.1), (10.0, 1.1), 2.5))  # parallel, 1.1 m < 1.2 m
+    assert not sep.conflict(a, leg((0.0, 1.2), (10.0, 1.2), 2.5))
+    assert sep.conflict(a, leg((0.0, 1.5), (10.0, 1.5), 2.5, radius_m=0.31))  # its radius counts
+
+
+def test_a_landed_uav_keeps_only_the_pad_separation() -> None:
+    sep = Separation()
+    beside = pad_separation_m() + 0.05  # 1.05 m: closer than the air separation
+    assert not sep.conflict(pad((0.0, 0.0)), column((beside, 0.0), 0.0, 3.0))  # one takes off beside it
+    assert sep.conflict(column((0.0, 0.0), 0.0, 3.0), column((beside, 0.0), 0.0, 3.0))  # two take off: no
+
+
+def test_the_site_rule_is_the_papers_r_c() -> None:
+    sep = Separation()
+    assert sep.conflict(site((0.0, 0.0), 0.8), site((0.8, 0.0), 0.8))  # dist <= r_c conflicts
+    assert not sep.conflict(site((0.0, 0.0), 0.8), site((0.81, 0.0), 0.8))
+    assert sep.conflict(site((0.0, 0.0), 0.8, (0.0, 2.0)), site((0.5, 1.0), 0.8))  # an adhesion segment
+    assert not sep.conflict(site((0.0, 0.0), 0.8), column((0.0, 0.0), 0.0, 3.0))  # a site holds no air
+    # the 3-D distance, as the planner's G^c: a site 0.5 m over and 0.5 m beside is 0.71 m away
+    assert sep.conflict(site((0.0, 0.0), 0.8, z_m=0.05), site((0.5, 0.0), 0.8, z_m=0.55))
+    assert not sep.conflict(site((0.0, 0.0), 0.8, z_m=0.05), site((0.5, 0.0), 0.8, z_m=0.75))
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: Reservation("a", pad((0.0, 0.0)), 5.0, 4.0, "stay"),
+        lambda: Reservation("a", pad((0.0, 0.0)), math.inf, math.inf, "stay"),
+        lambda: Reservation("", pad((0.0, 0.0)), 0.0, 1.0, "stay"),
+        lambda: Reservation("a", pad((0.0, 0.0)), 0.0, 1.0, "nap"),  # type: ignore[arg-type]
+        lambda: column((0.0, math.nan), 0.0, 1.0),
+        lambda: column((0.0, 0.0), 0.0, 1.0, radius_m=-1.0),
+        lambda: Airspace(()),
+        lambda: Airspace((3.0, 2.0)),
+    ],
+)
+def test_bad_values_are_refused(make: object) -> None:
+    with pytest.raises(InvalidArgument):
+        make()  # type: ignore[operator]
+
+
+def test_the_table_refuses_a_clash_and_names_both() -> None:
+    table = Table().add(Reservation("a", leg((0.0, 0.0), (10.0, 0.0), 2.5), 0.0, 10.0, "transit"))
+    crossing = Reservation("b", leg((5.0, -5.0), (5.0, 5.0), 2.5), 5.0, 15.0, "transit")
+    with pytest.raises(
+        PlanningError, match=re.escape("b's transit from 5.0 s to 15.0 s clashes with a's transit")
+    ):
+        table.add(crossing)
+    assert (
+        len(table.add(crossing.shifted(5.0)).reservations) == 2
+    )  # half-open windows: it may start as a ends
+    assert (
+        len(table.add(Reservation("a", crossing.volume, 5.0, 15.0, "transit")).reservations) == 2
+    )  # its own
+
+
+def test_pads_closer_than_the_pad_separation_are_refused() -> None:
+    with pytest.raises(PlanningError, match="clashes"):
+        start_table({"a": (0.0, 0.0), "b": (0.5, 0.0)})
+
+
+def test_decide_needs_the_uav_to_hold_a_place_to_stay() -> None:
+    request = Request("ghost", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 10.0))
+    with pytest.raises(PlanningError, match="ghost holds no place to stay"):
+        decide(Table(), request, 0.0, Airspace(LAYERS_M))
+
+
+def test_a_granted_flight_is_timed_from_the_uavs_speeds_with_the_margin() -> None:
+    s = Scenario({"a": (0.0, 0.0)})
+    s.at(0.0).fly("a", to=(6.0, 8.0), work_s=20.0).granted(start_s=0.0, layer=0)
+    plan = s.plans["a"]
+    kinds = [r.purpose for r in plan.reservations]
+    assert kinds == ["climb", "transit", "descend", "work", "climb", "transit", "descend", "stay"]
+    climb, transit = plan.reservations[0], plan.reservations[1]
+    # 2.5 m at 0.4 m/s peak: 1.875 * 2.5 / 0.4 s; 10 m at 1 m/s peak: 18.75 s; 2 s margin on each window
+    assert climb.t1_s == pytest.approx(1.875 * 2.5 / 0.4 + 2.0)
+    assert transit.t0_s == pytest.approx(1.875 * 2.5 / 0.4)
+    assert transit.t1_s - transit.t0_s == pytest.approx(18.75 + 2.0)
+    work = plan.reservations[3]
+    assert work.t1_s - work.t0_s == pytest.approx(20.0 + 2.0)
+    assert plan.stay.volume == pad((0.0, 0.0)) and plan.stay.open_ended
+    # its pad is held until it leaves (at 0 s: the stay is kept, empty, as the mark of its departure), not after
+    first = s.table.of("a")[0]
+    assert (first.purpose, first.volume, first.t0_s, first.t1_s) == ("stay", pad((0.0, 0.0)), 0.0, 0.0)
+
+
+# ---- named scenarios
+
+
+def test_two_uavs_crossing_fly_at_different_layers_at_once() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    s.at(0.0).fly("a", to=(10.0, 4.0), work_s=20.0).granted(start_s=0.0, layer=0)
+    # b's leg crosses a's at the time both are there: it starts now, one layer up, rather than later
+    s.fly("b", to=(0.0, 4.0), work_s=20.0).granted(start_s=0.0, layer=1)
+    # on layer 0 alone it would have to wait for a's legs
+    low = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, layers_m=LAYERS_M[:1])
+    low.at(0.0).fly("a", to=(10.0, 4.0), work_s=20.0).granted(start_s=0.0)
+    low.fly("b", to=(0.0, 4.0), work_s=20.0).granted()
+    assert low.plans["b"].start_s > 0.0
+
+
+def test_a_uav_waits_on_its_pad_for_a_busy_site() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=120.0).granted(start_s=0.0)
+    # b's site is 0.5 m from a's: not before a has worked there and left (beyond the 60 s horizon): it waits
+    s.fly("b", to=(5.5, 5.0), work_s=20.0).waits(for_uavs=("a",))
+    assert isinstance(s.last, Wait)
+    until_s = s.last.until_s
+    assert 60.0 < until_s < math.inf
+    # while it waits it holds only its pad
+    assert [r.purpose for r in s.table.of("b")] == ["stay"] and s.table.of("b")[0].volume == pad((10.0, 0.0))
+    # asked again when it fits, it is granted at once
+    s.at(until_s).fly("b", to=(5.5, 5.0), work_s=20.0).granted(start_s=until_s)
+    # it comes down once a's work there is over
+    a_work = next(r for r in s.table.of("a") if r.purpose == "work")
+    assert next(r for r in s.table.of("b") if r.purpose == "descend").t0_s >= a_work.t1_s
+
+
+def test_a_late_uav_pushes_the_next_one_visibly() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0).granted(start_s=0.0)
+    s.fly("b", to=(5.5, 5.0), work_s=20.0).granted()
+    b_start = s.plans["b"].start_s
+    assert b_start > 0.0
+    a_work = next(r for r in s.table.of("a") if r.purpose == "work")
+    s.at(a_work.t0_s + 10.0).late("a", 25.0).moved("b")
+    # a's work window runs 25 s longer, b leaves its pad later and waits there, not in the air
+    assert next(r for r in s.table.of("a") if r.purpose == "work").t1_s == pytest.approx(a_work.t1_s + 25.0)
+    b_now = s.table.of("b")
+    b_climb = next(r for r in b_now if r.purpose == "climb")
+    assert b_climb.t0_s > b_start
+    assert next(r for r in b_now if r.purpose == "stay").t1_s == pytest.approx(b_climb.t0_s)
+    assert all(m.after.t0_s >= m.before.t0_s and m.after.t1_s >= m.before.t1_s for m in s.moves)
+    # a plan under way does not move: late again once b has left for the site beside a's, no move makes room
+    # (a would have to stay in its zone while b comes down beside it): the table says so and stays as it was
+    s.at(b_climb.t0_s + 1.0)
+    table = s.table
+    with pytest.raises(PlanningError, match="clash and neither can move"):
+        s.late("a", 30.0)
+    assert s.table == table
+
+
+def test_the_site_rule_keeps_conflicting_sites_apart_for_their_windows() -> None:
+    # sites 1.5 m apart: the air separation (1.2 m) lets both work at once ...
+    free = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    free.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0, task="A0").granted(start_s=0.0)
+    free.fly("b", to=(6.5, 5.0), work_s=30.0, task="B0").granted(start_s=0.0)
+    # ... the paper's rule with r_c = 1.8 m does not: b comes down only once a's site interval is over
+    rule = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    rule.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0, clearance_m=1.8, task="A0").granted(start_s=0.0)
+    rule.fly("b", to=(6.5, 5.0), work_s=30.0, clearance_m=1.8, task="B0").granted()
+    a_site = next(r for r in rule.table.of("a") if r.purpose == "site")
+    b_site = next(r for r in rule.table.of("b") if r.purpose == "site")
+    b_descend = next(r for r in rule.table.of("b") if r.purpose == "descend")
+    assert b_site.t0_s == pytest.approx(a_site.t1_s) and b_descend.t0_s == pytest.approx(b_site.t0_s)
+    assert a_site.task == "A0" and a_site.t1_s < math.inf  # it ends with the work (plus the margin)
+
+
+def test_a_silent_uavs_way_home_is_reserved_and_moves_who_is_in_the_way() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, layers_m=LAYERS_M[:1])
+    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=10.0, then="site").granted(start_s=0.0)
+    # b parks under a's way home (after a has passed), then is to leave from there for a site of its own
+    s.fly("b", then=(2.5, 2.5)).granted()
+    parked_s = s.plans["b"].stay.t0_s
+    s.fly("b", to=(8.0, 8.0), work_s=10.0).granted(start_s=parked_s)
+    a_there = [r for r in s.table.of("a") if r.purpose == "stay"][-1]
+    assert a_there.t0_s < parked_s - 5.0
+    # a falls silent over its site 5 s before b would climb out under its way home: the way home is reserved
+    # from then, and b's plan (not under way) moves, visibly: b stays parked until a has passed
+    s.at(parked_s - 5.0).silent("a").moved("b")
+    home = s.plans["a"]
+    assert home.start_s == parked_s - 5.0 and home.stay.volume == pad((0.0, 0.0)) and home.stay.open_ended
+    assert {r.purpose for r in home.reservations[:-1]} == {"home"}
+    assert [r.purpose for r in s.table.of("a") if r.t0_s >= home.start_s] == ["home", "home", "home", "stay"]
+    b_climb = next(r for r in s.table.of("b") if r.purpose == "climb" and r.t0_s >= parked_s)
+    a_transit = home.reservations[1]
+    assert b_climb.t0_s >= a_transit.t1_s - 1e-9  # it climbs out once a's leg over it is over
+    parked = next(r for r in s.table.of("b") if r.purpose == "stay" and r.t0_s == parked_s)
+    assert parked.t1_s == pytest.approx(b_climb.t0_s)  # and waits for it on the ground
+
+
+def test_a_lost_uav_keeps_its_last_volume_until_accounted_for() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    s.at(0.0).lost("a", column((5.0, 5.0), 0.0, 3.0))
+    s.fly("b", to=(5.5, 5.0), work_s=10.0).waits(for_uavs=("a",), until_s=math.inf)
+    assert isinstance(s.last, Wait) and "until they leave" in s.last.describe()
+    # found at 50 s and carried back to its pad
+    s.table = s.table.release("a", 50.0).add(Reservation("a", pad((0.0, 0.0)), 50.0, math.inf, "stay"))
+    s.fly("b", to=(5.5, 5.0), work_s=10.0).granted()
+    assert s.plans["b"].start_s > 0.0
+
+
+def test_a_wait_within_the_horizon_is_a_grant_with_a_later_start() -> None:
+    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, horizon_s=1000.0)
+    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=120.0).granted(start_s=0.0)
+    s.fly("b", to=(5.5, 5.0), work_s=20.0).granted()
+    b = s.table.of("b")
+    assert b[0].purpose == "stay" and b[0].t1_s == s.plans["b"].start_s > 100.0  # on its pad until then
+
+
+def test_decide_is_pure() -> None:
+    table = start_table({"a": (0.0, 0.0)})
+    request = Request("a", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 10.0))
+    first = decide(table, request, 0.0, Airspace(LAYERS_M))
+    assert isinstance(first, Grant) and first == decide(table, request, 0.0, Airspace(LAYERS_M))
+    assert table == start_table({"a": (0.0, 0.0)})
+
+
+def test_the_packages_public_names_resolve() -> None:
+    import masonry.reservation as reservation
+
+    assert [name for name in reservation.__all__ if not hasattr(reservation, name)] == []
+
+
+def test_site_volumes_conflict_exactly_as_the_planners_conflict_graph() -> None:
+    """Over a real wall: every pair of G^c conflicts as site volumes, and every pair of site volumes that conflicts
+    but is not in G^c is a dependent pair (the planner drops those: they never run at once anyway)."""
+    import networkx as nx
+
+    from masonry.blueprint_gen import running_bond
+    from masonry.planner import plan as make_plan
+    from masonry.planner.tasks import BrickTask
+
+    bp = running_bond(3, 8, placed_courses=1)
+    p = make_plan(bp)
+    r_c = float(bp.clearance_m)
+
+    def volume(t: object) -> object:
+        if isinstance(t, BrickTask):
+            x, y, z = t.position_m
+            return site((x, y), r_c, z_m=z)
+        (x0, y0, z0), (x1, y1, _z1) = t.start_m, t.end_m  # type: ignore[attr-defined]
+        return site((x0, y0), r_c, (x1, y1), z_m=z0)
+
+    g = nx.DiGraph(p.dependencies)
+    conflicts = {frozenset(c) for c in p.conflicts}
+    assert conflicts, "the wall has conflicts to compare"
+    sep = Separation()
+    vols = {t.id: volume(t) for t in p.tasks}
+    ids = [t.id for t in p.tasks if not t.done]  # G^c is over the tasks still to do
+    for i, a in enumerate(ids):
+        for b in ids[i + 1 :]:
+            ours = sep.conflict(vols[a], vols[b])  # type: ignore[arg-type]
+            if frozenset((a, b)) in conflicts:
+                assert ours, (a, b)
+            elif ours:
+                assert nx.has_path(g, a, b) or nx.has_path(g, b, a), (a, b)
+
+
+def test_layout_problems_name_what_breaks_the_guarantee() -> None:
+    from masonry.reservation import layout_problems
+
+    zone = Work((5.0, 5.0), 1.0, 10.0).zone()
+    assert layout_problems({"a": (0.0, 0.0), "b": (3.0, 0.0)}, [zone], LAYERS_M) == []
+    problems = layout_problems(
+        {"a": (0.0, 0.0), "b": (0.5, 0.0), "c": (5.0, 4.0)}, [zone], (2.0, 3.1), parking={"a": (9.0, 9.0)}
+    )
+    assert problems == [
+        "a's pad and b's pad are closer than the pad separation 1.00 m",
+        "c's pad at (5.0, 4.0) is within the separation of work zone 0 at (5.0, 5.0)",
+        "layer 2.0 m is less than 1.1 m over work zone 0 (1.0 m high)",
+    ]
+
+
+def test_an_empty_window_overlaps_nothing() -> None:
+    """A stay that ended as it began (the mark of a departure) holds no instant."""
+    mark = Reservation("a", column((0.0, 0.0), 0.0, 3.0), 5.0, 5.0, "stay")
+    crossing = Reservation("b", leg((-5.0, 0.0), (5.0, 0.0), 2.5), 0.0, 10.0, "transit")
+    assert not mark.overlaps_in_time(crossing) and not crossing.overlaps_in_time(mark)
+    assert Table().add(mark, crossing).reservations == (mark, crossing)
+    assert crossing.overlaps_in_time(Reservation("a", mark.volume, 9.9, 10.1, "climb"))
+
+
+def test_the_airspace_flies_the_uavs_timing() -> None:
+    from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+    default = Airspace.from_timing(LAYERS_M)
+    assert (default.cruise_mps, default.vertical_mps) == (
+        DEFAULT_TIMING.cruise_speed_mps,
+        DEFAULT_TIMING.vertical_speed_mps,
+    )
+    assert default == Airspace(LAYERS_M)
+    fast = Airspace.from_timing(LAYERS_M, TaskTiming(cruise_speed_mps=2.0, vertical_speed_mps=0.8))
+    request = Request("a", Place((0.0, 0.0)), Work((6.0, 8.0), 1.0, 20.0))
+    table = start_table({"a": (0.0, 0.0)})
+    slow_plan = decide(table, request, 0.0, default)
+    fast_plan = decide(table, request, 0.0, fast)
+    assert isinstance(slow_plan, Grant) and isinstance(fast_plan, Grant)
+    transit = next(r for r in fast_plan.plan.reservations if r.purpose == "transit")
+    assert transit.t1_s - transit.t0_s == pytest.approx(1.875 * 10.0 / 2.0 + 2.0)
+    assert fast_plan.plan.stay.t0_s < slow_plan.plan.stay.t0_s

@@ -1,0 +1,133 @@
+"""The reservation model's invariants under random sequences of requests, clock steps, delays and silences
+(issue 27): no two granted reservations of different UAVs overlap in space and time; every granted plan ends in an
+open-ended reservation (a place the UAV may stay); a UAV told to wait holds nothing new; and every request is
+granted, at a finite time, once the others have gone back to their pads (deadlock-freedom by construction).
+Hypothesis is derandomised (tests/conftest.py); a failing sequence is printed."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from hypothesis import event, given, settings
+from hypothesis import strategies as st
+
+from masonry.errors import PlanningError
+from masonry.reservation import Airspace, Grant, Reservation, Table, Wait, Work, decide, layout_problems, pad
+from reservation_scenario import LAYERS_M, Scenario, check_table
+
+SITES = [(1.5 * i, y) for i in range(7) for y in (3.0, 4.5)]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of a random sequence: ``fly`` (to ``site``, working ``seconds``, then staying at ``then``), ``tick``
+    (the clock moves ``seconds`` on), ``late`` (``seconds`` behind) or ``silent``."""
+
+    kind: str
+    uav: int = 0
+    site: int = 0
+    seconds: float = 0.0
+    then: str = "pad"
+    clearance_m: float = 0.0
+
+
+fly = st.builds(
+    Step,
+    st.just("fly"),
+    st.integers(0, 3),
+    st.integers(0, len(SITES) - 1),
+    st.floats(5.0, 60.0),
+    st.sampled_from(["pad", "site", "parking", "none"]),
+    st.sampled_from([0.0, 1.5]),
+)
+tick = st.builds(Step, st.just("tick"), seconds=st.floats(1.0, 20.0))
+late = st.builds(Step, st.just("late"), st.integers(0, 3), seconds=st.floats(1.0, 30.0))
+silent = st.builds(Step, st.just("silent"), st.integers(0, 3))
+
+
+def test_the_random_layout_meets_the_guarantees_condition() -> None:
+    """The layout below keeps pads and parking spots out of every flight's way (the deadlock-freedom argument's
+    condition, docs/safety.md): four pads 3 m apart, each UAV's parking spot 3 m behind its pad, sites 3 m ahead."""
+    homes = {f"u{i}": (3.0 * i, 0.0) for i in range(4)}
+    parking = {f"u{i}": (3.0 * i, -3.0) for i in range(4)}
+    zones = [Work(xy, 1.0, 1.0).zone() for xy in SITES]
+    assert layout_problems(homes, zones, LAYERS_M, parking=parking) == []
+
+
+def _released(s: Scenario, uav: str) -> tuple[Reservation, ...]:
+    """The table's reservations once every UAV but ``uav`` is back on its pad after all that is reserved now."""
+    end_s = 1.0 + max((r.t1_s for r in s.table.reservations if not r.open_ended), default=s.now_s)
+    table = s.table
+    for other in table.uavs():
+        if other != uav:
+            x, y = s.pads[other]
+            table = table.release(other, end_s).add(Reservation(other, pad((x, y)), end_s, math.inf, "stay"))
+    return table.reservations
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    n=st.integers(2, 4),
+    steps=st.lists(st.one_of(fly, fly, tick, late, silent), min_size=6, max_size=30),
+)
+def test_random_sequences_keep_the_table_sound_and_every_request_is_eventually_granted(
+    n: int, steps: list[Step]
+) -> None:
+    uavs = [f"u{i}" for i in range(n)]
+    s = Scenario({u: (3.0 * i, 0.0) for i, u in enumerate(uavs)})
+    for step in steps:
+        if step.kind == "tick":
+            s.at(s.now_s + step.seconds)
+            continue
+        uav = uavs[step.uav % n]
+        if step.kind == "late":
+            try:
+                s.late(uav, step.seconds)
+                event(f"late: {'moved others' if {m.uav for m in s.moves} - {uav} else 'moved nobody'}")
+            except PlanningError as exc:  # a plan under way in the way: refused, the table as it was
+                event("late: refused")
+                assert "neither can move" in str(exc) or "cannot wait" in str(exc), exc
+            continue
+        if step.kind == "silent":
+            try:
+                s.silent(uav)
+                event(f"way home: {'moved others' if s.moves else 'moved nobody'}")
+            except PlanningError as exc:
+                event("way home: refused")
+                assert (
+                    "neither can move" in str(exc) or "cannot wait" in str(exc) or "no layer" in str(exc)
+                ), exc
+            continue
+        x, _y = s.pads[uav]
+        stay: str | tuple[float, float] = (x, -3.0) if step.then == "parking" else step.then
+        if stay == "none":
+            stay = "pad"
+        to = None if step.then == "none" else SITES[step.site]
+        request = s.request(uav, to, work_s=step.seconds, then=stay, clearance_m=step.clearance_m)
+        s.fly(uav, to, work_s=step.seconds, then=stay, clearance_m=step.clearance_m)
+        if isinstance(s.last, Grant):
+            plan = s.last.plan
+            assert s.now_s <= plan.start_s <= s.now_s + s.horizon_s
+            event(
+                f"grant: {'now' if plan.start_s == s.now_s else 'later'}, layer {LAYERS_M.index(plan.layer_m)}"
+            )
+            assert plan.reservations[-1].open_ended and all(not r.open_ended for r in plan.reservations[:-1])
+            continue
+        assert isinstance(s.last, Wait)
+        wait = s.last
+        event(f"wait: {'until they leave' if math.isinf(wait.until_s) else 'beyond the horizon'}")
+        if math.isinf(wait.until_s):
+            assert wait.blocked_by and all(r.open_ended and r.uav != uav for r in wait.blocked_by), (
+                wait.describe()
+            )
+        else:
+            assert wait.until_s > s.now_s + s.horizon_s
+        # once the others are back on their pads, the request is granted at a finite time
+        released = Table(_released(s, uav), s.table.separation)
+        check_table(released)
+        airspace = Airspace(LAYERS_M, margin_s=s.margin_s, horizon_s=math.inf)
+        granted = decide(released, request, s.now_s, airspace)
+        assert isinstance(granted, Grant), granted
+        assert math.isfinite(granted.plan.start_s)
+        check_table(granted.table)
