@@ -322,3 +322,22 @@ def test_a_resumed_missions_log_starts_with_the_tasks_done_before(tmp_path):
     for e in first_wall["entities"]:
         colour = (e.get("cubes") or e.get("lines"))[0]["color"]
         assert colour == (done if e["cubes"] else sprayed), e["id"]
+
+
+def test_the_docs_foxglove_layout_is_the_sdks_and_names_the_logs_topics(live):
+    """docs/foxglove_layout.json is what ``masonry.observe.layout`` builds with the SDK's layout types, and every
+    topic it names for the case study's UAVs is one the log writes."""
+    import re
+
+    from masonry.observe.layout import foxglove_layout
+
+    text = (ROOT / "docs" / "foxglove_layout.json").read_text(encoding="utf-8")
+    assert json.loads(text) == json.loads(foxglove_layout())
+    with open(live["log"], "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    written = {c.topic for c in summary.channels.values()}
+    named = set(re.findall(r'"(/[a-z/0-9-]+?)(?:\.[a-z_]+)?"', text))
+    case_study = {t for t in named if not re.search(r"brick-2|glue-2", t)}
+    assert {"/wall", "/airspace", "/paths", "/log", "/mission/events", "/uav/brick-1/state"} <= case_study
+    assert case_study <= written, case_study - written

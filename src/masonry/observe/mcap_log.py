@@ -16,7 +16,7 @@ journal stays the source of truth for ``--resume``; the log is for people and to
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,8 +29,16 @@ from masonry.errors import InputError, MasonryError
 from masonry.mission.events import MissionEvent
 from masonry.mission.report import MissionReport
 from masonry.mission.report_codec import report_from_record
-from masonry.observe.scene import COLOURS, TOPICS, WORLD_FRAME, MissionScene, ns, schema_name, volume_cube
-from masonry.observe.schemas import MASONRY
+from masonry.observe.scene import (
+    COLOURS,
+    TOPICS,
+    WORLD_FRAME,
+    MissionScene,
+    channel_schema,
+    encoded,
+    ns,
+    volume_cube,
+)
 from masonry.planner.tasks import Plan
 
 #: The MCAP profile (none of the ROS ones: protobuf and JSON messages with their schemas).
@@ -75,7 +83,7 @@ class McapLog(MissionScene):
             ) from None
         self._writer = Writer(self._file, compression=CompressionType.ZSTD)
         self._writer.start(profile=PROFILE, library="masonry")
-        self.start()
+        self.write_opening()
         return self
 
     def __enter__(self) -> McapLog:
@@ -104,36 +112,17 @@ class McapLog(MissionScene):
             self._file = None
 
     def write(self, topic: str, time_s: float, message: Any) -> None:
-        """One message into the file: an SDK message as its protobuf bytes, a dict as JSON."""
+        """One message into the file: a Foxglove message in the SDK's encoding, a dict as JSON."""
         assert self._writer is not None
         channel = self._channels.get(topic)
         if channel is None:
-            channel = self._channel(topic, message)
+            name, schema_encoding, data, encoding = channel_schema(topic)
+            schema = self._schemas.get(name)
+            if schema is None:
+                schema = self._schemas[name] = self._writer.register_schema(name, schema_encoding, data)
+            channel = self._channels[topic] = self._writer.register_channel(topic, encoding, schema)
         t = ns(time_s)
-        if isinstance(message, dict):
-            data = json.dumps(message, allow_nan=False).encode()
-        else:
-            data = message.encode()
-        self._writer.add_message(channel, t, data, t, self.messages)
-
-    def _channel(self, topic: str, message: Any) -> int:
-        assert self._writer is not None
-        name = schema_name(topic)
-        schema = self._schemas.get(name)
-        if isinstance(message, dict):
-            encoding = "json"
-            if schema is None:
-                body = json.dumps(MASONRY[name]).encode()
-                schema = self._writer.register_schema(name, "jsonschema", body)
-        else:
-            encoding = "protobuf"
-            if schema is None:
-                sdk = message.get_schema()  # the SDK's own definition (a FileDescriptorSet)
-                schema = self._writer.register_schema(sdk.name, sdk.encoding, bytes(sdk.data))
-        self._schemas[name] = schema
-        channel = self._writer.register_channel(topic, encoding, schema)
-        self._channels[topic] = channel
-        return channel
+        self._writer.add_message(channel, t, encoded(message), t, self.messages)
 
 
 @dataclass(frozen=True)
@@ -199,4 +188,36 @@ def read_log(path: str | Path) -> RecordedMission:
     )
 
 
-__all__ = ["COLOURS", "TOPICS", "WORLD_FRAME", "McapLog", "RecordedMission", "read_log", "volume_cube"]
+def iter_channel_messages(path: str | Path) -> Iterator[tuple[str, tuple[str, str, bytes, str], int, bytes]]:
+    """Every message of a log in log time order, as ``(topic, (schema name, schema encoding, schema data, message
+    encoding), log time ns, data)``: what ``masonry replay --foxglove`` serves, as it was recorded.
+
+    Raises:
+        InputError: the file cannot be read or is not MCAP.
+    """
+    p = Path(path)
+    try:
+        with open(p, "rb") as f:
+            for schema, channel, message in make_reader(f).iter_messages(log_time_order=True):
+                desc = (
+                    (schema.name, schema.encoding, bytes(schema.data), channel.message_encoding)
+                    if schema is not None
+                    else ("", "", b"", channel.message_encoding)
+                )
+                yield channel.topic, desc, message.log_time, bytes(message.data)
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read it: {exc.strerror or exc}") from None
+    except Exception as exc:  # the mcap reader raises its own, struct and zstd errors on a bad file
+        raise InputError(f"{p}: not a readable MCAP file ({type(exc).__name__}: {exc})") from None
+
+
+__all__ = [
+    "COLOURS",
+    "TOPICS",
+    "WORLD_FRAME",
+    "McapLog",
+    "RecordedMission",
+    "iter_channel_messages",
+    "read_log",
+    "volume_cube",
+]

@@ -10,11 +10,13 @@ messages (``foxglove.messages``: its protobuf encoding and the schema it ships);
 
 from __future__ import annotations
 
+import json
 import math
 import threading
 from collections.abc import Mapping
 from typing import Any
 
+import foxglove.messages
 from foxglove.messages import (
     Color,
     CubePrimitive,
@@ -37,6 +39,7 @@ from foxglove.messages import (
 from masonry.mission.events import MissionEvent
 from masonry.mission.report import MissionReport
 from masonry.mission.report_codec import report_to_record
+from masonry.observe.schemas import MASONRY
 from masonry.planner.tasks import BrickTask, Plan
 
 #: The world frame (ENU, metres) every pose and scene entity is in.
@@ -77,6 +80,23 @@ _LEVELS = {"failed": LogLevel.Warning, "lost": LogLevel.Warning, "stall": LogLev
 def schema_name(topic: str) -> str:
     """The schema of ``topic`` (``/uav/brick-1/pose`` -> ``foxglove.PoseInFrame``)."""
     return TOPICS.get(topic) or TOPICS["/uav/NAME/" + topic.rsplit("/", 1)[-1]]
+
+
+def channel_schema(topic: str) -> tuple[str, str, bytes, str]:
+    """``(schema name, schema encoding, schema data, message encoding)`` of ``topic``'s channel: the SDK's own
+    schema for Foxglove's messages (protobuf), masonry's JSON schema for its own."""
+    name = schema_name(topic)
+    if name.startswith("masonry."):
+        return name, "jsonschema", json.dumps(MASONRY[name]).encode(), "json"
+    sdk = getattr(foxglove.messages, name.split(".", 1)[1]).get_schema()  # a protobuf FileDescriptorSet
+    return str(sdk.name), str(sdk.encoding), bytes(sdk.data), "protobuf"
+
+
+def encoded(message: Any) -> bytes:
+    """A message's bytes: a Foxglove message in the SDK's encoding, a dict as JSON."""
+    if isinstance(message, dict):
+        return json.dumps(message, allow_nan=False).encode()
+    return bytes(message.encode())
 
 
 def ns(time_s: float) -> int:
@@ -179,7 +199,7 @@ class MissionScene:
         self.write(topic, time_s, message)
         self.messages += 1
 
-    def start(self) -> None:
+    def write_opening(self) -> None:
         """The blueprint and the wall as the mission starts."""
         self._put(
             "/mission/blueprint",
@@ -298,4 +318,14 @@ class MissionScene:
         self._put("/mission/report", t, {"report": report_to_record(report), "extra": dict(extra or {})})
 
 
-__all__ = ["COLOURS", "TOPICS", "WORLD_FRAME", "MissionScene", "ns", "schema_name", "volume_cube"]
+__all__ = [
+    "COLOURS",
+    "TOPICS",
+    "WORLD_FRAME",
+    "MissionScene",
+    "channel_schema",
+    "encoded",
+    "ns",
+    "schema_name",
+    "volume_cube",
+]
