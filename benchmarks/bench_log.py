@@ -1,8 +1,11 @@
-"""What the mission log (``--log FILE.mcap``) costs a simulated mission, and what it holds.
+"""What the mission log (``--log FILE.mcap``) and the live Foxglove server (``--foxglove``) cost a simulated mission.
 
-Flies the same mission with no sink and with an :class:`~masonry.observe.mcap_log.McapLog`, ``--runs`` times
-each, alternating, and prints the wall time of each run, the log's size, its messages per topic kind, and how
-long ``masonry.observe.mcap_log.read_log`` takes to read it back (what ``masonry replay`` does first).
+Flies the same mission, unserved (no pacing: as fast as it goes), ``--runs`` times in each mode, alternating:
+no sink; the MCAP log (:class:`~masonry.observe.mcap_log.McapLog`); the live Foxglove server
+(:class:`~masonry.observe.live.FoxgloveLive` on 127.0.0.1, no viewer); the same with one viewer subscribed to
+every channel (a ``foxglove.sdk.v1`` WebSocket client in a thread, draining). Prints the wall time of each run,
+the log's size, its messages per topic kind, and how long ``read_log`` takes to read it back (what ``masonry
+replay`` does first).
 
     .venv/bin/python benchmarks/bench_log.py
     .venv/bin/python benchmarks/bench_log.py --blueprint blueprints/running_bond_200.yaml --runs 1
@@ -11,18 +14,86 @@ long ``masonry.observe.mcap_log.read_log`` takes to read it back (what ``masonry
 from __future__ import annotations
 
 import argparse
+import json
 import tempfile
+import threading
 import time
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 from mcap.reader import make_reader
+from websockets.sync.client import connect
 
 from masonry.blueprint import load_blueprint
 from masonry.mission.simulate import SimulatedMission
+from masonry.observe.live import FoxgloveLive
 from masonry.observe.mcap_log import McapLog, read_log
 
 ROOT = Path(__file__).resolve().parents[1]
+MODES = ("no log", "log", "foxglove", "foxglove+viewer")
+
+
+class Viewer(threading.Thread):
+    """A Foxglove viewer: subscribes to every channel advertised and counts the messages it receives."""
+
+    def __init__(self, url: str) -> None:
+        super().__init__(daemon=True)
+        self.ws = connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None)
+        self.received = 0
+        self.subscribed = threading.Event()
+
+    def run(self) -> None:
+        subs = 0
+        try:
+            for frame in self.ws:
+                if isinstance(frame, str):
+                    msg = json.loads(frame)
+                    if msg["op"] == "advertise":
+                        chans = [
+                            {"id": subs + i + 1, "channelId": c["id"]} for i, c in enumerate(msg["channels"])
+                        ]
+                        subs += len(chans)
+                        self.ws.send(json.dumps({"op": "subscribe", "subscriptions": chans}))
+                        self.subscribed.set()
+                else:
+                    self.received += 1
+        except Exception:  # the server stopped: the connection closes
+            pass
+
+
+def fly(bp: Any, text: str, mode: str, path: Path) -> tuple[float, Any, int]:
+    """One mission in ``mode``: (wall seconds, its report, messages a viewer received)."""
+    mission = SimulatedMission.from_blueprint(bp)
+    sink: Any = None
+    viewer = None
+    if mode == "log":
+        sink = McapLog(path, mission.plan, text, title=bp.name or "")
+    elif mode.startswith("foxglove"):
+        sink = FoxgloveLive(
+            "127.0.0.1", 0, mission.plan, text, title=bp.name or "", uavs=[u.name for u in mission.fleet]
+        )
+    t0 = time.perf_counter()
+    if isinstance(sink, McapLog):
+        sink.open()
+    elif sink is not None:
+        sink.start()
+        if mode == "foxglove+viewer":
+            viewer = Viewer(sink.url)
+            viewer.start()
+            viewer.subscribed.wait(10)
+    mission.control.sink = sink
+    report = mission.run()
+    if sink is not None:
+        sink.finish(report)
+    wall_s = time.perf_counter() - t0
+    if isinstance(sink, McapLog):
+        sink.close()
+    elif sink is not None:
+        sink.stop()
+    if viewer is not None:
+        viewer.join(10)
+    return wall_s, report, viewer.received if viewer is not None else 0
 
 
 def main() -> None:
@@ -32,22 +103,16 @@ def main() -> None:
     args = ap.parse_args()
     bp = load_blueprint(args.blueprint)
     text = args.blueprint.read_text(encoding="utf-8")
-    times: dict[str, list[float]] = {"no log": [], "log": []}
+    times: dict[str, list[float]] = {m: [] for m in MODES}
+    received: list[int] = []
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "run.mcap"
         for _ in range(args.runs):
-            for mode in times:
-                mission = SimulatedMission.from_blueprint(bp)
-                log = McapLog(path, mission.plan, text, title=bp.name or "") if mode == "log" else None
-                t0 = time.perf_counter()
-                if log is not None:
-                    log.open()
-                    mission.control.sink = log
-                report = mission.run()
-                if log is not None:
-                    log.finish(report)
-                    log.close()
-                times[mode].append(time.perf_counter() - t0)
+            for mode in MODES:
+                wall_s, report, got = fly(bp, text, mode, path)
+                times[mode].append(wall_s)
+                if mode == "foxglove+viewer":
+                    received.append(got)
         size = path.stat().st_size
         with open(path, "rb") as f:
             summary = make_reader(f).get_summary()
@@ -63,7 +128,8 @@ def main() -> None:
         f"{args.blueprint.name}: {len(bp.bricks)} bricks, makespan {report.makespan_s:.0f} s, sim {report.sim_time_s:.0f} s"
     )
     for mode, ts in times.items():
-        print(f"  {mode:<7} " + "  ".join(f"{t:6.2f} s" for t in ts))
+        print(f"  {mode:<16} " + "  ".join(f"{t:6.2f} s" for t in ts))
+    print(f"  the viewer received {', '.join(str(n) for n in received)} messages")
     print(
         f"  log: {size / 1e6:.2f} MB, {summary.statistics.message_count} messages "
         f"({size / summary.statistics.message_count:.0f} B each, zstd chunks)"

@@ -15,6 +15,7 @@ from typing import Any
 
 import pytest
 from typer.testing import CliRunner
+from websockets.exceptions import WebSocketException
 from websockets.sync.client import connect
 
 from foxglove_decode import decode
@@ -279,3 +280,75 @@ def test_a_taken_port_is_one_line_and_exit_2():
         port = taken.getsockname()[1]
         res = runner.invoke(app, ["sim", str(CASE_STUDY), "--foxglove", f"127.0.0.1:{port}", "--no-progress"])
     assert res.exit_code == 2 and f"--foxglove 127.0.0.1:{port}: cannot listen" in res.output, res.output
+
+
+def _self_signed(tmp_path: Path) -> tuple[Path, Path]:
+    """A certificate for 127.0.0.1 and its PKCS#8 key (PEM files)."""
+    import datetime
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    key = ec.generate_private_key(ec.SECP256R1())
+    name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "mission-control")])
+    now = datetime.datetime(2026, 1, 1, tzinfo=datetime.timezone.utc)
+    cert = (
+        x509.CertificateBuilder()
+        .subject_name(name)
+        .issuer_name(name)
+        .public_key(key.public_key())
+        .serial_number(1)
+        .not_valid_before(now)
+        .not_valid_after(now + datetime.timedelta(days=3650))
+        .add_extension(
+            x509.SubjectAlternativeName([x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]), False
+        )
+        .sign(key, hashes.SHA256())
+    )
+    cert_path, key_path = tmp_path / "server.pem", tmp_path / "server.key"
+    cert_path.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
+    key_path.write_bytes(
+        key.private_bytes(
+            serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8, serialization.NoEncryption()
+        )
+    )
+    return cert_path, key_path
+
+
+def test_off_loopback_the_server_needs_tls_and_offers_no_services(tmp_path):
+    import ssl
+
+    cert, key = _self_signed(tmp_path)
+    proc = subprocess.Popen(
+        [
+            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY), "--no-progress", "--format", "json"),
+            *("--foxglove", "0.0.0.0:0", "--foxglove-cert", str(cert), "--foxglove-key", str(key)),
+        ],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        url = _line_with(proc, "serving the mission to Foxglove at ").split(" at ", 1)[1].split(" ", 1)[0]
+        assert url.startswith("wss://0.0.0.0:")
+        _line_with(proc, "Foxglove server stays up")  # the mission is over; its last messages stay served
+        trust = ssl.create_default_context(cafile=str(cert))
+        local = url.replace("0.0.0.0", "127.0.0.1")
+        with connect(local, subprotocols=["foxglove.sdk.v1"], ssl=trust, open_timeout=60) as ws:
+            info = json.loads(ws.recv(timeout=WAIT_S))
+            assert info["op"] == "serverInfo" and "services" not in info["capabilities"]
+            client = FoxgloveClient(ws)
+            client.pump(lambda: {"/wall", "/mission/events"} <= set(client.channels), "channels")
+            assert not client.services  # read-only off loopback: TLS proves the server, not the viewer
+        plain = url.replace("wss://0.0.0.0", "ws://127.0.0.1")  # refused by a TLS server
+        with pytest.raises((OSError, EOFError, WebSocketException)), connect(plain, open_timeout=10) as ws:
+            ws.recv(timeout=10)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert json.loads(out)["completed"] is True
