@@ -245,6 +245,10 @@ class FoxgloveLive(MissionScene):
             schema = self._schemas[topic] = channel_schema(topic)
         return schema
 
+    def wants(self, topic: str) -> bool:
+        """A viewer is subscribed to ``topic`` (no one: its messages are not built, nor encoded)."""
+        return bool(self.server.channel(topic, self._schema(topic)).base.has_sinks())
+
     def write(self, topic: str, time_s: float, message: Any) -> None:
         """Publish one message; the wall and the airspace go whole each time (a viewer may have joined late)."""
         if topic == "/mission/blueprint":

@@ -194,6 +194,11 @@ class MissionScene:
         """Write one message: an SDK message on Foxglove's topics, a dict on masonry's."""
         raise NotImplementedError
 
+    def wants(self, topic: str) -> bool:
+        """Whether anyone reads ``topic`` now (the log: always; a live server: a viewer subscribed to it), so the
+        frequent messages are not even built for nobody. The wall and the airspace are kept whatever it says."""
+        return True
+
     def _put(self, topic: str, time_s: float, message: Any) -> None:
         self.last_s = max(self.last_s, time_s)
         self.write(topic, time_s, message)
@@ -223,10 +228,11 @@ class MissionScene:
     def emit(self, event: MissionEvent) -> None:
         """Write one mission event, and what it changes on the other topics."""
         t = event.time_s
-        self._put("/mission/events", t, event.to_dict())
+        if self.wants("/mission/events"):
+            self._put("/mission/events", t, event.to_dict())
         if event.kind == "uav" and event.uav is not None:
             self._uav(event)
-        else:
+        elif self.wants("/log"):
             level = _LEVELS.get(event.kind, LogLevel.Info)
             line = Log(timestamp=_stamp(t), level=level, message=event.line().strip(), name="mission-control")
             self._put("/log", t, line)
@@ -242,11 +248,12 @@ class MissionScene:
     def _uav(self, event: MissionEvent) -> None:
         t, f, name = event.time_s, event.fields, str(event.uav)
         p = f.get("position_m")
-        if p is not None:
+        if p is not None and self.wants(f"/uav/{name}/pose"):
             pose = Pose(position=_vec(p), orientation=_yaw(0.0))
             self._put(
                 f"/uav/{name}/pose", t, PoseInFrame(timestamp=_stamp(t), frame_id=WORLD_FRAME, pose=pose)
             )
+        if p is not None and self.wants("/tf"):
             last_tf = self._tf_s.get(name)
             if last_tf is None or t - last_tf >= TF_PERIOD_S:
                 self._tf_s[name] = t
@@ -261,7 +268,9 @@ class MissionScene:
         vols = f.get("volumes", [])
         state = (f.get("state", ""), event.task_id, f.get("status", "ok"), len(vols))
         last = self._states.get(name)
-        if last is None or last[0] != state or t - last[1] >= STATE_PERIOD_S:
+        if (last is None or last[0] != state or t - last[1] >= STATE_PERIOD_S) and self.wants(
+            f"/uav/{name}/state"
+        ):
             self._states[name] = (state, t)
             self._put(
                 f"/uav/{name}/state",
