@@ -352,3 +352,81 @@ def test_off_loopback_the_server_needs_tls_and_offers_no_services(tmp_path):
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
     assert json.loads(out)["completed"] is True
+
+
+@pytest.mark.slow
+def test_mission_control_is_steered_from_foxglove_and_ctl_at_the_same_desk(tmp_path):
+    """``masonry mission-control --foxglove``: a pause from Foxglove is journaled, and ``masonry ctl`` (signed with
+    the mission key) then finds the mission paused; its resume shows in Foxglove's event channel."""
+    import socket
+
+    from masonry.mission.auth import write_key_file
+
+    key = write_key_file(tmp_path / "mission.key")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        endpoint = f"tcp/127.0.0.1:{s.getsockname()[1]}"
+    name = f"fox-{endpoint.rsplit(':', 1)[1]}"
+    journal = tmp_path / "mission.db"
+    mc = subprocess.Popen(
+        [
+            *(sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint),
+            *("--key-file", str(key), "--mission-name", name, "--journal", str(journal)),
+            *("--startup-timeout", "300", "--max-time", "300", "--foxglove", "127.0.0.1:0"),
+        ],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    common = ["--mission", endpoint, "--key-file", str(key), "--mission-name", name]
+
+    def ctl(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [sys.executable, "-c", MAIN, "ctl", *args, *common],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=False,
+        )
+
+    try:
+        url = _line_with(mc, "serving the mission to Foxglove at ").split(" at ", 1)[1].split(" ", 1)[0]
+        with foxglove_client(url) as ws:
+            client = FoxgloveClient(ws)
+            client.pump(
+                lambda: "/mission/pause" in client.services and "/mission/events" in client.channels,
+                "services",
+            )
+            client.subscribe("/mission/events")
+            assert client.call("/mission/pause", {}) == {"accepted": True, "reason": ""}
+            again = ctl("pause")
+            assert (again.returncode, again.stdout) == (1, "pause: refused: already paused\n"), again.stderr
+            resume = ctl("resume")
+            assert (resume.returncode, resume.stdout) == (0, "resume: accepted\n"), resume.stderr
+
+            def answered() -> list[tuple[str, bool]]:
+                ops = [e["fields"] for e in client.events() if e["kind"] == "operator"]
+                return [(f["command"], f["accepted"]) for f in ops]
+
+            client.pump(lambda: len(answered()) >= 3, "the operator's events")
+            assert answered() == [("pause", True), ("pause", False), ("resume", True)]
+            limit = client.call("/mission/limit", {"role": "brick", "limit": 1})
+            assert limit == {"accepted": True, "reason": ""}
+            assert client.call("/mission/limit", {"role": "crane", "limit": 1})["reason"].startswith(
+                "no 'crane' UAVs"
+            )
+    finally:
+        mc.kill()
+        mc.communicate(timeout=30)
+    import sqlite3
+
+    with sqlite3.connect(journal) as db:  # the journal's record of every command and its answer
+        history = json.loads(dict(db.execute("select key, value from meta").fetchall())["operator"])
+    assert [(h["command"], h["accepted"]) for h in history] == [
+        ("pause", True),
+        ("pause", False),
+        ("resume", True),
+        ("limit", True),
+        ("limit", False),
+    ]
