@@ -430,3 +430,22 @@ def test_mission_control_is_steered_from_foxglove_and_ctl_at_the_same_desk(tmp_p
         ("limit", True),
         ("limit", False),
     ]
+
+
+def test_a_service_request_becomes_the_operators_command_or_is_refused_naming_what_is_wrong():
+    from masonry.observe.live import SERVICES, answer
+
+    asked: list[dict[str, Any]] = []
+
+    def desk(c: Any) -> dict[str, Any]:
+        asked.append(dict(c))
+        return {"accepted": True, "reason": ""}
+
+    command, fields = SERVICES["/mission/limit"]
+    assert answer(desk, command, fields, b'{"role": "brick", "limit": 2, "extra": 1}')["accepted"] is True
+    assert asked == [{"command": "limit", "role": "brick", "limit": 2}]  # only the service's own fields
+    assert answer(desk, "pause", {}, b"") == {"accepted": True, "reason": ""}  # no body: no fields
+    assert answer(desk, command, fields, b"{")["reason"].startswith("the request is not JSON")
+    assert answer(desk, command, fields, b"[1]")["reason"] == "the request must be a JSON object"
+    assert answer(desk, command, fields, b'{"role": "brick"}')["reason"] == "limit needs limit"
+    assert len(asked) == 2

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import threading
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any
 
@@ -163,7 +164,7 @@ def _line(
     )
 
 
-class MissionScene:
+class MissionScene(ABC):
     """Turns mission events into the log's messages; a subclass writes them (:meth:`write`).
 
     Args:
@@ -190,9 +191,9 @@ class MissionScene:
         self.last_s = 0.0
         self.messages = 0
 
-    def write(self, topic: str, time_s: float, message: Any) -> None:  # pragma: no cover - abstract
+    @abstractmethod
+    def write(self, topic: str, time_s: float, message: Any) -> None:
         """Write one message: an SDK message on Foxglove's topics, a dict on masonry's."""
-        raise NotImplementedError
 
     def wants(self, topic: str) -> bool:
         """Whether anyone reads ``topic`` now (the log: always; a live server: a viewer subscribed to it), so the
