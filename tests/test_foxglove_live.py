@@ -111,9 +111,12 @@ def _line_with(proc: subprocess.Popen[str], text: str) -> str:
 
 @pytest.mark.slow
 def test_a_served_sim_is_watched_and_paused_and_resumed_from_a_foxglove_client():
+    """The done-when test of issue 32, with the live page served beside Foxglove: both show the same state."""
+    import urllib.request
+
     proc = subprocess.Popen(
         [
-            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY)),
+            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY), "--serve", "127.0.0.1:0"),
             *("--foxglove", "127.0.0.1:0", "--time-scale", "4", "--no-progress", "--format", "json"),
         ],
         stdin=subprocess.DEVNULL,
@@ -122,11 +125,21 @@ def test_a_served_sim_is_watched_and_paused_and_resumed_from_a_foxglove_client()
         text=True,
     )
     try:
+        page = _line_with(proc, "serving the mission's page at ").rsplit(" ", 1)[-1].strip()
         url = _line_with(proc, "serving the mission to Foxglove at ").split(" at ", 1)[1].split(" ", 1)[0]
         assert url.startswith("ws://127.0.0.1:")
         with foxglove_client(url) as ws:
-            _watch_pause_resume(FoxgloveClient(ws))
-        _line_with(proc, "Foxglove server stays up")
+            client = FoxgloveClient(ws)
+            _watch_pause_resume(client)
+        _line_with(proc, "page and Foxglove server stay up")
+        with urllib.request.urlopen(page + "state.json", timeout=60) as r:
+            state = json.loads(r.read())
+        # the page saw what Foxglove saw: every task done, the same operator's answers, in the same order
+        assert state["counts"]["done"] == 4 and state["completed"] is True and state["paused"] is False
+        from masonry.mission.events import MissionEvent
+
+        ops = [MissionEvent.from_dict(e) for e in client.events() if e["kind"] == "operator"]
+        assert state["operator"] == [e.line().strip() for e in ops] and len(ops) == 4
     finally:
         proc.send_signal(signal.SIGINT)  # the server stays up after the mission until Ctrl-C
         out, err = proc.communicate(timeout=60)
