@@ -1,53 +1,143 @@
-"""What the mission log (``--log FILE.mcap``) costs a simulated mission, and what it holds.
+"""What the mission log (``--log FILE.mcap``) and the live Foxglove server (``--foxglove``) cost a simulated mission.
 
-Flies the same mission with no sink and with an :class:`~masonry.observe.mcap_log.McapLog`, ``--runs`` times
-each, alternating, and prints the wall time of each run, the log's size, its messages per topic kind, and how
-long ``masonry.observe.mcap_log.read_log`` takes to read it back (what ``masonry replay`` does first).
+Flies the same mission, unserved (no pacing: as fast as it goes), ``--runs`` times in each mode, alternating:
+no sink; the MCAP log (:class:`~masonry.observe.mcap_log.McapLog`); the live Foxglove server
+(:class:`~masonry.observe.live.FoxgloveLive` on 127.0.0.1, no viewer); the same with one viewer subscribed to
+every channel (a ``foxglove.sdk.v1`` WebSocket client in a thread, draining). Prints, for each run, the wall
+time, the process's CPU time (``time.process_time``: every thread, the SDK's server threads too, and not the other
+jobs of a shared machine) and the CPU time spent inside the sink's ``emit``/``finish`` (the mission's thread);
+then the log's size, its messages per topic kind, and how long ``read_log`` takes to read it back (what
+``masonry replay`` does first).
 
     .venv/bin/python benchmarks/bench_log.py
     .venv/bin/python benchmarks/bench_log.py --blueprint blueprints/running_bond_200.yaml --runs 1
+    # the same modes on another checkout (e.g. before the Foxglove SDK): only the modes it has
+    PYTHONPATH=/path/to/old/src .venv/bin/python benchmarks/bench_log.py --modes "no log,log"
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import tempfile
+import threading
 import time
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 from mcap.reader import make_reader
+from websockets.sync.client import connect
 
 from masonry.blueprint import load_blueprint
 from masonry.mission.simulate import SimulatedMission
 from masonry.observe.mcap_log import McapLog, read_log
 
 ROOT = Path(__file__).resolve().parents[1]
+MODES = ("no log", "log", "foxglove", "foxglove+viewer")
+
+
+class Viewer(threading.Thread):
+    """A Foxglove viewer: subscribes to every channel advertised and counts the messages it receives."""
+
+    def __init__(self, url: str) -> None:
+        super().__init__(daemon=True)
+        self.ws = connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None)
+        self.received = 0
+        self.subscribed = threading.Event()
+
+    def run(self) -> None:
+        subs = 0
+        try:
+            for frame in self.ws:
+                if isinstance(frame, str):
+                    msg = json.loads(frame)
+                    if msg["op"] == "advertise":
+                        chans = [
+                            {"id": subs + i + 1, "channelId": c["id"]} for i, c in enumerate(msg["channels"])
+                        ]
+                        subs += len(chans)
+                        self.ws.send(json.dumps({"op": "subscribe", "subscriptions": chans}))
+                        self.subscribed.set()
+                else:
+                    self.received += 1
+        except Exception:  # the server stopped: the connection closes
+            pass
+
+
+class Timed:
+    """An event sink around another that adds up the CPU time spent inside it (the calling thread's)."""
+
+    def __init__(self, sink: Any) -> None:
+        self.sink = sink
+        self.cpu_s = 0.0
+
+    def emit(self, event: Any) -> None:
+        t0 = time.thread_time()
+        self.sink.emit(event)
+        self.cpu_s += time.thread_time() - t0
+
+
+def fly(bp: Any, text: str, mode: str, path: Path) -> tuple[tuple[float, float, float], Any, int]:
+    """One mission in ``mode``: ((wall s, process CPU s, sink CPU s), its report, messages a viewer received)."""
+    mission = SimulatedMission.from_blueprint(bp)
+    sink: Any = None
+    viewer = None
+    if mode == "log":
+        sink = McapLog(path, mission.plan, text, title=bp.name or "")
+    elif mode.startswith("foxglove"):
+        from masonry.observe.live import FoxgloveLive
+
+        sink = FoxgloveLive(
+            "127.0.0.1", 0, mission.plan, text, title=bp.name or "", uavs=[u.name for u in mission.fleet]
+        )
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    timed = Timed(sink)
+    if isinstance(sink, McapLog):
+        sink.open()
+    elif sink is not None:
+        sink.start()
+        if mode == "foxglove+viewer":
+            viewer = Viewer(sink.url)
+            viewer.start()
+            viewer.subscribed.wait(10)
+    mission.control.sink = timed if sink is not None else None
+    report = mission.run()
+    if sink is not None:
+        c0 = time.thread_time()
+        sink.finish(report)
+        timed.cpu_s += time.thread_time() - c0
+    wall_s, cpu_s = time.perf_counter() - t0, time.process_time() - cpu0
+    if isinstance(sink, McapLog):
+        sink.close()
+    elif sink is not None:
+        sink.stop()
+    if viewer is not None:
+        viewer.join(10)
+    return (wall_s, cpu_s, timed.cpu_s), report, viewer.received if viewer is not None else 0
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--blueprint", type=Path, default=ROOT / "blueprints" / "running_bond_small.yaml")
     ap.add_argument("--runs", type=int, default=2)
+    ap.add_argument("--modes", default=",".join(MODES), help=f"comma-separated, of: {', '.join(MODES)}")
     args = ap.parse_args()
+    modes = [m.strip() for m in args.modes.split(",")]
+    if "log" not in modes or not set(modes) <= set(MODES):
+        ap.error(f"--modes: some of {', '.join(MODES)}, with log (its file is read back)")
     bp = load_blueprint(args.blueprint)
     text = args.blueprint.read_text(encoding="utf-8")
-    times: dict[str, list[float]] = {"no log": [], "log": []}
+    times: dict[str, list[tuple[float, float, float]]] = {m: [] for m in modes}
+    received: list[int] = []
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "run.mcap"
         for _ in range(args.runs):
-            for mode in times:
-                mission = SimulatedMission.from_blueprint(bp)
-                log = McapLog(path, mission.plan, text, title=bp.name or "") if mode == "log" else None
-                t0 = time.perf_counter()
-                if log is not None:
-                    log.open()
-                    mission.control.sink = log
-                report = mission.run()
-                if log is not None:
-                    log.finish(report)
-                    log.close()
-                times[mode].append(time.perf_counter() - t0)
+            for mode in modes:
+                measured, report, got = fly(bp, text, mode, path)
+                times[mode].append(measured)
+                if mode == "foxglove+viewer":
+                    received.append(got)
         size = path.stat().st_size
         with open(path, "rb") as f:
             summary = make_reader(f).get_summary()
@@ -62,8 +152,11 @@ def main() -> None:
     print(
         f"{args.blueprint.name}: {len(bp.bricks)} bricks, makespan {report.makespan_s:.0f} s, sim {report.sim_time_s:.0f} s"
     )
+    print(f"  {'mode':<16} per run: wall s / process CPU s / CPU s inside the sink")
     for mode, ts in times.items():
-        print(f"  {mode:<7} " + "  ".join(f"{t:6.2f} s" for t in ts))
+        print(f"  {mode:<16} " + "   ".join(f"{w:6.2f} / {c:6.2f} / {s:5.2f}" for w, c, s in ts))
+    if received:
+        print(f"  the viewer received {', '.join(str(n) for n in received)} messages")
     print(
         f"  log: {size / 1e6:.2f} MB, {summary.statistics.message_count} messages "
         f"({size / summary.statistics.message_count:.0f} B each, zstd chunks)"

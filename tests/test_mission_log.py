@@ -12,12 +12,14 @@ import pytest
 from mcap.reader import make_reader
 from typer.testing import CliRunner
 
+from foxglove_decode import decode
 from masonry.blueprint import load_blueprint
 from masonry.cli import app
 from masonry.mission.events import KINDS, EventList, MissionEvent
 from masonry.mission.report_codec import report_from_record, report_to_record
 from masonry.mission.simulate import simulate
 from masonry.mission.view import view_at
+from masonry.observe.schemas import MASONRY
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE_STUDY = ROOT / "blueprints" / "paper_case_study.yaml"
@@ -104,24 +106,33 @@ def test_replay_at_a_time_prints_the_mission_state_then(live):
     assert "tasks: todo 4, running 0, done 0" in start.stdout
 
 
-def test_every_message_matches_its_schema_and_foxglove_schemas_are_named(live):
+def test_every_message_matches_its_schema_foxglove_ones_decoded_with_foxglove_definitions(live):
+    """masonry's channels against their JSON schemas; Foxglove's decoded with the protobuf definitions the
+    Foxglove SDK wrote into the file (its own, not the project's), each exactly one well-formed message."""
+    import foxglove.messages as fm
+
     with open(live["log"], "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
         assert summary is not None
-        names = {s.name for s in summary.schemas.values()}
-        assert {
+        by_name = {s.name: s for s in summary.schemas.values()}
+        foxglove_names = {
             "foxglove.PoseInFrame",
             "foxglove.FrameTransform",
             "foxglove.SceneUpdate",
             "foxglove.Log",
-        } <= names
-        assert {
+        }
+        assert foxglove_names | {
             "masonry.MissionEvent",
             "masonry.UavState",
             "masonry.Blueprint",
             "masonry.MissionReport",
-        } <= names
+        } == set(by_name)
+        for name in foxglove_names:  # the SDK's own definitions, as it ships them
+            sdk = getattr(fm, name.split(".", 1)[1]).get_schema()
+            assert (by_name[name].encoding, by_name[name].data) == ("protobuf", bytes(sdk.data))
+        assert all(s.encoding == "jsonschema" for n, s in by_name.items() if n.startswith("masonry."))
+        assert "foxglove.SceneUpdate" not in MASONRY and all(n.startswith("masonry.") for n in MASONRY)
         topics = {c.topic for c in summary.channels.values()}
         assert {
             "/uav/brick-1/pose",
@@ -132,32 +143,68 @@ def test_every_message_matches_its_schema_and_foxglove_schemas_are_named(live):
             "/tf",
             "/log",
         } <= topics
-        assert all(c.message_encoding == "json" for c in summary.channels.values())
-        assert all(s.encoding == "jsonschema" for s in summary.schemas.values())
         validators = {
-            sid: jsonschema.Draft7Validator(json.loads(s.data)) for sid, s in summary.schemas.items()
+            sid: jsonschema.Draft7Validator(json.loads(s.data))
+            for sid, s in summary.schemas.items()
+            if s.encoding == "jsonschema"
         }
         n = 0
         kinds = set()
+        decoded: dict[str, int] = {}
+        seen: set[str] = set()
         last_ns = 0
         for schema, channel, message in reader.iter_messages(log_time_order=True):
-            data = json.loads(message.data)
-            errors = list(validators[schema.id].iter_errors(data))
-            assert not errors, f"{channel.topic}: {errors[0].message}"
+            if schema.encoding == "protobuf":
+                assert channel.message_encoding == "protobuf" and schema.name.startswith("foxglove.")
+                data = decode(schema.name, schema.data, message.data)
+                decoded[schema.name] = decoded.get(schema.name, 0) + 1
+                if channel.topic == "/wall" and "/wall" not in seen:  # the whole wall first
+                    assert len(data["entities"]) == 8 and data["entities"][0]["frame_id"] == "world"
+                seen.add(channel.topic)
+            else:
+                assert channel.message_encoding == "json"
+                data = json.loads(message.data)
+                errors = list(validators[schema.id].iter_errors(data))
+                assert not errors, f"{channel.topic}: {errors[0].message}"
             if channel.topic == "/mission/events":
                 kinds.add(data["kind"])
             assert message.log_time >= last_ns
             last_ns = message.log_time
             n += 1
-    assert n > 100
+    assert n > 100 and set(decoded) == foxglove_names and min(decoded.values()) >= 2
     assert {"start", "assigned", "completed", "clearance", "uav", "end"} <= kinds <= set(KINDS)
 
 
-def test_a_schema_check_fails_on_a_bad_message():
-    from masonry.observe.schemas import FOXGLOVE
+def test_a_foxglove_message_check_fails_on_a_wrong_message():
+    import foxglove.messages as fm
 
-    v = jsonschema.Draft7Validator(FOXGLOVE["foxglove.PoseInFrame"])
-    assert list(v.iter_errors({"timestamp": {"sec": -1, "nsec": 0}, "frame_id": 3}))
+    pose = fm.PoseInFrame.get_schema()
+    log_line = fm.Log(message="not a pose", name="x").encode()
+    with pytest.raises(AssertionError, match="not a well-formed"):
+        decode(pose.name, pose.data, log_line + b"\xff")
+
+
+def test_a_schema_check_fails_on_a_bad_message():
+    v = jsonschema.Draft7Validator(MASONRY["masonry.UavState"])
+    assert list(v.iter_errors({"timestamp": {"sec": -1, "nsec": 0}, "uav": 3}))
+
+
+def test_replay_reads_a_log_written_before_the_foxglove_sdk(tmp_path):
+    """A log whose Foxglove topics are JSON (written by masonry before this change, kept in tests/data): the
+    report, its drawings, and its state at a time still come back."""
+    old = ROOT / "tests" / "data" / "old_format_case_study.mcap"
+    with open(old, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and {s.encoding for s in summary.schemas.values()} == {"jsonschema"}
+    res = runner.invoke(app, ["replay", str(old), "--format", "json", "--gantt", str(tmp_path / "g.png")])
+    assert res.exit_code == 0, res.output
+    report = json.loads(res.stdout)
+    # the run that wrote it: masonry sim blueprints/paper_case_study.yaml --seed 3 --log ...
+    assert report["completed"] is True and report["makespan_s"] == 87.3 and report["seed"] == 3
+    assert [t["status"] for t in report["tasks"]] == ["done"] * 4
+    assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    at = runner.invoke(app, ["replay", str(old), "--at", "1e6"])
+    assert "mission completed; tasks: todo 0, running 0, done 4, stuck 0" in at.stdout, at.output
 
 
 @pytest.mark.parametrize(
@@ -265,12 +312,32 @@ def test_a_resumed_missions_log_starts_with_the_tasks_done_before(tmp_path):
     at = runner.invoke(app, ["replay", str(log), "--at", "0"])
     assert "tasks: todo 0, running 0, done 4, stuck 0" in at.stdout, at.stdout
     with open(log, "rb") as f:
-        first_wall = json.loads(next(iter(make_reader(f).iter_messages(topics=["/wall"])))[2].data)
+        schema, _, message = next(iter(make_reader(f).iter_messages(topics=["/wall"])))
+        first_wall = decode(schema.name, schema.data, message.data)
     from masonry.observe.mcap_log import COLOURS
 
-    done = dict(zip("rgba", COLOURS["done"]))
-    sprayed = dict(zip("rgba", COLOURS["adhesion_done"]))
+    done = dict(zip("rgba", (pytest.approx(c) for c in COLOURS["done"])))
+    sprayed = dict(zip("rgba", (pytest.approx(c) for c in COLOURS["adhesion_done"])))
     assert len(first_wall["entities"]) == 8  # 4 placed beforehand, 4 done by the first run
     for e in first_wall["entities"]:
         colour = (e.get("cubes") or e.get("lines"))[0]["color"]
-        assert colour == (done if "cubes" in e else sprayed), e["id"]
+        assert colour == (done if e["cubes"] else sprayed), e["id"]
+
+
+def test_the_docs_foxglove_layout_is_the_sdks_and_names_the_logs_topics(live):
+    """docs/foxglove_layout.json is what ``masonry.observe.layout`` builds with the SDK's layout types, and every
+    topic it names for the case study's UAVs is one the log writes."""
+    import re
+
+    from masonry.observe.layout import foxglove_layout
+
+    text = (ROOT / "docs" / "foxglove_layout.json").read_text(encoding="utf-8")
+    assert json.loads(text) == json.loads(foxglove_layout())
+    with open(live["log"], "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    written = {c.topic for c in summary.channels.values()}
+    named = set(re.findall(r'"(/[a-z/0-9-]+?)(?:\.[a-z_]+)?"', text))
+    case_study = {t for t in named if not re.search(r"brick-2|glue-2", t)}
+    assert {"/wall", "/airspace", "/paths", "/log", "/mission/events", "/uav/brick-1/state"} <= case_study
+    assert case_study <= written, case_study - written

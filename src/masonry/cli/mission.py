@@ -13,6 +13,12 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.foxglove_options import (
+    FOXGLOVE_CERT_OPTION,
+    FOXGLOVE_KEY_OPTION,
+    FOXGLOVE_OPTION,
+    foxglove_option,
+)
 from masonry.cli.options import check_all, help_text, plural
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
@@ -155,6 +161,9 @@ def mission_control(
         metavar="[HOST:]PORT",
         help="Serve the mission's live page here (host 127.0.0.1 by default); docs/observe.md.",
     ),
+    foxglove: str | None = FOXGLOVE_OPTION,
+    foxglove_cert: Path | None = FOXGLOVE_CERT_OPTION,
+    foxglove_key: Path | None = FOXGLOVE_KEY_OPTION,
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Log every event on stderr."),
 ) -> None:
     """Run mission control in wall time: dispatch the blueprint's tasks to UAV handlers over Zenoh."""
@@ -191,6 +200,7 @@ def mission_control(
     )
     check_output_paths([("--report", report), ("--log", check_log_option(log))])
     key = network_options(key_file, insecure, [*listen, *connect], "--listen/--connect")
+    fox = foxglove_option(foxglove, foxglove_cert, foxglove_key)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(asctime)s %(message)s")
     bp = load_blueprint(blueprint)
     the_plan = make_plan(bp)
@@ -206,7 +216,12 @@ def mission_control(
     )
     transport = wrap(zenoh, key, mission_name)
     watch = Watchers(
-        log, parse_serve(serve) if serve else None, blueprint, bp.name or blueprint.name, "mission-control"
+        log,
+        parse_serve(serve) if serve else None,
+        blueprint,
+        bp.name or blueprint.name,
+        "mission-control",
+        foxglove=fox,
     )
     zenoh.connect()
     try:

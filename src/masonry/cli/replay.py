@@ -10,6 +10,12 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.foxglove_options import (
+    FOXGLOVE_CERT_OPTION,
+    FOXGLOVE_KEY_OPTION,
+    FOXGLOVE_OPTION,
+    foxglove_option,
+)
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.errors import InputError
 
@@ -29,6 +35,12 @@ def replay(
         "--serve",
         metavar="[HOST:]PORT",
         help="Play the log back in the live page, with a time slider, until Ctrl-C (docs/observe.md).",
+    ),
+    foxglove: str | None = FOXGLOVE_OPTION,
+    foxglove_cert: Path | None = FOXGLOVE_CERT_OPTION,
+    foxglove_key: Path | None = FOXGLOVE_KEY_OPTION,
+    time_scale: float = typer.Option(
+        1.0, "--time-scale", help="With --foxglove: log seconds per wall second of the playback."
     ),
 ) -> None:
     """Replay a mission log: print the summary (or JSON) and write the report and drawings the live run did.
@@ -50,6 +62,9 @@ def replay(
         if p is not None and p.suffix.lower() not in (".png", ".svg"):
             raise InputError(f"{opt} {p}: the file must end in .png or .svg")
     check_output_paths([("--report", report), ("--gantt", gantt), ("--plot3d", plot3d)])
+    fox = foxglove_option(foxglove, foxglove_cert, foxglove_key)
+    if not (math.isfinite(time_scale) and time_scale > 0):
+        raise InputError(f"--time-scale must be a number > 0, got {time_scale!r}")
     try:
         from masonry.observe.mcap_log import read_log
     except ImportError as exc:
@@ -65,6 +80,9 @@ def replay(
     task_ids = [t.id for t in the_plan.tasks if not t.done]
     if at is not None:
         typer.echo("\n".join(view_at(recorded.events, at, task_ids, recorded.done).lines()))
+        return
+    if fox is not None:
+        _foxglove(log, fox, time_scale)
         return
     if serve is not None:
         _serve(recorded, the_plan, bp, task_ids, serve)
@@ -89,6 +107,43 @@ def replay(
     )
     if not recorded.report.completed:
         raise typer.Exit(1)
+
+
+def _foxglove(log: Path, fox: Any, time_scale: float) -> None:
+    """The log's channels, as recorded, on a Foxglove server: played at ``time_scale`` once a viewer subscribes,
+    over and over (a viewer who joins late sees the next pass whole), until Ctrl-C."""
+    import threading
+
+    from masonry.observe.live import FoxgloveServer, serve_recorded
+    from masonry.observe.mcap_log import iter_channel_messages
+
+    messages = list(iter_channel_messages(log))
+    viewer = threading.Event()
+    server = FoxgloveServer(
+        fox.host,
+        fox.port,
+        name=f"masonry replay {log.name}",
+        tls=fox.tls,
+        on_subscribe=lambda _t: viewer.set(),
+    ).start()
+    stop = threading.Event()
+    try:
+        for topic, schema, _, _ in messages:
+            server.channel(topic, schema)
+        typer.echo(
+            f"playing {log} back to Foxglove at {server.url} (Open connection), over and over once a viewer "
+            "subscribes: Ctrl-C to stop",
+            err=True,
+        )
+        while not viewer.wait(0.5):
+            pass
+        while not stop.is_set():
+            serve_recorded(server, messages, time_scale=time_scale, stop=stop)
+            stop.wait(1.0)  # a pause between passes (Foxglove sees time go back to the start)
+    except KeyboardInterrupt:
+        stop.set()
+    finally:
+        server.stop()
 
 
 def _serve(recorded: Any, the_plan: Any, bp: Any, task_ids: list[str], serve: str) -> None:

@@ -9,6 +9,12 @@ from typing import Any
 import typer
 
 from masonry.cli.app import command
+from masonry.cli.foxglove_options import (
+    FOXGLOVE_CERT_OPTION,
+    FOXGLOVE_KEY_OPTION,
+    FOXGLOVE_OPTION,
+    foxglove_option,
+)
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.cli.watch import check_log_option
@@ -88,11 +94,16 @@ def sim(
         help="Serve the mission's live page here (host 127.0.0.1 by default) and fly it at --time-scale; "
         "docs/observe.md.",
     ),
+    foxglove: str | None = FOXGLOVE_OPTION,
+    foxglove_cert: Path | None = FOXGLOVE_CERT_OPTION,
+    foxglove_key: Path | None = FOXGLOVE_KEY_OPTION,
     time_scale: float = typer.Option(
         1.0,
         "--time-scale",
         help=help_text(
-            "sim", "--time-scale", "With --serve: mission seconds per wall second (1: real time, to watch)."
+            "sim",
+            "--time-scale",
+            "With --serve or --foxglove: mission seconds per wall second (1: real time, to watch).",
         ),
     ),
     vehicle: str | None = typer.Option(
@@ -150,6 +161,7 @@ def sim(
     if (policy == "schedule") != (schedule_file is not None):
         raise InputError("--policy schedule and --schedule FILE go together")
     faults = site_faults(fault, wind, turbulence)
+    fox = foxglove_option(foxglove, foxglove_cert, foxglove_key)
     bp = load_blueprint(blueprint)
     offline = None
     if schedule_file is not None:
@@ -162,7 +174,10 @@ def sim(
     from masonry.cli.watch import Watchers
     from masonry.observe.web import Pacer, parse_serve
 
-    watch = Watchers(log, parse_serve(serve) if serve is not None else None, blueprint, name, "sim")
+    watch = Watchers(
+        log, parse_serve(serve) if serve is not None else None, blueprint, name, "sim", foxglove=fox
+    )
+    watched = serve is not None or fox is not None
     progress_cb, finish = progress_display(progress)
     try:
         mission = SimulatedMission.from_blueprint(
@@ -184,9 +199,9 @@ def sim(
             vehicle=vehicle,
         )
         watch.attach(mission.control, mission.plan, mission.fleet)
-        if serve is not None:
+        if watched:
             mission.tick_hooks.append(Pacer(time_scale))
-        with _keys(mission, serve is not None):
+        with _keys(mission, watched):
             result = mission.run()
         watch.finish(result)
     except BaseException:

@@ -1,5 +1,6 @@
-"""``--log FILE.mcap`` and ``--serve [HOST:]PORT`` of a running mission (``masonry sim``, ``masonry
-mission-control``): the log and the live view, both event sinks of mission control (docs/observe.md)."""
+"""``--log FILE.mcap``, ``--serve [HOST:]PORT`` and ``--foxglove [HOST:]PORT`` of a running mission (``masonry
+sim``, ``masonry mission-control``): the log, the live page and the live Foxglove server, event sinks of mission
+control (docs/observe.md)."""
 
 from __future__ import annotations
 
@@ -42,6 +43,7 @@ class Watchers:
         blueprint: the blueprint file (its text goes into the log), name: the mission's name.
         command: ``sim`` or ``mission-control``.
         commands: takes an operator's command from the page (None: the page has no buttons).
+        foxglove: ``--foxglove`` (None: no Foxglove server).
     """
 
     def __init__(
@@ -52,6 +54,7 @@ class Watchers:
         name: str,
         command: str,
         commands: Callable[[Mapping[str, Any]], Mapping[str, Any]] | None = None,
+        foxglove: Any = None,
     ) -> None:
         self.log_path = log
         self.serve = serve
@@ -62,6 +65,8 @@ class Watchers:
         self.log: Any = None
         self.view: Any = None
         self.server: Any = None
+        self.foxglove = foxglove
+        self.live: Any = None
 
     def attach(self, control: Any, plan: Any, fleet: Any) -> None:
         """Open the log, start the page, and make them mission control's event sink."""
@@ -84,11 +89,7 @@ class Watchers:
             commands = self.commands
             if commands is None and _loopback(self.serve[0]):
                 # the page's buttons: on loopback only (the page is not authenticated; docs/observe.md)
-                def commands(c: Mapping[str, Any]) -> Mapping[str, Any]:
-                    if control.ended_at_s is not None:
-                        return {"accepted": False, "reason": "the mission is over"}
-                    return dict(control.operator.ask(c).to_dict())
-
+                commands = operator_commands(control)
             self.server = ViewServer(
                 *self.serve,
                 layout=wall_layout(plan, fleet, self.name),
@@ -98,12 +99,44 @@ class Watchers:
             ).start()
             sinks.append(self.view)
             typer.echo(f"serving the mission's page at {self.server.url}", err=True)
+        if self.foxglove is not None:
+            self.live = self._start_foxglove(control, plan, fleet, done)
+            sinks.append(self.live)
         control.sink = sinks[0] if len(sinks) == 1 else (EventFanout(*sinks) if sinks else None)
 
+    def _start_foxglove(self, control: Any, plan: Any, fleet: Any, done: set[str]) -> Any:
+        """The live Foxglove server (``--foxglove``): the log's channels; on loopback the operator's services."""
+        try:
+            from masonry.observe.live import FoxgloveLive
+        except ImportError as exc:  # the `observe` extra is not installed
+            raise InputError(
+                f"--foxglove needs the foxglove-sdk package (pip install 'masonry[observe]'): {exc}"
+            ) from None
+        from masonry.blueprint_yaml import read_text_limited
+
+        at = self.foxglove
+        live = FoxgloveLive(
+            at.host,
+            at.port,
+            plan,
+            read_text_limited(self.blueprint),
+            title=self.name,
+            command=f"masonry {self.command} {self.blueprint}",
+            uavs=[u.name for u in fleet],
+            commands=(self.commands or operator_commands(control)) if at.steer else None,
+            tls=at.tls,
+        )
+        live.done = done
+        live.start()
+        typer.echo(f"serving the mission to Foxglove at {live.url} (Open connection)", err=True)
+        return live
+
     def finish(self, result: Any, extra: Mapping[str, Any] | None = None) -> None:
-        """The mission's report into the log."""
+        """The mission's report into the log (and to Foxglove)."""
         if self.log is not None:
             self.log.finish(result, extra)
+        if self.live is not None:
+            self.live.finish(result, extra)
 
     def close(self) -> None:
         """Close the log (the page stays up until :meth:`linger` or :meth:`stop`)."""
@@ -113,14 +146,21 @@ class Watchers:
             typer.echo(f"wrote {self.log_path}", err=True)
 
     def linger(self, until: threading.Event | None = None) -> None:
-        """With a page: keep serving the mission's last state until Ctrl-C (or ``until`` is set), then stop."""
-        if self.server is None:
+        """With a page or Foxglove: keep serving the mission's last state until Ctrl-C (or ``until`` is set), then
+        stop."""
+        if self.server is None and self.live is None:
             return
         done = until or threading.Event()
+        urls = " and ".join(x.url for x in (self.server, self.live) if x is not None)
+        what = (
+            "page stays"
+            if self.live is None
+            else "page and Foxglove server stay"
+            if self.server
+            else "Foxglove server stays"
+        )
         try:  # (before the line: Ctrl-C may come as soon as it is read)
-            typer.echo(
-                f"the mission is over; its page stays up at {self.server.url}: Ctrl-C to stop", err=True
-            )
+            typer.echo(f"the mission is over; its {what} up at {urls}: Ctrl-C to stop", err=True)
             while not done.wait(0.5):
                 pass
         except KeyboardInterrupt:
@@ -131,6 +171,20 @@ class Watchers:
         if self.server is not None:
             self.server.stop()
             self.server = None
+        if self.live is not None:
+            self.live.stop()
+            self.live = None
+
+
+def operator_commands(control: Any) -> Callable[[Mapping[str, Any]], Mapping[str, Any]]:
+    """An operator's command from the page or Foxglove, to mission control's desk (as ``masonry ctl``'s)."""
+
+    def commands(c: Mapping[str, Any]) -> Mapping[str, Any]:
+        if control.ended_at_s is not None:
+            return {"accepted": False, "reason": "the mission is over"}
+        return dict(control.operator.ask(c).to_dict())
+
+    return commands
 
 
 def _loopback(host: str) -> bool:
@@ -144,4 +198,4 @@ def _loopback(host: str) -> bool:
         return False
 
 
-__all__ = ["Watchers", "check_log_option", "open_log"]
+__all__ = ["Watchers", "check_log_option", "open_log", "operator_commands"]

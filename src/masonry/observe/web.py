@@ -39,8 +39,9 @@ _TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=
 _STATIC = ("index.html", "app.js", "app.css")
 
 
-def parse_serve(text: str) -> tuple[str, int]:
-    """``[HOST:]PORT`` (``--serve``) as (host, port); the host defaults to :data:`DEFAULT_HOST`.
+def parse_serve(text: str, option: str = "serve") -> tuple[str, int]:
+    """``[HOST:]PORT`` (``--serve``, or the flag ``option`` names) as (host, port); the host defaults to
+    :data:`DEFAULT_HOST`.
 
     Raises:
         InputError: not ``[HOST:]PORT`` with a port in 0..65535 (0: any free port).
@@ -51,10 +52,10 @@ def parse_serve(text: str) -> tuple[str, int]:
         n = int(port)
     except ValueError:
         raise InputError(
-            f"`serve` {text!r}: give [HOST:]PORT, e.g. 8080 or 127.0.0.1:8080", options=("serve",)
+            f"`{option}` {text!r}: give [HOST:]PORT, e.g. 8080 or 127.0.0.1:8080", options=(option,)
         ) from None
     if not 0 <= n <= 65535:
-        raise InputError(f"`serve` {text!r}: the port must be in 0..65535", options=("serve",))
+        raise InputError(f"`{option}` {text!r}: the port must be in 0..65535", options=(option,))
     return host, n
 
 
