@@ -5,13 +5,27 @@ control (docs/observe.md)."""
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from masonry.errors import InputError
+
+if TYPE_CHECKING:  # (the observe extra's modules load only when a mission is watched)
+    from masonry.blueprint import UavSpec
+    from masonry.cli.foxglove_options import FoxgloveAt
+    from masonry.mission.control import MissionControl
+    from masonry.mission.report import MissionReport
+    from masonry.mission.view import MissionView
+    from masonry.observe.live import FoxgloveLive
+    from masonry.observe.mcap_log import McapLog
+    from masonry.observe.web import ViewServer
+    from masonry.planner.tasks import Plan
+
+#: An operator's command (``masonry ctl``'s fields) to its acknowledgement.
+Commands = Callable[[Mapping[str, Any]], Mapping[str, Any]]
 
 
 def check_log_option(log: Path | None) -> Path | None:
@@ -21,7 +35,7 @@ def check_log_option(log: Path | None) -> Path | None:
     return log
 
 
-def open_log(path: Path, plan: Any, blueprint: Path, name: str, command: str) -> Any:
+def open_log(path: Path, plan: Plan, blueprint: Path, name: str, command: str) -> McapLog:
     """The MCAP log of a mission (``--log``), to open: it records the blueprint file's text for ``masonry replay``."""
     try:
         from masonry.observe.mcap_log import McapLog
@@ -53,8 +67,8 @@ class Watchers:
         blueprint: Path,
         name: str,
         command: str,
-        commands: Callable[[Mapping[str, Any]], Mapping[str, Any]] | None = None,
-        foxglove: Any = None,
+        commands: Commands | None = None,
+        foxglove: FoxgloveAt | None = None,
     ) -> None:
         self.log_path = log
         self.serve = serve
@@ -62,17 +76,17 @@ class Watchers:
         self.name = name
         self.command = command
         self.commands = commands
-        self.log: Any = None
-        self.view: Any = None
-        self.server: Any = None
+        self.log: McapLog | None = None
+        self.view: MissionView | None = None
+        self.server: ViewServer | None = None
         self.foxglove = foxglove
-        self.live: Any = None
+        self.live: FoxgloveLive | None = None
 
-    def attach(self, control: Any, plan: Any, fleet: Any) -> None:
+    def attach(self, control: MissionControl, plan: Plan, fleet: Sequence[UavSpec]) -> None:
         """Open the log, start the page, and make them mission control's event sink."""
-        from masonry.mission.events import EventFanout
+        from masonry.mission.events import EventFanout, EventSink
 
-        sinks: list[Any] = []
+        sinks: list[EventSink] = []
         # the tasks a resumed mission did before (the plan's own done ones, bricks placed beforehand, aside)
         done = set(control.dispatcher.done) - {t.id for t in plan.tasks if t.done}
         if self.log_path is not None:
@@ -100,11 +114,13 @@ class Watchers:
             sinks.append(self.view)
             typer.echo(f"serving the mission's page at {self.server.url}", err=True)
         if self.foxglove is not None:
-            self.live = self._start_foxglove(control, plan, fleet, done)
+            self.live = self._start_foxglove(self.foxglove, control, plan, fleet, done)
             sinks.append(self.live)
         control.sink = sinks[0] if len(sinks) == 1 else (EventFanout(*sinks) if sinks else None)
 
-    def _start_foxglove(self, control: Any, plan: Any, fleet: Any, done: set[str]) -> Any:
+    def _start_foxglove(
+        self, at: FoxgloveAt, control: MissionControl, plan: Plan, fleet: Sequence[UavSpec], done: set[str]
+    ) -> FoxgloveLive:
         """The live Foxglove server (``--foxglove``): the log's channels; on loopback the operator's services."""
         try:
             from masonry.observe.live import FoxgloveLive
@@ -114,7 +130,6 @@ class Watchers:
             ) from None
         from masonry.blueprint_yaml import read_text_limited
 
-        at = self.foxglove
         live = FoxgloveLive(
             at.host,
             at.port,
@@ -131,7 +146,7 @@ class Watchers:
         typer.echo(f"serving the mission to Foxglove at {live.url} (Open connection)", err=True)
         return live
 
-    def finish(self, result: Any, extra: Mapping[str, Any] | None = None) -> None:
+    def finish(self, result: MissionReport, extra: Mapping[str, Any] | None = None) -> None:
         """The mission's report into the log (and to Foxglove)."""
         if self.log is not None:
             self.log.finish(result, extra)
@@ -176,7 +191,7 @@ class Watchers:
             self.live = None
 
 
-def operator_commands(control: Any) -> Callable[[Mapping[str, Any]], Mapping[str, Any]]:
+def operator_commands(control: MissionControl) -> Commands:
     """An operator's command from the page or Foxglove, to mission control's desk (as ``masonry ctl``'s)."""
 
     def commands(c: Mapping[str, Any]) -> Mapping[str, Any]:

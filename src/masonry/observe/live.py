@@ -32,7 +32,7 @@ from foxglove.messages import SceneUpdate
 from foxglove.websocket import ChannelView, Client, ServerListener
 
 from masonry.errors import InputError
-from masonry.observe.scene import MissionScene, channel_schema, encoded, ns
+from masonry.observe.scene import Message, MissionScene, channel_schema, encoded, ns
 from masonry.planner.tasks import Plan
 
 #: The operator's commands served as Foxglove services: service name -> (command, its request's fields).
@@ -224,7 +224,7 @@ class FoxgloveLive(MissionScene):
         )
         self.uavs = list(uavs)
         self._schemas: dict[str, tuple[str, str, bytes, str]] = {}
-        self._opening: dict[str, Any] = {}
+        self._opening: dict[str, Message] = {}
 
     @property
     def url(self) -> str:
@@ -249,7 +249,7 @@ class FoxgloveLive(MissionScene):
         """A viewer is subscribed to ``topic`` (no one: its messages are not built, nor encoded)."""
         return bool(self.server.channel(topic, self._schema(topic)).base.has_sinks())
 
-    def write(self, topic: str, time_s: float, message: Any) -> None:
+    def write(self, topic: str, time_s: float, message: Message) -> None:
         """Publish one message; the wall and the airspace go whole each time (a viewer may have joined late)."""
         if topic == "/mission/blueprint":
             self._opening[topic] = message

@@ -33,6 +33,7 @@ from masonry.observe.scene import (
     COLOURS,
     TOPICS,
     WORLD_FRAME,
+    Message,
     MissionScene,
     channel_schema,
     encoded,
@@ -111,7 +112,7 @@ class McapLog(MissionScene):
             self._file.close()
             self._file = None
 
-    def write(self, topic: str, time_s: float, message: Any) -> None:
+    def write(self, topic: str, time_s: float, message: Message) -> None:
         """One message into the file: a Foxglove message in the SDK's encoding, a dict as JSON."""
         assert self._writer is not None
         channel = self._channels.get(topic)

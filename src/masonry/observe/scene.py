@@ -14,8 +14,8 @@ import json
 import math
 import threading
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
 
 import foxglove.messages
 from foxglove.messages import (
@@ -93,7 +93,17 @@ def channel_schema(topic: str) -> tuple[str, str, bytes, str]:
     return str(sdk.name), str(sdk.encoding), bytes(sdk.data), "protobuf"
 
 
-def encoded(message: Any) -> bytes:
+class Encodable(Protocol):
+    """A Foxglove SDK message: it encodes itself in its schema's encoding."""
+
+    def encode(self) -> bytes: ...
+
+
+#: What the log and the live server write: a Foxglove SDK message, or a dict on masonry's own (JSON) topics.
+Message = Encodable | dict[str, object]
+
+
+def encoded(message: Message) -> bytes:
     """A message's bytes: a Foxglove message in the SDK's encoding, a dict as JSON."""
     if isinstance(message, dict):
         return json.dumps(message, allow_nan=False).encode()
@@ -115,11 +125,11 @@ def _json_stamp(time_s: float) -> dict[str, int]:
     return {"sec": t // 1_000_000_000, "nsec": t % 1_000_000_000}
 
 
-def _vec(p: Any) -> Vector3:
+def _vec(p: Sequence[float]) -> Vector3:
     return Vector3(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
-def _point(p: Any) -> Point3:
+def _point(p: Sequence[float]) -> Point3:
     return Point3(x=float(p[0]), y=float(p[1]), z=float(p[2]))
 
 
@@ -137,7 +147,9 @@ def _entity(time_s: float, entity_id: str, **primitives: Any) -> SceneEntity:
     )
 
 
-def volume_cube(row: Any, colour: tuple[float, float, float, float] = COLOURS["airspace"]) -> CubePrimitive:
+def volume_cube(
+    row: Sequence[float], colour: tuple[float, float, float, float] = COLOURS["airspace"]
+) -> CubePrimitive:
     """A reserved volume (``[ax, ay, bx, by, z0, z1, slack]``) as a ``foxglove.CubePrimitive``: the box around
     the segment thickened by its slack (the volume itself has round ends; the box holds it)."""
     ax, ay, bx, by, z0, z1, slack = (float(v) for v in row)
@@ -181,9 +193,9 @@ class MissionScene(ABC):
         self._tasks = {t.id: t for t in plan.tasks}
         #: tasks done before the log opens (a resumed mission's), drawn done on the wall from the start
         self.done: set[str] = set()
-        self._volumes: dict[str, Any] = {}
+        self._volumes: dict[str, object] = {}
         self._tf_s: dict[str, float] = {}
-        self._states: dict[str, tuple[Any, float]] = {}
+        self._states: dict[str, tuple[tuple[object, ...], float]] = {}
         #: the wall as it stands (task id -> its entity) and each UAV's airspace: a late viewer's first frame
         self.wall: dict[str, SceneEntity] = {}
         self.airspace: dict[str, SceneEntity] = {}
@@ -192,7 +204,7 @@ class MissionScene(ABC):
         self.messages = 0
 
     @abstractmethod
-    def write(self, topic: str, time_s: float, message: Any) -> None:
+    def write(self, topic: str, time_s: float, message: Message) -> None:
         """Write one message: an SDK message on Foxglove's topics, a dict on masonry's."""
 
     def wants(self, topic: str) -> bool:
@@ -200,7 +212,7 @@ class MissionScene(ABC):
         frequent messages are not even built for nobody. The wall and the airspace are kept whatever it says."""
         return True
 
-    def _put(self, topic: str, time_s: float, message: Any) -> None:
+    def _put(self, topic: str, time_s: float, message: Message) -> None:
         self.last_s = max(self.last_s, time_s)
         self.write(topic, time_s, message)
         self.messages += 1
@@ -288,7 +300,7 @@ class MissionScene(ABC):
             )
         self._airspace(t, name, vols)
 
-    def _airspace(self, t: float, uav: str, volumes: Any) -> None:
+    def _airspace(self, t: float, uav: str, volumes: Sequence[Sequence[float]]) -> None:
         if self._volumes.get(uav) == volumes:
             return
         self._volumes[uav] = volumes
