@@ -110,7 +110,7 @@ def test_a_failed_build_closes_the_journal(tmp_path, monkeypatch):
     def broken(*args, **kwargs):
         raise InputError("no mission control today")
 
-    monkeypatch.setattr(journal_module, "open_mission_journal", spy_open)
+    monkeypatch.setattr(simulate_module, "open_mission_journal", spy_open)
     monkeypatch.setattr(simulate_module, "MissionControl", broken)
     with pytest.raises(InputError, match="no mission control today"):
         SimulatedMission.from_blueprint(

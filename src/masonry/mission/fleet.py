@@ -7,15 +7,12 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from masonry.blueprint import Blueprint, UavSpec
-from masonry.errors import InputError
+from masonry.blueprint import Blueprint, UavSpec, validate_blueprint
+from masonry.errors import BlueprintError, InputError
 
 
 def with_fleet(blueprint: Blueprint, fleet: tuple[UavSpec, ...]) -> Blueprint:
     """``blueprint`` flown by ``fleet`` (the sizes asked for): its added pads must pass validation too."""
-    from masonry.blueprint import validate_blueprint
-    from masonry.errors import BlueprintError
-
     out = dataclasses.replace(blueprint, fleet=fleet)
     try:
         validate_blueprint(out)

@@ -22,13 +22,14 @@ from typing import TYPE_CHECKING, Any
 from masonry.airframe import DEFAULT_AIRFRAME
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, MasonryError
-from masonry.fingerprint import wall_digest
+from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.events import SAMPLE_PERIOD_S, EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
+from masonry.mission.journal import open_mission_journal
 from masonry.mission.measured import (
     KeptCompletion,
     MeasuredJournal,
@@ -40,12 +41,16 @@ from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
+from masonry.mission.wind_limit import DEFAULT_MAX_WIND_MPS, WindLimit
+from masonry.planner import estimate_durations_s
+from masonry.planner import plan as make_plan
 from masonry.planner.bounds import min_durations_s
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import Clock, UavPorts
+from masonry.sim.vehicle_config import vehicle_name, vehicle_preset
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
@@ -419,12 +424,7 @@ class SimulatedMission:
                 it was written for another wall or fleet, it is not a journal, it is read-only).
             JournalError: the journal cannot be written during the mission.
         """
-        from masonry.fingerprint import fleet_digest
-        from masonry.mission.journal import open_mission_journal
-        from masonry.planner import estimate_durations_s
-        from masonry.planner import plan as make_plan
         from masonry.sim import Faults, World
-        from masonry.sim.vehicle_config import vehicle_name, vehicle_preset
 
         if reservation not in RESERVATIONS:
             raise InputError(
@@ -673,7 +673,6 @@ def _wind_limit(faults: Any, fleet: Sequence[Any], max_wind_mps: float | Mapping
     """Mission control's wind limit for the simulated site (None in still air): each UAV's ``max_wind_mps``
     (one figure for all, or per name; default :data:`~masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`) against
     the site's mean wind at 10 m."""
-    from masonry.mission.wind_limit import DEFAULT_MAX_WIND_MPS, WindLimit
 
     wind = faults.site_wind() if faults is not None else None
     if wind is None or wind.calm:
