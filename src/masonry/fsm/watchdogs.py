@@ -15,8 +15,9 @@ A new watchdog is one declaration: ``Watchdog("marker_lost", ("pickup_estimate",
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, Protocol
 
@@ -99,15 +100,19 @@ class Watchdog:
     check: Check
     needs_link: bool = True
 
-    def guards(self, state: str, task_states: Iterable[str] = ()) -> bool:
+    def guards(self, state: str, task_states: frozenset[str] = frozenset()) -> bool:
         """Does this watchdog run in leaf ``state`` (``task_states``: the machine's, for :data:`TASK`)?"""
-        names = set(self.states)
-        return bool(
-            ANY in names
-            or state in names
-            or state.split("_")[0] in names
-            or (TASK in names and state in set(task_states))
-        )
+        return _guards(self.states, state, task_states)
+
+
+@functools.lru_cache(maxsize=4096)  # asked for every watchdog on every tick: a few dozen distinct answers
+def _guards(names: tuple[str, ...], state: str, task_states: frozenset[str]) -> bool:
+    return (
+        ANY in names
+        or state in names
+        or state.split("_")[0] in names
+        or (TASK in names and state in task_states)
+    )
 
 
 def link_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
