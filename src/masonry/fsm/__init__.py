@@ -25,14 +25,17 @@ from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
 from masonry.fsm.runner import SingleTaskRun, build_uav, fly_task, run_single_task
 from masonry.fsm.states import MACHINES, leaf_states
+from masonry.fsm.watchdogs import Abort, Watchdog
 
 __all__ = [
     "MACHINES",
+    "Abort",
     "AdhesionUav",
     "BrickUav",
     "SingleTaskRun",
     "UavConfig",
     "UavModel",
+    "Watchdog",
     "build_uav",
     "fly_task",
     "leaf_states",

@@ -599,13 +599,13 @@ class BrickUav(UavModel):
             return True
         return left_s >= self._putback_need_s(self._tel.position_m) + self.config.battery_return_wait_s
 
-    def _battery_short(self, tel: Telemetry) -> str | None:
+    def battery_short(self, tel: Telemetry) -> str | None:
         """Also short: about to grasp its brick (``pickup_align``), a UAV whose flight left above
         ``battery_low_fraction`` no longer covers the rest of the task with what is left of the waiting it was
         taken with (the pickup's column kept it waiting) and the way home: it gives the task up before it has a
         brick to put back. Only with a ground crew (``swaps_batteries``): without one, a battery reason retires the
-        UAV after landing, and the waiting rule (:meth:`UavModel._battery_short`) keeps it safe anyway."""
-        short = super()._battery_short(tel)
+        UAV after landing, and the waiting rule (:meth:`UavModel.battery_short`) keeps it safe anyway."""
+        short = super().battery_short(tel)
         if short is not None or self.state != "pickup_align" or not self._battery_service:
             return short
         left_s = self._flight_left_s(self.config.battery_low_fraction)

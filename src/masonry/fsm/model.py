@@ -1,9 +1,10 @@
 """The UAV model both machines share: the callbacks of :mod:`masonry.fsm.states`, on ports only.
 
 A model owns one ``transitions`` HierarchicalMachine (``queued=True``, no auto transitions) and is ticked by
-``step(now_s)``: it reads the flight controller's telemetry, checks the failsafes, runs the current leaf state's
-``do_<state>`` handler (which fires triggers when the state's work is done) and, while a motion is in hand, sends
-its :class:`~masonry.fsm.navigator.Navigator`'s setpoint (a minimum-jerk reference tracked by the position PID,
+``step(now_s)``: it reads the flight controller's telemetry, runs the watchdogs declared for the current state
+(:mod:`masonry.fsm.watchdogs`: link, battery, hold, fence), then the current leaf state's ``do_<state>`` handler
+(which fires triggers when the state's work is done) and, while a motion is in hand, sends its
+:class:`~masonry.fsm.navigator.Navigator`'s setpoint (a minimum-jerk reference tracked by the position PID,
 paper, Section IV "UAV Control"). A lateral move with a :class:`~masonry.ports.ClearanceLink` runs the airspace
 transit protocol beside the task machine (:class:`~masonry.fsm.transit.Transit`). The brick and adhesion UAVs
 are :mod:`masonry.fsm.brick` and :mod:`masonry.fsm.adhesion`.
@@ -17,7 +18,6 @@ import copy
 import logging
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -26,11 +26,12 @@ from transitions.extensions import HierarchicalMachine
 from masonry.errors import HardwareError
 from masonry.fsm.battery import TAKEOFF_S, DrainMeter, flight_left_s, land_s, route_s
 from masonry.fsm.config import UavConfig
-from masonry.fsm.fence import FenceWatch, watch_fence
+from masonry.fsm.fence import FenceWatch
 from masonry.fsm.navigator import Navigator
 from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
 from masonry.fsm.transit import Transit
+from masonry.fsm.watchdogs import TRIGGERS, Abort, Failsafe, Watchdog, for_kind
 from masonry.planner.tasks import Task
 from masonry.ports import (
     BATTERY_LOW_REASON,
@@ -62,16 +63,6 @@ _TAKEOFF_STUCK_S = 6.0
 #: A swinging UAV this far off its point when a gate fails was blown off (a position loop too fast for its
 #: autopilot swings about the point, tens of centimetres; gusts in moderate turbulence carried UAVs 1-40 m).
 _BLOWN_OFF_M = 1.0
-
-
-@dataclass
-class _Failsafe:
-    """The flight controller's link and the emergency landing (see ``enter_emergency``)."""
-
-    link_down_since_s: float | None = None  # when the link went down (None: it is up)
-    mode: str | None = None  # the autopilot's mode when the emergency began
-    land_pending: bool = False  # emergency: LAND still to be commanded
-    land_tried_s: float = -math.inf
 
 
 class UavModel:
@@ -139,7 +130,7 @@ class UavModel:
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
-        self.failsafe = _Failsafe()
+        self.failsafe = Failsafe()
         self.nav = Navigator(config)
         self.transit = Transit(ignore_invalid_triggers=not self.strict_triggers)
         self.phase_clock = PhaseClock()
@@ -149,16 +140,16 @@ class UavModel:
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
         self._battery_service = clearance is not None and clearance.swaps_batteries is True
         self._last_step_s = -math.inf
-        self._held_since_s: float | None = None  # since when the task's transit has waited for clearance
-        self._waiting_since_s: float | None = (
-            None  # since when it has waited in the air for clearance (battery)
-        )
+        self.held_since_s: float | None = None  # the task's transit waiting for clearance (hold patience)
+        self._waiting_since_s: float | None = None  # since when it has waited in the air for clearance
         #: seconds the task in hand has waited in the air for clearance so far, and the waiting it was taken with
         self.task_waited_s = 0.0
         self.task_wait_budget_s = 0.0
         #: the battery's drain per airborne second, measured (masonry.fsm.battery)
         self.drain = DrainMeter()
         self._leaf_names = leaf_states(states)
+        #: the cross-cutting checks run before each tick's work (masonry.fsm.watchdogs; add one here)
+        self.watchdogs: tuple[Watchdog, ...] = for_kind(self.KIND)
         self.machine = HierarchicalMachine(
             model=self,
             states=copy.deepcopy(states),
@@ -183,7 +174,7 @@ class UavModel:
         return self.state == "idle" and self.task is None and (self._tel is None or self._tel.on_ground)
 
     def step(self, now_s: float) -> None:
-        """One control tick at ``now_s``: telemetry, failsafes, the state's work, the velocity setpoint.
+        """One control tick at ``now_s``: telemetry, the state's watchdogs, the state's work, the velocity setpoint.
 
         Calls closer together than ``config.control_period_s`` return at once, so a simulation may tick the
         world faster than the UAV's control loop runs.
@@ -201,31 +192,14 @@ class UavModel:
         try:
             tel = self.fc.telemetry()
             self._tel = tel
+            self._observe(tel, step_s)
+            for dog in self.watchdogs:  # masonry.fsm.watchdogs: those guarding the state (as it is then)
+                if (tel.link_ok or not dog.needs_link) and dog.guards(self.state, self._TASK_STATES_SET):
+                    verdict = dog.check(self._now_s, tel, self)
+                    if verdict is not None:
+                        self._react(verdict)
             if not tel.link_ok:
-                self._link_down(tel)
                 return
-            self.failsafe.link_down_since_s = None
-            self.drain.update(self._now_s, tel.battery_fraction, not tel.on_ground)
-            if self.transit.state in _WAITING:
-                if self._waiting_since_s is None:
-                    self._waiting_since_s = self._now_s
-                elif self.task is not None:
-                    self.task_waited_s += step_s
-            else:
-                self._waiting_since_s = None
-            if self.state in self._TASK_STATES_SET:
-                short = self._battery_short(tel)
-                if short is not None:
-                    self._battery_low(tel, short)
-                elif (
-                    self._held_too_long()
-                ):  # (the check runs in task states only: reset there and at a start)
-                    self.abort(
-                        reason=f"held {self._now_s - self._held_since_s:.0f} s for clearance to "  # type: ignore[operator]
-                        f"{self._site_text()}, longer than hold_patience_s"
-                    )
-            if self.fence_watch is not None and not tel.on_ground:
-                watch_fence(self, self.fence_watch, self._now_s, tel.position_m)
             self._do[self.state](tel)
             if self.nav.active:
                 velocity_mps, yaw_rate_radps = self.nav.step(self._now_s, tel)
@@ -233,23 +207,55 @@ class UavModel:
         except HardwareError as exc:
             self._hardware_failure(str(exc))
 
-    def _held_too_long(self) -> bool:
-        """The task's transit has waited for clearance (asking, or at a hold point) for more than
-        ``hold_patience_s``: the task is given up, which frees the UAV's hold volume. UAVs that hold where each
-        other's sites are can otherwise wait for each other until their batteries run low (docs/safety.md)."""
-        patience_s = self.config.hold_patience_s
-        if self.task is None or self.transit.state not in ("ask", "hold") or patience_s is None:
-            self._held_since_s = None
-            return False
-        if self._held_since_s is None:
-            self._held_since_s = self._now_s
-        return self._now_s - self._held_since_s > patience_s
+    def _observe(self, tel: Telemetry, step_s: float) -> None:
+        """The timers the watchdogs read (link down, waiting and held for clearance, outside the fence), the drain.
 
-    def _site_text(self) -> str:
+        The hold's runs in task states only (reset there and at a task's start)."""
+        fs = self.failsafe
+        if not tel.link_ok:
+            fs.link_down_since_s = self._now_s if fs.link_down_since_s is None else fs.link_down_since_s
+            return
+        fs.link_down_since_s = None
+        self.drain.update(self._now_s, tel.battery_fraction, not tel.on_ground)
+        waiting = self.transit.state in _WAITING
+        if not waiting:
+            self._waiting_since_s = None
+        elif self._waiting_since_s is None:
+            self._waiting_since_s = self._now_s
+        elif self.task is not None:
+            self.task_waited_s += step_s
+        if self.state in self._TASK_STATES_SET:
+            if not waiting or self.task is None or self.config.hold_patience_s is None:
+                self.held_since_s = None
+            elif self.held_since_s is None:
+                self.held_since_s = self._now_s
+        if self.fence_watch is not None and not tel.on_ground:
+            self.fence_watch.observe(self._now_s, tel.position_m)
+
+    def _react(self, verdict: Abort) -> None:
+        """Act on a watchdog's verdict (:data:`masonry.fsm.watchdogs.Action`)."""
+        reason, action = verdict.reason, verdict.action
+        if action == "battery_low" and not self._battery_service:
+            self._halt_after_landing = reason  # retired after landing (a ground crew would swap the pack)
+        if action == "retire":
+            self.halt_reason = reason
+        getattr(self, TRIGGERS[action])(reason=reason)
+
+    # -- what the watchdogs read (masonry.fsm.watchdogs.Attempt) --------------------------------------------
+    @property
+    def entered_s(self) -> float:
+        """When the current state was entered."""
+        return self._entered_s
+
+    @property
+    def task_states(self) -> frozenset[str]:
+        return self._TASK_STATES_SET
+
+    def site_text(self) -> str:
         x, y, z = self.transit.site_m
         return f"({x:.2f}, {y:.2f}, {z:.2f})"
 
-    def _battery_short(self, tel: Telemetry) -> str | None:
+    def battery_short(self, tel: Telemetry) -> str | None:
         """Why the battery cannot carry on with the task (None: it can); the reason starts with
         :data:`BATTERY_LOW_REASON` (mission control does not count such a failure as an attempt).
 
@@ -268,7 +274,7 @@ class UavModel:
             return None
         return (
             f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): waited {self._now_s - self._waiting_since_s:.0f} s "
-            f"for clearance to {self._site_text()}; {left_s:.0f} s of flight left, {way} needs {exit_s:.0f} s"
+            f"for clearance to {self.site_text()}; {left_s:.0f} s of flight left, {way} needs {exit_s:.0f} s"
         )
 
     # -- the battery budget (masonry.fsm.battery) ---------------------------------------------------------
@@ -360,30 +366,7 @@ class UavModel:
             f"task {task.id} needs {flight_s:.0f} s from here (its flight and the way home, with no wait)"
         )
 
-    def _battery_low(self, tel: Telemetry, reason: str) -> None:
-        if not self._battery_service:
-            self._halt_after_landing = reason
-        self.abort(reason=reason)
-
     # -- failsafes -----------------------------------------------------------------------------------------
-    def _link_down(self, tel: Telemetry) -> None:
-        fs = self.failsafe
-        if fs.link_down_since_s is None:
-            fs.link_down_since_s = self._now_s
-        down_s = self._now_s - fs.link_down_since_s
-        state = self.state
-        if state == "idle":
-            # Landed with a silent flight controller: out of service, so that tasks go to other UAVs.
-            if down_s > self.config.link_lost_timeout_s:
-                self.halt_reason = "flight controller link lost"
-                self.retire(reason=self.halt_reason)
-            return
-        if state == "emergency":
-            if tel.on_ground or down_s > self.config.link_lost_timeout_s:
-                self.giveup(reason="flight controller link lost")
-            return
-        self.lost(reason="flight controller link lost")
-
     def _hardware_failure(self, reason: str) -> None:
         state = self.state
         if state == "halted":
@@ -464,7 +447,7 @@ class UavModel:
 
     def _start_task(self, task: Task) -> None:
         self.task = task
-        self._held_since_s = None
+        self.held_since_s = None
         self._task_start_s = self._now_s
         self.phase_clock.start(self._now_s)
         budget_s, flight_s = self.task_budget_s(task), self._flight_need_s(task)
