@@ -151,3 +151,17 @@ def test_bound_below_the_schedule_with_deadlines(seed: int, open_time_s: float, 
     slack = 2 * sum(1 for t in p.tasks if not t.done) * s.tick_s
     assert terms.value_s <= s.makespan_s + slack, (seed, terms, s.makespan_s)
     assert s.bound_s <= s.makespan_s + slack
+
+
+def test_policy_schedule_follows_a_schedule_with_deadlines() -> None:
+    from masonry.mission.schedule_file import stamp_schedule
+    from masonry.mission.simulate import simulate
+
+    bp = _glued(load_blueprint(CASE_STUDY), 60.0)
+    p = make_plan(bp)
+    s = stamp_schedule(
+        solve_schedule(p, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m, time_limit_s=2.0, workers=1), bp
+    )
+    r = simulate(bp, policy="schedule", schedule=s, seed=0, reservation="task")
+    assert r.completed and r.open_time_violations == 0 and r.schedule_followed == r.schedule_assignments
+    assert r.lower_bound_s <= r.makespan_s and s.bound_s <= r.makespan_s

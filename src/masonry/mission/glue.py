@@ -30,7 +30,7 @@ Vec3 = tuple[float, float, float]
 #: The reason of a bead's attempt whose glue expired before its brick came (its re-spray explains itself).
 EXPIRED_REASON = "open time expired"
 #: Slack added to the placing descent and release when judging whether a bead will still be open (s).
-MARGIN_SLACK_S = 5.0
+MARGIN_SLACK_S = 12.0
 
 
 @dataclass

@@ -6,7 +6,11 @@ adhesion task out of the available set while:
 
 * ``cure``: a brick under it has glue that has not cured yet (mission control says when: :meth:`cured`);
 * ``open``: its brick cannot follow it soon: another bead under that brick still waits for the brick below it
-  (or for a cure): this one would be laid now and the brick come only after that brick is placed.
+  (or for a cure): this one would be laid now and the brick come only after that brick is placed; or as many
+  bricks as there are live brick UAVs have all their glue and wait for a UAV.
+
+And a brick UAV takes the available brick whose glue has waited longest first (not with ``--policy schedule``,
+whose UAVs follow their plan).
 
 Two more rules were measured and left out, on the 12 m wall at 4+2, 300 s of open time, seed 1 (1,416.5 s
 without an adhesive): holding beads while as many glued bricks as live brick UAVs wait (glue only for a brick a UAV
@@ -51,6 +55,7 @@ class JustInTime:
                 if self._status[b] != _DONE:
                     self._uncured.add(b)
         self._held: set[int] = set()
+        self._glued = frozenset(self._glue_brick.values())  # bricks with an open time on their glue
         self._glue_on = True
         self._rehold()
 
@@ -67,10 +72,13 @@ class JustInTime:
         if b is None or self._status[b] != _PENDING:
             return False  # no open time, or its brick is on its way already (a re-spray)
         status, prereqs = self._status, self._prereqs
-        return any(
+        if any(
             a != i and status[a] == _PENDING and (prereqs[a] or self._cure_holds(a))
             for a in self._prerequisites[b]
-        )  # another bead under the brick cannot be laid yet: this one would wait for it
+        ):
+            return True  # another bead under the brick cannot be laid yet: this one would wait for it
+        # as many bricks as there are brick UAVs have all their glue and wait for one: more glue would age
+        return sum(1 for r in self._ready["brick"] if r in self._glued) >= self._live_count["brick"]
 
     def _rehold(self: Any) -> None:
         """Hold the available beads the rules now hold; let go the held ones they no longer hold."""
@@ -108,6 +116,15 @@ class JustInTime:
                     self._held.discard(i)
                     Dispatcher._maybe_available(self, i)
         return super().assign(uav_positions_m, may_start)  # type: ignore[misc, no-any-return]
+
+    def _select(self: Any, role: str, uav: str) -> int | None:
+        if self._glue_on and role == "brick" and not self._per_uav_choice:
+            # the brick whose glue has waited longest first (``_ready`` keeps the order they became ready in)
+            avail = self._available["brick"]
+            for b in self._ready["brick"]:
+                if b in avail and b in self._glued:
+                    return int(b)
+        return super()._select(role, uav)  # type: ignore[misc, no-any-return]
 
     @property
     def blocked(self: Any) -> bool:
