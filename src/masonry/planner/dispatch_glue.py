@@ -78,7 +78,8 @@ class JustInTime:
         ):
             return True  # another bead under the brick cannot be laid yet: this one would wait for it
         # as many bricks as there are brick UAVs have all their glue and wait for one: more glue would age
-        return sum(1 for r in self._ready["brick"] if r in self._glued) >= self._live_count["brick"]
+        waiting: int = sum(1 for r in self._ready["brick"] if r in self._glued)
+        return waiting >= int(self._live_count["brick"])
 
     def _rehold(self: Any) -> None:
         """Hold the available beads the rules now hold; let go the held ones they no longer hold."""
