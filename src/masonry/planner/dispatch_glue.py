@@ -6,19 +6,18 @@ adhesion task out of the available set while:
 
 * ``cure``: a brick under it has glue that has not cured yet (mission control says when: :meth:`cured`);
 * ``open``: its brick cannot follow it soon: another bead under that brick still waits for the brick below it
-  (or for a cure): this one would be laid now and the brick come only after that brick is placed; or as many
-  bricks as there are live brick UAVs have all their glue and wait for a UAV.
+  (or for a cure): this one would be laid now and the brick come only after that brick is placed.
 
-And a brick UAV takes the available brick whose glue has waited longest first (not with ``--policy schedule``,
-whose UAVs follow their plan).
-
-Two more rules were measured and left out, on the 12 m wall at 4+2, 300 s of open time, seed 1 (1,416.5 s
-without an adhesive): holding beads while as many glued bricks as live brick UAVs wait (glue only for a brick a UAV
-is free to bring): 2,872 s (2,045 s with twice the UAVs); holding a bead within r_c of a brick whose glue is all
-laid (so the sprayer does not keep that brick off its site): 1,873 s; neither: 1,574 s. Re-sprays are cheaper
-than idle sprayers, and the gate keeps every brick off expired glue either way. Both rules helped a single brick
-UAV at very short open times (the case study at 30 s: without them its brick B0 ends stuck after three
-recalls, at 40 s it completes).
+Other rules were measured and left out, on the 12 m wall with 4+2 UAVs, 300 s of open time, seed 1
+(``masonry blueprint running-bond --courses 3 --bricks-per-course 40 --placed-courses 1 --brick-uavs 4
+--adhesion-uavs 2``, then ``masonry sim --seed 1``: 1,416.5 s without an adhesive): holding beads while as many
+glued bricks as live brick UAVs are not placed yet (glue only for a brick a UAV is free to bring): 2,872 s
+(2,045 s with twice the UAVs); holding a bead within r_c of a brick whose glue is all laid (so the sprayer does
+not keep that brick off its site): 1,873 s; neither: 1,574 s. In ``bench_open_time.py`` (its own fleet homes,
+1,513.1 s without an adhesive), holding beads while as many bricks as brick UAVs had all their glue and waited,
+with the oldest glue's brick taken first: 1,971.7 s and a brick stuck. Re-sprays are cheaper than idle sprayers,
+and the gate keeps every brick off expired glue either way. The first two rules helped a single brick UAV at
+short open times (the case study at 30 s: without them its brick B0 ends stuck after three recalls).
 
 A bead whose brick is in progress (a re-spray: its glue expired while the brick came) is never held. When
 nothing is in progress and nothing is available, the open holds are let go (no dead-lock on a hold): the glue
@@ -55,7 +54,6 @@ class JustInTime:
                 if self._status[b] != _DONE:
                     self._uncured.add(b)
         self._held: set[int] = set()
-        self._glued = frozenset(self._glue_brick.values())  # bricks with an open time on their glue
         self._glue_on = True
         self._rehold()
 
@@ -72,14 +70,10 @@ class JustInTime:
         if b is None or self._status[b] != _PENDING:
             return False  # no open time, or its brick is on its way already (a re-spray)
         status, prereqs = self._status, self._prereqs
-        if any(
+        return any(
             a != i and status[a] == _PENDING and (prereqs[a] or self._cure_holds(a))
             for a in self._prerequisites[b]
-        ):
-            return True  # another bead under the brick cannot be laid yet: this one would wait for it
-        # as many bricks as there are brick UAVs have all their glue and wait for one: more glue would age
-        waiting: int = sum(1 for r in self._ready["brick"] if r in self._glued)
-        return waiting >= int(self._live_count["brick"])
+        )  # another bead under the brick cannot be laid yet: this one would wait for it
 
     def _rehold(self: Any) -> None:
         """Hold the available beads the rules now hold; let go the held ones they no longer hold."""
@@ -117,15 +111,6 @@ class JustInTime:
                     self._held.discard(i)
                     Dispatcher._maybe_available(self, i)
         return super().assign(uav_positions_m, may_start)  # type: ignore[misc, no-any-return]
-
-    def _select(self: Any, role: str, uav: str) -> int | None:
-        if self._glue_on and role == "brick" and not self._per_uav_choice:
-            # the brick whose glue has waited longest first (``_ready`` keeps the order they became ready in)
-            avail = self._available["brick"]
-            for b in self._ready["brick"]:
-                if b in avail and b in self._glued:
-                    return int(b)
-        return super()._select(role, uav)  # type: ignore[misc, no-any-return]
 
     @property
     def blocked(self: Any) -> bool:
