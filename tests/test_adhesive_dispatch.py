@@ -170,3 +170,16 @@ def test_an_open_time_no_brick_can_meet_is_refused() -> None:
         InputError, match=r"adhesive.open_time_s: 10 s is not above a brick's placing descent"
     ):
         _flight(_glued(CASE_STUDY, 10.0))
+
+
+def test_cli_sim_refuses_an_open_time_no_brick_can_meet(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from masonry.cli import app
+
+    path = tmp_path / "glued.yaml"
+    path.write_text(CASE_STUDY.read_text() + "adhesive: {open_time_s: 10}\n")
+    result = CliRunner().invoke(app, ["sim", str(path)])
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert result.exit_code == 2 and len(lines) == 1, result.stderr
+    assert "adhesive.open_time_s: 10 s is not above" in lines[0]
