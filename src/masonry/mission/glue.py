@@ -101,9 +101,10 @@ class GlueGate:
                 self.dispatcher.cured(brick)
                 news = True
         done = self.dispatcher.done
+        stuck = self.dispatcher.stuck
         for brick, beads in self._open.items():
-            if brick in done or brick in self.sites.on_site:
-                continue
+            if brick in done or brick in self.sites.on_site or brick in stuck:
+                continue  # (a stuck brick never comes: its glue is not sprayed again and again)
             for bead, lag in beads:
                 if bead in done and bead in self.sprayed_at_s and not self._fresh(bead, lag):
                     self._expire(mc, bead, brick, now_s)

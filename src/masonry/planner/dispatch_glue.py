@@ -6,7 +6,9 @@ adhesion task out of the available set while:
 
 * ``cure``: a brick under it has glue that has not cured yet (mission control says when: :meth:`cured`);
 * ``open``: its brick cannot follow it soon: another bead under that brick still waits for the brick below it
-  (or for a cure): this one would be laid now and the brick come only after that brick is placed.
+  (or for a cure): this one would be laid now and the brick come only after that brick is placed; or the bead
+  expired once already waiting for its brick, which has not started since, and no brick UAV is free to bring it
+  (else a brick that waits long for a UAV has its glue sprayed again and again).
 
 Other rules were measured and left out, on the 12 m wall with 4+2 UAVs, 300 s of open time, seed 1
 (``masonry blueprint running-bond --courses 3 --bricks-per-course 40 --placed-courses 1 --brick-uavs 4
@@ -54,6 +56,7 @@ class JustInTime:
                 if self._status[b] != _DONE:
                     self._uncured.add(b)
         self._held: set[int] = set()
+        self._expired: set[int] = set()  # beads sprayed again (``reopen``) whose brick has not started since
         self._glue_on = True
         self._rehold()
 
@@ -70,10 +73,24 @@ class JustInTime:
         if b is None or self._status[b] != _PENDING:
             return False  # no open time, or its brick is on its way already (a re-spray)
         status, prereqs = self._status, self._prereqs
-        return any(
+        if any(
             a != i and status[a] == _PENDING and (prereqs[a] or self._cure_holds(a))
             for a in self._prerequisites[b]
-        )  # another bead under the brick cannot be laid yet: this one would wait for it
+        ):
+            return True  # another bead under the brick cannot be laid yet: this one would wait for it
+        # a bead that expired once waiting for its brick is laid again only when a brick UAV is free to bring it
+        return i in self._expired and not self._idle_brick_uav()
+
+    def _idle_brick_uav(self: Any) -> bool:
+        return any(
+            spec.role == "brick" and n in self._live and n not in self._uav_task
+            for n, spec in self._fleet.items()
+        )
+
+    def _start(self: Any, i: int, uav: str) -> None:
+        if self._glue_on and self._role[i] == "brick":
+            self._expired.difference_update(self._prerequisites[i])
+        super()._start(i, uav)  # type: ignore[misc]
 
     def _rehold(self: Any) -> None:
         """Hold the available beads the rules now hold; let go the held ones they no longer hold."""
@@ -143,6 +160,7 @@ class JustInTime:
         self._events += 1
         self._status[i] = _PENDING
         self._done.discard(task_id)
+        self._expired.add(i)
         for d in self._dependents[i]:
             self._prereqs[d] += 1
             if self._status[d] == _PENDING:
