@@ -183,3 +183,68 @@ def test_cli_sim_refuses_an_open_time_no_brick_can_meet(tmp_path: Path) -> None:
     lines = [line for line in result.stderr.splitlines() if line.strip()]
     assert result.exit_code == 2 and len(lines) == 1, result.stderr
     assert "adhesive.open_time_s: 10 s is not above" in lines[0]
+
+
+def test_an_expired_bead_waits_for_a_free_brick_uav() -> None:
+    """A1's glue expired while brick-1 carried B0: it is laid again only once brick-1 is free to bring B1."""
+    bp = _glued(CASE_STUDY, 60.0)
+    d = make_dispatcher(make_plan(bp), bp.fleet, "critical-path", reservation="site")
+    assert {a.task_id for a in d.assign()} == {"A0", "B0"}
+    d.complete("A0")
+    assert [a.task_id for a in d.assign()] == ["A1"]
+    d.complete("A1")
+    d.assign()
+    d.reopen("A1")  # (mission control: it expired before B1 could come)
+    assert d.assign() == [] and d.held() == ("A1",) and not d.blocked
+    d.complete("B0")
+    again = {a.task_id: a.attempt for a in d.assign()}
+    assert again == {"A1": 2, "B1": 1} and d.held() == ()
+
+
+class _Control:
+    """What GlueGate asks of mission control: its attempts, journal, events, recalls and airspace."""
+
+    def __init__(self) -> None:
+        from masonry.mission.control import Attempt
+
+        self.history = [Attempt("A0", "glue-1", 1, 0.0, end_s=15.0, status="done")]
+        self.journal = None
+        self.recalls: list[tuple[str, str]] = []
+        self.touched = 0
+        self.columns = self
+
+    def touch(self) -> None:
+        self.touched += 1
+
+    def recall(self, uav: str, now_s: float, reason: str) -> None:
+        self.recalls.append((uav, reason))
+
+    def emit_event(self, *args: object, **kw: object) -> None:
+        pass
+
+
+def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alone() -> None:
+    from masonry.mission.glue import glue_gate
+    from masonry.mission.sites import SiteIntervals
+    from masonry.timing import DEFAULT_TIMING
+
+    bp = _glued(CASE_STUDY, 60.0)
+    p = make_plan(bp)
+    for stuck in (False, True):
+        d = make_dispatcher(p, bp.fleet, "critical-path", reservation="site", max_attempts=1)
+        gate = glue_gate(p, d, SiteIntervals(p, d.task_of, exclusive=False), DEFAULT_TIMING)
+        assert gate is not None and gate.margin_s == 19.5
+        mc = _Control()
+        d.assign()  # A0 and B0 (fetched while the glue is laid)
+        d.complete("A0")
+        gate.completed("A0", 15.0)
+        if stuck:
+            d.fail("B0")  # its only attempt: stuck
+        assert not gate.step(mc, 50.0)  # 35 s old + 19.5 s to press it: still open
+        news = gate.step(mc, 60.0)
+        if stuck:
+            assert not news and "A0" in d.done and mc.recalls == []
+        else:
+            assert news and "A0" not in d.done and mc.recalls == [("brick-1", EXPIRED_REASON)]
+            assert (mc.history[0].status, mc.history[0].reason) == ("failed", EXPIRED_REASON)
+            assert gate.expiries == [(60.0, "A0", "B0")]
