@@ -248,3 +248,19 @@ def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alon
             assert news and "A0" not in d.done and mc.recalls == [("brick-1", EXPIRED_REASON)]
             assert (mc.history[0].status, mc.history[0].reason) == ("failed", EXPIRED_REASON)
             assert gate.expiries == [(60.0, "A0", "B0")]
+
+
+def test_the_log_keeps_the_glue_and_the_gantt_draws_the_open_windows(tmp_path: Path) -> None:
+    from masonry.mission.report_codec import report_from_record, report_to_record
+    from masonry.viz.gantt import draw_gantt, open_windows
+
+    r = _flight(_glued(CASE_STUDY, 60.0))
+    again = report_from_record(json.loads(json.dumps(report_to_record(r))))
+    assert again.to_dict() == r.to_dict() and again.open_time_s == 60.0
+    windows = open_windows(r)
+    done = [a for a in r.attempts if a.kind == "adhesion" and a.status == "done"]
+    assert {w[1] for w in windows} >= {a.task_id for a in done} and done
+    assert all(t1 - t0 == pytest.approx(60.0) for _, _, t0, t1 in windows)
+    assert draw_gantt(r, tmp_path / "g.png").stat().st_size > 0
+    plain = _flight(load_blueprint(CASE_STUDY))
+    assert open_windows(plain) == [] and "glue_age_s" not in report_to_record(plain)

@@ -140,6 +140,8 @@ class MissionReport:
     glue_age_s: Mapping[str, float] | None = None
     open_time_violations: int | None = None
     cure_time_violations: int | None = None
+    #: the adhesive's open time (for the Gantt chart's open windows; not in the JSON)
+    open_time_s: float | None = None
 
     @property
     def real_time_factor(self) -> float:

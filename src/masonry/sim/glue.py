@@ -87,6 +87,7 @@ class GlueWatch:
             "glue_age_s": {task_ids[b]: age for b, age in self.glue_age_s.items() if b in task_ids},
             "open_time_violations": len(self.open_violations),
             "cure_time_violations": len(self.cure_violations),
+            "open_time_s": self.adhesive.open_time_s,
         }
 
 
