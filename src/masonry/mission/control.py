@@ -34,7 +34,8 @@ from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
-from masonry.mission.journal_state import LOST_REASON, journaled_phases
+from masonry.mission.journal_state import LOST_REASON
+from masonry.mission.journal_state import journaled_phases as _journaled_phases  # (its home before)
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
@@ -339,7 +340,7 @@ class MissionControl:
             )
         for task_id, rec in done.items():
             fields = dict(rec.fields)
-            phases = journaled_phases(fields.get("phases"))
+            phases = _journaled_phases(fields.get("phases"))
             self.history.append(
                 Attempt(
                     task_id=task_id,
