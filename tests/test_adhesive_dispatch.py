@@ -264,3 +264,18 @@ def test_the_log_keeps_the_glue_and_the_gantt_draws_the_open_windows(tmp_path: P
     assert draw_gantt(r, tmp_path / "g.png").stat().st_size > 0
     plain = _flight(load_blueprint(CASE_STUDY))
     assert open_windows(plain) == [] and "glue_age_s" not in report_to_record(plain)
+
+
+def test_a_resumed_mission_knows_its_beads_ages(tmp_path: Path) -> None:
+    from masonry.mission.journal import read_journal
+    from masonry.mission.simulate import SimulatedMission
+
+    bp = _glued(CASE_STUDY, 60.0)
+    journal = tmp_path / "m.db"
+    first = _flight(bp, journal_path=journal, max_time_s=25.0)
+    assert not first.completed
+    a0 = next(r for r in read_journal(journal).done if r.task_id == "A0")
+    mission = SimulatedMission.from_blueprint(bp, journal_path=journal, resume=True)
+    assert mission.control.glue is not None and mission.control.glue.sprayed_at_s == {"A0": a0.time_s}
+    r = mission.run()
+    assert r.completed and r.open_time_violations == 0 and r.cure_time_violations == 0

@@ -326,6 +326,8 @@ class MissionControl:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
         attempts = {k: int(v) for k, v in state.attempts.items()}
         self.dispatcher.restore(list(done), attempts)
+        if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
+            self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
         for f in state.failures:
             self.history.append(
                 Attempt(

@@ -18,6 +18,7 @@ task's completion) and each glued brick placed, and:
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -90,6 +91,12 @@ class GlueGate:
         else:
             self.sprayed_at_s[task_id] = now_s
             self._changed = True
+
+    def restore(self, completions: Iterable[tuple[str, float]]) -> None:
+        """A resumed mission: each journaled completion (task id, time s) as if heard now, in time order (a bead
+        sprayed before the stop is as old as the journal says; a re-spray's last completion wins)."""
+        for task_id, time_s in sorted(completions, key=lambda c: c[1]):
+            self.completed(task_id, time_s)
 
     def step(self, mc: Any, now_s: float) -> bool:
         """Cures that ended, beads that expired (sprayed again); True when the dispatcher has news."""
