@@ -21,6 +21,7 @@ from masonry.errors import BlueprintError
 from masonry.geofence import Site
 
 if TYPE_CHECKING:
+    from masonry.adhesive import Adhesive
     from masonry.planner.contacts import Contacts
 
 Role = Literal["brick", "adhesion"]
@@ -151,6 +152,8 @@ class Blueprint:
     source: str = "<blueprint>"
     #: the site's geofence (None: no fence; docs/blueprint-format.md, "Site")
     site: Site | None = None
+    #: the adhesive's open and cure times (None: neither is modelled; docs/blueprint-format.md, "Adhesive")
+    adhesive: Adhesive | None = None
 
     def brick(self, brick_id: int) -> Brick:
         """The brick with id ``brick_id`` (KeyError if there is none)."""
@@ -167,7 +170,7 @@ class Blueprint:
 
 # ---------------------------------------------------------------------------------------------- loading
 
-TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site")
+TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive")
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
 BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
@@ -272,6 +275,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         seen_names.add(uav.name)
         fleet.append(uav)
 
+    from masonry.adhesive import parse_adhesive
     from masonry.site_checks import parse_site
 
     blueprint = Blueprint(
@@ -284,6 +288,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         markers=markers,
         source=source,
         site=parse_site(data.get("site"), source),
+        adhesive=parse_adhesive(data.get("adhesive"), source),
     )
     validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
@@ -520,6 +525,10 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
         from masonry.site_checks import format_site
 
         lines.append(format_site(blueprint.site))
+    if blueprint.adhesive is not None:
+        from masonry.adhesive import format_adhesive
+
+        lines.append(format_adhesive(blueprint.adhesive))
     return "\n".join(lines) + "\n"
 
 

@@ -33,20 +33,22 @@ def _digest(value: Any) -> str:
 
 
 def wall_digest(blueprint: Blueprint) -> str:
-    """The digest of everything about the wall a task depends on: bricks, pickups, clearance, cruise, markers."""
+    """The digest of everything about the wall a task depends on: bricks, pickups, clearance, cruise, markers, adhesive."""
     m = blueprint.markers
-    return _digest(
-        {
-            "clearance_m": _num(blueprint.clearance_m),
-            "cruise_altitude_m": _num(blueprint.cruise_altitude_m),
-            "brick_size_m": _vec(blueprint.brick_size_m),
-            "markers": [m.dictionary, _num(m.size_m), _num(m.spacing_m)],
-            "bricks": [
-                [b.id, _vec(b.position_m), _vec(b.size_m), _num(b.yaw_rad), b.placed, _vec(b.pickup_m)]
-                for b in blueprint.bricks
-            ],
-        }
-    )
+    wall: dict[str, Any] = {
+        "clearance_m": _num(blueprint.clearance_m),
+        "cruise_altitude_m": _num(blueprint.cruise_altitude_m),
+        "brick_size_m": _vec(blueprint.brick_size_m),
+        "markers": [m.dictionary, _num(m.size_m), _num(m.spacing_m)],
+        "bricks": [
+            [b.id, _vec(b.position_m), _vec(b.size_m), _num(b.yaw_rad), b.placed, _vec(b.pickup_m)]
+            for b in blueprint.bricks
+        ],
+    }
+    if blueprint.adhesive is not None:  # absent: the digest of every wall written before it existed
+        a = blueprint.adhesive
+        wall["adhesive"] = [None if a.open_time_s is None else _num(a.open_time_s), _num(a.cure_time_s)]
+    return _digest(wall)
 
 
 def fleet_digest(blueprint: Blueprint) -> str:

@@ -170,6 +170,33 @@ def blueprint_schema() -> dict[str, Any]:
                 },
             },
             "site": _site(),
+            "adhesive": _adhesive(),
+        },
+    }
+
+
+def _adhesive() -> dict[str, Any]:
+    """The optional ``adhesive`` (open and cure times; docs/blueprint-format.md, "Adhesive")."""
+    from masonry.adhesive import MAX_ADHESIVE_TIME_S
+
+    return {
+        "type": "object",
+        "additionalProperties": False,
+        "minProperties": 1,
+        "description": "The adhesive's open time and cure time (absent: neither is modelled).",
+        "properties": {
+            "open_time_s": {
+                "type": "number",
+                "exclusiveMinimum": 0,
+                "maximum": MAX_ADHESIVE_TIME_S,
+                "description": "A brick starts its flight down onto a bead within this time of the bead's spraying (s).",
+            },
+            "cure_time_s": {
+                "type": "number",
+                "minimum": 0,
+                "maximum": MAX_ADHESIVE_TIME_S,
+                "description": "Nothing is sprayed onto a brick before this time has passed since it was placed (s).",
+            },
         },
     }
 

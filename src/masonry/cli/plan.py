@@ -14,7 +14,10 @@ from masonry.cli.outputs import atomic_path, check_output_path, check_output_pat
 from masonry.errors import InputError
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from masonry.blueprint import Blueprint
+    from masonry.planner.deadlines import Deadline
     from masonry.planner.graphs import PlanGraphs
 
 GRAPH_FORMATS = (".png", ".svg", ".dot", ".graphml")
@@ -94,6 +97,7 @@ def summary(bp: Blueprint, result: PlanGraphs) -> str:
         f"  dependencies    {plural(len(result.dependencies), 'edge')} in G^d",
         f"  conflicts       {plural(result.conflict_count, 'pair')} in G^c (clearance r_c = {bp.clearance_m:g} m)",
         f"  fleet           {fleet}",
+        *_adhesive_lines(bp, result.deadlines),
         f"  available now   {_id_list(ready)}",
         # longest_chain lists the top task first; shown in execution order (the first task to do first)
         f"  longest chain   {plural(len(chain), 'task')}: {_chain(chain[::-1])}",
@@ -455,3 +459,13 @@ def pyramid_command(
     )
     options.update(base=base)
     _emit("pyramid", options, output)
+
+
+def _adhesive_lines(bp: Blueprint, deadlines: Sequence[Deadline]) -> list[str]:
+    """The summary's adhesive line (none without ``adhesive``: the summary of old)."""
+    a = bp.adhesive
+    if a is None:
+        return []
+    n_open = sum(1 for d in deadlines if d.kind == "open")
+    opened = "no open time" if a.open_time_s is None else f"open time {a.open_time_s:g} s ({n_open} edges)"
+    return [f"  adhesive        {opened}, cure time {a.cure_time_s:g} s ({len(deadlines) - n_open} edges)"]

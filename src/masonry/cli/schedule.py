@@ -62,6 +62,7 @@ def schedule(
     from masonry.mission.schedule_file import stamp_schedule
     from masonry.planner import plan as make_plan
     from masonry.planner.schedule import ScheduleUnavailable, solve_schedule
+    from masonry.planner.schedule_deadlines import DeadlinesUnmet
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
@@ -101,7 +102,7 @@ def schedule(
             workers=workers,
             decomposition=decomposition,
         )
-    except ScheduleUnavailable as exc:
+    except (ScheduleUnavailable, DeadlinesUnmet) as exc:
         raise fail(str(exc), 2) from None
     result = stamp_schedule(result, bp)
     import json

@@ -33,7 +33,9 @@ from masonry.errors import MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.events import EventSink, MissionEvent, volume_list
+from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
+from masonry.mission.journal_state import journaled_phases as _journaled_phases  # (its home before)
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
@@ -49,7 +51,6 @@ from masonry.mission.messages import (
     Result,
     decode,
     encode,
-    phases_from_dict,
 )
 from masonry.mission.operator import Operator
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
@@ -272,6 +273,8 @@ class MissionControl:
             on_visit=self._journal_visit,
             is_done=self.dispatcher.done.__contains__,
         )
+        #: the adhesive's open and cure times (None: none; :mod:`masonry.mission.glue`)
+        self.glue = glue_gate(plan, self.dispatcher, self.sites, timing or DEFAULT_TIMING)
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
@@ -290,7 +293,7 @@ class MissionControl:
             layer_spacing_m,
             homes={u.name: u.home_m for u in self.fleet},
             start_base_m=layer_floor_m,
-            gate=self.sites,
+            gate=self.glue or self.sites,
             fence=fence,
         )
         self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
@@ -323,6 +326,8 @@ class MissionControl:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
         attempts = {k: int(v) for k, v in state.attempts.items()}
         self.dispatcher.restore(list(done), attempts)
+        if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
+            self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
         for f in state.failures:
             self.history.append(
                 Attempt(
@@ -428,6 +433,8 @@ class MissionControl:
             self._handle(raw, now_s)
         self.operator.step(self, now_s)
         self._check_heartbeats(now_s)
+        if self.glue is not None and self.glue.step(self, now_s):
+            self._dirty = True
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
                 self._send(
@@ -625,6 +632,8 @@ class MissionControl:
             att.status = "done"
             log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
             self.dispatcher.complete(r.task_id)
+            if self.glue is not None:
+                self.glue.completed(r.task_id, now_s)
             if self.journal is not None:
                 fields: dict[str, Any] = {}
                 if r.placement_error_m is not None:
@@ -1042,14 +1051,3 @@ class MissionControl:
             if not link.lost:
                 self.transport.send(name, data)
                 self.events.sent += 1
-
-
-def _journaled_phases(value: Any) -> PhaseTimes | None:
-    """The phases a journal kept with a completion (None: none kept, or not phases: a journal is a file)."""
-    if value is None:
-        return None
-    try:
-        return phases_from_dict(value, "journal complete")
-    except ProtocolError:
-        log.warning("ignoring the journaled phases %r", value)
-        return None

@@ -6,13 +6,15 @@
 from __future__ import annotations
 
 import json
+import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Literal
 
-from masonry.errors import JournalUnusable
-from masonry.ports import UNCOUNTED_REASONS
+from masonry.errors import JournalUnusable, ProtocolError
+from masonry.mission.messages import phases_from_dict
+from masonry.ports import UNCOUNTED_REASONS, PhaseTimes
 
 __all__ = [
     "LOST_REASON",
@@ -23,6 +25,7 @@ __all__ = [
     "RecordKind",
     "RunningRecord",
     "fold_records",
+    "journaled_phases",
 ]
 
 #: the reason of an attempt released because its UAV was declared lost (not counted against the task)
@@ -251,3 +254,14 @@ _APPLY: dict[str, Callable[[_Fold, JournalRecord, dict[str, Any]], None]] = {
     "fail": _Fold.finish,
     "uav_lost": _Fold.uav_lost,
 }
+
+
+def journaled_phases(value: Any) -> PhaseTimes | None:
+    """The phases a journal kept with a completion (None: none kept, or not phases: a journal is a file)."""
+    if value is None:
+        return None
+    try:
+        return phases_from_dict(value, "journal complete")
+    except ProtocolError:
+        logging.getLogger(__name__).warning("ignoring the journaled phases %r", value)
+        return None

@@ -266,6 +266,11 @@ def simulated_report(
         sim_time_s=sim_time_s,
         wall_time_s=wall_time_s,
         messages=messages,
+        **(
+            world.glue.report_fields({t.brick: t.id for t in the_plan.tasks if isinstance(t, BrickTask)})
+            if world.glue.enabled
+            else {}
+        ),
     )
 
 

@@ -135,6 +135,13 @@ class MissionReport:
     #: ``--policy schedule``: assignments that were their UAV's next planned task, of all assignments
     schedule_followed: int | None = None
     schedule_assignments: int | None = None
+    #: with an ``adhesive`` (measured by the simulated world, :mod:`masonry.sim.glue`): per brick task the age
+    #: of the oldest glue under it when it was placed, and the bricks placed on expired glue / loaded uncured
+    glue_age_s: Mapping[str, float] | None = None
+    open_time_violations: int | None = None
+    cure_time_violations: int | None = None
+    #: the adhesive's open time (for the Gantt chart's open windows; not in the JSON)
+    open_time_s: float | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -150,7 +157,7 @@ class MissionReport:
             "policy": self.policy,
             "seed": self.seed,
             "uavs": [u.to_dict() for u in self.uavs],
-            "tasks": [t.to_dict() for t in self.tasks],
+            "tasks": [self._task_dict(t) for t in self.tasks],
             "placement_error_m": {k: _r(v, 4) for k, v in self.placement_error_m.items()},
             "min_separation_m": _r(self.min_separation_m, 3),
             "conflict_violations": self.conflict_violations,
@@ -162,6 +169,15 @@ class MissionReport:
             out["stall"] = dict(self.stall)
         if self.schedule_followed is not None:
             out["schedule"] = {"followed": self.schedule_followed, "assignments": self.schedule_assignments}
+        if self.open_time_violations is not None:
+            out["open_time_violations"] = self.open_time_violations
+            out["cure_time_violations"] = self.cure_time_violations
+        return out
+
+    def _task_dict(self, task: TaskReport) -> dict[str, Any]:
+        out = task.to_dict()
+        if self.glue_age_s is not None and task.kind == "brick":
+            out["glue_age_s"] = _r(self.glue_age_s.get(task.id), 2)
         return out
 
     def to_json(self, indent: int | None = None) -> str:
@@ -194,6 +210,13 @@ class MissionReport:
         if self.schedule_followed is not None:
             lines.append(
                 f"schedule followed by {self.schedule_followed}/{self.schedule_assignments} assignments"
+            )
+        if self.open_time_violations is not None:
+            ages = sorted((self.glue_age_s or {}).values())
+            oldest = f", oldest glue under a brick {ages[-1]:.0f} s" if ages else ""
+            lines.append(
+                f"adhesive: {self.open_time_violations} open-time and {self.cure_time_violations} cure-time "
+                f"violations{oldest}"
             )
         if self.resumed_from_s is not None:
             lines.append(f"resumed from the journal at {self.resumed_from_s:.1f} s")

@@ -100,6 +100,19 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "lower_bound_kind": report.lower_bound_kind,
         "schedule_followed": report.schedule_followed,
         "schedule_assignments": report.schedule_assignments,
+        **_adhesive_out(report),
+    }
+
+
+def _adhesive_out(report: MissionReport) -> dict[str, Any]:
+    """The adhesive's measurements (issue 31), only when the mission had an adhesive: old records unchanged."""
+    if report.open_time_violations is None:
+        return {}
+    return {
+        "glue_age_s": {k: _num_out(v) for k, v in (report.glue_age_s or {}).items()},
+        "open_time_violations": report.open_time_violations,
+        "cure_time_violations": report.cure_time_violations,
+        "open_time_s": _num_out(report.open_time_s),
     }
 
 
@@ -140,6 +153,14 @@ def report_from_record(data: Any) -> MissionReport:
             lower_bound_kind=str(data["lower_bound_kind"]),
             schedule_followed=_opt_int(data["schedule_followed"]),
             schedule_assignments=_opt_int(data["schedule_assignments"]),
+            glue_age_s=(
+                None
+                if data.get("glue_age_s") is None
+                else {str(k): float(_num_in(v)) for k, v in dict(data["glue_age_s"]).items()}
+            ),
+            open_time_violations=_opt_int(data.get("open_time_violations")),
+            cure_time_violations=_opt_int(data.get("cure_time_violations")),
+            open_time_s=_num_in(data.get("open_time_s")),
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None

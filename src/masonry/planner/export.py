@@ -9,6 +9,11 @@ Shape::
      "dependencies": [["B1", "A0"], ["A0", "B0"]],
      "conflicts": [["A3", "B7"]]}
 
+With an ``adhesive`` in the blueprint, a fourth key lists its edges (:mod:`masonry.planner.deadlines`)::
+
+     "deadlines": [{"kind": "open", "adhesion": "A0", "brick": "B1", "max_lag_s": 300.0},
+                   {"kind": "cure", "adhesion": "A5", "brick": "B1", "min_lag_s": 120.0}]
+
 Numbers are rounded to the nanometre (1e-9) so 0.1 + 0.2 prints as 0.3.
 """
 
@@ -20,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from masonry.planner.deadlines import Deadline, deadline_to_dict
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 
 if TYPE_CHECKING:
@@ -64,7 +70,13 @@ def plan_to_dict(plan: Plan) -> dict[str, Any]:
         "tasks": [task_to_dict(t) for t in plan.tasks],
         "dependencies": [list(e) for e in plan.dependencies],
         "conflicts": [list(c) for c in plan.conflicts],
+        **_deadlines(plan.deadlines),
     }
+
+
+def _deadlines(deadlines: Sequence[Deadline]) -> dict[str, Any]:
+    """``{"deadlines": [...]}`` when the plan has any (absent otherwise: the plan's JSON of old)."""
+    return {"deadlines": [deadline_to_dict(d) for d in deadlines]} if deadlines else {}
 
 
 def iter_plan_json(plan: Plan | PlanGraphs) -> Iterator[str]:
@@ -84,6 +96,11 @@ def iter_plan_json(plan: Plan | PlanGraphs) -> Iterator[str]:
         yield from _pairs_json(plan, plan.conflicts, plan.conflict_indices)
     else:
         yield from _pairs_json(plan, None, plan.conflict_indices)
+    if plan.deadlines:
+        yield ',\n "deadlines": ['
+        for k, d in enumerate(plan.deadlines):
+            yield ("\n  " if k == 0 else ",\n  ") + json.dumps(deadline_to_dict(d))
+        yield "]"
     yield "}\n"
 
 

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from masonry.blueprint import Blueprint, validate_blueprint
 from masonry.planner.contacts import BrickArrays, Contacts, find_contacts
+from masonry.planner.deadlines import Deadline, adhesive_deadlines
 from masonry.planner.overlap import AXIS_ALIGNED_EPS, chord, clip_convex, principal_axis, rectangle_corners
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 
@@ -50,6 +51,8 @@ class PlanGraphs:
     tasks: tuple[Task, ...]
     dependencies: tuple[tuple[str, str], ...]
     conflict_indices: tuple[IntArray, IntArray]
+    #: the adhesive's open and cure edges (:mod:`masonry.planner.deadlines`)
+    deadlines: tuple[Deadline, ...] = ()
 
     @property
     def conflict_count(self) -> int:
@@ -62,7 +65,11 @@ class PlanGraphs:
         with _gc_paused():  # millions of small tuples: the cyclic collector would rescan them again and again
             pairs = tuple(zip(ids[ca].tolist(), ids[cb].tolist()))
         return Plan(
-            tasks=self.tasks, dependencies=self.dependencies, conflicts=pairs, conflict_indices=(ca, cb)
+            tasks=self.tasks,
+            dependencies=self.dependencies,
+            conflicts=pairs,
+            conflict_indices=(ca, cb),
+            deadlines=self.deadlines,
         )
 
 
@@ -120,7 +127,12 @@ def plan_graphs(blueprint: Blueprint, *, check_marker_ids: bool = True) -> PlanG
         dependencies.append((aid, f"B{bricks[j].id}"))
 
     ca, cb = _conflicts(blueprint, arrays, placed, upper, lower, start, end)
-    return PlanGraphs(tasks=tuple(tasks), dependencies=tuple(dependencies), conflict_indices=(ca, cb))
+    return PlanGraphs(
+        tasks=tuple(tasks),
+        dependencies=tuple(dependencies),
+        conflict_indices=(ca, cb),
+        deadlines=adhesive_deadlines(tasks, blueprint.adhesive),
+    )
 
 
 @contextmanager

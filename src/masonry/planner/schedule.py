@@ -34,6 +34,19 @@ from masonry.errors import PlanningError
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.bounds import empty_flight_s, min_cycles_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
+from masonry.planner.schedule_deadlines import (
+    DeadlinesUnmet,
+    TickDeadlines,
+    add_deadlines,
+    check_open_feasible,
+    cure_ready,
+    missed_open,
+    pick,
+    serial_horizon,
+    tick_deadlines,
+)
+from masonry.planner.schedule_graph import ancestors as _ancestors
+from masonry.planner.schedule_graph import clique_cover as _clique_cover
 from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -70,6 +83,7 @@ class _Problem:
     uav_of: dict[int, int] = field(default_factory=dict)
     ready: list[int] = field(default_factory=list)
     pos: list[tuple[float, float, float]] = field(default_factory=list)
+    deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
@@ -126,6 +140,9 @@ def _problem(
         tick_s=tick_s,
         ready=[0] * len(fleet),
         pos=[(float(s.home_m[0]), float(s.home_m[1]), float(s.home_m[2])) for s in fleet],
+        deadlines=tick_deadlines(
+            plan, tasks, timing=timing, cruise_altitude_m=cruise_altitude_m, tick_s=tick_s
+        ),
     )
 
 
@@ -216,8 +233,8 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
     avail = [i for i in part if missing[i] == 0]
     while avail:
         avail.sort(key=lambda i: (-chain[i], i))
-        i = avail.pop(0)
-        t0 = a0 = 0
+        i = pick(p.deadlines, p.tasks, p.prereqs, avail, start)
+        t0, a0 = cure_ready(p.deadlines, i, end), 0
         for v in p.prereqs[i]:
             if p.prefetch(i):
                 t0, a0 = max(t0, start[v]), max(a0, end[v])
@@ -257,52 +274,6 @@ def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
     return depth
 
 
-def _ancestors(p: _Problem, part: Sequence[int]) -> dict[int, set[int]]:
-    in_part = set(part)
-    memo: dict[int, set[int]] = {}
-
-    def of(i: int) -> set[int]:
-        stack = [i]
-        while stack:
-            j = stack[-1]
-            todo = [v for v in p.prereqs[j] if v in in_part and v not in memo]
-            if todo:
-                stack.extend(todo)
-                continue
-            acc: set[int] = set()
-            for v in p.prereqs[j]:
-                if v in in_part:
-                    acc.add(v)
-                    acc |= memo[v]
-            memo[j] = acc
-            stack.pop()
-        return memo[i]
-
-    return {i: of(i) for i in part}
-
-
-def _clique_cover(conflicts: Sequence[set[int]], part: Sequence[int]) -> list[list[int]]:
-    """Cliques of G^c within ``part`` that cover each of its conflict edges (greedy)."""
-    in_part = set(part)
-    covered: set[tuple[int, int]] = set()
-    out: list[list[int]] = []
-    for i in part:
-        for j in sorted(conflicts[i] & in_part):
-            if j < i or (i, j) in covered:
-                continue
-            clique = [i, j]
-            common = conflicts[i] & conflicts[j] & in_part
-            for k in sorted(common):
-                if all(k in conflicts[m] for m in clique):
-                    clique.append(k)
-            for a in clique:
-                for b in clique:
-                    if a < b:
-                        covered.add((a, b))
-            out.append(clique)
-    return out
-
-
 @dataclass
 class _PartResult:
     placed: dict[int, tuple[int, int, int, int]]
@@ -319,6 +290,10 @@ def _solve_part(
     t_start = time.perf_counter()
     hint = _greedy(p, part)
     horizon = max(e for _, _, e, _ in hint.values())
+    if p.deadlines:  # the greedy may miss an open time: a serial schedule never does
+        ends = [task_end_m(t) for t in p.tasks] + [u.home_m for u in p.uavs]
+        flights = [max(p.flight(e, i) for e in ends) for i in part]
+        horizon += serial_horizon([p.dur[i] for i in part], flights, p.deadlines)
     m = cp_model.CpModel()
     s_var: dict[int, Any] = {}
     e_var: dict[int, Any] = {}
@@ -340,6 +315,7 @@ def _solve_part(
         if site:
             m.add_hint(a_var[i], hint[i][3])
     _precedences(p, part, m, s_var, e_var, a_var)
+    add_deadlines(p.deadlines, part, m, s_var, e_var, a_var, p.end)
     for clique in _clique_cover(p.conflicts, part):
         m.add_no_overlap([keep[i] for i in clique])
     # conflicting tasks of earlier parts are fixed intervals: a task may fill a gap before one of them
@@ -420,7 +396,7 @@ def _machines(
 ) -> dict[int, dict[int, Any]]:
     """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights."""
     lits: dict[int, dict[int, Any]] = {i: {} for i in part}
-    anc = _ancestors(p, part)
+    anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
         mine = [i for i in part if p.tasks[i].kind == spec.role]
         if not mine:
@@ -517,6 +493,7 @@ def solve_schedule(
     t_ = DEFAULT_TIMING if timing is None else timing
     t0 = time.perf_counter()
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)
     parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
     reports: list[dict[str, Any]] = []
@@ -526,6 +503,11 @@ def solve_schedule(
             continue
         budget = time_limit_s * len(part) / n
         last = _solve_part(p, part, budget, seed, workers)
+        if last.status == "greedy" and missed_open(p.deadlines, last.placed, p.end, reservation):
+            raise DeadlinesUnmet(
+                f"CP-SAT found no schedule meeting the open times in {budget:.1f} s (a part of {len(part)} "
+                "tasks): give a longer --time-limit or a longer open time"
+            )
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
         for k in range(len(p.uavs)):
@@ -575,6 +557,8 @@ def _assemble(
     )
     whole = len(parts) == 1
     cp_bound = last.bound * tick if whole and last.bound is not None else None
+    if p.deadlines.has_open:  # a mission is not a solution of a model with open times (docs/schedule.md)
+        cp_bound = None
     bound, kind = terms.value_s, terms.kind
     if cp_bound is not None and cp_bound >= bound:
         bound, kind = cp_bound, "cp-sat"

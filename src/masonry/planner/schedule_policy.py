@@ -22,6 +22,7 @@ the assignments of a task to the UAV the schedule planned it for, :attr:`fallbac
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 from masonry.blueprint import UavSpec
 from masonry.errors import PlanningError
@@ -209,11 +210,19 @@ def make_dispatcher(
     Raises:
         PlanningError: ``schedule`` policy without a schedule, or as the dispatchers.
     """
+    from masonry.planner.dispatch_glue import with_glue
+
     if policy == SCHEDULE_POLICY:
         if schedule is None:
             raise PlanningError("the schedule policy needs an offline schedule (masonry schedule)")
-        return ScheduleDispatcher(plan, fleet, schedule, max_attempts, durations_s, reservation)
-    return Dispatcher(plan, fleet, policy, max_attempts, durations_s, reservation)
+        cls: Any = with_glue(ScheduleDispatcher) if plan.deadlines else ScheduleDispatcher
+        d: Dispatcher = cls(plan, fleet, schedule, max_attempts, durations_s, reservation)
+    else:
+        cls = with_glue(Dispatcher) if plan.deadlines else Dispatcher
+        d = cls(plan, fleet, policy, max_attempts, durations_s, reservation)
+    if plan.deadlines:  # the adhesive's open and cure times: glue just in time (docs/dispatch.md)
+        d._setup_glue(plan)  # type: ignore[attr-defined]
+    return d
 
 
 __all__ = ["SCHEDULE_POLICY", "ScheduleDispatcher", "make_dispatcher"]

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.blueprint import DEFAULT_BRICK_SIZE_M
+
+if TYPE_CHECKING:
+    from masonry.planner.deadlines import Deadline
 
 TaskKind = Literal["brick", "adhesion"]
 
@@ -69,6 +72,8 @@ class Plan:
     #: Optional (a, b) integer arrays of task indices, one entry per conflict (a fast path for large plans;
     #: filled by ``plan()``, ignored by equality).
     conflict_indices: Any = field(default=None, compare=False, repr=False)
+    #: The adhesive's open and cure edges (:mod:`masonry.planner.deadlines`; empty without ``adhesive``).
+    deadlines: tuple[Deadline, ...] = ()
 
     def task(self, task_id: str) -> Task:
         """The task with id ``task_id`` (KeyError if there is none)."""

@@ -35,16 +35,18 @@ class AdhesiveDeposit:
         self.z_tolerance_m = float(z_tolerance_m)
         self.sample_m = float(sample_m)
         self._segments: list[tuple[float, float, float, float, float, float]] = []
+        self._times: list[float] = []  # when each bead segment was laid (s, the world's clock)
         self._hash = SpatialHash(cell_m)
         self.length_m = 0.0
 
     def __len__(self) -> int:
         return len(self._segments)
 
-    def add(self, p0: Vec3, p1: Vec3) -> None:
-        """A bead from ``p0`` to ``p1`` (points on the surface; equal points make a dot)."""
+    def add(self, p0: Vec3, p1: Vec3, time_s: float = 0.0) -> None:
+        """A bead from ``p0`` to ``p1`` (points on the surface; equal points make a dot), laid at ``time_s``."""
         key = len(self._segments)
         self._segments.append((p0[0], p0[1], p0[2], p1[0], p1[1], p1[2]))
+        self._times.append(float(time_s))
         r = self.bead_radius_m
         self._hash.insert(
             key, min(p0[0], p1[0]) - r, min(p0[1], p1[1]) - r, max(p0[0], p1[0]) + r, max(p0[1], p1[1]) + r
@@ -59,6 +61,21 @@ class AdhesiveDeposit:
 
     def coverage(self, start_m: Vec3, end_m: Vec3) -> float:
         """Fraction of the segment ``start_m`` -> ``end_m`` within the bead radius of deposited adhesive."""
+        covered, _ = self._covering(start_m, end_m)
+        return float(np.mean(covered.any(axis=1))) if covered.size else 0.0
+
+    def laid_at_s(self, start_m: Vec3, end_m: Vec3) -> float | None:
+        """When the glue on the segment ``start_m`` -> ``end_m`` was laid: per sample the freshest bead over it,
+        the oldest of those (a re-sprayed stretch counts as fresh); None: no glue on it."""
+        covered, keys = self._covering(start_m, end_m)
+        if not covered.size or not covered.any():
+            return None
+        times = np.asarray([self._times[k] for k in keys], dtype=float)
+        fresh = np.where(covered, times[None, :], -np.inf).max(axis=1)
+        return float(fresh[np.isfinite(fresh)].min())
+
+    def _covering(self, start_m: Vec3, end_m: Vec3) -> tuple[np.ndarray, list[int]]:
+        """(samples x candidate beads) booleans: the bead covers the sample; and the candidates' keys."""
         a = np.asarray(start_m, dtype=float)
         b = np.asarray(end_m, dtype=float)
         length = float(np.linalg.norm((b - a)[:2]))
@@ -73,8 +90,9 @@ class AdhesiveDeposit:
             float(samples[:, 1].max()) + r,
         )
         if not keys:
-            return 0.0
-        seg = np.asarray([self._segments[k] for k in sorted(keys)], dtype=float)
+            return np.zeros((0, 0), dtype=bool), []
+        ordered = sorted(keys)
+        seg = np.asarray([self._segments[k] for k in ordered], dtype=float)
         p0, p1 = seg[:, 0:2], seg[:, 3:5]
         z = (seg[:, 2] + seg[:, 5]) / 2.0
         d = p1 - p0
@@ -85,5 +103,4 @@ class AdhesiveDeposit:
         closest = p0[None, :, :] + u[:, :, None] * d[None, :, :]
         dist2 = np.sum((samples[:, None, :2] - closest) ** 2, axis=2)
         near_z = np.abs(samples[:, None, 2] - z[None, :]) <= self.z_tolerance_m
-        covered = np.any((dist2 <= r * r) & near_z, axis=1)
-        return float(np.mean(covered))
+        return (dist2 <= r * r) & near_z, ordered

@@ -31,6 +31,7 @@ from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
 from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
 from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
+from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
 from masonry.sim.wind import WindField
@@ -214,6 +215,7 @@ class World:
         self.clock = SimClock(start_s)
         self.uavs: dict[str, SimUav] = {}
         self.adhesive = AdhesiveDeposit(bead_radius_m=self.config.bead_radius_m)
+        self.glue = GlueWatch(blueprint, self.adhesive)  # glue ages (inert without an ``adhesive``)
         self.field = BrickField(self.config.cell_m)
         self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
@@ -467,6 +469,7 @@ class World:
         brick.yaw_rad = math.remainder(brick.yaw_rad + cfg.release_yaw_scatter_rad * dyaw, 2.0 * math.pi)
         self.field.drop(brick_id, cfg.support_margin_m)
         uav.carried_brick = None
+        self.glue.placed(brick_id, brick.position_m, self.clock.now_s())
 
     def _spray(self, uav: SimUav) -> None:
         nx, ny, nz = uav.nozzle_m()
@@ -478,8 +481,9 @@ class World:
         prev = uav._last_deposit
         if prev is not None and abs(prev[2] - surface) > 1e-6:
             prev = None  # moved onto another surface: start a new bead
-        self.adhesive.add(prev if prev is not None else point, point)
+        self.adhesive.add(prev if prev is not None else point, point, self.clock.now_s())
         uav._last_deposit = point
+        self.glue.sprayed_at(self.field, point, self.clock.now_s())
 
     # ---------------------------------------------------------------- camera
     def camera_pose(self, uav: SimUav) -> np.ndarray:

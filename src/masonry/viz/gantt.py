@@ -37,6 +37,23 @@ PHASE_COLOURS = {
 
 
 OTHER_KIND_COLOUR = "#9bbb59"
+#: The open window of a bead (issue 31): a thin band under its adhesion UAV's row, from the bead's end.
+OPEN_WINDOW_COLOUR = "#17becf"
+
+
+def open_windows(report: Any) -> list[tuple[str, str, float, float]]:
+    """Per bead that was sprayed (a done or expired adhesion attempt): (UAV, bead id, start s, end s) of its open
+    window, from the end of the spraying to the end of the open time; none without an open time."""
+    open_s = getattr(report, "open_time_s", None)
+    if open_s is None:
+        return []
+    return [
+        (a.uav, a.task_id, a.end_s, a.end_s + open_s)
+        for a in report.attempts
+        if a.kind == "adhesion"
+        and a.end_s is not None
+        and (a.status == "done" or a.reason == "open time expired")
+    ]
 
 
 @dataclass
@@ -135,6 +152,10 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
         ax.broken_barh(spans, (y - 0.3, 0.6), facecolors=colour, linewidth=0)
     for y, spans in bars.outlines.items():
         ax.broken_barh(spans, (y - 0.3, 0.6), facecolors="none", edgecolors="black", linewidth=0.5)
+    windows = open_windows(report)
+    for uav, _, t0, t1 in windows:
+        if uav in row:
+            ax.broken_barh([(t0, t1 - t0)], (row[uav] + 0.3, 0.1), facecolors=OPEN_WINDOW_COLOUR, alpha=0.5)
     for u in report.uavs:
         if u.status != "ok":
             ax.plot([end], [row[u.name]], marker="|", color="black", markersize=16)
@@ -150,6 +171,8 @@ def draw_gantt(report: Any, path: str | Path, *, title: str | None = None) -> Pa
         for kind in sorted(bars.kinds)
     ]
     handles.append(Patch(facecolor=FAILED_COLOUR, hatch="//", label="failed attempt"))
+    if windows:
+        handles.append(Patch(color=OPEN_WINDOW_COLOUR, alpha=0.5, label="bead open window"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
     ax.set_title(
         title or f"mission ({report.policy}, seed {report.seed}): makespan {report.makespan_s:.1f} s"

@@ -1,0 +1,162 @@
+"""Mission control's side of the adhesive (issue 31; docs/dispatch.md, "Adhesive: just in time").
+
+Pure: no I/O, no clock (times are passed in). :class:`GlueGate` knows when each bead was sprayed (an adhesion
+task's completion) and each glued brick placed, and:
+
+* is the airspace's :class:`~masonry.mission.sites.SiteGate` in front of the site intervals: a brick's flight
+  down to its site is granted only when every bead under it is done and will still be open when the brick
+  presses on it (its age plus :attr:`margin_s`, the placing descent and release, within the open time);
+* every tick (:meth:`step`): a bead whose brick is not at its site yet and that would no longer be open by then
+  has *expired*: its done attempt is marked failed (reason :data:`EXPIRED_REASON`), the brick's UAV, if it has
+  one, is recalled (it may hover by the column the re-spray needs; its attempt fails with the same reason and
+  counts, so a brick that can never come in time ends stuck instead of looping), and the dispatcher sprays the
+  bead again (``reopen``): never is a brick placed on expired glue, whatever delayed it (a fault, a lost UAV, a
+  pause: paused time counts against the open time like any other);
+* tells the dispatcher when a brick's glue has cured (``cured``), so beads on top of it may be laid.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from masonry.errors import InputError
+from masonry.mission.sites import AT_SITE_M, SiteIntervals, work_point_m
+from masonry.planner.tasks import Plan
+from masonry.timing import TaskTiming
+
+Vec3 = tuple[float, float, float]
+#: The reason of a bead's attempt whose glue expired before its brick came (its re-spray explains itself).
+EXPIRED_REASON = "open time expired"
+#: Slack added to the placing descent and release when judging whether a bead will still be open (s).
+MARGIN_SLACK_S = 12.0
+
+
+@dataclass
+class GlueGate:
+    """The beads' ages for one mission (see the module docstring)."""
+
+    plan: Plan
+    dispatcher: Any
+    sites: SiteIntervals
+    margin_s: float
+    #: bead (adhesion task id) -> when it was sprayed (its completion, s)
+    sprayed_at_s: dict[str, float] = field(default_factory=dict)
+    #: brick task id -> when its glue has cured (s)
+    cures_at_s: dict[str, float] = field(default_factory=dict)
+    #: re-sprays ordered: (time, bead, brick)
+    expiries: list[tuple[float, str, str]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self._open: dict[str, list[tuple[str, float]]] = {}  # brick -> its beads and their open time
+        self._cure_s: dict[str, float] = {}  # glued brick -> cure time
+        for d in self.plan.deadlines:
+            if d.kind == "open":
+                self._open.setdefault(d.brick, []).append((d.adhesion, d.lag_s))
+            else:
+                self._cure_s[d.brick] = d.lag_s
+        self._work = {t.id: work_point_m(t) for t in self.plan.tasks}
+        self.now_s = 0.0
+        self._changed = False  # a bead was sprayed: the site gate's answers changed
+        self._recalled: dict[str, int] = {}  # brick -> the attempt whose UAV was recalled
+
+    # -- the site gate ---------------------------------------------------------------------------------------
+    def may_enter(self, uav: str, site_m: Vec3) -> bool:
+        """The site intervals' rule, and for a brick coming down to its site: every bead under it open then."""
+        if not self.sites.may_enter(uav, site_m):
+            return False
+        tid = self.dispatcher.task_of(uav)
+        if tid is None or tid not in self._open:
+            return True
+        w = self._work[tid]
+        if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) >= AT_SITE_M:
+            return True  # a flight elsewhere (the pallet)
+        return all(self._fresh(a, lag) for a, lag in self._open[tid])
+
+    def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
+        self.sites.entered(uav, site_m, now_s)
+
+    def _fresh(self, bead: str, open_time_s: float) -> bool:
+        sprayed = self.sprayed_at_s.get(bead)
+        done = bead in self.dispatcher.done
+        return done and sprayed is not None and self.now_s - sprayed + self.margin_s <= open_time_s
+
+    # -- mission control's events ------------------------------------------------------------------------------
+    def completed(self, task_id: str, now_s: float) -> None:
+        """A task was reported done at ``now_s``: a bead's spraying ended, or a glued brick was placed."""
+        if task_id in self._cure_s:
+            self.cures_at_s[task_id] = now_s + self._cure_s[task_id]
+        else:
+            self.sprayed_at_s[task_id] = now_s
+            self._changed = True
+
+    def restore(self, completions: Iterable[tuple[str, float]]) -> None:
+        """A resumed mission: each journaled completion (task id, time s) as if heard now, in time order (a bead
+        sprayed before the stop is as old as the journal says; a re-spray's last completion wins)."""
+        for task_id, time_s in sorted(completions, key=lambda c: c[1]):
+            self.completed(task_id, time_s)
+
+    def step(self, mc: Any, now_s: float) -> bool:
+        """Cures that ended, beads that expired (sprayed again); True when the dispatcher has news."""
+        self.now_s = now_s
+        news = False
+        for brick, at in list(self.cures_at_s.items()):
+            if now_s >= at:
+                del self.cures_at_s[brick]
+                self.dispatcher.cured(brick)
+                news = True
+        done = self.dispatcher.done
+        stuck = self.dispatcher.stuck
+        for brick, beads in self._open.items():
+            if brick in done or brick in self.sites.on_site or brick in stuck:
+                continue  # (a stuck brick never comes: its glue is not sprayed again and again)
+            for bead, lag in beads:
+                if bead in done and bead in self.sprayed_at_s and not self._fresh(bead, lag):
+                    self._expire(mc, bead, brick, now_s)
+                    news = True
+        if news or self._changed:
+            self._changed = False
+            mc.columns.touch()  # the gate's answers changed: the waiting requests are looked at again
+        return news
+
+    def _expire(self, mc: Any, bead: str, brick: str, now_s: float) -> None:
+        del self.sprayed_at_s[bead]
+        self.expiries.append((now_s, bead, brick))
+        carrier = self.dispatcher.in_progress.get(brick)
+        attempt = self.dispatcher.attempt_of(brick)
+        if carrier is not None and self._recalled.get(brick) != attempt:
+            # its UAV may hover by the bead's column, which the re-spray needs: it puts the brick back and
+            # comes again (an attempt of the brick: a brick that never makes it in time ends stuck, not looping)
+            self._recalled[brick] = attempt
+            mc.recall(carrier, now_s, EXPIRED_REASON)
+        self.dispatcher.reopen(bead)
+        for att in reversed(mc.history):
+            if att.task_id == bead and att.status == "done":
+                att.status, att.reason = "failed", EXPIRED_REASON
+                if mc.journal is not None:
+                    mc.journal.record_failure(now_s, bead, att.uav, EXPIRED_REASON)
+                mc.emit_event(now_s, "failed", att.uav, bead, attempt=att.attempt, reason=EXPIRED_REASON)
+                break
+
+
+def glue_gate(plan: Plan, dispatcher: Any, sites: SiteIntervals, timing: TaskTiming) -> GlueGate | None:
+    """Mission control's glue gate (None: the plan has no deadlines).
+
+    Raises:
+        InputError: an open time no brick can meet (shorter than its placing descent and release).
+    """
+    if not plan.deadlines:
+        return None
+    margin = timing.descent_duration_s + timing.release_dwell_s + MARGIN_SLACK_S
+    for d in plan.deadlines:
+        if d.kind == "open" and d.lag_s <= margin:
+            raise InputError(
+                f"adhesive.open_time_s: {d.lag_s:g} s is not above a brick's placing descent and release "
+                f"({margin:g} s with {MARGIN_SLACK_S:g} s of slack): no brick could be placed on open glue"
+            )
+    return GlueGate(plan, dispatcher, sites, margin)
+
+
+__all__ = ["EXPIRED_REASON", "MARGIN_SLACK_S", "GlueGate", "glue_gate"]
