@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
 
@@ -18,6 +18,12 @@ from masonry.cli.foxglove_options import (
 )
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.errors import InputError
+
+if TYPE_CHECKING:  # (the observe extra's modules load only when a log is replayed)
+    from masonry.blueprint import Blueprint
+    from masonry.cli.foxglove_options import FoxgloveAt
+    from masonry.observe.mcap_log import RecordedMission
+    from masonry.planner.tasks import Plan
 
 
 @command("replay")
@@ -109,7 +115,7 @@ def replay(
         raise typer.Exit(1)
 
 
-def _foxglove(log: Path, fox: Any, time_scale: float) -> None:
+def _foxglove(log: Path, fox: FoxgloveAt, time_scale: float) -> None:
     """The log's channels, as recorded, on a Foxglove server: played at ``time_scale`` once a viewer subscribes,
     over and over (a viewer who joins late sees the next pass whole), until Ctrl-C."""
     import threading
@@ -146,7 +152,7 @@ def _foxglove(log: Path, fox: Any, time_scale: float) -> None:
         server.stop()
 
 
-def _serve(recorded: Any, the_plan: Any, bp: Any, task_ids: list[str], serve: str) -> None:
+def _serve(recorded: RecordedMission, the_plan: Plan, bp: Blueprint, task_ids: list[str], serve: str) -> None:
     """The log in the live page, at the slider's time, until Ctrl-C."""
     from masonry.mission.view import view_at, wall_layout
     from masonry.observe.web import ViewServer, parse_serve

@@ -26,12 +26,12 @@ import logging
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 from masonry.blueprint import UavSpec
-from masonry.errors import MissionError, PlanningError, ProtocolError
+from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
-from masonry.mission.airspace import ON_PAD_Z_M
+from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Phase, task_work_altitude_m
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
@@ -53,11 +53,13 @@ from masonry.mission.messages import (
     encode,
 )
 from masonry.mission.operator import Operator
+from masonry.mission.records import Attempt, UavLink
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
-from masonry.mission.wind_limit import HeardWind
+from masonry.mission.wind_limit import HeardWind, WindLimit
 from masonry.planner.dispatch import DEFAULT_RESERVATION
+from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.ports import (
     CARRYING_STATES,
@@ -66,14 +68,12 @@ from masonry.ports import (
     RECALL_REASON,
     TASK_DROPPED_REASON,
     UNCOUNTED_REASONS,
-    PhaseTimes,
 )
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 log = logging.getLogger(__name__)
 
 Vec3 = tuple[float, float, float]
-AttemptStatus = Literal["running", "done", "failed"]
 
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
@@ -86,51 +86,6 @@ _WAY_HOME_MARGIN_S = 30.0
 #: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
 #: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
 MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
-
-
-@dataclass
-class Attempt:
-    """One assignment of a task to a UAV, as mission control saw it."""
-
-    task_id: str
-    uav: str
-    attempt: int
-    start_s: float
-    end_s: float | None = None
-    status: AttemptStatus = "running"
-    reason: str | None = None
-    placement_error_m: float | None = None
-    coverage: float | None = None
-    phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
-    #: in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
-    adopted: bool = False
-
-
-@dataclass
-class UavLink:
-    """What mission control knows about one UAV."""
-
-    spec: UavSpec
-    last_heard_s: float | None = None
-    position_m: Vec3 | None = None
-    state: str = ""
-    lost: bool = False
-    lost_at_s: float | None = None
-    distance_m: float = 0.0  # summed between successive reported positions
-    battery: float | None = None  # as its heartbeats report it (None: they do not)
-    status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
-    #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
-    #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
-    taking_off: bool = False
-    #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
-    airspace_until_s: float | None = None
-    #: silent with a brick on its magnet: the pickup it puts it back on, then home
-    way_via_m: Vec3 | None = None
-
-    def moved_to(self, position_m: Vec3) -> None:
-        if self.position_m is not None:
-            self.distance_m += math.dist(self.position_m, position_m)
-        self.position_m = position_m
 
 
 @dataclass
@@ -222,11 +177,9 @@ class MissionControl:
         schedule: Any = None,
         events_sink: EventSink | None = None,
         fence: Site | None = None,
-        wind_limit: Any = None,
+        wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
     ) -> None:
-        from masonry.mission.airspace import ColumnClearance
-        from masonry.planner.schedule_policy import make_dispatcher
 
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
@@ -318,7 +271,6 @@ class MissionControl:
         them out again at once would fly a task twice whose completion never reached the journal.
         UAVs the journal declared lost stay lost.
         """
-        from masonry.errors import JournalError
 
         done = {rec.task_id: rec for rec in state.done}
         unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self._tasks))
@@ -888,7 +840,6 @@ class MissionControl:
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
         here): take-offs from neighbouring pads go one after the other."""
-        from masonry.mission.airspace import Phase
 
         if not self.operator.may_fly(self, name):
             return False  # recalled, or its role at the operator's fleet limit
@@ -952,7 +903,6 @@ class MissionControl:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
         if self._layer_floor_m is None:
             return
-        from masonry.mission.airspace import task_work_altitude_m
 
         top = max(
             (

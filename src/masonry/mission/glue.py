@@ -20,12 +20,17 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
-from masonry.errors import InputError
+from masonry.errors import InputError, PlanningError
 from masonry.mission.sites import AT_SITE_M, SiteIntervals, work_point_m
+from masonry.planner.dispatch import Dispatcher
+from masonry.planner.dispatch_glue import JustInTime
 from masonry.planner.tasks import Plan
 from masonry.timing import TaskTiming
+
+if TYPE_CHECKING:  # (mission control builds the gate: no import cycle at run time)
+    from masonry.mission.control import MissionControl
 
 Vec3 = tuple[float, float, float]
 #: The reason of a bead's attempt whose glue expired before its brick came (its re-spray explains itself).
@@ -39,7 +44,7 @@ class GlueGate:
     """The beads' ages for one mission (see the module docstring)."""
 
     plan: Plan
-    dispatcher: Any
+    dispatcher: JustInTime
     sites: SiteIntervals
     margin_s: float
     #: bead (adhesion task id) -> when it was sprayed (its completion, s)
@@ -98,7 +103,7 @@ class GlueGate:
         for task_id, time_s in sorted(completions, key=lambda c: c[1]):
             self.completed(task_id, time_s)
 
-    def step(self, mc: Any, now_s: float) -> bool:
+    def step(self, mc: MissionControl, now_s: float) -> bool:
         """Cures that ended, beads that expired (sprayed again); True when the dispatcher has news."""
         self.now_s = now_s
         news = False
@@ -121,7 +126,7 @@ class GlueGate:
             mc.columns.touch()  # the gate's answers changed: the waiting requests are looked at again
         return news
 
-    def _expire(self, mc: Any, bead: str, brick: str, now_s: float) -> None:
+    def _expire(self, mc: MissionControl, bead: str, brick: str, now_s: float) -> None:
         del self.sprayed_at_s[bead]
         self.expiries.append((now_s, bead, brick))
         carrier = self.dispatcher.in_progress.get(brick)
@@ -141,7 +146,9 @@ class GlueGate:
                 break
 
 
-def glue_gate(plan: Plan, dispatcher: Any, sites: SiteIntervals, timing: TaskTiming) -> GlueGate | None:
+def glue_gate(
+    plan: Plan, dispatcher: Dispatcher, sites: SiteIntervals, timing: TaskTiming
+) -> GlueGate | None:
     """Mission control's glue gate (None: the plan has no deadlines).
 
     Raises:
@@ -156,6 +163,12 @@ def glue_gate(plan: Plan, dispatcher: Any, sites: SiteIntervals, timing: TaskTim
                 f"adhesive.open_time_s: {d.lag_s:g} s is not above a brick's placing descent and release "
                 f"({margin:g} s with {MARGIN_SLACK_S:g} s of slack): no brick could be placed on open glue"
             )
+    if not isinstance(
+        dispatcher, JustInTime
+    ):  # (make_dispatcher mixes it in whenever the plan has deadlines)
+        raise TypeError(
+            f"a plan with deadlines needs a just-in-time dispatcher, not {type(dispatcher).__name__}"
+        )
     return GlueGate(plan, dispatcher, sites, margin)
 
 

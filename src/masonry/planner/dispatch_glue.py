@@ -30,19 +30,19 @@ a task is held (time releases a cure; the next :meth:`assign` the other holds).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
-
+from typing import TypeVar, cast
 from masonry.planner.dispatch import _DONE, _PENDING, Dispatcher
 from masonry.planner.dispatch_values import Assignment
 from masonry.planner.tasks import Plan
 
 
-class JustInTime:
-    """The hold rules, mixed in before a :class:`~masonry.planner.dispatch.Dispatcher` class (see the module)."""
+class JustInTime(Dispatcher):
+    """The hold rules, mixed in before a :class:`~masonry.planner.dispatch.Dispatcher` class (see the module):
+    :func:`with_glue` puts it first in the policy's class, so its ``super()`` calls reach the policy's methods."""
 
     _glue_on = False
 
-    def _setup_glue(self: Any, plan: Plan) -> None:
+    def _setup_glue(self, plan: Plan) -> None:
         index = self._index
         self._glue_brick: dict[int, int] = {}
         self._cure_under: dict[int, list[int]] = {}
@@ -61,10 +61,10 @@ class JustInTime:
         self._rehold()
 
     # -- the rules ---------------------------------------------------------------------------------------
-    def _cure_holds(self: Any, i: int) -> bool:
+    def _cure_holds(self, i: int) -> bool:
         return any(b in self._uncured for b in self._cure_under.get(i, ()))
 
-    def _holds(self: Any, i: int) -> bool:
+    def _holds(self, i: int) -> bool:
         if self._role[i] != "adhesion":
             return False
         if self._cure_holds(i):
@@ -81,18 +81,18 @@ class JustInTime:
         # a bead that expired once waiting for its brick is laid again only when a brick UAV is free to bring it
         return i in self._expired and not self._idle_brick_uav()
 
-    def _idle_brick_uav(self: Any) -> bool:
+    def _idle_brick_uav(self) -> bool:
         return any(
             spec.role == "brick" and n in self._live and n not in self._uav_task
             for n, spec in self._fleet.items()
         )
 
-    def _start(self: Any, i: int, uav: str) -> None:
+    def _start(self, i: int, uav: str) -> None:
         if self._glue_on and self._role[i] == "brick":
             self._expired.difference_update(self._prerequisites[i])
-        super()._start(i, uav)  # type: ignore[misc]
+        super()._start(i, uav)
 
-    def _rehold(self: Any) -> None:
+    def _rehold(self) -> None:
         """Hold the available beads the rules now hold; let go the held ones they no longer hold."""
         for i in list(self._ready["adhesion"]):
             if self._holds(i):
@@ -107,14 +107,14 @@ class JustInTime:
                 Dispatcher._maybe_available(self, i)
 
     # -- the dispatcher's hooks ----------------------------------------------------------------------------
-    def _maybe_available(self: Any, i: int) -> None:
+    def _maybe_available(self, i: int) -> None:
         if self._glue_on and self._status[i] == _PENDING and not self._prereqs[i] and self._holds(i):
             self._held.add(i)
             return
-        super()._maybe_available(i)  # type: ignore[misc]
+        super()._maybe_available(i)
 
     def assign(
-        self: Any,
+        self,
         uav_positions_m: Mapping[str, Sequence[float]] | None = None,
         may_start: Callable[[str], bool] | None = None,
     ) -> list[Assignment]:
@@ -127,24 +127,24 @@ class JustInTime:
                 ):  # nothing else can run: lay it (mission control re-sprays it if need be)
                     self._held.discard(i)
                     Dispatcher._maybe_available(self, i)
-        return super().assign(uav_positions_m, may_start)  # type: ignore[misc, no-any-return]
+        return super().assign(uav_positions_m, may_start)
 
     @property
-    def blocked(self: Any) -> bool:
+    def blocked(self) -> bool:
         if self._held:
             return False  # a cure ends with time; the next assign() lets the other holds go when all is idle
-        return super().blocked  # type: ignore[misc, no-any-return]
+        return super().blocked
 
     # -- mission control's events --------------------------------------------------------------------------
-    def cured(self: Any, brick_task_id: str) -> None:
+    def cured(self, brick_task_id: str) -> None:
         """The glue under ``brick_task_id`` has cured: beads on top of it may be laid."""
         self._uncured.discard(self._lookup(brick_task_id, "cured"))
 
-    def held(self: Any) -> tuple[str, ...]:
+    def held(self) -> tuple[str, ...]:
         """Ids of the adhesion tasks held back now, in plan order."""
         return tuple(self._ids[i] for i in sorted(self._held))
 
-    def reopen(self: Any, task_id: str) -> None:
+    def reopen(self, task_id: str) -> None:
         """A done bead expired before its brick came: it is to be sprayed again (no attempt is counted).
 
         Raises:
@@ -169,9 +169,12 @@ class JustInTime:
         self._maybe_available(i)
 
 
-def with_glue(cls: type[Dispatcher]) -> type[Dispatcher]:
+D = TypeVar("D", bound=Dispatcher)
+
+
+def with_glue(cls: type[D]) -> type[D]:
     """``cls`` with :class:`JustInTime` mixed in (call ``_setup_glue(plan)`` on the instance after building it)."""
-    return type(f"JustInTime{cls.__name__}", (JustInTime, cls), {})
+    return cast("type[D]", type(f"JustInTime{cls.__name__}", (JustInTime, cls), {}))
 
 
 __all__ = ["JustInTime", "with_glue"]

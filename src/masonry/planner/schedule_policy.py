@@ -22,11 +22,11 @@ the assignments of a task to the UAV the schedule planned it for, :attr:`fallbac
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 from masonry.blueprint import UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.dispatch import _PENDING, _RUNNING, Dispatcher
+from masonry.planner.dispatch_glue import JustInTime, with_glue
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
@@ -210,18 +210,16 @@ def make_dispatcher(
     Raises:
         PlanningError: ``schedule`` policy without a schedule, or as the dispatchers.
     """
-    from masonry.planner.dispatch_glue import with_glue
-
     if policy == SCHEDULE_POLICY:
         if schedule is None:
             raise PlanningError("the schedule policy needs an offline schedule (masonry schedule)")
-        cls: Any = with_glue(ScheduleDispatcher) if plan.deadlines else ScheduleDispatcher
-        d: Dispatcher = cls(plan, fleet, schedule, max_attempts, durations_s, reservation)
+        by_schedule = with_glue(ScheduleDispatcher) if plan.deadlines else ScheduleDispatcher
+        d: Dispatcher = by_schedule(plan, fleet, schedule, max_attempts, durations_s, reservation)
     else:
-        cls = with_glue(Dispatcher) if plan.deadlines else Dispatcher
-        d = cls(plan, fleet, policy, max_attempts, durations_s, reservation)
-    if plan.deadlines:  # the adhesive's open and cure times: glue just in time (docs/dispatch.md)
-        d._setup_glue(plan)  # type: ignore[attr-defined]
+        plain = with_glue(Dispatcher) if plan.deadlines else Dispatcher
+        d = plain(plan, fleet, policy, max_attempts, durations_s, reservation)
+    if isinstance(d, JustInTime):  # the adhesive's open and cure times: glue just in time (docs/dispatch.md)
+        d._setup_glue(plan)
     return d
 
 

@@ -1,0 +1,61 @@
+"""What mission control records of each attempt and of each UAV (values of :mod:`masonry.mission.control`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+from masonry.blueprint import UavSpec
+from masonry.ports import PhaseTimes
+
+Vec3 = tuple[float, float, float]
+AttemptStatus = Literal["running", "done", "failed"]
+
+
+@dataclass
+class Attempt:
+    """One assignment of a task to a UAV, as mission control saw it."""
+
+    task_id: str
+    uav: str
+    attempt: int
+    start_s: float
+    end_s: float | None = None
+    status: AttemptStatus = "running"
+    reason: str | None = None
+    placement_error_m: float | None = None
+    coverage: float | None = None
+    phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
+    #: in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
+    adopted: bool = False
+
+
+@dataclass
+class UavLink:
+    """What mission control knows about one UAV."""
+
+    spec: UavSpec
+    last_heard_s: float | None = None
+    position_m: Vec3 | None = None
+    state: str = ""
+    lost: bool = False
+    lost_at_s: float | None = None
+    distance_m: float = 0.0  # summed between successive reported positions
+    battery: float | None = None  # as its heartbeats report it (None: they do not)
+    status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
+    #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
+    #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
+    taking_off: bool = False
+    #: declared lost for its silence, its airspace stays reserved until then (it may hover where it stopped)
+    airspace_until_s: float | None = None
+    #: silent with a brick on its magnet: the pickup it puts it back on, then home
+    way_via_m: Vec3 | None = None
+
+    def moved_to(self, position_m: Vec3) -> None:
+        if self.position_m is not None:
+            self.distance_m += math.dist(self.position_m, position_m)
+        self.position_m = position_m
+
+
+__all__ = ["Attempt", "AttemptStatus", "UavLink"]
