@@ -20,6 +20,7 @@ from masonry.motion import MinJerk
 from waiting import HeldClock, wait_until
 
 TIME_SCALE = 8.0
+DESCENT_SPEEDUP = 1.0
 KEY = bytes(range(32))
 OTHER_KEY = bytes(range(1, 33))
 
@@ -55,14 +56,15 @@ def take_off(fc: MavlinkFlightController, altitude_m: float = 1.2) -> None:
         lambda: (
             fc.telemetry().position_m[2] > altitude_m - 0.05 and abs(fc.telemetry().velocity_mps[2]) < 0.05
         ),
-        5.0,
+        30.0,  # a bound on waiting for the evidence (about 0.5 s at x8 when the machine is idle)
         "the takeoff altitude",
     )
 
 
 def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
-    # time scale 4: the 50 Hz wall-time loop below closes the loop at 12.5 Hz of autopilot time
-    with flight(home_m=(1.0, 2.0, 0.0), time_scale=4.0, telemetry_rate_hz=50.0) as (sitl, fc):
+    # x1: the tracking loop below runs on the wall (a 0.02 s sleep); a stall of a loaded machine lags it by the
+    # stall times the speed-up (12.8 cm worst at x4 under load, issue 29)
+    with flight(home_m=(1.0, 2.0, 0.0), time_scale=DESCENT_SPEEDUP, telemetry_rate_hz=50.0) as (sitl, fc):
         fc.connect()
         assert fc.autopilot == "ardupilot" and fc.target_system == 1
         assert fc.warnings == []

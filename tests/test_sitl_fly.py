@@ -24,6 +24,11 @@ from waiting import wait_until
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 runner = CliRunner()
+#: The SITL's speed-up for a whole task flown on its clock: its telemetry (30 Hz) and the setpoint stream (20 Hz)
+#: run on the wall, so every stall of a loaded machine reaches the position loop multiplied by it. At x10 on two
+#: cores with one kept busy, 3 of 8 adhesion tasks failed ("sprayed 6% of the bead ...", "takeoff did not reach
+#: 1.20 m"), 1 of 6 at x5, 0 of 8 at x4 (issue 29; docs/performance/autopilots.md "SITL tests under load").
+SUSTAINED_SPEEDUP = 4.0
 
 
 @pytest.mark.slow
@@ -31,7 +36,7 @@ def test_fly_completes_a_brick_task_against_masonry_sitl() -> None:
     port = free_udp_port()
     sitl = subprocess.Popen(
         [str(Path(sys.executable).parent / "masonry"), "sitl", "--port", str(port), "--blueprint", CASE_STUDY,
-         "--uav", "brick", "--time-scale", "10"],
+         "--uav", "brick", "--time-scale", str(SUSTAINED_SPEEDUP)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     try:
@@ -216,9 +221,12 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
          "--uav", "adhesion", "--time-scale", "5", "--signing-key", str(key)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
+    started = ""
     try:
         from masonry.adapters.mavlink import load_signing_key
 
+        # connect once it serves: its start-up (imports) on a loaded machine may outlast the connect timeout
+        started = _first_lines(proc, 2)
         fc = MavlinkFlightController(
             f"udpin:127.0.0.1:{port}", connect_timeout_s=10.0, signing_key=load_signing_key(key)
         )
@@ -233,11 +241,32 @@ def test_masonry_sitl_command_serves_mavlink_until_interrupted(tmp_path) -> None
     finally:
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=10)
+    out = started + out
     assert "glue-1 (adhesion) of" in out and "at (0.00, -2.50, 0.00) m" in out  # glue-1's home
     assert "(signed)" in out and f"udpin:0.0.0.0:{port}" in out
     assert "ground station connected (system 255)" in out
     assert proc.returncode in (130, 0, 1), err
     assert "Traceback" not in err
+
+
+def _first_lines(proc: subprocess.Popen[str], n: int, bound_s: float = 120.0) -> str:
+    """The first ``n`` lines ``proc`` prints (waiting for them, within a bound no start-up comes near); read
+    from the pipe itself, so that ``communicate`` goes on from there."""
+    import os
+    import selectors
+
+    assert proc.stdout is not None
+    fd = proc.stdout.fileno()
+    data = b""
+    with selectors.DefaultSelector() as sel:
+        sel.register(fd, selectors.EVENT_READ)
+        deadline = time.monotonic() + bound_s
+        while data.count(b"\n") < n:
+            assert sel.select(timeout=max(0.0, deadline - time.monotonic())), f"no output: {data!r}"
+            chunk = os.read(fd, 4096)
+            assert chunk, f"exited: {data!r}"
+            data += chunk
+    return data.decode()
 
 
 def test_sitl_command_bad_input() -> None:
@@ -387,7 +416,7 @@ def test_adhesion_task_with_the_serial_valve_against_the_sitl(tmp_path) -> None:
     from masonry.adapters.arduino_fake import FakeArduino
 
     port = free_udp_port()
-    sitl, _ = build_sitl(port=port, uav="adhesion", blueprint=Path(CASE_STUDY), time_scale=10.0)
+    sitl, _ = build_sitl(port=port, uav="adhesion", blueprint=Path(CASE_STUDY), time_scale=SUSTAINED_SPEEDUP)
     with FakeArduino() as board:
         config = tmp_path / "glue-1.yaml"
         config.write_text(

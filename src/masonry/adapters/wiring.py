@@ -64,7 +64,7 @@ class HardwareConfig:
     max_wind_mps: float = 8.0
     # the state machines' tuning (masonry.fsm.tuning): a preset (ideal | arducopter), then any UavConfig field
     # (``control``) and the position controller's gains per axis (``pid``) over it
-    control_preset: str | None = None  # None: ``ideal``, or the simulated vehicle's preset with ``--vehicle``
+    control_preset: str | None = None  # None: the autopilot's (masonry.fsm.tuning_choice), or --vehicle's
     control: dict[str, Any] = field(default_factory=dict)
     pid: dict[str, Any] = field(default_factory=dict)
 

@@ -15,6 +15,7 @@ from typing import Any
 import typer
 
 from masonry.cli.app import cli_text, command
+from masonry.cli.fly_tuning import tuning_preset, with_tuning_line
 from masonry.cli.options import check_all, help_text
 from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
 from masonry.errors import InputError
@@ -51,6 +52,7 @@ def select_adapters(
                 progress=lambda line: typer.echo(line, err=True),
                 site=getattr(blueprint, "site", None),
             )
+            report = with_tuning_line(report, hardware, vehicle, opened)
             for line in report.lines():
                 typer.echo(cli_text(line, report.options), err=True)
             report.raise_if_failed()
@@ -69,13 +71,6 @@ def select_adapters(
     world = World(blueprint, seed=seed, camera=camera, faults=faults, vehicle=vehicle_preset(vehicle))  # type: ignore[arg-type]
     faults.check_uavs([spec.name])
     return world.add_uav(spec).ports
-
-
-def tuning_preset(vehicle: str, adapters: Any) -> str:
-    """The control preset a UAV flies when its ``uav.yaml`` names none: ``px4`` on a PX4 autopilot (issue 20:
-    GNSS-grade noise, the camera's relative estimate), else the simulated vehicle's (``--vehicle``)."""
-    fc = adapters.fc if adapters is not None else None
-    return "px4" if getattr(fc, "autopilot", None) == "px4" else vehicle
 
 
 def _check_vehicle(vehicle: str | None, sim: bool = True) -> str:

@@ -1,0 +1,115 @@
+"""The SITL tests under load: N runs in a row with a busy process on one core; prints passes and failures.
+
+Each run is ``pytest -n WORKERS`` over the tests that fly a SITL (the project's ``masonry sitl`` and, where
+``MASONRY_ARDUPILOT_SITL`` names it, ArduCopter's), while a process spins on one core for the whole loop
+(issue 29: every such test must pass 10 runs in a row on a 2-core machine under ``-n 2`` with a core busy).
+Prints one line per run (passed, failed, skipped, wall seconds, the failing tests) and a total; asserts nothing.
+
+Usage: python benchmarks/bench_sitl_load.py [--runs 10] [--workers 2] [--no-busy] [--ardupilot]
+       [--tests tests/test_sitl_fly.py ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The tests that fly the project's SITL (MavlinkSitl in-process or ``masonry sitl``).
+SITL_TESTS = (
+    "tests/test_sitl.py",
+    "tests/test_sitl_fly.py",
+    "tests/test_hw_mission.py",
+    "tests/test_px4.py",
+    "tests/test_tuning_choice.py",
+)
+#: ArduCopter's SITL (skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
+ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py",)
+
+
+def _run(tests: list[str], workers: int) -> tuple[dict[str, int], list[str], float]:
+    started = time.perf_counter()
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pytest",
+            "-n",
+            str(workers),
+            "-rfE",
+            "--tb=line",
+            "-p",
+            "no:cacheprovider",
+            *tests,
+        ],
+        check=False,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+    )
+    wall_s = time.perf_counter() - started
+    counts = dict.fromkeys(("passed", "failed", "skipped", "error"), 0)
+    for number, kind in re.findall(r"(\d+) (passed|failed|skipped|error)", proc.stdout):
+        counts[kind] = int(number)
+    failing = [line[:240] for line in re.findall(r"^(?:FAILED|ERROR) (.+)$", proc.stdout, flags=re.MULTILINE)]
+    # --tb=line: one "path:line: error" per failure, what it waited for or asserted
+    failing += [
+        f"  {why[:300]}" for why in re.findall(r"^(/\S+\.py:\d+: .+)$", proc.stdout, flags=re.MULTILINE)
+    ]
+    if proc.returncode not in (0, 1) and not failing:
+        failing = [f"pytest exit {proc.returncode}: {proc.stdout[-300:]!r}"]
+    return counts, failing, wall_s
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--runs", type=int, default=10)
+    ap.add_argument("--workers", type=int, default=2, help="pytest-xdist workers (-n)")
+    ap.add_argument("--no-busy", action="store_true", help="no busy process (the baseline)")
+    ap.add_argument(
+        "--ardupilot", action="store_true", help="add ArduCopter SITL's tests (needs its env var)"
+    )
+    ap.add_argument("--tests", nargs="*", default=None, help="test files or ids (default: the SITL tests)")
+    args = ap.parse_args()
+    tests = list(args.tests) if args.tests else list(SITL_TESTS)
+    if args.ardupilot and not args.tests:
+        if not os.environ.get("MASONRY_ARDUPILOT_SITL"):
+            sys.exit("--ardupilot: set MASONRY_ARDUPILOT_SITL to the arducopter binary")
+        tests += list(ARDUPILOT_TESTS)
+    busy = None if args.no_busy else subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    print(
+        f"{args.runs} runs of pytest -n {args.workers} over {' '.join(tests)}; "
+        f"{'no busy process' if busy is None else 'one core kept busy'}; {os.cpu_count()} cores"
+    )
+    clean = 0
+    failures: dict[str, int] = {}
+    try:
+        for i in range(1, args.runs + 1):
+            counts, failing, wall_s = _run(tests, args.workers)
+            ok = not failing and counts["failed"] == 0 and counts["error"] == 0 and counts["passed"] > 0
+            clean += ok
+            for line in (f for f in failing if not f.startswith(" ")):
+                test = line.split(" - ", 1)[0]
+                failures[test] = failures.get(test, 0) + 1
+            print(
+                f"run {i:2d}: {counts['passed']} passed, {counts['failed']} failed, {counts['skipped']} skipped, "
+                f"{wall_s:.0f} s" + "".join(f"\n        FAILED {line}" for line in failing),
+                flush=True,
+            )
+    finally:
+        if busy is not None:
+            busy.kill()
+            busy.wait()
+    print(f"clean runs: {clean}/{args.runs}")
+    for test, n in sorted(failures.items(), key=lambda kv: -kv[1]):
+        print(f"  {test}: failed in {n} of {args.runs} runs")
+
+
+if __name__ == "__main__":
+    main()

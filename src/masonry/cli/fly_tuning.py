@@ -1,0 +1,45 @@
+"""The tuning ``masonry fly`` flies on the chosen flight controller, and the pre-flight line that says why."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+from masonry.fsm.tuning_choice import AUTOPILOT_PRESETS, TuningChoice, choose_tuning
+
+
+def tuning_preset(vehicle: str, adapters: Any) -> str:
+    """The control preset a UAV flies when its ``uav.yaml`` names none: the connected autopilot's
+    (``arducopter`` on ArduPilot, issue 29; ``px4`` on PX4, issue 20), else the simulated vehicle's (``--vehicle``)."""
+    fc = adapters.fc if adapters is not None else None
+    return AUTOPILOT_PRESETS.get(str(getattr(fc, "autopilot", None)), vehicle)
+
+
+def tuning_choice(hardware: Any, vehicle: str, adapters: Any) -> TuningChoice:
+    """What :func:`tuning_preset` and ``hardware`` (a :class:`~masonry.adapters.wiring.HardwareConfig`) choose."""
+    fc = adapters.fc if adapters is not None else None
+    autopilot = getattr(fc, "autopilot", None)
+    overrides = tuple(
+        key
+        for key, given in (
+            ("control", bool(hardware.control)),
+            ("pid", bool(hardware.pid)),
+            ("velocity_lag_s", hardware.velocity_lag_s is not None),
+        )
+        if given
+    )
+    return choose_tuning(
+        hardware.control_preset,
+        autopilot=autopilot if autopilot in AUTOPILOT_PRESETS else None,
+        vehicle=vehicle,
+        autopilot_setting=hardware.autopilot,
+        overrides=overrides,
+    )
+
+
+def with_tuning_line(report: Any, hardware: Any, vehicle: str, adapters: Any) -> Any:
+    """The pre-flight ``report`` with a last line naming the tuning flown and why (never blocking)."""
+    from masonry.adapters.wiring import CheckItem
+
+    item = CheckItem("tuning", True, tuning_choice(hardware, vehicle, adapters).detail(), blocking=False)
+    return replace(report, items=(*report.items, item))
