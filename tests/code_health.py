@@ -18,8 +18,8 @@ from pathlib import Path
 SRC = Path(__file__).resolve().parent.parent / "src" / "masonry"
 MAX_MODULE_LINES = 600
 
-# Today's figures (issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed).
-CEILINGS = {"any_mentions": 674, "in_function_imports": 158}
+# Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
+CEILINGS = {"any_mentions": 673, "in_function_imports": 155}
 
 # The modules still over MAX_MODULE_LINES, each at most the size it had when the ratchet began: a module here may
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
@@ -28,18 +28,18 @@ OVERSIZE_CEILINGS = {
     "adapters/mavlink_link.py": 641,
     "adapters/sitl.py": 602,
     "adapters/wiring.py": 620,
-    "cli/fly.py": 708,
+    "cli/fly.py": 703,
     "fakes.py": 614,
     "fsm/brick.py": 725,
-    "fsm/model.py": 874,
+    "fsm/model.py": 857,
     "mission/airspace.py": 802,
-    "mission/control.py": 1045,
+    "mission/control.py": 1001,
     "mission/handler.py": 703,
     "mission/messages.py": 781,
-    "mission/simulate.py": 712,
+    "mission/simulate.py": 711,
     "planner/bounds.py": 624,
     "planner/dispatch.py": 720,
-    "planner/schedule.py": 625,
+    "planner/schedule.py": 609,
     "sim/vehicle.py": 732,
 }
 

@@ -31,7 +31,10 @@ from masonry.blueprint import (
     quote,
 )
 from masonry.errors import BlueprintError
+from masonry.planner.contacts import BrickArrays, find_contacts
+from masonry.planner.overlap import clip_convex, polygon_area_centroid, rectangle_corners
 from masonry.separation import PAD_MARGIN_M, pad_separation_m, pad_site_distance_m, zone_slack_m
+from masonry.site_checks import check_site
 
 if TYPE_CHECKING:
     import numpy as np
@@ -44,7 +47,6 @@ def validate(
     blueprint: Blueprint, contacts: Contacts | None = None, *, check_marker_ids: bool = True
 ) -> None:
     """The checks of :func:`masonry.blueprint.validate_blueprint` (see there), in the order they run."""
-    from masonry.planner.contacts import BrickArrays, find_contacts
 
     source = blueprint.source
     bricks = blueprint.bricks
@@ -103,8 +105,6 @@ def validate(
     _check_support(bricks, contacts, source)
     _check_sites(blueprint)
     if blueprint.site is not None:
-        from masonry.site_checks import check_site
-
         check_site(blueprint)
 
 
@@ -238,8 +238,6 @@ def _check_support(bricks: tuple[Brick, ...], contacts: Contacts, source: str) -
     hi = np.minimum(center[upper] + ext[upper], center[lower] + ext[lower])
     area = np.where(both, np.prod(np.clip(hi - lo, 0.0, None), axis=1), 0.0)
     if not both.all():
-        from masonry.planner.overlap import clip_convex, polygon_area_centroid, rectangle_corners
-
         for k in np.nonzero(~both)[0].tolist():
             u, v = int(upper[k]), int(lower[k])
             a = rectangle_corners(tuple(center[u]), tuple(half[u]), float(yaw[u]))

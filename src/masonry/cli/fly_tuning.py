@@ -3,19 +3,23 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 from masonry.fsm.tuning_choice import AUTOPILOT_PRESETS, TuningChoice, choose_tuning
 
+if TYPE_CHECKING:  # (the adapters load only when a UAV flies: masonry --help imports no pymavlink)
+    from masonry.adapters.wiring import HardwareConfig, PreflightReport
+    from masonry.ports import UavPorts
 
-def tuning_preset(vehicle: str, adapters: Any) -> str:
+
+def tuning_preset(vehicle: str, adapters: UavPorts | None) -> str:
     """The control preset a UAV flies when its ``uav.yaml`` names none: the connected autopilot's
     (``arducopter`` on ArduPilot, issue 29; ``px4`` on PX4, issue 20), else the simulated vehicle's (``--vehicle``)."""
     fc = adapters.fc if adapters is not None else None
     return AUTOPILOT_PRESETS.get(str(getattr(fc, "autopilot", None)), vehicle)
 
 
-def tuning_choice(hardware: Any, vehicle: str, adapters: Any) -> TuningChoice:
+def tuning_choice(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None) -> TuningChoice:
     """What :func:`tuning_preset` and ``hardware`` (a :class:`~masonry.adapters.wiring.HardwareConfig`) choose."""
     fc = adapters.fc if adapters is not None else None
     autopilot = getattr(fc, "autopilot", None)
@@ -37,7 +41,9 @@ def tuning_choice(hardware: Any, vehicle: str, adapters: Any) -> TuningChoice:
     )
 
 
-def with_tuning_line(report: Any, hardware: Any, vehicle: str, adapters: Any) -> Any:
+def with_tuning_line(
+    report: PreflightReport, hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None
+) -> PreflightReport:
     """The pre-flight ``report`` with a last line naming the tuning flown and why (never blocking)."""
     from masonry.adapters.wiring import CheckItem
 

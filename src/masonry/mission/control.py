@@ -53,7 +53,7 @@ from masonry.mission.messages import (
     encode,
 )
 from masonry.mission.operator import Operator
-from masonry.mission.records import Attempt, UavLink
+from masonry.mission.records import LANDED_STATE, Attempt, UavLink
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
@@ -78,8 +78,6 @@ Vec3 = tuple[float, float, float]
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
 
-#: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
-LANDED_STATE = "idle"
 #: Added to the time a silent UAV's way home takes before mission control frees it (never heard again).
 _WAY_HOME_MARGIN_S = 30.0
 

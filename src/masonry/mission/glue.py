@@ -22,7 +22,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from masonry.errors import InputError, PlanningError
+from masonry.errors import InputError
 from masonry.mission.sites import AT_SITE_M, SiteIntervals, work_point_m
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_glue import JustInTime

@@ -25,6 +25,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from masonry.mission.records import LANDED_STATE
 from masonry.ports import RECALL_REASON
 
 __all__ = ["CommandOutcome", "Operator"]
@@ -202,8 +203,6 @@ class Operator:
         return flying < limit
 
     def _all_down(self, mc: Any) -> bool:
-        from masonry.mission.control import LANDED_STATE
-
         return not mc.dispatcher.in_progress and all(
             link.lost or (link.state == LANDED_STATE and not link.taking_off) for link in mc.uavs.values()
         )

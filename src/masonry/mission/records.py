@@ -12,6 +12,9 @@ from masonry.ports import PhaseTimes
 Vec3 = tuple[float, float, float]
 AttemptStatus = Literal["running", "done", "failed"]
 
+#: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
+LANDED_STATE = "idle"
+
 
 @dataclass
 class Attempt:
@@ -58,4 +61,4 @@ class UavLink:
         self.position_m = position_m
 
 
-__all__ = ["Attempt", "AttemptStatus", "UavLink"]
+__all__ = ["LANDED_STATE", "Attempt", "AttemptStatus", "UavLink"]

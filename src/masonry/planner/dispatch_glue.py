@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from typing import TypeVar, cast
+
 from masonry.planner.dispatch import _DONE, _PENDING, Dispatcher
 from masonry.planner.dispatch_values import Assignment
 from masonry.planner.tasks import Plan
