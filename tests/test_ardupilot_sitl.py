@@ -98,9 +98,11 @@ def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path, res
     endpoint = f"tcp/127.0.0.1:{_free_tcp_port()}"
     name = ["--mission-name", f"sitl-{endpoint.rsplit(':', 1)[1]}"]
     scale = str(SPEEDUP)
+    # instances of their own per rule: the two missions run at once on the two xdist workers (slow tests first)
+    first = 42 if reservation == "site" else 45
     with (
-        arducopter(tmp_path / "brick-1", instance=42, sysid=43) as brick_url,
-        arducopter(tmp_path / "glue-1", instance=43, sysid=44) as glue_url,
+        arducopter(tmp_path / "brick-1", instance=first, sysid=first + 1) as brick_url,
+        arducopter(tmp_path / "glue-1", instance=first + 1, sysid=first + 2) as glue_url,
     ):
         # mission seconds run at x5 of the wall: the UAVs join after their pre-flight (~8 s of wall), and a
         # heartbeat timeout of 30 mission seconds rides out a loaded machine slowing the SITLs down
