@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from masonry.cli.app import command, fail
+from masonry.cli.app import cli_message, command, fail
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
 from masonry.errors import InputError
@@ -103,7 +103,7 @@ def schedule(
             decomposition=decomposition,
         )
     except (ScheduleUnavailable, DeadlinesUnmet) as exc:
-        raise fail(str(exc), 2) from None
+        raise fail(cli_message(exc), 2) from None
     result = stamp_schedule(result, bp)
     import json
 

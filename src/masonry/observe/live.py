@@ -166,7 +166,9 @@ class FoxgloveServer:
                 tls_key=self.tls[1] if self.tls else None,
             )
         except Exception as exc:  # the SDK raises RuntimeError/ValueError with the OS's reason
-            raise InputError(f"--foxglove {self.host}:{self.port}: cannot listen: {exc}") from None
+            raise InputError(
+                f"`foxglove` {self.host}:{self.port}: cannot listen: {exc}", options=("foxglove",)
+            ) from None
         self.port = self.server.port
         return self
 

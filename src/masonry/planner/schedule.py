@@ -506,7 +506,8 @@ def solve_schedule(
         if last.status == "greedy" and missed_open(p.deadlines, last.placed, p.end, reservation):
             raise DeadlinesUnmet(
                 f"CP-SAT found no schedule meeting the open times in {budget:.1f} s (a part of {len(part)} "
-                "tasks): give a longer --time-limit or a longer open time"
+                "tasks): give a longer `time_limit` or a longer open time",
+                options=("time_limit",),
             )
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
