@@ -241,6 +241,7 @@ class _Control:
         self.recalls: list[tuple[str, str]] = []
         self.touched = 0
         self.columns = self
+        self.events: list[tuple[tuple[object, ...], dict[str, object]]] = []
 
     def touch(self) -> None:
         self.touched += 1
@@ -249,7 +250,31 @@ class _Control:
         self.recalls.append((uav, reason))
 
     def emit_event(self, *args: object, **kw: object) -> None:
-        pass
+        self.events.append((args, kw))
+
+
+def test_the_gate_tells_the_operator_of_each_bead_waiting_for_its_brick() -> None:
+    """A ``glue`` event per bead sprayed, with its brick and when it expires; after a resume, only for the beads
+    whose brick is not placed yet."""
+    from masonry.mission.glue import glue_gate
+    from masonry.mission.sites import SiteIntervals
+    from masonry.timing import DEFAULT_TIMING
+
+    bp = _glued(CASE_STUDY, 60.0)
+    p = make_plan(bp)
+    d = make_dispatcher(p, bp.fleet, "critical-path", reservation="site")
+    d.restore(["A0", "B0", "A1"], {})
+    gate = glue_gate(p, d, SiteIntervals(p, d.task_of, exclusive=False), DEFAULT_TIMING)
+    assert gate is not None
+    under = {t.id: f"B{t.above}" for t in p.tasks if isinstance(t, AdhesionTask)}
+    gate.restore([("A0", 10.0), ("B0", 30.0), ("A1", 35.0)])
+    mc = _Control()
+    gate.step(mc, 40.0)
+    assert [(a[1], a[3], kw) for a, kw in mc.events] == [
+        ("glue", "A1", {"brick": under["A1"], "sprayed_s": 35.0, "open_until_s": 95.0})
+    ]
+    gate.step(mc, 41.0)  # told once
+    assert len(mc.events) == 1
 
 
 def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alone() -> None:
@@ -304,9 +329,15 @@ def test_a_resumed_mission_knows_its_beads_ages(tmp_path: Path) -> None:
     first = _flight(bp, journal_path=journal, max_time_s=25.0)
     assert not first.completed
     a0 = next(r for r in read_journal(journal).done if r.task_id == "A0")
-    mission = SimulatedMission.from_blueprint(bp, journal_path=journal, resume=True)
+    from masonry.mission.events import EventList
+
+    sink = EventList()
+    mission = SimulatedMission.from_blueprint(bp, journal_path=journal, resume=True, events_sink=sink)
     assert mission.control.glue is not None and mission.control.glue.sprayed_at_s == {"A0": a0.time_s}
     r = mission.run()
+    # the operator is told at once: A0's age comes from the journal (the live page, the log)
+    told = next(e for e in sink.events if e.kind == "glue")
+    assert told.task_id == "A0" and told.fields["sprayed_s"] == a0.time_s
     assert r.completed and r.open_time_violations == 0 and r.cure_time_violations == 0
     # the rebuilt world knows the glue laid before the stop: B0, on A0 sprayed then, has its age measured
     assert r.glue_age_s is not None and set(r.glue_age_s) == {"B0", "B1"}
