@@ -140,6 +140,35 @@ def test_the_world_counts_glue_older_than_the_open_time() -> None:
     assert not inert.enabled and inert.glue_age_s == {}
 
 
+def test_the_world_keeps_counting_across_a_stop() -> None:
+    """A rebuilt world (mission control stopped and resumed) lays the journaled beads again at their times: glue
+    laid at 5 s before the stop is 40 s old under a brick placed at 45 s after it, a violation at 20 s."""
+    from masonry.sim.adhesive import AdhesiveDeposit
+    from masonry.sim.glue import GlueWatch
+
+    bp = _glued(CASE_STUDY, 20.0, 30.0)
+    deposit = AdhesiveDeposit()
+    before = GlueWatch(bp, deposit)
+    a0 = next(t for t in make_plan(bp).tasks if t.id == "A0")
+    deposit.add(a0.start_m, a0.end_m, 5.0)  # type: ignore[union-attr]
+    before.note_bead(a0.start_m, a0.end_m)  # type: ignore[union-attr]
+    b1 = bp.brick(1).position_m
+    before.note_bead(b1, b1)  # no glue there: nothing
+    snap = json.loads(json.dumps(before.snapshot()))  # as the journal keeps it
+    assert snap["beads"] == [[*a0.start_m, *a0.end_m, 5.0]]  # type: ignore[union-attr]
+    after = GlueWatch(bp, AdhesiveDeposit())
+    after.restore(snap)
+    after.placed(0, bp.brick(0).position_m, 45.0)
+    assert after.glue_age_s == {0: 40.0} and after.open_violations == [0]
+    again = GlueWatch(bp, AdhesiveDeposit())
+    again.restore(json.loads(json.dumps(after.snapshot())))
+    assert again.open_violations == [0] and again.glue_age_s == {0: 40.0} and again.placed_at_s == {0: 45.0}
+    again.sprayed_on(0, 50.0)  # on B0 placed (before the stop) at 45 s: 5 s of its 30 s cure
+    assert again.cure_violations == {0}
+    again.restore({"beads": "junk", "open": [None], "placed_s": {"x": 1.0}})  # unreadable parts are ignored
+    assert again.open_violations == [0]
+
+
 def test_a_recall_expires_the_glue_and_it_is_sprayed_again_before_its_brick(tmp_path: Path) -> None:
     """The operator recalls the brick UAV (it lands with its brick, held until the resume): the bead under B0
     expires while it waits, is sprayed again, and B0 goes onto fresh glue."""
@@ -212,6 +241,7 @@ class _Control:
         self.recalls: list[tuple[str, str]] = []
         self.touched = 0
         self.columns = self
+        self.events: list[tuple[tuple[object, ...], dict[str, object]]] = []
 
     def touch(self) -> None:
         self.touched += 1
@@ -220,7 +250,31 @@ class _Control:
         self.recalls.append((uav, reason))
 
     def emit_event(self, *args: object, **kw: object) -> None:
-        pass
+        self.events.append((args, kw))
+
+
+def test_the_gate_tells_the_operator_of_each_bead_waiting_for_its_brick() -> None:
+    """A ``glue`` event per bead sprayed, with its brick and when it expires; after a resume, only for the beads
+    whose brick is not placed yet."""
+    from masonry.mission.glue import glue_gate
+    from masonry.mission.sites import SiteIntervals
+    from masonry.timing import DEFAULT_TIMING
+
+    bp = _glued(CASE_STUDY, 60.0)
+    p = make_plan(bp)
+    d = make_dispatcher(p, bp.fleet, "critical-path", reservation="site")
+    d.restore(["A0", "B0", "A1"], {})
+    gate = glue_gate(p, d, SiteIntervals(p, d.task_of, exclusive=False), DEFAULT_TIMING)
+    assert gate is not None
+    under = {t.id: f"B{t.above}" for t in p.tasks if isinstance(t, AdhesionTask)}
+    gate.restore([("A0", 10.0), ("B0", 30.0), ("A1", 35.0)])
+    mc = _Control()
+    gate.step(mc, 40.0)
+    assert [(a[1], a[3], kw) for a, kw in mc.events] == [
+        ("glue", "A1", {"brick": under["A1"], "sprayed_s": 35.0, "open_until_s": 95.0})
+    ]
+    gate.step(mc, 41.0)  # told once
+    assert len(mc.events) == 1
 
 
 def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alone() -> None:
@@ -275,7 +329,16 @@ def test_a_resumed_mission_knows_its_beads_ages(tmp_path: Path) -> None:
     first = _flight(bp, journal_path=journal, max_time_s=25.0)
     assert not first.completed
     a0 = next(r for r in read_journal(journal).done if r.task_id == "A0")
-    mission = SimulatedMission.from_blueprint(bp, journal_path=journal, resume=True)
+    from masonry.mission.events import EventList
+
+    sink = EventList()
+    mission = SimulatedMission.from_blueprint(bp, journal_path=journal, resume=True, events_sink=sink)
     assert mission.control.glue is not None and mission.control.glue.sprayed_at_s == {"A0": a0.time_s}
     r = mission.run()
+    # the operator is told at once: A0's age comes from the journal (the live page, the log)
+    told = next(e for e in sink.events if e.kind == "glue")
+    assert told.task_id == "A0" and told.fields["sprayed_s"] == a0.time_s
     assert r.completed and r.open_time_violations == 0 and r.cure_time_violations == 0
+    # the rebuilt world knows the glue laid before the stop: B0, on A0 sprayed then, has its age measured
+    assert r.glue_age_s is not None and set(r.glue_age_s) == {"B0", "B1"}
+    assert 0.0 < r.glue_age_s["B0"] <= 60.0

@@ -20,6 +20,9 @@ Kinds (``MissionEvent.kind``) and their fields:
 - ``operator``: an operator's command (``command``, ``accepted``, ``reason``).
 - ``wind``: the wind limit grounded or freed UAVs: ``speed_mps`` (the reading, None: none fresh) and
   ``grounded`` (the UAVs given no task for it: empty once the wind has dropped).
+- ``glue``: with an adhesive's open time, a bead (``task_id``) sprayed, or known from the journal after a resume:
+  its ``brick``, ``sprayed_s`` and ``open_until_s`` (when it expires unless the brick is on it;
+  :mod:`masonry.mission.glue`).
 """
 
 from __future__ import annotations
@@ -47,6 +50,7 @@ KINDS = (
     "end",
     "operator",
     "wind",
+    "glue",
 )
 
 
@@ -122,6 +126,11 @@ class MissionEvent:
             grounded = f.get("grounded") or []
             extra = f" {speed:.1f} m/s" if isinstance(speed, (int, float)) else ""
             extra += f": no tasks for {', '.join(grounded)}" if grounded else ": every UAV within its limit"
+        elif self.kind == "glue":
+            until = f.get("open_until_s")
+            extra = f" under {f.get('brick')}" + (
+                f", open until {until:.1f} s" if isinstance(until, (int, float)) else ""
+            )
         return f"{self.time_s:8.1f} s  {self.kind}{who}{what}{extra}"
 
 

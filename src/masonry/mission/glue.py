@@ -12,7 +12,9 @@ task's completion) and each glued brick placed, and:
   counts, so a brick that can never come in time ends stuck instead of looping), and the dispatcher sprays the
   bead again (``reopen``): never is a brick placed on expired glue, whatever delayed it (a fault, a lost UAV, a
   pause: paused time counts against the open time like any other);
-* tells the dispatcher when a brick's glue has cured (``cured``), so beads on top of it may be laid.
+* tells the dispatcher when a brick's glue has cured (``cured``), so beads on top of it may be laid;
+* tells the operator: a ``glue`` event for each bead sprayed (or known from the journal after a resume), with
+  when it expires (the live page and the mission log show each bead's age and time left).
 """
 
 from __future__ import annotations
@@ -56,16 +58,19 @@ class GlueGate:
 
     def __post_init__(self) -> None:
         self._open: dict[str, list[tuple[str, float]]] = {}  # brick -> its beads and their open time
+        self._bead: dict[str, tuple[str, float]] = {}  # bead -> its brick and open time
         self._cure_s: dict[str, float] = {}  # glued brick -> cure time
         for d in self.plan.deadlines:
             if d.kind == "open":
                 self._open.setdefault(d.brick, []).append((d.adhesion, d.lag_s))
+                self._bead[d.adhesion] = (d.brick, d.lag_s)
             else:
                 self._cure_s[d.brick] = d.lag_s
         self._work = {t.id: work_point_m(t) for t in self.plan.tasks}
         self.now_s = 0.0
         self._changed = False  # a bead was sprayed: the site gate's answers changed
         self._recalled: dict[str, int] = {}  # brick -> the attempt whose UAV was recalled
+        self._untold: list[str] = []  # beads sprayed whose ``glue`` event is not emitted yet
 
     # -- the site gate ---------------------------------------------------------------------------------------
     def may_enter(self, uav: str, site_m: Vec3) -> bool:
@@ -96,6 +101,7 @@ class GlueGate:
         else:
             self.sprayed_at_s[task_id] = now_s
             self._changed = True
+            self._untold.append(task_id)
 
     def restore(self, completions: Iterable[tuple[str, float]]) -> None:
         """A resumed mission: each journaled completion (task id, time s) as if heard now, in time order (a bead
@@ -121,10 +127,23 @@ class GlueGate:
                 if bead in done and bead in self.sprayed_at_s and not self._fresh(bead, lag):
                     self._expire(mc, bead, brick, now_s)
                     news = True
+        self._tell(mc)
         if news or self._changed:
             self._changed = False
             mc.columns.touch()  # the gate's answers changed: the waiting requests are looked at again
         return news
+
+    def _tell(self, mc: MissionControl) -> None:
+        """A ``glue`` event for each bead sprayed since the last tick (with an open time, still open)."""
+        for bead in self._untold:
+            sprayed = self.sprayed_at_s.get(bead)
+            brick, lag = self._bead.get(bead, ("", 0.0))
+            if brick and sprayed is not None and brick not in self.dispatcher.done:
+                # (a resumed mission's restored beads under bricks placed before the stop are not waiting)
+                mc.emit_event(
+                    self.now_s, "glue", None, bead, brick=brick, sprayed_s=sprayed, open_until_s=sprayed + lag
+                )
+        self._untold.clear()
 
     def _expire(self, mc: MissionControl, bead: str, brick: str, now_s: float) -> None:
         del self.sprayed_at_s[bead]

@@ -20,7 +20,7 @@ from masonry.mission.handler import UavHandler
 from masonry.mission.messages import Result, decode
 from masonry.mission.report import MissionReport, control_report
 from masonry.planner.bounds import min_cycles_s, min_durations_s, min_site_s
-from masonry.planner.tasks import BrickTask, Plan
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 
@@ -29,7 +29,8 @@ class MeasuredJournal:
 
     Each record carries ``measured``: the distance each UAV has flown, its busy time (the tasks its handler
     executed) and the minimum separation so far (over the whole mission: a resumed run adds the values the
-    journal had), and a brick's completion its true placement error. A resumed report takes them from the
+    journal had), a brick's completion its true placement error, and with an adhesive the glue's times, ages and
+    violations (``glue``). A resumed report takes them from the
     journal (:func:`simulated_report`) instead of the UAVs' own estimates or a rebuilt world that has flown nothing yet.
     """
 
@@ -46,10 +47,13 @@ class MeasuredJournal:
         self.before_kept = dict(kept or {})
         self.world = world
         self._bricks = {t.id: t.brick for t in plan.tasks if isinstance(t, BrickTask)}
+        self._beads = {t.id: (t.start_m, t.end_m) for t in plan.tasks if isinstance(t, AdhesionTask)}
         self.before_distances_m = _floats(before.get("distances_m"))
         self.before_busy_s = _floats(before.get("busy_s"))
         sep = before.get("min_separation_m")
         self.before_min_separation_m = float(sep) if isinstance(sep, (int, float)) else None
+        # a rebuilt world lays the glue laid before the stop again, and goes on counting (masonry.sim.glue)
+        world.glue.restore(before.get("glue"))
         self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
         self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
 
@@ -85,6 +89,10 @@ class MeasuredJournal:
             "busy_s": self.busy_s(),
             "min_separation_m": self.min_separation_m(),
         }
+        if self.world.glue.enabled:  # (an adhesive: its beads' times, ages and violations so far)
+            if task_id in self._beads:
+                self.world.glue.note_bead(*self._beads[task_id])
+            out["glue"] = self.world.glue.snapshot()
         kept = next((k for k in self.before_kept.values() if k.task_id == task_id), None)
         if kept is not None and kept.placement_error_m is not None:
             out["placement_error_m"] = kept.placement_error_m  # placed before the stop: measured then

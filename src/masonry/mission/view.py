@@ -8,9 +8,11 @@ adhesion segment and every UAV's home.
 
 from __future__ import annotations
 
+import math
 import threading
 from collections import deque
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from masonry.blueprint import UavSpec
@@ -56,6 +58,15 @@ def wall_layout(plan: Plan, fleet: Sequence[UavSpec], name: str = "") -> dict[st
     }
 
 
+@dataclass(frozen=True)
+class OpenBead:
+    """A bead sprayed and waiting for its brick (a ``glue`` event)."""
+
+    brick: str
+    sprayed_s: float
+    open_until_s: float  # it expires then unless its brick is on it
+
+
 class MissionView:
     """The state of a mission after the events it has been given.
 
@@ -78,6 +89,9 @@ class MissionView:
         self.operator: list[str] = []
         self.recent: deque[str] = deque(maxlen=RECENT_LINES)
         self.events = 0
+        #: beads waiting for their brick (with an adhesive's open time; ``glue`` events)
+        self.glue: dict[str, OpenBead] = {}
+        self._glued = False  # a ``glue`` event was seen (the snapshot has ``glue`` only then)
 
     def emit(self, event: MissionEvent) -> None:
         """Fold one event in."""
@@ -90,6 +104,7 @@ class MissionView:
         f = e.fields
         if e.kind != "uav":
             self.recent.append(e.line())
+        self._fold_glue(e)
         if e.kind == "uav" and e.uav is not None:
             u = self.uavs.setdefault(e.uav, {"name": e.uav})
             u.update(
@@ -137,10 +152,41 @@ class MissionView:
         elif e.kind == "operator":
             self.operator.append(e.line().strip())
 
+    def _fold_glue(self, e: MissionEvent) -> None:
+        """A bead sprayed (``glue``), done again or failed (expired: it is told again), a brick placed on glue."""
+        if e.kind not in ("completed", "failed", "glue") or e.task_id is None:
+            return
+        if e.kind == "glue":
+            self._glued = True
+            self.glue[str(e.task_id)] = OpenBead(
+                str(e.fields.get("brick")),
+                float(e.fields.get("sprayed_s", e.time_s)),
+                float(e.fields.get("open_until_s", math.inf)),
+            )
+            return
+        self.glue.pop(str(e.task_id), None)
+        if e.kind == "completed":  # a brick on its glue: the glue no longer ages in the open
+            for bead in [b for b, g in self.glue.items() if g.brick == e.task_id]:
+                del self.glue[bead]
+
     def _close(self, task_id: str, time_s: float, status: str) -> None:
         i = self._open.pop(task_id, None)
         if i is not None:
             self.bars[i].update(end_s=time_s, status=status)
+
+    def open_glue(self) -> list[dict[str, object]]:
+        """The beads waiting for their brick now: ``bead``, ``brick``, ``age_s``, ``left_s`` (of the open time;
+        below 0: expired, it is sprayed again), the first to expire first."""
+        order = sorted(self.glue.items(), key=lambda bg: (bg[1].open_until_s, bg[0]))
+        return [
+            {
+                "bead": bead,
+                "brick": g.brick,
+                "age_s": round(self.time_s - g.sprayed_s, 1),
+                "left_s": round(g.open_until_s - self.time_s, 1),
+            }
+            for bead, g in order
+        ]
 
     def counts(self) -> dict[str, int]:
         """Tasks per state (:data:`TASK_STATES`)."""
@@ -152,7 +198,9 @@ class MissionView:
     def snapshot(self) -> dict[str, Any]:
         """The whole view as JSON values (what the page draws)."""
         with self._lock:
+            glue = {"glue": self.open_glue()} if self._glued else {}
             return {
+                **glue,
                 "time_s": self.time_s,
                 "counts": self.counts(),
                 "tasks": dict(self.tasks),
@@ -187,6 +235,15 @@ class MissionView:
             running = sorted(t for t, s in self.tasks.items() if s == "running")
             if running:
                 out.append(f"  running: {', '.join(running)}")
+            if self.glue:
+                out.append(
+                    "  glue waiting for its brick: "
+                    + ", ".join(
+                        f"{bead} under {g.brick} {self.time_s - g.sprayed_s:.0f} s old, "
+                        f"{g.open_until_s - self.time_s:.0f} s left"
+                        for bead, g in sorted(self.glue.items(), key=lambda bg: (bg[1].open_until_s, bg[0]))
+                    )
+                )
             if self.stall:
                 out.append(f"  {self.stall}")
             if self.recent:
@@ -208,4 +265,4 @@ def view_at(
     return view
 
 
-__all__ = ["TASK_STATES", "MissionView", "view_at", "wall_layout"]
+__all__ = ["TASK_STATES", "MissionView", "OpenBead", "view_at", "wall_layout"]

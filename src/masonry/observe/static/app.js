@@ -143,9 +143,33 @@ function render(state) {
     }
     body.appendChild(tr);
   }
+  drawGlue(state);
   const recent = document.getElementById("recent");
   recent.replaceChildren();
   for (const line of [...state.recent, ...state.operator.slice(-3)]) { const li = document.createElement("li"); li.textContent = line; recent.appendChild(li); }
+}
+
+// Each bead waiting for its brick (an adhesive's open time): its age and the open time left, the first to
+// expire first; within a minute of expiring it is marked, and a paused mission says which will expire.
+const GLUE_SOON_S = 60;
+function drawGlue(state) {
+  const box = document.getElementById("glue");
+  box.hidden = state.glue === undefined;
+  if (box.hidden) return;
+  const body = box.querySelector("tbody");
+  body.replaceChildren();
+  for (const g of state.glue) {
+    const tr = document.createElement("tr");
+    tr.className = g.left_s < 0 ? "expired" : (g.left_s < GLUE_SOON_S ? "soon" : "");
+    for (const v of [g.bead, g.brick, g.age_s.toFixed(0), g.left_s.toFixed(0)]) {
+      const td = document.createElement("td"); td.textContent = v; tr.appendChild(td);
+    }
+    body.appendChild(tr);
+  }
+  const warn = document.getElementById("glue-warning");
+  const soon = state.glue.filter((g) => g.left_s < GLUE_SOON_S).map((g) => `${g.bead} (${Math.max(0, g.left_s).toFixed(0)} s)`);
+  warn.hidden = !(state.paused && state.glue.length);
+  warn.textContent = `paused: the open time runs on; ${soon.length ? "expiring within a minute: " + soon.join(", ") : "first to expire: " + state.glue[0]?.bead + " in " + state.glue[0]?.left_s.toFixed(0) + " s"}`;
 }
 
 async function command(body) {
