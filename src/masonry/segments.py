@@ -33,4 +33,17 @@ def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
     )
 
 
-__all__ = ["XY", "point_segment_m", "segment_segment_m"]
+def segments_closer_than(a: XY, b: XY, c: XY, d: XY, need_m: float) -> bool:
+    """Segments ``a``-``b`` and ``c``-``d`` come horizontally closer than ``need_m`` (a cheap reject on their
+    bounding boxes before the exact distance: most pairs of a fleet's volumes are far apart)."""
+    if (
+        min(a[0], b[0]) - max(c[0], d[0]) >= need_m
+        or min(c[0], d[0]) - max(a[0], b[0]) >= need_m
+        or min(a[1], b[1]) - max(c[1], d[1]) >= need_m
+        or min(c[1], d[1]) - max(a[1], b[1]) >= need_m
+    ):
+        return False
+    return segment_segment_m(a, b, c, d) < need_m
+
+
+__all__ = ["XY", "point_segment_m", "segment_segment_m", "segments_closer_than"]

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 
+from masonry.cli.foxglove_options import loopback
 from masonry.errors import InputError
 
 if TYPE_CHECKING:  # (the observe extra's modules load only when a mission is watched)
@@ -101,7 +102,7 @@ class Watchers:
             self.view = MissionView([t.id for t in plan.tasks if not t.done], done=done)
             view = self.view
             commands = self.commands
-            if commands is None and _loopback(self.serve[0]):
+            if commands is None and loopback(self.serve[0]):
                 # the page's buttons: on loopback only (the page is not authenticated; docs/observe.md)
                 commands = operator_commands(control)
             self.server = ViewServer(
@@ -200,17 +201,3 @@ def operator_commands(control: MissionControl) -> Commands:
         return dict(control.operator.ask(c).to_dict())
 
     return commands
-
-
-def _loopback(host: str) -> bool:
-    import ipaddress
-
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
-__all__ = ["Watchers", "check_log_option", "open_log", "operator_commands"]

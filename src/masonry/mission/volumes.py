@@ -12,7 +12,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from masonry.segments import point_segment_m, segment_segment_m
+from masonry.segments import point_segment_m, segment_segment_m, segments_closer_than
 
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
@@ -54,15 +54,7 @@ def volumes_conflict(p: Volume, q: Volume, sep_xy_m: float, sep_z_m: float) -> b
     if p.z0_m - q.z1_m >= sep_z_m or q.z0_m - p.z1_m >= sep_z_m:
         return False
     need = sep_xy_m + p.slack_m + q.slack_m
-    # cheap reject on the bounding boxes before the exact segment distance
-    if (
-        min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need
-        or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
-        or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
-        or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need
-    ):
-        return False
-    return segment_segment_m(p.a, p.b, q.a, q.b) < need
+    return segments_closer_than(p.a, p.b, q.a, q.b, need)
 
 
 def volumes_clear(vols: Sequence[Volume], others: Sequence[Volume], sep_xy_m: float, sep_z_m: float) -> bool:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from masonry.errors import InvalidArgument
-from masonry.segments import XY, segment_segment_m
+from masonry.segments import XY, segment_segment_m, segments_closer_than
 from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_m
 
 #: Two sites at distance <= r_c + this conflict: :data:`masonry.planner.conflicts.CONFLICT_TOLERANCE_M` (not
@@ -112,15 +112,7 @@ class Separation:
             return False
         gap = self.pad_m if "ground" in (p.kind, q.kind) else self.xy_m
         need = gap + p.radius_m + q.radius_m
-        # cheap reject on the bounding boxes before the exact segment distance
-        if (
-            min(p.a[0], p.b[0]) - max(q.a[0], q.b[0]) >= need
-            or min(q.a[0], q.b[0]) - max(p.a[0], p.b[0]) >= need
-            or min(p.a[1], p.b[1]) - max(q.a[1], q.b[1]) >= need
-            or min(q.a[1], q.b[1]) - max(p.a[1], p.b[1]) >= need
-        ):
-            return False
-        return segment_segment_m(p.a, p.b, q.a, q.b) < need
+        return segments_closer_than(p.a, p.b, q.a, q.b, need)
 
 
 #: The separation of :mod:`masonry.separation` (the default airframe's pads).
