@@ -504,11 +504,7 @@ def solve_schedule(
         budget = time_limit_s * len(part) / n
         last = _solve_part(p, part, budget, seed, workers)
         if last.status == "greedy" and missed_open(p.deadlines, last.placed, p.end, reservation):
-            raise DeadlinesUnmet(
-                f"CP-SAT found no schedule meeting the open times in {budget:.1f} s (a part of {len(part)} "
-                "tasks): give a longer `time_limit` or a longer open time",
-                options=("time_limit",),
-            )
+            raise DeadlinesUnmet.within(budget, len(part))
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
         for k in range(len(p.uavs)):

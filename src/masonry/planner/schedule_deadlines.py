@@ -29,6 +29,15 @@ from masonry.timing import TaskTiming
 class DeadlinesUnmet(PlanningError):
     """No schedule meets the open times (a user's value: ``masonry schedule`` exits 2 with the line)."""
 
+    @classmethod
+    def within(cls, budget_s: float, tasks: int) -> DeadlinesUnmet:
+        """CP-SAT found none in ``budget_s`` for a part of ``tasks`` tasks (the greedy fallback misses them too)."""
+        return cls(
+            f"CP-SAT found no schedule meeting the open times in {budget_s:.1f} s (a part of {tasks} tasks): "
+            "give a longer `time_limit` or a longer open time",
+            options=("time_limit",),
+        )
+
 
 @dataclass(frozen=True)
 class TickDeadlines:
