@@ -100,6 +100,17 @@ def foxglove_client(url: str) -> Any:
     return connect(url, subprotocols=["foxglove.sdk.v1"], max_size=None, open_timeout=60)
 
 
+def _masonry(args: list[str]) -> subprocess.Popen[str]:
+    """``masonry ARGS`` in a process of its own, its output read as text (no input)."""
+    return subprocess.Popen(
+        [sys.executable, "-c", MAIN, *args],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
 def _line_with(proc: subprocess.Popen[str], text: str) -> str:
     assert proc.stderr is not None
     line = proc.stderr.readline()  # bounded: the process writes the line or ends (EOF)
@@ -114,15 +125,11 @@ def test_a_served_sim_is_watched_and_paused_and_resumed_from_a_foxglove_client()
     """The done-when test of issue 32, with the live page served beside Foxglove: both show the same state."""
     import urllib.request
 
-    proc = subprocess.Popen(
+    proc = _masonry(
         [
-            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY), "--serve", "127.0.0.1:0"),
+            *("sim", str(CASE_STUDY), "--serve", "127.0.0.1:0"),
             *("--foxglove", "127.0.0.1:0", "--time-scale", "4", "--no-progress", "--format", "json"),
-        ],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+        ]
     )
     try:
         page = _line_with(proc, "serving the mission's page at ").rsplit(" ", 1)[-1].strip()
@@ -220,13 +227,7 @@ def test_replay_plays_a_log_back_to_a_foxglove_client(tmp_path):
     log = tmp_path / "run.mcap"
     res = runner.invoke(app, ["sim", str(CASE_STUDY), "--log", str(log), "--no-progress", "--format", "json"])
     assert res.exit_code == 0, res.output
-    proc = subprocess.Popen(
-        [sys.executable, "-c", MAIN, "replay", str(log), "--foxglove", "127.0.0.1:0", "--time-scale", "100"],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    proc = _masonry(["replay", str(log), "--foxglove", "127.0.0.1:0", "--time-scale", "100"])
     try:
         url = _line_with(proc, "back to Foxglove at ").split(" at ", 1)[1].split(" ", 1)[0]
         with foxglove_client(url) as ws:
@@ -335,15 +336,11 @@ def test_off_loopback_the_server_needs_tls_and_offers_no_services(tmp_path):
     import ssl
 
     cert, key = _self_signed(tmp_path)
-    proc = subprocess.Popen(
+    proc = _masonry(
         [
-            *(sys.executable, "-c", MAIN, "sim", str(CASE_STUDY), "--no-progress", "--format", "json"),
+            *("sim", str(CASE_STUDY), "--no-progress", "--format", "json"),
             *("--foxglove", "0.0.0.0:0", "--foxglove-cert", str(cert), "--foxglove-key", str(key)),
-        ],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+        ]
     )
     try:
         url = _line_with(proc, "serving the mission to Foxglove at ").split(" at ", 1)[1].split(" ", 1)[0]
@@ -381,16 +378,12 @@ def test_mission_control_is_steered_from_foxglove_and_ctl_at_the_same_desk(tmp_p
         endpoint = f"tcp/127.0.0.1:{s.getsockname()[1]}"
     name = f"fox-{endpoint.rsplit(':', 1)[1]}"
     journal = tmp_path / "mission.db"
-    mc = subprocess.Popen(
+    mc = _masonry(
         [
-            *(sys.executable, "-c", MAIN, "mission-control", str(CASE_STUDY), "--listen", endpoint),
+            *("mission-control", str(CASE_STUDY), "--listen", endpoint),
             *("--key-file", str(key), "--mission-name", name, "--journal", str(journal)),
             *("--startup-timeout", "300", "--max-time", "300", "--foxglove", "127.0.0.1:0"),
-        ],
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+        ]
     )
     common = ["--mission", endpoint, "--key-file", str(key), "--mission-name", name]
 
