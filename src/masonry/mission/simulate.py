@@ -1,9 +1,15 @@
 """A whole mission in simulated time: World + one handler and state machine per UAV + MissionControl, in-process.
 
-``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every control tick (``CONTROL_PERIOD_S``, 0.1 s
-of simulated time): each live UAV handler reads its messages and ticks its state machine, mission control
-steps, then the world advances in steps of ``dt_s``. Nothing sleeps, so a mission runs as fast as the
-machine allows and is deterministic for a given seed.
+``simulate(blueprint, options, ...)`` is what ``masonry sim`` runs: the options are one frozen
+:class:`~masonry.mission.sim_options.SimOptions`, and the components beside them can be swapped: the world's
+vehicle model (``vehicle_model``, :mod:`masonry.sim.vehicle_model`), its faults and site wind (``faults``), the
+UAVs' tuning (``uav_config``) and state machines (``uav_machine``, :mod:`masonry.mission.uav_stack`), the
+offline schedule and the observers. :meth:`SimulatedMission.from_blueprint` is the builder;
+:class:`SimulatedMission` takes the built parts (world, mission control, bus, ports, clock) and runs them.
+
+Every control tick (``CONTROL_PERIOD_S``, 0.1 s of simulated time): each live UAV handler reads its messages and
+ticks its state machine, mission control steps, then the world advances in steps of ``dt_s``. Nothing sleeps, so
+a mission runs as fast as the machine allows and is deterministic for a given seed.
 
 Safety checks in the report are measured independently of mission control: conflict and dependency
 violations from the intervals the UAV handlers actually executed, separation from the world's vehicles.
@@ -12,16 +18,15 @@ violations from the intervals the UAV handlers actually executed, separation fro
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from masonry.airframe import DEFAULT_AIRFRAME
-from masonry.blueprint import Blueprint, UavSpec
-from masonry.errors import InputError, MasonryError
+from masonry.blueprint import Blueprint
+from masonry.errors import InputError
 from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
@@ -30,39 +35,43 @@ from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.journal import open_mission_journal
-from masonry.mission.measured import (
-    KeptCompletion,
-    MeasuredJournal,
-    journaled_errors_m,
-    kept_completions,
-    simulated_report,
-)
+from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
-from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
-from masonry.mission.wind_limit import DEFAULT_MAX_WIND_MPS, WindLimit
+from masonry.mission.sim_options import SimFields, SimOptions, sim_options
+from masonry.mission.sim_resume import kept_of, resumed_world
+from masonry.mission.uav_stack import (
+    BATTERY_SWAP_S,
+    GroundCrew,
+    UavMachineFactory,
+    battery_of,
+    build_machine,
+    position_of,
+    priority_durations_s,
+)
+from masonry.mission.wind_limit import site_wind_limit
 from masonry.planner import estimate_durations_s
 from masonry.planner import plan as make_plan
 from masonry.planner.bounds import min_durations_s
-from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
-from masonry.planner.tasks import BrickTask, Plan
+from masonry.planner.tasks import Plan
 from masonry.ports import Clock, UavPorts
+from masonry.sim import Faults, World
 from masonry.sim.vehicle_config import vehicle_name, vehicle_preset
+from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
+    from typing_extensions import Unpack
+
     from masonry.fsm.config import UavConfig
     from masonry.planner.schedule_values import OfflineSchedule
-    from masonry.sim import World
 
 #: The dispatch policies (the planner's, named here for the callers of ``simulate``).
 POLICIES = DISPATCH_POLICIES
 
-#: How long the ground crew takes to swap a landed UAV's battery (the handler keeps a reserve, see UavHandler).
-BATTERY_SWAP_S = 60.0
 #: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
 LANDING_GRACE_S = 180.0
 
@@ -73,140 +82,35 @@ CONTROL_PERIOD_S = DEFAULT_TIMING.control_period_s
 ProgressFn = Callable[[int, int, float], None]
 
 
-#: Expected durations are rounded to this for the critical-path priority (see :func:`priority_durations_s`).
-PRIORITY_QUANTUM_S = 5.0
-
-
-def priority_durations_s(
-    durations_s: Mapping[str, float], quantum_s: float = PRIORITY_QUANTUM_S
-) -> dict[str, float]:
-    """Expected durations rounded to ``quantum_s`` for the dispatcher's critical-path priority.
-
-    The estimates are a model, good to several seconds; comparing chains that differ by less than that
-    would let noise (a home a metre further away) decide, where the tie-break by flight distance is the
-    better rule. In the paper's case study this is what makes A0, the adhesion task nearest the adhesion
-    UAV, go first.
-    """
-    return {k: max(quantum_s, round(v / quantum_s) * quantum_s) for k, v in durations_s.items()}
-
-
-def _position_of(ports: UavPorts) -> Callable[[], tuple[float, float, float]]:
-    fc = ports.fc
-    return lambda: fc.telemetry().position_m
-
-
-def _battery_of(sim_uav: Any) -> Callable[[], float]:
-    vehicle = sim_uav.vehicle
-    return lambda: float(vehicle.battery_fraction)
-
-
-class _GroundCrew:
-    """Swaps a landed, disarmed UAV's battery, taking ``BATTERY_SWAP_S``; True once the fresh pack is in."""
-
-    def __init__(self, vehicle: Any, clock: Any) -> None:
-        self.vehicle = vehicle
-        self.clock = clock
-        self._since_s: float | None = None
-
-    def __call__(self) -> bool:
-        v = self.vehicle
-        if not (v.on_ground and not v.armed):
-            self._since_s = None
-            return False
-        now = self.clock.now_s()
-        if self._since_s is None:
-            self._since_s = now
-        if now - self._since_s < BATTERY_SWAP_S:
-            return False
-        try:
-            v.swap_battery()
-        except MasonryError:
-            return False
-        self._since_s = None
-        return True
-
-
-def _build_machine(
-    spec: UavSpec,
-    ports: UavPorts,
-    blueprint: Blueprint,
-    handler: UavHandler,
-    clock: Clock,
-    lateral_altitude_m: float | None = None,
-    template: UavConfig | None = None,
-) -> Any:
-    from masonry.fsm import AdhesionUav, BrickUav, UavConfig
-
-    # the template's tuning (default: UavConfig's), with this UAV's identity, home, layer and the blueprint's
-    base = template if template is not None else UavConfig(spec.name, spec.role, spec.home_m)
-    config = dataclasses.replace(
-        base,
-        name=spec.name,
-        role=spec.role,
-        home_m=spec.home_m,
-        cruise_altitude_m=blueprint.cruise_altitude_m,
-        markers=blueprint.markers,
-        lateral_altitude_m=lateral_altitude_m,
-        fence=blueprint.site,
-    )
-    if spec.role == "brick":
-        return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
-    return AdhesionUav(config, ports.fc, ports.sprayer, handler, clock, clearance=handler)
-
-
 def simulate(
     blueprint: Blueprint,
+    options: SimOptions | None = None,
     *,
-    brick_uavs: int | None = None,
-    adhesion_uavs: int | None = None,
-    policy: str = "critical-path",
-    seed: int = 0,
-    camera: str = "geometric",
-    faults: Any = None,
-    journal_path: str | Path | None = None,
-    resume: bool = False,
-    dt_s: float = 0.05,
-    max_time_s: float | None = None,
-    heartbeat_timeout_s: float = 5.0,
-    max_attempts: int = 3,
-    progress: ProgressFn | None = None,
-    separation: bool = True,
-    rising_layers: bool = True,
-    warn: Callable[[str], None] | None = None,
+    vehicle_model: VehicleModel = sim_vehicle,
+    faults: Faults | None = None,
     uav_config: UavConfig | None = None,
-    stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
-    reservation: str = DEFAULT_RESERVATION,
+    uav_machine: UavMachineFactory = build_machine,
     schedule: OfflineSchedule | None = None,
+    progress: ProgressFn | None = None,
+    warn: Callable[[str], None] | None = None,
     events_sink: EventSink | None = None,
-    vehicle: str | None = None,
+    **fields: Unpack[SimFields],
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
-    The arguments, and what it raises, are those of :meth:`SimulatedMission.from_blueprint`.
+    ``options`` (default: ``SimOptions()``) say how the mission runs; the old keywords (``seed=3``) replace its
+    fields. The components and what it raises are those of :meth:`SimulatedMission.from_blueprint`.
     """
     return SimulatedMission.from_blueprint(
         blueprint,
-        brick_uavs=brick_uavs,
-        adhesion_uavs=adhesion_uavs,
-        policy=policy,
-        seed=seed,
-        camera=camera,
+        sim_options(options, fields),
+        vehicle_model=vehicle_model,
         faults=faults,
-        journal_path=journal_path,
-        resume=resume,
-        dt_s=dt_s,
-        max_time_s=max_time_s,
-        heartbeat_timeout_s=heartbeat_timeout_s,
-        max_attempts=max_attempts,
-        progress=progress,
-        separation=separation,
-        rising_layers=rising_layers,
-        warn=warn,
         uav_config=uav_config,
-        vehicle=vehicle,
-        stall_timeout_s=stall_timeout_s,
-        reservation=reservation,
+        uav_machine=uav_machine,
         schedule=schedule,
+        progress=progress,
+        warn=warn,
         events_sink=events_sink,
     ).run()
 
@@ -242,6 +146,7 @@ class SimulatedMission:
         resources: closed when the run ends (the journal, by :meth:`from_blueprint`).
         uav_config: the tuning every UAV's machine flies with (None: ``UavConfig``'s defaults); the report's
             bound counts its timing (``uav_config.timing()``).
+        uav_machine: builds each UAV's state machine (default: :func:`masonry.mission.uav_stack.build_machine`).
     """
 
     def __init__(
@@ -266,6 +171,7 @@ class SimulatedMission:
         journaled_errors_m: Mapping[str, float] | None = None,
         resources: contextlib.ExitStack | None = None,
         uav_config: UavConfig | None = None,
+        uav_machine: UavMachineFactory = build_machine,
     ) -> None:
         if not (dt_s > 0 and math.isfinite(dt_s)):
             raise InputError(f"dt_s must be > 0, got {dt_s!r}")
@@ -316,10 +222,10 @@ class SimulatedMission:
             h = UavHandler(
                 spec.name,
                 bus.endpoint(spec.name),
-                position=_position_of(uav_ports),
+                position=position_of(uav_ports),
                 heartbeat_timeout_s=heartbeat_timeout_s,
-                battery=_battery_of(sim_uav),
-                swap_battery=_GroundCrew(sim_uav.vehicle, self.clock),
+                battery=battery_of(sim_uav.vehicle),
+                swap_battery=GroundCrew(sim_uav.vehicle, self.clock),
                 after_result=self._step_control,
                 tasks=plan.tasks,
                 role=spec.role,
@@ -327,7 +233,7 @@ class SimulatedMission:
                 keeper=self.measured if self.measured.journal is not None else None,
             )
             h.attach(
-                _build_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config)
+                uav_machine(spec, uav_ports, blueprint, h, self.clock, layers.get(spec.name), uav_config)
             )
             self.ports[spec.name] = uav_ports
             self.handlers[spec.name] = h
@@ -345,71 +251,40 @@ class SimulatedMission:
     def from_blueprint(
         cls,
         blueprint: Blueprint,
+        options: SimOptions | None = None,
         *,
-        brick_uavs: int | None = None,
-        adhesion_uavs: int | None = None,
-        policy: str = "critical-path",
-        seed: int = 0,
-        camera: str = "geometric",
-        faults: Any = None,
-        journal_path: str | Path | None = None,
-        resume: bool = False,
-        dt_s: float = 0.05,
-        max_time_s: float | None = None,
-        heartbeat_timeout_s: float = 5.0,
-        max_attempts: int = 3,
-        progress: ProgressFn | None = None,
-        separation: bool = True,
-        rising_layers: bool = True,
-        warn: Callable[[str], None] | None = None,
+        vehicle_model: VehicleModel = sim_vehicle,
+        faults: Faults | None = None,
         uav_config: UavConfig | None = None,
-        stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
-        reservation: str = DEFAULT_RESERVATION,
+        uav_machine: UavMachineFactory = build_machine,
         schedule: OfflineSchedule | None = None,
+        progress: ProgressFn | None = None,
+        warn: Callable[[str], None] | None = None,
         events_sink: EventSink | None = None,
-        vehicle: str | None = None,
-        max_wind_mps: float | Mapping[str, float] | None = None,
+        **fields: Unpack[SimFields],
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
         Args:
             blueprint: the wall and its fleet.
-            brick_uavs, adhesion_uavs: override the fleet's size per role (see :func:`fleet_for`).
-            policy: dispatcher priority: ``fifo``, ``critical-path`` or ``nearest``.
-            seed: seed of the world (brick offsets, noise, faults).
-            camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
-            faults: a :class:`masonry.sim.Faults` (None: no fault).
-            journal_path: SQLite journal to write (and, with ``resume``, to continue from); held open until the
-                run ends (or :meth:`close`).
-            resume: continue the mission recorded in ``journal_path``: its done tasks stay done (their bricks
-                are in place in the world), its clock continues, the report covers the whole mission.
-            dt_s: physics step of the world, seconds (handlers and mission control step every
-                ``CONTROL_PERIOD_S``).
-            max_time_s: give up at this simulated time (default: generous, from the number of tasks).
-            heartbeat_timeout_s: a UAV silent that long is declared lost.
-            max_attempts: failed attempts before a task is stuck.
-            progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion, and at
-                least once per simulated second between them (so a progress display can keep time on a slow task).
-            separation: transit layers and site columns (docs/safety.md); False flies every lateral leg at the
-                work altitude with no column clearance, as before they existed (for comparisons).
-            rising_layers: with separation, transit layer 0 rises with the wall (over the tasks done or assigned
-                so far) instead of staying above the finished wall from the start (False, for comparisons).
-            warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
+            options: how the mission runs (:class:`~masonry.mission.sim_options.SimOptions`; default: its
+                defaults); the old keywords (``seed=3``, each a field of it) replace its fields. The journal
+                (``journal_path``) is held open until the run ends (or :meth:`close`).
+            vehicle_model: builds each UAV's vehicle in the world (:mod:`masonry.sim.vehicle_model`; default:
+                a ``SimVehicle`` with the ``vehicle`` preset of the options).
+            faults: a :class:`masonry.sim.Faults`, with the site's wind (None: no fault, still air).
             uav_config: the tuning of every UAV (default: ``UavConfig``'s defaults); each keeps its own name,
                 role, home and transit layer, and the blueprint's cruise altitude and markers. The world's UAVs
                 get its airframe; the lower bound, the expected durations and the airspace its timing.
                 Default with a ``vehicle`` other than ``ideal``: the control preset of that name
                 (:mod:`masonry.fsm.tuning`), the tuning a real UAV on that autopilot flies with.
-            vehicle: the simulated autopilot (:data:`masonry.sim.vehicle_config.VEHICLE_PRESETS`): ``ideal``
-                (a first-order 0.3 s velocity lag) or ``arducopter`` (ArduCopter's shaping, delay and GPS-like
-                noise, fitted to its SITL: docs/performance/autopilots.md); None (default):
-                :data:`~masonry.sim.vehicle_config.DEFAULT_VEHICLE`, ``arducopter``.
-            stall_timeout_s: stop the mission, not completed, when nothing progresses for this long
-                (simulated seconds; :class:`masonry.mission.control.MissionControl`); None or 0: never.
-            reservation: ``site`` (default: conflicting tasks may run at once; their UAVs never work at their
-                sites at once) or ``task`` (the paper: conflicting tasks never run at once); docs/safety.md.
+            uav_machine: builds each UAV's state machine (:mod:`masonry.mission.uav_stack`; default: the brick
+                or adhesion machine of :mod:`masonry.fsm`).
             schedule: the offline schedule ``policy="schedule"`` follows (``masonry schedule``; computed for
                 this wall, fleet and reservation: :func:`masonry.mission.schedule_file.check_schedule`).
+            progress: called as ``progress(done_tasks, total_tasks, sim_time_s)`` after each completion, and at
+                least once per simulated second between them (so a progress display can keep time on a slow task).
+            warn: called with a warning line (a journal without a fingerprint); default :func:`warnings.warn`.
             events_sink: gets mission control's events (:mod:`masonry.mission.events`) and, every
                 ``SAMPLE_PERIOD_S``, each UAV's pose and battery as the world has them (a log, a live view).
 
@@ -419,35 +294,21 @@ class SimulatedMission:
         resumed report says for the work done before the crash what the run that did it would have said.
 
         Raises:
-            InputError: an unknown policy or camera mode, a bad fleet size, or ``resume`` without a journal.
+            InputError: a bad option (:class:`~masonry.mission.sim_options.SimOptions`), a bad fleet size, or
+                ``policy="schedule"`` without a schedule.
             JournalUnusable: the journal cannot serve this mission (it already holds one and ``resume`` is off,
                 it was written for another wall or fleet, it is not a journal, it is read-only).
             JournalError: the journal cannot be written during the mission.
         """
-        from masonry.sim import Faults, World
-
-        if reservation not in RESERVATIONS:
-            raise InputError(
-                f"`reservation` must be one of {', '.join(RESERVATIONS)}, got {reservation!r}",
-                options=("reservation",),
-            )
+        opts = sim_options(options, fields)
+        policy, reservation, separation = opts.policy, opts.reservation, opts.separation
         if policy == SCHEDULE_POLICY and schedule is None:
             raise InputError(
                 "`policy` schedule needs `schedule` (masonry schedule)", options=("policy", "schedule")
             )
-        if policy not in POLICIES and policy != SCHEDULE_POLICY:
-            raise InputError(
-                f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",)
-            )
-        if camera not in ("geometric", "render"):
-            raise InputError(f"`camera` must be geometric or render, got {camera!r}", options=("camera",))
-        if not (dt_s > 0 and math.isfinite(dt_s)):
-            raise InputError(f"dt_s must be > 0, got {dt_s!r}")
-        if resume and journal_path is None:
-            raise InputError("`resume` needs `journal_path`", options=("resume", "journal_path"))
         faults = faults if faults is not None else Faults()
         wall0 = time.perf_counter()
-        vehicle = vehicle_name(vehicle)
+        vehicle = vehicle_name(opts.vehicle)
         vehicle_config = vehicle_preset(vehicle)
         if uav_config is None and vehicle != "ideal":
             # the tuning a real UAV on that autopilot flies with (masonry.fsm.tuning's preset of the same name)
@@ -457,7 +318,7 @@ class SimulatedMission:
             uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **uav_settings(vehicle))
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
-        fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
+        fleet = fleet_for(blueprint, opts.brick_uavs, opts.adhesion_uavs)
         if not fleet:
             raise InputError(
                 "the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
@@ -472,10 +333,10 @@ class SimulatedMission:
         with contextlib.ExitStack() as resources:
             journal = None
             state = None
-            if journal_path is not None:
+            if opts.journal_path is not None:
                 journal, state = open_mission_journal(
-                    Path(journal_path),
-                    resume=resume,
+                    Path(opts.journal_path),
+                    resume=opts.resume,
                     wall_digest=wall_digest(blueprint),
                     fleet_digest=fleet_digest(blueprint),
                     fleet_names=[u.name for u in fleet],
@@ -485,16 +346,17 @@ class SimulatedMission:
                 )
                 resources.callback(journal.close)
 
-            kept = _kept(state, the_plan, fleet)
-            world_blueprint, resumed_from = _resumed_world(blueprint, the_plan, state, kept)
+            kept = kept_of(state, the_plan, fleet)
+            world_blueprint, resumed_from = resumed_world(blueprint, the_plan, state, kept)
             world = World(
                 world_blueprint,
-                seed=seed,
-                camera=camera,  # type: ignore[arg-type]
+                seed=opts.seed,
+                camera=opts.camera,  # type: ignore[arg-type]
                 faults=faults,
                 start_s=resumed_from or 0.0,
                 airframe=DEFAULT_AIRFRAME if uav_config is None else uav_config.airframe,
                 vehicle=vehicle_config,
+                vehicle_model=vehicle_model,
             )
             measured = MeasuredJournal(
                 journal, world, the_plan, state.measured if state is not None else {}, kept
@@ -509,26 +371,26 @@ class SimulatedMission:
                 bus.endpoint(MISSION_CONTROL),
                 policy=policy,
                 journal=measured if journal is not None else None,
-                max_attempts=max_attempts,
+                max_attempts=opts.max_attempts,
                 durations_s=priority_durations_s(expected_s),
-                heartbeat_timeout_s=heartbeat_timeout_s,
-                startup_timeout_s=max(10 * dt_s, 1.0),
+                heartbeat_timeout_s=opts.heartbeat_timeout_s,
+                startup_timeout_s=max(10 * opts.dt_s, 1.0),
                 # a radio that drops out for a few seconds: its UAV, the last of its role, may come back
-                rejoin_timeout_s=2.0 * heartbeat_timeout_s,
+                rejoin_timeout_s=2.0 * opts.heartbeat_timeout_s,
                 column_radius_m=blueprint.clearance_m if separation else 0.0,
                 layer_base_m=layer_base_m(blueprint, timing=timing) if separation else None,
-                layer_floor_m=blueprint.cruise_altitude_m if separation and rising_layers else None,
+                layer_floor_m=blueprint.cruise_altitude_m if separation and opts.rising_layers else None,
                 wall_digest=wall_digest(blueprint),
                 min_durations_s=min_durations_s(
                     the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing
                 ),
                 timing=timing,
-                stall_timeout_s=stall_timeout_s,
+                stall_timeout_s=opts.stall_timeout_s,
                 reservation=reservation,
                 schedule=schedule if policy == SCHEDULE_POLICY else None,
                 events_sink=events_sink,
                 fence=blueprint.site,
-                wind_limit=_wind_limit(faults, fleet, max_wind_mps),
+                wind_limit=site_wind_limit(faults.site_wind(), fleet, opts.max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
             )
             if state is not None:
@@ -541,10 +403,10 @@ class SimulatedMission:
                 control=mc,
                 bus=bus,
                 policy=policy,
-                seed=seed,
-                dt_s=dt_s,
-                max_time_s=max_time_s,
-                heartbeat_timeout_s=heartbeat_timeout_s,
+                seed=opts.seed,
+                dt_s=opts.dt_s,
+                max_time_s=opts.max_time_s,
+                heartbeat_timeout_s=opts.heartbeat_timeout_s,
                 progress=progress,
                 layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
                 measured=measured,
@@ -559,6 +421,7 @@ class SimulatedMission:
                 },
                 resources=resources.pop_all(),
                 uav_config=uav_config,
+                uav_machine=uav_machine,
             )
         mission.started_wall_s = wall0
         if schedule is not None and reservation == "task" and timing == DEFAULT_TIMING and state is None:
@@ -666,46 +529,12 @@ class SimulatedMission:
                 world.step(dt_s)
 
 
-__all__ = ["POLICIES", "SimulatedMission", "fleet_for", "simulate"]
-
-
-def _wind_limit(faults: Any, fleet: Sequence[Any], max_wind_mps: float | Mapping[str, float] | None) -> Any:
-    """Mission control's wind limit for the simulated site (None in still air): each UAV's ``max_wind_mps``
-    (one figure for all, or per name; default :data:`~masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`) against
-    the site's mean wind at 10 m."""
-
-    wind = faults.site_wind() if faults is not None else None
-    if wind is None or wind.calm:
-        return None
-    if isinstance(max_wind_mps, Mapping):
-        limits = {u.name: float(max_wind_mps.get(u.name, DEFAULT_MAX_WIND_MPS)) for u in fleet}
-    else:
-        limit = DEFAULT_MAX_WIND_MPS if max_wind_mps is None else float(max_wind_mps)
-        limits = {u.name: limit for u in fleet}
-    return WindLimit(limits, wind.speed_at)
-
-
-def _kept(state: Any, the_plan: Plan, fleet: Sequence[UavSpec]) -> dict[str, KeptCompletion]:
-    """The completions the UAVs kept in the journal file, unheard (of this plan's tasks and this fleet's UAVs)."""
-    ids, names = {t.id for t in the_plan.tasks}, {u.name for u in fleet}
-    return {u: k for u, k in kept_completions(state).items() if k.task_id in ids and u in names}
-
-
-def _resumed_world(
-    blueprint: Blueprint, the_plan: Plan, state: Any, kept: Mapping[str, KeptCompletion]
-) -> tuple[Blueprint, float | None]:
-    """The blueprint the resumed world is built from, and the time it resumes at (None: not a resume).
-
-    Bricks the journal says are placed are in place, and so are those a UAV kept the completion of, unheard (it
-    says it again first thing: mission control takes it); the clock starts no earlier than a kept completion
-    (the UAV finished then, so the mission was running)."""
-    if state is None:
-        return blueprint, None
-    placed = {
-        the_plan.task(tid).brick  # type: ignore[union-attr]
-        for tid in [r.task_id for r in state.done] + [k.task_id for k in kept.values()]
-        if isinstance(the_plan.task(tid), BrickTask)
-    }
-    bricks = tuple(dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks)
-    resumed_from = max([float(state.last_time_s or 0.0), *(k.time_s for k in kept.values())])
-    return dataclasses.replace(blueprint, bricks=bricks), resumed_from
+__all__ = [
+    "BATTERY_SWAP_S",
+    "POLICIES",
+    "SimOptions",
+    "SimulatedMission",
+    "fleet_for",
+    "priority_durations_s",
+    "simulate",
+]

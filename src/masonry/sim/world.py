@@ -34,6 +34,7 @@ from masonry.sim.faults import Faults
 from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
+from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
 from masonry.sim.wind import WindField
 
 __all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
@@ -53,9 +54,7 @@ class WorldConfig:
     contact_band_m: float = 0.015  # the effector touches a brick top when within this height of it
     guide_residual: float = 0.2  # the conical guide centres the brick: this fraction of the offset remains
     support_margin_m: float = 0.025  # a falling brick ignores overlaps with neighbours thinner than this
-    release_scatter_m: float = (
-        0.002  # a released brick settles this far (std, per axis) from where it was let go
-    )
+    release_scatter_m: float = 0.002  # a released brick settles this far (std, per axis) from its release
     release_scatter_per_m: float = 0.05  # ... plus this much per metre of fall
     release_yaw_scatter_rad: float = 0.005
     spray_max_height_m: float = 0.25  # adhesive reaches the surface from at most this nozzle height
@@ -182,6 +181,7 @@ class World:
         faults: injected faults.
         airframe: tool and camera placement on the UAVs.
         vehicle: multirotor model parameters.
+        vehicle_model: builds each UAV's vehicle (default: a ``SimVehicle``; :mod:`masonry.sim.vehicle_model`).
         camera_config: intrinsics, detection limits and noise.
         config: pickup scatter, contact and adhesive parameters.
         start_s: the clock's initial time.
@@ -199,6 +199,7 @@ class World:
         camera_config: CameraConfig | None = None,
         config: WorldConfig | None = None,
         start_s: float = 0.0,
+        vehicle_model: VehicleModel = sim_vehicle,
     ) -> None:
         if camera not in ("geometric", "render"):
             raise InputError(f"camera mode must be 'geometric' or 'render', got {camera!r}")
@@ -210,6 +211,7 @@ class World:
         self.faults = faults if faults is not None else Faults()
         self.airframe = airframe
         self.vehicle_config = vehicle if vehicle is not None else VehicleConfig()
+        self.vehicle_model = vehicle_model
         self.camera_config = camera_config if camera_config is not None else CameraConfig()
         self.config = config if config is not None else WorldConfig()
         self.clock = SimClock(start_s)
@@ -228,7 +230,6 @@ class World:
             f"seed={self.seed}, camera={self.camera_mode!r})"
         )
 
-    # ---------------------------------------------------------------- layout
     def _lay_out_bricks(self) -> None:
         cfg = self.config
         rng = np.random.default_rng([self.seed, 0])
@@ -250,7 +251,6 @@ class World:
             brick.state = "pickup"
             self.field.add(brick)
 
-    # ------------------------------------------------------------------ UAVs
     def add_uav(self, spec: UavSpec, *, yaw_rad: float = 0.0) -> SimUav:
         """Add a UAV landed and disarmed at ``spec.home_m``; its random stream derives from the seed and its name."""
         if spec.name in self.uavs:
@@ -265,7 +265,8 @@ class World:
             if site_wind.calm
             else WindField(site_wind, np.random.default_rng(wind_ss), self.clock.now_s())
         )
-        vehicle = SimVehicle(
+        vehicle = self.vehicle_model(
+            spec,
             self.vehicle_config,
             position_m=spec.home_m,
             yaw_rad=yaw_rad,
@@ -288,7 +289,6 @@ class World:
         """Ground crew puts a full pack in the UAV (it must be landed and disarmed: else CommandRejected)."""
         self.uavs[name].vehicle.swap_battery()
 
-    # ------------------------------------------------------------------ step
     def step(self, dt_s: float) -> None:
         """Advance the clock and the physics of every UAV and brick by ``dt_s`` seconds."""
         if not (dt_s > 0.0 and math.isfinite(dt_s)):
@@ -485,7 +485,6 @@ class World:
         uav._last_deposit = point
         self.glue.sprayed_at(self.field, point, self.clock.now_s())
 
-    # ---------------------------------------------------------------- camera
     def camera_pose(self, uav: SimUav) -> np.ndarray:
         """4x4 true pose of the UAV's camera in the world (body attitude included)."""
         vehicle = uav.vehicle
@@ -549,7 +548,6 @@ class World:
         )
         return CameraFrame(time_s=now, tags=tags)
 
-    # -------------------------------------------------------------- measures
     @property
     def bricks(self) -> Mapping[int, SimBrick]:
         """Every brick in the world by id (true state)."""
