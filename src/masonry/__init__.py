@@ -42,6 +42,7 @@ from masonry.mission import (
     JournalState,
     MissionControl,
     MissionReport,
+    SimOptions,
     SimulatedMission,
     UavHandler,
     simulate,
@@ -85,7 +86,7 @@ from masonry.ports import (
     Telemetry,
     UavPorts,
 )
-from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
+from masonry.sim import Faults, SimClock, SimUav, SimVehicle, VehicleModel, World
 from masonry.timing import TaskTiming
 
 __version__ = "0.1.0.dev0"
@@ -157,6 +158,7 @@ __all__ = [
     "PoseWindow",
     "ProtocolError",
     "SimClock",
+    "SimOptions",
     "SimUav",
     "SimVehicle",
     "SimulatedMission",
@@ -171,6 +173,7 @@ __all__ = [
     "UavPorts",
     "UavSpec",
     "UdpPoseSource",
+    "VehicleModel",
     "World",
     "estimate_brick_pose",
     "estimate_durations_s",

@@ -20,7 +20,10 @@ from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.cli.watch import check_log_option
 from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
 from masonry.errors import InputError
-from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
+from masonry.mission.sim_options import SimOptions
+
+#: ``masonry sim``'s defaults are the library's (:class:`masonry.mission.sim_options.SimOptions`)
+_DEFAULTS = SimOptions()
 
 
 @command("sim")
@@ -37,7 +40,7 @@ def sim(
         help=help_text("sim", "--adhesion-uavs", "Number of adhesion UAVs (overrides the fleet)."),
     ),
     policy: str = typer.Option(
-        "critical-path",
+        _DEFAULTS.policy,
         "--policy",
         help="fifo | critical-path | nearest | schedule (follow --schedule, falling back to critical-path).",
     ),
@@ -47,13 +50,17 @@ def sim(
         help="Offline schedule (JSON from masonry schedule) that --policy schedule follows.",
     ),
     reservation: str = typer.Option(
-        "site",
+        _DEFAULTS.reservation,
         "--reservation",
         help="task | site: keep conflicting tasks apart for their whole duration, as the paper (task), or "
         "only while their UAVs work at their sites (site). docs/safety.md.",
     ),
-    seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
-    camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
+    seed: int = typer.Option(
+        _DEFAULTS.seed, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")
+    ),
+    camera: str = typer.Option(
+        _DEFAULTS.camera, "--camera", help="geometric | render (images + ArUco, slower)."
+    ),
     fault: list[str] = typer.Option(
         [],
         "--fault",
@@ -69,9 +76,11 @@ def sim(
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
-    dt: float = typer.Option(0.05, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")),
+    dt: float = typer.Option(
+        _DEFAULTS.dt_s, "--dt", help=help_text("sim", "--dt", "Simulation tick, seconds.")
+    ),
     stall_timeout: float = typer.Option(
-        DEFAULT_STALL_TIMEOUT_S,
+        _DEFAULTS.stall_timeout_s,
         "--stall-timeout",
         help=help_text(
             "sim",
@@ -168,6 +177,20 @@ def sim(
         from masonry.mission.schedule_file import read_schedule
 
         offline = read_schedule(schedule_file)
+    # the one place the flags become the library's options (the library checks them: one line, the flag named)
+    options = SimOptions(
+        brick_uavs=brick_uavs,
+        adhesion_uavs=adhesion_uavs,
+        policy=policy,
+        seed=seed,
+        camera=camera,
+        journal_path=journal,
+        resume=resume,
+        dt_s=dt,
+        stall_timeout_s=stall_timeout,
+        reservation=reservation,
+        vehicle=vehicle,
+    )
     name = bp.name or blueprint.name
 
     from masonry.cli.progress import progress_display
@@ -182,21 +205,11 @@ def sim(
     try:
         mission = SimulatedMission.from_blueprint(
             bp,
-            brick_uavs=brick_uavs,
-            adhesion_uavs=adhesion_uavs,
-            policy=policy,
-            seed=seed,
-            camera=camera,
+            options,
             faults=faults,
-            journal_path=journal,
-            resume=resume,
-            dt_s=dt,
             progress=progress_cb,
             warn=lambda m: typer.echo(f"warning: {m}", err=True),
-            stall_timeout_s=stall_timeout,
-            reservation=reservation,
             schedule=offline,
-            vehicle=vehicle,
         )
         watch.attach(mission.control, mission.plan, mission.fleet)
         if watched:

@@ -14,6 +14,7 @@ from masonry.mission.inproc import InprocBus, InprocTransport
 from masonry.mission.journal import Journal, JournalState, read_journal
 from masonry.mission.messages import PROTOCOL_VERSION, decode, encode
 from masonry.mission.report import MissionReport
+from masonry.mission.sim_options import SimOptions
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.transport import Transport
 
@@ -26,6 +27,7 @@ __all__ = [
     "JournalState",
     "MissionControl",
     "MissionReport",
+    "SimOptions",
     "SimulatedMission",
     "Transport",
     "UavHandler",

@@ -27,6 +27,7 @@ from typing import Any
 from masonry.blueprint import Blueprint, Role
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.mission.report import MissionReport
+from masonry.mission.sim_options import SimOptions
 from masonry.mission.simulate import SimulatedMission
 from masonry.planner import plan as make_plan
 from masonry.planner.tasks import Plan
@@ -202,15 +203,14 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
     stops = list(run.stops_s)
     plan = make_plan(run.blueprint)
     while report is None:
-        mission = SimulatedMission.from_blueprint(
-            run.blueprint,
+        options = SimOptions(
             seed=run.seed + 7919 * segment,  # a restarted world does not replay the same noise
-            faults=run.faults,
             journal_path=journal,
             resume=segment > 0,
             vehicle=run.vehicle,
             reservation=run.reservation,
         )
+        mission = SimulatedMission.from_blueprint(run.blueprint, options, faults=run.faults)
         stop_s = stops.pop(0) if stops else None
         mission.tick_hooks.append(_hook(mission, run.link_drops, stop_s))
         try:

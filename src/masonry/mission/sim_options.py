@@ -3,7 +3,7 @@
 ``simulate(blueprint, options, ...)`` and :meth:`masonry.mission.simulate.SimulatedMission.from_blueprint` take
 one ``SimOptions`` beside their components (the vehicle model, the faults, the UAVs' tuning, the offline
 schedule and the observers); ``masonry sim`` builds it from its flags in one place
-(:func:`masonry.cli.sim.sim_options`), so the CLI, the library, the benchmarks and the chaos campaign cannot
+(:func:`masonry.cli.sim.sim`), so the CLI, the library, the benchmarks and the chaos campaign cannot
 drift apart. The old keywords (``simulate(bp, seed=3, policy="fifo")``) are still taken: each is a field of
 ``SimOptions`` (:class:`SimFields`), replaced in the default value.
 """
@@ -24,7 +24,7 @@ from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
 from masonry.sim.vehicle_config import vehicle_preset
 
-__all__ = ["CAMERA_MODES", "SimFields", "SimOptions", "sim_options"]
+__all__ = ["CAMERA_MODES", "SimFields", "SimOptions", "with_fields"]
 
 #: How the simulated camera sees the markers: from the camera model, or rendered images and ArUco.
 CAMERA_MODES = ("geometric", "render")
@@ -130,7 +130,7 @@ class SimFields(TypedDict, total=False):
     max_wind_mps: float | Mapping[str, float] | None
 
 
-def sim_options(options: SimOptions | None, fields: SimFields) -> SimOptions:
+def with_fields(options: SimOptions | None, fields: SimFields) -> SimOptions:
     """``options`` (default: ``SimOptions()``) with ``fields`` replaced: what ``simulate(bp, options, **fields)``
     runs with."""
     base = options if options is not None else SimOptions()

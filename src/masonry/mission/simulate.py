@@ -39,7 +39,7 @@ from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simula
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
-from masonry.mission.sim_options import SimFields, SimOptions, sim_options
+from masonry.mission.sim_options import SimFields, SimOptions, with_fields
 from masonry.mission.sim_resume import kept_of, resumed_world
 from masonry.mission.uav_stack import (
     BATTERY_SWAP_S,
@@ -103,7 +103,7 @@ def simulate(
     """
     return SimulatedMission.from_blueprint(
         blueprint,
-        sim_options(options, fields),
+        with_fields(options, fields),
         vehicle_model=vehicle_model,
         faults=faults,
         uav_config=uav_config,
@@ -300,7 +300,7 @@ class SimulatedMission:
                 it was written for another wall or fleet, it is not a journal, it is read-only).
             JournalError: the journal cannot be written during the mission.
         """
-        opts = sim_options(options, fields)
+        opts = with_fields(options, fields)
         policy, reservation, separation = opts.policy, opts.reservation, opts.separation
         if policy == SCHEDULE_POLICY and schedule is None:
             raise InputError(

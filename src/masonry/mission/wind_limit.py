@@ -14,15 +14,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from masonry.errors import InputError
 
 if TYPE_CHECKING:
     from masonry.blueprint import UavSpec
-    from masonry.sim.wind import WindConfig
 
-__all__ = ["DEFAULT_MAX_WIND_MPS", "HeardWind", "WindLimit", "site_wind_limit"]
+__all__ = ["DEFAULT_MAX_WIND_MPS", "HeardWind", "SiteWind", "WindLimit", "site_wind_limit"]
 
 #: A 4.5 kg hexacopter (docs/simulator.md, "Wind"): its 30 degree tilt runs out at 8.8 m/s of airspeed (11 m/s
 #: mean at 10 m); at 8 m/s (6.4 m/s at its 2 m working height) it keeps 1.8 m/s^2 to manoeuvre and 2.4 m/s of
@@ -105,8 +104,19 @@ class HeardWind:
         return WindLimit(self.limits_mps, self.reading)
 
 
+class SiteWind(Protocol):
+    """A site's wind as the limit reads it (:class:`masonry.sim.wind.WindConfig` in ``masonry sim``)."""
+
+    @property
+    def calm(self) -> bool:
+        """No wind at all: nothing to limit."""
+
+    def speed_at(self, t_s: float) -> float:
+        """The mean wind at 10 m at time ``t_s``, m/s."""
+
+
 def site_wind_limit(
-    site_wind: WindConfig, fleet: Sequence[UavSpec], max_wind_mps: float | Mapping[str, float] | None
+    site_wind: SiteWind, fleet: Sequence[UavSpec], max_wind_mps: float | Mapping[str, float] | None
 ) -> WindLimit | None:
     """Mission control's wind limit for a simulated site (None in still air): each UAV's ``max_wind_mps`` (one
     figure for all, or per name; default :data:`DEFAULT_MAX_WIND_MPS`) against the site's mean wind at 10 m."""

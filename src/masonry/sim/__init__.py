@@ -9,6 +9,7 @@ from masonry.sim.clock import SimClock
 from masonry.sim.faults import FAULT_KEYS, Faults
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
+from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
 from masonry.sim.world import CameraMode, SimUav, World, WorldConfig
 
 __all__ = [
@@ -28,6 +29,8 @@ __all__ = [
     "SimUav",
     "SimVehicle",
     "VehicleConfig",
+    "VehicleModel",
     "World",
     "WorldConfig",
+    "sim_vehicle",
 ]
