@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import json
-import sys
 import typing
 from pathlib import Path
 
@@ -33,7 +32,6 @@ def _bench_vehicle_model():
     )
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    sys.modules.setdefault("bench_vehicle_model", module)
     spec.loader.exec_module(module)
     return module
 
