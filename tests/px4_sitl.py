@@ -8,11 +8,15 @@ execs PX4 in the foreground: the process is PX4's), stopped with SIGTERM, then k
 
 from __future__ import annotations
 
+import bisect
 import contextlib
+import math
 import os
 import signal
 import subprocess
+import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -54,3 +58,101 @@ def px4(workdir: Path, instance: int) -> Iterator[str]:
                 os.killpg(proc.pid, signal.SIGKILL)
             proc.wait(timeout=10)
         log.close()
+
+
+@dataclass(frozen=True)
+class Hover:
+    """PX4's own hover (AUTO.TAKEOFF, then its loiter): EKF2's estimate and the simulator's truth, on PX4's clock.
+
+    ``estimate``: (t_s, x, y, z, vx, vy, vz) from LOCAL_POSITION_NED (NED); ``truth``: (t_s, north_m, east_m,
+    vx, vy) from HIL_STATE_QUATERNION (SIH's ground truth), north/east relative to its first sample.
+    """
+
+    estimate: tuple[tuple[float, ...], ...]
+    truth: tuple[tuple[float, ...], ...]
+
+    def truth_velocity_at(self, t_s: float) -> tuple[float, float]:
+        """The truth's horizontal velocity (m/s, NED) interpolated at ``t_s``."""
+        ts = [s[0] for s in self.truth]
+        i = max(1, min(len(ts) - 1, bisect.bisect_left(ts, t_s)))
+        (t0, *_, a0, b0), (t1, *_, a1, b1) = self.truth[i - 1], self.truth[i]
+        w = 0.0 if t1 <= t0 else min(1.0, max(0.0, (t_s - t0) / (t1 - t0)))
+        return a0 + w * (a1 - a0), b0 + w * (b1 - b0)
+
+
+def hover(url: str, hold_s: float, *, timeout_s: float = 240.0) -> Hover:
+    """Take off with PX4's own AUTO.TAKEOFF, hover ``hold_s`` (PX4's clock) in its loiter, land; what it saw.
+
+    Raises:
+        AssertionError: no heartbeat, not armed or not airborne within ``timeout_s`` of wall time.
+    """
+    from pymavlink import mavutil
+
+    conn = mavutil.mavlink_connection(url, source_system=255)
+    try:
+        assert conn.wait_heartbeat(timeout=60), f"no heartbeat on {url}"
+        sysid = conn.target_system
+
+        def command(cmd: int, *params: float) -> None:
+            p = [*params, *([0.0] * (7 - len(params)))]
+            conn.mav.command_long_send(sysid, 1, cmd, 0, *p)
+
+        for msg_id in (32, 115):  # LOCAL_POSITION_NED, HIL_STATE_QUATERNION at 30 Hz
+            command(511, msg_id, 1e6 / 30)
+        estimate: list[tuple[float, ...]] = []
+        truth: list[tuple[float, ...]] = []
+        origin: tuple[float, float] | None = None
+        deadline = time.monotonic() + timeout_s
+        asked_s = -math.inf
+        airborne_s: float | None = None
+        armed = False
+        while time.monotonic() < deadline:
+            msg = conn.recv_match(
+                type=["HEARTBEAT", "LOCAL_POSITION_NED", "HIL_STATE_QUATERNION"], blocking=True, timeout=1
+            )
+            if msg is None:
+                continue
+            kind = msg.get_type()
+            if kind == "HEARTBEAT" and msg.get_srcSystem() == sysid and msg.get_srcComponent() == 1:
+                armed = bool(msg.base_mode & 128)
+            elif kind == "LOCAL_POSITION_NED":
+                t_s = msg.time_boot_ms / 1000.0
+                if not armed and t_s - asked_s > 3.0:  # until it accepts: its EKF needs a few seconds
+                    command(22, 0, 0, 0, math.nan, math.nan, math.nan, math.nan)  # take off (MIS_TAKEOFF_ALT)
+                    command(400, 1)  # arm
+                    asked_s = t_s
+                if airborne_s is None and armed and msg.z < -2.0:
+                    airborne_s = t_s + 8.0  # the take-off's climb over, the loiter settled
+                if airborne_s is not None and t_s >= airborne_s:
+                    estimate.append((t_s, msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz))
+                    if t_s >= airborne_s + hold_s:
+                        command(21)  # land
+                        return Hover(tuple(estimate), tuple(truth))
+            elif kind == "HIL_STATE_QUATERNION" and airborne_s is not None:
+                lat, lon = msg.lat * 1e-7, msg.lon * 1e-7
+                if origin is None:
+                    origin = (lat, lon)
+                north = (lat - origin[0]) * 111_319.5
+                east = (lon - origin[1]) * 111_319.5 * math.cos(math.radians(origin[0]))
+                truth.append((msg.time_usec / 1e6, north, east, msg.vx / 100.0, msg.vy / 100.0))
+        raise AssertionError(
+            f"PX4 on {url}: armed {armed}, airborne {airborne_s is not None} after {timeout_s} s"
+        )
+    finally:
+        conn.close()
+
+
+def velocity_errors(flight: Hover, tau_s: float) -> tuple[float, float]:
+    """The rms horizontal error against the truth (m/s) of EKF2's velocity and of the velocity consistent with
+    its position (:class:`masonry.fsm.velocity_filter.PositionVelocity`, ``tau_s``), over the hover."""
+    from masonry.fsm.velocity_filter import PositionVelocity
+
+    flt = PositionVelocity(tau_s)
+    ekf = filtered = 0.0
+    for t_s, x, y, z, vx, vy, vz in flight.estimate:
+        tvx, tvy = flight.truth_velocity_at(t_s)
+        fx, fy, _ = flt.update(t_s, (x, y, z), (vx, vy, vz))
+        ekf += (vx - tvx) ** 2 + (vy - tvy) ** 2
+        filtered += (fx - tvx) ** 2 + (fy - tvy) ** 2
+    n = max(1, len(flight.estimate))
+    return math.sqrt(ekf / n), math.sqrt(filtered / n)

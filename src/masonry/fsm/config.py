@@ -81,6 +81,10 @@ class UavConfig:
     swing_speed_mps: float = 0.2
     swing_patience_s: float = 8.0
     swing_window_s: float = 2.0
+    # Issue 29: > 0, the velocity the gates read (the swing check above, the alignment's and the hover's speed
+    # limits) is made consistent with the reported position over this time constant (masonry.fsm.velocity_filter):
+    # PX4's EKF2 on GNSS reports a velocity up to 0.5 m/s off what its own position does; 0: the autopilot's
+    velocity_from_position_s: float = 0.0
     takeoff_timeout_s: float = 30.0
     # A task whose transit waits for clearance longer than this is given up (the attempt counts; None: never):
     # it frees the UAV's hold volume, which another waiting UAV's flight may need (docs/safety.md)

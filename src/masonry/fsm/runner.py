@@ -14,6 +14,7 @@ from masonry.fsm.adhesion import AdhesionUav
 from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
 from masonry.fsm.model import UavModel
+from masonry.fsm.velocity_filter import PositionVelocityFc
 from masonry.planner.tasks import Task
 from masonry.ports import (
     Camera,
@@ -102,6 +103,8 @@ def build_uav(
     """
     if clearance is FROM_LINK:
         clearance = link if isinstance(link, ClearanceLink) else None
+    if config.velocity_from_position_s > 0.0:  # the gates read a velocity the position follows (issue 29)
+        fc = PositionVelocityFc(fc, config.velocity_from_position_s)
     if config.role == "brick":
         if gripper is None or camera is None:
             raise ValueError(f"brick UAV {config.name} needs a gripper and a camera")
