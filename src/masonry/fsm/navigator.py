@@ -247,6 +247,19 @@ class Navigator:
             legs = [target]
         return [leg for i, leg in enumerate(legs) if i == len(legs) - 1 or np.linalg.norm(leg - p) > _SAME_M]
 
+    def expect(self, target_m: Sequence[float]) -> None:
+        """Where the autopilot takes the UAV by itself (a take-off): the point the machine holds next."""
+        self.target_m = np.array([float(target_m[0]), float(target_m[1]), float(target_m[2])])
+
+    def legs_moving(self) -> None:
+        """The legs that follow need not start from rest (a route's corners may be cut)."""
+        self.legs_from_rest = False
+
+    def begin_settling(self, now_s: float) -> None:
+        """The hover at the end of the leg starts waiting to settle now, unless it already does."""
+        if self.settling_since_s is None:
+            self.settling_since_s = now_s
+
     def next_leg(self, now_s: float, tel: Telemetry) -> None:
         """Start the next leg of the route (there is one: ``legs``)."""
         target, duration = self.legs.pop(0)
