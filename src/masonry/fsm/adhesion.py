@@ -216,7 +216,7 @@ class AdhesionUav(UavModel):
         elif self._now_s - attempt.stable_since_s >= cfg.stable_time_s:
             self.stable()
             return
-        swinging = self._swinging(tel)
+        swinging = self._gate_failure(tel)
         if swinging is not None:
             self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}: {swinging}")
         elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from masonry.fsm.battery import DrainMeter
     from masonry.fsm.config import UavConfig
     from masonry.fsm.fence import FenceWatch
+    from masonry.fsm.gates import Gate
     from masonry.fsm.navigator import Navigator
     from masonry.fsm.phases import PhaseClock
     from masonry.fsm.transit import Transit
@@ -56,6 +57,7 @@ class ModelBase:
     phase_clock: PhaseClock
     fence_watch: FenceWatch | None
     drain: DrainMeter
+    gates: tuple[Gate, ...]
     _now_s: float
     _entered_s: float
     _tel: Telemetry | None

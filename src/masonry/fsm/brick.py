@@ -279,7 +279,7 @@ class BrickUav(PutBack):
             track_brick(self, self._camera_align, tel)
         if self._aligned(tel):
             self.aligned()
-        elif (swinging := self._swinging(tel)) is not None:
+        elif (swinging := self._gate_failure(tel)) is not None:
             self.abort(reason=f"could not align above brick {self.brick_task.brick}: {swinging}")
         elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not align above brick {self.brick_task.brick}")
@@ -398,7 +398,7 @@ class BrickUav(PutBack):
     def do_place_align(self, tel: Telemetry) -> None:
         if self._aligned(tel):
             self.aligned()
-        elif (swinging := self._swinging(tel)) is not None:
+        elif (swinging := self._gate_failure(tel)) is not None:
             self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}: {swinging}")
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}")

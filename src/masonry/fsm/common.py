@@ -1,8 +1,8 @@
 """The states both UAV machines share: idle, takeoff, home, land, failsafe, emergency and halted.
 
 Each state is an ``enter_<state>`` callback (its motion and actuators) and a ``do_<state>`` tick handler (which
-fires the state's trigger when its work is done), as declared in :mod:`masonry.fsm.states`. The swing gate of
-the hover and alignment states (:meth:`CommonStates._swinging`) is here too: both machines' gates call it.
+fires the state's trigger when its work is done), as declared in :mod:`masonry.fsm.states`. The gate states'
+declared exit checks (:mod:`masonry.fsm.gates`: the swing gate) run from here too (:meth:`CommonStates._gate_failure`).
 """
 
 from __future__ import annotations
@@ -27,9 +27,6 @@ _TAKEOFF_SETTLE_MPS = 0.2
 _TAKEOFF_RETRY_S = 2.0
 _TAKEOFF_RETRIES = 2
 _TAKEOFF_STUCK_S = 6.0
-#: A swinging UAV this far off its point when a gate fails was blown off (a position loop too fast for its
-#: autopilot swings about the point, tens of centimetres; gusts in moderate turbulence carried UAVs 1-40 m).
-_BLOWN_OFF_M = 1.0
 
 
 class CommonStates(TaskBook):
@@ -95,35 +92,43 @@ class CommonStates(TaskBook):
                 f"within {self.config.takeoff_timeout_s:.0f} s" + (f": {why}" if isinstance(why, str) else "")
             )
 
-    def _swinging(self, tel: Telemetry) -> str | None:
-        """The reason to fail a gate (hover, alignment) now: the UAV swings instead of settling (or None).
+    def _gate_failure(self, tel: Telemetry) -> str | None:
+        """The reason to fail a gate state (hover, alignment) now, or None: its declared gates
+        (:mod:`masonry.fsm.gates`), in order, once the swing's running mean has this tick's speed.
 
-        The mean squared speed over ``swing_window_s`` (exponentially weighted), from the gate state's entry; past
-        ``swing_patience_s`` after the leg's planned end, its root above ``swing_speed_mps`` fails the attempt.
+        The mean squared speed over ``swing_window_s`` (exponentially weighted) runs from the gate state's entry
+        and is brought up to date only here: the state's work calls this after its own test has failed.
         """
-        cfg = self.config
         swing = self._swing
         if swing.entered_s != self._entered_s:
             swing = Swing(self._entered_s, self._now_s, 0.0)
         dt = self._now_s - swing.tick_s
         vx, vy, vz = tel.velocity_mps
         mean_sq = swing.mean_sq_mps2
-        mean_sq += min(1.0, dt / cfg.swing_window_s) * (vx * vx + vy * vy + vz * vz - mean_sq)
+        mean_sq += min(1.0, dt / self.config.swing_window_s) * (vx * vx + vy * vy + vz * vz - mean_sq)
         self._swing = Swing(self._entered_s, self._now_s, mean_sq)
-        if self._now_s < self.nav.end_s + cfg.swing_patience_s or mean_sq <= cfg.swing_speed_mps**2:
-            return None
-        off_m = math.dist(tel.position_m, self.nav.target_m)
-        head = (
-            f"swinging at {math.sqrt(mean_sq):.2f} m/s rms, {off_m:.2f} m off, "
-            f"{self._now_s - self.nav.end_s:.0f} s after the leg's end: "
-        )
-        if off_m > _BLOWN_OFF_M:
-            # a loop too fast for its autopilot swings about the point; this far off, the air moved it (issue 18)
-            return head + "blown off by gusts beyond what the autopilot holds against"
-        return head + (
-            "the position loop is too fast for this autopilot's lag (measure it: masonry fly --identify; "
-            "docs/hardware.md), or gusts"
-        )
+        for gate in self.gates:
+            if gate.guards(self.state):
+                reason = gate.check(self._now_s, tel, self)
+                if reason is not None:
+                    return reason
+        return None
+
+    # -- what the gates read (masonry.fsm.gates.Gated) ----------------------------------------------------
+    @property
+    def swing(self) -> Swing:
+        """The gate state's running mean of the squared speed."""
+        return self._swing
+
+    @property
+    def leg_end_s(self) -> float:
+        """When the motion in hand was planned to end."""
+        return self.nav.end_s
+
+    @property
+    def hold_target_m(self) -> np.ndarray:
+        """The point the UAV flies to (or holds)."""
+        return self.nav.target_m
 
     def _retry_takeoff(self, tel: Telemetry) -> bool:
         """Still on the ground after asking for the take-off: ask again (at most twice), arming first if the

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from masonry.errors import InvalidArgument
+from masonry.fsm.gates import gated_states
 from masonry.fsm.states import MACHINES, diagram_machine
 from masonry.fsm.watchdogs import guarded_states
 
@@ -56,9 +57,15 @@ def machine_graph(kind: str) -> Any:
 
 
 def watchdog_lines(kind: str) -> list[str]:
-    """The note on machine ``kind``'s watchdogs: a heading, then ``watchdog name: the states it guards``."""
+    """The note on machine ``kind``'s watchdogs: a heading, then ``watchdog name: the states it guards``; then
+    its gates' (:mod:`masonry.fsm.gates`), ``gate name: the states it guards``."""
     lines = [f"watchdog {name}: {', '.join(states)}" for name, states in guarded_states(kind)]
-    return ["watchdogs (run before each tick's work, in this order)", *lines]
+    gates = [f"gate {name}: {', '.join(states)}" for name, states in gated_states(kind)]
+    return [
+        "watchdogs (run before each tick's work, in this order)",
+        *lines,
+        *(["gates (run by a gate state's work when it has not settled)", *gates] if gates else []),
+    ]
 
 
 def dot_available() -> bool:

@@ -32,6 +32,7 @@ from masonry.fsm.battery import DrainMeter
 from masonry.fsm.common import CommonStates
 from masonry.fsm.config import UavConfig
 from masonry.fsm.fence import FenceWatch
+from masonry.fsm.gates import for_kind as gates_for_kind
 from masonry.fsm.navigator import Navigator
 from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
@@ -106,6 +107,8 @@ class UavModel(CommonStates):
         self._leaf_names = leaf_states(states)
         #: the cross-cutting checks run before each tick's work (masonry.fsm.watchdogs; add one here)
         self.watchdogs: tuple[Watchdog, ...] = for_kind(self.KIND)
+        #: the gate states' exit checks, run by their work after its own test (masonry.fsm.gates)
+        self.gates = gates_for_kind(self.KIND)
         self.machine = HierarchicalMachine(
             model=self,
             states=copy.deepcopy(states),
