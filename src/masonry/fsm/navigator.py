@@ -90,7 +90,7 @@ class Navigator:
         return np.array(p, dtype=float) if clamped or not isinstance(p, np.ndarray) else p
 
     # -- what to fly -------------------------------------------------------------------------------------
-    def shift(self, delta_m: Sequence[float]) -> None:
+    def shift(self, delta_m: Sequence[float] | np.ndarray) -> None:
         """Move the motion in hand, its reference and its end, by ``delta_m``: the point it flies to moved (the
         brick as the camera sees it now, :mod:`masonry.fsm.camera_align`); its timing stays."""
         d = (float(delta_m[0]), float(delta_m[1]), float(delta_m[2]))
