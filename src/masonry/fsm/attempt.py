@@ -28,7 +28,7 @@ class Takeoff:
 
 @dataclass(frozen=True)
 class Swing:
-    """A gate state's running mean of the squared speed (the swing gate, ``UavModel._swinging``)."""
+    """A gate state's running mean of the squared speed (kept by ``UavModel._gate_failure``, read by the swing gate)."""
 
     entered_s: float = math.nan  # the gate state's entry it belongs to
     tick_s: float = 0.0  # the tick it was last updated at

@@ -86,7 +86,7 @@ class UavModel(CommonStates):
         self.halt_reason: str | None = None
         self._now_s = clock.now_s()
         self._entered_s = self._now_s
-        self._swing = Swing()  # the gate state's running mean speed (_swinging)
+        self._swing = Swing()  # the gate state's running mean speed (_gate_failure)
         self._tel: Telemetry | None = None
         self._next_task: Task | None = None
         self._halt_after_landing: str | None = None
