@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import Any
 
 import numpy as np
 
+from masonry.fsm.attempt import AdhesionAttempt
 from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.fsm.bead import BeadPass, BeadSettings
 from masonry.fsm.config import UavConfig
@@ -35,6 +35,7 @@ class AdhesionUav(UavModel):
     """
 
     KIND = "adhesion"
+    attempt: AdhesionAttempt
     stable: Callable[..., bool]
     sprayed: Callable[..., bool]
     closed: Callable[..., bool]
@@ -51,13 +52,9 @@ class AdhesionUav(UavModel):
     ) -> None:
         self.sprayer = sprayer
         self.nozzle = Tool.at(config.airframe.nozzle_offset_m)
-        self._stable_since_s: float | None = None
+        #: the heading it flies its segments at (set for each task on the way there; the chaining of the next
+        #: task's segment is judged at it, so it outlives the attempt)
         self._yaw_rad = 0.0
-        #: the lean (roll, pitch) averaged over _LEAN_TAU_S from the hover on: a steady wind's, not a gust's
-        self._lean = (0.0, 0.0)
-        self._bead = BeadPass((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), BeadSettings(speed_mps=1.0))  # enter_spray's
-        self._bead_tick_s = 0.0
-        self._spray_deadline_s = 0.0
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
             config.cruise_altitude_m
@@ -65,6 +62,14 @@ class AdhesionUav(UavModel):
         super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(ADHESION_TASK_STATES)
+
+    def _new_attempt(self, start_s: float, wait_budget_s: float) -> AdhesionAttempt:
+        return AdhesionAttempt(start_s=start_s, wait_budget_s=wait_budget_s)
+
+    @property
+    def _bead(self) -> BeadPass:
+        """The attempt's pass of the bead (``attempt.bead``; its old name, read by tests)."""
+        return self.attempt.bead
 
     @property
     def adhesion_task(self) -> AdhesionTask:
@@ -122,7 +127,7 @@ class AdhesionUav(UavModel):
         p = np.array([point_m[0], point_m[1], point_m[2] + self.config.airframe.spray_height_m])
         tilt = None
         if tel is not None:
-            roll, pitch = self._lean
+            roll, pitch = self.attempt.lean_rad
             # below _LEAN_MIN_RAD the shift (under 1.2 cm) is within the spray tolerance: fly level, as in calm
             # air (where a hover's tilt is a fraction of a degree of noise, and the schedules stay as they were)
             if roll * roll + pitch * pitch > _LEAN_MIN_RAD**2:
@@ -136,7 +141,7 @@ class AdhesionUav(UavModel):
         if self.sprayer.is_valve_open():
             self.sprayer.set_valve(False)
 
-    def enter_cruise(self, *args: Any, **kwargs: Any) -> None:
+    def enter_cruise(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self._yaw_rad = tel.attitude_rad[2]
@@ -174,17 +179,20 @@ class AdhesionUav(UavModel):
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the start of {self.adhesion_task.id}")
 
-    def enter_hover(self, *args: Any, **kwargs: Any) -> None:
+    def enter_hover(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
-        self._stable_since_s = None
-        self._lean = (tel.attitude_rad[0], tel.attitude_rad[1])
+        self.attempt.stable_since_s = None
+        self.attempt.lean_rad = (tel.attitude_rad[0], tel.attitude_rad[1])
         self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
 
     def _follow_lean(self, tel: Telemetry) -> None:
         k = min(1.0, self.config.control_period_s / _LEAN_TAU_S)
-        roll, pitch = self._lean
-        self._lean = (roll + (tel.attitude_rad[0] - roll) * k, pitch + (tel.attitude_rad[1] - pitch) * k)
+        roll, pitch = self.attempt.lean_rad
+        self.attempt.lean_rad = (
+            roll + (tel.attitude_rad[0] - roll) * k,
+            pitch + (tel.attitude_rad[1] - pitch) * k,
+        )
 
     def do_hover(self, tel: Telemetry) -> None:
         cfg = self.config
@@ -200,20 +208,21 @@ class AdhesionUav(UavModel):
             and math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) <= scale * cfg.settle_speed_mps
             and self._yaw_error(tel) <= scale * cfg.align_yaw_tolerance_rad
         )
+        attempt = self.attempt
         if not still:
-            self._stable_since_s = None
-        elif self._stable_since_s is None:
-            self._stable_since_s = self._now_s
-        elif self._now_s - self._stable_since_s >= cfg.stable_time_s:
+            attempt.stable_since_s = None
+        elif attempt.stable_since_s is None:
+            attempt.stable_since_s = self._now_s
+        elif self._now_s - attempt.stable_since_s >= cfg.stable_time_s:
             self.stable()
             return
-        swinging = self._swinging(tel)
+        swinging = self._gate_failure(tel)
         if swinging is not None:
             self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}: {swinging}")
         elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not hover still over the start of {self.adhesion_task.id}")
 
-    def enter_descend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_descend(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         start = self._nozzle_body(self.adhesion_task.start_m, tel)
@@ -234,12 +243,12 @@ class AdhesionUav(UavModel):
         elif late > max(cfg.release_timeout_s, 2.0 * cfg.align_patience_s):
             self.abort(reason=f"could not reach the spraying height over {self.adhesion_task.id}")
 
-    def enter_spray(self, *args: Any, **kwargs: Any) -> None:
+    def enter_spray(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         t = self.adhesion_task
         cfg = self.config
-        self._bead = BeadPass(
+        self.attempt.bead = BeadPass(
             t.start_m,
             t.end_m,
             BeadSettings(
@@ -249,11 +258,11 @@ class AdhesionUav(UavModel):
                 lead_m=cfg.spray_lead_m,
             ),
         )
-        self._bead_tick_s = self._now_s
+        self.attempt.bead_tick_s = self._now_s
         # the spray ends by then, covered or not (bounded: gusts that never let the nozzle cover it end the task,
         # which reports the coverage it measured)
-        self._spray_deadline_s = (
-            self._now_s + self._bead.length_m / cfg.spray_speed_mps + cfg.spray_patience_s
+        self.attempt.spray_deadline_s = (
+            self._now_s + self.attempt.bead.length_m / cfg.spray_speed_mps + cfg.spray_patience_s
         )
         self._steer_bead(tel)
 
@@ -263,11 +272,12 @@ class AdhesionUav(UavModel):
         nozzle on the bead's reference as the UAV leans now (in turbulence the tilt swings by 10-20 degrees within
         seconds: 6-12 cm at the nozzle's 0.35 m, more than the 3 cm bead radius); True when the pass is over."""
         cfg = self.config
-        dt = self._now_s - self._bead_tick_s
-        self._bead_tick_s = self._now_s
+        attempt = self.attempt
+        dt = self._now_s - attempt.bead_tick_s
+        attempt.bead_tick_s = self._now_s
         nozzle = self.nozzle.position(tel)
         above = float(nozzle[2]) - self.adhesion_task.start_m[2]
-        step = self._bead.step(dt, nozzle, -0.01 <= above <= cfg.spray_check_height_m)
+        step = attempt.bead.step(dt, nozzle, -0.01 <= above <= cfg.spray_check_height_m)
         if step.valve_open != self.sprayer.is_valve_open():
             self.sprayer.set_valve(step.valve_open)
         ref = step.nozzle_ref_m
@@ -276,20 +286,21 @@ class AdhesionUav(UavModel):
             self._yaw_rad,
             (tel.attitude_rad[0], tel.attitude_rad[1]),
         )
-        remaining_s = abs((self._bead.length_m if self._bead.direction > 0 else 0.0) - self._bead.progress_m)
+        bead = attempt.bead
+        remaining_s = abs((bead.length_m if bead.direction > 0 else 0.0) - bead.progress_m)
         self.nav.steer(self._now_s, body, step.velocity_mps, self._now_s + remaining_s / cfg.spray_speed_mps)
         return step.pass_over
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
         over = self._steer_bead(tel)
-        bead = self._bead
+        bead = self.attempt.bead
         if over and bead.coverage() < 1.0:
             bead.turn()  # a gap left (the nozzle pushed off): back along the segment over it, valve on the bead
             over = False
         if over:
             self.sprayed()
-        elif self._now_s > self._spray_deadline_s:
+        elif self._now_s > self.attempt.spray_deadline_s:
             # bounded: gusts that never let the nozzle cover the segment end the spray; below spray_min_coverage
             # the attempt fails (mission control tries again: what was sprayed stays)
             if bead.coverage() >= cfg.spray_min_coverage:
@@ -300,7 +311,7 @@ class AdhesionUav(UavModel):
                     f"{self._now_s - self._entered_s:.0f} s, {bead.passes} passes: gusts kept the nozzle off it"
                 )
 
-    def enter_close(self, *args: Any, **kwargs: Any) -> None:
+    def enter_close(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.sprayer.set_valve(False)
@@ -310,13 +321,15 @@ class AdhesionUav(UavModel):
         if self._now_s - self._entered_s >= self.config.close_dwell_s:
             self.closed()
 
-    def enter_ascend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_ascend(self, *args: object, **kwargs: object) -> None:
         # The segment is sprayed and the valve closed: the task is done, reported now so that mission control
         # can hand over the next one while the UAV is still down here (see ``do_ascend``).
         tel = self._tel
         assert tel is not None
         self._climb_to_m = self._transit_altitude_m()
-        self._report_done(coverage=self._bead.coverage())  # its own measure: what the nozzle's track covered
+        self._report_done(
+            coverage=self.attempt.bead.coverage()
+        )  # its own measure: what the nozzle's track covered
         self._next_task = None
         self._climbing = False
         self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)

@@ -1,82 +1,37 @@
-"""The brick-carrier UAV (paper, Section IV): the callbacks of the brick machine (:data:`states.BRICK_STATES`)."""
+"""The brick-carrier UAV (paper, Section IV): the callbacks of the brick machine (:data:`states.BRICK_STATES`).
+
+Its put-back, carrying altitude and way out of a task are :mod:`masonry.fsm.putback`'s; what it has done of the
+task in hand is its :class:`~masonry.fsm.attempt.BrickAttempt` (``attempt``).
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
-from masonry.errors import HardwareError
-from masonry.fsm.battery import LEG_SETTLE_S, flight_left_s
+from masonry.fsm.base import Vec3
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
-from masonry.fsm.model import UavModel
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
-from masonry.fsm.states import (
-    BRICK_LOADED_STATES,
-    BRICK_STATES,
-    BRICK_TASK_STATES,
-    BRICK_TRANSITIONS,
-    leaf_states,
-)
+from masonry.fsm.putback import PutBack
+from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.geometry import R_world_body, wrap_angle_rad
+from masonry.perception.estimation import EstimatorConfig, PoseWindow, estimate_brick_pose
 from masonry.perception.types import TagPose
 from masonry.planner.tasks import BrickTask, Task
-from masonry.ports import (
-    BATTERY_LOW_REASON,
-    Camera,
-    ClearanceLink,
-    Clock,
-    FlightController,
-    Gripper,
-    MissionLink,
-    Telemetry,
-)
+from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
 
-Vec3 = tuple[float, float, float]
-
-#: States in which the brick is (or may be) on the magnet: a task given up there puts it back first.
-_LOADED_STATES = frozenset(BRICK_LOADED_STATES)
-#: A put-back waiting for its pickup's column goes home with the brick once the flight left above the critical
-#: battery falls under this many times the rest of the put-back and the way home.
-_PUTBACK_LAST_S_FACTOR = 1.1
 #: Hovering and aligning over a brick (estimate, align): seconds the battery budget counts for them.
 _ALIGN_S = 3.0
 #: A brick UAV this far (horizontally) from its estimate hover point has been blown off it: its camera looks
 #: elsewhere, and the time there does not count against the estimate's deadline.
 _ESTIMATE_OFF_M = 0.25
-#: A brick put back is let go after its descent's time-out only this close (horizontally) to where it was picked
-#: up: the retry's estimate hover must still see it.
-_PUTBACK_NEAR_M = 0.2
 
 
-@dataclass
-class BrickAttempt:
-    """What a brick UAV has done of the task in hand: counters, the brick's estimate, the heights and yaws it
-    flies (reset for each task)."""
-
-    climbs: int = 0
-    grasp_attempts: int = 0
-    place_attempts: int = 0
-    release_attempts: int = 0
-    brick_estimate: tuple[np.ndarray, float] | None = None  # top-face centre (world, m), yaw (rad)
-    estimates_seen: int = 0
-    hover_z: float = 0.0  # the estimate hover's altitude (0: where the UAV is)
-    hover_xy: tuple[float, float] | None = None  # where the estimate hovers (None: where the UAV is)
-    deadline_s: float = 0.0  # of the estimate
-    off_s: float = 0.0  # the estimate's time blown off its hover point (not counted against its deadline)
-    carry_yaw_rad: float = 0.0  # the carried brick's yaw relative to the body
-    grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
-    place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    release_error_m: float | None = None  # the effector's distance to its target at the release
-    putback_reason: str = ""  # why the task was given up while the brick is being put back
-
-
-class BrickUav(UavModel):
+class BrickUav(PutBack):
     """The brick-carrier UAV (paper, Section IV): pick a brick up near ``pickup_m``, place it on the wall.
 
     Args:
@@ -111,8 +66,6 @@ class BrickUav(UavModel):
         *,
         clearance: ClearanceLink | None = None,
     ) -> None:
-        from masonry.perception.estimation import EstimatorConfig, PoseWindow
-
         self.gripper = gripper
         self.camera = camera
         self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
@@ -123,13 +76,9 @@ class BrickUav(UavModel):
         self._camera_align = CameraAlign()
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
-        self._begin_counters()
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
-
-    def _begin_counters(self) -> None:
-        self.attempt = BrickAttempt()
 
     @property
     def climbs(self) -> int:
@@ -157,38 +106,11 @@ class BrickUav(UavModel):
     def estimates_seen(self) -> int:
         return self.attempt.estimates_seen
 
-    def _begin_task(self, task: Task) -> None:
-        self._begin_counters()
-
     def _task_problem(self, task: Task) -> str | None:
         assert isinstance(task, BrickTask)
         if task.pickup_m is None:
             return f"brick task {task.id} has no pickup location"
         return None
-
-    @property
-    def brick_task(self) -> BrickTask:
-        assert isinstance(self.task, BrickTask)
-        return self.task
-
-    def _transit_altitude_m(self) -> float:
-        """Cruise altitude, raised so a carried brick clears the drop-off by ``clearance_m``."""
-        if isinstance(self.task, BrickTask):
-            return self._carry_altitude_m(self.task)
-        return self.config.cruise_altitude_m
-
-    def _carry_altitude_m(self, t: BrickTask) -> float:
-        """The transit altitude of brick task ``t``: cruise, raised so the brick clears its drop-off."""
-        top_z = t.position_m[2] + t.size_m[2] / 2.0
-        return max(
-            self.config.cruise_altitude_m,
-            top_z - self.effector.offset_body_m[2] + t.size_m[2] + self.config.clearance_m,
-        )
-
-    # -- the battery budget (masonry.fsm.battery) -----------------------------------------------------------
-    def _vertical_s(self, distance_m: float) -> float:
-        """A climb or descent leg of the task (the navigator's rest-to-rest leg), settled."""
-        return self.nav.leg_duration_s(np.zeros(3), np.array([0.0, 0.0, abs(distance_m)])) + LEG_SETTLE_S
 
     def _task_flight_s(self, task: Task, from_m: Vec3) -> tuple[float, Vec3]:
         """To the pickup, the estimate and the grasp, the carry, the placement and the climb out of it."""
@@ -216,47 +138,8 @@ class BrickUav(UavModel):
         flight_s = self._route_s(from_m, hover) + pick_s + self._route_s(over_pickup, over_drop) + place_s
         return flight_s, over_drop
 
-    def _putback_need_s(self, from_m: Vec3) -> float:
-        """Putting the brick back from ``from_m`` (the flight to its pickup, the descent, the release, the climb)
-        and the way home from there, with no wait."""
-        cfg = self.config
-        effector_m, yaw = self._putback_pose()
-        body = self.effector.body_target(effector_m, yaw)
-        over = (float(body[0]), float(body[1]), self._transit_altitude_m())
-        return (
-            self._route_s(from_m, over)
-            + cfg.descent_duration_s
-            + cfg.release_dwell_s
-            + self._vertical_s(over[2] - float(body[2]))
-            + self._home_s(over)
-        )
-
-    def _flight_left_s(self, floor_fraction: float) -> float | None:
-        """Seconds of flight above ``floor_fraction`` at the measured drain (None: not measured yet)."""
-        drain = self.drain.drain_per_s
-        if self._tel is None or drain is None:
-            return None
-        return flight_left_s(self._tel.battery_fraction, floor_fraction, drain)
-
-    def _exit_s(self, tel: Telemetry) -> tuple[float, str]:
-        """With the brick (maybe) on the magnet and its put-back affordable: the put-back and the way home."""
-        if (
-            self.state in _LOADED_STATES
-            and self.attempt.brick_estimate is not None
-            and self._putback_affordable()
-        ):
-            return self._putback_need_s(tel.position_m), f"putting brick {self.brick_task.brick} back"
-        return super()._exit_s(tel)
-
-    def _safe_actuators(self) -> None:
-        self.gripper.set_joint_locked(True)  # keep a carried brick; it is put down after landing
-
-    def _on_landed(self) -> None:
-        self.gripper.set_magnet(False)
-        self.gripper.set_joint_locked(True)
-
     # -- pickup --------------------------------------------------------------------------------------------
-    def enter_pickup_goto(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_goto(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.gripper.set_magnet(False)
@@ -278,12 +161,12 @@ class BrickUav(UavModel):
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the pickup of {self.brick_task.id}")
 
-    def climb_step(self, *args: Any, **kwargs: Any) -> None:
+    def climb_step(self, *args: object, **kwargs: object) -> None:
         """Before re-entering ``estimate``: one step up to widen the camera's view."""
         self.attempt.climbs += 1
         self.attempt.hover_z += self.config.climb_step_m
 
-    def enter_pickup_estimate(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_estimate(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         p = tel.position_m
@@ -369,8 +252,6 @@ class BrickUav(UavModel):
                 tag2 = tag
         if tag1 is None and tag2 is None:
             return None
-        from masonry.perception.estimation import estimate_brick_pose
-
         roll, pitch, yaw = tel.attitude_rad
         R_wb = R_world_body(roll, pitch, yaw)
         R_wc = R_wb @ self._T_body_cam[:3, :3]
@@ -384,7 +265,7 @@ class BrickUav(UavModel):
         est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
         return None if est is None else (np.asarray(est.center_m, dtype=float), float(est.yaw_rad))
 
-    def enter_pickup_align(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_align(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None and self.attempt.brick_estimate is not None
         center, yaw = self.attempt.brick_estimate
@@ -398,7 +279,7 @@ class BrickUav(UavModel):
             track_brick(self, self._camera_align, tel)
         if self._aligned(tel):
             self.aligned()
-        elif (swinging := self._swinging(tel)) is not None:
+        elif (swinging := self._gate_failure(tel)) is not None:
             self.abort(reason=f"could not align above brick {self.brick_task.brick}: {swinging}")
         elif self._now_s > self.nav.end_s + cfg.leg_timeout_s:
             self.abort(reason=f"could not align above brick {self.brick_task.brick}")
@@ -420,7 +301,7 @@ class BrickUav(UavModel):
             return noise_aligned(noise, tolerance, speed)
         return math.hypot(p[0] - t[0], p[1] - t[1]) <= tolerance and math.hypot(v[0], v[1]) <= speed
 
-    def enter_pickup_descend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_descend(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None and self.attempt.brick_estimate is not None
         center, yaw = self.attempt.brick_estimate
@@ -435,7 +316,7 @@ class BrickUav(UavModel):
         if self._now_s >= self.nav.end_s:
             self.touched()
 
-    def enter_pickup_grasp(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_grasp(self, *args: object, **kwargs: object) -> None:
         pass  # keep tracking the descent's end point (pressing on the brick) with the magnet on
 
     def do_pickup_grasp(self, tel: Telemetry) -> None:
@@ -446,7 +327,7 @@ class BrickUav(UavModel):
             self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
 
-    def enter_pickup_ascend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_ascend(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
@@ -457,7 +338,7 @@ class BrickUav(UavModel):
         if self._advance(tel):
             self.ascended()
 
-    def enter_pickup_verify(self, *args: Any, **kwargs: Any) -> None:
+    def enter_pickup_verify(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self._hold(tel)
@@ -492,7 +373,7 @@ class BrickUav(UavModel):
         t = self.brick_task
         return np.array([t.position_m[0], t.position_m[1], t.position_m[2] + t.size_m[2] / 2.0])
 
-    def enter_transport(self, *args: Any, **kwargs: Any) -> None:
+    def enter_transport(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         yaw = self._place_yaw_rad()
@@ -506,7 +387,7 @@ class BrickUav(UavModel):
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not reach the drop-off of {self.brick_task.id}")
 
-    def enter_place_align(self, *args: Any, **kwargs: Any) -> None:
+    def enter_place_align(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
@@ -517,12 +398,12 @@ class BrickUav(UavModel):
     def do_place_align(self, tel: Telemetry) -> None:
         if self._aligned(tel):
             self.aligned()
-        elif (swinging := self._swinging(tel)) is not None:
+        elif (swinging := self._gate_failure(tel)) is not None:
             self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}: {swinging}")
         elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
             self.abort(reason=f"could not align above the drop-off of {self.brick_task.id}")
 
-    def enter_place_descend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_place_descend(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(False)
@@ -547,14 +428,14 @@ class BrickUav(UavModel):
             else:
                 self.timeout()
 
-    def enter_place_release(self, *args: Any, **kwargs: Any) -> None:
+    def enter_place_release(self, *args: object, **kwargs: object) -> None:
         self.gripper.set_magnet(False)
 
     def do_place_release(self, tel: Telemetry) -> None:
         if self._now_s - self._entered_s >= self.config.release_dwell_s:
             self.released()
 
-    def enter_place_verify(self, *args: Any, **kwargs: Any) -> None:
+    def enter_place_verify(self, *args: object, **kwargs: object) -> None:
         pass
 
     def do_place_verify(self, tel: Telemetry) -> None:
@@ -569,7 +450,7 @@ class BrickUav(UavModel):
         else:
             self.stuck()
 
-    def enter_place_ascend(self, *args: Any, **kwargs: Any) -> None:
+    def enter_place_ascend(self, *args: object, **kwargs: object) -> None:
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
@@ -579,147 +460,3 @@ class BrickUav(UavModel):
     def do_place_ascend(self, tel: Telemetry) -> None:
         if self._advance(tel):
             self._complete_task(placement_error_m=self.attempt.release_error_m)
-
-    # -- putting a brick back (a task given up with the brick on the magnet) ------------------------------
-    def may_put_back(self, *args: Any, **kwargs: Any) -> bool:
-        """The task is given up with the brick on the magnet and its pickup pose known: put it back there
-        (else it would come home on the UAV, and the task's retry would not find it on its pallet)."""
-        if self.attempt.brick_estimate is None or not self._putback_affordable():
-            return False
-        try:
-            return self.gripper.is_attached()
-        except HardwareError:
-            return False  # the general abort: failsafe, then home (or the emergency)
-
-    def _putback_affordable(self) -> bool:
-        """The UAV can put the brick back and fly home before its battery is critical, with
-        ``battery_return_wait_s`` of waiting for clearance on the way; else it flies home with the brick."""
-        left_s = self._flight_left_s(self.config.battery_critical_fraction)
-        if left_s is None or self._tel is None or self.attempt.brick_estimate is None:
-            return True
-        return left_s >= self._putback_need_s(self._tel.position_m) + self.config.battery_return_wait_s
-
-    def battery_short(self, tel: Telemetry) -> str | None:
-        """Also short: about to grasp its brick (``pickup_align``), a UAV whose flight left above
-        ``battery_low_fraction`` no longer covers the rest of the task with what is left of the waiting it was
-        taken with (the pickup's column kept it waiting) and the way home: it gives the task up before it has a
-        brick to put back. Only with a ground crew (``swaps_batteries``): without one, a battery reason retires the
-        UAV after landing, and the waiting rule (:meth:`UavModel.battery_short`) keeps it safe anyway."""
-        short = super().battery_short(tel)
-        if short is not None or self.state != "pickup_align" or not self._battery_service:
-            return short
-        left_s = self._flight_left_s(self.config.battery_low_fraction)
-        rest_s = self._flight_need_s(self.brick_task)
-        if left_s is None or rest_s is None:
-            return None
-        rest_s += max(0.0, self.task_wait_budget_s - self.task_waited_s)
-        if left_s >= rest_s:
-            return None
-        return (
-            f"{BATTERY_LOW_REASON} ({tel.battery_fraction:.0%}): waited {self.task_waited_s:.0f} s for clearance; "
-            f"{left_s:.0f} s of flight left, brick {self.brick_task.brick}'s placement needs {rest_s:.0f} s"
-        )
-
-    def defer_failure(self, *args: Any, reason: str = "unrecoverable error", **kwargs: Any) -> None:
-        """The task is reported failed once the brick is back on its pallet (mission control then re-queues it
-        and no other UAV comes for the brick while this one still carries it)."""
-        self.attempt.putback_reason = reason
-        self._safe_actuators()
-
-    def _putback_pose(self) -> tuple[np.ndarray, float]:
-        """Where the effector puts the brick back (its top face where it was picked up) and the body's yaw."""
-        assert self.attempt.brick_estimate is not None
-        center, yaw = self.attempt.brick_estimate
-        return np.asarray(center, dtype=float), wrap_angle_rad(yaw - self.attempt.carry_yaw_rad)
-
-    def _putback_given_up(self, what: str) -> None:
-        self.stow(
-            reason=f"{self.attempt.putback_reason}; {what}, brick {self.brick_task.brick} kept on board"
-        )
-
-    def _putback_battery_ok(self, tel: Telemetry) -> bool:
-        if tel.battery_fraction >= self.config.battery_critical_fraction:
-            return True
-        self._halt_after_landing = f"battery critical ({tel.battery_fraction:.0%})"
-        self.lost(reason=self._halt_after_landing)
-        return False
-
-    def enter_putback_goto(self, *args: Any, **kwargs: Any) -> None:
-        tel = self._tel
-        assert tel is not None
-        effector_m, yaw = self._putback_pose()
-        body = self.effector.body_target(effector_m, yaw)
-        self._route(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
-
-    def do_putback_goto(self, tel: Telemetry) -> None:
-        if not self._putback_battery_ok(tel):
-            return
-        if self._waiting_since_s is not None:
-            # waiting for its pickup's column: home with the brick while the battery still affords the way
-            # (landing on the pallet at the critical battery loses the brick and the UAV, issue 18)
-            left_s = self._flight_left_s(self.config.battery_critical_fraction)
-            if left_s is not None and left_s < _PUTBACK_LAST_S_FACTOR * self._putback_need_s(tel.position_m):
-                self._putback_given_up(
-                    f"{left_s:.0f} s of flight left after waiting "
-                    f"{self._now_s - self._waiting_since_s:.0f} s for its pickup's column"
-                )
-                return
-        if self._advance(tel):
-            self.arrived()
-        elif self._now_s > self.nav.end_s + self.config.leg_timeout_s:
-            self._putback_given_up("could not reach its pickup")
-
-    def enter_putback_descend(self, *args: Any, **kwargs: Any) -> None:
-        tel = self._tel
-        assert tel is not None
-        self.gripper.set_joint_locked(False)
-        effector_m, yaw = self._putback_pose()
-        self._fly_to(tel, self.effector.body_target(effector_m, yaw), self.config.descent_duration_s, yaw)
-
-    def do_putback_descend(self, tel: Telemetry) -> None:
-        if not self._putback_battery_ok(tel):
-            return
-        target_m = self._putback_pose()[0]
-        error_m = self.effector.distance_m(tel, target_m)
-        # On the pallet a few centimetres off does not matter (the retry estimates the brick's pose again):
-        # after the descent's time-out it is let go where it is, if that is within _PUTBACK_NEAR_M of its place
-        # (a gust dragged a brick 2 m off its pickup and let it go there: the retries never saw it, issue 18);
-        # farther, it waits for the UAV to come back, and at leg_timeout_s lets go anyway (bounded)
-        late_s = self._now_s - self.nav.end_s
-        p = self.effector.position(tel)
-        near = math.hypot(float(p[0]) - target_m[0], float(p[1]) - target_m[1]) <= _PUTBACK_NEAR_M
-        if (
-            error_m <= self.config.placement_radius_m
-            or (late_s > self.config.release_timeout_s and near)
-            or late_s > self.config.leg_timeout_s
-        ):
-            self.reached()
-
-    def enter_putback_release(self, *args: Any, **kwargs: Any) -> None:
-        self.gripper.set_magnet(False)
-
-    def do_putback_release(self, tel: Telemetry) -> None:
-        if not self._putback_battery_ok(tel):
-            return
-        dwell_s = self.config.release_dwell_s
-        if self._now_s - self._entered_s < dwell_s:
-            return
-        if not self.gripper.is_attached():
-            self.released()
-        elif self._now_s - self._entered_s >= dwell_s * self.config.max_release_attempts:
-            self._putback_given_up("the magnet did not let go at its pickup")
-
-    def enter_putback_ascend(self, *args: Any, **kwargs: Any) -> None:
-        tel = self._tel
-        assert tel is not None
-        self.gripper.set_joint_locked(True)
-        p = tel.position_m
-        self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
-
-    def do_putback_ascend(self, tel: Telemetry) -> None:
-        if not self._putback_battery_ok(tel):
-            return
-        if self._advance(tel):
-            self.finish(
-                reason=f"{self.attempt.putback_reason}; brick {self.brick_task.brick} put back at its pickup"
-            )

@@ -17,9 +17,13 @@ while the camera sees the brick: near the brick, out of the camera's view, the l
 from __future__ import annotations
 
 from collections import deque
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from masonry.fsm.brick import BrickUav
+    from masonry.ports import Telemetry
 
 __all__ = ["CameraAlign", "track_brick"]
 
@@ -64,10 +68,10 @@ class CameraAlign:
         return np.asarray(delta, dtype=float)
 
 
-def track_brick(uav: Any, tracker: CameraAlign, tel: Any) -> bool:
+def track_brick(uav: BrickUav, tracker: CameraAlign, tel: Telemetry) -> bool:
     """Follow the brick as the camera sees it now: shift ``uav``'s motion and brick estimate; True if moved.
 
-    ``uav`` is a :class:`~masonry.fsm.brick.BrickUav` (its ``_fresh_estimate``, ``attempt``, ``nav``).
+    It reads the brick UAV's camera (``_fresh_estimate``) and moves its attempt's estimate and its navigator.
     """
     estimate = uav._fresh_estimate(tel)
     if estimate is None or uav.attempt.brick_estimate is None:

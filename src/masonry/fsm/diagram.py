@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from masonry.errors import InvalidArgument
+from masonry.fsm.gates import gated_states
 from masonry.fsm.states import MACHINES, diagram_machine
 from masonry.fsm.watchdogs import guarded_states
 
@@ -31,7 +33,7 @@ def machine_graph(kind: str) -> Any:
     from transitions.extensions import HierarchicalGraphMachine
 
     if kind not in MACHINES:
-        raise ValueError(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
+        raise InvalidArgument(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
     states, transitions = diagram_machine(kind)
     machine = HierarchicalGraphMachine(
         states=copy.deepcopy(states),
@@ -55,9 +57,15 @@ def machine_graph(kind: str) -> Any:
 
 
 def watchdog_lines(kind: str) -> list[str]:
-    """The note on machine ``kind``'s watchdogs: a heading, then ``watchdog name: the states it guards``."""
+    """The note on machine ``kind``'s watchdogs: a heading, then ``watchdog name: the states it guards``; then
+    its gates' (:mod:`masonry.fsm.gates`), ``gate name: the states it guards``."""
     lines = [f"watchdog {name}: {', '.join(states)}" for name, states in guarded_states(kind)]
-    return ["watchdogs (run before each tick's work, in this order)", *lines]
+    gates = [f"gate {name}: {', '.join(states)}" for name, states in gated_states(kind)]
+    return [
+        "watchdogs (run before each tick's work, in this order)",
+        *lines,
+        *(["gates (run by a gate state's work when it has not settled)", *gates] if gates else []),
+    ]
 
 
 def dot_available() -> bool:
@@ -76,16 +84,16 @@ def write_diagram(kind: str, path: Path, engine: str = "auto") -> str:
         The engine that drew it: ``dot``, ``builtin`` or ``text`` (a .dot file).
 
     Raises:
-        ValueError: an unknown machine, engine or file suffix.
+        InvalidArgument: an unknown machine, engine or file suffix (a ValueError too).
         FileNotFoundError: ``engine="dot"`` but ``dot`` is not installed.
     """
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in FORMATS:
-        raise ValueError(f"{path}: the file must end in .svg, .png or .dot")
+        raise InvalidArgument(f"{path}: the file must end in .svg, .png or .dot")
     if engine not in ENGINES:
-        raise ValueError(f"unknown diagram engine {engine!r}: expected one of {', '.join(ENGINES)}")
+        raise InvalidArgument(f"unknown diagram engine {engine!r}: expected one of {', '.join(ENGINES)}")
     if kind not in MACHINES:
-        raise ValueError(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
+        raise InvalidArgument(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
     if fmt == "dot":
         path.write_text(machine_graph(kind).source)
         return "text"

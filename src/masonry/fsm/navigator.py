@@ -90,7 +90,7 @@ class Navigator:
         return np.array(p, dtype=float) if clamped or not isinstance(p, np.ndarray) else p
 
     # -- what to fly -------------------------------------------------------------------------------------
-    def shift(self, delta_m: Sequence[float]) -> None:
+    def shift(self, delta_m: Sequence[float] | np.ndarray) -> None:
         """Move the motion in hand, its reference and its end, by ``delta_m``: the point it flies to moved (the
         brick as the camera sees it now, :mod:`masonry.fsm.camera_align`); its timing stays."""
         d = (float(delta_m[0]), float(delta_m[1]), float(delta_m[2]))
@@ -246,6 +246,19 @@ class Navigator:
         else:
             legs = [target]
         return [leg for i, leg in enumerate(legs) if i == len(legs) - 1 or np.linalg.norm(leg - p) > _SAME_M]
+
+    def expect(self, target_m: Sequence[float]) -> None:
+        """Where the autopilot takes the UAV by itself (a take-off): the point the machine holds next."""
+        self.target_m = np.array([float(target_m[0]), float(target_m[1]), float(target_m[2])])
+
+    def legs_moving(self) -> None:
+        """The legs that follow need not start from rest (a route's corners may be cut)."""
+        self.legs_from_rest = False
+
+    def begin_settling(self, now_s: float) -> None:
+        """The hover at the end of the leg starts waiting to settle now, unless it already does."""
+        if self.settling_since_s is None:
+            self.settling_since_s = now_s
 
     def next_leg(self, now_s: float, tel: Telemetry) -> None:
         """Start the next leg of the route (there is one: ``legs``)."""

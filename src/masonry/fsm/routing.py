@@ -1,0 +1,159 @@
+"""The UAV model's motion: the navigator's legs and routes, and the airspace transit's asking (docs/safety.md).
+
+Every state moves the UAV through these methods: a hover, one minimum-jerk leg, a line, or a *route* that climbs
+first and descends last; with a :class:`~masonry.ports.ClearanceLink` a route is a transit, which asks mission
+control for the column over its site once at rest, waits at a hold point when told to, flies the layer it is
+given and comes down (:class:`~masonry.fsm.transit.Transit` keeps its phase and what its requests carry). The
+navigator is changed only through its methods.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from masonry.fsm.base import ModelBase, Vec3
+from masonry.ports import ClearanceAnswer, Telemetry
+
+
+class Routing(ModelBase):
+    """Motion for the model's states: hover, legs, lines, routes and the transit (see the module's docstring)."""
+
+    def site_text(self) -> str:
+        """Where the transit goes (the column asked for), as the reasons write it."""
+        x, y, z = self.transit.site_m
+        return f"({x:.2f}, {y:.2f}, {z:.2f})"
+
+    def _stop(self) -> None:
+        self.transit.drop()
+        self.nav.stop()
+
+    def _hold(self, tel: Telemetry, target_m: np.ndarray | None = None, yaw_rad: float | None = None) -> None:
+        """Hover at ``target_m`` (default: where the UAV is) with the given yaw (default: keep it)."""
+        self.nav.hold(self._now_s, tel, target_m, yaw_rad)
+
+    def _fly_to(
+        self,
+        tel: Telemetry,
+        target_m: np.ndarray,
+        duration_s: float | None = None,
+        yaw_rad: float | None = None,
+        from_rest: bool = False,
+    ) -> None:
+        """One minimum-jerk leg to rest at ``target_m`` (:meth:`Navigator.fly_to`)."""
+        self.nav.fly_to(self._now_s, tel, target_m, duration_s, yaw_rad, from_rest)
+
+    def _fly_line(self, tel: Telemetry, start_m: np.ndarray, end_m: np.ndarray, speed_mps: float) -> None:
+        """Track ``start -> end`` at constant ``speed_mps`` (reference starts at ``start`` now)."""
+        self.nav.fly_line(self._now_s, start_m, end_m, speed_mps)
+
+    def _yaw_error(self, tel: Telemetry) -> float:
+        return self.nav.yaw_error_rad(tel)
+
+    def _route(
+        self,
+        tel: Telemetry,
+        target_m: np.ndarray,
+        yaw_rad: float | None = None,
+        top_m: float | None = None,
+        to_m: np.ndarray | None = None,
+    ) -> None:
+        """Go to ``target_m`` climbing first if it is higher, descending last if it is lower (never diagonal).
+
+        With a clearance link (mission control's airspace, docs/safety.md) a lateral move is a *transit*: the
+        UAV first asks for the column over the target, hovering where it is; then climbs (or descends) to the
+        layer it is given, flies there, and descends over the target once the column is its (until then it
+        waits at its layer at the hold point it is given). Without one, with a fixed
+        ``config.lateral_altitude_m``, the lateral leg flies at that altitude. ``top_m``: the highest altitude
+        the UAV will reach while working at the target (default: the target's), ``to_m`` where that work ends if
+        it moves along a segment (an adhesion UAV spraying): mission control reserves both.
+        """
+        self.transit.drop()
+        if self.clearance is None:
+            self.nav.route(self._now_s, tel, target_m, yaw_rad)
+            return
+        # even a move of a few centimetres (the next adhesion segment starts where the last one ended): the
+        # work there is another span of airspace, which mission control must reserve
+        target = np.asarray(target_m, dtype=float)
+        self.nav.legs_moving()
+        self.transit.begin(
+            (float(target[0]), float(target[1]), float(target[2])),
+            top_m,
+            None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2])),
+        )
+        # hover until mission control answers, once come to rest smoothly: it asks once settled, and the flight
+        # it is granted starts from rest where it says it is
+        stop = self.nav.stop_point_m(tel)
+        if self.nav.rests_at(tel, stop):
+            self._fly_to(tel, stop, 0.1, yaw_rad=yaw_rad, from_rest=True)  # at rest there already
+        else:
+            self._fly_to(tel, stop, yaw_rad=yaw_rad)
+
+    def _advance(self, tel: Telemetry, tolerance_m: float | None = None) -> bool:
+        """Move the route on at the end of a leg (its next leg, the transit's next phase); True once the whole
+        motion is over and the UAV within ``tolerance_m`` of its end."""
+        if not self.nav.at_end(self._now_s, tel, tolerance_m):
+            return False
+        if self.nav.legs:
+            self.nav.next_leg(self._now_s, tel)
+            return False
+        if self.transit.active:
+            return self._transit_step(tel)
+        return True
+
+    def _transit_step(self, tel: Telemetry) -> bool:
+        """A transit's motion is over (see :meth:`_route`): ask, go on, or finish; True when it has arrived."""
+        assert self.clearance is not None
+        transit = self.transit
+        if transit.state == "down":
+            transit.arrive()
+            self.clearance.end_transit(transit.site_m)
+            return True
+        self.nav.begin_settling(self._now_s)
+        if not self.nav.settled(self._now_s, tel):
+            self.nav.wait(self._now_s)  # let it settle first (a leg timeout does not run meanwhile)
+            return False
+        answer = self.clearance.request_clearance(transit.site_m, transit.top_m, transit.to_m)
+        if answer is None:
+            self.nav.wait(self._now_s)  # no answer yet: hover (a leg timeout does not run meanwhile)
+            return False
+        p = np.asarray(tel.position_m, dtype=float)
+        layer = self._transit_layer_m(answer, p)
+        if answer.granted:
+            self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer)
+        else:
+            self._refused(tel, p, answer.hold_m, layer)
+        return False
+
+    def _transit_layer_m(self, answer: ClearanceAnswer, p: np.ndarray) -> float:
+        """The altitude of the transit's lateral legs: the one it has, else the answer's, else where it is."""
+        layer = self.transit.layer_m
+        if layer is None:
+            layer = answer.layer_m
+            if layer is None:  # no layers: the altitude it is at (or the target's, if higher)
+                layer = self.config.lateral_altitude_m or max(float(p[2]), float(self.transit.site_m[2]))
+        return layer
+
+    def _granted(self, tel: Telemetry, p: np.ndarray, layer: float) -> None:
+        """The column is the UAV's: fly there at ``layer`` (from a hold point perhaps another layer) and down."""
+        self.transit.layer_m = layer
+        self.transit.grant()
+        target = np.array(self.transit.site_m)
+        if math.hypot(target[0] - p[0], target[1] - p[1]) <= 0.05:
+            # already over the site: no lateral leg, no layer
+            self.nav.low_route(self._now_s, tel, p, target, self.nav.target_yaw_rad, from_rest=True)
+        else:
+            self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad)
+
+    def _refused(self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float) -> None:
+        """Not yet: wait at the hold point given (flying there at ``layer``), or where the UAV is."""
+        first = self.transit.state == "ask"
+        if hold is not None and (first or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
+            self.transit.layer_m = layer
+            self.transit.wait()
+            self.nav.layer_route(
+                self._now_s, tel, p, np.array([hold[0], hold[1], layer]), layer, self.nav.target_yaw_rad
+            )
+        else:
+            self.nav.wait(self._now_s)
