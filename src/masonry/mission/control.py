@@ -57,6 +57,7 @@ from masonry.mission.records import LANDED_STATE, Attempt, UavLink
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
+from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind, WindLimit
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
@@ -178,7 +179,6 @@ class MissionControl:
         wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
     ) -> None:
-
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
             raise MissionError(f"fleet names must be unique, got {names}")
@@ -257,6 +257,7 @@ class MissionControl:
         self._results = 0  # results acted on (done or failed): progress for the watchdog
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None
+        self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
@@ -417,6 +418,7 @@ class MissionControl:
                 self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
             ) and not self.operator.holds_dispatch():
                 self._dispatch(now_s)
+            self.waits.observe(self, now_s)
             self._watch_progress(now_s)
             if self.over:
                 self.ended_at_s = now_s
@@ -838,7 +840,6 @@ class MissionControl:
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
         here): take-offs from neighbouring pads go one after the other."""
-
         if not self.operator.may_fly(self, name):
             return False  # recalled, or its role at the operator's fleet limit
         if self.wind_limit is not None and not self.wind_limit.allows(name):
@@ -901,7 +902,6 @@ class MissionControl:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
         if self._layer_floor_m is None:
             return
-
         top = max(
             (
                 task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)
