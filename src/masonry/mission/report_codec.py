@@ -79,7 +79,7 @@ def _row_in(cls: Any, data: Any) -> Any:
         raise MissionError(f"a {cls.__name__} record is incomplete: {exc}") from None
 
 
-def _wait_out(w: TaskWait) -> dict[str, Any]:
+def _wait_out(w: TaskWait) -> dict[str, object]:
     return {
         "task_id": w.task_id,
         "cause": dataclasses.asdict(w.cause),
@@ -88,7 +88,7 @@ def _wait_out(w: TaskWait) -> dict[str, Any]:
     }
 
 
-def _waits_in(data: Any) -> tuple[TaskWait, ...]:
+def _waits_in(data: object) -> tuple[TaskWait, ...]:
     if not isinstance(data, list):
         raise MissionError(f"a TaskReport record's waits must be a list, got {type(data).__name__}")
     try:

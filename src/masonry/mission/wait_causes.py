@@ -65,20 +65,22 @@ class WaitWatch:
         d = mc.dispatcher
         wind = mc.wind_limit
         columns = mc.columns
+        op = mc.operator
         task_sig = (
             d.events,
-            len(d.done),
-            mc.operator.version,
-            mc.operator.holds_dispatch(),
+            op.version,
+            op.paused,
+            op.aborting,
             None if wind is None else wind.version,
             None if mc._deferred_at is None else columns.version,
         )
         if task_sig != self._task_sig:
             self._task_sig = task_sig
             self._tasks(mc, now_s)
-        asking = tuple(n for n in d.in_progress.values() if columns.asked_for(n) is not None)
-        air_sig = (columns.version, asking)
-        if air_sig != self._air_sig or any(t not in d.in_progress for t in self._held):
+        running = d.in_progress
+        asking = tuple(n for n in running.values() if columns.asked_for(n) is not None)
+        air_sig = (columns.version, d.events, asking)
+        if air_sig != self._air_sig or any(t not in running for t in self._held):
             self._air_sig = air_sig
             self._flights(mc, now_s, asking)
 
