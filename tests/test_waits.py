@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from masonry.blueprint import load_blueprint
-from masonry.blueprint_gen import pyramid
+from masonry.blueprint_gen import pyramid, running_bond
 from masonry.mission.report import MissionReport
 from masonry.mission.report_codec import report_from_record, report_to_record
 from masonry.mission.simulate import SimulatedMission, simulate
@@ -194,3 +194,38 @@ def test_the_log_of_waits_keeps_one_cause_at_a_time() -> None:
     on_pad = TaskWait("B2", WaitCause("airspace", uav="brick-1", where=GROUND), 0.0, 3.0)
     assert waiting_split_s(10.0, [*waits["B0"], on_pad], "brick-1") == (3.0, 7.0)
     assert waiting_split_s(2.0, [on_pad], "brick-1") == (2.0, 0.0)  # never more than it measured
+
+
+def test_without_transit_layers_the_refusals_are_the_waits() -> None:
+    """``separation=False``: the airspace keeps no request, it answers each one; a refused flight is a wait until
+    its grant all the same (``WaitWatch.answered``)."""
+    report = simulate(pyramid(3, clearance_m=0.8, brick_uavs=2, adhesion_uavs=1), seed=1, separation=False)
+    assert report.completed
+    _check_consistent(report)
+    site = [w for t in report.tasks for w in t.waits if w.cause.what == "site"]
+    assert site and all(w.cause.blocking_task and w.cause.blocking_uav for w in site)
+    for u in report.uavs:
+        held = sum(w.duration_s for t in report.tasks for w in t.waits if w.cause.uav == u.name)
+        assert held >= 0.7 * u.waiting_s > 0, (u.name, held, u.waiting_s)
+
+
+def test_a_uav_kept_on_its_pad_names_who_holds_the_column_over_it() -> None:
+    """Pads close together (r_c 0.5 m, three UAVs per role): a UAV on its pad is not given a task while another
+    UAV's volumes cover the column over its pad; the task it would have taken waits for that UAV (``take-off``)."""
+    bp = running_bond(1, 6, brick_uavs=3, adhesion_uavs=3, clearance_m=0.5)
+    report = simulate(bp, seed=0)
+    assert report.completed
+    _check_consistent(report)
+    roles = {u.name: u.role for u in report.uavs}
+    take_off = [(t.id, w) for t in report.tasks for w in t.waits if w.cause.what == "take-off"]
+    assert take_off
+    for tid, w in take_off:
+        assert w.cause.uav is None and w.cause.where == GROUND and w.cause.holds
+        assert w.cause.blocking_uav in roles  # (of either role: an adhesion UAV's leg may cross the pad too)
+        if w.cause.blocking_task is not None:  # the blocking UAV was flying that task then
+            assert any(
+                a.task_id == w.cause.blocking_task
+                and a.uav == w.cause.blocking_uav
+                and a.start_s <= w.from_s <= (a.end_s or report.makespan_s)
+                for a in report.attempts
+            ), (tid, w)

@@ -248,8 +248,7 @@ class MissionControl:
             fence=fence,
         )
         self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
-        self._layer_floor_m = layer_floor_m
-        self.timing = timing
+        self._layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
@@ -401,14 +400,10 @@ class MissionControl:
                         g.layer_m,
                     ),
                 )
+                self.waits.answered(g.uav, self.dispatcher.task_of(g.uav), g.site_m, g.granted)
                 self._emit_clearance(now_s, g)
-                log.debug(
-                    "flight to (%.2f, %.2f) %s to %s",
-                    g.site_m[0],
-                    g.site_m[1],
-                    "granted" if g.granted else "held",
-                    g.uav,
-                )
+                how = "granted" if g.granted else "held"
+                log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
@@ -517,6 +512,7 @@ class MissionControl:
         if self.sites.leaving(msg.sender, msg.site_m, now_s):
             self.columns.touch()  # a site is free: who waits for it may go now
         g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+        self.waits.answered(msg.sender, self.dispatcher.task_of(msg.sender), g.site_m, g.granted)
         self._emit_clearance(now_s, g)
         if g.refused is not None:
             self._fail_outside_fence(msg.sender, g.refused, now_s)

@@ -232,12 +232,19 @@ class MissionReport:
         for u in self.uavs:
             lines.append(
                 f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  idle {u.idle_s:7.1f} s  "
-                f"waiting {u.waiting_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}"
+                f"waiting {u.waiting_s:7.1f} s (air {u.waiting_air_s:.1f}, ground {u.waiting_ground_s:.1f})  "
+                f"flown {u.distance_m:7.1f} m  {u.status}"
             )
         totals = phase_totals(self.attempts)
         if totals.total_s > 0:
             spent = ", ".join(f"{name} {sec:.0f} s" for name, sec in totals.items() if sec >= 0.5)
             lines.append(f"time per phase (every attempt): {spent}")
+        waited: dict[str, float] = {}
+        for w in (w for t in self.tasks for w in t.waits):
+            waited[w.cause.what] = waited.get(w.cause.what, 0.0) + w.duration_s
+        if waited:
+            spent = ", ".join(f"{k} {v:.0f} s" for k, v in sorted(waited.items(), key=lambda kv: -kv[1]))
+            lines.append(f"tasks waited for (task-seconds, JSON: tasks[].waits): {spent}")
         errs = list(self.placement_error_m.values())
         if errs:
             lines.append(

@@ -58,6 +58,9 @@ class WaitWatch:
         self._task_sig: object = None
         self._air_sig: object = None
         self._held: set[str] = set()  # running tasks with a wait open for their flight
+        self._refused: dict[
+            str, tuple[str, Vec3]
+        ] = {}  # UAV -> (its task, site) when its last answer said no
 
     # -- the tick --------------------------------------------------------------------------------------
     def observe(self, mc: MissionControl, now_s: float) -> None:
@@ -78,11 +81,24 @@ class WaitWatch:
             self._task_sig = task_sig
             self._tasks(mc, now_s)
         running = d.in_progress
-        asking = tuple(n for n in running.values() if columns.asked_for(n) is not None)
+        refused = self._refused
+        asking = tuple(
+            n
+            for tid, n in running.items()
+            if columns.asked_for(n) is not None or (n in refused and refused[n][0] == tid)
+        )
         air_sig = (columns.version, d.events, asking)
         if air_sig != self._air_sig or any(t not in running for t in self._held):
             self._air_sig = air_sig
             self._flights(mc, now_s, asking)
+
+    def answered(self, uav: str, task_id: str | None, site_m: Vec3, granted: bool) -> None:
+        """Mission control answered ``uav``'s request for a flight to ``site_m`` (for ``task_id``): a refusal
+        counts as a wait until a grant, even from an airspace that keeps no request (no transit layers)."""
+        if granted or task_id is None:
+            self._refused.pop(uav, None)
+        else:
+            self._refused[uav] = (task_id, site_m)
 
     # -- tasks not assigned ----------------------------------------------------------------------------
     def _place(self, tid: str, done: AbstractSet[str]) -> None:
@@ -210,6 +226,8 @@ class WaitWatch:
         p = link.position_m
         where = AIR if p is None or p[2] - link.spec.home_m[2] > ON_PAD_Z_M else GROUND
         site = mc.columns.asked_for(name)
+        if site is None and name in self._refused:
+            site = self._refused[name][1]
         gate = mc.glue if mc.glue is not None else mc.sites
         if site is not None and not gate.may_enter(name, site):
             on_site = mc.sites.on_site
