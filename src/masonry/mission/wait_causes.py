@@ -58,9 +58,8 @@ class WaitWatch:
         self._task_sig: object = None
         self._air_sig: object = None
         self._held: set[str] = set()  # running tasks with a wait open for their flight
-        self._refused: dict[
-            str, tuple[str, Vec3]
-        ] = {}  # UAV -> (its task, site) when its last answer said no
+        #: UAV -> (its task, the site) while the last answer to its request said no
+        self._refused: dict[str, tuple[str, Vec3]] = {}
 
     # -- the tick --------------------------------------------------------------------------------------
     def observe(self, mc: MissionControl, now_s: float) -> None:
