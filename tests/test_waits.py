@@ -14,7 +14,16 @@ from masonry.blueprint_gen import pyramid, running_bond
 from masonry.mission.report import MissionReport
 from masonry.mission.report_codec import report_from_record, report_to_record
 from masonry.mission.simulate import SimulatedMission, simulate
-from masonry.mission.waits import AIR, CAUSES, GROUND, TaskWait, WaitCause, WaitLog, waiting_split_s
+from masonry.mission.waits import (
+    AIR,
+    CAUSES,
+    GROUND,
+    TaskWait,
+    WaitCause,
+    WaitLog,
+    waiting_split_s,
+    with_battery_holds,
+)
 from masonry.planner import plan as make_plan
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -49,7 +58,7 @@ def _check_consistent(report: MissionReport) -> None:
             if w.cause.uav is None:
                 assert w.cause.where in (None, GROUND)
                 continue
-            assert w.cause.where in (GROUND, AIR)
+            assert w.cause.where in ((None,) if w.cause.what == "battery" else (GROUND, AIR))
             assert any(
                 a.uav == w.cause.uav and a.start_s <= w.from_s and w.to_s <= (a.end_s or report.makespan_s)
                 for a in t.tries
@@ -59,7 +68,12 @@ def _check_consistent(report: MissionReport) -> None:
             assert before == pytest.approx(t.start_s, abs=1e-6), (t.id, waits)
     for u in report.uavs:
         assert u.waiting_ground_s + u.waiting_air_s == pytest.approx(u.waiting_s, abs=1e-9)
-        held = sum(w.duration_s for t in report.tasks for w in t.waits if w.cause.uav == u.name)
+        held = sum(
+            w.duration_s
+            for t in report.tasks
+            for w in t.waits
+            if w.cause.uav == u.name and w.cause.what != "battery"  # (that is its ``queued`` phase)
+        )
         # mission control's waits lie inside the UAV's own (it asks once it has come to rest)
         assert held <= u.waiting_s + TICK_S, (u.name, held, u.waiting_s)
 
@@ -229,3 +243,40 @@ def test_a_uav_kept_on_its_pad_names_who_holds_the_column_over_it() -> None:
                 and a.start_s <= w.from_s <= (a.end_s or report.makespan_s)
                 for a in report.attempts
             ), (tid, w)
+
+
+def test_a_battery_swap_is_a_wait_and_it_explains_the_deadlock_after_it() -> None:
+    """The handler holds glue-1's first task for a fresh pack (the ``queued`` phase): A0 waits for the battery
+    from its assignment; then A0 and B0 wait for each other (B0 for its glue, A0 for B0's earlier request), and
+    the waits say so."""
+    mission = SimulatedMission.from_blueprint(load_blueprint(CASE_STUDY), seed=0)
+    mission.world.uavs["glue-1"].vehicle.battery_fraction = 0.3  # below the handler's 40 % reserve
+    report = mission.run()
+    assert report.completed
+    _check_consistent(report)
+    by_id = {t.id: t for t in report.tasks}
+    first = by_id["A0"].waits[0]
+    queued = next(a for a in report.attempts if a.task_id == "A0").phases
+    assert queued is not None and queued.queued >= 60.0  # the ground crew's swap
+    assert (first.cause.what, first.cause.uav, first.from_s) == ("battery", "glue-1", 0.0)
+    assert first.duration_s == queued.queued
+    assert any(
+        w.cause.what == "airspace" and w.cause.blocking_uav == "brick-1" and w.cause.blocking_task == "B0"
+        for w in by_id["A0"].waits
+    )
+    assert any(
+        w.cause.what == "dependency" and w.cause.blocking_task == "A0" and w.cause.uav == "brick-1"
+        for w in by_id["B0"].waits
+    )
+
+
+def test_a_battery_hold_cuts_what_mission_control_saw_during_it() -> None:
+    flight_home = TaskWait("A0", WaitCause("airspace", "b", None, "zone", "g", AIR), 5.0, 10.0)
+    later = TaskWait("A0", WaitCause("site", "b", "B0", None, "g", AIR), 40.0, 5.0)
+    out = with_battery_holds({"A0": (flight_home, later)}, [("A0", "g", 0.0, 12.0), ("B9", "g", 0.0, 0.0)])
+    assert set(out) == {"A0"}
+    assert [(w.cause.what, w.from_s, w.duration_s) for w in out["A0"]] == [
+        ("battery", 0.0, 12.0),
+        ("airspace", 12.0, 3.0),
+        ("site", 40.0, 5.0),
+    ]

@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from masonry.mission.waits import TaskWait, waiting_split_s
+from masonry.mission.waits import TaskWait, waiting_split_s, with_battery_holds
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
 from masonry.ports import PhaseTimes
@@ -461,6 +461,9 @@ def control_report(
     watch = getattr(mc, "waits", None)
     ended = getattr(mc, "ended_at_s", None)
     waits = {} if watch is None else watch.log.waits(now if ended is None else min(now, ended))
+    if watch is not None:  # the handlers' holds for a battery swap, as the UAVs measured them
+        holds = [(a.task_id, a.uav, a.start_s, a.phases.queued) for a in attempts if a.phases is not None]
+        waits = with_battery_holds(waits, holds)
     for t in plan.tasks:
         if t.done:
             continue

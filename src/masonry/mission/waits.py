@@ -26,6 +26,7 @@ CAUSES: tuple[str, ...] = (
     "operator",  # the operator paused the mission, recalled its UAVs or limited its role
     "wind",  # the wind above the max_wind_mps of the UAVs of its role
     "glue",  # a brick over adhesive not sprayed recently enough (the open time)
+    "battery",  # assigned, held by its UAV's handler for a battery swap (the ``queued`` phase)
 )
 
 #: Where a waiting UAV was: on its pad, or in the air.
@@ -126,6 +127,30 @@ class WaitLog:
         return {tid: tuple(sorted(ws, key=lambda w: w.from_s)) for tid, ws in out.items()}
 
 
+def with_battery_holds(
+    waits: Mapping[str, tuple[TaskWait, ...]], holds: Iterable[tuple[str, str, float, float]]
+) -> dict[str, tuple[TaskWait, ...]]:
+    """``waits`` with each battery hold ``(task id, UAV, from_s, duration_s)`` added as a ``battery`` wait: the time
+    its UAV's handler kept the assignment for a battery swap (the flight home, the landing, the swap), which only
+    the UAV measures (its attempt's ``queued`` phase, from the assignment). Another wait of the task in that time
+    (its flight home asked for, as mission control saw it) is cut to what lies outside it: one cause at a time."""
+    out = dict(waits)
+    for task_id, uav, from_s, duration_s in holds:
+        if duration_s <= 0.0:
+            continue
+        hold = TaskWait(task_id, WaitCause("battery", uav=uav), from_s, duration_s)
+        kept: list[TaskWait] = [hold]
+        for w in out.get(task_id, ()):
+            if w.from_s < hold.from_s:
+                end = min(w.to_s, hold.from_s)
+                kept.append(TaskWait(task_id, w.cause, w.from_s, end - w.from_s))
+            if w.to_s > hold.to_s:
+                start = max(w.from_s, hold.to_s)
+                kept.append(TaskWait(task_id, w.cause, start, w.to_s - start))
+        out[task_id] = tuple(sorted(kept, key=lambda w: w.from_s))
+    return out
+
+
 def waiting_split_s(waiting_s: float, waits: Iterable[TaskWait], uav: str) -> tuple[float, float]:
     """``uav``'s ``waiting_s`` (its attempts' ``waiting`` and ``holding``, as it measured them) split into on the
     ground and in the air: the ground part is what mission control saw it wait on its pad with a task (at most
@@ -136,4 +161,13 @@ def waiting_split_s(waiting_s: float, waits: Iterable[TaskWait], uav: str) -> tu
     return ground, waiting_s - ground
 
 
-__all__ = ["AIR", "CAUSES", "GROUND", "TaskWait", "WaitCause", "WaitLog", "waiting_split_s"]
+__all__ = [
+    "AIR",
+    "CAUSES",
+    "GROUND",
+    "TaskWait",
+    "WaitCause",
+    "WaitLog",
+    "waiting_split_s",
+    "with_battery_holds",
+]
