@@ -280,3 +280,20 @@ def test_a_battery_hold_cuts_what_mission_control_saw_during_it() -> None:
         ("airspace", 12.0, 3.0),
         ("site", 40.0, 5.0),
     ]
+
+
+def test_the_paper_s_task_reservation_names_the_conflicting_task() -> None:
+    """``--reservation task`` (the paper's order A0, B0, A1, B1): A1 waits for A0, then for B0, the tasks whose
+    sites are within r_c of its own; B0 and B1 wait for their glue."""
+    report = simulate(load_blueprint(CASE_STUDY), reservation="task")
+    _check_consistent(report)
+    waits = {
+        t.id: [(w.cause.what, w.cause.blocking_task, w.cause.blocking_uav) for w in t.waits]
+        for t in report.tasks
+    }
+    assert waits == {
+        "A0": [],
+        "B0": [("dependency", "A0", None)],
+        "A1": [("conflict", "A0", "glue-1"), ("conflict", "B0", "brick-1")],
+        "B1": [("dependency", "A1", None)],
+    }
