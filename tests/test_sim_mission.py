@@ -61,7 +61,17 @@ def test_case_study_report_is_the_exact_json(case_study):
     assert list(d) == REPORT_KEYS
     assert d["policy"] == "critical-path" and d["seed"] == 0 and d["completed"] is True
     assert [list(u) for u in d["uavs"]] == [
-        ["name", "role", "busy_s", "idle_s", "waiting_s", "distance_m", "status"]
+        [
+            "name",
+            "role",
+            "busy_s",
+            "idle_s",
+            "waiting_s",
+            "waiting_ground_s",
+            "waiting_air_s",
+            "distance_m",
+            "status",
+        ]
     ] * 2
     assert {u["name"]: (u["role"], u["status"]) for u in d["uavs"]} == {
         "brick-1": ("brick", "ok"),
@@ -80,6 +90,7 @@ def test_case_study_report_is_the_exact_json(case_study):
             "attempts",
             "attempts_detail",
             "phases",
+            "waits",
         ]
         for t in d["tasks"]
     )

@@ -57,6 +57,7 @@ from masonry.mission.records import LANDED_STATE, Attempt, UavLink
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
+from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind, WindLimit
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
@@ -178,7 +179,6 @@ class MissionControl:
         wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
     ) -> None:
-
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
             raise MissionError(f"fleet names must be unique, got {names}")
@@ -248,8 +248,7 @@ class MissionControl:
             fence=fence,
         )
         self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
-        self._layer_floor_m = layer_floor_m
-        self.timing = timing
+        self._layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
@@ -257,6 +256,7 @@ class MissionControl:
         self._results = 0  # results acted on (done or failed): progress for the watchdog
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None
+        self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
@@ -400,14 +400,10 @@ class MissionControl:
                         g.layer_m,
                     ),
                 )
+                self.waits.answered(g.uav, self.dispatcher.task_of(g.uav), g.site_m, g.granted)
                 self._emit_clearance(now_s, g)
-                log.debug(
-                    "flight to (%.2f, %.2f) %s to %s",
-                    g.site_m[0],
-                    g.site_m[1],
-                    "granted" if g.granted else "held",
-                    g.uav,
-                )
+                how = "granted" if g.granted else "held"
+                log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
@@ -417,6 +413,7 @@ class MissionControl:
                 self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
             ) and not self.operator.holds_dispatch():
                 self._dispatch(now_s)
+            self.waits.observe(self, now_s)
             self._watch_progress(now_s)
             if self.over:
                 self.ended_at_s = now_s
@@ -515,6 +512,7 @@ class MissionControl:
         if self.sites.leaving(msg.sender, msg.site_m, now_s):
             self.columns.touch()  # a site is free: who waits for it may go now
         g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+        self.waits.answered(msg.sender, self.dispatcher.task_of(msg.sender), g.site_m, g.granted)
         self._emit_clearance(now_s, g)
         if g.refused is not None:
             self._fail_outside_fence(msg.sender, g.refused, now_s)
@@ -838,7 +836,6 @@ class MissionControl:
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
         here): take-offs from neighbouring pads go one after the other."""
-
         if not self.operator.may_fly(self, name):
             return False  # recalled, or its role at the operator's fleet limit
         if self.wind_limit is not None and not self.wind_limit.allows(name):
@@ -901,7 +898,6 @@ class MissionControl:
         """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
         if self._layer_floor_m is None:
             return
-
         top = max(
             (
                 task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)

@@ -16,6 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from masonry.mission.waits import TaskWait, waiting_split_s, with_battery_holds
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
 from masonry.ports import PhaseTimes
@@ -35,6 +36,9 @@ class UavReport:
     status: str  # "ok", "lost" (silent past the heartbeat timeout) or "out of service" (it reported so)
     idle_s: float = 0.0  # mission time with no task assigned (on the ground, hovering or flying home)
     waiting_s: float = 0.0  # its attempts' seconds waiting for clearance and holding (PhaseTimes.clearance_s)
+    #: ``waiting_s`` split: on its pad with a task, and in the air (:func:`masonry.mission.waits.waiting_split_s`)
+    waiting_ground_s: float = 0.0
+    waiting_air_s: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -43,6 +47,8 @@ class UavReport:
             "busy_s": _r(self.busy_s, 2),
             "idle_s": _r(self.idle_s, 2),
             "waiting_s": _r(self.waiting_s, 2),
+            "waiting_ground_s": _r(self.waiting_ground_s, 2),
+            "waiting_air_s": _r(self.waiting_air_s, 2),
             "distance_m": _r(self.distance_m, 2),
             "status": self.status,
         }
@@ -65,6 +71,8 @@ class TaskReport:
     site_end_s: float | None = None
     #: every attempt at it, in start order (``attempts_detail`` in the JSON: who, when, how, why it failed)
     tries: tuple[AttemptReport, ...] = ()
+    #: why it waited, in time order (:mod:`masonry.mission.waits`; ``waits`` in the JSON)
+    waits: tuple[TaskWait, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -78,6 +86,7 @@ class TaskReport:
             "attempts": self.attempts,
             "attempts_detail": [a.detail() for a in self.tries],
             "phases": _phases(self.phases),
+            "waits": [w.to_dict() for w in self.waits],
         }
 
 
@@ -223,12 +232,19 @@ class MissionReport:
         for u in self.uavs:
             lines.append(
                 f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  idle {u.idle_s:7.1f} s  "
-                f"waiting {u.waiting_s:7.1f} s  flown {u.distance_m:7.1f} m  {u.status}"
+                f"waiting {u.waiting_s:7.1f} s (air {u.waiting_air_s:.1f}, ground {u.waiting_ground_s:.1f})  "
+                f"flown {u.distance_m:7.1f} m  {u.status}"
             )
         totals = phase_totals(self.attempts)
         if totals.total_s > 0:
             spent = ", ".join(f"{name} {sec:.0f} s" for name, sec in totals.items() if sec >= 0.5)
             lines.append(f"time per phase (every attempt): {spent}")
+        waited: dict[str, float] = {}
+        for w in (w for t in self.tasks for w in t.waits):
+            waited[w.cause.what] = waited.get(w.cause.what, 0.0) + w.duration_s
+        if waited:
+            spent = ", ".join(f"{k} {v:.0f} s" for k, v in sorted(waited.items(), key=lambda kv: -kv[1]))
+            lines.append(f"tasks waited for (task-seconds, JSON: tasks[].waits): {spent}")
         errs = list(self.placement_error_m.values())
         if errs:
             lines.append(
@@ -442,6 +458,12 @@ def control_report(
     }
     tasks: list[TaskReport] = []
     stuck: list[str] = []
+    watch = getattr(mc, "waits", None)
+    ended = getattr(mc, "ended_at_s", None)
+    waits = {} if watch is None else watch.log.waits(now if ended is None else min(now, ended))
+    if watch is not None:  # the handlers' holds for a battery swap, as the UAVs measured them
+        holds = [(a.task_id, a.uav, a.start_s, a.phases.queued) for a in attempts if a.phases is not None]
+        waits = with_battery_holds(waits, holds)
     for t in plan.tasks:
         if t.done:
             continue
@@ -463,6 +485,7 @@ def control_report(
                     None if visit is None else visit[0],
                     None if visit is None else visit[1],
                     tuple(tries),
+                    waits.get(t.id, ()),
                 )
             )
             continue
@@ -472,7 +495,17 @@ def control_report(
         )
         stuck.append(t.id)
         tasks.append(
-            TaskReport(t.id, last.uav if last else None, None, None, status, n, t.kind, tries=tuple(tries))
+            TaskReport(
+                t.id,
+                last.uav if last else None,
+                None,
+                None,
+                status,
+                n,
+                t.kind,
+                tries=tuple(tries),
+                waits=waits.get(t.id, ()),
+            )
         )
     # the mission starts with its first assignment (mission control may have waited for its fleet before)
     start = min((a.start_s for a in attempts), default=0.0)
@@ -509,18 +542,24 @@ def control_report(
         busy = dict(busy_s)
     # idle: from the mission's start to its last completion (to now, if it did not complete), or to the UAV's loss
     end = start + makespan if not stuck else max(now, start)
-    uavs = tuple(
-        UavReport(
-            spec.name,
-            spec.role,
-            busy.get(spec.name, 0.0),
-            float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
-            mc.uavs[spec.name].status,
-            idle_s=idle_s(attempts, spec.name, start, _until(mc.uavs[spec.name], end)),
-            waiting_s=phase_totals(a for a in attempts if a.uav == spec.name).clearance_s,
+    every_wait = [w for ws in waits.values() for w in ws]
+    uavs = []
+    for spec in mc.fleet:
+        waiting = phase_totals(a for a in attempts if a.uav == spec.name).clearance_s
+        ground, air = waiting_split_s(waiting, every_wait, spec.name)
+        uavs.append(
+            UavReport(
+                spec.name,
+                spec.role,
+                busy.get(spec.name, 0.0),
+                float((distances_m or {}).get(spec.name, mc.uavs[spec.name].distance_m)),
+                mc.uavs[spec.name].status,
+                idle_s=idle_s(attempts, spec.name, start, _until(mc.uavs[spec.name], end)),
+                waiting_s=waiting,
+                waiting_ground_s=ground,
+                waiting_air_s=air,
+            )
         )
-        for spec in mc.fleet
-    )
     if placement_error_m is None:
         placement_error_m = {
             a.task_id: a.placement_error_m
@@ -535,7 +574,7 @@ def control_report(
         lower_bound_kind=terms.kind,
         policy=policy,
         seed=seed,
-        uavs=uavs,
+        uavs=tuple(uavs),
         tasks=tuple(tasks),
         placement_error_m=ordered,
         min_separation_m=min_separation_m,

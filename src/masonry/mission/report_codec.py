@@ -18,6 +18,7 @@ import numpy as np
 
 from masonry.errors import MissionError
 from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
+from masonry.mission.waits import TaskWait, WaitCause
 from masonry.ports import PhaseTimes
 
 #: Bumped when the record's form changes; a reader refuses another.
@@ -42,6 +43,8 @@ def _row_out(value: Any) -> dict[str, Any]:
         v = getattr(value, f.name)
         if isinstance(v, PhaseTimes):
             out[f.name] = v.as_dict()
+        elif isinstance(v, tuple) and v and all(isinstance(w, TaskWait) for w in v):
+            out[f.name] = [_wait_out(w) for w in v]  # a task's waits (TaskReport.waits)
         elif isinstance(v, tuple) and all(isinstance(a, AttemptReport) for a in v):
             out[f.name] = [_row_out(a) for a in v]  # a task's attempts (TaskReport.tries)
         else:
@@ -59,6 +62,12 @@ def _row_in(cls: Any, data: Any) -> Any:
     kw = {k: _num_in(v) for k, v in data.items()}
     if kw.get("phases") is not None:
         kw["phases"] = PhaseTimes(**kw["phases"])
+    if cls is UavReport and "waiting_air_s" not in kw:
+        # a record from before the split: the airspace then held UAVs in the air only (their transits start
+        # after the take-off), so all of waiting_s was in the air
+        kw["waiting_air_s"] = kw.get("waiting_s", 0.0)
+    if cls is TaskReport and "waits" in kw:
+        kw["waits"] = _waits_in(kw["waits"])
     if cls is TaskReport and "tries" in kw:
         tries = kw["tries"]
         if not isinstance(tries, list):
@@ -68,6 +77,32 @@ def _row_in(cls: Any, data: Any) -> Any:
         return cls(**kw)
     except TypeError as exc:
         raise MissionError(f"a {cls.__name__} record is incomplete: {exc}") from None
+
+
+def _wait_out(w: TaskWait) -> dict[str, object]:
+    return {
+        "task_id": w.task_id,
+        "cause": dataclasses.asdict(w.cause),
+        "from_s": _num_out(w.from_s),
+        "duration_s": _num_out(w.duration_s),
+    }
+
+
+def _waits_in(data: object) -> tuple[TaskWait, ...]:
+    if not isinstance(data, list):
+        raise MissionError(f"a TaskReport record's waits must be a list, got {type(data).__name__}")
+    try:
+        return tuple(
+            TaskWait(
+                str(w["task_id"]),
+                WaitCause(**w["cause"]),
+                float(_num_in(w["from_s"])),
+                float(_num_in(w["duration_s"])),
+            )
+            for w in data
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        raise MissionError(f"a task's wait record is malformed: {type(exc).__name__} {exc}") from None
 
 
 def _opt_int(v: Any) -> int | None:
