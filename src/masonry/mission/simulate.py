@@ -1,9 +1,8 @@
 """A whole mission in simulated time: World + one handler and state machine per UAV + MissionControl, in-process.
 
-``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every control tick (``CONTROL_PERIOD_S``, 0.1 s
-of simulated time): each live UAV handler reads its messages and ticks its state machine, mission control
-steps, then the world advances in steps of ``dt_s``. Nothing sleeps, so a mission runs as fast as the
-machine allows and is deterministic for a given seed.
+``simulate(blueprint, ...)`` is what ``masonry sim`` runs. Every control tick (``CONTROL_PERIOD_S``, 0.1 s of
+simulated time): each live UAV handler reads its messages and ticks its state machine, mission control steps,
+then the world advances in steps of ``dt_s``. Nothing sleeps: as fast as the machine allows, deterministic.
 
 Safety checks in the report are measured independently of mission control: conflict and dependency
 violations from the intervals the UAV handlers actually executed, separation from the world's vehicles.
@@ -322,6 +321,7 @@ class SimulatedMission:
                 swap_battery=_GroundCrew(sim_uav.vehicle, self.clock),
                 after_result=self._step_control,
                 tasks=plan.tasks,
+                spares=plan.spares,
                 role=spec.role,
                 wall_digest=wall,
                 keeper=self.measured if self.measured.journal is not None else None,
@@ -331,7 +331,7 @@ class SimulatedMission:
             )
             self.ports[spec.name] = uav_ports
             self.handlers[spec.name] = h
-        self.measured.handlers = self.handlers
+        self.measured.handlers, self.measured.spares = self.handlers, self.control.spares
         #: UAV -> the simulated time it failed (it flies, and says, nothing more)
         self.dead: dict[str, float] = {}
         self.measured.dead = self.dead
