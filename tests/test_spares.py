@@ -267,3 +267,13 @@ def test_a_uav_takes_a_spare_of_its_blueprint_in_its_bricks_place_and_refuses_an
     mc.send("brick-1", message)
     h.step(1.0)
     assert h.poll_task() == spare
+
+
+def test_the_walls_digest_covers_its_spares_and_is_unchanged_without_the_key() -> None:
+    plain, spared = _bp(""), _bp()
+    moved = _bp(SPARES.replace("[3.0, 1.0, 0.05]", "[3.0, 1.5, 0.05]"))
+    assert (
+        len({wall_digest(plain), wall_digest(spared), wall_digest(moved), wall_digest(_bp("spares: []\n"))})
+        == 4
+    )
+    assert wall_digest(replace(spared, spares=None)) == wall_digest(plain)
