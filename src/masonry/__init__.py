@@ -86,6 +86,7 @@ from masonry.ports import (
     UavPorts,
 )
 from masonry.sim import Faults, SimClock, SimUav, SimVehicle, World
+from masonry.spares import Spare
 from masonry.timing import TaskTiming
 
 __version__ = "0.1.0.dev0"
@@ -160,6 +161,7 @@ __all__ = [
     "SimUav",
     "SimVehicle",
     "SimulatedMission",
+    "Spare",
     "Sprayer",
     "TagPose",
     "Task",
