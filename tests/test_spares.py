@@ -22,7 +22,7 @@ from masonry.mission.spares import SPARE_META_PREFIX, WAITING_META_PREFIX, Spare
 from masonry.planner import plan
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.tasks import BrickTask
-from masonry.ports import RECALL_REASON
+from masonry.ports import RECALL_REASON, TASK_DROPPED_REASON
 from masonry.spares import Spare
 
 runner = CliRunner()
@@ -144,7 +144,8 @@ NOT_SEEN = "brick 1 not seen near its pickup after 3 climbs"
 
 
 def test_reasons_that_say_the_brick_is_gone() -> None:
-    assert brick_gone(LOST) and brick_gone(NOT_SEEN) and brick_gone("brick 3 dropped in transport")
+    assert brick_gone(LOST) and brick_gone(NOT_SEEN) and brick_gone("brick dropped in transport")
+    assert not brick_gone(f"{TASK_DROPPED_REASON} (its heartbeat holds no task 9.0 s after it)")
     assert not brick_gone("drop-off of B1 not reached within 1.5 cm after 3 descents")
     assert not brick_gone("brick 1 not attached after 3 grasps")
     assert not brick_gone("uav lost")

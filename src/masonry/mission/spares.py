@@ -41,13 +41,15 @@ class MetaJournal(Protocol):
 #: Journal meta key prefixes: a spare handed out for a task, a task waiting for a person.
 SPARE_META_PREFIX = "spare/"
 WAITING_META_PREFIX = "waiting/"
-#: Parts of a failure reason that say the brick itself is gone (the UAV machine's and mission control's words).
-GONE_PHRASES = ("not seen near its pickup", "on its magnet)", "dropped")
+#: Parts of a failure reason that say the brick itself is gone (the UAV machine's and mission control's words;
+#: the machine reports no drop in flight yet: an adapter that detects one says "brick dropped").
+GONE_PHRASES = ("not seen near its pickup", "on its magnet)", "brick dropped", "dropped its brick")
 
 
 def brick_gone(reason: str) -> bool:
-    """Whether a failed brick attempt's reason says the brick is gone (lost with its UAV, dropped, not found)."""
-    return any(phrase in reason for phrase in GONE_PHRASES)
+    """Whether a failed brick attempt's reason says the brick is gone (lost with its UAV, dropped, not found);
+    never one that is not the task's (the battery, a recall, a task its UAV dropped: ``UNCOUNTED_REASONS``)."""
+    return not reason.startswith(UNCOUNTED_REASONS) and any(phrase in reason for phrase in GONE_PHRASES)
 
 
 @dataclass(frozen=True)
