@@ -15,6 +15,7 @@ from masonry.blueprint_gen import generate
 from masonry.cli import app
 from masonry.errors import BlueprintError
 from masonry.fingerprint import wall_digest
+from masonry.mission.events import MissionEvent
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Assign, Result, decode, encode
@@ -278,3 +279,23 @@ def test_the_walls_digest_covers_its_spares_and_is_unchanged_without_the_key() -
         == 4
     )
     assert wall_digest(replace(spared, spares=None)) == wall_digest(plain)
+
+
+def test_the_book_tells_the_sink_of_each_spare_and_each_waiting_brick() -> None:
+    events: list[MissionEvent] = []
+
+    def emit(
+        now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
+    ) -> None:
+        events.append(MissionEvent(now_s, kind, uav, task_id, fields))
+
+    book = SpareBook(plan(_bp()), emit=emit)
+    book.lost("B0", LOST, 5.0)
+    book.failed("B1", NOT_SEEN, 6.0)
+    assert [(e.kind, e.task_id, e.fields["spare"], e.fields["brick"]) for e in events] == [
+        ("spare", "B0", 10, 0),
+        ("spare", "B1", None, 1),
+    ]
+    assert events[0].line() == "     5.0 s  spare B0: spare 10 for brick 0"
+    assert events[1].line() == "     6.0 s  spare B1: waiting for a person: brick 1"
+    assert MissionEvent.from_dict(events[1].to_dict()) == events[1]

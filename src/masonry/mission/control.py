@@ -227,7 +227,7 @@ class MissionControl:
         #: the adhesive's open and cure times (None: none; :mod:`masonry.mission.glue`)
         self.glue = glue_gate(plan, self.dispatcher, self.sites, timing or DEFAULT_TIMING)
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
-        self.spares = SpareBook(plan, journal)  #: spare bricks for lost ones (:mod:`masonry.mission.spares`)
+        self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
         self._running: dict[str, Attempt] = {}  # task id -> its running attempt

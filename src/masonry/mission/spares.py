@@ -32,6 +32,14 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
+class Emit(Protocol):
+    """Mission control's ``_emit``: an event for its sink."""
+
+    def __call__(
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
+    ) -> None: ...
+
+
 class MetaJournal(Protocol):
     """The part of :class:`~masonry.mission.journal.Journal` the book writes to."""
 
@@ -117,14 +125,16 @@ class SpareBook:
     Args:
         plan: the wall's plan (its ``spares``; None makes the book inert).
         journal: where each use and each wait is recorded (``set_meta``), or None.
+        emit: ``emit(now_s, kind, uav, task_id, **fields)``: a ``spare`` event for a log or a live view, or None.
     """
 
-    def __init__(self, plan: Plan, journal: MetaJournal | None = None) -> None:
+    def __init__(self, plan: Plan, journal: MetaJournal | None = None, emit: Emit | None = None) -> None:
         self.active = plan.spares is not None
         self._free: list[Spare] = list(plan.spares or ())
         self._spares = {s.id: s for s in plan.spares or ()}
         self._tasks = {t.id: t for t in plan.tasks if isinstance(t, BrickTask)}
         self.journal = journal
+        self._emit = emit
         #: every spare handed out, in order
         self.used: list[SpareUse] = []
         #: task id -> why its brick waits for a person
@@ -169,6 +179,8 @@ class SpareBook:
         log.warning("%s: spare %d stands in for brick %d (%s)", task_id, spare.id, brick.brick, reason)
         if self.journal is not None:
             self.journal.set_meta(f"{SPARE_META_PREFIX}{task_id}", {**use.as_dict(), "time_s": now_s})
+        if self._emit is not None:
+            self._emit(now_s, "spare", None, task_id, spare=spare.id, brick=brick.brick, reason=reason)
         return True
 
     def _wait(self, task_id: str, reason: str, now_s: float) -> None:
@@ -179,6 +191,8 @@ class SpareBook:
         log.warning("%s: brick %d waits for a person: %s", task_id, brick.brick, why)
         if self.journal is not None:
             self.journal.set_meta(f"{WAITING_META_PREFIX}{task_id}", {"reason": why, "time_s": now_s})
+        if self._emit is not None:
+            self._emit(now_s, "spare", None, task_id, spare=None, brick=brick.brick, reason=why)
 
     def restore(self, meta: Mapping[str, object]) -> tuple[str, ...]:
         """Take back the uses and waits a journal holds (its meta); returns the tasks that wait for a person."""
