@@ -112,7 +112,8 @@ def test_masonry_blueprint_adds_spares_beside_the_pallet_and_changes_nothing_els
     args = ["blueprint", "running-bond", "--courses", "2", "--bricks-per-course", "4"]
     plain, spared = tmp_path / "plain.yaml", tmp_path / "spared.yaml"
     assert runner.invoke(app, [*args, "-o", str(plain)]).exit_code == 0
-    assert runner.invoke(app, [*args, "--spares", "3", "-o", str(spared)]).exit_code == 0
+    out = runner.invoke(app, [*args, "--spares", "3", "-o", str(spared)])
+    assert out.exit_code == 0 and "8 bricks (8 to place), 3 spares, 2 UAVs" in out.output
     a, b = load_blueprint(plain), load_blueprint(spared)
     assert a.spares is None and "spares" not in plain.read_text()
     assert (b.bricks, b.fleet) == (a.bricks, a.fleet)  # the pads stay where they were

@@ -282,7 +282,8 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     n_todo = sum(1 for b in bp.bricks if not b.placed)
     typer.echo(
         f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
-        f"{plural(len(bp.fleet), 'UAV')}",
+        + ("" if bp.spares is None else f"{plural(len(bp.spares), 'spare')}, ")
+        + f"{plural(len(bp.fleet), 'UAV')}",
         err=True,
     )
 
