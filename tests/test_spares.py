@@ -3,6 +3,7 @@ the dispatcher giving up on a brick, and the UAV taking a spare in its brick's p
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from masonry.mission.events import MissionEvent
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Assign, Result, decode, encode
-from masonry.mission.spares import SPARE_META_PREFIX, WAITING_META_PREFIX, SpareBook, brick_gone
+from masonry.mission.spares import SPARE_META_PREFIX, WAITING_META_PREFIX, SpareBook, SpareReport, brick_gone
 from masonry.planner import plan
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.tasks import BrickTask
@@ -300,3 +301,15 @@ def test_the_book_tells_the_sink_of_each_spare_and_each_waiting_brick() -> None:
     assert events[0].line() == "     5.0 s  spare B0: spare 10 for brick 0"
     assert events[1].line() == "     6.0 s  spare B1: waiting for a person: brick 1"
     assert MissionEvent.from_dict(events[1].to_dict()) == events[1]
+
+
+def test_the_spare_report_survives_the_logs_report_record() -> None:
+    book = SpareBook(plan(_bp()))
+    book.lost("B0", LOST, 5.5)
+    book.failed("B1", NOT_SEEN, 6.25)
+    report = book.report()
+    assert report is not None
+    again = SpareReport.from_record(json.loads(json.dumps(report.to_record())))
+    assert again == report and again.lines() == report.lines()
+    with pytest.raises(TypeError):
+        SpareReport.from_record({"used": [[10, 0, "B0"]], "left": [], "waiting": []})

@@ -8,6 +8,7 @@ Without spares brick-1 then looks for brick 8 at its pickup in vain, and 11 task
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,7 @@ import pytest
 from masonry.blueprint import Blueprint, format_blueprint, load_blueprint
 from masonry.blueprint_gen import generate
 from masonry.mission.journal import read_journal
+from masonry.mission.report_codec import report_from_record, report_to_record
 from masonry.mission.simulate import simulate
 from masonry.mission.spares import SPARE_META_PREFIX
 from masonry.sim.faults import Faults
@@ -62,6 +64,9 @@ def test_a_brick_lost_with_its_uav_is_replaced_by_a_spare_and_the_wall_completes
     b8 = next(t for t in report.tasks if t.id == "B8")
     assert [a.uav for a in b8.tries] == ["brick-2", "brick-1"]
     assert "spares used: spare 30 for brick 8" in report.summary()
+    # a log's report record keeps it (masonry replay prints the same summary)
+    again = report_from_record(json.loads(json.dumps(report_to_record(report))))
+    assert again.spares == report.spares and again.summary() == report.summary()
 
 
 def test_without_a_spare_the_brick_waits_for_a_person_and_the_rest_is_built(tmp_path: Path) -> None:

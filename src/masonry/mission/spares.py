@@ -112,6 +112,23 @@ class SpareReport:
             "waiting_for_person": [w.as_dict() for w in self.waiting],
         }
 
+    def to_record(self) -> dict[str, object]:
+        """Everything, as JSON values, for a log's report record (:meth:`from_record` reads it back equal)."""
+        return {
+            "used": [[u.spare, u.brick, u.task_id, u.reason, u.time_s] for u in self.used],
+            "left": list(self.left),
+            "waiting": [[w.brick, w.task_id, w.reason, w.time_s] for w in self.waiting],
+        }
+
+    @classmethod
+    def from_record(cls, data: Mapping[str, object]) -> SpareReport:
+        """The report :meth:`to_record` wrote (KeyError, TypeError, ValueError: not such a record)."""
+        used = [
+            SpareUse(_int(a), _int(b), str(t), str(r), _float(s)) for a, b, t, r, s in _rows(data["used"], 5)
+        ]
+        waiting = [Waiting(_int(b), str(t), str(r), _float(s)) for b, t, r, s in _rows(data["waiting"], 4)]
+        return cls(tuple(used), tuple(_int(k) for k in _items(data["left"])), tuple(waiting))
+
     def lines(self) -> list[str]:
         """The summary's lines: which spare replaced which brick, and the bricks left for a person."""
         used = [f"spare {u.spare} for brick {u.brick} ({u.reason})" for u in self.used]
@@ -220,6 +237,32 @@ class SpareBook:
         if not self.active:
             return None
         return SpareReport(tuple(self.used), tuple(s.id for s in self._free), tuple(self.waiting.values()))
+
+
+def _items(value: object) -> list[object]:
+    if not isinstance(value, list):
+        raise TypeError(f"expected a list, got {value!r}"[:200])
+    return list(value)
+
+
+def _rows(value: object, width: int) -> list[list[object]]:
+    """A record's table: a list of lists of ``width`` items."""
+    rows = [r for r in _items(value) if isinstance(r, list) and len(r) == width]
+    if len(rows) != len(_items(value)):
+        raise TypeError(f"expected rows of {width} items, got {value!r}"[:200])
+    return rows
+
+
+def _int(value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"expected an integer, got {value!r}")
+    return value
+
+
+def _float(value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"expected a number, got {value!r}")
+    return float(value)
 
 
 def _time_of(value: object) -> float:
