@@ -164,12 +164,13 @@ def test_a_spare_of_the_same_size_stands_in_once_and_is_journaled() -> None:
     flown = book.task(b0)
     assert isinstance(flown, BrickTask)
     assert (flown.spare, flown.pickup_m, flown.marker_ids) == (10, (3.0, 1.0, 0.05), (20, 21))
-    assert journal.meta[f"{SPARE_META_PREFIX}B0"] == {
+    assert journal.meta[f"{SPARE_META_PREFIX}10"] == {
         "spare": 10,
         "brick": 0,
         "task": "B0",
         "reason": LOST,
         "time_s": 100.0,
+        "failure": False,
     }
     # brick 1's brick is gone too: spare 11 is of another size, so B1 waits for a person (stuck now)
     assert book.failed("B1", NOT_SEEN, 200.0) == (True, True)
@@ -202,7 +203,8 @@ def test_a_plan_without_spares_keeps_the_book_inert() -> None:
     book = SpareBook(plan(_bp("")))
     assert book.failed("B0", NOT_SEEN, 1.0) == (True, False)
     book.lost("B0", LOST, 1.0)
-    assert book.used == [] and book.report() is None and book.restore({"spare/B0": {"spare": 10}}) == ()
+    assert book.used == [] and book.report() is None
+    assert book.restore({"spare/10": {"task": "B0"}}, {"B0": 1}, 3) == {"B0": 1}
 
 
 def test_the_book_restored_from_a_journal_hands_out_no_spare_twice() -> None:
@@ -212,10 +214,22 @@ def test_the_book_restored_from_a_journal_hands_out_no_spare_twice() -> None:
     book.lost("B0", LOST, 10.0)
     book.failed("B2", NOT_SEEN, 20.0)  # spare 11 is 0.12 m high: none for B2, it waits
     again = SpareBook(p)
-    assert again.restore(first.meta) == ("B2",)
+    # the journal counted B2's failure, and the one spare 10 replaced on B1 after a first (uncounted) loss
+    assert again.restore(first.meta, {"B2": 1}, 3) == {"B2": 3}
     assert [(u.spare, u.task_id) for u in again.used] == [(10, "B0")]
     assert again.task(p.task("B0")) == book.task(p.task("B0"))
     assert again.failed("B1", NOT_SEEN, 30.0) == (True, True)  # spare 10 is taken: B1 waits too
+
+
+def test_an_attempt_a_spare_replaced_is_not_counted_after_a_resume() -> None:
+    p = plan(_bp())
+    journal = Meta()
+    book = SpareBook(p, journal)
+    assert book.failed("B0", NOT_SEEN, 10.0) == (False, False)  # spare 10, not counted here...
+    again = SpareBook(p)
+    # ... nor after a resume, though the journal's failure record counts it; a lost UAV's attempt is no record
+    assert again.restore(journal.meta, {"B0": 2, "B1": 1}, 3) == {"B0": 1, "B1": 1}
+    assert again.task(p.task("B0")) == book.task(p.task("B0"))
 
 
 def test_the_dispatcher_gives_up_on_a_task_at_once() -> None:

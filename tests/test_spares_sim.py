@@ -101,7 +101,7 @@ def test_a_used_spare_stays_used_after_a_resume(tmp_path: Path) -> None:
     stopped = simulate(bp, seed=SEED, faults=LOSS, journal_path=journal, max_time_s=200.0)
     assert not stopped.completed
     meta = read_journal(journal).meta
-    assert meta[f"{SPARE_META_PREFIX}B8"]["spare"] == 30  # journaled when it was handed out
+    assert meta[f"{SPARE_META_PREFIX}30"]["task"] == "B8"  # journaled when it was handed out
     resumed = simulate(dataclasses.replace(bp), seed=SEED, journal_path=journal, resume=True)
     assert resumed.completed, resumed.summary()
     out = resumed.to_dict()

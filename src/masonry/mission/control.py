@@ -275,9 +275,7 @@ class MissionControl:
         unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self._tasks))
         if unknown:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
-        attempts = {k: int(v) for k, v in state.attempts.items()}
-        for tid in self.spares.restore(state.meta):  # a brick waiting for a person stays so
-            attempts[tid] = max(attempts.get(tid, 0), self.dispatcher.max_attempts)
+        attempts = self.spares.restore(state.meta, state.attempts, self.dispatcher.max_attempts)  # (spares)
         self.dispatcher.restore(list(done), attempts)
         if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
             self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())

@@ -11,7 +11,7 @@ Mission control keeps one :class:`SpareBook`. It is inert for a plan without spa
 - With no spare of that size left, the task waits for a person (it is stuck at once, with the reason; the rest
   of the wall that does not depend on it is built). A UAV lost with its brick may have put the brick back on
   its pallet (docs/state-machines.md), so that case alone, with no spare left, is tried at its pickup again.
-- Every use of a spare and every brick left waiting is journaled (meta ``spare/<task>`` and
+- Every use of a spare and every brick left waiting is journaled (meta ``spare/<spare id>`` and
   ``waiting/<task>``): a resumed mission hands out no spare twice and keeps the replacements it made.
 """
 
@@ -174,7 +174,7 @@ class SpareBook:
         count = not reason.startswith(UNCOUNTED_REASONS)
         if not self.active or task_id not in self._tasks or not brick_gone(reason):
             return count, False
-        if self._hand_out(task_id, reason, now_s):
+        if self._hand_out(task_id, reason, now_s, failure=True):
             return False, False
         self._wait(task_id, reason, now_s)
         return count, True
@@ -183,9 +183,11 @@ class SpareBook:
         """A UAV was declared lost holding ``task_id`` (back in the pool): a spare stands in if its brick went
         with it (none left: the task is tried at its pickup again, where the UAV may have put the brick)."""
         if self.active and task_id in self._tasks and brick_gone(reason):
-            self._hand_out(task_id, reason, now_s)
+            self._hand_out(task_id, reason, now_s, failure=False)
 
-    def _hand_out(self, task_id: str, reason: str, now_s: float) -> bool:
+    def _hand_out(self, task_id: str, reason: str, now_s: float, *, failure: bool) -> bool:
+        """A free spare of the brick's size stands in (False: none). ``failure``: for a journaled failure (which
+        a resumed mission's journal counts as an attempt: :meth:`restore` takes it back)."""
         brick = self._tasks[task_id]
         spare = next((s for s in self._free if s.fits(brick.size_m)), None)
         if spare is None:
@@ -195,7 +197,8 @@ class SpareBook:
         self.used.append(use)
         log.warning("%s: spare %d stands in for brick %d (%s)", task_id, spare.id, brick.brick, reason)
         if self.journal is not None:
-            self.journal.set_meta(f"{SPARE_META_PREFIX}{task_id}", {**use.as_dict(), "time_s": now_s})
+            value = {**use.as_dict(), "time_s": now_s, "failure": failure}
+            self.journal.set_meta(f"{SPARE_META_PREFIX}{spare.id}", value)
         if self._emit is not None:
             self._emit(now_s, "spare", None, task_id, spare=spare.id, brick=brick.brick, reason=reason)
         return True
@@ -211,26 +214,36 @@ class SpareBook:
         if self._emit is not None:
             self._emit(now_s, "spare", None, task_id, spare=None, brick=brick.brick, reason=why)
 
-    def restore(self, meta: Mapping[str, object]) -> tuple[str, ...]:
-        """Take back the uses and waits a journal holds (its meta); returns the tasks that wait for a person."""
+    def restore(
+        self, meta: Mapping[str, object], attempts: Mapping[str, int], max_attempts: int
+    ) -> dict[str, int]:
+        """Take back the uses and waits a journal holds (its meta).
+
+        Returns:
+            ``attempts`` (the journal's finished attempts per task) as mission control counts them: an attempt a
+            spare replaced does not count, and a brick waiting for a person stays stuck (``max_attempts``).
+        """
+        out = {k: int(v) for k, v in attempts.items()}
         if not self.active:
-            return ()
-        for key, value in sorted(meta.items(), key=lambda kv: _time_of(kv[1])):
-            task_id = key.removeprefix(SPARE_META_PREFIX)
-            if key.startswith(SPARE_META_PREFIX) and task_id in self._tasks and isinstance(value, Mapping):
-                spare = next((s for s in self._free if s.id == value.get("spare")), None)
-                if spare is not None:
-                    self._free.remove(spare)
-                    brick = self._tasks[task_id].brick
-                    self.used.append(
-                        SpareUse(spare.id, brick, task_id, str(value.get("reason")), _time_of(value))
-                    )
-        for key, value in meta.items():
+            return out
+        values = [(k, v) for k, v in meta.items() if isinstance(v, Mapping)]
+        for key, value in sorted(values, key=lambda kv: _time_of(kv[1])):
+            task_id = str(value.get("task"))
+            spare = next((s for s in self._free if f"{SPARE_META_PREFIX}{s.id}" == key), None)
+            if spare is None or task_id not in self._tasks:
+                continue
+            self._free.remove(spare)
+            reason = str(value.get("reason"))
+            self.used.append(SpareUse(spare.id, self._tasks[task_id].brick, task_id, reason, _time_of(value)))
+            if value.get("failure") is True and out.get(task_id, 0) > 0:
+                out[task_id] -= 1
+        for key, value in values:
             task_id = key.removeprefix(WAITING_META_PREFIX)
-            if key.startswith(WAITING_META_PREFIX) and task_id in self._tasks and isinstance(value, Mapping):
+            if key.startswith(WAITING_META_PREFIX) and task_id in self._tasks:
                 brick = self._tasks[task_id].brick
                 self.waiting[task_id] = Waiting(brick, task_id, str(value.get("reason")), _time_of(value))
-        return tuple(self.waiting)
+                out[task_id] = max(out.get(task_id, 0), max_attempts)
+        return out
 
     def report(self) -> SpareReport | None:
         """The report's account of the spares (None for a plan without spares)."""
