@@ -87,6 +87,7 @@ from masonry.ports import (
     UavPorts,
 )
 from masonry.sim import Faults, SimClock, SimUav, SimVehicle, VehicleModel, World
+from masonry.spares import Spare
 from masonry.timing import TaskTiming
 
 __version__ = "0.1.0.dev0"
@@ -162,6 +163,7 @@ __all__ = [
     "SimUav",
     "SimVehicle",
     "SimulatedMission",
+    "Spare",
     "Sprayer",
     "TagPose",
     "Task",

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.errors import BlueprintError
 from masonry.geofence import Site
+from masonry.spares import Spare, format_spares, parse_spares
 
 if TYPE_CHECKING:
     from masonry.adhesive import Adhesive
@@ -154,6 +155,8 @@ class Blueprint:
     site: Site | None = None
     #: the adhesive's open and cure times (None: neither is modelled; docs/blueprint-format.md, "Adhesive")
     adhesive: Adhesive | None = None
+    #: spare bricks (None: no ``spares`` key, no spare accounting; docs/blueprint-format.md, "Spares")
+    spares: tuple[Spare, ...] | None = None
 
     def brick(self, brick_id: int) -> Brick:
         """The brick with id ``brick_id`` (KeyError if there is none)."""
@@ -170,7 +173,7 @@ class Blueprint:
 
 # ---------------------------------------------------------------------------------------------- loading
 
-TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive")
+TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive", "spares")
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
 BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
@@ -289,6 +292,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         source=source,
         site=parse_site(data.get("site"), source),
         adhesive=parse_adhesive(data.get("adhesive"), source),
+        spares=parse_spares(data.get("spares"), source, default_size),
     )
     validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
@@ -529,6 +533,8 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
         from masonry.adhesive import format_adhesive
 
         lines.append(format_adhesive(blueprint.adhesive))
+    if blueprint.spares is not None:
+        lines.append(format_spares(blueprint.spares, blueprint.brick_size_m, _num))
     return "\n".join(lines) + "\n"
 
 

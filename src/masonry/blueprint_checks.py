@@ -168,6 +168,7 @@ def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
                     f"the brick would be below the ground there "
                     f"(its centre at z = {_fmt(b.pickup_m[2])} m, bottom at {_fmt(bottom)} m)",
                 )
+    _check_spares(blueprint, capacity)
     for u in blueprint.fleet:
         _check_uav_name(u.name, source, f"fleet UAV {quote(u.name)}: name")
         _check_point(u.home_m, MAX_HOME_HEIGHT_M, source, f"fleet UAV {quote(u.name)}: home")
@@ -175,6 +176,41 @@ def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
             raise BlueprintError(
                 source, f"fleet UAV {quote(u.name)}: home", f"z = {_fmt(u.home_m[2])} m is below the ground"
             )
+
+
+def _check_spares(blueprint: Blueprint, capacity: int) -> None:
+    """Each spare: an id no brick has, its markers in the dictionary and on its top face, a size and a pickup
+    within the site's limits (its pickup's place among the others: :func:`_check_sites`)."""
+    source, markers = blueprint.source, blueprint.markers
+    brick_ids = {b.id for b in blueprint.bricks}
+    for s in blueprint.spares or ():
+        where = f"spare {s.id}"
+        if s.id in brick_ids:
+            raise BlueprintError(
+                source, f"{where}: id", f"brick {s.id} has it too: a spare's id must be its own"
+            )
+        if not 2 * s.id + 1 < capacity:
+            raise BlueprintError(
+                source,
+                f"{where}: id",
+                f"its marker ids {2 * s.id}, {2 * s.id + 1} are not in {markers.dictionary} (marker ids "
+                f"0..{capacity - 1})",
+            )
+        if not all(0.0 < v <= MAX_BRICK_DIMENSION_M for v in s.size_m):
+            raise BlueprintError(
+                source, f"{where}: size", f"every dimension must be in (0, {_fmt(MAX_BRICK_DIMENSION_M)}] m"
+            )
+        if markers.spacing_m + markers.size_m > s.size_m[0] + 1e-9 or markers.size_m > s.size_m[1] + 1e-9:
+            raise BlueprintError(source, f"{where}: size", "its two markers do not fit on its top face")
+        _check_point(s.pickup_m, MAX_PICKUP_HEIGHT_M, source, f"{where}: pickup")
+        if s.pickup_m[2] - s.size_m[2] / 2.0 < -RESTING_TOL_M:
+            raise BlueprintError(source, f"{where}: pickup", "the spare would be below the ground there")
+
+
+def _who(b: Brick, blueprint: Blueprint) -> str:
+    """``brick 7``, or ``spare 107`` for a spare's stand-in among the pickups."""
+    spare = blueprint.spares is not None and any(s.id == b.id for s in blueprint.spares)
+    return f"{'spare' if spare else 'brick'} {b.id}"
 
 
 def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
@@ -285,13 +321,15 @@ def _check_sites(blueprint: Blueprint) -> None:
         cKDTree(center),
     )
     todo = [b for b in bricks if b.pickup_m is not None and not b.placed]
+    # a spare waits at its pickup as a brick does (docs/blueprint-format.md, "Spares")
+    todo += [Brick(s.id, s.pickup_m, s.size_m, pickup_m=s.pickup_m) for s in blueprint.spares or ()]
     pickups = np.array([b.pickup_m for b in todo], dtype=float).reshape(-1, 3)
     hit = _inside_footprints(pickups[:, :2], footprints)
     if hit is not None:
         k, j = hit
         raise BlueprintError(
             source,
-            f"brick {todo[k].id}: pickup",
+            f"{_who(todo[k], blueprint)}: pickup",
             f"lies inside the wall's footprint (under brick {bricks[j].id})",
         )
     # Two bricks whose pickup centres are closer than the smaller one's smallest side would interpenetrate there.
@@ -301,8 +339,8 @@ def _check_sites(blueprint: Blueprint) -> None:
         a, b = sorted(pair, key=lambda k: todo[k].id)
         raise BlueprintError(
             source,
-            f"brick {todo[b].id}: pickup",
-            f"is brick {todo[a].id}'s pickup too: the two bricks would "
+            f"{_who(todo[b], blueprint)}: pickup",
+            f"is {_who(todo[a], blueprint)}'s pickup too: the two would "
             f"overlap there ({_fmt(float(np.linalg.norm(pickups[a] - pickups[b])))} m apart)",
         )
     _check_pads(blueprint, footprints, pickups, todo)
@@ -366,7 +404,7 @@ def _check_pads(
                 raise BlueprintError(
                     source,
                     f"fleet UAV {quote(fleet[k].name)}: home",
-                    f"is {_fmt(round(float(d[k]), 3))} m from brick {todo[int(i[k])].id}'s pickup: {why}",
+                    f"is {_fmt(round(float(d[k]), 3))} m from {_who(todo[int(i[k])], blueprint)}'s pickup: {why}",
                 )
 
 

@@ -29,6 +29,7 @@ from masonry.blueprint import (
 )
 from masonry.errors import BlueprintError
 from masonry.separation import pad_separation_m
+from masonry.spares import Spare
 
 Vec3 = tuple[float, float, float]
 #: (u, v, course) of each brick in the wall frame, plus its yaw relative to the wall.
@@ -60,6 +61,9 @@ class Site:
     pallet_distance_m: float | None = None  # from the wall's face to the pallet; default r_c + 1 m
     name: str | None = None
     markers: MarkerSpec | None = None  # default: fitted to the brick, dictionary numbering every brick
+    spares: int | None = (
+        None  # spare bricks after the wall's on the pallet (ids after the bricks'); None: no key
+    )
 
 
 def running_bond(
@@ -145,11 +149,12 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     pallet_distance = (
         clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
     )
-    markers = options.markers or _markers_for(size, len(layout))
+    n_spares = int(options.spares or 0)
+    markers = options.markers or _markers_for(size, len(layout) + n_spares)
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
-    if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
-        raise BlueprintError("<generator>", "counts", "placed courses and fleet sizes must be >= 0")
+    if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0 or n_spares < 0:
+        raise BlueprintError("<generator>", "counts", "placed courses, fleet sizes and spares must be >= 0")
     ox, oy = origin[0], origin[1]
     oz = origin[2] if len(origin) == 3 else 0.0
     cos_y, sin_y = math.cos(yaw), math.sin(yaw)
@@ -175,11 +180,13 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         # a long wall: a pallet as wide as the wall, each brick facing its place
         columns = wall_columns
         slots = _pallet_slots(todo_u, columns, pallet_pitch_u, pallet_pitch_v, pallet_distance + width / 2.0)
-    pickups: dict[int, Vec3] = {}
-    for index, (row, col) in zip(todo, slots):
+
+    def pallet(row: int, col: int) -> Vec3:
         u = (col - (columns - 1) / 2.0) * pallet_pitch_u
         v = -(width / 2.0 + pallet_distance + row * pallet_pitch_v)
-        pickups[index] = world(u, v, height / 2.0)
+        return world(u, v, height / 2.0)
+
+    pickups = {index: pallet(row, col) for index, (row, col) in zip(todo, slots)}
     bricks = []
     for index, (u, v, course, rel_yaw) in enumerate(layout):
         placed = course < placed_courses
@@ -194,6 +201,11 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
             )
         )
     rows = max((row for row, _ in slots), default=-1) + 1
+    # the spares in columns of their own at the pallet's +u end, as deep as the pallet: the pads stay where they are
+    depth = max(rows, 1)
+    spares = tuple(
+        Spare(len(layout) + k, pallet(k % depth, columns + k // depth), size) for k in range(n_spares)
+    )
     home_v = -(width / 2.0 + pallet_distance + max(rows - 1, 0) * pallet_pitch_v + clearance + 1.0)
     crew: list[tuple[str, Role]] = [(f"brick-{k + 1}", "brick") for k in range(brick_uavs)]
     crew += [(f"glue-{k + 1}", "adhesion") for k in range(adhesion_uavs)]
@@ -212,6 +224,7 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         brick_size_m=size,
         markers=markers,
         source=f"<{kind}>",
+        spares=None if options.spares is None else spares,
     )
 
 

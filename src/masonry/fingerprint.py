@@ -33,7 +33,8 @@ def _digest(value: Any) -> str:
 
 
 def wall_digest(blueprint: Blueprint) -> str:
-    """The digest of everything about the wall a task depends on: bricks, pickups, clearance, cruise, markers, adhesive."""
+    """The digest of everything about the wall a task depends on: bricks, pickups, clearance, cruise, markers, adhesive,
+    spares."""
     m = blueprint.markers
     wall: dict[str, Any] = {
         "clearance_m": _num(blueprint.clearance_m),
@@ -48,6 +49,8 @@ def wall_digest(blueprint: Blueprint) -> str:
     if blueprint.adhesive is not None:  # absent: the digest of every wall written before it existed
         a = blueprint.adhesive
         wall["adhesive"] = [None if a.open_time_s is None else _num(a.open_time_s), _num(a.cure_time_s)]
+    if blueprint.spares is not None:  # (as the adhesive: absent, the digest of old)
+        wall["spares"] = [[s.id, _vec(s.pickup_m), _vec(s.size_m)] for s in blueprint.spares]
     return _digest(wall)
 
 

@@ -171,6 +171,29 @@ def blueprint_schema() -> dict[str, Any]:
             },
             "site": _site(),
             "adhesive": _adhesive(),
+            "spares": {
+                "type": "array",
+                "description": 'Spare bricks (absent: no spare accounting; docs/blueprint-format.md, "Spares").',
+                "items": {
+                    "type": "object",
+                    "additionalProperties": False,
+                    "required": ["id", "pickup"],
+                    "properties": {
+                        "id": {
+                            "type": "integer",
+                            "minimum": 0,
+                            "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
+                            "description": "Unique among bricks and spares; the spare carries markers 2k, 2k+1.",
+                        },
+                        "pickup": _vec3(
+                            "Approximate centre of the spare where it waits, metres.", MAX_PICKUP_HEIGHT_M
+                        ),
+                        "size": _size(
+                            "The spare's size (default brick.size); it stands in for bricks of this size."
+                        ),
+                    },
+                },
+            },
         },
     }
 

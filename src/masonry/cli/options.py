@@ -84,6 +84,7 @@ RANGES: dict[str, Bound] = {
     "--origin": Bound(-10_000.0, 10_000.0, "m"),
     "--placed-courses": Bound(0, 1000, integer=True),
     "--pallet-columns": Bound(0, 1000, integer=True),
+    "--spares": Bound(0, 1000, integer=True),
     "blueprint --brick-uavs": Bound(1, 100, integer=True),
     "blueprint --adhesion-uavs": Bound(1, 100, integer=True),
     "--clearance": Bound(0.0, 50.0, "m", low_open=True),

@@ -232,6 +232,7 @@ _GEN_FLAGS = {
     "adhesion_uavs": "--adhesion-uavs",
     "clearance_m": "--clearance",
     "cruise_altitude_m": "--cruise-altitude",
+    "spares": "--spares",
 }
 
 
@@ -281,7 +282,8 @@ def _emit(kind: str, options: dict[str, Any], output: Path | None) -> None:
     n_todo = sum(1 for b in bp.bricks if not b.placed)
     typer.echo(
         f"wrote {output}: {plural(len(bp.bricks), 'brick')} ({n_todo} to place), "
-        f"{plural(len(bp.fleet), 'UAV')}",
+        + ("" if bp.spares is None else f"{plural(len(bp.spares), 'spare')}, ")
+        + f"{plural(len(bp.fleet), 'UAV')}",
         err=True,
     )
 
@@ -341,6 +343,13 @@ _CRUISE = typer.Option(
     ),
 )
 _NAME = typer.Option(None, "--name", help="Blueprint name (default: <kind>-<bricks>).")
+_SPARES = typer.Option(
+    None,
+    "--spares",
+    help=help_text(
+        _BP, "--spares", "Spare bricks on the pallet, after the wall's (default: no `spares` key)."
+    ),
+)
 
 
 @command("running-bond", typer_app=blueprint_app)
@@ -363,6 +372,7 @@ def running_bond_command(
     clearance: float = _CLEAR,
     cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
+    spares: int | None = _SPARES,
 ) -> None:
     """A straight running-bond wall: every other course shifted by half a brick."""
     options = _common(
@@ -380,6 +390,7 @@ def running_bond_command(
         name,
     )
     options.update(courses=courses, bricks_per_course=bricks_per_course)
+    options.update({} if spares is None else {"spares": spares})  # (absent: the blueprint of old)
     _emit("running-bond", options, output)
 
 
@@ -401,6 +412,7 @@ def towers_command(
     clearance: float = _CLEAR,
     cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
+    spares: int | None = _SPARES,
 ) -> None:
     """Separate stacks of bricks in a row (the paper's case study is --towers 2 --height 3 --placed-courses 2)."""
     options = _common(
@@ -419,6 +431,7 @@ def towers_command(
     )
     options.pop("joint_m")
     options.update(towers=towers, height=height, spacing_m=spacing)
+    options.update({} if spares is None else {"spares": spares})  # (absent: the blueprint of old)
     _emit("towers", options, output)
 
 
@@ -441,6 +454,7 @@ def pyramid_command(
     clearance: float = _CLEAR,
     cruise_altitude: float | None = _CRUISE,
     name: str | None = _NAME,
+    spares: int | None = _SPARES,
 ) -> None:
     """A stepped pyramid wall."""
     options = _common(
@@ -458,6 +472,7 @@ def pyramid_command(
         name,
     )
     options.update(base=base)
+    options.update({} if spares is None else {"spares": spares})  # (absent: the blueprint of old)
     _emit("pyramid", options, output)
 
 

@@ -243,7 +243,7 @@ class BrickUav(PutBack):
             from masonry.perception.aruco import detect_tags
 
             tags = tuple(detect_tags(frame.image, self.camera.intrinsics, self.config.markers))
-        id1, id2 = 2 * self.brick_task.brick, 2 * self.brick_task.brick + 1
+        id1, id2 = self.brick_task.marker_ids
         tag1 = tag2 = None
         for tag in tags:
             if tag.marker_id == id1:

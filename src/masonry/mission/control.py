@@ -53,8 +53,9 @@ from masonry.mission.messages import (
     encode,
 )
 from masonry.mission.operator import Operator
-from masonry.mission.records import LANDED_STATE, Attempt, UavLink
+from masonry.mission.records import LANDED_STATE, Attempt, UavLink, completion_fields
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
+from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.mission.wait_causes import WaitWatch
@@ -68,7 +69,6 @@ from masonry.ports import (
     LAST_RESORT_S,
     RECALL_REASON,
     TASK_DROPPED_REASON,
-    UNCOUNTED_REASONS,
 )
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
@@ -227,6 +227,7 @@ class MissionControl:
         #: the adhesive's open and cure times (None: none; :mod:`masonry.mission.glue`)
         self.glue = glue_gate(plan, self.dispatcher, self.sites, timing or DEFAULT_TIMING)
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
+        self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
         self._running: dict[str, Attempt] = {}  # task id -> its running attempt
@@ -274,7 +275,7 @@ class MissionControl:
         unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self._tasks))
         if unknown:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
-        attempts = {k: int(v) for k, v in state.attempts.items()}
+        attempts = self.spares.restore(state.meta, state.attempts, self.dispatcher.max_attempts)  # (spares)
         self.dispatcher.restore(list(done), attempts)
         if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
             self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
@@ -583,14 +584,7 @@ class MissionControl:
             if self.glue is not None:
                 self.glue.completed(r.task_id, now_s)
             if self.journal is not None:
-                fields: dict[str, Any] = {}
-                if r.placement_error_m is not None:
-                    fields["placement_error_m"] = r.placement_error_m
-                if r.coverage is not None:
-                    fields["coverage"] = r.coverage
-                if r.phases is not None:
-                    fields["phases"] = r.phases.as_dict()
-                self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+                self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r))
             self._emit(
                 now_s,
                 "completed",
@@ -614,7 +608,8 @@ class MissionControl:
             )
             # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
             # attempt of the task
-            self.dispatcher.fail(r.task_id, count=not att.reason.startswith(UNCOUNTED_REASONS))
+            count, give_up = self.spares.failed(r.task_id, att.reason, now_s)  # (its brick gone: a spare)
+            self.dispatcher.fail(r.task_id, count=count, give_up=give_up)
             if self.journal is not None:
                 self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
             self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=att.reason)
@@ -676,12 +671,7 @@ class MissionControl:
                     self.journal.record_failure(now_s, r.task_id, other, again.reason)
             self.recall(other, now_s, f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}")
         if self.journal is not None:
-            fields: dict[str, Any] = {}
-            if r.placement_error_m is not None:
-                fields["placement_error_m"] = r.placement_error_m
-            if r.coverage is not None:
-                fields["coverage"] = r.coverage
-            self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+            self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r, phases=False))
         self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
         self._dirty = True
         return True
@@ -773,7 +763,7 @@ class MissionControl:
         link.lost_at_s = now_s
         link.status = status
         task_id = self.dispatcher.task_of(name)
-        task = self._tasks[task_id] if task_id is not None else None
+        task = self.spares.task(self._tasks[task_id]) if task_id is not None else None
         # last heard with its brick on the magnet: it may have taken it down with it, or puts it back first
         carried = task if link.state in CARRYING_STATES and isinstance(task, BrickTask) else None
         if status == "lost" and self.columns.volumes(name):
@@ -808,6 +798,7 @@ class MissionControl:
                 if status == "lost" and carried is not None:
                     # a retry that then finds no brick on the pallet says why
                     att.reason += f" (last heard in {link.state}, with brick {carried.brick} on its magnet)"
+                    self.spares.lost(released, att.reason, now_s)
                 log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, name)
@@ -828,10 +819,10 @@ class MissionControl:
             if self.journal is not None:
                 self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
             self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
-            self._send(
-                a.uav,
-                Assign(MISSION_CONTROL, a.uav, self._tasks[a.task_id], attempt, now_s, self.wall_digest),
-            )
+            task = self.spares.task(
+                self._tasks[a.task_id]
+            )  # (with its spare, if one stands in for its brick)
+            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, task, attempt, now_s, self.wall_digest))
 
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved

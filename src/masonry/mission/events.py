@@ -23,6 +23,8 @@ Kinds (``MissionEvent.kind``) and their fields:
 - ``glue``: with an adhesive's open time, a bead (``task_id``) sprayed, or known from the journal after a resume:
   its ``brick``, ``sprayed_s`` and ``open_until_s`` (when it expires unless the brick is on it;
   :mod:`masonry.mission.glue`).
+- ``spare``: a spare stands in for the brick of ``task_id`` (``spare``, ``brick``, ``reason``), or none is left
+  and the brick waits for a person (``spare`` None; :mod:`masonry.mission.spares`).
 """
 
 from __future__ import annotations
@@ -51,6 +53,7 @@ KINDS = (
     "operator",
     "wind",
     "glue",
+    "spare",
 )
 
 
@@ -126,6 +129,9 @@ class MissionEvent:
             grounded = f.get("grounded") or []
             extra = f" {speed:.1f} m/s" if isinstance(speed, (int, float)) else ""
             extra += f": no tasks for {', '.join(grounded)}" if grounded else ": every UAV within its limit"
+        elif self.kind == "spare":
+            spare = f.get("spare")
+            extra = f": {f'spare {spare} for' if spare is not None else 'waiting for a person:'} brick {f.get('brick')}"
         elif self.kind == "glue":
             until = f.get("open_until_s")
             extra = f" under {f.get('brick')}" + (

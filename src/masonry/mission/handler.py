@@ -18,18 +18,15 @@ once the UAV is ``radius_m`` away from it horizontally or has landed. The answer
 lateral leg (a transit layer) and, while the column is taken, a hold point where the machine waits at that
 layer; ``end_transit`` tells mission control the flight is down (its layer is free).
 
-Assignments are checked against the UAV's own blueprint (docs/security.md): given its ``tasks``, ``role`` and
-``wall_digest``, the handler takes a task only if the assignment carries the same wall digest, the task is one
-of the blueprint's tasks (same id, same geometry) and of the UAV's role. Anything else is refused: counted in
-``refused`` (one line each), logged, and answered with a failed result naming the reason, so that mission
-control learns of it (a genuine mismatch: two blueprint files), unless that task is in hand or queued here:
-then the refused message cannot be mission control's and the answer would cancel the real assignment.
+Assignments are checked against the UAV's own blueprint (docs/security.md): given its ``tasks``, ``spares``,
+``role`` and ``wall_digest``, it takes a task only with the same wall digest, one of the blueprint's tasks (same
+id and geometry, or with one of its spares of that size in the brick's place) of the UAV's role. Anything else
+is refused: counted in ``refused``, logged, answered with a failed result naming the reason (two blueprint
+files), unless that task is in hand or queued here: then the refused message cannot be mission control's.
 
-Mission control's heartbeat is watched too: ``mission_control_lost`` turns true when it has been silent past
-the timeout. A UAV that had heard it then abandons the task in hand and any queued (failed, reason ``mission
-control lost``: no attempt counted) and flies home: by then mission control has declared it lost and given the
-task to another UAV, or it has crashed and a resumed one flies the task again, so finishing it would do it
-twice. Heard again with no task, it is taken back into the mission (docs/mission.md).
+Mission control's heartbeat is watched: silent past the timeout (``mission_control_lost``), a UAV that had heard
+it abandons its tasks (failed, ``mission control lost``: no attempt counted) and flies home (mission control
+gave them to another UAV, or a resumed one flies them). Heard again with no task, it is taken back.
 """
 
 from __future__ import annotations
@@ -56,6 +53,7 @@ from masonry.mission.messages import (
     decode,
     encode,
 )
+from masonry.mission.spares import as_flown
 from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
@@ -66,6 +64,7 @@ from masonry.ports import (
     MissionLink,
     TaskResult,
 )
+from masonry.spares import Spare
 
 log = logging.getLogger(__name__)
 
@@ -73,7 +72,6 @@ log = logging.getLogger(__name__)
 OUT_OF_SERVICE_STATE = "halted"
 
 Vec3 = tuple[float, float, float]
-
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
@@ -131,8 +129,8 @@ class UavHandler(MissionLink, ClearanceLink):
         after_result: called right after a result is sent; the in-process simulation steps mission control
             there, so that the answer (the next task) is in the inbox when the machine polls for it, as with a
             network round trip shorter than a tick.
-        tasks, role, wall_digest: the UAV's blueprint, to check every assignment against (its plan's tasks, this
-            UAV's role, :func:`masonry.fingerprint.wall_digest`); None: that check is not made.
+        tasks, spares, role, wall_digest: the UAV's blueprint, to check every assignment against (its plan's
+            tasks and spares, its role, :func:`masonry.fingerprint.wall_digest`); None: that check is not made.
         keeper: keeps the completion mission control has not heard yet; a completion it kept from before a
             restart is said first thing, ahead of the first heartbeat, and again when mission control is first
             heard (mission control ignores what it had).
@@ -154,6 +152,7 @@ class UavHandler(MissionLink, ClearanceLink):
         reserve_fraction: float = 0.4,
         after_result: Callable[[], None] | None = None,
         tasks: Iterable[Task] | None = None,
+        spares: Iterable[Spare] | None = None,
         role: str | None = None,
         wall_digest: str | None = None,
         keeper: ResultKeeper | None = None,
@@ -161,6 +160,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self._after_result = after_result
         self._keeper = keeper
         self._tasks = None if tasks is None else {t.id: t for t in tasks}
+        self._spares = {sp.id: sp for sp in spares or ()}  # (one may stand in for a brick)
         self._role = role
         self._wall_digest = wall_digest
         self.refused: list[str] = []
@@ -666,7 +666,7 @@ class UavHandler(MissionLink, ClearanceLink):
             mine = self._tasks.get(task.id)
             if mine is None:
                 return f"task {task.id} is not a task of this UAV's blueprint"
-            if replace(task, done=mine.done) != mine:
+            if replace(task, done=mine.done) != as_flown(mine, getattr(task, "spare", None), self._spares):
                 what = "brick" if isinstance(task, BrickTask) else "segment"
                 return f"task {task.id}: its {what} geometry differs from this UAV's blueprint"
         return None

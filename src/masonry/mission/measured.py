@@ -19,6 +19,7 @@ from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.messages import Result, decode
 from masonry.mission.report import MissionReport, control_report
+from masonry.mission.spares import SpareBook
 from masonry.planner.bounds import min_cycles_s, min_durations_s, min_site_s
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -56,6 +57,19 @@ class MeasuredJournal:
         world.glue.restore(before.get("glue"))
         self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
         self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
+        self.spares: SpareBook | None = None  # mission control's, once it exists: which spare stands in where
+
+    def error_m(self, task_id: str) -> float | None:
+        """The world's true placement error of a brick task's brick, or of the spare standing in for it
+        (its distance from the brick's design centre; None: not released, or not on the wall)."""
+        use = self.spares.spare_of(task_id) if self.spares is not None else None
+        if use is None:
+            err = self.world.placement_error_m(self._bricks[task_id])
+            return None if err is None else float(err)
+        b = self.world.bricks.get(use.spare)
+        if b is None or not b.released or b.state != "placed":
+            return None
+        return math.dist(b.position_m, self.world.blueprint.brick(use.brick).position_m)
 
     def distances_m(self) -> dict[str, float]:
         return {
@@ -97,7 +111,7 @@ class MeasuredJournal:
         if kept is not None and kept.placement_error_m is not None:
             out["placement_error_m"] = kept.placement_error_m  # placed before the stop: measured then
         elif task_id in self._bricks:
-            err = self.world.placement_error_m(self._bricks[task_id])
+            err = self.error_m(task_id)
             if err is not None:
                 out["placement_error_m"] = float(err)
         return out
@@ -119,7 +133,7 @@ class MeasuredJournal:
         value: dict[str, Any] = {"message": message.decode("utf-8")}
         task_id = _task_of(message)
         if task_id in self._bricks:
-            err = self.world.placement_error_m(self._bricks[task_id])
+            err = self.error_m(task_id)
             if err is not None:
                 value["placement_error_m"] = float(err)
         self.journal.set_meta(KEPT_META_PREFIX + uav, value)
@@ -245,7 +259,7 @@ def simulated_report(
     for t in the_plan.tasks:
         if isinstance(t, BrickTask) and t.id in done:
             # a brick placed before the resume was rebuilt in place: its error is the one measured then
-            err = journaled_errors_m[t.id] if t.id in journaled_errors_m else world.placement_error_m(t.brick)
+            err = journaled_errors_m[t.id] if t.id in journaled_errors_m else measured.error_m(t.id)
             if err is not None:
                 placement[t.id] = float(err)
     minimum_s = min_durations_s(the_plan, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing)

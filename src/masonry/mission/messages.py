@@ -26,11 +26,10 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
 so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
-``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
-blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
-``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
-without it leaves it out and one that does not know it ignores it, so the version stays. 4 adds the operator's
-messages (a version-3 UAV would reject a recall as an unknown type and fly on).
+``wall`` to the assignment and ``attempt`` to the result (docs/security.md). Within 3, a result may carry
+``phases`` (:class:`~masonry.ports.PhaseTimes`; optional both ways). 4 adds the operator's messages (a version-3
+UAV would reject a recall and fly on). Within 4, a brick task may carry ``spare`` (the spare picked in its
+place; sent only for a blueprint with spares, docs/blueprint-format.md).
 """
 
 from __future__ import annotations
@@ -153,9 +152,8 @@ class Clearance:
 class OperatorCommand:
     """An operator asks mission control to ``command`` (one of :data:`OPERATOR_COMMANDS`).
 
-    ``uav``: the UAV to recall; ``role`` and ``limit``: how many UAVs of that role may fly at once (``limit``;
-    ``limit`` -1 lifts it); ``id``: echoed in the answer.
-    """
+    ``uav``: the UAV to recall; ``role`` and ``limit``: how many UAVs of that role may fly at once (-1 lifts it);
+    ``id``: echoed in the answer."""
 
     sender: str
     command: str
@@ -231,6 +229,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
             "yaw_rad": task.yaw_rad,
             "pickup_m": _vec(task.pickup_m),
             "size_m": _vec(task.size_m),
+            **({} if task.spare is None else {"spare": task.spare}),
         }
     return {
         "kind": "adhesion",
@@ -450,6 +449,7 @@ def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
             yaw_rad=f.num("yaw_rad"),
             pickup_m=f.vec("pickup_m", optional=True),
             size_m=f.vec("size_m"),
+            spare=None if data.get("spare") is None else f.int_("spare"),
         )
     if kind == "adhesion":
         return AdhesionTask(

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from masonry.blueprint import UavSpec
-from masonry.ports import PhaseTimes
+from masonry.ports import PhaseTimes, TaskResult
 
 Vec3 = tuple[float, float, float]
 AttemptStatus = Literal["running", "done", "failed"]
@@ -61,4 +61,16 @@ class UavLink:
         self.position_m = position_m
 
 
-__all__ = ["LANDED_STATE", "Attempt", "AttemptStatus", "UavLink"]
+def completion_fields(r: TaskResult, *, phases: bool = True) -> dict[str, object]:
+    """What the journal keeps of a completion: its placement error, its coverage and (``phases``) its phases."""
+    fields: dict[str, object] = {}
+    if r.placement_error_m is not None:
+        fields["placement_error_m"] = r.placement_error_m
+    if r.coverage is not None:
+        fields["coverage"] = r.coverage
+    if phases and r.phases is not None:
+        fields["phases"] = r.phases.as_dict()
+    return fields
+
+
+__all__ = ["LANDED_STATE", "Attempt", "AttemptStatus", "UavLink", "completion_fields"]

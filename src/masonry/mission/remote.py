@@ -173,6 +173,7 @@ def run_remote_uav(
         heartbeat_timeout_s=heartbeat_timeout_s,
         after_result=await_answer,
         tasks=tasks,
+        spares=blueprint.spares,
         role=spec.role,
         wall_digest=wall_digest(blueprint),
     )

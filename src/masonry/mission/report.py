@@ -16,6 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from masonry.mission.spares import SpareReport
 from masonry.mission.waits import TaskWait, waiting_split_s, with_battery_holds
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
@@ -151,6 +152,9 @@ class MissionReport:
     cure_time_violations: int | None = None
     #: the adhesive's open time (for the Gantt chart's open windows; not in the JSON)
     open_time_s: float | None = None
+    #: with ``spares`` in the blueprint: which spare replaced which brick, the spares left, the bricks that wait
+    #: for a person (:class:`masonry.mission.spares.SpareReport`); None: no spares key, none of these fields
+    spares: SpareReport | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -181,6 +185,8 @@ class MissionReport:
         if self.open_time_violations is not None:
             out["open_time_violations"] = self.open_time_violations
             out["cure_time_violations"] = self.cure_time_violations
+        if self.spares is not None:
+            out.update(self.spares.to_dict())
         return out
 
     def _task_dict(self, task: TaskReport) -> dict[str, Any]:
@@ -259,6 +265,7 @@ class MissionReport:
         if failures:
             lines.append(f"failed attempts: {failures}")
         lines.extend(self.timeline())
+        lines.extend(self.spares.lines() if self.spares is not None else ())
         if not self.completed:
             lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
         if self.stall is not None:
@@ -584,5 +591,6 @@ def control_report(
         attempts=attempts,
         resumed_from_s=mc.resumed_at_s,
         stall=None if getattr(mc, "stall", None) is None else {**mc.stall.to_dict(), "line": mc.stall.line()},
+        spares=mc.spares.report() if getattr(mc, "spares", None) is not None else None,
         **extra,
     )

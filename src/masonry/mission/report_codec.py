@@ -18,6 +18,7 @@ import numpy as np
 
 from masonry.errors import MissionError
 from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
+from masonry.mission.spares import SpareReport
 from masonry.mission.waits import TaskWait, WaitCause
 from masonry.ports import PhaseTimes
 
@@ -136,6 +137,7 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "schedule_followed": report.schedule_followed,
         "schedule_assignments": report.schedule_assignments,
         **_adhesive_out(report),
+        **({} if report.spares is None else {"spares": report.spares.to_record()}),
     }
 
 
@@ -196,6 +198,7 @@ def report_from_record(data: Any) -> MissionReport:
             open_time_violations=_opt_int(data.get("open_time_violations")),
             cure_time_violations=_opt_int(data.get("cure_time_violations")),
             open_time_s=_num_in(data.get("open_time_s")),
+            spares=None if data.get("spares") is None else SpareReport.from_record(data["spares"]),
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None

@@ -228,6 +228,7 @@ class SimulatedMission:
                 swap_battery=GroundCrew(sim_uav.vehicle, self.clock),
                 after_result=self._step_control,
                 tasks=plan.tasks,
+                spares=plan.spares,
                 role=spec.role,
                 wall_digest=wall,
                 keeper=self.measured if self.measured.journal is not None else None,
@@ -237,7 +238,7 @@ class SimulatedMission:
             )
             self.ports[spec.name] = uav_ports
             self.handlers[spec.name] = h
-        self.measured.handlers = self.handlers
+        self.measured.handlers, self.measured.spares = self.handlers, self.control.spares
         #: UAV -> the simulated time it failed (it flies, and says, nothing more)
         self.dead: dict[str, float] = {}
         self.measured.dead = self.dead

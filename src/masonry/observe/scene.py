@@ -75,7 +75,12 @@ TF_PERIOD_S = 1.0
 #: ``/uav/NAME/state`` is written when the state, task, status or airspace changes, else this often.
 STATE_PERIOD_S = 2.0
 
-_LEVELS = {"failed": LogLevel.Warning, "lost": LogLevel.Warning, "stall": LogLevel.Error}
+_LEVELS = {
+    "failed": LogLevel.Warning,
+    "lost": LogLevel.Warning,
+    "spare": LogLevel.Warning,
+    "stall": LogLevel.Error,
+}
 
 
 def schema_name(topic: str) -> str:

@@ -492,32 +492,29 @@ class Dispatcher:
         self._mark_done(i, task_id)
         return uav
 
-    def fail(self, task_id: str, *, count: bool = True) -> bool:
+    def fail(self, task_id: str, *, count: bool = True, give_up: bool = False) -> bool:
         """Count a failed attempt of an in-progress task and free its UAV.
 
         ``count`` False: the attempt failed for a reason that is not the task's (the UAV's battery): the task
-        returns to the pool without counting it.
+        returns to the pool without counting it. ``give_up``: it is stuck now (its brick is gone, no spare left).
 
         Returns:
-            True if the task went back to the pool, False if it reached ``max_attempts`` and is now stuck.
+            True if the task went back to the pool, False if it reached ``max_attempts`` (or gave up): stuck.
 
         Raises:
             PlanningError: the task is unknown or not in progress.
         """
         i = self._running(task_id, "fail")
         self._stop(i)
-        if not count:
+        if count:
+            self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
+        if not give_up and (not count or self._attempts[task_id] < self.max_attempts):
             self._maybe_available(i)
             return True
-        n = self._attempts.get(task_id, 0) + 1
-        self._attempts[task_id] = n
-        if n >= self.max_attempts:
-            self._ready[self._role[i]].pop(i, None)
-            self._status[i] = _STUCK
-            self._stuck.add(task_id)
-            return False
-        self._maybe_available(i)
-        return True
+        self._ready[self._role[i]].pop(i, None)
+        self._status[i] = _STUCK
+        self._stuck.add(task_id)
+        return False
 
     def remove_uav(self, name: str) -> str | None:
         """Drop a UAV that is lost; its task (if any) returns to the pool without counting an attempt.

@@ -27,6 +27,7 @@ from masonry.planner.contacts import BrickArrays, Contacts, find_contacts
 from masonry.planner.deadlines import Deadline, adhesive_deadlines
 from masonry.planner.overlap import AXIS_ALIGNED_EPS, chord, clip_convex, principal_axis, rectangle_corners
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
+from masonry.spares import Spare
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -53,6 +54,8 @@ class PlanGraphs:
     conflict_indices: tuple[IntArray, IntArray]
     #: the adhesive's open and cure edges (:mod:`masonry.planner.deadlines`)
     deadlines: tuple[Deadline, ...] = ()
+    #: the blueprint's spare bricks (None: no ``spares`` key)
+    spares: tuple[Spare, ...] | None = None
 
     @property
     def conflict_count(self) -> int:
@@ -70,6 +73,7 @@ class PlanGraphs:
             conflicts=pairs,
             conflict_indices=(ca, cb),
             deadlines=self.deadlines,
+            spares=self.spares,
         )
 
 
@@ -132,6 +136,7 @@ def plan_graphs(blueprint: Blueprint, *, check_marker_ids: bool = True) -> PlanG
         dependencies=tuple(dependencies),
         conflict_indices=(ca, cb),
         deadlines=adhesive_deadlines(tasks, blueprint.adhesive),
+        spares=blueprint.spares,
     )
 
 

@@ -10,6 +10,7 @@ from masonry.blueprint import DEFAULT_BRICK_SIZE_M
 
 if TYPE_CHECKING:
     from masonry.planner.deadlines import Deadline
+    from masonry.spares import Spare
 
 TaskKind = Literal["brick", "adhesion"]
 
@@ -27,6 +28,14 @@ class BrickTask:
     size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
 
     kind: TaskKind = "brick"
+    #: the spare picked up in place of brick ``brick`` (its id; ``pickup_m`` is then the spare's), or None
+    spare: int | None = None
+
+    @property
+    def marker_ids(self) -> tuple[int, int]:
+        """The ArUco ids on the brick to pick up: 2k and 2k+1 of the brick's id, or of the spare's."""
+        k = self.brick if self.spare is None else self.spare
+        return (2 * k, 2 * k + 1)
 
     @property
     def location_m(self) -> tuple[float, float, float]:
@@ -74,6 +83,8 @@ class Plan:
     conflict_indices: Any = field(default=None, compare=False, repr=False)
     #: The adhesive's open and cure edges (:mod:`masonry.planner.deadlines`; empty without ``adhesive``).
     deadlines: tuple[Deadline, ...] = ()
+    #: the blueprint's spare bricks (None: no ``spares`` key; :mod:`masonry.mission.spares`)
+    spares: tuple[Spare, ...] | None = None
 
     def task(self, task_id: str) -> Task:
         """The task with id ``task_id`` (KeyError if there is none)."""

@@ -33,6 +33,7 @@ from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
 from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
+from masonry.sim.spares import lay_out_spares
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
 from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
 from masonry.sim.wind import WindField
@@ -250,6 +251,7 @@ class World:
             brick.position_m = (x, y, support + b.size_m[2] / 2.0)
             brick.state = "pickup"
             self.field.add(brick)
+        lay_out_spares(self.field, self.blueprint, self.seed, cfg.pickup_offset_m, cfg.pickup_yaw_spread_rad)
 
     def add_uav(self, spec: UavSpec, *, yaw_rad: float = 0.0) -> SimUav:
         """Add a UAV landed and disarmed at ``spec.home_m``; its random stream derives from the seed and its name."""
@@ -557,8 +559,7 @@ class World:
         """Distance (3-D) from a released brick's resting centre to its blueprint centre.
 
         0.0 for a pre-placed brick; None while the brick has not been released by a UAV (still at its pickup
-        or carried) or if the world has no such brick.
-        """
+        or carried) or if the world has no such brick. (A spare's: ``MeasuredJournal.error_m``.)"""
         brick = self.field.bricks.get(brick_id)
         if brick is None or brick.state == "carried":
             return None
