@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from masonry.blueprint import (
@@ -28,6 +28,7 @@ from masonry.blueprint import (
     UavSpec,
 )
 from masonry.errors import BlueprintError
+from masonry.marker_reuse import assign_markers, marker_capacity
 from masonry.separation import pad_separation_m
 
 Vec3 = tuple[float, float, float]
@@ -146,6 +147,7 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
     )
     markers = options.markers or _markers_for(size, len(layout))
+    capacity = marker_capacity(markers)
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
     if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0:
@@ -202,9 +204,19 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         UavSpec(name=n, role=r, home_m=world((k - (len(crew) - 1) / 2.0) * step, home_v, 0.0))
         for k, (n, r) in enumerate(crew)
     )
+    numbered: tuple[Brick, ...] = tuple(bricks)
+    if len(bricks) > capacity:
+        # more bricks than marker numbers: reuse them where no camera sees two alike (masonry.marker_reuse), in
+        # the smallest dictionary that holds the numbers used unless the options name one
+        widest = markers if options.markers else replace(markers, dictionary=_dictionary_for(len(bricks)))
+        reused = assign_markers(bricks, widest)
+        if reused is not None:
+            numbered = reused
+            used = 1 + max(b.marker_number for b in reused)
+            markers = markers if options.markers else replace(markers, dictionary=_dictionary_for(used))
     name = options.name or f"{kind}-{len(bricks)}"
     return Blueprint(
-        bricks=tuple(bricks),
+        bricks=numbered,
         fleet=fleet,
         name=str(name),
         clearance_m=clearance,
@@ -263,7 +275,7 @@ def _markers_for(size: Vec3, n_bricks: int) -> MarkerSpec:
 
 def _dictionary_for(n_bricks: int) -> str:
     """The smallest 4x4 ArUco dictionary holding markers 0 .. 2n-1, DICT_APRILTAG_36h10 (2320 markers) beyond 500
-    bricks; beyond 1160 bricks no predefined dictionary numbers every brick (the blueprint does not validate)."""
+    bricks; beyond 1160 bricks, DICT_APRILTAG_36h10 with marker numbers reused (:func:`_build`)."""
     for size in (50, 100, 250, 1000):
         if 2 * n_bricks <= size:
             return f"DICT_4X4_{size}"

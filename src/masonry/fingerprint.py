@@ -48,6 +48,8 @@ def wall_digest(blueprint: Blueprint) -> str:
     if blueprint.adhesive is not None:  # absent: the digest of every wall written before it existed
         a = blueprint.adhesive
         wall["adhesive"] = [None if a.open_time_s is None else _num(a.open_time_s), _num(a.cure_time_s)]
+    if any(b.marker is not None for b in blueprint.bricks):  # absent: as before marker numbers existed
+        wall["marker_numbers"] = [b.marker_number for b in blueprint.bricks]
     return _digest(wall)
 
 

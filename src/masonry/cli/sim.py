@@ -53,7 +53,11 @@ def sim(
         "only while their UAVs work at their sites (site). docs/safety.md.",
     ),
     seed: int = typer.Option(0, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")),
-    camera: str = typer.Option("geometric", "--camera", help="geometric | render (images + ArUco, slower)."),
+    camera: str = typer.Option(
+        "geometric",
+        "--camera",
+        help="geometric | render (images + ArUco, slower) | mixed (images + ArUco over the pickups of 10 bricks).",
+    ),
     fault: list[str] = typer.Option(
         [],
         "--fault",

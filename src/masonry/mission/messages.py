@@ -24,13 +24,11 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`CommandAnswer` mission control -> operator: that command accepted, or refused with a reason.
 - :class:`Recall` mission control -> UAV: drop your task (it is reported failed, ``reason``), fly home and land.
 
-Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
-so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
-``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
-blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
-``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
-without it leaves it out and one that does not know it ignores it, so the version stays. 4 adds the operator's
-messages (a version-3 UAV would reject a recall as an unknown type and fly on).
+Version history: 1 the first five messages; 2 adds the clearance messages (a mixed pair refuses each other's
+messages at once instead of half-working); 3 adds ``wall`` to the assignment and ``attempt`` to the result
+(docs/security.md). Within version 3, a result may carry ``phases`` (:class:`~masonry.ports.PhaseTimes`) and a
+brick task ``marker`` (a big wall's reused marker number): optional both ways, so the version stays. 4 adds the
+operator's messages (a version-3 UAV would reject a recall as an unknown type and fly on).
 """
 
 from __future__ import annotations
@@ -231,6 +229,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
             "yaw_rad": task.yaw_rad,
             "pickup_m": _vec(task.pickup_m),
             "size_m": _vec(task.size_m),
+            **({} if task.marker is None else {"marker": task.marker}),
         }
     return {
         "kind": "adhesion",
@@ -450,6 +449,7 @@ def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
             yaw_rad=f.num("yaw_rad"),
             pickup_m=f.vec("pickup_m", optional=True),
             size_m=f.vec("size_m"),
+            marker=f.int_("marker") if "marker" in data else None,
         )
     if kind == "adhesion":
         return AdhesionTask(

@@ -377,7 +377,7 @@ class SimulatedMission:
             brick_uavs, adhesion_uavs: override the fleet's size per role (see :func:`fleet_for`).
             policy: dispatcher priority: ``fifo``, ``critical-path`` or ``nearest``.
             seed: seed of the world (brick offsets, noise, faults).
-            camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
+            camera: ``geometric`` (the camera model), ``render`` (images + ArUco) or ``mixed`` (images at a sample).
             faults: a :class:`masonry.sim.Faults` (None: no fault).
             journal_path: SQLite journal to write (and, with ``resume``, to continue from); held open until the
                 run ends (or :meth:`close`).
@@ -439,8 +439,8 @@ class SimulatedMission:
             raise InputError(
                 f"`policy` must be one of {', '.join(POLICIES)}, got {policy!r}", options=("policy",)
             )
-        if camera not in ("geometric", "render"):
-            raise InputError(f"`camera` must be geometric or render, got {camera!r}", options=("camera",))
+        if camera not in ("geometric", "render", "mixed"):
+            raise InputError(f"`camera` must be geometric, render or mixed ({camera!r})", options=("camera",))
         if not (dt_s > 0 and math.isfinite(dt_s)):
             raise InputError(f"dt_s must be > 0, got {dt_s!r}")
         if resume and journal_path is None:

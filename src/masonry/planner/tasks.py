@@ -25,8 +25,16 @@ class BrickTask:
     yaw_rad: float
     pickup_m: tuple[float, float, float] | None
     size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
+    #: the brick's marker number when the blueprint reuses numbers (ArUco ids 2m, 2m+1); None: ``brick``
+    marker: int | None = None
 
     kind: TaskKind = "brick"
+
+    @property
+    def marker_ids(self) -> tuple[int, int]:
+        """The ArUco ids the camera looks for on this brick."""
+        m = self.brick if self.marker is None else self.marker
+        return (2 * m, 2 * m + 1)
 
     @property
     def location_m(self) -> tuple[float, float, float]:
