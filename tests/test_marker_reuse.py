@@ -73,6 +73,7 @@ def test_no_two_covisible_bricks_share_a_marker_number(bp: Blueprint) -> None:
 
 
 ARUCO_PAIRS = {"DICT_4X4_50": 25, "DICT_4X4_100": 50}
+_ROOT = Path(__file__).resolve().parent.parent
 
 
 @settings(max_examples=40, deadline=None, derandomize=True)
@@ -241,3 +242,12 @@ def test_a_wall_with_reused_markers_flies_to_completion_with_no_confusion() -> N
     assert audit.sampled == audit.sampled_identified >= 5
     assert world.rendered_frames > 0
     assert max(report.placement_error_m.values()) < 0.05
+
+
+def test_masonry_sim_camera_mixed_draws_the_sampled_pickups() -> None:
+    result = CliRunner().invoke(
+        app,
+        ["sim", str(_ROOT / "blueprints" / "paper_case_study.yaml"), "--camera", "mixed", "--format", "json"],
+    )
+    assert result.exit_code == 0, result.output
+    assert '"completed": true' in result.output
