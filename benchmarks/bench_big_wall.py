@@ -66,7 +66,7 @@ def main() -> None:
             profiler.disable()
         world = mission.world
     cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
-    audit = audit_picks(world.picks, report.attempts, world._render_sample)
+    audit = audit_picks(world.picks, report.attempts, world.drawn_pickups)
     done = sum(1 for t in report.tasks if t.kind == "brick" and t.status == "done")
     todo = sum(1 for b in bp.bricks if not b.placed)
     print(f"completed: {report.completed}; bricks placed {done} / {todo}; stuck {len(report.stuck)}")

@@ -236,7 +236,7 @@ def test_a_wall_with_reused_markers_flies_to_completion_with_no_confusion() -> N
         report = mission.run()
         world = mission.world
     assert report.completed
-    audit = audit_picks(world.picks, report.attempts, world._render_sample)
+    audit = audit_picks(world.picks, report.attempts, world.drawn_pickups)
     assert audit.confusions == ()
     assert audit.picks == audit.identified >= 30
     assert audit.sampled == audit.sampled_identified >= 5

@@ -222,7 +222,7 @@ class World:
         self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
         self._carriers: list[SimUav] = []
-        self._render_sample = render_sample(blueprint) if camera == "mixed" else frozenset()
+        self.drawn_pickups = render_sample(blueprint) if camera == "mixed" else frozenset()  # mixed mode
         self.picks: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every grasp
         self.rendered_frames = 0
         self._lay_out_bricks()
@@ -513,7 +513,7 @@ class World:
 
     def _renders_at(self, T_wc: np.ndarray) -> bool:
         """``mixed`` mode: whether this camera is over a sampled brick still waiting at its pickup."""
-        return over_sampled_pickup(self.field, self._render_sample, float(T_wc[0, 3]), float(T_wc[1, 3]))
+        return over_sampled_pickup(self.field, self.drawn_pickups, float(T_wc[0, 3]), float(T_wc[1, 3]))
 
     def _camera_frame(self, uav: SimUav) -> CameraFrame | None:
         if uav.failed:
