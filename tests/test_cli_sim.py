@@ -106,7 +106,7 @@ def test_a_journal_resumes_only_with_its_reservation(tmp_path):
     "args, message",
     [
         (["--policy", "random"], "--policy must be one of"),
-        (["--camera", "lidar"], "--camera must be geometric or render"),
+        (["--camera", "lidar"], "--camera must be geometric, render or mixed"),
         (["--fault", "grasp=2"], "grasp"),
         (["--fault", "uav-loss=brick-9@10"], "brick-9"),
         (["--format", "yaml"], "--format must be text or json"),

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 from typer.testing import CliRunner
 
@@ -16,14 +18,21 @@ from masonry.planner import plan
 def big_wall(tmp_path_factory):
     bp = running_bond(3, 400, placed_courses=1)  # 1,200 bricks: more than MAX_MARKED_BRICKS
     assert len(bp.bricks) > MAX_MARKED_BRICKS
+    # without the marker numbers `masonry blueprint` gives it (issue 30): each brick's id is its marker number
+    bp = dataclasses.replace(
+        bp,
+        bricks=tuple(dataclasses.replace(b, marker=None) for b in bp.bricks),
+        markers=dataclasses.replace(bp.markers, dictionary="DICT_APRILTAG_36h10"),
+    )
     path = tmp_path_factory.mktemp("big") / "wall.yaml"
     path.write_text(format_blueprint(bp))
     return path
 
 
 def test_a_wall_beyond_every_dictionary_does_not_validate(big_wall):
-    with pytest.raises(BlueprintError, match="no ArUco dictionary holds more than 2320 markers"):
+    with pytest.raises(BlueprintError, match="no ArUco dictionary holds more than 2320 markers") as info:
         load_blueprint(big_wall)
+    assert "give the bricks `marker` numbers" in str(info.value)
 
 
 def test_it_plans_as_a_planner_only_study(big_wall):
@@ -43,8 +52,6 @@ def test_cli_plan_refuses_it_in_one_line_and_plans_it_with_planner_only(big_wall
 
 def test_planner_only_still_bounds_ids():
     bp = running_bond(1, 3)
-    import dataclasses
-
     huge = dataclasses.replace(bp, bricks=(dataclasses.replace(bp.bricks[0], id=10**26), *bp.bricks[1:]))
     with pytest.raises(BlueprintError, match=r"id must be in 0\.\."):
         plan(huge, check_marker_ids=False)

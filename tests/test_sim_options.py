@@ -61,7 +61,7 @@ def test_the_default_options_are_masonry_sims_and_frozen():
     ("field", "value", "match"),
     [
         ("policy", "random", "`policy` must be one of"),
-        ("camera", "lidar", "`camera` must be geometric or render"),
+        ("camera", "lidar", "`camera` must be geometric, render or mixed"),
         ("reservation", "none", "`reservation` must be one of"),
         ("dt_s", 0.0, "dt_s must be > 0"),
         ("resume", True, "`resume` needs `journal_path`"),

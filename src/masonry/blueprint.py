@@ -102,6 +102,8 @@ class Brick:
     yaw_rad: float = 0.0
     placed: bool = False
     pickup_m: tuple[float, float, float] | None = None
+    #: the brick's marker number m (ArUco ids 2m, 2m+1); None: its id (docs/blueprint-format.md, "Markers")
+    marker: int | None = None
 
     @property
     def bottom_z_m(self) -> float:
@@ -125,9 +127,15 @@ class Brick:
             for dx, dy in ((-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy))
         )
 
+    @property
+    def marker_number(self) -> int:
+        """The brick's marker number m: ``marker`` if the blueprint gives one, else its id."""
+        return self.id if self.marker is None else self.marker
+
     def marker_ids(self) -> tuple[int, int]:
-        """The ArUco ids on this brick: 2k (at +spacing/2 on the length axis) and 2k+1 (at -spacing/2)."""
-        return (2 * self.id, 2 * self.id + 1)
+        """The ArUco ids on this brick: 2m (at +spacing/2 on the length axis) and 2m+1 (at -spacing/2)."""
+        m = self.marker_number
+        return (2 * m, 2 * m + 1)
 
 
 @dataclass(frozen=True)
@@ -176,7 +184,7 @@ class Blueprint:
 TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive", "spares")
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
-BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
+BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup", "marker")
 UAV_KEYS = ("name", "role", "home")
 
 
@@ -353,8 +361,17 @@ def _brick(raw: Any, index: int, default_size: tuple[float, float, float], sourc
         raise BlueprintError(source, f"{where}: placed", f"must be true or false, got {quote(placed)}")
     pickup = raw.get("pickup")
     pickup_m = None if pickup is None else _vec3(pickup, source, f"{where}: pickup")
+    marker = raw.get("marker")
+    if marker is not None and (isinstance(marker, bool) or not isinstance(marker, int) or marker < 0):
+        raise BlueprintError(source, f"{where}: marker", f"must be an integer >= 0, got {quote(marker)}")
     return Brick(
-        id=int(raw["id"]), position_m=position, size_m=size, yaw_rad=yaw, placed=placed, pickup_m=pickup_m
+        id=int(raw["id"]),
+        position_m=position,
+        size_m=size,
+        yaw_rad=yaw,
+        placed=placed,
+        pickup_m=pickup_m,
+        marker=marker,
     )
 
 
@@ -521,6 +538,8 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
             parts.append("placed: true")
         if b.pickup_m is not None:
             parts.append(f"pickup: {_vec(b.pickup_m)}")
+        if b.marker is not None:
+            parts.append(f"marker: {b.marker}")
         lines.append("  - {" + ", ".join(parts) + "}")
     lines.append("fleet:")
     for u in blueprint.fleet:

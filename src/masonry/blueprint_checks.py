@@ -31,6 +31,7 @@ from masonry.blueprint import (
     quote,
 )
 from masonry.errors import BlueprintError
+from masonry.marker_reuse import check_marker_reuse
 from masonry.planner.contacts import BrickArrays, find_contacts
 from masonry.planner.overlap import clip_convex, polygon_area_centroid, rectangle_corners
 from masonry.separation import PAD_MARGIN_M, pad_separation_m, pad_site_distance_m, zone_slack_m
@@ -106,6 +107,8 @@ def validate(
     _check_sites(blueprint)
     if blueprint.site is not None:
         check_site(blueprint)
+    if check_marker_ids:
+        check_marker_reuse(blueprint)
 
 
 def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
@@ -129,21 +132,15 @@ def _check_ranges(blueprint: Blueprint, check_marker_ids: bool = True) -> None:
         capacity = 2 * MAX_BRICK_ID + 2
     for b in _suspects(blueprint.bricks, capacity):
         where = f"brick {b.id}"
-        if isinstance(b.id, bool) or not isinstance(b.id, int) or not 0 <= 2 * b.id + 1 < capacity:
-            if not check_marker_ids:
-                raise BlueprintError(source, f"brick {quote(b.id)}", f"id must be in 0..{MAX_BRICK_ID}")
-            largest = max(ARUCO_DICTIONARY_SIZES.values())
-            hint = (
-                "choose a larger dictionary"
-                if capacity < largest
-                else f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks)"
-            )
+        id_ok = not isinstance(b.id, bool) and isinstance(b.id, int) and 0 <= b.id <= MAX_BRICK_ID
+        if not id_ok and (not check_marker_ids or b.marker is not None):
+            raise BlueprintError(source, f"brick {quote(b.id)}", f"id must be in 0..{MAX_BRICK_ID}")
+        if b.marker is not None and (isinstance(b.marker, bool) or not isinstance(b.marker, int)):
             raise BlueprintError(
-                source,
-                f"brick {quote(b.id)}",
-                f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
-                f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}",
+                source, f"{where}: marker", f"must be an integer >= 0, got {quote(b.marker)}"
             )
+        if not id_ok or not 0 <= 2 * b.marker_number + 1 < capacity:
+            _marker_out_of_range(b, dictionary, capacity, source)
         _check_point(b.position_m, SITE_MAX_HEIGHT_M, source, f"{where}: position")
         if not all(0.0 < v <= MAX_BRICK_DIMENSION_M for v in b.size_m):
             raise BlueprintError(
@@ -213,12 +210,37 @@ def _who(b: Brick, blueprint: Blueprint) -> str:
     return f"{'spare' if spare else 'brick'} {b.id}"
 
 
+def _marker_out_of_range(b: Brick, dictionary: str, capacity: int, source: str) -> None:
+    """A brick's marker ids beyond its dictionary: one line naming the brick and what to do."""
+    if b.marker is not None:
+        m = b.marker
+        raise BlueprintError(
+            source,
+            f"brick {b.id}: marker",
+            f"{m} (ArUco ids {2 * m}, {2 * m + 1}) is not in {dictionary} (marker numbers 0..{capacity // 2 - 1})",
+        )
+    largest = max(ARUCO_DICTIONARY_SIZES.values())
+    hint = (
+        "choose a larger dictionary"
+        if capacity < largest
+        else f"no ArUco dictionary holds more than {largest} markers ({largest // 2} bricks): give the bricks "
+        "`marker` numbers reused where no camera sees two alike (`masonry blueprint` numbers big walls so)"
+    )
+    raise BlueprintError(
+        source,
+        f"brick {quote(b.id)}",
+        f"its marker ids 2k, 2k+1 are not in {dictionary} (marker ids "
+        f"0..{capacity - 1}: brick ids 0..{capacity // 2 - 1}); {hint}",
+    )
+
+
 def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
     """The bricks from the first one that may break a range rule on (all checked one by one), found vectorised."""
     import numpy as np
 
     try:
         ids = np.array([b.id for b in bricks], dtype=np.int64)
+        numbers = np.array([b.marker_number for b in bricks], dtype=np.int64)
     except (OverflowError, TypeError, ValueError):
         return bricks
     pos = np.array([b.position_m for b in bricks], dtype=float)
@@ -226,7 +248,7 @@ def _suspects(bricks: tuple[Brick, ...], capacity: int) -> tuple[Brick, ...]:
     yaw = np.array([b.yaw_rad for b in bricks], dtype=float)
     pick = np.array([b.pickup_m if b.pickup_m is not None else (0.0, 0.0, 1.0) for b in bricks], dtype=float)
     with np.errstate(invalid="ignore"):
-        ok = (ids >= 0) & (2 * ids + 1 < capacity)
+        ok = (ids >= 0) & (ids <= MAX_BRICK_ID) & (numbers >= 0) & (2 * numbers + 1 < capacity)
         ok &= (np.abs(pos[:, :2]) <= SITE_HALF_EXTENT_M).all(axis=1) & (
             np.abs(pos[:, 2]) <= SITE_MAX_HEIGHT_M
         )

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from masonry.blueprint import (
@@ -28,6 +28,7 @@ from masonry.blueprint import (
     UavSpec,
 )
 from masonry.errors import BlueprintError
+from masonry.marker_reuse import assign_markers, marker_capacity
 from masonry.separation import pad_separation_m
 from masonry.spares import Spare
 
@@ -128,6 +129,18 @@ def _size(options: Site) -> Vec3:
     return (values[0], values[1], values[2])
 
 
+def _cruise_m(options: Site, layout: _Layout, origin: tuple[float, ...], height: float) -> float:
+    """The cruise altitude: the option's, else the default, or over the finished wall's top when that is higher."""
+    if options.cruise_altitude_m is not None:
+        return float(options.cruise_altitude_m)
+    top = (
+        (origin[2] if len(origin) == 3 else 0.0)
+        + max((c for _, _, c, _ in layout), default=0) * height
+        + height
+    )
+    return DEFAULT_CRUISE_ALTITUDE_M if top < DEFAULT_CRUISE_ALTITUDE_M else top + CRUISE_OVER_WALL_M
+
+
 def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     size = _size(options)
     length, width, height = size
@@ -137,20 +150,13 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     brick_uavs = int(options.brick_uavs)
     adhesion_uavs = int(options.adhesion_uavs)
     clearance = float(options.clearance_m)
-    top = (
-        (origin[2] if len(origin) == 3 else 0.0)
-        + max((c for _, _, c, _ in layout), default=0) * height
-        + height
-    )
-    if options.cruise_altitude_m is not None:
-        cruise = float(options.cruise_altitude_m)
-    else:
-        cruise = DEFAULT_CRUISE_ALTITUDE_M if top < DEFAULT_CRUISE_ALTITUDE_M else top + CRUISE_OVER_WALL_M
+    cruise = _cruise_m(options, layout, origin, height)
     pallet_distance = (
         clearance + 1.0 if options.pallet_distance_m is None else float(options.pallet_distance_m)
     )
     n_spares = int(options.spares or 0)
     markers = options.markers or _markers_for(size, len(layout) + n_spares)
+    capacity = marker_capacity(markers)
     if len(origin) not in (2, 3):
         raise BlueprintError("<generator>", "origin", f"must be 2 or 3 numbers, got {origin!r}")
     if placed_courses < 0 or brick_uavs < 0 or adhesion_uavs < 0 or n_spares < 0:
@@ -214,9 +220,19 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
         UavSpec(name=n, role=r, home_m=world((k - (len(crew) - 1) / 2.0) * step, home_v, 0.0))
         for k, (n, r) in enumerate(crew)
     )
+    numbered: tuple[Brick, ...] = tuple(bricks)
+    if len(bricks) > capacity:
+        # more bricks than marker numbers: reuse them where no camera sees two alike (masonry.marker_reuse), in
+        # the smallest dictionary that holds the numbers used unless the options name one
+        widest = markers if options.markers else replace(markers, dictionary=_dictionary_for(len(bricks)))
+        reused = assign_markers(bricks, widest)
+        if reused is not None:
+            numbered = reused
+            used = 1 + max(b.marker_number for b in reused)
+            markers = markers if options.markers else replace(markers, dictionary=_dictionary_for(used))
     name = options.name or f"{kind}-{len(bricks)}"
     return Blueprint(
-        bricks=tuple(bricks),
+        bricks=numbered,
         fleet=fleet,
         name=str(name),
         clearance_m=clearance,
@@ -276,7 +292,7 @@ def _markers_for(size: Vec3, n_bricks: int) -> MarkerSpec:
 
 def _dictionary_for(n_bricks: int) -> str:
     """The smallest 4x4 ArUco dictionary holding markers 0 .. 2n-1, DICT_APRILTAG_36h10 (2320 markers) beyond 500
-    bricks; beyond 1160 bricks no predefined dictionary numbers every brick (the blueprint does not validate)."""
+    bricks; beyond 1160 bricks, DICT_APRILTAG_36h10 with marker numbers reused (:func:`_build`)."""
     for size in (50, 100, 250, 1000):
         if 2 * n_bricks <= size:
             return f"DICT_4X4_{size}"

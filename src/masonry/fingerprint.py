@@ -51,6 +51,8 @@ def wall_digest(blueprint: Blueprint) -> str:
         wall["adhesive"] = [None if a.open_time_s is None else _num(a.open_time_s), _num(a.cure_time_s)]
     if blueprint.spares is not None:  # (as the adhesive: absent, the digest of old)
         wall["spares"] = [[s.id, _vec(s.pickup_m), _vec(s.size_m)] for s in blueprint.spares]
+    if any(b.marker is not None for b in blueprint.bricks):  # absent: as before marker numbers existed
+        wall["marker_numbers"] = [b.marker_number for b in blueprint.bricks]
     return _digest(wall)
 
 

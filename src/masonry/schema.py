@@ -18,6 +18,7 @@ from masonry.blueprint import (
     DEFAULT_CRUISE_ALTITUDE_M,
     MAX_ABS_YAW_RAD,
     MAX_BRICK_DIMENSION_M,
+    MAX_BRICK_ID,
     MAX_CLEARANCE_M,
     MAX_HOME_HEIGHT_M,
     MAX_PICKUP_HEIGHT_M,
@@ -123,8 +124,8 @@ def blueprint_schema() -> dict[str, Any]:
                         "id": {
                             "type": "integer",
                             "minimum": 0,
-                            "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
-                            "description": "Unique brick id; its markers 2k, 2k+1 must be in the dictionary.",
+                            "maximum": MAX_BRICK_ID,
+                            "description": "Unique brick id; its marker number unless `marker` is given.",
                         },
                         "position": _vec3(
                             "Geometric centre of the brick, world ENU frame, metres.", SITE_MAX_HEIGHT_M
@@ -146,6 +147,13 @@ def blueprint_schema() -> dict[str, Any]:
                             "Approximate centre of the brick at its pickup site (required unless placed).",
                             MAX_PICKUP_HEIGHT_M,
                         ),
+                        "marker": {
+                            "type": "integer",
+                            "minimum": 0,
+                            "maximum": max(ARUCO_DICTIONARY_SIZES.values()) // 2 - 1,
+                            "description": "Marker number m (ArUco ids 2m, 2m+1; default: the id), reused only "
+                            "by bricks no camera sees together.",
+                        },
                     },
                 },
             },

@@ -36,8 +36,8 @@ def plan_command(
     planner_only: bool = typer.Option(
         False,
         "--planner-only",
-        help="Plan a wall larger than any ArUco dictionary can number (over 1160 "
-        "bricks): skips the marker-id check, for planner studies; such a wall cannot be flown.",
+        help="Plan a wall whose marker ids do not fit its dictionary (over 1160 bricks without `marker` "
+        "numbers): skips the marker checks, for planner studies; such a wall cannot be flown.",
     ),
 ) -> None:
     """Plan a wall: tasks, dependency graph G^d, conflict graph G^c (paper Section III)."""

@@ -59,7 +59,9 @@ def sim(
         _DEFAULTS.seed, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")
     ),
     camera: str = typer.Option(
-        _DEFAULTS.camera, "--camera", help="geometric | render (images + ArUco, slower)."
+        _DEFAULTS.camera,
+        "--camera",
+        help="geometric | render (images + ArUco, slower) | mixed (images + ArUco over the pickups of 10 bricks).",
     ),
     fault: list[str] = typer.Option(
         [],

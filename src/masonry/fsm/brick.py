@@ -12,15 +12,16 @@ from collections.abc import Callable
 import numpy as np
 
 from masonry.fsm.base import Vec3
+from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
-from masonry.geometry import R_world_body, wrap_angle_rad
-from masonry.perception.estimation import EstimatorConfig, PoseWindow, estimate_brick_pose
-from masonry.perception.types import TagPose
+from masonry.geometry import wrap_angle_rad
+from masonry.marker_reuse import identify_radius_m
+from masonry.perception.estimation import EstimatorConfig, PoseWindow
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import Camera, ClearanceLink, Clock, FlightController, Gripper, MissionLink, Telemetry
 
@@ -71,6 +72,7 @@ class BrickUav(PutBack):
         self._est_config = EstimatorConfig(spacing_m=config.markers.spacing_m, up=(0.0, 0.0, 1.0))
         self.window = PoseWindow(size=config.window_size, sigma_tol_m=config.sigma_tol_m)
         self._T_body_cam = np.asarray(camera.T_body_cam, dtype=float)
+        self._sight_m = identify_radius_m(config.markers)  # a reused marker number is another brick beyond it
         # the rod descends on its unlocked ball joint: it hangs plumb however the UAV leans (masonry.fsm.tool)
         self.effector = Tool.at(config.airframe.effector_offset_m, plumb=True)
         self._camera_align = CameraAlign()
@@ -233,37 +235,10 @@ class BrickUav(PutBack):
 
     def _fresh_estimate(self, tel: Telemetry) -> tuple[np.ndarray, float] | None:
         """The brick's top-face centre (world, m) and yaw as the camera sees it now, from ``tel``'s pose."""
-        frame = self.camera.read()
-        if frame is None:
-            return None
-        tags = frame.tags
-        if tags is None:
-            if frame.image is None:
-                return None
-            from masonry.perception.aruco import detect_tags
-
-            tags = tuple(detect_tags(frame.image, self.camera.intrinsics, self.config.markers))
-        id1, id2 = self.brick_task.marker_ids
-        tag1 = tag2 = None
-        for tag in tags:
-            if tag.marker_id == id1:
-                tag1 = tag
-            elif tag.marker_id == id2:
-                tag2 = tag
-        if tag1 is None and tag2 is None:
-            return None
-        roll, pitch, yaw = tel.attitude_rad
-        R_wb = R_world_body(roll, pitch, yaw)
-        R_wc = R_wb @ self._T_body_cam[:3, :3]
-        t_wc = np.asarray(tel.position_m, dtype=float) + R_wb @ self._T_body_cam[:3, 3]
-
-        def to_world(tag: TagPose | None) -> TagPose | None:
-            if tag is None:
-                return None
-            return TagPose(tag.marker_id, R_wc @ np.asarray(tag.position_m) + t_wc, R_wc @ tag.R_cam_marker)
-
-        est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
-        return None if est is None else (np.asarray(est.center_m, dtype=float), float(est.yaw_rad))
+        cfg = self.config
+        return sight_brick(
+            self.camera, self._T_body_cam, tel, self.brick_task, cfg.markers, self._est_config, self._sight_m
+        )
 
     def enter_pickup_align(self, *args: object, **kwargs: object) -> None:
         tel = self._tel

@@ -6,10 +6,9 @@ to idle UAVs through the dispatcher, journal every assignment, completion, failu
 assignments, and send its own heartbeat. The loop around it is thin (``masonry sim`` steps it in simulated
 time, ``masonry mission-control`` in wall time), so the same code runs in both.
 
-Airspace: a UAV setting off for a site asks for the column there (``ClearanceRequest``); mission control
-grants columns first come, first served, never two within ``column_radius_m`` of each other, or tells the UAV
-where to wait (:class:`~masonry.mission.airspace.ColumnClearance`), and frees a lost UAV's columns
-(docs/safety.md).
+Airspace: a UAV setting off for a site asks for the column there (``ClearanceRequest``); mission control grants
+columns first come, first served, never two within ``column_radius_m`` of each other, or tells the UAV where to
+wait (:class:`~masonry.mission.airspace.ColumnClearance`), and frees a lost UAV's columns (docs/safety.md).
 
 Results (docs/security.md): a completion counts only if it comes from the UAV the task is assigned to, for the
 current attempt, and no sooner after the assignment than ``min_fraction`` of the least time the task can take
@@ -318,6 +317,7 @@ class MissionControl:
         self.history.sort(key=lambda a: (a.start_s, a.task_id))
         self.resumed_at_s = state.last_time_s
         self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
+        self.waits.restore(state.meta)
         # what the previous run may have built: done tasks, and every task it ever assigned
         self._raise_layers([*done, *attempts, *state.in_progress])
 

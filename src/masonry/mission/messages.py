@@ -24,12 +24,10 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`CommandAnswer` mission control -> operator: that command accepted, or refused with a reason.
 - :class:`Recall` mission control -> UAV: drop your task (it is reported failed, ``reason``), fly home and land.
 
-Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
-so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
-``wall`` to the assignment and ``attempt`` to the result (docs/security.md). Within 3, a result may carry
-``phases`` (:class:`~masonry.ports.PhaseTimes`; optional both ways). 4 adds the operator's messages (a version-3
-UAV would reject a recall and fly on). Within 4, a brick task may carry ``spare`` (the spare picked in its
-place; sent only for a blueprint with spares, docs/blueprint-format.md).
+Version history: 1 the first five messages; 2 the clearance messages (a mixed pair refuses each other's messages
+at once instead of half-working); 3 ``wall`` in the assignment, ``attempt`` in the result (docs/security.md);
+within 3, optional both ways: a result's ``phases``, a brick task's ``marker`` (a big wall's reused number); 4 the
+operator's messages (a version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spare``.
 """
 
 from __future__ import annotations
@@ -230,6 +228,7 @@ def task_to_dict(task: Task) -> dict[str, Any]:
             "pickup_m": _vec(task.pickup_m),
             "size_m": _vec(task.size_m),
             **({} if task.spare is None else {"spare": task.spare}),
+            **({} if task.marker is None else {"marker": task.marker}),
         }
     return {
         "kind": "adhesion",
@@ -450,6 +449,7 @@ def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
             pickup_m=f.vec("pickup_m", optional=True),
             size_m=f.vec("size_m"),
             spare=None if data.get("spare") is None else f.int_("spare"),
+            marker=f.int_("marker") if "marker" in data else None,
         )
     if kind == "adhesion":
         return AdhesionTask(

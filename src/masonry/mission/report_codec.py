@@ -45,7 +45,7 @@ def _row_out(value: Any) -> dict[str, Any]:
         if isinstance(v, PhaseTimes):
             out[f.name] = v.as_dict()
         elif isinstance(v, tuple) and v and all(isinstance(w, TaskWait) for w in v):
-            out[f.name] = [_wait_out(w) for w in v]  # a task's waits (TaskReport.waits)
+            out[f.name] = [wait_record(w) for w in v]  # a task's waits (TaskReport.waits)
         elif isinstance(v, tuple) and all(isinstance(a, AttemptReport) for a in v):
             out[f.name] = [_row_out(a) for a in v]  # a task's attempts (TaskReport.tries)
         else:
@@ -68,7 +68,7 @@ def _row_in(cls: Any, data: Any) -> Any:
         # after the take-off), so all of waiting_s was in the air
         kw["waiting_air_s"] = kw.get("waiting_s", 0.0)
     if cls is TaskReport and "waits" in kw:
-        kw["waits"] = _waits_in(kw["waits"])
+        kw["waits"] = waits_from_record(kw["waits"])
     if cls is TaskReport and "tries" in kw:
         tries = kw["tries"]
         if not isinstance(tries, list):
@@ -80,7 +80,8 @@ def _row_in(cls: Any, data: Any) -> Any:
         raise MissionError(f"a {cls.__name__} record is incomplete: {exc}") from None
 
 
-def _wait_out(w: TaskWait) -> dict[str, object]:
+def wait_record(w: TaskWait) -> dict[str, object]:
+    """One wait as a JSON record (the log's report record, the journal: :func:`waits_from_record` reads it)."""
     return {
         "task_id": w.task_id,
         "cause": dataclasses.asdict(w.cause),
@@ -89,7 +90,8 @@ def _wait_out(w: TaskWait) -> dict[str, object]:
     }
 
 
-def _waits_in(data: object) -> tuple[TaskWait, ...]:
+def waits_from_record(data: object) -> tuple[TaskWait, ...]:
+    """The waits :func:`wait_record` wrote (raises MissionError: not such a list)."""
     if not isinstance(data, list):
         raise MissionError(f"a TaskReport record's waits must be a list, got {type(data).__name__}")
     try:

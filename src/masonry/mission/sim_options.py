@@ -26,8 +26,9 @@ from masonry.sim.vehicle_config import vehicle_preset
 
 __all__ = ["CAMERA_MODES", "SimFields", "SimOptions", "with_fields"]
 
-#: How the simulated camera sees the markers: from the camera model, or rendered images and ArUco.
-CAMERA_MODES = ("geometric", "render")
+#: How the simulated camera sees the markers: from the camera model, rendered images and ArUco, or the camera
+#: model with rendered images over the pickups of a sample of bricks (``mixed``).
+CAMERA_MODES = ("geometric", "render", "mixed")
 
 
 @dataclass(frozen=True)
@@ -40,7 +41,8 @@ class SimOptions:
         policy: dispatcher priority: ``fifo``, ``critical-path``, ``nearest``, or ``schedule`` (follow the
             offline schedule given beside the options).
         seed: seed of the world (brick offsets, noise, faults).
-        camera: ``geometric`` (marker observations from the camera model) or ``render`` (images + ArUco).
+        camera: ``geometric`` (marker observations from the camera model), ``render`` (images + ArUco) or
+            ``mixed`` (images + ArUco over the pickups of 10 sampled bricks).
         journal_path: SQLite journal to write (and, with ``resume``, to continue from).
         resume: continue the mission recorded in ``journal_path``: its done tasks stay done, its clock
             continues, the report covers the whole mission.
@@ -99,7 +101,7 @@ class SimOptions:
             )
         if self.camera not in CAMERA_MODES:
             raise InputError(
-                f"`camera` must be geometric or render, got {self.camera!r}", options=("camera",)
+                f"`camera` must be geometric, render or mixed, got {self.camera!r}", options=("camera",)
             )
         if not (self.dt_s > 0 and math.isfinite(self.dt_s)):
             raise InputError(f"dt_s must be > 0, got {self.dt_s!r}")

@@ -16,19 +16,28 @@ airspace answering them feeds the same record. Pure: no I/O, no clock.
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Mapping
 from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING
 
+from masonry.errors import MissionError
 from masonry.mission.airspace import ON_PAD_Z_M
-from masonry.mission.waits import AIR, GROUND, WaitCause, WaitLog
+from masonry.mission.report_codec import wait_record, waits_from_record
+from masonry.mission.waits import AIR, GROUND, TaskWait, WaitCause, WaitLog
 from masonry.planner.tasks import Plan
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
+    from masonry.mission.journal import Journal
 
 Vec3 = tuple[float, float, float]
 
 _OPERATOR = WaitCause("operator")
+
+
+#: Journal meta keys of the waits: ``waits/<task id>`` -> the task's closed waits (:func:`wait_record` each).
+WAITS_META_PREFIX = "waits/"
 
 
 class WaitWatch:
@@ -36,6 +45,8 @@ class WaitWatch:
 
     def __init__(self, plan: Plan, reservation: str) -> None:
         self.log = WaitLog()
+        self._journal: Journal | None = None
+        self._journaled: dict[str, list[dict[str, object]]] = {}  # task id -> its closed waits, as journaled
         self._order = {t.id: i for i, t in enumerate(plan.tasks)}
         self._role = {t.id: t.kind for t in plan.tasks}
         self._task_rule = reservation == "task"
@@ -62,8 +73,31 @@ class WaitWatch:
         self._refused: dict[str, tuple[str, Vec3]] = {}
 
     # -- the tick --------------------------------------------------------------------------------------
+    def restore(self, meta: Mapping[str, object]) -> None:
+        """The waits a previous run journaled (before a resume): its report lists them too (a wait still open at
+        the crash was not journaled: it ended there, and the resumed run sees its cause again)."""
+        for key, value in meta.items():
+            if key.startswith(WAITS_META_PREFIX):
+                try:
+                    waits = waits_from_record(value)
+                except MissionError as exc:
+                    logging.getLogger(__name__).warning("ignoring the journaled %s: %s", key, exc)
+                    continue
+                self.log.closed.extend(waits)
+                self._journaled[key[len(WAITS_META_PREFIX) :]] = [wait_record(w) for w in waits]
+        self.log.closed.sort(key=lambda w: (w.from_s, w.task_id))
+
+    def _keep(self, w: TaskWait) -> None:
+        """A wait closed: the task's closed waits go to the journal (``waits/<task id>``)."""
+        mine = self._journaled.setdefault(w.task_id, [])
+        mine.append(wait_record(w))
+        if self._journal is not None:
+            self._journal.set_meta(f"{WAITS_META_PREFIX}{w.task_id}", mine)
+
     def observe(self, mc: MissionControl, now_s: float) -> None:
         """Mission control's state at ``now_s``: the causes that changed since the last call go to the log."""
+        if self.log.on_close is None:
+            self._journal, self.log.on_close = mc.journal, self._keep
         d = mc.dispatcher
         wind = mc.wind_limit
         columns = mc.columns

@@ -12,7 +12,7 @@ Pure: no I/O, no clock (times are passed in).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 #: What a task may wait for (``what`` of a wait in the JSON report, docs/mission.md "Why each task waited").
@@ -92,6 +92,8 @@ class WaitLog:
     def __init__(self) -> None:
         self._open: dict[str, tuple[WaitCause, float]] = {}  # task id -> (its cause now, since when)
         self.closed: list[TaskWait] = []
+        #: told each interval as it closes (mission control journals them, for a resumed mission's report)
+        self.on_close: Callable[[TaskWait], None] | None = None
 
     @property
     def current(self) -> Mapping[str, WaitCause]:
@@ -108,6 +110,8 @@ class WaitLog:
             del self._open[task_id]
             if now_s > was[1]:  # a cause that held for no time leaves no interval
                 self.closed.append(TaskWait(task_id, was[0], was[1], now_s - was[1]))
+                if self.on_close is not None:
+                    self.on_close(self.closed[-1])
         if cause is not None:
             self._open[task_id] = (cause, now_s)
 

@@ -45,12 +45,13 @@ _SCALE = float(1 << _SHIFT)
 
 @dataclass(frozen=True)
 class RenderedBrick:
-    """A brick to draw: id (its markers are 2*id and 2*id+1), centre of its box in the world, yaw about z."""
+    """A brick to draw: id (its markers are 2m and 2m+1, m = ``marker`` or the id), centre of its box, yaw about z."""
 
     brick_id: int
     position_m: tuple[float, float, float]
     yaw_rad: float
     size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
+    marker: int | None = None  # a big wall's reused marker number (masonry.marker_reuse)
 
 
 def render_frame(
@@ -372,7 +373,8 @@ def _draw_brick(
         return
     shade_top = _shade(R_wb[:, 2])
     center_top = np.asarray(b.position_m, dtype=float) + R_wb[:, 2] * (b.size_m[2] / 2.0)
-    for marker_id, along in ((2 * b.brick_id, 0.5), (2 * b.brick_id + 1, -0.5)):
+    m = b.brick_id if b.marker is None else b.marker
+    for marker_id, along in ((2 * m, 0.5), (2 * m + 1, -0.5)):
         if marker_id in hidden:
             continue
         _draw_marker(

@@ -109,6 +109,7 @@ def plan_graphs(blueprint: Blueprint, *, check_marker_ids: bool = True) -> PlanG
             yaw_rad=b.yaw_rad,
             pickup_m=b.pickup_m,
             size_m=b.size_m,
+            marker=b.marker,
         )
         for b in bricks
     ]

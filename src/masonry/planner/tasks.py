@@ -26,6 +26,8 @@ class BrickTask:
     yaw_rad: float
     pickup_m: tuple[float, float, float] | None
     size_m: tuple[float, float, float] = DEFAULT_BRICK_SIZE_M
+    #: the brick's marker number when the blueprint reuses numbers (ArUco ids 2m, 2m+1); None: ``brick``
+    marker: int | None = None
 
     kind: TaskKind = "brick"
     #: the spare picked up in place of brick ``brick`` (its id; ``pickup_m`` is then the spare's), or None
@@ -33,8 +35,9 @@ class BrickTask:
 
     @property
     def marker_ids(self) -> tuple[int, int]:
-        """The ArUco ids on the brick to pick up: 2k and 2k+1 of the brick's id, or of the spare's."""
-        k = self.brick if self.spare is None else self.spare
+        """The ArUco ids the camera looks for on the brick to pick up: 2k and 2k+1 of the spare's id when a spare
+        stands in, else of the brick's marker number (its id unless the blueprint reuses numbers)."""
+        k = self.spare if self.spare is not None else self.brick if self.marker is None else self.marker
         return (2 * k, 2 * k + 1)
 
     @property

@@ -82,7 +82,7 @@ def marker_layout(
     n = len(bricks)
     ids: list[int] = []
     for b in bricks:
-        ids.extend((2 * b.id, 2 * b.id + 1))
+        ids.extend(b.blueprint.marker_ids())
     P = np.array([_marker_points(b, markers) for b in bricks], dtype=float).reshape(n, 10, 3)
     return np.array(ids, dtype=int), P[:, 0:2].reshape(2 * n, 3), P[:, 2:10].reshape(2 * n, 4, 3)
 

@@ -33,6 +33,7 @@ from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
 from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
+from masonry.sim.render_camera import over_sampled_pickup, render_sample, rendered_frame
 from masonry.sim.spares import lay_out_spares
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
 from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
@@ -40,7 +41,7 @@ from masonry.sim.wind import WindField
 
 __all__ = ["CameraMode", "SimUav", "World", "WorldConfig"]
 
-CameraMode = Literal["geometric", "render"]
+CameraMode = Literal["geometric", "render", "mixed"]
 
 #: A tool (or a carried brick) within this height above the highest brick top is checked for contact.
 _CONTACT_TOL_M = 0.06
@@ -178,7 +179,8 @@ class World:
     Args:
         blueprint: the wall; its bricks are laid out in the world (its fleet is not added: see ``add_fleet``).
         seed: one seed for everything random in the world (>= 0).
-        camera: ``"geometric"`` (marker poses from the camera model plus noise) or ``"render"`` (synthetic images).
+        camera: ``"geometric"`` (marker poses from the camera model plus noise), ``"render"`` (synthetic images)
+            or ``"mixed"`` (images over a sample of the pickups: :mod:`masonry.sim.render_camera`).
         faults: injected faults.
         airframe: tool and camera placement on the UAVs.
         vehicle: multirotor model parameters.
@@ -202,8 +204,8 @@ class World:
         start_s: float = 0.0,
         vehicle_model: VehicleModel = sim_vehicle,
     ) -> None:
-        if camera not in ("geometric", "render"):
-            raise InputError(f"camera mode must be 'geometric' or 'render', got {camera!r}")
+        if camera not in ("geometric", "render", "mixed"):
+            raise InputError(f"camera mode must be 'geometric', 'render' or 'mixed', got {camera!r}")
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
             raise InputError(f"seed must be an integer >= 0, got {seed!r}")
         self.blueprint = blueprint
@@ -223,6 +225,9 @@ class World:
         self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
         self._carriers: list[SimUav] = []
+        self.drawn_pickups = render_sample(blueprint) if camera == "mixed" else frozenset()  # mixed mode
+        self.picks: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every grasp
+        self.rendered_frames = 0
         self._lay_out_bricks()
 
     def __repr__(self) -> str:
@@ -450,6 +455,7 @@ class World:
         dx, dy = (tx - ex) * self.config.guide_residual, (ty - ey) * self.config.guide_residual
         uav._carry_offset = (c * dx + s * dy, -s * dx + c * dy, best.yaw_rad - yaw)
         self.field.pick(best.id, uav.name)
+        self.picks.append((self.clock.now_s(), uav.name, best.id))
         uav.carried_brick = best.id
         uav._attempt = None
         self._carry_pose(uav, best)
@@ -506,6 +512,10 @@ class World:
                 found.append(self.field.bricks[other.carried_brick])
         return found
 
+    def _renders_at(self, T_wc: np.ndarray) -> bool:
+        """``mixed`` mode: whether this camera is over a sampled brick still waiting at its pickup."""
+        return over_sampled_pickup(self.field, self.drawn_pickups, float(T_wc[0, 3]), float(T_wc[1, 3]))
+
     def _camera_frame(self, uav: SimUav) -> CameraFrame | None:
         if uav.failed:
             return None
@@ -517,23 +527,14 @@ class World:
         dropped = faults.dropout > 0.0 and rng.random() < faults.dropout
         hidden: set[int] = set()
         if faults.occlusion > 0.0 and rng.random() < faults.occlusion:
-            hidden = {2 * b.id + int(rng.integers(2)) for b in bricks}
-        if self.camera_mode == "render":
-            from masonry.perception.render import RenderedBrick, render_frame
-
+            hidden = {b.blueprint.marker_ids()[int(rng.integers(2))] for b in bricks}
+        mode = self.camera_mode
+        if mode == "render" or (mode == "mixed" and self._renders_at(T_wc)):
             if dropped:
-                hidden = {m for b in bricks for m in (2 * b.id, 2 * b.id + 1)}
-            image = render_frame(
-                self.camera_config.intrinsics,
-                T_wc,
-                [RenderedBrick(b.id, b.position_m, b.yaw_rad, b.size_m) for b in bricks],
-                self.blueprint.markers,
-                rng=rng,
-                blur_sigma_px=self.camera_config.blur_sigma_px,
-                noise_sigma=self.camera_config.noise_sigma,
-                hidden_markers=frozenset(hidden),
-            )
-            return CameraFrame(time_s=now, image=image)
+                hidden = {m for b in bricks for m in b.blueprint.marker_ids()}
+            markers, config = self.blueprint.markers, self.camera_config
+            self.rendered_frames += 1
+            return rendered_frame(now, T_wc, bricks, markers, config, rng, hidden)
         if dropped:
             return CameraFrame(time_s=now, tags=())
         occluder = self.field.bricks[uav.carried_brick] if uav.carried_brick is not None else None
