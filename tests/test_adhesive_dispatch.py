@@ -231,10 +231,10 @@ def test_an_expired_bead_waits_for_a_free_brick_uav() -> None:
 
 
 class _Control:
-    """What GlueGate asks of mission control: its attempts, journal, events, recalls and airspace."""
+    """What GlueGate asks of mission control: its attempts, journal, events, recalls, airspace and UAVs."""
 
     def __init__(self) -> None:
-        from masonry.mission.control import Attempt
+        from masonry.mission.control import Attempt, UavLink
 
         self.history = [Attempt("A0", "glue-1", 1, 0.0, end_s=15.0, status="done")]
         self.journal = None
@@ -242,6 +242,7 @@ class _Control:
         self.touched = 0
         self.columns = self
         self.events: list[tuple[tuple[object, ...], dict[str, object]]] = []
+        self.uavs: dict[str, UavLink] = {}
 
     def touch(self) -> None:
         self.touched += 1
@@ -277,8 +278,10 @@ def test_the_gate_tells_the_operator_of_each_bead_waiting_for_its_brick() -> Non
     assert len(mc.events) == 1
 
 
-def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alone() -> None:
-    from masonry.mission.glue import glue_gate
+def test_the_gate_expires_a_bead_keeps_its_brick_waiting_then_recalls_it_and_leaves_a_stuck_brick_alone() -> (
+    None
+):
+    from masonry.mission.glue import RECALL_AFTER_EXPIRIES, glue_gate
     from masonry.mission.sites import SiteIntervals
     from masonry.timing import DEFAULT_TIMING
 
@@ -298,10 +301,20 @@ def test_the_gate_expires_a_bead_recalls_its_brick_and_leaves_a_stuck_brick_alon
         news = gate.step(mc, 60.0)
         if stuck:
             assert not news and "A0" in d.done and mc.recalls == []
-        else:
-            assert news and "A0" not in d.done and mc.recalls == [("brick-1", EXPIRED_REASON)]
-            assert (mc.history[0].status, mc.history[0].reason) == ("failed", EXPIRED_REASON)
-            assert gate.expiries == [(60.0, "A0", "B0")]
+            continue
+        # the bead is sprayed again; the brick's UAV keeps its brick and waits (no recall yet)
+        assert news and "A0" not in d.done and mc.recalls == []
+        assert (mc.history[0].status, mc.history[0].reason) == ("failed", EXPIRED_REASON)
+        assert gate.expiries == [(60.0, "A0", "B0")]
+        t = 60.0
+        for n in range(2, RECALL_AFTER_EXPIRIES + 1):  # sprayed again and again, and expiring each time
+            d.assign()
+            d.complete("A0")
+            gate.completed("A0", t)
+            t += 60.0
+            assert gate.step(mc, t)
+            assert mc.recalls == ([] if n < RECALL_AFTER_EXPIRIES else [("brick-1", EXPIRED_REASON)])
+        assert len(gate.expiries) == RECALL_AFTER_EXPIRIES
 
 
 def test_the_log_keeps_the_glue_and_the_gantt_draws_the_open_windows(tmp_path: Path) -> None:

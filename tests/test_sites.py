@@ -105,3 +105,30 @@ def test_the_paper_reservation_keeps_conflicting_tasks_apart_for_their_whole_dur
         if a in tasks and b in tasks:
             ta, tb = tasks[a], tasks[b]
             assert not _overlap((ta.start_s, ta.end_s), (tb.start_s, tb.end_s))
+
+
+def test_a_uav_waiting_for_a_bead_holds_clear_of_it():
+    """A brick UAV that waits for the bead under its brick does not hold over that bead, whose sprayer had not
+    asked yet (it did, on the 12 m wall at 300 s of open time, until hold patience broke the wait)."""
+    from masonry.mission.airspace_state import hold_candidates
+    from masonry.planner.tasks import AdhesionTask
+    from masonry.segments import point_segment_m
+
+    a0 = AdhesionTask("A0", 9, 1, (0.9, 0.0, 0.15), (1.6, 0.0, 0.15), 0.7)
+    b1 = BrickTask("B1", 1, False, (1.2, 0.3, 0.3), 0.0, (0.5, -3.0, 0.05))
+    plan = Plan((a0, b1), (("B1", "A0"),), ())
+    done: set[str] = set()
+    s = SiteIntervals(plan, {"brick": "B1", "glue": "A0"}.get, exclusive=True, is_done=done.__contains__)
+    assert s.waited_on("brick") == (((0.9, 0.0), (1.6, 0.0)),)
+    assert s.waited_on("glue") == () and s.waited_on("idle") == ()
+    site = b1.position_m
+    free = hold_candidates(site, (), 0.8)
+    clear = hold_candidates(site, (), 0.8, waited_on=s.waited_on("brick"))
+
+    def over_bead(p: tuple[float, float, float]) -> bool:
+        return point_segment_m((p[0], p[1]), (0.9, 0.0), (1.6, 0.0)) < 1.1 * 0.8
+
+    assert any(over_bead(p) for p in free), "without the rule some hold points lie over the bead"
+    assert clear and not any(over_bead(p) for p in clear)
+    done.add("A0")  # sprayed: nothing to wait for
+    assert s.waited_on("brick") == ()

@@ -736,13 +736,13 @@ class ColumnClearance:
         start = w.position if w.position is not None else w.site
         others = [o for n, o in self._uavs.items() if n != uav]
         pads = [(h[0], h[1]) for n, h in self._homes.items() if n != uav]
-        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads)
+        waited = () if self.gate is None else self.gate.waited_on(uav)
+        candidates = hold_candidates(w.site, others, self.wait_radius_m, pads, waited)
         if self.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
             need = AIRSPACE_MARGIN_M + self.zone_slack_m
             candidates = [h for h in candidates if self.fence.contains(h[0], h[1], need)]
-        candidates = candidates[:6]
         for k in range(self.max_layers):
-            for hold in candidates:
+            for hold in candidates[:6]:
                 vols = self._flight_volumes(start, None, w.top_m, k, (hold[0], hold[1]))
                 if self._fits(uav, vols):
                     self._take(u, vols)

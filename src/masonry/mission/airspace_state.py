@@ -89,15 +89,21 @@ class UavAirspace:
 
 
 def hold_candidates(
-    site: Vec3, others: Iterable[UavAirspace], radius_m: float, pads: Iterable[XY] = ()
+    site: Vec3,
+    others: Iterable[UavAirspace],
+    radius_m: float,
+    pads: Iterable[XY] = (),
+    waited_on: Iterable[tuple[XY, XY]] = (),
 ) -> list[Vec3]:
     """Hold points near ``site`` for a UAV that must wait (:func:`masonry.mission.volumes.hold_points`), kept
     ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, from wherever they climb, hover or
     work, and from their ``pads``: a UAV waiting there must be able to leave vertically, and to come home,
     without passing the hold point (else the two could wait for each other: a UAV holding beside another's pad
-    blocked the column that one needed to land, while it waited for that one's zone)."""
+    blocked the column that one needed to land, while it waited for that one's zone), and from the work the
+    waiting UAV's task waits on (``waited_on``: a brick UAV held over the bead it waits for, whose sprayer had
+    not asked yet, blocked that sprayer until hold patience broke the wait)."""
     keep_out: list[XY] = list(pads)
-    spans: list[tuple[XY, XY]] = []
+    spans: list[tuple[XY, XY]] = list(waited_on)
     for o in others:
         if o.zone is not None:
             keep_out.extend(v.b for v in o.volumes if v.kind == "zone")

@@ -5,11 +5,13 @@ task's completion) and each glued brick placed, and:
 
 * is the airspace's :class:`~masonry.mission.sites.SiteGate` in front of the site intervals: a brick's flight
   down to its site is granted only when every bead under it is done and will still be open when the brick
-  presses on it (its age plus :attr:`margin_s`, the placing descent and release, within the open time);
+  presses on it (its age, plus the flight from where the UAV is to the site, plus :attr:`margin_s`, the placing
+  descent and release, within the open time);
 * every tick (:meth:`step`): a bead whose brick is not at its site yet and that would no longer be open by then
   has *expired*: its done attempt is marked failed (reason :data:`EXPIRED_REASON`), the brick's UAV, if it has
-  one, is recalled (it may hover by the column the re-spray needs; its attempt fails with the same reason and
-  counts, so a brick that can never come in time ends stuck instead of looping), and the dispatcher sprays the
+  one, keeps its brick and waits (at a hold point clear of the beads it waits for); at the
+  :data:`RECALL_AFTER_EXPIRIES`-th expiry in one attempt it is recalled (its attempt fails with the same reason and
+  counts, so a brick that can never come in time ends stuck instead of looping); the dispatcher sprays the
   bead again (``reopen``): never is a brick placed on expired glue, whatever delayed it (a fault, a lost UAV, a
   pause: paused time counts against the open time like any other);
 * tells the dispatcher when a brick's glue has cured (``cured``), so beads on top of it may be laid;
@@ -39,6 +41,10 @@ Vec3 = tuple[float, float, float]
 EXPIRED_REASON = "open time expired"
 #: Slack added to the placing descent and release when judging whether a bead will still be open (s).
 MARGIN_SLACK_S = 12.0
+#: Expiries of a brick's beads while one attempt of it is carried before its UAV is recalled (the attempt fails
+#: and counts: a brick that can never come in time ends stuck instead of looping). Its UAV waits at a hold point
+#: clear of the beads it waits for (``SiteGate.waited_on``), so the re-sprays need not move it before that.
+RECALL_AFTER_EXPIRIES = 3
 
 
 @dataclass
@@ -49,6 +55,10 @@ class GlueGate:
     dispatcher: JustInTime
     sites: SiteIntervals
     margin_s: float
+    #: the flight down to a site from where its UAV is: horizontally at this speed (m/s) ...
+    cruise_speed_mps: float = 1.0
+    #: ... and vertically at this one (m/s)
+    vertical_speed_mps: float = 0.4
     #: bead (adhesion task id) -> when it was sprayed (its completion, s)
     sprayed_at_s: dict[str, float] = field(default_factory=dict)
     #: brick task id -> when its glue has cured (s)
@@ -69,8 +79,9 @@ class GlueGate:
         self._work = {t.id: work_point_m(t) for t in self.plan.tasks}
         self.now_s = 0.0
         self._changed = False  # a bead was sprayed: the site gate's answers changed
-        self._recalled: dict[str, int] = {}  # brick -> the attempt whose UAV was recalled
+        self._expired_in: dict[tuple[str, int], int] = {}  # (brick, attempt) -> its beads' expiries meanwhile
         self._untold: list[str] = []  # beads sprayed whose ``glue`` event is not emitted yet
+        self._where: dict[str, Vec3] = {}  # UAV -> where it was at the last tick
 
     # -- the site gate ---------------------------------------------------------------------------------------
     def may_enter(self, uav: str, site_m: Vec3) -> bool:
@@ -83,15 +94,30 @@ class GlueGate:
         w = self._work[tid]
         if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) >= AT_SITE_M:
             return True  # a flight elsewhere (the pallet)
-        return all(self._fresh(a, lag) for a, lag in self._open[tid])
+        lead = self._lead_s(uav, site_m)
+        return all(self._fresh(a, lag, lead) for a, lag in self._open[tid])
+
+    def _lead_s(self, uav: str, site_m: Vec3) -> float:
+        """The flight from where ``uav`` is (at the last tick) to ``site_m``, before its placing descent: a UAV
+        granted from a hold point presses its brick that much later (0 s: its position is not known)."""
+        p = self._where.get(uav)
+        if p is None:
+            return 0.0
+        across_m = math.hypot(site_m[0] - p[0], site_m[1] - p[1])
+        return across_m / self.cruise_speed_mps + abs(site_m[2] - p[2]) / self.vertical_speed_mps
 
     def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
         self.sites.entered(uav, site_m, now_s)
 
-    def _fresh(self, bead: str, open_time_s: float) -> bool:
+    def waited_on(self, uav: str) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
+        """The site intervals' answer: a bead sprayed again is a not-done prerequisite of its brick again."""
+        return self.sites.waited_on(uav)
+
+    def _fresh(self, bead: str, open_time_s: float, lead_s: float = 0.0) -> bool:
+        """Done, and still open when a brick that leaves in ``lead_s`` presses on it."""
         sprayed = self.sprayed_at_s.get(bead)
         done = bead in self.dispatcher.done
-        return done and sprayed is not None and self.now_s - sprayed + self.margin_s <= open_time_s
+        return done and sprayed is not None and self.now_s - sprayed + self.margin_s + lead_s <= open_time_s
 
     # -- mission control's events ------------------------------------------------------------------------------
     def completed(self, task_id: str, now_s: float) -> None:
@@ -112,6 +138,7 @@ class GlueGate:
     def step(self, mc: MissionControl, now_s: float) -> bool:
         """Cures that ended, beads that expired (sprayed again); True when the dispatcher has news."""
         self.now_s = now_s
+        self._where = {n: link.position_m for n, link in mc.uavs.items() if link.position_m is not None}
         news = False
         for brick, at in list(self.cures_at_s.items()):
             if now_s >= at:
@@ -150,11 +177,12 @@ class GlueGate:
         self.expiries.append((now_s, bead, brick))
         carrier = self.dispatcher.in_progress.get(brick)
         attempt = self.dispatcher.attempt_of(brick)
-        if carrier is not None and self._recalled.get(brick) != attempt:
-            # its UAV may hover by the bead's column, which the re-spray needs: it puts the brick back and
-            # comes again (an attempt of the brick: a brick that never makes it in time ends stuck, not looping)
-            self._recalled[brick] = attempt
-            mc.recall(carrier, now_s, EXPIRED_REASON)
+        if carrier is not None:
+            # its UAV keeps the brick and waits while the bead is sprayed again; after RECALL_AFTER_EXPIRIES it
+            # puts the brick back and comes again (an attempt: a brick never in time ends stuck, not looping)
+            n = self._expired_in[brick, attempt] = self._expired_in.get((brick, attempt), 0) + 1
+            if n == RECALL_AFTER_EXPIRIES:
+                mc.recall(carrier, now_s, EXPIRED_REASON)
         self.dispatcher.reopen(bead)
         for att in reversed(mc.history):
             if att.task_id == bead and att.status == "done":
@@ -188,7 +216,7 @@ def glue_gate(
         raise TypeError(
             f"a plan with deadlines needs a just-in-time dispatcher, not {type(dispatcher).__name__}"
         )
-    return GlueGate(plan, dispatcher, sites, margin)
+    return GlueGate(plan, dispatcher, sites, margin, timing.cruise_speed_mps, timing.vertical_speed_mps)
 
 
-__all__ = ["EXPIRED_REASON", "MARGIN_SLACK_S", "GlueGate", "glue_gate"]
+__all__ = ["EXPIRED_REASON", "MARGIN_SLACK_S", "RECALL_AFTER_EXPIRIES", "GlueGate", "glue_gate"]

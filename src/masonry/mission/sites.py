@@ -21,6 +21,7 @@ from typing import Any, Protocol
 from masonry.planner.tasks import BrickTask, Plan, Task
 
 Vec3 = tuple[float, float, float]
+XY = tuple[float, float]
 
 #: A flight to within this (horizontally) of a task's work point goes to its site (pickups and homes are
 #: metres away: validation keeps pads 1 m from the wall, generated pallets are r_c + 1 m from it).
@@ -33,6 +34,14 @@ def work_point_m(task: Task) -> Vec3:
     return (float(p[0]), float(p[1]), float(p[2]))
 
 
+def work_span_m(task: Task) -> tuple[XY, XY]:
+    """Where a task's UAV works, seen from above: a brick's drop-off (a point), an adhesion segment."""
+    if isinstance(task, BrickTask):
+        p = (float(task.position_m[0]), float(task.position_m[1]))
+        return p, p
+    return (float(task.start_m[0]), float(task.start_m[1])), (float(task.end_m[0]), float(task.end_m[1]))
+
+
 class SiteGate(Protocol):
     """Who else decides whether a UAV may come down at a site (mission control's site intervals: conflicting
     tasks never work at their sites at once, ``--reservation site``)."""
@@ -43,6 +52,11 @@ class SiteGate(Protocol):
 
     def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
         """``uav`` was granted its flight down to ``site_m`` at ``now_s``."""
+        ...
+
+    def waited_on(self, uav: str) -> tuple[tuple[XY, XY], ...]:
+        """Where the not-done tasks ``uav``'s task waits on are worked (each a span, start to end): a UAV that
+        waits for them must not hold over them, or their UAVs would wait for it in turn."""
         ...
 
 
@@ -80,6 +94,7 @@ class SiteIntervals:
     ) -> None:
         self._tasks = {t.id: t for t in plan.tasks}
         self._work = {t.id: work_point_m(t) for t in plan.tasks}
+        self._span = {t.id: work_span_m(t) for t in plan.tasks}
         self._neighbours: dict[str, set[str]] = {t.id: set() for t in plan.tasks}
         for a, b in plan.conflicts:
             self._neighbours[a].add(b)
@@ -114,6 +129,14 @@ class SiteIntervals:
             return False
         done = self._is_done
         return done is None or all(done(p) for p in self._prerequisites.get(tid, ()))
+
+    def waited_on(self, uav: str) -> tuple[tuple[XY, XY], ...]:
+        """The work spans of the prerequisites of ``uav``'s task that are not done (:class:`SiteGate`)."""
+        tid = self._task_of(uav)
+        if tid is None:
+            return ()
+        done = self._is_done
+        return tuple(self._span[p] for p in self._prerequisites.get(tid, ()) if done is None or not done(p))
 
     def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
         """``uav``'s flight down to ``site_m`` was granted: if that is its task's site, its visit starts."""
@@ -197,4 +220,5 @@ __all__ = [
     "SiteVisit",
     "journaled_visits",
     "work_point_m",
+    "work_span_m",
 ]
