@@ -1,14 +1,18 @@
 """The fleet a simulated mission flies: the blueprint's, or one of other sizes per role (``--brick-uavs``,
-``--adhesion-uavs``), with homes for the UAVs it adds that pass the blueprint's validation. Pure.
+``--adhesion-uavs``), with homes for the UAVs it adds that pass the blueprint's validation; the tuning its machines fly with. Pure.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 from masonry.blueprint import Blueprint, UavSpec, validate_blueprint
 from masonry.errors import BlueprintError, InputError
+
+if TYPE_CHECKING:
+    from masonry.fsm.config import UavConfig
 
 
 def with_fleet(blueprint: Blueprint, fleet: tuple[UavSpec, ...]) -> Blueprint:
@@ -79,4 +83,19 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["fleet_for", "with_fleet"]
+def template_config(uav_config: UavConfig | None, vehicle: str, airspace: str) -> UavConfig | None:
+    """Every UAV's tuning: the one given, else a real autopilot's control preset (:mod:`masonry.fsm.tuning`),
+    else None (``UavConfig``'s defaults); with the ``table`` airspace, no hold patience (a UAV waits on its
+    stay, never given up for waiting)."""
+    if (uav_config is not None or vehicle == "ideal") and airspace != "table":
+        return uav_config
+    from masonry.fsm import UavConfig
+    from masonry.fsm.tuning import uav_settings
+
+    if uav_config is None:
+        tuning = uav_settings(vehicle) if vehicle != "ideal" else {}
+        uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **tuning)
+    return uav_config if airspace != "table" else dataclasses.replace(uav_config, hold_patience_s=None)
+
+
+__all__ = ["fleet_for", "template_config", "with_fleet"]

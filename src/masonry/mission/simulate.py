@@ -26,7 +26,7 @@ from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
 from masonry.mission.events import SAMPLE_PERIOD_S, EventSink
-from masonry.mission.fleet import fleet_for, with_fleet
+from masonry.mission.fleet import fleet_for, template_config, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.journal import open_mission_journal
@@ -39,9 +39,10 @@ from masonry.mission.measured import (
 )
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
+from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
-from masonry.mission.wind_limit import DEFAULT_MAX_WIND_MPS, WindLimit
+from masonry.mission.wind_limit import site_wind_limit as _wind_limit
 from masonry.planner import estimate_durations_s
 from masonry.planner import plan as make_plan
 from masonry.planner.bounds import min_durations_s
@@ -179,6 +180,7 @@ def simulate(
     schedule: OfflineSchedule | None = None,
     events_sink: EventSink | None = None,
     vehicle: str | None = None,
+    airspace: str = DEFAULT_AIRSPACE,
 ) -> MissionReport:
     """Run a whole mission in simulated time and report it: ``SimulatedMission.from_blueprint(...).run()``.
 
@@ -208,6 +210,7 @@ def simulate(
         reservation=reservation,
         schedule=schedule,
         events_sink=events_sink,
+        airspace=airspace,
     ).run()
 
 
@@ -369,6 +372,7 @@ class SimulatedMission:
         events_sink: EventSink | None = None,
         vehicle: str | None = None,
         max_wind_mps: float | Mapping[str, float] | None = None,
+        airspace: str = DEFAULT_AIRSPACE,
     ) -> SimulatedMission:
         """The mission ``masonry sim`` flies: the world, mission control and the fleet's machines for ``blueprint``.
 
@@ -412,6 +416,8 @@ class SimulatedMission:
                 this wall, fleet and reservation: :func:`masonry.mission.schedule_file.check_schedule`).
             events_sink: gets mission control's events (:mod:`masonry.mission.events`) and, every
                 ``SAMPLE_PERIOD_S``, each UAV's pose and battery as the world has them (a log, a live view).
+            airspace: ``columns`` (default) or ``table``: flights planned and reserved in a space-time table,
+                no hold patience (:mod:`masonry.mission.reserved`, docs/safety.md).
 
         The journal stores the fingerprint of the wall and the fleet (:func:`masonry.fingerprint.wall_digest`,
         :func:`~masonry.fingerprint.fleet_digest`) and, with every record, what the world measured (the
@@ -431,6 +437,10 @@ class SimulatedMission:
                 f"`reservation` must be one of {', '.join(RESERVATIONS)}, got {reservation!r}",
                 options=("reservation",),
             )
+        if airspace not in AIRSPACES:
+            raise InputError(
+                f"`airspace` must be one of {', '.join(AIRSPACES)}, got {airspace!r}", options=("airspace",)
+            )
         if policy == SCHEDULE_POLICY and schedule is None:
             raise InputError(
                 "`policy` schedule needs `schedule` (masonry schedule)", options=("policy", "schedule")
@@ -449,12 +459,7 @@ class SimulatedMission:
         wall0 = time.perf_counter()
         vehicle = vehicle_name(vehicle)
         vehicle_config = vehicle_preset(vehicle)
-        if uav_config is None and vehicle != "ideal":
-            # the tuning a real UAV on that autopilot flies with (masonry.fsm.tuning's preset of the same name)
-            from masonry.fsm import UavConfig
-            from masonry.fsm.tuning import uav_settings
-
-            uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **uav_settings(vehicle))
+        uav_config = template_config(uav_config, vehicle, airspace)
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
         fleet = fleet_for(blueprint, brick_uavs, adhesion_uavs)
@@ -530,6 +535,7 @@ class SimulatedMission:
                 fence=blueprint.site,
                 wind_limit=_wind_limit(faults, fleet, max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
+                airspace=airspace,
             )
             if state is not None:
                 mc.restore(state)
@@ -667,22 +673,6 @@ class SimulatedMission:
 
 
 __all__ = ["POLICIES", "SimulatedMission", "fleet_for", "simulate"]
-
-
-def _wind_limit(faults: Any, fleet: Sequence[Any], max_wind_mps: float | Mapping[str, float] | None) -> Any:
-    """Mission control's wind limit for the simulated site (None in still air): each UAV's ``max_wind_mps``
-    (one figure for all, or per name; default :data:`~masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`) against
-    the site's mean wind at 10 m."""
-
-    wind = faults.site_wind() if faults is not None else None
-    if wind is None or wind.calm:
-        return None
-    if isinstance(max_wind_mps, Mapping):
-        limits = {u.name: float(max_wind_mps.get(u.name, DEFAULT_MAX_WIND_MPS)) for u in fleet}
-    else:
-        limit = DEFAULT_MAX_WIND_MPS if max_wind_mps is None else float(max_wind_mps)
-        limits = {u.name: limit for u in fleet}
-    return WindLimit(limits, wind.speed_at)
 
 
 def _kept(state: Any, the_plan: Plan, fleet: Sequence[UavSpec]) -> dict[str, KeptCompletion]:

@@ -12,12 +12,14 @@ The reading is the mean wind at 10 m, in the units of ``--wind`` and of a foreca
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
+from masonry.blueprint import UavSpec
 from masonry.errors import InputError
 
-__all__ = ["DEFAULT_MAX_WIND_MPS", "HeardWind", "WindLimit"]
+__all__ = ["DEFAULT_MAX_WIND_MPS", "HeardWind", "WindLimit", "site_wind_limit"]
 
 #: A 4.5 kg hexacopter (docs/simulator.md, "Wind"): its 30 degree tilt runs out at 8.8 m/s of airspeed (11 m/s
 #: mean at 10 m); at 8 m/s (6.4 m/s at its 2 m working height) it keeps 1.8 m/s^2 to manoeuvre and 2.4 m/s of
@@ -98,3 +100,21 @@ class HeardWind:
     def limit(self) -> WindLimit:
         """The mission's wind limit over these reports (its limits follow them as UAVs report theirs)."""
         return WindLimit(self.limits_mps, self.reading)
+
+
+def site_wind_limit(
+    faults: Any, fleet: Sequence[UavSpec], max_wind_mps: float | Mapping[str, float] | None
+) -> WindLimit | None:
+    """Mission control's wind limit for the simulated site (None in still air): each UAV's ``max_wind_mps``
+    (one figure for all, or per name; default :data:`~masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`) against
+    the site's mean wind at 10 m."""
+
+    wind = faults.site_wind() if faults is not None else None
+    if wind is None or wind.calm:
+        return None
+    if isinstance(max_wind_mps, Mapping):
+        limits = {u.name: float(max_wind_mps.get(u.name, DEFAULT_MAX_WIND_MPS)) for u in fleet}
+    else:
+        limit = DEFAULT_MAX_WIND_MPS if max_wind_mps is None else float(max_wind_mps)
+        limits = {u.name: limit for u in fleet}
+    return WindLimit(limits, wind.speed_at)
