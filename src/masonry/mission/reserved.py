@@ -180,7 +180,7 @@ class TableClearance:
         """UAVs mission control must look at every tick (:meth:`grant`): a request waiting or a flight under way
         (its windows are extended if it runs late), in request order."""
         asking = sorted((u.request.seq, n) for n, u in self._uavs.items() if u.request is not None)
-        flying = sorted(n for n, u in self._uavs.items() if u.phase in (Phase.FLYING, Phase.TO_HOLD))
+        flying = sorted(n for n, u in self._uavs.items() if u.plan is not None and u.request is None)
         return (*(n for _s, n in asking), *flying)
 
     def phase(self, uav: str) -> Phase:
@@ -285,7 +285,7 @@ class TableClearance:
         in request order where the table changed (only grants are returned: a wait is said when asked)."""
         self._tick(now_s)
         for uav, u in self._uavs.items():
-            if u.phase in (Phase.FLYING, Phase.TO_HOLD):
+            if u.plan is not None:  # (flying, or stopped in it: it turned back and waits for its new flight)
                 self._keep_up(uav, u, now_s)
         out: list[Grant] = []
         for uav in self.waiting:
@@ -314,7 +314,7 @@ class TableClearance:
             # over every transit layer however high the wall's rise takes them (base_m: the finished wall's)
             z = self._home_top_m() + (self.max_layers + self._levels.get(uav, 0)) * self.spacing_m
             spot = (home[0], home[1], z)
-            plan = park_plan(self.table, uav, start, spot, now_s, self._airspace)
+            plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
             if plan is None:
                 continue
             stay = self.table.stay_of(uav)
@@ -497,7 +497,20 @@ class TableClearance:
         if self.table.stay_of(uav) is None:  # (heard again with nothing held: where it is now)
             where = u.position if u.position is not None else w.site
             self._set_stay(uav, column((where[0], where[1]), 0.0, where[2]), u.phase)
-        decision = decide(self.table, self._hop(uav, u, w), now_s, self._airspace)
+        guarded, hop = self._guarded(uav), self._hop(uav, u, w)
+        top = self._airspace.layers_m[-1]
+        high = hop.start.z_m > top  # from its parking spot, over every layer: planned from the top one
+        decision = decide(
+            guarded, replace(hop, start=replace(hop.start, z_m=top)) if high else hop, now_s, self._airspace
+        )
+        if high and not isinstance(decision, Wait):
+            first = decision.plan.reservations[0]  # its climb (a descent here) reaches up to where it is
+            down = replace(first, volume=column(hop.start.xy, first.volume.z0_m, hop.start.z_m))
+            if guarded.clashes(down):
+                decision = Wait(uav, now_s + 1.0, guarded.clashes(down))
+            else:
+                plan = decision.plan
+                decision = replace(decision, plan=replace(plan, reservations=(down, *plan.reservations[1:])))
         if isinstance(decision, Wait):
             u.retry_s = decision.until_s
             u.blocked_by = tuple(sorted({(r.uav, r.purpose) for r in decision.blocked_by}))
@@ -505,13 +518,27 @@ class TableClearance:
             if u.phase is Phase.AT_HOLD and u.spot is not None:
                 return Grant(uav, w.site, False, u.spot, u.spot[2])
             return Grant(uav, w.site, False)
-        self.table, u.plan, u.site = decision.table, decision.plan, w.site
+        stay = self.table.stay_of(uav)
+        assert stay is not None
+        left = forced(self.table, [stay], [stay.until(decision.plan.start_s)])
+        self.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
         u.request, u.phase, u.blocked_by, u.spot = None, Phase.FLYING, (), None
         self.granted_count += 1
         if self.gate is not None:
             self.gate.entered(uav, w.site, now_s)
         self._bump()
         return Grant(uav, w.site, layer_m=decision.plan.layer_m)
+
+    def _guarded(self, uav: str) -> Table:
+        """The table ``uav``'s flight is planned in: the other UAVs' windows a margin longer, so that one of them
+        running late can be extended (:meth:`_keep_up`) without a clash."""
+        m = self.margin_s
+        return Table(
+            tuple(
+                r if r.uav == uav or r.open_ended else r.until(r.t1_s + m) for r in self.table.reservations
+            ),
+            self.table.separation,
+        )
 
     def _hop(self, uav: str, u: _Uav, w: FlightRequest) -> Request:
         """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""
@@ -522,7 +549,8 @@ class TableClearance:
             and stay.volume.a == stay.volume.b
             and math.dist(stay.volume.a, start[:2]) < ON_LEG_M
         ):
-            start = (*stay.volume.a, start[2])  # where it stays, give or take its tracking error
+            v = stay.volume  # where it stays, give or take its tracking error (a hover: at its altitude)
+            start = (*v.a, v.z1_m if v.z0_m == v.z1_m and abs(start[2] - v.z1_m) < ON_LEG_M else start[2])
         home = self._homes.get(uav)
         radius = 0.0 if home is not None and _same(home, w.site) else self.zone_r_m
         here = Place((start[0], start[1]), start[2], "site", radius)
@@ -541,9 +569,16 @@ class TableClearance:
             self._fence_refusals[uav] = problem
 
     def _stop_where(self, uav: str, u: _Uav, pos: Vec3 | None) -> None:
-        """``uav`` left its plan where it is (``pos``): that column is its stay from now, its plan is over."""
-        where = pos if pos is not None else (u.position or u.site or (0.0, 0.0, 0.0))
-        self._set_stay(uav, column((where[0], where[1]), 0.0, where[2], 0.3), Phase.PARKED)
+        """``uav`` stopped its plan where it is (``pos``), turned back for another site: a hover there is its stay
+        from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted."""
+        where = pos if pos is not None else u.position
+        if where is None:
+            return
+        hover = Reservation(
+            uav, column((where[0], where[1]), where[2], where[2], 0.3), self.now_s, math.inf, "stay"
+        )
+        if not self.table.clashes(hover):
+            self._set_stay(uav, hover.volume, Phase.PARKED)
 
     def _set_stay(self, uav: str, volume: Volume, phase: Phase) -> None:
         """``uav`` holds only ``volume``, open-ended, from now on (it is there: nothing is checked)."""
