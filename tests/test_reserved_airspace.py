@@ -3,19 +3,23 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import random
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
-from masonry.blueprint import load_blueprint
-from masonry.blueprint_gen import towers
+from masonry.blueprint import UavSpec, load_blueprint, validate_blueprint
+from masonry.blueprint_gen import pyramid, towers
+from masonry.blueprint_random import LayoutLimits, _box, _footprint, _pallet_on, random_layout
 from masonry.cli import app
 from masonry.errors import InputError
 from masonry.mission.airspace_state import Phase
 from masonry.mission.reserved import DEFAULT_AIRSPACE, TableClearance
 from masonry.mission.simulate import simulate
+from masonry.separation import pad_site_distance_m
 
 ROOT = Path(__file__).resolve().parent.parent
 SEPARATION_BOUND_M = 1.0
@@ -98,3 +102,41 @@ def test_two_by_two_uavs_over_three_towers_complete_apart():
     assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
     assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
     assert math.isfinite(r.makespan_s)
+
+
+def _issue_27_pyramid():
+    """Issue 27's compact layout: a 21-brick pyramid (6-brick base, its first course placed), r_c 0.8 m, the
+    pallet beside it (east), 3 brick + 2 adhesion UAVs on pads 1 m apart south of it all."""
+    wall = pyramid(6, clearance_m=0.8, placed_courses=1)
+    bricks = _pallet_on(wall.bricks, "east")
+    points = [(b.pickup_m[0], b.pickup_m[1]) for b in bricks if b.pickup_m is not None]
+    fx0, fx1, fy0, fy1 = _footprint(bricks)
+    x0, x1, y0, _y1 = _box([*points, (fx0, fy0), (fx1, fy1)])
+    names = [("brick-1", "brick"), ("brick-2", "brick"), ("brick-3", "brick"), ("glue-1", "adhesion")]
+    names.append(("glue-2", "adhesion"))
+    y = y0 - pad_site_distance_m(0.8)
+    fleet = tuple(UavSpec(n, r, ((x0 + x1) / 2.0 + (k - 2) * 1.0, y, 0.0)) for k, (n, r) in enumerate(names))
+    bp = dataclasses.replace(wall, bricks=bricks, fleet=fleet)
+    validate_blueprint(bp)
+    return bp
+
+
+@pytest.mark.slow
+def test_the_issue_27_livelock_completes_with_no_attempt_given_up_for_waiting():
+    r = simulate(_issue_27_pyramid(), policy="fifo", seed=1, airspace="table")
+    assert r.completed and r.stall is None
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [3, 11, 17])
+def test_small_compact_random_layouts_complete_apart(seed):
+    limits = LayoutLimits(max_courses=2, max_per_course=3, max_uavs_per_role=2, clearance_m=(0.5, 0.8))
+    bp = random_layout(random.Random(seed), limits)
+    r = simulate(bp, seed=seed, airspace="table")
+    assert r.completed, r.stall
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is None or r.min_separation_m >= SEPARATION_BOUND_M
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
