@@ -1,26 +1,13 @@
-"""The airspace at run time as a space-time reservation table (``--airspace table``; docs/safety.md).
+"""The airspace at run time as a space-time reservation table (``--airspace table``; docs/safety.md, "The table
+at run time").
 
-:class:`TableClearance` answers mission control's questions about the airspace (the same ones
-:class:`~masonry.mission.airspace.ColumnClearance` answers, so mission control, the UAVs and the wire protocol
-are unchanged) from one :class:`~masonry.reservation.Table` and :func:`~masonry.reservation.decide`:
-
-- **A flight is a timed plan.** A UAV setting off for a site (its hop: climb where it is, fly at a layer, come
-  down over the site) is granted the whole hop as reservations, each leg for the time it takes at the UAV's
-  speeds (``TaskTiming``) plus a margin, at the lowest layer free *at the times it will be there*, ending in an
-  open-ended stay: the work zone at the site (or the column over its pad, flying home). A flight that does not
-  fit now is not granted: the UAV waits where it is, which is always its own stay (its pad, the column over its
-  pad after its take-off, the zone at its site), never a piece of shared air.
-- **Take-offs** are stays too: a landed UAV holds its pad (a ``ground`` volume); it takes off once the column
-  over its pad, open-ended, clashes with nobody's reservation from now on.
-- **Late, silent, lost.** A UAV still in a leg whose window is about to end has its windows extended
-  (:func:`~masonry.reservation.extend`); a silent UAV keeps what it holds and its way home is reserved
-  (:func:`~masonry.reservation.way_home` at its fallback layer), both until mission control releases it.
-- **No hold patience.** A waiting UAV is never given up for waiting; a wait ends when a window ends or a stay
-  moves, which bumps :attr:`TableClearance.version`. UAVs waiting at sites for each other (a cycle through
-  their stays, or through the site rule) are broken up by sending one to its *parking spot*, over its own pad
-  above every transit layer (:mod:`masonry.mission.reserved_parts`), reserved like any flight.
-
-Pure: no I/O, no clock (times are passed in).
+:class:`TableClearance` answers mission control's questions about the airspace (those
+:class:`~masonry.mission.airspace.ColumnClearance` answers: mission control, the UAVs and the wire protocol are
+unchanged) from one :class:`~masonry.reservation.Table`: each hop is granted as timed legs ending in an open-ended
+stay (:func:`~masonry.reservation.decide`), a UAV waits where it stays, a late one is extended
+(:func:`~masonry.reservation.extend`), a silent one keeps its way home (:func:`~masonry.reservation.way_home`),
+and UAVs waiting at sites for each other are broken up by parking spots (:mod:`masonry.mission.reserved_parts`).
+No hold patience. Pure: no I/O, no clock (times are passed in).
 """
 
 from __future__ import annotations
@@ -29,7 +16,6 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
-from masonry.errors import PlanningError
 from masonry.geofence import Site
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase
 from masonry.mission.fence import flight_fence_problem
@@ -38,6 +24,7 @@ from masonry.mission.reserved_parts import (
     AT_SPOT_Z_M,
     ON_LEG_M,
     end_flight,
+    extend_or_force,
     forced,
     leg_index,
     park_levels,
@@ -61,7 +48,6 @@ from masonry.reservation import (
     Work,
     column,
     decide,
-    extend,
     pad,
     violations,
 )
@@ -81,6 +67,7 @@ TABLE_MARGIN_S = 3.0
 AIRSPACES = ("columns", "table")
 DEFAULT_AIRSPACE = "columns"
 
+_LEGS = ("climb", "transit", "descend")
 _FLIGHT = ("climb", "transit", "descend", "work", "site", "home")
 
 
@@ -148,7 +135,7 @@ class TableClearance:
         self._version = 0
         self.now_s = 0.0
         self.granted_count = 0
-        self.held_back = 0  # always 0: nobody is sent to wait in the air (the watchdog's signature reads it)
+        self.held_back = 0  # flights to a parking spot (the watchdog's signature reads it)
         self.refused = 0  # answers "wait where you are"
         self.extended = 0  # windows extended for a late UAV
         self.forced = 0  # extensions no move could make room for (the table then holds a clash: counted)
@@ -344,20 +331,15 @@ class TableClearance:
         self._replace(uav, kept)
         u.plan, u.phase = None, Phase.PARKED
 
-    def can_take_off(self, uav: str) -> bool:
-        """``uav`` may take off now: it is not landed, or the column over its pad clashes with nobody from now on."""
+    def take_off(self, uav: str) -> bool:
+        """``uav``, landed, takes off: it holds the column over its pad from now on if that clashes with nobody's
+        reservation (True; else it stays on its pad: False). A UAV not landed holds what it needs (True)."""
         u = self._uavs.get(uav)
         if self.base_m is None or u is None or u.phase is not Phase.LANDED:
             return True
-        return not self.table.clashes(Reservation(uav, self._pad_column(uav), self.now_s, math.inf, "stay"))
-
-    def take_off(self, uav: str) -> bool:
-        """``uav``, landed, takes off: it holds the column over its pad from now on, if that is free (True)."""
-        if not self.can_take_off(uav):
+        if self.table.clashes(Reservation(uav, self._pad_column(uav), self.now_s, math.inf, "stay")):
             return False
-        u = self._uavs.get(uav)
-        if u is not None and u.phase is Phase.LANDED:
-            self._set_stay(uav, self._pad_column(uav), Phase.PARKED)
+        self._set_stay(uav, self._pad_column(uav), Phase.PARKED)
         return True
 
     def landed(self, uav: str, position_m: Vec3) -> bool:
@@ -425,11 +407,7 @@ class TableClearance:
         self._at_spot(uav, u)
         if u.phase is not Phase.FLYING or u.plan is None:
             return
-        legs = [
-            r
-            for r in self.table.of(uav)
-            if r.purpose in ("climb", "transit", "descend") and r.t1_s > self.now_s
-        ]
+        legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
         at = leg_index(legs, u.position)
         if at is None or at == 0:
             return
@@ -454,31 +432,18 @@ class TableClearance:
     def _keep_up(self, uav: str, u: _Uav, now_s: float) -> None:
         """A UAV still in a leg whose window ends within half the margin: its windows are extended by the margin
         (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced)."""
-        legs = [
-            r for r in self.table.of(uav) if r.purpose in ("climb", "transit", "descend") and r.t1_s > now_s
-        ]
-        at = leg_index(legs, u.position) if u.position is not None else None
-        current = legs[at] if at is not None else (legs[0] if legs else None)
-        if current is None:
-            stay = self.table.stay_of(uav)
-            if stay is None or stay.t0_s > now_s + self.margin_s / 2:
-                return
-            current = stay  # its flight's windows are over but it has not said it is down
-        if current.t1_s - now_s > self.margin_s / 2 and not (current.open_ended and current.t0_s <= now_s):
-            return
+        legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > now_s]
+        at = leg_index(legs, u.position)
+        current = legs[at] if at is not None else (legs[0] if legs else self.table.stay_of(uav))
+        if (
+            current is None
+            or current.t0_s > now_s + self.margin_s / 2
+            or current.t1_s - now_s > self.margin_s / 2
+        ):
+            return  # (a stay it is in has no end: nothing to extend)
         self.extended += 1
-        try:
-            self.table, _moves = extend(self.table, uav, now_s, self.margin_s)
-        except PlanningError:
-            self.forced += 1
-            mine = self.table.of(uav)
-            moved = [
-                r.until(r.t1_s + self.margin_s) if r.t0_s <= now_s else r.shifted(self.margin_s)
-                for r in mine
-                if r.t1_s > now_s and not (r.open_ended and r.t0_s <= now_s)
-            ]
-            drop = [r for r in mine if r.t1_s > now_s and not (r.open_ended and r.t0_s <= now_s)]
-            self.table = forced(self.table, drop, moved)
+        self.table, was_forced = extend_or_force(self.table, uav, now_s, self.margin_s)
+        self.forced += was_forced
         self._bump()
 
     def _evaluate(self, uav: str, u: _Uav, now_s: float) -> Grant:

@@ -25,6 +25,7 @@ from masonry.reservation import (
     Volume,
     column,
     earliest_start,
+    extend,
     flight_reservations,
     way_home,
 )
@@ -134,6 +135,17 @@ def silent_way(
     return forced(table, table.of(uav), [*held, *(r.until(math.inf) for r in way)]), length_m
 
 
+def extend_or_force(table: Table, uav: str, now_s: float, margin_s: float) -> tuple[Table, bool]:
+    """``uav``'s windows from ``now_s`` on extended by ``margin_s`` (:func:`~masonry.reservation.extend`: the plans
+    of others in the way move), or, when no move makes room, extended all the same (True: forced, a clash)."""
+    try:
+        return extend(table, uav, now_s, margin_s)[0], False
+    except PlanningError:
+        mine = [r for r in table.of(uav) if r.t1_s > now_s and not (r.open_ended and r.t0_s <= now_s)]
+        moved = [r.until(r.t1_s + margin_s) if r.t0_s <= now_s else r.shifted(margin_s) for r in mine]
+        return forced(table, mine, moved), True
+
+
 def end_flight(rs: Sequence[Reservation], now_s: float, flight: Sequence[str]) -> list[Reservation]:
     """``rs`` (one UAV's) once it is where its flight ends: the flight's windows end now, its stay starts now."""
     out = []
@@ -154,6 +166,7 @@ __all__ = [
     "ON_LEG_M",
     "Volume",
     "end_flight",
+    "extend_or_force",
     "forced",
     "leg_index",
     "park_levels",
