@@ -463,6 +463,9 @@ class TableClearance:
             where = u.position if u.position is not None else w.site
             self._set_stay(uav, column((where[0], where[1]), 0.0, where[2]), u.phase)
         guarded, hop = self._guarded(uav), self._hop(uav, u, w)
+        if u.plan is not None:  # it turned back and holds its old plan: its new one starts where it is, now
+            here = column(hop.start.xy, hop.start.z_m, hop.start.z_m)
+            guarded = forced(guarded, guarded.of(uav), [Reservation(uav, here, now_s, math.inf, "stay")])
         top = self._airspace.layers_m[-1]
         high = hop.start.z_m > top  # from its parking spot, over every layer: planned from the top one
         decision = decide(
@@ -483,9 +486,7 @@ class TableClearance:
             if u.phase is Phase.AT_HOLD and u.spot is not None:
                 return Grant(uav, w.site, False, u.spot, u.spot[2])
             return Grant(uav, w.site, False)
-        stay = self.table.stay_of(uav)
-        assert stay is not None
-        left = forced(self.table, [stay], [stay.until(decision.plan.start_s)])
+        left = self.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
         self.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
         u.request, u.phase, u.blocked_by, u.spot = None, Phase.FLYING, (), None
         self.granted_count += 1
