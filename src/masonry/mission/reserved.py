@@ -148,8 +148,7 @@ class TableClearance:
 
     def use_timing(self, timing: TaskTiming) -> None:
         """Time the legs with ``timing`` (the UAVs' speeds) from now on."""
-        self.timing = timing
-        self._airspace = self._make_airspace()
+        self.timing, self._airspace = timing, self._make_airspace(timing)
 
     # -- what mission control reads -----------------------------------------------------------------------
     @property
@@ -158,8 +157,7 @@ class TableClearance:
         return self._version
 
     @property
-    def release_radius_m(self) -> float:
-        """The UAVs' handlers say they left a site this far away (unused: windows end by time and progress)."""
+    def release_radius_m(self) -> float:  # (the UAVs say they left a site this far away: windows end by time)
         return self.sep_xy_m
 
     @property
@@ -417,10 +415,10 @@ class TableClearance:
             self._replace(uav, [*left, *(r.until(self.now_s) for r in behind)])
 
     # -- internals ---------------------------------------------------------------------------------------
-    def _make_airspace(self) -> Airspace:
+    def _make_airspace(self, timing: TaskTiming | None = None) -> Airspace:
         base = self.layer_base_m if self.layer_base_m is not None else 0.0
         layers = tuple(base + k * self.spacing_m for k in range(self.max_layers))
-        return Airspace.from_timing(layers, self.timing, margin_s=self.margin_s, horizon_s=0.0)
+        return Airspace.from_timing(layers, timing or self.timing, margin_s=self.margin_s, horizon_s=0.0)
 
     def _tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
@@ -498,10 +496,15 @@ class TableClearance:
     def _guarded(self, uav: str) -> Table:
         """The table ``uav``'s flight is planned in: the other UAVs' windows a margin longer, so that one of them
         running late can be extended (:meth:`_keep_up`) without a clash."""
-        m = self.margin_s
+        m, now = self.margin_s, self.now_s
+        # a UAV stopped in its plan (it turned back and waits for its new flight) may stay there: open-ended
+        stopped = {n for n, o in self._uavs.items() if o.plan is not None and o.request is not None}
         return Table(
             tuple(
-                r if r.uav == uav or r.open_ended else r.until(r.t1_s + m) for r in self.table.reservations
+                r
+                if r.uav == uav or r.open_ended
+                else r.until(math.inf if r.uav in stopped and r.t0_s <= now else r.t1_s + m)
+                for r in self.table.reservations
             ),
             self.table.separation,
         )
@@ -562,8 +565,8 @@ class TableClearance:
         self.table = forced(self.table, self.table.of(uav), list(reservations))
         self._bump()
 
-    def _bump(self) -> None:
-        self._version += 1  # (every change: a wait is looked at again)
+    def _bump(self) -> None:  # (every change: a wait is looked at again)
+        self._version += 1
 
     def _uav(self, uav: str) -> _Uav:
         u = self._uavs.get(uav)
