@@ -22,6 +22,7 @@ the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/p
    the mission (failed ones too), and the share of waiting + holding.
 
 Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--reservation site|task]
+       [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
        [--schedule-time-s 90]
@@ -43,6 +44,7 @@ from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.report import MissionReport, phase_totals
+from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
 from masonry.planner import plan as make_plan
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
@@ -86,7 +88,15 @@ class Run:
         return f"{self.bricks} + {self.adhesion}"
 
 
-def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, policy: str, reservation: str) -> Run:
+def fly(
+    blueprint: Blueprint,
+    bricks: int,
+    adhesion: int,
+    seed: int,
+    policy: str,
+    reservation: str,
+    airspace: str = DEFAULT_AIRSPACE,
+) -> Run:
     wall0 = time.perf_counter()
     report = simulate(
         blueprint,
@@ -96,6 +106,7 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, policy: str
         policy=policy,
         camera="geometric",
         reservation=reservation,
+        airspace=airspace,
     )
     return Run(bricks, adhesion, report, time.perf_counter() - wall0)
 
@@ -193,6 +204,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--policy", default="critical-path")
     ap.add_argument("--reservation", default=DEFAULT_RESERVATION, choices=RESERVATIONS)
+    ap.add_argument("--airspace", default=DEFAULT_AIRSPACE, choices=AIRSPACES)
     ap.add_argument("--walls", default=None, help=f"comma-separated, of {', '.join(WALLS)}")
     ap.add_argument("--fleets", default=None, help="comma-separated brick+adhesion pairs, e.g. 1+1,2+1")
     ap.add_argument(
@@ -210,7 +222,8 @@ def main() -> None:
         ap.error(f"--schedule-time-s must be a number >= 0, got {args.schedule_time_s!r}")
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
-        f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, geometric camera, "
+        f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, "
+        f"airspace {args.airspace}, geometric camera, "
         f"schedule {args.schedule_time_s:g} s; "
         f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
     )
@@ -221,7 +234,7 @@ def main() -> None:
         print(f"\n## {what} ({todo} bricks to place)\n", flush=True)
         runs = []
         for bricks, adhesion in fleets:
-            run = fly(blueprint, bricks, adhesion, args.seed, args.policy, args.reservation)
+            run = fly(blueprint, bricks, adhesion, args.seed, args.policy, args.reservation, args.airspace)
             print(
                 f"  flown {run.fleet}: makespan {run.report.makespan_s:,.0f} s in {run.wall_s:.0f} s wall",
                 flush=True,

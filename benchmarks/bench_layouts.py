@@ -2,6 +2,7 @@
 property test tests/test_random_layouts.py, on more and larger layouts.
 
     python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults] [--reservation site]
+        [--airspace columns|table] [--compact]
 
 A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
 violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
@@ -15,6 +16,7 @@ import random
 import time
 
 from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.separation import pad_separation_m
@@ -24,7 +26,9 @@ from masonry.sim import Faults
 SEPARATION_BOUND_M = 1.0
 
 
-def fly(seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task") -> dict[str, object]:
+def fly(
+    seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task", airspace: str = DEFAULT_AIRSPACE
+) -> dict[str, object]:
     rng = random.Random(seed)
     bp = random_layout(rng, limits)
     f = Faults.mild(rng) if faults else Faults()
@@ -33,7 +37,7 @@ def fly(seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task"
         (math.dist(a[:2], b[:2]) for i, a in enumerate(homes) for b in homes[i + 1 :]), default=float("nan")
     )
     t0 = time.perf_counter()
-    r = simulate(bp, seed=seed, faults=f, reservation=reservation)
+    r = simulate(bp, seed=seed, faults=f, reservation=reservation, airspace=airspace)
     return {
         "seed": seed,
         "wall": bp.name,
@@ -50,6 +54,7 @@ def fly(seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task"
         "wall_s": time.perf_counter() - t0,
         "stuck": r.stuck,
         "stall": (r.stall or {}).get("line"),
+        "held_up": sum("hold_patience_s" in (a.reason or "") for a in r.attempts),
     }
 
 
@@ -60,28 +65,33 @@ def main() -> None:
     ap.add_argument("--large", action="store_true", help="walls up to 6 courses x 12 bricks")
     ap.add_argument("--faults", action="store_true", help="mild random faults")
     ap.add_argument("--reservation", choices=RESERVATIONS, default=DEFAULT_RESERVATION)
+    ap.add_argument("--airspace", choices=AIRSPACES, default=DEFAULT_AIRSPACE)
+    ap.add_argument("--compact", action="store_true", help="small walls, r_c 0.5-0.8 m (issue 27's layouts)")
     args = ap.parse_args()
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
-    print(f"pad separation {pad_separation_m():.2f} m; limits {limits}")
+    if args.compact:
+        limits = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
+    print(f"pad separation {pad_separation_m():.2f} m; airspace {args.airspace}; limits {limits}")
     print(
-        "seed  wall                       fleet  r_c   pads   done  stall conf deps min_sep makespan bound  wall_s"
+        "seed  wall                       fleet  r_c   pads   done  stall conf deps held min_sep makespan bound  wall_s"
     )
     bad = 0
     for seed in range(args.first_seed, args.first_seed + args.n):
-        row = fly(seed, limits, args.faults, args.reservation)
+        row = fly(seed, limits, args.faults, args.reservation, args.airspace)
         sep = row["min_sep"]
         ok = (
             (row["completed"] or args.faults)
             and not row["stalled"]
             and row["conflicts"] == 0
             and row["deps"] == 0
+            and row["held_up"] == 0
             and (sep is None or sep >= SEPARATION_BOUND_M)
         )
         bad += not ok
         print(
             f"{row['seed']:<5} {row['wall']:<26} {row['fleet']:<6} {row['r_c']:<5.2f} {row['pads_m']:<6.2f} "
             f"{'yes' if row['completed'] else 'NO':<5} {'YES' if row['stalled'] else 'no':<5} "
-            f"{row['conflicts']:<4} {row['deps']:<4} {'-' if sep is None else f'{sep:.3f}':<7} "
+            f"{row['conflicts']:<4} {row['deps']:<4} {row['held_up']:<4} {'-' if sep is None else f'{sep:.3f}':<7} "
             f"{row['makespan']:<8.1f} {row['bound']:<6.1f} {row['wall_s']:.1f}"
             + ("" if ok else f"   <-- {row['stall'] or 'stuck: ' + ', '.join(row['stuck'])}"),
             flush=True,

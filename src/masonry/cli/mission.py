@@ -19,7 +19,7 @@ from masonry.cli.foxglove_options import (
     FOXGLOVE_OPTION,
     foxglove_option,
 )
-from masonry.cli.options import check_all, help_text, plural
+from masonry.cli.options import check_all, check_choice, help_text, plural
 from masonry.errors import InputError
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
@@ -146,6 +146,13 @@ def mission_control(
         help="task | site: keep conflicting tasks apart for their whole duration (task, the paper) or only "
         "while their UAVs work at their sites (site). docs/safety.md.",
     ),
+    airspace: str = typer.Option(
+        "columns",
+        "--airspace",
+        help="columns | table: grant flights column by column with hold points (columns), or plan each flight "
+        "as timed legs reserved in a space-time table, waiting on the ground or at the site (table). "
+        "docs/safety.md.",
+    ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     log: Path | None = typer.Option(
@@ -185,8 +192,8 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    if reservation not in ("site", "task"):
-        raise InputError(f"--reservation must be site or task, got {reservation!r}")
+    check_choice("--reservation", reservation, ("site", "task"))
+    check_choice("--airspace", airspace, ("columns", "table"))
     check_all(
         "mission-control",
         {
@@ -241,6 +248,7 @@ def mission_control(
             min_durations_s=min_durations_s(the_plan, cruise_altitude_m=bp.cruise_altitude_m),
             stall_timeout_s=stall_timeout,
             reservation=reservation,
+            airspace=airspace,
             fence=bp.site,
             # the layer each `masonry fly --mission` UAV flies at without mission control (remote.py's)
             fallback_layers_m=transit_layers_m(bp),

@@ -135,6 +135,12 @@ def check_all(command: str, values: dict[str, float | tuple[float, ...] | None])
         check(command, option, value)
 
 
+def check_choice(option: str, value: str, choices: tuple[str, ...]) -> None:
+    """``value`` is one of ``choices``, else one clear line naming ``option`` (exit 2)."""
+    if value not in choices:
+        raise InputError(f"{option} must be {' or '.join(choices)}, got {value!r}")
+
+
 def plural(n: int, word: str, many: str | None = None) -> str:
     """``1 task``, ``2 tasks`` (``many``: the irregular plural)."""
     return f"{n} {word if n == 1 else (many or word + 's')}"

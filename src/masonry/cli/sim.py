@@ -15,7 +15,7 @@ from masonry.cli.foxglove_options import (
     FOXGLOVE_OPTION,
     foxglove_option,
 )
-from masonry.cli.options import check_all, help_text
+from masonry.cli.options import check_all, check_choice, help_text
 from masonry.cli.outputs import check_output_paths, write_mission_outputs
 from masonry.cli.watch import check_log_option
 from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
@@ -54,6 +54,13 @@ def sim(
         "--reservation",
         help="task | site: keep conflicting tasks apart for their whole duration, as the paper (task), or "
         "only while their UAVs work at their sites (site). docs/safety.md.",
+    ),
+    airspace: str = typer.Option(
+        _DEFAULTS.airspace,
+        "--airspace",
+        help="columns | table: grant flights column by column with hold points (columns), or plan each flight "
+        "as timed legs reserved in a space-time table, waiting on the ground or at the site (table). "
+        "docs/safety.md.",
     ),
     seed: int = typer.Option(
         _DEFAULTS.seed, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")
@@ -145,8 +152,8 @@ def sim(
 
     if fmt not in ("text", "json"):
         raise InputError(f"--format must be text or json, got {fmt!r}")
-    if reservation not in ("site", "task"):
-        raise InputError(f"--reservation must be site or task, got {reservation!r}")
+    check_choice("--reservation", reservation, ("site", "task"))
+    check_choice("--airspace", airspace, ("columns", "table"))
     check_all(
         "sim",
         {
@@ -192,6 +199,7 @@ def sim(
         stall_timeout_s=stall_timeout,
         reservation=reservation,
         vehicle=vehicle,
+        airspace=airspace,
     )
     name = bp.name or blueprint.name
 

@@ -30,7 +30,7 @@ from typing import Any
 from masonry.blueprint import UavSpec
 from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
-from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Phase, task_work_altitude_m
+from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, Phase, task_work_altitude_m
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
@@ -53,6 +53,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.operator import Operator
 from masonry.mission.records import LANDED_STATE, Attempt, UavLink, completion_fields
+from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
@@ -146,6 +147,7 @@ class MissionControl:
         fallback_layers_m: each UAV's fixed layer for flights without mission control (its machine's
             ``lateral_altitude_m``: ``transit_layers_m``); a UAV that falls silent in the air keeps its way home
             at that layer reserved (:meth:`ColumnClearance.silent`). Not given: the altitude it was last at.
+        airspace: ``columns`` (:class:`ColumnClearance`) or ``table`` (:class:`masonry.mission.reserved.TableClearance`).
     """
 
     def __init__(
@@ -177,6 +179,7 @@ class MissionControl:
         fence: Site | None = None,
         wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
+        airspace: str = "columns",
     ) -> None:
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
@@ -238,7 +241,10 @@ class MissionControl:
         self.ended_at_s: float | None = None
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
-        self.columns = ColumnClearance(
+        if airspace not in AIRSPACES:
+            raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {airspace!r}")
+        kind = TableClearance if airspace == "table" else ColumnClearance
+        self.columns: ColumnClearance | TableClearance = kind(
             column_radius_m,
             layer_base_m,
             layer_spacing_m,
@@ -247,6 +253,8 @@ class MissionControl:
             gate=self.glue or self.sites,
             fence=fence,
         )
+        if isinstance(self.columns, TableClearance):
+            self.columns.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
         self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self._layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
@@ -388,19 +396,7 @@ class MissionControl:
             self._dirty = True
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
-                self._send(
-                    g.uav,
-                    Clearance(
-                        MISSION_CONTROL,
-                        g.uav,
-                        g.site_m,
-                        self.columns.release_radius_m,
-                        now_s,
-                        g.granted,
-                        g.hold_m,
-                        g.layer_m,
-                    ),
-                )
+                self._answer(g, now_s)
                 self.waits.answered(g.uav, self.dispatcher.task_of(g.uav), g.site_m, g.granted)
                 self._emit_clearance(now_s, g)
                 how = "granted" if g.granted else "held"
@@ -517,19 +513,13 @@ class MissionControl:
         self._emit_clearance(now_s, g)
         if g.refused is not None:
             self._fail_outside_fence(msg.sender, g.refused, now_s)
-        self._send(
-            msg.sender,
-            Clearance(
-                MISSION_CONTROL,
-                msg.sender,
-                g.site_m,
-                self.columns.release_radius_m,
-                now_s,
-                g.granted,
-                g.hold_m,
-                g.layer_m,
-            ),
-        )
+        self._answer(g, now_s)
+
+    def _answer(self, g: Grant, now_s: float) -> None:
+        """Send the airspace's answer ``g`` to its UAV."""
+        radius_m = self.columns.release_radius_m
+        answer = Clearance(MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m)
+        self._send(g.uav, answer)
 
     def _fail_outside_fence(self, uav: str, reason: str, now_s: float) -> None:
         """``uav``'s flight can only be flown outside the site's fence: its task fails with the reason (once per

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TypedDict
 
 from masonry.errors import InputError
+from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
@@ -63,6 +64,8 @@ class SimOptions:
             control preset is the UAVs' tuning unless a tuning is given.
         max_wind_mps: the wind (mean at 10 m) above which mission control grounds a UAV, m/s: one figure for
             all or per UAV name (None: :data:`masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`).
+        airspace: ``columns`` (default) or ``table``: flights planned and reserved in a space-time table, no hold
+            patience (:mod:`masonry.mission.reserved`, docs/safety.md).
 
     Raises:
         InputError: an unknown policy, camera mode or reservation, a bad ``dt_s``, or ``resume`` without
@@ -87,6 +90,7 @@ class SimOptions:
     reservation: str = DEFAULT_RESERVATION
     vehicle: str | None = None
     max_wind_mps: float | Mapping[str, float] | None = None
+    airspace: str = DEFAULT_AIRSPACE
 
     def __post_init__(self) -> None:
         if self.reservation not in RESERVATIONS:
@@ -107,6 +111,11 @@ class SimOptions:
             raise InputError(f"dt_s must be > 0, got {self.dt_s!r}")
         if self.resume and self.journal_path is None:
             raise InputError("`resume` needs `journal_path`", options=("resume", "journal_path"))
+        if self.airspace not in AIRSPACES:
+            raise InputError(
+                f"`airspace` must be one of {', '.join(AIRSPACES)}, got {self.airspace!r}",
+                options=("airspace",),
+            )
         vehicle_preset(self.vehicle)  # InvalidArgument naming the presets
 
 
@@ -130,6 +139,7 @@ class SimFields(TypedDict, total=False):
     reservation: str
     vehicle: str | None
     max_wind_mps: float | Mapping[str, float] | None
+    airspace: str
 
 
 def with_fields(options: SimOptions | None, fields: SimFields) -> SimOptions:

@@ -49,6 +49,7 @@ from masonry.mission.uav_stack import (
     build_machine,
     position_of,
     priority_durations_s,
+    template_config,
 )
 from masonry.mission.wind_limit import site_wind_limit
 from masonry.planner import estimate_durations_s
@@ -311,12 +312,7 @@ class SimulatedMission:
         wall0 = time.perf_counter()
         vehicle = vehicle_name(opts.vehicle)
         vehicle_config = vehicle_preset(vehicle)
-        if uav_config is None and vehicle != "ideal":
-            # the tuning a real UAV on that autopilot flies with (masonry.fsm.tuning's preset of the same name)
-            from masonry.fsm import UavConfig
-            from masonry.fsm.tuning import uav_settings
-
-            uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **uav_settings(vehicle))
+        uav_config = template_config(uav_config, vehicle, opts.airspace)
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
         fleet = fleet_for(blueprint, opts.brick_uavs, opts.adhesion_uavs)
@@ -393,6 +389,7 @@ class SimulatedMission:
                 fence=blueprint.site,
                 wind_limit=site_wind_limit(faults.site_wind(), fleet, opts.max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
+                airspace=opts.airspace,
             )
             if state is not None:
                 mc.restore(state)

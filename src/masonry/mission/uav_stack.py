@@ -14,10 +14,11 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Protocol
 
 from masonry.errors import MasonryError
+from masonry.fsm.config import UavConfig
+from masonry.fsm.tuning import uav_settings
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
-    from masonry.fsm.config import UavConfig
     from masonry.mission.handler import UavHandler
     from masonry.ports import Clock, UavPorts
     from masonry.sim import SimVehicle
@@ -29,6 +30,7 @@ __all__ = [
     "UavMachineFactory",
     "build_machine",
     "priority_durations_s",
+    "template_config",
 ]
 
 #: How long the ground crew takes to swap a landed UAV's battery (the handler keeps a reserve, see UavHandler).
@@ -141,3 +143,15 @@ def build_machine(
     if spec.role == "brick":
         return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
     return AdhesionUav(config, ports.fc, ports.sprayer, handler, clock, clearance=handler)
+
+
+def template_config(uav_config: UavConfig | None, vehicle: str, airspace: str) -> UavConfig | None:
+    """Every UAV's tuning: the one given, else a real autopilot's control preset (:mod:`masonry.fsm.tuning`),
+    else None (``UavConfig``'s defaults); with the ``table`` airspace, no hold patience (a UAV waits on its
+    stay, never given up for waiting)."""
+    if (uav_config is not None or vehicle == "ideal") and airspace != "table":
+        return uav_config
+    if uav_config is None:
+        tuning = uav_settings(vehicle) if vehicle != "ideal" else {}
+        uav_config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **tuning)
+    return uav_config if airspace != "table" else dataclasses.replace(uav_config, hold_patience_s=None)

@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
+from masonry.blueprint import UavSpec
 from masonry.errors import InputError
 
 if TYPE_CHECKING:

@@ -1,0 +1,176 @@
+"""The pieces of :mod:`masonry.mission.reserved` that need no state: forced changes, where a UAV is on its plan,
+parking spots and who should move to one (pure: no I/O, no clock).
+
+A *parking spot* is a hover over the UAV's own pad, above every transit layer: there it is in nobody's way (legs
+fly lower, pads keep out of work zones, neighbouring pads park a layer apart). A UAV waiting at a site for a
+stay that will not end by itself (another waiting UAV's, or one the site rule holds back) and itself in the way
+of a waiting UAV is sent there: that breaks every cycle of UAVs waiting at sites for each other.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Iterable, Mapping, Sequence
+
+from masonry.errors import PlanningError
+from masonry.mission.volumes import Vec3
+from masonry.reservation import (
+    Airspace,
+    FlightPlan,
+    Place,
+    Request,
+    Reservation,
+    Table,
+    Volume,
+    column,
+    earliest_start,
+    extend,
+    flight_reservations,
+    way_home,
+)
+from masonry.segments import point_segment_m
+from masonry.timing import TaskTiming
+
+#: How far (horizontally and vertically) a reported position may be off a leg's volume and still be in it.
+ON_LEG_M = 0.3
+
+#: A UAV this close (horizontally) to its parking spot, within ``AT_SPOT_Z_M`` of its altitude, is there.
+AT_SPOT_M = 0.15
+AT_SPOT_Z_M = 0.15
+
+
+def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
+    """``table`` without ``drop`` and with ``add``, not checked (what a UAV physically holds, or is late in)."""
+    out = table.without(list(drop))
+    return Table((*out.reservations, *add), out.separation)
+
+
+def leg_index(legs: Sequence[Reservation], p: Vec3 | None) -> int | None:
+    """The index of the first leg of ``legs`` (in plan order) ``p`` is in (within ``ON_LEG_M``), or None: the
+    legs before it are behind the UAV (it flies them in order; a short hop's descent may hold its start too)."""
+    if p is None:
+        return None
+    for i, r in enumerate(legs):
+        v = r.volume
+        inside_z = v.z0_m - ON_LEG_M <= p[2] <= v.z1_m + ON_LEG_M
+        if inside_z and point_segment_m((p[0], p[1]), v.a, v.b) <= v.radius_m + ON_LEG_M:
+            return i
+    return None
+
+
+def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
+    """Each UAV's parking level (0, 1, ...): two pads closer than ``separation_m`` never share one (greedy)."""
+    out: dict[str, int] = {}
+    for uav in sorted(homes):
+        h = homes[uav]
+        near = {out[o] for o in out if math.hypot(homes[o][0] - h[0], homes[o][1] - h[1]) < separation_m}
+        out[uav] = next(k for k in range(len(homes) + 1) if k not in near)
+    return out
+
+
+def park_plan(
+    table: Table, uav: str, start: Vec3, spot: Vec3, now_s: float, airspace: Airspace
+) -> FlightPlan | None:
+    """The flight from ``start`` to the parking ``spot`` (climb to its altitude, fly over), ending in a hover
+    there, open-ended, if it fits now (None: not now)."""
+    air = Airspace((spot[2],), airspace.cruise_mps, airspace.vertical_mps, airspace.margin_s, 0.0)
+    here = Place((start[0], start[1]), min(start[2], spot[2]), "site")
+    there = Place((spot[0], spot[1]), spot[2], "site")
+    rs = list(flight_reservations(Request(uav, here, None, there), now_s, spot[2], air))
+    rs[-1] = Reservation(uav, column(there.xy, spot[2], spot[2]), rs[-1].t0_s, math.inf, "stay")
+    parts = [(r.volume, r.t0_s - now_s, r.t1_s - now_s) for r in rs]
+    start_s, _ = earliest_start(table, uav, parts, now_s)
+    if start_s > now_s:
+        return None
+    return FlightPlan(uav, now_s, spot[2], tuple(rs))
+
+
+def to_park(
+    waits: Mapping[str, tuple[tuple[str, str], ...]], endless: Iterable[str], order: Mapping[str, int]
+) -> list[str]:
+    """The waiting UAVs that should go to their parking spots, best first: those in the way of a waiting UAV
+    (``waits``: UAV -> (other, purpose) in its way) whose own wait does not end by itself (``endless``: only
+    stays, of waiting UAVs, or the site rule), the latest request (``order``) first."""
+    endless = set(endless)
+    blocking = {other for ws in waits.values() for other, purpose in ws if purpose == "stay"}
+    out = []
+    for uav in endless & blocking:
+        ws = waits.get(uav, ())
+        if any(o in waits or p == "site-rule" for o, p in ws):
+            out.append(uav)
+    return sorted(out, key=lambda u: -order.get(u, 0))
+
+
+def silent_way(
+    table: Table,
+    uav: str,
+    position_m: Vec3,
+    layer_m: float | None,
+    via_m: Vec3 | None,
+    home_m: Vec3,
+    now_s: float,
+    timing: TaskTiming,
+) -> tuple[Table, float]:
+    """``table`` with a silent ``uav``'s reservations open-ended and its way home from ``position_m`` at its
+    fallback ``layer_m`` (through ``via_m``'s column, a brick put back first, to over ``home_m``) reserved
+    open-ended too (:func:`~masonry.reservation.way_home`, or forced where plans under way are in its way: it
+    flies it anyway); and the way's length in metres."""
+    held = [r.until(math.inf) for r in table.of(uav) if r.t1_s > now_s]
+    x, y, z = (float(v) for v in position_m)
+    alt = max(float(layer_m) if layer_m is not None else z, z, home_m[2])
+    air = Airspace((alt,), timing.cruise_speed_mps, timing.vertical_speed_mps, 0.0, 0.0)
+    stops = [(x, y, z), *([] if via_m is None else [via_m]), home_m]
+    way: list[Reservation] = []
+    length_m = 0.0
+    for a, b in itertools.pairwise(stops):
+        length_m += math.hypot(b[0] - a[0], b[1] - a[1]) + abs(alt - a[2]) + abs(alt - b[2])
+        start, end = Place((a[0], a[1]), a[2], "site"), Place((b[0], b[1]), b[2], "site")
+        try:  # reserved from now at its fallback layer; plans not started in its way move
+            table, plan, _moves = way_home(table, uav, now_s, start, end, air)
+            way.extend(plan.reservations)
+        except PlanningError:
+            way.extend(flight_reservations(Request(uav, start, None, end), now_s, alt, air))
+    # all of it until mission control releases it (heard again, or the way home's time is over)
+    return forced(table, table.of(uav), [*held, *(r.until(math.inf) for r in way)]), length_m
+
+
+def extend_or_force(table: Table, uav: str, now_s: float, margin_s: float) -> tuple[Table, bool]:
+    """``uav``'s windows from ``now_s`` on extended by ``margin_s`` (:func:`~masonry.reservation.extend`: the plans
+    of others in the way move), or, when no move makes room, extended all the same (True: forced, a clash)."""
+    try:
+        return extend(table, uav, now_s, margin_s)[0], False
+    except PlanningError:
+        mine = [r for r in table.of(uav) if r.t1_s > now_s and not (r.open_ended and r.t0_s <= now_s)]
+        moved = [r.until(r.t1_s + margin_s) if r.t0_s <= now_s else r.shifted(margin_s) for r in mine]
+        return forced(table, mine, moved), True
+
+
+def end_flight(rs: Sequence[Reservation], now_s: float, flight: Sequence[str]) -> list[Reservation]:
+    """``rs`` (one UAV's) once it is where its flight ends: the flight's windows end now, its stay starts now."""
+    out = []
+    for r in rs:
+        if r.purpose in flight and r.t1_s > now_s:
+            if r.t0_s < now_s:
+                out.append(r.until(now_s))
+        elif r.open_ended and r.t0_s > now_s:
+            out.append(Reservation(r.uav, r.volume, now_s, math.inf, r.purpose, r.task))
+        else:
+            out.append(r)
+    return out
+
+
+__all__ = [
+    "AT_SPOT_M",
+    "AT_SPOT_Z_M",
+    "ON_LEG_M",
+    "Volume",
+    "end_flight",
+    "extend_or_force",
+    "forced",
+    "leg_index",
+    "park_levels",
+    "park_plan",
+    "silent_way",
+    "to_park",
+]

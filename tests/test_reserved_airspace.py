@@ -1,0 +1,142 @@
+"""``--airspace table``: mission control grants flights from a space-time reservation table
+(:mod:`masonry.mission.reserved`); ``columns`` stays the default."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import random
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from masonry.blueprint import UavSpec, load_blueprint, validate_blueprint
+from masonry.blueprint_gen import pyramid, towers
+from masonry.blueprint_random import LayoutLimits, _box, _footprint, _pallet_on, random_layout
+from masonry.cli import app
+from masonry.errors import InputError
+from masonry.mission.airspace_state import Phase
+from masonry.mission.reserved import DEFAULT_AIRSPACE, TableClearance
+from masonry.mission.simulate import simulate
+from masonry.separation import pad_site_distance_m
+
+ROOT = Path(__file__).resolve().parent.parent
+SEPARATION_BOUND_M = 1.0
+
+
+def _airspace() -> TableClearance:
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    return TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2)
+
+
+def test_the_default_airspace_is_columns():
+    assert DEFAULT_AIRSPACE == "columns"
+
+
+def test_a_landed_uav_holds_its_pad_and_takes_off_with_the_column_over_it():
+    air = _airspace()
+    assert air.phase("a") is Phase.LANDED
+    assert [v.kind for v in air.volumes("a")] == ["stay"]
+    assert air.take_off("a")
+    assert air.phase("a") is Phase.PARKED
+    assert air.volumes("a")[0].z1_m == pytest.approx(2.0)  # up to the transit base
+
+
+def test_a_flight_is_granted_as_timed_legs_ending_in_a_stay_at_the_site():
+    air = _airspace()
+    air.take_off("a")
+    g = air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2))
+    assert g.granted and g.layer_m is not None
+    kinds = [v.kind for v in air.volumes("a")]
+    assert kinds[-1] == "stay" and {"climb", "transit", "descend"} <= set(kinds)
+    assert air.conflicts() == []
+
+
+def test_a_second_uav_for_the_same_site_waits_where_it_is_and_is_granted_once_the_site_is_free():
+    air = _airspace()
+    air.take_off("a")
+    assert air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2)).granted
+    air.take_off("b")
+    wait = air.request("b", (0.3, 0.0, 1.2), 0.5, (3.0, -5.0, 1.2))
+    assert not wait.granted and wait.hold_m is None  # it waits on its own stay, not in shared air
+    assert air.blockers("b") and air.blockers("b")[0][0] == "a"
+    assert air.grant(30.0) == []  # a is still at the site (its stay is open-ended)
+    air.end_transit("a")
+    assert air.request("a", (0.0, -5.0, 2.0), 31.0, (0.0, 0.0, 1.2)).granted  # a flies home
+    granted = []
+    for t in range(32, 120):
+        if t == 40:
+            air.end_transit("a")  # a is over its pad, on time
+        granted += [g.uav for g in air.grant(float(t))]
+    assert granted == ["b"]
+    assert air.forced == 0  # nobody ran late past what the table could make room for
+    assert air.conflicts() == []
+
+
+def test_a_bad_airspace_is_one_clear_error():
+    with pytest.raises(InputError, match="`airspace` must be one of columns, table"):
+        simulate(towers(1, 2), airspace="tubes")
+    res = CliRunner().invoke(
+        app, ["sim", str(ROOT / "blueprints" / "paper_case_study.yaml"), "--airspace", "tubes"]
+    )
+    assert res.exit_code == 2
+    assert "--airspace must be columns or table" in res.output
+
+
+def test_the_case_study_under_task_reservation_still_flies_in_the_papers_order():
+    bp = load_blueprint(ROOT / "blueprints" / "paper_case_study.yaml")
+    r = simulate(bp, seed=0, reservation="task", airspace="table")
+    assert r.completed
+    assert [a.task_id for a in sorted(r.attempts, key=lambda a: a.start_s)] == ["A0", "B0", "A1", "B1"]
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+
+
+@pytest.mark.slow
+def test_two_by_two_uavs_over_three_towers_complete_apart():
+    r = simulate(
+        towers(3, 2, spacing_m=1.6, brick_uavs=2, adhesion_uavs=2), reservation="task", airspace="table"
+    )
+    assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+    assert math.isfinite(r.makespan_s)
+
+
+def _issue_27_pyramid():
+    """Issue 27's compact layout: a 21-brick pyramid (6-brick base, its first course placed), r_c 0.8 m, the
+    pallet beside it (east), 3 brick + 2 adhesion UAVs on pads 1 m apart south of it all."""
+    wall = pyramid(6, clearance_m=0.8, placed_courses=1)
+    bricks = _pallet_on(wall.bricks, "east")
+    points = [(b.pickup_m[0], b.pickup_m[1]) for b in bricks if b.pickup_m is not None]
+    fx0, fx1, fy0, fy1 = _footprint(bricks)
+    x0, x1, y0, _y1 = _box([*points, (fx0, fy0), (fx1, fy1)])
+    names = [("brick-1", "brick"), ("brick-2", "brick"), ("brick-3", "brick"), ("glue-1", "adhesion")]
+    names.append(("glue-2", "adhesion"))
+    y = y0 - pad_site_distance_m(0.8)
+    fleet = tuple(UavSpec(n, r, ((x0 + x1) / 2.0 + (k - 2) * 1.0, y, 0.0)) for k, (n, r) in enumerate(names))
+    bp = dataclasses.replace(wall, bricks=bricks, fleet=fleet)
+    validate_blueprint(bp)
+    return bp
+
+
+@pytest.mark.slow
+def test_the_issue_27_livelock_completes_with_no_attempt_given_up_for_waiting():
+    r = simulate(_issue_27_pyramid(), policy="fifo", seed=1, airspace="table")
+    assert r.completed and r.stall is None
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [3, 11, 17])
+def test_small_compact_random_layouts_complete_apart(seed):
+    limits = LayoutLimits(max_courses=2, max_per_course=3, max_uavs_per_role=2, clearance_m=(0.5, 0.8))
+    bp = random_layout(random.Random(seed), limits)
+    r = simulate(bp, seed=seed, airspace="table")
+    assert r.completed, r.stall
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is None or r.min_separation_m >= SEPARATION_BOUND_M
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
