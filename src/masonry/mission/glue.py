@@ -9,8 +9,8 @@ task's completion) and each glued brick placed, and:
   descent and release, within the open time);
 * every tick (:meth:`step`): a bead whose brick is not at its site yet and that would no longer be open by then
   has *expired*: its done attempt is marked failed (reason :data:`EXPIRED_REASON`), the brick's UAV, if it has
-  one, keeps its brick and waits (at a hold point clear of the beads it waits for); at the
-  :data:`RECALL_AFTER_EXPIRIES`-th expiry in one attempt it is recalled (its attempt fails with the same reason and
+  one, is recalled at the :data:`RECALL_AFTER_EXPIRIES`-th expiry in one attempt (until then it keeps its brick
+  and waits, at a hold point clear of the beads it waits for) (its attempt fails with the same reason and
   counts, so a brick that can never come in time ends stuck instead of looping); the dispatcher sprays the
   bead again (``reopen``): never is a brick placed on expired glue, whatever delayed it (a fault, a lost UAV, a
   pause: paused time counts against the open time like any other);
@@ -42,9 +42,10 @@ EXPIRED_REASON = "open time expired"
 #: Slack added to the placing descent and release when judging whether a bead will still be open (s).
 MARGIN_SLACK_S = 12.0
 #: Expiries of a brick's beads while one attempt of it is carried before its UAV is recalled (the attempt fails
-#: and counts: a brick that can never come in time ends stuck instead of looping). Its UAV waits at a hold point
-#: clear of the beads it waits for (``SiteGate.waited_on``), so the re-sprays need not move it before that.
-RECALL_AFTER_EXPIRIES = 3
+#: and counts: a brick that can never come in time ends stuck instead of looping). Measured (docs/dispatch.md,
+#: "Adhesive: just in time"): 3 let the 12 m wall at 4+2 complete at 120 s of open time, but the pyramid at 4+2
+#: and 60 s then sprayed 495 beads again and ran out of time, where 1 ends it blocked, saying why, at 698 s.
+RECALL_AFTER_EXPIRIES = 1
 
 
 @dataclass
@@ -178,8 +179,8 @@ class GlueGate:
         carrier = self.dispatcher.in_progress.get(brick)
         attempt = self.dispatcher.attempt_of(brick)
         if carrier is not None:
-            # its UAV keeps the brick and waits while the bead is sprayed again; after RECALL_AFTER_EXPIRIES it
-            # puts the brick back and comes again (an attempt: a brick never in time ends stuck, not looping)
+            # at the RECALL_AFTER_EXPIRIES-th expiry in one attempt its UAV puts the brick back and comes again
+            # (an attempt: a brick never in time ends stuck, not looping); before, it keeps the brick and waits
             n = self._expired_in[brick, attempt] = self._expired_in.get((brick, attempt), 0) + 1
             if n == RECALL_AFTER_EXPIRIES:
                 mc.recall(carrier, now_s, EXPIRED_REASON)
