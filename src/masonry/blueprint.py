@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.errors import BlueprintError
 from masonry.geofence import Site
+from masonry.placement_check import PLACEMENT_KEYS, PlacementCheck, parse_placement_check
 
 if TYPE_CHECKING:
     from masonry.adhesive import Adhesive
@@ -154,6 +155,8 @@ class Blueprint:
     site: Site | None = None
     #: the adhesive's open and cure times (None: neither is modelled; docs/blueprint-format.md, "Adhesive")
     adhesive: Adhesive | None = None
+    #: the as-built check of each placed brick (docs/blueprint-format.md, "As-built check")
+    placement: PlacementCheck = field(default_factory=PlacementCheck)
 
     def brick(self, brick_id: int) -> Brick:
         """The brick with id ``brick_id`` (KeyError if there is none)."""
@@ -170,7 +173,17 @@ class Blueprint:
 
 # ---------------------------------------------------------------------------------------------- loading
 
-TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive")
+TOP_KEYS = (
+    "name",
+    "clearance",
+    "cruise_altitude",
+    "brick",
+    "bricks",
+    "fleet",
+    "site",
+    "adhesive",
+    *PLACEMENT_KEYS,
+)
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
 BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup")
@@ -289,6 +302,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         source=source,
         site=parse_site(data.get("site"), source),
         adhesive=parse_adhesive(data.get("adhesive"), source),
+        placement=parse_placement_check(data, source),
     )
     validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
@@ -529,6 +543,11 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
         from masonry.adhesive import format_adhesive
 
         lines.append(format_adhesive(blueprint.adhesive))
+    if (
+        blueprint.placement != PlacementCheck()
+    ):  # (the defaults are not written: old files read back the same)
+        lines.append(f"placement_tolerance_m: {_num(blueprint.placement.tolerance_m)}")
+        lines.append(f"on_placement_error: {blueprint.placement.on_error}")
     return "\n".join(lines) + "\n"
 
 

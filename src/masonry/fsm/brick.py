@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from masonry.errors import HardwareError
+from masonry.fsm.as_built import AsBuiltLook, frame_tags, world_estimate
 from masonry.fsm.battery import LEG_SETTLE_S, flight_left_s
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
@@ -23,8 +24,7 @@ from masonry.fsm.states import (
     leaf_states,
 )
 from masonry.fsm.tool import Tool
-from masonry.geometry import R_world_body, wrap_angle_rad
-from masonry.perception.types import TagPose
+from masonry.geometry import wrap_angle_rad
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
     BATTERY_LOW_REASON,
@@ -121,6 +121,7 @@ class BrickUav(UavModel):
         # the rod descends on its unlocked ball joint: it hangs plumb however the UAV leans (masonry.fsm.tool)
         self.effector = Tool.at(config.airframe.effector_offset_m, plumb=True)
         self._camera_align = CameraAlign()
+        self.as_built = AsBuiltLook(config.window_size, config.sigma_tol_m)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         self._begin_counters()
@@ -350,39 +351,8 @@ class BrickUav(UavModel):
 
     def _fresh_estimate(self, tel: Telemetry) -> tuple[np.ndarray, float] | None:
         """The brick's top-face centre (world, m) and yaw as the camera sees it now, from ``tel``'s pose."""
-        frame = self.camera.read()
-        if frame is None:
-            return None
-        tags = frame.tags
-        if tags is None:
-            if frame.image is None:
-                return None
-            from masonry.perception.aruco import detect_tags
-
-            tags = tuple(detect_tags(frame.image, self.camera.intrinsics, self.config.markers))
-        id1, id2 = 2 * self.brick_task.brick, 2 * self.brick_task.brick + 1
-        tag1 = tag2 = None
-        for tag in tags:
-            if tag.marker_id == id1:
-                tag1 = tag
-            elif tag.marker_id == id2:
-                tag2 = tag
-        if tag1 is None and tag2 is None:
-            return None
-        from masonry.perception.estimation import estimate_brick_pose
-
-        roll, pitch, yaw = tel.attitude_rad
-        R_wb = R_world_body(roll, pitch, yaw)
-        R_wc = R_wb @ self._T_body_cam[:3, :3]
-        t_wc = np.asarray(tel.position_m, dtype=float) + R_wb @ self._T_body_cam[:3, 3]
-
-        def to_world(tag: TagPose | None) -> TagPose | None:
-            if tag is None:
-                return None
-            return TagPose(tag.marker_id, R_wc @ np.asarray(tag.position_m) + t_wc, R_wc @ tag.R_cam_marker)
-
-        est = estimate_brick_pose(to_world(tag1), to_world(tag2), self._est_config)
-        return None if est is None else (np.asarray(est.center_m, dtype=float), float(est.yaw_rad))
+        tags = frame_tags(self.camera.read(), self.camera, self.config.markers)
+        return world_estimate(tags, self.brick_task.brick, tel, self._T_body_cam, self._est_config)
 
     def enter_pickup_align(self, *args: Any, **kwargs: Any) -> None:
         tel = self._tel
@@ -573,12 +543,17 @@ class BrickUav(UavModel):
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
+        self.as_built.begin()
         p = tel.position_m
         self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
 
     def do_place_ascend(self, tel: Telemetry) -> None:
+        t = self.brick_task  # (masonry.fsm.as_built: the placed brick is under the camera as it climbs)
+        self.as_built.look(self.camera, t.brick, tel, self.config.markers, self._T_body_cam, self._est_config)
         if self._advance(tel):
-            self._complete_task(placement_error_m=self.attempt.release_error_m)
+            self._complete_task(
+                placement_error_m=self.attempt.release_error_m, as_built=self.as_built.pose(t)
+            )
 
     # -- putting a brick back (a task given up with the brick on the magnet) ------------------------------
     def may_put_back(self, *args: Any, **kwargs: Any) -> bool:

@@ -32,6 +32,7 @@ from masonry.blueprint import UavSpec
 from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Phase, task_work_altitude_m
+from masonry.mission.as_built import PlacementWatch, completion_fields, journaled_as_built, take_result
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
@@ -58,6 +59,7 @@ from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, jo
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.mission.wind_limit import HeardWind, WindLimit
+from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import BrickTask, Plan, Task
@@ -146,6 +148,7 @@ class MissionControl:
         fallback_layers_m: each UAV's fixed layer for flights without mission control (its machine's
             ``lateral_altitude_m``: ``transit_layers_m``); a UAV that falls silent in the air keeps its way home
             at that layer reserved (:meth:`ColumnClearance.silent`). Not given: the altitude it was last at.
+        placement: the blueprint's as-built check (``Blueprint.placement``; None: its defaults, 2 cm, continue).
     """
 
     def __init__(
@@ -177,6 +180,7 @@ class MissionControl:
         fence: Site | None = None,
         wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
+        placement: PlacementCheck | None = None,
     ) -> None:
 
         names = [u.name for u in fleet]
@@ -193,6 +197,7 @@ class MissionControl:
         self.wind_limit = wind_limit
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
+        self.placement = PlacementWatch(placement)
         #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
         #: for the sink, :meth:`sample`, turns this off: its samples are the better measure)
         self.uav_events = True
@@ -304,6 +309,7 @@ class MissionControl:
                     placement_error_m=fields.get("placement_error_m"),
                     coverage=fields.get("coverage"),
                     phases=phases,
+                    as_built=journaled_as_built(fields.get("as_built")),
                 )
             )
         for name in state.lost_uavs:
@@ -575,9 +581,7 @@ class MissionControl:
         del self._running[r.task_id]
         self._results += 1
         att.end_s = now_s
-        att.placement_error_m = r.placement_error_m
-        att.coverage = r.coverage
-        att.phases = r.phases
+        take_result(att, r)
         if r.status == "done":
             att.status = "done"
             log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
@@ -585,14 +589,7 @@ class MissionControl:
             if self.glue is not None:
                 self.glue.completed(r.task_id, now_s)
             if self.journal is not None:
-                fields: dict[str, Any] = {}
-                if r.placement_error_m is not None:
-                    fields["placement_error_m"] = r.placement_error_m
-                if r.coverage is not None:
-                    fields["coverage"] = r.coverage
-                if r.phases is not None:
-                    fields["phases"] = r.phases.as_dict()
-                self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+                self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r))
             self._emit(
                 now_s,
                 "completed",
@@ -601,7 +598,9 @@ class MissionControl:
                 attempt=att.attempt,
                 placement_error_m=r.placement_error_m,
                 coverage=r.coverage,
+                **self.placement.event_fields(r.as_built),
             )
+            self.placement.completed(self, r, msg.sender, now_s)
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
@@ -665,9 +664,7 @@ class MissionControl:
         att.end_s = now_s
         att.status = "done"
         att.reason = None
-        att.placement_error_m = r.placement_error_m
-        att.coverage = r.coverage
-        att.phases = r.phases
+        take_result(att, r)
         if other is not None:
             again = self._running.pop(r.task_id, None)
             if again is not None:
@@ -678,12 +675,7 @@ class MissionControl:
                     self.journal.record_failure(now_s, r.task_id, other, again.reason)
             self.recall(other, now_s, f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}")
         if self.journal is not None:
-            fields: dict[str, Any] = {}
-            if r.placement_error_m is not None:
-                fields["placement_error_m"] = r.placement_error_m
-            if r.coverage is not None:
-                fields["coverage"] = r.coverage
-            self.journal.record_completion(now_s, r.task_id, msg.sender, **fields)
+            self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r))
         self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
         self._dirty = True
         return True

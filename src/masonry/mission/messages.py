@@ -26,10 +26,9 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 
 Version history: 1 the first five messages; 2 adds the clearance messages (a version-1 peer would reject them,
 so the version changes and a mixed pair refuses each other's messages at once instead of half-working); 3 adds
-``wall`` to the assignment and ``attempt`` to the result (docs/security.md: a UAV checks the task against its
-blueprint, mission control accepts a result only for the current attempt). Within version 3, a result may carry
-``phases`` (where the attempt's time went, :class:`~masonry.ports.PhaseTimes`): optional both ways, since a peer
-without it leaves it out and one that does not know it ignores it, so the version stays. 4 adds the operator's
+``wall`` to the assignment and ``attempt`` to the result (docs/security.md). Within version 3, a result may carry
+``phases`` (:class:`~masonry.ports.PhaseTimes`) and ``as_built`` (:class:`~masonry.perception.types.AsBuiltPose`):
+optional both ways, a peer that does not know one ignores it, so the version stays. 4 adds the operator's
 messages (a version-3 UAV would reject a recall as an unknown type and fly on).
 """
 
@@ -42,6 +41,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from masonry.errors import ProtocolError
+from masonry.mission.as_built import as_built_field
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import PHASES, PhaseTimes, TaskResult
 
@@ -294,6 +294,7 @@ def encode(message: Message) -> bytes:
                 "placement_error_m": r.placement_error_m,
                 "coverage": r.coverage,
                 **({} if r.phases is None else {"phases": r.phases.as_dict()}),
+                **({} if r.as_built is None else {"as_built": r.as_built.to_dict()}),
             },
         )
     elif isinstance(message, ClearanceRequest):
@@ -395,11 +396,7 @@ class _Fields:
         v = self.data.get(field) if optional else self.get(field)
         if v is None and optional:
             return None
-        if (
-            not isinstance(v, list)
-            or len(v) != 3
-            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v)
-        ):
+        if not isinstance(v, list) or len(v) != 3 or not all(_finite_number(x) for x in v):
             raise self.fail(field, f"must be a list of 3 finite numbers, got {v!r}")
         return (float(v[0]), float(v[1]), float(v[2]))
 
@@ -674,6 +671,7 @@ def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
         placement_error_m=r.num("placement_error_m", optional=True),
         coverage=r.num("coverage", optional=True),
         phases=None if r.data.get("phases") is None else phases_from_dict(r.data["phases"]),
+        as_built=as_built_field(r.data, r.fail),
     )
     attempt = f.int_("attempt")
     if attempt < 0:

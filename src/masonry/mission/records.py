@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from masonry.blueprint import UavSpec
+from masonry.perception.types import AsBuiltPose
 from masonry.ports import PhaseTimes
 
 Vec3 = tuple[float, float, float]
@@ -30,6 +31,7 @@ class Attempt:
     placement_error_m: float | None = None
     coverage: float | None = None
     phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
+    as_built: AsBuiltPose | None = None  # a brick's pose as the UAV's camera saw it (None: not reported)
     #: in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
     adopted: bool = False
 

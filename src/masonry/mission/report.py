@@ -16,6 +16,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from masonry.perception.types import AsBuiltPose
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
 from masonry.ports import PhaseTimes
@@ -142,6 +143,8 @@ class MissionReport:
     cure_time_violations: int | None = None
     #: the adhesive's open time (for the Gantt chart's open windows; not in the JSON)
     open_time_s: float | None = None
+    #: per brick task, the brick's pose as the UAV's camera saw it after the release (issue 30)
+    as_built: Mapping[str, AsBuiltPose] = field(default_factory=dict)
 
     @property
     def real_time_factor(self) -> float:
@@ -159,6 +162,7 @@ class MissionReport:
             "uavs": [u.to_dict() for u in self.uavs],
             "tasks": [self._task_dict(t) for t in self.tasks],
             "placement_error_m": {k: _r(v, 4) for k, v in self.placement_error_m.items()},
+            "as_built": {k: v.to_dict(4) for k, v in self.as_built.items()},
             "min_separation_m": _r(self.min_separation_m, 3),
             "conflict_violations": self.conflict_violations,
             "dependency_violations": self.dependency_violations,
@@ -233,6 +237,12 @@ class MissionReport:
         if errs:
             lines.append(
                 f"placement error: mean {sum(errs) / len(errs) * 100:.1f} cm, max {max(errs) * 100:.1f} cm"
+            )
+        devs = [p.deviation_m for p in self.as_built.values()]
+        if devs:
+            lines.append(
+                f"as-built ({len(devs)} brick{'' if len(devs) == 1 else 's'} seen): deviation from the design mean "
+                f"{sum(devs) / len(devs) * 100:.1f} cm, max {max(devs) * 100:.1f} cm"
             )
         sep = "n/a" if self.min_separation_m is None else f"{self.min_separation_m:.2f} m"
         lines.append(
@@ -528,6 +538,7 @@ def control_report(
             if a.status == "done" and a.placement_error_m is not None
         }
     ordered = {t.id: placement_error_m[t.id] for t in plan.tasks if t.id in placement_error_m}
+    seen = {a.task_id: a.as_built for a in mc.history if a.status == "done" and a.as_built is not None}
     return MissionReport(
         completed=not stuck,
         makespan_s=makespan,
@@ -538,6 +549,7 @@ def control_report(
         uavs=uavs,
         tasks=tuple(tasks),
         placement_error_m=ordered,
+        as_built={t.id: seen[t.id] for t in plan.tasks if t.id in seen},
         min_separation_m=min_separation_m,
         conflict_violations=conflicts,
         dependency_violations=deps,

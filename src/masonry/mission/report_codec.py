@@ -18,6 +18,7 @@ import numpy as np
 
 from masonry.errors import MissionError
 from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
+from masonry.perception.types import AsBuiltPose
 from masonry.ports import PhaseTimes
 
 #: Bumped when the record's form changes; a reader refuses another.
@@ -101,6 +102,7 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "schedule_followed": report.schedule_followed,
         "schedule_assignments": report.schedule_assignments,
         **_adhesive_out(report),
+        **({"as_built": {k: v.to_dict() for k, v in report.as_built.items()}} if report.as_built else {}),
     }
 
 
@@ -161,6 +163,8 @@ def report_from_record(data: Any) -> MissionReport:
             open_time_violations=_opt_int(data.get("open_time_violations")),
             cure_time_violations=_opt_int(data.get("cure_time_violations")),
             open_time_s=_num_in(data.get("open_time_s")),
+            # (absent from the records of logs written before issue 30)
+            as_built={str(k): AsBuiltPose.from_dict(v) for k, v in dict(data.get("as_built") or {}).items()},
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None

@@ -35,6 +35,7 @@ from masonry.mission.measured import (
     MeasuredJournal,
     journaled_errors_m,
     kept_completions,
+    kept_errors_m,
     simulated_report,
 )
 from masonry.mission.messages import MISSION_CONTROL
@@ -530,6 +531,7 @@ class SimulatedMission:
                 fence=blueprint.site,
                 wind_limit=_wind_limit(faults, fleet, max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
+                placement=blueprint.placement,
             )
             if state is not None:
                 mc.restore(state)
@@ -549,14 +551,7 @@ class SimulatedMission:
                 layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
                 measured=measured,
                 resumed_from=resumed_from,
-                journaled_errors_m={
-                    **{
-                        k.task_id: k.placement_error_m
-                        for k in kept.values()
-                        if k.placement_error_m is not None
-                    },
-                    **journaled_errors_m(state),
-                },
+                journaled_errors_m={**kept_errors_m(kept), **journaled_errors_m(state)},
                 resources=resources.pop_all(),
                 uav_config=uav_config,
             )
