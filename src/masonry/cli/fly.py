@@ -473,8 +473,7 @@ def _fly_one_task(
     from masonry.planner import plan
 
     the_plan = plan(bp)
-    the_task = _pick_task(bp, the_plan, task, uav)
-    spec = _pick_uav(bp, uav, name)
+    the_task, spec = _pick_task(bp, the_plan, task, uav), _pick_uav(bp, uav, name)
 
     # Single-task mode: every brick the task depends on is taken as already built.
     before = {t for t in _prerequisites(the_plan, task) if t.startswith("B")}
@@ -489,6 +488,7 @@ def _fly_one_task(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
+        wall=tuple((b.id, (*b.position_m[:2], b.position_m[2] + b.size_m[2] / 2)) for b in bp.bricks),
         fence=bp.site,
         **hardware.uav_settings(tuning_preset(vehicle, adapters)),
     )

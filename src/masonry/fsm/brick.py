@@ -24,6 +24,7 @@ from masonry.fsm.states import (
     leaf_states,
 )
 from masonry.fsm.tool import Tool
+from masonry.fsm.wall_align import WallAlign
 from masonry.geometry import wrap_angle_rad
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
@@ -122,6 +123,7 @@ class BrickUav(UavModel):
         self.effector = Tool.at(config.airframe.effector_offset_m, plumb=True)
         self._camera_align = CameraAlign()
         self.as_built = AsBuiltLook(config.window_size, config.sigma_tol_m)
+        self._wall = WallAlign()  # (masonry.fsm.wall_align: with align_on_wall only)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         self._begin_counters()
@@ -483,8 +485,10 @@ class BrickUav(UavModel):
         yaw = self._place_yaw_rad()
         body = self.effector.body_target(self._place_effector_target_m(), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+        self._wall.reset(self._place_effector_target_m())
 
     def do_place_align(self, tel: Telemetry) -> None:
+        self._wall.track(self, tel)
         if self._aligned(tel):
             self.aligned()
         elif (swinging := self._swinging(tel)) is not None:
@@ -500,9 +504,11 @@ class BrickUav(UavModel):
         self.attempt.place_effector_target_m = self._place_effector_target_m()
         body = self.effector.body_target(self.attempt.place_effector_target_m, yaw)
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
+        self._wall.apply(self)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._wall.track(self, tel)
         error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
             self.attempt.release_error_m = error

@@ -62,6 +62,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
     "px4": {
         "gate_window_s": 1.5,
         "align_on_camera": True,
+        "align_on_wall": True,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,

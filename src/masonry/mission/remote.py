@@ -184,6 +184,7 @@ def run_remote_uav(
         spec,
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
+        wall=tuple((b.id, (*b.position_m[:2], b.position_m[2] + b.size_m[2] / 2)) for b in blueprint.bricks),
         lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
         fence=blueprint.site,
         **dict(uav_settings or {}),

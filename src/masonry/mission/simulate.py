@@ -147,6 +147,7 @@ def _build_machine(
         home_m=spec.home_m,
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
+        wall=tuple((b.id, (*b.position_m[:2], b.position_m[2] + b.size_m[2] / 2)) for b in blueprint.bricks),
         lateral_altitude_m=lateral_altitude_m,
         fence=blueprint.site,
     )
