@@ -17,7 +17,8 @@ The default run (one seed, calm air) takes a few minutes on one core; the issue'
 
     .venv/bin/python benchmarks/bench_as_built.py --seeds 10 --wind calm,4
 
-(``--walls``, ``--vehicles`` select; ``--seed0`` shifts the seeds.)
+(``--walls``, ``--vehicles`` select; ``--seed0`` shifts the seeds; ``--no-wall-align`` places on the absolute
+position, ``align_on_wall`` off, for the comparison.)
 """
 
 from __future__ import annotations
@@ -32,6 +33,8 @@ import numpy as np
 
 from masonry.blueprint import Blueprint
 from masonry.blueprint_gen import pyramid, running_bond, towers
+from masonry.fsm.config import UavConfig
+from masonry.fsm.tuning import uav_settings
 from masonry.mission.simulate import SimulatedMission
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -82,9 +85,19 @@ def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
     return out
 
 
-def run_one(bp: Blueprint, vehicle: str, seed: int, wind_mps: float, tally: Tally) -> None:
+def run_one(
+    bp: Blueprint, vehicle: str, seed: int, wind_mps: float, tally: Tally, *, wall: bool = True
+) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
-    mission = SimulatedMission.from_blueprint(bp, seed=seed, vehicle=vehicle, faults=faults)
+    config = None
+    if (
+        not wall
+    ):  # the vehicle's control preset with the wall's markers off (placement on the absolute position)
+        settings = {**uav_settings(vehicle), "align_on_wall": False}
+        config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
+    mission = SimulatedMission.from_blueprint(
+        bp, seed=seed, vehicle=vehicle, faults=faults, uav_config=config
+    )
     report = mission.run()
     tally.runs += 1
     tally.completed += int(report.completed)
@@ -128,6 +141,11 @@ def main() -> None:
     )
     parser.add_argument("--walls", default=",".join(WALLS))
     parser.add_argument("--vehicles", default=",".join(VEHICLES))
+    parser.add_argument(
+        "--no-wall-align",
+        action="store_true",
+        help="place on the absolute position (align_on_wall off, as before issue 30's wall alignment)",
+    )
     args = parser.parse_args()
     winds = [0.0 if w == "calm" else float(w) for w in args.wind.split(",")]
     print(
@@ -141,7 +159,7 @@ def main() -> None:
                 tally = Tally()
                 start = time.perf_counter()
                 for seed in range(args.seed0, args.seed0 + args.seeds):
-                    run_one(bp, vehicle, seed, wind, tally)
+                    run_one(bp, vehicle, seed, wind, tally, wall=not args.no_wall_align)
                 assert tally.design_m is not None and tally.neighbour_m is not None
                 assert tally.estimate_m is not None
                 label = "calm" if wind == 0 else f"{wind:g} m/s"
