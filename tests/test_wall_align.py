@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from masonry.blueprint_gen import pyramid
+from masonry.errors import InputError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import PRESETS, uav_settings
 from masonry.fsm.wall_align import wall_offset_m
@@ -77,3 +78,11 @@ def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     against 15.1 cm on this seed; docs/performance/as-built.md has the benchmark)."""
     on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))
+
+
+def test_uav_yaml_may_switch_it_but_not_set_the_wall() -> None:
+    assert uav_settings("arducopter", {"align_on_wall": True})["align_on_wall"] is True
+    with pytest.raises(InputError, match="control: align_on_wall must be true or false"):
+        uav_settings("ideal", {"align_on_wall": 1})
+    with pytest.raises(InputError, match="control: unknown setting 'wall'"):
+        uav_settings("ideal", {"wall": 3})

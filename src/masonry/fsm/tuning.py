@@ -28,7 +28,17 @@ from masonry.motion import AxisGains, PIDGains
 
 #: UavConfig fields ``control:`` may not set: the UAV's identity and the blueprint's, and the gains (``pid:``).
 _NOT_TUNING = frozenset(
-    {"name", "role", "home_m", "cruise_altitude_m", "markers", "airframe", "pid_gains", "lateral_altitude_m"}
+    {
+        "name",
+        "role",
+        "home_m",
+        "cruise_altitude_m",
+        "markers",
+        "airframe",
+        "pid_gains",
+        "lateral_altitude_m",
+        "wall",
+    }
 )
 #: UavConfig fields that are counts (integers), not measures.
 _COUNTS = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("int", int))
