@@ -34,6 +34,7 @@ def test_sim_json_is_exactly_the_report(tmp_path):
         "uavs",
         "tasks",
         "placement_error_m",
+        "as_built",
         "min_separation_m",
         "conflict_violations",
         "dependency_violations",

@@ -30,6 +30,7 @@ REPORT_KEYS = [
     "uavs",
     "tasks",
     "placement_error_m",
+    "as_built",
     "min_separation_m",
     "conflict_violations",
     "dependency_violations",

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.errors import BlueprintError
 from masonry.geofence import Site
+from masonry.placement_check import PLACEMENT_KEYS, PlacementCheck, parse_placement_check
 from masonry.spares import Spare, format_spares, parse_spares
 
 if TYPE_CHECKING:
@@ -165,6 +166,8 @@ class Blueprint:
     adhesive: Adhesive | None = None
     #: spare bricks (None: no ``spares`` key, no spare accounting; docs/blueprint-format.md, "Spares")
     spares: tuple[Spare, ...] | None = None
+    #: the as-built check of each placed brick (docs/blueprint-format.md, "As-built check")
+    placement: PlacementCheck = field(default_factory=PlacementCheck)
 
     def brick(self, brick_id: int) -> Brick:
         """The brick with id ``brick_id`` (KeyError if there is none)."""
@@ -181,7 +184,18 @@ class Blueprint:
 
 # ---------------------------------------------------------------------------------------------- loading
 
-TOP_KEYS = ("name", "clearance", "cruise_altitude", "brick", "bricks", "fleet", "site", "adhesive", "spares")
+TOP_KEYS = (
+    "name",
+    "clearance",
+    "cruise_altitude",
+    "brick",
+    "bricks",
+    "fleet",
+    "site",
+    "adhesive",
+    "spares",
+    *PLACEMENT_KEYS,
+)
 BRICK_DEFAULT_KEYS = ("size", "markers")
 MARKER_KEYS = ("dictionary", "size", "spacing")
 BRICK_KEYS = ("id", "position", "yaw", "placed", "size", "pickup", "marker")
@@ -301,6 +315,7 @@ def parse_blueprint(data: Any, source: str = "<blueprint>", *, check_marker_ids:
         site=parse_site(data.get("site"), source),
         adhesive=parse_adhesive(data.get("adhesive"), source),
         spares=parse_spares(data.get("spares"), source, default_size),
+        placement=parse_placement_check(data, source),
     )
     validate_blueprint(blueprint, check_marker_ids=check_marker_ids)
     return blueprint
@@ -554,6 +569,11 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
         lines.append(format_adhesive(blueprint.adhesive))
     if blueprint.spares is not None:
         lines.append(format_spares(blueprint.spares, blueprint.brick_size_m, _num))
+    if (
+        blueprint.placement != PlacementCheck()
+    ):  # (the defaults are not written: old files read back the same)
+        lines.append(f"placement_tolerance_m: {_num(blueprint.placement.tolerance_m)}")
+        lines.append(f"on_placement_error: {blueprint.placement.on_error}")
     return "\n".join(lines) + "\n"
 
 

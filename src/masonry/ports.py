@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 if TYPE_CHECKING:
     import numpy as np
 
-    from masonry.perception.types import CameraIntrinsics, TagPose
+    from masonry.perception.types import AsBuiltPose, CameraIntrinsics, TagPose
     from masonry.planner.tasks import Task
 
 Vec3 = tuple[float, float, float]
@@ -162,6 +162,8 @@ class TaskResult:
     placement_error_m: float | None = None
     coverage: float | None = None
     phases: PhaseTimes | None = None
+    #: a brick's pose as the UAV's camera saw it after the release (None: not seen, or not a brick task)
+    as_built: AsBuiltPose | None = None
 
 
 @runtime_checkable

@@ -29,6 +29,7 @@ from masonry.blueprint import (
     UAV_NAME_PATTERN,
 )
 from masonry.geofence import MAX_BOUNDARY_VERTICES
+from masonry.placement_check import MAX_PLACEMENT_TOLERANCE_M, ON_PLACEMENT_ERROR
 
 SCHEMA_ID = "https://masonry.example/schemas/blueprint.schema.json"
 
@@ -201,6 +202,18 @@ def blueprint_schema() -> dict[str, Any]:
                         ),
                     },
                 },
+            },
+            "placement_tolerance_m": {
+                "type": "number",
+                "exclusiveMinimum": 0,
+                "maximum": MAX_PLACEMENT_TOLERANCE_M,
+                "description": "A placed brick whose as-built centre is farther than this from its design is an "
+                "event the operator sees (m; default 0.02).",
+            },
+            "on_placement_error": {
+                "enum": list(ON_PLACEMENT_ERROR),
+                "description": "What the mission does when a brick is beyond placement_tolerance_m: continue "
+                "(default) or hold (pause until the operator resumes).",
             },
         },
     }

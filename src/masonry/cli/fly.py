@@ -1,8 +1,7 @@
 """``masonry fly``: one UAV flies one task of a blueprint, here in the simulated world (``--sim``).
 
-The command is thin: parse, pick the UAV and the task, wire the adapters (:func:`select_adapters`, the one
-place that decides what drives the flight controller, the actuators and the camera), run
-:func:`masonry.fsm.fly_task`, print the trace and the result.
+The command is thin: parse, pick the UAV and the task, wire the adapters (:func:`select_adapters`, the one place
+that decides what drives the flight controller, the actuators and the camera), fly it, print the result.
 """
 
 from __future__ import annotations
@@ -19,6 +18,7 @@ from masonry.cli.fly_tuning import tuning_preset, with_tuning_line
 from masonry.cli.options import check_all, help_text
 from masonry.cli.wind_options import TURBULENCE_OPTION, WIND_OPTION, site_faults
 from masonry.errors import InputError
+from masonry.placement_check import wall_tops_m
 from masonry.ports import UavPorts
 
 #: The old name of what :func:`select_adapters` returns (it is :class:`masonry.ports.UavPorts` now).
@@ -473,8 +473,7 @@ def _fly_one_task(
     from masonry.planner import plan
 
     the_plan = plan(bp)
-    the_task = _pick_task(bp, the_plan, task, uav)
-    spec = _pick_uav(bp, uav, name)
+    the_task, spec = _pick_task(bp, the_plan, task, uav), _pick_uav(bp, uav, name)
 
     # Single-task mode: every brick the task depends on is taken as already built.
     before = {t for t in _prerequisites(the_plan, task) if t.startswith("B")}
@@ -489,6 +488,7 @@ def _fly_one_task(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
         markers=bp.markers,
+        wall=wall_tops_m(bp.bricks),
         fence=bp.site,
         **hardware.uav_settings(tuning_preset(vehicle, adapters)),
     )

@@ -252,6 +252,7 @@ def mission_control(
             fence=bp.site,
             # the layer each `masonry fly --mission` UAV flies at without mission control (remote.py's)
             fallback_layers_m=transit_layers_m(bp),
+            placement=bp.placement,
         )
         offset = 0.0
         if state is not None:

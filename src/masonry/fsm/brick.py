@@ -11,6 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from masonry.fsm.as_built import AsBuiltLook
 from masonry.fsm.base import Vec3
 from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
@@ -19,6 +20,7 @@ from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
+from masonry.fsm.wall_align import WallAlign
 from masonry.geometry import wrap_angle_rad
 from masonry.marker_reuse import identify_radius_m
 from masonry.perception.estimation import EstimatorConfig, PoseWindow
@@ -76,6 +78,8 @@ class BrickUav(PutBack):
         # the rod descends on its unlocked ball joint: it hangs plumb however the UAV leans (masonry.fsm.tool)
         self.effector = Tool.at(config.airframe.effector_offset_m, plumb=True)
         self._camera_align = CameraAlign()
+        self.as_built = AsBuiltLook(config.window_size, config.sigma_tol_m)
+        self._wall = WallAlign()  # (masonry.fsm.wall_align: with align_on_wall only)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
@@ -369,8 +373,10 @@ class BrickUav(PutBack):
         yaw = self._place_yaw_rad()
         body = self.effector.body_target(self._place_effector_target_m(), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+        self._wall.reset(self._place_effector_target_m())
 
     def do_place_align(self, tel: Telemetry) -> None:
+        self._wall.track(self, tel)
         if self._aligned(tel):
             self.aligned()
         elif (swinging := self._gate_failure(tel)) is not None:
@@ -386,9 +392,11 @@ class BrickUav(PutBack):
         self.attempt.place_effector_target_m = self._place_effector_target_m()
         body = self.effector.body_target(self.attempt.place_effector_target_m, yaw)
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
+        self._wall.apply(self)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._wall.track(self, tel)
         error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
             self.attempt.release_error_m = error
@@ -429,9 +437,16 @@ class BrickUav(PutBack):
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
+        self.as_built.begin()
         p = tel.position_m
         self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
 
     def do_place_ascend(self, tel: Telemetry) -> None:
+        t = self.brick_task  # (masonry.fsm.as_built: the placed brick is under the camera as it climbs)
+        self.as_built.look(
+            self.camera, t.marker_ids[0] // 2, tel, self.config.markers, self._T_body_cam, self._est_config
+        )
         if self._advance(tel):
-            self._complete_task(placement_error_m=self.attempt.release_error_m)
+            self._complete_task(
+                placement_error_m=self.attempt.release_error_m, as_built=self.as_built.pose(t)
+            )

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from masonry.blueprint import MarkerSpec
+from masonry.fsm.as_built import frame_tags
 from masonry.geometry import R_world_body
 from masonry.perception.estimation import EstimatorConfig, estimate_brick_pose
 from masonry.perception.types import TagPose
@@ -43,16 +44,7 @@ def sight_brick(
 
     None when the camera has no frame, or sees none of the brick's markers within ``radius_m`` of its pickup.
     """
-    frame = camera.read()
-    if frame is None:
-        return None
-    tags = frame.tags
-    if tags is None:
-        if frame.image is None:
-            return None
-        from masonry.perception.aruco import detect_tags  # OpenCV only for a camera that gives images
-
-        tags = tuple(detect_tags(frame.image, camera.intrinsics, markers))
+    tags = frame_tags(camera.read(), camera, markers)
     id1, id2 = task.marker_ids
     mine = [tag for tag in tags if tag.marker_id in (id1, id2)]
     if not mine:

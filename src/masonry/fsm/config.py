@@ -60,6 +60,11 @@ class UavConfig:
     # The brick UAV re-estimates the brick from its camera every tick while it aligns and descends and follows it
     # (masonry.fsm.camera_align): the absolute position's wander cancels; False: the estimate hover's estimate
     align_on_camera: bool = False
+    # Issue 30: while it aligns above the drop-off and descends, the brick UAV moves the drop-off with the bricks
+    # of the wall its camera sees (masonry.fsm.wall_align): the absolute position's wander cancels and the brick
+    # keeps its designed offsets to them; ``wall``: every brick's id and designed top-face centre (the blueprint's)
+    align_on_wall: bool = False
+    wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

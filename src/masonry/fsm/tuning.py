@@ -28,7 +28,17 @@ from masonry.motion import AxisGains, PIDGains
 
 #: UavConfig fields ``control:`` may not set: the UAV's identity and the blueprint's, and the gains (``pid:``).
 _NOT_TUNING = frozenset(
-    {"name", "role", "home_m", "cruise_altitude_m", "markers", "airframe", "pid_gains", "lateral_altitude_m"}
+    {
+        "name",
+        "role",
+        "home_m",
+        "cruise_altitude_m",
+        "markers",
+        "airframe",
+        "pid_gains",
+        "lateral_altitude_m",
+        "wall",
+    }
 )
 #: UavConfig fields that are counts (integers), not measures.
 _COUNTS = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("int", int))
@@ -65,6 +75,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "velocity_from_position_s": 2.0,
         "gate_window_s": 1.5,
         "align_on_camera": True,
+        "align_on_wall": True,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,

@@ -31,6 +31,7 @@ from masonry.blueprint import UavSpec
 from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, Phase, task_work_altitude_m
+from masonry.mission.as_built import PlacementWatch, journaled_as_built, take_result
 from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
@@ -60,6 +61,7 @@ from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, st
 from masonry.mission.transport import Transport
 from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind, WindLimit
+from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import BrickTask, Plan, Task
@@ -116,8 +118,8 @@ class MissionControl:
         heartbeat_period_s: how often mission control sends its heartbeat.
         heartbeat_timeout_s: a UAV silent for longer is declared lost.
         startup_timeout_s: how long to wait for the whole fleet before starting without the missing UAVs.
-        rejoin_timeout_s: how long a mission left without any UAV of a role waits, before it ends, for one of
-            them declared lost for its silence to be heard again and rejoin (default: ``startup_timeout_s``).
+        rejoin_timeout_s: how long a mission left without any UAV of a role waits for one declared lost for its
+            silence to rejoin, before it ends (default: ``startup_timeout_s``).
         column_radius_m: two site columns (UAVs below their transit layer) are never granted closer than
             this horizontally (the blueprint's clearance r_c is the natural value; 0 grants every request).
         layer_base_m, layer_spacing_m: transit layers handed out per flight, at ``layer_base_m + k *
@@ -132,22 +134,19 @@ class MissionControl:
         min_fraction: the margin on ``min_durations_s`` (two processes' clocks and ticks).
         timing: the UAVs' task timing and tool geometry (:class:`masonry.timing.TaskTiming`; default:
             ``UavConfig``'s), for the work altitudes ``layer_floor_m`` rises to.
-        stall_timeout_s: when no task ends, no flight is granted and no UAV's state changes for this long,
-            the mission stops, not completed, with :attr:`stall` saying who waits for whom
-            (:mod:`masonry.mission.stall`); None or 0: never.
-        reservation: ``task`` (the paper: conflicting tasks never run at once) or ``site`` (they may; their
-            UAVs never work at their sites at once: :mod:`masonry.mission.sites`). Site intervals are recorded
-            either way (:attr:`sites`).
+        stall_timeout_s: when no task ends, no flight is granted and no UAV's state changes for this long, the
+            mission stops, not completed, :attr:`stall` saying who waits for whom; None or 0: never.
+        reservation: ``task`` (the paper: conflicting tasks never run at once) or ``site`` (their UAVs never
+            work at their sites at once: :mod:`masonry.mission.sites`); site intervals are recorded either way.
         schedule: the offline schedule (:class:`masonry.planner.schedule_values.OfflineSchedule`) that
             ``policy="schedule"`` follows (:mod:`masonry.planner.schedule_policy`).
-        events_sink: gets every :class:`~masonry.mission.events.MissionEvent` (assignments, results,
-            clearances, UAV reports, losses, the stall, the end) for a log or a live view; it only watches.
+        events_sink: gets every :class:`~masonry.mission.events.MissionEvent` for a log or a live view.
         fence: the site's geofence (``Blueprint.site``; None: none): the airspace grants no flight that leaves it,
             and a task whose flight could only be flown outside it fails with the reason.
-        fallback_layers_m: each UAV's fixed layer for flights without mission control (its machine's
-            ``lateral_altitude_m``: ``transit_layers_m``); a UAV that falls silent in the air keeps its way home
-            at that layer reserved (:meth:`ColumnClearance.silent`). Not given: the altitude it was last at.
+        fallback_layers_m: each UAV's fixed layer for flights without mission control (``transit_layers_m``):
+            a UAV silent in the air keeps its way home there reserved (default: the altitude it was last at).
         airspace: ``columns`` (:class:`ColumnClearance`) or ``table`` (:class:`masonry.mission.reserved.TableClearance`).
+        placement: the blueprint's as-built check (``Blueprint.placement``; None: 2 cm, continue).
     """
 
     def __init__(
@@ -180,6 +179,7 @@ class MissionControl:
         wind_limit: WindLimit | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
         airspace: str = "columns",
+        placement: PlacementCheck | None = None,
     ) -> None:
         names = [u.name for u in fleet]
         if len(set(names)) != len(names):
@@ -195,6 +195,7 @@ class MissionControl:
         self.wind_limit = wind_limit
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
+        self.placement = PlacementWatch(placement)
         #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
         #: for the sink, :meth:`sample`, turns this off: its samples are the better measure)
         self.uav_events = True
@@ -312,6 +313,7 @@ class MissionControl:
                     placement_error_m=fields.get("placement_error_m"),
                     coverage=fields.get("coverage"),
                     phases=phases,
+                    as_built=journaled_as_built(fields.get("as_built")),
                 )
             )
         for name in state.lost_uavs:
@@ -564,9 +566,7 @@ class MissionControl:
         del self._running[r.task_id]
         self._results += 1
         att.end_s = now_s
-        att.placement_error_m = r.placement_error_m
-        att.coverage = r.coverage
-        att.phases = r.phases
+        take_result(att, r)
         if r.status == "done":
             att.status = "done"
             log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
@@ -583,7 +583,9 @@ class MissionControl:
                 attempt=att.attempt,
                 placement_error_m=r.placement_error_m,
                 coverage=r.coverage,
+                **self.placement.event_fields(r.as_built),
             )
+            self.placement.completed(self, r, msg.sender, now_s)
         else:
             att.status = "failed"
             att.reason = r.reason or "failed"
@@ -648,9 +650,7 @@ class MissionControl:
         att.end_s = now_s
         att.status = "done"
         att.reason = None
-        att.placement_error_m = r.placement_error_m
-        att.coverage = r.coverage
-        att.phases = r.phases
+        take_result(att, r)
         if other is not None:
             again = self._running.pop(r.task_id, None)
             if again is not None:

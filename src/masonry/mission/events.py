@@ -8,7 +8,10 @@ Kinds (``MissionEvent.kind``) and their fields:
 
 - ``start``: the mission starts dispatching (``fleet``: names).
 - ``assigned``: ``task_id`` to ``uav``, ``attempt``.
-- ``completed``: ``task_id`` by ``uav``, ``placement_error_m`` and ``coverage`` as the UAV measured them.
+- ``completed``: ``task_id`` by ``uav``, ``placement_error_m`` and ``coverage`` as the UAV measured them, and
+  ``as_built`` (a brick's pose as its camera saw it, :class:`~masonry.perception.types.AsBuiltPose`'s dict).
+- ``placement``: a brick placed farther from its design than the blueprint's ``placement_tolerance_m``:
+  ``deviation_m``, ``tolerance_m``, ``action`` (``continue`` or ``hold``) and ``line`` (:mod:`masonry.mission.as_built`).
 - ``failed``: ``task_id`` by ``uav``, ``reason``.
 - ``clearance``: a flight to ``site_m`` ``granted`` (true) or held (false, ``hold_m`` where to wait).
 - ``uav``: a UAV's ``state``, ``position_m``, ``task_id``, ``battery`` (0..1, None: not reported) and the airspace
@@ -54,6 +57,7 @@ KINDS = (
     "wind",
     "glue",
     "spare",
+    "placement",
 )
 
 
@@ -118,7 +122,7 @@ class MissionEvent:
             extra = f": {f.get('reason', 'failed')}"
         elif self.kind == "clearance":
             extra = " granted" if f.get("granted") else " held"
-        elif self.kind in ("stall", "operator"):
+        elif self.kind in ("stall", "operator", "placement"):
             extra = f": {f.get('line') or f.get('reason') or f.get('command', '')}"
         elif self.kind == "end":
             extra = ": completed" if f.get("completed") else ": NOT completed"

@@ -207,6 +207,11 @@ def _floats(value: Any) -> dict[str, float]:
     return {str(k): float(v) for k, v in items if isinstance(v, (int, float)) and math.isfinite(v)}
 
 
+def kept_errors_m(kept: Mapping[str, KeptCompletion]) -> dict[str, float]:
+    """Placement errors of the completions the UAVs kept unheard before a stop (measured then)."""
+    return {k.task_id: k.placement_error_m for k in kept.values() if k.placement_error_m is not None}
+
+
 def journaled_errors_m(state: Any) -> dict[str, float]:
     """Placement errors of the bricks done before a resume: the world's true one when the journal has it."""
     out: dict[str, float] = {}

@@ -26,8 +26,9 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 
 Version history: 1 the first five messages; 2 the clearance messages (a mixed pair refuses each other's messages
 at once instead of half-working); 3 ``wall`` in the assignment, ``attempt`` in the result (docs/security.md);
-within 3, optional both ways: a result's ``phases``, a brick task's ``marker`` (a big wall's reused number); 4 the
-operator's messages (a version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spare``.
+within 3, optional both ways: a result's ``phases`` and ``as_built``, a brick task's ``marker`` (a big wall's
+reused number); 4 the operator's messages (a version-3 UAV would reject a recall and fly on); within 4, a brick
+task's ``spare``.
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from masonry.errors import ProtocolError
+from masonry.mission.as_built import as_built_field
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
 from masonry.ports import PHASES, PhaseTimes, TaskResult
 
@@ -292,6 +294,7 @@ def encode(message: Message) -> bytes:
                 "placement_error_m": r.placement_error_m,
                 "coverage": r.coverage,
                 **({} if r.phases is None else {"phases": r.phases.as_dict()}),
+                **({} if r.as_built is None else {"as_built": r.as_built.to_dict()}),
             },
         )
     elif isinstance(message, ClearanceRequest):
@@ -393,11 +396,7 @@ class _Fields:
         v = self.data.get(field) if optional else self.get(field)
         if v is None and optional:
             return None
-        if (
-            not isinstance(v, list)
-            or len(v) != 3
-            or any(isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) for x in v)
-        ):
+        if not isinstance(v, list) or len(v) != 3 or not all(_finite_number(x) for x in v):
             raise self.fail(field, f"must be a list of 3 finite numbers, got {v!r}")
         return (float(v[0]), float(v[1]), float(v[2]))
 
@@ -674,6 +673,7 @@ def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
         placement_error_m=r.num("placement_error_m", optional=True),
         coverage=r.num("coverage", optional=True),
         phases=None if r.data.get("phases") is None else phases_from_dict(r.data["phases"]),
+        as_built=as_built_field(r.data, r.fail),
     )
     attempt = f.int_("attempt")
     if attempt < 0:

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from masonry.blueprint import UavSpec
+from masonry.perception.types import AsBuiltPose
 from masonry.ports import PhaseTimes, TaskResult
 
 Vec3 = tuple[float, float, float]
@@ -30,6 +31,7 @@ class Attempt:
     placement_error_m: float | None = None
     coverage: float | None = None
     phases: PhaseTimes | None = None  # where its time went, as the UAV measured it (None: not reported)
+    as_built: AsBuiltPose | None = None  # a brick's pose as the UAV's camera saw it (None: not reported)
     #: in flight when the journal this run resumed from ends (:meth:`MissionControl.restore`)
     adopted: bool = False
 
@@ -62,7 +64,8 @@ class UavLink:
 
 
 def completion_fields(r: TaskResult, *, phases: bool = True) -> dict[str, object]:
-    """What the journal keeps of a completion: its placement error, its coverage and (``phases``) its phases."""
+    """What the journal keeps of a completion: its placement error, its coverage, (``phases``) its phases and the
+    placed brick's as-built pose."""
     fields: dict[str, object] = {}
     if r.placement_error_m is not None:
         fields["placement_error_m"] = r.placement_error_m
@@ -70,6 +73,8 @@ def completion_fields(r: TaskResult, *, phases: bool = True) -> dict[str, object
         fields["coverage"] = r.coverage
     if phases and r.phases is not None:
         fields["phases"] = r.phases.as_dict()
+    if r.as_built is not None:
+        fields["as_built"] = r.as_built.to_dict()
     return fields
 
 

@@ -19,6 +19,7 @@ from typing import Any
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, LinkLost
 from masonry.mission.handler import UavHandler
+from masonry.placement_check import wall_tops_m
 from masonry.ports import UavPorts
 
 
@@ -185,6 +186,7 @@ def run_remote_uav(
         spec,
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
+        wall=wall_tops_m(blueprint.bricks),
         lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
         fence=blueprint.site,
         **dict(uav_settings or {}),

@@ -16,8 +16,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from masonry.mission.as_built import as_built_lines
 from masonry.mission.spares import SpareReport
-from masonry.mission.waits import TaskWait, waiting_split_s, with_battery_holds
+from masonry.mission.waits import TaskWait, waiting_split_s, waits_lines, with_battery_holds
+from masonry.perception.types import AsBuiltPose
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
 from masonry.ports import PhaseTimes
@@ -155,6 +157,8 @@ class MissionReport:
     #: with ``spares`` in the blueprint: which spare replaced which brick, the spares left, the bricks that wait
     #: for a person (:class:`masonry.mission.spares.SpareReport`); None: no spares key, none of these fields
     spares: SpareReport | None = None
+    #: per brick task, the brick's pose as the UAV's camera saw it after the release (issue 30)
+    as_built: Mapping[str, AsBuiltPose] = field(default_factory=dict)
 
     @property
     def real_time_factor(self) -> float:
@@ -172,6 +176,7 @@ class MissionReport:
             "uavs": [u.to_dict() for u in self.uavs],
             "tasks": [self._task_dict(t) for t in self.tasks],
             "placement_error_m": {k: _r(v, 4) for k, v in self.placement_error_m.items()},
+            "as_built": {k: v.to_dict(4) for k, v in self.as_built.items()},
             "min_separation_m": _r(self.min_separation_m, 3),
             "conflict_violations": self.conflict_violations,
             "dependency_violations": self.dependency_violations,
@@ -245,17 +250,13 @@ class MissionReport:
         if totals.total_s > 0:
             spent = ", ".join(f"{name} {sec:.0f} s" for name, sec in totals.items() if sec >= 0.5)
             lines.append(f"time per phase (every attempt): {spent}")
-        waited: dict[str, float] = {}
-        for w in (w for t in self.tasks for w in t.waits):
-            waited[w.cause.what] = waited.get(w.cause.what, 0.0) + w.duration_s
-        if waited:
-            spent = ", ".join(f"{k} {v:.0f} s" for k, v in sorted(waited.items(), key=lambda kv: -kv[1]))
-            lines.append(f"tasks waited for (task-seconds, JSON: tasks[].waits): {spent}")
+        lines.extend(waits_lines(w for t in self.tasks for w in t.waits))
         errs = list(self.placement_error_m.values())
         if errs:
             lines.append(
                 f"placement error: mean {sum(errs) / len(errs) * 100:.1f} cm, max {max(errs) * 100:.1f} cm"
             )
+        lines.extend(as_built_lines(self.as_built))
         sep = "n/a" if self.min_separation_m is None else f"{self.min_separation_m:.2f} m"
         lines.append(
             f"min separation {sep}; conflict violations {self.conflict_violations}, "
@@ -574,6 +575,7 @@ def control_report(
             if a.status == "done" and a.placement_error_m is not None
         }
     ordered = {t.id: placement_error_m[t.id] for t in plan.tasks if t.id in placement_error_m}
+    seen = {a.task_id: a.as_built for a in mc.history if a.status == "done" and a.as_built is not None}
     return MissionReport(
         completed=not stuck,
         makespan_s=makespan,
@@ -584,6 +586,7 @@ def control_report(
         uavs=tuple(uavs),
         tasks=tuple(tasks),
         placement_error_m=ordered,
+        as_built={t.id: seen[t.id] for t in plan.tasks if t.id in seen},
         min_separation_m=min_separation_m,
         conflict_violations=conflicts,
         dependency_violations=deps,

@@ -20,6 +20,7 @@ from masonry.errors import MissionError
 from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
 from masonry.mission.spares import SpareReport
 from masonry.mission.waits import TaskWait, WaitCause
+from masonry.perception.types import AsBuiltPose
 from masonry.ports import PhaseTimes
 
 #: Bumped when the record's form changes; a reader refuses another.
@@ -140,6 +141,7 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "schedule_assignments": report.schedule_assignments,
         **_adhesive_out(report),
         **({} if report.spares is None else {"spares": report.spares.to_record()}),
+        **({"as_built": {k: v.to_dict() for k, v in report.as_built.items()}} if report.as_built else {}),
     }
 
 
@@ -201,6 +203,8 @@ def report_from_record(data: Any) -> MissionReport:
             cure_time_violations=_opt_int(data.get("cure_time_violations")),
             open_time_s=_num_in(data.get("open_time_s")),
             spares=None if data.get("spares") is None else SpareReport.from_record(data["spares"]),
+            # (absent from the records of logs written before issue 30)
+            as_built={str(k): AsBuiltPose.from_dict(v) for k, v in dict(data.get("as_built") or {}).items()},
         )
     except (KeyError, TypeError, ValueError) as exc:
         raise MissionError(f"a report record is malformed: {type(exc).__name__} {exc}") from None

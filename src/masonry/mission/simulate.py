@@ -35,7 +35,7 @@ from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.journal import open_mission_journal
-from masonry.mission.measured import MeasuredJournal, journaled_errors_m, simulated_report
+from masonry.mission.measured import MeasuredJournal, journaled_errors_m, kept_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
@@ -390,6 +390,7 @@ class SimulatedMission:
                 wind_limit=site_wind_limit(faults.site_wind(), fleet, opts.max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
                 airspace=opts.airspace,
+                placement=blueprint.placement,
             )
             if state is not None:
                 mc.restore(state)
@@ -409,14 +410,7 @@ class SimulatedMission:
                 layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else {},
                 measured=measured,
                 resumed_from=resumed_from,
-                journaled_errors_m={
-                    **{
-                        k.task_id: k.placement_error_m
-                        for k in kept.values()
-                        if k.placement_error_m is not None
-                    },
-                    **journaled_errors_m(state),
-                },
+                journaled_errors_m={**kept_errors_m(kept), **journaled_errors_m(state)},
                 resources=resources.pop_all(),
                 uav_config=uav_config,
                 uav_machine=uav_machine,

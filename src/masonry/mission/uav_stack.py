@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Protocol
 from masonry.errors import MasonryError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
+from masonry.placement_check import wall_tops_m
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
@@ -137,6 +138,7 @@ def build_machine(
         home_m=spec.home_m,
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
+        wall=wall_tops_m(blueprint.bricks),
         lateral_altitude_m=lateral_altitude_m,
         fence=blueprint.site,
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import threading
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -92,6 +92,9 @@ class MissionView:
         #: beads waiting for their brick (with an adhesive's open time; ``glue`` events)
         self.glue: dict[str, OpenBead] = {}
         self._glued = False  # a ``glue`` event was seen (the snapshot has ``glue`` only then)
+        #: brick task -> its as-built ``deviation_m`` and the ``tolerance_m`` it is judged by (issue 30)
+        self.as_built: dict[str, dict[str, float]] = {}
+        self.beyond: dict[str, float] = {}  # brick tasks placed beyond the tolerance -> deviation (m)
 
     def emit(self, event: MissionEvent) -> None:
         """Fold one event in."""
@@ -105,6 +108,7 @@ class MissionView:
         if e.kind != "uav":
             self.recent.append(e.line())
         self._fold_glue(e)
+        self._fold_as_built(e)
         if e.kind == "uav" and e.uav is not None:
             u = self.uavs.setdefault(e.uav, {"name": e.uav})
             u.update(
@@ -151,6 +155,20 @@ class MissionView:
                     self.tasks[tid] = "stuck"
         elif e.kind == "operator":
             self.operator.append(e.line().strip())
+
+    def _fold_as_built(self, e: MissionEvent) -> None:
+        """A brick's as-built pose (a ``completed`` event's), a brick placed beyond the tolerance (``placement``)."""
+        f = e.fields
+        if e.task_id is None:
+            return
+        pose = f.get("as_built")
+        if e.kind == "completed" and isinstance(pose, Mapping):
+            self.as_built[e.task_id] = {
+                "deviation_m": float(pose.get("deviation_m", 0.0)),
+                "tolerance_m": float(f.get("tolerance_m", 0.0)),
+            }
+        elif e.kind == "placement":
+            self.beyond[e.task_id] = float(f.get("deviation_m", 0.0))
 
     def _fold_glue(self, e: MissionEvent) -> None:
         """A bead sprayed (``glue``), done again or failed (expired: it is told again), a brick placed on glue."""
@@ -199,8 +217,10 @@ class MissionView:
         """The whole view as JSON values (what the page draws)."""
         with self._lock:
             glue = {"glue": self.open_glue()} if self._glued else {}
+            seen = {"as_built": {k: dict(v) for k, v in self.as_built.items()}} if self.as_built else {}
             return {
                 **glue,
+                **seen,
                 "time_s": self.time_s,
                 "counts": self.counts(),
                 "tasks": dict(self.tasks),
@@ -243,6 +263,11 @@ class MissionView:
                         f"{g.open_until_s - self.time_s:.0f} s left"
                         for bead, g in sorted(self.glue.items(), key=lambda bg: (bg[1].open_until_s, bg[0]))
                     )
+                )
+            if self.beyond:
+                out.append(
+                    "  placed beyond the tolerance: "
+                    + ", ".join(f"{t} ({d * 100:.1f} cm)" for t, d in self.beyond.items())
                 )
             if self.stall:
                 out.append(f"  {self.stall}")

@@ -165,6 +165,17 @@ def waiting_split_s(waiting_s: float, waits: Iterable[TaskWait], uav: str) -> tu
     return ground, waiting_s - ground
 
 
+def waits_lines(waits: Iterable[TaskWait]) -> list[str]:
+    """The text summary's line: the task-seconds waited per cause, most first (none: no line)."""
+    waited: dict[str, float] = {}
+    for w in waits:
+        waited[w.cause.what] = waited.get(w.cause.what, 0.0) + w.duration_s
+    if not waited:
+        return []
+    spent = ", ".join(f"{k} {v:.0f} s" for k, v in sorted(waited.items(), key=lambda kv: -kv[1]))
+    return [f"tasks waited for (task-seconds, JSON: tasks[].waits): {spent}"]
+
+
 __all__ = [
     "AIR",
     "CAUSES",
@@ -173,5 +184,6 @@ __all__ = [
     "WaitCause",
     "WaitLog",
     "waiting_split_s",
+    "waits_lines",
     "with_battery_holds",
 ]

@@ -79,6 +79,7 @@ _LEVELS = {
     "failed": LogLevel.Warning,
     "lost": LogLevel.Warning,
     "spare": LogLevel.Warning,
+    "placement": LogLevel.Warning,
     "stall": LogLevel.Error,
 }
 
@@ -256,7 +257,7 @@ class MissionScene(ABC):
             self._put("/log", t, line)
         if event.task_id is not None and event.kind in ("assigned", "completed", "failed", "lost"):
             state = {"assigned": "running", "completed": "done"}.get(event.kind, "todo")
-            entity = self._task_entity(t, event.task_id, state)
+            entity = self._task_entity(t, event.task_id, state, event)
             with self.scene_lock:
                 self.wall[event.task_id] = entity
             self._put("/wall", t, SceneUpdate(entities=[entity]))
@@ -314,13 +315,24 @@ class MissionScene(ABC):
             self.airspace[uav] = entity
         self._put("/airspace", t, SceneUpdate(entities=[entity]))
 
-    def _task_entity(self, t: float, task_id: str, state: str) -> SceneEntity:
+    def _task_entity(
+        self, t: float, task_id: str, state: str, event: MissionEvent | None = None
+    ) -> SceneEntity:
         task = self._tasks[task_id]
         if isinstance(task, BrickTask):
+            position, yaw, colour = task.position_m, task.yaw_rad, COLOURS[state]
+            f = event.fields if event is not None else {}
+            seen = f.get("as_built") if state == "done" else None
+            if isinstance(
+                seen, Mapping
+            ):  # where the camera saw it, green on its design to red at the tolerance
+                position, yaw = seen["position_m"], float(seen["yaw_rad"])
+                frac = min(1.0, float(seen["deviation_m"]) / max(float(f.get("tolerance_m", 0.02)), 1e-9))
+                colour = (frac, 1.0 - frac, 0.1, 1.0)
             cube = CubePrimitive(
-                pose=Pose(position=_vec(task.position_m), orientation=_yaw(task.yaw_rad)),
+                pose=Pose(position=_vec(position), orientation=_yaw(yaw)),
                 size=_vec(task.size_m),
-                color=_rgba(COLOURS[state]),
+                color=_rgba(colour),
             )
             return _entity(t, f"task/{task_id}", cubes=[cube])
         colour = COLOURS["adhesion_done"] if state == "done" else COLOURS[state]

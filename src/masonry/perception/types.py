@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,3 +51,52 @@ class BrickEstimate:
     center_m: np.ndarray
     yaw_rad: float
     tags: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class AsBuiltPose:
+    """A placed brick as the camera saw it after the release (issue 30's as-built pose).
+
+    ``position_m``: the brick's centre (world, m; the blueprint's ``position`` is its designed value),
+    ``yaw_rad``: its yaw, ``deviation_m``: the distance from ``position_m`` to the designed centre,
+    ``confidence``: the paper's C of the window of estimates it is the mean of (0..1).
+    """
+
+    position_m: tuple[float, float, float]
+    yaw_rad: float
+    deviation_m: float
+    confidence: float
+
+    def to_dict(self, digits: int | None = None) -> dict[str, object]:
+        """``{position_m, yaw_rad, deviation_m, confidence}`` (``digits``: metres and radians rounded to it, the
+        confidence to 3; None: exact, the form of the wire and the journal)."""
+
+        def r(v: float, nd: int | None = digits) -> float:
+            return v if nd is None else round(v, nd)
+
+        return {
+            "position_m": [r(v) for v in self.position_m],
+            "yaw_rad": r(self.yaw_rad),
+            "deviation_m": r(self.deviation_m),
+            "confidence": r(self.confidence, None if digits is None else 3),
+        }
+
+    @classmethod
+    def from_dict(cls, data: object) -> AsBuiltPose:
+        """The pose :meth:`to_dict` wrote.
+
+        Raises:
+            ValueError: not such a mapping (a field missing, not a number, not finite, a confidence off 0..1).
+        """
+        if not isinstance(data, dict):
+            raise ValueError(f"an as-built pose must be an object, got {type(data).__name__}")
+        try:
+            x, y, z = (float(v) for v in data["position_m"])
+            yaw, dev, conf = (float(data[k]) for k in ("yaw_rad", "deviation_m", "confidence"))
+        except KeyError as exc:
+            raise ValueError(f"an as-built pose has no {exc.args[0]!r}") from None
+        except (TypeError, ValueError):
+            raise ValueError(f"an as-built pose's fields must be numbers: {data!r}") from None
+        if not all(map(math.isfinite, (x, y, z, yaw, dev, conf))) or dev < 0.0 or not 0.0 <= conf <= 1.0:
+            raise ValueError(f"an as-built pose out of range: {data!r}")
+        return cls((x, y, z), yaw, dev, conf)

@@ -125,3 +125,8 @@ class SimCamera:
 
     def read(self) -> CameraFrame | None:
         return self._uav.world._camera_frame(self._uav)
+
+    def read_as_built(self) -> CameraFrame | None:
+        """A frame of the as-built look (``masonry.fsm.as_built``): the same camera model, its noise drawn from
+        a stream of its own, so that looking leaves every other random draw of the simulation as it was."""
+        return self._uav.world._camera_frame(self._uav, self._uav.look_rng)

@@ -81,6 +81,7 @@ class SimUav:
     world: World
     vehicle: SimVehicle
     rng: np.random.Generator  # gripper and camera faults, camera noise
+    look_rng: np.random.Generator  # the as-built look's frames (its own stream: shifts no later draw)
     magnet_on: bool = False
     joint_locked: bool = True
     valve_open: bool = False
@@ -262,10 +263,10 @@ class World:
         """Add a UAV landed and disarmed at ``spec.home_m``; its random stream derives from the seed and its name."""
         if spec.name in self.uavs:
             raise InputError(f"a UAV named {spec.name!r} is already in the world")
-        # the third stream (the wind's) leaves the first two as they were before the wind model
-        vehicle_ss, uav_ss, wind_ss = np.random.SeedSequence(
+        # the third stream (the wind's) and the fourth (the as-built look's) leave the ones before them as they were
+        vehicle_ss, uav_ss, wind_ss, look_ss = np.random.SeedSequence(
             [self.seed, 1, zlib.crc32(spec.name.encode())]
-        ).spawn(3)
+        ).spawn(4)
         site_wind = self.faults.site_wind()
         wind = (
             None
@@ -282,8 +283,8 @@ class World:
             battery_drain_per_s=self.faults.battery_drain_per_s,
             start_s=self.clock.now_s(),
         )
-        uav = SimUav(spec.name, spec, self, vehicle, np.random.default_rng(uav_ss))
-        self.uavs[spec.name] = uav
+        rngs = np.random.default_rng(uav_ss), np.random.default_rng(look_ss)
+        self.uavs[spec.name] = uav = SimUav(spec.name, spec, self, vehicle, *rngs)
         return uav
 
     def add_fleet(self, fleet: Iterable[UavSpec] | None = None) -> list[SimUav]:
@@ -516,13 +517,13 @@ class World:
         """``mixed`` mode: whether this camera is over a sampled brick still waiting at its pickup."""
         return over_sampled_pickup(self.field, self.drawn_pickups, float(T_wc[0, 3]), float(T_wc[1, 3]))
 
-    def _camera_frame(self, uav: SimUav) -> CameraFrame | None:
+    def _camera_frame(self, uav: SimUav, rng: np.random.Generator | None = None) -> CameraFrame | None:
         if uav.failed:
             return None
         now = self.clock.now_s()
         T_wc = self.camera_pose(uav)
         bricks = self._visible_candidates(T_wc)
-        rng = uav.rng
+        rng = uav.rng if rng is None else rng
         faults = self.faults
         dropped = faults.dropout > 0.0 and rng.random() < faults.dropout
         hidden: set[int] = set()

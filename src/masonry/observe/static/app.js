@@ -51,8 +51,9 @@ function drawTop(state) {
     const st = state.tasks[t.id] || (t.done ? "done" : "todo");
     {
       const w = t.size_m[0] * f.s, h = t.size_m[1] * f.s, cx = f.x(t.position_m[0]), cy = f.y(t.position_m[1]);
-      el("rect", { class: st, x: cx - w / 2, y: cy - h / 2, width: w, height: h, "data-task": t.id,
+      const r = el("rect", { class: st, x: cx - w / 2, y: cy - h / 2, width: w, height: h, "data-task": t.id,
         transform: `rotate(${-t.yaw_rad * 180 / Math.PI} ${cx} ${cy})` }, svg);
+      deviation(r, state, t.id, st);
     }
   }
   drawUavs(svg, state, (p) => [f.x(p[0]), f.y(p[1])]);
@@ -76,13 +77,26 @@ function drawSide(state) {
   for (const t of bricks) {
     const st = state.tasks[t.id] || (t.done ? "done" : "todo");
     const w = (k === 0 ? t.size_m[0] : t.size_m[1]) * f.s, h = t.size_m[2] * f.s;
-    el("rect", { class: st, x: f.x(t.position_m[k]) - w / 2, y: f.y(t.position_m[2]) - h / 2, width: w, height: h, "data-task": t.id }, svg);
+    const r = el("rect", { class: st, x: f.x(t.position_m[k]) - w / 2, y: f.y(t.position_m[2]) - h / 2, width: w, height: h, "data-task": t.id }, svg);
+    deviation(r, state, t.id, st);
   }
   for (const t of layout.tasks) if (t.kind === "adhesion") {
     const st = state.tasks[t.id] || (t.done ? "done" : "todo");
     el("line", { class: "adh " + st, x1: f.x(t.start_m[k]), y1: f.y(t.start_m[2]), x2: f.x(t.end_m[k]), y2: f.y(t.end_m[2]), "stroke-width": 2 }, svg);
   }
   drawUavs(svg, state, (p) => [f.x(p[k]), f.y(p[2])]);
+}
+
+// A placed brick whose as-built pose is known is coloured by its deviation from the design: green on the design,
+// red at the blueprint's placement_tolerance_m and beyond (issue 30); its title says by how much.
+function deviation(rect, state, id, st) {
+  const a = state.as_built && state.as_built[id];
+  if (!a || st !== "done") return;
+  const frac = a.tolerance_m > 0 ? Math.min(1, a.deviation_m / a.tolerance_m) : 0;
+  rect.style.fill = `hsl(${Math.round(120 * (1 - frac))}, 70%, 45%)`;
+  rect.dataset.deviation = a.deviation_m;
+  if (a.deviation_m > a.tolerance_m) rect.classList.add("beyond");
+  el("title", {}, rect, `${id}: ${(a.deviation_m * 100).toFixed(1)} cm from its design (tolerance ${(a.tolerance_m * 100).toFixed(1)} cm)`);
 }
 
 function drawUavs(svg, state, at) {

@@ -1,0 +1,104 @@
+"""Placement by the wall's own markers (issue 30): the brick UAV aligns its drop-off on the bricks around it.
+
+On GNSS (``px4``: EKF2's +-15 cm of slow wander) the drop-off flown on the absolute position misses by the wander:
+the effector is placed at ``design + e(t)`` in the reported frame, ``design - e(t)`` in truth... relative to what
+the wall really is. The bricks already on the wall (and the pre-placed ones) carry markers, and the camera sees
+some of them while the UAV aligns above the drop-off and descends: each such brick k, estimated in the world frame
+from the same telemetry the position loop closes on, sits at ``true_k + e(t)``. Its offset from its designed pose
+(``UavConfig.wall``) is ``(true_k - design_k) + e(t)``: the wander plus how far brick k was built off. The mean of
+these offsets over the bricks in view, added to the drop-off, makes the effector's target move with ``e(t)`` (the
+wander cancels, as in :mod:`masonry.fsm.camera_align`) and with the bricks around it (the new brick keeps its
+designed offsets to them). A brick farther than ``_REFERENCE_M`` from its design (one on the pallet, one on
+another UAV's magnet) is no reference; with none in view the last offset stands.
+
+:class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
+same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from masonry.fsm.as_built import frame_tags, world_estimate
+from masonry.fsm.camera_align import CameraAlign
+
+if TYPE_CHECKING:
+    from masonry.fsm.brick import BrickUav
+    from masonry.ports import Telemetry
+
+__all__ = ["WallAlign", "wall_offset_m"]
+
+#: A brick seen farther than this from its design is not on the wall (a pallet, a magnet): no reference.
+_REFERENCE_M = 0.5
+
+
+def wall_offset_m(
+    estimates: Mapping[int, np.ndarray], wall: Mapping[int, tuple[float, ...]], own: int
+) -> np.ndarray | None:
+    """The mean offset (world, m) of the bricks seen (``estimates``: brick id -> estimated top-face centre) from
+    their designed top-face centres (``wall``), brick ``own`` and bricks off the wall left out; None: none."""
+    offsets = []
+    for bid, top in estimates.items():
+        design = wall.get(bid)
+        if bid == own or design is None:
+            continue
+        d = np.asarray(top, dtype=float) - np.asarray(design, dtype=float)
+        if float(np.linalg.norm(d)) <= _REFERENCE_M:
+            offsets.append(d)
+    return np.mean(offsets, axis=0) if offsets else None
+
+
+class WallAlign:
+    """The drop-off's target as the bricks around it place it (see the module docstring)."""
+
+    def __init__(self) -> None:
+        self.tracker = CameraAlign()
+        self.design_m = np.zeros(3)
+        self._wall: dict[int, tuple[float, ...]] | None = None
+
+    def reset(self, design_top_m: np.ndarray) -> None:
+        """A new placement whose designed effector target (the brick's top-face centre) is ``design_top_m``."""
+        self.design_m = np.asarray(design_top_m, dtype=float).copy()
+        self.tracker.reset(self.design_m)
+
+    @property
+    def offset_m(self) -> np.ndarray:
+        """The target's offset from the design so far."""
+        assert self.tracker.center_m is not None
+        return np.asarray(self.tracker.center_m - self.design_m, dtype=float)
+
+    def track(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """One frame: move ``uav``'s motion and placement target with the wall's offset; True if moved (never
+        without ``align_on_wall``)."""
+        if not uav.config.align_on_wall or not uav.config.wall:
+            return False
+        if self._wall is None:
+            self._wall = dict(uav.config.wall)
+        wall = self._wall
+        tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
+        seen = {t.marker_id // 2 for t in tags} - {uav.brick_task.brick}
+        estimates = {}
+        for bid in seen & wall.keys():
+            est = world_estimate(tags, bid, tel, uav._T_body_cam, uav._est_config)
+            if est is not None:
+                estimates[bid] = est[0]
+        offset = wall_offset_m(estimates, wall, uav.brick_task.brick)
+        if offset is None:
+            return False
+        delta = self.tracker.add(self.design_m + offset)
+        if delta is None:
+            return False
+        uav.nav.shift(tuple(float(v) for v in delta))
+        uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
+        return True
+
+    def apply(self, uav: BrickUav) -> None:
+        """A new leg toward the design (the descent): shift it by the offset found so far (with ``align_on_wall``)."""
+        if not uav.config.align_on_wall:
+            return
+        offset = self.offset_m
+        uav.nav.shift(tuple(float(v) for v in offset))
+        uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + offset

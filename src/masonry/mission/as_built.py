@@ -1,0 +1,108 @@
+"""Mission control's side of the as-built poses (issue 30): journal them, show them, check them.
+
+A brick UAV's completion carries the pose its camera saw of the brick it placed
+(:class:`~masonry.perception.types.AsBuiltPose`, ``masonry.fsm.as_built``). Mission control journals it with the
+completion (the ``as_built`` field: the report of a resumed mission keeps it), hands it to the event sink with
+the ``completed`` event (the log, the live page colour the brick by its deviation) and checks it against the
+blueprint's ``placement_tolerance_m`` (:class:`PlacementWatch`): a brick beyond it is a ``placement`` event at
+warning level, and with ``on_placement_error: hold`` the mission pauses as the operator's ``pause`` does
+(journaled as an operator command) until the operator resumes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING
+
+from masonry.perception.types import AsBuiltPose
+from masonry.placement_check import PlacementCheck
+
+if TYPE_CHECKING:
+    from masonry.errors import ProtocolError
+    from masonry.mission.control import MissionControl
+    from masonry.mission.records import Attempt
+    from masonry.ports import TaskResult
+
+__all__ = ["PlacementWatch", "as_built_field", "as_built_lines", "journaled_as_built", "take_result"]
+
+
+def as_built_field(
+    data: Mapping[str, object], fail: Callable[[str, str], ProtocolError]
+) -> AsBuiltPose | None:
+    """A result message's optional ``as_built`` (raises ``fail("as_built", problem)`` on a malformed one)."""
+    raw = data.get("as_built")
+    if raw is None:
+        return None
+    try:
+        return AsBuiltPose.from_dict(raw)
+    except ValueError as exc:
+        raise fail("as_built", str(exc)) from None
+
+
+def take_result(att: Attempt, r: TaskResult) -> None:
+    """What an attempt keeps of its UAV's result: what the UAV measured."""
+    att.placement_error_m, att.coverage, att.phases, att.as_built = (
+        r.placement_error_m,
+        r.coverage,
+        r.phases,
+        r.as_built,
+    )
+
+
+def as_built_lines(poses: Mapping[str, AsBuiltPose]) -> list[str]:
+    """The text summary's line: the bricks seen after their release and their deviation from the design."""
+    devs = [p.deviation_m for p in poses.values()]
+    if not devs:
+        return []
+    return [
+        f"as-built ({len(devs)} brick{'' if len(devs) == 1 else 's'} seen): deviation from the design mean "
+        f"{sum(devs) / len(devs) * 100:.1f} cm, max {max(devs) * 100:.1f} cm"
+    ]
+
+
+def journaled_as_built(raw: object) -> AsBuiltPose | None:
+    """A journaled completion's ``as_built`` (None: absent, or a journal written before it existed)."""
+    if raw is None:
+        return None
+    try:
+        return AsBuiltPose.from_dict(raw)
+    except ValueError:
+        return None  # (a hand-edited journal: the pose is lost, not the completion)
+
+
+class PlacementWatch:
+    """The blueprint's :class:`~masonry.placement_check.PlacementCheck` applied to each completion.
+
+    Mission control's ``placement`` (``MissionControl(placement=blueprint.placement)``; its defaults without).
+    """
+
+    def __init__(self, check: PlacementCheck | None = None) -> None:
+        self.check = check if check is not None else PlacementCheck()
+        #: task ids found beyond the tolerance, in order
+        self.beyond: list[str] = []
+
+    def event_fields(self, pose: AsBuiltPose | None) -> dict[str, object]:
+        """The ``completed`` event's as-built fields: the pose and the tolerance it is judged by (none without a
+        pose: the events of other tasks read as before)."""
+        return {} if pose is None else {"as_built": pose.to_dict(4), "tolerance_m": self.check.tolerance_m}
+
+    def completed(self, mc: MissionControl, r: TaskResult, uav: str, now_s: float) -> None:
+        """A task done: if its as-built pose is beyond the tolerance, say so (and hold, as the blueprint says)."""
+        pose = r.as_built
+        if pose is None or not self.check.beyond(pose.deviation_m):
+            return
+        self.beyond.append(r.task_id)
+        hold = self.check.on_error == "hold"
+        mc.emit_event(
+            now_s,
+            "placement",
+            uav,
+            r.task_id,
+            deviation_m=round(pose.deviation_m, 4),
+            tolerance_m=self.check.tolerance_m,
+            action=self.check.on_error,
+            line=f"{r.task_id} placed {pose.deviation_m * 100:.1f} cm from its design (tolerance "
+            f"{self.check.tolerance_m * 100:.1f} cm): {'mission held, resume to go on' if hold else 'going on'}",
+        )
+        if hold and not mc.operator.paused:
+            mc.operator.apply(mc, {"command": "pause"}, now_s)
