@@ -5,17 +5,20 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 
 from masonry.cli.fly_adapters import _describe, select_adapters
 from masonry.cli.fly_tuning import tuning_preset
 
+if TYPE_CHECKING:
+    from masonry.blueprint import Blueprint, UavSpec
+
 
 def _fly_mission(
-    bp: Any,
-    spec: Any,
+    bp: Blueprint,
+    spec: UavSpec,
     endpoint: str,
     *,
     listen: list[str],

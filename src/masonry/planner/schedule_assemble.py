@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
 from masonry.planner.bound_terms import bound_terms
@@ -22,7 +22,7 @@ def _assemble(
     p: _Problem,
     parts: Sequence[Sequence[int]],
     last: _PartResult,
-    reports: list[dict[str, Any]],
+    reports: list[dict[str, object]],
     timing: TaskTiming,
     cruise_altitude_m: float,
     time_limit_s: float,
