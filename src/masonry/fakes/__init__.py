@@ -33,7 +33,7 @@ import numpy as np
 
 from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
-from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
+from masonry.errors import CommandRejected, CommandTimeout, HardwareError, InvalidArgument, LinkLost
 from masonry.fakes.link import FakeClearance as FakeClearance
 from masonry.fakes.link import QueueMissionLink as QueueMissionLink
 from masonry.fakes.link import ScriptedClearanceLink as ScriptedClearanceLink
@@ -90,7 +90,7 @@ class FakeClock:
 
     def advance(self, duration_s: float) -> None:
         if duration_s < 0.0:
-            raise ValueError(f"cannot advance a clock by a negative duration ({duration_s} s)")
+            raise InvalidArgument(f"cannot advance a clock by a negative duration ({duration_s} s)")
         self._now_s += duration_s
 
 

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from masonry.errors import InvalidArgument
 from masonry.fsm.states import MACHINES, diagram_machine
 from masonry.fsm.watchdogs import guarded_states
 
@@ -31,7 +32,7 @@ def machine_graph(kind: str) -> Any:
     from transitions.extensions import HierarchicalGraphMachine
 
     if kind not in MACHINES:
-        raise ValueError(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
+        raise InvalidArgument(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
     states, transitions = diagram_machine(kind)
     machine = HierarchicalGraphMachine(
         states=copy.deepcopy(states),
@@ -81,11 +82,11 @@ def write_diagram(kind: str, path: Path, engine: str = "auto") -> str:
     """
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in FORMATS:
-        raise ValueError(f"{path}: the file must end in .svg, .png or .dot")
+        raise InvalidArgument(f"{path}: the file must end in .svg, .png or .dot")
     if engine not in ENGINES:
-        raise ValueError(f"unknown diagram engine {engine!r}: expected one of {', '.join(ENGINES)}")
+        raise InvalidArgument(f"unknown diagram engine {engine!r}: expected one of {', '.join(ENGINES)}")
     if kind not in MACHINES:
-        raise ValueError(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
+        raise InvalidArgument(f"unknown machine {kind!r}: expected one of {', '.join(MACHINES)}")
     if fmt == "dot":
         path.write_text(machine_graph(kind).source)
         return "text"

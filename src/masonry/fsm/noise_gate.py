@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import math
 
+from masonry.errors import InvalidArgument
+
 __all__ = ["HoverNoise", "noise_aligned"]
 
 
@@ -30,7 +32,7 @@ class HoverNoise:
 
     def __init__(self, window_s: float) -> None:
         if not (math.isfinite(window_s) and window_s > 0.0):
-            raise ValueError(f"window_s must be finite and > 0, got {window_s!r}")
+            raise InvalidArgument(f"window_s must be finite and > 0, got {window_s!r}")
         self.window_s = float(window_s)
         self.reset()
 

@@ -10,6 +10,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from masonry.errors import InvalidArgument
 from masonry.fsm.adhesion import AdhesionUav
 from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
@@ -64,7 +65,7 @@ def run_single_task(
             unless one was reported.
     """
     if not dt_s > 0.0:
-        raise ValueError(f"dt_s must be > 0, got {dt_s!r}")
+        raise InvalidArgument(f"dt_s must be > 0, got {dt_s!r}")
     step_time = clock.sleep if advance is None else advance
     start_s = clock.now_s()
     n_results = len(uav.results)
@@ -104,13 +105,13 @@ def build_uav(
         clearance = link if isinstance(link, ClearanceLink) else None
     if config.role == "brick":
         if gripper is None or camera is None:
-            raise ValueError(f"brick UAV {config.name} needs a gripper and a camera")
+            raise InvalidArgument(f"brick UAV {config.name} needs a gripper and a camera")
         return BrickUav(config, fc, gripper, camera, link, clock, clearance=clearance)
     if config.role == "adhesion":
         if sprayer is None:
-            raise ValueError(f"adhesion UAV {config.name} needs a sprayer")
+            raise InvalidArgument(f"adhesion UAV {config.name} needs a sprayer")
         return AdhesionUav(config, fc, sprayer, link, clock, clearance=clearance)
-    raise ValueError(f"unknown UAV role {config.role!r}")
+    raise InvalidArgument(f"unknown UAV role {config.role!r}")
 
 
 def fly_task(

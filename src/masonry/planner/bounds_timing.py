@@ -42,6 +42,7 @@ def _timing(
     base = DEFAULT_TIMING if timing is None else timing
     unknown = sorted(k for k in legacy if k not in allowed)
     if unknown:
+        # builtin raise: the TypeError Python raises for an unknown keyword, as the signature had it
         raise TypeError(f"{func}() got an unexpected keyword argument {unknown[0]!r}")
     given = {k: v for k, v in legacy.items() if v is not None}
     legacy.clear()
