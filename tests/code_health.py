@@ -19,7 +19,7 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "masonry"
 MAX_MODULE_LINES = 600
 
 # Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
-CEILINGS = {"any_mentions": 580, "in_function_imports": 150}
+CEILINGS = {"any_mentions": 576, "in_function_imports": 150}
 
 # The modules still over MAX_MODULE_LINES, each at most the size it had when the ratchet began: a module here may
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
@@ -27,17 +27,10 @@ OVERSIZE_CEILINGS = {
     "adapters/mavlink.py": 672,
     "adapters/mavlink_link.py": 641,
     "adapters/sitl.py": 602,
-    "adapters/wiring.py": 620,
-    "cli/fly.py": 703,
-    "fakes.py": 614,
     "mission/airspace.py": 802,
     "mission/control.py": 978,
     "mission/handler.py": 703,
-    "mission/messages.py": 781,
-    "planner/bounds.py": 624,
     "planner/dispatch.py": 717,
-    "planner/schedule.py": 606,
-    "sim/vehicle.py": 732,
 }
 
 _ANY = re.compile(r"\bAny\b")

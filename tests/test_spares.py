@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from masonry.blueprint import format_blueprint, load_blueprint, parse_blueprint
 from masonry.blueprint_gen import generate
 from masonry.cli import app
-from masonry.errors import BlueprintError
+from masonry.errors import BlueprintError, MissionError
 from masonry.fingerprint import wall_digest
 from masonry.mission.events import MissionEvent
 from masonry.mission.handler import UavHandler
@@ -325,5 +325,5 @@ def test_the_spare_report_survives_the_logs_report_record() -> None:
     assert report is not None
     again = SpareReport.from_record(json.loads(json.dumps(report.to_record())))
     assert again == report and again.lines() == report.lines()
-    with pytest.raises(TypeError):
+    with pytest.raises(MissionError, match="a spare record is malformed"):
         SpareReport.from_record({"used": [[10, 0, "B0"]], "left": [], "waiting": []})

@@ -29,6 +29,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from masonry.errors import InvalidArgument
+
 PROTOCOL_NAME = "masonry-actuators"
 PROTOCOL_VERSION = 1
 MAX_LINE_BYTES = 96
@@ -125,7 +127,7 @@ def _seq(token: str) -> int:
 def encode_request(request: Request) -> bytes:
     """``Request`` -> one framed line."""
     if not 0 <= request.seq <= 255:
-        raise ValueError(f"seq must be 0..255, not {request.seq}")
+        raise InvalidArgument(f"seq must be 0..255, not {request.seq}")
     return _frame(" ".join((str(request.seq), request.command, *request.args)))
 
 

@@ -24,7 +24,7 @@ from typing import Any, Protocol
 
 from typing_extensions import Self
 
-from masonry.errors import DeviceNotFound, InputError
+from masonry.errors import DeviceNotFound, InputError, InvalidArgument
 from masonry.ports import Vec3
 
 
@@ -48,7 +48,7 @@ def quaternion_to_euler(w: float, x: float, y: float, z: float) -> Vec3:
     """Unit quaternion (world-from-body) -> roll, pitch, yaw (ZYX), radians."""
     n = math.sqrt(w * w + x * x + y * y + z * z)
     if n == 0.0:
-        raise ValueError("zero quaternion")
+        raise InvalidArgument("zero quaternion")
     w, x, y, z = w / n, x / n, y / n, z / n
     roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))

@@ -109,6 +109,7 @@ def bound(command: str, option: str) -> Bound:
     """The range of ``option`` in ``command`` (``blueprint`` for its generators)."""
     found = RANGES.get(f"{command} {option}") or RANGES.get(option)
     if found is None:
+        # builtin raise: a lookup miss in a static table, as the dict's own (callers and tests expect KeyError)
         raise KeyError(f"no range for {command} {option}")
     return found
 

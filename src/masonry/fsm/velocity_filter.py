@@ -21,6 +21,8 @@ import dataclasses
 import math
 from typing import TYPE_CHECKING
 
+from masonry.errors import InvalidArgument
+
 if TYPE_CHECKING:
     from masonry.ports import FlightController, Telemetry
 
@@ -40,7 +42,7 @@ class PositionVelocity:
 
     def __init__(self, tau_s: float) -> None:
         if not (math.isfinite(tau_s) and tau_s > 0.0):
-            raise ValueError(f"tau_s must be finite and > 0, got {tau_s!r}")
+            raise InvalidArgument(f"tau_s must be finite and > 0, got {tau_s!r}")
         self.tau_s = float(tau_s)
         self.reset()
 

@@ -8,6 +8,7 @@ import math
 from collections.abc import Sequence
 
 from masonry.blueprint import Blueprint, UavSpec
+from masonry.errors import InvalidArgument
 from masonry.planner.tasks import BrickTask, Task
 from masonry.separation import LAYER_SPACING_M
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -77,7 +78,7 @@ def transit_layers_m(
     the UAVs' (default: ``UavConfig``'s), for the work altitude.
     """
     if not (spacing_m >= 0.0 and math.isfinite(spacing_m)):
-        raise ValueError(f"layer spacing must be a finite number >= 0, got {spacing_m!r}")
+        raise InvalidArgument(f"layer spacing must be a finite number >= 0, got {spacing_m!r}")
     members = tuple(blueprint.fleet if fleet is None else fleet)
     base = layer_base_m(blueprint, timing=timing)
     return {u.name: base + (k + 1) * spacing_m for k, u in enumerate(members)}

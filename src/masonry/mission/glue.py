@@ -26,7 +26,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from masonry.errors import InputError
+from masonry.errors import InputError, PlanningError
 from masonry.mission.sites import AT_SITE_M, SiteIntervals, work_point_m
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_glue import JustInTime
@@ -214,7 +214,7 @@ def glue_gate(
     if not isinstance(
         dispatcher, JustInTime
     ):  # (make_dispatcher mixes it in whenever the plan has deadlines)
-        raise TypeError(
+        raise PlanningError(
             f"a plan with deadlines needs a just-in-time dispatcher, not {type(dispatcher).__name__}"
         )
     return GlueGate(plan, dispatcher, sites, margin, timing.cruise_speed_mps, timing.vertical_speed_mps)

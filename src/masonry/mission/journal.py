@@ -82,6 +82,7 @@ def _json_default(value: Any) -> Any:
         return value.tolist()
     if hasattr(value, "item"):
         return value.item()
+    # builtin raise: json's contract for a default hook is a TypeError for what it cannot serialise
     raise TypeError(f"{type(value).__name__} is not JSON serialisable")
 
 

@@ -12,6 +12,7 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 
+from masonry.errors import InvalidArgument
 from masonry.geofence import Site
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase
 from masonry.mission.fence import flight_fence_problem
@@ -104,7 +105,7 @@ class TableClearance:
         max_layers: int = 4,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
-            raise ValueError(f"column radius must be a finite number >= 0, got {radius_m!r}")
+            raise InvalidArgument(f"column radius must be a finite number >= 0, got {radius_m!r}")
         self.base_m = None if base_m is None else float(base_m)
         self.layer_base_m = self.base_m
         if self.base_m is not None and start_base_m is not None:

@@ -22,6 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Protocol
 
+from masonry.errors import MissionError
 from masonry.planner.tasks import BrickTask
 from masonry.ports import UNCOUNTED_REASONS
 
@@ -122,7 +123,7 @@ class SpareReport:
 
     @classmethod
     def from_record(cls, data: Mapping[str, object]) -> SpareReport:
-        """The report :meth:`to_record` wrote (KeyError, TypeError, ValueError: not such a record)."""
+        """The report :meth:`to_record` wrote (KeyError, MissionError: not such a record)."""
         used = [
             SpareUse(_int(a), _int(b), str(t), str(r), _float(s)) for a, b, t, r, s in _rows(data["used"], 5)
         ]
@@ -254,7 +255,7 @@ class SpareBook:
 
 def _items(value: object) -> list[object]:
     if not isinstance(value, list):
-        raise TypeError(f"expected a list, got {value!r}"[:200])
+        raise MissionError(f"a spare record is malformed: expected a list, got {value!r}"[:200])
     return list(value)
 
 
@@ -262,19 +263,21 @@ def _rows(value: object, width: int) -> list[list[object]]:
     """A record's table: a list of lists of ``width`` items."""
     rows = [r for r in _items(value) if isinstance(r, list) and len(r) == width]
     if len(rows) != len(_items(value)):
-        raise TypeError(f"expected rows of {width} items, got {value!r}"[:200])
+        raise MissionError(
+            f"a spare record is malformed: expected rows of {width} items, got {value!r}"[:200]
+        )
     return rows
 
 
 def _int(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"expected an integer, got {value!r}")
+        raise MissionError(f"a spare record is malformed: expected an integer, got {value!r}")
     return value
 
 
 def _float(value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"expected a number, got {value!r}")
+        raise MissionError(f"a spare record is malformed: expected a number, got {value!r}")
     return float(value)
 
 

@@ -16,6 +16,8 @@ from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from masonry.errors import InvalidArgument
+
 Vec3 = tuple[float, float, float]
 
 #: A mission with no progress this long (simulated or wall seconds of mission time) is stalled. The longest
@@ -98,7 +100,7 @@ class StallWatch:
 
     def __init__(self, timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S) -> None:
         if timeout_s is not None and not (timeout_s >= 0.0 and math.isfinite(timeout_s)):
-            raise ValueError(f"stall timeout must be a finite number >= 0 s, got {timeout_s!r}")
+            raise InvalidArgument(f"stall timeout must be a finite number >= 0 s, got {timeout_s!r}")
         self.timeout_s = None if not timeout_s else float(timeout_s)
         self.since_s: float | None = None
         self._last: Hashable = None

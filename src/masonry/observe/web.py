@@ -216,10 +216,11 @@ class _Handler(BaseHTTPRequestHandler):
         try:
             n = min(int(self.headers.get("Content-Length") or 0), 4096)
             body = json.loads(self.rfile.read(n) or b"{}")
-            if not isinstance(body, dict):
-                raise ValueError("not an object")
         except ValueError as exc:
             self._json({"accepted": False, "reason": f"bad command: {exc}"}, HTTPStatus.BAD_REQUEST)
+            return
+        if not isinstance(body, dict):
+            self._json({"accepted": False, "reason": "bad command: not an object"}, HTTPStatus.BAD_REQUEST)
             return
         self._json(dict(self.view.commands(body)))
 

@@ -31,9 +31,9 @@ from typing import Any
 
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
 from masonry.errors import PlanningError
-from masonry.planner.bound_terms import bound_terms
-from masonry.planner.bounds import empty_flight_s, min_cycles_s, min_durations_s, min_site_s
+from masonry.planner.bounds import empty_flight_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
+from masonry.planner.schedule_assemble import _assemble
 from masonry.planner.schedule_deadlines import (
     DeadlinesUnmet,
     TickDeadlines,
@@ -47,7 +47,7 @@ from masonry.planner.schedule_deadlines import (
 )
 from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
-from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
+from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
@@ -525,74 +525,6 @@ def solve_schedule(
         time_limit_s,
         seed,
         time.perf_counter() - t0,
-    )
-
-
-def _assemble(
-    plan: Plan,
-    fleet: Sequence[UavSpec],
-    p: _Problem,
-    parts: Sequence[Sequence[int]],
-    last: _PartResult,
-    reports: list[dict[str, Any]],
-    timing: TaskTiming,
-    cruise_altitude_m: float,
-    time_limit_s: float,
-    seed: int,
-    solve_s: float,
-) -> OfflineSchedule:
-    tick = p.tick_s
-    makespan = max(p.end.values(), default=0) * tick
-    md = min_durations_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m)
-    site_w = (
-        min_site_s(plan, timing=timing, cruise_altitude_m=cruise_altitude_m)
-        if p.reservation == "site"
-        else None
-    )
-    terms = bound_terms(
-        plan, fleet, md, work_s=min_cycles_s(plan, fleet, md, timing=timing), clique_weights_s=site_w
-    )
-    whole = len(parts) == 1
-    cp_bound = last.bound * tick if whole and last.bound is not None else None
-    if p.deadlines.has_open:  # a mission is not a solution of a model with open times (docs/schedule.md)
-        cp_bound = None
-    bound, kind = terms.value_s, terms.kind
-    if cp_bound is not None and cp_bound >= bound:
-        bound, kind = cp_bound, "cp-sat"
-    bound = min(bound, makespan) if whole and last.status == "optimal" else bound
-    status = "optimal" if makespan <= bound + 1e-9 else "feasible"
-    uavs = []
-    for k, spec in enumerate(p.uavs):
-        mine = sorted((i for i, u in p.uav_of.items() if u == k), key=lambda i: (p.start[i], i))
-        uavs.append(
-            UavSchedule(
-                spec.name,
-                spec.role,
-                tuple(
-                    ScheduledTask(
-                        p.tasks[i].id,
-                        p.start[i] * tick,
-                        p.end[i] * tick,
-                        p.site_start[i] * tick if p.reservation == "site" else None,
-                        (p.site_start[i] + p.site[i]) * tick if p.reservation == "site" else None,
-                    )
-                    for i in mine
-                ),
-            )
-        )
-    return OfflineSchedule(
-        uavs=tuple(uavs),
-        makespan_s=makespan,
-        bound_s=bound,
-        bound_kind=kind,
-        status=status,
-        solve_time_s=solve_s,
-        decomposition="none" if whole else "course",
-        reservation=p.reservation,
-        time_limit_s=time_limit_s,
-        seed=seed,
-        tick_s=tick,
-        parts=tuple(reports) if not whole else (),
     )
 
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from masonry.blueprint import Brick
+from masonry.errors import InvalidArgument
 
 __all__ = [
     "GROUND_Z_M",
@@ -33,7 +34,7 @@ class SpatialHash:
 
     def __init__(self, cell_m: float = 0.5) -> None:
         if not cell_m > 0:
-            raise ValueError(f"cell_m must be > 0, got {cell_m!r}")
+            raise InvalidArgument(f"cell_m must be > 0, got {cell_m!r}")
         self.cell_m = float(cell_m)
         self._cells: dict[tuple[int, int], set[int]] = {}
         self._where: dict[int, list[tuple[int, int]]] = {}

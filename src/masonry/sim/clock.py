@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+from masonry.errors import InvalidArgument
+
 __all__ = ["SimClock"]
 
 
@@ -16,7 +18,7 @@ class SimClock:
 
     def __init__(self, start_s: float = 0.0) -> None:
         if not math.isfinite(start_s):
-            raise ValueError(f"SimClock start_s must be finite, got {start_s!r}")
+            raise InvalidArgument(f"SimClock start_s must be finite, got {start_s!r}")
         self._now_s = float(start_s)
 
     def now_s(self) -> float:
@@ -26,7 +28,7 @@ class SimClock:
     def advance(self, dt_s: float) -> None:
         """Move the time forward by ``dt_s`` >= 0 seconds."""
         if not dt_s >= 0.0 or not math.isfinite(dt_s):
-            raise ValueError(f"SimClock cannot advance by {dt_s!r} s (must be finite and >= 0)")
+            raise InvalidArgument(f"SimClock cannot advance by {dt_s!r} s (must be finite and >= 0)")
         self._now_s += dt_s
 
     def sleep(self, duration_s: float) -> None:

@@ -22,7 +22,7 @@ import numpy as np
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import Blueprint, UavSpec
-from masonry.errors import InputError
+from masonry.errors import InputError, InvalidArgument
 from masonry.geometry import body_to_world_floats
 from masonry.planner.tasks import AdhesionTask
 from masonry.ports import CameraFrame, Telemetry, UavPorts, Vec3
@@ -300,7 +300,7 @@ class World:
     def step(self, dt_s: float) -> None:
         """Advance the clock and the physics of every UAV and brick by ``dt_s`` seconds."""
         if not (dt_s > 0.0 and math.isfinite(dt_s)):
-            raise ValueError(f"World.step needs a finite dt_s > 0, got {dt_s!r}")
+            raise InvalidArgument(f"World.step needs a finite dt_s > 0, got {dt_s!r}")
         now = self.clock.now_s() + dt_s
         faults = self.faults
         timed_faults = bool(faults.uav_loss_at_s) or bool(faults.link_loss_at_s)

@@ -25,8 +25,7 @@ Example (a notebook)::
 from __future__ import annotations
 
 import math
-from collections import deque
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,11 +33,13 @@ import numpy as np
 
 from masonry.airframe import DEFAULT_AIRFRAME, camera_mount
 from masonry.blueprint import MarkerSpec
-from masonry.errors import CommandRejected, CommandTimeout, HardwareError, LinkLost
+from masonry.errors import CommandRejected, CommandTimeout, HardwareError, InvalidArgument, LinkLost
+from masonry.fakes.link import FakeClearance as FakeClearance
+from masonry.fakes.link import QueueMissionLink as QueueMissionLink
+from masonry.fakes.link import ScriptedClearanceLink as ScriptedClearanceLink
 from masonry.geometry import R_world_body
 from masonry.perception.types import DEFAULT_INTRINSICS, CameraIntrinsics, TagPose
-from masonry.planner.tasks import Task
-from masonry.ports import CameraFrame, Clock, TaskResult, Telemetry
+from masonry.ports import CameraFrame, Clock, Telemetry
 
 Vec3 = tuple[float, float, float]
 
@@ -89,7 +90,7 @@ class FakeClock:
 
     def advance(self, duration_s: float) -> None:
         if duration_s < 0.0:
-            raise ValueError(f"cannot advance a clock by a negative duration ({duration_s} s)")
+            raise InvalidArgument(f"cannot advance a clock by a negative duration ({duration_s} s)")
         self._now_s += duration_s
 
 
@@ -526,89 +527,3 @@ class FakeCamera(_Scripted):
                     R_cm = R_cm @ np.array([[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]])
                 tags.append(TagPose(marker_id=marker_id, position_m=p_cam, R_cam_marker=R_cm))
         return tags
-
-
-class QueueMissionLink:
-    """MissionLink fake: hands out queued tasks one per ``poll_task`` and collects progress and results."""
-
-    def __init__(self, tasks: Sequence[Task] = ()) -> None:
-        self._queue: deque[Task] = deque(tasks)
-        self.progress: list[tuple[str, str, float]] = []
-        self.results: list[TaskResult] = []
-
-    def push(self, task: Task) -> None:
-        """Queue one more task."""
-        self._queue.append(task)
-
-    @property
-    def pending(self) -> int:
-        return len(self._queue)
-
-    def poll_task(self) -> Task | None:
-        return self._queue.popleft() if self._queue else None
-
-    def report_progress(self, task_id: str, state: str, time_s: float) -> None:
-        self.progress.append((task_id, state, time_s))
-
-    def report_result(self, result: TaskResult) -> None:
-        self.results.append(result)
-
-
-@dataclass(frozen=True)
-class FakeClearance:
-    """A ClearanceAnswer: what mission control's airspace answers (the fields the state machines read)."""
-
-    granted: bool
-    layer_m: float | None
-    hold_m: Vec3 | None = None
-
-
-class ScriptedClearanceLink(QueueMissionLink):
-    """MissionLink and ClearanceLink fake: mission control answers after ``answer_after_s`` (hold at
-    ``hold_m``, or where the UAV is) and grants the column at ``grant_after_s``, both counted from the first
-    request for a site.
-
-    Attributes:
-        asked: the first request time of every site asked for.
-        arrived: the sites of every transit ended (``end_transit``), in order.
-    """
-
-    def __init__(
-        self,
-        tasks: Sequence[Task],
-        clock: Clock,
-        *,
-        layer_m: float | None = 2.6,
-        answer_after_s: float = 0.0,
-        grant_after_s: float = 0.0,
-        hold_m: Vec3 | None = None,
-        swaps_batteries: bool = False,
-    ) -> None:
-        super().__init__(tasks)
-        self.clock = clock
-        self.layer_m = layer_m
-        self.answer_after_s = answer_after_s
-        self.grant_after_s = grant_after_s
-        self.hold_m = hold_m
-        self._swaps_batteries = swaps_batteries
-        self.asked: dict[Vec3, float] = {}
-        self.arrived: list[Vec3] = []
-
-    @property
-    def swaps_batteries(self) -> bool:
-        return self._swaps_batteries
-
-    def request_clearance(
-        self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
-    ) -> FakeClearance | None:
-        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-        first = self.asked.setdefault(site, self.clock.now_s())
-        waited = self.clock.now_s() - first
-        if waited < self.answer_after_s:
-            return None
-        if waited < self.grant_after_s:
-            return FakeClearance(False, self.layer_m, self.hold_m)
-        return FakeClearance(True, self.layer_m)
-
-    def end_transit(self, site_m: Vec3) -> None:
-        self.arrived.append((float(site_m[0]), float(site_m[1]), float(site_m[2])))
