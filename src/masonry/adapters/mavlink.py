@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from masonry.adapters.mavlink_estimate import EstimateLink
 from masonry.adapters.mavlink_link import (
     LinkClock,
     LinkStatus,
@@ -192,7 +193,7 @@ def _wrap(angle_rad: float) -> float:
     return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
-class MavlinkFlightController(MavlinkLink):
+class MavlinkFlightController(EstimateLink):
     """The FlightController port over MAVLink 2 for ArduPilot (GUIDED) or PX4 (OFFBOARD).
 
     Args:
@@ -400,80 +401,6 @@ class MavlinkFlightController(MavlinkLink):
         """The mode velocity setpoints are flown in: GUIDED (ArduPilot) or OFFBOARD (PX4)."""
         return "OFFBOARD" if self.autopilot == "px4" else "GUIDED"
 
-    def estimate_status(self) -> str:
-        """What the estimate lacks now, in words: no local position yet, or what the EKF flags miss."""
-        now = self._monotonic()
-        with self._lock:
-            st = self._state
-            flags = st.estimate_flags
-            streaming = st.position_ned is not None and now - st.position_time_s <= max(
-                0.5, self.heartbeat_timeout_s
-            )
-            at_rest = self._at_rest(st)
-        if flags is not None and not estimate_usable(flags, self.autopilot, on_ground=at_rest):
-            return (
-                "no local position yet, " if not streaming else "local position streaming, "
-            ) + describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
-        if not streaming:
-            return "no local position yet (LOCAL_POSITION_NED not streaming)" + (
-                ""
-                if flags is None
-                else f", {describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)}"
-            )
-        return (
-            "usable" if flags is None else describe_estimate_flags(flags, self.autopilot, on_ground=at_rest)
-        )
-
-    def wait_for_estimate(
-        self,
-        timeout_s: float | None = None,
-        *,
-        progress: Callable[[str], None] | None = None,
-        report_every_s: float = 5.0,
-    ) -> None:
-        """Block until the autopilot reports a usable local position estimate.
-
-        ArduCopter SITL streams LOCAL_POSITION_NED about 19 s after its first client connects and its EKF is
-        usable at about 40 s (docs/hardware.md), so a pre-flight check waits that long with a countdown.
-
-        Args:
-            progress: called with one line (what is missing, the seconds left) when that changes and every
-                ``report_every_s``; e.g. the pre-flight check's echo to stderr.
-
-        Raises:
-            CommandRejected: no usable estimate within ``timeout_s`` (default ``estimate_timeout_s``), naming
-                what was missing at the end.
-            LinkLost: the link went silent meanwhile.
-        """
-        timeout_s = self.estimate_timeout_s if timeout_s is None else timeout_s
-        start = self._monotonic()
-        deadline = start + timeout_s
-        last_status, last_report = "", start
-        while True:
-            self._check_link("wait for position estimate")
-            now = self._monotonic()
-            if self._position_ok(now):
-                return
-            status = self.estimate_status()
-            if now >= deadline:
-                hint = (
-                    "is motion capture feeding the EKF?"
-                    if self.pose_source is not None
-                    else "an ArduPilot SITL needs about 40 s after its first connection, a cold Pixhawk about as "
-                    "long: give more with `estimate_timeout_s`; indoors, is the position source feeding the EKF?"
-                )
-                raise CommandRejected(
-                    "arm",
-                    f"no usable position estimate from the autopilot after {timeout_s:.1f} s: {status} ({hint})",
-                    options=() if self.pose_source is not None else ("estimate_timeout_s",),
-                )
-            if progress is not None and (status != last_status or now - last_report >= report_every_s):
-                progress(
-                    f"waiting for the position estimate: {status} ({max(0.0, deadline - now):.0f} s left)"
-                )
-                last_status, last_report = status, now
-            self._stop.wait(0.02)
-
     def arm(self) -> None:
         """Wait for a usable position estimate, enter GUIDED/OFFBOARD, arm; each step checked by COMMAND_ACK."""
         self._check_link("arm")
@@ -602,21 +529,6 @@ class MavlinkFlightController(MavlinkLink):
             self._send_position_target(v, FrameTransform.yaw_rate_to_ned(float(yaw_rate_radps)))
 
     # --------------------------------------------------------------------------------------------- telemetry
-
-    def _position_ok(self, now: float) -> bool:
-        st = self._state
-        if st.position_ned is None or now - st.position_time_s > max(0.5, self.heartbeat_timeout_s):
-            return False
-        if (
-            st.estimate_flags is None
-        ):  # no estimator report (yet): a streaming LOCAL_POSITION_NED is the signal
-            return True
-        return estimate_usable(st.estimate_flags, self.autopilot, on_ground=self._at_rest(st))
-
-    @staticmethod
-    def _at_rest(st: Any) -> bool:
-        """Disarmed, or landed by EXTENDED_SYS_STATE: PX4's constant-position flag then means "at rest"."""
-        return not st.armed or st.landed_state == MAV_LANDED_STATE_ON_GROUND
 
     def upload_fence(self, site: Site) -> FenceUpload:
         """Upload the blueprint's site as the autopilot's fence and check it (:mod:`masonry.adapters.mavlink_fence`).

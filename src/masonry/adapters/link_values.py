@@ -1,0 +1,119 @@
+"""Values around :class:`~masonry.adapters.mavlink_link.MavlinkLink`: the autopilot's clock seen from this computer
+(:class:`LinkClock`), the link's counters (:class:`LinkStatus`) and the MAVLink 2 signing key's reader."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from masonry.errors import InputError
+
+if TYPE_CHECKING:
+    import os
+
+
+def load_signing_key(path: str | os.PathLike[str]) -> bytes:
+    """Read a MAVLink 2 signing key: 32 raw bytes, 64 hex digits, or a passphrase (SHA-256, as MAVProxy does).
+
+    Raises:
+        InputError: the file is missing or empty.
+    """
+    import hashlib
+
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read signing key: {exc.strerror or exc}") from exc
+    if len(raw) == 32:
+        return raw
+    text = raw.decode("utf-8", errors="replace").strip()
+    if not text:
+        raise InputError(f"{p}: signing key file is empty")
+    if len(text) == 64 and all(ch in "0123456789abcdefABCDEF" for ch in text):
+        return bytes.fromhex(text)
+    return hashlib.sha256(text.encode("utf-8")).digest()
+
+
+class LinkClock:
+    """The autopilot's clock (``time_boot_ms``) seen from this computer: a Clock for the state machines.
+
+    ``now_s`` extrapolates the last boot time received at the rate measured between the autopilot's and the
+    local monotonic clock (1.0 for real hardware, the time-scale factor for a faster-than-real-time SITL);
+    ``sleep`` sleeps the wall time that corresponds to ``duration_s`` of autopilot time.
+
+    Args:
+        monotonic: the local clock (s) the samples are stamped on (the link's: a test may inject one it holds).
+    """
+
+    def __init__(self, monotonic: Callable[[], float] = time.monotonic) -> None:
+        self._monotonic = monotonic
+        self._lock = threading.Lock()
+        self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
+        self._last: tuple[float, float] | None = None
+        self._returned = -math.inf
+        self._created = self._monotonic()
+
+    def observe(self, boot_s: float, monotonic_s: float) -> None:
+        with self._lock:
+            if self._last is not None and boot_s < self._last[0] - 1.0:  # autopilot rebooted
+                self._first = None
+                self._returned = -math.inf
+            if self._first is None:
+                self._first = (boot_s, monotonic_s)
+            self._last = (boot_s, monotonic_s)
+
+    @property
+    def rate(self) -> float:
+        """Autopilot seconds per local second (1.0 until 0.2 s of samples exist)."""
+        with self._lock:
+            if self._first is None or self._last is None:
+                return 1.0
+            dt_local = self._last[1] - self._first[1]
+            if dt_local < 0.2:
+                return 1.0
+            return max(1e-3, (self._last[0] - self._first[0]) / dt_local)
+
+    def now_s(self) -> float:
+        rate = self.rate
+        with self._lock:
+            if self._last is None:  # nothing heard yet: seconds since this clock was made
+                return self._monotonic() - self._created
+            # extrapolated over one telemetry period at most; never runs backwards
+            now = self._last[0] + (self._monotonic() - self._last[1]) * rate
+            self._returned = max(self._returned, now)
+            return self._returned
+
+    @property
+    def anchored(self) -> bool:
+        """Whether a time-stamped message from the autopilot has been seen."""
+        return self._last is not None
+
+    def sleep(self, duration_s: float) -> None:
+        if duration_s > 0.0:
+            time.sleep(duration_s / self.rate)
+
+
+@dataclass(frozen=True)
+class LinkStatus:
+    """What the link's threads have done and met so far (counters since construction)."""
+
+    connected: bool
+    autopilot: str | None
+    setpoints_sent: int
+    vision_sent: int
+    handler_errors: int  # messages the receiver could not handle (missing or ill-typed fields)
+    receive_errors: int  # failed reads from the connection
+    send_errors: int  # failed sends of the background stream (heartbeat, setpoints)
+    pose_errors: int  # failed pose reads or forwards (``pose_source``)
+    last_error: str | None
+
+    @property
+    def errors(self) -> int:
+        """All errors the threads met."""
+        return self.handler_errors + self.receive_errors + self.send_errors + self.pose_errors

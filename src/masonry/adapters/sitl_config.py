@@ -1,0 +1,71 @@
+"""The project's SITL (:class:`~masonry.adapters.sitl.MavlinkSitl`): its knobs (:class:`SitlConfig`), the MAVLink
+constants it answers with, its default stream rates and :func:`free_udp_port`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from masonry.adapters.mavlink import (
+    MSG_ATTITUDE,
+    MSG_EKF_STATUS_REPORT,
+    MSG_EXTENDED_SYS_STATE,
+    MSG_LOCAL_POSITION_NED,
+    MSG_SYS_STATUS,
+    MSG_WIND,
+)
+
+MAV_TYPE_QUADROTOR = 2
+MAV_RESULT_ACCEPTED, MAV_RESULT_DENIED, MAV_RESULT_UNSUPPORTED, MAV_RESULT_FAILED = 0, 2, 3, 4
+MAV_SEVERITY_CRITICAL, MAV_SEVERITY_WARNING, MAV_SEVERITY_INFO = 2, 4, 6
+MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
+MAV_LANDED_STATE_ON_GROUND, MAV_LANDED_STATE_IN_AIR = 1, 2
+MAV_LANDED_STATE_TAKEOFF, MAV_LANDED_STATE_LANDING = 3, 4
+DISARM_MAGIC = 21196  # ArduPilot: param2 of a forced disarm
+VELOCITY_ONLY_IGNORED = 1 | 2 | 4  # x, y, z ignored: the only targets this SITL flies (velocity control)
+
+#: Default stream rates (Hz) before a ground station asks for others (ArduPilot's SRx_ defaults are a few Hz).
+DEFAULT_RATES_HZ = {
+    MSG_LOCAL_POSITION_NED: 4.0,
+    MSG_ATTITUDE: 4.0,
+    MSG_SYS_STATUS: 1.0,
+    MSG_EKF_STATUS_REPORT: 1.0,
+    MSG_EXTENDED_SYS_STATE: 1.0,
+    MSG_WIND: 1.0,  # ArduPilot's; a px4 SITL does not send it
+}
+
+
+def free_udp_port(host: str = "127.0.0.1") -> int:
+    """A UDP port on ``host`` that nothing is bound to right now (for tests and ``masonry sitl --port 0``)."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+        sock.bind((host, 0))
+        return int(sock.getsockname()[1])
+
+
+@dataclass(frozen=True)
+class SitlConfig:
+    """Knobs of the simulated autopilot (ArduCopter parameter names in comments)."""
+
+    guided_timeout_s: float = 3.0  # GUID_TIMEOUT
+    gcs_failsafe_s: float = 5.0  # FS_GCS_TIMEOUT (FS_GCS_ENABLE = LAND)
+    ekf_converge_s: float = 0.5
+    position_source: str = (
+        "internal"  # "internal" (always available) or "vision" (needs VISION_POSITION_ESTIMATE)
+    )
+    arm_min_battery: float = 0.2  # BATT_ARM_MAH-like: refuse to arm below this fraction
+    prearm_failure: str | None = None  # e.g. "Compass not calibrated": every arm attempt fails with it
+    heartbeat_hz: float = 1.0
+    autopilot: str = "ardupilot"  # or "px4": PX4 modes, OFFBOARD rules, ESTIMATOR_STATUS
+    offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
+    # PX4 EKF2's ESTIMATOR_STATUS as PX4 v1.16 SITL sends it (issue 20): 0x3FF at rest (constant-position mode
+    # with everything else), 895 / 831 in flight (height above ground comes and goes)
+    ekf2_flags: bool = False
+    # the EKF's NED z where the vehicle stands (PX4 on GNSS and baro: -0.34 to -0.71 m, issue 20); 0: at home
+    ekf_ground_z_m: float = 0.0
+    vehicle: str = "ideal"  # the simulated vehicle's preset (masonry.sim.vehicle_config.VEHICLE_PRESETS)
+    system_id: int = 1
+    component_id: int = 1
+    fence: str = (
+        "accept"  # the fence's answers (masonry.adapters.sitl_fence: accept, unsupported, deny, corrupt)
+    )
