@@ -25,7 +25,7 @@ from masonry.mission.airspace_state import (
 )
 from masonry.mission.altitudes import layer_base_m, task_work_altitude_m, transit_layers_m, work_altitude_m
 from masonry.mission.fence import flight_fence_problem, volumes_in_fence
-from masonry.mission.sites import SiteGate
+from masonry.mission.sites import SiteGate, enter_ungoverned
 from masonry.mission.volumes import (
     HOVER_SLACK_M,
     STOP_M,
@@ -268,14 +268,11 @@ class ColumnClearance:
         """
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         top = max(site[2], float(top_m) if top_m is not None else site[2])
-        if self.base_m is None:
-            if self.gate is not None:
-                if not self.gate.may_enter(uav, site):
-                    self.refused += 1
-                    return Grant(uav, site, False)
-                self.gate.entered(uav, site, now_s)
-            self.granted_count += 1
-            return Grant(uav, site)
+        if self.base_m is None:  # no airspace rules: only the site gate may hold the flight back
+            granted = enter_ungoverned(self.gate, uav, site, now_s)
+            self.granted_count += granted
+            self.refused += not granted
+            return Grant(uav, site, granted)
         u = self._uav(uav)
         pos = (
             None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))

@@ -29,7 +29,7 @@ from masonry.mission.reserved_parts import (
     silent_way,
     to_park,
 )
-from masonry.mission.sites import SiteGate
+from masonry.mission.sites import SiteGate, enter_ungoverned
 from masonry.mission.volumes import Vec3
 from masonry.mission.volumes import Volume as AirVolume
 from masonry.reservation import (
@@ -217,14 +217,11 @@ class TableClearance:
         self._tick(now_s)
         site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
         top = max(site[2], float(top_m) if top_m is not None else site[2])
-        if self.base_m is None:
-            if self.gate is not None:
-                if not self.gate.may_enter(uav, site):
-                    self.refused += 1
-                    return Grant(uav, site, False)
-                self.gate.entered(uav, site, now_s)
-            self.granted_count += 1
-            return Grant(uav, site)
+        if self.base_m is None:  # no airspace rules: only the site gate may hold the flight back
+            granted = enter_ungoverned(self.gate, uav, site, now_s)
+            self.granted_count += granted
+            self.refused += not granted
+            return Grant(uav, site, granted)
         u = self._uav(uav)
         pos = (
             None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))

@@ -60,6 +60,17 @@ class SiteGate(Protocol):
         ...
 
 
+def enter_ungoverned(gate: SiteGate | None, uav: str, site_m: Vec3, now_s: float) -> bool:
+    """A flight with no airspace rules (separation off) goes unless ``gate`` holds it back; True: it goes (and the
+    gate is told it entered)."""
+    if gate is None:
+        return True
+    if not gate.may_enter(uav, site_m):
+        return False
+    gate.entered(uav, site_m, now_s)
+    return True
+
+
 @dataclass
 class SiteVisit:
     """One stay of a task's UAV at its site."""
@@ -218,6 +229,7 @@ __all__ = [
     "SiteGate",
     "SiteIntervals",
     "SiteVisit",
+    "enter_ungoverned",
     "journaled_visits",
     "work_point_m",
     "work_span_m",
