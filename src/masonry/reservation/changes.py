@@ -5,7 +5,7 @@
 - :func:`way_home`: a silent UAV's fallback flight home, reserved from now for the time it takes (it cannot
   wait: the plans of others in its way move instead).
 - :func:`lose`: a lost UAV's last volume stays reserved, open-ended, until it is accounted for
-  (:meth:`masonry.reservation.table.Table.release`).
+  (:meth:`masonry.reservation.table.Table.release`); plans not under way that need that space are withdrawn.
 
 Plans move whole: a UAV whose plan moves waits longer where it stays before it (its pad, a parking spot, its
 site), never in the air. A plan under way (its UAV left its stay) never moves.
@@ -31,7 +31,8 @@ from masonry.reservation.table import Reservation, Table, clash
 
 @dataclass(frozen=True)
 class Move:
-    """A reservation moved (or lengthened) to make room: what it was, what it is now."""
+    """A reservation moved (or lengthened) to make room: what it was, what it is now (a window that ends as it
+    begins: withdrawn, no longer in the table)."""
 
     before: Reservation
     after: Reservation
@@ -175,12 +176,36 @@ def way_home(
     raise PlanningError(problem)
 
 
+def _withdraw(table: Table, held: Reservation, now_s: float) -> tuple[Table, list[Move]]:
+    """The plans of others not under way that clash with ``held`` (open-ended: no move gets past it) withdrawn:
+    their UAVs stay, open-ended, where they were to leave from. A withdrawn reservation's move ends as it begins."""
+    moves: list[Move] = []
+    for q in table.clashes(held):
+        departure_s = _departure_s(table, q)
+        if q not in table.reservations or not departure_s > now_s:
+            continue  # (withdrawn with its plan already, or under way: settle refuses it)
+        mine = table.of(q.uav)
+        waited = [r for r in mine if r.purpose == "stay" and r.t1_s == departure_s]
+        dropped = [r for r in mine if r.t0_s >= departure_s and r not in waited]
+        moves += [Move(r, r.until(r.t0_s)) for r in dropped] + [Move(r, r.until(math.inf)) for r in waited]
+        out = table.without([*dropped, *waited])
+        table = Table((*out.reservations, *(r.until(math.inf) for r in waited)), table.separation)
+    return table, moves
+
+
 def lose(table: Table, uav: str, now_s: float, last: Volume) -> tuple[Table, tuple[Move, ...]]:
     """``uav`` is lost at ``now_s``: it holds ``last`` (the volume it was last known in), open-ended, instead of its
-    plan; the plans of others in the way move."""
+    plan. The plans of others not under way that need that space are withdrawn (their UAVs stay where they were
+    to leave from, and ask again); other plans in the way of what was withdrawn move.
+
+    Raises:
+        PlanningError: a plan under way needs that space (the message names both).
+    """
     left = table.release(uav, now_s)
     held = Reservation(uav, last, now_s, math.inf, "lost")
-    return settle(Table((*left.reservations, held), left.separation), now_s, uav)
+    left, withdrawn = _withdraw(left, held, now_s)
+    settled, moved = settle(Table((*left.reservations, held), left.separation), now_s, uav)
+    return settled, (*withdrawn, *moved)
 
 
 __all__ = ["Move", "extend", "lose", "settle", "way_home"]
