@@ -8,13 +8,33 @@ the grants, waits and moves expected of them. Every step re-checks the table's i
 
 ``fly`` asks for a flight from where the UAV stays now to ``to`` (its work there lasts ``work_s``), then to stay
 ``then``: ``"pad"`` (default), ``"site"`` or a parking spot ``(x, y)``; without ``to`` it flies straight there.
+
+The same scenario reads as a table (:func:`play`), one step a row: the clock, the UAV, what happens, what is
+expected::
+
+    s = play({"a": (0, 0), "b": (10, 0)}, '''
+        t_s | uav | does                      | expect
+        0   | a   | fly to (5, 5) work 30     | granted now layer 0
+        0   | b   | fly to (5.5, 5) work 20   | granted later
+        40  | a   | late 25                   | moves b
+    ''')
+
+``does``: ``fly to (x, y) [work S] [rc R] [task T] [then pad|site|(x, y)]``, ``home`` (straight to its pad),
+``park (x, y)`` (straight to a parking spot there), ``late S``, ``silent``, ``lost [(x, y)]`` (its last volume: the
+column up to 3 m there, or where it stays), ``found`` (accounted for: back on its pad from now).
+``expect``: ``granted [now|later|at T] [layer K]``, ``waits [for u,v] [until T|until they leave]``,
+``moves u,v`` or ``moves nobody``, ``refused [words of the reason]``, or ``-``. Times are to 0.05 s.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
+import pytest
+
+from masonry.errors import PlanningError
 from masonry.reservation import (
     Airspace,
     Decision,
@@ -23,9 +43,11 @@ from masonry.reservation import (
     Move,
     Place,
     Request,
+    Reservation,
     Table,
     Wait,
     Work,
+    column,
     decide,
     extend,
     lose,
@@ -71,6 +93,8 @@ class Scenario:
     #: the UAV the last change (late, silent, lost) was about
     about: str = field(init=False, default="")
     plans: dict[str, FlightPlan] = field(init=False, default_factory=dict)
+    #: the places UAVs left from, by UAV and the volume they held there (a withdrawn plan leaves its UAV there)
+    left_from: dict[tuple[str, Volume], Place] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.table = start_table({u: (float(x), float(y)) for u, (x, y) in self.pads.items()}, self.now_s)
@@ -124,6 +148,7 @@ class Scenario:
             self.table = self.last.table
             self.plans[uav] = self.last.plan
             assert self.last.plan.stay.open_ended, "a granted plan ends where the UAV may stay"
+            self.left_from[(uav, request.start.volume())] = request.start
             self.where[uav] = request.stay if request.stay is not None else request.work.end_place()  # type: ignore[union-attr]
         else:
             assert self.table == before, "a wait changes nothing: the UAV keeps only its stay"
@@ -169,9 +194,31 @@ class Scenario:
         return self
 
     def lost(self, uav: str, last: Volume) -> Scenario:
-        """``uav`` is lost: its last volume stays reserved."""
+        """``uav`` is lost: its last volume stays reserved; plans withdrawn leave their UAVs where they were."""
+        places = {(u, p.volume()): p for u, p in self.where.items()}
+        places |= {
+            (u, Place((float(x), float(y))).volume()): Place((float(x), float(y)))
+            for u, (x, y) in self.pads.items()
+        }
+        places |= self.left_from
         self.table, self.moves = lose(self.table, uav, self.now_s, last)
         self.about = uav
+        for m in self.moves:
+            if (
+                m.after.open_ended and not m.before.open_ended
+            ):  # withdrawn: it stays where it was to leave from
+                self.where[m.uav] = places[(m.uav, m.after.volume)]
+        check_table(self.table)
+        return self
+
+    def found(self, uav: str) -> Scenario:
+        """``uav`` (lost) is accounted for: back on its pad from now."""
+        x, y = self.pads[uav]
+        home = Place((float(x), float(y)))
+        self.table = self.table.release(uav, self.now_s).add(
+            Reservation(uav, home.volume(), self.now_s, math.inf, "stay")
+        )
+        self.where[uav] = home
         check_table(self.table)
         return self
 
@@ -189,3 +236,127 @@ class Scenario:
         if isinstance(self.last, Grant):
             return f"a grant from {self.last.plan.start_s:.1f} s at {self.last.plan.layer_m} m"
         return "nothing yet"
+
+
+# ---- the scenario as a table
+
+_TOKEN = re.compile(r"\(\s*-?[\d.]+\s*,\s*-?[\d.]+\s*\)|[^\s]+")
+TIME_TOL_S = 0.05
+
+
+def _xy(token: str) -> XY:
+    x, y = token.strip("()").split(",")
+    return (float(x), float(y))
+
+
+def _options(words: list[str], row: str) -> dict[str, str]:
+    """``key value`` pairs (``to (1, 2) work 20``) as a dict; a key with no value is an error naming the row."""
+    if len(words) % 2:
+        raise AssertionError(f"{row!r}: expected `key value` pairs, got {' '.join(words)!r}")
+    return dict(zip(words[::2], words[1::2], strict=True))
+
+
+def _do(s: Scenario, uav: str, does: list[str], row: str) -> None:
+    verb, rest = does[0], does[1:]
+    if verb == "fly":
+        opts = _options(rest, row)
+        then_word = opts.pop("then", "pad")
+        then: str | XY = then_word if then_word in ("pad", "site") else _xy(then_word)
+        kw: dict[str, object] = {"then": then}
+        if "work" in opts:
+            kw["work_s"] = float(opts.pop("work"))
+        if "rc" in opts:
+            kw["clearance_m"] = float(opts.pop("rc"))
+        if "task" in opts:
+            kw["task"] = opts.pop("task")
+        to = _xy(opts.pop("to")) if "to" in opts else None
+        assert not opts, f"{row!r}: unknown options {sorted(opts)}"
+        s.fly(uav, to, **kw)
+    elif verb == "home":
+        s.fly(uav, then="pad")
+    elif verb == "park":
+        s.fly(uav, then=_xy(rest[0]))
+    elif verb == "late":
+        s.late(uav, float(rest[0]))
+    elif verb == "silent":
+        s.silent(uav)
+    elif verb == "lost":
+        last = column(_xy(rest[0]), 0.0, 3.0) if rest else s.where[uav].volume()
+        s.lost(uav, last)
+    elif verb == "found":
+        s.found(uav)
+    else:
+        raise AssertionError(f"{row!r}: unknown step {verb!r}")
+
+
+def _expect(s: Scenario, words: list[str]) -> None:
+    if not words or words == ["-"]:
+        return
+    kind, rest = words[0], words[1:]
+    if kind == "granted":
+        assert isinstance(s.last, Grant), f"expected a grant, got: {s._said()}"
+        start_s = s.last.plan.start_s
+        while rest:
+            word = rest.pop(0)
+            if word == "now":
+                assert math.isclose(start_s, s.now_s, abs_tol=1e-9), f"granted from {start_s:.2f} s, not now"
+            elif word == "later":
+                assert start_s > s.now_s + 1e-9, f"granted now ({start_s:.2f} s), not later"
+            elif word == "at":
+                want = float(rest.pop(0))
+                assert abs(start_s - want) <= TIME_TOL_S, f"granted from {start_s:.2f} s, not {want} s"
+            elif word == "layer":
+                s.granted(layer=int(rest.pop(0)))
+            else:
+                raise AssertionError(f"granted: unknown word {word!r}")
+    elif kind == "waits":
+        s.waits()
+        assert isinstance(s.last, Wait)
+        while rest:
+            word = rest.pop(0)
+            if word == "for":
+                s.waits(for_uavs=tuple(sorted(rest.pop(0).split(","))))
+            elif word == "until" and rest[:2] == ["they", "leave"]:
+                del rest[:2]
+                assert math.isinf(s.last.until_s), s.last.describe()
+            elif word == "until":
+                want = float(rest.pop(0))
+                assert abs(s.last.until_s - want) <= TIME_TOL_S, s.last.describe()
+            else:
+                raise AssertionError(f"waits: unknown word {word!r}")
+    elif kind == "moves":
+        s.moved(*(() if rest == ["nobody"] else tuple(rest[0].split(","))))
+    else:
+        raise AssertionError(f"unknown expectation {kind!r}")
+
+
+def play(pads: dict[str, XY], script: str, **scenario: object) -> Scenario:
+    """Play ``script``, a table of steps (the module's docstring), from a fleet on ``pads``; every row's
+    expectation is checked (a failure names the row) and the table's invariants after every step. Returns the
+    scenario, for the test to look closer."""
+    s = Scenario(pads, **scenario)  # type: ignore[arg-type]
+    rows = [line.strip() for line in script.strip().splitlines() if line.strip()]
+    header = [c.strip() for c in rows[0].split("|")]
+    assert header == ["t_s", "uav", "does", "expect"], (
+        f"the header is t_s | uav | does | expect, got {rows[0]!r}"
+    )
+    for row in rows[1:]:
+        cells = [c.strip() for c in row.split("|")]
+        assert len(cells) == 4, f"{row!r}: four cells, got {len(cells)}"
+        t_s, uav, does, expect = cells
+        words = _TOKEN.findall(expect)
+        try:
+            s.at(float(t_s))
+            table = s.table
+            if words and words[0] == "refused":
+                with pytest.raises(PlanningError) as refusal:
+                    _do(s, uav, _TOKEN.findall(does), row)
+                reason = " ".join(words[1:])
+                assert reason in str(refusal.value), f"refused with {refusal.value}, not {reason!r}"
+                assert s.table == table, "a refused change leaves the table as it was"
+                continue
+            _do(s, uav, _TOKEN.findall(does), row)
+            _expect(s, words)
+        except AssertionError as exc:
+            raise AssertionError(f"row {row!r}: {exc}") from exc
+    return s

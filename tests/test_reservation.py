@@ -1,5 +1,6 @@
-"""The space-time reservation model (issue 27, masonry.reservation): named scenarios in the scenario language
-(tests/reservation_scenario.py) and the unit pieces under them."""
+"""The space-time reservation model (issue 27, masonry.reservation): the unit pieces (volumes, the separation, the
+table, decide, the layout condition). Its rules, one named scenario each, are in tests/test_reservation_rules.py;
+its random-sequence invariants in tests/test_reservation_invariants.py."""
 
 from __future__ import annotations
 
@@ -17,7 +18,6 @@ from masonry.reservation import (
     Request,
     Reservation,
     Table,
-    Wait,
     Work,
     column,
     decide,
@@ -28,7 +28,7 @@ from masonry.reservation import (
 )
 from masonry.reservation.space import SITE_TOLERANCE_M, Separation
 from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_m
-from reservation_scenario import LAYERS_M, Scenario
+from reservation_scenario import LAYERS_M
 
 # ---- the volumes and the separation
 
@@ -109,139 +109,6 @@ def test_decide_needs_the_uav_to_hold_a_place_to_stay() -> None:
     request = Request("ghost", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 10.0))
     with pytest.raises(PlanningError, match="ghost holds no place to stay"):
         decide(Table(), request, 0.0, Airspace(LAYERS_M))
-
-
-def test_a_granted_flight_is_timed_from_the_uavs_speeds_with_the_margin() -> None:
-    s = Scenario({"a": (0.0, 0.0)})
-    s.at(0.0).fly("a", to=(6.0, 8.0), work_s=20.0).granted(start_s=0.0, layer=0)
-    plan = s.plans["a"]
-    kinds = [r.purpose for r in plan.reservations]
-    assert kinds == ["climb", "transit", "descend", "work", "climb", "transit", "descend", "stay"]
-    climb, transit = plan.reservations[0], plan.reservations[1]
-    # 2.5 m at 0.4 m/s peak: 1.875 * 2.5 / 0.4 s; 10 m at 1 m/s peak: 18.75 s; 2 s margin on each window
-    assert climb.t1_s == pytest.approx(1.875 * 2.5 / 0.4 + 2.0)
-    assert transit.t0_s == pytest.approx(1.875 * 2.5 / 0.4)
-    assert transit.t1_s - transit.t0_s == pytest.approx(18.75 + 2.0)
-    work = plan.reservations[3]
-    assert work.t1_s - work.t0_s == pytest.approx(20.0 + 2.0)
-    assert plan.stay.volume == pad((0.0, 0.0)) and plan.stay.open_ended
-    # its pad is held until it leaves (at 0 s: the stay is kept, empty, as the mark of its departure), not after
-    first = s.table.of("a")[0]
-    assert (first.purpose, first.volume, first.t0_s, first.t1_s) == ("stay", pad((0.0, 0.0)), 0.0, 0.0)
-
-
-# ---- named scenarios
-
-
-def test_two_uavs_crossing_fly_at_different_layers_at_once() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    s.at(0.0).fly("a", to=(10.0, 4.0), work_s=20.0).granted(start_s=0.0, layer=0)
-    # b's leg crosses a's at the time both are there: it starts now, one layer up, rather than later
-    s.fly("b", to=(0.0, 4.0), work_s=20.0).granted(start_s=0.0, layer=1)
-    # on layer 0 alone it would have to wait for a's legs
-    low = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, layers_m=LAYERS_M[:1])
-    low.at(0.0).fly("a", to=(10.0, 4.0), work_s=20.0).granted(start_s=0.0)
-    low.fly("b", to=(0.0, 4.0), work_s=20.0).granted()
-    assert low.plans["b"].start_s > 0.0
-
-
-def test_a_uav_waits_on_its_pad_for_a_busy_site() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=120.0).granted(start_s=0.0)
-    # b's site is 0.5 m from a's: not before a has worked there and left (beyond the 60 s horizon): it waits
-    s.fly("b", to=(5.5, 5.0), work_s=20.0).waits(for_uavs=("a",))
-    assert isinstance(s.last, Wait)
-    until_s = s.last.until_s
-    assert 60.0 < until_s < math.inf
-    # while it waits it holds only its pad
-    assert [r.purpose for r in s.table.of("b")] == ["stay"] and s.table.of("b")[0].volume == pad((10.0, 0.0))
-    # asked again when it fits, it is granted at once
-    s.at(until_s).fly("b", to=(5.5, 5.0), work_s=20.0).granted(start_s=until_s)
-    # it comes down once a's work there is over
-    a_work = next(r for r in s.table.of("a") if r.purpose == "work")
-    assert next(r for r in s.table.of("b") if r.purpose == "descend").t0_s >= a_work.t1_s
-
-
-def test_a_late_uav_pushes_the_next_one_visibly() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0).granted(start_s=0.0)
-    s.fly("b", to=(5.5, 5.0), work_s=20.0).granted()
-    b_start = s.plans["b"].start_s
-    assert b_start > 0.0
-    a_work = next(r for r in s.table.of("a") if r.purpose == "work")
-    s.at(a_work.t0_s + 10.0).late("a", 25.0).moved("b")
-    # a's work window runs 25 s longer, b leaves its pad later and waits there, not in the air
-    assert next(r for r in s.table.of("a") if r.purpose == "work").t1_s == pytest.approx(a_work.t1_s + 25.0)
-    b_now = s.table.of("b")
-    b_climb = next(r for r in b_now if r.purpose == "climb")
-    assert b_climb.t0_s > b_start
-    assert next(r for r in b_now if r.purpose == "stay").t1_s == pytest.approx(b_climb.t0_s)
-    assert all(m.after.t0_s >= m.before.t0_s and m.after.t1_s >= m.before.t1_s for m in s.moves)
-    # a plan under way does not move: late again once b has left for the site beside a's, no move makes room
-    # (a would have to stay in its zone while b comes down beside it): the table says so and stays as it was
-    s.at(b_climb.t0_s + 1.0)
-    table = s.table
-    with pytest.raises(PlanningError, match="clash and neither can move"):
-        s.late("a", 30.0)
-    assert s.table == table
-
-
-def test_the_site_rule_keeps_conflicting_sites_apart_for_their_windows() -> None:
-    # sites 1.5 m apart: the air separation (1.2 m) lets both work at once ...
-    free = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    free.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0, task="A0").granted(start_s=0.0)
-    free.fly("b", to=(6.5, 5.0), work_s=30.0, task="B0").granted(start_s=0.0)
-    # ... the paper's rule with r_c = 1.8 m does not: b comes down only once a's site interval is over
-    rule = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    rule.at(0.0).fly("a", to=(5.0, 5.0), work_s=30.0, clearance_m=1.8, task="A0").granted(start_s=0.0)
-    rule.fly("b", to=(6.5, 5.0), work_s=30.0, clearance_m=1.8, task="B0").granted()
-    a_site = next(r for r in rule.table.of("a") if r.purpose == "site")
-    b_site = next(r for r in rule.table.of("b") if r.purpose == "site")
-    b_descend = next(r for r in rule.table.of("b") if r.purpose == "descend")
-    assert b_site.t0_s == pytest.approx(a_site.t1_s) and b_descend.t0_s == pytest.approx(b_site.t0_s)
-    assert a_site.task == "A0" and a_site.t1_s < math.inf  # it ends with the work (plus the margin)
-
-
-def test_a_silent_uavs_way_home_is_reserved_and_moves_who_is_in_the_way() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, layers_m=LAYERS_M[:1])
-    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=10.0, then="site").granted(start_s=0.0)
-    # b parks under a's way home (after a has passed), then is to leave from there for a site of its own
-    s.fly("b", then=(2.5, 2.5)).granted()
-    parked_s = s.plans["b"].stay.t0_s
-    s.fly("b", to=(8.0, 8.0), work_s=10.0).granted(start_s=parked_s)
-    a_there = [r for r in s.table.of("a") if r.purpose == "stay"][-1]
-    assert a_there.t0_s < parked_s - 5.0
-    # a falls silent over its site 5 s before b would climb out under its way home: the way home is reserved
-    # from then, and b's plan (not under way) moves, visibly: b stays parked until a has passed
-    s.at(parked_s - 5.0).silent("a").moved("b")
-    home = s.plans["a"]
-    assert home.start_s == parked_s - 5.0 and home.stay.volume == pad((0.0, 0.0)) and home.stay.open_ended
-    assert {r.purpose for r in home.reservations[:-1]} == {"home"}
-    assert [r.purpose for r in s.table.of("a") if r.t0_s >= home.start_s] == ["home", "home", "home", "stay"]
-    b_climb = next(r for r in s.table.of("b") if r.purpose == "climb" and r.t0_s >= parked_s)
-    a_transit = home.reservations[1]
-    assert b_climb.t0_s >= a_transit.t1_s - 1e-9  # it climbs out once a's leg over it is over
-    parked = next(r for r in s.table.of("b") if r.purpose == "stay" and r.t0_s == parked_s)
-    assert parked.t1_s == pytest.approx(b_climb.t0_s)  # and waits for it on the ground
-
-
-def test_a_lost_uav_keeps_its_last_volume_until_accounted_for() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)})
-    s.at(0.0).lost("a", column((5.0, 5.0), 0.0, 3.0))
-    s.fly("b", to=(5.5, 5.0), work_s=10.0).waits(for_uavs=("a",), until_s=math.inf)
-    assert isinstance(s.last, Wait) and "until they leave" in s.last.describe()
-    # found at 50 s and carried back to its pad
-    s.table = s.table.release("a", 50.0).add(Reservation("a", pad((0.0, 0.0)), 50.0, math.inf, "stay"))
-    s.fly("b", to=(5.5, 5.0), work_s=10.0).granted()
-    assert s.plans["b"].start_s > 0.0
-
-
-def test_a_wait_within_the_horizon_is_a_grant_with_a_later_start() -> None:
-    s = Scenario({"a": (0.0, 0.0), "b": (10.0, 0.0)}, horizon_s=1000.0)
-    s.at(0.0).fly("a", to=(5.0, 5.0), work_s=120.0).granted(start_s=0.0)
-    s.fly("b", to=(5.5, 5.0), work_s=20.0).granted()
-    b = s.table.of("b")
-    assert b[0].purpose == "stay" and b[0].t1_s == s.plans["b"].start_s > 100.0  # on its pad until then
 
 
 def test_decide_is_pure() -> None:
