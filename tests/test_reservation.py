@@ -173,6 +173,11 @@ def test_layout_problems_name_what_breaks_the_guarantee() -> None:
         "c's pad at (5.0, 4.0) is within the separation of work zone 0 at (5.0, 5.0)",
         "layer 2.0 m is less than 1.1 m over work zone 0 (1.0 m high)",
     ]
+    # a layer low enough to pass over a landed UAV within the separation: the leg would wait for it for ever
+    ground = Work((5.0, 5.0), 0.0, 10.0).zone()
+    assert layout_problems({"a": (0.0, 0.0)}, [ground], (1.2,)) == [
+        "layer 1.2 m is less than 1.1 m over a landed UAV (0.3 m high)"
+    ]
 
 
 def test_an_empty_window_overlaps_nothing() -> None:

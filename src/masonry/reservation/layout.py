@@ -30,7 +30,7 @@ def layout_problems(
 
     The conditions: pads and parking spots keep the pad separation from each other; the column over each of them
     (a take-off or landing, up to the highest layer) keeps the separation from every work zone; every layer clears
-    every zone vertically. Then no stay at a pad or a parking spot is ever in a flight's way, and no flight's leg
+    every zone and every landed UAV vertically. Then no stay at a pad or a parking spot is ever in a flight's way, and no flight's leg
     in any stay's way.
     """
     places = [(f"{u}'s pad", xy) for u, xy in homes.items()]
@@ -50,6 +50,10 @@ def layout_problems(
             out.append(
                 f"layer {low[0]} m is less than {separation.z_m} m over work zone {k} ({zone.z1_m} m high)"
             )
+    landed_m = pad((0.0, 0.0)).z1_m
+    low = [z for z in layers_m if z - landed_m < separation.z_m]
+    if places and low:
+        out.append(f"layer {low[0]} m is less than {separation.z_m} m over a landed UAV ({landed_m} m high)")
     return out
 
 
