@@ -19,9 +19,10 @@ expected::
         40  | a   | late 25                   | moves b
     ''')
 
-``does``: ``fly to (x, y) [work S] [rc R] [task T] [then pad|site|(x, y)]``, ``home`` (straight to its pad),
-``park (x, y)`` (straight to a parking spot there), ``late S``, ``silent``, ``lost [(x, y)]`` (its last volume: the
-column up to 3 m there, or where it stays), ``found`` (accounted for: back on its pad from now).
+``does``: ``fly to (x, y) [z Z] [work S] [rc R] [task T] [then pad|site|(x, y)]`` (``z``: the work altitude, 1 m
+by default), ``home`` (straight to its pad), ``park (x, y)`` (straight to a parking spot there), ``late S``,
+``silent``, ``lost [(x, y)]`` (its last volume: the column up to 3 m there, or where it stays), ``found`` (accounted
+for: back on its pad from now).
 ``expect``: ``granted [now|later|at T] [layer K]``, ``waits [for u,v] [until T|until they leave]``,
 ``moves u,v`` or ``moves nobody``, ``refused [words of the reason]``, or ``-``. Times are to 0.05 s.
 """
@@ -269,6 +270,8 @@ def _do(s: Scenario, uav: str, does: list[str], row: str) -> None:
             kw["clearance_m"] = float(opts.pop("rc"))
         if "task" in opts:
             kw["task"] = opts.pop("task")
+        if "z" in opts:
+            kw["z_m"] = float(opts.pop("z"))
         to = _xy(opts.pop("to")) if "to" in opts else None
         assert not opts, f"{row!r}: unknown options {sorted(opts)}"
         s.fly(uav, to, **kw)

@@ -90,14 +90,16 @@ def test_rule_a_flight_is_reserved_whole_with_its_margin() -> None:
 
 
 def test_rule_earliest_start_then_lowest_layer() -> None:
-    # four layers: b crosses a's path one layer up and leaves now, rather than at 22.2 s on layer 0
+    # four layers: b crosses a's path one layer up and leaves now, rather than at 22.2 s on layer 0; c, in nobody's
+    # way, flies at the lowest; d works 3 m up, over layer 0 (2.5 m): the lowest it may use is layer 1
     play(
-        {"a": (0, 0), "b": (10, 0), "c": (20, 0)},
+        {"a": (0, 0), "b": (10, 0), "c": (20, 0), "d": (30, 0)},
         """
         t_s | uav | does                    | expect
         0   | a   | fly to (10, 4) work 20  | granted now layer 0
         0   | b   | fly to (0, 4) work 20   | granted now layer 1
         0   | c   | fly to (20, 4) work 20  | granted now layer 0
+        0   | d   | fly to (30, 4) z 3 work 20  | granted now layer 1
         """,
     )
 
