@@ -9,6 +9,7 @@ import math
 import shutil
 from pathlib import Path
 
+import jsonschema
 import pytest
 from mcap.reader import make_reader
 from typer.testing import CliRunner
@@ -178,6 +179,16 @@ def test_the_log_shows_each_tasks_flight_reserved_by_its_uav_during_its_attempt(
     report = table_run["report"]
     events = _reservations(table_run["log"])
     assert report["completed"] is True
+    with open(
+        table_run["log"], "rb"
+    ) as f:  # its own topic, each message valid against the schema in the file
+        reader = make_reader(f)
+        for schema, _channel, message in reader.iter_messages(topics=["/mission/reservations"]):
+            assert schema is not None and schema.name == "masonry.MissionEvent"
+            errors = list(
+                jsonschema.Draft7Validator(json.loads(schema.data)).iter_errors(json.loads(message.data))
+            )
+            assert not errors, errors[0].message
     with open(table_run["log"], "rb") as f:
         summary = make_reader(f).get_summary()
     assert summary is not None
