@@ -13,6 +13,8 @@ then the log's size, its messages per topic kind, and how long ``read_log`` take
     .venv/bin/python benchmarks/bench_log.py --blueprint blueprints/running_bond_200.yaml --runs 1
     # the same modes on another checkout (e.g. before the Foxglove SDK): only the modes it has
     PYTHONPATH=/path/to/old/src .venv/bin/python benchmarks/bench_log.py --modes "no log,log"
+    # with the reservation table (its changes on /mission/reservations; the watch's CPU time printed too)
+    .venv/bin/python benchmarks/bench_log.py --airspace table --modes "no log,log"
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from websockets.sync.client import connect
 
 from masonry.blueprint import load_blueprint
 from masonry.mission.simulate import SimulatedMission
+from masonry.mission.table_events import watch_table
 from masonry.observe.mcap_log import McapLog, read_log
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -78,9 +81,12 @@ class Timed:
         self.cpu_s += time.thread_time() - t0
 
 
-def fly(bp: Any, text: str, mode: str, path: Path) -> tuple[tuple[float, float, float], Any, int]:
-    """One mission in ``mode``: ((wall s, process CPU s, sink CPU s), its report, messages a viewer received)."""
-    mission = SimulatedMission.from_blueprint(bp)
+def fly(
+    bp: Any, text: str, mode: str, path: Path, airspace: str = "columns"
+) -> tuple[tuple[float, float, float, float], Any, int]:
+    """One mission in ``mode``: ((wall s, process CPU s, sink CPU s, table watch CPU s), its report, messages a
+    viewer received)."""
+    mission = SimulatedMission.from_blueprint(bp, airspace=airspace)
     sink: Any = None
     viewer = None
     if mode == "log":
@@ -102,6 +108,17 @@ def fly(bp: Any, text: str, mode: str, path: Path) -> tuple[tuple[float, float, 
             viewer.start()
             viewer.subscribed.wait(10)
     mission.control.sink = timed if sink is not None else None
+    watch = watch_table(mission.control) if sink is not None else None  # (as the CLI's Watchers.attach)
+    watch_cpu = [0.0]
+    if watch is not None:
+        columns: Any = mission.control.columns
+
+        def timed_watch(table: Any, now_s: float) -> None:
+            c0 = time.thread_time()
+            watch(table, now_s)
+            watch_cpu[0] += time.thread_time() - c0
+
+        columns.on_change = timed_watch
     report = mission.run()
     if sink is not None:
         c0 = time.thread_time()
@@ -114,7 +131,7 @@ def fly(bp: Any, text: str, mode: str, path: Path) -> tuple[tuple[float, float, 
         sink.stop()
     if viewer is not None:
         viewer.join(10)
-    return (wall_s, cpu_s, timed.cpu_s), report, viewer.received if viewer is not None else 0
+    return (wall_s, cpu_s, timed.cpu_s, watch_cpu[0]), report, viewer.received if viewer is not None else 0
 
 
 def main() -> None:
@@ -122,19 +139,20 @@ def main() -> None:
     ap.add_argument("--blueprint", type=Path, default=ROOT / "blueprints" / "running_bond_small.yaml")
     ap.add_argument("--runs", type=int, default=2)
     ap.add_argument("--modes", default=",".join(MODES), help=f"comma-separated, of: {', '.join(MODES)}")
+    ap.add_argument("--airspace", default="columns", choices=("columns", "table"))
     args = ap.parse_args()
     modes = [m.strip() for m in args.modes.split(",")]
     if "log" not in modes or not set(modes) <= set(MODES):
         ap.error(f"--modes: some of {', '.join(MODES)}, with log (its file is read back)")
     bp = load_blueprint(args.blueprint)
     text = args.blueprint.read_text(encoding="utf-8")
-    times: dict[str, list[tuple[float, float, float]]] = {m: [] for m in modes}
+    times: dict[str, list[tuple[float, float, float, float]]] = {m: [] for m in modes}
     received: list[int] = []
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "run.mcap"
         for _ in range(args.runs):
             for mode in modes:
-                measured, report, got = fly(bp, text, mode, path)
+                measured, report, got = fly(bp, text, mode, path, args.airspace)
                 times[mode].append(measured)
                 if mode == "foxglove+viewer":
                     received.append(got)
@@ -151,10 +169,18 @@ def main() -> None:
         read_s = time.perf_counter() - t0
     print(
         f"{args.blueprint.name}: {len(bp.bricks)} bricks, makespan {report.makespan_s:.0f} s, sim {report.sim_time_s:.0f} s"
+        f", airspace {args.airspace}"
     )
-    print(f"  {'mode':<16} per run: wall s / process CPU s / CPU s inside the sink")
+    table = args.airspace == "table"
+    extra = " / CPU s inside the table watch" if table else ""
+    print(f"  {'mode':<16} per run: wall s / process CPU s / CPU s inside the sink{extra}")
     for mode, ts in times.items():
-        print(f"  {mode:<16} " + "   ".join(f"{w:6.2f} / {c:6.2f} / {s:5.2f}" for w, c, s in ts))
+        print(
+            f"  {mode:<16} "
+            + "   ".join(
+                f"{w:6.2f} / {c:6.2f} / {s:5.2f}" + (f" / {t:5.2f}" if table else "") for w, c, s, t in ts
+            )
+        )
     if received:
         print(f"  the viewer received {', '.join(str(n) for n in received)} messages")
     print(

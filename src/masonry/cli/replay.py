@@ -34,7 +34,11 @@ def replay(
     gantt: Path | None = typer.Option(None, "--gantt", help="Gantt chart (.png or .svg)."),
     plot3d: Path | None = typer.Option(None, "--plot3d", help="3-D plot of the wall and the paths (.png)."),
     at: float | None = typer.Option(
-        None, "--at", metavar="T", help="Print the mission's state at mission time T (seconds) instead."
+        None,
+        "--at",
+        metavar="T",
+        help="Print the mission's state at mission time T (seconds) instead (with --airspace table: its "
+        "reservation table too).",
     ),
     serve: str | None = typer.Option(
         None,

@@ -13,6 +13,7 @@ import typer
 
 from masonry.cli.foxglove_options import loopback
 from masonry.errors import InputError
+from masonry.mission.table_events import watch_table
 
 if TYPE_CHECKING:  # (the observe extra's modules load only when a mission is watched)
     from masonry.blueprint import UavSpec
@@ -118,6 +119,8 @@ class Watchers:
             self.live = self._start_foxglove(self.foxglove, control, plan, fleet, done)
             sinks.append(self.live)
         control.sink = sinks[0] if len(sinks) == 1 else (EventFanout(*sinks) if sinks else None)
+        if sinks:  # (--airspace table: its reservations as they are made, moved and released)
+            watch_table(control)
 
     def _start_foxglove(
         self, at: FoxgloveAt, control: MissionControl, plan: Plan, fleet: Sequence[UavSpec], done: set[str]

@@ -28,6 +28,9 @@ Kinds (``MissionEvent.kind``) and their fields:
   :mod:`masonry.mission.glue`).
 - ``spare``: a spare stands in for the brick of ``task_id`` (``spare``, ``brick``, ``reason``), or none is left
   and the brick waits for a person (``spare`` None; :mod:`masonry.mission.spares`).
+- ``reservation``: with ``--airspace table``, a reservation of ``uav`` (for ``task_id``) ``made``, ``moved`` or
+  ``released`` (``change``), its ``id``, ``purpose``, ``t0_s``, ``t1_s`` (None: open-ended), ``volume``, ``space``
+  and, moved, the window it ``was`` (:mod:`masonry.mission.table_events`).
 """
 
 from __future__ import annotations
@@ -58,6 +61,7 @@ KINDS = (
     "glue",
     "spare",
     "placement",
+    "reservation",
 )
 
 
@@ -136,6 +140,10 @@ class MissionEvent:
         elif self.kind == "spare":
             spare = f.get("spare")
             extra = f": {f'spare {spare} for' if spare is not None else 'waiting for a person:'} brick {f.get('brick')}"
+        elif self.kind == "reservation":
+            t1 = f.get("t1_s")
+            end = f"{t1:.1f} s" if isinstance(t1, (int, float)) else "open-ended"
+            extra = f": {f.get('change')} {f.get('purpose')} from {f.get('t0_s', 0.0):.1f} s to {end}"
         elif self.kind == "glue":
             until = f.get("open_until_s")
             extra = f" under {f.get('brick')}" + (

@@ -9,7 +9,7 @@ parking spots (:mod:`masonry.mission.reserved_parts`). No hold patience. Pure: n
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, replace
 
 from masonry.errors import InvalidArgument
@@ -125,6 +125,7 @@ class TableClearance:
             separation=Separation(self.sep_xy_m, self.spacing_m - 1e-9, float(pad_separation_m) - 1e-6)
         )
         self._uavs: dict[str, _Uav] = {}
+        self.on_change: Callable[[Table, float], object] = lambda table, now_s: None  # (a log watches)
         self._seq = 0
         self._version = 0
         self.now_s = 0.0
@@ -562,8 +563,9 @@ class TableClearance:
         self.table = forced(self.table, self.table.of(uav), list(reservations))
         self._bump()
 
-    def _bump(self) -> None:  # (every change: a wait is looked at again)
+    def _bump(self) -> None:  # (every change: a wait is looked at again, on_change sees the table)
         self._version += 1
+        self.on_change(self.table, self.now_s)
 
     def _uav(self, uav: str) -> _Uav:
         u = self._uavs.get(uav)

@@ -41,6 +41,7 @@ from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
 from masonry.mission.sim_options import SimFields, SimOptions, with_fields
 from masonry.mission.sim_resume import kept_of, resumed_world
+from masonry.mission.table_events import watch_table
 from masonry.mission.uav_stack import (
     BATTERY_SWAP_S,
     GroundCrew,
@@ -394,6 +395,8 @@ class SimulatedMission:
             )
             if state is not None:
                 mc.restore(state)
+            if events_sink is not None:  # (--airspace table: the sink sees its reservations too)
+                watch_table(mc)
             world.add_fleet(fleet)
             mission = cls(
                 blueprint,

@@ -17,6 +17,7 @@ from typing import Any
 
 from masonry.blueprint import UavSpec
 from masonry.mission.events import MissionEvent
+from masonry.mission.table_view import TableView
 from masonry.planner.tasks import BrickTask, Plan
 
 #: Task states in the view.
@@ -95,11 +96,18 @@ class MissionView:
         #: brick task -> its as-built ``deviation_m`` and the ``tolerance_m`` it is judged by (issue 30)
         self.as_built: dict[str, dict[str, float]] = {}
         self.beyond: dict[str, float] = {}  # brick tasks placed beyond the tolerance -> deviation (m)
+        #: the reservation table (``reservation`` events: ``--airspace table``; mission/table_view.py)
+        self.table = TableView()
 
     def emit(self, event: MissionEvent) -> None:
         """Fold one event in."""
         with self._lock:
-            self._apply(event)
+            if event.kind == "reservation":  # the table's own (not among the latest events' lines)
+                self.events += 1
+                self.time_s = max(self.time_s, event.time_s)
+                self.table.fold(event)
+            else:
+                self._apply(event)
 
     def _apply(self, e: MissionEvent) -> None:
         self.events += 1
@@ -218,9 +226,11 @@ class MissionView:
         with self._lock:
             glue = {"glue": self.open_glue()} if self._glued else {}
             seen = {"as_built": {k: dict(v) for k, v in self.as_built.items()}} if self.as_built else {}
+            table = {"reservations": self.table.rows()} if self.table.seen else {}
             return {
                 **glue,
                 **seen,
+                **table,
                 "time_s": self.time_s,
                 "counts": self.counts(),
                 "tasks": dict(self.tasks),
@@ -269,6 +279,8 @@ class MissionView:
                     "  placed beyond the tolerance: "
                     + ", ".join(f"{t} ({d * 100:.1f} cm)" for t, d in self.beyond.items())
                 )
+            if self.table.seen:
+                out.extend(self.table.lines(self.time_s))
             if self.stall:
                 out.append(f"  {self.stall}")
             if self.recent:

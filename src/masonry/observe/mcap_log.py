@@ -9,7 +9,8 @@ report, losslessly (:mod:`masonry.mission.report_codec`). Foxglove's topics are 
 (nanoseconds from mission time 0).
 
 :func:`read_log` reads one back (:class:`RecordedMission`): the blueprint, the events, the report, from masonry's
-own JSON topics, which logs written before Foxglove's topics moved to the SDK (JSON there too) share. The SQLite
+own JSON topics, which logs written before Foxglove's topics moved to the SDK (JSON there too) share; the
+reservation table's changes (``/mission/reservations``) come back as ``reservation`` events among the others. The SQLite
 journal stays the source of truth for ``--resume``; the log is for people and tools.
 """
 
@@ -44,6 +45,10 @@ from masonry.planner.tasks import Plan
 
 #: The MCAP profile (none of the ROS ones: protobuf and JSON messages with their schemas).
 PROFILE = ""
+
+#: The topics :func:`read_log` reads: masonry's own (``/mission/reservations``: the reservation table's changes,
+#: ``reservation`` events, only with ``--airspace table``; a log without them reads as before).
+_READ = ("/mission/blueprint", "/mission/events", "/mission/reservations", "/mission/report")
 
 
 class McapLog(MissionScene):
@@ -155,11 +160,9 @@ def read_log(path: str | Path) -> RecordedMission:
     try:
         with open(p, "rb") as f:
             reader = make_reader(f)
-            for _schema, channel, message in reader.iter_messages(
-                topics=["/mission/blueprint", "/mission/events", "/mission/report"], log_time_order=True
-            ):
+            for _schema, channel, message in reader.iter_messages(topics=[*_READ], log_time_order=True):
                 data = json.loads(message.data)
-                if channel.topic == "/mission/events":
+                if channel.topic in ("/mission/events", "/mission/reservations"):
                     events.append(MissionEvent.from_dict(data))
                 elif channel.topic == "/mission/blueprint":
                     blueprint = data

@@ -60,6 +60,7 @@ COLOURS: dict[str, tuple[float, float, float, float]] = {
 TOPICS: dict[str, str] = {
     "/mission/blueprint": "masonry.Blueprint",
     "/mission/events": "masonry.MissionEvent",
+    "/mission/reservations": "masonry.MissionEvent",
     "/mission/report": "masonry.MissionReport",
     "/log": "foxglove.Log",
     "/wall": "foxglove.SceneUpdate",
@@ -247,6 +248,10 @@ class MissionScene(ABC):
     def emit(self, event: MissionEvent) -> None:
         """Write one mission event, and what it changes on the other topics."""
         t = event.time_s
+        if event.kind == "reservation":  # the table's changes (--airspace table): a topic of their own
+            if self.wants("/mission/reservations"):
+                self._put("/mission/reservations", t, event.to_dict())
+            return
         if self.wants("/mission/events"):
             self._put("/mission/events", t, event.to_dict())
         if event.kind == "uav" and event.uav is not None:

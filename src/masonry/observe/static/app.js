@@ -109,12 +109,27 @@ function drawUavs(svg, state, at) {
   }
 }
 
+// the Gantt's and the reserved windows' time axis: to now, the last bar's end or the last window planned
+function chartEnd(state) {
+  let end = Math.max(10, state.time_s, ...state.bars.map((b) => b.end_s || state.time_s));
+  for (const r of state.reservations || []) if (r.t1_s !== null) end = Math.max(end, r.t1_s);
+  return end;
+}
+
+function timeTicks(svg, sx, end, height) {
+  const step = Math.pow(10, Math.floor(Math.log10(end))) / (end / Math.pow(10, Math.floor(Math.log10(end))) < 3 ? 2 : 1);
+  for (let t = 0; t <= end; t += step) {
+    el("line", { class: "axis", x1: sx(t), x2: sx(t), y1: 0, y2: height - 20 }, svg);
+    el("text", { class: "label", x: sx(t) - 8, y: height - 6 }, svg, `${Math.round(t)} s`);
+  }
+}
+
 function drawGantt(state) {
   const svg = document.getElementById("gantt");
   svg.replaceChildren();
   const names = layout.uavs.map((u) => u.name);
   const rowH = 24, left = 90, width = 1600 - left - 10;
-  const end = Math.max(10, state.time_s, ...state.bars.map((b) => b.end_s || state.time_s));
+  const end = chartEnd(state);
   const height = names.length * rowH + 30;
   svg.setAttribute("viewBox", `0 0 1600 ${height}`);
   const sx = (t) => left + (t / end) * width;
@@ -127,11 +142,37 @@ function drawGantt(state) {
     el("title", {}, r, `${b.task_id} (${b.uav}, attempt ${b.attempt}): ${b.start_s.toFixed(1)}-${e.toFixed(1)} s ${b.status}`);
     if (sx(e) - sx(b.start_s) > 28) el("text", { class: "label", x: sx(b.start_s) + 3, y: 20 + i * rowH }, svg, b.task_id);
   }
-  const step = Math.pow(10, Math.floor(Math.log10(end))) / (end / Math.pow(10, Math.floor(Math.log10(end))) < 3 ? 2 : 1);
-  for (let t = 0; t <= end; t += step) {
-    el("line", { class: "axis", x1: sx(t), x2: sx(t), y1: 0, y2: height - 20 }, svg);
-    el("text", { class: "label", x: sx(t) - 8, y: height - 6 }, svg, `${Math.round(t)} s`);
+  timeTicks(svg, sx, end, height);
+}
+
+// The reservation table (--airspace table) under the Gantt: one row per UAV, a box per reserved window on the
+// same time axis (flights and work full height, the stays it waits in on a lower band; open-ended ones run to
+// the axis' end). Without a table (the columns airspace) the section stays hidden.
+function drawReserved(state) {
+  const box = document.getElementById("reserved-box");
+  box.hidden = state.reservations === undefined;
+  if (box.hidden) return;
+  const svg = document.getElementById("reserved");
+  svg.replaceChildren();
+  const names = layout.uavs.map((u) => u.name);
+  const rowH = 24, left = 90, width = 1600 - left - 10;
+  const end = chartEnd(state);
+  const height = names.length * rowH + 30;
+  svg.setAttribute("viewBox", `0 0 1600 ${height}`);
+  const sx = (t) => left + (Math.min(Math.max(t, 0), end) / end) * width;
+  names.forEach((n, i) => el("text", { class: "label", x: 4, y: 18 + i * rowH }, svg, n));
+  for (const r of state.reservations) {
+    const i = names.indexOf(r.uav);
+    if (i < 0) continue;
+    const t1 = r.t1_s === null ? end : r.t1_s;
+    const low = r.purpose === "stay" || r.purpose === "lost";
+    const h = (rowH - 8) * (low ? 0.35 : 0.65);
+    const cls = `res ${r.purpose}` + (r.released ? " released" : "") + (r.t1_s === null ? " open" : "");
+    const rect = el("rect", { class: cls, x: sx(r.t0_s), y: 6 + i * rowH + (rowH - 8) - h, width: Math.max(sx(t1) - sx(r.t0_s), 1), height: h, "data-uav": r.uav, "data-purpose": r.purpose }, svg);
+    el("title", {}, rect, `${r.uav} ${r.purpose}${r.task ? " for " + r.task : ""}: ${r.t0_s.toFixed(1)} s to ${r.t1_s === null ? "open-ended" : r.t1_s.toFixed(1) + " s"}${r.released ? " (released)" : ""}`);
   }
+  el("line", { class: "now", x1: sx(state.time_s), x2: sx(state.time_s), y1: 0, y2: height - 20 }, svg);
+  timeTicks(svg, sx, end, height);
 }
 
 function render(state) {
@@ -147,7 +188,7 @@ function render(state) {
   const stall = document.getElementById("stall");
   stall.hidden = !state.stall;
   stall.textContent = state.stall || "";
-  drawTop(state); drawSide(state); drawGantt(state);
+  drawTop(state); drawSide(state); drawGantt(state); drawReserved(state);
   const body = document.querySelector("#uavs tbody");
   body.replaceChildren();
   for (const u of state.uavs) {
