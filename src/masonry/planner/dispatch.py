@@ -23,7 +23,18 @@ from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
-from masonry.planner.dispatch_values import Assignment, SetView, task_end_m, task_start_m, vec3
+from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
+from masonry.planner.dispatch_values import (
+    DONE,
+    PENDING,
+    RUNNING,
+    STUCK,
+    Assignment,
+    SetView,
+    task_end_m,
+    task_start_m,
+    vec3,
+)
 from masonry.planner.tasks import Plan, Task
 
 Policy = Literal["fifo", "critical-path", "nearest"]
@@ -38,7 +49,8 @@ DEFAULT_RESERVATION = "site"
 
 Vec3 = Sequence[float]
 
-_PENDING, _RUNNING, _DONE, _STUCK = 0, 1, 2, 3
+# the task states (masonry.planner.dispatch_values), by the names the dispatchers built on this one use
+_PENDING, _RUNNING, _DONE, _STUCK = PENDING, RUNNING, DONE, STUCK
 
 
 class Dispatcher:
@@ -92,72 +104,22 @@ class Dispatcher:
         #: brick; mission control's site gate keeps it off the site until they are done). Not adhesion: it has
         #: nothing to fetch, and would only hold a place in the airspace's queue.
         self.prefetch = reservation == "site"
-        self._index_tasks(plan)
-        self._build_graphs(plan)
-        self._chain = self._chains(durations_s)
+        self._tasks: tuple[Task, ...] = plan.tasks
+        index = index_tasks(plan.tasks)
+        self._ids, self._index, self._role = index.ids, index.index, index.roles
+        self._start_m, self._end_m, self._leg_m = index.start_m, index.end_m, index.leg_m
+        self._graphs = graphs = adjacency(plan, self._index)
+        self._dependents, self._prerequisites = graphs.dependents, graphs.prerequisites
+        self._neighbours = graphs.neighbours
+        self._chain = chains(self._tasks, graphs, durations_s)
         # critical-path compares chains in steps of one typical task (the median duration; 1 unweighted): tasks
         # whose remaining chains differ by less than that are ties, and ties go to the shortest flight.
-        self.tie_step_s = self._tie_step(durations_s)
+        self.tie_step_s = tie_step(self._tasks, durations_s)
         self._rank = [math.floor(c / self.tie_step_s + 1e-9) for c in self._chain]
         self._add_fleet(fleet)
         self._init_state()
 
     # ------------------------------------------------------------------ construction helpers
-
-    def _index_tasks(self, plan: Plan) -> None:
-        """Task ids, roles and the places a UAV flies to for each (one pass over the plan)."""
-        tasks = plan.tasks
-        n = len(tasks)
-        self._tasks: tuple[Task, ...] = tasks
-        self._ids: list[str] = [t.id for t in tasks]
-        self._index: dict[str, int] = {}
-        for i, tid in enumerate(self._ids):
-            if tid in self._index:
-                raise PlanningError(f"plan has two tasks with id {tid!r}")
-            self._index[tid] = i
-        self._role: list[str] = []
-        for t in tasks:
-            if t.kind not in ROLES:
-                raise PlanningError(f"task {t.id}: unknown kind {t.kind!r}")
-            self._role.append(t.kind)
-        self._start_m = [task_start_m(t) for t in tasks]
-        self._end_m = [task_end_m(t) for t in tasks]
-        # The part of a brick flight that does not depend on the UAV: pickup -> drop-off.
-        self._leg_m = [
-            math.dist(self._start_m[i], self._end_m[i]) if self._role[i] == "brick" else 0.0 for i in range(n)
-        ]
-
-    def _build_graphs(self, plan: Plan) -> None:
-        """Adjacency, built once: O(size of the plan). Duplicate edges are dropped per task afterwards (cheaper
-        than a global set of pairs on a wall with millions of conflicts)."""
-        n = len(plan.tasks)
-        index = self._index
-        dependents: list[list[int]] = [[] for _ in range(n)]
-        prerequisites: list[list[int]] = [[] for _ in range(n)]
-        try:
-            for u, v in plan.dependencies:
-                iu, iv = index[u], index[v]
-                if iu == iv:
-                    raise PlanningError(f"dependency ({u}, {v}): a task cannot depend on itself")
-                dependents[iv].append(iu)
-                prerequisites[iu].append(iv)
-        except KeyError as exc:
-            raise PlanningError(f"dependency names unknown task {exc.args[0]!r}") from None
-        neighbours: list[list[int]] = [[] for _ in range(n)]
-        try:
-            for a, b in plan.conflicts:
-                ia, ib = index[a], index[b]
-                if ia == ib:
-                    raise PlanningError(f"conflict ({a}, {b}): a task cannot conflict with itself")
-                neighbours[ia].append(ib)
-                neighbours[ib].append(ia)
-        except KeyError as exc:
-            raise PlanningError(f"conflict names unknown task {exc.args[0]!r}") from None
-        for lists in (dependents, prerequisites, neighbours):
-            for i, items in enumerate(lists):
-                if len(items) > 1 and len(set(items)) != len(items):
-                    lists[i] = list(dict.fromkeys(items))
-        self._dependents, self._prerequisites, self._neighbours = dependents, prerequisites, neighbours
 
     def _add_fleet(self, fleet: Sequence[UavSpec]) -> None:
         self._fleet: dict[str, UavSpec] = {}
@@ -206,54 +168,6 @@ class Dispatcher:
             return self._index[task_id]
         except KeyError:
             raise PlanningError(f"{graph} names unknown task {task_id!r}") from None
-
-    def _chains(self, durations_s: Mapping[str, float] | None) -> list[float]:
-        """Longest remaining dependency chain from each task (its own duration included): the bottom level."""
-        n = len(self._tasks)
-        weight = [0.0] * n
-        for i, t in enumerate(self._tasks):
-            if t.done:
-                continue
-            if durations_s is None:
-                weight[i] = 1.0
-                continue
-            if t.id not in durations_s:
-                raise PlanningError(f"durations_s has no entry for task {t.id}")
-            d = durations_s[t.id]
-            try:
-                d = float(d)
-            except (TypeError, ValueError):
-                raise PlanningError(f"durations_s[{t.id!r}] is not a number: {d!r}") from None
-            if not math.isfinite(d) or d < 0.0:
-                raise PlanningError(f"durations_s[{t.id!r}] must be finite and >= 0, got {d!r}")
-            weight[i] = d
-        # Kahn's algorithm from the tasks nothing depends on, walking towards prerequisites.
-        pending = [len(self._dependents[i]) for i in range(n)]
-        order = [i for i in range(n) if pending[i] == 0]
-        chain = [0.0] * n
-        k = 0
-        while k < len(order):
-            i = order[k]
-            k += 1
-            best = 0.0
-            for d in self._dependents[i]:
-                best = max(best, chain[d])
-            chain[i] = weight[i] + best
-            for p in self._prerequisites[i]:
-                pending[p] -= 1
-                if pending[p] == 0:
-                    order.append(p)
-        if len(order) != n:
-            on_cycle = next(self._ids[i] for i in range(n) if pending[i] > 0)
-            raise PlanningError(f"the dependency graph has a cycle through task {on_cycle}")
-        return chain
-
-    def _tie_step(self, durations_s: Mapping[str, float] | None) -> float:
-        if durations_s is None:
-            return 1.0
-        values = sorted(float(durations_s[t.id]) for t in self._tasks if not t.done)
-        values = [v for v in values if v > 0.0]
-        return values[len(values) // 2] if values else 1.0
 
     # ------------------------------------------------------------------ availability bookkeeping
 
@@ -352,16 +266,7 @@ class Dispatcher:
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
-        status, out = self._status, []
-        seen: set[int] = set()
-        for r in self._uav_task.values():
-            for d in self._dependents[r]:
-                if d in seen or self._role[d] != role or status[d] != _PENDING:
-                    continue
-                seen.add(d)
-                if all(status[p] in (_DONE, _RUNNING) for p in self._prerequisites[d]):
-                    out.append(d)
-        return out
+        return prefetchable(role, self._uav_task.values(), self._status, self._role, self._graphs)
 
     # ------------------------------------------------------------------ events
 
