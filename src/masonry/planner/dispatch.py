@@ -14,7 +14,6 @@ changed and feeds back :meth:`~Dispatcher.complete`, :meth:`~Dispatcher.fail` an
 
 from __future__ import annotations
 
-import heapq
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from collections.abc import Set as AbstractSet
@@ -24,6 +23,7 @@ from typing import Literal
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
+from masonry.planner.dispatch_ranking import Ranking
 from masonry.planner.dispatch_values import (
     DONE,
     PENDING,
@@ -150,15 +150,11 @@ class Dispatcher:
         self._stuck: set[str] = set()
         self._in_progress: dict[str, str] = {}
 
-        # Available tasks per role (insertion-ordered dict used as a set) and the policy's structures.
-        self._available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
-        # pending tasks whose prerequisites are done, blocked by a conflict or not (``site`` reservation)
+        # Available tasks per role in the policy's order, and (``site`` reservation) the pending tasks whose
+        # prerequisites are done, blocked by a conflict or not.
+        self._ranking = Ranking(self.policy, self._rank, self._start_m, self._leg_m)
+        self._available = self._ranking.available
         self._ready: dict[str, dict[int, None]] = {r: {} for r in ROLES}
-        self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
-        self._in_heap = [False] * n
-        # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
-        self._buckets: dict[str, dict[int, dict[int, None]]] = {r: {} for r in ROLES}
-        self._heap_values: dict[str, set[int]] = {r: set() for r in ROLES}
         self._events = 0
         for i in range(n):
             self._maybe_available(i)
@@ -176,73 +172,16 @@ class Dispatcher:
             return
         role = self._role[i]
         self._ready[role][i] = None
-        if self._blockers[i]:
-            return
-        avail = self._available[role]
-        if i in avail:
-            return
-        avail[i] = None
-        if self.policy == "fifo":
-            if not self._in_heap[i]:
-                self._in_heap[i] = True
-                heapq.heappush(self._heap[role], (i, i))
-        elif self.policy == "critical-path":
-            c = self._rank[i]
-            buckets = self._buckets[role]
-            bucket = buckets.get(c)
-            if bucket is None:
-                buckets[c] = bucket = {}
-                if c not in self._heap_values[role]:
-                    self._heap_values[role].add(c)
-                    heapq.heappush(self._heap[role], (-c, i))
-            bucket[i] = None
+        if not self._blockers[i]:
+            self._ranking.add(i, role)
 
     def _unavailable(self, i: int) -> None:
-        role = self._role[i]
-        if self._available[role].pop(i, 0) is None and self.policy == "critical-path":
-            buckets = self._buckets[role]
-            c = self._rank[i]
-            bucket = buckets[c]
-            del bucket[i]
-            if not bucket:
-                del buckets[c]  # its heap entry is dropped lazily
+        self._ranking.discard(i, self._role[i])
 
     # ------------------------------------------------------------------ selection per policy
 
     def _select(self, role: str, uav: str) -> int | None:
-        avail = self._available[role]
-        if not avail:
-            return None
-        if self.policy == "fifo":
-            heap = self._heap[role]
-            while heap:
-                _, i = heap[0]
-                if i in avail:
-                    return i
-                heapq.heappop(heap)
-                self._in_heap[i] = False
-            return None  # pragma: no cover - avail non-empty implies a heap entry
-        candidates = avail
-        if self.policy == "critical-path":
-            heap = self._heap[role]
-            buckets = self._buckets[role]
-            while True:
-                c = -heap[0][0]
-                bucket = buckets.get(c)
-                if bucket:
-                    candidates = bucket
-                    break
-                heapq.heappop(heap)
-                self._heap_values[role].discard(c)
-        # Shortest flight (to the start, plus pickup -> drop-off for a brick); ties by plan order.
-        pos = self._position[uav]
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        best, best_cost = -1, math.inf
-        for i in candidates:
-            cost = dist(pos, start[i]) + leg[i]
-            if cost < best_cost or (cost == best_cost and i < best):
-                best, best_cost = i, cost
-        return best
+        return self._ranking.pick(role, self._position[uav])
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
@@ -255,14 +194,7 @@ class Dispatcher:
             candidates = self._prefetchable(role)
         if not candidates:
             return None
-        if self.policy == "critical-path":
-            top = max(self._rank[i] for i in candidates)
-            candidates = [i for i in candidates if self._rank[i] == top]
-        elif self.policy == "fifo":
-            return min(candidates)
-        pos = self._position[uav]
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        return min(candidates, key=lambda i: (dist(pos, start[i]) + leg[i], i))
+        return self._ranking.pick_among(candidates, self._position[uav])
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
