@@ -9,20 +9,21 @@ ordered by the policy; see docs/dispatch.md for the algorithm, its complexity an
 
 The module is pure: no I/O, no clock. Mission control calls :meth:`Dispatcher.assign` whenever something
 changed and feeds back :meth:`~Dispatcher.complete`, :meth:`~Dispatcher.fail` and
-:meth:`~Dispatcher.remove_uav`.
+:meth:`~Dispatcher.remove_uav`. Its parts: the plan indexed and its graphs (:mod:`.dispatch_graphs`), the
+policies' order (:mod:`.dispatch_ranking`), the read-only queries (:mod:`.dispatch_queries`), the values it
+hands out (:mod:`.dispatch_values`); this module keeps the state and reacts to the events.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from collections.abc import Set as AbstractSet
-from types import MappingProxyType
 from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
+from masonry.planner.dispatch_queries import DispatchQueries
 from masonry.planner.dispatch_ranking import Ranking
 from masonry.planner.dispatch_values import (
     DONE,
@@ -30,12 +31,11 @@ from masonry.planner.dispatch_values import (
     RUNNING,
     STUCK,
     Assignment,
-    SetView,
     task_end_m,
     task_start_m,
     vec3,
 )
-from masonry.planner.tasks import Plan, Task
+from masonry.planner.tasks import Plan
 
 Policy = Literal["fifo", "critical-path", "nearest"]
 POLICIES: tuple[str, ...] = ("fifo", "critical-path", "nearest")
@@ -53,7 +53,7 @@ Vec3 = Sequence[float]
 _PENDING, _RUNNING, _DONE, _STUCK = PENDING, RUNNING, DONE, STUCK
 
 
-class Dispatcher:
+class Dispatcher(DispatchQueries):
     """Assign available, non-conflicting tasks of a :class:`Plan` to idle UAVs, reacting to every event.
 
     Args:
@@ -104,7 +104,7 @@ class Dispatcher:
         #: brick; mission control's site gate keeps it off the site until they are done). Not adhesion: it has
         #: nothing to fetch, and would only hold a place in the airspace's queue.
         self.prefetch = reservation == "site"
-        self._tasks: tuple[Task, ...] = plan.tasks
+        self._tasks = plan.tasks
         index = index_tasks(plan.tasks)
         self._ids, self._index, self._role = index.ids, index.index, index.roles
         self._start_m, self._end_m, self._leg_m = index.start_m, index.end_m, index.leg_m
@@ -122,7 +122,7 @@ class Dispatcher:
     # ------------------------------------------------------------------ construction helpers
 
     def _add_fleet(self, fleet: Sequence[UavSpec]) -> None:
-        self._fleet: dict[str, UavSpec] = {}
+        self._fleet = {}
         for spec in fleet:
             if spec.name in self._fleet:
                 raise PlanningError(f"fleet has two UAVs named {spec.name!r}")
@@ -132,9 +132,9 @@ class Dispatcher:
         self._position: dict[str, tuple[float, float, float]] = {
             s.name: vec3(s.home_m, f"UAV {s.name} home_m") for s in self._fleet.values()
         }
-        self._live: set[str] = set(self._fleet)
-        self._uav_task: dict[str, int] = {}
-        self._live_count: dict[str, int] = dict.fromkeys(ROLES, 0)
+        self._live = set(self._fleet)
+        self._uav_task = {}
+        self._live_count = dict.fromkeys(ROLES, 0)
         for s in self._fleet.values():
             self._live_count[s.role] += 1
 
@@ -145,10 +145,10 @@ class Dispatcher:
         self._status = [_DONE if t.done else _PENDING for t in tasks]
         self._prereqs = [sum(1 for p in self._prerequisites[i] if self._status[p] != _DONE) for i in range(n)]
         self._blockers = [0] * n
-        self._attempts: dict[str, int] = {}
-        self._done: set[str] = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
-        self._stuck: set[str] = set()
-        self._in_progress: dict[str, str] = {}
+        self._attempts = {}
+        self._done = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
+        self._stuck = set()
+        self._in_progress = {}
 
         # Available tasks per role in the policy's order, and (``site`` reservation) the pending tasks whose
         # prerequisites are done, blocked by a conflict or not.
@@ -158,12 +158,6 @@ class Dispatcher:
         self._events = 0
         for i in range(n):
             self._maybe_available(i)
-
-    def _lookup(self, task_id: str, graph: str) -> int:
-        try:
-            return self._index[task_id]
-        except KeyError:
-            raise PlanningError(f"{graph} names unknown task {task_id!r}") from None
 
     # ------------------------------------------------------------------ availability bookkeeping
 
@@ -458,87 +452,6 @@ class Dispatcher:
             self._ready[role].clear()
         for i in range(len(self._tasks)):
             self._maybe_available(i)
-
-    # ------------------------------------------------------------------ queries
-
-    @property
-    def done(self) -> AbstractSet[str]:
-        """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
-        return SetView(self._done)
-
-    @property
-    def in_progress(self) -> Mapping[str, str]:
-        """Task id -> UAV name for every task in progress; a live read-only view."""
-        return MappingProxyType(self._in_progress)
-
-    @property
-    def stuck(self) -> AbstractSet[str]:
-        """Ids of tasks that failed ``max_attempts`` times; a live read-only view."""
-        return SetView(self._stuck)
-
-    @property
-    def attempts(self) -> Mapping[str, int]:
-        """Finished (completed or failed) attempts per task id; tasks never finished are absent."""
-        return MappingProxyType(self._attempts)
-
-    @property
-    def idle_uavs(self) -> tuple[str, ...]:
-        """Names of UAVs in the fleet, not removed, with no task, in fleet order."""
-        return tuple(n for n in self._fleet if n in self._live and n not in self._uav_task)
-
-    @property
-    def uavs(self) -> tuple[str, ...]:
-        """Names of the UAVs not removed, in fleet order."""
-        return tuple(n for n in self._fleet if n in self._live)
-
-    @property
-    def available(self) -> tuple[str, ...]:
-        """Ids of tasks that could be assigned now (both roles), in plan order."""
-        return tuple(self._ids[i] for i in sorted(i for r in ROLES for i in self._available[r]))
-
-    @property
-    def remaining(self) -> tuple[str, ...]:
-        """Ids of tasks not done (pending, in progress or stuck), in plan order."""
-        return tuple(tid for i, tid in enumerate(self._ids) if self._status[i] != _DONE)
-
-    @property
-    def finished(self) -> bool:
-        """True when every task of the plan is done."""
-        return len(self._done) == len(self._tasks)
-
-    @property
-    def blocked(self) -> bool:
-        """True when the mission cannot finish: not finished, nothing in progress and nothing assignable.
-
-        This happens when a task is stuck (it and everything depending on it can never run) or every UAV of a
-        role that still has work was removed.
-        """
-        if self.finished or self._in_progress:
-            return False
-        return not any(self._available[r] and self._live_count[r] for r in ROLES)
-
-    @property
-    def events(self) -> int:
-        """Number of assignment, completion, failure and release events processed so far."""
-        return self._events
-
-    def task(self, task_id: str) -> Task:
-        """The task with id ``task_id`` (O(1), unlike ``Plan.task``)."""
-        return self._tasks[self._lookup(task_id, "query")]
-
-    def task_of(self, uav: str) -> str | None:
-        """The id of the task UAV ``uav`` is flying, or None."""
-        i = self._uav_task.get(uav)
-        return None if i is None else self._ids[i]
-
-    def attempt_of(self, task_id: str) -> int:
-        """The number the next (or current) attempt of ``task_id`` has: finished attempts + 1."""
-        self._lookup(task_id, "query")
-        return self._attempts.get(task_id, 0) + 1
-
-    def chain_s(self, task_id: str) -> float:
-        """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
-        return self._chain[self._lookup(task_id, "query")]
 
 
 __all__ = [
