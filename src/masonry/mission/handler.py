@@ -35,10 +35,11 @@ import logging
 import math
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, Protocol
 
 from masonry.errors import ProtocolError
+from masonry.mission.execution import Execution
 from masonry.mission.messages import (
     MAX_REPORTED_WIND_MPS,
     MISSION_CONTROL,
@@ -75,26 +76,6 @@ Vec3 = tuple[float, float, float]
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
-
-
-@dataclass
-class Execution:
-    """One task as the UAV flew it: handed to the machine at ``start_s``, reported at ``end_s``.
-
-    ``queued_s``: how long its assignment waited here before the machine took it (the battery reserve's hold).
-    """
-
-    task_id: str
-    uav: str
-    attempt: int
-    start_s: float
-    end_s: float | None = None
-    status: str = "running"
-    queued_s: float = 0.0
-    reason: str | None = None  # why it failed, as the machine reported it
-    #: when the handler abandoned it (mission control silent): from then on the machine only puts the brick back
-    #: or flies home, away from the task's site, until it reports the failure
-    abandoned_s: float | None = None
 
 
 class ResultKeeper(Protocol):
