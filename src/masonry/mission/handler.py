@@ -40,6 +40,7 @@ from typing import Any, Protocol
 
 from masonry.errors import ProtocolError
 from masonry.mission.execution import Execution
+from masonry.mission.handler_base import HandlerBase, Vec3
 from masonry.mission.messages import (
     MAX_REPORTED_WIND_MPS,
     MISSION_CONTROL,
@@ -72,8 +73,6 @@ log = logging.getLogger(__name__)
 #: The state a machine reports when it is out of service for the rest of the mission (as in control.py).
 OUT_OF_SERVICE_STATE = "halted"
 
-Vec3 = tuple[float, float, float]
-
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
 
@@ -92,7 +91,7 @@ class ResultKeeper(Protocol):
         ...
 
 
-class UavHandler(MissionLink, ClearanceLink):
+class UavHandler(HandlerBase, MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.
@@ -160,7 +159,7 @@ class UavHandler(MissionLink, ClearanceLink):
         self._position = position
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
-        self.model: Any = None
+        self.model = None
         self._queue: deque[tuple[Task, int, float]] = deque()  # task, attempt, when its assignment came
         self._current: Execution | None = None
         #: the operator recalled this UAV (the reason): its task is dropped at the next tick it can be
@@ -451,7 +450,7 @@ class UavHandler(MissionLink, ClearanceLink):
                     result, phases=replace(result.phases, queued=result.phases.queued + cur.queued_s)
                 )
         attempt = cur.attempt if cur is not None and cur.task_id == result.task_id else 0
-        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        state = self._state()
         if result.status == "done":
             log.info("%s: %s attempt %d done at %.1f s", self.name, result.task_id, attempt, self.now_s)
         else:
@@ -490,7 +489,7 @@ class UavHandler(MissionLink, ClearanceLink):
             self._last_sent_hb_s = now_s
             self._resend_unheard(now_s)
             cur = self._current
-            state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+            state = self._state()
             self._send(
                 Heartbeat(
                     self.name,
@@ -531,19 +530,10 @@ class UavHandler(MissionLink, ClearanceLink):
     def _apply_recall(self, reason: str) -> None:
         """The operator's recall: assignments not started are failed back, the task in hand is aborted (the
         machine reports it failed with ``reason`` and flies home); once nothing is left, done."""
-        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
+        state = self._state()
         while self._queue:
             task, attempt, _ = self._queue.popleft()
-            self._send(
-                Result(
-                    self.name,
-                    TaskResult(task.id, "failed", 0.0, reason=reason),
-                    self.now_s,
-                    self._where(),
-                    state=state,
-                    attempt=attempt,
-                )
-            )
+            self._send_failed(task.id, attempt, reason, state)
         model = self.model
         if self._current is None:
             self._recall = None
@@ -565,17 +555,7 @@ class UavHandler(MissionLink, ClearanceLink):
         cur.end_s, cur.status, cur.reason = self.now_s, "failed", reason
         self._current = None
         self._swallow = cur.task_id
-        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
-        self._send(
-            Result(
-                self.name,
-                TaskResult(cur.task_id, "failed", 0.0, reason=reason),
-                self.now_s,
-                self._where(),
-                state=state,
-                attempt=cur.attempt,
-            )
-        )
+        self._send_failed(cur.task_id, cur.attempt, reason, self._state())
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -662,23 +642,4 @@ class UavHandler(MissionLink, ClearanceLink):
             t.id == tid for t, _, _ in self._queue
         ):
             return  # the real assignment of that task is here: a failed result would cancel it
-        state = str(getattr(self.model, "state", "")) if self.model is not None else ""
-        self._send(
-            Result(
-                self.name,
-                TaskResult(msg.task.id, "failed", 0.0, reason=f"refused: {why}"),
-                self.now_s,
-                self._where(),
-                state=state,
-                attempt=msg.attempt,
-            )
-        )
-
-    def _where(self) -> Vec3 | None:
-        if self._position is None:
-            return None
-        p = self._position()
-        return (float(p[0]), float(p[1]), float(p[2]))
-
-    def _send(self, msg: Any) -> None:
-        self.transport.send(MISSION_CONTROL, encode(msg))
+        self._send_failed(msg.task.id, msg.attempt, f"refused: {why}", self._state())
