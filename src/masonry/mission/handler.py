@@ -11,12 +11,8 @@ below ``reserve_fraction`` a queued task is held back, so the machine flies home
 the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
 the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
 
-Airspace (docs/safety.md): ``request_clearance(site_m)`` is how the state machine asks for the column over a
-site before leaving its transit layer; the handler sends a ``ClearanceRequest`` (again every heartbeat period
-while unanswered), answers True once mission control's ``Clearance`` has come, and frees the column by itself
-once the UAV is ``radius_m`` away from it horizontally or has landed. The answer also gives the altitude of the
-lateral leg (a transit layer) and, while the column is taken, a hold point where the machine waits at that
-layer; ``end_transit`` tells mission control the flight is down (its layer is free).
+Airspace (docs/safety.md): the columns over the sites, asked for and freed by
+:class:`~masonry.mission.handler_columns.ColumnRequests`, a base class of the handler.
 
 Assignments are checked against the UAV's own blueprint (docs/security.md): given its ``tasks``, ``spares``,
 ``role`` and ``wall_digest``, it takes a task only with the same wall digest, one of the blueprint's tasks (same
@@ -40,13 +36,13 @@ from typing import Any, Protocol
 
 from masonry.errors import ProtocolError
 from masonry.mission.execution import Execution
-from masonry.mission.handler_base import HandlerBase, Vec3
+from masonry.mission.handler_base import Vec3
+from masonry.mission.handler_columns import ColumnRequests
 from masonry.mission.messages import (
     MAX_REPORTED_WIND_MPS,
     MISSION_CONTROL,
     Assign,
     Clearance,
-    ClearanceRequest,
     Heartbeat,
     MissionEnd,
     Progress,
@@ -60,7 +56,6 @@ from masonry.mission.transport import Transport
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
     FINISHING_STATES,
-    LAST_RESORT_S,
     MISSION_CONTROL_LOST_REASON,
     ClearanceLink,
     MissionLink,
@@ -91,7 +86,7 @@ class ResultKeeper(Protocol):
         ...
 
 
-class UavHandler(HandlerBase, MissionLink, ClearanceLink):
+class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.
@@ -171,18 +166,7 @@ class UavHandler(HandlerBase, MissionLink, ClearanceLink):
         self.executions: list[Execution] = []
         self.rejected = 0
         self.now_s = 0.0
-        self._column: Vec3 | None = None  # site of the column last asked for (granted or not)
-        self._column_granted = False
-        # a new attempt asks again even for the column it was granted last (issue 19): it may have flown off
-        self._column_stale = False
-        self._column_answer: Clearance | None = None
-        self._columns_left: list[Vec3] = []  # granted earlier, freed once the UAV is out of them
-        self._column_radius_m = 0.0
-        self._column_sent_s = -1e18
-        self._column_top_m: float | None = None
-        self._column_to_m: Vec3 | None = None
-        self._column_checked_s = -1e18
-        self.clearance_requests = 0
+        self._init_columns()
         self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
         self._kept = self._restore_kept()  # a completion from before a restart: said at the first step
         self._swallow: str | None = (
@@ -307,7 +291,7 @@ class UavHandler(HandlerBase, MissionLink, ClearanceLink):
                 return None
             self.battery_swaps += 1
         task, attempt, received_s = self._queue.popleft()
-        self._column_stale = self._column is not None and self._column_granted
+        self._ask_afresh()
         self._current = Execution(
             task.id, self.name, attempt, self.now_s, queued_s=max(0.0, self.now_s - received_s)
         )
@@ -329,107 +313,6 @@ class UavHandler(HandlerBase, MissionLink, ClearanceLink):
             log.info("%s: %s holds it for a battery swap", self.name, why)
         self._held_for = why
         return why is not None
-
-    def request_clearance(
-        self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None
-    ) -> Clearance | None:
-        """The UAV sets off for ``site_m``: mission control's answer (layer, column granted or hold point), or None.
-
-        The first call for a site sends the request (again every heartbeat period while unanswered); the answer
-        is None until mission control's has come, then the latest one (``granted`` turns true when the column
-        is given). Mission control silent (a link down) is asked again every heartbeat period: the UAV hovers
-        where it stopped, its task abandoned, until mission control answers. Without mission control (never
-        heard, or silent for ``LAST_RESORT_S``) there is nobody to ask: granted, no layer, so the UAV can land.
-        """
-        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-        col = self._column
-        same = col is not None and abs(col[0] - site[0]) < 1e-3 and abs(col[1] - site[1]) < 1e-3
-        if same and self._column_granted and not self._column_stale:
-            return self._column_answer
-        if self._last_mc_s is None or self.now_s - self._last_mc_s > LAST_RESORT_S:
-            # nobody to ask: never heard (no mission), or silent so long it is not coming back
-            return Clearance(MISSION_CONTROL, self.name, site, 0.0, self.now_s, True, None, None)
-        if not same:
-            if col is not None and self._column_granted:
-                self._columns_left.append(col)  # freed once the UAV is out of it
-            elif col is not None:
-                self._send(ClearanceRequest(self.name, col, self.now_s, release=True))  # no longer wanted
-            self._column = site
-            self._column_granted = False
-            self._column_answer = None
-            self._column_sent_s = self.now_s
-            self.clearance_requests += 1
-            self._column_top_m = top_m
-            self._column_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
-            self._send(
-                ClearanceRequest(
-                    self.name, site, self.now_s, self._where(), top_m=top_m, to_m=self._column_to_m
-                )
-            )
-        elif self._column_stale or self.now_s - self._column_sent_s >= (
-            0.25
-            if self._column_answer is not None and self._column_answer.hold_m is None
-            else self.heartbeat_period_s
-        ):  # refused for now (another flight in the way): ask again soon
-            if self._column_stale:  # a new attempt: a fresh request from where it is now, not the old grant
-                self._column_stale = False
-                self._column_granted = False
-                self._column_answer = None
-                self.clearance_requests += 1
-                self._column_top_m = top_m
-                self._column_to_m = None if to_m is None else (float(to_m[0]), float(to_m[1]), float(to_m[2]))
-            self._column_sent_s = self.now_s  # lost on the way? ask again (mission control keeps its place)
-            self._send(
-                ClearanceRequest(
-                    self.name,
-                    site,
-                    self.now_s,
-                    self._where(),
-                    top_m=self._column_top_m,
-                    to_m=self._column_to_m,
-                )
-            )
-        self.pump()  # in-process, the answer may already be here
-        return self._column_answer
-
-    def end_transit(self, site_m: Vec3) -> None:
-        """The flight to ``site_m`` has come down there: its layer is free."""
-        self._send(
-            ClearanceRequest(
-                self.name, (float(site_m[0]), float(site_m[1]), float(site_m[2])), self.now_s, arrived=True
-            )
-        )
-
-    @property
-    def columns(self) -> tuple[Vec3, ...]:
-        """Sites of the columns this UAV holds."""
-        cur = (self._column,) if self._column is not None and self._column_granted else ()
-        return tuple(self._columns_left) + cur
-
-    def _check_columns(self, now_s: float) -> None:
-        """Free columns the UAV has left (``radius_m`` away horizontally); all of them once it has landed."""
-        if now_s - self._column_checked_s < 0.2:
-            return
-        self._column_checked_s = now_s
-        model = self.model
-        if model is not None and bool(model.finished):
-            for col in [*self._columns_left, *([self._column] if self._column is not None else [])]:
-                self._send(ClearanceRequest(self.name, col, now_s, release=True))
-            self._columns_left = []
-            self._column = None
-            self._column_granted = False
-            return
-        if not self._columns_left or self._position is None:
-            return
-        p = self._position()
-        r2 = self._column_radius_m**2
-        keep = []
-        for col in self._columns_left:
-            if (p[0] - col[0]) ** 2 + (p[1] - col[1]) ** 2 >= r2:
-                self._send(ClearanceRequest(self.name, col, now_s, release=True))
-            else:
-                keep.append(col)
-        self._columns_left = keep
 
     def report_progress(self, task_id: str, state: str, time_s: float) -> None:
         self._send(Progress(self.name, task_id, state, time_s, self._where()))
@@ -593,17 +476,7 @@ class UavHandler(HandlerBase, MissionLink, ClearanceLink):
             self._queue.append((msg.task, msg.attempt, now_s))
             self.mission_ended = False
         elif isinstance(msg, Clearance):
-            col = self._column
-            if (
-                msg.uav == self.name
-                and col is not None
-                and abs(col[0] - msg.site_m[0]) < 1e-3
-                and abs(col[1] - msg.site_m[1]) < 1e-3
-            ):
-                self._column_radius_m = msg.radius_m
-                if msg.granted or not self._column_granted:
-                    self._column_answer = msg
-                    self._column_granted = msg.granted
+            self._on_clearance(msg)
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed
