@@ -23,6 +23,11 @@ files), unless that task is in hand or queued here: then the refused message can
 Mission control's heartbeat is watched: silent past the timeout (``mission_control_lost``), a UAV that had heard
 it abandons its tasks (failed, ``mission control lost``: no attempt counted) and flies home (mission control
 gave them to another UAV, or a resumed one flies them). Heard again with no task, it is taken back.
+
+The handler's parts, each a small module: the attempt record (:mod:`masonry.mission.execution`), what the parts
+share (:mod:`masonry.mission.handler_base`), the results and the kept completion
+(:mod:`masonry.mission.handler_results`), the site columns (:mod:`masonry.mission.handler_columns`); this module
+holds the queue, the heartbeat, the recall and the assignment check.
 """
 
 from __future__ import annotations
@@ -32,12 +37,13 @@ import math
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import replace
-from typing import Any, Protocol
+from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.mission.execution import Execution
 from masonry.mission.handler_base import Vec3
 from masonry.mission.handler_columns import ColumnRequests
+from masonry.mission.handler_results import ResultKeeper, ResultReports
 from masonry.mission.messages import (
     MAX_REPORTED_WIND_MPS,
     MISSION_CONTROL,
@@ -47,9 +53,7 @@ from masonry.mission.messages import (
     MissionEnd,
     Progress,
     Recall,
-    Result,
     decode,
-    encode,
 )
 from masonry.mission.spares import as_flown
 from masonry.mission.transport import Transport
@@ -59,7 +63,6 @@ from masonry.ports import (
     MISSION_CONTROL_LOST_REASON,
     ClearanceLink,
     MissionLink,
-    TaskResult,
 )
 from masonry.spares import Spare
 
@@ -72,21 +75,7 @@ OUT_OF_SERVICE_STATE = "halted"
 MAX_REFUSALS_KEPT = 1000
 
 
-class ResultKeeper(Protocol):
-    """Where a UAV keeps its last completion until mission control has heard it, across a restart of its handler
-    (a real UAV's companion computer keeps it on its disk; the in-process simulation in its mission's journal
-    file, because a stop of ``masonry sim`` stops its UAVs too)."""
-
-    def kept(self, uav: str) -> bytes | None:
-        """The completion ``uav`` kept (its wire form), or None."""
-        ...
-
-    def keep(self, uav: str, message: bytes | None) -> None:
-        """Keep ``message`` for ``uav`` (None: forget it, mission control heard it); durable when it returns."""
-        ...
-
-
-class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
+class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.
@@ -132,8 +121,6 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
         wall_digest: str | None = None,
         keeper: ResultKeeper | None = None,
     ) -> None:
-        self._after_result = after_result
-        self._keeper = keeper
         self._tasks = None if tasks is None else {t.id: t for t in tasks}
         self._spares = {sp.id: sp for sp in spares or ()}  # (one may stand in for a brick)
         self._role = role
@@ -167,39 +154,7 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
         self.rejected = 0
         self.now_s = 0.0
         self._init_columns()
-        self._unheard: tuple[Result, float] | None = None  # the last completion sent, and when
-        self._kept = self._restore_kept()  # a completion from before a restart: said at the first step
-        self._swallow: str | None = (
-            None  # a task dropped (mission control silent): its machine's report is not sent
-        )
-
-    def _restore_kept(self) -> Result | None:
-        raw = self._keeper.kept(self.name) if self._keeper is not None else None
-        if raw is None:
-            return None
-        try:
-            msg = decode(raw)
-        except ProtocolError as exc:
-            log.warning("%s: the kept completion cannot be read (%s): forgotten", self.name, exc)
-            return None
-        if not isinstance(msg, Result) or msg.sender != self.name or msg.result.status != "done":
-            log.warning("%s: the kept message is not a completion of this UAV: forgotten", self.name)
-            return None
-        return msg
-
-    def _say_kept(self, now_s: float) -> None:
-        """The first step after a restart: the completion mission control may never have heard, ahead of the
-        heartbeat (which names no task: heard first, it would give the task back to the pool)."""
-        kept, self._kept = self._kept, None
-        if kept is None:
-            return
-        log.info("%s: %s done before the restart: reported again", self.name, kept.result.task_id)
-        self._send(kept)
-        self._unheard = (kept, -math.inf)  # said again when mission control is first heard (_handle)
-
-    def _keep(self, sent: Result | None) -> None:
-        if self._keeper is not None:
-            self._keeper.keep(self.name, None if sent is None else encode(sent))
+        self._init_results(keeper, after_result)
 
     def attach(self, model: Any) -> None:
         """Give the handler the state machine it drives (built with ``link=self``)."""
@@ -209,18 +164,6 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
     def mission_control_lost(self) -> bool:
         """Mission control has been silent past the heartbeat timeout (or never heard)."""
         return self._last_mc_s is None or self.now_s - self._last_mc_s > self.heartbeat_timeout_s
-
-    def _resend_unheard(self, now_s: float) -> None:
-        """While mission control is silent since before the last completion was sent, say the completion again
-        with every heartbeat, ahead of it: the link may be down, and the first thing mission control hears
-        when it is back is then the completion, before the heartbeat that takes this UAV back (a task declared
-        released and given to it again would be flown twice)."""
-        if self._unheard is None:
-            return
-        sent, sent_s = self._unheard
-        last = self._last_mc_s
-        if last is not None and last <= sent_s and now_s - last > 1.5 * self.heartbeat_period_s:
-            self._send(sent)
 
     def _mission_control_gone(self) -> bool:
         """Mission control was heard, then fell silent long enough that it may declare this UAV lost soon (never
@@ -317,43 +260,6 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
     def report_progress(self, task_id: str, state: str, time_s: float) -> None:
         self._send(Progress(self.name, task_id, state, time_s, self._where()))
 
-    def report_result(self, result: TaskResult) -> None:
-        cur = self._current
-        if self._swallow == result.task_id and (cur is None or cur.task_id != result.task_id):
-            self._swallow = None  # the failure of a task dropped when mission control fell silent: sent then
-            return
-        if cur is not None and cur.task_id == result.task_id:
-            cur.end_s = self.now_s
-            cur.status = result.status
-            cur.reason = None if result.status == "done" else (result.reason or "no reason given")
-            self._current = None
-            if result.phases is not None and cur.queued_s > 0.0:
-                # the machine measured from taking the task; the attempt began when its assignment came
-                result = replace(
-                    result, phases=replace(result.phases, queued=result.phases.queued + cur.queued_s)
-                )
-        attempt = cur.attempt if cur is not None and cur.task_id == result.task_id else 0
-        state = self._state()
-        if result.status == "done":
-            log.info("%s: %s attempt %d done at %.1f s", self.name, result.task_id, attempt, self.now_s)
-        else:
-            log.info(
-                "%s: %s attempt %d failed at %.1f s in state %s: %s",
-                self.name,
-                result.task_id,
-                attempt,
-                self.now_s,
-                state or "-",
-                result.reason or "no reason given",
-            )
-        sent = Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt)
-        self._send(sent)
-        if result.status == "done":
-            self._unheard = (sent, self.now_s)  # said again if the link turns out to have been down (_handle)
-            self._keep(sent)
-        if self._after_result is not None:
-            self._after_result()
-
     def pump(self) -> bool:
         """Read what has arrived now (between ticks); True if a task is waiting for the machine."""
         for raw in self.transport.receive():
@@ -429,17 +335,6 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
             model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
             self._recall = None
 
-    def _drop_current(self, reason: str) -> None:
-        """Off the task now, cut off from mission control: the attempt ends here and is reported failed, so the
-        heartbeats say this UAV holds no task (mission control takes it back when it hears them) while the machine
-        puts the brick back or heads home; the machine's own report of that failure is not sent again."""
-        cur = self._current
-        assert cur is not None
-        cur.end_s, cur.status, cur.reason = self.now_s, "failed", reason
-        self._current = None
-        self._swallow = cur.task_id
-        self._send_failed(cur.task_id, cur.attempt, reason, self._state())
-
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
             msg = decode(raw)
@@ -450,20 +345,7 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
         if msg.sender != MISSION_CONTROL:
             return
         before, self._last_mc_s = self._last_mc_s, now_s
-        if self._unheard is not None:
-            sent, sent_s = self._unheard
-            self._unheard = None
-            self._keep(None)
-            if sent_s == -math.inf or (
-                before is not None and before <= sent_s and now_s - before > 1.5 * self.heartbeat_period_s
-            ):
-                # mission control's heartbeats stopped around the completion: the link was down, the result may
-                # be lost. Said again: mission control takes it late if the task was released from this UAV
-                # and is not done since, and ignores it if it had it (docs/mission.md, "Heartbeats and time")
-                log.info(
-                    "%s: %s done while the link was down: reported again", self.name, sent.result.task_id
-                )
-                self._send(sent)
+        self._heard_after(before, now_s)
         if isinstance(msg, Assign):
             if msg.uav != self.name:
                 self.rejected += 1
@@ -516,3 +398,6 @@ class UavHandler(ColumnRequests, MissionLink, ClearanceLink):
         ):
             return  # the real assignment of that task is here: a failed result would cancel it
         self._send_failed(msg.task.id, msg.attempt, f"refused: {why}", self._state())
+
+
+__all__ = ["MAX_REFUSALS_KEPT", "OUT_OF_SERVICE_STATE", "Execution", "ResultKeeper", "UavHandler"]
