@@ -9,22 +9,33 @@ ordered by the policy; see docs/dispatch.md for the algorithm, its complexity an
 
 The module is pure: no I/O, no clock. Mission control calls :meth:`Dispatcher.assign` whenever something
 changed and feeds back :meth:`~Dispatcher.complete`, :meth:`~Dispatcher.fail` and
-:meth:`~Dispatcher.remove_uav`.
+:meth:`~Dispatcher.remove_uav`. Its parts: the plan indexed and its graphs (:mod:`.dispatch_graphs`), the
+policies' order (:mod:`.dispatch_ranking`), the read-only queries (:mod:`.dispatch_queries`), the values it
+hands out (:mod:`.dispatch_values`); this module keeps the state and reacts to the events.
 """
 
 from __future__ import annotations
 
-import heapq
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from collections.abc import Set as AbstractSet
-from types import MappingProxyType
 from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
-from masonry.planner.dispatch_values import Assignment, SetView, task_end_m, task_start_m, vec3
-from masonry.planner.tasks import Plan, Task
+from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
+from masonry.planner.dispatch_queries import DispatchQueries
+from masonry.planner.dispatch_ranking import Ranking
+from masonry.planner.dispatch_values import (
+    DONE,
+    PENDING,
+    RUNNING,
+    STUCK,
+    Assignment,
+    task_end_m,
+    task_start_m,
+    vec3,
+)
+from masonry.planner.tasks import Plan
 
 Policy = Literal["fifo", "critical-path", "nearest"]
 POLICIES: tuple[str, ...] = ("fifo", "critical-path", "nearest")
@@ -38,10 +49,11 @@ DEFAULT_RESERVATION = "site"
 
 Vec3 = Sequence[float]
 
-_PENDING, _RUNNING, _DONE, _STUCK = 0, 1, 2, 3
+# the task states (masonry.planner.dispatch_values), by the names the dispatchers built on this one use
+_PENDING, _RUNNING, _DONE, _STUCK = PENDING, RUNNING, DONE, STUCK
 
 
-class Dispatcher:
+class Dispatcher(DispatchQueries):
     """Assign available, non-conflicting tasks of a :class:`Plan` to idle UAVs, reacting to every event.
 
     Args:
@@ -92,75 +104,25 @@ class Dispatcher:
         #: brick; mission control's site gate keeps it off the site until they are done). Not adhesion: it has
         #: nothing to fetch, and would only hold a place in the airspace's queue.
         self.prefetch = reservation == "site"
-        self._index_tasks(plan)
-        self._build_graphs(plan)
-        self._chain = self._chains(durations_s)
+        self._tasks = plan.tasks
+        index = index_tasks(plan.tasks)
+        self._ids, self._index, self._role = index.ids, index.index, index.roles
+        self._start_m, self._end_m, self._leg_m = index.start_m, index.end_m, index.leg_m
+        self._graphs = graphs = adjacency(plan, self._index)
+        self._dependents, self._prerequisites = graphs.dependents, graphs.prerequisites
+        self._neighbours = graphs.neighbours
+        self._chain = chains(self._tasks, graphs, durations_s)
         # critical-path compares chains in steps of one typical task (the median duration; 1 unweighted): tasks
         # whose remaining chains differ by less than that are ties, and ties go to the shortest flight.
-        self.tie_step_s = self._tie_step(durations_s)
+        self.tie_step_s = tie_step(self._tasks, durations_s)
         self._rank = [math.floor(c / self.tie_step_s + 1e-9) for c in self._chain]
         self._add_fleet(fleet)
         self._init_state()
 
     # ------------------------------------------------------------------ construction helpers
 
-    def _index_tasks(self, plan: Plan) -> None:
-        """Task ids, roles and the places a UAV flies to for each (one pass over the plan)."""
-        tasks = plan.tasks
-        n = len(tasks)
-        self._tasks: tuple[Task, ...] = tasks
-        self._ids: list[str] = [t.id for t in tasks]
-        self._index: dict[str, int] = {}
-        for i, tid in enumerate(self._ids):
-            if tid in self._index:
-                raise PlanningError(f"plan has two tasks with id {tid!r}")
-            self._index[tid] = i
-        self._role: list[str] = []
-        for t in tasks:
-            if t.kind not in ROLES:
-                raise PlanningError(f"task {t.id}: unknown kind {t.kind!r}")
-            self._role.append(t.kind)
-        self._start_m = [task_start_m(t) for t in tasks]
-        self._end_m = [task_end_m(t) for t in tasks]
-        # The part of a brick flight that does not depend on the UAV: pickup -> drop-off.
-        self._leg_m = [
-            math.dist(self._start_m[i], self._end_m[i]) if self._role[i] == "brick" else 0.0 for i in range(n)
-        ]
-
-    def _build_graphs(self, plan: Plan) -> None:
-        """Adjacency, built once: O(size of the plan). Duplicate edges are dropped per task afterwards (cheaper
-        than a global set of pairs on a wall with millions of conflicts)."""
-        n = len(plan.tasks)
-        index = self._index
-        dependents: list[list[int]] = [[] for _ in range(n)]
-        prerequisites: list[list[int]] = [[] for _ in range(n)]
-        try:
-            for u, v in plan.dependencies:
-                iu, iv = index[u], index[v]
-                if iu == iv:
-                    raise PlanningError(f"dependency ({u}, {v}): a task cannot depend on itself")
-                dependents[iv].append(iu)
-                prerequisites[iu].append(iv)
-        except KeyError as exc:
-            raise PlanningError(f"dependency names unknown task {exc.args[0]!r}") from None
-        neighbours: list[list[int]] = [[] for _ in range(n)]
-        try:
-            for a, b in plan.conflicts:
-                ia, ib = index[a], index[b]
-                if ia == ib:
-                    raise PlanningError(f"conflict ({a}, {b}): a task cannot conflict with itself")
-                neighbours[ia].append(ib)
-                neighbours[ib].append(ia)
-        except KeyError as exc:
-            raise PlanningError(f"conflict names unknown task {exc.args[0]!r}") from None
-        for lists in (dependents, prerequisites, neighbours):
-            for i, items in enumerate(lists):
-                if len(items) > 1 and len(set(items)) != len(items):
-                    lists[i] = list(dict.fromkeys(items))
-        self._dependents, self._prerequisites, self._neighbours = dependents, prerequisites, neighbours
-
     def _add_fleet(self, fleet: Sequence[UavSpec]) -> None:
-        self._fleet: dict[str, UavSpec] = {}
+        self._fleet = {}
         for spec in fleet:
             if spec.name in self._fleet:
                 raise PlanningError(f"fleet has two UAVs named {spec.name!r}")
@@ -170,9 +132,9 @@ class Dispatcher:
         self._position: dict[str, tuple[float, float, float]] = {
             s.name: vec3(s.home_m, f"UAV {s.name} home_m") for s in self._fleet.values()
         }
-        self._live: set[str] = set(self._fleet)
-        self._uav_task: dict[str, int] = {}
-        self._live_count: dict[str, int] = dict.fromkeys(ROLES, 0)
+        self._live = set(self._fleet)
+        self._uav_task = {}
+        self._live_count = dict.fromkeys(ROLES, 0)
         for s in self._fleet.values():
             self._live_count[s.role] += 1
 
@@ -183,77 +145,19 @@ class Dispatcher:
         self._status = [_DONE if t.done else _PENDING for t in tasks]
         self._prereqs = [sum(1 for p in self._prerequisites[i] if self._status[p] != _DONE) for i in range(n)]
         self._blockers = [0] * n
-        self._attempts: dict[str, int] = {}
-        self._done: set[str] = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
-        self._stuck: set[str] = set()
-        self._in_progress: dict[str, str] = {}
+        self._attempts = {}
+        self._done = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
+        self._stuck = set()
+        self._in_progress = {}
 
-        # Available tasks per role (insertion-ordered dict used as a set) and the policy's structures.
-        self._available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
-        # pending tasks whose prerequisites are done, blocked by a conflict or not (``site`` reservation)
+        # Available tasks per role in the policy's order, and (``site`` reservation) the pending tasks whose
+        # prerequisites are done, blocked by a conflict or not.
+        self._ranking = Ranking(self.policy, self._rank, self._start_m, self._leg_m)
+        self._available = self._ranking.available
         self._ready: dict[str, dict[int, None]] = {r: {} for r in ROLES}
-        self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
-        self._in_heap = [False] * n
-        # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
-        self._buckets: dict[str, dict[int, dict[int, None]]] = {r: {} for r in ROLES}
-        self._heap_values: dict[str, set[int]] = {r: set() for r in ROLES}
         self._events = 0
         for i in range(n):
             self._maybe_available(i)
-
-    def _lookup(self, task_id: str, graph: str) -> int:
-        try:
-            return self._index[task_id]
-        except KeyError:
-            raise PlanningError(f"{graph} names unknown task {task_id!r}") from None
-
-    def _chains(self, durations_s: Mapping[str, float] | None) -> list[float]:
-        """Longest remaining dependency chain from each task (its own duration included): the bottom level."""
-        n = len(self._tasks)
-        weight = [0.0] * n
-        for i, t in enumerate(self._tasks):
-            if t.done:
-                continue
-            if durations_s is None:
-                weight[i] = 1.0
-                continue
-            if t.id not in durations_s:
-                raise PlanningError(f"durations_s has no entry for task {t.id}")
-            d = durations_s[t.id]
-            try:
-                d = float(d)
-            except (TypeError, ValueError):
-                raise PlanningError(f"durations_s[{t.id!r}] is not a number: {d!r}") from None
-            if not math.isfinite(d) or d < 0.0:
-                raise PlanningError(f"durations_s[{t.id!r}] must be finite and >= 0, got {d!r}")
-            weight[i] = d
-        # Kahn's algorithm from the tasks nothing depends on, walking towards prerequisites.
-        pending = [len(self._dependents[i]) for i in range(n)]
-        order = [i for i in range(n) if pending[i] == 0]
-        chain = [0.0] * n
-        k = 0
-        while k < len(order):
-            i = order[k]
-            k += 1
-            best = 0.0
-            for d in self._dependents[i]:
-                best = max(best, chain[d])
-            chain[i] = weight[i] + best
-            for p in self._prerequisites[i]:
-                pending[p] -= 1
-                if pending[p] == 0:
-                    order.append(p)
-        if len(order) != n:
-            on_cycle = next(self._ids[i] for i in range(n) if pending[i] > 0)
-            raise PlanningError(f"the dependency graph has a cycle through task {on_cycle}")
-        return chain
-
-    def _tie_step(self, durations_s: Mapping[str, float] | None) -> float:
-        if durations_s is None:
-            return 1.0
-        values = sorted(float(durations_s[t.id]) for t in self._tasks if not t.done)
-        values = [v for v in values if v > 0.0]
-        return values[len(values) // 2] if values else 1.0
 
     # ------------------------------------------------------------------ availability bookkeeping
 
@@ -262,73 +166,16 @@ class Dispatcher:
             return
         role = self._role[i]
         self._ready[role][i] = None
-        if self._blockers[i]:
-            return
-        avail = self._available[role]
-        if i in avail:
-            return
-        avail[i] = None
-        if self.policy == "fifo":
-            if not self._in_heap[i]:
-                self._in_heap[i] = True
-                heapq.heappush(self._heap[role], (i, i))
-        elif self.policy == "critical-path":
-            c = self._rank[i]
-            buckets = self._buckets[role]
-            bucket = buckets.get(c)
-            if bucket is None:
-                buckets[c] = bucket = {}
-                if c not in self._heap_values[role]:
-                    self._heap_values[role].add(c)
-                    heapq.heappush(self._heap[role], (-c, i))
-            bucket[i] = None
+        if not self._blockers[i]:
+            self._ranking.add(i, role)
 
     def _unavailable(self, i: int) -> None:
-        role = self._role[i]
-        if self._available[role].pop(i, 0) is None and self.policy == "critical-path":
-            buckets = self._buckets[role]
-            c = self._rank[i]
-            bucket = buckets[c]
-            del bucket[i]
-            if not bucket:
-                del buckets[c]  # its heap entry is dropped lazily
+        self._ranking.discard(i, self._role[i])
 
     # ------------------------------------------------------------------ selection per policy
 
     def _select(self, role: str, uav: str) -> int | None:
-        avail = self._available[role]
-        if not avail:
-            return None
-        if self.policy == "fifo":
-            heap = self._heap[role]
-            while heap:
-                _, i = heap[0]
-                if i in avail:
-                    return i
-                heapq.heappop(heap)
-                self._in_heap[i] = False
-            return None  # pragma: no cover - avail non-empty implies a heap entry
-        candidates = avail
-        if self.policy == "critical-path":
-            heap = self._heap[role]
-            buckets = self._buckets[role]
-            while True:
-                c = -heap[0][0]
-                bucket = buckets.get(c)
-                if bucket:
-                    candidates = bucket
-                    break
-                heapq.heappop(heap)
-                self._heap_values[role].discard(c)
-        # Shortest flight (to the start, plus pickup -> drop-off for a brick); ties by plan order.
-        pos = self._position[uav]
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        best, best_cost = -1, math.inf
-        for i in candidates:
-            cost = dist(pos, start[i]) + leg[i]
-            if cost < best_cost or (cost == best_cost and i < best):
-                best, best_cost = i, cost
-        return best
+        return self._ranking.pick(role, self._position[uav])
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
@@ -341,27 +188,11 @@ class Dispatcher:
             candidates = self._prefetchable(role)
         if not candidates:
             return None
-        if self.policy == "critical-path":
-            top = max(self._rank[i] for i in candidates)
-            candidates = [i for i in candidates if self._rank[i] == top]
-        elif self.policy == "fifo":
-            return min(candidates)
-        pos = self._position[uav]
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        return min(candidates, key=lambda i: (dist(pos, start[i]) + leg[i], i))
+        return self._ranking.pick_among(candidates, self._position[uav])
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
-        status, out = self._status, []
-        seen: set[int] = set()
-        for r in self._uav_task.values():
-            for d in self._dependents[r]:
-                if d in seen or self._role[d] != role or status[d] != _PENDING:
-                    continue
-                seen.add(d)
-                if all(status[p] in (_DONE, _RUNNING) for p in self._prerequisites[d]):
-                    out.append(d)
-        return out
+        return prefetchable(role, self._uav_task.values(), self._status, self._role, self._graphs)
 
     # ------------------------------------------------------------------ events
 
@@ -621,87 +452,6 @@ class Dispatcher:
             self._ready[role].clear()
         for i in range(len(self._tasks)):
             self._maybe_available(i)
-
-    # ------------------------------------------------------------------ queries
-
-    @property
-    def done(self) -> AbstractSet[str]:
-        """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
-        return SetView(self._done)
-
-    @property
-    def in_progress(self) -> Mapping[str, str]:
-        """Task id -> UAV name for every task in progress; a live read-only view."""
-        return MappingProxyType(self._in_progress)
-
-    @property
-    def stuck(self) -> AbstractSet[str]:
-        """Ids of tasks that failed ``max_attempts`` times; a live read-only view."""
-        return SetView(self._stuck)
-
-    @property
-    def attempts(self) -> Mapping[str, int]:
-        """Finished (completed or failed) attempts per task id; tasks never finished are absent."""
-        return MappingProxyType(self._attempts)
-
-    @property
-    def idle_uavs(self) -> tuple[str, ...]:
-        """Names of UAVs in the fleet, not removed, with no task, in fleet order."""
-        return tuple(n for n in self._fleet if n in self._live and n not in self._uav_task)
-
-    @property
-    def uavs(self) -> tuple[str, ...]:
-        """Names of the UAVs not removed, in fleet order."""
-        return tuple(n for n in self._fleet if n in self._live)
-
-    @property
-    def available(self) -> tuple[str, ...]:
-        """Ids of tasks that could be assigned now (both roles), in plan order."""
-        return tuple(self._ids[i] for i in sorted(i for r in ROLES for i in self._available[r]))
-
-    @property
-    def remaining(self) -> tuple[str, ...]:
-        """Ids of tasks not done (pending, in progress or stuck), in plan order."""
-        return tuple(tid for i, tid in enumerate(self._ids) if self._status[i] != _DONE)
-
-    @property
-    def finished(self) -> bool:
-        """True when every task of the plan is done."""
-        return len(self._done) == len(self._tasks)
-
-    @property
-    def blocked(self) -> bool:
-        """True when the mission cannot finish: not finished, nothing in progress and nothing assignable.
-
-        This happens when a task is stuck (it and everything depending on it can never run) or every UAV of a
-        role that still has work was removed.
-        """
-        if self.finished or self._in_progress:
-            return False
-        return not any(self._available[r] and self._live_count[r] for r in ROLES)
-
-    @property
-    def events(self) -> int:
-        """Number of assignment, completion, failure and release events processed so far."""
-        return self._events
-
-    def task(self, task_id: str) -> Task:
-        """The task with id ``task_id`` (O(1), unlike ``Plan.task``)."""
-        return self._tasks[self._lookup(task_id, "query")]
-
-    def task_of(self, uav: str) -> str | None:
-        """The id of the task UAV ``uav`` is flying, or None."""
-        i = self._uav_task.get(uav)
-        return None if i is None else self._ids[i]
-
-    def attempt_of(self, task_id: str) -> int:
-        """The number the next (or current) attempt of ``task_id`` has: finished attempts + 1."""
-        self._lookup(task_id, "query")
-        return self._attempts.get(task_id, 0) + 1
-
-    def chain_s(self, task_id: str) -> float:
-        """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
-        return self._chain[self._lookup(task_id, "query")]
 
 
 __all__ = [

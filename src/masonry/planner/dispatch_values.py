@@ -12,6 +12,9 @@ from masonry.planner.tasks import BrickTask, Task
 
 Vec3 = Sequence[float]
 
+#: A task's state in the dispatcher: waiting for a UAV, flown by one, complete, failed for good.
+PENDING, RUNNING, DONE, STUCK = 0, 1, 2, 3
+
 
 @dataclass(frozen=True)
 class Assignment:
@@ -67,4 +70,14 @@ def vec3(value: Vec3, what: str) -> tuple[float, float, float]:
     return (x, y, z)
 
 
-__all__ = ["Assignment", "SetView", "task_end_m", "task_start_m", "vec3"]
+__all__ = [
+    "DONE",
+    "PENDING",
+    "RUNNING",
+    "STUCK",
+    "Assignment",
+    "SetView",
+    "task_end_m",
+    "task_start_m",
+    "vec3",
+]

@@ -1,0 +1,69 @@
+"""What the parts of a UAV's mission handler share: who the UAV is, how it talks to mission control, where it is.
+
+:class:`~masonry.mission.handler.UavHandler` is built from small parts, each a base class of it: this one, the
+results it reports and keeps (:mod:`masonry.mission.handler_results`) and the site columns it asks for
+(:mod:`masonry.mission.handler_columns`). The handler sets the attributes declared here in its constructor.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from collections.abc import Callable
+from typing import Any
+
+from masonry.mission.execution import Execution
+from masonry.mission.messages import MISSION_CONTROL, Message, Result, encode
+from masonry.mission.transport import Transport
+from masonry.ports import TaskResult
+
+Vec3 = tuple[float, float, float]
+
+
+class HandlerBase:
+    """The UAV's name, endpoint, clock reading and machine; the messages it sends (see the module)."""
+
+    name: str
+    transport: Transport
+    #: the time of the current step (the handler's clock: set by ``step``)
+    now_s: float
+    #: the UAV's state machine (``masonry.fsm``), attached after it is built with the handler as its link
+    model: Any
+    heartbeat_period_s: float
+    _position: Callable[[], Vec3] | None
+    #: when mission control was last heard from (None: never)
+    _last_mc_s: float | None
+    #: the task the machine has in hand (None: none)
+    _current: Execution | None
+
+    @abstractmethod
+    def pump(self) -> bool:
+        """Read what has arrived now (between ticks); True if a task is waiting for the machine."""
+
+    def _state(self) -> str:
+        """The machine's state now (empty without a machine)."""
+        return str(getattr(self.model, "state", "")) if self.model is not None else ""
+
+    def _where(self) -> Vec3 | None:
+        if self._position is None:
+            return None
+        p = self._position()
+        return (float(p[0]), float(p[1]), float(p[2]))
+
+    def _send(self, msg: Message) -> None:
+        self.transport.send(MISSION_CONTROL, encode(msg))
+
+    def _send_failed(self, task_id: str, attempt: int, reason: str, state: str) -> None:
+        """Tell mission control attempt ``attempt`` of ``task_id`` failed (``reason``), the machine in ``state``."""
+        self._send(
+            Result(
+                self.name,
+                TaskResult(task_id, "failed", 0.0, reason=reason),
+                self.now_s,
+                self._where(),
+                state=state,
+                attempt=attempt,
+            )
+        )
+
+
+__all__ = ["HandlerBase", "Vec3"]

@@ -1,0 +1,124 @@
+"""The dispatch policies' order: the available tasks of each role, kept as the policy picks them (pure).
+
+docs/dispatch.md, "Policies": ``fifo`` keeps a heap of plan indices (lazy deletion), ``critical-path`` a bucket
+of available tasks per chain step and a heap of the steps (lazy deletion), ``nearest`` only the set; every pick
+ends on the shortest flight for the UAV (to the task's start, plus pickup -> drop-off for a brick), ties by plan
+order. :class:`~masonry.planner.dispatch.Dispatcher` says when a task becomes available or stops being so.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Sequence
+
+from masonry.blueprint import ROLES
+
+
+class Ranking:
+    """The available tasks per role in the order of ``policy``.
+
+    Args:
+        policy: ``"fifo"``, ``"critical-path"`` or ``"nearest"`` (checked by the dispatcher).
+        rank: each task's chain step (critical-path's priority: higher first).
+        start_m: where each task's flight starts.
+        leg_m: the part of each task's flight that does not depend on the UAV.
+    """
+
+    def __init__(
+        self,
+        policy: str,
+        rank: Sequence[int],
+        start_m: Sequence[tuple[float, float, float]],
+        leg_m: Sequence[float],
+    ) -> None:
+        self.policy = policy
+        self._rank, self._start_m, self._leg_m = rank, start_m, leg_m
+        #: available tasks per role (an insertion-ordered dict used as a set)
+        self.available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
+        self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
+        self._in_heap = [False] * len(rank)
+        # critical-path: bucket of available tasks per chain value and a heap of the values (lazy deletion).
+        self._buckets: dict[str, dict[int, dict[int, None]]] = {r: {} for r in ROLES}
+        self._heap_values: dict[str, set[int]] = {r: set() for r in ROLES}
+
+    def add(self, i: int, role: str) -> None:
+        """Task ``i`` (of ``role``) is available (again); nothing if it is already."""
+        avail = self.available[role]
+        if i in avail:
+            return
+        avail[i] = None
+        if self.policy == "fifo":
+            if not self._in_heap[i]:
+                self._in_heap[i] = True
+                heapq.heappush(self._heap[role], (i, i))
+        elif self.policy == "critical-path":
+            c = self._rank[i]
+            buckets = self._buckets[role]
+            bucket = buckets.get(c)
+            if bucket is None:
+                buckets[c] = bucket = {}
+                if c not in self._heap_values[role]:
+                    self._heap_values[role].add(c)
+                    heapq.heappush(self._heap[role], (-c, i))
+            bucket[i] = None
+
+    def discard(self, i: int, role: str) -> None:
+        """Task ``i`` (of ``role``) is not available (any more); nothing if it was not."""
+        if self.available[role].pop(i, 0) is None and self.policy == "critical-path":
+            buckets = self._buckets[role]
+            c = self._rank[i]
+            bucket = buckets[c]
+            del bucket[i]
+            if not bucket:
+                del buckets[c]  # its heap entry is dropped lazily
+
+    def pick(self, role: str, position_m: Sequence[float]) -> int | None:
+        """The policy's best available task of ``role`` for a UAV at ``position_m`` (None: none available)."""
+        avail = self.available[role]
+        if not avail:
+            return None
+        if self.policy == "fifo":
+            heap = self._heap[role]
+            while heap:
+                _, i = heap[0]
+                if i in avail:
+                    return i
+                heapq.heappop(heap)
+                self._in_heap[i] = False
+            return None  # pragma: no cover - avail non-empty implies a heap entry
+        candidates = avail
+        if self.policy == "critical-path":
+            heap = self._heap[role]
+            buckets = self._buckets[role]
+            while True:
+                c = -heap[0][0]
+                bucket = buckets.get(c)
+                if bucket:
+                    candidates = bucket
+                    break
+                heapq.heappop(heap)
+                self._heap_values[role].discard(c)
+        # Shortest flight (to the start, plus pickup -> drop-off for a brick); ties by plan order.
+        start, leg, dist = self._start_m, self._leg_m, math.dist
+        best, best_cost = -1, math.inf
+        for i in candidates:
+            cost = dist(position_m, start[i]) + leg[i]
+            if cost < best_cost or (cost == best_cost and i < best):
+                best, best_cost = i, cost
+        return best
+
+    def pick_among(self, candidates: Sequence[int], position_m: Sequence[float]) -> int:
+        """The policy's best of ``candidates`` (not empty; not available: blocked or to prefetch) for a UAV at
+        ``position_m``: highest chain step for ``critical-path``, plan order for ``fifo``; then the shortest
+        flight, ties by plan order."""
+        if self.policy == "critical-path":
+            top = max(self._rank[i] for i in candidates)
+            candidates = [i for i in candidates if self._rank[i] == top]
+        elif self.policy == "fifo":
+            return min(candidates)
+        start, leg, dist = self._start_m, self._leg_m, math.dist
+        return min(candidates, key=lambda i: (dist(position_m, start[i]) + leg[i], i))
+
+
+__all__ = ["Ranking"]
