@@ -811,9 +811,7 @@ class MissionControl:
             task = self.spares.task(
                 self._tasks[a.task_id]
             )  # (with its spare, if one stands in for its brick)
-            self._send(
-                a.uav, self.placement.assign(self, a.uav, task, attempt, now_s)
-            )  # (as built, issue 30)
+            self._send(a.uav, self.placement.assign(self, a.uav, task, attempt, now_s))  # (planned: issue 30)
 
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
