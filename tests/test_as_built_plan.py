@@ -7,6 +7,7 @@ import dataclasses
 import json
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from hypothesis import given, settings
@@ -18,7 +19,9 @@ from masonry.blueprint_gen import running_bond, towers
 from masonry.blueprint_yaml import safe_load
 from masonry.cli import app
 from masonry.errors import ProtocolError
+from masonry.mission.as_built import PlacementWatch
 from masonry.mission.messages import Assign, decode, encode
+from masonry.mission.records import Attempt
 from masonry.mission.simulate import SimulatedMission
 from masonry.perception.types import AsBuiltPose
 from masonry.placement_check import PlacementCheck
@@ -32,6 +35,7 @@ from masonry.planner.as_built_plan import (
 )
 from masonry.planner.graphs import plan
 from masonry.planner.tasks import AdhesionTask, BrickTask
+from masonry.ports import TaskResult
 
 runner = CliRunner()
 mm = st.floats(-0.2, 0.2, allow_nan=False)
@@ -222,3 +226,25 @@ def test_a_mission_flies_the_targets_planned_on_the_as_built_poses() -> None:
         assert pose.deviation_m == pytest.approx(
             math.dist(pose.position_m, design[tid].position_m), abs=1e-12
         )
+
+
+def test_the_watch_plans_on_the_journal_poses_of_a_resumed_mission_and_measures_from_the_design() -> None:
+    """Mission control's side (``PlacementWatch``): the poses of the attempts a resumed mission restored are known
+    at its first assignment; a completion's deviation is measured from the design; off, nothing is planned."""
+    p = plan(towers(1, 3))
+    b0, b1 = p.task("B0"), p.task("B1")
+    assert isinstance(b0, BrickTask) and isinstance(b1, BrickTask)
+    built = (b0.position_m[0] + 0.01, b0.position_m[1], b0.position_m[2])
+    restored = Attempt("B0", "brick-1", 1, 0.0, 5.0, "done", as_built=_pose(built, b0.position_m))
+    mc = SimpleNamespace(plan=p, history=[restored], wall_digest="w")
+    assert PlacementWatch().assign(mc, "brick-1", b1, 1, 6.0) == Assign(
+        "mission-control", "brick-1", b1, 1, 6.0, "w"
+    )
+    watch = PlacementWatch(PlacementCheck(plan_on_as_built=True, pullback_m=0.0))
+    a = watch.assign(mc, "brick-1", b1, 1, 6.0)
+    assert a.planned is not None and a.flown.position_m == pytest.approx(
+        (b1.position_m[0] + 0.01, b1.position_m[1], b1.position_m[2]), abs=1e-12
+    )
+    seen = AsBuiltPose(a.flown.position_m, 0.0, 0.0, 0.9)  # (the UAV measured from the target it flew)
+    r = watch.against_design(TaskResult("B1", "done", 30.0, as_built=seen))
+    assert r.as_built is not None and r.as_built.deviation_m == pytest.approx(0.01, abs=1e-12)
