@@ -9,6 +9,7 @@ import math
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -19,6 +20,7 @@ from masonry.blueprint_gen import running_bond, towers
 from masonry.blueprint_yaml import safe_load
 from masonry.cli import app
 from masonry.errors import ProtocolError
+from masonry.fsm.wall_align import WallAlign
 from masonry.mission.as_built import PlacementWatch
 from masonry.mission.messages import Assign, decode, encode
 from masonry.mission.records import Attempt
@@ -248,3 +250,13 @@ def test_the_watch_plans_on_the_journal_poses_of_a_resumed_mission_and_measures_
     seen = AsBuiltPose(a.flown.position_m, 0.0, 0.0, 0.9)  # (the UAV measured from the target it flew)
     r = watch.against_design(TaskResult("B1", "done", 30.0, as_built=seen))
     assert r.as_built is not None and r.as_built.deviation_m == pytest.approx(0.01, abs=1e-12)
+
+
+def test_the_wall_alignment_adds_its_offset_to_the_brick_s_own_design_not_to_a_planned_target() -> None:
+    """Both measure the supports' deviation: added to a planned target, the wall's offset would count it twice."""
+    align = WallAlign()
+    align.reset(np.array([1.0, 2.0, 0.30]))  # the drop-off flown (planned 1 cm off the design)
+    own = (0.99, 2.0, 0.30)
+    assert align._base_m(own).tolist() == list(own)
+    assert align._base_m(None).tolist() == [1.0, 2.0, 0.30]  # (reused marker numbers: no design to go by)
+    assert align._base_m((1.0, 2.0, 0.30)) is align.design_m  # as designed: exactly as before
