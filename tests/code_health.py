@@ -25,7 +25,7 @@ CEILINGS = {"any_mentions": 575, "in_function_imports": 150}
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
 OVERSIZE_CEILINGS = {
     "mission/airspace.py": 799,
-    "mission/control.py": 978,
+    "mission/control.py": 977,
 }
 
 _ANY = re.compile(r"\bAny\b")

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from masonry.errors import BlueprintError
 from masonry.geofence import Site
-from masonry.placement_check import PLACEMENT_KEYS, PlacementCheck, parse_placement_check
+from masonry.placement_check import PLACEMENT_KEYS, PlacementCheck, parse_placement_check, placement_lines
 from masonry.spares import Spare, format_spares, parse_spares
 
 if TYPE_CHECKING:
@@ -572,8 +572,7 @@ def format_blueprint(blueprint: Blueprint, header: str = "") -> str:
     if (
         blueprint.placement != PlacementCheck()
     ):  # (the defaults are not written: old files read back the same)
-        lines.append(f"placement_tolerance_m: {_num(blueprint.placement.tolerance_m)}")
-        lines.append(f"on_placement_error: {blueprint.placement.on_error}")
+        lines.extend(placement_lines(blueprint.placement, _num))
     return "\n".join(lines) + "\n"
 
 

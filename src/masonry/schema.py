@@ -29,7 +29,7 @@ from masonry.blueprint import (
     UAV_NAME_PATTERN,
 )
 from masonry.geofence import MAX_BOUNDARY_VERTICES
-from masonry.placement_check import MAX_PLACEMENT_TOLERANCE_M, ON_PLACEMENT_ERROR
+from masonry.placement_check import MAX_AS_BUILT_PULLBACK_M, MAX_PLACEMENT_TOLERANCE_M, ON_PLACEMENT_ERROR
 
 SCHEMA_ID = "https://masonry.example/schemas/blueprint.schema.json"
 
@@ -214,6 +214,19 @@ def blueprint_schema() -> dict[str, Any]:
                 "enum": list(ON_PLACEMENT_ERROR),
                 "description": "What the mission does when a brick is beyond placement_tolerance_m: continue "
                 "(default) or hold (pause until the operator resumes).",
+            },
+            "plan_on_as_built": {
+                "type": "boolean",
+                "description": "Plan on what was built: a brick's target keeps its designed offsets to the "
+                "as-built bricks under it (pulled back toward the design by as_built_pullback_m per course, never "
+                "farther than placement_tolerance_m), an adhesion segment moves with the bricks it joins "
+                "(default false).",
+            },
+            "as_built_pullback_m": {
+                "type": "number",
+                "minimum": 0,
+                "maximum": MAX_AS_BUILT_PULLBACK_M,
+                "description": "How much nearer its design each course's target is brought (m; default 0.005).",
             },
         },
     }

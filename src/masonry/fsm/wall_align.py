@@ -12,7 +12,9 @@ designed offsets to them). A brick farther than ``_REFERENCE_M`` from its design
 another UAV's magnet) is no reference; with none in view the last offset stands.
 
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
-same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does).
+same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
+planned on the as-built poses gives way to it: the offset is added to the brick's own design, not to the planned
+target (the bricks in view place it as the plan would, measured now).
 """
 
 from __future__ import annotations
@@ -88,12 +90,22 @@ class WallAlign:
         offset = wall_offset_m(estimates, wall, uav.brick_task.brick)
         if offset is None:
             return False
-        delta = self.tracker.add(self.design_m + offset)
+        delta = self.tracker.add(self._base_m(wall.get(uav.brick_task.brick)) + offset)
         if delta is None:
             return False
         uav.nav.shift(tuple(float(v) for v in delta))
         uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
         return True
+
+    def _base_m(self, own_design_m: tuple[float, ...] | None) -> np.ndarray:
+        """What the wall's offset is added to: the brick's own design. A target planned on the as-built poses
+        (``Assign.planned``, :mod:`masonry.planner.as_built_plan`) already holds its supports' deviation, which
+        the offset measures again, live and without the GNSS wander of the as-built looks: added to it, each
+        course would add its supports' deviation twice (docs/performance/as-built.md, the px4 rows)."""
+        if own_design_m is None:
+            return self.design_m
+        own = np.asarray(own_design_m, dtype=float)
+        return own if float(np.linalg.norm(own - self.design_m)) > 1e-9 else self.design_m
 
     def apply(self, uav: BrickUav) -> None:
         """A new leg toward the design (the descent): shift it by the offset found so far (with ``align_on_wall``)."""

@@ -7,20 +7,32 @@ the ``completed`` event (the log, the live page colour the brick by its deviatio
 blueprint's ``placement_tolerance_m`` (:class:`PlacementWatch`): a brick beyond it is a ``placement`` event at
 warning level, and with ``on_placement_error: hold`` the mission pauses as the operator's ``pause`` does
 (journaled as an operator command) until the operator resumes.
+
+With the blueprint's ``plan_on_as_built`` the watch also plans the work on what was built
+(:class:`~masonry.planner.as_built_plan.AsBuiltPlan`, from the poses of the completions taken and journaled):
+each assignment (:meth:`PlacementWatch.assign`) carries the task's target or segment moved onto the wall as built
+(``planned``), and a completion's deviation is measured from the design again (:meth:`PlacementWatch.against_design`:
+the UAV measured it from the target it was given). Off (the default), assignments and completions are as before.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from masonry.mission.message_types import MISSION_CONTROL, Assign
 from masonry.perception.types import AsBuiltPose
 from masonry.placement_check import PlacementCheck
+from masonry.planner.as_built_plan import AsBuiltPlan, AsBuiltPlanning
+from masonry.planner.tasks import BrickTask
 
 if TYPE_CHECKING:
     from masonry.errors import ProtocolError
     from masonry.mission.control import MissionControl
     from masonry.mission.records import Attempt
+    from masonry.planner.tasks import Task
     from masonry.ports import TaskResult
 
 __all__ = ["PlacementWatch", "as_built_field", "as_built_lines", "journaled_as_built", "take_result"]
@@ -80,6 +92,41 @@ class PlacementWatch:
         self.check = check if check is not None else PlacementCheck()
         #: task ids found beyond the tolerance, in order
         self.beyond: list[str] = []
+        self._plan: AsBuiltPlan | None = None  # (made at the first assignment, with plan_on_as_built)
+        self._design: dict[str, BrickTask] = {}
+        #: brick id -> its as-built pose, from the completions (plan_on_as_built only)
+        self.poses: dict[int, AsBuiltPose] = {}
+
+    def assign(self, mc: MissionControl, uav: str, task: Task, attempt: int, now_s: float) -> Assign:
+        """The assignment of ``task`` to ``uav``: with ``plan_on_as_built``, its geometry planned on the wall as
+        built (``planned``, when that is not the design)."""
+        return Assign(MISSION_CONTROL, uav, task, attempt, now_s, mc.wall_digest, self.planned(mc, task))
+
+    def planned(self, mc: MissionControl, task: Task) -> Task | None:
+        """``task`` planned on the as-built poses known so far (None: planning off, or the design exactly)."""
+        if not self.check.plan_on_as_built:
+            return None
+        if self._plan is None:
+            tasks = mc.plan.tasks
+            self._plan = AsBuiltPlan(tasks, AsBuiltPlanning(self.check.pullback_m, self.check.tolerance_m))
+            self._design = {t.id: t for t in tasks if isinstance(t, BrickTask)}
+            for att in mc.history:  # (a resumed mission: the poses of the journal)
+                self._take(att.task_id, att.as_built if att.status == "done" else None)
+        return self._plan.planned(task, self.poses)
+
+    def _take(self, task_id: str, pose: AsBuiltPose | None) -> None:
+        design = self._design.get(task_id)
+        if design is not None and pose is not None:
+            self.poses[design.brick] = pose
+
+    def against_design(self, r: TaskResult) -> TaskResult:
+        """``r`` with its as-built deviation measured from the brick's design (with ``plan_on_as_built`` the UAV
+        measured it from the planned target); as it is otherwise."""
+        design = self._design.get(r.task_id) if self.check.plan_on_as_built else None
+        if design is None or r.as_built is None:
+            return r
+        deviation_m = math.dist(r.as_built.position_m, design.position_m)
+        return replace(r, as_built=replace(r.as_built, deviation_m=deviation_m))
 
     def event_fields(self, pose: AsBuiltPose | None) -> dict[str, object]:
         """The ``completed`` event's as-built fields: the pose and the tolerance it is judged by (none without a
@@ -89,6 +136,8 @@ class PlacementWatch:
     def completed(self, mc: MissionControl, r: TaskResult, uav: str, now_s: float) -> None:
         """A task done: if its as-built pose is beyond the tolerance, say so (and hold, as the blueprint says)."""
         pose = r.as_built
+        if self.check.plan_on_as_built and r.status == "done":
+            self._take(r.task_id, pose)
         if pose is None or not self.check.beyond(pose.deviation_m):
             return
         self.beyond.append(r.task_id)

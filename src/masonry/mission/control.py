@@ -39,7 +39,6 @@ from masonry.mission.journal_state import journaled_phases as _journaled_phases 
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
-    Assign,
     Clearance,
     ClearanceRequest,
     CommandAnswer,
@@ -536,7 +535,7 @@ class MissionControl:
         self.recall(uav, now_s, reason)
 
     def _on_result(self, msg: Result, now_s: float) -> None:
-        r = msg.result
+        r = self.placement.against_design(msg.result)
         if self.dispatcher.in_progress.get(r.task_id) != msg.sender:
             self._ignore("not-assigned", f"a result for {r.task_id} from {msg.sender}: not its task now")
             return
@@ -812,7 +811,7 @@ class MissionControl:
             task = self.spares.task(
                 self._tasks[a.task_id]
             )  # (with its spare, if one stands in for its brick)
-            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, task, attempt, now_s, self.wall_digest))
+            self._send(a.uav, self.placement.assign(self, a.uav, task, attempt, now_s))  # (planned: issue 30)
 
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved

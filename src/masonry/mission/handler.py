@@ -355,7 +355,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             if why is not None:
                 self._refuse(msg, why)
                 return
-            self._queue.append((msg.task, msg.attempt, now_s))
+            self._queue.append((msg.flown, msg.attempt, now_s))  # (planned on the wall as built)
             self.mission_ended = False
         elif isinstance(msg, Clearance):
             self._on_clearance(msg)

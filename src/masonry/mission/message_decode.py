@@ -30,6 +30,8 @@ from masonry.mission.message_types import (
     Recall,
     Result,
 )
+from masonry.planner.as_built_plan import MAX_PLANNED_SHIFT_M, planned_shift_m
+from masonry.planner.tasks import Task
 from masonry.ports import TaskResult
 
 _new_message = object.__new__
@@ -194,7 +196,25 @@ def _assign(f: _Fields, sender: str, fleet: Collection[str] | None) -> Assign:
     wall = f.data.get("wall", "")
     if not isinstance(wall, str):
         raise f.fail("wall", f"must be a string, got {wall!r}")
-    return Assign(sender, uav, task_from_dict(f.obj("task")), attempt, f.num("time_s"), wall)
+    task = task_from_dict(f.obj("task"))
+    return Assign(sender, uav, task, attempt, f.num("time_s"), wall, _planned(f, task))
+
+
+def _planned(f: _Fields, task: Task) -> Task | None:
+    """An assignment's optional ``planned``: ``task`` moved onto the wall as built, by at most
+    :data:`MAX_PLANNED_SHIFT_M` (anything else is refused: it would fly a brick elsewhere than the blueprint says)."""
+    if f.data.get("planned") is None:
+        return None
+    planned = task_from_dict(f.obj("planned"), "assign planned")
+    shift_m = planned_shift_m(task, planned)
+    if shift_m is None:
+        raise f.fail("planned", f"must be task {task.id} with only its target or segment moved")
+    if not shift_m <= MAX_PLANNED_SHIFT_M:
+        raise f.fail(
+            "planned",
+            f"moves task {task.id} {shift_m:.3f} m from its design (at most {MAX_PLANNED_SHIFT_M} m)",
+        )
+    return planned
 
 
 def _progress(f: _Fields, sender: str, fleet: Collection[str] | None) -> Progress:

@@ -43,6 +43,8 @@ class Assign:
     """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1) of the wall ``wall``.
 
     ``wall`` is :func:`masonry.fingerprint.wall_digest` of mission control's blueprint ("" when it has none).
+    ``planned``: the same task with its target or segment moved onto the wall as built
+    (:mod:`masonry.planner.as_built_plan`; None: flown as designed).
     """
 
     sender: str
@@ -51,6 +53,12 @@ class Assign:
     attempt: int
     time_s: float
     wall: str = ""
+    planned: Task | None = None
+
+    @property
+    def flown(self) -> Task:
+        """The task as the UAV flies it: ``planned`` if given, else ``task``."""
+        return self.task if self.planned is None else self.planned
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,10 @@ at once instead of half-working); 3 ``wall`` in the assignment, ``attempt`` in t
 checks the task against its blueprint, mission control accepts a result only for the current attempt); within 3,
 optional both ways (a peer without one leaves it out, one that does not know it ignores it): a result's
 ``phases`` and ``as_built``, a brick task's ``marker`` (a big wall's reused number); 4 the operator's messages (a
-version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spare``.
+version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spare``, an assignment's ``planned``
+(the task on the wall as built, :mod:`masonry.planner.as_built_plan`: a UAV that does not know it flies the
+design; one that does refuses a ``planned`` that is not the task moved by at most
+:data:`~masonry.planner.as_built_plan.MAX_PLANNED_SHIFT_M`).
 """
 
 from __future__ import annotations
@@ -154,6 +157,8 @@ def encode(message: Message) -> bytes:
             time_s=message.time_s,
             wall=message.wall,
         )
+        if message.planned is not None:
+            body["planned"] = task_to_dict(message.planned)
     elif isinstance(message, Progress):
         body.update(
             task_id=message.task_id,
