@@ -59,6 +59,9 @@ ON_PAD_Z_M = 0.3
 #: machines come to rest between legs and settle before they ask, which the timed legs do not count.
 TABLE_MARGIN_S = 3.0
 
+#: Seconds the other UAVs' windows are made longer when a flight is planned: room for their extensions.
+TABLE_GUARD_S = 3.0
+
 #: The airspaces mission control can run: ColumnClearance (the default) or :class:`TableClearance`.
 AIRSPACES = ("columns", "table")
 DEFAULT_AIRSPACE = "columns"
@@ -101,7 +104,8 @@ class TableClearance:
         fence: Site | None = None,
         *,
         timing: TaskTiming = DEFAULT_TIMING,
-        margin_s: float = TABLE_MARGIN_S,
+        margin_s: float | None = None,
+        guard_s: float | None = None,
         max_layers: int = 4,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
@@ -116,7 +120,8 @@ class TableClearance:
         self.gate = gate
         self.fence = fence
         self.timing = timing
-        self.margin_s = float(margin_s)
+        self.margin_s = float(TABLE_MARGIN_S if margin_s is None else margin_s)
+        self.guard_s = float(TABLE_GUARD_S if guard_s is None else guard_s)
         self.max_layers = max_layers
         self._homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -415,7 +420,9 @@ class TableClearance:
     def _make_airspace(self, timing: TaskTiming | None = None) -> Airspace:
         base = self.layer_base_m if self.layer_base_m is not None else 0.0
         layers = tuple(base + k * self.spacing_m for k in range(self.max_layers))
-        return Airspace.from_timing(layers, timing or self.timing, margin_s=self.margin_s, horizon_s=0.0)
+        return Airspace.from_timing(
+            layers, timing or self.timing, margin_s=self.margin_s, horizon_s=0.0, any_layer=True
+        )
 
     def _tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
@@ -493,7 +500,7 @@ class TableClearance:
     def _guarded(self, uav: str) -> Table:
         """The table ``uav``'s flight is planned in: the other UAVs' windows a margin longer, so that one of them
         running late can be extended (:meth:`_keep_up`) without a clash."""
-        m, now = self.margin_s, self.now_s
+        m, now = self.guard_s, self.now_s
         # a UAV stopped in its plan (it turned back and waits for its new flight) may stay there: open-ended
         stopped = {n for n, o in self._uavs.items() if o.plan is not None and o.request is not None}
         return Table(
