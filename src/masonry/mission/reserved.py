@@ -23,6 +23,7 @@ from masonry.mission.reserved_parts import (
     end_flight,
     extend_or_force,
     forced,
+    guarded,
     leg_index,
     park_levels,
     park_plan,
@@ -498,20 +499,9 @@ class TableClearance:
         return Grant(uav, w.site, layer_m=decision.plan.layer_m)
 
     def _guarded(self, uav: str) -> Table:
-        """The table ``uav``'s flight is planned in: the other UAVs' windows a margin longer, so that one of them
-        running late can be extended (:meth:`_keep_up`) without a clash."""
-        m, now = self.guard_s, self.now_s
-        # a UAV stopped in its plan (it turned back and waits for its new flight) may stay there: open-ended
+        """The table ``uav``'s flight is planned in (:func:`~masonry.mission.reserved_parts.guarded`)."""
         stopped = {n for n, o in self._uavs.items() if o.plan is not None and o.request is not None}
-        return Table(
-            tuple(
-                r
-                if r.uav == uav or r.open_ended
-                else r.until(math.inf if r.uav in stopped and r.t0_s <= now else r.t1_s + m)
-                for r in self.table.reservations
-            ),
-            self.table.separation,
-        )
+        return guarded(self.table, uav, self.now_s, self.guard_s, stopped)
 
     def _hop(self, uav: str, u: _Uav, w: FlightRequest) -> Request:
         """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""

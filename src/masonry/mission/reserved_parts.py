@@ -46,6 +46,22 @@ def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]
     return Table((*out.reservations, *add), out.separation)
 
 
+def guarded(table: Table, uav: str, now_s: float, guard_s: float, stopped: Iterable[str]) -> Table:
+    """The table ``uav``'s flight is planned in: the other UAVs' windows ``guard_s`` longer, so that one of them
+    running late can be extended without a clash; a UAV in ``stopped`` (it turned back and waits for its new
+    flight) may stay where it stopped: its windows under way are open-ended."""
+    stopped = set(stopped)
+    return Table(
+        tuple(
+            r
+            if r.uav == uav or r.open_ended
+            else r.until(math.inf if r.uav in stopped and r.t0_s <= now_s else r.t1_s + guard_s)
+            for r in table.reservations
+        ),
+        table.separation,
+    )
+
+
 def leg_index(legs: Sequence[Reservation], p: Vec3 | None) -> int | None:
     """The index of the first leg of ``legs`` (in plan order) ``p`` is in (within ``ON_LEG_M``), or None: the
     legs before it are behind the UAV (it flies them in order; a short hop's descent may hold its start too)."""
@@ -168,6 +184,7 @@ __all__ = [
     "end_flight",
     "extend_or_force",
     "forced",
+    "guarded",
     "leg_index",
     "park_levels",
     "park_plan",
