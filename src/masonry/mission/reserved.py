@@ -256,6 +256,10 @@ class TableClearance:
         to = None
         if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
             to = (float(to_m[0]), float(to_m[1]))
+        if self.gate is not None and u.site is not None and not _same(u.site, site):
+            self.gate.left(
+                uav, now_s
+            )  # it moves on: its site interval is over, however close the next site is
         self._seq += 1
         u.request = FlightRequest(site, top, pos, now_s, self._seq, to)
         u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
