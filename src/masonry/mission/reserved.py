@@ -27,6 +27,7 @@ from masonry.mission.reserved_parts import (
     leg_index,
     park_levels,
     park_plan,
+    park_spots,
     silent_way,
     to_park,
 )
@@ -297,10 +298,12 @@ class TableClearance:
             start = u.request.position or u.position
             if home is None or start is None:
                 continue
-            # over every transit layer however high the wall's rise takes them (base_m: the finished wall's)
-            z = self._home_top_m() + (self.max_layers + self._levels.get(uav, 0)) * self.spacing_m
-            spot = (home[0], home[1], z)
-            plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
+            for spot in park_spots(
+                home, self._home_top_m(), self.max_layers, self.spacing_m, self._levels, uav
+            ):
+                plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
+                if plan is not None:
+                    break
             if plan is None:
                 continue
             stay = self.table.stay_of(uav)
@@ -309,7 +312,7 @@ class TableClearance:
             u.phase, u.plan, u.spot, u.site = Phase.TO_HOLD, plan, spot, u.request.site
             self.held_back += 1
             self._bump()
-            return Grant(uav, u.request.site, False, spot, z)
+            return Grant(uav, u.request.site, False, spot, spot[2])
         return None
 
     def _at_spot(self, uav: str, u: _Uav) -> None:

@@ -85,6 +85,18 @@ def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int
     return out
 
 
+def park_spots(
+    home: Vec3, base_m: float, max_layers: int, spacing_m: float, levels: Mapping[str, int], uav: str
+) -> list[Vec3]:
+    """``uav``'s parking spots over its ``home``, best first: at its level over every transit layer however high
+    the wall's rise takes them (``base_m``: the finished wall's), then one tier of levels higher. The flight to a
+    spot flies at its altitude: where another UAV's spot at that level is in its way (held for good), the higher
+    tier, whose column down over the pad passes only the spots of its pad-neighbours, gets it there."""
+    tiers = (0, 1 + max(levels.values(), default=0))
+    zs = [base_m + (max_layers + levels.get(uav, 0) + t) * spacing_m for t in tiers]
+    return [(home[0], home[1], z) for z in zs]
+
+
 def park_plan(
     table: Table, uav: str, start: Vec3, spot: Vec3, now_s: float, airspace: Airspace
 ) -> FlightPlan | None:
@@ -188,6 +200,7 @@ __all__ = [
     "leg_index",
     "park_levels",
     "park_plan",
+    "park_spots",
     "silent_way",
     "to_park",
 ]
