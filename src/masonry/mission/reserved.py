@@ -298,9 +298,8 @@ class TableClearance:
             start = u.request.position or u.position
             if home is None or start is None:
                 continue
-            for spot in park_spots(
-                home, self._home_top_m(), self.max_layers, self.spacing_m, self._levels, uav
-            ):
+            top, n = self._home_top_m(), self.max_layers
+            for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
                 plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
                 if plan is not None:
                     break
@@ -428,9 +427,8 @@ class TableClearance:
     def _make_airspace(self, timing: TaskTiming | None = None) -> Airspace:
         base = self.layer_base_m if self.layer_base_m is not None else 0.0
         layers = tuple(base + k * self.spacing_m for k in range(self.max_layers))
-        return Airspace.from_timing(
-            layers, timing or self.timing, margin_s=self.margin_s, horizon_s=0.0, any_layer=True
-        )
+        t = timing or self.timing  # (legs at any layer, as the columns grant them: Airspace.any_layer)
+        return Airspace(layers, t.cruise_speed_mps, t.vertical_speed_mps, self.margin_s, 0.0, True)
 
     def _tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
