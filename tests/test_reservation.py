@@ -111,6 +111,20 @@ def test_decide_needs_the_uav_to_hold_a_place_to_stay() -> None:
         decide(Table(), request, 0.0, Airspace(LAYERS_M))
 
 
+def test_any_layer_lets_a_leg_fly_below_the_works_top() -> None:
+    # a pickup worked up to 3.0 m (over the lowest layer) from a UAV hovering a little over that layer
+    table = Table().add(Reservation("a", column((0.0, 0.0), 0.0, LAYERS_M[0] + 0.04), 0.0, math.inf, "stay"))
+    request = Request("a", Place((0.0, 0.0), LAYERS_M[0] + 0.04, "site"), Work((6.0, 0.0), 3.0, 5.0))
+    assert min(LAYERS_M) < 3.0 < max(LAYERS_M)
+    strict = decide(table, request, 0.0, Airspace(LAYERS_M))
+    low = decide(table, request, 0.0, Airspace(LAYERS_M, any_layer=True))
+    assert isinstance(strict, Grant) and strict.plan.layer_m > 3.0
+    assert isinstance(low, Grant) and low.plan.layer_m == LAYERS_M[0]
+    # the descent over the site reaches from the layer up to the work's top: the column the UAV works in
+    descent = next(r for r in low.plan.reservations if r.purpose == "descend")
+    assert (descent.volume.z0_m, descent.volume.z1_m) == (LAYERS_M[0], 3.0)
+
+
 def test_decide_is_pure() -> None:
     table = start_table({"a": (0.0, 0.0)})
     request = Request("a", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 10.0))

@@ -66,12 +66,55 @@ def test_a_second_uav_for_the_same_site_waits_where_it_is_and_is_granted_once_th
     assert air.request("a", (0.0, -5.0, 2.0), 31.0, (0.0, 0.0, 1.2)).granted  # a flies home
     granted = []
     for t in range(32, 120):
+        if t == 34:
+            air.progress("a", (0.0, -2.5, 1.2))  # a says where it is: on its leg home, its climb behind it
         if t == 40:
             air.end_transit("a")  # a is over its pad, on time
         granted += [g.uav for g in air.grant(float(t))]
     assert granted == ["b"]
     assert air.forced == 0  # nobody ran late past what the table could make room for
     assert air.conflicts() == []
+
+
+class _Gate:
+    """A site gate that lets everyone in and records who moved on from a site."""
+
+    def __init__(self) -> None:
+        self.left_by: list[tuple[str, float]] = []
+
+    def may_enter(self, uav, site_m):
+        return True
+
+    def entered(self, uav, site_m, now_s):
+        pass
+
+    def waited_on(self, uav):
+        return ()
+
+    def left(self, uav, now_s):
+        self.left_by.append((uav, now_s))
+        return True
+
+
+def test_a_uav_asking_for_the_next_site_ends_its_site_interval_however_close_the_sites_are():
+    # adhesion segments 0.15 m apart: closer than AT_SITE_M, yet the first task's site interval is over once its
+    # UAV asks for the next one (else two UAVs could wait for each other's finished sites)
+    gate = _Gate()
+    air = TableClearance(0.8, 2.0, homes={"a": (0.0, -5.0, 0.0)}, start_base_m=1.2, gate=gate)
+    air.take_off("a")
+    assert air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2)).granted
+    air.end_transit("a")
+    assert gate.left_by == []  # (its first flight: no site before it)
+    assert air.request("a", (0.15, 0.0, 1.2), 20.0, (0.0, 0.0, 1.2)).granted
+    assert gate.left_by == [("a", 20.0)]
+
+
+def test_a_leg_flies_at_the_lowest_layer_even_under_the_works_top():
+    air = _airspace()
+    air.take_off("a")
+    # hovering 4 cm over the lowest layer (1.2 m), off to a pickup worked up to 2.1 m: the leg flies at 1.2 m
+    g = air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.24), top_m=2.1)
+    assert g.granted and g.layer_m == pytest.approx(1.2)
 
 
 def test_a_bad_airspace_is_one_clear_error():

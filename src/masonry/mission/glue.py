@@ -110,6 +110,9 @@ class GlueGate:
     def entered(self, uav: str, site_m: Vec3, now_s: float) -> None:
         self.sites.entered(uav, site_m, now_s)
 
+    def left(self, uav: str, now_s: float) -> bool:
+        return self.sites.left(uav, now_s)
+
     def waited_on(self, uav: str) -> tuple[tuple[tuple[float, float], tuple[float, float]], ...]:
         """The site intervals' answer: a bead sprayed again is a not-done prerequisite of its brick again."""
         return self.sites.waited_on(uav)

@@ -23,9 +23,11 @@ from masonry.mission.reserved_parts import (
     end_flight,
     extend_or_force,
     forced,
+    guarded,
     leg_index,
     park_levels,
     park_plan,
+    park_spots,
     silent_way,
     to_park,
 )
@@ -58,6 +60,9 @@ ON_PAD_Z_M = 0.3
 #: Seconds added to every window of a plan: a UAV this much behind a leg is still inside its window. The state
 #: machines come to rest between legs and settle before they ask, which the timed legs do not count.
 TABLE_MARGIN_S = 3.0
+
+#: Seconds the other UAVs' windows are made longer when a flight is planned: room for their extensions.
+TABLE_GUARD_S = 3.0
 
 #: The airspaces mission control can run: ColumnClearance (the default) or :class:`TableClearance`.
 AIRSPACES = ("columns", "table")
@@ -101,7 +106,8 @@ class TableClearance:
         fence: Site | None = None,
         *,
         timing: TaskTiming = DEFAULT_TIMING,
-        margin_s: float = TABLE_MARGIN_S,
+        margin_s: float | None = None,
+        guard_s: float | None = None,
         max_layers: int = 4,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
@@ -116,7 +122,8 @@ class TableClearance:
         self.gate = gate
         self.fence = fence
         self.timing = timing
-        self.margin_s = float(margin_s)
+        self.margin_s = float(TABLE_MARGIN_S if margin_s is None else margin_s)
+        self.guard_s = float(TABLE_GUARD_S if guard_s is None else guard_s)
         self.max_layers = max_layers
         self._homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -251,6 +258,10 @@ class TableClearance:
         to = None
         if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
             to = (float(to_m[0]), float(to_m[1]))
+        if self.gate is not None and u.site is not None and not _same(u.site, site):
+            self.gate.left(
+                uav, now_s
+            )  # it moves on: its site interval is over, however close the next site is
         self._seq += 1
         u.request = FlightRequest(site, top, pos, now_s, self._seq, to)
         u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
@@ -288,10 +299,11 @@ class TableClearance:
             start = u.request.position or u.position
             if home is None or start is None:
                 continue
-            # over every transit layer however high the wall's rise takes them (base_m: the finished wall's)
-            z = self._home_top_m() + (self.max_layers + self._levels.get(uav, 0)) * self.spacing_m
-            spot = (home[0], home[1], z)
-            plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
+            top, n = self._home_top_m(), self.max_layers
+            for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
+                plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
+                if plan is not None:
+                    break
             if plan is None:
                 continue
             stay = self.table.stay_of(uav)
@@ -300,7 +312,7 @@ class TableClearance:
             u.phase, u.plan, u.spot, u.site = Phase.TO_HOLD, plan, spot, u.request.site
             self.held_back += 1
             self._bump()
-            return Grant(uav, u.request.site, False, spot, z)
+            return Grant(uav, u.request.site, False, spot, spot[2])
         return None
 
     def _at_spot(self, uav: str, u: _Uav) -> None:
@@ -416,7 +428,8 @@ class TableClearance:
     def _make_airspace(self, timing: TaskTiming | None = None) -> Airspace:
         base = self.layer_base_m if self.layer_base_m is not None else 0.0
         layers = tuple(base + k * self.spacing_m for k in range(self.max_layers))
-        return Airspace.from_timing(layers, timing or self.timing, margin_s=self.margin_s, horizon_s=0.0)
+        t = timing or self.timing  # (legs at any layer, as the columns grant them: Airspace.any_layer)
+        return Airspace(layers, t.cruise_speed_mps, t.vertical_speed_mps, self.margin_s, 0.0, True)
 
     def _tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
@@ -492,20 +505,9 @@ class TableClearance:
         return Grant(uav, w.site, layer_m=decision.plan.layer_m)
 
     def _guarded(self, uav: str) -> Table:
-        """The table ``uav``'s flight is planned in: the other UAVs' windows a margin longer, so that one of them
-        running late can be extended (:meth:`_keep_up`) without a clash."""
-        m, now = self.margin_s, self.now_s
-        # a UAV stopped in its plan (it turned back and waits for its new flight) may stay there: open-ended
+        """The table ``uav``'s flight is planned in (:func:`~masonry.mission.reserved_parts.guarded`)."""
         stopped = {n for n, o in self._uavs.items() if o.plan is not None and o.request is not None}
-        return Table(
-            tuple(
-                r
-                if r.uav == uav or r.open_ended
-                else r.until(math.inf if r.uav in stopped and r.t0_s <= now else r.t1_s + m)
-                for r in self.table.reservations
-            ),
-            self.table.separation,
-        )
+        return guarded(self.table, uav, self.now_s, self.guard_s, stopped)
 
     def _hop(self, uav: str, u: _Uav, w: FlightRequest) -> Request:
         """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""

@@ -46,6 +46,22 @@ def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]
     return Table((*out.reservations, *add), out.separation)
 
 
+def guarded(table: Table, uav: str, now_s: float, guard_s: float, stopped: Iterable[str]) -> Table:
+    """The table ``uav``'s flight is planned in: the other UAVs' windows ``guard_s`` longer, so that one of them
+    running late can be extended without a clash; a UAV in ``stopped`` (it turned back and waits for its new
+    flight) may stay where it stopped: its windows under way are open-ended."""
+    stopped = set(stopped)
+    return Table(
+        tuple(
+            r
+            if r.uav == uav or r.open_ended
+            else r.until(math.inf if r.uav in stopped and r.t0_s <= now_s else r.t1_s + guard_s)
+            for r in table.reservations
+        ),
+        table.separation,
+    )
+
+
 def leg_index(legs: Sequence[Reservation], p: Vec3 | None) -> int | None:
     """The index of the first leg of ``legs`` (in plan order) ``p`` is in (within ``ON_LEG_M``), or None: the
     legs before it are behind the UAV (it flies them in order; a short hop's descent may hold its start too)."""
@@ -67,6 +83,18 @@ def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int
         near = {out[o] for o in out if math.hypot(homes[o][0] - h[0], homes[o][1] - h[1]) < separation_m}
         out[uav] = next(k for k in range(len(homes) + 1) if k not in near)
     return out
+
+
+def park_spots(
+    home: Vec3, base_m: float, max_layers: int, spacing_m: float, levels: Mapping[str, int], uav: str
+) -> list[Vec3]:
+    """``uav``'s parking spots over its ``home``, best first: at its level over every transit layer however high
+    the wall's rise takes them (``base_m``: the finished wall's), then one tier of levels higher. The flight to a
+    spot flies at its altitude: where another UAV's spot at that level is in its way (held for good), the higher
+    tier, whose column down over the pad passes only the spots of its pad-neighbours, gets it there."""
+    tiers = (0, 1 + max(levels.values(), default=0))
+    zs = [base_m + (max_layers + levels.get(uav, 0) + t) * spacing_m for t in tiers]
+    return [(home[0], home[1], z) for z in zs]
 
 
 def park_plan(
@@ -168,9 +196,11 @@ __all__ = [
     "end_flight",
     "extend_or_force",
     "forced",
+    "guarded",
     "leg_index",
     "park_levels",
     "park_plan",
+    "park_spots",
     "silent_way",
     "to_park",
 ]

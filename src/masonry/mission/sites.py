@@ -59,6 +59,10 @@ class SiteGate(Protocol):
         waits for them must not hold over them, or their UAVs would wait for it in turn."""
         ...
 
+    def left(self, uav: str, now_s: float) -> bool:
+        """``uav`` moves on from its site (it asked for another one): its visit ends (True if one did)."""
+        ...
+
 
 def enter_ungoverned(gate: SiteGate | None, uav: str, site_m: Vec3, now_s: float) -> bool:
     """A flight with no airspace rules (separation off) goes unless ``gate`` holds it back; True: it goes (and the

@@ -88,6 +88,9 @@ class Airspace:
         margin_s: added to every window (how late a UAV may be before its windows are extended).
         horizon_s: a plan starting later than now + this is not granted: the UAV waits where it is and asks again
             (the rolling horizon).
+        any_layer: legs may also fly below the start, the work's top or the stay (the UAV climbs or descends to
+            the layer where it is, and the work's column covers the rest, as the column airspace grants them);
+            False: only layers over all three.
     """
 
     layers_m: tuple[float, ...]
@@ -95,6 +98,7 @@ class Airspace:
     vertical_mps: float = DEFAULT_TIMING.vertical_speed_mps
     margin_s: float = DEFAULT_MARGIN_S
     horizon_s: float = 60.0
+    any_layer: bool = False
 
     @classmethod
     def from_timing(
@@ -104,6 +108,7 @@ class Airspace:
         *,
         margin_s: float = DEFAULT_MARGIN_S,
         horizon_s: float = 60.0,
+        any_layer: bool = False,
     ) -> Airspace:
         """The airspace of UAVs that fly ``timing`` (a ``UavConfig.timing()``): its cruise and vertical speeds."""
         return cls(
@@ -112,6 +117,7 @@ class Airspace:
             timing.vertical_speed_mps,
             margin_s,
             horizon_s,
+            any_layer,
         )
 
     def __post_init__(self) -> None:
@@ -203,6 +209,14 @@ def _parts(request: Request, layer_m: float, air: Airspace) -> list[_Part]:
     return [*parts, *home, (request.stay.volume(), "stay", "", end, math.inf)]
 
 
+def _floor_m(request: Request, airspace: Airspace) -> float:
+    """The lowest layer ``request``'s legs may fly at (:attr:`Airspace.any_layer`)."""
+    if airspace.any_layer:
+        return -math.inf
+    w, s = request.work, request.stay
+    return max(request.start.z_m, w.z_m if w is not None else 0.0, s.z_m if s is not None else 0.0)
+
+
 def earliest_start(
     table: Table, uav: str, parts: Sequence[tuple[Volume, float, float]], from_s: float
 ) -> tuple[float, tuple[Reservation, ...]]:
@@ -237,12 +251,11 @@ def plan_flight(table: Table, request: Request, from_s: float, airspace: Airspac
     """The flight of ``request`` starting at the earliest time ``>= from_s`` it fits, at the lowest layer of the
     earliest start; None if no layer ever fits (an open-ended reservation of another UAV is in its way).
 
-    Layers below the start, the work or the stay are skipped. The UAV's own reservations are not in its way (it
+    Layers below the start, the work or the stay are skipped (unless :attr:`Airspace.any_layer`). The UAV's own reservations are not in its way (it
     leaves its stay when the flight starts).
     """
     best: tuple[float, float, list[_Part]] | None = None
-    w, s = request.work, request.stay
-    floor = max(request.start.z_m, w.z_m if w is not None else 0.0, s.z_m if s is not None else 0.0)
+    floor = _floor_m(request, airspace)
     for layer in airspace.layers_m:
         if layer < floor:
             continue
@@ -270,8 +283,7 @@ def blockers(
 ) -> tuple[Reservation, ...]:
     """The other UAVs' reservations in the way of the request's flight at ``from_s`` on its lowest usable layer
     (``standing``: instead, the open-ended ones in its way at any time)."""
-    w, s = request.work, request.stay
-    floor = max(request.start.z_m, w.z_m if w is not None else 0.0, s.z_m if s is not None else 0.0)
+    floor = _floor_m(request, airspace)
     layers = [z for z in airspace.layers_m if z >= floor] or [airspace.layers_m[-1]]
     parts = [(v, a, b) for v, _p, _t, a, b in _parts(request, layers[0], airspace)]
     if not standing:
