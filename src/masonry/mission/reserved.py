@@ -579,12 +579,10 @@ class TableClearance:
         return self.base_m if self.base_m is not None else 0.0
 
     def _pad_volume(self, uav: str) -> Volume:
-        home = self._homes[uav]
-        return pad((home[0], home[1]))
+        return pad(self._homes[uav][:2])
 
     def _pad_column(self, uav: str) -> Volume:
-        home = self._homes[uav]
-        return column((home[0], home[1]), 0.0, self._home_top_m())
+        return column(self._homes[uav][:2], 0.0, self._home_top_m())
 
     def _on_pad(self, uav: str, position_m: Vec3, max_z_m: float) -> bool:
         home = self._homes.get(uav)
