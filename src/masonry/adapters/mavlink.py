@@ -336,11 +336,13 @@ class MavlinkFlightController(EstimateLink):
                     self._takeoff_target_m = None
                     self.takeoff_problem = climb_monitor.reason
                     self._climb = None
+                    self.velocity_loop_engaged = True  # airborne: acceleration setpoints, if ours (issue 29)
             else:
                 reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
                 if reached or self._monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
                     with self._lock:
                         self._takeoff_target_m = None
+                        self.velocity_loop_engaged = True
                         if not reached:
                             self.takeoff_problem = (
                                 f"take-off at {world_alt:.2f} m of {takeoff_target:.2f} m after "
@@ -460,6 +462,7 @@ class MavlinkFlightController(EstimateLink):
             self._state.armed = False
             self._streaming = False
             self._setpoint = None
+            self.velocity_loop_engaged = False
 
     def takeoff(self, altitude_m: float) -> None:
         """Climb ``altitude_m`` above where the UAV stands (the port's convention); setpoints wait until then.
@@ -483,6 +486,7 @@ class MavlinkFlightController(EstimateLink):
             self._setpoint = None
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
+            self.velocity_loop_engaged = False
             self._takeoff_started_s = self._monotonic()
             self.takeoff_problem = None
             self._climb = (
@@ -503,6 +507,7 @@ class MavlinkFlightController(EstimateLink):
             self._setpoint = None
             self._takeoff_target_m = None
             self._climb = None
+            self.velocity_loop_engaged = False
         if self.autopilot == "ardupilot":
             self.set_mode("LAND")
         else:
@@ -556,7 +561,12 @@ class MavlinkFlightController(EstimateLink):
             position = (
                 self.frame.position_to_world(p_ned) if st.position_ned is not None else self.frame.offset_m
             )
-            velocity = self.frame.velocity_to_world(st.velocity_ned)
+            loop = (
+                self.velocity_loop if self.velocity_loop_engaged else None
+            )  # ours: the velocity it closes on
+            velocity = self.frame.velocity_to_world(
+                loop.velocity_mps if loop is not None else st.velocity_ned
+            )
             attitude = self.frame.attitude_to_world(*st.attitude)
             if st.landed_state is not None and st.landed_state != 0:
                 # disarmed after LANDING is down even if the next EXTENDED_SYS_STATE has not come yet; disarmed

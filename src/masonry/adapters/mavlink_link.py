@@ -45,11 +45,14 @@ from masonry.adapters.mavlink_protocol import (
     MSG_LOCAL_POSITION_NED,
     MSG_SYS_STATUS,
     MSG_WIND,
+    TYPE_MASK_ACCELERATION_YAW_RATE,
     TYPE_MASK_VELOCITY_YAW_RATE,
+    VELOCITY_LOOP_STALE_S,
     Autopilot,
 )
 from masonry.adapters.pose_source import PoseSource
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
+from masonry.motion.velocity_loop import VelocityLoop
 from masonry.ports import Vec3
 
 # Re-exported: callers import these from here (the clock, the counters and the key reader live in link_values).
@@ -173,6 +176,11 @@ class MavlinkLink:
         self._acks = threading.Condition(self._lock)
         self._ack_log: list[tuple[float, int, int]] = []  # (monotonic_s, command, result)
         self._state = _State(status_texts=[])
+        #: close the velocity loop here, on the reported position, sending acceleration setpoints while
+        #: :attr:`velocity_loop_engaged` (issue 29: PX4's loop closes on EKF2's velocity); None: on PX4 only
+        self.own_velocity_loop: bool | None = None
+        self.velocity_loop: VelocityLoop | None = None
+        self.velocity_loop_engaged = False
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._listeners: list[tuple[frozenset[str], queue.Queue[Any]]] = []
@@ -307,6 +315,8 @@ class MavlinkLink:
                 self.autopilot = "px4" if msg.autopilot == MAV_AUTOPILOT_PX4 else "ardupilot"
             else:
                 self.autopilot = self.autopilot_setting
+            own = self.own_velocity_loop
+            self.velocity_loop = VelocityLoop() if (self.autopilot == "px4" if own is None else own) else None
             self._handle(msg, self._monotonic())
             return
         hint = " (is the signing key the same on both ends?)" if self.signing_key is not None else ""
@@ -389,6 +399,8 @@ class MavlinkLink:
                 st.position_ned = (msg.x, msg.y, msg.z)
                 st.velocity_ned = (msg.vx, msg.vy, msg.vz)
                 st.position_time_s = now
+                if self.velocity_loop is not None:
+                    self.velocity_loop.observe(msg.time_boot_ms / 1000.0, st.position_ned)
                 if not st.armed:
                     st.ground_heights.append(-float(msg.z))
                 self.clock.observe(msg.time_boot_ms / 1000.0, now)
@@ -448,16 +460,23 @@ class MavlinkLink:
         """The sender's hook for ``pose_source`` (the flight controller forwards it in the autopilot's frame)."""
 
     def _send_position_target(self, v_ned: Vec3, yaw_rate_ned: float) -> None:
+        mask, v, a = TYPE_MASK_VELOCITY_YAW_RATE, v_ned, (0.0, 0.0, 0.0)
+        with self._lock:  # engaged: our loop, while the position it closes on is fresh (else the autopilot's)
+            loop = self.velocity_loop if self.velocity_loop_engaged else None
+            if self.velocity_loop is not None and loop is None:
+                self.velocity_loop.release()
+            if loop is not None and self._monotonic() - self._state.position_time_s <= VELOCITY_LOOP_STALE_S:
+                mask, v, a = TYPE_MASK_ACCELERATION_YAW_RATE, (0.0, 0.0, 0.0), loop.acceleration(v_ned)
         with self._send_lock:
             self._conn.mav.set_position_target_local_ned_send(
                 int(self._monotonic() * 1000) & 0xFFFFFFFF,
                 self.target_system,
                 self.target_component,
                 MAV_FRAME_LOCAL_NED,
-                TYPE_MASK_VELOCITY_YAW_RATE,
+                mask,
                 0.0, 0.0, 0.0,
-                float(v_ned[0]), float(v_ned[1]), float(v_ned[2]),
-                0.0, 0.0, 0.0,
+                float(v[0]), float(v[1]), float(v[2]),
+                float(a[0]), float(a[1]), float(a[2]),
                 0.0, float(yaw_rate_ned),
             )  # fmt: skip
         self.setpoints_sent += 1

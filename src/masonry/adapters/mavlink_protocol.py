@@ -47,6 +47,11 @@ MAV_SEVERITY_WARNING = 4
 # SET_POSITION_TARGET_LOCAL_NED type mask: a set bit means "ignore this field". Velocity + yaw rate only:
 # ignore x, y, z (1|2|4), ax, ay, az (64|128|256) and yaw (1024); keep vx, vy, vz (8|16|32) and yaw rate (2048).
 TYPE_MASK_VELOCITY_YAW_RATE = 1 | 2 | 4 | 64 | 128 | 256 | 1024
+# Acceleration + yaw rate (issue 29: masonry's own velocity loop, masonry.motion.velocity_loop): ignore x, y, z,
+# vx, vy, vz (8|16|32) and yaw; PX4 then leaves its position and velocity loops out and tilts for the acceleration.
+TYPE_MASK_ACCELERATION_YAW_RATE = 1 | 2 | 4 | 8 | 16 | 32 | 1024
+# Our velocity loop falls back to the autopilot's when the position it closes on is older than this (s).
+VELOCITY_LOOP_STALE_S = 0.5
 
 # EKF_STATUS_REPORT (ArduPilot) / ESTIMATOR_STATUS (PX4) flags: what each autopilot's bits mean, and which make
 # a local position usable for flight, is :mod:`masonry.adapters.estimator_status` (issue 20: PX4's EKF2 sets

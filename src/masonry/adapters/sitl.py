@@ -76,6 +76,7 @@ from masonry.adapters.sitl_config import (
     MAV_STATE_ACTIVE,
     MAV_STATE_STANDBY,
     MAV_TYPE_QUADROTOR,
+    VELOCITY_IGNORED,
     VELOCITY_ONLY_IGNORED,
     SitlConfig,
     free_udp_port,
@@ -168,6 +169,9 @@ class MavlinkSitl:
         self.vision_received = 0
         self.last_vision_m: Vec3 | None = None  # world ENU position of the last VISION_POSITION_ESTIMATE
         self.setpoints_received = 0
+        self.acceleration_targets = (
+            0  # acceleration-only targets (masonry's own velocity loop on PX4, issue 29)
+        )
         self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
         self.land_requests = 0  # LAND asked by the ground station (MAV_CMD_NAV_LAND or a mode change)
@@ -486,8 +490,18 @@ class MavlinkSitl:
         ):
             return  # position targets and other frames are not modelled
         self._last_setpoint_wall_s = time.monotonic()
-        v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
         vehicle = self.vehicle
+        if (
+            msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED
+        ):  # acceleration (PX4, issue 29): the velocity that
+            a = self.frame.velocity_to_world(
+                (msg.afx, msg.afy, msg.afz)
+            )  # reaches it through the model's lag
+            tau_s, v_now = vehicle.config.velocity_tau_s, vehicle.velocity_mps
+            v_world = (v_now[0] + a[0] * tau_s, v_now[1] + a[1] * tau_s, v_now[2] + a[2] * tau_s)
+            self.acceleration_targets += 1
+        else:
+            v_world = self.frame.velocity_to_world((msg.vx, msg.vy, msg.vz))
         if self.px4 and self.mode == "OFFBOARD" and vehicle.armed and vehicle.on_ground and v_world[2] > 0.05:
             vehicle.takeoff(0.2)  # PX4 lifts off on an upward offboard velocity; setpoints rule once airborne
         if self.mode != self._offboard_mode or not vehicle.armed or vehicle.on_ground:

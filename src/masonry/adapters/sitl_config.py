@@ -21,6 +21,7 @@ MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
 MAV_LANDED_STATE_ON_GROUND, MAV_LANDED_STATE_IN_AIR = 1, 2
 MAV_LANDED_STATE_TAKEOFF, MAV_LANDED_STATE_LANDING = 3, 4
 DISARM_MAGIC = 21196  # ArduPilot: param2 of a forced disarm
+VELOCITY_IGNORED = 8 | 16 | 32  # vx, vy, vz ignored: an acceleration target (masonry's own velocity loop)
 VELOCITY_ONLY_IGNORED = 1 | 2 | 4  # x, y, z ignored: the only targets this SITL flies (velocity control)
 
 #: Default stream rates (Hz) before a ground station asks for others (ArduPilot's SRx_ defaults are a few Hz).

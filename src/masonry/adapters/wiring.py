@@ -71,15 +71,20 @@ class HardwareConfig:
     control: dict[str, Any] = field(default_factory=dict)
     pid: dict[str, Any] = field(default_factory=dict)
 
-    def uav_settings(self, default_preset: str = "ideal") -> dict[str, Any]:
+    def uav_settings(
+        self, default_preset: str = "ideal", *, own_velocity_loop: bool = False
+    ) -> dict[str, Any]:
         """The :class:`~masonry.fsm.UavConfig` overrides this configuration asks for (both modes of ``fly``);
-        ``default_preset`` when it names none (``fly --sim --vehicle arducopter`` flies the arducopter tuning)."""
+        ``default_preset`` when it names none (``fly --sim --vehicle arducopter`` flies the arducopter tuning);
+        ``own_velocity_loop``: the flight controller flies masonry's velocity loop (a real PX4, issue 29)."""
         from masonry.fsm.tuning import uav_settings
 
         control = dict(self.control)
         if self.velocity_lag_s is not None:
             control.setdefault("velocity_lag_s", self.velocity_lag_s)
-        return uav_settings(self.control_preset or default_preset, control, self.pid)
+        return uav_settings(
+            self.control_preset or default_preset, control, self.pid, own_velocity_loop=own_velocity_loop
+        )
 
     def origin_for(self, home_m: tuple[float, float, float]) -> tuple[float, float, float]:
         """Where the autopilot's local origin is in the world for a UAV whose blueprint home is ``home_m``."""

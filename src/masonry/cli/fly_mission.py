@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.fly_adapters import _describe, select_adapters
-from masonry.cli.fly_tuning import tuning_preset
+from masonry.cli.fly_tuning import fly_settings
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
@@ -88,9 +88,7 @@ def _fly_mission(
             adapters=adapters,
             key=key,
             zenoh_config=zenoh_config,
-            uav_settings=hardware.uav_settings(tuning_preset(vehicle, adapters))
-            if hardware is not None
-            else None,
+            uav_settings=fly_settings(hardware, vehicle, adapters) if hardware is not None else None,
             max_wind_mps=hardware.max_wind_mps if hardware is not None else None,
             events_sink=mission_log,
             vehicle=vehicle,

@@ -9,17 +9,18 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from masonry.cli.fly_adapters import _a, _describe, _pick_uav, _prerequisites, select_adapters
-from masonry.cli.fly_tuning import tuning_preset
+from masonry.cli.fly_tuning import fly_settings
 from masonry.errors import InputError
 from masonry.placement_check import wall_tops_m
 
 if TYPE_CHECKING:
     from masonry.adapters.wiring import HardwareConfig
+    from masonry.blueprint import Blueprint, UavSpec
 
 
 def _identify(
-    bp: Any,
-    spec: Any,
+    bp: Blueprint,
+    spec: UavSpec,
     *,
     sim: bool,
     seed: int,
@@ -41,7 +42,7 @@ def _identify(
     config = UavConfig.from_spec(
         spec,
         cruise_altitude_m=bp.cruise_altitude_m,
-        **hardware.uav_settings(tuning_preset(vehicle, adapters)),
+        **fly_settings(hardware, vehicle, adapters),
     )
     try:
         adapters.fc.connect()
@@ -96,7 +97,7 @@ def _fly_one_task(
         markers=bp.markers,
         wall=wall_tops_m(bp.bricks),
         fence=bp.site,
-        **hardware.uav_settings(tuning_preset(vehicle, adapters)),
+        **fly_settings(hardware, vehicle, adapters),
     )
     try:
         run = fly_task(

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from masonry.fsm.tuning_choice import AUTOPILOT_PRESETS, TuningChoice, choose_tuning
 
@@ -17,6 +17,14 @@ def tuning_preset(vehicle: str, adapters: UavPorts | None) -> str:
     (``arducopter`` on ArduPilot, issue 29; ``px4`` on PX4, issue 20), else the simulated vehicle's (``--vehicle``)."""
     fc = adapters.fc if adapters is not None else None
     return AUTOPILOT_PRESETS.get(str(getattr(fc, "autopilot", None)), vehicle)
+
+
+def fly_settings(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None) -> dict[str, Any]:
+    """The :class:`~masonry.fsm.UavConfig` overrides a UAV flies: :func:`tuning_preset`'s, and the gains of
+    masonry's own velocity loop where its flight controller flies it (a real PX4, issue 29)."""
+    fc = adapters.fc if adapters is not None else None
+    own = getattr(fc, "velocity_loop", None) is not None
+    return hardware.uav_settings(tuning_preset(vehicle, adapters), own_velocity_loop=own)
 
 
 def tuning_choice(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None) -> TuningChoice:

@@ -82,6 +82,13 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
     },
 }
 
+#: The position gains over any preset's where masonry closes the velocity loop itself (acceleration setpoints,
+#: masonry.motion.velocity_loop: a real PX4, issue 29): the loop's kv 4 /s times kp 3 /s swung the alignment
+#: behind EKF2's 0.15-0.4 s of position lag (0.40 m/s rms); kp 1.5, ki 0.5 placed the brick (docs/hardware.md).
+OWN_VELOCITY_LOOP_PID: Mapping[str, Mapping[str, float]] = {
+    "xy": {"kp": 1.5, "ki": 0.5, "output_limit": 1.5, "integral_limit": 0.5},
+}
+
 _AXES = ("x", "y", "z", "yaw")
 
 
@@ -91,8 +98,12 @@ def uav_settings(
     pid: Mapping[str, Any] | None = None,
     *,
     source: str = "uav.yaml",
+    own_velocity_loop: bool = False,
 ) -> dict[str, Any]:
     """The :class:`UavConfig` overrides of ``preset``, then ``control``, then ``pid`` (later ones win).
+
+    ``own_velocity_loop``: masonry closes the velocity loop itself (:data:`OWN_VELOCITY_LOOP_PID` over the preset's
+    gains, under ``pid``).
 
     Raises:
         InputError: an unknown preset, field, axis or gain, or a value that is not a number (named, with
@@ -103,6 +114,8 @@ def uav_settings(
     base = dict(PRESETS[preset])
     preset_pid = base.pop("pid", {})
     out = _control_fields({**base, **dict(control or {})}, source)
+    if own_velocity_loop:
+        preset_pid = _merge_pid(dict(preset_pid), dict(OWN_VELOCITY_LOOP_PID), source)
     gains = _merge_pid(dict(preset_pid), dict(pid or {}), source)
     if gains:
         out["pid_gains"] = pid_gains(gains, source)

@@ -1,0 +1,78 @@
+"""On PX4 masonry closes the velocity loop itself once airborne (issue 29): acceleration setpoints, on loopback.
+
+The real PX4's velocity loop closes on EKF2's velocity, up to 0.5 m/s off what its position does; the adapter sends
+acceleration setpoints from :mod:`masonry.motion.velocity_loop` instead (docs/hardware.md, "Against the real PX4
+v1.16 SITL"). ``masonry sitl --autopilot px4`` flies them through its model's velocity lag; ArduPilot keeps its own.
+"""
+
+from __future__ import annotations
+
+from masonry.adapters.sitl import SitlConfig
+from masonry.adapters.wiring import HardwareConfig
+from masonry.cli.fly_tuning import fly_settings
+from masonry.fsm.tuning import OWN_VELOCITY_LOOP_PID, uav_settings
+from masonry.ports import UavPorts
+from test_sitl import flight, take_off
+from waiting import wait_until
+
+SPEED = 2.0  # the SITL's speed-up: a rate a loaded two-core machine sustains (docs/performance/autopilots.md)
+
+
+def _ports(fc) -> UavPorts:
+    return UavPorts(fc=fc, gripper=None, sprayer=None, camera=None, clock=None)  # type: ignore[arg-type]
+
+
+def test_on_px4_the_adapter_flies_acceleration_setpoints_once_airborne() -> None:
+    with flight(SitlConfig(autopilot="px4"), time_scale=SPEED) as (sitl, fc):
+        fc.connect()
+        assert fc.velocity_loop is not None and not fc.velocity_loop_engaged
+        take_off(
+            fc, 1.0
+        )  # the climb itself: velocity setpoints (a zero acceleration on the ground would lift)
+        wait_until(lambda: fc.velocity_loop_engaged, 30.0, "the end of the take-off")
+
+        def moving() -> bool:
+            fc.send_velocity((0.4, -0.2, 0.0), 0.0)
+            v = fc.telemetry().velocity_mps
+            return abs(v[0] - 0.4) < 0.05 and abs(v[1] + 0.2) < 0.05
+
+        wait_until(moving, 30.0, "the commanded velocity through the acceleration setpoints")
+        assert sitl.acceleration_targets > 10
+        # the telemetry's velocity is the loop's own (consistent with the reported position), and the vehicle's
+        wait_until(
+            lambda: (
+                max(abs(a - b) for a, b in zip(fc.telemetry().velocity_mps, sitl.vehicle.velocity_mps)) < 0.1
+            ),
+            10.0,
+            "the telemetry's velocity on the vehicle's",
+        )
+        fc.land()
+        assert not fc.velocity_loop_engaged
+
+
+def test_on_ardupilot_and_when_switched_off_the_autopilot_keeps_its_velocity_loop() -> None:
+    with flight(time_scale=SPEED) as (sitl, fc):
+        fc.connect()
+        assert fc.velocity_loop is None
+        take_off(fc, 0.8)
+        fc.send_velocity((0.2, 0.0, 0.0), 0.0)
+        wait_until(lambda: sitl.setpoints_received > 5, 10.0, "velocity setpoints")
+        assert sitl.acceleration_targets == 0
+        assert fly_settings(HardwareConfig(), "ideal", _ports(fc)) == uav_settings("arducopter")
+    with flight(SitlConfig(autopilot="px4"), time_scale=SPEED) as (sitl, fc):
+        fc.own_velocity_loop = False
+        fc.connect()
+        assert fc.velocity_loop is None
+
+
+def test_its_gains_come_with_the_px4_tuning_and_a_users_pid_still_wins() -> None:
+    with flight(SitlConfig(autopilot="px4"), time_scale=SPEED) as (_, fc):
+        fc.connect()
+        ours = fly_settings(HardwareConfig(), "ideal", _ports(fc))
+        theirs = fly_settings(HardwareConfig(pid={"x": {"kp": 2.5}}), "ideal", _ports(fc))
+    assert ours == uav_settings("px4", own_velocity_loop=True)
+    assert ours["pid_gains"].x.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"] == ours["pid_gains"].y.kp
+    assert ours["pid_gains"].x.ki == OWN_VELOCITY_LOOP_PID["xy"]["ki"]
+    assert theirs["pid_gains"].x.kp == 2.5 and theirs["pid_gains"].y.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"]
+    # the px4 preset itself is unchanged: the simulated px4 vehicle (no MAVLink) flies what it flew
+    assert "pid_gains" not in uav_settings("px4")
