@@ -36,6 +36,7 @@ from masonry.mission.events import EventSink, MissionEvent, volume_list
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import LOST_REASON
 from masonry.mission.journal_state import journaled_phases as _journaled_phases  # (its home before)
+from masonry.mission.liveness import Lapse, LivenessTracker, Timeouts, way_home_s
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
@@ -53,7 +54,7 @@ from masonry.mission.messages import (
     encode,
 )
 from masonry.mission.operator import Operator
-from masonry.mission.records import LANDED_STATE, Attempt, UavLink, completion_fields
+from masonry.mission.records import LANDED_STATE, Attempt, Liveness, UavLink, completion_fields
 from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.spares import SpareBook
@@ -65,13 +66,7 @@ from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import BrickTask, Plan, Task
-from masonry.ports import (
-    CARRYING_STATES,
-    FINISHING_STATES,
-    LAST_RESORT_S,
-    RECALL_REASON,
-    TASK_DROPPED_REASON,
-)
+from masonry.ports import CARRYING_STATES, RECALL_REASON, TASK_DROPPED_REASON
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 log = logging.getLogger(__name__)
@@ -80,13 +75,6 @@ Vec3 = tuple[float, float, float]
 
 #: The state a UAV's machine reports when it is out of service for the rest of the mission.
 OUT_OF_SERVICE_STATE = "halted"
-
-#: Added to the time a silent UAV's way home takes before mission control frees it (never heard again).
-_WAY_HOME_MARGIN_S = 30.0
-
-#: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
-#: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
-MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
 
 
 @dataclass
@@ -230,6 +218,8 @@ class MissionControl:
         #: the adhesive's open and cure times (None: none; :mod:`masonry.mission.glue`)
         self.glue = glue_gate(plan, self.dispatcher, self.sites, timing or DEFAULT_TIMING)
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
+        #: each UAV's :class:`~masonry.mission.records.Liveness` and the timeouts that move it
+        self.liveness = LivenessTracker(self.uavs, Timeouts(heartbeat_timeout_s, self.rejoin_timeout_s))
         self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.history: list[Attempt] = []
@@ -319,8 +309,8 @@ class MissionControl:
         for name in state.lost_uavs:
             link = self.uavs.get(name)
             if link is not None and not link.lost:
-                link.lost = True
-                link.status = "lost"
+                self.liveness.lose(link, state.last_time_s)
+                link.lost_at_s = None  # (not within this run's rejoin wait)
                 self.dispatcher.remove_uav(name)
         for run in getattr(state, "running", ()):
             self._adopt(run)
@@ -366,23 +356,13 @@ class MissionControl:
         is not over yet (``rejoin_timeout_s``): it may come back (a radio out of range, a handler process restarted)
         and rejoin.
         """
-        blocked = self.blocked and not self._awaiting_rejoin()
+        blocked = self.blocked and not self.liveness.awaiting_rejoin(self.now_s)
         return self.finished or blocked or self.stall is not None or self.operator.aborted
-
-    def _awaiting_rejoin(self) -> bool:
-        """A role has no UAV left, and one of its UAVs was declared lost for silence within ``rejoin_timeout_s``."""
-        live = {link.spec.role for link in self.uavs.values() if not link.lost}
-        return any(
-            link.status == "lost"
-            and link.spec.role not in live
-            and link.lost_at_s is not None
-            and self.now_s - link.lost_at_s <= self.rejoin_timeout_s
-            for link in self.uavs.values()
-        )
 
     @property
     def online(self) -> list[str]:
-        return [n for n, u in self.uavs.items() if u.last_heard_s is not None and not u.lost]
+        """The UAVs heard from and still in the mission."""
+        return self.liveness.online()
 
     # -- the tick --------------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:
@@ -425,7 +405,7 @@ class MissionControl:
             )
 
     def _maybe_start(self, now_s: float) -> None:
-        missing = [n for n, u in self.uavs.items() if u.last_heard_s is None and not u.lost]
+        missing = self.liveness.never_heard()
         assert self._first_step_s is not None
         if missing and now_s - self._first_step_s < self.startup_timeout_s:
             return
@@ -453,7 +433,7 @@ class MissionControl:
         link = self.uavs[msg.sender]
         if self._screened(link, msg, now_s):
             return
-        link.last_heard_s = now_s
+        self.liveness.heard(link, now_s)
         if isinstance(msg, ClearanceRequest):
             self._on_clearance_request(msg, now_s)
             return
@@ -706,7 +686,7 @@ class MissionControl:
         no task and is in service (a radio that came back after its task was given away, a handler restarted),
         holding its pad, or the column where it hovers, in the airspace (``ColumnClearance.rejoined``);
         anything else it sends stays ignored (a late result of a task that went to another UAV)."""
-        if link.status != "lost" or not isinstance(msg, Heartbeat) or msg.task_id is not None:
+        if link.liveness is not Liveness.LOST or not isinstance(msg, Heartbeat) or msg.task_id is not None:
             return False
         if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
             return False
@@ -720,38 +700,25 @@ class MissionControl:
         if not self.dispatcher.readmit_uav(link.spec.name):
             return False
         log.warning("UAV %s heard again (%s, no task): back in the mission", link.spec.name, msg.state or "-")
-        link.lost = False
-        link.lost_at_s = None
-        link.status = "ok"
-        link.taking_off = False
+        self.liveness.rejoin(link)
         self.events.rejoined += 1
         self._emit_uav(now_s, link)  # its status is "ok" again (a log, a live view)
         self._dirty = True
         return True
 
     def _check_heartbeats(self, now_s: float) -> None:
-        for name, link in self.uavs.items():
-            if link.airspace_until_s is not None and (not link.lost or now_s >= link.airspace_until_s):
-                if link.lost:
-                    self.columns.release(name)  # not heard again: it fell, or landed where it was
-                link.airspace_until_s = None
-            if link.lost or link.last_heard_s is None:
-                continue
-            timeout_s = self.heartbeat_timeout_s
-            if link.state in MAY_FINISH_STATES and self.dispatcher.task_of(name) is not None:
-                # its work is (or was about to be) on the wall, and it finishes it even cut off: its completion
-                # may come late, and a conflicting task given out now would work beside it
-                timeout_s += self.rejoin_timeout_s
-            if now_s - link.last_heard_s > timeout_s:
-                log.warning("UAV %s silent for %.1f s: lost", name, now_s - link.last_heard_s)
+        for name, lapse in self.liveness.sweep(now_s, lambda n: self.dispatcher.task_of(n) is not None):
+            if lapse is Lapse.AIRSPACE_EXPIRED:
+                self.columns.release(name)  # not heard again: it fell, or landed where it was
+            else:
+                quiet_s = now_s - (self.uavs[name].last_heard_s or now_s)
+                log.warning("UAV %s silent for %.1f s: lost", name, quiet_s)
                 self._lose(name, now_s)
 
     def _lose(self, name: str, now_s: float, status: str = "lost") -> None:
         """Take a UAV out of the mission (silent, or out of service); its task goes back to the pool."""
         link = self.uavs[name]
-        link.lost = True
-        link.lost_at_s = now_s
-        link.status = status
+        self.liveness.lose(link, now_s, out_of_service=status != "lost")
         task_id = self.dispatcher.task_of(name)
         task = self.spares.task(self._tasks[task_id]) if task_id is not None else None
         # last heard with its brick on the magnet: it may have taken it down with it, or puts it back first
@@ -768,11 +735,7 @@ class MissionControl:
                 way_m = self.columns.silent(
                     name, link.position_m, self.fallback_layers_m.get(name), link.way_via_m
                 )
-                way_s = (
-                    LAST_RESORT_S
-                    + way_m / (self.timing or DEFAULT_TIMING).vertical_speed_mps
-                    + _WAY_HOME_MARGIN_S
-                )
+                way_s = way_home_s(way_m, (self.timing or DEFAULT_TIMING).vertical_speed_mps)
                 link.airspace_until_s = now_s + max(self.rejoin_timeout_s, way_s)
         else:
             self.columns.release(name)  # retired (on the ground) or fell: its column is free
