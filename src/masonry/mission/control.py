@@ -24,18 +24,18 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
 from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, Phase, task_work_altitude_m
-from masonry.mission.as_built import PlacementWatch, journaled_as_built, take_result
-from masonry.mission.events import EventSink, MissionEvent, volume_list
+from masonry.mission.as_built import PlacementWatch, take_result
+from masonry.mission.control_ports import JournalPort, WindGate
+from masonry.mission.events import EventSink, volume_list
 from masonry.mission.glue import glue_gate
-from masonry.mission.journal_state import LOST_REASON
-from masonry.mission.journal_state import journaled_phases as _journaled_phases  # (its home before)
+from masonry.mission.journal_state import journaled_phases as _journaled_phases  # noqa: F401 - its home before
+from masonry.mission.ledger import AttemptLedger
 from masonry.mission.liveness import Lapse, LivenessTracker, Timeouts, way_home_s
 from masonry.mission.messages import (
     MISSION_CONTROL,
@@ -45,51 +45,50 @@ from masonry.mission.messages import (
     ClearanceRequest,
     CommandAnswer,
     Heartbeat,
+    Message,
     MissionEnd,
     OperatorCommand,
     Progress,
     Recall,
     Result,
     decode,
-    encode,
 )
 from masonry.mission.operator import Operator
-from masonry.mission.records import LANDED_STATE, Attempt, Liveness, UavLink, completion_fields
+from masonry.mission.outbox import MissionEvents, Outbox
+from masonry.mission.records import LANDED_STATE, Attempt, Liveness, UavLink
+from masonry.mission.reducer import (
+    OUT_OF_SERVICE_STATE,
+    Step,
+    dropped_reason,
+    late_completion,
+    loss_reason,
+    screen_result,
+    steps_of,
+    way_home_of,
+)
 from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
 from masonry.mission.transport import Transport
 from masonry.mission.wait_causes import WaitWatch
-from masonry.mission.wind_limit import HeardWind, WindLimit
+from masonry.mission.wind_limit import HeardWind
 from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import BrickTask, Plan, Task
-from masonry.ports import CARRYING_STATES, RECALL_REASON, TASK_DROPPED_REASON
+from masonry.ports import CARRYING_STATES, RECALL_REASON
 from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+if TYPE_CHECKING:
+    from masonry.mission.journal_state import JournalState, RunningRecord
+    from masonry.planner.schedule_values import OfflineSchedule
+
+__all__ = ["OUT_OF_SERVICE_STATE", "Attempt", "MissionControl", "MissionEvents", "UavLink"]
 
 log = logging.getLogger(__name__)
 
 Vec3 = tuple[float, float, float]
-
-#: The state a UAV's machine reports when it is out of service for the rest of the mission.
-OUT_OF_SERVICE_STATE = "halted"
-
-
-@dataclass
-class MissionEvents:
-    """Counters of what crossed the transport (for the report and the benchmark)."""
-
-    received: int = 0
-    rejected: int = 0
-    sent: int = 0
-    progress: int = 0
-    errors: list[str] = field(default_factory=list)
-    #: results not acted on, by reason: "not-assigned", "wrong-attempt", "too-short"
-    ignored: dict[str, int] = field(default_factory=dict)
-    #: UAVs declared lost and heard again with no task (back in the mission)
-    rejoined: int = 0
 
 
 class MissionControl:
@@ -144,7 +143,7 @@ class MissionControl:
         transport: Transport,
         *,
         policy: str = "critical-path",
-        journal: Any = None,
+        journal: JournalPort | None = None,
         max_attempts: int = 3,
         durations_s: Mapping[str, float] | None = None,
         heartbeat_period_s: float = 1.0,
@@ -161,10 +160,10 @@ class MissionControl:
         timing: TaskTiming | None = None,
         stall_timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S,
         reservation: str = DEFAULT_RESERVATION,
-        schedule: Any = None,
+        schedule: OfflineSchedule | None = None,
         events_sink: EventSink | None = None,
         fence: Site | None = None,
-        wind_limit: WindLimit | None = None,
+        wind_limit: WindGate | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
         airspace: str = "columns",
         placement: PlacementCheck | None = None,
@@ -173,14 +172,13 @@ class MissionControl:
         if len(set(names)) != len(names):
             raise MissionError(f"fleet names must be unique, got {names}")
         self.plan = plan
-        self.sink = events_sink
         #: the wind limit (masonry.mission.wind_limit.WindLimit). None given: the one the UAVs' heartbeats
         #: report (their autopilots' wind and their uav.yaml's max_wind_mps; no UAV grounded until they do)
         self.heard_wind: HeardWind | None = None
         if wind_limit is None:
             self.heard_wind = HeardWind()
             wind_limit = self.heard_wind.limit()
-        self.wind_limit = wind_limit
+        self.wind_limit: WindGate | None = wind_limit
         #: the operator's commands (pause, recall, abort, limits: :mod:`masonry.mission.operator`)
         self.operator = Operator()
         self.placement = PlacementWatch(placement)
@@ -220,11 +218,11 @@ class MissionControl:
         self.uavs: dict[str, UavLink] = {u.name: UavLink(u) for u in self.fleet}
         #: each UAV's :class:`~masonry.mission.records.Liveness` and the timeouts that move it
         self.liveness = LivenessTracker(self.uavs, Timeouts(heartbeat_timeout_s, self.rejoin_timeout_s))
+        self.events = MissionEvents()
+        self.out = Outbox(transport, events_sink, self.events)  #: what mission control sends and tells
         self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
         self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
-        self.history: list[Attempt] = []
-        self._running: dict[str, Attempt] = {}  # task id -> its running attempt
-        self.events = MissionEvents()
+        self.ledger = AttemptLedger(journal)  #: every attempt, the running ones, their journal lines
         self.started_at_s: float | None = None
         self._first_step_s: float | None = None
         self._last_heartbeat_s: float | None = None
@@ -252,14 +250,13 @@ class MissionControl:
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
         self._watch = StallWatch(stall_timeout_s)
-        self._results = 0  # results acted on (done or failed): progress for the watchdog
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None
         self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         self._raise_layers(t.id for t in plan.tasks if t.done)
 
     # -- resume ----------------------------------------------------------------------------------------
-    def restore(self, state: Any) -> None:
+    def restore(self, state: JournalState) -> None:
         """Continue from a journal's replayed state: done tasks stay done with their times, attempts carry on.
 
         Attempts in progress when the previous run stopped stay with their UAVs (:meth:`_adopt`): what each
@@ -277,51 +274,22 @@ class MissionControl:
         self.dispatcher.restore(list(done), attempts)
         if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
             self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
-        for f in state.failures:
-            self.history.append(
-                Attempt(
-                    f.task_id,
-                    f.uav,
-                    f.attempt,
-                    f.start_s if f.start_s is not None else f.time_s,
-                    f.time_s,
-                    "failed",
-                    f.reason,
-                )
-            )
-        for task_id, rec in done.items():
-            fields = dict(rec.fields)
-            phases = _journaled_phases(fields.get("phases"))
-            self.history.append(
-                Attempt(
-                    task_id=task_id,
-                    uav=rec.uav,
-                    attempt=rec.attempt,
-                    start_s=rec.start_s if rec.start_s is not None else rec.time_s,
-                    end_s=rec.time_s,
-                    status="done",
-                    placement_error_m=fields.get("placement_error_m"),
-                    coverage=fields.get("coverage"),
-                    phases=phases,
-                    as_built=journaled_as_built(fields.get("as_built")),
-                )
-            )
+        self.ledger.restore(state.failures, done)
         for name in state.lost_uavs:
             link = self.uavs.get(name)
             if link is not None and not link.lost:
-                self.liveness.lose(link, state.last_time_s)
-                link.lost_at_s = None  # (not within this run's rejoin wait)
+                link.liveness = Liveness.LOST  # (lost before this run: not awaited to rejoin)
                 self.dispatcher.remove_uav(name)
-        for run in getattr(state, "running", ()):
+        for run in state.running:
             self._adopt(run)
-        self.history.sort(key=lambda a: (a.start_s, a.task_id))
+        self.ledger.sort()
         self.resumed_at_s = state.last_time_s
         self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
         self.waits.restore(state.meta)
         # what the previous run may have built: done tasks, and every task it ever assigned
         self._raise_layers([*done, *attempts, *state.in_progress])
 
-    def _adopt(self, run: Any) -> None:
+    def _adopt(self, run: RunningRecord) -> None:
         """A journaled attempt still running at the stop: in progress on its UAV again (unless the UAV is lost,
         another attempt holds it, or the task cannot run now: then it goes back to the pool as before)."""
         link = self.uavs.get(run.uav)
@@ -332,12 +300,24 @@ class MissionControl:
         except PlanningError as exc:
             log.warning("%s: not kept on %s after the resume: %s", run.task_id, run.uav, exc)
             return
-        att = Attempt(run.task_id, run.uav, run.attempt, run.start_s, adopted=True)
-        self.history.append(att)
-        self._running[run.task_id] = att
+        self.ledger.adopt(run.task_id, run.uav, run.attempt, run.start_s)
         log.info("%s kept on %s (attempt %d) from before the resume", run.task_id, run.uav, run.attempt)
 
     # -- properties ------------------------------------------------------------------------------------
+    @property
+    def history(self) -> list[Attempt]:
+        """Every attempt of the mission, in the order they began (:class:`~masonry.mission.ledger.AttemptLedger`)."""
+        return self.ledger.history
+
+    @property
+    def sink(self) -> EventSink | None:
+        """Who gets every :class:`~masonry.mission.events.MissionEvent` (None: no one)."""
+        return self.out.sink
+
+    @sink.setter
+    def sink(self, sink: EventSink | None) -> None:
+        self.out.sink = sink
+
     @property
     def finished(self) -> bool:
         """Every task is done."""
@@ -352,9 +332,8 @@ class MissionControl:
     def over(self) -> bool:
         """Finished, blocked, stalled or aborted: mission control has sent (or will send) MissionEnd.
 
-        Blocked only for want of a UAV of a role whose last one fell silent less than ``startup_timeout_s`` ago
-        is not over yet (``rejoin_timeout_s``): it may come back (a radio out of range, a handler process restarted)
-        and rejoin.
+        Blocked only for want of a UAV of a role whose last one fell silent less than ``rejoin_timeout_s`` ago
+        is not over yet: it may come back (a radio out of range, a handler process restarted) and rejoin.
         """
         blocked = self.blocked and not self.liveness.awaiting_rejoin(self.now_s)
         return self.finished or blocked or self.stall is not None or self.operator.aborted
@@ -417,6 +396,7 @@ class MissionControl:
         self._emit(now_s, "start", fleet=[n for n, u in self.uavs.items() if not u.lost])
 
     def _handle(self, raw: bytes, now_s: float) -> None:
+        """One message: decoded, screened, then the :func:`~masonry.mission.reducer.steps_of` it asks for."""
         try:
             msg = decode(raw, self.uavs.keys())
         except ProtocolError as exc:
@@ -434,32 +414,25 @@ class MissionControl:
         if self._screened(link, msg, now_s):
             return
         self.liveness.heard(link, now_s)
-        if isinstance(msg, ClearanceRequest):
-            self._on_clearance_request(msg, now_s)
-            return
         if isinstance(msg, Result):
             link.taking_off = False
             if msg.position_m is not None:
                 link.moved_to(msg.position_m)
-            if msg.state == OUT_OF_SERVICE_STATE and msg.result.status == "failed":
-                # the UAV refused or abandoned the task because it is out of service: not the task's fault
+        for step in steps_of(msg):
+            if step is Step.CLEARANCE and isinstance(msg, ClearanceRequest):
+                self._on_clearance_request(msg, now_s)
+            elif step is Step.RESULT and isinstance(msg, Result):
+                self._on_result(msg, now_s)
+            elif step is Step.RETIRE:
                 self._lose(msg.sender, now_s, status="out of service")
-                return
-            self._on_result(msg, now_s)
-            if msg.state == OUT_OF_SERVICE_STATE:
-                self._lose(msg.sender, now_s, status="out of service")
-            return
-        if isinstance(msg, (Heartbeat, Progress)) and msg.state == OUT_OF_SERVICE_STATE:
-            self._lose(msg.sender, now_s, status="out of service")
-            return
-        if isinstance(msg, (Heartbeat, Progress)):
-            if isinstance(msg, Progress):
-                self.events.progress += 1
-            else:
+            elif step is Step.HEARTBEAT and isinstance(msg, Heartbeat):
                 self._on_heartbeat(msg, link, now_s)
-            self._report(link, msg.state, msg.position_m)
-            if self.sink is not None and self.uav_events:
-                self._emit_uav(now_s, link)
+            elif step is Step.PROGRESS:
+                self.events.progress += 1
+            elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
+                self._report(link, msg.state, msg.position_m)
+                if self.sink is not None and self.uav_events:
+                    self._emit_uav(now_s, link)
 
     def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:
         """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
@@ -517,44 +490,21 @@ class MissionControl:
 
     def _on_result(self, msg: Result, now_s: float) -> None:
         r = msg.result
-        if self.dispatcher.in_progress.get(r.task_id) != msg.sender:
-            self._ignore("not-assigned", f"a result for {r.task_id} from {msg.sender}: not its task now")
+        att = self.ledger.running.get(r.task_id)
+        least_s = self.min_durations_s.get(r.task_id)
+        owner = self.dispatcher.in_progress.get(r.task_id)
+        ignored = screen_result(msg, owner, att, least_s, self.min_fraction, now_s)
+        if ignored is not None:
+            self._ignore(ignored.reason, ignored.detail)
             return
-        att = self._running[r.task_id]
-        if msg.attempt != att.attempt:
-            self._ignore(
-                "wrong-attempt",
-                f"a result for {r.task_id} from {msg.sender} for attempt {msg.attempt}: "
-                f"the current one is {att.attempt}",
-            )
-            return
-        least = self.min_durations_s.get(r.task_id)
-        # (not for an attempt kept from before a resume: the clock resumed at the journal's last record, and how
-        # long mission control was down is not known)
-        if (
-            r.status == "done"
-            and least is not None
-            and not att.adopted
-            and now_s - att.start_s < self.min_fraction * least
-        ):
-            self._ignore(
-                "too-short",
-                f"{r.task_id} reported done by {msg.sender} {now_s - att.start_s:.2f} s "
-                f"after its assignment: it takes at least {least:.1f} s",
-            )
-            return
-        del self._running[r.task_id]
-        self._results += 1
-        att.end_s = now_s
-        take_result(att, r)
+        assert att is not None  # (screen_result ignores a result with no running attempt)
         if r.status == "done":
-            att.status = "done"
+            self.ledger.done(att, r, now_s)
             log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
             self.dispatcher.complete(r.task_id)
             if self.glue is not None:
                 self.glue.completed(r.task_id, now_s)
-            if self.journal is not None:
-                self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r))
+            self.ledger.journal_done(now_s, r, msg.sender)
             self._emit(
                 now_s,
                 "completed",
@@ -567,31 +517,26 @@ class MissionControl:
             )
             self.placement.completed(self, r, msg.sender, now_s)
         else:
-            att.status = "failed"
-            att.reason = r.reason or "failed"
+            reason = r.reason or "failed"
+            self.ledger.end(att, now_s, "failed", reason)
+            take_result(att, r)
             log.info(
                 "%s failed on %s (attempt %d, %.1f-%.1f s): %s",
-                r.task_id,
-                msg.sender,
-                att.attempt,
-                att.start_s,
-                now_s,
-                att.reason,
+                *(r.task_id, msg.sender, att.attempt, att.start_s, now_s, reason),
             )
             # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
             # attempt of the task
-            count, give_up = self.spares.failed(r.task_id, att.reason, now_s)  # (its brick gone: a spare)
+            count, give_up = self.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
             self.dispatcher.fail(r.task_id, count=count, give_up=give_up)
-            if self.journal is not None:
-                self.journal.record_failure(now_s, r.task_id, msg.sender, att.reason)
-            self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=att.reason)
+            self.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
+            self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
         self._dirty = True
 
     def _ignore(self, reason: str, detail: str) -> None:
-        self.events.ignored[reason] = self.events.ignored.get(reason, 0) + 1
+        self.out.ignored(reason)
         log.warning("ignoring %s", detail)
 
-    def _screened(self, link: UavLink, msg: Any, now_s: float) -> bool:
+    def _screened(self, link: UavLink, msg: Message, now_s: float) -> bool:
         """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
         (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
         if isinstance(msg, Result) and (self._heard_again(msg) or self._late_result(msg, now_s)):
@@ -603,45 +548,27 @@ class MissionControl:
         heartbeats paused around it, as a slow link or a busy computer makes them): nothing to do, nothing
         suspicious."""
         r = msg.result
-        return r.status == "done" and any(
-            (a.task_id, a.uav, a.attempt, a.status) == (r.task_id, msg.sender, msg.attempt, "done")
-            for a in self.history
-        )
+        return r.status == "done" and self.ledger.completed(r.task_id, msg.sender, msg.attempt)
 
     def _late_result(self, msg: Result, now_s: float) -> bool:
-        """A completion from a UAV its task was released from when it was declared lost: it did the task after
-        all, its result delayed by the link. Taken if the task is not done (or stuck) since: done, and a UAV
-        flying it again is recalled. True if taken."""
+        """A completion from a UAV its task was released from (:func:`~masonry.mission.reducer.late_completion`):
+        done, and a UAV flying it again is recalled. True if taken."""
         r = msg.result
-        if r.status != "done" or r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck:
+        att = self.ledger.last_of(r.task_id, msg.sender)
+        settled = r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck
+        if att is None or not late_completion(msg, att, settled, self.dispatcher.in_progress.get(r.task_id)):
             return False
-        att = next(
-            (a for a in reversed(self.history) if a.task_id == r.task_id and a.uav == msg.sender), None
-        )
-        if att is None or att.attempt != msg.attempt or att.status != "failed":
-            return False
-        if not (att.reason or "").startswith((LOST_REASON, TASK_DROPPED_REASON)):
-            return False  # (released for its silence, or for a heartbeat that no longer named it: done after all)
-        if self.dispatcher.in_progress.get(r.task_id) == msg.sender:
-            return False  # assigned to it again meanwhile: an ordinary result
         other = self.dispatcher.complete_late(r.task_id)
         log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
-        self._results += 1
-        att.end_s = now_s
-        att.status = "done"
-        att.reason = None
-        take_result(att, r)
+        self.ledger.done(att, r, now_s)
         if other is not None:
-            again = self._running.pop(r.task_id, None)
+            why = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
+            again = self.ledger.running.get(r.task_id)
             if again is not None:
-                again.end_s = now_s
-                again.status = "failed"
-                again.reason = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
-                if self.journal is not None:
-                    self.journal.record_failure(now_s, r.task_id, other, again.reason)
-            self.recall(other, now_s, f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}")
-        if self.journal is not None:
-            self.journal.record_completion(now_s, r.task_id, msg.sender, **completion_fields(r, phases=False))
+                self.ledger.end(again, now_s, "failed", why, result=False)
+                self.ledger.journal_failed(now_s, r.task_id, other, why)
+            self.recall(other, now_s, why)
+        self.ledger.journal_done(now_s, r, msg.sender, phases=False)
         self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
         self._dirty = True
         return True
@@ -656,32 +583,22 @@ class MissionControl:
         self._check_holds_task(msg, now_s)
 
     def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
-        """A UAV's heartbeat says it is idle and holds no task (none in hand, none queued) although its assignment went out
-        longer than the heartbeat timeout ago: it has forgotten it (its handler was restarted before it was
-        declared lost). The task goes back to the pool without counting an attempt."""
+        """A UAV's heartbeat says it forgot its task (:func:`~masonry.mission.reducer.dropped_reason`): the task
+        goes back to the pool without counting an attempt."""
         name = msg.sender
         tid = self.dispatcher.task_of(name)
-        if msg.task_id is not None or tid is None or msg.state != LANDED_STATE:
-            return  # (only an idle machine: a UAV that names no task but is busy flying is not a fresh one)
-        att = self._running.get(tid)
-        if att is None or (not att.adopted and now_s - att.start_s <= self.heartbeat_timeout_s):
-            return  # the assignment may still be on its way (none is, for an attempt kept from before a resume)
-        reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task {now_s - att.start_s:.1f} s after it)"
-        if att.adopted:
-            reason = f"{TASK_DROPPED_REASON} (its heartbeat holds no task after the resume)"
+        att = None if tid is None else self.ledger.running.get(tid)
+        reason = dropped_reason(msg, att, now_s, self.heartbeat_timeout_s)
+        if tid is None or att is None or reason is None:
+            return
         log.warning("%s: %s: released", name, reason)
-        del self._running[tid]
-        self._results += 1
-        att.end_s = now_s
-        att.status = "failed"
-        att.reason = reason
+        self.ledger.end(att, now_s, "failed", reason)
         self.dispatcher.fail(tid, count=False)
-        if self.journal is not None:
-            self.journal.record_failure(now_s, tid, name, reason)
+        self.ledger.journal_failed(now_s, tid, name, reason)
         self._emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
         self._dirty = True
 
-    def _readmit(self, link: UavLink, msg: Any, now_s: float) -> bool:
+    def _readmit(self, link: UavLink, msg: Message, now_s: float) -> bool:
         """A UAV declared lost for its silence is heard again: back in the mission if its heartbeat says it holds
         no task and is in service (a radio that came back after its task was given away, a handler restarted),
         holding its pad, or the column where it hovers, in the airspace (``ColumnClearance.rejoined``);
@@ -691,15 +608,12 @@ class MissionControl:
         if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
             return False
         name = link.spec.name
-        way_home = None
-        if msg.state == "home" or msg.state.startswith("putback"):
-            via = link.way_via_m if msg.state in ("putback_goto", "putback_descend") else None
-            way_home = (self.fallback_layers_m.get(name), via)
+        way_home = way_home_of(msg.state, link.way_via_m, self.fallback_layers_m.get(name))
         if not self.columns.rejoined(name, msg.position_m, way_home):
             return False
-        if not self.dispatcher.readmit_uav(link.spec.name):
+        if not self.dispatcher.readmit_uav(name):
             return False
-        log.warning("UAV %s heard again (%s, no task): back in the mission", link.spec.name, msg.state or "-")
+        log.warning("UAV %s heard again (%s, no task): back in the mission", name, msg.state or "-")
         self.liveness.rejoin(link)
         self.events.rejoined += 1
         self._emit_uav(now_s, link)  # its status is "ok" again (a log, a live view)
@@ -732,9 +646,8 @@ class MissionControl:
             link.way_via_m = carried.pickup_m if carried is not None else None
             # (last heard on its pad too: it may have been taking off, and hovers over the pad asking to land)
             if link.position_m is not None:
-                way_m = self.columns.silent(
-                    name, link.position_m, self.fallback_layers_m.get(name), link.way_via_m
-                )
+                layer_m = self.fallback_layers_m.get(name)
+                way_m = self.columns.silent(name, link.position_m, layer_m, link.way_via_m)
                 way_s = way_home_s(way_m, (self.timing or DEFAULT_TIMING).vertical_speed_mps)
                 link.airspace_until_s = now_s + max(self.rejoin_timeout_s, way_s)
         else:
@@ -742,19 +655,15 @@ class MissionControl:
         if self.sites.left(name, now_s):
             self.columns.touch()
         released = self.dispatcher.remove_uav(name)
-        if released is not None:
-            att = self._running.pop(released, None)
-            if att is not None:
-                att.end_s = now_s
-                att.status = "failed"
-                att.reason = LOST_REASON if status == "lost" else f"uav {status}"
-                if status == "lost" and carried is not None:
-                    # a retry that then finds no brick on the pallet says why
-                    att.reason += f" (last heard in {link.state}, with brick {carried.brick} on its magnet)"
-                    self.spares.lost(released, att.reason, now_s)
-                log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, att.reason)
-        if self.journal is not None:
-            self.journal.record_uav_lost(now_s, name)
+        att = None if released is None else self.ledger.running.get(released)
+        if released is not None and att is not None:
+            brick = carried.brick if status == "lost" and carried is not None else None
+            reason = loss_reason(None if status == "lost" else status, link.state, brick)
+            self.ledger.end(att, now_s, "failed", reason, result=False)
+            if brick is not None:
+                self.spares.lost(released, reason, now_s)
+            log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, reason)
+        self.ledger.journal_lost(now_s, name)
         self._emit(now_s, "lost", name, released, status=status)
         self._dirty = True
 
@@ -764,13 +673,9 @@ class MissionControl:
         self._deferred_at = None
         for a in self.dispatcher.assign(positions or None, may_start=self._may_take_off):
             attempt = a.attempt
-            att = Attempt(a.task_id, a.uav, attempt, now_s)
-            self.history.append(att)
-            self._running[a.task_id] = att
+            self.ledger.begin(a.task_id, a.uav, attempt, now_s)
             self._raise_layers((a.task_id,))
             log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
-            if self.journal is not None:
-                self.journal.record_assignment(now_s, a.task_id, a.uav, attempt)
             self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
             task = self.spares.task(
                 self._tasks[a.task_id]
@@ -802,7 +707,7 @@ class MissionControl:
             return  # waiting for the wind to drop is no stall either
         signature = (
             self.operator.version,
-            self._results,
+            self.ledger.results,
             self.columns.granted_count,
             self.columns.held_back,
             tuple((link.state, link.lost) for link in self.uavs.values()),
@@ -863,8 +768,7 @@ class MissionControl:
             answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
             if msg.id:
                 self.operator.answered[msg.id] = answer
-        self.transport.send(OPERATOR, encode(answer))
-        self.events.sent += 1
+        self._send(OPERATOR, answer)
 
     def wake(self) -> None:
         """Dispatch again at the next step (the operator resumed, or changed a limit)."""
@@ -875,19 +779,17 @@ class MissionControl:
         self._send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
 
     def emit_event(
-        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
     ) -> None:
         """Hand an event to the sink, if any (the operator's commands)."""
-        self._emit(now_s, kind, uav, task_id, **fields)
+        self.out.emit(now_s, kind, uav, task_id, **fields)
 
     def _emit(
-        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: Any
+        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
     ) -> None:
-        """Hand an event to the sink, if any (it only watches)."""
-        if self.sink is not None:
-            self.sink.emit(MissionEvent(now_s, kind, uav, task_id, fields))
+        self.out.emit(now_s, kind, uav, task_id, **fields)
 
-    def _emit_clearance(self, now_s: float, g: Any) -> None:
+    def _emit_clearance(self, now_s: float, g: Grant) -> None:
         if self.sink is not None:
             self._emit(
                 now_s,
@@ -929,13 +831,8 @@ class MissionControl:
             if name in positions_m and not link.lost:
                 self._emit_uav(now_s, link, positions_m[name], batteries.get(name))
 
-    def _send(self, to: str, msg: Any) -> None:
-        self.transport.send(to, encode(msg))
-        self.events.sent += 1
+    def _send(self, to: str, msg: Message) -> None:
+        self.out.send(to, msg)
 
-    def _broadcast(self, msg: Any) -> None:
-        data = encode(msg)
-        for name, link in self.uavs.items():
-            if not link.lost:
-                self.transport.send(name, data)
-                self.events.sent += 1
+    def _broadcast(self, msg: Message) -> None:
+        self.out.broadcast(msg, [name for name, link in self.uavs.items() if not link.lost])
