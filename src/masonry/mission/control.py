@@ -22,26 +22,25 @@ online, or ``startup_timeout_s`` after its first step, then removes the UAVs nev
 from __future__ import annotations
 
 import logging
-import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
 from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
 from masonry.geofence import Site
-from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, Phase, task_work_altitude_m
-from masonry.mission.as_built import PlacementWatch, take_result
+from masonry.mission import control_airspace, control_losses, control_results, control_watch
+from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.as_built import PlacementWatch
 from masonry.mission.control_ports import JournalPort, WindGate
-from masonry.mission.events import EventSink, volume_list
+from masonry.mission.events import EventSink
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import journaled_phases as _journaled_phases  # noqa: F401 - its home before
 from masonry.mission.ledger import AttemptLedger
-from masonry.mission.liveness import Lapse, LivenessTracker, Timeouts, way_home_s
+from masonry.mission.liveness import LivenessTracker, Timeouts
 from masonry.mission.messages import (
     MISSION_CONTROL,
     OPERATOR,
     Assign,
-    Clearance,
     ClearanceRequest,
     CommandAnswer,
     Heartbeat,
@@ -55,29 +54,23 @@ from masonry.mission.messages import (
 )
 from masonry.mission.operator import Operator
 from masonry.mission.outbox import MissionEvents, Outbox
-from masonry.mission.records import LANDED_STATE, Attempt, Liveness, UavLink
+from masonry.mission.records import Attempt, Liveness, UavLink
 from masonry.mission.reducer import (
     OUT_OF_SERVICE_STATE,
     Step,
-    dropped_reason,
-    late_completion,
-    loss_reason,
-    screen_result,
     steps_of,
-    way_home_of,
 )
 from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
 from masonry.mission.spares import SpareBook
-from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch, stall_of
+from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
 from masonry.mission.transport import Transport
 from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind
 from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
 from masonry.planner.schedule_policy import make_dispatcher
-from masonry.planner.tasks import BrickTask, Plan, Task
-from masonry.ports import CARRYING_STATES, RECALL_REASON
+from masonry.planner.tasks import Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
@@ -221,7 +214,7 @@ class MissionControl:
         self.events = MissionEvents()
         self.out = Outbox(transport, events_sink, self.events)  #: what mission control sends and tells
         self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
-        self._tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
+        self.tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
         self.ledger = AttemptLedger(journal)  #: every attempt, the running ones, their journal lines
         self.started_at_s: float | None = None
         self._first_step_s: float | None = None
@@ -244,16 +237,16 @@ class MissionControl:
         )
         if isinstance(self.columns, TableClearance):
             self.columns.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
-        self._fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
-        self._layer_floor_m, self.timing = layer_floor_m, timing
+        self.fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
+        self.layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
-        self._watch = StallWatch(stall_timeout_s)
+        self.watch = StallWatch(stall_timeout_s)
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None
         self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
-        self._raise_layers(t.id for t in plan.tasks if t.done)
+        control_airspace.raise_layers(self, [t.id for t in plan.tasks if t.done])
 
     # -- resume ----------------------------------------------------------------------------------------
     def restore(self, state: JournalState) -> None:
@@ -267,7 +260,7 @@ class MissionControl:
         """
 
         done = {rec.task_id: rec for rec in state.done}
-        unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self._tasks))
+        unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self.tasks))
         if unknown:
             raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
         attempts = self.spares.restore(state.meta, state.attempts, self.dispatcher.max_attempts)  # (spares)
@@ -287,7 +280,7 @@ class MissionControl:
         self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
         self.waits.restore(state.meta)
         # what the previous run may have built: done tasks, and every task it ever assigned
-        self._raise_layers([*done, *attempts, *state.in_progress])
+        control_airspace.raise_layers(self, [*done, *attempts, *state.in_progress])
 
     def _adopt(self, run: RunningRecord) -> None:
         """A journaled attempt still running at the stop: in progress on its UAV again (unless the UAV is lost,
@@ -352,27 +345,27 @@ class MissionControl:
         for raw in self.transport.receive():
             self._handle(raw, now_s)
         self.operator.step(self, now_s)
-        self._check_heartbeats(now_s)
+        control_losses.check_heartbeats(self, now_s)
         if self.glue is not None and self.glue.step(self, now_s):
             self._dirty = True
         if self.columns.waiting:
             for g in self.columns.grant(now_s):
-                self._answer(g, now_s)
+                control_airspace.answer(self, g, now_s)
                 self.waits.answered(g.uav, self.dispatcher.task_of(g.uav), g.site_m, g.granted)
-                self._emit_clearance(now_s, g)
+                control_airspace.emit_clearance(self, now_s, g)
                 how = "granted" if g.granted else "held"
                 log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
         if self.started_at_s is None:
             self._maybe_start(now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
             if self.wind_limit is not None and self.wind_limit.update(now_s):
-                self._on_wind(now_s)
+                control_watch.on_wind(self, now_s)
             if (
                 self._dirty or (self._deferred_at is not None and self._deferred_at != self.columns.version)
             ) and not self.operator.holds_dispatch():
                 self._dispatch(now_s)
             self.waits.observe(self, now_s)
-            self._watch_progress(now_s)
+            control_watch.watch_progress(self, now_s)
             if self.over:
                 self.ended_at_s = now_s
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
@@ -390,7 +383,7 @@ class MissionControl:
             return
         for name in missing:
             log.warning("UAV %s never came online; starting without it", name)
-            self._lose(name, now_s)
+            control_losses.lose(self, name, now_s)
         self.started_at_s = now_s
         self._dirty = True
         self._emit(now_s, "start", fleet=[n for n, u in self.uavs.items() if not u.lost])
@@ -420,158 +413,28 @@ class MissionControl:
                 link.moved_to(msg.position_m)
         for step in steps_of(msg):
             if step is Step.CLEARANCE and isinstance(msg, ClearanceRequest):
-                self._on_clearance_request(msg, now_s)
+                control_airspace.on_clearance_request(self, msg, now_s)
             elif step is Step.RESULT and isinstance(msg, Result):
-                self._on_result(msg, now_s)
+                control_results.take_result_message(self, msg, now_s)
             elif step is Step.RETIRE:
-                self._lose(msg.sender, now_s, status="out of service")
+                control_losses.lose(self, msg.sender, now_s, status="out of service")
             elif step is Step.HEARTBEAT and isinstance(msg, Heartbeat):
                 self._on_heartbeat(msg, link, now_s)
             elif step is Step.PROGRESS:
                 self.events.progress += 1
             elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
-                self._report(link, msg.state, msg.position_m)
+                control_airspace.report(self, link, msg.state, msg.position_m)
                 if self.sink is not None and self.uav_events:
-                    self._emit_uav(now_s, link)
-
-    def _report(self, link: UavLink, state: str, position_m: Vec3 | None) -> None:
-        """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
-        flying, it holds only the pad."""
-        link.state = state
-        if position_m is None:
-            return
-        link.moved_to(position_m)
-        name = link.spec.name
-        if position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
-            link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
-        self.columns.progress(name, position_m)
-        if state == LANDED_STATE and not link.taking_off and self.dispatcher.task_of(name) is None:
-            # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
-            self.columns.landed(name, position_m)
-
-    def _on_clearance_request(self, msg: ClearanceRequest, now_s: float) -> None:
-        """A UAV asks for a flight (or says it left a column, or came down): the airspace answers."""
-        if msg.release:
-            self.columns.release(msg.sender, msg.site_m)
-            if self.sites.released(msg.sender, msg.site_m, now_s):
-                self.columns.touch()
-            return
-        if msg.arrived:
-            self.columns.end_transit(msg.sender)
-            return
-        if msg.position_m is not None:
-            self.columns.progress(msg.sender, msg.position_m)
-        if self.sites.leaving(msg.sender, msg.site_m, now_s):
-            self.columns.touch()  # a site is free: who waits for it may go now
-        g = self.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
-        self.waits.answered(msg.sender, self.dispatcher.task_of(msg.sender), g.site_m, g.granted)
-        self._emit_clearance(now_s, g)
-        if g.refused is not None:
-            self._fail_outside_fence(msg.sender, g.refused, now_s)
-        self._answer(g, now_s)
-
-    def _answer(self, g: Grant, now_s: float) -> None:
-        """Send the airspace's answer ``g`` to its UAV."""
-        radius_m = self.columns.release_radius_m
-        answer = Clearance(MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m)
-        self._send(g.uav, answer)
-
-    def _fail_outside_fence(self, uav: str, reason: str, now_s: float) -> None:
-        """``uav``'s flight can only be flown outside the site's fence: its task fails with the reason (once per
-        task in hand; the attempt counts, so a task no UAV can reach inside the fence ends stuck, saying why)."""
-        task_id = self.dispatcher.task_of(uav)
-        if task_id is None:
-            return
-        key = (uav, task_id, self.dispatcher.attempt_of(task_id))
-        if key in self._fence_failed:
-            return
-        self._fence_failed.add(key)
-        self.recall(uav, now_s, reason)
-
-    def _on_result(self, msg: Result, now_s: float) -> None:
-        r = msg.result
-        att = self.ledger.running.get(r.task_id)
-        least_s = self.min_durations_s.get(r.task_id)
-        owner = self.dispatcher.in_progress.get(r.task_id)
-        ignored = screen_result(msg, owner, att, least_s, self.min_fraction, now_s)
-        if ignored is not None:
-            self._ignore(ignored.reason, ignored.detail)
-            return
-        assert att is not None  # (screen_result ignores a result with no running attempt)
-        if r.status == "done":
-            self.ledger.done(att, r, now_s)
-            log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
-            self.dispatcher.complete(r.task_id)
-            if self.glue is not None:
-                self.glue.completed(r.task_id, now_s)
-            self.ledger.journal_done(now_s, r, msg.sender)
-            self._emit(
-                now_s,
-                "completed",
-                msg.sender,
-                r.task_id,
-                attempt=att.attempt,
-                placement_error_m=r.placement_error_m,
-                coverage=r.coverage,
-                **self.placement.event_fields(r.as_built),
-            )
-            self.placement.completed(self, r, msg.sender, now_s)
-        else:
-            reason = r.reason or "failed"
-            self.ledger.end(att, now_s, "failed", reason)
-            take_result(att, r)
-            log.info(
-                "%s failed on %s (attempt %d, %.1f-%.1f s): %s",
-                *(r.task_id, msg.sender, att.attempt, att.start_s, now_s, reason),
-            )
-            # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
-            # attempt of the task
-            count, give_up = self.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
-            self.dispatcher.fail(r.task_id, count=count, give_up=give_up)
-            self.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
-            self._emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
-        self._dirty = True
-
-    def _ignore(self, reason: str, detail: str) -> None:
-        self.out.ignored(reason)
-        log.warning("ignoring %s", detail)
+                    control_airspace.emit_uav(self, now_s, link)
 
     def _screened(self, link: UavLink, msg: Message, now_s: float) -> bool:
         """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
         (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
-        if isinstance(msg, Result) and (self._heard_again(msg) or self._late_result(msg, now_s)):
+        if isinstance(msg, Result) and (
+            control_results.heard_again(self, msg) or control_results.late_result(self, msg, now_s)
+        ):
             return True
-        return link.lost and not self._readmit(link, msg, now_s)
-
-    def _heard_again(self, msg: Result) -> bool:
-        """A completion already taken, said again by its UAV (the handler repeats one when mission control's
-        heartbeats paused around it, as a slow link or a busy computer makes them): nothing to do, nothing
-        suspicious."""
-        r = msg.result
-        return r.status == "done" and self.ledger.completed(r.task_id, msg.sender, msg.attempt)
-
-    def _late_result(self, msg: Result, now_s: float) -> bool:
-        """A completion from a UAV its task was released from (:func:`~masonry.mission.reducer.late_completion`):
-        done, and a UAV flying it again is recalled. True if taken."""
-        r = msg.result
-        att = self.ledger.last_of(r.task_id, msg.sender)
-        settled = r.task_id in self.dispatcher.done or r.task_id in self.dispatcher.stuck
-        if att is None or not late_completion(msg, att, settled, self.dispatcher.in_progress.get(r.task_id)):
-            return False
-        other = self.dispatcher.complete_late(r.task_id)
-        log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
-        self.ledger.done(att, r, now_s)
-        if other is not None:
-            why = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
-            again = self.ledger.running.get(r.task_id)
-            if again is not None:
-                self.ledger.end(again, now_s, "failed", why, result=False)
-                self.ledger.journal_failed(now_s, r.task_id, other, why)
-            self.recall(other, now_s, why)
-        self.ledger.journal_done(now_s, r, msg.sender, phases=False)
-        self._emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
-        self._dirty = True
-        return True
+        return link.lost and not control_losses.readmit(self, link, msg, now_s)
 
     def _on_heartbeat(self, msg: Heartbeat, link: UavLink, now_s: float) -> None:
         """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
@@ -580,92 +443,7 @@ class MissionControl:
             link.battery = msg.battery
         if self.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
             self.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
-        self._check_holds_task(msg, now_s)
-
-    def _check_holds_task(self, msg: Heartbeat, now_s: float) -> None:
-        """A UAV's heartbeat says it forgot its task (:func:`~masonry.mission.reducer.dropped_reason`): the task
-        goes back to the pool without counting an attempt."""
-        name = msg.sender
-        tid = self.dispatcher.task_of(name)
-        att = None if tid is None else self.ledger.running.get(tid)
-        reason = dropped_reason(msg, att, now_s, self.heartbeat_timeout_s)
-        if tid is None or att is None or reason is None:
-            return
-        log.warning("%s: %s: released", name, reason)
-        self.ledger.end(att, now_s, "failed", reason)
-        self.dispatcher.fail(tid, count=False)
-        self.ledger.journal_failed(now_s, tid, name, reason)
-        self._emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
-        self._dirty = True
-
-    def _readmit(self, link: UavLink, msg: Message, now_s: float) -> bool:
-        """A UAV declared lost for its silence is heard again: back in the mission if its heartbeat says it holds
-        no task and is in service (a radio that came back after its task was given away, a handler restarted),
-        holding its pad, or the column where it hovers, in the airspace (``ColumnClearance.rejoined``);
-        anything else it sends stays ignored (a late result of a task that went to another UAV)."""
-        if link.liveness is not Liveness.LOST or not isinstance(msg, Heartbeat) or msg.task_id is not None:
-            return False
-        if msg.state == OUT_OF_SERVICE_STATE or self.ended_at_s is not None:
-            return False
-        name = link.spec.name
-        way_home = way_home_of(msg.state, link.way_via_m, self.fallback_layers_m.get(name))
-        if not self.columns.rejoined(name, msg.position_m, way_home):
-            return False
-        if not self.dispatcher.readmit_uav(name):
-            return False
-        log.warning("UAV %s heard again (%s, no task): back in the mission", name, msg.state or "-")
-        self.liveness.rejoin(link)
-        self.events.rejoined += 1
-        self._emit_uav(now_s, link)  # its status is "ok" again (a log, a live view)
-        self._dirty = True
-        return True
-
-    def _check_heartbeats(self, now_s: float) -> None:
-        for name, lapse in self.liveness.sweep(now_s, lambda n: self.dispatcher.task_of(n) is not None):
-            if lapse is Lapse.AIRSPACE_EXPIRED:
-                self.columns.release(name)  # not heard again: it fell, or landed where it was
-            else:
-                quiet_s = now_s - (self.uavs[name].last_heard_s or now_s)
-                log.warning("UAV %s silent for %.1f s: lost", name, quiet_s)
-                self._lose(name, now_s)
-
-    def _lose(self, name: str, now_s: float, status: str = "lost") -> None:
-        """Take a UAV out of the mission (silent, or out of service); its task goes back to the pool."""
-        link = self.uavs[name]
-        self.liveness.lose(link, now_s, out_of_service=status != "lost")
-        task_id = self.dispatcher.task_of(name)
-        task = self.spares.task(self._tasks[task_id]) if task_id is not None else None
-        # last heard with its brick on the magnet: it may have taken it down with it, or puts it back first
-        carried = task if link.state in CARRYING_STATES and isinstance(task, BrickTask) else None
-        if status == "lost" and self.columns.volumes(name):
-            # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
-            # mission control is silent), and fly home on its own after LAST_RESORT_S: both stay reserved until
-            # it is heard again, or for as long as that flight takes
-            link.airspace_until_s = now_s + self.rejoin_timeout_s
-            # (carrying, it puts the brick back on its pallet first: docs/state-machines.md, "Putting a brick back")
-            link.way_via_m = carried.pickup_m if carried is not None else None
-            # (last heard on its pad too: it may have been taking off, and hovers over the pad asking to land)
-            if link.position_m is not None:
-                layer_m = self.fallback_layers_m.get(name)
-                way_m = self.columns.silent(name, link.position_m, layer_m, link.way_via_m)
-                way_s = way_home_s(way_m, (self.timing or DEFAULT_TIMING).vertical_speed_mps)
-                link.airspace_until_s = now_s + max(self.rejoin_timeout_s, way_s)
-        else:
-            self.columns.release(name)  # retired (on the ground) or fell: its column is free
-        if self.sites.left(name, now_s):
-            self.columns.touch()
-        released = self.dispatcher.remove_uav(name)
-        att = None if released is None else self.ledger.running.get(released)
-        if released is not None and att is not None:
-            brick = carried.brick if status == "lost" and carried is not None else None
-            reason = loss_reason(None if status == "lost" else status, link.state, brick)
-            self.ledger.end(att, now_s, "failed", reason, result=False)
-            if brick is not None:
-                self.spares.lost(released, reason, now_s)
-            log.info("%s failed on %s (attempt %d): %s", released, name, att.attempt, reason)
-        self.ledger.journal_lost(now_s, name)
-        self._emit(now_s, "lost", name, released, status=status)
-        self._dirty = True
+        control_results.check_holds_task(self, msg, now_s)
 
     def _dispatch(self, now_s: float) -> None:
         self._dirty = False
@@ -674,12 +452,10 @@ class MissionControl:
         for a in self.dispatcher.assign(positions or None, may_start=self._may_take_off):
             attempt = a.attempt
             self.ledger.begin(a.task_id, a.uav, attempt, now_s)
-            self._raise_layers((a.task_id,))
+            control_airspace.raise_layers(self, (a.task_id,))
             log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
             self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
-            task = self.spares.task(
-                self._tasks[a.task_id]
-            )  # (with its spare, if one stands in for its brick)
+            task = self.spares.task(self.tasks[a.task_id])  # (with its spare, if one stands in for its brick)
             self._send(a.uav, Assign(MISSION_CONTROL, a.uav, task, attempt, now_s, self.wall_digest))
 
     def _may_take_off(self, name: str) -> bool:
@@ -696,45 +472,6 @@ class MissionControl:
         self.uavs[name].taking_off = True
         return True
 
-    def _watch_progress(self, now_s: float) -> None:
-        """The watchdog: progress is a task done or failed, a flight or hold flight granted, a UAV's state
-        changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
-        if self.operator.paused or self.operator.held or self.operator.aborting:
-            return  # waiting for the operator is no stall
-        wind = self.wind_limit
-        if wind is not None and wind.grounded:
-            self._watch.observe(now_s, ("wind", wind.version))
-            return  # waiting for the wind to drop is no stall either
-        signature = (
-            self.operator.version,
-            self.ledger.results,
-            self.columns.granted_count,
-            self.columns.held_back,
-            tuple((link.state, link.lost) for link in self.uavs.values()),
-        )
-        if not self._watch.observe(now_s, signature) or self.finished:
-            return
-        assert self._watch.since_s is not None and self._watch.timeout_s is not None
-        live = [(name, link.state) for name, link in self.uavs.items() if not link.lost]
-        self.stall = stall_of(
-            now_s, self._watch.since_s, self._watch.timeout_s, live, self.dispatcher, self.columns
-        )
-        log.warning("%s", self.stall.line())
-        self._emit(now_s, "stall", line=self.stall.line())
-
-    def _on_wind(self, now_s: float) -> None:
-        """The wind grounded or freed UAVs: say so, and dispatch again."""
-        wind = self.wind_limit
-        assert wind is not None
-        self._dirty = True
-        speed = wind.speed_mps if wind.speed_mps is not None else math.nan
-        grounded = sorted(wind.grounded)
-        if grounded:
-            log.warning("wind %.1f m/s: no tasks for %s (above max_wind_mps)", speed, ", ".join(grounded))
-        else:
-            log.info("wind %.1f m/s: every UAV within its max_wind_mps, dispatching again", speed)
-        self._emit(now_s, "wind", speed_mps=None if math.isnan(speed) else float(speed), grounded=grounded)
-
     def _journal_visit(self, visit: SiteVisit) -> None:
         """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
         if self.journal is not None:
@@ -742,20 +479,6 @@ class MissionControl:
                 f"{SITE_META_PREFIX}{visit.task_id}",
                 {"uav": visit.uav, "start_s": visit.start_s, "end_s": visit.end_s},
             )
-
-    def _raise_layers(self, task_ids: Iterable[str]) -> None:
-        """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
-        if self._layer_floor_m is None:
-            return
-        top = max(
-            (
-                task_work_altitude_m(self._tasks[tid], self._layer_floor_m, timing=self.timing)
-                for tid in task_ids
-            ),
-            default=None,
-        )
-        if top is not None:
-            self.columns.raise_base(top)
 
     def _on_command(self, msg: OperatorCommand, now_s: float) -> None:
         """An operator's command over the network: applied now, answered to the operator. ``masonry ctl`` sends
@@ -789,39 +512,6 @@ class MissionControl:
     ) -> None:
         self.out.emit(now_s, kind, uav, task_id, **fields)
 
-    def _emit_clearance(self, now_s: float, g: Grant) -> None:
-        if self.sink is not None:
-            self._emit(
-                now_s,
-                "clearance",
-                g.uav,
-                self.dispatcher.task_of(g.uav),
-                site_m=list(g.site_m),
-                granted=g.granted,
-                hold_m=None if g.hold_m is None else list(g.hold_m),
-                layer_m=g.layer_m,
-                volumes=volume_list(self.columns.volumes(g.uav)),
-            )
-
-    def _emit_uav(
-        self, now_s: float, link: UavLink, position_m: Vec3 | None = None, battery: float | None = None
-    ) -> None:
-        """A UAV's state, position, task and airspace as mission control knows them (its position and battery
-        as measured elsewhere, if given)."""
-        name = link.spec.name
-        p = link.position_m if position_m is None else position_m
-        self._emit(
-            now_s,
-            "uav",
-            name,
-            self.dispatcher.task_of(name),
-            state=link.state,
-            position_m=None if p is None else list(p),
-            battery=link.battery if battery is None else battery,
-            status=link.status,
-            volumes=volume_list(self.columns.volumes(name)),
-        )
-
     def sample(self, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]) -> None:
         """Hand the sink a ``uav`` event per live UAV, with its position and battery measured outside mission
         control (the simulator's world); mission control's own view is unchanged."""
@@ -829,7 +519,7 @@ class MissionControl:
             return
         for name, link in self.uavs.items():
             if name in positions_m and not link.lost:
-                self._emit_uav(now_s, link, positions_m[name], batteries.get(name))
+                control_airspace.emit_uav(self, now_s, link, positions_m[name], batteries.get(name))
 
     def _send(self, to: str, msg: Message) -> None:
         self.out.send(to, msg)
