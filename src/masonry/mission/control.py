@@ -26,11 +26,12 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
-from masonry.errors import JournalError, MissionError, PlanningError, ProtocolError
+from masonry.errors import MissionError, ProtocolError
 from masonry.geofence import Site
-from masonry.mission import control_airspace, control_losses, control_results, control_watch
-from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission import control_airspace, control_losses, control_results, control_resume, control_watch
+from masonry.mission.airspace import Phase
 from masonry.mission.as_built import PlacementWatch
+from masonry.mission.control_airspace import make_airspace
 from masonry.mission.control_ports import JournalPort, WindGate
 from masonry.mission.events import EventSink
 from masonry.mission.glue import glue_gate
@@ -42,7 +43,6 @@ from masonry.mission.messages import (
     OPERATOR,
     Assign,
     ClearanceRequest,
-    CommandAnswer,
     Heartbeat,
     Message,
     MissionEnd,
@@ -54,14 +54,13 @@ from masonry.mission.messages import (
 )
 from masonry.mission.operator import Operator
 from masonry.mission.outbox import MissionEvents, Outbox
-from masonry.mission.records import Attempt, Liveness, UavLink
+from masonry.mission.records import Attempt, UavLink
 from masonry.mission.reducer import (
     OUT_OF_SERVICE_STATE,
     Step,
     steps_of,
 )
-from masonry.mission.reserved import AIRSPACES, TableClearance
-from masonry.mission.sites import SITE_META_PREFIX, SiteIntervals, SiteVisit, journaled_visits
+from masonry.mission.sites import SiteIntervals
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
 from masonry.mission.transport import Transport
@@ -74,7 +73,7 @@ from masonry.planner.tasks import Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
-    from masonry.mission.journal_state import JournalState, RunningRecord
+    from masonry.mission.journal_state import JournalState
     from masonry.planner.schedule_values import OfflineSchedule
 
 __all__ = ["OUT_OF_SERVICE_STATE", "Attempt", "MissionControl", "MissionEvents", "UavLink"]
@@ -185,6 +184,7 @@ class MissionControl:
         self.min_fraction = min_fraction
         self.policy = policy
         self.journal = journal
+        self.ledger = AttemptLedger(journal)  #: every attempt, the running ones, their journal lines
         self.heartbeat_period_s = heartbeat_period_s
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
@@ -203,7 +203,7 @@ class MissionControl:
             plan,
             self.dispatcher.task_of,
             exclusive=reservation == "site",
-            on_visit=self._journal_visit,
+            on_visit=self.ledger.journal_visit,
             is_done=self.dispatcher.done.__contains__,
         )
         #: the adhesive's open and cure times (None: none; :mod:`masonry.mission.glue`)
@@ -213,30 +213,20 @@ class MissionControl:
         self.liveness = LivenessTracker(self.uavs, Timeouts(heartbeat_timeout_s, self.rejoin_timeout_s))
         self.events = MissionEvents()
         self.out = Outbox(transport, events_sink, self.events)  #: what mission control sends and tells
-        self.spares = SpareBook(plan, journal, self._emit)  #: spares for lost bricks (mission/spares.py)
+        self.spares = SpareBook(plan, journal, self.out.emit)  #: spares for lost bricks (mission/spares.py)
         self.tasks: dict[str, Task] = {t.id: t for t in plan.tasks}
-        self.ledger = AttemptLedger(journal)  #: every attempt, the running ones, their journal lines
         self.started_at_s: float | None = None
-        self._first_step_s: float | None = None
+        self.first_step_s: float | None = None
         self._last_heartbeat_s: float | None = None
         self._dirty = True
         self.ended_at_s: float | None = None
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
-        if airspace not in AIRSPACES:
-            raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {airspace!r}")
-        kind = TableClearance if airspace == "table" else ColumnClearance
-        self.columns: ColumnClearance | TableClearance = kind(
-            column_radius_m,
-            layer_base_m,
-            layer_spacing_m,
-            homes={u.name: u.home_m for u in self.fleet},
-            start_base_m=layer_floor_m,
-            gate=self.glue or self.sites,
-            fence=fence,
+        homes = {u.name: u.home_m for u in self.fleet}
+        layers_m = (layer_base_m, layer_spacing_m, layer_floor_m)
+        self.columns = make_airspace(
+            airspace, column_radius_m, layers_m, homes, self.glue or self.sites, fence, timing
         )
-        if isinstance(self.columns, TableClearance):
-            self.columns.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
         self.fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self.layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
@@ -248,53 +238,9 @@ class MissionControl:
         self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         control_airspace.raise_layers(self, [t.id for t in plan.tasks if t.done])
 
-    # -- resume ----------------------------------------------------------------------------------------
     def restore(self, state: JournalState) -> None:
-        """Continue from a journal's replayed state: done tasks stay done with their times, attempts carry on.
-
-        Attempts in progress when the previous run stopped stay with their UAVs (:meth:`_adopt`): what each
-        UAV says first decides (its completion, said again, is taken; its heartbeat naming the task keeps it
-        flying; one naming no task gives it back to the pool, not counted; silence declares it lost). Handing
-        them out again at once would fly a task twice whose completion never reached the journal.
-        UAVs the journal declared lost stay lost.
-        """
-
-        done = {rec.task_id: rec for rec in state.done}
-        unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(self.tasks))
-        if unknown:
-            raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
-        attempts = self.spares.restore(state.meta, state.attempts, self.dispatcher.max_attempts)  # (spares)
-        self.dispatcher.restore(list(done), attempts)
-        if self.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
-            self.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
-        self.ledger.restore(state.failures, done)
-        for name in state.lost_uavs:
-            link = self.uavs.get(name)
-            if link is not None and not link.lost:
-                link.liveness = Liveness.LOST  # (lost before this run: not awaited to rejoin)
-                self.dispatcher.remove_uav(name)
-        for run in state.running:
-            self._adopt(run)
-        self.ledger.sort()
-        self.resumed_at_s = state.last_time_s
-        self.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
-        self.waits.restore(state.meta)
-        # what the previous run may have built: done tasks, and every task it ever assigned
-        control_airspace.raise_layers(self, [*done, *attempts, *state.in_progress])
-
-    def _adopt(self, run: RunningRecord) -> None:
-        """A journaled attempt still running at the stop: in progress on its UAV again (unless the UAV is lost,
-        another attempt holds it, or the task cannot run now: then it goes back to the pool as before)."""
-        link = self.uavs.get(run.uav)
-        if link is None or link.lost or run.task_id in self.dispatcher.done:
-            return
-        try:
-            self.dispatcher.adopt(run.task_id, run.uav)
-        except PlanningError as exc:
-            log.warning("%s: not kept on %s after the resume: %s", run.task_id, run.uav, exc)
-            return
-        self.ledger.adopt(run.task_id, run.uav, run.attempt, run.start_s)
-        log.info("%s kept on %s (attempt %d) from before the resume", run.task_id, run.uav, run.attempt)
+        """Continue from a journal's replayed state (:func:`masonry.mission.control_resume.restore`)."""
+        control_resume.restore(self, state)
 
     # -- properties ------------------------------------------------------------------------------------
     @property
@@ -340,23 +286,17 @@ class MissionControl:
     def step(self, now_s: float) -> None:
         """One tick of mission control at mission time ``now_s`` (see the module docstring)."""
         self.now_s = now_s
-        if self._first_step_s is None:
-            self._first_step_s = now_s
+        if self.first_step_s is None:
+            self.first_step_s = now_s
         for raw in self.transport.receive():
             self._handle(raw, now_s)
         self.operator.step(self, now_s)
         control_losses.check_heartbeats(self, now_s)
         if self.glue is not None and self.glue.step(self, now_s):
             self._dirty = True
-        if self.columns.waiting:
-            for g in self.columns.grant(now_s):
-                control_airspace.answer(self, g, now_s)
-                self.waits.answered(g.uav, self.dispatcher.task_of(g.uav), g.site_m, g.granted)
-                control_airspace.emit_clearance(self, now_s, g)
-                how = "granted" if g.granted else "held"
-                log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
+        control_airspace.grant_waiting(self, now_s)
         if self.started_at_s is None:
-            self._maybe_start(now_s)
+            control_losses.maybe_start(self, now_s)
         if self.started_at_s is not None and self.ended_at_s is None:
             if self.wind_limit is not None and self.wind_limit.update(now_s):
                 control_watch.on_wind(self, now_s)
@@ -369,24 +309,12 @@ class MissionControl:
             if self.over:
                 self.ended_at_s = now_s
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
-                self._emit(now_s, "end", completed=self.finished)
+                self.out.emit(now_s, "end", completed=self.finished)
         if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:
             self._last_heartbeat_s = now_s
             self._broadcast(
                 Heartbeat(MISSION_CONTROL, now_s, state="running" if self.ended_at_s is None else "ended")
             )
-
-    def _maybe_start(self, now_s: float) -> None:
-        missing = self.liveness.never_heard()
-        assert self._first_step_s is not None
-        if missing and now_s - self._first_step_s < self.startup_timeout_s:
-            return
-        for name in missing:
-            log.warning("UAV %s never came online; starting without it", name)
-            control_losses.lose(self, name, now_s)
-        self.started_at_s = now_s
-        self._dirty = True
-        self._emit(now_s, "start", fleet=[n for n, u in self.uavs.items() if not u.lost])
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         """One message: decoded, screened, then the :func:`~masonry.mission.reducer.steps_of` it asks for."""
@@ -399,12 +327,12 @@ class MissionControl:
             return
         self.events.received += 1
         if isinstance(msg, OperatorCommand):
-            self._on_command(msg, now_s)
+            self.out.send(OPERATOR, self.operator.answer(self, msg, now_s))
             return
         if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
             return
         link = self.uavs[msg.sender]
-        if self._screened(link, msg, now_s):
+        if control_losses.screened(self, link, msg, now_s):
             return
         self.liveness.heard(link, now_s)
         if isinstance(msg, Result):
@@ -419,31 +347,13 @@ class MissionControl:
             elif step is Step.RETIRE:
                 control_losses.lose(self, msg.sender, now_s, status="out of service")
             elif step is Step.HEARTBEAT and isinstance(msg, Heartbeat):
-                self._on_heartbeat(msg, link, now_s)
+                control_results.on_heartbeat(self, msg, link, now_s)
             elif step is Step.PROGRESS:
                 self.events.progress += 1
             elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
                 control_airspace.report(self, link, msg.state, msg.position_m)
                 if self.sink is not None and self.uav_events:
                     control_airspace.emit_uav(self, now_s, link)
-
-    def _screened(self, link: UavLink, msg: Message, now_s: float) -> bool:
-        """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
-        (it stays lost until a heartbeat says it holds no task: :meth:`_readmit`; its task went to another)."""
-        if isinstance(msg, Result) and (
-            control_results.heard_again(self, msg) or control_results.late_result(self, msg, now_s)
-        ):
-            return True
-        return link.lost and not control_losses.readmit(self, link, msg, now_s)
-
-    def _on_heartbeat(self, msg: Heartbeat, link: UavLink, now_s: float) -> None:
-        """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
-        wind limit, and the task it holds."""
-        if msg.battery is not None:
-            link.battery = msg.battery
-        if self.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
-            self.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
-        control_results.check_holds_task(self, msg, now_s)
 
     def _dispatch(self, now_s: float) -> None:
         self._dirty = False
@@ -454,9 +364,9 @@ class MissionControl:
             self.ledger.begin(a.task_id, a.uav, attempt, now_s)
             control_airspace.raise_layers(self, (a.task_id,))
             log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
-            self._emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
+            self.out.emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)
             task = self.spares.task(self.tasks[a.task_id])  # (with its spare, if one stands in for its brick)
-            self._send(a.uav, Assign(MISSION_CONTROL, a.uav, task, attempt, now_s, self.wall_digest))
+            self.out.send(a.uav, Assign(MISSION_CONTROL, a.uav, task, attempt, now_s, self.wall_digest))
 
     def _may_take_off(self, name: str) -> bool:
         """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
@@ -472,44 +382,18 @@ class MissionControl:
         self.uavs[name].taking_off = True
         return True
 
-    def _journal_visit(self, visit: SiteVisit) -> None:
-        """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
-        if self.journal is not None:
-            self.journal.set_meta(
-                f"{SITE_META_PREFIX}{visit.task_id}",
-                {"uav": visit.uav, "start_s": visit.start_s, "end_s": visit.end_s},
-            )
-
-    def _on_command(self, msg: OperatorCommand, now_s: float) -> None:
-        """An operator's command over the network: applied now, answered to the operator. ``masonry ctl`` sends
-        it again until it hears the answer: a command already answered (its ``id``) is answered again, not
-        applied twice."""
-        answer = self.operator.answered.get(msg.id) if msg.id else None
-        if answer is None:
-            command = {"command": msg.command, "uav": msg.uav, "role": msg.role, "limit": msg.limit}
-            out = self.operator.apply(self, {k: v for k, v in command.items() if v is not None}, now_s)
-            answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
-            if msg.id:
-                self.operator.answered[msg.id] = answer
-        self._send(OPERATOR, answer)
-
     def wake(self) -> None:
         """Dispatch again at the next step (the operator resumed, or changed a limit)."""
         self._dirty = True
 
     def recall(self, uav: str, now_s: float, reason: str) -> None:
         """Tell ``uav`` to drop its task, fly home and land (the operator's recall)."""
-        self._send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
+        self.out.send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
 
     def emit_event(
         self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
     ) -> None:
         """Hand an event to the sink, if any (the operator's commands)."""
-        self.out.emit(now_s, kind, uav, task_id, **fields)
-
-    def _emit(
-        self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object
-    ) -> None:
         self.out.emit(now_s, kind, uav, task_id, **fields)
 
     def sample(self, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]) -> None:
@@ -520,9 +404,6 @@ class MissionControl:
         for name, link in self.uavs.items():
             if name in positions_m and not link.lost:
                 control_airspace.emit_uav(self, now_s, link, positions_m[name], batteries.get(name))
-
-    def _send(self, to: str, msg: Message) -> None:
-        self.out.send(to, msg)
 
     def _broadcast(self, msg: Message) -> None:
         self.out.broadcast(msg, [name for name, link in self.uavs.items() if not link.lost])

@@ -10,14 +10,19 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING
 
-from masonry.mission.airspace import ON_PAD_Z_M, Grant, task_work_altitude_m
+from masonry.errors import MissionError
+from masonry.geofence import Site
+from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, task_work_altitude_m
 from masonry.mission.events import volume_list
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest
 from masonry.mission.records import LANDED_STATE, UavLink
+from masonry.mission.reserved import AIRSPACES, TableClearance
+from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import Vec3
+from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable
+    from collections.abc import Iterable, Mapping
 
     from masonry.mission.control import MissionControl
 
@@ -26,6 +31,8 @@ __all__ = [
     "emit_clearance",
     "emit_uav",
     "fail_outside_fence",
+    "grant_waiting",
+    "make_airspace",
     "on_clearance_request",
     "raise_layers",
     "report",
@@ -141,3 +148,41 @@ def emit_uav(
         status=link.status,
         volumes=volume_list(mc.columns.volumes(name)),
     )
+
+
+def make_airspace(
+    kind: str,
+    radius_m: float,
+    layers_m: tuple[float | None, float, float | None],
+    homes: Mapping[str, Vec3],
+    gate: SiteGate,
+    fence: Site | None,
+    timing: TaskTiming | None,
+) -> ColumnClearance | TableClearance:
+    """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
+
+    Args:
+        layers_m: the transit layers' base, their spacing and the floor layer 0 rises from (``MissionControl``'s
+            ``layer_base_m``, ``layer_spacing_m`` and ``layer_floor_m``).
+    """
+    if kind not in AIRSPACES:
+        raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
+    base_m, spacing_m, floor_m = layers_m
+    made = (TableClearance if kind == "table" else ColumnClearance)(
+        radius_m, base_m, spacing_m, homes=homes, start_base_m=floor_m, gate=gate, fence=fence
+    )
+    if isinstance(made, TableClearance):
+        made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
+    return made
+
+
+def grant_waiting(mc: MissionControl, now_s: float) -> None:
+    """The airspace looks at the waiting requests again; each answer is sent, noted and told."""
+    if not mc.columns.waiting:
+        return
+    for g in mc.columns.grant(now_s):
+        answer(mc, g, now_s)
+        mc.waits.answered(g.uav, mc.dispatcher.task_of(g.uav), g.site_m, g.granted)
+        emit_clearance(mc, now_s, g)
+        how = "granted" if g.granted else "held"
+        log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)

@@ -11,9 +11,9 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING
 
-from masonry.mission import control_airspace
+from masonry.mission import control_airspace, control_results
 from masonry.mission.liveness import Lapse, way_home_s
-from masonry.mission.messages import Heartbeat, Message
+from masonry.mission.messages import Heartbeat, Message, Result
 from masonry.mission.records import Liveness, UavLink
 from masonry.mission.reducer import OUT_OF_SERVICE_STATE, loss_reason, way_home_of
 from masonry.planner.tasks import BrickTask
@@ -23,7 +23,7 @@ from masonry.timing import DEFAULT_TIMING
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["check_heartbeats", "lose", "readmit"]
+__all__ = ["check_heartbeats", "lose", "maybe_start", "readmit", "screened"]
 
 log = logging.getLogger("masonry.mission.control")
 
@@ -100,3 +100,27 @@ def lose(mc: MissionControl, name: str, now_s: float, status: str = "lost") -> N
     mc.ledger.journal_lost(now_s, name)
     mc.out.emit(now_s, "lost", name, released, status=status)
     mc.wake()
+
+
+def screened(mc: MissionControl, link: UavLink, msg: Message, now_s: float) -> bool:
+    """True when ``msg`` needs nothing more: a late completion taken, or anything else from a UAV declared lost
+    (it stays lost until a heartbeat says it holds no task: :func:`readmit`; its task went to another)."""
+    if isinstance(msg, Result) and (
+        control_results.heard_again(mc, msg) or control_results.late_result(mc, msg, now_s)
+    ):
+        return True
+    return link.lost and not readmit(mc, link, msg, now_s)
+
+
+def maybe_start(mc: MissionControl, now_s: float) -> None:
+    """Start once the whole fleet is heard, or ``startup_timeout_s`` after the first step without the rest."""
+    missing = mc.liveness.never_heard()
+    assert mc.first_step_s is not None
+    if missing and now_s - mc.first_step_s < mc.startup_timeout_s:
+        return
+    for name in missing:
+        log.warning("UAV %s never came online; starting without it", name)
+        lose(mc, name, now_s)
+    mc.started_at_s = now_s
+    mc.wake()
+    mc.out.emit(now_s, "start", fleet=[n for n, u in mc.uavs.items() if not u.lost])

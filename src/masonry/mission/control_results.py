@@ -13,13 +13,14 @@ from typing import TYPE_CHECKING
 
 from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
+from masonry.mission.records import UavLink
 from masonry.mission.reducer import dropped_reason, late_completion, screen_result
 from masonry.ports import RECALL_REASON
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["check_holds_task", "heard_again", "ignore", "late_result", "take_result_message"]
+__all__ = ["check_holds_task", "heard_again", "ignore", "late_result", "on_heartbeat", "take_result_message"]
 
 log = logging.getLogger("masonry.mission.control")
 
@@ -123,3 +124,13 @@ def check_holds_task(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     mc.ledger.journal_failed(now_s, tid, name, reason)
     mc.out.emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
     mc.wake()
+
+
+def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float) -> None:
+    """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
+    wind limit, and the task it holds."""
+    if msg.battery is not None:
+        link.battery = msg.battery
+    if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
+        mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
+    check_holds_task(mc, msg, now_s)

@@ -16,10 +16,12 @@ from masonry.mission.as_built import journaled_as_built, take_result
 from masonry.mission.control_ports import JournalPort
 from masonry.mission.journal_state import journaled_phases
 from masonry.mission.records import Attempt, AttemptStatus, completion_fields
+from masonry.mission.sites import SITE_META_PREFIX
 from masonry.ports import TaskResult
 
 if TYPE_CHECKING:
     from masonry.mission.journal_state import DoneRecord, FailureRecord
+    from masonry.mission.sites import SiteVisit
 
 __all__ = ["AttemptLedger"]
 
@@ -92,6 +94,11 @@ class AttemptLedger:
         """Keep ``value`` under ``key`` in the journal's metadata (none without a journal)."""
         if self.journal is not None:
             self.journal.set_meta(key, value)
+
+    def journal_visit(self, visit: SiteVisit) -> None:
+        """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
+        record = {"uav": visit.uav, "start_s": visit.start_s, "end_s": visit.end_s}
+        self.set_meta(f"{SITE_META_PREFIX}{visit.task_id}", record)
 
     def completed(self, task_id: str, uav: str, attempt: int) -> bool:
         """This very attempt was already taken as done (its UAV said it again)."""

@@ -25,12 +25,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from masonry.mission.message_types import MISSION_CONTROL, CommandAnswer, OperatorCommand
 from masonry.mission.records import LANDED_STATE
 from masonry.ports import RECALL_REASON
 
 if TYPE_CHECKING:
     from masonry.mission.control_ports import MissionHost
-    from masonry.mission.message_types import CommandAnswer
 
 __all__ = ["CommandOutcome", "Operator"]
 
@@ -186,6 +186,18 @@ class Operator:
     def _recall(self, mc: MissionHost, uav: str, now_s: float) -> None:
         self.held.add(uav)
         mc.recall(uav, now_s, RECALL_REASON)
+
+    def answer(self, mc: MissionHost, msg: OperatorCommand, now_s: float) -> CommandAnswer:
+        """A command over the network: applied now, answered to the operator. ``masonry ctl`` sends it again
+        until it hears the answer: a command already answered (its ``id``) is answered again, not applied twice."""
+        answer = self.answered.get(msg.id) if msg.id else None
+        if answer is None:
+            command = {"command": msg.command, "uav": msg.uav, "role": msg.role, "limit": msg.limit}
+            out = self.apply(mc, {k: v for k, v in command.items() if v is not None}, now_s)
+            answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
+            if msg.id:
+                self.answered[msg.id] = answer
+        return answer
 
     def holds_dispatch(self) -> bool:
         """No assignment at all now (paused, or aborting)."""
