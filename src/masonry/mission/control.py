@@ -6,17 +6,13 @@ to idle UAVs through the dispatcher, journal every assignment, completion, failu
 assignments, and send its own heartbeat. The loop around it is thin (``masonry sim`` steps it in simulated
 time, ``masonry mission-control`` in wall time), so the same code runs in both.
 
-Airspace: a UAV setting off for a site asks for the column there (``ClearanceRequest``); mission control grants
-columns first come, first served, never two within ``column_radius_m`` of each other, or tells the UAV where to
-wait (:class:`~masonry.mission.airspace.ColumnClearance`), and frees a lost UAV's columns (docs/safety.md).
-
-Results (docs/security.md): a completion counts only if it comes from the UAV the task is assigned to, for the
-current attempt, and no sooner after the assignment than ``min_fraction`` of the least time the task can take
-(``min_durations_s``, :func:`masonry.planner.min_durations_s`). Anything else is ignored and counted by reason
-in ``events.ignored``; the task stays assigned. These checks hold with or without a mission key.
-
-Startup: a UAV takes tasks once it has been heard from. Mission control waits until the whole fleet is
-online, or ``startup_timeout_s`` after its first step, then removes the UAVs never heard from.
+This class is the thin shell; its parts (issue 27 §2, docs/architecture.md): :mod:`~masonry.mission.reducer`
+(pure: what a message asks for, which results count: docs/security.md), :mod:`~masonry.mission.liveness` (one
+enum per UAV: heard, silent, lost, rejoined, out of service), :mod:`~masonry.mission.ledger` (the attempts and
+their journal lines), :mod:`~masonry.mission.outbox` (what is sent and told), :mod:`~masonry.mission.control_ports`
+(the operator's, the wind limit's and the journal's Protocols), and the effects: ``control_results``,
+``control_losses`` (startup: the UAVs never heard within ``startup_timeout_s`` are removed), ``control_airspace``
+(the airspace of docs/safety.md answers the UAVs' ``ClearanceRequest``), ``control_watch`` and ``control_resume``.
 """
 
 from __future__ import annotations
@@ -55,15 +51,12 @@ from masonry.mission.messages import (
 from masonry.mission.operator import Operator
 from masonry.mission.outbox import MissionEvents, Outbox
 from masonry.mission.records import Attempt, UavLink
-from masonry.mission.reducer import (
-    OUT_OF_SERVICE_STATE,
-    Step,
-    steps_of,
-)
+from masonry.mission.reducer import OUT_OF_SERVICE_STATE, Step, steps_of
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
 from masonry.mission.transport import Transport
+from masonry.mission.volumes import Vec3
 from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind
 from masonry.placement_check import PlacementCheck
@@ -79,8 +72,6 @@ if TYPE_CHECKING:
 __all__ = ["OUT_OF_SERVICE_STATE", "Attempt", "MissionControl", "MissionEvents", "UavLink"]
 
 log = logging.getLogger(__name__)
-
-Vec3 = tuple[float, float, float]
 
 
 class MissionControl:
@@ -399,11 +390,7 @@ class MissionControl:
     def sample(self, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]) -> None:
         """Hand the sink a ``uav`` event per live UAV, with its position and battery measured outside mission
         control (the simulator's world); mission control's own view is unchanged."""
-        if self.sink is None:
-            return
-        for name, link in self.uavs.items():
-            if name in positions_m and not link.lost:
-                control_airspace.emit_uav(self, now_s, link, positions_m[name], batteries.get(name))
+        control_airspace.sample(self, now_s, positions_m, batteries)
 
     def _broadcast(self, msg: Message) -> None:
         self.out.broadcast(msg, [name for name, link in self.uavs.items() if not link.lost])

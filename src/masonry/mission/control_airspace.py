@@ -36,6 +36,7 @@ __all__ = [
     "on_clearance_request",
     "raise_layers",
     "report",
+    "sample",
 ]
 
 log = logging.getLogger("masonry.mission.control")
@@ -186,3 +187,14 @@ def grant_waiting(mc: MissionControl, now_s: float) -> None:
         emit_clearance(mc, now_s, g)
         how = "granted" if g.granted else "held"
         log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
+
+
+def sample(
+    mc: MissionControl, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]
+) -> None:
+    """Hand the sink a ``uav`` event per live UAV, its position and battery measured outside mission control."""
+    if mc.sink is None:
+        return
+    for name, link in mc.uavs.items():
+        if name in positions_m and not link.lost:
+            emit_uav(mc, now_s, link, positions_m[name], batteries.get(name))
