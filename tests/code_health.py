@@ -24,8 +24,6 @@ CEILINGS = {"any_mentions": 575, "in_function_imports": 150}
 # The modules still over MAX_MODULE_LINES, each at most the size it had when the ratchet began: a module here may
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
 OVERSIZE_CEILINGS = {
-    "mission/airspace.py": 799,
-    "mission/control.py": 978,
     "mission/handler.py": 703,
     "planner/dispatch.py": 717,
 }
