@@ -19,14 +19,11 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "masonry"
 MAX_MODULE_LINES = 600
 
 # Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
-CEILINGS = {"any_mentions": 575, "in_function_imports": 150}
+CEILINGS = {"any_mentions": 556, "in_function_imports": 150}
 
 # The modules still over MAX_MODULE_LINES, each at most the size it had when the ratchet began: a module here may
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
-OVERSIZE_CEILINGS = {
-    "mission/airspace.py": 799,
-    "mission/control.py": 977,
-}
+OVERSIZE_CEILINGS: dict[str, int] = {}
 
 _ANY = re.compile(r"\bAny\b")
 

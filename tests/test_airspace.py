@@ -591,11 +591,11 @@ def test_the_work_altitude_of_the_wall_is_the_highest_of_its_tasks(courses, per,
 def test_with_rising_layers_no_flight_passes_low_over_the_wall_and_the_low_layers_are_used(monkeypatch):
     """A tall wall: the first flights get layers below the finished wall's work altitude, and every lateral
     flight keeps its lowest point (carried brick, rod or nozzle) well above the bricks under it."""
-    from masonry.mission import airspace
+    from masonry.mission import airspace_requests
     from masonry.sim import world
 
     granted: list[float] = []
-    grant = airspace.ColumnClearance._granted
+    grant = airspace_requests.granted
 
     def spy_granted(self, *args, **kwargs):
         g = grant(self, *args, **kwargs)
@@ -631,7 +631,7 @@ def test_with_rising_layers_no_flight_passes_low_over_the_wall_and_the_low_layer
                 gap = tool[2] - self.field.support_at(tool[0], tool[1])
             lowest_gap[name] = min(lowest_gap.get(name, math.inf), gap)
 
-    monkeypatch.setattr(airspace.ColumnClearance, "_granted", spy_granted)
+    monkeypatch.setattr(airspace_requests, "granted", spy_granted)
     monkeypatch.setattr(world.World, "step", spy_step)
     bp = running_bond(8, 3, brick_uavs=2, adhesion_uavs=1)
     r = simulate(bp)

@@ -361,7 +361,8 @@ def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a
     )
     assert mc.columns.layer_base_m == max(cruise, work(placed)) < final
     mc._dispatch(0.0)  # both UAVs take their first task
-    assert mc._running and mc.columns.layer_base_m == max(cruise, work(placed + list(mc._running)))
+    running = mc.ledger.running
+    assert running and mc.columns.layer_base_m == max(cruise, work(placed + list(running)))
     # a resumed mission starts over everything the journal says was done or was being worked on
     high = [t.id for t in plan.tasks if not t.done and t.kind == "brick"][-3:]
     with Journal(tmp_path / "j.sqlite") as j:

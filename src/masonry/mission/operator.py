@@ -23,10 +23,14 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from masonry.mission.message_types import MISSION_CONTROL, CommandAnswer, OperatorCommand
 from masonry.mission.records import LANDED_STATE
 from masonry.ports import RECALL_REASON
+
+if TYPE_CHECKING:
+    from masonry.mission.control_ports import MissionHost
 
 __all__ = ["CommandOutcome", "Operator"]
 
@@ -56,7 +60,7 @@ class Operator:
         #: every command and its answer, in order (journaled)
         self.history: list[dict[str, Any]] = []
         #: network commands answered, by id (a command sent again is answered again, not applied twice)
-        self.answered: dict[str, Any] = {}
+        self.answered: dict[str, CommandAnswer] = {}
         self.version = 0  # bumped by every accepted command (the stall watchdog counts it as progress)
         self._lock = threading.Lock()
         self._inbox: list[tuple[Mapping[str, Any], Callable[[CommandOutcome], None] | None]] = []
@@ -85,7 +89,7 @@ class Operator:
         return box[0]
 
     # -- mission control's side --------------------------------------------------------------------------
-    def step(self, mc: Any, now_s: float) -> None:
+    def step(self, mc: MissionHost, now_s: float) -> None:
         """Apply the queued commands; end an abort once every UAV is down with no task."""
         with self._lock:
             inbox, self._inbox = self._inbox, []
@@ -98,7 +102,7 @@ class Operator:
             if mc.journal is not None:
                 mc.journal.set_meta("aborted", {"time_s": now_s})
 
-    def apply(self, mc: Any, command: Mapping[str, Any], now_s: float) -> CommandOutcome:
+    def apply(self, mc: MissionHost, command: Mapping[str, Any], now_s: float) -> CommandOutcome:
         """Apply one command to mission control ``mc`` at ``now_s``; journal it and tell the sink."""
         outcome = self._apply(mc, command, now_s)
         if outcome.accepted:
@@ -123,7 +127,7 @@ class Operator:
         )
         return outcome
 
-    def _apply(self, mc: Any, command: Mapping[str, Any], now_s: float) -> CommandOutcome:
+    def _apply(self, mc: MissionHost, command: Mapping[str, Any], now_s: float) -> CommandOutcome:
         what = command.get("command")
         if mc.ended_at_s is not None:
             return CommandOutcome(False, "the mission is over")
@@ -163,7 +167,7 @@ class Operator:
             return self._limit(mc, command)
         return CommandOutcome(False, f"unknown command {what!r}")
 
-    def _limit(self, mc: Any, command: Mapping[str, Any]) -> CommandOutcome:
+    def _limit(self, mc: MissionHost, command: Mapping[str, Any]) -> CommandOutcome:
         role, n = command.get("role"), command.get("limit")
         roles = {link.spec.role for link in mc.uavs.values()}
         if role not in roles:
@@ -179,15 +183,27 @@ class Operator:
         mc.wake()
         return CommandOutcome(True)
 
-    def _recall(self, mc: Any, uav: str, now_s: float) -> None:
+    def _recall(self, mc: MissionHost, uav: str, now_s: float) -> None:
         self.held.add(uav)
         mc.recall(uav, now_s, RECALL_REASON)
+
+    def answer(self, mc: MissionHost, msg: OperatorCommand, now_s: float) -> CommandAnswer:
+        """A command over the network: applied now, answered to the operator. ``masonry ctl`` sends it again
+        until it hears the answer: a command already answered (its ``id``) is answered again, not applied twice."""
+        answer = self.answered.get(msg.id) if msg.id else None
+        if answer is None:
+            command = {"command": msg.command, "uav": msg.uav, "role": msg.role, "limit": msg.limit}
+            out = self.apply(mc, {k: v for k, v in command.items() if v is not None}, now_s)
+            answer = CommandAnswer(MISSION_CONTROL, msg.id, msg.command, out.accepted, out.reason, now_s)
+            if msg.id:
+                self.answered[msg.id] = answer
+        return answer
 
     def holds_dispatch(self) -> bool:
         """No assignment at all now (paused, or aborting)."""
         return self.paused or self.aborting
 
-    def may_fly(self, mc: Any, uav: str) -> bool:
+    def may_fly(self, mc: MissionHost, uav: str) -> bool:
         """May ``uav`` take a task now (not held, and its role under its limit)?"""
         if uav in self.held:
             return False
@@ -202,7 +218,7 @@ class Operator:
         )
         return flying < limit
 
-    def _all_down(self, mc: Any) -> bool:
+    def _all_down(self, mc: MissionHost) -> bool:
         return not mc.dispatcher.in_progress and all(
             link.lost or (link.state == LANDED_STATE and not link.taking_off) for link in mc.uavs.values()
         )

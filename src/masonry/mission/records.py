@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 from typing import Literal
@@ -36,6 +37,24 @@ class Attempt:
     adopted: bool = False
 
 
+class Liveness(enum.Enum):
+    """What mission control hears of a UAV (:mod:`masonry.mission.liveness` moves it)."""
+
+    #: not heard yet, or quiet past the heartbeat timeout while it may be finishing its work
+    SILENT = "silent"
+    HEARD = "heard"
+    #: declared lost for its silence (its task went back to the pool); it may rejoin
+    LOST = "lost"
+    #: declared lost, then heard again with no task: back in the mission
+    REJOINED = "rejoined"
+    #: it said it is out of service: out of the mission for good
+    OUT_OF_SERVICE = "out of service"
+
+
+#: The report's word for each liveness (``UavLink.status``).
+_STATUS = {Liveness.LOST: "lost", Liveness.OUT_OF_SERVICE: "out of service"}
+
+
 @dataclass
 class UavLink:
     """What mission control knows about one UAV."""
@@ -44,11 +63,10 @@ class UavLink:
     last_heard_s: float | None = None
     position_m: Vec3 | None = None
     state: str = ""
-    lost: bool = False
+    liveness: Liveness = Liveness.SILENT
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
     battery: float | None = None  # as its heartbeats report it (None: they do not)
-    status: str = "ok"  # "ok", "lost" (silent past the timeout) or "out of service" (it said so)
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
     taking_off: bool = False
@@ -56,6 +74,16 @@ class UavLink:
     airspace_until_s: float | None = None
     #: silent with a brick on its magnet: the pickup it puts it back on, then home
     way_via_m: Vec3 | None = None
+
+    @property
+    def lost(self) -> bool:
+        """Out of the mission: lost for its silence, or out of service."""
+        return self.liveness in _STATUS
+
+    @property
+    def status(self) -> str:
+        """``ok``, ``lost`` (silent past the timeout) or ``out of service`` (it said so): the report's word."""
+        return _STATUS.get(self.liveness, "ok")
 
     def moved_to(self, position_m: Vec3) -> None:
         if self.position_m is not None:
@@ -78,4 +106,4 @@ def completion_fields(r: TaskResult, *, phases: bool = True) -> dict[str, object
     return fields
 
 
-__all__ = ["LANDED_STATE", "Attempt", "AttemptStatus", "UavLink", "completion_fields"]
+__all__ = ["LANDED_STATE", "Attempt", "AttemptStatus", "Liveness", "UavLink", "completion_fields"]

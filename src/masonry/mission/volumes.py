@@ -171,6 +171,11 @@ def flight_volumes(
     return vols
 
 
+def same_site(a: Vec3, b: Vec3) -> bool:
+    """The same site (column): the same point horizontally."""
+    return math.hypot(a[0] - b[0], a[1] - b[1]) < 1e-3
+
+
 def stopped_at(xy: XY, z: float, vols: Sequence[Volume]) -> list[Volume]:
     """The volumes of a UAV that stopped at ``xy`` (``z`` high) inside ``vols``: a hover there, and ``STOP_M`` of
     the lateral leg ahead if it stopped on one (it may coast on along it)."""
@@ -231,6 +236,7 @@ __all__ = [
     "flight_volumes",
     "hold_points",
     "point_segment_m",
+    "same_site",
     "segment_segment_m",
     "stopped_at",
     "volumes_clear",

@@ -29,7 +29,7 @@ from masonry.planner.tasks import Plan
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
-    from masonry.mission.journal import Journal
+    from masonry.mission.control_ports import JournalPort
 
 Vec3 = tuple[float, float, float]
 
@@ -45,7 +45,7 @@ class WaitWatch:
 
     def __init__(self, plan: Plan, reservation: str) -> None:
         self.log = WaitLog()
-        self._journal: Journal | None = None
+        self._journal: JournalPort | None = None
         self._journaled: dict[str, list[dict[str, object]]] = {}  # task id -> its closed waits, as journaled
         self._order = {t.id: i for i, t in enumerate(plan.tasks)}
         self._role = {t.id: t.kind for t in plan.tasks}

@@ -1,0 +1,216 @@
+"""The airspace's request decision: a UAV's flight granted, a hold flight near its site, or "hover where you are".
+
+Part of :class:`~masonry.mission.airspace.ColumnClearance` (its rules: the class docstring and docs/safety.md).
+:func:`request` takes a UAV's request into the queue; :func:`evaluate` answers it at the lowest layer that fits,
+first come, first served (:func:`queued_before`), else with a hold flight (:func:`hold_flight`: the hold-point
+choice), else it hovers where it stopped (:func:`hover_where`). A flight no layer can fly inside the fence is
+refused with the reason (:func:`check_fence`). Pure: no I/O, no clock.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+from masonry.geofence import AIRSPACE_MARGIN_M
+from masonry.mission.airspace_state import (
+    FlightRequest,
+    Grant,
+    GrantedFlight,
+    HoldFlight,
+    Phase,
+    UavAirspace,
+    hold_candidates,
+)
+from masonry.mission.fence import flight_fence_problem
+from masonry.mission.sites import enter_ungoverned
+from masonry.mission.volumes import Vec3, contains, same_site, stopped_at
+
+if TYPE_CHECKING:
+    from masonry.mission.airspace import ColumnClearance
+
+__all__ = ["check_fence", "evaluate", "granted", "hold_flight", "hover_where", "queued_before", "request"]
+
+
+def request(
+    c: ColumnClearance,
+    uav: str,
+    site_m: Vec3,
+    now_s: float,
+    position_m: Vec3 | None = None,
+    top_m: float | None = None,
+    to_m: Vec3 | None = None,
+) -> Grant:
+    """``uav`` (now at ``position_m``) sets off for ``site_m``, where it will work up to ``top_m`` (and along
+    to ``to_m``: an adhesion UAV sprays from its site to there).
+
+    (:meth:`ColumnClearance.request`, which says what a repeated or a replaced request gets.)
+    """
+    site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+    top = max(site[2], float(top_m) if top_m is not None else site[2])
+    if c.base_m is None:  # no airspace rules: only the site gate may hold the flight back
+        ok = enter_ungoverned(c.gate, uav, site, now_s)
+        c.granted_count += ok
+        c.refused += not ok
+        return Grant(uav, site, ok)
+    u = c.record(uav)
+    pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+    if u.flight is not None:
+        if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
+            return Grant(uav, site, layer_m=u.flight.layer_m)
+        # turned back for another site, or asks again from outside the flight it was given (a retry after a
+        # failsafe flew it off): it keeps the volumes of that flight until a fresh one is granted
+        u.flight = None
+        u.phase = Phase.PARKED
+    w = u.request
+    if w is not None and same_site(w.site, site):
+        if pos is not None and u.phase is Phase.ASKING and pos != w.position:
+            u.request = dataclasses.replace(w, position=pos)
+            u.seen_version = -1  # where it asks from changed: look again
+        return evaluate(c, uav, u, now_s)
+    if pos is not None and u.zone is None:
+        hover_where(c, uav, pos)  # it turned back mid-flight: it stays where it is until answered
+    to = None
+    if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
+        to = (float(to_m[0]), float(to_m[1]))
+    c.seq += 1
+    u.request, u.hold, u.phase = FlightRequest(site, top, pos, now_s, c.seq, to), None, Phase.ASKING
+    check_fence(c, uav, u.request)
+    u.seen_version, u.answer = -1, None
+    c.touch()  # the queue changed: answers of those behind it may change
+    return evaluate(c, uav, u, now_s)
+
+
+def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Grant:
+    """Grant ``uav``'s flight if it fits, else a hold flight, else "hover where you are"."""
+    w = u.request
+    assert w is not None
+    if u.seen_version == c.version and u.answer is not None:
+        return u.answer
+    u.seen_version = c.version
+    refused = c.fence_refusals.get(uav)
+    if refused is not None and u.phase is Phase.ASKING:
+        c.refused += 1
+        u.answer = Grant(uav, w.site, False, refused=refused)
+        return u.answer
+    earlier = queued_before(c, w.seq)
+    blocked_site = any(
+        math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier
+    ) or (c.gate is not None and not c.gate.may_enter(uav, w.site))
+    if not blocked_site:
+        home = c.is_home(uav, w.site)
+        if u.phase is Phase.AT_HOLD:
+            # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
+            # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
+            # answer, and one that never saw its hold answer (a later one came first) would fly straight.
+            assert u.hold is not None
+            hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
+            for k in range(c.max_layers):
+                extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to, home=home)
+                if c.fits(uav, extra):
+                    u.volumes = u.volumes + extra
+                    c.touch()
+                    return granted(c, uav, u, k, now_s)
+        elif u.phase is Phase.ASKING:
+            start = w.position if w.position is not None else w.site
+            for k in range(c.max_layers):
+                vols = c.flight_volumes_at(start, w.site, w.top_m, k, None, w.to, home=home)
+                if c.fits(uav, vols):
+                    c.take(u, vols)
+                    return granted(c, uav, u, k, now_s)
+    if u.phase is Phase.ASKING:
+        g = hold_flight(c, uav, u)
+        if g is not None:
+            u.answer = g
+            c.held_back += 1
+            return g
+        c.refused += 1
+        u.answer = Grant(uav, w.site, False)
+        return u.answer
+    assert u.hold is not None
+    u.answer = Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
+    return u.answer
+
+
+def granted(c: ColumnClearance, uav: str, u: UavAirspace, k: int, now_s: float) -> Grant:
+    w = u.request
+    assert w is not None
+    u.flight = GrantedFlight(w.site, k, c.alt(k), w.top_m, w.to)
+    u.request, u.hold, u.phase = None, None, Phase.FLYING
+    waited = max(0.0, now_s - w.since_s)
+    c.wait_s += waited
+    c.max_wait_s = max(c.max_wait_s, waited)
+    c.granted_count += 1
+    c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
+    c.touch()
+    if c.gate is not None:
+        c.gate.entered(uav, w.site, now_s)
+    return Grant(uav, w.site, layer_m=c.alt(k))
+
+
+def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
+    """A flight to a hold point near the site, at the lowest layer that fits (None: none fits now)."""
+    w = u.request
+    assert w is not None
+    start = w.position if w.position is not None else w.site
+    others = [o for n, o in c.records.items() if n != uav]
+    pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav]
+    waited = () if c.gate is None else c.gate.waited_on(uav)
+    candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited)
+    if c.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
+        need = AIRSPACE_MARGIN_M + c.zone_slack_m
+        candidates = [h for h in candidates if c.fence.contains(h[0], h[1], need)]
+    for k in range(c.max_layers):
+        for hold in candidates[:6]:
+            vols = c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1]))
+            if c.fits(uav, vols):
+                c.take(u, vols)
+                u.hold, u.phase = HoldFlight(hold, k, c.alt(k)), Phase.TO_HOLD
+                c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
+                return Grant(uav, w.site, False, hold, c.alt(k))
+    return None
+
+
+def hover_where(c: ColumnClearance, uav: str, pos: Vec3) -> None:
+    """``uav`` stopped at ``pos`` (it asks from there, hovering): only a small volume there is its now, if
+    that fits (it should: it was inside its volumes), else it keeps what it held."""
+    u = c.records.get(uav)
+    vols = None if u is None else u.volumes
+    if not vols or u is None:
+        return
+    if len(vols) == 1 and vols[0].kind == "hover":
+        return
+    here = stopped_at((pos[0], pos[1]), c.snap(pos[2]), vols)
+    if c.free(uav, here):
+        u.volumes = here
+        u.origin = None
+        c.touch()
+
+
+def check_fence(c: ColumnClearance, uav: str, w: FlightRequest) -> None:
+    """Note why ``uav``'s new request can never be flown inside the fence, if it cannot (at no layer)."""
+    c.fence_refusals.pop(uav, None)
+    if c.fence is None:
+        return
+    start = w.position if w.position is not None else w.site
+    start = (start[0], start[1], c.snap(start[2]))
+    layers = [c.alt(k) for k in range(c.max_layers)]
+    problem = flight_fence_problem(c.fence, start, w.site, w.top_m, w.to, layers, c.zone_slack_m)
+    if problem is not None:
+        c.fence_refusals[uav] = problem
+
+
+def queued_before(c: ColumnClearance, seq: int) -> list[FlightRequest]:
+    """The requests made before ``seq`` that wait for the airspace: one the :class:`SiteGate` holds back (its
+    site is busy with conflicting work, or its prerequisites are not done) waits for work, not for the
+    airspace, and keeps no one else from coming down near its site (else the two could wait for each other:
+    an adhesion UAV waiting for the brick under its segment, whose UAV waited for the adhesion UAV's turn)."""
+    gate = c.gate
+    return [
+        u.request
+        for n, u in c.waiting_records()
+        if u.request is not None
+        and u.request.seq < seq
+        and (gate is None or gate.may_enter(n, u.request.site))
+    ]

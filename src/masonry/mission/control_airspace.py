@@ -1,0 +1,200 @@
+"""Mission control's side of the airspace: requests answered, reports followed, layers raised, events told.
+
+Part of :class:`~masonry.mission.control.MissionControl` (issue 27 §2): the airspace itself
+(:class:`~masonry.mission.airspace.ColumnClearance` or :class:`~masonry.mission.reserved.TableClearance`) decides;
+these functions feed it what the UAVs say, send its answers, and fail a task whose flight leaves the fence.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from masonry.errors import MissionError
+from masonry.geofence import Site
+from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, task_work_altitude_m
+from masonry.mission.events import volume_list
+from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest
+from masonry.mission.records import LANDED_STATE, UavLink
+from masonry.mission.reserved import AIRSPACES, TableClearance
+from masonry.mission.sites import SiteGate
+from masonry.mission.volumes import Vec3
+from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+if TYPE_CHECKING:
+    from collections.abc import Iterable, Mapping
+
+    from masonry.mission.control import MissionControl
+
+__all__ = [
+    "answer",
+    "emit_clearance",
+    "emit_uav",
+    "fail_outside_fence",
+    "grant_waiting",
+    "make_airspace",
+    "on_clearance_request",
+    "raise_layers",
+    "report",
+    "sample",
+]
+
+log = logging.getLogger("masonry.mission.control")
+
+
+def report(mc: MissionControl, link: UavLink, state: str, position_m: Vec3 | None) -> None:
+    """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
+    flying, it holds only the pad."""
+    link.state = state
+    if position_m is None:
+        return
+    link.moved_to(position_m)
+    name = link.spec.name
+    if position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
+        link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
+    mc.columns.progress(name, position_m)
+    if state == LANDED_STATE and not link.taking_off and mc.dispatcher.task_of(name) is None:
+        # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
+        mc.columns.landed(name, position_m)
+
+
+def on_clearance_request(mc: MissionControl, msg: ClearanceRequest, now_s: float) -> None:
+    """A UAV asks for a flight (or says it left a column, or came down): the airspace answers."""
+    if msg.release:
+        mc.columns.release(msg.sender, msg.site_m)
+        if mc.sites.released(msg.sender, msg.site_m, now_s):
+            mc.columns.touch()
+        return
+    if msg.arrived:
+        mc.columns.end_transit(msg.sender)
+        return
+    if msg.position_m is not None:
+        mc.columns.progress(msg.sender, msg.position_m)
+    if mc.sites.leaving(msg.sender, msg.site_m, now_s):
+        mc.columns.touch()  # a site is free: who waits for it may go now
+    g = mc.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+    mc.waits.answered(msg.sender, mc.dispatcher.task_of(msg.sender), g.site_m, g.granted)
+    emit_clearance(mc, now_s, g)
+    if g.refused is not None:
+        fail_outside_fence(mc, msg.sender, g.refused, now_s)
+    answer(mc, g, now_s)
+
+
+def answer(mc: MissionControl, g: Grant, now_s: float) -> None:
+    """Send the airspace's answer ``g`` to its UAV."""
+    radius_m = mc.columns.release_radius_m
+    answer = Clearance(MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m)
+    mc.out.send(g.uav, answer)
+
+
+def fail_outside_fence(mc: MissionControl, uav: str, reason: str, now_s: float) -> None:
+    """``uav``'s flight can only be flown outside the site's fence: its task fails with the reason (once per
+    task in hand; the attempt counts, so a task no UAV can reach inside the fence ends stuck, saying why)."""
+    task_id = mc.dispatcher.task_of(uav)
+    if task_id is None:
+        return
+    key = (uav, task_id, mc.dispatcher.attempt_of(task_id))
+    if key in mc.fence_failed:
+        return
+    mc.fence_failed.add(key)
+    mc.recall(uav, now_s, reason)
+
+
+def emit_clearance(mc: MissionControl, now_s: float, g: Grant) -> None:
+    if mc.sink is not None:
+        mc.out.emit(
+            now_s,
+            "clearance",
+            g.uav,
+            mc.dispatcher.task_of(g.uav),
+            site_m=list(g.site_m),
+            granted=g.granted,
+            hold_m=None if g.hold_m is None else list(g.hold_m),
+            layer_m=g.layer_m,
+            volumes=volume_list(mc.columns.volumes(g.uav)),
+        )
+
+
+def raise_layers(mc: MissionControl, task_ids: Iterable[str]) -> None:
+    """These tasks' bricks may be on the wall now: transit layers granted from now on clear them."""
+    if mc.layer_floor_m is None:
+        return
+    top = max(
+        (task_work_altitude_m(mc.tasks[tid], mc.layer_floor_m, timing=mc.timing) for tid in task_ids),
+        default=None,
+    )
+    if top is not None:
+        mc.columns.raise_base(top)
+
+
+def emit_uav(
+    mc: MissionControl,
+    now_s: float,
+    link: UavLink,
+    position_m: Vec3 | None = None,
+    battery: float | None = None,
+) -> None:
+    """A UAV's state, position, task and airspace as mission control knows them (its position and battery
+    as measured elsewhere, if given)."""
+    name = link.spec.name
+    p = link.position_m if position_m is None else position_m
+    mc.out.emit(
+        now_s,
+        "uav",
+        name,
+        mc.dispatcher.task_of(name),
+        state=link.state,
+        position_m=None if p is None else list(p),
+        battery=link.battery if battery is None else battery,
+        status=link.status,
+        volumes=volume_list(mc.columns.volumes(name)),
+    )
+
+
+def make_airspace(
+    kind: str,
+    radius_m: float,
+    layers_m: tuple[float | None, float, float | None],
+    homes: Mapping[str, Vec3],
+    gate: SiteGate,
+    fence: Site | None,
+    timing: TaskTiming | None,
+) -> ColumnClearance | TableClearance:
+    """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
+
+    Args:
+        layers_m: the transit layers' base, their spacing and the floor layer 0 rises from (``MissionControl``'s
+            ``layer_base_m``, ``layer_spacing_m`` and ``layer_floor_m``).
+    """
+    if kind not in AIRSPACES:
+        raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
+    base_m, spacing_m, floor_m = layers_m
+    made = (TableClearance if kind == "table" else ColumnClearance)(
+        radius_m, base_m, spacing_m, homes=homes, start_base_m=floor_m, gate=gate, fence=fence
+    )
+    if isinstance(made, TableClearance):
+        made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
+    return made
+
+
+def grant_waiting(mc: MissionControl, now_s: float) -> None:
+    """The airspace looks at the waiting requests again; each answer is sent, noted and told."""
+    if not mc.columns.waiting:
+        return
+    for g in mc.columns.grant(now_s):
+        answer(mc, g, now_s)
+        mc.waits.answered(g.uav, mc.dispatcher.task_of(g.uav), g.site_m, g.granted)
+        emit_clearance(mc, now_s, g)
+        how = "granted" if g.granted else "held"
+        log.debug("flight to (%.2f, %.2f) %s to %s", *g.site_m[:2], how, g.uav)
+
+
+def sample(
+    mc: MissionControl, now_s: float, positions_m: Mapping[str, Vec3], batteries: Mapping[str, float]
+) -> None:
+    """Hand the sink a ``uav`` event per live UAV, its position and battery measured outside mission control."""
+    if mc.sink is None:
+        return
+    for name, link in mc.uavs.items():
+        if name in positions_m and not link.lost:
+            emit_uav(mc, now_s, link, positions_m[name], batteries.get(name))

@@ -1,0 +1,136 @@
+"""Mission control's results: a task's result acted on, one said again, one heard late, a task its UAV forgot.
+
+Part of :class:`~masonry.mission.control.MissionControl` (issue 27 §2): the verdicts come from the pure
+:mod:`masonry.mission.reducer` (docs/security.md's checks), the records go to the
+:class:`~masonry.mission.ledger.AttemptLedger`; these functions carry the effects out on the dispatcher, the
+spares, the adhesive's gate and the as-built watch.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from masonry.mission.as_built import take_result
+from masonry.mission.messages import Heartbeat, Result
+from masonry.mission.records import UavLink
+from masonry.mission.reducer import dropped_reason, late_completion, screen_result
+from masonry.ports import RECALL_REASON
+
+if TYPE_CHECKING:
+    from masonry.mission.control import MissionControl
+
+__all__ = ["check_holds_task", "heard_again", "ignore", "late_result", "on_heartbeat", "take_result_message"]
+
+log = logging.getLogger("masonry.mission.control")
+
+
+def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
+    """A task's result from a UAV in the mission: acted on (done or failed), or ignored and counted by reason."""
+    r = mc.placement.against_design(msg.result)  # (its deviation from the design: issue 30)
+    att = mc.ledger.running.get(r.task_id)
+    least_s = mc.min_durations_s.get(r.task_id)
+    owner = mc.dispatcher.in_progress.get(r.task_id)
+    ignored = screen_result(msg, owner, att, least_s, mc.min_fraction, now_s)
+    if ignored is not None:
+        ignore(mc, ignored.reason, ignored.detail)
+        return
+    assert att is not None  # (screen_result ignores a result with no running attempt)
+    if r.status == "done":
+        mc.ledger.done(att, r, now_s)
+        log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
+        mc.dispatcher.complete(r.task_id)
+        if mc.glue is not None:
+            mc.glue.completed(r.task_id, now_s)
+        mc.ledger.journal_done(now_s, r, msg.sender)
+        mc.out.emit(
+            now_s,
+            "completed",
+            msg.sender,
+            r.task_id,
+            attempt=att.attempt,
+            placement_error_m=r.placement_error_m,
+            coverage=r.coverage,
+            **mc.placement.event_fields(r.as_built),
+        )
+        mc.placement.completed(mc, r, msg.sender, now_s)
+    else:
+        reason = r.reason or "failed"
+        mc.ledger.end(att, now_s, "failed", reason)
+        take_result(att, r)
+        log.info(
+            "%s failed on %s (attempt %d, %.1f-%.1f s): %s",
+            *(r.task_id, msg.sender, att.attempt, att.start_s, now_s, reason),
+        )
+        # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
+        # attempt of the task
+        count, give_up = mc.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
+        mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
+        mc.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
+        mc.out.emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
+    mc.wake()
+
+
+def ignore(mc: MissionControl, reason: str, detail: str) -> None:
+    """A result not acted on: counted by ``reason``, logged."""
+    mc.out.ignored(reason)
+    log.warning("ignoring %s", detail)
+
+
+def heard_again(mc: MissionControl, msg: Result) -> bool:
+    """A completion already taken, said again by its UAV (the handler repeats one when mission control's
+    heartbeats paused around it, as a slow link or a busy computer makes them): nothing to do, nothing
+    suspicious."""
+    r = msg.result
+    return r.status == "done" and mc.ledger.completed(r.task_id, msg.sender, msg.attempt)
+
+
+def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
+    """A completion from a UAV its task was released from (:func:`~masonry.mission.reducer.late_completion`):
+    done, and a UAV flying it again is recalled. True if taken."""
+    r = msg.result
+    att = mc.ledger.last_of(r.task_id, msg.sender)
+    settled = r.task_id in mc.dispatcher.done or r.task_id in mc.dispatcher.stuck
+    if att is None or not late_completion(msg, att, settled, mc.dispatcher.in_progress.get(r.task_id)):
+        return False
+    other = mc.dispatcher.complete_late(r.task_id)
+    log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
+    mc.ledger.done(att, r, now_s)
+    if other is not None:
+        why = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
+        again = mc.ledger.running.get(r.task_id)
+        if again is not None:
+            mc.ledger.end(again, now_s, "failed", why, result=False)
+            mc.ledger.journal_failed(now_s, r.task_id, other, why)
+        mc.recall(other, now_s, why)
+    mc.ledger.journal_done(now_s, r, msg.sender, phases=False)
+    mc.out.emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
+    mc.wake()
+    return True
+
+
+def check_holds_task(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
+    """A UAV's heartbeat says it forgot its task (:func:`~masonry.mission.reducer.dropped_reason`): the task
+    goes back to the pool without counting an attempt."""
+    name = msg.sender
+    tid = mc.dispatcher.task_of(name)
+    att = None if tid is None else mc.ledger.running.get(tid)
+    reason = dropped_reason(msg, att, now_s, mc.heartbeat_timeout_s)
+    if tid is None or att is None or reason is None:
+        return
+    log.warning("%s: %s: released", name, reason)
+    mc.ledger.end(att, now_s, "failed", reason)
+    mc.dispatcher.fail(tid, count=False)
+    mc.ledger.journal_failed(now_s, tid, name, reason)
+    mc.out.emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
+    mc.wake()
+
+
+def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float) -> None:
+    """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
+    wind limit, and the task it holds."""
+    if msg.battery is not None:
+        link.battery = msg.battery
+    if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
+        mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
+    check_holds_task(mc, msg, now_s)

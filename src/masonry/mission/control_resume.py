@@ -1,0 +1,73 @@
+"""Mission control resumed from its journal (``--resume``): done tasks stay done, running attempts stay with their UAVs.
+
+Part of :class:`~masonry.mission.control.MissionControl` (issue 27 §2): the
+:class:`~masonry.mission.ledger.AttemptLedger` rebuilds the history; these functions put the dispatcher, the
+spares, the adhesive's gate, the site intervals, the waits and the UAVs' liveness back where the journal left them.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from masonry.errors import JournalError, PlanningError
+from masonry.mission import control_airspace
+from masonry.mission.records import Liveness
+from masonry.mission.sites import journaled_visits
+
+if TYPE_CHECKING:
+    from masonry.mission.control import MissionControl
+    from masonry.mission.journal_state import JournalState, RunningRecord
+
+__all__ = ["adopt", "restore"]
+
+log = logging.getLogger("masonry.mission.control")
+
+
+def restore(mc: MissionControl, state: JournalState) -> None:
+    """Continue from a journal's replayed state: done tasks stay done with their times, attempts carry on.
+
+    Attempts in progress when the previous run stopped stay with their UAVs (:func:`adopt`): what each
+    UAV says first decides (its completion, said again, is taken; its heartbeat naming the task keeps it
+    flying; one naming no task gives it back to the pool, not counted; silence declares it lost). Handing
+    them out again at once would fly a task twice whose completion never reached the journal.
+    UAVs the journal declared lost stay lost.
+    """
+
+    done = {rec.task_id: rec for rec in state.done}
+    unknown = sorted((set(done) | {f.task_id for f in state.failures}) - set(mc.tasks))
+    if unknown:
+        raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
+    attempts = mc.spares.restore(state.meta, state.attempts, mc.dispatcher.max_attempts)  # (spares)
+    mc.dispatcher.restore(list(done), attempts)
+    if mc.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
+        mc.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
+    mc.ledger.restore(state.failures, done)
+    for name in state.lost_uavs:
+        link = mc.uavs.get(name)
+        if link is not None and not link.lost:
+            link.liveness = Liveness.LOST  # (lost before this run: not awaited to rejoin)
+            mc.dispatcher.remove_uav(name)
+    for run in state.running:
+        adopt(mc, run)
+    mc.ledger.sort()
+    mc.resumed_at_s = state.last_time_s
+    mc.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))
+    mc.waits.restore(state.meta)
+    # what the previous run may have built: done tasks, and every task it ever assigned
+    control_airspace.raise_layers(mc, [*done, *attempts, *state.in_progress])
+
+
+def adopt(mc: MissionControl, run: RunningRecord) -> None:
+    """A journaled attempt still running at the stop: in progress on its UAV again (unless the UAV is lost,
+    another attempt holds it, or the task cannot run now: then it goes back to the pool as before)."""
+    link = mc.uavs.get(run.uav)
+    if link is None or link.lost or run.task_id in mc.dispatcher.done:
+        return
+    try:
+        mc.dispatcher.adopt(run.task_id, run.uav)
+    except PlanningError as exc:
+        log.warning("%s: not kept on %s after the resume: %s", run.task_id, run.uav, exc)
+        return
+    mc.ledger.adopt(run.task_id, run.uav, run.attempt, run.start_s)
+    log.info("%s kept on %s (attempt %d) from before the resume", run.task_id, run.uav, run.attempt)

@@ -1,0 +1,58 @@
+"""Mission control's watches: the progress watchdog (a stall stops the mission) and the wind limit's changes.
+
+Part of :class:`~masonry.mission.control.MissionControl` (issue 27 §2).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import TYPE_CHECKING
+
+from masonry.mission.stall import stall_of
+
+if TYPE_CHECKING:
+    from masonry.mission.control import MissionControl
+
+__all__ = ["on_wind", "watch_progress"]
+
+log = logging.getLogger("masonry.mission.control")
+
+
+def watch_progress(mc: MissionControl, now_s: float) -> None:
+    """The watchdog: progress is a task done or failed, a flight or hold flight granted, a UAV's state
+    changed or a UAV lost; none for ``stall_timeout_s`` stops the mission with the wait-for graph."""
+    if mc.operator.paused or mc.operator.held or mc.operator.aborting:
+        return  # waiting for the operator is no stall
+    wind = mc.wind_limit
+    if wind is not None and wind.grounded:
+        mc.watch.observe(now_s, ("wind", wind.version))
+        return  # waiting for the wind to drop is no stall either
+    signature = (
+        mc.operator.version,
+        mc.ledger.results,
+        mc.columns.granted_count,
+        mc.columns.held_back,
+        tuple((link.state, link.lost) for link in mc.uavs.values()),
+    )
+    if not mc.watch.observe(now_s, signature) or mc.finished:
+        return
+    assert mc.watch.since_s is not None and mc.watch.timeout_s is not None
+    live = [(name, link.state) for name, link in mc.uavs.items() if not link.lost]
+    mc.stall = stall_of(now_s, mc.watch.since_s, mc.watch.timeout_s, live, mc.dispatcher, mc.columns)
+    log.warning("%s", mc.stall.line())
+    mc.out.emit(now_s, "stall", line=mc.stall.line())
+
+
+def on_wind(mc: MissionControl, now_s: float) -> None:
+    """The wind grounded or freed UAVs: say so, and dispatch again."""
+    wind = mc.wind_limit
+    assert wind is not None
+    mc.wake()
+    speed = wind.speed_mps if wind.speed_mps is not None else math.nan
+    grounded = sorted(wind.grounded)
+    if grounded:
+        log.warning("wind %.1f m/s: no tasks for %s (above max_wind_mps)", speed, ", ".join(grounded))
+    else:
+        log.info("wind %.1f m/s: every UAV within its max_wind_mps, dispatching again", speed)
+    mc.out.emit(now_s, "wind", speed_mps=None if math.isnan(speed) else float(speed), grounded=grounded)

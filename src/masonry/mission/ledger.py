@@ -1,0 +1,137 @@
+"""The attempt ledger: every attempt mission control made, the running one of each task, and their journal lines.
+
+An :class:`~masonry.mission.records.Attempt` begins when a task is assigned (journaled ``assigned``) and ends done
+(``completed``), failed (``failed``: a failure report, a UAV lost with it, a task its UAV forgot) or, for a
+completion heard late, done after all. :meth:`AttemptLedger.restore` rebuilds the history from a journal's
+replayed state (``--resume``). The ledger only records: what a result means for the dispatcher, the airspace and
+the spares is mission control's (:mod:`masonry.mission.control`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+from masonry.mission.as_built import journaled_as_built, take_result
+from masonry.mission.control_ports import JournalPort
+from masonry.mission.journal_state import journaled_phases
+from masonry.mission.records import Attempt, AttemptStatus, completion_fields
+from masonry.mission.sites import SITE_META_PREFIX
+from masonry.ports import TaskResult
+
+if TYPE_CHECKING:
+    from masonry.mission.journal_state import DoneRecord, FailureRecord
+    from masonry.mission.sites import SiteVisit
+
+__all__ = ["AttemptLedger"]
+
+
+class AttemptLedger:
+    """The history of attempts and the running one per task, written to ``journal`` (None: none) as they change."""
+
+    def __init__(self, journal: JournalPort | None) -> None:
+        self.journal = journal
+        self.history: list[Attempt] = []
+        self.running: dict[str, Attempt] = {}  # task id -> its running attempt
+        #: attempts ended by a result or by their UAV dropping them (progress for the stall watchdog)
+        self.results = 0
+
+    def begin(self, task_id: str, uav: str, attempt: int, now_s: float) -> Attempt:
+        """``task_id`` assigned to ``uav`` now (its ``attempt``-th attempt): running, journaled."""
+        att = Attempt(task_id, uav, attempt, now_s)
+        self.history.append(att)
+        self.running[task_id] = att
+        if self.journal is not None:
+            self.journal.record_assignment(now_s, task_id, uav, attempt)
+        return att
+
+    def adopt(self, task_id: str, uav: str, attempt: int, start_s: float) -> Attempt:
+        """A journaled attempt still running when the previous run stopped: running again (not journaled twice)."""
+        att = Attempt(task_id, uav, attempt, start_s, adopted=True)
+        self.history.append(att)
+        self.running[task_id] = att
+        return att
+
+    def end(
+        self,
+        att: Attempt,
+        now_s: float,
+        status: AttemptStatus,
+        reason: str | None = None,
+        *,
+        result: bool = True,
+    ) -> None:
+        """``att`` ended now (no longer running); ``result``: on a result or a dropped task (counted)."""
+        if self.running.get(att.task_id) is att:
+            del self.running[att.task_id]
+        if result:
+            self.results += 1
+        att.end_s = now_s
+        att.status = status
+        att.reason = reason
+
+    def done(self, att: Attempt, r: TaskResult, now_s: float) -> None:
+        """``att`` completed with result ``r`` (its measurements kept); not journaled (:meth:`journal_done`)."""
+        self.end(att, now_s, "done")
+        take_result(att, r)
+
+    def journal_done(self, now_s: float, r: TaskResult, uav: str, *, phases: bool = True) -> None:
+        """Journal ``uav``'s completion ``r`` (with its phases unless ``phases`` is False: heard late)."""
+        if self.journal is not None:
+            self.journal.record_completion(now_s, r.task_id, uav, **completion_fields(r, phases=phases))
+
+    def journal_failed(self, now_s: float, task_id: str, uav: str, reason: str) -> None:
+        """Journal a failed attempt of ``task_id`` on ``uav``."""
+        if self.journal is not None:
+            self.journal.record_failure(now_s, task_id, uav, reason)
+
+    def journal_lost(self, now_s: float, uav: str) -> None:
+        """Journal that ``uav`` is out of the mission."""
+        if self.journal is not None:
+            self.journal.record_uav_lost(now_s, uav)
+
+    def set_meta(self, key: str, value: object) -> None:
+        """Keep ``value`` under ``key`` in the journal's metadata (none without a journal)."""
+        if self.journal is not None:
+            self.journal.set_meta(key, value)
+
+    def journal_visit(self, visit: SiteVisit) -> None:
+        """A site interval started or ended: journaled (the last visit of each task), for a resumed report."""
+        record = {"uav": visit.uav, "start_s": visit.start_s, "end_s": visit.end_s}
+        self.set_meta(f"{SITE_META_PREFIX}{visit.task_id}", record)
+
+    def completed(self, task_id: str, uav: str, attempt: int) -> bool:
+        """This very attempt was already taken as done (its UAV said it again)."""
+        return any(
+            (a.task_id, a.uav, a.attempt, a.status) == (task_id, uav, attempt, "done") for a in self.history
+        )
+
+    def last_of(self, task_id: str, uav: str) -> Attempt | None:
+        """``uav``'s latest attempt of ``task_id``, if any."""
+        return next((a for a in reversed(self.history) if a.task_id == task_id and a.uav == uav), None)
+
+    def restore(self, failures: tuple[FailureRecord, ...], done: Mapping[str, DoneRecord]) -> None:
+        """The failed and the completed attempts of a journal's replayed state, into the history."""
+        for f in failures:
+            start_s = f.start_s if f.start_s is not None else f.time_s
+            self.history.append(Attempt(f.task_id, f.uav, f.attempt, start_s, f.time_s, "failed", f.reason))
+        for task_id, rec in done.items():
+            fields = dict(rec.fields)
+            self.history.append(
+                Attempt(
+                    task_id=task_id,
+                    uav=rec.uav,
+                    attempt=rec.attempt,
+                    start_s=rec.start_s if rec.start_s is not None else rec.time_s,
+                    end_s=rec.time_s,
+                    status="done",
+                    placement_error_m=fields.get("placement_error_m"),
+                    coverage=fields.get("coverage"),
+                    phases=journaled_phases(fields.get("phases")),
+                    as_built=journaled_as_built(fields.get("as_built")),
+                )
+            )
+
+    def sort(self) -> None:
+        """The history in the order the attempts began (after a restore)."""
+        self.history.sort(key=lambda a: (a.start_s, a.task_id))

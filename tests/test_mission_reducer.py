@@ -1,0 +1,165 @@
+"""Mission control's parts on their own: the pure reducer (message -> steps, verdicts) and the liveness tracker."""
+
+from __future__ import annotations
+
+import pytest
+
+from masonry.blueprint import UavSpec
+from masonry.mission.journal_state import LOST_REASON
+from masonry.mission.liveness import Lapse, Liveness, LivenessTracker, Timeouts, way_home_s
+from masonry.mission.messages import ClearanceRequest, Heartbeat, Progress, Recall, Result
+from masonry.mission.records import Attempt, UavLink
+from masonry.mission.reducer import (
+    OUT_OF_SERVICE_STATE,
+    Step,
+    dropped_reason,
+    late_completion,
+    loss_reason,
+    screen_result,
+    steps_of,
+    way_home_of,
+)
+from masonry.ports import LAST_RESORT_S, TASK_DROPPED_REASON, TaskResult
+
+
+def _result(status: str = "done", *, state: str = "", attempt: int = 1, sender: str = "b1") -> Result:
+    r = TaskResult("B0", "done" if status == "done" else "failed", 10.0)
+    return Result(sender, r, 50.0, state=state, attempt=attempt)
+
+
+def test_each_message_asks_for_its_steps_in_order() -> None:
+    assert steps_of(_result()) == (Step.RESULT,)
+    # out of service: a completion still counts, then the UAV leaves; a failure is not the task's fault
+    assert steps_of(_result(state=OUT_OF_SERVICE_STATE)) == (Step.RESULT, Step.RETIRE)
+    assert steps_of(_result("failed", state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
+    assert steps_of(Heartbeat("b1", 1.0, state="idle")) == (Step.HEARTBEAT, Step.REPORT)
+    assert steps_of(Progress("b1", "B0", "transit", 1.0)) == (Step.PROGRESS, Step.REPORT)
+    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
+    assert steps_of(ClearanceRequest("b1", (0.0, 0.0, 1.0), 1.0)) == (Step.CLEARANCE,)
+    assert steps_of(Recall("mission-control", "b1", 1.0, "recalled")) == ()
+
+
+def test_a_result_is_acted_on_only_from_its_uav_for_its_attempt_and_not_too_soon() -> None:
+    att = Attempt("B0", "b1", 2, start_s=40.0)
+    ok = screen_result(_result(attempt=2), "b1", att, 20.0, 0.5, 50.0)
+    assert ok is None
+    for owner, running in (("b2", att), ("b1", None)):
+        ignored = screen_result(_result(attempt=2), owner, running, None, 0.9, 50.0)
+        assert ignored is not None and ignored.reason == "not-assigned"
+    wrong = screen_result(_result(attempt=1), "b1", att, None, 0.9, 50.0)
+    assert wrong is not None and wrong.reason == "wrong-attempt" and "the current one is 2" in wrong.detail
+    short = screen_result(_result(attempt=2), "b1", att, 20.0, 0.9, 50.0)  # 10 s < 0.9 x 20 s
+    assert short is not None and short.reason == "too-short"
+    # a failure may come at any time, and an attempt kept from before a resume has no known start
+    assert screen_result(_result("failed", attempt=2), "b1", att, 20.0, 0.9, 50.0) is None
+    adopted = Attempt("B0", "b1", 2, start_s=49.0, adopted=True)
+    assert screen_result(_result(attempt=2), "b1", adopted, 20.0, 0.9, 50.0) is None
+
+
+@pytest.mark.parametrize(
+    ("reason", "settled", "owner", "taken"),
+    [
+        (LOST_REASON, False, None, True),
+        (f"{TASK_DROPPED_REASON} (its heartbeat holds no task)", False, "b2", True),
+        (LOST_REASON, True, None, False),  # done (or stuck) since
+        (LOST_REASON, False, "b1", False),  # assigned to it again: an ordinary result
+        ("battery low", False, None, False),  # it failed the task itself
+    ],
+)
+def test_a_completion_heard_late_counts_only_for_a_task_released_from_its_uav(
+    reason: str, settled: bool, owner: str | None, taken: bool
+) -> None:
+    last = Attempt("B0", "b1", 1, 0.0, 30.0, "failed", reason)
+    assert late_completion(_result(), last, settled, owner) is taken
+    assert not late_completion(_result(attempt=2), last, settled, owner)
+    assert not late_completion(_result("failed"), last, settled, owner)
+
+
+def test_an_idle_heartbeat_with_no_task_releases_an_assignment_older_than_the_timeout() -> None:
+    idle = Heartbeat("b1", 20.0, state="idle")
+    att = Attempt("B0", "b1", 1, start_s=10.0)
+    reason = dropped_reason(idle, att, 20.0, 5.0)
+    assert reason is not None and reason.startswith(TASK_DROPPED_REASON) and "10.0 s" in reason
+    assert dropped_reason(idle, att, 14.0, 5.0) is None  # the assignment may still be on its way
+    assert dropped_reason(Heartbeat("b1", 20.0, state="transit"), att, 20.0, 5.0) is None  # busy flying
+    assert dropped_reason(Heartbeat("b1", 20.0, state="idle", task_id="B0"), att, 20.0, 5.0) is None
+    adopted = Attempt("B0", "b1", 1, start_s=19.0, adopted=True)
+    assert "after the resume" in (dropped_reason(idle, adopted, 20.0, 5.0) or "")
+
+
+def test_the_way_home_and_the_loss_reason_follow_what_the_uav_last_said() -> None:
+    via = (1.0, 2.0, 0.5)
+    assert way_home_of("home", via, 3.3) == (3.3, None)
+    assert way_home_of("putback_goto", via, None) == (None, via)
+    assert way_home_of("putback_release", via, 3.3) == (3.3, None)
+    assert way_home_of("idle", via, 3.3) is None
+    assert loss_reason(None, "transit", None) == LOST_REASON
+    assert (
+        loss_reason(None, "transit", 7)
+        == f"{LOST_REASON} (last heard in transit, with brick 7 on its magnet)"
+    )
+    assert loss_reason("out of service", "halted", 7) == "uav out of service"
+
+
+def _tracker() -> tuple[LivenessTracker, dict[str, UavLink]]:
+    links = {
+        "b1": UavLink(UavSpec("b1", "brick", (0.0, 0.0, 0.0))),
+        "a1": UavLink(UavSpec("a1", "adhesion", (2.0, 0.0, 0.0))),
+    }
+    return LivenessTracker(links, Timeouts(heartbeat_s=5.0, rejoin_s=30.0)), links
+
+
+def test_liveness_moves_through_one_enum() -> None:
+    live, links = _tracker()
+    b1 = links["b1"]
+    assert b1.liveness is Liveness.SILENT and b1.status == "ok" and not b1.lost
+    assert live.never_heard() == ["b1", "a1"] and live.online() == []
+    live.heard(b1, 0.0)
+    assert b1.liveness is Liveness.HEARD and live.online() == ["b1"]
+    assert live.sweep(5.0, lambda _n: False) == []
+    assert live.sweep(5.5, lambda _n: False) == [("b1", Lapse.SILENT_TOO_LONG)]
+    live.lose(b1, 5.5)
+    assert b1.liveness is Liveness.LOST and b1.lost and b1.status == "lost" and b1.lost_at_s == 5.5
+    assert live.sweep(100.0, lambda _n: False) == []  # lost: not swept again
+    live.rejoin(b1)
+    assert b1.liveness is Liveness.REJOINED and b1.status == "ok" and b1.lost_at_s is None
+    live.lose(b1, 200.0, out_of_service=True)
+    assert b1.liveness is Liveness.OUT_OF_SERVICE and b1.status == "out of service" and b1.lost
+
+
+def test_a_uav_finishing_its_work_is_silent_for_the_rejoin_timeout_before_it_is_lost() -> None:
+    live, links = _tracker()
+    b1 = links["b1"]
+    live.heard(b1, 0.0)
+    b1.state = "place_descend"
+    assert live.sweep(20.0, lambda _n: True) == []
+    assert b1.liveness is Liveness.SILENT and not b1.lost  # in its grace
+    live.heard(b1, 21.0)
+    assert b1.liveness is Liveness.HEARD
+    assert live.sweep(27.0, lambda _n: False) == [("b1", Lapse.SILENT_TOO_LONG)]  # no task: 5 s
+    assert live.sweep(56.0, lambda _n: True) == []  # with its task: 5 + 30 s
+    assert live.sweep(56.5, lambda _n: True) == [("b1", Lapse.SILENT_TOO_LONG)]
+
+
+def test_a_lost_uavs_way_home_is_freed_when_its_time_is_up() -> None:
+    live, links = _tracker()
+    b1 = links["b1"]
+    live.heard(b1, 0.0)
+    live.lose(b1, 6.0)
+    b1.airspace_until_s = 50.0
+    assert live.sweep(49.0, lambda _n: False) == []
+    assert live.sweep(50.0, lambda _n: False) == [("b1", Lapse.AIRSPACE_EXPIRED)]
+    assert b1.airspace_until_s is None
+    assert way_home_s(10.0, 2.0) == pytest.approx(LAST_RESORT_S + 5.0 + 30.0)
+
+
+def test_a_mission_waits_for_a_role_whose_last_uav_fell_silent() -> None:
+    live, links = _tracker()
+    for link in links.values():
+        live.heard(link, 0.0)
+    live.lose(links["a1"], 10.0)
+    assert live.awaiting_rejoin(39.0) and not live.awaiting_rejoin(41.0)
+    live.lose(links["b1"], 10.0, out_of_service=True)  # out of service: never awaited
+    assert live.awaiting_rejoin(39.0)  # (the adhesion UAV still is)
+    live.rejoin(links["a1"])
+    assert not live.awaiting_rejoin(11.0)
