@@ -14,7 +14,8 @@ import math
 from collections.abc import Mapping
 
 from masonry.geofence import Site
-from masonry.mission import airspace_queries, airspace_requests
+from masonry.mission import airspace_ground, airspace_queries, airspace_requests
+from masonry.mission.airspace_ground import ON_PAD_XY_M, ON_PAD_Z_M
 from masonry.mission.airspace_state import (
     Grant,
     Phase,
@@ -42,11 +43,6 @@ from masonry.separation import LAYER_SPACING_M, SEPARATION_XY_M, pad_separation_
 
 #: Vertical distance between two transit layers: the 1 m separation target plus tracking error and gusts.
 DEFAULT_LAYER_SPACING_M = LAYER_SPACING_M
-
-#: A UAV reported this close to its home (horizontally) and this low is on its pad.
-ON_PAD_XY_M = 0.3
-ON_PAD_Z_M = 0.3
-
 
 #: A UAV reported within this of a layer's altitude is at the layer (hover noise). UAVs come to rest where they
 #: stop before they ask (``masonry.fsm``), so a UAV reported farther from a layer is where it says: a UAV at rest
@@ -285,43 +281,16 @@ class ColumnClearance:
         self._version += 1
 
     def can_take_off(self, uav: str) -> bool:
-        """``uav`` may take off now: it holds more than its pad already, or the column over its pad is free."""
-        u = self.records.get(uav)
-        if self.base_m is None or u is None or u.phase is not Phase.LANDED:
-            return True
-        return self.free(uav, [self.home_column(uav)])
+        """``uav`` may take off now (:func:`masonry.mission.airspace_ground.can_take_off`)."""
+        return airspace_ground.can_take_off(self, uav)
 
     def take_off(self, uav: str) -> bool:
-        """``uav``, landed on its pad, is about to take off: it holds the column over its pad up to the transit
-        altitude, if that is free (True), else it stays on its pad (False: ask again once :attr:`version`
-        changed). A UAV that is not landed already holds what it needs (True)."""
-        if not self.can_take_off(uav):
-            return False
-        u = self.records.get(uav)
-        if u is not None and u.phase is Phase.LANDED:
-            self.set_zone(uav, self.homes[uav], self.home_top_m())
-        return True
+        """``uav``, landed on its pad, is about to take off (:func:`masonry.mission.airspace_ground.take_off`)."""
+        return airspace_ground.take_off(self, uav)
 
     def landed(self, uav: str, position_m: Vec3) -> bool:
-        """``uav`` says it is on the ground at ``position_m``, done flying: if that is on its pad, it holds only
-        the pad from now on (True). A UAV whose flight home is still reserved (its ``arrived`` was lost) lands
-        out of it too, and so does one holding only where it was last seen (a zone, nothing granted)."""
-        home = self.homes.get(uav)
-        u = self.records.get(uav)
-        if self.base_m is None or home is None or u is None or u.phase is Phase.LANDED:
-            return False
-        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
-        if math.hypot(x - home[0], y - home[1]) > ON_PAD_XY_M or z - home[2] > ON_PAD_Z_M:
-            return False
-        at_home = u.zone is not None and same_site(u.zone, home)
-        flying_home = u.flight is not None and same_site(u.flight.site, home)
-        # nothing granted in flight: what it holds is where it was last seen (heard again while it flew home on
-        # its own, cut off past LAST_RESORT_S: the column where it was heard); it is on its pad now
-        seen_elsewhere = u.flight is None and u.hold is None
-        if u.request is not None or not (at_home or flying_home or seen_elsewhere):
-            return False
-        self.set_pad(uav)
-        return True
+        """``uav`` says it is on the ground at ``position_m`` (:func:`masonry.mission.airspace_ground.landed`)."""
+        return airspace_ground.landed(self, uav, position_m)
 
     def rejoined(
         self,
@@ -329,48 +298,12 @@ class ColumnClearance:
         position_m: Vec3 | None,
         way_home: tuple[float | None, Vec3 | None] | None = None,
     ) -> bool:
-        """``uav``, taken out of the mission (:meth:`release` with no site), is heard again at ``position_m``: on
-        its pad it holds the pad again and takes off like the others; in the air (it hovers where it stopped,
-        cut off, and asks for its flight home) it holds the column where it is, up to the transit altitude,
-        as after a take-off there, and asks from there; with ``way_home`` (it says it is flying home, or putting
-        a brick back, maybe on its own) also that way (:meth:`silent`). False: it is down away from its pad (not back yet);
-        with no position known it is taken back holding nothing."""
-        home = self.homes.get(uav)
-        if self.base_m is None or home is None or position_m is None:
-            return True
-        x, y, z = float(position_m[0]), float(position_m[1]), float(position_m[2])
-        on_pad = math.hypot(x - home[0], y - home[1]) <= ON_PAD_XY_M
-        if z - home[2] <= ON_PAD_Z_M:
-            if not on_pad:
-                return False
-            self.set_pad(uav)  # (a silent UAV landed kept the column over its pad too: :meth:`silent`)
-            return True
-        u = self.record(uav)
-        # what it was granted before it fell silent is over (its `arrived` would end the old flight at its site)
-        u.flight, u.hold, u.request, u.origin, u.phase = None, None, None, None, Phase.PARKED
-        self.set_zone(uav, (x, y, home[2]), max(z, self.home_top_m()))
-        if way_home is not None:
-            # it is flying home on its own (cut off past LAST_RESORT_S, it asks nobody until it is down): the
-            # rest of that way stays its own (``way_home``: its fallback layer and the pickup it calls at first)
-            u.volumes = [
-                *u.volumes,
-                *airspace_queries.way_home(self, uav, (x, y, z), way_home[0], way_home[1])[0],
-            ]
-        return True
+        """``uav``, out of the mission, is heard again (:func:`masonry.mission.airspace_ground.rejoined`)."""
+        return airspace_ground.rejoined(self, uav, position_m, way_home)
 
     def silent(self, uav: str, position_m: Vec3, layer_m: float | None, via_m: Vec3 | None = None) -> float:
-        """``uav`` fell silent in the air at ``position_m``: besides what it holds it keeps the way home it flies on
-        its own once mission control has been silent for ``LAST_RESORT_S`` (its machine's route without an
-        airspace): the climb or descent where it is to ``layer_m`` (its fixed fallback layer; None: the altitude
-        it is at), the leg there to above its pad, and its pad's column; with ``via_m`` (a brick's pickup: it
-        puts the brick back first) through that site's column. Returns the way's length in metres."""
-        u = self.records.get(uav)
-        if u is None or uav not in self.homes:
-            return 0.0
-        way, length_m = airspace_queries.way_home(self, uav, position_m, layer_m, via_m)
-        u.volumes = [*u.volumes, *way]
-        self._version += 1
-        return length_m
+        """``uav`` fell silent in the air (:func:`masonry.mission.airspace_ground.silent`): the way home's length."""
+        return airspace_ground.silent(self, uav, position_m, layer_m, via_m)
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
         """``uav`` is ``release_radius_m`` away from where it was at ``site_m`` (its climb there is over), or gave
@@ -538,6 +471,8 @@ __all__ = [
     "AT_HOLD_M",
     "DEFAULT_LAYER_SPACING_M",
     "HOVER_SLACK_M",
+    "ON_PAD_XY_M",
+    "ON_PAD_Z_M",
     "SNAP_M",
     "STOP_M",
     "TRACK_M",

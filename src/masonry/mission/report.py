@@ -3,119 +3,39 @@
 Where the time goes (docs/mission.md): every attempt carries the seconds its UAV spent in each phase
 (:class:`~masonry.ports.PhaseTimes`), every task those of the attempt that completed it, every UAV its ``idle_s``
 (mission time with no task assigned) and ``waiting_s`` (its attempts' ``waiting`` and ``holding`` phases).
+The rows (per UAV, task and attempt) live in :mod:`masonry.mission.report_rows`.
 
 Also the two checks the report carries, computed from a trace of executed intervals independently of the
-dispatcher that produced it (:func:`count_violations`), and the makespan lower bound (:func:`lower_bound_s`).
+dispatcher that produced it (:mod:`masonry.mission.trace_checks`), and the makespan lower bound.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from masonry.mission.as_built import as_built_lines
+from masonry.mission.report_rows import (
+    AttemptReport,
+    TaskReport,
+    UavReport,
+    _r,
+    idle_s,
+    makespan_s,
+    phase_totals,
+)
 from masonry.mission.spares import SpareReport
-from masonry.mission.waits import TaskWait, waiting_split_s, waits_lines, with_battery_holds
+from masonry.mission.trace_checks import count_site_violations, count_violations
+from masonry.mission.waits import waiting_split_s, waits_lines, with_battery_holds
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.bound_terms import bound_terms
 from masonry.planner.tasks import Plan
-from masonry.ports import PhaseTimes
 
 #: Rows of the attempt trace in the text summary (the JSON report has every attempt).
 TIMELINE_ROWS = 40
-
-
-@dataclass(frozen=True)
-class UavReport:
-    """One UAV over the mission."""
-
-    name: str
-    role: str
-    busy_s: float
-    distance_m: float
-    status: str  # "ok", "lost" (silent past the heartbeat timeout) or "out of service" (it reported so)
-    idle_s: float = 0.0  # mission time with no task assigned (on the ground, hovering or flying home)
-    waiting_s: float = 0.0  # its attempts' seconds waiting for clearance and holding (PhaseTimes.clearance_s)
-    #: ``waiting_s`` split: on its pad with a task, and in the air (:func:`masonry.mission.waits.waiting_split_s`)
-    waiting_ground_s: float = 0.0
-    waiting_air_s: float = 0.0
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "name": self.name,
-            "role": self.role,
-            "busy_s": _r(self.busy_s, 2),
-            "idle_s": _r(self.idle_s, 2),
-            "waiting_s": _r(self.waiting_s, 2),
-            "waiting_ground_s": _r(self.waiting_ground_s, 2),
-            "waiting_air_s": _r(self.waiting_air_s, 2),
-            "distance_m": _r(self.distance_m, 2),
-            "status": self.status,
-        }
-
-
-@dataclass(frozen=True)
-class TaskReport:
-    """One task: the attempt that completed it (start at its assignment, end at its completion)."""
-
-    id: str
-    uav: str | None
-    start_s: float | None
-    end_s: float | None
-    status: str  # "done", "stuck" (attempt limit reached or no UAV of its role left) or "pending"
-    attempts: int
-    kind: str = "brick"
-    phases: PhaseTimes | None = None  # of the attempt that completed it (None: not done, or not reported)
-    #: when its UAV worked at its site: from the grant of its flight down there to its asking to leave
-    site_start_s: float | None = None
-    site_end_s: float | None = None
-    #: every attempt at it, in start order (``attempts_detail`` in the JSON: who, when, how, why it failed)
-    tries: tuple[AttemptReport, ...] = ()
-    #: why it waited, in time order (:mod:`masonry.mission.waits`; ``waits`` in the JSON)
-    waits: tuple[TaskWait, ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "id": self.id,
-            "uav": self.uav,
-            "start_s": _r(self.start_s, 2),
-            "end_s": _r(self.end_s, 2),
-            "site_start_s": _r(self.site_start_s, 2),
-            "site_end_s": _r(self.site_end_s, 2),
-            "status": self.status,
-            "attempts": self.attempts,
-            "attempts_detail": [a.detail() for a in self.tries],
-            "phases": _phases(self.phases),
-            "waits": [w.to_dict() for w in self.waits],
-        }
-
-
-@dataclass(frozen=True)
-class AttemptReport:
-    """One assignment of a task to a UAV (for the Gantt chart: failures are marked)."""
-
-    task_id: str
-    uav: str
-    attempt: int
-    start_s: float
-    end_s: float | None
-    status: str  # "done", "failed", "running" (the mission ended first)
-    kind: str
-    reason: str | None = None
-    phases: PhaseTimes | None = None  # as its UAV measured them (None: not reported, or still running)
-
-    def detail(self) -> dict[str, Any]:
-        """One entry of a task's ``attempts_detail``: ``outcome`` done/failed/running, ``reason`` (failed only)."""
-        return {
-            "uav": self.uav,
-            "start_s": _r(self.start_s, 2),
-            "end_s": _r(self.end_s, 2),
-            "outcome": self.status,
-            "reason": self.reason if self.status == "failed" else None,
-        }
 
 
 @dataclass(frozen=True)
@@ -279,125 +199,10 @@ class MissionReport:
         return "\n".join(lines)
 
 
-def _r(v: float | None, nd: int) -> float | None:
-    if v is None or not math.isfinite(v):
-        return None
-    return round(float(v), nd)
-
-
-def _phases(phases: PhaseTimes | None) -> dict[str, float | None] | None:
-    return None if phases is None else {name: _r(s, 2) for name, s in phases.items()}
-
-
-def phase_totals(attempts: Iterable[AttemptReport]) -> PhaseTimes:
-    """The phases of ``attempts`` summed (those that reported none count nothing)."""
-    total = PhaseTimes()
-    for a in attempts:
-        if a.phases is not None:
-            total = total + a.phases
-    return total
-
-
-def idle_s(attempts: Sequence[AttemptReport], uav: str, start_s: float, end_s: float) -> float:
-    """Seconds of ``[start_s, end_s]`` in which ``uav`` had no attempt assigned (mission control's times).
-
-    A UAV has one attempt at a time, so its idle time and its attempts' phases add up to the window.
-    """
-    busy = 0.0
-    for a in attempts:
-        if a.uav != uav:
-            continue
-        s, e = max(a.start_s, start_s), min(end_s if a.end_s is None else a.end_s, end_s)
-        busy += max(0.0, e - s)
-    return max(0.0, end_s - start_s - busy)
-
-
-def count_violations(plan: Plan, intervals: Iterable[tuple[str, float, float | None]]) -> tuple[int, int]:
-    """Conflict and dependency violations in a trace of executed intervals.
-
-    Args:
-        plan: the plan whose conflicts and dependencies are checked.
-        intervals: (task id, start_s, end_s) for every attempt as the UAVs flew it; ``end_s`` None means
-            still in progress at the end of the trace (open interval).
-
-    Returns:
-        (conflict_violations, dependency_violations): the number of pairs of conflicting tasks whose
-        intervals overlap for a positive time (each pair counted once; a zero-length attempt, refused at
-        once, was never in progress), and the number of attempts that started before every
-        prerequisite had completed (a prerequisite done before the mission, ``done`` in the plan, counts as
-        completed at -inf).
-    """
-    by_task: dict[str, list[tuple[float, float]]] = {}
-    for task_id, start, end in intervals:
-        by_task.setdefault(task_id, []).append((start, math.inf if end is None else end))
-    conflicts = 0
-    for a, b in plan.conflicts:
-        ia, ib = by_task.get(a), by_task.get(b)
-        if not ia or not ib:
-            continue
-        # Two attempts overlap when they share time: max(starts) < min(ends). An attempt refused at once
-        # (start == end: a machine out of service, or of the wrong kind, reporting it failed when handed it)
-        # was never in progress, so it overlaps nothing; any overlap of positive length is counted.
-        if any(max(s1, s2) < min(e1, e2) for s1, e1 in ia for s2, e2 in ib):
-            conflicts += 1
-    # completion time of each task = end of its last interval (the successful one closes the task)
-    pre_done = {t.id for t in plan.tasks if t.done}
-    completion: dict[str, float] = {}
-    for task_id, ivs in by_task.items():
-        ends = [e for _, e in ivs if math.isfinite(e)]
-        if ends:
-            completion[task_id] = max(ends)
-    prereqs: dict[str, list[str]] = {}
-    for u, v in plan.dependencies:
-        prereqs.setdefault(u, []).append(v)
-    deps = 0
-    for task_id, ivs in by_task.items():
-        for start, _ in ivs:
-            for v in prereqs.get(task_id, ()):
-                if v in pre_done:
-                    continue
-                if completion.get(v, math.inf) > start:
-                    deps += 1
-                    break
-    return conflicts, deps
-
-
-def count_site_violations(
-    plan: Plan,
-    site_intervals: Iterable[tuple[str, float, float | None]],
-    task_intervals: Iterable[tuple[str, float, float | None]],
-) -> tuple[int, int]:
-    """Violations under the ``site`` reservation: pairs of conflicting tasks whose *site* intervals overlap, and
-    site intervals that started before a prerequisite completed (completions: the ends of ``task_intervals``,
-    as in :func:`count_violations`)."""
-    sites = list(site_intervals)
-    conflicts, _ = count_violations(plan, sites)
-    completion: dict[str, float] = {}
-    for task_id, _start, end in task_intervals:
-        if end is not None:
-            completion[task_id] = max(completion.get(task_id, -math.inf), end)
-    pre_done = {t.id for t in plan.tasks if t.done}
-    prereqs: dict[str, list[str]] = {}
-    for u, v in plan.dependencies:
-        prereqs.setdefault(u, []).append(v)
-    deps = sum(
-        1
-        for task_id, start, _end in sites
-        if any(v not in pre_done and completion.get(v, math.inf) > start for v in prereqs.get(task_id, ()))
-    )
-    return conflicts, deps
-
-
 def _until(link: Any, end_s: float) -> float:
     """The end of a UAV's part in the mission: ``end_s``, or its loss if sooner."""
     lost = getattr(link, "lost_at_s", None)
     return end_s if lost is None else min(end_s, float(lost))
-
-
-def makespan_s(attempts: Sequence[AttemptReport], start_s: float = 0.0) -> float:
-    """Time from ``start_s`` to the last completion."""
-    ends = [a.end_s for a in attempts if a.status == "done" and a.end_s is not None]
-    return max(ends) - start_s if ends else 0.0
 
 
 def control_report(
@@ -597,3 +402,18 @@ def control_report(
         spares=mc.spares.report() if getattr(mc, "spares", None) is not None else None,
         **extra,
     )
+
+
+__all__ = [
+    "TIMELINE_ROWS",
+    "AttemptReport",
+    "MissionReport",
+    "TaskReport",
+    "UavReport",
+    "control_report",
+    "count_site_violations",
+    "count_violations",
+    "idle_s",
+    "makespan_s",
+    "phase_totals",
+]

@@ -3,23 +3,23 @@ at run time"). :class:`TableClearance` answers what :class:`~masonry.mission.air
 (mission control, the UAVs and the protocol are unchanged) from one :class:`~masonry.reservation.Table`: each hop
 granted as timed legs ending in an open-ended stay (:func:`~masonry.reservation.decide`), a UAV waiting where it
 stays, a late one extended, a silent one keeping its way home, UAVs waiting at sites for each other broken up by
-parking spots (:mod:`masonry.mission.reserved_parts`). No hold patience. Pure: no I/O, no clock.
+parking spots (:mod:`masonry.mission.reserved_parts`). A request is decided in
+:mod:`masonry.mission.reserved_requests` (over the class's internals below). No hold patience. Pure: no I/O, no
+clock.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass, replace
 
 from masonry.errors import InvalidArgument
 from masonry.geofence import Site
-from masonry.mission.airspace_state import FlightRequest, Grant, Phase
-from masonry.mission.fence import flight_fence_problem
+from masonry.mission import reserved_requests
+from masonry.mission.airspace_state import Grant, Phase
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
-    ON_LEG_M,
     end_flight,
     extend_or_force,
     forced,
@@ -31,22 +31,17 @@ from masonry.mission.reserved_parts import (
     silent_way,
     to_park,
 )
-from masonry.mission.sites import SiteGate, enter_ungoverned
-from masonry.mission.volumes import Vec3
+from masonry.mission.reserved_requests import TableUav
+from masonry.mission.sites import SiteGate
+from masonry.mission.volumes import Vec3, same_site
 from masonry.mission.volumes import Volume as AirVolume
 from masonry.reservation import (
     Airspace,
-    FlightPlan,
-    Place,
-    Request,
     Reservation,
     Separation,
     Table,
     Volume,
-    Wait,
-    Work,
     column,
-    decide,
     pad,
     violations,
 )
@@ -70,21 +65,6 @@ DEFAULT_AIRSPACE = "columns"
 
 _LEGS = ("climb", "transit", "descend")
 _FLIGHT = ("climb", "transit", "descend", "work", "site", "home")
-
-
-@dataclass
-class _Uav:
-    """One UAV's part in the protocol: its phase, its pending request, its granted plan."""
-
-    phase: Phase = Phase.PARKED
-    request: FlightRequest | None = None
-    plan: FlightPlan | None = None
-    site: Vec3 | None = None  # where its plan (or its last one) goes
-    position: Vec3 | None = None
-    seen_version: int = -1  # table version at its request's last evaluation
-    retry_s: float = math.inf  # its wait ends then at the latest (a window ends)
-    blocked_by: tuple[tuple[str, str], ...] = ()
-    spot: Vec3 | None = None  # its parking spot, while it flies there or waits there
 
 
 class TableClearance:
@@ -125,15 +105,15 @@ class TableClearance:
         self.margin_s = float(TABLE_MARGIN_S if margin_s is None else margin_s)
         self.guard_s = float(TABLE_GUARD_S if guard_s is None else guard_s)
         self.max_layers = max_layers
-        self._homes: dict[str, Vec3] = {
+        self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
         }
         self.table = Table(
             separation=Separation(self.sep_xy_m, self.spacing_m - 1e-9, float(pad_separation_m) - 1e-6)
         )
-        self._uavs: dict[str, _Uav] = {}
+        self._uavs: dict[str, TableUav] = {}
         self.on_change: Callable[[Table, float], object] = lambda table, now_s: None  # (a log watches)
-        self._seq = 0
+        self.seq = 0
         self._version = 0
         self.now_s = 0.0
         self.granted_count = 0
@@ -141,16 +121,16 @@ class TableClearance:
         self.refused = 0  # answers "wait where you are"
         self.extended = 0  # windows extended for a late UAV
         self.forced = 0  # extensions no move could make room for (the table then holds a clash: counted)
-        self._fence_refusals: dict[str, str] = {}
-        self._levels = park_levels(self._homes, self.sep_xy_m)
-        self._airspace = self._make_airspace()
+        self.fence_refusals: dict[str, str] = {}
+        self._levels = park_levels(self.homes, self.sep_xy_m)
+        self.airspace = self._make_airspace()
         if self.base_m is not None:
-            for uav in self._homes:
-                self._set_stay(uav, self._pad_volume(uav), Phase.LANDED)
+            for uav in self.homes:
+                self.set_stay(uav, self._pad_volume(uav), Phase.LANDED)
 
     def use_timing(self, timing: TaskTiming) -> None:
         """Time the legs with ``timing`` (the UAVs' speeds) from now on."""
-        self.timing, self._airspace = timing, self._make_airspace(timing)
+        self.timing, self.airspace = timing, self._make_airspace(timing)
 
     # -- what mission control reads -----------------------------------------------------------------------
     @property
@@ -204,7 +184,7 @@ class TableClearance:
         z = min(self.base_m, float(altitude_m))
         if z > self.layer_base_m:
             self.layer_base_m = z
-            self._airspace = self._make_airspace()
+            self.airspace = self._make_airspace()
             self._version += 1
 
     def touch(self) -> None:
@@ -221,57 +201,13 @@ class TableClearance:
         to_m: Vec3 | None = None,
     ) -> Grant:
         """``uav`` (at ``position_m``) sets off for ``site_m``, to work there up to ``top_m`` (along to ``to_m``):
-        its hop is granted if it fits now, else it waits where it is (its stay)."""
-        self._tick(now_s)
-        site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-        top = max(site[2], float(top_m) if top_m is not None else site[2])
-        if self.base_m is None:  # no airspace rules: only the site gate may hold the flight back
-            granted = enter_ungoverned(self.gate, uav, site, now_s)
-            self.granted_count += granted
-            self.refused += not granted
-            return Grant(uav, site, granted)
-        u = self._uav(uav)
-        pos = (
-            None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
-        )
-        if pos is not None:
-            u.position = pos
-        if (
-            u.phase in (Phase.TO_HOLD, Phase.AT_HOLD)
-            and u.request is not None
-            and _same(u.request.site, site)
-        ):
-            self._at_spot(uav, u)
-            if u.phase is Phase.TO_HOLD and u.spot is not None:
-                return Grant(uav, site, False, u.spot, u.spot[2])  # on its way there: the same answer
-        elif u.plan is not None and u.site is not None and _same(u.site, site):
-            return Grant(uav, site, layer_m=u.plan.layer_m)  # said again: the same flight
-        if u.plan is not None and u.phase in (Phase.FLYING, Phase.TO_HOLD):
-            # it turned back mid-flight (a failsafe, a recall): it stops where it is, which is its stay now
-            self._stop_where(uav, u, pos)
-        w = u.request
-        if w is not None and _same(w.site, site):
-            if pos is not None and (w.position is None or math.dist(pos, w.position) > 0.05):
-                u.request = replace(w, position=pos)
-                u.seen_version = -1
-            return self._evaluate(uav, u, now_s)
-        to = None
-        if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
-            to = (float(to_m[0]), float(to_m[1]))
-        if self.gate is not None and u.site is not None and not _same(u.site, site):
-            self.gate.left(
-                uav, now_s
-            )  # it moves on: its site interval is over, however close the next site is
-        self._seq += 1
-        u.request = FlightRequest(site, top, pos, now_s, self._seq, to)
-        u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
-        self._check_fence(uav, u.request)
-        return self._evaluate(uav, u, now_s)
+        its hop is granted if it fits now, else it waits where it is (:func:`masonry.mission.reserved_requests.request`)."""
+        return reserved_requests.request(self, uav, site_m, now_s, position_m, top_m, to_m)
 
     def grant(self, now_s: float) -> list[Grant]:
         """Every tick: windows that ended are dropped, late UAVs' windows extended, and waiting requests answered
         in request order where the table changed (only grants are returned: a wait is said when asked)."""
-        self._tick(now_s)
+        self.tick(now_s)
         for uav, u in self._uavs.items():
             if u.plan is not None:  # (flying, or stopped in it: it turned back and waits for its new flight)
                 self._keep_up(uav, u, now_s)
@@ -280,7 +216,7 @@ class TableClearance:
             u = self._uavs[uav]
             if u.request is None or (u.seen_version == self._version and now_s < u.retry_s):
                 continue
-            g = self._evaluate(uav, u, now_s)
+            g = reserved_requests.evaluate(self, uav, u, now_s)
             if g.granted:
                 out.append(g)
         park = self._park(now_s)
@@ -295,13 +231,13 @@ class TableClearance:
         for uav in to_park(waits, endless, order):
             u = asking[uav]
             assert u.request is not None
-            home = self._homes.get(uav)
+            home = self.homes.get(uav)
             start = u.request.position or u.position
             if home is None or start is None:
                 continue
             top, n = self._home_top_m(), self.max_layers
             for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
-                plan = park_plan(self._guarded(uav), uav, start, spot, now_s, self._airspace)
+                plan = park_plan(self.guarded_for(uav), uav, start, spot, now_s, self.airspace)
                 if plan is not None:
                     break
             if plan is None:
@@ -311,11 +247,11 @@ class TableClearance:
             self.table = forced(left, [], plan.reservations)
             u.phase, u.plan, u.spot, u.site = Phase.TO_HOLD, plan, spot, u.request.site
             self.held_back += 1
-            self._bump()
+            self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])
         return None
 
-    def _at_spot(self, uav: str, u: _Uav) -> None:
+    def at_spot(self, uav: str, u: TableUav) -> None:
         """A UAV flying to its parking spot is there (it said so): it hovers there, its flight's windows end."""
         p, spot = u.position, u.spot
         if u.phase is not Phase.TO_HOLD or p is None or spot is None:
@@ -347,7 +283,7 @@ class TableClearance:
             return False
         u = self._uavs.get(uav)
         if self.base_m is not None and u is not None and u.phase is Phase.LANDED:
-            self._set_stay(uav, self._pad_column(uav), Phase.PARKED)
+            self.set_stay(uav, self._pad_column(uav), Phase.PARKED)
         return True
 
     def landed(self, uav: str, position_m: Vec3) -> bool:
@@ -357,7 +293,7 @@ class TableClearance:
             return False
         if not self._on_pad(uav, position_m, ON_PAD_Z_M):
             return False
-        self._set_stay(uav, self._pad_volume(uav), Phase.LANDED)
+        self.set_stay(uav, self._pad_volume(uav), Phase.LANDED)
         return True
 
     def rejoined(
@@ -365,16 +301,16 @@ class TableClearance:
     ) -> bool:
         """``uav``, out of the mission, is heard again at ``position_m``: on its pad it holds the pad; in the air
         the column where it hovers (and, with ``way_home``, its way home); down elsewhere it is not back (False)."""
-        home = self._homes.get(uav)
+        home = self.homes.get(uav)
         if self.base_m is None or home is None or position_m is None:
             return True
         x, y, z = (float(v) for v in position_m)
         if z - home[2] <= ON_PAD_Z_M:
             if not self._on_pad(uav, position_m, math.inf):
                 return False
-            self._set_stay(uav, self._pad_volume(uav), Phase.LANDED)
+            self.set_stay(uav, self._pad_volume(uav), Phase.LANDED)
             return True
-        self._set_stay(uav, column((x, y), 0.0, max(z, self._home_top_m())), Phase.PARKED)
+        self.set_stay(uav, column((x, y), 0.0, max(z, self._home_top_m())), Phase.PARKED)
         if way_home is not None:
             self.silent(uav, (x, y, z), way_home[0], way_home[1])
         return True
@@ -383,7 +319,7 @@ class TableClearance:
         """``uav`` fell silent at ``position_m``: what it holds stays its (open-ended), and its way home at its
         fallback ``layer_m`` (through ``via_m``'s column: a brick put back first) is reserved, until mission control
         releases it. Returns the way's length in metres."""
-        home = self._homes.get(uav)
+        home = self.homes.get(uav)
         if home is None or self.base_m is None:
             return 0.0
         via = None if via_m is None else (float(via_m[0]), float(via_m[1]), float(via_m[2]))
@@ -391,7 +327,7 @@ class TableClearance:
         self.table, length_m = silent_way(
             self.table, uav, position_m, layer_m, via, (home[0], home[1], top), self.now_s, self.timing
         )
-        self._bump()
+        self.bump()
         return length_m
 
     def release(self, uav: str, site_m: Vec3 | None = None) -> None:
@@ -402,9 +338,9 @@ class TableClearance:
             self._replace(uav, [])
             return
         u = self._uavs.get(uav)
-        if u is not None and u.request is not None and _same(u.request.site, site_m):
+        if u is not None and u.request is not None and same_site(u.request.site, site_m):
             u.request, u.phase = None, (Phase.PARKED if u.plan is None else u.phase)
-            self._bump()
+            self.bump()
 
     def progress(self, uav: str, position_m: Vec3) -> None:
         """``uav`` reports where it is: the legs of its flight behind it end now."""
@@ -412,7 +348,7 @@ class TableClearance:
         if u is None:
             return
         u.position = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
-        self._at_spot(uav, u)
+        self.at_spot(uav, u)
         if u.phase is not Phase.FLYING or u.plan is None:
             return
         legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
@@ -431,14 +367,14 @@ class TableClearance:
         t = timing or self.timing  # (legs at any layer, as the columns grant them: Airspace.any_layer)
         return Airspace(layers, t.cruise_speed_mps, t.vertical_speed_mps, self.margin_s, 0.0, True)
 
-    def _tick(self, now_s: float) -> None:
+    def tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
         self.now_s = max(self.now_s, float(now_s))
         if any(r.t1_s <= self.now_s for r in self.table.reservations):
             self.table = self.table.prune(self.now_s)
-            self._bump()
+            self.bump()
 
-    def _keep_up(self, uav: str, u: _Uav, now_s: float) -> None:
+    def _keep_up(self, uav: str, u: TableUav, now_s: float) -> None:
         """A UAV still in a leg whose window ends within half the margin: its windows are extended by the margin
         (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced)."""
         legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > now_s]
@@ -453,105 +389,16 @@ class TableClearance:
         self.extended += 1
         self.table, was_forced = extend_or_force(self.table, uav, now_s, self.margin_s)
         self.forced += was_forced
-        self._bump()
+        self.bump()
 
-    def _evaluate(self, uav: str, u: _Uav, now_s: float) -> Grant:
-        """Grant ``uav``'s hop if it fits now, else tell it to wait where it is."""
-        w = u.request
-        assert w is not None
-        u.seen_version, u.retry_s = self._version, math.inf
-        refused = self._fence_refusals.get(uav)
-        if refused is not None:
-            self.refused += 1
-            return Grant(uav, w.site, False, refused=refused)
-        if self.gate is not None and not self.gate.may_enter(uav, w.site):
-            u.blocked_by = (("-", "site-rule"),)
-            self.refused += 1
-            return Grant(uav, w.site, False)
-        if self.table.stay_of(uav) is None:  # (heard again with nothing held: where it is now)
-            where = u.position if u.position is not None else w.site
-            self._set_stay(uav, column((where[0], where[1]), 0.0, where[2]), u.phase)
-        guarded, hop = self._guarded(uav), self._hop(uav, u, w)
-        if u.plan is not None:  # it turned back and holds its old plan: its new one starts where it is, now
-            here = column(hop.start.xy, hop.start.z_m, hop.start.z_m)
-            guarded = forced(guarded, guarded.of(uav), [Reservation(uav, here, now_s, math.inf, "stay")])
-        top = self._airspace.layers_m[-1]
-        high = hop.start.z_m > top  # from its parking spot, over every layer: planned from the top one
-        decision = decide(
-            guarded, replace(hop, start=replace(hop.start, z_m=top)) if high else hop, now_s, self._airspace
-        )
-        if high and not isinstance(decision, Wait):
-            first = decision.plan.reservations[0]  # its climb (a descent here) reaches up to where it is
-            down = replace(first, volume=column(hop.start.xy, first.volume.z0_m, hop.start.z_m))
-            if guarded.clashes(down):
-                decision = Wait(uav, now_s + 1.0, guarded.clashes(down))
-            else:
-                plan = decision.plan
-                decision = replace(decision, plan=replace(plan, reservations=(down, *plan.reservations[1:])))
-        if isinstance(decision, Wait):
-            u.retry_s = decision.until_s
-            u.blocked_by = tuple(sorted({(r.uav, r.purpose) for r in decision.blocked_by}))
-            self.refused += 1
-            if u.phase is Phase.AT_HOLD and u.spot is not None:
-                return Grant(uav, w.site, False, u.spot, u.spot[2])
-            return Grant(uav, w.site, False)
-        left = self.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
-        self.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
-        u.request, u.phase, u.blocked_by, u.spot = None, Phase.FLYING, (), None
-        self.granted_count += 1
-        if self.gate is not None:
-            self.gate.entered(uav, w.site, now_s)
-        self._bump()
-        return Grant(uav, w.site, layer_m=decision.plan.layer_m)
-
-    def _guarded(self, uav: str) -> Table:
+    def guarded_for(self, uav: str) -> Table:
         """The table ``uav``'s flight is planned in (:func:`~masonry.mission.reserved_parts.guarded`)."""
         stopped = {n for n, o in self._uavs.items() if o.plan is not None and o.request is not None}
         return guarded(self.table, uav, self.now_s, self.guard_s, stopped)
 
-    def _hop(self, uav: str, u: _Uav, w: FlightRequest) -> Request:
-        """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""
-        start = w.position if w.position is not None else (u.position or w.site)
-        stay = self.table.stay_of(uav)
-        if (
-            stay is not None
-            and stay.volume.a == stay.volume.b
-            and math.dist(stay.volume.a, start[:2]) < ON_LEG_M
-        ):
-            v = stay.volume  # where it stays, give or take its tracking error (a hover: at its altitude)
-            start = (*v.a, v.z1_m if v.z0_m == v.z1_m and abs(start[2] - v.z1_m) < ON_LEG_M else start[2])
-        home = self._homes.get(uav)
-        radius = 0.0 if home is not None and _same(home, w.site) else self.zone_r_m
-        here = Place((start[0], start[1]), start[2], "site", radius)
-        work = Work((w.site[0], w.site[1]), w.top_m, 0.0, w.to, radius, 0.0)
-        return Request(uav, here, work, None)
-
-    def _check_fence(self, uav: str, w: FlightRequest) -> None:
-        self._fence_refusals.pop(uav, None)
-        if self.fence is None:
-            return
-        start = w.position if w.position is not None else w.site
-        problem = flight_fence_problem(
-            self.fence, start, w.site, w.top_m, w.to, self._airspace.layers_m, self.zone_r_m
-        )
-        if problem is not None:
-            self._fence_refusals[uav] = problem
-
-    def _stop_where(self, uav: str, u: _Uav, pos: Vec3 | None) -> None:
-        """``uav`` stopped its plan where it is (``pos``), turned back for another site: a hover there is its stay
-        from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted."""
-        where = pos if pos is not None else u.position
-        if where is None:
-            return
-        hover = Reservation(
-            uav, column((where[0], where[1]), where[2], where[2], 0.3), self.now_s, math.inf, "stay"
-        )
-        if not self.table.clashes(hover):
-            self._set_stay(uav, hover.volume, Phase.PARKED)
-
-    def _set_stay(self, uav: str, volume: Volume, phase: Phase) -> None:
+    def set_stay(self, uav: str, volume: Volume, phase: Phase) -> None:
         """``uav`` holds only ``volume``, open-ended, from now on (it is there: nothing is checked)."""
-        u = self._uav(uav)
+        u = self.record(uav)
         u.plan, u.phase = None, phase
         kept = [
             r.until(self.now_s)
@@ -563,37 +410,33 @@ class TableClearance:
     def _replace(self, uav: str, reservations: Iterable[Reservation]) -> None:
         """``uav``'s reservations are ``reservations`` from now on (what it physically holds: not checked)."""
         self.table = forced(self.table, self.table.of(uav), list(reservations))
-        self._bump()
+        self.bump()
 
-    def _bump(self) -> None:  # (every change: a wait is looked at again, on_change sees the table)
+    def bump(self) -> None:  # (every change: a wait is looked at again, on_change sees the table)
         self._version += 1
         self.on_change(self.table, self.now_s)
 
-    def _uav(self, uav: str) -> _Uav:
+    def record(self, uav: str) -> TableUav:
         u = self._uavs.get(uav)
         if u is None:
-            u = self._uavs[uav] = _Uav()
+            u = self._uavs[uav] = TableUav()
         return u
 
     def _home_top_m(self) -> float:
         return self.base_m if self.base_m is not None else 0.0
 
     def _pad_volume(self, uav: str) -> Volume:
-        return pad(self._homes[uav][:2])
+        return pad(self.homes[uav][:2])
 
     def _pad_column(self, uav: str) -> Volume:
-        return column(self._homes[uav][:2], 0.0, self._home_top_m())
+        return column(self.homes[uav][:2], 0.0, self._home_top_m())
 
     def _on_pad(self, uav: str, position_m: Vec3, max_z_m: float) -> bool:
-        home = self._homes.get(uav)
+        home = self.homes.get(uav)
         if home is None:
             return False
         x, y, z = (float(v) for v in position_m)
         return math.hypot(x - home[0], y - home[1]) <= ON_PAD_XY_M and z - home[2] <= max_z_m
-
-
-def _same(a: Vec3, b: Vec3) -> bool:
-    return math.hypot(a[0] - b[0], a[1] - b[1]) < 1e-3
 
 
 __all__ = ["AIRSPACES", "DEFAULT_AIRSPACE", "TABLE_MARGIN_S", "TableClearance"]

@@ -30,7 +30,7 @@ from masonry.errors import InputError
 from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import MissionControl
-from masonry.mission.events import SAMPLE_PERIOD_S, EventSink
+from masonry.mission.events import EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
@@ -39,6 +39,7 @@ from masonry.mission.measured import MeasuredJournal, journaled_errors_m, kept_e
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
+from masonry.mission.sim_loop import CONTROL_PERIOD_S, LANDING_GRACE_S, fly
 from masonry.mission.sim_options import SimFields, SimOptions, with_fields
 from masonry.mission.sim_resume import kept_of, resumed_world
 from masonry.mission.table_events import watch_table
@@ -73,13 +74,6 @@ if TYPE_CHECKING:
 
 #: The dispatch policies (the planner's, named here for the callers of ``simulate``).
 POLICIES = DISPATCH_POLICIES
-
-#: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
-LANDING_GRACE_S = 180.0
-
-#: The state machines' control period (``UavConfig.control_period_s``, from :data:`masonry.timing.DEFAULT_TIMING`):
-#: UAV handlers and mission control step at this period, the world at ``dt_s``.
-CONTROL_PERIOD_S = DEFAULT_TIMING.control_period_s
 
 ProgressFn = Callable[[int, int, float], None]
 
@@ -446,7 +440,7 @@ class SimulatedMission:
             raise InputError("this mission has run already: build another one")
         self._ran = True
         with self._resources:
-            self._fly()
+            fly(self)
             if self.measured.journal is not None:
                 # the end of the run, for a later resume of a finished mission (no record follows the landing)
                 self.measured.journal.set_meta(
@@ -473,59 +467,11 @@ class SimulatedMission:
             )
             return with_schedule_counts(report, self.control.dispatcher)
 
-    def _fly(self) -> None:
-        """The loop: handlers and mission control at the control period, the world's physics at ``dt_s``."""
-        mc, world, clock, handlers, dead = self.control, self.world, self.clock, self.handlers, self.dead
-        total = sum(1 for t in self.plan.tasks if not t.done)
-        # Handlers and mission control tick at the machines' control rate; the world's physics at dt_s in
-        # between. A tick of theirs in between would do nothing the next one does not (the machines act every
-        # control_period_s, and an answer to a result is handled at once through ``after_result``).
-        dt_s = self.dt_s
-        substeps = max(1, round(CONTROL_PERIOD_S / dt_s)) if dt_s < CONTROL_PERIOD_S else 1
-        pre_done = sum(1 for t in self.plan.tasks if t.done)
-        done_seen = len(mc.dispatcher.done) - pre_done
-        progress_s = clock.now_s()
-        mission_end_s: float | None = None
-        next_sample_s = clock.now_s()
-        mc.uav_events = False  # the world's samples below tell the sink where each UAV is
-        while True:
-            now = clock.now_s()
-            for name, h in handlers.items():
-                if name in dead:
-                    continue
-                if world.uavs[name].failed:
-                    # a failed UAV (``uav-loss``) says nothing more: mission control must notice the silence
-                    dead[name] = now
-                    self.bus.cut(name)
-                    continue
-                h.step(now)
-            mc.step(now)
-            if mc.sink is not None and now >= next_sample_s - 1e-9:
-                next_sample_s = max(next_sample_s + SAMPLE_PERIOD_S, now)
-                live = [(n, u.vehicle) for n, u in world.uavs.items() if n not in dead]
-                mc.sample(now, {n: v.position_m for n, v in live}, {n: v.battery_fraction for n, v in live})
-            for hook in self.tick_hooks:
-                hook(now)
-            if self.progress is not None:
-                n_done = len(mc.dispatcher.done) - pre_done
-                if n_done != done_seen or now - progress_s >= 1.0:
-                    done_seen = n_done
-                    progress_s = now
-                    self.progress(n_done, total, now)
-            if mc.ended_at_s is not None:
-                if mission_end_s is None:
-                    mission_end_s = now
-                landed = all(h.finished for n, h in handlers.items() if n not in dead)
-                if landed or now - mission_end_s > LANDING_GRACE_S:
-                    break
-            if now >= self.max_time_s:
-                break
-            for _ in range(substeps):
-                world.step(dt_s)
-
 
 __all__ = [
     "BATTERY_SWAP_S",
+    "CONTROL_PERIOD_S",
+    "LANDING_GRACE_S",
     "POLICIES",
     "SimOptions",
     "SimulatedMission",

@@ -1,0 +1,180 @@
+"""The reservation table's request decision: a UAV's hop granted, or "wait where you stay".
+
+Part of :class:`~masonry.mission.reserved.TableClearance` (``--airspace table``; docs/safety.md, "The table at run
+time"), as :mod:`masonry.mission.airspace_requests` is of the columns: :func:`request` takes a UAV's request (a
+UAV that turned back mid-flight stops where it is, :func:`stop_where`; a flight that no layer can fly inside the
+fence is refused, :func:`check_fence`), :func:`evaluate` plans its hop in the table (:func:`hop_request`) and grants it if
+it fits now, else tells it to wait where it stays. Pure: no I/O, no clock.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+from masonry.mission.airspace_state import FlightRequest, Grant, Phase
+from masonry.mission.fence import flight_fence_problem
+from masonry.mission.reserved_parts import ON_LEG_M, forced
+from masonry.mission.sites import enter_ungoverned
+from masonry.mission.volumes import Vec3, same_site
+from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
+
+if TYPE_CHECKING:
+    from masonry.mission.reserved import TableClearance
+
+__all__ = ["TableUav", "check_fence", "evaluate", "hop_request", "request", "stop_where"]
+
+
+@dataclass
+class TableUav:
+    """One UAV's part in the protocol: its phase, its pending request, its granted plan."""
+
+    phase: Phase = Phase.PARKED
+    request: FlightRequest | None = None
+    plan: FlightPlan | None = None
+    site: Vec3 | None = None  # where its plan (or its last one) goes
+    position: Vec3 | None = None
+    seen_version: int = -1  # table version at its request's last evaluation
+    retry_s: float = math.inf  # its wait ends then at the latest (a window ends)
+    blocked_by: tuple[tuple[str, str], ...] = ()
+    spot: Vec3 | None = None  # its parking spot, while it flies there or waits there
+
+
+def request(
+    c: TableClearance,
+    uav: str,
+    site_m: Vec3,
+    now_s: float,
+    position_m: Vec3 | None = None,
+    top_m: float | None = None,
+    to_m: Vec3 | None = None,
+) -> Grant:
+    """``uav`` (at ``position_m``) sets off for ``site_m``, to work there up to ``top_m`` (along to ``to_m``):
+    its hop is granted if it fits now, else it waits where it is (its stay)."""
+    c.tick(now_s)
+    site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+    top = max(site[2], float(top_m) if top_m is not None else site[2])
+    if c.base_m is None:  # no airspace rules: only the site gate may hold the flight back
+        granted = enter_ungoverned(c.gate, uav, site, now_s)
+        c.granted_count += granted
+        c.refused += not granted
+        return Grant(uav, site, granted)
+    u = c.record(uav)
+    pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+    if pos is not None:
+        u.position = pos
+    if (
+        u.phase in (Phase.TO_HOLD, Phase.AT_HOLD)
+        and u.request is not None
+        and same_site(u.request.site, site)
+    ):
+        c.at_spot(uav, u)
+        if u.phase is Phase.TO_HOLD and u.spot is not None:
+            return Grant(uav, site, False, u.spot, u.spot[2])  # on its way there: the same answer
+    elif u.plan is not None and u.site is not None and same_site(u.site, site):
+        return Grant(uav, site, layer_m=u.plan.layer_m)  # said again: the same flight
+    if u.plan is not None and u.phase in (Phase.FLYING, Phase.TO_HOLD):
+        # it turned back mid-flight (a failsafe, a recall): it stops where it is, which is its stay now
+        stop_where(c, uav, u, pos)
+    w = u.request
+    if w is not None and same_site(w.site, site):
+        if pos is not None and (w.position is None or math.dist(pos, w.position) > 0.05):
+            u.request = replace(w, position=pos)
+            u.seen_version = -1
+        return evaluate(c, uav, u, now_s)
+    to = None
+    if to_m is not None and math.hypot(float(to_m[0]) - site[0], float(to_m[1]) - site[1]) > 1e-6:
+        to = (float(to_m[0]), float(to_m[1]))
+    if c.gate is not None and u.site is not None and not same_site(u.site, site):
+        c.gate.left(uav, now_s)  # it moves on: its site interval is over, however close the next site is
+    c.seq += 1
+    u.request = FlightRequest(site, top, pos, now_s, c.seq, to)
+    u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
+    check_fence(c, uav, u.request)
+    return evaluate(c, uav, u, now_s)
+
+
+def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
+    """Grant ``uav``'s hop if it fits now, else tell it to wait where it is."""
+    w = u.request
+    assert w is not None
+    u.seen_version, u.retry_s = c.version, math.inf
+    refused = c.fence_refusals.get(uav)
+    if refused is not None:
+        c.refused += 1
+        return Grant(uav, w.site, False, refused=refused)
+    if c.gate is not None and not c.gate.may_enter(uav, w.site):
+        u.blocked_by = (("-", "site-rule"),)
+        c.refused += 1
+        return Grant(uav, w.site, False)
+    if c.table.stay_of(uav) is None:  # (heard again with nothing held: where it is now)
+        where = u.position if u.position is not None else w.site
+        c.set_stay(uav, column((where[0], where[1]), 0.0, where[2]), u.phase)
+    guarded, hop = c.guarded_for(uav), hop_request(c, uav, u, w)
+    if u.plan is not None:  # it turned back and holds its old plan: its new one starts where it is, now
+        here = column(hop.start.xy, hop.start.z_m, hop.start.z_m)
+        guarded = forced(guarded, guarded.of(uav), [Reservation(uav, here, now_s, math.inf, "stay")])
+    top = c.airspace.layers_m[-1]
+    high = hop.start.z_m > top  # from its parking spot, over every layer: planned from the top one
+    decision = decide(
+        guarded, replace(hop, start=replace(hop.start, z_m=top)) if high else hop, now_s, c.airspace
+    )
+    if high and not isinstance(decision, Wait):
+        first = decision.plan.reservations[0]  # its climb (a descent here) reaches up to where it is
+        down = replace(first, volume=column(hop.start.xy, first.volume.z0_m, hop.start.z_m))
+        if guarded.clashes(down):
+            decision = Wait(uav, now_s + 1.0, guarded.clashes(down))
+        else:
+            plan = decision.plan
+            decision = replace(decision, plan=replace(plan, reservations=(down, *plan.reservations[1:])))
+    if isinstance(decision, Wait):
+        u.retry_s = decision.until_s
+        u.blocked_by = tuple(sorted({(r.uav, r.purpose) for r in decision.blocked_by}))
+        c.refused += 1
+        if u.phase is Phase.AT_HOLD and u.spot is not None:
+            return Grant(uav, w.site, False, u.spot, u.spot[2])
+        return Grant(uav, w.site, False)
+    left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
+    c.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
+    u.request, u.phase, u.blocked_by, u.spot = None, Phase.FLYING, (), None
+    c.granted_count += 1
+    if c.gate is not None:
+        c.gate.entered(uav, w.site, now_s)
+    c.bump()
+    return Grant(uav, w.site, layer_m=decision.plan.layer_m)
+
+
+def hop_request(c: TableClearance, uav: str, u: TableUav, w: FlightRequest) -> Request:
+    """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""
+    start = w.position if w.position is not None else (u.position or w.site)
+    stay = c.table.stay_of(uav)
+    if stay is not None and stay.volume.a == stay.volume.b and math.dist(stay.volume.a, start[:2]) < ON_LEG_M:
+        v = stay.volume  # where it stays, give or take its tracking error (a hover: at its altitude)
+        start = (*v.a, v.z1_m if v.z0_m == v.z1_m and abs(start[2] - v.z1_m) < ON_LEG_M else start[2])
+    home = c.homes.get(uav)
+    radius = 0.0 if home is not None and same_site(home, w.site) else c.zone_r_m
+    here = Place((start[0], start[1]), start[2], "site", radius)
+    work = Work((w.site[0], w.site[1]), w.top_m, 0.0, w.to, radius, 0.0)
+    return Request(uav, here, work, None)
+
+
+def check_fence(c: TableClearance, uav: str, w: FlightRequest) -> None:
+    c.fence_refusals.pop(uav, None)
+    if c.fence is None:
+        return
+    start = w.position if w.position is not None else w.site
+    problem = flight_fence_problem(c.fence, start, w.site, w.top_m, w.to, c.airspace.layers_m, c.zone_r_m)
+    if problem is not None:
+        c.fence_refusals[uav] = problem
+
+
+def stop_where(c: TableClearance, uav: str, u: TableUav, pos: Vec3 | None) -> None:
+    """``uav`` stopped its plan where it is (``pos``), turned back for another site: a hover there is its stay
+    from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted."""
+    where = pos if pos is not None else u.position
+    if where is None:
+        return
+    hover = Reservation(uav, column((where[0], where[1]), where[2], where[2], 0.3), c.now_s, math.inf, "stay")
+    if not c.table.clashes(hover):
+        c.set_stay(uav, hover.volume, Phase.PARKED)
