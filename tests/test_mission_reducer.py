@@ -25,7 +25,7 @@ from masonry.ports import LAST_RESORT_S, TASK_DROPPED_REASON, TaskResult
 
 def _result(status: str = "done", *, state: str = "", attempt: int = 1, sender: str = "b1") -> Result:
     r = TaskResult("B0", "done" if status == "done" else "failed", 10.0)
-    return Result(sender, r, 50.0, state=state, attempt=attempt)
+    return Result(sender, r, 50.0, state=state, attempt=attempt, out_of_service=state == OUT_OF_SERVICE_STATE)
 
 
 def test_each_message_asks_for_its_steps_in_order() -> None:
@@ -35,7 +35,12 @@ def test_each_message_asks_for_its_steps_in_order() -> None:
     assert steps_of(_result("failed", state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
     assert steps_of(Heartbeat("b1", 1.0, state="idle")) == (Step.HEARTBEAT, Step.REPORT)
     assert steps_of(Progress("b1", "B0", "transit", 1.0)) == (Step.PROGRESS, Step.REPORT)
-    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
+    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE, out_of_service=True)) == (Step.RETIRE,)
+    assert steps_of(Progress("b1", "B0", "x", 1.0, out_of_service=True)) == (Step.RETIRE,)
+    # the fact decides, not the state name
+    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE)) == (Step.HEARTBEAT, Step.REPORT)
+    no_fact = Result("b1", TaskResult("B0", "failed", 1.0), 50.0, state=OUT_OF_SERVICE_STATE, attempt=1)
+    assert steps_of(no_fact) == (Step.RESULT,)
     assert steps_of(ClearanceRequest("b1", (0.0, 0.0, 1.0), 1.0)) == (Step.CLEARANCE,)
     assert steps_of(Recall("mission-control", "b1", 1.0, "recalled")) == ()
 

@@ -4,6 +4,7 @@ message (version 5), the decoder refuses a bad one, and mission control decides 
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -18,14 +19,16 @@ from masonry.mission.messages import (
     Assign,
     Heartbeat,
     Progress,
+    Result,
     decode,
     encode,
 )
 from masonry.mission.uav_facts import UavFacts, facts_of
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.ports import TaskResult
 
 FLEET = {"brick-1", "brick-2"}
-FACTS = ("carrying", "flying_home", "on_pad", "finishing")
+FACTS = ("carrying", "flying_home", "on_pad", "finishing", "out_of_service")
 
 
 def test_the_protocol_version_went_up_for_the_facts() -> None:
@@ -82,7 +85,20 @@ def test_the_uav_side_reads_its_facts_off_its_machine() -> None:
     assert facts_of("home") == UavFacts(flying_home=True)
     assert facts_of("place_descend") == UavFacts(carrying=True, finishing=True)
     assert facts_of("spray") == UavFacts(finishing=True)
+    assert facts_of("halted") == UavFacts(out_of_service=True)
     assert facts_of("") == UavFacts()
+
+
+def test_a_results_out_of_service_fact_round_trips_and_is_checked() -> None:
+    msg = Result("brick-1", TaskResult("B0", "failed", 1.0, reason="x"), 3.0, state="halted", attempt=1)
+    for m in (msg, replace(msg, out_of_service=True)):
+        assert decode(encode(m), FLEET) == m
+    body = json.loads(encode(msg))
+    body["out_of_service"] = "yes"
+    with pytest.raises(ProtocolError, match="result message: field 'out_of_service' must be true or false"):
+        decode(json.dumps(body), FLEET)
+    body.pop("out_of_service")
+    assert decode(json.dumps(body), FLEET) == msg
 
 
 def test_the_handlers_heartbeat_and_progress_carry_its_machines_facts() -> None:

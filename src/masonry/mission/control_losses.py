@@ -15,7 +15,7 @@ from masonry.mission import control_airspace, control_results
 from masonry.mission.liveness import Lapse, way_home_s
 from masonry.mission.messages import Heartbeat, Message, Result
 from masonry.mission.records import Liveness, UavLink
-from masonry.mission.reducer import OUT_OF_SERVICE_STATE, loss_reason, way_home_of
+from masonry.mission.reducer import loss_reason, way_home_of
 from masonry.mission.uav_facts import facts_from
 from masonry.planner.tasks import BrickTask
 from masonry.timing import DEFAULT_TIMING
@@ -35,7 +35,7 @@ def readmit(mc: MissionControl, link: UavLink, msg: Message, now_s: float) -> bo
     anything else it sends stays ignored (a late result of a task that went to another UAV)."""
     if link.liveness is not Liveness.LOST or not isinstance(msg, Heartbeat) or msg.task_id is not None:
         return False
-    if msg.state == OUT_OF_SERVICE_STATE or mc.ended_at_s is not None:
+    if msg.out_of_service or mc.ended_at_s is not None:
         return False
     name = link.spec.name
     way_home = way_home_of(facts_from(msg), link.way_via_m, mc.fallback_layers_m.get(name))

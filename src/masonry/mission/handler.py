@@ -57,7 +57,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.spares import as_flown
 from masonry.mission.transport import Transport
-from masonry.mission.uav_facts import facts_of
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, facts_of
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
     FINISHING_STATES,
@@ -69,8 +69,6 @@ from masonry.spares import Spare
 
 log = logging.getLogger(__name__)
 
-#: The state a machine reports when it is out of service for the rest of the mission (as in control.py).
-OUT_OF_SERVICE_STATE = "halted"
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
@@ -273,6 +271,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                 flying_home=f.flying_home,
                 on_pad=f.on_pad,
                 finishing=f.finishing,
+                out_of_service=f.out_of_service,
             )
         )
 
@@ -314,6 +313,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                     flying_home=f.flying_home,
                     on_pad=f.on_pad,
                     finishing=f.finishing,
+                    out_of_service=f.out_of_service,
                 )
             )
         if self._column is not None or self._columns_left:

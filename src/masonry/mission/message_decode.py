@@ -75,12 +75,8 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     flying_home = data.get("flying_home", False)
     on_pad = data.get("on_pad", False)
     finishing = data.get("finishing", False)
-    if not (
-        type(carrying) is bool
-        and type(flying_home) is bool
-        and type(on_pad) is bool
-        and type(finishing) is bool
-    ):
+    out_of_service = data.get("out_of_service", False)
+    if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service)):
         return None
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
@@ -97,6 +93,7 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         flying_home=flying_home,
         on_pad=on_pad,
         finishing=finishing,
+        out_of_service=out_of_service,
     )
     return hb
 
@@ -283,6 +280,7 @@ def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
         f.vec("position_m", optional=True),
         state=str(f.data.get("state") or ""),
         attempt=attempt,
+        out_of_service=_facts(f)["out_of_service"],
     )
 
 

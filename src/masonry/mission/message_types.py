@@ -21,7 +21,7 @@ OPERATOR_COMMANDS = ("pause", "resume", "abort", "recall", "return-all", "limit"
 Vec3 = tuple[float, float, float]
 
 #: A heartbeat's and a progress report's typed facts (:mod:`masonry.mission.uav_facts`), booleans on the wire.
-FACT_FIELDS = ("carrying", "flying_home", "on_pad", "finishing")
+FACT_FIELDS = ("carrying", "flying_home", "on_pad", "finishing", "out_of_service")
 
 
 @dataclass(frozen=True)
@@ -45,6 +45,7 @@ class Heartbeat:
     flying_home: bool = False
     on_pad: bool = False
     finishing: bool = False
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,7 @@ class Progress:
     flying_home: bool = False
     on_pad: bool = False
     finishing: bool = False
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)
@@ -93,8 +95,10 @@ class Result:
     result: TaskResult
     time_s: float
     position_m: Vec3 | None = None
-    state: str = ""  # the UAV's state after the result ("halted": out of service)
+    state: str = ""  # the UAV's state after the result (for display)
     attempt: int = 0  # the attempt of the assignment this result answers (0: unknown, never accepted)
+    #: the UAV is out of service after it (its fact, as in a heartbeat): mission control retires it
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spar
 (the task on the wall as built, :mod:`masonry.planner.as_built_plan`: a UAV that does not know it flies the
 design; one that does refuses a ``planned`` that is not the task moved by at most
 :data:`~masonry.planner.as_built_plan.MAX_PLANNED_SHIFT_M`); 5 a heartbeat's and a progress report's typed facts
-``carrying``, ``flying_home``, ``on_pad`` and ``finishing`` (:mod:`masonry.mission.uav_facts`; booleans, false
+``carrying``, ``flying_home``, ``on_pad``, ``finishing`` and ``out_of_service`` (a result's ``out_of_service`` too) (:mod:`masonry.mission.uav_facts`; booleans, false
 when left out): mission control decides from them, not from the state name (a version-4 UAV sends none, and
 would be taken for one that never carries a brick).
 """
@@ -178,6 +178,7 @@ def encode(message: Message) -> bytes:
             position_m=_vec(message.position_m),
             state=message.state,
             attempt=message.attempt,
+            out_of_service=message.out_of_service,
             result={
                 "task_id": r.task_id,
                 "status": r.status,
@@ -223,6 +224,7 @@ def _facts(message: Heartbeat | Progress) -> dict[str, bool]:
         "flying_home": message.flying_home,
         "on_pad": message.on_pad,
         "finishing": message.finishing,
+        "out_of_service": message.out_of_service,
     }
 
 

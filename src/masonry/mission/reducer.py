@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from masonry.mission.journal_state import LOST_REASON
 from masonry.mission.message_types import ClearanceRequest, Heartbeat, Message, Progress, Result
 from masonry.mission.records import Attempt
-from masonry.mission.uav_facts import UavFacts
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, UavFacts
 from masonry.mission.volumes import Vec3
 from masonry.ports import TASK_DROPPED_REASON
 
@@ -33,8 +33,6 @@ __all__ = [
     "way_home_of",
 ]
 
-#: The state a UAV's machine reports when it is out of service for the rest of the mission.
-OUT_OF_SERVICE_STATE = "halted"
 
 #: The states of a UAV flying a brick back to its pallet (``masonry.fsm``): its way home goes through the pickup
 #: (kept for readers; mission control decides from the facts ``flying_home`` and ``carrying``).
@@ -55,12 +53,12 @@ class Step(enum.Enum):
 def steps_of(msg: Message) -> tuple[Step, ...]:
     """What a message from a UAV in the mission asks of mission control, in order."""
     if isinstance(msg, Result):
-        if msg.state != OUT_OF_SERVICE_STATE:
+        if not msg.out_of_service:
             return (Step.RESULT,)
         # refused or abandoned because it is out of service: not the task's fault (no result counted)
         return (Step.RETIRE,) if msg.result.status == "failed" else (Step.RESULT, Step.RETIRE)
     if isinstance(msg, (Heartbeat, Progress)):
-        if msg.state == OUT_OF_SERVICE_STATE:
+        if msg.out_of_service:
             return (Step.RETIRE,)
         return (Step.HEARTBEAT if isinstance(msg, Heartbeat) else Step.PROGRESS, Step.REPORT)
     # (the other kinds never come from a UAV: nothing to do)

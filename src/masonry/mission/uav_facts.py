@@ -13,10 +13,12 @@ from typing import Protocol
 
 from masonry.ports import CARRYING_STATES, FINISHING_STATES
 
-__all__ = ["LANDED_STATE", "MAY_FINISH_STATES", "UavFacts", "facts_from", "facts_of"]
+__all__ = ["LANDED_STATE", "MAY_FINISH_STATES", "OUT_OF_SERVICE_STATE", "UavFacts", "facts_from", "facts_of"]
 
 #: The state of a UAV's machine landed and idle on its pad.
 LANDED_STATE = "idle"
+#: The state a UAV's machine reports when it is out of service for the rest of the mission.
+OUT_OF_SERVICE_STATE = "halted"
 
 #: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
 #: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
@@ -32,12 +34,14 @@ class UavFacts:
         flying_home: it flies home on its own (its way home, or a brick back to its pallet first).
         on_pad: it is landed and idle on its pad.
         finishing: its work is (or is about to be) on the wall and it finishes it even cut off.
+        out_of_service: it is out of service for the rest of the mission (it refuses every task).
     """
 
     carrying: bool = False
     flying_home: bool = False
     on_pad: bool = False
     finishing: bool = False
+    out_of_service: bool = False
 
 
 def facts_of(state: str) -> UavFacts:
@@ -47,6 +51,7 @@ def facts_of(state: str) -> UavFacts:
         flying_home=state == "home" or state.startswith("putback"),
         on_pad=state == LANDED_STATE,
         finishing=state in MAY_FINISH_STATES,
+        out_of_service=state == OUT_OF_SERVICE_STATE,
     )
 
 
@@ -61,8 +66,10 @@ class _Reports(Protocol):
     def on_pad(self) -> bool: ...
     @property
     def finishing(self) -> bool: ...
+    @property
+    def out_of_service(self) -> bool: ...
 
 
 def facts_from(msg: _Reports) -> UavFacts:
     """The facts a heartbeat or progress report carries (mission control's side: it reads no state name)."""
-    return UavFacts(msg.carrying, msg.flying_home, msg.on_pad, msg.finishing)
+    return UavFacts(msg.carrying, msg.flying_home, msg.on_pad, msg.finishing, msg.out_of_service)
