@@ -29,6 +29,7 @@ from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Assign, Heartbeat, Result, decode, encode
+from masonry.mission.uav_facts import facts_of
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import MISSION_CONTROL_LOST_REASON, TaskResult
@@ -135,7 +136,14 @@ class Uav:
         self.assigned: list[Assign] = []
 
     def beat(self, now_s, task_id=None, state="idle"):
-        self.t.send(MISSION_CONTROL, encode(Heartbeat(self.name, now_s, state=state, task_id=task_id)))
+        self.t.send(
+            MISSION_CONTROL,
+            encode(
+                Heartbeat(
+                    self.name, now_s, state=state, task_id=task_id, **dataclasses.asdict(facts_of(state))
+                )
+            ),
+        )
         for raw in self.t.receive():
             msg = decode(raw)
             if isinstance(msg, Assign):

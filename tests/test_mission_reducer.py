@@ -19,12 +19,13 @@ from masonry.mission.reducer import (
     steps_of,
     way_home_of,
 )
+from masonry.mission.uav_facts import UavFacts, facts_of
 from masonry.ports import LAST_RESORT_S, TASK_DROPPED_REASON, TaskResult
 
 
 def _result(status: str = "done", *, state: str = "", attempt: int = 1, sender: str = "b1") -> Result:
     r = TaskResult("B0", "done" if status == "done" else "failed", 10.0)
-    return Result(sender, r, 50.0, state=state, attempt=attempt)
+    return Result(sender, r, 50.0, state=state, attempt=attempt, out_of_service=state == OUT_OF_SERVICE_STATE)
 
 
 def test_each_message_asks_for_its_steps_in_order() -> None:
@@ -34,7 +35,12 @@ def test_each_message_asks_for_its_steps_in_order() -> None:
     assert steps_of(_result("failed", state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
     assert steps_of(Heartbeat("b1", 1.0, state="idle")) == (Step.HEARTBEAT, Step.REPORT)
     assert steps_of(Progress("b1", "B0", "transit", 1.0)) == (Step.PROGRESS, Step.REPORT)
-    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE)) == (Step.RETIRE,)
+    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE, out_of_service=True)) == (Step.RETIRE,)
+    assert steps_of(Progress("b1", "B0", "x", 1.0, out_of_service=True)) == (Step.RETIRE,)
+    # the fact decides, not the state name
+    assert steps_of(Heartbeat("b1", 1.0, state=OUT_OF_SERVICE_STATE)) == (Step.HEARTBEAT, Step.REPORT)
+    no_fact = Result("b1", TaskResult("B0", "failed", 1.0), 50.0, state=OUT_OF_SERVICE_STATE, attempt=1)
+    assert steps_of(no_fact) == (Step.RESULT,)
     assert steps_of(ClearanceRequest("b1", (0.0, 0.0, 1.0), 1.0)) == (Step.CLEARANCE,)
     assert steps_of(Recall("mission-control", "b1", 1.0, "recalled")) == ()
 
@@ -76,23 +82,32 @@ def test_a_completion_heard_late_counts_only_for_a_task_released_from_its_uav(
 
 
 def test_an_idle_heartbeat_with_no_task_releases_an_assignment_older_than_the_timeout() -> None:
-    idle = Heartbeat("b1", 20.0, state="idle")
+    idle = Heartbeat("b1", 20.0, state="idle", on_pad=True)
     att = Attempt("B0", "b1", 1, start_s=10.0)
     reason = dropped_reason(idle, att, 20.0, 5.0)
     assert reason is not None and reason.startswith(TASK_DROPPED_REASON) and "10.0 s" in reason
     assert dropped_reason(idle, att, 14.0, 5.0) is None  # the assignment may still be on its way
     assert dropped_reason(Heartbeat("b1", 20.0, state="transit"), att, 20.0, 5.0) is None  # busy flying
-    assert dropped_reason(Heartbeat("b1", 20.0, state="idle", task_id="B0"), att, 20.0, 5.0) is None
+    assert (
+        dropped_reason(Heartbeat("b1", 20.0, state="idle", on_pad=True, task_id="B0"), att, 20.0, 5.0) is None
+    )
+    # mission control reads the fact, not the state name: "idle" without on_pad is not down on the pad
+    assert dropped_reason(Heartbeat("b1", 20.0, state="idle"), att, 20.0, 5.0) is None
+    assert dropped_reason(Heartbeat("b1", 20.0, state="parked", on_pad=True), att, 20.0, 5.0) is not None
     adopted = Attempt("B0", "b1", 1, start_s=19.0, adopted=True)
     assert "after the resume" in (dropped_reason(idle, adopted, 20.0, 5.0) or "")
 
 
 def test_the_way_home_and_the_loss_reason_follow_what_the_uav_last_said() -> None:
     via = (1.0, 2.0, 0.5)
-    assert way_home_of("home", via, 3.3) == (3.3, None)
-    assert way_home_of("putback_goto", via, None) == (None, via)
-    assert way_home_of("putback_release", via, 3.3) == (3.3, None)
-    assert way_home_of("idle", via, 3.3) is None
+    # the facts the UAV side reads off its machine (masonry.mission.uav_facts.facts_of) ...
+    assert way_home_of(facts_of("home"), via, 3.3) == (3.3, None)
+    assert way_home_of(facts_of("putback_goto"), via, None) == (None, via)
+    assert way_home_of(facts_of("putback_release"), via, 3.3) == (3.3, None)
+    assert way_home_of(facts_of("idle"), via, 3.3) is None
+    # ... and mission control decides from the facts alone, whatever the state is called
+    assert way_home_of(UavFacts(flying_home=True, carrying=True), via, 3.3) == (3.3, via)
+    assert way_home_of(UavFacts(carrying=True), via, 3.3) is None
     assert loss_reason(None, "transit", None) == LOST_REASON
     assert (
         loss_reason(None, "transit", 7)
@@ -131,7 +146,8 @@ def test_a_uav_finishing_its_work_is_silent_for_the_rejoin_timeout_before_it_is_
     live, links = _tracker()
     b1 = links["b1"]
     live.heard(b1, 0.0)
-    b1.state = "place_descend"
+    b1.state, b1.facts = "place_descend", facts_of("place_descend")
+    assert b1.facts.finishing
     assert live.sweep(20.0, lambda _n: True) == []
     assert b1.liveness is Liveness.SILENT and not b1.lost  # in its grace
     live.heard(b1, 21.0)
@@ -139,6 +155,17 @@ def test_a_uav_finishing_its_work_is_silent_for_the_rejoin_timeout_before_it_is_
     assert live.sweep(27.0, lambda _n: False) == [("b1", Lapse.SILENT_TOO_LONG)]  # no task: 5 s
     assert live.sweep(56.0, lambda _n: True) == []  # with its task: 5 + 30 s
     assert live.sweep(56.5, lambda _n: True) == [("b1", Lapse.SILENT_TOO_LONG)]
+
+
+def test_the_grace_follows_the_finishing_fact_not_the_state_name() -> None:
+    live, links = _tracker()
+    b1 = links["b1"]
+    live.heard(b1, 0.0)
+    b1.state, b1.facts = "place_descend", UavFacts()  # a familiar name, but it does not say it is finishing
+    assert live.sweep(5.5, lambda _n: True) == [("b1", Lapse.SILENT_TOO_LONG)]
+    live.heard(b1, 10.0)
+    b1.state, b1.facts = "a-new-state", UavFacts(finishing=True)  # an unfamiliar name that says it is
+    assert live.sweep(40.0, lambda _n: True) == []
 
 
 def test_a_lost_uavs_way_home_is_freed_when_its_time_is_up() -> None:

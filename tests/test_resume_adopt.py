@@ -11,6 +11,7 @@ too.
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
@@ -23,6 +24,7 @@ from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.journal import Journal
 from masonry.mission.messages import MISSION_CONTROL, Assign, Heartbeat, Result, decode, encode
+from masonry.mission.uav_facts import facts_of
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import TaskResult
@@ -55,7 +57,10 @@ class Uav:
         self.assigned: list[Assign] = []
 
     def beat(self, now_s: float, task_id: str | None = None, state: str = "idle") -> None:
-        self.t.send(MISSION_CONTROL, encode(Heartbeat(self.name, now_s, state=state, task_id=task_id)))
+        self.t.send(
+            MISSION_CONTROL,
+            encode(Heartbeat(self.name, now_s, state=state, task_id=task_id, **asdict(facts_of(state)))),
+        )
         self.read()
 
     def read(self) -> None:

@@ -341,7 +341,7 @@ class MissionControl:
             elif step is Step.PROGRESS:
                 self.events.progress += 1
             elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
-                control_airspace.report(self, link, msg.state, msg.position_m)
+                control_airspace.report(self, link, msg, msg.position_m)
                 if self.sink is not None and self.uav_events:
                     control_airspace.emit_uav(self, now_s, link)
 

@@ -14,10 +14,11 @@ from masonry.errors import MissionError
 from masonry.geofence import Site
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, task_work_altitude_m
 from masonry.mission.events import volume_list
-from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest
-from masonry.mission.records import LANDED_STATE, UavLink
+from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, Heartbeat, Progress
+from masonry.mission.records import UavLink
 from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SiteGate
+from masonry.mission.uav_facts import facts_from
 from masonry.mission.volumes import Vec3
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
@@ -42,10 +43,11 @@ __all__ = [
 log = logging.getLogger("masonry.mission.control")
 
 
-def report(mc: MissionControl, link: UavLink, state: str, position_m: Vec3 | None) -> None:
-    """A UAV's state and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
+def report(mc: MissionControl, link: UavLink, msg: Heartbeat | Progress, position_m: Vec3 | None) -> None:
+    """A UAV's state, facts and position (heartbeat or progress): its flight shrinks behind it; on its pad, done
     flying, it holds only the pad."""
-    link.state = state
+    link.state = msg.state
+    link.facts = facts_from(msg)
     if position_m is None:
         return
     link.moved_to(position_m)
@@ -53,7 +55,7 @@ def report(mc: MissionControl, link: UavLink, state: str, position_m: Vec3 | Non
     if position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
         link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
     mc.columns.progress(name, position_m)
-    if state == LANDED_STATE and not link.taking_off and mc.dispatcher.task_of(name) is None:
+    if link.facts.on_pad and not link.taking_off and mc.dispatcher.task_of(name) is None:
         # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
         mc.columns.landed(name, position_m)
 

@@ -15,9 +15,9 @@ from masonry.mission import control_airspace, control_results
 from masonry.mission.liveness import Lapse, way_home_s
 from masonry.mission.messages import Heartbeat, Message, Result
 from masonry.mission.records import Liveness, UavLink
-from masonry.mission.reducer import OUT_OF_SERVICE_STATE, loss_reason, way_home_of
+from masonry.mission.reducer import loss_reason, way_home_of
+from masonry.mission.uav_facts import facts_from
 from masonry.planner.tasks import BrickTask
-from masonry.ports import CARRYING_STATES
 from masonry.timing import DEFAULT_TIMING
 
 if TYPE_CHECKING:
@@ -35,10 +35,10 @@ def readmit(mc: MissionControl, link: UavLink, msg: Message, now_s: float) -> bo
     anything else it sends stays ignored (a late result of a task that went to another UAV)."""
     if link.liveness is not Liveness.LOST or not isinstance(msg, Heartbeat) or msg.task_id is not None:
         return False
-    if msg.state == OUT_OF_SERVICE_STATE or mc.ended_at_s is not None:
+    if msg.out_of_service or mc.ended_at_s is not None:
         return False
     name = link.spec.name
-    way_home = way_home_of(msg.state, link.way_via_m, mc.fallback_layers_m.get(name))
+    way_home = way_home_of(facts_from(msg), link.way_via_m, mc.fallback_layers_m.get(name))
     if not mc.columns.rejoined(name, msg.position_m, way_home):
         return False
     if not mc.dispatcher.readmit_uav(name):
@@ -70,7 +70,7 @@ def lose(mc: MissionControl, name: str, now_s: float, status: str = "lost") -> N
     task_id = mc.dispatcher.task_of(name)
     task = mc.spares.task(mc.tasks[task_id]) if task_id is not None else None
     # last heard with its brick on the magnet: it may have taken it down with it, or puts it back first
-    carried = task if link.state in CARRYING_STATES and isinstance(task, BrickTask) else None
+    carried = task if link.facts.carrying and isinstance(task, BrickTask) else None
     if status == "lost" and mc.columns.volumes(name):
         # silent: it may be cut off and hovering where it stopped, inside what it was granted (its rule when
         # mission control is silent), and fly home on its own after LAST_RESORT_S: both stay reserved until

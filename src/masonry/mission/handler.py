@@ -57,6 +57,7 @@ from masonry.mission.messages import (
 )
 from masonry.mission.spares import as_flown
 from masonry.mission.transport import Transport
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, facts_of
 from masonry.planner.tasks import BrickTask, Task
 from masonry.ports import (
     FINISHING_STATES,
@@ -68,8 +69,6 @@ from masonry.spares import Spare
 
 log = logging.getLogger(__name__)
 
-#: The state a machine reports when it is out of service for the rest of the mission (as in control.py).
-OUT_OF_SERVICE_STATE = "halted"
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
@@ -258,7 +257,23 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         return why is not None
 
     def report_progress(self, task_id: str, state: str, time_s: float) -> None:
-        self._send(Progress(self.name, task_id, state, time_s, self._where()))
+        f = facts_of(
+            state
+        )  # (the handler knows its machine: mission control reads these, not the state name)
+        self._send(
+            Progress(
+                self.name,
+                task_id,
+                state,
+                time_s,
+                self._where(),
+                carrying=f.carrying,
+                flying_home=f.flying_home,
+                on_pad=f.on_pad,
+                finishing=f.finishing,
+                out_of_service=f.out_of_service,
+            )
+        )
 
     def pump(self) -> bool:
         """Read what has arrived now (between ticks); True if a task is waiting for the machine."""
@@ -279,6 +294,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self._resend_unheard(now_s)
             cur = self._current
             state = self._state()
+            f = facts_of(state)
             self._send(
                 Heartbeat(
                     self.name,
@@ -293,6 +309,11 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                     else min(1.0, max(0.0, float(self._report_battery()))),
                     wind_mps=self._wind_reading(),
                     max_wind_mps=self._max_wind_mps,
+                    carrying=f.carrying,
+                    flying_home=f.flying_home,
+                    on_pad=f.on_pad,
+                    finishing=f.finishing,
+                    out_of_service=f.out_of_service,
                 )
             )
         if self._column is not None or self._columns_left:

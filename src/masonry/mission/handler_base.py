@@ -14,6 +14,7 @@ from typing import Any
 from masonry.mission.execution import Execution
 from masonry.mission.messages import MISSION_CONTROL, Message, Result, encode
 from masonry.mission.transport import Transport
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE
 from masonry.ports import TaskResult
 
 Vec3 = tuple[float, float, float]
@@ -62,6 +63,7 @@ class HandlerBase:
                 self._where(),
                 state=state,
                 attempt=attempt,
+                out_of_service=state == OUT_OF_SERVICE_STATE,
             )
         )
 

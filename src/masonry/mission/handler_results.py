@@ -22,6 +22,7 @@ from typing import Protocol
 from masonry.errors import ProtocolError
 from masonry.mission.handler_base import HandlerBase
 from masonry.mission.messages import Result, decode, encode
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE
 from masonry.ports import TaskResult
 
 log = logging.getLogger("masonry.mission.handler")
@@ -138,7 +139,15 @@ class ResultReports(HandlerBase):
                 state or "-",
                 result.reason or "no reason given",
             )
-        sent = Result(self.name, result, self.now_s, self._where(), state=state, attempt=attempt)
+        sent = Result(
+            self.name,
+            result,
+            self.now_s,
+            self._where(),
+            state=state,
+            attempt=attempt,
+            out_of_service=state == OUT_OF_SERVICE_STATE,  # (the handler knows its machine)
+        )
         self._send(sent)
         if result.status == "done":
             self._unheard = (

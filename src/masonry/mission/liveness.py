@@ -2,7 +2,7 @@
 
 A UAV starts :attr:`Liveness.SILENT` (not heard yet) and is :attr:`Liveness.HEARD` from its first message. Quiet
 past ``heartbeat_timeout_s`` it is declared :attr:`Liveness.LOST` (its task goes back to the pool); one last heard
-finishing its work (``MAY_FINISH_STATES``) with a task first gets ``rejoin_timeout_s`` more, :attr:`Liveness.SILENT`
+finishing its work (its facts say ``finishing``) with a task first gets ``rejoin_timeout_s`` more, :attr:`Liveness.SILENT`
 meanwhile. A lost UAV heard again with no task is :attr:`Liveness.REJOINED` (back in the mission); one that says
 it is out of service is :attr:`Liveness.OUT_OF_SERVICE` for the rest of the mission. ``UavLink.lost`` and
 ``UavLink.status`` (the report's word) are read from this one value.
@@ -18,7 +18,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 from masonry.mission.records import Liveness, UavLink
-from masonry.ports import FINISHING_STATES, LAST_RESORT_S
+from masonry.mission.uav_facts import MAY_FINISH_STATES
+from masonry.ports import LAST_RESORT_S
 
 __all__ = [
     "MAY_FINISH_STATES",
@@ -29,10 +30,6 @@ __all__ = [
     "Timeouts",
     "way_home_s",
 ]
-
-#: Last heard in one of these, a silent UAV may be finishing its task (``FINISHING_STATES``, or the descent and
-#: the spraying that lead into them): it gets ``rejoin_timeout_s`` more before it is declared lost.
-MAY_FINISH_STATES = FINISHING_STATES | {"place_descend", "spray"}
 
 #: Added to the time a silent UAV's way home takes before mission control frees it (never heard again).
 WAY_HOME_MARGIN_S = 30.0
@@ -54,9 +51,10 @@ class Timeouts:
     heartbeat_s: float
     rejoin_s: float
 
-    def silence_limit_s(self, state: str, has_task: bool) -> float:
-        """The longest a UAV last heard in ``state`` may stay quiet before it is declared lost."""
-        if state in MAY_FINISH_STATES and has_task:
+    def silence_limit_s(self, finishing: bool, has_task: bool) -> float:
+        """The longest a UAV last heard ``finishing`` its work (its facts) or not may stay quiet before it is
+        declared lost."""
+        if finishing and has_task:
             # its work is (or was about to be) on the wall, and it finishes it even cut off: its completion may
             # come late, and a conflicting task given out now would work beside it
             return self.heartbeat_s + self.rejoin_s
@@ -94,7 +92,7 @@ class LivenessTracker:
             if link.lost or link.last_heard_s is None:
                 continue
             quiet_s = now_s - link.last_heard_s
-            if quiet_s > self.timeouts.silence_limit_s(link.state, has_task(name)):
+            if quiet_s > self.timeouts.silence_limit_s(link.facts.finishing, has_task(name)):
                 out.append((name, Lapse.SILENT_TOO_LONG))
             elif quiet_s > self.timeouts.heartbeat_s:
                 link.liveness = Liveness.SILENT  # in its grace: finishing its work cut off

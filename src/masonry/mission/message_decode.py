@@ -14,6 +14,7 @@ from masonry.errors import ProtocolError
 from masonry.mission.as_built import as_built_field
 from masonry.mission.message_fields import _Fields, _finite_number, _loads, phases_from_dict, task_from_dict
 from masonry.mission.message_types import (
+    FACT_FIELDS,
     MISSION_CONTROL,
     OPERATOR,
     OPERATOR_COMMANDS,
@@ -70,6 +71,13 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     limit = data.get("max_wind_mps")
     if wind is not None or limit is not None:
         return None  # the checked decoder says what is wrong with them, if anything
+    carrying = data.get("carrying", False)
+    flying_home = data.get("flying_home", False)
+    on_pad = data.get("on_pad", False)
+    finishing = data.get("finishing", False)
+    out_of_service = data.get("out_of_service", False)
+    if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service)):
+        return None
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
     hb.__dict__.update(
@@ -81,6 +89,11 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         battery=battery,
         wind_mps=None,
         max_wind_mps=None,
+        carrying=carrying,
+        flying_home=flying_home,
+        on_pad=on_pad,
+        finishing=finishing,
+        out_of_service=out_of_service,
     )
     return hb
 
@@ -159,7 +172,19 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         battery=_battery(f),
         wind_mps=_speed(f, "wind_mps", 0.0, MAX_REPORTED_WIND_MPS, low_open=False),
         max_wind_mps=_speed(f, "max_wind_mps", 0.0, MAX_WIND_LIMIT_MPS, low_open=True),
+        **_facts(f),
     )
+
+
+def _facts(f: _Fields) -> dict[str, bool]:
+    """A heartbeat's or progress report's facts (:data:`FACT_FIELDS`): each true or false, false when left out."""
+    out: dict[str, bool] = {}
+    for name in FACT_FIELDS:
+        value = f.data.get(name, False)
+        if type(value) is not bool:
+            raise f.fail(name, f"must be true or false, got {value!r}")
+        out[name] = value
+    return out
 
 
 #: A wind reading above this is no reading (a hurricane's sustained wind is 33 m/s), and a limit above
@@ -220,7 +245,12 @@ def _planned(f: _Fields, task: Task) -> Task | None:
 def _progress(f: _Fields, sender: str, fleet: Collection[str] | None) -> Progress:
     _check_uav(f, fleet, sender, "sender")
     return Progress(
-        sender, f.str_("task_id"), f.str_("state"), f.num("time_s"), f.vec("position_m", optional=True)
+        sender,
+        f.str_("task_id"),
+        f.str_("state"),
+        f.num("time_s"),
+        f.vec("position_m", optional=True),
+        **_facts(f),
     )
 
 
@@ -250,6 +280,7 @@ def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
         f.vec("position_m", optional=True),
         state=str(f.data.get("state") or ""),
         attempt=attempt,
+        out_of_service=_facts(f)["out_of_service"],
     )
 
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from masonry.planner.tasks import Task
 from masonry.ports import TaskResult
 
-PROTOCOL_VERSION = 4
+PROTOCOL_VERSION = 5
 MISSION_CONTROL = "mission-control"
 #: The sender name of an operator's commands (``masonry ctl``); mission control answers to it.
 OPERATOR = "operator"
@@ -19,6 +19,9 @@ OPERATOR = "operator"
 OPERATOR_COMMANDS = ("pause", "resume", "abort", "recall", "return-all", "limit")
 
 Vec3 = tuple[float, float, float]
+
+#: A heartbeat's and a progress report's typed facts (:mod:`masonry.mission.uav_facts`), booleans on the wire.
+FACT_FIELDS = ("carrying", "flying_home", "on_pad", "finishing", "out_of_service")
 
 
 @dataclass(frozen=True)
@@ -36,6 +39,13 @@ class Heartbeat:
     #: gives it no task above that (None: not reported)
     wind_mps: float | None = None
     max_wind_mps: float | None = None
+    #: its facts (:class:`~masonry.mission.uav_facts.UavFacts`): mission control decides from these, ``state``
+    #: is for display
+    carrying: bool = False
+    flying_home: bool = False
+    on_pad: bool = False
+    finishing: bool = False
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)
@@ -63,13 +73,18 @@ class Assign:
 
 @dataclass(frozen=True)
 class Progress:
-    """A UAV's state machine entered ``state`` while working on ``task_id``."""
+    """A UAV's state machine entered ``state`` while working on ``task_id`` (with its facts, as a heartbeat)."""
 
     sender: str
     task_id: str
     state: str
     time_s: float
     position_m: Vec3 | None = None
+    carrying: bool = False
+    flying_home: bool = False
+    on_pad: bool = False
+    finishing: bool = False
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)
@@ -80,8 +95,10 @@ class Result:
     result: TaskResult
     time_s: float
     position_m: Vec3 | None = None
-    state: str = ""  # the UAV's state after the result ("halted": out of service)
+    state: str = ""  # the UAV's state after the result (for display)
     attempt: int = 0  # the attempt of the assignment this result answers (0: unknown, never accepted)
+    #: the UAV is out of service after it (its fact, as in a heartbeat): mission control retires it
+    out_of_service: bool = False
 
 
 @dataclass(frozen=True)

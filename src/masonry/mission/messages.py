@@ -1,6 +1,6 @@
 """The mission protocol: versioned, validated messages between mission control and UAV handlers.
 
-Every message travels as one JSON object with an envelope ``{"v": 2, "type": ..., "sender": ...}``.
+Every message travels as one JSON object with an envelope ``{"v": 5, "type": ..., "sender": ...}``.
 :func:`decode` checks the version, the type, every field's type and, when the fleet is given, that the
 sender (and the addressed UAV) belongs to it; anything else raises :class:`~masonry.errors.ProtocolError`.
 
@@ -32,7 +32,10 @@ optional both ways (a peer without one leaves it out, one that does not know it 
 version-3 UAV would reject a recall and fly on); within 4, a brick task's ``spare``, an assignment's ``planned``
 (the task on the wall as built, :mod:`masonry.planner.as_built_plan`: a UAV that does not know it flies the
 design; one that does refuses a ``planned`` that is not the task moved by at most
-:data:`~masonry.planner.as_built_plan.MAX_PLANNED_SHIFT_M`).
+:data:`~masonry.planner.as_built_plan.MAX_PLANNED_SHIFT_M`); 5 a heartbeat's and a progress report's typed facts
+``carrying``, ``flying_home``, ``on_pad``, ``finishing`` and ``out_of_service`` (a result's ``out_of_service`` too) (:mod:`masonry.mission.uav_facts`; booleans, false
+when left out): mission control decides from them, not from the state name (a version-4 UAV sends none, and
+would be taken for one that never carries a brick).
 """
 
 from __future__ import annotations
@@ -149,6 +152,7 @@ def encode(message: Message) -> bytes:
             body["wind_mps"] = message.wind_mps
         if message.max_wind_mps is not None:
             body["max_wind_mps"] = message.max_wind_mps
+        body.update(_facts(message))
     elif isinstance(message, Assign):
         body.update(
             uav=message.uav,
@@ -166,6 +170,7 @@ def encode(message: Message) -> bytes:
             time_s=message.time_s,
             position_m=_vec(message.position_m),
         )
+        body.update(_facts(message))
     elif isinstance(message, Result):
         r = message.result
         body.update(
@@ -173,6 +178,7 @@ def encode(message: Message) -> bytes:
             position_m=_vec(message.position_m),
             state=message.state,
             attempt=message.attempt,
+            out_of_service=message.out_of_service,
             result={
                 "task_id": r.task_id,
                 "status": r.status,
@@ -209,6 +215,17 @@ def encode(message: Message) -> bytes:
     else:
         body.update(_operator_body(message))
     return _ENCODER.encode(body).encode()
+
+
+def _facts(message: Heartbeat | Progress) -> dict[str, bool]:
+    """A heartbeat's or progress report's facts (:data:`~masonry.mission.message_types.FACT_FIELDS`)."""
+    return {
+        "carrying": message.carrying,
+        "flying_home": message.flying_home,
+        "on_pad": message.on_pad,
+        "finishing": message.finishing,
+        "out_of_service": message.out_of_service,
+    }
 
 
 def _operator_body(message: OperatorCommand | CommandAnswer | Recall) -> dict[str, Any]:

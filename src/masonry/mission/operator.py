@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from masonry.mission.message_types import MISSION_CONTROL, CommandAnswer, OperatorCommand
-from masonry.mission.records import LANDED_STATE
 from masonry.ports import RECALL_REASON
 
 if TYPE_CHECKING:
@@ -220,5 +219,5 @@ class Operator:
 
     def _all_down(self, mc: MissionHost) -> bool:
         return not mc.dispatcher.in_progress and all(
-            link.lost or (link.state == LANDED_STATE and not link.taking_off) for link in mc.uavs.values()
+            link.lost or (link.facts.on_pad and not link.taking_off) for link in mc.uavs.values()
         )

@@ -4,18 +4,16 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 from masonry.blueprint import UavSpec
+from masonry.mission.uav_facts import LANDED_STATE, UavFacts
 from masonry.perception.types import AsBuiltPose
 from masonry.ports import PhaseTimes, TaskResult
 
 Vec3 = tuple[float, float, float]
 AttemptStatus = Literal["running", "done", "failed"]
-
-#: The state a UAV's machine reports when it is on its pad, ready for a task (``masonry.fsm``).
-LANDED_STATE = "idle"
 
 
 @dataclass
@@ -62,7 +60,9 @@ class UavLink:
     spec: UavSpec
     last_heard_s: float | None = None
     position_m: Vec3 | None = None
-    state: str = ""
+    state: str = ""  # its machine's state as last reported (for the log, the report and the live page)
+    #: what it last said of itself (:mod:`masonry.mission.uav_facts`): mission control decides from these
+    facts: UavFacts = field(default_factory=UavFacts)
     liveness: Liveness = Liveness.SILENT
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 from masonry.mission.journal_state import LOST_REASON
 from masonry.mission.message_types import ClearanceRequest, Heartbeat, Message, Progress, Result
-from masonry.mission.records import LANDED_STATE, Attempt
+from masonry.mission.records import Attempt
+from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, UavFacts
 from masonry.mission.volumes import Vec3
 from masonry.ports import TASK_DROPPED_REASON
 
@@ -32,10 +33,9 @@ __all__ = [
     "way_home_of",
 ]
 
-#: The state a UAV's machine reports when it is out of service for the rest of the mission.
-OUT_OF_SERVICE_STATE = "halted"
 
-#: The states of a UAV flying a brick back to its pallet (``masonry.fsm``): its way home goes through the pickup.
+#: The states of a UAV flying a brick back to its pallet (``masonry.fsm``): its way home goes through the pickup
+#: (kept for readers; mission control decides from the facts ``flying_home`` and ``carrying``).
 PUTBACK_FLIGHT_STATES = frozenset({"putback_goto", "putback_descend"})
 
 
@@ -53,12 +53,12 @@ class Step(enum.Enum):
 def steps_of(msg: Message) -> tuple[Step, ...]:
     """What a message from a UAV in the mission asks of mission control, in order."""
     if isinstance(msg, Result):
-        if msg.state != OUT_OF_SERVICE_STATE:
+        if not msg.out_of_service:
             return (Step.RESULT,)
         # refused or abandoned because it is out of service: not the task's fault (no result counted)
         return (Step.RETIRE,) if msg.result.status == "failed" else (Step.RESULT, Step.RETIRE)
     if isinstance(msg, (Heartbeat, Progress)):
-        if msg.state == OUT_OF_SERVICE_STATE:
+        if msg.out_of_service:
             return (Step.RETIRE,)
         return (Step.HEARTBEAT if isinstance(msg, Heartbeat) else Step.PROGRESS, Step.REPORT)
     # (the other kinds never come from a UAV: nothing to do)
@@ -128,7 +128,7 @@ def dropped_reason(
     """Why the task of ``att`` goes back to the pool (not counted), or None: the UAV's heartbeat says it is idle
     and holds no task although its assignment went out longer than the heartbeat timeout ago (its handler was
     restarted before it was declared lost)."""
-    if msg.task_id is not None or att is None or msg.state != LANDED_STATE:
+    if msg.task_id is not None or att is None or not msg.on_pad:
         return None  # (only an idle machine: a UAV that names no task but is busy flying is not a fresh one)
     if att.adopted:
         return f"{TASK_DROPPED_REASON} (its heartbeat holds no task after the resume)"
@@ -138,12 +138,12 @@ def dropped_reason(
 
 
 def way_home_of(
-    state: str, via_m: Vec3 | None, layer_m: float | None
+    facts: UavFacts, via_m: Vec3 | None, layer_m: float | None
 ) -> tuple[float | None, Vec3 | None] | None:
-    """The way home a UAV heard again in ``state`` flies on its own (its fixed layer, and the pickup it puts its
-    brick back on), or None: it is not flying home."""
-    if state == "home" or state.startswith("putback"):
-        return (layer_m, via_m if state in PUTBACK_FLIGHT_STATES else None)
+    """The way home a UAV heard again with ``facts`` flies on its own (its fixed layer, and, with a brick on its
+    magnet, the pickup it puts it back on), or None: it is not flying home."""
+    if facts.flying_home:
+        return (layer_m, via_m if facts.carrying else None)
     return None
 
 
