@@ -22,6 +22,7 @@ from masonry.mission.airspace_state import (
     Phase,
     UavAirspace,
     hold_candidates,
+    request_geometry,
 )
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.sites import enter_ungoverned
@@ -47,15 +48,13 @@ def request(
 
     (:meth:`ColumnClearance.request`, which says what a repeated or a replaced request gets.)
     """
-    site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-    top = max(site[2], float(top_m) if top_m is not None else site[2])
+    site, top, pos = request_geometry(site_m, top_m, position_m)
     if c.base_m is None:  # no airspace rules: only the site gate may hold the flight back
         ok = enter_ungoverned(c.gate, uav, site, now_s)
         c.granted_count += ok
         c.refused += not ok
         return Grant(uav, site, ok)
     u = c.record(uav)
-    pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
             return Grant(uav, site, layer_m=u.flight.layer_m)

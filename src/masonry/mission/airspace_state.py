@@ -62,6 +62,17 @@ class HoldFlight:
     layer_m: float  # its altitude then (the layer base may have risen since)
 
 
+def request_geometry(
+    site_m: Vec3, top_m: float | None, position_m: Vec3 | None
+) -> tuple[Vec3, float, Vec3 | None]:
+    """A flight request's site, the top of its work there (never below the site) and the UAV's position, as floats
+    (both airspaces read a request so)."""
+    site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
+    top = max(site[2], float(top_m) if top_m is not None else site[2])
+    pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+    return site, top, pos
+
+
 @dataclass(frozen=True)
 class GrantedFlight:
     """A granted flight: to ``site`` at layer ``layer`` (``layer_m`` high), then the zone there up to ``top_m``."""
@@ -119,4 +130,13 @@ def hold_candidates(
     return hold_points(site, keep_out, spans, radius_m)
 
 
-__all__ = ["FlightRequest", "Grant", "GrantedFlight", "HoldFlight", "Phase", "UavAirspace", "hold_candidates"]
+__all__ = [
+    "FlightRequest",
+    "Grant",
+    "GrantedFlight",
+    "HoldFlight",
+    "Phase",
+    "UavAirspace",
+    "hold_candidates",
+    "request_geometry",
+]

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
-from masonry.mission.airspace_state import FlightRequest, Grant, Phase
+from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_parts import ON_LEG_M, forced
 from masonry.mission.sites import enter_ungoverned
@@ -53,15 +53,13 @@ def request(
     """``uav`` (at ``position_m``) sets off for ``site_m``, to work there up to ``top_m`` (along to ``to_m``):
     its hop is granted if it fits now, else it waits where it is (its stay)."""
     c.tick(now_s)
-    site = (float(site_m[0]), float(site_m[1]), float(site_m[2]))
-    top = max(site[2], float(top_m) if top_m is not None else site[2])
+    site, top, pos = request_geometry(site_m, top_m, position_m)
     if c.base_m is None:  # no airspace rules: only the site gate may hold the flight back
         granted = enter_ungoverned(c.gate, uav, site, now_s)
         c.granted_count += granted
         c.refused += not granted
         return Grant(uav, site, granted)
     u = c.record(uav)
-    pos = None if position_m is None else (float(position_m[0]), float(position_m[1]), float(position_m[2]))
     if pos is not None:
         u.position = pos
     if (
