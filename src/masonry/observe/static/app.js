@@ -124,8 +124,10 @@ function timeTicks(svg, sx, end, height) {
   }
 }
 
-function drawGantt(state) {
-  const svg = document.getElementById("gantt");
+// One row per UAV on the mission's time axis (the Gantt and the reservation table share it): the cleared svg, the
+// UAV names labelled down its left, and sx, a time in seconds to an x.
+function uavRows(id, state) {
+  const svg = document.getElementById(id);
   svg.replaceChildren();
   const names = layout.uavs.map((u) => u.name);
   const rowH = 24, left = 90, width = 1600 - left - 10;
@@ -134,6 +136,11 @@ function drawGantt(state) {
   svg.setAttribute("viewBox", `0 0 1600 ${height}`);
   const sx = (t) => left + (t / end) * width;
   names.forEach((n, i) => el("text", { class: "label", x: 4, y: 18 + i * rowH }, svg, n));
+  return { svg, names, rowH, end, height, sx };
+}
+
+function drawGantt(state) {
+  const { svg, names, rowH, end, height, sx } = uavRows("gantt", state);
   for (const b of state.bars) {
     const i = names.indexOf(b.uav);
     if (i < 0) continue;
@@ -152,15 +159,8 @@ function drawReserved(state) {
   const box = document.getElementById("reserved-box");
   box.hidden = state.reservations === undefined;
   if (box.hidden) return;
-  const svg = document.getElementById("reserved");
-  svg.replaceChildren();
-  const names = layout.uavs.map((u) => u.name);
-  const rowH = 24, left = 90, width = 1600 - left - 10;
-  const end = chartEnd(state);
-  const height = names.length * rowH + 30;
-  svg.setAttribute("viewBox", `0 0 1600 ${height}`);
-  const sx = (t) => left + (Math.min(Math.max(t, 0), end) / end) * width;
-  names.forEach((n, i) => el("text", { class: "label", x: 4, y: 18 + i * rowH }, svg, n));
+  const { svg, names, rowH, end, height, sx: along } = uavRows("reserved", state);
+  const sx = (t) => along(Math.min(Math.max(t, 0), end));
   for (const r of state.reservations) {
     const i = names.indexOf(r.uav);
     if (i < 0) continue;
