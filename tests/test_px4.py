@@ -289,6 +289,8 @@ def test_px4_sitl_ground_offset_take_off_and_gnss_noise() -> None:
     with px4_sitl() as (sitl, fc):
         assert fc.autopilot == "px4"
         fc.wait_for_estimate(3.0)
+        # (a streaming position is enough for the pre-flight; the estimator's report may come a moment after it)
+        wait_until(lambda: fc._state.estimate_flags is not None, 5.0, "the estimator's status report")
         assert fc._state.estimate_flags == PX4_GROUND  # EKF2 at rest: usable all the same
         assert fc._state.position_ned[2] == pytest.approx(-0.5, abs=0.02)  # the ground 0.5 m up in its frame
         assert fc.telemetry().position_m[2] == pytest.approx(0.5, abs=0.02)  # before the measurement
