@@ -87,6 +87,8 @@ class Scenario:
     margin_s: float = 2.0
     horizon_s: float = 60.0
     now_s: float = 0.0
+    #: plan each flight at the layer that arrives first (``Airspace.first_arrival``, as mission control's table)
+    first_arrival: bool = False
     table: Table = field(init=False)
     where: dict[str, Place] = field(init=False)
     last: Decision | None = field(init=False, default=None)
@@ -104,7 +106,9 @@ class Scenario:
 
     @property
     def airspace(self) -> Airspace:
-        return Airspace(self.layers_m, margin_s=self.margin_s, horizon_s=self.horizon_s)
+        return Airspace(
+            self.layers_m, margin_s=self.margin_s, horizon_s=self.horizon_s, first_arrival=self.first_arrival
+        )
 
     def at(self, t_s: float) -> Scenario:
         """The clock moves on to ``t_s``."""

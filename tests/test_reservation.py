@@ -221,3 +221,21 @@ def test_the_airspace_flies_the_uavs_timing() -> None:
     transit = next(r for r in fast_plan.plan.reservations if r.purpose == "transit")
     assert transit.t1_s - transit.t0_s == pytest.approx(1.875 * 10.0 / 2.0 + 2.0)
     assert fast_plan.plan.stay.t0_s < slow_plan.plan.stay.t0_s
+
+
+def test_first_arrival_waits_a_little_for_a_lower_layer_rather_than_climb() -> None:
+    # b crosses a's way on the lowest layer for 12 s; the next layer is free now, 1.1 m more to climb and descend
+    crossing = Reservation("b", leg((3.0, -3.0), (3.0, 3.0), LAYERS_M[0]), 0.0, 12.0, "transit")
+    table = start_table({"a": (0.0, 0.0)}).add(crossing)
+    request = Request("a", Place((0.0, 0.0)), Work((6.0, 0.0), 1.0, 10.0))
+    soonest = decide(table, request, 0.0, Airspace(LAYERS_M, horizon_s=60.0))
+    first = decide(table, request, 0.0, Airspace(LAYERS_M, horizon_s=60.0, first_arrival=True))
+    assert isinstance(soonest, Grant) and isinstance(first, Grant)
+    assert (soonest.plan.start_s, soonest.plan.layer_m) == (0.0, LAYERS_M[1])  # rule 4: the earliest start
+    assert first.plan.layer_m == LAYERS_M[0] and first.plan.start_s > 0.0  # waits on its pad, then lower
+    assert first.plan.stay.t0_s < soonest.plan.stay.t0_s  # and is at its site sooner
+    # a request that can start now at the lowest layer is planned alike either way
+    clear = start_table({"a": (0.0, 0.0)})
+    assert decide(clear, request, 0.0, Airspace(LAYERS_M, first_arrival=True)) == decide(
+        clear, request, 0.0, Airspace(LAYERS_M)
+    )

@@ -9,13 +9,13 @@ Hypothesis is derandomised (tests/conftest.py); a failing sequence is printed.""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
 from masonry.errors import PlanningError
-from masonry.reservation import Airspace, Grant, Reservation, Table, Wait, Work, decide, layout_problems, pad
+from masonry.reservation import Grant, Reservation, Table, Wait, Work, decide, layout_problems, pad
 from reservation_scenario import LAYERS_M, Scenario, check_table
 
 SITES = [(1.5 * i, y) for i in range(7) for y in (3.0, 4.5)]
@@ -72,7 +72,7 @@ def _released(s: Scenario, uav: str) -> tuple[Reservation, ...]:
 def _every_uav_can_go_home(s: Scenario) -> None:
     """Rule 12 (docs/safety.md): every UAV's flight home from where it stays is granted at a finite start, with the
     others where they are: so no cycle of waits is ever a deadlock (any UAV in it can leave it)."""
-    airspace = Airspace(LAYERS_M, margin_s=s.margin_s, horizon_s=math.inf)
+    airspace = replace(s.airspace, horizon_s=math.inf)
     for uav in s.table.uavs():
         if any(r.purpose == "lost" and r.open_ended for r in s.table.of(uav)):
             continue  # (it holds its last volume until it is accounted for)
@@ -140,7 +140,7 @@ def _fly(s: Scenario, uav: str, step: Step) -> None:
     # once the others are back on their pads, the request is granted at a finite time
     released = Table(_released(s, uav), s.table.separation)
     check_table(released)
-    airspace = Airspace(LAYERS_M, margin_s=s.margin_s, horizon_s=math.inf)
+    airspace = replace(s.airspace, horizon_s=math.inf)
     granted = decide(released, request, s.now_s, airspace)
     assert isinstance(granted, Grant), granted
     assert math.isfinite(granted.plan.start_s)
@@ -151,12 +151,13 @@ def _fly(s: Scenario, uav: str, step: Step) -> None:
 @given(
     n=st.integers(2, 4),
     steps=st.lists(st.one_of(fly, fly, tick, late, silent, lost), min_size=6, max_size=30),
+    first_arrival=st.booleans(),
 )
 def test_random_sequences_keep_the_table_sound_and_every_request_is_eventually_granted(
-    n: int, steps: list[Step]
+    n: int, steps: list[Step], first_arrival: bool
 ) -> None:
     uavs = [f"u{i}" for i in range(n)]
-    s = Scenario({u: (3.0 * i, 0.0) for i, u in enumerate(uavs)})
+    s = Scenario({u: (3.0 * i, 0.0) for i, u in enumerate(uavs)}, first_arrival=first_arrival)
     for step in steps:
         if step.kind == "tick":
             s.at(s.now_s + step.seconds)

@@ -12,13 +12,17 @@ import pytest
 from typer.testing import CliRunner
 
 from masonry.blueprint import UavSpec, load_blueprint, validate_blueprint
-from masonry.blueprint_gen import pyramid, towers
+from masonry.blueprint_gen import pyramid, running_bond, towers
 from masonry.blueprint_random import LayoutLimits, _box, _footprint, _pallet_on, random_layout
 from masonry.cli import app
 from masonry.errors import InputError
 from masonry.mission.airspace_state import Phase
 from masonry.mission.reserved import DEFAULT_AIRSPACE, TableClearance
 from masonry.mission.simulate import simulate
+from masonry.mission.sites import work_span_m
+from masonry.planner import plan as make_plan
+from masonry.reservation import Work
+from masonry.segments import segment_segment_m
 from masonry.separation import pad_site_distance_m
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -183,3 +187,33 @@ def test_small_compact_random_layouts_complete_apart(seed):
     assert r.conflict_violations == 0 and r.dependency_violations == 0
     assert r.min_separation_m is None or r.min_separation_m >= SEPARATION_BOUND_M
     assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+
+
+@pytest.mark.parametrize("wall", ["pyramid", "running bond", "compact pyramid"])
+def test_the_stays_at_sites_already_keep_the_site_rule_apart(wall):
+    # why a timed site window grants nothing sooner with the table (docs/safety.md, "The site rule and the stays at
+    # sites"): two tasks closer than r_c have work zones that clash, and a UAV holds its zone, open-ended, until its
+    # next flight is granted; only pairs exactly r_c apart (the planner's G^c counts them) are left to the site rule
+    blueprint = {
+        "pyramid": lambda: load_blueprint(ROOT / "blueprints" / "pyramid.yaml"),
+        "running bond": lambda: running_bond(2, 12, placed_courses=1),
+        "compact pyramid": _issue_27_pyramid,
+    }[wall]()
+    plan = make_plan(blueprint)
+    air = TableClearance(blueprint.clearance_m, 2.0, start_base_m=1.2)
+    tasks = {t.id: t for t in plan.tasks}
+
+    def zone(task_id):
+        (a, b) = work_span_m(tasks[task_id])
+        return Work(a, 1.2, 0.0, b, air.zone_r_m).zone()
+
+    at_r_c = 0
+    for a, b in plan.conflicts:
+        (a0, a1), (b0, b1) = work_span_m(tasks[a]), work_span_m(tasks[b])
+        d = segment_segment_m(a0, a1, b0, b1)
+        if d < blueprint.clearance_m - 1e-6:
+            assert air.table.separation.conflict(zone(a), zone(b)), (a, b)
+        else:  # (3-D within r_c, so horizontally too: exactly r_c apart)
+            assert d == pytest.approx(blueprint.clearance_m, abs=1e-6), (a, b, d)
+            at_r_c += 1
+    assert at_r_c < 0.05 * len(plan.conflicts)

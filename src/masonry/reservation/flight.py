@@ -28,6 +28,9 @@ PlaceKind = Literal["pad", "parking", "site", "air"]
 #: Seconds added to every window of a plan: a UAV this much behind its plan is still inside it.
 DEFAULT_MARGIN_S = 2.0
 
+#: Arrivals (or starts) this close are equal: the lower layer is chosen.
+ARRIVAL_TIE_S = 1e-6
+
 
 @dataclass(frozen=True)
 class Place:
@@ -91,6 +94,9 @@ class Airspace:
         any_layer: legs may also fly below the start, the work's top or the stay (the UAV climbs or descends to
             the layer where it is, and the work's column covers the rest, as the column airspace grants them);
             False: only layers over all three.
+        first_arrival: of the layers, each at its earliest start, the one whose flight arrives first where it
+            stays (a higher layer free now loses to a lower one free a little later when the climb takes longer
+            than the wait); False: the earliest start (rule 4 of docs/safety.md).
     """
 
     layers_m: tuple[float, ...]
@@ -99,6 +105,7 @@ class Airspace:
     margin_s: float = DEFAULT_MARGIN_S
     horizon_s: float = 60.0
     any_layer: bool = False
+    first_arrival: bool = False
 
     @classmethod
     def from_timing(
@@ -249,23 +256,26 @@ def earliest_start(
 
 def plan_flight(table: Table, request: Request, from_s: float, airspace: Airspace) -> FlightPlan | None:
     """The flight of ``request`` starting at the earliest time ``>= from_s`` it fits, at the lowest layer of the
-    earliest start; None if no layer ever fits (an open-ended reservation of another UAV is in its way).
+    earliest start (with :attr:`Airspace.first_arrival`: at each layer at the earliest start there, the one that
+    arrives first where it stays, the lowest among equal arrivals); None if no layer ever fits (an open-ended
+    reservation of another UAV is in its way).
 
     Layers below the start, the work or the stay are skipped (unless :attr:`Airspace.any_layer`). The UAV's own reservations are not in its way (it
     leaves its stay when the flight starts).
     """
-    best: tuple[float, float, list[_Part]] | None = None
+    best: tuple[float, float, float] | None = None  # (arrival, start, layer)
     floor = _floor_m(request, airspace)
     for layer in airspace.layers_m:
         if layer < floor:
             continue
         parts = _parts(request, layer, airspace)
         t, _ = earliest_start(table, request.uav, [(v, a, b) for v, _p, _t, a, b in parts], from_s)
-        if math.isfinite(t) and (best is None or t < best[0]):
-            best = (t, layer, parts)
+        arrival = t + parts[-1][3] if airspace.first_arrival else t  # (where it stays, from then on)
+        if math.isfinite(t) and (best is None or arrival < best[0] - ARRIVAL_TIE_S):
+            best = (arrival, t, layer)
     if best is None:
         return None
-    t, layer, _parts_at = best
+    _arrival, t, layer = best
     return FlightPlan(request.uav, t, layer, flight_reservations(request, t, layer, airspace))
 
 
