@@ -115,9 +115,12 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
         guarded = forced(guarded, guarded.of(uav), [Reservation(uav, here, now_s, math.inf, "stay")])
     top = c.airspace.layers_m[-1]
     high = hop.start.z_m > top  # from its parking spot, over every layer: planned from the top one
-    decision = decide(
-        guarded, replace(hop, start=replace(hop.start, z_m=top)) if high else hop, now_s, c.airspace
+    # (the layer that arrives first only for a UAV at rest where it stays: one that turned back mid-flight takes
+    # the first layer free now)
+    air = (
+        c.airspace if u.plan is None and u.phase is Phase.ASKING else replace(c.airspace, first_arrival=False)
     )
+    decision = decide(guarded, replace(hop, start=replace(hop.start, z_m=top)) if high else hop, now_s, air)
     if high and not isinstance(decision, Wait):
         first = decision.plan.reservations[0]  # its climb (a descent here) reaches up to where it is
         down = replace(first, volume=column(hop.start.xy, first.volume.z0_m, hop.start.z_m))
