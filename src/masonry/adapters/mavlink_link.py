@@ -164,6 +164,7 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
+        self._link_was_ok = True  # the watchdog's last verdict (its transitions are logged)
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -513,11 +514,20 @@ class MavlinkLink:
         receiver has read (:meth:`_heard_until`)."""
         heard = self._heard_until(now)
         st = self._state
-        return (
+        ok = (
             self._conn is not None
             and heard - st.last_message_s <= self.heartbeat_timeout_s
             and heard - st.last_heartbeat_s <= self._heartbeat_missing_s
         )
+        if ok != self._link_was_ok and self._conn is not None:  # its transitions, with what it read, logged
+            self._link_was_ok = ok
+            _log.warning(
+                "MAVLink watchdog on %s: link %s (now %.2f s; last message %.2f s ago, last HEARTBEAT %.2f s "
+                "ago, receiver last listened %.2f s ago)",
+                self.url, "back" if ok else "down", now, now - st.last_message_s, now - st.last_heartbeat_s,
+                now - st.listened_s,
+            )  # fmt: skip
+        return ok
 
     def _check_link(self, what: str) -> None:
         if self._conn is None:
