@@ -6,7 +6,10 @@ Each run is ``pytest -n WORKERS`` over the tests that fly a SITL (the project's 
 Prints one line per run (passed, failed, skipped, wall seconds, the failing tests) and a total; asserts nothing.
 
 Usage: python benchmarks/bench_sitl_load.py [--runs 10] [--workers 2] [--no-busy] [--ardupilot]
-       [--tests tests/test_sitl_fly.py ...]
+       [--tests tests/test_sitl_fly.py ...] [--log DIR] [--speedup K]
+
+``--log DIR`` keeps each failing run's whole output (``--tb=long``: the failing test's stderr, e.g. mission
+control's) in ``DIR/run-NN.txt``. Each run's line ends with the load average (1, 5, 15 min) after it.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ SITL_TESTS = (
 ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py",)
 
 
-def _run(tests: list[str], workers: int) -> tuple[dict[str, int], list[str], float]:
+def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[str, int], list[str], float]:
     started = time.perf_counter()
     proc = subprocess.run(
         [
@@ -42,7 +45,7 @@ def _run(tests: list[str], workers: int) -> tuple[dict[str, int], list[str], flo
             "-n",
             str(workers),
             "-rfE",
-            "--tb=line",
+            "--tb=line" if log is None else "--tb=long",
             "-p",
             "no:cacheprovider",
             *tests,
@@ -54,6 +57,8 @@ def _run(tests: list[str], workers: int) -> tuple[dict[str, int], list[str], flo
         timeout=1800,
     )
     wall_s = time.perf_counter() - started
+    if log is not None and proc.returncode != 0:  # the whole output of a failing run, stderr and all
+        log.write_text(proc.stdout + proc.stderr)
     counts = dict.fromkeys(("passed", "failed", "skipped", "error"), 0)
     for number, kind in re.findall(r"(\d+) (passed|failed|skipped|error)", proc.stdout):
         counts[kind] = int(number)
@@ -76,22 +81,38 @@ def main() -> None:
         "--ardupilot", action="store_true", help="add ArduCopter SITL's tests (needs its env var)"
     )
     ap.add_argument("--tests", nargs="*", default=None, help="test files or ids (default: the SITL tests)")
+    ap.add_argument(
+        "--speedup",
+        type=int,
+        default=None,
+        help="ArduCopter SITL's --speedup in its tests (default: theirs, 5)",
+    )
+    ap.add_argument(
+        "--log", type=Path, default=None, help="folder for each failing run's whole pytest output"
+    )
     args = ap.parse_args()
     tests = list(args.tests) if args.tests else list(SITL_TESTS)
     if args.ardupilot and not args.tests:
         if not os.environ.get("MASONRY_ARDUPILOT_SITL"):
             sys.exit("--ardupilot: set MASONRY_ARDUPILOT_SITL to the arducopter binary")
         tests += list(ARDUPILOT_TESTS)
+    if args.speedup is not None:
+        os.environ["MASONRY_ARDUPILOT_SITL_SPEEDUP"] = str(args.speedup)  # read by tests/ardupilot_sitl.py
     busy = None if args.no_busy else subprocess.Popen([sys.executable, "-c", "while True: pass"])
     print(
         f"{args.runs} runs of pytest -n {args.workers} over {' '.join(tests)}; "
         f"{'no busy process' if busy is None else 'one core kept busy'}; {os.cpu_count()} cores"
+        + ("" if args.speedup is None else f"; ArduCopter SITL at --speedup {args.speedup}")
     )
     clean = 0
     failures: dict[str, int] = {}
     try:
         for i in range(1, args.runs + 1):
-            counts, failing, wall_s = _run(tests, args.workers)
+            log = None
+            if args.log is not None:
+                args.log.mkdir(parents=True, exist_ok=True)
+                log = args.log / f"run-{i:02d}.txt"
+            counts, failing, wall_s = _run(tests, args.workers, log)
             ok = not failing and counts["failed"] == 0 and counts["error"] == 0 and counts["passed"] > 0
             clean += ok
             for line in (f for f in failing if not f.startswith(" ")):
@@ -99,7 +120,8 @@ def main() -> None:
                 failures[test] = failures.get(test, 0) + 1
             print(
                 f"run {i:2d}: {counts['passed']} passed, {counts['failed']} failed, {counts['skipped']} skipped, "
-                f"{wall_s:.0f} s" + "".join(f"\n        FAILED {line}" for line in failing),
+                f"{wall_s:.0f} s, load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}"
+                + "".join(f"\n        FAILED {line}" for line in failing),
                 flush=True,
             )
     finally:

@@ -24,7 +24,9 @@ ENV = "MASONRY_ARDUPILOT_SITL"
 #: Wind for the same tests (m/s, ArduPilot's SIM_WIND_SPD from the north-east): issue 19's windy targets.
 WIND_ENV = "MASONRY_ARDUPILOT_SITL_WIND"
 #: Simulated seconds per wall second: the lag measured with --identify is the same at 1 and 5 (docs/hardware.md).
-SPEEDUP = 5
+#: ``MASONRY_ARDUPILOT_SITL_SPEEDUP=K`` flies them at K (``benchmarks/bench_sitl_load.py --speedup K``).
+SPEEDUP_ENV = "MASONRY_ARDUPILOT_SITL_SPEEDUP"
+SPEEDUP = int(os.environ.get(SPEEDUP_ENV) or 5)
 #: ArduPilot's SITL home of its examples (Canberra model airfield); the local frame starts here.
 HOME = "-35.363261,149.165230,584,353"
 

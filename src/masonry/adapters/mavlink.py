@@ -551,12 +551,8 @@ class MavlinkFlightController(EstimateLink):
         now = self._monotonic()
         with self._lock:
             st = self._state
-            link_ok = (
-                self._conn is not None
-                and now - st.last_message_s <= self.heartbeat_timeout_s
-                and now - st.last_heartbeat_s <= self._heartbeat_missing_s
-            )
-            position_ok = link_ok and self._position_ok(now)
+            link_ok = self._link_ok(now)
+            position_ok = link_ok and self._position_ok(self._heard_until(now))
             p_ned = st.position_ned or (0.0, 0.0, 0.0)
             position = (
                 self.frame.position_to_world(p_ned) if st.position_ned is not None else self.frame.offset_m

@@ -27,7 +27,7 @@ class EstimateLink(MavlinkLink):
 
     def estimate_status(self) -> str:
         """What the estimate lacks now, in words: no local position yet, or what the EKF flags miss."""
-        now = self._monotonic()
+        now = self._heard_until(self._monotonic())
         with self._lock:
             st = self._state
             flags = st.estimate_flags
@@ -77,7 +77,7 @@ class EstimateLink(MavlinkLink):
         while True:
             self._check_link("wait for position estimate")
             now = self._monotonic()
-            if self._position_ok(now):
+            if self._position_ok(self._heard_until(now)):
                 return
             status = self.estimate_status()
             if now >= deadline:

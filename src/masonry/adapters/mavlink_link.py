@@ -59,6 +59,9 @@ from masonry.ports import Vec3
 __all__ = ["LinkClock", "LinkStatus", "MavlinkLink", "load_signing_key", "mavutil_module"]
 
 _log = logging.getLogger(__name__)
+#: A receiver that has read nothing for this long (wall seconds) is hung, or the link is gone: the link watchdog
+#: then counts wall time (the guard against a hung process; see :meth:`MavlinkLink._heard_until`).
+RECEIVER_HUNG_S = 10.0
 
 
 def mavutil_module() -> Any:
@@ -77,6 +80,7 @@ class _State:
 
     last_message_s: float = -math.inf
     last_heartbeat_s: float = -math.inf
+    listened_s: float = -math.inf  # when the receiver last began a read that found nothing (the link quiet)
     armed: bool = False
     custom_mode: int = -1
     base_mode: int = 0
@@ -160,6 +164,7 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
+        self._link_was_ok = True  # the watchdog's last verdict (its transitions are logged)
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -359,7 +364,10 @@ class MavlinkLink:
     def _receive_loop(self) -> None:
         while not self._stop.is_set():
             try:
+                started = self._monotonic()
                 msg = self._conn.recv_match(blocking=True, timeout=0.05)
+                if msg is None:
+                    self._state.listened_s = started
             except (OSError, ValueError, AttributeError) as exc:
                 if self._stop.is_set():
                     return
@@ -491,14 +499,44 @@ class MavlinkLink:
                 self.target_system, self.target_component, command, confirmation, *map(float, params)
             )
 
+    def _heard_until(self, now: float) -> float:
+        """Up to when the receiver has read all that arrived: ``now``, or when it last listened if that is
+        earlier. This process starved by a loaded machine (its receiver not run) leaves messages unread in the
+        socket, which is not the autopilot's silence; a receiver that has not read for
+        :data:`RECEIVER_HUNG_S` is hung, and then the wall clock counts."""
+        st = self._state
+        if now - st.last_message_s > RECEIVER_HUNG_S:
+            return now
+        return min(now, max(st.listened_s, st.last_message_s))
+
+    def _link_ok(self, now: float) -> bool:
+        """The watchdog: a message within ``heartbeat_timeout_s`` and a HEARTBEAT within 2.5 s of what the
+        receiver has read (:meth:`_heard_until`)."""
+        heard = self._heard_until(now)
+        st = self._state
+        ok = (
+            self._conn is not None
+            and heard - st.last_message_s <= self.heartbeat_timeout_s
+            and heard - st.last_heartbeat_s <= self._heartbeat_missing_s
+        )
+        if ok != self._link_was_ok and self._conn is not None:  # its transitions, with what it read, logged
+            self._link_was_ok = ok
+            _log.warning(
+                "MAVLink watchdog on %s: link %s (now %.2f s; last message %.2f s ago, last HEARTBEAT %.2f s "
+                "ago, receiver last listened %.2f s ago)",
+                self.url, "back" if ok else "down", now, now - st.last_message_s, now - st.last_heartbeat_s,
+                now - st.listened_s,
+            )  # fmt: skip
+        return ok
+
     def _check_link(self, what: str) -> None:
         if self._conn is None:
             raise LinkLost(f"{what}: not connected to {self.url} (call connect() first)")
-        now = self._monotonic()
-        silent_s = now - self._state.last_message_s
+        heard = self._heard_until(self._monotonic())
+        silent_s = heard - self._state.last_message_s
         if silent_s > self.heartbeat_timeout_s:
             raise LinkLost(f"{what}: no message from the autopilot on {self.url} for {silent_s:.1f} s")
-        beatless_s = now - self._state.last_heartbeat_s
+        beatless_s = heard - self._state.last_heartbeat_s
         if beatless_s > self._heartbeat_missing_s:
             raise LinkLost(f"{what}: no HEARTBEAT from the autopilot on {self.url} for {beatless_s:.1f} s")
 

@@ -21,6 +21,7 @@ from masonry.cli.foxglove_options import (
 )
 from masonry.cli.options import check_all, check_choice, help_text, plural
 from masonry.errors import InputError
+from masonry.mission.fleet_clock import FleetClock
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -102,8 +103,8 @@ def mission_control(
         help=help_text(
             "mission-control",
             "--time-scale",
-            "Mission seconds per wall second (match the UAVs' --time-scale when "
-            "they are simulated faster than real time).",
+            "Mission seconds per wall second until the UAVs report (match the UAVs' --time-scale or their "
+            "SITL's speed-up); then mission time follows their own clocks, the slowest's.",
         ),
     ),
     heartbeat_timeout: float = typer.Option(
@@ -327,11 +328,14 @@ def _open_journal(
 def _run_in_wall_time(
     mc: Any, offset_s: float, *, time_scale: float, max_time_s: float | None, tick_s: float
 ) -> None:
-    """Step mission control on the wall clock (mission time from ``offset_s``) until it ends or ``--max-time``."""
-    t0 = time.monotonic()
+    """Step mission control every ``tick_s`` of wall time until it ends or ``--max-time``, on mission time that
+    follows the UAVs' own clocks (:class:`~masonry.mission.fleet_clock.FleetClock`, from ``offset_s``): their
+    autopilots' on hardware and on a SITL, so a SITL slowed by a loaded machine slows the mission equally."""
+    clock = FleetClock(time_scale, start_s=offset_s)
+    mc.heard_clock = clock.heard
     linger_until = None
     while True:
-        now = offset_s + (time.monotonic() - t0) * time_scale
+        now = clock.now_s()
         mc.step(now)
         if mc.ended_at_s is not None:
             # keep answering heartbeats a moment so every handler hears MissionEnd

@@ -18,7 +18,7 @@ their journal lines), :mod:`~masonry.mission.outbox` (what is sent and told), :m
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
@@ -167,6 +167,9 @@ class MissionControl:
         #: hand the sink a ``uav`` event per heartbeat and progress report (a simulator that samples its world
         #: for the sink, :meth:`sample`, turns this off: its samples are the better measure)
         self.uav_events = True
+        #: called with each UAV heartbeat's sender and time stamp (the UAV's own clock): ``masonry
+        #: mission-control`` paces mission time by them (:class:`~masonry.mission.fleet_clock.FleetClock`)
+        self.heard_clock: Callable[[str, float], None] | None = None
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest

@@ -128,7 +128,9 @@ def check_holds_task(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
 
 def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float) -> None:
     """What a UAV's heartbeat says besides its state: its battery, the wind its autopilot measures and its
-    wind limit, and the task it holds."""
+    wind limit, and the task it holds; its time stamp to the clock that paces mission time, if any."""
+    if mc.heard_clock is not None:
+        mc.heard_clock(msg.sender, msg.time_s)
     if msg.battery is not None:
         link.battery = msg.battery
     if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):

@@ -1,0 +1,105 @@
+"""Mission time that follows the UAVs' own clocks: the clock of ``masonry mission-control`` (issue 29).
+
+Every UAV stamps its heartbeats with its own clock: its autopilot's when it flies one (``masonry fly --fc``:
+wall time on a real vehicle, the SITL's own time on a bench), its simulated world's under ``--sim``. Mission
+control's time used to be the wall clock times ``--time-scale``; an ArduCopter SITL asked for x5 on a loaded
+2-core machine runs at x3.5 (measured), so mission time ran ahead of the UAVs' and its timeouts, glue open times
+and reservations drifted away from what the vehicles did. :class:`FleetClock` advances mission time as the
+slowest live UAV's clock advances, so a slowed SITL slows the mission equally:
+
+- each UAV heard is anchored (its time and mission time at that moment); its *equivalent* mission time is the
+  anchor plus how far its clock has moved since, extrapolated past its last heartbeat at ``time_scale`` for at
+  most ``lead_s``;
+- mission time is the least equivalent over the UAVs heard within ``hold_wall_s`` of wall time, and never runs
+  backwards; with no UAV heard (before they join, or all silent) it runs at ``time_scale`` of the wall, so the
+  heartbeat and start-up timeouts still fire for UAVs that fell silent;
+- a UAV heard again after a silence, or whose clock went backwards (its autopilot rebooted), is anchored anew.
+
+On a real vehicle the autopilots' clocks run at the wall's rate, so with ``time_scale`` 1 this is the wall clock
+(docs/hardware.md). The wall clock is read through ``monotonic`` (injected: tests hold it).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from masonry.errors import InputError
+
+#: How far (mission seconds) a UAV's equivalent is extrapolated past its last heartbeat: a heartbeat period
+#: (1 s) and its jitter, so that a UAV keeping pace does not hold the clock between two heartbeats.
+LEAD_S = 1.5
+#: A UAV not heard for this many of its heartbeat periods (mission seconds, at ``time_scale``) no longer holds
+#: the clock; the wall-time guard against a hung UAV process (at least :data:`MIN_HOLD_WALL_S`).
+HOLD_HEARTBEATS = 3.0
+MIN_HOLD_WALL_S = 1.0
+
+
+@dataclass
+class _Track:
+    """One UAV's clock as heard: its anchor and its latest heartbeat."""
+
+    uav0_s: float  # the UAV's time at the anchor
+    mission0_s: float  # mission time at the anchor
+    uav_s: float  # the UAV's latest time heard
+    wall_s: float  # when it was heard (local monotonic)
+
+
+class FleetClock:
+    """Mission time paced by the UAVs' own clocks (see the module docstring).
+
+    Args:
+        time_scale: mission seconds per wall second while no UAV is heard (``--time-scale``), and the rate a
+            UAV's time is extrapolated at between its heartbeats.
+        start_s: mission time now (a resumed mission's last time).
+        lead_s: how far past its last heartbeat a UAV's time is extrapolated (mission seconds).
+        hold_wall_s: a UAV silent for longer (wall seconds) stops holding the clock (None: from
+            :data:`HOLD_HEARTBEATS` and ``time_scale``).
+        monotonic: the wall clock (s).
+    """
+
+    def __init__(
+        self,
+        time_scale: float = 1.0,
+        *,
+        start_s: float = 0.0,
+        lead_s: float = LEAD_S,
+        hold_wall_s: float | None = None,
+        monotonic: Callable[[], float] = time.monotonic,
+    ) -> None:
+        if not time_scale > 0.0:
+            raise InputError(f"time_scale must be > 0, not {time_scale}", options=("time_scale",))
+        self.time_scale = time_scale
+        self.lead_s = lead_s
+        self.hold_wall_s = (
+            max(MIN_HOLD_WALL_S, HOLD_HEARTBEATS / time_scale) if hold_wall_s is None else hold_wall_s
+        )
+        self._monotonic = monotonic
+        self._tracks: dict[str, _Track] = {}
+        self._now = start_s
+        self._wall = monotonic()
+
+    def heard(self, uav: str, uav_time_s: float) -> None:
+        """``uav``'s heartbeat stamped ``uav_time_s`` on its own clock has just arrived."""
+        wall = self._monotonic()
+        track = self._tracks.get(uav)
+        if track is None or uav_time_s < track.uav_s or wall - track.wall_s > self.hold_wall_s:
+            self._tracks[uav] = _Track(uav_time_s, self.now_s(), uav_time_s, wall)
+        else:
+            track.uav_s, track.wall_s = uav_time_s, wall
+
+    def now_s(self) -> float:
+        """Mission time now (s): the slowest live UAV's, or ``time_scale`` of the wall with none live."""
+        wall = self._monotonic()
+        bound = math.inf
+        for t in self._tracks.values():
+            since_s = wall - t.wall_s
+            if since_s <= self.hold_wall_s:
+                ahead_s = min(max(0.0, since_s) * self.time_scale, self.lead_s)
+                bound = min(bound, t.mission0_s + (t.uav_s - t.uav0_s) + ahead_s)
+        if math.isinf(bound):
+            bound = self._now + max(0.0, wall - self._wall) * self.time_scale
+        self._now, self._wall = max(self._now, bound), wall
+        return self._now

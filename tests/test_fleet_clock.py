@@ -1,0 +1,123 @@
+"""Mission time that follows the UAVs' own clocks (masonry.mission.fleet_clock, issue 29), on a held wall clock.
+
+A SITL asked for x5 that a loaded machine runs at x3.5 must slow the mission equally; with no UAV heard, or on
+a real vehicle (its autopilot's clock is the wall's), mission time is ``time_scale`` of the wall.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from masonry.blueprint import UavSpec
+from masonry.errors import InputError
+from masonry.mission.control import MissionControl
+from masonry.mission.fleet_clock import LEAD_S, FleetClock
+from masonry.mission.inproc import InprocBus
+from masonry.mission.messages import MISSION_CONTROL, Heartbeat, Progress, encode
+from masonry.planner.tasks import BrickTask, Plan
+
+
+class Wall:
+    """A wall clock the test moves."""
+
+    def __init__(self) -> None:
+        self.t = 100.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def test_with_no_uav_heard_mission_time_runs_at_the_time_scale() -> None:
+    wall = Wall()
+    clock = FleetClock(5.0, start_s=12.0, monotonic=wall)
+    assert clock.now_s() == 12.0
+    wall.t += 2.0
+    assert clock.now_s() == pytest.approx(22.0)
+
+
+def fly(clock: FleetClock, wall: Wall, rates: dict[str, float], wall_s: float, period_s: float = 1.0) -> None:
+    """Each UAV's clock runs at its rate (its seconds per wall second) and beats every ``period_s`` of its own."""
+    own = dict.fromkeys(rates, 0.0)
+    beat = dict.fromkeys(rates, 0.0)
+    step = 0.01
+    for _ in range(round(wall_s / step)):
+        wall.t += step
+        for name, rate in rates.items():
+            own[name] += rate * step
+            if own[name] >= beat[name]:
+                clock.heard(name, own[name])
+                beat[name] += period_s
+        clock.now_s()
+
+
+def test_a_sitl_slowed_by_the_load_slows_the_mission_equally() -> None:
+    wall = Wall()
+    clock = FleetClock(5.0, monotonic=wall)
+    fly(clock, wall, {"brick-1": 3.5}, 60.0)  # asked for x5, the machine gives it x3.5 (measured)
+    assert clock.now_s() == pytest.approx(3.5 * 60.0, abs=LEAD_S + 0.1)  # not 300 s: the UAV's 210 s
+
+
+def test_the_slowest_live_uav_sets_the_pace() -> None:
+    wall = Wall()
+    clock = FleetClock(5.0, monotonic=wall)
+    fly(clock, wall, {"brick-1": 5.0, "glue-1": 2.0}, 30.0)
+    assert clock.now_s() == pytest.approx(60.0, abs=LEAD_S + 0.1)
+
+
+def test_on_a_real_vehicle_mission_time_is_the_wall_clock() -> None:
+    wall = Wall()
+    clock = FleetClock(1.0, monotonic=wall)
+    fly(clock, wall, {"brick-1": 1.0, "glue-1": 1.0}, 120.0)
+    assert clock.now_s() == pytest.approx(120.0, abs=0.05)
+
+
+def test_a_silent_uav_stops_holding_the_clock_and_is_anchored_anew_when_heard_again() -> None:
+    wall = Wall()
+    clock = FleetClock(5.0, monotonic=wall)
+    clock.heard("brick-1", 40.0)
+    wall.t += clock.hold_wall_s  # still holding: extrapolated no further than its lead
+    assert clock.now_s() == pytest.approx(LEAD_S)
+    wall.t += 4.0  # silent past the hold: the heartbeat timeout must still come, so mission time runs on
+    assert clock.now_s() == pytest.approx(LEAD_S + 20.0)
+    before = clock.now_s()
+    clock.heard("brick-1", 41.0)  # back: its own clock is its own business, mission time goes on from here
+    assert clock.now_s() == pytest.approx(before)
+    wall.t += 0.1
+    clock.heard("brick-1", 41.5)
+    assert clock.now_s() == pytest.approx(before + 0.5)
+
+
+def test_mission_time_never_runs_backwards_and_a_rebooted_autopilot_is_anchored_anew() -> None:
+    wall = Wall()
+    clock = FleetClock(5.0, monotonic=wall)
+    clock.heard("brick-1", 100.0)
+    wall.t += 0.2
+    clock.heard("brick-1", 101.0)
+    t = clock.now_s()
+    assert t == pytest.approx(1.0)
+    wall.t += 0.2
+    clock.heard("brick-1", 3.0)  # its autopilot rebooted: its clock starts again
+    rebooted = clock.now_s()
+    assert rebooted >= t
+    wall.t += 0.2
+    clock.heard("brick-1", 4.0)
+    assert clock.now_s() == pytest.approx(rebooted + 1.0)
+
+
+def test_a_bad_time_scale_is_one_clear_error() -> None:
+    with pytest.raises(InputError, match="time_scale must be > 0"):
+        FleetClock(0.0)
+
+
+def test_mission_control_hands_each_uav_heartbeat_to_its_clock() -> None:
+    plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
+    bus = InprocBus()
+    fleet = [UavSpec("brick-1", "brick", (0.0, 0.0, 0.0))]
+    mc = MissionControl(plan, fleet, bus.endpoint(MISSION_CONTROL))
+    heard: list[tuple[str, float]] = []
+    mc.heard_clock = lambda uav, t: heard.append((uav, t))
+    uav = bus.endpoint("brick-1")
+    uav.send(MISSION_CONTROL, encode(Heartbeat("brick-1", 7.5)))
+    uav.send(MISSION_CONTROL, encode(Progress("brick-1", "B0", "working", 8.0)))  # only heartbeats pace it
+    mc.step(0.0)
+    assert heard == [("brick-1", 7.5)]
