@@ -1,10 +1,10 @@
 """The real autopilot: ArduCopter 4.7 SITL flown by ``masonry fly`` (issue 19). Skipped, with one reason, where
 ``MASONRY_ARDUPILOT_SITL`` does not name the binary (tests/ardupilot_sitl.py); ``.ci/run`` sets it.
 
-A small bounded set, at ``--speedup 5`` (the machines run on the autopilot's clock): a brick task and an adhesion
-task on one SITL vehicle, and the paper's case study as a mission on two (``-I42``, ``-I43``) with mission
-control's time following the autopilots' clocks (x5 until they join), under the default ``site`` reservation
-and under ``task`` (the paper's order).
+A small bounded set, at ``--speedup 2`` (``ardupilot_sitl.SPEEDUP``; the machines run on the autopilot's clock):
+a brick task and an adhesion task on one SITL vehicle, and the paper's case study as a mission on two (``-I42``,
+``-I43``) with mission control's time following the autopilots' clocks (the speed-up until they join), under the
+default ``site`` reservation and under ``task`` (the paper's order).
 Each UAV's uav.yaml holds only ``estimate_wait_s``: it flies the defaults, the ``arducopter`` control preset
 chosen from the autopilot's HEARTBEAT (issue 29, docs/hardware.md).
 """
