@@ -57,8 +57,8 @@ _DIRECTIONS = 16
 _DISTANCES_M = tuple(0.04 + 0.01 * i for i in range(47))
 #: A marker corner nearer the image's edge than this is not counted on (pixels).
 _EDGE_PX = 8.0
-#: A brick of the drop-off's course (or above) this near the carried brick's way makes the side look unsafe.
-_CLEAR_M = 0.05
+#: Bricks side by side in a course touch: closer than this (m) past touching is an overlap.
+_TOUCH_M = 0.002
 
 
 @dataclass(frozen=True)
@@ -167,7 +167,8 @@ def _support_seen(scene: LookScene, displacement_m: np.ndarray, height_m: float,
         shifts += [(spread_m * math.cos(a), spread_m * math.sin(a)) for a in np.linspace(0.0, 2 * math.pi, 9)[:-1]]
     for sx, sy in shifts:
         if not any(
-            marker_in_view(corners, camera, R_wc, scene.intrinsics, effector, scene.brick_yaw_rad, half)
+            not _covered(scene, corners.mean(axis=0))
+            and marker_in_view(corners, camera, R_wc, scene.intrinsics, effector, scene.brick_yaw_rad, half)
             for support in scene.supports
             for corners in _marker_corners(
                 (support[0] + sx, support[1] + sy, support[2]),
@@ -180,19 +181,39 @@ def _support_seen(scene: LookScene, displacement_m: np.ndarray, height_m: float,
     return True
 
 
-def _way_clear(scene: LookScene, displacement_m: np.ndarray) -> bool:
-    """No other brick of the drop-off's course or above (but those standing on the new brick: not built yet) lies
-    near the carried brick's way from the displaced point to the drop-off (two half diagonals and a margin)."""
-    reach = math.hypot(scene.size_m[0], scene.size_m[1]) + _CLEAR_M  # two half diagonals and a margin
-    x0, y0, z0 = scene.drop_top_m
-    bottom = z0 - scene.size_m[2]
+def _in_brick_frame(scene: LookScene, dx_m: float, dy_m: float) -> tuple[float, float]:
+    """A horizontal offset along and across the brick (its yaw: the wall's bricks share it)."""
+    c, s = math.cos(scene.brick_yaw_rad), math.sin(scene.brick_yaw_rad)
+    return c * dx_m + s * dy_m, -s * dx_m + c * dy_m
+
+
+def _covered(scene: LookScene, point_m: Sequence[float]) -> bool:
+    """A brick of the drop-off's course (built or not yet: the UAV does not know) rests on ``point_m``."""
+    half_l, half_w = scene.size_m[0] / 2.0, scene.size_m[1] / 2.0
     for other in scene.others:
-        if other[2] <= bottom + 1e-3:
+        if abs(other[2] - scene.drop_top_m[2]) > 1e-3:
+            continue
+        along, across = _in_brick_frame(scene, point_m[0] - other[0], point_m[1] - other[1])
+        if abs(along) < half_l and abs(across) < half_w:
+            return True
+    return False
+
+
+def _way_clear(scene: LookScene, displacement_m: np.ndarray) -> bool:
+    """The carried brick, moved from the drop-off by up to ``displacement_m``, overlaps no other brick of the
+    drop-off's course or above (but those standing on the new brick: not built yet)."""
+    x0, y0, z0 = scene.drop_top_m
+    length, width = scene.size_m[0] - _TOUCH_M, scene.size_m[1] - _TOUCH_M
+    for other in scene.others:
+        if other[2] <= z0 - scene.size_m[2] + 1e-3:
             continue
         if other[2] > z0 + 1e-3 and math.hypot(other[0] - x0, other[1] - y0) < 0.99 * scene.size_m[0]:
             continue  # it stands on the drop-off's brick: not built yet
-        for f in np.linspace(0.0, 1.0, 6):
-            if math.hypot(other[0] - x0 - f * displacement_m[0], other[1] - y0 - f * displacement_m[1]) < reach:
+        for f in np.linspace(0.0, 1.0, 11):
+            along, across = _in_brick_frame(
+                scene, other[0] - x0 - f * displacement_m[0], other[1] - y0 - f * displacement_m[1]
+            )
+            if abs(along) < length and abs(across) < width:
                 return False
     return True
 
@@ -207,6 +228,15 @@ def look_offset_m(scene: LookScene) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     if _support_seen(scene, np.zeros(2), 0.0):
         return None
+    for spread in (ACQUIRE_SPREAD_M, ACQUIRE_SPREAD_M / 2.0, 0.0):  # the surest first
+        found = _look(scene, spread)
+        if found is not None:
+            return found
+    return None
+
+
+def _look(scene: LookScene, acquire_spread_m: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`look_offset_m` with the support up to ``acquire_spread_m`` off where the hover looks for it."""
     pre, high = PRE_RELEASE_GAP_M, scene.align_height_m
     R_wb = rot_z(scene.body_yaw_rad)[:2, :2]
     best: tuple[float, float, np.ndarray, np.ndarray] | None = None
@@ -217,7 +247,7 @@ def look_offset_m(scene: LookScene) -> tuple[np.ndarray, np.ndarray] | None:
         if near is None or (best is not None and near > best[0]):
             continue
         far = next(
-            (d for d in _DISTANCES_M if d >= near and _support_seen(scene, d * unit, high, ACQUIRE_SPREAD_M)),
+            (d for d in _DISTANCES_M if d >= near and _support_seen(scene, d * unit, high, acquire_spread_m)),
             None,
         )
         if far is None or (best is not None and (near, far) >= best[:2]):
