@@ -10,7 +10,9 @@ import pytest
 
 from masonry.airframe import camera_mount
 from masonry.blueprint_gen import towers
+from masonry.fsm.config import UavConfig
 from masonry.fsm.side_look import LookScene, look_offset_m, marker_in_view
+from masonry.fsm.tuning import uav_settings
 from masonry.geometry import rot_z
 from masonry.mission.simulate import SimulatedMission
 from masonry.perception.types import DEFAULT_INTRINSICS
@@ -53,9 +55,14 @@ def _support_markers_seen(displacement_m: np.ndarray, height_m: float) -> int:
     for sign in (1.0, -1.0):
         mx, my, mz = _along(sign * 0.0875)
         corners = np.array(
-            [_rot_corner(mx, my, mz, dx * 0.025, dy * 0.025) for dx, dy in ((-1, 1), (1, 1), (1, -1), (-1, -1))]
+            [
+                _rot_corner(mx, my, mz, dx * 0.025, dy * 0.025)
+                for dx, dy in ((-1, 1), (1, 1), (1, -1), (-1, -1))
+            ]
         )
-        seen += marker_in_view(corners, camera, R_wb @ T[:3, :3], DEFAULT_INTRINSICS, effector, YAW, (0.15, 0.075))
+        seen += marker_in_view(
+            corners, camera, R_wb @ T[:3, :3], DEFAULT_INTRINSICS, effector, YAW, (0.15, 0.075)
+        )
     return seen
 
 
@@ -108,7 +115,10 @@ def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
         if b.position_m[2] < b.size_m[2]:
             continue  # the first course: nothing to keep to (GNSS puts it)
         below = next(
-            o for o in bp.bricks if math.dist(o.position_m[:2], b.position_m[:2]) < 1e-6 and o.id != b.id
+            o
+            for o in bp.bricks
+            if math.dist(o.position_m[:2], b.position_m[:2]) < 1e-6
+            and o.id != b.id
             and abs(b.position_m[2] - o.position_m[2] - b.size_m[2]) < 1e-6
         )
         off = np.subtract(world.bricks[b.id].position_m, b.position_m)
@@ -116,3 +126,9 @@ def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
         errors.append(float(np.linalg.norm((off - off_below)[:2])))
     assert len(errors) == 6
     assert max(errors) < 0.02, errors
+
+
+def test_it_is_on_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).side_look is True  # (it acts only with align_on_wall)
+    assert uav_settings("px4", {"side_look": False})["side_look"] is False
+    assert "side_look" not in uav_settings("arducopter")

@@ -392,7 +392,9 @@ class BrickUav(PutBack):
         self.gripper.set_joint_locked(False)
         yaw = self._place_yaw_rad()
         self.attempt.place_effector_target_m = self._place_effector_target_m()
-        body = self.effector.body_target(self._side.descent_target_m(self.attempt.place_effector_target_m), yaw)
+        body = self.effector.body_target(
+            self._side.descent_target_m(self.attempt.place_effector_target_m), yaw
+        )
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
         self._wall.apply(self)
 

@@ -36,9 +36,9 @@ __all__ = [
     "ACQUIRE_SPREAD_M",
     "FINAL_LEG_S",
     "PRE_RELEASE_GAP_M",
+    "TRACK_SPREAD_M",
     "LookScene",
     "SideLook",
-    "TRACK_SPREAD_M",
     "look_offset_m",
     "marker_in_view",
     "scene_of",
@@ -61,7 +61,7 @@ _EDGE_PX = 8.0
 _TOUCH_M = 0.002
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LookScene:
     """What the brick UAV knows of a placement (world ENU, metres, radians).
 
@@ -93,7 +93,9 @@ class LookScene:
     align_height_m: float
 
 
-def _marker_corners(top_m: Sequence[float], yaw_rad: float, spacing_m: float, size_m: float) -> list[np.ndarray]:
+def _marker_corners(
+    top_m: Sequence[float], yaw_rad: float, spacing_m: float, size_m: float
+) -> list[np.ndarray]:
     """The four corners (4, 3) of each of the two markers on a top face centred at ``top_m``."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     h = size_m / 2.0
@@ -150,7 +152,9 @@ def marker_in_view(
     return True
 
 
-def _support_seen(scene: LookScene, displacement_m: np.ndarray, height_m: float, spread_m: float = 0.0) -> bool:
+def _support_seen(
+    scene: LookScene, displacement_m: np.ndarray, height_m: float, spread_m: float = 0.0
+) -> bool:
     """A whole support marker is in view with the effector at the drop-off + ``displacement_m``, ``height_m`` up;
     with ``spread_m``, also with the supports that far off their design in any of 8 directions."""
     effector = np.asarray(scene.drop_top_m, dtype=float) + np.array(
@@ -164,7 +168,9 @@ def _support_seen(scene: LookScene, displacement_m: np.ndarray, height_m: float,
     half = (scene.size_m[0] / 2.0, scene.size_m[1] / 2.0)
     shifts = [(0.0, 0.0)]
     if spread_m > 0.0:
-        shifts += [(spread_m * math.cos(a), spread_m * math.sin(a)) for a in np.linspace(0.0, 2 * math.pi, 9)[:-1]]
+        shifts += [
+            (spread_m * math.cos(a), spread_m * math.sin(a)) for a in np.linspace(0.0, 2 * math.pi, 9)[:-1]
+        ]
     for sx, sy in shifts:
         if not any(
             not _covered(scene, corners.mean(axis=0))
@@ -273,10 +279,10 @@ class SideLook:
 
     def plan(self, uav: BrickUav) -> np.ndarray:
         """A new alignment above the drop-off: the displacement of its hover (zero without a side look; never
-        without ``align_on_wall``)."""
+        without ``align_on_wall`` and ``side_look``)."""
         self.offset_m, self.final = None, False
         cfg = uav.config
-        if not (cfg.align_on_wall and cfg.wall):
+        if not (cfg.align_on_wall and cfg.side_look and cfg.wall):
             return np.zeros(3)
         found = look_offset_m(scene_of(uav))
         if found is None:
@@ -288,7 +294,9 @@ class SideLook:
         """Where the descent takes the effector: the pre-release point with a side look, else the drop-off."""
         if self.offset_m is None:
             return effector_target_m
-        return effector_target_m + self.offset_m + np.array([0.0, 0.0, PRE_RELEASE_GAP_M])
+        return np.asarray(
+            effector_target_m + self.offset_m + np.array([0.0, 0.0, PRE_RELEASE_GAP_M]), dtype=float
+        )
 
     def step(self, uav: BrickUav, yaw_rad: float) -> None:
         """The displaced descent over: fly the last leg to the drop-off (once)."""
