@@ -104,8 +104,8 @@ def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
 @pytest.mark.slow
 def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
     """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: every brick above the
-    first course within 2 cm of its support's offset (before the side look: 2.0-12.9 cm, the camera never saw
-    the support of two of them; docs/performance/as-built.md has the benchmark)."""
+    first course within 2 cm of its support's offset (3.6-10.9 mm; before the side look 14.7-98.9 mm, the camera
+    never saw the support of two of them; docs/performance/as-built.md has the benchmark)."""
     bp = towers(3, 3, spacing_m=1.0, yaw_rad=YAW, clearance_m=1.0, brick_uavs=1, adhesion_uavs=1)
     mission = SimulatedMission.from_blueprint(bp, seed=2, vehicle="px4")
     assert mission.run().completed
