@@ -232,10 +232,9 @@ def look_offset_m(scene: LookScene) -> tuple[np.ndarray, np.ndarray] | None:
     shortest. None: no support, one already in view at the release, none found, or the way not clear."""
     if not scene.supports:
         return None
+    # one in view at the release, even with the supports as far off as the hover may find them: as before
     if _support_seen(scene, np.zeros(2), 0.0, ACQUIRE_SPREAD_M):
-        return (
-            None  # one in view at the release, even with the supports as far off as the hover may find them
-        )
+        return None
     for spread in (ACQUIRE_SPREAD_M, ACQUIRE_SPREAD_M / 2.0, 0.0):  # the surest first
         found = _look(scene, spread)
         if found is not None:
