@@ -10,7 +10,14 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   offset of the placed bricks it touches or stands on: what a wall built a little off as a whole does not show);
   mean and max, millimetres;
 - the as-built estimate's own error: the distance from each as-built pose the UAV reported (``report.as_built``)
-  to the brick's true centre, mean and max, millimetres, and how many of the placed bricks were seen.
+  to the brick's true centre, mean and max, millimetres, and how many of the placed bricks were seen;
+- the same error relative to the wall: a brick's estimate error less the mean estimate error of its neighbours
+  (those with an as-built pose): what a wall estimated off as a whole, as it must be on GNSS with no absolute
+  reference, does not show.
+
+``--wander`` prints the ``px4`` model's GNSS wander instead: its standard deviation per axis (what any position
+estimated in the world frame on it carries) and how far it moves on, rms and 95th percentile per axis, in the
+seconds after a look (what an offset to the wall measured then is off by at the release).
 
 The default run (one seed, calm air) takes a few minutes on one core; the issue's full run (10 seeds, calm and
 4 m/s wind with light turbulence) is::
@@ -18,13 +25,15 @@ The default run (one seed, calm air) takes a few minutes on one core; the issue'
     .venv/bin/python benchmarks/bench_as_built.py --seeds 10 --wind calm,4
 
 (``--walls``, ``--vehicles`` select; ``--seed0`` shifts the seeds; ``--no-wall-align`` places on the absolute
-position, ``align_on_wall`` off, for the comparison.)
+position, ``align_on_wall`` off, for the comparison; ``--no-side-look`` keeps the wall alignment but flies every
+descent from right above the drop-off, as before the side look.)
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import random
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -37,6 +46,7 @@ from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
 from masonry.mission.simulate import SimulatedMission
 from masonry.sim import Faults
+from masonry.sim.shaping import PX4, Shaper
 from masonry.sim.wind import WindConfig
 
 YAW_RAD = math.radians(30.0)
@@ -60,9 +70,10 @@ class Tally:
     design_m: list[float] | None = None
     neighbour_m: list[float] | None = None
     estimate_m: list[float] | None = None
+    estimate_wall_m: list[float] | None = None
 
     def __post_init__(self) -> None:
-        self.design_m, self.neighbour_m, self.estimate_m = [], [], []
+        self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
 
 
 def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
@@ -86,14 +97,22 @@ def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
 
 
 def run_one(
-    bp: Blueprint, vehicle: str, seed: int, wind_mps: float, tally: Tally, *, wall: bool = True
+    bp: Blueprint,
+    vehicle: str,
+    seed: int,
+    wind_mps: float,
+    tally: Tally,
+    *,
+    wall: bool = True,
+    side_look: bool = True,
 ) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
     config = None
-    if (
-        not wall
-    ):  # the vehicle's control preset with the wall's markers off (placement on the absolute position)
-        settings = {**uav_settings(vehicle), "align_on_wall": False}
+    if not wall or not side_look:
+        # the vehicle's control preset with the wall's markers off (placement on the absolute position), or the
+        # side look off (every descent from right above the drop-off)
+        settings = {**uav_settings(vehicle)}
+        settings["align_on_wall" if not wall else "side_look"] = False
         config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
     mission = SimulatedMission.from_blueprint(
         bp, seed=seed, vehicle=vehicle, faults=faults, uav_config=config
@@ -124,12 +143,43 @@ def run_one(
         if pose is not None:
             tally.seen += 1
             tally.estimate_m.append(math.dist(pose.position_m, world.bricks[bid].position_m))
+    estimate_off = {
+        bid: np.subtract(pose.position_m, world.bricks[bid].position_m)
+        for bid in offsets
+        if (pose := report.as_built.get(f"B{bid}")) is not None
+    }
+    assert tally.estimate_wall_m is not None
+    for bid, err in estimate_off.items():
+        others = [estimate_off[o] for o in near[bid] if o in estimate_off]
+        if others:
+            tally.estimate_wall_m.append(float(np.linalg.norm(err - np.mean(others, axis=0))))
 
 
 def _mm(values: Sequence[float]) -> str:
     if not values:
         return "      -        -"
     return f"{np.mean(values) * 1000:7.1f} {max(values) * 1000:8.1f}"
+
+
+def wander(duration_s: float = 20000.0, dt_s: float = 0.02) -> None:
+    """The ``px4`` model's GNSS wander (``masonry.sim.shaping.PX4``): its spread, and how far it moves on."""
+    shaper = Shaper(PX4)
+    rng = random.Random(1)
+    xs = np.empty(int(duration_s / dt_s))
+    for i in range(len(xs)):
+        shaper.drift(dt_s, rng.gauss)
+        xs[i] = shaper.gps_error_m[0]
+    print(
+        f"px4 GNSS wander (sigma {PX4.gps_noise_m * 1000:.0f} mm, correlation {PX4.gps_noise_tau_s:g} s, smoothed "
+        f"{PX4.gps_noise_smooth_s:g} s), {duration_s:.0f} s simulated: std {xs.std() * 1000:.1f} mm per axis"
+    )
+    print(f"{'after s':>8}  {'moved on, rms mm':>16}  {'95th percentile mm':>18}   (per axis)")
+    for after_s in (0.3, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 8.0):
+        k = round(after_s / dt_s)
+        moved = np.abs(xs[k:] - xs[:-k])
+        print(
+            f"{after_s:>8g}  {np.sqrt(np.mean(moved**2)) * 1000:>16.1f}  {np.percentile(moved, 95) * 1000:>18.1f}"
+        )
 
 
 def main() -> None:
@@ -146,11 +196,21 @@ def main() -> None:
         action="store_true",
         help="place on the absolute position (align_on_wall off, as before issue 30's wall alignment)",
     )
+    parser.add_argument(
+        "--no-side-look",
+        action="store_true",
+        help="the wall alignment without the side look (side_look off: every descent from above the drop-off)",
+    )
+    parser.add_argument("--wander", action="store_true", help="print the px4 model's GNSS wander and stop")
     args = parser.parse_args()
+    if args.wander:
+        wander()
+        return
     winds = [0.0 if w == "calm" else float(w) for w in args.wind.split(",")]
     print(
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
-        f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  seen/placed"
+        f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
+        f"{'estimate vs wall mean/max mm':>28}  seen/placed"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -159,13 +219,22 @@ def main() -> None:
                 tally = Tally()
                 start = time.perf_counter()
                 for seed in range(args.seed0, args.seed0 + args.seeds):
-                    run_one(bp, vehicle, seed, wind, tally, wall=not args.no_wall_align)
+                    run_one(
+                        bp,
+                        vehicle,
+                        seed,
+                        wind,
+                        tally,
+                        wall=not args.no_wall_align,
+                        side_look=not args.no_side_look,
+                    )
                 assert tally.design_m is not None and tally.neighbour_m is not None
-                assert tally.estimate_m is not None
+                assert tally.estimate_m is not None and tally.estimate_wall_m is not None
                 label = "calm" if wind == 0 else f"{wind:g} m/s"
                 print(
                     f"{vehicle:<11} {wall:<13} {label:<8} {tally.completed:>4}/{tally.runs:<4}  "
                     f"{_mm(tally.design_m):>18}  {_mm(tally.neighbour_m):>22}  {_mm(tally.estimate_m):>29}  "
+                    f"{_mm(tally.estimate_wall_m):>28}  "
                     f"{tally.seen}/{tally.placed}  ({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )

@@ -18,6 +18,7 @@ from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
+from masonry.fsm.side_look import SideLook
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.fsm.wall_align import WallAlign
@@ -80,6 +81,7 @@ class BrickUav(PutBack):
         self._camera_align = CameraAlign()
         self.as_built = AsBuiltLook(config.window_size, config.sigma_tol_m)
         self._wall = WallAlign()  # (masonry.fsm.wall_align: with align_on_wall only)
+        self._side = SideLook()  # (masonry.fsm.side_look: a tower's support, hidden from above)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
@@ -371,7 +373,7 @@ class BrickUav(PutBack):
         assert tel is not None
         self.gripper.set_joint_locked(True)
         yaw = self._place_yaw_rad()
-        body = self.effector.body_target(self._place_effector_target_m(), yaw)
+        body = self.effector.body_target(self._place_effector_target_m() + self._side.plan(self), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
         self._wall.reset(self._place_effector_target_m())
 
@@ -390,13 +392,16 @@ class BrickUav(PutBack):
         self.gripper.set_joint_locked(False)
         yaw = self._place_yaw_rad()
         self.attempt.place_effector_target_m = self._place_effector_target_m()
-        body = self.effector.body_target(self.attempt.place_effector_target_m, yaw)
+        body = self.effector.body_target(
+            self._side.descent_target_m(self.attempt.place_effector_target_m), yaw
+        )
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
         self._wall.apply(self)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._wall.track(self, tel)
+        self._side.step(self, self._place_yaw_rad())
         error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
             self.attempt.release_error_m = error

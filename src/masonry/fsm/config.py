@@ -65,6 +65,9 @@ class UavConfig:
     # keeps its designed offsets to them; ``wall``: every brick's id and designed top-face centre (the blueprint's)
     align_on_wall: bool = False
     wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
+    # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
+    # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
+    side_look: bool = True
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

@@ -1,0 +1,137 @@
+"""The side look (issue 30): a drop-off whose supports the carried brick hides is approached from where the camera
+sees one, so that on GNSS a tower's brick keeps to the brick it stands on."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from masonry.airframe import camera_mount
+from masonry.blueprint_gen import towers
+from masonry.fsm.config import UavConfig
+from masonry.fsm.side_look import LookScene, look_offset_m, marker_in_view
+from masonry.fsm.tuning import uav_settings
+from masonry.geometry import rot_z
+from masonry.mission.simulate import SimulatedMission
+from masonry.perception.types import DEFAULT_INTRINSICS
+
+YAW = math.radians(30.0)
+SIZE = (0.30, 0.15, 0.10)
+DROP = (1.0, 2.0, 0.3)  # the drop-off's top-face centre: a second-course brick
+
+
+def _scene(supports: tuple[tuple[float, float, float], ...], others: tuple = ()) -> LookScene:
+    return LookScene(
+        drop_top_m=DROP,
+        body_yaw_rad=YAW,
+        brick_yaw_rad=YAW,
+        size_m=SIZE,
+        supports=supports,
+        others=others,
+        marker_size_m=0.05,
+        marker_spacing_m=0.175,
+        intrinsics=DEFAULT_INTRINSICS,
+        T_body_cam=camera_mount(),
+        effector_body_m=(0.0, 0.0, -0.45),
+        align_height_m=0.55,
+    )
+
+
+def _along(d_m: float, across_m: float = 0.0, z_m: float = 0.2) -> tuple[float, float, float]:
+    """A point ``d_m`` along the brick's length and ``across_m`` across it from the drop-off, at height ``z_m``."""
+    c, s = math.cos(YAW), math.sin(YAW)
+    return (DROP[0] + c * d_m - s * across_m, DROP[1] + s * d_m + c * across_m, z_m)
+
+
+def _support_markers_seen(displacement_m: np.ndarray, height_m: float) -> int:
+    """The support's (right under the drop-off) markers the camera sees, whole, past the carried brick."""
+    effector = np.array(DROP) + np.array([displacement_m[0], displacement_m[1], height_m])
+    R_wb = rot_z(YAW)
+    T = camera_mount()
+    camera = effector - R_wb @ np.array([0.0, 0.0, -0.45]) + R_wb @ T[:3, 3]
+    seen = 0
+    for sign in (1.0, -1.0):
+        mx, my, mz = _along(sign * 0.0875)
+        corners = np.array(
+            [
+                _rot_corner(mx, my, mz, dx * 0.025, dy * 0.025)
+                for dx, dy in ((-1, 1), (1, 1), (1, -1), (-1, -1))
+            ]
+        )
+        seen += marker_in_view(
+            corners, camera, R_wb @ T[:3, :3], DEFAULT_INTRINSICS, effector, YAW, (0.15, 0.075)
+        )
+    return seen
+
+
+def _rot_corner(x: float, y: float, z: float, dx: float, dy: float) -> tuple[float, float, float]:
+    c, s = math.cos(YAW), math.sin(YAW)
+    return (x + c * dx - s * dy, y + s * dx + c * dy, z)
+
+
+def test_a_towers_support_is_hidden_from_above_and_seen_from_the_displaced_descent() -> None:
+    found = look_offset_m(_scene((_along(0.0),)))
+    assert found is not None
+    hover, pre = found
+    assert hover[2] == pre[2] == 0.0
+    assert 0.08 <= np.linalg.norm(pre) <= np.linalg.norm(hover) <= 0.5
+    # from right above the drop-off the carried brick hides both markers, at the release and high up
+    for height in (0.0, 0.03, 0.3, 0.55):
+        assert _support_markers_seen(np.zeros(3), height) == 0
+    # from the pre-release point and the hover, and on the straight descent between them, one is in view
+    for f in np.linspace(0.0, 1.0, 5):
+        assert _support_markers_seen(pre + f * (hover - pre), 0.03 + f * (0.55 - 0.03)) >= 1
+
+
+def test_no_support_no_side_look_and_a_marker_at_the_edge_of_the_view_is_not_counted_on() -> None:
+    assert look_offset_m(_scene(())) is None
+    # a running bond's second course: half on a brick whose far marker sticks out on the camera's side, in view at
+    # the release only if the support is where the position says: the side look keeps it in view instead
+    found = look_offset_m(_scene((_along(0.15),)))
+    assert found is not None
+    assert np.linalg.norm(found[1]) <= np.linalg.norm(found[0])
+
+
+def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
+    ring = tuple(
+        _along(0.45 * math.cos(a), 0.45 * math.sin(a), 0.3) for a in np.linspace(0, 2 * math.pi, 12)[:-1]
+    )
+    assert look_offset_m(_scene((_along(0.0),), ring)) is None
+    # the bricks that stand on the new one are not built yet: no obstacle
+    above = (_along(0.15, 0.0, 0.4), _along(-0.15, 0.0, 0.4))
+    assert look_offset_m(_scene((_along(0.0),), above)) is not None
+
+
+@pytest.mark.slow
+def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
+    """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: every brick above the
+    first course within 2 cm of its support's offset (3.6-10.9 mm; before the side look 14.7-98.9 mm, the camera
+    never saw the support of two of them; docs/performance/as-built.md has the benchmark)."""
+    bp = towers(3, 3, spacing_m=1.0, yaw_rad=YAW, clearance_m=1.0, brick_uavs=1, adhesion_uavs=1)
+    mission = SimulatedMission.from_blueprint(bp, seed=2, vehicle="px4")
+    assert mission.run().completed
+    world = mission.world
+    errors = []
+    for b in bp.bricks:
+        if b.position_m[2] < b.size_m[2]:
+            continue  # the first course: nothing to keep to (GNSS puts it)
+        below = next(
+            o
+            for o in bp.bricks
+            if math.dist(o.position_m[:2], b.position_m[:2]) < 1e-6
+            and o.id != b.id
+            and abs(b.position_m[2] - o.position_m[2] - b.size_m[2]) < 1e-6
+        )
+        off = np.subtract(world.bricks[b.id].position_m, b.position_m)
+        off_below = np.subtract(world.bricks[below.id].position_m, below.position_m)
+        errors.append(float(np.linalg.norm((off - off_below)[:2])))
+    assert len(errors) == 6
+    assert max(errors) < 0.02, errors
+
+
+def test_it_is_on_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).side_look is True  # (it acts only with align_on_wall)
+    assert uav_settings("px4", {"side_look": False})["side_look"] is False
+    assert "side_look" not in uav_settings("arducopter")
