@@ -145,6 +145,8 @@ class ColumnClearance:
         self.gate = gate
         self.fence = fence
         self.fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
+        #: UAVs whose flight home is held back (:meth:`linger`) -> the sites their hold point keeps clear of
+        self.lingering: dict[str, tuple[XY, ...]] = {}
         self.records: dict[str, UavAirspace] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -255,6 +257,20 @@ class ColumnClearance:
             if g.granted or (g.hold_m is not None and (before is None or before.hold_m is None)):
                 out.append(g)
         return out
+
+    def linger(self, uav: str, keep_clear: tuple[XY, ...]) -> None:
+        """``uav`` has no task and one is expected soon (:mod:`masonry.mission.linger`): its flight home is held
+        back, and it waits at a hold point near where it asked, ``1.1 wait_radius_m`` from ``keep_clear`` (the
+        sites still to be worked) as from everything a hold point keeps clear of. No spot fits: it flies home."""
+        self.lingering[uav] = keep_clear
+        self.touch()
+
+    def unlinger(self, uav: str) -> bool:
+        """``uav``'s flight home is no longer held back (it is granted once it fits); False: it was not."""
+        if self.lingering.pop(uav, None) is None:
+            return False
+        self.touch()
+        return True
 
     def end_transit(self, uav: str) -> None:
         """``uav``'s flight came down at its site: it holds the zone there now."""

@@ -165,6 +165,7 @@ class MissionReport:
                 f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  idle {u.idle_s:7.1f} s  "
                 f"waiting {u.waiting_s:7.1f} s (air {u.waiting_air_s:.1f}, ground {u.waiting_ground_s:.1f})  "
                 f"flown {u.distance_m:7.1f} m  {u.status}"
+                + (f"  lingered {u.lingering_s:.0f} s ({u.lingers}x near the wall)" if u.lingers else "")
             )
         totals = phase_totals(self.attempts)
         if totals.total_s > 0:
@@ -203,6 +204,14 @@ def _until(link: Any, end_s: float) -> float:
     """The end of a UAV's part in the mission: ``end_s``, or its loss if sooner."""
     lost = getattr(link, "lost_at_s", None)
     return end_s if lost is None else min(end_s, float(lost))
+
+
+def lingered(mc: Any, uav: str, end_s: float) -> dict[str, Any]:
+    """``uav``'s seconds waiting near the wall for a task and how often (:mod:`masonry.mission.linger`)."""
+    book = getattr(mc, "lingers", None)
+    if book is None:
+        return {}
+    return {"lingering_s": book.total_s(uav, end_s), "lingers": book.count.get(uav, 0)}
 
 
 def control_report(
@@ -371,6 +380,7 @@ def control_report(
                 waiting_s=waiting,
                 waiting_ground_s=ground,
                 waiting_air_s=air,
+                **lingered(mc, spec.name, end),
             )
         )
     if placement_error_m is None:
