@@ -145,8 +145,7 @@ class ColumnClearance:
         self.gate = gate
         self.fence = fence
         self.fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
-        #: UAVs whose flight home is held back (:meth:`linger`) -> the sites their hold point keeps clear of
-        self.lingering: dict[str, tuple[XY, ...]] = {}
+        self.lingering: dict[str, tuple[XY, ...]] = {}  # flight home held back (:meth:`linger`) -> keep clear
         self.records: dict[str, UavAirspace] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -259,18 +258,14 @@ class ColumnClearance:
         return out
 
     def linger(self, uav: str, keep_clear: tuple[XY, ...]) -> None:
-        """``uav`` has no task and one is expected soon (:mod:`masonry.mission.linger`): its flight home is held
-        back, and it waits at a hold point near where it asked, ``1.1 wait_radius_m`` from ``keep_clear`` (the
-        sites still to be worked) as from everything a hold point keeps clear of. No spot fits: it flies home."""
+        """Hold ``uav``'s flight home back: it waits near where it asks, clear of ``keep_clear`` (mission/linger.py)."""
         self.lingering[uav] = keep_clear
         self.touch()
 
     def unlinger(self, uav: str) -> bool:
-        """``uav``'s flight home is no longer held back (it is granted once it fits); False: it was not."""
-        if self.lingering.pop(uav, None) is None:
-            return False
-        self.touch()
-        return True
+        """Let ``uav``'s flight home go (granted once it fits); False: it was not held back."""
+        self._version += (held := self.lingering.pop(uav, None) is not None)
+        return held
 
     def end_transit(self, uav: str) -> None:
         """``uav``'s flight came down at its site: it holds the zone there now."""

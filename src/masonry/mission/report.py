@@ -206,14 +206,6 @@ def _until(link: Any, end_s: float) -> float:
     return end_s if lost is None else min(end_s, float(lost))
 
 
-def lingered(mc: Any, uav: str, end_s: float) -> dict[str, Any]:
-    """``uav``'s seconds waiting near the wall for a task and how often (:mod:`masonry.mission.linger`)."""
-    book = getattr(mc, "lingers", None)
-    if book is None:
-        return {}
-    return {"lingering_s": book.total_s(uav, end_s), "lingers": book.count.get(uav, 0)}
-
-
 def control_report(
     mc: Any,
     plan: Plan,
@@ -366,6 +358,7 @@ def control_report(
     end = start + makespan if not stuck else max(now, start)
     every_wait = [w for ws in waits.values() for w in ws]
     uavs = []
+    lingers = getattr(mc, "lingers", None)
     for spec in mc.fleet:
         waiting = phase_totals(a for a in attempts if a.uav == spec.name).clearance_s
         ground, air = waiting_split_s(waiting, every_wait, spec.name)
@@ -380,7 +373,10 @@ def control_report(
                 waiting_s=waiting,
                 waiting_ground_s=ground,
                 waiting_air_s=air,
-                **lingered(mc, spec.name, end),
+                lingering_s=0.0
+                if lingers is None
+                else lingers.total_s(spec.name, end),  # (mission/linger.py)
+                lingers=0 if lingers is None else lingers.count.get(spec.name, 0),
             )
         )
     if placement_error_m is None:
