@@ -100,6 +100,45 @@ class _Gate:
         return True
 
 
+def test_a_uav_sent_to_its_parking_spot_is_granted_its_flight_from_there_not_from_where_it_asked():
+    # two UAVs each wait for the other's site (a cycle of stays): b is sent to its parking spot, a takes b's site.
+    # b's flight to a's old site starts where b waits, at its spot: planned from where b asked (b's old site, a's
+    # stay now) it waited for good, and granted while b still flew to its spot it was a flight from a place b was
+    # not at (a UAV flew where the table reserved nothing for it: min separation 0.65 m on the 12 m wall)
+    air = _airspace()
+    s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
+    for uav, site in (("a", s1), ("b", s2)):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, (site[0], -5.0, 1.2)).granted
+    for t in range(1, 30):
+        air.grant(float(t))
+    for uav, site in (("a", s1), ("b", s2)):
+        air.end_transit(uav)
+        air.progress(uav, site)
+    assert not air.request("a", s2, 30.0, s1).granted
+    assert not air.request("b", s1, 30.5, s2).granted
+    granted: list[tuple[str, Phase]] = []
+    spot = None
+    for k in range(62, 200):
+        t = k / 2.0
+        for g in air.grant(t):
+            if g.hold_m is not None:
+                spot = g.hold_m
+            granted += [(g.uav, air.phase(g.uav))] if g.granted else []
+        if t == 40.0:
+            air.progress("b", (3.0, -2.5, 6.4))  # on its way to its spot
+        if t == 45.0:
+            assert spot is not None and air.phase("b") is Phase.TO_HOLD
+            air.progress("b", spot)  # there
+        if t == 60.0:
+            air.progress("a", s2)
+            air.end_transit("a")
+    assert [u for u, _p in granted] == ["a", "b"]
+    climb = air.volumes("b")[0]
+    assert spot is not None and climb.a == pytest.approx(spot[:2])  # from its spot
+    assert air.conflicts() == []
+
+
 def test_a_uav_asking_for_the_next_site_ends_its_site_interval_however_close_the_sites_are():
     # adhesion segments 0.15 m apart: closer than AT_SITE_M, yet the first task's site interval is over once its
     # UAV asks for the next one (else two UAVs could wait for each other's finished sites)

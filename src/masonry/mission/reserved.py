@@ -216,6 +216,8 @@ class TableClearance:
             u = self._uavs[uav]
             if u.request is None or (u.seen_version == self._version and now_s < u.retry_s):
                 continue
+            if u.phase is Phase.TO_HOLD:  # on its way to its parking spot: asked again once it is there
+                continue
             g = reserved_requests.evaluate(self, uav, u, now_s)
             if g.granted:
                 out.append(g)

@@ -149,6 +149,8 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
 def hop_request(c: TableClearance, uav: str, u: TableUav, w: FlightRequest) -> Request:
     """The request of ``w``'s hop: from where the UAV is (its site when unknown), to stay at the target."""
     start = w.position if w.position is not None else (u.position or w.site)
+    if u.phase in (Phase.TO_HOLD, Phase.AT_HOLD) and u.spot is not None:
+        start = u.spot  # it waits at its parking spot, wherever it asked from
     stay = c.table.stay_of(uav)
     if stay is not None and stay.volume.a == stay.volume.b and math.dist(stay.volume.a, start[:2]) < ON_LEG_M:
         v = stay.volume  # where it stays, give or take its tracking error (a hover: at its altitude)
