@@ -145,7 +145,6 @@ class ColumnClearance:
         self.gate = gate
         self.fence = fence
         self.fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
-        self.lingering: dict[str, tuple[XY, ...]] = {}  # flight home held back (:meth:`linger`) -> keep clear
         self.records: dict[str, UavAirspace] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
@@ -256,16 +255,6 @@ class ColumnClearance:
             if g.granted or (g.hold_m is not None and (before is None or before.hold_m is None)):
                 out.append(g)
         return out
-
-    def linger(self, uav: str, keep_clear: tuple[XY, ...]) -> None:
-        """Hold ``uav``'s flight home back: it waits near where it asks, clear of ``keep_clear`` (mission/linger.py)."""
-        self.lingering[uav] = keep_clear
-        self.touch()
-
-    def unlinger(self, uav: str) -> bool:
-        """Let ``uav``'s flight home go (granted once it fits); False: it was not held back."""
-        self._version += (held := self.lingering.pop(uav, None) is not None)
-        return held
 
     def end_transit(self, uav: str) -> None:
         """``uav``'s flight came down at its site: it holds the zone there now."""

@@ -26,21 +26,12 @@ from masonry.mission.airspace_state import (
 )
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.sites import enter_ungoverned
-from masonry.mission.volumes import XY, Vec3, contains, same_site, stopped_at
+from masonry.mission.volumes import Vec3, contains, same_site, stopped_at
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
 
-__all__ = [
-    "check_fence",
-    "evaluate",
-    "granted",
-    "hold_flight",
-    "hover_where",
-    "linger_spots",
-    "queued_before",
-    "request",
-]
+__all__ = ["check_fence", "evaluate", "granted", "hold_flight", "hover_where", "queued_before", "request"]
 
 
 def request(
@@ -103,12 +94,9 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
         u.answer = Grant(uav, w.site, False, refused=refused)
         return u.answer
     earlier = queued_before(c, w.seq)
-    lingers = uav in c.lingering and c.is_home(uav, w.site)  # its flight home held back: it waits near here
-    blocked_site = (
-        lingers
-        or any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier)
-        or (c.gate is not None and not c.gate.may_enter(uav, w.site))
-    )
+    blocked_site = any(
+        math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier
+    ) or (c.gate is not None and not c.gate.may_enter(uav, w.site))
     if not blocked_site:
         home = c.is_home(uav, w.site)
         if u.phase is Phase.AT_HOLD:
@@ -132,9 +120,6 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
                     return granted(c, uav, u, k, now_s)
     if u.phase is Phase.ASKING:
         g = hold_flight(c, uav, u)
-        if g is None and lingers:  # nowhere to wait near here now: it flies home as it asked
-            c.unlinger(uav)
-            return evaluate(c, uav, u, now_s)
         if g is not None:
             u.answer = g
             c.held_back += 1
@@ -171,13 +156,7 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     others = [o for n, o in c.records.items() if n != uav]
     pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav]
     waited = () if c.gate is None else c.gate.waited_on(uav)
-    near = w.site
-    lingering = c.lingering.get(uav) if c.is_home(uav, w.site) else None
-    if lingering is not None:  # waiting for a task near where it is, clear of the sites still to be worked
-        near, pads = start, pads + list(lingering)
-    candidates = hold_candidates(near, others, c.wait_radius_m, pads, waited)
-    if lingering is not None:
-        candidates = linger_spots(c, uav, start, candidates, lingering)
+    candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited)
     if c.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
         need = AIRSPACE_MARGIN_M + c.zone_slack_m
         candidates = [h for h in candidates if c.fence.contains(h[0], h[1], need)]
@@ -190,25 +169,6 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
                 return Grant(uav, w.site, False, hold, c.alt(k))
     return None
-
-
-def linger_spots(
-    c: ColumnClearance, uav: str, start: Vec3, candidates: list[Vec3], keep_clear: tuple[XY, ...]
-) -> list[Vec3]:
-    """The hold points where a UAV waiting for a task may wait: nearer than its home (else it may as well land
-    there), and clear of every site still to be worked (:func:`hold_candidates` falls back on a far point that
-    need not be)."""
-    home = c.homes.get(uav)
-    if home is None:
-        return []
-    far_m = math.hypot(home[0] - start[0], home[1] - start[1])
-    r = 1.1 * c.wait_radius_m
-    return [
-        h
-        for h in candidates
-        if math.hypot(h[0] - start[0], h[1] - start[1]) < far_m
-        and all(math.hypot(h[0] - k[0], h[1] - k[1]) >= r for k in keep_clear)
-    ]
 
 
 def hover_where(c: ColumnClearance, uav: str, pos: Vec3) -> None:
@@ -252,5 +212,4 @@ def queued_before(c: ColumnClearance, seq: int) -> list[FlightRequest]:
         if u.request is not None
         and u.request.seq < seq
         and (gate is None or gate.may_enter(n, u.request.site))
-        and n not in c.lingering  # (its flight home is held back: it waits for a task, not the airspace)
     ]
