@@ -367,7 +367,15 @@ class TableClearance:
         base = self.layer_base_m if self.layer_base_m is not None else 0.0
         layers = tuple(base + k * self.spacing_m for k in range(self.max_layers))
         t = timing or self.timing  # (legs at any layer, as the columns grant them: Airspace.any_layer)
-        return Airspace(layers, t.cruise_speed_mps, t.vertical_speed_mps, self.margin_s, 0.0, True, True)
+        return Airspace(
+            layers,
+            t.cruise_speed_mps,
+            t.vertical_speed_mps,
+            self.margin_s,
+            0.0,
+            any_layer=True,
+            first_arrival=True,
+        )
 
     def tick(self, now_s: float) -> None:
         """Time moves on: windows that ended bind nobody (dropped; a change: waits are looked at again)."""
