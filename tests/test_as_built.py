@@ -29,6 +29,7 @@ from masonry.sim.world import World
 
 runner = CliRunner()
 KEYS = {"position_m", "yaw_rad", "deviation_m", "confidence"}
+RELATIVE_KEYS = {"relative_to", "relative_offset_m", "relative_deviation_m"}  # (a neighbour seen with it)
 
 
 @pytest.fixture(scope="module")
@@ -46,8 +47,9 @@ def test_the_report_has_an_as_built_pose_per_placed_brick(default_run) -> None:
     bricks = [t.id for t in report.tasks if t.kind == "brick"]
     assert list(data["as_built"]) == bricks  # in plan order, every brick seen
     bp = mission.blueprint
+    first = next(iter(data["as_built"].values()), None)
     for tid, pose in data["as_built"].items():
-        assert set(pose) == KEYS
+        assert set(pose) == (KEYS if "relative_to" not in pose else KEYS | RELATIVE_KEYS)
         brick = bp.brick(int(tid[1:]))
         design = brick.position_m
         assert pose["deviation_m"] == pytest.approx(math.dist(pose["position_m"], design), abs=2e-4)
@@ -57,6 +59,11 @@ def test_the_report_has_an_as_built_pose_per_placed_brick(default_run) -> None:
         assert math.dist(report.as_built[tid].position_m, truth) < 0.015
         assert abs(math.remainder(pose["yaw_rad"] - mission.world.bricks[brick.id].yaw_rad, math.tau)) < 0.05
     assert "as-built (6 bricks seen): deviation from the design mean" in report.summary()
+    # every brick but the wall's first saw one already placed with it (masonry.fsm.relative_look)
+    done = [a for a in mission.control.history if a.status == "done" and a.task_id in report.as_built]
+    placed_first = min(done, key=lambda a: a.end_s).task_id
+    assert first is not None
+    assert {tid for tid, pose in data["as_built"].items() if "relative_to" not in pose} == {placed_first}
 
 
 def test_the_completed_events_carry_the_pose_and_the_default_tolerance(default_run) -> None:

@@ -8,6 +8,10 @@ on the marker poses turned into the world frame with the telemetry of that tick)
 as-built pose and its confidence the paper's C; the pose's distance from the designed centre is its deviation.
 The climb is not lengthened: a UAV that saw nothing reports no as-built pose (the report says so).
 
+The same frames give the pose relative to the wall (:mod:`masonry.fsm.relative_look`): the bricks of
+``UavConfig.wall`` seen with the placed brick, placed in the world by the same telemetry, whose offsets from it
+hold no position error; the pose's ``relative_*`` fields.
+
 A simulated camera draws the noise of these frames from a stream of their own (:class:`LooksBack`), so that
 looking leaves every other random draw of a simulation, and so every pinned schedule, as it was.
 """
@@ -16,10 +20,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from masonry.fsm.relative_look import RelativeLook
 from masonry.geometry import R_world_body
 from masonry.perception.estimation import EstimatorConfig, PoseWindow, estimate_brick_pose
 from masonry.perception.types import AsBuiltPose, TagPose
@@ -93,10 +99,13 @@ class AsBuiltLook:
 
     def __init__(self, window_size: int, sigma_tol_m: float) -> None:
         self.window = PoseWindow(size=window_size, sigma_tol_m=sigma_tol_m)
+        self.relative = RelativeLook(window_size, sigma_tol_m)
+        self._wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
 
     def begin(self) -> None:
         """A new placement: forget the last brick's estimates."""
         self.window.clear()
+        self.relative.begin()
 
     def look(
         self,
@@ -106,14 +115,25 @@ class AsBuiltLook:
         markers: MarkerSpec,
         T_body_cam: np.ndarray,
         config: EstimatorConfig,
+        wall: tuple[tuple[int, tuple[float, ...]], ...] = (),
     ) -> None:
-        """One frame: its estimate of brick ``brick_id`` joins the window until the window is full."""
+        """One frame: its estimate of brick ``brick_id`` joins the window until the window is full, and its offsets
+        from the bricks of ``wall`` (``UavConfig.wall``) in the same frame join theirs."""
         if self.window.count >= self.window.size:
             return
         frame = camera.read_as_built() if isinstance(camera, LooksBack) else camera.read()
-        est = world_estimate(frame_tags(frame, camera, markers), brick_id, tel, T_body_cam, config)
-        if est is not None:
-            self.window.add(est[0], est[1])
+        tags = frame_tags(frame, camera, markers)
+        est = world_estimate(tags, brick_id, tel, T_body_cam, config)
+        if est is None:
+            return
+        self.window.add(est[0], est[1])
+        self._wall = wall
+        designs = self.relative.wall(wall)
+        seen = {}
+        for bid in {t.marker_id // 2 for t in tags} - {brick_id}:
+            if bid in designs and (other := world_estimate(tags, bid, tel, T_body_cam, config)) is not None:
+                seen[bid] = other[0]
+        self.relative.add(brick_id, est[0], seen, designs)
 
     def pose(self, task: BrickTask) -> AsBuiltPose | None:
         """The brick's as-built pose (its centre: the top face's less half its height) and deviation from the
@@ -123,4 +143,13 @@ class AsBuiltLook:
             return None
         top, yaw = self.window.mean()
         centre = (float(top[0]), float(top[1]), float(top[2]) - task.size_m[2] / 2.0)
-        return AsBuiltPose(centre, float(yaw), math.dist(centre, task.position_m), float(confidence))
+        pose = AsBuiltPose(centre, float(yaw), math.dist(centre, task.position_m), float(confidence))
+        rel = self.relative.pose(task.marker_ids[0] // 2, self.relative.wall(self._wall))
+        if rel is None:
+            return pose
+        return replace(
+            pose,
+            relative_to=rel.relative_to,
+            relative_offset_m=rel.offset_m,
+            relative_deviation_m=rel.deviation_m,
+        )

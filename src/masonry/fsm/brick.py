@@ -449,7 +449,13 @@ class BrickUav(PutBack):
     def do_place_ascend(self, tel: Telemetry) -> None:
         t = self.brick_task  # (masonry.fsm.as_built: the placed brick is under the camera as it climbs)
         self.as_built.look(
-            self.camera, t.marker_ids[0] // 2, tel, self.config.markers, self._T_body_cam, self._est_config
+            self.camera,
+            t.marker_ids[0] // 2,
+            tel,
+            self.config.markers,
+            self._T_body_cam,
+            self._est_config,
+            self.config.wall,
         )
         if self._advance(tel):
             self._complete_task(

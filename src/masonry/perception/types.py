@@ -60,26 +60,40 @@ class AsBuiltPose:
     ``position_m``: the brick's centre (world, m; the blueprint's ``position`` is its designed value),
     ``yaw_rad``: its yaw, ``deviation_m``: the distance from ``position_m`` to the designed centre,
     ``confidence``: the paper's C of the window of estimates it is the mean of (0..1).
+
+    Relative to the wall (``masonry.fsm.relative_look``; all None when no brick on the wall was seen with it):
+    ``relative_to``: the neighbour's brick id, ``relative_offset_m``: the brick's top-face centre less the
+    neighbour's as seen in the same frames (world axes, m; the position source's error cancels),
+    ``relative_deviation_m``: that offset's distance from the designed one (m).
     """
 
     position_m: tuple[float, float, float]
     yaw_rad: float
     deviation_m: float
     confidence: float
+    relative_to: int | None = None
+    relative_offset_m: tuple[float, float, float] | None = None
+    relative_deviation_m: float | None = None
 
     def to_dict(self, digits: int | None = None) -> dict[str, object]:
-        """``{position_m, yaw_rad, deviation_m, confidence}`` (``digits``: metres and radians rounded to it, the
-        confidence to 3; None: exact, the form of the wire and the journal)."""
+        """``{position_m, yaw_rad, deviation_m, confidence}`` and, with a neighbour seen, ``{relative_to,
+        relative_offset_m, relative_deviation_m}`` (``digits``: metres and radians rounded to it, the confidence to
+        3; None: exact, the form of the wire and the journal)."""
 
         def r(v: float, nd: int | None = digits) -> float:
             return v if nd is None else round(v, nd)
 
-        return {
+        out: dict[str, object] = {
             "position_m": [r(v) for v in self.position_m],
             "yaw_rad": r(self.yaw_rad),
             "deviation_m": r(self.deviation_m),
             "confidence": r(self.confidence, None if digits is None else 3),
         }
+        if self.relative_to is not None and self.relative_offset_m is not None:
+            out["relative_to"] = self.relative_to
+            out["relative_offset_m"] = [r(v) for v in self.relative_offset_m]
+            out["relative_deviation_m"] = r(self.relative_deviation_m or 0.0)
+        return out
 
     @classmethod
     def from_dict(cls, data: object) -> AsBuiltPose:
@@ -99,4 +113,18 @@ class AsBuiltPose:
             raise ValueError(f"an as-built pose's fields must be numbers: {data!r}") from None
         if not all(map(math.isfinite, (x, y, z, yaw, dev, conf))) or dev < 0.0 or not 0.0 <= conf <= 1.0:
             raise ValueError(f"an as-built pose out of range: {data!r}")
-        return cls((x, y, z), yaw, dev, conf)
+        if data.get("relative_to") is None:
+            return cls((x, y, z), yaw, dev, conf)
+        try:
+            ref = data["relative_to"]
+            if isinstance(ref, bool) or not isinstance(ref, int) or ref < 0:
+                raise TypeError(ref)
+            ox, oy, oz = (float(v) for v in data["relative_offset_m"])
+            rdev = float(data["relative_deviation_m"])
+        except KeyError as exc:
+            raise ValueError(f"an as-built pose with relative_to has no {exc.args[0]!r}") from None
+        except (TypeError, ValueError):
+            raise ValueError(f"an as-built pose's relative fields are malformed: {data!r}") from None
+        if not all(map(math.isfinite, (ox, oy, oz, rdev))) or rdev < 0.0:
+            raise ValueError(f"an as-built pose's relative fields out of range: {data!r}")
+        return cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev)
