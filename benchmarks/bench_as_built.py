@@ -13,7 +13,11 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   to the brick's true centre, mean and max, millimetres, and how many of the placed bricks were seen;
 - the same error relative to the wall: a brick's estimate error less the mean estimate error of its neighbours
   (those with an as-built pose): what a wall estimated off as a whole, as it must be on GNSS with no absolute
-  reference, does not show.
+  reference, does not show;
+- the relative estimate's error (``masonry.fsm.relative_look``): the distance from the offset the UAV reported
+  to the brick it saw with the placed one in the same frames (``relative_offset_m`` to ``relative_to``) to the
+  simulator's true offset between the two bricks' top-face centres, mean and max, millimetres, and how many of
+  the bricks seen had such a neighbour.
 
 ``--wander`` prints the ``px4`` model's GNSS wander instead: its standard deviation per axis (what any position
 estimated in the world frame on it carries) and how far it moves on, rms and 95th percentile per axis, in the
@@ -48,6 +52,7 @@ from masonry.mission.simulate import SimulatedMission
 from masonry.sim import Faults
 from masonry.sim.shaping import PX4, Shaper
 from masonry.sim.wind import WindConfig
+from masonry.sim.world import World
 
 YAW_RAD = math.radians(30.0)
 SITE = {"yaw_rad": YAW_RAD, "clearance_m": 1.0, "brick_uavs": 1, "adhesion_uavs": 1}
@@ -71,9 +76,18 @@ class Tally:
     neighbour_m: list[float] | None = None
     estimate_m: list[float] | None = None
     estimate_wall_m: list[float] | None = None
+    relative_m: list[float] | None = None
 
     def __post_init__(self) -> None:
         self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
+        self.relative_m = []
+
+
+def _true_top_m(world: World, bid: int) -> np.ndarray:
+    """Brick ``bid``'s true top-face centre in the simulated world (a placed brick lies flat)."""
+    brick = world.bricks[bid]
+    x, y, z = brick.position_m
+    return np.array([x, y, z + brick.blueprint.size_m[2] / 2.0])
 
 
 def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
@@ -143,6 +157,12 @@ def run_one(
         if pose is not None:
             tally.seen += 1
             tally.estimate_m.append(math.dist(pose.position_m, world.bricks[bid].position_m))
+            if pose.relative_to is not None and pose.relative_offset_m is not None:
+                true_offset = _true_top_m(world, bid) - _true_top_m(world, pose.relative_to)
+                assert tally.relative_m is not None
+                tally.relative_m.append(
+                    float(np.linalg.norm(np.subtract(pose.relative_offset_m, true_offset)))
+                )
     estimate_off = {
         bid: np.subtract(pose.position_m, world.bricks[bid].position_m)
         for bid in offsets
@@ -210,7 +230,8 @@ def main() -> None:
     print(
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
-        f"{'estimate vs wall mean/max mm':>28}  seen/placed"
+        f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
+        f"relative/seen/placed"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -234,8 +255,9 @@ def main() -> None:
                 print(
                     f"{vehicle:<11} {wall:<13} {label:<8} {tally.completed:>4}/{tally.runs:<4}  "
                     f"{_mm(tally.design_m):>18}  {_mm(tally.neighbour_m):>22}  {_mm(tally.estimate_m):>29}  "
-                    f"{_mm(tally.estimate_wall_m):>28}  "
-                    f"{tally.seen}/{tally.placed}  ({time.perf_counter() - start:.0f} s)",
+                    f"{_mm(tally.estimate_wall_m):>28}  {_mm(tally.relative_m or []):>38}  "
+                    f"{len(tally.relative_m or [])}/{tally.seen}/{tally.placed}  "
+                    f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )
 
