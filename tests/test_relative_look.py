@@ -79,6 +79,9 @@ def test_the_report_json_carries_the_relative_fields(biased_run) -> None:
     for p in with_ref:
         assert isinstance(p["relative_to"], int) and len(p["relative_offset_m"]) == 3
         assert p["relative_deviation_m"] < 0.02
+    assert f"as-built relative to a neighbour ({len(with_ref)} bricks): deviation from the design mean" in (
+        report.summary()
+    )
 
 
 WALL = {1: np.array([0.0, 0.0, 0.1]), 2: np.array([0.3, 0.0, 0.1]), 3: np.array([0.15, 0.0, 0.2])}

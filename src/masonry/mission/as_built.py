@@ -62,14 +62,22 @@ def take_result(att: Attempt, r: TaskResult) -> None:
 
 
 def as_built_lines(poses: Mapping[str, AsBuiltPose]) -> list[str]:
-    """The text summary's line: the bricks seen after their release and their deviation from the design."""
+    """The text summary's lines: the bricks seen after their release and their deviation from the design, in the
+    world frame and relative to the neighbour each was seen with."""
     devs = [p.deviation_m for p in poses.values()]
     if not devs:
         return []
-    return [
+    lines = [
         f"as-built ({len(devs)} brick{'' if len(devs) == 1 else 's'} seen): deviation from the design mean "
         f"{sum(devs) / len(devs) * 100:.1f} cm, max {max(devs) * 100:.1f} cm"
     ]
+    rel = [p.relative_deviation_m for p in poses.values() if p.relative_deviation_m is not None]
+    if rel:  # (masonry.fsm.relative_look: measured against a neighbour in the same frames)
+        lines.append(
+            f"as-built relative to a neighbour ({len(rel)} brick{'' if len(rel) == 1 else 's'}): deviation from "
+            f"the design mean {sum(rel) / len(rel) * 100:.1f} cm, max {max(rel) * 100:.1f} cm"
+        )
+    return lines
 
 
 def journaled_as_built(raw: object) -> AsBuiltPose | None:
