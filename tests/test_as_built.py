@@ -183,7 +183,8 @@ def test_a_resumed_mission_keeps_the_poses_of_the_journal(tmp_path: Path) -> Non
     again = simulate(running_bond(2, 3), seed=2, journal_path=journal, resume=True)
     assert again.completed
     for tid, pose in first.as_built.items():
-        assert again.as_built[tid] == pose
+        assert again.as_built[tid] == pose  # (the relative fields with the rest: the journal keeps them)
+    assert any(p.relative_to is not None for p in first.as_built.values())
 
 
 def test_the_log_replays_the_poses_byte_for_byte_and_the_plot_colours_them(tmp_path: Path) -> None:
@@ -194,6 +195,8 @@ def test_the_log_replays_the_poses_byte_for_byte_and_the_plot_colours_them(tmp_p
                                "--plot3d", str(tmp_path / "live.png")])  # fmt: skip
     assert live.exit_code == 0, live.output
     assert set(json.loads(live.stdout)["as_built"]) == {"B0", "B1"}
+    # the second brick was seen with the first: its pose relative to it is logged and replayed too
+    assert any("relative_to" in p for p in json.loads(live.stdout)["as_built"].values())
     again = runner.invoke(
         app, ["replay", str(log), "--format", "json", "--plot3d", str(tmp_path / "again.png")]
     )
