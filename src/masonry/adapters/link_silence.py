@@ -21,6 +21,7 @@ silences, both counted here by pure functions from what the receiver thread reco
 from __future__ import annotations
 
 import math
+from typing import Protocol
 
 #: A receiver that has read nothing for this long (wall seconds) is hung, or the link is gone: the link watchdog
 #: then counts wall time (the guard against a hung process; see :func:`heard_until`).
@@ -66,4 +67,42 @@ def beatless_s(
     return min(local_s, boot_s - heartbeat_boot_s)
 
 
-__all__ = ["RECEIVER_HUNG_S", "beatless_s", "heard_until"]
+class Heard(Protocol):
+    """What the receiver recorded (local seconds), as the watchdog's log line reads it."""
+
+    last_message_s: float
+    last_heartbeat_s: float
+    listened_s: float
+    heartbeat_boot_s: float | None
+
+
+def watchdog_text(
+    now_s: float,
+    heard: Heard,
+    beatless: float,
+    boot_s: float | None,
+    down_at: tuple[float, float | None] | None,
+) -> str:
+    """The watchdog's log line at a transition: down (``down_at`` None) or back, with what it read on both clocks.
+
+    Back, it says how far each clock moved since the last message before the link went down (``down_at``: when,
+    on the local clock, and the autopilot's clock then): the autopilot's about nothing for a SITL the machine
+    left unrun (it stood still), as far as the local one for a real loss.
+    """
+    clock = "-" if boot_s is None else f"{boot_s:.2f}"
+    at_beat = "-" if heard.heartbeat_boot_s is None else f"{heard.heartbeat_boot_s:.2f}"
+    text = (
+        f"link {'down' if down_at is None else 'back'} (now {now_s:.2f} s; last message "
+        f"{now_s - heard.last_message_s:.2f} s ago, last HEARTBEAT {now_s - heard.last_heartbeat_s:.2f} s ago "
+        f"({beatless:.2f} s counted), receiver last listened {now_s - heard.listened_s:.2f} s ago; autopilot clock "
+        f"{clock} s, at the last HEARTBEAT {at_beat} s)"
+    )
+    if down_at is not None and down_at[1] is not None and boot_s is not None:
+        text += (
+            f"; since the last message before it went down {now_s - down_at[0]:.2f} s of this computer's clock, "
+            f"{boot_s - down_at[1]:.2f} s of the autopilot's"
+        )
+    return text
+
+
+__all__ = ["RECEIVER_HUNG_S", "Heard", "beatless_s", "heard_until", "watchdog_text"]

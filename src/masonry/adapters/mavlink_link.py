@@ -25,7 +25,7 @@ from typing import Any
 
 from typing_extensions import Self
 
-from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until
+from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until, watchdog_text
 from masonry.adapters.link_values import LinkClock, LinkStatus, load_signing_key
 from masonry.adapters.mavlink_protocol import (
     HEARTBEAT_MISSING_S,
@@ -163,7 +163,9 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
-        self._link_was_ok = True  # the watchdog's last verdict (its transitions are logged)
+        self._down_at: tuple[float, float | None] | None = (
+            None  # the watchdog found the link down: when, clocks
+        )
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -519,17 +521,14 @@ class MavlinkLink:
             and silent_s <= self.heartbeat_timeout_s
             and beatless <= self._heartbeat_missing_s
         )
-        if ok != self._link_was_ok and self._conn is not None:  # its transitions, with what it read, logged
-            self._link_was_ok = ok
+        if (
+            ok == (self._down_at is not None) and self._conn is not None
+        ):  # its transitions, what it read, logged
             st, boot = self._state, self.clock.last_boot_s
             _log.warning(
-                "MAVLink watchdog on %s: link %s (now %.2f s; last message %.2f s ago, last HEARTBEAT %.2f s "
-                "ago (%.2f s counted), receiver last listened %.2f s ago; autopilot clock %s s, at the last "
-                "HEARTBEAT %s s)",
-                self.url, "back" if ok else "down", now, now - st.last_message_s, now - st.last_heartbeat_s,
-                beatless, now - st.listened_s, "-" if boot is None else f"{boot:.2f}",
-                "-" if st.heartbeat_boot_s is None else f"{st.heartbeat_boot_s:.2f}",
-            )  # fmt: skip
+                "MAVLink watchdog on %s: %s", self.url, watchdog_text(now, st, beatless, boot, self._down_at)
+            )
+            self._down_at = None if ok else (st.last_message_s, boot)
         return ok
 
     def _check_link(self, what: str) -> None:
