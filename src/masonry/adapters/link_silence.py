@@ -13,9 +13,12 @@ silences, both counted here by pure functions from what the receiver thread reco
   machine can leave it runnable but unrun for a second or more. Its clock, its heartbeats and its simulated
   vehicle then stop together: the wall clock counts a silence the autopilot never had. Seen under load at x5
   (docs/performance/autopilots.md): 2.7 s of wall without a message while a take-off was commanded, in which
-  the autopilot's clock moved 0.13 s; the first message after it found the last HEARTBEAT 2.88 s (wall) old and
-  the UAV landed with "flight controller link lost". On real hardware the two clocks run together and nothing
-  changes; a stream that goes on without heartbeats advances both and is lost after 2.5 s of the slower.
+  the autopilot's clock moved 0.13 s; the first message after it found the last HEARTBEAT 2.88 s (wall) old:
+  link down, which in flight lands the UAV ("flight controller link lost"). On real hardware the two clocks run
+  together and nothing changes; a stream that goes on without heartbeats advances both and is lost after 2.5 s
+  of the slower. A total silence has no clock but the local one: a SITL left unrun for longer than
+  ``heartbeat_timeout_s`` while the receiver listens is a lost link (:func:`watchdog_text` says afterwards how
+  far the autopilot's clock moved meanwhile).
 """
 
 from __future__ import annotations
