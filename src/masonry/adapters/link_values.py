@@ -90,6 +90,12 @@ class LinkClock:
             return self._returned
 
     @property
+    def last_boot_s(self) -> float | None:
+        """The autopilot's clock in the latest time-stamped message (s since its boot); None before one."""
+        with self._lock:
+            return None if self._last is None else self._last[0]
+
+    @property
     def anchored(self) -> bool:
         """Whether a time-stamped message from the autopilot has been seen."""
         return self._last is not None

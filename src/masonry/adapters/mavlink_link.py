@@ -25,6 +25,7 @@ from typing import Any
 
 from typing_extensions import Self
 
+from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until, watchdog_text
 from masonry.adapters.link_values import LinkClock, LinkStatus, load_signing_key
 from masonry.adapters.mavlink_protocol import (
     HEARTBEAT_MISSING_S,
@@ -56,12 +57,9 @@ from masonry.motion.velocity_loop import VelocityLoop
 from masonry.ports import Vec3
 
 # Re-exported: callers import these from here (the clock, the counters and the key reader live in link_values).
-__all__ = ["LinkClock", "LinkStatus", "MavlinkLink", "load_signing_key", "mavutil_module"]
+__all__ = ["RECEIVER_HUNG_S", "LinkClock", "LinkStatus", "MavlinkLink", "load_signing_key", "mavutil_module"]
 
 _log = logging.getLogger(__name__)
-#: A receiver that has read nothing for this long (wall seconds) is hung, or the link is gone: the link watchdog
-#: then counts wall time (the guard against a hung process; see :meth:`MavlinkLink._heard_until`).
-RECEIVER_HUNG_S = 10.0
 
 
 def mavutil_module() -> Any:
@@ -80,6 +78,7 @@ class _State:
 
     last_message_s: float = -math.inf
     last_heartbeat_s: float = -math.inf
+    heartbeat_boot_s: float | None = None  # the autopilot's clock at the last HEARTBEAT (link_silence)
     listened_s: float = -math.inf  # when the receiver last began a read that found nothing (the link quiet)
     armed: bool = False
     custom_mode: int = -1
@@ -164,7 +163,9 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
-        self._link_was_ok = True  # the watchdog's last verdict (its transitions are logged)
+        self._down_at: tuple[float, float | None] | None = (
+            None  # the watchdog found the link down: when, clocks
+        )
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -400,6 +401,7 @@ class MavlinkLink:
                 if msg.get_srcComponent() != self.target_component:
                     return
                 st.last_heartbeat_s = now
+                st.heartbeat_boot_s = self.clock.last_boot_s
                 st.armed = bool(msg.base_mode & MAV_MODE_FLAG_SAFETY_ARMED)
                 st.base_mode = msg.base_mode
                 st.custom_mode = msg.custom_mode
@@ -500,45 +502,43 @@ class MavlinkLink:
             )
 
     def _heard_until(self, now: float) -> float:
-        """Up to when the receiver has read all that arrived: ``now``, or when it last listened if that is
-        earlier. This process starved by a loaded machine (its receiver not run) leaves messages unread in the
-        socket, which is not the autopilot's silence; a receiver that has not read for
-        :data:`RECEIVER_HUNG_S` is hung, and then the wall clock counts."""
-        st = self._state
-        if now - st.last_message_s > RECEIVER_HUNG_S:
-            return now
-        return min(now, max(st.listened_s, st.last_message_s))
+        """Up to when the receiver has read all that arrived (:func:`~masonry.adapters.link_silence.heard_until`)."""
+        return heard_until(now, self._state.last_message_s, self._state.listened_s)
+
+    def _silences(self, now: float) -> tuple[float, float]:
+        """Seconds without a message (local) and without a HEARTBEAT (the slower clock), up to what was read."""
+        st, heard = self._state, self._heard_until(now)
+        return heard - st.last_message_s, beatless_s(
+            heard, st.last_heartbeat_s, self.clock.last_boot_s, st.heartbeat_boot_s
+        )
 
     def _link_ok(self, now: float) -> bool:
-        """The watchdog: a message within ``heartbeat_timeout_s`` and a HEARTBEAT within 2.5 s of what the
-        receiver has read (:meth:`_heard_until`)."""
-        heard = self._heard_until(now)
-        st = self._state
+        """The watchdog: a message within ``heartbeat_timeout_s`` and a HEARTBEAT within 2.5 s (the slower of the
+        local and the autopilot's clocks) of what the receiver has read (masonry.adapters.link_silence)."""
+        silent_s, beatless = self._silences(now)
         ok = (
             self._conn is not None
-            and heard - st.last_message_s <= self.heartbeat_timeout_s
-            and heard - st.last_heartbeat_s <= self._heartbeat_missing_s
+            and silent_s <= self.heartbeat_timeout_s
+            and beatless <= self._heartbeat_missing_s
         )
-        if ok != self._link_was_ok and self._conn is not None:  # its transitions, with what it read, logged
-            self._link_was_ok = ok
+        if (
+            ok == (self._down_at is not None) and self._conn is not None
+        ):  # its transitions, what it read, logged
+            st, boot = self._state, self.clock.last_boot_s
             _log.warning(
-                "MAVLink watchdog on %s: link %s (now %.2f s; last message %.2f s ago, last HEARTBEAT %.2f s "
-                "ago, receiver last listened %.2f s ago)",
-                self.url, "back" if ok else "down", now, now - st.last_message_s, now - st.last_heartbeat_s,
-                now - st.listened_s,
-            )  # fmt: skip
+                "MAVLink watchdog on %s: %s", self.url, watchdog_text(now, st, beatless, boot, self._down_at)
+            )
+            self._down_at = None if ok else (st.last_message_s, boot)
         return ok
 
     def _check_link(self, what: str) -> None:
         if self._conn is None:
             raise LinkLost(f"{what}: not connected to {self.url} (call connect() first)")
-        heard = self._heard_until(self._monotonic())
-        silent_s = heard - self._state.last_message_s
+        silent_s, beatless = self._silences(self._monotonic())
         if silent_s > self.heartbeat_timeout_s:
             raise LinkLost(f"{what}: no message from the autopilot on {self.url} for {silent_s:.1f} s")
-        beatless_s = heard - self._state.last_heartbeat_s
-        if beatless_s > self._heartbeat_missing_s:
-            raise LinkLost(f"{what}: no HEARTBEAT from the autopilot on {self.url} for {beatless_s:.1f} s")
+        if beatless > self._heartbeat_missing_s:
+            raise LinkLost(f"{what}: no HEARTBEAT from the autopilot on {self.url} for {beatless:.1f} s")
 
     def _latest_warning(self, since: float) -> str | None:
         with self._lock:
