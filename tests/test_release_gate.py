@@ -12,7 +12,7 @@ from fsm_rig import BRICK_ID, Rig, brick_task
 from masonry.fakes import FakeBrick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.release_gate import MAX_RELOOKS
-from masonry.fsm.wall_align import supports_of, touching, wall_offset_m
+from masonry.fsm.wall_align import supports_of, wall_offset_m
 
 DROP = (0.0, 0.5, 0.25)  # the brick's centre: a second-course brick
 SUPPORT = 3
@@ -97,12 +97,12 @@ def test_a_first_course_brick_has_no_support_and_is_not_held() -> None:
     assert not rig.uav._gate.guarded and watch.max_relooks == 0
 
 
-def test_the_bricks_it_touches_outweigh_the_rest_of_the_wall() -> None:
+def test_the_bricks_it_stands_on_outweigh_the_rest_of_the_wall() -> None:
     """A tower's third brick sees its support and the tower's first brick: only the support counts."""
     wall = {0: (0.0, 0.0, 0.1), 1: (0.0, 0.0, 0.2), 2: (0.0, 0.0, 0.3), 5: (0.6, 0.0, 0.3)}
     size = (0.30, 0.15, 0.10)
-    near = touching(wall, 2, size)
-    assert near == {1}  # (brick 5 is 60 cm away: not beside it)
+    near = supports_of(wall, 2, size)
+    assert near == {1}
     seen = {0: np.array([0.0, 0.0, 0.1]), 1: np.array([0.12, 0.0, 0.2])}  # the support built 12 cm off
     assert np.allclose(wall_offset_m(seen, wall, 2, near), [0.12, 0.0, 0.0])
     assert np.allclose(wall_offset_m(seen, wall, 2), [0.06, 0.0, 0.0])  # (the mean of all, as before)
