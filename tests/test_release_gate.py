@@ -12,6 +12,7 @@ from fsm_rig import BRICK_ID, Rig, brick_task
 from masonry.fakes import FakeBrick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.release_gate import MAX_RELOOKS
+from masonry.fsm.tuning import uav_settings
 from masonry.fsm.wall_align import supports_of, wall_offset_m
 
 DROP = (0.0, 0.5, 0.25)  # the brick's centre: a second-course brick
@@ -108,3 +109,9 @@ def test_the_bricks_it_stands_on_outweigh_the_rest_of_the_wall() -> None:
     assert np.allclose(wall_offset_m(seen, wall, 2), [0.06, 0.0, 0.0])  # (the mean of all, as before)
     assert np.allclose(wall_offset_m({0: seen[0]}, wall, 2, near), [0.0, 0.0, 0.0])  # none near: the rest
     assert math.isclose(float(np.linalg.norm(wall_offset_m(seen, wall, 2, near))), 0.12)
+
+
+def test_it_is_on_by_default_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_fresh_s == 0.45  # (it acts only with align_on_wall)
+    assert uav_settings("px4", {"release_fresh_s": 0})["release_fresh_s"] == 0
+    assert "release_fresh_s" not in uav_settings("arducopter")
