@@ -112,6 +112,8 @@ def test_the_bricks_it_stands_on_outweigh_the_rest_of_the_wall() -> None:
 
 
 def test_it_is_on_by_default_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:
-    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_fresh_s == 0.45  # (it acts only with align_on_wall)
+    assert (
+        UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_fresh_s == 0.45
+    )  # (it acts only with align_on_wall)
     assert uav_settings("px4", {"release_fresh_s": 0})["release_fresh_s"] == 0
     assert "release_fresh_s" not in uav_settings("arducopter")
