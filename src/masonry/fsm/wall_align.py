@@ -9,11 +9,12 @@ from the same telemetry the position loop closes on, sits at ``true_k + e(t)``. 
 these offsets over the bricks in view, added to the drop-off, makes the effector's target move with ``e(t)`` (the
 wander cancels, as in :mod:`masonry.fsm.camera_align`) and with the bricks around it (the new brick keeps its
 designed offsets to them). A brick farther than ``_REFERENCE_M`` from its design (one on the pallet, one on
-another UAV's magnet) is no reference; with none in view the last offset stands. Where a brick the new one stands on
-(:func:`supports_of`) is in view, only those count: a tower's third brick sees its support and the tower's first
+another UAV's magnet) is no reference; with none in view the last offset stands. Where the one brick the new one stands on
+(:func:`supports_of`) is in view, only it counts: a tower's third brick sees its support and the tower's first
 brick, and a support built 12 cm off the one under it would otherwise pull the new brick half way back to the
 design (the px4 towers, seed 4: 34.7 mm off its support; 3.5 mm with the supports only). Bricks beside it in
-its course are not preferred so: measured, the rotated bond's worst brick grew from 21.9 to 34.2 mm (seed 3).
+its course are not preferred so (measured, the rotated bond's worst brick grew from 21.9 to 34.2 mm, seed 3), nor
+one of two supports (a pyramid's brick: 11.6 -> 47.7 mm).
 
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
 same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
@@ -115,7 +116,10 @@ class WallAlign:
             self._wall = dict(uav.config.wall)
         wall, own = self._wall, uav.brick_task.brick
         if self._near_of != own:
-            self._near, self._near_of = supports_of(wall, own, uav.brick_task.size_m), own
+            below = supports_of(wall, own, uav.brick_task.size_m)
+            # one support (a tower's, a course's end): keep to it; on two, the mean of the wall seen, as before
+            # (measured: keeping to one of two put a px4 pyramid's brick 47.7 mm off its neighbours, 11.6 before)
+            self._near, self._near_of = (below if len(below) == 1 else frozenset()), own
         tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
         seen = {t.marker_id // 2 for t in tags} - {own}
         estimates = {}
