@@ -106,9 +106,7 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
             assert u.hold is not None
             hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
             for k in range(c.max_layers):
-                # (from a hold point, home too keeps the work slack: a UAV that waited near the wall ends a short
-                # leg over its pad, overshooting it by up to 0.12 m on the arducopter model)
-                extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to)
+                extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to, home=home)
                 if c.fits(uav, extra):
                     u.volumes = u.volumes + extra
                     c.touch()
