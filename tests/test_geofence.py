@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 
 import pytest
-from hypothesis import given, seed, settings
+from hypothesis import example, given, seed, settings
 from hypothesis import strategies as st
 
 from masonry.blueprint import format_blueprint, load_blueprint, parse_blueprint
@@ -137,6 +137,22 @@ def _polygons(draw: st.DrawFn) -> Site:
 @seed(18)
 @settings(max_examples=150, deadline=None)
 @given(site=_polygons(), u=st.floats(-1.5, 1.5), v=st.floats(-1.5, 1.5), z=st.floats(0.0, 80.0))
+@example(  # a vertex a subnormal above the ray: recomputing its y as start + direction put it on the other side
+    site=Site(
+        (
+            (23.0, 5e-324),
+            (21.0, 2.598076211353316),
+            (17.0, 2.598076211353316),
+            (15.0, 3.6739403974420594e-16),
+            (17.0, -2.598076211353315),
+            (21.0, -2.598076211353316),
+        ),
+        3.0,
+    ),
+    u=0.0,
+    v=0.0,
+    z=0.0,
+)
 def test_clamp_keeps_points_inside_by_the_margin_and_leaves_inner_ones_alone(site, u, v, z) -> None:
     assert simple_polygon_problem(site.boundary_m) is None
     xs = [p[0] for p in site.boundary_m]

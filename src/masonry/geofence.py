@@ -51,8 +51,8 @@ class Site:
         """How far ``(x, y)`` is inside the boundary: its distance to the nearest edge, negative outside."""
         best = math.inf  # the squared distance to the nearest edge
         inside = False
-        for ax, ay, ex, ey, inv in self._edges():
-            by = ay + ey
+        for ax, ay, by, ex, ey, inv in self._edges():
+            # the crossing test uses the stored end point: ``ay + ey`` can round a vertex off the ray's side
             if (ay > y) != (by > y) and x < ax + (y - ay) * ex / ey:
                 inside = not inside
             dx, dy = x - ax, y - ay
@@ -68,8 +68,8 @@ class Site:
         d = math.sqrt(best)
         return d if inside else -d
 
-    def _edges(self) -> tuple[tuple[float, float, float, float, float], ...]:
-        """Each edge's start, direction and inverse squared length (a cache: the control loop asks every tick)."""
+    def _edges(self) -> tuple[tuple[float, float, float, float, float, float], ...]:
+        """Each edge's start, end y, direction and inverse squared length (a cache: the control loop asks every tick)."""
         edges = self.__dict__.get("_edge_cache")
         if edges is None:
             pts = self.boundary_m
@@ -79,7 +79,7 @@ class Site:
                 (ax, ay), (bx, by) = pts[i], pts[(i + 1) % n]
                 ex, ey = bx - ax, by - ay
                 ll = ex * ex + ey * ey
-                out.append((ax, ay, ex, ey, 0.0 if ll == 0.0 else 1.0 / ll))
+                out.append((ax, ay, by, ex, ey, 0.0 if ll == 0.0 else 1.0 / ll))
             edges = tuple(out)
             object.__setattr__(self, "_edge_cache", edges)  # a cache, not state (the value stays frozen)
         return edges
