@@ -16,8 +16,10 @@ Printed per wall, as Markdown tables (docs/performance/fleet.md, "After: `site` 
 the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/performance/history.md):
 
 1. fleet, makespan, speed-up over 1+1, the schedule's makespan, its speed-up over 1+1, simulated / schedule,
-   ``lower_bound_s``, ratio, ``min_separation_m``, the mean brick and adhesion attempt, the UAVs' mean
-   ``idle_s`` and ``waiting_s``, simulated and wall seconds;
+   ``lower_bound_s``, ratio, ``min_separation_m``, the mean brick and adhesion attempt, the share of adhesion
+   segments sprayed chained (done attempts whose descent took less than halfway from ``chain_descent_s`` to
+   ``spray_descent_s``: the UAV came from the end of the segment before, not from the transit altitude), the
+   UAVs' mean ``idle_s`` and ``waiting_s``, simulated and wall seconds;
 2. the phase totals: seconds per phase (docs/mission.md, "Where the time goes") summed over every attempt of
    the mission (failed ones too), and the share of waiting + holding.
 
@@ -50,6 +52,7 @@ from masonry.planner import plan as make_plan
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.schedule import solve_schedule
 from masonry.ports import PHASES
+from masonry.timing import DEFAULT_TIMING
 
 BLUEPRINTS = Path(__file__).resolve().parent.parent / "blueprints"
 
@@ -137,6 +140,17 @@ def _mean_attempt_s(report: MissionReport, kind: str) -> float:
     return statistics.fmean(spans) if spans else float("nan")
 
 
+def _chained(report: MissionReport) -> str:
+    """Adhesion segments sprayed chained, of those done: a descent shorter than halfway from a chained one's to
+    a full one's (the UAV hovered at the spraying height already)."""
+    limit_s = (DEFAULT_TIMING.chain_descent_s + DEFAULT_TIMING.spray_descent_s) / 2.0
+    done = [
+        a for a in report.attempts if a.kind == "adhesion" and a.status == "done" and a.phases is not None
+    ]
+    chained = sum(1 for a in done if a.phases is not None and a.phases.descending < limit_s)
+    return f"{chained}/{len(done)} ({chained / len(done):.0%})" if done else "-"
+
+
 def _sep(v: float | None) -> str:
     return "-" if v is None else f"{v:.2f}"
 
@@ -155,8 +169,9 @@ def scaling_table(runs: list[Run]) -> list[str]:
     lines = [
         "| fleet (brick + adhesion) | makespan | speed-up over 1 + 1 | schedule (CP-SAT) | its speed-up over 1 + 1 "
         "| simulated / schedule | lower_bound_s | ratio | min_separation_m "
-        "| mean brick attempt | mean adhesion attempt | mean idle_s | mean waiting_s | done | simulated | wall |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| mean brick attempt | mean adhesion attempt | chained segments | mean idle_s | mean waiting_s | done "
+        "| simulated | wall |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in runs:
         rep = r.report
@@ -169,7 +184,7 @@ def scaling_table(runs: list[Run]) -> list[str]:
             f"| {r.fleet} | {rep.makespan_s:,.0f} s | {speedup:.2f} | {_schedule_cells(r, base_schedule_s)} "
             f"| {rep.lower_bound_s:,.0f} s | {ratio:.2f} "
             f"| {_sep(rep.min_separation_m)} | {_mean_attempt_s(rep, 'brick'):.1f} s "
-            f"| {_mean_attempt_s(rep, 'adhesion'):.1f} s | {idle:,.0f} s | {waiting:,.0f} s "
+            f"| {_mean_attempt_s(rep, 'adhesion'):.1f} s | {_chained(rep)} | {idle:,.0f} s | {waiting:,.0f} s "
             f"| {done}/{len(rep.tasks)}{'' if rep.completed else ' (NOT completed)'} "
             f"| {rep.sim_time_s:,.0f} s | {r.wall_s:.0f} s |"
         )

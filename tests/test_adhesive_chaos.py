@@ -8,18 +8,59 @@ import dataclasses
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
+import pytest
+
 from masonry.adhesive import Adhesive
 from masonry.blueprint import load_blueprint
+from masonry.fsm.config import UavConfig
 from masonry.mission.chaos import ChaosRun, check_chaos, fly_chaos
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.glue import EXPIRED_REASON
 from masonry.planner.tasks import AdhesionTask
 from masonry.sim import Faults
+from masonry.sim.world import SimUav, World
 
 SMALL = Path(__file__).resolve().parents[1] / "blueprints" / "running_bond_small.yaml"
 
 
-def test_faults_and_a_stop_leave_no_violation_and_every_respray_explained(tmp_path: Path) -> None:
+class _FirstGraspsFail:
+    """A UAV's random stream whose first ``n`` grasp draws fail (the magnet touches, the brick is not held), then
+    its own: the grasp fault is certainly drawn, whatever order dispatch gives the tasks."""
+
+    def __init__(self, rng: np.random.Generator, n: int) -> None:
+        self._rng, self.left = rng, n
+
+    def random(self) -> float:
+        if self.left > 0:
+            self.left -= 1
+            return 0.0  # (< grasp_failure: this grasp fails)
+        return float(self._rng.random())
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._rng, name)
+
+
+def test_faults_and_a_stop_leave_no_violation_and_every_respray_explained(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # brick-1's first brick fails all its grasps (one failed attempt for sure), every later grasp fails at p = 0.2
+    grip = World._grip
+    forced = {"left": UavConfig.max_grasp_attempts}
+
+    def first_grasps_fail(self: World, uav: SimUav) -> None:
+        if uav.name != "brick-1" or forced["left"] == 0:
+            grip(self, uav)
+            return
+        real = uav.rng
+        draws = _FirstGraspsFail(real, forced["left"])
+        uav.rng = draws  # type: ignore[assignment]
+        try:
+            grip(self, uav)
+        finally:
+            uav.rng, forced["left"] = real, draws.left
+
+    monkeypatch.setattr(World, "_grip", first_grasps_fail)
     bp = dataclasses.replace(load_blueprint(SMALL), adhesive=Adhesive(open_time_s=300.0))
     bp = with_fleet(bp, fleet_for(bp, 2, 1))
     faults = Faults.parse(["grasp=0.2", "uav-loss=brick-2@100"])

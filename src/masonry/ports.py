@@ -276,6 +276,11 @@ class ClearanceLink(Protocol):
         """A ground crew swaps the battery of a landed UAV before its next task (a low battery: land, not retire)."""
         ...
 
+    def return_brick(self, brick_id: int) -> bool:
+        """The ground crew takes brick ``brick_id`` off the landed UAV's magnet and lays it back at its pickup;
+        True once it is there, False without a ground crew (the brick stays on the UAV's pad for a person)."""
+        ...
+
 
 def _no_tick(dt_s: float) -> None:
     """A time base that moves on by itself (nothing to advance)."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from masonry.planner.tasks import Task
@@ -67,6 +67,7 @@ class ScriptedClearanceLink(QueueMissionLink):
         grant_after_s: float = 0.0,
         hold_m: Vec3 | None = None,
         swaps_batteries: bool = False,
+        return_brick: Callable[[int], bool] | None = None,
     ) -> None:
         super().__init__(tasks)
         self.clock = clock
@@ -75,12 +76,20 @@ class ScriptedClearanceLink(QueueMissionLink):
         self.grant_after_s = grant_after_s
         self.hold_m = hold_m
         self._swaps_batteries = swaps_batteries
+        self._return_brick = return_brick  # the ground crew's hands (None: no ground crew takes bricks back)
+        self.returned: list[int] = []  # bricks the ground crew took back to their pickup
         self.asked: dict[Vec3, float] = {}
         self.arrived: list[Vec3] = []
 
     @property
     def swaps_batteries(self) -> bool:
         return self._swaps_batteries
+
+    def return_brick(self, brick_id: int) -> bool:
+        if self._return_brick is None or not self._return_brick(brick_id):
+            return False
+        self.returned.append(brick_id)
+        return True
 
     def request_clearance(
         self, site_m: Vec3, top_m: float | None = None, to_m: Vec3 | None = None

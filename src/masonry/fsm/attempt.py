@@ -73,6 +73,7 @@ class BrickAttempt(TaskAttempt):
     place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
     release_error_m: float | None = None  # the effector's distance to its target at the release
     putback_reason: str = ""  # why the task was given up while the brick is being put back
+    kept_on_board: str = ""  # flown home with the brick on the magnet: the failure reported once landed
 
 
 def _no_bead() -> BeadPass:

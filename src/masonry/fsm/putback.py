@@ -106,8 +106,20 @@ class PutBack(UavModel):
         self.gripper.set_joint_locked(True)  # keep a carried brick; it is put down after landing
 
     def _on_landed(self) -> None:
+        kept = self.attempt.kept_on_board if isinstance(self.task, BrickTask) else ""
+        if kept:
+            # landed with the brick (``stow``): the ground crew takes it off the magnet and back to its pickup
+            # before the task is reported failed, so that no UAV looks for it at its pickup before it is there
+            self.attempt.kept_on_board = ""
+            brick = self.brick_task.brick
+            if self.clearance is not None and self.clearance.return_brick(brick):
+                kept += f"; ground crew returned brick {brick} to its pickup"
+            else:
+                kept += f"; no ground crew: brick {brick} waits on {self.config.name}'s pad for a person"
         self.gripper.set_magnet(False)
         self.gripper.set_joint_locked(True)
+        if kept:
+            self.fail_task(reason=kept)
 
     # -- putting a brick back (a task given up with the brick on the magnet) ------------------------------
     def may_put_back(self, *args: object, **kwargs: object) -> bool:
@@ -119,6 +131,12 @@ class PutBack(UavModel):
             return self.gripper.is_attached()
         except HardwareError:
             return False  # the general abort: failsafe, then home (or the emergency)
+
+    def _may_take_task(self, tel: Telemetry) -> bool:
+        """Not on the way home with a brick kept on board: its task is still in hand until it has landed."""
+        return not (
+            isinstance(self.task, BrickTask) and self.attempt.kept_on_board
+        ) and super()._may_take_task(tel)
 
     def _putback_affordable(self) -> bool:
         """The UAV can put the brick back and fly home before its battery is critical, with
@@ -165,6 +183,11 @@ class PutBack(UavModel):
         self.stow(
             reason=f"{self.attempt.putback_reason}; {what}, brick {self.brick_task.brick} kept on board"
         )
+
+    def keep_brick(self, *args: object, reason: str = "unrecoverable error", **kwargs: object) -> None:
+        """Home with the brick on the magnet: the task stays in hand (no UAV is sent for the brick) until it
+        has landed and handed the brick over (:meth:`_on_landed`), then it is reported failed with ``reason``."""
+        self.attempt.kept_on_board = reason
 
     def _putback_battery_ok(self, tel: Telemetry) -> bool:
         if tel.battery_fraction >= self.config.battery_critical_fraction:

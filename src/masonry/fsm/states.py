@@ -141,7 +141,7 @@ BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "reached", "source": "putback_descend", "dest": "putback_release"},
     {"trigger": "released", "source": "putback_release", "dest": "putback_ascend"},
     {"trigger": "finish", "source": "putback_ascend", "dest": "home", "before": "fail_task"},
-    {"trigger": "stow", "source": "putback", "dest": "home", "before": "fail_task"},
+    {"trigger": "stow", "source": "putback", "dest": "home", "before": "keep_brick"},
     {
         "trigger": "lost",
         "source": [*BRICK_TASK_STATES, "putback", *_AIRBORNE_COMMON],

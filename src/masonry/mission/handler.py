@@ -87,6 +87,8 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         heartbeat_period_s: how often the handler sends its heartbeat.
         heartbeat_timeout_s: mission control silent for longer counts as lost.
         battery, swap_battery, reserve_fraction: the battery reserve (see the module docstring).
+        return_brick: the ground crew's hands: takes brick N off the landed UAV's magnet and lays it back at its
+            pickup, True once done (a UAV that flew home with its brick; docs/state-machines.md).
         report_battery: the battery (0..1) the heartbeats report, without a reserve (a remote UAV's autopilot);
             default ``battery``.
         after_result: called right after a result is sent; the in-process simulation steps mission control
@@ -109,6 +111,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         heartbeat_timeout_s: float = 5.0,
         battery: Callable[[], float] | None = None,
         swap_battery: Callable[[], bool] | None = None,
+        return_brick: Callable[[int], bool] | None = None,
         report_battery: Callable[[], float] | None = None,
         wind: Callable[[], float | None] | None = None,
         max_wind_mps: float | None = None,
@@ -127,6 +130,8 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         self.refused: list[str] = []
         self._battery = battery
         self._swap_battery = swap_battery
+        self._return_brick = return_brick
+        self.bricks_returned: list[int] = []  # bricks the ground crew took off this UAV back to their pickup
         #: what the heartbeats say of the battery (the reserve's, or ``report_battery``'s)
         self._report_battery = report_battery if report_battery is not None else battery
         #: what the heartbeats say of the wind (the autopilot's reading) and of this UAV's limit (uav.yaml)
@@ -188,6 +193,18 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         instead of taking the UAV out of service.
         """
         return self._battery is not None and self._swap_battery is not None
+
+    def return_brick(self, brick_id: int) -> bool:
+        """The ground crew takes brick ``brick_id`` off the landed UAV and back to its pickup (True once done).
+
+        Only a ground crew that swaps batteries does this (``swaps_batteries``); without one, False: the brick
+        stays on the UAV's pad for a person.
+        """
+        if not self.swaps_batteries or self._return_brick is None or not self._return_brick(brick_id):
+            return False
+        self.bricks_returned.append(brick_id)
+        log.info("%s: ground crew returned brick %d to its pickup", self.name, brick_id)
+        return True
 
     @property
     def out_of_service(self) -> bool:

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
     from masonry.mission.handler import UavHandler
     from masonry.ports import Clock, UavPorts
-    from masonry.sim import SimVehicle
+    from masonry.sim import SimUav, SimVehicle
 
 __all__ = [
     "BATTERY_SWAP_S",
@@ -66,12 +66,26 @@ def battery_of(vehicle: SimVehicle) -> Callable[[], float]:
 
 
 class GroundCrew:
-    """Swaps a landed, disarmed UAV's battery, taking ``BATTERY_SWAP_S``; True once the fresh pack is in."""
+    """Swaps a landed, disarmed UAV's battery, taking ``BATTERY_SWAP_S``; True once the fresh pack is in.
 
-    def __init__(self, vehicle: SimVehicle, clock: Clock) -> None:
+    Given the simulated ``uav``, it also takes a brick off a landed UAV's magnet and lays it back where it was
+    picked up (:meth:`return_brick`; docs/state-machines.md, "Putting a brick back").
+    """
+
+    def __init__(self, vehicle: SimVehicle, clock: Clock, uav: SimUav | None = None) -> None:
         self.vehicle = vehicle
         self.clock = clock
+        self.uav = uav
         self._since_s: float | None = None
+
+    def return_brick(self, brick_id: int) -> bool:
+        """Take brick ``brick_id`` off the landed UAV's magnet and back to its pickup; True once it is there."""
+        uav = self.uav
+        if uav is None or uav.carried_brick != brick_id or not self.vehicle.on_ground:
+            return False
+        uav.world.field.return_to_pickup(brick_id)
+        uav.carried_brick = None
+        return True
 
     def __call__(self) -> bool:
         v = self.vehicle

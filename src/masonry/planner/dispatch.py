@@ -22,6 +22,7 @@ from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
+from masonry.planner.dispatch_chaining import NEAR_END_M, segment_links
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
 from masonry.planner.dispatch_queries import DispatchQueries
 from masonry.planner.dispatch_ranking import Ranking
@@ -152,7 +153,12 @@ class Dispatcher(DispatchQueries):
 
         # Available tasks per role in the policy's order, and (``site`` reservation) the pending tasks whose
         # prerequisites are done, blocked by a conflict or not.
-        self._ranking = Ranking(self.policy, self._rank, self._start_m, self._leg_m)
+        self._successors, predecessors = segment_links(tasks)
+        self._ranking = Ranking(
+            self.policy, self._rank, self._start_m, self._leg_m, self._successors, predecessors
+        )
+        #: per UAV, the adhesion segment it has just sprayed (until its next task): chaining's "after"
+        self._sprayed: dict[str, int] = {}
         self._available = self._ranking.available
         self._ready: dict[str, dict[int, None]] = {r: {} for r in ROLES}
         self._events = 0
@@ -174,8 +180,16 @@ class Dispatcher(DispatchQueries):
 
     # ------------------------------------------------------------------ selection per policy
 
+    def _after(self, uav: str) -> int | None:
+        """The adhesion segment ``uav`` has just sprayed, if it is still (horizontally) near its end."""
+        i = self._sprayed.get(uav)
+        if i is None:
+            return None
+        p, end = self._position[uav], self._end_m[i]
+        return i if math.hypot(p[0] - end[0], p[1] - end[1]) <= NEAR_END_M else None
+
     def _select(self, role: str, uav: str) -> int | None:
-        return self._ranking.pick(role, self._position[uav])
+        return self._ranking.pick(role, self._position[uav], self._after(uav))
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
@@ -188,7 +202,7 @@ class Dispatcher(DispatchQueries):
             candidates = self._prefetchable(role)
         if not candidates:
             return None
-        return self._ranking.pick_among(candidates, self._position[uav])
+        return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
@@ -251,6 +265,7 @@ class Dispatcher(DispatchQueries):
         self._ready[self._role[i]].pop(i, None)
         self._status[i] = _RUNNING
         self._uav_task[uav] = i
+        self._sprayed.pop(uav, None)
         self._in_progress[self._ids[i]] = uav
         blockers = self._blockers
         for j in self._neighbours[i]:
@@ -289,6 +304,8 @@ class Dispatcher(DispatchQueries):
         i = self._running(task_id, "complete")
         uav = self._stop(i)
         self._position[uav] = self._end_m[i]
+        if self._role[i] == "adhesion":
+            self._sprayed[uav] = i
         self._mark_done(i, task_id)
 
     def _mark_done(self, i: int, task_id: str) -> None:

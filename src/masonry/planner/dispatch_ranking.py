@@ -3,16 +3,17 @@
 docs/dispatch.md, "Policies": ``fifo`` keeps a heap of plan indices (lazy deletion), ``critical-path`` a bucket
 of available tasks per chain step and a heap of the steps (lazy deletion), ``nearest`` only the set; every pick
 ends on the shortest flight for the UAV (to the task's start, plus pickup -> drop-off for a brick), ties by plan
-order. :class:`~masonry.planner.dispatch.Dispatcher` says when a task becomes available or stops being so.
+order, except that an adhesion UAV takes the segment starting where it has just sprayed, else the head of a run
+of contiguous segments (:mod:`masonry.planner.dispatch_chaining`). :class:`~masonry.planner.dispatch.Dispatcher` says when a task becomes available or stops being so.
 """
 
 from __future__ import annotations
 
 import heapq
-import math
 from collections.abc import Sequence
 
 from masonry.blueprint import ROLES
+from masonry.planner.dispatch_chaining import chain_pick
 
 
 class Ranking:
@@ -23,6 +24,8 @@ class Ranking:
         rank: each task's chain step (critical-path's priority: higher first).
         start_m: where each task's flight starts.
         leg_m: the part of each task's flight that does not depend on the UAV.
+        successors, predecessors: each task's adhesion segments starting where it ends and ending where it
+            starts (:func:`~masonry.planner.dispatch_chaining.segment_links`; None: no links, every task a head).
     """
 
     def __init__(
@@ -31,9 +34,14 @@ class Ranking:
         rank: Sequence[int],
         start_m: Sequence[tuple[float, float, float]],
         leg_m: Sequence[float],
+        successors: Sequence[tuple[int, ...]] | None = None,
+        predecessors: Sequence[tuple[int, ...]] | None = None,
     ) -> None:
         self.policy = policy
         self._rank, self._start_m, self._leg_m = rank, start_m, leg_m
+        none: list[tuple[int, ...]] = [() for _ in rank]
+        self._succ = none if successors is None else successors
+        self._pred = none if predecessors is None else predecessors
         #: available tasks per role (an insertion-ordered dict used as a set)
         self.available: dict[str, dict[int, None]] = {r: {} for r in ROLES}
         self._heap: dict[str, list[tuple[int, int]]] = {r: [] for r in ROLES}
@@ -73,8 +81,9 @@ class Ranking:
             if not bucket:
                 del buckets[c]  # its heap entry is dropped lazily
 
-    def pick(self, role: str, position_m: Sequence[float]) -> int | None:
-        """The policy's best available task of ``role`` for a UAV at ``position_m`` (None: none available)."""
+    def pick(self, role: str, position_m: Sequence[float], after: int | None = None) -> int | None:
+        """The policy's best available task of ``role`` for a UAV at ``position_m`` (None: none available);
+        ``after``: the adhesion segment the UAV has just sprayed, if it is still at its end (chaining)."""
         avail = self.available[role]
         if not avail:
             return None
@@ -99,26 +108,24 @@ class Ranking:
                     break
                 heapq.heappop(heap)
                 self._heap_values[role].discard(c)
-        # Shortest flight (to the start, plus pickup -> drop-off for a brick); ties by plan order.
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        best, best_cost = -1, math.inf
-        for i in candidates:
-            cost = dist(position_m, start[i]) + leg[i]
-            if cost < best_cost or (cost == best_cost and i < best):
-                best, best_cost = i, cost
-        return best
+        # The segment chained to ``after``, else the nearest run head (shortest flight: to the start, plus
+        # pickup -> drop-off for a brick); ties by plan order.
+        return chain_pick(candidates, position_m, self._start_m, self._leg_m, self._succ, self._pred, after)
 
-    def pick_among(self, candidates: Sequence[int], position_m: Sequence[float]) -> int:
+    def pick_among(
+        self, candidates: Sequence[int], position_m: Sequence[float], after: int | None = None
+    ) -> int:
         """The policy's best of ``candidates`` (not empty; not available: blocked or to prefetch) for a UAV at
-        ``position_m``: highest chain step for ``critical-path``, plan order for ``fifo``; then the shortest
-        flight, ties by plan order."""
+        ``position_m``: highest chain step for ``critical-path``, plan order for ``fifo``; then the segment
+        chained to ``after``, else the nearest run head, ties by plan order."""
         if self.policy == "critical-path":
             top = max(self._rank[i] for i in candidates)
             candidates = [i for i in candidates if self._rank[i] == top]
         elif self.policy == "fifo":
             return min(candidates)
-        start, leg, dist = self._start_m, self._leg_m, math.dist
-        return min(candidates, key=lambda i: (dist(position_m, start[i]) + leg[i], i))
+        return chain_pick(
+            dict.fromkeys(candidates), position_m, self._start_m, self._leg_m, self._succ, self._pred, after
+        )
 
 
 __all__ = ["Ranking"]

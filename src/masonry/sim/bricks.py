@@ -136,6 +136,9 @@ class SimBrick:
     state: BrickState
     carrier: str | None = None
     released: bool = False  # dropped at least once by a UAV: its placement error is measured
+    picked_from: tuple[tuple[float, float, float], float] | None = (
+        None  # its pose (centre, yaw) when last picked
+    )
     marker_cache: tuple[object, object] | None = field(default=None, repr=False)  # camera model's, per pose
 
     @property
@@ -198,6 +201,7 @@ class BrickField:
         """Take a resting brick out of the index: it is now carried."""
         brick = self.bricks[brick_id]
         self._hash.remove(brick_id)
+        brick.picked_from = (brick.position_m, brick.yaw_rad)
         brick.state = "carried"
         brick.carrier = carrier
         return brick
@@ -211,6 +215,16 @@ class BrickField:
         brick.state = "placed"
         brick.carrier = None
         brick.released = True
+        self._index(brick)
+        return brick
+
+    def return_to_pickup(self, brick_id: int) -> SimBrick:
+        """A carried brick taken off its UAV by hand and laid back where it was picked up (the ground crew's)."""
+        brick = self.bricks[brick_id]
+        assert brick.state == "carried" and brick.picked_from is not None
+        brick.position_m, brick.yaw_rad = brick.picked_from
+        brick.state = "pickup"
+        brick.carrier = None
         self._index(brick)
         return brick
 
