@@ -14,6 +14,7 @@ from typing import Literal
 
 from masonry.blueprint import Brick
 from masonry.errors import InvalidArgument
+from masonry.sim.settle import rest_z_m
 
 __all__ = [
     "GROUND_Z_M",
@@ -207,10 +208,10 @@ class BrickField:
         return brick
 
     def drop(self, brick_id: int, shrink_m: float) -> SimBrick:
-        """Let a carried brick fall straight down onto whatever is below its footprint, and index it."""
+        """Let a carried brick fall straight down onto the bricks below its footprint that hold it, and index it."""
         brick = self.bricks[brick_id]
         x, y, _ = brick.position_m
-        support = self.support_under(brick.rect(shrink_m), below_z_m=brick.bottom_z_m)
+        support = self.rest_under(brick.rect(shrink_m), below_z_m=brick.bottom_z_m)
         brick.position_m = (x, y, support + brick.size_m[2] / 2.0)
         brick.state = "placed"
         brick.carrier = None
@@ -288,3 +289,18 @@ class BrickField:
             if rects_overlap(rect, bricks[k].rect()):
                 return t
         return GROUND_Z_M
+
+    def rest_under(
+        self, rect: tuple[float, float, float, float, float], below_z_m: float = math.inf, tol_m: float = 0.02
+    ) -> float:
+        """Height a brick with footprint ``rect`` released at ``below_z_m`` (+ ``tol_m``) comes to rest at: the
+        highest tops under it that hold it (its centre over them; masonry.sim.settle), else lower down."""
+        xs, ys = zip(*rect_corners(*rect))
+        limit = below_z_m + tol_m
+        bricks = self.bricks
+        supports = []
+        for k in self._hash.query(min(xs), min(ys), max(xs), max(ys)):
+            b = bricks[k]
+            if GROUND_Z_M < b.top_z_m <= limit and rects_overlap(rect, b.rect()):
+                supports.append((b.top_z_m, b.rect()))
+        return rest_z_m(rect, supports, GROUND_Z_M)
