@@ -10,9 +10,18 @@ from view 0.9-7.5 s before the release landed 19.5-143 mm off it; the side look'
 pre-release point, or right above the drop-off), ``RELOOK_CLIMB_M`` higher at each look (a wider view), hovers
 until the camera has seen the wall for ``RELOOK_FRAMES`` frames, and flies the last leg again. Only bricks that
 stand on others are held so (their supports are built before them: there is something to see); a first-course
-brick has no support and is placed as before. After ``MAX_RELOOKS`` looks in one descent (each waiting at most
-``RELOOK_WAIT_S`` for the wall) the descent counts as failed, as one that did not reach its drop-off: the UAV
-aligns and descends again, and after ``max_place_attempts`` the task fails with the reason said.
+brick has no support and is placed as before. A look that does not find the wall within ``RELOOK_WAIT_S`` looks
+again from higher up; after ``MAX_RELOOKS`` looks in one descent without the wall the descent counts as failed, as
+one that did not reach its drop-off: the UAV aligns and descends again, and after ``max_place_attempts`` the task
+fails with the reason said.
+
+A vehicle whose last leg cannot arrive within ``release_fresh_s`` of losing the support from view is released
+after ``MAX_RELOOKS`` looks that each found the wall, on the offset the last one measured (its age kept in
+``ReleaseGate.stale_age_s``; the as-built look measures where the brick ended up). On the ``px4`` SITL over MAVLink
+(``masonry sitl --vehicle px4`` at x4: telemetry every 0.13 s of its time, the machine's tick every 0.12 s) the
+last leg ends 2-4 cm past the drop-off and swings back through it 1.5-3.8 s after the support left the view,
+where the simulated vehicle in-process is there in 0.3-0.4 s: every look flew the same leg and missed the same
+way, and failing the descent then (three times) failed a brick that the same offsets placed 5-16 mm off.
 """
 
 from __future__ import annotations
@@ -53,11 +62,13 @@ class ReleaseGate:
         self.looking = False  # flying to, or hovering at, a look point
         self._frames = 0  # sightings of the wall since the look point was reached
         self._seen_s = -math.inf  # the last of them counted
+        #: At a release after ``MAX_RELOOKS`` looks that each found the wall: how old (s) its last sighting was
+        self.stale_age_s: float | None = None
 
     def reset(self, uav: BrickUav) -> None:
         """A new descent onto ``uav``'s drop-off (guarded only with ``align_on_wall`` and ``release_fresh_s``)."""
         cfg, task = uav.config, uav.brick_task
-        self.relooks, self.looking = 0, False
+        self.relooks, self.looking, self.stale_age_s = 0, False, None
         self.guarded = bool(
             cfg.align_on_wall
             and cfg.release_fresh_s > 0.0
@@ -70,14 +81,20 @@ class ReleaseGate:
         return not self.guarded or uav._now_s - uav._wall.seen_s <= uav.config.release_fresh_s
 
     def allows(self, uav: BrickUav, tel: Telemetry) -> bool:
-        """At the drop-off: True to release; else a look back up has begun (or the descent has failed)."""
+        """At the drop-off: True to release; else a look back up has begun.
+
+        The last leg is flown only after a look that found the wall: arriving stale after ``MAX_RELOOKS`` of them,
+        the vehicle cannot arrive sooner, and the release goes on the offset the last look measured."""
         if self.fresh(uav):
+            return True
+        if self.relooks >= MAX_RELOOKS:
+            self.stale_age_s = uav._now_s - uav._wall.seen_s
             return True
         self._look(uav, tel)
         return False
 
     def _look(self, uav: BrickUav, tel: Telemetry) -> None:
-        """Fly to the next look point, or fail the descent after ``MAX_RELOOKS`` looks."""
+        """Fly to the next look point, or fail the descent after ``MAX_RELOOKS`` looks (the last without the wall)."""
         if self.relooks >= MAX_RELOOKS:
             self.looking = False
             self._fail(uav)
