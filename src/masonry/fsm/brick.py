@@ -412,7 +412,7 @@ class BrickUav(PutBack):
             if self._gate.allows(self, tel):
                 self.attempt.release_error_m = error
                 self.reached()
-        elif self._now_s > self.nav.end_s + cfg.release_timeout_s:
+        elif self._now_s > self.nav.end_s + cfg.release_timeout_s and not self._gate.retries(self, tel):
             self.attempt.place_attempts += 1
             if self.attempt.place_attempts >= cfg.max_place_attempts:
                 self.abort(

@@ -7,8 +7,11 @@ axis in 0.5 s, 30 mm in 3 s (``benchmarks/bench_as_built.py --wander``). A tower
 from view 0.9-7.5 s before the release landed 19.5-143 mm off it; the side look's last leg leaves the offset
 0.3-0.4 s old when all goes well. So the release waits for a fresh sighting: with the offset older than
 ``release_fresh_s`` at the drop-off, the UAV flies back up to where a support is in view (the side look's
-pre-release point, or right above the drop-off), ``RELOOK_CLIMB_M`` higher at each look (a wider view), hovers
-until the camera has seen the wall for ``RELOOK_FRAMES`` frames, and flies the last leg again. Only bricks that
+pre-release point, or right above the drop-off), ``RELOOK_CLIMB_M`` higher after a look that did not find the
+wall (a wider view), hovers until the camera has seen the wall for ``RELOOK_FRAMES`` frames and the UAV rests
+there, and flies the last leg again; a leg that does not
+reach the drop-off within ``release_timeout_s`` of its end is flown again so too (not a failed descent while looks
+are left). Only bricks that
 stand on others are held so (their supports are built before them: there is something to see); a first-course
 brick has no support and is placed as before. A look that does not find the wall within ``RELOOK_WAIT_S`` looks
 again from higher up; after ``MAX_RELOOKS`` looks in one descent without the wall the descent counts as failed, as
@@ -42,7 +45,8 @@ __all__ = ["MAX_RELOOKS", "RELOOK_CLIMB_M", "RELOOK_FRAMES", "RELOOK_WAIT_S", "R
 
 #: Looks back up per descent before it counts as failed.
 MAX_RELOOKS = 3
-#: Each look hovers this much higher (m) than the last (the first: ``PRE_RELEASE_GAP_M`` + this).
+#: A look that did not find the wall is followed by one this much higher (m) (the first: ``PRE_RELEASE_GAP_M`` +
+#: this).
 RELOOK_CLIMB_M = 0.05
 #: Sightings of the wall at the look point before the last leg is flown again (the wall alignment's mean is over
 #: its last five: all of them new).
@@ -62,6 +66,7 @@ class ReleaseGate:
         self.looking = False  # flying to, or hovering at, a look point
         self._frames = 0  # sightings of the wall since the look point was reached
         self._seen_s = -math.inf  # the last of them counted
+        self._height_m = RELOOK_CLIMB_M  # the look point's height over the pre-release point
         #: At a release after ``MAX_RELOOKS`` looks that each found the wall: how old (s) its last sighting was
         self.stale_age_s: float | None = None
 
@@ -69,6 +74,7 @@ class ReleaseGate:
         """A new descent onto ``uav``'s drop-off (guarded only with ``align_on_wall`` and ``release_fresh_s``)."""
         cfg, task = uav.config, uav.brick_task
         self.relooks, self.looking, self.stale_age_s = 0, False, None
+        self._height_m = RELOOK_CLIMB_M
         self.guarded = bool(
             cfg.align_on_wall
             and cfg.release_fresh_s > 0.0
@@ -93,6 +99,14 @@ class ReleaseGate:
         self._look(uav, tel)
         return False
 
+    def retries(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """The drop-off not reached within ``release_timeout_s`` of the leg's end: True if a look back up has
+        begun instead of a failed descent (guarded, looks left: the look point has the wall in view again)."""
+        if not self.guarded or self.relooks >= MAX_RELOOKS:
+            return False
+        self._look(uav, tel)
+        return True
+
     def _look(self, uav: BrickUav, tel: Telemetry) -> None:
         """Fly to the next look point, or fail the descent after ``MAX_RELOOKS`` looks (the last without the wall)."""
         if self.relooks >= MAX_RELOOKS:
@@ -100,12 +114,14 @@ class ReleaseGate:
             self._fail(uav)
             return
         self.relooks += 1
+        if self.looking:  # the last look did not find the wall: a wider view, from higher up
+            self._height_m += RELOOK_CLIMB_M
         self.looking, self._frames, self._seen_s = True, 0, uav._wall.seen_s
         side = uav._side.offset_m
         look = np.asarray(uav.attempt.place_effector_target_m, dtype=float) + (
             side if side is not None else np.zeros(3)
         )
-        look = look + np.array([0.0, 0.0, PRE_RELEASE_GAP_M + RELOOK_CLIMB_M * self.relooks])
+        look = look + np.array([0.0, 0.0, PRE_RELEASE_GAP_M + self._height_m])
         yaw = uav._place_yaw_rad()
         uav._fly_to(tel, uav.effector.body_target(look, yaw), FINAL_LEG_S, yaw)
 
@@ -134,12 +150,16 @@ class ReleaseGate:
         if seen_s > self._seen_s:
             self._seen_s = seen_s
             self._frames += 1
-        if self._frames >= RELOOK_FRAMES and now - seen_s <= uav.config.release_fresh_s:
+        found = self._frames >= RELOOK_FRAMES and now - seen_s <= uav.config.release_fresh_s
+        waited = now > uav.nav.end_s + RELOOK_WAIT_S
+        # the leg from a UAV at rest at the look point (a swinging start overshoots the drop-off), or from where it
+        # swings once it has waited RELOOK_WAIT_S there with the wall found
+        if found and (waited or uav.nav.rests_at(tel, uav.nav.target_m)):
             self.looking = False
             yaw = uav._place_yaw_rad()
             uav._fly_to(
                 tel, uav.effector.body_target(uav.attempt.place_effector_target_m, yaw), FINAL_LEG_S, yaw
             )
-        elif now > uav.nav.end_s + RELOOK_WAIT_S:
+        elif waited:
             self._look(uav, tel)  # higher up, or the descent failed
         return True
