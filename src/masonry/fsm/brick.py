@@ -18,6 +18,7 @@ from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
+from masonry.fsm.release_gate import ReleaseGate
 from masonry.fsm.side_look import SideLook
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
@@ -82,6 +83,7 @@ class BrickUav(PutBack):
         self.as_built = AsBuiltLook(config.window_size, config.sigma_tol_m)
         self._wall = WallAlign()  # (masonry.fsm.wall_align: with align_on_wall only)
         self._side = SideLook()  # (masonry.fsm.side_look: a tower's support, hidden from above)
+        self._gate = ReleaseGate()  # (masonry.fsm.release_gate: a release on a fresh sighting of the wall)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
@@ -397,16 +399,20 @@ class BrickUav(PutBack):
         )
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
         self._wall.apply(self)
+        self._gate.reset(self)
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._wall.track(self, tel)
+        if self._gate.step(self, tel):  # looking back up for the wall: no release
+            return
         self._side.step(self, self._place_yaw_rad())
         error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
-            self.attempt.release_error_m = error
-            self.reached()
-        elif self._now_s > self.nav.end_s + cfg.release_timeout_s:
+            if self._gate.allows(self, tel):
+                self.attempt.release_error_m = error
+                self.reached()
+        elif self._now_s > self.nav.end_s + cfg.release_timeout_s and not self._gate.retries(self, tel):
             self.attempt.place_attempts += 1
             if self.attempt.place_attempts >= cfg.max_place_attempts:
                 self.abort(

@@ -68,6 +68,9 @@ class UavConfig:
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
     side_look: bool = True
+    # With align_on_wall: a brick that stands on others is released only if a brick of the wall was in the
+    # camera's view at most this long (s) before; else it looks again from above (masonry.fsm.release_gate). 0: off
+    release_fresh_s: float = 0.45
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is
