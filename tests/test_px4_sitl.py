@@ -8,6 +8,7 @@ SITL") but is not flown here: SIH runs in real time, and on a loaded machine PX4
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -48,12 +49,17 @@ def test_the_real_px4_is_read_from_its_heartbeat_and_flies_the_px4_tuning(tmp_pa
 @pytest.mark.slow
 def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ekf2s(tmp_path: Path) -> None:
     """PX4's own hover: EKF2's velocity sits up to 0.5 m/s off the truth; the one the ``px4`` preset's gates read
-    (consistent with the position, 2 s) is no farther from it (issue 29). On PX4's clock (SIH runs lock-step)."""
+    (consistent with the position, 2 s) is no farther from it, within a 40 s rms's spread (issue 29). On PX4's clock (SIH runs lock-step)."""
     tau_s = uav_settings("px4")["velocity_from_position_s"]
     with px4(tmp_path / "px4", instance=8) as url:
         flight = hover(url, 40.0)
+    kept = tmp_path / "hover.json"  # the flight, for a look at a failure
+    kept.write_text(json.dumps({"estimate": flight.estimate, "truth": flight.truth}))
     assert len(flight.estimate) > 600 and len(flight.truth) > 600  # 30 Hz streams over 40 s
     ekf, filtered = velocity_errors(flight, tau_s)
-    # measured in 5 hovers: EKF2 0.22-0.36 m/s, filtered 0.08-0.27 m/s, every time the nearer (closest 0.265 against
-    # 0.288); the recorded hover in tests/test_velocity_filter.py holds the margin deterministically
-    assert filtered < ekf + 0.03, (ekf, filtered)
+    # measured in 14 hovers (2026-12-03/04; 8 of them beside 2-5 busy loops): EKF2 0.19-0.47 m/s, filtered
+    # 0.09-0.53 m/s, the nearer in 13; once (a CI run, EKF2's worst hover, 0.47) 0.06 m/s farther. A 40 s rms varies
+    # by about 0.1 m/s from hover to hover, so that is the margin. A hover barely moves: this checks that the filter
+    # adds no error to what the gates read on the real PX4, not that it follows motion (tests/test_velocity_filter.py
+    # checks that, deterministically, and the recorded hover's margin).
+    assert filtered < ekf + 0.1, (ekf, filtered, str(kept))
