@@ -85,7 +85,10 @@ def main() -> None:
         if wall not in WALLS:
             ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
         for fleet in args.fleets.split(","):
-            bricks, adhesion = (int(x) for x in fleet.split("+"))
+            try:
+                bricks, adhesion = (int(x) for x in fleet.split("+"))
+            except ValueError:
+                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
             for airspace in args.airspaces.split(","):
                 t0 = time.perf_counter()
                 r = simulate(
