@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING
 
+from masonry.fsm.place_taken import is_place_taken
 from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
 from masonry.mission.records import UavLink
@@ -78,6 +79,7 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
         # attempt of the task
         count, give_up = mc.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
+        give_up = give_up or is_place_taken(reason)  # (the brick in its place will not move: not again)
         mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
         mc.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
         mc.out.emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
