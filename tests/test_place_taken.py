@@ -21,7 +21,9 @@ SIZE_M = (0.3, 0.15, 0.1)
 
 
 def _rig(neighbour_x_m: float) -> Rig:
-    rig = Rig(tasks=[brick_task(position=DROP)], config={"align_on_wall": True, "wall": WALL, "side_look": False})
+    rig = Rig(
+        tasks=[brick_task(position=DROP)], config={"align_on_wall": True, "wall": WALL, "side_look": False}
+    )
     rig.camera.bricks.append(FakeBrick(SUPPORT, (0.0, 0.5, 0.20), 0.0))
     rig.camera.bricks.append(FakeBrick(NEIGHBOUR, (neighbour_x_m, 0.5, 0.30), 0.0))
     return rig.run()

@@ -20,21 +20,16 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from masonry.placement_check import PLACE_TAKEN, is_place_taken
+
 __all__ = ["PLACE_TAKEN", "TAKEN_DEPTH_M", "is_place_taken", "taken_by"]
 
-#: How a refused release's failure reason begins.
-PLACE_TAKEN = "place taken:"
 #: A neighbour this deep (m) in the footprint along both axes takes the place; a designed neighbour touches it
 #: (0), a GNSS-placed one a few centimetres in is held off by the edge as the simulator's ``support_margin_m``
 #: (2.5 cm) says, and from a third of the brick's width in, the brick would rest on it.
 TAKEN_DEPTH_M = 0.05
 #: A brick seen farther than this from its design is not on the wall (a pallet, a magnet).
 _ON_WALL_M = 0.5
-
-
-def is_place_taken(reason: str) -> bool:
-    """Whether a failure ``reason`` is a release refused onto a taken place (not to be tried again)."""
-    return reason.startswith(PLACE_TAKEN)
 
 
 def taken_by(

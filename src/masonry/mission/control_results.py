@@ -11,11 +11,11 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING
 
-from masonry.fsm.place_taken import is_place_taken
 from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
 from masonry.mission.records import UavLink
 from masonry.mission.reducer import dropped_reason, late_completion, screen_result
+from masonry.placement_check import is_place_taken
 from masonry.ports import RECALL_REASON
 
 if TYPE_CHECKING:

@@ -56,7 +56,10 @@ class CourseCheck:
     def course_error_m(self, brick: int, pose: AsBuiltPose) -> float | None:
         """How far ``brick``'s top stands above its designed height, from its relative look (None: no neighbour
         seen, or one not in the plan)."""
-        task, ref = self._design.get(brick), self._design.get(pose.relative_to if pose.relative_to is not None else -1)
+        task, ref = (
+            self._design.get(brick),
+            self._design.get(pose.relative_to if pose.relative_to is not None else -1),
+        )
         if task is None or ref is None or pose.relative_offset_m is None:
             return None
         designed_m = _top_z_m(task) - _top_z_m(ref)
