@@ -62,6 +62,9 @@ WALLS: dict[str, Callable[[], Blueprint]] = {
     "rotated-bond": lambda: running_bond(3, 5, name="rotated-bond", **SITE),
     "towers": lambda: towers(3, 3, spacing_m=1.0, name="towers", **SITE),
     "pyramid": lambda: pyramid(4, name="pyramid", **SITE),
+    # tests/test_wall_align.py's and tests/test_course_check.py's 3-course pyramid (its default fleet), where GNSS
+    # put bricks a course off (``--walls pyramid-3 --seed0 1 --seeds 12``); not in the default run
+    "pyramid-3": lambda: pyramid(3, yaw_rad=YAW_RAD, clearance_m=1.0),
 }
 VEHICLES = ("ideal", "arducopter", "px4")
 
@@ -219,7 +222,7 @@ def main() -> None:
     parser.add_argument(
         "--wind", default="calm", help="comma-separated: calm and/or mean speeds in m/s (light turbulence)"
     )
-    parser.add_argument("--walls", default=",".join(WALLS))
+    parser.add_argument("--walls", default="rotated-bond,towers,pyramid")
     parser.add_argument("--vehicles", default=",".join(VEHICLES))
     parser.add_argument(
         "--no-wall-align",
