@@ -41,15 +41,17 @@ def test_only_the_px4_preset_turns_it_on() -> None:
 
 
 def _relative_m(mission: SimulatedMission) -> list[float]:
-    """Per placed brick, the horizontal distance of its offset from the design to the mean offset of the bricks it
+    """Per placed brick (its task done), the horizontal distance of its offset from the design to the mean offset of the bricks it
     touches in its course or stands on (what a wall built off as a whole does not show)."""
     bp, world = mission.blueprint, mission.world
-    off = {b.id: np.asarray(world.bricks[b.id].position_m) - np.asarray(b.position_m) for b in bp.bricks}
+    done = {a.task_id for a in mission.control.history if a.status == "done"}
+    placed = [b for b in bp.bricks if f"B{b.id}" in done]  # (not one found off its course: never done)
+    off = {b.id: np.asarray(world.bricks[b.id].position_m) - np.asarray(b.position_m) for b in placed}
     out = []
-    for b in bp.bricks:
+    for b in placed:
         near = [
             o.id
-            for o in bp.bricks
+            for o in placed
             if o.id != b.id
             and math.dist(o.position_m[:2], b.position_m[:2]) <= b.size_m[0] * 1.01
             and -1e-6 < b.position_m[2] - o.position_m[2] < b.size_m[2] + 1e-3
@@ -67,7 +69,9 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
         vehicle="px4",
         uav_config=UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings),
     )
-    assert mission.run().completed
+    # without the wall's markers, this seed's B3 lands a course too low beside a misplaced B0: found off its
+    # course, it is not counted as placed and the mission does not complete (masonry.mission.course_check)
+    assert mission.run().completed == align_on_wall
     return mission
 
 
@@ -75,7 +79,8 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
 def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     """The px4 model (GNSS wander +-15 cm), a pyramid turned 30 degrees: with the wall's markers the bricks sit
     less than half as far from where their neighbours say they belong as on the absolute position (4.8 cm
-    against 11.8 cm on this seed; docs/performance/as-built.md has the benchmark)."""
+    against 12.0 cm over the bricks placed without them, B3 found a course too low and B5 not built, on this
+    seed; docs/performance/as-built.md has the benchmark)."""
     on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))
 

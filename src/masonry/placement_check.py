@@ -38,6 +38,14 @@ ON_PLACEMENT_ERROR = ("continue", "hold")
 MAX_PLACEMENT_TOLERANCE_M = 1.0
 
 OnPlacementError = Literal["continue", "hold"]
+#: How a brick UAV's refused release begins its failure reason (``masonry.fsm.place_taken``: a brick of the wall
+#: seen in the drop-off's footprint); mission control does not try such a task again.
+PLACE_TAKEN = "place taken:"
+
+
+def is_place_taken(reason: str) -> bool:
+    """Whether a failure ``reason`` is a release refused onto a taken place (not to be tried again)."""
+    return reason.startswith(PLACE_TAKEN)
 
 
 @dataclass(frozen=True)
@@ -132,7 +140,9 @@ __all__ = [
     "MAX_PLACEMENT_TOLERANCE_M",
     "ON_PLACEMENT_ERROR",
     "PLACEMENT_KEYS",
+    "PLACE_TAKEN",
     "PlacementCheck",
+    "is_place_taken",
     "parse_placement_check",
     "placement_lines",
     "wall_tops_m",

@@ -409,7 +409,10 @@ class BrickUav(PutBack):
         self._side.step(self, self._place_yaw_rad())
         error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
         if error <= cfg.placement_radius_m:
-            if self._gate.allows(self, tel):
+            taken = self._wall.taken(self)
+            if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)
+                self.abort(reason=taken)
+            elif self._gate.allows(self, tel):
                 self.attempt.release_error_m = error
                 self.reached()
         elif self._now_s > self.nav.end_s + cfg.release_timeout_s and not self._gate.retries(self, tel):

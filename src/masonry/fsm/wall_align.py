@@ -32,6 +32,7 @@ import numpy as np
 
 from masonry.fsm.as_built import frame_tags, world_estimate
 from masonry.fsm.camera_align import CameraAlign
+from masonry.fsm.place_taken import PLACE_TAKEN, taken_by
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
@@ -94,12 +95,15 @@ class WallAlign:
         self._near_of: int | None = None
         #: When (s) a brick of the wall was last in view (placement by the wall's markers; -inf: not yet)
         self.seen_s = -math.inf
+        #: The bricks of the wall in that last view: id -> estimated top-face centre (world)
+        self.estimates: dict[int, np.ndarray] = {}
 
     def reset(self, design_top_m: np.ndarray) -> None:
         """A new placement whose designed effector target (the brick's top-face centre) is ``design_top_m``."""
         self.design_m = np.asarray(design_top_m, dtype=float).copy()
         self.tracker.reset(self.design_m)
         self.seen_s = -math.inf
+        self.estimates = {}
 
     @property
     def offset_m(self) -> np.ndarray:
@@ -130,7 +134,7 @@ class WallAlign:
         offset = wall_offset_m(estimates, wall, own, self._near)
         if offset is None:
             return False
-        self.seen_s = uav._now_s
+        self.seen_s, self.estimates = uav._now_s, estimates
         delta = self.tracker.add(self._base_m(wall.get(uav.brick_task.brick)) + offset)
         if delta is None:
             return False
@@ -147,6 +151,21 @@ class WallAlign:
             return self.design_m
         own = np.asarray(own_design_m, dtype=float)
         return own if float(np.linalg.norm(own - self.design_m)) > 1e-9 else self.design_m
+
+    def taken(self, uav: BrickUav) -> str | None:
+        """The reason not to release ``uav``'s brick at its drop-off: a brick of the wall in the last view lies in
+        its footprint (:mod:`masonry.fsm.place_taken`); None otherwise (and always without ``align_on_wall``)."""
+        if not self.estimates or self._wall is None:
+            return None
+        task = uav.brick_task
+        target = np.asarray(uav.attempt.place_effector_target_m, dtype=float)
+        hit = taken_by(target, uav._place_yaw_rad(), task.size_m, self.estimates, self._wall, task.brick)
+        if hit is None:
+            return None
+        return (
+            f"{PLACE_TAKEN} B{hit[0]} seen {hit[1] * 100:.1f} cm into the place of {task.id}; not released "
+            f"there (it would rest on B{hit[0]}, off its course)"
+        )
 
     def apply(self, uav: BrickUav) -> None:
         """A new leg toward the design (the descent): shift it by the offset found so far (with ``align_on_wall``)."""

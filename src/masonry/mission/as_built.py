@@ -22,6 +22,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from masonry.mission.course_check import CourseCheck
 from masonry.mission.message_types import MISSION_CONTROL, Assign
 from masonry.perception.types import AsBuiltPose
 from masonry.placement_check import PlacementCheck
@@ -104,6 +105,17 @@ class PlacementWatch:
         self._design: dict[str, BrickTask] = {}
         #: brick id -> its as-built pose, from the completions (plan_on_as_built only)
         self.poses: dict[int, AsBuiltPose] = {}
+        self._course: CourseCheck | None = None  # (made at the first completion)
+
+    def misplaced(self, mc: MissionControl, r: TaskResult) -> str | None:
+        """The reason a brick task's completion ``r`` is not a placement: its brick measured off its course
+        height (:mod:`masonry.mission.course_check`); None otherwise."""
+        if self._course is None:
+            self._course = CourseCheck(mc.plan.tasks)
+        task = mc.tasks.get(r.task_id)
+        if not isinstance(task, BrickTask):
+            return None
+        return self._course.misplaced(r.task_id, task.brick, r.as_built)
 
     def assign(self, mc: MissionControl, uav: str, task: Task, attempt: int, now_s: float) -> Assign:
         """The assignment of ``task`` to ``uav``: with ``plan_on_as_built``, its geometry planned on the wall as

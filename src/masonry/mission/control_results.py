@@ -15,12 +15,23 @@ from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
 from masonry.mission.records import UavLink
 from masonry.mission.reducer import dropped_reason, late_completion, screen_result
+from masonry.placement_check import is_place_taken
 from masonry.ports import RECALL_REASON
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
+    from masonry.mission.records import Attempt
+    from masonry.ports import TaskResult
 
-__all__ = ["check_holds_task", "heard_again", "ignore", "late_result", "on_heartbeat", "take_result_message"]
+__all__ = [
+    "check_holds_task",
+    "heard_again",
+    "ignore",
+    "late_result",
+    "misplaced",
+    "on_heartbeat",
+    "take_result_message",
+]
 
 log = logging.getLogger("masonry.mission.control")
 
@@ -36,7 +47,10 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         ignore(mc, ignored.reason, ignored.detail)
         return
     assert att is not None  # (screen_result ignores a result with no running attempt)
-    if r.status == "done":
+    why = mc.placement.misplaced(mc, r) if r.status == "done" else None
+    if why is not None:  # (a brick off its course: not placed, and not to be tried again)
+        misplaced(mc, att, r, msg.sender, why, now_s)
+    elif r.status == "done":
         mc.ledger.done(att, r, now_s)
         log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
         mc.dispatcher.complete(r.task_id)
@@ -65,10 +79,22 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         # abandoned for the UAV's battery (it lands for a fresh pack) or recalled by the operator: not an
         # attempt of the task
         count, give_up = mc.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
+        give_up = give_up or is_place_taken(reason)  # (the brick in its place will not move: not again)
         mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
         mc.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
         mc.out.emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
     mc.wake()
+
+
+def misplaced(mc: MissionControl, att: Attempt, r: TaskResult, uav: str, why: str, now_s: float) -> None:
+    """A brick its UAV placed that the as-built look found off its course height: failed with ``why`` and stuck
+    (the brick is glued where it lies), journaled so, the bricks on it left unbuilt (docs/safety.md)."""
+    mc.ledger.end(att, now_s, "failed", why)
+    take_result(att, r)
+    log.warning("%s placed by %s (attempt %d) but %s", r.task_id, uav, att.attempt, why)
+    mc.dispatcher.fail(r.task_id, give_up=True)
+    mc.ledger.journal_failed(now_s, r.task_id, uav, why)
+    mc.out.emit(now_s, "failed", uav, r.task_id, attempt=att.attempt, reason=why)
 
 
 def ignore(mc: MissionControl, reason: str, detail: str) -> None:

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from masonry.errors import JournalError, PlanningError
 from masonry.mission import control_airspace
+from masonry.mission.course_check import is_misplaced
 from masonry.mission.records import Liveness
 from masonry.mission.sites import journaled_visits
 
@@ -39,6 +40,9 @@ def restore(mc: MissionControl, state: JournalState) -> None:
     if unknown:
         raise JournalError(f"journal holds tasks that are not in this plan: {', '.join(unknown)}")
     attempts = mc.spares.restore(state.meta, state.attempts, mc.dispatcher.max_attempts)  # (spares)
+    for f in state.failures:  # a brick found off its course stays where it lies: not tried again
+        if is_misplaced(f.reason) and f.task_id not in done:
+            attempts[f.task_id] = max(attempts.get(f.task_id, 0), mc.dispatcher.max_attempts)
     mc.dispatcher.restore(list(done), attempts)
     if mc.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
         mc.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
