@@ -16,6 +16,7 @@ from masonry.fsm.base import Vec3
 from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
+from masonry.fsm.dropoff_reach import DropoffReach, at_dropoff
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.side_look import SideLook
@@ -84,6 +85,7 @@ class BrickUav(PutBack):
         self._side = SideLook()  # (masonry.fsm.side_look: a tower's support, hidden from above)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
+        self._dropoff = DropoffReach(config.gate_window_s or 1.0)  # (masonry.fsm.dropoff_reach)
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
@@ -397,14 +399,13 @@ class BrickUav(PutBack):
         )
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
         self._wall.apply(self)
+        self._dropoff.reset()
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._wall.track(self, tel)
         self._side.step(self, self._place_yaw_rad())
-        error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
-        if error <= cfg.placement_radius_m:
-            self.attempt.release_error_m = error
+        if at_dropoff(self, tel, self._dropoff):
             self.reached()
         elif self._now_s > self.nav.end_s + cfg.release_timeout_s:
             self.attempt.place_attempts += 1
