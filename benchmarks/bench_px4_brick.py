@@ -6,6 +6,7 @@ then ``masonry fly --uav brick --task B1 --blueprint one_brick.yaml --fc udpin:0
 (4, -1, 0.05), brick-1's home at the origin) and a uav.yaml holding only ``estimate_wait_s: 150``. Prints per run
 done or failed (with the reason), the placement error, the seconds of flight and how often PX4's log says a
 sensor timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges); then a JSON summary.
+PX4 refuses to arm in its first seconds ("temporarily rejected"): each run flies ``--boot-wait`` s after starting it.
 
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6
 """
@@ -18,6 +19,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -60,6 +62,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=6)
     ap.add_argument("--instance", type=int, default=6, help="PX4 instance (offboard link on 14540 + N)")
     ap.add_argument("--timeout", type=float, default=400.0, help="wall seconds a run may take")
+    ap.add_argument("--boot-wait", type=float, default=10.0,
+                    help="wall seconds between starting PX4 and flying (its arming checks settle first)")  # fmt: skip
     args = ap.parse_args()
     os.environ[ENV] = str(args.run_sh.resolve())
     rows = []
@@ -67,6 +71,9 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp)
             with px4(folder / "px4", args.instance) as url:
+                time.sleep(
+                    args.boot_wait
+                )  # as a user starts PX4, then flies: it refuses to arm in its first seconds
                 out = fly(url, folder, args.timeout)
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
             log = (folder / "px4" / "px4.log").read_text(errors="replace")
