@@ -9,6 +9,7 @@ sensor timed out (SIH runs in real time: on a machine too loaded for it EKF2 div
 PX4 refuses to arm in its first seconds ("temporarily rejected"): each run flies ``--boot-wait`` s after starting it.
 
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6
+    python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6 --control gate_window_s=3.0
 """
 
 from __future__ import annotations
@@ -39,10 +40,11 @@ fleet:
 """
 
 
-def fly(url: str, folder: Path, timeout_s: float) -> dict[str, object]:
+def fly(url: str, folder: Path, timeout_s: float, control: dict[str, float]) -> dict[str, object]:
     """One ``masonry fly`` of the scenario against the PX4 at ``url``: its JSON result (or why there is none)."""
     (folder / "one_brick.yaml").write_text(ONE_BRICK)
-    (folder / "uav.yaml").write_text("estimate_wait_s: 150\n")
+    extra = f"control: {json.dumps(control)}\n" if control else ""
+    (folder / "uav.yaml").write_text("estimate_wait_s: 150\n" + extra)
     cmd = [sys.executable, "-c", "from masonry.cli import main; main()", "fly", "--uav", "brick", "--task", "B1",
            "--blueprint", str(folder / "one_brick.yaml"), "--fc", url, "--actuators", "sim", "--camera", "sim",
            "--config", str(folder / "uav.yaml"), "--format", "json"]  # fmt: skip
@@ -64,7 +66,10 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=400.0, help="wall seconds a run may take")
     ap.add_argument("--boot-wait", type=float, default=10.0,
                     help="wall seconds between starting PX4 and flying (its arming checks settle first)")  # fmt: skip
+    ap.add_argument("--control", action="append", default=[], metavar="FIELD=VALUE",
+                    help="a `control:` setting added to uav.yaml (not the issue's scenario; repeatable)")  # fmt: skip
     args = ap.parse_args()
+    control = {k: float(v) for k, v in (item.split("=", 1) for item in args.control)}
     os.environ[ENV] = str(args.run_sh.resolve())
     rows = []
     for run in range(args.runs):
@@ -74,7 +79,7 @@ def main() -> None:
                 time.sleep(
                     args.boot_wait
                 )  # as a user starts PX4, then flies: it refuses to arm in its first seconds
-                out = fly(url, folder, args.timeout)
+                out = fly(url, folder, args.timeout, control)
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
             log = (folder / "px4" / "px4.log").read_text(errors="replace")
         error = out.get("placement_error_m")
@@ -91,7 +96,7 @@ def main() -> None:
         print(f"run {run}: {what} (load {os.getloadavg()[0]:.1f}; PX4 sensor timeouts {row['sensor_timeouts']})"
               + (f": {row['reason']}" if row["reason"] else ""), flush=True)  # fmt: skip
     done = sum(r["status"] == "done" for r in rows)
-    print(json.dumps({"runs": rows, "done": done, "of": len(rows)}))
+    print(json.dumps({"control": control, "runs": rows, "done": done, "of": len(rows)}))
 
 
 if __name__ == "__main__":
