@@ -4,10 +4,9 @@
 requests message rates, and runs two threads: the receiver records what the autopilot says (:class:`_State`,
 raw MAVLink fields: the NED frame conversion lives in :mod:`masonry.adapters.mavlink` only) and the sender
 beats our heartbeat and streams whatever the flight controller above wants streamed. ``command`` sends a
-COMMAND_LONG and checks its COMMAND_ACK.
-
-Nothing the threads meet is silent: a message the receiver cannot handle, a failed receive and a failed send
-are each counted and logged (:meth:`MavlinkLink.status`), and the threads keep going.
+COMMAND_LONG and checks its COMMAND_ACK (a refusal marked ``temporary`` when the autopilot says so). Nothing the
+threads meet is silent: a message the receiver cannot handle, a failed receive and a failed send are each
+counted and logged (:meth:`MavlinkLink.status`), and the threads keep going.
 """
 
 from __future__ import annotations
@@ -37,6 +36,7 @@ from masonry.adapters.mavlink_protocol import (
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_IN_PROGRESS,
     MAV_RESULT_NAMES,
+    MAV_RESULT_TEMPORARILY_REJECTED,
     MAV_SEVERITY_WARNING,
     MAV_TYPE_GCS,
     MSG_ATTITUDE,
@@ -568,7 +568,8 @@ class MavlinkLink:
                 return
             reason = MAV_RESULT_NAMES.get(result, f"result {result}")
             warning = self._latest_warning(started - 0.5)
-            raise CommandRejected(name, f"{reason}: {warning}" if warning else reason)
+            text = f"{reason}: {warning}" if warning else reason
+            raise CommandRejected(name, text, temporary=result == MAV_RESULT_TEMPORARILY_REJECTED)
         self._check_link(name)
         raise CommandTimeout(
             f"{name}: no COMMAND_ACK from the autopilot on {self.url} after {self.command_retries + 1} tries "

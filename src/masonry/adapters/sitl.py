@@ -69,6 +69,7 @@ from masonry.adapters.sitl_config import (
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_DENIED,
     MAV_RESULT_FAILED,
+    MAV_RESULT_TEMPORARILY_REJECTED,
     MAV_RESULT_UNSUPPORTED,
     MAV_SEVERITY_CRITICAL,
     MAV_SEVERITY_INFO,
@@ -358,6 +359,9 @@ class MavlinkSitl:
     def _arm_disarm(self, msg: Any, cmd: int) -> None:
         v = self.vehicle
         if msg.param1 >= 0.5:
+            if self.sim_time_s < self.config.arm_ready_s:
+                self._ack(cmd, MAV_RESULT_TEMPORARILY_REJECTED)
+                return
             problem = self._prearm_problem()
             if problem is not None:
                 self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")
