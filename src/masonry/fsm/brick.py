@@ -407,8 +407,7 @@ class BrickUav(PutBack):
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._wall.track(self, tel)
-        if self._gate.step(self, tel):  # looking back up for the wall: no release, the leg's heights anew
-            self._dropoff.reset()
+        if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
         self._side.step(self, self._place_yaw_rad())
         error = dropoff_error_m(self, tel, self._dropoff)
