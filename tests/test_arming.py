@@ -1,10 +1,14 @@
-"""masonry.adapters.arming: an arming refused as temporary is asked again, for a bounded time (issue 29)."""
+"""masonry.adapters.arming: an arming refused as temporary is asked again, for a bounded time (issue 29); the
+autopilot's refusal text whole (PX4 sends long ones in chunks)."""
 
 from __future__ import annotations
+
+from types import SimpleNamespace
 
 import pytest
 
 from masonry.adapters.arming import ARM_RETRY_INTERVAL_S, arm_retrying
+from masonry.adapters.link_values import StatusText, add_status_text
 from masonry.errors import CommandRejected
 
 
@@ -81,3 +85,25 @@ def test_a_closing_link_stops_the_asking() -> None:
     with pytest.raises(CommandRejected, match=r"^arm rejected: temporarily rejected$"):
         arm_retrying(ap.arm, ap.monotonic, ap.wait, 30.0)
     assert ap.asked == 1
+
+
+def test_px4s_long_status_text_is_joined_from_its_chunks() -> None:
+    # PX4 v1.16 SITL's refusal came as two STATUSTEXT chunks of one id: the reason read "t\t" without the join
+    texts: list[StatusText] = []
+    add_status_text(texts, SimpleNamespace(severity=4, text="Ready", id=0, chunk_seq=0), 1.0)
+    first = "Arming denied: Resolve system health failures firs"
+    add_status_text(texts, SimpleNamespace(severity=4, text=first, id=7, chunk_seq=0), 2.0)
+    add_status_text(texts, SimpleNamespace(severity=4, text="t\t", id=7, chunk_seq=1), 2.01)
+    add_status_text(texts, SimpleNamespace(severity=6, text="other", id=8, chunk_seq=0), 3.0)
+    add_status_text(
+        texts, SimpleNamespace(severity=6, text="stray", id=9, chunk_seq=1), 3.5
+    )  # its start lost
+    assert [t[2] for t in texts] == ["Ready", first + "t\t", "other", "stray"]
+    assert texts[1][:2] == (2.0, 4)
+
+
+def test_the_status_text_log_keeps_the_last_twenty() -> None:
+    texts: list[StatusText] = []
+    for i in range(25):
+        add_status_text(texts, SimpleNamespace(severity=6, text=f"t{i}\x00\x00", id=0, chunk_seq=0), float(i))
+    assert [t[2] for t in texts] == [f"t{i}" for i in range(5, 25)]

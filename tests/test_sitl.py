@@ -171,13 +171,16 @@ def test_rejected_arming_carries_the_autopilot_reason() -> None:
 
 def test_arming_is_asked_again_through_px4s_first_seconds() -> None:
     # PX4 answers TEMPORARILY_REJECTED until its arming checks pass (v1.16 SITL: 3 s after its first HEARTBEAT)
-    with flight(SitlConfig(autopilot="px4", ekf2_flags=True, arm_ready_s=16.0)) as (sitl, fc):
+    config = SitlConfig(autopilot="px4", ekf2_flags=True, arm_ready_s=16.0)
+    with flight(config, arm_retry_s=10.0) as (sitl, fc):
         fc.connect()
         fc.wait_for_estimate(5.0)
         assert sitl.sim_time_s < 16.0  # the first arming is refused
         fc.arm()
         assert fc.telemetry().armed
         assert sitl.sim_time_s >= 16.0
+        # OFFBOARD entered again with each asking: the stream runs armed only, PX4 leaves OFFBOARD without it
+        assert fc.telemetry().mode == "OFFBOARD"
 
 
 def test_a_temporary_refusal_is_asked_through_for_a_bounded_time() -> None:

@@ -417,15 +417,7 @@ class MavlinkFlightController(EstimateLink):
         with self._lock:
             self._setpoint = None
             self._streaming = True  # PX4 needs a setpoint stream before it accepts OFFBOARD
-        if self.autopilot == "px4":
-            self._stream_zero_before_offboard()
-        self.set_mode(self.offboard_mode)
-        arm_retrying(
-            lambda: self.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,)),
-            self._monotonic,
-            self._stop.wait,
-            self.arm_retry_s,
-        )
+        arm_retrying(self._enter_mode_and_arm, self._monotonic, self._stop.wait, self.arm_retry_s)
         with self._lock:
             self._state.armed = True  # the ACK said so; the next HEARTBEAT confirms
 
@@ -459,6 +451,14 @@ class MavlinkFlightController(EstimateLink):
         self.frame = FrameTransform((ox, oy, float(ground_m[2]) - up), self.frame.yaw_rad)
         self.ground_offset_m = up
         return up
+
+    def _enter_mode_and_arm(self) -> None:
+        # each asking enters OFFBOARD anew: the stream runs armed only, and PX4 refuses arming ("Resolve system
+        # health failures first") in an OFFBOARD left without setpoints for COM_OF_LOSS_T
+        if self.autopilot == "px4":
+            self._stream_zero_before_offboard()
+        self.set_mode(self.offboard_mode)
+        self.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
 
     def _stream_zero_before_offboard(self) -> None:
         for _ in range(5):

@@ -25,7 +25,7 @@ from typing import Any
 from typing_extensions import Self
 
 from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until, watchdog_text
-from masonry.adapters.link_values import LinkClock, LinkStatus, load_signing_key
+from masonry.adapters.link_values import LinkClock, LinkStatus, StatusText, add_status_text, load_signing_key
 from masonry.adapters.mavlink_protocol import (
     HEARTBEAT_MISSING_S,
     MAV_AUTOPILOT_INVALID,
@@ -93,7 +93,7 @@ class _State:
     landed_state: int | None = None
     wind_speed_mps: float | None = None  # the latest WIND message's speed (ArduPilot), and when it came
     wind_time_s: float = -math.inf
-    status_texts: list[tuple[float, int, str]] | None = None
+    status_texts: list[StatusText] | None = None
     # the latest local heights (up, m) reported while disarmed: the ground as the EKF sees it (issue 20)
     ground_heights: deque[float] = field(default_factory=lambda: deque(maxlen=15))
 
@@ -424,9 +424,7 @@ class MavlinkLink:
             elif kind == "EXTENDED_SYS_STATE":
                 st.landed_state = int(msg.landed_state)
             elif kind == "STATUSTEXT":
-                assert st.status_texts is not None
-                st.status_texts.append((now, int(msg.severity), str(msg.text)))
-                del st.status_texts[:-20]
+                add_status_text(st.status_texts, msg, now)
             elif kind == "COMMAND_ACK":
                 self._ack_log.append((now, int(msg.command), int(msg.result)))
                 del self._ack_log[:-64]
@@ -545,7 +543,7 @@ class MavlinkLink:
             texts = [
                 t for t in (self._state.status_texts or []) if t[0] >= since and t[1] <= MAV_SEVERITY_WARNING
             ]
-        return texts[-1][2] if texts else None
+        return texts[-1][2].rstrip() if texts else None
 
     def command(self, name: str, command: int, params: tuple[float, ...] = ()) -> None:
         """Send COMMAND_LONG ``command`` and wait for its COMMAND_ACK.

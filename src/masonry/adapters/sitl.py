@@ -359,7 +359,13 @@ class MavlinkSitl:
     def _arm_disarm(self, msg: Any, cmd: int) -> None:
         v = self.vehicle
         if msg.param1 >= 0.5:
-            if self.sim_time_s < self.config.arm_ready_s:
+            lost = (
+                self.mode == "OFFBOARD"
+                and time.monotonic() - self._last_setpoint_wall_s > self.config.offboard_loss_s
+            )
+            if self.sim_time_s < self.config.arm_ready_s or (self.px4 and lost):
+                if lost:  # (PX4 v1.16 SITL, on an OFFBOARD whose setpoints stopped)
+                    self._text(MAV_SEVERITY_WARNING, "Arming denied: Resolve system health failures first")
                 self._ack(cmd, MAV_RESULT_TEMPORARILY_REJECTED)
                 return
             problem = self._prearm_problem()
