@@ -7,7 +7,7 @@ rejected: temporarily rejected". So :meth:`MavlinkFlightController.arm
 <masonry.adapters.mavlink.MavlinkFlightController.arm>` asks again every :data:`ARM_RETRY_INTERVAL_S` while
 the answer is that one, for at most ``arm_retry_s`` (:data:`ARM_RETRY_S` by default), then raises the last
 refusal with how long it lasted. PX4 gives the same answer to a check that will not pass by itself (a
-calibration missing): the bound ends that wait. Any other refusal (ArduPilot's FAILED with "PreArm: ...",
+calibration missing): the bound ends that wait. Every other refusal (ArduPilot's FAILED with "PreArm: ...",
 DENIED) is raised at once, as before.
 """
 
