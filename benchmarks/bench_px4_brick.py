@@ -6,7 +6,8 @@ then ``masonry fly --uav brick --task B1 --blueprint one_brick.yaml --fc udpin:0
 (4, -1, 0.05), brick-1's home at the origin) and a uav.yaml holding only ``estimate_wait_s: 150``. Prints per run
 done or failed (with the reason), the placement error, the seconds of flight and how often PX4's log says a
 sensor timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges); then a JSON summary.
-PX4 refuses to arm in its first seconds ("temporarily rejected"): each run flies ``--boot-wait`` s after starting it.
+PX4 refuses to arm in its first seconds ("temporarily rejected"); masonry asks again for up to 30 s
+(``masonry.adapters.arming``), and each run flies ``--boot-wait`` s after starting PX4 (``--boot-wait 0``: at once).
 
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6 --control gate_window_s=3.0
