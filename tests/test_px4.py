@@ -242,7 +242,8 @@ def test_the_camera_tracker_follows_the_brick_past_its_deadband() -> None:
 
 def test_the_px4_tuning_preset() -> None:
     settings = uav_settings("px4")
-    assert settings["align_on_camera"] is True and settings["gate_window_s"] == 1.5
+    # issue 29: 3 s, longer than the real PX4's ~2 s hover oscillation (the gates' mean no longer follows it)
+    assert settings["align_on_camera"] is True and settings["gate_window_s"] == 3.0
     assert (
         settings["velocity_from_position_s"] == 2.0
     )  # issue 29: the gates read a velocity the position follows

@@ -106,9 +106,14 @@ def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
 
 @pytest.mark.slow
 def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
-    """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: every brick above the
-    first course within 2 cm of its support's offset (3.6-10.9 mm; before the side look 14.7-98.9 mm, the camera
-    never saw the support of two of them; docs/performance/as-built.md has the benchmark)."""
+    """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: no brick above the first
+    course past 2.5 cm of its support's offset (before the side look 14.7-98.9 mm, the camera never saw the
+    support of two of them; docs/performance/as-built.md has the benchmark).
+
+    The bound is the towers' worst brick over seeds 0-9 (``bench_as_built.py --vehicles px4 --seeds 10 --walls
+    towers``: 23.8 mm before issue 29's release on the windowed height, 20.7 mm with it and the 3 s window): a
+    brick's offset from its support is the wall estimate's error, 0.3-0.4 s old, plus the release's, random on
+    GNSS; seed 2's worst moved from 10.9 to 20.7 mm with the release's timing."""
     bp = towers(3, 3, spacing_m=1.0, yaw_rad=YAW, clearance_m=1.0, brick_uavs=1, adhesion_uavs=1)
     mission = SimulatedMission.from_blueprint(bp, seed=2, vehicle="px4")
     assert mission.run().completed
@@ -128,7 +133,7 @@ def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
         off_below = np.subtract(world.bricks[below.id].position_m, below.position_m)
         errors.append(float(np.linalg.norm((off - off_below)[:2])))
     assert len(errors) == 6
-    assert max(errors) < 0.02, errors
+    assert max(errors) < 0.025, errors
 
 
 def test_it_is_on_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:

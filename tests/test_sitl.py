@@ -5,6 +5,7 @@ The SITL runs faster than real time (``TIME_SCALE``); each test stays within a f
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -164,6 +165,36 @@ def test_rejected_arming_carries_the_autopilot_reason() -> None:
         assert info.value.command == "arm"
         assert info.value.reason == "failed: PreArm: Compass not calibrated"
         assert str(info.value) == "arm rejected: failed: PreArm: Compass not calibrated"
+        assert not info.value.temporary  # ArduPilot's FAILED is not asked again
+        assert not fc.telemetry().armed
+
+
+def test_arming_is_asked_again_through_px4s_first_seconds() -> None:
+    # PX4 answers TEMPORARILY_REJECTED until its arming checks pass (v1.16 SITL: 3 s after its first HEARTBEAT)
+    config = SitlConfig(autopilot="px4", ekf2_flags=True, arm_ready_s=16.0)
+    with flight(config, arm_retry_s=10.0) as (sitl, fc):
+        fc.connect()
+        fc.wait_for_estimate(5.0)
+        assert sitl.sim_time_s < 16.0  # the first arming is refused
+        fc.arm()
+        assert fc.telemetry().armed
+        assert sitl.sim_time_s >= 16.0
+        # OFFBOARD entered again with each asking: the stream runs armed only, PX4 leaves OFFBOARD without it
+        assert fc.telemetry().mode == "OFFBOARD"
+
+
+def test_a_temporary_refusal_is_asked_through_for_a_bounded_time() -> None:
+    with flight(SitlConfig(autopilot="px4", ekf2_flags=True, arm_ready_s=1e6), arm_retry_s=1.0) as (
+        _sitl,
+        fc,
+    ):
+        fc.connect()
+        with pytest.raises(CommandRejected) as info:
+            fc.arm()
+        assert info.value.temporary
+        assert re.fullmatch(
+            r"temporarily rejected for \d\.\d s \(asked \d+ times, for at most 1 s\)", info.value.reason
+        )
         assert not fc.telemetry().armed
 
 

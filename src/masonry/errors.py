@@ -83,11 +83,14 @@ class DeviceNotFound(HardwareError):
 
 
 class CommandRejected(HardwareError):
-    """The device refused a command; ``reason`` says why."""
+    """The device refused a command; ``reason`` says why, ``temporary`` whether the device said to try again."""
 
-    def __init__(self, command: str, reason: str, *, options: tuple[str, ...] = ()) -> None:
+    def __init__(
+        self, command: str, reason: str, *, options: tuple[str, ...] = (), temporary: bool = False
+    ) -> None:
         self.command = command
         self.reason = reason
+        self.temporary = temporary
         super().__init__(f"{command} rejected: {reason}", options=options)
 
 

@@ -1,5 +1,6 @@
 """Values around :class:`~masonry.adapters.mavlink_link.MavlinkLink`: the autopilot's clock seen from this computer
-(:class:`LinkClock`), the link's counters (:class:`LinkStatus`) and the MAVLink 2 signing key's reader."""
+(:class:`LinkClock`), the link's counters (:class:`LinkStatus`), the MAVLink 2 signing key's reader and the
+autopilot's STATUSTEXT log (:func:`add_status_text`)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,26 @@ from masonry.errors import InputError
 
 if TYPE_CHECKING:
     import os
+
+
+#: A received STATUSTEXT: (local time s, severity, text, MAVLink 2 ``id``: 0 for a text in one message).
+StatusText = tuple[float, int, str, int]
+
+
+def add_status_text(texts: list[StatusText] | None, msg: object, now_s: float, keep: int = 20) -> None:
+    """Add STATUSTEXT ``msg`` to ``texts``, keeping the last ``keep``; a continuation of a longer text (the same
+    non-zero ``id``, ``chunk_seq`` > 0: PX4 splits texts past 50 characters, "Arming denied: Resolve system health
+    failures firs" + "t") is joined to the text it continues."""
+    if texts is None:
+        return
+    text = str(getattr(msg, "text", "")).rstrip("\x00")
+    text_id, chunk = int(getattr(msg, "id", 0) or 0), int(getattr(msg, "chunk_seq", 0) or 0)
+    if text_id and chunk > 0 and texts and texts[-1][3] == text_id:
+        t_s, severity, before, _ = texts[-1]
+        texts[-1] = (t_s, severity, before + text, text_id)
+        return
+    texts.append((now_s, int(getattr(msg, "severity", 6)), text, text_id))
+    del texts[:-keep]
 
 
 def load_signing_key(path: str | os.PathLike[str]) -> bytes:

@@ -30,6 +30,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from masonry.adapters.arming import ARM_RETRY_S, arm_retrying
 from masonry.adapters.mavlink_estimate import EstimateLink
 from masonry.adapters.mavlink_link import (
     LinkClock,
@@ -207,6 +208,8 @@ class MavlinkFlightController(EstimateLink):
         command_timeout_s: how long to wait for each COMMAND_ACK (one try).
         command_retries: resends of an unanswered command (MAVLink's ``confirmation`` field counts them).
         estimate_timeout_s: how long :meth:`arm` waits for a usable position estimate.
+        arm_retry_s: how long :meth:`arm` keeps asking while the autopilot refuses it as temporary (PX4's first
+            seconds; :mod:`masonry.adapters.arming`).
         setpoint_rate_hz: rate of the background setpoint stream (PX4 leaves OFFBOARD below 2 Hz).
         setpoint_hold_s: a velocity setpoint older than this is replaced by zero (hover) in the stream, so a
             stalled caller cannot leave the UAV flying on its last command.
@@ -238,6 +241,7 @@ class MavlinkFlightController(EstimateLink):
         command_timeout_s: float = 1.0,
         command_retries: int = 2,
         estimate_timeout_s: float = 15.0,
+        arm_retry_s: float = ARM_RETRY_S,
         takeoff_timeout_s: float = 20.0,
         setpoint_rate_hz: float = 20.0,
         setpoint_hold_s: float = 0.5,
@@ -270,6 +274,7 @@ class MavlinkFlightController(EstimateLink):
             monotonic=monotonic,
         )
         self.estimate_timeout_s = estimate_timeout_s
+        self.arm_retry_s = arm_retry_s
         self.takeoff_timeout_s = takeoff_timeout_s
         self.setpoint_hold_s = setpoint_hold_s
         self.frame = frame or FrameTransform()
@@ -412,10 +417,7 @@ class MavlinkFlightController(EstimateLink):
         with self._lock:
             self._setpoint = None
             self._streaming = True  # PX4 needs a setpoint stream before it accepts OFFBOARD
-        if self.autopilot == "px4":
-            self._stream_zero_before_offboard()
-        self.set_mode(self.offboard_mode)
-        self.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+        arm_retrying(self._enter_mode_and_arm, self._monotonic, self._stop.wait, self.arm_retry_s)
         with self._lock:
             self._state.armed = True  # the ACK said so; the next HEARTBEAT confirms
 
@@ -449,6 +451,14 @@ class MavlinkFlightController(EstimateLink):
         self.frame = FrameTransform((ox, oy, float(ground_m[2]) - up), self.frame.yaw_rad)
         self.ground_offset_m = up
         return up
+
+    def _enter_mode_and_arm(self) -> None:
+        # each asking enters OFFBOARD anew: the stream runs armed only, and PX4 refuses arming ("Resolve system
+        # health failures first") in an OFFBOARD left without setpoints for COM_OF_LOSS_T
+        if self.autopilot == "px4":
+            self._stream_zero_before_offboard()
+        self.set_mode(self.offboard_mode)
+        self.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
 
     def _stream_zero_before_offboard(self) -> None:
         for _ in range(5):

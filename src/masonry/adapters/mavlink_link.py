@@ -4,10 +4,9 @@
 requests message rates, and runs two threads: the receiver records what the autopilot says (:class:`_State`,
 raw MAVLink fields: the NED frame conversion lives in :mod:`masonry.adapters.mavlink` only) and the sender
 beats our heartbeat and streams whatever the flight controller above wants streamed. ``command`` sends a
-COMMAND_LONG and checks its COMMAND_ACK.
-
-Nothing the threads meet is silent: a message the receiver cannot handle, a failed receive and a failed send
-are each counted and logged (:meth:`MavlinkLink.status`), and the threads keep going.
+COMMAND_LONG and checks its COMMAND_ACK (a refusal marked ``temporary`` when the autopilot says so). Nothing the
+threads meet is silent: a message the receiver cannot handle, a failed receive and a failed send are each
+counted and logged (:meth:`MavlinkLink.status`), and the threads keep going.
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from typing import Any
 from typing_extensions import Self
 
 from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until, watchdog_text
-from masonry.adapters.link_values import LinkClock, LinkStatus, load_signing_key
+from masonry.adapters.link_values import LinkClock, LinkStatus, StatusText, add_status_text, load_signing_key
 from masonry.adapters.mavlink_protocol import (
     HEARTBEAT_MISSING_S,
     MAV_AUTOPILOT_INVALID,
@@ -37,6 +36,7 @@ from masonry.adapters.mavlink_protocol import (
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_IN_PROGRESS,
     MAV_RESULT_NAMES,
+    MAV_RESULT_TEMPORARILY_REJECTED,
     MAV_SEVERITY_WARNING,
     MAV_TYPE_GCS,
     MSG_ATTITUDE,
@@ -93,7 +93,7 @@ class _State:
     landed_state: int | None = None
     wind_speed_mps: float | None = None  # the latest WIND message's speed (ArduPilot), and when it came
     wind_time_s: float = -math.inf
-    status_texts: list[tuple[float, int, str]] | None = None
+    status_texts: list[StatusText] | None = None
     # the latest local heights (up, m) reported while disarmed: the ground as the EKF sees it (issue 20)
     ground_heights: deque[float] = field(default_factory=lambda: deque(maxlen=15))
 
@@ -424,9 +424,7 @@ class MavlinkLink:
             elif kind == "EXTENDED_SYS_STATE":
                 st.landed_state = int(msg.landed_state)
             elif kind == "STATUSTEXT":
-                assert st.status_texts is not None
-                st.status_texts.append((now, int(msg.severity), str(msg.text)))
-                del st.status_texts[:-20]
+                add_status_text(st.status_texts, msg, now)
             elif kind == "COMMAND_ACK":
                 self._ack_log.append((now, int(msg.command), int(msg.result)))
                 del self._ack_log[:-64]
@@ -545,7 +543,7 @@ class MavlinkLink:
             texts = [
                 t for t in (self._state.status_texts or []) if t[0] >= since and t[1] <= MAV_SEVERITY_WARNING
             ]
-        return texts[-1][2] if texts else None
+        return texts[-1][2].rstrip() if texts else None
 
     def command(self, name: str, command: int, params: tuple[float, ...] = ()) -> None:
         """Send COMMAND_LONG ``command`` and wait for its COMMAND_ACK.
@@ -568,7 +566,8 @@ class MavlinkLink:
                 return
             reason = MAV_RESULT_NAMES.get(result, f"result {result}")
             warning = self._latest_warning(started - 0.5)
-            raise CommandRejected(name, f"{reason}: {warning}" if warning else reason)
+            text = f"{reason}: {warning}" if warning else reason
+            raise CommandRejected(name, text, temporary=result == MAV_RESULT_TEMPORARILY_REJECTED)
         self._check_link(name)
         raise CommandTimeout(
             f"{name}: no COMMAND_ACK from the autopilot on {self.url} after {self.command_retries + 1} tries "

@@ -69,6 +69,7 @@ from masonry.adapters.sitl_config import (
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_DENIED,
     MAV_RESULT_FAILED,
+    MAV_RESULT_TEMPORARILY_REJECTED,
     MAV_RESULT_UNSUPPORTED,
     MAV_SEVERITY_CRITICAL,
     MAV_SEVERITY_INFO,
@@ -358,6 +359,15 @@ class MavlinkSitl:
     def _arm_disarm(self, msg: Any, cmd: int) -> None:
         v = self.vehicle
         if msg.param1 >= 0.5:
+            lost = (
+                self.mode == "OFFBOARD"
+                and time.monotonic() - self._last_setpoint_wall_s > self.config.offboard_loss_s
+            )
+            if self.sim_time_s < self.config.arm_ready_s or (self.px4 and lost):
+                if lost:  # (PX4 v1.16 SITL, on an OFFBOARD whose setpoints stopped)
+                    self._text(MAV_SEVERITY_WARNING, "Arming denied: Resolve system health failures first")
+                self._ack(cmd, MAV_RESULT_TEMPORARILY_REJECTED)
+                return
             problem = self._prearm_problem()
             if problem is not None:
                 self._text(MAV_SEVERITY_CRITICAL, f"PreArm: {problem}")

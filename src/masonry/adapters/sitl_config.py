@@ -16,6 +16,7 @@ from masonry.adapters.mavlink import (
 
 MAV_TYPE_QUADROTOR = 2
 MAV_RESULT_ACCEPTED, MAV_RESULT_DENIED, MAV_RESULT_UNSUPPORTED, MAV_RESULT_FAILED = 0, 2, 3, 4
+MAV_RESULT_TEMPORARILY_REJECTED = 1
 MAV_SEVERITY_CRITICAL, MAV_SEVERITY_WARNING, MAV_SEVERITY_INFO = 2, 4, 6
 MAV_STATE_STANDBY, MAV_STATE_ACTIVE = 3, 4
 MAV_LANDED_STATE_ON_GROUND, MAV_LANDED_STATE_IN_AIR = 1, 2
@@ -56,6 +57,9 @@ class SitlConfig:
     )
     arm_min_battery: float = 0.2  # BATT_ARM_MAH-like: refuse to arm below this fraction
     prearm_failure: str | None = None  # e.g. "Compass not calibrated": every arm attempt fails with it
+    # PX4's first seconds: arming before this much simulated time is answered TEMPORARILY_REJECTED (PX4 v1.16
+    # SITL: for 3 s after its first HEARTBEAT, with no STATUSTEXT on the offboard link); 0: ready at once
+    arm_ready_s: float = 0.0
     heartbeat_hz: float = 1.0
     autopilot: str = "ardupilot"  # or "px4": PX4 modes, OFFBOARD rules, ESTIMATOR_STATUS
     offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER

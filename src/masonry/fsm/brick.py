@@ -16,6 +16,7 @@ from masonry.fsm.base import Vec3
 from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
+from masonry.fsm.dropoff_reach import DropoffReach, dropoff_error_m
 from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.release_gate import ReleaseGate
@@ -86,6 +87,7 @@ class BrickUav(PutBack):
         self._gate = ReleaseGate()  # (masonry.fsm.release_gate: a release on a fresh sighting of the wall)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
+        self._dropoff = DropoffReach(config.gate_window_s or 1.0)  # (masonry.fsm.dropoff_reach)
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
@@ -400,6 +402,7 @@ class BrickUav(PutBack):
         self._fly_to(tel, body, self.config.descent_duration_s, yaw)
         self._wall.apply(self)
         self._gate.reset(self)
+        self._dropoff.reset()
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
@@ -407,8 +410,8 @@ class BrickUav(PutBack):
         if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
         self._side.step(self, self._place_yaw_rad())
-        error = self.effector.distance_m(tel, self.attempt.place_effector_target_m)
-        if error <= cfg.placement_radius_m:
+        error = dropoff_error_m(self, tel, self._dropoff)
+        if error is not None:
             taken = self._wall.taken(self)
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)
                 self.abort(reason=taken)

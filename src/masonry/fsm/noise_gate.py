@@ -74,6 +74,11 @@ class HoverNoise:
         return 0.0 if self._started_s is None else self._last_s - self._started_s
 
     @property
+    def mean_m(self) -> tuple[float, float]:
+        """The mean horizontal error (m, per axis; signed)."""
+        return (self._mean[0], self._mean[1])
+
+    @property
     def mean_error_m(self) -> float:
         """The distance of the mean horizontal error from zero (m)."""
         return math.hypot(self._mean[0], self._mean[1])

@@ -68,12 +68,15 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
     },
     # PX4 v1.16 OFFBOARD on GNSS (issue 20): velocity setpoints unshaped (the default gains suit its ~0.3 s
     # response), a position that wanders +-15 cm and a velocity noisy to +-0.2 m/s: the alignment gates average
-    # over 1.5 s, the brick UAV aligns on its camera's relative estimate, the hover gates allow for the noise.
+    # over gate_window_s, the brick UAV aligns on its camera's relative estimate, the hover gates allow for the
+    # noise.
     # The real PX4 v1.16 SITL reports a velocity up to 0.5 m/s off what its position does (issue 29): the gates
-    # read one consistent with the position over 2 s (masonry.fsm.velocity_filter).
+    # read one consistent with the position over 2 s (masonry.fsm.velocity_filter). Its hover oscillates with a
+    # period of about 2 s and 4-5 cm of spread: the gates and the release's height average over 3 s, longer than
+    # that (benchmarks/bench_px4_brick.py: 5 of 6 placed with 3 s, 4 of 6 with 1.5 s; docs/hardware.md).
     "px4": {
         "velocity_from_position_s": 2.0,
-        "gate_window_s": 1.5,
+        "gate_window_s": 3.0,
         "align_on_camera": True,
         "align_on_wall": True,
         "ask_settle_tolerance_m": 0.05,

@@ -1,0 +1,67 @@
+"""Arming through an autopilot's first seconds (issue 29): asked again while it says the refusal is temporary.
+
+PX4 answers MAV_CMD_COMPONENT_ARM_DISARM with MAV_RESULT_TEMPORARILY_REJECTED whenever its arming checks fail,
+and in its first seconds they do: PX4 v1.16 SITL (SIH, ../shared/px4) refused every arming for 3 s after its
+first HEARTBEAT (2.1 s after start), then accepted it; a user who starts PX4 and flies at once got "arm
+rejected: temporarily rejected". So :meth:`MavlinkFlightController.arm
+<masonry.adapters.mavlink.MavlinkFlightController.arm>` asks again every :data:`ARM_RETRY_INTERVAL_S` while
+the answer is that one, for at most ``arm_retry_s`` (:data:`ARM_RETRY_S` by default), then raises the last
+refusal with how long it lasted. PX4 gives the same answer to a check that will not pass by itself (a
+calibration missing): the bound ends that wait. Every other refusal (ArduPilot's FAILED with "PreArm: ...",
+DENIED) is raised at once, as before.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from masonry.errors import CommandRejected
+
+__all__ = ["ARM_RETRY_INTERVAL_S", "ARM_RETRY_S", "arm_retrying"]
+
+#: How long (s) an arming refused as temporary is asked again before the refusal is raised.
+ARM_RETRY_S = 30.0
+#: Between two askings (s): PX4 runs its arming checks at about 10 Hz.
+ARM_RETRY_INTERVAL_S = 0.5
+
+
+def arm_retrying(
+    arm: Callable[[], None],
+    monotonic: Callable[[], float],
+    wait: Callable[[float], bool],
+    retry_s: float = ARM_RETRY_S,
+) -> int:
+    """Call ``arm`` until it is accepted, again after each temporary refusal, for at most ``retry_s``.
+
+    Args:
+        arm: sends the arm command and returns once accepted (raises :class:`CommandRejected` otherwise).
+        monotonic: the clock (s) ``retry_s`` is measured on.
+        wait: sleeps the given seconds; True if the wait was cut short (the link is closing: no more asking).
+        retry_s: how long temporary refusals are asked through (s; 0: the first refusal is raised).
+
+    Returns:
+        How many temporary refusals came before the acceptance.
+
+    Raises:
+        CommandRejected: a refusal that is not temporary (at once), or the last temporary one once ``retry_s``
+            has passed (its reason says how long the autopilot refused).
+    """
+    started_s = monotonic()
+    refusals = 0
+    while True:
+        try:
+            arm()
+            return refusals
+        except CommandRejected as exc:
+            if not exc.temporary:
+                raise
+            refusals += 1
+            waited_s = monotonic() - started_s
+            if waited_s + ARM_RETRY_INTERVAL_S > retry_s:
+                raise CommandRejected(
+                    exc.command,
+                    f"{exc.reason} for {waited_s:.1f} s (asked {refusals} times, for at most {retry_s:g} s)",
+                    temporary=True,
+                ) from exc
+            if wait(ARM_RETRY_INTERVAL_S):
+                raise
