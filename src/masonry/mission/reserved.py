@@ -165,7 +165,7 @@ class TableClearance:
 
     def blockers(self, uav: str) -> list[tuple[str, str]]:
         """``(other UAV, purpose of its reservation)`` in the way of what ``uav`` waits for (``site-rule``: the
-        site gate holds it back)."""
+        site gate holds it back; ``approach``: it flies to its approach spot)."""
         u = self._uavs.get(uav)
         return [] if u is None or u.request is None else list(u.blocked_by)
 
