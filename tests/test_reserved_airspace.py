@@ -214,6 +214,9 @@ def test_the_issue_27_livelock_completes_with_no_attempt_given_up_for_waiting():
     assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
     assert r.conflict_violations == 0 and r.dependency_violations == 0
     assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+    # UAVs held back from their sites waited at their approach spots (mission control wires the rule in)
+    approached = [t.id for t in r.tasks for w in t.waits if w.cause.holds == "approach"]
+    assert approached
 
 
 @pytest.mark.slow
