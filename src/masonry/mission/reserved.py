@@ -3,7 +3,8 @@ at run time"). :class:`TableClearance` answers what :class:`~masonry.mission.air
 (mission control, the UAVs and the protocol are unchanged) from one :class:`~masonry.reservation.Table`: each hop
 granted as timed legs ending in an open-ended stay (:func:`~masonry.reservation.decide`), a UAV waiting where it
 stays, a late one extended, a silent one keeping its way home, UAVs waiting at sites for each other broken up by
-parking spots (:mod:`masonry.mission.reserved_parts`). A request is decided in
+parking spots (:mod:`masonry.mission.reserved_parts`), a UAV held back far from its site waiting over it
+(:mod:`masonry.mission.reserved_approach`). A request is decided in
 :mod:`masonry.mission.reserved_requests` (over the class's internals below). No hold patience. Pure: no I/O, no
 clock.
 """

@@ -4,7 +4,8 @@ Part of :class:`~masonry.mission.reserved.TableClearance` (``--airspace table``;
 time"), as :mod:`masonry.mission.airspace_requests` is of the columns: :func:`request` takes a UAV's request (a
 UAV that turned back mid-flight stops where it is, :func:`stop_where`; a flight that no layer can fly inside the
 fence is refused, :func:`check_fence`), :func:`evaluate` plans its hop in the table (:func:`hop_request`) and grants it if
-it fits now, else tells it to wait where it stays. Pure: no I/O, no clock.
+it fits now, else tells it to wait where it stays (held back by the site gate far from its site: at its approach
+spot, :mod:`masonry.mission.reserved_approach`). Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
