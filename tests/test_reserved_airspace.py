@@ -214,6 +214,9 @@ def test_the_issue_27_livelock_completes_with_no_attempt_given_up_for_waiting():
     assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
     assert r.conflict_violations == 0 and r.dependency_violations == 0
     assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M
+    # UAVs held back from their sites waited at their approach spots (mission control wires the rule in)
+    approached = [t.id for t in r.tasks for w in t.waits if w.cause.holds == "approach"]
+    assert approached
 
 
 @pytest.mark.slow
@@ -256,3 +259,108 @@ def test_the_stays_at_sites_already_keep_the_site_rule_apart(wall):
             assert d == pytest.approx(blueprint.clearance_m, abs=1e-6), (a, b, d)
             at_r_c += 1
     assert at_r_c < 0.05 * len(plan.conflicts)
+
+
+class _BusyGate(_Gate):
+    """A site gate over two conflicting sites: nobody comes down at one while another UAV is at the other."""
+
+    def __init__(self, sites) -> None:
+        super().__init__()
+        self.sites = sites
+        self.on: dict[str, tuple[float, float, float]] = {}
+        self.entered_at: list[tuple[str, float]] = []
+
+    def may_enter(self, uav, site_m):
+        return not any(o != uav and s in self.sites for o, s in self.on.items())
+
+    def entered(self, uav, site_m, now_s):
+        if site_m in self.sites:  # (a flight home starts no site interval)
+            self.on[uav] = site_m
+            self.entered_at.append((uav, now_s))
+
+    def left(self, uav, now_s):
+        super().left(uav, now_s)
+        return self.on.pop(uav, None) is not None
+
+
+def test_a_uav_held_back_far_from_its_site_waits_at_its_approach_spot_and_its_site_interval_starts_there():
+    # scenario (docs/safety.md, "The approach spot"): b works at its site; a, on its pad 5 m away, is given the
+    # conflicting site beside it. The site gate holds a back: a does not wait over its pad (its site interval
+    # would then run through the whole 5 m flight once b is gone) but flies to the hover over its site at the
+    # layer under the top one, reserved like any flight; there it waits for the gate, and its site interval
+    # starts when its descent is granted, once b has moved on
+    s_a, s_b = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2)
+    gate = _BusyGate({s_a, s_b})
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
+    air.work_site = lambda uav, site: site in (s_a, s_b)
+    air.take_off("b")
+    assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted  # near its site: straight there
+    air.take_off("a")
+    g = air.request("a", s_a, 1.0, (0.0, -5.0, 1.2))
+    top = air.airspace.layers_m[-2]  # (the layer under the top one)
+    assert not g.granted and g.hold_m == pytest.approx((0.0, 0.0, top)) and g.layer_m == pytest.approx(top)
+    assert air.phase("a") is Phase.TO_HOLD and gate.entered_at == [("b", 0.0)]
+    assert air.approached_count == 1
+    for t in range(2, 20):
+        assert not any(g.granted for g in air.grant(float(t)))
+    air.end_transit("b")
+    air.progress("a", (0.0, 0.0, top))  # a is at its approach spot
+    assert air.phase("a") is Phase.AT_HOLD
+    answer = air.request("a", s_a, 20.0, (0.0, 0.0, top))
+    assert not answer.granted  # b is at its site: a waits where it is, at its spot
+    assert air.blockers("a") == [("-", "site-rule")]
+    air.request("b", (3.0, -5.0, 1.2), 30.0, s_b)  # b moves on: its site interval ends
+    granted = []
+    for t in range(31, 60):
+        if t == 45:
+            air.progress("b", (3.0, -5.0, 1.2))  # b is over its pad, its flight's windows end
+            air.end_transit("b")
+        granted += [(g.uav, t) for g in air.grant(float(t)) if g.granted]
+    assert [u for u, _t in granted] == ["a"] and granted[0][
+        1
+    ] >= 45  # once b's climb and leg are out of the way
+    assert gate.entered_at == [("b", 0.0), ("a", float(granted[0][1]))]  # a's site interval starts then
+    climb = next(r.volume for r in air.table.of("a") if r.purpose == "climb")
+    assert climb.a == pytest.approx((0.0, 0.0)) and climb.z1_m == pytest.approx(top)  # from the spot, down
+    assert air.conflicts() == []
+
+
+def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_spot():
+    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
+    # on to a site beside a's, to work up to 2.6 m, which the hover over a's site is in the way of, while b's stay
+    # is in the way of a's descent: a cycle of waits. a, at its spot, is sent to its parking spot like any waiting
+    # UAV of a cycle (b's own parking flight would climb through a's hover), and b's flight goes once a is there
+    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, 0.4, 1.2)
+    gate = _BusyGate({s_a, s_b})
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
+    air.work_site = lambda uav, site: site in (s_a, s_b, s_c)
+    air.take_off("b")
+    assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted
+    air.take_off("a")
+    spot = air.request("a", s_a, 1.0, (0.0, -5.0, 1.2)).hold_m
+    assert spot is not None
+    for t in range(2, 30):
+        air.grant(float(t))
+    air.end_transit("b")
+    air.progress("b", s_b)
+    air.progress("a", spot)
+    assert not air.request("a", s_a, 30.0, spot).granted and air.phase("a") is Phase.AT_HOLD
+    assert not air.request("b", s_c, 31.0, s_b, top_m=2.6).granted
+    assert air.blockers("b") == [("a", "stay")]
+    parked, granted = None, []
+    for k in range(64, 200):
+        t = k / 2.0
+        for g in air.grant(t):
+            if g.uav == "a" and g.hold_m is not None:
+                parked = (g.hold_m, t)
+            if g.granted:
+                granted.append((g.uav, t))
+        if parked is not None and t == parked[1] + 20.0:
+            air.progress("a", parked[0])  # a is at its parking spot
+    assert parked is not None and parked[0][:2] == pytest.approx(homes["a"][:2])
+    assert parked[0][2] > air.airspace.layers_m[-1]  # over every layer, over its pad
+    assert granted and granted[0][0] == "b" and granted[0][1] >= parked[1]
+    assert [u for u, _t in gate.entered_at] == ["b"]  # a's site interval has not started: it never came down
+    assert air.conflicts() == []

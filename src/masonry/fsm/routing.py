@@ -123,7 +123,9 @@ class Routing(ModelBase):
         if answer.granted:
             self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer)
         else:
-            self._refused(tel, p, answer.hold_m, layer)
+            # a hold flight at the altitude it is given: a later one may be at another (to a parking spot)
+            hold_layer = answer.layer_m if answer.hold_m is not None and answer.layer_m is not None else layer
+            self._refused(tel, p, answer.hold_m, hold_layer)
         return False
 
     def _transit_layer_m(self, answer: ClearanceAnswer, p: np.ndarray) -> float:

@@ -217,9 +217,8 @@ class MissionControl:
         self.now_s = 0.0
         homes = {u.name: u.home_m for u in self.fleet}
         layers_m = (layer_base_m, layer_spacing_m, layer_floor_m)
-        self.columns = make_airspace(
-            airspace, column_radius_m, layers_m, homes, self.glue or self.sites, fence, timing
-        )
+        gate, work = self.glue or self.sites, self.sites.is_work_site
+        self.columns = make_airspace(airspace, column_radius_m, layers_m, homes, gate, fence, timing, work)
         self.fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self.layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)

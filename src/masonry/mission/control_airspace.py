@@ -23,7 +23,7 @@ from masonry.mission.volumes import Vec3
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
-    from collections.abc import Iterable, Mapping
+    from collections.abc import Callable, Iterable, Mapping
 
     from masonry.mission.control import MissionControl
 
@@ -161,12 +161,15 @@ def make_airspace(
     gate: SiteGate,
     fence: Site | None,
     timing: TaskTiming | None,
+    work_site: Callable[[str, Vec3], bool] | None = None,
 ) -> ColumnClearance | TableClearance:
     """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
 
     Args:
         layers_m: the transit layers' base, their spacing and the floor layer 0 rises from (``MissionControl``'s
             ``layer_base_m``, ``layer_spacing_m`` and ``layer_floor_m``).
+        work_site: is a site a UAV's task's (the table sends a UAV far from it to its approach spot first,
+            :mod:`masonry.mission.reserved_approach`; None: no approach spots).
     """
     if kind not in AIRSPACES:
         raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
@@ -176,6 +179,7 @@ def make_airspace(
     )
     if isinstance(made, TableClearance):
         made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
+        made.work_site = work_site
     return made
 
 

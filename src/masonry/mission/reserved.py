@@ -3,7 +3,8 @@ at run time"). :class:`TableClearance` answers what :class:`~masonry.mission.air
 (mission control, the UAVs and the protocol are unchanged) from one :class:`~masonry.reservation.Table`: each hop
 granted as timed legs ending in an open-ended stay (:func:`~masonry.reservation.decide`), a UAV waiting where it
 stays, a late one extended, a silent one keeping its way home, UAVs waiting at sites for each other broken up by
-parking spots (:mod:`masonry.mission.reserved_parts`). A request is decided in
+parking spots (:mod:`masonry.mission.reserved_parts`), a UAV held back far from its site waiting over it
+(:mod:`masonry.mission.reserved_approach`). A request is decided in
 :mod:`masonry.mission.reserved_requests` (over the class's internals below). No hold patience. Pure: no I/O, no
 clock.
 """
@@ -17,6 +18,7 @@ from masonry.errors import InvalidArgument
 from masonry.geofence import Site
 from masonry.mission import reserved_requests
 from masonry.mission.airspace_state import Grant, Phase
+from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
@@ -122,6 +124,10 @@ class TableClearance:
         self.extended = 0  # windows extended for a late UAV
         self.forced = 0  # extensions no move could make room for (the table then holds a clash: counted)
         self.fence_refusals: dict[str, str] = {}
+        #: is this a UAV's flight to its task's site (then, held back far from it, it waits at the approach spot
+        #: over it)? None: no approach spots (:mod:`masonry.mission.reserved_approach`)
+        self.work_site: Callable[[str, Vec3], bool] | None = None
+        self.approached_count = 0  # flights to an approach spot
         self._levels = park_levels(self.homes, self.sep_xy_m)
         self.airspace = self._make_airspace()
         if self.base_m is not None:
@@ -160,7 +166,7 @@ class TableClearance:
 
     def blockers(self, uav: str) -> list[tuple[str, str]]:
         """``(other UAV, purpose of its reservation)`` in the way of what ``uav`` waits for (``site-rule``: the
-        site gate holds it back)."""
+        site gate holds it back; ``approach``: it flies to its approach spot)."""
         u = self._uavs.get(uav)
         return [] if u is None or u.request is None else list(u.blocked_by)
 
@@ -226,15 +232,25 @@ class TableClearance:
 
     def _park(self, now_s: float) -> Grant | None:
         """Send one waiting UAV in a cycle of waits at sites to its parking spot, if its flight there fits now."""
-        asking = {n: u for n, u in self._uavs.items() if u.request is not None and u.phase is Phase.ASKING}
+        asking = {
+            n: u
+            for n, u in self._uavs.items()
+            if u.request is not None
+            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and u.approach))
+        }
         waits = {n: u.blocked_by for n, u in asking.items()}
         endless = [n for n, u in asking.items() if math.isinf(u.retry_s)]
         order = {n: u.request.seq for n, u in asking.items() if u.request is not None}
         for uav in to_park(waits, endless, order):
             u = asking[uav]
             assert u.request is not None
+            if not u.approach:  # to the approach spot over its site, if it may go there: no detour home
+                hop = reserved_requests.hop_request(self, uav, u, u.request)
+                sent = approach(self, uav, u, u.request, (*hop.start.xy, hop.start.z_m), now_s)
+                if sent is not None:
+                    return sent
             home = self.homes.get(uav)
-            start = u.request.position or u.position
+            start = u.spot if u.approach else (u.request.position or u.position)
             if home is None or start is None:
                 continue
             top, n = self._home_top_m(), self.max_layers
@@ -247,7 +263,7 @@ class TableClearance:
             stay = self.table.stay_of(uav)
             left = self.table if stay is None else forced(self.table, [stay], [stay.until(now_s)])
             self.table = forced(left, [], plan.reservations)
-            u.phase, u.plan, u.spot, u.site = Phase.TO_HOLD, plan, spot, u.request.site
+            u.phase, u.plan, u.spot, u.site, u.approach = Phase.TO_HOLD, plan, spot, u.request.site, False
             self.held_back += 1
             self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])

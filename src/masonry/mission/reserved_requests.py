@@ -4,7 +4,8 @@ Part of :class:`~masonry.mission.reserved.TableClearance` (``--airspace table``;
 time"), as :mod:`masonry.mission.airspace_requests` is of the columns: :func:`request` takes a UAV's request (a
 UAV that turned back mid-flight stops where it is, :func:`stop_where`; a flight that no layer can fly inside the
 fence is refused, :func:`check_fence`), :func:`evaluate` plans its hop in the table (:func:`hop_request`) and grants it if
-it fits now, else tells it to wait where it stays. Pure: no I/O, no clock.
+it fits now, else tells it to wait where it stays (held back by the site gate far from its site: at its approach
+spot, :mod:`masonry.mission.reserved_approach`). Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import TYPE_CHECKING
 
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
+from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import ON_LEG_M, forced
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
@@ -39,6 +41,10 @@ class TableUav:
     retry_s: float = math.inf  # its wait ends then at the latest (a window ends)
     blocked_by: tuple[tuple[str, str], ...] = ()
     spot: Vec3 | None = None  # its parking spot, while it flies there or waits there
+    approach: bool = (
+        False  # its spot is the approach spot over its site (:mod:`~masonry.mission.reserved_approach`)
+    )
+    approached: int = -1  # the request (seq) it was sent to an approach spot for: only once
 
 
 def request(
@@ -102,14 +108,17 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
     if refused is not None:
         c.refused += 1
         return Grant(uav, w.site, False, refused=refused)
-    if c.gate is not None and not c.gate.may_enter(uav, w.site):
-        u.blocked_by = (("-", "site-rule"),)
-        c.refused += 1
-        return Grant(uav, w.site, False)
     if c.table.stay_of(uav) is None:  # (heard again with nothing held: where it is now)
         where = u.position if u.position is not None else w.site
         c.set_stay(uav, column((where[0], where[1]), 0.0, where[2]), u.phase)
     guarded, hop = c.guarded_for(uav), hop_request(c, uav, u, w)
+    if c.gate is not None and not c.gate.may_enter(uav, w.site):
+        sent = approach(c, uav, u, w, (*hop.start.xy, hop.start.z_m), now_s)
+        if sent is not None:  # far from its task's site: it waits over it, not where it is
+            return sent
+        u.blocked_by = (("-", "site-rule"),)
+        c.refused += 1
+        return Grant(uav, w.site, False)
     if u.plan is not None:  # it turned back and holds its old plan: its new one starts where it is, now
         here = column(hop.start.xy, hop.start.z_m, hop.start.z_m)
         guarded = forced(guarded, guarded.of(uav), [Reservation(uav, here, now_s, math.inf, "stay")])
@@ -133,17 +142,22 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
         u.retry_s = decision.until_s
         u.blocked_by = tuple(sorted({(r.uav, r.purpose) for r in decision.blocked_by}))
         c.refused += 1
-        if u.phase is Phase.AT_HOLD and u.spot is not None:
-            return Grant(uav, w.site, False, u.spot, u.spot[2])
-        return Grant(uav, w.site, False)
+        return _hold_on(uav, u, w)
     left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
     c.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
-    u.request, u.phase, u.blocked_by, u.spot = None, Phase.FLYING, (), None
+    u.request, u.phase, u.blocked_by, u.spot, u.approach = None, Phase.FLYING, (), None, False
     c.granted_count += 1
     if c.gate is not None:
         c.gate.entered(uav, w.site, now_s)
     c.bump()
     return Grant(uav, w.site, layer_m=decision.plan.layer_m)
+
+
+def _hold_on(uav: str, u: TableUav, w: FlightRequest) -> Grant:
+    """Not yet: wait where you are (at the spot you hover at, if any)."""
+    if u.phase is Phase.AT_HOLD and u.spot is not None:
+        return Grant(uav, w.site, False, u.spot, u.spot[2])
+    return Grant(uav, w.site, False)
 
 
 def hop_request(c: TableClearance, uav: str, u: TableUav, w: FlightRequest) -> Request:

@@ -132,6 +132,10 @@ class SiteIntervals:
         w = self._work[tid]
         return tid if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) < AT_SITE_M else None
 
+    def is_work_site(self, uav: str, site_m: Vec3) -> bool:
+        """``site_m`` is where ``uav``'s task is worked (a flight there starts a site interval)."""
+        return self._work_task(uav, site_m) is not None
+
     def may_enter(self, uav: str, site_m: Vec3) -> bool:
         """No conflicting task's UAV is at its site (``exclusive``); any other flight may go."""
         if not self.exclusive:
