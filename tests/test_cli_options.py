@@ -467,16 +467,25 @@ def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
         try:
             fc.connect()
 
-            def play() -> None:  # the boot, in half-second steps (bounded waits, not sleeps to time anything)
-                pause = threading.Event()
-                pause.wait(0.5)
+            # the boot moves on once the countdown has said each phase twice (events, not wall-clock steps: under
+            # load a half-second phase could pass between two reports); each wait is bounded
+            seen = {"no local position": threading.Event(), "local position streaming": threading.Event()}
+
+            def progress(line: str) -> None:
+                lines.append(line)
+                for phrase, event in seen.items():
+                    if sum(phrase in said for said in lines) >= 2:
+                        event.set()
+
+            def play() -> None:
+                seen["no local position"].wait(4.0)
                 autopilot.phase = "converging"
-                pause.wait(0.5)
+                seen["local position streaming"].wait(4.0)
                 autopilot.phase = "ready"
 
             player = threading.Thread(target=play)
             player.start()
-            fc.wait_for_estimate(5.0, progress=lines.append, report_every_s=0.2)
+            fc.wait_for_estimate(20.0, progress=progress, report_every_s=0.2)
             player.join()
         finally:
             fc.close()
@@ -489,7 +498,7 @@ def test_the_estimate_wait_counts_down_what_it_sees_until_the_ekf_is_ready():
         "vertical position; constant-position mode, not initialised"
     ) in converging[0]
     left = [float(re.search(r"\((\d+) s left\)", line).group(1)) for line in lines]
-    assert left == sorted(left, reverse=True) and left[0] in (4.0, 5.0)  # a countdown
+    assert left == sorted(left, reverse=True) and left[0] in (19.0, 20.0)  # a countdown
     assert len(lines) >= 4  # repeated every 0.2 s while nothing changes, not only on changes
 
 
