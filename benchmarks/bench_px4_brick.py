@@ -26,19 +26,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from px4_sitl import ENV, px4
-
-ONE_BRICK = """\
-name: one-brick
-cruise_altitude: 1.2
-brick:
-  size: [0.30, 0.15, 0.10]
-  markers: {dictionary: DICT_4X4_50, size: 0.05, spacing: 0.175}
-bricks:
-  - {id: 1, position: [2.0, 1.0, 0.05], pickup: [4.0, -1.0, 0.05]}
-fleet:
-  - {name: brick-1, role: brick, home: [0.0, 0.0, 0.0]}
-"""
+from px4_sitl import ENV, ONE_BRICK, px4
 
 
 def fly(url: str, folder: Path, timeout_s: float, control: dict[str, float]) -> dict[str, object]:
