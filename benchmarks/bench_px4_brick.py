@@ -8,6 +8,8 @@ done or failed (with the reason), the placement error, the seconds of flight and
 sensor timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges); then a JSON summary.
 PX4 refuses to arm in its first seconds ("temporarily rejected"); masonry asks again for up to 30 s
 (``masonry.adapters.arming``), and each run flies ``--boot-wait`` s after starting PX4 (``--boot-wait 0``: at once).
+PX4 runs at ``px4_sitl.PX4_NICE`` where the machine allows it (as the tests start it); the scenario is
+``px4_sitl.ONE_BRICK``, the blueprint ``tests/test_px4_sitl.py`` flies.
 
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6 --control gate_window_s=3.0

@@ -205,5 +205,8 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
         assert json.loads(out)["mission_completed"]
         assert TUNING_LINE in err
     attempts = {t["id"]: t["attempts"] for t in report["tasks"]}
+    retried = {t["id"]: t["attempts_detail"] for t in report["tasks"] if t["attempts"] > 1}
     errors = ", ".join(f"{k} {v * 1000:.1f} mm" for k, v in report["placement_error_m"].items())
-    print(f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts}")
+    print(
+        f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
+    )
