@@ -4,7 +4,7 @@ settings.
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
-never fly beside each other on the two xdist workers) and flies its own PX4 instances (2-9, one set per test), each
+never fly beside each other on the two xdist workers) and flies its own PX4 instances (4-9, one set per test), each
 bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
