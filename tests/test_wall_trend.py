@@ -13,9 +13,9 @@ RATE = np.array([0.02, -0.01, 0.0])  # the wander's rate (m/s): 20 mm/s east, 10
 
 
 def _fed(trend: WallTrend, t0_s: float, t1_s: float, key: frozenset[int] = frozenset({3})) -> None:
-    """Frames every 0.1 s from t0_s to t1_s of an offset moving at RATE; the wall alignment's mean moves with each."""
+    """Frames every 0.1 s from t0_s to t1_s of an offset moving at RATE."""
     for t in np.arange(t0_s, t1_s + 1e-9, 0.1):
-        trend.add(float(t), np.array([0.05, 0.02, 0.0]) + RATE * t, key, moved=True)
+        trend.add(float(t), np.array([0.05, 0.02, 0.0]) + RATE * t, key)
 
 
 def test_the_target_follows_the_offsets_trend_past_the_last_frame() -> None:
@@ -38,7 +38,7 @@ def test_no_trend_no_move() -> None:
     trend = WallTrend(1.5)
     trend.reset(5)
     for t in np.arange(0.0, 2.0, 0.1):
-        trend.add(float(t), np.array([0.05, 0.02, 0.0]) + rng.normal(0.0, 0.0005, 3), frozenset({3}), True)
+        trend.add(float(t), np.array([0.05, 0.02, 0.0]) + rng.normal(0.0, 0.0005, 3), frozenset({3}))
     assert trend.step(2.3) is None
     assert float(np.linalg.norm(trend.shift_m)) == 0.0
     assert SHIFT_M > 0.0

@@ -144,7 +144,6 @@ class WallAlign:
             uav._now_s,
             offset,
             frozenset(estimates.keys() & self._near) or frozenset(estimates),
-            delta is not None,
         )
         if delta is None:
             return False

@@ -57,9 +57,10 @@ class WallTrend:
         self._mean_t = None
         self.shift_m = np.zeros(3)
 
-    def add(self, now_s: float, offset_m: np.ndarray, key: Hashable, moved: bool) -> None:
+    def add(self, now_s: float, offset_m: np.ndarray, key: Hashable) -> None:
         """One frame's offset of the wall (``key``: the reference bricks it is the mean of; a new set starts a new
-        line); ``moved``: the wall alignment's mean moved the target with it (its time is the frames' mean)."""
+        line). The wall alignment's target is the mean of its last frames (or within its deadband of it): as old
+        as their mean time."""
         if key != self._key:
             self._key = key
             self._frames.clear()
@@ -67,8 +68,7 @@ class WallTrend:
         while self._frames and now_s - self._frames[0][0] > self.span_s:
             self._frames.popleft()
         self._mean_times.append(now_s)
-        if moved or self._mean_t is None:
-            self._mean_t = float(np.mean(self._mean_times))
+        self._mean_t = float(np.mean(self._mean_times))
 
     def rate_mps(self) -> np.ndarray | None:
         """The offset's horizontal rate (m/s) over the ``span_s`` up to the last frame (None: too few frames to
