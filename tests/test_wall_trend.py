@@ -22,7 +22,7 @@ def test_the_target_follows_the_offsets_trend_past_the_last_frame() -> None:
     trend = WallTrend(1.5)
     trend.reset(5)
     _fed(trend, 0.0, 2.0)  # the last frame at 2.0 s; the mean of the last five is of 1.8 s
-    assert np.allclose(trend.rate_mps(), RATE, atol=1e-9)
+    assert np.allclose(trend.rate_mps(2.0), RATE, atol=1e-9)
     # the support out of view for 0.4 s: the target moves on by the rate times the mean's age (0.6 s)
     delta = trend.step(2.4)
     assert delta is not None and np.allclose(delta, RATE * 0.6, atol=1e-9)
@@ -48,24 +48,36 @@ def test_too_few_frames_or_a_new_set_of_references_no_trend() -> None:
     trend = WallTrend(1.5)
     trend.reset(5)
     _fed(trend, 0.0, 0.1 * (MIN_FRAMES - 2))
-    assert trend.rate_mps() is None and trend.step(1.0) is None
+    assert trend.rate_mps(0.8) is None and trend.step(1.0) is None
     _fed(trend, 0.8, 2.0)
-    assert trend.rate_mps() is not None
+    assert trend.rate_mps(2.0) is not None
     # another brick comes into view: its mean is another line, the old frames no longer count
     _fed(trend, 2.1, 2.3, key=frozenset({3, 4}))
-    assert trend.rate_mps() is None
+    assert trend.rate_mps(2.3) is None
 
 
 def test_the_shift_is_capped_and_off_with_no_span() -> None:
     trend = WallTrend(1.5)
     trend.reset(5)
-    _fed(trend, 0.0, 2.0)
-    delta = trend.step(10.0)  # 8 s on: the line says 18 cm
+    for t in np.arange(0.0, 2.01, 0.1):
+        trend.add(float(t), np.array([0.1, 0.0, 0.0]) * t, frozenset({3}))  # 10 cm/s
+    delta = trend.step(2.4)  # the line says 6 cm since the mean
     assert delta is not None and np.isclose(float(np.linalg.norm(delta)), MAX_SHIFT_M)
     off = WallTrend(0.0)
     off.reset(5)
     _fed(off, 0.0, 2.0)
-    assert off.rate_mps() is None and off.step(2.5) is None
+    assert off.rate_mps(2.0) is None and off.step(2.5) is None
+
+
+def test_a_wall_long_out_of_view_is_not_extrapolated() -> None:
+    """Out of view for over 0.4 of the span, too few of the span's frames are left to carry the line on: the
+    shift goes back to none, the last mean stands (a stale release after three looks, masonry.fsm.release_gate)."""
+    trend = WallTrend(1.5)
+    trend.reset(5)
+    _fed(trend, 0.0, 2.0)
+    assert trend.step(2.5) is not None
+    delta = trend.step(2.0 + 0.7)
+    assert delta is not None and np.allclose(trend.shift_m, 0.0)
 
 
 def test_on_with_the_wall_alignment_only() -> None:

@@ -70,10 +70,10 @@ class WallTrend:
         self._mean_times.append(now_s)
         self._mean_t = float(np.mean(self._mean_times))
 
-    def rate_mps(self) -> np.ndarray | None:
-        """The offset's horizontal rate (m/s) over the ``span_s`` up to the last frame (None: too few frames to
-        say)."""
-        frames = self._frames
+    def rate_mps(self, now_s: float) -> np.ndarray | None:
+        """The offset's horizontal rate (m/s) over the last ``span_s`` up to now (None: too few frames in it to say:
+        with the wall out of view for over ``0.4 * span_s`` the line is not carried on, the last mean stands)."""
+        frames = [(t, o) for t, o in self._frames if now_s - t <= self.span_s]
         if self.span_s <= 0.0 or len(frames) < MIN_FRAMES or frames[-1][0] - frames[0][0] < 0.6 * self.span_s:
             return None
         ts = np.array([t for t, _ in frames])
@@ -85,7 +85,7 @@ class WallTrend:
 
     def step(self, now_s: float) -> np.ndarray | None:
         """The move (world, m) to make now to carry the target along the trend; None: none (within ``SHIFT_M``)."""
-        rate = self.rate_mps()
+        rate = self.rate_mps(now_s)
         want = np.zeros(3)
         if rate is not None and self._mean_t is not None:
             want = rate * (now_s - self._mean_t)
