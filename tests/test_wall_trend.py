@@ -3,10 +3,13 @@ drop-off follows the offset's trend through the frames missed and the last leg."
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
+from masonry.fsm.wall_align import WallAlign
 from masonry.fsm.wall_trend import MAX_SHIFT_M, MIN_FRAMES, SHIFT_M, WallTrend
 
 RATE = np.array([0.02, -0.01, 0.0])  # the wander's rate (m/s): 20 mm/s east, 10 mm/s south
@@ -22,12 +25,14 @@ def test_the_target_follows_the_offsets_trend_past_the_last_frame() -> None:
     trend = WallTrend(1.5)
     trend.reset(5)
     _fed(trend, 0.0, 2.0)  # the last frame at 2.0 s; the mean of the last five is of 1.8 s
-    assert np.allclose(trend.rate_mps(2.0), RATE, atol=1e-9)
+    rate = trend.rate_mps(2.0)
+    assert rate is not None and np.allclose(rate, RATE, atol=1e-9)
     # the support out of view for 0.4 s: the target moves on by the rate times the mean's age (0.6 s)
     delta = trend.step(2.4)
     assert delta is not None and np.allclose(delta, RATE * 0.6, atol=1e-9)
     # a tick later, only what has moved since
-    assert np.allclose(trend.step(2.5), RATE * 0.1, atol=1e-9)
+    step = trend.step(2.5)
+    assert step is not None and np.allclose(step, RATE * 0.1, atol=1e-9)
     assert np.allclose(trend.shift_m, RATE * 0.7, atol=1e-9)
 
 
@@ -86,3 +91,32 @@ def test_on_with_the_wall_alignment_only() -> None:
     assert uav_settings("px4")["align_on_wall"] is True
     assert "align_on_wall" not in uav_settings("arducopter")
     assert uav_settings("px4", {"wall_trend_s": 0})["wall_trend_s"] == 0.0
+
+
+class _Nav:
+    def __init__(self) -> None:
+        self.shifted_m = np.zeros(3)
+
+    def shift(self, delta_m: tuple[float, float, float]) -> None:
+        self.shifted_m = self.shifted_m + np.asarray(delta_m)
+
+
+def _uav(align_on_wall: bool, now_s: float) -> SimpleNamespace:
+    config = UavConfig("b", "brick", (0.0, 0.0, 0.0), align_on_wall=align_on_wall)
+    attempt = SimpleNamespace(place_effector_target_m=np.array([1.0, 2.0, 0.2]))
+    return SimpleNamespace(config=config, _now_s=now_s, nav=_Nav(), attempt=attempt)
+
+
+def test_the_descent_carries_the_drop_off_and_its_motion_along_the_trend() -> None:
+    """WallAlign.carry (each tick of place_descend) moves the navigator's leg and the release's target together,
+    with the wall alignment on; without it, nothing (the ideal and arducopter presets fly as before)."""
+    for on in (True, False):
+        wall = WallAlign()
+        wall.reset(np.array([1.0, 2.0, 0.2]))
+        wall.trend.span_s = UavConfig("b", "brick", (0.0, 0.0, 0.0)).wall_trend_s
+        _fed(wall.trend, 0.0, 2.0)
+        uav = _uav(on, 2.4)
+        wall.carry(uav)  # type: ignore[arg-type]
+        moved = RATE * 0.6 if on else np.zeros(3)
+        assert np.allclose(uav.nav.shifted_m, moved, atol=1e-9)
+        assert np.allclose(uav.attempt.place_effector_target_m, np.array([1.0, 2.0, 0.2]) + moved, atol=1e-9)
