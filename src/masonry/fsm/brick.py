@@ -411,6 +411,7 @@ class BrickUav(PutBack):
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._wall.track(self, tel)
+        self._wall.carry(self)  # (masonry.fsm.wall_trend: the wander's trend since the frames of the target)
         if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
         self._side.step(self, self._place_yaw_rad())
