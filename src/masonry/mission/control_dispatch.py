@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from masonry.mission.airspace import Phase
+from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.sites import work_point_m
 from masonry.planner.dispatch_admission import Admission, site_width
 
@@ -18,8 +18,11 @@ if TYPE_CHECKING:
 
 
 def admit(mc: MissionControl, column_radius_m: float) -> None:
-    """Give ``mc``'s dispatcher the admission rule (none with ``column_radius_m`` 0: every column granted)."""
-    if column_radius_m <= 0:
+    """Give ``mc``'s dispatcher the admission rule: under the columns (the default airspace) only, and none with
+    ``column_radius_m`` 0 (every column granted). Not under ``--airspace table``: its approach spots already
+    keep held UAVs over their sites, and with the rule issue 27's livelock pyramid stalled there at 355 s (a UAV
+    flying home and a sprayer waiting for each other's stays; docs/dispatch.md, "Admission")."""
+    if column_radius_m <= 0 or not isinstance(mc.columns, ColumnClearance):
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
     width = site_width(((p[0], p[1]) for p in points), column_radius_m)
