@@ -40,11 +40,14 @@ def test_site_width_counts_the_points_that_can_be_worked_at_once():
 
 def test_a_task_is_crowded_within_two_conflict_hops_of_a_queued_one():
     neighbours = [[1], [0, 2], [1, 3], [2], []]  # a chain 0-1-2-3, and 4 alone
-    assert crowded(0, [2], neighbours)  # 0 conflicts with 1, which conflicts with 2
-    assert crowded(0, [1], neighbours)
-    assert not crowded(0, [3], neighbours)  # three hops
-    assert not crowded(4, [1, 2], neighbours)
-    assert not crowded(0, [], neighbours)
+    none: list[list[int]] = [[] for _ in neighbours]
+    assert crowded(0, [2], neighbours, none)  # 0 conflicts with 1, which conflicts with 2
+    assert crowded(0, [1], neighbours, none)
+    assert not crowded(0, [3], neighbours, none)  # three hops
+    assert not crowded(4, [1, 2], neighbours, none)
+    assert not crowded(0, [], neighbours, none)
+    # 1 waits for 0 (its prerequisite): it never holds 0 back, or it would wait for it until it gave up
+    assert not crowded(0, [1], neighbours, [[], [0], [], [], []])
     running = {0, 1, 3}
     assert queued(sorted(running), running.__contains__, lambda j: neighbours[j]) == [0, 1]
 

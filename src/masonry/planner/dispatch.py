@@ -209,19 +209,20 @@ class Dispatcher(DispatchQueries):
         return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
 
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
-        """``i``, or the policy's best task of ``role`` not crowded for ``uav`` when ``i`` is (None: none);
+        """``i``, or for a landed ``uav`` the policy's best task of ``role`` not crowded when ``i`` is (None: none);
         :mod:`masonry.planner.dispatch_admission`."""
         rule = self.admission
         if rule is None or not rule.applies(sum(self._live_count.values())):
             return i
         st, nb, pre = self._status, self._neighbours, self._prerequisites
-        landed = rule.landed(uav)
-        running = [j for j in self._uav_task.values() if landed or self._role[j] == role]
-        waiting = queued(running, lambda k: st[k] == _RUNNING, lambda j: (*nb[j], *pre[j]))
-        if not crowded(i, waiting, nb):
+        if not rule.landed(uav):
+            return i  # already out: it is not added to the crowd (holding it back left holds unserved)
+        running = list(self._uav_task.values())
+        waiting = queued(running, lambda k: st[k] == _RUNNING, lambda j: nb[j])
+        if not crowded(i, waiting, nb, pre):
             return i
         for pool in (self._available[role], self._ready[role]):
-            free = [k for k in pool if not crowded(k, waiting, nb)]
+            free = [k for k in pool if not crowded(k, waiting, nb, pre)]
             if free:
                 return self._ranking.pick_among(free, self._position[uav], self._after(uav))
         return None
