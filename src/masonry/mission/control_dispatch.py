@@ -20,8 +20,8 @@ if TYPE_CHECKING:
 def admit(mc: MissionControl, column_radius_m: float) -> None:
     """Give ``mc``'s dispatcher the admission rule: under the columns (the default airspace) only, and none with
     ``column_radius_m`` 0 (every column granted). Not under ``--airspace table``: its approach spots already
-    keep held UAVs over their sites, and with the rule issue 27's livelock pyramid stalled there at 355 s (a UAV
-    flying home and a sprayer waiting for each other's stays; docs/dispatch.md, "Admission")."""
+    keep held UAVs over their sites, and with the rule as first written (UAVs in the air held back too) issue 27's
+    livelock pyramid stalled there at 355 s (a UAV flying home and a sprayer waiting for each other's stays)."""
     if column_radius_m <= 0 or not isinstance(mc.columns, ColumnClearance):
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
