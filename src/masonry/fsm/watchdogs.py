@@ -54,6 +54,8 @@ class Failsafe:
     mode: str | None = None  # the autopilot's mode when the emergency began
     land_pending: bool = False  # emergency: LAND still to be commanded
     land_tried_s: float = -math.inf
+    flight_mode: str | None = None  # the autopilot's mode masonry flies in (its mode at the end of the take-off)
+    foreign_mode_since_s: float | None = None  # since when the autopilot reports another mode (None: it does not)
 
 
 @dataclass(frozen=True)
@@ -167,6 +169,36 @@ def fence_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
     return None
 
 
+#: Seconds the autopilot must report a mode other than the one masonry flies in before the autopilot counts as
+#: having taken the vehicle: more than one HEARTBEAT period (1 s), so that a heartbeat sent before the mode change
+#: and heard after it is no take-over.
+MODE_TAKEN_S = 2.0
+
+
+def autopilot_mode_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
+    """The autopilot has taken the vehicle (its failsafe switched it out of the mode masonry flies in, to RTL or
+    LAND; or a pilot did): stop flying it, without a LAND of masonry's (``land``: the emergency, which commands
+    nothing then), and leave it to the autopilot once there (``give_up``: halted, the task failed)."""
+    fs = a.failsafe
+    if fs.flight_mode is None:
+        return None
+    if a.state == "emergency":  # entered over a mode the autopilot chose: nothing left for masonry to do
+        return Abort(f"the autopilot has the vehicle (mode {fs.mode})", "give_up") if taken_over(fs) else None
+    since_s = fs.foreign_mode_since_s
+    if a.state == "takeoff" or since_s is None or now_s - since_s < MODE_TAKEN_S:
+        return None
+    return Abort(
+        f"{a.config.name}: the autopilot took control: mode {tel.mode}, not requested (masonry flies in "
+        f"{fs.flight_mode})",
+        "land",
+    )
+
+
+def taken_over(fs: Failsafe) -> bool:
+    """The emergency began in a mode the autopilot chose (not the one masonry flies in): masonry commands nothing."""
+    return fs.flight_mode is not None and fs.mode is not None and fs.mode != fs.flight_mode
+
+
 def standard(*, putback: bool = False) -> tuple[Watchdog, ...]:
     """Every UAV's watchdogs, in the order they run (``putback``: the brick machine's putback states too)."""
     airborne = (TASK, *(("putback",) if putback else ()), "home", "failsafe")
@@ -175,6 +207,7 @@ def standard(*, putback: bool = False) -> tuple[Watchdog, ...]:
         Watchdog("battery", (TASK,), battery_watch),
         Watchdog("hold", (TASK,), hold_watch),
         Watchdog("fence", airborne, fence_watch),
+        Watchdog("autopilot", (*airborne, "emergency"), autopilot_mode_watch),
     )
 
 
@@ -210,6 +243,7 @@ __all__ = [
     "BRICK_WATCHDOGS",
     "TASK",
     "TRIGGERS",
+    "MODE_TAKEN_S",
     "WATCHDOGS",
     "Abort",
     "Action",
@@ -217,6 +251,7 @@ __all__ = [
     "Check",
     "Failsafe",
     "Watchdog",
+    "autopilot_mode_watch",
     "battery_watch",
     "fence_watch",
     "for_kind",
@@ -224,4 +259,5 @@ __all__ = [
     "hold_watch",
     "link_watch",
     "standard",
+    "taken_over",
 ]
