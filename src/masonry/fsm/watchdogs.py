@@ -54,8 +54,12 @@ class Failsafe:
     mode: str | None = None  # the autopilot's mode when the emergency began
     land_pending: bool = False  # emergency: LAND still to be commanded
     land_tried_s: float = -math.inf
-    flight_mode: str | None = None  # the autopilot's mode masonry flies in (its mode at the end of the take-off)
-    foreign_mode_since_s: float | None = None  # since when the autopilot reports another mode (None: it does not)
+    flight_mode: str | None = (
+        None  # the autopilot's mode masonry flies in (its mode at the end of the take-off)
+    )
+    foreign_mode_since_s: float | None = (
+        None  # since when the autopilot reports another mode (None: it does not)
+    )
 
 
 @dataclass(frozen=True)
@@ -241,9 +245,9 @@ __all__ = [
     "ADHESION_WATCHDOGS",
     "ANY",
     "BRICK_WATCHDOGS",
+    "MODE_TAKEN_S",
     "TASK",
     "TRIGGERS",
-    "MODE_TAKEN_S",
     "WATCHDOGS",
     "Abort",
     "Action",
