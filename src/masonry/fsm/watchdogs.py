@@ -182,12 +182,15 @@ MODE_TAKEN_S = 2.0
 def autopilot_mode_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
     """The autopilot has taken the vehicle (its failsafe switched it out of the mode masonry flies in, to RTL or
     LAND; or a pilot did): stop flying it, without a LAND of masonry's (``land``: the emergency, which commands
-    nothing then), and leave it to the autopilot once there (``give_up``: halted, the task failed)."""
+    nothing then), and leave it to the autopilot once there (``give_up``: halted, the task failed) unless it is
+    landing the vehicle (then halted on the ground)."""
     fs = a.failsafe
     if fs.flight_mode is None:
         return None
-    if a.state == "emergency":  # entered over a mode the autopilot chose: nothing left for masonry to do
-        return Abort(f"the autopilot has the vehicle (mode {fs.mode})", "give_up") if taken_over(fs) else None
+    if a.state == "emergency":  # entered over a mode the autopilot chose: nothing left for masonry to do (a
+        # landing is watched to the ground, as before: it ends; an RTL, a hold may not for minutes)
+        taken = taken_over(fs) and not tel.landing
+        return Abort(f"the autopilot has the vehicle (mode {tel.mode})", "give_up") if taken else None
     since_s = fs.foreign_mode_since_s
     if a.state == "takeoff" or since_s is None or now_s - since_s < MODE_TAKEN_S:
         return None
