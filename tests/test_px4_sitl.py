@@ -1,10 +1,10 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
-flies an adhesion task with default settings; issue 29's one-brick scenario and the case study as a two-vehicle
+flies an adhesion task with default settings, and a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario and the case study as a two-vehicle
 mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: 6 of 8 and 2 of 5).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
-never fly beside each other on the two xdist workers) and flies its own PX4 instances (4-9, one set per test), each
+never fly beside each other on the two xdist workers) and flies its own PX4 instances (3-9, one set per test), each
 bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
