@@ -66,7 +66,7 @@ def test_without_the_watchdog_the_machine_gives_up_on_its_own_terms() -> None:
 
 
 def test_the_defaults_are_the_standard_list_in_order() -> None:
-    assert [d.name for d in Rig("brick").uav.watchdogs] == ["link", "battery", "hold", "fence"]
+    assert [d.name for d in Rig("brick").uav.watchdogs] == ["link", "battery", "hold", "fence", "autopilot"]
     assert Rig("brick").uav.watchdogs == BRICK_WATCHDOGS
     assert Rig("adhesion").uav.watchdogs == ADHESION_WATCHDOGS
 

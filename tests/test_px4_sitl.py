@@ -1,10 +1,10 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
-flies an adhesion task with default settings; issue 29's one-brick scenario and the case study as a two-vehicle
+flies an adhesion task with default settings, and a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario and the case study as a two-vehicle
 mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: 6 of 8 and 2 of 5).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
-never fly beside each other on the two xdist workers) and flies its own PX4 instances (4-9, one set per test), each
+never fly beside each other on the two xdist workers) and flies its own PX4 instances (3-9, one set per test), each
 bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
@@ -227,3 +227,32 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     print(
         f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
     )
+
+
+#: PX4's geofence 1.5 m around home, its breach action 3 (PX4 v1.16 SIH went to AUTO.LOITER, a hold): the
+#: one-brick scenario's pickup is 4.1 m out, so PX4's failsafe takes the vehicle out of OFFBOARD on the way there.
+GEOFENCE_PX4_PARAMS = {"GF_MAX_HOR_DIST": "1.5", "GF_ACTION": "3"}
+
+
+@pytest.mark.slow
+def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -> None:
+    """A PX4 failsafe (its geofence) switches out of OFFBOARD mid-task: ``masonry fly`` stops, says which UAV and
+    which mode in one line and exits 1 (it never returned before, issue 29). Instance 3 (a developer's are 0, 1)."""
+    blueprint = tmp_path / "one_brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    config = tmp_path / "uav.yaml"
+    config.write_text(UAV_YAML)
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=3, params=GEOFENCE_PX4_PARAMS) as url:
+        proc = _masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
+                        "--actuators", "sim", "--camera", "sim", "--config", str(config))  # fmt: skip
+        out, err = _finish(proc, TASK_WALL_S, f"masonry fly on PX4 with a 1.5 m geofence ({url})",
+                           tmp_path / "px4" / "px4.log")  # fmt: skip
+    assert proc.returncode == 1, (out[-2000:], err[-2000:])
+    *trace, line = out.strip().splitlines()
+    assert (
+        line.startswith("B1: failed in ") and ": brick-1: the autopilot took control: mode AUTO." in line
+    ), out
+    assert line.endswith(", not requested (masonry flies in OFFBOARD)"), line
+    # the machine stopped (no LAND of its own over PX4's mode) and halted
+    assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
+    print(f"PX4: {line}")

@@ -197,6 +197,15 @@ class FlightController(Protocol):
 
 
 @runtime_checkable
+class WaitsAlive(Protocol):
+    """A flight controller whose calls may wait (arming through an autopilot's refusals, its estimate) and that
+    calls ``keep_alive`` while it does, so that the loop around the machine keeps its other duties (the UAV's
+    heartbeat to mission control: issue 29's "uav lost")."""
+
+    keep_alive: Callable[[], None] | None
+
+
+@runtime_checkable
 class Gripper(Protocol):
     """Electromagnet on a lockable ball joint."""
 

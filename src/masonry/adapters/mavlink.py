@@ -417,7 +417,7 @@ class MavlinkFlightController(EstimateLink):
         with self._lock:
             self._setpoint = None
             self._streaming = True  # PX4 needs a setpoint stream before it accepts OFFBOARD
-        arm_retrying(self._enter_mode_and_arm, self._monotonic, self._stop.wait, self.arm_retry_s)
+        arm_retrying(self._enter_mode_and_arm, self._monotonic, self._pause, self.arm_retry_s)
         with self._lock:
             self._state.armed = True  # the ACK said so; the next HEARTBEAT confirms
 
@@ -463,7 +463,7 @@ class MavlinkFlightController(EstimateLink):
     def _stream_zero_before_offboard(self) -> None:
         for _ in range(5):
             self._send_position_target((0.0, 0.0, 0.0), 0.0)
-            self._stop.wait(0.05)
+            self._pause(0.05)
 
     def disarm(self) -> None:
         """Disarm (the autopilot refuses while flying: CommandRejected)."""

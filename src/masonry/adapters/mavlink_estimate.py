@@ -24,6 +24,17 @@ class EstimateLink(MavlinkLink):
     """A :class:`~masonry.adapters.mavlink_link.MavlinkLink` that knows when the autopilot's estimate is usable."""
 
     estimate_timeout_s: float
+    #: called during this adapter's waits (the estimate, arming through refusals) at least every
+    #: :attr:`ARM_RETRY_INTERVAL_S <masonry.adapters.arming.ARM_RETRY_INTERVAL_S>`: the loop around the machine
+    #: (``masonry fly --mission``: the UAV's heartbeat to mission control) goes on meanwhile (issue 29,
+    #: :class:`masonry.ports.WaitsAlive`). None: nothing to keep alive.
+    keep_alive: Callable[[], None] | None = None
+
+    def _pause(self, seconds: float) -> bool:
+        """Wait ``seconds`` (True if cut short: the link is closing), the loop around kept alive first."""
+        if self.keep_alive is not None:
+            self.keep_alive()
+        return self._stop.wait(seconds)
 
     def estimate_status(self) -> str:
         """What the estimate lacks now, in words: no local position yet, or what the EKF flags miss."""
@@ -97,7 +108,7 @@ class EstimateLink(MavlinkLink):
                     f"waiting for the position estimate: {status} ({max(0.0, deadline - now):.0f} s left)"
                 )
                 last_status, last_report = status, now
-            self._stop.wait(0.02)
+            self._pause(0.02)
 
     def _position_ok(self, now: float) -> bool:
         st = self._state

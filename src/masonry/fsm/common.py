@@ -15,6 +15,7 @@ import numpy as np
 from masonry.errors import HardwareError
 from masonry.fsm.attempt import Swing, Takeoff
 from masonry.fsm.taskbook import TaskBook
+from masonry.fsm.watchdogs import taken_over
 from masonry.ports import BATTERY_LOW_REASON, Telemetry
 
 log = logging.getLogger(__name__)
@@ -233,9 +234,11 @@ class CommonStates(TaskBook):
         # link down) and the autopilot is still in the mode it was in here: a pilot who has switched modes
         # (or the autopilot's own failsafe) has the UAV, and masonry never fights a mode change.
         self.failsafe.mode = tel.mode if tel is not None else None
-        self.failsafe.land_pending = True
         self.failsafe.land_tried_s = -math.inf
-        self._command_land(tel)
+        # the autopilot took the vehicle (its failsafe's RTL, LAND...): not a LAND of masonry's over it either
+        self.failsafe.land_pending = not taken_over(self.failsafe)
+        if self.failsafe.land_pending:
+            self._command_land(tel)
 
     #: Seconds between tries of a LAND command that did not go through (emergency).
     LAND_RETRY_S = 1.0

@@ -175,6 +175,7 @@ class UavModel(CommonStates):
             fs.link_down_since_s = self._now_s if fs.link_down_since_s is None else fs.link_down_since_s
             return
         fs.link_down_since_s = None
+        self._watch_mode(tel)
         self.drain.update(self._now_s, tel.battery_fraction, not tel.on_ground)
         waiting = self.transit.state in _WAITING
         if not waiting:
@@ -190,6 +191,19 @@ class UavModel(CommonStates):
                 self.attempt.held_since_s = self._now_s
         if self.fence_watch is not None and not tel.on_ground:
             self.fence_watch.observe(self._now_s, tel.position_m)
+
+    def _watch_mode(self, tel: Telemetry) -> None:
+        """The mode masonry flies in (the autopilot's at the end of the take-off; forgotten on the ground, idle)
+        and since when the autopilot reports another one (:func:`masonry.fsm.watchdogs.autopilot_mode_watch`)."""
+        fs = self.failsafe
+        if self.state == "idle":
+            fs.flight_mode = None
+        elif self.state == "takeoff" and tel.armed:
+            fs.flight_mode = tel.mode
+        if fs.flight_mode is None or tel.mode == fs.flight_mode or self.state in ("takeoff", "land"):
+            fs.foreign_mode_since_s = None
+        elif fs.foreign_mode_since_s is None:
+            fs.foreign_mode_since_s = self._now_s
 
     def _react(self, verdict: Abort) -> None:
         """Act on a watchdog's verdict (:data:`masonry.fsm.watchdogs.Action`)."""

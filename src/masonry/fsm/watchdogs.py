@@ -54,6 +54,12 @@ class Failsafe:
     mode: str | None = None  # the autopilot's mode when the emergency began
     land_pending: bool = False  # emergency: LAND still to be commanded
     land_tried_s: float = -math.inf
+    flight_mode: str | None = (
+        None  # the autopilot's mode masonry flies in (its mode at the end of the take-off)
+    )
+    foreign_mode_since_s: float | None = (
+        None  # since when the autopilot reports another mode (None: it does not)
+    )
 
 
 @dataclass(frozen=True)
@@ -167,6 +173,39 @@ def fence_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
     return None
 
 
+#: Seconds the autopilot must report a mode other than the one masonry flies in before the autopilot counts as
+#: having taken the vehicle: more than one HEARTBEAT period (1 s), so that a heartbeat sent before the mode change
+#: and heard after it is no take-over.
+MODE_TAKEN_S = 2.0
+
+
+def autopilot_mode_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
+    """The autopilot has taken the vehicle (its failsafe switched it out of the mode masonry flies in, to RTL or
+    LAND; or a pilot did): stop flying it, without a LAND of masonry's (``land``: the emergency, which commands
+    nothing then), and leave it to the autopilot once there (``give_up``: halted, the task failed) unless it is
+    landing the vehicle (then halted on the ground)."""
+    fs = a.failsafe
+    if fs.flight_mode is None:
+        return None
+    if a.state == "emergency":  # entered over a mode the autopilot chose: nothing left for masonry to do (a
+        # landing is watched to the ground, as before: it ends; an RTL, a hold may not for minutes)
+        taken = taken_over(fs) and not tel.landing
+        return Abort(f"the autopilot has the vehicle (mode {tel.mode})", "give_up") if taken else None
+    since_s = fs.foreign_mode_since_s
+    if a.state == "takeoff" or since_s is None or now_s - since_s < MODE_TAKEN_S:
+        return None
+    return Abort(
+        f"{a.config.name}: the autopilot took control: mode {tel.mode}, not requested (masonry flies in "
+        f"{fs.flight_mode})",
+        "land",
+    )
+
+
+def taken_over(fs: Failsafe) -> bool:
+    """The emergency began in a mode the autopilot chose (not the one masonry flies in): masonry commands nothing."""
+    return fs.flight_mode is not None and fs.mode is not None and fs.mode != fs.flight_mode
+
+
 def standard(*, putback: bool = False) -> tuple[Watchdog, ...]:
     """Every UAV's watchdogs, in the order they run (``putback``: the brick machine's putback states too)."""
     airborne = (TASK, *(("putback",) if putback else ()), "home", "failsafe")
@@ -175,6 +214,7 @@ def standard(*, putback: bool = False) -> tuple[Watchdog, ...]:
         Watchdog("battery", (TASK,), battery_watch),
         Watchdog("hold", (TASK,), hold_watch),
         Watchdog("fence", airborne, fence_watch),
+        Watchdog("autopilot", (*airborne, "emergency"), autopilot_mode_watch),
     )
 
 
@@ -208,6 +248,7 @@ __all__ = [
     "ADHESION_WATCHDOGS",
     "ANY",
     "BRICK_WATCHDOGS",
+    "MODE_TAKEN_S",
     "TASK",
     "TRIGGERS",
     "WATCHDOGS",
@@ -217,6 +258,7 @@ __all__ = [
     "Check",
     "Failsafe",
     "Watchdog",
+    "autopilot_mode_watch",
     "battery_watch",
     "fence_watch",
     "for_kind",
@@ -224,4 +266,5 @@ __all__ = [
     "hold_watch",
     "link_watch",
     "standard",
+    "taken_over",
 ]

@@ -298,6 +298,45 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self._handle(raw, self.now_s)
         return bool(self._queue)
 
+    def keep_alive(self, now_s: float) -> None:
+        """Between ticks, while the machine waits inside a call (an autopilot refusing to arm for a while): read
+        what has arrived and send the heartbeat when due, so that mission control does not declare this UAV lost
+        (issue 29; the flight controller calls it: :class:`masonry.ports.WaitsAlive`)."""
+        self.now_s = max(self.now_s, now_s)
+        for raw in self.transport.receive():
+            self._handle(raw, self.now_s)
+        self._heartbeat_when_due(self.now_s)
+
+    def _heartbeat_when_due(self, now_s: float) -> None:
+        if self._last_sent_hb_s is not None and now_s - self._last_sent_hb_s < self.heartbeat_period_s:
+            return
+        self._last_sent_hb_s = now_s
+        self._resend_unheard(now_s)
+        cur = self._current
+        state = self._state()
+        f = facts_of(state)
+        self._send(
+            Heartbeat(
+                self.name,
+                now_s,
+                state=state,
+                # the task in hand, or the one queued for it (mission control releases a task its UAV's
+                # heartbeats say it does not hold: a handler restarted)
+                task_id=cur.task_id if cur else (self._queue[0][0].id if self._queue else None),
+                position_m=self._where(),
+                battery=None
+                if self._report_battery is None
+                else min(1.0, max(0.0, float(self._report_battery()))),
+                wind_mps=self._wind_reading(),
+                max_wind_mps=self._max_wind_mps,
+                carrying=f.carrying,
+                flying_home=f.flying_home,
+                on_pad=f.on_pad,
+                finishing=f.finishing,
+                out_of_service=f.out_of_service,
+            )
+        )
+
     # -- the tick --------------------------------------------------------------------------------------
     def step(self, now_s: float) -> None:
         """Read messages, send the heartbeat when due, tick the machine (skipped while landed and idle)."""
@@ -306,33 +345,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self._say_kept(now_s)
         for raw in self.transport.receive():
             self._handle(raw, now_s)
-        if self._last_sent_hb_s is None or now_s - self._last_sent_hb_s >= self.heartbeat_period_s:
-            self._last_sent_hb_s = now_s
-            self._resend_unheard(now_s)
-            cur = self._current
-            state = self._state()
-            f = facts_of(state)
-            self._send(
-                Heartbeat(
-                    self.name,
-                    now_s,
-                    state=state,
-                    # the task in hand, or the one queued for it (mission control releases a task its UAV's
-                    # heartbeats say it does not hold: a handler restarted)
-                    task_id=cur.task_id if cur else (self._queue[0][0].id if self._queue else None),
-                    position_m=self._where(),
-                    battery=None
-                    if self._report_battery is None
-                    else min(1.0, max(0.0, float(self._report_battery()))),
-                    wind_mps=self._wind_reading(),
-                    max_wind_mps=self._max_wind_mps,
-                    carrying=f.carrying,
-                    flying_home=f.flying_home,
-                    on_pad=f.on_pad,
-                    finishing=f.finishing,
-                    out_of_service=f.out_of_service,
-                )
-            )
+        self._heartbeat_when_due(now_s)
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
         cur = self._current

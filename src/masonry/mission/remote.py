@@ -20,7 +20,7 @@ from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, LinkLost
 from masonry.mission.handler import UavHandler
 from masonry.placement_check import wall_tops_m
-from masonry.ports import UavPorts
+from masonry.ports import UavPorts, WaitsAlive
 
 
 @dataclass(frozen=True)
@@ -193,6 +193,8 @@ def run_remote_uav(
     )
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
+    if isinstance(fc, WaitsAlive):  # its waits (arming through refusals) keep the heartbeat going
+        fc.keep_alive = lambda: handler.keep_alive(clock.now_s())
     wall0 = time.monotonic()
     t0 = clock.now_s()
 
@@ -226,6 +228,8 @@ def run_remote_uav(
         if watch is not None:
             watch.tick(clock.now_s(), sample=True)  # where it ended: landed
     finally:
+        if isinstance(fc, WaitsAlive):
+            fc.keep_alive = None
         fc.close()
         transport.close()
     dropped = dict(transport.dropped) if isinstance(transport, AuthenticatedTransport) else {}
