@@ -74,14 +74,6 @@ class UavConfig:
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5
-    # A release gate (issue 30, masonry.fsm.dropoff_reach): until ``release_strict_s`` past the descent's leg, the
-    # brick is let go only within ``release_radius_m`` horizontally (0: placement_radius_m, the paper's r_pl) and
-    # with a horizontal speed below ``release_speed_mps`` (0: any), and only while the wall was seen within
-    # ``release_strict_seen_s``; after that, r_pl alone (no brick is lost)
-    release_radius_m: float = 0.0
-    release_speed_mps: float = 0.0
-    release_strict_s: float = 1.0
-    release_strict_seen_s: float = 0.25
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

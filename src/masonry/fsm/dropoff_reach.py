@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
     from masonry.ports import Telemetry
 
-__all__ = ["DropoffReach", "dropoff_error_m", "release_radius_m", "resting_error_m"]
+__all__ = ["DropoffReach", "dropoff_error_m", "resting_error_m"]
 
 
 def resting_error_m(error_m: Sequence[float]) -> float:
@@ -54,25 +54,16 @@ class DropoffReach:
         """A new descent: forget the heights seen."""
         self._height.reset()
 
-    def reached(
-        self,
-        now_s: float,
-        error_m: Sequence[float],
-        tracking_z_m: float,
-        radius_m: float,
-        horizontal_m: float | None = None,
-    ) -> bool:
+    def reached(self, now_s: float, error_m: Sequence[float], tracking_z_m: float, radius_m: float) -> bool:
         """One tick of the descent: the effector's error (effector minus target, world, m) and how far above its
-        descent's reference the UAV is (m); True once this tick is within ``horizontal_m`` (None: ``radius_m``)
-        horizontally and the mean height over the window, with two standard errors, is no more than ``radius_m``
-        above the target.
+        descent's reference the UAV is (m); True once this tick is within ``radius_m`` horizontally and the mean
+        height over the window, with two standard errors, is no more than ``radius_m`` above the target.
 
         The window averages the height about the descent's reference (which is known, not noisy), so that the
         descent itself is neither spread nor lag: the mean height is the reference's plus the mean deviation."""
         height = self._height
         height.add(now_s, (float(tracking_z_m), 0.0), (0.0, 0.0))
-        within_m = radius_m if horizontal_m is None else horizontal_m
-        if math.hypot(float(error_m[0]), float(error_m[1])) > within_m or height.seen_s < height.window_s:
+        if math.hypot(float(error_m[0]), float(error_m[1])) > radius_m or height.seen_s < height.window_s:
             return False
         reference_dz_m = float(error_m[2]) - float(tracking_z_m)
         return reference_dz_m + height.mean_m[0] + 2.0 * height.standard_error_m <= radius_m
@@ -84,42 +75,11 @@ def dropoff_error_m(uav: BrickUav, tel: Telemetry, reach: DropoffReach) -> float
     height; the error then counts a height above the drop-off only, :func:`resting_error_m`). The release itself
     may still wait (:mod:`masonry.fsm.release_gate`)."""
     cfg, target = uav.config, uav.attempt.place_effector_target_m
-    horizontal_m = release_radius_m(uav, tel)
-    if horizontal_m is None:
-        return None
     if cfg.gate_window_s > 0.0:
         error_m = uav.effector.position(tel) - target
         tracking_z_m = tel.position_m[2] - float(uav.nav.reference(uav._now_s)[0][2])
-        if not reach.reached(uav._now_s, error_m, tracking_z_m, cfg.placement_radius_m, horizontal_m):
+        if not reach.reached(uav._now_s, error_m, tracking_z_m, cfg.placement_radius_m):
             return None
         return resting_error_m(error_m)
     error = uav.effector.distance_m(tel, target)
-    if error > cfg.placement_radius_m:
-        return None
-    if horizontal_m < cfg.placement_radius_m:
-        error_m = uav.effector.position(tel) - target
-        if math.hypot(float(error_m[0]), float(error_m[1])) > horizontal_m:
-            return None
-    return error
-
-
-def release_radius_m(uav: BrickUav, tel: Telemetry) -> float | None:
-    """The horizontal radius (m) the effector must be within this tick to release, or None while the UAV moves
-    too fast to: the release gate (``UavConfig.release_radius_m`` and ``release_speed_mps``) until
-    ``release_strict_s`` past the descent leg's end, then r_pl alone, so that a gate the vehicle cannot meet costs
-    time, never the brick; only while the wall was seen within ``release_strict_seen_s`` (waiting with the wall
-    out of view makes the drop-off older: a tower's brick then lands farther off its support)."""
-    cfg = uav.config
-    if cfg.release_radius_m <= 0.0 and cfg.release_speed_mps <= 0.0:
-        return cfg.placement_radius_m
-    if uav._now_s > uav.nav.end_s + cfg.release_strict_s:
-        return cfg.placement_radius_m
-    if uav._now_s - uav._wall.seen_s > cfg.release_strict_seen_s:
-        return cfg.placement_radius_m
-    if cfg.release_speed_mps > 0.0:
-        speed_m_s = math.hypot(float(tel.velocity_mps[0]), float(tel.velocity_mps[1]))
-        if speed_m_s > cfg.release_speed_mps:
-            return None
-    if cfg.release_radius_m > 0.0:
-        return min(cfg.release_radius_m, cfg.placement_radius_m)
-    return cfg.placement_radius_m
+    return error if error <= cfg.placement_radius_m else None
