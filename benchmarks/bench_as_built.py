@@ -68,6 +68,8 @@ WALLS: dict[str, Callable[[], Blueprint]] = {
     "pyramid-3": lambda: pyramid(3, yaw_rad=YAW_RAD, clearance_m=1.0),
 }
 VEHICLES = ("ideal", "arducopter", "px4")
+#: issue 30's target: every brick within this of its design relative to its neighbours (m)
+NEIGHBOUR_LIMIT_M = 0.02
 
 
 @dataclass
@@ -280,7 +282,7 @@ def main() -> None:
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
-        f"relative/seen/placed  off course/counted done  descending/attempt mean s"
+        f"relative/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -310,6 +312,7 @@ def main() -> None:
                     f"{len(tally.relative_m or [])}/{tally.seen}/{tally.placed}  "
                     f"{tally.off_course}/{tally.off_course_done}  "
                     f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
+                    f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )
