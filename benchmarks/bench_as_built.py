@@ -42,8 +42,8 @@ import argparse
 import math
 import random
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -68,6 +68,8 @@ WALLS: dict[str, Callable[[], Blueprint]] = {
     "pyramid-3": lambda: pyramid(3, yaw_rad=YAW_RAD, clearance_m=1.0),
 }
 VEHICLES = ("ideal", "arducopter", "px4")
+#: issue 30's target: every brick within this of its design relative to its neighbours (m)
+NEIGHBOUR_LIMIT_M = 0.02
 
 
 @dataclass
@@ -87,6 +89,9 @@ class Tally:
     #: control counted done: a silent wrong answer (masonry.mission.course_check)
     off_course: int = 0
     off_course_done: int = 0
+    #: the seconds each brick attempt done spent descending (onto the pallet and onto the drop-off) and in all
+    descend_s: list[float] = field(default_factory=list)
+    attempt_s: list[float] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
@@ -120,6 +125,25 @@ def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
     return out
 
 
+def _config(
+    vehicle: str, *, wall: bool, side_look: bool, trend: bool, overrides: Mapping[str, float] | None
+) -> UavConfig | None:
+    """The UAVs' settings when they differ from ``vehicle``'s preset (None: the preset's)."""
+    if not wall or not side_look or not trend or overrides:
+        # the vehicle's control preset with the wall's markers off (placement on the absolute position), the side
+        # look off (every descent from right above the drop-off) or the wall offset's trend off
+        settings = {**uav_settings(vehicle)}
+        if not wall:
+            settings["align_on_wall"] = False
+        if not side_look:
+            settings["side_look"] = False
+        if not trend:
+            settings["wall_trend_s"] = 0.0
+        settings.update(overrides or {})
+        return UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
+    return None
+
+
 def run_one(
     bp: Blueprint,
     vehicle: str,
@@ -130,20 +154,10 @@ def run_one(
     wall: bool = True,
     side_look: bool = True,
     trend: bool = True,
+    overrides: Mapping[str, float] | None = None,
 ) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
-    config = None
-    if not wall or not side_look or not trend:
-        # the vehicle's control preset with the wall's markers off (placement on the absolute position), the side
-        # look off (every descent from right above the drop-off) or the wall offset's trend off
-        settings = {**uav_settings(vehicle)}
-        if not wall:
-            settings["align_on_wall"] = False
-        if not side_look:
-            settings["side_look"] = False
-        if not trend:
-            settings["wall_trend_s"] = 0.0
-        config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
+    config = _config(vehicle, wall=wall, side_look=side_look, trend=trend, overrides=overrides)
     mission = SimulatedMission.from_blueprint(
         bp, seed=seed, vehicle=vehicle, faults=faults, uav_config=config
     )
@@ -152,6 +166,10 @@ def run_one(
     tally.completed += int(report.completed)
     world = mission.world
     done = {a.task_id for a in mission.control.history if a.status == "done"}
+    for att in report.attempts:
+        if att.kind == "brick" and att.status == "done" and att.phases is not None:
+            tally.descend_s.append(att.phases.descending)
+            tally.attempt_s.append(att.phases.total_s)
     offsets: dict[int, np.ndarray] = {}
     for b in bp.bricks:
         sim = world.bricks[b.id]
@@ -246,17 +264,25 @@ def main() -> None:
         action="store_true",
         help="the wall alignment without the wall offset's trend (wall_trend_s 0: the target is the last frames' mean)",
     )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a UavConfig setting over the vehicle's preset (a number; repeatable), e.g. release_radius_m=0.01",
+    )
     parser.add_argument("--wander", action="store_true", help="print the px4 model's GNSS wander and stop")
     args = parser.parse_args()
     if args.wander:
         wander()
         return
     winds = [0.0 if w == "calm" else float(w) for w in args.wind.split(",")]
+    overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
     print(
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
-        f"relative/seen/placed  off course/counted done"
+        f"relative/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -274,6 +300,7 @@ def main() -> None:
                         wall=not args.no_wall_align,
                         side_look=not args.no_side_look,
                         trend=not args.no_trend,
+                        overrides=overrides,
                     )
                 assert tally.design_m is not None and tally.neighbour_m is not None
                 assert tally.estimate_m is not None and tally.estimate_wall_m is not None
@@ -284,6 +311,8 @@ def main() -> None:
                     f"{_mm(tally.estimate_wall_m):>28}  {_mm(tally.relative_m or []):>38}  "
                     f"{len(tally.relative_m or [])}/{tally.seen}/{tally.placed}  "
                     f"{tally.off_course}/{tally.off_course_done}  "
+                    f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
+                    f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )
