@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
+from masonry.adapters.mavlink import MavlinkFlightController
+from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.fakes import (
     FakeBrick,
     FakeCamera,
@@ -119,3 +122,28 @@ class Rig:
         """State ``b`` was entered right after ``a`` somewhere in the trace."""
         s = self.states
         return any(s[i] == a and s[i + 1] == b for i in range(len(s) - 1))
+
+
+@contextmanager
+def glue_on_px4_sitl() -> Iterator[
+    tuple[MavlinkSitl, MavlinkFlightController, AdhesionUav, QueueMissionLink]
+]:
+    """An adhesion UAV with task A0 flying the project's SITL as PX4 over real MAVLink (x10 time); closed after."""
+    port = free_udp_port()
+    sitl = MavlinkSitl(
+        port, time_scale=10.0, home_m=HOME, config=SitlConfig(autopilot="px4", heartbeat_hz=10.0)
+    )
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=5.0)
+    sitl.start()
+    try:
+        fc.connect()
+        link = QueueMissionLink([adhesion_task()])
+        yield (
+            sitl,
+            fc,
+            AdhesionUav(UavConfig("glue-1", "adhesion", HOME), fc, FakeSprayer(fc.clock), link, fc.clock),
+            link,
+        )
+    finally:
+        fc.close()
+        sitl.stop()

@@ -11,11 +11,7 @@ from __future__ import annotations
 
 import time
 
-from fsm_rig import Rig, adhesion_task
-from masonry.adapters.mavlink import MavlinkFlightController
-from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
-from masonry.fakes import FakeSprayer, QueueMissionLink
-from masonry.fsm import AdhesionUav, UavConfig
+from fsm_rig import Rig, glue_on_px4_sitl
 from masonry.fsm.watchdogs import MODE_TAKEN_S, autopilot_mode_watch, for_kind
 
 TAKEN = "brick-1: the autopilot took control: mode RTL, not requested (masonry flies in GUIDED)"
@@ -94,18 +90,8 @@ def test_the_watchdog_is_declared_for_both_machines() -> None:
 def test_px4s_failsafe_hold_over_mavlink_ends_the_flight() -> None:
     """The project's SITL as PX4 (real MAVLink, x10 time): its failsafe takes the vehicle to AUTO.LOITER in
     cruise; the machine halts with the mode named, having commanded no LAND."""
-    port = free_udp_port()
-    home = (0.0, -2.0, 0.0)
-    sitl = MavlinkSitl(
-        port, time_scale=10.0, home_m=home, config=SitlConfig(autopilot="px4", heartbeat_hz=10.0)
-    )
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=5.0)
-    sitl.start()
-    try:
-        fc.connect()
+    with glue_on_px4_sitl() as (sitl, fc, uav, link):
         clock = fc.clock
-        link = QueueMissionLink([adhesion_task()])
-        uav = AdhesionUav(UavConfig("glue-1", "adhesion", home), fc, FakeSprayer(clock), link, clock)
         switched = False
         deadline = time.monotonic() + 30.0  # wall seconds: a bound on the loop, not a timed assertion
         while time.monotonic() < deadline and uav.state != "halted":
@@ -115,9 +101,6 @@ def test_px4s_failsafe_hold_over_mavlink_ends_the_flight() -> None:
                 sitl.pilot_mode("AUTO.LOITER")  # as PX4's offboard-loss failsafe does
                 switched = True
             clock.sleep(0.05)
-    finally:
-        fc.close()
-        sitl.stop()
     assert switched and uav.state == "halted", uav.trace
     assert uav.halt_reason is not None and uav.halt_reason.startswith(
         "glue-1: the autopilot took control: mode AUTO.LOITER, not requested (masonry flies in OFFBOARD)"

@@ -13,8 +13,7 @@ import time
 
 import pytest
 
-from fsm_rig import Rig
-from masonry.fakes import FakeSprayer, QueueMissionLink
+from fsm_rig import Rig, glue_on_px4_sitl
 from waiting import wait_until
 
 
@@ -126,24 +125,9 @@ def test_a_landing_autopilot_is_left_to_land() -> None:
 
 
 def _px4_emergency(pilot_takes_over: bool) -> tuple[object, object, list[str]]:
-    from fsm_rig import adhesion_task
-    from masonry.adapters.mavlink import MavlinkFlightController
-    from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
-    from masonry.fsm import AdhesionUav, UavConfig
-
-    port = free_udp_port()
-    home = (0.0, -2.0, 0.0)
-    sitl = MavlinkSitl(
-        port, time_scale=10.0, home_m=home, config=SitlConfig(autopilot="px4", heartbeat_hz=10.0)
-    )
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=5.0)
     modes: list[str] = []
-    sitl.start()
-    try:
-        fc.connect()
+    with glue_on_px4_sitl() as (sitl, fc, uav, _link):
         clock = fc.clock
-        link = QueueMissionLink([adhesion_task()])
-        uav = AdhesionUav(UavConfig("glue-1", "adhesion", home), fc, FakeSprayer(clock), link, clock)
         deadline = time.monotonic() + 20.0
         pilot_s: float | None = None
         while time.monotonic() < deadline:
@@ -162,10 +146,7 @@ def _px4_emergency(pilot_takes_over: bool) -> tuple[object, object, list[str]]:
             if uav.state == "halted":
                 break
             clock.sleep(0.05)
-        return sitl, uav, modes
-    finally:
-        fc.close()
-        sitl.stop()
+    return sitl, uav, modes
 
 
 def test_px4_emergency_lands_once_in_auto_land() -> None:
