@@ -12,19 +12,16 @@ chosen from the autopilot's HEARTBEAT (issue 29, docs/hardware.md).
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from ardupilot_sitl import SPEEDUP, arducopter, sitl_binary
+from case_study_procs import CASE_STUDY, check_completed, fly_mission, free_tcp_port, masonry, reaped
 from masonry.cli import app
 from masonry.fsm import UavConfig
 
-CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
-MAIN = "from masonry.cli import main; main()"
 #: ArduCopter SITL needs ~40 s (its clock) from the first connection to a GPS-based estimate; nothing else is set.
 UAV_YAML = "estimate_wait_s: 150\n"
 #: Mission control's and the UAVs' ``--heartbeat-timeout`` (the same, as ``fly --help`` asks): a UAV counts it on
@@ -72,35 +69,13 @@ def test_a_brick_task_and_an_adhesion_task_on_arducopter_sitl(tmp_path: Path) ->
     )
 
 
-def _masonry(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-c", MAIN, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
-
-
-def _fly_mission(
-    role: str, uav: str, url: str, endpoint: str, config: Path, name: list[str]
-) -> subprocess.Popen[str]:
-    return _masonry("fly", "--uav", role, "--name", uav, "--blueprint", CASE_STUDY, "--mission", endpoint,
-                    "--listen", f"tcp/127.0.0.1:{_free_tcp_port()}", "--fc", url, "--actuators", "sim",
-                    "--camera", "sim", "--config", str(config), "--wait", "60", "--heartbeat-timeout",
-                    HEARTBEAT_TIMEOUT, "--format", "json", *name)  # fmt: skip
-
-
-def _free_tcp_port() -> int:
-    import socket
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("reservation", ["site", "task"])
 def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path, reservation: str) -> None:
     sitl_binary()
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
-    endpoint = f"tcp/127.0.0.1:{_free_tcp_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     name = ["--mission-name", f"sitl-{endpoint.rsplit(':', 1)[1]}"]
     scale = str(SPEEDUP)
     # instances of their own per rule: the two missions run at once on the two xdist workers (slow tests first)
@@ -111,27 +86,20 @@ def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path, res
     ):
         # mission time runs at x5 of the wall until the UAVs join (after their pre-flight), then follows their
         # autopilots' clocks (masonry.mission.fleet_clock): a SITL slowed by a loaded machine slows the mission
-        mc = _masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--time-scale", scale,
+        mc = masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--time-scale", scale,
                       "--startup-timeout", "300", "--heartbeat-timeout", HEARTBEAT_TIMEOUT, "--max-time", "1500",
                       "--verbose",
                       *(["--reservation", "task"] if reservation == "task" else []),  # site: the default
                       *name)  # fmt: skip
+        flags = ["--wait", "60", "--heartbeat-timeout", HEARTBEAT_TIMEOUT, *name]
         uavs = [
-            _fly_mission(role, uav, url, endpoint, config, name)
+            fly_mission(role, uav, url, endpoint, config, *flags)
             for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
         ]
-        try:
+        with reaped([mc, *uavs]):
             mc_out, mc_err = mc.communicate(timeout=400)
             runs = [p.communicate(timeout=120) for p in uavs]
-        finally:
-            for p in [mc, *uavs]:
-                if p.poll() is None:
-                    p.kill()
-                    p.wait()
-    assert mc.returncode == 0, mc_err[-3000:] + "".join(err[-2000:] for _, err in runs)
-    report = json.loads(mc_out)
-    assert report["completed"] is True
-    done = sorted((t["end_s"], t["id"], t["uav"]) for t in report["tasks"])
+    report, done = check_completed(mc, mc_out, mc_err, runs)
     if (
         reservation == "task"
     ):  # the paper's rule gives Section VI's order: A0 by glue-1, B0 by brick-1, A1, B1
@@ -142,9 +110,6 @@ def test_the_case_study_as_a_mission_on_two_arducopter_sitls(tmp_path: Path, res
             ("B1", "brick-1"),
         ]
     else:  # site overlaps what the paper serialises; each task by its kind of UAV, each brick after its bead
-        assert sorted((tid, uav) for _, tid, uav in done) == [
-            ("A0", "glue-1"), ("A1", "glue-1"), ("B0", "brick-1"), ("B1", "brick-1")
-        ]  # fmt: skip
         ends = {tid: end for end, tid, _ in done}
         assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]
     assert all(e < 0.02 for e in report["placement_error_m"].values())

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import json
 import os
-import socket
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from case_study_procs import CASE_STUDY, check_completed, fly_mission, free_tcp_port, masonry, reaped
 from masonry.adapters.wiring import hardware_config
 from masonry.blueprint import load_blueprint
 from masonry.cli.fly import select_adapters
@@ -27,8 +26,6 @@ from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
 from px4_sitl import ONE_BRICK, hover, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
 
-CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
-MAIN = "from masonry.cli import main; main()"
 #: The issue's uav.yaml: PX4's EKF2 is ready within seconds, a loaded machine slows it; nothing else is set.
 UAV_YAML = "estimate_wait_s: 150\n"
 TUNING_LINE = "[ok  ] tuning: control preset px4 (PX4 autopilot, from its HEARTBEAT)"
@@ -77,11 +74,6 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     assert filtered < ekf + 0.1, (ekf, filtered, str(kept))
 
 
-def _masonry(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-c", MAIN, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
-
-
 def _finish(proc: subprocess.Popen[str], wall_s: float, what: str, px4_log: Path) -> tuple[str, str]:
     """The process's output once it has ended, or a failure saying what did not end within ``wall_s``."""
     try:
@@ -98,7 +90,7 @@ def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> di
     uav.yaml: its JSON result, asserted done."""
     config = folder / "uav.yaml"
     config.write_text(UAV_YAML)
-    proc = _masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url, "--actuators", "sim",
+    proc = masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url, "--actuators", "sim",
                     "--camera", "sim", "--config", str(config), "--format", "json")  # fmt: skip
     out, err = _finish(
         proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", folder / "px4" / "px4.log"
@@ -160,20 +152,6 @@ MISSION_WALL_S = 720.0
 MISSION_PX4_PARAMS = {"SIM_BAT_DRAIN": "3600"}
 
 
-def _free_tcp_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def _fly_mission(
-    role: str, uav: str, url: str, endpoint: str, config: Path, name: list[str]
-) -> subprocess.Popen[str]:
-    return _masonry("fly", "--uav", role, "--name", uav, "--blueprint", CASE_STUDY, "--mission", endpoint,
-                    "--listen", f"tcp/127.0.0.1:{_free_tcp_port()}", "--fc", url, "--actuators", "sim",
-                    "--camera", "sim", "--config", str(config), "--format", "json", *name)  # fmt: skip
-
-
 @pytest.mark.slow
 def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     """Mission control and two ``masonry fly --mission`` processes (brick-1 on PX4 instance 4, glue-1 on 5), all
@@ -181,7 +159,7 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     _opted_in("the case study on two PX4s")
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
-    endpoint = f"tcp/127.0.0.1:{_free_tcp_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     name = ["--mission-name", f"px4-{endpoint.rsplit(':', 1)[1]}"]
     brick_dir, glue_dir = tmp_path / "brick-1", tmp_path / "glue-1"
     with (
@@ -189,30 +167,19 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
         px4(brick_dir, instance=4, params=MISSION_PX4_PARAMS) as brick_url,
         px4(glue_dir, instance=5, params=MISSION_PX4_PARAMS) as glue_url,
     ):
-        mc = _masonry(
+        mc = masonry(
             "mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--verbose", *name
         )
         uavs = [
-            _fly_mission(role, uav, url, endpoint, config, name)
+            fly_mission(role, uav, url, endpoint, config, *name)
             for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
         ]
-        try:
+        with reaped([mc, *uavs]):
             mc_out, mc_err = _finish(mc, MISSION_WALL_S, "mission control (case study on two PX4s)",
                                      brick_dir / "px4.log")  # fmt: skip
             runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", folder / "px4.log")
                     for p, uav, folder in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
-        finally:
-            for p in [mc, *uavs]:
-                if p.poll() is None:
-                    p.kill()
-                    p.wait()
-    assert mc.returncode == 0, mc_err[-3000:] + "".join(err[-2000:] for _, err in runs)
-    report = json.loads(mc_out)
-    assert report["completed"] is True
-    done = sorted((t["end_s"], t["id"], t["uav"]) for t in report["tasks"])
-    assert sorted((tid, uav) for _, tid, uav in done) == [
-        ("A0", "glue-1"), ("A1", "glue-1"), ("B0", "brick-1"), ("B1", "brick-1")
-    ]  # fmt: skip
+    report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
     assert all(e < 0.02 for e in report["placement_error_m"].values()), report["placement_error_m"]
@@ -243,7 +210,7 @@ def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
     with one_flight_at_a_time(), px4(tmp_path / "px4", instance=3, params=GEOFENCE_PX4_PARAMS) as url:
-        proc = _masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
+        proc = masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
                         "--actuators", "sim", "--camera", "sim", "--config", str(config))  # fmt: skip
         out, err = _finish(proc, TASK_WALL_S, f"masonry fly on PX4 with a 1.5 m geofence ({url})",
                            tmp_path / "px4" / "px4.log")  # fmt: skip
