@@ -32,7 +32,8 @@ The default run (one seed, calm air) takes a few minutes on one core; the issue'
 
 (``--walls``, ``--vehicles`` select; ``--seed0`` shifts the seeds; ``--no-wall-align`` places on the absolute
 position, ``align_on_wall`` off, for the comparison; ``--no-side-look`` keeps the wall alignment but flies every
-descent from right above the drop-off, as before the side look.)
+descent from right above the drop-off, as before the side look; ``--no-trend`` keeps both but not the wall offset's
+trend, ``wall_trend_s`` 0, as before ``masonry.fsm.wall_trend``.)
 """
 
 from __future__ import annotations
@@ -128,14 +129,20 @@ def run_one(
     *,
     wall: bool = True,
     side_look: bool = True,
+    trend: bool = True,
 ) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
     config = None
-    if not wall or not side_look:
-        # the vehicle's control preset with the wall's markers off (placement on the absolute position), or the
-        # side look off (every descent from right above the drop-off)
+    if not wall or not side_look or not trend:
+        # the vehicle's control preset with the wall's markers off (placement on the absolute position), the side
+        # look off (every descent from right above the drop-off) or the wall offset's trend off
         settings = {**uav_settings(vehicle)}
-        settings["align_on_wall" if not wall else "side_look"] = False
+        if not wall:
+            settings["align_on_wall"] = False
+        if not side_look:
+            settings["side_look"] = False
+        if not trend:
+            settings["wall_trend_s"] = 0.0
         config = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
     mission = SimulatedMission.from_blueprint(
         bp, seed=seed, vehicle=vehicle, faults=faults, uav_config=config
@@ -234,6 +241,11 @@ def main() -> None:
         action="store_true",
         help="the wall alignment without the side look (side_look off: every descent from above the drop-off)",
     )
+    parser.add_argument(
+        "--no-trend",
+        action="store_true",
+        help="the wall alignment without the wall offset's trend (wall_trend_s 0: the target is the last frames' mean)",
+    )
     parser.add_argument("--wander", action="store_true", help="print the px4 model's GNSS wander and stop")
     args = parser.parse_args()
     if args.wander:
@@ -261,6 +273,7 @@ def main() -> None:
                         tally,
                         wall=not args.no_wall_align,
                         side_look=not args.no_side_look,
+                        trend=not args.no_trend,
                     )
                 assert tally.design_m is not None and tally.neighbour_m is not None
                 assert tally.estimate_m is not None and tally.estimate_wall_m is not None

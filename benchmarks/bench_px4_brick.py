@@ -8,6 +8,8 @@ done or failed (with the reason), the placement error, the seconds of flight and
 sensor timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges); then a JSON summary.
 PX4 refuses to arm in its first seconds ("temporarily rejected"); masonry asks again for up to 30 s
 (``masonry.adapters.arming``), and each run flies ``--boot-wait`` s after starting PX4 (``--boot-wait 0``: at once).
+PX4 runs at ``px4_sitl.PX4_NICE`` where the machine allows it (as the tests start it); the scenario is
+``px4_sitl.ONE_BRICK``, the blueprint ``tests/test_px4_sitl.py`` flies.
 
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6
     python benchmarks/bench_px4_brick.py --run-sh ../shared/px4/run.sh --runs 6 --control gate_window_s=3.0
@@ -26,19 +28,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from px4_sitl import ENV, px4
-
-ONE_BRICK = """\
-name: one-brick
-cruise_altitude: 1.2
-brick:
-  size: [0.30, 0.15, 0.10]
-  markers: {dictionary: DICT_4X4_50, size: 0.05, spacing: 0.175}
-bricks:
-  - {id: 1, position: [2.0, 1.0, 0.05], pickup: [4.0, -1.0, 0.05]}
-fleet:
-  - {name: brick-1, role: brick, home: [0.0, 0.0, 0.0]}
-"""
+from px4_sitl import ENV, ONE_BRICK, px4
 
 
 def fly(url: str, folder: Path, timeout_s: float, control: dict[str, float]) -> dict[str, object]:

@@ -81,3 +81,17 @@ def test_the_default_gates_let_a_calm_task_through() -> None:
     rig = Rig("brick").run()
     assert rig.link.results[0].status == "done"
     assert rig.followed("pickup_align", "pickup_descend") and rig.followed("place_align", "place_descend")
+
+
+@pytest.mark.parametrize(("kind", "mean_sq_mps2"), [("brick", 0.09), ("adhesion", 0.34)])
+def test_the_swing_gate_counts_the_axes_its_states_judge(kind: str, mean_sq_mps2: float) -> None:
+    """Issue 29: the brick UAV's alignments judge the horizontal, so its swing counts the horizontal speed (PX4's
+    hover wanders vertically); the adhesion UAV's hover asks the nozzle still in all three axes, and counts them."""
+    uav = Rig(kind).uav
+    tel = Telemetry(
+        0.0, (0.0, 0.0, 1.0), (0.3, 0.0, 0.5), (0.0, 0.0, 0.0), True, "GUIDED", 0.9, True, True, False
+    )
+    for tick in range(200):  # 10 s, five swing windows: the mean has settled on the speed's square
+        uav._now_s = 0.05 * tick
+        assert uav._gate_failure(tel) is None  # idle: no gate guards it
+    assert uav.swing.mean_sq_mps2 == pytest.approx(mean_sq_mps2, rel=0.01)  # (1 - 1/40) ** 199 of it left

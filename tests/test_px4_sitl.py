@@ -1,17 +1,20 @@
-"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told.
+"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
+flies an adhesion task with default settings; issue 29's one-brick scenario and the case study as a two-vehicle
+mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: 6 of 8 and 2 of 5).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
-``.ci/run`` sets it. The pre-flight check, masonry's own velocity loop chosen for it, and the velocity the gates
-read against the simulator's truth. A brick task on it completes (docs/hardware.md "Against the real PX4 v1.16
-SITL") but is not flown here: with the 3 s gate window issue 29's scenario placed the brick in 6 of 6 runs of one
-series but 19 of 23 over four (benchmarks/bench_px4_brick.py; the pickup's swing gate, "swinging at 0.20-0.24 m/s
-rms", which counts the hover's vertical motion, failed most of the others), SIH runs in real time, and on a loaded
-machine PX4's sensors time out.
+``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
+never fly beside each other on the two xdist workers) and flies its own PX4 instances (4-9, one set per test), each
+bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
 from __future__ import annotations
 
 import json
+import os
+import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -22,16 +25,22 @@ from masonry.cli.fly import select_adapters
 from masonry.cli.fly_tuning import fly_settings, tuning_preset
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
-from px4_sitl import hover, px4, velocity_errors
+from px4_sitl import ONE_BRICK, hover, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
+MAIN = "from masonry.cli import main; main()"
+#: The issue's uav.yaml: PX4's EKF2 is ready within seconds, a loaded machine slows it; nothing else is set.
+UAV_YAML = "estimate_wait_s: 150\n"
+TUNING_LINE = "[ok  ] tuning: control preset px4 (PX4 autopilot, from its HEARTBEAT)"
+#: Wall seconds a single task may take, pre-flight included (the brick task flies 60-140 s; PX4 runs in real time).
+TASK_WALL_S = 420.0
 
 
 @pytest.mark.slow
 def test_the_real_px4_is_read_from_its_heartbeat_and_flies_the_px4_tuning(tmp_path: Path, capsys) -> None:
     bp = load_blueprint(CASE_STUDY)
     spec = next(u for u in bp.fleet if u.role == "brick")
-    with px4(tmp_path / "px4", instance=7) as url:
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=7) as url:
         # the defaults but the estimate wait (its EKF2 is ready within seconds; a loaded machine slows it)
         hw = hardware_config({"fc": url, "actuators": "sim", "camera": "sim"}, {"estimate_wait_s": 150})
         ports = select_adapters(sim=False, blueprint=bp, spec=spec, seed=0, camera="sim", faults=Faults(),
@@ -54,7 +63,7 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     """PX4's own hover: EKF2's velocity sits up to 0.5 m/s off the truth; the one the ``px4`` preset's gates read
     (consistent with the position, 2 s) is no farther from it, within a 40 s rms's spread (issue 29). On PX4's clock (SIH runs lock-step)."""
     tau_s = uav_settings("px4")["velocity_from_position_s"]
-    with px4(tmp_path / "px4", instance=8) as url:
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=8) as url:
         flight = hover(url, 40.0)
     kept = tmp_path / "hover.json"  # the flight, for a look at a failure
     kept.write_text(json.dumps({"estimate": flight.estimate, "truth": flight.truth}))
@@ -66,3 +75,155 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     # adds no error to what the gates read on the real PX4, not that it follows motion (tests/test_velocity_filter.py
     # checks that, deterministically, and the recorded hover's margin).
     assert filtered < ekf + 0.1, (ekf, filtered, str(kept))
+
+
+def _masonry(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-c", MAIN, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)  # fmt: skip
+
+
+def _finish(proc: subprocess.Popen[str], wall_s: float, what: str, px4_log: Path) -> tuple[str, str]:
+    """The process's output once it has ended, or a failure saying what did not end within ``wall_s``."""
+    try:
+        return proc.communicate(timeout=wall_s)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+        log = px4_log.read_text(errors="replace") if px4_log.is_file() else ""
+        pytest.fail(f"{what}: no result within {wall_s:g} s of wall time\n{err[-3000:]}\nPX4: {log[-1500:]}")
+
+
+def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> dict:
+    """``masonry fly --uav UAV --task TASK --blueprint BP --fc URL --actuators sim --camera sim`` with the issue's
+    uav.yaml: its JSON result, asserted done."""
+    config = folder / "uav.yaml"
+    config.write_text(UAV_YAML)
+    proc = _masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url, "--actuators", "sim",
+                    "--camera", "sim", "--config", str(config), "--format", "json")  # fmt: skip
+    out, err = _finish(
+        proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", folder / "px4" / "px4.log"
+    )
+    results = [line for line in out.splitlines() if line.startswith("{")]
+    assert results, f"no result (exit {proc.returncode}): {err[-3000:]}"
+    result = dict(json.loads(results[-1]))
+    px4_log = (folder / "px4" / "px4.log").read_text(errors="replace")
+    assert result["status"] == "done", (result.get("reason"), err[-2000:], px4_log[-1500:])
+    assert TUNING_LINE in err
+    return result
+
+
+@pytest.mark.slow
+def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> None:
+    """The issue's scenario as written: a one-brick blueprint, ``masonry fly --uav brick --task B1 --fc
+    udpin:0.0.0.0:14540+N --actuators sim --camera sim``, uav.yaml only ``estimate_wait_s: 150``, flown as PX4
+    starts (as CI starts it: its first seconds' arming refusals are asked through)."""
+    _opted_in("issue 29's scenario")
+    blueprint = tmp_path / "one_brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=6) as url:
+        result = _fly_task(tmp_path, url, "brick", "B1", str(blueprint))
+    assert result["placement_error_m"] is not None and result["placement_error_m"] < 0.02, result
+    states = [e["state"] for e in result["trace"]]
+    for state in ("takeoff", "pickup_align", "pickup_grasp", "place_align", "place_release", "land"):
+        assert state in states
+    print(f"PX4: B1 placed {result['placement_error_m'] * 1000:.1f} mm off in {result['duration_s']} s")
+
+
+@pytest.mark.slow
+def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
+    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=9) as url:
+        result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
+    assert result["coverage"] is not None and result["coverage"] >= 0.9, result
+    print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
+
+
+#: The scenario and the mission fly only where this is set as well (opt-in): beside a busy loop the scenario placed
+#: 6 of 8 (PX4's SIH failed once; once the place alignment swung 0.92 m off), the mission completed 2 of 5 (a lost
+#: glue-1, a brick-1 1.66 m off its drop-off, "could not reach the spraying height"; docs/performance/
+#: autopilots.md, "Issue 29's PX4 list in CI"): not yet tests CI can hold.
+OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
+
+
+def _opted_in(what: str) -> None:
+    """Skip ``what`` unless :data:`OPT_IN_ENV` is set (after the PX4 SITL's own check: its reason comes first)."""
+    px4_run_sh()
+    if not os.environ.get(OPT_IN_ENV):
+        pytest.skip(f"{what} on the real PX4 is opt-in ({OPT_IN_ENV}=1): not yet reliable under load")
+
+
+#: Wall seconds the two-vehicle mission may take: 285 s by hand (2026-12-03), pre-flights included.
+MISSION_WALL_S = 720.0
+#: PX4's simulated battery drains to its floor (SIM_BAT_MIN_PCT, 50 %) in a minute (SIM_BAT_DRAIN 60 s), and masonry
+#: rightly retires a UAV at "battery low (51%)" after its first task: the mission's PX4s drain over an hour (the
+#: simulator's parameter, not masonry's).
+MISSION_PX4_PARAMS = {"SIM_BAT_DRAIN": "3600"}
+
+
+def _free_tcp_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _fly_mission(
+    role: str, uav: str, url: str, endpoint: str, config: Path, name: list[str]
+) -> subprocess.Popen[str]:
+    return _masonry("fly", "--uav", role, "--name", uav, "--blueprint", CASE_STUDY, "--mission", endpoint,
+                    "--listen", f"tcp/127.0.0.1:{_free_tcp_port()}", "--fc", url, "--actuators", "sim",
+                    "--camera", "sim", "--config", str(config), "--format", "json", *name)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
+    """Mission control and two ``masonry fly --mission`` processes (brick-1 on PX4 instance 4, glue-1 on 5), all
+    with default settings (the default reservation, ``site``; real time): the mission completes."""
+    _opted_in("the case study on two PX4s")
+    config = tmp_path / "uav.yaml"
+    config.write_text(UAV_YAML)
+    endpoint = f"tcp/127.0.0.1:{_free_tcp_port()}"
+    name = ["--mission-name", f"px4-{endpoint.rsplit(':', 1)[1]}"]
+    brick_dir, glue_dir = tmp_path / "brick-1", tmp_path / "glue-1"
+    with (
+        one_flight_at_a_time(),
+        px4(brick_dir, instance=4, params=MISSION_PX4_PARAMS) as brick_url,
+        px4(glue_dir, instance=5, params=MISSION_PX4_PARAMS) as glue_url,
+    ):
+        mc = _masonry(
+            "mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--verbose", *name
+        )
+        uavs = [
+            _fly_mission(role, uav, url, endpoint, config, name)
+            for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
+        ]
+        try:
+            mc_out, mc_err = _finish(mc, MISSION_WALL_S, "mission control (case study on two PX4s)",
+                                     brick_dir / "px4.log")  # fmt: skip
+            runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", folder / "px4.log")
+                    for p, uav, folder in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
+        finally:
+            for p in [mc, *uavs]:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+    assert mc.returncode == 0, mc_err[-3000:] + "".join(err[-2000:] for _, err in runs)
+    report = json.loads(mc_out)
+    assert report["completed"] is True
+    done = sorted((t["end_s"], t["id"], t["uav"]) for t in report["tasks"])
+    assert sorted((tid, uav) for _, tid, uav in done) == [
+        ("A0", "glue-1"), ("A1", "glue-1"), ("B0", "brick-1"), ("B1", "brick-1")
+    ]  # fmt: skip
+    ends = {tid: end for end, tid, _ in done}
+    assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
+    assert all(e < 0.02 for e in report["placement_error_m"].values()), report["placement_error_m"]
+    assert report["conflict_violations"] == 0 and report["dependency_violations"] == 0
+    for p, (out, err) in zip(uavs, runs):
+        assert p.returncode == 0, err[-2000:]
+        assert json.loads(out)["mission_completed"]
+        assert TUNING_LINE in err
+    attempts = {t["id"]: t["attempts"] for t in report["tasks"]}
+    retried = {t["id"]: t["attempts_detail"] for t in report["tasks"] if t["attempts"] > 1}
+    errors = ", ".join(f"{k} {v * 1000:.1f} mm" for k, v in report["placement_error_m"].items())
+    print(
+        f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
+    )

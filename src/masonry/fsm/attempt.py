@@ -32,7 +32,7 @@ class Swing:
 
     entered_s: float = math.nan  # the gate state's entry it belongs to
     tick_s: float = 0.0  # the tick it was last updated at
-    mean_sq_mps2: float = 0.0  # exponentially weighted over ``swing_window_s``
+    mean_sq_mps2: float = 0.0  # exponentially weighted over ``swing_window_s`` (the machine's ``SWING_AXES``)
 
 
 @dataclass

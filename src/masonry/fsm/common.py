@@ -32,6 +32,10 @@ _TAKEOFF_STUCK_S = 6.0
 class CommonStates(TaskBook):
     """The callbacks of the states every UAV has (see the module's docstring)."""
 
+    #: The velocity axes the swing gate's running mean counts: those the guarded states' own exit tests judge (3:
+    #: the adhesion UAV's hover asks the nozzle still in all three; the brick UAV's alignments are horizontal, 2).
+    SWING_AXES = 3
+
     def _hardware_failure(self, reason: str) -> None:
         state = self.state
         if state == "halted":
@@ -103,9 +107,9 @@ class CommonStates(TaskBook):
         if swing.entered_s != self._entered_s:
             swing = Swing(self._entered_s, self._now_s, 0.0)
         dt = self._now_s - swing.tick_s
-        vx, vy, vz = tel.velocity_mps
+        speed_sq = sum(float(v) * float(v) for v in tel.velocity_mps[: self.SWING_AXES])
         mean_sq = swing.mean_sq_mps2
-        mean_sq += min(1.0, dt / self.config.swing_window_s) * (vx * vx + vy * vy + vz * vz - mean_sq)
+        mean_sq += min(1.0, dt / self.config.swing_window_s) * (speed_sq - mean_sq)
         self._swing = Swing(self._entered_s, self._now_s, mean_sq)
         for gate in self.gates:
             if gate.guards(self.state):

@@ -71,6 +71,9 @@ class UavConfig:
     # With align_on_wall: a brick that stands on others is released only if a brick of the wall was in the
     # camera's view at most this long (s) before; else it looks again from above (masonry.fsm.release_gate). 0: off
     release_fresh_s: float = 0.45
+    # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
+    # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
+    wall_trend_s: float = 1.5
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

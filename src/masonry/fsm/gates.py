@@ -58,7 +58,8 @@ class Gate:
 
 def swing_gate(now_s: float, tel: Telemetry, g: Gated) -> str | None:
     """The UAV swings instead of settling: past ``swing_patience_s`` after the leg's planned end, the root of its
-    mean squared speed over ``swing_window_s`` (exponentially weighted, from the state's entry) is above
+    mean squared speed over ``swing_window_s`` (exponentially weighted, from the state's entry; the speed over the
+    axes its machine's ``SWING_AXES`` names: horizontal for the brick UAV's alignments) is above
     ``swing_speed_mps``. The reason says whether it was blown off (more than :data:`BLOWN_OFF_M` off its point) or
     swings about it (a position loop too fast for the autopilot's lag, or gusts)."""
     cfg = g.config

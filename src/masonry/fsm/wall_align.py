@@ -33,6 +33,7 @@ import numpy as np
 from masonry.fsm.as_built import frame_tags, world_estimate
 from masonry.fsm.camera_align import CameraAlign
 from masonry.fsm.place_taken import PLACE_TAKEN, taken_by
+from masonry.fsm.wall_trend import WallTrend
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
@@ -89,6 +90,7 @@ class WallAlign:
 
     def __init__(self) -> None:
         self.tracker = CameraAlign()
+        self.trend = WallTrend(0.0)  # (masonry.fsm.wall_trend: the wander carried past the last sighting)
         self.design_m = np.zeros(3)
         self._wall: dict[int, tuple[float, ...]] | None = None
         self._near: frozenset[int] = frozenset()
@@ -102,6 +104,7 @@ class WallAlign:
         """A new placement whose designed effector target (the brick's top-face centre) is ``design_top_m``."""
         self.design_m = np.asarray(design_top_m, dtype=float).copy()
         self.tracker.reset(self.design_m)
+        self.trend.reset(self.tracker.size)
         self.seen_s = -math.inf
         self.estimates = {}
 
@@ -136,11 +139,28 @@ class WallAlign:
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
         delta = self.tracker.add(self._base_m(wall.get(uav.brick_task.brick)) + offset)
+        self.trend.span_s = uav.config.wall_trend_s
+        self.trend.add(
+            uav._now_s,
+            offset,
+            frozenset(estimates.keys() & self._near) or frozenset(estimates),
+        )
         if delta is None:
             return False
         uav.nav.shift(tuple(float(v) for v in delta))
         uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
         return True
+
+    def carry(self, uav: BrickUav) -> None:
+        """One tick of the descent: move ``uav``'s motion and placement target along the wall's offset's trend since
+        the frames the target is the mean of (:mod:`masonry.fsm.wall_trend`; with ``align_on_wall`` only)."""
+        if not uav.config.align_on_wall:
+            return
+        delta = self.trend.step(uav._now_s)
+        if delta is None:
+            return
+        uav.nav.shift(tuple(float(v) for v in delta))
+        uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
 
     def _base_m(self, own_design_m: tuple[float, ...] | None) -> np.ndarray:
         """What the wall's offset is added to: the brick's own design. A target planned on the as-built poses
@@ -172,5 +192,7 @@ class WallAlign:
         if not uav.config.align_on_wall:
             return
         offset = self.offset_m
+        # the descent's target starts from the design again: no trend in it yet
+        self.trend.shift_m = np.zeros(3)
         uav.nav.shift(tuple(float(v) for v in offset))
         uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + offset
