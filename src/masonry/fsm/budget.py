@@ -98,13 +98,16 @@ class BatteryBudget(Routing):
 
     def task_budget_s(self, task: Task) -> float | None:
         """What ``task`` needs of the battery from where the UAV is, in seconds of flight: its flight with the
-        way home (:meth:`_flight_need_s`) and the waiting budget (:meth:`_wait_budget_s`), the latter cut to what
-        a full pack leaves beside the flight (None: no telemetry, or no drain measured yet)."""
+        way home (:meth:`_flight_need_s`), the waiting budget (:meth:`_wait_budget_s`) and
+        ``battery_return_wait_s`` of waiting for clearance on the way home (a UAV asking home may hover at a hold
+        point while a site beside its pad is worked), the waits cut to what a full pack leaves beside the flight
+        (None: no telemetry, or no drain measured yet)."""
         flight_s, drain = self._flight_need_s(task), self.drain.drain_per_s
         if flight_s is None or drain is None:
             return None
         full_s = flight_left_s(1.0, self.config.battery_low_fraction, drain)
-        return flight_s + max(0.0, min(self._wait_budget_s(), full_s - flight_s))
+        waits_s = self._wait_budget_s() + self.config.battery_return_wait_s
+        return flight_s + max(0.0, min(waits_s, full_s - flight_s))
 
     def battery_shortfall(self, task: Task) -> str | None:
         """Why the battery does not cover ``task`` now (the mission handler then holds it for a swap), or None:

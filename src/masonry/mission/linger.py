@@ -17,7 +17,9 @@ sooner than the UAV could fly home and back (:func:`round_trip_s`):
   (the model was wrong: waiting longer costs more than the trip it saves, the rule of the ski-rental problem); or
   another UAV's flight, hold flight or take-off fits only without its volumes (:func:`held_up_by`), whatever
   that UAV waits for (the airspace, its site's turn): it yields, and its flight home is granted once it fits;
-  or its battery is under :data:`MIN_BATTERY` (the handler would hold its next task back for a swap anyway);
+  or its battery is under :data:`MIN_BATTERY` (the handler would hold its next task back for a swap anyway) or
+  does not cover the rest of the wait, the task and the way home at the drain its heartbeats show
+  (:meth:`LingerBook.affords`: a wait in the air is flight time, and a UAV that cannot afford it goes home);
   or the wind grounds it, the operator pauses, recalls or limits it, or it is lost; or the mission is over.
 
 Only the ``columns`` airspace lingers (the table airspace's plans end on the pad). Pure bookkeeping over mission
@@ -32,6 +34,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from masonry.fsm.battery import DrainMeter, flight_left_s
 from masonry.mission.airspace import ColumnClearance
 from masonry.mission.airspace_requests import queued_before
 from masonry.mission.airspace_state import Phase, UavAirspace, hold_candidates
@@ -44,13 +47,25 @@ from masonry.timing import DEFAULT_TIMING, TaskTiming, min_jerk_leg_s
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["MIN_BATTERY", "LingerBook", "Lingering", "due_s", "held_up_by", "round_trip_s", "wanted_flights"]
+__all__ = [
+    "LOW_BATTERY",
+    "MIN_BATTERY",
+    "LingerBook",
+    "Lingering",
+    "due_s",
+    "held_up_by",
+    "round_trip_s",
+    "wanted_flights",
+]
 
 log = logging.getLogger("masonry.mission.control")
 
 #: A UAV reporting less charge than this does not wait in the air: it is the mission handler's default reserve
 #: (``UavHandler(reserve_fraction=0.4)``), under which its next task is held back until it has landed for a swap.
 MIN_BATTERY = 0.4
+#: The charge a UAV's budget keeps in reserve (``UavConfig.battery_low_fraction``'s default): a wait near the wall
+#: is taken only while the flight left above it covers the wait, the task and the way home.
+LOW_BATTERY = 0.2
 #: The autopilot's touch-down and disarm, and its take-off's spool-up (s): ``masonry.fsm.battery``'s figures.
 _TOUCHDOWN_S = 1.0
 _SPOOL_UP_S = 1.5
@@ -172,12 +187,43 @@ class LingerBook:
         self.lingered_s: dict[str, float] = {}  # each UAV's seconds waiting near the wall, over the mission
         self.count: dict[str, int] = {}  # how often each UAV did
         self._expected_s: dict[str, float] | None = None
+        self.drains: dict[str, DrainMeter] = {}  # each UAV's drain per airborne second, from its heartbeats
         self._prerequisites: dict[str, list[str]] | None = None
 
     def total_s(self, uav: str, now_s: float) -> float:
         """``uav``'s seconds waiting near the wall so far (one still waiting counts to ``now_s``)."""
         ongoing = self.active.get(uav)
         return self.lingered_s.get(uav, 0.0) + (0.0 if ongoing is None else max(0.0, now_s - ongoing.since_s))
+
+    def heard(self, uav: str, now_s: float, battery: float | None, airborne: bool) -> None:
+        """A heartbeat of ``uav`` with its ``battery`` (0..1): its drain per airborne second is measured."""
+        if battery is not None:
+            self.drains.setdefault(uav, DrainMeter()).update(now_s, battery, airborne)
+
+    def affords(self, mc: MissionControl, uav: str, position_m: Vec3, until_s: float, now_s: float) -> bool:
+        """The flight left above :data:`LOW_BATTERY` at ``uav``'s measured drain covers a wait until ``until_s``,
+        the longest task of its role still to do and the way home (True while no drain is measured: the
+        :data:`MIN_BATTERY` floor alone)."""
+        link = mc.uavs[uav]
+        meter = self.drains.get(uav)
+        drain = None if meter is None else meter.drain_per_s
+        if drain is None or link.battery is None:
+            return True
+        if self._expected_s is None:
+            self._due_s(mc, link.spec.role, now_s)
+        assert self._expected_s is not None
+        done = mc.dispatcher.done
+        task_s = max(
+            (
+                self._expected_s.get(t.id, 0.0)
+                for t in mc.plan.tasks
+                if t.kind == link.spec.role and t.id not in done
+            ),
+            default=0.0,
+        )
+        home_s = 0.5 * round_trip_s(position_m, link.spec.home_m, mc.timing or DEFAULT_TIMING)
+        need_s = max(0.0, until_s - now_s) + task_s + home_s
+        return flight_left_s(link.battery, LOW_BATTERY, drain) >= need_s
 
     def _due_s(self, mc: MissionControl, role: str, now_s: float) -> list[float]:
         if self._expected_s is None or self._prerequisites is None:
@@ -230,7 +276,7 @@ class LingerBook:
         ):
             return
         until_s = self._until_s(mc, uav, position_m, now_s)
-        if until_s is None:
+        if until_s is None or not self.affords(mc, uav, position_m, until_s, now_s):
             return
         c.lingering[uav] = self._work_to_do(mc)
         c.touch()
@@ -278,6 +324,9 @@ class LingerBook:
         why = self._may_wait(mc, uav)
         if why is not None:
             return why
+        pos = mc.uavs[uav].position_m
+        if pos is not None and not self.affords(mc, uav, pos, w.until_s, now_s):
+            return "battery (the wait, a task and the way home)"
         if now_s > w.until_s:
             return "no task within a round trip"
         if w.events != mc.dispatcher.events:
