@@ -126,3 +126,24 @@ def test_a_lingering_uav_yields_to_a_uav_whose_every_hold_flight_it_blocks():
     b.phase, b.zone = Phase.ASKING, None
     b.request = FlightRequest((6.0, 6.0, 1.2), 1.2, (g.hold_m[0], g.hold_m[1], 0.5), 11.0, 99)
     assert held_up_by(c, "b", "g")
+
+
+def test_a_uav_lingers_only_while_its_battery_covers_the_wait_a_task_and_the_way_home():
+    """A wait near the wall is flight time: at the drain its heartbeats show, the flight left above 20 % must cover
+    the rest of the wait, its role's longest task still to do and the way home, or it flies home (and is swapped)
+    as it asked. With no drain measured yet, the 40 % floor alone decides."""
+    options = SimOptions(brick_uavs=1, adhesion_uavs=1, seed=1)
+    mission = SimulatedMission.from_blueprint(load_blueprint(ROOT / "blueprints" / "pyramid.yaml"), options)
+    mc, book = mission.control, mission.control.lingers
+    link = mc.uavs["glue-1"]
+    near_wall = (link.spec.home_m[0], link.spec.home_m[1] + 3.0, 1.35)
+    link.battery = 0.6
+    assert book.affords(mc, "glue-1", near_wall, 1000.0, 0.0)  # nothing measured yet
+    for i in range(201):  # 20 s in the air at 0.5 %/s
+        book.heard("glue-1", i * 0.1, 0.7 - 0.0005 * i, airborne=True)
+    assert book.drains["glue-1"].drain_per_s == pytest.approx(0.005)
+    # 0.6: 80 s of flight above 20 %; the pyramid's beads and the way home take well under 60 s
+    assert book.affords(mc, "glue-1", near_wall, 20.0, 0.0)
+    assert not book.affords(mc, "glue-1", near_wall, 80.0, 0.0)
+    link.battery = 0.3  # 20 s above 20 %: not even the way home and a bead
+    assert not book.affords(mc, "glue-1", near_wall, 0.0, 0.0)
