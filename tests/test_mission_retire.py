@@ -128,7 +128,7 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     # packs of 200 s (with 300 s the budget's wait on the way home kept every UAV from running low in the air):
     # the UAVs ran low (and were swapped, since all are in service) many times
     assert report.makespan_s > 1000.0
-    assert sum(h.battery_swaps for h in mission.handlers.values()) >= 15
+    assert sum(h.battery_swaps for h in mission.handlers.values()) >= 10
     assert sum(1 for a in report.attempts if (a.reason or "").startswith("battery low")) >= 1
     assert lowest[0] > 0.15  # measured 35 %; critical is 10 % (before the budget: 9.8 %)
     done = [t.id for t in report.tasks if t.status == "done"]

@@ -24,8 +24,14 @@ from typing import TYPE_CHECKING
 from masonry.blueprint import UavSpec
 from masonry.errors import MissionError, ProtocolError
 from masonry.geofence import Site
-from masonry.mission import control_airspace, control_losses, control_results, control_resume, control_watch
-from masonry.mission.airspace import Phase
+from masonry.mission import (
+    control_airspace,
+    control_dispatch,
+    control_losses,
+    control_results,
+    control_resume,
+    control_watch,
+)
 from masonry.mission.as_built import PlacementWatch
 from masonry.mission.control_airspace import make_airspace
 from masonry.mission.control_ports import JournalPort, WindGate
@@ -231,6 +237,7 @@ class MissionControl:
         self.stall: Stall | None = None
         self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         control_airspace.raise_layers(self, [t.id for t in plan.tasks if t.done])
+        control_dispatch.admit(self, column_radius_m)  # who is not sent into a crowd (docs/dispatch.md)
 
     def restore(self, state: JournalState) -> None:
         """Continue from a journal's replayed state (:func:`masonry.mission.control_resume.restore`)."""
@@ -365,18 +372,8 @@ class MissionControl:
             )  # (planned: issue 30)
 
     def _may_take_off(self, name: str) -> bool:
-        """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
-        here): take-offs from neighbouring pads go one after the other."""
-        if not self.operator.may_fly(self, name):
-            return False  # recalled, or its role at the operator's fleet limit
-        if self.wind_limit is not None and not self.wind_limit.allows(name):
-            return False  # above its max_wind_mps: it finishes its task and lands
-        if self.columns.phase(name) is Phase.LANDED and not self.columns.take_off(name):
-            self._deferred_at = self.columns.version
-            return False
-        # from now on a report that it is landed may predate the assignment (it lands, then reads it)
-        self.uavs[name].taking_off = True
-        return True
+        """:func:`masonry.mission.control_dispatch.may_take_off` (the dispatcher's ``may_start``)."""
+        return control_dispatch.may_take_off(self, name)
 
     def wake(self) -> None:
         """Dispatch again at the next step (the operator resumed, or changed a limit)."""

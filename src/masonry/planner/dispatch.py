@@ -22,6 +22,7 @@ from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
+from masonry.planner.dispatch_admission import Admission, crowded, queued
 from masonry.planner.dispatch_chaining import NEAR_END_M, segment_links
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
 from masonry.planner.dispatch_queries import DispatchQueries
@@ -79,6 +80,9 @@ class Dispatcher(DispatchQueries):
 
     #: each UAV chooses for itself (``--policy schedule``): one UAV left idle does not mean the next one is
     _per_uav_choice = False
+    #: mission control's admission rule (:mod:`masonry.planner.dispatch_admission`; None: every idle UAV is
+    #: given a task, as Algorithm 1)
+    admission: Admission | None = None
 
     def __init__(
         self,
@@ -204,6 +208,25 @@ class Dispatcher(DispatchQueries):
             return None
         return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
 
+    def _admitted(self, uav: str, role: str, i: int) -> int | None:
+        """``i``, or for a landed ``uav`` the policy's best task of ``role`` not crowded when ``i`` is (None: none);
+        :mod:`masonry.planner.dispatch_admission`."""
+        rule = self.admission
+        if rule is None or not rule.applies(sum(self._live_count.values())):
+            return i
+        st, nb, pre = self._status, self._neighbours, self._prerequisites
+        if not rule.landed(uav):
+            return i  # already out: it is not added to the crowd (holding it back left holds unserved)
+        running = list(self._uav_task.values())
+        waiting = queued(running, lambda k: st[k] == _RUNNING, lambda j: nb[j])
+        if not crowded(i, waiting, nb, pre):
+            return i
+        for pool in (self._available[role], self._ready[role]):
+            free = [k for k in pool if not crowded(k, waiting, nb, pre)]
+            if free:
+                return self._ranking.pick_among(free, self._position[uav], self._after(uav))
+        return None
+
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
         return prefetchable(role, self._uav_task.values(), self._status, self._role, self._graphs)
@@ -252,6 +275,10 @@ class Dispatcher(DispatchQueries):
                     if self._per_uav_choice:
                         continue
                     break
+                if self.admission is not None:
+                    i = self._admitted(name, role, i)
+                    if i is None:
+                        continue
                 if may_start is not None and not may_start(name):
                     continue
                 self._start(i, name)

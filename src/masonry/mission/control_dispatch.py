@@ -1,0 +1,47 @@
+"""Mission control's side of dispatch: who may take off for a task, and the admission rule's facts.
+
+:func:`may_take_off` is the dispatcher's ``may_start`` (a landed UAV takes a task only with its take-off column
+reserved); :func:`admit` hands the dispatcher the wall's width at the conflict radius and which UAVs are on their
+pads (:mod:`masonry.planner.dispatch_admission`, docs/dispatch.md "Admission").
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.sites import work_point_m
+from masonry.planner.dispatch_admission import Admission, site_width
+
+if TYPE_CHECKING:
+    from masonry.mission.control import MissionControl
+
+
+def admit(mc: MissionControl, column_radius_m: float) -> None:
+    """Give ``mc``'s dispatcher the admission rule: under the columns (the default airspace) only, and none with
+    ``column_radius_m`` 0 (every column granted). Not under ``--airspace table``: its approach spots already
+    keep held UAVs over their sites, and with the rule as first written (UAVs in the air held back too) issue 27's
+    livelock pyramid stalled there at 355 s (a UAV flying home and a sprayer waiting for each other's stays)."""
+    if column_radius_m <= 0 or not isinstance(mc.columns, ColumnClearance):
+        return
+    points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
+    width = site_width(((p[0], p[1]) for p in points), column_radius_m)
+    mc.dispatcher.admission = Admission(width, lambda name: mc.columns.phase(name) is Phase.LANDED)
+
+
+def may_take_off(mc: MissionControl, name: str) -> bool:
+    """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
+    here): take-offs from neighbouring pads go one after the other."""
+    if not mc.operator.may_fly(mc, name):
+        return False  # recalled, or its role at the operator's fleet limit
+    if mc.wind_limit is not None and not mc.wind_limit.allows(name):
+        return False  # above its max_wind_mps: it finishes its task and lands
+    if mc.columns.phase(name) is Phase.LANDED and not mc.columns.take_off(name):
+        mc._deferred_at = mc.columns.version
+        return False
+    # from now on a report that it is landed may predate the assignment (it lands, then reads it)
+    mc.uavs[name].taking_off = True
+    return True
+
+
+__all__ = ["admit", "may_take_off"]

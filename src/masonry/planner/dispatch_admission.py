@@ -1,0 +1,85 @@
+"""Admission (issue 27 §4): a UAV on its pad is not sent where the fleet already queues, on a wall too compact for it.
+
+On a compact wall (the bundled pyramid: 2.1 m wide, r_c 1.5 m) only one or two site intervals can be open at once;
+under the ``site`` reservation the dispatcher still gives every idle UAV a task, conflicting or to prefetch, and
+the extra UAVs fly out and hold near the wall and over the pallet, where their holds block the UAVs that could
+work (the pyramid took 1,349 s at 2 + 1 and 2,092 s at 8 + 4). The rule (docs/dispatch.md, "Admission"):
+
+- the *width* of a wall is how many of its tasks' work points can be worked at once, r_c apart (a greedy count,
+  :func:`site_width`); the rule applies only when the fleet has more UAVs than twice the width (one at each site
+  that can be worked, one coming to it): on the 12 m wall (width 8) it never does up to 8 + 4;
+- a task in progress is *queued* when a conflicting task is in progress too (one of them waits for the other's
+  site interval);
+- a task is *crowded* when a queued task lies within two conflict hops of it (conflicts with it, or with a task
+  it conflicts with) and does not wait for it (a prerequisite is never held back by its dependent);
+- a UAV on its pad whose chosen task is crowded is given the policy's best uncrowded task of its role instead,
+  available first, else ready and conflicting; with none it stays on its pad until the next event. A UAV in the
+  air is not held back: it is out already, and holding it back too (it flies home) was tried and not kept: a
+  random compact layout then gave five tasks up for hold patience (docs/performance/fleet.md, "Admission").
+
+Pure: no I/O, no clock.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+
+#: a fleet larger than this many UAVs per site that can be worked at once is admitted by :class:`Admission`
+UAVS_PER_SITE = 2
+
+
+def site_width(points_xy: Iterable[tuple[float, float]], radius_m: float) -> int:
+    """How many of ``points_xy`` can be worked at once, at least ``radius_m`` apart horizontally (greedy, in
+    the given order: a lower bound of the largest such set; 1 at least for a non-empty wall)."""
+    kept: list[tuple[float, float]] = []
+    for x, y in points_xy:
+        if all(math.hypot(x - a, y - b) >= radius_m for a, b in kept):
+            kept.append((x, y))
+    return len(kept)
+
+
+def queued(
+    running: Iterable[int], is_running: Callable[[int], bool], waits_on: Callable[[int], Iterable[int]]
+) -> list[int]:
+    """The tasks of ``running`` of which a task they wait on (``waits_on``: the conflicting ones) runs too."""
+    return [j for j in running if any(is_running(k) for k in waits_on(j))]
+
+
+def crowded(
+    task: int,
+    queued_tasks: Sequence[int],
+    neighbours: Sequence[Sequence[int]],
+    prerequisites: Sequence[Sequence[int]],
+) -> bool:
+    """A task of ``queued_tasks`` conflicts with ``task`` or with one of its conflicting tasks (two hops), and
+    does not wait for ``task`` itself (a brick fetched early whose glue is still to spray: holding the glue's UAV
+    back would make the brick's UAV wait until its hold patience gives the brick up)."""
+    if not queued_tasks:
+        return False
+    near = set(neighbours[task])
+    return any(
+        (j in near or not near.isdisjoint(neighbours[j])) and task not in prerequisites[j]
+        for j in queued_tasks
+    )
+
+
+@dataclass(frozen=True)
+class Admission:
+    """The rule's facts about a mission: the wall's width and which UAVs stand on their pads.
+
+    Args:
+        width: :func:`site_width` of the wall's tasks at the conflict radius.
+        landed: whether a UAV is on its pad (mission control's airspace).
+    """
+
+    width: int
+    landed: Callable[[str], bool]
+
+    def applies(self, live_uavs: int) -> bool:
+        """The fleet has more UAVs than :data:`UAVS_PER_SITE` per site the wall can work at once."""
+        return live_uavs > UAVS_PER_SITE * max(self.width, 1)
+
+
+__all__ = ["UAVS_PER_SITE", "Admission", "crowded", "queued", "site_width"]

@@ -1,0 +1,97 @@
+"""Admission (issue 27 §4, masonry.planner.dispatch_admission): on a wall too compact for its fleet, a UAV is not
+given a task where the fleet already queues; it stays on its pad instead."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from masonry.blueprint import UavSpec, load_blueprint
+from masonry.mission.simulate import simulate
+from masonry.planner.dispatch import Dispatcher
+from masonry.planner.dispatch_admission import UAVS_PER_SITE, Admission, crowded, queued, site_width
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
+
+PYRAMID = Path(__file__).resolve().parent.parent / "blueprints" / "pyramid.yaml"
+
+
+def brick(i: int, x: float) -> BrickTask:
+    return BrickTask(f"B{i}", i, False, (x, 0.0, 0.05), 0.0, (x, -2.0, 0.05))
+
+
+def bricks_in_one_place(n: int) -> Plan:
+    """``n`` ready bricks, each conflicting with every other (all within r_c): one site at a time."""
+    tasks = tuple(brick(i, 0.3 * i) for i in range(n))
+    conflicts = tuple((f"B{a}", f"B{b}") for a in range(n) for b in range(a + 1, n))
+    return Plan(tasks, (), conflicts)
+
+
+def brick_fleet(n: int) -> list[UavSpec]:
+    return [UavSpec(f"brick-{k + 1}", "brick", (0.3 * k, -3.0, 0.0)) for k in range(n)]
+
+
+def test_site_width_counts_the_points_that_can_be_worked_at_once():
+    pyramid_course = [(-1.05 + 0.3 * k, 0.0) for k in range(8)]  # 2.1 m wide, r_c 1.5 m: its two ends
+    assert site_width(pyramid_course, 1.5) == 2
+    assert site_width([(0.3 * k, 0.0) for k in range(41)], 1.5) == 9  # 12 m: every 1.5 m
+    assert site_width([], 1.5) == 0
+
+
+def test_a_task_is_crowded_within_two_conflict_hops_of_a_queued_one():
+    neighbours = [[1], [0, 2], [1, 3], [2], []]  # a chain 0-1-2-3, and 4 alone
+    none: list[list[int]] = [[] for _ in neighbours]
+    assert crowded(0, [2], neighbours, none)  # 0 conflicts with 1, which conflicts with 2
+    assert crowded(0, [1], neighbours, none)
+    assert not crowded(0, [3], neighbours, none)  # three hops
+    assert not crowded(4, [1, 2], neighbours, none)
+    assert not crowded(0, [], neighbours, none)
+    # 1 waits for 0 (its prerequisite): it never holds 0 back, or it would wait for it until it gave up
+    assert not crowded(0, [1], neighbours, [[], [0], [], [], []])
+    running = {0, 1, 3}
+    assert queued(sorted(running), running.__contains__, lambda j: neighbours[j]) == [0, 1]
+
+
+def test_on_a_compact_wall_the_fleet_past_the_queue_stays_on_its_pads():
+    plan = bricks_in_one_place(3)
+    d = Dispatcher(plan, brick_fleet(3), reservation="site")
+    d.admission = Admission(width=1, landed=lambda _name: True)
+    assert Admission(1, lambda _n: True).applies(3) and UAVS_PER_SITE == 2
+    got = d.assign()
+    # the first works, the second comes next (it fetches while the site is busy), the third would only queue
+    assert [a.uav for a in got] == ["brick-1", "brick-2"]
+    assert d.assign() == []
+    d.complete(got[0].task_id)
+    # the queue is gone (one task runs, nothing waits on it): the UAV now idle is given the last brick
+    assert [a.uav for a in d.assign()] == ["brick-1"]
+
+
+def test_without_the_rule_or_with_room_every_idle_uav_is_given_a_task():
+    for admission in (None, Admission(width=2, landed=lambda _name: True)):  # 3 UAVs, 2 sites: room enough
+        d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
+        d.admission = admission
+        assert len(d.assign()) == 3
+
+
+def test_a_uav_in_the_air_is_not_held_back_by_the_other_roles_queue():
+    # two bricks queued at one site; an adhesion UAV in the air is given its (conflicting) segment anyway, as
+    # it would be from its pad without the bricks' queue
+    tasks = (brick(0, 0.0), brick(1, 0.3), AdhesionTask("A0", 0, 1, (0.6, 0.0, 0.1), (0.9, 0.0, 0.1), 0.3))
+    plan = Plan(tasks, (), (("B0", "B1"), ("B1", "A0"), ("B0", "A0")))
+    fleet = [*brick_fleet(2), UavSpec("glue-1", "adhesion", (2.0, -3.0, 0.0))]
+    in_air = Dispatcher(plan, fleet, reservation="site")
+    in_air.admission = Admission(width=1, landed=lambda name: name != "glue-1")
+    assert [a.uav for a in in_air.assign()] == ["brick-1", "brick-2", "glue-1"]
+    on_pad = Dispatcher(plan, fleet, reservation="site")
+    on_pad.admission = Admission(width=1, landed=lambda _name: True)
+    assert [a.uav for a in on_pad.assign()] == ["brick-1", "brick-2"]
+
+
+@pytest.mark.slow
+def test_the_bundled_pyramid_with_a_large_fleet_completes_apart_with_the_rule_on():
+    # the defaults (columns, site, critical-path): 6 + 3 UAVs on a wall 2 sites wide, so the rule applies
+    r = simulate(load_blueprint(PYRAMID), brick_uavs=6, adhesion_uavs=3, seed=1, camera="geometric")
+    assert r.completed and r.stall is None
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+    assert r.min_separation_m is not None and r.min_separation_m >= 1.0
