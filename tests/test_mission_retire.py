@@ -54,9 +54,9 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
 
     The machines are told there is no battery service (as on a link without a ground crew), so that a low
     battery retires them, while the handler's reserve would still wait for a swap before handing a task over.
-    Tasks are taken with no waiting budgeted (``battery_wait_budget_s=0``, ``battery_return_wait_s=0``): with the
-    defaults (60 s, and 45 s on the way home) the budget keeps every battery high enough and no UAV retires; with
-    none, glue-2 gives A1 up waiting for its column and retires with A1 queued again.
+    Tasks are taken with no waiting budgeted (``battery_wait_budget_s=0``): with the default 60 s the budget keeps
+    every battery high enough and no UAV retires; with none, glue-2 gives A1 up waiting for its column and
+    retires with A1 queued again.
     """
     monkeypatch.setattr(UavHandler, "swaps_batteries", property(lambda self: False))
     sim_module = sys.modules["masonry.mission.measured"]  # where the simulated report is built
@@ -74,12 +74,7 @@ def test_a_retiring_uav_refuses_its_queued_task_before_it_is_released(monkeypatc
         seed=2,
         faults=Faults(battery_drain_per_s=0.004),
         uav_config=UavConfig(
-            "template",
-            "brick",
-            (0.0, 0.0, 0.0),
-            **uav_settings("arducopter"),
-            battery_wait_budget_s=0.0,
-            battery_return_wait_s=0.0,
+            "template", "brick", (0.0, 0.0, 0.0), **uav_settings("arducopter"), battery_wait_budget_s=0.0
         ),
         reservation="task",  # the executed intervals of conflicting tasks are checked below (the paper's rule)
     )
@@ -110,7 +105,7 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     (docs/state-machines.md, "Battery budget") no UAV in the air comes near it.
     """
     mission = SimulatedMission.from_blueprint(
-        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0, faults=Faults(battery_drain_per_s=0.005)
+        running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0, faults=Faults(battery_drain_per_s=0.0033)
     )
     lowest: list[float] = [1.0]
 
@@ -125,11 +120,15 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     assert [u.status for u in report.uavs] == ["ok"] * 6
     assert report.completed
     assert (report.conflict_violations, report.dependency_violations) == (0, 0)
-    # packs of 200 s (with 300 s the budget's wait on the way home kept every UAV from running low in the air):
-    # the UAVs ran low (and were swapped, since all are in service) many times
+    # packs of 300 s: the UAVs ran low (and were swapped, since all are in service) many times. Measured with the
+    # admission of landed UAVs (docs/dispatch.md): 1,028 s, 13 swaps, 2,894 s in the air over six UAVs; without it
+    # 1,347 s, 25 swaps, 5,595 s in the air (the UAVs hovered waiting for columns the admission keeps them off).
+    # With the linger (docs/safety.md, "Waiting near the wall"): 1,108 s, 16 swaps, 3,616 s in the air, 2 tasks
+    # given up low in the air. No wait on the way home is budgeted here: the pads are 2 m apart (masonry.fsm.budget)
     assert report.makespan_s > 1000.0
     assert sum(h.battery_swaps for h in mission.handlers.values()) >= 10
     assert sum(1 for a in report.attempts if (a.reason or "").startswith("battery low")) >= 1
-    assert lowest[0] > 0.15  # measured 35 %; critical is 10 % (before the budget: 9.8 %)
+    # measured 30 %, 21 % with the linger (15.0 % without the admission); critical is 10 % (before: 9.8 %)
+    assert lowest[0] > 0.15
     done = [t.id for t in report.tasks if t.status == "done"]
     assert len(done) == len(set(done)) == len(report.tasks)

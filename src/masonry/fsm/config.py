@@ -120,6 +120,12 @@ class UavConfig:
     # battery_return_wait_s of waiting for clearance on that way
     battery_wait_budget_s: float = 60.0
     battery_return_wait_s: float = 45.0
+    # The nearest other UAV's pad, centre to centre (build_machine sets it from the fleet; None: none known). Within
+    # the separation (plus a margin) of it, this UAV's landing waits while that one holds the column over its pad:
+    # its landing, its battery swap (battery_swap_s, the ground crew's time) and its take-off; the task budget
+    # counts that wait on the way home (and no other: docs/state-machines.md, "Battery budget")
+    neighbour_pad_m: float | None = None
+    battery_swap_s: float = 60.0
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this
     # Brick pickup (paper, Section IV)
     confidence_threshold: float = 0.75  # C_th
