@@ -115,9 +115,9 @@ class UavConfig:
     battery_critical_fraction: float = 0.10  # below this it lands where it is
     # The battery budget (masonry.fsm.battery): a task is taken (else held for a swap, with a ground crew) only if
     # the flight left above battery_low_fraction covers it, this much waiting for clearance (at most
-    # hold_patience_s), the way home and battery_return_wait_s of waiting on it; waiting in the air, a UAV gives its task up while the flight left above
-    # battery_critical_fraction covers its way out of it (home, or putting its brick back) and
-    # battery_return_wait_s of waiting for clearance on that way
+    # hold_patience_s), the way home and, beside a neighbouring pad, the wait on it (neighbour_pad_m below); waiting
+    # in the air, a UAV gives its task up while the flight left above battery_critical_fraction covers its way out
+    # of it (home, or putting its brick back) and battery_return_wait_s of waiting for clearance on that way
     battery_wait_budget_s: float = 60.0
     battery_return_wait_s: float = 45.0
     # The nearest other UAV's pad, centre to centre (build_machine sets it from the fleet; None: none known). Within
