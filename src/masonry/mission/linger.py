@@ -34,7 +34,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from masonry.fsm.battery import DrainMeter, flight_left_s
+from masonry.battery_drain import DrainMeter, flight_left_s
 from masonry.mission.airspace import ColumnClearance
 from masonry.mission.airspace_requests import queued_before
 from masonry.mission.airspace_state import Phase, UavAirspace, hold_candidates
