@@ -166,7 +166,7 @@ def test_phases_left_out_are_zero():
 # -- a mission ---------------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def case_study():
-    # the paper's rule: every attempt takes off, and the brick UAV idles while A0 is sprayed (under ``site`` it
+    # the paper's rule: the brick UAV idles while A0 is sprayed (under ``site`` it
     # fetches B0's brick meanwhile and A1 follows A0 in the air)
     mission = SimulatedMission.from_blueprint(load_blueprint(CASE_STUDY), seed=0, reservation="task")
     report = mission.run()
@@ -194,9 +194,14 @@ def test_the_machine_s_phases_add_up_to_the_duration_it_reports(case_study):
 
 def test_brick_and_adhesion_attempts_go_through_their_own_phases(case_study):
     _, report = case_study
+    took_off: set[str] = set()
     for a in report.attempts:
         assert a.phases is not None
-        assert a.phases.takeoff > 0 and a.phases.transit > 0 and a.phases.descending > 0
+        assert a.phases.transit > 0 and a.phases.descending > 0
+        # each UAV's first attempt starts on its pad; a later one may start in the air (the linger, docs/safety.md)
+        if a.uav not in took_off:
+            assert a.phases.takeoff > 0
+            took_off.add(a.uav)
         if a.kind == "brick":
             assert a.phases.estimating > 0 and a.phases.grasping > 0 and a.phases.placing > 0
             assert a.phases.spraying == 0
