@@ -11,8 +11,9 @@ import pytest
 
 from masonry.blueprint_gen import running_bond
 from masonry.blueprint_random import LayoutLimits, random_layout
-from masonry.fsm.battery import DrainMeter, flight_left_s, land_s, route_s
+from masonry.fsm.battery import TAKEOFF_S, DrainMeter, flight_left_s, land_s, route_s
 from masonry.mission.simulate import SimulatedMission, simulate
+from masonry.mission.uav_stack import BATTERY_SWAP_S
 from masonry.ports import BATTERY_LOW_REASON
 from masonry.sim import Faults
 
@@ -83,6 +84,24 @@ def test_a_pack_too_short_for_any_task_stops_the_mission_saying_why() -> None:
         for why in reasons
     ), reasons
     assert all(u.status == "ok" for u in r.uavs)
+
+
+def test_the_wait_on_the_way_home_is_budgeted_beside_a_neighbours_pad_only() -> None:
+    """A landing waits while the UAV of a pad within the separation holds the column over its pad (its landing,
+    its swap and its take-off): only there does the budget count that wait (``build_machine`` tells each machine its
+    nearest other pad). The 3 x 10 wall's pads are 2 m apart; the random running bond's (seed 1) about 1 m."""
+    apart = SimulatedMission.from_blueprint(running_bond(3, 10, brick_uavs=4, adhesion_uavs=2), seed=0)
+    for handler in apart.handlers.values():
+        config = handler.model.config
+        assert config.neighbour_pad_m == pytest.approx(2.0)
+        assert handler.model._home_wait_s() == 0.0
+    bp = random_layout(random.Random(1), LayoutLimits(max_courses=3, max_per_course=5, max_uavs_per_role=3))
+    close = SimulatedMission.from_blueprint(bp, seed=1)
+    for handler in close.handlers.values():
+        config = handler.model.config
+        assert config.neighbour_pad_m == pytest.approx(1.0, abs=0.01)
+        ground_s = land_s(config.cruise_altitude_m - config.home_m[2]) + BATTERY_SWAP_S + TAKEOFF_S
+        assert handler.model._home_wait_s() == pytest.approx(ground_s)
 
 
 class _BudgetWatch:

@@ -122,11 +122,13 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     assert (report.conflict_violations, report.dependency_violations) == (0, 0)
     # packs of 300 s: the UAVs ran low (and were swapped, since all are in service) many times. Measured with the
     # admission of landed UAVs (docs/dispatch.md): 1,028 s, 13 swaps, 2,894 s in the air over six UAVs; without it
-    # 1,347 s, 25 swaps, 5,595 s in the air (the UAVs hovered waiting for columns the admission keeps them off);
-    # with its cap on the UAVs taking off (3 brick + 1 adhesion busy at most): 954 s, 12 swaps, lowest 25 %.
+    # 1,347 s, 25 swaps, 5,595 s in the air (the UAVs hovered waiting for columns the admission keeps them off).
+    # With the linger (docs/safety.md, "Waiting near the wall"): 1,108 s, 16 swaps, 3,616 s in the air, 2 tasks
+    # given up low in the air. No wait on the way home is budgeted here: the pads are 2 m apart (masonry.fsm.budget)
     assert report.makespan_s > 900.0
     assert sum(h.battery_swaps for h in mission.handlers.values()) >= 10
     assert sum(1 for a in report.attempts if (a.reason or "").startswith("battery low")) >= 1
-    assert lowest[0] > 0.15  # measured 25 % (30 % before the cap, 15.0 % with no admission); critical 10 %
+    # measured 30 %, 21 % with the linger (15.0 % without the admission); critical is 10 % (before: 9.8 %)
+    assert lowest[0] > 0.15
     done = [t.id for t in report.tasks if t.status == "done"]
     assert len(done) == len(set(done)) == len(report.tasks)

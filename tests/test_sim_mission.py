@@ -70,6 +70,8 @@ def test_case_study_report_is_the_exact_json(case_study):
             "waiting_s",
             "waiting_ground_s",
             "waiting_air_s",
+            "lingering_s",
+            "lingers",
             "distance_m",
             "status",
         ]
@@ -116,7 +118,8 @@ def test_case_study_is_deterministic(case_study):
 
 def test_case_study_with_site_intervals_overlaps_what_the_paper_serialises(case_study):
     """``site`` (the default): brick-1 fetches B0 while A0 is sprayed, and A1 is sprayed while B0 is on its way;
-    conflicting tasks never work at their sites at once. 83.0 s against the paper's rule's 118.4 s."""
+    conflicting tasks never work at their sites at once. 87.8 s against the paper's rule's 106.0 s (112.4 s before
+    its brick UAV waited near the wall for B1 instead of flying home: masonry.mission.linger; ``site`` unchanged)."""
     r = simulate(load_blueprint(CASE_STUDY))
     assert r.completed and (r.conflict_violations, r.dependency_violations) == (0, 0)
     by_id = {t.id: t for t in r.tasks}
@@ -125,7 +128,7 @@ def test_case_study_with_site_intervals_overlaps_what_the_paper_serialises(case_
     assert by_id["A1"].start_s < by_id["B0"].end_s  # A1 no longer waits for the whole of B0
     order = [t.id for t in sorted(r.tasks, key=lambda t: t.site_start_s)]
     assert order == ["A0", "A1", "B0", "B1"]
-    assert r.makespan_s < 0.8 * case_study.makespan_s
+    assert r.makespan_s < 0.85 * case_study.makespan_s
 
 
 @settings(max_examples=6, deadline=None)

@@ -65,22 +65,28 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
     settings = {**uav_settings("px4"), "align_on_wall": align_on_wall}
     mission = SimulatedMission.from_blueprint(
         pyramid(3, yaw_rad=math.radians(30.0), clearance_m=1.0),
-        seed=1,
+        seed=4,
         vehicle="px4",
         uav_config=UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings),
     )
-    # without the wall's markers, this seed's B3 lands a course too low beside a misplaced B0: found off its
-    # course, it is not counted as placed and the mission does not complete (masonry.mission.course_check)
+    # without the wall's markers, this seed's B5 lands two courses too low: found off its course, it is not
+    # counted as placed and the mission does not complete (masonry.mission.course_check). (Seed 1 did so with B3
+    # until the linger moved the placements' times: which seeds put a brick off its course on GNSS alone is the
+    # wander's draw at those times, 4 of seeds 1-8 either way; seed 4 does on both timings.)
     assert mission.run().completed == align_on_wall
+    done = {a.task_id for a in mission.control.history if a.status == "done"}
+    for b in mission.blueprint.bricks:  # no brick counted placed is off its course (the simulator's truth)
+        if f"B{b.id}" in done:
+            assert mission.world.bricks[b.id].position_m[2] == pytest.approx(b.position_m[2], abs=0.02)
     return mission
 
 
 @pytest.mark.slow
 def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     """The px4 model (GNSS wander +-15 cm), a pyramid turned 30 degrees: with the wall's markers the bricks sit
-    less than half as far from where their neighbours say they belong as on the absolute position (4.8 cm
-    against 12.0 cm over the bricks placed without them, B3 found a course too low and B5 not built, on this
-    seed; docs/performance/as-built.md has the benchmark)."""
+    less than half as far from where their neighbours say they belong as on the absolute position (2.3 cm
+    against 11.0 cm over the bricks placed without them, B5 found two courses too low, on this seed;
+    docs/performance/as-built.md has the benchmark)."""
     on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))
 

@@ -7,15 +7,16 @@ while the flight left above ``battery_critical_fraction`` still covers its way h
 and the waiting it may meet on it. Both need the drain per airborne second (:class:`DrainMeter`) and what a
 route of the machine's own legs takes (:func:`route_s`).
 
-Pure: the standard library and :mod:`masonry.timing` (the legs' durations come from the caller's navigator).
+Pure: the standard library, :mod:`masonry.timing` and :mod:`masonry.battery_drain` (the legs' durations come
+from the caller's navigator).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
+from masonry.battery_drain import DrainMeter, flight_left_s
 from masonry.timing import MIN_JERK_PEAK_TO_MEAN_SPEED
 
 Vec3 = tuple[float, float, float]
@@ -28,57 +29,6 @@ LAND_SPEED_MPS = 0.5
 LAND_TOUCHDOWN_S = 1.0
 #: A take-off from the pad to the transit altitude (ArduCopter's auto take-off, about 3 s for 1.2 m).
 TAKEOFF_S = 4.0
-
-
-@dataclass
-class DrainMeter:
-    """The battery's drain per airborne second, measured over the pack in use (the previous pack's until this
-    one has flown ``min_airborne_s``); None until a pack has.
-
-    A rise of the charge by more than ``step`` between two readings is a fresh pack (a swap); a fall by more (a
-    voltage sag, the autopilot's estimate corrected, a test's scripted step) is no drain of the pack's either, it
-    is not counted. Seconds on the ground do not count (a landed UAV waiting for its swap, or for a task, draws
-    next to nothing).
-    """
-
-    min_airborne_s: float = 10.0
-    step: float = 0.02
-    _drop: float = 0.0
-    _airborne_s: float = 0.0
-    _last: tuple[float, float] | None = None
-    _previous_per_s: float | None = None
-
-    def update(self, now_s: float, fraction: float, airborne: bool) -> None:
-        """One reading of the charge (0..1) at ``now_s``; ``airborne``: the UAV flew since the last one."""
-        if not math.isfinite(fraction):
-            return
-        if self._last is not None:
-            last_s, last_fraction = self._last
-            if fraction > last_fraction + self.step:
-                current = self._pack_per_s()
-                if current is not None:
-                    self._previous_per_s = current
-                self._drop, self._airborne_s = 0.0, 0.0
-            elif airborne and now_s > last_s and fraction >= last_fraction - self.step:
-                self._drop += max(0.0, last_fraction - fraction)
-                self._airborne_s += now_s - last_s
-        self._last = (now_s, fraction)
-
-    def _pack_per_s(self) -> float | None:
-        if self._airborne_s < self.min_airborne_s or self._drop <= 0.0:
-            return None
-        return self._drop / self._airborne_s
-
-    @property
-    def drain_per_s(self) -> float | None:
-        """Charge used per airborne second (None: not measured yet)."""
-        current = self._pack_per_s()
-        return current if current is not None else self._previous_per_s
-
-
-def flight_left_s(fraction: float, floor_fraction: float, drain_per_s: float) -> float:
-    """Seconds of flight from ``fraction`` down to ``floor_fraction`` at ``drain_per_s`` (0 below the floor)."""
-    return max(0.0, fraction - floor_fraction) / drain_per_s
 
 
 def route_s(

@@ -16,6 +16,7 @@ from masonry.fsm.battery import TAKEOFF_S, flight_left_s, land_s, route_s
 from masonry.fsm.routing import Routing
 from masonry.planner.tasks import Task
 from masonry.ports import BATTERY_LOW_REASON, Telemetry
+from masonry.separation import PAD_MARGIN_M, SEPARATION_XY_M
 
 #: A UAV waiting in the air for clearance gives its task up once the flight left above the critical battery falls
 #: under this many times its way out of the task (plus ``battery_return_wait_s``): the estimate's margin.
@@ -96,15 +97,27 @@ class BatteryBudget(Routing):
         flight_s, end_m = self._task_flight_s(task, tel.position_m)
         return (TAKEOFF_S if tel.on_ground else 0.0) + flight_s + self._home_s(end_m)
 
+    def _home_wait_s(self) -> float:
+        """The wait for clearance on the way home a task is taken with: none, unless another UAV's pad lies
+        within the separation (plus :data:`PAD_MARGIN_M`) of this one's (``neighbour_pad_m``): the columns over
+        the two pads then conflict, and this UAV's landing may wait while the other lands, has its pack swapped
+        (``battery_swap_s``) and takes off again with its task (it holds its column meanwhile)."""
+        cfg = self.config
+        if cfg.neighbour_pad_m is None or cfg.neighbour_pad_m >= SEPARATION_XY_M + PAD_MARGIN_M:
+            return 0.0
+        return land_s(cfg.cruise_altitude_m - cfg.home_m[2]) + cfg.battery_swap_s + TAKEOFF_S
+
     def task_budget_s(self, task: Task) -> float | None:
         """What ``task`` needs of the battery from where the UAV is, in seconds of flight: its flight with the
-        way home (:meth:`_flight_need_s`) and the waiting budget (:meth:`_wait_budget_s`), the latter cut to what
-        a full pack leaves beside the flight (None: no telemetry, or no drain measured yet)."""
+        way home (:meth:`_flight_need_s`), the waiting budget (:meth:`_wait_budget_s`) and the wait on the way
+        home beside a neighbour's pad (:meth:`_home_wait_s`), the waits cut to what a full pack leaves beside the
+        flight (None: no telemetry, or no drain measured yet)."""
         flight_s, drain = self._flight_need_s(task), self.drain.drain_per_s
         if flight_s is None or drain is None:
             return None
         full_s = flight_left_s(1.0, self.config.battery_low_fraction, drain)
-        return flight_s + max(0.0, min(self._wait_budget_s(), full_s - flight_s))
+        waits_s = self._wait_budget_s() + self._home_wait_s()
+        return flight_s + max(0.0, min(waits_s, full_s - flight_s))
 
     def battery_shortfall(self, task: Task) -> str | None:
         """Why the battery does not cover ``task`` now (the mission handler then holds it for a swap), or None:

@@ -115,11 +115,17 @@ class UavConfig:
     battery_critical_fraction: float = 0.10  # below this it lands where it is
     # The battery budget (masonry.fsm.battery): a task is taken (else held for a swap, with a ground crew) only if
     # the flight left above battery_low_fraction covers it, this much waiting for clearance (at most
-    # hold_patience_s) and the way home; waiting in the air, a UAV gives its task up while the flight left above
-    # battery_critical_fraction covers its way out of it (home, or putting its brick back) and
-    # battery_return_wait_s of waiting for clearance on that way
+    # hold_patience_s), the way home and, beside a neighbouring pad, the wait on it (neighbour_pad_m below); waiting
+    # in the air, a UAV gives its task up while the flight left above battery_critical_fraction covers its way out
+    # of it (home, or putting its brick back) and battery_return_wait_s of waiting for clearance on that way
     battery_wait_budget_s: float = 60.0
     battery_return_wait_s: float = 45.0
+    # The nearest other UAV's pad, centre to centre (build_machine sets it from the fleet; None: none known). Within
+    # the separation (plus a margin) of it, this UAV's landing waits while that one holds the column over its pad:
+    # its landing, its battery swap (battery_swap_s, the ground crew's time) and its take-off; the task budget
+    # counts that wait on the way home (and no other: docs/state-machines.md, "Battery budget")
+    neighbour_pad_m: float | None = None
+    battery_swap_s: float = 60.0
     link_lost_timeout_s: float = 5.0  # in an emergency, give up on a silent flight controller after this
     # Brick pickup (paper, Section IV)
     confidence_threshold: float = 0.75  # C_th

@@ -87,7 +87,11 @@ class TaskBook(BatteryBudget):
         self.task = task
         self.phase_clock.start(self._now_s)
         budget_s, flight_s = self.task_budget_s(task), self._flight_need_s(task)
-        wait_budget_s = self._wait_budget_s() if budget_s is None or flight_s is None else budget_s - flight_s
+        wait_budget_s = self._wait_budget_s()
+        if (
+            budget_s is not None and flight_s is not None
+        ):  # (what the budget leaves of it: the way home's wait last)
+            wait_budget_s = min(wait_budget_s, budget_s - flight_s)
         self.attempt = self._new_attempt(self._now_s, wait_budget_s)
 
     def _new_attempt(self, start_s: float, wait_budget_s: float) -> TaskAttempt:

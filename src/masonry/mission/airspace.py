@@ -145,6 +145,8 @@ class ColumnClearance:
         self.gate = gate
         self.fence = fence
         self.fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
+        #: UAVs whose flight home is held back (mission/linger.py) -> what their hold point keeps clear of
+        self.lingering: dict[str, tuple[tuple[XY, XY], ...]] = {}
         self.records: dict[str, UavAirspace] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()

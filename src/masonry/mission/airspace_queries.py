@@ -74,6 +74,7 @@ def blockers(c: ColumnClearance, uav: str) -> list[tuple[str, str]]:
             (other, "earlier-request")
             for other, o in c.waiting_records()
             if other != uav
+            and other not in c.lingering
             and o.request is not None
             and o.request.seq < w.seq
             and math.hypot(o.request.site[0] - w.site[0], o.request.site[1] - w.site[1]) < c.wait_radius_m

@@ -25,6 +25,7 @@ from masonry.mission.airspace_state import (
     request_geometry,
 )
 from masonry.mission.fence import flight_fence_problem
+from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, contains, same_site, stopped_at
 
@@ -94,9 +95,12 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
         u.answer = Grant(uav, w.site, False, refused=refused)
         return u.answer
     earlier = queued_before(c, w.seq)
-    blocked_site = any(
-        math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier
-    ) or (c.gate is not None and not c.gate.may_enter(uav, w.site))
+    lingers = linger_spans(c, uav, w.site) is not None  # its flight home held back: it waits near here
+    blocked_site = (
+        lingers
+        or any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier)
+        or (c.gate is not None and not c.gate.may_enter(uav, w.site))
+    )
     if not blocked_site:
         home = c.is_home(uav, w.site)
         if u.phase is Phase.AT_HOLD:
@@ -120,6 +124,10 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
                     return granted(c, uav, u, k, now_s)
     if u.phase is Phase.ASKING:
         g = hold_flight(c, uav, u)
+        if g is None and lingers:  # nowhere to wait near here now: it flies home as it asked
+            c.lingering.pop(uav, None)
+            c.touch()
+            return evaluate(c, uav, u, now_s)
         if g is not None:
             u.answer = g
             c.held_back += 1
@@ -156,7 +164,12 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     others = [o for n, o in c.records.items() if n != uav]
     pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav]
     waited = () if c.gate is None else c.gate.waited_on(uav)
-    candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited)
+    keep_clear = linger_spans(c, uav, w.site)
+    if keep_clear is None:
+        candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited)
+    else:  # waiting for a task near where it is, clear of the work still to do (mission/linger.py)
+        candidates = hold_candidates(start, others, c.wait_radius_m, pads, (*waited, *keep_clear))
+        candidates = linger_spots(c, uav, start, candidates, keep_clear)
     if c.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
         need = AIRSPACE_MARGIN_M + c.zone_slack_m
         candidates = [h for h in candidates if c.fence.contains(h[0], h[1], need)]
@@ -212,4 +225,5 @@ def queued_before(c: ColumnClearance, seq: int) -> list[FlightRequest]:
         if u.request is not None
         and u.request.seq < seq
         and (gate is None or gate.may_enter(n, u.request.site))
+        and n not in c.lingering  # (its flight home is held back: it waits for a task, not the airspace)
     ]

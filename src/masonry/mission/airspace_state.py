@@ -112,7 +112,9 @@ def hold_candidates(
     without passing the hold point (else the two could wait for each other: a UAV holding beside another's pad
     blocked the column that one needed to land, while it waited for that one's zone), and from the work the
     waiting UAV's task waits on (``waited_on``: a brick UAV held over the bead it waits for, whose sprayer had
-    not asked yet, blocked that sprayer until hold patience broke the wait)."""
+    not asked yet, blocked that sprayer until hold patience broke the wait). A request along a segment keeps
+    hold points from the whole segment: its UAV climbs out at the far end (a hold point 1.2 m from the end of an
+    earlier sprayer's segment blocked that sprayer's climb out while it waited for the same spot)."""
     keep_out: list[XY] = list(pads)
     spans: list[tuple[XY, XY]] = list(waited_on)
     for o in others:
@@ -123,6 +125,8 @@ def hold_candidates(
             keep_out.append((o.flight.site[0], o.flight.site[1]))
         if o.request is not None:
             keep_out.append((o.request.site[0], o.request.site[1]))
+            if o.request.to is not None:  # (it climbs out at the far end of its segment)
+                spans.append(((o.request.site[0], o.request.site[1]), o.request.to))
             if o.hold is not None:
                 keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
         # a hold hover is a layer (>= 1.1 m) above any pad, and legs are passed at another layer

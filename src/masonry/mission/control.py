@@ -39,6 +39,7 @@ from masonry.mission.events import EventSink
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import journaled_phases as _journaled_phases  # noqa: F401 - its home before
 from masonry.mission.ledger import AttemptLedger
+from masonry.mission.linger import LingerBook
 from masonry.mission.liveness import LivenessTracker, Timeouts
 from masonry.mission.messages import (
     MISSION_CONTROL,
@@ -230,6 +231,7 @@ class MissionControl:
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
+        self.lingers = LingerBook()  # who waits near the wall for a task due soon (mission/linger.py)
         self.watch = StallWatch(stall_timeout_s)
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None

@@ -74,6 +74,7 @@ def on_clearance_request(mc: MissionControl, msg: ClearanceRequest, now_s: float
         mc.columns.progress(msg.sender, msg.position_m)
     if mc.sites.leaving(msg.sender, msg.site_m, now_s):
         mc.columns.touch()  # a site is free: who waits for it may go now
+    mc.lingers.consider(mc, msg.sender, msg.site_m, msg.position_m, now_s)  # home, with a task due soon?
     g = mc.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
     mc.waits.answered(msg.sender, mc.dispatcher.task_of(msg.sender), g.site_m, g.granted)
     emit_clearance(mc, now_s, g)
@@ -185,6 +186,7 @@ def make_airspace(
 
 def grant_waiting(mc: MissionControl, now_s: float) -> None:
     """The airspace looks at the waiting requests again; each answer is sent, noted and told."""
+    mc.lingers.review(mc, now_s)  # (a UAV that stops waiting near the wall asks to fly home)
     if not mc.columns.waiting:
         return
     for g in mc.columns.grant(now_s):

@@ -159,6 +159,7 @@ def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float
         mc.heard_clock(msg.sender, msg.time_s)
     if msg.battery is not None:
         link.battery = msg.battery
+    mc.lingers.heard(msg.sender, now_s, msg.battery, airborne=not msg.on_pad)
     if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
         mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
     check_holds_task(mc, msg, now_s)

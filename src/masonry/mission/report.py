@@ -165,6 +165,7 @@ class MissionReport:
                 f"  {u.name:<12} {u.role:<8} busy {u.busy_s:7.1f} s  idle {u.idle_s:7.1f} s  "
                 f"waiting {u.waiting_s:7.1f} s (air {u.waiting_air_s:.1f}, ground {u.waiting_ground_s:.1f})  "
                 f"flown {u.distance_m:7.1f} m  {u.status}"
+                + (f"  lingered {u.lingering_s:.0f} s ({u.lingers}x near the wall)" if u.lingers else "")
             )
         totals = phase_totals(self.attempts)
         if totals.total_s > 0:
@@ -357,6 +358,7 @@ def control_report(
     end = start + makespan if not stuck else max(now, start)
     every_wait = [w for ws in waits.values() for w in ws]
     uavs = []
+    lingers = getattr(mc, "lingers", None)  # (mission/linger.py)
     for spec in mc.fleet:
         waiting = phase_totals(a for a in attempts if a.uav == spec.name).clearance_s
         ground, air = waiting_split_s(waiting, every_wait, spec.name)
@@ -371,6 +373,8 @@ def control_report(
                 waiting_s=waiting,
                 waiting_ground_s=ground,
                 waiting_air_s=air,
+                lingering_s=0.0 if lingers is None else lingers.total_s(spec.name, end),
+                lingers=0 if lingers is None else lingers.count.get(spec.name, 0),
             )
         )
     if placement_error_m is None:

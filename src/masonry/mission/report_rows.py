@@ -30,6 +30,10 @@ class UavReport:
     #: ``waiting_s`` split: on its pad with a task, and in the air (:func:`masonry.mission.waits.waiting_split_s`)
     waiting_ground_s: float = 0.0
     waiting_air_s: float = 0.0
+    #: seconds it hovered near the wall with no task, for one due soon instead of flying home
+    #: (:mod:`masonry.mission.linger`), and how many times it did
+    lingering_s: float = 0.0
+    lingers: int = 0
 
     def to_dict(self) -> dict[str, object]:
         return {
@@ -40,6 +44,8 @@ class UavReport:
             "waiting_s": _r(self.waiting_s, 2),
             "waiting_ground_s": _r(self.waiting_ground_s, 2),
             "waiting_air_s": _r(self.waiting_air_s, 2),
+            "lingering_s": _r(self.lingering_s, 2),
+            "lingers": self.lingers,
             "distance_m": _r(self.distance_m, 2),
             "status": self.status,
         }

@@ -10,6 +10,7 @@ builder gives it to mission control.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Protocol
 
@@ -155,6 +156,11 @@ def build_machine(
         wall=wall_tops_m(blueprint.bricks),
         lateral_altitude_m=lateral_altitude_m,
         fence=blueprint.site,
+        neighbour_pad_m=min(
+            (math.dist(spec.home_m[:2], u.home_m[:2]) for u in blueprint.fleet if u.name != spec.name),
+            default=None,
+        ),
+        battery_swap_s=BATTERY_SWAP_S,
     )
     if spec.role == "brick":
         return BrickUav(config, ports.fc, ports.gripper, ports.camera, handler, clock, clearance=handler)
