@@ -73,18 +73,42 @@ def test_without_the_rule_or_with_room_every_idle_uav_is_given_a_task():
         assert len(d.assign()) == 3
 
 
-def test_a_uav_in_the_air_is_not_held_back_by_the_other_roles_queue():
-    # two bricks queued at one site; an adhesion UAV in the air is given its (conflicting) segment anyway, as
-    # it would be from its pad without the bricks' queue
+def test_a_uav_in_the_air_is_not_held_back_by_the_queue():
+    # two bricks (their UAVs in the air) queued at one site; an adhesion UAV in the air is given its
+    # (conflicting) segment anyway, one on its pad is not
     tasks = (brick(0, 0.0), brick(1, 0.3), AdhesionTask("A0", 0, 1, (0.6, 0.0, 0.1), (0.9, 0.0, 0.1), 0.3))
     plan = Plan(tasks, (), (("B0", "B1"), ("B1", "A0"), ("B0", "A0")))
     fleet = [*brick_fleet(2), UavSpec("glue-1", "adhesion", (2.0, -3.0, 0.0))]
     in_air = Dispatcher(plan, fleet, reservation="site")
-    in_air.admission = Admission(width=1, landed=lambda name: name != "glue-1")
+    in_air.admission = Admission(width=1, landed=lambda _name: False)
     assert [a.uav for a in in_air.assign()] == ["brick-1", "brick-2", "glue-1"]
     on_pad = Dispatcher(plan, fleet, reservation="site")
-    on_pad.admission = Admission(width=1, landed=lambda _name: True)
+    on_pad.admission = Admission(width=1, landed=lambda name: name == "glue-1")
     assert [a.uav for a in on_pad.assign()] == ["brick-1", "brick-2"]
+
+
+def test_the_cap_shares_the_uavs_a_wall_keeps_busy_among_the_roles():
+    pyramid = Admission(width=2, landed=lambda _name: True)  # 2 UAVs per site that can be worked at once: 4
+    assert [(pyramid.cap(b, b + a), pyramid.cap(a, b + a)) for b, a in ((4, 2), (6, 3), (8, 4))] == [
+        (3, 1)
+    ] * 3
+    assert pyramid.cap(3, 5) == 2 and pyramid.cap(2, 5) == 2  # 2.4 and 1.6, rounded
+    assert Admission(width=1, landed=lambda _name: True).cap(1, 9) == 1  # every role keeps a UAV it may fly
+
+
+def test_the_uavs_past_the_cap_stay_on_their_pads_but_one_in_the_air_is_not_held():
+    # four bricks far apart (nothing conflicts, nothing queues) on a wall 1 site wide: 2 UAVs may be busy
+    plan = Plan(tuple(brick(i, 5.0 * i) for i in range(4)), (), ())
+    on_pads = Dispatcher(plan, brick_fleet(3), reservation="site")
+    on_pads.admission = Admission(width=1, landed=lambda _name: True)
+    got = on_pads.assign()
+    assert [a.uav for a in got] == ["brick-1", "brick-2"]
+    assert on_pads.assign() == []
+    on_pads.complete(got[0].task_id)  # a UAV comes free: one on its pad may go
+    assert len(on_pads.assign()) == 1
+    in_air = Dispatcher(plan, brick_fleet(3), reservation="site")
+    in_air.admission = Admission(width=1, landed=lambda name: name != "brick-3")
+    assert [a.uav for a in in_air.assign()] == ["brick-1", "brick-2", "brick-3"]
 
 
 @pytest.mark.slow

@@ -209,14 +209,17 @@ class Dispatcher(DispatchQueries):
         return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
 
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
-        """``i``, or for a landed ``uav`` the policy's best task of ``role`` not crowded when ``i`` is (None: none);
-        :mod:`masonry.planner.dispatch_admission`."""
+        """``i``, or for a landed ``uav`` None while its role has its cap of busy UAVs, else the policy's best task
+        of ``role`` not crowded when ``i`` is (None: none); :mod:`masonry.planner.dispatch_admission`."""
         rule = self.admission
         if rule is None or not rule.applies(sum(self._live_count.values())):
             return i
         st, nb, pre = self._status, self._neighbours, self._prerequisites
         if not rule.landed(uav):
             return i  # already out: it is not added to the crowd (holding it back left holds unserved)
+        busy = sum(1 for j in self._uav_task.values() if self._role[j] == role)
+        if busy >= rule.cap(self._live_count[role], sum(self._live_count.values())):
+            return None  # its role has its share of the UAVs the wall can keep busy: it stays on its pad
         running = list(self._uav_task.values())
         waiting = queued(running, lambda k: st[k] == _RUNNING, lambda j: nb[j])
         if not crowded(i, waiting, nb, pre):
