@@ -19,9 +19,10 @@ import signal
 import subprocess
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import pytest
 
@@ -78,6 +79,34 @@ def one_flight_at_a_time() -> Iterator[None]:
             yield
         finally:
             fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+#: What PX4's SIH logs when the machine starved it of CPU: its simulated sensors stopped publishing (a blind-land
+#: failsafe follows). Seen in 2 of some 40 CI runs, only there; never in a flight that went on.
+SIH_STARVED = "Preflight Fail: No valid data from"
+
+T = TypeVar("T")
+
+
+def sih_starved(workdir: Path) -> bool:
+    """Whether the PX4 run in ``workdir`` logged its simulated sensors starved (:data:`SIH_STARVED`)."""
+    log = workdir / "px4.log"
+    return log.is_file() and SIH_STARVED in log.read_text(errors="replace")
+
+
+def on_px4(workdir: Path, instance: int, fly: Callable[[str], T], params: dict[str, str] | None = None) -> T:
+    """``fly(url)`` on a fresh PX4, one flight at a time; once more on another fresh PX4 (folder ``<workdir>-2``)
+    if the first failed with PX4's own log saying its simulator starved (:func:`sih_starved`): the reference
+    simulator failing, not the flight. Any other failure, or a second starved run, fails the test."""
+    for folder in (workdir, workdir.with_name(f"{workdir.name}-2")):
+        try:
+            with one_flight_at_a_time(), px4(folder, instance, params) as url:
+                return fly(url)
+        except (AssertionError, pytest.fail.Exception):
+            if folder != workdir or not sih_starved(folder):
+                raise
+            print(f"PX4: {folder / 'px4.log'}: its SIH starved ({SIH_STARVED!r}); flown again on a fresh PX4")
+    raise AssertionError("unreachable: the second run returns or raises")
 
 
 @contextlib.contextmanager

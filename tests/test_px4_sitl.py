@@ -24,7 +24,7 @@ from masonry.cli.fly import select_adapters
 from masonry.cli.fly_tuning import fly_settings, tuning_preset
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
-from px4_sitl import ONE_BRICK, hover, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
+from px4_sitl import ONE_BRICK, hover, on_px4, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
 
 #: The issue's uav.yaml: PX4's EKF2 is ready within seconds, a loaded machine slows it; nothing else is set.
 UAV_YAML = "estimate_wait_s: 150\n"
@@ -60,8 +60,7 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     """PX4's own hover: EKF2's velocity sits up to 0.5 m/s off the truth; the one the ``px4`` preset's gates read
     (consistent with the position, 2 s) is no farther from it, within a 40 s rms's spread (issue 29). On PX4's clock (SIH runs lock-step)."""
     tau_s = uav_settings("px4")["velocity_from_position_s"]
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=8) as url:
-        flight = hover(url, 40.0)
+    flight = on_px4(tmp_path / "px4", 8, lambda url: hover(url, 40.0))
     kept = tmp_path / "hover.json"  # the flight, for a look at a failure
     kept.write_text(json.dumps({"estimate": flight.estimate, "truth": flight.truth}))
     assert len(flight.estimate) > 600 and len(flight.truth) > 600  # 30 Hz streams over 40 s
@@ -124,9 +123,13 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
 @pytest.mark.slow
 def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
     """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=9) as url:
+
+    def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
-    assert result["coverage"] is not None and result["coverage"] >= 0.9, result
+        assert result["coverage"] is not None and result["coverage"] >= 0.9, result
+        return result
+
+    result = on_px4(tmp_path / "px4", 9, fly)
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
