@@ -51,6 +51,25 @@ def test_a_failsafes_rtl_fails_the_task_and_halts_without_a_land_of_ours() -> No
     assert rig.uav.finished
 
 
+def test_a_failsafe_during_the_take_off_is_named_against_masonrys_mode_not_taken_for_it() -> None:
+    """The autopilot switches to AUTO.LOITER in the climb (a real PX4 on a loaded CI machine did): once the
+    take-off is over that is a take-over, named against the mode masonry armed in (GUIDED here), not its own."""
+    rig = Rig("brick")
+    switched: dict[str, float] = {}
+
+    def tick(r: Rig) -> None:
+        if r.uav.state == "takeoff" and r.fc.armed and "at" not in switched:
+            switched["at"] = r.clock.now_s()
+            r.fc.at(switched["at"] + 0.5, mode="AUTO.LOITER")
+
+    rig.run(on_tick=tick)
+    assert "at" in switched
+    assert [r.status for r in rig.link.results] == ["failed"], rig.link.results
+    assert rig.uav.halt_reason is not None and rig.uav.halt_reason.endswith(
+        "mode AUTO.LOITER, not requested (masonry flies in GUIDED)"
+    ), rig.uav.halt_reason
+
+
 def test_a_mode_heard_for_less_than_a_heartbeat_period_is_no_take_over() -> None:
     rig = Rig("brick")
     seen = _switch_in_transport(rig, "RTL", back_after_s=1.0)  # a stale HEARTBEAT's mode, then ours again

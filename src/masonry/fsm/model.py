@@ -193,12 +193,14 @@ class UavModel(CommonStates):
             self.fence_watch.observe(self._now_s, tel.position_m)
 
     def _watch_mode(self, tel: Telemetry) -> None:
-        """The mode masonry flies in (the autopilot's at the end of the take-off; forgotten on the ground, idle)
-        and since when the autopilot reports another one (:func:`masonry.fsm.watchdogs.autopilot_mode_watch`)."""
+        """The mode masonry flies in (the autopilot's as it is first heard armed in the take-off: masonry enters it
+        before arming; forgotten on the ground, idle) and since when the autopilot reports another one
+        (:func:`masonry.fsm.watchdogs.autopilot_mode_watch`). Not the mode at the take-off's end: a failsafe during
+        the climb (a real PX4 on a loaded CI machine went to AUTO.LOITER then) would be taken for masonry's."""
         fs = self.failsafe
         if self.state == "idle":
             fs.flight_mode = None
-        elif self.state == "takeoff" and tel.armed:
+        elif self.state == "takeoff" and tel.armed and fs.flight_mode is None:
             fs.flight_mode = tel.mode
         if fs.flight_mode is None or tel.mode == fs.flight_mode or self.state in ("takeoff", "land"):
             fs.foreign_mode_since_s = None
