@@ -24,11 +24,10 @@ the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/p
    the mission (failed ones too), and the share of waiting + holding.
 
 Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--reservation site|task]
-       [--airspace columns|table] [--no-linger]
+       [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
        [--schedule-time-s 90]
-``--no-linger``: every UAV with no task flies home (measurement only: what the linger costs or saves).
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 
@@ -48,8 +47,7 @@ from masonry.blueprint_gen import running_bond
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
-from masonry.mission.sim_options import SimOptions
-from masonry.mission.simulate import SimulatedMission
+from masonry.mission.simulate import simulate
 from masonry.planner import plan as make_plan
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.schedule import solve_schedule
@@ -101,12 +99,10 @@ def fly(
     policy: str,
     reservation: str,
     airspace: str = DEFAULT_AIRSPACE,
-    linger: bool = True,
 ) -> Run:
-    """Fly the wall with the fleet; ``linger`` False: every UAV with no task flies home (for measurement: what
-    the linger, :mod:`masonry.mission.linger`, costs or saves)."""
     wall0 = time.perf_counter()
-    options = SimOptions(
+    report = simulate(
+        blueprint,
         brick_uavs=bricks,
         adhesion_uavs=adhesion,
         seed=seed,
@@ -115,9 +111,6 @@ def fly(
         reservation=reservation,
         airspace=airspace,
     )
-    mission = SimulatedMission.from_blueprint(blueprint, options)
-    mission.control.lingers.enabled = linger
-    report = mission.run()
     return Run(bricks, adhesion, report, time.perf_counter() - wall0)
 
 
@@ -227,11 +220,6 @@ def main() -> None:
     ap.add_argument("--policy", default="critical-path")
     ap.add_argument("--reservation", default=DEFAULT_RESERVATION, choices=RESERVATIONS)
     ap.add_argument("--airspace", default=DEFAULT_AIRSPACE, choices=AIRSPACES)
-    ap.add_argument(
-        "--no-linger",
-        action="store_true",
-        help="every UAV with no task flies home (measurement only: what the linger costs or saves)",
-    )
     ap.add_argument("--walls", default=None, help=f"comma-separated, of {', '.join(WALLS)}")
     ap.add_argument("--fleets", default=None, help="comma-separated brick+adhesion pairs, e.g. 1+1,2+1")
     ap.add_argument(
@@ -250,7 +238,7 @@ def main() -> None:
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
         f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, "
-        f"airspace {args.airspace}, {'no linger' if args.no_linger else 'linger'}, geometric camera, "
+        f"airspace {args.airspace}, geometric camera, "
         f"schedule {args.schedule_time_s:g} s; "
         f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
     )
@@ -261,16 +249,7 @@ def main() -> None:
         print(f"\n## {what} ({todo} bricks to place)\n", flush=True)
         runs = []
         for bricks, adhesion in fleets:
-            run = fly(
-                blueprint,
-                bricks,
-                adhesion,
-                args.seed,
-                args.policy,
-                args.reservation,
-                args.airspace,
-                linger=not args.no_linger,
-            )
+            run = fly(blueprint, bricks, adhesion, args.seed, args.policy, args.reservation, args.airspace)
             print(
                 f"  flown {run.fleet}: makespan {run.report.makespan_s:,.0f} s in {run.wall_s:.0f} s wall",
                 flush=True,
