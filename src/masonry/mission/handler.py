@@ -303,9 +303,13 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         what has arrived and send the heartbeat when due, so that mission control does not declare this UAV lost
         (issue 29; the flight controller calls it: :class:`masonry.ports.WaitsAlive`)."""
         self.now_s = max(self.now_s, now_s)
+        self._read_and_beat(self.now_s)
+
+    def _read_and_beat(self, now_s: float) -> None:
+        """Handle what has arrived, then send the heartbeat when due (the tick's first duties, and the wait's)."""
         for raw in self.transport.receive():
-            self._handle(raw, self.now_s)
-        self._heartbeat_when_due(self.now_s)
+            self._handle(raw, now_s)
+        self._heartbeat_when_due(now_s)
 
     def _heartbeat_when_due(self, now_s: float) -> None:
         if self._last_sent_hb_s is not None and now_s - self._last_sent_hb_s < self.heartbeat_period_s:
@@ -343,9 +347,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         self.now_s = now_s
         if self._kept is not None:
             self._say_kept(now_s)
-        for raw in self.transport.receive():
-            self._handle(raw, now_s)
-        self._heartbeat_when_due(now_s)
+        self._read_and_beat(now_s)
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
         cur = self._current
