@@ -22,6 +22,7 @@ import argparse
 import math
 import sys
 from collections import Counter
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -70,7 +71,9 @@ def min_phases_s(plan: Plan, cruise_altitude_m: float) -> dict[str, Counter[str]
             c["transit"] = MIN_LEG_S + _lat(carry_m)
             c["estimating"] = T.settle_time_s + (T.min_estimates - 1) * tick
             c["aligning"] = 2 * MIN_LEG_S
-            c["descending"] = T.descent_duration_s * (1.0 + _min_jerk_time_to_within(drop, T.placement_radius_m))
+            c["descending"] = T.descent_duration_s * (
+                1.0 + _min_jerk_time_to_within(drop, T.placement_radius_m)
+            )
             c["grasping"] = T.grasp_dwell_s + tick
             c["placing"] = T.release_dwell_s + tick
             c["ascending"] = _vert(transit - grasp_z) + _vert(drop - T.placement_radius_m)
@@ -90,7 +93,9 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
     plan = make_plan(bp)
     m = SimulatedMission.from_blueprint(
         bp,
-        SimOptions(brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, camera="geometric", reservation="site"),
+        SimOptions(
+            brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, camera="geometric", reservation="site"
+        ),
     )
     rep = m.run()
     mins = min_durations_s(plan, cruise_altitude_m=bp.cruise_altitude_m)
@@ -108,7 +113,9 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
     )
     s_tasks = {t.id: t for u in sched.uavs for t in u.tasks}
     print(f"## {wall}, {bricks} + {adhesion}, seed {seed}")
-    print(f"simulated {rep.makespan_s:,.1f} s, schedule {sched.makespan_s:,.1f} s ({sched.status}, {time_limit_s:g} s)")
+    print(
+        f"simulated {rep.makespan_s:,.1f} s, schedule {sched.makespan_s:,.1f} s ({sched.status}, {time_limit_s:g} s)"
+    )
     print()
     print("| role | phase | simulated (done attempts) | schedule minimum | excess |")
     print("|---|---|---|---|---|")
@@ -126,14 +133,18 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
             if a > 0.05 or b > 0.05:
                 print(f"| {role} | {ph} | {a:,.0f} s | {b:,.0f} s | {a - b:+,.0f} s |")
     print()
-    print("| UAV | first start (schedule) | sum of its tasks (schedule) | between tasks on its pad | in the air | "
-          "after its last task | lingering |")
+    print(
+        "| UAV | first start (schedule) | sum of its tasks (schedule) | between tasks on its pad | in the air | "
+        "after its last task | lingering |"
+    )
     print("|---|---|---|---|---|---|---|")
     for u in rep.uavs:
-        mine = sorted((t for t in rep.tasks if t.uav == u.name and t.start_s is not None), key=lambda t: t.start_s)
+        mine = sorted(
+            (t for t in rep.tasks if t.uav == u.name and t.start_s is not None), key=lambda t: t.start_s
+        )
         path = m.world.uavs[u.name].path_m()
         pad_s = air_s = 0.0
-        for a, b in zip(mine, mine[1:], strict=False):
+        for a, b in pairwise(mine):
             assert a.end_s is not None and b.start_s is not None
             sel = (path[:, 0] >= a.end_s) & (path[:, 0] < b.start_s)
             if b.start_s - a.end_s <= 0.0:
@@ -154,8 +165,12 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
         )
     print()
     for role, prefix in (("brick", "B"), ("adhesion", "A")):
-        sim_order = [t.id for t in sorted(rep.tasks, key=lambda t: t.start_s or 0.0) if t.id.startswith(prefix)]
-        s_order = [k for k, _ in sorted(s_tasks.items(), key=lambda kv: kv[1].start_s) if k.startswith(prefix)]
+        sim_order = [
+            t.id for t in sorted(rep.tasks, key=lambda t: t.start_s or 0.0) if t.id.startswith(prefix)
+        ]
+        s_order = [
+            k for k, _ in sorted(s_tasks.items(), key=lambda kv: kv[1].start_s) if k.startswith(prefix)
+        ]
         same = sum(1 for a, b in zip(sim_order, s_order, strict=False) if a == b)
         print(f"{role} order, simulated: {' '.join(sim_order)}")
         print(f"{role} order, schedule:  {' '.join(s_order)}  ({same} of {len(s_order)} at the same rank)")
