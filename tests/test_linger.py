@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 
@@ -97,6 +98,31 @@ def test_on_the_pyramid_the_adhesion_uav_waits_near_the_wall_instead_of_flying_h
     for report in (before, after):
         assert report.min_separation_m is not None and report.min_separation_m >= 1.0
         assert report.conflict_violations == 0 and report.dependency_violations == 0
+
+
+def test_a_lingering_uav_does_not_give_way_on_its_hold_flight_out_of_the_site_it_worked(caplog):
+    """Issue 27: the give-way was asked on the hold flight too, which climbs out of the site the UAV has just
+    worked; the brick UAV waiting for that site always found it in the way, so nearly every wait ended the
+    moment it began (the pyramid at 1 + 1: 17 of 20) and the sprayer flew home and back on the critical path.
+    It gives way once it hovers at its spot (its flight home would have been in the way just as much)."""
+    with caplog.at_level(logging.INFO, logger="masonry.mission.control"):
+        report = _pyramid(True, 600.0)
+    started: dict[str, list[str]] = {}
+    ended_at_once = 0
+    for rec in caplog.records:
+        msg = rec.getMessage()
+        if msg.startswith("glue-1 waits near the wall"):
+            started.setdefault("glue-1", []).append(msg.rsplit(" at ", 1)[1])
+        elif msg.startswith("glue-1 stops waiting near the wall") and "in another UAV's way" in msg:
+            at = msg.split(" at ", 1)[1].split(" (", 1)[0]
+            ended_at_once += at in started.get("glue-1", [])
+    glue = {u.name: u for u in report.uavs}["glue-1"]
+    assert glue.lingers >= 4
+    assert ended_at_once == 0
+    # it waits there (was 13.6 s over 6 waits in these 600 s; 187.6 s over 10 with the change)
+    assert glue.lingering_s >= 10.0 * glue.lingers
+    assert report.min_separation_m is not None and report.min_separation_m >= 1.0
+    assert report.conflict_violations == 0 and report.dependency_violations == 0
 
 
 def test_hold_points_keep_clear_of_a_waiting_sprayers_whole_segment_where_it_climbs_out():

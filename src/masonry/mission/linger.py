@@ -14,9 +14,10 @@ sooner than the UAV could fly home and back (:func:`round_trip_s`):
   UAV flies its hold flight and hovers there; a task handed to it turns it back from there (docs/safety.md).
 - **Until** (:meth:`LingerBook.review`, every tick): it got a task; or the model no longer expects one (a
   failure, a task due later than a round trip); or the expected release passed by more than one round trip
-  (the model was wrong: waiting longer costs more than the trip it saves, the rule of the ski-rental problem); or
-  another UAV's flight, hold flight or take-off fits only without its volumes (:func:`held_up_by`), whatever
-  that UAV waits for (the airspace, its site's turn): it yields, and its flight home is granted once it fits;
+  (the model was wrong: waiting longer costs more than the trip it saves, the rule of the ski-rental problem); or,
+  once it hovers at its spot (not on its hold flight out of the site it worked), another UAV's flight, hold
+  flight or take-off fits only without its volumes (:func:`held_up_by`), whatever that UAV waits for (the
+  airspace, its site's turn): it yields, and its flight home is granted once it fits;
   or its battery is under :data:`MIN_BATTERY` (the handler would hold its next task back for a swap anyway) or
   does not cover the rest of the wait, the task and the way home at the drain its heartbeats show
   (:meth:`LingerBook.affords`: a wait in the air is flight time, and a UAV that cannot afford it goes home);
@@ -336,7 +337,10 @@ class LingerBook:
                 return "no task due soon"
             w.events = mc.dispatcher.events  # (its end stays: a wait is never longer than first expected)
         seen, w.seen = w.seen, (c.version, c.phase(uav))
-        if w.seen != seen and w.seen[1] in (Phase.AT_HOLD, Phase.TO_HOLD) and self._in_the_way(mc, c, uav):
+        # only once it hovers at its spot: on its hold flight it is still climbing out of the site it just
+        # worked, in the way of the UAV waiting for that site, which its flight home would be as well (issue 27:
+        # 17 of the pyramid's 20 waits at 1 + 1 ended so at once, each a round trip home on the critical path)
+        if w.seen != seen and w.seen[1] is Phase.AT_HOLD and self._in_the_way(mc, c, uav):
             return "in another UAV's way"
         return None
 
