@@ -75,8 +75,8 @@ class DropoffReach:
 def dropoff_error_m(uav: BrickUav, tel: Telemetry, reach: DropoffReach) -> float | None:
     """The effector's error (m) to release ``uav`` at if it has reached its drop-off this tick, else None: the
     paper's test, one tick within r_pl; with a ``gate_window_s``, ``reach``'s (the horizontal tick, the windowed
-    height; the error then is the horizontal one, where the brick comes to rest, :func:`resting_error_m`). The release itself
-    may still wait (:mod:`masonry.fsm.release_gate`)."""
+    height; the error then is the horizontal one, where the brick comes to rest, :func:`resting_error_m`). The
+    release itself may still wait (:mod:`masonry.fsm.release_gate`)."""
     cfg, target = uav.config, uav.attempt.place_effector_target_m
     if cfg.gate_window_s > 0.0:
         error_m = uav.effector.position(tel) - target
