@@ -57,6 +57,10 @@ def test_the_descent_itself_is_not_spread_the_window_averages_about_its_referenc
     assert not reach.reached(0.0, (0.0, 0.0, 0.0), 0.0, R_PL)  # a new descent: a window first
 
 
-def test_the_error_at_rest_counts_a_height_above_the_drop_off_only() -> None:
+def test_the_error_at_rest_is_the_horizontal_one_the_brick_rests_on_its_support() -> None:
+    # below the drop-off it stands on its support; above it, it falls onto it: either way at its support's height
     assert resting_error_m((0.003, 0.004, -0.05)) == pytest.approx(0.005)
-    assert resting_error_m((0.003, 0.004, 0.012)) == pytest.approx(0.013)
+    assert resting_error_m((0.003, 0.004, 0.012)) == pytest.approx(0.005)
+    # the case study's B0 on a real PX4 (issue 29): released on a tick 2.9 cm above the drop-off, 15.0 mm to the
+    # side; the brick came to rest 14.7 mm off its place (the simulated world's measure), not 32.7 mm
+    assert resting_error_m((-0.01496, -0.0001, 0.02909)) == pytest.approx(0.01496, abs=1e-5)

@@ -188,7 +188,10 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
+    # the UAV's own: the release tick's horizontal error (masonry.fsm.dropoff_reach.resting_error_m); and where its
+    # camera saw each brick rest as it climbed out (the as-built look), a measure of its own
     assert all(e < 0.02 for e in report["placement_error_m"].values()), report["placement_error_m"]
+    assert all(p["deviation_m"] < 0.02 for p in report["as_built"].values()), report["as_built"]
     assert report["conflict_violations"] == 0 and report["dependency_violations"] == 0
     for p, (out, err) in zip(uavs, runs):
         assert p.returncode == 0, err[-2000:]
@@ -197,6 +200,10 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     attempts = {t["id"]: t["attempts"] for t in report["tasks"]}
     retried = {t["id"]: t["attempts_detail"] for t in report["tasks"] if t["attempts"] > 1}
     errors = ", ".join(f"{k} {v * 1000:.1f} mm" for k, v in report["placement_error_m"].items())
+    errors += " (as built " + ", ".join(
+        f"{k} {p['deviation_m'] * 1000:.1f}" for k, p in report["as_built"].items()
+    )
+    errors += " mm)"
     print(
         f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
     )
