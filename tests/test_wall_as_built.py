@@ -71,20 +71,27 @@ def test_a_brick_whose_support_was_placed_off_keeps_its_offset_to_it_pulled_back
     e = np.array([0.07, -0.05, 0.01])
     seen = {1: np.asarray(wall[1]) + np.array([0.015, 0.0, 0.0]) + e}
     assert wall_offset_m(seen, wall, 2, frozenset({1}), {1: (0.015, 0.0, 0.0)}) == pytest.approx(e)
-    assert wall_offset_m(seen, wall, 2, frozenset({1})) == pytest.approx(e + [0.015, 0.0, 0.0])  # (as before)
+    assert wall_offset_m(seen, wall, 2, frozenset({1})) == pytest.approx(
+        e + np.array([0.015, 0.0, 0.0])
+    )  # (as before)
 
 
 def test_the_assignment_carries_the_deviations_around_the_brick_and_reads_back() -> None:
-    b0, b1, b2 = (TOWER.task(f"B{i}") for i in range(3))
+    b1, b2 = TOWER.task("B1"), TOWER.task("B2")
     done = [
-        Attempt("B0", "brick-1", 1, 0.0, 5.0, "done", as_built=AsBuiltPose((0.09, 0.0, 0.05), 0.0, 0.09, 0.9)),
+        Attempt(
+            "B0", "brick-1", 1, 0.0, 5.0, "done", as_built=AsBuiltPose((0.09, 0.0, 0.05), 0.0, 0.09, 0.9)
+        ),
         Attempt("B1", "brick-1", 1, 6.0, 9.0, "done", as_built=_on(1, 0, (0.015, 0.0, 0.0))),
     ]
     mc = SimpleNamespace(plan=TOWER, history=done[:1], wall_digest="w")
-    assert PlacementWatch().assign(mc, "brick-1", b1, 1, 6.0) == Assign("mission-control", "brick-1", b1, 1, 6.0, "w")
+    assert PlacementWatch().assign(mc, "brick-1", b1, 1, 6.0) == Assign(
+        "mission-control", "brick-1", b1, 1, 6.0, "w"
+    )
     mc = SimpleNamespace(plan=TOWER, history=done, wall_digest="w")
     a = PlacementWatch().assign(mc, "brick-1", b2, 1, 10.0)
-    assert a.task == b2 and a.flown.position_m == b2.position_m  # (flown as designed: a UAV not aligning on the wall)
+    # (flown as designed by a UAV not aligning on the wall)
+    assert a.task == b2 and a.flown.position_m == b2.position_m
     assert isinstance(a.flown, BrickTask)
     assert a.flown.wall_as_built == ((0, (0.0, 0.0, 0.0)), (1, pytest.approx((0.015, 0.0, 0.0), abs=1e-12)))
     assert decode(encode(a)) == a

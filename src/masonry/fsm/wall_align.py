@@ -173,7 +173,10 @@ class WallAlign:
             cfg = uav.config
             self._as_built = dict(task.wall_as_built) if cfg.wall_as_built else {}
             self.follow_m = follow_m(
-                neighbours_of(wall, own, task.size_m), self._as_built, cfg.wall_pullback_m, cfg.wall_follow_cap_m
+                neighbours_of(wall, own, task.size_m),
+                self._as_built,
+                cfg.wall_pullback_m,
+                cfg.wall_follow_cap_m,
             )
         tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
         seen = {t.marker_id // 2 for t in tags} - {own}

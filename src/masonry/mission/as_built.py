@@ -41,7 +41,14 @@ if TYPE_CHECKING:
 #: its camera sees of the wall while it aligns and descends
 WALL_AS_BUILT_RADIUS_M = 1.0
 
-__all__ = ["WALL_AS_BUILT_RADIUS_M", "PlacementWatch", "as_built_field", "as_built_lines", "journaled_as_built", "take_result"]
+__all__ = [
+    "WALL_AS_BUILT_RADIUS_M",
+    "PlacementWatch",
+    "as_built_field",
+    "as_built_lines",
+    "journaled_as_built",
+    "take_result",
+]
 
 
 def as_built_field(
@@ -132,7 +139,9 @@ class PlacementWatch:
         if isinstance(task, BrickTask):
             self._known(mc)
             assert self._tasks is not None
-            near = around(self._tasks, task.brick, wall_deviations(self._tasks, self.poses), WALL_AS_BUILT_RADIUS_M)
+            near = around(
+                self._tasks, task.brick, wall_deviations(self._tasks, self.poses), WALL_AS_BUILT_RADIUS_M
+            )
             if any(d != (0.0, 0.0, 0.0) for _, d in near):  # (all on their design: as designed, nothing sent)
                 planned = replace(planned if isinstance(planned, BrickTask) else task, wall_as_built=near)
         return Assign(MISSION_CONTROL, uav, task, attempt, now_s, mc.wall_digest, planned)
@@ -152,7 +161,9 @@ class PlacementWatch:
             return None
         if self._plan is None:
             self._known(mc)
-            self._plan = AsBuiltPlan(mc.plan.tasks, AsBuiltPlanning(self.check.pullback_m, self.check.tolerance_m))
+            self._plan = AsBuiltPlan(
+                mc.plan.tasks, AsBuiltPlanning(self.check.pullback_m, self.check.tolerance_m)
+            )
         return self._plan.planned(task, self.poses)
 
     def _take(self, task_id: str, pose: AsBuiltPose | None) -> None:
