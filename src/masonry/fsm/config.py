@@ -79,7 +79,7 @@ class UavConfig:
     # neighbours as built, pulled back toward the design by ``wall_pullback_m`` per course and at most
     # ``wall_follow_cap_m`` from it (masonry.fsm.wall_align); False: every brick in view counts at its design
     wall_as_built: bool = True
-    wall_pullback_m: float = 0.005
+    wall_pullback_m: float = 0.002
     wall_follow_cap_m: float = 0.02
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than

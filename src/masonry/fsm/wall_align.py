@@ -16,6 +16,15 @@ design (the px4 towers, seed 4: 34.7 mm off its support; 3.5 mm with the support
 its course are not preferred so (measured, the rotated bond's worst brick grew from 21.9 to 34.2 mm, seed 3), nor
 one of two supports (a pyramid's brick: 11.6 -> 47.7 mm).
 
+**Relative to the wall as it stands** (``UavConfig.wall_as_built``): a brick assignment carries the placed bricks'
+deviations from their design relative to the wall (``BrickTask.wall_as_built``, :mod:`masonry.planner.wall_deviation`:
+chained from the relative as-built poses, so without the position source's error). Each brick in view then counts
+at its as-built place (:func:`wall_offset_m` less its deviation: the wander and the chain's common constant
+remain), and the drop-off is the brick's design plus its placed neighbours' mean deviation (:func:`follow_m`:
+supports and course neighbours, seen or not), pulled back toward the design by ``wall_pullback_m`` per course and
+at most ``wall_follow_cap_m`` from it: a course end that sees only its course neighbour no longer inherits that
+neighbour's offset from its supports (docs/state-machines.md, "Building relative to the wall as it stands").
+
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
 same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
 planned on the as-built poses gives way to it: the offset is added to the brick's own design, not to the planned
