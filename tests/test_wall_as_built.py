@@ -63,7 +63,10 @@ def test_a_brick_whose_support_was_placed_off_keeps_its_offset_to_it_pulled_back
     wall = {t.brick: _top(t) for t in TOWER.tasks if isinstance(t, BrickTask)}
     size = TOWER.task("B2").size_m  # type: ignore[union-attr]
     assert neighbours_of(wall, 2, size) == {1}
-    assert follow_m(frozenset({1}), {1: (0.015, 0.0, 0.0)}, 0.002, 0.02) == pytest.approx([0.013, 0.0, 0.0])
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("px4"))  # (the defaults: 2 mm, 2 cm, on)
+    assert cfg.align_on_wall and cfg.wall_as_built
+    one = follow_m(frozenset({1}), {1: (0.015, 0.0, 0.0)}, cfg.wall_pullback_m, cfg.wall_follow_cap_m)
+    assert one == pytest.approx([0.013, 0.0, 0.0])
     assert follow_m(frozenset({1}), {1: (0.0, -0.04, 0.0)}, 0.005, 0.02) == pytest.approx([0.0, -0.020, 0.0])
     assert follow_m(frozenset({1}), {0: (0.015, 0.0, 0.0)}, 0.005, 0.02) == pytest.approx([0.0, 0.0, 0.0])
     # seen in the camera at its as-built place plus the wander e: the wall's offset is e alone, the drop-off
