@@ -13,6 +13,10 @@ With the blueprint's ``plan_on_as_built`` the watch also plans the work on what 
 each assignment (:meth:`PlacementWatch.assign`) carries the task's target or segment moved onto the wall as built
 (``planned``), and a completion's deviation is measured from the design again (:meth:`PlacementWatch.against_design`:
 the UAV measured it from the target it was given). Off (the default), assignments and completions are as before.
+
+Whatever the blueprint says, a brick assignment carries the deviations of the placed bricks around its drop-off
+relative to the wall (``BrickTask.wall_as_built``, :mod:`masonry.planner.wall_deviation`, chained from the
+completions' relative poses), which a UAV aligning on the wall's markers builds the brick relative to.
 """
 
 from __future__ import annotations
