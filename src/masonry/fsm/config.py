@@ -74,6 +74,13 @@ class UavConfig:
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5
+    # With align_on_wall: the bricks in view count at their as-built poses relative to the wall (the task's
+    # ``wall_as_built``, from mission control) and the drop-off keeps the brick's designed offsets to its placed
+    # neighbours as built, pulled back toward the design by ``wall_pullback_m`` per course and at most
+    # ``wall_follow_cap_m`` from it (masonry.fsm.wall_align); False: every brick in view counts at its design
+    wall_as_built: bool = True
+    wall_pullback_m: float = 0.002
+    wall_follow_cap_m: float = 0.02
     settle_speed_mps: float = 0.08  # "hovering" means slower than this
     # A transit is asked for (docs/safety.md) once the UAV hovers within this of where it stopped, and slower than
     # settle_speed_mps: mission control reserves the flight's climb where the request says the UAV is

@@ -16,6 +16,15 @@ design (the px4 towers, seed 4: 34.7 mm off its support; 3.5 mm with the support
 its course are not preferred so (measured, the rotated bond's worst brick grew from 21.9 to 34.2 mm, seed 3), nor
 one of two supports (a pyramid's brick: 11.6 -> 47.7 mm).
 
+**Relative to the wall as it stands** (``UavConfig.wall_as_built``): a brick assignment carries the placed bricks'
+deviations from their design relative to the wall (``BrickTask.wall_as_built``, :mod:`masonry.planner.wall_deviation`:
+chained from the relative as-built poses, so without the position source's error). Each brick in view then counts
+at its as-built place (:func:`wall_offset_m` less its deviation: the wander and the chain's common constant
+remain), and the drop-off is the brick's design plus its placed neighbours' mean deviation (:func:`follow_m`:
+supports and course neighbours, seen or not), pulled back toward the design by ``wall_pullback_m`` per course and
+at most ``wall_follow_cap_m`` from it: a course end that sees only its course neighbour no longer inherits that
+neighbour's offset from its supports (docs/state-machines.md, "Building relative to the wall as it stands").
+
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
 same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
 planned on the as-built poses gives way to it: the offset is added to the brick's own design, not to the planned
@@ -34,12 +43,14 @@ from masonry.fsm.as_built import frame_tags, world_estimate
 from masonry.fsm.camera_align import CameraAlign
 from masonry.fsm.place_taken import PLACE_TAKEN, taken_by
 from masonry.fsm.wall_trend import WallTrend
+from masonry.planner.as_built_plan import pulled_back
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
+    from masonry.planner.tasks import BrickTask
     from masonry.ports import Telemetry
 
-__all__ = ["WallAlign", "supports_of", "wall_offset_m"]
+__all__ = ["WallAlign", "follow_m", "neighbours_of", "supports_of", "wall_offset_m"]
 
 #: A brick seen farther than this from its design is not on the wall (a pallet, a magnet): no reference.
 _REFERENCE_M = 0.5
@@ -50,10 +61,12 @@ def wall_offset_m(
     wall: Mapping[int, tuple[float, ...]],
     own: int,
     near: frozenset[int] = frozenset(),
+    as_built: Mapping[int, tuple[float, float, float]] | None = None,
 ) -> np.ndarray | None:
     """The mean offset (world, m) of the bricks seen (``estimates``: brick id -> estimated top-face centre) from
-    their designed top-face centres (``wall``), brick ``own`` and bricks off the wall left out, only those of
-    ``near`` if one of them is seen; None: none."""
+    their designed top-face centres (``wall``) moved by their deviations relative to the wall (``as_built``;
+    none: on their design), brick ``own`` and bricks off the wall left out, only those of ``near`` if one of them
+    is seen; None: none."""
     offsets: dict[int, np.ndarray] = {}
     for bid, top in estimates.items():
         design = wall.get(bid)
@@ -61,7 +74,7 @@ def wall_offset_m(
             continue
         d = np.asarray(top, dtype=float) - np.asarray(design, dtype=float)
         if float(np.linalg.norm(d)) <= _REFERENCE_M:
-            offsets[bid] = d
+            offsets[bid] = d - np.asarray((as_built or {}).get(bid, (0.0, 0.0, 0.0)), dtype=float)
     if not offsets:
         return None
     close = [d for bid, d in offsets.items() if bid in near]
@@ -85,6 +98,41 @@ def supports_of(
     )
 
 
+def neighbours_of(
+    wall: Mapping[int, tuple[float, ...]], own: int, size_m: tuple[float, float, float]
+) -> frozenset[int]:
+    """The bricks of ``wall`` brick ``own`` touches: its supports (:func:`supports_of`) and the bricks beside it
+    in its course (centres at most a brick's length apart horizontally)."""
+    top = wall.get(own)
+    if top is None:
+        return frozenset()
+    beside = frozenset(
+        bid
+        for bid, t in wall.items()
+        if bid != own
+        and abs(top[2] - t[2]) < 1e-3
+        and float(np.hypot(t[0] - top[0], t[1] - top[1])) <= 1.01 * size_m[0]
+    )
+    return beside | supports_of(wall, own, size_m)
+
+
+def follow_m(
+    neighbours: frozenset[int],
+    as_built: Mapping[int, tuple[float, float, float]],
+    pullback_m: float,
+    cap_m: float,
+) -> np.ndarray:
+    """How far from its design (relative to the wall, m) a brick is placed: the mean deviation of its placed
+    ``neighbours`` as built (``as_built``, relative to the wall), pulled back toward the design by ``pullback_m``
+    horizontally and at most ``cap_m`` from it (:func:`~masonry.planner.as_built_plan.pulled_back`); zero with
+    none known."""
+    known = [as_built[b] for b in sorted(neighbours) if b in as_built]
+    if not known:
+        return np.zeros(3)
+    mean = np.mean(np.asarray(known, dtype=float), axis=0)
+    return np.asarray(pulled_back((float(mean[0]), float(mean[1]), float(mean[2])), pullback_m, cap_m))
+
+
 class WallAlign:
     """The drop-off's target as the bricks around it place it (see the module docstring)."""
 
@@ -94,7 +142,10 @@ class WallAlign:
         self.design_m = np.zeros(3)
         self._wall: dict[int, tuple[float, ...]] | None = None
         self._near: frozenset[int] = frozenset()
-        self._near_of: int | None = None
+        self._near_of: BrickTask | None = None
+        self._as_built: dict[int, tuple[float, float, float]] = {}
+        #: the drop-off's deviation from the design relative to the wall: its neighbours' as built (follow_m)
+        self.follow_m = np.zeros(3)
         #: When (s) a brick of the wall was last in view (placement by the wall's markers; -inf: not yet)
         self.seen_s = -math.inf
         #: The bricks of the wall in that last view: id -> estimated top-face centre (world)
@@ -121,12 +172,21 @@ class WallAlign:
             return False
         if self._wall is None:
             self._wall = dict(uav.config.wall)
-        wall, own = self._wall, uav.brick_task.brick
-        if self._near_of != own:
-            below = supports_of(wall, own, uav.brick_task.size_m)
+        task = uav.brick_task
+        wall, own = self._wall, task.brick
+        if self._near_of is not task:
+            below = supports_of(wall, own, task.size_m)
             # one support (a tower's, a course's end): keep to it; on two, the mean of the wall seen, as before
             # (measured: keeping to one of two put a px4 pyramid's brick 47.7 mm off its neighbours, 11.6 before)
-            self._near, self._near_of = (below if len(below) == 1 else frozenset()), own
+            self._near, self._near_of = (below if len(below) == 1 else frozenset()), task
+            cfg = uav.config
+            self._as_built = dict(task.wall_as_built) if cfg.wall_as_built else {}
+            self.follow_m = follow_m(
+                neighbours_of(wall, own, task.size_m),
+                self._as_built,
+                cfg.wall_pullback_m,
+                cfg.wall_follow_cap_m,
+            )
         tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
         seen = {t.marker_id // 2 for t in tags} - {own}
         estimates = {}
@@ -134,11 +194,11 @@ class WallAlign:
             est = world_estimate(tags, bid, tel, uav._T_body_cam, uav._est_config)
             if est is not None:
                 estimates[bid] = est[0]
-        offset = wall_offset_m(estimates, wall, own, self._near)
+        offset = wall_offset_m(estimates, wall, own, self._near, self._as_built)
         if offset is None:
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
-        delta = self.tracker.add(self._base_m(wall.get(uav.brick_task.brick)) + offset)
+        delta = self.tracker.add(self._base_m(wall.get(own)) + self.follow_m + offset)
         self.trend.span_s = uav.config.wall_trend_s
         self.trend.add(
             uav._now_s,

@@ -13,6 +13,10 @@ With the blueprint's ``plan_on_as_built`` the watch also plans the work on what 
 each assignment (:meth:`PlacementWatch.assign`) carries the task's target or segment moved onto the wall as built
 (``planned``), and a completion's deviation is measured from the design again (:meth:`PlacementWatch.against_design`:
 the UAV measured it from the target it was given). Off (the default), assignments and completions are as before.
+
+Whatever the blueprint says, a brick assignment carries the deviations of the placed bricks around its drop-off
+relative to the wall (``BrickTask.wall_as_built``, :mod:`masonry.planner.wall_deviation`, chained from the
+completions' relative poses), which a UAV aligning on the wall's markers builds the brick relative to.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ from masonry.perception.types import AsBuiltPose
 from masonry.placement_check import PlacementCheck
 from masonry.planner.as_built_plan import AsBuiltPlan, AsBuiltPlanning
 from masonry.planner.tasks import BrickTask
+from masonry.planner.wall_deviation import around, wall_deviations
 
 if TYPE_CHECKING:
     from masonry.errors import ProtocolError
@@ -36,7 +41,18 @@ if TYPE_CHECKING:
     from masonry.planner.tasks import Task
     from masonry.ports import TaskResult
 
-__all__ = ["PlacementWatch", "as_built_field", "as_built_lines", "journaled_as_built", "take_result"]
+#: How far around a brick's drop-off (horizontally, m) the bricks' as-built deviations go with its assignment: what
+#: its camera sees of the wall while it aligns and descends
+WALL_AS_BUILT_RADIUS_M = 1.0
+
+__all__ = [
+    "WALL_AS_BUILT_RADIUS_M",
+    "PlacementWatch",
+    "as_built_field",
+    "as_built_lines",
+    "journaled_as_built",
+    "take_result",
+]
 
 
 def as_built_field(
@@ -103,8 +119,9 @@ class PlacementWatch:
         self.beyond: list[str] = []
         self._plan: AsBuiltPlan | None = None  # (made at the first assignment, with plan_on_as_built)
         self._design: dict[str, BrickTask] = {}
-        #: brick id -> its as-built pose, from the completions (plan_on_as_built only)
+        #: brick id -> its as-built pose, from the completions
         self.poses: dict[int, AsBuiltPose] = {}
+        self._tasks: list[Task] | None = None  # (the plan's, at the first assignment)
         self._course: CourseCheck | None = None  # (made at the first completion)
 
     def misplaced(self, mc: MissionControl, r: TaskResult) -> str | None:
@@ -119,19 +136,38 @@ class PlacementWatch:
 
     def assign(self, mc: MissionControl, uav: str, task: Task, attempt: int, now_s: float) -> Assign:
         """The assignment of ``task`` to ``uav``: with ``plan_on_as_built``, its geometry planned on the wall as
-        built (``planned``, when that is not the design)."""
-        return Assign(MISSION_CONTROL, uav, task, attempt, now_s, mc.wall_digest, self.planned(mc, task))
+        built (``planned``, when that is not the design); a brick task's carries the as-built deviations of the
+        placed bricks around it relative to the wall (``BrickTask.wall_as_built``, :mod:`masonry.planner.wall_deviation`:
+        what its UAV's wall alignment builds it relative to), when any is known."""
+        planned = self.planned(mc, task)
+        if isinstance(task, BrickTask):
+            self._known(mc)
+            assert self._tasks is not None
+            near = around(
+                self._tasks, task.brick, wall_deviations(self._tasks, self.poses), WALL_AS_BUILT_RADIUS_M
+            )
+            if any(d != (0.0, 0.0, 0.0) for _, d in near):  # (all on their design: as designed, nothing sent)
+                planned = replace(planned if isinstance(planned, BrickTask) else task, wall_as_built=near)
+        return Assign(MISSION_CONTROL, uav, task, attempt, now_s, mc.wall_digest, planned)
+
+    def _known(self, mc: MissionControl) -> None:
+        """The plan's tasks and the poses of the bricks done so far (a resumed mission: the journal's), once."""
+        if self._tasks is not None:
+            return
+        self._tasks = list(mc.plan.tasks)
+        self._design = {t.id: t for t in self._tasks if isinstance(t, BrickTask)}
+        for att in mc.history:
+            self._take(att.task_id, att.as_built if att.status == "done" else None)
 
     def planned(self, mc: MissionControl, task: Task) -> Task | None:
         """``task`` planned on the as-built poses known so far (None: planning off, or the design exactly)."""
         if not self.check.plan_on_as_built:
             return None
         if self._plan is None:
-            tasks = mc.plan.tasks
-            self._plan = AsBuiltPlan(tasks, AsBuiltPlanning(self.check.pullback_m, self.check.tolerance_m))
-            self._design = {t.id: t for t in tasks if isinstance(t, BrickTask)}
-            for att in mc.history:  # (a resumed mission: the poses of the journal)
-                self._take(att.task_id, att.as_built if att.status == "done" else None)
+            self._known(mc)
+            self._plan = AsBuiltPlan(
+                mc.plan.tasks, AsBuiltPlanning(self.check.pullback_m, self.check.tolerance_m)
+            )
         return self._plan.planned(task, self.poses)
 
     def _take(self, task_id: str, pose: AsBuiltPose | None) -> None:
@@ -156,7 +192,7 @@ class PlacementWatch:
     def completed(self, mc: MissionControl, r: TaskResult, uav: str, now_s: float) -> None:
         """A task done: if its as-built pose is beyond the tolerance, say so (and hold, as the blueprint says)."""
         pose = r.as_built
-        if self.check.plan_on_as_built and r.status == "done":
+        if r.status == "done":
             self._take(r.task_id, pose)
         if pose is None or not self.check.beyond(pose.deviation_m):
             return

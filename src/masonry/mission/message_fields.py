@@ -12,6 +12,7 @@ from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.planner.tasks import AdhesionTask, BrickTask, Task
+from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
 from masonry.ports import PHASES, PhaseTimes
 
 
@@ -104,6 +105,26 @@ def phases_from_dict(data: Any, what: str = "result result") -> PhaseTimes:
     return PhaseTimes(**seconds)
 
 
+def _wall_as_built(f: _Fields) -> tuple[tuple[int, tuple[float, float, float]], ...]:
+    """A brick task's optional ``wall_as_built``: [[brick id, [dx, dy, dz]], ...], each deviation at most
+    :data:`~masonry.planner.wall_deviation.MAX_WALL_DEVIATION_M` long (a UAV aligns its drop-off on them)."""
+    raw = f.data.get("wall_as_built")
+    if raw is None:
+        return ()
+    if not isinstance(raw, list):
+        raise f.fail("wall_as_built", f"must be a list, got {type(raw).__name__}")
+    out = []
+    for item in raw:
+        if not isinstance(item, list) or len(item) != 2:
+            raise f.fail("wall_as_built", f"must hold [brick id, [dx, dy, dz]] pairs, got {item!r}")
+        d = _Fields({"brick": item[0], "d": item[1]}, f.what)
+        brick, dev = d.int_("brick"), d.vec("d")
+        if not math.hypot(*dev) <= MAX_WALL_DEVIATION_M:
+            raise f.fail("wall_as_built", f"brick {brick}'s deviation is over {MAX_WALL_DEVIATION_M} m")
+        out.append((brick, dev))
+    return tuple(out)
+
+
 def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
     """Rebuild a task value from :func:`task_to_dict` data (raises ProtocolError)."""
     f = _Fields(data, f"{what} task")
@@ -119,6 +140,7 @@ def task_from_dict(data: dict[str, Any], what: str = "assign") -> Task:
             size_m=f.vec("size_m"),
             spare=None if data.get("spare") is None else f.int_("spare"),
             marker=f.int_("marker") if "marker" in data else None,
+            wall_as_built=_wall_as_built(f),
         )
     if kind == "adhesion":
         return AdhesionTask(

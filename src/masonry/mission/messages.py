@@ -119,6 +119,11 @@ def task_to_dict(task: Task) -> dict[str, Any]:
             "size_m": _vec(task.size_m),
             **({} if task.spare is None else {"spare": task.spare}),
             **({} if task.marker is None else {"marker": task.marker}),
+            **(
+                {}
+                if not task.wall_as_built
+                else {"wall_as_built": [[b, _vec(d)] for b, d in task.wall_as_built]}
+            ),
         }
     return {
         "kind": "adhesion",

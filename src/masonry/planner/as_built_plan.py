@@ -144,7 +144,10 @@ def planned_shift_m(design: Task, planned: Task) -> float | None:
     """How far ``planned`` moves ``design`` (the largest distance between their targets or segment ends, m); None
     when it is not the same task with only its target or segment moved (another id, kind, size, pickup...)."""
     if isinstance(design, BrickTask) and isinstance(planned, BrickTask):
-        if replace(planned, position_m=design.position_m, done=design.done) != design:
+        same = replace(
+            planned, position_m=design.position_m, done=design.done, wall_as_built=design.wall_as_built
+        )
+        if same != design:
             return None
         return math.dist(planned.position_m, design.position_m)
     if isinstance(design, AdhesionTask) and isinstance(planned, AdhesionTask):

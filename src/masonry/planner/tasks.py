@@ -32,6 +32,9 @@ class BrickTask:
     kind: TaskKind = "brick"
     #: the spare picked up in place of brick ``brick`` (its id; ``pickup_m`` is then the spare's), or None
     spare: int | None = None
+    #: placed bricks around it as built, relative to the wall (issue 30; ``masonry.planner.wall_deviation``): (brick
+    #: id, (dx, dy, dz) of its centre from its design, m), given by mission control with an assignment; (): none
+    wall_as_built: tuple[tuple[int, tuple[float, float, float]], ...] = ()
 
     @property
     def marker_ids(self) -> tuple[int, int]:
