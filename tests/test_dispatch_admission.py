@@ -10,7 +10,14 @@ import pytest
 from masonry.blueprint import UavSpec, load_blueprint
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import Dispatcher
-from masonry.planner.dispatch_admission import UAVS_PER_SITE, Admission, crowded, queued, site_width
+from masonry.planner.dispatch_admission import (
+    UAVS_PER_SITE,
+    Admission,
+    coming_alone,
+    crowded,
+    queued,
+    site_width,
+)
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 
 PYRAMID = Path(__file__).resolve().parent.parent / "blueprints" / "pyramid.yaml"
@@ -66,11 +73,37 @@ def test_on_a_compact_wall_the_fleet_past_the_queue_stays_on_its_pads():
     assert [a.uav for a in d.assign()] == ["brick-1"]
 
 
-def test_without_the_rule_or_with_room_every_idle_uav_is_given_a_task():
-    for admission in (None, Admission(width=2, landed=lambda _name: True)):  # 3 UAVs, 2 sites: room enough
-        d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
-        d.admission = admission
-        assert len(d.assign()) == 3
+def test_without_the_rule_every_idle_uav_is_given_a_task():
+    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
+    assert len(d.assign()) == 3
+
+
+def test_with_room_a_uav_on_its_pad_is_not_sent_to_queue_second_at_a_site():
+    # 3 UAVs, 2 sites: the cap does not apply, but the third brick's site has one UAV working and one coming
+    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
+    d.admission = Admission(width=2, landed=lambda _name: True)
+    assert not d.admission.applies(3)
+    got = d.assign()
+    assert [a.uav for a in got] == ["brick-1", "brick-2"]
+    d.complete(got[0].task_id)
+    assert [a.uav for a in d.assign()] == ["brick-1"]  # one works, one comes: the last brick is given now
+
+
+def test_a_uav_in_the_air_may_still_queue_second_at_a_site():
+    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
+    d.admission = Admission(width=2, landed=lambda _name: False)
+    assert len(d.assign()) == 3
+
+
+def test_coming_alone():
+    # 0 - 1 - 2 conflict in a row, 3 conflicts with 0 only
+    neighbours = ((1, 2, 3), (0, 2), (0, 1), (0,))
+    assert coming_alone(1, lambda k: k == 0, neighbours)  # 0 works, 1 would come
+    assert not coming_alone(1, lambda k: k in (0, 2), neighbours)  # two run at its site already
+    assert not coming_alone(
+        3, lambda k: k in (0, 1), neighbours
+    )  # 0 runs, and 1 waits on it: 3 would be second
+    assert coming_alone(3, lambda _k: False, neighbours)
 
 
 def test_a_uav_in_the_air_is_not_held_back_by_the_queue():
