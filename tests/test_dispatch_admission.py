@@ -73,26 +73,33 @@ def test_on_a_compact_wall_the_fleet_past_the_queue_stays_on_its_pads():
     assert [a.uav for a in d.assign()] == ["brick-1"]
 
 
-def test_without_the_rule_every_idle_uav_is_given_a_task():
-    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
-    assert len(d.assign()) == 3
+def test_without_the_rule_or_with_room_every_idle_uav_is_given_a_task():
+    for admission in (None, Admission(width=2, landed=lambda _name: True)):  # 3 UAVs, 2 sites: room enough
+        d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
+        d.admission = admission
+        assert len(d.assign()) == 3
 
 
-def test_with_room_a_uav_on_its_pad_is_not_sent_to_queue_second_at_a_site():
-    # 3 UAVs, 2 sites: the cap does not apply, but the third brick's site has one UAV working and one coming
-    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
-    d.admission = Admission(width=2, landed=lambda _name: True)
-    assert not d.admission.applies(3)
-    got = d.assign()
-    assert [a.uav for a in got] == ["brick-1", "brick-2"]
-    d.complete(got[0].task_id)
-    assert [a.uav for a in d.assign()] == ["brick-1"]  # one works, one comes: the last brick is given now
+def bricks_on_one_bead() -> Plan:
+    """Three bricks in one place (all within r_c of each other) on one bead, far from them, still to spray."""
+    bead = AdhesionTask("A0", 0, 1, (3.0, 0.0, 0.1), (3.3, 0.0, 0.1), 0.3)
+    tasks = (bead, *(brick(i, 0.3 * i) for i in range(3)))
+    conflicts = (("B0", "B1"), ("B0", "B2"), ("B1", "B2"))
+    return Plan(tasks, tuple((f"B{i}", "A0") for i in range(3)), conflicts)
 
 
-def test_a_uav_in_the_air_may_still_queue_second_at_a_site():
-    d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
-    d.admission = Admission(width=2, landed=lambda _name: False)
-    assert len(d.assign()) == 3
+def test_a_uav_on_its_pad_prefetches_a_brick_only_as_the_one_uav_coming_to_its_site():
+    fleet = [*brick_fleet(3), UavSpec("glue-1", "adhesion", (3.0, -3.0, 0.0))]
+    got = {}
+    for landed in (True, False):
+        d = Dispatcher(bricks_on_one_bead(), fleet, reservation="site")
+        d.admission = Admission(width=2, landed=lambda _name, on_pad=landed: on_pad)
+        got[landed] = sorted(a.uav for a in d.assign())
+    # on their pads: one brick UAV works, one comes, the third stays; in the air, every one is given a brick
+    assert got[True] == ["brick-1", "brick-2", "glue-1"]
+    assert got[False] == ["brick-1", "brick-2", "brick-3", "glue-1"]
+    d = Dispatcher(bricks_on_one_bead(), fleet, reservation="site")
+    assert len(d.assign()) == 4  # without the rule
 
 
 def test_coming_alone():
