@@ -17,9 +17,9 @@ work (the pyramid took 1,349 s at 2 + 1 and 2,092 s at 8 + 4). The rule (docs/di
   share of :data:`UAVS_PER_SITE` busy UAVs per site the wall can work at once, in proportion to the live fleet,
   rounded, one at least (:meth:`Admission.cap`; the pyramid: 3 brick + 1 adhesion UAVs at 4 + 2 to 8 + 4). Every
   role keeps a UAV it may fly, so the mission goes on as a smaller fleet's would;
-- a UAV on its pad is given a conflicting task (its site interval is taken: nothing else is available) or a brick
-  to prefetch only where it would be the one UAV coming to a site (:func:`coming_alone`: at most one conflicting
-  task runs, and that one waits for no other), on every wall (the 12 m wall's 6 + 3 and 8 + 4: docs/dispatch.md);
+- on every wall, a UAV on its pad is sent to fetch a brick early (prefetch) only where it would be the one UAV
+  coming to its site (:func:`coming_alone`: at most one conflicting task runs, and that one waits for no other;
+  the 12 m wall's 6 + 3 and 8 + 4: docs/dispatch.md); a ready conflicting task is given as before;
 - a UAV on its pad whose chosen task is crowded is given the policy's best uncrowded task of its role instead,
   available first, else ready and conflicting; with none it stays on its pad until the next event.
 
