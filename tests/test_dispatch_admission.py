@@ -10,7 +10,14 @@ import pytest
 from masonry.blueprint import UavSpec, load_blueprint
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import Dispatcher
-from masonry.planner.dispatch_admission import UAVS_PER_SITE, Admission, crowded, queued, site_width
+from masonry.planner.dispatch_admission import (
+    UAVS_PER_SITE,
+    Admission,
+    coming_alone,
+    crowded,
+    queued,
+    site_width,
+)
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
 
 PYRAMID = Path(__file__).resolve().parent.parent / "blueprints" / "pyramid.yaml"
@@ -71,6 +78,39 @@ def test_without_the_rule_or_with_room_every_idle_uav_is_given_a_task():
         d = Dispatcher(bricks_in_one_place(3), brick_fleet(3), reservation="site")
         d.admission = admission
         assert len(d.assign()) == 3
+
+
+def bricks_on_one_bead() -> Plan:
+    """Three bricks in one place (all within r_c of each other) on one bead, far from them, still to spray."""
+    bead = AdhesionTask("A0", 0, 1, (3.0, 0.0, 0.1), (3.3, 0.0, 0.1), 0.3)
+    tasks = (bead, *(brick(i, 0.3 * i) for i in range(3)))
+    conflicts = (("B0", "B1"), ("B0", "B2"), ("B1", "B2"))
+    return Plan(tasks, tuple((f"B{i}", "A0") for i in range(3)), conflicts)
+
+
+def test_a_uav_on_its_pad_prefetches_a_brick_only_as_the_one_uav_coming_to_its_site():
+    fleet = [*brick_fleet(3), UavSpec("glue-1", "adhesion", (3.0, -3.0, 0.0))]
+    got = {}
+    for landed in (True, False):
+        d = Dispatcher(bricks_on_one_bead(), fleet, reservation="site")
+        d.admission = Admission(width=2, landed=lambda _name, on_pad=landed: on_pad)
+        got[landed] = sorted(a.uav for a in d.assign())
+    # on their pads: one brick UAV works, one comes, the third stays; in the air, every one is given a brick
+    assert got[True] == ["brick-1", "brick-2", "glue-1"]
+    assert got[False] == ["brick-1", "brick-2", "brick-3", "glue-1"]
+    d = Dispatcher(bricks_on_one_bead(), fleet, reservation="site")
+    assert len(d.assign()) == 4  # without the rule
+
+
+def test_coming_alone():
+    # 0 - 1 - 2 conflict in a row, 3 conflicts with 0 only
+    neighbours = ((1, 2, 3), (0, 2), (0, 1), (0,))
+    assert coming_alone(1, lambda k: k == 0, neighbours)  # 0 works, 1 would come
+    assert not coming_alone(1, lambda k: k in (0, 2), neighbours)  # two run at its site already
+    assert not coming_alone(
+        3, lambda k: k in (0, 1), neighbours
+    )  # 0 runs, and 1 waits on it: 3 would be second
+    assert coming_alone(3, lambda _k: False, neighbours)
 
 
 def test_a_uav_in_the_air_is_not_held_back_by_the_queue():

@@ -133,14 +133,16 @@ def test_a_compact_layout_names_who_held_whom(compact) -> None:
     for tid, w in deps:
         assert (tid, w.cause.blocking_task) in prereqs, (tid, w)
         assert w.to_s <= done_at[w.cause.blocking_task] + 1e-6
-    # here most of each waiting UAV's waiting is mission control holding it back (the rest: coming to rest to ask,
-    # after each linger too: glue-1 25.0 of 33.3 s with 4 lingers); a UAV the admission's cap keeps on its pad
-    # (docs/dispatch.md) may never wait at all (brick-2 here)
+    # here most of each waiting UAV's waiting is mission control holding it back; the rest is its coming to rest
+    # to ask, about a second before each attempt's request and each linger's (glue-1 17.8 of 27.7 s held, 6
+    # attempts, 4 lingers; 25.0 of 33.3 s before its short ways home were flown gently, issue 27); a UAV the
+    # admission's cap keeps on its pad (docs/dispatch.md) may never wait at all (brick-2 here)
     waited = [u for u in report.uavs if u.waiting_s > 10.0]
     assert len(waited) >= 2
     for u in waited:
         held = sum(w.duration_s for w in waits if w.cause.uav == u.name)
-        assert held >= 0.7 * u.waiting_s, (u.name, held, u.waiting_s)
+        asks = sum(1 for a in report.attempts if a.uav == u.name) + u.lingers
+        assert held > u.waiting_s / 2 and u.waiting_s - held <= 1.5 * asks, (u.name, held, u.waiting_s, asks)
 
 
 def test_the_log_record_keeps_the_waits_and_an_old_record_reads(compact) -> None:

@@ -43,6 +43,11 @@ class UavConfig:
     # overshoots its end (issue 19: 0.3 m past a 0.35 m leg flown in the 1 s minimum). inf: no limit.
     leg_jerk_mps3: float = math.inf
     leg_accel_mps2: float = math.inf
+    # ... and a lateral leg into the column over the UAV's own pad within this acceleration: the one column
+    # mission control reserves with no slack beyond the separation's 0.1 m for tracking error (no work there;
+    # masonry.mission.airspace.ColumnClearance.home_column), and a shaped autopilot overshoots a short leg's end
+    # (the arducopter vehicle: 0.11-0.12 m past a 1.5 m leg at 1.1 m/s^2, 0.06 m at 0.5). inf: no other limit.
+    pad_leg_accel_mps2: float = math.inf
     arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
     # ... and slower than this (issue 19: on ArduCopter a leg was taken as over at 8 cm while still moving at
     # 1 m/s, and the next leg started from a swing); twice this after align_patience_s past the leg's planned end

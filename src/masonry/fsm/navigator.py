@@ -213,12 +213,20 @@ class Navigator:
         target: np.ndarray,
         layer: float,
         yaw_rad: float | None,
+        lateral_accel_mps2: float | None = None,
     ) -> None:
-        """Climb (or descend) to ``layer`` where the UAV is, fly there above ``target``, descend to it."""
+        """Climb (or descend) to ``layer`` where the UAV is, fly there above ``target`` (within
+        ``lateral_accel_mps2``, if given), descend to it."""
         v_z = self.config.layer_vertical_speed_mps
         legs: list[Leg] = []
         if math.hypot(target[0] - p[0], target[1] - p[1]) > _SAME_M:
-            legs.append((np.array([target[0], target[1], layer]), None))
+            over = np.array([target[0], target[1], layer])
+            lateral_s = (
+                None
+                if lateral_accel_mps2 is None
+                else self.leg_duration_s(np.array([p[0], p[1], layer]), over, lateral_accel_mps2)
+            )
+            legs.append((over, lateral_s))
         if abs(target[2] - layer) > _SAME_M:
             legs.append((target, max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - target[2]) / v_z)))
         self.legs_from_rest = True  # legs start from rest: a corner is turned where the UAV is, never cut
@@ -269,10 +277,11 @@ class Navigator:
         """Hover on at the end of the leg: its timeout counts from now."""
         self.end_s = now_s
 
-    def leg_duration_s(self, start: np.ndarray, target: np.ndarray) -> float:
+    def leg_duration_s(self, start: np.ndarray, target: np.ndarray, accel_mps2: float | None = None) -> float:
         """A rest-to-rest leg's duration: its peak speed within the cruise and vertical speeds, its jerk and
-        acceleration within ``leg_jerk_mps3`` and ``leg_accel_mps2``, at least 1 s."""
+        acceleration within ``leg_jerk_mps3`` and ``leg_accel_mps2`` (and ``accel_mps2``), at least 1 s."""
         cfg = self.config
+        accel = cfg.leg_accel_mps2 if accel_mps2 is None else min(cfg.leg_accel_mps2, accel_mps2)
         d_xy = math.hypot(target[0] - start[0], target[1] - start[1])
         d_z = abs(target[2] - start[2])
         d = math.hypot(d_xy, d_z)
@@ -280,7 +289,7 @@ class Navigator:
             MIN_LEG_S,
             MIN_JERK_PEAK_TO_MEAN_SPEED * max(d_xy / cfg.cruise_speed_mps, d_z / cfg.vertical_speed_mps),
             (MIN_JERK_PEAK_JERK * d / cfg.leg_jerk_mps3) ** (1.0 / 3.0),
-            math.sqrt(MIN_JERK_PEAK_ACCEL * d / cfg.leg_accel_mps2),
+            math.sqrt(MIN_JERK_PEAK_ACCEL * d / accel),
         )
 
     def _start_leg(

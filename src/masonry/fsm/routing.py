@@ -146,7 +146,11 @@ class Routing(ModelBase):
             # already over the site: no lateral leg, no layer
             self.nav.low_route(self._now_s, tel, p, target, self.nav.target_yaw_rad, from_rest=True)
         else:
-            self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad)
+            home = self.config.home_m
+            # into the column over its own pad (no slack there beyond the tracking error's): gently
+            to_pad = math.hypot(target[0] - home[0], target[1] - home[1]) <= 0.05
+            accel = self.config.pad_leg_accel_mps2 if to_pad else None
+            self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad, accel)
 
     def _refused(self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float) -> None:
         """Not yet: wait at the hold point given (flying there at ``layer``), or where the UAV is."""

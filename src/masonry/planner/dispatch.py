@@ -22,7 +22,7 @@ from typing import Literal
 
 from masonry.blueprint import ROLES, UavSpec
 from masonry.errors import PlanningError
-from masonry.planner.dispatch_admission import Admission, crowded, queued
+from masonry.planner.dispatch_admission import Admission, coming_alone, crowded, queued
 from masonry.planner.dispatch_chaining import NEAR_END_M, segment_links
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
 from masonry.planner.dispatch_queries import DispatchQueries
@@ -199,11 +199,15 @@ class Dispatcher(DispatchQueries):
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
         progress, or else (``prefetch``) a task whose every prerequisite is done or in progress (its UAV
         fetches the brick while the glue is sprayed; its site interval waits for them). Highest chain for
-        ``critical-path``, plan order for ``fifo``; then the shortest flight."""
+        ``critical-path``, plan order for ``fifo``; then the shortest flight. With the admission rule, a UAV on its
+        pad prefetches only where it would be the one UAV coming to the site (:func:`coming_alone`)."""
         avail = self._available[role]
         candidates = [i for i in self._ready[role] if i not in avail]
         if not candidates and self.prefetch and role == "brick":
             candidates = self._prefetchable(role)
+            if candidates and self.admission is not None and self.admission.landed(uav):
+                st, nb = self._status, self._neighbours
+                candidates = [i for i in candidates if coming_alone(i, lambda k: st[k] == _RUNNING, nb)]
         if not candidates:
             return None
         return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))

@@ -17,6 +17,9 @@ work (the pyramid took 1,349 s at 2 + 1 and 2,092 s at 8 + 4). The rule (docs/di
   share of :data:`UAVS_PER_SITE` busy UAVs per site the wall can work at once, in proportion to the live fleet,
   rounded, one at least (:meth:`Admission.cap`; the pyramid: 3 brick + 1 adhesion UAVs at 4 + 2 to 8 + 4). Every
   role keeps a UAV it may fly, so the mission goes on as a smaller fleet's would;
+- on every wall, a UAV on its pad is sent to fetch a brick early (prefetch) only where it would be the one UAV
+  coming to its site (:func:`coming_alone`: at most one conflicting task runs, and that one waits for no other;
+  the 12 m wall's 6 + 3 and 8 + 4: docs/dispatch.md); a ready conflicting task is given as before;
 - a UAV on its pad whose chosen task is crowded is given the policy's best uncrowded task of its role instead,
   available first, else ready and conflicting; with none it stays on its pad until the next event.
 
@@ -75,6 +78,15 @@ def crowded(
     )
 
 
+def coming_alone(task: int, is_running: Callable[[int], bool], neighbours: Sequence[Sequence[int]]) -> bool:
+    """At most one task conflicting with ``task`` runs, and that one waits for no other running task: ``task``'s
+    UAV would be the one coming to a site interval (one working, one coming), not a second in its queue."""
+    running = [j for j in neighbours[task] if is_running(j)]
+    if len(running) > 1:
+        return False
+    return all(not any(is_running(k) for k in neighbours[j] if k != task) for j in running)
+
+
 @dataclass(frozen=True)
 class Admission:
     """The rule's facts about a mission: the wall's width and which UAVs stand on their pads.
@@ -100,4 +112,4 @@ class Admission:
         return max(1, (share_x2 + 1) // 2)
 
 
-__all__ = ["UAVS_PER_SITE", "Admission", "crowded", "queued", "site_width"]
+__all__ = ["UAVS_PER_SITE", "Admission", "coming_alone", "crowded", "queued", "site_width"]
