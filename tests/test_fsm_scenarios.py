@@ -489,7 +489,15 @@ def test_adhesion_link_loss_while_spraying_closes_the_valve() -> None:
 
 
 def test_adhesion_low_battery_closes_the_valve_and_goes_home() -> None:
-    rig = Rig("adhesion", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.002}).run()
+    # the battery drains fast from the moment the valve opens: it falls under battery_low_fraction mid-spray
+    # (a drain from take-off timed to cross mid-spray broke when the first descent got shorter, issue 27)
+    rig = Rig("adhesion", fc={"battery_fraction": 0.23})
+
+    def drain(r: Rig) -> None:
+        if r.sprayer.is_valve_open():
+            r.fc.battery_drain_per_s = 0.05
+
+    rig.run(on_tick=drain)
     assert rig.link.results[0].status == "failed" and "battery" in (rig.link.results[0].reason or "")
     assert not rig.sprayer.is_valve_open()
     assert rig.states[-4:] == ["failsafe", "home", "land", "halted"]

@@ -65,15 +65,15 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
     settings = {**uav_settings("px4"), "align_on_wall": align_on_wall}
     mission = SimulatedMission.from_blueprint(
         pyramid(3, yaw_rad=math.radians(30.0), clearance_m=1.0),
-        seed=3,
+        seed=1,
         vehicle="px4",
         uav_config=UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings),
     )
-    # without the wall's markers, this seed's B5 lands two courses too low: found off its course, it is not
-    # counted as placed and the mission does not complete (masonry.mission.course_check). (Seed 1 did so with B3
-    # until the linger moved the placements' times, seed 4 until the linger's give-way did (issue 27): which seeds
-    # put a brick off its course on GNSS alone is the wander's draw at those times, 5 or 6 of seeds 1-8 either
-    # way; seed 3 does on both timings, B3 one course too low before the give-way.)
+    # without the wall's markers, this seed's B4 lands a course too low: found off its course, it is not counted
+    # as placed and the mission does not complete (masonry.mission.course_check). Which seeds put a brick off its
+    # course on GNSS alone is the wander's draw at the placements' times, which every change of timing moves
+    # (issue 27): seed 1 did so with B3 until the linger, seed 4 until the linger's give-way, seed 3 (B5) until
+    # the sprayer's shorter first descent; seeds 1, 2 and 5 do now, seed 4 does not.
     assert mission.run().completed == align_on_wall
     done = {a.task_id for a in mission.control.history if a.status == "done"}
     for b in mission.blueprint.bricks:  # no brick counted placed is off its course (the simulator's truth)
@@ -85,8 +85,8 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
 @pytest.mark.slow
 def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     """The px4 model (GNSS wander +-15 cm), a pyramid turned 30 degrees: with the wall's markers the bricks sit
-    less than half as far from where their neighbours say they belong as on the absolute position (1.3 cm
-    against 9.0 cm over the bricks placed without them, B5 found two courses too low, on this seed;
+    less than half as far from where their neighbours say they belong as on the absolute position (2.2 cm
+    against 14.9 cm over the bricks placed without them, B4 found a course too low, on this seed;
     docs/performance/as-built.md has the benchmark)."""
     on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))

@@ -129,4 +129,20 @@ _CONFIG_FIELDS = (
 #: The timing of a ``UavConfig`` with its defaults (and of the default airframe).
 DEFAULT_TIMING = TaskTiming()
 
-__all__ = ["DEFAULT_TIMING", "MIN_JERK_PEAK_TO_MEAN_SPEED", "MIN_LEG_S", "TaskTiming", "min_jerk_leg_s"]
+
+def spray_descent_leg_s(drop_m: float, vertical_speed_mps: float, spray_descent_s: float) -> float:
+    """How long an adhesion UAV's first descent over a segment's start lasts (issue 27): a minimum-jerk leg of
+    ``drop_m`` at the climb's peak speed ``vertical_speed_mps`` (:func:`min_jerk_leg_s`, at least
+    :data:`MIN_LEG_S`), at most ``spray_descent_s``. The clearance alone (0.30 m) is 1.4 s at 0.4 m/s, where a
+    fixed ``spray_descent_s`` of 4 s held the nozzle at a 0.14 m/s peak; a drop of 0.8 m or more takes all 4 s."""
+    return min(spray_descent_s, min_jerk_leg_s(drop_m, vertical_speed_mps))
+
+
+__all__ = [
+    "DEFAULT_TIMING",
+    "MIN_JERK_PEAK_TO_MEAN_SPEED",
+    "MIN_LEG_S",
+    "TaskTiming",
+    "min_jerk_leg_s",
+    "spray_descent_leg_s",
+]

@@ -16,6 +16,7 @@ from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_T
 from masonry.fsm.tool import Tool
 from masonry.planner.tasks import AdhesionTask, Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, Sprayer, Telemetry
+from masonry.timing import spray_descent_leg_s
 
 Vec3 = tuple[float, float, float]
 
@@ -110,7 +111,7 @@ class AdhesionUav(UavModel):
         climb_s = self.nav.leg_duration_s(end, np.array([end[0], end[1], top])) + LEG_SETTLE_S
         work_s = (
             cfg.stable_time_s
-            + cfg.spray_descent_s
+            + spray_descent_leg_s(top - float(start[2]), cfg.vertical_speed_mps, cfg.spray_descent_s)
             + LEG_SETTLE_S
             + task.length_m / cfg.spray_speed_mps
             + cfg.close_dwell_s
@@ -227,10 +228,13 @@ class AdhesionUav(UavModel):
         assert tel is not None
         start = self._nozzle_body(self.adhesion_task.start_m, tel)
         # a chained segment: the UAV hovers at the spraying height already
-        short = abs(tel.position_m[2] - start[2]) <= self.config.chain_distance_m
-        self._fly_to(
-            tel, start, self.config.chain_descent_s if short else self.config.spray_descent_s, self._yaw_rad
-        )
+        drop_m = float(tel.position_m[2] - start[2])
+        cfg = self.config
+        if abs(drop_m) <= cfg.chain_distance_m:
+            descent_s = cfg.chain_descent_s
+        else:
+            descent_s = spray_descent_leg_s(drop_m, cfg.vertical_speed_mps, cfg.spray_descent_s)
+        self._fly_to(tel, start, descent_s, self._yaw_rad)
 
     def do_descend(self, tel: Telemetry) -> None:
         cfg = self.config

@@ -25,7 +25,13 @@ from masonry.errors import PlanningError
 from masonry.planner.bounds_timing import _LEGACY_FIELDS as _LEGACY_FIELDS
 from masonry.planner.bounds_timing import _check_timing, _timing
 from masonry.planner.tasks import BrickTask, Plan
-from masonry.timing import DEFAULT_TIMING, MIN_JERK_PEAK_TO_MEAN_SPEED, MIN_LEG_S, TaskTiming
+from masonry.timing import (
+    DEFAULT_TIMING,
+    MIN_JERK_PEAK_TO_MEAN_SPEED,
+    MIN_LEG_S,
+    TaskTiming,
+    spray_descent_leg_s,
+)
 
 
 def _check_durations(plan: Plan, durations_s: Mapping[str, float]) -> dict[str, float]:
@@ -151,7 +157,8 @@ def estimate_durations_s(
     drop-off, where a UAV coming back from the previous placement is), a minimum-jerk descent of
     ``timing.descent_duration_s``, the climb back to cruise altitude, the carry to the drop-off at
     ``timing.cruise_speed_mps``, a second descent, the climb, and ``brick_handling_s`` of settling, estimation
-    and grasp/release dwells. An adhesion task: a descent of ``timing.spray_descent_s``, the segment at
+    and grasp/release dwells. An adhesion task: its first descent (:func:`masonry.timing.spray_descent_leg_s`: its drop at
+    ``timing.vertical_speed_mps``, at most ``timing.spray_descent_s``), the segment at
     ``timing.spray_speed_mps``, the climb, and ``adhesion_handling_s``; its approach counts as zero (consecutive
     segments are neighbours). Horizontal legs use the cruise speed, climbs ``timing.vertical_speed_mps`` (as
     mean speeds: an estimate, not a bound). With ``include_approach=False`` no approach is counted (for a
@@ -219,8 +226,11 @@ def estimate_durations_s(
                 + brick_handling_s
             )
         else:
+            surface_m = max(t.start_m[2], t.end_m[2])
+            nozzle_body_m = surface_m + t_.spray_height_m - t_.nozzle_offset_m[2]
+            drop_m = max(cruise_altitude_m, t_.spray_altitude_m(surface_m)) - nozzle_body_m
             out[t.id] = (
-                spray_descent_s
+                spray_descent_leg_s(drop_m, vertical_speed_mps, spray_descent_s)
                 + t.length_m / spray_speed_mps
                 + climb(min(t.start_m[2], t.end_m[2]))
                 + adhesion_handling_s
