@@ -7,7 +7,6 @@ import math
 import random
 
 from fsm_rig import Rig
-
 from masonry.fakes import FakeFlightController
 from masonry.fsm.descent_reach import DescentReach
 from masonry.fsm.tuning import uav_settings
@@ -64,7 +63,9 @@ def test_a_hover_centred_off_the_spraying_point_does_not_arrive_on_ticks_that_sw
 def test_the_descent_itself_is_not_spread_the_window_averages_about_its_reference() -> None:
     reach = DescentReach(3.0)
     first = None
-    for i in range(90):  # a 7 s descent of 0.5 m (minimum jerk), the body 1 cm behind its reference, 2 s after
+    for i in range(
+        90
+    ):  # a 7 s descent of 0.5 m (minimum jerk), the body 1 cm behind its reference, 2 s after
         t = i * 0.1
         s = min(1.0, t / 7.0)
         ref_dz = 0.5 * (1.0 - (10 * s**3 - 15 * s**4 + 6 * s**5))
