@@ -78,6 +78,18 @@ def test_the_descent_itself_is_not_spread_the_window_averages_about_its_referenc
     assert reach.mean_error_m((0.0, 0.0, 0.0)) is None  # a new descent: a window first
 
 
+def test_a_chained_segments_short_descent_is_judged_on_what_it_saw_not_held_for_a_window() -> None:
+    reach = DescentReach(3.0)
+    reach.reset(0.5)  # chain_descent_s: the UAV is at the spraying height already
+    for i in range(6):
+        reach.add(i * 0.1, (0.01, -0.005, 0.004))
+    assert reach.reached((0.0, 0.0, 0.0), TOLERANCE_M)  # at its end, 0.5 s seen
+    reach.reset(4.0)  # a full descent: a whole window first
+    for i in range(6):
+        reach.add(i * 0.1, (0.01, -0.005, 0.004))
+    assert not reach.reached((0.0, 0.0, 0.0), TOLERANCE_M)
+
+
 class _SwingingFc(FakeFlightController):
     """The fake autopilot, its reported position swinging as PX4 v1.16 SITL's does (:func:`_swing`) while
     ``swinging``."""

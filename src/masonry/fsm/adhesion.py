@@ -230,10 +230,9 @@ class AdhesionUav(UavModel):
         start = self._nozzle_body(self.adhesion_task.start_m, tel)
         # a chained segment: the UAV hovers at the spraying height already
         short = abs(tel.position_m[2] - start[2]) <= self.config.chain_distance_m
-        self._descent.reset()
-        self._fly_to(
-            tel, start, self.config.chain_descent_s if short else self.config.spray_descent_s, self._yaw_rad
-        )
+        duration_s = self.config.chain_descent_s if short else self.config.spray_descent_s
+        self._descent.reset(duration_s)
+        self._fly_to(tel, start, duration_s, self._yaw_rad)
 
     def do_descend(self, tel: Telemetry) -> None:
         cfg = self.config

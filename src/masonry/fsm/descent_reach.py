@@ -38,11 +38,15 @@ class DescentReach:
     def __init__(self, window_s: float) -> None:
         self._horizontal = HoverNoise(window_s)
         self._height = HoverNoise(window_s)
+        self._seen_s = window_s
 
-    def reset(self) -> None:
-        """A new descent: forget the deviations seen."""
+    def reset(self, duration_s: float = math.inf) -> None:
+        """A new descent of ``duration_s`` (planned): forget the deviations seen. A descent shorter than the window
+        (a chained segment's ``chain_descent_s``, 0.5 s: the UAV is at the spraying height already) is judged on
+        what it has seen by its end, not held for a whole window."""
         self._horizontal.reset()
         self._height.reset()
+        self._seen_s = min(self._horizontal.window_s, duration_s)
 
     def add(self, now_s: float, deviation_m: Sequence[float]) -> None:
         """One tick of the descent: the body's deviation from the descent's reference now (body minus reference,
@@ -53,8 +57,8 @@ class DescentReach:
     def mean_error_m(self, reference_error_m: Sequence[float]) -> float | None:
         """The distance (m) of the window's mean position from the target, given where the descent's reference is
         now relative to the target (reference minus target: zero once the descent is over by plan); None until
-        a window has been seen."""
-        if self._horizontal.seen_s < self._horizontal.window_s:
+        a window (or the whole of a shorter descent) has been seen."""
+        if self._horizontal.seen_s < self._seen_s:
             return None
         mx, my = self._horizontal.mean_m
         mz = self._height.mean_m[0]
