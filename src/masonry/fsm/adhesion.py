@@ -11,6 +11,7 @@ from masonry.fsm.attempt import AdhesionAttempt
 from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.fsm.bead import BeadPass, BeadSettings
 from masonry.fsm.config import UavConfig
+from masonry.fsm.descent_reach import DescentReach
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
 from masonry.fsm.tool import Tool
@@ -56,6 +57,7 @@ class AdhesionUav(UavModel):
         #: the heading it flies its segments at (set for each task on the way there; the chaining of the next
         #: task's segment is judged at it, so it outlives the attempt)
         self._yaw_rad = 0.0
+        self._descent = DescentReach(config.gate_window_s or 1.0)  # (masonry.fsm.descent_reach)
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
             config.cruise_altitude_m
@@ -234,6 +236,7 @@ class AdhesionUav(UavModel):
             descent_s = cfg.chain_descent_s
         else:
             descent_s = spray_descent_leg_s(drop_m, cfg.vertical_speed_mps, cfg.spray_descent_s)
+        self._descent.reset(descent_s)
         self._fly_to(tel, start, descent_s, self._yaw_rad)
 
     def do_descend(self, tel: Telemetry) -> None:
@@ -242,7 +245,19 @@ class AdhesionUav(UavModel):
         # patience, as in the hover: align_patience_s past the descent's end the tolerance doubles; the attempt
         # ends (with its reason) at release_timeout_s or, if later, twice the patience
         late = self._now_s - self.nav.end_s
-        if self._advance(tel, cfg.spray_tolerance_m * (2.0 if late > cfg.align_patience_s else 1.0)):
+        tolerance_m = cfg.spray_tolerance_m * (2.0 if late > cfg.align_patience_s else 1.0)
+        if cfg.gate_window_s > 0.0:
+            # a noisy position source (the px4 preset): the window's mean about the descent's reference, not one
+            # tick (masonry.fsm.descent_reach); the tick's speed as before
+            ref = self.nav.reference(self._now_s)[0]
+            p, target = tel.position_m, self.nav.target_m
+            self._descent.add(self._now_s, [p[i] - float(ref[i]) for i in range(3)])
+            arrived = self._advance(tel, math.inf) and self._descent.reached(
+                [float(ref[i]) - float(target[i]) for i in range(3)], tolerance_m
+            )
+        else:
+            arrived = self._advance(tel, tolerance_m)
+        if arrived:
             self.reached()
         elif late > max(cfg.release_timeout_s, 2.0 * cfg.align_patience_s):
             self.abort(reason=f"could not reach the spraying height over {self.adhesion_task.id}")

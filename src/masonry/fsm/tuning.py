@@ -83,6 +83,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,
+        # the spray descent's arrival: the window's mean within the valve's radius (masonry.fsm.descent_reach)
+        "spray_tolerance_m": 0.03,
     },
 }
 
