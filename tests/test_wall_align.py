@@ -69,12 +69,13 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
         vehicle="px4",
         uav_config=UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings),
     )
-    # without the wall's markers, this seed's B4 lands a course too low: found off its course, it is not counted
-    # as placed and the mission does not complete (masonry.mission.course_check). Which seeds put a brick off its
-    # course on GNSS alone is the wander's draw at the placements' times, which every change of timing moves
-    # (issue 27): seed 1 did so with B3 until the linger, seed 4 until the linger's give-way, seed 3 (B5) until
-    # the sprayer's shorter first descent; seeds 1, 2 and 5 do now, seed 4 does not.
-    assert mission.run().completed == align_on_wall
+    # with the wall's markers every brick is placed; without them a brick may land a course too low and, found off
+    # its course, is not counted placed (masonry.mission.course_check; tests/test_course_check.py proves that).
+    # Which seeds do so on GNSS alone is the wander's draw at the placements' times, which every change of timing
+    # moves (issue 27: seed 1 with B3 until the linger, seed 4 until the linger's give-way, seed 3 until the
+    # sprayer's shorter first descent, seed 1 again until the px4 descent's window): so it is not asserted here.
+    completed = mission.run().completed
+    assert completed or not align_on_wall
     done = {a.task_id for a in mission.control.history if a.status == "done"}
     for b in mission.blueprint.bricks:  # no brick counted placed is off its course (the simulator's truth)
         if f"B{b.id}" in done:
@@ -85,9 +86,9 @@ def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
 @pytest.mark.slow
 def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     """The px4 model (GNSS wander +-15 cm), a pyramid turned 30 degrees: with the wall's markers the bricks sit
-    less than half as far from where their neighbours say they belong as on the absolute position (2.2 cm
-    against 14.9 cm over the bricks placed without them, B4 found a course too low, on this seed;
-    docs/performance/as-built.md has the benchmark)."""
+    less than half as far from where their neighbours say they belong as on the absolute position (1.6 cm
+    against 13.4 cm on this seed at main 524230c, every brick placed both ways; docs/performance/as-built.md has
+    the benchmark)."""
     on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))
 
