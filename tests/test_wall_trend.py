@@ -76,7 +76,7 @@ def test_the_shift_is_capped_and_off_with_no_span() -> None:
 
 def test_a_wall_long_out_of_view_is_not_extrapolated() -> None:
     """Out of view for over 0.4 of the span, too few of the span's frames are left to carry the line on: the
-    shift goes back to none, the last mean stands (a stale release after three looks, masonry.fsm.release_gate)."""
+    shift goes back to none, the last mean stands (a stale release after the looks, masonry.fsm.release_gate)."""
     trend = WallTrend(1.5)
     trend.reset(5)
     _fed(trend, 0.0, 2.0)

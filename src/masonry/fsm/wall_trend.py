@@ -12,7 +12,7 @@ as EKF2's output predictor smooths it): its rate holds over a second. :class:`Wa
 offsets of the last ``span_s`` seconds (a straight line through at least ``MIN_FRAMES`` frames of one set of
 reference bricks) and moves the target by that rate times the age of the wall alignment's mean, at most
 ``MAX_SHIFT_M``: the target follows the wander through the frames missed and the last leg. With the wall out of
-view for longer (a release after three looks, :mod:`masonry.fsm.release_gate`) too few frames of the span are left
+view for longer (a release after the looks, :mod:`masonry.fsm.release_gate`) too few frames of the span are left
 and nothing is carried: the last mean stands, as before (carried on, the px4 towers' worst brick, let go 1.0 s
 after its last sighting, landed 27.6 mm off its support). A source with no
 trend (motion capture, a camera rendered from the reported position) gives a rate of noise: the target stays
