@@ -9,6 +9,7 @@ from typing import Any
 
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+from masonry.blueprint import Blueprint
 from masonry.fakes import (
     FakeBrick,
     FakeCamera,
@@ -19,8 +20,11 @@ from masonry.fakes import (
     QueueMissionLink,
     ScriptedClearanceLink,
 )
-from masonry.fsm import AdhesionUav, BrickUav, UavConfig
-from masonry.planner.tasks import AdhesionTask, BrickTask
+from masonry.fsm import AdhesionUav, BrickUav, UavConfig, build_uav
+from masonry.fsm.model import UavModel
+from masonry.planner.tasks import AdhesionTask, BrickTask, Task
+from masonry.sim import World
+from masonry.sim.world import SimUav
 
 HOME = (0.0, -2.0, 0.0)
 PICKUP = (3.0, 1.0, 0.05)
@@ -147,3 +151,17 @@ def glue_on_px4_sitl() -> Iterator[
     finally:
         fc.close()
         sitl.stop()
+
+
+def sim_machine(bp: Blueprint, world: World, sim_uav: SimUav, task: Task) -> UavModel:
+    """The state machine of ``sim_uav`` (of ``world``) with ``task`` queued on its link."""
+    spec = sim_uav.spec
+    return build_uav(
+        UavConfig.from_spec(spec, markers=bp.markers),
+        fc=sim_uav.fc,
+        link=QueueMissionLink([task]),
+        clock=world.clock,
+        gripper=sim_uav.gripper,
+        camera=sim_uav.camera,
+        sprayer=sim_uav.sprayer,
+    )

@@ -7,30 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from masonry.blueprint import Blueprint, load_blueprint
-from masonry.fakes import QueueMissionLink
-from masonry.fsm import UavConfig, build_uav, run_single_task
-from masonry.fsm.model import UavModel
+from fsm_rig import sim_machine
+from masonry.blueprint import load_blueprint
+from masonry.fsm import run_single_task
 from masonry.planner import plan
-from masonry.planner.tasks import Task
 from masonry.sim import Faults, World
-from masonry.sim.world import SimUav
 
 CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
-
-
-def _machine(bp: Blueprint, world: World, sim_uav: SimUav, task: Task) -> UavModel:
-    """The state machine of ``sim_uav`` (of ``world``) with ``task`` queued on its link."""
-    spec = sim_uav.spec
-    return build_uav(
-        UavConfig.from_spec(spec, markers=bp.markers),
-        fc=sim_uav.fc,
-        link=QueueMissionLink([task]),
-        clock=world.clock,
-        gripper=sim_uav.gripper,
-        camera=sim_uav.camera,
-        sprayer=sim_uav.sprayer,
-    )
 
 
 def _fly(task_id: str, seed: int, faults: Faults | None = None, camera: str = "geometric"):
@@ -39,7 +22,7 @@ def _fly(task_id: str, seed: int, faults: Faults | None = None, camera: str = "g
     world = World(bp, seed=seed, faults=faults, camera=camera)  # type: ignore[arg-type]
     spec = next(u for u in bp.fleet if u.role == task.kind)
     sim_uav = world.add_uav(spec)
-    uav = _machine(bp, world, sim_uav, task)
+    uav = sim_machine(bp, world, sim_uav, task)
     run = run_single_task(uav, world.clock, advance=world.step, dt_s=0.05, timeout_s=400.0)
     return run, world, task, uav
 
@@ -123,7 +106,7 @@ def test_a_task_given_up_with_the_brick_on_board_puts_it_back_on_its_pallet(load
     spec = next(u for u in bp.fleet if u.role == "brick")
     sim_uav = world.add_uav(spec)
     sim_uav.vehicle.battery_fraction = 0.21
-    uav = _machine(bp, world, sim_uav, task)
+    uav = sim_machine(bp, world, sim_uav, task)
     picked_up_at: list[tuple[float, float, float]] = []
 
     def advance(dt_s: float) -> None:
@@ -161,7 +144,7 @@ def test_a_task_given_up_as_the_magnet_takes_the_brick_in_the_descent_puts_it_ba
     world = World(bp, seed=0)
     spec = next(u for u in bp.fleet if u.role == "brick")
     sim_uav = world.add_uav(spec)
-    uav = _machine(bp, world, sim_uav, task)
+    uav = sim_machine(bp, world, sim_uav, task)
     on_pallet = world.bricks[task.brick].top_center_m
     aborted: list[str] = []
 
@@ -194,7 +177,7 @@ def test_a_brick_put_back_is_picked_up_again_by_the_retry() -> None:
     sim_uav = world.add_uav(spec)
     sim_uav.vehicle.battery_fraction = 0.21
 
-    first = _machine(bp, world, sim_uav, task)
+    first = sim_machine(bp, world, sim_uav, task)
 
     def low_in_transport(dt_s: float) -> None:
         if first.state == "transport" and sim_uav.vehicle.battery_fraction > 0.2:
@@ -204,7 +187,7 @@ def test_a_brick_put_back_is_picked_up_again_by_the_retry() -> None:
     run = run_single_task(first, world.clock, advance=low_in_transport, dt_s=0.05, timeout_s=400.0)
     assert run.result is not None and "put back" in (run.result.reason or "")
     sim_uav.vehicle.swap_battery()
-    second = _machine(bp, world, sim_uav, task)
+    second = sim_machine(bp, world, sim_uav, task)
     run = run_single_task(second, world.clock, advance=world.step, dt_s=0.05, timeout_s=400.0)
     assert run.result is not None and run.result.status == "done", run.result
     assert world.placement_error_m(task.brick) <= 0.03

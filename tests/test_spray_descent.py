@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
+from fsm_rig import sim_machine
 from masonry.blueprint import load_blueprint
-from masonry.fakes import QueueMissionLink
-from masonry.fsm import UavConfig, build_uav, run_single_task
+from masonry.fsm import run_single_task
 from masonry.planner import plan
 from masonry.sim import World
 from masonry.timing import DEFAULT_TIMING, MIN_LEG_S, spray_descent_leg_s
@@ -42,16 +42,8 @@ def test_a_first_descent_in_the_simulated_world_is_shorter_and_stops_at_the_spra
     world = World(bp, seed=1)
     spec = next(u for u in bp.fleet if u.role == "adhesion")
     sim_uav = world.add_uav(spec)
-    cfg = UavConfig.from_spec(spec, markers=bp.markers)
-    uav = build_uav(
-        cfg,
-        fc=sim_uav.fc,
-        link=QueueMissionLink([task]),
-        clock=world.clock,
-        gripper=sim_uav.gripper,
-        camera=sim_uav.camera,
-        sprayer=sim_uav.sprayer,
-    )
+    uav = sim_machine(bp, world, sim_uav, task)
+    cfg = uav.config
     lowest_m: list[float] = []
 
     def advance(dt_s: float) -> None:
