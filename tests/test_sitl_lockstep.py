@@ -35,6 +35,16 @@ def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() ->
     sitl.sim_time_s = 1.3
     pace.grant(1400)  # the client grants again: lock-step again
     assert pace.engaged and pace.step_s(0.4, wall_s=1.4) == pytest.approx(0.1)
+    texts: list[str] = []
+    sitl._text = lambda severity, text: texts.append(text)
+    for last_s, now_s in (
+        (None, 0.0),
+        (0.0, 1.0),
+        (1.0, 2.0),
+        (2.0, 5.5),
+    ):  # first heard, 1 Hz, back after 3.5 s
+        pace.greet(last_s, now_s)
+    assert texts == [LOCKSTEP_TEXT, LOCKSTEP_TEXT]
     with pytest.raises(ValueError, match="must be positive"):
         SitlLockstep(sitl, wait_s=0.0)
 

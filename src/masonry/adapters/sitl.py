@@ -82,7 +82,7 @@ from masonry.adapters.sitl_config import (
     SitlConfig,
     free_udp_port,
 )
-from masonry.adapters.sitl_lockstep import LOCKSTEP_TEXT, SitlLockstep
+from masonry.adapters.sitl_lockstep import SitlLockstep
 from masonry.errors import CommandRejected
 from masonry.ports import Vec3
 
@@ -326,8 +326,8 @@ class MavlinkSitl:
             if msg.type == MAV_TYPE_GCS:
                 if self._last_gcs_wall_s is None:
                     self._log(f"ground station connected (system {msg.get_srcSystem()})")
-                    if self.lockstep is not None:  # it takes grants (masonry.adapters.sitl_lockstep)
-                        self._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
+                if self.lockstep is not None:  # it takes grants: says so to a client new or back
+                    self.lockstep.greet(self._last_gcs_wall_s, time.monotonic())
                 self._last_gcs_wall_s = time.monotonic()
         elif kind == "COMMAND_LONG":
             if msg.target_system in (0, self.config.system_id):

@@ -4,7 +4,8 @@ Without it the SITL's clock runs at ``time_scale`` x the wall whatever its clien
 loaded machine leaves unrun for 0.1 s of wall finds the vehicle 0.4 s of simulated flight further on (at x4),
 having coasted on a stale setpoint (issue 29). With it the client paces the simulation (docs/sitl-lockstep.md):
 
-1. On a ground station's first HEARTBEAT the SITL sends STATUSTEXT :data:`LOCKSTEP_TEXT`: it takes grants.
+1. On a ground station's first HEARTBEAT (and on one heard again after 3 s without) the SITL sends STATUSTEXT
+   :data:`LOCKSTEP_TEXT`: it takes grants.
 2. A grant: the client has dealt with everything up to now and next acts at ``T`` on the SITL's clock; it sends
    SYSTEM_TIME with ``time_boot_ms`` = ``T`` (``time_unix_usec``: its wall clock, as ground stations send it).
 3. The SITL runs, at up to ``time_scale`` x the wall, to the latest grant and stops there. Having reached it,
@@ -25,11 +26,14 @@ from typing import TYPE_CHECKING
 
 from masonry.adapters.lockstep import LOCKSTEP_TEXT
 from masonry.adapters.mavlink import MSG_ATTITUDE, MSG_LOCAL_POSITION_NED
+from masonry.adapters.sitl_config import MAV_SEVERITY_INFO
 
 if TYPE_CHECKING:
     from masonry.adapters.sitl import MavlinkSitl
 
 __all__ = ["LOCKSTEP_TEXT", "SitlLockstep"]
+#: A ground station heard again after this long (s of wall) without its heartbeat is told again (a new client).
+GREET_AFTER_S = 3.0
 #: How far below a grant (s) the simulated time counts as having reached it (time_boot_ms is whole ms).
 _REACHED_S = 1e-6
 
@@ -53,6 +57,12 @@ class SitlLockstep:
         self.free_runs = 0  # times the SITL gave up waiting for a grant and ran free
         self._replied_ms: int | None = None
         self._held_since_s: float | None = None
+
+    def greet(self, last_heartbeat_s: float | None, now_s: float) -> None:
+        """A ground station's HEARTBEAT (wall s): announce lock-step to one first heard, or heard again after a
+        silence (a second ``masonry fly`` against the same SITL)."""
+        if last_heartbeat_s is None or now_s - last_heartbeat_s > GREET_AFTER_S:
+            self._sitl._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
 
     def grant(self, time_boot_ms: int) -> None:
         """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock."""
