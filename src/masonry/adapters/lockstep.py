@@ -72,8 +72,9 @@ class LockstepClock:
                 reply = self._replies.get(timeout=left_s)
             except queue.Empty:
                 break
-            if int(getattr(reply, "time_boot_ms", -1)) >= grant_ms:
-                self._now_s = max(self._now_s, grant_ms / 1000.0)
+            reply_ms = int(getattr(reply, "time_boot_ms", -1))
+            if reply_ms >= grant_ms:  # the SITL's time: the grant, or later if it ran free past it
+                self._now_s = max(self._now_s, reply_ms / 1000.0)
                 return
         self.late_replies += 1
 

@@ -10,7 +10,8 @@ having coasted on a stale setpoint (issue 29). With it the client paces the simu
    SYSTEM_TIME with ``time_boot_ms`` = ``T`` (``time_unix_usec``: its wall clock, as ground stations send it).
 3. The SITL runs, at up to ``time_scale`` x the wall, to the latest grant and stops there. Having reached it,
    it sends ATTITUDE and LOCAL_POSITION_NED at ``T`` and then the reply, SYSTEM_TIME with ``time_boot_ms`` =
-   ``T``: the client, waiting for the reply (:mod:`masonry.adapters.lockstep`), reads the state at ``T``.
+   ``T`` (its own time, if it had run free past ``T``): the client, waiting for the reply
+   (:mod:`masonry.adapters.lockstep`), reads the state at ``T`` and its clock reads the reply's time.
 4. A client that stops granting (it waits on its own wall clock for a take-off or an arming, or it is gone)
    cannot stall the SITL: held at a grant, the SITL waits for the next one at most ``wait_s`` of wall (its
    socket's next datagram ends the wait at once), then runs free at ``time_scale`` until a grant comes again.
@@ -101,7 +102,9 @@ class SitlLockstep:
         self._replied_ms = self.grant_ms
         sitl._send_stream(MSG_ATTITUDE)
         sitl._send_stream(MSG_LOCAL_POSITION_NED)  # (none before the EKF has converged)
-        sitl._conn.mav.system_time_send(time.time_ns() // 1000, self.grant_ms)
+        # the time it is at: the grant, or later where it ran free past it (the client's clock goes on from there)
+        now_ms = max(self.grant_ms, int(sitl.sim_time_s * 1000.0))
+        sitl._conn.mav.system_time_send(time.time_ns() // 1000, now_ms)
 
     def wait(self, timeout_s: float) -> None:
         """Wait up to ``timeout_s`` of wall for the next datagram from the client (a grant ends a hold at once)."""
