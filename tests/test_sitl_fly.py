@@ -51,7 +51,7 @@ def test_fly_completes_a_brick_task_against_masonry_sitl() -> None:
         log, err = sitl.communicate(timeout=10)
     assert res.exit_code == 0, res.output + err
     out = json.loads(res.stdout)
-    assert out["status"] == "done", out
+    assert out["status"] == "done", (out["reason"], [(round(e["t_s"], 1), e["state"]) for e in out["trace"]])
     assert out["uav"] == "brick-1" and out["task"] == "B0"
     assert out["placement_error_m"] is not None and out["placement_error_m"] < 0.03
     states = [e["state"] for e in out["trace"]]
@@ -436,7 +436,7 @@ def test_adhesion_task_with_the_serial_valve_against_the_sitl(tmp_path) -> None:
         commands = [" ".join((r.command, *r.args)) for r in board.logic.executed if r.command != "STATUS"]
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
-    assert out["status"] == "done", out
+    assert out["status"] == "done", (out["reason"], [(round(e["t_s"], 1), e["state"]) for e in out["trace"]])
     assert "[ok  ] actuators: Arduino on " in res.stderr
     opened = commands.index("VALVE OPEN")  # the valve was opened over the serial line ...
     assert "VALVE CLOSE" in commands[opened:]  # ... and closed again
