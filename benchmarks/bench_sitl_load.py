@@ -30,6 +30,7 @@ SITL_TESTS = (
     "tests/test_hw_mission.py",
     "tests/test_px4.py",
     "tests/test_tuning_choice.py",
+    "tests/test_sitl_lockstep.py",
 )
 #: ArduCopter's SITL (skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
 ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py",)

@@ -82,6 +82,7 @@ from masonry.adapters.sitl_config import (
     SitlConfig,
     free_udp_port,
 )
+from masonry.adapters.sitl_lockstep import SitlLockstep
 from masonry.errors import CommandRejected
 from masonry.ports import Vec3
 
@@ -113,6 +114,8 @@ class MavlinkSitl:
         signing_key: 32-byte MAVLink 2 key: sign everything, accept only messages signed with it.
         config: autopilot knobs.
         log: called with one line per event (mode change, STATUSTEXT), e.g. ``print``.
+        lockstep_wait_s: lock-step (``masonry sitl --lockstep``, :mod:`masonry.adapters.sitl_lockstep`): simulated
+            time waits for the client's grants, at most this long (wall s) each; None: it runs free.
     """
 
     def __init__(
@@ -128,8 +131,10 @@ class MavlinkSitl:
         physics_dt_s: float = 0.01,
         seed: int = 0,
         log: Callable[[str], None] | None = None,
+        lockstep_wait_s: float | None = None,
     ) -> None:
         self.port = port
+        self.lockstep = SitlLockstep(self, lockstep_wait_s) if lockstep_wait_s is not None else None
         self.host = host
         self.time_scale = time_scale
         self.signing_key = signing_key
@@ -170,9 +175,7 @@ class MavlinkSitl:
         self.vision_received = 0
         self.last_vision_m: Vec3 | None = None  # world ENU position of the last VISION_POSITION_ESTIMATE
         self.setpoints_received = 0
-        self.acceleration_targets = (
-            0  # acceleration-only targets (masonry's own velocity loop on PX4, issue 29)
-        )
+        self.acceleration_targets = 0  # acceleration-only targets (masonry's velocity loop on PX4, issue 29)
         self.last_setpoint_mps: Vec3 | None = None  # world ENU velocity of the last accepted setpoint
         self.status_log: list[str] = []
         self.land_requests = 0  # LAND asked by the ground station (MAV_CMD_NAV_LAND or a mode change)
@@ -243,7 +246,8 @@ class MavlinkSitl:
             now = time.monotonic()
             with self._lock:
                 self._drain_input()
-                self._advance((now - last) * self.time_scale)
+                step_s = (now - last) * self.time_scale
+                self._advance(self.lockstep.step_s(step_s, now) if self.lockstep is not None else step_s)
                 last = now
                 if not self.link_down:
                     if now >= next_beat:
@@ -252,7 +256,9 @@ class MavlinkSitl:
                         searching = self._last_gcs_wall_s is None
                         next_beat = now + (0.2 if searching else 1.0 / self.config.heartbeat_hz)
                     self._send_streams(now)
-            self._stop.wait(0.004)
+                    if self.lockstep is not None:
+                        self.lockstep.reply()
+            (self._stop if self.lockstep is None else self.lockstep).wait(0.004)  # lock-step: or a grant
 
     def _advance(self, dt_s: float) -> None:
         v = self.vehicle
@@ -320,6 +326,8 @@ class MavlinkSitl:
             if msg.type == MAV_TYPE_GCS:
                 if self._last_gcs_wall_s is None:
                     self._log(f"ground station connected (system {msg.get_srcSystem()})")
+                if self.lockstep is not None:  # it takes grants: says so to a client new or back
+                    self.lockstep.greet(self._last_gcs_wall_s, time.monotonic())
                 self._last_gcs_wall_s = time.monotonic()
         elif kind == "COMMAND_LONG":
             if msg.target_system in (0, self.config.system_id):
@@ -330,6 +338,8 @@ class MavlinkSitl:
         elif kind == "SET_POSITION_TARGET_LOCAL_NED":
             if msg.target_system == self.config.system_id:
                 self._position_target(msg)
+        elif kind == "SYSTEM_TIME" and self.lockstep is not None:
+            self.lockstep.grant(int(msg.time_boot_ms))
         elif kind == "VISION_POSITION_ESTIMATE":
             self.vision_received += 1
             self.last_vision_m = self.frame.position_to_world((msg.x, msg.y, msg.z))
@@ -501,12 +511,8 @@ class MavlinkSitl:
             return  # position targets and other frames are not modelled
         self._last_setpoint_wall_s = time.monotonic()
         vehicle = self.vehicle
-        if (
-            msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED
-        ):  # acceleration (PX4, issue 29): the velocity that
-            a = self.frame.velocity_to_world(
-                (msg.afx, msg.afy, msg.afz)
-            )  # reaches it through the model's lag
+        if msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED:  # acceleration (PX4, issue 29): the velocity
+            a = self.frame.velocity_to_world((msg.afx, msg.afy, msg.afz))  # that reaches it through the lag
             tau_s, v_now = vehicle.config.velocity_tau_s, vehicle.velocity_mps
             v_world = (v_now[0] + a[0] * tau_s, v_now[1] + a[1] * tau_s, v_now[2] + a[2] * tau_s)
             self.acceleration_targets += 1

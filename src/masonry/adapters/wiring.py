@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
+from masonry.adapters.lockstep import LockstepClock
 from masonry.adapters.preflight import CheckItem, PreflightReport, preflight
 from masonry.adapters.preflight import _check_actuators as _check_actuators
 from masonry.adapters.preflight import _check_camera as _check_camera
@@ -321,8 +322,8 @@ def open_adapters(
         fc = None
         link_clock = None
         if not hw.sim_fc:
-            fc = _open_mavlink(hw, spec, opened)
-            link_clock = ZeroedClock(fc.clock)
+            fc, paced = _open_mavlink(hw, spec, opened)
+            link_clock = ZeroedClock(paced)
         need_world = hw.sim_fc or hw.sim_actuators or hw.sim_camera
         world = None
         uav = None
@@ -400,7 +401,8 @@ def _open_camera(
     return cam
 
 
-def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
+def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> tuple[Any, LockstepClock]:
+    """The connected flight controller and its clock (in lock-step with a SITL that asks for it)."""
     from masonry.adapters.mavlink import FrameTransform, MavlinkFlightController, load_signing_key
 
     pose_source = None
@@ -420,6 +422,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
         signing_key=load_signing_key(hw.signing_key) if hw.signing_key else None,
         pose_source=pose_source,
     )
+    paced = LockstepClock(fc)  # before connecting: a SITL announces lock-step on the first heartbeat it hears
     fc.connect()
     opened.closers.append(fc.close)
     who = f"{fc.autopilot} system {fc.target_system}"
@@ -431,7 +434,7 @@ def _open_mavlink(hw: HardwareConfig, spec: Any, opened: _Opening) -> Any:
     opened.descriptions["flight controller"] = f"MAVLink {hw.fc}: {who}" + (
         f" ({', '.join(extras)})" if extras else ""
     )
-    return fc
+    return fc, paced
 
 
 def describe(hw: HardwareConfig) -> str:

@@ -11,6 +11,10 @@ from masonry.cli.app import command
 from masonry.cli.options import check, help_text
 from masonry.errors import InputError
 
+#: ``--lockstep``: the longest wall time (s) the SITL waits at a grant for the next before it runs free (a client
+#: waiting on its own wall clock, e.g. for a take-off; the flying loop grants every step, 20-50 times a second).
+LOCKSTEP_WAIT_S = 1.0
+
 
 def sitl_home(blueprint: Any, role: str, name: str | None) -> tuple[tuple[float, float, float], str]:
     """The home (and name) of the UAV a SITL stands in for: ``name`` or the first of ``role`` in the fleet."""
@@ -40,12 +44,14 @@ def build_sitl(
     autopilot: str | None = None,
     vehicle: str = "ideal",
     log: Any = None,
+    lockstep: bool = False,
 ) -> tuple[Any, str]:
     """The MavlinkSitl ``masonry sitl`` runs (not started) and a one-line description of it.
 
     ``vehicle`` (``--vehicle``): the simulated vehicle's preset with the autopilot knobs that come with it
     (``px4``: PX4 v1.16 on GNSS, and ``autopilot`` px4 unless given); ``autopilot`` default: the preset's, else
-    ardupilot.
+    ardupilot. ``lockstep`` (``--lockstep``): simulated time waits for the client's grants
+    (:mod:`masonry.adapters.sitl_lockstep`), each wait at most :data:`LOCKSTEP_WAIT_S` of wall.
     """
     from masonry.adapters.mavlink import load_signing_key
     from masonry.adapters.sitl import SITL_PRESETS, MavlinkSitl, SitlConfig
@@ -80,12 +86,14 @@ def build_sitl(
         config=SitlConfig(prearm_failure=prearm_failure, autopilot=autopilot, **preset),
         seed=seed,
         log=log,
+        lockstep_wait_s=LOCKSTEP_WAIT_S if lockstep else None,
     )
     description = (
         f"SITL: {who} at ({home[0]:.2f}, {home[1]:.2f}, {home[2]:.2f}) m, "
         f"{'PX4' if autopilot == 'px4' else 'ArduCopter'}-style MAVLink 2 to "
         f"udp {host}:{port}{' (signed)' if key else ''}, x{time_scale:g} real time"
         + (f", vehicle {vehicle}" if vehicle != "ideal" else "")
+        + (", in lock-step with its client" if lockstep else "")
     )
     return sitl, description
 
@@ -126,6 +134,12 @@ def sitl(
         help="ideal | arducopter | px4: the simulated vehicle (px4: PX4 v1.16 on GNSS: EKF2's flags, the ground "
         "0.5 m up in its frame, a thrust ramp on take-off, GNSS-grade noise; --autopilot px4).",
     ),
+    lockstep: bool = typer.Option(
+        False,
+        "--lockstep",
+        help="Lock-step: simulated time waits for the flying client (`masonry fly` grants it each step, "
+        "docs/sitl-lockstep.md); a client silent for 1 s of wall leaves it running free until it grants again.",
+    ),
 ) -> None:
     """Run a simulated ArduCopter over MAVLink 2 until Ctrl-C: `masonry fly --fc udpin:0.0.0.0:PORT` flies it."""
     server, description = build_sitl(
@@ -141,6 +155,7 @@ def sitl(
         autopilot=autopilot,
         vehicle=vehicle,
         log=typer.echo,
+        lockstep=lockstep,
     )
     typer.echo(description)
     typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")

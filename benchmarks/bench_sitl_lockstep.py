@@ -1,0 +1,80 @@
+"""The PX4 brick task against the project's SITL, free-running and in lock-step, side by side (issue 29).
+
+Flies tests/test_px4.py's task (``masonry fly --task B1`` against ``build_sitl(time_scale=K, vehicle="px4")``, in
+this process) ``--pairs`` times, once free and once in lock-step (``masonry sitl --lockstep``) each time, with a
+process spinning on one core unless ``--no-busy``. Prints one line per flight: the placement, the task's simulated
+time, its wall time, the SITL's grants and free runs (docs/sitl-lockstep.md), the load average after it. Asserts
+nothing.
+
+Usage: python benchmarks/bench_sitl_lockstep.py [--pairs 4] [--time-scale 4] [--no-busy]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from typer.testing import CliRunner
+
+from masonry.adapters.sitl import free_udp_port
+from masonry.cli import app
+from masonry.cli.hardware import build_sitl
+
+CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
+
+
+def fly(lockstep: bool, time_scale: float) -> str:
+    port = free_udp_port()
+    sitl, _ = build_sitl(
+        port=port, uav="brick", blueprint=Path(CASE_STUDY), time_scale=time_scale, vehicle="px4", seed=1,
+        lockstep=lockstep,
+    )  # fmt: skip
+    sitl.start()
+    started = time.perf_counter()
+    try:
+        res = CliRunner().invoke(app, [
+            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B1", "--fc", f"udp:127.0.0.1:{port}",
+            "--actuators", "sim", "--camera", "sim", "--format", "json",
+        ])  # fmt: skip
+    finally:
+        sitl.stop()
+    wall_s = time.perf_counter() - started
+    try:
+        out = json.loads(res.stdout)
+    except json.JSONDecodeError:
+        return f"exit {res.exit_code}: {res.output[-200:]!r}"
+    placed = out.get("placement_error_m")
+    pace = sitl.lockstep
+    return (
+        f"{out['status']:6s} placed {placed * 1000 if placed is not None else float('nan'):6.1f} mm, "
+        f"simulated {sitl.sim_time_s:6.1f} s, wall {wall_s:5.1f} s"
+        + (f", grants {pace.grants}, free runs {pace.free_runs}" if pace is not None else "")
+        + ", load average {:.1f} {:.1f} {:.1f}".format(*os.getloadavg())
+    )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--pairs", type=int, default=4)
+    ap.add_argument("--time-scale", type=float, default=4.0)
+    ap.add_argument("--no-busy", action="store_true", help="no busy process")
+    args = ap.parse_args()
+    busy = None if args.no_busy else subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        for pair in range(1, args.pairs + 1):
+            for lockstep in (False, True):
+                line = fly(lockstep, args.time_scale)
+                print(f"pair {pair} {'lock-step' if lockstep else 'free     '}: {line}", flush=True)
+    finally:
+        if busy is not None:
+            busy.kill()
+            busy.wait()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,91 @@
+"""The client's side of a SITL's lock-step (:mod:`masonry.adapters.sitl_lockstep`, docs/sitl-lockstep.md).
+
+``masonry fly`` on an autopilot's clock waits between its steps with the clock's ``sleep``. Against a SITL that
+announced lock-step (its STATUSTEXT :data:`LOCKSTEP_TEXT`) that wait is a grant
+instead: SYSTEM_TIME with the time the loop next acts at, then a wait for the SITL's reply, which comes once its
+simulated time has got there. Against any other autopilot (a real one, ArduCopter's SITL) it sleeps as before and
+sends nothing.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import time
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from masonry.adapters.mavlink import MavlinkFlightController
+
+#: What a SITL in lock-step says (STATUSTEXT, at most 50 characters) on a ground station's first HEARTBEAT.
+LOCKSTEP_TEXT = "Lockstep: SYSTEM_TIME grants pace the simulation"
+#: The longest wall time (s) a step waits for the SITL's reply to its grant before it goes on without it (a SITL
+#: the machine leaves unrun for that long; the next step's grant picks the lock-step up again).
+REPLY_WAIT_S = 2.0
+
+
+class LockstepClock:
+    """The autopilot's clock (``fc.clock``) whose ``sleep`` keeps in lock-step with a SITL that asks for it.
+
+    Make it before ``fc.connect()``: the SITL announces lock-step when it first hears the ground station.
+
+    Args:
+        fc: the MAVLink flight controller, not yet connected.
+    """
+
+    def __init__(self, fc: MavlinkFlightController) -> None:
+        self._fc = fc
+        self._texts = fc.listen(("STATUSTEXT",))
+        self._replies: queue.Queue[object] | None = None
+        self._now_s = -math.inf  # in lock-step: the SITL's time as last heard, never extrapolated
+        self.grants = 0
+        self.late_replies = 0  # grants not answered within REPLY_WAIT_S
+
+    @property
+    def lockstep(self) -> bool:
+        """Whether the autopilot announced lock-step (so far)."""
+        return self._replies is not None
+
+    def now_s(self) -> float:
+        """The autopilot's time (s); in lock-step the time its telemetry and replies last gave, not extrapolated:
+        a client the machine left unrun for a while does not grant that while on top of its step."""
+        if not self.lockstep:
+            return self._fc.clock.now_s()
+        heard_s = self._fc.clock.last_boot_s
+        self._now_s = max(self._now_s, heard_s if heard_s is not None else -math.inf)
+        return self._now_s
+
+    def sleep(self, duration_s: float) -> None:
+        """Wait ``duration_s`` of the autopilot's time: a grant and its reply in lock-step, else a sleep."""
+        if not self.lockstep and not self._announced():
+            self._fc.clock.sleep(duration_s)
+            return
+        if duration_s <= 0.0:
+            return
+        grant_ms = round((self.now_s() + duration_s) * 1000.0)
+        self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, grant_ms))
+        self.grants += 1
+        assert self._replies is not None
+        deadline_s = time.monotonic() + REPLY_WAIT_S
+        while (left_s := deadline_s - time.monotonic()) > 0.0:
+            try:
+                reply = self._replies.get(timeout=left_s)
+            except queue.Empty:
+                break
+            reply_ms = int(getattr(reply, "time_boot_ms", -1))
+            if reply_ms >= grant_ms:  # the SITL's time: the grant, or later if it ran free past it
+                self._now_s = max(self._now_s, reply_ms / 1000.0)
+                return
+        self.late_replies += 1
+
+    def _announced(self) -> bool:
+        while True:
+            try:
+                text = str(getattr(self._texts.get_nowait(), "text", ""))
+            except queue.Empty:
+                return False
+            if text.rstrip("\x00").startswith(LOCKSTEP_TEXT):
+                self._fc.unlisten(self._texts)
+                self._now_s = self._fc.clock.now_s()  # on from where the loop's clock read last
+                self._replies = self._fc.listen(("SYSTEM_TIME",))
+                return True

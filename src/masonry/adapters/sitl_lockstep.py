@@ -1,0 +1,118 @@
+"""Lock-step for the project's SITL (``masonry sitl --lockstep``): simulated time waits for the flying client.
+
+Without it the SITL's clock runs at ``time_scale`` x the wall whatever its client does, so a client that a
+loaded machine leaves unrun for 0.1 s of wall finds the vehicle 0.4 s of simulated flight further on (at x4),
+having coasted on a stale setpoint (issue 29). With it the client paces the simulation (docs/sitl-lockstep.md):
+
+1. On a ground station's first HEARTBEAT (and on one heard again after 3 s without) the SITL sends STATUSTEXT
+   :data:`LOCKSTEP_TEXT`: it takes grants.
+2. A grant: the client has dealt with everything up to now and next acts at ``T`` on the SITL's clock; it sends
+   SYSTEM_TIME with ``time_boot_ms`` = ``T`` (``time_unix_usec``: its wall clock, as ground stations send it).
+3. The SITL runs, at up to ``time_scale`` x the wall, to the latest grant and stops there. Having reached it,
+   it sends ATTITUDE and LOCAL_POSITION_NED at ``T`` and then the reply, SYSTEM_TIME with ``time_boot_ms`` =
+   ``T`` (its own time, if it had run free past ``T``): the client, waiting for the reply
+   (:mod:`masonry.adapters.lockstep`), reads the state at ``T`` and its clock reads the reply's time.
+4. A client that stops granting (it waits on its own wall clock for a take-off or an arming, or it is gone)
+   cannot stall the SITL: held at a grant, the SITL waits for the next one at most ``wait_s`` of wall (its
+   socket's next datagram ends the wait at once), then runs free at ``time_scale`` until a grant comes again.
+   Heartbeats and streams keep their wall rates throughout, so the client's link watchdog never sees a
+   silence that lock-step made. The wall time spent held is not made up.
+"""
+
+from __future__ import annotations
+
+import select
+import time
+from typing import TYPE_CHECKING
+
+from masonry.adapters.lockstep import LOCKSTEP_TEXT
+from masonry.adapters.mavlink import MSG_ATTITUDE, MSG_LOCAL_POSITION_NED
+from masonry.adapters.sitl_config import MAV_SEVERITY_INFO
+
+if TYPE_CHECKING:
+    from masonry.adapters.sitl import MavlinkSitl
+
+__all__ = ["LOCKSTEP_TEXT", "SitlLockstep"]
+#: A ground station heard again after this long (s of wall) without its heartbeat is told again (a new client).
+GREET_AFTER_S = 3.0
+#: How far below a grant (s) the simulated time counts as having reached it (time_boot_ms is whole ms).
+_REACHED_S = 1e-6
+
+
+class SitlLockstep:
+    """The SITL's side of lock-step: how far its simulated time may advance, and when to reply.
+
+    Args:
+        sitl: the SITL it paces (its simulated time, its connection).
+        wait_s: the longest wall time (s) the SITL, held at a grant, waits for the next before it runs free.
+    """
+
+    def __init__(self, sitl: MavlinkSitl, wait_s: float = 1.0) -> None:
+        if not wait_s > 0.0:
+            raise ValueError(f"the lock-step wait must be positive, got {wait_s!r} s")
+        self._sitl = sitl
+        self.wait_s = wait_s
+        self.grant_ms: int | None = None  # the latest grant (the client's time_boot_ms)
+        self.engaged = False  # a grant came and the client has not been silent for wait_s since
+        self.grants = 0
+        self.free_runs = 0  # times the SITL gave up waiting for a grant and ran free
+        self._replied_ms: int | None = None
+        self._held_since_s: float | None = None
+
+    def greet(self, last_heartbeat_s: float | None, now_s: float) -> None:
+        """A ground station's HEARTBEAT (wall s): announce lock-step to one first heard, or heard again after a
+        silence (a second ``masonry fly`` against the same SITL)."""
+        if last_heartbeat_s is None or now_s - last_heartbeat_s > GREET_AFTER_S:
+            self._sitl._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
+
+    def grant(self, time_boot_ms: int) -> None:
+        """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock."""
+        self.grant_ms = int(time_boot_ms)
+        self.engaged = True
+        self._held_since_s = None
+        self.grants += 1
+
+    def step_s(self, free_step_s: float, wall_s: float) -> float:
+        """How far to advance simulated time now: ``free_step_s`` (``time_scale`` x the wall since the last
+        step), cut at the grant; 0 while held there, until ``wait_s`` of wall without a grant has passed."""
+        if not self.engaged or self.grant_ms is None:
+            return free_step_s
+        room_s = self.grant_ms / 1000.0 - self._sitl.sim_time_s
+        if room_s > _REACHED_S:
+            self._held_since_s = None
+            return min(free_step_s, room_s)
+        if self._held_since_s is None:
+            self._held_since_s = wall_s
+        elif (
+            wall_s - self._held_since_s > self.wait_s
+        ):  # the client is silent: run free until it grants again
+            self.engaged = False
+            self._held_since_s = None
+            self.free_runs += 1
+            return free_step_s
+        return 0.0
+
+    def reply(self) -> None:
+        """Once simulated time has reached the latest grant: the state at it, then the reply (step 3 above)."""
+        sitl = self._sitl
+        if self.grant_ms is None or self.grant_ms == self._replied_ms:
+            return
+        if sitl.sim_time_s < self.grant_ms / 1000.0 - _REACHED_S:
+            return
+        self._replied_ms = self.grant_ms
+        sitl._send_stream(MSG_ATTITUDE)
+        sitl._send_stream(MSG_LOCAL_POSITION_NED)  # (none before the EKF has converged)
+        # the time it is at: the grant, or later where it ran free past it (the client's clock goes on from there)
+        now_ms = max(self.grant_ms, int(sitl.sim_time_s * 1000.0))
+        sitl._conn.mav.system_time_send(time.time_ns() // 1000, now_ms)
+
+    def wait(self, timeout_s: float) -> None:
+        """Wait up to ``timeout_s`` of wall for the next datagram from the client (a grant ends a hold at once)."""
+        sock = getattr(self._sitl._conn, "port", None)  # pymavlink's udpout socket
+        if sock is None:
+            self._sitl._stop.wait(timeout_s)
+            return
+        try:
+            select.select([sock], [], [], timeout_s)
+        except (OSError, ValueError):  # closed under us (stop): the loop sees the stop event
+            return

@@ -1,0 +1,137 @@
+"""Lock-step between the project's SITL and its client (``masonry sitl --lockstep``, docs/sitl-lockstep.md).
+
+The SITL's simulated time goes only as far as the client's grants (SYSTEM_TIME), and on from there by itself
+once the client has been silent for the SITL's wait; the client grants only to a SITL that asked for it.
+"""
+
+from __future__ import annotations
+
+import itertools
+from types import SimpleNamespace
+
+import pytest
+
+from masonry.adapters.lockstep import LOCKSTEP_TEXT, LockstepClock
+from masonry.adapters.mavlink import MavlinkFlightController
+from masonry.adapters.sitl import MavlinkSitl, free_udp_port
+from masonry.adapters.sitl_lockstep import SitlLockstep
+from masonry.cli.hardware import build_sitl
+from waiting import wait_until
+
+
+def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() -> None:
+    sitl = SimpleNamespace(sim_time_s=0.0)
+    pace = SitlLockstep(sitl, wait_s=1.0)
+    assert pace.step_s(0.4, wall_s=0.0) == 0.4  # no grant yet: free at the time scale
+    sitl.sim_time_s = 0.4
+    pace.grant(500)
+    assert pace.step_s(0.4, wall_s=0.1) == pytest.approx(0.1)  # cut at the grant
+    sitl.sim_time_s = 0.5
+    assert [pace.step_s(0.4, wall_s=w) for w in (0.2, 0.7, 1.2)] == [0.0, 0.0, 0.0]  # held, up to wait_s
+    assert pace.engaged and pace.free_runs == 0
+    assert pace.step_s(0.4, wall_s=1.21) == 0.4  # 1.01 s of wall without a grant: the client is silent
+    assert not pace.engaged and pace.free_runs == 1
+    assert pace.step_s(0.4, wall_s=1.3) == 0.4
+    sitl.sim_time_s = 1.3
+    pace.grant(1400)  # the client grants again: lock-step again
+    assert pace.engaged and pace.step_s(0.4, wall_s=1.4) == pytest.approx(0.1)
+    texts: list[str] = []
+    sitl._text = lambda severity, text: texts.append(text)
+    for last_s, now_s in (
+        (None, 0.0),
+        (0.0, 1.0),
+        (1.0, 2.0),
+        (2.0, 5.5),
+    ):  # first heard, 1 Hz, back after 3.5 s
+        pace.greet(last_s, now_s)
+    assert texts == [LOCKSTEP_TEXT, LOCKSTEP_TEXT]
+    with pytest.raises(ValueError, match="must be positive"):
+        SitlLockstep(sitl, wait_s=0.0)
+
+
+def _flight(sitl: MavlinkSitl) -> tuple[MavlinkFlightController, LockstepClock]:
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{sitl.port}", connect_timeout_s=10.0)
+    clock = LockstepClock(fc)  # before connecting, as masonry fly makes it
+    fc.connect()
+    return fc, clock
+
+
+def _announced(clock: LockstepClock) -> bool:
+    clock.sleep(0.0)  # reads the announcement (a zero wait grants nothing)
+    return clock.lockstep
+
+
+def test_each_grant_moves_the_sitl_exactly_its_step_however_fast_it_may_run() -> None:
+    # x50 free, and a wait far longer than any stall of a loaded machine: the SITL moves only when granted
+    sitl = MavlinkSitl(free_udp_port(), time_scale=50.0, lockstep_wait_s=60.0)
+    sitl.start()
+    try:
+        fc, clock = _flight(sitl)
+        try:
+            wait_until(lambda: _announced(clock), 10.0, "the SITL's lock-step announcement")
+            assert LOCKSTEP_TEXT in sitl.status_log
+            clock.sleep(0.1)
+            times_s = [sitl.sim_time_s]
+            for _ in range(8):
+                clock.sleep(0.1)
+                assert sitl.lockstep is not None and sitl.sim_time_s == pytest.approx(
+                    sitl.lockstep.grant_ms / 1000.0, abs=1e-6
+                )  # held at the grant it replied to
+                assert clock.now_s() == pytest.approx(sitl.sim_time_s, abs=2e-3)
+                times_s.append(sitl.sim_time_s)
+            steps_s = [b - a for a, b in itertools.pairwise(times_s)]
+            assert steps_s == pytest.approx([0.1] * 8, abs=2e-3), steps_s
+            assert clock.grants == 9 and clock.late_replies == 0
+            assert sitl.lockstep.free_runs == 0
+        finally:
+            fc.close()
+    finally:
+        sitl.stop()
+
+
+def test_a_silent_client_cannot_stall_the_sitl() -> None:
+    sitl = MavlinkSitl(free_udp_port(), time_scale=5.0, lockstep_wait_s=0.2)
+    sitl.start()
+    try:
+        fc, clock = _flight(sitl)
+        try:
+            wait_until(lambda: _announced(clock), 10.0, "the SITL's lock-step announcement")
+            clock.sleep(0.1)
+            assert sitl.lockstep is not None and sitl.lockstep.grant_ms is not None
+            held_at_s = sitl.lockstep.grant_ms / 1000.0
+            # the client says nothing more (as while it waits on its own wall clock for a take-off)
+            wait_until(lambda: sitl.sim_time_s > held_at_s + 1.0, 30.0, "the SITL to run on by itself")
+            assert sitl.lockstep.free_runs >= 1 and not sitl.lockstep.engaged
+            clock.sleep(0.1)  # and the next grant is answered: from where the SITL has got to
+            assert clock.late_replies == 0 and sitl.lockstep.grants == 2
+            assert clock.now_s() > held_at_s + 1.0
+        finally:
+            fc.close()
+    finally:
+        sitl.stop()
+
+
+def test_the_client_grants_nothing_to_an_autopilot_that_did_not_ask() -> None:
+    sitl = MavlinkSitl(free_udp_port(), time_scale=5.0)  # the default: free-running, no announcement
+    sitl.start()
+    try:
+        fc, clock = _flight(sitl)
+        try:
+            before_s = clock.now_s()
+            for _ in range(3):
+                clock.sleep(0.05)  # a plain sleep on the autopilot's clock
+            assert not clock.lockstep and clock.grants == 0 and sitl.lockstep is None
+            assert clock.now_s() > before_s
+            assert LOCKSTEP_TEXT not in sitl.status_log
+        finally:
+            fc.close()
+    finally:
+        sitl.stop()
+
+
+def test_masonry_sitl_says_it_runs_in_lock_step() -> None:
+    sitl, description = build_sitl(port=free_udp_port(), lockstep=True)
+    assert description.endswith(", in lock-step with its client")
+    assert sitl.lockstep is not None and sitl.lockstep.wait_s == 1.0
+    sitl, description = build_sitl(port=free_udp_port())
+    assert sitl.lockstep is None and "lock-step" not in description
