@@ -11,7 +11,8 @@ from hypothesis import given, seed, settings
 from hypothesis import strategies as st
 
 from masonry.blueprint_gen import pyramid, towers
-from masonry.mission.simulate import SimulatedMission
+from masonry.mission.events import EventList
+from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.graphs import plan
 from masonry.planner.tasks import BrickTask
@@ -140,8 +141,10 @@ def test_the_anchored_pose_lies_between_chain_and_look_and_is_no_worse_than_both
 def px4_on_a_surveyed_course() -> SimulatedMission:
     """A pyramid of three courses flown on the px4 model (GNSS), built on a surveyed course of four."""
     bp = pyramid(4, placed_courses=1, brick_uavs=1, adhesion_uavs=1, clearance_m=1.0)
-    mission = SimulatedMission.from_blueprint(bp, seed=3, vehicle="px4")
+    events = EventList()
+    mission = SimulatedMission.from_blueprint(bp, seed=3, vehicle="px4", events_sink=events)
     mission.report = mission.run()  # type: ignore[attr-defined]
+    mission.events = events  # type: ignore[attr-defined]
     return mission
 
 
@@ -158,7 +161,29 @@ def test_px4s_reported_as_built_positions_are_within_a_few_mm_of_the_truth(px4_o
     assert len(errs) == 6
     assert max(errs) < 0.006  # (the world-frame looks: GNSS, several cm)
     assert min(world_errs) > 0.01
-    # journaled and shown as reported: the completed events carry the anchored pose
-    assert mission.control.placement.poses  # (the flights' inputs: the world looks)
+    # shown as reported: the completed events (the log, the live page) carry the anchored pose and judge it
+    done = {
+        e.task_id: e for e in mission.events.events if e.kind == "completed" and e.task_id in report.as_built
+    }
+    assert {tid: e.fields["as_built"] for tid, e in done.items()} == {
+        tid: p.to_dict(4) for tid, p in report.as_built.items()
+    }
+    assert not [e for e in mission.events.events if e.kind == "placement"]  # (within 2 cm: none beyond)
+    # the flights' inputs are the UAVs' world looks, as before
+    assert mission.control.placement.poses
     for b, raw in mission.control.placement.poses.items():
         assert raw.anchored_to is None and raw.position_m == report.as_built[f"B{b}"].world_position_m
+
+
+def test_a_resumed_px4_mission_keeps_the_anchored_poses_and_anchors_on_them(tmp_path) -> None:
+    """The journal keeps the anchored poses; the mission resumed from it anchors its later bricks on them."""
+    bp = pyramid(4, placed_courses=1, brick_uavs=1, adhesion_uavs=1, clearance_m=1.0)
+    journal = tmp_path / "j.jsonl"
+    first = simulate(bp, seed=3, vehicle="px4", journal_path=journal, max_time_s=240.0)
+    assert first.as_built and not first.completed
+    again = simulate(bp, seed=3, vehicle="px4", journal_path=journal, resume=True)
+    assert again.completed
+    for tid, pose in first.as_built.items():
+        assert again.as_built[tid] == pose
+    assert len(again.as_built) > len(first.as_built)
+    assert all(p.anchored_to is not None for p in again.as_built.values())
