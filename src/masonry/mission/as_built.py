@@ -160,10 +160,13 @@ class PlacementWatch:
         self._tasks = list(mc.plan.tasks)
         self._design = {t.id: t for t in self._tasks if isinstance(t, BrickTask)}
         self._anchor = WallAnchor(self._tasks)
-        for att in mc.history:
+        done = [a for a in mc.history if a.status == "done"]
+        # (the anchors of a resumed mission, in the order the completions were taken: a chain's bricks after its root)
+        for att in sorted(done, key=lambda a: a.end_s if a.end_s is not None else math.inf):
             design = self._design.get(att.task_id)
-            if att.status == "done" and att.as_built is not None and design is not None:
-                self._anchor.take(design.brick, att.as_built)  # (the anchors of a resumed mission, in order)
+            if att.as_built is not None and design is not None:
+                self._anchor.take(design.brick, att.as_built)
+        for att in mc.history:
             self._take(att.task_id, att.as_built if att.status == "done" else None)
 
     def planned(self, mc: MissionControl, task: Task) -> Task | None:
