@@ -9,8 +9,10 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   its centre from the designed centre) and relative to its neighbours (its offset from the design less the mean
   offset of the placed bricks it touches or stands on: what a wall built a little off as a whole does not show);
   mean and max, millimetres;
-- the as-built estimate's own error: the distance from each as-built pose the UAV reported (``report.as_built``)
-  to the brick's true centre, mean and max, millimetres, and how many of the placed bricks were seen;
+- the as-built estimate's own error: the distance from each as-built pose reported (``report.as_built``: anchored
+  on the wall where its chain reaches a surveyed brick, ``masonry.planner.wall_anchor``) to the brick's true
+  centre, mean and max, millimetres, how many of the placed bricks were seen and how many of them anchored; and
+  last, the same for the UAVs' world-frame looks (``world_position_m``; the reported pose before the anchoring);
 - the same error relative to the wall: a brick's estimate error less the mean estimate error of its neighbours
   (those with an as-built pose): what a wall estimated off as a whole, as it must be on GNSS with no absolute
   reference, does not show;
@@ -30,7 +32,8 @@ The default run (one seed, calm air) takes a few minutes on one core; the issue'
 
     .venv/bin/python benchmarks/bench_as_built.py --seeds 10 --wind calm,4
 
-(``--walls``, ``--vehicles`` select; ``--seed0`` shifts the seeds; ``--no-wall-align`` places on the absolute
+(``--walls``, ``--vehicles`` select; ``--placed-courses N`` builds each wall on N surveyed courses, which the
+reported as-built poses anchor on, ``masonry.planner.wall_anchor``; ``--seed0`` shifts the seeds; ``--no-wall-align`` places on the absolute
 position, ``align_on_wall`` off, for the comparison; ``--no-side-look`` keeps the wall alignment but flies every
 descent from right above the drop-off, as before the side look; ``--no-trend`` keeps both but not the wall offset's
 trend, ``wall_trend_s`` 0, as before ``masonry.fsm.wall_trend``.)
@@ -59,13 +62,14 @@ from masonry.sim.world import World
 
 YAW_RAD = math.radians(30.0)
 SITE = {"yaw_rad": YAW_RAD, "clearance_m": 1.0, "brick_uavs": 1, "adhesion_uavs": 1}
-WALLS: dict[str, Callable[[], Blueprint]] = {
-    "rotated-bond": lambda: running_bond(3, 5, name="rotated-bond", **SITE),
-    "towers": lambda: towers(3, 3, spacing_m=1.0, name="towers", **SITE),
-    "pyramid": lambda: pyramid(4, name="pyramid", **SITE),
+#: wall name -> the wall built on ``n`` surveyed courses (the blueprint's ``placed``, under the courses flown)
+WALLS: dict[str, Callable[[int], Blueprint]] = {
+    "rotated-bond": lambda n: running_bond(3 + n, 5, name="rotated-bond", placed_courses=n, **SITE),
+    "towers": lambda n: towers(3, 3 + n, spacing_m=1.0, name="towers", placed_courses=n, **SITE),
+    "pyramid": lambda n: pyramid(4 + n, name="pyramid", placed_courses=n, **SITE),
     # tests/test_wall_align.py's and tests/test_course_check.py's 3-course pyramid (its default fleet), where GNSS
     # put bricks a course off (``--walls pyramid-3 --seed0 1 --seeds 12``); not in the default run
-    "pyramid-3": lambda: pyramid(3, yaw_rad=YAW_RAD, clearance_m=1.0),
+    "pyramid-3": lambda n: pyramid(3 + n, yaw_rad=YAW_RAD, clearance_m=1.0, placed_courses=n),
 }
 VEHICLES = ("ideal", "arducopter", "px4")
 #: issue 30's target: every brick within this of its design relative to its neighbours (m)
@@ -85,6 +89,11 @@ class Tally:
     estimate_m: list[float] | None = None
     estimate_wall_m: list[float] | None = None
     relative_m: list[float] | None = None
+    #: the as-built poses reported anchored on the wall (``anchored_to``: masonry.planner.wall_anchor)
+    anchored: int = 0
+    #: the UAVs' world-frame looks against the truth (``world_position_m`` of an anchored pose): the estimate before
+    #: the anchoring
+    look_m: list[float] = field(default_factory=list)
     #: placed bricks whose truth is off their course height (by over half a brick), and of them those mission
     #: control counted done: a silent wrong answer (masonry.mission.course_check)
     off_course: int = 0
@@ -194,6 +203,9 @@ def run_one(
         pose = report.as_built.get(f"B{bid}")
         if pose is not None:
             tally.seen += 1
+            tally.anchored += int(pose.anchored_to is not None)
+            look = pose.world_position_m if pose.world_position_m is not None else pose.position_m
+            tally.look_m.append(math.dist(look, world.bricks[bid].position_m))
             tally.estimate_m.append(math.dist(pose.position_m, world.bricks[bid].position_m))
             if pose.relative_to is not None and pose.relative_offset_m is not None:
                 true_offset = _true_top_m(world, bid) - _true_top_m(world, pose.relative_to)
@@ -248,6 +260,12 @@ def main() -> None:
         "--wind", default="calm", help="comma-separated: calm and/or mean speeds in m/s (light turbulence)"
     )
     parser.add_argument("--walls", default="rotated-bond,towers,pyramid")
+    parser.add_argument(
+        "--placed-courses",
+        type=int,
+        default=0,
+        help="build each wall on this many surveyed courses (placed in the blueprint: what as-built poses anchor on)",
+    )
     parser.add_argument("--vehicles", default=",".join(VEHICLES))
     parser.add_argument(
         "--no-wall-align",
@@ -282,11 +300,12 @@ def main() -> None:
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
-        f"relative/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours"
+        f"relative/anchored/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours  "
+        f"world look vs truth mean/max mm"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
-            bp = WALLS[wall]()
+            bp = WALLS[wall](args.placed_courses)
             for wind in winds:
                 tally = Tally()
                 start = time.perf_counter()
@@ -309,10 +328,11 @@ def main() -> None:
                     f"{vehicle:<11} {wall:<13} {label:<8} {tally.completed:>4}/{tally.runs:<4}  "
                     f"{_mm(tally.design_m):>18}  {_mm(tally.neighbour_m):>22}  {_mm(tally.estimate_m):>29}  "
                     f"{_mm(tally.estimate_wall_m):>28}  {_mm(tally.relative_m or []):>38}  "
-                    f"{len(tally.relative_m or [])}/{tally.seen}/{tally.placed}  "
+                    f"{len(tally.relative_m or [])}/{tally.anchored}/{tally.seen}/{tally.placed}  "
                     f"{tally.off_course}/{tally.off_course_done}  "
                     f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
                     f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
+                    f"{_mm(tally.look_m)}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )

@@ -43,7 +43,7 @@ def main() -> None:
     overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
     BrickUav.enter_place_release = _record  # type: ignore[method-assign]
     for wall in args.walls.split(","):
-        bp = WALLS[wall]()
+        bp = WALLS[wall](0)
         near = _neighbours(bp)
         for seed in range(args.seed0, args.seed0 + args.seeds):
             SEEN.clear()

@@ -32,6 +32,7 @@ from masonry.perception.types import AsBuiltPose
 from masonry.placement_check import PlacementCheck
 from masonry.planner.as_built_plan import AsBuiltPlan, AsBuiltPlanning
 from masonry.planner.tasks import BrickTask
+from masonry.planner.wall_anchor import WallAnchor
 from masonry.planner.wall_deviation import around, wall_deviations
 
 if TYPE_CHECKING:
@@ -119,8 +120,10 @@ class PlacementWatch:
         self.beyond: list[str] = []
         self._plan: AsBuiltPlan | None = None  # (made at the first assignment, with plan_on_as_built)
         self._design: dict[str, BrickTask] = {}
-        #: brick id -> its as-built pose, from the completions
+        #: brick id -> its as-built pose, from the completions: the world-frame look its UAV sent (what the flights
+        #: are planned on), not the pose reported anchored on the wall
         self.poses: dict[int, AsBuiltPose] = {}
+        self._anchor: WallAnchor | None = None  # (made with the design)
         self._tasks: list[Task] | None = None  # (the plan's, at the first assignment)
         self._course: CourseCheck | None = None  # (made at the first completion)
 
@@ -156,6 +159,13 @@ class PlacementWatch:
             return
         self._tasks = list(mc.plan.tasks)
         self._design = {t.id: t for t in self._tasks if isinstance(t, BrickTask)}
+        self._anchor = WallAnchor(self._tasks)
+        done = [a for a in mc.history if a.status == "done"]
+        # (the anchors of a resumed mission, in the order the completions were taken: a chain's bricks after its root)
+        for att in sorted(done, key=lambda a: a.end_s if a.end_s is not None else math.inf):
+            design = self._design.get(att.task_id)
+            if att.as_built is not None and design is not None:
+                self._anchor.take(design.brick, att.as_built)
         for att in mc.history:
             self._take(att.task_id, att.as_built if att.status == "done" else None)
 
@@ -172,8 +182,17 @@ class PlacementWatch:
 
     def _take(self, task_id: str, pose: AsBuiltPose | None) -> None:
         design = self._design.get(task_id)
-        if design is not None and pose is not None:
-            self.poses[design.brick] = pose
+        if design is not None and pose is not None and self._anchor is not None:
+            self.poses[design.brick] = self._anchor.world(design.brick, pose)
+
+    def anchored(self, mc: MissionControl, r: TaskResult) -> TaskResult:
+        """``r`` with its as-built pose anchored on the wall (:mod:`masonry.planner.wall_anchor`: from the chain of
+        relative looks to a surveyed brick, where there is one), the pose mission control journals and reports."""
+        self._known(mc)
+        design = self._design.get(r.task_id)
+        if design is None or r.as_built is None or self._anchor is None:
+            return r
+        return replace(r, as_built=self._anchor.take(design.brick, r.as_built))
 
     def against_design(self, r: TaskResult) -> TaskResult:
         """``r`` with its as-built deviation measured from the brick's design (with ``plan_on_as_built`` the UAV

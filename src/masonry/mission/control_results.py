@@ -51,6 +51,7 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
     if why is not None:  # (a brick off its course: not placed, and not to be tried again)
         misplaced(mc, att, r, msg.sender, why, now_s)
     elif r.status == "done":
+        r = mc.placement.anchored(mc, r)  # (the pose reported: anchored on the wall where it can be)
         mc.ledger.done(att, r, now_s)
         log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
         mc.dispatcher.complete(r.task_id)
@@ -120,6 +121,7 @@ def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
     if att is None or not late_completion(msg, att, settled, mc.dispatcher.in_progress.get(r.task_id)):
         return False
     other = mc.dispatcher.complete_late(r.task_id)
+    r = mc.placement.anchored(mc, r)
     log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
     mc.ledger.done(att, r, now_s)
     if other is not None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -65,6 +65,10 @@ class AsBuiltPose:
     ``relative_to``: the neighbour's brick id, ``relative_offset_m``: the brick's top-face centre less the
     neighbour's as seen in the same frames (world axes, m; the position source's error cancels),
     ``relative_deviation_m``: that offset's distance from the designed one (m).
+
+    Anchored on the wall (mission control, :mod:`masonry.planner.wall_anchor`; both None when the pose is the
+    world-frame look): ``anchored_to``: the surveyed brick (the blueprint's ``placed``) its chain of relative looks
+    ends on, ``world_position_m``: the camera's world-frame look, which ``position_m`` then replaces.
     """
 
     position_m: tuple[float, float, float]
@@ -74,6 +78,8 @@ class AsBuiltPose:
     relative_to: int | None = None
     relative_offset_m: tuple[float, float, float] | None = None
     relative_deviation_m: float | None = None
+    anchored_to: int | None = None
+    world_position_m: tuple[float, float, float] | None = None
 
     def to_dict(self, digits: int | None = None) -> dict[str, object]:
         """``{position_m, yaw_rad, deviation_m, confidence}`` and, with a neighbour seen, ``{relative_to,
@@ -93,6 +99,9 @@ class AsBuiltPose:
             out["relative_to"] = self.relative_to
             out["relative_offset_m"] = [r(v) for v in self.relative_offset_m]
             out["relative_deviation_m"] = r(self.relative_deviation_m or 0.0)
+        if self.anchored_to is not None and self.world_position_m is not None:
+            out["anchored_to"] = self.anchored_to
+            out["world_position_m"] = [r(v) for v in self.world_position_m]
         return out
 
     @classmethod
@@ -127,4 +136,18 @@ class AsBuiltPose:
             raise ValueError(f"an as-built pose's relative fields are malformed: {data!r}") from None
         if not all(map(math.isfinite, (ox, oy, oz, rdev))) or rdev < 0.0:
             raise ValueError(f"an as-built pose's relative fields out of range: {data!r}")
-        return cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev)
+        pose = cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev)
+        if data.get("anchored_to") is None:
+            return pose
+        try:
+            anchor = data["anchored_to"]
+            if isinstance(anchor, bool) or not isinstance(anchor, int) or anchor < 0:
+                raise TypeError(anchor)
+            wx, wy, wz = (float(v) for v in data["world_position_m"])
+        except KeyError as exc:
+            raise ValueError(f"an as-built pose with anchored_to has no {exc.args[0]!r}") from None
+        except (TypeError, ValueError):
+            raise ValueError(f"an as-built pose's anchor fields are malformed: {data!r}") from None
+        if not all(map(math.isfinite, (wx, wy, wz))):
+            raise ValueError(f"an as-built pose's world position out of range: {data!r}")
+        return replace(pose, anchored_to=anchor, world_position_m=(wx, wy, wz))
