@@ -15,7 +15,7 @@ from masonry.blueprint_gen import pyramid, towers
 from masonry.errors import ProtocolError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
-from masonry.fsm.wall_align import follow_m, neighbours_of, wall_offset_m
+from masonry.fsm.wall_align import follow_in_view, follow_m, neighbours_of, wall_offset_m
 from masonry.mission.as_built import PlacementWatch
 from masonry.mission.messages import Assign, decode, encode
 from masonry.mission.records import Attempt
@@ -77,6 +77,41 @@ def test_a_brick_whose_support_was_placed_off_keeps_its_offset_to_it_pulled_back
     assert wall_offset_m(seen, wall, 2, frozenset({1})) == pytest.approx(
         e + np.array([0.015, 0.0, 0.0])
     )  # (as before)
+
+
+def test_a_brick_aligned_on_its_support_keeps_to_it_however_far_off_the_support_was_passed_on() -> None:
+    """The cap bounds the drop-off's offset from the bricks in view, not from the design: B2 aligned on its support
+    B1, passed on 48 mm off (the px4 towers, seed 2: a brick let go 28 mm off its support, the cap's excess), keeps
+    to it with the pull-back, under the px4 defaults; a course neighbour's deviation that the bricks in view do not
+    show moves the drop-off at most the cap off them."""
+    wall = {t.brick: _top(t) for t in TOWER.tasks if isinstance(t, BrickTask)}
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("px4"))
+    pull, cap = cfg.wall_pullback_m, cfg.wall_follow_cap_m
+    assert (pull, cap) == (0.002, 0.02)
+    dev = (0.024, 0.041, 0.0)  # 47.5 mm
+    as_built = {1: dev}
+    e = np.array([0.07, -0.05, 0.01])  # the wander
+    seen = {1: np.asarray(wall[1]) + np.asarray(dev) + e}
+    offset = wall_offset_m(seen, wall, 2, frozenset({1}), as_built)
+    at_design = wall_offset_m(seen, wall, 2, frozenset({1}))
+    assert offset is not None and at_design is not None
+    raw = follow_m(frozenset({1}), as_built, pull, math.inf)
+    follow = follow_in_view(raw, at_design - offset, cap)
+    # the drop-off (design + follow + offset) less where the support puts it (its seen centre + designed offset)
+    off_support = (
+        np.asarray(wall[2]) + follow + offset - (seen[1] + np.asarray(wall[2]) - np.asarray(wall[1]))
+    )
+    assert math.hypot(off_support[0], off_support[1]) == pytest.approx(pull, abs=1e-9)
+    assert off_support[2] == pytest.approx(0.0, abs=1e-9)
+    # as before, with the cap from the design: 47.5 - 20 mm off its support
+    capped = follow_m(frozenset({1}), as_built, pull, cap)
+    before = np.asarray(wall[2]) + capped + offset - (seen[1] + np.asarray(wall[2]) - np.asarray(wall[1]))
+    assert math.hypot(before[0], before[1]) == pytest.approx(math.hypot(dev[0], dev[1]) - cap, abs=1e-9)
+    # neighbours 5 cm off that the bricks in view (on their design) do not show: at most the cap off those
+    far = follow_in_view(np.array([0.05, 0.0, 0.0]), np.zeros(3), cap)
+    assert far == pytest.approx([cap, 0.0, 0.0])
+    near = follow_in_view(np.array([0.013, 0.0, 0.0]), np.zeros(3), cap)  # within it: as follow_m
+    assert near == pytest.approx([0.013, 0.0, 0.0])
 
 
 def test_the_assignment_carries_the_deviations_around_the_brick_and_reads_back() -> None:

@@ -50,7 +50,7 @@ if TYPE_CHECKING:
     from masonry.planner.tasks import BrickTask
     from masonry.ports import Telemetry
 
-__all__ = ["WallAlign", "follow_m", "neighbours_of", "supports_of", "wall_offset_m"]
+__all__ = ["WallAlign", "follow_in_view", "follow_m", "neighbours_of", "supports_of", "wall_offset_m"]
 
 #: A brick seen farther than this from its design is not on the wall (a pallet, a magnet): no reference.
 _REFERENCE_M = 0.5
@@ -133,6 +133,23 @@ def follow_m(
     return np.asarray(pulled_back((float(mean[0]), float(mean[1]), float(mean[2])), pullback_m, cap_m))
 
 
+def follow_in_view(follow_m: np.ndarray, seen_m: np.ndarray, cap_m: float) -> np.ndarray:
+    """The drop-off's deviation from the design relative to the wall (m) given the bricks in view: ``follow_m``
+    (its neighbours' mean as built, pulled back, not capped) moved to within ``cap_m`` of ``seen_m`` (the mean
+    deviation of the bricks in view as they are counted), horizontally and vertically apart. The brick then
+    lies at most ``cap_m`` off its designed offsets to the bricks it is aligned on, whatever the deviations say:
+    a tower's brick aligned on its one support keeps to it (the pull-back off it), where the cap on ``follow_m``
+    from the design set it ``|deviation| - cap`` off it (the px4 towers, seed 2: a support passed on 48 mm off,
+    the brick let go 28 mm off it; docs/performance/as-built.md)."""
+    d = np.asarray(follow_m, dtype=float) - np.asarray(seen_m, dtype=float)
+    n = math.hypot(float(d[0]), float(d[1]))
+    k = 1.0 if n <= cap_m else cap_m / n
+    out = np.asarray(seen_m, dtype=float) + np.array(
+        [d[0] * k, d[1] * k, min(max(float(d[2]), -cap_m), cap_m)]
+    )
+    return np.asarray(out, dtype=float)
+
+
 class WallAlign:
     """The drop-off's target as the bricks around it place it (see the module docstring)."""
 
@@ -146,6 +163,7 @@ class WallAlign:
         self._as_built: dict[int, tuple[float, float, float]] = {}
         #: the drop-off's deviation from the design relative to the wall: its neighbours' as built (follow_m)
         self.follow_m = np.zeros(3)
+        self._follow_raw_m = np.zeros(3)  # the same, pulled back but not capped
         #: When (s) a brick of the wall was last in view (placement by the wall's markers; -inf: not yet)
         self.seen_s = -math.inf
         #: The bricks of the wall in that last view: id -> estimated top-face centre (world)
@@ -187,6 +205,9 @@ class WallAlign:
                 cfg.wall_pullback_m,
                 cfg.wall_follow_cap_m,
             )
+            self._follow_raw_m = follow_m(
+                neighbours_of(wall, own, task.size_m), self._as_built, cfg.wall_pullback_m, math.inf
+            )
         tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
         seen = {t.marker_id // 2 for t in tags} - {own}
         estimates = {}
@@ -198,7 +219,13 @@ class WallAlign:
         if offset is None:
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
-        delta = self.tracker.add(self._base_m(wall.get(own)) + self.follow_m + offset)
+        follow = self.follow_m
+        at_design = wall_offset_m(estimates, wall, own, self._near) if self._as_built else None
+        if (
+            at_design is not None
+        ):  # the cap relative to the bricks in view, not to the design (follow_in_view)
+            follow = follow_in_view(self._follow_raw_m, at_design - offset, uav.config.wall_follow_cap_m)
+        delta = self.tracker.add(self._base_m(wall.get(own)) + follow + offset)
         self.trend.span_s = uav.config.wall_trend_s
         self.trend.add(
             uav._now_s,

@@ -1,0 +1,104 @@
+"""The px4 placements on one support split by cause (issue 30): the release, the target's error, the carry.
+
+For every brick of ``bench_as_built.py``'s walls that stands on one support, at its release: *release*, the true
+effector's distance from the true point its target meant (the target less the position source's wander then);
+*align*, that point's distance from where the support truly puts the brick; *carry*, the rest (the conical
+guide's residual on the magnet, the world's release scatter). It prints rms / max mm of each, the measured release
+error and the tick's position noise, and the worst bricks::
+
+    python benchmarks/bench_as_built_release.py --walls towers --seeds 10 [--set NAME=VALUE ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+from bench_as_built import WALLS, _config
+
+from masonry.fsm.brick import BrickUav
+from masonry.fsm.wall_align import supports_of
+from masonry.mission.simulate import SimulatedMission
+
+#: brick id -> what the release tick held (filled by the wrapper below)
+RELEASES: dict[int, dict[str, np.ndarray | float]] = {}
+MISSION: list[SimulatedMission] = []
+_release = BrickUav.enter_place_release
+
+
+def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
+    sim = MISSION[0].world.uavs[self.config.name]
+    tel = self._tel
+    assert tel is not None
+    target = np.asarray(self.attempt.place_effector_target_m, dtype=float)
+    true_m = np.asarray(sim.vehicle.position_m, dtype=float)
+    shaper = sim.vehicle._shaper  # (the simulator's truth)
+    gps = np.zeros(3) if shaper is None else np.asarray(shaper.gps_error_m, dtype=float)
+    RELEASES[self.brick_task.brick] = {
+        "measured": (np.asarray(self.effector.position(tel), dtype=float) - target)[:2],
+        "noise": (np.asarray(tel.position_m, dtype=float) - true_m - gps)[:2],
+        "true_target": (target - gps)[:2],
+        "effector": np.asarray(sim.effector_m(), dtype=float)[:2],
+        "age_s": self._now_s - self._wall.seen_s,
+    }
+    _release(self, *args, **kwargs)
+
+
+def _rms_mm(vs: list[np.ndarray]) -> float:
+    return math.sqrt(float(np.mean([float(np.dot(v, v)) for v in vs]))) * 1000.0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--walls", default="towers")
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--seed0", type=int, default=0)
+    parser.add_argument("--worst", type=int, default=8)
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    args = parser.parse_args()
+    overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
+    BrickUav.enter_place_release = _record  # type: ignore[method-assign]
+    rows: list[tuple[str, int, int, dict[str, np.ndarray]]] = []
+    for wall in args.walls.split(","):
+        bp = WALLS[wall]()
+        design = {
+            b.id: (b.position_m[0], b.position_m[1], b.position_m[2] + b.size_m[2] / 2) for b in bp.bricks
+        }
+        for seed in range(args.seed0, args.seed0 + args.seeds):
+            RELEASES.clear()
+            config = _config("px4", wall=True, side_look=True, trend=True, overrides=overrides)
+            mission = SimulatedMission.from_blueprint(bp, seed=seed, vehicle="px4", uav_config=config)
+            MISSION[:] = [mission]
+            mission.run()
+            for b in bp.bricks:
+                below = supports_of(design, b.id, b.size_m)
+                if b.id not in RELEASES or len(below) != 1:
+                    continue
+                s = next(iter(below))
+                want = np.asarray(mission.world.bricks[s].position_m)[:2] + (
+                    np.asarray(b.position_m)[:2] - np.asarray(bp.brick(s).position_m)[:2]
+                )
+                r = RELEASES[b.id]
+                final = np.asarray(mission.world.bricks[b.id].position_m)[:2] - want
+                release = np.asarray(r["effector"]) - np.asarray(r["true_target"])
+                align = np.asarray(r["true_target"]) - want
+                parts = {"final": final, "release": release, "align": align, "carry": final - release - align}
+                rows.append((wall, seed, b.id, {**parts, **{k: np.asarray(v) for k, v in r.items()}}))
+    print(f"{len(rows)} bricks on one support")
+    for name in ("final", "release", "align", "carry", "measured", "noise"):
+        vs = [r[3][name] for r in rows]
+        print(
+            f"{name:9s} rms {_rms_mm(vs):5.1f} mm, max {max(float(np.linalg.norm(v)) for v in vs) * 1000:5.1f} mm"
+        )
+    for wall, seed, bid, p in sorted(rows, key=lambda r: -float(np.linalg.norm(r[3]["final"])))[: args.worst]:
+        mm = {k: float(np.linalg.norm(p[k])) * 1000 for k in ("final", "release", "align", "carry", "noise")}
+        print(
+            f"{wall} seed {seed} B{bid}: {mm['final']:.1f} mm = release {mm['release']:.1f} + align "
+            f"{mm['align']:.1f} + carry {mm['carry']:.1f} (vectors); measured {np.round(p['measured'] * 1000, 1)}, "
+            f"the tick's noise {mm['noise']:.1f} mm; wall seen {float(p['age_s']):.2f} s before"
+        )
+
+
+if __name__ == "__main__":
+    main()
