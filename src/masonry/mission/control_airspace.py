@@ -75,14 +75,8 @@ def on_clearance_request(mc: MissionControl, msg: ClearanceRequest, now_s: float
     if mc.sites.leaving(msg.sender, msg.site_m, now_s):
         mc.columns.touch()  # a site is free: who waits for it may go now
     mc.lingers.consider(mc, msg.sender, msg.site_m, msg.position_m, now_s)  # home, with a task due soon?
-    # (a UAV handed a task at its spot near the wall may still ask home once, before it knows: not a wait)
-    c = mc.columns
-    handed = (
-        isinstance(c, ColumnClearance) and msg.sender in c.handed_task and c.is_home(msg.sender, msg.site_m)
-    )
-    g = c.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
-    if not handed:
-        mc.waits.answered(msg.sender, mc.dispatcher.task_of(msg.sender), g.site_m, g.granted)
+    g = mc.columns.request(msg.sender, msg.site_m, now_s, msg.position_m, msg.top_m, msg.to_m)
+    mc.waits.answered(msg.sender, mc.dispatcher.task_of(msg.sender), g.site_m, g.granted)
     emit_clearance(mc, now_s, g)
     if g.refused is not None:
         fail_outside_fence(mc, msg.sender, g.refused, now_s)
