@@ -19,6 +19,8 @@ from masonry.mission.volumes import point_segment_m
 ROOT = Path(__file__).resolve().parents[1]
 R, BASE, S = 1.5, 1.35, 1.1
 HOMES = {"g": (0.0, -6.0, 0.0), "b": (2.0, -6.0, 0.0)}
+#: the pyramid blueprint's adhesion UAV's pad (blueprints/pyramid.yaml)
+HOMES_PYRAMID_GLUE = (2.0, -5.975)
 #: the sites still to be worked, along the wall at y = 0 (as zero-length spans)
 WALL = tuple(((x / 10.0, 0.0), (x / 10.0, 0.0)) for x in range(-12, 13, 3))
 
@@ -173,3 +175,60 @@ def test_a_uav_lingers_only_while_its_battery_covers_the_wait_a_task_and_the_way
     assert not book.affords(mc, "glue-1", near_wall, 80.0, 0.0)
     link.battery = 0.3  # 20 s above 20 %: not even the way home and a bead
     assert not book.affords(mc, "glue-1", near_wall, 0.0, 0.0)
+
+
+def test_a_lingering_uav_handed_a_task_at_its_spot_is_not_granted_its_flight_home_before_it_asks_again():
+    """Issue 27: the wait ended with a task, and the next look at the airspace granted the UAV its flight home
+    (its request then) before it asked for its task's site; that flight's volumes, towards its pad, stayed its
+    own until its flight to the site was granted. Until it asks again it keeps its spot; then it is answered
+    as any UAV asking from where it is."""
+    c = ColumnClearance(R, BASE, S, homes=HOMES)
+    _at_site(c, "g", (0.0, 0.0, 1.2))
+    c.lingering["g"] = WALL
+    g = c.request("g", HOMES["g"], 10.0, (0.0, 0.0, BASE))
+    assert g.hold_m is not None and g.layer_m is not None
+    spot = (g.hold_m[0], g.hold_m[1], g.layer_m)
+    c.progress("g", spot)
+    assert c.phase("g") is Phase.AT_HOLD
+    # the wait ends with a task (LingerBook.end): no flight home, it stays at its spot
+    c.handed_task.add("g")
+    del c.lingering["g"]
+    c.touch()
+    assert c.grant(11.0) == []
+    assert c.phase("g") is Phase.AT_HOLD and c.request("g", HOMES["g"], 11.5, spot).hold_m == g.hold_m
+    # the request above was its next one: from now on it is answered as any other (here: home, free)
+    c.touch()
+    (home,) = c.grant(12.0)
+    assert home.uav == "g" and home.granted
+    # handed a task again at a spot: its request for the site is granted from there as it fits
+    c2 = ColumnClearance(R, BASE, S, homes=HOMES)
+    _at_site(c2, "g", (0.0, 0.0, 1.2))
+    c2.lingering["g"] = WALL
+    g2 = c2.request("g", HOMES["g"], 10.0, (0.0, 0.0, BASE))
+    assert g2.hold_m is not None and g2.layer_m is not None
+    c2.progress("g", (g2.hold_m[0], g2.hold_m[1], g2.layer_m))
+    c2.handed_task.add("g")
+    del c2.lingering["g"]
+    c2.touch()
+    site = c2.request("g", (0.6, 0.0, 1.2), 11.0, (g2.hold_m[0], g2.hold_m[1], g2.layer_m))
+    assert site.granted and "g" not in c2.handed_task
+    assert c2.conflicts() == []
+
+
+def test_on_the_pyramid_a_wait_near_the_wall_ended_by_a_task_is_followed_by_the_flight_to_its_site(caplog):
+    """Issue 27: the pyramid at 1 + 1, seed 1: before, every wait that ended with a task (24 of 24 over the
+    mission) was followed by the sprayer's flight home being granted, then turned back for its site."""
+    with caplog.at_level(logging.DEBUG, logger="masonry.mission.control"):
+        report = _pyramid(True, 600.0)
+    lines = [r.getMessage() for r in caplog.records if r.name == "masonry.mission.control"]
+    home = f"flight to ({HOMES_PYRAMID_GLUE[0]:.2f}, {HOMES_PYRAMID_GLUE[1]:.2f}) granted to glue-1"
+    ended, home_next = 0, 0
+    for i, msg in enumerate(lines):
+        if msg.startswith("glue-1 stops waiting near the wall") and msg.endswith("(task)"):
+            ended += 1
+            after = [m for m in lines[i + 1 :] if "granted to glue-1" in m][:1]
+            home_next += after == [home]
+    assert ended >= 4
+    assert home_next == 0
+    assert report.min_separation_m is not None and report.min_separation_m >= 1.0
+    assert report.conflict_violations == 0 and report.dependency_violations == 0

@@ -147,6 +147,8 @@ class ColumnClearance:
         self.fence_refusals: dict[str, str] = {}  # a UAV's request no layer can fly inside the fence: why
         #: UAVs whose flight home is held back (mission/linger.py) -> what their hold point keeps clear of
         self.lingering: dict[str, tuple[tuple[XY, XY], ...]] = {}
+        #: lingering UAVs just handed a task at their spot: their flight home is not granted until they ask again
+        self.handed_task: set[str] = set()
         self.records: dict[str, UavAirspace] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()

@@ -56,6 +56,7 @@ def request(
         c.refused += not ok
         return Grant(uav, site, ok)
     u = c.record(uav)
+    c.handed_task.discard(uav)  # (it asks again: for its task's site, or home if the task was taken back)
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
             return Grant(uav, site, layer_m=u.flight.layer_m)
@@ -89,6 +90,12 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
     if u.seen_version == c.version and u.answer is not None:
         return u.answer
     u.seen_version = c.version
+    if uav in c.handed_task and u.hold is not None:
+        # handed a task while it waited near the wall: it is about to ask for its site, so its flight home is
+        # not granted meanwhile (that flight's volumes, towards its pad, would stay its own until its flight to
+        # the site is granted, in the way of the UAVs working near the site: issue 27)
+        u.answer = Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
+        return u.answer
     refused = c.fence_refusals.get(uav)
     if refused is not None and u.phase is Phase.ASKING:
         c.refused += 1

@@ -372,6 +372,8 @@ class LingerBook:
             return
         self.lingered_s[uav] = self.lingered_s.get(uav, 0.0) + max(0.0, now_s - w.since_s)
         c = mc.columns
+        if isinstance(c, ColumnClearance) and why == "task" and c.phase(uav) is Phase.AT_HOLD:
+            c.handed_task.add(uav)  # (it asks for its site next: no flight home meanwhile)
         if isinstance(c, ColumnClearance) and c.lingering.pop(uav, None) is not None:
             c.touch()  # its flight home is granted once it fits
         log.info("%s stops waiting near the wall at %.1f s (%s)", uav, now_s, why)
