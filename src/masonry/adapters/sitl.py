@@ -474,8 +474,7 @@ class MavlinkSitl:
                     and self.vehicle.armed
                     and self._setpoints.stale(self.config.offboard_loss_s)
                 ):
-                    # PX4 v1.16 (issue 29): armed, OFFBOARD without setpoints is TEMPORARILY_REJECTED; disarmed it
-                    # is accepted whatever the stream, and the arming is refused instead (_arm_disarm)
+                    # PX4 v1.16 armed (disarmed: accepted, the arming refused instead): masonry.adapters.sitl_offboard
                     self._text(MAV_SEVERITY_WARNING, "Switching to Offboard is not possible: no setpoints")
                     return MAV_RESULT_TEMPORARILY_REJECTED
                 if name == self._land_mode:
