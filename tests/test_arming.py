@@ -60,6 +60,25 @@ def test_a_refusal_that_is_not_temporary_is_raised_at_once() -> None:
     assert ap.asked == 2
 
 
+def test_offboard_refused_for_want_of_setpoints_is_asked_again_and_other_mode_refusals_are_not() -> None:
+    """Issue 29: a switch to OFFBOARD refused because the zero burst went stale (a client starved under load),
+    as FAILED (the project's SITL before issue 29), is asked again; a mode refusal for another reason is not."""
+    starved = CommandRejected(
+        "set mode OFFBOARD", "failed: Switching to Offboard is not possible: no setpoints"
+    )
+    ap = Autopilot([starved])
+    assert arm_retrying(ap.arm, ap.monotonic, ap.wait, 30.0) == 1
+    assert ap.asked == 2 and ap.waits == [ARM_RETRY_INTERVAL_S]
+    for other in (
+        CommandRejected("set mode OFFBOARD", "failed: Mode change to OFFBOARD failed: requires position"),
+        CommandRejected("set mode GUIDED", "failed: no setpoints"),  # ArduPilot: as before
+    ):
+        ap = Autopilot([other])
+        with pytest.raises(CommandRejected) as info:
+            arm_retrying(ap.arm, ap.monotonic, ap.wait, 30.0)
+        assert info.value is other and ap.asked == 1
+
+
 def test_temporary_refusals_end_after_the_bound_with_how_long() -> None:
     ap = Autopilot([temporary() for _ in range(1000)])
     with pytest.raises(CommandRejected) as info:

@@ -18,10 +18,12 @@ from pathlib import Path
 import pytest
 
 from case_study_procs import CASE_STUDY, check_completed, fly_mission, free_tcp_port, masonry, reaped
+from masonry.adapters.mavlink import MAV_CMD_COMPONENT_ARM_DISARM, MavlinkFlightController
 from masonry.adapters.wiring import hardware_config
 from masonry.blueprint import load_blueprint
 from masonry.cli.fly import select_adapters
 from masonry.cli.fly_tuning import fly_settings, tuning_preset
+from masonry.errors import CommandRejected
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
 from px4_sitl import ONE_BRICK, hover, on_px4, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
@@ -238,3 +240,36 @@ def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -
     # the machine stopped (no LAND of its own over PX4's mode) and halted
     assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
     print(f"PX4: {line}")
+
+
+#: More than PX4's COM_OF_LOSS_T (1.0 s in v1.16): setpoints this old no longer count as a stream.
+STALE_S = 1.5
+
+
+def _offboard_without_setpoints(url: str) -> None:
+    fc = MavlinkFlightController(url, connect_timeout_s=60.0)
+    try:
+        fc.connect()
+        fc.wait_for_estimate(150.0)
+        fc.arm()  # through PX4's first-seconds refusals: a zero burst, OFFBOARD, the arming
+        fc.disarm()  # the setpoint stream stops with it
+        fc.clock.sleep(STALE_S)  # (longer under load: the setpoints only get older)
+        fc.set_mode("OFFBOARD")  # disarmed: accepted without setpoints
+        with pytest.raises(CommandRejected) as info:  # the arming in it is what PX4 refuses, as temporary
+            fc.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+        assert info.value.temporary, info.value.reason
+        fc.arm()  # the client's own asking streams the burst again and arms
+        assert fc.telemetry().mode == "OFFBOARD"
+        fc.disarm()
+    finally:
+        fc.close()
+
+
+@pytest.mark.slow
+def test_px4s_offboard_without_setpoints_is_accepted_disarmed_and_its_arming_refused_as_temporary(
+    tmp_path: Path,
+) -> None:
+    """Issue 29: what the project's SITL answers as (masonry.adapters.sitl_offboard): PX4 v1.16 enters OFFBOARD
+    disarmed whatever the stream and refuses the arming in it as TEMPORARILY_REJECTED (never FAILED) until
+    setpoints stream again, which :meth:`arm` asks through. Instance 8."""
+    on_px4(tmp_path / "px4", 8, _offboard_without_setpoints)

@@ -14,7 +14,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from masonry.adapters.mavlink import HEARTBEAT_MISSING_S, MavlinkFlightController, mavutil_module
+from masonry.adapters.mavlink import (
+    HEARTBEAT_MISSING_S,
+    MAV_CMD_COMPONENT_ARM_DISARM,
+    MavlinkFlightController,
+    mavutil_module,
+)
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
@@ -348,17 +353,42 @@ def test_px4_offboard_rules() -> None:
         fc.connect()
         assert fc.autopilot == "px4" and fc.offboard_mode == "OFFBOARD"
         fc.wait_for_estimate(2.0)
-        # PX4 enters OFFBOARD only while setpoints stream (arm() streams them first)
+        # as PX4 v1.16 (issue 29): disarmed, OFFBOARD is entered without setpoints, the arming in it is refused
+        fc.set_mode("OFFBOARD")
         with pytest.raises(
-            CommandRejected, match="set mode OFFBOARD rejected: failed: Switching to Offboard"
-        ):
-            fc.set_mode("OFFBOARD")
-        take_off(fc, 1.0)  # climbs by the setpoint stream inside OFFBOARD
+            CommandRejected, match="arm rejected: temporarily rejected: Arming denied"
+        ) as info:
+            fc.command("arm", MAV_CMD_COMPONENT_ARM_DISARM, (1.0,))
+        assert info.value.temporary and not sitl.vehicle.armed
+        take_off(fc, 1.0)  # arm() streams a zero burst first; climbs by the setpoint stream inside OFFBOARD
         assert fc.telemetry().mode == "OFFBOARD"
         fc._stop.set()  # the onboard program hangs: the setpoint stream stops
         fc._threads[1].join(timeout=2.0)
         wait_until(lambda: sitl.mode == "AUTO.LOITER", 2.0, "PX4's offboard-loss failsafe")
         assert "Offboard setpoints lost: holding position" in sitl.status_log
+
+
+def test_px4_arms_through_a_starved_zero_burst() -> None:
+    """Issue 29: the client's zero burst went stale before PX4 looked (a thread starved under load, injected
+    here): the arming in OFFBOARD is refused as temporary, the next asking streams the burst again and arms."""
+    with flight(SitlConfig(autopilot="px4", starved_answers=2)) as (sitl, fc):
+        fc.connect()
+        fc.arm()
+        assert sitl.vehicle.armed and sitl.mode == "OFFBOARD"
+        assert sitl.status_log.count("Arming denied: Resolve system health failures first") == 2
+        take_off(fc, 0.8)
+        assert fc.telemetry().mode == "OFFBOARD"
+
+
+def test_px4_refuses_an_armed_switch_to_offboard_without_setpoints_as_temporary() -> None:
+    with flight(SitlConfig(autopilot="px4")) as (sitl, fc):
+        fc.connect()
+        take_off(fc, 0.8)
+        fc.set_mode("POSCTL")
+        sitl._setpoints.starved_left = 1  # the stream seen stale (as after offboard_loss_s without one)
+        with pytest.raises(CommandRejected, match="Switching to Offboard is not possible") as info:
+            fc.set_mode("OFFBOARD")
+        assert info.value.temporary and sitl.mode == "POSCTL"
 
 
 def test_a_failing_pose_source_does_not_stop_the_setpoint_stream() -> None:

@@ -9,6 +9,11 @@ the answer is that one, for at most ``arm_retry_s`` (:data:`ARM_RETRY_S` by defa
 refusal with how long it lasted. PX4 gives the same answer to a check that will not pass by itself (a
 calibration missing): the bound ends that wait. Every other refusal (ArduPilot's FAILED with "PreArm: ...",
 DENIED) is raised at once, as before.
+
+A client starved under load (issue 29) can let its zero-setpoint burst go stale before PX4 looks at it: PX4 v1.16
+then refuses the arming in OFFBOARD, or an armed switch to OFFBOARD, as TEMPORARILY_REJECTED, and the next asking
+streams the burst again. A switch to OFFBOARD refused for want of setpoints with another result (FAILED, as the
+project's SITL answered before issue 29) is asked again the same way: :func:`asked_again`.
 """
 
 from __future__ import annotations
@@ -17,12 +22,17 @@ from collections.abc import Callable
 
 from masonry.errors import CommandRejected
 
-__all__ = ["ARM_RETRY_INTERVAL_S", "ARM_RETRY_S", "arm_retrying"]
+__all__ = ["ARM_RETRY_INTERVAL_S", "ARM_RETRY_S", "arm_retrying", "asked_again"]
 
 #: How long (s) an arming refused as temporary is asked again before the refusal is raised.
 ARM_RETRY_S = 30.0
 #: Between two askings (s): PX4 runs its arming checks at about 10 Hz.
 ARM_RETRY_INTERVAL_S = 0.5
+
+
+def asked_again(exc: CommandRejected) -> bool:
+    """Whether a refusal met while arming is asked again: temporary, or OFFBOARD refused for want of setpoints."""
+    return exc.temporary or (exc.command == "set mode OFFBOARD" and "setpoints" in exc.reason)
 
 
 def arm_retrying(
@@ -43,7 +53,7 @@ def arm_retrying(
         How many temporary refusals came before the acceptance.
 
     Raises:
-        CommandRejected: a refusal that is not temporary (at once), or the last temporary one once ``retry_s``
+        CommandRejected: a refusal not :func:`asked_again` (at once), or the last temporary one once ``retry_s``
             has passed (its reason says how long the autopilot refused).
     """
     started_s = monotonic()
@@ -53,7 +63,7 @@ def arm_retrying(
             arm()
             return refusals
         except CommandRejected as exc:
-            if not exc.temporary:
+            if not asked_again(exc):
                 raise
             refusals += 1
             waited_s = monotonic() - started_s
@@ -61,7 +71,7 @@ def arm_retrying(
                 raise CommandRejected(
                     exc.command,
                     f"{exc.reason} for {waited_s:.1f} s (asked {refusals} times, for at most {retry_s:g} s)",
-                    temporary=True,
+                    temporary=exc.temporary,
                 ) from exc
             if wait(ARM_RETRY_INTERVAL_S):
                 raise

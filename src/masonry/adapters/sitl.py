@@ -83,6 +83,7 @@ from masonry.adapters.sitl_config import (
     free_udp_port,
 )
 from masonry.adapters.sitl_lockstep import SitlLockstep
+from masonry.adapters.sitl_offboard import SetpointStream
 from masonry.errors import CommandRejected
 from masonry.ports import Vec3
 
@@ -169,7 +170,7 @@ class MavlinkSitl:
         self._offboard_mode = "OFFBOARD" if self.px4 else "GUIDED"
         self._land_mode = "AUTO.LAND" if self.px4 else "LAND"
         self.mode = "POSCTL" if self.px4 else "STABILIZE"
-        self._last_setpoint_wall_s = -math.inf
+        self._setpoints = SetpointStream(self.config.starved_answers)  # PX4's OFFBOARD rules (issue 29)
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
         self.log = log  # a line per event (mode change, STATUSTEXT), e.g. print
         self.vision_received = 0
@@ -292,7 +293,7 @@ class MavlinkSitl:
             and self.mode == "OFFBOARD"
             and v.armed
             and not v.on_ground
-            and time.monotonic() - self._last_setpoint_wall_s > self.config.offboard_loss_s
+            and self._setpoints.silent_for(self.config.offboard_loss_s)
         ):
             self._text(MAV_SEVERITY_CRITICAL, "Offboard setpoints lost: holding position")
             self._set_mode("AUTO.LOITER")
@@ -369,11 +370,8 @@ class MavlinkSitl:
     def _arm_disarm(self, msg: Any, cmd: int) -> None:
         v = self.vehicle
         if msg.param1 >= 0.5:
-            lost = (
-                self.mode == "OFFBOARD"
-                and time.monotonic() - self._last_setpoint_wall_s > self.config.offboard_loss_s
-            )
-            if self.sim_time_s < self.config.arm_ready_s or (self.px4 and lost):
+            lost = self.px4 and self.mode == "OFFBOARD" and self._setpoints.stale(self.config.offboard_loss_s)
+            if self.sim_time_s < self.config.arm_ready_s or lost:
                 if lost:  # (PX4 v1.16 SITL, on an OFFBOARD whose setpoints stopped)
                     self._text(MAV_SEVERITY_WARNING, "Arming denied: Resolve system health failures first")
                 self._ack(cmd, MAV_RESULT_TEMPORARILY_REJECTED)
@@ -427,10 +425,10 @@ class MavlinkSitl:
 
     def _do_set_mode(self, msg: Any, cmd: int) -> None:
         if self.px4:  # param2 main mode, param3 sub mode
-            ok = self._set_mode_by_number((int(msg.param2) << 16) | (int(msg.param3) << 24))
+            result = self._set_mode_by_number((int(msg.param2) << 16) | (int(msg.param3) << 24))
         else:
-            ok = self._set_mode_by_number(int(msg.param2))
-        self._ack(cmd, MAV_RESULT_ACCEPTED if ok else MAV_RESULT_FAILED)
+            result = self._set_mode_by_number(int(msg.param2))
+        self._ack(cmd, result)
 
     def _set_message_interval(self, msg: Any, cmd: int) -> None:
         msg_id, interval_us = int(msg.param1), float(msg.param2)
@@ -465,22 +463,26 @@ class MavlinkSitl:
             return "Need Position Estimate"
         return None  # battery and the vehicle's own checks: SimVehicle.arm()
 
-    def _set_mode_by_number(self, custom_mode: int) -> bool:
+    def _set_mode_by_number(self, custom_mode: int) -> int:  # the MAV_RESULT to acknowledge it with
         for name, number in self._modes.items():
             if number == custom_mode:
                 if name == self._offboard_mode and not self._ekf_ok():
                     self._text(MAV_SEVERITY_WARNING, f"Mode change to {name} failed: requires position")
-                    return False
-                if name == "OFFBOARD" and time.monotonic() - self._last_setpoint_wall_s > 0.5:
-                    # PX4 enters OFFBOARD only while setpoints are streaming
+                    return MAV_RESULT_FAILED
+                if (
+                    name == "OFFBOARD"
+                    and self.vehicle.armed
+                    and self._setpoints.stale(self.config.offboard_loss_s)
+                ):
+                    # PX4 v1.16 armed (disarmed: accepted, the arming refused instead): masonry.adapters.sitl_offboard
                     self._text(MAV_SEVERITY_WARNING, "Switching to Offboard is not possible: no setpoints")
-                    return False
+                    return MAV_RESULT_TEMPORARILY_REJECTED
                 if name == self._land_mode:
                     self.land_requests += 1
                 self._set_mode(name)
-                return True
+                return MAV_RESULT_ACCEPTED
         self._text(MAV_SEVERITY_WARNING, f"Mode change to {custom_mode} failed: unknown mode")
-        return False
+        return MAV_RESULT_FAILED
 
     def pilot_mode(self, name: str) -> None:
         """The safety pilot flips the RC mode switch: the autopilot enters ``name`` (no ground station involved)."""
@@ -509,7 +511,7 @@ class MavlinkSitl:
             or msg.type_mask & VELOCITY_ONLY_IGNORED != VELOCITY_ONLY_IGNORED
         ):
             return  # position targets and other frames are not modelled
-        self._last_setpoint_wall_s = time.monotonic()
+        self._setpoints.heard()
         vehicle = self.vehicle
         if msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED:  # acceleration (PX4, issue 29): the velocity
             a = self.frame.velocity_to_world((msg.afx, msg.afy, msg.afz))  # that reaches it through the lag

@@ -63,6 +63,9 @@ class SitlConfig:
     heartbeat_hz: float = 1.0
     autopilot: str = "ardupilot"  # or "px4": PX4 modes, OFFBOARD rules, ESTIMATOR_STATUS
     offboard_loss_s: float = 1.0  # PX4 COM_OF_LOSS_T: OFFBOARD without setpoints this long -> AUTO.LOITER
+    # the first this many answers that look at the setpoint stream (PX4's arming in OFFBOARD, an armed switch to
+    # OFFBOARD) see it stale, as for a client starved under load (issue 29; tests)
+    starved_answers: int = 0
     # PX4 EKF2's ESTIMATOR_STATUS as PX4 v1.16 SITL sends it (issue 20): 0x3FF at rest (constant-position mode
     # with everything else), 895 / 831 in flight (height above ground comes and goes)
     ekf2_flags: bool = False
