@@ -101,6 +101,18 @@ class ReleaseGate:
         self._look(uav, tel)
         return False
 
+    def before_leg(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """The side look's displaced descent over, its last leg due: True if a look back up has begun instead (the
+        wall not seen within ``release_fresh_s``, looks left). The leg flies the carried brick sideways at the height
+        the offset last measured put it: out of view, the vertical wander moves on, and a brick flown in low passes
+        under its supports' tops into the course below (px4 rotated bond, seed 12: B8's support out of view for the
+        7 s of its descent, the wander 11 cm down, B8 a course low). From the look the leg starts fresh."""
+        if self.fresh(uav) or self.relooks >= MAX_RELOOKS:
+            return False
+        uav._side.final = True  # the look flies the leg when it has found the wall
+        self._look(uav, tel)
+        return True
+
     def retries(self, uav: BrickUav, tel: Telemetry) -> bool:
         """The drop-off not reached within ``release_timeout_s`` of the leg's end: True if a look back up has
         begun instead of a failed descent (guarded, looks left: the look point has the wall in view again)."""
