@@ -140,7 +140,7 @@ def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
 def test_a_stale_offset_at_the_end_of_the_displaced_descent_is_looked_at_again_before_the_last_leg() -> None:
     """The px4 model, issue 30's running bond turned 30 degrees, seed 12: B8's supports (B3, B4) were out of view
     for the 7 s of its displaced descent while the vertical wander moved 11 cm; the last leg, flown on that stale
-    offset, took the carried brick sideways under its supports' tops into the course below. B8 rested 10.1 cm
+    offset, took the carried brick sideways under its supports' tops into the course below. B8 rested ~10 cm
     low, 100.6 mm off its neighbours; mission control failed the task (misplaced, waits for a person) and the
     mission did not complete. With the look back up before the leg (``ReleaseGate.before_leg``) every brick is on
     its course and the mission completes."""
