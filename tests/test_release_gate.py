@@ -138,3 +138,35 @@ def test_it_is_on_by_default_with_the_wall_alignment_and_uav_yaml_may_switch_it_
     )  # (it acts only with align_on_wall)
     assert uav_settings("px4", {"release_fresh_s": 0})["release_fresh_s"] == 0
     assert "release_fresh_s" not in uav_settings("arducopter")
+
+
+class LegWatch:
+    """The support hidden for the first descent (as ``Watch("once")``); where the UAV was when its first look back
+    up began and where it let go."""
+
+    def __init__(self) -> None:
+        self.look_m: np.ndarray | None = None
+        self.release_m: np.ndarray | None = None
+
+    def __call__(self, rig: Rig) -> None:
+        uav = rig.uav
+        hidden = uav.state == "place_descend" and uav._gate.relooks == 0
+        rig.camera.hidden = frozenset({2 * SUPPORT, 2 * SUPPORT + 1}) if hidden else frozenset()
+        here = None if uav._tel is None else np.asarray(uav._tel.position_m, dtype=float)
+        if self.look_m is None and uav._gate.looking:
+            self.look_m = here
+        if self.release_m is None and uav.state == "place_release":
+            self.release_m = here
+
+
+def test_a_stale_offset_at_the_end_of_the_side_looks_descent_is_looked_at_again_before_the_last_leg() -> None:
+    """With the side look the descent ends displaced beside the drop-off; the support out of view all the way
+    down, the UAV looks back up from there, not after a last leg flown sideways on the stale offset (which on GNSS
+    took px4 rotated bond seed 12's B8 under its supports' tops, a course low; tests/test_side_look.py)."""
+    watch = LegWatch()
+    rig = _rig(side_look=True).run(on_tick=watch)
+    assert rig.link.results[0].status == "done"
+    assert rig.uav._side.offset_m is not None  # a displaced descent (15 cm beside the drop-off here)
+    assert watch.look_m is not None and watch.release_m is not None
+    # the look began at the pre-release point, beside the drop-off (before: at the drop-off, 0.5 mm from it)
+    assert float(np.linalg.norm((watch.look_m - watch.release_m)[:2])) > 0.1

@@ -414,6 +414,9 @@ class BrickUav(PutBack):
         self._wall.carry(self)  # (masonry.fsm.wall_trend: the wander's trend since the frames of the target)
         if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
+        # the wall's offset stale at the end of the displaced descent: look back up before the last leg
+        if self._side.leg_due(self) and self._gate.before_leg(self, tel):
+            return
         self._side.step(self, self._place_yaw_rad())
         error = dropoff_error_m(self, tel, self._dropoff)
         if error is not None:

@@ -10,8 +10,10 @@ from view 0.9-7.5 s before the release landed 19.5-143 mm off it; the side look'
 pre-release point, or right above the drop-off, ``RELOOK_CLIMB_M`` higher), hovers until the camera has seen the
 wall for ``RELOOK_FRAMES`` frames and the UAV rests there, and flies the last leg again; a leg that does not reach
 the drop-off within ``release_timeout_s`` of its end looks again too (not a failed descent while looks are left).
-Only bricks that stand on others are held so (their supports are built before them: there is something to see);
-a first-course brick has no support and is placed as before. A look that does not find the wall within
+The side look's displaced descent is checked so too where it ends, before its last leg
+(:meth:`ReleaseGate.before_leg`): flown on a stale offset, the leg can take the brick sideways under its supports'
+tops. Only bricks that stand on others are held so (their supports are built before them: there is something to
+see); a first-course brick has no support and is placed as before. A look that does not find the wall within
 ``RELOOK_WAIT_S`` looks again ``RELOOK_CLIMB_M`` higher (a wider view); after ``MAX_RELOOKS`` looks in one descent
 without the wall the descent counts as failed, as one that did not reach its drop-off: the UAV aligns and
 descends again, and after ``max_place_attempts`` the task fails with the reason said.
@@ -100,6 +102,18 @@ class ReleaseGate:
             return True
         self._look(uav, tel)
         return False
+
+    def before_leg(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """The side look's displaced descent over, its last leg due: True if a look back up has begun instead (the
+        wall not seen within ``release_fresh_s``, looks left). The leg flies the carried brick sideways at the height
+        the offset last measured put it: out of view, the vertical wander moves on, and a brick flown in low passes
+        under its supports' tops into the course below (px4 rotated bond, seed 12: B8's support out of view for the
+        7 s of its descent, the wander 11 cm down, B8 a course low). From the look the leg starts fresh."""
+        if self.fresh(uav) or self.relooks >= MAX_RELOOKS:
+            return False
+        uav._side.final = True  # the look flies the leg when it has found the wall
+        self._look(uav, tel)
+        return True
 
     def retries(self, uav: BrickUav, tel: Telemetry) -> bool:
         """The drop-off not reached within ``release_timeout_s`` of the leg's end: True if a look back up has

@@ -301,6 +301,10 @@ class SideLook:
             effector_target_m + self.offset_m + np.array([0.0, 0.0, PRE_RELEASE_GAP_M]), dtype=float
         )
 
+    def leg_due(self, uav: BrickUav) -> bool:
+        """The displaced descent is over and its last leg not yet flown."""
+        return self.offset_m is not None and not self.final and uav._now_s >= uav.nav.end_s
+
     def step(self, uav: BrickUav, yaw_rad: float) -> None:
         """The displaced descent over: fly the last leg to the drop-off (once)."""
         if self.offset_m is None or self.final or uav._now_s < uav.nav.end_s:
