@@ -20,7 +20,7 @@ from waiting import wait_until
 
 
 def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() -> None:
-    sitl = SimpleNamespace(sim_time_s=0.0)
+    sitl = SimpleNamespace(sim_time_s=0.0, physics_dt_s=0.01, vehicle=None)
     pace = SitlLockstep(sitl, wait_s=1.0)
     assert pace.step_s(0.4, wall_s=0.0) == 0.4  # no grant yet: free at the time scale
     sitl.sim_time_s = 0.4
