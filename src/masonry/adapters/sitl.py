@@ -276,7 +276,7 @@ class MavlinkSitl:
             if was_armed and not v.armed:
                 self._text(MAV_SEVERITY_INFO, "Land complete, disarming" if v.on_ground else "Motors stopped")
             if self.lockstep is not None:  # the telemetry noise: one sample per step, not per message sent
-                v.telemetry()
+                self.lockstep.sample()
 
     def _gcs_failsafe(self) -> None:
         v = self.vehicle

@@ -136,6 +136,15 @@ class SitlLockstep:
             return free_step_s
         return 0.0
 
+    def sample(self) -> None:
+        """After each physics step: the telemetry's noise sample for it (drawn per step, not per message sent).
+        Before the first grant is reached (the pre-flight, paced by the client's wall clock) every step draws
+        the same sample, so what the client measures standing (its ground height) is the same whenever it reads."""
+        vehicle = self._sitl.vehicle
+        if self._replied_ms is None and hasattr(vehicle, "reseed"):
+            vehicle.reseed(np.random.default_rng(self._sitl.seed))
+        vehicle.telemetry()
+
     def at_grant(self) -> bool:
         """Whether the SITL may send its streams: running free, or held at the grant (within a step below it);
         on its way there it sends none (the client sees the state at the grants only, whatever the wall)."""
