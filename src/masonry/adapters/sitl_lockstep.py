@@ -62,6 +62,7 @@ class SitlLockstep:
         self._replied_ms: int | None = None
         self._held_since_s: float | None = None
         self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
+        self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
         self._armed_free = False  # held at the arming for wait_s without a grant: not again
         self._last_setpoint: tuple[float, ...] = ()
 
@@ -160,13 +161,8 @@ class SitlLockstep:
             return
         if not self.at_grant():
             return
-        vehicle = sitl.vehicle
-        if self._replied_ms is None and hasattr(
-            vehicle, "reseed"
-        ):  # the first grant reached: the noise on from
-            vehicle.reseed(
-                np.random.default_rng(sitl.seed)
-            )  # here alike, however long the wall kept it before
+        if self._replied_ms is None:  # the flight's first grant: its noise (sample) and its time start here
+            self.epoch_s = sitl.sim_time_s
         self._replied_ms = self.grant_ms
         sitl._send_heartbeat()  # the whole state at the grant, the latest of each message when the reply comes
         for msg_id, rate_hz in sitl._rates_hz.items():

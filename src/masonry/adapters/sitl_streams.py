@@ -55,9 +55,12 @@ def send_stream(self: MavlinkSitl, msg_id: int) -> None:
         mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
     elif msg_id == MSG_ESTIMATOR_STATUS:
         flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128)  # ESTIMATOR_STATUS_FLAGS
-        if ekf_ok and self.config.ekf2_flags:
+        if (
+            ekf_ok and self.config.ekf2_flags
+        ):  # (lock-step: the flicker's phase from the flight's first grant)
+            epoch_s = self.lockstep.epoch_s if self.lockstep is not None else 0.0
             at_rest = not v.armed or v.on_ground
-            flags = 0x3FF if at_rest else (895 if int(self.sim_time_s) % 2 == 0 else 831)
+            flags = 0x3FF if at_rest else (895 if int(self.sim_time_s - epoch_s) % 2 == 0 else 831)
         mav.estimator_status_send(int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01)
     elif msg_id == MSG_WIND:
         wx, wy = v.wind_estimate_mps  # ENU, where the air goes: it blows from the opposite bearing
