@@ -53,7 +53,8 @@ class LockstepClock:
     def now_s(self) -> float:
         """The autopilot's time (s); in lock-step the time its telemetry and replies last gave, not extrapolated:
         a client the machine left unrun for a while does not grant that while on top of its step."""
-        if not self.lockstep:
+        # the announcement is read here too: the loop's first tick is then on the SITL's time as heard
+        if not self.lockstep and not self._announced():
             return self._fc.clock.now_s()
         heard_s = self._fc.clock.last_boot_s
         self._now_s = max(self._now_s, heard_s if heard_s is not None else -math.inf)
