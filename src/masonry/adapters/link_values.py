@@ -79,6 +79,7 @@ class LinkClock:
         self._last: tuple[float, float] | None = None
         self._returned = -math.inf
         self._created = self._monotonic()
+        self.extrapolate = True  # False: now_s is the last boot time heard (a SITL in lock-step, lockstep.py)
 
     def observe(self, boot_s: float, monotonic_s: float) -> None:
         with self._lock:
@@ -105,6 +106,8 @@ class LinkClock:
         with self._lock:
             if self._last is None:  # nothing heard yet: seconds since this clock was made
                 return self._monotonic() - self._created
+            if not self.extrapolate:
+                return self._last[0]
             # extrapolated over one telemetry period at most; never runs backwards
             now = self._last[0] + (self._monotonic() - self._last[1]) * rate
             self._returned = max(self._returned, now)

@@ -22,6 +22,10 @@ LOCKSTEP_TEXT = "Lockstep: SYSTEM_TIME grants pace the simulation"
 #: The longest wall time (s) a step waits for the SITL's reply to its grant before it goes on without it (a SITL
 #: the machine leaves unrun for that long; the next step's grant picks the lock-step up again).
 REPLY_WAIT_S = 2.0
+#: How long (wall s) after a grant the flight controller's own thread leaves the setpoint stream to the grants
+#: (each grant sends it once, so the SITL gets it at a defined simulated time); a client that stops granting
+#: (its waits on the wall: arming, commands) has its thread stream again after this.
+PACED_STREAM_S = 0.5
 
 
 class LockstepClock:
@@ -49,7 +53,8 @@ class LockstepClock:
     def now_s(self) -> float:
         """The autopilot's time (s); in lock-step the time its telemetry and replies last gave, not extrapolated:
         a client the machine left unrun for a while does not grant that while on top of its step."""
-        if not self.lockstep:
+        # the announcement is read here too: the loop's first tick is then on the SITL's time as heard
+        if not self.lockstep and not self._announced():
             return self._fc.clock.now_s()
         heard_s = self._fc.clock.last_boot_s
         self._now_s = max(self._now_s, heard_s if heard_s is not None else -math.inf)
@@ -63,6 +68,10 @@ class LockstepClock:
         if duration_s <= 0.0:
             return
         grant_ms = round((self.now_s() + duration_s) * 1000.0)
+        # the setpoint stream at the grant, not at the sender thread's wall times (the SITL applies it in order)
+        fc = self._fc
+        fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
+        fc._stream_setpoint(fc.stream_clock())
         self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, grant_ms))
         self.grants += 1
         assert self._replies is not None
@@ -86,6 +95,8 @@ class LockstepClock:
                 return False
             if text.rstrip("\x00").startswith(LOCKSTEP_TEXT):
                 self._fc.unlisten(self._texts)
+                self._fc.clock.extrapolate = False  # its time: as last heard (the state the client has)
+                self._fc.stream_clock = self.now_s
                 self._now_s = self._fc.clock.now_s()  # on from where the loop's clock read last
                 self._replies = self._fc.listen(("SYSTEM_TIME",))
                 return True

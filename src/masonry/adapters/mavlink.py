@@ -535,7 +535,7 @@ class MavlinkFlightController(EstimateLink):
             raise InputError(f"velocity setpoint must be finite, not {velocity_mps}, {yaw_rate_radps}")
         with self._lock:
             self._setpoint = (v, FrameTransform.yaw_rate_to_ned(float(yaw_rate_radps)))
-            self._setpoint_time_s = self._monotonic()
+            self._setpoint_time_s = self.stream_clock()  # (the clock the stream judges freshness on)
             if not self._state.armed:
                 return
             self._streaming = True

@@ -163,9 +163,10 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
-        self._down_at: tuple[float, float | None] | None = (
-            None  # the watchdog found the link down: when, clocks
-        )
+        self._down_at: tuple[float, float | None] | None = None  # the watchdog fired: (when, clocks)
+        # lock-step (masonry.adapters.lockstep): the setpoint stream's clock; until when (monotonic) grants stream it
+        self.stream_clock: Callable[[], float] = monotonic
+        self.stream_paced_until_s = -math.inf
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -444,7 +445,8 @@ class MavlinkLink:
                     next_setpoint += period
                     if next_setpoint < now:  # fell behind (suspended?): don't burst
                         next_setpoint = now + period
-                    self._stream_setpoint(now)
+                    if now >= self.stream_paced_until_s:
+                        self._stream_setpoint(self.stream_clock())
                 if self.pose_source is not None and now >= next_vision:
                     next_vision = now + vision_period
                     try:

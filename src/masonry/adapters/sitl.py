@@ -50,10 +50,7 @@ from masonry.adapters.mavlink import (
     MSG_ATTITUDE,
     MSG_EKF_STATUS_REPORT,
     MSG_ESTIMATOR_STATUS,
-    MSG_EXTENDED_SYS_STATE,
     MSG_HEARTBEAT,
-    MSG_LOCAL_POSITION_NED,
-    MSG_SYS_STATUS,
     MSG_WIND,
     PX4_MODES,
     FrameTransform,
@@ -62,10 +59,6 @@ from masonry.adapters.mavlink import (
 from masonry.adapters.sitl_config import (
     DEFAULT_RATES_HZ,
     DISARM_MAGIC,
-    MAV_LANDED_STATE_IN_AIR,
-    MAV_LANDED_STATE_LANDING,
-    MAV_LANDED_STATE_ON_GROUND,
-    MAV_LANDED_STATE_TAKEOFF,
     MAV_RESULT_ACCEPTED,
     MAV_RESULT_DENIED,
     MAV_RESULT_FAILED,
@@ -84,6 +77,7 @@ from masonry.adapters.sitl_config import (
 )
 from masonry.adapters.sitl_lockstep import SitlLockstep
 from masonry.adapters.sitl_offboard import SetpointStream
+from masonry.adapters.sitl_streams import send_stream
 from masonry.errors import CommandRejected
 from masonry.ports import Vec3
 
@@ -157,6 +151,7 @@ class MavlinkSitl:
                 rng=np.random.default_rng(seed),
             )
         self.vehicle = vehicle
+        self.seed = seed  # (lock-step draws the noise afresh from it at the first grant: sitl_lockstep)
         self.physics_dt_s = physics_dt_s
         origin = (
             tuple(float(c) for c in home_m) if self.config.position_source == "internal" else (0.0, 0.0, 0.0)
@@ -248,7 +243,10 @@ class MavlinkSitl:
             with self._lock:
                 self._drain_input()
                 step_s = (now - last) * self.time_scale
-                self._advance(self.lockstep.step_s(step_s, now) if self.lockstep is not None else step_s)
+                if self.lockstep is None:
+                    self._advance(step_s)
+                else:  # whole physics steps, to the grant (masonry.adapters.sitl_lockstep)
+                    self.lockstep.run(step_s, now)
                 last = now
                 if not self.link_down:
                     if now >= next_beat:
@@ -256,7 +254,8 @@ class MavlinkSitl:
                         # until a ground station has answered, beat at 5 Hz so it finds us quickly
                         searching = self._last_gcs_wall_s is None
                         next_beat = now + (0.2 if searching else 1.0 / self.config.heartbeat_hz)
-                    self._send_streams(now)
+                    if self.lockstep is None or self.lockstep.at_grant():
+                        self._send_streams(now)
                     if self.lockstep is not None:
                         self.lockstep.reply()
             (self._stop if self.lockstep is None else self.lockstep).wait(0.004)  # lock-step: or a grant
@@ -276,6 +275,8 @@ class MavlinkSitl:
                 self.mode = self._land_mode
             if was_armed and not v.armed:
                 self._text(MAV_SEVERITY_INFO, "Land complete, disarming" if v.on_ground else "Motors stopped")
+            if self.lockstep is not None:  # the telemetry noise: one sample per step, not per message sent
+                self.lockstep.sample()
 
     def _gcs_failsafe(self) -> None:
         v = self.vehicle
@@ -347,6 +348,8 @@ class MavlinkSitl:
             self._last_vision_sim_s = self.sim_time_s
 
     def _ack(self, command: int, result: int) -> None:
+        if self.lockstep is not None:  # the time it is answered at, heard before the answer (sitl_lockstep)
+            self._send_stream(MSG_ATTITUDE)
         self._conn.mav.command_ack_send(command, result)
 
     def _log(self, text: str) -> None:
@@ -513,7 +516,15 @@ class MavlinkSitl:
             return  # position targets and other frames are not modelled
         self._setpoints.heard()
         vehicle = self.vehicle
-        if msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED:  # acceleration (PX4, issue 29): the velocity
+        if (
+            self.lockstep is not None
+            and self.lockstep.same_setpoint(msg)
+            and self.last_setpoint_mps is not None
+        ):
+            v_world = self.last_setpoint_mps  # the client's stream repeating it: refreshed, not re-applied
+        elif (
+            msg.type_mask & VELOCITY_IGNORED == VELOCITY_IGNORED
+        ):  # acceleration (PX4, issue 29): the velocity
             a = self.frame.velocity_to_world((msg.afx, msg.afy, msg.afz))  # that reaches it through the lag
             tau_s, v_now = vehicle.config.velocity_tau_s, vehicle.velocity_mps
             v_world = (v_now[0] + a[0] * tau_s, v_now[1] + a[1] * tau_s, v_now[2] + a[2] * tau_s)
@@ -552,49 +563,4 @@ class MavlinkSitl:
             self._next_due[msg_id] = max(due + 1.0 / rate_hz, now)
             self._send_stream(msg_id)
 
-    def _send_stream(self, msg_id: int) -> None:
-        v = self.vehicle
-        mav = self._conn.mav
-        boot_ms = int(self.sim_time_s * 1000) & 0xFFFFFFFF
-        ekf_ok = self._ekf_ok()
-        if msg_id == MSG_LOCAL_POSITION_NED:
-            if ekf_ok:
-                tel = v.telemetry()
-                x, y, z = self.frame.position_to_ned(tel.position_m)
-                vx, vy, vz = self.frame.velocity_to_ned(tel.velocity_mps)
-                mav.local_position_ned_send(boot_ms, x, y, z + self.config.ekf_ground_z_m, vx, vy, vz)
-        elif msg_id == MSG_ATTITUDE:
-            roll, pitch, yaw = self.frame.attitude_to_ned(*v.attitude_rad)
-            mav.attitude_send(
-                boot_ms, roll, pitch, yaw, 0.0, 0.0, FrameTransform.yaw_rate_to_ned(v.yaw_rate_radps)
-            )
-        elif msg_id == MSG_SYS_STATUS:
-            fraction = v.battery_fraction
-            voltage_mv = int((3.5 + 0.7 * fraction) * 4 * 1000)  # a 4S pack between 14.0 and 16.8 V
-            mav.sys_status_send(0, 0, 0, 500, voltage_mv, 1500 if v.armed else 50, round(fraction * 100),
-                                0, 0, 0, 0, 0, 0)  # fmt: skip
-        elif msg_id == MSG_EKF_STATUS_REPORT:
-            flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128 | 1024)  # no GPS: no absolute position
-            mav.ekf_status_report_send(flags, 0.1, 0.1, 0.1, 0.1, 0.0)
-        elif msg_id == MSG_ESTIMATOR_STATUS:
-            flags = (1 | 2 | 4 | 8 | 32) if ekf_ok else (1 | 128)  # ESTIMATOR_STATUS_FLAGS
-            if ekf_ok and self.config.ekf2_flags:
-                at_rest = not v.armed or v.on_ground
-                flags = 0x3FF if at_rest else (895 if int(self.sim_time_s) % 2 == 0 else 831)
-            mav.estimator_status_send(
-                int(self.sim_time_s * 1e6), flags, 0.1, 0.1, 0.1, 0.1, 0.0, 0.0, 0.01, 0.01
-            )
-        elif msg_id == MSG_WIND:
-            wx, wy = v.wind_estimate_mps  # ENU, where the air goes: it blows from the opposite bearing
-            from_deg = math.degrees(math.atan2(-wx, -wy)) % 360.0 if wx or wy else 0.0
-            mav.wind_send(from_deg, math.hypot(wx, wy), 0.0)
-        elif msg_id == MSG_EXTENDED_SYS_STATE:
-            if not v.armed or v.on_ground:
-                landed = MAV_LANDED_STATE_ON_GROUND
-            elif v.taking_off:
-                landed = MAV_LANDED_STATE_TAKEOFF
-            elif self.mode == self._land_mode:
-                landed = MAV_LANDED_STATE_LANDING
-            else:
-                landed = MAV_LANDED_STATE_IN_AIR
-            mav.extended_sys_state_send(0, landed)
+    _send_stream = send_stream  # one message of a stream, now (masonry.adapters.sitl_streams)

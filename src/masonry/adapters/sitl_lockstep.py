@@ -21,9 +21,12 @@ having coasted on a stale setpoint (issue 29). With it the client paces the simu
 
 from __future__ import annotations
 
+import math
 import select
 import time
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from masonry.adapters.lockstep import LOCKSTEP_TEXT
 from masonry.adapters.mavlink import MSG_ATTITUDE, MSG_LOCAL_POSITION_NED
@@ -58,6 +61,10 @@ class SitlLockstep:
         self.free_runs = 0  # times the SITL gave up waiting for a grant and ran free
         self._replied_ms: int | None = None
         self._held_since_s: float | None = None
+        self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
+        self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
+        self._armed_free = False  # held at the arming for wait_s without a grant: not again
+        self._last_setpoint: tuple[float, ...] = ()
 
     def greet(self, last_heartbeat_s: float | None, now_s: float) -> None:
         """A ground station's HEARTBEAT (wall s): announce lock-step to one first heard, or heard again after a
@@ -72,38 +79,97 @@ class SitlLockstep:
         self._held_since_s = None
         self.grants += 1
 
+    def run(self, free_step_s: float, wall_s: float) -> None:
+        """Advance the SITL in whole physics steps only, as far as :meth:`step_s` allows of the wall's
+        ``free_step_s`` (what is left of a step is owed to the next call); engaged, to the first whole step at or
+        past the grant: the steps, and so the noise drawn at each, are the grants' and not the wall's."""
+        sitl = self._sitl
+        dt_s = sitl.physics_dt_s
+        room_s = self.step_s(free_step_s, wall_s)
+        if room_s <= 0.0:  # held: the wall spent is not made up
+            self._owed_s = 0.0
+            return
+        self._owed_s += room_s
+        steps = int(self._owed_s / dt_s + _REACHED_S)
+        if self.engaged and self.grant_ms is not None:
+            to_grant_s = self.grant_ms / 1000.0 - sitl.sim_time_s
+            to_grant = math.ceil(to_grant_s / dt_s - _REACHED_S)
+            steps = to_grant if room_s >= to_grant_s - _REACHED_S else min(steps, to_grant)
+        self._owed_s = max(0.0, self._owed_s - steps * dt_s)
+        for _ in range(steps):
+            sitl._advance(dt_s)
+
+    def same_setpoint(self, msg: object) -> bool:
+        """Whether SET_POSITION_TARGET_LOCAL_NED ``msg`` repeats the last (the client's stream resending it at its
+        wall rate): in lock-step a repeat refreshes the setpoint, it does not apply it anew at whatever step."""
+        fields = tuple(
+            getattr(msg, k) for k in ("type_mask", "vx", "vy", "vz", "afx", "afy", "afz", "yaw_rate")
+        )
+        same, self._last_setpoint = fields == self._last_setpoint, fields
+        return same and self.engaged
+
     def step_s(self, free_step_s: float, wall_s: float) -> float:
         """How far to advance simulated time now: ``free_step_s`` (``time_scale`` x the wall since the last
-        step), cut at the grant; 0 while held there, until ``wait_s`` of wall without a grant has passed."""
+        step) running free; engaged, that cut at the grant; 0 once there (held), until ``wait_s`` of wall without
+        a grant has passed. Armed before the first grant, it is held too (the flight is the client's from its
+        arming: the wall between the arming and the fly loop's first grant is not flown), as long at most."""
+        if self.grant_ms is None and not self._armed_free and getattr(self._sitl.vehicle, "armed", False):
+            self.engaged = True  # held at the arming
+            return self._held(free_step_s, wall_s)
         if not self.engaged or self.grant_ms is None:
             return free_step_s
         room_s = self.grant_ms / 1000.0 - self._sitl.sim_time_s
-        if room_s > _REACHED_S:
+        if room_s > _REACHED_S:  # below it: on to it (the whole step at or just past it)
             self._held_since_s = None
             return min(free_step_s, room_s)
+        return self._held(free_step_s, wall_s)
+
+    def _held(self, free_step_s: float, wall_s: float) -> float:
         if self._held_since_s is None:
             self._held_since_s = wall_s
         elif (
             wall_s - self._held_since_s > self.wait_s
         ):  # the client is silent: run free until it grants again
             self.engaged = False
+            self._armed_free = True
             self._held_since_s = None
             self.free_runs += 1
             return free_step_s
         return 0.0
+
+    def sample(self) -> None:
+        """After each physics step: the telemetry's noise sample for it (drawn per step, not per message sent).
+        Before the first grant is reached (the pre-flight, paced by the client's wall clock) every step draws
+        the same sample, so what the client measures standing (its ground height) is the same whenever it reads."""
+        vehicle = self._sitl.vehicle
+        if self._replied_ms is None and hasattr(vehicle, "reseed"):
+            vehicle.reseed(np.random.default_rng(self._sitl.seed))
+        vehicle.telemetry()
+
+    def at_grant(self) -> bool:
+        """Whether the SITL may send its streams: running free, or held at the grant (within a step below it);
+        on its way there it sends none (the client sees the state at the grants only, whatever the wall)."""
+        grant_ms, sitl = self.grant_ms, self._sitl
+        if not self.engaged or grant_ms is None:
+            return True
+        return sitl.sim_time_s >= grant_ms / 1000.0 - _REACHED_S
 
     def reply(self) -> None:
         """Once simulated time has reached the latest grant: the state at it, then the reply (step 3 above)."""
         sitl = self._sitl
         if self.grant_ms is None or self.grant_ms == self._replied_ms:
             return
-        if sitl.sim_time_s < self.grant_ms / 1000.0 - _REACHED_S:
+        if not self.at_grant():
             return
+        if self._replied_ms is None:  # the flight's first grant: its noise (sample) and its time start here
+            self.epoch_s = sitl.sim_time_s
         self._replied_ms = self.grant_ms
-        sitl._send_stream(MSG_ATTITUDE)
-        sitl._send_stream(MSG_LOCAL_POSITION_NED)  # (none before the EKF has converged)
+        sitl._send_heartbeat()  # the whole state at the grant, the latest of each message when the reply comes
+        for msg_id, rate_hz in sitl._rates_hz.items():
+            if rate_hz > 0.0 or msg_id in (MSG_ATTITUDE, MSG_LOCAL_POSITION_NED):
+                sitl._send_stream(msg_id)  # (no LOCAL_POSITION_NED before the EKF has converged)
         # the time it is at: the grant, or later where it ran free past it (the client's clock goes on from there)
-        now_ms = max(self.grant_ms, int(sitl.sim_time_s * 1000.0))
+        now_ms = max(self.grant_ms, round(sitl.sim_time_s * 1000.0))
         sitl._conn.mav.system_time_send(time.time_ns() // 1000, now_ms)
 
     def wait(self, timeout_s: float) -> None:

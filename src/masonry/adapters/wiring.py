@@ -262,7 +262,9 @@ class ZeroedClock:
 
     def __init__(self, base: Any) -> None:
         self.base = base
-        self.start_s = base.now_s()
+        # in whole ms (time_boot_ms's grain): a lock-step flight's times less it are then the same numbers however
+        # long the pre-flight took (docs/sitl-lockstep.md), so the fly loop and a simulated world repeat
+        self.start_s = round(base.now_s(), 3)
 
     def now_s(self) -> float:
         return float(self.base.now_s() - self.start_s)

@@ -150,6 +150,11 @@ class SimVehicle(_Autopilot):
         self._liftoff_s = -math.inf  # when it last left the ground (the take-off's thrust ramp)
 
     # ------------------------------------------------------------------ state
+    def reseed(self, rng: np.random.Generator) -> None:
+        """Draw the noise from ``rng`` from now on (a SITL in lock-step at its first grant: masonry.adapters.sitl)."""
+        self._gauss = _Gauss(rng)
+        self._tel = None
+
     @property
     def time_s(self) -> float:
         """The vehicle's own time: the sum of the steps it has taken."""
