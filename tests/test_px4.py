@@ -33,6 +33,7 @@ from masonry.fsm.noise_gate import HoverNoise, noise_aligned
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import SimVehicle
 from masonry.sim.vehicle_config import vehicle_preset
+from own_sitl_flight import lockstep_brick_flight
 from waiting import wait_until
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
@@ -325,24 +326,7 @@ def test_sitl_vehicle_option_is_checked() -> None:
 
 @pytest.mark.slow
 def test_a_brick_task_against_the_px4_sitl_places_within_2_cm() -> None:
-    port = free_udp_port()
-    sitl, _ = build_sitl(
-        port=port,
-        uav="brick",
-        blueprint=Path(CASE_STUDY),
-        time_scale=4.0,
-        vehicle="px4",
-        seed=1,
-        lockstep=True,
-    )
-    sitl.start()
-    try:
-        res = runner.invoke(app, [
-            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B1", "--fc", f"udp:127.0.0.1:{port}",
-            "--actuators", "sim", "--camera", "sim", "--format", "json",
-        ])  # fmt: skip
-    finally:
-        sitl.stop()
+    res, sitl = lockstep_brick_flight(seed=1)
     assert res.exit_code == 0, res.output
     out = json.loads(res.stdout)
     assert out["status"] == "done", (out["reason"], [(round(e["t_s"], 1), e["state"]) for e in out["trace"]])

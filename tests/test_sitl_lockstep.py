@@ -8,22 +8,18 @@ from __future__ import annotations
 
 import itertools
 import json
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import pytest
-from typer.testing import CliRunner
 
 from masonry.adapters.lockstep import LOCKSTEP_TEXT, LockstepClock
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.sitl import MavlinkSitl, free_udp_port
 from masonry.adapters.sitl_lockstep import SitlLockstep
-from masonry.cli import app
 from masonry.cli.hardware import build_sitl
+from own_sitl_flight import lockstep_brick_flight
 from waiting import wait_until
-
-CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 
 
 def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() -> None:
@@ -145,25 +141,8 @@ def test_masonry_sitl_says_it_runs_in_lock_step() -> None:
 
 
 def _brick_flight(seed: int) -> dict[str, Any]:
-    """``masonry fly`` of the case study's B1 against the PX4-preset SITL in lock-step (as tests/test_px4.py)."""
-    port = free_udp_port()
-    sitl, _ = build_sitl(
-        port=port,
-        uav="brick",
-        blueprint=Path(CASE_STUDY),
-        time_scale=4.0,
-        vehicle="px4",
-        seed=seed,
-        lockstep=True,
-    )
-    sitl.start()
-    try:
-        res = CliRunner().invoke(app, [
-            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B1", "--fc", f"udp:127.0.0.1:{port}",
-            "--actuators", "sim", "--camera", "sim", "--format", "json",
-        ])  # fmt: skip
-    finally:
-        sitl.stop()
+    """B1 against the PX4-preset SITL in lock-step (as tests/test_px4.py): its JSON output."""
+    res, sitl = lockstep_brick_flight(seed)
     assert res.exit_code == 0, res.output
     assert sitl.lockstep is not None and sitl.lockstep.free_runs == 0
     out: dict[str, Any] = json.loads(res.stdout)
