@@ -12,8 +12,14 @@ placing descent to the release radius, ``grasping`` / ``placing`` the dwells and
 ``descending`` the chained descent, ``spraying`` the segment and the valve close. ``queued`` (held for a battery
 swap), ``takeoff``, ``waiting`` and ``holding`` have no minimum: the schedule models none of them.
 
+``--per-task`` adds the brick UAVs' tasks one by one: each task's minimum, its done attempt flown without a
+hold (every phase but ``queued``, ``takeoff``, ``waiting``, ``holding``), its holds (``waiting`` + ``holding``,
+and of them the seconds mission control said were the ``site`` rule or the ``airspace``), its battery swap
+(``queued`` + ``takeoff``), and the makespan rebuilt from them against the schedule's. ``--vehicle`` flies
+another simulated vehicle (``ideal``: the first-order lag the project was tuned on; default ``arducopter``).
+
 Usage: python benchmarks/bench_schedule_gap.py [--walls pyramid,12m] [--fleet 1+1] [--seed 1]
-       [--schedule-time-s 60]
+       [--schedule-time-s 60] [--per-task] [--vehicle arducopter]
 """
 
 from __future__ import annotations
@@ -32,6 +38,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_fleet import WALLS
 
 from masonry.mission.fleet import fleet_for, with_fleet
+from masonry.mission.report import MissionReport
 from masonry.mission.sim_options import SimOptions
 from masonry.mission.simulate import SimulatedMission
 from masonry.planner import plan as make_plan
@@ -86,7 +93,62 @@ def min_phases_s(plan: Plan, cruise_altitude_m: float) -> dict[str, Counter[str]
     return out
 
 
-def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -> None:
+_HOLDS = ("waiting", "holding")
+_SWAP = ("queued", "takeoff")
+
+
+def per_task(rep: MissionReport, mins: dict[str, float], schedule_makespan_s: float, s_busy_s: float) -> None:
+    """The brick tasks one by one (minimum, flown without a hold, holds, swap) and the makespan rebuilt."""
+    print("| task | minimum | flown, no hold | excess | holds (site / airspace) | swap | task |")
+    print("|---|---|---|---|---|---|---|")
+    tot: Counter[str] = Counter()
+    bricks = sorted(
+        (t for t in rep.tasks if t.kind == "brick" and t.phases is not None and t.start_s is not None),
+        key=lambda t: t.start_s or 0.0,
+    )
+    for t in bricks:
+        assert t.phases is not None and t.start_s is not None and t.end_s is not None
+        ph = t.phases.as_dict()
+        holds = sum(ph[k] for k in _HOLDS)
+        swap = sum(ph[k] for k in _SWAP)
+        flown = sum(ph.values()) - holds - swap
+        by: Counter[str] = Counter()
+        for w in t.waits:
+            if w.cause.uav is not None and w.cause.what in ("site", "airspace"):
+                by[w.cause.what] += w.duration_s
+        row = {"min": mins[t.id], "flown": flown, "holds": holds, "site": by["site"], "air": by["airspace"]}
+        row |= {"swap": swap, "task": t.end_s - t.start_s}
+        tot.update(row)
+        print(
+            f"| {t.id} | {row['min']:.1f} s | {flown:.1f} s | {flown - row['min']:+.1f} s | {holds:.1f} s "
+            f"({by['site']:.1f} / {by['airspace']:.1f}) | {swap:.1f} s | {row['task']:.1f} s |"
+        )
+    print(
+        f"| all {len(bricks)} | {tot['min']:,.1f} s | {tot['flown']:,.1f} s | {tot['flown'] - tot['min']:+,.1f} s "
+        f"| {tot['holds']:,.1f} s ({tot['site']:,.1f} / {tot['air']:,.1f}) | {tot['swap']:,.1f} s "
+        f"| {tot['task']:,.1f} s |"
+    )
+    first = min((t.start_s for t in bricks if t.start_s is not None), default=0.0)
+    rest = rep.makespan_s - first - tot["task"]
+    print()
+    print(
+        f"makespan {rep.makespan_s:,.1f} s = first start {first:,.1f} + minimum {tot['min']:,.1f} + flown over "
+        f"the minimum {tot['flown'] - tot['min']:+,.1f} + holds {tot['holds']:,.1f} + swap {tot['swap']:,.1f} "
+        f"+ between and after its tasks {rest:,.1f}; schedule {schedule_makespan_s:,.1f} s = tasks {s_busy_s:,.1f} "
+        f"+ first start and empty flights {schedule_makespan_s - s_busy_s:,.1f}"
+    )
+    print()
+
+
+def run(
+    wall: str,
+    bricks: int,
+    adhesion: int,
+    seed: int,
+    time_limit_s: float,
+    show_tasks: bool = False,
+    vehicle: str | None = None,
+) -> None:
     bp = WALLS[wall][1]()
     fleet = fleet_for(bp, bricks, adhesion)
     bp = bp if fleet == bp.fleet else with_fleet(bp, fleet)
@@ -94,7 +156,12 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
     m = SimulatedMission.from_blueprint(
         bp,
         SimOptions(
-            brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, camera="geometric", reservation="site"
+            brick_uavs=bricks,
+            adhesion_uavs=adhesion,
+            seed=seed,
+            camera="geometric",
+            reservation="site",
+            vehicle=vehicle,
         ),
     )
     rep = m.run()
@@ -112,7 +179,7 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
         decomposition="auto",
     )
     s_tasks = {t.id: t for u in sched.uavs for t in u.tasks}
-    print(f"## {wall}, {bricks} + {adhesion}, seed {seed}")
+    print(f"## {wall}, {bricks} + {adhesion}, seed {seed}, vehicle {vehicle or 'arducopter (default)'}")
     print(
         f"simulated {rep.makespan_s:,.1f} s, schedule {sched.makespan_s:,.1f} s ({sched.status}, {time_limit_s:g} s)"
     )
@@ -133,6 +200,9 @@ def run(wall: str, bricks: int, adhesion: int, seed: int, time_limit_s: float) -
             if a > 0.05 or b > 0.05:
                 print(f"| {role} | {ph} | {a:,.0f} s | {b:,.0f} s | {a - b:+,.0f} s |")
     print()
+    if show_tasks:
+        brick_busy_s = sum(x.end_s - x.start_s for u in sched.uavs for x in u.tasks if x.id.startswith("B"))
+        per_task(rep, mins, sched.makespan_s, brick_busy_s)
     print(
         "| UAV | first start (schedule) | sum of its tasks (schedule) | between tasks on its pad | in the air | "
         "after its last task | lingering |"
@@ -183,10 +253,14 @@ def main() -> None:
     ap.add_argument("--fleet", default="1+1")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--schedule-time-s", type=float, default=60.0)
+    ap.add_argument(
+        "--per-task", action="store_true", help="the brick tasks one by one, the makespan rebuilt"
+    )
+    ap.add_argument("--vehicle", default=None, help="simulated vehicle preset (default: arducopter)")
     args = ap.parse_args()
     b, a = (int(x) for x in args.fleet.split("+"))
     for wall in args.walls.split(","):
-        run(wall, b, a, args.seed, args.schedule_time_s)
+        run(wall, b, a, args.seed, args.schedule_time_s, args.per_task, args.vehicle)
 
 
 if __name__ == "__main__":
