@@ -162,7 +162,6 @@ def test_a_stale_offset_at_the_end_of_the_displaced_descent_is_looked_at_again_b
         assert abs(truth.position_m[2] - b.position_m[2]) < 0.02, (b.id, truth.position_m)
 
 
-
 @pytest.mark.slow
 def test_in_4_m_s_wind_the_px4_rotated_bond_completes_with_every_brick_on_its_course() -> None:
     """Issue 30's done-when in wind: the px4 model, the running bond turned 30 degrees, 4 m/s with light
@@ -179,6 +178,7 @@ def test_in_4_m_s_wind_the_px4_rotated_bond_completes_with_every_brick_on_its_co
         truth = mission.world.bricks[b.id]
         assert truth.state == "placed"
         assert abs(truth.position_m[2] - b.position_m[2]) < 0.02, (b.id, truth.position_m)
+
 
 def test_it_is_on_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> None:
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).side_look is True  # (it acts only with align_on_wall)
