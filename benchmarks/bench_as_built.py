@@ -173,6 +173,11 @@ def run_one(
     report = mission.run()
     tally.runs += 1
     tally.completed += int(report.completed)
+    if not report.completed:
+        # which mission did not complete, and its stuck tasks: what bench_as_built_trace.py follows
+        print(
+            f"  not completed: {vehicle} {bp.name} seed {seed} wind {wind_mps:g}: {', '.join(report.stuck)}"
+        )
     world = mission.world
     done = {a.task_id for a in mission.control.history if a.status == "done"}
     for att in report.attempts:
