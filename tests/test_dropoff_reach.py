@@ -7,7 +7,12 @@ import random
 
 import pytest
 
-from masonry.fsm.dropoff_reach import DropoffReach, resting_error_m
+from masonry.blueprint_gen import running_bond
+from masonry.fsm.config import UavConfig
+from masonry.fsm.dropoff_reach import SWING_WINDOW_S, DropoffReach, resting_error_m, swing_margin_m
+from masonry.mission.simulate import simulate
+from masonry.sim import Faults
+from masonry.sim.wind import WindConfig
 
 R_PL = 0.015  # the paper's r_pl (UavConfig.placement_radius_m)
 
@@ -64,3 +69,48 @@ def test_the_error_at_rest_is_the_horizontal_one_the_brick_rests_on_its_support(
     # the case study's B0 on a real PX4 (issue 29): released on a tick 2.9 cm above the drop-off, 15.0 mm to the
     # side; the brick came to rest 14.7 mm off its place (the simulated world's measure), not 32.7 mm
     assert resting_error_m((-0.01496, -0.0001, 0.02909)) == pytest.approx(0.01496, abs=1e-5)
+
+
+def test_the_swing_is_the_fastest_horizontal_speed_about_the_reference_over_the_last_second() -> None:
+    reach = DropoffReach(1.0)
+    assert reach.swing(0.0, (0.10, 0.0, -0.3), (0.0, 0.0, -0.3)) == pytest.approx(
+        0.10
+    )  # the height is the leg's
+    # a leg's own motion is no swing: 0.3 m/s along its reference, 0.03 m/s off it
+    assert reach.swing(0.1, (0.3, 0.03, 0.0), (0.3, 0.0, 0.0)) == pytest.approx(
+        0.10
+    )  # the 0.10 still in view
+    assert reach.swing(0.2 + SWING_WINDOW_S, (0.02, 0.0, 0.0), (0.0, 0.0, 0.0)) == pytest.approx(
+        0.02
+    )  # forgotten
+    reach.reset()
+    assert reach.swing(3.0, (0.0, 0.01, 0.0), (0.0, 0.0, 0.0)) == pytest.approx(0.01)
+
+
+def test_the_release_radius_shrinks_with_the_swing_to_its_floor_for_the_patience_only() -> None:
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0))  # the defaults: every preset's
+    assert swing_margin_m(cfg, 0.012, 0.0) == 0.0  # calm air at the drop-off (ideal, 12 mm/s at most): r_pl
+    assert swing_margin_m(cfg, 0.04, 0.0) == pytest.approx(cfg.release_lead_s * 0.02)
+    floor_m = cfg.placement_radius_m - cfg.release_floor_m  # a gust's 0.1 m/s: down to the floor, no lower
+    assert swing_margin_m(cfg, 0.10, -3.0) == pytest.approx(floor_m)
+    assert swing_margin_m(cfg, 0.50, cfg.release_patience_s) == pytest.approx(floor_m)
+    # past the patience, the paper's r_pl again: a descent fails no more often than before
+    assert swing_margin_m(cfg, 0.50, cfg.release_patience_s + 0.1) == 0.0
+    assert swing_margin_m(UavConfig("b", "brick", (0.0, 0.0, 0.0), release_lead_s=0.0), 0.5, 0.0) == 0.0
+
+
+def test_in_4_m_s_wind_the_bricks_land_nearer_their_place_than_on_the_one_tick_test() -> None:
+    # the motion-capture vehicle (exact position) in 4 m/s, light turbulence, a course of four: on the paper's
+    # one-tick test (release_lead_s 0) the bricks were let go at the 1.5 cm disc's edge
+    bp = running_bond(1, 4, yaw_rad=math.radians(30.0), clearance_m=1.0, brick_uavs=1, adhesion_uavs=1)
+    wind = Faults(wind=WindConfig(speed_mps=4.0, turbulence="light"))
+    errors_mm = {}
+    for lead_s in (None, 0.0):
+        config = (
+            None if lead_s is None else UavConfig("template", "brick", (0.0, 0.0, 0.0), release_lead_s=lead_s)
+        )
+        report = simulate(bp, seed=0, faults=wind, uav_config=config)
+        assert report.completed
+        errors_mm[lead_s] = sorted(round(e * 1000.0, 1) for e in report.placement_error_m.values())
+    print(errors_mm)
+    assert max(errors_mm[None]) < max(errors_mm[0.0])
