@@ -24,7 +24,7 @@ tick inside r_pl: at its edge, 11-15 mm off, in any direction, so that two neigh
 (``ideal``, whose position is exact, as much as the others). So r_pl is shortened while the effector swings: by
 ``release_lead_s`` times its swing (the fastest horizontal speed about the descent's reference over the last
 ``SWING_WINDOW_S``: at the turning point of a swing, where it is slow, it is farthest off) over
-``release_still_mps``, down to ``release_floor_m`` (0.8 cm), for ``release_patience_s`` past the descent's end;
+``settle_speed_mps`` (the hover's, 0.08 m/s), down to ``release_floor_m`` (0.8 cm), for ``release_patience_s`` past the descent's end;
 after that the paper's r_pl again, so that a descent fails no more often than before. In calm air the test is the
 paper's. The brick's own carry offset (the conical guide's residual, up to 6 mm) and the release's scatter stay:
 the radius is not all of the placement's error (docs/performance/as-built.md). Only the one-tick test is so
@@ -68,11 +68,11 @@ def swing_margin_m(cfg: UavConfig, swing_mps: float, past_end_s: float) -> float
     """How much nearer than r_pl (m) the effector must be at a release while it swings at ``swing_mps`` (the
     fastest horizontal speed about its reference over the last ``SWING_WINDOW_S``, :meth:`DropoffReach.swing`),
     ``past_end_s`` after its descent's end (negative before): ``release_lead_s`` times the swing's excess over
-    ``release_still_mps``, at most down to ``release_floor_m``; 0 for a still effector, and 0 from
+    ``settle_speed_mps`` (slower is a hover), at most down to ``release_floor_m``; 0 for a still effector, and 0 from
     ``release_patience_s`` past the end (see the module docstring)."""
     if past_end_s > cfg.release_patience_s:
         return 0.0
-    margin_m = cfg.release_lead_s * max(0.0, swing_mps - cfg.release_still_mps)
+    margin_m = cfg.release_lead_s * max(0.0, swing_mps - cfg.settle_speed_mps)
     return min(margin_m, max(0.0, cfg.placement_radius_m - cfg.release_floor_m))
 
 
