@@ -155,11 +155,12 @@ class UavConfig:
     # Brick placement
     placement_radius_m: float = _T.placement_radius_m  # r_pl: release when the effector is this close to it
     # Issue 30, in wind (masonry.fsm.dropoff_reach.swing_margin_m): r_pl shrinks by release_lead_s times the
-    # effector's swing (its fastest horizontal speed about the reference over the last second) over
-    # settle_speed_mps (a swing slower than that is a hover), to no less than release_floor_m, for
-    # release_patience_s past the descent's end (then the paper's r_pl again): a gust's swing lets go within 0.8 cm,
-    # not at the 1.5 cm disc's edge. release_lead_s 0: off
-    release_lead_s: float = 0.3
+    # effector's swing (its fastest horizontal speed about the reference over the last second, within 5 cm of the
+    # drop-off) over release_still_mps, to no less than release_floor_m, for release_patience_s past the descent's
+    # end (then the paper's r_pl again): a gust's swing lets go within 0.8 cm, not at the 1.5 cm disc's edge; calm
+    # air keeps the paper's test. release_lead_s 0: off
+    release_lead_s: float = 0.2
+    release_still_mps: float = 0.04
     release_floor_m: float = 0.008
     release_patience_s: float = 3.5
     release_timeout_s: float = 4.0  # after the descent's t_f; then hover above and try again

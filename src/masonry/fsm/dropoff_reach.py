@@ -24,9 +24,10 @@ tick inside r_pl: at its edge, 11-15 mm off, in any direction, so that two neigh
 (``ideal``, whose position is exact, as much as the others). So r_pl is shortened while the effector swings: by
 ``release_lead_s`` times its swing (the fastest horizontal speed about the descent's reference over the last
 ``SWING_WINDOW_S``: at the turning point of a swing, where it is slow, it is farthest off) over
-``settle_speed_mps`` (the hover's, 0.08 m/s), down to ``release_floor_m`` (0.8 cm), for ``release_patience_s`` past the descent's end;
-after that the paper's r_pl again, so that a descent fails no more often than before. In calm air the test is the
-paper's. The brick's own carry offset (the conical guide's residual, up to 6 mm) and the release's scatter stay:
+``release_still_mps`` (0.04 m/s), counted within ``SWING_NEAR_M`` of the drop-off, down to ``release_floor_m``
+(0.8 cm), for ``release_patience_s`` past the descent's end; after that the paper's r_pl again, so that a descent
+fails no more often than before. In calm air the test is mostly the paper's (a UAV moving faster than
+``release_still_mps`` near its drop-off waits there too: the multi-UAV walls' pinned schedules moved). The brick's own carry offset (the conical guide's residual, up to 6 mm) and the release's scatter stay:
 the radius is not all of the placement's error (docs/performance/as-built.md). Only the one-tick test is so
 shortened: on a noisy position source (a ``gate_window_s``, the ``px4`` preset) the velocity's own noise (0.03-0.4
 m/s at the drop-off on the px4 model) reads as a swing at every tick, and a release held to 0.8 cm waited past the
@@ -48,11 +49,22 @@ if TYPE_CHECKING:
     from masonry.fsm.config import UavConfig
     from masonry.ports import Telemetry
 
-__all__ = ["SWING_WINDOW_S", "DropoffReach", "dropoff_error_m", "resting_error_m", "swing_margin_m"]
+__all__ = [
+    "SWING_NEAR_M",
+    "SWING_WINDOW_S",
+    "DropoffReach",
+    "dropoff_error_m",
+    "resting_error_m",
+    "swing_margin_m",
+]
 
 #: The swing measured is the fastest horizontal speed about the reference over this last stretch (s): a gust's
 #: swing turns in about a second, and its turning point, slow, is where it is farthest off.
 SWING_WINDOW_S = 1.0
+#: ... counted only at the ticks the effector is this near its drop-off (m): a descent begins with the UAV still
+#: settling from its leg (up to ``settle_speed_mps``: ``place_align``'s gate), which is no gust's swing; counted,
+#: it moved the case study's calm releases by a tick.
+SWING_NEAR_M = 0.05
 
 
 def resting_error_m(error_m: Sequence[float]) -> float:
@@ -68,11 +80,11 @@ def swing_margin_m(cfg: UavConfig, swing_mps: float, past_end_s: float) -> float
     """How much nearer than r_pl (m) the effector must be at a release while it swings at ``swing_mps`` (the
     fastest horizontal speed about its reference over the last ``SWING_WINDOW_S``, :meth:`DropoffReach.swing`),
     ``past_end_s`` after its descent's end (negative before): ``release_lead_s`` times the swing's excess over
-    ``settle_speed_mps`` (slower is a hover), at most down to ``release_floor_m``; 0 for a still effector, and 0 from
+    ``release_still_mps``, at most down to ``release_floor_m``; 0 for a still effector, and 0 from
     ``release_patience_s`` past the end (see the module docstring)."""
     if past_end_s > cfg.release_patience_s:
         return 0.0
-    margin_m = cfg.release_lead_s * max(0.0, swing_mps - cfg.settle_speed_mps)
+    margin_m = cfg.release_lead_s * max(0.0, swing_mps - cfg.release_still_mps)
     return min(margin_m, max(0.0, cfg.placement_radius_m - cfg.release_floor_m))
 
 
@@ -134,7 +146,11 @@ def dropoff_error_m(uav: BrickUav, tel: Telemetry, reach: DropoffReach) -> float
         if not reach.reached(uav._now_s, error_m, tracking_z_m, cfg.placement_radius_m):
             return None
         return resting_error_m(error_m)
+    error = uav.effector.distance_m(tel, target)
+    if (
+        error > SWING_NEAR_M
+    ):  # the descent's way down, and the UAV still settling from its leg: no swing counted
+        return None
     swing_mps = reach.swing(uav._now_s, tel.velocity_mps, uav.nav.reference(uav._now_s)[1])
     margin_m = swing_margin_m(cfg, swing_mps, uav._now_s - uav.nav.end_s)
-    error = uav.effector.distance_m(tel, target)
     return error if error + margin_m <= cfg.placement_radius_m else None
