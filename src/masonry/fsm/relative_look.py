@@ -8,10 +8,11 @@ brick's top-face centre less the neighbour's, holds no position error at all (on
 vector of a few decimetres by a fraction of a degree). Over the frames of the climb each neighbour seen with the
 placed brick gathers these offsets in a :class:`~masonry.perception.estimation.PoseWindow` (the paper's filter:
 their mean, and its confidence C); at the end every neighbour seen in two frames or more is reported with its
-offset and its number of frames (mission control combines them over the wall), and the neighbour seen most (ties: the nearest in the design, its support
-or course neighbour) is the reference. Anchored to that neighbour's designed top-face centre, the offset's distance
-from the designed offset is the brick's deviation from the design *relative to the wall*: how far off its designed
-offset to the brick beside or under it the brick was built, which the glue joint takes, measured to camera noise.
+offset and its number of frames (mission control combines them over the wall), and the neighbour seen most (ties:
+the nearest in the design, its support or course neighbour) is the reference. Anchored to that neighbour's designed
+top-face centre, the offset's distance from the designed offset is the brick's deviation from the design *relative
+to the wall*: how far off its designed offset to the brick beside or under it the brick was built, which the glue
+joint takes, measured to camera noise.
 
 A brick counts as on the wall when it is seen within ``REFERENCE_M`` of its design, as for the wall alignment
 (:mod:`masonry.fsm.wall_align`): a brick on the pallet or on another UAV's magnet is no reference. A blueprint

@@ -87,8 +87,8 @@ class AsBuiltPose:
 
     def to_dict(self, digits: int | None = None) -> dict[str, object]:
         """``{position_m, yaw_rad, deviation_m, confidence}`` and, with a neighbour seen, ``{relative_to,
-        relative_offset_m, relative_deviation_m}`` (and exact, ``relative_offsets``) (``digits``: metres and radians rounded to it, the confidence to
-        3; None: exact, the form of the wire and the journal)."""
+        relative_offset_m, relative_deviation_m}`` (``digits``: metres and radians rounded to it, the confidence to
+        3; None: exact, the form of the wire and the journal, which alone carry ``relative_offsets``)."""
 
         def r(v: float, nd: int | None = digits) -> float:
             return v if nd is None else round(v, nd)
