@@ -30,7 +30,7 @@ def test_one_uav_per_four_of_a_role_is_sent_for_an_early_swap_at_a_time() -> Non
     assert swap_due(mc, "glue-1")
     mc.uavs["glue-2"].battery = low
     assert not swap_due(mc, "glue-2")  # two of a role: one at a time
-    assert mc.uavs["glue-1"].battery < SWAP_EARLY < TOP_UP_FRACTION  # given nothing, it is swapped on its pad
+    assert TOP_UP_FRACTION == SWAP_EARLY  # given nothing, a UAV sent home early is swapped on its pad
 
     alone = SimulatedMission.from_blueprint(running_bond(2, 8, brick_uavs=1, adhesion_uavs=1), seed=0).control
     alone.uavs["brick-1"].battery = alone.uavs["glue-1"].battery = 0.2

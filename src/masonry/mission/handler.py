@@ -10,6 +10,8 @@ With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the han
 below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
 the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
 the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
+Landed with nothing to do and under ``top_up_fraction``, the pack is swapped on the pad (docs/dispatch.md,
+"Battery swaps one after another").
 
 Airspace (docs/safety.md): the columns over the sites, asked for and freed by
 :class:`~masonry.mission.handler_columns.ColumnRequests`, a base class of the handler.
@@ -70,8 +72,9 @@ from masonry.spares import Spare
 log = logging.getLogger(__name__)
 
 
-#: An idle UAV on its pad with less charge than this has its pack swapped there (``UavHandler.top_up_fraction``).
-TOP_UP_FRACTION = 0.75
+#: An idle UAV on its pad with less charge than this has its pack swapped there (``UavHandler.top_up_fraction``;
+#: the line under which mission control sends a UAV home early, ``masonry.mission.swap_stagger.SWAP_EARLY``).
+TOP_UP_FRACTION = 0.5
 
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
