@@ -164,6 +164,7 @@ def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float
         if msg.battery >= SWAP_EARLY > (link.battery if link.battery is not None else 1.0):
             mc.wake()  # a fresh pack (swap_stagger): it may be dispatched again
         link.battery = msg.battery
+    link.swaps_batteries = msg.swaps_batteries
     mc.lingers.heard(msg.sender, now_s, msg.battery, airborne=not msg.on_pad)
     if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
         mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)

@@ -359,6 +359,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                 else min(1.0, max(0.0, float(self._report_battery()))),
                 wind_mps=self._wind_reading(),
                 max_wind_mps=self._max_wind_mps,
+                swaps_batteries=self.swaps_batteries,
                 carrying=f.carrying,
                 flying_home=f.flying_home,
                 on_pad=f.on_pad,

@@ -157,6 +157,8 @@ def encode(message: Message) -> bytes:
             body["wind_mps"] = message.wind_mps
         if message.max_wind_mps is not None:
             body["max_wind_mps"] = message.max_wind_mps
+        if message.swaps_batteries:
+            body["swaps_batteries"] = True
         body.update(_facts(message))
     elif isinstance(message, Assign):
         body.update(
