@@ -78,7 +78,9 @@ class SwapStagger:
         if self._expected_s is None:
             self._expected_s = estimate_durations_s(mc.plan, mc.fleet, timing=mc.timing or DEFAULT_TIMING)
         done = mc.dispatcher.done
-        left_s = sum(self._expected_s.get(t.id, 0.0) for t in mc.plan.tasks if t.kind == role and t.id not in done)
+        left_s = sum(
+            self._expected_s.get(t.id, 0.0) for t in mc.plan.tasks if t.kind == role and t.id not in done
+        )
         working = sum(1 for u in mc.uavs.values() if u.spec.role == role and not u.lost)
         return left_s / max(1, working)
 
