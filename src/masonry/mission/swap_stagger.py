@@ -37,7 +37,7 @@ __all__ = ["RESERVE", "SWAP_EARLY", "SWAP_SHARE", "SwapStagger", "swap_due"]
 
 #: A UAV reporting less charge than this may be sent home for its swap early (above the handler's reserve).
 SWAP_EARLY = 0.5
-#: At most one in this many UAVs of a role (at least one) are sent home for their swap at a time.
+#: At most one in this many UAVs of a role are sent home for their swap at a time (a role of fewer: none).
 SWAP_SHARE = 4
 #: The handler's battery reserve (``UavHandler(reserve_fraction=0.4)``): the pack's flight left is counted to it.
 RESERVE = 0.4
@@ -104,6 +104,8 @@ def swap_due(mc: MissionControl, name: str) -> bool:
     if link.lost or not link.swaps_batteries or link.battery is None or link.battery >= SWAP_EARLY:
         return False
     role = [n for n, u in mc.uavs.items() if u.spec.role == link.spec.role and n != name and not u.lost]
+    if len(role) + 1 < SWAP_SHARE:
+        return False  # a few of a role: their swaps barely overlap, and sent early each pack flies less
     sent = sum(1 for n in role if book.is_sent(mc, n))
     if sent >= max(1, (len(role) + 1) // SWAP_SHARE) or sent >= len(role):
         return False  # enough of its role away for theirs, or none other there to work
