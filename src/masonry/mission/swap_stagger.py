@@ -4,18 +4,21 @@ Every UAV of a fleet flies from t = 0 without landing, so, left alone, every pac
 handlers hold the UAVs' next tasks for their swaps at once: on the 12 m wall at 8 + 4 every UAV swapped between
 720 and 980 s, three to five tasks waiting at a time (issue 27, docs/performance/fleet.md). Mission control hears
 every UAV's battery, so it spreads the swaps (:func:`swap_due`): a UAV reporting less than :data:`SWAP_EARLY` is
-sent home (given no task) while fewer than one in :data:`SWAP_SHARE` of the UAVs of its role (at least one) are
-sent, and while another UAV of its role is there to work. Given nothing, it flies home and lands, and its handler
-has the ground crew swap the pack while it is idle on its pad
+sent home (given no task) while fewer than one in :data:`SWAP_SHARE` of the UAVs of its role are sent, and
+while another UAV of its role is there to work. Given nothing, it flies home and lands, and its handler has the
+ground crew swap the pack while it is idle on its pad
 (:attr:`masonry.mission.handler.UavHandler.top_up_fraction`); with the fresh pack it is dispatched again.
 
 A UAV once sent stays sent until a heartbeat reports its fresh pack (:class:`SwapStagger`): counting as "away"
 every UAV of the role under the line that happened to be between two tasks let a UAV landing for its swap take a
-task again as soon as another finished one, and the next be sent instead (12 m wall, 6 + 3, seed 3: four brick
+task again as soon as another finished one, and the next be sent instead (12 m wall, 6 + 3, seed 3: three brick
 UAVs flew home and back without a swap, +125 s). Never sent: a UAV whose heartbeats do not say a ground crew
-swaps its pack (``swaps_batteries``: it would sit on its pad, never swapped), a UAV alone in its role (the swap
-would cost the wall as much now as later), and a UAV whose pack, above the handler's reserve at the drain its
-heartbeats show, covers its share of the work of its role left (the mission ends before it runs low).
+swaps its pack (``swaps_batteries``: it would sit on its pad, never swapped), a UAV of a role of fewer than
+:data:`SWAP_SHARE` (alone, the swap costs the wall as much now as later; two or three swap with little overlap
+anyway, and a pack swapped early flies less: 12 m wall, 2 + 1, +80 s), a UAV while another of its role waits on
+its pad with a good pack and no task (:meth:`SwapStagger.spare`), and a UAV whose pack, above the handler's
+reserve at the drain its heartbeats show, covers its share of the work of its role left (the mission ends before
+it runs low).
 
 Nothing here relaxes the battery reserve: a UAV given a task its battery does not cover still has it held for a
 swap by its handler (docs/state-machines.md, "Battery budget"). Pure bookkeeping over mission control's state:
