@@ -11,7 +11,7 @@ import pytest
 from masonry.blueprint import UavSpec
 from masonry.errors import InputError
 from masonry.mission.control import MissionControl
-from masonry.mission.fleet_clock import LEAD_S, FleetClock
+from masonry.mission.fleet_clock import HOLD_HEARTBEATS, LEAD_S, MAX_HOLD_WALL_S, FleetClock
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, Progress, encode
 from masonry.planner.tasks import BrickTask, Plan
@@ -62,6 +62,26 @@ def test_the_slowest_live_uav_sets_the_pace() -> None:
     clock = FleetClock(5.0, monotonic=wall)
     fly(clock, wall, {"brick-1": 5.0, "glue-1": 2.0}, 30.0)
     assert clock.now_s() == pytest.approx(60.0, abs=LEAD_S + 0.1)
+
+
+def test_a_lock_step_sitl_slower_than_the_wall_holds_the_mission_between_its_heartbeats() -> None:
+    """A SITL in lock-step goes as fast as its loaded client: x0.8 where x4 was asked, a heartbeat every 1.25 s of
+    wall, longer than ``hold_wall_s`` (1 s). It holds the clock for three of its own heartbeats at its measured
+    rate, so the mission keeps its pace; it used to drop out between heartbeats and be anchored anew ahead of
+    itself each time, the mission at the adhesion UAV's x4 (240 s here)."""
+    wall = Wall()
+    clock = FleetClock(4.0, monotonic=wall)
+    fly(clock, wall, {"brick-1": 0.8, "glue-1": 4.0}, 60.0)
+    # its lead, and its first interval not known yet (its first silence let the mission on at the glue's x4)
+    assert clock.now_s() == pytest.approx(0.8 * 60.0, abs=5.0)
+    before = clock.now_s()
+    wall.t += HOLD_HEARTBEATS * 1.25 - 0.05  # silent: still holding, three of its heartbeats at its rate
+    assert clock.now_s() == pytest.approx(before, abs=LEAD_S)
+    wall.t += 1.0  # gone: the clock runs on at the time scale, so its heartbeat timeout fires
+    assert clock.now_s() == pytest.approx(before + 4.0 * 0.95, abs=LEAD_S)
+    slow = FleetClock(4.0, monotonic=wall)
+    fly(slow, wall, {"brick-1": 0.05}, 60.0)  # 20 s of wall a heartbeat: held at most MAX_HOLD_WALL_S
+    assert slow.now_s() > 0.05 * 60.0 + 4.0 * (20.0 - MAX_HOLD_WALL_S) - LEAD_S
 
 
 def test_on_a_real_vehicle_mission_time_is_the_wall_clock() -> None:
