@@ -148,11 +148,11 @@ def _fly_mission(
         raise typer.Exit(1)
 
 
-def _lockstep_of(adapters: Any) -> dict[str, int] | None:
+def _lockstep_of(adapters: object) -> dict[str, int] | None:
     """How the UAV kept lock-step with a SITL that asked for it (``masonry sitl --lockstep``,
     docs/sitl-lockstep.md): the grants it sent and those not answered in time; None: no lock-step (a real
     autopilot, ArduCopter's SITL, ``--sim``)."""
     paced = getattr(getattr(adapters, "clock", None), "base", None)  # wiring.ZeroedClock over a LockstepClock
-    if not getattr(paced, "lockstep", False):
+    if paced is None or not getattr(paced, "lockstep", False):
         return None
     return {"grants": int(paced.grants), "late_replies": int(paced.late_replies)}
