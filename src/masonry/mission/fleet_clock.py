@@ -18,7 +18,10 @@ slowest live UAV's clock advances, so a slowed SITL slows the mission equally:
   heartbeat periods at the rate measured for it (at most :data:`MAX_HOLD_WALL_S`): with ``hold_wall_s`` alone it
   dropped out between two of its heartbeats, mission time ran on at the other UAVs' pace and anchored it anew
   ahead each time (a 45 s brick flight took 90 s of mission time);
-- a UAV heard again after a silence, or whose clock went backwards (its autopilot rebooted), is anchored anew.
+- a UAV heard again after a silence, or whose clock went backwards (its autopilot rebooted), is anchored anew;
+- a silence is counted only while the clock is read: mission control's own process left unrun for a while (a
+  loaded machine) has the UAVs' heartbeats of that while waiting in its queue, not missing
+  (:data:`UNLOOKED_S`).
 
 On a real vehicle the autopilots' clocks run at the wall's rate, so with ``time_scale`` 1 this is the wall clock
 (docs/hardware.md). The wall clock is read through ``monotonic`` (injected: tests hold it).
@@ -43,6 +46,11 @@ MIN_HOLD_WALL_S = 1.0
 #: The longest a UAV slower than ``time_scale`` holds the clock (wall s) for its :data:`HOLD_HEARTBEATS`: a UAV
 #: measured slower than 0.3 of the wall still releases it this long after its last heartbeat.
 MAX_HOLD_WALL_S = 10.0
+#: A gap (wall s) between two readings of the clock longer than this is the reading process left unrun (mission
+#: control's loop reads it every tick, 50 ms): the UAVs' heartbeats of that while wait unread in its queue, so the
+#: gap past this does not count as their silence (it let mission time jump at ``time_scale`` of the wall, and
+#: anchored each UAV anew ahead of itself).
+UNLOOKED_S = 0.5
 #: Own seconds between two heartbeats of a UAV (``masonry fly``'s heartbeat period).
 HEARTBEAT_PERIOD_S = 1.0
 
@@ -69,6 +77,8 @@ class FleetClock:
         lead_s: how far past its last heartbeat a UAV's time is extrapolated (mission seconds).
         hold_wall_s: a UAV silent for longer (wall seconds) stops holding the clock (None: from
             :data:`HOLD_HEARTBEATS` and ``time_scale``).
+        unlooked_s: a longer gap (wall s) between two readings is the reader left unrun: not counted as the
+            UAVs' silence (:data:`UNLOOKED_S`; more for a reader that reads less often).
         monotonic: the wall clock (s).
     """
 
@@ -79,6 +89,7 @@ class FleetClock:
         start_s: float = 0.0,
         lead_s: float = LEAD_S,
         hold_wall_s: float | None = None,
+        unlooked_s: float = UNLOOKED_S,
         monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         if not time_scale > 0.0:
@@ -88,6 +99,7 @@ class FleetClock:
         self.hold_wall_s = (
             max(MIN_HOLD_WALL_S, HOLD_HEARTBEATS / time_scale) if hold_wall_s is None else hold_wall_s
         )
+        self.unlooked_s = unlooked_s
         self._monotonic = monotonic
         self._tracks: dict[str, _Track] = {}
         self._now = start_s
@@ -118,6 +130,11 @@ class FleetClock:
     def now_s(self) -> float:
         """Mission time now (s): the slowest live UAV's, or ``time_scale`` of the wall with none live."""
         wall = self._monotonic()
+        unlooked_s = wall - self._wall - self.unlooked_s
+        if unlooked_s > 0.0:  # this process was not run (a loaded machine): not a silence of the UAVs
+            for t in self._tracks.values():
+                t.wall_s += unlooked_s
+                t.wall0_s += unlooked_s
         bound = math.inf
         for t in self._tracks.values():
             since_s = wall - t.wall_s
