@@ -72,7 +72,7 @@ def test_the_slowest_live_uav_sets_the_pace() -> None:
 
 
 def test_a_lock_step_sitl_slower_than_the_wall_holds_the_mission_between_its_heartbeats() -> None:
-    """A SITL in lock-step goes as fast as its loaded client: x0.8 where x4 was asked, a heartbeat every 1.25 s of
+    """A SITL in lock-step goes as fast as its loaded client: say x0.8 where x4 was asked, a heartbeat every 1.25 s of
     wall, longer than ``hold_wall_s`` (1 s). It holds the clock for three of its own heartbeats at its measured
     rate, so the mission keeps its pace; it used to drop out between heartbeats and be anchored anew ahead of
     itself each time, the mission at the adhesion UAV's x4 (240 s here)."""

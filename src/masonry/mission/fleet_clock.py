@@ -14,7 +14,7 @@ slowest live UAV's clock advances, so a slowed SITL slows the mission equally:
   backwards; with no UAV heard (before they join, or all silent) it runs at ``time_scale`` of the wall, so the
   heartbeat and start-up timeouts still fire for UAVs that fell silent;
 - a UAV whose clock runs slower than ``time_scale`` (a SITL in lock-step, ``masonry sitl --lockstep``, goes only
-  as fast as its loaded client: x0.8 where x4 was asked) holds the clock for :data:`HOLD_HEARTBEATS` of its own
+  as fast as its loaded client: say x0.8 where x4 was asked) holds the clock for :data:`HOLD_HEARTBEATS` of its own
   heartbeat periods at the rate measured for it (at most :data:`MAX_HOLD_WALL_S`): with ``hold_wall_s`` alone it
   dropped out between two of its heartbeats, mission time ran on at the other UAVs' pace and anchored it anew
   ahead each time (a 45 s brick flight took 90 s of mission time);
