@@ -172,6 +172,14 @@ class SitlLockstep:
         now_ms = max(self.grant_ms, round(sitl.sim_time_s * 1000.0))
         sitl._conn.mav.system_time_send(time.time_ns() // 1000, now_ms)
 
+    def summary(self) -> str:
+        """One line on how the lock-step went (``masonry sitl`` prints it when it stops): the grants taken, the
+        times the client fell silent for ``wait_s`` (the SITL ran free), and the simulated time reached."""
+        return (
+            f"lock-step: {self.grants} grants, ran free {self.free_runs} times (its client silent for "
+            f"{self.wait_s:g} s of wall), at {self._sitl.sim_time_s:.2f} s simulated"
+        )
+
     def wait(self, timeout_s: float) -> None:
         """Wait up to ``timeout_s`` of wall for the next datagram from the client (a grant ends a hold at once)."""
         sock = getattr(self._sitl._conn, "port", None)  # pymavlink's udpout socket
