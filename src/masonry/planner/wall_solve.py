@@ -27,8 +27,6 @@ from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 Vec2 = tuple[float, float]
 
@@ -88,6 +86,10 @@ def solve(
     ``priors``: brick id -> (a direct measurement of its centre, its variance per axis), for bricks among those
     solved (the world-frame looks; others are ignored). ``variance_of``: the bricks whose variance to return.
     """
+    # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
     sightings = [s for s in sightings if s.offsets]
     root = _roots(fixed, sightings)
     free = sorted(b for b in root if b not in fixed)
