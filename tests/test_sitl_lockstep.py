@@ -14,8 +14,8 @@ from typing import Any
 import pytest
 
 from masonry.adapters.lockstep import LOCKSTEP_TEXT, LockstepClock
-from masonry.adapters.mavlink import MavlinkFlightController
-from masonry.adapters.sitl import MavlinkSitl, free_udp_port
+from masonry.adapters.mavlink import MSG_LOCAL_POSITION_NED, MavlinkFlightController
+from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.adapters.sitl_lockstep import SitlLockstep
 from masonry.cli.hardware import build_sitl
 from own_sitl_flight import lockstep_brick_flight
@@ -50,6 +50,49 @@ def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() ->
     assert texts == [LOCKSTEP_TEXT, LOCKSTEP_TEXT]
     with pytest.raises(ValueError, match="must be positive"):
         SitlLockstep(sitl, wait_s=0.0)
+
+
+class _Sent:
+    """A stand-in for pymavlink's ``mav``: keeps what each ``*_send`` was called with."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, tuple[Any, ...]]] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return lambda *args: self.calls.append((name, args))
+
+    def positions(self) -> list[tuple[Any, ...]]:
+        return [args for name, args in self.calls if name == "local_position_ned_send"]
+
+
+def _granted(sitl: MavlinkSitl, grant_ms: int, wall_s: float) -> None:
+    assert sitl.lockstep is not None
+    sitl.lockstep.grant(grant_ms)
+    sitl.lockstep.run(1.0, wall_s)  # room for the whole grant: it runs to it
+    sitl.lockstep.reply()  # the state at the grant, then the reply
+
+
+def test_a_command_between_steps_does_not_change_the_noise_the_streams_send() -> None:
+    # a command between two physics steps (the arming, PX4's take-off on its first climb setpoint) clears the
+    # vehicle's own telemetry sample; a stream sent before the next step (its wall rate decides whether one is)
+    # drew the next sample, and every later step's noise shifted by it (runs of the same lock-step flight
+    # placed 12.7, 9.0 and 7.0 mm). It sends the step's sample: what follows is the same either way.
+    sitls = [
+        MavlinkSitl(free_udp_port(), config=SitlConfig(vehicle="px4"), lockstep_wait_s=1.0) for _ in "ab"
+    ]
+    sent = [_Sent(), _Sent()]
+    for sitl, mav in zip(sitls, sent):
+        sitl._conn = SimpleNamespace(mav=mav)
+        _granted(sitl, 600, wall_s=0.0)  # (the EKF streams its position after 0.5 s)
+        sitl.vehicle.arm()
+    sitls[1]._send_stream(
+        MSG_LOCAL_POSITION_NED
+    )  # the stream's wall rate: between the steps, in one run only
+    assert sent[1].positions()[-1] == sent[0].positions()[-1]  # the state at 0.6 s, as the reply sent it
+    for sitl in sitls:
+        _granted(sitl, 800, wall_s=0.1)
+    assert sitls[0].sim_time_s == pytest.approx(0.8) and sitls[1].vehicle.armed
+    assert sent[1].positions()[-1] == sent[0].positions()[-1]  # the same noise at 0.8 s
 
 
 def _flight(sitl: MavlinkSitl) -> tuple[MavlinkFlightController, LockstepClock]:
