@@ -157,6 +157,35 @@ def test_a_silent_client_cannot_stall_the_sitl() -> None:
         sitl.stop()
 
 
+def test_the_velocity_loop_judges_its_position_on_the_autopilots_time_in_lock_step() -> None:
+    # PX4's velocity loop is the client's (acceleration setpoints) while the position it closes on is fresh; a
+    # client the machine left unrun 0.5 s after a grant's reply judged it stale on the wall and sent that step as
+    # a velocity setpoint (the flight went another way). In lock-step the position is the state at the grant.
+    sitl = MavlinkSitl(
+        free_udp_port(), config=SitlConfig(autopilot="px4"), time_scale=50.0, lockstep_wait_s=60.0
+    )
+    sitl.start()
+    try:
+        fc, clock = _flight(sitl)
+        try:
+            assert fc.velocity_loop is not None
+            wall_age = fc.position_age_s  # running free: the wall's age of the last position heard
+            wait_until(lambda: _announced(clock), 10.0, "the SITL's lock-step announcement")
+            wait_until(lambda: fc.velocity_loop.observed_s is not None, 10.0, "the EKF's local position")
+            clock.sleep(0.1)
+            assert (
+                fc.velocity_loop.observed_s == clock.now_s()
+            )  # the state at the grant came before the reply
+            stalled_s = 10.0
+            wall = fc._monotonic
+            fc._monotonic = lambda: wall() + stalled_s  # the client left unrun 10 s since
+            assert fc.position_age_s() == 0.0 and wall_age() >= stalled_s
+        finally:
+            fc.close()
+    finally:
+        sitl.stop()
+
+
 def test_the_client_grants_nothing_to_an_autopilot_that_did_not_ask() -> None:
     sitl = MavlinkSitl(free_udp_port(), time_scale=5.0)  # the default: free-running, no announcement
     sitl.start()
