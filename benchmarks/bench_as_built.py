@@ -12,7 +12,10 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
 - the as-built estimate's own error: the distance from each as-built pose reported (``report.as_built``: anchored
   on the wall where its chain reaches a surveyed brick, ``masonry.planner.wall_anchor``) to the brick's true
   centre, mean and max, millimetres, how many of the placed bricks were seen and how many of them anchored; and
-  last, the same for the UAVs' world-frame looks (``world_position_m``; the reported pose before the anchoring);
+  the same for the UAVs' world-frame looks (``world_position_m``; the reported pose before the anchoring); and
+  last, for the single chain (each look's offset to its reference neighbour only, ``relative_to``: the anchoring
+  before every neighbour's offset was combined, ``WallAnchor(every_neighbour=False)``) re-solved over the same
+  completions;
 - the same error relative to the wall: a brick's estimate error less the mean estimate error of its neighbours
   (those with an as-built pose): what a wall estimated off as a whole, as it must be on GNSS with no absolute
   reference, does not show;
@@ -55,6 +58,7 @@ from masonry.blueprint_gen import pyramid, running_bond, towers
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
 from masonry.mission.simulate import SimulatedMission
+from masonry.planner.wall_anchor import WallAnchor
 from masonry.sim import Faults
 from masonry.sim.shaping import PX4, Shaper
 from masonry.sim.wind import WindConfig
@@ -94,6 +98,8 @@ class Tally:
     #: the UAVs' world-frame looks against the truth (``world_position_m`` of an anchored pose): the estimate before
     #: the anchoring
     look_m: list[float] = field(default_factory=list)
+    #: the single chain's estimates against the truth (each look's reference neighbour only)
+    chain_m: list[float] = field(default_factory=list)
     #: placed bricks whose truth is off their course height (by over half a brick), and of them those mission
     #: control counted done: a silent wrong answer (masonry.mission.course_check)
     off_course: int = 0
@@ -224,6 +230,13 @@ def run_one(
                 tally.relative_m.append(
                     float(np.linalg.norm(np.subtract(pose.relative_offset_m, true_offset)))
                 )
+    chain = WallAnchor(mission.control.plan.tasks, every_neighbour=False)
+    for att in sorted(mission.control.history, key=lambda a: a.end_s or 0.0):
+        if att.status == "done" and att.as_built is not None and att.task_id in report.as_built:
+            chain.take(int(att.task_id[1:]), att.as_built)
+    tally.chain_m.extend(
+        math.dist(p.position_m, world.bricks[b].position_m) for b, p in chain.poses().items()
+    )
     estimate_off = {
         bid: np.subtract(pose.position_m, world.bricks[bid].position_m)
         for bid in offsets
@@ -312,7 +325,7 @@ def main() -> None:
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
         f"relative/anchored/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours  "
-        f"world look vs truth mean/max mm"
+        f"world look vs truth mean/max mm  single chain vs truth mean/max mm"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -343,7 +356,7 @@ def main() -> None:
                     f"{tally.off_course}/{tally.off_course_done}  "
                     f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
                     f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
-                    f"{_mm(tally.look_m)}  "
+                    f"{_mm(tally.look_m)}  {_mm(tally.chain_m)}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )

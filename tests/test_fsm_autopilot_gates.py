@@ -14,6 +14,7 @@ from masonry.cli import app
 from masonry.fsm import UavConfig, fly_task
 from masonry.planner import plan
 from masonry.sim import World
+from masonry.sim.vehicle_config import vehicle_preset
 
 CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
 
@@ -68,4 +69,41 @@ def test_a_dropped_take_off_is_asked_for_again(disarm):
     config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
     run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)
     assert fc.takeoffs == 2
+    assert run.result is not None and run.result.status == "done", run.result
+
+
+class _SlowArming:
+    """The flight controller port of a simulated UAV whose arming takes ``arming_s`` of the autopilot's clock (a real
+    autopilot's pre-arm checks, a lock-step SITL's pre-flight), its world moving on meanwhile."""
+
+    def __init__(self, fc, advance, arming_s):
+        self._fc, self._advance, self._arming_s, self.takeoffs = fc, advance, arming_s, 0
+
+    def arm(self):
+        self._advance(self._arming_s)
+        self._fc.arm()
+
+    def takeoff(self, altitude_m):
+        self.takeoffs += 1
+        self._fc.takeoff(altitude_m)
+
+    def __getattr__(self, name):
+        return getattr(self._fc, name)
+
+
+def test_the_wait_before_asking_a_take_off_again_counts_from_the_arming():
+    # the shaped arducopter vehicle leaves its pad a few tenths of a second after the take-off; the machine asks
+    # again after 6 s on the ground armed. That wait counted from the tick that began the arming, so an arming of
+    # 7 s (on the autopilot's clock) made a take-off asked a moment ago look stuck (a lock-step flight against the
+    # project's SITL asked again "9.2 s after the take-off" and flew another way: issue 29)
+    bp = load_blueprint(CASE_STUDY)
+    spec = next(u for u in bp.fleet if u.role == "adhesion")
+    world = World(bp, seed=0, vehicle=vehicle_preset("arducopter"))
+    uav = world.add_uav(spec)
+    ports = uav.ports
+    fc = _SlowArming(ports.fc, ports.advance, arming_s=7.0)
+    task = next(t for t in plan(bp).tasks if t.id == "A0")
+    config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
+    run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)
+    assert fc.takeoffs == 1
     assert run.result is not None and run.result.status == "done", run.result

@@ -1,14 +1,17 @@
 """Mission mode on the hardware adapters: ``masonry fly --mission --fc udp:...`` against ``masonry sitl``.
 
-Four processes on loopback, every wait bounded: ``masonry sitl`` (the brick UAV's autopilot, ArduCopter-like, 10x
-real time), ``masonry mission-control`` on a one-brick wall, ``masonry fly --uav brick --mission ... --fc udp:...
---actuators sim --camera sim`` (the MAVLink adapter, the pre-flight check, the machines on the autopilot's clock)
-and ``masonry fly --uav adhesion --sim --mission ...`` (a simulated adhesion UAV at the same time scale).
+Four processes on loopback, every wait bounded: ``masonry sitl --lockstep`` (the brick UAV's autopilot,
+ArduCopter-like, at most 4x real time, its simulated time paced by its client's grants), ``masonry mission-control``
+on a one-brick wall, ``masonry fly --uav brick --mission ... --fc udp:... --actuators sim --camera sim`` (the
+MAVLink adapter, the pre-flight check, the machines on the autopilot's clock, granting it each step) and ``masonry
+fly --uav adhesion --sim --mission ...`` (a simulated adhesion UAV at the same time scale). Mission time follows
+the slower of the two UAVs' clocks (masonry.mission.fleet_clock).
 """
 
 from __future__ import annotations
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -20,7 +23,10 @@ import pytest
 from masonry.adapters.sitl import free_udp_port
 
 MAIN = "from masonry.cli import main; main()"
-SCALE = "10"
+#: At x10, free, 1 of 10 runs failed beside a busy core; in lock-step the SITL runs as fast as its client keeps up,
+#: at most this: mission control's heartbeats reach the brick UAV on its clock, so a stall of mission control's
+#: process is this many times as long there (docs/sitl-lockstep.md, "In a mission"; issue 29).
+SCALE = "4"
 
 ONE_BRICK = """\
 name: one-brick
@@ -60,7 +66,7 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
     name = ["--mission-name", f"hw-{zenoh_port}"]
     started = time.monotonic()
     sitl = masonry("sitl", "--port", str(mav_port), "--blueprint", str(blueprint), "--uav", "brick",
-                   "--time-scale", SCALE)  # fmt: skip
+                   "--time-scale", SCALE, "--lockstep")  # fmt: skip
     mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", "--time-scale", SCALE,
                  "--startup-timeout", "20", "--heartbeat-timeout", "5", "--max-time", "1200", *name)  # fmt: skip
     brick = masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint), "--mission", endpoint,
@@ -71,7 +77,7 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
                    "--wait", "20", "--format", "json", *name)  # fmt: skip
     procs = [mc, brick, glue]
     try:
-        mc_out, mc_err = mc.communicate(timeout=60)
+        mc_out, mc_err = mc.communicate(timeout=180)
         brick_out, brick_err = brick.communicate(timeout=20)
         glue_out, glue_err = glue.communicate(timeout=20)
     finally:
@@ -82,7 +88,7 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
         sitl.send_signal(signal.SIGINT)
         sitl_log, _ = sitl.communicate(timeout=10)
     wall_s = time.monotonic() - started
-    assert mc.returncode == 0, mc_err + brick_err
+    assert mc.returncode == 0, mc_out + mc_err + brick_err + glue_err
     report = json.loads(mc_out)
     assert report["completed"] is True
     assert [(t["id"], t["uav"], t["status"]) for t in report["tasks"]] == [
@@ -94,6 +100,8 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
     assert brick.returncode == 0, brick_err
     run = json.loads(brick_out)
     assert run["uav"] == "brick-1" and run["mission_ended"] and run["mission_completed"]
+    assert run["lockstep"]["grants"] > 100, run["lockstep"]  # its fly loop paced the SITL
+    assert json.loads(glue_out)["lockstep"] is None
     assert [t["task"] for t in run["tasks"] if t["status"] == "done"] == ["B0"]
     assert "-> ready to arm" in brick_err and "[ok  ] position estimate" in brick_err
     assert glue.returncode == 0, glue_err
@@ -103,6 +111,9 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
               "Land complete, disarming"]  # fmt: skip
     positions = [sitl_log.find(e) for e in events]
     assert all(p >= 0 for p in positions) and positions == sorted(positions), sitl_log
+    assert "Lockstep: SYSTEM_TIME grants pace the simulation" in sitl_log
+    summary = re.search(r"lock-step: (\d+) grants, ran free (\d+) times", sitl_log)
+    assert summary is not None and int(summary[1]) > 100, sitl_log  # the SITL took them
     print(f"mission over zenoh with the brick UAV on the SITL: {wall_s:.1f} s wall, makespan "
           f"{report['makespan_s']} s at x{SCALE}")  # fmt: skip
 

@@ -138,3 +138,39 @@ def test_the_relative_fields_go_over_the_wire_and_bad_ones_are_refused() -> None
     del missing["relative_deviation_m"]
     with pytest.raises(ValueError, match="has no 'relative_deviation_m'"):
         AsBuiltPose.from_dict(missing)
+
+
+def test_every_neighbour_seen_in_two_frames_is_reported_with_its_frames() -> None:
+    look = RelativeLook(window_size=5, sigma_tol_m=0.04)
+    own = np.array([0.16, 0.01, 0.2])
+    look.add(3, own, {1: np.array([0.0, 0.0, 0.1]), 2: np.array([0.3, 0.0, 0.1])}, WALL)
+    look.add(3, own, {1: np.array([0.0, 0.0, 0.1]), 2: np.array([0.3, 0.0, 0.1])}, WALL)
+    look.add(3, own, {2: np.array([0.3, 0.0, 0.1]), 4: np.array([0.45, 0.0, 0.1])}, WALL)  # (4: one frame)
+    every = look.poses(3, WALL)
+    assert [(r.relative_to, r.frames) for r in every] == [(1, 2), (2, 3)]
+    assert every[0].offset_m == pytest.approx((0.16, 0.01, 0.1))
+    assert every[1] == look.pose(3, WALL)  # (the reference among them)
+    assert look.poses(7, WALL) == ()
+
+
+EVERY = dataclasses.replace(REL, relative_offsets=((2, (0.3, 0.0, 0.1), 12), (4, (0.25, 0.0, 0.0), 30)))
+
+
+def test_every_neighbours_offset_goes_over_the_wire_and_the_journal_not_into_the_report() -> None:
+    assert AsBuiltPose.from_dict(EVERY.to_dict()) == EVERY
+    assert AsBuiltPose.from_dict(json.loads(json.dumps(EVERY.to_dict()))) == EVERY
+    assert "relative_offsets" not in EVERY.to_dict(4)  # (the report's and the events' fields as they were)
+    msg = Result("brick-1", TaskResult("B3", "done", 71.4, placement_error_m=0.01, as_built=EVERY), 80.0)
+    assert decode(encode(msg)) == msg
+    bad_items: list[object] = [
+        "B2",
+        [[2, [0.3, 0.0], 12]],
+        [[2, [0.3, 0.0, 0.1], 0]],
+        [[-1, [0.3, 0.0, 0.1], 3]],
+        [[True, [0.3, 0.0, 0.1], 3]],
+        [[2, [math.inf, 0.0, 0.1], 3]],
+        [[2, [0.3, 0.0, 0.1], 3]] * 65,
+    ]
+    for bad in bad_items:
+        with pytest.raises(ValueError, match="relative_offsets"):
+            AsBuiltPose.from_dict({**EVERY.to_dict(), "relative_offsets": bad})

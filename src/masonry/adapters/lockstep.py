@@ -22,9 +22,10 @@ LOCKSTEP_TEXT = "Lockstep: SYSTEM_TIME grants pace the simulation"
 #: The longest wall time (s) a step waits for the SITL's reply to its grant before it goes on without it (a SITL
 #: the machine leaves unrun for that long; the next step's grant picks the lock-step up again).
 REPLY_WAIT_S = 2.0
-#: How long (wall s) after a grant the flight controller's own thread leaves the setpoint stream to the grants
-#: (each grant sends it once, so the SITL gets it at a defined simulated time); a client that stops granting
-#: (its waits on the wall: arming, commands) has its thread stream again after this.
+#: How long (wall s) after a grant's reply the flight controller's own thread leaves the setpoint stream to the
+#: grants (each grant sends it once, so the SITL gets it at a defined simulated time; while a grant waits for its
+#: reply the thread streams nothing); a client that stops granting (its waits on the wall: arming, commands) has
+#: its thread stream again after this, to a SITL held at its last grant.
 PACED_STREAM_S = 0.5
 
 
@@ -68,12 +69,20 @@ class LockstepClock:
         if duration_s <= 0.0:
             return
         grant_ms = round((self.now_s() + duration_s) * 1000.0)
-        # the setpoint stream at the grant, not at the sender thread's wall times (the SITL applies it in order)
+        # the setpoint stream at the grant, not at the sender thread's wall times (the SITL applies it in order);
+        # none from that thread while the SITL runs to the grant: every setpoint reaches it held at a grant
         fc = self._fc
-        fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
+        fc.stream_paced_until_s = math.inf
         fc._stream_setpoint(fc.stream_clock())
         self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, grant_ms))
         self.grants += 1
+        try:
+            self._await_reply(grant_ms)
+        finally:
+            fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
+
+    def _await_reply(self, grant_ms: int) -> None:
+        """Wait (at most :data:`REPLY_WAIT_S` of wall) for the SITL's reply to the grant ``grant_ms``."""
         assert self._replies is not None
         deadline_s = time.monotonic() + REPLY_WAIT_S
         while (left_s := deadline_s - time.monotonic()) > 0.0:
@@ -87,6 +96,13 @@ class LockstepClock:
                 return
         self.late_replies += 1
 
+    def _position_age_s(self) -> float:
+        """How old the position the velocity loop closes on is, on the autopilot's time as heard (not the wall's:
+        at a grant's reply it is the state at the grant, however long the machine then leaves this client unrun)."""
+        loop = self._fc.velocity_loop
+        observed_s = loop.observed_s if loop is not None else None
+        return math.inf if observed_s is None else self._fc.clock.now_s() - observed_s
+
     def _announced(self) -> bool:
         while True:
             try:
@@ -97,6 +113,7 @@ class LockstepClock:
                 self._fc.unlisten(self._texts)
                 self._fc.clock.extrapolate = False  # its time: as last heard (the state the client has)
                 self._fc.stream_clock = self.now_s
+                self._fc.position_age_s = self._position_age_s
                 self._now_s = self._fc.clock.now_s()  # on from where the loop's clock read last
                 self._replies = self._fc.listen(("SYSTEM_TIME",))
                 return True

@@ -164,9 +164,11 @@ class MavlinkLink:
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
         self._down_at: tuple[float, float | None] | None = None  # the watchdog fired: (when, clocks)
-        # lock-step (masonry.adapters.lockstep): the setpoint stream's clock; until when (monotonic) grants stream it
+        # lock-step (masonry.adapters.lockstep): the stream's clock, until when (monotonic) grants stream it, and
+        # the age (s) of the position the velocity loop closes on (on the wall here; on the autopilot's time there)
         self.stream_clock: Callable[[], float] = monotonic
         self.stream_paced_until_s = -math.inf
+        self.position_age_s: Callable[[], float] = lambda: self._monotonic() - self._state.position_time_s
         self.warnings: list[str] = []
         self.setpoints_sent = 0
         self.vision_sent = 0
@@ -345,15 +347,13 @@ class MavlinkLink:
         for msg_id, rate_hz in rates.items():
             self._send_command(MAV_CMD_SET_MESSAGE_INTERVAL, (msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0), 0)
         deadline = sent_at + self.command_timeout_s
+        asked = MAV_CMD_SET_MESSAGE_INTERVAL
         with self._acks:
-            while self._monotonic() < deadline:
-                answered = [
-                    a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL
-                ]
-                if len(answered) >= len(rates):
+            while True:
+                answered = [a for a in self._ack_log if a[0] >= sent_at and a[1] == asked]
+                if len(answered) >= len(rates) or self._monotonic() >= deadline:
                     break
                 self._acks.wait(timeout=max(0.0, deadline - self._monotonic()))
-            answered = [a for a in self._ack_log if a[0] >= sent_at and a[1] == MAV_CMD_SET_MESSAGE_INTERVAL]
         refused = [a for a in answered if a[2] != MAV_RESULT_ACCEPTED]
         if len(answered) < len(rates) or refused:
             self.warnings.append(
@@ -475,7 +475,7 @@ class MavlinkLink:
             loop = self.velocity_loop if self.velocity_loop_engaged else None
             if self.velocity_loop is not None and loop is None:
                 self.velocity_loop.release()
-            if loop is not None and self._monotonic() - self._state.position_time_s <= VELOCITY_LOOP_STALE_S:
+            if loop is not None and self.position_age_s() <= VELOCITY_LOOP_STALE_S:
                 mask, v, a = TYPE_MASK_ACCELERATION_YAW_RATE, (0.0, 0.0, 0.0), loop.acceleration(v_ned)
         with self._send_lock:
             self._conn.mav.set_position_target_local_ned_send(

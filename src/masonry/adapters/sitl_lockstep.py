@@ -31,6 +31,7 @@ import numpy as np
 from masonry.adapters.lockstep import LOCKSTEP_TEXT
 from masonry.adapters.mavlink import MSG_ATTITUDE, MSG_LOCAL_POSITION_NED
 from masonry.adapters.sitl_config import MAV_SEVERITY_INFO
+from masonry.ports import Telemetry
 
 if TYPE_CHECKING:
     from masonry.adapters.sitl import MavlinkSitl
@@ -38,6 +39,8 @@ if TYPE_CHECKING:
 __all__ = ["LOCKSTEP_TEXT", "SitlLockstep"]
 #: A ground station heard again after this long (s of wall) without its heartbeat is told again (a new client).
 GREET_AFTER_S = 3.0
+#: The draws a vehicle's noise fetches at once (``masonry.sim.vehicle``'s blocks): the first of a seed, kept.
+_BLOCK = 4096
 #: How far below a grant (s) the simulated time counts as having reached it (time_boot_ms is whole ms).
 _REACHED_S = 1e-6
 
@@ -65,6 +68,11 @@ class SitlLockstep:
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
         self._armed_free = False  # held at the arming for wait_s without a grant: not again
         self._last_setpoint: tuple[float, ...] = ()
+        #: the telemetry drawn at the last physics step (sample): what LOCAL_POSITION_NED sends until the next step
+        self.sampled: Telemetry | None = None
+        self._first: tuple[np.random.Generator, list[float]] | None = (
+            None  # the seed's generator, its first block
+        )
 
     def greet(self, last_heartbeat_s: float | None, now_s: float) -> None:
         """A ground station's HEARTBEAT (wall s): announce lock-step to one first heard, or heard again after a
@@ -140,11 +148,22 @@ class SitlLockstep:
     def sample(self) -> None:
         """After each physics step: the telemetry's noise sample for it (drawn per step, not per message sent).
         Before the first grant is reached (the pre-flight, paced by the client's wall clock) every step draws
-        the same sample, so what the client measures standing (its ground height) is the same whenever it reads."""
+        the same sample, so what the client measures standing (its ground height) is the same whenever it reads.
+        The streams send this sample until the next step: a command between steps (an arming, a take-off) clears
+        the vehicle's own, and a message sent after it at a wall-chosen moment would draw the next step's noise."""
         vehicle = self._sitl.vehicle
         if self._replied_ms is None and hasattr(vehicle, "reseed"):
-            vehicle.reseed(np.random.default_rng(self._sitl.seed))
-        vehicle.telemetry()
+            # the seed's first block drawn once, not per step: a new generator and 4096 draws a step (0.3 ms) kept
+            # a free-running SITL at x50 (x4 at load average 19) catching up for seconds, its streams silent
+            if self._first is None:
+                rng = np.random.default_rng(self._sitl.seed)
+                self._first = (rng, rng.standard_normal(_BLOCK).tolist())
+            vehicle.reseed(*self._first)
+        self.sampled = vehicle.telemetry()
+
+    def telemetry(self) -> Telemetry:
+        """The vehicle's telemetry as the last physics step drew it (the vehicle's own before the first step)."""
+        return self.sampled if self.sampled is not None else self._sitl.vehicle.telemetry()
 
     def at_grant(self) -> bool:
         """Whether the SITL may send its streams: running free, or held at the grant (within a step below it);
@@ -171,6 +190,14 @@ class SitlLockstep:
         # the time it is at: the grant, or later where it ran free past it (the client's clock goes on from there)
         now_ms = max(self.grant_ms, round(sitl.sim_time_s * 1000.0))
         sitl._conn.mav.system_time_send(time.time_ns() // 1000, now_ms)
+
+    def summary(self) -> str:
+        """One line on how the lock-step went (``masonry sitl`` prints it when it stops): the grants taken, the
+        times the client fell silent for ``wait_s`` (the SITL ran free), and the simulated time reached."""
+        return (
+            f"lock-step: {self.grants} grants, ran free {self.free_runs} times (its client silent for "
+            f"{self.wait_s:g} s of wall), at {self._sitl.sim_time_s:.2f} s simulated"
+        )
 
     def wait(self, timeout_s: float) -> None:
         """Wait up to ``timeout_s`` of wall for the next datagram from the client (a grant ends a hold at once)."""

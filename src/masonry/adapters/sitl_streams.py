@@ -36,7 +36,7 @@ def send_stream(self: MavlinkSitl, msg_id: int) -> None:
     ekf_ok = self._ekf_ok()
     if msg_id == MSG_LOCAL_POSITION_NED:
         if ekf_ok:
-            tel = v.telemetry()
+            tel = v.telemetry() if self.lockstep is None else self.lockstep.telemetry()  # (the step's noise)
             x, y, z = self.frame.position_to_ned(tel.position_m)
             vx, vy, vz = self.frame.velocity_to_ned(tel.velocity_mps)
             mav.local_position_ned_send(boot_ms, x, y, z + self.config.ekf_ground_z_m, vx, vy, vz)

@@ -99,6 +99,7 @@ def _fly_mission(
         if mission_log is not None:
             mission_log.close()
             typer.echo(f"wrote {log}", err=True)
+    lockstep = _lockstep_of(adapters)
     tasks = [
         {
             "task": e.task_id,
@@ -121,6 +122,7 @@ def _fly_mission(
                     "tasks": tasks,
                     "refused": list(run.refused),
                     "dropped": run.dropped,
+                    "lockstep": lockstep,
                 }
             )
         )
@@ -136,6 +138,21 @@ def _fly_mission(
                 + ", ".join(f"{k} {v}" for k, v in sorted(run.dropped.items()))
                 + ")"
             )
+        if lockstep is not None:
+            typer.echo(
+                f"in lock-step with the SITL: {lockstep['grants']} grants, {lockstep['late_replies']} not answered "
+                "within 2 s"
+            )
         typer.echo(f"mission {'ended' if run.mission_ended else 'did not end'}; {spec.name} is {run.state}")
     if not run.mission_ended:
         raise typer.Exit(1)
+
+
+def _lockstep_of(adapters: object) -> dict[str, int] | None:
+    """How the UAV kept lock-step with a SITL that asked for it (``masonry sitl --lockstep``,
+    docs/sitl-lockstep.md): the grants it sent and those not answered in time; None: no lock-step (a real
+    autopilot, ArduCopter's SITL, ``--sim``)."""
+    paced = getattr(getattr(adapters, "clock", None), "base", None)  # wiring.ZeroedClock over a LockstepClock
+    if paced is None or not getattr(paced, "lockstep", False):
+        return None
+    return {"grants": int(paced.grants), "late_replies": int(paced.late_replies)}

@@ -159,4 +159,8 @@ def sitl(
     )
     typer.echo(description)
     typer.echo(f"fly it with: masonry fly --fc udpin:0.0.0.0:{port} ... (Ctrl-C to stop)")
-    server.serve_forever()
+    try:
+        server.serve_forever()
+    finally:  # on Ctrl-C too: whether its client (a `masonry fly`, in a mission or not) paced it
+        if server.lockstep is not None:
+            typer.echo(server.lockstep.summary())

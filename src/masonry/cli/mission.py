@@ -21,7 +21,7 @@ from masonry.cli.foxglove_options import (
 )
 from masonry.cli.options import check_all, check_choice, help_text, plural
 from masonry.errors import InputError
-from masonry.mission.fleet_clock import FleetClock
+from masonry.mission.fleet_clock import UNLOOKED_S, FleetClock
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -331,7 +331,8 @@ def _run_in_wall_time(
     """Step mission control every ``tick_s`` of wall time until it ends or ``--max-time``, on mission time that
     follows the UAVs' own clocks (:class:`~masonry.mission.fleet_clock.FleetClock`, from ``offset_s``): their
     autopilots' on hardware and on a SITL, so a SITL slowed by a loaded machine slows the mission equally."""
-    clock = FleetClock(time_scale, start_s=offset_s)
+    # a gap of several ticks between two readings is this process left unrun, not the UAVs' silence
+    clock = FleetClock(time_scale, start_s=offset_s, unlooked_s=max(UNLOOKED_S, 4.0 * tick_s))
     mc.heard_clock = clock.heard
     linger_until = None
     while True:

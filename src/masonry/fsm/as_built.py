@@ -10,7 +10,8 @@ The climb is not lengthened: a UAV that saw nothing reports no as-built pose (th
 
 The same frames give the pose relative to the wall (:mod:`masonry.fsm.relative_look`): the bricks of
 ``UavConfig.wall`` seen with the placed brick, placed in the world by the same telemetry, whose offsets from it
-hold no position error; the pose's ``relative_*`` fields.
+hold no position error; the pose's ``relative_*`` fields (``relative_offsets``: the offset from every neighbour
+seen, with its frames).
 
 A simulated camera draws the noise of these frames from a stream of their own (:class:`LooksBack`), so that
 looking leaves every other random draw of a simulation, and so every pinned schedule, as it was.
@@ -144,7 +145,8 @@ class AsBuiltLook:
         top, yaw = self.window.mean()
         centre = (float(top[0]), float(top[1]), float(top[2]) - task.size_m[2] / 2.0)
         pose = AsBuiltPose(centre, float(yaw), math.dist(centre, task.position_m), float(confidence))
-        rel = self.relative.pose(task.marker_ids[0] // 2, self.relative.wall(self._wall))
+        designs = self.relative.wall(self._wall)
+        rel = self.relative.pose(task.marker_ids[0] // 2, designs)
         if rel is None:
             return pose
         return replace(
@@ -152,4 +154,8 @@ class AsBuiltLook:
             relative_to=rel.relative_to,
             relative_offset_m=rel.offset_m,
             relative_deviation_m=rel.deviation_m,
+            relative_offsets=tuple(
+                (r.relative_to, r.offset_m, r.frames)
+                for r in self.relative.poses(task.marker_ids[0] // 2, designs)
+            ),
         )

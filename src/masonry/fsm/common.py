@@ -72,11 +72,13 @@ class CommonStates(TaskBook):
         tel = self._tel
         assert tel is not None
         self.nav.pid.reset()
+        arming_s = self.clock.now_s()
         if not tel.armed:
             self.fc.arm()
         climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
         self.fc.takeoff(climb_m)
-        self.attempt.takeoff = Takeoff(self._now_s, 1, climb_m)  # when it was asked, how often, the climb
+        # when it was asked (after the arming, which a real autopilot takes its time over), how often, the climb
+        self.attempt.takeoff = Takeoff(self._now_s + max(0.0, self.clock.now_s() - arming_s), 1, climb_m)
         x, y, z = tel.position_m
         self.nav.expect((x, y, z + climb_m))  # where the autopilot takes it (the machine hovers there next)
 
@@ -155,10 +157,12 @@ class CommonStates(TaskBook):
             waited,
             "armed" if tel.armed else "disarmed",
         )
+        arming_s = self.clock.now_s()
         if not tel.armed:
             self.fc.arm()
         self.fc.takeoff(takeoff.climb_m)
-        self.attempt.takeoff = Takeoff(self._now_s, takeoff.tries + 1, takeoff.climb_m)
+        asked_s = self._now_s + max(0.0, self.clock.now_s() - arming_s)
+        self.attempt.takeoff = Takeoff(asked_s, takeoff.tries + 1, takeoff.climb_m)
         return True
 
     def enter_home(self, *args: object, **kwargs: object) -> None:

@@ -7,10 +7,12 @@ the wall seen in the *same* frame is placed by the same telemetry: the differenc
 brick's top-face centre less the neighbour's, holds no position error at all (only the attitude's, which turns a
 vector of a few decimetres by a fraction of a degree). Over the frames of the climb each neighbour seen with the
 placed brick gathers these offsets in a :class:`~masonry.perception.estimation.PoseWindow` (the paper's filter:
-their mean, and its confidence C); at the end the neighbour seen most (ties: the nearest in the design, its support
-or course neighbour) is the reference. Anchored to that neighbour's designed top-face centre, the offset's distance
-from the designed offset is the brick's deviation from the design *relative to the wall*: how far off its designed
-offset to the brick beside or under it the brick was built, which the glue joint takes, measured to camera noise.
+their mean, and its confidence C); at the end every neighbour seen in two frames or more is reported with its
+offset and its number of frames (mission control combines them over the wall), and the neighbour seen most (ties:
+the nearest in the design, its support or course neighbour) is the reference. Anchored to that neighbour's designed
+top-face centre, the offset's distance from the designed offset is the brick's deviation from the design *relative
+to the wall*: how far off its designed offset to the brick beside or under it the brick was built, which the glue
+joint takes, measured to camera noise.
 
 A brick counts as on the wall when it is seen within ``REFERENCE_M`` of its design, as for the wall alignment
 (:mod:`masonry.fsm.wall_align`): a brick on the pallet or on another UAV's magnet is no reference. A blueprint
@@ -97,6 +99,21 @@ class RelativeLook:
         if not seen:
             return None
         _, bid = min(seen, key=lambda s: (-s[0], float(np.linalg.norm(wall[s[1]] - own_design)), s[1]))
+        return self._relative(bid, own_design, wall)
+
+    def poses(self, own: int, wall: Mapping[int, np.ndarray]) -> tuple[RelativePose, ...]:
+        """The offsets from every neighbour seen in two frames or more with the placed brick, by brick id (what
+        mission control combines over the wall, :mod:`masonry.planner.wall_solve`); () as :meth:`pose`'s None."""
+        own_design = wall.get(own)
+        if own_design is None:
+            return ()
+        return tuple(
+            self._relative(bid, own_design, wall)
+            for bid in sorted(self.windows)
+            if self.windows[bid].count >= 2
+        )
+
+    def _relative(self, bid: int, own_design: np.ndarray, wall: Mapping[int, np.ndarray]) -> RelativePose:
         offset, _ = self.windows[bid].mean()
         designed = own_design - wall[bid]
         x, y, z = (float(v) for v in offset)

@@ -194,6 +194,16 @@ class PlacementWatch:
             return r
         return replace(r, as_built=self._anchor.take(design.brick, r.as_built))
 
+    def best(self, mc: MissionControl) -> dict[str, AsBuiltPose]:
+        """Task id -> its brick's as-built pose re-solved with every look taken so far (an anchored brick's estimate
+        improves with the looks of the bricks built after it: :meth:`~masonry.planner.wall_anchor.WallAnchor.poses`),
+        for the bricks taken; what the report shows, where the journal and the ``completed`` event keep the pose
+        known at the completion."""
+        self._known(mc)
+        assert self._anchor is not None
+        poses = self._anchor.poses()
+        return {tid: poses[t.brick] for tid, t in self._design.items() if t.brick in poses}
+
     def against_design(self, r: TaskResult) -> TaskResult:
         """``r`` with its as-built deviation measured from the brick's design (with ``plan_on_as_built`` the UAV
         measured it from the planned target); as it is otherwise."""

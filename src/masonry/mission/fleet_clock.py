@@ -13,7 +13,15 @@ slowest live UAV's clock advances, so a slowed SITL slows the mission equally:
 - mission time is the least equivalent over the UAVs heard within ``hold_wall_s`` of wall time, and never runs
   backwards; with no UAV heard (before they join, or all silent) it runs at ``time_scale`` of the wall, so the
   heartbeat and start-up timeouts still fire for UAVs that fell silent;
-- a UAV heard again after a silence, or whose clock went backwards (its autopilot rebooted), is anchored anew.
+- a UAV whose clock runs slower than ``time_scale`` (a SITL in lock-step, ``masonry sitl --lockstep``, goes only
+  as fast as its loaded client: say x0.8 where x4 was asked) holds the clock for :data:`HOLD_HEARTBEATS` of its own
+  heartbeat periods at the rate measured for it (at most :data:`MAX_HOLD_WALL_S`): with ``hold_wall_s`` alone it
+  dropped out between two of its heartbeats, mission time ran on at the other UAVs' pace and anchored it anew
+  ahead each time (a 45 s brick flight took 90 s of mission time);
+- a UAV heard again after a silence, or whose clock went backwards (its autopilot rebooted), is anchored anew;
+- a silence is counted only while the clock is read: mission control's own process left unrun for a while (a
+  loaded machine) has the UAVs' heartbeats of that while waiting in its queue, not missing
+  (:data:`UNLOOKED_S`).
 
 On a real vehicle the autopilots' clocks run at the wall's rate, so with ``time_scale`` 1 this is the wall clock
 (docs/hardware.md). The wall clock is read through ``monotonic`` (injected: tests hold it).
@@ -35,6 +43,16 @@ LEAD_S = 1.5
 #: the clock; the wall-time guard against a hung UAV process (at least :data:`MIN_HOLD_WALL_S`).
 HOLD_HEARTBEATS = 3.0
 MIN_HOLD_WALL_S = 1.0
+#: The longest a UAV slower than ``time_scale`` holds the clock (wall s) for its :data:`HOLD_HEARTBEATS`: a UAV
+#: measured slower than 0.3 of the wall still releases it this long after its last heartbeat.
+MAX_HOLD_WALL_S = 10.0
+#: A gap (wall s) between two readings of the clock longer than this is the reading process left unrun (mission
+#: control's loop reads it every tick, 50 ms): the UAVs' heartbeats of that while wait unread in its queue, so the
+#: gap past this does not count as their silence (it let mission time jump at ``time_scale`` of the wall, and
+#: anchored each UAV anew ahead of itself).
+UNLOOKED_S = 0.5
+#: Own seconds between two heartbeats of a UAV (``masonry fly``'s heartbeat period).
+HEARTBEAT_PERIOD_S = 1.0
 
 
 @dataclass
@@ -45,6 +63,8 @@ class _Track:
     mission0_s: float  # mission time at the anchor
     uav_s: float  # the UAV's latest time heard
     wall_s: float  # when it was heard (local monotonic)
+    wall0_s: float  # when it was anchored (local monotonic)
+    wall_per_own_s: float = 0.0  # wall seconds per second of its clock over its last heartbeat (0: not known)
 
 
 class FleetClock:
@@ -57,6 +77,8 @@ class FleetClock:
         lead_s: how far past its last heartbeat a UAV's time is extrapolated (mission seconds).
         hold_wall_s: a UAV silent for longer (wall seconds) stops holding the clock (None: from
             :data:`HOLD_HEARTBEATS` and ``time_scale``).
+        unlooked_s: a longer gap (wall s) between two readings is the reader left unrun: not counted as the
+            UAVs' silence (:data:`UNLOOKED_S`; more for a reader that reads less often).
         monotonic: the wall clock (s).
     """
 
@@ -67,6 +89,7 @@ class FleetClock:
         start_s: float = 0.0,
         lead_s: float = LEAD_S,
         hold_wall_s: float | None = None,
+        unlooked_s: float = UNLOOKED_S,
         monotonic: Callable[[], float] = time.monotonic,
     ) -> None:
         if not time_scale > 0.0:
@@ -76,6 +99,7 @@ class FleetClock:
         self.hold_wall_s = (
             max(MIN_HOLD_WALL_S, HOLD_HEARTBEATS / time_scale) if hold_wall_s is None else hold_wall_s
         )
+        self.unlooked_s = unlooked_s
         self._monotonic = monotonic
         self._tracks: dict[str, _Track] = {}
         self._now = start_s
@@ -85,18 +109,36 @@ class FleetClock:
         """``uav``'s heartbeat stamped ``uav_time_s`` on its own clock has just arrived."""
         wall = self._monotonic()
         track = self._tracks.get(uav)
-        if track is None or uav_time_s < track.uav_s or wall - track.wall_s > self.hold_wall_s:
-            self._tracks[uav] = _Track(uav_time_s, self.now_s(), uav_time_s, wall)
+        # its rate over this heartbeat, kept across an anchoring anew (one that its slowness made, too)
+        rate_s = track.wall_per_own_s if track is not None else 0.0
+        if track is not None and uav_time_s > track.uav_s:
+            rate_s = (wall - track.wall_s) / (uav_time_s - track.uav_s)
+        if track is None or uav_time_s < track.uav_s or wall - track.wall_s > self._hold_s(track):
+            self._tracks[uav] = _Track(uav_time_s, self.now_s(), uav_time_s, wall, wall, rate_s)
         else:
-            track.uav_s, track.wall_s = uav_time_s, wall
+            track.uav_s, track.wall_s, track.wall_per_own_s = uav_time_s, wall, rate_s
+
+    def _hold_s(self, track: _Track) -> float:
+        """How long (wall s) ``track``'s UAV holds the clock after its last heartbeat: ``hold_wall_s``, or
+        :data:`HOLD_HEARTBEATS` of its heartbeat periods at its measured rate where it runs slower (the slower of
+        its rate since its anchor and over its last heartbeat), at most :data:`MAX_HOLD_WALL_S`."""
+        moved_s = track.uav_s - track.uav0_s
+        mean_s = (track.wall_s - track.wall0_s) / moved_s if moved_s > 0.0 else 0.0
+        own_hold_s = HOLD_HEARTBEATS * HEARTBEAT_PERIOD_S * max(mean_s, track.wall_per_own_s)
+        return max(self.hold_wall_s, min(own_hold_s, MAX_HOLD_WALL_S))
 
     def now_s(self) -> float:
         """Mission time now (s): the slowest live UAV's, or ``time_scale`` of the wall with none live."""
         wall = self._monotonic()
+        unlooked_s = wall - self._wall - self.unlooked_s
+        if unlooked_s > 0.0:  # this process was not run (a loaded machine): not a silence of the UAVs
+            for t in self._tracks.values():
+                t.wall_s += unlooked_s
+                t.wall0_s += unlooked_s
         bound = math.inf
         for t in self._tracks.values():
             since_s = wall - t.wall_s
-            if since_s <= self.hold_wall_s:
+            if since_s <= self._hold_s(t):
                 ahead_s = min(max(0.0, since_s) * self.time_scale, self.lead_s)
                 bound = min(bound, t.mission0_s + (t.uav_s - t.uav0_s) + ahead_s)
         if math.isinf(bound):

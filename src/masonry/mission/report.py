@@ -385,6 +385,10 @@ def control_report(
         }
     ordered = {t.id: placement_error_m[t.id] for t in plan.tasks if t.id in placement_error_m}
     seen = {a.task_id: a.as_built for a in mc.history if a.status == "done" and a.as_built is not None}
+    if (
+        seen and getattr(mc, "placement", None) is not None
+    ):  # (the best estimates, the wall re-solved: issue 30)
+        seen.update({k: v for k, v in mc.placement.best(mc).items() if k in seen})
     return MissionReport(
         completed=not stuck,
         makespan_s=makespan,

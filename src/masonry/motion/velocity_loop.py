@@ -86,6 +86,11 @@ class VelocityLoop:
         return self._t_s is not None
 
     @property
+    def observed_s(self) -> float | None:
+        """The autopilot's time (s) of the last position observed; None since the last :meth:`reset`."""
+        return self._t_s
+
+    @property
     def velocity_mps(self) -> Vec3:
         """The observed velocity (the frame of the positions fed in)."""
         return (self._v[0], self._v[1], self._v[2])

@@ -64,7 +64,10 @@ class AsBuiltPose:
     Relative to the wall (``masonry.fsm.relative_look``; all None when no brick on the wall was seen with it):
     ``relative_to``: the neighbour's brick id, ``relative_offset_m``: the brick's top-face centre less the
     neighbour's as seen in the same frames (world axes, m; the position source's error cancels),
-    ``relative_deviation_m``: that offset's distance from the designed one (m).
+    ``relative_deviation_m``: that offset's distance from the designed one (m); ``relative_offsets``: the offset from
+    every neighbour seen in two frames or more, ``(brick id, offset (m), frames)`` by brick id (the reference among
+    them; () from a UAV that reports only the reference), which mission control combines over the wall
+    (:mod:`masonry.planner.wall_solve`).
 
     Anchored on the wall (mission control, :mod:`masonry.planner.wall_anchor`; both None when the pose is the
     world-frame look): ``anchored_to``: the surveyed brick (the blueprint's ``placed``) its chain of relative looks
@@ -80,11 +83,12 @@ class AsBuiltPose:
     relative_deviation_m: float | None = None
     anchored_to: int | None = None
     world_position_m: tuple[float, float, float] | None = None
+    relative_offsets: tuple[tuple[int, tuple[float, float, float], int], ...] = ()
 
     def to_dict(self, digits: int | None = None) -> dict[str, object]:
         """``{position_m, yaw_rad, deviation_m, confidence}`` and, with a neighbour seen, ``{relative_to,
         relative_offset_m, relative_deviation_m}`` (``digits``: metres and radians rounded to it, the confidence to
-        3; None: exact, the form of the wire and the journal)."""
+        3; None: exact, the form of the wire and the journal, which alone carry ``relative_offsets``)."""
 
         def r(v: float, nd: int | None = digits) -> float:
             return v if nd is None else round(v, nd)
@@ -99,6 +103,10 @@ class AsBuiltPose:
             out["relative_to"] = self.relative_to
             out["relative_offset_m"] = [r(v) for v in self.relative_offset_m]
             out["relative_deviation_m"] = r(self.relative_deviation_m or 0.0)
+            if (
+                self.relative_offsets and digits is None
+            ):  # (the wire's and the journal's: what a re-solve needs)
+                out["relative_offsets"] = [[b, [r(v) for v in o], n] for b, o, n in self.relative_offsets]
         if self.anchored_to is not None and self.world_position_m is not None:
             out["anchored_to"] = self.anchored_to
             out["world_position_m"] = [r(v) for v in self.world_position_m]
@@ -136,7 +144,7 @@ class AsBuiltPose:
             raise ValueError(f"an as-built pose's relative fields are malformed: {data!r}") from None
         if not all(map(math.isfinite, (ox, oy, oz, rdev))) or rdev < 0.0:
             raise ValueError(f"an as-built pose's relative fields out of range: {data!r}")
-        pose = cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev)
+        pose = cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev, relative_offsets=_offsets(data))
         if data.get("anchored_to") is None:
             return pose
         try:
@@ -151,3 +159,40 @@ class AsBuiltPose:
         if not all(map(math.isfinite, (wx, wy, wz))):
             raise ValueError(f"an as-built pose's world position out of range: {data!r}")
         return replace(pose, anchored_to=anchor, world_position_m=(wx, wy, wz))
+
+
+#: The most neighbours an as-built pose's ``relative_offsets`` may hold (a camera sees a few dozen bricks at most).
+MAX_RELATIVE_OFFSETS = 64
+
+
+def _offsets(data: dict[str, object]) -> tuple[tuple[int, tuple[float, float, float], int], ...]:
+    """A pose's optional ``relative_offsets`` ([[brick id, [dx, dy, dz], frames], ...]; () when absent).
+
+    Raises:
+        ValueError: malformed (not such pairs, a number not finite, a frame count under 1, over
+            :data:`MAX_RELATIVE_OFFSETS` of them).
+    """
+    raw = data.get("relative_offsets")
+    if raw is None:
+        return ()
+    if not isinstance(raw, list) or len(raw) > MAX_RELATIVE_OFFSETS:
+        raise ValueError(
+            f"an as-built pose's relative_offsets must be a list of at most {MAX_RELATIVE_OFFSETS}"
+        )
+    out = []
+    for item in raw:
+        try:
+            bid, offset, frames = item
+            ox, oy, oz = (float(v) for v in offset)
+            if (
+                any(isinstance(v, bool) or not isinstance(v, int) for v in (bid, frames))
+                or bid < 0
+                or frames < 1
+            ):
+                raise TypeError(item)
+        except (TypeError, ValueError):
+            raise ValueError(f"an as-built pose's relative_offsets are malformed: {item!r}") from None
+        if not all(map(math.isfinite, (ox, oy, oz))):
+            raise ValueError(f"an as-built pose's relative_offsets out of range: {item!r}")
+        out.append((bid, (ox, oy, oz), frames))
+    return tuple(out)

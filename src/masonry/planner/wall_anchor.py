@@ -1,28 +1,38 @@
-"""The as-built pose anchored on the wall (issue 30): a placed brick's position from its chain of relative looks.
+"""The as-built pose anchored on the wall (issue 30): a placed brick's position from the relative looks of the wall,
+combined in one least-squares on its surveyed bricks.
 
 Pure: the plan's tasks (the design, and which bricks are surveyed: the blueprint's ``placed``, ``BrickTask.done``)
-in, the as-built poses in completion order one by one (:meth:`WallAnchor.take`), the pose mission control reports out.
+in, the as-built poses in completion order one by one (:meth:`WallAnchor.take`), the pose mission control reports out;
+after each, every brick's best estimate so far (:meth:`WallAnchor.poses`: a later look improves an earlier brick's).
 
 A brick's world-frame look (``AsBuiltPose.position_m`` as its UAV sent it) carries the position source's error: on
 GNSS (``px4``) 6 cm per axis that wanders over seconds, 83-94 mm on average over a wall; on motion capture 1-5 mm.
-Its offset from the neighbour seen in the same frames (``relative_to``, ``relative_offset_m``,
-:mod:`masonry.fsm.relative_look`) does not carry it: 0.85 mm per horizontal axis. When that neighbour is surveyed,
-or was itself anchored, the brick's centre is known from the neighbour's: the *chain*. Each brick keeps the variance
-of its horizontal position (0 on a surveyed brick, plus :data:`RELATIVE_SIGMA_M` squared per link), and the world
-look and the chain are combined weighted by their inverse variances. The world look's variance is not known to
-mission control (the UAV does not say what its position source is), so it is measured: the mean over the anchored
-bricks of the mission so far (this one included) of the squared horizontal difference between look and chain, less
-the chain's own variance, never under :data:`MIN_WORLD_SIGMA_M` squared. On GNSS the chain takes the whole
-weight, on motion capture the two share it.
+Its offsets from the neighbours seen in the same frames (``relative_offsets``, or only ``relative_to`` and
+``relative_offset_m`` from a UAV that sends the one, :mod:`masonry.fsm.relative_look`) do not carry it: 0.85 mm per
+horizontal axis. Every look is a *sighting* of its brick and its neighbours up to a common translation; all the
+sightings so far, with the surveyed bricks fixed on their design, are solved together in one weighted least-squares
+(:mod:`masonry.planner.wall_solve`): a brick seen with bricks of several courses is tied to the survey by its
+shortest paths at once, not by a chain through the neighbour seen most. Each brick's estimate in a look has the
+variance ``RELATIVE_SIGMA_M**2 / 2`` (the link's, shared by its two ends) times the look's most frames over its own
+(a neighbour seen in fewer frames weighs less).
 
-Vertically an anchored brick lies on its course (the chain reaches it from a surveyed course through bricks that
+The world looks enter the same least-squares, each as a direct measurement of its brick with the world look's
+variance. That variance is not known to mission control (the UAV does not say what its position source is), so it
+is measured: the mean over the anchored bricks of the mission so far (this one included, each at its completion) of
+the squared horizontal difference between the look and the relative looks' solution without any world look, less
+that solution's own variance, never under :data:`MIN_WORLD_SIGMA_M` squared. On GNSS the relative looks take the
+whole weight, on motion capture the two share it.
+
+Vertically an anchored brick lies on its course (the sightings reach it from a surveyed course through bricks that
 the course check, :mod:`masonry.mission.course_check`, found at their course height): its height is the design's.
 The relative look's vertical is its noisiest axis (2.2 mm per link), the world look's on GNSS 6 cm.
 
-A brick whose look has no neighbour, or whose chain does not reach a surveyed brick (the first brick of a wall
-built on the ground, a tower's bricks, seen alone), keeps its world-frame look: its pose has no ``anchored_to``.
-A chain that puts a brick over :data:`~masonry.planner.wall_deviation.MAX_WALL_DEVIATION_M` from its design is not
-trusted either (no brick of a wall is built that far off its neighbours).
+A brick whose look has no neighbour and that no sighting ties to a surveyed brick (the first brick of a wall built
+on the ground, a tower's bricks, seen alone) keeps its world-frame look: its pose has no ``anchored_to``. An offset
+over :data:`~masonry.planner.wall_deviation.MAX_WALL_DEVIATION_M` from its designed one horizontally, or over half
+a brick vertically, is left out (not a brick of this wall's course beside or under it), and a solution that puts a
+brick over that distance from its design is not trusted either (no brick of a wall is built that far off its
+neighbours): the brick keeps its world look.
 """
 
 from __future__ import annotations
@@ -34,6 +44,7 @@ from dataclasses import dataclass, replace
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
+from masonry.planner.wall_solve import Sighting, solve
 
 Vec3 = tuple[float, float, float]
 
@@ -47,19 +58,30 @@ __all__ = ["MIN_WORLD_SIGMA_M", "RELATIVE_SIGMA_M", "Anchor", "WallAnchor"]
 
 @dataclass(frozen=True)
 class Anchor:
-    """A brick's anchored centre (world, m), its horizontal variance per axis (m^2) and its surveyed root."""
+    """A brick's anchored centre (world, m) and the surveyed brick it is anchored to (its root)."""
 
     centre_m: Vec3
-    variance_m2: float
     root: int
 
 
 class WallAnchor:
-    """The as-built poses of a mission anchored on its surveyed bricks, taken in completion order."""
+    """The as-built poses of a mission anchored on its surveyed bricks, taken in completion order.
 
-    def __init__(self, tasks: Sequence[Task]) -> None:
+    Args:
+        tasks: the plan's.
+        every_neighbour: each look's offsets to every neighbour seen (False: only to the neighbour seen most, the
+            single chain of links; for comparison).
+    """
+
+    def __init__(self, tasks: Sequence[Task], every_neighbour: bool = True) -> None:
         self._design = {t.brick: t for t in tasks if isinstance(t, BrickTask)}
+        self._fixed = {b: (t.position_m[0], t.position_m[1]) for b, t in self._design.items() if t.done}
+        self.every_neighbour = every_neighbour
+        #: brick id -> its anchored centre in the last solve (every brick tied to a surveyed one, within its
+        #: design's reach)
         self.anchors: dict[int, Anchor] = {}
+        self._looks: dict[int, AsBuiltPose] = {}  # (brick id -> its world-frame look, in completion order)
+        self._sightings: dict[int, Sighting] = {}
         self._residuals_m2: list[float] = []
 
     def world(self, brick: int, pose: AsBuiltPose) -> AsBuiltPose:
@@ -78,56 +100,85 @@ class WallAnchor:
             return None
         return math.sqrt(max(sum(self._residuals_m2) / len(self._residuals_m2), MIN_WORLD_SIGMA_M**2))
 
-    def _chain(self, brick: int, pose: AsBuiltPose) -> Anchor | None:
-        """Brick ``brick``'s centre from its neighbour's (surveyed or anchored) and the relative look; None."""
-        ref, offset = pose.relative_to, pose.relative_offset_m
+    def _sighting(self, brick: int, pose: AsBuiltPose) -> Sighting | None:
+        """Brick ``brick``'s look as a sighting of it and its neighbours on the wall (None: no neighbour kept)."""
         own = self._design.get(brick)
-        if ref is None or offset is None or own is None or own.done:
+        if own is None or own.done or pose.relative_to is None or pose.relative_offset_m is None:
             return None
-        other = self._design.get(ref)
-        if other is None:
-            return None
-        if other.done:
-            base = Anchor(other.position_m, 0.0, ref)
-        elif ref in self.anchors:
-            base = self.anchors[ref]
-        else:
-            return None
-        # the offset is top face to top face; the centres lie half a height under each
-        dz = (other.size_m[2] - own.size_m[2]) / 2.0
-        c = (base.centre_m[0] + offset[0], base.centre_m[1] + offset[1], own.position_m[2])
-        if math.dist(c, own.position_m) > MAX_WALL_DEVIATION_M or abs(
-            base.centre_m[2] + dz + offset[2] - c[2]
-        ) > (own.size_m[2] / 2.0):
-            return None  # (not a brick of this wall's course beside or under it: not trusted)
-        return Anchor(c, base.variance_m2 + RELATIVE_SIGMA_M**2, base.root)
+        raw = pose.relative_offsets if self.every_neighbour and pose.relative_offsets else ()
+        if not raw:
+            raw = ((pose.relative_to, pose.relative_offset_m, 1),)
+        most = max(n for _, _, n in raw)
+        half = RELATIVE_SIGMA_M**2 / 2.0
+        top = own.position_m[2] + own.size_m[2] / 2.0
+        offsets = []
+        for nb, o, frames in raw:
+            other = self._design.get(nb)
+            if other is None or nb == brick:
+                continue
+            designed = (
+                own.position_m[0] - other.position_m[0],
+                own.position_m[1] - other.position_m[1],
+                top - other.position_m[2] - other.size_m[2] / 2.0,
+            )
+            if (
+                abs(o[2] - designed[2]) > own.size_m[2] / 2.0
+                or math.hypot(o[0] - designed[0], o[1] - designed[1]) > MAX_WALL_DEVIATION_M
+            ):
+                continue  # (not a brick of this wall's course beside or under it: not trusted)
+            offsets.append((nb, (o[0], o[1]), half * most / frames))
+        return Sighting(brick, tuple(offsets), half) if offsets else None
 
     def take(self, brick: int, pose: AsBuiltPose) -> AsBuiltPose:
-        """Brick ``brick``'s reported pose (see the module docstring): anchored when its chain reaches a surveyed
-        brick, its world-frame look otherwise; the brick's anchor is kept for the bricks chained to it."""
+        """Brick ``brick``'s reported pose (see the module docstring): anchored when its look ties it to a
+        surveyed brick, its world-frame look otherwise; the wall re-solved with it (:meth:`poses`)."""
         look = self.world(brick, pose)
-        chain = self._chain(brick, look)
-        if chain is None:
-            self.anchors.pop(brick, None)
-            return look
-        w = look.position_m
-        var_c = chain.variance_m2
-        self._residuals_m2.append(
-            ((w[0] - chain.centre_m[0]) ** 2 + (w[1] - chain.centre_m[1]) ** 2) / 2.0 - var_c
-        )
+        self._looks[brick] = look
+        sighting = self._sighting(brick, look)
+        if sighting is None:
+            self._sightings.pop(brick, None)
+        else:
+            self._sightings[brick] = sighting
+        sightings = list(self._sightings.values())
+        relative = solve(self._fixed, sightings, variance_of=(brick,))
+        c = relative.centre_m.get(brick)
+        if c is not None:
+            w = look.position_m
+            self._residuals_m2.append(
+                ((w[0] - c[0]) ** 2 + (w[1] - c[1]) ** 2) / 2.0 - relative.variance_m2[brick]
+            )
         sigma_w = self.world_sigma_m()
-        assert sigma_w is not None
-        var_w = sigma_w**2
-        k = var_w / (var_w + var_c)  # the chain's weight
-        x = k * chain.centre_m[0] + (1.0 - k) * w[0]
-        y = k * chain.centre_m[1] + (1.0 - k) * w[1]
-        centre = (x, y, chain.centre_m[2])
-        self.anchors[brick] = Anchor(centre, var_c * var_w / (var_c + var_w), chain.root)
-        design = self._design[brick].position_m
+        if sigma_w is not None:
+            priors = {
+                b: ((p.position_m[0], p.position_m[1]), sigma_w**2)
+                for b, p in self._looks.items()
+                if b in relative.centre_m
+            }
+            relative = solve(self._fixed, sightings, priors)
+        self.anchors = {}
+        for b, (x, y) in relative.centre_m.items():
+            design = self._design[b].position_m
+            centre = (x, y, design[2])
+            if math.dist(centre, design) <= MAX_WALL_DEVIATION_M:
+                self.anchors[b] = Anchor(centre, relative.root[b])
+        out = self.pose(brick)
+        assert out is not None
+        return out
+
+    def pose(self, brick: int) -> AsBuiltPose | None:
+        """Brick ``brick``'s best estimate after the looks taken so far (None: not taken)."""
+        look = self._looks.get(brick)
+        anchor = self.anchors.get(brick)
+        if look is None or anchor is None:
+            return look
         return replace(
             look,
-            position_m=centre,
-            deviation_m=math.dist(centre, design),
-            anchored_to=chain.root,
-            world_position_m=w,
+            position_m=anchor.centre_m,
+            deviation_m=math.dist(anchor.centre_m, self._design[brick].position_m),
+            anchored_to=anchor.root,
+            world_position_m=look.position_m,
         )
+
+    def poses(self) -> dict[int, AsBuiltPose]:
+        """Every brick taken -> its best estimate so far (:meth:`pose`), in completion order."""
+        return {b: p for b in self._looks if (p := self.pose(b)) is not None}

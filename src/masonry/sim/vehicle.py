@@ -150,9 +150,13 @@ class SimVehicle(_Autopilot):
         self._liftoff_s = -math.inf  # when it last left the ground (the take-off's thrust ramp)
 
     # ------------------------------------------------------------------ state
-    def reseed(self, rng: np.random.Generator) -> None:
-        """Draw the noise from ``rng`` from now on (a SITL in lock-step at its first grant: masonry.adapters.sitl)."""
-        self._gauss = _Gauss(rng)
+    def reseed(self, rng: np.random.Generator, first: list[float] | None = None) -> None:
+        """Draw the noise from ``rng`` from now on (a SITL in lock-step at its first grant: masonry.adapters.sitl);
+        ``first``: the draws ``rng`` would give first (its first block, already drawn: ``rng`` is past it)."""
+        gauss = _Gauss(rng)
+        if first is not None:
+            gauss._buf = first  # read, never written: a list shared by every reseed from the same seed
+        self._gauss = gauss
         self._tel = None
 
     @property

@@ -1,0 +1,139 @@
+"""The wall's relative looks in one least-squares (issue 30, masonry.planner.wall_solve): exact without noise,
+and on average never worse than the single chain of links through each look's reference neighbour."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, seed, settings
+from hypothesis import strategies as st
+
+from masonry.planner.wall_solve import Sighting, solve
+
+HALF_M2 = 0.001**2 / 2.0  # (a brick's estimate in a look: half the link's variance)
+
+
+def _graph(draw: st.DrawFn) -> tuple[dict[int, tuple[float, float]], dict[int, np.ndarray], list[list[int]]]:
+    """Surveyed bricks (0..), free bricks after them with true centres, and per free brick the bricks its look
+    saw: the first its reference (surveyed or seen before it), the others any brick but itself."""
+    n_fixed = draw(st.integers(1, 3))
+    n_free = draw(st.integers(1, 9))
+    coords = st.tuples(st.floats(-2, 2), st.floats(-2, 2))
+    fixed = {b: draw(coords) for b in range(n_fixed)}
+    truth = {b: np.asarray(p) for b, p in fixed.items()}
+    seen: list[list[int]] = []
+    for b in range(n_fixed, n_fixed + n_free):
+        truth[b] = np.asarray(draw(coords))
+        ref = draw(st.integers(0, b - 1))
+        others = [
+            o for o in draw(st.lists(st.integers(0, n_fixed + n_free - 1), max_size=4)) if o not in (b, ref)
+        ]
+        seen.append([ref, *dict.fromkeys(others)])
+    return fixed, truth, seen
+
+
+@st.composite
+def graphs(
+    draw: st.DrawFn,
+) -> tuple[dict[int, tuple[float, float]], dict[int, np.ndarray], list[list[int]], list[list[int]]]:
+    fixed, truth, seen = _graph(draw)
+    frames = [[draw(st.integers(2, 30)) for _ in s] for s in seen]
+    return fixed, truth, seen, frames
+
+
+def _sightings(
+    truth: dict[int, np.ndarray],
+    seen: list[list[int]],
+    frames: list[list[int]],
+    n_fixed: int,
+    noise: list[np.ndarray],
+) -> list[Sighting]:
+    """Each free brick's look: its own estimate and each neighbour's up to the look's translation, ``noise[k]``
+    holding the errors (own first), drawn by the caller with the variances the sighting declares."""
+    out = []
+    for k, (nbs, fr) in enumerate(zip(seen, frames, strict=True)):
+        b = n_fixed + k
+        most = max(fr)
+        own = truth[b] + noise[k][0]
+        offsets = tuple(
+            (n, tuple(float(v) for v in own - (truth[n] + noise[k][i + 1])), HALF_M2 * most / f)
+            for i, (n, f) in enumerate(zip(nbs, fr, strict=True))
+        )
+        out.append(Sighting(b, offsets, HALF_M2))  # type: ignore[arg-type]
+    return out
+
+
+def _chain(fixed: dict[int, tuple[float, float]], sightings: list[Sighting]) -> dict[int, np.ndarray]:
+    """The single chain: each brick from its look's reference neighbour (the first offset) and its offset."""
+    out = {b: np.asarray(p) for b, p in fixed.items()}
+    for s in sightings:
+        ref, offset, _ = s.offsets[0]
+        out[s.brick] = out[ref] + np.asarray(offset)
+    return out
+
+
+@seed(30)
+@settings(max_examples=80, deadline=None, print_blob=True)
+@given(g=graphs())
+def test_without_noise_the_solve_is_exact_and_anchored_on_a_surveyed_brick(g) -> None:
+    fixed, truth, seen, frames = g
+    zero = [np.zeros((len(s) + 1, 2)) for s in seen]
+    sightings = _sightings(truth, seen, frames, len(fixed), zero)
+    sol = solve(fixed, sightings, variance_of=list(truth))
+    free = [b for b in truth if b not in fixed]
+    assert sorted(sol.centre_m) == free  # (every look chains down to a surveyed brick)
+    for b in free:
+        assert sol.centre_m[b] == pytest.approx(tuple(truth[b]), abs=1e-9)
+        assert sol.root[b] in fixed
+        assert 0.0 < sol.variance_m2[b] <= len(truth) * 2 * HALF_M2 * 15 + 1e-12
+    # a prior (a world look on the truth) changes nothing; far off with a large variance, next to nothing
+    priors = {b: (tuple(truth[b]), 0.05**2) for b in free}
+    with_priors = solve(fixed, sightings, priors)  # type: ignore[arg-type]
+    for b in free:
+        assert with_priors.centre_m[b] == pytest.approx(tuple(truth[b]), abs=1e-9)
+
+
+@seed(30)
+@settings(max_examples=40, deadline=None, print_blob=True)
+@given(g=graphs(), noise_seed=st.integers(0, 2**32 - 1))
+def test_with_noise_the_solve_is_never_worse_than_the_single_chain_on_average(g, noise_seed: int) -> None:
+    """Noise drawn as the sightings declare it (each brick's estimate in a look, per axis): over 200 draws on the
+    same graph, the mean squared error of the solve is at most the chain's (the least-squares is the best linear
+    unbiased estimate; the chain is one), within the draws' spread; on a brick tied only by its chain, the same."""
+    fixed, truth, seen, frames = g
+    rng = np.random.default_rng(noise_seed)
+    free = [b for b in truth if b not in fixed]
+    se_solve, se_chain = 0.0, 0.0
+    for _ in range(200):
+        noise = []
+        for s, fr in zip(seen, frames, strict=True):
+            most = max(fr)
+            sig = [math.sqrt(HALF_M2)] + [math.sqrt(HALF_M2 * most / f) for f in fr]
+            noise.append(rng.normal(size=(len(s) + 1, 2)) * np.asarray(sig)[:, None])
+        sightings = _sightings(truth, seen, frames, len(fixed), noise)
+        sol = solve(fixed, sightings)
+        chain = _chain(fixed, sightings)
+        for b in free:
+            se_solve += float(np.sum((np.asarray(sol.centre_m[b]) - truth[b]) ** 2))
+            se_chain += float(np.sum((chain[b] - truth[b]) ** 2))
+    assert se_solve <= se_chain * 1.02 + 1e-12
+    if all(
+        len(s) == 1 for s in seen
+    ):  # (one neighbour per look: the chain is the only path, the same estimate)
+        assert se_solve == pytest.approx(se_chain, rel=1e-6)
+
+
+def test_a_brick_not_tied_to_a_surveyed_one_is_not_solved() -> None:
+    fixed = {0: (0.0, 0.0)}
+    # brick 1 on the survey; bricks 2 and 3 only see each other
+    sightings = [
+        Sighting(1, ((0, (0.3, 0.0), HALF_M2),), HALF_M2),
+        Sighting(2, ((3, (0.3, 0.0), HALF_M2),), HALF_M2),
+        Sighting(4, (), HALF_M2),
+    ]
+    sol = solve(fixed, sightings, {2: ((5.0, 5.0), 1.0)}, variance_of=[1, 2])
+    assert sol.centre_m == {1: (0.3, 0.0)} and sol.root == {1: 0}
+    assert sol.variance_m2 == {1: pytest.approx(2 * HALF_M2)}
+    assert solve(fixed, []) == solve({}, sightings)
