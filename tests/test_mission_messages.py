@@ -36,6 +36,7 @@ MESSAGES = [
     Result("brick-1", TaskResult("B3", "done", 71.4, placement_error_m=0.012), 80.0, (1.0, 2.0, 1.2)),
     Result("glue-1", TaskResult("A0", "failed", 5.0, reason="battery low"), 9.0),
     MissionEnd(MISSION_CONTROL, 400.0, True),
+    Heartbeat("glue-1", 3.0, state="idle", battery=0.45, swaps_batteries=True, on_pad=True),
 ]
 
 
@@ -64,6 +65,7 @@ def _body(msg):
         (lambda d: d.pop("time_s"), "'time_s' is missing"),
         (lambda d: d.update(time_s="soon"), "'time_s' must be a finite number"),
         (lambda d: d.update(position_m=[1, 2]), "'position_m' must be a list of 3"),
+        (lambda d: d.update(swaps_batteries="yes"), "'swaps_batteries' must be true or false"),
     ],
 )
 def test_bad_heartbeat_rejected(mutate, match):

@@ -61,6 +61,7 @@ from masonry.mission.reducer import OUT_OF_SERVICE_STATE, Step, steps_of
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
+from masonry.mission.swap_stagger import SwapStagger
 from masonry.mission.transport import Transport
 from masonry.mission.volumes import Vec3
 from masonry.mission.wait_causes import WaitWatch
@@ -232,6 +233,7 @@ class MissionControl:
         self.fallback_layers_m = dict(fallback_layers_m or {})
         self._deferred_at: int | None = None  # airspace version when a landed UAV could not take off
         self.lingers = LingerBook()  # who waits near the wall for a task due soon (mission/linger.py)
+        self.swaps = SwapStagger()  # who is sent home for an early battery swap (mission/swap_stagger.py)
         self.watch = StallWatch(stall_timeout_s)
         #: set when the progress watchdog stopped the mission: who waited for whom
         self.stall: Stall | None = None

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.sites import work_point_m
+from masonry.mission.swap_stagger import swap_due
 from masonry.planner.dispatch_admission import Admission, site_width
 
 if TYPE_CHECKING:
@@ -34,6 +35,8 @@ def may_take_off(mc: MissionControl, name: str) -> bool:
     here): take-offs from neighbouring pads go one after the other."""
     if not mc.operator.may_fly(mc, name):
         return False  # recalled, or its role at the operator's fleet limit
+    if swap_due(mc, name):
+        return False  # it flies home for a fresh pack now, while few of its role are away for theirs
     if mc.wind_limit is not None and not mc.wind_limit.allows(name):
         return False  # above its max_wind_mps: it finishes its task and lands
     if mc.columns.phase(name) is Phase.LANDED and not mc.columns.take_off(name):

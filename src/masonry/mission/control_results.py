@@ -15,6 +15,7 @@ from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
 from masonry.mission.records import UavLink
 from masonry.mission.reducer import dropped_reason, late_completion, screen_result
+from masonry.mission.swap_stagger import SWAP_EARLY
 from masonry.placement_check import is_place_taken
 from masonry.ports import RECALL_REASON
 
@@ -160,7 +161,10 @@ def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float
     if mc.heard_clock is not None:
         mc.heard_clock(msg.sender, msg.time_s)
     if msg.battery is not None:
+        if msg.battery >= SWAP_EARLY > (link.battery if link.battery is not None else 1.0):
+            mc.wake()  # a fresh pack (swap_stagger): it may be dispatched again
         link.battery = msg.battery
+    link.swaps_batteries = msg.swaps_batteries
     mc.lingers.heard(msg.sender, now_s, msg.battery, airborne=not msg.on_pad)
     if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
         mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)

@@ -10,6 +10,8 @@ With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the han
 below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
 the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
 the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
+Landed with nothing to do and under ``top_up_fraction``, the pack is swapped on the pad (docs/dispatch.md,
+"Battery swaps one after another").
 
 Airspace (docs/safety.md): the columns over the sites, asked for and freed by
 :class:`~masonry.mission.handler_columns.ColumnRequests`, a base class of the handler.
@@ -70,6 +72,10 @@ from masonry.spares import Spare
 log = logging.getLogger(__name__)
 
 
+#: An idle UAV on its pad with less charge than this has its pack swapped there (``UavHandler.top_up_fraction``;
+#: the line under which mission control sends a UAV home early, ``masonry.mission.swap_stagger.SWAP_EARLY``).
+TOP_UP_FRACTION = 0.5
+
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
 
@@ -116,6 +122,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         wind: Callable[[], float | None] | None = None,
         max_wind_mps: float | None = None,
         reserve_fraction: float = 0.4,
+        top_up_fraction: float = TOP_UP_FRACTION,
         after_result: Callable[[], None] | None = None,
         tasks: Iterable[Task] | None = None,
         spares: Iterable[Spare] | None = None,
@@ -138,7 +145,9 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         self._wind = wind
         self._max_wind_mps = max_wind_mps
         self.reserve_fraction = reserve_fraction
+        self.top_up_fraction = top_up_fraction
         self.battery_swaps = 0
+        self.top_ups = 0  # the swaps made while idle on the pad (``top_up_fraction``)
         self._held_for: str | None = None  # why the battery budget holds the next task (logged once)
         self.name = name
         self.transport = transport
@@ -257,6 +266,23 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         self.executions.append(self._current)
         return task
 
+    def _top_up_while_idle(self) -> None:
+        """Idle on its pad with nothing to do and under ``top_up_fraction``: the ground crew swaps the pack now,
+        off the critical path, rather than when the next task is held for it (a task handed over meanwhile
+        that the battery covers starts at once: the swap is abandoned)."""
+        if (
+            self._battery is None
+            or self._swap_battery is None
+            or self.mission_ended
+            or self.out_of_service
+            or self._battery() >= self.top_up_fraction
+        ):
+            return
+        if self._swap_battery():
+            self.battery_swaps += 1
+            self.top_ups += 1
+            log.info("%s: battery swapped while idle on its pad at %.0f s", self.name, self.now_s)
+
     def _needs_swap(self, task: Task) -> bool:
         """The battery is under ``reserve_fraction``, or (with a ground crew) does not cover ``task``: the
         machine's battery budget (its ``battery_shortfall``: the task's flight, a budget of waiting for
@@ -333,6 +359,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                 else min(1.0, max(0.0, float(self._report_battery()))),
                 wind_mps=self._wind_reading(),
                 max_wind_mps=self._max_wind_mps,
+                swaps_batteries=self.swaps_batteries,
                 carrying=f.carrying,
                 flying_home=f.flying_home,
                 on_pad=f.on_pad,
@@ -368,6 +395,8 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         model = self.model
         if model is not None and (self._queue or self._current is not None or not model.finished):
             model.step(now_s)
+        elif model is not None:
+            self._top_up_while_idle()  # landed with nothing to do
 
     def _apply_recall(self, reason: str) -> None:
         """The operator's recall: assignments not started are failed back, the task in hand is aborted (the

@@ -40,6 +40,7 @@ from masonry.mission.airspace import ColumnClearance
 from masonry.mission.airspace_requests import queued_before
 from masonry.mission.airspace_state import Phase, UavAirspace, hold_candidates
 from masonry.mission.fence import volumes_in_fence
+from masonry.mission.swap_stagger import swap_due
 from masonry.mission.volumes import XY, Vec3, Volume, volumes_clear
 from masonry.planner.bounds import estimate_durations_s
 from masonry.planner.tasks import AdhesionTask
@@ -254,7 +255,7 @@ class LingerBook:
             return "held by the operator"
         if mc.wind_limit is not None and not mc.wind_limit.allows(uav):
             return "grounded by the wind"
-        if link.battery is None or link.battery < MIN_BATTERY:
+        if link.battery is None or link.battery < MIN_BATTERY or swap_due(mc, uav):
             return "battery"
         return None
 

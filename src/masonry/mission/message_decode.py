@@ -76,7 +76,8 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     on_pad = data.get("on_pad", False)
     finishing = data.get("finishing", False)
     out_of_service = data.get("out_of_service", False)
-    if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service)):
+    swaps = data.get("swaps_batteries", False)
+    if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service, swaps)):
         return None
     # the same value as Heartbeat(...) without the frozen dataclass's per-field object.__setattr__
     hb: Heartbeat = _new_message(Heartbeat)
@@ -89,6 +90,7 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         battery=battery,
         wind_mps=None,
         max_wind_mps=None,
+        swaps_batteries=swaps,
         carrying=carrying,
         flying_home=flying_home,
         on_pad=on_pad,
@@ -172,18 +174,24 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         battery=_battery(f),
         wind_mps=_speed(f, "wind_mps", 0.0, MAX_REPORTED_WIND_MPS, low_open=False),
         max_wind_mps=_speed(f, "max_wind_mps", 0.0, MAX_WIND_LIMIT_MPS, low_open=True),
+        swaps_batteries=_flag(f, "swaps_batteries"),
         **_facts(f),
     )
+
+
+def _flag(f: _Fields, name: str) -> bool:
+    """An optional true-or-false field (false when left out)."""
+    value = f.data.get(name, False)
+    if type(value) is not bool:
+        raise f.fail(name, f"must be true or false, got {value!r}")
+    return value
 
 
 def _facts(f: _Fields) -> dict[str, bool]:
     """A heartbeat's or progress report's facts (:data:`FACT_FIELDS`): each true or false, false when left out."""
     out: dict[str, bool] = {}
     for name in FACT_FIELDS:
-        value = f.data.get(name, False)
-        if type(value) is not bool:
-            raise f.fail(name, f"must be true or false, got {value!r}")
-        out[name] = value
+        out[name] = _flag(f, name)
     return out
 
 

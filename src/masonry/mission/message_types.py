@@ -39,6 +39,9 @@ class Heartbeat:
     #: gives it no task above that (None: not reported)
     wind_mps: float | None = None
     max_wind_mps: float | None = None
+    #: a ground crew swaps its pack on its pad (``UavHandler.swaps_batteries``): mission control may send it home
+    #: for an early swap (:mod:`masonry.mission.swap_stagger`)
+    swaps_batteries: bool = False
     #: its facts (:class:`~masonry.mission.uav_facts.UavFacts`): mission control decides from these, ``state``
     #: is for display
     carrying: bool = False

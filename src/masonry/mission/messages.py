@@ -35,7 +35,9 @@ design; one that does refuses a ``planned`` that is not the task moved by at mos
 :data:`~masonry.planner.as_built_plan.MAX_PLANNED_SHIFT_M`); 5 a heartbeat's and a progress report's typed facts
 ``carrying``, ``flying_home``, ``on_pad``, ``finishing`` and ``out_of_service`` (a result's ``out_of_service`` too) (:mod:`masonry.mission.uav_facts`; booleans, false
 when left out): mission control decides from them, not from the state name (a version-4 UAV sends none, and
-would be taken for one that never carries a brick).
+would be taken for one that never carries a brick); within 5, a heartbeat's ``swaps_batteries`` (a ground crew
+swaps its pack: mission control may send it home for an early swap, :mod:`masonry.mission.swap_stagger`; one
+that does not send it is never sent home early).
 """
 
 from __future__ import annotations
@@ -157,6 +159,8 @@ def encode(message: Message) -> bytes:
             body["wind_mps"] = message.wind_mps
         if message.max_wind_mps is not None:
             body["max_wind_mps"] = message.max_wind_mps
+        if message.swaps_batteries:
+            body["swaps_batteries"] = True
         body.update(_facts(message))
     elif isinstance(message, Assign):
         body.update(

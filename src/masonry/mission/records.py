@@ -67,6 +67,7 @@ class UavLink:
     lost_at_s: float | None = None
     distance_m: float = 0.0  # summed between successive reported positions
     battery: float | None = None  # as its heartbeats report it (None: they do not)
+    swaps_batteries: bool = False  # its heartbeats say a ground crew swaps its pack on its pad
     #: it was given a task and has not been seen in the air since (nor answered): a report that it is landed
     #: may predate the assignment, or it waits on the ground (a battery swap) before it takes off with it
     taking_off: bool = False

@@ -38,6 +38,9 @@ __all__ = [
 #: How long the ground crew takes to swap a landed UAV's battery (the handler keeps a reserve, see UavHandler).
 BATTERY_SWAP_S = 60.0
 
+#: The ground crew asked again after longer than this (s) starts its swap afresh (the UAV flew meanwhile).
+SWAP_GAP_S = 1.0
+
 #: Expected durations are rounded to this for the critical-path priority (see :func:`priority_durations_s`).
 PRIORITY_QUANTUM_S = 5.0
 
@@ -78,6 +81,7 @@ class GroundCrew:
         self.clock = clock
         self.uav = uav
         self._since_s: float | None = None
+        self._last_s: float | None = None  # the last call (a swap is one unbroken run of calls)
 
     def return_brick(self, brick_id: int) -> bool:
         """Take brick ``brick_id`` off the landed UAV's magnet and back to its pickup; True once it is there."""
@@ -94,8 +98,10 @@ class GroundCrew:
             self._since_s = None
             return False
         now = self.clock.now_s()
-        if self._since_s is None:
+        if self._since_s is None or self._last_s is None or now - self._last_s > SWAP_GAP_S:
+            # a swap left off (the UAV took a task the battery covered, see UavHandler.top_up_fraction) starts afresh
             self._since_s = now
+        self._last_s = now
         if now - self._since_s < BATTERY_SWAP_S:
             return False
         try:
