@@ -159,6 +159,28 @@ def _config(
     return None
 
 
+def _wall_offsets(
+    bp: Blueprint, world: World, done: set[str], tally: Tally, label: str
+) -> dict[int, np.ndarray]:
+    """Each released brick's offset from its design, the bricks put back at their pickup left out."""
+    offsets: dict[int, np.ndarray] = {}
+    for b in bp.bricks:
+        sim = world.bricks[b.id]
+        if b.placed or not sim.released or sim.state != "placed":
+            continue
+        off = np.asarray(sim.position_m) - np.asarray(b.position_m)
+        if f"B{b.id}" not in done and math.hypot(off[0], off[1]) > b.size_m[0]:
+            # a failed task's brick put back at its pickup (it lies released, on the ground there): not on the
+            # wall, not a placement error (it read 2.3-2.5 m off its design before 2026-12-05)
+            print(f"  put back: {label}: B{b.id}")
+            continue
+        offsets[b.id] = off
+        if abs(off[2]) > b.size_m[2] / 2.0:
+            tally.off_course += 1
+            tally.off_course_done += int(f"B{b.id}" in done)
+    return offsets
+
+
 def run_one(
     bp: Blueprint,
     vehicle: str,
@@ -190,21 +212,7 @@ def run_one(
         if att.kind == "brick" and att.status == "done" and att.phases is not None:
             tally.descend_s.append(att.phases.descending)
             tally.attempt_s.append(att.phases.total_s)
-    offsets: dict[int, np.ndarray] = {}
-    for b in bp.bricks:
-        sim = world.bricks[b.id]
-        if b.placed or not sim.released or sim.state != "placed":
-            continue
-        off = np.asarray(sim.position_m) - np.asarray(b.position_m)
-        if f"B{b.id}" not in done and math.hypot(off[0], off[1]) > b.size_m[0]:
-            # a failed task's brick put back at its pickup (it lies released, on the ground there): not on the
-            # wall, not a placement error (it read 2.3-2.5 m off its design before 2026-12-05)
-            print(f"  put back: {vehicle} {bp.name} seed {seed} wind {wind_mps:g}: B{b.id}")
-            continue
-        offsets[b.id] = off
-        if abs(offsets[b.id][2]) > b.size_m[2] / 2.0:
-            tally.off_course += 1
-            tally.off_course_done += int(f"B{b.id}" in done)
+    offsets = _wall_offsets(bp, world, done, tally, f"{vehicle} {bp.name} seed {seed} wind {wind_mps:g}")
     assert tally.design_m is not None and tally.neighbour_m is not None and tally.estimate_m is not None
     near = _neighbours(bp)
     for bid, off in offsets.items():

@@ -208,6 +208,28 @@ def test_low_battery_aborts_goes_home_and_retires() -> None:
     assert rig.link.results[-1].task_id == "B8" and "out of service" in (rig.link.results[-1].reason or "")
 
 
+def test_low_battery_after_the_release_finishes_the_task() -> None:
+    """The pack sags under 20 % as the UAV climbs out of the placement: the brick is on the wall, so the task is
+    done (not given up: its next attempt would look for the brick at its pickup), and the UAV flies home."""
+    sagged: list[float] = []
+
+    def sag(rig: Rig) -> None:
+        if not sagged and rig.uav.state == "place_ascend":
+            sagged.append(rig.clock.now_s())
+            rig.fc.at(rig.clock.now_s() + 0.05, battery_fraction=0.19)
+
+    rig = Rig("brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.001}).run(on_tick=sag)
+    (result,) = rig.link.results
+    assert sagged and result.status == "done", (result.status, result.reason)
+    assert result.placement_error_m is not None and result.placement_error_m < 0.015
+    assert not rig.followed("place_ascend", "failsafe")
+    # and before the release the same sag still gives the task up (the brick is put back)
+    early = Rig("brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.001})
+    early.fc.at(sagged[0] - 8.0, battery_fraction=0.19)
+    early.run()
+    assert early.link.results[0].status == "failed"
+
+
 def test_low_battery_with_the_brick_on_board_puts_it_back_then_goes_home() -> None:
     """The pack sags to 20.08 % in transport (a step the drain meter does not count as drain): below 20 % the task
     is given up, and the 10 % left above critical at 0.1 %/s (100 s) afford putting the brick back."""

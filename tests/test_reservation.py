@@ -239,3 +239,20 @@ def test_first_arrival_waits_a_little_for_a_lower_layer_rather_than_climb() -> N
     assert decide(clear, request, 0.0, Airspace(LAYERS_M, first_arrival=True)) == decide(
         clear, request, 0.0, Airspace(LAYERS_M)
     )
+
+
+def test_a_wait_no_layer_ends_names_who_stays_in_the_way_of_every_layer() -> None:
+    # a stays at its site (0, 0) and asks for its pad; b hovers for good across its way on the lowest layer, c waits
+    # for good over a's site at the second (an approach spot): its climb to any higher layer passes c. Both are in
+    # the way for good; naming only the lowest layer's (b, a landed or parked UAV with nothing to do) left c, whom
+    # mission control could send to its parking spot, out of the cycle breaker's sight (issue 27's pyramid, 3 + 2,
+    # --airspace table, once the swap stagger changed the trajectory: stalled 300 s)
+    table = Table().add(
+        Reservation("a", column((0.0, 0.0), 0.0, 1.2), 0.0, math.inf, "stay"),
+        Reservation("b", column((1.5, -1.5), LAYERS_M[0], LAYERS_M[0]), 0.0, math.inf, "stay"),
+        Reservation("c", column((0.3, 0.0), LAYERS_M[1], LAYERS_M[1]), 0.0, math.inf, "stay"),
+    )
+    request = Request("a", Place((0.0, 0.0), 1.2, "site"), None, Place((3.0, -3.0)))
+    wait = decide(table, request, 10.0, Airspace(LAYERS_M))
+    assert not isinstance(wait, Grant) and math.isinf(wait.until_s)
+    assert sorted(r.uav for r in wait.blocked_by) == ["b", "c"]

@@ -136,8 +136,18 @@ def link_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
     return Abort(reason, "land")
 
 
+#: Task states after the brick has left the magnet on the wall: the work is done, what is left is the climb out
+#: (which the way home begins with anyway), so a low battery does not give the task up there. Given up, the placed
+#: brick's task went back to the queue and its next attempt looked for the brick at its pickup ("not seen near its
+#: pickup after 3 climbs"): the wall stranded behind a brick that was on it.
+WORK_DONE_STATES = ("place_verify", "place_ascend")
+
+
 def battery_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
-    """The battery cannot carry on with the task (the model's budget, masonry.fsm.battery): give it up."""
+    """The battery cannot carry on with the task (the model's budget, masonry.fsm.battery): give it up (not
+    once the brick is released on the wall: :data:`WORK_DONE_STATES`)."""
+    if a.state in WORK_DONE_STATES:
+        return None
     short = a.battery_short(tel)
     return None if short is None else Abort(short, "battery_low")
 
@@ -252,6 +262,7 @@ __all__ = [
     "TASK",
     "TRIGGERS",
     "WATCHDOGS",
+    "WORK_DONE_STATES",
     "Abort",
     "Action",
     "Attempt",

@@ -292,17 +292,20 @@ def blockers(
     table: Table, request: Request, from_s: float, airspace: Airspace, *, standing: bool = False
 ) -> tuple[Reservation, ...]:
     """The other UAVs' reservations in the way of the request's flight at ``from_s`` on its lowest usable layer
-    (``standing``: instead, the open-ended ones in its way at any time)."""
+    (``standing``: instead, the open-ended ones in its way at any time on any usable layer: no layer fits, and
+    whoever waits in the way of a higher one may be what mission control must move, not only the lowest layer's
+    blocker; docs/safety.md, "Parking spots break the cycles")."""
     floor = _floor_m(request, airspace)
     layers = [z for z in airspace.layers_m if z >= floor] or [airspace.layers_m[-1]]
     parts = [(v, a, b) for v, _p, _t, a, b in _parts(request, layers[0], airspace)]
     if not standing:
         return earliest_start(table, request.uav, parts, from_s)[1]
     sep = table.separation
+    volumes = [v for z in layers for v, _p, _t, _a, _b in _parts(request, z, airspace)]
     return tuple(
         q
         for q in table.reservations
-        if q.uav != request.uav and q.open_ended and any(sep.conflict(v, q.volume) for v, _a, _b in parts)
+        if q.uav != request.uav and q.open_ended and any(sep.conflict(v, q.volume) for v in volumes)
     )
 
 
