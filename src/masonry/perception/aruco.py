@@ -344,7 +344,10 @@ def yaw_about_rad(
     else:
         k = np.cross(z, u)
         Kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-        R = np.eye(3) + Kx + Kx @ Kx / (1.0 + c)  # rotation taking z onto u (Rodrigues, unnormalised axis)
+        # 1 / (1 + c) without cancellation when up is close to -z (1 - c^2 = |k|^2), as estimation.yaw_about_rad:
+        # with up (1e-5, 0, -1) the plain quotient was off by 8e-8 rad (hypothesis found it)
+        s = (1.0 - c) / float(k @ k) if c < 0.0 else 1.0 / (1.0 + c)
+        R = np.eye(3) + Kx + Kx @ Kx * s  # rotation taking z onto u (Rodrigues, unnormalised axis)
     local = R.T @ v
     return math.atan2(float(local[1]), float(local[0]))
 
