@@ -14,6 +14,8 @@ Then, per tuning, the preset's settle time and hover error against the SITL's (t
 
     .venv/bin/python benchmarks/bench_vehicle_fit.py                          # simulated presets only
     .venv/bin/python benchmarks/bench_vehicle_fit.py --fc tcp:127.0.0.1:5760  # and the SITL (started by you)
+    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings px4 ideal --fc udpin:0.0.0.0:14540
+                                                          # the px4 model against ../shared/px4's real PX4 (SIH)
 """
 
 from __future__ import annotations
@@ -135,8 +137,14 @@ def main() -> None:
     ap.add_argument("--hover", type=float, default=10.0, help="seconds of hover after each leg")
     ap.add_argument("--tunings", nargs="+", default=["ideal", "arducopter"])
     ap.add_argument("--only-sitl", action="store_true", help="fly the SITL only (the presets take seconds)")
+    ap.add_argument(
+        "--model",
+        default="arducopter",
+        choices=["arducopter", "px4"],
+        help="the simulated vehicle compared with the SITL (px4 for ../shared/px4's SITL on --fc udpin:0.0.0.0:14540)",
+    )
     args = ap.parse_args()
-    targets = ["ideal", "arducopter"] + (["sitl"] if args.fc else [])
+    targets = ["ideal", args.model] + (["sitl"] if args.fc else [])
     if args.only_sitl:
         targets = ["sitl"]
     table: dict[tuple[str, str], list[Leg]] = {}
@@ -155,10 +163,10 @@ def main() -> None:
                     f"hover error {leg.hover_error_m * 100:5.2f} cm, swing {leg.swing_m * 100:5.1f} cm",
                     flush=True,
                 )
-    if "sitl" not in targets:
+    if "sitl" not in targets or args.only_sitl:
         return
     for tuning in args.tunings:
-        sitl, sim = table[("sitl", tuning)], table[("arducopter", tuning)]
+        sitl, sim = table[("sitl", tuning)], table[(args.model, tuning)]
         for name, get in (
             ("settle", lambda leg: leg.settle_s),
             ("hover error", lambda leg: leg.hover_error_m),
