@@ -8,6 +8,8 @@ references' mean lies from the neighbours' mean (what a brick aligned on them in
 to each neighbour's offset, and the neighbour its as-built pose was measured relative to::
 
     python benchmarks/bench_as_built_trace.py --walls rotated-bond,pyramid --seeds 10 --over 0.018
+
+(``--wind 4``: in 4 m/s wind with light turbulence, as ``bench_as_built.py --wind 4``.)
 """
 
 from __future__ import annotations
@@ -19,6 +21,8 @@ from bench_as_built import WALLS, _config, _neighbours
 
 from masonry.fsm.brick import BrickUav
 from masonry.mission.simulate import SimulatedMission
+from masonry.sim import Faults
+from masonry.sim.wind import WindConfig
 
 #: brick id -> what the wall alignment had at the release (filled by the wrapper below)
 SEEN: dict[int, tuple[list[int], float]] = {}
@@ -39,7 +43,11 @@ def main() -> None:
     parser.add_argument("--over", type=float, default=0.02)
     parser.add_argument("--vehicle", default="px4")
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    parser.add_argument(
+        "--wind", type=float, default=0.0, help="wind speed (m/s), light turbulence (0: calm)"
+    )
     args = parser.parse_args()
+    faults = Faults(wind=WindConfig(speed_mps=args.wind, turbulence="light")) if args.wind > 0 else None
     overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
     BrickUav.enter_place_release = _record  # type: ignore[method-assign]
     for wall in args.walls.split(","):
@@ -48,7 +56,9 @@ def main() -> None:
         for seed in range(args.seed0, args.seed0 + args.seeds):
             SEEN.clear()
             config = _config(args.vehicle, wall=True, side_look=True, trend=True, overrides=overrides)
-            mission = SimulatedMission.from_blueprint(bp, seed=seed, vehicle=args.vehicle, uav_config=config)
+            mission = SimulatedMission.from_blueprint(
+                bp, seed=seed, vehicle=args.vehicle, faults=faults, uav_config=config
+            )
             report = mission.run()
             offs = {
                 b.id: np.asarray(mission.world.bricks[b.id].position_m) - np.asarray(b.position_m)

@@ -72,6 +72,8 @@ class BrickAttempt(TaskAttempt):
     grasp_yaw_rad: float = 0.0  # the body's yaw at the grasp
     place_effector_target_m: np.ndarray = field(default_factory=lambda: np.zeros(3))
     release_error_m: float | None = None  # the effector's distance to its target at the release
+    #: aligned on the wall for the wind (``UavConfig.wall_in_wind_rad``, masonry.fsm.wind_lean)
+    in_wind: bool = False
     putback_reason: str = ""  # why the task was given up while the brick is being put back
     kept_on_board: str = ""  # flown home with the brick on the magnet: the failure reported once landed
 

@@ -24,6 +24,7 @@ from masonry.fsm.side_look import SideLook
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.fsm.wall_align import WallAlign
+from masonry.fsm.wind_lean import WindLean
 from masonry.geometry import wrap_angle_rad
 from masonry.marker_reuse import identify_radius_m
 from masonry.perception.estimation import EstimatorConfig, PoseWindow
@@ -92,9 +93,15 @@ class BrickUav(PutBack):
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         self._dropoff = DropoffReach(config.gate_window_s or 1.0)  # (masonry.fsm.dropoff_reach)
+        self._lean = WindLean()  # (masonry.fsm.wind_lean: the pickup's hovers)
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(s for s in leaf_states(BRICK_STATES) if s.split("_")[0] in BRICK_TASK_STATES)
+
+    @property
+    def on_wall(self) -> bool:
+        """This placement aligns on the wall's markers: ``align_on_wall``, or in a wind (masonry.fsm.wind_lean)."""
+        return self.config.align_on_wall or self.attempt.in_wind
 
     @property
     def climbs(self) -> int:
@@ -264,6 +271,7 @@ class BrickUav(PutBack):
 
     def do_pickup_align(self, tel: Telemetry) -> None:
         cfg = self.config
+        self._lean.follow(tel, cfg.control_period_s)
         if cfg.align_on_camera:
             track_brick(self, self._camera_align, tel)
         if self._aligned(tel):
@@ -300,6 +308,7 @@ class BrickUav(PutBack):
         self._fly_to(tel, self.effector.body_target(grasp, yaw), self.config.descent_duration_s, yaw)
 
     def do_pickup_descend(self, tel: Telemetry) -> None:
+        self._lean.follow(tel, self.config.control_period_s)
         if self.config.align_on_camera:
             track_brick(self, self._camera_align, tel)
         if self._now_s >= self.nav.end_s:
@@ -380,6 +389,7 @@ class BrickUav(PutBack):
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
+        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad)
         yaw = self._place_yaw_rad()
         body = self.effector.body_target(self._place_effector_target_m() + self._side.plan(self), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)

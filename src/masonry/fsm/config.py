@@ -69,6 +69,10 @@ class UavConfig:
     # of the wall its camera sees (masonry.fsm.wall_align): the absolute position's wander cancels and the brick
     # keeps its designed offsets to them; ``wall``: every brick's id and designed top-face centre (the blueprint's)
     align_on_wall: bool = False
+    # Issue 30, in wind: without align_on_wall, the brick UAV aligns on the wall all the same (the side look and
+    # the release gate with it) for a placement where its lean in the pickup's hovers, averaged, was over this
+    # (rad): a steady wind's (masonry.fsm.wind_lean). 0: never
+    wall_in_wind_rad: float = 0.0
     wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)

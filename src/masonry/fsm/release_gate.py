@@ -80,7 +80,7 @@ class ReleaseGate:
         self.relooks, self.looking, self.stale_age_s = 0, False, None
         self._height_m = RELOOK_CLIMB_M
         self.guarded = bool(
-            cfg.align_on_wall
+            uav.on_wall
             and cfg.release_fresh_s > 0.0
             and cfg.wall
             and supports_of(dict(cfg.wall), task.brick, task.size_m)

@@ -285,7 +285,7 @@ class SideLook:
         without ``align_on_wall`` and ``side_look``)."""
         self.offset_m, self.final = None, False
         cfg = uav.config
-        if not (cfg.align_on_wall and cfg.side_look and cfg.wall):
+        if not (uav.on_wall and cfg.side_look and cfg.wall):
             return np.zeros(3)
         found = look_offset_m(scene_of(uav))
         if found is None:

@@ -62,6 +62,10 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_relaxed_tolerance_m": 0.028,
         "align_patience_s": 4.0,
         "spray_tolerance_m": 0.03,
+        # in a wind (a tilt over 1.1 degrees averaged in the pickup's hovers; none in calm air) the brick UAV
+        # aligns on the wall's markers (masonry.fsm.wind_lean): 4 m/s, its bricks 14-16 mm mean, 30-42 mm at
+        # worst from their neighbours, aligned 9-11 / 20-28 (docs/performance/as-built.md)
+        "wall_in_wind_rad": 0.02,
         "pid": {
             "xy": {"kp": 1.0, "ki": 0.2, "output_limit": 1.5, "integral_limit": 0.5},
             "z": {"kp": 1.0, "ki": 0.1, "output_limit": 0.7, "integral_limit": 0.3},

@@ -186,7 +186,7 @@ class WallAlign:
     def track(self, uav: BrickUav, tel: Telemetry) -> bool:
         """One frame: move ``uav``'s motion and placement target with the wall's offset; True if moved (never
         without ``align_on_wall``)."""
-        if not uav.config.align_on_wall or not uav.config.wall:
+        if not uav.on_wall or not uav.config.wall:
             return False
         if self._wall is None:
             self._wall = dict(uav.config.wall)
@@ -241,7 +241,7 @@ class WallAlign:
     def carry(self, uav: BrickUav) -> None:
         """One tick of the descent: move ``uav``'s motion and placement target along the wall's offset's trend since
         the frames the target is the mean of (:mod:`masonry.fsm.wall_trend`; with ``align_on_wall`` only)."""
-        if not uav.config.align_on_wall:
+        if not uav.on_wall:
             return
         delta = self.trend.step(uav._now_s)
         if delta is None:
@@ -276,7 +276,7 @@ class WallAlign:
 
     def apply(self, uav: BrickUav) -> None:
         """A new leg toward the design (the descent): shift it by the offset found so far (with ``align_on_wall``)."""
-        if not uav.config.align_on_wall:
+        if not uav.on_wall:
             return
         offset = self.offset_m
         # the descent's target starts from the design again: no trend in it yet

@@ -1,0 +1,43 @@
+"""Whether the brick UAV places in a wind (issue 30): its lean in the pickup's hovers, averaged.
+
+In a wind a multirotor leans into it to hold its place, and the gusts swing the lean about; in calm air it leans
+only to accelerate, and the pickup's hovers (the alignment above the brick, the descent onto it) accelerate little.
+Measured on the simulated hexacopter (``masonry.sim.vehicle``, ``arducopter``), the tilt averaged as below at the
+drop-off's alignment: 0 in calm air, 2-17 degrees in 4 m/s and 2-21 in 2 m/s (light turbulence). The brick UAV averages its tilt (the lean's angle from
+the vertical, in whatever direction: turbulence swings the lean about the wind's) over those hovers, each tick,
+over ``LEAN_TAU_S``; at its drop-off's alignment a mean tilt over
+``UavConfig.wall_in_wind_rad`` says it places in a wind, and it then aligns on the wall's markers
+(:mod:`masonry.fsm.wall_align`, as ``align_on_wall`` does, with the side look and the release gate) for that
+placement. Why: on the ``arducopter`` preset (motion capture, no wall alignment) the bricks lay 14-16 mm mean,
+30-42 mm at worst from their neighbours in 4 m/s wind against 5-6 / 13-19 mm in calm air: the effector lingers
+1-4 cm off its drop-off in the gusts and is let go at the edge of r_pl, each brick where its own gust put it;
+aligned on the wall, a brick keeps its designed offsets to the bricks it sees (docs/performance/as-built.md). In
+calm air nothing changes: the wall alignment's looks and the side look's legs cost seconds a brick.
+"""
+
+from __future__ import annotations
+
+import math
+
+from masonry.ports import Telemetry
+
+__all__ = ["LEAN_TAU_S", "WindLean"]
+
+#: The time the lean is averaged over (s): turbulence tilts the UAV by as much again for a second or two.
+LEAN_TAU_S = 3.0
+
+
+class WindLean:
+    """The tilt (rad, from the vertical) averaged over the ticks given, over :data:`LEAN_TAU_S` (zero at first)."""
+
+    def __init__(self) -> None:
+        self.tilt_rad = 0.0
+
+    def follow(self, tel: Telemetry, dt_s: float) -> None:
+        """One tick of a hover: the mean moves toward ``tel``'s tilt (``dt_s`` since the last)."""
+        k = min(1.0, dt_s / LEAN_TAU_S)
+        self.tilt_rad += (math.hypot(tel.attitude_rad[0], tel.attitude_rad[1]) - self.tilt_rad) * k
+
+    def windy(self, threshold_rad: float) -> bool:
+        """The mean tilt is over ``threshold_rad`` (never for a threshold of 0 or less)."""
+        return 0.0 < threshold_rad < self.tilt_rad
