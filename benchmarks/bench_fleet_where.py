@@ -11,9 +11,10 @@ behind the pallet's last row), ``pads`` (the rest: the pad row). Printed per run
 2. seconds per (role, region) and, of those, the seconds still (slower than 0.05 m/s) in a flying state: a hold;
 3. task-seconds of waiting per (role, region, the waiting UAV's state, cause, what of the other UAV holds it),
    ``dependency`` and ``fleet`` left out, and per region of the UAV in the way;
-4. the battery trips: for each flight home with a task held or sent for a swap (state ``home`` then ``land``),
-   the seconds to the pad, on it, and from take-off to the first state off the way (``pickup_estimate`` or
-   ``hover``), with the pad's distance from the wall's middle.
+4. the trips home: for each flight home that lands and takes off again (state ``home``, ``land``, later
+   ``takeoff``: a battery swap, about 63 s on the pad, or a UAV with no task sent home), the seconds to the pad,
+   on it, and from take-off to its first state at the work (``pickup_estimate``, ``hover`` or ``descend``), with
+   the pad's x from the wall's middle.
 
 Usage: python benchmarks/bench_fleet_where.py [--walls 12m] [--fleets 4+2,8+4] [--seed 1]
 """
@@ -172,7 +173,7 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> None:
     for key, v in sorted(theirs.items(), key=lambda kv: -kv[1])[:10]:
         print(f"    {' '.join(f'{k:<10}' for k in key)} {v:7,.0f}")
     trips = battery_trips(samples)
-    print(f"  battery trips: {len(trips)}, to the pad / on it / back on the way (s), the pad's x (m)")
+    print(f"  trips home: {len(trips)}, to the pad / on it / back on the way (s), the pad's x (m)")
     for uav, t, home, on, back, x in trips:
         print(f"    {uav:<8} from {t:6,.0f} s: {home:5.0f} / {on:5.0f} / {back:5.0f}  x {x - middle_x:+5.1f}")
     if trips:
