@@ -144,12 +144,13 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> None:
     back_y = min(b.pickup_m[1] for b in blueprint.bricks if b.pickup_m is not None)
     xs = [b.position_m[0] for b in blueprint.bricks]
     middle_x = (min(xs) + max(xs)) / 2.0
+    sep = "n/a" if r.min_separation_m is None else f"{r.min_separation_m:.3f} m"
     pads = ", ".join(
         f"{u.name} {u.home_m[0] - middle_x:+.0f}" for u in fleet_for(blueprint, bricks, adhesion)
     )
     print(
         f"## {bricks} + {adhesion}, seed {seed}: makespan {r.makespan_s:,.0f} s, min separation "
-        f"{r.min_separation_m} m ({time.perf_counter() - t0:.0f} s wall)\n  pads (x from the wall's middle, m): {pads}"
+        f"{sep} ({time.perf_counter() - t0:.0f} s wall)\n  pads (x from the wall's middle, m): {pads}"
     )
     done: Counter[tuple[int, str]] = Counter()
     for t in r.tasks:
