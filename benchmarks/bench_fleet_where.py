@@ -67,10 +67,10 @@ def samples_of(events: list[MissionEvent]) -> dict[str, list[Sample]]:
 
 def time_by_region(
     samples: dict[str, list[Sample]], back_y: float
-) -> tuple[Counter[tuple[str, str]], Counter[tuple[str, str]]]:
+) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float]]:
     """Seconds per (role, region), and of those still in a flying state."""
-    spent: Counter[tuple[str, str]] = Counter()
-    still: Counter[tuple[str, str]] = Counter()
+    spent: dict[tuple[str, str], float] = defaultdict(float)
+    still: dict[tuple[str, str], float] = defaultdict(float)
     for uav, seq in samples.items():
         role = "brick" if uav.startswith("brick") else "adhesion"
         for (t0, st, p0), (t1, _, p1) in itertools.pairwise(seq):
@@ -86,15 +86,15 @@ def time_by_region(
 
 def waits_by_place(
     report: MissionReport, samples: dict[str, list[Sample]], back_y: float
-) -> tuple[Counter[tuple[str, ...]], Counter[tuple[str, ...]]]:
+) -> tuple[dict[tuple[str, ...], float], dict[tuple[str, ...], float]]:
     """Task-seconds waited per (role, region, state, cause, holds) and per (role, region, cause, other's region)."""
     times = {u: [s[0] for s in seq] for u, seq in samples.items()}
 
     def at(uav: str, t_s: float) -> Sample:
         return samples[uav][max(0, bisect.bisect_right(times[uav], t_s) - 1)]
 
-    mine: Counter[tuple[str, ...]] = Counter()
-    theirs: Counter[tuple[str, ...]] = Counter()
+    mine: dict[tuple[str, ...], float] = defaultdict(float)
+    theirs: dict[tuple[str, ...], float] = defaultdict(float)
     for t in report.tasks:
         for w in t.waits:
             c = w.cause
@@ -164,19 +164,21 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> None:
     samples = samples_of(sink.events)
     spent, still = time_by_region(samples, back_y)
     print("  seconds by region (still in flight):")
-    for key in sorted(spent):
-        print(f"    {key[0]:<9} {key[1]:<7} {spent[key]:7,.0f} ({still[key]:,.0f})")
+    for role, where in sorted(spent):
+        print(f"    {role:<9} {where:<7} {spent[(role, where)]:7,.0f} ({still.get((role, where), 0.0):,.0f})")
     mine, theirs = waits_by_place(r, samples, back_y)
     print("  waits (task-seconds) by role, region, state, cause, holds:")
-    for key, v in sorted(mine.items(), key=lambda kv: -kv[1])[:15]:
-        print(f"    {' '.join(f'{k:<15}' for k in key)} {v:7,.0f}")
+    for cells, v in sorted(mine.items(), key=lambda kv: -kv[1])[:15]:
+        print(f"    {' '.join(f'{k:<15}' for k in cells)} {v:7,.0f}")
     print("  waits by role, region, cause, and the region of the UAV in the way:")
-    for key, v in sorted(theirs.items(), key=lambda kv: -kv[1])[:10]:
-        print(f"    {' '.join(f'{k:<10}' for k in key)} {v:7,.0f}")
+    for cells, v in sorted(theirs.items(), key=lambda kv: -kv[1])[:10]:
+        print(f"    {' '.join(f'{k:<10}' for k in cells)} {v:7,.0f}")
     trips = battery_trips(samples)
     print(f"  trips home: {len(trips)}, to the pad / on it / back on the way (s), the pad's x (m)")
-    for uav, t, home, on, back, x in trips:
-        print(f"    {uav:<8} from {t:6,.0f} s: {home:5.0f} / {on:5.0f} / {back:5.0f}  x {x - middle_x:+5.1f}")
+    for uav, from_s, home, on, back, x in trips:
+        print(
+            f"    {uav:<8} from {from_s:6,.0f} s: {home:5.0f} / {on:5.0f} / {back:5.0f}  x {x - middle_x:+5.1f}"
+        )
     if trips:
         print(
             f"    total: to the pad {sum(h for _, _, h, _, _, _ in trips):,.0f} s, on it "
