@@ -173,7 +173,9 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     waited = () if c.gate is None else c.gate.waited_on(uav)
     keep_clear = linger_spans(c, uav, w.site)
     if keep_clear is None:
-        candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited)
+        # nearest the UAV first in each ring: a hold point round the far side of the site made a brick UAV
+        # back from the pallet fly past its site and stop there (issue 27: the pyramid at 1 + 1 -5.6 %)
+        candidates = hold_candidates(w.site, others, c.wait_radius_m, pads, waited, from_m=start)
     else:  # waiting for a task near where it is, clear of the work still to do (mission/linger.py)
         candidates = hold_candidates(start, others, c.wait_radius_m, pads, (*waited, *keep_clear))
         candidates = linger_spots(c, uav, start, candidates, keep_clear)

@@ -142,7 +142,7 @@ def wanted_flights(c: ColumnClearance, uav: str, u: UavAirspace) -> list[list[Vo
         others = [o for n, o in c.records.items() if n != uav]
         pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav]
         waited = () if c.gate is None else c.gate.waited_on(uav)
-        for hold in hold_candidates(w.site, others, c.wait_radius_m, pads, waited)[:6]:
+        for hold in hold_candidates(w.site, others, c.wait_radius_m, pads, waited, from_m=start)[:6]:
             out.extend(
                 c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1])) for k in range(c.max_layers)
             )
