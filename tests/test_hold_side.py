@@ -36,6 +36,15 @@ def test_a_uav_coming_from_the_south_waits_south_of_its_site_not_east_of_it():
     assert c.conflicts() == []
 
 
+def test_with_two_others_in_the_air_the_hold_points_keep_their_old_order():
+    c = ColumnClearance(R, BASE)
+    _working(c, "a", (0.0, 0.0, 1.2))
+    _working(c, "c", (8.0, 8.0, 1.2))  # a third UAV in the air: a hold point on b's side may be in its way
+    b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2))
+    assert b.hold_m is not None and b.hold_m[:2] == (2.0, 0.0)  # the first by its angle from east, as before
+    assert c.conflicts() == []
+
+
 def test_without_a_start_the_points_keep_their_old_order():
     site = (0.5, 0.0, 1.2)
     assert hold_points(site, [(0.0, 0.0)], [], R)[0] == (2.0, 0.0, 1.2)
