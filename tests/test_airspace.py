@@ -522,6 +522,9 @@ def test_mission_control_and_a_handler_exchange_clearances_over_the_transport():
     mc.step(0.6)
     assert handlers[b].request_clearance(near).granted is False  # b has not said it is at its hold point
     where[b] = (wait.hold_m[0], wait.hold_m[1], wait.layer_m)
+    # a's heartbeat: it is at the end of its leg, which is freed behind it (b waits on its own side of its site
+    # since issue 27's hold point on the UAV's side, off a's leg: a flies it at layer 0, over b's site)
+    handlers[a].step(1.6)
     handlers[b].step(1.7)  # its heartbeat tells where it is
     mc.step(1.8)
     handlers[b].step(1.9)

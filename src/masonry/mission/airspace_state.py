@@ -105,6 +105,7 @@ def hold_candidates(
     radius_m: float,
     pads: Iterable[XY] = (),
     waited_on: Iterable[tuple[XY, XY]] = (),
+    from_m: Vec3 | None = None,
 ) -> list[Vec3]:
     """Hold points near ``site`` for a UAV that must wait (:func:`masonry.mission.volumes.hold_points`), kept
     ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, from wherever they climb, hover or
@@ -114,7 +115,8 @@ def hold_candidates(
     waiting UAV's task waits on (``waited_on``: a brick UAV held over the bead it waits for, whose sprayer had
     not asked yet, blocked that sprayer until hold patience broke the wait). A request along a segment keeps
     hold points from the whole segment: its UAV climbs out at the far end (a hold point 1.2 m from the end of an
-    earlier sprayer's segment blocked that sprayer's climb out while it waited for the same spot)."""
+    earlier sprayer's segment blocked that sprayer's climb out while it waited for the same spot). Given
+    ``from_m`` (where the waiting UAV is), the points of a ring come nearest to it first (:func:`hold_points`)."""
     keep_out: list[XY] = list(pads)
     spans: list[tuple[XY, XY]] = list(waited_on)
     for o in others:
@@ -131,7 +133,7 @@ def hold_candidates(
                 keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
         # a hold hover is a layer (>= 1.1 m) above any pad, and legs are passed at another layer
         spans.extend((v.a, v.b) for v in o.volumes if v.kind not in ("leg", "pad"))
-    return hold_points(site, keep_out, spans, radius_m)
+    return hold_points(site, keep_out, spans, radius_m, None if from_m is None else (from_m[0], from_m[1]))
 
 
 __all__ = [

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 from masonry.battery_drain import DrainMeter, flight_left_s
 from masonry.mission.airspace import ColumnClearance
-from masonry.mission.airspace_requests import queued_before
+from masonry.mission.airspace_requests import hold_side, queued_before
 from masonry.mission.airspace_state import Phase, UavAirspace, hold_candidates
 from masonry.mission.fence import volumes_in_fence
 from masonry.mission.swap_stagger import swap_due
@@ -142,7 +142,8 @@ def wanted_flights(c: ColumnClearance, uav: str, u: UavAirspace) -> list[list[Vo
         others = [o for n, o in c.records.items() if n != uav]
         pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav]
         waited = () if c.gate is None else c.gate.waited_on(uav)
-        for hold in hold_candidates(w.site, others, c.wait_radius_m, pads, waited)[:6]:
+        side = hold_side(c, uav, start)  # (so the points its hold flight would try)
+        for hold in hold_candidates(w.site, others, c.wait_radius_m, pads, waited, from_m=side)[:6]:
             out.extend(
                 c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1])) for k in range(c.max_layers)
             )

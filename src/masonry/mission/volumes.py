@@ -199,10 +199,18 @@ def stopped_at(xy: XY, z: float, vols: Sequence[Volume]) -> list[Volume]:
 
 
 def hold_points(
-    site: Vec3, keep_out: Sequence[XY], spans: Sequence[tuple[XY, XY]], radius_m: float
+    site: Vec3,
+    keep_out: Sequence[XY],
+    spans: Sequence[tuple[XY, XY]],
+    radius_m: float,
+    from_m: XY | None = None,
 ) -> list[Vec3]:
     """Points around ``site`` (rings ``radius_m`` apart, nearest first, at least six when there are) at least
-    1.1 ``radius_m`` from every point of ``keep_out`` and every segment of ``spans``; one far point if none is."""
+    1.1 ``radius_m`` from every point of ``keep_out`` and every segment of ``spans``; one far point if none is.
+
+    Given ``from_m`` (where the UAV sent there is), the points of a ring come nearest to it first: on the way
+    from there to the site, not round the far side of it (issue 27; else by their angle from east).
+    """
     r = 1.1 * radius_m
     r2 = r * r
 
@@ -221,6 +229,11 @@ def hold_points(
                 out.append((ring * step, (c[0], c[1], site[2])))
         if len(out) >= 6:
             break
+    if from_m is not None:
+        fx, fy = from_m
+        out.sort(
+            key=lambda x: math.hypot(x[1][0] - fx, x[1][1] - fy)
+        )  # (stable: the rings' order wins below)
     return [p for _d, p in sorted(out, key=lambda x: x[0])] or [(site[0] + 8 * step, site[1], site[2])]
 
 
