@@ -25,15 +25,21 @@ from waiting import wait_until
 def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() -> None:
     sitl = SimpleNamespace(sim_time_s=0.0, physics_dt_s=0.01, vehicle=None)
     pace = SitlLockstep(sitl, wait_s=1.0)
-    assert pace.step_s(0.4, wall_s=0.0) == 0.4  # no grant yet: free at the time scale
+    assert [pace.step_s(0.4, wall_s=w) for w in (0.0, 5.0)] == [0.0, 0.0]  # no client yet: held at its start
+    pace.heard(-1.0)
+    pace.heard(5.0)  # (the first datagram counts)
+    assert pace.step_s(0.4, wall_s=5.0) == 0.4  # a client heard 6 s ago and no grant: it does not grant, free
+    assert pace.free_runs == 1
     sitl.sim_time_s = 0.4
     pace.grant(500)
     assert pace.step_s(0.4, wall_s=0.1) == pytest.approx(0.1)  # cut at the grant
     sitl.sim_time_s = 0.5
+    pace.grant(450)  # below the latest (a pre-flight's hold): stay, the grant is not taken back
+    assert pace.grant_ms == 500
     assert [pace.step_s(0.4, wall_s=w) for w in (0.2, 0.7, 1.2)] == [0.0, 0.0, 0.0]  # held, up to wait_s
-    assert pace.engaged and pace.free_runs == 0
+    assert pace.engaged and pace.free_runs == 1
     assert pace.step_s(0.4, wall_s=1.21) == 0.4  # 1.01 s of wall without a grant: the client is silent
-    assert not pace.engaged and pace.free_runs == 1
+    assert not pace.engaged and pace.free_runs == 2
     assert pace.step_s(0.4, wall_s=1.3) == 0.4
     sitl.sim_time_s = 1.3
     pace.grant(1400)  # the client grants again: lock-step again
@@ -171,7 +177,8 @@ def test_the_velocity_loop_judges_its_position_on_the_autopilots_time_in_lock_st
             assert fc.velocity_loop is not None
             wall_age = fc.position_age_s  # running free: the wall's age of the last position heard
             wait_until(lambda: _announced(clock), 10.0, "the SITL's lock-step announcement")
-            wait_until(lambda: fc.velocity_loop.observed_s is not None, 10.0, "the EKF's local position")
+            fc.wait_for_estimate(10.0)  # (its waits grant: the SITL is held at 0 s until its client grants)
+            assert fc.velocity_loop.observed_s is not None
             clock.sleep(0.1)
             assert (
                 fc.velocity_loop.observed_s == clock.now_s()

@@ -66,7 +66,8 @@ class SitlLockstep:
         self._held_since_s: float | None = None
         self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
-        self._armed_free = False  # held at the arming for wait_s without a grant: not again
+        self._armed_free = False  # held before the first grant for wait_s without one: not again
+        self.client_since_s: float | None = None  # wall time of the first datagram from a client
         self._last_setpoint: tuple[float, ...] = ()
         #: the telemetry drawn at the last physics step (sample): what LOCAL_POSITION_NED sends until the next step
         self.sampled: Telemetry | None = None
@@ -80,12 +81,20 @@ class SitlLockstep:
         if last_heartbeat_s is None or now_s - last_heartbeat_s > GREET_AFTER_S:
             self._sitl._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
 
+    def heard(self, wall_s: float) -> None:
+        """Any datagram from a client (wall s): the first starts the count of its silence before its first grant."""
+        if self.client_since_s is None:
+            self.client_since_s = wall_s
+
     def grant(self, time_boot_ms: int) -> None:
-        """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock."""
-        self.grant_ms = int(time_boot_ms)
+        """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock. One below the latest
+        (the client's hold during its pre-flight, :mod:`masonry.adapters.lockstep`) keeps the SITL held where it
+        is: simulated time never goes back, and a grant is never taken back."""
+        if self.grant_ms is None or time_boot_ms > self.grant_ms:
+            self.grant_ms = int(time_boot_ms)
+            self.grants += 1  # (the holds are not counted)
         self.engaged = True
         self._held_since_s = None
-        self.grants += 1
 
     def run(self, free_step_s: float, wall_s: float) -> None:
         """Advance the SITL in whole physics steps only, as far as :meth:`step_s` allows of the wall's
@@ -119,10 +128,15 @@ class SitlLockstep:
     def step_s(self, free_step_s: float, wall_s: float) -> float:
         """How far to advance simulated time now: ``free_step_s`` (``time_scale`` x the wall since the last
         step) running free; engaged, that cut at the grant; 0 once there (held), until ``wait_s`` of wall without
-        a grant has passed. Armed before the first grant, it is held too (the flight is the client's from its
-        arming: the wall between the arming and the fly loop's first grant is not flown), as long at most."""
-        if self.grant_ms is None and not self._armed_free and getattr(self._sitl.vehicle, "armed", False):
-            self.engaged = True  # held at the arming
+        a grant has passed. Before the first grant it is held too: at its start until a client is heard (nothing
+        flies), then at most ``wait_s`` of wall (a client that does not grant: it runs free then). The whole
+        flight, its pre-flight included, is then on the grants' time: a lock-step client's pre-flight grants its
+        waits (the estimate's convergence, the arming) from simulated time 0 (docs/sitl-lockstep.md)."""
+        if self.grant_ms is None and not self._armed_free:
+            if self.client_since_s is None:
+                return 0.0  # no client yet: the simulated time starts with one
+            if self._held_since_s is None:
+                self._held_since_s = self.client_since_s  # its silence counts from when it was first heard
             return self._held(free_step_s, wall_s)
         if not self.engaged or self.grant_ms is None:
             return free_step_s
