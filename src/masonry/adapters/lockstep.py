@@ -95,7 +95,7 @@ class LockstepClock:
         while self._preflight and not fc._stop.wait(HOLD_EVERY_S):
             held_ms = self._held_ms
             if self._preflight and held_ms is not None:
-                fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, held_ms))
+                fc.send_message(lambda mav, ms=held_ms: mav.system_time_send(time.time_ns() // 1000, ms))
 
     def _grant(self, duration_s: float) -> None:
         if duration_s <= 0.0:
@@ -107,7 +107,7 @@ class LockstepClock:
         fc.stream_paced_until_s = math.inf
         fc._stream_setpoint(fc.stream_clock())
         self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, grant_ms))
-        self._held_ms = grant_ms  # (after the grant: what the hold sends never comes before the setpoint above)
+        self._held_ms = grant_ms  # (set after the grant: a hold never comes before the setpoint above)
         self.grants += 1
         try:
             self._await_reply(grant_ms)
