@@ -43,6 +43,10 @@ GREET_AFTER_S = 3.0
 _BLOCK = 4096
 #: How far below a grant (s) the simulated time counts as having reached it (time_boot_ms is whole ms).
 _REACHED_S = 1e-6
+#: A longer wall gap (s) between two of the SITL loop's turns (every 4 ms or so) is the SITL itself unrun (a
+#: loaded machine), not counted as its client's silence: a client in the same process, or left unrun as long,
+#: could not have granted meanwhile (at load average 9.7 a flight ran free once so and placed 8.7 mm, not 12.7).
+UNRUN_S = 0.25
 
 
 class SitlLockstep:
@@ -68,6 +72,7 @@ class SitlLockstep:
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
         self._armed_free = False  # held before the first grant for wait_s without one: not again
         self.client_since_s: float | None = None  # wall time of the first datagram from a client
+        self._last_wall_s: float | None = None  # the wall time of the last step_s (the SITL loop's last turn)
         self._last_setpoint: tuple[float, ...] = ()
         #: the telemetry drawn at the last physics step (sample): what LOCAL_POSITION_NED sends until the next step
         self.sampled: Telemetry | None = None
@@ -132,6 +137,9 @@ class SitlLockstep:
         flies), then at most ``wait_s`` of wall (a client that does not grant: it runs free then). The whole
         flight, its pre-flight included, is then on the grants' time: a lock-step client's pre-flight grants its
         waits (the estimate's convergence, the arming) from simulated time 0 (docs/sitl-lockstep.md)."""
+        last_s, self._last_wall_s = self._last_wall_s, wall_s
+        if last_s is not None and wall_s - last_s > UNRUN_S and self._held_since_s is not None:
+            self._held_since_s += wall_s - last_s  # the SITL was not run: its client's silence is not counted
         if self.grant_ms is None and not self._armed_free:
             if self.client_since_s is None:
                 return 0.0  # no client yet: the simulated time starts with one
