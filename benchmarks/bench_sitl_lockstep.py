@@ -61,6 +61,7 @@ def fly(lockstep: bool, time_scale: float, placed_m: list[float]) -> str:
         + (f", grants {pace.grants}, free runs {pace.free_runs}" if pace is not None else "")
         + f", trace {hashlib.sha256(json.dumps(out.get('trace')).encode()).hexdigest()[:10]}"
         + ", load average {:.1f} {:.1f} {:.1f}".format(*os.getloadavg())
+        + (f"; {out.get('reason')}" if out["status"] != "done" else "")
     )
 
 

@@ -71,6 +71,7 @@ class SitlLockstep:
         self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
         self._armed_free = False  # held before the first grant for wait_s without one: not again
+        self._armed_once = False  # the vehicle has been armed: its noise is drawn afresh each step from then
         self.client_since_s: float | None = None  # wall time of the first datagram from a client
         self._last_wall_s: float | None = None  # the wall time of the last step_s (the SITL loop's last turn)
         self._last_setpoint: tuple[float, ...] = ()
@@ -169,12 +170,13 @@ class SitlLockstep:
 
     def sample(self) -> None:
         """After each physics step: the telemetry's noise sample for it (drawn per step, not per message sent).
-        Before the first grant is reached (the pre-flight, paced by the client's wall clock) every step draws
-        the same sample, so what the client measures standing (its ground height) is the same whenever it reads.
+        Until the first arming (the pre-flight, standing) every step draws the same sample, so what the client
+        measures standing (its ground height) is the same whichever of its messages it read.
         The streams send this sample until the next step: a command between steps (an arming, a take-off) clears
         the vehicle's own, and a message sent after it at a wall-chosen moment would draw the next step's noise."""
         vehicle = self._sitl.vehicle
-        if self._replied_ms is None and hasattr(vehicle, "reseed"):
+        self._armed_once = self._armed_once or bool(getattr(vehicle, "armed", False))
+        if not self._armed_once and hasattr(vehicle, "reseed"):
             # the seed's first block drawn once, not per step: a new generator and 4096 draws a step (0.3 ms) kept
             # a free-running SITL at x50 (x4 at load average 19) catching up for seconds, its streams silent
             if self._first is None:
@@ -202,7 +204,9 @@ class SitlLockstep:
             return
         if not self.at_grant():
             return
-        if self._replied_ms is None:  # the flight's first grant: its noise (sample) and its time start here
+        if (
+            self._replied_ms is None
+        ):  # the first grant (a lock-step client holds at 0 s): the flight's time starts
             self.epoch_s = sitl.sim_time_s
         self._replied_ms = self.grant_ms
         sitl._send_heartbeat()  # the whole state at the grant, the latest of each message when the reply comes
