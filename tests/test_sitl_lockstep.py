@@ -34,14 +34,15 @@ def test_the_sitl_runs_to_a_grant_holds_there_and_runs_free_after_a_silence() ->
     pace.grant(500)
     assert pace.step_s(0.4, wall_s=0.1) == pytest.approx(0.1)  # cut at the grant
     sitl.sim_time_s = 0.5
-    pace.grant(450)  # below the latest (a pre-flight's hold): stay, the grant is not taken back
-    assert pace.grant_ms == 500
+    pace.grant(450)  # below the latest (the client's hold): stay, the grant is not taken back
+    assert pace.grant_ms == 500 and pace.grants == 1
     # the SITL's loop turns every few ms; held, up to wait_s
     assert {pace.step_s(0.4, wall_s=w / 100) for w in range(20, 121)} == {0.0}
     assert pace.engaged and pace.free_runs == 1
     assert pace.step_s(0.4, wall_s=1.21) == 0.4  # 1.01 s of wall without a grant: the client is silent
     assert not pace.engaged and pace.free_runs == 2
-    assert pace.step_s(0.4, wall_s=1.3) == 0.4
+    pace.grant(500)  # a hold after the SITL has run free does not engage it again: only a grant does
+    assert pace.step_s(0.4, wall_s=1.3) == 0.4 and not pace.engaged
     sitl.sim_time_s = 1.3
     pace.grant(1400)  # the client grants again: lock-step again
     assert pace.engaged and pace.step_s(0.4, wall_s=1.4) == pytest.approx(0.1)

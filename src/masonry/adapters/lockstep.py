@@ -32,6 +32,11 @@ PACED_STREAM_S = 0.5
 #: again): the SITL counts a client silent for its ``wait_s`` (1 s) as gone and runs free, and a pre-flight's
 #: steps on this computer (the checks, the report, the machines' start) can take that long on a loaded machine.
 HOLD_EVERY_S = 0.25
+#: In flight the hold goes on at most this long (wall s) after a grant's reply: a fly loop the machine leaves
+#: unrun for more than the SITL's ``wait_s`` keeps the SITL at its grant (issue 29: under load such a flight ran
+#: free, PX4's offboard check fired and the same flight ended otherwise); a client that stops granting on purpose
+#: (its waits on the wall: a test's take-off, the end of the flight) lets it run free this much later.
+HOLD_IN_FLIGHT_S = 5.0
 
 
 class LockstepClock:
@@ -41,8 +46,9 @@ class LockstepClock:
 
     The SITL holds its time at 0 until its client first grants (:mod:`masonry.adapters.sitl_lockstep`): from the
     announcement on, the flight controller's own waits (the position estimate, the arming's, ``fc._pause``) grant
-    too, and until the fly loop's first :meth:`sleep` a thread tells the SITL every :data:`HOLD_EVERY_S` to stay
-    at the last grant (the pre-flight's waits on this computer's clock: commands, the checks). The whole flight,
+    too, and a thread tells the SITL every :data:`HOLD_EVERY_S` to stay at the last grant: until the fly loop's
+    first :meth:`sleep` (the pre-flight's waits on this computer's clock: commands, the checks), then for at most
+    :data:`HOLD_IN_FLIGHT_S` after each grant's reply (a loop left unrun by a loaded machine). The whole flight,
     pre-flight included, is then on the SITL's clock: the same seed, the same flight (docs/sitl-lockstep.md).
 
     Args:
@@ -58,6 +64,7 @@ class LockstepClock:
         self.late_replies = 0  # grants not answered within REPLY_WAIT_S
         self._held_ms: int | None = None  # the latest grant (or the time heard at the announcement)
         self._preflight = True  # until the fly loop's first sleep: the SITL is held between grants
+        self._replied_wall_s = -math.inf  # when (wall) the last grant was answered (or given up on)
 
     @property
     def lockstep(self) -> bool:
@@ -89,12 +96,15 @@ class LockstepClock:
         self._grant(duration_s)
 
     def _hold(self) -> None:
-        """The pre-flight's hold: the latest grant again every :data:`HOLD_EVERY_S` of wall, until the fly loop
-        grants or the link closes (the SITL takes a grant below its latest as "stay where you are")."""
+        """The hold: the latest grant again every :data:`HOLD_EVERY_S` of wall (the SITL takes a grant at or below
+        its latest as "stay where you are"), in the pre-flight until the fly loop grants, in flight for at most
+        :data:`HOLD_IN_FLIGHT_S` after a grant's reply; until the link closes."""
         fc = self._fc
-        while self._preflight and not fc._stop.wait(HOLD_EVERY_S):
+        while not fc._stop.wait(HOLD_EVERY_S):
             held_ms = self._held_ms
-            if self._preflight and held_ms is not None:
+            if held_ms is None:
+                continue
+            if self._preflight or time.monotonic() - self._replied_wall_s < HOLD_IN_FLIGHT_S:
                 fc.send_message(lambda mav, ms=held_ms: mav.system_time_send(time.time_ns() // 1000, ms))
 
     def _grant(self, duration_s: float) -> None:
@@ -113,6 +123,7 @@ class LockstepClock:
             self._await_reply(grant_ms)
         finally:
             fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
+            self._replied_wall_s = time.monotonic()
 
     def _await_reply(self, grant_ms: int) -> None:
         """Wait (at most :data:`REPLY_WAIT_S` of wall) for the SITL's reply to the grant ``grant_ms``."""

@@ -96,9 +96,12 @@ class SitlLockstep:
         """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock. One below the latest
         (the client's hold during its pre-flight, :mod:`masonry.adapters.lockstep`) keeps the SITL held where it
         is: simulated time never goes back, and a grant is never taken back."""
-        if self.grant_ms is None or time_boot_ms > self.grant_ms:
-            self.grant_ms = int(time_boot_ms)
-            self.grants += 1  # (the holds are not counted)
+        if self.grant_ms is not None and time_boot_ms <= self.grant_ms:  # a hold (not counted)
+            if self.engaged:  # the client is there: still held (once run free, only a grant engages again)
+                self._held_since_s = None
+            return
+        self.grant_ms = int(time_boot_ms)
+        self.grants += 1
         self.engaged = True
         self._held_since_s = None
 
