@@ -105,7 +105,10 @@ class LockstepClock:
             if held_ms is None:
                 continue
             if self._preflight or time.monotonic() - self._replied_wall_s < HOLD_IN_FLIGHT_S:
-                fc.send_message(lambda mav, ms=held_ms: mav.system_time_send(time.time_ns() // 1000, ms))
+                self._send_hold(held_ms)
+
+    def _send_hold(self, held_ms: int) -> None:
+        self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, held_ms))
 
     def _grant(self, duration_s: float) -> None:
         if duration_s <= 0.0:

@@ -88,7 +88,7 @@ class SitlLockstep:
             self._sitl._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
 
     def heard(self, wall_s: float) -> None:
-        """Any datagram from a client (wall s): the first starts the count of its silence before its first grant."""
+        """A datagram from a client (wall s): the first starts the count of its silence before its first grant."""
         if self.client_since_s is None:
             self.client_since_s = wall_s
 
