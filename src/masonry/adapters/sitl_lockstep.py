@@ -70,7 +70,7 @@ class SitlLockstep:
         self._held_since_s: float | None = None
         self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
-        self._armed_free = False  # held before the first grant for wait_s without one: not again
+        self._waited_free = False  # held before the first grant for wait_s without one: not again
         self._armed_once = False  # the vehicle has been armed: its noise is drawn afresh each step from then
         self.client_since_s: float | None = None  # wall time of the first datagram from a client
         self._last_wall_s: float | None = None  # the wall time of the last step_s (the SITL loop's last turn)
@@ -144,7 +144,7 @@ class SitlLockstep:
         last_s, self._last_wall_s = self._last_wall_s, wall_s
         if last_s is not None and wall_s - last_s > UNRUN_S and self._held_since_s is not None:
             self._held_since_s += wall_s - last_s  # the SITL was not run: its client's silence is not counted
-        if self.grant_ms is None and not self._armed_free:
+        if self.grant_ms is None and not self._waited_free:
             if self.client_since_s is None:
                 return 0.0  # no client yet: the simulated time starts with one
             if self._held_since_s is None:
@@ -165,7 +165,7 @@ class SitlLockstep:
             wall_s - self._held_since_s > self.wait_s
         ):  # the client is silent: run free until it grants again
             self.engaged = False
-            self._armed_free = True
+            self._waited_free = True
             self._held_since_s = None
             self.free_runs += 1
             return free_step_s
@@ -207,9 +207,7 @@ class SitlLockstep:
             return
         if not self.at_grant():
             return
-        if (
-            self._replied_ms is None
-        ):  # the first grant (a lock-step client holds at 0 s): the flight's time starts
+        if self._replied_ms is None:  # the first grant (a lock-step client: at 0 s), the flight time starts
             self.epoch_s = sitl.sim_time_s
         self._replied_ms = self.grant_ms
         sitl._send_heartbeat()  # the whole state at the grant, the latest of each message when the reply comes
