@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import queue
+import threading
 import time
 from typing import TYPE_CHECKING
 
@@ -27,12 +28,28 @@ REPLY_WAIT_S = 2.0
 #: reply the thread streams nothing); a client that stops granting (its waits on the wall: arming, commands) has
 #: its thread stream again after this, to a SITL held at its last grant.
 PACED_STREAM_S = 0.5
+#: How often (wall s) a client in its pre-flight tells a SITL held at its last grant to stay there (the grant
+#: again): the SITL counts a client silent for its ``wait_s`` (1 s) as gone and runs free, and a pre-flight's
+#: steps on this computer (the checks, the report, the machines' start) can take that long on a loaded machine.
+HOLD_EVERY_S = 0.25
+#: In flight the hold goes on at most this long (wall s) after a grant's reply: a fly loop the machine leaves
+#: unrun for more than the SITL's ``wait_s`` keeps the SITL at its grant (issue 29: under load such a flight ran
+#: free, PX4's offboard check fired and the same flight ended otherwise); a client that stops granting on purpose
+#: (its waits on the wall: a test's take-off, the end of the flight) lets it run free this much later.
+HOLD_IN_FLIGHT_S = 5.0
 
 
 class LockstepClock:
     """The autopilot's clock (``fc.clock``) whose ``sleep`` keeps in lock-step with a SITL that asks for it.
 
     Make it before ``fc.connect()``: the SITL announces lock-step when it first hears the ground station.
+
+    The SITL holds its time at 0 until its client first grants (:mod:`masonry.adapters.sitl_lockstep`): from the
+    announcement on, the flight controller's own waits (the position estimate, the arming's, ``fc._pause``) grant
+    too, and a thread tells the SITL every :data:`HOLD_EVERY_S` to stay at the last grant: until the fly loop's
+    first :meth:`sleep` (the pre-flight's waits on this computer's clock: commands, the checks), then for at most
+    :data:`HOLD_IN_FLIGHT_S` after each grant's reply (a loop left unrun by a loaded machine). The whole flight,
+    pre-flight included, is then on the SITL's clock: the same seed, the same flight (docs/sitl-lockstep.md).
 
     Args:
         fc: the MAVLink flight controller, not yet connected.
@@ -45,6 +62,9 @@ class LockstepClock:
         self._now_s = -math.inf  # in lock-step: the SITL's time as last heard, never extrapolated
         self.grants = 0
         self.late_replies = 0  # grants not answered within REPLY_WAIT_S
+        self._held_ms: int | None = None  # the latest grant (or the time heard at the announcement)
+        self._preflight = True  # until the fly loop's first sleep: the SITL is held between grants
+        self._replied_wall_s = -math.inf  # when (wall) the last grant was answered (or given up on)
 
     @property
     def lockstep(self) -> bool:
@@ -62,10 +82,35 @@ class LockstepClock:
         return self._now_s
 
     def sleep(self, duration_s: float) -> None:
-        """Wait ``duration_s`` of the autopilot's time: a grant and its reply in lock-step, else a sleep."""
+        """Wait ``duration_s`` of the autopilot's time: a grant and its reply in lock-step, else a sleep. The fly
+        loop's: its first ends the pre-flight's hold (the loop grants from here on)."""
         if not self.lockstep and not self._announced():
             self._fc.clock.sleep(duration_s)
             return
+        if duration_s > 0.0:
+            self._preflight = False
+        self._grant(duration_s)
+
+    def _pause(self, duration_s: float) -> None:
+        """The flight controller's own waits (``fc.wait_hook``), in lock-step: a grant, the pre-flight held."""
+        self._grant(duration_s)
+
+    def _hold(self) -> None:
+        """The hold: the latest grant again every :data:`HOLD_EVERY_S` of wall (the SITL takes a grant at or below
+        its latest as "stay where you are"), in the pre-flight until the fly loop grants, in flight for at most
+        :data:`HOLD_IN_FLIGHT_S` after a grant's reply; until the link closes."""
+        fc = self._fc
+        while not fc._stop.wait(HOLD_EVERY_S):
+            held_ms = self._held_ms
+            if held_ms is None:
+                continue
+            if self._preflight or time.monotonic() - self._replied_wall_s < HOLD_IN_FLIGHT_S:
+                self._send_hold(held_ms)
+
+    def _send_hold(self, held_ms: int) -> None:
+        self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, held_ms))
+
+    def _grant(self, duration_s: float) -> None:
         if duration_s <= 0.0:
             return
         grant_ms = round((self.now_s() + duration_s) * 1000.0)
@@ -75,11 +120,13 @@ class LockstepClock:
         fc.stream_paced_until_s = math.inf
         fc._stream_setpoint(fc.stream_clock())
         self._fc.send_message(lambda mav: mav.system_time_send(time.time_ns() // 1000, grant_ms))
+        self._held_ms = grant_ms  # (set after the grant: a hold never comes before the setpoint above)
         self.grants += 1
         try:
             self._await_reply(grant_ms)
         finally:
             fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
+            self._replied_wall_s = time.monotonic()
 
     def _await_reply(self, grant_ms: int) -> None:
         """Wait (at most :data:`REPLY_WAIT_S` of wall) for the SITL's reply to the grant ``grant_ms``."""
@@ -116,4 +163,7 @@ class LockstepClock:
                 self._fc.position_age_s = self._position_age_s
                 self._now_s = self._fc.clock.now_s()  # on from where the loop's clock read last
                 self._replies = self._fc.listen(("SYSTEM_TIME",))
+                self._held_ms = round(self._now_s * 1000.0)
+                self._fc.wait_hook = self._pause
+                threading.Thread(target=self._hold, name="lockstep-hold", daemon=True).start()
                 return True

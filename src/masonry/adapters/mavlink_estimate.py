@@ -29,11 +29,18 @@ class EstimateLink(MavlinkLink):
     #: (``masonry fly --mission``: the UAV's heartbeat to mission control) goes on meanwhile (issue 29,
     #: :class:`masonry.ports.WaitsAlive`). None: nothing to keep alive.
     keep_alive: Callable[[], None] | None = None
+    #: how those waits wait ``seconds`` of the autopilot's time; None: on this computer's clock. A SITL in
+    #: lock-step (:class:`masonry.adapters.lockstep.LockstepClock` sets it) has its time granted instead: it is
+    #: held while nothing is granted, so the pre-flight, too, is on its clock (docs/sitl-lockstep.md).
+    wait_hook: Callable[[float], None] | None = None
 
     def _pause(self, seconds: float) -> bool:
         """Wait ``seconds`` (True if cut short: the link is closing), the loop around kept alive first."""
         if self.keep_alive is not None:
             self.keep_alive()
+        if self.wait_hook is not None:
+            self.wait_hook(seconds)
+            return self._stop.is_set()
         return self._stop.wait(seconds)
 
     def estimate_status(self) -> str:

@@ -321,6 +321,8 @@ class MavlinkSitl:
             self._handle(msg)
 
     def _handle(self, msg: Any) -> None:
+        if self.lockstep is not None:
+            self.lockstep.heard(time.monotonic())
         if self.fence.handle(self, msg):
             return
         kind = msg.get_type()

@@ -43,6 +43,10 @@ GREET_AFTER_S = 3.0
 _BLOCK = 4096
 #: How far below a grant (s) the simulated time counts as having reached it (time_boot_ms is whole ms).
 _REACHED_S = 1e-6
+#: A longer wall gap (s) between two of the SITL loop's turns (every 4 ms or so) is the SITL itself unrun (a
+#: loaded machine), not counted as its client's silence: a client in the same process, or left unrun as long,
+#: could not have granted meanwhile (at load average 9.7 a flight ran free once so and placed 8.7 mm, not 12.7).
+UNRUN_S = 0.25
 
 
 class SitlLockstep:
@@ -66,7 +70,10 @@ class SitlLockstep:
         self._held_since_s: float | None = None
         self._owed_s = 0.0  # simulated time owed (less than a physics step), run free
         self.epoch_s = 0.0  # the simulated time the first grant was reached at (the flight's own time starts)
-        self._armed_free = False  # held at the arming for wait_s without a grant: not again
+        self._waited_free = False  # held before the first grant for wait_s without one: not again
+        self._armed_once = False  # the vehicle has been armed: its noise is drawn afresh each step from then
+        self.client_since_s: float | None = None  # wall time of the first datagram from a client
+        self._last_wall_s: float | None = None  # the wall time of the last step_s (the SITL loop's last turn)
         self._last_setpoint: tuple[float, ...] = ()
         #: the telemetry drawn at the last physics step (sample): what LOCAL_POSITION_NED sends until the next step
         self.sampled: Telemetry | None = None
@@ -80,12 +87,23 @@ class SitlLockstep:
         if last_heartbeat_s is None or now_s - last_heartbeat_s > GREET_AFTER_S:
             self._sitl._text(MAV_SEVERITY_INFO, LOCKSTEP_TEXT)
 
+    def heard(self, wall_s: float) -> None:
+        """A datagram from a client (wall s): the first starts the count of its silence before its first grant."""
+        if self.client_since_s is None:
+            self.client_since_s = wall_s
+
     def grant(self, time_boot_ms: int) -> None:
-        """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock."""
+        """A client's SYSTEM_TIME: it next acts at ``time_boot_ms`` of the SITL's clock. One below the latest
+        (the client's hold during its pre-flight, :mod:`masonry.adapters.lockstep`) keeps the SITL held where it
+        is: simulated time never goes back, and a grant is never taken back."""
+        if self.grant_ms is not None and time_boot_ms <= self.grant_ms:  # a hold (not counted)
+            if self.engaged:  # the client is there: still held (once run free, only a grant engages again)
+                self._held_since_s = None
+            return
         self.grant_ms = int(time_boot_ms)
+        self.grants += 1
         self.engaged = True
         self._held_since_s = None
-        self.grants += 1
 
     def run(self, free_step_s: float, wall_s: float) -> None:
         """Advance the SITL in whole physics steps only, as far as :meth:`step_s` allows of the wall's
@@ -119,10 +137,18 @@ class SitlLockstep:
     def step_s(self, free_step_s: float, wall_s: float) -> float:
         """How far to advance simulated time now: ``free_step_s`` (``time_scale`` x the wall since the last
         step) running free; engaged, that cut at the grant; 0 once there (held), until ``wait_s`` of wall without
-        a grant has passed. Armed before the first grant, it is held too (the flight is the client's from its
-        arming: the wall between the arming and the fly loop's first grant is not flown), as long at most."""
-        if self.grant_ms is None and not self._armed_free and getattr(self._sitl.vehicle, "armed", False):
-            self.engaged = True  # held at the arming
+        a grant has passed. Before the first grant it is held too: at its start until a client is heard (nothing
+        flies), then at most ``wait_s`` of wall (a client that does not grant: it runs free then). The whole
+        flight, its pre-flight included, is then on the grants' time: a lock-step client's pre-flight grants its
+        waits (the estimate's convergence, the arming) from simulated time 0 (docs/sitl-lockstep.md)."""
+        last_s, self._last_wall_s = self._last_wall_s, wall_s
+        if last_s is not None and wall_s - last_s > UNRUN_S and self._held_since_s is not None:
+            self._held_since_s += wall_s - last_s  # the SITL was not run: its client's silence is not counted
+        if self.grant_ms is None and not self._waited_free:
+            if self.client_since_s is None:
+                return 0.0  # no client yet: the simulated time starts with one
+            if self._held_since_s is None:
+                self._held_since_s = self.client_since_s  # its silence counts from when it was first heard
             return self._held(free_step_s, wall_s)
         if not self.engaged or self.grant_ms is None:
             return free_step_s
@@ -139,7 +165,7 @@ class SitlLockstep:
             wall_s - self._held_since_s > self.wait_s
         ):  # the client is silent: run free until it grants again
             self.engaged = False
-            self._armed_free = True
+            self._waited_free = True
             self._held_since_s = None
             self.free_runs += 1
             return free_step_s
@@ -147,12 +173,13 @@ class SitlLockstep:
 
     def sample(self) -> None:
         """After each physics step: the telemetry's noise sample for it (drawn per step, not per message sent).
-        Before the first grant is reached (the pre-flight, paced by the client's wall clock) every step draws
-        the same sample, so what the client measures standing (its ground height) is the same whenever it reads.
+        Until the first arming (the pre-flight, standing) every step draws the same sample, so what the client
+        measures standing (its ground height) is the same whichever of its messages it read.
         The streams send this sample until the next step: a command between steps (an arming, a take-off) clears
         the vehicle's own, and a message sent after it at a wall-chosen moment would draw the next step's noise."""
         vehicle = self._sitl.vehicle
-        if self._replied_ms is None and hasattr(vehicle, "reseed"):
+        self._armed_once = self._armed_once or bool(getattr(vehicle, "armed", False))
+        if not self._armed_once and hasattr(vehicle, "reseed"):
             # the seed's first block drawn once, not per step: a new generator and 4096 draws a step (0.3 ms) kept
             # a free-running SITL at x50 (x4 at load average 19) catching up for seconds, its streams silent
             if self._first is None:
@@ -180,7 +207,7 @@ class SitlLockstep:
             return
         if not self.at_grant():
             return
-        if self._replied_ms is None:  # the flight's first grant: its noise (sample) and its time start here
+        if self._replied_ms is None:  # the first grant (a lock-step client: at 0 s), the flight time starts
             self.epoch_s = sitl.sim_time_s
         self._replied_ms = self.grant_ms
         sitl._send_heartbeat()  # the whole state at the grant, the latest of each message when the reply comes
