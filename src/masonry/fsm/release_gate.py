@@ -28,10 +28,10 @@ let go on the offset the last look measured (its age kept in ``ReleaseGate.stale
 measures where the brick ended up). Failing the descent instead, but in the last one allowed, was measured worse
 (docs/performance/as-built.md).
 
-Inside r_pl, on the side look's last leg, the release waits for the nearest tick (``UavConfig.release_closest_s``,
-the ``px4`` preset's 0.1 s: issue 30, branch ``px4tail``). That leg arrives at 0.2-0.3 m/s, 2-3 cm a tick, and the first tick
-inside the 1.5 cm disc let go anywhere in it: of the 6 px4 bricks over 2 cm off their neighbours over seeds
-10-19 (towers, pyramid), the release (the true effector off the true target) was 12-20 mm in every one. So while
+Inside r_pl, on the side look's last leg, the release waits for the nearest tick
+(``UavConfig.release_closest_s``, the ``px4`` preset's 0.1 s: issue 30, branch ``px4tail``). That leg arrives at
+0.2-0.3 m/s, 2-3 cm a tick, and the first tick inside the 1.5 cm disc let go anywhere in it: of the 6 px4
+bricks over 2 cm off their neighbours over seeds 10-19 (towers, pyramid), the release (the true effector off the true target) was 12-20 mm in every one. So while
 the effector's velocity brings it more than 1 mm nearer by the next tick, and the wall's sighting will still be
 fresh then, it waits that tick; past the freshness it lets go as before (a hold into a look back up was measured
 worse: the drop-off ages, docs/performance/as-built.md, "The px4 tail over 20 seeds"). On every descent, not
@@ -102,10 +102,12 @@ class ReleaseGate:
         return not self.guarded or uav._now_s - uav._wall.seen_s <= uav.config.release_fresh_s
 
     def closing(self, uav: BrickUav, tel: Telemetry) -> bool:
-        """Within r_pl of the drop-off this tick, on the side look's last leg: True to let one more tick pass,
-        while the effector's velocity brings it more than 1 mm nearer by the next tick and the wall's sighting is
-        still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring). Never past the
-        sighting's freshness: a release held into a look back up ages the drop-off more than it gains."""
+        """Within r_pl of the drop-off this tick, on the side look's last leg: True to let one more tick pass.
+
+        While the effector's velocity brings it more than 1 mm nearer by the next tick and the wall's sighting is
+        still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring).
+        Never past the sighting's freshness: a release held into a look back up ages the drop-off more than it
+        gains."""
         dt_s = uav.config.release_closest_s
         if (
             dt_s <= 0.0
