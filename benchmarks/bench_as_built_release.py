@@ -4,9 +4,12 @@ For every brick of ``bench_as_built.py``'s walls that stands on one support, at 
 effector's distance from the true point its target meant (the target less the position source's wander then);
 *align*, that point's distance from where the support truly puts the brick; *carry*, the rest (the conical
 guide's residual on the magnet, the world's release scatter). It prints rms / max mm of each, the measured release
-error and the tick's position noise, and the worst bricks::
+error and the tick's position noise, the align part by the wall's sighting's age at the release, and the worst
+bricks (with their speed and time from the descent leg's planned end at the release). ``--neighbours`` takes
+every brick with placed neighbours instead, against where their mean puts it (the benchmark's "neighbours" figure)::
 
     python benchmarks/bench_as_built_release.py --walls towers --seeds 10 [--set NAME=VALUE ...]
+    python benchmarks/bench_as_built_release.py --walls towers,pyramid --seeds 10 --seed0 10 --neighbours --worst 8
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import argparse
 import math
 
 import numpy as np
-from bench_as_built import WALLS, _config
+from bench_as_built import WALLS, _config, _neighbours
 
 from masonry.fsm.brick import BrickUav
 from masonry.fsm.wall_align import supports_of
@@ -41,6 +44,8 @@ def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
         "true_target": (target - gps)[:2],
         "effector": np.asarray(sim.effector_m(), dtype=float)[:2],
         "age_s": self._now_s - self._wall.seen_s,
+        "speed": np.asarray(sim.vehicle.velocity_mps, dtype=float)[:2],
+        "past_end_s": self._now_s - self.nav.end_s,
     }
     _release(self, *args, **kwargs)
 
@@ -56,12 +61,18 @@ def main() -> None:
     parser.add_argument("--seed0", type=int, default=0)
     parser.add_argument("--worst", type=int, default=8)
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
+    parser.add_argument(
+        "--neighbours",
+        action="store_true",
+        help="every brick with placed neighbours, against their mean (the benchmark's figure), not only one support",
+    )
     args = parser.parse_args()
     overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
     BrickUav.enter_place_release = _record  # type: ignore[method-assign]
     rows: list[tuple[str, int, int, dict[str, np.ndarray]]] = []
     for wall in args.walls.split(","):
-        bp = WALLS[wall]()
+        bp = WALLS[wall](0)
+        near = _neighbours(bp)
         design = {
             b.id: (b.position_m[0], b.position_m[1], b.position_m[2] + b.size_m[2] / 2) for b in bp.bricks
         }
@@ -73,11 +84,17 @@ def main() -> None:
             mission.run()
             for b in bp.bricks:
                 below = supports_of(design, b.id, b.size_m)
-                if b.id not in RELEASES or len(below) != 1:
+                if args.neighbours:
+                    below = {o for o in near[b.id] if o in RELEASES}
+                if b.id not in RELEASES or not below or (len(below) != 1 and not args.neighbours):
                     continue
-                s = next(iter(below))
-                want = np.asarray(mission.world.bricks[s].position_m)[:2] + (
-                    np.asarray(b.position_m)[:2] - np.asarray(bp.brick(s).position_m)[:2]
+                want = np.mean(
+                    [
+                        np.asarray(mission.world.bricks[s].position_m)[:2]
+                        + (np.asarray(b.position_m)[:2] - np.asarray(bp.brick(s).position_m)[:2])
+                        for s in below
+                    ],
+                    axis=0,
                 )
                 r = RELEASES[b.id]
                 final = np.asarray(mission.world.bricks[b.id].position_m)[:2] - want
@@ -85,18 +102,28 @@ def main() -> None:
                 align = np.asarray(r["true_target"]) - want
                 parts = {"final": final, "release": release, "align": align, "carry": final - release - align}
                 rows.append((wall, seed, b.id, {**parts, **{k: np.asarray(v) for k, v in r.items()}}))
-    print(f"{len(rows)} bricks on one support")
+    print(f"{len(rows)} bricks {'with neighbours' if args.neighbours else 'on one support'}")
     for name in ("final", "release", "align", "carry", "measured", "noise"):
         vs = [r[3][name] for r in rows]
         print(
             f"{name:9s} rms {_rms_mm(vs):5.1f} mm, max {max(float(np.linalg.norm(v)) for v in vs) * 1000:5.1f} mm"
         )
+    ages = sorted({round(float(r[3]["age_s"]), 1) for r in rows})
+    print(
+        "align rms by the sighting's age at the release: "
+        + ", ".join(
+            f"{a:.1f} s {_rms_mm([r[3]['align'] for r in rows if round(float(r[3]['age_s']), 1) == a]):.1f} mm "
+            f"({sum(1 for r in rows if round(float(r[3]['age_s']), 1) == a)})"
+            for a in ages
+        )
+    )
     for wall, seed, bid, p in sorted(rows, key=lambda r: -float(np.linalg.norm(r[3]["final"])))[: args.worst]:
         mm = {k: float(np.linalg.norm(p[k])) * 1000 for k in ("final", "release", "align", "carry", "noise")}
         print(
             f"{wall} seed {seed} B{bid}: {mm['final']:.1f} mm = release {mm['release']:.1f} + align "
             f"{mm['align']:.1f} + carry {mm['carry']:.1f} (vectors); measured {np.round(p['measured'] * 1000, 1)}, "
-            f"the tick's noise {mm['noise']:.1f} mm; wall seen {float(p['age_s']):.2f} s before"
+            f"the tick's noise {mm['noise']:.1f} mm; wall seen {float(p['age_s']):.2f} s before; "
+            f"{float(np.linalg.norm(p['speed'])):.2f} m/s, {float(p['past_end_s']):+.2f} s past the leg's end"
         )
 
 

@@ -6,15 +6,21 @@ said; a vehicle that finds the wall at every look but cannot arrive in time is r
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from fsm_rig import BRICK_ID, Rig, brick_task
 from masonry.fakes import FakeBrick
 from masonry.fsm.config import UavConfig
-from masonry.fsm.release_gate import MAX_RELOOKS
+from masonry.fsm.release_gate import MAX_RELOOKS, ReleaseGate
 from masonry.fsm.tuning import uav_settings
 from masonry.fsm.wall_align import supports_of, wall_offset_m
+
+if TYPE_CHECKING:
+    from masonry.fsm.brick import BrickUav
+    from masonry.ports import Telemetry
 
 DROP = (0.0, 0.5, 0.25)  # the brick's centre: a second-course brick
 SUPPORT = 3
@@ -170,3 +176,44 @@ def test_a_stale_offset_at_the_end_of_the_side_looks_descent_is_looked_at_again_
     assert watch.look_m is not None and watch.release_m is not None
     # the look began at the pre-release point, beside the drop-off (before: at the drop-off, 0.5 mm from it)
     assert float(np.linalg.norm((watch.look_m - watch.release_m)[:2])) > 0.1
+
+
+def _closing_case(
+    error_m: tuple[float, float], velocity_mps: tuple[float, float], seen_ago_s: float, last_leg: bool = True
+) -> bool:
+    """ReleaseGate.closing on one tick: the effector ``error_m`` off its target, moving at ``velocity_mps``, the
+    wall last seen ``seen_ago_s`` before, on the side look's last leg or not, the px4 preset's settings."""
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("px4"))
+    target = np.array([1.0, 2.0, 0.3])
+    tel = SimpleNamespace(velocity_mps=(velocity_mps[0], velocity_mps[1], 0.0))
+    uav = SimpleNamespace(
+        config=cfg,
+        _now_s=10.0,
+        _wall=SimpleNamespace(seen_s=10.0 - seen_ago_s),
+        _side=SimpleNamespace(final=last_leg),
+        effector=SimpleNamespace(position=lambda _tel: target + np.array([error_m[0], error_m[1], 0.0])),
+        attempt=SimpleNamespace(place_effector_target_m=target),
+    )
+    return ReleaseGate().closing(cast("BrickUav", uav), cast("Telemetry", tel))
+
+
+def test_inside_r_pl_the_last_leg_waits_a_tick_only_while_it_closes_and_the_sighting_stays_fresh() -> None:
+    # 12 mm short of the drop-off at 0.1 m/s toward it: 2 mm off the next tick, so wait
+    assert _closing_case((-0.012, 0.0), (0.1, 0.0), seen_ago_s=0.2)
+    # the same at 0.27 m/s: passing through, 15 mm past by the next tick: let go now
+    assert not _closing_case((-0.012, 0.0), (0.27, 0.0), seen_ago_s=0.2)
+    # moving away, or across: let go now
+    assert not _closing_case((0.005, 0.0), (0.1, 0.0), seen_ago_s=0.2)
+    assert not _closing_case((0.0, 0.01), (0.1, 0.0), seen_ago_s=0.2)
+    # closing, but the next tick would be past the sighting's freshness (0.45 s): let go now, no look back up
+    assert not _closing_case((-0.012, 0.0), (0.1, 0.0), seen_ago_s=0.4)
+    # never seen (a first-course brick): as before
+    assert not _closing_case((-0.012, 0.0), (0.1, 0.0), seen_ago_s=math.inf)
+    # not the side look's last leg (a descent from above): as before
+    assert not _closing_case((-0.012, 0.0), (0.1, 0.0), seen_ago_s=0.2, last_leg=False)
+
+
+def test_the_nearest_tick_is_the_px4_presets_and_off_by_default() -> None:
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_closest_s == 0.0
+    assert uav_settings("px4")["release_closest_s"] == 0.1
+    assert "release_closest_s" not in uav_settings("arducopter")

@@ -429,6 +429,8 @@ class BrickUav(PutBack):
             return
         self._side.step(self, self._place_yaw_rad())
         error = dropoff_error_m(self, tel, self._dropoff)
+        if error is not None and self._gate.closing(self, tel):
+            error = None  # (masonry.fsm.release_gate: nearer by the next tick, the sighting still fresh then)
         if error is not None:
             taken = self._wall.taken(self)
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)

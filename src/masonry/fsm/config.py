@@ -80,6 +80,10 @@ class UavConfig:
     # With align_on_wall: a brick that stands on others is released only if a brick of the wall was in the
     # camera's view at most this long (s) before; else it looks again from above (masonry.fsm.release_gate). 0: off
     release_fresh_s: float = 0.45
+    # With align_on_wall, inside r_pl on the side look's last leg: one more tick (this long, s) while the
+    # effector's velocity brings it nearer by then and the sighting stays within release_fresh_s
+    # (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
+    release_closest_s: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5

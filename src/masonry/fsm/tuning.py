@@ -84,6 +84,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "gate_window_s": 3.0,
         "align_on_camera": True,
         "align_on_wall": True,
+        # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
+        "release_closest_s": 0.1,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,
