@@ -16,7 +16,10 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   last, for the single chain (each look's offset to its reference neighbour only, ``relative_to``: the anchoring
   before every neighbour's offset was combined, ``WallAnchor(every_neighbour=False)``) re-solved over the same
   completions;
-- the same error relative to the wall: a brick's estimate error less the mean estimate error of its neighbours
+- the same error in the wall's frame: each mission's mean estimate error (a translation of the whole wall) taken
+  out; what a wall built on no survey is known by, since on GNSS its translation is the looks' mean
+  (``masonry.planner.wall_anchor``, docs/estimation.md "The wall's frame");
+- the same error relative to the neighbours: a brick's estimate error less the mean estimate error of its neighbours
   (those with an as-built pose): what a wall estimated off as a whole, as it must be on GNSS with no absolute
   reference, does not show;
 - the placed bricks off their course height (the simulator's truth over half a brick from the designed height)
@@ -46,6 +49,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import pickle
 import random
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -92,6 +96,8 @@ class Tally:
     neighbour_m: list[float] | None = None
     estimate_m: list[float] | None = None
     estimate_wall_m: list[float] | None = None
+    #: the estimates against the truth in the wall's frame: each mission's mean error (its translation) taken out
+    frame_m: list[float] = field(default_factory=list)
     relative_m: list[float] | None = None
     #: the as-built poses reported anchored on the wall (``anchored_to``: masonry.planner.wall_anchor)
     anchored: int = 0
@@ -192,6 +198,7 @@ def run_one(
     side_look: bool = True,
     trend: bool = True,
     overrides: Mapping[str, float] | None = None,
+    dump: list[dict[str, object]] | None = None,
 ) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
     config = _config(vehicle, wall=wall, side_look=side_look, trend=trend, overrides=overrides)
@@ -238,6 +245,28 @@ def run_one(
                 tally.relative_m.append(
                     float(np.linalg.norm(np.subtract(pose.relative_offset_m, true_offset)))
                 )
+    if dump is not None:
+        # what an estimator over the mission's looks needs, offline: the plan, the looks in completion order, the truth
+        dump.append(
+            {
+                "vehicle": vehicle,
+                "wall": bp.name,
+                "seed": seed,
+                "wind_mps": wind_mps,
+                "tasks": mission.control.plan.tasks,
+                "looks": [
+                    (a.task_id, a.end_s, a.as_built)
+                    for a in sorted(mission.control.history, key=lambda a: a.end_s or 0.0)
+                    if a.status == "done" and a.as_built is not None
+                ],
+                "placed": sorted(offsets),
+                "truth": {
+                    b.id: (tuple(world.bricks[b.id].position_m), world.bricks[b.id].yaw_rad)
+                    for b in bp.bricks
+                },
+                "reported": dict(report.as_built),
+            }
+        )
     chain = WallAnchor(mission.control.plan.tasks, every_neighbour=False)
     for att in sorted(mission.control.history, key=lambda a: a.end_s or 0.0):
         if att.status == "done" and att.as_built is not None and att.task_id in report.as_built:
@@ -250,6 +279,10 @@ def run_one(
         for bid in offsets
         if (pose := report.as_built.get(f"B{bid}")) is not None
     }
+    if estimate_off:
+        # in the wall's frame: what a wall built on no survey is known by (GNSS: its translation is the looks' mean)
+        common = np.mean(list(estimate_off.values()), axis=0)
+        tally.frame_m.extend(float(np.linalg.norm(err - common)) for err in estimate_off.values())
     assert tally.estimate_wall_m is not None
     for bid, err in estimate_off.items():
         others = [estimate_off[o] for o in near[bid] if o in estimate_off]
@@ -321,6 +354,9 @@ def main() -> None:
         metavar="NAME=VALUE",
         help="a UavConfig setting over the vehicle's preset (a number; repeatable), e.g. release_radius_m=0.01",
     )
+    parser.add_argument(
+        "--dump", help="pickle every run's looks, plan and truth to this file (offline estimators)"
+    )
     parser.add_argument("--wander", action="store_true", help="print the px4 model's GNSS wander and stop")
     args = parser.parse_args()
     if args.wander:
@@ -328,9 +364,10 @@ def main() -> None:
         return
     winds = [0.0 if w == "calm" else float(w) for w in args.wind.split(",")]
     overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
+    dump: list[dict[str, object]] | None = [] if args.dump else None
     print(
         f"{'vehicle':<11} {'wall':<13} {'wind':<8} {'completed':>9}  {'design mean/max mm':>18}  "
-        f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  "
+        f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  {'in the wall frame mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
         f"relative/anchored/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours  "
         f"world look vs truth mean/max mm  single chain vs truth mean/max mm"
@@ -352,13 +389,18 @@ def main() -> None:
                         side_look=not args.no_side_look,
                         trend=not args.no_trend,
                         overrides=overrides,
+                        dump=dump,
                     )
+                    if dump is not None:
+                        with open(args.dump, "wb") as f:
+                            pickle.dump(dump, f)
                 assert tally.design_m is not None and tally.neighbour_m is not None
                 assert tally.estimate_m is not None and tally.estimate_wall_m is not None
                 label = "calm" if wind == 0 else f"{wind:g} m/s"
                 print(
                     f"{vehicle:<11} {wall:<13} {label:<8} {tally.completed:>4}/{tally.runs:<4}  "
                     f"{_mm(tally.design_m):>18}  {_mm(tally.neighbour_m):>22}  {_mm(tally.estimate_m):>29}  "
+                    f"{_mm(tally.frame_m):>29}  "
                     f"{_mm(tally.estimate_wall_m):>28}  {_mm(tally.relative_m or []):>38}  "
                     f"{len(tally.relative_m or [])}/{tally.anchored}/{tally.seen}/{tally.placed}  "
                     f"{tally.off_course}/{tally.off_course_done}  "

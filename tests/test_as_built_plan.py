@@ -215,7 +215,13 @@ def test_a_mission_flies_the_targets_planned_on_the_as_built_poses() -> None:
     assert report.completed
     tasks = plan(bp).tasks
     design = {t.id: t for t in tasks}
-    poses = {int(tid[1:]): pose for tid, pose in report.as_built.items()}
+    # (planned on the UAVs' looks: the report's height is the course's, the look it replaced ``world_position_m``)
+    poses = {
+        int(tid[1:]): pose
+        if pose.world_position_m is None
+        else dataclasses.replace(pose, position_m=pose.world_position_m)
+        for tid, pose in report.as_built.items()
+    }
     assert len(poses) == 5
     planner = AsBuiltPlan(tasks, AsBuiltPlanning(0.005, 0.02))
     moved = 0

@@ -137,3 +137,48 @@ def test_a_brick_not_tied_to_a_surveyed_one_is_not_solved() -> None:
     assert sol.centre_m == {1: (0.3, 0.0)} and sol.root == {1: 0}
     assert sol.variance_m2 == {1: pytest.approx(2 * HALF_M2)}
     assert solve(fixed, []) == solve({}, sightings)
+
+
+def test_with_unsurveyed_a_component_with_a_prior_is_solved_and_rooted_on_its_lowest_prior() -> None:
+    fixed = {0: (0.0, 0.0)}
+    sightings = [
+        Sighting(1, ((0, (0.3, 0.0), HALF_M2),), HALF_M2),
+        Sighting(2, ((3, (0.3, 0.0), HALF_M2),), HALF_M2),
+    ]
+    # bricks 2 and 3 (no survey) where their priors' mean puts them, with the sighting's shape; 5 alone: its prior
+    priors = {2: ((5.3, 5.1), 1.0), 3: ((5.1, 4.9), 1.0), 5: ((7.0, 7.0), 1.0)}
+    sol = solve(fixed, sightings, priors, unsurveyed=True)
+    assert sol.root == {1: 0, 2: 2, 3: 2, 5: 5}
+    assert sol.centre_m[2] == pytest.approx((5.35, 5.0)) and sol.centre_m[3] == pytest.approx((5.05, 5.0))
+    assert sol.centre_m[5] == pytest.approx((7.0, 7.0)) and sol.centre_m[1] == pytest.approx((0.3, 0.0))
+
+
+@seed(30)
+@settings(max_examples=60, deadline=None, print_blob=True)
+@given(
+    g=graphs(),
+    shift=st.tuples(st.floats(-0.2, 0.2), st.floats(-0.2, 0.2)),
+    noise_seed=st.integers(0, 2**32 - 1),
+)
+def test_with_no_survey_the_wall_keeps_its_shape_and_sits_on_its_looks_mean(
+    g, shift, noise_seed: int
+) -> None:
+    """No brick surveyed, exact sightings, the world looks off by a common ``shift`` plus their own noise (equal
+    variances): every brick of a connected wall is off by the same translation, the mean of its looks' errors
+    (the wall's frame is exact; the error in the world is the looks' common part)."""
+    _, truth, seen, frames = g
+    n_fixed = len(truth) - len(seen)
+    # (the graph's surveyed bricks taken as unsurveyed, not fixed: the whole wall stands on its looks)
+    sightings = _sightings(truth, seen, frames, n_fixed, [np.zeros((len(s) + 1, 2)) for s in seen])
+    rng = np.random.default_rng(noise_seed)
+    err = {b: np.asarray(shift) + rng.normal(scale=0.05, size=2) for b in truth}
+    priors = {b: (tuple(float(v) for v in truth[b] + e), 0.05**2) for b, e in err.items()}
+    sol = solve({}, sightings, priors, unsurveyed=True)  # type: ignore[arg-type]
+    assert set(sol.centre_m) == set(truth)
+    for root in set(sol.root.values()):
+        members = [b for b in sol.root if sol.root[b] == root]
+        common = np.mean([err[b] for b in members], axis=0)
+        for b in members:
+            assert np.asarray(sol.centre_m[b]) - truth[b] == pytest.approx(
+                common, abs=1e-4
+            )  # (0.1 mm: sightings of 1 mm against looks of 5 cm)

@@ -69,9 +69,10 @@ class AsBuiltPose:
     them; () from a UAV that reports only the reference), which mission control combines over the wall
     (:mod:`masonry.planner.wall_solve`).
 
-    Anchored on the wall (mission control, :mod:`masonry.planner.wall_anchor`; both None when the pose is the
-    world-frame look): ``anchored_to``: the surveyed brick (the blueprint's ``placed``) its chain of relative looks
-    ends on, ``world_position_m``: the camera's world-frame look, which ``position_m`` then replaces.
+    On the wall (mission control, :mod:`masonry.planner.wall_anchor`; both None when the pose is the world-frame
+    look as the UAV sent it): ``world_position_m``: the camera's world-frame look, which ``position_m`` then
+    replaces (the wall's solve: its sightings and every look; on no survey the wall sits where its looks' mean
+    puts it), ``anchored_to``: the surveyed brick (the blueprint's ``placed``) its sightings reach, if any.
     """
 
     position_m: tuple[float, float, float]
@@ -107,8 +108,9 @@ class AsBuiltPose:
                 self.relative_offsets and digits is None
             ):  # (the wire's and the journal's: what a re-solve needs)
                 out["relative_offsets"] = [[b, [r(v) for v in o], n] for b, o, n in self.relative_offsets]
-        if self.anchored_to is not None and self.world_position_m is not None:
-            out["anchored_to"] = self.anchored_to
+        if self.world_position_m is not None:
+            if self.anchored_to is not None:
+                out["anchored_to"] = self.anchored_to
             out["world_position_m"] = [r(v) for v in self.world_position_m]
         return out
 
@@ -131,7 +133,7 @@ class AsBuiltPose:
         if not all(map(math.isfinite, (x, y, z, yaw, dev, conf))) or dev < 0.0 or not 0.0 <= conf <= 1.0:
             raise ValueError(f"an as-built pose out of range: {data!r}")
         if data.get("relative_to") is None:
-            return cls((x, y, z), yaw, dev, conf)
+            return _world(cls((x, y, z), yaw, dev, conf), data)
         try:
             ref = data["relative_to"]
             if isinstance(ref, bool) or not isinstance(ref, int) or ref < 0:
@@ -146,7 +148,7 @@ class AsBuiltPose:
             raise ValueError(f"an as-built pose's relative fields out of range: {data!r}")
         pose = cls((x, y, z), yaw, dev, conf, ref, (ox, oy, oz), rdev, relative_offsets=_offsets(data))
         if data.get("anchored_to") is None:
-            return pose
+            return _world(pose, data)
         try:
             anchor = data["anchored_to"]
             if isinstance(anchor, bool) or not isinstance(anchor, int) or anchor < 0:
@@ -159,6 +161,26 @@ class AsBuiltPose:
         if not all(map(math.isfinite, (wx, wy, wz))):
             raise ValueError(f"an as-built pose's world position out of range: {data!r}")
         return replace(pose, anchored_to=anchor, world_position_m=(wx, wy, wz))
+
+
+def _world(pose: AsBuiltPose, data: dict[str, object]) -> AsBuiltPose:
+    """``pose`` with ``data``'s ``world_position_m`` (a pose on the wall's own looks, no survey), if any.
+
+    Raises:
+        ValueError: a malformed one.
+    """
+    raw = data.get("world_position_m")
+    if raw is None:
+        return pose
+    try:
+        if not isinstance(raw, (list, tuple)):
+            raise TypeError(raw)
+        wx, wy, wz = (float(v) for v in raw)
+    except (TypeError, ValueError):
+        raise ValueError(f"an as-built pose's world position is malformed: {data!r}") from None
+    if not all(map(math.isfinite, (wx, wy, wz))):
+        raise ValueError(f"an as-built pose's world position out of range: {data!r}")
+    return replace(pose, world_position_m=(wx, wy, wz))
 
 
 #: The most neighbours an as-built pose's ``relative_offsets`` may hold (a camera sees a few dozen bricks at most).

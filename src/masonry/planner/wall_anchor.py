@@ -27,24 +27,30 @@ Vertically an anchored brick lies on its course (the sightings reach it from a s
 the course check, :mod:`masonry.mission.course_check`, found at their course height): its height is the design's.
 The relative look's vertical is its noisiest axis (2.2 mm per link), the world look's on GNSS 6 cm.
 
-A brick whose look has no neighbour and that no sighting ties to a surveyed brick (the first brick of a wall built
-on the ground, a tower's bricks, seen alone) keeps its world-frame look: its pose has no ``anchored_to``. An offset
+A wall with no surveyed brick (docs/estimation.md, "The wall's frame") is solved the same way with nothing fixed:
+its sightings give its shape, its world looks (each a direct measurement of its brick) its translation, their
+mean; the world look's variance is measured on it too (each look against that solution, over the looks less one
+per wall). Such a pose has ``world_position_m`` but no ``anchored_to``: it is exact in the wall's frame (to the
+sightings), and in the world as good as the mean of the wall's looks. A brick tied to no other (a tower's, seen
+alone) keeps its world-frame look horizontally; every brick whose look is within half a brick of its course's
+height is put at that height (the course check's criterion: a brick a course off is failed, not taken). An offset
 over :data:`~masonry.planner.wall_deviation.MAX_WALL_DEVIATION_M` from its designed one horizontally, or over half
 a brick vertically, is left out (not a brick of this wall's course beside or under it), and a solution that puts a
 brick over that distance from its design is not trusted either (no brick of a wall is built that far off its
-neighbours): the brick keeps its world look.
+neighbours; on no survey: that far off relative to the rest of its wall): the brick keeps its world look.
 """
 
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
-from masonry.planner.wall_solve import Sighting, solve
+from masonry.planner.wall_solve import Sighting, Solution, solve
 
 Vec3 = tuple[float, float, float]
 
@@ -52,6 +58,8 @@ Vec3 = tuple[float, float, float]
 RELATIVE_SIGMA_M = 0.001
 #: The least the world look's error per horizontal axis is taken to be (m): a look is never trusted as a survey.
 MIN_WORLD_SIGMA_M = 0.0003
+#: The world look's error taken before any is measured (m): a wall's translation from its looks' plain mean.
+LOOSE_SIGMA_M = 1.0
 
 __all__ = ["MIN_WORLD_SIGMA_M", "RELATIVE_SIGMA_M", "Anchor", "WallAnchor"]
 
@@ -83,6 +91,7 @@ class WallAnchor:
         self._looks: dict[int, AsBuiltPose] = {}  # (brick id -> its world-frame look, in completion order)
         self._sightings: dict[int, Sighting] = {}
         self._residuals_m2: list[float] = []
+        self._free: tuple[float, int] = (0.0, 0)  # (the unsurveyed walls' look residuals: m^2 summed, dof)
 
     def world(self, brick: int, pose: AsBuiltPose) -> AsBuiltPose:
         """``pose`` as its UAV sent it: the world-frame look (an anchored pose's ``world_position_m``)."""
@@ -96,9 +105,11 @@ class WallAnchor:
 
     def world_sigma_m(self) -> float | None:
         """The world look's error per horizontal axis measured so far (m; None before any anchored brick)."""
-        if not self._residuals_m2:
+        total, dof = self._free
+        n = len(self._residuals_m2) + dof
+        if n == 0:
             return None
-        return math.sqrt(max(sum(self._residuals_m2) / len(self._residuals_m2), MIN_WORLD_SIGMA_M**2))
+        return math.sqrt(max((sum(self._residuals_m2) + total) / n, MIN_WORLD_SIGMA_M**2))
 
     def _sighting(self, brick: int, pose: AsBuiltPose) -> Sighting | None:
         """Brick ``brick``'s look as a sighting of it and its neighbours on the wall (None: no neighbour kept)."""
@@ -131,7 +142,8 @@ class WallAnchor:
 
     def take(self, brick: int, pose: AsBuiltPose) -> AsBuiltPose:
         """Brick ``brick``'s reported pose (see the module docstring): anchored when its look ties it to a
-        surveyed brick, its world-frame look otherwise; the wall re-solved with it (:meth:`poses`)."""
+        surveyed brick, on the wall's own sightings and the world looks otherwise; the wall re-solved with it
+        (:meth:`poses`)."""
         look = self.world(brick, pose)
         self._looks[brick] = look
         sighting = self._sighting(brick, look)
@@ -147,35 +159,81 @@ class WallAnchor:
             self._residuals_m2.append(
                 ((w[0] - c[0]) ** 2 + (w[1] - c[1]) ** 2) / 2.0 - relative.variance_m2[brick]
             )
+        looks = {b: (p.position_m[0], p.position_m[1]) for b, p in self._looks.items()}
+        self._free = self._unsurveyed_residuals(sightings, looks)
         sigma_w = self.world_sigma_m()
-        if sigma_w is not None:
-            priors = {
-                b: ((p.position_m[0], p.position_m[1]), sigma_w**2)
-                for b, p in self._looks.items()
-                if b in relative.centre_m
-            }
-            relative = solve(self._fixed, sightings, priors)
+        var_w = LOOSE_SIGMA_M**2 if sigma_w is None else sigma_w**2
+        solved = solve(self._fixed, sightings, {b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
         self.anchors = {}
-        for b, (x, y) in relative.centre_m.items():
+        shift = self._wall_shift(solved)
+        size = Counter(solved.root.values())
+        for b, (x, y) in solved.centre_m.items():
             design = self._design[b].position_m
             centre = (x, y, design[2])
-            if math.dist(centre, design) <= MAX_WALL_DEVIATION_M:
-                self.anchors[b] = Anchor(centre, relative.root[b])
+            root = solved.root[b]
+            if root not in self._fixed and size[root] == 1:
+                continue  # (seen alone, tied to no brick: its look, :meth:`pose`)
+            if root in self._fixed:
+                ok = math.dist(centre, design) <= MAX_WALL_DEVIATION_M
+            else:
+                # (relative to the rest of its wall: a wall built on no survey sits where its looks put it)
+                dx, dy = shift[root]
+                ok = math.hypot(x - design[0] - dx, y - design[1] - dy) <= MAX_WALL_DEVIATION_M
+            if ok:
+                self.anchors[b] = Anchor(centre, root)
         out = self.pose(brick)
         assert out is not None
         return out
+
+    def _unsurveyed_residuals(
+        self, sightings: Sequence[Sighting], looks: dict[int, tuple[float, float]]
+    ) -> tuple[float, int]:
+        """The world looks' squared horizontal residuals per axis (m^2, summed) against the shape of their wall's
+        sightings with no survey (the translation the looks' mean), and the degrees of freedom they hold (per
+        component, its looks less one)."""
+        loose = solve({}, sightings, {b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
+        total, members = 0.0, dict[int, int]()
+        for b, (x, y) in loose.centre_m.items():
+            if b in looks and b not in self._fixed and loose.root[b] not in self._fixed:
+                w = looks[b]
+                total += ((w[0] - x) ** 2 + (w[1] - y) ** 2) / 2.0
+                members[loose.root[b]] = members.get(loose.root[b], 0) + 1
+        return total, sum(n - 1 for n in members.values())
+
+    def _wall_shift(self, solved: Solution) -> dict[int, tuple[float, float]]:
+        """Per component rooted on no surveyed brick, its bricks' mean horizontal offset from their design (m)."""
+        sums: dict[int, list[float]] = {}
+        for b, (x, y) in solved.centre_m.items():
+            design = self._design[b].position_m
+            acc = sums.setdefault(solved.root[b], [0.0, 0.0, 0.0])
+            acc[0] += x - design[0]
+            acc[1] += y - design[1]
+            acc[2] += 1.0
+        return {r: (a[0] / a[2], a[1] / a[2]) for r, a in sums.items()}
 
     def pose(self, brick: int) -> AsBuiltPose | None:
         """Brick ``brick``'s best estimate after the looks taken so far (None: not taken)."""
         look = self._looks.get(brick)
         anchor = self.anchors.get(brick)
-        if look is None or anchor is None:
-            return look
+        if look is None:
+            return None
+        design = self._design.get(brick)
+        if anchor is None:
+            if design is None or abs(look.position_m[2] - design.position_m[2]) > design.size_m[2] / 2.0:
+                return look  # (off its course, or no design: the look as it came)
+            x, y, z = look.position_m
+            if z == design.position_m[2]:
+                return look
+            centre = (x, y, design.position_m[2])
+            root = None
+        else:
+            centre = anchor.centre_m
+            root = anchor.root if anchor.root in self._fixed else None
         return replace(
             look,
-            position_m=anchor.centre_m,
-            deviation_m=math.dist(anchor.centre_m, self._design[brick].position_m),
-            anchored_to=anchor.root,
+            position_m=centre,
+            deviation_m=math.dist(centre, self._design[brick].position_m),
+            anchored_to=root,
             world_position_m=look.position_m,
         )
 

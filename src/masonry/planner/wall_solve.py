@@ -54,24 +54,30 @@ class Solution:
     variance_m2: dict[int, float]
 
 
-def _roots(fixed: Collection[int], sightings: Sequence[Sighting]) -> dict[int, int]:
-    """Brick id -> the surveyed brick fewest sightings away (ties: the lowest id), for every brick reached."""
+def _roots(
+    fixed: Collection[int], sightings: Sequence[Sighting], unsurveyed: Collection[int] = ()
+) -> dict[int, int]:
+    """Brick id -> the surveyed brick fewest sightings away (ties: the lowest id), for every brick reached; then,
+    for the bricks no surveyed one reaches, the lowest id of ``unsurveyed`` in their component (itself alone: a
+    brick in no sighting)."""
     near: dict[int, set[int]] = {}
     for s in sightings:
         group = {s.brick, *(n for n, _, _ in s.offsets)}
         for b in group:
             near.setdefault(b, set()).update(group - {b})
     root: dict[int, int] = {}
-    queue: deque[int] = deque()
-    for f in sorted(fixed):
-        root[f] = f
-        queue.append(f)
-    while queue:
-        b = queue.popleft()
-        for n in sorted(near.get(b, ())):
-            if n not in root:
-                root[n] = root[b]
-                queue.append(n)
+    for seeds in (sorted(fixed), sorted(unsurveyed)):
+        for f in seeds:
+            if f in root:
+                continue
+            root[f] = f
+            queue: deque[int] = deque([f])
+            while queue:
+                b = queue.popleft()
+                for n in sorted(near.get(b, ())):
+                    if n not in root:
+                        root[n] = root[b]
+                        queue.append(n)
     return root
 
 
@@ -80,18 +86,21 @@ def solve(
     sightings: Sequence[Sighting],
     priors: Mapping[int, tuple[Vec2, float]] | None = None,
     variance_of: Collection[int] = (),
+    unsurveyed: bool = False,
 ) -> Solution:
     """The least-squares centres of the bricks that ``sightings`` connect to a ``fixed`` (surveyed) brick.
 
     ``priors``: brick id -> (a direct measurement of its centre, its variance per axis), for bricks among those
     solved (the world-frame looks; others are ignored). ``variance_of``: the bricks whose variance to return.
+    ``unsurveyed``: also the components with no surveyed brick but a prior (their translation is then the priors'
+    weighted mean, their shape the sightings'), rooted on their lowest id with a prior.
     """
     # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
     sightings = [s for s in sightings if s.offsets]
-    root = _roots(fixed, sightings)
+    root = _roots(fixed, sightings, (priors or {}).keys() if unsurveyed else ())
     free = sorted(b for b in root if b not in fixed)
     if not free:
         return Solution({}, {}, {})
