@@ -9,8 +9,8 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   its centre from the designed centre) and relative to its neighbours (its offset from the design less the mean
   offset of the placed bricks it touches or stands on: what a wall built a little off as a whole does not show);
   mean and max, millimetres;
-- the as-built estimate's own error: the distance from each as-built pose reported (``report.as_built``: anchored
-  on the wall where its chain reaches a surveyed brick, ``masonry.planner.wall_anchor``) to the brick's true
+- the as-built estimate's own error: the distance from each as-built pose reported (``report.as_built``: solved on
+  the wall's sightings and looks, anchored where they reach a surveyed brick, ``masonry.planner.wall_anchor``) to the brick's true
   centre, mean and max, millimetres, how many of the placed bricks were seen and how many of them anchored; and
   the same for the UAVs' world-frame looks (``world_position_m``; the reported pose before the anchoring); and
   last, for the single chain (each look's offset to its reference neighbour only, ``relative_to``: the anchoring
