@@ -191,7 +191,9 @@ class WallAnchor:
         """The world looks' squared horizontal residuals per axis (m^2, summed) against the shape of their wall's
         sightings with no survey (the translation the looks' mean), and the degrees of freedom they hold (per
         component, its looks less one)."""
-        loose = solve({}, sightings, {b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
+        loose = solve(
+            self._fixed, sightings, {b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True
+        )
         total, members = 0.0, dict[int, int]()
         for b, (x, y) in loose.centre_m.items():
             if b in looks and b not in self._fixed and loose.root[b] not in self._fixed:
