@@ -194,7 +194,8 @@ class WallAnchor:
         loose = solve(
             self._fixed, sightings, {b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True
         )
-        total, members = 0.0, dict[int, int]()
+        total = 0.0
+        members: dict[int, int] = {}  # (component root -> its looks)
         for b, (x, y) in loose.centre_m.items():
             if b in looks and b not in self._fixed and loose.root[b] not in self._fixed:
                 w = looks[b]
