@@ -29,7 +29,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
+from masonry.blueprint import DEFAULT_CLEARANCE_M, DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.bounds import empty_flight_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
@@ -47,6 +47,16 @@ from masonry.planner.schedule_deadlines import (
 )
 from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
+from masonry.planner.schedule_graph import parts as _parts
+from masonry.planner.schedule_physical import (
+    DEFAULT_BATTERY,
+    BatteryModel,
+    Physics,
+    add_battery,
+    add_pallet,
+    make_physics,
+    physical_terms,
+)
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -84,6 +94,7 @@ class _Problem:
     ready: list[int] = field(default_factory=list)
     pos: list[tuple[float, float, float]] = field(default_factory=list)
     deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
+    phys: Physics | None = None  # the physical terms (``--physical``), None: the plain model
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
@@ -146,42 +157,6 @@ def _problem(
     )
 
 
-def _parts(p: _Problem, decomposition: str, max_full: int, part_tasks: int) -> list[list[int]]:
-    """The whole plan as one part, or (``course``) whole courses in order, gathered up to :data:`PART_TASKS`."""
-    n = len(p.tasks)
-    if decomposition == "none" or (decomposition == "auto" and n <= max_full):
-        return [list(range(n))]
-
-    def level(i: int) -> float:
-        t = p.tasks[i]
-        if isinstance(t, BrickTask):
-            return round(t.position_m[2], 3)
-        return round(min(t.start_m[2], t.end_m[2]), 3)  # glue on top of the course below
-
-    levels = sorted({level(i) for i in range(n)})
-    rank = {z: k for k, z in enumerate(levels)}
-    part = [rank[level(i)] for i in range(n)]
-    # a prerequisite is never in a later part than its dependent (glue on top of a course sits higher)
-    changed = True
-    while changed:
-        changed = False
-        for i in range(n):
-            for v in p.prereqs[i]:
-                if part[v] > part[i]:
-                    part[i] = part[v]
-                    changed = True
-    by_level: dict[int, list[int]] = {}
-    for i in range(n):
-        by_level.setdefault(part[i], []).append(i)
-    out: list[list[int]] = []
-    for k in sorted(by_level):
-        if out and len(out[-1]) + len(by_level[k]) <= part_tasks:
-            out[-1].extend(by_level[k])
-        else:
-            out.append(list(by_level[k]))
-    return out
-
-
 def _earliest(
     p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
 ) -> tuple[int, int]:
@@ -229,6 +204,11 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
         for j in p.start
     }
     start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
+    phys = p.phys
+    picks = {j: phys.pick_window(j, p.start[j]) for j in p.start if j in phys.phases} if phys else {}
+    energy = list(phys.energy) if phys else []
+    if phys is not None:
+        phys.hint_swaps = {k: [] for k in range(len(p.uavs))}
     out: dict[int, tuple[int, int, int, int]] = {}
     avail = [i for i in part if missing[i] == 0]
     while avail:
@@ -240,16 +220,29 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
                 t0, a0 = max(t0, start[v]), max(a0, end[v])
             else:
                 t0 = max(t0, end[v])
-        best: tuple[int, int, int] | None = None
+        best: tuple[int, int, int, int, bool] | None = None
         for k, spec in enumerate(p.uavs):
             if spec.role != p.tasks[i].kind:
                 continue
-            s, a = _earliest(p, i, max(t0, ready[k] + p.flight(pos[k], i)), a0, kept)
+            swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
+            r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
+            t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
+            if phys is not None and i in phys.phases and phys.pallet:
+                s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
+            else:
+                s, a = _earliest(p, i, t_k, a0, kept)
+                e = s + p.dur[i]
             if best is None or s < best[1]:
-                best = (k, s, a)
+                best = (k, s, a, e, swap)
         assert best is not None  # _problem checked every role has a UAV
-        k, s, a = best
-        e = s + p.dur[i]
+        k, s, a, e, swap = best
+        if phys is not None:
+            if swap:
+                phys.hint_swaps[k].append(ready[k] + phys.home_ticks(pos[k], p.uavs[k].home_m))
+                pos[k], energy[k] = p.uavs[k].home_m, 0
+            energy[k] += p.flight(pos[k], i) + p.dur[i]
+            if i in phys.phases:
+                picks[i] = phys.pick_window(i, s)
         start[i], end[i], site_start[i] = s, e, a
         kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
         ready[k], pos[k] = e, task_end_m(p.tasks[i])
@@ -280,6 +273,7 @@ class _PartResult:
     status: str
     bound: int | None
     solve_s: float
+    swaps: dict[int, list[int]] = field(default_factory=dict)  # per UAV its swaps' starts (``battery``)
 
 
 def _solve_part(
@@ -299,11 +293,17 @@ def _solve_part(
     e_var: dict[int, Any] = {}
     a_var: dict[int, Any] = {}
     keep: dict[int, Any] = {}
+    size: dict[int, Any] = {}
     site = p.reservation == "site"
+    phys = p.phys
+    hint_swaps = dict(phys.hint_swaps) if phys else {}
+    if phys is not None:
+        phys.swap_vars = {}
     for i in part:
         s_var[i] = m.new_int_var(0, horizon, f"s{i}")
         e_var[i] = m.new_int_var(0, horizon, f"e{i}")
-        m.new_interval_var(s_var[i], p.dur[i], e_var[i], f"t{i}")
+        size[i] = m.new_int_var(p.dur[i], horizon, f"d{i}") if phys and phys.flexible(p, i) else p.dur[i]
+        m.new_interval_var(s_var[i], size[i], e_var[i], f"t{i}")
         if site:
             a_var[i] = m.new_int_var(0, horizon, f"a{i}")
             m.add(a_var[i] >= s_var[i])
@@ -315,6 +315,8 @@ def _solve_part(
         if site:
             m.add_hint(a_var[i], hint[i][3])
     _precedences(p, part, m, s_var, e_var, a_var)
+    if phys is not None and phys.pallet:
+        add_pallet(p, phys, part, m, s_var, e_var, a_var, _clique_cover)
     add_deadlines(p.deadlines, part, m, s_var, e_var, a_var, p.end)
     for clique in _clique_cover(p.conflicts, part):
         m.add_no_overlap([keep[i] for i in clique])
@@ -327,7 +329,7 @@ def _solve_part(
                     lo = p.site_start[c] if site else p.start[c]
                     fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
                 m.add_no_overlap([keep[i], fixed[c]])
-    lits = _machines(p, part, m, s_var, e_var, hint)
+    lits = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
     makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
     for i in part:
         m.add(makespan >= e_var[i])
@@ -341,15 +343,19 @@ def _solve_part(
     code = solver.solve(m)
     solve_s = time.perf_counter() - t_start
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        return _PartResult(hint, "greedy", None, solve_s)
+        return _PartResult(hint, "greedy", None, solve_s, hint_swaps)
     placed: dict[int, tuple[int, int, int, int]] = {}
     for i in part:
         k = next(k for k, lit in lits[i].items() if solver.boolean_value(lit))
         s = int(solver.value(s_var[i]))
         a = int(solver.value(a_var[i])) if site else s
-        placed[i] = (k, s, s + p.dur[i], a)
+        placed[i] = (k, s, int(solver.value(e_var[i])), a)
+    swaps = {
+        k: [int(solver.value(w)) for here, w in nodes if solver.boolean_value(here)]
+        for k, nodes in (phys.swap_vars.items() if phys else ())
+    }
     status = "optimal" if code == cp_model.OPTIMAL else "feasible"
-    return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s)
+    return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s, swaps)
 
 
 def _precedences(
@@ -393,9 +399,14 @@ def _machines(
     s_var: Mapping[int, Any],
     e_var: Mapping[int, Any],
     hint: Mapping[int, tuple[int, int, int, int]],
+    size: Mapping[int, Any],
+    hint_swaps: Mapping[int, Sequence[int]],
+    horizon: int,
 ) -> dict[int, dict[int, Any]]:
-    """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights."""
+    """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights (and its
+    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`)."""
     lits: dict[int, dict[int, Any]] = {i: {} for i in part}
+    battery = p.phys is not None and p.phys.battery
     anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
         mine = [i for i in part if p.tasks[i].kind == spec.role]
@@ -405,17 +416,19 @@ def _machines(
         hinted_arcs = set(zip([-1, *order], [*order, -1]))
         node = {i: n + 1 for n, i in enumerate(mine)}
         arcs: list[tuple[int, int, Any]] = []
+        task_arcs: list[tuple[int, int, Any]] = []  # (from, to, literal), -1: the depot
         optional = []
         for i in mine:
             x = m.new_bool_var(f"x{i}_{k}")
             lits[i][k] = x
             m.add_hint(x, int(hint[i][0] == k))
-            optional.append(m.new_optional_interval_var(s_var[i], p.dur[i], e_var[i], x, f"o{i}_{k}"))
+            optional.append(m.new_optional_interval_var(s_var[i], size[i], e_var[i], x, f"o{i}_{k}"))
             arcs.append((node[i], node[i], x.Not()))
             first = m.new_bool_var(f"f{i}_{k}")
             m.add(s_var[i] >= p.ready[k] + p.flight(p.pos[k], i)).only_enforce_if(first)
             m.add_hint(first, int((-1, i) in hinted_arcs))
             arcs.append((0, node[i], first))
+            task_arcs.append((-1, i, first))
             last = m.new_bool_var(f"l{i}_{k}")
             m.add_hint(last, int((i, -1) in hinted_arcs))
             arcs.append((node[i], 0, last))
@@ -431,6 +444,11 @@ def _machines(
                 m.add(s_var[j] >= e_var[i] + p.flight(end_i, j)).only_enforce_if(lit)
                 m.add_hint(lit, int((i, j) in hinted_arcs))
                 arcs.append((node[i], node[j], lit))
+                task_arcs.append((i, j, lit))
+        if battery and p.phys is not None:
+            arcs += add_battery(
+                p, p.phys, k, mine, m, s_var, e_var, task_arcs, node, optional, hint_swaps.get(k, ()), horizon
+            )
         m.add_circuit(arcs)
         m.add_no_overlap(optional)
     for i in part:
@@ -452,6 +470,9 @@ def solve_schedule(
     tick_s: float = DEFAULT_TICK_S,
     max_full_tasks: int = FULL_MODEL_MAX_TASKS,
     part_tasks: int = PART_TASKS,
+    physical: str | Sequence[str] = (),
+    battery: BatteryModel = DEFAULT_BATTERY,
+    clearance_m: float = DEFAULT_CLEARANCE_M,
 ) -> OfflineSchedule:
     """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
 
@@ -466,13 +487,16 @@ def solve_schedule(
         max_full_tasks, part_tasks: ``auto`` decomposes plans with more tasks than ``max_full_tasks``; a part
             gathers whole courses up to ``part_tasks`` tasks (a course larger than that is one part).
         tick_s: the model's time unit; durations and flights are rounded down to it (the bound stays valid).
+        physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``, as
+            names or one comma-separated string, ``all``); none by default.
+        battery, clearance_m: the packs and swaps (``battery``) and the blueprint's r_c (``pallet``).
 
     Returns:
         The schedule; no digest (the caller, who has the blueprint, adds them).
 
     Raises:
         ScheduleUnavailable: OR-Tools is not installed.
-        PlanningError: bad arguments, or a role with tasks has no UAV.
+        PlanningError: bad arguments, a role with tasks has no UAV, or a task no fresh pack covers.
     """
     try:
         import ortools.sat.python.cp_model  # noqa: F401
@@ -492,7 +516,22 @@ def solve_schedule(
         raise PlanningError(f"workers must be an integer >= 1, got {workers!r}")
     t_ = DEFAULT_TIMING if timing is None else timing
     t0 = time.perf_counter()
+    terms = physical_terms(physical)
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    if terms:
+        p.phys = make_physics(
+            plan,
+            p.tasks,
+            fleet,
+            p.dur,
+            terms=terms,
+            timing=t_,
+            cruise_altitude_m=cruise_altitude_m,
+            tick_s=tick_s,
+            battery=battery,
+            clearance_m=clearance_m,
+        )
+        p.phys.check(p)
     check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)
     parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
@@ -507,6 +546,8 @@ def solve_schedule(
             raise DeadlinesUnmet.within(budget, len(part))
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
+        if p.phys is not None:
+            p.phys.carry_over(p, part, last.placed, last.swaps)
         for k in range(len(p.uavs)):
             mine = [i for i in part if last.placed[i][0] == k]
             if mine:
