@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
+from typer.testing import CliRunner
 
 from masonry.blueprint import Blueprint, Brick, UavSpec
 from masonry.blueprint_gen import running_bond
+from masonry.cli import app
 from masonry.errors import PlanningError
 from masonry.fsm.battery import LAND_SPEED_MPS, LAND_TOUCHDOWN_S, TAKEOFF_S
 from masonry.fsm.config import UavConfig
@@ -89,7 +93,9 @@ def test_brick_phases_sum_to_the_minimum_duration(courses, per_course):
     for i, ph in phases.items():
         assert min(ph.pre, ph.pick, ph.carry, ph.site, ph.post) >= 0
         assert ph.pre + ph.pick + ph.carry + ph.site + ph.post == dur[i]
-        assert ph.pick == math.floor((DEFAULT_TIMING.descent_duration_s + DEFAULT_TIMING.grasp_dwell_s) / tick)
+        assert ph.pick == math.floor(
+            (DEFAULT_TIMING.descent_duration_s + DEFAULT_TIMING.grasp_dwell_s) / tick
+        )
 
 
 def test_pickup_conflicts_are_symmetric_and_within_r_c():
@@ -121,16 +127,14 @@ def test_the_pallet_holds_the_second_pickup_by_its_descent_and_grasp():
 
 def _row(n: int, pack_s: float) -> tuple[Blueprint, BatteryModel]:
     """``n`` bricks 3 m apart in a row (no conflicts, their pickups 3 m apart too), one brick UAV."""
-    bricks = tuple(
-        Brick(k, (3.0 * k, 0.0, 0.05), BRICK, 0.0, False, (3.0 * k, -2.0, 0.05)) for k in range(n)
-    )
+    bricks = tuple(Brick(k, (3.0 * k, 0.0, 0.05), BRICK, 0.0, False, (3.0 * k, -2.0, 0.05)) for k in range(n))
     bp = Blueprint(bricks=bricks, fleet=(UavSpec("b1", "brick", (0.0, -4.0, 0.0)),), source="<test>")
     return bp, BatteryModel(pack_s=pack_s)
 
 
 def test_a_pack_that_covers_one_task_swaps_between_every_two():
     bp, battery = _row(3, pack_s=56.0)  # 44.8 s of flight: one task of ~28 s with its legs, not two
-    p, plain = _solve(bp)
+    _p, plain = _solve(bp)
     _p, swapped = _solve(bp, physical="battery", battery=battery)
     assert plain.status == swapped.status == "optimal"
     assert swapped.battery_swaps == 2
@@ -217,8 +221,21 @@ def test_physical_schedules_keep_every_physical_term(per_course, bricks, pack_s,
     fleet = fleet_for(bp0, bricks, 1)
     bp = with_fleet(bp0, fleet)
     battery = BatteryModel(pack_s=pack_s)
-    p, s = _solve(
-        bp, physical="all", battery=battery, time_limit_s=2.0, decomposition=decomposition, seed=0
-    )
+    p, s = _solve(bp, physical="all", battery=battery, time_limit_s=2.0, decomposition=decomposition, seed=0)
     assert s.status in ("optimal", "feasible")
     check_physical(p, fleet, s, bp.cruise_altitude_m, battery, bp.clearance_m)
+
+
+def test_cli_physical_option():
+    case_study = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+    runner = CliRunner()
+    res = runner.invoke(app, ["schedule", str(case_study), "--physical", "pallet,wind"])
+    assert res.exit_code == 2 and "--physical" in res.stderr and "wind" in res.stderr
+    res = runner.invoke(
+        app, ["schedule", str(case_study), "--physical", "all", "--workers", "1", "--format", "json"]
+    )
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert doc["physical"] == ["pallet", "battery"] and all(u["swaps_s"] == [] for u in doc["uavs"])
+    res = runner.invoke(app, ["schedule", str(case_study), "--workers", "1", "--format", "json"])
+    assert res.exit_code == 0 and "physical" not in json.loads(res.stdout)

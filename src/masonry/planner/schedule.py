@@ -27,7 +27,7 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from masonry.blueprint import DEFAULT_CLEARANCE_M, DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
 from masonry.errors import PlanningError
@@ -48,6 +48,7 @@ from masonry.planner.schedule_deadlines import (
 from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
 from masonry.planner.schedule_graph import parts as _parts
+from masonry.planner.schedule_graph import precedences as _precedences
 from masonry.planner.schedule_physical import (
     DEFAULT_BATTERY,
     BatteryModel,
@@ -60,6 +61,9 @@ from masonry.planner.schedule_physical import (
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+if TYPE_CHECKING:
+    from ortools.sat.python.cp_model import BoolVarT, CpModel, IntervalVar, IntVar
 
 #: Plans with more not-done tasks than this are solved course by course (``decomposition="auto"``).
 FULL_MODEL_MAX_TASKS = 110
@@ -220,22 +224,7 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
                 t0, a0 = max(t0, start[v]), max(a0, end[v])
             else:
                 t0 = max(t0, end[v])
-        best: tuple[int, int, int, int, bool] | None = None
-        for k, spec in enumerate(p.uavs):
-            if spec.role != p.tasks[i].kind:
-                continue
-            swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
-            r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
-            t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
-            if phys is not None and i in phys.phases and phys.pallet:
-                s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
-            else:
-                s, a = _earliest(p, i, t_k, a0, kept)
-                e = s + p.dur[i]
-            if best is None or s < best[1]:
-                best = (k, s, a, e, swap)
-        assert best is not None  # _problem checked every role has a UAV
-        k, s, a, e, swap = best
+        k, s, a, e, swap = _best_uav(p, i, t0, a0, ready, pos, energy, kept, picks)
         if phys is not None:
             if swap:
                 phys.hint_swaps[k].append(ready[k] + phys.home_ticks(pos[k], p.uavs[k].home_m))
@@ -252,6 +241,37 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
             if missing[d] == 0:
                 avail.append(d)
     return out
+
+
+def _best_uav(
+    p: _Problem,
+    i: int,
+    t0: int,
+    a0: int,
+    ready: Sequence[int],
+    pos: Sequence[Sequence[float]],
+    energy: Sequence[int],
+    kept: Mapping[int, tuple[int, int]],
+    picks: Mapping[int, tuple[int, int]],
+) -> tuple[int, int, int, int, bool]:
+    """The greedy's UAV for task ``i``: (UAV, start, site start, end, swaps first), the earliest start."""
+    phys = p.phys
+    best: tuple[int, int, int, int, bool] | None = None
+    for k, spec in enumerate(p.uavs):
+        if spec.role != p.tasks[i].kind:
+            continue
+        swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
+        r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
+        t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
+        if phys is not None and i in phys.phases and phys.pallet:
+            s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
+        else:
+            s, a = _earliest(p, i, t_k, a0, kept)
+            e = s + p.dur[i]
+        if best is None or s < best[1]:
+            best = (k, s, a, e, swap)
+    assert best is not None  # _problem checked every role has a UAV
+    return best
 
 
 def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
@@ -289,31 +309,12 @@ def _solve_part(
         flights = [max(p.flight(e, i) for e in ends) for i in part]
         horizon += serial_horizon([p.dur[i] for i in part], flights, p.deadlines)
     m = cp_model.CpModel()
-    s_var: dict[int, Any] = {}
-    e_var: dict[int, Any] = {}
-    a_var: dict[int, Any] = {}
-    keep: dict[int, Any] = {}
-    size: dict[int, Any] = {}
     site = p.reservation == "site"
     phys = p.phys
     hint_swaps = dict(phys.hint_swaps) if phys else {}
     if phys is not None:
         phys.swap_vars = {}
-    for i in part:
-        s_var[i] = m.new_int_var(0, horizon, f"s{i}")
-        e_var[i] = m.new_int_var(0, horizon, f"e{i}")
-        size[i] = m.new_int_var(p.dur[i], horizon, f"d{i}") if phys and phys.flexible(p, i) else p.dur[i]
-        m.new_interval_var(s_var[i], size[i], e_var[i], f"t{i}")
-        if site:
-            a_var[i] = m.new_int_var(0, horizon, f"a{i}")
-            m.add(a_var[i] >= s_var[i])
-            m.add(a_var[i] + p.site[i] <= e_var[i])
-            keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
-        else:
-            keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
-        m.add_hint(s_var[i], hint[i][1])
-        if site:
-            m.add_hint(a_var[i], hint[i][3])
+    s_var, e_var, a_var, keep, size = _task_vars(p, part, m, horizon, hint)
     _precedences(p, part, m, s_var, e_var, a_var)
     if phys is not None and phys.pallet:
         add_pallet(p, phys, part, m, s_var, e_var, a_var, _clique_cover)
@@ -321,7 +322,7 @@ def _solve_part(
     for clique in _clique_cover(p.conflicts, part):
         m.add_no_overlap([keep[i] for i in clique])
     # conflicting tasks of earlier parts are fixed intervals: a task may fill a gap before one of them
-    fixed: dict[int, Any] = {}
+    fixed: dict[int, IntervalVar] = {}
     for i in part:
         for c in p.conflicts[i]:
             if c in p.end and c not in s_var:
@@ -358,54 +359,54 @@ def _solve_part(
     return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s, swaps)
 
 
-def _precedences(
-    p: _Problem,
-    part: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
-    a_var: Mapping[int, Any],
-) -> None:
-    """G^d inside the part, and the prerequisites placed in earlier parts."""
+def _task_vars(
+    p: _Problem, part: Sequence[int], m: CpModel, horizon: int, hint: Mapping[int, tuple[int, int, int, int]]
+) -> tuple[
+    dict[int, IntVar], dict[int, IntVar], dict[int, IntVar], dict[int, IntervalVar], dict[int, IntVar | int]
+]:
+    """Per task its start, end, site start (``site``), kept-apart interval and length (its minimum duration,
+    or a variable for a task the physical terms let last longer)."""
+    s_var: dict[int, IntVar] = {}
+    e_var: dict[int, IntVar] = {}
+    a_var: dict[int, IntVar] = {}
+    keep: dict[int, IntervalVar] = {}
+    size: dict[int, IntVar | int] = {}
     site = p.reservation == "site"
     for i in part:
-        lo_s, lo_a = 0, 0
-        for v in p.prereqs[i]:
-            if v in s_var:
-                if p.prefetch(i):
-                    m.add(s_var[i] >= s_var[v])
-                    m.add(a_var[i] >= e_var[v])
-                elif site:
-                    m.add(s_var[i] >= e_var[v])
-                    m.add(a_var[i] >= e_var[v])
-                else:
-                    m.add(s_var[i] >= e_var[v])
-            elif v in p.end:
-                if p.prefetch(i):
-                    lo_s, lo_a = max(lo_s, p.start[v]), max(lo_a, p.end[v])
-                else:
-                    lo_s = max(lo_s, p.end[v])
-                    lo_a = max(lo_a, p.end[v])
-        if lo_s:
-            m.add(s_var[i] >= lo_s)
-        if site and lo_a:
-            m.add(a_var[i] >= lo_a)
+        s_var[i] = m.new_int_var(0, horizon, f"s{i}")
+        e_var[i] = m.new_int_var(0, horizon, f"e{i}")
+        flexible = p.phys is not None and p.phys.flexible(p, i)
+        size[i] = m.new_int_var(p.dur[i], horizon, f"d{i}") if flexible else p.dur[i]
+        m.new_interval_var(s_var[i], size[i], e_var[i], f"t{i}")
+        if site:
+            a_var[i] = m.new_int_var(0, horizon, f"a{i}")
+            m.add(a_var[i] >= s_var[i])
+            m.add(a_var[i] + p.site[i] <= e_var[i])
+            keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
+        else:
+            keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
+        m.add_hint(s_var[i], hint[i][1])
+        if flexible:
+            m.add_hint(e_var[i], hint[i][2])
+        if site:
+            m.add_hint(a_var[i], hint[i][3])
+    return s_var, e_var, a_var, keep, size
 
 
 def _machines(
     p: _Problem,
     part: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
+    m: CpModel,
+    s_var: Mapping[int, IntVar],
+    e_var: Mapping[int, IntVar],
     hint: Mapping[int, tuple[int, int, int, int]],
-    size: Mapping[int, Any],
+    size: Mapping[int, IntVar | int],
     hint_swaps: Mapping[int, Sequence[int]],
     horizon: int,
-) -> dict[int, dict[int, Any]]:
+) -> dict[int, dict[int, IntVar]]:
     """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights (and its
     battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`)."""
-    lits: dict[int, dict[int, Any]] = {i: {} for i in part}
+    lits: dict[int, dict[int, IntVar]] = {i: {} for i in part}
     battery = p.phys is not None and p.phys.battery
     anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
@@ -415,8 +416,8 @@ def _machines(
         order = sorted((i for i in mine if hint[i][0] == k), key=lambda i: hint[i][1])
         hinted_arcs = set(zip([-1, *order], [*order, -1]))
         node = {i: n + 1 for n, i in enumerate(mine)}
-        arcs: list[tuple[int, int, Any]] = []
-        task_arcs: list[tuple[int, int, Any]] = []  # (from, to, literal), -1: the depot
+        arcs: list[tuple[int, int, BoolVarT]] = []
+        task_arcs: list[tuple[int, int, BoolVarT]] = []  # (from, to, literal), -1: the depot
         optional = []
         for i in mine:
             x = m.new_bool_var(f"x{i}_{k}")
@@ -575,5 +576,6 @@ __all__ = [
     "FULL_MODEL_MAX_TASKS",
     "PART_TASKS",
     "ScheduleUnavailable",
+    "physical_terms",
     "solve_schedule",
 ]

@@ -1,14 +1,16 @@
 """Graph helpers of the offline schedule's model (:mod:`masonry.planner.schedule`): ancestors, a clique cover, the
-decomposition's parts."""
+decomposition's parts, the precedences of G^d."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.planner.tasks import BrickTask
 
 if TYPE_CHECKING:
+    from ortools.sat.python.cp_model import CpModel, IntVar
+
     from masonry.planner.schedule import _Problem
 
 
@@ -94,3 +96,37 @@ def parts(p: _Problem, decomposition: str, max_full: int, part_tasks: int) -> li
         else:
             out.append(list(by_level[k]))
     return out
+
+
+def precedences(
+    p: _Problem,
+    part: Sequence[int],
+    m: CpModel,
+    s_var: Mapping[int, IntVar],
+    e_var: Mapping[int, IntVar],
+    a_var: Mapping[int, IntVar],
+) -> None:
+    """G^d inside the part, and the prerequisites placed in earlier parts."""
+    site = p.reservation == "site"
+    for i in part:
+        lo_s, lo_a = 0, 0
+        for v in p.prereqs[i]:
+            if v in s_var:
+                if p.prefetch(i):
+                    m.add(s_var[i] >= s_var[v])
+                    m.add(a_var[i] >= e_var[v])
+                elif site:
+                    m.add(s_var[i] >= e_var[v])
+                    m.add(a_var[i] >= e_var[v])
+                else:
+                    m.add(s_var[i] >= e_var[v])
+            elif v in p.end:
+                if p.prefetch(i):
+                    lo_s, lo_a = max(lo_s, p.start[v]), max(lo_a, p.end[v])
+                else:
+                    lo_s = max(lo_s, p.end[v])
+                    lo_a = max(lo_a, p.end[v])
+        if lo_s:
+            m.add(s_var[i] >= lo_s)
+        if site and lo_a:
+            m.add(a_var[i] >= lo_a)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from masonry.blueprint import DEFAULT_CLEARANCE_M, UavSpec
 from masonry.errors import PlanningError
@@ -33,7 +33,11 @@ from masonry.planner.bounds import flight_slack_m, min_site_s
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import MIN_LEG_S, TaskTiming, min_jerk_leg_s
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the types only: ortools is imported by masonry.planner.schedule, inside solve_schedule
+    from collections.abc import Callable
+
+    from ortools.sat.python.cp_model import BoolVarT, CpModel, IntervalVar, IntVar
+
     from masonry.planner.schedule import _Problem
 
 #: The physical terms ``--physical`` may name (``all``: every one).
@@ -61,8 +65,11 @@ class BatteryModel:
 
     def on_pad_s(self, cruise_altitude_m: float, pad_z_m: float) -> float:
         """Landing from the cruise altitude, the swap and the take-off."""
-        return max(0.0, cruise_altitude_m - pad_z_m) / self.land_speed_mps + self.touchdown_s + self.swap_s + (
-            self.takeoff_s
+        return (
+            max(0.0, cruise_altitude_m - pad_z_m) / self.land_speed_mps
+            + self.touchdown_s
+            + self.swap_s
+            + (self.takeoff_s)
         )
 
 
@@ -116,7 +123,7 @@ class Physics:
     #: per UAV, the starts of its swaps so far (ticks)
     swaps: list[list[int]] = field(default_factory=list)
     #: the last model's swap nodes per UAV: (presence, start)
-    swap_vars: dict[int, list[tuple[Any, Any]]] = field(default_factory=dict)
+    swap_vars: dict[int, list[tuple[IntVar, IntVar]]] = field(default_factory=dict)
     #: the last greedy's swaps per UAV (the model's hint, or the part's answer when CP-SAT found nothing)
     hint_swaps: dict[int, list[int]] = field(default_factory=dict)
 
@@ -193,7 +200,9 @@ class Physics:
                 if u.role == t.kind
             ]
             if fits and not any(fits):
-                raise PlanningError(f"task {t.id} does not fit in a fresh pack ({self.usable * self.tick_s:.0f} s)")
+                raise PlanningError(
+                    f"task {t.id} does not fit in a fresh pack ({self.usable * self.tick_s:.0f} s)"
+                )
 
     def carry_over(
         self,
@@ -263,7 +272,8 @@ def brick_phases(
         transit = max(cruise_altitude_m, timing.carry_altitude_m(top_drop, h))
         drop = transit - (top_drop - timing.effector_offset_m[2])
         pre = math.floor(
-            (2 * MIN_LEG_S + timing.settle_time_s + (timing.min_estimates - 1) * timing.control_period_s) / tick_s
+            (2 * MIN_LEG_S + timing.settle_time_s + (timing.min_estimates - 1) * timing.control_period_s)
+            / tick_s
         )
         pick = math.floor((timing.descent_duration_s + timing.grasp_dwell_s) / tick_s)
         site = math.floor(site_s[t.id] / tick_s)
@@ -271,7 +281,9 @@ def brick_phases(
             min_jerk_leg_s(max(drop - timing.placement_radius_m, 0.0), timing.vertical_speed_mps) / tick_s
         )
         carry = dur[i] - pre - pick - site - post
-        if carry < 0:  # the floors of the parts never sum above the floor of the whole; kept safe all the same
+        if (
+            carry < 0
+        ):  # the floors of the parts never sum above the floor of the whole; kept safe all the same
             pre, carry = max(0, pre + carry), 0
         out[i] = BrickPhases(pre, pick, carry, site, post)
     return out
@@ -323,14 +335,14 @@ def add_pallet(
     p: _Problem,
     phys: Physics,
     part: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
-    a_var: Mapping[int, Any],
-    cliques: Any,
+    m: CpModel,
+    s_var: Mapping[int, IntVar],
+    e_var: Mapping[int, IntVar],
+    a_var: Mapping[int, IntVar],
+    cliques: Callable[[Sequence[set[int]], Sequence[int]], list[list[int]]],
 ) -> None:
     """The brick tasks' parts in order, and no overlap of pickups within r_c (earlier parts' pickups fixed)."""
-    picks: dict[int, Any] = {}
+    picks: dict[int, IntervalVar] = {}
     for i in part:
         ph = phys.phases.get(i)
         if ph is None:
@@ -341,7 +353,7 @@ def add_pallet(
             m.add(e_var[i] == a_var[i] + ph.site + ph.post)
     for clique in cliques(phys.pick_conflicts, [i for i in part if i in picks]):
         m.add_no_overlap([picks[i] for i in clique])
-    fixed: dict[int, Any] = {}
+    fixed: dict[int, IntervalVar] = {}
     for i in picks:
         for c in phys.pick_conflicts[i]:
             if c in p.end and c not in s_var:
@@ -356,15 +368,15 @@ def add_battery(
     phys: Physics,
     k: int,
     mine: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
-    task_arcs: Sequence[tuple[int, int, Any]],
+    m: CpModel,
+    s_var: Mapping[int, IntVar],
+    e_var: Mapping[int, IntVar],
+    task_arcs: Sequence[tuple[int, int, BoolVarT]],
     node: Mapping[int, int],
-    optional: list[Any],
+    optional: list[IntervalVar],
     hint_swaps: Sequence[int],
     horizon: int,
-) -> list[tuple[int, int, Any]]:
+) -> list[tuple[int, int, BoolVarT]]:
     """UAV ``k``'s flight since its last swap along its circuit, and its swap nodes; the arcs to add to the
     circuit (``task_arcs``: (from, to, literal), -1 for the depot, as :func:`~masonry.planner.schedule._machines`
     made them)."""
@@ -382,8 +394,8 @@ def add_battery(
     work = phys.energy[k] + sum(p.dur[i] for i in mine)
     n_swaps = min(len(mine), math.ceil(work / max(1, cap)) + 1) if work > cap else 0
     pad = phys.on_pad[k]
-    arcs: list[tuple[int, int, Any]] = []
-    nodes: list[tuple[Any, Any]] = []
+    arcs: list[tuple[int, int, BoolVarT]] = []
+    nodes: list[tuple[IntVar, IntVar]] = []
     first = len(node) + 1
     for w in range(n_swaps):
         here = m.new_bool_var(f"sw{k}_{w}")
