@@ -112,16 +112,17 @@ def test_pickup_conflicts_are_symmetric_and_within_r_c():
     assert any(conf), "the running bond's pallet has neighbouring pickups"
 
 
-def test_the_pallet_holds_the_second_pickup_by_its_descent_and_grasp():
+@pytest.mark.parametrize("reservation", ["site", "task"])
+def test_the_pallet_holds_the_second_pickup_by_its_descent_and_grasp(reservation):
     bp = _pair_at_the_pallet()
-    _p, plain = _solve(bp)
-    _p, pallet = _solve(bp, physical="pallet")
+    _p, plain = _solve(bp, reservation=reservation)
+    _p, pallet = _solve(bp, physical="pallet", reservation=reservation)
     assert plain.status == pallet.status == "optimal"
     pick_s = math.floor((DEFAULT_TIMING.descent_duration_s + DEFAULT_TIMING.grasp_dwell_s) / 0.01) * 0.01
     assert pallet.makespan_s == pytest.approx(plain.makespan_s + pick_s, abs=TOL_S)
     assert pallet.physical == ("pallet",) and pallet.battery_swaps == 0
     # the battery alone changes nothing here: each UAV flies one task, far within a pack
-    _p, battery = _solve(bp, physical="battery")
+    _p, battery = _solve(bp, physical="battery", reservation=reservation)
     assert battery.makespan_s == pytest.approx(plain.makespan_s, abs=TOL_S)
 
 
