@@ -163,7 +163,11 @@ def schedule_makespan(
         physical=physical,
         clearance_m=bp.clearance_m,
     )
-    return result.makespan_s, result.status, time.perf_counter() - wall0, result.battery_swaps
+    greedy = sum(
+        1 for q in result.parts if q.get("status") == "greedy"
+    )  # CP-SAT found nothing in a part's time
+    status = f"{result.status}, {greedy} of {len(result.parts)} parts greedy" if greedy else result.status
+    return result.makespan_s, status, time.perf_counter() - wall0, result.battery_swaps
 
 
 def _mean_attempt_s(report: MissionReport, kind: str) -> float:

@@ -390,9 +390,10 @@ def add_battery(
             m.add(energy[b] >= phys.energy[k] + p.flight(p.pos[k], b) + p.dur[b]).only_enforce_if(lit)
         else:
             m.add(energy[b] >= energy[a] + p.flight(_end(p.tasks[a]), b) + p.dur[b]).only_enforce_if(lit)
-    # at most one swap per part of a pack's worth of the role's work (and one more: a pack is rarely used up)
+    # one swap per pack's worth of the role's work in the part, and one more (a pack is rarely used up); nodes
+    # from half a pack of work on, as the empty legs, not in ``work``, drain the pack too
     work = phys.energy[k] + sum(p.dur[i] for i in mine)
-    n_swaps = min(len(mine), math.ceil(work / max(1, cap)) + 1) if work > cap else 0
+    n_swaps = min(len(mine), math.ceil(work / max(1, cap)) + 1) if 2 * work > cap else 0
     pad = phys.on_pad[k]
     arcs: list[tuple[int, int, BoolVarT]] = []
     nodes: list[tuple[IntVar, IntVar]] = []
