@@ -415,6 +415,12 @@ def _machines(
             continue
         order = sorted((i for i in mine if hint[i][0] == k), key=lambda i: hint[i][1])
         hinted_arcs = set(zip([-1, *order], [*order, -1]))
+        swaps_k = hint_swaps.get(k, ())  # a greedy swap between two tasks: no arc between them
+        hinted_arcs -= {
+            (a, b)
+            for a, b in zip([-1, *order], order)
+            if any((hint[a][2] if a >= 0 else 0) <= w < hint[b][1] for w in swaps_k)
+        }
         node = {i: n + 1 for n, i in enumerate(mine)}
         arcs: list[tuple[int, int, BoolVarT]] = []
         task_arcs: list[tuple[int, int, BoolVarT]] = []  # (from, to, literal), -1: the depot
@@ -448,7 +454,19 @@ def _machines(
                 task_arcs.append((i, j, lit))
         if battery and p.phys is not None:
             arcs += add_battery(
-                p, p.phys, k, mine, m, s_var, e_var, task_arcs, node, optional, hint_swaps.get(k, ()), horizon
+                p,
+                p.phys,
+                k,
+                mine,
+                m,
+                s_var,
+                e_var,
+                task_arcs,
+                node,
+                optional,
+                hint_swaps.get(k, ()),
+                horizon,
+                hint,
             )
         m.add_circuit(arcs)
         m.add_no_overlap(optional)

@@ -376,6 +376,7 @@ def add_battery(
     optional: list[IntervalVar],
     hint_swaps: Sequence[int],
     horizon: int,
+    hint: Mapping[int, tuple[int, int, int, int]],
 ) -> list[tuple[int, int, BoolVarT]]:
     """UAV ``k``'s flight since its last swap along its circuit, and its swap nodes; the arcs to add to the
     circuit (``task_arcs``: (from, to, literal), -1 for the depot, as :func:`~masonry.planner.schedule._machines`
@@ -385,15 +386,30 @@ def add_battery(
     energy = {
         i: m.new_int_var(0, max(0, cap - phys.home_ticks(_end(p.tasks[i]), home)), f"en{i}_{k}") for i in mine
     }
+    # the greedy's sequence for this UAV, swaps in it (-1 - w: swap w), and its flight since the last swap: a
+    # complete hint (without it CP-SAT found no first solution of the 12 m wall's 8 + 4 parts in 60 s)
+    seq = sorted(
+        [(hint[i][1], i) for i in mine if hint[i][0] == k] + [(w, -1 - n) for n, w in enumerate(hint_swaps)]
+    )
+    flown, at, work = phys.energy[k], p.pos[k], phys.energy[k]
+    for _, i in seq:
+        if i < 0:
+            flown, at = 0, home
+        else:
+            flown += p.flight(at, i) + p.dur[i]
+            work += p.flight(at, i) + p.dur[i]
+            at = _end(p.tasks[i])
+            m.add_hint(energy[i], flown)
+    after = dict(zip([-1 - 10**9] + [i for _, i in seq], [i for _, i in seq] + [None], strict=True))
     for a, b, lit in task_arcs:
         if a < 0:
             m.add(energy[b] >= phys.energy[k] + p.flight(p.pos[k], b) + p.dur[b]).only_enforce_if(lit)
         else:
             m.add(energy[b] >= energy[a] + p.flight(_end(p.tasks[a]), b) + p.dur[b]).only_enforce_if(lit)
-    # one swap per pack's worth of the role's work in the part, and one more (a pack is rarely used up); nodes
-    # from half a pack of work on, as the empty legs, not in ``work``, drain the pack too
-    work = phys.energy[k] + sum(p.dur[i] for i in mine)
-    n_swaps = min(len(mine), math.ceil(work / max(1, cap)) + 1) if 2 * work > cap else 0
+    # the greedy's swaps, and one more once its flight for this UAV passes half a pack: a node per swap the role's
+    # whole work could need made the 12 m wall's 8 + 4 parts too large for CP-SAT to find a first solution; the
+    # cap makes the model a restriction (a schedule found is still one the physics allows: docs/schedule.md)
+    n_swaps = min(len(mine), len(hint_swaps) + (1 if 2 * work > cap else 0))
     pad = phys.on_pad[k]
     arcs: list[tuple[int, int, BoolVarT]] = []
     nodes: list[tuple[IntVar, IntVar]] = []
@@ -411,13 +427,16 @@ def add_battery(
             m.add(start >= nodes[-1][1] + pad).only_enforce_if(here)
         nodes.append((here, start))
         from_depot = m.new_bool_var(f"dsw{k}_{w}")
+        m.add_hint(from_depot, int(after[-1 - 10**9] == -1 - w))
         m.add(start >= p.ready[k] + phys.home_ticks(p.pos[k], home)).only_enforce_if(from_depot)
         arcs.append((0, first + w, from_depot))
         for i in mine:
             to_swap = m.new_bool_var(f"tsw{i}_{k}_{w}")
             m.add(start >= e_var[i] + phys.home_ticks(_end(p.tasks[i]), home)).only_enforce_if(to_swap)
             arcs.append((node[i], first + w, to_swap))
+            m.add_hint(to_swap, int(after.get(i) == -1 - w))
             back = m.new_bool_var(f"bsw{i}_{k}_{w}")
+            m.add_hint(back, int(after.get(-1 - w) == i))
             m.add(s_var[i] >= start + pad + p.flight(home, i)).only_enforce_if(back)
             m.add(energy[i] >= p.flight(home, i) + p.dur[i]).only_enforce_if(back)
             arcs.append((first + w, node[i], back))
