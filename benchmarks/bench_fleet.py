@@ -10,7 +10,9 @@ the default policy, seed 1, geometric camera (``masonry.mission.simulate``).
 The yardstick (issue 27): for the same wall and fleet, the makespan of ``masonry schedule`` (OR-Tools CP-SAT,
 minimum task durations, the same reservation rule, ``--schedule-time-s`` seconds, 90 by default, 2 workers,
 seed 0; ``--schedule-time-s 0`` leaves it out). Printed beside the simulated makespan: the ratio simulated /
-schedule and the speed-up over 1+1 of both.
+schedule and the speed-up over 1+1 of both. Beside it the physical schedule (``masonry schedule --physical``,
+``--physical`` terms, ``all`` by default: the pallet and the battery swaps, docs/schedule.md; ``none`` leaves
+it out), its battery swaps, its speed-up over 1+1 and simulated / physical.
 
 Printed per wall, as Markdown tables (docs/performance/fleet.md, "After: `site` as the default" and "Fleet against
 the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/performance/history.md):
@@ -27,7 +29,7 @@ Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-
        [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
-       [--schedule-time-s 90]
+       [--schedule-time-s 90] [--physical all|pallet|battery|none]
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 
@@ -44,13 +46,14 @@ from pathlib import Path
 
 from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
+from masonry.errors import PlanningError
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
 from masonry.planner import plan as make_plan
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
-from masonry.planner.schedule import solve_schedule
+from masonry.planner.schedule import physical_terms, solve_schedule
 from masonry.ports import PHASES
 from masonry.timing import DEFAULT_TIMING
 
@@ -101,6 +104,10 @@ class Run:
     #: its status (optimal / feasible) and the seconds CP-SAT took
     schedule_status: str = ""
     schedule_wall_s: float = 0.0
+    #: the physical schedule's makespan (``--physical``; None: not computed), status and battery swaps
+    physical_s: float | None = None
+    physical_status: str = ""
+    physical_swaps: int = 0
 
     @property
     def fleet(self) -> str:
@@ -131,10 +138,16 @@ def fly(
 
 
 def schedule_makespan(
-    blueprint: Blueprint, bricks: int, adhesion: int, reservation: str, time_limit_s: float
-) -> tuple[float, str, float]:
-    """The makespan of ``masonry schedule`` for the wall and fleet (as the command calls the solver: the fleet of
-    ``fleet_for``, the plan of the blueprint, its cruise altitude, 2 workers, seed 0), its status and wall time."""
+    blueprint: Blueprint,
+    bricks: int,
+    adhesion: int,
+    reservation: str,
+    time_limit_s: float,
+    physical: str = "",
+) -> tuple[float, str, float, int]:
+    """The makespan of ``masonry schedule [--physical TERMS]`` for the wall and fleet (as the command calls the
+    solver: the fleet of ``fleet_for``, the plan of the blueprint, its cruise altitude and r_c, 2 workers, seed
+    0), its status, wall time and battery swaps."""
     fleet = fleet_for(blueprint, bricks, adhesion)
     bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
     wall0 = time.perf_counter()
@@ -147,8 +160,14 @@ def schedule_makespan(
         seed=0,
         workers=2,
         decomposition="auto",
+        physical=physical,
+        clearance_m=bp.clearance_m,
     )
-    return result.makespan_s, result.status, time.perf_counter() - wall0
+    greedy = sum(
+        1 for q in result.parts if q.get("status") == "greedy"
+    )  # CP-SAT found nothing in a part's time
+    status = f"{result.status}, {greedy} of {len(result.parts)} parts greedy" if greedy else result.status
+    return result.makespan_s, status, time.perf_counter() - wall0, result.battery_swaps
 
 
 def _mean_attempt_s(report: MissionReport, kind: str) -> float:
@@ -179,15 +198,28 @@ def _schedule_cells(r: Run, base_s: float | None) -> str:
     return f"{r.schedule_s:,.0f} s ({r.schedule_status}) | {speedup:.2f} | {r.report.makespan_s / r.schedule_s:.2f}"
 
 
+def _physical_cells(r: Run, base_s: float | None) -> str:
+    """The physical schedule's makespan (its swaps), its speed-up over the first fleet's, simulated / it."""
+    if r.physical_s is None or r.physical_s <= 0:
+        return "- | - | -"
+    speedup = base_s / r.physical_s if base_s else float("nan")
+    return (
+        f"{r.physical_s:,.0f} s ({r.physical_status}, {r.physical_swaps} swaps) | {speedup:.2f} "
+        f"| {r.report.makespan_s / r.physical_s:.2f}"
+    )
+
+
 def scaling_table(runs: list[Run]) -> list[str]:
     base = runs[0].report.makespan_s if runs and runs[0].report.completed else float("nan")
     base_schedule_s = runs[0].schedule_s if runs else None
+    base_physical_s = runs[0].physical_s if runs else None
     lines = [
         "| fleet (brick + adhesion) | makespan | speed-up over 1 + 1 | schedule (CP-SAT) | its speed-up over 1 + 1 "
-        "| simulated / schedule | lower_bound_s | ratio | min_separation_m "
+        "| simulated / schedule | physical schedule | its speed-up over 1 + 1 | simulated / physical "
+        "| lower_bound_s | ratio | min_separation_m "
         "| mean brick attempt | mean adhesion attempt | chained segments | mean idle_s | mean waiting_s | done "
         "| simulated | wall |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in runs:
         rep = r.report
@@ -198,6 +230,7 @@ def scaling_table(runs: list[Run]) -> list[str]:
         waiting = statistics.fmean(u.waiting_s for u in rep.uavs)
         lines.append(
             f"| {r.fleet} | {rep.makespan_s:,.0f} s | {speedup:.2f} | {_schedule_cells(r, base_schedule_s)} "
+            f"| {_physical_cells(r, base_physical_s)} "
             f"| {rep.lower_bound_s:,.0f} s | {ratio:.2f} "
             f"| {_sep(rep.min_separation_m)} | {_mean_attempt_s(rep, 'brick'):.1f} s "
             f"| {_mean_attempt_s(rep, 'adhesion'):.1f} s | {_chained(rep)} | {idle:,.0f} s | {waiting:,.0f} s "
@@ -244,6 +277,11 @@ def main() -> None:
         default=DEFAULT_SCHEDULE_TIME_S,
         help="CP-SAT's time for each wall and fleet's schedule, s (0: no schedule column)",
     )
+    ap.add_argument(
+        "--physical",
+        default="all",
+        help="the physical schedule's terms (pallet, battery, all; none: no physical column)",
+    )
     args = ap.parse_args()
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30", "pyramid"])
     unknown = [w for w in walls if w not in WALLS]
@@ -251,11 +289,15 @@ def main() -> None:
         ap.error(f"--walls: unknown wall {unknown[0]!r} (known: {', '.join(WALLS)})")
     if not (args.schedule_time_s >= 0.0 and args.schedule_time_s < float("inf")):
         ap.error(f"--schedule-time-s must be a number >= 0, got {args.schedule_time_s!r}")
+    try:
+        physical_terms(args.physical)
+    except PlanningError as exc:
+        ap.error(f"--physical: {exc}")
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
         f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, "
         f"airspace {args.airspace}, geometric camera, "
-        f"schedule {args.schedule_time_s:g} s; "
+        f"schedule {args.schedule_time_s:g} s, physical {args.physical}; "
         f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
     )
     for key in walls:
@@ -271,12 +313,22 @@ def main() -> None:
                 flush=True,
             )
             if args.schedule_time_s > 0:
-                made, status, took = schedule_makespan(
+                made, status, took, _swaps = schedule_makespan(
                     blueprint, bricks, adhesion, args.reservation, args.schedule_time_s
                 )
                 run = dataclasses.replace(run, schedule_s=made, schedule_status=status, schedule_wall_s=took)
                 print(
                     f"  scheduled {run.fleet}: makespan {made:,.0f} s ({status}) in {took:.0f} s", flush=True
+                )
+            if args.schedule_time_s > 0 and args.physical not in ("", "none"):
+                made, status, took, swaps = schedule_makespan(
+                    blueprint, bricks, adhesion, args.reservation, args.schedule_time_s, args.physical
+                )
+                run = dataclasses.replace(run, physical_s=made, physical_status=status, physical_swaps=swaps)
+                print(
+                    f"  scheduled {run.fleet} --physical {args.physical}: makespan {made:,.0f} s ({status}, "
+                    f"{swaps} swaps) in {took:.0f} s",
+                    flush=True,
                 )
             runs.append(run)
         print()

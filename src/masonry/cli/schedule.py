@@ -9,7 +9,7 @@ import typer
 from masonry.cli.app import cli_message, command, fail
 from masonry.cli.options import check_all, help_text
 from masonry.cli.outputs import atomic_path, check_output_paths, write_atomic
-from masonry.errors import InputError
+from masonry.errors import InputError, PlanningError
 
 
 @command("schedule")
@@ -46,6 +46,11 @@ def schedule(
         "--decomposition",
         help="auto | none | course: the whole model, or course by course (auto: course beyond 110 tasks).",
     ),
+    physical: str = typer.Option(
+        "",
+        "--physical",
+        help="pallet,battery | all: the physical terms (docs/schedule.md, 'The physical model'); none by default.",
+    ),
     output: Path | None = typer.Option(
         None, "-o", "--output", help="Write the schedule (JSON) to this file."
     ),
@@ -61,7 +66,7 @@ def schedule(
     from masonry.mission.fleet import fleet_for, with_fleet
     from masonry.mission.schedule_file import stamp_schedule
     from masonry.planner import plan as make_plan
-    from masonry.planner.schedule import ScheduleUnavailable, solve_schedule
+    from masonry.planner.schedule import ScheduleUnavailable, physical_terms, solve_schedule
     from masonry.planner.schedule_deadlines import DeadlinesUnmet
 
     if fmt not in ("text", "json"):
@@ -70,6 +75,10 @@ def schedule(
         raise InputError(f"--reservation must be site or task, got {reservation!r}")
     if decomposition not in ("auto", "none", "course"):
         raise InputError(f"--decomposition must be auto, none or course, got {decomposition!r}")
+    try:
+        terms = physical_terms(physical)
+    except PlanningError as exc:
+        raise InputError(f"--physical: {exc}") from None
     check_all(
         "schedule",
         {
@@ -101,6 +110,8 @@ def schedule(
             seed=seed,
             workers=workers,
             decomposition=decomposition,
+            physical=terms,
+            clearance_m=bp.clearance_m,
         )
     except (ScheduleUnavailable, DeadlinesUnmet) as exc:
         raise fail(cli_message(exc), 2) from None

@@ -27,9 +27,9 @@ import math
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
+from masonry.blueprint import DEFAULT_CLEARANCE_M, DEFAULT_CRUISE_ALTITUDE_M, ROLES, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.bounds import empty_flight_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
@@ -47,9 +47,23 @@ from masonry.planner.schedule_deadlines import (
 )
 from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
+from masonry.planner.schedule_graph import parts as _parts
+from masonry.planner.schedule_graph import precedences as _precedences
+from masonry.planner.schedule_physical import (
+    DEFAULT_BATTERY,
+    BatteryModel,
+    Physics,
+    add_battery,
+    add_pallet,
+    make_physics,
+    physical_terms,
+)
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
+
+if TYPE_CHECKING:
+    from ortools.sat.python.cp_model import BoolVarT, CpModel, IntervalVar, IntVar
 
 #: Plans with more not-done tasks than this are solved course by course (``decomposition="auto"``).
 FULL_MODEL_MAX_TASKS = 110
@@ -84,6 +98,7 @@ class _Problem:
     ready: list[int] = field(default_factory=list)
     pos: list[tuple[float, float, float]] = field(default_factory=list)
     deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
+    phys: Physics | None = None  # the physical terms (``--physical``), None: the plain model
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
@@ -146,42 +161,6 @@ def _problem(
     )
 
 
-def _parts(p: _Problem, decomposition: str, max_full: int, part_tasks: int) -> list[list[int]]:
-    """The whole plan as one part, or (``course``) whole courses in order, gathered up to :data:`PART_TASKS`."""
-    n = len(p.tasks)
-    if decomposition == "none" or (decomposition == "auto" and n <= max_full):
-        return [list(range(n))]
-
-    def level(i: int) -> float:
-        t = p.tasks[i]
-        if isinstance(t, BrickTask):
-            return round(t.position_m[2], 3)
-        return round(min(t.start_m[2], t.end_m[2]), 3)  # glue on top of the course below
-
-    levels = sorted({level(i) for i in range(n)})
-    rank = {z: k for k, z in enumerate(levels)}
-    part = [rank[level(i)] for i in range(n)]
-    # a prerequisite is never in a later part than its dependent (glue on top of a course sits higher)
-    changed = True
-    while changed:
-        changed = False
-        for i in range(n):
-            for v in p.prereqs[i]:
-                if part[v] > part[i]:
-                    part[i] = part[v]
-                    changed = True
-    by_level: dict[int, list[int]] = {}
-    for i in range(n):
-        by_level.setdefault(part[i], []).append(i)
-    out: list[list[int]] = []
-    for k in sorted(by_level):
-        if out and len(out[-1]) + len(by_level[k]) <= part_tasks:
-            out[-1].extend(by_level[k])
-        else:
-            out.append(list(by_level[k]))
-    return out
-
-
 def _earliest(
     p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
 ) -> tuple[int, int]:
@@ -229,6 +208,11 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
         for j in p.start
     }
     start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
+    phys = p.phys
+    picks = {j: phys.pick_window(j, p.start[j]) for j in p.start if j in phys.phases} if phys else {}
+    energy = list(phys.energy) if phys else []
+    if phys is not None:
+        phys.hint_swaps = {k: [] for k in range(len(p.uavs))}
     out: dict[int, tuple[int, int, int, int]] = {}
     avail = [i for i in part if missing[i] == 0]
     while avail:
@@ -240,16 +224,14 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
                 t0, a0 = max(t0, start[v]), max(a0, end[v])
             else:
                 t0 = max(t0, end[v])
-        best: tuple[int, int, int] | None = None
-        for k, spec in enumerate(p.uavs):
-            if spec.role != p.tasks[i].kind:
-                continue
-            s, a = _earliest(p, i, max(t0, ready[k] + p.flight(pos[k], i)), a0, kept)
-            if best is None or s < best[1]:
-                best = (k, s, a)
-        assert best is not None  # _problem checked every role has a UAV
-        k, s, a = best
-        e = s + p.dur[i]
+        k, s, a, e, swap = _best_uav(p, i, t0, a0, ready, pos, energy, kept, picks)
+        if phys is not None:
+            if swap:
+                phys.hint_swaps[k].append(ready[k] + phys.home_ticks(pos[k], p.uavs[k].home_m))
+                pos[k], energy[k] = p.uavs[k].home_m, 0
+            energy[k] += p.flight(pos[k], i) + p.dur[i]
+            if i in phys.phases:
+                picks[i] = phys.pick_window(i, s)
         start[i], end[i], site_start[i] = s, e, a
         kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
         ready[k], pos[k] = e, task_end_m(p.tasks[i])
@@ -259,6 +241,37 @@ def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, 
             if missing[d] == 0:
                 avail.append(d)
     return out
+
+
+def _best_uav(
+    p: _Problem,
+    i: int,
+    t0: int,
+    a0: int,
+    ready: Sequence[int],
+    pos: Sequence[Sequence[float]],
+    energy: Sequence[int],
+    kept: Mapping[int, tuple[int, int]],
+    picks: Mapping[int, tuple[int, int]],
+) -> tuple[int, int, int, int, bool]:
+    """The greedy's UAV for task ``i``: (UAV, start, site start, end, swaps first), the earliest start."""
+    phys = p.phys
+    best: tuple[int, int, int, int, bool] | None = None
+    for k, spec in enumerate(p.uavs):
+        if spec.role != p.tasks[i].kind:
+            continue
+        swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
+        r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
+        t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
+        if phys is not None and i in phys.phases and phys.pallet:
+            s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
+        else:
+            s, a = _earliest(p, i, t_k, a0, kept)
+            e = s + p.dur[i]
+        if best is None or s < best[1]:
+            best = (k, s, a, e, swap)
+    assert best is not None  # _problem checked every role has a UAV
+    return best
 
 
 def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
@@ -280,6 +293,7 @@ class _PartResult:
     status: str
     bound: int | None
     solve_s: float
+    swaps: dict[int, list[int]] = field(default_factory=dict)  # per UAV its swaps' starts (``battery``)
 
 
 def _solve_part(
@@ -295,31 +309,20 @@ def _solve_part(
         flights = [max(p.flight(e, i) for e in ends) for i in part]
         horizon += serial_horizon([p.dur[i] for i in part], flights, p.deadlines)
     m = cp_model.CpModel()
-    s_var: dict[int, Any] = {}
-    e_var: dict[int, Any] = {}
-    a_var: dict[int, Any] = {}
-    keep: dict[int, Any] = {}
     site = p.reservation == "site"
-    for i in part:
-        s_var[i] = m.new_int_var(0, horizon, f"s{i}")
-        e_var[i] = m.new_int_var(0, horizon, f"e{i}")
-        m.new_interval_var(s_var[i], p.dur[i], e_var[i], f"t{i}")
-        if site:
-            a_var[i] = m.new_int_var(0, horizon, f"a{i}")
-            m.add(a_var[i] >= s_var[i])
-            m.add(a_var[i] + p.site[i] <= e_var[i])
-            keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
-        else:
-            keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
-        m.add_hint(s_var[i], hint[i][1])
-        if site:
-            m.add_hint(a_var[i], hint[i][3])
+    phys = p.phys
+    hint_swaps = dict(phys.hint_swaps) if phys else {}
+    if phys is not None:
+        phys.swap_vars = {}
+    s_var, e_var, a_var, keep, size = _task_vars(p, part, m, horizon, hint)
     _precedences(p, part, m, s_var, e_var, a_var)
+    if phys is not None and phys.pallet:
+        add_pallet(p, phys, part, m, s_var, e_var, a_var, _clique_cover)
     add_deadlines(p.deadlines, part, m, s_var, e_var, a_var, p.end)
     for clique in _clique_cover(p.conflicts, part):
         m.add_no_overlap([keep[i] for i in clique])
     # conflicting tasks of earlier parts are fixed intervals: a task may fill a gap before one of them
-    fixed: dict[int, Any] = {}
+    fixed: dict[int, IntervalVar] = {}
     for i in part:
         for c in p.conflicts[i]:
             if c in p.end and c not in s_var:
@@ -327,7 +330,7 @@ def _solve_part(
                     lo = p.site_start[c] if site else p.start[c]
                     fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
                 m.add_no_overlap([keep[i], fixed[c]])
-    lits = _machines(p, part, m, s_var, e_var, hint)
+    lits = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
     makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
     for i in part:
         m.add(makespan >= e_var[i])
@@ -341,61 +344,70 @@ def _solve_part(
     code = solver.solve(m)
     solve_s = time.perf_counter() - t_start
     if code not in (cp_model.OPTIMAL, cp_model.FEASIBLE):
-        return _PartResult(hint, "greedy", None, solve_s)
+        return _PartResult(hint, "greedy", None, solve_s, hint_swaps)
     placed: dict[int, tuple[int, int, int, int]] = {}
     for i in part:
         k = next(k for k, lit in lits[i].items() if solver.boolean_value(lit))
         s = int(solver.value(s_var[i]))
         a = int(solver.value(a_var[i])) if site else s
-        placed[i] = (k, s, s + p.dur[i], a)
+        placed[i] = (k, s, int(solver.value(e_var[i])), a)
+    swaps = {
+        k: [int(solver.value(w)) for here, w in nodes if solver.boolean_value(here)]
+        for k, nodes in (phys.swap_vars.items() if phys else ())
+    }
     status = "optimal" if code == cp_model.OPTIMAL else "feasible"
-    return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s)
+    return _PartResult(placed, status, math.floor(solver.best_objective_bound), solve_s, swaps)
 
 
-def _precedences(
-    p: _Problem,
-    part: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
-    a_var: Mapping[int, Any],
-) -> None:
-    """G^d inside the part, and the prerequisites placed in earlier parts."""
+def _task_vars(
+    p: _Problem, part: Sequence[int], m: CpModel, horizon: int, hint: Mapping[int, tuple[int, int, int, int]]
+) -> tuple[
+    dict[int, IntVar], dict[int, IntVar], dict[int, IntVar], dict[int, IntervalVar], dict[int, IntVar | int]
+]:
+    """Per task its start, end, site start (``site``), kept-apart interval and length (its minimum duration,
+    or a variable for a task the physical terms let last longer)."""
+    s_var: dict[int, IntVar] = {}
+    e_var: dict[int, IntVar] = {}
+    a_var: dict[int, IntVar] = {}
+    keep: dict[int, IntervalVar] = {}
+    size: dict[int, IntVar | int] = {}
     site = p.reservation == "site"
     for i in part:
-        lo_s, lo_a = 0, 0
-        for v in p.prereqs[i]:
-            if v in s_var:
-                if p.prefetch(i):
-                    m.add(s_var[i] >= s_var[v])
-                    m.add(a_var[i] >= e_var[v])
-                elif site:
-                    m.add(s_var[i] >= e_var[v])
-                    m.add(a_var[i] >= e_var[v])
-                else:
-                    m.add(s_var[i] >= e_var[v])
-            elif v in p.end:
-                if p.prefetch(i):
-                    lo_s, lo_a = max(lo_s, p.start[v]), max(lo_a, p.end[v])
-                else:
-                    lo_s = max(lo_s, p.end[v])
-                    lo_a = max(lo_a, p.end[v])
-        if lo_s:
-            m.add(s_var[i] >= lo_s)
-        if site and lo_a:
-            m.add(a_var[i] >= lo_a)
+        s_var[i] = m.new_int_var(0, horizon, f"s{i}")
+        e_var[i] = m.new_int_var(0, horizon, f"e{i}")
+        flexible = p.phys is not None and p.phys.flexible(p, i)
+        size[i] = m.new_int_var(p.dur[i], horizon, f"d{i}") if flexible else p.dur[i]
+        m.new_interval_var(s_var[i], size[i], e_var[i], f"t{i}")
+        if site:
+            a_var[i] = m.new_int_var(0, horizon, f"a{i}")
+            m.add(a_var[i] >= s_var[i])
+            m.add(a_var[i] + p.site[i] <= e_var[i])
+            keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
+        else:
+            keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
+        m.add_hint(s_var[i], hint[i][1])
+        if flexible:
+            m.add_hint(e_var[i], hint[i][2])
+        if site:
+            m.add_hint(a_var[i], hint[i][3])
+    return s_var, e_var, a_var, keep, size
 
 
 def _machines(
     p: _Problem,
     part: Sequence[int],
-    m: Any,
-    s_var: Mapping[int, Any],
-    e_var: Mapping[int, Any],
+    m: CpModel,
+    s_var: Mapping[int, IntVar],
+    e_var: Mapping[int, IntVar],
     hint: Mapping[int, tuple[int, int, int, int]],
-) -> dict[int, dict[int, Any]]:
-    """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights."""
-    lits: dict[int, dict[int, Any]] = {i: {} for i in part}
+    size: Mapping[int, IntVar | int],
+    hint_swaps: Mapping[int, Sequence[int]],
+    horizon: int,
+) -> dict[int, dict[int, IntVar]]:
+    """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights (and its
+    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`)."""
+    lits: dict[int, dict[int, IntVar]] = {i: {} for i in part}
+    battery = p.phys is not None and p.phys.battery
     anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
         mine = [i for i in part if p.tasks[i].kind == spec.role]
@@ -403,19 +415,27 @@ def _machines(
             continue
         order = sorted((i for i in mine if hint[i][0] == k), key=lambda i: hint[i][1])
         hinted_arcs = set(zip([-1, *order], [*order, -1]))
+        swaps_k = hint_swaps.get(k, ())  # a greedy swap between two tasks: no arc between them
+        hinted_arcs -= {
+            (a, b)
+            for a, b in zip([-1, *order], order)
+            if any((hint[a][2] if a >= 0 else 0) <= w < hint[b][1] for w in swaps_k)
+        }
         node = {i: n + 1 for n, i in enumerate(mine)}
-        arcs: list[tuple[int, int, Any]] = []
+        arcs: list[tuple[int, int, BoolVarT]] = []
+        task_arcs: list[tuple[int, int, BoolVarT]] = []  # (from, to, literal), -1: the depot
         optional = []
         for i in mine:
             x = m.new_bool_var(f"x{i}_{k}")
             lits[i][k] = x
             m.add_hint(x, int(hint[i][0] == k))
-            optional.append(m.new_optional_interval_var(s_var[i], p.dur[i], e_var[i], x, f"o{i}_{k}"))
+            optional.append(m.new_optional_interval_var(s_var[i], size[i], e_var[i], x, f"o{i}_{k}"))
             arcs.append((node[i], node[i], x.Not()))
             first = m.new_bool_var(f"f{i}_{k}")
             m.add(s_var[i] >= p.ready[k] + p.flight(p.pos[k], i)).only_enforce_if(first)
             m.add_hint(first, int((-1, i) in hinted_arcs))
             arcs.append((0, node[i], first))
+            task_arcs.append((-1, i, first))
             last = m.new_bool_var(f"l{i}_{k}")
             m.add_hint(last, int((i, -1) in hinted_arcs))
             arcs.append((node[i], 0, last))
@@ -431,6 +451,23 @@ def _machines(
                 m.add(s_var[j] >= e_var[i] + p.flight(end_i, j)).only_enforce_if(lit)
                 m.add_hint(lit, int((i, j) in hinted_arcs))
                 arcs.append((node[i], node[j], lit))
+                task_arcs.append((i, j, lit))
+        if battery and p.phys is not None:
+            arcs += add_battery(
+                p,
+                p.phys,
+                k,
+                mine,
+                m,
+                s_var,
+                e_var,
+                task_arcs,
+                node,
+                optional,
+                hint_swaps.get(k, ()),
+                horizon,
+                hint,
+            )
         m.add_circuit(arcs)
         m.add_no_overlap(optional)
     for i in part:
@@ -452,6 +489,9 @@ def solve_schedule(
     tick_s: float = DEFAULT_TICK_S,
     max_full_tasks: int = FULL_MODEL_MAX_TASKS,
     part_tasks: int = PART_TASKS,
+    physical: str | Sequence[str] = (),
+    battery: BatteryModel = DEFAULT_BATTERY,
+    clearance_m: float = DEFAULT_CLEARANCE_M,
 ) -> OfflineSchedule:
     """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
 
@@ -466,13 +506,16 @@ def solve_schedule(
         max_full_tasks, part_tasks: ``auto`` decomposes plans with more tasks than ``max_full_tasks``; a part
             gathers whole courses up to ``part_tasks`` tasks (a course larger than that is one part).
         tick_s: the model's time unit; durations and flights are rounded down to it (the bound stays valid).
+        physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``, as
+            names or one comma-separated string, ``all``); none by default.
+        battery, clearance_m: the packs and swaps (``battery``) and the blueprint's r_c (``pallet``).
 
     Returns:
         The schedule; no digest (the caller, who has the blueprint, adds them).
 
     Raises:
         ScheduleUnavailable: OR-Tools is not installed.
-        PlanningError: bad arguments, or a role with tasks has no UAV.
+        PlanningError: bad arguments, a role with tasks has no UAV, or a task no fresh pack covers.
     """
     try:
         import ortools.sat.python.cp_model  # noqa: F401
@@ -492,7 +535,22 @@ def solve_schedule(
         raise PlanningError(f"workers must be an integer >= 1, got {workers!r}")
     t_ = DEFAULT_TIMING if timing is None else timing
     t0 = time.perf_counter()
+    terms = physical_terms(physical)
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    if terms:
+        p.phys = make_physics(
+            plan,
+            p.tasks,
+            fleet,
+            p.dur,
+            terms=terms,
+            timing=t_,
+            cruise_altitude_m=cruise_altitude_m,
+            tick_s=tick_s,
+            battery=battery,
+            clearance_m=clearance_m,
+        )
+        p.phys.check(p)
     check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)
     parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
@@ -507,6 +565,8 @@ def solve_schedule(
             raise DeadlinesUnmet.within(budget, len(part))
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
+        if p.phys is not None:
+            p.phys.carry_over(p, part, last.placed, last.swaps)
         for k in range(len(p.uavs)):
             mine = [i for i in part if last.placed[i][0] == k]
             if mine:
@@ -534,5 +594,6 @@ __all__ = [
     "FULL_MODEL_MAX_TASKS",
     "PART_TASKS",
     "ScheduleUnavailable",
+    "physical_terms",
     "solve_schedule",
 ]

@@ -66,6 +66,7 @@ def _assemble(
                     )
                     for i in mine
                 ),
+                tuple(w * tick for w in sorted(p.phys.swaps[k])) if p.phys is not None else (),
             )
         )
     return OfflineSchedule(
@@ -81,4 +82,5 @@ def _assemble(
         seed=seed,
         tick_s=tick,
         parts=tuple(reports) if not whole else (),
+        physical=p.phys.terms if p.phys is not None else (),
     )

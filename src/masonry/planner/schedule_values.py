@@ -38,6 +38,8 @@ class UavSchedule:
     name: str
     role: str
     tasks: tuple[ScheduledTask, ...]
+    #: the starts of its battery swaps (the flight home), s (``--physical battery``)
+    swaps_s: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -64,6 +66,13 @@ class OfflineSchedule:
     fleet_digest: str = ""
     #: per part of a decomposition: tasks, status, solve time
     parts: tuple[Mapping[str, Any], ...] = ()
+    #: the physical terms of the model (``masonry schedule --physical``; () : the plain model)
+    physical: tuple[str, ...] = ()
+
+    @property
+    def battery_swaps(self) -> int:
+        """The battery swaps of the schedule, all UAVs together (``--physical battery``)."""
+        return sum(len(u.swaps_s) for u in self.uavs)
 
     @property
     def gap(self) -> float:
@@ -92,11 +101,13 @@ class OfflineSchedule:
             "tick_s": self.tick_s,
             "decomposition": self.decomposition,
             "parts": [dict(p) for p in self.parts],
+            **({"physical": list(self.physical)} if self.physical else {}),
             "uavs": [
                 {
                     "name": u.name,
                     "role": u.role,
                     "tasks": [_task_dict(t) for t in u.tasks],
+                    **({"swaps_s": [round(w, 3) for w in u.swaps_s]} if self.physical else {}),
                 }
                 for u in self.uavs
             ],
@@ -108,6 +119,7 @@ class OfflineSchedule:
             f"schedule {self.status}: makespan {self.makespan_s:.1f} s, bound {self.bound_s:.1f} s "
             f"({self.bound_kind}), gap {self.gap * 100:.1f} %, solved in {self.solve_time_s:.1f} s "
             f"(limit {self.time_limit_s:g} s), decomposition {self.decomposition}, reservation {self.reservation}"
+            + (f", physical {'+'.join(self.physical)} ({self.battery_swaps} swaps)" if self.physical else "")
         ]
         for u in self.uavs:
             last = u.tasks[-1].end_s if u.tasks else 0.0
@@ -191,7 +203,17 @@ def schedule_from_dict(doc: Any, where: str = "schedule") -> OfflineSchedule:
                 else None
             )
             tasks.append(ScheduledTask(tid, start, end, *(site or (None, None))))
-        uavs.append(UavSchedule(_field(u, "name", str, at), _field(u, "role", str, at), tuple(tasks)))
+        swaps = _field(u, "swaps_s", list, at) if "swaps_s" in u else []
+        if not all(isinstance(w, (int, float)) and not isinstance(w, bool) and w >= 0 for w in swaps):
+            raise InputError(f"{at}: field `swaps_s` holds a value that is not a time >= 0")
+        uavs.append(
+            UavSchedule(
+                _field(u, "name", str, at),
+                _field(u, "role", str, at),
+                tuple(tasks),
+                tuple(float(w) for w in swaps),
+            )
+        )
     parts = _field(doc, "parts", list, where) if "parts" in doc else []
     return OfflineSchedule(
         uavs=tuple(uavs),
@@ -208,6 +230,7 @@ def schedule_from_dict(doc: Any, where: str = "schedule") -> OfflineSchedule:
         wall_digest=_field(doc, "wall_digest", str, where),
         fleet_digest=_field(doc, "fleet_digest", str, where),
         parts=tuple(p for p in parts if isinstance(p, Mapping)),
+        physical=tuple(str(t) for t in _field(doc, "physical", list, where)) if "physical" in doc else (),
     )
 
 
