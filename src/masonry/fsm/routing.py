@@ -14,9 +14,8 @@ import math
 import numpy as np
 
 from masonry.fsm.base import ModelBase, Vec3
-from masonry.segments import point_segment_m
 from masonry.ports import ClearanceAnswer, Telemetry
-
+from masonry.segments import point_segment_m
 
 #: A UAV flies on over its hold point to its site (:meth:`Routing._straight_on`) only from farther than this: one
 #: nearer is as good as there (within a leg's arrival tolerances), and flying on from there changed the order of
@@ -152,7 +151,12 @@ class Routing(ModelBase):
         if math.hypot(float(target[0]) - p[0], float(target[1]) - p[1]) < STRAIGHT_ON_FROM_M:
             return False  # (as good as there: it stops and reads the answer at rest, as before)
         answer = self.clearance.request_clearance(site, transit.top_m, transit.to_m)
-        if answer is None or not answer.granted or answer.layer_m is None or abs(answer.layer_m - layer) > 1e-6:
+        if (
+            answer is None
+            or not answer.granted
+            or answer.layer_m is None
+            or abs(answer.layer_m - layer) > 1e-6
+        ):
             return False
         transit.grant()
         legs = self.nav.layer_route_legs(np.array(site), layer)

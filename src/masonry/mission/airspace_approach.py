@@ -69,6 +69,9 @@ def approach(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
         vols = c.flight_volumes_at(start, None, w.top_m, h.layer, p)
         if c.fits(uav, vols):
             c.take(u, vols)
-            u.hold, u.phase = HoldFlight((p[0], p[1], w.site[2]), h.layer, h.layer_m, straight=True), Phase.TO_HOLD
+            u.hold, u.phase = (
+                HoldFlight((p[0], p[1], w.site[2]), h.layer, h.layer_m, straight=True),
+                Phase.TO_HOLD,
+            )
             return Grant(uav, w.site, False, u.hold.point_m, h.layer_m)
     return None

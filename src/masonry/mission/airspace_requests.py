@@ -215,7 +215,9 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
             vols = c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1]))
             if c.fits(uav, vols):
                 c.take(u, vols)
-                straight = point_segment_m((hold[0], hold[1]), (start[0], start[1]), (w.site[0], w.site[1])) < 0.01
+                straight = (
+                    point_segment_m((hold[0], hold[1]), (start[0], start[1]), (w.site[0], w.site[1])) < 0.01
+                )
                 u.hold, u.phase = HoldFlight(hold, k, c.alt(k), straight), Phase.TO_HOLD
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
                 return Grant(uav, w.site, False, hold, c.alt(k))
