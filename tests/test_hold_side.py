@@ -1,7 +1,8 @@
 """Hold points on the waiting UAV's side of its site (issue 27): of the admissible points of a ring, the one nearest
 the UAV first (``masonry.mission.volumes.hold_points``' ``from_m``), so that a UAV sent to wait flies towards its
 site, not round the far side of it. The choice is among the same points, each as far from everyone else as before
-(docs/safety.md, "Layers, hold flights, order")."""
+(docs/safety.md, "Layers, hold flights, order"); and the admissible points on its straight line to the site
+among them, by their distance from the site."""
 
 from __future__ import annotations
 
@@ -62,13 +63,20 @@ point = st.tuples(coord, coord)
     start=point,
     radius_m=st.sampled_from([0.8, 1.2, 1.5, 2.0]),
 )
-def test_the_points_are_the_same_admissible_ones_nearest_the_uav_first_in_each_ring(
+def test_the_points_are_the_same_admissible_ones_and_those_on_the_uav_s_line_nearest_the_uav_first_in_each_ring(
     site, keep_out, spans, start, radius_m
 ):
     s3 = (site[0], site[1], 1.2)
     before = hold_points(s3, keep_out, spans, radius_m)
     after = hold_points(s3, keep_out, spans, radius_m, from_m=start)
-    assert sorted(after) == sorted(before), (site, keep_out, spans, start)  # the same points
+    far = math.dist(site, start)
+    extra = list(after)
+    for p in before:
+        if p != (site[0] + 8 * max(radius_m, 0.25), site[1], 1.2) or p in extra:
+            extra.remove(p)  # every point of before is there (the far point only if still none is admissible)
+    for p in extra:  # the others lie on the UAV's straight line to its site, no farther than the UAV
+        assert point_segment_m(p[:2], site, start) < 1e-6, (p, site, start)
+        assert radius_m - 1e-9 <= math.dist(p[:2], site) <= far + 1e-9
     ring = [math.hypot(p[0] - site[0], p[1] - site[1]) for p in after]
     assert all(a <= b + 1e-9 for a, b in itertools.pairwise(ring))  # rings nearest the site first, as before
     if after != [(site[0] + 8 * max(radius_m, 0.25), site[1], 1.2)]:  # (none admissible: one far point)

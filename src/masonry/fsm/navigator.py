@@ -205,6 +205,14 @@ class Navigator:
         self.fly_to(now_s, tel, legs[0], yaw_rad=yaw_rad, from_rest=from_rest)
         self.legs = [(leg, None) for leg in legs[1:]]
 
+    def layer_route_legs(self, target: np.ndarray, layer: float) -> list[Leg]:
+        """The legs of a layer route from the layer on: over ``target`` at ``layer``, then down to it."""
+        legs: list[Leg] = [(np.array([target[0], target[1], layer]), None)]
+        if abs(target[2] - layer) > _SAME_M:
+            v_z = self.config.layer_vertical_speed_mps
+            legs.append((target, max(0.5, MIN_JERK_PEAK_TO_MEAN_SPEED * abs(layer - target[2]) / v_z)))
+        return legs
+
     def layer_route(
         self,
         now_s: float,

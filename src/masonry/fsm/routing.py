@@ -15,6 +15,12 @@ import numpy as np
 
 from masonry.fsm.base import ModelBase, Vec3
 from masonry.ports import ClearanceAnswer, Telemetry
+from masonry.segments import point_segment_m
+
+#: A UAV flies on over its hold point to its site (:meth:`Routing._straight_on`) only from farther than this: one
+#: nearer is as good as there (within a leg's arrival tolerances), and flying on from there changed the order of
+#: the multi-UAV runs, not their time (the 12 m wall at 4 + 2: 1,189 -> 1,236 s).
+STRAIGHT_ON_FROM_M = 0.25
 
 
 class Routing(ModelBase):
@@ -93,6 +99,8 @@ class Routing(ModelBase):
     def _advance(self, tel: Telemetry, tolerance_m: float | None = None) -> bool:
         """Move the route on at the end of a leg (its next leg, the transit's next phase); True once the whole
         motion is over and the UAV within ``tolerance_m`` of its end."""
+        if self.transit.state == "hold" and not self.nav.legs and self._straight_on(tel):
+            return False
         if not self.nav.at_end(self._now_s, tel, tolerance_m):
             return False
         if self.nav.legs:
@@ -127,6 +135,35 @@ class Routing(ModelBase):
             hold_layer = answer.layer_m if answer.hold_m is not None and answer.layer_m is not None else layer
             self._refused(tel, p, answer.hold_m, hold_layer)
         return False
+
+    def _straight_on(self, tel: Telemetry) -> bool:
+        """On the lateral leg to a hold point that lies on the straight line to the site: if the rest of the flight
+        is granted at this layer meanwhile, fly on over the hold point to the site without stopping there (mission
+        control reserved the line: docs/safety.md, "Straight on over the hold point"); True if it does."""
+        assert self.clearance is not None
+        transit, target = self.transit, self.nav.target_m
+        layer, site = transit.layer_m, transit.site_m
+        p = np.asarray(tel.position_m, dtype=float)
+        if layer is None or abs(float(target[2]) - layer) > 1e-6 or abs(float(p[2]) - layer) > 0.2:
+            return False
+        if point_segment_m((float(target[0]), float(target[1])), (p[0], p[1]), (site[0], site[1])) > 0.02:
+            return False
+        if math.hypot(float(target[0]) - p[0], float(target[1]) - p[1]) < STRAIGHT_ON_FROM_M:
+            return False  # (as good as there: it stops and reads the answer at rest, as before)
+        answer = self.clearance.request_clearance(site, transit.top_m, transit.to_m)
+        if (
+            answer is None
+            or not answer.granted
+            or answer.layer_m is None
+            or abs(answer.layer_m - layer) > 1e-6
+        ):
+            return False
+        transit.grant()
+        legs = self.nav.layer_route_legs(np.array(site), layer)
+        self.nav.fly_to(self._now_s, tel, legs[0][0], None, yaw_rad=self.nav.target_yaw_rad)
+        self.nav.legs = legs[1:]
+        self.nav.legs_from_rest = True
+        return True
 
     def _transit_layer_m(self, answer: ClearanceAnswer, p: np.ndarray) -> float:
         """The altitude of the transit's lateral legs: the one it has, else the answer's, else where it is."""

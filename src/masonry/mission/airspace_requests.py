@@ -14,6 +14,7 @@ import math
 from typing import TYPE_CHECKING
 
 from masonry.geofence import AIRSPACE_MARGIN_M
+from masonry.mission.airspace_approach import approach
 from masonry.mission.airspace_state import (
     FlightRequest,
     Grant,
@@ -27,14 +28,16 @@ from masonry.mission.airspace_state import (
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned
-from masonry.mission.volumes import Vec3, contains, same_site, stopped_at
+from masonry.mission.volumes import Vec3, contains, point_segment_m, same_site, stopped_at
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
 
 __all__ = [
+    "LINGER_RING_STEP_M",
     "check_fence",
     "evaluate",
+    "few_airborne",
     "granted",
     "hold_flight",
     "hold_side",
@@ -42,6 +45,12 @@ __all__ = [
     "queued_before",
     "request",
 ]
+
+
+#: The rings of a lingering UAV's spots this far apart (from the wait radius out): the spots must keep 1.1 wait
+#: radii from every site still to be worked, so on a wall one site thick the 1.5 m rings around where it
+#: stopped held none but 3 m along the wall past its end; 1.75 m off the wall's face is one (issue 27).
+LINGER_RING_STEP_M = 0.25
 
 
 def request(
@@ -119,13 +128,20 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
     )
     if not blocked_site:
         home = c.is_home(uav, w.site)
-        if u.phase is Phase.AT_HOLD:
+        if u.phase is Phase.AT_HOLD or (
+            u.phase is Phase.TO_HOLD and u.hold is not None and u.hold.straight and few_airborne(c, uav)
+        ):
             # hovering at its hold point (it said so): from there, to the lowest layer that fits now, over to
             # the site and down. Not before: a UAV flies its hold flight to the end before it reads another
             # answer, and one that never saw its hold answer (a later one came first) would fly straight.
+            # On its way to a nearer hold point on its line to the site (airspace_approach.py) straight on is
+            # that same line: at the same layer, the rest of the flight may be granted before it is there.
             assert u.hold is not None
             hold = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
-            for k in range(c.max_layers):
+            layers = range(c.max_layers) if u.phase is Phase.AT_HOLD else (u.hold.layer,)
+            for k in layers:
+                if u.phase is Phase.TO_HOLD and abs(c.alt(k) - u.hold.layer_m) > 1e-9:
+                    break  # (the layer base rose since: the rest would climb at the hold point)
                 extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to, home=home)
                 if c.fits(uav, extra):
                     u.volumes = u.volumes + extra
@@ -152,7 +168,8 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
         u.answer = Grant(uav, w.site, False)
         return u.answer
     assert u.hold is not None
-    u.answer = Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
+    nearer = approach(c, uav, u) if not blocked_site else None
+    u.answer = nearer or Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
     return u.answer
 
 
@@ -186,7 +203,9 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
             w.site, others, c.wait_radius_m, pads, waited, from_m=hold_side(c, uav, start)
         )
     else:  # waiting for a task near where it is, clear of the work still to do (mission/linger.py)
-        candidates = hold_candidates(start, others, c.wait_radius_m, pads, (*waited, *keep_clear))
+        candidates = hold_candidates(
+            start, others, c.wait_radius_m, pads, (*waited, *keep_clear), ring_step_m=LINGER_RING_STEP_M
+        )
         candidates = linger_spots(c, uav, start, candidates, keep_clear)
     if c.fence is not None:  # only hold points inside it (else near an edge all six could be outside)
         need = AIRSPACE_MARGIN_M + c.zone_slack_m
@@ -196,7 +215,10 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
             vols = c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1]))
             if c.fits(uav, vols):
                 c.take(u, vols)
-                u.hold, u.phase = HoldFlight(hold, k, c.alt(k)), Phase.TO_HOLD
+                straight = (
+                    point_segment_m((hold[0], hold[1]), (start[0], start[1]), (w.site[0], w.site[1])) < 0.01
+                )
+                u.hold, u.phase = HoldFlight(hold, k, c.alt(k), straight), Phase.TO_HOLD
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
                 return Grant(uav, w.site, False, hold, c.alt(k))
     return None
@@ -211,8 +233,14 @@ def hold_side(c: ColumnClearance, uav: str, start: Vec3) -> Vec3 | None:
     point on the UAV's side lies where the others fly between their sites and the pallet: the 12 m wall at 4 + 2
     was up to 17 % slower with it, so the points keep their old order there (docs/safety.md).
     """
-    airborne = sum(1 for n, o in c.records.items() if n != uav and o.phase is not Phase.LANDED and o.volumes)
-    return start if airborne <= 1 else None
+    return start if few_airborne(c, uav) else None
+
+
+def few_airborne(c: ColumnClearance, uav: str) -> bool:
+    """At most one UAV but ``uav`` is in the air (the one it waits for, at 1 + 1): the rules for the hand-over
+    between two UAVs hold (:func:`hold_side`, :func:`masonry.mission.airspace_approach.approach`, a straight hold
+    flight's rest granted on the way)."""
+    return sum(1 for n, o in c.records.items() if n != uav and o.phase is not Phase.LANDED and o.volumes) <= 1
 
 
 def hover_where(c: ColumnClearance, uav: str, pos: Vec3) -> None:

@@ -60,6 +60,9 @@ class HoldFlight:
     point_m: Vec3
     layer: int
     layer_m: float  # its altitude then (the layer base may have risen since)
+    #: the hold point lies on the straight line from where the hold flight set off to the site, at the layer the
+    #: rest of the flight flies: flying straight on over it to the site stays inside the hold flight and the rest
+    straight: bool = False
 
 
 def request_geometry(
@@ -106,6 +109,7 @@ def hold_candidates(
     pads: Iterable[XY] = (),
     waited_on: Iterable[tuple[XY, XY]] = (),
     from_m: Vec3 | None = None,
+    ring_step_m: float | None = None,
 ) -> list[Vec3]:
     """Hold points near ``site`` for a UAV that must wait (:func:`masonry.mission.volumes.hold_points`), kept
     ``1.1 radius_m`` from where ``others`` work, fly to, wait for or wait at, from wherever they climb, hover or
@@ -117,6 +121,16 @@ def hold_candidates(
     hold points from the whole segment: its UAV climbs out at the far end (a hold point 1.2 m from the end of an
     earlier sprayer's segment blocked that sprayer's climb out while it waited for the same spot). Given
     ``from_m`` (where the waiting UAV is), the points of a ring come nearest to it first (:func:`hold_points`)."""
+    keep_out, spans = hold_keep_out(others, pads, waited_on)
+    return hold_points(
+        site, keep_out, spans, radius_m, None if from_m is None else (from_m[0], from_m[1]), ring_step_m
+    )
+
+
+def hold_keep_out(
+    others: Iterable[UavAirspace], pads: Iterable[XY] = (), waited_on: Iterable[tuple[XY, XY]] = ()
+) -> tuple[list[XY], list[tuple[XY, XY]]]:
+    """The points and segments a hold point keeps ``1.1 radius_m`` from (:func:`hold_candidates`)."""
     keep_out: list[XY] = list(pads)
     spans: list[tuple[XY, XY]] = list(waited_on)
     for o in others:
@@ -133,7 +147,7 @@ def hold_candidates(
                 keep_out.append((o.hold.point_m[0], o.hold.point_m[1]))
         # a hold hover is a layer (>= 1.1 m) above any pad, and legs are passed at another layer
         spans.extend((v.a, v.b) for v in o.volumes if v.kind not in ("leg", "pad"))
-    return hold_points(site, keep_out, spans, radius_m, None if from_m is None else (from_m[0], from_m[1]))
+    return keep_out, spans
 
 
 __all__ = [
@@ -144,5 +158,6 @@ __all__ = [
     "Phase",
     "UavAirspace",
     "hold_candidates",
+    "hold_keep_out",
     "request_geometry",
 ]

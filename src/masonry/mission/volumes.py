@@ -24,6 +24,9 @@ TRACK_M = 0.3
 #: A UAV that stopped mid-flight to ask for another site (it turned back) holds this much around where it is.
 HOVER_SLACK_M = 0.3
 
+#: The hold points on a UAV's straight line to its site (:func:`hold_points` given ``from_m``), this far apart.
+HOLD_LINE_STEP_M = 0.25
+
 #: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
 STOP_M = 1.0
 
@@ -204,12 +207,17 @@ def hold_points(
     spans: Sequence[tuple[XY, XY]],
     radius_m: float,
     from_m: XY | None = None,
+    ring_step_m: float | None = None,
 ) -> list[Vec3]:
     """Points around ``site`` (rings ``radius_m`` apart, nearest first, at least six when there are) at least
     1.1 ``radius_m`` from every point of ``keep_out`` and every segment of ``spans``; one far point if none is.
 
     Given ``from_m`` (where the UAV sent there is), the points of a ring come nearest to it first: on the way
-    from there to the site, not round the far side of it (issue 27; else by their angle from east).
+    from there to the site, not round the far side of it (issue 27; else by their angle from east); and the
+    points on its straight line to the site, ``HOLD_LINE_STEP_M`` apart from ``radius_m`` out to it, are among
+    them by their distance from the site (a sprayer at its linger spot 2.5 m from its segment, the ring at
+    1.5 m blocked, waited 3 m out, past where it was: issue 27). ``ring_step_m``: rings that far apart instead
+    (from ``radius_m`` out to 8 ``radius_m``).
     """
     r = 1.1 * radius_m
     r2 = r * r
@@ -220,17 +228,29 @@ def hold_points(
         )
 
     step = max(radius_m, 0.25)
+    radii = [ring * step for ring in range(1, 9)]
+    if ring_step_m is not None:  # finer rings, from ``radius_m`` out as far
+        radii = [step + i * ring_step_m for i in range(int(7 * step / ring_step_m) + 1)]
     out: list[tuple[float, Vec3]] = []
-    for ring in range(1, 9):
+    for rad in radii:
         for a in range(24):
             ang = 2.0 * math.pi * a / 24.0
-            c = (site[0] + ring * step * math.cos(ang), site[1] + ring * step * math.sin(ang))
+            c = (site[0] + rad * math.cos(ang), site[1] + rad * math.sin(ang))
             if free(c):
-                out.append((ring * step, (c[0], c[1], site[2])))
+                out.append((rad, (c[0], c[1], site[2])))
         if len(out) >= 6:
             break
     if from_m is not None:
         fx, fy = from_m
+        far = math.hypot(fx - site[0], fy - site[1])
+        if far > radius_m:  # the points on the UAV's straight line to the site, from ``radius_m`` out to it
+            ux, uy = (fx - site[0]) / far, (fy - site[1]) / far
+            d = step
+            while d < far + 1e-9:
+                c = (site[0] + d * ux, site[1] + d * uy)
+                if free(c):
+                    out.append((d, (c[0], c[1], site[2])))
+                d += HOLD_LINE_STEP_M
         out.sort(
             key=lambda x: math.hypot(x[1][0] - fx, x[1][1] - fy)
         )  # (stable: the rings' order wins below)
@@ -238,6 +258,7 @@ def hold_points(
 
 
 __all__ = [
+    "HOLD_LINE_STEP_M",
     "HOVER_SLACK_M",
     "STOP_M",
     "TRACK_M",
