@@ -292,7 +292,7 @@ def main() -> None:
                     )
                 print(
                     f"  flown {run.fleet} ({policy}): makespan {run.report.makespan_s:,.0f} s "
-                    f"in {run.wall_s:.0f} s wall{_followed(run.report)}",
+                    f"in {run.wall_s:.0f} s wall{followed_note(run.report)}",
                     flush=True,
                 )
                 runs[policy].append(run)
@@ -303,7 +303,7 @@ def main() -> None:
             print("\n".join(phase_table(runs[policy])), flush=True)
 
 
-def _followed(report: MissionReport) -> str:
+def followed_note(report: MissionReport) -> str:
     """``, followed the schedule in N of M assignments`` (``--policy schedule``), else nothing."""
     if report.schedule_assignments is None:
         return ""

@@ -35,7 +35,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import DEFAULT_SCHEDULE_TIME_S, WALLS, policies_of, walls_and_fleets
+from bench_fleet import DEFAULT_SCHEDULE_TIME_S, WALLS, followed_note, policies_of, walls_and_fleets
 from schedule_cache import cached_schedule
 
 from masonry.mission.report import MissionReport
@@ -152,7 +152,7 @@ def main() -> None:
                         f"## {wall} {fleet} {airspace} seed {seed} {policy}: makespan {r.makespan_s:,.0f} s, "
                         f"completed {d['completed']}, min separation {d['min_separation_m']} m, violations "
                         f"{d['conflict_violations']} / {d['dependency_violations']} "
-                        f"({time.perf_counter() - t0:.0f} s wall)",
+                        f"({time.perf_counter() - t0:.0f} s wall){followed_note(r)}",
                         flush=True,
                     )
                     waits = wait_breakdown(r)

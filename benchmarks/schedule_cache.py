@@ -6,7 +6,8 @@ of ``fleet_for``, the plan of the blueprint, its cruise altitude, seed 0, 2 work
 stamps it with the wall's and fleet's digests (so ``simulate(..., policy="schedule", schedule=...)`` accepts
 it), and keeps it as JSON in ``--schedule-cache`` (default ``$XDG_CACHE_HOME/masonry/schedules``, else
 ``~/.cache/masonry/schedules``). The file name holds the wall and fleet digests, the reservation, the time limit
-and a digest of the schedule model's source (``masonry/planner/schedule*.py``, ``bounds*.py``, ``timing.py``):
+and a digest of the schedule model's source (``masonry/planner/schedule*.py`` but the policy, ``bounds*.py``,
+``timing.py``):
 a changed model solves anew. Every run of a sweep, every seed and policy, follows the same schedule.
 """
 
@@ -40,8 +41,13 @@ def default_cache_dir() -> Path:
 def model_digest() -> str:
     """A digest of the source of the schedule model (a change to it solves the schedules again)."""
     root = Path(masonry.__file__).resolve().parent
+    planner = root / "planner"
     files = sorted(
-        [*(root / "planner").glob("schedule*.py"), *(root / "planner").glob("bounds*.py"), root / "timing.py"]
+        [
+            *(f for f in planner.glob("schedule*.py") if f.name != "schedule_policy.py"),
+            *planner.glob("bounds*.py"),
+            root / "timing.py",
+        ]
     )
     h = hashlib.sha256()
     for f in files:
