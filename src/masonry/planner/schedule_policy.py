@@ -13,8 +13,6 @@ safe whatever the schedule says). Where the schedule cannot be followed the disp
   69-task running bond, 2+1 UAVs, this took the mission from 1,843 s to 1,560 s);
 * a task whose UAV is lost, or that the schedule does not list, is *unclaimed*: a UAV with nothing of its own
   available takes the best unclaimed one (critical-path order, then the shortest flight);
-* or else an available task planned for a UAV that is busy now (``steal``: a UAV late on its own tasks does not
-  keep the idle ones waiting; with ``chain``, 12 m wall at 4 + 2, seed 1: 1,983 -> 1,872 s);
 * a failed task goes back to the pool and stays its UAV's (it is retried by the same UAV);
 * when nothing is in progress and no idle UAV can start one of its own tasks (it could only wait for what
   will not happen: a stuck prerequisite), a UAV takes any available task that is not the next one of its own
@@ -52,9 +50,10 @@ class ScheduleDispatcher(Dispatcher):
     _per_uav_choice = True
     #: a UAV whose next planned task is not available takes a later one of its own that is
     lookahead = True
-    #: ... or else an available task planned for a UAV that is busy now (a UAV late on its own tasks does not
-    #: keep the idle ones waiting; docs/performance/fleet.md, "The schedule's order flown")
-    steal = True
+    #: ... or else an available task planned for a UAV that is busy now (off: it undoes the schedule's
+    #: assignment, and sends more UAVs into a crowded wall: the pyramid at 8 + 4 1,782 -> 2,357 s, while the
+    #: 12 m wall at 4 + 2 gained 111 s; docs/performance/fleet.md, "The schedule's order flown")
+    steal = False
     #: an adhesion UAV at the end of the segment it has just sprayed takes the segment starting there, if it is
     #: its own (or unclaimed) and available, before its next planned one: chained, no climb and descent
     chain = True
