@@ -87,11 +87,13 @@ SUMMARY = (
     ("brick", "site"),
     ("brick", "airspace"),
     ("brick", "battery"),
+    ("brick", "take-off"),
     ("brick", "dependency"),
     ("brick", "fleet"),
     ("adhesion", "site"),
     ("adhesion", "airspace"),
     ("adhesion", "battery"),
+    ("adhesion", "take-off"),
     ("adhesion", "dependency"),
     ("adhesion", "fleet"),
 )
