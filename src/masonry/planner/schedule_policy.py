@@ -6,8 +6,9 @@ safe whatever the schedule says). Where the schedule cannot be followed the disp
 
 * an adhesion UAV still at the end of the segment it has just sprayed takes the segment starting there if it is
   its own (or unclaimed) and available, before its next planned one (``chain``: sprayed chained, no climb and
-  descent; the schedule's model counts every segment chained, its order chains few: 3 of 156 consecutive
-  segments of a sprayer on the 12 m wall at 4 + 2; that wall, seed 1, 2,308 -> 1,983 s);
+  descent; the schedule's model charges a segment the same whether it is chained or not, so its order chains
+  few: 3 of 156 consecutive segments of a sprayer on the 12 m wall at 4 + 2; that wall, seeds 1-3, 2,308 /
+  2,246 / 2,016 -> 1,983 / 1,915 / 1,726 s);
 * its next task not available, a UAV takes the first available task further down its own sequence
   (``lookahead``: the flights take longer than the model's minimum, so the planned interleaving slips; on the
   69-task running bond, 2+1 UAVs, this took the mission from 1,843 s to 1,560 s);
@@ -51,8 +52,8 @@ class ScheduleDispatcher(Dispatcher):
     #: a UAV whose next planned task is not available takes a later one of its own that is
     lookahead = True
     #: ... or else an available task planned for a UAV that is busy now (off: it undoes the schedule's
-    #: assignment, and sends more UAVs into a crowded wall: the pyramid at 8 + 4 1,782 -> 2,357 s, while the
-    #: 12 m wall at 4 + 2 gained 111 s; docs/performance/fleet.md, "The schedule's order flown")
+    #: assignment, and sends more UAVs into a crowded wall: with ``chain``, the pyramid at 8 + 4 1,782 -> 2,357 s,
+    #: the 12 m wall at 4 + 2 faster on one seed of three; docs/performance/fleet.md, "The schedule's order flown")
     steal = False
     #: an adhesion UAV at the end of the segment it has just sprayed takes the segment starting there, if it is
     #: its own (or unclaimed) and available, before its next planned one: chained, no climb and descent
