@@ -25,11 +25,16 @@ the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/p
 2. the phase totals: seconds per phase (docs/mission.md, "Where the time goes") summed over every attempt of
    the mission (failed ones too), and the share of waiting + holding.
 
-Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path] [--reservation site|task]
-       [--airspace columns|table]
+``--policy`` takes a comma-separated list (``critical-path,schedule``): each wall and fleet is flown by each, one
+table per policy. ``schedule`` follows the CP-SAT schedule above (``masonry sim --policy schedule``); the
+schedule is solved once per wall, fleet, reservation and time limit and cached on disk
+(``benchmarks/schedule_cache.py``, ``--schedule-cache DIR``), so every seed and policy of a sweep uses the same.
+
+Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path[,schedule]]
+       [--reservation site|task] [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
-       [--schedule-time-s 90] [--physical all|pallet|battery|none]
+       [--schedule-time-s 90] [--physical all|pallet|battery|none] [--schedule-cache DIR]
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 
@@ -39,10 +44,15 @@ import argparse
 import dataclasses
 import os
 import statistics
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from schedule_cache import cached_schedule
 
 from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
@@ -52,8 +62,10 @@ from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
 from masonry.planner import plan as make_plan
-from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
+from masonry.planner.dispatch import DEFAULT_RESERVATION, POLICIES, RESERVATIONS
 from masonry.planner.schedule import physical_terms, solve_schedule
+from masonry.planner.schedule_policy import SCHEDULE_POLICY
+from masonry.planner.schedule_values import OfflineSchedule
 from masonry.ports import PHASES
 from masonry.timing import DEFAULT_TIMING
 
@@ -122,7 +134,9 @@ def fly(
     policy: str,
     reservation: str,
     airspace: str = DEFAULT_AIRSPACE,
+    schedule: OfflineSchedule | None = None,
 ) -> Run:
+    """One mission; ``schedule`` is the one ``policy`` ``schedule`` follows (:func:`cached_schedule`)."""
     wall0 = time.perf_counter()
     report = simulate(
         blueprint,
@@ -133,6 +147,7 @@ def fly(
         camera="geometric",
         reservation=reservation,
         airspace=airspace,
+        schedule=schedule if policy == SCHEDULE_POLICY else None,
     )
     return Run(bricks, adhesion, report, time.perf_counter() - wall0)
 
@@ -168,6 +183,17 @@ def schedule_makespan(
     )  # CP-SAT found nothing in a part's time
     status = f"{result.status}, {greedy} of {len(result.parts)} parts greedy" if greedy else result.status
     return result.makespan_s, status, time.perf_counter() - wall0, result.battery_swaps
+
+
+def policies_of(ap: argparse.ArgumentParser, text: str, schedule_time_s: float) -> list[str]:
+    """``--policy`` as a list; ``schedule`` needs a schedule (``--schedule-time-s`` above 0)."""
+    out = text.split(",")
+    for p in out:
+        if p != SCHEDULE_POLICY and p not in POLICIES:
+            ap.error(f"--policy: unknown policy {p!r} (one of {', '.join((*POLICIES, SCHEDULE_POLICY))})")
+    if SCHEDULE_POLICY in out and schedule_time_s <= 0:
+        ap.error("--policy schedule needs a schedule: --schedule-time-s above 0")
+    return out
 
 
 def _mean_attempt_s(report: MissionReport, kind: str) -> float:
@@ -266,7 +292,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="a small wall and three fleets")
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--policy", default="critical-path")
+    ap.add_argument("--policy", default="critical-path", help="comma-separated, e.g. critical-path,schedule")
     ap.add_argument("--reservation", default=DEFAULT_RESERVATION, choices=RESERVATIONS)
     ap.add_argument("--airspace", default=DEFAULT_AIRSPACE, choices=AIRSPACES)
     ap.add_argument("--walls", default=None, help=f"comma-separated, of {', '.join(WALLS)}")
@@ -282,6 +308,7 @@ def main() -> None:
         default="all",
         help="the physical schedule's terms (pallet, battery, all; none: no physical column)",
     )
+    ap.add_argument("--schedule-cache", type=Path, default=None, help="directory of the cached schedules")
     args = ap.parse_args()
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30", "pyramid"])
     unknown = [w for w in walls if w not in WALLS]
@@ -293,9 +320,10 @@ def main() -> None:
         physical_terms(args.physical)
     except PlanningError as exc:
         ap.error(f"--physical: {exc}")
+    policies = policies_of(ap, args.policy, args.schedule_time_s)
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
-        f"bench_fleet: seed {args.seed}, policy {args.policy}, reservation {args.reservation}, "
+        f"bench_fleet: seed {args.seed}, policy {', '.join(policies)}, reservation {args.reservation}, "
         f"airspace {args.airspace}, geometric camera, "
         f"schedule {args.schedule_time_s:g} s, physical {args.physical}; "
         f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}"
@@ -305,36 +333,65 @@ def main() -> None:
         blueprint = make()
         todo = sum(1 for b in blueprint.bricks if not b.placed)
         print(f"\n## {what} ({todo} bricks to place)\n", flush=True)
-        runs = []
+        runs: dict[str, list[Run]] = {p: [] for p in policies}
         for bricks, adhesion in fleets:
-            run = fly(blueprint, bricks, adhesion, args.seed, args.policy, args.reservation, args.airspace)
-            print(
-                f"  flown {run.fleet}: makespan {run.report.makespan_s:,.0f} s in {run.wall_s:.0f} s wall",
-                flush=True,
-            )
+            schedule = None
             if args.schedule_time_s > 0:
-                made, status, took, _swaps = schedule_makespan(
-                    blueprint, bricks, adhesion, args.reservation, args.schedule_time_s
+                schedule, took, cached = cached_schedule(
+                    blueprint, bricks, adhesion, args.reservation, args.schedule_time_s, args.schedule_cache
                 )
-                run = dataclasses.replace(run, schedule_s=made, schedule_status=status, schedule_wall_s=took)
                 print(
-                    f"  scheduled {run.fleet}: makespan {made:,.0f} s ({status}) in {took:.0f} s", flush=True
+                    f"  scheduled {bricks} + {adhesion}: makespan {schedule.makespan_s:,.0f} s "
+                    f"({schedule.status}) {'from the cache' if cached else 'solved'} in {took:.0f} s",
+                    flush=True,
                 )
+            physical: tuple[float, str, int] | None = None
             if args.schedule_time_s > 0 and args.physical not in ("", "none"):
                 made, status, took, swaps = schedule_makespan(
                     blueprint, bricks, adhesion, args.reservation, args.schedule_time_s, args.physical
                 )
-                run = dataclasses.replace(run, physical_s=made, physical_status=status, physical_swaps=swaps)
+                physical = (made, status, swaps)
                 print(
-                    f"  scheduled {run.fleet} --physical {args.physical}: makespan {made:,.0f} s ({status}, "
-                    f"{swaps} swaps) in {took:.0f} s",
+                    f"  scheduled {bricks} + {adhesion} --physical {args.physical}: makespan {made:,.0f} s "
+                    f"({status}, {swaps} swaps) in {took:.0f} s",
                     flush=True,
                 )
-            runs.append(run)
-        print()
-        print("\n".join(scaling_table(runs)))
-        print("\nPhase totals (seconds, summed over every attempt):\n")
-        print("\n".join(phase_table(runs)), flush=True)
+            for policy in policies:
+                run = fly(
+                    blueprint, bricks, adhesion, args.seed, policy, args.reservation, args.airspace, schedule
+                )
+                if schedule is not None:
+                    run = dataclasses.replace(
+                        run,
+                        schedule_s=schedule.makespan_s,
+                        schedule_status=schedule.status,
+                        schedule_wall_s=schedule.solve_time_s,
+                    )
+                if physical is not None:
+                    made, status, swaps = physical
+                    run = dataclasses.replace(
+                        run, physical_s=made, physical_status=status, physical_swaps=swaps
+                    )
+                print(
+                    f"  flown {run.fleet} ({policy}): makespan {run.report.makespan_s:,.0f} s "
+                    f"in {run.wall_s:.0f} s wall{followed_note(run.report)}",
+                    flush=True,
+                )
+                runs[policy].append(run)
+        for policy in policies:
+            print(f"\n### {policy}\n")
+            print("\n".join(scaling_table(runs[policy])))
+            print("\nPhase totals (seconds, summed over every attempt):\n")
+            print("\n".join(phase_table(runs[policy])), flush=True)
+
+
+def followed_note(report: MissionReport) -> str:
+    """``, followed the schedule in N of M assignments`` (``--policy schedule``), else nothing."""
+    if report.schedule_assignments is None:
+        return ""
+    return (
+        f", followed the schedule in {report.schedule_followed} of {report.schedule_assignments} assignments"
+    )
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from masonry.planner.bound_terms import bound_terms
 from masonry.planner.bounds import min_cycles_s, min_durations_s
 from masonry.planner.schedule import solve_schedule
 from masonry.planner.schedule_policy import ScheduleDispatcher, make_dispatcher
+from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
 
 
 @pytest.fixture(scope="module")
@@ -121,3 +122,85 @@ def test_bound_below_optimum_below_simulated(seed):
         assert s.bound_s <= r.makespan_s, (seed, policy)
         if s.status == "optimal":
             assert s.makespan_s <= r.makespan_s, (seed, policy)
+
+
+def _hand_schedule(bp, order):
+    """An offline schedule of ``bp`` giving each UAV the task ids of ``order`` (name -> ids), in that order."""
+    fleet = {u.name: u.role for u in bp.fleet}
+    uavs = tuple(
+        UavSchedule(
+            name, fleet[name], tuple(ScheduledTask(t, float(k), float(k) + 1.0) for k, t in enumerate(ids))
+        )
+        for name, ids in order.items()
+    )
+    return OfflineSchedule(
+        uavs=uavs,
+        makespan_s=float(max(len(ids) for ids in order.values())),
+        bound_s=0.0,
+        bound_kind="none",
+        status="feasible",
+        solve_time_s=0.0,
+        decomposition="none",
+        reservation="site",
+        time_limit_s=0.0,
+        seed=0,
+        tick_s=0.1,
+    )
+
+
+@pytest.fixture(scope="module")
+def glued():
+    """A running bond of 2 x 4 with its first course placed: the seven segments on it are contiguous (each starts
+    where the one before ends) and available from the start."""
+    bp = running_bond(2, 4, placed_courses=1)
+    return bp, make_plan(bp)
+
+
+def _sprayed(d, glue):
+    """The segments ``glue`` is given, each completed at once, until it has none (the brick UAVs never run)."""
+    out = []
+    while True:
+        mine = [a for a in d.assign() if a.uav == glue]
+        if not mine:
+            return out
+        out.append(mine[0].task_id)
+        d.complete(mine[0].task_id)
+
+
+def test_a_sprayer_chains_into_its_own_next_segment(glued):
+    bp, p = glued
+    bricks = [u.name for u in bp.fleet if u.role == "brick"]
+    glue = next(u.name for u in bp.fleet if u.role == "adhesion")
+    planned = ["A0", "A2", "A4", "A6", "A1", "A3", "A5"]
+    s = _hand_schedule(bp, {glue: planned, bricks[0]: ["B4", "B5", "B6", "B7"]})
+    for chain in (True, False):
+        d = make_dispatcher(p, bp.fleet, "schedule", schedule=s, reservation="site")
+        d.chain = chain
+        d.remove_uav(bricks[0])  # (no brick in progress to block a segment)
+        # at the end of A0 the segment starting there (A1, its own, available) comes before A2, and so on
+        assert _sprayed(d, glue) == (sorted(planned) if chain else planned)
+        assert d.followed == len(planned)
+
+
+def test_a_uav_with_nothing_of_its_own_takes_a_busy_uavs_task():
+    """``steal``: a sprayer whose planned segments are all done takes an available one planned for the sprayer
+    busy now, rather than wait for it to come back (off: it waits)."""
+    bp = running_bond(2, 12, placed_courses=1)
+    bp = with_fleet(bp, fleet_for(bp, 1, 2))
+    p = make_plan(bp)
+    one, two = (u.name for u in bp.fleet if u.role == "adhesion")
+    brick = next(u.name for u in bp.fleet if u.role == "brick")
+    segments = [t.id for t in p.tasks if t.id.startswith("A")]
+    bricks = [t.id for t in p.tasks if t.id.startswith("B") and not t.done]
+    s = _hand_schedule(bp, {one: segments[:-1], two: segments[-1:], brick: bricks})
+    for steal in (True, False):
+        d = make_dispatcher(p, bp.fleet, "schedule", schedule=s, reservation="site")
+        d.steal = steal
+        first = {a.uav: a.task_id for a in d.assign()}
+        assert first[one] == segments[0] and first[two] == segments[-1]
+        d.complete(segments[-1])
+        again = {a.uav: a.task_id for a in d.assign()}
+        if steal:
+            assert again[two] in segments[1:-1] and d.fallbacks == 1, again
+        else:
+            assert two not in again and d.fallbacks == 0, again

@@ -1,0 +1,96 @@
+"""The CP-SAT schedule of a wall and fleet for the fleet benchmarks, solved once and cached on disk (issue 27).
+
+``masonry schedule`` with a time limit is not deterministic (2 workers race), and a 90 s solve per wall and
+fleet makes a sweep of seeds and policies slow. :func:`cached_schedule` solves it as the command does (the fleet
+of ``fleet_for``, the plan of the blueprint, its cruise altitude, seed 0, 2 workers, decomposition ``auto``),
+stamps it with the wall's and fleet's digests (so ``simulate(..., policy="schedule", schedule=...)`` accepts
+it), and keeps it as JSON in ``--schedule-cache`` (default ``$XDG_CACHE_HOME/masonry/schedules``, else
+``~/.cache/masonry/schedules``). The file name holds the wall and fleet digests, the reservation, the time limit
+and a digest of the schedule model's source (``masonry/planner/schedule*.py`` but the policy, ``bounds*.py``,
+``timing.py``):
+a changed model solves anew. Every run of a sweep, every seed and policy, follows the same schedule.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from pathlib import Path
+
+import masonry
+from masonry.blueprint import Blueprint
+from masonry.fingerprint import fleet_digest, wall_digest
+from masonry.mission.fleet import fleet_for, with_fleet
+from masonry.mission.schedule_file import read_schedule, stamp_schedule
+from masonry.planner import plan as make_plan
+from masonry.planner.schedule import solve_schedule
+from masonry.planner.schedule_values import OfflineSchedule
+
+#: the solver's seed and workers, as the benchmarks have always called it
+SEED = 0
+WORKERS = 2
+
+
+def default_cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "masonry" / "schedules"
+
+
+def model_digest() -> str:
+    """A digest of the source of the schedule model (a change to it solves the schedules again)."""
+    root = Path(masonry.__file__).resolve().parent
+    planner = root / "planner"
+    files = sorted(
+        [
+            *(f for f in planner.glob("schedule*.py") if f.name != "schedule_policy.py"),
+            *planner.glob("bounds*.py"),
+            root / "timing.py",
+        ]
+    )
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:12]
+
+
+def cached_schedule(
+    blueprint: Blueprint,
+    bricks: int,
+    adhesion: int,
+    reservation: str,
+    time_limit_s: float,
+    cache_dir: Path | None = None,
+) -> tuple[OfflineSchedule, float, bool]:
+    """The schedule of ``blueprint`` flown by ``bricks`` + ``adhesion`` UAVs, the seconds it took to get (the
+    solve, or reading the file) and whether it came from the cache."""
+    fleet = fleet_for(blueprint, bricks, adhesion)
+    bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
+    where = cache_dir if cache_dir is not None else default_cache_dir()
+    name = (
+        f"{wall_digest(bp)}-{fleet_digest(bp)}-{reservation}-{time_limit_s:g}s-seed{SEED}-w{WORKERS}"
+        f"-{model_digest()}.json"
+    )
+    path = where / name
+    wall0 = time.perf_counter()
+    if path.exists():
+        return read_schedule(path), time.perf_counter() - wall0, True
+    result = solve_schedule(
+        make_plan(bp),
+        fleet,
+        cruise_altitude_m=bp.cruise_altitude_m,
+        reservation=reservation,
+        time_limit_s=time_limit_s,
+        seed=SEED,
+        workers=WORKERS,
+        decomposition="auto",
+    )
+    result = stamp_schedule(result, bp)
+    took_s = time.perf_counter() - wall0
+    where.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(result.to_dict(), indent=1) + "\n", encoding="utf-8")
+    tmp.replace(path)
+    return result, took_s, False
