@@ -49,15 +49,16 @@ def test_the_course_error_is_measured_against_the_neighbour_and_carried_up() -> 
 
 
 def test_a_brick_a_course_too_high_is_reported_misplaced_not_done() -> None:
-    """The px4 model placing on GNSS alone (the wall's markers off), seed 8: GNSS put B1 10 cm toward B2's place,
-    and B2, released beside it, rests on it a course too high (the simulator's truth), and the relative look says
-    so within a centimetre. Before, the mission said B2 done and completed.
+    """The px4 model placing on GNSS alone (the wall's markers off), seed 5 (seed 8 before issue 29's refit of the
+    model: of seeds 1-6 on it, 3-6 each leave a brick a course off): B2, released beside B1, rests on it a course
+    too high (the simulator's truth), and the relative look says so within a centimetre. Before, the mission said
+    B2 done and completed.
     (With the markers on, the default, this seed did the same until the px4 preset's 3 s gate window, and does
     again with the linger's timing: of seeds 1-20, seeds 8 and 15 put B2 a course too high with it, seed 15
     without it; docs/performance/fleet.md, the linger's section.)"""
     settings = {**uav_settings("px4"), "align_on_wall": False}
     template = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
-    mission = SimulatedMission.from_blueprint(WALL, seed=8, vehicle="px4", uav_config=template)
+    mission = SimulatedMission.from_blueprint(WALL, seed=5, vehicle="px4", uav_config=template)
     report = mission.run()
     assert not report.completed
     failed = {a.task_id: a.reason for a in mission.control.history if a.status == "failed"}
