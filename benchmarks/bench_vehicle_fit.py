@@ -14,8 +14,13 @@ Then, per tuning, the preset's settle time and hover error against the SITL's (t
 
     .venv/bin/python benchmarks/bench_vehicle_fit.py                          # simulated presets only
     .venv/bin/python benchmarks/bench_vehicle_fit.py --fc tcp:127.0.0.1:5760  # and the SITL (started by you)
-    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings px4 ideal --fc udpin:0.0.0.0:14540
+    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings fly ideal --fc udpin:0.0.0.0:14540
                                                           # the px4 model against ../shared/px4's real PX4 (SIH)
+    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings fly ideal --seeds 5   # the model alone
+
+``fly`` is the tuning ``masonry fly`` picks for the target when uav.yaml names none (on a real PX4: the px4 preset
+with the gains of masonry's own velocity loop, which its adapter flies there); ``--seeds`` pools the simulated
+vehicles' legs over seeds (the px4 model is noisy: docs/performance/autopilots.md, "The px4 model refitted").
 """
 
 from __future__ import annotations
