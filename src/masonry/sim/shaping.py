@@ -92,7 +92,7 @@ ARDUCOPTER = ShapingConfig(
 #: PX4 v1.16 on GNSS as masonry flies it (issue 20; refitted to the real PX4 v1.16 SITL in issue 29): velocity
 #: setpoints unshaped (masonry's own velocity loop, acceleration setpoints), behind 0.25 s of dead time (the link,
 #: the loop, EKF2's position lag: a 0.5 m/s step starts to move the reported position 0.3-0.4 s later); the
-#: airframe's velocity wanders 10 cm/s about the setpoint over 0.1 s (behind the 0.15 s lag: 5-6 cm/s rms, as the
+#: airframe's velocity wanders 7.5 cm/s about the setpoint over 0.1 s (behind the 0.15 s lag: 4-5 cm/s rms, as the
 #: real one with zero velocity commanded) and first reaches about 75 % of a step (1-2 s after a 0.5 m/s step the
 #: real one moves at 0.30-0.51 m/s: the drag against the velocity loop's proportional part); the position its EKF2 reports wanders slowly (GNSS errors are correlated
 #: over seconds): 6 cm per axis (smoothed over 2 s: EKF2's output predictor), issue 20's +-15 cm in a hover (kept:
@@ -102,7 +102,7 @@ PX4 = ShapingConfig(
     gps_noise_m=0.06,
     gps_noise_tau_s=8.0,
     gps_noise_smooth_s=2.0,
-    velocity_wander_mps=0.1,
+    velocity_wander_mps=0.075,
     velocity_wander_tau_s=0.1,
     velocity_droop=0.25,
     velocity_droop_s=4.0,

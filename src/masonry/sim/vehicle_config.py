@@ -108,7 +108,7 @@ DEFAULT_VEHICLE = "arducopter"
 #: airframe lag, with the SITL's measured hover noise (docs/performance/autopilots.md, "The fit, again").
 #: ``px4``: PX4 v1.16 on GNSS as masonry flies it (issue 20; refitted to the real PX4 v1.16 SITL, issue 29):
 #: velocity setpoints unshaped behind 0.25 s of dead time and a 0.15 s lag, an airframe whose velocity wanders
-#: about the setpoint (5-6 cm/s rms: masonry's own velocity loop closes on a velocity observed from EKF2's
+#: about the setpoint (4-5 cm/s rms: masonry's own velocity loop closes on a velocity observed from EKF2's
 #: position), the smooth take-off's thrust ramp, and the wandering GNSS-grade position (about +-15 cm) its EKF2
 #: reports; its telemetry's velocity is smooth (the observed one), its position without white noise to speak of.
 VEHICLE_PRESETS: dict[str, VehicleConfig] = {
