@@ -137,13 +137,6 @@ def test_the_anchored_pose_lies_between_chain_and_look_and_is_no_worse_than_both
     assert sigma is not None and sigma >= MIN_WORLD_SIGMA_M and RELATIVE_SIGMA_M > 0
 
 
-#: The px4 model refitted to the real PX4 v1.16 SITL (issue 29, docs/performance/autopilots.md "The px4 model
-#: refitted"): its airframe wanders 4-5 cm/s about the setpoint, and on it B6 of this course lands 2.1 cm from its
-#: design (tolerance 2 cm) and the resumed pyramid's re-solved poses move 15.9 mm (under 10 mm before). Strict: they
-#: pass again, and say so, once the placement answers that motion.
-PX4_REFIT = pytest.mark.xfail(
-    strict=True, reason="issue 29: the refitted px4 model's airframe wander; placement not yet tuned to it"
-)
 
 
 @pytest.fixture(scope="module")
@@ -157,7 +150,6 @@ def px4_on_a_surveyed_course() -> SimulatedMission:
     return mission
 
 
-@PX4_REFIT
 def test_px4s_reported_as_built_positions_are_within_a_few_mm_of_the_truth(px4_on_a_surveyed_course) -> None:
     mission = px4_on_a_surveyed_course
     report = mission.report
@@ -201,7 +193,6 @@ def test_px4s_reported_as_built_positions_are_within_a_few_mm_of_the_truth(px4_o
         assert raw.anchored_to is None and raw.position_m == report.as_built[f"B{b}"].world_position_m
 
 
-@PX4_REFIT
 def test_a_resumed_px4_mission_keeps_the_anchored_poses_and_anchors_on_them(tmp_path) -> None:
     """The journal keeps the anchored poses; the mission resumed from it anchors its later bricks on them."""
     bp = pyramid(4, placed_courses=1, brick_uavs=1, adhesion_uavs=1, clearance_m=1.0)
