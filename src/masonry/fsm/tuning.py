@@ -97,11 +97,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
 #: The position gains over any preset's where masonry closes the velocity loop itself (acceleration setpoints,
 #: masonry.motion.velocity_loop: a real PX4, issue 29): the loop's kv 4 /s times kp 3 /s swung the alignment
 #: behind EKF2's 0.15-0.4 s of position lag (0.40 m/s rms); kp 1.5, ki 0.5 placed the brick (docs/hardware.md).
-#: kp 2 since the px4 model's refit (issue 29/30): in 4 m/s wind kp 1.5 completed none of 6 missions on the refitted
-#: model, kp 2 all 6 (docs/performance/as-built.md "The px4 placement on the refitted model"); not yet flown on a
-#: real PX4 with masonry's loop (kv 6 with kp 2 oscillated there, kv 4 with kp 3 swung).
 OWN_VELOCITY_LOOP_PID: Mapping[str, Mapping[str, float]] = {
-    "xy": {"kp": 2.0, "ki": 0.5, "output_limit": 1.5, "integral_limit": 0.5},
+    "xy": {"kp": 1.5, "ki": 0.5, "output_limit": 1.5, "integral_limit": 0.5},
 }
 
 #: The presets of an autopilot masonry flies through its own velocity loop by default (PX4, issue 29): their
