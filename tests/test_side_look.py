@@ -106,13 +106,6 @@ def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
     assert look_offset_m(_scene((_along(0.0),), above)) is not None
 
 
-#: The px4 model refitted to the real PX4 v1.16 SITL (issue 29, docs/performance/autopilots.md "The px4 model
-#: refitted"): its airframe wanders 4-5 cm/s about the setpoint behind 0.25 s of dead time, and the 4 m/s-wind
-#: bond, tuned on the still one, does not complete on it. Strict: it passes again, and says so, once the placement
-#: answers that motion.
-PX4_REFIT = pytest.mark.xfail(
-    strict=True, reason="issue 29: the refitted px4 model's airframe wander; placement not yet tuned to it"
-)
 
 
 @pytest.mark.slow
@@ -172,7 +165,6 @@ def test_a_stale_offset_at_the_end_of_the_displaced_descent_is_looked_at_again_b
 
 
 @pytest.mark.slow
-@PX4_REFIT
 def test_in_4_m_s_wind_the_px4_rotated_bond_completes_with_every_brick_on_its_course() -> None:
     """Issue 30's done-when in wind: the px4 model, the running bond turned 30 degrees, 4 m/s with light
     turbulence, seed 7. Before the look back up before the side look's last leg, B7 and B8 went in under their

@@ -73,6 +73,10 @@ class UavConfig:
     # the release gate with it) for a placement where its lean in the pickup's hovers, averaged, was over this
     # (rad): a steady wind's (masonry.fsm.wind_lean). 0: never
     wall_in_wind_rad: float = 0.0
+    # Issues 29/30: > 0, a placement in a wind (its lean over wall_in_wind_rad) aligns and descends with this
+    # horizontal position gain (1/s) over the configured one's, and flies it on (the next pickup's too) until a
+    # placement in calm air (masonry.fsm.wind_lean); 0: the configured gains throughout
+    wind_xy_kp_per_s: float = 0.0
     wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
