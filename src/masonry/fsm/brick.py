@@ -266,6 +266,7 @@ class BrickUav(PutBack):
         assert tel is not None and self.attempt.brick_estimate is not None
         center, yaw = self.attempt.brick_estimate
         above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
+        self._place_gains(self._lean.windy(self.config.wall_in_wind_rad))
         self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
         self._camera_align.reset(center)
 
