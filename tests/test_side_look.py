@@ -106,8 +106,6 @@ def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
     assert look_offset_m(_scene((_along(0.0),), above)) is not None
 
 
-
-
 @pytest.mark.slow
 def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
     """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: no brick above the first

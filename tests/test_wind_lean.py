@@ -12,8 +12,8 @@ from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import PRESETS, uav_settings
 from masonry.fsm.wind_lean import LEAN_TAU_S, WindLean, place_gains
-from masonry.motion import PIDGains
 from masonry.mission.simulate import SimulatedMission
+from masonry.motion import PIDGains
 from masonry.ports import Telemetry
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -85,7 +85,9 @@ def _px4_kp(monkeypatch: pytest.MonkeyPatch, wind: Faults | None) -> list[float]
     return kps
 
 
-def test_px4_places_in_a_wind_on_kp_2_and_in_calm_air_on_its_own_loops_kp(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_px4_places_in_a_wind_on_kp_2_and_in_calm_air_on_its_own_loops_kp(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """The refitted px4 model (issue 29) in 4 m/s wind did not hold the alignment gates with kp 1.5
     (docs/performance/as-built.md "The px4 placement on the refitted model"); calm air keeps kp 1.5."""
     assert set(_px4_kp(monkeypatch, None)) == {1.5}
