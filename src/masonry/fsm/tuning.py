@@ -87,7 +87,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
         "release_closest_s": 0.1,
         # a placement in a wind (its lean over 0.07 rad; calm: 0.05-0.055) aligns and descends on kp 2 /s
-        # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of six 4 m/s missions on the refitted model
+        # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of nine 4 m/s missions on the refitted model
         "wall_in_wind_rad": 0.07,
         "wind_xy_kp_per_s": 2.0,
         "ask_settle_tolerance_m": 0.05,

@@ -17,7 +17,7 @@ calm air nothing changes: the wall alignment's looks and the side look's legs co
 With ``UavConfig.wind_xy_kp_per_s`` (the ``px4`` preset's 2 /s, over masonry's own velocity loop's 1.5) such a
 placement also aligns and descends on that horizontal position gain (:func:`place_gains`), and the UAV flies it on,
 the next pickups too, until a placement in calm air: the refitted ``px4`` model (0.25 s of dead time, issue 29) in 4 m/s wind did not hold the
-alignment gates' 3 s means with kp 1.5 (no mission of six completed), and did with kp 2 (all six); in calm air kp 2
+alignment gates' 3 s means with kp 1.5 (no mission of nine completed), and did with kp 2 (all nine); in calm air kp 2
 placed a pyramid's first course farther apart, so there it stays 1.5. Its tilt averaged so is 0.05-0.055 rad in calm
 air (its airframe's wander), 0.08-0.27 rad in 4 m/s: the ``px4`` preset's ``wall_in_wind_rad`` is 0.07
 (docs/performance/as-built.md "The px4 placement on the refitted model").
