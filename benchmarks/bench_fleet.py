@@ -72,6 +72,22 @@ FLEETS = ((1, 1), (2, 1), (4, 2), (6, 3), (8, 4))
 QUICK_FLEETS = ((1, 1), (2, 1), (4, 2))
 
 
+def walls_and_fleets(ap: argparse.ArgumentParser, walls: str, fleets: str) -> list[tuple[str, int, int]]:
+    """``--walls`` x ``--fleets`` (comma-separated names of :data:`WALLS`, BRICK+ADHESION pairs) as (wall, brick
+    UAVs, adhesion UAVs), wall by wall; a bad name or pair ends the run with argparse's one-line error."""
+    out = []
+    for wall in walls.split(","):
+        if wall not in WALLS:
+            ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
+        for fleet in fleets.split(","):
+            try:
+                bricks, adhesion = (int(x) for x in fleet.split("+"))
+            except ValueError:
+                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
+            out.append((wall, bricks, adhesion))
+    return out
+
+
 @dataclass(frozen=True)
 class Run:
     """One mission of the sweep and what it took."""

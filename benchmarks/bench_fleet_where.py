@@ -32,7 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, walls_and_fleets
 
 from masonry.blueprint import Blueprint
 from masonry.mission.events import EventList, MissionEvent
@@ -193,16 +193,9 @@ def main() -> None:
     ap.add_argument("--fleets", default="4+2,8+4")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
-    for wall in args.walls.split(","):
-        if wall not in WALLS:
-            ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
-        for fleet in args.fleets.split(","):
-            try:
-                bricks, adhesion = (int(x) for x in fleet.split("+"))
-            except ValueError:
-                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
-            print(f"# {wall}")
-            fly(WALLS[wall][1](), bricks, adhesion, args.seed)
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
+        print(f"# {wall}")
+        fly(WALLS[wall][1](), bricks, adhesion, args.seed)
 
 
 if __name__ == "__main__":

@@ -29,7 +29,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, walls_and_fleets
 
 from masonry.mission.report import MissionReport
 from masonry.mission.simulate import simulate
@@ -81,46 +81,40 @@ def main() -> None:
     ap.add_argument("--airspaces", default="columns,table")
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
-    for wall in args.walls.split(","):
-        if wall not in WALLS:
-            ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
-        for fleet in args.fleets.split(","):
-            try:
-                bricks, adhesion = (int(x) for x in fleet.split("+"))
-            except ValueError:
-                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
-            for airspace in args.airspaces.split(","):
-                t0 = time.perf_counter()
-                r = simulate(
-                    WALLS[wall][1](),
-                    brick_uavs=bricks,
-                    adhesion_uavs=adhesion,
-                    seed=args.seed,
-                    policy="critical-path",
-                    camera="geometric",
-                    reservation="site",
-                    airspace=airspace,
-                )
-                d = r.to_dict()
-                print(
-                    f"## {wall} {fleet} {airspace}: makespan {r.makespan_s:,.0f} s, completed {d['completed']}, "
-                    f"min separation {d['min_separation_m']} m, violations {d['conflict_violations']} / "
-                    f"{d['dependency_violations']} ({time.perf_counter() - t0:.0f} s wall)"
-                )
-                waits = wait_breakdown(r)
-                model = sum(v for k, v in waits.items() if k[1] in MODEL_CAUSES)
-                rest = sum(v for k, v in waits.items() if k[1] not in MODEL_CAUSES)
-                print(f"  waits (task-seconds): task model {model:,.0f}, the rest {rest:,.0f}")
-                for (role, what, where), v in sorted(waits.items(), key=lambda kv: -kv[1]):
-                    if what not in MODEL_CAUSES and v >= 1.0:
-                        print(f"    {role:<9} {what:<22} {where:<6} {v:8,.0f}")
-                total, union, means = site_intervals(r)
-                span = r.makespan_s or 1.0
-                print(
-                    f"  site intervals: sum {total:,.0f} s ({total / span:.0%} of the makespan), union "
-                    f"{union:,.0f} s ({union / span:.0%}); mean brick {means['brick']:.1f} s, adhesion "
-                    f"{means['adhesion']:.1f} s"
-                )
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
+        fleet = f"{bricks}+{adhesion}"
+        for airspace in args.airspaces.split(","):
+            t0 = time.perf_counter()
+            r = simulate(
+                WALLS[wall][1](),
+                brick_uavs=bricks,
+                adhesion_uavs=adhesion,
+                seed=args.seed,
+                policy="critical-path",
+                camera="geometric",
+                reservation="site",
+                airspace=airspace,
+            )
+            d = r.to_dict()
+            print(
+                f"## {wall} {fleet} {airspace}: makespan {r.makespan_s:,.0f} s, completed {d['completed']}, "
+                f"min separation {d['min_separation_m']} m, violations {d['conflict_violations']} / "
+                f"{d['dependency_violations']} ({time.perf_counter() - t0:.0f} s wall)"
+            )
+            waits = wait_breakdown(r)
+            model = sum(v for k, v in waits.items() if k[1] in MODEL_CAUSES)
+            rest = sum(v for k, v in waits.items() if k[1] not in MODEL_CAUSES)
+            print(f"  waits (task-seconds): task model {model:,.0f}, the rest {rest:,.0f}")
+            for (role, what, where), v in sorted(waits.items(), key=lambda kv: -kv[1]):
+                if what not in MODEL_CAUSES and v >= 1.0:
+                    print(f"    {role:<9} {what:<22} {where:<6} {v:8,.0f}")
+            total, union, means = site_intervals(r)
+            span = r.makespan_s or 1.0
+            print(
+                f"  site intervals: sum {total:,.0f} s ({total / span:.0%} of the makespan), union "
+                f"{union:,.0f} s ({union / span:.0%}); mean brick {means['brick']:.1f} s, adhesion "
+                f"{means['adhesion']:.1f} s"
+            )
 
 
 if __name__ == "__main__":

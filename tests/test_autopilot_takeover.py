@@ -126,3 +126,28 @@ def test_px4s_failsafe_hold_over_mavlink_ends_the_flight() -> None:
     )
     assert sitl.land_requests == 0 and sitl.mode == "AUTO.LOITER"
     assert [r.status for r in link.results] == ["failed"]
+
+
+def _climb_then(switch_to: str | None) -> int:
+    """PX4 (the project's SITL, real MAVLink) climbing in OFFBOARD; the pilot switches to ``switch_to`` mid-climb
+    (None: nobody does); the adapter closed there. The LAND requests the autopilot heard."""
+    with glue_on_px4_sitl() as (sitl, fc, _uav, _link):
+        fc.arm()
+        fc.takeoff(1.5)
+        deadline = time.monotonic() + 20.0  # wall seconds: a bound on the loop, not a timed assertion
+        while time.monotonic() < deadline and fc.telemetry().position_m[2] < 0.4:
+            fc.clock.sleep(0.05)
+        assert fc.telemetry().position_m[2] >= 0.4, "the climb never started"
+        if switch_to is not None:
+            sitl.pilot_mode(switch_to)
+            while time.monotonic() < deadline and fc.telemetry().mode != switch_to:
+                fc.clock.sleep(0.05)
+            assert fc.telemetry().mode == switch_to
+    return sitl.land_requests
+
+
+def test_closing_mid_climb_lands_ours_and_leaves_the_pilots_mode_alone() -> None:
+    """The CI failure of stop 45: under load the failsafe's switch came while the adapter still counted the climb
+    as its own (the take-off target set), and closing it commanded LAND over the pilot's AUTO.LOITER."""
+    assert _climb_then(None) == 1  # still climbing in OFFBOARD, ours: closing lands it
+    assert _climb_then("AUTO.LOITER") == 0  # the pilot's mode mid-climb is the pilot's

@@ -104,7 +104,7 @@ class _Nav:
 def _uav(align_on_wall: bool, now_s: float) -> SimpleNamespace:
     config = UavConfig("b", "brick", (0.0, 0.0, 0.0), align_on_wall=align_on_wall)
     attempt = SimpleNamespace(place_effector_target_m=np.array([1.0, 2.0, 0.2]))
-    return SimpleNamespace(config=config, _now_s=now_s, nav=_Nav(), attempt=attempt)
+    return SimpleNamespace(config=config, on_wall=align_on_wall, _now_s=now_s, nav=_Nav(), attempt=attempt)
 
 
 def test_the_descent_carries_the_drop_off_and_its_motion_along_the_trend() -> None:

@@ -32,13 +32,7 @@ from typing import TYPE_CHECKING, Any
 
 from masonry.adapters.arming import ARM_RETRY_S, arm_retrying
 from masonry.adapters.mavlink_estimate import EstimateLink
-from masonry.adapters.mavlink_link import (
-    LinkClock,
-    LinkStatus,
-    MavlinkLink,
-    load_signing_key,
-    mavutil_module,
-)
+from masonry.adapters.mavlink_link import LinkClock, LinkStatus, MavlinkLink, load_signing_key, mavutil_module
 from masonry.adapters.mavlink_protocol import (
     ARDUPILOT_MODES,
     ESTIMATE_FLAGS_BAD,
@@ -283,6 +277,7 @@ class MavlinkFlightController(EstimateLink):
         self._setpoint_time_s = -math.inf
         self._streaming = False
         self._takeoff_target_m: float | None = None  # world altitude being climbed to
+        self._takeoff_mode = ""  # the autopilot's mode when the take-off was commanded
         self._takeoff_started_s = -math.inf
         self._climb: ClimbMonitor | None = None  # PX4's take-off climb inside OFFBOARD
         #: why the last take-off ended short of its altitude (None: it reached it, or none was asked)
@@ -303,7 +298,9 @@ class MavlinkFlightController(EstimateLink):
         if self.land_on_close and self._conn is not None and self._threads:
             tel = self.telemetry()
             # only while masonry flies it (GUIDED/OFFBOARD): a pilot's mode is the pilot's
-            flying_ours = tel.mode == self.offboard_mode or self._takeoff_target_m is not None
+            # (or climbing in the mode the take-off began in: a pilot's switch mid-climb is the pilot's too)
+            climbing = self._takeoff_target_m is not None and tel.mode == self._takeoff_mode
+            flying_ours = tel.mode == self.offboard_mode or climbing
             if tel.link_ok and tel.armed and not tel.on_ground and not tel.landing and flying_ours:
                 try:
                     self.land()
@@ -349,10 +346,8 @@ class MavlinkFlightController(EstimateLink):
                         self._takeoff_target_m = None
                         self.velocity_loop_engaged = True
                         if not reached:
-                            self.takeoff_problem = (
-                                f"take-off at {world_alt:.2f} m of {takeoff_target:.2f} m after "
-                                f"{self.takeoff_timeout_s:.0f} s"
-                            )
+                            alt = f"{world_alt:.2f} m of {takeoff_target:.2f} m"
+                            self.takeoff_problem = f"take-off at {alt} after {self.takeoff_timeout_s:.0f} s"
                 else:
                     return  # ArduPilot climbs on its own; a velocity target would abort its takeoff
         if setpoint is None or not fresh:
@@ -490,6 +485,7 @@ class MavlinkFlightController(EstimateLink):
         if not armed:  # the autopilot would refuse too, with a less direct reason (ArduPilot: mode first)
             raise CommandRejected("takeoff", "not armed (arm first)")
         ground_world = self.frame.position_to_world(position) if position is not None else self.frame.offset_m
+        self._takeoff_mode = self.telemetry().mode
         if self.autopilot == "ardupilot":
             self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
         with self._lock:
