@@ -137,16 +137,6 @@ def test_the_anchored_pose_lies_between_chain_and_look_and_is_no_worse_than_both
     assert sigma is not None and sigma >= MIN_WORLD_SIGMA_M and RELATIVE_SIGMA_M > 0
 
 
-#: The px4 model refitted to the real PX4 v1.16 SITL (issue 29, docs/performance/autopilots.md "The px4 model
-#: refitted"): its airframe wanders 4-5 cm/s about the setpoint, and on it B7, B8 and B9 of this pyramid land 3.1,
-#: 3.1 and 3.3 cm from their design (tolerance 2 cm; B6 2.1 cm at px4fit). Strict: it passes again, and says so,
-#: once the placement answers that motion. (The resumed pyramid's re-solved poses, 15.9 mm at px4fit, move 9.3 mm
-#: since the merge with issue 30's px4 release tail: under 10 mm again, no longer marked.)
-PX4_REFIT = pytest.mark.xfail(
-    strict=True, reason="issue 29: the refitted px4 model's airframe wander; placement not yet tuned to it"
-)
-
-
 @pytest.fixture(scope="module")
 def px4_on_a_surveyed_course() -> SimulatedMission:
     """A pyramid of three courses flown on the px4 model (GNSS), built on a surveyed course of four."""
@@ -158,7 +148,6 @@ def px4_on_a_surveyed_course() -> SimulatedMission:
     return mission
 
 
-@PX4_REFIT
 def test_px4s_reported_as_built_positions_are_within_a_few_mm_of_the_truth(px4_on_a_surveyed_course) -> None:
     mission = px4_on_a_surveyed_course
     report = mission.report

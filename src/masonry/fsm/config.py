@@ -88,6 +88,11 @@ class UavConfig:
     # effector's velocity brings it nearer by then and the sighting stays within release_fresh_s
     # (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
     release_closest_s: float = 0.0
+    # With align_on_wall: inside r_pl but farther than release_hold_m from the drop-off, the release waits a tick
+    # (release_closest_s) while the sighting stays within release_fresh_s then, up to release_hold_s past the
+    # descent's end (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
+    release_hold_m: float = 0.0
+    release_hold_s: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5

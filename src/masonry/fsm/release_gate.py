@@ -108,19 +108,25 @@ class ReleaseGate:
         still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring).
         Never past the sighting's freshness: a release held into a look back up ages the drop-off more than it
         gains."""
-        dt_s = uav.config.release_closest_s
-        if (
-            dt_s <= 0.0
-            or not uav._side.final
-            or uav._now_s + dt_s - uav._wall.seen_s > uav.config.release_fresh_s
-        ):
+        cfg = uav.config
+        dt_s = cfg.release_closest_s
+        if dt_s <= 0.0 or uav._now_s + dt_s - uav._wall.seen_s > cfg.release_fresh_s:
             return False
         error_m = (
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
+        error = float(np.hypot(*error_m))
+        if (
+            error > cfg.release_hold_m > 0.0
+            and uav._now_s - uav.nav.end_s <= cfg.release_hold_s
+            and uav._now_s - uav._wall.seen_s <= dt_s
+        ):
+            return True
+        if not uav._side.final:
+            return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
-        return float(np.hypot(*ahead_m)) < float(np.hypot(*error_m)) - CLOSING_MIN_M
+        return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
 
     def allows(self, uav: BrickUav, tel: Telemetry) -> bool:
         """At the drop-off: True to release; else a look back up has begun.

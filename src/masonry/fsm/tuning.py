@@ -86,6 +86,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_on_wall": True,
         # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
         "release_closest_s": 0.1,
+        "release_hold_m": 0.010,
+        "release_hold_s": 3.5,
         # a placement in a wind (its lean over 0.07 rad; calm: 0.05-0.055) aligns and descends on kp 2 /s
         # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of nine 4 m/s missions on the refitted model
         "wall_in_wind_rad": 0.07,
