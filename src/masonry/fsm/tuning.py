@@ -86,6 +86,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_on_wall": True,
         # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
         "release_closest_s": 0.1,
+        # with the wall in view, inside r_pl but over 1 cm off: a nearer tick, up to 3.5 s past the leg's end
+        # (masonry.fsm.release_gate; the refitted model's wander crosses the 1.5 cm disc)
         "release_hold_m": 0.010,
         "release_hold_s": 3.5,
         # a placement in a wind (its lean over 0.07 rad; calm: 0.05-0.055) aligns and descends on kp 2 /s
