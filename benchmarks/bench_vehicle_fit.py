@@ -14,8 +14,13 @@ Then, per tuning, the preset's settle time and hover error against the SITL's (t
 
     .venv/bin/python benchmarks/bench_vehicle_fit.py                          # simulated presets only
     .venv/bin/python benchmarks/bench_vehicle_fit.py --fc tcp:127.0.0.1:5760  # and the SITL (started by you)
-    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings px4 ideal --fc udpin:0.0.0.0:14540
+    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings fly ideal --fc udpin:0.0.0.0:14540
                                                           # the px4 model against ../shared/px4's real PX4 (SIH)
+    .venv/bin/python benchmarks/bench_vehicle_fit.py --model px4 --tunings fly ideal --seeds 5   # the model alone
+
+``fly`` is the tuning ``masonry fly`` picks for the target when uav.yaml names none (on a real PX4: the px4 preset
+with the gains of masonry's own velocity loop, which its adapter flies there); ``--seeds`` pools the simulated
+vehicles' legs over seeds (the px4 model is noisy: docs/performance/autopilots.md, "The px4 model refitted").
 """
 
 from __future__ import annotations
@@ -42,7 +47,7 @@ class Leg:
     swing_m: float
 
 
-def _ports(target: str, fc_url: str | None) -> Any:
+def _ports(target: str, fc_url: str | None, seed: int = 0) -> Any:
     from masonry.adapters.wiring import hardware_config
     from masonry.blueprint import load_blueprint
     from masonry.cli.fly import select_adapters
@@ -56,15 +61,27 @@ def _ports(target: str, fc_url: str | None) -> Any:
             sim=False, blueprint=bp, spec=spec, seed=0, camera="geometric", faults=Faults(), hardware=hw
         )
     return select_adapters(
-        sim=True, blueprint=bp, spec=spec, seed=0, camera="geometric", faults=Faults(), vehicle=target
+        sim=True, blueprint=bp, spec=spec, seed=seed, camera="geometric", faults=Faults(), vehicle=target
     )
 
 
-def fly_legs(ports: Any, tuning: str, hover_s: float, dt_s: float = 0.05) -> list[Leg]:
+def settings_for(tuning: str, ports: Any, model: str) -> dict[str, Any]:
+    """The UavConfig overrides of ``tuning``: a preset's, or for ``fly`` what ``masonry fly`` picks for these
+    ports with no control_preset in uav.yaml (masonry.cli.fly_tuning: on a real PX4, the px4 preset and the gains
+    of masonry's own velocity loop; in simulation, the ``--vehicle`` preset's)."""
+    if tuning != "fly":
+        return uav_settings(tuning)
+    from masonry.adapters.wiring import HardwareConfig
+    from masonry.cli.fly_tuning import fly_settings
+
+    return fly_settings(HardwareConfig(), model, ports)
+
+
+def fly_legs(ports: Any, tuning: str, hover_s: float, dt_s: float = 0.05, model: str = "ideal") -> list[Leg]:
     fc, clock, advance = ports.fc, ports.clock, ports.advance
-    config = UavConfig.from_spec(UavSpec("u", "brick", (0.0, 0.0, 0.0)), **uav_settings(tuning))
+    fc.connect()  # (before the tuning: ``fly`` asks the connected autopilot which it is)
+    config = UavConfig.from_spec(UavSpec("u", "brick", (0.0, 0.0, 0.0)), **settings_for(tuning, ports, model))
     nav = Navigator(config)
-    fc.connect()
     fc.arm()
     fc.takeoff(1.5)
     start = clock.now_s()
@@ -135,7 +152,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--fc", help="the SITL's MAVLink URL (tcp:127.0.0.1:5760); without it, presets only")
     ap.add_argument("--hover", type=float, default=10.0, help="seconds of hover after each leg")
-    ap.add_argument("--tunings", nargs="+", default=["ideal", "arducopter"])
+    ap.add_argument(
+        "--tunings",
+        nargs="+",
+        default=["ideal", "arducopter"],
+        help="control presets, or fly: what `masonry fly` picks for the target with no control_preset",
+    )
+    ap.add_argument(
+        "--seeds", type=int, default=1, help="fly the simulated vehicles with this many seeds (legs pooled)"
+    )
     ap.add_argument("--only-sitl", action="store_true", help="fly the SITL only (the presets take seconds)")
     ap.add_argument(
         "--model",
@@ -150,11 +175,13 @@ def main() -> None:
     table: dict[tuple[str, str], list[Leg]] = {}
     for tuning in args.tunings:
         for target in targets:
-            ports = _ports(target, args.fc)
-            try:
-                legs = fly_legs(ports, tuning, args.hover)
-            finally:
-                ports.close()
+            legs = []
+            for seed in range(1 if target == "sitl" else args.seeds):
+                ports = _ports(target, args.fc, seed)
+                try:
+                    legs += fly_legs(ports, tuning, args.hover, model=target if target != "sitl" else "ideal")
+                finally:
+                    ports.close()
             table[(target, tuning)] = legs
             for i, leg in enumerate(legs):
                 settle = "-" if leg.settle_s is None else f"{leg.settle_s:5.2f} s"
@@ -163,21 +190,31 @@ def main() -> None:
                     f"hover error {leg.hover_error_m * 100:5.2f} cm, swing {leg.swing_m * 100:5.1f} cm",
                     flush=True,
                 )
+            if len(legs) > 2:
+                print(f"{target:<10} tuning {tuning:<10} {_summary(legs)}", flush=True)
     if "sitl" not in targets or args.only_sitl:
         return
     for tuning in args.tunings:
         sitl, sim = table[("sitl", tuning)], table[(args.model, tuning)]
-        for name, get in (
-            ("settle", lambda leg: leg.settle_s),
-            ("hover error", lambda leg: leg.hover_error_m),
-        ):
-            a = [get(x) for x in sitl]
-            b = [get(x) for x in sim]
-            if any(v is None for v in a + b):
-                print(f"tuning {tuning}: {name}: SITL {a}, preset {b} (a leg never settled)")
-                continue
-            ma, mb = float(np.mean(a)), float(np.mean(b))
-            print(f"tuning {tuning}: {name}: SITL {ma:.3f}, preset {mb:.3f}, preset/SITL {mb / ma:.2f}")
+        print(f"tuning {tuning}: SITL {_summary(sitl)}; preset {_summary(sim)}")
+        a, b = _settle(sitl), _settle(sim)
+        if a and b:
+            print(f"tuning {tuning}: settle preset/SITL {np.mean(b) / np.mean(a):.2f} (legs that settled)")
+        ma, mb = np.mean([x.hover_error_m for x in sitl]), np.mean([x.hover_error_m for x in sim])
+        print(f"tuning {tuning}: hover error preset/SITL {mb / ma:.2f}")
+
+
+def _settle(legs: list[Leg]) -> list[float]:
+    return [leg.settle_s for leg in legs if leg.settle_s is not None]
+
+
+def _summary(legs: list[Leg]) -> str:
+    """Legs settled (and their mean settle time), mean hover error and swing."""
+    settled = _settle(legs)
+    mean = f" in {np.mean(settled):.2f} s" if settled else ""
+    hover = np.mean([leg.hover_error_m for leg in legs]) * 100
+    swing = np.mean([leg.swing_m for leg in legs]) * 100
+    return f"{len(settled)}/{len(legs)} legs settled{mean}, hover error {hover:.2f} cm, swing {swing:.1f} cm"
 
 
 if __name__ == "__main__":

@@ -49,27 +49,30 @@ def test_the_course_error_is_measured_against_the_neighbour_and_carried_up() -> 
 
 
 def test_a_brick_a_course_too_high_is_reported_misplaced_not_done() -> None:
-    """The px4 model placing on GNSS alone (the wall's markers off), seed 8: GNSS put B1 10 cm toward B2's place,
-    and B2, released beside it, rests on it a course too high (the simulator's truth), and the relative look says
-    so within a centimetre. Before, the mission said B2 done and completed.
-    (With the markers on, the default, this seed did the same until the px4 preset's 3 s gate window, and does
-    again with the linger's timing: of seeds 1-20, seeds 8 and 15 put B2 a course too high with it, seed 15
-    without it; docs/performance/fleet.md, the linger's section.)"""
+    """The px4 model placing on GNSS alone (the wall's markers off), seed 17: B3, released beside its place, rests a
+    course too high (the simulator's truth), and the relative look says so within a centimetre. Before, the mission
+    said such a brick done and completed.
+    (Until issue 29's refit of the model it was seed 8 and B2 on B1; on the refitted model, of seeds 1-32, B0 on
+    seed 14 and B3 on seed 30 rest a course too high, and a brick a course too low is common: 11 seeds.
+    Since the merge with issue 30's px4 release tail seed 30 completes; of seeds 1-40, B3 on seeds 17 and 24 rests a
+    course too high, and 19 seeds have a brick a course (or two) too low.
+    With the markers on, the default, seed 8 did the same on the earlier model until the px4 preset's 3 s gate
+    window, and again with the linger's timing; docs/performance/fleet.md, the linger's section.)"""
     settings = {**uav_settings("px4"), "align_on_wall": False}
     template = UavConfig("template", "brick", (0.0, 0.0, 0.0), **settings)
-    mission = SimulatedMission.from_blueprint(WALL, seed=8, vehicle="px4", uav_config=template)
+    mission = SimulatedMission.from_blueprint(WALL, seed=17, vehicle="px4", uav_config=template)
     report = mission.run()
     assert not report.completed
     failed = {a.task_id: a.reason for a in mission.control.history if a.status == "failed"}
-    found = re.match(r"misplaced: B2 rests (\d+\.\d) cm above its course height", failed["B2"] or "")
+    found = re.match(r"misplaced: B3 rests (\d+\.\d) cm above its course height", failed["B3"] or "")
     assert found is not None, failed
-    # (the figure is the relative look's, from frames of B2's climb: it moves by a few mm with the mission's
-    # timing, 10.4 cm before the linger, 9.9 cm with it; the simulator's truth is one course)
-    course_m = WALL.bricks[2].size_m[2]
-    true_m = mission.world.bricks[2].position_m[2] - WALL.bricks[2].position_m[2]
+    # (the figure is the relative look's, from frames of B3's climb: it moves by a few mm with the mission's
+    # timing; the simulator's truth is one course)
+    course_m = WALL.bricks[3].size_m[2]
+    true_m = mission.world.bricks[3].position_m[2] - WALL.bricks[3].position_m[2]
     assert true_m == pytest.approx(course_m, abs=0.005)
-    assert float(found.group(1)) / 100.0 == pytest.approx(true_m, abs=0.01), failed["B2"]
-    assert {"B2", "B4", "B5"} <= set(report.stuck)  # it, and the bricks that would stand on it
+    assert float(found.group(1)) / 100.0 == pytest.approx(true_m, abs=0.01), failed["B3"]
+    assert {"B3", "B5"} <= set(report.stuck)  # it, and the brick that would stand on it
     done = {a.task_id for a in mission.control.history if a.status == "done"}
     for b in mission.blueprint.bricks:  # no brick counted placed is off its course (the simulator's truth)
         if f"B{b.id}" in done:

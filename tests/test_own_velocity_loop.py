@@ -74,5 +74,8 @@ def test_its_gains_come_with_the_px4_tuning_and_a_users_pid_still_wins() -> None
     assert ours["pid_gains"].x.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"] == ours["pid_gains"].y.kp
     assert ours["pid_gains"].x.ki == OWN_VELOCITY_LOOP_PID["xy"]["ki"]
     assert theirs["pid_gains"].x.kp == 2.5 and theirs["pid_gains"].y.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"]
-    # the px4 preset itself is unchanged: the simulated px4 vehicle (no MAVLink) flies what it flew
-    assert "pid_gains" not in uav_settings("px4")
+    # the simulated px4 vehicle (no MAVLink) models PX4 as masonry flies it: its preset brings the loop's gains
+    # (issue 29's refit), unless told the loop is not flown (a real PX4 with ``own_velocity_loop: false``)
+    assert uav_settings("px4") == ours
+    assert "pid_gains" not in uav_settings("px4", own_velocity_loop=False)
+    assert uav_settings("arducopter") == uav_settings("arducopter", own_velocity_loop=False)

@@ -179,10 +179,15 @@ def test_a_stale_offset_at_the_end_of_the_side_looks_descent_is_looked_at_again_
 
 
 def _closing_case(
-    error_m: tuple[float, float], velocity_mps: tuple[float, float], seen_ago_s: float, last_leg: bool = True
+    error_m: tuple[float, float],
+    velocity_mps: tuple[float, float],
+    seen_ago_s: float,
+    last_leg: bool = True,
+    past_end_s: float = 5.0,
 ) -> bool:
     """ReleaseGate.closing on one tick: the effector ``error_m`` off its target, moving at ``velocity_mps``, the
-    wall last seen ``seen_ago_s`` before, on the side look's last leg or not, the px4 preset's settings."""
+    wall last seen ``seen_ago_s`` before, on the side look's last leg or not, ``past_end_s`` after the descent's
+    leg ended (5 s: past the hold), the px4 preset's settings."""
     cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("px4"))
     target = np.array([1.0, 2.0, 0.3])
     tel = SimpleNamespace(velocity_mps=(velocity_mps[0], velocity_mps[1], 0.0))
@@ -191,6 +196,7 @@ def _closing_case(
         _now_s=10.0,
         _wall=SimpleNamespace(seen_s=10.0 - seen_ago_s),
         _side=SimpleNamespace(final=last_leg),
+        nav=SimpleNamespace(end_s=10.0 - past_end_s),
         effector=SimpleNamespace(position=lambda _tel: target + np.array([error_m[0], error_m[1], 0.0])),
         attempt=SimpleNamespace(place_effector_target_m=target),
     )
@@ -217,3 +223,21 @@ def test_the_nearest_tick_is_the_px4_presets_and_off_by_default() -> None:
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_closest_s == 0.0
     assert uav_settings("px4")["release_closest_s"] == 0.1
     assert "release_closest_s" not in uav_settings("arducopter")
+
+
+def test_with_the_wall_in_view_a_release_outside_the_hold_radius_waits_for_a_nearer_tick() -> None:
+    # the px4 preset: inside r_pl (1.5 cm) but 1.2 cm off, at rest, the wall seen this tick, 1 s past the leg's
+    # end: wait (a calm px4 release let go at r_pl's edge put the surveyed pyramid's B7 2 cm off its neighbours)
+    for last_leg in (True, False):
+        assert _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=0.0, last_leg=last_leg, past_end_s=1.0)
+        # within the hold radius (1 cm): let go (nothing closing)
+        assert not _closing_case((-0.009, 0.0), (0.0, 0.0), seen_ago_s=0.0, last_leg=last_leg, past_end_s=1.0)
+        # past the hold (3.5 s after the leg's end): let go, as before
+        assert not _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=0.0, last_leg=last_leg, past_end_s=3.6)
+        # the wall out of view since an earlier tick (the side look's last leg hides it): no hold, the sighting
+        # ages while it waits
+        assert not _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=0.2, last_leg=last_leg, past_end_s=1.0)
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0))
+    assert cfg.release_hold_m == 0.0 and cfg.release_hold_s == 0.0  # off by default
+    assert uav_settings("px4")["release_hold_m"] == 0.010 and uav_settings("px4")["release_hold_s"] == 3.5
+    assert "release_hold_m" not in uav_settings("arducopter")

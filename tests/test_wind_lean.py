@@ -10,9 +10,10 @@ import pytest
 from masonry.blueprint_gen import pyramid
 from masonry.fsm.brick import BrickUav
 from masonry.fsm.config import UavConfig
-from masonry.fsm.tuning import PRESETS
-from masonry.fsm.wind_lean import LEAN_TAU_S, WindLean
+from masonry.fsm.tuning import PRESETS, uav_settings
+from masonry.fsm.wind_lean import LEAN_TAU_S, WindLean, place_gains
 from masonry.mission.simulate import SimulatedMission
+from masonry.motion import PIDGains
 from masonry.ports import Telemetry
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -50,10 +51,48 @@ def test_the_tilt_averaged_over_the_hovers_says_wind() -> None:
     assert not one_gust.windy(0.02)
 
 
-def test_only_the_arducopter_preset_turns_it_on() -> None:
+def test_only_the_arducopter_and_px4_presets_turn_it_on() -> None:
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).wall_in_wind_rad == 0.0
     assert PRESETS["arducopter"]["wall_in_wind_rad"] > 0.0
-    assert "wall_in_wind_rad" not in PRESETS["px4"]  # (it aligns on the wall in any air)
+    # px4 aligns on the wall in any air: its lean says only which gain a placement flies (over its calm 0.05 rad)
+    assert PRESETS["px4"]["wall_in_wind_rad"] > 0.055 and PRESETS["px4"]["wind_xy_kp_per_s"] == 2.0
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).wind_xy_kp_per_s == 0.0
+    assert "wind_xy_kp_per_s" not in PRESETS["arducopter"] and "wind_xy_kp_per_s" not in PRESETS["ideal"]
+
+
+def test_place_gains_swap_the_horizontal_kp_in_a_wind_only() -> None:
+    configured = uav_settings("px4")["pid_gains"]
+    assert place_gains(configured, 2.0, False) is configured
+    assert place_gains(configured, 0.0, True) is configured
+    windy = place_gains(configured, 2.0, True)
+    assert windy.x.kp == windy.y.kp == 2.0 and configured.x.kp == 1.5
+    assert (windy.x.ki, windy.z, windy.yaw) == (configured.x.ki, configured.z, configured.yaw)
+    assert place_gains(None, 2.0, True).z == PIDGains().z
+
+
+def _px4_kp(monkeypatch: pytest.MonkeyPatch, wind: Faults | None) -> list[float]:
+    """The px4 preset's pyramid of two: the horizontal kp each place alignment flies."""
+    kps: list[float] = []
+    align = BrickUav.enter_place_align
+
+    def record(self: BrickUav, *args: object, **kwargs: object) -> None:
+        align(self, *args, **kwargs)
+        kps.append(self.nav.pid.gains.x.kp)
+
+    monkeypatch.setattr(BrickUav, "enter_place_align", record)
+    bp = pyramid(2, yaw_rad=math.radians(30.0), clearance_m=1.0)
+    assert SimulatedMission.from_blueprint(bp, seed=0, vehicle="px4", faults=wind).run().completed
+    return kps
+
+
+def test_px4_places_in_a_wind_on_kp_2_and_in_calm_air_on_its_own_loops_kp(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The refitted px4 model (issue 29) in 4 m/s wind did not hold the alignment gates with kp 1.5
+    (docs/performance/as-built.md "The px4 placement on the refitted model"); calm air keeps kp 1.5."""
+    assert set(_px4_kp(monkeypatch, None)) == {1.5}
+    windy = _px4_kp(monkeypatch, Faults(wind=WindConfig(speed_mps=4.0, turbulence="light")))
+    assert windy and set(windy) == {2.0}
 
 
 def _on_wall(monkeypatch: pytest.MonkeyPatch, wind: Faults | None) -> list[tuple[bool, int]]:

@@ -138,11 +138,11 @@ class MavlinkSitl:
             from dataclasses import replace
 
             from masonry.sim.vehicle import SimVehicle
-            from masonry.sim.vehicle_config import vehicle_preset
+            from masonry.sim.vehicle_config import sitl_vehicle_preset
 
             vehicle = SimVehicle(
                 replace(
-                    vehicle_preset(self.config.vehicle),
+                    sitl_vehicle_preset(self.config.vehicle),
                     setpoint_timeout_s=self.config.guided_timeout_s,
                     link_failsafe_s=math.inf,  # the GCS failsafe below decides
                     battery_arm_min_fraction=self.config.arm_min_battery,

@@ -73,11 +73,12 @@ class HardwareConfig:
     pid: dict[str, Any] = field(default_factory=dict)
 
     def uav_settings(
-        self, default_preset: str = "ideal", *, own_velocity_loop: bool = False
+        self, default_preset: str = "ideal", *, own_velocity_loop: bool | None = None
     ) -> dict[str, Any]:
         """The :class:`~masonry.fsm.UavConfig` overrides this configuration asks for (both modes of ``fly``);
         ``default_preset`` when it names none (``fly --sim --vehicle arducopter`` flies the arducopter tuning);
-        ``own_velocity_loop``: the flight controller flies masonry's velocity loop (a real PX4, issue 29)."""
+        ``own_velocity_loop``: the flight controller flies masonry's velocity loop (a real PX4, issue 29); None: as
+        masonry does on the preset's autopilot by default (masonry.fsm.tuning.uav_settings)."""
         from masonry.fsm.tuning import uav_settings
 
         control = dict(self.control)

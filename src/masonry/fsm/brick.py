@@ -24,7 +24,7 @@ from masonry.fsm.side_look import SideLook
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.fsm.wall_align import WallAlign
-from masonry.fsm.wind_lean import WindLean
+from masonry.fsm.wind_lean import WindLean, place_gains
 from masonry.geometry import wrap_angle_rad
 from masonry.marker_reuse import identify_radius_m
 from masonry.perception.estimation import EstimatorConfig, PoseWindow
@@ -266,6 +266,7 @@ class BrickUav(PutBack):
         assert tel is not None and self.attempt.brick_estimate is not None
         center, yaw = self.attempt.brick_estimate
         above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
+        self._place_gains(self._lean.windy(self.config.wall_in_wind_rad))
         self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
         self._camera_align.reset(center)
 
@@ -390,6 +391,7 @@ class BrickUav(PutBack):
         assert tel is not None
         self.gripper.set_joint_locked(True)
         self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad)
+        self._place_gains(self.attempt.in_wind)
         yaw = self._place_yaw_rad()
         body = self.effector.body_target(self._place_effector_target_m() + self._side.plan(self), yaw)
         self._fly_to(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
@@ -450,6 +452,13 @@ class BrickUav(PutBack):
 
     def enter_place_release(self, *args: object, **kwargs: object) -> None:
         self.gripper.set_magnet(False)
+
+    def _place_gains(self, in_wind: bool) -> None:
+        """The position gains from this placement on (masonry.fsm.wind_lean.place_gains; only with
+        ``wind_xy_kp_per_s``): the wind's from a placement in a wind until one in calm air."""
+        cfg = self.config
+        if cfg.wind_xy_kp_per_s > 0.0:
+            self.nav.pid.set_gains(place_gains(cfg.pid_gains, cfg.wind_xy_kp_per_s, in_wind))
 
     def do_place_release(self, tel: Telemetry) -> None:
         if self._now_s - self._entered_s >= self.config.release_dwell_s:

@@ -73,6 +73,10 @@ class UavConfig:
     # the release gate with it) for a placement where its lean in the pickup's hovers, averaged, was over this
     # (rad): a steady wind's (masonry.fsm.wind_lean). 0: never
     wall_in_wind_rad: float = 0.0
+    # Issues 29/30: > 0, a placement in a wind (its lean over wall_in_wind_rad) aligns and descends with this
+    # horizontal position gain (1/s) over the configured one's, and flies it on (the next pickup's too) until a
+    # placement in calm air (masonry.fsm.wind_lean); 0: the configured gains throughout
+    wind_xy_kp_per_s: float = 0.0
     wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
@@ -84,6 +88,11 @@ class UavConfig:
     # effector's velocity brings it nearer by then and the sighting stays within release_fresh_s
     # (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
     release_closest_s: float = 0.0
+    # With align_on_wall: inside r_pl but farther than release_hold_m from the drop-off, the release waits a tick
+    # (release_closest_s) while the sighting stays within release_fresh_s then, up to release_hold_s past the
+    # descent's end (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
+    release_hold_m: float = 0.0
+    release_hold_s: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5

@@ -36,6 +36,16 @@ the effector's velocity brings it more than 1 mm nearer by the next tick, and th
 fresh then, it waits that tick; past the freshness it lets go as before (a hold into a look back up was measured
 worse: the drop-off ages, docs/performance/as-built.md, "The px4 tail over 20 seeds"). On every descent, not
 only that leg, it was a draw (the pyramid better, the rotated bond worse, seeds 0-9 21.3 mm against 19.3).
+
+With the wall in view at the release tick (seen this tick or the last), on any descent, a tick inside r_pl but
+more than ``UavConfig.release_hold_m`` off (the ``px4`` preset's 1 cm) is passed over too, up to
+``release_hold_s`` (3.5 s) past the leg's end (issues 29/30, branch ``px4land``). On the px4 model refitted to the
+real PX4 the airframe wanders 4-5 cm/s about its setpoint and the effector crosses the 1.5 cm disc rather than
+settling in it: the first tick inside let go at its edge (the surveyed pyramid of tests/test_wall_anchor.py, seed
+3: B7 released 14.5 mm off its target, and B8, B9 kept their designed offsets to it, 3.1-3.3 cm from their
+design). With the wall in view the offset stays fresh while the UAV waits for a nearer pass; out of view (the side
+look's last leg) waiting ages it, so there only the nearest-tick rule above holds (a 1 cm gate without that
+condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-built.md).
 """
 
 from __future__ import annotations
@@ -108,19 +118,25 @@ class ReleaseGate:
         still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring).
         Never past the sighting's freshness: a release held into a look back up ages the drop-off more than it
         gains."""
-        dt_s = uav.config.release_closest_s
-        if (
-            dt_s <= 0.0
-            or not uav._side.final
-            or uav._now_s + dt_s - uav._wall.seen_s > uav.config.release_fresh_s
-        ):
+        cfg = uav.config
+        dt_s = cfg.release_closest_s
+        if dt_s <= 0.0 or uav._now_s + dt_s - uav._wall.seen_s > cfg.release_fresh_s:
             return False
         error_m = (
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
+        error = float(np.hypot(*error_m))
+        if (
+            error > cfg.release_hold_m > 0.0
+            and uav._now_s - uav.nav.end_s <= cfg.release_hold_s
+            and uav._now_s - uav._wall.seen_s <= dt_s
+        ):
+            return True
+        if not uav._side.final:
+            return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
-        return float(np.hypot(*ahead_m)) < float(np.hypot(*error_m)) - CLOSING_MIN_M
+        return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
 
     def allows(self, uav: BrickUav, tel: Telemetry) -> bool:
         """At the drop-off: True to release; else a look back up has begun.

@@ -86,6 +86,14 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_on_wall": True,
         # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
         "release_closest_s": 0.1,
+        # with the wall in view, inside r_pl but over 1 cm off: a nearer tick, up to 3.5 s past the leg's end
+        # (masonry.fsm.release_gate; the refitted model's wander crosses the 1.5 cm disc)
+        "release_hold_m": 0.010,
+        "release_hold_s": 3.5,
+        # a placement in a wind (its lean over 0.07 rad; calm: 0.05-0.055) aligns and descends on kp 2 /s
+        # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of nine 4 m/s missions on the refitted model
+        "wall_in_wind_rad": 0.07,
+        "wind_xy_kp_per_s": 2.0,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,
@@ -101,6 +109,11 @@ OWN_VELOCITY_LOOP_PID: Mapping[str, Mapping[str, float]] = {
     "xy": {"kp": 1.5, "ki": 0.5, "output_limit": 1.5, "integral_limit": 0.5},
 }
 
+#: The presets of an autopilot masonry flies through its own velocity loop by default (PX4, issue 29): their
+#: :data:`OWN_VELOCITY_LOOP_PID` applies unless told otherwise, so the simulated ``px4`` vehicle, fitted to the real
+#: PX4 as masonry flies it (docs/performance/autopilots.md "The px4 model refitted"), flies the gains a real one does.
+OWN_VELOCITY_LOOP_PRESETS = frozenset({"px4"})
+
 _AXES = ("x", "y", "z", "yaw")
 
 
@@ -110,12 +123,12 @@ def uav_settings(
     pid: Mapping[str, Any] | None = None,
     *,
     source: str = "uav.yaml",
-    own_velocity_loop: bool = False,
+    own_velocity_loop: bool | None = None,
 ) -> dict[str, Any]:
     """The :class:`UavConfig` overrides of ``preset``, then ``control``, then ``pid`` (later ones win).
 
     ``own_velocity_loop``: masonry closes the velocity loop itself (:data:`OWN_VELOCITY_LOOP_PID` over the preset's
-    gains, under ``pid``).
+    gains, under ``pid``); None: as it does by default on the preset's autopilot (:data:`OWN_VELOCITY_LOOP_PRESETS`).
 
     Raises:
         InputError: an unknown preset, field, axis or gain, or a value that is not a number (named, with
@@ -126,7 +139,7 @@ def uav_settings(
     base = dict(PRESETS[preset])
     preset_pid = base.pop("pid", {})
     out = _control_fields({**base, **dict(control or {})}, source)
-    if own_velocity_loop:
+    if preset in OWN_VELOCITY_LOOP_PRESETS if own_velocity_loop is None else own_velocity_loop:
         preset_pid = _merge_pid(dict(preset_pid), dict(OWN_VELOCITY_LOOP_PID), source)
     gains = _merge_pid(dict(preset_pid), dict(pid or {}), source)
     if gains:

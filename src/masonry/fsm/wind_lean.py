@@ -13,15 +13,25 @@ placement. Why: on the ``arducopter`` preset (motion capture, no wall alignment)
 1-4 cm off its drop-off in the gusts and is let go at the edge of r_pl, each brick where its own gust put it;
 aligned on the wall, a brick keeps its designed offsets to the bricks it sees (docs/performance/as-built.md). In
 calm air nothing changes: the wall alignment's looks and the side look's legs cost seconds a brick.
+
+With ``UavConfig.wind_xy_kp_per_s`` (the ``px4`` preset's 2 /s, over masonry's own velocity loop's 1.5) such a
+placement also aligns and descends on that horizontal position gain (:func:`place_gains`), and the UAV flies it on,
+the next pickups too, until a placement in calm air: the refitted ``px4`` model (0.25 s of dead time, issue 29) in 4 m/s wind did not hold the
+alignment gates' 3 s means with kp 1.5 (no mission of nine completed), and did with kp 2 (all nine); in calm air kp 2
+placed a pyramid's first course farther apart, so there it stays 1.5. Its tilt averaged so is 0.05-0.055 rad in calm
+air (its airframe's wander), 0.08-0.27 rad in 4 m/s: the ``px4`` preset's ``wall_in_wind_rad`` is 0.07
+(docs/performance/as-built.md "The px4 placement on the refitted model").
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
+from masonry.motion import PIDGains
 from masonry.ports import Telemetry
 
-__all__ = ["LEAN_TAU_S", "WindLean"]
+__all__ = ["LEAN_TAU_S", "WindLean", "place_gains"]
 
 #: The time the lean is averaged over (s): turbulence tilts the UAV by as much again for a second or two.
 LEAN_TAU_S = 3.0
@@ -41,3 +51,16 @@ class WindLean:
     def windy(self, threshold_rad: float) -> bool:
         """The mean tilt is over ``threshold_rad`` (never for a threshold of 0 or less)."""
         return 0.0 < threshold_rad < self.tilt_rad
+
+
+def place_gains(configured: PIDGains | None, wind_xy_kp_per_s: float, in_wind: bool) -> PIDGains:
+    """The position gains a placement flies: ``configured`` (None: the defaults) with the horizontal kp
+    ``wind_xy_kp_per_s`` in a wind (``in_wind``, and ``wind_xy_kp_per_s`` > 0)."""
+    gains = configured if configured is not None else PIDGains()
+    if not in_wind or wind_xy_kp_per_s <= 0.0:
+        return gains
+    return dataclasses.replace(
+        gains,
+        x=dataclasses.replace(gains.x, kp=wind_xy_kp_per_s),
+        y=dataclasses.replace(gains.y, kp=wind_xy_kp_per_s),
+    )

@@ -153,6 +153,12 @@ class PID:
         self._flat = tuple((g.kp, g.ki, g.kd, g.output_limit, g.integral_limit) for g in self._axes)
         self.reset()
 
+    def set_gains(self, gains: PIDGains) -> None:
+        """Fly ``gains`` from the next tick on (the integral and the measured rate kept)."""
+        self.gains = gains
+        self._axes = (gains.x, gains.y, gains.z, gains.yaw)
+        self._flat = tuple((g.kp, g.ki, g.kd, g.output_limit, g.integral_limit) for g in self._axes)
+
     def reset(self) -> None:
         """Forget the integral, the previous measurement and the previous time (e.g. after a mode change)."""
         self._integral = [0.0, 0.0, 0.0, 0.0]  # ki * integral(e), in output units, axes x, y, z, yaw
