@@ -26,7 +26,18 @@ from masonry.cli.fly_tuning import fly_settings, tuning_preset
 from masonry.errors import CommandRejected
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
-from px4_sitl import ONE_BRICK, hover, on_px4, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
+from px4_sitl import (
+    ONE_BRICK,
+    SIH_STARVED,
+    give_the_cpu,
+    hover,
+    on_px4,
+    one_flight_at_a_time,
+    px4,
+    px4_run_sh,
+    sih_starved,
+    velocity_errors,
+)
 
 #: The issue's uav.yaml: PX4's EKF2 is ready within seconds, a loaded machine slows it; nothing else is set.
 UAV_YAML = "estimate_wait_s: 150\n"
@@ -86,20 +97,33 @@ def _finish(proc: subprocess.Popen[str], wall_s: float, what: str, px4_log: Path
         pytest.fail(f"{what}: no result within {wall_s:g} s of wall time\n{err[-3000:]}\nPX4: {log[-1500:]}")
 
 
+def _vehicle(proc: subprocess.Popen[str]) -> subprocess.Popen[str]:
+    """A ``masonry`` process started in a session of its own, given the CPU share PX4 has (a vehicle's companion
+    computer, a site's ground station: px4_sitl.give_the_cpu)."""
+    give_the_cpu(proc.pid)
+    return proc
+
+
+def _latest_px4_log(folder: Path) -> Path:
+    """The log of the PX4 flown last under ``folder`` (``px4``, or ``px4-2`` where px4_sitl.on_px4 flew again)."""
+    again = folder / "px4-2" / "px4.log"
+    return again if again.is_file() else folder / "px4" / "px4.log"
+
+
 def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> dict:
     """``masonry fly --uav UAV --task TASK --blueprint BP --fc URL --actuators sim --camera sim`` with the issue's
     uav.yaml: its JSON result, asserted done."""
     config = folder / "uav.yaml"
     config.write_text(UAV_YAML)
-    proc = masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url, "--actuators", "sim",
-                    "--camera", "sim", "--config", str(config), "--format", "json")  # fmt: skip
-    out, err = _finish(
-        proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", folder / "px4" / "px4.log"
-    )
+    proc = _vehicle(masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url,
+                            "--actuators", "sim", "--camera", "sim", "--config", str(config), "--format", "json",
+                            own_session=True))  # fmt: skip
+    px4_log_path = _latest_px4_log(folder)
+    out, err = _finish(proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", px4_log_path)
     results = [line for line in out.splitlines() if line.startswith("{")]
     assert results, f"no result (exit {proc.returncode}): {err[-3000:]}"
     result = dict(json.loads(results[-1]))
-    px4_log = (folder / "px4" / "px4.log").read_text(errors="replace")
+    px4_log = px4_log_path.read_text(errors="replace") if px4_log_path.is_file() else ""
     assert result["status"] == "done", (result.get("reason"), err[-2000:], px4_log[-1500:])
     assert TUNING_LINE in err
     return result
@@ -113,12 +137,18 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
     _opted_in("issue 29's scenario")
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=6) as url:
+
+    def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "brick", "B1", str(blueprint))
-    assert result["placement_error_m"] is not None and result["placement_error_m"] < 0.02, result
-    states = [e["state"] for e in result["trace"]]
-    for state in ("takeoff", "pickup_align", "pickup_grasp", "place_align", "place_release", "land"):
-        assert state in states
+        assert result["placement_error_m"] is not None and result["placement_error_m"] < 0.02, result
+        states = [e["state"] for e in result["trace"]]
+        for state in ("takeoff", "pickup_align", "pickup_grasp", "place_align", "place_release", "land"):
+            assert state in states
+        return result
+
+    result = on_px4(
+        tmp_path / "px4", 6, fly
+    )  # (once more on a fresh PX4 if its SIH starved: px4_sitl.on_px4)
     print(f"PX4: B1 placed {result['placement_error_m'] * 1000:.1f} mm off in {result['duration_s']} s")
 
 
@@ -165,30 +195,44 @@ MISSION_PX4_PARAMS = {"SIM_BAT_DRAIN": "3600"}
 @pytest.mark.slow
 def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     """Mission control and two ``masonry fly --mission`` processes (brick-1 on PX4 instance 4, glue-1 on 5), all
-    with default settings (the default reservation, ``site``; real time): the mission completes."""
+    with default settings (the default reservation, ``site``; real time): the mission completes. Flown once more
+    on two fresh PX4s only if the first failed with a PX4's own log saying its SIH starved (as px4_sitl.on_px4)."""
     _opted_in("the case study on two PX4s")
-    config = tmp_path / "uav.yaml"
+    for folder in (tmp_path / "mission", tmp_path / "mission-2"):
+        try:
+            print(_fly_the_case_study(folder))
+            return
+        except (AssertionError, pytest.fail.Exception):
+            starved = [uav for uav in ("brick-1", "glue-1") if sih_starved(folder / uav)]
+            if folder.name != "mission" or not starved:
+                raise
+            print(f"PX4: {', '.join(starved)}'s SIH starved ({SIH_STARVED!r}); the mission flown again")
+
+
+def _fly_the_case_study(folder: Path) -> str:
+    """The mission flown and checked (the test's asserts); its summary line."""
+    folder.mkdir(parents=True, exist_ok=True)
+    config = folder / "uav.yaml"
     config.write_text(UAV_YAML)
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     name = ["--mission-name", f"px4-{endpoint.rsplit(':', 1)[1]}"]
-    brick_dir, glue_dir = tmp_path / "brick-1", tmp_path / "glue-1"
+    brick_dir, glue_dir = folder / "brick-1", folder / "glue-1"
     with (
         one_flight_at_a_time(),
         px4(brick_dir, instance=4, params=MISSION_PX4_PARAMS) as brick_url,
         px4(glue_dir, instance=5, params=MISSION_PX4_PARAMS) as glue_url,
     ):
-        mc = masonry(
-            "mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--verbose", *name
-        )
+        mc = _vehicle(masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json",
+                              "--verbose", *name, own_session=True))  # fmt: skip
         uavs = [
-            fly_mission(role, uav, url, endpoint, config, *name)
+            _vehicle(fly_mission(role, uav, url, endpoint, config, *name, own_session=True))
             for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
         ]
         with reaped([mc, *uavs]):
             mc_out, mc_err = _finish(mc, MISSION_WALL_S, "mission control (case study on two PX4s)",
                                      brick_dir / "px4.log")  # fmt: skip
-            runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", folder / "px4.log")
-                    for p, uav, folder in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
+            runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", px4_dir / "px4.log")
+                    for p, uav, px4_dir in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
@@ -208,9 +252,7 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
         f"{k} {p['deviation_m'] * 1000:.1f}" for k, p in report["as_built"].items()
     )
     errors += " mm)"
-    print(
-        f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
-    )
+    return f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
 
 
 #: PX4's geofence 1.5 m around home, its breach action 3 (PX4 v1.16 SIH went to AUTO.LOITER, a hold): the
