@@ -224,15 +224,24 @@ def _fly_the_case_study(folder: Path) -> str:
     ):
         mc = _vehicle(masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json",
                               "--verbose", *name, own_session=True))  # fmt: skip
+        # each UAV with its log (tasks, states, poses: an MCAP file, docs/logging.md) for a look at a failure
+        logs = [("--log", str(folder / f"{uav}.mcap")) for uav in ("brick-1", "glue-1")]
         uavs = [
-            _vehicle(fly_mission(role, uav, url, endpoint, config, *name, own_session=True))
-            for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
+            _vehicle(fly_mission(role, uav, url, endpoint, config, *name, *log, own_session=True))
+            for (role, uav, url), log in zip(
+                (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url)), logs, strict=True
+            )
         ]
         with reaped([mc, *uavs]):
             mc_out, mc_err = _finish(mc, MISSION_WALL_S, "mission control (case study on two PX4s)",
                                      brick_dir / "px4.log")  # fmt: skip
             runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", px4_dir / "px4.log")
                     for p, uav, px4_dir in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
+    for what, text in (
+        ("mission-control", mc_err),
+        *((uav, err) for uav, (_, err) in zip(("brick-1", "glue-1"), runs)),
+    ):
+        (folder / f"{what}.err").write_text(text)  # the whole of it, for a look at a failure
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
