@@ -17,9 +17,11 @@ MAIN = "from masonry.cli import main; main()"
 EVERY_TASK_BY_ITS_KIND = [("A0", "glue-1"), ("A1", "glue-1"), ("B0", "brick-1"), ("B1", "brick-1")]
 
 
-def masonry(*args: str) -> subprocess.Popen[str]:
+def masonry(*args: str, own_session: bool = False) -> subprocess.Popen[str]:
+    """``masonry ARGS`` as a process, its output piped; ``own_session``: in a session (and process group) of its
+    own, which a test may then give a share of the CPU of its own (tests/px4_sitl.py ``give_the_cpu``)."""
     return subprocess.Popen([sys.executable, "-c", MAIN, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)  # fmt: skip
+                            text=True, start_new_session=own_session)  # fmt: skip
 
 
 def free_tcp_port() -> int:
@@ -29,12 +31,13 @@ def free_tcp_port() -> int:
 
 
 def fly_mission(
-    role: str, uav: str, url: str, endpoint: str, config: Path, *extra: str
+    role: str, uav: str, url: str, endpoint: str, config: Path, *extra: str, own_session: bool = False
 ) -> subprocess.Popen[str]:
     """``masonry fly --mission`` for one UAV of the case study, simulated actuators and camera, JSON out."""
     return masonry("fly", "--uav", role, "--name", uav, "--blueprint", CASE_STUDY, "--mission", endpoint,
                    "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", url, "--actuators", "sim",
-                   "--camera", "sim", "--config", str(config), "--format", "json", *extra)  # fmt: skip
+                   "--camera", "sim", "--config", str(config), "--format", "json", *extra,
+                   own_session=own_session)  # fmt: skip
 
 
 @contextmanager

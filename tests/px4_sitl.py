@@ -61,8 +61,16 @@ def px4_run_sh() -> Path:
 PX4_NICE = -10
 
 
-def _give_the_cpu(pid: int) -> None:
-    """Run PX4 (process group and session ``pid``) at :data:`PX4_NICE`, where allowed."""
+def give_the_cpu(pid: int) -> None:
+    """Run the process group and session ``pid`` (PX4, or a ``masonry`` process started in a session of its own) at
+    :data:`PX4_NICE`, where allowed.
+
+    masonry closes PX4's velocity loop itself (acceleration setpoints at 20 Hz from the adapter's sender thread,
+    masonry.motion.velocity_loop): on a vehicle it runs on a companion computer of its own, as PX4 on its flight
+    controller, and mission control on a ground station. Beside a busy process the loop's ticks came late and the
+    hover swung wider than PX4's own noise (docs/performance/autopilots.md, issue 29): the tests give masonry's
+    processes the share PX4 has. Set before the process has started its threads (the interpreter's start-up takes
+    far longer than this call), so they inherit it."""
     with contextlib.suppress(OSError):
         os.setpriority(os.PRIO_PGRP, pid, PX4_NICE)
     with contextlib.suppress(OSError):
@@ -125,7 +133,7 @@ def px4(workdir: Path, instance: int, params: dict[str, str] | None = None) -> I
         ["sh", str(run_sh), str(workdir / "px4"), str(instance)],
         env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
     )  # fmt: skip
-    _give_the_cpu(proc.pid)
+    give_the_cpu(proc.pid)
     try:
         yield f"udpin:0.0.0.0:{14540 + instance}"
     finally:

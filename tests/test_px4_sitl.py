@@ -1,6 +1,7 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
-flies an adhesion task with default settings, and a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario and the case study as a two-vehicle
-mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: 6 of 8 and 2 of 5).
+a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario, the adhesion task A0 and the
+case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load:
+:data:`OPT_IN_ENV`).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
@@ -26,7 +27,18 @@ from masonry.cli.fly_tuning import fly_settings, tuning_preset
 from masonry.errors import CommandRejected
 from masonry.fsm.tuning import uav_settings
 from masonry.sim import Faults
-from px4_sitl import ONE_BRICK, hover, on_px4, one_flight_at_a_time, px4, px4_run_sh, velocity_errors
+from px4_sitl import (
+    ONE_BRICK,
+    SIH_STARVED,
+    give_the_cpu,
+    hover,
+    on_px4,
+    one_flight_at_a_time,
+    px4,
+    px4_run_sh,
+    sih_starved,
+    velocity_errors,
+)
 
 #: The issue's uav.yaml: PX4's EKF2 is ready within seconds, a loaded machine slows it; nothing else is set.
 UAV_YAML = "estimate_wait_s: 150\n"
@@ -86,20 +98,33 @@ def _finish(proc: subprocess.Popen[str], wall_s: float, what: str, px4_log: Path
         pytest.fail(f"{what}: no result within {wall_s:g} s of wall time\n{err[-3000:]}\nPX4: {log[-1500:]}")
 
 
+def _vehicle(proc: subprocess.Popen[str]) -> subprocess.Popen[str]:
+    """A ``masonry`` process started in a session of its own, given the CPU share PX4 has (a vehicle's companion
+    computer, a site's ground station: px4_sitl.give_the_cpu)."""
+    give_the_cpu(proc.pid)
+    return proc
+
+
+def _latest_px4_log(folder: Path) -> Path:
+    """The log of the PX4 flown last under ``folder`` (``px4``, or ``px4-2`` where px4_sitl.on_px4 flew again)."""
+    again = folder / "px4-2" / "px4.log"
+    return again if again.is_file() else folder / "px4" / "px4.log"
+
+
 def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> dict:
     """``masonry fly --uav UAV --task TASK --blueprint BP --fc URL --actuators sim --camera sim`` with the issue's
     uav.yaml: its JSON result, asserted done."""
     config = folder / "uav.yaml"
     config.write_text(UAV_YAML)
-    proc = masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url, "--actuators", "sim",
-                    "--camera", "sim", "--config", str(config), "--format", "json")  # fmt: skip
-    out, err = _finish(
-        proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", folder / "px4" / "px4.log"
-    )
+    proc = _vehicle(masonry("fly", "--uav", uav, "--task", task, "--blueprint", blueprint, "--fc", url,
+                            "--actuators", "sim", "--camera", "sim", "--config", str(config), "--format", "json",
+                            own_session=True))  # fmt: skip
+    px4_log_path = _latest_px4_log(folder)
+    out, err = _finish(proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", px4_log_path)
     results = [line for line in out.splitlines() if line.startswith("{")]
     assert results, f"no result (exit {proc.returncode}): {err[-3000:]}"
     result = dict(json.loads(results[-1]))
-    px4_log = (folder / "px4" / "px4.log").read_text(errors="replace")
+    px4_log = px4_log_path.read_text(errors="replace") if px4_log_path.is_file() else ""
     assert result["status"] == "done", (result.get("reason"), err[-2000:], px4_log[-1500:])
     assert TUNING_LINE in err
     return result
@@ -113,12 +138,18 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
     _opted_in("issue 29's scenario")
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=6) as url:
+
+    def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "brick", "B1", str(blueprint))
-    assert result["placement_error_m"] is not None and result["placement_error_m"] < 0.02, result
-    states = [e["state"] for e in result["trace"]]
-    for state in ("takeoff", "pickup_align", "pickup_grasp", "place_align", "place_release", "land"):
-        assert state in states
+        assert result["placement_error_m"] is not None and result["placement_error_m"] < 0.02, result
+        states = [e["state"] for e in result["trace"]]
+        for state in ("takeoff", "pickup_align", "pickup_grasp", "place_align", "place_release", "land"):
+            assert state in states
+        return result
+
+    result = on_px4(
+        tmp_path / "px4", 6, fly
+    )  # (once more on a fresh PX4 if its SIH starved: px4_sitl.on_px4)
     print(f"PX4: B1 placed {result['placement_error_m'] * 1000:.1f} mm off in {result['duration_s']} s")
 
 
@@ -136,14 +167,13 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
-#: A0 failed 1 of 6 fresh-clone rehearsals of 2026-12-04 ("could not reach the spraying height over A0", PX4's log
-#: clean): the descent's single-tick gate, tighter than PX4's hover noise (now the window's mean within the valve's
-#: radius, masonry.fsm.descent_reach: 15 of 15 descents arrived since). Still opt-in: beside a busy loop the hover
-#: over the start failed its swing gate in 2 of the 10 flown (docs/performance/autopilots.md, issue 29's A0), beside:
-#: The scenario and the mission fly only where this is set as well (opt-in): beside a busy loop the scenario placed
-#: 6 of 8 (PX4's SIH failed once; once the place alignment swung 0.92 m off), the mission completed 2 of 5 (a lost
-#: glue-1, a brick-1 1.66 m off its drop-off, "could not reach the spraying height"; docs/performance/
-#: autopilots.md, "Issue 29's PX4 list in CI"): not yet tests CI can hold.
+#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list (branch px4ci,
+#: 2026-12-05; docs/performance/autopilots.md, "The opt-in PX4 tests under load"): flown beside a busy loop with the
+#: machine at load average 11-20 (other sessions), after the fixes there (the adhesion hover on the window's mean,
+#: masonry's processes on a CPU share of their own, the world's contact for a vehicle that follows telemetry, the
+#: px4 swing gate at 0.3 m/s, one more PX4 where its SIH starved) the scenario placed 9 of 11, A0 covered 9 of 11,
+#: the mission completed 4 of 5 valid runs; the failures left (a place alignment's leg timeout, a spray pass 16 %
+#: covered, a take-off stalled at 0.99 m, PX4's SIH starving) are not yet traced: not yet tests CI can hold.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -165,30 +195,53 @@ MISSION_PX4_PARAMS = {"SIM_BAT_DRAIN": "3600"}
 @pytest.mark.slow
 def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
     """Mission control and two ``masonry fly --mission`` processes (brick-1 on PX4 instance 4, glue-1 on 5), all
-    with default settings (the default reservation, ``site``; real time): the mission completes."""
+    with default settings (the default reservation, ``site``; real time): the mission completes. Flown once more
+    on two fresh PX4s only if the first failed with a PX4's own log saying its SIH starved (as px4_sitl.on_px4)."""
     _opted_in("the case study on two PX4s")
-    config = tmp_path / "uav.yaml"
+    for folder in (tmp_path / "mission", tmp_path / "mission-2"):
+        try:
+            print(_fly_the_case_study(folder))
+            return
+        except (AssertionError, pytest.fail.Exception):
+            starved = [uav for uav in ("brick-1", "glue-1") if sih_starved(folder / uav)]
+            if folder.name != "mission" or not starved:
+                raise
+            print(f"PX4: {', '.join(starved)}'s SIH starved ({SIH_STARVED!r}); the mission flown again")
+
+
+def _fly_the_case_study(folder: Path) -> str:
+    """The mission flown and checked (the test's asserts); its summary line."""
+    folder.mkdir(parents=True, exist_ok=True)
+    config = folder / "uav.yaml"
     config.write_text(UAV_YAML)
     endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
     name = ["--mission-name", f"px4-{endpoint.rsplit(':', 1)[1]}"]
-    brick_dir, glue_dir = tmp_path / "brick-1", tmp_path / "glue-1"
+    brick_dir, glue_dir = folder / "brick-1", folder / "glue-1"
     with (
         one_flight_at_a_time(),
         px4(brick_dir, instance=4, params=MISSION_PX4_PARAMS) as brick_url,
         px4(glue_dir, instance=5, params=MISSION_PX4_PARAMS) as glue_url,
     ):
-        mc = masonry(
-            "mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json", "--verbose", *name
-        )
+        mc = _vehicle(masonry("mission-control", CASE_STUDY, "--listen", endpoint, "--format", "json",
+                              "--verbose", *name, own_session=True))  # fmt: skip
+        # each UAV with its log (tasks, states, poses: an MCAP file, docs/logging.md) for a look at a failure
+        logs = [("--log", str(folder / f"{uav}.mcap")) for uav in ("brick-1", "glue-1")]
         uavs = [
-            fly_mission(role, uav, url, endpoint, config, *name)
-            for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url))
+            _vehicle(fly_mission(role, uav, url, endpoint, config, *name, *log, own_session=True))
+            for (role, uav, url), log in zip(
+                (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url)), logs, strict=True
+            )
         ]
         with reaped([mc, *uavs]):
             mc_out, mc_err = _finish(mc, MISSION_WALL_S, "mission control (case study on two PX4s)",
                                      brick_dir / "px4.log")  # fmt: skip
-            runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", folder / "px4.log")
-                    for p, uav, folder in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
+            runs = [_finish(p, 120.0, f"masonry fly --mission ({uav})", px4_dir / "px4.log")
+                    for p, uav, px4_dir in zip(uavs, ("brick-1", "glue-1"), (brick_dir, glue_dir))]  # fmt: skip
+    for what, text in (
+        ("mission-control", mc_err),
+        *((uav, err) for uav, (_, err) in zip(("brick-1", "glue-1"), runs)),
+    ):
+        (folder / f"{what}.err").write_text(text)  # the whole of it, for a look at a failure
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
@@ -208,9 +261,7 @@ def test_the_case_study_as_a_mission_on_two_real_px4s(tmp_path: Path) -> None:
         f"{k} {p['deviation_m'] * 1000:.1f}" for k, p in report["as_built"].items()
     )
     errors += " mm)"
-    print(
-        f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
-    )
+    return f"PX4: case study on two PX4s: makespan {report['makespan_s']} s; {errors}; attempts {attempts} {retried}"
 
 
 #: PX4's geofence 1.5 m around home, its breach action 3 (PX4 v1.16 SIH went to AUTO.LOITER, a hold): the

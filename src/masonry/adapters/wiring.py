@@ -281,6 +281,8 @@ def _follow_autopilot(uav: Any, fc: Any) -> None:
     class TelemetryVehicle(SimVehicle):
         """A SimVehicle whose state is the FlightController's telemetry at every step (``SimVehicle.follow``)."""
 
+        follows_telemetry = True  # (masonry.sim.follow_contact: a carried brick stays on the bricks under it)
+
         def idle(self, dt_s: float) -> None:  # the world's fast path for a parked vehicle: it may take off
             self.step(dt_s)
 

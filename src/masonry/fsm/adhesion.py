@@ -12,6 +12,7 @@ from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.fsm.bead import BeadPass, BeadSettings
 from masonry.fsm.config import UavConfig
 from masonry.fsm.descent_reach import DescentReach
+from masonry.fsm.hover_still import HoverStill
 from masonry.fsm.model import UavModel
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
 from masonry.fsm.tool import Tool
@@ -58,6 +59,7 @@ class AdhesionUav(UavModel):
         #: task's segment is judged at it, so it outlives the attempt)
         self._yaw_rad = 0.0
         self._descent = DescentReach(config.gate_window_s or 1.0)  # (masonry.fsm.descent_reach)
+        self._hover_still = HoverStill(config.gate_window_s or 1.0)  # (masonry.fsm.hover_still)
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
             config.cruise_altitude_m
@@ -186,6 +188,7 @@ class AdhesionUav(UavModel):
         tel = self._tel
         assert tel is not None
         self.attempt.stable_since_s = None
+        self._hover_still.reset()
         self.attempt.lean_rad = (tel.attitude_rad[0], tel.attitude_rad[1])
         self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
 
@@ -206,8 +209,18 @@ class AdhesionUav(UavModel):
         # its start and catches up along the segment: coverage counts what it covers), and leg_timeout_s still
         # ends the attempt with a reason.
         scale = 2.0 if self._now_s > self.nav.end_s + cfg.align_patience_s else 1.0
+        if cfg.gate_window_s > 0.0:
+            # a noisy position source (the px4 preset): the window's mean position and velocity, not a run of
+            # ticks (masonry.fsm.hover_still); the window is the stable time
+            self._hover_still.add(self._now_s, [p[i] - t[i] for i in range(3)], v)
+            if self._hover_still.still(
+                scale * 2.0 * cfg.align_tolerance_m, scale * cfg.settle_speed_mps
+            ) and (self._yaw_error(tel) <= scale * cfg.align_yaw_tolerance_rad):
+                self.stable()
+                return
         still = (
-            math.dist(p, t) <= scale * 2.0 * cfg.align_tolerance_m
+            cfg.gate_window_s <= 0.0
+            and math.dist(p, t) <= scale * 2.0 * cfg.align_tolerance_m
             and math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) <= scale * cfg.settle_speed_mps
             and self._yaw_error(tel) <= scale * cfg.align_yaw_tolerance_rad
         )

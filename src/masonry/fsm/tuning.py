@@ -99,6 +99,10 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_patience_s": 4.0,
         # the spray descent's arrival: the window's mean within the valve's radius (masonry.fsm.descent_reach)
         "spray_tolerance_m": 0.03,
+        # the swing gate: beside busy processes the real PX4's hover at its point reads 0.20-0.25 m/s rms (4-9 cm
+        # off; docs/performance/autopilots.md), at the default 0.2; a loop too fast for it swings at 0.4 and more.
+        # The gate only ends an alignment early: its own windowed gate still decides, or leg_timeout_s
+        "swing_speed_mps": 0.3,
     },
 }
 

@@ -31,6 +31,7 @@ from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
 from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
 from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
+from masonry.sim.follow_contact import carried_support_m
 from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
 from masonry.sim.render_camera import over_sampled_pickup, render_sample, rendered_frame
@@ -403,9 +404,7 @@ class World:
             self._carry_pose(uav, brick)
             if brick.bottom_z_m > clear_z:
                 return
-            support = self.field.support_under(
-                brick.rect(self.config.support_margin_m), below_z_m=brick.bottom_z_m, tol_m=tol
-            )
+            support = carried_support_m(self.field, vehicle, brick, self.config.support_margin_m, tol)
             if brick.bottom_z_m < support:
                 vehicle.hold_above(vehicle.position_m[2] + support - brick.bottom_z_m)
                 self._carry_pose(uav, brick)
