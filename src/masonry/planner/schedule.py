@@ -55,6 +55,7 @@ from masonry.planner.schedule_physical import (
     Physics,
     add_battery,
     add_pallet,
+    clear_of,
     make_physics,
     physical_terms,
 )
@@ -168,16 +169,7 @@ def _earliest(
     placed conflicting intervals (``placed``: task -> its kept-apart interval)."""
     off = p.site_offset_max(i) if p.reservation == "site" else 0
     length = p.site[i] if p.reservation == "site" else p.dur[i]
-    t = max(t0, a0 - off)
-    others = sorted(placed[j] for j in p.conflicts[i] if j in placed)
-    moved = True
-    while moved:
-        moved = False
-        for s, e in others:
-            x = t + off
-            if x < e and s < x + length:
-                t = e - off
-                moved = True
+    t = clear_of(sorted(placed[j] for j in p.conflicts[i] if j in placed), max(t0, a0 - off), off, length)
     return t, t + off
 
 

@@ -164,9 +164,9 @@ class Physics:
         flex = self.flexible(p, i)
         t = t0
         while True:
-            t = _clear(others, t, ph.pre, ph.pick)
+            t = clear_of(others, t, ph.pre, ph.pick)
             if flex:
-                a = _clear(
+                a = clear_of(
                     sorted(kept[j] for j in p.conflicts[i] if j in kept),
                     max(a0, t + ph.pre + ph.pick + ph.carry),
                     0,
@@ -176,7 +176,7 @@ class Physics:
             # fixed length: the task's kept interval (``task``) or the site part at its latest, then the pickup
             off = p.dur[i] - p.site[i] if p.reservation == "site" else 0
             length = p.site[i] if p.reservation == "site" else p.dur[i]
-            t2 = _clear(sorted(kept[j] for j in p.conflicts[i] if j in kept), max(t, a0 - off), off, length)
+            t2 = clear_of(sorted(kept[j] for j in p.conflicts[i] if j in kept), max(t, a0 - off), off, length)
             if t2 == t:
                 return t, t + off, t + p.dur[i]
             t = t2
@@ -239,7 +239,7 @@ def _start(t: Task) -> tuple[float, float, float]:
     return t.start_m
 
 
-def _clear(others: Sequence[tuple[int, int]], t: int, off: int, length: int) -> int:
+def clear_of(others: Sequence[tuple[int, int]], t: int, off: int, length: int) -> int:
     """The earliest ``t`` >= the given one whose window [t + off, t + off + length) overlaps none of ``others``."""
     moved = True
     while moved:
