@@ -52,18 +52,16 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from schedule_cache import cached_schedule
+from schedule_cache import cached_schedule, solve_as_the_cli
 
 from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.errors import PlanningError
-from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
-from masonry.planner import plan as make_plan
 from masonry.planner.dispatch import DEFAULT_RESERVATION, POLICIES, RESERVATIONS
-from masonry.planner.schedule import physical_terms, solve_schedule
+from masonry.planner.schedule import physical_terms
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.ports import PHASES
@@ -163,21 +161,8 @@ def schedule_makespan(
     """The makespan of ``masonry schedule [--physical TERMS]`` for the wall and fleet (as the command calls the
     solver: the fleet of ``fleet_for``, the plan of the blueprint, its cruise altitude and r_c, 2 workers, seed
     0), its status, wall time and battery swaps."""
-    fleet = fleet_for(blueprint, bricks, adhesion)
-    bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
     wall0 = time.perf_counter()
-    result = solve_schedule(
-        make_plan(bp),
-        fleet,
-        cruise_altitude_m=bp.cruise_altitude_m,
-        reservation=reservation,
-        time_limit_s=time_limit_s,
-        seed=0,
-        workers=2,
-        decomposition="auto",
-        physical=physical,
-        clearance_m=bp.clearance_m,
-    )
+    result = solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s, physical)
     greedy = sum(
         1 for q in result.parts if q.get("status") == "greedy"
     )  # CP-SAT found nothing in a part's time

@@ -77,7 +77,29 @@ def cached_schedule(
     wall0 = time.perf_counter()
     if path.exists():
         return read_schedule(path), time.perf_counter() - wall0, True
-    result = solve_schedule(
+    result = stamp_schedule(solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s), bp)
+    took_s = time.perf_counter() - wall0
+    where.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(result.to_dict(), indent=1) + "\n", encoding="utf-8")
+    tmp.replace(path)
+    return result, took_s, False
+
+
+def solve_as_the_cli(
+    blueprint: Blueprint,
+    bricks: int,
+    adhesion: int,
+    reservation: str,
+    time_limit_s: float,
+    physical: str = "",
+) -> OfflineSchedule:
+    """``masonry schedule [--physical TERMS]`` of the wall and fleet, solved as the command solves it: the fleet of
+    ``fleet_for``, the plan of the blueprint, its cruise altitude and r_c, :data:`WORKERS` workers, seed
+    :data:`SEED` (not cached)."""
+    fleet = fleet_for(blueprint, bricks, adhesion)
+    bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
+    return solve_schedule(
         make_plan(bp),
         fleet,
         cruise_altitude_m=bp.cruise_altitude_m,
@@ -86,11 +108,6 @@ def cached_schedule(
         seed=SEED,
         workers=WORKERS,
         decomposition="auto",
+        physical=physical,
+        clearance_m=bp.clearance_m,
     )
-    result = stamp_schedule(result, bp)
-    took_s = time.perf_counter() - wall0
-    where.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(result.to_dict(), indent=1) + "\n", encoding="utf-8")
-    tmp.replace(path)
-    return result, took_s, False
