@@ -35,6 +35,7 @@ from masonry.mission import (
 from masonry.mission.as_built import PlacementWatch
 from masonry.mission.control_airspace import make_airspace
 from masonry.mission.control_ports import JournalPort, WindGate
+from masonry.mission.dispatch_chain import mission_dispatcher
 from masonry.mission.events import EventSink
 from masonry.mission.glue import glue_gate
 from masonry.mission.journal_state import journaled_phases as _journaled_phases  # noqa: F401 - its home before
@@ -68,7 +69,6 @@ from masonry.mission.wait_causes import WaitWatch
 from masonry.mission.wind_limit import HeardWind
 from masonry.placement_check import PlacementCheck
 from masonry.planner.dispatch import DEFAULT_RESERVATION
-from masonry.planner.schedule_policy import make_dispatcher
 from masonry.planner.tasks import Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
@@ -190,7 +190,7 @@ class MissionControl:
         self.heartbeat_timeout_s = heartbeat_timeout_s
         self.startup_timeout_s = startup_timeout_s
         self.rejoin_timeout_s = startup_timeout_s if rejoin_timeout_s is None else rejoin_timeout_s
-        self.dispatcher = make_dispatcher(
+        self.dispatcher = mission_dispatcher(
             plan,
             self.fleet,
             policy,

@@ -1,0 +1,110 @@
+"""Chaining through a queued task (masonry.mission.dispatch_chain): a sprayer at the end of its segment is given
+the next one of its run when it is ready, even while a conflicting brick task is in progress, as long as the
+fleet has no more UAVs than the wall has sites to work at once and more than one brick UAV."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from masonry.blueprint import UavSpec, load_blueprint
+from masonry.blueprint_gen import running_bond
+from masonry.mission.dispatch_chain import ChainThrough, mission_dispatcher
+from masonry.mission.simulate import simulate
+from masonry.planner.dispatch import Dispatcher
+from masonry.planner.dispatch_admission import Admission
+from masonry.planner.graphs import plan as plan_of
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
+
+ROOT = Path(__file__).resolve().parents[1]
+FLEET = [
+    UavSpec("brick-1", "brick", (0.0, -3.0, 0.0)),
+    UavSpec("brick-2", "brick", (3.0, -3.0, 0.0)),
+    UavSpec("glue-1", "adhesion", (-2.0, -3.0, 0.0)),
+]
+A0_END_M = (-0.9, 0.0, 0.55)  # the sprayer's body over the end of A0 (its nozzle hangs below it)
+
+
+def glue(n: int, x0: float, x1: float) -> AdhesionTask:
+    return AdhesionTask(f"A{n}", 0, 1, (x0, 0.0, 0.1), (x1, 0.0, 0.1), abs(x1 - x0))
+
+
+def run_and_a_brick() -> Plan:
+    """A0 -> A1 contiguous (a run), A2 further on; brick B0 conflicts with A1 only."""
+    tasks = (
+        glue(0, -1.05, -0.9),
+        glue(1, -0.9, -0.75),
+        glue(2, 1.0, 1.15),
+        BrickTask("B0", 0, False, (-0.6, 0.0, 0.15), 0.0, (-0.6, -2.0, 0.05)),
+    )
+    return Plan(tasks, (), (("A1", "B0"),))
+
+
+def after_a0(d: Dispatcher) -> list[str]:
+    """The brick UAV takes B0 and the sprayer A0; A0 done, the sprayer still at its end: what is it given?"""
+    assert sorted(a.task_id for a in d.assign()) == ["A0", "B0"]
+    d.complete("A0")
+    return [a.task_id for a in d.assign({"glue-1": A0_END_M})]
+
+
+def test_the_sprayer_takes_the_next_segment_of_its_run_while_a_conflicting_brick_is_in_progress() -> None:
+    d = ChainThrough(run_and_a_brick(), FLEET, reservation="site")
+    d.admission = Admission(3, lambda _name: False)  # three sites to work at once, three UAVs
+    assert after_a0(d) == ["A1"]
+    assert d.in_progress == {"A1": "glue-1", "B0": "brick-1"}
+
+
+def test_the_plain_dispatcher_sends_it_elsewhere() -> None:
+    d = Dispatcher(run_and_a_brick(), FLEET, reservation="site")
+    d.admission = Admission(3, lambda _name: False)
+    assert after_a0(d) == ["A2"]
+
+
+@pytest.mark.parametrize("width", [None, 2])
+def test_not_past_the_walls_width_nor_without_the_admission_rule(width: int | None) -> None:
+    d = ChainThrough(run_and_a_brick(), FLEET, reservation="site")
+    if width is not None:
+        d.admission = Admission(width, lambda _name: False)  # three UAVs for two sites: they queue already
+    assert after_a0(d) == ["A2"]
+
+
+def test_not_with_one_brick_uav() -> None:
+    # the one brick UAV is the whole of its role: the sprayer does not make it wait
+    d = ChainThrough(run_and_a_brick(), [FLEET[0], FLEET[2]], reservation="site")
+    d.admission = Admission(3, lambda _name: False)
+    assert after_a0(d) == ["A2"]
+
+
+def test_a_segment_not_ready_is_not_taken() -> None:
+    # A1 waits for B0 (a segment over the brick): chaining through would send the sprayer to a site it may not
+    # enter before the brick is laid
+    base = run_and_a_brick()
+    d = ChainThrough(Plan(base.tasks, (("A1", "B0"),), base.conflicts), FLEET, reservation="site")
+    d.admission = Admission(3, lambda _name: False)
+    assert sorted(a.task_id for a in d.assign()) == ["A0", "B0"]
+    d.complete("A0")
+    assert [a.task_id for a in d.assign({"glue-1": A0_END_M})] == ["A2"]
+
+
+def test_mission_control_uses_it_for_the_reactive_policies_under_site_only() -> None:
+    p = plan_of(running_bond(2, 6, placed_courses=1))
+    fleet = [UavSpec("brick-1", "brick", (0.0, -5.0, 0.0)), UavSpec("glue-1", "adhesion", (1.0, -5.0, 0.0))]
+    for policy in ("critical-path", "fifo", "nearest"):
+        assert type(mission_dispatcher(p, fleet, policy, reservation="site")) is ChainThrough
+        assert type(mission_dispatcher(p, fleet, policy, reservation="task")) is Dispatcher
+
+
+@pytest.mark.parametrize(("blueprint", "bricks", "adhesion"), [("pyramid", 1, 1), ("bond", 2, 1)])
+def test_missions_with_it_complete_and_keep_their_separation(
+    blueprint: str, bricks: int, adhesion: int
+) -> None:
+    bp = (
+        load_blueprint(ROOT / "blueprints" / "pyramid.yaml")
+        if blueprint == "pyramid"
+        else running_bond(2, 12)
+    )
+    r = simulate(bp, brick_uavs=bricks, adhesion_uavs=adhesion, seed=1, camera="geometric")
+    assert all(t.status == "done" for t in r.tasks)
+    assert r.min_separation_m >= 1.0
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
