@@ -34,14 +34,13 @@ from masonry.errors import PlanningError
 from masonry.planner.bounds import empty_flight_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
 from masonry.planner.schedule_assemble import _assemble
+from masonry.planner.schedule_chain import ChainCosts, chain_costs
 from masonry.planner.schedule_deadlines import (
     DeadlinesUnmet,
     TickDeadlines,
     add_deadlines,
     check_open_feasible,
-    cure_ready,
     missed_open,
-    pick,
     serial_horizon,
     tick_deadlines,
 )
@@ -49,13 +48,13 @@ from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
 from masonry.planner.schedule_graph import parts as _parts
 from masonry.planner.schedule_graph import precedences as _precedences
+from masonry.planner.schedule_greedy import greedy as _greedy
 from masonry.planner.schedule_physical import (
     DEFAULT_BATTERY,
     BatteryModel,
     Physics,
     add_battery,
     add_pallet,
-    clear_of,
     make_physics,
     physical_terms,
 )
@@ -98,13 +97,20 @@ class _Problem:
     uav_of: dict[int, int] = field(default_factory=dict)
     ready: list[int] = field(default_factory=list)
     pos: list[tuple[float, float, float]] = field(default_factory=list)
+    last: list[int] = field(default_factory=list)  # per UAV its last task so far (-1: none, or its pad)
     deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
     phys: Physics | None = None  # the physical terms (``--physical``), None: the plain model
+    chain: ChainCosts | None = None  # the chain term (``chaining``), None: every segment at its chained least
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
             empty_flight_s(from_m, task_start_m(self.tasks[i]), timing=self.timing) / self.tick_s
         )
+
+    def leg(self, prev: int, from_m: Sequence[float], i: int) -> int:
+        """From the end of task ``prev`` (-1: a pad, or nothing known) at ``from_m`` to the start of task ``i``:
+        the empty flight and, with the chain term, the climb out and first descent of a segment not chained."""
+        return self.flight(from_m, i) + (self.chain.extra(prev, i) if self.chain is not None else 0)
 
     def prefetch(self, i: int) -> bool:
         return self.reservation == "site" and isinstance(self.tasks[i], BrickTask)
@@ -156,127 +162,11 @@ def _problem(
         tick_s=tick_s,
         ready=[0] * len(fleet),
         pos=[(float(s.home_m[0]), float(s.home_m[1]), float(s.home_m[2])) for s in fleet],
+        last=[-1] * len(fleet),
         deadlines=tick_deadlines(
             plan, tasks, timing=timing, cruise_altitude_m=cruise_altitude_m, tick_s=tick_s
         ),
     )
-
-
-def _earliest(
-    p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
-) -> tuple[int, int]:
-    """Earliest (start, site start) of task ``i`` from ``t0`` (and its site part from ``a0``) clear of the
-    placed conflicting intervals (``placed``: task -> its kept-apart interval)."""
-    off = p.site_offset_max(i) if p.reservation == "site" else 0
-    length = p.site[i] if p.reservation == "site" else p.dur[i]
-    t = clear_of(sorted(placed[j] for j in p.conflicts[i] if j in placed), max(t0, a0 - off), off, length)
-    return t, t + off
-
-
-def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, int]]:
-    """A list schedule of ``part`` after what is placed: task -> (uav, start, end, site start), ticks.
-
-    Highest remaining chain first; each task on the UAV of its role where it ends first.
-    """
-    in_part = set(part)
-    dependents: dict[int, list[int]] = {i: [] for i in part}
-    missing = dict.fromkeys(part, 0)
-    for i in part:
-        for v in p.prereqs[i]:
-            if v in in_part:
-                dependents[v].append(i)
-                missing[i] += 1
-    chain: dict[int, int] = {}
-    for i in sorted(part, key=lambda i: -_depth(p, i, in_part)):
-        chain[i] = p.dur[i] + max((chain[d] for d in dependents[i] if d in chain), default=0)
-    ready = list(p.ready)
-    pos = list(p.pos)
-    kept = {
-        j: (
-            (p.site_start[j], p.site_start[j] + p.site[j])
-            if p.reservation == "site"
-            else (p.start[j], p.end[j])
-        )
-        for j in p.start
-    }
-    start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
-    phys = p.phys
-    picks = {j: phys.pick_window(j, p.start[j]) for j in p.start if j in phys.phases} if phys else {}
-    energy = list(phys.energy) if phys else []
-    if phys is not None:
-        phys.hint_swaps = {k: [] for k in range(len(p.uavs))}
-    out: dict[int, tuple[int, int, int, int]] = {}
-    avail = [i for i in part if missing[i] == 0]
-    while avail:
-        avail.sort(key=lambda i: (-chain[i], i))
-        i = pick(p.deadlines, p.tasks, p.prereqs, avail, start)
-        t0, a0 = cure_ready(p.deadlines, i, end), 0
-        for v in p.prereqs[i]:
-            if p.prefetch(i):
-                t0, a0 = max(t0, start[v]), max(a0, end[v])
-            else:
-                t0 = max(t0, end[v])
-        k, s, a, e, swap = _best_uav(p, i, t0, a0, ready, pos, energy, kept, picks)
-        if phys is not None:
-            if swap:
-                phys.hint_swaps[k].append(ready[k] + phys.home_ticks(pos[k], p.uavs[k].home_m))
-                pos[k], energy[k] = p.uavs[k].home_m, 0
-            energy[k] += p.flight(pos[k], i) + p.dur[i]
-            if i in phys.phases:
-                picks[i] = phys.pick_window(i, s)
-        start[i], end[i], site_start[i] = s, e, a
-        kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
-        ready[k], pos[k] = e, task_end_m(p.tasks[i])
-        out[i] = (k, s, e, a)
-        for d in dependents[i]:
-            missing[d] -= 1
-            if missing[d] == 0:
-                avail.append(d)
-    return out
-
-
-def _best_uav(
-    p: _Problem,
-    i: int,
-    t0: int,
-    a0: int,
-    ready: Sequence[int],
-    pos: Sequence[Sequence[float]],
-    energy: Sequence[int],
-    kept: Mapping[int, tuple[int, int]],
-    picks: Mapping[int, tuple[int, int]],
-) -> tuple[int, int, int, int, bool]:
-    """The greedy's UAV for task ``i``: (UAV, start, site start, end, swaps first), the earliest start."""
-    phys = p.phys
-    best: tuple[int, int, int, int, bool] | None = None
-    for k, spec in enumerate(p.uavs):
-        if spec.role != p.tasks[i].kind:
-            continue
-        swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
-        r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
-        t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
-        if phys is not None and i in phys.phases and phys.pallet:
-            s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
-        else:
-            s, a = _earliest(p, i, t_k, a0, kept)
-            e = s + p.dur[i]
-        if best is None or s < best[1]:
-            best = (k, s, a, e, swap)
-    assert best is not None  # _problem checked every role has a UAV
-    return best
-
-
-def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
-    """How many prerequisites deep ``i`` sits within the part (for a dependents-first order)."""
-    depth, frontier = 0, [i]
-    seen = {i}
-    while frontier:
-        nxt = [v for j in frontier for v in p.prereqs[j] if v in in_part and v not in seen]
-        seen.update(nxt)
-        if nxt:
-            depth += 1
-        frontier = nxt
-    return depth
 
 
 @dataclass
@@ -298,7 +188,7 @@ def _solve_part(
     horizon = max(e for _, _, e, _ in hint.values())
     if p.deadlines:  # the greedy may miss an open time: a serial schedule never does
         ends = [task_end_m(t) for t in p.tasks] + [u.home_m for u in p.uavs]
-        flights = [max(p.flight(e, i) for e in ends) for i in part]
+        flights = [max(p.flight(e, i) for e in ends) + (p.chain.most(i) if p.chain else 0) for i in part]
         horizon += serial_horizon([p.dur[i] for i in part], flights, p.deadlines)
     m = cp_model.CpModel()
     site = p.reservation == "site"
@@ -424,7 +314,7 @@ def _machines(
             optional.append(m.new_optional_interval_var(s_var[i], size[i], e_var[i], x, f"o{i}_{k}"))
             arcs.append((node[i], node[i], x.Not()))
             first = m.new_bool_var(f"f{i}_{k}")
-            m.add(s_var[i] >= p.ready[k] + p.flight(p.pos[k], i)).only_enforce_if(first)
+            m.add(s_var[i] >= p.ready[k] + p.leg(p.last[k], p.pos[k], i)).only_enforce_if(first)
             m.add_hint(first, int((-1, i) in hinted_arcs))
             arcs.append((0, node[i], first))
             task_arcs.append((-1, i, first))
@@ -440,7 +330,7 @@ def _machines(
                 if i == j or j in anc[i]:
                     continue  # j must end before i starts: never right after it on one UAV
                 lit = m.new_bool_var(f"y{i}_{j}_{k}")
-                m.add(s_var[j] >= e_var[i] + p.flight(end_i, j)).only_enforce_if(lit)
+                m.add(s_var[j] >= e_var[i] + p.leg(i, end_i, j)).only_enforce_if(lit)
                 m.add_hint(lit, int((i, j) in hinted_arcs))
                 arcs.append((node[i], node[j], lit))
                 task_arcs.append((i, j, lit))
@@ -484,6 +374,7 @@ def solve_schedule(
     physical: str | Sequence[str] = (),
     battery: BatteryModel = DEFAULT_BATTERY,
     clearance_m: float = DEFAULT_CLEARANCE_M,
+    chaining: bool = True,
 ) -> OfflineSchedule:
     """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
 
@@ -501,6 +392,9 @@ def solve_schedule(
         physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``, as
             names or one comma-separated string, ``all``); none by default.
         battery, clearance_m: the packs and swaps (``battery``) and the blueprint's r_c (``pallet``).
+        chaining: the chain term (:mod:`~masonry.planner.schedule_chain`): a segment not sprayed right after the
+            one ending at its start costs its climb out and first descent (default); False: every segment at its
+            chained least, the model before issue 27's chain term.
 
     Returns:
         The schedule; no digest (the caller, who has the blueprint, adds them).
@@ -529,6 +423,7 @@ def solve_schedule(
     t0 = time.perf_counter()
     terms = physical_terms(physical)
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    p.chain = chain_costs(p.tasks, t_, cruise_altitude_m, tick_s) if chaining else None
     if terms:
         p.phys = make_physics(
             plan,
@@ -542,7 +437,7 @@ def solve_schedule(
             battery=battery,
             clearance_m=clearance_m,
         )
-        p.phys.check(p)
+        p.phys.apply(p)
     check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)
     parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
@@ -563,7 +458,7 @@ def solve_schedule(
             mine = [i for i in part if last.placed[i][0] == k]
             if mine:
                 j = max(mine, key=lambda i: p.end[i])
-                p.ready[k], p.pos[k] = p.end[j], task_end_m(p.tasks[j])
+                p.ready[k], p.pos[k], p.last[k] = p.end[j], task_end_m(p.tasks[j]), j
         reports.append({"tasks": len(part), "status": last.status, "solve_time_s": round(last.solve_s, 3)})
     return _assemble(
         plan,
