@@ -122,3 +122,42 @@ def test_chained_schedules_of_random_running_bonds_keep_every_constraint(
     assert s.status in ("optimal", "feasible")
     # dependencies, conflicts (tasks or site parts), each UAV's flights with the chain term, the bound
     check_feasible(p, fleet, s, bp.cruise_altitude_m)
+    if reservation == "site" and decomposition == "none":
+        check_windows(p, s, bp.cruise_altitude_m)
+
+
+def check_windows(p: Plan, s, cruise_altitude_m: float) -> None:
+    """Under ``site`` a segment's site part, with its first descent before it unless it follows the one ending
+    at its start and its climb out after it unless the next one does (or it is its UAV's last), overlaps no
+    conflicting task's (independently of the solver, from each UAV's order)."""
+    todo = [t for t in p.tasks if not t.done]
+    index = {t.id: i for i, t in enumerate(todo)}
+    c = chain_costs(todo, DEFAULT_TIMING, cruise_altitude_m, s.tick_s)
+    window = {}
+    for u in s.uavs:
+        ids = [index[t.id] for t in u.tasks]
+        for n, t in enumerate(u.tasks):
+            i = ids[n]
+            lo = hi = 0
+            if isinstance(todo[i], AdhesionTask):
+                lo = 0 if n and (ids[n - 1], i) in c.follows else c.descend[i]
+                hi = 0 if n + 1 == len(ids) or (i, ids[n + 1]) in c.follows else c.climb[i]
+            window[t.id] = (t.site_start_s - lo * s.tick_s, t.site_end_s + hi * s.tick_s)
+    for a, b in p.conflicts:
+        if a in window and b in window:
+            x, y = window[a], window[b]
+            assert x[1] <= y[0] + TOL_S or y[1] <= x[0] + TOL_S, (a, b, x, y)
+
+
+def test_a_small_running_bonds_windows_and_the_default_is_the_chain_term():
+    bp0 = running_bond(2, 4, placed_courses=1)
+    fleet = fleet_for(bp0, 2, 1)
+    bp = with_fleet(bp0, fleet)
+    p = make_plan(bp)
+    s = solve_schedule(p, fleet, cruise_altitude_m=bp.cruise_altitude_m, reservation="site", time_limit_s=3.0)
+    check_feasible(p, fleet, s, bp.cruise_altitude_m)
+    check_windows(p, s, bp.cruise_altitude_m)
+    plain = solve_schedule(
+        p, fleet, cruise_altitude_m=bp.cruise_altitude_m, reservation="site", time_limit_s=3.0, chaining=False
+    )
+    check_feasible(p, fleet, plain, bp.cruise_altitude_m, chaining=False)

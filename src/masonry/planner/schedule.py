@@ -59,7 +59,7 @@ from masonry.planner.schedule_physical import (
     physical_terms,
 )
 from masonry.planner.schedule_values import OfflineSchedule
-from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
@@ -101,6 +101,7 @@ class _Problem:
     deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
     phys: Physics | None = None  # the physical terms (``--physical``), None: the plain model
     chain: ChainCosts | None = None  # the chain term (``chaining``), None: every segment at its chained least
+    kept: dict[int, tuple[int, int]] = field(default_factory=dict)  # placed tasks' kept-apart windows (ticks)
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
@@ -111,6 +112,39 @@ class _Problem:
         """From the end of task ``prev`` (-1: a pad, or nothing known) at ``from_m`` to the start of task ``i``:
         the empty flight and, with the chain term, the climb out and first descent of a segment not chained."""
         return self.flight(from_m, i) + (self.chain.extra(prev, i) if self.chain is not None else 0)
+
+    def spread(self, i: int) -> bool:
+        """Task ``i``'s kept window holds its first descent and climb out when not chained (``site``, chain
+        term): the runtime's site interval does (docs/schedule.md, "Chaining")."""
+        return (
+            self.chain is not None and self.reservation == "site" and isinstance(self.tasks[i], AdhesionTask)
+        )
+
+    def around(self, prev: int, i: int, nxt: int) -> tuple[int, int]:
+        """Ticks task ``i``'s kept window reaches before its site part and after it, after task ``prev`` (-1:
+        none) and before ``nxt`` (-1: none, -2: not known yet, its climb out counted)."""
+        c = self.chain
+        if c is None or not self.spread(i):
+            return 0, 0
+        lo = 0 if prev >= 0 and (prev, i) in c.follows else c.descend[i]
+        hi = 0 if nxt == -1 or (nxt >= 0 and (i, nxt) in c.follows) else c.climb[i]
+        return lo, hi
+
+    def windows(self, placed: Mapping[int, tuple[int, int, int, int]]) -> dict[int, tuple[int, int]]:
+        """The kept windows of a part's placed tasks (task -> (UAV, start, end, site start)), each UAV's order
+        after its last task so far."""
+        by: dict[int, list[int]] = {}
+        for i, (k, *_rest) in placed.items():
+            by.setdefault(k, []).append(i)
+        out: dict[int, tuple[int, int]] = {}
+        for k, mine in by.items():
+            mine.sort(key=lambda i: placed[i][1])
+            for n, i in enumerate(mine):
+                _k, s, e, a = placed[i]
+                prev = mine[n - 1] if n else self.last[k]
+                lo, hi = self.around(prev, i, mine[n + 1] if n + 1 < len(mine) else -1)
+                out[i] = (a - lo, a + self.site[i] + hi) if self.reservation == "site" else (s, e)
+        return out
 
     def prefetch(self, i: int) -> bool:
         return self.reservation == "site" and isinstance(self.tasks[i], BrickTask)
@@ -196,7 +230,7 @@ def _solve_part(
     hint_swaps = dict(phys.hint_swaps) if phys else {}
     if phys is not None:
         phys.swap_vars = {}
-    s_var, e_var, a_var, keep, size = _task_vars(p, part, m, horizon, hint)
+    s_var, e_var, a_var, keep, size, ext = _task_vars(p, part, m, horizon, hint)
     _precedences(p, part, m, s_var, e_var, a_var)
     if phys is not None and phys.pallet:
         add_pallet(p, phys, part, m, s_var, e_var, a_var, _clique_cover)
@@ -209,10 +243,11 @@ def _solve_part(
         for c in p.conflicts[i]:
             if c in p.end and c not in s_var:
                 if c not in fixed:
-                    lo = p.site_start[c] if site else p.start[c]
-                    fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
+                    lo, hi = p.kept[c]
+                    fixed[c] = m.new_fixed_size_interval_var(lo, hi - lo, f"fixed{c}")
                 m.add_no_overlap([keep[i], fixed[c]])
-    lits = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
+    lits, into, away = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
+    _link_windows(p, part, m, ext, into, away)
     makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
     for i in part:
         m.add(makespan >= e_var[i])
@@ -244,10 +279,18 @@ def _solve_part(
 def _task_vars(
     p: _Problem, part: Sequence[int], m: CpModel, horizon: int, hint: Mapping[int, tuple[int, int, int, int]]
 ) -> tuple[
-    dict[int, IntVar], dict[int, IntVar], dict[int, IntVar], dict[int, IntervalVar], dict[int, IntVar | int]
+    dict[int, IntVar],
+    dict[int, IntVar],
+    dict[int, IntVar],
+    dict[int, IntervalVar],
+    dict[int, IntVar | int],
+    dict[int, tuple[IntVar, IntVar]],
 ]:
     """Per task its start, end, site start (``site``), kept-apart interval and length (its minimum duration,
-    or a variable for a task the physical terms let last longer)."""
+    or a variable for a task the physical terms let last longer); per segment whose kept window holds its first
+    descent and climb out (:meth:`_Problem.spread`) their ticks (0 when chained)."""
+    ext: dict[int, tuple[IntVar, IntVar]] = {}
+    hinted = p.windows(hint)
     s_var: dict[int, IntVar] = {}
     e_var: dict[int, IntVar] = {}
     a_var: dict[int, IntVar] = {}
@@ -265,6 +308,19 @@ def _task_vars(
             m.add(a_var[i] >= s_var[i])
             m.add(a_var[i] + p.site[i] <= e_var[i])
             keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
+            if p.spread(i) and p.chain is not None:
+                din = m.new_int_var(0, p.chain.descend[i], f"din{i}")
+                cout = m.new_int_var(0, p.chain.climb[i], f"cout{i}")
+                ext[i] = (din, cout)
+                lo_v = m.new_int_var(-p.chain.descend[i], horizon, f"vlo{i}")
+                hi_v = m.new_int_var(0, horizon + p.chain.climb[i], f"vhi{i}")
+                m.add(lo_v == a_var[i] - din)
+                m.add(hi_v == a_var[i] + p.site[i] + cout)
+                span = m.new_int_var(p.site[i], p.site[i] + p.chain.descend[i] + p.chain.climb[i], f"vs{i}")
+                m.add(span == din + p.site[i] + cout)
+                keep[i] = m.new_interval_var(lo_v, span, hi_v, f"visit{i}")
+                m.add_hint(din, hint[i][3] - hinted[i][0])
+                m.add_hint(cout, hinted[i][1] - hint[i][3] - p.site[i])
         else:
             keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
         m.add_hint(s_var[i], hint[i][1])
@@ -272,7 +328,25 @@ def _task_vars(
             m.add_hint(e_var[i], hint[i][2])
         if site:
             m.add_hint(a_var[i], hint[i][3])
-    return s_var, e_var, a_var, keep, size
+    return s_var, e_var, a_var, keep, size, ext
+
+
+def _link_windows(
+    p: _Problem,
+    part: Sequence[int],
+    m: CpModel,
+    ext: Mapping[int, tuple[IntVar, IntVar]],
+    into: Mapping[int, Sequence[BoolVarT]],
+    away: Mapping[int, Sequence[BoolVarT]],
+) -> None:
+    """A segment's first descent is in its kept window unless it follows the one ending at its start (a circuit
+    arc of :func:`_machines`, or its UAV's last task so far), its climb out unless the next one does or it is
+    its UAV's last."""
+    if not ext or p.chain is None:
+        return
+    for i, (din, cout) in ext.items():
+        m.add(din == p.chain.descend[i] * (1 - sum(into.get(i, ()))))
+        m.add(cout == p.chain.climb[i] * sum(away.get(i, ())))
 
 
 def _machines(
@@ -285,10 +359,14 @@ def _machines(
     size: Mapping[int, IntVar | int],
     hint_swaps: Mapping[int, Sequence[int]],
     horizon: int,
-) -> dict[int, dict[int, IntVar]]:
+) -> tuple[dict[int, dict[int, IntVar]], dict[int, list[BoolVarT]], dict[int, list[BoolVarT]]]:
     """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights (and its
-    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`)."""
+    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`). Returns per task its
+    UAVs' literals, and (chain term) the arcs into it that chain it and out of it to a task they do not chain."""
     lits: dict[int, dict[int, IntVar]] = {i: {} for i in part}
+    follows = p.chain.follows if p.chain is not None else frozenset()
+    into: dict[int, list[BoolVarT]] = {}
+    away: dict[int, list[BoolVarT]] = {}
     battery = p.phys is not None and p.phys.battery
     anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
@@ -317,6 +395,8 @@ def _machines(
             m.add(s_var[i] >= p.ready[k] + p.leg(p.last[k], p.pos[k], i)).only_enforce_if(first)
             m.add_hint(first, int((-1, i) in hinted_arcs))
             arcs.append((0, node[i], first))
+            if (p.last[k], i) in follows:
+                into.setdefault(i, []).append(first)
             task_arcs.append((-1, i, first))
             last = m.new_bool_var(f"l{i}_{k}")
             m.add_hint(last, int((i, -1) in hinted_arcs))
@@ -334,6 +414,10 @@ def _machines(
                 m.add_hint(lit, int((i, j) in hinted_arcs))
                 arcs.append((node[i], node[j], lit))
                 task_arcs.append((i, j, lit))
+                if (i, j) in follows:
+                    into.setdefault(j, []).append(lit)
+                else:
+                    away.setdefault(i, []).append(lit)
         if battery and p.phys is not None:
             arcs += add_battery(
                 p,
@@ -354,7 +438,7 @@ def _machines(
         m.add_no_overlap(optional)
     for i in part:
         m.add_exactly_one(lits[i].values())
-    return lits
+    return lits, into, away
 
 
 def solve_schedule(
@@ -452,6 +536,7 @@ def solve_schedule(
             raise DeadlinesUnmet.within(budget, len(part))
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
+        p.kept.update(p.windows(last.placed))  # before each UAV's last task moves on
         if p.phys is not None:
             p.phys.carry_over(p, part, last.placed, last.swaps)
         for k in range(len(p.uavs)):

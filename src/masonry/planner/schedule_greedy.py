@@ -16,13 +16,18 @@ if TYPE_CHECKING:
 
 
 def _earliest(
-    p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
+    p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]], lo: int = 0, hi: int = 0
 ) -> tuple[int, int]:
     """Earliest (start, site start) of task ``i`` from ``t0`` (and its site part from ``a0``) clear of the
     placed conflicting intervals (``placed``: task -> its kept-apart interval)."""
     off = p.site_offset_max(i) if p.reservation == "site" else 0
     length = p.site[i] if p.reservation == "site" else p.dur[i]
-    t = clear_of(sorted(placed[j] for j in p.conflicts[i] if j in placed), max(t0, a0 - off), off, length)
+    t = clear_of(
+        sorted(placed[j] for j in p.conflicts[i] if j in placed),
+        max(t0, a0 - off),
+        off - lo,
+        length + lo + hi,
+    )
     return t, t + off
 
 
@@ -45,14 +50,7 @@ def greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, i
     ready = list(p.ready)
     pos = list(p.pos)
     prev = list(p.last)
-    kept = {
-        j: (
-            (p.site_start[j], p.site_start[j] + p.site[j])
-            if p.reservation == "site"
-            else (p.start[j], p.end[j])
-        )
-        for j in p.start
-    }
+    kept = dict(p.kept)
     start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
     phys = p.phys
     picks = {j: phys.pick_window(j, p.start[j]) for j in p.start if j in phys.phases} if phys else {}
@@ -79,7 +77,8 @@ def greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, i
             if i in phys.phases:
                 picks[i] = phys.pick_window(i, s)
         start[i], end[i], site_start[i] = s, e, a
-        kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
+        lo, hi = p.around(prev[k], i, -2)  # its climb out counted: the next task is not known yet
+        kept[i] = (a - lo, a + p.site[i] + hi) if p.reservation == "site" else (s, e)
         ready[k], pos[k], prev[k] = e, task_end_m(p.tasks[i]), i
         out[i] = (k, s, e, a)
         for d in dependents[i]:
@@ -113,7 +112,7 @@ def _best_uav(
         if phys is not None and i in phys.phases and phys.pallet:
             s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
         else:
-            s, a = _earliest(p, i, t_k, a0, kept)
+            s, a = _earliest(p, i, t_k, a0, kept, *p.around(-1 if swap else prev[k], i, -2))
             e = s + p.dur[i]
         if best is None or s < best[1]:
             best = (k, s, a, e, swap)
