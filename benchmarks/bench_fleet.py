@@ -11,7 +11,7 @@ The yardstick (issue 27): for the same wall and fleet, the makespan of ``masonry
 minimum task durations, the same reservation rule, ``--schedule-time-s`` seconds, 90 by default, 2 workers,
 seed 0; ``--schedule-time-s 0`` leaves it out). Printed beside the simulated makespan: the ratio simulated /
 schedule and the speed-up over 1+1 of both. Beside it the physical schedule (``masonry schedule --physical``,
-``--physical`` terms, ``all`` by default: the pallet and the battery swaps, docs/schedule.md; ``none`` leaves
+``--physical`` terms, ``all`` by default: the pallet, the battery swaps and the site visit at its floor, docs/schedule.md; ``none`` leaves
 it out), its battery swaps, its speed-up over 1+1 and simulated / physical.
 
 Printed per wall, as Markdown tables (docs/performance/fleet.md, "After: `site` as the default" and "Fleet against
@@ -34,7 +34,7 @@ Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-
        [--reservation site|task] [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
-       [--schedule-time-s 90] [--physical all|pallet|battery|none] [--schedule-cache DIR]
+       [--schedule-time-s 90] [--physical all|pallet|battery|visit|none] [--schedule-cache DIR]
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 

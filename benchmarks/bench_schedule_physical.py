@@ -7,7 +7,7 @@ schedule [--physical TERMS]`` computes it (the fleet of ``fleet_for``, the ``sit
 swaps), its ratio to the plain schedule and its speed-up over the first fleet's with the same terms.
 
 Usage: python benchmarks/bench_schedule_physical.py [--walls pyramid,12m] [--fleets 1+1,4+2,8+4] [--time-s 30]
-       [--models plain,pallet,battery,all]
+       [--models plain,pallet,battery,visit,all]
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def main() -> None:
     ap.add_argument("--walls", default="pyramid,12m", help=f"comma-separated, of {', '.join(WALLS)}")
     ap.add_argument("--fleets", default="1+1,4+2,8+4", help="comma-separated brick+adhesion pairs")
     ap.add_argument("--time-s", type=float, default=30.0, help="CP-SAT's time per schedule, s")
-    ap.add_argument("--models", default="plain,pallet,battery,all", help="plain, or --physical terms")
+    ap.add_argument("--models", default="plain,pallet,battery,visit,all", help="plain, or --physical terms")
     args = ap.parse_args()
     if not (args.time_s > 0 and args.time_s < float("inf")):
         ap.error(f"--time-s must be > 0, got {args.time_s!r}")

@@ -63,21 +63,25 @@ def cached_schedule(
     reservation: str,
     time_limit_s: float,
     cache_dir: Path | None = None,
+    chaining: bool = True,
 ) -> tuple[OfflineSchedule, float, bool]:
     """The schedule of ``blueprint`` flown by ``bricks`` + ``adhesion`` UAVs, the seconds it took to get (the
-    solve, or reading the file) and whether it came from the cache."""
+    solve, or reading the file) and whether it came from the cache (``chaining``: the model's chain term, as
+    ``solve_schedule``'s)."""
     fleet = fleet_for(blueprint, bricks, adhesion)
     bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
     where = cache_dir if cache_dir is not None else default_cache_dir()
     name = (
         f"{wall_digest(bp)}-{fleet_digest(bp)}-{reservation}-{time_limit_s:g}s-seed{SEED}-w{WORKERS}"
-        f"-{model_digest()}.json"
+        f"{'' if chaining else '-nochain'}-{model_digest()}.json"
     )
     path = where / name
     wall0 = time.perf_counter()
     if path.exists():
         return read_schedule(path), time.perf_counter() - wall0, True
-    result = stamp_schedule(solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s), bp)
+    result = stamp_schedule(
+        solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s, chaining=chaining), bp
+    )
     took_s = time.perf_counter() - wall0
     where.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".tmp")
@@ -93,6 +97,7 @@ def solve_as_the_cli(
     reservation: str,
     time_limit_s: float,
     physical: str = "",
+    chaining: bool = True,
 ) -> OfflineSchedule:
     """``masonry schedule [--physical TERMS]`` of the wall and fleet, solved as the command solves it: the fleet of
     ``fleet_for``, the plan of the blueprint, its cruise altitude and r_c, :data:`WORKERS` workers, seed
@@ -110,4 +115,5 @@ def solve_as_the_cli(
         decomposition="auto",
         physical=physical,
         clearance_m=bp.clearance_m,
+        chaining=chaining,
     )

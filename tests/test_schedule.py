@@ -21,7 +21,9 @@ from masonry.planner.bound_terms import bound_terms, conflict_clique_s
 from masonry.planner.bounds import empty_flight_s, min_cycles_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
 from masonry.planner.schedule import ScheduleUnavailable, solve_schedule
+from masonry.planner.schedule_chain import chain_costs
 from masonry.planner.schedule_values import schedule_from_dict
+from masonry.timing import DEFAULT_TIMING
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE_STUDY = ROOT / "blueprints" / "paper_case_study.yaml"
@@ -35,9 +37,14 @@ def _solve(bp, **kw):
     return p, solve_schedule(p, bp.fleet, cruise_altitude_m=bp.cruise_altitude_m, **kw)
 
 
-def check_feasible(p, fleet, s, cruise_altitude_m):
-    """Every constraint of the model, checked on the planned times (independently of the solver)."""
+def check_feasible(p, fleet, s, cruise_altitude_m, chaining=True):
+    """Every constraint of the model, checked on the planned times (independently of the solver); with
+    ``chaining`` (the default model's) a segment not sprayed right after the one ending at its start is also
+    its climb out and first descent later."""
     md = min_durations_s(p, cruise_altitude_m=cruise_altitude_m)
+    todo = [t for t in p.tasks if not t.done]
+    index = {t.id: i for i, t in enumerate(todo)}
+    chain = chain_costs(todo, DEFAULT_TIMING, cruise_altitude_m, s.tick_s) if chaining else None
     site = min_site_s(p, cruise_altitude_m=cruise_altitude_m)
     tick = s.tick_s
     planned = {}
@@ -45,7 +52,7 @@ def check_feasible(p, fleet, s, cruise_altitude_m):
     homes = {u.name: u.home_m for u in fleet}
     for u in s.uavs:
         assert roles[u.name] == u.role
-        where, free = homes[u.name], 0.0
+        where, free, prev = homes[u.name], 0.0, -1
         for t in u.tasks:
             task = p.task(t.id)
             assert task.kind == u.role
@@ -54,8 +61,10 @@ def check_feasible(p, fleet, s, cruise_altitude_m):
             # duration: the minimum one, rounded down to the tick
             assert t.end_s - t.start_s == pytest.approx(math.floor(md[t.id] / tick) * tick, abs=1e-6)
             flight = math.floor(empty_flight_s(where, task_start_m(task)) / tick) * tick
+            if chain is not None:
+                flight += chain.extra(prev, index[t.id]) * tick
             assert t.start_s >= free + flight - TOL_S, f"{u.name}: {t.id} starts before the flight to it ends"
-            where, free = task_end_m(task), t.end_s
+            where, free, prev = task_end_m(task), t.end_s, index[t.id]
     assert set(planned) == {t.id for t in p.tasks if not t.done}
     for a, b in p.conflicts:
         if a in planned and b in planned:

@@ -28,8 +28,10 @@ from masonry.planner.schedule_physical import (
     brick_phases,
     physical_terms,
     pickup_conflicts,
+    with_visit,
 )
 from masonry.planner.schedule_values import schedule_from_dict
+from masonry.planner.schedule_visit import visit_site
 from masonry.planner.tasks import BrickTask
 from masonry.sim.vehicle_config import VEHICLE_PRESETS
 from masonry.timing import DEFAULT_TIMING
@@ -73,7 +75,7 @@ def test_defaults_are_the_simulators_and_the_machines():
 
 def test_terms_parsed():
     assert physical_terms("") == () and physical_terms("none") == () and physical_terms(()) == ()
-    assert physical_terms("all") == ("pallet", "battery")
+    assert physical_terms("all") == ("pallet", "battery", "visit")
     assert physical_terms("battery, pallet") == ("pallet", "battery")
     assert physical_terms(["battery"]) == ("battery",)
     with pytest.raises(PlanningError, match="unknown term 'wind'"):
@@ -163,8 +165,8 @@ def test_the_default_model_is_unchanged_and_the_file_keeps_the_terms():
     bp2, battery = _row(3, pack_s=56.0)
     _p, swapped = _solve(bp2, physical="all", battery=battery)
     back = schedule_from_dict(swapped.to_dict())
-    assert back.physical == ("pallet", "battery") and back.battery_swaps == 2
-    assert "physical pallet+battery (2 swaps)" in swapped.summary()
+    assert back.physical == ("pallet", "battery", "visit") and back.battery_swaps == 2
+    assert "physical pallet+battery+visit (2 swaps)" in swapped.summary()
 
 
 def check_physical(p, fleet, s, cruise_altitude_m, battery: BatteryModel, clearance_m: float) -> None:
@@ -175,6 +177,13 @@ def check_physical(p, fleet, s, cruise_altitude_m, battery: BatteryModel, cleara
     md = min_durations_s(p, cruise_altitude_m=cruise_altitude_m)
     dur = [math.floor(md[t.id] / tick) for t in tasks]
     phases = brick_phases(p, tasks, dur, DEFAULT_TIMING, cruise_altitude_m, tick)
+    if (
+        "visit" in s.physical
+    ):  # a brick's site part is its visit: flight in from r_c, align, placing, climb out
+        site = [phases[i].site if i in phases else 0 for i in range(len(tasks))]
+        post = [phases[i].post if i in phases else 0 for i in range(len(tasks))]
+        visit = visit_site(tasks, dur, site, post, DEFAULT_TIMING, clearance_m, tick)
+        phases = {i: with_visit(ph, visit[i]) for i, ph in phases.items()}
     index = {t.id: i for i, t in enumerate(tasks)}
     planned = {t.id: t for u in s.uavs for t in u.tasks}
     pick = {}
@@ -237,6 +246,6 @@ def test_cli_physical_option():
     )
     assert res.exit_code == 0, res.output
     doc = json.loads(res.stdout)
-    assert doc["physical"] == ["pallet", "battery"] and all(u["swaps_s"] == [] for u in doc["uavs"])
+    assert doc["physical"] == ["pallet", "battery", "visit"] and all(u["swaps_s"] == [] for u in doc["uavs"])
     res = runner.invoke(app, ["schedule", str(case_study), "--workers", "1", "--format", "json"])
     assert res.exit_code == 0 and "physical" not in json.loads(res.stdout)

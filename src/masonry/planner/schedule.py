@@ -34,14 +34,13 @@ from masonry.errors import PlanningError
 from masonry.planner.bounds import empty_flight_s, min_durations_s, min_site_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
 from masonry.planner.schedule_assemble import _assemble
+from masonry.planner.schedule_chain import ChainCosts, chain_costs
 from masonry.planner.schedule_deadlines import (
     DeadlinesUnmet,
     TickDeadlines,
     add_deadlines,
     check_open_feasible,
-    cure_ready,
     missed_open,
-    pick,
     serial_horizon,
     tick_deadlines,
 )
@@ -49,18 +48,18 @@ from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
 from masonry.planner.schedule_graph import parts as _parts
 from masonry.planner.schedule_graph import precedences as _precedences
+from masonry.planner.schedule_greedy import greedy as _greedy
 from masonry.planner.schedule_physical import (
     DEFAULT_BATTERY,
     BatteryModel,
     Physics,
     add_battery,
     add_pallet,
-    clear_of,
     make_physics,
     physical_terms,
 )
 from masonry.planner.schedule_values import OfflineSchedule
-from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.planner.tasks import AdhesionTask, BrickTask, Plan, Task
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
@@ -98,13 +97,54 @@ class _Problem:
     uav_of: dict[int, int] = field(default_factory=dict)
     ready: list[int] = field(default_factory=list)
     pos: list[tuple[float, float, float]] = field(default_factory=list)
+    last: list[int] = field(default_factory=list)  # per UAV its last task so far (-1: none, or its pad)
     deadlines: TickDeadlines = field(default_factory=TickDeadlines)  # the adhesive's (issue 31)
     phys: Physics | None = None  # the physical terms (``--physical``), None: the plain model
+    chain: ChainCosts | None = None  # the chain term (``chaining``), None: every segment at its chained least
+    kept: dict[int, tuple[int, int]] = field(default_factory=dict)  # placed tasks' kept-apart windows (ticks)
 
     def flight(self, from_m: Sequence[float], i: int) -> int:
         return math.floor(
             empty_flight_s(from_m, task_start_m(self.tasks[i]), timing=self.timing) / self.tick_s
         )
+
+    def leg(self, prev: int, from_m: Sequence[float], i: int) -> int:
+        """From the end of task ``prev`` (-1: a pad, or nothing known) at ``from_m`` to the start of task ``i``:
+        the empty flight and, with the chain term, the climb out and first descent of a segment not chained."""
+        return self.flight(from_m, i) + (self.chain.extra(prev, i) if self.chain is not None else 0)
+
+    def spread(self, i: int) -> bool:
+        """Task ``i``'s kept window holds its first descent and climb out when not chained (``site``, chain
+        term): the runtime's site interval does (docs/schedule.md, "Chaining")."""
+        return (
+            self.chain is not None and self.reservation == "site" and isinstance(self.tasks[i], AdhesionTask)
+        )
+
+    def around(self, prev: int, i: int, nxt: int) -> tuple[int, int]:
+        """Ticks task ``i``'s kept window reaches before its site part and after it, after task ``prev`` (-1:
+        none) and before ``nxt`` (-1: none, -2: not known yet, its climb out counted)."""
+        c = self.chain
+        if c is None or not self.spread(i):
+            return 0, 0
+        lo = 0 if prev >= 0 and (prev, i) in c.follows else c.descend[i]
+        hi = 0 if nxt == -1 or (nxt >= 0 and (i, nxt) in c.follows) else c.climb[i]
+        return lo, hi
+
+    def windows(self, placed: Mapping[int, tuple[int, int, int, int]]) -> dict[int, tuple[int, int]]:
+        """The kept windows of a part's placed tasks (task -> (UAV, start, end, site start)), each UAV's order
+        after its last task so far."""
+        by: dict[int, list[int]] = {}
+        for i, (k, *_rest) in placed.items():
+            by.setdefault(k, []).append(i)
+        out: dict[int, tuple[int, int]] = {}
+        for k, mine in by.items():
+            mine.sort(key=lambda i: placed[i][1])
+            for n, i in enumerate(mine):
+                _k, s, e, a = placed[i]
+                prev = mine[n - 1] if n else self.last[k]
+                lo, hi = self.around(prev, i, mine[n + 1] if n + 1 < len(mine) else -1)
+                out[i] = (a - lo, a + self.site[i] + hi) if self.reservation == "site" else (s, e)
+        return out
 
     def prefetch(self, i: int) -> bool:
         return self.reservation == "site" and isinstance(self.tasks[i], BrickTask)
@@ -156,127 +196,11 @@ def _problem(
         tick_s=tick_s,
         ready=[0] * len(fleet),
         pos=[(float(s.home_m[0]), float(s.home_m[1]), float(s.home_m[2])) for s in fleet],
+        last=[-1] * len(fleet),
         deadlines=tick_deadlines(
             plan, tasks, timing=timing, cruise_altitude_m=cruise_altitude_m, tick_s=tick_s
         ),
     )
-
-
-def _earliest(
-    p: _Problem, i: int, t0: int, a0: int, placed: Mapping[int, tuple[int, int]]
-) -> tuple[int, int]:
-    """Earliest (start, site start) of task ``i`` from ``t0`` (and its site part from ``a0``) clear of the
-    placed conflicting intervals (``placed``: task -> its kept-apart interval)."""
-    off = p.site_offset_max(i) if p.reservation == "site" else 0
-    length = p.site[i] if p.reservation == "site" else p.dur[i]
-    t = clear_of(sorted(placed[j] for j in p.conflicts[i] if j in placed), max(t0, a0 - off), off, length)
-    return t, t + off
-
-
-def _greedy(p: _Problem, part: Sequence[int]) -> dict[int, tuple[int, int, int, int]]:
-    """A list schedule of ``part`` after what is placed: task -> (uav, start, end, site start), ticks.
-
-    Highest remaining chain first; each task on the UAV of its role where it ends first.
-    """
-    in_part = set(part)
-    dependents: dict[int, list[int]] = {i: [] for i in part}
-    missing = dict.fromkeys(part, 0)
-    for i in part:
-        for v in p.prereqs[i]:
-            if v in in_part:
-                dependents[v].append(i)
-                missing[i] += 1
-    chain: dict[int, int] = {}
-    for i in sorted(part, key=lambda i: -_depth(p, i, in_part)):
-        chain[i] = p.dur[i] + max((chain[d] for d in dependents[i] if d in chain), default=0)
-    ready = list(p.ready)
-    pos = list(p.pos)
-    kept = {
-        j: (
-            (p.site_start[j], p.site_start[j] + p.site[j])
-            if p.reservation == "site"
-            else (p.start[j], p.end[j])
-        )
-        for j in p.start
-    }
-    start, end, site_start = dict(p.start), dict(p.end), dict(p.site_start)
-    phys = p.phys
-    picks = {j: phys.pick_window(j, p.start[j]) for j in p.start if j in phys.phases} if phys else {}
-    energy = list(phys.energy) if phys else []
-    if phys is not None:
-        phys.hint_swaps = {k: [] for k in range(len(p.uavs))}
-    out: dict[int, tuple[int, int, int, int]] = {}
-    avail = [i for i in part if missing[i] == 0]
-    while avail:
-        avail.sort(key=lambda i: (-chain[i], i))
-        i = pick(p.deadlines, p.tasks, p.prereqs, avail, start)
-        t0, a0 = cure_ready(p.deadlines, i, end), 0
-        for v in p.prereqs[i]:
-            if p.prefetch(i):
-                t0, a0 = max(t0, start[v]), max(a0, end[v])
-            else:
-                t0 = max(t0, end[v])
-        k, s, a, e, swap = _best_uav(p, i, t0, a0, ready, pos, energy, kept, picks)
-        if phys is not None:
-            if swap:
-                phys.hint_swaps[k].append(ready[k] + phys.home_ticks(pos[k], p.uavs[k].home_m))
-                pos[k], energy[k] = p.uavs[k].home_m, 0
-            energy[k] += p.flight(pos[k], i) + p.dur[i]
-            if i in phys.phases:
-                picks[i] = phys.pick_window(i, s)
-        start[i], end[i], site_start[i] = s, e, a
-        kept[i] = (a, a + p.site[i]) if p.reservation == "site" else (s, e)
-        ready[k], pos[k] = e, task_end_m(p.tasks[i])
-        out[i] = (k, s, e, a)
-        for d in dependents[i]:
-            missing[d] -= 1
-            if missing[d] == 0:
-                avail.append(d)
-    return out
-
-
-def _best_uav(
-    p: _Problem,
-    i: int,
-    t0: int,
-    a0: int,
-    ready: Sequence[int],
-    pos: Sequence[Sequence[float]],
-    energy: Sequence[int],
-    kept: Mapping[int, tuple[int, int]],
-    picks: Mapping[int, tuple[int, int]],
-) -> tuple[int, int, int, int, bool]:
-    """The greedy's UAV for task ``i``: (UAV, start, site start, end, swaps first), the earliest start."""
-    phys = p.phys
-    best: tuple[int, int, int, int, bool] | None = None
-    for k, spec in enumerate(p.uavs):
-        if spec.role != p.tasks[i].kind:
-            continue
-        swap = phys is not None and phys.swap_before(p, k, i, pos[k], energy[k])
-        r_k = ready[k] + phys.home_ticks(pos[k], spec.home_m) + phys.on_pad[k] if swap and phys else ready[k]
-        t_k = max(t0, r_k + p.flight(spec.home_m if swap else pos[k], i))
-        if phys is not None and i in phys.phases and phys.pallet:
-            s, a, e = phys.earliest(p, i, t_k, a0, kept, picks)
-        else:
-            s, a = _earliest(p, i, t_k, a0, kept)
-            e = s + p.dur[i]
-        if best is None or s < best[1]:
-            best = (k, s, a, e, swap)
-    assert best is not None  # _problem checked every role has a UAV
-    return best
-
-
-def _depth(p: _Problem, i: int, in_part: set[int]) -> int:
-    """How many prerequisites deep ``i`` sits within the part (for a dependents-first order)."""
-    depth, frontier = 0, [i]
-    seen = {i}
-    while frontier:
-        nxt = [v for j in frontier for v in p.prereqs[j] if v in in_part and v not in seen]
-        seen.update(nxt)
-        if nxt:
-            depth += 1
-        frontier = nxt
-    return depth
 
 
 @dataclass
@@ -298,7 +222,7 @@ def _solve_part(
     horizon = max(e for _, _, e, _ in hint.values())
     if p.deadlines:  # the greedy may miss an open time: a serial schedule never does
         ends = [task_end_m(t) for t in p.tasks] + [u.home_m for u in p.uavs]
-        flights = [max(p.flight(e, i) for e in ends) for i in part]
+        flights = [max(p.flight(e, i) for e in ends) + (p.chain.most(i) if p.chain else 0) for i in part]
         horizon += serial_horizon([p.dur[i] for i in part], flights, p.deadlines)
     m = cp_model.CpModel()
     site = p.reservation == "site"
@@ -306,7 +230,7 @@ def _solve_part(
     hint_swaps = dict(phys.hint_swaps) if phys else {}
     if phys is not None:
         phys.swap_vars = {}
-    s_var, e_var, a_var, keep, size = _task_vars(p, part, m, horizon, hint)
+    s_var, e_var, a_var, keep, size, ext = _task_vars(p, part, m, horizon, hint)
     _precedences(p, part, m, s_var, e_var, a_var)
     if phys is not None and phys.pallet:
         add_pallet(p, phys, part, m, s_var, e_var, a_var, _clique_cover)
@@ -319,10 +243,11 @@ def _solve_part(
         for c in p.conflicts[i]:
             if c in p.end and c not in s_var:
                 if c not in fixed:
-                    lo = p.site_start[c] if site else p.start[c]
-                    fixed[c] = m.new_fixed_size_interval_var(lo, p.site[c] if site else p.dur[c], f"fixed{c}")
+                    lo, hi = p.kept[c]
+                    fixed[c] = m.new_fixed_size_interval_var(lo, hi - lo, f"fixed{c}")
                 m.add_no_overlap([keep[i], fixed[c]])
-    lits = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
+    lits, into, away = _machines(p, part, m, s_var, e_var, hint, size, hint_swaps, horizon)
+    _link_windows(p, part, m, ext, into, away)
     makespan = m.new_int_var(max(p.end.values(), default=0), horizon, "makespan")
     for i in part:
         m.add(makespan >= e_var[i])
@@ -354,10 +279,18 @@ def _solve_part(
 def _task_vars(
     p: _Problem, part: Sequence[int], m: CpModel, horizon: int, hint: Mapping[int, tuple[int, int, int, int]]
 ) -> tuple[
-    dict[int, IntVar], dict[int, IntVar], dict[int, IntVar], dict[int, IntervalVar], dict[int, IntVar | int]
+    dict[int, IntVar],
+    dict[int, IntVar],
+    dict[int, IntVar],
+    dict[int, IntervalVar],
+    dict[int, IntVar | int],
+    dict[int, tuple[IntVar, IntVar]],
 ]:
     """Per task its start, end, site start (``site``), kept-apart interval and length (its minimum duration,
-    or a variable for a task the physical terms let last longer)."""
+    or a variable for a task the physical terms let last longer); per segment whose kept window holds its first
+    descent and climb out (:meth:`_Problem.spread`) their ticks (0 when chained)."""
+    ext: dict[int, tuple[IntVar, IntVar]] = {}
+    hinted = p.windows(hint)
     s_var: dict[int, IntVar] = {}
     e_var: dict[int, IntVar] = {}
     a_var: dict[int, IntVar] = {}
@@ -375,6 +308,19 @@ def _task_vars(
             m.add(a_var[i] >= s_var[i])
             m.add(a_var[i] + p.site[i] <= e_var[i])
             keep[i] = m.new_fixed_size_interval_var(a_var[i], p.site[i], f"site{i}")
+            if p.spread(i) and p.chain is not None:
+                din = m.new_int_var(0, p.chain.descend[i], f"din{i}")
+                cout = m.new_int_var(0, p.chain.climb[i], f"cout{i}")
+                ext[i] = (din, cout)
+                lo_v = m.new_int_var(-p.chain.descend[i], horizon, f"vlo{i}")
+                hi_v = m.new_int_var(0, horizon + p.chain.climb[i], f"vhi{i}")
+                m.add(lo_v == a_var[i] - din)
+                m.add(hi_v == a_var[i] + p.site[i] + cout)
+                span = m.new_int_var(p.site[i], p.site[i] + p.chain.descend[i] + p.chain.climb[i], f"vs{i}")
+                m.add(span == din + p.site[i] + cout)
+                keep[i] = m.new_interval_var(lo_v, span, hi_v, f"visit{i}")
+                m.add_hint(din, hint[i][3] - hinted[i][0])
+                m.add_hint(cout, hinted[i][1] - hint[i][3] - p.site[i])
         else:
             keep[i] = m.new_fixed_size_interval_var(s_var[i], p.dur[i], f"k{i}")
         m.add_hint(s_var[i], hint[i][1])
@@ -382,7 +328,25 @@ def _task_vars(
             m.add_hint(e_var[i], hint[i][2])
         if site:
             m.add_hint(a_var[i], hint[i][3])
-    return s_var, e_var, a_var, keep, size
+    return s_var, e_var, a_var, keep, size, ext
+
+
+def _link_windows(
+    p: _Problem,
+    part: Sequence[int],
+    m: CpModel,
+    ext: Mapping[int, tuple[IntVar, IntVar]],
+    into: Mapping[int, Sequence[BoolVarT]],
+    away: Mapping[int, Sequence[BoolVarT]],
+) -> None:
+    """A segment's first descent is in its kept window unless it follows the one ending at its start (a circuit
+    arc of :func:`_machines`, or its UAV's last task so far), its climb out unless the next one does or it is
+    its UAV's last."""
+    if not ext or p.chain is None:
+        return
+    for i, (din, cout) in ext.items():
+        m.add(din == p.chain.descend[i] * (1 - sum(into.get(i, ()))))
+        m.add(cout == p.chain.climb[i] * sum(away.get(i, ())))
 
 
 def _machines(
@@ -395,10 +359,14 @@ def _machines(
     size: Mapping[int, IntVar | int],
     hint_swaps: Mapping[int, Sequence[int]],
     horizon: int,
-) -> dict[int, dict[int, IntVar]]:
+) -> tuple[dict[int, dict[int, IntVar]], dict[int, list[BoolVarT]], dict[int, list[BoolVarT]]]:
     """Each task on one UAV of its role; per UAV a circuit through its home with the empty flights (and its
-    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`)."""
+    battery swaps, ``battery``: :func:`~masonry.planner.schedule_physical.add_battery`). Returns per task its
+    UAVs' literals, and (chain term) the arcs into it that chain it and out of it to a task they do not chain."""
     lits: dict[int, dict[int, IntVar]] = {i: {} for i in part}
+    follows = p.chain.follows if p.chain is not None else frozenset()
+    into: dict[int, list[BoolVarT]] = {}
+    away: dict[int, list[BoolVarT]] = {}
     battery = p.phys is not None and p.phys.battery
     anc = _ancestors(p.prereqs, part)
     for k, spec in enumerate(p.uavs):
@@ -424,9 +392,11 @@ def _machines(
             optional.append(m.new_optional_interval_var(s_var[i], size[i], e_var[i], x, f"o{i}_{k}"))
             arcs.append((node[i], node[i], x.Not()))
             first = m.new_bool_var(f"f{i}_{k}")
-            m.add(s_var[i] >= p.ready[k] + p.flight(p.pos[k], i)).only_enforce_if(first)
+            m.add(s_var[i] >= p.ready[k] + p.leg(p.last[k], p.pos[k], i)).only_enforce_if(first)
             m.add_hint(first, int((-1, i) in hinted_arcs))
             arcs.append((0, node[i], first))
+            if (p.last[k], i) in follows:
+                into.setdefault(i, []).append(first)
             task_arcs.append((-1, i, first))
             last = m.new_bool_var(f"l{i}_{k}")
             m.add_hint(last, int((i, -1) in hinted_arcs))
@@ -440,10 +410,14 @@ def _machines(
                 if i == j or j in anc[i]:
                     continue  # j must end before i starts: never right after it on one UAV
                 lit = m.new_bool_var(f"y{i}_{j}_{k}")
-                m.add(s_var[j] >= e_var[i] + p.flight(end_i, j)).only_enforce_if(lit)
+                m.add(s_var[j] >= e_var[i] + p.leg(i, end_i, j)).only_enforce_if(lit)
                 m.add_hint(lit, int((i, j) in hinted_arcs))
                 arcs.append((node[i], node[j], lit))
                 task_arcs.append((i, j, lit))
+                if (i, j) in follows:
+                    into.setdefault(j, []).append(lit)
+                else:
+                    away.setdefault(i, []).append(lit)
         if battery and p.phys is not None:
             arcs += add_battery(
                 p,
@@ -464,7 +438,7 @@ def _machines(
         m.add_no_overlap(optional)
     for i in part:
         m.add_exactly_one(lits[i].values())
-    return lits
+    return lits, into, away
 
 
 def solve_schedule(
@@ -484,6 +458,7 @@ def solve_schedule(
     physical: str | Sequence[str] = (),
     battery: BatteryModel = DEFAULT_BATTERY,
     clearance_m: float = DEFAULT_CLEARANCE_M,
+    chaining: bool = True,
 ) -> OfflineSchedule:
     """The offline schedule of ``plan``'s not-done tasks for ``fleet`` (see the module docstring).
 
@@ -501,6 +476,9 @@ def solve_schedule(
         physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``, as
             names or one comma-separated string, ``all``); none by default.
         battery, clearance_m: the packs and swaps (``battery``) and the blueprint's r_c (``pallet``).
+        chaining: the chain term (:mod:`~masonry.planner.schedule_chain`): a segment not sprayed right after the
+            one ending at its start costs its climb out and first descent (default); False: every segment at its
+            chained least, the model before issue 27's chain term.
 
     Returns:
         The schedule; no digest (the caller, who has the blueprint, adds them).
@@ -529,6 +507,7 @@ def solve_schedule(
     t0 = time.perf_counter()
     terms = physical_terms(physical)
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
+    p.chain = chain_costs(p.tasks, t_, cruise_altitude_m, tick_s) if chaining else None
     if terms:
         p.phys = make_physics(
             plan,
@@ -542,7 +521,7 @@ def solve_schedule(
             battery=battery,
             clearance_m=clearance_m,
         )
-        p.phys.check(p)
+        p.phys.apply(p)
     check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)
     parts = _parts(p, decomposition, max_full_tasks, part_tasks)
     n = max(1, len(p.tasks))
@@ -557,13 +536,14 @@ def solve_schedule(
             raise DeadlinesUnmet.within(budget, len(part))
         for i, (k, s, e, a) in last.placed.items():
             p.start[i], p.end[i], p.site_start[i], p.uav_of[i] = s, e, a, k
+        p.kept.update(p.windows(last.placed))  # before each UAV's last task moves on
         if p.phys is not None:
             p.phys.carry_over(p, part, last.placed, last.swaps)
         for k in range(len(p.uavs)):
             mine = [i for i in part if last.placed[i][0] == k]
             if mine:
                 j = max(mine, key=lambda i: p.end[i])
-                p.ready[k], p.pos[k] = p.end[j], task_end_m(p.tasks[j])
+                p.ready[k], p.pos[k], p.last[k] = p.end[j], task_end_m(p.tasks[j]), j
         reports.append({"tasks": len(part), "status": last.status, "solve_time_s": round(last.solve_s, 3)})
     return _assemble(
         plan,

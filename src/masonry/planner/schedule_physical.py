@@ -15,6 +15,10 @@ empty legs between its tasks. What the simulated fleet cannot escape besides, ea
   the UAV's circuit: the flight home (at cruise speed), the landing, ``swap_s`` on the pad, the take-off and the
   flight back to the next task.
 
+* ``visit`` (under ``site``): each task's site part is the one it holds at run time, at its floor (a brick's
+  flight in from r_c, align, placing and climb out; a segment's whole minimum duration:
+  :mod:`masonry.planner.schedule_visit`); with ``pallet`` a brick's carry gives up the flight in and the align.
+
 The empty legs between consecutive tasks of a UAV are in every model (the circuit of :func:`~masonry.planner.
 schedule._machines`). Every term is counted at its least, so each stays a lower bound of what the machines fly
 (the UAV-to-UAV separation in flight is not a term: docs/schedule.md says why).
@@ -30,6 +34,7 @@ from typing import TYPE_CHECKING
 from masonry.blueprint import DEFAULT_CLEARANCE_M, UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.bounds import flight_slack_m, min_site_s
+from masonry.planner.schedule_visit import visit_site
 from masonry.planner.tasks import BrickTask, Plan, Task
 from masonry.timing import MIN_LEG_S, TaskTiming, min_jerk_leg_s
 
@@ -41,7 +46,7 @@ if TYPE_CHECKING:  # the types only: ortools is imported by masonry.planner.sche
     from masonry.planner.schedule import _Problem
 
 #: The physical terms ``--physical`` may name (``all``: every one).
-PHYSICAL_TERMS: tuple[str, ...] = ("pallet", "battery")
+PHYSICAL_TERMS: tuple[str, ...] = ("pallet", "battery", "visit")
 
 
 @dataclass(frozen=True)
@@ -126,10 +131,16 @@ class Physics:
     swap_vars: dict[int, list[tuple[IntVar, IntVar]]] = field(default_factory=dict)
     #: the last greedy's swaps per UAV (the model's hint, or the part's answer when CP-SAT found nothing)
     hint_swaps: dict[int, list[int]] = field(default_factory=dict)
+    #: per task its site part at run time (``visit``: :mod:`~masonry.planner.schedule_visit`), else None
+    visit_ticks: list[int] | None = None
 
     @property
     def pallet(self) -> bool:
         return "pallet" in self.terms
+
+    @property
+    def visit(self) -> bool:
+        return "visit" in self.terms
 
     @property
     def battery(self) -> bool:
@@ -181,13 +192,28 @@ class Physics:
                 return t, t + off, t + p.dur[i]
             t = t2
 
-    def swap_before(self, p: _Problem, k: int, i: int, pos: Sequence[float], energy: int) -> bool:
+    def swap_before(
+        self, p: _Problem, k: int, i: int, pos: Sequence[float], energy: int, prev: int = -1
+    ) -> bool:
         """The greedy's rule: UAV ``k`` at ``pos`` swaps before task ``i`` when the task, the leg to it and the
         flight home after it would not fit in what is left of its pack."""
         if not self.battery:
             return False
-        need = p.flight(pos, i) + p.dur[i] + self.home_ticks(_end(p.tasks[i]), p.uavs[k].home_m)
+        need = p.leg(prev, pos, i) + p.dur[i] + self.home_ticks(_end(p.tasks[i]), p.uavs[k].home_m)
         return energy + need > self.usable
+
+    def apply(self, p: _Problem) -> None:
+        """``visit`` (under ``site``): each task's site part is its visit, and a brick's pallet phases hold it
+        (its carry gives the flight in and the align, its climb out joins it); then :meth:`check`."""
+        if self.visit_ticks is not None and p.reservation == "site":
+            for i, v in enumerate(self.visit_ticks):
+                ph = self.phases.get(i)
+                if ph is None:
+                    p.site[i] = max(p.site[i], v)
+                    continue
+                self.phases[i] = with_visit(ph, v)
+                p.site[i] = self.phases[i].site
+        self.check(p)
 
     def check(self, p: _Problem) -> None:
         """Every task fits in a fresh pack with the flights from and to its UAVs' pads (else no schedule)."""
@@ -195,7 +221,7 @@ class Physics:
             return
         for i, t in enumerate(p.tasks):
             fits = [
-                p.flight(u.home_m, i) + p.dur[i] + self.home_ticks(_end(t), u.home_m) <= self.usable
+                p.leg(-1, u.home_m, i) + p.dur[i] + self.home_ticks(_end(t), u.home_m) <= self.usable
                 for u in p.uavs
                 if u.role == t.kind
             ]
@@ -217,14 +243,21 @@ class Physics:
             new = list(swaps.get(k, ()))
             self.swaps[k].extend(new)
             events = sorted([(s, -1) for s in new] + [(placed[i][1], i) for i in part if placed[i][0] == k])
-            pos, energy = p.pos[k], self.energy[k]
+            pos, prev, energy = p.pos[k], p.last[k], self.energy[k]
             for _, i in events:
                 if i < 0:
-                    pos, energy = p.uavs[k].home_m, 0
+                    pos, prev, energy = p.uavs[k].home_m, -1, 0
                 else:
-                    energy += p.flight(pos, i) + p.dur[i]
-                    pos = _end(p.tasks[i])
+                    energy += p.leg(prev, pos, i) + p.dur[i]
+                    pos, prev = _end(p.tasks[i]), i
             self.energy[k] = energy
+
+
+def with_visit(ph: BrickPhases, visit: int) -> BrickPhases:
+    """A brick's phases with its site part its visit (``visit``, ticks): the carry gives up the flight in and the
+    align, the climb out joins it; never into the pickup, never less than the least site part and climb out."""
+    v = max(ph.site + ph.post, min(visit, ph.carry + ph.site + ph.post))
+    return BrickPhases(ph.pre, ph.pick, ph.carry + ph.site + ph.post - v, v, 0)
 
 
 def _end(t: Task) -> tuple[float, float, float]:
@@ -317,9 +350,16 @@ def make_physics(
     """The physical terms of a schedule problem (ticks)."""
     if not (math.isfinite(battery.pack_s) and battery.pack_s > 0 and 0 <= battery.low_fraction < 1):
         raise PlanningError(f"battery: a pack of {battery.pack_s!r} s down to {battery.low_fraction!r}")
+    phases = brick_phases(plan, tasks, dur, timing, cruise_altitude_m, tick_s)
+    visit = None
+    if "visit" in terms:
+        site = [phases[i].site if i in phases else 0 for i in range(len(tasks))]
+        post = [phases[i].post if i in phases else 0 for i in range(len(tasks))]
+        visit = visit_site(tasks, dur, site, post, timing, clearance_m, tick_s)
     return Physics(
         terms=terms,
-        phases=brick_phases(plan, tasks, dur, timing, cruise_altitude_m, tick_s),
+        phases=phases,
+        visit_ticks=visit,
         pick_conflicts=pickup_conflicts(tasks, clearance_m) if "pallet" in terms else [set() for _ in tasks],
         usable=math.floor(battery.usable_s / tick_s),
         on_pad=[math.ceil(battery.on_pad_s(cruise_altitude_m, u.home_m[2]) / tick_s - 1e-9) for u in fleet],
@@ -391,21 +431,21 @@ def add_battery(
     seq = sorted(
         [(hint[i][1], i) for i in mine if hint[i][0] == k] + [(w, -1 - n) for n, w in enumerate(hint_swaps)]
     )
-    flown, at, work = phys.energy[k], p.pos[k], phys.energy[k]
+    flown, at, prev, work = phys.energy[k], p.pos[k], p.last[k], phys.energy[k]
     for _, i in seq:
         if i < 0:
-            flown, at = 0, home
+            flown, at, prev = 0, home, -1
         else:
-            flown += p.flight(at, i) + p.dur[i]
-            work += p.flight(at, i) + p.dur[i]
-            at = _end(p.tasks[i])
+            flown += p.leg(prev, at, i) + p.dur[i]
+            work += p.leg(prev, at, i) + p.dur[i]
+            at, prev = _end(p.tasks[i]), i
             m.add_hint(energy[i], flown)
     after = dict(zip([-1 - 10**9] + [i for _, i in seq], [i for _, i in seq] + [None], strict=True))
     for a, b, lit in task_arcs:
         if a < 0:
-            m.add(energy[b] >= phys.energy[k] + p.flight(p.pos[k], b) + p.dur[b]).only_enforce_if(lit)
+            m.add(energy[b] >= phys.energy[k] + p.leg(p.last[k], p.pos[k], b) + p.dur[b]).only_enforce_if(lit)
         else:
-            m.add(energy[b] >= energy[a] + p.flight(_end(p.tasks[a]), b) + p.dur[b]).only_enforce_if(lit)
+            m.add(energy[b] >= energy[a] + p.leg(a, _end(p.tasks[a]), b) + p.dur[b]).only_enforce_if(lit)
     # the greedy's swaps, and one more once its flight for this UAV passes half a pack: a node per swap the role's
     # whole work could need made the 12 m wall's 8 + 4 parts too large for CP-SAT to find a first solution; the
     # cap makes the model a restriction (a schedule found is still one the physics allows: docs/schedule.md)
@@ -437,8 +477,8 @@ def add_battery(
             m.add_hint(to_swap, int(after.get(i) == -1 - w))
             back = m.new_bool_var(f"bsw{i}_{k}_{w}")
             m.add_hint(back, int(after.get(-1 - w) == i))
-            m.add(s_var[i] >= start + pad + p.flight(home, i)).only_enforce_if(back)
-            m.add(energy[i] >= p.flight(home, i) + p.dur[i]).only_enforce_if(back)
+            m.add(s_var[i] >= start + pad + p.leg(-1, home, i)).only_enforce_if(back)
+            m.add(energy[i] >= p.leg(-1, home, i) + p.dur[i]).only_enforce_if(back)
             arcs.append((first + w, node[i], back))
     phys.swap_vars[k] = nodes
     return arcs
@@ -456,4 +496,5 @@ __all__ = [
     "make_physics",
     "physical_terms",
     "pickup_conflicts",
+    "with_visit",
 ]
