@@ -1,11 +1,11 @@
-"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
-a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario, the adhesion task A0 and the
-case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load:
-:data:`OPT_IN_ENV`).
+"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, a
+failsafe of its (its geofence) ends `masonry fly`, and the adhesion task A0 flies on it with default settings; issue
+29's one-brick scenario and the case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in
+(not yet reliable under load: :data:`OPT_IN_ENV`).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
-never fly beside each other on the two xdist workers) and flies its own PX4 instances (3-9, one set per test), each
+never fly beside each other on the two xdist workers) and flies PX4 instances 4-7 (one flight at a time), each
 bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
@@ -74,7 +74,7 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     """PX4's own hover: EKF2's velocity sits up to 0.5 m/s off the truth; the one the ``px4`` preset's gates read
     (consistent with the position, 2 s) is no farther from it, within a 40 s rms's spread (issue 29). On PX4's clock (SIH runs lock-step)."""
     tau_s = uav_settings("px4")["velocity_from_position_s"]
-    flight = on_px4(tmp_path / "px4", 8, lambda url: hover(url, 40.0))
+    flight = on_px4(tmp_path / "px4", 6, lambda url: hover(url, 40.0))
     kept = tmp_path / "hover.json"  # the flight, for a look at a failure
     kept.write_text(json.dumps({"estimate": flight.estimate, "truth": flight.truth}))
     assert len(flight.estimate) > 600 and len(flight.truth) > 600  # 30 Hz streams over 40 s
@@ -121,7 +121,8 @@ def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> di
                             own_session=True))  # fmt: skip
     px4_log_path = _latest_px4_log(folder)
     out, err = _finish(proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", px4_log_path)
-    (px4_log_path.parent / "fly.out").write_text(out)  # the whole of it beside PX4's log, for a look at a failure
+    # the whole of it beside PX4's log, for a look at a failure
+    (px4_log_path.parent / "fly.out").write_text(out)
     (px4_log_path.parent / "fly.err").write_text(err)
     results = [line for line in out.splitlines() if line.startswith("{")]
     assert results, f"no result (exit {proc.returncode}): {err[-3000:]}"
@@ -157,8 +158,9 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
 
 @pytest.mark.slow
 def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
-    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
-    _opted_in("A0")
+    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings. In CI wherever
+    PX4 SITL is (docs/performance/autopilots.md, "The real-PX4 tests under load, traced")."""
+    px4_run_sh()  # (skipped with its reason where PX4 SITL is not configured)
 
     def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
@@ -169,13 +171,13 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
-#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list (branch px4ci,
-#: 2026-12-05; docs/performance/autopilots.md, "The opt-in PX4 tests under load"): flown beside a busy loop with the
-#: machine at load average 11-20 (other sessions), after the fixes there (the adhesion hover on the window's mean,
-#: masonry's processes on a CPU share of their own, the world's contact for a vehicle that follows telemetry, the
-#: px4 swing gate at 0.3 m/s, one more PX4 where its SIH starved) the scenario placed 9 of 11, A0 covered 9 of 11,
-#: the mission completed 4 of 5 valid runs; the failures left (a place alignment's leg timeout, a spray pass 16 %
-#: covered, a take-off stalled at 0.99 m, PX4's SIH starving) are not yet traced: not yet tests CI can hold.
+#: The scenario and the mission fly only where this is set as well (opt-in). Issue 29's list, traced (branch px4real,
+#: 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other sessions at
+#: load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.6 m (height) and 0.5 m (horizontally) off SIH's
+#: own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres within seconds; masonry flies
+#: (and the simulated world follows) that estimate: the scenario failed 2 of 6 flights (the pickup's alignment
+#: 1.23 m off, a grasp not attached three times), the mission needed a task's second attempt in 2 of 2. A single task
+#: has no second attempt: not yet a test CI can hold.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -274,12 +276,12 @@ GEOFENCE_PX4_PARAMS = {"GF_MAX_HOR_DIST": "1.5", "GF_ACTION": "3"}
 @pytest.mark.slow
 def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -> None:
     """A PX4 failsafe (its geofence) switches out of OFFBOARD mid-task: ``masonry fly`` stops, says which UAV and
-    which mode in one line and exits 1 (it never returned before, issue 29). Instance 3 (a developer's are 0, 1)."""
+    which mode in one line and exits 1 (it never returned before, issue 29). Instance 4."""
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=3, params=GEOFENCE_PX4_PARAMS) as url:
+    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=4, params=GEOFENCE_PX4_PARAMS) as url:
         proc = masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
                         "--actuators", "sim", "--camera", "sim", "--config", str(config))  # fmt: skip
         out, err = _finish(proc, TASK_WALL_S, f"masonry fly on PX4 with a 1.5 m geofence ({url})",
@@ -324,5 +326,5 @@ def test_px4s_offboard_without_setpoints_is_accepted_disarmed_and_its_arming_ref
 ) -> None:
     """Issue 29: what the project's SITL answers as (masonry.adapters.sitl_offboard): PX4 v1.16 enters OFFBOARD
     disarmed whatever the stream and refuses the arming in it as TEMPORARILY_REJECTED (never FAILED) until
-    setpoints stream again, which :meth:`arm` asks through. Instance 8."""
-    on_px4(tmp_path / "px4", 8, _offboard_without_setpoints)
+    setpoints stream again, which :meth:`arm` asks through. Instance 5."""
+    on_px4(tmp_path / "px4", 5, _offboard_without_setpoints)
