@@ -1,7 +1,7 @@
-"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, a
-failsafe of its (its geofence) ends `masonry fly`, and the adhesion task A0 flies on it with default settings; issue
-29's one-brick scenario and the case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in
-(not yet reliable under load: :data:`OPT_IN_ENV`).
+"""The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
+a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario, the adhesion task A0 and the
+case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load:
+:data:`OPT_IN_ENV`).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
@@ -158,9 +158,8 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
 
 @pytest.mark.slow
 def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
-    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings. In CI wherever
-    PX4 SITL is (docs/performance/autopilots.md, "The real-PX4 tests under load, traced")."""
-    px4_run_sh()  # (skipped with its reason where PX4 SITL is not configured)
+    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
+    _opted_in("A0")
 
     def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
@@ -171,13 +170,13 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
-#: The scenario and the mission fly only where this is set as well (opt-in). Issue 29's list, traced (branch px4real,
-#: 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other sessions at
-#: load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.6 m (height) and 0.5 m (horizontally) off SIH's
-#: own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres within seconds; masonry flies
-#: (and the simulated world follows) that estimate: the scenario failed 2 of 6 flights (the pickup's alignment
-#: 1.23 m off, a grasp not attached three times), the mission needed a task's second attempt in 2 of 2. A single task
-#: has no second attempt: not yet a test CI can hold.
+#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list, traced (branch
+#: px4real, 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other
+#: sessions at load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.65 m (height) and 0.6 m
+#: (horizontally) off SIH's own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres
+#: within seconds; masonry flies (and the simulated world follows) that estimate. The scenario failed 2 of 6
+#: flights, A0 2 of 9 test runs ("could not reach the spraying height", "could not hover still ... 0.35 m off"), the
+#: mission completed 2 of 2 with a task's second attempt each: not yet tests CI can hold.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -276,25 +275,30 @@ GEOFENCE_PX4_PARAMS = {"GF_MAX_HOR_DIST": "1.5", "GF_ACTION": "3"}
 @pytest.mark.slow
 def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -> None:
     """A PX4 failsafe (its geofence) switches out of OFFBOARD mid-task: ``masonry fly`` stops, says which UAV and
-    which mode in one line and exits 1 (it never returned before, issue 29). Instance 4."""
+    which mode in one line and exits 1 (it never returned before, issue 29). Instance 4; once more on a fresh PX4 if
+    the first's SIH starved (px4_sitl.on_px4: seen at load average 10, baro and compass gone for good, a blind land,
+    and no result within the wall bound)."""
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=4, params=GEOFENCE_PX4_PARAMS) as url:
+
+    def fly(url: str) -> str:
         proc = masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
                         "--actuators", "sim", "--camera", "sim", "--config", str(config))  # fmt: skip
         out, err = _finish(proc, TASK_WALL_S, f"masonry fly on PX4 with a 1.5 m geofence ({url})",
-                           tmp_path / "px4" / "px4.log")  # fmt: skip
-    assert proc.returncode == 1, (out[-2000:], err[-2000:])
-    *trace, line = out.strip().splitlines()
-    assert (
-        line.startswith("B1: failed in ") and ": brick-1: the autopilot took control: mode AUTO." in line
-    ), out
-    assert line.endswith(", not requested (masonry flies in OFFBOARD)"), line
-    # the machine stopped (no LAND of its own over PX4's mode) and halted
-    assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
-    print(f"PX4: {line}")
+                           _latest_px4_log(tmp_path))  # fmt: skip
+        assert proc.returncode == 1, (out[-2000:], err[-2000:])
+        *trace, line = out.strip().splitlines()
+        assert (
+            line.startswith("B1: failed in ") and ": brick-1: the autopilot took control: mode AUTO." in line
+        ), out
+        assert line.endswith(", not requested (masonry flies in OFFBOARD)"), line
+        # the machine stopped (no LAND of its own over PX4's mode) and halted
+        assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
+        return line
+
+    print(f"PX4: {on_px4(tmp_path / 'px4', 4, fly, GEOFENCE_PX4_PARAMS)}")
 
 
 #: More than PX4's COM_OF_LOSS_T (1.0 s in v1.16): setpoints this old no longer count as a stream.
