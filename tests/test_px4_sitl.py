@@ -174,9 +174,9 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
 #: px4real, 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other
 #: sessions at load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.65 m (height) and 0.6 m
 #: (horizontally) off SIH's own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres
-#: within seconds; masonry flies (and the simulated world follows) that estimate. The scenario failed 2 of 6
-#: flights, A0 2 of 10 test runs ("could not reach the spraying height", "could not hover still ... 0.35 m off"), the
-#: mission completed 2 of 2 with a task's second attempt each: not yet tests CI can hold.
+#: within seconds; masonry flies (and the simulated world follows) that estimate. The scenario failed 2 of 7
+#: flights, A0 2 of 11 test runs ("could not reach the spraying height", "could not hover still ... 0.35 m off"), the
+#: mission completed 3 of 3, two with a task's second attempt: not yet tests CI can hold.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
