@@ -2,10 +2,10 @@
 
 ``MASONRY_PX4_SITL`` names ``../shared/px4/run.sh`` (``.ci/run`` sets it when that exists). Without it, the tests
 that need it are skipped with one reason. Each instance runs in its own working folder and process group (run.sh
-execs PX4 in the foreground: the process is PX4's), stopped with SIGTERM, then killed whole; instance numbers 3-9
-(offboard link on UDP 14540 + N), one set per test, keep clear of a developer's instances 0 and 1 and of each other
-on the xdist workers. SIH runs in real time and PX4 starves on a loaded machine (its sensors time out, EKF2's
-estimate runs off): :func:`one_flight_at_a_time` keeps the tests' PX4s from flying beside each other.
+execs PX4 in the foreground: the process is PX4's), stopped with SIGTERM, then killed whole; instance numbers 4-7
+(offboard link on UDP 14540 + N) keep clear of a developer's instances 0 and 1. SIH runs in real time and PX4
+starves on a loaded machine (its sensors time out, EKF2's estimate runs off): :func:`one_flight_at_a_time` keeps
+the tests' PX4s from flying beside each other, whichever xdist worker runs them (so they may share instances).
 """
 
 from __future__ import annotations

@@ -202,6 +202,50 @@ def test_a_stalled_climb_and_a_slow_one_say_why() -> None:
     assert slow.step(99.0, 0.0, 0.0) == 0.0  # over: nothing more is commanded
 
 
+def _climb_on_a_biased_velocity(monitor: ClimbMonitor, bias_mps: float, dt: float = 0.05) -> list[float]:
+    """Fly ``monitor`` on PX4's velocity loop closing on an EKF2 vertical velocity ``bias_mps`` above the truth (it
+    realises the command less the bias) until the monitor hands the climb to masonry's own loop (which closes on the
+    position: the command realised); a 0.3 s lag either way, a 3 s thrust ramp."""
+    z = vz = 0.0
+    t = monitor.start_s
+    heights = []
+    while not monitor.done and t < monitor.start_s + 60.0:
+        cmd = monitor.step(t, z, vz)
+        realised = cmd if monitor.own_loop else cmd - bias_mps
+        cap = 0.5 * (0.1 + 0.9 * min(1.0, (t - monitor.start_s) / 3.0))
+        vz += (min(realised, cap) - vz) * dt / 0.3
+        z = max(0.0, z + vz * dt)
+        t += dt
+        heights.append(z)
+    return heights
+
+
+def test_a_stall_once_airborne_hands_the_climb_to_the_own_velocity_loop() -> None:
+    """Issue 29 on the real PX4 under load: "take-off stalled at 0.99 m of 1.09 m" (+0.05 m in 4 s at 0.12 m/s
+    asked). Where the adapter flies its own velocity loop the stall hands the rest of the climb to it, with a fresh
+    progress window, and the climb ends reached; without one, or stalled again, it fails as before."""
+    heights = _climb_on_a_biased_velocity(without := ClimbMonitor(0.0, 1.09), bias_mps=0.125)
+    assert without.state == "stalled" and not without.own_loop
+    assert 0.9 < heights[-1] < 1.09 - 2 * without.config.tolerance_m + 0.01  # stuck short of the target
+    with_loop = ClimbMonitor(0.0, 1.09, ClimbConfig(own_loop=True))
+    heights = _climb_on_a_biased_velocity(with_loop, bias_mps=0.125)
+    assert with_loop.own_loop and with_loop.state == "reached" and with_loop.reason is None
+    assert abs(heights[-1] - 1.09) <= with_loop.config.tolerance_m
+    # on the ground it is no stall of a climb in the air: a vehicle that cannot lift still fails, loop or not
+    grounded = ClimbMonitor(0.0, 1.2, ClimbConfig(own_loop=True))
+    _climb(grounded, ramp_s=3.0, lift=0.0)
+    assert grounded.state == "stalled" and not grounded.lifted and not grounded.own_loop
+    # a second stall, on the loop, fails it
+    stuck = ClimbMonitor(0.0, 1.09, ClimbConfig(own_loop=True))
+    t, z = 0.0, 0.0
+    while not stuck.done and t < 60.0:  # climbs to 0.95 m and stays there whatever is asked
+        stuck.step(t, z, 0.0)
+        z = min(0.95, z + 0.5 * 0.05)
+        t += 0.05
+    assert stuck.own_loop and stuck.state == "stalled"
+    assert stuck.reason is not None and stuck.reason.startswith("take-off stalled at 0.95 m of 1.09 m")
+
+
 def test_a_velocity_setpoint_takes_over_only_near_the_altitude() -> None:
     monitor = ClimbMonitor(0.0, 1.2)
     assert not monitor.hand_over(0.9, 0.3) and monitor.state == "climbing"  # still climbing: keep on

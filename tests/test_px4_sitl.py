@@ -5,7 +5,7 @@ case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
-never fly beside each other on the two xdist workers) and flies its own PX4 instances (3-9, one set per test), each
+never fly beside each other on the two xdist workers) and flies PX4 instances 4-7 (one flight at a time), each
 bounded in wall time with a message saying what did not end. Every uav.yaml holds only ``estimate_wait_s: 150``.
 """
 
@@ -74,7 +74,7 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     """PX4's own hover: EKF2's velocity sits up to 0.5 m/s off the truth; the one the ``px4`` preset's gates read
     (consistent with the position, 2 s) is no farther from it, within a 40 s rms's spread (issue 29). On PX4's clock (SIH runs lock-step)."""
     tau_s = uav_settings("px4")["velocity_from_position_s"]
-    flight = on_px4(tmp_path / "px4", 8, lambda url: hover(url, 40.0))
+    flight = on_px4(tmp_path / "px4", 6, lambda url: hover(url, 40.0))
     kept = tmp_path / "hover.json"  # the flight, for a look at a failure
     kept.write_text(json.dumps({"estimate": flight.estimate, "truth": flight.truth}))
     assert len(flight.estimate) > 600 and len(flight.truth) > 600  # 30 Hz streams over 40 s
@@ -121,6 +121,9 @@ def _fly_task(folder: Path, url: str, uav: str, task: str, blueprint: str) -> di
                             own_session=True))  # fmt: skip
     px4_log_path = _latest_px4_log(folder)
     out, err = _finish(proc, TASK_WALL_S, f"masonry fly --task {task} on PX4 ({url})", px4_log_path)
+    # the whole of it beside PX4's log, for a look at a failure
+    (px4_log_path.parent / "fly.out").write_text(out)
+    (px4_log_path.parent / "fly.err").write_text(err)
     results = [line for line in out.splitlines() if line.startswith("{")]
     assert results, f"no result (exit {proc.returncode}): {err[-3000:]}"
     result = dict(json.loads(results[-1]))
@@ -163,17 +166,17 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
         assert result["coverage"] is not None and result["coverage"] >= 0.9, result
         return result
 
-    result = on_px4(tmp_path / "px4", 9, fly)
+    result = on_px4(tmp_path / "px4", 7, fly)
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
-#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list (branch px4ci,
-#: 2026-12-05; docs/performance/autopilots.md, "The opt-in PX4 tests under load"): flown beside a busy loop with the
-#: machine at load average 11-20 (other sessions), after the fixes there (the adhesion hover on the window's mean,
-#: masonry's processes on a CPU share of their own, the world's contact for a vehicle that follows telemetry, the
-#: px4 swing gate at 0.3 m/s, one more PX4 where its SIH starved) the scenario placed 9 of 11, A0 covered 9 of 11,
-#: the mission completed 4 of 5 valid runs; the failures left (a place alignment's leg timeout, a spray pass 16 %
-#: covered, a take-off stalled at 0.99 m, PX4's SIH starving) are not yet traced: not yet tests CI can hold.
+#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list, traced (branch
+#: px4real, 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other
+#: sessions at load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.65 m (height) and 0.6 m
+#: (horizontally) off SIH's own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres
+#: within seconds; masonry flies (and the simulated world follows) that estimate. The scenario failed 2 of 7
+#: flights, A0 2 of 11 test runs ("could not reach the spraying height", "could not hover still ... 0.35 m off"), the
+#: mission completed 3 of 3, two with a task's second attempt: not yet tests CI can hold.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -272,25 +275,30 @@ GEOFENCE_PX4_PARAMS = {"GF_MAX_HOR_DIST": "1.5", "GF_ACTION": "3"}
 @pytest.mark.slow
 def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -> None:
     """A PX4 failsafe (its geofence) switches out of OFFBOARD mid-task: ``masonry fly`` stops, says which UAV and
-    which mode in one line and exits 1 (it never returned before, issue 29). Instance 3 (a developer's are 0, 1)."""
+    which mode in one line and exits 1 (it never returned before, issue 29). Instance 4; once more on a fresh PX4 if
+    the first's SIH starved (px4_sitl.on_px4: seen at load average 10, baro and compass gone for good, a blind land,
+    and no result within the wall bound)."""
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
     config = tmp_path / "uav.yaml"
     config.write_text(UAV_YAML)
-    with one_flight_at_a_time(), px4(tmp_path / "px4", instance=3, params=GEOFENCE_PX4_PARAMS) as url:
+
+    def fly(url: str) -> str:
         proc = masonry("fly", "--uav", "brick", "--task", "B1", "--blueprint", str(blueprint), "--fc", url,
                         "--actuators", "sim", "--camera", "sim", "--config", str(config))  # fmt: skip
         out, err = _finish(proc, TASK_WALL_S, f"masonry fly on PX4 with a 1.5 m geofence ({url})",
-                           tmp_path / "px4" / "px4.log")  # fmt: skip
-    assert proc.returncode == 1, (out[-2000:], err[-2000:])
-    *trace, line = out.strip().splitlines()
-    assert (
-        line.startswith("B1: failed in ") and ": brick-1: the autopilot took control: mode AUTO." in line
-    ), out
-    assert line.endswith(", not requested (masonry flies in OFFBOARD)"), line
-    # the machine stopped (no LAND of its own over PX4's mode) and halted
-    assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
-    print(f"PX4: {line}")
+                           _latest_px4_log(tmp_path))  # fmt: skip
+        assert proc.returncode == 1, (out[-2000:], err[-2000:])
+        *trace, line = out.strip().splitlines()
+        assert (
+            line.startswith("B1: failed in ") and ": brick-1: the autopilot took control: mode AUTO." in line
+        ), out
+        assert line.endswith(", not requested (masonry flies in OFFBOARD)"), line
+        # the machine stopped (no LAND of its own over PX4's mode) and halted
+        assert [s.split()[-1] for s in trace[-2:]] == ["emergency", "halted"], out
+        return line
+
+    print(f"PX4: {on_px4(tmp_path / 'px4', 4, fly, GEOFENCE_PX4_PARAMS)}")
 
 
 #: More than PX4's COM_OF_LOSS_T (1.0 s in v1.16): setpoints this old no longer count as a stream.
@@ -322,5 +330,5 @@ def test_px4s_offboard_without_setpoints_is_accepted_disarmed_and_its_arming_ref
 ) -> None:
     """Issue 29: what the project's SITL answers as (masonry.adapters.sitl_offboard): PX4 v1.16 enters OFFBOARD
     disarmed whatever the stream and refuses the arming in it as TEMPORARILY_REJECTED (never FAILED) until
-    setpoints stream again, which :meth:`arm` asks through. Instance 8."""
-    on_px4(tmp_path / "px4", 8, _offboard_without_setpoints)
+    setpoints stream again, which :meth:`arm` asks through. Instance 5."""
+    on_px4(tmp_path / "px4", 5, _offboard_without_setpoints)

@@ -321,8 +321,9 @@ class MavlinkFlightController(EstimateLink):
             return
         if takeoff_target is not None:
             world_alt = self.frame.position_to_world(position)[2] if position is not None else 0.0
-            with self._lock:
-                climb_rate = -self._state.velocity_ned[2]
+            with self._lock:  # where the own loop flies the climb, the position's velocity (EKF2's is off)
+                loop = self.velocity_loop if self.velocity_loop_engaged else None
+                climb_rate = -(loop.velocity_mps if loop is not None else self._state.velocity_ned)[2]
             climb_monitor = self._climb
             if climb_monitor is not None:
                 # PX4 has no GUIDED-style takeoff inside OFFBOARD: the stream climbs, monitored (takeoff.py)
@@ -331,6 +332,8 @@ class MavlinkFlightController(EstimateLink):
                 climb = 0.0
                 if not (setpoint is not None and fresh and climb_monitor.hand_over(world_alt, climb_rate)):
                     climb = climb_monitor.step(self.clock.now_s(), world_alt, climb_rate)
+                if climb_monitor.own_loop:  # a stall once airborne: the rest on the own loop (takeoff.py)
+                    self.velocity_loop_engaged = True
                 if not climb_monitor.done:
                     self._send_position_target((0.0, 0.0, -climb), 0.0)
                     return
@@ -495,15 +498,14 @@ class MavlinkFlightController(EstimateLink):
             self.velocity_loop_engaged = False
             self._takeoff_started_s = self._monotonic()
             self.takeoff_problem = None
-            self._climb = (
-                ClimbMonitor(
-                    self.clock.now_s(),
-                    self._takeoff_target_m,
-                    ClimbConfig(timeout_s=max(self.takeoff_timeout_s, 10.0 + 2.0 * altitude_m / 0.5)),
-                )
-                if self.autopilot == "px4"
-                else None
+            timeout_s = max(self.takeoff_timeout_s, 10.0 + 2.0 * altitude_m / 0.5)
+            own_loop = self.velocity_loop is not None  # a stall once airborne: the rest on it (takeoff.py)
+            climb = ClimbMonitor(
+                self.clock.now_s(),
+                self._takeoff_target_m,
+                ClimbConfig(timeout_s=timeout_s, own_loop=own_loop),
             )
+            self._climb = climb if self.autopilot == "px4" else None
 
     def land(self) -> None:
         """Land where the UAV is (ArduPilot LAND mode; PX4 MAV_CMD_NAV_LAND); the setpoint stream stops."""
