@@ -7,9 +7,13 @@ telemetry period across each such gap, the receiver listening all along); its cl
 simulated vehicle stop together, so nothing of the flight happened in that gap, yet the watchdog found "no
 message for 1 s" and the UAV landed ("flight controller link lost"). The project's own SITL in lock-step does not
 count a gap in which it was unrun (:data:`masonry.adapters.sitl_lockstep.UNRUN_S`); this is the same rule on the
-client's side for an autopilot that is a process of this computer: the time that process waited for a CPU, as
-the kernel counts it (``/proc/PID/schedstat``, its second field: the time spent runnable on a run queue), is
-taken out of the silence (:meth:`Standstill.heard_until`).
+client's side for an autopilot that is a process of this computer: the time that process waited for a CPU is
+taken out of the silence (:meth:`Standstill.heard_until`). The kernel says it in two readings: the process's
+state (``/proc/PID/stat``: ``R``, runnable, whether running or waiting for a CPU) and its CPU time
+(``/proc/PID/schedstat``'s first field, in ns). Between two readings that both find it runnable and its CPU time
+the same, it was runnable and never ran: a task that ran would have advanced its CPU time, and one that slept
+must have run to go to sleep. (The kernel's own count of the wait, schedstat's second field, is added only
+when the wait ends, so it cannot tell of a wait still going on.)
 
 The autopilot is known to be such a process only over TCP on this computer's loopback (``tcp:127.0.0.1:PORT``,
 as ArduCopter's SITL serves its MAVLink): the process other than this one holding a socket on PORT, found once
@@ -20,9 +24,11 @@ that hangs or is stopped (asleep, not waiting for a CPU), or has gone (its stati
 silence longer than :data:`~masonry.adapters.link_silence.RECEIVER_HUNG_S`. Nothing is widened: a SITL that was
 run and said nothing for ``heartbeat_timeout_s`` is lost after ``heartbeat_timeout_s`` as before.
 
-Samples of the process's wait are taken when the watchdog asks (each tick and each command); the wait taken out
-is between the first sample at or after the last message and the last at or before what the receiver read, so
-it never exceeds the wait inside the silence (a coarse sampling only counts more of the silence).
+The readings are taken when the watchdog asks (each tick and each command); what is taken out is the sum of the
+intervals between two consecutive readings inside the silence (from the first at or after the last message to
+the last at or before what the receiver read) that found the process runnable and unrun, so it never exceeds the
+time it stood unrun in the silence (a coarse sampling, or a process that got a CPU now and then, only counts
+more of the silence).
 """
 
 from __future__ import annotations
@@ -39,10 +45,12 @@ from pathlib import Path
 from masonry.adapters.link_silence import RECEIVER_HUNG_S
 from masonry.adapters.link_silence import heard_until as receiver_heard_until
 
-__all__ = ["Standstill", "loopback_tcp_port", "run_delay_s", "server_pid"]
+__all__ = ["Standstill", "loopback_tcp_port", "run_state", "server_pid", "unrun_stretches_s"]
 
 #: Samples kept (at the watchdog's 20-50 Hz, well over RECEIVER_HUNG_S of them).
 SAMPLES = 2048
+#: A stretch unrun shorter than this (s) is not counted (see :func:`unrun_stretches_s`).
+MIN_UNRUN_S = 0.05
 #: A silence with more than this much of the process's wait taken out is logged (once a silence).
 LOG_UNRUN_S = 0.5
 _PROC = Path("/proc")
@@ -101,14 +109,30 @@ def server_pid(port: int, *, own_pid: int | None = None, proc: Path = _PROC) -> 
     return found.pop() if len(found) == 1 else None
 
 
-def run_delay_s(pid: int, proc: Path = _PROC) -> float | None:
-    """Seconds process ``pid``'s main thread has spent runnable and waiting for a CPU since it started
-    (``/proc/PID/schedstat``'s second field); None when unreadable (gone, or no scheduler statistics)."""
+def run_state(pid: int, proc: Path = _PROC) -> tuple[bool, int] | None:
+    """Process ``pid``'s main thread now: runnable (state ``R``: running or waiting for a CPU), and its CPU time
+    (ns, ``/proc/PID/schedstat``'s first field); None when unreadable (gone, or no scheduler statistics)."""
     try:
-        fields = (proc / str(pid) / "schedstat").read_text().split()
-        return int(fields[1]) / 1e9
+        stat = (proc / str(pid) / "stat").read_text()
+        cpu_ns = int((proc / str(pid) / "schedstat").read_text().split()[0])
+        return stat[stat.rindex(")") + 2] == "R", cpu_ns  # the name, in parentheses, may hold anything
     except (OSError, ValueError, IndexError):
         return None
+
+
+def unrun_stretches_s(samples: list[tuple[float, bool, int]]) -> float:
+    """The seconds covered by stretches of consecutive readings ``(local s, runnable, CPU ns)`` that all find
+    the process runnable with the same CPU time, each stretch counted if it lasts :data:`MIN_UNRUN_S` or more (a
+    running process's CPU time is brought up to date at the scheduler's tick, 1-10 ms: a shorter flat stretch
+    may have been run)."""
+    total_s, start = 0.0, 0
+    for i in range(1, len(samples) + 1):
+        if i < len(samples) and samples[i][1] and samples[start][1] and samples[i][2] == samples[start][2]:
+            continue
+        span_s = samples[i - 1][0] - samples[start][0]
+        total_s += span_s if span_s >= MIN_UNRUN_S else 0.0
+        start = i
+    return total_s
 
 
 class Standstill:
@@ -117,7 +141,7 @@ class Standstill:
     Args:
         url: the link's MAVLink URL; only ``tcp:`` on the loopback names a local process.
         pid: the autopilot's process when known (a test); None: found from ``url`` at the first message heard.
-        run_delay: reads a process's run-queue wait (s; None: unreadable), :func:`run_delay_s` by default.
+        run_state: reads a process's state (runnable, CPU ns; None: unreadable), :func:`run_state` by default.
     """
 
     def __init__(
@@ -125,14 +149,14 @@ class Standstill:
         url: str,
         *,
         pid: int | None = None,
-        run_delay: Callable[[int], float | None] = run_delay_s,
+        run_state: Callable[[int], tuple[bool, int] | None] = run_state,
     ) -> None:
         self.port = loopback_tcp_port(url)
         self.pid = pid
         self._looked = pid is not None or self.port is None
-        self._run_delay = run_delay
+        self._run_state = run_state
         self.url = url
-        self._samples: deque[tuple[float, float]] = deque(maxlen=SAMPLES)  # (local s, its wait s)
+        self._samples: deque[tuple[float, bool, int]] = deque(maxlen=SAMPLES)  # (local s, runnable, CPU ns)
         self._lock = threading.Lock()  # the fly loop's and the commands' threads both ask
         self._logged_since = -math.inf  # the silence (its last message) last logged
 
@@ -144,24 +168,24 @@ class Standstill:
         return heard - self.unrun_s(now_s, last_message_s, heard)
 
     def unrun_s(self, now_s: float, since_s: float, until_s: float) -> float:
-        """Seconds the autopilot's process waited for a CPU between ``since_s`` and ``until_s`` (local s), as
-        far as the samples up to ``now_s`` tell (a sample is taken now); 0 when it cannot be told."""
+        """Seconds the autopilot's process stood runnable and unrun between ``since_s`` and ``until_s`` (local s),
+        as far as the readings up to ``now_s`` tell (one is taken now); 0 when it cannot be told."""
         if not math.isfinite(since_s) or until_s - since_s > RECEIVER_HUNG_S:
             return 0.0
         with self._lock:
             pid = self._process()
-            wait_s = None if pid is None else self._run_delay(pid)
-            if pid is None or wait_s is None:  # no local process, or it has gone: the silence counts in full
+            state = None if pid is None else self._run_state(pid)
+            if pid is None or state is None:  # no local process, or it has gone: the silence counts in full
                 self.pid = None
                 self._samples.clear()
                 return 0.0
             samples = self._samples
-            if not samples or now_s >= samples[-1][0]:
-                samples.append((now_s, wait_s))
+            if not samples or now_s > samples[-1][0]:
+                samples.append((now_s, *state))
             while len(samples) > 1 and samples[0][0] < since_s:
                 samples.popleft()  # the last message only moves on: what came before it is not needed
-            inside = [w for t, w in samples if since_s <= t <= until_s]
-            unrun = max(0.0, inside[-1] - inside[0]) if inside else 0.0
+            inside = [x for x in samples if since_s <= x[0] <= until_s]
+            unrun = unrun_stretches_s(inside)
             if unrun > LOG_UNRUN_S and since_s != self._logged_since:
                 self._logged_since = since_s
                 _log.warning(
