@@ -23,7 +23,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The tests that fly the project's SITL (MavlinkSitl in-process or ``masonry sitl``).
+#: The tests that fly the project's SITL (MavlinkSitl in-process, ``masonry sitl``, tests/fsm_rig.py's
+#: ``glue_on_px4_sitl``, tests/own_sitl_flight.py): every test file that starts one (issue 29's list).
 SITL_TESTS = (
     "tests/test_sitl.py",
     "tests/test_sitl_fly.py",
@@ -31,9 +32,15 @@ SITL_TESTS = (
     "tests/test_px4.py",
     "tests/test_tuning_choice.py",
     "tests/test_sitl_lockstep.py",
+    "tests/test_autopilot_takeover.py",
+    "tests/test_contract_clock.py",
+    "tests/test_flight_contract.py",
+    "tests/test_fsm_emergency.py",
+    "tests/test_own_velocity_loop.py",
+    "tests/test_wind_heard.py",
 )
-#: ArduCopter's SITL (skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
-ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py",)
+#: ArduCopter's SITL (tests/ardupilot_sitl.py; skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
+ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py", "tests/test_mavlink_fence.py")
 
 
 def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[str, int], list[str], float]:
@@ -86,7 +93,7 @@ def main() -> None:
         "--speedup",
         type=int,
         default=None,
-        help="ArduCopter SITL's --speedup in its tests (default: theirs, 5)",
+        help="ArduCopter SITL's --speedup in its tests (default: theirs, tests/ardupilot_sitl.py SPEEDUP)",
     )
     ap.add_argument(
         "--log", type=Path, default=None, help="folder for each failing run's whole pytest output"

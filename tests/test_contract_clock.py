@@ -1,10 +1,13 @@
 """One Clock contract, run against the scripted fake, the simulator's clock, the wall clock the camera adapter
 stamps frames with, the ``masonry fly`` zeroed clock, and the MAVLink adapter's autopilot clock on the SITL (UDP
-loopback, the SITL at 4x real time).
+loopback, the SITL at up to 4x real time, in lock-step as ``masonry fly`` flies ``masonry sitl --lockstep``).
 
 What every Clock must do: read finite time that never runs backwards, and ``sleep(d)`` lets at least ``d`` of its
-own time pass (exactly ``d`` for the clocks that advance only when told; for the autopilot's clock, ``d`` within
-its rate's measurement). The wall-time sleeps are tens of milliseconds; no assertion bounds them from above.
+own time pass (exactly ``d`` for the clocks that advance only when told). The wall-time sleeps are tens of
+milliseconds; no assertion bounds them from above. The autopilot's clock is checked in lock-step (issue 29):
+free, its ``sleep(d)`` sleeps ``d`` over the rate it measured on the wall, and a SITL that a loaded machine
+leaves unrun meanwhile moves less (``sleep(0.04)`` once read 0.015 s at x4 beside a busy loop): the SITL's
+pace, not the clock's contract.
 """
 
 from __future__ import annotations
@@ -53,18 +56,22 @@ def _wall() -> Iterator[Rig]:
 
 
 def _link() -> Iterator[Rig]:
+    from masonry.adapters.lockstep import LockstepClock
     from masonry.adapters.mavlink import MavlinkFlightController
     from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+    from waiting import wait_until
 
     port = free_udp_port()
-    sitl = MavlinkSitl(port, time_scale=4.0, config=SitlConfig(heartbeat_hz=4.0))
+    # held between grants however long the wall takes (the lock-step tests' setting: it never runs free here)
+    sitl = MavlinkSitl(port, time_scale=4.0, config=SitlConfig(heartbeat_hz=4.0), lockstep_wait_s=60.0)
     sitl.start()
-    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=3.0)
+    fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", connect_timeout_s=10.0)
+    clock = LockstepClock(fc)  # before connecting, as masonry fly makes it
     try:
         fc.connect()
-        assert fc.clock.anchored
-        fc.clock.sleep(0.8)  # 0.2 s of wall time: the rate is measured from then on
-        yield Rig(fc.clock, exact=False, slack=0.5)
+        wait_until(lambda: clock.sleep(0.0) or clock.lockstep, 10.0, "the SITL's lock-step announcement")
+        clock.sleep(0.2)
+        yield Rig(clock, exact=False)
     finally:
         fc.close()
         sitl.stop()

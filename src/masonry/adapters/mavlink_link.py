@@ -24,7 +24,7 @@ from typing import Any
 
 from typing_extensions import Self
 
-from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, heard_until, watchdog_text
+from masonry.adapters.link_silence import RECEIVER_HUNG_S, beatless_s, watchdog_text
 from masonry.adapters.link_values import LinkClock, LinkStatus, StatusText, add_status_text, load_signing_key
 from masonry.adapters.mavlink_protocol import (
     HEARTBEAT_MISSING_S,
@@ -52,6 +52,7 @@ from masonry.adapters.mavlink_protocol import (
     Autopilot,
 )
 from masonry.adapters.pose_source import PoseSource
+from masonry.adapters.sitl_standstill import Standstill
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
 from masonry.motion.velocity_loop import VelocityLoop
 from masonry.ports import Vec3
@@ -163,6 +164,7 @@ class MavlinkLink:
         self.target_component = 0
         self._monotonic = monotonic
         self.clock = LinkClock(monotonic)
+        self.standstill = Standstill(url)  # a SITL on this computer left unrun: not its silence (issue 29)
         self._down_at: tuple[float, float | None] | None = None  # the watchdog fired: (when, clocks)
         # lock-step (masonry.adapters.lockstep): the stream's clock, until when (monotonic) grants stream it, and
         # the age (s) of the position the velocity loop closes on (on the wall here; on the autopilot's time there)
@@ -502,8 +504,8 @@ class MavlinkLink:
             )
 
     def _heard_until(self, now: float) -> float:
-        """Up to when the receiver has read all that arrived (:func:`~masonry.adapters.link_silence.heard_until`)."""
-        return heard_until(now, self._state.last_message_s, self._state.listened_s)
+        """Up to when the receiver read all that arrived and the autopilot could speak (sitl_standstill)."""
+        return self.standstill.heard_until(now, self._state.last_message_s, self._state.listened_s)
 
     def _silences(self, now: float) -> tuple[float, float]:
         """Seconds without a message (local) and without a HEARTBEAT (the slower clock), up to what was read."""
@@ -513,17 +515,15 @@ class MavlinkLink:
         )
 
     def _link_ok(self, now: float) -> bool:
-        """The watchdog: a message within ``heartbeat_timeout_s`` and a HEARTBEAT within 2.5 s (the slower of the
-        local and the autopilot's clocks) of what the receiver has read (masonry.adapters.link_silence)."""
+        """The watchdog: a message within ``heartbeat_timeout_s``, a HEARTBEAT within 2.5 s (link_silence)."""
         silent_s, beatless = self._silences(now)
         ok = (
             self._conn is not None
             and silent_s <= self.heartbeat_timeout_s
             and beatless <= self._heartbeat_missing_s
         )
-        if (
-            ok == (self._down_at is not None) and self._conn is not None
-        ):  # its transitions, what it read, logged
+        # its transitions, what it read, logged
+        if ok == (self._down_at is not None) and self._conn is not None:
             st, boot = self._state, self.clock.last_boot_s
             _log.warning(
                 "MAVLink watchdog on %s: %s", self.url, watchdog_text(now, st, beatless, boot, self._down_at)
