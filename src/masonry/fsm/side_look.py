@@ -321,9 +321,10 @@ def last_leg_lag_s(uav: BrickUav) -> float | None:
     """The lag (s) of the last leg's acceleration feed-forward (``UavConfig.last_leg_lag_s``; None: the UAV's
     ``velocity_lag_s``). On the refitted ``px4`` model (0.25 s of dead time, a 0.15 s lag and 25 % droop) the
     default 0.3 s left the leg 5-8 cm short at its end; it then overshot, and came back past the wall's sighting's
-    freshness (the towers' releases on 2-4 s old looks, docs/performance/as-built.md)."""
+    freshness (the towers' releases on 2-4 s old looks, docs/performance/as-built.md). Not in a wind (the
+    placement flies kp 2 there, :mod:`masonry.fsm.wind_lean`): measured a draw on the 4 m/s towers and pyramid."""
     lag_s = uav.config.last_leg_lag_s
-    return lag_s if lag_s > 0.0 else None
+    return lag_s if lag_s > 0.0 and not uav.attempt.in_wind else None
 
 
 def scene_of(uav: BrickUav) -> LookScene:
