@@ -2,9 +2,11 @@
 
 For every brick of ``bench_as_built.py``'s walls that stands on one support, at its release: *release*, the true
 effector's distance from the true point its target meant (the target less the position source's wander then);
-*align*, that point's distance from where the support truly puts the brick; *carry*, the rest (the conical
-guide's residual on the magnet, the world's release scatter). It prints rms / max mm of each, the measured release
-error and the tick's position noise, the align part by the wall's sighting's age at the release, and the worst
+*align*, that point (moved by the carried brick's offset on the magnet the camera measured,
+:mod:`masonry.fsm.carried_look`) from where the support truly puts the brick; *carry*, the rest (the conical
+guide's residual on the magnet less what was measured of it, the world's release scatter). It prints rms / max
+mm of each, the measured release error and the tick's position noise, the align part by the wall's sighting's age
+at the release, and the worst
 bricks (with their speed and time from the descent leg's planned end at the release). ``--neighbours`` takes
 every brick with placed neighbours instead, against where their mean puts it (the benchmark's "neighbours" figure)::
 
@@ -46,6 +48,9 @@ def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
         "age_s": self._now_s - self._wall.seen_s,
         "speed": np.asarray(sim.vehicle.velocity_mps, dtype=float)[:2],
         "past_end_s": self._now_s - self.nav.end_s,
+        # the carried brick's offset on the magnet the camera measured (masonry.fsm.carried_look): the target is
+        # the effector's, the brick's is this much off it
+        "carried": np.asarray(self._wall.carried.world_m(self._place_yaw_rad()), dtype=float)[:2],
     }
     _release(self, *args, **kwargs)
 
@@ -99,7 +104,7 @@ def main() -> None:
                 r = RELEASES[b.id]
                 final = np.asarray(mission.world.bricks[b.id].position_m)[:2] - want
                 release = np.asarray(r["effector"]) - np.asarray(r["true_target"])
-                align = np.asarray(r["true_target"]) - want
+                align = np.asarray(r["true_target"]) + np.asarray(r["carried"]) - want
                 parts = {"final": final, "release": release, "align": align, "carry": final - release - align}
                 rows.append((wall, seed, b.id, {**parts, **{k: np.asarray(v) for k, v in r.items()}}))
     print(f"{len(rows)} bricks {'with neighbours' if args.neighbours else 'on one support'}")

@@ -81,6 +81,13 @@ class UavConfig:
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
     side_look: bool = True
+    # With align_on_wall: the carried brick's offset on the magnet, seen by the camera in the frames the wall
+    # alignment reads, is taken off the drop-off's target (masonry.fsm.carried_look)
+    carried_look: bool = True
+    # With align_on_wall: > 0, the side look's last leg and the legs from a look back up to the drop-off fly the
+    # acceleration feed-forward of this velocity lag (s) instead of velocity_lag_s, not in a wind
+    # (masonry.fsm.side_look); 0: off
+    last_leg_lag_s: float = 0.0
     # With align_on_wall: a brick that stands on others is released only if a brick of the wall was in the
     # camera's view at most this long (s) before; else it looks again from above (masonry.fsm.release_gate). 0: off
     release_fresh_s: float = 0.45

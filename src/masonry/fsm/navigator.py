@@ -65,6 +65,7 @@ class Navigator:
         self.config = config
         self.pid = PID(config.pid_gains)
         self.velocity_lag_s = float(config.velocity_lag_s)
+        self.leg_lag_s = self.velocity_lag_s  # the leg in hand's (fly_to's lag_s)
         self.active = False
         self.target_m = np.zeros(3)
         self.target_yaw_rad: float | None = None
@@ -128,15 +129,18 @@ class Navigator:
         duration_s: float | None = None,
         yaw_rad: float | None = None,
         from_rest: bool = False,
+        lag_s: float | None = None,
     ) -> None:
         """One minimum-jerk leg from the current state (``from_rest``: from rest where the UAV is) to rest at
-        ``target_m``."""
+        ``target_m``; ``lag_s``: its acceleration feed-forward's lag (default: ``velocity_lag_s``)."""
         if not self.active:
             self.pid.reset()
         self.legs = []
         self.line = None
         self.steered = None
-        self._start_leg(now_s, tel, np.asarray(target_m, dtype=float), duration_s, from_rest=from_rest)
+        self._start_leg(
+            now_s, tel, np.asarray(target_m, dtype=float), duration_s, from_rest=from_rest, lag_s=lag_s
+        )
         if yaw_rad is not None:
             self.target_yaw_rad = yaw_rad
         elif not self.active:
@@ -307,7 +311,9 @@ class Navigator:
         target: np.ndarray,
         duration_s: float | None,
         from_rest: bool = False,
+        lag_s: float | None = None,
     ) -> None:
+        self.leg_lag_s = self.velocity_lag_s if lag_s is None else float(lag_s)
         p = np.asarray(tel.position_m, dtype=float)
         if self.fence is not None:
             target = self._inside(target)
@@ -413,7 +419,7 @@ class Navigator:
                 # velocity, plus the acceleration times the autopilot's velocity lag: a first-order velocity
                 # loop then follows the reference's velocity instead of trailing it by lag x acceleration,
                 # which the integral would otherwise make up for as an overshoot at the end of the leg
-                lag = self.velocity_lag_s
+                lag = self.leg_lag_s
                 return ref, (vel[0] + lag * acc[0], vel[1] + lag * acc[1], vel[2] + lag * acc[2])
             return ref, _ZERO_FF
         if self.steered is not None:

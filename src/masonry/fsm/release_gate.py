@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M
+from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M, last_leg_lag_s
 from masonry.fsm.wall_align import supports_of
 
 if TYPE_CHECKING:
@@ -222,7 +222,11 @@ class ReleaseGate:
             self.looking = False
             yaw = uav._place_yaw_rad()
             uav._fly_to(
-                tel, uav.effector.body_target(uav.attempt.place_effector_target_m, yaw), FINAL_LEG_S, yaw
+                tel,
+                uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
+                FINAL_LEG_S,
+                yaw,
+                lag_s=last_leg_lag_s(uav),
             )
         elif waited:
             self._look(uav, tel)  # higher up, or the descent failed

@@ -46,9 +46,10 @@ class Routing(ModelBase):
         duration_s: float | None = None,
         yaw_rad: float | None = None,
         from_rest: bool = False,
+        lag_s: float | None = None,
     ) -> None:
         """One minimum-jerk leg to rest at ``target_m`` (:meth:`Navigator.fly_to`)."""
-        self.nav.fly_to(self._now_s, tel, target_m, duration_s, yaw_rad, from_rest)
+        self.nav.fly_to(self._now_s, tel, target_m, duration_s, yaw_rad, from_rest, lag_s)
 
     def _fly_line(self, tel: Telemetry, start_m: np.ndarray, end_m: np.ndarray, speed_mps: float) -> None:
         """Track ``start -> end`` at constant ``speed_mps`` (reference starts at ``start`` now)."""

@@ -41,6 +41,7 @@ __all__ = [
     "TRACK_SPREAD_M",
     "LookScene",
     "SideLook",
+    "last_leg_lag_s",
     "look_offset_m",
     "marker_in_view",
     "scene_of",
@@ -313,7 +314,17 @@ class SideLook:
         tel = uav._tel
         assert tel is not None
         body = uav.effector.body_target(uav.attempt.place_effector_target_m, yaw_rad)
-        uav._fly_to(tel, body, FINAL_LEG_S, yaw_rad)
+        uav._fly_to(tel, body, FINAL_LEG_S, yaw_rad, lag_s=last_leg_lag_s(uav))
+
+
+def last_leg_lag_s(uav: BrickUav) -> float | None:
+    """The lag (s) of the last leg's acceleration feed-forward (``UavConfig.last_leg_lag_s``; None: the UAV's
+    ``velocity_lag_s``). On the refitted ``px4`` model (0.25 s of dead time, a 0.15 s lag and 25 % droop) the
+    default 0.3 s left the leg 5-8 cm short at its end; it then overshot, and came back past the wall's sighting's
+    freshness (the towers' releases on 2-4 s old looks, docs/performance/as-built.md). Not in a wind (the
+    placement flies kp 2 there, :mod:`masonry.fsm.wind_lean`): measured a draw on the 4 m/s towers and pyramid."""
+    lag_s = uav.config.last_leg_lag_s
+    return lag_s if lag_s > 0.0 and not uav.attempt.in_wind else None
 
 
 def scene_of(uav: BrickUav) -> LookScene:

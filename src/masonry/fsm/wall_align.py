@@ -41,6 +41,7 @@ import numpy as np
 
 from masonry.fsm.as_built import frame_tags, world_estimate
 from masonry.fsm.camera_align import CameraAlign
+from masonry.fsm.carried_look import CarriedLook
 from masonry.fsm.place_taken import PLACE_TAKEN, taken_by
 from masonry.fsm.wall_trend import WallTrend
 from masonry.planner.as_built_plan import pulled_back
@@ -155,6 +156,7 @@ class WallAlign:
 
     def __init__(self) -> None:
         self.tracker = CameraAlign()
+        self.carried = CarriedLook()  # (masonry.fsm.carried_look: the brick's offset on the magnet)
         self.trend = WallTrend(0.0)  # (masonry.fsm.wall_trend: the wander carried past the last sighting)
         self.design_m = np.zeros(3)
         self._wall: dict[int, tuple[float, ...]] | None = None
@@ -174,6 +176,7 @@ class WallAlign:
         self.design_m = np.asarray(design_top_m, dtype=float).copy()
         self.tracker.reset(self.design_m)
         self.trend.reset(self.tracker.size)
+        self.carried.reset()
         self.seen_s = -math.inf
         self.estimates = {}
 
@@ -209,6 +212,8 @@ class WallAlign:
                 neighbours_of(wall, own, task.size_m), self._as_built, cfg.wall_pullback_m, math.inf
             )
         tags = frame_tags(uav.camera.read(), uav.camera, uav.config.markers)
+        if uav.config.carried_look:
+            self.carried.add(uav, tags, tel)
         seen = {t.marker_id // 2 for t in tags} - {own}
         estimates = {}
         for bid in seen & wall.keys():
@@ -225,7 +230,8 @@ class WallAlign:
             at_design is not None
         ):  # the cap relative to the bricks in view, not to the design (follow_in_view)
             follow = follow_in_view(self._follow_raw_m, at_design - offset, uav.config.wall_follow_cap_m)
-        delta = self.tracker.add(self._base_m(wall.get(own)) + follow + offset)
+        carried = self.carried.world_m(uav._place_yaw_rad())
+        delta = self.tracker.add(self._base_m(wall.get(own)) + follow + offset - carried)
         self.trend.span_s = uav.config.wall_trend_s
         self.trend.add(
             uav._now_s,
