@@ -260,12 +260,16 @@ def test_a_resumed_px4_mission_keeps_the_anchored_poses_and_anchors_on_them(tmp_
     journal = tmp_path / "j.jsonl"
     first = simulate(bp, seed=3, vehicle="px4", journal_path=journal, max_time_s=240.0)
     assert first.as_built and not first.completed
-    again = simulate(bp, seed=3, vehicle="px4", journal_path=journal, resume=True)
+    resumed = SimulatedMission.from_blueprint(bp, seed=3, vehicle="px4", journal_path=journal, resume=True)
+    again = resumed.run()
     assert again.completed
     for tid, pose in first.as_built.items():  # (the same looks, the wall re-solved with the later ones)
         assert again.as_built[tid].world_position_m == pose.world_position_m
         assert again.as_built[tid].anchored_to is not None
-        assert math.dist(again.as_built[tid].position_m, pose.position_m) < 0.01
+    # the journaled looks re-solved with the later ones: every pose within a few mm of the truth, those known before
+    # the stop too (a brick's pose at the stop may rest on fewer looks: seed 3's B6 was 14 mm off then, 4 mm after)
+    for tid, pose in again.as_built.items():
+        assert math.dist(pose.position_m, resumed.world.bricks[int(tid[1:])].position_m) < 0.006, tid
     assert len(again.as_built) > len(first.as_built)
     assert all(p.anchored_to is not None for p in again.as_built.values())
 
