@@ -22,6 +22,7 @@ from masonry.planner import plan as make_plan
 from masonry.planner.bounds import empty_flight_s, min_durations_s
 from masonry.planner.dispatch_values import task_end_m, task_start_m
 from masonry.planner.schedule import solve_schedule
+from masonry.planner.schedule_chain import chain_costs
 from masonry.planner.schedule_physical import (
     DEFAULT_BATTERY,
     BatteryModel,
@@ -201,21 +202,23 @@ def check_physical(p, fleet, s, cruise_altitude_m, battery: BatteryModel, cleara
     homes = {u.name: u.home_m for u in fleet}
     usable = math.floor(battery.usable_s / tick) * tick
     on_pad = math.ceil(battery.on_pad_s(cruise_altitude_m, 0.0) / tick - 1e-9) * tick
+    chain = chain_costs(tasks, DEFAULT_TIMING, cruise_altitude_m, tick)  # the default model's chain term
     for u in s.uavs:
         home = homes[u.name]
         events = sorted([(w, "") for w in u.swaps_s] + [(t.start_s, t.id) for t in u.tasks])
-        where, flown, free = home, 0.0, 0.0
+        where, flown, free, prev = home, 0.0, 0.0, -1
         for at, tid in events:
             if not tid:
                 assert at >= free - TOL_S
-                where, flown, free = home, 0.0, at + on_pad
+                where, flown, free, prev = home, 0.0, at + on_pad, -1
                 continue
             task = p.task(tid)
             leg = math.floor(empty_flight_s(where, task_start_m(task)) / tick) * tick
-            assert at >= free + leg - TOL_S
+            leg += chain.extra(prev, index[tid]) * tick  # an unchained segment's climb out and first descent
+            assert at >= free + leg - TOL_S, (u.name, tid)
             flown += leg + dur[index[tid]] * tick
             assert flown <= usable + TOL_S, (u.name, tid, flown)
-            where, free = task_end_m(task), planned[tid].end_s
+            where, free, prev = task_end_m(task), planned[tid].end_s, index[tid]
 
 
 @seed(27)
