@@ -477,7 +477,9 @@ class MavlinkFlightController(EstimateLink):
 
         ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream, monitored
         against its progress (:class:`~masonry.adapters.takeoff.ClimbMonitor`): it ends reached and steady, or
-        with :attr:`takeoff_problem` saying why not.
+        with :attr:`takeoff_problem` saying why not. Where it stands is the latest position at this call, after
+        the arming: the one the state machine's take-off measured its ground in just before (issue 29: a ground
+        from before the arming made the climb aim 1 cm under the altitude the machine waited for).
         """
         self._check_link("takeoff")
         if not (math.isfinite(altitude_m) and altitude_m > 0.0):

@@ -19,11 +19,14 @@ from masonry.fsm.bead import BeadPass, BeadSettings
 
 @dataclass(frozen=True)
 class Takeoff:
-    """A take-off asked of the autopilot: when it was last asked, how often, and the climb asked for."""
+    """A take-off asked of the autopilot: when it was last asked, how often, the climb asked for and the altitude it
+    ends at (world, m): the ground measured when it was asked (after the arming) plus the climb, the one reference
+    the autopilot climbs from and the machine waits on (issue 29)."""
 
     asked_s: float
     tries: int = 1
     climb_m: float = 0.0
+    target_m: float = math.nan
 
 
 @dataclass(frozen=True)

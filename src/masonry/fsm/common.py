@@ -24,6 +24,8 @@ _TAKEOFF_SHORT_M = 0.1
 #: ... once climbing slower than this: an autopilot that shapes its climb (ArduCopter's PSC_JERK_Z) and was taken
 #: over at 0.48 m/s rose 0.12 m past the layer its pad's column reaches (issue 19)
 _TAKEOFF_SETTLE_MPS = 0.2
+#: The least climb a take-off asks for (m), where the transit altitude is lower over the ground.
+_TAKEOFF_MIN_CLIMB_M = 0.3
 #: Disarmed on the ground this long after a take-off was asked for: arm and ask again, at most this often.
 _TAKEOFF_RETRY_S = 2.0
 _TAKEOFF_RETRIES = 2
@@ -72,20 +74,44 @@ class CommonStates(TaskBook):
         tel = self._tel
         assert tel is not None
         self.nav.pid.reset()
+        ground = self._ask_takeoff(tel, tries=1)
+        takeoff = self.attempt.takeoff
+        assert takeoff is not None
+        x, y, _ = ground.position_m
+        # where the autopilot takes it (the machine hovers there next)
+        self.nav.expect((x, y, takeoff.target_m))
+
+    def _ask_takeoff(self, tel: Telemetry, tries: int) -> Telemetry:
+        """Arm (unless armed) and ask for the take-off to the transit altitude (at least ``_TAKEOFF_MIN_CLIMB_M``
+        up), measured from the ground as it is once armed; record it (:class:`Takeoff`). Returns the telemetry
+        the ground was measured in.
+
+        The autopilot climbs ``climb_m`` from the ground it has when asked: the MAVLink adapter measures the
+        ground again as it arms (its frame moves to it) and climbs from the position at ``takeoff``; a simulated
+        vehicle from where it stands. A ground read before an arming that took time (a real autopilot's pre-arm
+        checks, the estimate moving meanwhile) was another one: on the real PX4 the climb aimed at 1.09 m while the
+        machine waited for 1.10 m (issue 29). So the ground is read once armed, the climb is asked from it and
+        ``target_m`` (ground + climb) is what :meth:`do_takeoff` waits for. Armed already, the tick's telemetry is
+        the reading of that moment.
+        """
         arming_s = self.clock.now_s()
         if not tel.armed:
-            self.fc.arm()
-        climb_m = max(0.3, self._transit_altitude_m() - tel.position_m[2])
+            self.fc.arm()  # (the MAVLink adapter measures the ground afresh here and moves its frame to it)
+            tel = self.fc.telemetry()  # the ground as the autopilot has it once armed
+        ground_m = float(tel.position_m[2])
+        climb_m = max(_TAKEOFF_MIN_CLIMB_M, self._transit_altitude_m() - ground_m)
         self.fc.takeoff(climb_m)
         # when it was asked (after the arming, which a real autopilot takes its time over), how often, the climb
-        self.attempt.takeoff = Takeoff(self._now_s + max(0.0, self.clock.now_s() - arming_s), 1, climb_m)
-        x, y, z = tel.position_m
-        self.nav.expect((x, y, z + climb_m))  # where the autopilot takes it (the machine hovers there next)
+        asked_s = self._now_s + max(0.0, self.clock.now_s() - arming_s)
+        self.attempt.takeoff = Takeoff(asked_s, tries, climb_m, ground_m + climb_m)
+        return tel
 
     def do_takeoff(self, tel: Telemetry) -> None:
+        takeoff = self.attempt.takeoff
+        assert takeoff is not None  # asked for on entering takeoff
         if (
             not tel.on_ground
-            and tel.position_m[2] >= self._transit_altitude_m() - _TAKEOFF_SHORT_M
+            and tel.position_m[2] >= takeoff.target_m - _TAKEOFF_SHORT_M
             and abs(tel.velocity_mps[2]) <= _TAKEOFF_SETTLE_MPS
         ):
             self.airborne()
@@ -95,7 +121,7 @@ class CommonStates(TaskBook):
             # the flight controller's own account, where it keeps one (the MAVLink adapter's PX4 climb monitor)
             why = getattr(self.fc, "takeoff_problem", None)
             self.abort(
-                reason=f"takeoff did not reach {self._transit_altitude_m():.2f} m "
+                reason=f"takeoff did not reach {takeoff.target_m:.2f} m "
                 f"within {self.config.takeoff_timeout_s:.0f} s" + (f": {why}" if isinstance(why, str) else "")
             )
 
@@ -157,12 +183,7 @@ class CommonStates(TaskBook):
             waited,
             "armed" if tel.armed else "disarmed",
         )
-        arming_s = self.clock.now_s()
-        if not tel.armed:
-            self.fc.arm()
-        self.fc.takeoff(takeoff.climb_m)
-        asked_s = self._now_s + max(0.0, self.clock.now_s() - arming_s)
-        self.attempt.takeoff = Takeoff(asked_s, takeoff.tries + 1, takeoff.climb_m)
+        self._ask_takeoff(tel, tries=takeoff.tries + 1)  # from the ground as it is now (re-armed, maybe)
         return True
 
     def enter_home(self, *args: object, **kwargs: object) -> None:

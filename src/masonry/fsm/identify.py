@@ -195,8 +195,8 @@ def identify(
         HardwareError: take-off or landing not done within ``timeout_s``, or no step followed.
     """
     fc.arm()
+    ground = fc.telemetry().position_m[2]  # once armed: the ground the autopilot climbs from (issue 29)
     fc.takeoff(altitude_m)
-    ground = fc.telemetry().position_m[2]
 
     def wait(done: Callable[[Any], bool], what: str) -> None:
         start = clock.now_s()

@@ -27,6 +27,7 @@ body frame FLU, so accelerating forward is a positive pitch and accelerating lef
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -214,8 +215,11 @@ class SimVehicle(_Autopilot):
 
     # --------------------------------------------------------------- commands
     def arm(self) -> None:
-        """Arm the motors (on the ground, with enough battery); GUIDED mode."""
-        self._tel = None
+        """Arm the motors (on the ground, with enough battery); GUIDED mode.
+
+        Arming moves nothing: this instant's telemetry sample, if drawn, stays the one reported (with the new
+        flags), so that a caller reading the ground once armed (the take-off's) draws no fresh noise."""
+        sample, self._tel = self._tel, None
         if self.failed:
             raise CommandRejected("arm", "the vehicle has failed")
         if self.armed:
@@ -229,6 +233,8 @@ class SimVehicle(_Autopilot):
         self._sp_time = -math.inf
         self._takeoff_z = None
         self._hold = None
+        if sample is not None:
+            self._tel = (sample[0], dataclasses.replace(sample[1], armed=True, mode="GUIDED"))
 
     def disarm(self, force: bool = False) -> None:
         """Disarm; refused in the air unless ``force`` (then the vehicle falls)."""
