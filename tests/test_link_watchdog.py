@@ -15,6 +15,7 @@ import pytest
 from masonry.adapters.link_silence import beatless_s
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.mavlink_link import RECEIVER_HUNG_S
+from masonry.adapters.takeoff import ClimbMonitor
 from masonry.errors import LinkLost
 
 
@@ -162,3 +163,43 @@ def test_the_watchdog_logs_how_far_the_autopilots_clock_moved_while_the_link_was
     assert back.endswith(
         "since the last message before it went down 1.55 s of this computer's clock, 0.03 s of the autopilot's"
     )
+
+
+def test_the_autopilots_clock_holds_while_the_watchdog_holds_the_link_and_runs_on_once_it_is_lost() -> None:
+    """Issue 29: ``LinkClock`` extrapolated a silent autopilot's time at its rate for ever (x5: 0.9 s of silence
+    read 4.5 s on the machines' timers). Now 0.5 s of its clock at most past the last message; held while the
+    watchdog holds the link alive (a stand-still: its clock stood still too); once the link is lost, on at this
+    computer's rate, so that the machine's own handling of a lost link (its emergency's give-up) runs."""
+    clock = Held()
+    fc = streaming(clock, 5.0)
+    last_s, last_boot_s = clock.t, fc.clock.last_boot_s
+    assert fc.clock.rate == pytest.approx(5.0, rel=0.01) and not fc.clock.stale
+    clock.t = fc._state.listened_s = last_s + 0.9  # the receiver listens and hears nothing
+    assert fc.telemetry().link_ok
+    assert fc.clock.now_s() == pytest.approx(last_boot_s + 0.5) and fc.clock.stale  # (was + 4.5)
+    assert fc.telemetry().time_s == pytest.approx(last_boot_s + 0.5)
+    clock.t = fc._state.listened_s = last_s + 1.5
+    assert not fc.telemetry().link_ok
+    assert fc.clock.now_s() == pytest.approx(last_boot_s + 1.0)  # on at 1x past its 1 s hold (was + 7.5)
+
+
+def test_a_px4_climb_holds_its_altitude_and_is_not_judged_on_a_stale_clock() -> None:
+    """The take-off climb's monitor (masonry.adapters.takeoff) judges progress on the autopilot's clock and sets
+    the climb from the last altitude heard: over a silence the stream went on climbing on that altitude while the
+    monitor's timers ran. On a stale clock the stream holds the altitude and the monitor judges nothing."""
+    clock = Held()
+    fc = streaming(clock, 5.0)
+    fc.autopilot = "px4"
+    sent: list[tuple[float, float, float]] = []
+    fc._send_position_target = lambda velocity, yaw_rate: sent.append(velocity)  # type: ignore[method-assign]
+    fc._state.armed, fc._streaming = True, True
+    fc._state.position_ned, fc._state.velocity_ned = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    fc._takeoff_target_m = 1.2
+    fc._climb = ClimbMonitor(fc.clock.now_s(), 1.2)
+    fc._stream_setpoint(clock.t)
+    assert sent[-1][2] < -0.1  # climbing (NED: up is negative)
+    clock.t = fc._state.listened_s = clock.t + 3.0  # silent: the link lost, the clock on at 1x past its hold
+    assert not fc.telemetry().link_ok
+    fc._stream_setpoint(clock.t)
+    assert sent[-1] == (0.0, 0.0, 0.0)  # held
+    assert fc._climb is not None and fc._climb.state == "climbing", fc._climb.reason  # not judged

@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from masonry.adapters.link_values import EXTRAPOLATION_HORIZON_S, HOLD_S
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     PX4_MODES,
@@ -172,6 +173,30 @@ def test_link_clock_follows_the_autopilot_rate() -> None:
     assert clock.rate == pytest.approx(5.0)
     clock.observe(0.2, 1001.1)  # reboot: restart the estimate
     assert clock.rate == 1.0
+
+
+def test_link_clock_extrapolates_up_to_its_horizon_then_holds_then_runs_on_at_this_computers_rate() -> None:
+    # issue 29: the extrapolation had no bound, so a silent autopilot's time ran on at its rate as if the link
+    # were alive (a SITL at x5 left unrun for 3 s read 15 s on the machines' timers, then held while it caught up)
+    local = [1000.0]
+    clock = LinkClock(lambda: local[0])  # horizon 0.5 s of the autopilot's clock, hold 1 s of this computer's
+    assert clock.horizon_s == EXTRAPOLATION_HORIZON_S == 0.5 and clock.hold_s == HOLD_S == 1.0
+    for i in range(11):
+        clock.observe(100.0 + 0.5 * i, 1000.0 + 0.1 * i)  # x5; the last: 105.0 at 1001.0
+    assert clock.rate == pytest.approx(5.0)
+    readings = {}
+    for t in (1001.06, 1001.2, 1001.5, 1002.0, 1004.0):
+        local[0] = t
+        readings[t] = (clock.now_s(), clock.stale)
+    assert readings[1001.06] == (pytest.approx(105.3), False)  # at the rate within the horizon
+    assert readings[1001.2] == (pytest.approx(105.5), True)  # past the horizon (0.1 s here): held
+    assert readings[1001.5] == (pytest.approx(105.5), True)
+    assert readings[1002.0] == (pytest.approx(105.5), True)  # held for 1 s of this computer's clock
+    assert readings[1004.0] == (pytest.approx(107.5), True)  # then on at 1x (the old extrapolation: 120.0)
+    clock.observe(105.2, 1004.0)  # back: the SITL had moved 0.2 s
+    assert clock.now_s() == pytest.approx(107.5) and not clock.stale  # never backwards
+    clock.extrapolate = False  # lock-step: the time last heard, as before
+    assert clock.now_s() == 105.2
 
 
 def test_link_clock_sleep_is_scaled(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -61,19 +61,48 @@ def load_signing_key(path: str | os.PathLike[str]) -> bytes:
     return hashlib.sha256(text.encode("utf-8")).digest()
 
 
+#: The farthest (s of the autopilot's clock) :meth:`LinkClock.now_s` extrapolates past the latest time-stamped
+#: message, at the rate measured: 15 periods of the 30 Hz telemetry masonry asks for, two of a 4 Hz stream.
+EXTRAPOLATION_HORIZON_S = 0.5
+#: How long (s of this computer's clock) after the latest time-stamped message :meth:`LinkClock.now_s` holds
+#: before it runs on this computer's clock: the MAVLink link watchdog's default ``heartbeat_timeout_s`` (the link
+#: passes its own), so the clock holds while the watchdog holds the link alive.
+HOLD_S = 1.0
+
+
 class LinkClock:
     """The autopilot's clock (``time_boot_ms``) seen from this computer: a Clock for the state machines.
 
     ``now_s`` extrapolates the last boot time received at the rate measured between the autopilot's and the
-    local monotonic clock (1.0 for real hardware, the time-scale factor for a faster-than-real-time SITL);
-    ``sleep`` sleeps the wall time that corresponds to ``duration_s`` of autopilot time.
+    local monotonic clock (1.0 for real hardware, the time-scale factor for a faster-than-real-time SITL), for at
+    most ``horizon_s`` of the autopilot's time past it; then it holds (:attr:`stale`) until ``hold_s`` of this
+    computer's time have passed since the message, and from then on runs at this computer's rate (1x) until the
+    next message. ``sleep`` sleeps the wall time that corresponds to ``duration_s`` of autopilot time.
+
+    The bound is issue 29's: unbounded, the extrapolation ran on as if the link were alive. A SITL that a loaded
+    machine left unrun for 0.4-2.7 s of wall (its clock, heartbeats and vehicle stood still) read as that many
+    seconds times its speed-up on the machines' timers, and the clock, never running backwards, then held until
+    the SITL caught up. Holding is what a stand-still is; past ``hold_s`` the link watchdog has found the link
+    lost (or the SITL stood still longer), the autopilot's time is not known, and the machines' own reaction to a
+    lost link (the emergency's LAND retries, its give-up after ``link_lost_timeout_s``) runs on this computer's
+    time: a clock held for good would stop it (the fly loop ticks the machine only when its time moves on).
 
     Args:
         monotonic: the local clock (s) the samples are stamped on (the link's: a test may inject one it holds).
+        horizon_s: how far past the latest message (s of the autopilot's clock) ``now_s`` extrapolates at the rate.
+        hold_s: how long after the latest message (s of the local clock) ``now_s`` holds before it runs at 1x.
     """
 
-    def __init__(self, monotonic: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        monotonic: Callable[[], float] = time.monotonic,
+        *,
+        horizon_s: float = EXTRAPOLATION_HORIZON_S,
+        hold_s: float = HOLD_S,
+    ) -> None:
         self._monotonic = monotonic
+        self.horizon_s = horizon_s
+        self.hold_s = hold_s
         self._lock = threading.Lock()
         self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
         self._last: tuple[float, float] | None = None
@@ -108,10 +137,25 @@ class LinkClock:
                 return self._monotonic() - self._created
             if not self.extrapolate:
                 return self._last[0]
-            # extrapolated over one telemetry period at most; never runs backwards
-            now = self._last[0] + (self._monotonic() - self._last[1]) * rate
-            self._returned = max(self._returned, now)
+            age_s = self._monotonic() - self._last[1]
+            horizon_local_s = self.horizon_s / rate
+            # at the rate up to the horizon, then held; silent past the hold, on at this computer's rate
+            now = self._last[0] + min(age_s, horizon_local_s) * rate
+            now += max(0.0, age_s - max(self.hold_s, horizon_local_s))
+            self._returned = max(self._returned, now)  # never runs backwards
             return self._returned
+
+    @property
+    def age_s(self) -> float:
+        """Seconds of the local clock since the latest time-stamped message (inf before one)."""
+        with self._lock:
+            return math.inf if self._last is None else self._monotonic() - self._last[1]
+
+    @property
+    def stale(self) -> bool:
+        """Whether :meth:`now_s` is past its horizon (held, or on this computer's clock): no message for longer
+        than ``horizon_s`` of the autopilot's time at the rate measured (or none yet)."""
+        return self.age_s * self.rate > self.horizon_s
 
     @property
     def last_boot_s(self) -> float | None:

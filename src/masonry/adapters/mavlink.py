@@ -328,9 +328,10 @@ class MavlinkFlightController(EstimateLink):
             if climb_monitor is not None:
                 # PX4 has no GUIDED-style takeoff inside OFFBOARD: the stream climbs, monitored (takeoff.py)
                 # a fresh velocity setpoint takes over once the climb is near its altitude (as ArduPilot's
-                # guided take-off ends on one): the monitor's "steady" would hold it back another second
-                climb = 0.0
-                if not (setpoint is not None and fresh and climb_monitor.hand_over(world_alt, climb_rate)):
+                # guided take-off ends on one): the monitor's "steady" would hold it back another second.
+                # No telemetry past the clock's horizon (stale): hold the altitude, judge no progress on none
+                climb, stale, asked = 0.0, self.clock.stale, setpoint is not None and fresh
+                if not (stale or (asked and climb_monitor.hand_over(world_alt, climb_rate))):
                     climb = climb_monitor.step(self.clock.now_s(), world_alt, climb_rate)
                 if climb_monitor.own_loop:  # a stall once airborne: the rest on the own loop (takeoff.py)
                     self.velocity_loop_engaged = True
@@ -477,9 +478,7 @@ class MavlinkFlightController(EstimateLink):
 
         ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream, monitored
         against its progress (:class:`~masonry.adapters.takeoff.ClimbMonitor`): it ends reached and steady, or
-        with :attr:`takeoff_problem` saying why not. Where it stands is the latest position at this call, after
-        the arming: the one the state machine's take-off measured its ground in just before (issue 29: a ground
-        from before the arming made the climb aim 1 cm under the altitude the machine waited for).
+        with :attr:`takeoff_problem` saying why not. Where it stands: the position at this call (once armed).
         """
         self._check_link("takeoff")
         if not (math.isfinite(altitude_m) and altitude_m > 0.0):

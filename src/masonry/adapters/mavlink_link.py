@@ -163,7 +163,7 @@ class MavlinkLink:
         self.target_system = 0
         self.target_component = 0
         self._monotonic = monotonic
-        self.clock = LinkClock(monotonic)
+        self.clock = LinkClock(monotonic, hold_s=heartbeat_timeout_s)  # held while the link watchdog waits
         self.standstill = Standstill(url)  # a SITL on this computer left unrun: not its silence (issue 29)
         self._down_at: tuple[float, float | None] | None = None  # the watchdog fired: (when, clocks)
         # lock-step (masonry.adapters.lockstep): the stream's clock, until when (monotonic) grants stream it, and
