@@ -99,6 +99,22 @@ def test_takeoff_climbs_to_altitude_and_land_disarms() -> None:
     assert v.on_ground and not v.armed and v.position_m[2] == 0.0
 
 
+def test_arming_and_a_pack_swap_keep_the_instants_telemetry_sample() -> None:
+    # the take-off reads the ground once armed (issue 29): on the simulator the same instant's sample, with the new
+    # flags (or the full pack), not a fresh noise draw that would shift every later one
+    v = SimVehicle(rng=np.random.default_rng(3))
+    v.battery_fraction = 0.4
+    before = v.telemetry()
+    v.swap_battery()
+    swapped = v.telemetry()
+    assert swapped.position_m == before.position_m and swapped.battery_fraction == 1.0
+    v.arm()
+    armed = v.telemetry()
+    assert armed.position_m == before.position_m and armed.armed and armed.mode == "GUIDED"
+    v.takeoff(1.0)  # a command that moves it: a fresh sample
+    assert v.telemetry().position_m != before.position_m
+
+
 def test_takeoff_refused_in_the_air_and_arming_refused_on_low_battery() -> None:
     v = flying()
     with pytest.raises(CommandRejected, match="already flying"):

@@ -308,10 +308,12 @@ class SimVehicle(_Autopilot):
 
     def swap_battery(self) -> None:
         """A fresh pack (ground crew): only landed and disarmed."""
-        self._tel = None
+        sample, self._tel = self._tel, None
         if self.armed or not self.on_ground:
             raise CommandRejected("swap battery", "only on the ground and disarmed")
         self.battery_fraction = 1.0
+        if sample is not None:  # a swap moves nothing: the same sample, with the full pack (as arm)
+            self._tel = (sample[0], dataclasses.replace(sample[1], battery_fraction=1.0))
 
     def hold_above(self, z_min_m: float) -> None:
         """Contact: the world stops the airframe from going below ``z_min_m`` (e.g. the rod on a brick)."""
