@@ -203,3 +203,28 @@ def test_a_px4_climb_holds_its_altitude_and_is_not_judged_on_a_stale_clock() -> 
     fc._stream_setpoint(clock.t)
     assert sent[-1] == (0.0, 0.0, 0.0)  # held
     assert fc._climb is not None and fc._climb.state == "climbing", fc._climb.reason  # not judged
+
+
+def test_an_ardupilot_take_off_is_timed_on_the_autopilots_clock() -> None:
+    """The adapter lets the stream fly (and says why) once ArduPilot's own climb has reached its altitude or run
+    out of ``takeoff_timeout_s``; that time-out counted this computer's seconds while the machine's take-off counts
+    the autopilot's. A SITL slower than the wall (x0.5: lock-step behind a loaded client) then had its climb cut
+    short after 10 s of its own time by the stream's setpoints."""
+    clock = Held()
+    fc = streaming(clock, 0.5)
+    fc.autopilot = "ardupilot"
+    sent: list[tuple[float, float, float]] = []
+    fc._send_position_target = lambda velocity, yaw_rate: sent.append(velocity)  # type: ignore[method-assign]
+    fc._state.armed, fc._streaming = True, True
+    fc._state.position_ned, fc._state.velocity_ned = (0.0, 0.0, -0.5), (0.0, 0.0, -0.3)  # climbing, 0.5 m up
+    fc._takeoff_target_m, fc._takeoff_started_s = 1.2, fc.clock.now_s()
+    wall0_s, boot0_s = clock.t, fc.clock.last_boot_s
+    assert boot0_s is not None
+    for i in range(1, 211):  # 21 s of wall, 10.5 s of its clock
+        heard(fc, clock, wall0_s + 0.1 * i, boot0_s + 0.05 * i)
+    fc._stream_setpoint(clock.t)
+    assert fc._takeoff_target_m == 1.2 and fc.takeoff_problem is None and not sent  # still ArduPilot's climb
+    for i in range(211, 411):  # 20.5 s of its clock
+        heard(fc, clock, wall0_s + 0.1 * i, boot0_s + 0.05 * i)
+    fc._stream_setpoint(clock.t)
+    assert fc._takeoff_target_m is None and fc.takeoff_problem == "take-off at 0.50 m of 1.20 m after 20 s"

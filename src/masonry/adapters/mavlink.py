@@ -220,8 +220,9 @@ class MavlinkFlightController(EstimateLink):
             z (PX4 on GNSS and baro reported -0.34 to -0.71 m, issue 20). Only within 1 m of it horizontally
             (a UAV that landed elsewhere keeps the last measurement). None: ``frame`` as given.
         monotonic: the local monotonic clock (s) that stamps what arrives and that the link watchdog, the
-            connect, command, estimate and takeoff timeouts and the setpoint hold are measured on (a test injects
-            one it can hold still; the waits themselves stay bounded polls of wall time).
+            connect, command and estimate timeouts and the setpoint hold are measured on (a test injects one it
+            can hold still; the waits themselves stay bounded polls of wall time). The take-off's timeout is on
+            the autopilot's clock (``clock``), as the machine's.
     """
 
     def __init__(
@@ -345,7 +346,7 @@ class MavlinkFlightController(EstimateLink):
                     self.velocity_loop_engaged = True  # airborne: acceleration setpoints, if ours (issue 29)
             else:
                 reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
-                if reached or self._monotonic() - self._takeoff_started_s > self.takeoff_timeout_s:
+                if reached or self.clock.now_s() - self._takeoff_started_s > self.takeoff_timeout_s:
                     with self._lock:
                         self._takeoff_target_m = None
                         self.velocity_loop_engaged = True
@@ -497,7 +498,7 @@ class MavlinkFlightController(EstimateLink):
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
             self.velocity_loop_engaged = False
-            self._takeoff_started_s = self._monotonic()
+            self._takeoff_started_s = self.clock.now_s()  # (the autopilot's clock, as the machine's take-off)
             self.takeoff_problem = None
             timeout_s = max(self.takeoff_timeout_s, 10.0 + 2.0 * altitude_m / 0.5)
             own_loop = self.velocity_loop is not None  # a stall once airborne: the rest on it (takeoff.py)
