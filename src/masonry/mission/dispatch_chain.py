@@ -19,15 +19,7 @@ Only while the fleet has no more UAVs than the wall has sites to work at once (t
 r_c, so only under the columns): past it the UAVs queue at the sites already, and chaining through slowed the
 12 m wall at 8 + 4 (12 UAVs, width 8). Used by mission control for the reactive policies under ``site`` with no
 adhesive's open times (a plan with deadlines keeps the glue dispatcher, which holds segments back on purpose);
-``--policy schedule`` has its own ``chain`` rule.
-
-*Bricks past a segment*: past that width (more UAVs than sites to work at once), a segment in progress keeps no
-brick task unavailable (:meth:`ChainThrough._blocks`): every UAV holds a task there, and the tasks in progress,
-each blocking r_c on both sides, cover the wall (12 m wall, 8 + 4), so the brick UAVs were given conflicting
-bricks by rank, next to one another. A segment's visit lasts seconds, a brick UAV's flight to the pallet and back
-a minute, so a brick next to a segment being sprayed is as good as a free one; the site rule still keeps the two
-UAVs' site intervals apart. A brick in progress still keeps its segments unavailable. Up to the width it slowed
-the 12 m wall at 4 + 2 (+3-4 %, docs/performance/fleet.md). Pure: no I/O, no clock.
+``--policy schedule`` has its own ``chain`` rule. Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -51,14 +43,6 @@ class ChainThrough(Dispatcher):
     def _select(self, role: str, uav: str) -> int | None:
         i = self._chained_through(role, uav)
         return super()._select(role, uav) if i is None else i
-
-    def _blocks(self, i: int) -> Sequence[int]:
-        """Past the wall's width, a segment in progress keeps no brick task unavailable (the module docstring,
-        "Bricks past a segment"): its conflicting segments only."""
-        rule = self.admission
-        if self._role[i] != "adhesion" or rule is None or sum(self._live_count.values()) <= rule.width:
-            return super()._blocks(i)
-        return [j for j in self._neighbours[i] if self._role[j] != "brick"]
 
     def _chained_through(self, role: str, uav: str) -> int | None:
         """The segment starting where ``uav`` has just sprayed (it is still there), ready but blocked by a

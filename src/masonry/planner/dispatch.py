@@ -150,7 +150,6 @@ class Dispatcher(DispatchQueries):
         self._status = [_DONE if t.done else _PENDING for t in tasks]
         self._prereqs = [sum(1 for p in self._prerequisites[i] if self._status[p] != _DONE) for i in range(n)]
         self._blockers = [0] * n
-        self._blocking: dict[int, Sequence[int]] = {}  # running task -> the tasks it keeps unavailable
         self._attempts = {}
         self._done = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
         self._stuck = set()
@@ -303,15 +302,10 @@ class Dispatcher(DispatchQueries):
         self._sprayed.pop(uav, None)
         self._in_progress[self._ids[i]] = uav
         blockers = self._blockers
-        self._blocking[i] = blocked = self._blocks(i)
-        for j in blocked:
+        for j in self._neighbours[i]:
             blockers[j] += 1
             if blockers[j] == 1:
                 self._unavailable(j)
-
-    def _blocks(self, i: int) -> Sequence[int]:
-        """The tasks that task ``i``, starting now, keeps unavailable until it stops: its conflicting tasks."""
-        return self._neighbours[i]
 
     def _stop(self, i: int) -> str:
         """Take running task ``i`` off its UAV and unblock its conflicting tasks; returns the UAV's name."""
@@ -320,7 +314,7 @@ class Dispatcher(DispatchQueries):
         del self._uav_task[uav]
         self._status[i] = _PENDING
         blockers = self._blockers
-        for j in self._blocking.pop(i):
+        for j in self._neighbours[i]:
             blockers[j] -= 1
             if blockers[j] == 0:
                 self._maybe_available(j)
