@@ -32,7 +32,7 @@ On the side look's last leg a pass that misses is looked again at once (:meth:`R
 branch ``px4tow``): the support leaves the camera's view 7-15 cm before the drop-off (the carried brick's shadow
 from the camera 10 cm beside the rod: 1.25 times the brick at the support's top, over both its markers), and the
 ``px4`` airframe wanders 2.5-3 cm per axis about its reference, so a pass lands inside r_pl within
-``release_fresh_s`` of the last sighting about one time in three (towers seeds 0-9: 60 of 184 passes). Flown on,
+``release_fresh_s`` of the last sighting about one time in three (towers seeds 0-9: 56 of 184 passes). Flown on,
 the effector wandered into r_pl blind 1-4 s later, only for :meth:`ReleaseGate.allows` to look back up then; five
 such looks left 4 of the 60 tower bricks let go stale (0.9-2.3 s, up to 34 mm off their support). The look now
 starts as the sighting goes stale, and the side look's descent has ``MAX_LEG_LOOKS`` of them.
@@ -88,7 +88,7 @@ MAX_RELOOKS = 5
 #: The same on the side look's descent, whose looks each follow a pass of the last leg that missed the drop-off
 #: (:meth:`ReleaseGate.lost`): a pass lands in r_pl while the sighting is fresh about one time in three on the px4
 #: model, so five looks left 4 of 60 tower bricks to a stale release (docs/performance/as-built.md, branch
-#: ``px4tow``); a look begun as the sighting goes stale costs about 3 s.
+#: ``px4tow``); begun as the sighting goes stale, ten of them took less time than five had (25.8 -> 22.5 s a brick).
 MAX_LEG_LOOKS = 10
 #: A look that did not find the wall is followed by one this much higher (m) (the first: ``PRE_RELEASE_GAP_M`` +
 #: this).
