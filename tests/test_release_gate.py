@@ -14,7 +14,7 @@ import numpy as np
 from fsm_rig import BRICK_ID, Rig, brick_task
 from masonry.fakes import FakeBrick
 from masonry.fsm.config import UavConfig
-from masonry.fsm.release_gate import MAX_RELOOKS, ReleaseGate
+from masonry.fsm.release_gate import MAX_LEG_LOOKS, MAX_RELOOKS, ReleaseGate
 from masonry.fsm.tuning import uav_settings
 from masonry.fsm.wall_align import supports_of, wall_offset_m
 
@@ -241,3 +241,43 @@ def test_with_the_wall_in_view_a_release_outside_the_hold_radius_waits_for_a_nea
     assert cfg.release_hold_m == 0.0 and cfg.release_hold_s == 0.0  # off by default
     assert uav_settings("px4")["release_hold_m"] == 0.010 and uav_settings("px4")["release_hold_s"] == 3.5
     assert "release_hold_m" not in uav_settings("arducopter")
+
+
+class PassWatch:
+    """The support in view but on the side look's last leg (every pass blind from its start, the px4 towers' case
+    from 7.6 cm out): the age of the wall's sighting as each look back up begins, and the looks at the release."""
+
+    def __init__(self) -> None:
+        self.look_ages_s: list[float] = []
+        self.release_age_s: float | None = None
+        self.relooks_at_release: int | None = None
+
+    def __call__(self, rig: Rig) -> None:
+        uav = rig.uav
+        gate = uav._gate
+        blind = uav.state == "place_descend" and uav._side.final and not gate.looking
+        rig.camera.hidden = frozenset({2 * SUPPORT, 2 * SUPPORT + 1}) if blind else frozenset()
+        if gate.relooks > len(self.look_ages_s):
+            self.look_ages_s.append(uav._now_s - uav._wall.seen_s)
+        if uav.state == "place_release" and self.release_age_s is None:
+            self.release_age_s = uav._now_s - uav._wall.seen_s
+            self.relooks_at_release = gate.relooks
+
+
+def test_a_side_look_pass_that_misses_is_looked_again_as_the_sighting_goes_stale() -> None:
+    """On the side look's last leg the UAV looks back up as soon as the sighting is older than
+    ``release_fresh_s``, not when the effector, flying on blind, comes within r_pl (here at the 1.2 s leg's end,
+    the sighting about 1 s old); that descent has ``MAX_LEG_LOOKS`` looks, then the stale release as before."""
+    watch = PassWatch()
+    rig = _rig(side_look=True).run(on_tick=watch)
+    uav = rig.uav
+    assert uav._side.offset_m is not None  # the support is hidden from above: the side look flew
+    assert rig.link.results[0].status == "done"
+    assert MAX_LEG_LOOKS > MAX_RELOOKS
+    assert watch.relooks_at_release == MAX_LEG_LOOKS
+    assert len(watch.look_ages_s) == MAX_LEG_LOOKS
+    period = rig.config.control_period_s
+    fresh = rig.config.release_fresh_s
+    assert all(fresh < age <= fresh + 2 * period for age in watch.look_ages_s), watch.look_ages_s
+    assert uav.attempt.place_attempts == 0  # no descent failed
+    assert watch.release_age_s is not None and watch.release_age_s > fresh

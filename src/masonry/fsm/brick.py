@@ -430,6 +430,8 @@ class BrickUav(PutBack):
         if self._side.leg_due(self) and self._gate.before_leg(self, tel):
             return
         self._side.step(self, self._place_yaw_rad())
+        if self._gate.lost(self, tel):  # the last leg's pass missed the drop-off while fresh: look again now
+            return
         error = dropoff_error_m(self, tel, self._dropoff)
         if error is not None and self._gate.closing(self, tel):
             error = None  # (masonry.fsm.release_gate: nearer by the next tick, the sighting still fresh then)
