@@ -8,17 +8,22 @@ from __future__ import annotations
 
 import itertools
 import json
+import threading
+from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from typer.testing import CliRunner, Result
 
+from masonry.adapters import lockstep as lockstep_module
 from masonry.adapters.lockstep import LOCKSTEP_TEXT, LockstepClock
 from masonry.adapters.mavlink import MSG_LOCAL_POSITION_NED, MavlinkFlightController
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.adapters.sitl_lockstep import SitlLockstep
+from masonry.cli import app
 from masonry.cli.hardware import build_sitl
-from own_sitl_flight import lockstep_brick_flight
+from own_sitl_flight import CASE_STUDY, lockstep_brick_flight
 from waiting import wait_until
 
 
@@ -252,3 +257,150 @@ def test_a_lock_step_flight_repeats_with_the_same_seed() -> None:
     assert first["trace"] == second["trace"], states
     assert first["trace"][0]["t_s"] < 1.0, states  # the flight starts where the pre-flight's grants left it
     assert second["placement_error_m"] == first["placement_error_m"], states
+
+
+class _Wall:
+    """This computer's clock, held by the test (the lock-step clock's ``monotonic``)."""
+
+    def __init__(self) -> None:
+        self.t = 1000.0
+
+    def __call__(self) -> float:
+        return self.t
+
+
+def test_a_sitl_that_dies_is_gone_after_its_late_replies_and_the_clock_runs_on_at_1x() -> None:
+    # issue 29: a SITL that died left the clock at the last time heard for ever; each step waited 2 s for a reply,
+    # the machine was never ticked on a later time, never saw the lost link, and `masonry fly` looped for ever
+    sitl = MavlinkSitl(free_udp_port(), time_scale=50.0, lockstep_wait_s=60.0)
+    sitl.start()
+    wall = _Wall()
+    fc = MavlinkFlightController(
+        f"udpin:127.0.0.1:{sitl.port}", connect_timeout_s=10.0, heartbeat_timeout_s=0.3
+    )
+    clock = LockstepClock(fc, reply_wait_s=0.05, monotonic=wall)  # (2 s a step in masonry fly)
+    fc.connect()
+    try:
+        wait_until(lambda: _announced(clock), 10.0, "the SITL's lock-step announcement")
+        for _ in range(3):
+            clock.sleep(0.1)
+        assert clock.late_replies == 0 and not clock.gone
+        heard_s = clock.now_s()
+        sitl.stop()  # the SITL dies: nothing more from it
+        for late in (1, 2):
+            clock.sleep(0.1)
+            assert clock.late_replies == late and not clock.gone
+            wall.t += 10.0  # (however long the wall: not gone before the third late reply)
+            assert clock.now_s() == heard_s  # held at the time last heard, as before
+        clock.sleep(0.1)
+        assert clock.late_replies == clock.late_in_row == 3 and clock.gone
+        assert clock.now_s() == heard_s
+        wall.t += 2.5
+        assert clock.now_s() == pytest.approx(heard_s + 2.5)  # on at this computer's rate
+        clock.sleep(0.1)  # a step of the clock's own: not another late reply
+        assert clock.late_replies == 3 and clock.grants == 7
+        wall.t += 0.05
+        assert clock.now_s() == pytest.approx(heard_s + 2.55)
+        wait_until(lambda: not fc.telemetry().link_ok, 10.0, "the link watchdog")  # what the machine now sees
+    finally:
+        fc.close()
+        sitl.stop()
+
+
+class _FakeLink:
+    """The flight controller as the lock-step clock sees it: the queues it listens on, what it sends, its clock."""
+
+    def __init__(self) -> None:
+        self.queues: dict[str, Any] = {}
+        self.clock = SimpleNamespace(last_boot_s=4.0, now_s=lambda: 4.0, extrapolate=True)
+        self.sent: list[int] = []
+        self._stop = SimpleNamespace(wait=lambda s: True)  # (the hold thread ends at once)
+        self.velocity_loop = None
+        self.stream_paced_until_s = 0.0
+
+    def listen(self, kinds: tuple[str, ...]) -> Any:
+        import queue
+
+        q: Any = queue.Queue()
+        self.queues[kinds[0]] = q
+        return q
+
+    def unlisten(self, q: Any) -> None:
+        pass
+
+    def send_message(self, build: Any) -> None:
+        build(SimpleNamespace(system_time_send=lambda unix_us, boot_ms: self.sent.append(boot_ms)))
+
+    def _stream_setpoint(self, now_s: float) -> None:
+        pass
+
+    def stream_clock(self) -> float:
+        return 0.0
+
+    def _monotonic(self) -> float:
+        return 0.0
+
+
+def test_a_sitl_that_answers_again_puts_the_clock_back_in_lock_step() -> None:
+    fake, wall = _FakeLink(), _Wall()
+    clock = LockstepClock(fake, reply_wait_s=0.01, monotonic=wall)  # type: ignore[arg-type]
+    fake.queues["STATUSTEXT"].put(SimpleNamespace(text=LOCKSTEP_TEXT))
+    assert _announced(clock) and clock.now_s() == 4.0
+    for _ in range(2):
+        clock.sleep(0.1)  # unanswered
+        clock.sleep(0.1)
+        fake.queues["SYSTEM_TIME"].put(SimpleNamespace(time_boot_ms=fake.sent[-1] + 100))  # answered late...
+        clock.sleep(0.1)  # ...and this grant is: two in a row at most, never gone
+        assert not clock.gone and clock.late_in_row == 0
+    for _ in range(3):
+        clock.sleep(0.1)
+    assert clock.gone and clock.late_replies == 7
+    gone_s = clock.now_s()
+    wall.t += 1.0
+    assert clock.now_s() == pytest.approx(gone_s + 1.0)
+    fake.queues["SYSTEM_TIME"].put(SimpleNamespace(time_boot_ms=round((gone_s + 1.2) * 1000)))  # it is back
+    clock.sleep(0.1)
+    assert not clock.gone and clock.now_s() == pytest.approx(gone_s + 1.2)
+    wall.t += 5.0
+    assert clock.now_s() == pytest.approx(gone_s + 1.2)  # in lock-step: the time heard, not the wall's
+
+
+def test_masonry_fly_ends_with_the_lost_link_when_its_sitl_dies_in_flight(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the whole fly loop: the SITL stops in the take-off; `masonry fly` ends with the existing one-line error
+    # (before: it waited REPLY_WAIT_S a step for ever, its clock at the last time heard; 40 s of wall, still going)
+    monkeypatch.setattr(lockstep_module, "REPLY_WAIT_S", 0.1)  # (2 s: 6 s of wall before it is found gone)
+    port = free_udp_port()
+    sitl, _ = build_sitl(
+        port=port,
+        uav="brick",
+        blueprint=Path(CASE_STUDY),
+        time_scale=4.0,
+        vehicle="px4",
+        seed=1,
+        lockstep=True,
+    )
+    sitl.start()
+    ran: list[Result] = []
+
+    def fly() -> None:
+        ran.append(CliRunner().invoke(app, [
+            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B1", "--fc", f"udp:127.0.0.1:{port}",
+            "--actuators", "sim", "--camera", "sim",
+        ]))  # fmt: skip
+
+    flight = threading.Thread(target=fly, daemon=True)
+    flight.start()
+    try:
+        # 80 grants: the pre-flight's (the estimate's 0.5 s, the arming's) and the fly loop's first 2.7 s
+        assert sitl.lockstep is not None
+        wait_until(lambda: sitl.lockstep is not None and sitl.lockstep.grants >= 80, 60.0, "80 grants")
+    finally:
+        sitl.stop()  # the SITL dies
+    flight.join(60.0)
+    assert not flight.is_alive(), "masonry fly still running 60 s after its SITL died"
+    assert ran[0].exit_code == 1, ran[0].output
+    assert "B1: failed in " in ran[0].output and ran[0].output.rstrip().endswith(
+        ": flight controller link lost"
+    )

@@ -13,6 +13,7 @@ import math
 import queue
 import threading
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -37,6 +38,13 @@ HOLD_EVERY_S = 0.25
 #: free, PX4's offboard check fired and the same flight ended otherwise); a client that stops granting on purpose
 #: (its waits on the wall: a test's take-off, the end of the flight) lets it run free this much later.
 HOLD_IN_FLIGHT_S = 5.0
+#: After this many grants in a row not answered within :data:`REPLY_WAIT_S` (so at least 6 s of wall without a
+#: reply: longer than :data:`HOLD_IN_FLIGHT_S`, the longest stall of a loaded machine the lock-step rides out) the
+#: SITL counts as gone (issue 29): :meth:`LockstepClock.now_s` runs on from the time last heard at this computer's
+#: rate (1x, as ``LinkClock`` past its hold), so that the fly loop ticks, the machine sees the link lost and its
+#: own reaction runs; held at the last time heard, ``masonry fly`` waited 2 s a step for ever. A process left unrun
+#: as a whole counts one late reply, not three: its next grant is answered.
+GONE_AFTER_LATE_REPLIES = 3
 
 
 class LockstepClock:
@@ -51,17 +59,33 @@ class LockstepClock:
     :data:`HOLD_IN_FLIGHT_S` after each grant's reply (a loop left unrun by a loaded machine). The whole flight,
     pre-flight included, is then on the SITL's clock: the same seed, the same flight (docs/sitl-lockstep.md).
 
+    A SITL that stops answering (:data:`GONE_AFTER_LATE_REPLIES` grants in a row) is gone: the clock runs on at
+    1x of this computer's clock from the time last heard, each step waits its own duration of wall for the reply
+    (not :data:`REPLY_WAIT_S`), and a reply (a SITL that comes back) puts it in lock-step again.
+
     Args:
         fc: the MAVLink flight controller, not yet connected.
+        reply_wait_s: how long (wall s) a step waits for the SITL's reply (None: :data:`REPLY_WAIT_S`).
+        monotonic: this computer's clock (s) the clock runs on once the SITL is gone (a test may inject one).
     """
 
-    def __init__(self, fc: MavlinkFlightController) -> None:
+    def __init__(
+        self,
+        fc: MavlinkFlightController,
+        *,
+        reply_wait_s: float | None = None,
+        monotonic: Callable[[], float] = time.monotonic,
+    ) -> None:
         self._fc = fc
+        self.reply_wait_s = REPLY_WAIT_S if reply_wait_s is None else reply_wait_s
+        self._monotonic = monotonic
         self._texts = fc.listen(("STATUSTEXT",))
         self._replies: queue.Queue[object] | None = None
         self._now_s = -math.inf  # in lock-step: the SITL's time as last heard, never extrapolated
         self.grants = 0
         self.late_replies = 0  # grants not answered within REPLY_WAIT_S
+        self.late_in_row = 0  # ... since the last reply
+        self.gone_at: tuple[float, float] | None = None  # the SITL gone: (its time, this computer's) then
         self._held_ms: int | None = None  # the latest grant (or the time heard at the announcement)
         self._preflight = True  # until the fly loop's first sleep: the SITL is held between grants
         self._replied_wall_s = -math.inf  # when (wall) the last grant was answered (or given up on)
@@ -79,7 +103,15 @@ class LockstepClock:
             return self._fc.clock.now_s()
         heard_s = self._fc.clock.last_boot_s
         self._now_s = max(self._now_s, heard_s if heard_s is not None else -math.inf)
+        if (gone_at := self.gone_at) is not None:  # the SITL gone: on at 1x from when it was found so
+            self._now_s = max(self._now_s, gone_at[0] + self._monotonic() - gone_at[1])
         return self._now_s
+
+    @property
+    def gone(self) -> bool:
+        """Whether the SITL has stopped answering (:data:`GONE_AFTER_LATE_REPLIES` grants in a row) and not come
+        back: :meth:`now_s` runs at this computer's rate."""
+        return self.gone_at is not None
 
     def sleep(self, duration_s: float) -> None:
         """Wait ``duration_s`` of the autopilot's time: a grant and its reply in lock-step, else a sleep. The fly
@@ -123,15 +155,18 @@ class LockstepClock:
         self._held_ms = grant_ms  # (set after the grant: a hold never comes before the setpoint above)
         self.grants += 1
         try:
-            self._await_reply(grant_ms)
+            self._await_reply(
+                grant_ms, min(self.reply_wait_s, duration_s) if self.gone else self.reply_wait_s
+            )
         finally:
             fc.stream_paced_until_s = fc._monotonic() + PACED_STREAM_S
             self._replied_wall_s = time.monotonic()
 
-    def _await_reply(self, grant_ms: int) -> None:
-        """Wait (at most :data:`REPLY_WAIT_S` of wall) for the SITL's reply to the grant ``grant_ms``."""
+    def _await_reply(self, grant_ms: int, wait_s: float) -> None:
+        """Wait (at most ``wait_s`` of wall) for the SITL's reply to the grant ``grant_ms``: a late one counted
+        (its wait the whole :attr:`reply_wait_s`), the SITL gone after :data:`GONE_AFTER_LATE_REPLIES` in a row."""
         assert self._replies is not None
-        deadline_s = time.monotonic() + REPLY_WAIT_S
+        deadline_s = time.monotonic() + wait_s
         while (left_s := deadline_s - time.monotonic()) > 0.0:
             try:
                 reply = self._replies.get(timeout=left_s)
@@ -140,8 +175,14 @@ class LockstepClock:
             reply_ms = int(getattr(reply, "time_boot_ms", -1))
             if reply_ms >= grant_ms:  # the SITL's time: the grant, or later if it ran free past it
                 self._now_s = max(self._now_s, reply_ms / 1000.0)
+                self.late_in_row, self.gone_at = 0, None  # (back in lock-step, if it had gone)
                 return
+        if self.gone:
+            return  # a step of the clock's own, not a late reply
         self.late_replies += 1
+        self.late_in_row += 1
+        if self.late_in_row >= GONE_AFTER_LATE_REPLIES:
+            self.gone_at = (self.now_s(), self._monotonic())
 
     def _position_age_s(self) -> float:
         """How old the position the velocity loop closes on is, on the autopilot's time as heard (not the wall's:
