@@ -16,8 +16,8 @@ from masonry.errors import LinkLost
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
 
-#: Wall seconds a real autopilot's link may stay down with the UAV down (landed, or halted out of service) before
-#: `masonry fly --mission` ends with one line saying so (mission control has had its out-of-service heartbeats).
+#: Wall seconds a real autopilot's link may stay down with the UAV halted out of service before `masonry fly
+#: --mission` ends with one line saying so (mission control has had its out-of-service heartbeats).
 AUTOPILOT_GONE_S = 5.0
 
 

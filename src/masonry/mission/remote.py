@@ -128,8 +128,9 @@ def run_remote_uav(
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
-        autopilot_gone_s: a real autopilot's (``masonry fly --fc``): once the UAV is down (landed, or halted out of
-            service) with its flight controller's link down this long (wall seconds), the run ends with
+        autopilot_gone_s: a real autopilot's (``masonry fly --fc``): once the UAV is halted out of service (for
+            good: a silent autopilot retires it) with its flight controller's link down this long (wall seconds),
+            the run ends with
             ``RemoteRun.autopilot_lost`` (issue 29: a PX4 SITL whose process died left `masonry fly --mission`
             waiting for mission control's silence, then exiting with no word of why). None: never (a simulated
             world's link comes back).
@@ -335,7 +336,7 @@ def _fly_until_done(
             heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
         if handler.finished:
             break
-        if autopilot_down is not None and autopilot_down(model.finished):
+        if autopilot_down is not None and autopilot_down(model.state == "halted"):
             return True
         if heard_s is None:
             if time.monotonic() - wall0 > wait_s:
@@ -351,12 +352,12 @@ def _fly_until_done(
 def _link_down(
     fc: FlightController, gone_s: float, monotonic: Callable[[], float] = time.monotonic
 ) -> Callable[[bool], bool]:
-    """Whether the autopilot is gone, asked once a tick with whether the UAV is down (landed or halted): its link
-    has been down (``fc.telemetry().link_ok`` False) for ``gone_s`` of wall time (``monotonic``) while it was."""
+    """Whether the autopilot is gone, asked once a tick with whether the UAV is halted (out of service for good): its
+    link has been down (``fc.telemetry().link_ok`` False) for ``gone_s`` of wall time (``monotonic``) while it was."""
     since: list[float] = []
 
-    def gone(down: bool) -> bool:
-        if not down or fc.telemetry().link_ok:
+    def gone(halted: bool) -> bool:
+        if not halted or fc.telemetry().link_ok:
             since.clear()
             return False
         if not since:
