@@ -117,6 +117,16 @@ def on_px4(workdir: Path, instance: int, fly: Callable[[str], T], params: dict[s
     raise AssertionError("unreachable: the second run returns or raises")
 
 
+#: The PX4 process behind each URL :func:`px4` yields, while its block runs.
+_RUNNING: dict[str, subprocess.Popen[bytes]] = {}
+
+
+def kill_px4(url: str) -> None:
+    """Kill the PX4 behind ``url`` (its process group, SIGKILL) as a crash would: no goodbye on the link."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(_RUNNING[url].pid, signal.SIGKILL)
+
+
 @contextlib.contextmanager
 def px4(workdir: Path, instance: int, params: dict[str, str] | None = None) -> Iterator[str]:
     """Run one PX4 SIH quadrotor (instance ``instance``, no .ulg logging, ``params`` set at boot as
@@ -134,9 +144,12 @@ def px4(workdir: Path, instance: int, params: dict[str, str] | None = None) -> I
         env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True,
     )  # fmt: skip
     give_the_cpu(proc.pid)
+    url = f"udpin:0.0.0.0:{14540 + instance}"
+    _RUNNING[url] = proc
     try:
-        yield f"udpin:0.0.0.0:{14540 + instance}"
+        yield url
     finally:
+        _RUNNING.pop(url, None)
         with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGTERM)
         try:

@@ -1,7 +1,7 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
-a failsafe of its (its geofence) ends `masonry fly`; issue 29's one-brick scenario, the adhesion task A0 and the
-case study as a two-vehicle mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load:
-:data:`OPT_IN_ENV`).
+a failsafe of its (its geofence) ends `masonry fly`, and its process's death `masonry fly --mission` (in one line);
+issue 29's one-brick scenario, the adhesion task A0 and the case study as a two-vehicle mission too where
+``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: :data:`OPT_IN_ENV`).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -32,6 +33,7 @@ from px4_sitl import (
     SIH_STARVED,
     give_the_cpu,
     hover,
+    kill_px4,
     on_px4,
     one_flight_at_a_time,
     px4,
@@ -176,7 +178,13 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
 #: (horizontally) off SIH's own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres
 #: within seconds; masonry flies (and the simulated world follows) that estimate. The scenario failed 2 of 7
 #: flights, A0 2 of 11 test runs ("could not reach the spraying height", "could not hover still ... 0.35 m off"), the
-#: mission completed 3 of 3, two with a task's second attempt: not yet tests CI can hold.
+#: mission completed 3 of 3, two with a task's second attempt: not yet tests CI can hold. Again at load average 3-9
+#: (the same branch, second stop; "The real-PX4 tests and SIH's ground truth"): the scenario failed 2 of 9 flights,
+#: each in the drop-off's alignment on EKF2's 3-5 cm wander; the mission's SIH starved at load 3.6, its retry
+#: completed in 472.5 s with B1 in 2 attempts; once more at load 2-3 it failed (B1's drop-off alignment twice,
+#: then the 720 s bound); the three took 15-21 min of wall (CI's budget for them: 3-4 min).
+#: Driving the simulated world from SIH's ground truth does not help: EKF2 sat 0.22-0.27 m rms (0.5-0.8 m at most)
+#: off it horizontally, 0.25-0.45 m rms vertically, so a lone brick would land decimetres from its design.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -299,6 +307,50 @@ def test_masonry_fly_ends_when_px4s_failsafe_takes_the_vehicle(tmp_path: Path) -
         return line
 
     print(f"PX4: {on_px4(tmp_path / 'px4', 4, fly, GEOFENCE_PX4_PARAMS)}")
+
+
+#: Wall seconds `masonry fly --mission` may take to end once its PX4 is killed: the link watchdog (1 s), the landing
+#: asked of a silent autopilot and the emergency's give-up (link_lost_timeout_s, 5 s), then 5 s of the link down
+#: with the UAV halted (masonry.cli.fly_mission.AUTOPILOT_GONE_S); 15 s by hand (docs/performance/autopilots.md).
+GONE_WALL_S = 60.0
+
+
+@pytest.mark.slow
+def test_masonry_fly_mission_ends_in_one_line_when_its_px4_dies(tmp_path: Path) -> None:
+    """Issue 29: PX4's process killed (SIGKILL, its whole group) while ``masonry fly --mission`` flies issue 29's
+    one-brick scenario: the UAV halts out of service, and the process ends within :data:`GONE_WALL_S` with one
+    ``error:`` line naming its flight controller, exit 1 (it waited for mission control's silence before: 70 s, no
+    word of why). Instance 5; mission control stays up (it would wait for the UAV)."""
+    blueprint = tmp_path / "one_brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    config = tmp_path / "uav.yaml"
+    config.write_text(UAV_YAML)
+    endpoint = f"tcp/127.0.0.1:{free_tcp_port()}"
+    name = ["--mission-name", f"px4-gone-{endpoint.rsplit(':', 1)[1]}"]
+    workdir = tmp_path / "px4"
+    with one_flight_at_a_time(), px4(workdir, instance=5) as url:
+        mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", *name)
+        uav = _vehicle(masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint),
+                               "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", url,
+                               "--actuators", "sim", "--camera", "sim", "--config", str(config), "--format",
+                               "json", *name, own_session=True))  # fmt: skip
+        with reaped([mc, uav]):
+            log = workdir / "px4.log"
+            deadline = time.monotonic() + TASK_WALL_S
+            while "Takeoff detected" not in log.read_text(errors="replace"):  # PX4's own word: airborne
+                px4_said = log.read_text(errors="replace")[-1500:]
+                assert uav.poll() is None and time.monotonic() < deadline, (uav.returncode, px4_said)
+                time.sleep(0.2)  # (PX4 runs in real time; its log is the only word of its take-off)
+            kill_px4(url)
+            killed_s = time.monotonic()
+            out, err = _finish(uav, GONE_WALL_S, "masonry fly --mission after its PX4 was killed", log)
+            ended_s = time.monotonic() - killed_s
+    assert uav.returncode == 1, (out[-1500:], err[-2000:])
+    last = err.strip().splitlines()[-1]
+    said = f"error: brick-1: its flight controller ({url}) went silent and stayed so"
+    assert last.startswith(said), err[-2000:]
+    assert json.loads(out)["state"] == "halted", out[-1500:]
+    print(f"PX4: masonry fly --mission ended {ended_s:.1f} s after its PX4 was killed: {last}")
 
 
 #: More than PX4's COM_OF_LOSS_T (1.0 s in v1.16): setpoints this old no longer count as a stream.

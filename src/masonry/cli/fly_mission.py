@@ -11,9 +11,14 @@ import typer
 
 from masonry.cli.fly_adapters import _describe, select_adapters
 from masonry.cli.fly_tuning import fly_settings
+from masonry.errors import LinkLost
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
+
+#: Wall seconds a real autopilot's link may stay down with the UAV halted out of service before `masonry fly
+#: --mission` ends with one line saying so (mission control has had its out-of-service heartbeats).
+AUTOPILOT_GONE_S = 5.0
 
 
 def _fly_mission(
@@ -92,6 +97,7 @@ def _fly_mission(
             max_wind_mps=hardware.max_wind_mps if hardware is not None else None,
             events_sink=mission_log,
             vehicle=vehicle,
+            autopilot_gone_s=None if adapters is None or hardware.sim_fc else AUTOPILOT_GONE_S,
         )
     finally:
         if adapters is not None:
@@ -144,6 +150,11 @@ def _fly_mission(
                 "within 2 s"
             )
         typer.echo(f"mission {'ended' if run.mission_ended else 'did not end'}; {spec.name} is {run.state}")
+    if run.autopilot_lost:
+        raise LinkLost(
+            f"{spec.name}: its flight controller ({hardware.fc}) went silent and stayed so: the autopilot is gone "
+            f"(its process ended, its link cut); {spec.name} is {run.state}, out of the mission"
+        )
     if not run.mission_ended:
         raise typer.Exit(1)
 

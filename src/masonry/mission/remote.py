@@ -20,7 +20,7 @@ from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, LinkLost
 from masonry.mission.handler import UavHandler
 from masonry.placement_check import wall_tops_m
-from masonry.ports import UavPorts, WaitsAlive
+from masonry.ports import FlightController, UavPorts, WaitsAlive
 
 
 @dataclass(frozen=True)
@@ -34,6 +34,9 @@ class RemoteRun:
     sim_time_s: float
     refused: tuple[str, ...] = ()  # assignments refused (not of this UAV's blueprint), one line each
     dropped: dict[str, int] = field(default_factory=dict)  # frames that failed authentication, by reason
+    #: the run ended because the autopilot went silent for good (``autopilot_gone_s``): its process died, its
+    #: cable is out
+    autopilot_lost: bool = False
 
 
 def paced(clock: Any, step: Callable[[float], None], time_scale: float) -> Callable[[float], None]:
@@ -92,6 +95,7 @@ def run_remote_uav(
     zenoh_config: str | Path | None = None,
     events_sink: Any = None,
     vehicle: str | None = None,
+    autopilot_gone_s: float | None = None,
 ) -> RemoteRun:
     """Fly one UAV for a remote mission control until it ends the mission and the UAV has landed.
 
@@ -124,6 +128,12 @@ def run_remote_uav(
         key: the mission's 32-byte key (:mod:`masonry.mission.auth`); None: messages are not authenticated.
         zenoh_config: a Zenoh configuration file (TLS, access control), see
             :class:`~masonry.mission.zenoh_transport.ZenohTransport`.
+        autopilot_gone_s: a real autopilot's (``masonry fly --fc``): once the UAV is halted out of service (for
+            good: a silent autopilot retires it) with its flight controller's link down this long (wall seconds),
+            the run ends with
+            ``RemoteRun.autopilot_lost`` (issue 29: a PX4 SITL whose process died left `masonry fly --mission`
+            waiting for mission control's silence, then exiting with no word of why). None: never (a simulated
+            world's link comes back).
         events_sink: gets this UAV's events (:class:`masonry.mission.uav_events.UavWatch`: its tasks, and its
             state, position and battery every ``SAMPLE_PERIOD_S``), for its log; None: none.
 
@@ -212,7 +222,7 @@ def run_remote_uav(
             from masonry.mission.uav_events import UavWatch
 
             watch = UavWatch(handler, model, fc.telemetry, events_sink)
-        _fly_until_done(
+        lost = _fly_until_done(
             handler,
             model,
             clock,
@@ -224,6 +234,7 @@ def run_remote_uav(
             echo=echo,
             not_heard=not_heard,
             watch=watch,
+            autopilot_down=None if autopilot_gone_s is None else _link_down(fc, autopilot_gone_s),
         )
         if watch is not None:
             watch.tick(clock.now_s(), sample=True)  # where it ended: landed
@@ -241,6 +252,7 @@ def run_remote_uav(
         clock.now_s() - t0,
         tuple(handler.refused),
         dropped,
+        lost,
     )
 
 
@@ -292,12 +304,14 @@ def _fly_until_done(
     echo: Any,
     not_heard: Callable[[], LinkLost],
     watch: Any = None,
-) -> None:
+    autopilot_down: Callable[[bool], bool] | None = None,
+) -> bool:
     """The control loop of :func:`run_remote_uav`: tick the handler until the mission ends for this UAV.
 
     It ends when the handler is finished, when the UAV has landed and mission control has been silent for
     ``wait_s`` of wall time, or after ``max_time_s`` of the UAV's clock; ``start`` is (clock, wall) time at
-    the start. Raises ``not_heard()`` when mission control was never heard within ``wait_s``.
+    the start. Raises ``not_heard()`` when mission control was never heard within ``wait_s``. With
+    ``autopilot_down`` (:func:`_link_down`) it also ends, returning True, once that says the autopilot is gone.
     """
     t0, wall0 = start
     last_state = model.state
@@ -322,6 +336,8 @@ def _fly_until_done(
             heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
         if handler.finished:
             break
+        if autopilot_down is not None and autopilot_down(model.state == "halted"):
+            return True
         if heard_s is None:
             if time.monotonic() - wall0 > wait_s:
                 raise not_heard()
@@ -330,3 +346,22 @@ def _fly_until_done(
         if now - t0 >= max_time_s:
             break
         advance(dt_s)
+    return False
+
+
+def _link_down(
+    fc: FlightController, gone_s: float, monotonic: Callable[[], float] = time.monotonic
+) -> Callable[[bool], bool]:
+    """Whether the autopilot is gone, asked once a tick with whether the UAV is halted (out of service for good): its
+    link has been down (``fc.telemetry().link_ok`` False) for ``gone_s`` of wall time (``monotonic``) while it was."""
+    since: list[float] = []
+
+    def gone(halted: bool) -> bool:
+        if not halted or fc.telemetry().link_ok:
+            since.clear()
+            return False
+        if not since:
+            since.append(monotonic())
+        return monotonic() - since[0] >= gone_s
+
+    return gone
