@@ -346,7 +346,7 @@ def open_adapters(
             fc, clock, advance = uav.fc, world.clock, world.step
             opened.descriptions["flight controller"] = "simulated"
         else:
-            clock, advance = link_clock, _advance_on(link_clock, world)
+            clock, advance = link_clock, _advance_on(link_clock, world, paced)
         gripper, sprayer = _open_actuators(hw, uav, opened)
         camera = _open_camera(hw, uav, clock, opened, camera_mode, sim_fc=hw.sim_fc)
         return UavPorts(
@@ -357,11 +357,21 @@ def open_adapters(
         raise
 
 
-def _advance_on(clock: Any, world: Any) -> Callable[[float], None]:
-    """``advance`` on the autopilot's clock: wait ``dt_s`` of it, then bring the simulated world (if any) level."""
+def _advance_on(clock: Any, world: Any, paced: Any = None) -> Callable[[float], None]:
+    """``advance`` on the autopilot's clock: wait until the tick is due, then bring the simulated world (if any) level.
+
+    The tick is due ``dt_s`` after the last one woke: off lock-step the machine's own work runs on the autopilot's
+    clock too, and a whole ``dt_s`` after it made the 20 Hz loop tick at 8-9 Hz against the real PX4 (issue 29).
+    In lock-step (``paced.lockstep`` and not ``paced.gone``) the clock stands while the tick works, and the wait is
+    ``dt_s`` exactly, so a lock-step flight repeats. A tick that overran waits nothing and does not catch up.
+    """
+    woke_s: list[float] = []
 
     def advance(dt_s: float) -> None:
-        clock.sleep(dt_s)
+        in_step = bool(getattr(paced, "lockstep", False)) and not bool(getattr(paced, "gone", False))
+        spent_s = clock.now_s() - woke_s[0] if woke_s and not in_step else 0.0
+        clock.sleep(max(0.0, dt_s - spent_s))
+        woke_s[:] = [clock.now_s()]
         if world is not None:  # keep the simulated world on the autopilot's time
             step = clock.now_s() - world.clock.now_s()
             if step > 1e-6:

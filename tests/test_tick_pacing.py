@@ -1,0 +1,72 @@
+"""The fly loop's tick on a real autopilot's clock is due ``dt_s`` after the last one woke (issue 29).
+
+Against the real PX4 the 20 Hz loop ticked at 8-9 Hz: it waited a whole ``dt_s`` after the machine's own work,
+which runs on the autopilot's clock too. In lock-step the clock stands while the tick works and the wait stays
+``dt_s`` exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import pytest
+
+from masonry.adapters.wiring import _advance_on
+
+
+@dataclass
+class WorkClock:
+    """A clock that runs on while the machine works (``work``) and records what it was asked to sleep."""
+
+    t_s: float = 0.0
+    slept_s: list[float] = field(default_factory=list)
+
+    def now_s(self) -> float:
+        return self.t_s
+
+    def sleep(self, duration_s: float) -> None:
+        self.slept_s.append(duration_s)
+        self.t_s += duration_s
+
+
+@dataclass
+class Paced:
+    lockstep: bool
+    gone: bool = False
+
+
+def _fly(clock: WorkClock, advance: object, work_s: float, ticks: int) -> float:
+    start_s = clock.now_s()
+    for _ in range(ticks):
+        clock.t_s += work_s  # the machine's step
+        advance(0.05)  # type: ignore[operator]
+    return ticks / (clock.now_s() - start_s)
+
+
+def test_off_lockstep_the_tick_keeps_its_rate_whatever_the_work() -> None:
+    clock = WorkClock()
+    rate_hz = _fly(clock, _advance_on(clock, None, Paced(lockstep=False)), work_s=0.03, ticks=100)
+    assert rate_hz == pytest.approx(20.0, rel=0.01)  # was 12.5 Hz: 0.05 s of sleep after 0.03 s of work
+    assert clock.slept_s[1:] == pytest.approx([0.02] * 99)
+
+
+def test_a_tick_that_overran_waits_nothing_and_does_not_catch_up() -> None:
+    clock = WorkClock()
+    advance = _advance_on(clock, None, Paced(lockstep=False))
+    _fly(clock, advance, work_s=0.01, ticks=3)
+    _fly(clock, advance, work_s=0.2, ticks=1)  # a stall
+    assert clock.slept_s[-1] == 0.0
+    _fly(clock, advance, work_s=0.01, ticks=2)
+    assert clock.slept_s[-2:] == pytest.approx([0.04, 0.04])  # back on its period, no burst of short ticks
+
+
+def test_in_lockstep_each_wait_is_dt_exactly() -> None:
+    clock = WorkClock()
+    _fly(clock, _advance_on(clock, None, Paced(lockstep=True)), work_s=0.0, ticks=50)
+    assert clock.slept_s == [0.05] * 50
+
+
+def test_a_lockstep_sitl_gone_is_paced_as_any_link() -> None:
+    clock = WorkClock()
+    _fly(clock, _advance_on(clock, None, Paced(lockstep=True, gone=True)), work_s=0.03, ticks=10)
+    assert clock.slept_s[1:] == pytest.approx([0.02] * 9)
