@@ -28,7 +28,7 @@ from masonry.mission.airspace_state import (
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned
-from masonry.mission.volumes import Vec3, contains, point_segment_m, same_site, stopped_at
+from masonry.mission.volumes import Vec3, contains, leave_from, point_segment_m, same_site, stopped_at
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
@@ -74,6 +74,8 @@ def request(
         c.refused += not ok
         return Grant(uav, site, ok)
     u = c.record(uav)
+    if pos is not None:  # (a few centimetres past its zone: it leaves from the zone, volumes.leave_from)
+        pos = (*leave_from((pos[0], pos[1]), u.volumes), pos[2])
     c.handed_task.discard(uav)  # (it asks again: for its task's site, or home if the task was taken back)
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):

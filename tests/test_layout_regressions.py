@@ -1,0 +1,133 @@
+"""Failures ``benchmarks/bench_layouts.py`` found (issue 27, section 4), each traced to its cause and kept fixed: a
+scenario over the pure airspace where the cause is there, else the generated layout flown (a few seconds)."""
+
+from __future__ import annotations
+
+import math
+import random
+
+from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.simulate import SimulatedMission
+from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, point_segment_m
+from masonry.sim import Faults
+
+#: The bound every whole-mission simulation keeps between two airborne UAVs (docs/safety.md).
+SEPARATION_BOUND_M = 1.0
+#: ``bench_layouts.py --compact``: small walls, r_c 0.5-0.8 m, up to 3 UAVs per role.
+COMPACT = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
+
+
+class _Gate:
+    """A site gate that holds back the UAVs in ``held`` (their task's prerequisites are not done yet)."""
+
+    def __init__(self, *held: str) -> None:
+        self.held = set(held)
+
+    def may_enter(self, uav: str, site_m: tuple[float, float, float]) -> bool:
+        return uav not in self.held
+
+    def entered(self, uav: str, site_m: tuple[float, float, float], now_s: float) -> None:
+        pass
+
+    def waited_on(self, uav: str) -> tuple:
+        return ()
+
+    def left(self, uav: str, now_s: float) -> bool:
+        return False
+
+
+def test_a_uav_come_to_rest_just_past_its_bead_leaves_from_its_zone_past_a_hold_point_beside_it():
+    # bench_layouts --large seed 3022 (4 + 4, r_c 1.175 m): brick-1 waited at its hold point for B25, held back by
+    # the site gate; glue-3 meanwhile sprayed its way along the wall, each bead granted beside that hover (its zone
+    # 1.20 m from it: clear), came to rest 5 cm past the last bead's end and asked for its pad. Its climb, reserved
+    # where it was, was 1.15 m from the hover: refused at every layer, as was every hold flight; brick-1's flight
+    # waited for glue-3's zone. 240 s later hold patience gave B25's attempt up.
+    c = ColumnClearance(radius_m=1.175, base_m=1.35, gate=(gate := _Gate("b")))
+    site_b = (0.0, 0.0, 1.35)
+    g = c.request("b", site_b, 0.0, (6.0, 0.0, 1.35))
+    assert not g.granted and g.hold_m is not None
+    hold = g.hold_m
+    c.progress("b", hold)
+    c.request("b", site_b, 1.0, hold)
+    assert c.phase("b") is Phase.AT_HOLD
+    # a bead on the line from the hold point to b's site, its end 1.21 m from the hover
+    ux, uy = (
+        (site_b[0] - hold[0]) / math.dist(site_b[:2], hold[:2]),
+        (site_b[1] - hold[1]) / math.dist(site_b[:2], hold[:2]),
+    )
+    end = (hold[0] + 1.21 * ux, hold[1] + 1.21 * uy, 1.2)
+    start = (end[0] + 0.15 * ux, end[1] + 0.15 * uy, 1.2)
+    assert c.request("g", start, 2.0, (start[0], start[1], 1.35), top_m=1.2, to_m=end).granted
+    c.end_transit("g")
+    # at rest 5 cm past the bead's end, towards the hover (1.16 m from it), it asks for its pad
+    rest = (end[0] - 0.05 * ux, end[1] - 0.05 * uy, 1.2)
+    assert math.dist(rest[:2], hold[:2]) < 1.2
+    pad = (start[0] - 4.0 * uy, start[1] + 4.0 * ux, 0.0)
+    home = c.request("g", pad, 3.0, rest)
+    assert home.granted or home.hold_m is not None, home  # it can leave (refused before: hover where you are)
+    climb = c.volumes("g")[0]
+    assert climb.kind == "climb" and point_segment_m(climb.a, start[:2], end[:2]) < 1e-9  # from its zone
+    assert c.conflicts() == []
+    # the gate opens for b: its flight waits for g's zone only until g is gone
+    gate.held.clear()
+    c.touch()
+    if home.granted:
+        c.end_transit("g")
+        c.landed("g", pad)
+        assert any(x.uav == "b" and x.granted for x in c.grant(4.0))
+
+
+def test_leave_from_moves_only_a_rest_just_outside_a_single_zone_onto_its_edge():
+    bead = Volume((0.0, 0.0), (1.0, 0.0), 0.0, 1.2, 0.0, "zone")
+    assert leave_from((1.05, 0.0), [bead]) == (1.0, 0.0)
+    assert leave_from((0.5, 0.0), [bead]) == (0.5, 0.0)  # inside
+    assert leave_from((1.0 + LEAVE_SNAP_M + 0.01, 0.0), [bead]) == (
+        1.0 + LEAVE_SNAP_M + 0.01,
+        0.0,
+    )  # too far out
+    wide = Volume((0.0, 0.0), (0.0, 0.0), 0.0, 1.2, 0.15, "zone")
+    x, y = leave_from((0.0, 0.2), [wide])  # onto the edge of its slack
+    assert math.isclose(x, 0.0, abs_tol=1e-12) and math.isclose(y, 0.15)
+    leg = Volume((0.0, 0.0), (1.0, 0.0), 1.35, 1.35, 0.0, "leg")
+    assert leave_from((1.05, 0.0), [leg]) == (1.05, 0.0)  # not in a zone: where it is
+    assert leave_from((1.05, 0.0), [bead, leg]) == (1.05, 0.0)
+
+
+def _outside_m(vols: tuple[Volume, ...], p: tuple[float, float, float]) -> float:
+    """How far ``p`` is outside every one of ``vols`` (box metric, as the separation rule)."""
+    best = math.inf
+    for q in vols:
+        h = max(0.0, point_segment_m((p[0], p[1]), q.a, q.b) - q.slack_m)
+        v = max(0.0, q.z0_m - p[2], p[2] - q.z1_m)
+        best = min(best, max(h, v))
+    return best
+
+
+def test_a_brick_uav_that_looks_at_a_tower_from_the_side_has_its_displaced_hover_reserved():
+    # bench_layouts --compact --faults seed 2298 (towers, 2 + 2, r_c 0.68 m, gusts): brick-2's lean at the pallet
+    # made its placement one in a wind, so it aligned on the wall and looked at the tower's support from the side
+    # (masonry.fsm.side_look): its alignment hover 0.29 m off the drop-off, outside the zone it had asked for (no
+    # slack at r_c < 1.2 m), 0.83 m from glue-2 waiting at the end of its bead beside it. The request now carries
+    # the hover (``to_m``): the zone spans drop-off to hover.
+    rng = random.Random(2298)
+    bp = random_layout(rng, COMPACT)
+    mission = SimulatedMission.from_blueprint(bp, seed=2298, faults=Faults.mild(rng))
+    columns, world = mission.control.columns, mission.world
+    worst: dict[str, float] = {}
+    step = world.step
+
+    def spy_step(dt_s: float) -> None:
+        step(dt_s)
+        for name, u in world.uavs.items():
+            v = u.vehicle
+            if name.startswith("brick") and v.armed and not v.on_ground and columns.volumes(name):
+                worst[name] = max(worst.get(name, 0.0), _outside_m(columns.volumes(name), v.position_m))
+
+    world.step = spy_step  # type: ignore[method-assign]
+    r = mission.run()
+    assert r.completed and r.stall is None
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m
+    # tracking error only: 0.10-0.12 m at the end of legs in these gusts (0.36 m/s); 0.29 m before, aligning
+    assert max(worst.values()) < 0.15, worst
