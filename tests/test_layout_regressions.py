@@ -9,7 +9,9 @@ import random
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.simulate import SimulatedMission
+from masonry.mission.sites import SiteIntervals
 from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, point_segment_m
+from masonry.planner.tasks import BrickTask, Plan
 from masonry.sim import Faults
 
 #: The bound every whole-mission simulation keeps between two airborne UAVs (docs/safety.md).
@@ -131,3 +133,22 @@ def test_a_brick_uav_that_looks_at_a_tower_from_the_side_has_its_displaced_hover
     assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m
     # tracking error only: 0.10-0.12 m at the end of legs in these gusts (0.36 m/s); 0.29 m before, aligning
     assert max(worst.values()) < 0.15, worst
+
+
+def test_a_uav_that_asks_for_its_next_tasks_site_beside_its_last_one_has_left_the_last_one():
+    # bench_layouts --large seed 3041 (1 + 4, r_c 0.56 m): glue-4 finished A49 and asked for A50, 0.15 m on; A50
+    # was not free, so it waited at a hold point, its A49 visit still open (a site within 0.5 m was "the same
+    # stay"). glue-2's A51, conflicting with A49 only, was held back by that visit, and glue-4 waited for glue-2's
+    # hover: 240 s, then three attempts given up (glue-2, glue-4 and brick-1 behind them).
+    b0 = BrickTask("B0", 0, False, (0.0, 0.0, 0.15), 0.0, (0.0, -3.0, 0.05))
+    b1 = BrickTask("B1", 1, False, (0.3, 0.0, 0.15), 0.0, (0.5, -3.0, 0.05))
+    b2 = BrickTask("B2", 2, False, (-0.5, 0.0, 0.15), 0.0, (-0.5, -3.0, 0.05))
+    tasks = {"a": "B0", "c": "B2"}
+    s = SiteIntervals(Plan((b0, b1, b2), (), (("B0", "B2"),)), tasks.get, exclusive=True)
+    s.entered("a", (0.0, 0.0, 1.2), 10.0)
+    assert not s.leaving("a", (0.0, 0.0, 1.3), 11.0)  # its own task's site again (a hold flight, the rest)
+    assert not s.may_enter("c", (-0.5, 0.0, 1.2))
+    tasks["a"] = "B1"  # B0 done, B1 next: it asks for B1's site, 0.3 m on
+    assert s.leaving("a", (0.3, 0.0, 1.2), 20.0)
+    assert s.may_enter("c", (-0.5, 0.0, 1.2))
+    assert [(v.task_id, v.start_s, v.end_s) for v in s.visits] == [("B0", 10.0, 20.0)]
