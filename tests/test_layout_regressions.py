@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import math
 import random
+from types import SimpleNamespace
 
 from masonry.blueprint_random import LayoutLimits, random_layout
-from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.airspace import ColumnClearance, Grant, Phase
+from masonry.mission.control_airspace import answer
 from masonry.mission.simulate import SimulatedMission
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, point_segment_m
@@ -135,20 +137,29 @@ def test_a_brick_uav_that_looks_at_a_tower_from_the_side_has_its_displaced_hover
     assert max(worst.values()) < 0.15, worst
 
 
-def test_a_uav_that_asks_for_its_next_tasks_site_beside_its_last_one_has_left_the_last_one():
+def test_a_uav_sent_to_a_hold_point_for_its_next_task_has_left_the_site_of_its_last_one():
     # bench_layouts --large seed 3041 (1 + 4, r_c 0.56 m): glue-4 finished A49 and asked for A50, 0.15 m on; A50
-    # was not free, so it waited at a hold point, its A49 visit still open (a site within 0.5 m was "the same
-    # stay"). glue-2's A51, conflicting with A49 only, was held back by that visit, and glue-4 waited for glue-2's
-    # hover: 240 s, then three attempts given up (glue-2, glue-4 and brick-1 behind them).
+    # was not free, so it was sent to a hold point, its A49 visit still open (a site within 0.5 m is the same
+    # stay: a sprayer chaining its segments). glue-2's A51, conflicting with A49 only, was held back by that
+    # visit, and glue-4 waited for glue-2's hover: 240 s, then three attempts given up.
     b0 = BrickTask("B0", 0, False, (0.0, 0.0, 0.15), 0.0, (0.0, -3.0, 0.05))
     b1 = BrickTask("B1", 1, False, (0.3, 0.0, 0.15), 0.0, (0.5, -3.0, 0.05))
     b2 = BrickTask("B2", 2, False, (-0.5, 0.0, 0.15), 0.0, (-0.5, -3.0, 0.05))
     tasks = {"a": "B0", "c": "B2"}
-    s = SiteIntervals(Plan((b0, b1, b2), (), (("B0", "B2"),)), tasks.get, exclusive=True)
-    s.entered("a", (0.0, 0.0, 1.2), 10.0)
-    assert not s.leaving("a", (0.0, 0.0, 1.3), 11.0)  # its own task's site again (a hold flight, the rest)
-    assert not s.may_enter("c", (-0.5, 0.0, 1.2))
+    sites = SiteIntervals(Plan((b0, b1, b2), (), (("B0", "B2"),)), tasks.get, exclusive=True)
+    sites.entered("a", (0.0, 0.0, 1.2), 10.0)
     tasks["a"] = "B1"  # B0 done, B1 next: it asks for B1's site, 0.3 m on
-    assert s.leaving("a", (0.3, 0.0, 1.2), 20.0)
-    assert s.may_enter("c", (-0.5, 0.0, 1.2))
-    assert [(v.task_id, v.start_s, v.end_s) for v in s.visits] == [("B0", 10.0, 20.0)]
+    assert not sites.leaving("a", (0.3, 0.0, 1.2), 20.0)  # chained: still its stay
+    assert not sites.may_enter("c", (-0.5, 0.0, 1.2))
+    sent: list[tuple[str, object]] = []
+    mc = SimpleNamespace(
+        sites=sites,
+        columns=ColumnClearance(radius_m=0.56, base_m=1.35),
+        out=SimpleNamespace(send=lambda uav, msg: sent.append((uav, msg))),
+    )
+    answer(mc, Grant("a", (0.3, 0.0, 1.2), layer_m=1.35), 20.5)  # granted on: the stay goes on
+    assert not sites.may_enter("c", (-0.5, 0.0, 1.2))
+    answer(mc, Grant("a", (0.3, 0.0, 1.2), False, (2.0, 0.0, 1.35), 1.35), 21.0)  # sent to wait: it leaves
+    assert sites.may_enter("c", (-0.5, 0.0, 1.2))
+    assert [(v.task_id, v.start_s, v.end_s) for v in sites.visits] == [("B0", 10.0, 21.0)]
+    assert [uav for uav, _ in sent] == ["a", "a"]

@@ -199,20 +199,12 @@ class SiteIntervals:
         return self.left(uav, now_s)
 
     def leaving(self, uav: str, site_m: Vec3, now_s: float) -> bool:
-        """``uav`` asks to fly to ``site_m``: a visit elsewhere, or of a task it no longer works on, ends (True if
-        one did).
-
-        Only a request for the same task's site keeps the visit (a hold flight, then the rest of the flight). A
-        sprayer that asks for its next segment 0.15 m on has moved on, however close: before, its finished
-        segment's visit stayed open while it waited at a hold point for the next one, and held back a conflicting
-        task's UAV whose hover it waited for in turn (``bench_layouts --large`` seed 3041: three attempts given
-        up after 240 s).
-        """
+        """``uav`` asks to fly to ``site_m``: a visit elsewhere ends (True if one did)."""
         visit = self._uav_visit.get(uav)
         if visit is None:
             return False
         w = self._work[visit.task_id]
-        if self._task_of(uav) == visit.task_id and math.hypot(site_m[0] - w[0], site_m[1] - w[1]) < AT_SITE_M:
+        if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) < AT_SITE_M:
             return False
         return self.left(uav, now_s)
 
