@@ -3,11 +3,15 @@ scenario over the pure airspace where the cause is there, else the generated lay
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from types import SimpleNamespace
 
+import numpy as np
+
 from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.fsm.side_look import look_offset_m
 from masonry.mission.airspace import ColumnClearance, Grant, Phase
 from masonry.mission.control_airspace import answer
 from masonry.mission.simulate import SimulatedMission
@@ -163,3 +167,25 @@ def test_a_uav_sent_to_a_hold_point_for_its_next_task_has_left_the_site_of_its_l
     assert sites.may_enter("c", (-0.5, 0.0, 1.2))
     assert [(v.task_id, v.start_s, v.end_s) for v in sites.visits] == [("B0", 10.0, 21.0)]
     assert [uav for uav, _ in sent] == ["a", "a"]
+
+
+def test_the_side_look_keeps_its_hover_off_the_other_uavs_pads():
+    # bench_layouts --compact --faults --policy nearest seed 5543 (running bond, 1 + 1, r_c 0.56 m, pads 1.0 m from
+    # the wall): with the hover reserved, one planned towards glue-1's pad, 1.1 m from the drop-off, was never
+    # granted while glue-1 sat on it: six attempts given up, B7 and B8 stuck. The look keeps its way from the
+    # drop-off to the hover ``pad_keep_off_m`` from every other pad (else it takes another direction, or none).
+    from test_side_look import DROP, _along, _scene
+
+    scene = _scene((_along(0.0),))
+    found = look_offset_m(scene)
+    assert found is not None
+    hover = found[0]
+    unit = hover[:2] / np.hypot(*hover[:2])
+    pad = (DROP[0] + 1.1 * unit[0], DROP[1] + 1.1 * unit[1])  # 1.1 m off, where the hover points
+    assert math.dist(pad, (DROP[0] + hover[0], DROP[1] + hover[1])) < 1.0
+    near_pad = dataclasses.replace(scene, pads_m=(pad,), pad_keep_off_m=1.0)
+    kept = look_offset_m(near_pad)
+    if kept is not None:
+        far = (DROP[0] + kept[0][0], DROP[1] + kept[0][1])
+        assert point_segment_m(pad, DROP[:2], far) >= 1.0
+    assert kept is None or not np.allclose(kept[0], hover)
