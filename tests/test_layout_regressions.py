@@ -13,6 +13,7 @@ import numpy as np
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.fsm.side_look import look_offset_m
 from masonry.mission.airspace import ColumnClearance, Grant, Phase
+from masonry.mission.airspace_state import FlightRequest
 from masonry.mission.control_airspace import answer
 from masonry.mission.simulate import SimulatedMission
 from masonry.mission.sites import SiteIntervals
@@ -189,3 +190,29 @@ def test_the_side_look_keeps_its_hover_off_the_other_uavs_pads():
         far = (DROP[0] + kept[0][0], DROP[1] + kept[0][1])
         assert point_segment_m(pad, DROP[:2], far) >= 1.0
     assert kept is None or not np.allclose(kept[0], hover)
+
+
+def test_no_zone_is_granted_under_the_hold_hover_of_a_uav_that_waits_beside_it():
+    # bench_layouts --large seed 3143 (pyramid of 66, 3 + 5, r_c 0.80 m): glue-4 waited at its hold point one
+    # layer up (2.55 m) for A86; brick-2 was granted its drop-off 0.6 m under that hover (its zone's top 1.45 m:
+    # 1.1 m below, clear) and then could not climb out at any layer while glue-4 waited for brick-2's zone: 19
+    # attempts given up, the wall unfinished (glue-4 was held back by the site gate: no first come, first served). A zone's column up through the layers keeps clear of the hover of a
+    # UAV that waits for a site near it.
+    def waiting_at(
+        c: ColumnClearance, uav: str, hover_xy: tuple[float, float], site: tuple[float, float, float]
+    ):
+        u = c.record(uav)
+        u.volumes = [Volume(hover_xy, hover_xy, 2.55, 2.55, 0.0, "hover")]
+        c.seq += 1
+        u.request, u.phase = FlightRequest(site, site[2], None, 0.0, c.seq, None), Phase.AT_HOLD
+        c.touch()
+
+    # g waits, held back by the site gate (the brick under its bead is b's), for a site 0.5 m from b's
+    c = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
+    waiting_at(c, "g", (0.6, 0.0), (0.5, 0.5, 1.35))
+    g = c.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45)
+    assert not g.granted  # (granted before: b's zone under g's hover, which it could never climb out through)
+    assert c.conflicts() == []
+    far = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
+    waiting_at(far, "g", (0.6, 0.0), (9.0, 9.0, 1.35))  # it waits for a site far off: it will not wait for b
+    assert far.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45).granted
