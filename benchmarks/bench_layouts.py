@@ -2,7 +2,7 @@
 property test tests/test_random_layouts.py, on more and larger layouts.
 
     python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults] [--reservation site]
-        [--airspace columns|table] [--compact]
+        [--airspace columns|table] [--compact] [--policy critical-path|fifo|nearest]
 
 A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
 violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
@@ -18,7 +18,7 @@ import time
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
-from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
+from masonry.planner.dispatch import DEFAULT_POLICY, DEFAULT_RESERVATION, POLICIES, RESERVATIONS
 from masonry.separation import pad_separation_m
 from masonry.sim import Faults
 
@@ -27,7 +27,12 @@ SEPARATION_BOUND_M = 1.0
 
 
 def fly(
-    seed: int, limits: LayoutLimits, faults: bool, reservation: str = "task", airspace: str = DEFAULT_AIRSPACE
+    seed: int,
+    limits: LayoutLimits,
+    faults: bool,
+    reservation: str = "task",
+    airspace: str = DEFAULT_AIRSPACE,
+    policy: str = DEFAULT_POLICY,
 ) -> dict[str, object]:
     rng = random.Random(seed)
     bp = random_layout(rng, limits)
@@ -37,7 +42,7 @@ def fly(
         (math.dist(a[:2], b[:2]) for i, a in enumerate(homes) for b in homes[i + 1 :]), default=float("nan")
     )
     t0 = time.perf_counter()
-    r = simulate(bp, seed=seed, faults=f, reservation=reservation, airspace=airspace)
+    r = simulate(bp, seed=seed, faults=f, reservation=reservation, airspace=airspace, policy=policy)
     return {
         "seed": seed,
         "wall": bp.name,
@@ -67,17 +72,20 @@ def main() -> None:
     ap.add_argument("--reservation", choices=RESERVATIONS, default=DEFAULT_RESERVATION)
     ap.add_argument("--airspace", choices=AIRSPACES, default=DEFAULT_AIRSPACE)
     ap.add_argument("--compact", action="store_true", help="small walls, r_c 0.5-0.8 m (issue 27's layouts)")
+    ap.add_argument("--policy", choices=POLICIES, default=DEFAULT_POLICY, help="the dispatch policy")
     args = ap.parse_args()
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     if args.compact:
         limits = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
-    print(f"pad separation {pad_separation_m():.2f} m; airspace {args.airspace}; limits {limits}")
+    print(
+        f"pad separation {pad_separation_m():.2f} m; airspace {args.airspace}; policy {args.policy}; limits {limits}"
+    )
     print(
         "seed  wall                       fleet  r_c   pads   done  stall conf deps held min_sep makespan bound  wall_s"
     )
     bad = 0
     for seed in range(args.first_seed, args.first_seed + args.n):
-        row = fly(seed, limits, args.faults, args.reservation, args.airspace)
+        row = fly(seed, limits, args.faults, args.reservation, args.airspace, args.policy)
         sep = row["min_sep"]
         ok = (
             (row["completed"] or args.faults)

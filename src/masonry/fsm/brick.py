@@ -378,7 +378,15 @@ class BrickUav(PutBack):
         yaw = self._place_yaw_rad()
         eff = self._place_effector_target_m()
         body = self.effector.body_target(eff, yaw)
-        self._route(tel, np.array([body[0], body[1], self._transit_altitude_m()]), yaw_rad=yaw)
+        alt = self._transit_altitude_m()
+        # The alignment hover of a side look (masonry.fsm.side_look) lies up to 0.5 m from the drop-off: the work
+        # there spans drop-off to hover, and mission control must reserve it all (``to_m``), as it reserves an
+        # adhesion UAV's segment. Planned now, as enter_place_align will plan it (the lean of the pickup's hovers
+        # and the placement decide it; nothing changes them on the way).
+        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad)
+        side = self._side.plan(self)
+        to = np.array([body[0] + side[0], body[1] + side[1], alt]) if side.any() else None
+        self._route(tel, np.array([body[0], body[1], alt]), yaw_rad=yaw, to_m=to)
 
     def do_transport(self, tel: Telemetry) -> None:
         if self._advance(tel):

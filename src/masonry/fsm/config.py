@@ -81,6 +81,12 @@ class UavConfig:
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)
     side_look: bool = True
+    # The other UAVs' pads (x, y; build_machine sets them from the fleet) and how far the side look's displaced
+    # work keeps from each (build_machine: the blueprint's pad_site_distance_m, what validation keeps between a
+    # pad and the wall): the zone the brick UAV asks for spans the drop-off and the side look's hover, and a zone
+    # within that of a landed UAV's pad is never granted (masonry.fsm.side_look)
+    pads_m: tuple[tuple[float, float], ...] = ()
+    pad_keep_off_m: float = 0.0
     # With align_on_wall: the carried brick's offset on the magnet, seen by the camera in the frames the wall
     # alignment reads, is taken off the drop-off's target (masonry.fsm.carried_look)
     carried_look: bool = True

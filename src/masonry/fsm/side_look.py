@@ -30,6 +30,7 @@ import numpy as np
 
 from masonry.geometry import rot_z
 from masonry.perception.types import CameraIntrinsics
+from masonry.segments import point_segment_m
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
@@ -80,6 +81,8 @@ class LookScene:
         T_body_cam: the camera's pose on the body (4x4).
         effector_body_m: the effector tip on the body (the rod hangs plumb).
         align_height_m: the effector's height above ``drop_top_m`` in the alignment hover.
+        pads_m, pad_keep_off_m: the other UAVs' pads, and how far the body keeps from each on its way from the
+            drop-off to the alignment hover (mission control reserves that way, and never near a landed UAV).
     """
 
     drop_top_m: tuple[float, float, float]
@@ -94,6 +97,8 @@ class LookScene:
     T_body_cam: np.ndarray
     effector_body_m: tuple[float, float, float]
     align_height_m: float
+    pads_m: tuple[tuple[float, float], ...] = ()
+    pad_keep_off_m: float = 0.0
 
 
 def _marker_corners(
@@ -227,6 +232,19 @@ def _way_clear(scene: LookScene, displacement_m: np.ndarray) -> bool:
     return True
 
 
+def _off_pads(scene: LookScene, displacement_m: np.ndarray) -> bool:
+    """The body's way from over the drop-off to ``displacement_m`` off it keeps ``pad_keep_off_m`` from every other
+    UAV's pad: the zone the brick UAV asks for spans it, and one that near a landed UAV is never granted (issue 27:
+    ``bench_layouts --compact --faults --policy nearest`` seed 5543, a hover 0.5 m towards a pad 1.1 m off)."""
+    if not scene.pads_m:
+        return True
+    R_wb = rot_z(scene.body_yaw_rad)
+    body = np.asarray(scene.drop_top_m, dtype=float) - R_wb @ np.asarray(scene.effector_body_m, dtype=float)
+    a = (float(body[0]), float(body[1]))
+    b = (a[0] + float(displacement_m[0]), a[1] + float(displacement_m[1]))
+    return all(point_segment_m(p, a, b) >= scene.pad_keep_off_m for p in scene.pads_m)
+
+
 def look_offset_m(scene: LookScene) -> tuple[np.ndarray, np.ndarray] | None:
     """The horizontal displacements (world, m) from the drop-off of the alignment hover and of the pre-release
     point: a support's marker in the camera's view all the way down the straight descent between them (from the
@@ -267,7 +285,7 @@ def _look(scene: LookScene, acquire_spread_m: float) -> tuple[np.ndarray, np.nda
             for f in (0.25, 0.5, 0.75)
         ):
             continue
-        if _way_clear(scene, near * unit) and _way_clear(scene, far * unit):
+        if _way_clear(scene, near * unit) and _way_clear(scene, far * unit) and _off_pads(scene, far * unit):
             best = (near, far, near * unit, far * unit)
     if best is None:
         return None
@@ -356,4 +374,6 @@ def scene_of(uav: BrickUav) -> LookScene:
         T_body_cam=uav._T_body_cam,
         effector_body_m=eff,
         align_height_m=uav._transit_altitude_m() + eff[2] - drop[2],
+        pads_m=cfg.pads_m,
+        pad_keep_off_m=cfg.pad_keep_off_m,
     )

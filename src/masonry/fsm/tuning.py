@@ -38,6 +38,8 @@ _NOT_TUNING = frozenset(
         "pid_gains",
         "lateral_altitude_m",
         "wall",
+        "pads_m",
+        "pad_keep_off_m",
     }
 )
 #: UavConfig fields that are counts (integers), not measures.

@@ -28,7 +28,16 @@ from masonry.mission.airspace_state import (
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned
-from masonry.mission.volumes import Vec3, contains, point_segment_m, same_site, stopped_at
+from masonry.mission.volumes import (
+    Vec3,
+    Volume,
+    contains,
+    leave_from,
+    point_segment_m,
+    same_site,
+    stopped_at,
+    volumes_clear,
+)
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
@@ -74,6 +83,8 @@ def request(
         c.refused += not ok
         return Grant(uav, site, ok)
     u = c.record(uav)
+    if pos is not None:  # (a few centimetres past its zone: it leaves from the zone, volumes.leave_from)
+        pos = (*leave_from((pos[0], pos[1]), u.volumes), pos[2])
     c.handed_task.discard(uav)  # (it asks again: for its task's site, or home if the task was taken back)
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
@@ -143,7 +154,7 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
                 if u.phase is Phase.TO_HOLD and abs(c.alt(k) - u.hold.layer_m) > 1e-9:
                     break  # (the layer base rose since: the rest would climb at the hold point)
                 extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to, home=home)
-                if c.fits(uav, extra):
+                if c.fits(uav, extra) and climb_out_free(c, uav, extra):
                     u.volumes = u.volumes + extra
                     c.touch()
                     return granted(c, uav, u, k, now_s)
@@ -151,7 +162,7 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
             start = w.position if w.position is not None else w.site
             for k in range(c.max_layers):
                 vols = c.flight_volumes_at(start, w.site, w.top_m, k, None, w.to, home=home)
-                if c.fits(uav, vols):
+                if c.fits(uav, vols) and climb_out_free(c, uav, vols):
                     c.take(u, vols)
                     return granted(c, uav, u, k, now_s)
     if u.phase is Phase.ASKING:
@@ -171,6 +182,27 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
     nearer = approach(c, uav, u) if not blocked_site else None
     u.answer = nearer or Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
     return u.answer
+
+
+def climb_out_free(c: ColumnClearance, uav: str, vols: list[Volume]) -> bool:
+    """The zone a flight ends in has its column clear up through every layer of the other UAVs' hold hovers: a
+    UAV there can always climb out. A zone granted under a hover 1.1 m over its top (clear of it) could not be
+    left at any layer while that UAV waited for the zone's site (``bench_layouts --large`` seed 3143)."""
+    z = vols[-1]
+    if z.kind != "zone":
+        return True
+    up = dataclasses.replace(z, z1_m=max(z.z1_m, c.alt(c.max_layers - 1)))
+    near = (
+        1.1 * c.wait_radius_m
+    )  # (a hover whose UAV waits for a site near the zone: it may wait for this UAV)
+    hovers = [
+        q
+        for n, o in c.records.items()
+        if n != uav and o.request is not None and point_segment_m(o.request.site[:2], z.a, z.b) < near
+        for q in o.volumes
+        if q.kind == "hover"
+    ]
+    return volumes_clear([up], hovers, c.sep_xy_m, c.spacing_m - 1e-9)
 
 
 def granted(c: ColumnClearance, uav: str, u: UavAirspace, k: int, now_s: float) -> Grant:

@@ -84,7 +84,17 @@ def on_clearance_request(mc: MissionControl, msg: ClearanceRequest, now_s: float
 
 
 def answer(mc: MissionControl, g: Grant, now_s: float) -> None:
-    """Send the airspace's answer ``g`` to its UAV."""
+    """Send the airspace's answer ``g`` to its UAV.
+
+    A UAV sent to a hold point leaves the site it is at: its visit there ends (``SiteIntervals.left``). A sprayer
+    that asked for its next segment 0.15 m on kept its finished segment's visit (a site within ``AT_SITE_M`` is
+    the same stay) while it waited at a hold point, and held back a conflicting task's UAV whose hover it waited
+    for in turn (``bench_layouts --large`` seed 3041: three attempts given up after 240 s). Ending the visit as
+    soon as it asks for the next segment instead lets brick UAVs in between a sprayer's chained segments: the
+    pyramid and the 12 m wall at 4 + 2 9-14 % slower.
+    """
+    if not g.granted and g.hold_m is not None and mc.sites.left(g.uav, now_s):
+        mc.columns.touch()  # its site is free: who waits for it may go now
     radius_m = mc.columns.release_radius_m
     answer = Clearance(MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m)
     mc.out.send(g.uav, answer)

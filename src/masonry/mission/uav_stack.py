@@ -18,6 +18,7 @@ from masonry.errors import MasonryError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
 from masonry.placement_check import wall_tops_m
+from masonry.separation import pad_site_distance_m
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
@@ -160,6 +161,8 @@ def build_machine(
         cruise_altitude_m=blueprint.cruise_altitude_m,
         markers=blueprint.markers,
         wall=wall_tops_m(blueprint.bricks),
+        pads_m=tuple((u.home_m[0], u.home_m[1]) for u in blueprint.fleet if u.name != spec.name),
+        pad_keep_off_m=pad_site_distance_m(blueprint.clearance_m),
         lateral_altitude_m=lateral_altitude_m,
         fence=blueprint.site,
         neighbour_pad_m=min(

@@ -30,6 +30,11 @@ HOLD_LINE_STEP_M = 0.25
 #: How far a UAV flying a leg may coast on after it is told to stop (1.9 m/s peak, 2.5 m/s^2 braking, margin).
 STOP_M = 1.0
 
+#: A UAV that asks to leave its work zone from this far outside it (an autopilot coasting past the end of a bead,
+#: a gust) leaves from the zone's edge (:func:`leave_from`): half of what ``SEPARATION_XY_M`` keeps over the 1 m
+#: target, each UAV's share of the tracking error.
+LEAVE_SNAP_M = 0.1
+
 
 @dataclass(frozen=True)
 class Volume:
@@ -142,6 +147,30 @@ def contains(vols: Sequence[Volume], x: float, y: float, z: float, margin_m: flo
         if point_segment_m((x, y), v.a, v.b) <= v.slack_m + margin_m:
             return True
     return False
+
+
+def leave_from(xy: XY, vols: Sequence[Volume]) -> XY:
+    """Where a UAV at ``xy`` holding ``vols`` leaves from: the nearest point of its work zone if it holds only
+    one and is within ``LEAVE_SNAP_M`` outside it, else ``xy``.
+
+    Anything granted after the zone was granted keeps the separation from the zone, not from the few centimetres
+    past it where the UAV came to rest: a climb reserved there could be refused for good by a hover that fits
+    beside the zone, whose UAV waits for the zone to be freed (issue 27: ``bench_layouts --large`` seed 3022, an
+    adhesion UAV 5 cm past its bead's end 1.15 m from a brick UAV's hold point 1.20 m from the zone).
+    """
+    if len(vols) != 1 or vols[0].kind != "zone":
+        return xy
+    v = vols[0]
+    (ax, ay), (bx, by) = v.a, v.b
+    dx, dy = bx - ax, by - ay
+    n2 = dx * dx + dy * dy
+    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((xy[0] - ax) * dx + (xy[1] - ay) * dy) / n2))
+    px, py = ax + t * dx, ay + t * dy
+    d = math.hypot(xy[0] - px, xy[1] - py)
+    if d <= v.slack_m or d > v.slack_m + LEAVE_SNAP_M:
+        return xy
+    f = v.slack_m / d
+    return (px + f * (xy[0] - px), py + f * (xy[1] - py))
 
 
 def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
@@ -260,6 +289,7 @@ def hold_points(
 __all__ = [
     "HOLD_LINE_STEP_M",
     "HOVER_SLACK_M",
+    "LEAVE_SNAP_M",
     "STOP_M",
     "TRACK_M",
     "XY",
@@ -269,6 +299,7 @@ __all__ = [
     "column",
     "flight_volumes",
     "hold_points",
+    "leave_from",
     "point_segment_m",
     "same_site",
     "segment_segment_m",
