@@ -3,7 +3,7 @@
 Issue 27: the brick machine keeps the way to its side look's hover ``pad_keep_off_m`` from the other UAVs' pads
 (``UavConfig.pads_m``). ``build_machine`` set them in simulation only; ``masonry fly`` (mission mode, through
 :func:`masonry.mission.remote.remote_config`, and single-task mode) left them empty. Both now take them from
-:func:`masonry.mission.uav_stack.blueprint_settings`.
+:func:`masonry.fsm.config.blueprint_settings`.
 """
 
 from __future__ import annotations

@@ -75,7 +75,7 @@ def remote_config(
     blueprint: Blueprint, spec: UavSpec, uav_settings: Mapping[str, object] | None = None
 ) -> UavConfig:
     """The configuration :func:`run_remote_uav` flies UAV ``spec`` with (``masonry fly --mission``): the
-    blueprint's and its fleet's fields as the simulator's (:func:`masonry.mission.uav_stack.blueprint_settings`:
+    blueprint's and its fleet's fields as the simulator's (:func:`masonry.fsm.config.blueprint_settings`:
     the other UAVs' pads the side look keeps off, issue 27), a fixed transit layer, and ``uav_settings`` (the
     uav.yaml's tuning) over them."""
     # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
