@@ -11,7 +11,6 @@ import typer
 from masonry.cli.fly_adapters import _a, _describe, _pick_uav, _prerequisites, select_adapters
 from masonry.cli.fly_tuning import fly_settings
 from masonry.errors import InputError
-from masonry.placement_check import wall_tops_m
 
 if TYPE_CHECKING:
     from masonry.adapters.wiring import HardwareConfig
@@ -75,7 +74,7 @@ def _fly_one_task(
     vehicle: str = "ideal",
 ) -> None:
     """Single-task mode: fly ``task`` with the UAV of role ``uav`` (``name``); print the trace and the result."""
-    from masonry.fsm import UavConfig, fly_task
+    from masonry.fsm import UavConfig, blueprint_settings, fly_task
     from masonry.planner import plan
 
     the_plan = plan(bp)
@@ -91,13 +90,9 @@ def _fly_one_task(
         sim=sim, blueprint=world_bp, spec=spec, seed=seed, camera=camera, faults=faults, hardware=hardware,
         vehicle=vehicle,
     )  # fmt: skip
+    # the blueprint's and its fleet's fields as the simulator's (the other UAVs' pads too, issue 27), the tuning over
     uav_config = UavConfig.from_spec(
-        spec,
-        cruise_altitude_m=bp.cruise_altitude_m,
-        markers=bp.markers,
-        wall=wall_tops_m(bp.bricks),
-        fence=bp.site,
-        **fly_settings(hardware, vehicle, adapters),
+        spec, **{**blueprint_settings(bp, spec), **fly_settings(hardware, vehicle, adapters)}
     )
     try:
         run = fly_task(

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from masonry.fsm.adhesion import AdhesionUav
 from masonry.fsm.brick import BrickUav
-from masonry.fsm.config import UavConfig
+from masonry.fsm.config import UavConfig, blueprint_settings
 from masonry.fsm.model import UavModel
 from masonry.fsm.runner import SingleTaskRun, build_uav, fly_task, run_single_task
 from masonry.fsm.states import MACHINES, leaf_states
@@ -36,6 +36,7 @@ __all__ = [
     "UavConfig",
     "UavModel",
     "Watchdog",
+    "blueprint_settings",
     "build_uav",
     "fly_task",
     "leaf_states",

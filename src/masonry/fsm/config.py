@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypedDict
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
-from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, MarkerSpec, Role, UavSpec
+from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, Blueprint, MarkerSpec, Role, UavSpec
 from masonry.geofence import Site
+from masonry.placement_check import wall_tops_m
+from masonry.separation import pad_site_distance_m
 from masonry.timing import DEFAULT_TIMING as _T
 from masonry.timing import TaskTiming
 
@@ -235,3 +237,37 @@ class UavConfig:
     def from_spec(cls, spec: UavSpec, **overrides: Any) -> UavConfig:
         """The configuration of a fleet member of a blueprint (name, role, home), with overrides."""
         return cls(name=spec.name, role=spec.role, home_m=tuple(spec.home_m), **overrides)  # type: ignore[arg-type]
+
+
+class BlueprintSettings(TypedDict):
+    """The :class:`UavConfig` fields a UAV takes from the blueprint and its fleet (:func:`blueprint_settings`)."""
+
+    cruise_altitude_m: float
+    markers: MarkerSpec
+    wall: tuple[tuple[int, tuple[float, ...]], ...]
+    fence: Site | None
+    pads_m: tuple[tuple[float, float], ...]
+    pad_keep_off_m: float
+    neighbour_pad_m: float | None
+
+
+def blueprint_settings(blueprint: Blueprint, spec: UavSpec) -> BlueprintSettings:
+    """The :class:`~masonry.fsm.UavConfig` fields UAV ``spec`` takes from the blueprint and its fleet: the cruise
+    altitude, the markers, the wall's bricks, the site fence, the other UAVs' pads (``pads_m``, not its own) with
+    the side look's keep-off from them (``pad_keep_off_m``: the blueprint's ``pad_site_distance_m``) and the
+    nearest one's distance (``neighbour_pad_m``, for the battery budget).
+
+    The one derivation of them: the simulator's machines (:func:`masonry.mission.uav_stack.build_machine`) and
+    ``masonry fly``'s (:func:`masonry.mission.remote.remote_config` in mission mode, and single-task mode) fly the
+    same (issue 27).
+    """
+    others = [u for u in blueprint.fleet if u.name != spec.name]
+    return {
+        "cruise_altitude_m": blueprint.cruise_altitude_m,
+        "markers": blueprint.markers,
+        "wall": wall_tops_m(blueprint.bricks),
+        "fence": blueprint.site,
+        "pads_m": tuple((u.home_m[0], u.home_m[1]) for u in others),
+        "pad_keep_off_m": pad_site_distance_m(blueprint.clearance_m),
+        "neighbour_pad_m": min((math.dist(spec.home_m[:2], u.home_m[:2]) for u in others), default=None),
+    }

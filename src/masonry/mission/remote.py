@@ -18,8 +18,9 @@ from typing import Any
 
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import InputError, LinkLost
+from masonry.fsm.config import UavConfig, blueprint_settings
+from masonry.mission.airspace import transit_layers_m
 from masonry.mission.handler import UavHandler
-from masonry.placement_check import wall_tops_m
 from masonry.ports import FlightController, UavPorts, WaitsAlive
 
 
@@ -70,6 +71,22 @@ def _key_hint(transport: Any, handler: UavHandler) -> str:
     return ""
 
 
+def remote_config(
+    blueprint: Blueprint, spec: UavSpec, uav_settings: Mapping[str, object] | None = None
+) -> UavConfig:
+    """The configuration :func:`run_remote_uav` flies UAV ``spec`` with (``masonry fly --mission``): the
+    blueprint's and its fleet's fields as the simulator's (:func:`masonry.fsm.config.blueprint_settings`:
+    the other UAVs' pads the side look keeps off, issue 27), a fixed transit layer, and ``uav_settings`` (the
+    uav.yaml's tuning) over them."""
+    # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
+    # fleet, the same in every process) is for when mission control is silent (docs/safety.md)
+    layer_m = transit_layers_m(blueprint).get(spec.name)
+    return UavConfig.from_spec(
+        spec,
+        **{**blueprint_settings(blueprint, spec), "lateral_altitude_m": layer_m, **dict(uav_settings or {})},
+    )
+
+
 def run_remote_uav(
     blueprint: Blueprint,
     spec: UavSpec,
@@ -89,7 +106,7 @@ def run_remote_uav(
     turnaround_s: float = 0.2,
     echo: Any = None,
     adapters: UavPorts | None = None,
-    uav_settings: Mapping[str, Any] | None = None,
+    uav_settings: Mapping[str, object] | None = None,
     max_wind_mps: float | None = None,
     key: bytes | None = None,
     zenoh_config: str | Path | None = None,
@@ -142,7 +159,7 @@ def run_remote_uav(
         LinkLost: mission control was never heard within ``wait_s``.
     """
     from masonry.fingerprint import wall_digest
-    from masonry.fsm import UavConfig, build_uav
+    from masonry.fsm import build_uav
     from masonry.mission.auth import AuthenticatedTransport, wrap
     from masonry.mission.zenoh_transport import ZenohTransport
     from masonry.planner import plan
@@ -188,19 +205,7 @@ def run_remote_uav(
         role=spec.role,
         wall_digest=wall_digest(blueprint),
     )
-    from masonry.mission.airspace import transit_layers_m
-
-    # mission control hands out transit layers per flight; this fixed one (by the UAV's index in the blueprint's
-    # fleet, the same in every process) is for when mission control is silent (docs/safety.md)
-    config = UavConfig.from_spec(
-        spec,
-        cruise_altitude_m=blueprint.cruise_altitude_m,
-        markers=blueprint.markers,
-        wall=wall_tops_m(blueprint.bricks),
-        lateral_altitude_m=transit_layers_m(blueprint).get(spec.name),
-        fence=blueprint.site,
-        **dict(uav_settings or {}),
-    )
+    config = remote_config(blueprint, spec, uav_settings)
     model = build_uav(config, fc=fc, link=handler, clock=clock, gripper=gripper, camera=cam, sprayer=sprayer)
     handler.attach(model)
     if isinstance(fc, WaitsAlive):  # its waits (arming through refusals) keep the heartbeat going

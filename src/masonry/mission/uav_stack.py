@@ -10,15 +10,12 @@ builder gives it to mission control.
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Protocol
 
 from masonry.errors import MasonryError
-from masonry.fsm.config import UavConfig
+from masonry.fsm.config import UavConfig, blueprint_settings
 from masonry.fsm.tuning import uav_settings
-from masonry.placement_check import wall_tops_m
-from masonry.separation import pad_site_distance_m
 
 if TYPE_CHECKING:
     from masonry.blueprint import Blueprint, UavSpec
@@ -158,17 +155,8 @@ def build_machine(
         name=spec.name,
         role=spec.role,
         home_m=spec.home_m,
-        cruise_altitude_m=blueprint.cruise_altitude_m,
-        markers=blueprint.markers,
-        wall=wall_tops_m(blueprint.bricks),
-        pads_m=tuple((u.home_m[0], u.home_m[1]) for u in blueprint.fleet if u.name != spec.name),
-        pad_keep_off_m=pad_site_distance_m(blueprint.clearance_m),
+        **blueprint_settings(blueprint, spec),
         lateral_altitude_m=lateral_altitude_m,
-        fence=blueprint.site,
-        neighbour_pad_m=min(
-            (math.dist(spec.home_m[:2], u.home_m[:2]) for u in blueprint.fleet if u.name != spec.name),
-            default=None,
-        ),
         battery_swap_s=BATTERY_SWAP_S,
     )
     if spec.role == "brick":
