@@ -21,7 +21,7 @@ MAX_MODULE_LINES = 600
 MISSION_MAX_LINES = 500
 
 # Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
-CEILINGS = {"any_mentions": 538, "in_function_imports": 150}
+CEILINGS = {"any_mentions": 538, "in_function_imports": 149}
 
 # The modules still over MAX_MODULE_LINES, each at most the size it had when the ratchet began: a module here may
 # only shrink, and one that drops to MAX_MODULE_LINES or below leaves the list (the test says so).
