@@ -9,7 +9,6 @@ from __future__ import annotations
 import itertools
 import json
 import threading
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
@@ -23,7 +22,7 @@ from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.adapters.sitl_lockstep import SitlLockstep
 from masonry.cli import app
 from masonry.cli.hardware import build_sitl
-from own_sitl_flight import CASE_STUDY, lockstep_brick_flight
+from own_sitl_flight import fly_b1_argv, lockstep_brick_flight, start_lockstep_sitl
 from waiting import wait_until
 
 
@@ -371,24 +370,11 @@ def test_masonry_fly_ends_with_the_lost_link_when_its_sitl_dies_in_flight(
     # the whole fly loop: the SITL stops in the take-off; `masonry fly` ends with the existing one-line error
     # (before: it waited REPLY_WAIT_S a step for ever, its clock at the last time heard; 40 s of wall, still going)
     monkeypatch.setattr(lockstep_module, "REPLY_WAIT_S", 0.1)  # (2 s: 6 s of wall before it is found gone)
-    port = free_udp_port()
-    sitl, _ = build_sitl(
-        port=port,
-        uav="brick",
-        blueprint=Path(CASE_STUDY),
-        time_scale=4.0,
-        vehicle="px4",
-        seed=1,
-        lockstep=True,
-    )
-    sitl.start()
+    sitl, port = start_lockstep_sitl(seed=1)
     ran: list[Result] = []
 
     def fly() -> None:
-        ran.append(CliRunner().invoke(app, [
-            "fly", "--uav", "brick", "--blueprint", CASE_STUDY, "--task", "B1", "--fc", f"udp:127.0.0.1:{port}",
-            "--actuators", "sim", "--camera", "sim",
-        ]))  # fmt: skip
+        ran.append(CliRunner().invoke(app, fly_b1_argv(port)))
 
     flight = threading.Thread(target=fly, daemon=True)
     flight.start()
