@@ -17,6 +17,7 @@ from fsm_rig import HOME, Rig
 from masonry.fsm import UavConfig
 from masonry.fsm.navigator import Navigator
 from masonry.fsm.tuning import uav_settings
+from masonry.ports import Telemetry
 from masonry.sim.vehicle import SimVehicle
 from masonry.sim.vehicle_config import vehicle_preset
 
@@ -165,3 +166,39 @@ def test_a_uav_flying_home_plans_its_lateral_leg_within_the_pads_acceleration():
     for T, a, b in lateral:
         d = math.dist(a.tolist(), np.asarray(b).tolist())
         assert math.sqrt(10.0 / math.sqrt(3.0) * d / 0.5) - 1e-3 <= T, (T, d)  # start: where it was
+
+
+@pytest.mark.parametrize("climb_rebound_mps", [-0.07, 0.07])
+def test_flying_on_over_the_hold_point_keeps_the_layer(climb_rebound_mps):
+    # bench_layouts --large seed 3256 (before 58c2520 changed its schedule): brick-2 climbed to its 2.45 m hold
+    # layer, overshot it (2.48 m) and was sinking back at 0.07 m/s when its lateral leg to the hold point began;
+    # 0.1 s later the rest of the flight was granted and it flew on (Routing._straight_on) with a leg started
+    # from its velocity, vertical part and all: over that 8 s leg the reference sagged to 2.34 m, 0.11 m under
+    # its layer and 0.994 m over brick-3 on the layer below (the world measured 0.993 m). The leg flown on
+    # carries the horizontal velocity only: its reference stays between the altitude it starts at and the layer.
+    layer, site = 2.45, (0.5, -6.0, 1.2)
+    rig, link = _rig(layer_m=layer, grant_after_s=0.0)
+    uav = rig.uav
+    uav._now_s = 100.0
+    start = (0.5, 0.0, layer + 0.03)
+    hold = np.array([0.5, -3.0, layer])  # on the straight line to the site
+    uav.transit.begin(site, None, None)
+    uav.transit.layer_m = layer
+    uav.transit.wait()
+    at_rest = Telemetry(
+        100.0, start, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), True, "GUIDED", 1.0, True, True, False
+    )
+    uav.nav.fly_to(100.0, at_rest, hold, yaw_rad=0.0, from_rest=True)  # the lateral leg to the hold point
+    uav._now_s = 100.1
+    tel = Telemetry(
+        100.1, start, (0.0, -0.01, climb_rebound_mps), (0.0, 0.0, 0.0), True, "GUIDED", 1.0, True, True, False
+    )
+    assert uav._straight_on(tel), "the grant at this layer did not fly on"
+    assert uav.transit.state == "down" and link.asked
+    nav = uav.nav
+    assert nav.target_m[2] == pytest.approx(layer) and nav.end_s - 100.1 > 5.0  # a long level leg
+    heights = [float(nav.reference(t)[0][2]) for t in np.arange(100.1, nav.end_s + 0.05, 0.05)]
+    assert min(heights) >= layer - 1e-9, f"the reference sagged {layer - min(heights):.3f} m under its layer"
+    assert max(heights) <= start[2] + 1e-9, (
+        f"the reference rose {max(heights) - start[2]:.3f} m over its start"
+    )

@@ -130,17 +130,17 @@ class Navigator:
         yaw_rad: float | None = None,
         from_rest: bool = False,
         lag_s: float | None = None,
+        level: bool = False,
     ) -> None:
         """One minimum-jerk leg from the current state (``from_rest``: from rest where the UAV is) to rest at
-        ``target_m``; ``lag_s``: its acceleration feed-forward's lag (default: ``velocity_lag_s``)."""
+        ``target_m``; ``lag_s``: its acceleration feed-forward's lag (default: ``velocity_lag_s``); ``level``:
+        a lateral leg at a layer, which carries the UAV's horizontal velocity only (:meth:`_start_leg`)."""
         if not self.active:
             self.pid.reset()
         self.legs = []
         self.line = None
         self.steered = None
-        self._start_leg(
-            now_s, tel, np.asarray(target_m, dtype=float), duration_s, from_rest=from_rest, lag_s=lag_s
-        )
+        self._start_leg(now_s, tel, np.asarray(target_m, dtype=float), duration_s, from_rest, lag_s, level)
         if yaw_rad is not None:
             self.target_yaw_rad = yaw_rad
         elif not self.active:
@@ -312,6 +312,7 @@ class Navigator:
         duration_s: float | None,
         from_rest: bool = False,
         lag_s: float | None = None,
+        level: bool = False,
     ) -> None:
         self.leg_lag_s = self.velocity_lag_s if lag_s is None else float(lag_s)
         p = np.asarray(tel.position_m, dtype=float)
@@ -319,6 +320,11 @@ class Navigator:
             target = self._inside(target)
         # from rest: the reference turns the corner where the UAV is (a layer route never cuts diagonally)
         v = _ZERO3 if from_rest else np.asarray(tel.velocity_mps, dtype=float)
+        if level and not from_rest:
+            # a level leg keeps its altitude: a minimum-jerk leg started with a vertical velocity v_z sags up to
+            # ~0.2 v_z T past its end altitude, 0.11 m below a 2.45 m layer for a climb's -0.07 m/s rebound
+            # carried into an 8 s leg (bench_layouts --large seed 3256: 0.993 m over the UAV a layer below)
+            v = np.array([v[0], v[1], 0.0])
         T = self.leg_duration_s(p, target) if duration_s is None else float(duration_s)
         self.traj = MinJerk(p, v, _ZERO3, target, _ZERO3, _ZERO3, T)
         self._shift_m = None

@@ -161,7 +161,8 @@ class Routing(ModelBase):
             return False
         transit.grant()
         legs = self.nav.layer_route_legs(np.array(site), layer)
-        self.nav.fly_to(self._now_s, tel, legs[0][0], None, yaw_rad=self.nav.target_yaw_rad)
+        # on at the layer with the lateral speed it has, not the vertical one (:meth:`Navigator.fly_to`'s level)
+        self.nav.fly_to(self._now_s, tel, legs[0][0], None, yaw_rad=self.nav.target_yaw_rad, level=True)
         self.nav.legs = legs[1:]
         self.nav.legs_from_rest = True
         return True
