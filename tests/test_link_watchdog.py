@@ -183,16 +183,24 @@ def test_the_autopilots_clock_holds_while_the_watchdog_holds_the_link_and_runs_o
     assert fc.clock.now_s() == pytest.approx(last_boot_s + 1.0)  # on at 1x past its 1 s hold (was + 7.5)
 
 
+def taking_off(
+    clock: Held, rate: float, autopilot: str
+) -> tuple[MavlinkFlightController, list[tuple[float, float, float]]]:
+    """An armed, streaming link to ``autopilot`` (:func:`streaming`), and the velocity setpoints it sends."""
+    fc = streaming(clock, rate)
+    fc.autopilot = autopilot
+    sent: list[tuple[float, float, float]] = []
+    fc._send_position_target = lambda velocity, yaw_rate: sent.append(velocity)  # type: ignore[method-assign]
+    fc._state.armed, fc._streaming = True, True
+    return fc, sent
+
+
 def test_a_px4_climb_holds_its_altitude_and_is_not_judged_on_a_stale_clock() -> None:
     """The take-off climb's monitor (masonry.adapters.takeoff) judges progress on the autopilot's clock and sets
     the climb from the last altitude heard: over a silence the stream went on climbing on that altitude while the
     monitor's timers ran. On a stale clock the stream holds the altitude and the monitor judges nothing."""
     clock = Held()
-    fc = streaming(clock, 5.0)
-    fc.autopilot = "px4"
-    sent: list[tuple[float, float, float]] = []
-    fc._send_position_target = lambda velocity, yaw_rate: sent.append(velocity)  # type: ignore[method-assign]
-    fc._state.armed, fc._streaming = True, True
+    fc, sent = taking_off(clock, 5.0, "px4")
     fc._state.position_ned, fc._state.velocity_ned = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     fc._takeoff_target_m = 1.2
     fc._climb = ClimbMonitor(fc.clock.now_s(), 1.2)
@@ -211,11 +219,7 @@ def test_an_ardupilot_take_off_is_timed_on_the_autopilots_clock() -> None:
     the autopilot's. A SITL slower than the wall (x0.5: lock-step behind a loaded client) then had its climb cut
     short after 10 s of its own time by the stream's setpoints."""
     clock = Held()
-    fc = streaming(clock, 0.5)
-    fc.autopilot = "ardupilot"
-    sent: list[tuple[float, float, float]] = []
-    fc._send_position_target = lambda velocity, yaw_rate: sent.append(velocity)  # type: ignore[method-assign]
-    fc._state.armed, fc._streaming = True, True
+    fc, sent = taking_off(clock, 0.5, "ardupilot")
     fc._state.position_ned, fc._state.velocity_ned = (0.0, 0.0, -0.5), (0.0, 0.0, -0.3)  # climbing, 0.5 m up
     fc._takeoff_target_m, fc._takeoff_started_s = 1.2, fc.clock.now_s()
     wall0_s, boot0_s = clock.t, fc.clock.last_boot_s
