@@ -11,12 +11,23 @@ import math
 XY = tuple[float, float]
 
 
-def point_segment_m(p: XY, a: XY, b: XY) -> float:
-    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
+def _along(p: XY, a: XY, b: XY) -> float:
+    """Where on the segment ``a``-``b`` (0 at ``a``, 1 at ``b``) the point nearest ``p`` lies."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     n2 = dx * dx + dy * dy
-    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
-    return math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+    return 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / n2))
+
+
+def point_segment_m(p: XY, a: XY, b: XY) -> float:
+    """Horizontal distance from ``p`` to the segment ``a``-``b``."""
+    t = _along(p, a, b)
+    return math.hypot(p[0] - a[0] - t * (b[0] - a[0]), p[1] - a[1] - t * (b[1] - a[1]))
+
+
+def nearest_on_segment(p: XY, a: XY, b: XY) -> XY:
+    """The point of the segment ``a``-``b`` nearest ``p``."""
+    t = _along(p, a, b)
+    return (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]))
 
 
 def segment_segment_m(a: XY, b: XY, c: XY, d: XY) -> float:
@@ -46,4 +57,4 @@ def segments_closer_than(a: XY, b: XY, c: XY, d: XY, need_m: float) -> bool:
     return segment_segment_m(a, b, c, d) < need_m
 
 
-__all__ = ["XY", "point_segment_m", "segment_segment_m", "segments_closer_than"]
+__all__ = ["XY", "nearest_on_segment", "point_segment_m", "segment_segment_m", "segments_closer_than"]

@@ -192,9 +192,8 @@ def climb_out_free(c: ColumnClearance, uav: str, vols: list[Volume]) -> bool:
     if z.kind != "zone":
         return True
     up = dataclasses.replace(z, z1_m=max(z.z1_m, c.alt(c.max_layers - 1)))
-    near = (
-        1.1 * c.wait_radius_m
-    )  # (a hover whose UAV waits for a site near the zone: it may wait for this UAV)
+    # a hover whose UAV waits for a site near the zone: it may wait for this UAV
+    near = 1.1 * c.wait_radius_m
     hovers = [
         q
         for n, o in c.records.items()

@@ -12,7 +12,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from masonry.segments import point_segment_m, segment_segment_m, segments_closer_than
+from masonry.segments import nearest_on_segment, point_segment_m, segment_segment_m, segments_closer_than
 
 Vec3 = tuple[float, float, float]
 XY = tuple[float, float]
@@ -161,11 +161,7 @@ def leave_from(xy: XY, vols: Sequence[Volume]) -> XY:
     if len(vols) != 1 or vols[0].kind != "zone":
         return xy
     v = vols[0]
-    (ax, ay), (bx, by) = v.a, v.b
-    dx, dy = bx - ax, by - ay
-    n2 = dx * dx + dy * dy
-    t = 0.0 if n2 == 0.0 else max(0.0, min(1.0, ((xy[0] - ax) * dx + (xy[1] - ay) * dy) / n2))
-    px, py = ax + t * dx, ay + t * dy
+    px, py = nearest_on_segment(xy, v.a, v.b)
     d = math.hypot(xy[0] - px, xy[1] - py)
     if d <= v.slack_m or d > v.slack_m + LEAVE_SNAP_M:
         return xy
