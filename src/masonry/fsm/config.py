@@ -111,6 +111,11 @@ class UavConfig:
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5
+    # With wall_trend_s: > 0, the offset past the frames is predicted by a Kalman filter on the wander's drift
+    # (masonry.fsm.wall_drift: the rate diffuses this fast, m/s per square-root second, and relaxes over
+    # wall_drift_tau_s), not by the straight line; 0: the straight line
+    wall_drift_mps_per_sqrt_s: float = 0.0
+    wall_drift_tau_s: float = 2.0
     # With align_on_wall: the bricks in view count at their as-built poses relative to the wall (the task's
     # ``wall_as_built``, from mission control) and the drop-off keeps the brick's designed offsets to its placed
     # neighbours as built, pulled back toward the design by ``wall_pullback_m`` per course and at most

@@ -93,6 +93,9 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "align_on_wall": True,
         # inside r_pl, the nearest tick while the wall's sighting stays fresh (masonry.fsm.release_gate)
         "release_closest_s": 0.1,
+        # the wall's offset past its last sighting predicted on the GNSS wander's drift (masonry.fsm.wall_drift:
+        # masonry.sim.shaping.PX4's 6 cm over 8 s, smoothed over 2 s: the rate diffuses 0.015 m/s per sqrt s)
+        "wall_drift_mps_per_sqrt_s": 0.015,
         # with the wall in view, inside r_pl but over 1 cm off: a nearer tick, up to 3.5 s past the leg's end
         # (masonry.fsm.release_gate; the refitted model's wander crosses the 1.5 cm disc)
         "release_hold_m": 0.010,

@@ -17,6 +17,13 @@ and nothing is carried: the last mean stands, as before (carried on, the px4 tow
 after its last sighting, landed 27.6 mm off its support). A source with no
 trend (motion capture, a camera rendered from the reported position) gives a rate of noise: the target stays
 within a millimetre or two (the shift's deadband :data:`SHIFT_M`).
+
+With ``UavConfig.wall_drift_mps_per_sqrt_s`` (the ``px4`` preset's 0.015) the straight line gives way to a Kalman
+filter on the wander's drift (:mod:`masonry.fsm.wall_drift`, issue 30, branch ``drift30``): the target moves by
+the filter's prediction now less the mean of the frames it is, at any age (the rate it carries relaxes over 2 s,
+so a long-stale release is not carried far). The px4 towers' bricks against their neighbours, seeds 0-9 and
+10-19: 11.9 / 51.9 and 11.8 / 26.7 mm mean / max, 3 and 6 of 60 over 2 cm -> 10.8 / 22.2 and 10.5 / 22.5, 3 and
+2 of 60 (docs/performance/as-built.md).
 """
 
 from __future__ import annotations
@@ -25,6 +32,8 @@ from collections import deque
 from collections.abc import Hashable
 
 import numpy as np
+
+from masonry.fsm.wall_drift import DriftFilter
 
 __all__ = ["MAX_SHIFT_M", "MIN_FRAMES", "SHIFT_M", "WallTrend"]
 
@@ -45,6 +54,12 @@ class WallTrend:
 
     def __init__(self, span_s: float) -> None:
         self.span_s = span_s
+        #: > 0: the offset is predicted by :class:`~masonry.fsm.wall_drift.DriftFilter` with this rate noise
+        #: (m/s per square-root second) and :attr:`drift_tau_s`, not by the straight line
+        self.drift_mps_per_sqrt_s = 0.0
+        self.drift_tau_s = 2.0
+        self._drift: DriftFilter | None = None
+        self._mean_offsets: deque[np.ndarray] = deque(maxlen=1)
         self._frames: deque[tuple[float, np.ndarray]] = deque()
         self._key: Hashable | None = None
         self._mean_times: deque[float] = deque(maxlen=1)
@@ -57,7 +72,9 @@ class WallTrend:
         self._frames.clear()
         self._key = None
         self._mean_times = deque(maxlen=size)
+        self._mean_offsets = deque(maxlen=size)
         self._mean_t = None
+        self._drift = None
         self.shift_m = np.zeros(3)
 
     def add(self, now_s: float, offset_m: np.ndarray, key: Hashable) -> None:
@@ -67,7 +84,14 @@ class WallTrend:
         if key != self._key:
             self._key = key
             self._frames.clear()
+            if self._drift is not None:
+                self._drift.reset()
         self._frames.append((now_s, np.asarray(offset_m, dtype=float)))
+        if self.drift_mps_per_sqrt_s > 0.0:
+            if self._drift is None:
+                self._drift = DriftFilter(self.drift_mps_per_sqrt_s, self.drift_tau_s)
+            self._drift.add(now_s, offset_m)
+        self._mean_offsets.append(np.asarray(offset_m, dtype=float))
         while self._frames and now_s - self._frames[0][0] > self.span_s:
             self._frames.popleft()
         self._mean_times.append(now_s)
@@ -86,15 +110,26 @@ class WallTrend:
         rate[2] = 0.0  # the height is the release's own test (masonry.fsm.dropoff_reach)
         return np.asarray(rate, dtype=float)
 
+    def _want_m(self, now_s: float) -> np.ndarray:
+        """The shift (world, m) the target needs now over the mean of the frames it is: the drift filter's
+        prediction less that mean, or the straight line's rate times the mean's age."""
+        drift = self._drift
+        if drift is not None and self.drift_mps_per_sqrt_s > 0.0 and self.span_s > 0.0:
+            if drift.frames < MIN_FRAMES or not self._mean_offsets:
+                return np.zeros(3)
+            mean = np.mean(np.stack(self._mean_offsets), axis=0)
+            return np.array([*(drift.predict_m(now_s) - mean[:2]), 0.0])
+        rate = self.rate_mps(now_s)
+        if rate is None or self._mean_t is None:
+            return np.zeros(3)
+        return np.asarray(rate * (now_s - self._mean_t), dtype=float)
+
     def step(self, now_s: float) -> np.ndarray | None:
         """The move (world, m) to make now to carry the target along the trend; None: none (within ``SHIFT_M``)."""
-        rate = self.rate_mps(now_s)
-        want = np.zeros(3)
-        if rate is not None and self._mean_t is not None:
-            want = rate * (now_s - self._mean_t)
-            size = float(np.linalg.norm(want))
-            if size > MAX_SHIFT_M:
-                want *= MAX_SHIFT_M / size
+        want = self._want_m(now_s)
+        size = float(np.linalg.norm(want))
+        if size > MAX_SHIFT_M:
+            want *= MAX_SHIFT_M / size
         delta = want - self.shift_m
         if float(np.linalg.norm(delta)) <= SHIFT_M:
             return None
