@@ -234,7 +234,7 @@ class WallAlign:
         delta = self.tracker.add(self._base_m(wall.get(own)) + follow + offset - carried)
         self.trend.span_s = uav.config.wall_trend_s
         # the drift filter in calm air only: in 4 m/s it failed px4 missions the straight line completes (the bond's
-        # seed 1, the pyramid's seed 0: a first-course drop-off not reached in three descents)
+        # seed 1, the pyramid's seed 0: a brick put back after three descents; docs/performance/as-built.md)
         self.trend.drift_mps_per_sqrt_s = 0.0 if uav.attempt.in_wind else uav.config.wall_drift_mps_per_sqrt_s
         self.trend.drift_tau_s = uav.config.wall_drift_tau_s
         self.trend.add(
