@@ -11,11 +11,12 @@ from types import SimpleNamespace
 import numpy as np
 
 from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.fsm.config import blueprint_settings
 from masonry.fsm.side_look import look_offset_m
 from masonry.mission.airspace import ColumnClearance, Grant, Phase
 from masonry.mission.airspace_state import FlightRequest
 from masonry.mission.control_airspace import answer
-from masonry.mission.simulate import SimulatedMission
+from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, point_segment_m
 from masonry.planner.tasks import BrickTask, Plan
@@ -216,3 +217,16 @@ def test_no_zone_is_granted_under_the_hold_hover_of_a_uav_that_waits_beside_it()
     far = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
     waiting_at(far, "g", (0.6, 0.0), (9.0, 9.0, 1.35))  # it waits for a site far off: it will not wait for b
     assert far.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45).granted
+
+
+def test_a_short_leg_into_a_zone_with_no_slack_is_flown_gently():
+    # bench_layouts --large seed 3302 (running bond of 24, 3 + 2, r_c 0.60 m): brick-3 and brick-1 were granted in
+    # one tick flights to sites 1.20 m apart (zones with no slack at r_c < 1.2 m, so exactly the separation), each
+    # a 1.2 m leg from its hold point: on the arducopter vehicle each came 0.1 m past its leg's end, towards the
+    # other, 0.996 m apart. Where the zones have no slack for that overshoot, legs into them fly within
+    # pad_leg_accel_mps2, as into a pad's column (docs/safety.md, "Tracking error on a real autopilot").
+    bp = random_layout(random.Random(3302), LayoutLimits(max_courses=6, max_per_course=12))
+    assert all(blueprint_settings(bp, u)["zone_slack_m"] == 0.0 for u in bp.fleet)
+    r = simulate(bp, seed=3302, faults=Faults())
+    assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m

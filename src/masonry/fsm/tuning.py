@@ -40,6 +40,7 @@ _NOT_TUNING = frozenset(
         "wall",
         "pads_m",
         "pad_keep_off_m",
+        "zone_slack_m",
     }
 )
 #: UavConfig fields that are counts (integers), not measures.
