@@ -50,11 +50,14 @@ class UavConfig:
     # masonry.mission.airspace.ColumnClearance.home_column), and a shaped autopilot overshoots a short leg's end
     # (the arducopter vehicle: 0.11-0.12 m past a 1.5 m leg at 1.1 m/s^2, 0.06 m at 0.5). inf: no other limit.
     pad_leg_accel_mps2: float = math.inf
-    # ... and every lateral leg into a site or to a hold point within it too while mission control's work zones
-    # and hold hovers have no more slack than that overshoot less the 0.1 m each UAV's tracking error has
-    # (masonry.separation.zone_slack_m: none at r_c under 1.2 m; issue 27, bench_layouts --large seed 3302: two
-    # brick UAVs granted sites 1.20 m apart came 0.996 m close, each 0.1 m past its 1.2 m leg's end). The
-    # blueprint's (blueprint_settings); inf: the zones' slack covers it.
+    # ... and every lateral leg into a site or to a hold point within this while mission control's work zones and
+    # hold hovers have no more slack than a short leg's overshoot less the 0.1 m each UAV's tracking error has
+    # (zone_slack_m below; issue 27, bench_layouts --large seed 3302: two brick UAVs granted sites 1.20 m apart came
+    # 0.996 m close, each 0.1 m past its 1.2 m leg's end). The arducopter vehicle overshoots a 0.6-2.2 m leg by
+    # 0.059-0.076 m within 0.7 m/s^2 (0.049-0.054 m within 0.5, which cost compact walls twice the time). inf: none.
+    zone_leg_accel_mps2: float = math.inf
+    # The horizontal slack of mission control's work zones and hold hovers (masonry.separation.zone_slack_m of the
+    # blueprint's r_c, by blueprint_settings: none at r_c under 1.2 m); inf: enough for any overshoot.
     zone_slack_m: float = math.inf
     arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
     # ... and slower than this (issue 19: on ArduCopter a leg was taken as over at 8 cm while still moving at
@@ -263,7 +266,7 @@ def blueprint_settings(blueprint: Blueprint, spec: UavSpec) -> BlueprintSettings
     altitude, the markers, the wall's bricks, the site fence, the other UAVs' pads (``pads_m``, not its own) with
     the side look's keep-off from them (``pad_keep_off_m``: the blueprint's ``pad_site_distance_m``) and the
     nearest one's distance (``neighbour_pad_m``, for the battery budget), and the slack of mission control's work
-    zones and hold hovers (``zone_slack_m``: whether a leg into them is flown gently).
+    zones and hold hovers (``zone_slack_m``: whether a leg into them is flown within ``zone_leg_accel_mps2``).
 
     The one derivation of them: the simulator's machines (:func:`masonry.mission.uav_stack.build_machine`) and
     ``masonry fly``'s (:func:`masonry.mission.remote.remote_config` in mission mode, and single-task mode) fly the

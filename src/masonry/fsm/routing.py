@@ -24,7 +24,7 @@ STRAIGHT_ON_FROM_M = 0.25
 
 #: How far a short lateral leg at the autopilot's own limits overshoots its end on the ``arducopter`` vehicle (a
 #: 1.5 m leg, peak 1.1 m/s^2), and the share of the separation's tracking error one UAV may use (docs/safety.md):
-#: a leg whose end volume has less slack than their difference is flown within ``pad_leg_accel_mps2``.
+#: a leg whose end volume has less slack than their difference is flown within ``zone_leg_accel_mps2``.
 LEG_OVERSHOOT_M = 0.12
 TRACK_SHARE_M = 0.1
 
@@ -200,10 +200,11 @@ class Routing(ModelBase):
             self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad, accel)
 
     def _end_accel_mps2(self) -> float | None:
-        """The acceleration a lateral leg into a work zone or to a hold hover is flown within: gently
-        (``pad_leg_accel_mps2``) if their slack does not cover a short leg's overshoot, else the legs' own."""
-        if self.config.zone_slack_m + TRACK_SHARE_M < LEG_OVERSHOOT_M:
-            return self.config.pad_leg_accel_mps2
+        """The acceleration a lateral leg into a work zone or to a hold hover is flown within: ``zone_leg_accel_mps2``
+        if their slack does not cover a short leg's overshoot, else (None) the legs' own."""
+        accel = self.config.zone_leg_accel_mps2
+        if self.config.zone_slack_m + TRACK_SHARE_M < LEG_OVERSHOOT_M and math.isfinite(accel):
+            return accel
         return None
 
     def _refused(self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float) -> None:

@@ -60,6 +60,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "leg_jerk_mps3": 5.0,
         "leg_accel_mps2": 2.5,
         "pad_leg_accel_mps2": 0.5,
+        "zone_leg_accel_mps2": 0.7,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_relaxed_tolerance_m": 0.028,
