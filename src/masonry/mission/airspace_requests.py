@@ -257,8 +257,9 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
                 return Grant(uav, w.site, False, hold, c.alt(k))
     alt = off_layer_m(c, w)
-    for hold in candidates[:6] if alt is not None else ():
-        assert alt is not None
+    if alt is None:
+        return None
+    for hold in candidates[:6]:  # no layer fits: at the altitude it is at (no climb), if that fits
         vols = flight_volumes(
             (start[0], start[1]), alt, alt, None, w.top_m, (hold[0], hold[1]), None, c.zone_slack_m
         )
