@@ -98,10 +98,11 @@ def test_a_uav_asks_for_its_transit_at_rest_where_its_flight_starts(answer_after
 DT_S = 0.05
 
 
-def _arducopter_pad_leg_overshoot_m(length_m: float, *, into_pad: bool) -> float:
+def _arducopter_pad_leg_overshoot_m(length_m: float, *, into_pad: bool, into_zone: bool = False) -> float:
     """How far past its end a ``length_m`` lateral leg at 1.2 m (a layer route from a hover, as a transit flies
     it) takes the ``arducopter`` vehicle under its control preset, along the leg (0: never past it).
-    ``into_pad``: the leg goes into the column over the UAV's pad (``pad_leg_accel_mps2``)."""
+    ``into_pad``: the leg goes into the column over the UAV's pad (``pad_leg_accel_mps2``); ``into_zone``: into
+    a work zone with no slack (``zone_leg_accel_mps2``)."""
     config = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("arducopter"))
     vehicle = SimVehicle(vehicle_preset("arducopter"), rng=np.random.default_rng(0))
     nav = Navigator(config)
@@ -129,7 +130,7 @@ def _arducopter_pad_leg_overshoot_m(length_m: float, *, into_pad: bool) -> float
     fly(5.0)
     start = np.array(vehicle.position_m)
     end = np.array([0.6 * length_m, -0.8 * length_m, 1.2])  # a diagonal leg: both axes
-    accel = config.pad_leg_accel_mps2 if into_pad else None
+    accel = config.pad_leg_accel_mps2 if into_pad else config.zone_leg_accel_mps2 if into_zone else None
     nav.layer_route(now_s, vehicle.telemetry(), start, end, 1.2, None, accel)
     track = fly(nav.end_s - now_s + 5.0)
     along = (end - start)[:2] / np.linalg.norm((end - start)[:2])
@@ -141,6 +142,13 @@ def test_a_leg_into_its_pads_column_ends_within_the_tracking_allowance_on_the_ar
     # the column over a UAV's pad has no slack beyond the separation rule's 0.1 m for tracking error: a 1.5 m
     # leg into one overshot by 0.11 m (tests/test_airspace.py, the 3 x 12 wall, 4 + 2, seed 0)
     assert _arducopter_pad_leg_overshoot_m(length_m, into_pad=True) < 0.07
+
+
+@pytest.mark.parametrize("length_m", [0.6, 1.2, 1.5, 2.0])
+def test_a_leg_into_a_zone_with_no_slack_ends_within_the_tracking_share_on_the_arducopter_vehicle(length_m):
+    # at r_c under 1.2 m a work zone has no slack: a 1.2 m leg into one overshot by 0.106 m, two of them towards each
+    # other left 0.996 m (bench_layouts --large seed 3302); within zone_leg_accel_mps2 0.059-0.076 m
+    assert _arducopter_pad_leg_overshoot_m(length_m, into_pad=False, into_zone=True) < 0.085
 
 
 def test_a_short_leg_at_the_autopilots_own_acceleration_overshoots_its_end_on_the_arducopter_vehicle():

@@ -11,13 +11,14 @@ from types import SimpleNamespace
 import numpy as np
 
 from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.fsm.config import blueprint_settings
 from masonry.fsm.side_look import look_offset_m
 from masonry.mission.airspace import ColumnClearance, Grant, Phase
 from masonry.mission.airspace_state import FlightRequest
 from masonry.mission.control_airspace import answer
-from masonry.mission.simulate import SimulatedMission
+from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.sites import SiteIntervals
-from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, point_segment_m
+from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, on_leg, point_segment_m
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.sim import Faults
 
@@ -216,3 +217,67 @@ def test_no_zone_is_granted_under_the_hold_hover_of_a_uav_that_waits_beside_it()
     far = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
     waiting_at(far, "g", (0.6, 0.0), (9.0, 9.0, 1.35))  # it waits for a site far off: it will not wait for b
     assert far.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45).granted
+
+
+def test_on_leg_moves_only_a_rest_just_off_a_lateral_leg_onto_it():
+    leg = Volume((0.0, 0.0), (2.0, 0.0), 1.25, 1.25, 0.0, "leg")
+    assert on_leg((0.5, 0.05, 1.27), [leg]) == (0.5, 0.0, 1.25)
+    assert on_leg((2.05, 0.0, 1.2), [leg]) == (2.0, 0.0, 1.25)  # just past its end
+    off = (0.5, LEAVE_SNAP_M + 0.01, 1.25)
+    assert on_leg(off, [leg]) == off  # too far off it
+    high = (0.5, 0.0, 1.25 + LEAVE_SNAP_M + 0.01)
+    assert on_leg(high, [leg]) == high  # climbing to it
+    zone = Volume((0.5, 0.0), (0.5, 0.0), 0.0, 1.25, 0.0, "zone")
+    assert on_leg((0.5, 0.05, 1.2), [zone]) == (0.5, 0.05, 1.2)  # (a zone: volumes.leave_from)
+
+
+def test_a_uav_that_turned_back_a_few_centimetres_off_its_leg_asks_from_the_leg():
+    # bench_layouts --large seed 3310 (6 + 5, r_c 1.03 m): glue-5, on its hold leg, was handed a new task and stopped
+    # 3 cm off the leg, 1.188 m from brick-3's hold hover (granted 1.217 m from the leg). Its climb, reserved where
+    # it was, conflicted with that hover at every layer, as did every hold flight; it kept its leg, 0.76 m from
+    # brick-3's site, and brick-3 waited for it while it waited for brick-3 (first come, first served): 240 s,
+    # then hold patience gave the attempt up. Here b works at its site, g's leg 1.217 m beside it.
+    c = ColumnClearance(radius_m=1.031, base_m=1.25)
+    c.set_zone("b", (0.0, 0.0, 1.2), 1.2)
+    assert c.request("g", (4.0, 1.217, 1.2), 0.0, (-4.0, 1.217, 1.25)).granted
+    c.progress("g", (0.0, 1.19, 1.27))
+    turned = c.request("g", (-4.0, 3.0, 1.2), 1.0, (0.0, 1.187, 1.27))  # 1.187 m from b's zone
+    assert turned.granted or turned.hold_m is not None, turned  # (refused before: it kept its leg)
+    climb = c.volumes("g")[0]
+    assert climb.kind == "climb" and math.dist(climb.a, (0.0, 1.217)) < 1e-9  # from its leg
+    assert c.conflicts() == []
+
+
+def test_a_uav_that_turned_back_at_a_layer_the_base_has_risen_over_waits_at_its_altitude():
+    # bench_layouts --large seed 3275 (pyramid of 78, 6 + 3, r_c 0.54 m): glue-2 flew home at layer 1 (2.85 m),
+    # over the zone of brick-3 (its top 1.75 m), and brick-1 was sent to a hold point 1.1 m over that leg (3.95 m,
+    # 1.07 m beside it). The layer base rose to 1.85 m; glue-2 was handed A123 next to brick-3's site and stopped
+    # on its leg. Every layer's climb or descent from 2.85 m passed brick-1's hover or brick-3's zone: no flight or
+    # hold flight fitted, it kept its leg home, which blocked brick-3's climb out, and brick-3 blocked it: three
+    # attempts given up. Its hold flight may fly at the altitude it is at, off the layers. Here h's leg is the hover.
+    c = ColumnClearance(radius_m=0.542, base_m=3.0, start_base_m=1.75)
+    c.set_zone("b", (0.0, 0.0, 1.7), 1.75)
+    g = c.request("g", (6.0, 0.7, 1.7), 0.0, (-6.0, 0.7, 1.75))
+    assert g.granted and g.layer_m is not None and math.isclose(g.layer_m, 2.85)  # over b's zone
+    h = c.request("h", (1.0, 8.0, 1.7), 0.0, (1.0, -6.0, 1.75))
+    assert h.granted and h.layer_m is not None and math.isclose(h.layer_m, 3.95)  # over g's leg
+    c.raise_base(1.85)
+    c.progress("g", (0.0, 0.72, 2.87))
+    turned = c.request("g", (-3.0, 3.0, 1.7), 1.0, (0.0, 0.72, 2.87))
+    assert turned.hold_m is not None, turned  # (refused before: "hover where you are", its leg kept)
+    assert turned.layer_m is not None and math.isclose(turned.layer_m, 2.85)
+    assert c.conflicts() == []
+    assert all(v.z0_m == v.z1_m == 2.85 for v in c.volumes("g"))  # no climb, the leg, the hover
+
+
+def test_a_short_leg_into_a_zone_with_no_slack_is_flown_gently():
+    # bench_layouts --large seed 3302 (running bond of 24, 3 + 2, r_c 0.60 m): brick-3 and brick-1 were granted in
+    # one tick flights to sites 1.20 m apart (zones with no slack at r_c < 1.2 m, so exactly the separation), each
+    # a 1.2 m leg from its hold point: on the arducopter vehicle each came 0.1 m past its leg's end, towards the
+    # other, 0.996 m apart. Where the zones have no slack for that overshoot, legs into them fly within
+    # pad_leg_accel_mps2, as into a pad's column (docs/safety.md, "Tracking error on a real autopilot").
+    bp = random_layout(random.Random(3302), LayoutLimits(max_courses=6, max_per_course=12))
+    assert all(blueprint_settings(bp, u)["zone_slack_m"] == 0.0 for u in bp.fleet)
+    r = simulate(bp, seed=3302, faults=Faults())
+    assert r.completed and r.conflict_violations == 0 and r.dependency_violations == 0
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m

@@ -10,7 +10,7 @@ from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, Blueprint, MarkerSpec, Role, UavSpec
 from masonry.geofence import Site
 from masonry.placement_check import wall_tops_m
-from masonry.separation import pad_site_distance_m
+from masonry.separation import pad_site_distance_m, zone_slack_m
 from masonry.timing import DEFAULT_TIMING as _T
 from masonry.timing import TaskTiming
 
@@ -50,6 +50,15 @@ class UavConfig:
     # masonry.mission.airspace.ColumnClearance.home_column), and a shaped autopilot overshoots a short leg's end
     # (the arducopter vehicle: 0.11-0.12 m past a 1.5 m leg at 1.1 m/s^2, 0.06 m at 0.5). inf: no other limit.
     pad_leg_accel_mps2: float = math.inf
+    # ... and every lateral leg into a site or to a hold point within this while mission control's work zones and
+    # hold hovers have no more slack than a short leg's overshoot less the 0.1 m each UAV's tracking error has
+    # (zone_slack_m below; issue 27, bench_layouts --large seed 3302: two brick UAVs granted sites 1.20 m apart came
+    # 0.996 m close, each 0.1 m past its 1.2 m leg's end). The arducopter vehicle overshoots a 0.6-2.2 m leg by
+    # 0.059-0.076 m within 0.7 m/s^2 (0.049-0.054 m within 0.5, which cost compact walls twice the time). inf: none.
+    zone_leg_accel_mps2: float = math.inf
+    # The horizontal slack of mission control's work zones and hold hovers (masonry.separation.zone_slack_m of the
+    # blueprint's r_c, by blueprint_settings: none at r_c under 1.2 m); inf: enough for any overshoot.
+    zone_slack_m: float = math.inf
     arrive_tolerance_m: float = _T.arrive_tolerance_m  # a leg is over when the body is this close to its end
     # ... and slower than this (issue 19: on ArduCopter a leg was taken as over at 8 cm while still moving at
     # 1 m/s, and the next leg started from a swing); twice this after align_patience_s past the leg's planned end
@@ -254,13 +263,15 @@ class BlueprintSettings(TypedDict):
     pads_m: tuple[tuple[float, float], ...]
     pad_keep_off_m: float
     neighbour_pad_m: float | None
+    zone_slack_m: float
 
 
 def blueprint_settings(blueprint: Blueprint, spec: UavSpec) -> BlueprintSettings:
     """The :class:`~masonry.fsm.UavConfig` fields UAV ``spec`` takes from the blueprint and its fleet: the cruise
     altitude, the markers, the wall's bricks, the site fence, the other UAVs' pads (``pads_m``, not its own) with
     the side look's keep-off from them (``pad_keep_off_m``: the blueprint's ``pad_site_distance_m``) and the
-    nearest one's distance (``neighbour_pad_m``, for the battery budget).
+    nearest one's distance (``neighbour_pad_m``, for the battery budget), and the slack of mission control's work
+    zones and hold hovers (``zone_slack_m``: whether a leg into them is flown within ``zone_leg_accel_mps2``).
 
     The one derivation of them: the simulator's machines (:func:`masonry.mission.uav_stack.build_machine`) and
     ``masonry fly``'s (:func:`masonry.mission.remote.remote_config` in mission mode, and single-task mode) fly the
@@ -275,4 +286,5 @@ def blueprint_settings(blueprint: Blueprint, spec: UavSpec) -> BlueprintSettings
         "pads_m": tuple((u.home_m[0], u.home_m[1]) for u in others),
         "pad_keep_off_m": pad_site_distance_m(blueprint.clearance_m),
         "neighbour_pad_m": min((math.dist(spec.home_m[:2], u.home_m[:2]) for u in others), default=None),
+        "zone_slack_m": zone_slack_m(blueprint.clearance_m),
     }

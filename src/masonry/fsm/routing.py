@@ -22,6 +22,12 @@ from masonry.segments import point_segment_m
 #: the multi-UAV runs, not their time (the 12 m wall at 4 + 2: 1,189 -> 1,236 s).
 STRAIGHT_ON_FROM_M = 0.25
 
+#: How far a short lateral leg at the autopilot's own limits overshoots its end on the ``arducopter`` vehicle (a
+#: 1.5 m leg, peak 1.1 m/s^2), and the share of the separation's tracking error one UAV may use (docs/safety.md):
+#: a leg whose end volume has less slack than their difference is flown within ``zone_leg_accel_mps2``.
+LEG_OVERSHOOT_M = 0.12
+TRACK_SHARE_M = 0.1
+
 
 class Routing(ModelBase):
     """Motion for the model's states: hover, legs, lines, routes and the transit (see the module's docstring)."""
@@ -162,7 +168,9 @@ class Routing(ModelBase):
         transit.grant()
         legs = self.nav.layer_route_legs(np.array(site), layer)
         # on at the layer with the lateral speed it has, not the vertical one (:meth:`Navigator.fly_to`'s level)
-        self.nav.fly_to(self._now_s, tel, legs[0][0], None, yaw_rad=self.nav.target_yaw_rad, level=True)
+        accel = self._end_accel_mps2()
+        duration_s = None if accel is None else self.nav.leg_duration_s(p, legs[0][0], accel)
+        self.nav.fly_to(self._now_s, tel, legs[0][0], duration_s, yaw_rad=self.nav.target_yaw_rad, level=True)
         self.nav.legs = legs[1:]
         self.nav.legs_from_rest = True
         return True
@@ -188,8 +196,16 @@ class Routing(ModelBase):
             home = self.config.home_m
             # into the column over its own pad (no slack there beyond the tracking error's): gently
             to_pad = math.hypot(target[0] - home[0], target[1] - home[1]) <= 0.05
-            accel = self.config.pad_leg_accel_mps2 if to_pad else None
+            accel = self.config.pad_leg_accel_mps2 if to_pad else self._end_accel_mps2()
             self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad, accel)
+
+    def _end_accel_mps2(self) -> float | None:
+        """The acceleration a lateral leg into a work zone or to a hold hover is flown within: ``zone_leg_accel_mps2``
+        if their slack does not cover a short leg's overshoot, else (None) the legs' own."""
+        accel = self.config.zone_leg_accel_mps2
+        if self.config.zone_slack_m + TRACK_SHARE_M < LEG_OVERSHOOT_M and math.isfinite(accel):
+            return accel
+        return None
 
     def _refused(self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float) -> None:
         """Not yet: wait at the hold point given (flying there at ``layer``), or where the UAV is."""
@@ -198,7 +214,13 @@ class Routing(ModelBase):
             self.transit.layer_m = layer
             self.transit.wait()
             self.nav.layer_route(
-                self._now_s, tel, p, np.array([hold[0], hold[1], layer]), layer, self.nav.target_yaw_rad
+                self._now_s,
+                tel,
+                p,
+                np.array([hold[0], hold[1], layer]),
+                layer,
+                self.nav.target_yaw_rad,
+                self._end_accel_mps2(),
             )
         else:
             self.nav.wait(self._now_s)

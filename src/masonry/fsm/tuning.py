@@ -40,6 +40,7 @@ _NOT_TUNING = frozenset(
         "wall",
         "pads_m",
         "pad_keep_off_m",
+        "zone_slack_m",
     }
 )
 #: UavConfig fields that are counts (integers), not measures.
@@ -59,6 +60,7 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "leg_jerk_mps3": 5.0,
         "leg_accel_mps2": 2.5,
         "pad_leg_accel_mps2": 0.5,
+        "zone_leg_accel_mps2": 0.7,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_relaxed_tolerance_m": 0.028,

@@ -17,7 +17,7 @@ import math
 from typing import TYPE_CHECKING
 
 from masonry.geofence import AIRSPACE_MARGIN_M
-from masonry.mission.airspace_state import Grant, HoldFlight, Phase, UavAirspace, hold_keep_out
+from masonry.mission.airspace_state import OFF_LAYER, Grant, HoldFlight, Phase, UavAirspace, hold_keep_out
 from masonry.mission.volumes import Vec3, point_segment_m
 
 if TYPE_CHECKING:
@@ -41,7 +41,13 @@ def approach(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     any hold flight is (its volumes reserved, ``TO_HOLD``); the UAV flies it from rest at its hold point.
     """
     w, h = u.request, u.hold
-    if w is None or h is None or u.phase is not Phase.AT_HOLD or c.layer_base_m is None:
+    if (
+        w is None
+        or h is None
+        or u.phase is not Phase.AT_HOLD
+        or c.layer_base_m is None
+        or h.layer == OFF_LAYER
+    ):
         return None
     if sum(1 for n, o in c.records.items() if n != uav and o.phase is not Phase.LANDED and o.volumes) > 1:
         return None

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from masonry.geofence import AIRSPACE_MARGIN_M
 from masonry.mission.airspace_approach import approach
 from masonry.mission.airspace_state import (
+    OFF_LAYER,
     FlightRequest,
     Grant,
     GrantedFlight,
@@ -32,7 +33,9 @@ from masonry.mission.volumes import (
     Vec3,
     Volume,
     contains,
+    flight_volumes,
     leave_from,
+    on_leg,
     point_segment_m,
     same_site,
     stopped_at,
@@ -51,6 +54,7 @@ __all__ = [
     "hold_flight",
     "hold_side",
     "hover_where",
+    "off_layer_m",
     "queued_before",
     "request",
 ]
@@ -83,8 +87,8 @@ def request(
         c.refused += not ok
         return Grant(uav, site, ok)
     u = c.record(uav)
-    if pos is not None:  # (a few centimetres past its zone: it leaves from the zone, volumes.leave_from)
-        pos = (*leave_from((pos[0], pos[1]), u.volumes), pos[2])
+    if pos is not None:  # (a few centimetres past its zone or off its leg: it leaves from there, volumes.py)
+        pos = on_leg((*leave_from((pos[0], pos[1]), u.volumes), pos[2]), u.volumes)
     c.handed_task.discard(uav)  # (it asks again: for its task's site, or home if the task was taken back)
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
@@ -252,7 +256,35 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
                 u.hold, u.phase = HoldFlight(hold, k, c.alt(k), straight), Phase.TO_HOLD
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
                 return Grant(uav, w.site, False, hold, c.alt(k))
+    alt = off_layer_m(c, w)
+    if alt is None:
+        return None
+    for hold in candidates[:6]:  # no layer fits: at the altitude it is at (no climb), if that fits
+        vols = flight_volumes(
+            (start[0], start[1]), alt, alt, None, w.top_m, (hold[0], hold[1]), None, c.zone_slack_m
+        )
+        if c.fits(uav, vols):
+            c.take(u, vols)
+            u.hold, u.phase = HoldFlight(hold, OFF_LAYER, alt), Phase.TO_HOLD
+            c.layer_counts[OFF_LAYER] = c.layer_counts.get(OFF_LAYER, 0) + 1
+            return Grant(uav, w.site, False, hold, alt)
     return None
+
+
+def off_layer_m(c: ColumnClearance, w: FlightRequest) -> float | None:
+    """The altitude a UAV asking from mid-air off the layers (a leg flown at a layer before the layer base rose)
+    may fly its hold flight at, if no layer fits: where it is, over layer 0 (so over all that is built), else None.
+
+    It kept its altitude when the base rose, and the UAVs granted since keep their 1.1 m from it: one hovering 1.1 m
+    over its leg, a zone whose top is 1.1 m under it, and every layer's climb or descent from there passes one of
+    them (``bench_layouts --large`` seed 3275: an adhesion UAV that turned back on its way home, its leg 2.85 m high,
+    the base risen from 1.75 to 1.85 m; it waited, holding the leg home over the zone of the brick UAV it waited
+    for, whose climb out that leg blocked, 240 s).
+    """
+    if w.position is None or c.layer_base_m is None:
+        return None
+    z = w.position[2]
+    return z if c.snap(z) == z and z > c.alt(0) else None
 
 
 def hold_side(c: ColumnClearance, uav: str, start: Vec3) -> Vec3 | None:

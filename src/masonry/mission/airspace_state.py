@@ -53,6 +53,11 @@ class FlightRequest:
     to: XY | None = None  # the work at the site spans from it to here (an adhesion segment)
 
 
+#: :attr:`HoldFlight.layer` of a hold flight flown at the altitude its UAV asked from, off the layers
+#: (:func:`masonry.mission.airspace_requests.off_layer_m`)
+OFF_LAYER = -1
+
+
 @dataclass(frozen=True)
 class HoldFlight:
     """The hold flight a waiting UAV was granted: to ``point_m`` at layer ``layer`` (``layer_m`` high)."""
@@ -151,6 +156,7 @@ def hold_keep_out(
 
 
 __all__ = [
+    "OFF_LAYER",
     "FlightRequest",
     "Grant",
     "GrantedFlight",

@@ -169,6 +169,25 @@ def leave_from(xy: XY, vols: Sequence[Volume]) -> XY:
     return (px + f * (xy[0] - px), py + f * (xy[1] - py))
 
 
+def on_leg(p: Vec3, vols: Sequence[Volume]) -> Vec3:
+    """Where a UAV at ``p`` that stopped on a lateral leg it holds asks from: the nearest point of that leg, at its
+    altitude, if ``p`` is within ``LEAVE_SNAP_M`` of it horizontally and vertically, else ``p``.
+
+    As :func:`leave_from` for a zone: anything granted while it flew keeps the separation from its leg, not from
+    the few centimetres off it where it came to rest, and a climb reserved there could conflict at every layer with
+    a hover granted beside the leg (issue 27, ``bench_layouts --large``: seed 3310, an adhesion UAV turned back 3 cm
+    off its hold leg, 1.188 m from a hover 1.217 m from the leg; seed 3275, one 2 cm over its leg, 1.08 m under a
+    hover 1.1 m over the leg): no hold flight fitted, and the leg it kept blocked the UAV it waited for.
+    """
+    for v in vols:
+        if v.kind != "leg" or abs(p[2] - v.z0_m) > LEAVE_SNAP_M:
+            continue
+        q = nearest_on_segment((p[0], p[1]), v.a, v.b)
+        if math.hypot(p[0] - q[0], p[1] - q[1]) <= LEAVE_SNAP_M:
+            return (q[0], q[1], v.z0_m)
+    return p
+
+
 def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
     """The zone over ``site``: from the ground up to ``top_m``, along to ``to`` (an adhesion segment), ``slack_m``
     wide."""
@@ -296,6 +315,7 @@ __all__ = [
     "flight_volumes",
     "hold_points",
     "leave_from",
+    "on_leg",
     "point_segment_m",
     "same_site",
     "segment_segment_m",
