@@ -1,0 +1,220 @@
+"""Where a site visit's time goes (issue 27): per phase inside each task's site interval, when the interval ends
+against the UAV leaving the r_c neighbourhood, and how long a freed site waits for the next UAV; prints, asserts
+nothing.
+
+A site interval (``--reservation site``, :mod:`masonry.mission.sites`) runs from the grant of a UAV's flight down
+to its task's site to its asking to fly elsewhere; conflicting tasks' intervals never overlap (G^c). Flies
+``masonry.mission.simulate`` as ``bench_fleet.py`` does (``critical-path``, ``site``, ``columns``, geometric
+camera), recording every UAV's control tick (task state, transit state, position), and prints per run:
+
+1. per task kind (brick, adhesion): the visits, their mean, median and least length, and the seconds per visit
+   in each (task state / transit state) pair, largest first: where the interval's time goes;
+2. the release: how long before (or after) its UAV was out of r_c of the site (horizontally, of the
+   segment for adhesion) each interval ended; the seconds of each interval before its UAV first came within r_c;
+3. the hand-overs: for each interval whose UAV was waiting for its flight (transit ``ask`` or ``hold``) when it
+   began, after a conflicting task's interval that ended while it waited, the seconds from that end to this
+   start (0: granted the moment the site freed); the longest, with the tasks and UAVs.
+
+Usage: python benchmarks/bench_site_visits.py [--walls 12m] [--fleets 4+2,8+4] [--seed 1] [--vehicle ideal]
+"""
+
+from __future__ import annotations
+
+import argparse
+import bisect
+import itertools
+import statistics
+import sys
+from collections import Counter, defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_fleet import WALLS, walls_and_fleets
+
+from masonry.blueprint import Blueprint
+from masonry.mission.simulate import SimulatedMission
+from masonry.mission.sites import SiteVisit, work_span_m
+from masonry.mission.uav_stack import build_machine
+from masonry.planner.tasks import BrickTask, Plan
+from masonry.segments import point_segment_m
+
+#: UAV name -> its ticks: (time s, task state, transit state, position or None)
+Ticks = dict[str, list[tuple[float, str, str, tuple[float, float, float] | None]]]
+
+
+@dataclass(frozen=True)
+class Flown:
+    """One mission and its ticks."""
+
+    makespan_s: float
+    plan: Plan
+    clearance_m: float
+    visits: tuple[SiteVisit, ...]
+    ticks: Ticks
+
+
+def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: str | None) -> Flown:
+    """Fly the mission, recording each UAV's state, transit and position at every control tick."""
+    ticks: Ticks = defaultdict(list)
+
+    def machine(
+        spec: Any, ports: Any, bp: Any, handler: Any, clock: Any, layer: Any, template: Any
+    ) -> object:
+        m: Any = build_machine(spec, ports, bp, handler, clock, layer, template)
+        step, rows = m.step, ticks[spec.name]
+
+        def recorded_step(now_s: float) -> None:
+            step(now_s)
+            tel = m._tel
+            rows.append((now_s, m.state, m.transit.state, None if tel is None else tuple(tel.position_m)))
+
+        m.step = recorded_step
+        return m
+
+    options: dict[str, Any] = {"brick_uavs": bricks, "adhesion_uavs": adhesion, "seed": seed}
+    if vehicle is not None:
+        options["vehicle"] = vehicle
+    mission = SimulatedMission.from_blueprint(blueprint, uav_machine=machine, camera="geometric", **options)
+    report = mission.run()
+    visits = tuple(v for v in mission.control.sites.visits if v.end_s is not None)
+    return Flown(report.makespan_s, mission.plan, blueprint.clearance_m, visits, dict(ticks))
+
+
+def _in_visit(rows: list[Any], v: SiteVisit) -> Counter[tuple[str, str]]:
+    """The seconds per (task state, transit state) of ``v``'s UAV inside the visit."""
+    per: Counter[tuple[str, str]] = Counter()
+    assert v.end_s is not None
+    for (t0, state, transit, _p), (t1, *_rest) in itertools.pairwise(rows):
+        if t0 >= v.start_s - 1e-9 and t1 <= v.end_s + 1e-9:
+            per[(state, transit)] += t1 - t0
+    return per
+
+
+def _near(rows: list[Any], v: SiteVisit, span: Any, r_c: float) -> tuple[float | None, float | None]:
+    """When ``v``'s UAV first came within ``r_c`` of the work ``span`` in the visit, and when it was first
+    farther than that after the visit ended (None: not seen)."""
+    assert v.end_s is not None
+    first = out = None
+    for t, _s, _tr, p in rows:
+        if p is None or t < v.start_s - 1e-9:
+            continue
+        inside = point_segment_m((p[0], p[1]), span[0], span[1]) <= r_c
+        if first is None and inside and t <= v.end_s + 1e-9:
+            first = t
+        if t >= v.end_s - 1e-9 and not inside:
+            out = t
+            break
+    return first, out
+
+
+def _stats(xs: list[float]) -> str:
+    if not xs:
+        return "-"
+    xs = sorted(xs)
+    p90 = xs[min(len(xs) - 1, int(0.9 * len(xs)))]
+    return (
+        f"mean {statistics.mean(xs):.2f}, median {statistics.median(xs):.2f}, p90 {p90:.2f}, "
+        f"least {xs[0]:.2f}, most {xs[-1]:.2f} s"
+    )
+
+
+def visit_table(f: Flown) -> list[str]:
+    """Section 1 and 2: the phases per visit, the release and the time before r_c."""
+    tasks = {t.id: t for t in f.plan.tasks}
+    out = []
+    for kind in ("brick", "adhesion"):
+        mine = [v for v in f.visits if isinstance(tasks[v.task_id], BrickTask) == (kind == "brick")]
+        if not mine:
+            continue
+        lengths = [v.end_s - v.start_s for v in mine if v.end_s is not None]
+        per: Counter[tuple[str, str]] = Counter()
+        before_rc, released_early = [], []
+        for v in mine:
+            assert v.end_s is not None
+            rows = f.ticks.get(v.uav, [])
+            per.update(_in_visit(rows, v))
+            first, left = _near(rows, v, work_span_m(tasks[v.task_id]), f.clearance_m)
+            if first is not None:
+                before_rc.append(first - v.start_s)
+            if left is not None:
+                released_early.append(left - v.end_s)
+        n = len(mine)
+        out.append(
+            f"{kind}: {n} visits, mean {statistics.mean(lengths):.2f} s, median {statistics.median(lengths):.2f} s, "
+            f"least {min(lengths):.2f} s"
+        )
+        out.append("")
+        out.append("| task state / transit | s per visit | share |")
+        out.append("|---|---|---|")
+        total = sum(per.values())
+        for (state, transit), s in per.most_common():
+            if s / n >= 0.005:
+                out.append(f"| {state} / {transit} | {s / n:.2f} | {s / total:.0%} |")
+        out.append("")
+        out.append(f"- before its UAV came within r_c: {_stats(before_rc)}")
+        out.append(
+            f"- ended this long before its UAV was out of r_c (negative: held after it left): {_stats(released_early)}"
+        )
+        out.append("")
+    return out
+
+
+def hand_overs(f: Flown) -> list[str]:
+    """Section 3: from a conflicting interval's end to the next start of a UAV that waited for it."""
+    near: dict[str, set[str]] = {t.id: set() for t in f.plan.tasks}
+    for a, b in f.plan.conflicts:
+        near[a].add(b)
+        near[b].add(a)
+    gaps = []
+    for v in f.visits:
+        rows = f.ticks.get(v.uav, [])
+        i = bisect.bisect_left([r[0] for r in rows], v.start_s - 1e-6) - 1
+        if i < 0 or rows[i][2] not in ("ask", "hold"):
+            continue
+        j = i
+        while j > 0 and rows[j - 1][2] in ("ask", "hold"):
+            j -= 1
+        ended = [
+            o
+            for o in f.visits
+            if o.task_id in near[v.task_id]
+            and o.uav != v.uav
+            and o.end_s is not None
+            and rows[j][0] <= o.end_s <= v.start_s + 1e-6
+        ]
+        if ended:
+            o = max(ended, key=lambda o: o.end_s or 0.0)
+            assert o.end_s is not None
+            gaps.append((v.start_s - o.end_s, v, o))
+    gaps.sort(key=lambda g: -g[0])
+    out = [f"hand-overs: {len(gaps)}, {_stats([g[0] for g in gaps])}; at once (< 0.05 s): "]
+    out[0] += str(sum(1 for g in gaps if g[0] < 0.05))
+    for gap, v, o in gaps[:5]:
+        out.append(
+            f"- {gap:.1f} s: {v.task_id} ({v.uav}) at {v.start_s:.1f} s after {o.task_id} ({o.uav}) left"
+        )
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--walls", default="12m")
+    ap.add_argument("--fleets", default="4+2,8+4")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--vehicle", default=None, help="the simulated vehicle (default: masonry sim's)")
+    args = ap.parse_args()
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
+        f = fly(WALLS[wall][1](), bricks, adhesion, args.seed, args.vehicle)
+        print(
+            f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {args.seed}: makespan {f.makespan_s:,.1f} s\n"
+        )
+        for line in [*visit_table(f), *hand_overs(f)]:
+            print(line)
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()
