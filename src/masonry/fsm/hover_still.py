@@ -51,7 +51,7 @@ class HoverStill:
 
     def still(self, tolerance_m: float, speed_mps: float, *, margin: bool = True) -> bool:
         """A window seen, its mean position within ``tolerance_m`` of the point (3-D) by two standard errors (where
-        ``margin``; the mean alone without: past the patience, masonry.fsm.noise_gate), and its mean velocity
+        ``margin``; the mean alone without: from half the leg's timeout, masonry.fsm.noise_gate), and its mean velocity
         slower than ``speed_mps`` (3-D)."""
         h, z = self._horizontal, self._height
         if h.seen_s < h.window_s:

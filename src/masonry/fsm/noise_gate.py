@@ -14,8 +14,8 @@ its camera (``UavConfig.align_on_camera``), the error it gates on is relative to
 The margin treats the ticks as independent draws about a fixed mean. On the real PX4 (v1.16 SITL, issue 29) they
 are not: the airframe itself wanders about its setpoint (3-5 cm rms per tick, and the world follows the reported
 position), and a 3 s window's mean wanders with it, 1.5-3.5 cm, for seconds at a time. Two standard errors came to
-1.4-2 cm of the 2.5 cm relaxed tolerance, so the gate asked the mean to lie within 0.5-1 cm: luck, which came
-4-27 s after the leg (past ``leg_timeout_s`` in the failed flights). From :data:`MEAN_ALONE_AFTER` of the leg's
+1.3-2.8 cm of the 2.5 cm relaxed tolerance, so the gate asked the mean to lie within 0.5-1 cm: luck, which came
+6-27 s after the leg (past ``leg_timeout_s`` in the failed flights). From :data:`MEAN_ALONE_AFTER` of the leg's
 timeout past its end (15 s of the ``px4`` preset's 30) the gates judge the mean alone (``margin=False``): the
 window has had its time, its mean is where the descent starts from, and the timeout would otherwise fail an
 attempt that hovers where it should; the swing gate (:mod:`masonry.fsm.gates`) still fails a UAV that swings
