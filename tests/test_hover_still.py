@@ -12,15 +12,16 @@ from masonry.fsm.tuning import uav_settings
 from masonry.ports import Telemetry
 
 ORBIT_M = 0.10  # the scripted hover's swing about its centre (m)
+ORBIT_PERIOD_S = 1.7  # ... and its period (s)
 CENTRE_M = (0.015, 0.0, 0.0)  # the scripted hover's centre, off the point (m)
 
 
 def _orbit(t_s: float) -> tuple[float, float, float]:
     """PX4 v1.16 SITL's hover over A0's start beside busy processes, scripted: 4-6 cm rms off the point with a ~2 s
-    oscillation and a mean offset of 1-2 cm (docs/performance/autopilots.md), here wider: a 10 cm orbit of 2 s about
-    a point 1.5 cm off, the height swinging by 2 cm. The body is never within 8.5 cm of the point, and the speed
-    that orbit implies is 0.31 m/s: above the px4 preset's swing gate (0.3 m/s rms)."""
-    w = 2.0 * math.pi * t_s / 2.0
+    oscillation and a mean offset of 1-2 cm (docs/performance/autopilots.md), here wider: a 10 cm orbit of 1.7 s
+    about a point 1.5 cm off, the height swinging by 2 cm. The body is never within 8.5 cm of the point, and the
+    speed that orbit implies is 0.37 m/s: above the px4 preset's swing gate (0.35 m/s rms)."""
+    w = 2.0 * math.pi * t_s / ORBIT_PERIOD_S
     return (CENTRE_M[0] + ORBIT_M * math.cos(w), ORBIT_M * math.sin(w), 0.02 * math.sin(1.3 * w))
 
 
@@ -51,7 +52,7 @@ def _glue_orbiting_in_its_hover(preset: str) -> Rig:
 
 
 def test_the_px4_preset_hovers_still_over_a_swinging_start_and_sprays_a0() -> None:
-    # the px4 preset's gates read the velocity consistent with the position (0.31 m/s round the orbit): the
+    # the px4 preset's gates read the velocity consistent with the position (0.37 m/s round the orbit): the
     # swing gate would fail the hover 8 s after the leg's end, as it did on PX4 beside a busy loop
     rig = _glue_orbiting_in_its_hover("px4")
     result = rig.link.results[0]

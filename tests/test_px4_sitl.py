@@ -1,7 +1,7 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
 a failsafe of its (its geofence) ends `masonry fly`, and its process's death `masonry fly --mission` (in one line);
-issue 29's one-brick scenario, the adhesion task A0 and the case study as a two-vehicle mission too where
-``MASONRY_PX4_SITL_ALL=1`` opts in (not yet reliable under load: :data:`OPT_IN_ENV`).
+issue 29's one-brick scenario and the adhesion task A0 fly with default settings; the case study as a two-vehicle
+mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (:data:`OPT_IN_ENV`: 4-8 min of wall on its own).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
@@ -89,15 +89,31 @@ def test_the_gates_velocity_on_the_real_px4_is_no_farther_from_the_truth_than_ek
     assert filtered < ekf + 0.1, (ekf, filtered, str(kept))
 
 
+#: How often (wall s) a flight's PX4 log is read for its SIH starved while the flight runs.
+STARVED_POLL_S = 5.0
+
+
 def _finish(proc: subprocess.Popen[str], wall_s: float, what: str, px4_log: Path) -> tuple[str, str]:
-    """The process's output once it has ended, or a failure saying what did not end within ``wall_s``."""
-    try:
-        return proc.communicate(timeout=wall_s)
-    except subprocess.TimeoutExpired:
+    """The process's output once it has ended, or a failure saying what did not end within ``wall_s``; ended at
+    once (a failure) where PX4's log says its SIH starved (px4_sitl.sih_starved: a blind land follows, and masonry
+    waited out the wall bound, 420 s, before on_px4 flew again)."""
+    deadline_s = time.monotonic() + wall_s
+    while True:
+        try:
+            return proc.communicate(timeout=min(STARVED_POLL_S, max(0.0, deadline_s - time.monotonic())))
+        except subprocess.TimeoutExpired:
+            starved = sih_starved(px4_log.parent)
+            if not starved and time.monotonic() < deadline_s:
+                continue
         proc.kill()
         _, err = proc.communicate()
         log = px4_log.read_text(errors="replace") if px4_log.is_file() else ""
-        pytest.fail(f"{what}: no result within {wall_s:g} s of wall time\n{err[-3000:]}\nPX4: {log[-1500:]}")
+        why = (
+            f"its PX4's SIH starved ({SIH_STARVED!r})"
+            if starved
+            else f"no result within {wall_s:g} s of wall time"
+        )
+        pytest.fail(f"{what}: {why}\n{err[-3000:]}\nPX4: {log[-1500:]}")
 
 
 def _vehicle(proc: subprocess.Popen[str]) -> subprocess.Popen[str]:
@@ -140,7 +156,6 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
     """The issue's scenario as written: a one-brick blueprint, ``masonry fly --uav brick --task B1 --fc
     udpin:0.0.0.0:14540+N --actuators sim --camera sim``, uav.yaml only ``estimate_wait_s: 150``, flown as PX4
     starts (as CI starts it: its first seconds' arming refusals are asked through)."""
-    _opted_in("issue 29's scenario")
     blueprint = tmp_path / "one_brick.yaml"
     blueprint.write_text(ONE_BRICK)
 
@@ -161,7 +176,6 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
 @pytest.mark.slow
 def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
     """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
-    _opted_in("A0")
 
     def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
@@ -172,7 +186,10 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
     print(f"PX4: A0 coverage {result['coverage']:.0%} in {result['duration_s']} s")
 
 
-#: The scenario, A0 and the mission fly only where this is set as well (opt-in). Issue 29's list, traced (branch
+#: The mission flies only where this is set as well (opt-in). The scenario and A0 were opt-in too until branch
+#: px4drop (2026-12-05): every failed attempt of theirs had failed the drop-off's alignment on EKF2's wander, which
+#: the gate now judges by the window's mean past its patience (masonry.fsm.noise_gate; docs/performance/
+#: autopilots.md, "The drop-off's alignment on the real PX4's wander"). Before that, issue 29's list, traced (branch
 #: px4real, 2026-12-05; docs/performance/autopilots.md, "The real-PX4 tests under load, traced"): beside other
 #: sessions at load average 8-14, PX4 v1.16 SIH's EKF2 put its estimate up to 1.65 m (height) and 0.6 m
 #: (horizontally) off SIH's own truth, also at half speed (PX4_SIM_SPEED_FACTOR=0.5), and moved it by decimetres
@@ -192,7 +209,7 @@ def _opted_in(what: str) -> None:
     """Skip ``what`` unless :data:`OPT_IN_ENV` is set (after the PX4 SITL's own check: its reason comes first)."""
     px4_run_sh()
     if not os.environ.get(OPT_IN_ENV):
-        pytest.skip(f"{what} on the real PX4 is opt-in ({OPT_IN_ENV}=1): not yet reliable under load")
+        pytest.skip(f"{what} on the real PX4 is opt-in ({OPT_IN_ENV}=1): 4-8 min of wall, a task's retry")
 
 
 #: Wall seconds the two-vehicle mission may take: 285 s by hand (2026-12-03), pre-flights included.

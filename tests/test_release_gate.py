@@ -184,10 +184,12 @@ def _closing_case(
     seen_ago_s: float,
     last_leg: bool = True,
     past_end_s: float = 5.0,
+    guarded: bool = False,
 ) -> bool:
     """ReleaseGate.closing on one tick: the effector ``error_m`` off its target, moving at ``velocity_mps``, the
     wall last seen ``seen_ago_s`` before, on the side look's last leg or not, ``past_end_s`` after the descent's
-    leg ended (5 s: past the hold), the px4 preset's settings."""
+    leg ended (5 s: past the hold), the drop-off guarded (on bricks of the wall) or not, the px4 preset's
+    settings."""
     cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **uav_settings("px4"))
     target = np.array([1.0, 2.0, 0.3])
     tel = SimpleNamespace(velocity_mps=(velocity_mps[0], velocity_mps[1], 0.0))
@@ -200,7 +202,9 @@ def _closing_case(
         effector=SimpleNamespace(position=lambda _tel: target + np.array([error_m[0], error_m[1], 0.0])),
         attempt=SimpleNamespace(place_effector_target_m=target),
     )
-    return ReleaseGate().closing(cast("BrickUav", uav), cast("Telemetry", tel))
+    gate = ReleaseGate()
+    gate.guarded = guarded
+    return gate.closing(cast("BrickUav", uav), cast("Telemetry", tel))
 
 
 def test_inside_r_pl_the_last_leg_waits_a_tick_only_while_it_closes_and_the_sighting_stays_fresh() -> None:
@@ -237,6 +241,14 @@ def test_with_the_wall_in_view_a_release_outside_the_hold_radius_waits_for_a_nea
         # the wall out of view since an earlier tick (the side look's last leg hides it): no hold, the sighting
         # ages while it waits
         assert not _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=0.2, last_leg=last_leg, past_end_s=1.0)
+    # a lone brick (issue 29's scenario: no brick of the wall seen, none under it): its drop-off is the design's,
+    # nothing ages while it waits, so it waits as with the wall in view (it let go at r_pl's edge: 20.6 mm off on
+    # the real PX4, the carry offset added)
+    assert _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=math.inf, last_leg=False, past_end_s=1.0)
+    assert not _closing_case((-0.009, 0.0), (0.0, 0.0), seen_ago_s=math.inf, last_leg=False, past_end_s=1.0)
+    assert not _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=math.inf, last_leg=False, past_end_s=3.6)
+    # a drop-off on bricks of the wall not yet seen waits for its sighting instead (ReleaseGate.allows)
+    assert not _closing_case((-0.012, 0.0), (0.0, 0.0), seen_ago_s=math.inf, past_end_s=1.0, guarded=True)
     cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0))
     assert cfg.release_hold_m == 0.0 and cfg.release_hold_s == 0.0  # off by default
     assert uav_settings("px4")["release_hold_m"] == 0.010 and uav_settings("px4")["release_hold_s"] == 3.5

@@ -14,6 +14,7 @@ from masonry.fsm.config import UavConfig
 from masonry.fsm.descent_reach import DescentReach
 from masonry.fsm.hover_still import HoverStill
 from masonry.fsm.model import UavModel
+from masonry.fsm.noise_gate import MEAN_ALONE_AFTER
 from masonry.fsm.states import ADHESION_STATES, ADHESION_TASK_STATES, ADHESION_TRANSITIONS
 from masonry.fsm.tool import Tool
 from masonry.planner.tasks import AdhesionTask, Task
@@ -214,7 +215,9 @@ class AdhesionUav(UavModel):
             # ticks (masonry.fsm.hover_still); the window is the stable time
             self._hover_still.add(self._now_s, [p[i] - t[i] for i in range(3)], v)
             if self._hover_still.still(
-                scale * 2.0 * cfg.align_tolerance_m, scale * cfg.settle_speed_mps
+                scale * 2.0 * cfg.align_tolerance_m,
+                scale * cfg.settle_speed_mps,
+                margin=self._now_s <= self.nav.end_s + MEAN_ALONE_AFTER * cfg.leg_timeout_s,
             ) and (self._yaw_error(tel) <= scale * cfg.align_yaw_tolerance_rad):
                 self.stable()
                 return

@@ -17,7 +17,7 @@ from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.dropoff_reach import DropoffReach, dropoff_error_m
-from masonry.fsm.noise_gate import HoverNoise, noise_aligned
+from masonry.fsm.noise_gate import MEAN_ALONE_AFTER, HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.release_gate import ReleaseGate
 from masonry.fsm.side_look import SideLook
@@ -296,7 +296,9 @@ class BrickUav(PutBack):
                 self._gate_entered_s = self._entered_s
                 noise.reset()
             noise.add(self._now_s, (p[0] - t[0], p[1] - t[1]), (v[0], v[1]))
-            return noise_aligned(noise, tolerance, speed)
+            # half the leg's timeout on, the mean alone: the margin is the autopilot's own wander (noise_gate.py)
+            margin = self._now_s <= self.nav.end_s + MEAN_ALONE_AFTER * cfg.leg_timeout_s
+            return noise_aligned(noise, tolerance, speed, margin=margin)
         return math.hypot(p[0] - t[0], p[1] - t[1]) <= tolerance and math.hypot(v[0], v[1]) <= speed
 
     def enter_pickup_descend(self, *args: object, **kwargs: object) -> None:

@@ -113,8 +113,9 @@ class UavConfig:
     # (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
     release_closest_s: float = 0.0
     # With align_on_wall: inside r_pl but farther than release_hold_m from the drop-off, the release waits a tick
-    # (release_closest_s) while the sighting stays within release_fresh_s then, up to release_hold_s past the
-    # descent's end (masonry.fsm.release_gate.ReleaseGate.closing). 0: off
+    # (release_closest_s) while the sighting stays within release_fresh_s then (a lone brick, no wall seen and none
+    # under it: regardless), up to release_hold_s past the descent's end (masonry.fsm.release_gate.ReleaseGate.closing).
+    # 0: off
     release_hold_m: float = 0.0
     release_hold_s: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last

@@ -49,14 +49,15 @@ class HoverStill:
         )
         self._height.add(now_s, (float(error_m[2]), 0.0), (float(velocity_mps[2]), 0.0))
 
-    def still(self, tolerance_m: float, speed_mps: float) -> bool:
-        """A window seen, its mean position within ``tolerance_m`` of the point (3-D) by two standard errors, and
-        its mean velocity slower than ``speed_mps`` (3-D)."""
+    def still(self, tolerance_m: float, speed_mps: float, *, margin: bool = True) -> bool:
+        """A window seen, its mean position within ``tolerance_m`` of the point (3-D) by two standard errors (where
+        ``margin``; the mean alone without: from half the leg's timeout, masonry.fsm.noise_gate), and its mean velocity
+        slower than ``speed_mps`` (3-D)."""
         h, z = self._horizontal, self._height
         if h.seen_s < h.window_s:
             return False
         mean_m = math.hypot(h.mean_error_m, z.mean_error_m)
-        margin_m = 2.0 * math.hypot(h.standard_error_m, z.standard_error_m)
+        margin_m = 2.0 * math.hypot(h.standard_error_m, z.standard_error_m) if margin else 0.0
         return (
             mean_m + margin_m <= tolerance_m and math.hypot(h.mean_speed_mps, z.mean_speed_mps) <= speed_mps
         )

@@ -10,6 +10,18 @@ velocity to lie below the speed. With motion-capture noise the window is a forma
 the tick gate would); with GNSS-grade noise it is what lets the gate pass at all. Where the brick UAV aligns on
 its camera (``UavConfig.align_on_camera``), the error it gates on is relative to what the camera sees
 (:mod:`masonry.fsm.camera_align`), so the absolute wander cancels.
+
+The margin treats the ticks as independent draws about a fixed mean. On the real PX4 (v1.16 SITL, issue 29) they
+are not: the airframe itself wanders about its setpoint (3-5 cm rms per tick, and the world follows the reported
+position), and a 3 s window's mean wanders with it, 1.5-3.5 cm, for seconds at a time. Two standard errors came to
+1.3-2.8 cm of the 2.5 cm relaxed tolerance, so the gate asked the mean to lie within 0.5-1 cm: luck, which came
+6-27 s after the leg (past ``leg_timeout_s`` in the failed flights). From :data:`MEAN_ALONE_AFTER` of the leg's
+timeout past its end (15 s of the ``px4`` preset's 30) the gates judge the mean alone (``margin=False``): the
+window has had its time, its mean is where the descent starts from, and the timeout would otherwise fail an
+attempt that hovers where it should; the swing gate (:mod:`masonry.fsm.gates`) still fails a UAV that swings
+about the point. Not from the patience (4 s) nor from twice it: on the px4 model the descents after alignments
+passed that early missed their drop-off and grasp (the rotated bond, seed 12: 4 and 2 attempts failed, none with
+the margin; from 12 s or 15 s none, makespan 1,129 s; docs/performance/autopilots.md).
 """
 
 from __future__ import annotations
@@ -18,7 +30,11 @@ import math
 
 from masonry.errors import InvalidArgument
 
-__all__ = ["HoverNoise", "noise_aligned"]
+__all__ = ["MEAN_ALONE_AFTER", "HoverNoise", "noise_aligned"]
+
+#: Past this share of ``leg_timeout_s`` after the leg's end, the alignment and hover gates judge the window's mean
+#: alone, without the margin of its standard errors (see the module docstring).
+MEAN_ALONE_AFTER = 0.5
 
 
 class HoverNoise:
@@ -100,11 +116,10 @@ class HoverNoise:
         return math.hypot(self._vel[0], self._vel[1])
 
 
-def noise_aligned(noise: HoverNoise, tolerance_m: float, speed_mps: float) -> bool:
-    """The gate passes: a window seen, the mean error within ``tolerance_m`` by two standard errors, the mean
-    velocity slower than ``speed_mps``."""
+def noise_aligned(noise: HoverNoise, tolerance_m: float, speed_mps: float, *, margin: bool = True) -> bool:
+    """The gate passes: a window seen, the mean error within ``tolerance_m`` (by two standard errors where
+    ``margin``; the mean alone without), the mean velocity slower than ``speed_mps``."""
     if noise.seen_s < noise.window_s:
         return False
-    return (
-        noise.mean_error_m + 2.0 * noise.standard_error_m <= tolerance_m and noise.mean_speed_mps <= speed_mps
-    )
+    spread_m = 2.0 * noise.standard_error_m if margin else 0.0
+    return noise.mean_error_m + spread_m <= tolerance_m and noise.mean_speed_mps <= speed_mps

@@ -139,10 +139,13 @@ class ReleaseGate:
         While the effector's velocity brings it more than 1 mm nearer by the next tick and the wall's sighting is
         still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring).
         Never past the sighting's freshness: a release held into a look back up ages the drop-off more than it
-        gains."""
+        gains. A drop-off with no brick of the wall seen in its placement and none under it (a lone brick, issue
+        29's scenario) has nothing to age: it waits for a tick within ``release_hold_m`` as with the wall in view."""
         cfg = uav.config
         dt_s = cfg.release_closest_s
-        if dt_s <= 0.0 or uav._now_s + dt_s - uav._wall.seen_s > cfg.release_fresh_s:
+        # no brick of the wall seen in this placement, none under it: the drop-off is the design's, nothing ages
+        alone = not self.guarded and uav._wall.seen_s == -math.inf
+        if dt_s <= 0.0 or (not alone and uav._now_s + dt_s - uav._wall.seen_s > cfg.release_fresh_s):
             return False
         error_m = (
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
@@ -152,10 +155,10 @@ class ReleaseGate:
         if (
             error > cfg.release_hold_m > 0.0
             and uav._now_s - uav.nav.end_s <= cfg.release_hold_s
-            and uav._now_s - uav._wall.seen_s <= dt_s
+            and (alone or uav._now_s - uav._wall.seen_s <= dt_s)
         ):
             return True
-        if not uav._side.final:
+        if alone or not uav._side.final:
             return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
         return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
