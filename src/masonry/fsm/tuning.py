@@ -84,6 +84,10 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
     # period of about 2 s and 4-5 cm of spread: the gates and the release's height average over 3 s, longer than
     # that (benchmarks/bench_px4_brick.py: 5 of 6 placed with 3 s, 4 of 6 with 1.5 s; docs/hardware.md).
     "px4": {
+        # the transit layer's climbs and descents at issue 27's 0.5 m/s, not the default 0.9: with 0.9 the px4 rotated
+        # bond (tests/test_side_look.py, seeds 12 calm and 7 in 4 m/s) failed its first course's drop-offs, "not
+        # reached within 1.5 cm after 3 descents", and did not complete; the cause is not traced (docs/hardware.md)
+        "layer_vertical_speed_mps": 0.5,
         # the side look's last leg and a look's leg back down fly the acceleration feed-forward of a 0.5 s lag (the
         # refitted model's 0.25 s dead time, 0.15 s lag and 25 % droop): on the default 0.3 they ended 5-8 cm short
         # and overshot past the sighting's freshness (the px4 towers' stale releases); on every leg it failed the
