@@ -554,7 +554,7 @@ class MavlinkFlightController(EstimateLink):
         from masonry.adapters.mavlink_fence import upload_fence
 
         self._check_link("fence")
-        return upload_fence(self, site)
+        return upload_fence(self, site, monotonic=self._monotonic)  # (the commands' clock)
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""
