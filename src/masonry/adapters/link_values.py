@@ -123,12 +123,10 @@ class LinkClock:
         self.hold_s = hold_s
         self.window_s = window_s
         self._lock = threading.Lock()
-        self._samples: deque[tuple[float, float]] = (
-            deque()
-        )  # (boot_s, monotonic_s), the window's and one before
-        self._carried = (
-            1.0  # the rate until the window spans RATE_MIN_SPAN_S: 1x, or the one before a stand-still
-        )
+        # (boot_s, monotonic_s): the window's samples and the newest one before it
+        self._samples: deque[tuple[float, float]] = deque()
+        # the rate until the window spans RATE_MIN_SPAN_S: 1x, or the one measured before a stand-still
+        self._carried = 1.0
         self._returned = -math.inf
         self._created = self._monotonic()
         self.extrapolate = True  # False: now_s is the last boot time heard (a SITL in lock-step, lockstep.py)
@@ -143,9 +141,11 @@ class LinkClock:
                     samples.clear()
                     self._carried = 1.0
                     self._returned = -math.inf
-                elif gap_s >= STANDSTILL_GAP_S and boot_s - last_boot_s < 0.5 * gap_s * self._rate_locked():
-                    self._carried = self._rate_locked()  # a stand-still is not the speed: on from after it
-                    samples.clear()
+                elif gap_s >= STANDSTILL_GAP_S:
+                    rate = self._rate_locked()
+                    if boot_s - last_boot_s < 0.5 * gap_s * rate:  # a stand-still: not the speed
+                        self._carried = rate  # (measured on from after it)
+                        samples.clear()
             samples.append((boot_s, monotonic_s))
             # keep the newest sample at least window_s old, so the window spans window_s once it can
             while len(samples) > 2 and samples[1][1] <= monotonic_s - self.window_s:
