@@ -8,11 +8,11 @@ completed, the tasks in the order they ended (by whom, attempts), the makespan (
 placement error, the violations, and each UAV's exit and last lines when it failed; asserts nothing.
 
 Usage: python benchmarks/bench_arducopter_case_study.py [--reservation site|task] [--speedup K]
-       [--sitl ../shared/sitl/arducopter] [--keep DIR]
+       [--sitl ../shared/sitl/arducopter] [--keep DIR [--log]]
 
 ``--reservation`` is mission control's (``site``, the default, is not passed: the user's default). The masonry run
 is this interpreter's (``PYTHONPATH=src`` runs a worktree's code). ``--keep DIR`` keeps the SITLs' folders and
-every process's output there.
+every process's output there (``--log``: each UAV's MCAP log too, ``masonry fly --log``).
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ def _masonry(out: Path, *args: str) -> subprocess.Popen[bytes]:
     )
 
 
-def run(reservation: str, speedup: int, binary: Path, folder: Path) -> None:
+def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = False) -> None:
     config = folder / "uav.yaml"
     config.write_text("estimate_wait_s: 150\n")
     started = time.monotonic()
@@ -91,7 +91,8 @@ def run(reservation: str, speedup: int, binary: Path, folder: Path) -> None:
         for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url)):
             uavs[uav] = _masonry(folder / uav, "fly", "--uav", role, "--name", uav, "--blueprint", str(CASE_STUDY),
                                  "--mission", LISTEN, "--fc", url, "--actuators", "sim", "--camera", "sim",
-                                 "--config", str(config), "--format", "json")  # fmt: skip
+                                 "--config", str(config), "--format", "json",
+                                 *(["--log", str(folder / f"{uav}.mcap")] if log else []))  # fmt: skip
         procs = [mc, *uavs.values()]
         try:
             mc.wait(timeout=1800)
@@ -141,10 +142,13 @@ def main() -> None:
     ap.add_argument("--speedup", type=int, default=1)
     ap.add_argument("--sitl", type=Path, default=Path(os.environ.get("MASONRY_ARDUPILOT_SITL") or SITL))
     ap.add_argument("--keep", type=Path, default=None)
+    ap.add_argument(
+        "--log", action="store_true", help="with --keep: each UAV's MCAP log (fly --log) there too"
+    )
     args = ap.parse_args()
     if args.keep is not None:
         args.keep.mkdir(parents=True, exist_ok=True)
-        run(args.reservation, args.speedup, args.sitl, args.keep)
+        run(args.reservation, args.speedup, args.sitl, args.keep, args.log)
         return
     with tempfile.TemporaryDirectory(prefix="case-study-sitl-") as tmp:
         run(args.reservation, args.speedup, args.sitl, Path(tmp))
