@@ -36,6 +36,8 @@ SITL = ROOT.parent / "shared" / "sitl" / "arducopter"
 HOME = "-35.363261,149.165230,584,353"
 MAIN = "from masonry.cli import main; main()"
 LISTEN = "tcp/127.0.0.1:7471"
+#: How long (s of wall) a UAV may take to end after mission control has (its return and landing).
+UAV_EXIT_S = 180.0
 
 
 @contextlib.contextmanager
@@ -75,7 +77,20 @@ def _masonry(out: Path, *args: str) -> subprocess.Popen[bytes]:
     )
 
 
+def _busy_ports() -> list[int]:
+    """The ports of this scenario something already listens on (another run of it, a developer's SITL)."""
+    busy = []
+    for port in (5760, 5770, int(LISTEN.rsplit(":", 1)[1])):
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                busy.append(port)
+    return busy
+
+
 def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = False) -> None:
+    busy = _busy_ports()
+    if busy:  # the issue's fixed ports: a second run beside one would join the other's vehicles and mission
+        raise SystemExit(f"ports {', '.join(map(str, busy))} are in use: another run (or SITL) is on them")
     config = folder / "uav.yaml"
     config.write_text("estimate_wait_s: 150\n")
     started = time.monotonic()
@@ -94,10 +109,15 @@ def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = 
                                  "--config", str(config), "--format", "json",
                                  *(["--log", str(folder / f"{uav}.mcap")] if log else []))  # fmt: skip
         procs = [mc, *uavs.values()]
+        hung: list[str] = []  # UAVs still running UAV_EXIT_S after mission control ended
         try:
             mc.wait(timeout=1800)
-            for p in uavs.values():
-                p.wait(timeout=180)
+            ended_s = time.monotonic()
+            for uav, p in uavs.items():
+                try:
+                    p.wait(timeout=max(0.0, ended_s + UAV_EXIT_S - time.monotonic()))
+                except subprocess.TimeoutExpired:
+                    hung.append(uav)
         finally:
             for p in procs:
                 if p.poll() is None:
@@ -131,7 +151,10 @@ def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = 
     for uav, p in uavs.items():
         err = (folder / uav).with_suffix(".err").read_text()
         tuning = next((line for line in err.splitlines() if "tuning:" in line), "(no tuning line)")
-        print(f"  {uav}: exit {p.returncode}; {tuning.strip()}")
+        still = (
+            f" (still running {UAV_EXIT_S:.0f} s after mission control ended: killed)" if uav in hung else ""
+        )
+        print(f"  {uav}: exit {p.returncode}{still}; {tuning.strip()}")
         if p.returncode != 0:
             print("   ", err[-1500:].replace("\n", "\n    "))
 
