@@ -46,14 +46,16 @@ class _DroppedTakeoff:
 
     def __init__(self, fc, vehicle, disarm):
         self._fc, self._vehicle, self._disarm, self.takeoffs = fc, vehicle, disarm, 0
+        self.asked = []  # (the clock when asked, the time-out given)
 
-    def takeoff(self, altitude_m):
+    def takeoff(self, altitude_m, timeout_s=None):
         self.takeoffs += 1
+        self.asked.append((self._fc.telemetry().time_s, timeout_s))
         if self.takeoffs == 1:
             if self._disarm:
                 self._vehicle.disarm()
             return
-        self._fc.takeoff(altitude_m)
+        self._fc.takeoff(altitude_m, timeout_s)
 
     def __getattr__(self, name):
         return getattr(self._fc, name)
@@ -72,6 +74,10 @@ def test_a_dropped_take_off_is_asked_for_again(disarm):
     run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)
     assert fc.takeoffs == 2
     assert run.result is not None and run.result.status == "done", run.result
+    # the take-off's one time-out, the machine's: the flight controller is given what is left of it each time
+    (first_s, first), (again_s, again) = fc.asked
+    assert first == config.takeoff_timeout_s == 30.0
+    assert again == pytest.approx(first - (again_s - first_s), abs=0.05) and again <= first - 2.0
 
 
 class _SlowArming:
@@ -80,14 +86,16 @@ class _SlowArming:
 
     def __init__(self, fc, advance, arming_s):
         self._fc, self._advance, self._arming_s, self.takeoffs = fc, advance, arming_s, 0
+        self.timeouts = []
 
     def arm(self):
         self._advance(self._arming_s)
         self._fc.arm()
 
-    def takeoff(self, altitude_m):
+    def takeoff(self, altitude_m, timeout_s=None):
         self.takeoffs += 1
-        self._fc.takeoff(altitude_m)
+        self.timeouts.append(timeout_s)
+        self._fc.takeoff(altitude_m, timeout_s)
 
     def __getattr__(self, name):
         return getattr(self._fc, name)
@@ -108,6 +116,7 @@ def test_the_wait_before_asking_a_take_off_again_counts_from_the_arming():
     config = UavConfig.from_spec(spec, cruise_altitude_m=bp.cruise_altitude_m, markers=bp.markers)
     run = fly_task(config, task, fc=fc, clock=ports.clock, sprayer=ports.sprayer, advance=ports.advance)
     assert fc.takeoffs == 1
+    assert fc.timeouts == [pytest.approx(30.0 - 7.0, abs=0.05)]  # the arming spent 7 s of the take-off's 30
     assert run.result is not None and run.result.status == "done", run.result
 
 

@@ -15,7 +15,7 @@ import pytest
 from masonry.adapters.link_silence import beatless_s
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.mavlink_link import RECEIVER_HUNG_S
-from masonry.adapters.takeoff import ClimbMonitor
+from masonry.adapters.takeoff import ClimbMonitor, climb_limit_s
 from masonry.errors import LinkLost
 
 
@@ -213,22 +213,32 @@ def test_a_px4_climb_holds_its_altitude_and_is_not_judged_on_a_stale_clock() -> 
     assert fc._climb is not None and fc._climb.state == "climbing", fc._climb.reason  # not judged
 
 
-def test_an_ardupilot_take_off_is_timed_on_the_autopilots_clock() -> None:
+@pytest.mark.parametrize(("timeout_s", "limit_s"), [(None, 28.0), (30.0, 28.0), (12.0, 10.8)])
+def test_an_ardupilot_take_off_is_timed_on_the_autopilots_clock(
+    timeout_s: float | None, limit_s: float
+) -> None:
     """The adapter lets the stream fly (and says why) once ArduPilot's own climb has reached its altitude or run
-    out of ``takeoff_timeout_s``; that time-out counted this computer's seconds while the machine's take-off counts
-    the autopilot's. A SITL slower than the wall (x0.5: lock-step behind a loaded client) then had its climb cut
-    short after 10 s of its own time by the stream's setpoints."""
+    out of its time; that time-out counted this computer's seconds while the machine's take-off counts the
+    autopilot's. A SITL slower than the wall (x0.5: lock-step behind a loaded client) then had its climb cut short
+    after 10 s of its own time by the stream's setpoints. Its time is the machine's ``takeoff_timeout_s`` (what
+    of it the machine passes to ``takeoff``; ``TAKEOFF_TIMEOUT_S``, 30 s, when none) less ``REPORT_MARGIN_S``: it
+    was 20 s of the adapter's own against the machine's 30: a machine told 12 s gave the take-off up, and the
+    setpoints of its failsafe and return waited for ArduPilot's climb until the adapter's 20 s."""
+    assert climb_limit_s(timeout_s) == pytest.approx(limit_s)
     clock = Held()
     fc, sent = taking_off(clock, 0.5, "ardupilot")
     fc._state.position_ned, fc._state.velocity_ned = (0.0, 0.0, -0.5), (0.0, 0.0, -0.3)  # climbing, 0.5 m up
     fc._takeoff_target_m, fc._takeoff_started_s = 1.2, fc.clock.now_s()
+    fc._takeoff_limit_s = climb_limit_s(timeout_s)  # (as takeoff() sets it)
     wall0_s, boot0_s = clock.t, fc.clock.last_boot_s
     assert boot0_s is not None
-    for i in range(1, 211):  # 21 s of wall, 10.5 s of its clock
+    steps = round((limit_s - 0.3) / 0.05)
+    for i in range(1, steps):  # up to 0.3 s short of its time (of its clock), twice that of wall
         heard(fc, clock, wall0_s + 0.1 * i, boot0_s + 0.05 * i)
     fc._stream_setpoint(clock.t)
     assert fc._takeoff_target_m == 1.2 and fc.takeoff_problem is None and not sent  # still ArduPilot's climb
-    for i in range(211, 411):  # 20.5 s of its clock
+    for i in range(steps, steps + 12):  # 0.3 s past it
         heard(fc, clock, wall0_s + 0.1 * i, boot0_s + 0.05 * i)
     fc._stream_setpoint(clock.t)
-    assert fc._takeoff_target_m is None and fc.takeoff_problem == "take-off at 0.50 m of 1.20 m after 20 s"
+    assert fc._takeoff_target_m is None
+    assert fc.takeoff_problem == f"take-off at 0.50 m of 1.20 m after {limit_s:.0f} s"

@@ -8,10 +8,10 @@ import threading
 import time
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from masonry.adapters.link_values import EXTRAPOLATION_HORIZON_S, HOLD_S
+from masonry.adapters.link_values import EXTRAPOLATION_HORIZON_S, HOLD_S, RATE_WINDOW_S
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     PX4_MODES,
@@ -197,6 +197,70 @@ def test_link_clock_extrapolates_up_to_its_horizon_then_holds_then_runs_on_at_th
     assert clock.now_s() == pytest.approx(107.5) and not clock.stale  # never backwards
     clock.extrapolate = False  # lock-step: the time last heard, as before
     assert clock.now_s() == 105.2
+
+
+def _feed(clock: LinkClock, boot_s: float, local_s: float, rate: float, wall_s: float) -> tuple[float, float]:
+    """30 Hz time-stamped messages from an autopilot running at ``rate`` for ``wall_s`` of local time; the last."""
+    for _ in range(round(wall_s * 30)):
+        boot_s, local_s = boot_s + rate / 30, local_s + 1 / 30
+        clock.observe(boot_s, local_s)
+    return boot_s, local_s
+
+
+def test_link_clock_follows_a_sitl_whose_speed_changes_within_its_window() -> None:
+    """Issue 29: the rate was averaged since the link came up, so a SITL at x5 for 60 s that a loaded machine then
+    slowed to x2 was still extrapolated (and slept for) at x4.77 after 5 s of wall at x2. Now the last ``window_s``."""
+    local = [1000.0]
+    clock = LinkClock(lambda: local[0])
+    assert clock.window_s == RATE_WINDOW_S == 2.0
+    boot_s, local[0] = _feed(clock, 100.0, 1000.0, 5.0, 60.0)
+    assert clock.rate == pytest.approx(5.0)
+    boot_s, local[0] = _feed(clock, boot_s, local[0], 2.0, 1.0)
+    assert 2.0 < clock.rate < 5.0  # half its window at the new speed
+    boot_s, local[0] = _feed(clock, boot_s, local[0], 2.0, RATE_WINDOW_S)
+    assert clock.rate == pytest.approx(2.0)  # (since the link came up: 4.86)
+    local[0] += 0.2  # within the horizon at x2 (0.25 s of wall): 0.4 s on
+    assert clock.now_s() == pytest.approx(boot_s + 0.4) and not clock.stale  # (at 4.86: held, stale)
+    boot_s, local[0] = _feed(clock, boot_s + 0.4, local[0], 5.0, RATE_WINDOW_S + 0.1)  # and back up
+    assert clock.rate == pytest.approx(5.0)
+
+
+def test_link_clock_leaves_a_stand_still_out_of_its_rate() -> None:
+    """A SITL left unrun (1.5 s of wall, its clock still) runs on at its speed after it: the rate is the one before
+    it, then measured from after it (over a window with the silence in it: x1.25 for 2 s, slept for 4 times too
+    long), while a receiver that was starved (the autopilot's clock moved on meanwhile) is measured through it."""
+    local = [1000.0]
+    clock = LinkClock(lambda: local[0])
+    boot_s, local[0] = _feed(clock, 100.0, 1000.0, 5.0, 10.0)
+    local[0] += 1.5
+    clock.observe(boot_s + 1 / 30, local[0])  # stood still
+    assert clock.rate == pytest.approx(5.0)
+    boot_s, local[0] = _feed(clock, boot_s + 1 / 30, local[0], 5.0, 0.1)
+    assert clock.rate == pytest.approx(5.0)  # still the rate before it: less than RATE_MIN_SPAN_S since
+    boot_s, local[0] = _feed(clock, boot_s, local[0], 5.0, 0.5)
+    assert clock.rate == pytest.approx(5.0)  # measured after it
+    local[0] += 1.5
+    clock.observe(boot_s + 7.5, local[0])  # the receiver starved: 1.5 s of messages at once, in order
+    boot_s, local[0] = _feed(clock, boot_s + 7.5, local[0], 5.0, 0.5)
+    assert clock.rate == pytest.approx(5.0)
+
+
+@settings(max_examples=60, derandomize=True)
+@given(
+    before=st.floats(min_value=0.5, max_value=10.0),
+    after=st.floats(min_value=0.5, max_value=10.0),
+    before_s=st.floats(min_value=0.3, max_value=120.0),
+)
+def test_link_clock_rate_is_the_new_speed_one_window_after_a_change(
+    before: float, after: float, before_s: float
+) -> None:
+    local = [0.0]
+    clock = LinkClock(lambda: local[0])
+    boot_s, local[0] = _feed(clock, 0.0, 0.0, before, before_s)
+    boot_s, local[0] = _feed(clock, boot_s, local[0], after, RATE_WINDOW_S + 1 / 30)
+    assert clock.rate == pytest.approx(after, rel=1e-6), (before, after, before_s)
+    local[0] += 0.5 * EXTRAPOLATION_HORIZON_S / after  # half-way to the horizon at the new speed
+    assert clock.now_s() == pytest.approx(boot_s + 0.5 * EXTRAPOLATION_HORIZON_S)
 
 
 def test_link_clock_sleep_is_scaled(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -5,19 +5,26 @@ held by the autopilot itself."""
 from __future__ import annotations
 
 import math
+import queue
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
 from masonry.adapters.mavlink import FrameTransform
 from masonry.adapters.mavlink_fence import (
+    MAV_MISSION_ACCEPTED,
+    MAV_MISSION_TYPE_FENCE,
+    POLL_S,
     GeoOrigin,
     fence_vertices_e7,
     global_to_ned,
     ned_to_global,
+    upload_fence,
 )
 from masonry.adapters.sitl import SitlConfig
 from masonry.adapters.sitl_fence import CMAC
-from masonry.errors import CommandRejected
+from masonry.errors import CommandRejected, CommandTimeout
 from masonry.geofence import Site
 from test_sitl import flight, take_off
 from waiting import wait_until
@@ -146,3 +153,125 @@ def test_the_fence_on_arducopter_sitl(tmp_path) -> None:
             wait_until(lambda: "Fence Indexed OK" in fc.status_texts(), 5.0, "ArduCopter indexing the fence")
         finally:
             fc.close()
+
+
+def _msg(kind: str, **fields: Any) -> SimpleNamespace:
+    return SimpleNamespace(get_type=lambda: kind, mission_type=MAV_MISSION_TYPE_FENCE, **fields)
+
+
+class _ScriptedAutopilot:
+    """An autopilot on the link's clock (``now``, s): it answers the fence's protocol ``delay_s`` after each
+    request, and sends a PARAM_VALUE of another parameter every 0.2 s (ArduPilot's parameter stream); it echoes
+    no PARAM_SET when ``mute_params``. A listener's ``get`` moves the clock to the next message, or by its
+    ``timeout`` when none comes within it: nothing waits on the wall."""
+
+    def __init__(self, delay_s: float, *, mute_params: bool = False) -> None:
+        self.now, self.delay_s, self.mute_params = 0.0, delay_s, mute_params
+        self.target_system, self.target_component = 1, 1
+        self.frame, self.autopilot = FrameTransform(HOME), "ardupilot"
+        self.outbox: list[tuple[float, SimpleNamespace]] = []
+        self.sent: list[tuple[float, str]] = []
+        self.vertices: list[tuple[int, int]] = []
+        self.polls: list[float] = []
+
+    def listen(self, kinds: Any) -> Any:
+        outer = self
+
+        class Listener:
+            def get(self, timeout: float) -> SimpleNamespace:
+                outer.polls.append(timeout)
+                chatter = (math.floor(outer.now / 0.2) + 1) * 0.2
+                due = [(t, m) for t, m in outer.outbox if m.get_type() in kinds]
+                t, msg = min(due, key=lambda d: d[0], default=(math.inf, None))
+                if "PARAM_VALUE" in kinds and chatter < t:
+                    t, msg = chatter, _msg("PARAM_VALUE", param_id=b"SIM_SPEEDUP", param_value=5.0)
+                if t > outer.now + timeout:
+                    outer.now += timeout
+                    raise queue.Empty
+                outer.now = max(outer.now, t)
+                outer.outbox = [(u, m) for u, m in outer.outbox if m is not msg]
+                return msg
+
+        return Listener()
+
+    def unlisten(self, q: Any) -> None:
+        pass
+
+    def send_message(self, build: Any) -> None:
+        build(SimpleNamespace(**{name: self._sender(name) for name in _SENDS}))
+
+    def _sender(self, name: str) -> Any:
+        def send(*args: Any) -> None:
+            self.sent.append((self.now, name))
+            answer = self._answer(name, args)
+            if answer is not None:
+                self.outbox.append((self.now + self.delay_s, answer))
+
+        return send
+
+    def _answer(self, name: str, args: tuple[Any, ...]) -> SimpleNamespace | None:
+        if name == "command_long_send":
+            return _msg(
+                "GPS_GLOBAL_ORIGIN", latitude=round(CMAC.lat_deg * 1e7), longitude=round(CMAC.lon_deg * 1e7)
+            )
+        if name == "mission_count_send":
+            self.vertices = [(0, 0)] * args[2]
+            return _msg("MISSION_REQUEST_INT", seq=0)
+        if name == "mission_item_int_send":
+            seq = args[2]
+            self.vertices[seq] = (args[11], args[12])
+            if seq + 1 < len(self.vertices):
+                return _msg("MISSION_REQUEST_INT", seq=seq + 1)
+            return _msg("MISSION_ACK", type=MAV_MISSION_ACCEPTED)
+        if name == "mission_request_list_send":
+            return _msg("MISSION_COUNT", count=len(self.vertices))
+        if name == "mission_request_int_send":
+            x, y = self.vertices[args[2]]
+            return _msg("MISSION_ITEM_INT", seq=args[2], command=5001, x=x, y=y)
+        if name == "param_set_send" and not self.mute_params:
+            return _msg("PARAM_VALUE", param_id=args[2], param_value=args[3])
+        return None
+
+
+_SENDS = ("command_long_send", "mission_count_send", "mission_item_int_send", "mission_request_list_send",
+          "mission_request_int_send", "mission_ack_send", "param_set_send")  # fmt: skip
+
+
+def test_the_fence_protocol_times_out_on_the_links_clock() -> None:
+    """Issue 29: the fence's waits ran on ``time.monotonic`` while the link's commands run on its injected clock (a
+    test could not drive them); each step's time-out is now the link's (``MavlinkFlightController.upload_fence``
+    passes it), polled in ``POLL_S`` slices of wall. An autopilot 1 s slow (of 1.5 s) is answered at the first try
+    of each of the 14 steps; one that never echoes the PARAM_SET is given up after 3 tries of 1.5 s of the link's
+    clock, whatever other parameters it streams meanwhile."""
+    slow = _ScriptedAutopilot(1.0)
+    up = upload_fence(slow, SITE, timeout_s=1.5, monotonic=lambda: slow.now)
+    assert up.supported and up.vertices == 4 and up.origin == CMAC
+    kinds = [name for _, name in slow.sent]
+    assert kinds.count("command_long_send") == 1 and kinds.count("param_set_send") == 3  # no resend
+    assert slow.now == pytest.approx(
+        1.0 * 14
+    )  # the origin, 4 requests + the ACK, the count + 4 items, 3 echoes
+    assert max(slow.polls) <= POLL_S
+    mute = _ScriptedAutopilot(0.05, mute_params=True)
+    with pytest.raises(
+        CommandTimeout, match=r"no PARAM_VALUE FENCE_ALT_MAX from the autopilot after 3 tries of 1\.5 s"
+    ):
+        upload_fence(mute, SITE, timeout_s=1.5, monotonic=lambda: mute.now)
+    param_sets = [t for t, name in mute.sent if name == "param_set_send"]
+    assert [t - param_sets[0] for t in param_sets] == pytest.approx([0.0, 1.5, 3.0], abs=POLL_S)
+
+
+def test_the_flight_controller_uploads_its_fence_on_its_links_clock(monkeypatch: pytest.MonkeyPatch) -> None:
+    import masonry.adapters.mavlink_fence as fence
+    from masonry.adapters.mavlink import MavlinkFlightController
+
+    def link_clock() -> float:
+        return 100.0
+
+    fc = MavlinkFlightController("udpin:127.0.0.1:9", frame=FrameTransform(HOME), monotonic=link_clock)
+    fc._conn = object()  # "connected": nothing is sent or read here
+    fc._state.last_message_s = fc._state.last_heartbeat_s = 100.0
+    given: dict[str, Any] = {}
+    monkeypatch.setattr(fence, "upload_fence", lambda fc, site, **kw: given.update(kw) or "uploaded")
+    assert fc.upload_fence(SITE) == "uploaded"
+    assert given == {"monotonic": link_clock}

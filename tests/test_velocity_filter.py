@@ -99,8 +99,8 @@ class _Fc:
     def disarm(self) -> None:
         self.calls.append("disarm")
 
-    def takeoff(self, altitude_m: float) -> None:
-        self.calls.append(f"takeoff {altitude_m}")
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        self.calls.append(f"takeoff {altitude_m}" + ("" if timeout_s is None else f" within {timeout_s}"))
 
     def land(self) -> None:
         self.calls.append("land")

@@ -19,6 +19,12 @@ if TYPE_CHECKING:
 
 Vec3 = tuple[float, float, float]
 
+#: How long (s of the flight controller's clock) a take-off may take before the state machine gives it up: the
+#: default of ``UavConfig.takeoff_timeout_s``, which the machine passes to :meth:`FlightController.takeoff` (the
+#: MAVLink adapter ends the climb it flies or watches a little before it: ``masonry.adapters.takeoff``), and what
+#: a flight controller assumes when a caller passes none.
+TAKEOFF_TIMEOUT_S = 30.0
+
 
 @dataclass(frozen=True)
 class Telemetry:
@@ -187,7 +193,10 @@ class FlightController(Protocol):
 
     def disarm(self) -> None: ...
 
-    def takeoff(self, altitude_m: float) -> None: ...
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        """Climb ``altitude_m`` above where the UAV stands; ``timeout_s``: how long (s of its clock, from now) the
+        caller gives the climb before it gives the take-off up (None: :data:`TAKEOFF_TIMEOUT_S`)."""
+        ...
 
     def land(self) -> None: ...
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -68,6 +69,15 @@ EXTRAPOLATION_HORIZON_S = 0.5
 #: before it runs on this computer's clock: the MAVLink link watchdog's default ``heartbeat_timeout_s`` (the link
 #: passes its own), so the clock holds while the watchdog holds the link alive.
 HOLD_S = 1.0
+#: How far back (s of this computer's clock) :attr:`LinkClock.rate` is measured: 60 messages of the 30 Hz
+#: telemetry, so a SITL's new speed is the rate within 2 s (bench_link_clock.py).
+RATE_WINDOW_S = 2.0
+#: The least span (s of this computer's clock) :attr:`LinkClock.rate` is measured over: less, the rate before.
+RATE_MIN_SPAN_S = 0.2
+#: A silence of this long (s of this computer's clock; 9 periods of the 30 Hz telemetry) over which the
+#: autopilot's clock moved less than half what the rate says is a stand-still (a SITL left unrun), not its speed.
+#: Above a 4 Hz stream's period, so that a slow stream's next message measures the rate again.
+STANDSTILL_GAP_S = 0.3
 
 
 class LinkClock:
@@ -87,10 +97,17 @@ class LinkClock:
     lost link (the emergency's LAND retries, its give-up after ``link_lost_timeout_s``) runs on this computer's
     time: a clock held for good would stop it (the fly loop ticks the machine only when its time moves on).
 
+    The rate is the recent one (issue 29): measured over the last ``window_s`` of this computer's clock, so a SITL
+    whose speed changes (a loaded machine: asked for x5, it kept x3.45) is extrapolated, and slept for, at the
+    speed it runs at now, not at its average since the link came up. A stand-still (:data:`STANDSTILL_GAP_S` or
+    more of this computer's clock between two messages over which the autopilot's clock moved less than half
+    what the rate says) is left out of it: the window starts again after it, at the rate measured before it.
+
     Args:
         monotonic: the local clock (s) the samples are stamped on (the link's: a test may inject one it holds).
         horizon_s: how far past the latest message (s of the autopilot's clock) ``now_s`` extrapolates at the rate.
         hold_s: how long after the latest message (s of the local clock) ``now_s`` holds before it runs at 1x.
+        window_s: how far back (s of the local clock) the rate is measured.
     """
 
     def __init__(
@@ -99,36 +116,59 @@ class LinkClock:
         *,
         horizon_s: float = EXTRAPOLATION_HORIZON_S,
         hold_s: float = HOLD_S,
+        window_s: float = RATE_WINDOW_S,
     ) -> None:
         self._monotonic = monotonic
         self.horizon_s = horizon_s
         self.hold_s = hold_s
+        self.window_s = window_s
         self._lock = threading.Lock()
-        self._first: tuple[float, float] | None = None  # (boot_s, monotonic_s)
-        self._last: tuple[float, float] | None = None
+        # (boot_s, monotonic_s): the window's samples and the newest one before it
+        self._samples: deque[tuple[float, float]] = deque()
+        # the rate until the window spans RATE_MIN_SPAN_S: 1x, or the one measured before a stand-still
+        self._carried = 1.0
         self._returned = -math.inf
         self._created = self._monotonic()
         self.extrapolate = True  # False: now_s is the last boot time heard (a SITL in lock-step, lockstep.py)
 
     def observe(self, boot_s: float, monotonic_s: float) -> None:
         with self._lock:
-            if self._last is not None and boot_s < self._last[0] - 1.0:  # autopilot rebooted
-                self._first = None
-                self._returned = -math.inf
-            if self._first is None:
-                self._first = (boot_s, monotonic_s)
-            self._last = (boot_s, monotonic_s)
+            samples = self._samples
+            if samples:
+                last_boot_s, last_local_s = samples[-1]
+                gap_s = monotonic_s - last_local_s
+                if boot_s < last_boot_s - 1.0:  # autopilot rebooted: measure again from 1x
+                    samples.clear()
+                    self._carried = 1.0
+                    self._returned = -math.inf
+                elif gap_s >= STANDSTILL_GAP_S:
+                    rate = self._rate_locked()
+                    if boot_s - last_boot_s < 0.5 * gap_s * rate:  # a stand-still: not the speed
+                        self._carried = rate  # (measured on from after it)
+                        samples.clear()
+            samples.append((boot_s, monotonic_s))
+            # keep the newest sample at least window_s old, so the window spans window_s once it can
+            while len(samples) > 2 and samples[1][1] <= monotonic_s - self.window_s:
+                samples.popleft()
+
+    def _rate_locked(self) -> float:
+        samples = self._samples
+        if len(samples) < 2:
+            return self._carried
+        (boot0_s, local0_s), (boot1_s, local1_s) = samples[0], samples[-1]
+        if local1_s - local0_s < RATE_MIN_SPAN_S:
+            return self._carried
+        return max(1e-3, (boot1_s - boot0_s) / (local1_s - local0_s))
 
     @property
     def rate(self) -> float:
-        """Autopilot seconds per local second (1.0 until 0.2 s of samples exist)."""
+        """Autopilot seconds per local second over the last ``window_s`` (1.0 until 0.2 s of samples exist)."""
         with self._lock:
-            if self._first is None or self._last is None:
-                return 1.0
-            dt_local = self._last[1] - self._first[1]
-            if dt_local < 0.2:
-                return 1.0
-            return max(1e-3, (self._last[0] - self._first[0]) / dt_local)
+            return self._rate_locked()
+
+    @property
+    def _last(self) -> tuple[float, float] | None:
+        return self._samples[-1] if self._samples else None
 
     def now_s(self) -> float:
         rate = self.rate

@@ -73,7 +73,7 @@ from masonry.adapters.mavlink_protocol import (
     mode_name,
 )
 from masonry.adapters.pose_source import PoseSource
-from masonry.adapters.takeoff import ClimbConfig, ClimbMonitor
+from masonry.adapters.takeoff import ClimbConfig, ClimbMonitor, climb_limit_s
 from masonry.errors import CommandRejected, CommandTimeout, InputError, LinkLost
 from masonry.ports import Telemetry, Vec3
 
@@ -237,7 +237,6 @@ class MavlinkFlightController(EstimateLink):
         command_retries: int = 2,
         estimate_timeout_s: float = 15.0,
         arm_retry_s: float = ARM_RETRY_S,
-        takeoff_timeout_s: float = 20.0,
         setpoint_rate_hz: float = 20.0,
         setpoint_hold_s: float = 0.5,
         frame: FrameTransform | None = None,
@@ -270,7 +269,6 @@ class MavlinkFlightController(EstimateLink):
         )
         self.estimate_timeout_s = estimate_timeout_s
         self.arm_retry_s = arm_retry_s
-        self.takeoff_timeout_s = takeoff_timeout_s
         self.setpoint_hold_s = setpoint_hold_s
         self.frame = frame or FrameTransform()
         self.land_on_close = land_on_close
@@ -279,7 +277,7 @@ class MavlinkFlightController(EstimateLink):
         self._streaming = False
         self._takeoff_target_m: float | None = None  # world altitude being climbed to
         self._takeoff_mode = ""  # the autopilot's mode when the take-off was commanded
-        self._takeoff_started_s = -math.inf
+        self._takeoff_started_s, self._takeoff_limit_s = -math.inf, climb_limit_s(None)  # (takeoff())
         self._climb: ClimbMonitor | None = None  # PX4's take-off climb inside OFFBOARD
         #: why the last take-off ended short of its altitude (None: it reached it, or none was asked)
         self.takeoff_problem: str | None = None
@@ -346,13 +344,13 @@ class MavlinkFlightController(EstimateLink):
                     self.velocity_loop_engaged = True  # airborne: acceleration setpoints, if ours (issue 29)
             else:
                 reached = world_alt >= takeoff_target - 0.1 and abs(climb_rate) < 0.1
-                if reached or self.clock.now_s() - self._takeoff_started_s > self.takeoff_timeout_s:
+                if reached or self.clock.now_s() - self._takeoff_started_s > self._takeoff_limit_s:
                     with self._lock:
                         self._takeoff_target_m = None
                         self.velocity_loop_engaged = True
                         if not reached:
                             alt = f"{world_alt:.2f} m of {takeoff_target:.2f} m"
-                            self.takeoff_problem = f"take-off at {alt} after {self.takeoff_timeout_s:.0f} s"
+                            self.takeoff_problem = f"take-off at {alt} after {self._takeoff_limit_s:.0f} s"
                 else:
                     return  # ArduPilot climbs on its own; a velocity target would abort its takeoff
         if setpoint is None or not fresh:
@@ -474,8 +472,9 @@ class MavlinkFlightController(EstimateLink):
             self._setpoint = None
             self.velocity_loop_engaged = False
 
-    def takeoff(self, altitude_m: float) -> None:
-        """Climb ``altitude_m`` above where the UAV stands (the port's convention); setpoints wait until then.
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        """Climb ``altitude_m`` above where the UAV stands (the port's convention); setpoints wait until then, for
+        at most :func:`~masonry.adapters.takeoff.climb_limit_s` of the caller's ``timeout_s`` (its clock).
 
         ArduPilot: MAV_CMD_NAV_TAKEOFF in GUIDED. PX4: a climb inside OFFBOARD by the setpoint stream, monitored
         against its progress (:class:`~masonry.adapters.takeoff.ClimbMonitor`): it ends reached and steady, or
@@ -499,13 +498,12 @@ class MavlinkFlightController(EstimateLink):
             self._takeoff_target_m = ground_world[2] + altitude_m
             self.velocity_loop_engaged = False
             self._takeoff_started_s = self.clock.now_s()  # (the autopilot's clock, as the machine's take-off)
-            self.takeoff_problem = None
-            timeout_s = max(self.takeoff_timeout_s, 10.0 + 2.0 * altitude_m / 0.5)
+            self._takeoff_limit_s, self.takeoff_problem = climb_limit_s(timeout_s), None
             own_loop = self.velocity_loop is not None  # a stall once airborne: the rest on it (takeoff.py)
             climb = ClimbMonitor(
                 self.clock.now_s(),
                 self._takeoff_target_m,
-                ClimbConfig(timeout_s=timeout_s, own_loop=own_loop),
+                ClimbConfig(timeout_s=self._takeoff_limit_s, own_loop=own_loop),
             )
             self._climb = climb if self.autopilot == "px4" else None
 
@@ -554,7 +552,7 @@ class MavlinkFlightController(EstimateLink):
         from masonry.adapters.mavlink_fence import upload_fence
 
         self._check_link("fence")
-        return upload_fence(self, site)
+        return upload_fence(self, site, monotonic=self._monotonic)  # (the commands' clock)
 
     def telemetry(self) -> Telemetry:
         """The latest state in the world frame (never blocks; ``link_ok`` False once the watchdog fired)."""

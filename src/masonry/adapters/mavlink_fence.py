@@ -60,6 +60,8 @@ EARTH_RADIUS_M = 6378137.0
 MAX_VERTICES = 255
 #: ArduPilot's FENCE_TYPE bits: maximum altitude (1) and polygon (4).
 ARDUPILOT_FENCE_TYPE = 1 | 4
+#: The longest wait (s of wall) for a message before the time-out is looked at again on the injected clock.
+POLL_S = 0.1
 _MISSION_KINDS = (
     "MISSION_REQUEST_INT",
     "MISSION_REQUEST",
@@ -121,9 +123,20 @@ class FenceUpload:
     detail: str
 
 
-def upload_fence(fc: Any, site: Site, *, timeout_s: float = 1.5, retries: int = 2) -> FenceUpload:
+def upload_fence(
+    fc: Any,
+    site: Site,
+    *,
+    timeout_s: float = 1.5,
+    retries: int = 2,
+    monotonic: Callable[[], float] = time.monotonic,
+) -> FenceUpload:
     """Upload ``site`` as the autopilot's fence and check it was accepted (MISSION_ACK, a read-back, the
     parameters echoed); ``fc`` is a connected :class:`~masonry.adapters.mavlink.MavlinkFlightController`.
+
+    ``monotonic`` is the clock (s) each step's ``timeout_s`` is measured on: the link's, as its commands' time-outs
+    (``MavlinkFlightController.upload_fence`` passes it; a test injects one it moves); the waits themselves are
+    polls of at most :data:`POLL_S` of wall time.
 
     Raises:
         CommandRejected: the autopilot refused it (the MISSION_ACK result), gave back other vertices, kept
@@ -135,7 +148,7 @@ def upload_fence(fc: Any, site: Site, *, timeout_s: float = 1.5, retries: int = 
         raise CommandRejected(
             "fence", f"the site has {n} vertices; the autopilot stores at most {MAX_VERTICES}"
         )
-    run = _Protocol(fc, timeout_s, retries)
+    run = _Protocol(fc, timeout_s, retries, monotonic)
     origin = run.origin()
     items = fence_vertices_e7(site, fc.frame, origin)
     result = run.upload(items)
@@ -168,28 +181,27 @@ def upload_fence(fc: Any, site: Site, *, timeout_s: float = 1.5, retries: int = 
 class _Protocol:
     """One run of the mission protocol (fence type) and the parameter protocol over ``fc``'s link."""
 
-    def __init__(self, fc: Any, timeout_s: float, retries: int) -> None:
+    def __init__(self, fc: Any, timeout_s: float, retries: int, monotonic: Callable[[], float]) -> None:
         self.fc = fc
         self.timeout_s = timeout_s
         self.retries = retries
+        self._monotonic = monotonic
         self.ts, self.tc = fc.target_system, fc.target_component
 
     def _send(self, build: Callable[[Any], None]) -> None:
         self.fc.send_message(build)
 
     def _await(self, q: queue.Queue[Any], accept: Callable[[Any], bool], what: str) -> Any:
-        """The next message ``accept`` takes, within the timeout (None: none)."""
-        deadline = time.monotonic() + self.timeout_s
-        while True:
-            left = deadline - time.monotonic()
-            if left <= 0.0:
-                return None
+        """The next message ``accept`` takes, within the timeout on the injected clock (None: none)."""
+        deadline = self._monotonic() + self.timeout_s
+        while (left := deadline - self._monotonic()) > 0.0:
             try:
-                msg = q.get(timeout=left)
+                msg = q.get(timeout=min(left, POLL_S))
             except queue.Empty:
-                return None
+                continue
             if accept(msg):
                 return msg
+        return None
 
     def _exchange(self, kinds: Sequence[str], send: Callable[[Any], None], accept: Callable[[Any], bool], what: str) -> Any:  # fmt: skip
         q = self.fc.listen(kinds)

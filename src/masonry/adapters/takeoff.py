@@ -22,7 +22,24 @@ from collections import deque
 from dataclasses import dataclass
 from typing import Literal
 
-__all__ = ["ClimbConfig", "ClimbMonitor", "ClimbState"]
+from masonry.ports import TAKEOFF_TIMEOUT_S
+
+__all__ = ["REPORT_MARGIN_S", "ClimbConfig", "ClimbMonitor", "ClimbState", "climb_limit_s"]
+
+#: How long (s of the autopilot's clock) before the caller's take-off time-out the adapter ends a climb it flies
+#: or watches (PX4's in OFFBOARD, ArduPilot's own) and says why (``takeoff_problem``): the machine, giving the
+#: take-off up at its time-out, then has the reason, and its next setpoints are flown.
+REPORT_MARGIN_S = 2.0
+
+
+def climb_limit_s(timeout_s: float | None) -> float:
+    """How long (s of the autopilot's clock) the adapter lets a take-off climb run: the caller's ``timeout_s``
+    (the machine's ``takeoff_timeout_s``, what is left of it; None: ``TAKEOFF_TIMEOUT_S``) less
+    :data:`REPORT_MARGIN_S`, or less a tenth of it when that is shorter. One number, the machine's, wins: the
+    machine is what gives the task up, and a user sets it (``control: takeoff_timeout_s`` in uav.yaml)."""
+    total_s = TAKEOFF_TIMEOUT_S if timeout_s is None else max(0.0, float(timeout_s))
+    return total_s - min(REPORT_MARGIN_S, 0.1 * total_s)
+
 
 ClimbState = Literal["climbing", "reached", "stalled", "timeout"]
 

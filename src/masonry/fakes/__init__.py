@@ -275,8 +275,8 @@ class FakeFlightController(_Scripted):
         self.armed = False
         self._log("disarm")
 
-    def takeoff(self, altitude_m: float) -> None:
-        """Climb on its own to ``altitude_m`` above where it stands."""
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        """Climb on its own to ``altitude_m`` above where it stands (``timeout_s``: the caller's, not needed)."""
         self._check("takeoff")
         if not self.armed:
             raise CommandRejected("takeoff", "not armed")

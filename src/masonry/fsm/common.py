@@ -100,7 +100,11 @@ class CommonStates(TaskBook):
             tel = self.fc.telemetry()  # the ground as the autopilot has it once armed
         ground_m = float(tel.position_m[2])
         climb_m = max(_TAKEOFF_MIN_CLIMB_M, self._transit_altitude_m() - ground_m)
-        self.fc.takeoff(climb_m)
+        # the flight controller gets what is left of the take-off's time-out (do_takeoff gives it up then), from
+        # the state's entry (now on the first try: _record_state stamps it after this enter callback)
+        entered_s = self._now_s if tries == 1 else self._entered_s
+        spent_s = self._now_s + max(0.0, self.clock.now_s() - arming_s) - entered_s
+        self.fc.takeoff(climb_m, timeout_s=max(0.0, self.config.takeoff_timeout_s - spent_s))
         # when it was asked (after the arming, which a real autopilot takes its time over), how often, the climb
         asked_s = self._now_s + max(0.0, self.clock.now_s() - arming_s)
         self.attempt.takeoff = Takeoff(asked_s, tries, climb_m, ground_m + climb_m)

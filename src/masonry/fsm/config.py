@@ -10,6 +10,7 @@ from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, Blueprint, MarkerSpec, Role, UavSpec
 from masonry.geofence import Site
 from masonry.placement_check import wall_tops_m
+from masonry.ports import TAKEOFF_TIMEOUT_S
 from masonry.separation import pad_site_distance_m, zone_slack_m
 from masonry.timing import DEFAULT_TIMING as _T
 from masonry.timing import TaskTiming
@@ -163,7 +164,9 @@ class UavConfig:
     # limits) is made consistent with the reported position over this time constant (masonry.fsm.velocity_filter):
     # PX4's EKF2 on GNSS reports a velocity up to 0.5 m/s off what its own position does; 0: the autopilot's
     velocity_from_position_s: float = 0.0
-    takeoff_timeout_s: float = 30.0
+    # the take-off's one time limit (its clock): the machine gives it up past it, and passes what is left of it to
+    # the flight controller's takeoff (the MAVLink adapter ends ArduPilot's own climb, or PX4's, a little before)
+    takeoff_timeout_s: float = TAKEOFF_TIMEOUT_S
     # A task whose transit waits for clearance longer than this is given up (the attempt counts; None: never):
     # it frees the UAV's hold volume, which another waiting UAV's flight may need (docs/safety.md)
     hold_patience_s: float | None = 240.0

@@ -107,8 +107,8 @@ class PositionVelocityFc:
     def disarm(self) -> None:
         self.inner.disarm()
 
-    def takeoff(self, altitude_m: float) -> None:
-        self.inner.takeoff(altitude_m)
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        self.inner.takeoff(altitude_m, timeout_s)
 
     def land(self) -> None:
         self.inner.land()

@@ -51,8 +51,8 @@ class SimFlightController:
         if self._listening():
             self._uav.vehicle.disarm()
 
-    def takeoff(self, altitude_m: float) -> None:
-        if self._listening():
+    def takeoff(self, altitude_m: float, timeout_s: float | None = None) -> None:
+        if self._listening():  # (the simulated autopilot's climb has no time limit of its own)
             self._uav.vehicle.takeoff(altitude_m)
 
     def land(self) -> None:
