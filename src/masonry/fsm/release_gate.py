@@ -139,12 +139,15 @@ class ReleaseGate:
         While the effector's velocity brings it more than 1 mm nearer by the next tick and the wall's sighting is
         still fresh then (``UavConfig.release_closest_s``, the ``px4`` preset's tick; see the module docstring).
         Never past the sighting's freshness: a release held into a look back up ages the drop-off more than it
-        gains. A drop-off with no brick of the wall seen in its placement and none under it (a lone brick, issue
-        29's scenario) has nothing to age: it waits for a tick within ``release_hold_m`` as with the wall in view."""
+        gains. A drop-off with no brick of the wall seen in its placement, none under it and no other brick in the
+        blueprint (a lone brick, issue 29's scenario) has nothing to age: it waits for a tick within ``release_hold_m`` as with the wall in view."""
         cfg = uav.config
         dt_s = cfg.release_closest_s
-        # no brick of the wall seen in this placement, none under it: the drop-off is the design's, nothing ages
-        alone = not self.guarded and uav._wall.seen_s == -math.inf
+        # no brick of the wall seen in this placement, none under it, none other in the blueprint: the drop-off is
+        # the design's, nothing ages. A wall's first course is not alone: there the hold took 3.5 s of the 4 s
+        # release window and the few ticks within it failed the windowed height test (a brick resting on its
+        # neighbour's top bounces upward only), the px4 rotated bond's first course failed three descents in a row
+        alone = not self.guarded and uav._wall.seen_s == -math.inf and len(cfg.wall) <= 1
         if dt_s <= 0.0 or (not alone and uav._now_s + dt_s - uav._wall.seen_s > cfg.release_fresh_s):
             return False
         error_m = (
