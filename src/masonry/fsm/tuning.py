@@ -86,7 +86,9 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
     "px4": {
         # the transit layer's climbs and descents at issue 27's 0.5 m/s, not the default 0.9: with 0.9 the px4 rotated
         # bond (tests/test_side_look.py, seeds 12 calm and 7 in 4 m/s) failed its first course's drop-offs, "not
-        # reached within 1.5 cm after 3 descents", and did not complete; the cause is not traced (docs/hardware.md)
+        # reached within 1.5 cm after 3 descents", and did not complete: the 1 cm hold and the
+        # release's windowed height pass one descent in three there, and 0.9 moved those seeds' timing onto three
+        # failures in a row (docs/hardware.md, traced on branch px4layer)
         "layer_vertical_speed_mps": 0.5,
         # the side look's last leg and a look's leg back down fly the acceleration feed-forward of a 0.5 s lag (the
         # refitted model's 0.25 s dead time, 0.15 s lag and 25 % droop): on the default 0.3 they ended 5-8 cm short
