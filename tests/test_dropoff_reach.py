@@ -105,16 +105,22 @@ def test_the_release_radius_shrinks_with_the_swing_to_its_floor_for_the_patience
 
 def test_in_4_m_s_wind_the_bricks_land_nearer_their_place_than_on_the_one_tick_test() -> None:
     # the motion-capture vehicle (exact position) in 4 m/s, light turbulence, a course of four: on the paper's
-    # one-tick test (release_lead_s 0) the bricks were let go at the 1.5 cm disc's edge
+    # one-tick test (release_lead_s 0) the bricks were let go at the 1.5 cm disc's edge. Both flown from the same
+    # template (default settings but the lead), over four seeds: one seed alone is one worst brick either way (seed
+    # 0 was this test's only one until the blueprint's zone slack came into the default path, which the template
+    # path does not take; the worst bricks of seeds 0-3 on 2026-12-05: 13.1 / 14.5 / 18.3 / 7.2 mm with the lead
+    # against 19.2 / 14.5 / 22.1 / 9.9 without)
     bp = running_bond(1, 4, yaw_rad=math.radians(30.0), clearance_m=1.0, brick_uavs=1, adhesion_uavs=1)
     wind = Faults(wind=WindConfig(speed_mps=4.0, turbulence="light"))
-    errors_mm = {}
-    for lead_s in (None, 0.0):
-        config = (
-            None if lead_s is None else UavConfig("template", "brick", (0.0, 0.0, 0.0), release_lead_s=lead_s)
-        )
-        report = simulate(bp, seed=0, faults=wind, uav_config=config)
-        assert report.completed
-        errors_mm[lead_s] = sorted(round(e * 1000.0, 1) for e in report.placement_error_m.values())
-    print(errors_mm)
-    assert max(errors_mm[None]) < max(errors_mm[0.0])
+    worst_mm: dict[bool, list[float]] = {True: [], False: []}
+    for seed in range(4):
+        for lead in (True, False):
+            config = UavConfig(
+                "template", "brick", (0.0, 0.0, 0.0), **({} if lead else {"release_lead_s": 0.0})
+            )
+            report = simulate(bp, seed=seed, faults=wind, uav_config=config)
+            assert report.completed, (seed, lead)
+            worst_mm[lead].append(round(max(report.placement_error_m.values()) * 1000.0, 1))
+    print(worst_mm)
+    assert all(a <= b for a, b in zip(worst_mm[True], worst_mm[False], strict=True)), worst_mm
+    assert sum(worst_mm[True]) < sum(worst_mm[False]), worst_mm

@@ -292,11 +292,12 @@ def test_without_a_hold_patience_a_task_waits_for_its_grant() -> None:
 
 
 def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
-    """Every column is granted 20 s after it is asked for. Asking for its drop-off's at 56 %, a UAV whose pack
-    drains 0.6 %/s has 77 s left above critical: less than 1.25 times what putting the brick back and flying home
-    take (27 s) plus 45 s of waiting on that way (``battery_return_wait_s``), so it gives the task up there (a
-    battery reason: mission control does not count it as an attempt), waits 20 s for its pickup's column and 20 s
-    for its home's, and lands with the battery above critical."""
+    """Every column is granted 20 s after it is asked for. Asking for its drop-off's at 58 % (56 % before the
+    transit layer's climbs at 0.9 m/s), a UAV whose pack drains 0.6 %/s has 79 s left above critical 2 s later:
+    less than 1.25 times what putting the brick back and flying home take (27 s) plus 45 s of waiting on that way
+    (``battery_return_wait_s``), so it gives the task up then, at 57 % (a battery reason: mission control does not
+    count it as an attempt), waits 20 s for its pickup's column and 20 s for its home's, and lands with the battery
+    above critical."""
     rig = Rig(
         "brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.006}, clearance={"grant_after_s": 20.0}
     )
@@ -304,7 +305,7 @@ def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
     (result,) = rig.link.results
     assert result.status == "failed"
     assert result.reason == (
-        "battery low (56%): waited 0 s for clearance to (0.00, 0.50, 1.20); 77 s of flight left, putting brick 7 "
+        "battery low (57%): waited 2 s for clearance to (0.00, 0.50, 1.20); 79 s of flight left, putting brick 7 "
         "back needs 27 s; brick 7 put back at its pickup"
     )
     assert rig.followed("transport", "putback_goto")
@@ -313,8 +314,8 @@ def test_a_uav_waiting_with_a_brick_keeps_the_reserve_to_put_it_back() -> None:
 
 
 def test_a_uav_that_can_no_longer_afford_the_put_back_flies_home_with_its_brick_at_once() -> None:
-    """Columns granted 30 s after the request: asking for its drop-off's at 50 %, the UAV has 67 s left above
-    critical, short of the put-back and its return wait (27 + 45 s): 4 s later, at 1.25 times the way home plus
+    """Columns granted 30 s after the request: asking for its drop-off's at 52 % (50 % before the transit layer's
+    climbs at 0.9 m/s), the UAV is soon short of the put-back and its return wait (27 + 45 s): 7 s later, at 48 %, at 1.25 times the way home plus
     that wait, it flies home with the brick, instead of waiting on until the battery is critical."""
     rig = Rig(
         "brick", fc={"battery_fraction": 0.9, "battery_drain_per_s": 0.006}, clearance={"grant_after_s": 30.0}
@@ -322,7 +323,7 @@ def test_a_uav_that_can_no_longer_afford_the_put_back_flies_home_with_its_brick_
     rig.run()
     (result,) = rig.link.results
     assert result.status == "failed" and result.reason is not None
-    assert result.reason.startswith("battery low (48%): waited 4 s for clearance to (0.00, 0.50, 1.20); 64 s")
+    assert result.reason.startswith("battery low (48%): waited 7 s for clearance to (0.00, 0.50, 1.20); 64 s")
     assert result.reason.endswith("the way home needs 15 s")
     assert "putback_goto" not in rig.states and rig.states[-3:] == ["home", "land", "halted"]
     assert rig.fc.telemetry().battery_fraction > rig.config.battery_critical_fraction

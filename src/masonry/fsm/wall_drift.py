@@ -23,6 +23,8 @@ import math
 
 import numpy as np
 
+from masonry.errors import InvalidArgument
+
 __all__ = ["FRAME_NOISE_M", "DriftFilter"]
 
 #: One frame's offset of the wall, its noise (m, per axis, white): the camera's, as measured on the px4 towers.
@@ -44,7 +46,7 @@ class DriftFilter:
         self, rate_noise_mps_per_sqrt_s: float, rate_tau_s: float, frame_noise_m: float = FRAME_NOISE_M
     ) -> None:
         if rate_noise_mps_per_sqrt_s <= 0.0 or rate_tau_s <= 0.0 or frame_noise_m <= 0.0:
-            raise ValueError("the drift filter's noises and time must be positive")
+            raise InvalidArgument("the drift filter's noises and time must be positive")
         self.q = rate_noise_mps_per_sqrt_s
         self.tau_s = rate_tau_s
         self.r2 = frame_noise_m**2
