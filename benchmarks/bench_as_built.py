@@ -113,6 +113,8 @@ class Tally:
     #: the seconds each brick attempt done spent descending (onto the pallet and onto the drop-off) and in all
     descend_s: list[float] = field(default_factory=list)
     attempt_s: list[float] = field(default_factory=list)
+    #: brick attempts that failed (put back, flown again or left: "drop-off not reached ... after 3 descents")
+    failed: int = 0
 
     def __post_init__(self) -> None:
         self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
@@ -215,6 +217,7 @@ def run_one(
         )
     world = mission.world
     done = {a.task_id for a in mission.control.history if a.status == "done"}
+    tally.failed += sum(1 for att in report.attempts if att.kind == "brick" and att.status == "failed")
     for att in report.attempts:
         if att.kind == "brick" and att.status == "done" and att.phases is not None:
             tally.descend_s.append(att.phases.descending)
@@ -370,7 +373,7 @@ def main() -> None:
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  {'in the wall frame mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
         f"relative/anchored/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours  "
-        f"world look vs truth mean/max mm  single chain vs truth mean/max mm"
+        f"world look vs truth mean/max mm  single chain vs truth mean/max mm  failed attempts"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -406,7 +409,7 @@ def main() -> None:
                     f"{tally.off_course}/{tally.off_course_done}  "
                     f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
                     f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
-                    f"{_mm(tally.look_m)}  {_mm(tally.chain_m)}  "
+                    f"{_mm(tally.look_m)}  {_mm(tally.chain_m)}  {tally.failed:>3}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )

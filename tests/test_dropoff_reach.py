@@ -10,6 +10,7 @@ import pytest
 from masonry.blueprint_gen import running_bond
 from masonry.fsm.config import UavConfig
 from masonry.fsm.dropoff_reach import SWING_WINDOW_S, DropoffReach, resting_error_m, swing_margin_m
+from masonry.fsm.noise_gate import HoverNoise
 from masonry.mission.simulate import simulate
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -45,6 +46,27 @@ def test_a_hover_above_the_drop_off_is_not_reached_even_on_ticks_that_dip_to_it(
         ticks = list(_hover(DropoffReach(1.5), seed, mean_dz_m=0.035, duration_s=10.0))
         assert any(math.dist(e, (0, 0, 0)) <= R_PL for _, e, _ in ticks)  # the paper's single tick would
         assert not any(ok for _, _, ok in ticks)
+
+
+def test_a_brick_resting_on_its_support_is_reached_though_its_bounce_is_one_sided() -> None:
+    # issue 30: set down on the ground, the brick holds the effector up: its height bounces up to 5 cm above the
+    # drop-off and never below it (with the descent's last centimetre of lag fading), so the 3 s window's mean sits
+    # ~1 cm high by itself and two standard errors over it put it past r_pl for the whole release window; the brick
+    # is down at its height all the same
+    for seed in range(5):
+        rng = random.Random(seed)
+        reach, margined, reached_s = DropoffReach(3.0), HoverNoise(3.0), None
+        for i in range(70):  # the descent's last 3 s, then the release's 4 s
+            t = i * 0.1
+            bounce = 0.05 * max(0.0, math.sin(2.0 * math.pi * t / 1.7)) ** 2 + abs(rng.gauss(0.0, 0.002))
+            dz = bounce + 0.01 * math.exp(-t)
+            margined.add(t, (dz, 0.0), (0.0, 0.0))
+            if t >= 3.0:  # the rule with the margin at every tick never lets go
+                assert margined.mean_m[0] + 2.0 * margined.standard_error_m > R_PL, seed
+            if reach.reached(t, (0.004, -0.003, dz), dz, R_PL) and reached_s is None:
+                reached_s = t
+                assert dz <= R_PL  # at a tick level with the drop-off, not at the top of a bounce
+        assert reached_s is not None and reached_s < 4.0, seed
 
 
 def test_the_descent_itself_is_not_spread_the_window_averages_about_its_reference() -> None:
