@@ -17,6 +17,7 @@ from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.dropoff_reach import DropoffReach, dropoff_error_m
+from masonry.fsm.grasp_reach import grasp_done
 from masonry.fsm.noise_gate import MEAN_ALONE_AFTER, HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.release_gate import ReleaseGate
@@ -322,9 +323,17 @@ class BrickUav(PutBack):
 
     def do_pickup_grasp(self, tel: Telemetry) -> None:
         # Press on the brick with the magnet on for the dwell (the magnet grips on contact; polling lets an
-        # actuator board report it), then climb: the verification happens at cruise altitude.
-        self.gripper.is_attached()
-        if self._now_s - self._entered_s >= self.config.grasp_dwell_s:
+        # actuator board report it), then climb: the verification happens at cruise altitude. A body still above
+        # the brick (an autopilot's vertical lag) presses on for up to grasp_patience_s (masonry.fsm.grasp_reach).
+        cfg = self.config
+        if grasp_done(
+            pressed_s=self._now_s - self._entered_s,
+            attached=self.gripper.is_attached(),
+            above_end_m=float(tel.position_m[2] - self.nav.target_m[2]),
+            dwell_s=cfg.grasp_dwell_s,
+            press_m=cfg.grasp_press_m,
+            patience_s=cfg.grasp_patience_s,
+        ):
             self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
 

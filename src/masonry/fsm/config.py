@@ -206,6 +206,9 @@ class UavConfig:
     descent_duration_s: float = _T.descent_duration_s  # t_f of the minimum-jerk descent
     grasp_press_m: float = _T.grasp_press_m  # aim the effector this far below the brick's top face
     grasp_dwell_s: float = _T.grasp_dwell_s  # hold on the brick with the magnet on before climbing
+    # ... then, not attached and the body still over 1.5 cm above the descent's end (ArduCopter's vertical lag),
+    # hold on up to this much longer (masonry.fsm.grasp_reach)
+    grasp_patience_s: float = 2.0
     max_grasp_attempts: int = 3
     # Brick placement
     placement_radius_m: float = _T.placement_radius_m  # r_pl: release when the effector is this close to it
