@@ -13,7 +13,11 @@ camera), recording every UAV's control tick (task state, transit state, position
    segment for adhesion) each interval ended; the seconds of each interval before its UAV first came within r_c;
 3. the hand-overs: for each interval whose UAV was waiting for its flight (transit ``ask`` or ``hold``) when it
    began, after a conflicting task's interval that ended while it waited, the seconds from that end to this
-   start (0: granted the moment the site freed); the longest, with the tasks and UAVs.
+   start (0: granted the moment the site freed); the longest, with the tasks and UAVs. Then what held the
+   waiting UAV in those seconds (the airspace's ``blockers`` at each tick of mission control: the leaving UAV's
+   climb, which is where it set off until it is ``TRACK_M`` along its leg, its other volumes, only other UAVs',
+   or nothing: the site gate, or the answer on its way), and how long the leaving UAV took from its ask to
+   moving off its site (its answer and its climb there).
 
 Usage: python benchmarks/bench_site_visits.py [--walls 12m] [--fleets 4+2,8+4] [--seed 1] [--vehicle ideal]
 """
@@ -23,6 +27,7 @@ from __future__ import annotations
 import argparse
 import bisect
 import itertools
+import math
 import statistics
 import sys
 from collections import Counter, defaultdict
@@ -43,6 +48,11 @@ from masonry.segments import point_segment_m
 
 #: UAV name -> its ticks: (time s, task state, transit state, position or None)
 Ticks = dict[str, list[tuple[float, str, str, tuple[float, float, float] | None]]]
+#: UAV name -> at each tick of mission control it waited for its flight: (time s, (other UAV, what of it) ...)
+Blocked = dict[str, list[tuple[float, tuple[tuple[str, str], ...]]]]
+
+#: A leaving UAV has moved off its site once this far from where it asked (horizontally).
+MOVED_M = 0.05
 
 
 @dataclass(frozen=True)
@@ -54,6 +64,7 @@ class Flown:
     clearance_m: float
     visits: tuple[SiteVisit, ...]
     ticks: Ticks
+    blocked: Blocked
 
 
 def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: str | None) -> Flown:
@@ -78,9 +89,19 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: st
     if vehicle is not None:
         options["vehicle"] = vehicle
     mission = SimulatedMission.from_blueprint(blueprint, uav_machine=machine, camera="geometric", **options)
+    blocked: Blocked = defaultdict(list)
+    columns: Any = mission.control.columns
+    grant = columns.grant
+
+    def recorded_grant(now_s: float) -> Any:
+        for uav in columns.waiting:
+            blocked[uav].append((now_s, tuple(columns.blockers(uav))))
+        return grant(now_s)
+
+    columns.grant = recorded_grant
     report = mission.run()
     visits = tuple(v for v in mission.control.sites.visits if v.end_s is not None)
-    return Flown(report.makespan_s, mission.plan, blueprint.clearance_m, visits, dict(ticks))
+    return Flown(report.makespan_s, mission.plan, blueprint.clearance_m, visits, dict(ticks), dict(blocked))
 
 
 def _in_visit(rows: list[Any], v: SiteVisit) -> Counter[tuple[str, str]]:
@@ -196,7 +217,74 @@ def hand_overs(f: Flown) -> list[str]:
         out.append(
             f"- {gap:.1f} s: {v.task_id} ({v.uav}) at {v.start_s:.1f} s after {o.task_id} ({o.uav}) left"
         )
+    held: Counter[str] = Counter()
+    off_s, climbed = [], []
+    for _gap, v, o in gaps:
+        held.update(_held_by(f, v, o))
+        off, climb_m = _leaving(f, v, o)
+        off_s.append(off)
+        if climb_m >= 0.3:
+            climbed.append(off)
+    total = sum(g[0] for g in gaps)
+    out.append(
+        f"- what held the waiting UAV, of {total:.1f} s in the sum: "
+        + ", ".join(f"{what} {held[what]:.1f} s" for what in HELD_BY)
+    )
+    out.append(
+        f"- the leaving UAV from its ask to moving off its site: {sum(off_s):.1f} s in the sum "
+        f"({_stats(off_s)}); {len(climbed)} climbed 0.3 m or more there first ({sum(climbed):.1f} s)"
+    )
     return out
+
+
+#: What held a waiting UAV at a tick of a hand-over (:func:`_held_by`), in the order printed.
+HELD_BY = (
+    "the leaving UAV's climb (where it set off)",
+    "its leg or other volumes",
+    "another UAV only",
+    "nothing in the airspace",
+)
+
+
+def _held_by(f: Flown, v: SiteVisit, o: SiteVisit) -> Counter[str]:
+    """The seconds of the hand-over from ``o`` to ``v`` by what held ``v``'s UAV (:data:`HELD_BY`)."""
+    assert o.end_s is not None
+    rows = [r for r in f.blocked.get(v.uav, []) if o.end_s - 1e-6 <= r[0] < v.start_s - 1e-6]
+    out: Counter[str] = Counter()
+    if not rows:
+        return out
+    for (t0, blockers), t1 in zip(rows, [r[0] for r in rows[1:]] + [v.start_s], strict=True):
+        mine = {kind for uav, kind in blockers if uav == o.uav}
+        if "climb" in mine:
+            out[HELD_BY[0]] += t1 - t0
+        elif mine:
+            out[HELD_BY[1]] += t1 - t0
+        elif blockers:
+            out[HELD_BY[2]] += t1 - t0
+        else:
+            out[HELD_BY[3]] += t1 - t0
+    return out
+
+
+def _leaving(f: Flown, v: SiteVisit, o: SiteVisit) -> tuple[float, float]:
+    """How long ``o``'s UAV took from its ask to moving ``MOVED_M`` off where it asked (at most until ``v``
+    began), and how much it climbed meanwhile."""
+    assert o.end_s is not None
+    rows = [
+        r for r in f.ticks.get(o.uav, []) if o.end_s - 1e-6 <= r[0] <= v.start_s + 1e-6 and r[3] is not None
+    ]
+    if not rows:
+        return 0.0, 0.0
+    p0 = rows[0][3]
+    assert p0 is not None
+    off = v.start_s
+    for t, _s, _tr, p in rows:
+        assert p is not None
+        if math.hypot(p[0] - p0[0], p[1] - p0[1]) > MOVED_M:
+            off = t
+            break
+    climb_m = max(p[2] for t, _s, _tr, p in rows if p is not None and t <= off) - p0[2]
+    return off - o.end_s, climb_m
 
 
 def main() -> None:
