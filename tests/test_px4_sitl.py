@@ -270,6 +270,8 @@ def _fly_the_case_study(folder: Path) -> str:
         *((uav, err) for uav, (_, err) in zip(("brick-1", "glue-1"), runs)),
     ):
         (folder / f"{what}.err").write_text(text)  # the whole of it, for a look at a failure
+    for what, text in (("mission-control", mc_out), *zip(("brick-1", "glue-1"), (out for out, _ in runs))):
+        (folder / f"{what}.out").write_text(text)  # the report, each UAV's tasks
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead
