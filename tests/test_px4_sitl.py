@@ -1,7 +1,7 @@
 """The real PX4 v1.16 SITL (issue 29): read from its heartbeat, it gets the ``px4`` tuning without being told, and
 a failsafe of its (its geofence) ends `masonry fly`, and its process's death `masonry fly --mission` (in one line);
 issue 29's one-brick scenario and the adhesion task A0 fly with default settings; the case study as a two-vehicle
-mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (:data:`OPT_IN_ENV`: 4-8 min of wall on its own).
+mission too where ``MASONRY_PX4_SITL_ALL=1`` opts in (:data:`OPT_IN_ENV`: 4-12 min of wall on its own).
 
 Skipped, with one reason, where ``MASONRY_PX4_SITL`` does not name ``../shared/px4/run.sh`` (tests/px4_sitl.py);
 ``.ci/run`` sets it. SIH runs in real time: each test holds :func:`px4_sitl.one_flight_at_a_time` (the tests' PX4s
@@ -202,6 +202,10 @@ def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> Non
 #: then the 720 s bound); the three took 15-21 min of wall (CI's budget for them: 3-4 min).
 #: Driving the simulated world from SIH's ground truth does not help: EKF2 sat 0.22-0.27 m rms (0.5-0.8 m at most)
 #: off it horizontally, 0.25-0.45 m rms vertically, so a lone brick would land decimetres from its design.
+#: Flown again after px4drop (branch px4two31, load average 4-6; docs/performance/autopilots.md, "The case study on
+#: two real PX4s, flown again"): 4 of 5 passed, 241.6-711.9 s of wall; the failure an as-built look 20.4 mm off (the
+#: bound 2 cm), the slowest two failed attempts (712 of the 720 s bound); 10 of 15 tower descents spent 51-57 s in
+#: the side look's ten looks back up: the release rarely finds the support seen within 0.45 s on the real PX4.
 OPT_IN_ENV = "MASONRY_PX4_SITL_ALL"
 
 
@@ -209,7 +213,7 @@ def _opted_in(what: str) -> None:
     """Skip ``what`` unless :data:`OPT_IN_ENV` is set (after the PX4 SITL's own check: its reason comes first)."""
     px4_run_sh()
     if not os.environ.get(OPT_IN_ENV):
-        pytest.skip(f"{what} on the real PX4 is opt-in ({OPT_IN_ENV}=1): 4-8 min of wall, a task's retry")
+        pytest.skip(f"{what} on the real PX4 is opt-in ({OPT_IN_ENV}=1): 4-12 min of wall, 4 of 5 passed")
 
 
 #: Wall seconds the two-vehicle mission may take: 285 s by hand (2026-12-03), pre-flights included.
@@ -270,6 +274,8 @@ def _fly_the_case_study(folder: Path) -> str:
         *((uav, err) for uav, (_, err) in zip(("brick-1", "glue-1"), runs)),
     ):
         (folder / f"{what}.err").write_text(text)  # the whole of it, for a look at a failure
+    for what, text in (("mission-control", mc_out), *zip(("brick-1", "glue-1"), (out for out, _ in runs))):
+        (folder / f"{what}.out").write_text(text)  # the report, each UAV's tasks
     report, done = check_completed(mc, mc_out, mc_err, runs)
     ends = {tid: end for end, tid, _ in done}
     assert ends["A0"] < ends["B0"] and ends["A1"] < ends["B1"]  # each brick after its bead

@@ -25,6 +25,9 @@ from masonry.mission.fleet_clock import UNLOOKED_S, FleetClock
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
 
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+#: Wall seconds mission control answers on after its MissionEnd at the least, so that every handler hears it (then
+#: until every UAV has landed: MissionControl.may_leave).
+END_HEARD_S = 2.0
 
 
 def network_options(key_file: Path | None, insecure: bool, endpoints: list[str], what: str) -> bytes | None:
@@ -328,21 +331,19 @@ def _open_journal(
 def _run_in_wall_time(
     mc: Any, offset_s: float, *, time_scale: float, max_time_s: float | None, tick_s: float
 ) -> None:
-    """Step mission control every ``tick_s`` of wall time until it ends or ``--max-time``, on mission time that
-    follows the UAVs' own clocks (:class:`~masonry.mission.fleet_clock.FleetClock`, from ``offset_s``): their
+    """Step mission control every ``tick_s`` of wall time until it ends and every UAV has landed
+    (:meth:`~masonry.mission.control.MissionControl.may_leave`), or ``--max-time``, on mission time that follows the
+    UAVs' own clocks (:class:`~masonry.mission.fleet_clock.FleetClock`, from ``offset_s``): their
     autopilots' on hardware and on a SITL, so a SITL slowed by a loaded machine slows the mission equally."""
     # a gap of several ticks between two readings is this process left unrun, not the UAVs' silence
     clock = FleetClock(time_scale, start_s=offset_s, unlooked_s=max(UNLOOKED_S, 4.0 * tick_s))
     mc.heard_clock = clock.heard
-    linger_until = None
     while True:
         now = clock.now_s()
         mc.step(now)
-        if mc.ended_at_s is not None:
-            # keep answering heartbeats a moment so every handler hears MissionEnd
-            linger_until = linger_until or now + 2.0 * time_scale
-            if now >= linger_until:
-                break
+        # after the end, answering on (heartbeats, the flights home's clearances) until every UAV has landed
+        if mc.may_leave(now, END_HEARD_S * time_scale):
+            break
         if max_time_s is not None and now - offset_s >= max_time_s:
             break
         time.sleep(tick_s)

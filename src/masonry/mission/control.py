@@ -76,9 +76,13 @@ if TYPE_CHECKING:
     from masonry.mission.journal_state import JournalState
     from masonry.planner.schedule_values import OfflineSchedule
 
-__all__ = ["OUT_OF_SERVICE_STATE", "Attempt", "MissionControl", "MissionEvents", "UavLink"]
+__all__ = ["LANDING_GRACE_S", "OUT_OF_SERVICE_STATE", "Attempt", "MissionControl", "MissionEvents", "UavLink"]
 
 log = logging.getLogger(__name__)
+
+#: How long (mission s) the UAVs get, after the mission's end, to fly home and land while mission control still
+#: answers them (:meth:`MissionControl.may_leave`; the simulated mission stops then too).
+LANDING_GRACE_S = 180.0
 
 
 class MissionControl:
@@ -279,6 +283,29 @@ class MissionControl:
         """
         blocked = self.blocked and not self.liveness.awaiting_rejoin(self.now_s)
         return self.finished or blocked or self.stall is not None or self.operator.aborted
+
+    @property
+    def fleet_down(self) -> bool:
+        """No UAV may still ask for the airspace: each is on its pad (not taking off), out of the mission (lost,
+        out of service), or was never heard."""
+        return all(
+            link.lost or link.last_heard_s is None or (link.facts.on_pad and not link.taking_off)
+            for link in self.uavs.values()
+        )
+
+    def may_leave(self, now_s: float, heard_s: float) -> bool:
+        """After its end, whether mission control may stop answering (its process exit): ``heard_s`` (mission s)
+        past its MissionEnd, so that every handler has heard it, and every UAV down (:attr:`fleet_down`) or
+        :data:`LANDING_GRACE_S` past the end.
+
+        Until then it answers the flights home: a UAV whose way home it had not granted before it left hovered
+        where its last task ended for ``LAST_RESORT_S`` (30 s), then flew home on its fallback layer (issue 29: a
+        `masonry fly --mission` still running long after its mission control ended).
+        """
+        if self.ended_at_s is None:
+            return False
+        since_s = now_s - self.ended_at_s
+        return since_s >= heard_s and (self.fleet_down or since_s >= LANDING_GRACE_S)
 
     @property
     def online(self) -> list[str]:

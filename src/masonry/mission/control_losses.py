@@ -57,6 +57,10 @@ def check_heartbeats(mc: MissionControl, now_s: float) -> None:
     for name, lapse in mc.liveness.sweep(now_s, lambda n: mc.dispatcher.task_of(n) is not None):
         if lapse is Lapse.AIRSPACE_EXPIRED:
             mc.columns.release(name)  # not heard again: it fell, or landed where it was
+        elif mc.ended_at_s is not None and mc.uavs[name].facts.on_pad and mc.dispatcher.task_of(name) is None:
+            # it left: on its pad after the mission's end, its `masonry fly --mission` over (mission control
+            # answers on for the UAVs still flying home: MissionControl.may_leave), not lost
+            continue
         else:
             quiet_s = now_s - (mc.uavs[name].last_heard_s or now_s)
             log.warning("UAV %s silent for %.1f s: lost", name, quiet_s)

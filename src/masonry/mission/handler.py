@@ -337,6 +337,12 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self._handle(raw, now_s)
         self._heartbeat_when_due(now_s)
 
+    def say_finished(self, now_s: float) -> None:
+        """The run ends (:attr:`finished`: on its pad): a heartbeat now, whatever is due, so that mission control,
+        which answers until every UAV has landed (``MissionControl.may_leave``), hears it landed at once."""
+        self._last_sent_hb_s = None
+        self._heartbeat_when_due(now_s)
+
     def _heartbeat_when_due(self, now_s: float) -> None:
         if self._last_sent_hb_s is not None and now_s - self._last_sent_hb_s < self.heartbeat_period_s:
             return

@@ -340,6 +340,7 @@ def _fly_until_done(
         if handler.mission_control_heard_s != heard_s:
             heard_s, heard_wall = handler.mission_control_heard_s, time.monotonic()
         if handler.finished:
+            handler.say_finished(now)
             break
         if autopilot_down is not None and autopilot_down(model.state == "halted"):
             return True

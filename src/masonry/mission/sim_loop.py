@@ -10,14 +10,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from masonry.mission.control import LANDING_GRACE_S
 from masonry.mission.events import SAMPLE_PERIOD_S
 from masonry.timing import DEFAULT_TIMING
 
 if TYPE_CHECKING:
     from masonry.mission.simulate import SimulatedMission
-
-#: How long the UAVs get, after the last task, to fly home and land before the simulation stops.
-LANDING_GRACE_S = 180.0
 
 #: The state machines' control period (``UavConfig.control_period_s``, from :data:`masonry.timing.DEFAULT_TIMING`):
 #: UAV handlers and mission control step at this period, the world at ``dt_s``.

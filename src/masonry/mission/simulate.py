@@ -29,7 +29,7 @@ from masonry.blueprint import Blueprint
 from masonry.errors import InputError
 from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
-from masonry.mission.control import MissionControl
+from masonry.mission.control import LANDING_GRACE_S, MissionControl
 from masonry.mission.events import EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
@@ -39,7 +39,7 @@ from masonry.mission.measured import MeasuredJournal, journaled_errors_m, kept_e
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
-from masonry.mission.sim_loop import CONTROL_PERIOD_S, LANDING_GRACE_S, fly
+from masonry.mission.sim_loop import CONTROL_PERIOD_S, fly
 from masonry.mission.sim_options import SimFields, SimOptions, with_fields
 from masonry.mission.sim_resume import kept_of, resumed_world
 from masonry.mission.table_events import watch_table
