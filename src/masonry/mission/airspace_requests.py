@@ -98,6 +98,8 @@ def request(
         # failsafe flew it off): it keeps the volumes of that flight until a fresh one is granted
         u.flight = None
         u.phase = Phase.PARKED
+    if u.phase is Phase.AT_HOLD and pos is not None:
+        at_rest_at_hold(c, u)
     w = u.request
     if w is not None and same_site(w.site, site):
         if pos is not None and u.phase is Phase.ASKING and pos != w.position:
@@ -226,6 +228,14 @@ def fast_end(c: ColumnClearance, uav: str, vols: list[Volume], home: bool = Fals
         return vols  # (the end's slack covers the overshoot, or there is no lateral leg to overshoot)
     wide = [*vols[:-1], dataclasses.replace(end, slack_m=end.slack_m + excess)]
     return wide if c.fits(uav, wide) else None
+
+
+def at_rest_at_hold(c: ColumnClearance, u: UavAirspace) -> None:
+    """A UAV asks from its hold point (it asks at rest there): a hover widened for a fast leg's overshoot
+    (:func:`fast_end`, kept while a heartbeat may have placed it there still moving) is its own width again."""
+    if len(u.volumes) == 1 and u.volumes[0].kind == "hover" and u.volumes[0].slack_m > c.zone_slack_m:
+        u.volumes = [dataclasses.replace(u.volumes[0], slack_m=c.zone_slack_m)]
+        c.touch()
 
 
 def granted(
