@@ -9,6 +9,7 @@ only once it is at rest where it will start the flight.
 from __future__ import annotations
 
 import math
+import types
 
 import numpy as np
 import pytest
@@ -16,8 +17,10 @@ import pytest
 from fsm_rig import HOME, Rig
 from masonry.fsm import UavConfig
 from masonry.fsm.navigator import Navigator
+from masonry.fsm.routing import Routing
 from masonry.fsm.tuning import uav_settings
 from masonry.ports import Telemetry
+from masonry.separation import LEG_OVERSHOOT_M, TRACK_SHARE_M
 from masonry.sim.vehicle import SimVehicle
 from masonry.sim.vehicle_config import vehicle_preset
 
@@ -149,6 +152,19 @@ def test_a_leg_into_a_zone_with_no_slack_ends_within_the_tracking_share_on_the_a
     # at r_c under 1.2 m a work zone has no slack: a 1.2 m leg into one overshot by 0.106 m, two of them towards each
     # other left 0.996 m (bench_layouts --large seed 3302); within zone_leg_accel_mps2 0.059-0.076 m
     assert _arducopter_pad_leg_overshoot_m(length_m, into_pad=False, into_zone=True) < 0.085
+
+
+def test_a_leg_into_a_zone_with_no_slack_is_flown_gently_unless_mission_control_widened_its_end():
+    settings = uav_settings("arducopter")
+
+    def accel(gentle: bool, slack_m: float = 0.0, **over: float) -> float | None:
+        config = UavConfig("b", "brick", (0.0, 0.0, 0.0), **{**settings, "zone_slack_m": slack_m, **over})
+        return Routing._end_accel_mps2(types.SimpleNamespace(config=config), gentle)  # type: ignore[arg-type]
+
+    assert accel(True) == settings["zone_leg_accel_mps2"]  # its end is near another UAV's reservation
+    assert accel(False) is None  # nothing near: mission control widened the end by the overshoot
+    assert accel(True, slack_m=LEG_OVERSHOOT_M - TRACK_SHARE_M) is None  # the zone's slack covers it
+    assert accel(True, zone_leg_accel_mps2=math.inf) is None  # (the ideal preset: no limit)
 
 
 def test_a_short_leg_at_the_autopilots_own_acceleration_overshoots_its_end_on_the_arducopter_vehicle():

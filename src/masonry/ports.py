@@ -270,6 +270,11 @@ class ClearanceAnswer(Protocol):
     @property
     def hold_m(self) -> Vec3 | None: ...  # not granted yet: where to wait at the layer (None: where it is)
 
+    @property
+    def gentle(
+        self,
+    ) -> bool: ...  # its lateral leg's end is near another UAV's: fly it gently (docs/safety.md)
+
 
 @runtime_checkable
 class ClearanceLink(Protocol):

@@ -26,11 +26,26 @@ LAYER_SPACING_M = 1.1
 #: Room between the propeller tips of a landed UAV and one beside it (tracking error at take-off and landing).
 PAD_MARGIN_M = 0.2
 
+#: The share of the air separation's tracking error one UAV may use (``SEPARATION_XY_M`` is 1 m and two of them).
+TRACK_SHARE_M = 0.1
+
+#: How far a short lateral leg at the autopilot's own limits overshoots its end on the ``arducopter`` vehicle (a
+#: 1.3-1.5 m leg, peak 1.1-1.2 m/s^2: 0.112 m): where a leg's end volume has less slack than this beyond the
+#: tracking share, the leg is flown within ``UavConfig.zone_leg_accel_mps2`` unless mission control widened that
+#: end by the difference (``Grant.gentle`` False: nothing of another UAV's near it; docs/safety.md).
+LEG_OVERSHOOT_M = 0.12
+
 
 def zone_slack_m(clearance_m: float, separation_xy_m: float = SEPARATION_XY_M) -> float:
     """Horizontal slack of a work zone (alignment, the nozzle along its segment): two zones are then the
     blueprint's clearance r_c apart."""
     return max(0.0, (float(clearance_m) - separation_xy_m) / 2.0)
+
+
+def fast_leg_excess_m(slack_m: float) -> float:
+    """How far past its end volume (of horizontal slack ``slack_m``) a leg at the autopilot's own limits may come
+    beyond the tracking share: what mission control widens that end by for a leg it lets be flown fast."""
+    return max(0.0, LEG_OVERSHOOT_M - TRACK_SHARE_M - float(slack_m))
 
 
 def pad_separation_m(airframe: Airframe = DEFAULT_AIRFRAME) -> float:
@@ -46,8 +61,11 @@ def pad_site_distance_m(clearance_m: float, airframe: Airframe = DEFAULT_AIRFRAM
 
 __all__ = [
     "LAYER_SPACING_M",
+    "LEG_OVERSHOOT_M",
     "PAD_MARGIN_M",
     "SEPARATION_XY_M",
+    "TRACK_SHARE_M",
+    "fast_leg_excess_m",
     "pad_separation_m",
     "pad_site_distance_m",
     "zone_slack_m",

@@ -45,6 +45,7 @@ class FakeClearance:
     granted: bool
     layer_m: float | None
     hold_m: Vec3 | None = None
+    gentle: bool = True
 
 
 class ScriptedClearanceLink(QueueMissionLink):

@@ -16,17 +16,12 @@ import numpy as np
 from masonry.fsm.base import ModelBase, Vec3
 from masonry.ports import ClearanceAnswer, Telemetry
 from masonry.segments import point_segment_m
+from masonry.separation import LEG_OVERSHOOT_M, TRACK_SHARE_M
 
 #: A UAV flies on over its hold point to its site (:meth:`Routing._straight_on`) only from farther than this: one
 #: nearer is as good as there (within a leg's arrival tolerances), and flying on from there changed the order of
 #: the multi-UAV runs, not their time (the 12 m wall at 4 + 2: 1,189 -> 1,236 s).
 STRAIGHT_ON_FROM_M = 0.25
-
-#: How far a short lateral leg at the autopilot's own limits overshoots its end on the ``arducopter`` vehicle (a
-#: 1.5 m leg, peak 1.1 m/s^2), and the share of the separation's tracking error one UAV may use (docs/safety.md):
-#: a leg whose end volume has less slack than their difference is flown within ``zone_leg_accel_mps2``.
-LEG_OVERSHOOT_M = 0.12
-TRACK_SHARE_M = 0.1
 
 
 class Routing(ModelBase):
@@ -136,11 +131,11 @@ class Routing(ModelBase):
         p = np.asarray(tel.position_m, dtype=float)
         layer = self._transit_layer_m(answer, p)
         if answer.granted:
-            self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer)
+            self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer, answer.gentle)
         else:
             # a hold flight at the altitude it is given: a later one may be at another (to a parking spot)
             hold_layer = answer.layer_m if answer.hold_m is not None and answer.layer_m is not None else layer
-            self._refused(tel, p, answer.hold_m, hold_layer)
+            self._refused(tel, p, answer.hold_m, hold_layer, answer.gentle)
         return False
 
     def _straight_on(self, tel: Telemetry) -> bool:
@@ -168,7 +163,7 @@ class Routing(ModelBase):
         transit.grant()
         legs = self.nav.layer_route_legs(np.array(site), layer)
         # on at the layer with the lateral speed it has, not the vertical one (:meth:`Navigator.fly_to`'s level)
-        accel = self._end_accel_mps2()
+        accel = self._end_accel_mps2(answer.gentle)
         duration_s = None if accel is None else self.nav.leg_duration_s(p, legs[0][0], accel)
         self.nav.fly_to(self._now_s, tel, legs[0][0], duration_s, yaw_rad=self.nav.target_yaw_rad, level=True)
         self.nav.legs = legs[1:]
@@ -184,8 +179,9 @@ class Routing(ModelBase):
                 layer = self.config.lateral_altitude_m or max(float(p[2]), float(self.transit.site_m[2]))
         return layer
 
-    def _granted(self, tel: Telemetry, p: np.ndarray, layer: float) -> None:
-        """The column is the UAV's: fly there at ``layer`` (from a hold point perhaps another layer) and down."""
+    def _granted(self, tel: Telemetry, p: np.ndarray, layer: float, gentle: bool = True) -> None:
+        """The column is the UAV's: fly there at ``layer`` (from a hold point perhaps another layer) and down
+        (``gentle``: mission control's :attr:`~masonry.ports.ClearanceAnswer.gentle`)."""
         self.transit.layer_m = layer
         self.transit.grant()
         target = np.array(self.transit.site_m)
@@ -196,19 +192,25 @@ class Routing(ModelBase):
             home = self.config.home_m
             # into the column over its own pad (no slack there beyond the tracking error's): gently
             to_pad = math.hypot(target[0] - home[0], target[1] - home[1]) <= 0.05
-            accel = self.config.pad_leg_accel_mps2 if to_pad else self._end_accel_mps2()
+            accel = self.config.pad_leg_accel_mps2 if to_pad else self._end_accel_mps2(gentle)
             self.nav.layer_route(self._now_s, tel, p, target, layer, self.nav.target_yaw_rad, accel)
 
-    def _end_accel_mps2(self) -> float | None:
-        """The acceleration a lateral leg into a work zone or to a hold hover is flown within: ``zone_leg_accel_mps2``
-        if their slack does not cover a short leg's overshoot, else (None) the legs' own."""
-        accel = self.config.zone_leg_accel_mps2
-        if self.config.zone_slack_m + TRACK_SHARE_M < LEG_OVERSHOOT_M and math.isfinite(accel):
-            return accel
-        return None
+    def _end_accel_mps2(self, gentle: bool = True) -> float | None:
+        """The acceleration a lateral leg into a work zone or to a hold hover is flown within:
+        ``zone_leg_accel_mps2`` if their slack does not cover a short leg's overshoot and mission control has not
+        widened its end for it (``gentle``: something of another UAV's is near there); else (None) the legs' own."""
+        cfg = self.config
+        if cfg.zone_slack_m + TRACK_SHARE_M >= LEG_OVERSHOOT_M or not math.isfinite(cfg.zone_leg_accel_mps2):
+            return None
+        if not gentle:
+            return None  # (its end has room for the overshoot: masonry.mission.airspace_requests.fast_end)
+        return cfg.zone_leg_accel_mps2
 
-    def _refused(self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float) -> None:
-        """Not yet: wait at the hold point given (flying there at ``layer``), or where the UAV is."""
+    def _refused(
+        self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float, gentle: bool = True
+    ) -> None:
+        """Not yet: wait at the hold point given (flying there at ``layer``, gently if ``gentle``), or where the
+        UAV is."""
         first = self.transit.state == "ask"
         if hold is not None and (first or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
             self.transit.layer_m = layer
@@ -220,7 +222,7 @@ class Routing(ModelBase):
                 np.array([hold[0], hold[1], layer]),
                 layer,
                 self.nav.target_yaw_rad,
-                self._end_accel_mps2(),
+                self._end_accel_mps2(gentle),
             )
         else:
             self.nav.wait(self._now_s)

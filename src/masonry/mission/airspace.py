@@ -467,7 +467,10 @@ class ColumnClearance:
         u.origin = None
         hxy = (u.hold.point_m[0], u.hold.point_m[1])
         alt = u.hold.layer_m
-        u.volumes = [Volume(hxy, hxy, alt, alt, self.zone_slack_m, "hover")]
+        # (a hover widened for a fast leg there stays so: a heartbeat may say it is there before it overshoots)
+        end = u.volumes[-1] if u.volumes else None
+        slack = end.slack_m if end is not None and end.kind == "hover" else self.zone_slack_m
+        u.volumes = [Volume(hxy, hxy, alt, alt, max(slack, self.zone_slack_m), "hover")]
         self._version += 1
 
 

@@ -41,6 +41,7 @@ from masonry.mission.volumes import (
     stopped_at,
     volumes_clear,
 )
+from masonry.separation import fast_leg_excess_m
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
@@ -92,11 +93,13 @@ def request(
     c.handed_task.discard(uav)  # (it asks again: for its task's site, or home if the task was taken back)
     if u.flight is not None:
         if same_site(u.flight.site, site) and (pos is None or contains(u.volumes, *pos)):
-            return Grant(uav, site, layer_m=u.flight.layer_m)
+            return Grant(uav, site, layer_m=u.flight.layer_m, gentle=u.flight.gentle)
         # turned back for another site, or asks again from outside the flight it was given (a retry after a
         # failsafe flew it off): it keeps the volumes of that flight until a fresh one is granted
         u.flight = None
         u.phase = Phase.PARKED
+    if u.phase is Phase.AT_HOLD and pos is not None:
+        at_rest_at_hold(c, u)
     w = u.request
     if w is not None and same_site(w.site, site):
         if pos is not None and u.phase is Phase.ASKING and pos != w.position:
@@ -159,16 +162,18 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
                     break  # (the layer base rose since: the rest would climb at the hold point)
                 extra = c.flight_volumes_at(hold, w.site, w.top_m, k, None, w.to, home=home)
                 if c.fits(uav, extra) and climb_out_free(c, uav, extra):
-                    u.volumes = u.volumes + extra
+                    fast = fast_end(c, uav, extra, home)
+                    u.volumes = u.volumes + (fast or extra)
                     c.touch()
-                    return granted(c, uav, u, k, now_s)
+                    return granted(c, uav, u, k, now_s, gentle=fast is None)
         elif u.phase is Phase.ASKING:
             start = w.position if w.position is not None else w.site
             for k in range(c.max_layers):
                 vols = c.flight_volumes_at(start, w.site, w.top_m, k, None, w.to, home=home)
                 if c.fits(uav, vols) and climb_out_free(c, uav, vols):
-                    c.take(u, vols)
-                    return granted(c, uav, u, k, now_s)
+                    fast = fast_end(c, uav, vols, home)
+                    c.take(u, fast or vols)
+                    return granted(c, uav, u, k, now_s, gentle=fast is None)
     if u.phase is Phase.ASKING:
         g = hold_flight(c, uav, u)
         if g is None and lingers:  # nowhere to wait near here now: it flies home as it asked
@@ -208,10 +213,37 @@ def climb_out_free(c: ColumnClearance, uav: str, vols: list[Volume]) -> bool:
     return volumes_clear([up], hovers, c.sep_xy_m, c.spacing_m - 1e-9)
 
 
-def granted(c: ColumnClearance, uav: str, u: UavAirspace, k: int, now_s: float) -> Grant:
+def fast_end(c: ColumnClearance, uav: str, vols: list[Volume], home: bool = False) -> list[Volume] | None:
+    """``vols`` with their end (the site's column, or the hold hover) widened by a fast leg's overshoot past the
+    tracking share, if that still keeps clear of every other UAV's reservation: the UAV may fly its lateral leg
+    there at its own limits (``Grant.gentle`` False), and no UAV is granted a volume in the overshoot until it has
+    arrived (the end is set anew then). None: something of another UAV's is near that end, the leg is flown
+    gently (docs/safety.md, "Tracking error on a real autopilot"). Into its pad's column a UAV always flies gently.
+    """
+    end = vols[-1]
+    excess = fast_leg_excess_m(end.slack_m)
+    if home or end.kind not in ("zone", "hover"):
+        return None
+    if excess <= 0.0 or not any(v.kind == "leg" for v in vols):
+        return vols  # (the end's slack covers the overshoot, or there is no lateral leg to overshoot)
+    wide = [*vols[:-1], dataclasses.replace(end, slack_m=end.slack_m + excess)]
+    return wide if c.fits(uav, wide) else None
+
+
+def at_rest_at_hold(c: ColumnClearance, u: UavAirspace) -> None:
+    """A UAV asks from its hold point (it asks at rest there): a hover widened for a fast leg's overshoot
+    (:func:`fast_end`, kept while a heartbeat may have placed it there still moving) is its own width again."""
+    if len(u.volumes) == 1 and u.volumes[0].kind == "hover" and u.volumes[0].slack_m > c.zone_slack_m:
+        u.volumes = [dataclasses.replace(u.volumes[0], slack_m=c.zone_slack_m)]
+        c.touch()
+
+
+def granted(
+    c: ColumnClearance, uav: str, u: UavAirspace, k: int, now_s: float, *, gentle: bool = True
+) -> Grant:
     w = u.request
     assert w is not None
-    u.flight = GrantedFlight(w.site, k, c.alt(k), w.top_m, w.to)
+    u.flight = GrantedFlight(w.site, k, c.alt(k), w.top_m, w.to, gentle)
     u.request, u.hold, u.phase = None, None, Phase.FLYING
     waited = max(0.0, now_s - w.since_s)
     c.wait_s += waited
@@ -221,7 +253,7 @@ def granted(c: ColumnClearance, uav: str, u: UavAirspace, k: int, now_s: float) 
     c.touch()
     if c.gate is not None:
         c.gate.entered(uav, w.site, now_s)
-    return Grant(uav, w.site, layer_m=c.alt(k))
+    return Grant(uav, w.site, layer_m=c.alt(k), gentle=gentle)
 
 
 def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
@@ -249,13 +281,14 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
         for hold in candidates[:6]:
             vols = c.flight_volumes_at(start, None, w.top_m, k, (hold[0], hold[1]))
             if c.fits(uav, vols):
-                c.take(u, vols)
+                fast = fast_end(c, uav, vols)
+                c.take(u, fast or vols)
                 straight = (
                     point_segment_m((hold[0], hold[1]), (start[0], start[1]), (w.site[0], w.site[1])) < 0.01
                 )
                 u.hold, u.phase = HoldFlight(hold, k, c.alt(k), straight), Phase.TO_HOLD
                 c.layer_counts[k] = c.layer_counts.get(k, 0) + 1
-                return Grant(uav, w.site, False, hold, c.alt(k))
+                return Grant(uav, w.site, False, hold, c.alt(k), gentle=fast is None)
     alt = off_layer_m(c, w)
     if alt is None:
         return None

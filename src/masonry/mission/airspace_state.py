@@ -28,6 +28,9 @@ class Grant:
     hold_m: Vec3 | None = None
     layer_m: float | None = None
     refused: str | None = None
+    #: fly the lateral leg to the site (or hold point) within the gentle leg's limit: its end is near another UAV's
+    #: reservation (False: mission control widened the end by a fast leg's overshoot, ``fast_leg_excess_m``)
+    gentle: bool = True
 
 
 class Phase(enum.Enum):
@@ -90,6 +93,7 @@ class GrantedFlight:
     layer_m: float
     top_m: float
     to: XY | None = None
+    gentle: bool = True  # (Grant.gentle: said again with a repeated request)
 
 
 @dataclass

@@ -96,7 +96,9 @@ def answer(mc: MissionControl, g: Grant, now_s: float) -> None:
     if not g.granted and g.hold_m is not None and mc.sites.left(g.uav, now_s):
         mc.columns.touch()  # its site is free: who waits for it may go now
     radius_m = mc.columns.release_radius_m
-    answer = Clearance(MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m)
+    answer = Clearance(
+        MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m, g.gentle
+    )
     mc.out.send(g.uav, answer)
 
 

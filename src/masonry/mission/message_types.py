@@ -141,6 +141,9 @@ class Clearance:
     granted: bool = True
     hold_m: Vec3 | None = None
     layer_m: float | None = None
+    #: fly the lateral leg to the site or hold point gently where the zones have no slack for its overshoot (False:
+    #: nothing of another UAV's is near its end, which mission control widened: docs/safety.md)
+    gentle: bool = True
 
 
 @dataclass(frozen=True)

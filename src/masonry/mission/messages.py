@@ -219,6 +219,8 @@ def encode(message: Message) -> bytes:
             hold_m=_vec(message.hold_m),
             layer_m=message.layer_m,
         )
+        if not message.gentle:  # (only said when not: an older mission control's answer is gentle)
+            body["gentle"] = False
     elif isinstance(message, MissionEnd):
         body.update(time_s=message.time_s, completed=message.completed)
     else:
