@@ -17,12 +17,12 @@ counted once, not once per neighbour. The two horizontal axes are alike and inde
 
 Only the bricks connected to a surveyed one through sightings are solved (a component without a survey has no
 absolute reference: its bricks keep their world-frame looks, which the caller knows). The root a brick is anchored
-to is the surveyed brick fewest sightings away (ties: the lowest id).
+to is the lowest surveyed brick of its component (its id; the search this module did before the union-find of
+:func:`_roots` gave every brick its component's first seed too, not the nearest one).
 """
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -57,27 +57,37 @@ class Solution:
 def _roots(
     fixed: Collection[int], sightings: Sequence[Sighting], unsurveyed: Collection[int] = ()
 ) -> dict[int, int]:
-    """Brick id -> the surveyed brick fewest sightings away (ties: the lowest id), for every brick reached; then,
-    for the bricks no surveyed one reaches, the lowest id of ``unsurveyed`` in their component (itself alone: a
-    brick in no sighting)."""
-    near: dict[int, set[int]] = {}
+    """Brick id -> the root of its component of the sightings' graph: its lowest surveyed brick; for the
+    components no surveyed brick reaches, their lowest id of ``unsurveyed`` (itself alone: a brick in no
+    sighting); the bricks of the other components are left out."""
+    # (union-find: one pass over the sightings, not a search from every seed; the roots are the same)
+    parent: dict[int, int] = {}
+
+    def find(b: int) -> int:
+        while (up := parent[b]) != b:
+            parent[b] = parent[up]
+            b = up
+        return b
+
     for s in sightings:
-        group = {s.brick, *(n for n, _, _ in s.offsets)}
-        for b in group:
-            near.setdefault(b, set()).update(group - {b})
+        top = parent.setdefault(s.brick, s.brick)
+        top = find(top)
+        for n, _, _ in s.offsets:
+            other = find(parent.setdefault(n, n))
+            if other != top:
+                parent[other] = top
+    label: dict[int, int] = {}  # (a component's union-find representative -> its root)
     root: dict[int, int] = {}
     for seeds in (sorted(fixed), sorted(unsurveyed)):
         for f in seeds:
-            if f in root:
-                continue
-            root[f] = f
-            queue: deque[int] = deque([f])
-            while queue:
-                b = queue.popleft()
-                for n in sorted(near.get(b, ())):
-                    if n not in root:
-                        root[n] = root[b]
-                        queue.append(n)
+            if f in parent:
+                label.setdefault(find(f), f)
+            else:
+                root.setdefault(f, f)
+    for b in parent:
+        r = label.get(find(b))
+        if r is not None:
+            root[b] = r
     return root
 
 
@@ -106,40 +116,47 @@ def solve(
         return Solution({}, {}, {})
     index = {b: i for i, b in enumerate(free)}
     used = [s for s in sightings if s.brick in root]
-    n = len(free) + len(used)
-    rows: list[int] = []
-    cols: list[int] = []
-    vals: list[float] = []
+    m = len(free)
+    n = m + len(used)
+    # Every measurement of every sighting, in order: its sighting's row g, its brick, its y and its weight.
+    # The normal equations are built from them with numpy in the same order as the plain loop over them would
+    # (the same entries, summed in the same order, the same floats; tests/test_wall_solve.py checks it).
+    g_rows = [m + k for k, s in enumerate(used) for _ in range(len(s.offsets) + 1)]
+    bricks = [b for s in used for b in (s.brick, *(nb for nb, _, _ in s.offsets))]
+    y0 = [y for s in used for y in (0.0, *(-o[0] for _, o, _ in s.offsets))]
+    y1 = [y for s in used for y in (0.0, *(-o[1] for _, o, _ in s.offsets))]
+    var = [v for s in used for v in (s.own_variance_m2, *(v for _, _, v in s.offsets))]
+    g = np.array(g_rows, dtype=np.int64)
+    p = np.array([index.get(b, -1) for b in bricks], dtype=np.int64)
+    on_free = p >= 0  # (a brick not free is fixed: every brick of a used sighting has a root)
+    w = 1.0 / np.array(var, dtype=float)
+    fx = np.array([fixed.get(b, (0.0, 0.0)) for b in bricks], dtype=float).reshape(-1, 2)
+    y = np.stack([np.array(y0, dtype=float), np.array(y1, dtype=float)], axis=1).reshape(-1, 2)
+    # per measurement: (g, g, w), then on a free brick (p, p, w), (p, g, -w), (g, p, -w): the measurement
+    # x_b - g = y with weight w
+    keep = np.stack([np.ones_like(on_free), on_free, on_free, on_free], axis=1)
+    rows = np.stack([g, p, p, g], axis=1)[keep]
+    cols = np.stack([g, p, g, p], axis=1)[keep]
+    vals = np.stack([w, w, -w, -w], axis=1)[keep]
+    # the right-hand side: on a fixed brick rhs[g] += w (fx - y); on a free one rhs[p] += w y, rhs[g] -= w y
+    wy = w[:, None] * y
+    first_at = np.where(on_free, p, g)
+    first = np.where(on_free[:, None], wy, w[:, None] * (fx - y))
+    at = np.stack([first_at, g], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+    add = np.stack([first, -wy], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+    prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
+    if prior:
+        pi = np.array([i for i, _, _ in prior], dtype=np.int64)
+        pv = np.array([v for _, _, v in prior], dtype=float)
+        pm = np.array([mv for _, mv, _ in prior], dtype=float).reshape(-1, 2)
+        rows = np.concatenate([rows, pi])
+        cols = np.concatenate([cols, pi])
+        vals = np.concatenate([vals, 1.0 / pv])
+        at = np.concatenate([at, pi])
+        add = np.concatenate([add, pm / pv[:, None]])
     rhs = np.zeros((n, 2))
-
-    def add(i: int, j: int, w: float) -> None:
-        rows.append(i)
-        cols.append(j)
-        vals.append(w)
-
-    for k, s in enumerate(used):
-        g = len(free) + k
-        for b, y, var in (
-            (s.brick, (0.0, 0.0), s.own_variance_m2),
-            *((nb, (-o[0], -o[1]), v) for nb, o, v in s.offsets),
-        ):
-            w = 1.0 / var
-            add(g, g, w)  # the measurement x_b - g = y, weight w
-            if b in fixed:
-                fx = fixed[b]
-                rhs[g] += (w * (fx[0] - y[0]), w * (fx[1] - y[1]))
-            else:
-                p = index[b]
-                add(p, p, w)
-                add(p, g, -w)
-                add(g, p, -w)
-                rhs[p] += (w * y[0], w * y[1])
-                rhs[g] -= (w * y[0], w * y[1])
-    for b, (m, var) in (priors or {}).items():
-        if b in index:
-            p = index[b]
-            add(p, p, 1.0 / var)
-            rhs[p] += (m[0] / var, m[1] / var)
+    np.add.at(rhs[:, 0], at, add[:, 0])
+    np.add.at(rhs[:, 1], at, add[:, 1])
     h = sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
     lu = spla.splu(h)
     x = lu.solve(rhs)
@@ -149,8 +166,9 @@ def solve(
             e = np.zeros(n)
             e[index[b]] = 1.0
             variance[b] = float(lu.solve(e)[index[b]])
+    xs = x.tolist()
     return Solution(
-        {b: (float(x[i, 0]), float(x[i, 1])) for b, i in index.items()},
+        {b: (xs[i][0], xs[i][1]) for b, i in index.items()},
         {b: root[b] for b in free},
         variance,
     )
