@@ -309,6 +309,8 @@ def test_support_queries_match_a_plain_scan(placed, probe, below_z):
     for z in (0.0, 0.1, 0.2, 0.3, below_z):  # (the courses' bottoms, and any height)
         covered = any(abs(b.bottom_z_m - z) <= 1e-3 and point_in_rect(px, py, *b.rect()) for b in field)
         assert field.covered_at(px, py, z) == covered
+        wide = any(abs(b.bottom_z_m - z) <= 0.06 and point_in_rect(px, py, *b.rect()) for b in field)
+        assert field.covered_at(px, py, z, tol_m=0.06) == wide
     # a brick picked up is out of the index: it supports and covers nothing where it was
     field.pick(0, "brick-1")
     assert all(b.id != 0 for b in field.near(px, py, 2.0))

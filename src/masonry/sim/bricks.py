@@ -27,6 +27,9 @@ __all__ = [
 ]
 
 GROUND_Z_M = 0.0
+#: The height bins (m) :meth:`BrickField.covered_at` files the resting bricks' bottoms in, per ground cell (a cell
+#: holds a brick of every course of a wall; a marker is covered only by a brick whose bottom is at its height).
+BOTTOM_BIN_M = 0.01
 BrickState = Literal["pickup", "carried", "placed"]
 
 
@@ -72,6 +75,10 @@ class SpatialHash:
         """Keys whose cells hold the point (None if none; the set is the index's own: do not modify it)."""
         c = self.cell_m
         return self._cells.get((math.floor(x / c), math.floor(y / c)))
+
+    def cells_of(self, key: int) -> list[tuple[int, int]]:
+        """The cells ``key`` is indexed in (none: not indexed)."""
+        return self._where.get(key, [])
 
     def __contains__(self, key: object) -> bool:
         return key in self._where
@@ -188,6 +195,9 @@ class BrickField:
         self.max_top_z_m = GROUND_Z_M  # highest brick top ever indexed: nothing rests above it
         # (resting brick id -> bottom z, top z, x, y, cos yaw, sin yaw, half sizes: ``rect()``'s arithmetic)
         self._rest: dict[int, tuple[float, float, float, float, float, float, float, float]] = {}
+        # (ground cell i, j and bottom height bin -> the resting bricks there; brick id -> its keys)
+        self._by_bottom: dict[tuple[int, int, int], set[int]] = {}
+        self._bottom_keys: dict[int, list[tuple[int, int, int]]] = {}
 
     def __iter__(self) -> Iterator[SimBrick]:
         return iter(self.bricks.values())
@@ -206,13 +216,28 @@ class BrickField:
         xs, ys = zip(*rect_corners(*rect))
         self._hash.insert(brick.id, min(xs), min(ys), max(xs), max(ys))
         x, y, yaw, hx, hy = rect
-        self._rest[brick.id] = (brick.bottom_z_m, brick.top_z_m, x, y, math.cos(yaw), math.sin(yaw), hx, hy)
+        bottom = brick.bottom_z_m
+        self._rest[brick.id] = (bottom, brick.top_z_m, x, y, math.cos(yaw), math.sin(yaw), hx, hy)
+        self._unfile_bottom(brick.id)
+        zb = math.floor(bottom / BOTTOM_BIN_M)
+        keys = [(i, j, zb) for i, j in self._hash.cells_of(brick.id)]
+        for key in keys:
+            self._by_bottom.setdefault(key, set()).add(brick.id)
+        self._bottom_keys[brick.id] = keys
+
+    def _unfile_bottom(self, brick_id: int) -> None:
+        for key in self._bottom_keys.pop(brick_id, ()):
+            bucket = self._by_bottom[key]
+            bucket.discard(brick_id)
+            if not bucket:
+                del self._by_bottom[key]
 
     def pick(self, brick_id: int, carrier: str) -> SimBrick:
         """Take a resting brick out of the index: it is now carried."""
         brick = self.bricks[brick_id]
         self._hash.remove(brick_id)
         self._rest.pop(brick_id, None)
+        self._unfile_bottom(brick_id)
         brick.picked_from = (brick.position_m, brick.yaw_rad)
         brick.state = "carried"
         brick.carrier = carrier
@@ -261,8 +286,21 @@ class BrickField:
 
     def covered_at(self, x: float, y: float, z: float, tol_m: float = 1e-3) -> bool:
         """Whether a resting brick sits on the surface point (x, y, z) (its bottom at z, its footprint over it)."""
+        if not math.isfinite(z):
+            return False  # (no bottom is within any tolerance of it)
         rest = self._rest
-        for k in self._hash.query_point(x, y) or ():
+        # the bricks of the point's cell with their bottoms in the bins that z +- tol_m meets (a margin over the
+        # rounding of the bins' edges): the exact test below decides, as on every brick of the cell
+        lo = math.floor((z - tol_m - 1e-9) / BOTTOM_BIN_M)
+        hi = math.floor((z + tol_m + 1e-9) / BOTTOM_BIN_M)
+        if hi - lo > 8:
+            candidates: Iterable[int] = self._hash.query_point(x, y) or ()
+        else:
+            cell = self._hash.cell_m
+            i, j = math.floor(x / cell), math.floor(y / cell)
+            by_bottom = self._by_bottom
+            candidates = [k for zb in range(lo, hi + 1) for k in by_bottom.get((i, j, zb), ())]
+        for k in candidates:
             g = rest[k]
             if abs(g[0] - z) <= tol_m:
                 # point_in_rect(x, y, *b.rect()), inline (every marker of every camera frame asks)
