@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -43,6 +44,15 @@ class Sighting:
     offsets: tuple[tuple[int, Vec2, float], ...]
     own_variance_m2: float
 
+    @cached_property
+    def measurements(self) -> np.ndarray:
+        """Its measurements ``x_b - g = y`` as rows (b, y_x, y_y, the variance), its own brick's first (y = 0), then
+        each neighbour's (y = minus its offset): built once, read by every solve after it (an id is an exact
+        float)."""
+        rows = [(self.brick, 0.0, 0.0, self.own_variance_m2)]
+        rows.extend((nb, -o[0], -o[1], v) for nb, o, v in self.offsets)
+        return np.array(rows, dtype=float).reshape(-1, 4)
+
 
 @dataclass(frozen=True)
 class Solution:
@@ -60,35 +70,52 @@ def _roots(
     """Brick id -> the root of its component of the sightings' graph: its lowest surveyed brick; for the
     components no surveyed brick reaches, their lowest id of ``unsurveyed`` (itself alone: a brick in no
     sighting); the bricks of the other components are left out."""
-    # (union-find: one pass over the sightings, not a search from every seed; the roots are the same)
-    parent: dict[int, int] = {}
+    nodes, has, root = _components(fixed, _Table(sightings), unsurveyed)
+    return dict(zip(nodes[has].tolist(), root[has].tolist(), strict=True))
 
-    def find(b: int) -> int:
-        while (up := parent[b]) != b:
-            parent[b] = parent[up]
-            b = up
-        return b
 
-    for s in sightings:
-        top = parent.setdefault(s.brick, s.brick)
-        top = find(top)
-        for n, _, _ in s.offsets:
-            other = find(parent.setdefault(n, n))
-            if other != top:
-                parent[other] = top
-    label: dict[int, int] = {}  # (a component's union-find representative -> its root)
-    root: dict[int, int] = {}
-    for seeds in (sorted(fixed), sorted(unsurveyed)):
-        for f in seeds:
-            if f in parent:
-                label.setdefault(find(f), f)
-            else:
-                root.setdefault(f, f)
-    for b in parent:
-        r = label.get(find(b))
-        if r is not None:
-            root[b] = r
-    return root
+class _Table:
+    """Every measurement of ``sightings`` in order (:attr:`Sighting.measurements`), with its sighting's index."""
+
+    def __init__(self, sightings: Sequence[Sighting]) -> None:
+        blocks = [s.measurements for s in sightings]
+        self.rows = np.concatenate(blocks) if blocks else np.zeros((0, 4))
+        counts = np.array([len(b) for b in blocks], dtype=np.int64)
+        self.owner = np.repeat(np.arange(len(blocks), dtype=np.int64), counts)  # (each row's sighting)
+        self.first = np.cumsum(counts) - counts  # (each sighting's own row)
+        self.ids = self.rows[:, 0].astype(np.int64)
+
+
+def _components(
+    fixed: Collection[int], table: _Table, unsurveyed: Collection[int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bricks (sorted ids: those of the sightings and the seeds), whether each has a root, and its root
+    (:func:`_roots`): the connected components of the sightings' graph, rooted on their lowest seed of the first
+    kind they hold (surveyed, else ``unsurveyed``)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    fixed_ids = np.array(sorted(fixed), dtype=np.int64)
+    loose_ids = np.array(sorted(unsurveyed), dtype=np.int64)
+    nodes = np.unique(np.concatenate([table.ids, fixed_ids, loose_ids]))
+    if not len(nodes):
+        return nodes, np.zeros(0, dtype=bool), nodes
+    pos = np.searchsorted(nodes, table.ids)
+    edges = coo_matrix(
+        (np.ones(len(pos)), (pos[table.first][table.owner], pos)), shape=(len(nodes), len(nodes))
+    )
+    n, label = connected_components(edges, directed=False)
+    top = np.iinfo(np.int64).max
+    root = np.full(n, top, dtype=np.int64)
+    has = np.zeros(n, dtype=bool)
+    for seeds in (fixed_ids, loose_ids):
+        at = label[np.searchsorted(nodes, seeds)]
+        fresh = ~has[at]  # (components a seed of the first kind roots keep it)
+        best = np.full(n, top, dtype=np.int64)
+        np.minimum.at(best, at[fresh], seeds[fresh])
+        root = np.where(has, root, best)
+        has |= best != top
+    return nodes, has[label], root[label]
 
 
 def solve(
@@ -110,28 +137,32 @@ def solve(
     import scipy.sparse.linalg as spla
 
     sightings = [s for s in sightings if s.offsets]
-    root = _roots(fixed, sightings, (priors or {}).keys() if unsurveyed else ())
-    free = sorted(b for b in root if b not in fixed)
-    if not free:
+    table = _Table(sightings)
+    nodes, has, node_root = _components(fixed, table, (priors or {}).keys() if unsurveyed else ())
+    fixed_ids = np.array(sorted(fixed), dtype=np.int64)
+    free_at = has & ~np.isin(nodes, fixed_ids)
+    free_ids = nodes[free_at]
+    if not len(free_ids):
         return Solution({}, {}, {})
+    free = free_ids.tolist()
     index = {b: i for i, b in enumerate(free)}
-    used = [s for s in sightings if s.brick in root]
+    # the sightings of a rooted brick, in order, and their measurements: the k-th such sighting's unknown is row
+    # m + k; every brick of such a sighting is rooted (its component is), so free or surveyed
     m = len(free)
-    n = m + len(used)
-    # Every measurement of every sighting, in order: its sighting's row g, its brick, its y and its weight.
-    # The normal equations are built from them with numpy in the same order as the plain loop over them would
-    # (the same entries, summed in the same order, the same floats; tests/test_wall_solve.py checks it).
-    g_rows = [m + k for k, s in enumerate(used) for _ in range(len(s.offsets) + 1)]
-    bricks = [b for s in used for b in (s.brick, *(nb for nb, _, _ in s.offsets))]
-    y0 = [y for s in used for y in (0.0, *(-o[0] for _, o, _ in s.offsets))]
-    y1 = [y for s in used for y in (0.0, *(-o[1] for _, o, _ in s.offsets))]
-    var = [v for s in used for v in (s.own_variance_m2, *(v for _, _, v in s.offsets))]
-    g = np.array(g_rows, dtype=np.int64)
-    p = np.array([index.get(b, -1) for b in bricks], dtype=np.int64)
-    on_free = p >= 0  # (a brick not free is fixed: every brick of a used sighting has a root)
-    w = 1.0 / np.array(var, dtype=float)
-    fx = np.array([fixed.get(b, (0.0, 0.0)) for b in bricks], dtype=float).reshape(-1, 2)
-    y = np.stack([np.array(y0, dtype=float), np.array(y1, dtype=float)], axis=1).reshape(-1, 2)
+    used = has[np.searchsorted(nodes, table.ids[table.first])]
+    n = m + int(used.sum())
+    kept = used[table.owner]
+    g = m + (np.cumsum(used) - 1)[table.owner][kept]
+    ids = table.ids[kept]
+    y = table.rows[kept, 1:3]
+    w = 1.0 / table.rows[kept, 3]
+    near = np.minimum(np.searchsorted(free_ids, ids), m - 1)
+    on_free = free_ids[near] == ids
+    p = np.where(on_free, near, -1)
+    fx = np.zeros((len(ids), 2))
+    if len(fixed_ids):
+        xy = np.array([fixed[b] for b in fixed_ids.tolist()], dtype=float).reshape(-1, 2)
+        fx = xy[np.minimum(np.searchsorted(fixed_ids, ids), len(fixed_ids) - 1)]
     # per measurement: (g, g, w), then on a free brick (p, p, w), (p, g, -w), (g, p, -w): the measurement
     # x_b - g = y with weight w
     keep = np.stack([np.ones_like(on_free), on_free, on_free, on_free], axis=1)
@@ -169,6 +200,6 @@ def solve(
     xs = x.tolist()
     return Solution(
         {b: (xs[i][0], xs[i][1]) for b, i in index.items()},
-        {b: root[b] for b in free},
+        dict(zip(free, node_root[free_at].tolist(), strict=True)),
         variance,
     )
