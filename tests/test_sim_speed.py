@@ -306,6 +306,20 @@ def test_support_queries_match_a_plain_scan(placed, probe, below_z):
         if 0.0 < t <= below_z + 0.02 and point_in_rect(px, py, *b.rect()) and t > expected_at:
             expected_at = t
     assert field.support_at(px, py, below_z_m=below_z) == expected_at
+    for z in (0.0, 0.1, 0.2, 0.3, below_z):  # (the courses' bottoms, and any height)
+        covered = any(abs(b.bottom_z_m - z) <= 1e-3 and point_in_rect(px, py, *b.rect()) for b in field)
+        assert field.covered_at(px, py, z) == covered
+        wide = any(abs(b.bottom_z_m - z) <= 0.06 and point_in_rect(px, py, *b.rect()) for b in field)
+        assert field.covered_at(px, py, z, tol_m=0.06) == wide
+    # a brick picked up is out of the index: it supports and covers nothing where it was
+    field.pick(0, "brick-1")
+    assert all(b.id != 0 for b in field.near(px, py, 2.0))
+    x0, y0, _ = field.bricks[0].position_m
+    rest = [b for b in field if b.id != 0]
+    bottom0 = field.bricks[0].bottom_z_m
+    assert field.covered_at(x0, y0, bottom0) == any(
+        abs(b.bottom_z_m - bottom0) <= 1e-3 and point_in_rect(x0, y0, *b.rect()) for b in rest
+    )
 
 
 def test_min_separation_is_the_minimum_over_every_physics_step():

@@ -184,3 +184,104 @@ def test_with_no_survey_the_wall_keeps_its_shape_and_sits_on_its_looks_mean(
         spread_m = max(float(np.linalg.norm(err[b] - common)) for b in members)
         for b in members:
             assert np.asarray(sol.centre_m[b]) - truth[b] == pytest.approx(common, abs=0.01 * spread_m + 1e-9)
+
+
+def _search_roots(fixed, sightings, unsurveyed):  # type: ignore[no-untyped-def]
+    """The roots by a breadth-first search from each seed in id order, the surveyed ones first."""
+    near: dict[int, set[int]] = {}
+    for s in sightings:
+        group = {s.brick, *(n for n, _, _ in s.offsets)}
+        for b in group:
+            near.setdefault(b, set()).update(group - {b})
+    root: dict[int, int] = {}
+    for seeds in (sorted(fixed), sorted(unsurveyed)):
+        for f in seeds:
+            if f in root:
+                continue
+            root[f] = f
+            queue = [f]
+            while queue:
+                b = queue.pop(0)
+                for n in sorted(near.get(b, ())):
+                    if n not in root:
+                        root[n] = root[b]
+                        queue.append(n)
+    return root
+
+
+def _loop_solve(fixed, sightings, priors=None, variance_of=(), unsurveyed=False):  # type: ignore[no-untyped-def]
+    """The normal equations built entry by entry (the solve's plain form, :func:`_search_roots`'s roots): what
+    :func:`solve` must return bit for bit."""
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    sightings = [s for s in sightings if s.offsets]
+    root = _search_roots(fixed, sightings, (priors or {}).keys() if unsurveyed else ())
+    free = sorted(b for b in root if b not in fixed)
+    if not free:
+        return {}, {}, {}
+    index = {b: i for i, b in enumerate(free)}
+    used = [s for s in sightings if s.brick in root]
+    n = len(free) + len(used)
+    rows: list[int] = []
+    cols: list[int] = []
+    vals: list[float] = []
+    rhs = np.zeros((n, 2))
+    for k, s in enumerate(used):
+        g = len(free) + k
+        for b, y, var in (
+            (s.brick, (0.0, 0.0), s.own_variance_m2),
+            *((nb, (-o[0], -o[1]), v) for nb, o, v in s.offsets),
+        ):
+            w = 1.0 / var
+            rows.append(g), cols.append(g), vals.append(w)
+            if b in fixed:
+                rhs[g] += (w * (fixed[b][0] - y[0]), w * (fixed[b][1] - y[1]))
+            else:
+                p = index[b]
+                for i, j, v in ((p, p, w), (p, g, -w), (g, p, -w)):
+                    rows.append(i), cols.append(j), vals.append(v)
+                rhs[p] += (w * y[0], w * y[1])
+                rhs[g] -= (w * y[0], w * y[1])
+    for b, (m, var) in (priors or {}).items():
+        if b in index:
+            rows.append(index[b]), cols.append(index[b]), vals.append(1.0 / var)
+            rhs[index[b]] += (m[0] / var, m[1] / var)
+    lu = spla.splu(sp.csc_matrix((vals, (rows, cols)), shape=(n, n)))
+    x = lu.solve(rhs)
+    variance = {}
+    for b in variance_of:
+        if b in index:
+            e = np.zeros(n)
+            e[index[b]] = 1.0
+            variance[b] = float(lu.solve(e)[index[b]])
+    centre = {b: (float(x[i, 0]), float(x[i, 1])) for b, i in index.items()}
+    return centre, {b: root[b] for b in free}, variance
+
+
+@st.composite
+def random_sightings(draw: st.DrawFn) -> tuple:  # type: ignore[type-arg]
+    """Any bricks, surveyed or not, any sightings among them (empty ones too), any priors."""
+    n = draw(st.integers(1, 14))
+    ids = st.integers(0, n - 1)
+    coords = st.tuples(st.floats(-3, 3), st.floats(-3, 3))
+    var = st.sampled_from([HALF_M2, 2 * HALF_M2, 3.3e-7, 0.01])
+    fixed = draw(st.dictionaries(ids, coords, max_size=3))
+    sightings = [
+        Sighting(b, tuple((o, draw(coords), draw(var)) for o in dict.fromkeys(others) if o != b), draw(var))
+        for b, others in draw(st.lists(st.tuples(ids, st.lists(ids, max_size=4)), max_size=16))
+    ]
+    priors = draw(st.none() | st.dictionaries(ids, st.tuples(coords, var)))
+    return fixed, sightings, priors, draw(st.lists(ids, max_size=3)), draw(st.booleans())
+
+
+@seed(30)
+@settings(max_examples=150, deadline=None)
+@given(random_sightings())
+def test_the_solve_is_bit_for_bit_the_normal_equations_built_entry_by_entry(case) -> None:  # type: ignore[no-untyped-def]
+    fixed, sightings, priors, variance_of, unsurveyed = case
+    got = solve(fixed, sightings, priors, variance_of, unsurveyed)
+    centre, root, variance = _loop_solve(fixed, sightings, priors, variance_of, unsurveyed)
+    assert got.centre_m == centre, case
+    assert got.root == root, case
+    assert got.variance_m2 == variance, case

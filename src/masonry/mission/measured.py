@@ -244,6 +244,7 @@ def simulated_report(
     journaled_errors_m: Mapping[str, float],
     timing: TaskTiming = DEFAULT_TIMING,
     cp_sat_bound_s: float | None = None,
+    cpu_time_s: float = 0.0,
 ) -> MissionReport:
     now = world.clock.now_s()
     # Independent checks from what the UAVs executed (their handlers' traces; a UAV that failed stopped
@@ -292,6 +293,7 @@ def simulated_report(
         paths_m={n: u.path_m()[:, 1:4] for n, u in world.uavs.items()},
         sim_time_s=sim_time_s,
         wall_time_s=wall_time_s,
+        cpu_time_s=cpu_time_s,
         messages=messages,
         **(
             world.glue.report_fields({t.brick: t.id for t in the_plan.tasks if isinstance(t, BrickTask)})

@@ -58,6 +58,8 @@ class MissionReport:
     paths_m: Mapping[str, Any] = field(default_factory=dict)  # UAV name -> (n, 3) array of flown positions
     sim_time_s: float = 0.0
     wall_time_s: float = 0.0
+    #: the simulation's CPU time (process time, s): what the real-time factor costs on a shared machine
+    cpu_time_s: float = 0.0
     resumed_from_s: float | None = None
     messages: int = 0
     #: the progress watchdog stopped the mission: who waited for whom (``masonry.mission.stall.Stall.to_dict``)
@@ -84,6 +86,11 @@ class MissionReport:
     def real_time_factor(self) -> float:
         """Simulated seconds per wall second."""
         return self.sim_time_s / self.wall_time_s if self.wall_time_s > 0 else math.inf
+
+    @property
+    def cpu_real_time_factor(self) -> float:
+        """Simulated seconds per second of CPU (process time)."""
+        return self.sim_time_s / self.cpu_time_s if self.cpu_time_s > 0 else math.inf
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -193,9 +200,11 @@ class MissionReport:
         if self.stall is not None:
             lines.append(str(self.stall.get("line", "stalled")))
         if self.wall_time_s > 0:
+            cpu = f", {self.cpu_time_s:.1f} s CPU" if self.cpu_time_s > 0 else ""
+            cpu_x = f", x{self.cpu_real_time_factor:.0f} on CPU" if self.cpu_time_s > 0 else ""
             lines.append(
-                f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall "
-                f"(x{self.real_time_factor:.0f} real time)"
+                f"simulated {self.sim_time_s:.1f} s in {self.wall_time_s:.1f} s wall{cpu} "
+                f"(x{self.real_time_factor:.0f} real time on the wall clock{cpu_x})"
             )
         return "\n".join(lines)
 

@@ -133,6 +133,7 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "paths_m": {k: np.asarray(v, dtype=float).tolist() for k, v in report.paths_m.items()},
         "sim_time_s": _num_out(report.sim_time_s),
         "wall_time_s": _num_out(report.wall_time_s),
+        "cpu_time_s": _num_out(report.cpu_time_s),
         "resumed_from_s": _num_out(report.resumed_from_s),
         "messages": report.messages,
         "stall": None if report.stall is None else dict(report.stall),
@@ -188,6 +189,7 @@ def report_from_record(data: Any) -> MissionReport:
             paths_m=paths,
             sim_time_s=float(_num_in(data["sim_time_s"])),
             wall_time_s=float(_num_in(data["wall_time_s"])),
+            cpu_time_s=float(_num_in(data.get("cpu_time_s", 0.0))),  # (absent from older records)
             resumed_from_s=_num_in(data["resumed_from_s"]),
             messages=int(data["messages"]),
             stall=None if data["stall"] is None else dict(data["stall"]),

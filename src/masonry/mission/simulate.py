@@ -190,6 +190,7 @@ class SimulatedMission:
         self._resources = resources if resources is not None else contextlib.ExitStack()
         self._ran = False
         self.started_wall_s = time.perf_counter()
+        self.started_cpu_s = time.process_time()
         #: called as ``hook(now_s)`` after every control tick (a live view paces the mission against the wall
         #: clock, an operator pauses it); they may sleep, never change the mission's state
         self.tick_hooks: list[Callable[[float], None]] = []
@@ -305,7 +306,7 @@ class SimulatedMission:
                 "`policy` schedule needs `schedule` (masonry schedule)", options=("policy", "schedule")
             )
         faults = faults if faults is not None else Faults()
-        wall0 = time.perf_counter()
+        wall0, cpu0 = time.perf_counter(), time.process_time()
         vehicle = vehicle_name(opts.vehicle)
         vehicle_config = vehicle_preset(vehicle)
         uav_config = template_config(uav_config, vehicle, opts.airspace)
@@ -413,7 +414,7 @@ class SimulatedMission:
                 uav_config=uav_config,
                 uav_machine=uav_machine,
             )
-        mission.started_wall_s = wall0
+        mission.started_wall_s, mission.started_cpu_s = wall0, cpu0
         if schedule is not None and reservation == "task" and timing == DEFAULT_TIMING and state is None:
             # the same timing model (a vehicle's control preset may fly other gains over the same minimum
             # durations), wall and fleet: a valid term
@@ -459,6 +460,7 @@ class SimulatedMission:
                 seed=self.seed,
                 sim_time_s=self.clock.now_s() - (self.resumed_from or 0.0),
                 wall_time_s=time.perf_counter() - self.started_wall_s,
+                cpu_time_s=time.process_time() - self.started_cpu_s,
                 resumed_from=self.resumed_from,
                 messages=self.bus.sent,
                 measured=self.measured,

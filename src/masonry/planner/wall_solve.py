@@ -17,14 +17,15 @@ counted once, not once per neighbour. The two horizontal axes are alike and inde
 
 Only the bricks connected to a surveyed one through sightings are solved (a component without a survey has no
 absolute reference: its bricks keep their world-frame looks, which the caller knows). The root a brick is anchored
-to is the surveyed brick fewest sightings away (ties: the lowest id).
+to is the lowest surveyed brick of its component (its id; the search this module did before the union-find of
+:func:`_roots` gave every brick its component's first seed too, not the nearest one).
 """
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -43,6 +44,15 @@ class Sighting:
     offsets: tuple[tuple[int, Vec2, float], ...]
     own_variance_m2: float
 
+    @cached_property
+    def measurements(self) -> np.ndarray:
+        """Its measurements ``x_b - g = y`` as rows (b, y_x, y_y, the variance), its own brick's first (y = 0), then
+        each neighbour's (y = minus its offset): built once, read by every solve after it (an id is an exact
+        float)."""
+        rows = [(self.brick, 0.0, 0.0, self.own_variance_m2)]
+        rows.extend((nb, -o[0], -o[1], v) for nb, o, v in self.offsets)
+        return np.array(rows, dtype=float).reshape(-1, 4)
+
 
 @dataclass(frozen=True)
 class Solution:
@@ -57,28 +67,55 @@ class Solution:
 def _roots(
     fixed: Collection[int], sightings: Sequence[Sighting], unsurveyed: Collection[int] = ()
 ) -> dict[int, int]:
-    """Brick id -> the surveyed brick fewest sightings away (ties: the lowest id), for every brick reached; then,
-    for the bricks no surveyed one reaches, the lowest id of ``unsurveyed`` in their component (itself alone: a
-    brick in no sighting)."""
-    near: dict[int, set[int]] = {}
-    for s in sightings:
-        group = {s.brick, *(n for n, _, _ in s.offsets)}
-        for b in group:
-            near.setdefault(b, set()).update(group - {b})
-    root: dict[int, int] = {}
-    for seeds in (sorted(fixed), sorted(unsurveyed)):
-        for f in seeds:
-            if f in root:
-                continue
-            root[f] = f
-            queue: deque[int] = deque([f])
-            while queue:
-                b = queue.popleft()
-                for n in sorted(near.get(b, ())):
-                    if n not in root:
-                        root[n] = root[b]
-                        queue.append(n)
-    return root
+    """Brick id -> the root of its component of the sightings' graph: its lowest surveyed brick; for the
+    components no surveyed brick reaches, their lowest id of ``unsurveyed`` (itself alone: a brick in no
+    sighting); the bricks of the other components are left out."""
+    nodes, has, root = _components(fixed, _Table(sightings), unsurveyed)
+    return dict(zip(nodes[has].tolist(), root[has].tolist(), strict=True))
+
+
+class _Table:
+    """Every measurement of ``sightings`` in order (:attr:`Sighting.measurements`), with its sighting's index."""
+
+    def __init__(self, sightings: Sequence[Sighting]) -> None:
+        blocks = [s.measurements for s in sightings]
+        self.rows = np.concatenate(blocks) if blocks else np.zeros((0, 4))
+        counts = np.array([len(b) for b in blocks], dtype=np.int64)
+        self.owner = np.repeat(np.arange(len(blocks), dtype=np.int64), counts)  # (each row's sighting)
+        self.first = np.cumsum(counts) - counts  # (each sighting's own row)
+        self.ids = self.rows[:, 0].astype(np.int64)
+
+
+def _components(
+    fixed: Collection[int], table: _Table, unsurveyed: Collection[int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bricks (sorted ids: those of the sightings and the seeds), whether each has a root, and its root
+    (:func:`_roots`): the connected components of the sightings' graph, rooted on their lowest seed of the first
+    kind they hold (surveyed, else ``unsurveyed``)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    fixed_ids = np.array(sorted(fixed), dtype=np.int64)
+    loose_ids = np.array(sorted(unsurveyed), dtype=np.int64)
+    nodes = np.unique(np.concatenate([table.ids, fixed_ids, loose_ids]))
+    if not len(nodes):
+        return nodes, np.zeros(0, dtype=bool), nodes
+    pos = np.searchsorted(nodes, table.ids)
+    edges = coo_matrix(
+        (np.ones(len(pos)), (pos[table.first][table.owner], pos)), shape=(len(nodes), len(nodes))
+    )
+    n, label = connected_components(edges, directed=False)
+    top = np.iinfo(np.int64).max
+    root = np.full(n, top, dtype=np.int64)
+    has = np.zeros(n, dtype=bool)
+    for seeds in (fixed_ids, loose_ids):
+        at = label[np.searchsorted(nodes, seeds)]
+        fresh = ~has[at]  # (components a seed of the first kind roots keep it)
+        best = np.full(n, top, dtype=np.int64)
+        np.minimum.at(best, at[fresh], seeds[fresh])
+        root = np.where(has, root, best)
+        has |= best != top
+    return nodes, has[label], root[label]
 
 
 def solve(
@@ -100,46 +137,57 @@ def solve(
     import scipy.sparse.linalg as spla
 
     sightings = [s for s in sightings if s.offsets]
-    root = _roots(fixed, sightings, (priors or {}).keys() if unsurveyed else ())
-    free = sorted(b for b in root if b not in fixed)
-    if not free:
+    table = _Table(sightings)
+    nodes, has, node_root = _components(fixed, table, (priors or {}).keys() if unsurveyed else ())
+    fixed_ids = np.array(sorted(fixed), dtype=np.int64)
+    free_at = has & ~np.isin(nodes, fixed_ids)
+    free_ids = nodes[free_at]
+    if not len(free_ids):
         return Solution({}, {}, {})
+    free = free_ids.tolist()
     index = {b: i for i, b in enumerate(free)}
-    used = [s for s in sightings if s.brick in root]
-    n = len(free) + len(used)
-    rows: list[int] = []
-    cols: list[int] = []
-    vals: list[float] = []
+    # the sightings of a rooted brick, in order, and their measurements: the k-th such sighting's unknown is row
+    # m + k; every brick of such a sighting is rooted (its component is), so free or surveyed
+    m = len(free)
+    used = has[np.searchsorted(nodes, table.ids[table.first])]
+    n = m + int(used.sum())
+    kept = used[table.owner]
+    g = m + (np.cumsum(used) - 1)[table.owner][kept]
+    ids = table.ids[kept]
+    y = table.rows[kept, 1:3]
+    w = 1.0 / table.rows[kept, 3]
+    near = np.minimum(np.searchsorted(free_ids, ids), m - 1)
+    on_free = free_ids[near] == ids
+    p = np.where(on_free, near, -1)
+    fx = np.zeros((len(ids), 2))
+    if len(fixed_ids):
+        xy = np.array([fixed[b] for b in fixed_ids.tolist()], dtype=float).reshape(-1, 2)
+        fx = xy[np.minimum(np.searchsorted(fixed_ids, ids), len(fixed_ids) - 1)]
+    # per measurement: (g, g, w), then on a free brick (p, p, w), (p, g, -w), (g, p, -w): the measurement
+    # x_b - g = y with weight w
+    keep = np.stack([np.ones_like(on_free), on_free, on_free, on_free], axis=1)
+    rows = np.stack([g, p, p, g], axis=1)[keep]
+    cols = np.stack([g, p, g, p], axis=1)[keep]
+    vals = np.stack([w, w, -w, -w], axis=1)[keep]
+    # the right-hand side: on a fixed brick rhs[g] += w (fx - y); on a free one rhs[p] += w y, rhs[g] -= w y
+    wy = w[:, None] * y
+    first_at = np.where(on_free, p, g)
+    first = np.where(on_free[:, None], wy, w[:, None] * (fx - y))
+    at = np.stack([first_at, g], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+    add = np.stack([first, -wy], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+    prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
+    if prior:
+        pi = np.array([i for i, _, _ in prior], dtype=np.int64)
+        pv = np.array([v for _, _, v in prior], dtype=float)
+        pm = np.array([mv for _, mv, _ in prior], dtype=float).reshape(-1, 2)
+        rows = np.concatenate([rows, pi])
+        cols = np.concatenate([cols, pi])
+        vals = np.concatenate([vals, 1.0 / pv])
+        at = np.concatenate([at, pi])
+        add = np.concatenate([add, pm / pv[:, None]])
     rhs = np.zeros((n, 2))
-
-    def add(i: int, j: int, w: float) -> None:
-        rows.append(i)
-        cols.append(j)
-        vals.append(w)
-
-    for k, s in enumerate(used):
-        g = len(free) + k
-        for b, y, var in (
-            (s.brick, (0.0, 0.0), s.own_variance_m2),
-            *((nb, (-o[0], -o[1]), v) for nb, o, v in s.offsets),
-        ):
-            w = 1.0 / var
-            add(g, g, w)  # the measurement x_b - g = y, weight w
-            if b in fixed:
-                fx = fixed[b]
-                rhs[g] += (w * (fx[0] - y[0]), w * (fx[1] - y[1]))
-            else:
-                p = index[b]
-                add(p, p, w)
-                add(p, g, -w)
-                add(g, p, -w)
-                rhs[p] += (w * y[0], w * y[1])
-                rhs[g] -= (w * y[0], w * y[1])
-    for b, (m, var) in (priors or {}).items():
-        if b in index:
-            p = index[b]
-            add(p, p, 1.0 / var)
-            rhs[p] += (m[0] / var, m[1] / var)
+    np.add.at(rhs[:, 0], at, add[:, 0])
+    np.add.at(rhs[:, 1], at, add[:, 1])
     h = sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
     lu = spla.splu(h)
     x = lu.solve(rhs)
@@ -149,8 +197,9 @@ def solve(
             e = np.zeros(n)
             e[index[b]] = 1.0
             variance[b] = float(lu.solve(e)[index[b]])
+    xs = x.tolist()
     return Solution(
-        {b: (float(x[i, 0]), float(x[i, 1])) for b, i in index.items()},
-        {b: root[b] for b in free},
+        {b: (xs[i][0], xs[i][1]) for b, i in index.items()},
+        dict(zip(free, node_root[free_at].tolist(), strict=True)),
         variance,
     )

@@ -27,6 +27,9 @@ __all__ = [
 ]
 
 GROUND_Z_M = 0.0
+#: The height bins (m) :meth:`BrickField.covered_at` files the resting bricks' bottoms in, per ground cell (a cell
+#: holds a brick of every course of a wall; a marker is covered only by a brick whose bottom is at its height).
+BOTTOM_BIN_M = 0.01
 BrickState = Literal["pickup", "carried", "placed"]
 
 
@@ -72,6 +75,10 @@ class SpatialHash:
         """Keys whose cells hold the point (None if none; the set is the index's own: do not modify it)."""
         c = self.cell_m
         return self._cells.get((math.floor(x / c), math.floor(y / c)))
+
+    def cells_of(self, key: int) -> list[tuple[int, int]]:
+        """The cells ``key`` is indexed in (none: not indexed)."""
+        return self._where.get(key, [])
 
     def __contains__(self, key: object) -> bool:
         return key in self._where
@@ -175,12 +182,22 @@ class SimBrick:
 
 
 class BrickField:
-    """All bricks of a world; the resting ones (at a pickup site or placed) indexed by a spatial hash."""
+    """All bricks of a world; the resting ones (at a pickup site or placed) indexed by a spatial hash.
+
+    A resting brick does not move while it is indexed (it moves when picked, :meth:`pick`, and is indexed again
+    where it comes to rest): its footprint is kept with it, computed once (:meth:`covered_at` and
+    :meth:`support_at` ask for it every camera frame and physics step).
+    """
 
     def __init__(self, cell_m: float = 0.5) -> None:
         self.bricks: dict[int, SimBrick] = {}
         self._hash = SpatialHash(cell_m)
         self.max_top_z_m = GROUND_Z_M  # highest brick top ever indexed: nothing rests above it
+        # (resting brick id -> bottom z, top z, x, y, cos yaw, sin yaw, half sizes: ``rect()``'s arithmetic)
+        self._rest: dict[int, tuple[float, float, float, float, float, float, float, float]] = {}
+        # (ground cell i, j and bottom height bin -> the resting bricks there; brick id -> its keys)
+        self._by_bottom: dict[tuple[int, int, int], set[int]] = {}
+        self._bottom_keys: dict[int, list[tuple[int, int, int]]] = {}
 
     def __iter__(self) -> Iterator[SimBrick]:
         return iter(self.bricks.values())
@@ -195,13 +212,32 @@ class BrickField:
 
     def _index(self, brick: SimBrick) -> None:
         self.max_top_z_m = max(self.max_top_z_m, brick.top_z_m)
-        xs, ys = zip(*rect_corners(*brick.rect()))
+        rect = brick.rect()
+        xs, ys = zip(*rect_corners(*rect))
         self._hash.insert(brick.id, min(xs), min(ys), max(xs), max(ys))
+        x, y, yaw, hx, hy = rect
+        bottom = brick.bottom_z_m
+        self._rest[brick.id] = (bottom, brick.top_z_m, x, y, math.cos(yaw), math.sin(yaw), hx, hy)
+        self._unfile_bottom(brick.id)
+        zb = math.floor(bottom / BOTTOM_BIN_M)
+        keys = [(i, j, zb) for i, j in self._hash.cells_of(brick.id)]
+        for key in keys:
+            self._by_bottom.setdefault(key, set()).add(brick.id)
+        self._bottom_keys[brick.id] = keys
+
+    def _unfile_bottom(self, brick_id: int) -> None:
+        for key in self._bottom_keys.pop(brick_id, ()):
+            bucket = self._by_bottom[key]
+            bucket.discard(brick_id)
+            if not bucket:
+                del self._by_bottom[key]
 
     def pick(self, brick_id: int, carrier: str) -> SimBrick:
         """Take a resting brick out of the index: it is now carried."""
         brick = self.bricks[brick_id]
         self._hash.remove(brick_id)
+        self._rest.pop(brick_id, None)
+        self._unfile_bottom(brick_id)
         brick.picked_from = (brick.position_m, brick.yaw_rad)
         brick.state = "carried"
         brick.carrier = carrier
@@ -238,21 +274,11 @@ class BrickField:
         """Height of the surface under the point (x, y) at or below ``below_z_m`` (+ ``tol_m``): a brick top or the ground."""
         top = GROUND_Z_M
         limit = below_z_m + tol_m
-        bricks = self.bricks
+        rest = self._rest
         for k in self._hash.query_point(x, y) or ():
-            b = bricks[k]
-            bx, by, bz = b.position_m
-            sx, sy, sz = b.blueprint.size_m
-            t = bz + sz / 2.0  # b.top_z_m
+            _, t, bx, by, c, s, hx, hy = rest[k]
             if top < t <= limit:
                 # point_in_rect(x, y, *b.rect()), inline (a tool near the bricks asks every physics step)
-                hx, hy = sx / 2.0 - 0.0, sy / 2.0 - 0.0
-                if hx < 1e-4:  # noqa: PLR1730 (no min/max call: hot loop)
-                    hx = 1e-4
-                if hy < 1e-4:  # noqa: PLR1730 (no min/max call: hot loop)
-                    hy = 1e-4
-                yaw = b.yaw_rad
-                c, s = math.cos(yaw), math.sin(yaw)
                 dx, dy = x - bx, y - by
                 if abs(c * dx + s * dy) <= hx and abs(-s * dx + c * dy) <= hy:
                     top = t
@@ -260,11 +286,28 @@ class BrickField:
 
     def covered_at(self, x: float, y: float, z: float, tol_m: float = 1e-3) -> bool:
         """Whether a resting brick sits on the surface point (x, y, z) (its bottom at z, its footprint over it)."""
-        bricks = self.bricks
-        for k in self._hash.query_point(x, y) or ():
-            b = bricks[k]
-            if abs(b.bottom_z_m - z) <= tol_m and point_in_rect(x, y, *b.rect()):
-                return True
+        if not math.isfinite(z):
+            return False  # (no bottom is within any tolerance of it)
+        rest = self._rest
+        # the bricks of the point's cell with their bottoms in the bins that z +- tol_m meets (a margin over the
+        # rounding of the bins' edges): the exact test below decides, as on every brick of the cell
+        lo = math.floor((z - tol_m - 1e-9) / BOTTOM_BIN_M)
+        hi = math.floor((z + tol_m + 1e-9) / BOTTOM_BIN_M)
+        if hi - lo > 8:
+            candidates: Iterable[int] = self._hash.query_point(x, y) or ()
+        else:
+            cell = self._hash.cell_m
+            i, j = math.floor(x / cell), math.floor(y / cell)
+            by_bottom = self._by_bottom
+            candidates = [k for zb in range(lo, hi + 1) for k in by_bottom.get((i, j, zb), ())]
+        for k in candidates:
+            g = rest[k]
+            if abs(g[0] - z) <= tol_m:
+                # point_in_rect(x, y, *b.rect()), inline (every marker of every camera frame asks)
+                _, _, bx, by, c, s, hx, hy = g
+                dx, dy = x - bx, y - by
+                if abs(c * dx + s * dy) <= hx and abs(-s * dx + c * dy) <= hy:
+                    return True
         return False
 
     def support_under(

@@ -83,7 +83,7 @@ def marker_layout(
     ids: list[int] = []
     for b in bricks:
         ids.extend(b.blueprint.marker_ids())
-    P = np.array([_marker_points(b, markers) for b in bricks], dtype=float).reshape(n, 10, 3)
+    P = np.concatenate([_marker_points(b, markers) for b in bricks]).reshape(n, 10, 3)
     return np.array(ids, dtype=int), P[:, 0:2].reshape(2 * n, 3), P[:, 2:10].reshape(2 * n, 4, 3)
 
 
@@ -135,7 +135,8 @@ def observe_markers(
     if hidden:
         index = np.array([i for i in index if int(ids[i]) not in hidden], dtype=int)
     if covered is not None and len(index):
-        index = np.array([i for i in index if not covered(*centres[i].tolist())], dtype=int)
+        xyz = centres.tolist()  # (one conversion, not one per marker)
+        index = np.array([i for i in index.tolist() if not covered(*xyz[i])], dtype=int)
     if occluder is not None and len(index):
         index = np.array([i for i in index if not _behind(occluder, c_w, centres[i])], dtype=int)
     if not len(index):
