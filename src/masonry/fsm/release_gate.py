@@ -65,7 +65,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M, last_leg_lag_s
-from masonry.fsm.wall_align import supports_of
+from masonry.fsm.wall_align import neighbours_of, supports_of
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
@@ -73,6 +73,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CLOSING_MIN_M",
+    "LOW_M",
     "MAX_LEG_LOOKS",
     "MAX_RELOOKS",
     "RELOOK_CLIMB_M",
@@ -100,6 +101,9 @@ RELOOK_FRAMES = 5
 RELOOK_WAIT_S = 3.0
 #: A release inside r_pl waits a tick (``ReleaseGate.closing``) only if the next is this much nearer (m).
 CLOSING_MIN_M = 0.001
+#: On a fresh sighting of the wall, an effector more than this far (m) below its drop-off is not let go there
+#: (``ReleaseGate.low``): the brick is not on its supports but beside them, under their tops.
+LOW_M = 0.03
 
 
 class ReleaseGate:
@@ -122,11 +126,17 @@ class ReleaseGate:
         cfg, task = uav.config, uav.brick_task
         self.relooks, self.looking, self.stale_age_s = 0, False, None
         self._height_m = RELOOK_CLIMB_M
+        wall = dict(cfg.wall)
+        below = supports_of(wall, task.brick, task.size_m)
+        # a first-course brick: guarded once a brick beside it in its course has been seen on the wall in this
+        # placement (there is something to see again from the look point; a tower's first brick, alone in its
+        # course, is not)
+        beside = neighbours_of(wall, task.brick, task.size_m) - below
         self.guarded = bool(
             uav.on_wall
             and cfg.release_fresh_s > 0.0
-            and cfg.wall
-            and supports_of(dict(cfg.wall), task.brick, task.size_m)
+            and wall
+            and (below or beside & uav._wall.seen_ids)
         )
 
     def fresh(self, uav: BrickUav) -> bool:
@@ -165,6 +175,23 @@ class ReleaseGate:
             return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
         return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
+
+    def low(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """Within r_pl of the drop-off this tick: True to let it pass, the effector more than ``LOW_M`` below the
+        drop-off's height as the wall's fresh sighting measures it (guarded only; see the module docstring).
+
+        The release's height test is one-sided (a brick pressed down rests on its support, masonry.fsm.dropoff_reach),
+        and a brick set down from above is held up by its supports: measured on the wall, its effector stays within
+        2 cm of the drop-off's height. One lower has come in from the side under its supports' tops (the side
+        look's last leg in a gust's sink: px4 rotated bond in 4 m/s, seed 5, B11 let go 6.8 cm low rested a course
+        lower, 9.4 cm below its course height)."""
+        if not self.guarded or not self.fresh(uav):
+            return False
+        below_m = float(
+            np.asarray(uav.attempt.place_effector_target_m, dtype=float)[2]
+            - np.asarray(uav.effector.position(tel), dtype=float)[2]
+        )
+        return below_m > LOW_M
 
     def allows(self, uav: BrickUav, tel: Telemetry) -> bool:
         """At the drop-off: True to release; else a look back up has begun.
