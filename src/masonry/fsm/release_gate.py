@@ -12,8 +12,10 @@ wall for ``RELOOK_FRAMES`` frames and the UAV rests there, and flies the last le
 the drop-off within ``release_timeout_s`` of its end looks again too (not a failed descent while looks are left).
 The side look's displaced descent is checked so too where it ends, before its last leg
 (:meth:`ReleaseGate.before_leg`): flown on a stale offset, the leg can take the brick sideways under its supports'
-tops. Only bricks that stand on others are held so (their supports are built before them: there is something to
-see); a first-course brick has no support and is placed as before. A look that does not find the wall within
+tops. Bricks that stand on others are held so (their supports are built before them: there is something to
+see), and a first-course brick once a brick beside it in its course has been seen on the wall in this placement
+(issue 30, branch ``fresh31``: the px4 pyramid in 4 m/s let B0 go 2.4 s after its neighbour was last seen, 53.2 mm
+off it); a tower's first brick, alone in its course, is placed as before. A look that does not find the wall within
 ``RELOOK_WAIT_S`` looks again ``RELOOK_CLIMB_M`` higher (a wider view); after ``MAX_RELOOKS`` looks in one descent
 without the wall the descent counts as failed, as one that did not reach its drop-off: the UAV aligns and
 descends again, and after ``max_place_attempts`` the task fails with the reason said.
@@ -55,6 +57,11 @@ settling in it: the first tick inside let go at its edge (the surveyed pyramid o
 design). With the wall in view the offset stays fresh while the UAV waits for a nearer pass; out of view (the side
 look's last leg) waiting ages it, so there only the nearest-tick rule above holds (a 1 cm gate without that
 condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-built.md).
+
+On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
+height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
+pressed down rests on its support, :mod:`masonry.fsm.dropoff_reach`), but an effector that low has brought its
+brick in beside its supports, under their tops (the side look's last leg sinking in a gust).
 """
 
 from __future__ import annotations
@@ -133,10 +140,7 @@ class ReleaseGate:
         # course, is not)
         beside = neighbours_of(wall, task.brick, task.size_m) - below
         self.guarded = bool(
-            uav.on_wall
-            and cfg.release_fresh_s > 0.0
-            and wall
-            and (below or beside & uav._wall.seen_ids)
+            uav.on_wall and cfg.release_fresh_s > 0.0 and wall and (below or beside & uav._wall.seen_ids)
         )
 
     def fresh(self, uav: BrickUav) -> bool:
