@@ -443,6 +443,7 @@ class BrickUav(PutBack):
         cfg = self.config
         self._wall.track(self, tel)
         self._wall.carry(self)  # (masonry.fsm.wall_trend: the wander's trend since the frames of the target)
+        self._gate.track(self)
         if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
         # the wall's offset stale at the end of the displaced descent: look back up before the last leg

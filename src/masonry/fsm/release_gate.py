@@ -15,7 +15,10 @@ The side look's displaced descent is checked so too where it ends, before its la
 tops. Bricks that stand on others are held so (their supports are built before them: there is something to
 see), and a first-course brick once a brick beside it in its course has been seen on the wall in this placement
 (issue 30, branch ``fresh31``: the px4 pyramid in 4 m/s let B0 go 2.4 s after its neighbour was last seen, 53.2 mm
-off it); a tower's first brick, alone in its course, is placed as before. A look that does not find the wall within
+off it), seen before the descent or in it (:meth:`ReleaseGate.track`); a tower's first brick, alone in its course,
+is placed as before. A first-course drop-off whose looks all miss the wall (the neighbour under the carried brick's
+shadow) flies its last leg and is let go as an unguarded one was, not a failed descent (tests/test_wall_as_built.py's
+pyramid, seed 4: failing it failed the mission). A look that does not find the wall within
 ``RELOOK_WAIT_S`` looks again ``RELOOK_CLIMB_M`` higher (a wider view); after ``MAX_RELOOKS`` looks in one descent
 without the wall the descent counts as failed, as one that did not reach its drop-off: the UAV aligns and
 descends again, and after ``max_place_attempts`` the task fails with the reason said.
@@ -120,6 +123,7 @@ class ReleaseGate:
         self.guarded = (
             False  # the drop-off stands on bricks of the wall: the release waits for a fresh sighting
         )
+        self._beside: frozenset[int] = frozenset()  # a first-course drop-off's neighbours in its course
         self.relooks = 0  # looks back up flown in this descent
         self.looking = False  # flying to, or hovering at, a look point
         self._frames = 0  # sightings of the wall since the look point was reached
@@ -135,13 +139,20 @@ class ReleaseGate:
         self._height_m = RELOOK_CLIMB_M
         wall = dict(cfg.wall)
         below = supports_of(wall, task.brick, task.size_m)
+        on = bool(uav.on_wall and cfg.release_fresh_s > 0.0 and wall)
         # a first-course brick: guarded once a brick beside it in its course has been seen on the wall in this
         # placement (there is something to see again from the look point; a tower's first brick, alone in its
-        # course, is not)
-        beside = neighbours_of(wall, task.brick, task.size_m) - below
-        self.guarded = bool(
-            uav.on_wall and cfg.release_fresh_s > 0.0 and wall and (below or beside & uav._wall.seen_ids)
+        # course, is not), before the descent or during it (:meth:`track`)
+        self._beside = (
+            neighbours_of(wall, task.brick, task.size_m) - below if on and not below else frozenset()
         )
+        self.guarded = bool(on and below)
+        self.track(uav)
+
+    def track(self, uav: BrickUav) -> None:
+        """One tick of the descent: a first-course drop-off becomes guarded once a brick beside it is seen."""
+        if not self.guarded and self._beside & uav._wall.seen_ids:
+            self.guarded = True
 
     def fresh(self, uav: BrickUav) -> bool:
         """The wall was seen recently enough to release now (always, unguarded)."""
@@ -257,7 +268,11 @@ class ReleaseGate:
         complete so: docs/performance/as-built.md, branch ``px4tow``)."""
         if self.relooks >= self._most(uav):
             self.looking = False
-            self._fail(uav)
+            # a first course's neighbour may hide under the carried brick's shadow: let go as unguarded
+            if self._beside:
+                self._leg(uav, tel)
+            else:
+                self._fail(uav)
             return
         self.relooks += 1
         if self.looking:  # the last look did not find the wall: a wider view, from higher up
@@ -270,6 +285,18 @@ class ReleaseGate:
         look = look + np.array([0.0, 0.0, PRE_RELEASE_GAP_M + self._height_m])
         yaw = uav._place_yaw_rad()
         uav._fly_to(tel, uav.effector.body_target(look, yaw), FINAL_LEG_S, yaw)
+
+    @staticmethod
+    def _leg(uav: BrickUav, tel: Telemetry) -> None:
+        """Fly the last leg, from the look point to the drop-off."""
+        yaw = uav._place_yaw_rad()
+        uav._fly_to(
+            tel,
+            uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
+            FINAL_LEG_S,
+            yaw,
+            lag_s=last_leg_lag_s(uav),
+        )
 
     def _fail(self, uav: BrickUav) -> None:
         """The looks of this descent did not find the wall: a failed descent (the task fails after the last)."""
@@ -302,14 +329,7 @@ class ReleaseGate:
         # swings once it has waited RELOOK_WAIT_S there with the wall found
         if found and (waited or uav.nav.rests_at(tel, uav.nav.target_m)):
             self.looking = False
-            yaw = uav._place_yaw_rad()
-            uav._fly_to(
-                tel,
-                uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
-                FINAL_LEG_S,
-                yaw,
-                lag_s=last_leg_lag_s(uav),
-            )
+            self._leg(uav, tel)
         elif waited:
             self._look(uav, tel)  # higher up, or the descent failed
         return True
