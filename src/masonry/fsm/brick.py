@@ -443,6 +443,7 @@ class BrickUav(PutBack):
         cfg = self.config
         self._wall.track(self, tel)
         self._wall.carry(self)  # (masonry.fsm.wall_trend: the wander's trend since the frames of the target)
+        self._gate.track(self)
         if self._gate.step(self, tel):  # looking back up for the wall: no release
             return
         # the wall's offset stale at the end of the displaced descent: look back up before the last leg
@@ -452,8 +453,8 @@ class BrickUav(PutBack):
         if self._gate.lost(self, tel):  # the last leg's pass missed the drop-off while fresh: look again now
             return
         error = dropoff_error_m(self, tel, self._dropoff)
-        if error is not None and self._gate.closing(self, tel):
-            error = None  # (masonry.fsm.release_gate: nearer by the next tick, the sighting still fresh then)
+        if error is not None and (self._gate.closing(self, tel) or self._gate.low(self, tel)):
+            error = None  # (masonry.fsm.release_gate: nearer by the next tick, or under the supports' tops)
         if error is not None:
             taken = self._wall.taken(self)
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)

@@ -12,8 +12,13 @@ wall for ``RELOOK_FRAMES`` frames and the UAV rests there, and flies the last le
 the drop-off within ``release_timeout_s`` of its end looks again too (not a failed descent while looks are left).
 The side look's displaced descent is checked so too where it ends, before its last leg
 (:meth:`ReleaseGate.before_leg`): flown on a stale offset, the leg can take the brick sideways under its supports'
-tops. Only bricks that stand on others are held so (their supports are built before them: there is something to
-see); a first-course brick has no support and is placed as before. A look that does not find the wall within
+tops. Bricks that stand on others are held so (their supports are built before them: there is something to
+see), and a first-course brick once a brick beside it in its course has been seen on the wall in this placement
+(issue 30, branch ``fresh31``: the px4 pyramid in 4 m/s let B0 go 2.4 s after its neighbour was last seen, 53.2 mm
+off it), seen before the descent or in it (:meth:`ReleaseGate.track`); a tower's first brick, alone in its course,
+is placed as before. A first-course drop-off whose looks all miss the wall (the neighbour under the carried brick's
+shadow) flies its last leg and is let go as an unguarded one was, not a failed descent (tests/test_wall_as_built.py's
+pyramid, seed 4: failing it failed the mission). A look that does not find the wall within
 ``RELOOK_WAIT_S`` looks again ``RELOOK_CLIMB_M`` higher (a wider view); after ``MAX_RELOOKS`` looks in one descent
 without the wall the descent counts as failed, as one that did not reach its drop-off: the UAV aligns and
 descends again, and after ``max_place_attempts`` the task fails with the reason said.
@@ -55,6 +60,11 @@ settling in it: the first tick inside let go at its edge (the surveyed pyramid o
 design). With the wall in view the offset stays fresh while the UAV waits for a nearer pass; out of view (the side
 look's last leg) waiting ages it, so there only the nearest-tick rule above holds (a 1 cm gate without that
 condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-built.md).
+
+On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
+height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
+pressed down rests on its support, :mod:`masonry.fsm.dropoff_reach`), but an effector that low has brought its
+brick in beside its supports, under their tops (the side look's last leg sinking in a gust).
 """
 
 from __future__ import annotations
@@ -65,7 +75,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M, last_leg_lag_s
-from masonry.fsm.wall_align import supports_of
+from masonry.fsm.wall_align import neighbours_of, supports_of
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
@@ -73,6 +83,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CLOSING_MIN_M",
+    "LOW_M",
     "MAX_LEG_LOOKS",
     "MAX_RELOOKS",
     "RELOOK_CLIMB_M",
@@ -100,6 +111,9 @@ RELOOK_FRAMES = 5
 RELOOK_WAIT_S = 3.0
 #: A release inside r_pl waits a tick (``ReleaseGate.closing``) only if the next is this much nearer (m).
 CLOSING_MIN_M = 0.001
+#: On a fresh sighting of the wall, an effector more than this far (m) below its drop-off is not let go there
+#: (``ReleaseGate.low``): the brick is not on its supports but beside them, under their tops.
+LOW_M = 0.03
 
 
 class ReleaseGate:
@@ -109,6 +123,7 @@ class ReleaseGate:
         self.guarded = (
             False  # the drop-off stands on bricks of the wall: the release waits for a fresh sighting
         )
+        self._beside: frozenset[int] = frozenset()  # a first-course drop-off's neighbours in its course
         self.relooks = 0  # looks back up flown in this descent
         self.looking = False  # flying to, or hovering at, a look point
         self._frames = 0  # sightings of the wall since the look point was reached
@@ -122,12 +137,22 @@ class ReleaseGate:
         cfg, task = uav.config, uav.brick_task
         self.relooks, self.looking, self.stale_age_s = 0, False, None
         self._height_m = RELOOK_CLIMB_M
-        self.guarded = bool(
-            uav.on_wall
-            and cfg.release_fresh_s > 0.0
-            and cfg.wall
-            and supports_of(dict(cfg.wall), task.brick, task.size_m)
+        wall = dict(cfg.wall)
+        below = supports_of(wall, task.brick, task.size_m)
+        on = bool(uav.on_wall and cfg.release_fresh_s > 0.0 and wall)
+        # a first-course brick: guarded once a brick beside it in its course has been seen on the wall in this
+        # placement (there is something to see again from the look point; a tower's first brick, alone in its
+        # course, is not), before the descent or during it (:meth:`track`)
+        self._beside = (
+            neighbours_of(wall, task.brick, task.size_m) - below if on and not below else frozenset()
         )
+        self.guarded = bool(on and below)
+        self.track(uav)
+
+    def track(self, uav: BrickUav) -> None:
+        """One tick of the descent: a first-course drop-off becomes guarded once a brick beside it is seen."""
+        if not self.guarded and self._beside & uav._wall.seen_ids:
+            self.guarded = True
 
     def fresh(self, uav: BrickUav) -> bool:
         """The wall was seen recently enough to release now (always, unguarded)."""
@@ -165,6 +190,23 @@ class ReleaseGate:
             return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
         return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
+
+    def low(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """Within r_pl of the drop-off this tick: True to let it pass, the effector more than ``LOW_M`` below the
+        drop-off's height as the wall's fresh sighting measures it (guarded only; see the module docstring).
+
+        The release's height test is one-sided (a brick pressed down rests on its support, masonry.fsm.dropoff_reach),
+        and a brick set down from above is held up by its supports: measured on the wall, its effector stays within
+        2 cm of the drop-off's height. One lower has come in from the side under its supports' tops (the side
+        look's last leg in a gust's sink: px4 rotated bond in 4 m/s, seed 5, B11 let go 6.8 cm low rested a course
+        lower, 9.4 cm below its course height)."""
+        if not self.guarded or not self.fresh(uav):
+            return False
+        below_m = float(
+            np.asarray(uav.attempt.place_effector_target_m, dtype=float)[2]
+            - np.asarray(uav.effector.position(tel), dtype=float)[2]
+        )
+        return below_m > LOW_M
 
     def allows(self, uav: BrickUav, tel: Telemetry) -> bool:
         """At the drop-off: True to release; else a look back up has begun.
@@ -226,7 +268,11 @@ class ReleaseGate:
         complete so: docs/performance/as-built.md, branch ``px4tow``)."""
         if self.relooks >= self._most(uav):
             self.looking = False
-            self._fail(uav)
+            # a first course's neighbour may hide under the carried brick's shadow: let go as unguarded
+            if self._beside:
+                self._leg(uav, tel)
+            else:
+                self._fail(uav)
             return
         self.relooks += 1
         if self.looking:  # the last look did not find the wall: a wider view, from higher up
@@ -239,6 +285,18 @@ class ReleaseGate:
         look = look + np.array([0.0, 0.0, PRE_RELEASE_GAP_M + self._height_m])
         yaw = uav._place_yaw_rad()
         uav._fly_to(tel, uav.effector.body_target(look, yaw), FINAL_LEG_S, yaw)
+
+    @staticmethod
+    def _leg(uav: BrickUav, tel: Telemetry) -> None:
+        """Fly the last leg, from the look point to the drop-off."""
+        yaw = uav._place_yaw_rad()
+        uav._fly_to(
+            tel,
+            uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
+            FINAL_LEG_S,
+            yaw,
+            lag_s=last_leg_lag_s(uav),
+        )
 
     def _fail(self, uav: BrickUav) -> None:
         """The looks of this descent did not find the wall: a failed descent (the task fails after the last)."""
@@ -271,14 +329,7 @@ class ReleaseGate:
         # swings once it has waited RELOOK_WAIT_S there with the wall found
         if found and (waited or uav.nav.rests_at(tel, uav.nav.target_m)):
             self.looking = False
-            yaw = uav._place_yaw_rad()
-            uav._fly_to(
-                tel,
-                uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
-                FINAL_LEG_S,
-                yaw,
-                lag_s=last_leg_lag_s(uav),
-            )
+            self._leg(uav, tel)
         elif waited:
             self._look(uav, tel)  # higher up, or the descent failed
         return True

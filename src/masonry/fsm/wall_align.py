@@ -170,6 +170,8 @@ class WallAlign:
         self.seen_s = -math.inf
         #: The bricks of the wall in that last view: id -> estimated top-face centre (world)
         self.estimates: dict[int, np.ndarray] = {}
+        #: Every brick of the wall seen on the wall (within ``_REFERENCE_M`` of its design) in this placement
+        self.seen_ids: set[int] = set()
 
     def reset(self, design_top_m: np.ndarray) -> None:
         """A new placement whose designed effector target (the brick's top-face centre) is ``design_top_m``."""
@@ -179,6 +181,7 @@ class WallAlign:
         self.carried.reset()
         self.seen_s = -math.inf
         self.estimates = {}
+        self.seen_ids = set()
 
     @property
     def offset_m(self) -> np.ndarray:
@@ -224,6 +227,12 @@ class WallAlign:
         if offset is None:
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
+        self.seen_ids.update(
+            bid
+            for bid, top in estimates.items()
+            if float(np.linalg.norm(np.asarray(top, dtype=float) - np.asarray(wall[bid], dtype=float)))
+            <= _REFERENCE_M
+        )
         follow = self.follow_m
         at_design = wall_offset_m(estimates, wall, own, self._near) if self._as_built else None
         if (
