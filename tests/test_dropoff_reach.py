@@ -146,3 +146,24 @@ def test_in_4_m_s_wind_the_bricks_land_nearer_their_place_than_on_the_one_tick_t
     print(worst_mm)
     assert all(a <= b for a, b in zip(worst_mm[True], worst_mm[False], strict=True)), worst_mm
     assert sum(worst_mm[True]) < sum(worst_mm[False]), worst_mm
+
+
+def test_a_tick_below_the_drop_off_needs_no_margin_on_the_mean() -> None:
+    # issue 29, the real PX4 (branch px4flaky31): within 1 cm horizontally, 2 cm below the drop-off (pressing the
+    # brick onto its support), the window's mean 1 cm above with its +-4 cm wander: two standard errors put it past
+    # r_pl, so the margin refused it (and the descent failed); the mean alone is within r_pl, the tick below it
+    def window(final_dz_m: float) -> tuple[bool, HoverNoise]:
+        reach, seen = DropoffReach(3.0), HoverNoise(3.0)
+        for i in range(40):
+            t = i * 0.1
+            dz = 0.01 + 0.04 * math.sin(2.0 * math.pi * t / 1.7)
+            seen.add(t, (dz, 0.0), (0.0, 0.0))
+            assert not reach.reached(t, (0.05, 0.0, dz), dz, R_PL)  # 5 cm off horizontally: no release
+        seen.add(4.0, (final_dz_m, 0.0), (0.0, 0.0))
+        return reach.reached(4.0, (0.005, 0.0, final_dz_m), final_dz_m, R_PL), seen
+
+    below, seen = window(-0.02)
+    assert seen.mean_m[0] <= R_PL < seen.mean_m[0] + 2.0 * seen.standard_error_m  # the margin's refusal
+    assert below
+    above, _ = window(0.025)  # the same window, the tick 2.5 cm above: in the air, the margin stands
+    assert not above
