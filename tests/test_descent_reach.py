@@ -131,3 +131,32 @@ def test_the_single_tick_gate_gives_up_on_the_same_swing() -> None:
     rig = _glue_swinging_in_its_descent("ideal")
     result = rig.link.results[0]
     assert result.status == "failed" and "spraying height" in (result.reason or ""), result
+
+
+def test_a_spray_descent_not_reached_by_its_timeout_is_flown_again_before_the_attempt_fails() -> None:
+    # the default preset's single tick never meets the swing: the first descent times out; the second, from where
+    # the UAV is, swings no more (EKF2's height running off for seconds, then settling) and sprays: the task is done
+    # in the same attempt (issue 29: a failed attempt costs a mission a flight away and back)
+    rig = Rig("adhesion", config=dict(uav_settings("ideal")))
+    fc = _SwingingFc(rig.clock, position_m=rig.fc.position_m)
+    rig.fc = rig.uav.fc = fc
+    descents: list[int] = []
+
+    def swing(r: Rig) -> None:
+        first = r.uav.state == "descend" and r.uav.attempt.spray_descents == 0
+        fc.swinging = first
+        if r.uav.state == "descend" and r.uav.attempt.spray_descents not in descents:
+            descents.append(r.uav.attempt.spray_descents)
+
+    rig.run(max_s=300.0, on_tick=swing)
+    result = rig.link.results[0]
+    assert result.status == "done", result
+    assert descents == [0, 1]
+    assert rig.followed("descend", "spray")
+
+
+def test_the_spray_descents_give_up_after_max_spray_descents_with_the_count_said() -> None:
+    rig = _glue_swinging_in_its_descent("ideal")
+    result = rig.link.results[0]
+    assert result.status == "failed", result
+    assert result.reason is not None and result.reason.endswith("after 2 descents"), result

@@ -276,7 +276,14 @@ class AdhesionUav(UavModel):
         if arrived:
             self.reached()
         elif late > max(cfg.release_timeout_s, 2.0 * cfg.align_patience_s):
-            self.abort(reason=f"could not reach the spraying height over {self.adhesion_task.id}")
+            self.attempt.spray_descents += 1
+            if self.attempt.spray_descents < cfg.max_spray_descents:
+                self.enter_descend()  # once more, a fresh leg from where it is (its window restarts)
+                return
+            self.abort(
+                reason=f"could not reach the spraying height over {self.adhesion_task.id}"
+                f" after {self.attempt.spray_descents} descents"
+            )
 
     def enter_spray(self, *args: object, **kwargs: object) -> None:
         tel = self._tel

@@ -95,6 +95,7 @@ class AdhesionAttempt(TaskAttempt):
     bead: BeadPass = field(default_factory=_no_bead)  # ``spray``'s (what the nozzle covered: its coverage)
     bead_tick_s: float = 0.0
     spray_deadline_s: float = 0.0
+    spray_descents: int = 0  # ``descend``: the descents flown in this attempt (UavConfig.max_spray_descents)
 
 
 __all__ = ["AdhesionAttempt", "BrickAttempt", "Swing", "Takeoff", "TaskAttempt"]

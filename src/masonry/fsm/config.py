@@ -226,6 +226,10 @@ class UavConfig:
     release_dwell_s: float = _T.release_dwell_s
     max_release_attempts: int = 3
     # Adhesion (paper, Section V)
+    # The spray descent flown again from where the UAV is when it has not arrived by its timeout, before the attempt
+    # fails, as the brick's drop-off is (issue 29: on the real PX4 the spray descent missed 1 in ~16 flights, EKF2's
+    # height running off for seconds mid-descent; a failed attempt costs a mission a flight away and back)
+    max_spray_descents: int = 2
     spray_speed_mps: float = _T.spray_speed_mps
     spray_descent_s: float = _T.spray_descent_s
     stable_time_s: float = _T.stable_time_s  # hover still this long over the segment start before descending
