@@ -25,6 +25,8 @@ from bench_as_built import WALLS, _config, _neighbours
 from masonry.fsm.brick import BrickUav
 from masonry.fsm.wall_align import supports_of
 from masonry.mission.simulate import SimulatedMission
+from masonry.sim import Faults
+from masonry.sim.wind import WindConfig
 
 #: brick id -> what the release tick held (filled by the wrapper below)
 RELEASES: dict[int, dict[str, np.ndarray | float]] = {}
@@ -48,6 +50,7 @@ def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
         "age_s": self._now_s - self._wall.seen_s,
         "speed": np.asarray(sim.vehicle.velocity_mps, dtype=float)[:2],
         "past_end_s": self._now_s - self.nav.end_s,
+        "looks": float(self._gate.relooks),
         # the carried brick's offset on the magnet the camera measured (masonry.fsm.carried_look): the target is
         # the effector's, the brick's is this much off it
         "carried": np.asarray(self._wall.carried.world_m(self._place_yaw_rad()), dtype=float)[:2],
@@ -71,7 +74,11 @@ def main() -> None:
         action="store_true",
         help="every brick with placed neighbours, against their mean (the benchmark's figure), not only one support",
     )
+    parser.add_argument(
+        "--wind", type=float, default=0.0, help="wind speed (m/s), light turbulence (0: calm)"
+    )
     args = parser.parse_args()
+    faults = Faults(wind=WindConfig(speed_mps=args.wind, turbulence="light")) if args.wind > 0 else None
     overrides = {name: float(value) for name, _, value in (item.partition("=") for item in args.set)}
     BrickUav.enter_place_release = _record  # type: ignore[method-assign]
     rows: list[tuple[str, int, int, dict[str, np.ndarray]]] = []
@@ -84,7 +91,9 @@ def main() -> None:
         for seed in range(args.seed0, args.seed0 + args.seeds):
             RELEASES.clear()
             config = _config("px4", wall=True, side_look=True, trend=True, overrides=overrides)
-            mission = SimulatedMission.from_blueprint(bp, seed=seed, vehicle="px4", uav_config=config)
+            mission = SimulatedMission.from_blueprint(
+                bp, seed=seed, vehicle="px4", faults=faults, uav_config=config
+            )
             MISSION[:] = [mission]
             mission.run()
             for b in bp.bricks:
@@ -128,7 +137,8 @@ def main() -> None:
             f"{wall} seed {seed} B{bid}: {mm['final']:.1f} mm = release {mm['release']:.1f} + align "
             f"{mm['align']:.1f} + carry {mm['carry']:.1f} (vectors); measured {np.round(p['measured'] * 1000, 1)}, "
             f"the tick's noise {mm['noise']:.1f} mm; wall seen {float(p['age_s']):.2f} s before; "
-            f"{float(np.linalg.norm(p['speed'])):.2f} m/s, {float(p['past_end_s']):+.2f} s past the leg's end"
+            f"{float(np.linalg.norm(p['speed'])):.2f} m/s, {float(p['past_end_s']):+.2f} s past the leg's end, "
+            f"{int(p['looks'])} looks"
         )
 
 

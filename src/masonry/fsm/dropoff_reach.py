@@ -39,6 +39,17 @@ shortened: on a noisy position source (a ``gate_window_s``, the ``px4`` preset) 
 m/s at the drop-off on the px4 model) reads as a swing at every tick, and a release held to 0.8 cm waited past the
 wall's sighting's freshness (:mod:`masonry.fsm.release_gate`): the towers in wind let go after five looks on
 sightings 0.9-1.7 s old, their worst brick 24.7 -> 91.3 mm off its neighbours (seeds 0-2).
+
+A brick set down where no brick of the wall measures the drop-off's height (the wall's first brick, a tower's
+first: :attr:`masonry.fsm.release_gate.ReleaseGate.guarded` False) rests on the ground wherever the GNSS's
+vertical wander put its target: a target the wander put under the ground holds the UAV up there, above its
+reference by that much, and no window's mean comes within r_pl of it (the px4 rotated bond in 4 m/s, seed 8: B4's
+first descent held 3.5-7 cm above its reference for the whole 4 s, three attempts of three descents each failed and
+the mission with them; the wind30 branch's towers seed 3 B6 so, 3-11 cm). So on such a descent the height is also
+reached when the UAV is *held* (:meth:`DropoffReach.held`): past the descent's end, over the last
+``HELD_WINDOW_S`` every tick more than r_pl above the reference and less than a brick's height, and within
+``HELD_SPREAD_M`` of a straight line no steeper than ``HELD_DRIFT_MPS`` (the hover about its reference swings by
+centimetres in a second; held on the ground, only the wander's drift moves it, up to 2-3 cm/s, smoothly).
 """
 
 from __future__ import annotations
@@ -56,6 +67,9 @@ if TYPE_CHECKING:
     from masonry.ports import Telemetry
 
 __all__ = [
+    "HELD_DRIFT_MPS",
+    "HELD_SPREAD_M",
+    "HELD_WINDOW_S",
     "SWING_NEAR_M",
     "SWING_WINDOW_S",
     "DropoffReach",
@@ -71,6 +85,14 @@ SWING_WINDOW_S = 1.0
 #: settling from its leg (up to ``settle_speed_mps``: ``place_align``'s gate), which is no gust's swing; counted,
 #: it moved the case study's calm releases by a tick.
 SWING_NEAR_M = 0.05
+#: A UAV held up by its brick resting on the ground (:meth:`DropoffReach.held`): judged over this last stretch past
+#: the descent's end (s), ...
+HELD_WINDOW_S = 1.0
+#: ... over which its height about its reference lies within this (m) of a straight line (the wander's drift) ...
+HELD_SPREAD_M = 0.005
+#: ... whose slope is at most this (m/s): the wander's drift (its rate about 1.5 cm/s rms on the px4 model), not
+#: half a swing of the hover (4-5 cm in about a second).
+HELD_DRIFT_MPS = 0.03
 
 
 def resting_error_m(error_m: Sequence[float]) -> float:
@@ -105,11 +127,42 @@ class DropoffReach:
         self._height = HoverNoise(window_s)
         #: (time s, horizontal speed about the reference m/s) over the last SWING_WINDOW_S
         self._swing: deque[tuple[float, float]] = deque()
+        #: (time s, height about the reference m) over the last HELD_WINDOW_S
+        self._held: deque[tuple[float, float]] = deque()
 
     def reset(self) -> None:
         """A new descent: forget the heights and speeds seen."""
         self._height.reset()
         self._swing.clear()
+        self._held.clear()
+
+    def held(
+        self, now_s: float, past_end_s: float, tracking_z_m: float, radius_m: float, most_m: float
+    ) -> bool:
+        """One tick's height above the descent's reference (m), ``past_end_s`` after the descent's end: True if
+        over the last ``HELD_WINDOW_S``, all of it past the end, every tick was more than ``radius_m`` and less than
+        ``most_m`` above the reference and within ``HELD_SPREAD_M`` of a straight line through them no steeper than
+        ``HELD_DRIFT_MPS`` (the UAV held up by
+        its brick resting on what is under it; see the module docstring)."""
+        seen = self._held
+        seen.append((now_s, float(tracking_z_m)))
+        while seen[0][0] < now_s - HELD_WINDOW_S - 1e-6:  # (a tick's time a float sum: a microsecond's slack)
+            seen.popleft()
+        if past_end_s < HELD_WINDOW_S - 1e-6 or seen[0][0] > now_s - HELD_WINDOW_S + 1e-6:
+            return False
+        heights = [z for _, z in seen]
+        if min(heights) <= radius_m or max(heights) >= most_m:
+            return False
+        # steady on a straight line: held, the height about the reference moves only with the wander's drift
+        # (up to 2-3 cm/s on the px4 model), not by the hover's swing
+        n = len(seen)
+        t_mean = sum(t for t, _ in seen) / n
+        z_mean = sum(heights) / n
+        var_t = sum((t - t_mean) ** 2 for t, _ in seen)
+        slope = sum((t - t_mean) * (z - z_mean) for t, z in seen) / var_t if var_t > 0.0 else 0.0
+        return abs(slope) <= HELD_DRIFT_MPS and all(
+            abs(z - z_mean - slope * (t - t_mean)) <= HELD_SPREAD_M for t, z in seen
+        )
 
     def swing(self, now_s: float, velocity_mps: Sequence[float], reference_mps: Sequence[float]) -> float:
         """One tick's velocity and its reference's (world, m/s): the fastest horizontal speed about the reference
@@ -123,17 +176,29 @@ class DropoffReach:
             seen.popleft()
         return max(v for _, v in seen)
 
-    def reached(self, now_s: float, error_m: Sequence[float], tracking_z_m: float, radius_m: float) -> bool:
+    def reached(
+        self,
+        now_s: float,
+        error_m: Sequence[float],
+        tracking_z_m: float,
+        radius_m: float,
+        held: bool = False,
+    ) -> bool:
         """One tick of the descent: the effector's error (effector minus target, world, m) and how far above its
         descent's reference the UAV is (m); True once this tick is within ``radius_m`` horizontally and the mean
         height over the window, with two standard errors unless this tick's own height is no more than ``radius_m``
-        above the target, is no more than ``radius_m`` above the target.
+        above the target, is no more than ``radius_m`` above the target, or the UAV is ``held`` up
+        (:meth:`held`, this tick's).
 
         The window averages the height about the descent's reference (which is known, not noisy), so that the
         descent itself is neither spread nor lag: the mean height is the reference's plus the mean deviation."""
         height = self._height
         height.add(now_s, (float(tracking_z_m), 0.0), (0.0, 0.0))
-        if math.hypot(float(error_m[0]), float(error_m[1])) > radius_m or height.seen_s < height.window_s:
+        if math.hypot(float(error_m[0]), float(error_m[1])) > radius_m:
+            return False
+        if held:
+            return True
+        if height.seen_s < height.window_s:
             return False
         reference_dz_m = float(error_m[2]) - float(tracking_z_m)
         # The margin only while this tick's own height is above the drop-off by more than r_pl: a brick set down on
@@ -156,7 +221,15 @@ def dropoff_error_m(uav: BrickUav, tel: Telemetry, reach: DropoffReach) -> float
     if cfg.gate_window_s > 0.0:
         error_m = uav.effector.position(tel) - target
         tracking_z_m = tel.position_m[2] - float(uav.nav.reference(uav._now_s)[0][2])
-        if not reach.reached(uav._now_s, error_m, tracking_z_m, cfg.placement_radius_m):
+        # held up on the ground: only where no brick of the wall measures the drop-off's height (unguarded)
+        held = not uav._gate.guarded and reach.held(
+            uav._now_s,
+            uav._now_s - uav.nav.end_s,
+            tracking_z_m,
+            cfg.placement_radius_m,
+            float(uav.brick_task.size_m[2]),
+        )
+        if not reach.reached(uav._now_s, error_m, tracking_z_m, cfg.placement_radius_m, held):
             return None
         return resting_error_m(error_m)
     error = uav.effector.distance_m(tel, target)

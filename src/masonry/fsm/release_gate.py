@@ -40,7 +40,8 @@ from the camera 10 cm beside the rod: 1.25 times the brick at the support's top,
 ``release_fresh_s`` of the last sighting about one time in three (towers seeds 0-9: 56 of 184 passes). Flown on,
 the effector wandered into r_pl blind 1-4 s later, only for :meth:`ReleaseGate.allows` to look back up then; five
 such looks left 4 of the 60 tower bricks let go stale (0.9-2.3 s, up to 34 mm off their support). The look now
-starts as the sighting goes stale, and the side look's descent has ``MAX_LEG_LOOKS`` of them.
+starts as the sighting goes stale, and the side look's descent has ``MAX_LEG_LOOKS`` of them (20: in 4 m/s ten
+left the px4 towers' worst bricks to a stale release, branch ``towers32``).
 
 Inside r_pl, on the side look's last leg, the release waits for the nearest tick
 (``UavConfig.release_closest_s``, the ``px4`` preset's 0.1 s: issue 30, branch ``px4tail``). That leg arrives at
@@ -100,7 +101,10 @@ MAX_RELOOKS = 5
 #: (:meth:`ReleaseGate.lost`): a pass lands in r_pl while the sighting is fresh about one time in three on the px4
 #: model, so five looks left 4 of 60 tower bricks to a stale release (docs/performance/as-built.md, branch
 #: ``px4tow``); begun as the sighting goes stale, ten of them took less time than five had (25.8 -> 22.5 s a brick).
-MAX_LEG_LOOKS = 10
+#: 20 since branch ``towers32``: in 4 m/s a pass lands fresh less often, and the px4 towers let 6 of 60 bricks go
+#: after ten looks on sightings 1.6-3.7 s old, the four worst of them 29-79 mm off their neighbours
+#: (docs/performance/as-built.md).
+MAX_LEG_LOOKS = 20
 #: A look that did not find the wall is followed by one this much higher (m) (the first: ``PRE_RELEASE_GAP_M`` +
 #: this).
 RELOOK_CLIMB_M = 0.05
