@@ -12,6 +12,9 @@ every brick with placed neighbours instead, against where their mean puts it (th
 
     python benchmarks/bench_as_built_release.py --walls towers --seeds 10 [--set NAME=VALUE ...]
     python benchmarks/bench_as_built_release.py --walls towers,pyramid --seeds 10 --seed0 10 --neighbours --worst 8
+
+(``--wind 4``: in 4 m/s wind with light turbulence, as ``bench_as_built.py --wind 4``; each worst brick also says how
+many looks back up its descent flew, ``ReleaseGate.relooks``.)
 """
 
 from __future__ import annotations
