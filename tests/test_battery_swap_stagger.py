@@ -7,7 +7,7 @@ from masonry.battery_drain import DrainMeter
 from masonry.blueprint_gen import running_bond
 from masonry.mission.handler import TOP_UP_FRACTION
 from masonry.mission.simulate import SimulatedMission
-from masonry.mission.swap_stagger import SWAP_EARLY, swap_due
+from masonry.mission.swap_stagger import RESERVE, SWAP_EARLY, swap_due
 from masonry.mission.uav_facts import UavFacts
 
 
@@ -38,9 +38,39 @@ def test_one_uav_per_four_of_a_role_is_sent_for_an_early_swap_and_stays_sent_unt
     assert TOP_UP_FRACTION == SWAP_EARLY  # given nothing, a UAV sent home early is swapped on its pad
 
     alone = SimulatedMission.from_blueprint(running_bond(2, 8, brick_uavs=1, adhesion_uavs=1), seed=0).control
-    alone.uavs["brick-1"].battery = alone.uavs["glue-1"].battery = 0.2
+    alone.uavs["brick-1"].battery = alone.uavs["glue-1"].battery = RESERVE + 0.05
     alone.uavs["brick-1"].swaps_batteries = alone.uavs["glue-1"].swaps_batteries = True
     assert not swap_due(alone, "brick-1") and not swap_due(alone, "glue-1")
+
+
+def test_a_uav_under_the_handlers_reserve_is_given_no_task_whatever_its_role_does() -> None:
+    """Under ``RESERVE`` its handler would hold any task for the swap (the flight home, the crew's minute, the
+    take-off) with the task in progress for mission control: a UAV with a ground crew is given none instead, in a
+    role of any size and beside a UAV already sent; it stays sent until its fresh pack is heard. Without a ground
+    crew, never (its handler retires it); nor while a UAV of its role waits on its pad with a good pack (a spare
+    would take the task and lay the rest from its pad)."""
+    alone = SimulatedMission.from_blueprint(running_bond(2, 8, brick_uavs=1, adhesion_uavs=1), seed=0).control
+    alone.uavs["brick-1"].battery = RESERVE - 0.01
+    assert not swap_due(alone, "brick-1")  # no ground crew heard of
+    alone.uavs["brick-1"].swaps_batteries = True
+    assert swap_due(alone, "brick-1")  # one of a role
+    alone.uavs["brick-1"].battery = RESERVE + 0.01  # a heartbeat a little higher (a sag over): still sent
+    assert swap_due(alone, "brick-1")
+    alone.uavs["brick-1"].battery = 1.0
+    assert not swap_due(alone, "brick-1")
+
+    mc = SimulatedMission.from_blueprint(running_bond(2, 8, brick_uavs=4, adhesion_uavs=2), seed=0).control
+    for link in mc.uavs.values():
+        link.swaps_batteries = True
+    mc.uavs["brick-1"].battery = SWAP_EARLY - 0.05
+    assert swap_due(mc, "brick-1")  # sent early: the one of four
+    mc.uavs["brick-4"].battery = 0.9
+    mc.uavs["brick-4"].facts = UavFacts(on_pad=True)  # a spare on its pad
+    mc.uavs["brick-2"].battery = RESERVE - 0.01
+    assert not swap_due(mc, "brick-2")
+    mc.uavs["brick-4"].facts = UavFacts()  # it flies
+    assert swap_due(mc, "brick-2")  # under the reserve: beside brick-1, already sent
+    assert set(mc.swaps.sent_s) == {"brick-1", "brick-2"}
 
 
 def test_no_uav_is_sent_without_a_ground_crew_with_a_spare_on_its_pad_or_with_a_pack_that_covers_its_share() -> (

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import random
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -326,7 +327,11 @@ def test_out_of_service_uav_is_retired_without_burning_attempts():
     assert [a.uav for a in mc.history if a.status == "done"].count("brick-1") == 1
 
 
-def test_battery_reserve_holds_the_task_until_the_pack_is_swapped():
+@pytest.mark.parametrize("heard", [False, True])
+def test_battery_reserve_holds_the_task_until_the_pack_is_swapped(heard: bool):
+    """Under the handler's 40 % reserve a task waits for the swap: held by the handler when mission control does
+    not hear the low charge (the heartbeats report another battery, e.g. a remote autopilot's), not given at all
+    when it does (``swap_stagger``: the UAV is swapped idle on its pad, then given the task)."""
     plan = Plan((BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),), (), ())
     bus = InprocBus()
     mc = MissionControl(plan, fleet_of(1, 0), bus.endpoint(MISSION_CONTROL))
@@ -335,11 +340,21 @@ def test_battery_reserve_holds_the_task_until_the_pack_is_swapped():
     def swap():
         return h.now_s >= pack["swaps_at"] and pack.update(charge=1.0) is None
 
-    h = UavHandler("brick-1", bus.endpoint("brick-1"), battery=lambda: pack["charge"], swap_battery=swap)
+    h = UavHandler(
+        "brick-1",
+        bus.endpoint("brick-1"),
+        battery=lambda: pack["charge"],
+        swap_battery=swap,
+        report_battery=None if heard else (lambda: 0.9),
+    )
     h.attach(ScriptedUav(h, {"B0": 2.0}, random.Random(0)))
     _fly_until_the_end(mc, h, 50.0)
     assert mc.finished and h.battery_swaps == 1
-    assert mc.history[0].start_s < 4.0 <= h.executions[0].start_s  # assigned at once, flown after the swap
+    assert h.executions[0].start_s >= 4.0  # flown after the swap
+    if heard:
+        assert h.top_ups == 1 and mc.history[0].start_s >= 4.0  # swapped idle, assigned with the fresh pack
+    else:
+        assert h.top_ups == 0 and mc.history[0].start_s < 4.0  # assigned at once, held by its handler
 
 
 def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a_resumed_journal(tmp_path):
