@@ -68,7 +68,7 @@ class PutBack(UavModel):
 
     def _vertical_s(self, distance_m: float) -> float:
         """A climb or descent leg of the task (the navigator's rest-to-rest leg), settled."""
-        return self.nav.leg_duration_s(np.zeros(3), np.array([0.0, 0.0, abs(distance_m)])) + LEG_SETTLE_S
+        return self.nav.leg_duration_s((0.0, 0.0, 0.0), (0.0, 0.0, abs(distance_m))) + LEG_SETTLE_S
 
     def _putback_need_s(self, from_m: Vec3) -> float:
         """Putting the brick back from ``from_m`` (the flight to its pickup, the descent, the release, the climb)
