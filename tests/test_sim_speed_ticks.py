@@ -2,7 +2,7 @@
 
 Covered: the setpoint shaping's inlined ``sqrt_controller`` and its draws three at a time, the site gate's scan
 over the visits in progress, the liveness sweep's early exit, the watchdogs' flags per state, and the battery
-budget's legs as tuples.
+budget's legs as tuples and the put-back's legs kept between ticks.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fsm_rig import Rig
 from masonry.blueprint import UavSpec
 from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
@@ -147,3 +148,44 @@ def test_the_liveness_sweep_skips_only_what_it_would_not_have_changed(rejoin_s, 
 def test_a_leg_of_tuples_lasts_what_the_same_leg_of_arrays_lasts(a, b):
     nav = Navigator(UavConfig(name="u", role="brick", home_m=(0.0, 0.0, 0.0)))
     assert nav.leg_duration_s(a, b) == nav.leg_duration_s(np.asarray(a), np.asarray(b))
+
+
+def _putback_need_as_it_was(uav, from_m) -> float:
+    """``PutBack._putback_need_s`` as it was: every leg computed on every call."""
+    cfg = uav.config
+    effector_m, yaw = uav._putback_pose()
+    body = uav.effector.body_target(effector_m, yaw)
+    over = (float(body[0]), float(body[1]), uav._transit_altitude_m())
+    return (
+        uav._route_s(from_m, over)
+        + cfg.descent_duration_s
+        + cfg.release_dwell_s
+        + uav._vertical_s(over[2] - float(body[2]))
+        + uav._home_s(over)
+    )
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    froms=st.lists(st.tuples(finite, finite, st.floats(0.0, 5.0)), min_size=1, max_size=5),
+    estimates=st.lists(
+        st.tuples(st.floats(-3.0, 3.0), st.floats(-3.0, 3.0), st.floats(-3.0, 3.0)), min_size=1, max_size=3
+    ),
+    carry_yaw=st.floats(-3.0, 3.0),
+)
+def test_the_put_back_legs_kept_between_ticks_are_the_legs_computed_again(froms, estimates, carry_yaw):
+    uav = Rig("brick", clearance={}).uav
+    uav.task = uav.link.poll_task()
+    for x, y, yaw in estimates:  # a new estimate (or carry yaw) is a new put-back: its legs computed again
+        uav.attempt.brick_estimate = (np.array([x, y, 0.05]), yaw)
+        uav.attempt.carry_yaw_rad = carry_yaw
+        for from_m in froms:
+            assert uav._putback_need_s(from_m) == _putback_need_as_it_was(uav, from_m)
+        carry_yaw = -carry_yaw
+
+
+def test_lost_is_the_report_saying_lost_or_out_of_service():
+    link = UavLink(UavSpec("u", "brick", (0.0, 0.0, 0.0)))
+    for liveness in Liveness:
+        link.liveness = liveness
+        assert link.lost is (link.status != "ok")

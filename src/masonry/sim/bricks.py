@@ -195,6 +195,7 @@ class BrickField:
         self.max_top_z_m = GROUND_Z_M  # highest brick top ever indexed: nothing rests above it
         # (resting brick id -> bottom z, top z, x, y, cos yaw, sin yaw, half sizes: ``rect()``'s arithmetic)
         self._rest: dict[int, tuple[float, float, float, float, float, float, float, float]] = {}
+        self._rects: dict[int, tuple[float, float, float, float, float]] = {}  # (resting brick -> rect())
         # (ground cell i, j and bottom height bin -> the resting bricks there; brick id -> its keys)
         self._by_bottom: dict[tuple[int, int, int], set[int]] = {}
         self._bottom_keys: dict[int, list[tuple[int, int, int]]] = {}
@@ -218,6 +219,7 @@ class BrickField:
         x, y, yaw, hx, hy = rect
         bottom = brick.bottom_z_m
         self._rest[brick.id] = (bottom, brick.top_z_m, x, y, math.cos(yaw), math.sin(yaw), hx, hy)
+        self._rects[brick.id] = rect
         self._unfile_bottom(brick.id)
         zb = math.floor(bottom / BOTTOM_BIN_M)
         keys = [(i, j, zb) for i, j in self._hash.cells_of(brick.id)]
@@ -237,6 +239,7 @@ class BrickField:
         brick = self.bricks[brick_id]
         self._hash.remove(brick_id)
         self._rest.pop(brick_id, None)
+        self._rects.pop(brick_id, None)
         self._unfile_bottom(brick_id)
         brick.picked_from = (brick.position_m, brick.yaw_rad)
         brick.state = "carried"
@@ -316,20 +319,20 @@ class BrickField:
         """Height of the highest surface under a footprint, at or below ``below_z_m`` (+ ``tol_m``)."""
         xs, ys = zip(*rect_corners(*rect))
         limit = below_z_m + tol_m
-        bricks = self.bricks
+        rest, rects = self._rest, self._rects
         # The answer is the highest top among the overlapping candidates: test them highest first and stop at
         # the first overlap (a carried brick over a wall asks every physics step; the lower courses under it
         # need no overlap test). The maximum does not depend on the order, so this is the plain scan's answer.
+        # Tops and footprints as indexed (``top_z_m``, ``rect()``: a resting brick does not move while indexed).
         tops: list[tuple[float, int]] = []
         for k in self._hash.query(min(xs), min(ys), max(xs), max(ys)):
-            b = bricks[k]
-            t = b.position_m[2] + b.blueprint.size_m[2] / 2.0  # b.top_z_m
+            t = rest[k][1]
             if GROUND_Z_M < t <= limit:
                 tops.append((t, k))
         if len(tops) > 1:
             tops.sort(reverse=True)
         for t, k in tops:
-            if rects_overlap(rect, bricks[k].rect()):
+            if rects_overlap(rect, rects[k]):
                 return t
         return GROUND_Z_M
 
