@@ -2,7 +2,8 @@
 
 Covered: the setpoint shaping's inlined ``sqrt_controller`` and its draws three at a time, the site gate's scan
 over the visits in progress, the liveness sweep's early exit, the watchdogs' flags per state, and the battery
-budget's legs as tuples and the put-back's legs kept between ticks.
+budget's legs as tuples and the put-back's legs kept between ticks, the camera's marker layout and its
+``covered`` answers kept between frames.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fsm_rig import Rig
-from masonry.blueprint import UavSpec
+from masonry.blueprint import Brick, MarkerSpec, UavSpec
 from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
 from masonry.mission.liveness import Lapse, Liveness, LivenessTracker, Timeouts
@@ -22,6 +23,8 @@ from masonry.mission.records import UavLink
 from masonry.mission.sites import SiteIntervals, SiteVisit
 from masonry.mission.uav_facts import UavFacts
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.sim.bricks import BrickField, SimBrick
+from masonry.sim.camera import LayoutCache, marker_layout
 from masonry.sim.shaping import ARDUCOPTER, PX4, Shaper, _Axis, _sqrt_controller
 from masonry.sim.vehicle import _Gauss
 
@@ -189,3 +192,48 @@ def test_lost_is_the_report_saying_lost_or_out_of_service():
     for liveness in Liveness:
         link.liveness = liveness
         assert link.lost is (link.status != "ok")
+
+
+def _field_of(n: int) -> BrickField:
+    field = BrickField(0.5)
+    size = (0.3, 0.15, 0.1)
+    for i in range(n):
+        x, z = 0.31 * (i % 4), 0.05 + 0.1 * (i // 4)
+        field.add(SimBrick(i, Brick(i, (x, 0.0, z), size), (x, 0.0, z), 0.1 * i, "placed"))
+    return field
+
+
+def test_the_kept_layout_is_the_layout_of_the_bricks_as_they_are_now():
+    field, markers = _field_of(8), MarkerSpec()
+    cache = LayoutCache()
+    bricks = list(field.near(0.3, 0.0, 1.0))
+
+    def same(layout, expected):
+        return all(np.array_equal(a, b) for a, b in zip(layout, expected, strict=True))
+
+    assert same(cache.layout(bricks, markers, field.version), marker_layout(bricks, markers))
+    field.pick(bricks[0].id, "brick-1")  # carried: compared by its pose from now on
+    bricks[0].position_m = (0.5, 0.2, 0.6)
+    assert same(cache.layout(bricks, markers, field.version), marker_layout(bricks, markers))
+    bricks[0].yaw_rad = 0.7  # (moves with its UAV every physics step)
+    assert same(cache.layout(bricks, markers, field.version), marker_layout(bricks, markers))
+    field.drop(bricks[0].id, 0.0)  # resting again, somewhere else: a new version
+    assert same(cache.layout(bricks, markers, field.version), marker_layout(bricks, markers))
+    fewer = bricks[1:]
+    assert same(cache.layout(fewer, markers, field.version), marker_layout(fewer, markers))
+
+
+def test_covered_kept_answers_what_covered_at_answers_as_bricks_come_and_go():
+    field = _field_of(12)
+    points = [
+        (0.31 * (i % 4) + dx, dy, 0.1 * (i // 4)) for i in range(12) for dx in (0.0, 0.1) for dy in (0, 0.05)
+    ]
+    for step in range(5):
+        for p in points:
+            assert field.covered_kept(*p) == field.covered_at(*p)
+        if step % 2 == 0:
+            field.pick(
+                8 + step // 2, "brick-1"
+            )  # the upper course's bricks leave, uncovering the ones under them
+        else:
+            field.drop(8 + step // 2, 0.0)

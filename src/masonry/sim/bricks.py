@@ -196,6 +196,10 @@ class BrickField:
         # (resting brick id -> bottom z, top z, x, y, cos yaw, sin yaw, half sizes: ``rect()``'s arithmetic)
         self._rest: dict[int, tuple[float, float, float, float, float, float, float, float]] = {}
         self._rects: dict[int, tuple[float, float, float, float, float]] = {}  # (resting brick -> rect())
+        #: bumped whenever the resting bricks change (one indexed or picked): answers about them kept meanwhile
+        #: (the camera's marker layout, ``covered_at``) are still the answers
+        self.version = 0
+        self._covered: dict[tuple[float, float, float], bool] = {}  # (covered_kept's answers at this version)
         # (ground cell i, j and bottom height bin -> the resting bricks there; brick id -> its keys)
         self._by_bottom: dict[tuple[int, int, int], set[int]] = {}
         self._bottom_keys: dict[int, list[tuple[int, int, int]]] = {}
@@ -212,6 +216,8 @@ class BrickField:
             self._index(brick)
 
     def _index(self, brick: SimBrick) -> None:
+        self.version += 1
+        self._covered.clear()
         self.max_top_z_m = max(self.max_top_z_m, brick.top_z_m)
         rect = brick.rect()
         xs, ys = zip(*rect_corners(*rect))
@@ -237,6 +243,8 @@ class BrickField:
     def pick(self, brick_id: int, carrier: str) -> SimBrick:
         """Take a resting brick out of the index: it is now carried."""
         brick = self.bricks[brick_id]
+        self.version += 1
+        self._covered.clear()
         self._hash.remove(brick_id)
         self._rest.pop(brick_id, None)
         self._rects.pop(brick_id, None)
@@ -312,6 +320,15 @@ class BrickField:
                 if abs(c * dx + s * dy) <= hx and abs(-s * dx + c * dy) <= hy:
                     return True
         return False
+
+    def covered_kept(self, x: float, y: float, z: float) -> bool:
+        """:meth:`covered_at` (default tolerance), each point's answer kept until the resting bricks change: the
+        camera asks it for every marker in view of every frame, the same markers frame after frame."""
+        key = (x, y, z)
+        hit = self._covered.get(key)
+        if hit is None:
+            hit = self._covered[key] = self.covered_at(x, y, z)
+        return hit
 
     def support_under(
         self, rect: tuple[float, float, float, float, float], below_z_m: float = math.inf, tol_m: float = 0.02
