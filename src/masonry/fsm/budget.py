@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from masonry.fsm.base import Vec3
 from masonry.fsm.battery import TAKEOFF_S, flight_left_s, land_s, route_s
 from masonry.fsm.routing import Routing
@@ -62,11 +60,8 @@ class BatteryBudget(Routing):
     def _route_s(self, start_m: Vec3, end_m: Vec3) -> float:
         """What the flight from ``start_m`` to ``end_m`` takes with no wait (:func:`masonry.fsm.battery.route_s`)."""
 
-        def leg_s(a: Vec3, b: Vec3) -> float:
-            return self.nav.leg_duration_s(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
-
-        speed = self.config.layer_vertical_speed_mps
-        return route_s(leg_s, speed, start_m, end_m, self._layer_m(start_m, end_m))
+        speed = self.config.layer_vertical_speed_mps  # (the legs as tuples: asked on every tick of a wait)
+        return route_s(self.nav.leg_duration_s, speed, start_m, end_m, self._layer_m(start_m, end_m))
 
     def _home_s(self, from_m: Vec3) -> float:
         """The flight home from ``from_m`` and the landing there."""

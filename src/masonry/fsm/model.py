@@ -107,6 +107,9 @@ class UavModel(CommonStates):
         self._leaf_names = leaf_states(states)
         #: the cross-cutting checks run before each tick's work (masonry.fsm.watchdogs; add one here)
         self.watchdogs: tuple[Watchdog, ...] = for_kind(self.KIND)
+        #: leaf state -> whether each of ``_guarded_dogs`` (the watchdogs as they were asked) guards it
+        self._guarded: dict[str, tuple[bool, ...]] = {}
+        self._guarded_dogs = self.watchdogs
         #: the gate states' exit checks, run by their work after its own test (masonry.fsm.gates)
         self.gates = gates_for_kind(self.KIND)
         self.machine = HierarchicalMachine(
@@ -152,8 +155,15 @@ class UavModel(CommonStates):
             tel = self.fc.telemetry()
             self._tel = tel
             self._observe(tel, step_s)
-            for dog in self.watchdogs:  # masonry.fsm.watchdogs: those guarding the state (as it is then)
-                if (tel.link_ok or not dog.needs_link) and dog.guards(self.state, self._TASK_STATES_SET):
+            dogs, guarded = self.watchdogs, self._guarded
+            if dogs is not self._guarded_dogs:  # another set of watchdogs (a test's): ask each state again
+                guarded.clear()
+                self._guarded_dogs = dogs
+            for i, dog in enumerate(dogs):  # masonry.fsm.watchdogs: those guarding the state (as it is then)
+                flags = guarded.get(self.state)
+                if flags is None:
+                    flags = guarded[self.state] = self._guard_flags(self.state)
+                if flags[i] and (tel.link_ok or not dog.needs_link):
                     verdict = dog.check(self._now_s, tel, self)
                     if verdict is not None:
                         self._react(verdict)
@@ -165,6 +175,10 @@ class UavModel(CommonStates):
                 self.fc.send_velocity(velocity_mps, yaw_rate_radps)
         except HardwareError as exc:
             self._hardware_failure(str(exc))
+
+    def _guard_flags(self, state: str) -> tuple[bool, ...]:
+        """Which of :attr:`watchdogs` guard leaf ``state`` (asked once per state: the tick looks them up)."""
+        return tuple(dog.guards(state, self._TASK_STATES_SET) for dog in self.watchdogs)
 
     def _observe(self, tel: Telemetry, step_s: float) -> None:
         """The timers the watchdogs read (link down, waiting and held for clearance, outside the fence), the drain.

@@ -289,7 +289,9 @@ class Navigator:
         """Hover on at the end of the leg: its timeout counts from now."""
         self.end_s = now_s
 
-    def leg_duration_s(self, start: np.ndarray, target: np.ndarray, accel_mps2: float | None = None) -> float:
+    def leg_duration_s(
+        self, start: np.ndarray | Vec3, target: np.ndarray | Vec3, accel_mps2: float | None = None
+    ) -> float:
         """A rest-to-rest leg's duration: its peak speed within the cruise and vertical speeds, its jerk and
         acceleration within ``leg_jerk_mps3`` and ``leg_accel_mps2`` (and ``accel_mps2``), at least 1 s."""
         cfg = self.config

@@ -43,6 +43,8 @@ class PutBack(UavModel):
     attempt: BrickAttempt
     released: Callable[..., bool]
     stow: Callable[..., bool]
+    #: the put-back's legs that do not depend on where the UAV is, and what they were computed for (_putback_legs)
+    _putback_cache: tuple[tuple[object, ...], tuple[Vec3, float, float]] | None = None
 
     def _new_attempt(self, start_s: float, wait_budget_s: float) -> BrickAttempt:
         return BrickAttempt(start_s=start_s, wait_budget_s=wait_budget_s)
@@ -68,22 +70,40 @@ class PutBack(UavModel):
 
     def _vertical_s(self, distance_m: float) -> float:
         """A climb or descent leg of the task (the navigator's rest-to-rest leg), settled."""
-        return self.nav.leg_duration_s(np.zeros(3), np.array([0.0, 0.0, abs(distance_m)])) + LEG_SETTLE_S
+        return self.nav.leg_duration_s((0.0, 0.0, 0.0), (0.0, 0.0, abs(distance_m))) + LEG_SETTLE_S
 
     def _putback_need_s(self, from_m: Vec3) -> float:
         """Putting the brick back from ``from_m`` (the flight to its pickup, the descent, the release, the climb)
         and the way home from there, with no wait."""
         cfg = self.config
+        over, vertical_s, home_s = self._putback_legs()
+        return (
+            self._route_s(from_m, over) + cfg.descent_duration_s + cfg.release_dwell_s + vertical_s + home_s
+        )
+
+    def _putback_legs(self) -> tuple[Vec3, float, float]:
+        """Where the put-back's descent starts, the climb back from the pallet and the way home from there: the
+        same for every ``from_m`` (the battery watch asks on every tick of a wait), so kept while the brick's
+        estimate, the carry yaw and the transit altitude stay."""
+        assert self.attempt.brick_estimate is not None
+        center, est_yaw = self.attempt.brick_estimate
+        key = (
+            *(float(c) for c in center),
+            est_yaw,
+            self.attempt.carry_yaw_rad,
+            self._transit_altitude_m(),
+            self.config,  # (the same object: compared by identity first)
+            self.effector,
+        )
+        cached = self._putback_cache
+        if cached is not None and cached[0] == key:
+            return cached[1]
         effector_m, yaw = self._putback_pose()
         body = self.effector.body_target(effector_m, yaw)
         over = (float(body[0]), float(body[1]), self._transit_altitude_m())
-        return (
-            self._route_s(from_m, over)
-            + cfg.descent_duration_s
-            + cfg.release_dwell_s
-            + self._vertical_s(over[2] - float(body[2]))
-            + self._home_s(over)
-        )
+        legs = (over, self._vertical_s(over[2] - float(body[2])), self._home_s(over))
+        self._putback_cache = (key, legs)
+        return legs
 
     def _flight_left_s(self, floor_fraction: float) -> float | None:
         """Seconds of flight above ``floor_fraction`` at the measured drain (None: not measured yet)."""

@@ -83,6 +83,8 @@ class LivenessTracker:
     def sweep(self, now_s: float, has_task: Callable[[str], bool]) -> list[tuple[str, Lapse]]:
         """What the clock did to each UAV since the last sweep (in fleet order; a UAV may show twice)."""
         out: list[tuple[str, Lapse]] = []
+        heartbeat_s = self.timeouts.heartbeat_s
+        finishing_s = self.timeouts.silence_limit_s(True, True)
         for name, link in self.links.items():
             until_s = link.airspace_until_s
             if until_s is not None and (not link.lost or now_s >= until_s):
@@ -92,6 +94,8 @@ class LivenessTracker:
             if link.lost or link.last_heard_s is None:
                 continue
             quiet_s = now_s - link.last_heard_s
+            if quiet_s <= heartbeat_s and quiet_s <= finishing_s:
+                continue  # within both limits (every UAV but a silent one, every tick): nothing to ask
             if quiet_s > self.timeouts.silence_limit_s(link.facts.finishing, has_task(name)):
                 out.append((name, Lapse.SILENT_TOO_LONG))
             elif quiet_s > self.timeouts.heartbeat_s:

@@ -79,7 +79,8 @@ class UavLink:
     @property
     def lost(self) -> bool:
         """Out of the mission: lost for its silence, or out of service."""
-        return self.liveness in _STATUS
+        liveness = self.liveness  # (identity, not the dict: an enum's hash is Python code, asked every tick)
+        return liveness is Liveness.LOST or liveness is Liveness.OUT_OF_SERVICE
 
     @property
     def status(self) -> str:

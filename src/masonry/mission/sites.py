@@ -143,8 +143,9 @@ class SiteIntervals:
         tid = self._work_task(uav, site_m)
         if tid is None:
             return True
-        on_site = self.on_site
-        if any(n in on_site and on_site[n].uav != uav for n in self._neighbours[tid]):
+        # over the visits in progress (one per UAV at most), not the task's neighbourhood (hundreds on a long wall)
+        neighbours = self._neighbours[tid]
+        if any(visit.uav != uav for n, visit in self.on_site.items() if n in neighbours):
             return False
         done = self._is_done
         return done is None or all(done(p) for p in self._prerequisites.get(tid, ()))

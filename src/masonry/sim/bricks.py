@@ -195,6 +195,11 @@ class BrickField:
         self.max_top_z_m = GROUND_Z_M  # highest brick top ever indexed: nothing rests above it
         # (resting brick id -> bottom z, top z, x, y, cos yaw, sin yaw, half sizes: ``rect()``'s arithmetic)
         self._rest: dict[int, tuple[float, float, float, float, float, float, float, float]] = {}
+        self._rects: dict[int, tuple[float, float, float, float, float]] = {}  # (resting brick -> rect())
+        #: bumped whenever the resting bricks change (one indexed or picked): answers about them kept meanwhile
+        #: (the camera's marker layout, ``covered_at``) are still the answers
+        self.version = 0
+        self._covered: dict[tuple[float, float, float], bool] = {}  # (covered_kept's answers at this version)
         # (ground cell i, j and bottom height bin -> the resting bricks there; brick id -> its keys)
         self._by_bottom: dict[tuple[int, int, int], set[int]] = {}
         self._bottom_keys: dict[int, list[tuple[int, int, int]]] = {}
@@ -211,6 +216,8 @@ class BrickField:
             self._index(brick)
 
     def _index(self, brick: SimBrick) -> None:
+        self.version += 1
+        self._covered.clear()
         self.max_top_z_m = max(self.max_top_z_m, brick.top_z_m)
         rect = brick.rect()
         xs, ys = zip(*rect_corners(*rect))
@@ -218,6 +225,7 @@ class BrickField:
         x, y, yaw, hx, hy = rect
         bottom = brick.bottom_z_m
         self._rest[brick.id] = (bottom, brick.top_z_m, x, y, math.cos(yaw), math.sin(yaw), hx, hy)
+        self._rects[brick.id] = rect
         self._unfile_bottom(brick.id)
         zb = math.floor(bottom / BOTTOM_BIN_M)
         keys = [(i, j, zb) for i, j in self._hash.cells_of(brick.id)]
@@ -235,8 +243,11 @@ class BrickField:
     def pick(self, brick_id: int, carrier: str) -> SimBrick:
         """Take a resting brick out of the index: it is now carried."""
         brick = self.bricks[brick_id]
+        self.version += 1
+        self._covered.clear()
         self._hash.remove(brick_id)
         self._rest.pop(brick_id, None)
+        self._rects.pop(brick_id, None)
         self._unfile_bottom(brick_id)
         brick.picked_from = (brick.position_m, brick.yaw_rad)
         brick.state = "carried"
@@ -310,26 +321,35 @@ class BrickField:
                     return True
         return False
 
+    def covered_kept(self, x: float, y: float, z: float) -> bool:
+        """:meth:`covered_at` (default tolerance), each point's answer kept until the resting bricks change: the
+        camera asks it for every marker in view of every frame, the same markers frame after frame."""
+        key = (x, y, z)
+        hit = self._covered.get(key)
+        if hit is None:
+            hit = self._covered[key] = self.covered_at(x, y, z)
+        return hit
+
     def support_under(
         self, rect: tuple[float, float, float, float, float], below_z_m: float = math.inf, tol_m: float = 0.02
     ) -> float:
         """Height of the highest surface under a footprint, at or below ``below_z_m`` (+ ``tol_m``)."""
         xs, ys = zip(*rect_corners(*rect))
         limit = below_z_m + tol_m
-        bricks = self.bricks
+        rest, rects = self._rest, self._rects
         # The answer is the highest top among the overlapping candidates: test them highest first and stop at
         # the first overlap (a carried brick over a wall asks every physics step; the lower courses under it
         # need no overlap test). The maximum does not depend on the order, so this is the plain scan's answer.
+        # Tops and footprints as indexed (``top_z_m``, ``rect()``: a resting brick does not move while indexed).
         tops: list[tuple[float, int]] = []
         for k in self._hash.query(min(xs), min(ys), max(xs), max(ys)):
-            b = bricks[k]
-            t = b.position_m[2] + b.blueprint.size_m[2] / 2.0  # b.top_z_m
+            t = rest[k][1]
             if GROUND_Z_M < t <= limit:
                 tops.append((t, k))
         if len(tops) > 1:
             tops.sort(reverse=True)
         for t, k in tops:
-            if rects_overlap(rect, bricks[k].rect()):
+            if rects_overlap(rect, rects[k]):
                 return t
         return GROUND_Z_M
 

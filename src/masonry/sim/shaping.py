@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from masonry.errors import InvalidArgument
@@ -120,20 +121,34 @@ class _Axis:
     acceleration ``sqrt_controller(error, jerk / accel, jerk)`` (linear, gain jerk / accel, for errors below
     jerk / gain^2; a jerk-limited braking curve beyond), within the acceleration limit, reached at the jerk limit."""
 
-    __slots__ = ("a", "accel", "gain", "jerk", "v")
+    __slots__ = ("_half_linear", "_linear", "_shaped", "_two_jerk", "a", "accel", "gain", "jerk", "v")
 
     def __init__(self, jerk: float, accel: float) -> None:
         self.jerk, self.accel = jerk, accel
         self.gain = jerk / accel if math.isfinite(jerk) and math.isfinite(accel) else math.inf
         self.v = self.a = 0.0
+        self._shaped = math.isfinite(self.gain)
+        # _sqrt_controller's constants for this axis (the same floats it computes on every call)
+        self._linear = jerk / (self.gain * self.gain) if self._shaped else math.inf
+        self._half_linear, self._two_jerk = self._linear / 2.0, 2.0 * jerk
 
     def step(self, target: float, dt: float) -> float:
+        """One step toward ``target``: :func:`_sqrt_controller` inline (every vehicle, every physics step)."""
         e = target - self.v
-        if not math.isfinite(self.gain):  # no shaping on this axis
+        if not self._shaped:  # no shaping on this axis
             self.v, self.a = target, 0.0
             return target
-        want = _sqrt_controller(e, self.gain, self.jerk, dt)
-        want = self.accel if want > self.accel else (-self.accel if want < -self.accel else want)
+        linear = self._linear
+        if e > linear:
+            want = math.sqrt(self._two_jerk * (e - self._half_linear))
+        elif e < -linear:
+            want = -math.sqrt(self._two_jerk * (-e - self._half_linear))
+        else:
+            want = e * self.gain
+        limit = abs(e) / dt  # never past the error in one step
+        want = limit if want > limit else (-limit if want < -limit else want)
+        accel = self.accel
+        want = accel if want > accel else (-accel if want < -accel else want)
         da = want - self.a
         step = self.jerk * dt
         self.a += step if da > step else (-step if da < -step else da)
@@ -186,8 +201,8 @@ class Shaper:
         due = t_s - self.config.delay_s + 1e-9
         out = self._out
         while line and line[0][0] <= due:
-            _, *vel = line.popleft()
-            out = (vel[0], vel[1], vel[2])
+            _, vx, vy, vz = line.popleft()
+            out = (vx, vy, vz)
         self._out = out
         ax, ay, az = self._axes
         w = self._velocity_wander_mps
@@ -201,16 +216,19 @@ class Shaper:
             vx, vy = vx - droop * (vx - slow[0]), vy - droop * (vy - slow[1])
         return vx + w[0], vy + w[1], az.step(out[2], dt_s) + w[2]
 
-    def drift(self, dt_s: float, gauss: object) -> None:
+    def drift(self, dt_s: float, gauss: Callable[[], float]) -> None:
         """Move the GPS error and the velocity's wander on by ``dt_s`` (Ornstein-Uhlenbeck; ``gauss()`` a standard
-        normal draw)."""
+        normal draw; a ``gauss`` with ``take(k)``, :class:`masonry.sim.vehicle._Gauss`, gives three at once, the
+        same three in the same order)."""
+        take = getattr(gauss, "take", None)
         wander = self.config.velocity_wander_mps
         if wander > 0.0:
             a = min(1.0, dt_s / self.config.velocity_wander_tau_s)
             b = wander * math.sqrt(a * (2.0 - a))  # stationary at ``wander`` for any step
             w = self._velocity_wander_mps
+            g = take(3) if take is not None else [gauss(), gauss(), gauss()]
             for i in range(3):
-                w[i] += -w[i] * a + b * gauss()  # type: ignore[operator]
+                w[i] += -w[i] * a + b * g[i]
         sigma = self.config.gps_noise_m
         if sigma <= 0.0:
             return
@@ -218,8 +236,9 @@ class Shaper:
         b = sigma * math.sqrt(2.0 * a)
         smooth_s = self.config.gps_noise_smooth_s
         err = self.gps_error_m if smooth_s <= 0.0 else self._wander_m
+        g = take(3) if take is not None else [gauss(), gauss(), gauss()]
         for i in range(3):
-            err[i] += -err[i] * a + b * gauss()  # type: ignore[operator]
+            err[i] += -err[i] * a + b * g[i]
         if smooth_s > 0.0:
             k = min(1.0, dt_s / smooth_s)
             out = self.gps_error_m

@@ -28,7 +28,7 @@ from masonry.planner.tasks import AdhesionTask
 from masonry.ports import CameraFrame, Telemetry, UavPorts, Vec3
 from masonry.sim.adhesive import AdhesiveDeposit
 from masonry.sim.bricks import GROUND_Z_M, BrickField, SimBrick
-from masonry.sim.camera import CameraConfig, R_world_body, observe_markers
+from masonry.sim.camera import CameraConfig, LayoutCache, R_world_body, observe_markers
 from masonry.sim.clock import SimClock
 from masonry.sim.faults import Faults
 from masonry.sim.follow_contact import carried_support_m
@@ -226,7 +226,7 @@ class World:
         self.field = BrickField(self.config.cell_m)
         self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
-        self._carriers: list[SimUav] = []
+        self._layouts = LayoutCache()  # the camera's marker arrays, kept between frames
         self.drawn_pickups = render_sample(blueprint) if camera == "mixed" else frozenset()  # mixed mode
         self.picks: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every grasp
         self.rendered_frames = 0
@@ -547,7 +547,8 @@ class World:
             rng,
             hidden=hidden,
             occluder=occluder,
-            covered=self.field.covered_at,
+            covered=self.field.covered_kept,
+            layout=self._layouts.layout(bricks, self.blueprint.markers, self.field.version),
         )
         return CameraFrame(time_s=now, tags=tags)
 
