@@ -237,3 +237,10 @@ def test_covered_kept_answers_what_covered_at_answers_as_bricks_come_and_go():
             )  # the upper course's bricks leave, uncovering the ones under them
         else:
             field.drop(8 + step // 2, 0.0)
+
+
+def test_a_frame_over_no_brick_has_an_empty_layout_and_sees_nothing():
+    # (a UAV over bare ground: the kept layout of no brick is empty, not an error; the .ci/run rehearsal of the merge)
+    markers = MarkerSpec()
+    ids, centres, corners = LayoutCache().layout([], markers, 0)
+    assert ids.shape == (0,) and centres.shape == (0, 3) and corners.shape == (0, 4, 3)

@@ -226,6 +226,8 @@ class WaitWatch:
         for name in mc.dispatcher.idle_uavs:
             if not mc.operator.may_fly(mc, name):
                 out[name] = _OPERATOR
+            elif mc.swaps.is_sent(mc, name):  # given nothing: it flies home for a fresh pack (swap_stagger)
+                out[name] = WaitCause("battery", name)
             elif wind is not None and not wind.allows(name):
                 out[name] = WaitCause("wind")
             elif not mc.columns.can_take_off(name):

@@ -26,7 +26,8 @@ CAUSES: tuple[str, ...] = (
     "operator",  # the operator paused the mission, recalled its UAVs or limited its role
     "wind",  # the wind above the max_wind_mps of the UAVs of its role
     "glue",  # a brick over adhesive not sprayed recently enough (the open time)
-    "battery",  # assigned, held by its UAV's handler for a battery swap (the ``queued`` phase)
+    "battery",  # held by its UAV's handler for a battery swap (the ``queued`` phase), or its role's free UAV sent
+    # home for one with no task (masonry.mission.swap_stagger: ``blocking_uav`` names it)
 )
 
 #: Where a waiting UAV was: on its pad, or in the air.

@@ -80,6 +80,8 @@ def marker_layout(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Marker ids (m,), centres (m, 3) and corners (m, 4, 3) in the world for the bricks' top faces."""
     n = len(bricks)
+    if n == 0:  # (a frame over no brick: a UAV over bare ground)
+        return np.zeros(0, dtype=int), np.zeros((0, 3)), np.zeros((0, 4, 3))
     ids: list[int] = []
     for b in bricks:
         ids.extend(b.blueprint.marker_ids())
