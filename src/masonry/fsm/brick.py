@@ -345,6 +345,7 @@ class BrickUav(PutBack):
             dwell_s=cfg.grasp_dwell_s,
             press_m=cfg.grasp_press_m,
             patience_s=cfg.grasp_patience_s,
+            wait_for_contact=cfg.gate_window_s > 0.0,
         ):
             self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
