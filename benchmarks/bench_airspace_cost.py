@@ -33,7 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, simulate_fleet
 
 import masonry.mission.airspace as airspace_mod
 import masonry.mission.airspace_queries as queries_mod
@@ -41,7 +41,6 @@ import masonry.mission.airspace_requests as requests_mod
 import masonry.mission.linger as linger_mod
 from masonry.blueprint import Blueprint
 from masonry.mission.report import MissionReport
-from masonry.mission.simulate import simulate
 from masonry.mission.volumes import Volume, volumes_clear, volumes_conflict
 from masonry.separation import SEPARATION_XY_M
 from masonry.sim.faults import Faults
@@ -116,16 +115,7 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, mode: str) 
     if mode == "no-separation":
         extra["separation"] = False
     with patched(ignore_for(mode, blueprint)):
-        return simulate(
-            blueprint,
-            brick_uavs=bricks,
-            adhesion_uavs=adhesion,
-            seed=seed,
-            policy="critical-path",
-            camera="geometric",
-            reservation="site",
-            **extra,  # type: ignore[arg-type]
-        )
+        return simulate_fleet(blueprint, bricks, adhesion, seed, **extra)
 
 
 def main() -> None:

@@ -26,10 +26,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, simulate_fleet
 
 from masonry.mission.report import MissionReport
-from masonry.mission.simulate import simulate
 from masonry.planner import plan as make_plan
 from masonry.planner.tasks import Plan
 
@@ -110,14 +109,11 @@ def main() -> None:
             except ValueError:
                 ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
             for seed in (int(s) for s in args.seeds.split(",")):
-                report = simulate(
+                report = simulate_fleet(
                     blueprint,
-                    brick_uavs=bricks,
-                    adhesion_uavs=adhesion,
-                    seed=seed,
-                    policy="critical-path",
-                    camera="geometric",
-                    reservation="site",
+                    bricks,
+                    adhesion,
+                    seed,
                     airspace="columns",
                 )
                 print(

@@ -49,6 +49,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -122,6 +123,20 @@ class Run:
     @property
     def fleet(self) -> str:
         return f"{self.bricks} + {self.adhesion}"
+
+
+def simulate_fleet(
+    blueprint: Blueprint, bricks: int, adhesion: int, seed: int, **extra: Any
+) -> MissionReport:
+    """The issue's mission as the fleet benchmarks fly it: ``critical-path``, the ``site`` rule, the geometric
+    camera (``extra``: any other keyword of :func:`masonry.mission.simulate.simulate`, e.g. ``events_sink``)."""
+    kwargs: dict[str, Any] = {
+        "policy": "critical-path",
+        "camera": "geometric",
+        "reservation": "site",
+        **extra,
+    }
+    return simulate(blueprint, brick_uavs=bricks, adhesion_uavs=adhesion, seed=seed, **kwargs)
 
 
 def fly(

@@ -20,11 +20,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, simulate_fleet
 
 from masonry.mission.events import EventList
 from masonry.mission.report import MissionReport, phase_totals
-from masonry.mission.simulate import simulate
 
 #: a clearance for a site farther than this behind the wall's face (y, metres) is one at the pallet
 PALLET_Y_M = -1.2
@@ -85,14 +84,11 @@ def main() -> None:
                 except ValueError:
                     ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
                 events = EventList()
-                report = simulate(
+                report = simulate_fleet(
                     WALLS[wall][1](),
-                    brick_uavs=bricks,
-                    adhesion_uavs=adhesion,
-                    seed=seed,
-                    policy="critical-path",
-                    camera="geometric",
-                    reservation="site",
+                    bricks,
+                    adhesion,
+                    seed,
                     airspace="columns",
                     events_sink=events,
                 )

@@ -32,13 +32,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS, walls_and_fleets
+from bench_fleet import WALLS, simulate_fleet, walls_and_fleets
 
 from masonry.blueprint import Blueprint
 from masonry.mission.events import EventList, MissionEvent
 from masonry.mission.fleet import fleet_for
 from masonry.mission.report import MissionReport
-from masonry.mission.simulate import simulate
 
 #: flying states in which a UAV standing still is held (not working, grasping or on its pad)
 WORKING = ("idle", "landed", "swap", "done", "pickup_grasp", "place_release", "spray")
@@ -131,14 +130,11 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> None:
     """One mission, and its figures printed."""
     sink = EventList()
     t0 = time.perf_counter()
-    r = simulate(
+    r = simulate_fleet(
         blueprint,
-        brick_uavs=bricks,
-        adhesion_uavs=adhesion,
-        seed=seed,
-        policy="critical-path",
-        camera="geometric",
-        reservation="site",
+        bricks,
+        adhesion,
+        seed,
         events_sink=sink,
     )
     back_y = min(b.pickup_m[1] for b in blueprint.bricks if b.pickup_m is not None)
