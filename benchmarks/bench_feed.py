@@ -26,7 +26,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS, simulate_fleet
+from bench_fleet import WALLS, simulate_fleet, walls_and_fleets
 
 from masonry.mission.report import MissionReport
 from masonry.planner import plan as make_plan
@@ -98,36 +98,27 @@ def main() -> None:
     args = ap.parse_args()
     if args.window_s <= 0:
         ap.error("--window-s must be > 0")
-    for wall in args.walls.split(","):
-        if wall not in WALLS:
-            ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
         blueprint = WALLS[wall][1]()
         plan = make_plan(blueprint)
-        for fleet in args.fleets.split(","):
-            try:
-                bricks, adhesion = (int(x) for x in fleet.split("+"))
-            except ValueError:
-                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
-            for seed in (int(s) for s in args.seeds.split(",")):
-                report = simulate_fleet(
-                    blueprint,
-                    bricks,
-                    adhesion,
-                    seed,
-                    airspace="columns",
-                )
-                print(
-                    f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: {report.makespan_s:,.1f} s\n"
-                )
-                print(
-                    f"| from (s, {args.window_s:g} s windows) | brick UAVs on a task | adhesion UAVs on a task | "
-                    "bricks ready, unassigned | bricks freed | adhesion tasks done |"
-                )
-                print("|---|---|---|---|---|---|")
-                print("\n".join(windows(report, plan, args.window_s)))
-                print("\n| UAV | attempts | first assigned | gaps between attempts (from: length) |")
-                print("|---|---|---|---|")
-                print("\n".join(gaps(report)), flush=True)
+        for seed in (int(s) for s in args.seeds.split(",")):
+            report = simulate_fleet(
+                blueprint,
+                bricks,
+                adhesion,
+                seed,
+                airspace="columns",
+            )
+            print(f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: {report.makespan_s:,.1f} s\n")
+            print(
+                f"| from (s, {args.window_s:g} s windows) | brick UAVs on a task | adhesion UAVs on a task | "
+                "bricks ready, unassigned | bricks freed | adhesion tasks done |"
+            )
+            print("|---|---|---|---|---|---|")
+            print("\n".join(windows(report, plan, args.window_s)))
+            print("\n| UAV | attempts | first assigned | gaps between attempts (from: length) |")
+            print("|---|---|---|---|")
+            print("\n".join(gaps(report)), flush=True)
 
 
 if __name__ == "__main__":

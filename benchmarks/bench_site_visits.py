@@ -67,9 +67,9 @@ class Flown:
     blocked: Blocked
 
 
-def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: str | None) -> Flown:
-    """Fly the mission, recording each UAV's state, transit and position at every control tick."""
-    ticks: Ticks = defaultdict(list)
+def recording_machine(ticks: Ticks) -> Any:
+    """A ``uav_machine`` for :meth:`SimulatedMission.from_blueprint` whose machines append each control tick's
+    state, transit state and position to ``ticks`` (by UAV name)."""
 
     def machine(
         spec: Any, ports: Any, bp: Any, handler: Any, clock: Any, layer: Any, template: Any
@@ -85,6 +85,13 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: st
         m.step = recorded_step
         return m
 
+    return machine
+
+
+def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, vehicle: str | None) -> Flown:
+    """Fly the mission, recording each UAV's state, transit and position at every control tick."""
+    ticks: Ticks = defaultdict(list)
+    machine = recording_machine(ticks)
     options: dict[str, Any] = {"brick_uavs": bricks, "adhesion_uavs": adhesion, "seed": seed}
     if vehicle is not None:
         options["vehicle"] = vehicle

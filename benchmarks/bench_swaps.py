@@ -25,7 +25,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import WALLS, walls_and_fleets
 
 from masonry.blueprint import Blueprint
 from masonry.mission.report import MissionReport
@@ -186,36 +186,29 @@ def main() -> None:
     ap.add_argument("--seeds", default="1")
     ap.add_argument("--no-swap", action="store_true", help="also fly with no battery drain (an upper bound)")
     args = ap.parse_args()
-    for wall in args.walls.split(","):
-        if wall not in WALLS:
-            ap.error(f"--walls: unknown wall {wall!r} (one of {', '.join(WALLS)})")
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
         blueprint = WALLS[wall][1]()
-        for fleet in args.fleets.split(","):
-            try:
-                bricks, adhesion = (int(x) for x in fleet.split("+"))
-            except ValueError:
-                ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
-            for seed in (int(s) for s in args.seeds.split(",")):
-                report, swaps = fly(blueprint, bricks, adhesion, seed, None)
+        for seed in (int(s) for s in args.seeds.split(",")):
+            report, swaps = fly(blueprint, bricks, adhesion, seed, None)
+            print(
+                f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: {report.makespan_s:,.1f} s "
+                f"({'complete' if report.completed else 'NOT complete'})\n"
+            )
+            print(
+                "| UAV | why | sent | set off home | landed (charge) | fresh pack | took off | flight home s "
+                "| on the pad s | away s |"
+            )
+            print("|---|---|---|---|---|---|---|---|---|---|")
+            print("\n".join(swap_rows(swaps)))
+            print()
+            print("\n".join(f"- {line}" for line in overlaps(swaps, report.makespan_s)))
+            if args.no_swap:
+                bound, _ = fly(blueprint, bricks, adhesion, seed, 0.0)
                 print(
-                    f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: {report.makespan_s:,.1f} s "
-                    f"({'complete' if report.completed else 'NOT complete'})\n"
+                    f"- no battery drain (no swap, a bound): {bound.makespan_s:,.1f} s "
+                    f"({bound.makespan_s - report.makespan_s:+,.1f} s)"
                 )
-                print(
-                    "| UAV | why | sent | set off home | landed (charge) | fresh pack | took off | flight home s "
-                    "| on the pad s | away s |"
-                )
-                print("|---|---|---|---|---|---|---|---|---|---|")
-                print("\n".join(swap_rows(swaps)))
-                print()
-                print("\n".join(f"- {line}" for line in overlaps(swaps, report.makespan_s)))
-                if args.no_swap:
-                    bound, _ = fly(blueprint, bricks, adhesion, seed, 0.0)
-                    print(
-                        f"- no battery drain (no swap, a bound): {bound.makespan_s:,.1f} s "
-                        f"({bound.makespan_s - report.makespan_s:+,.1f} s)"
-                    )
-                sys.stdout.flush()
+            sys.stdout.flush()
 
 
 if __name__ == "__main__":

@@ -30,13 +30,12 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_fleet import WALLS, walls_and_fleets
+from bench_site_visits import Ticks, recording_machine
 
 from masonry.mission import reserved
 from masonry.mission.simulate import SimulatedMission
-from masonry.mission.uav_stack import build_machine
 
 #: UAV name -> its ticks: (time s, task state, transit state, position or None)
-Ticks = dict[str, list[tuple[float, str, str, tuple[float, float, float] | None]]]
 #: a hop of the table that ended down: (UAV, seconds its plan timed, seconds flown, layer m)
 Hop = tuple[str, float, float, float]
 
@@ -46,21 +45,7 @@ def fly(
 ) -> tuple[Any, Any, Ticks, list[Hop]]:
     """Fly the mission, recording each UAV's ticks and (with the table) each hop's timed and flown length."""
     ticks: Ticks = defaultdict(list)
-
-    def machine(
-        spec: Any, ports: Any, bp: Any, handler: Any, clock: Any, layer: Any, template: Any
-    ) -> object:
-        m: Any = build_machine(spec, ports, bp, handler, clock, layer, template)
-        step, rows = m.step, ticks[spec.name]
-
-        def recorded_step(now_s: float) -> None:
-            step(now_s)
-            tel = m._tel
-            rows.append((now_s, m.state, m.transit.state, None if tel is None else tuple(tel.position_m)))
-
-        m.step = recorded_step
-        return m
-
+    machine = recording_machine(ticks)
     hops: list[Hop] = []
     end_transit = reserved.TableClearance.end_transit
 
