@@ -11,6 +11,8 @@ says so), and the difference to ``main`` is what those reservations cost the mak
 - ``main``: nothing patched;
 - ``all``: no two volumes conflict (the layers, the site gate, first come first served and the hold points stay);
 - ``flights``: no pair with a climb or a lateral leg in it (zones, hovers and pads still keep apart);
+- ``crossings``: no pair of two climbs or lateral legs (flight against flight: what perfectly timed climbs and
+  legs could at most let pass; a flight against a zone, a hover or a pad still conflicts);
 - ``pallet`` / ``wall``: no pair of volumes both over the pallet (between the first and last pickup row, with
   ``SEPARATION_XY_M`` around) / both over the wall's footprint (the same margin);
 - ``hover``: no pair with a hold hover in it;
@@ -18,7 +20,7 @@ says so), and the difference to ``main`` is what those reservations cost the mak
 - ``no-separation``: ``simulate(separation=False)``: no layers, no columns (the site rule only).
 
 Usage: python benchmarks/bench_airspace_cost.py [--walls 12m] [--fleets 4+2,8+4] [--seeds 1,2,3]
-       [--modes main,all,flights,pallet,wall,hover,no-swaps,no-separation]
+       [--modes main,all,flights,crossings,pallet,wall,hover,no-swaps,no-separation]
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from masonry.mission.volumes import Volume, volumes_clear, volumes_conflict
 from masonry.separation import SEPARATION_XY_M
 from masonry.sim.faults import Faults
 
-MODES = ("main", "all", "flights", "pallet", "wall", "hover", "no-swaps", "no-separation")
+MODES = ("main", "all", "flights", "crossings", "pallet", "wall", "hover", "no-swaps", "no-separation")
 
 #: the pack's drain with ``no-swaps``: 1/100 of the simulated vehicles' 1/1200 per second
 NO_SWAP_DRAIN_PER_S = 1.0 / 120000.0
@@ -71,6 +73,7 @@ def ignore_for(mode: str, blueprint: Blueprint) -> Ignore | None:
     rules: dict[str, Ignore] = {
         "all": lambda v, q: True,
         "flights": lambda v, q: bool({v.kind, q.kind} & {"climb", "leg"}),
+        "crossings": lambda v, q: {v.kind, q.kind} <= {"climb", "leg"},
         "pallet": lambda v, q: inside(v, pallet) and inside(q, pallet),
         "wall": lambda v, q: inside(v, wall) and inside(q, wall),
         "hover": lambda v, q: "hover" in (v.kind, q.kind),
