@@ -223,6 +223,29 @@ def test_the_kept_layout_is_the_layout_of_the_bricks_as_they_are_now():
     assert same(cache.layout(fewer, markers, field.version), marker_layout(fewer, markers))
 
 
+def test_the_kept_layout_with_carried_bricks_after_the_resting_ones_is_their_layout_every_frame():
+    # (a world's frames: the resting bricks near the camera, then every carried brick of the fleet, moving)
+    field, markers = _field_of(8), MarkerSpec()
+    cache = LayoutCache()
+    field.pick(7, "brick-2")
+    carried = field.bricks[7]
+    resting = list(field.near(0.3, 0.0, 1.0))
+    assert all(b.state != "carried" for b in resting)
+
+    def same(layout, expected):
+        return all(np.array_equal(a, b) for a, b in zip(layout, expected, strict=True))
+
+    for step in range(4):
+        carried.position_m = (0.1 * step, 0.3, 0.8 + 0.05 * step)
+        carried.yaw_rad = 0.2 * step
+        frame = [*resting, carried]
+        assert same(cache.layout(frame, markers, field.version), marker_layout(frame, markers))
+        assert same(cache.layout(resting, markers, field.version), marker_layout(resting, markers))
+    field.drop(7, 0.0)  # resting again: a new version, and the same bricks laid out afresh
+    resting = list(field.near(0.3, 0.0, 1.0))
+    assert same(cache.layout(resting, markers, field.version), marker_layout(resting, markers))
+
+
 def test_covered_kept_answers_what_covered_at_answers_as_bricks_come_and_go():
     field = _field_of(12)
     points = [

@@ -35,6 +35,9 @@ class AttemptLedger:
         self.running: dict[str, Attempt] = {}  # task id -> its running attempt
         #: attempts ended by a result or by their UAV dropping them (progress for the stall watchdog)
         self.results = 0
+        #: (task id, UAV, attempt) of the attempts in ``history`` ended done (:meth:`completed`; kept by
+        #: :meth:`end` and :meth:`restore`, so a result asks a set, not the whole history)
+        self._done_keys: set[tuple[str, str, int]] = set()
 
     def begin(self, task_id: str, uav: str, attempt: int, now_s: float) -> Attempt:
         """``task_id`` assigned to ``uav`` now (its ``attempt``-th attempt): running, journaled."""
@@ -66,6 +69,11 @@ class AttemptLedger:
             del self.running[att.task_id]
         if result:
             self.results += 1
+        key = (att.task_id, att.uav, att.attempt)
+        if status == "done":
+            self._done_keys.add(key)
+        elif att.status == "done":
+            self._done_keys.discard(key)
         att.end_s = now_s
         att.status = status
         att.reason = reason
@@ -102,9 +110,7 @@ class AttemptLedger:
 
     def completed(self, task_id: str, uav: str, attempt: int) -> bool:
         """This very attempt was already taken as done (its UAV said it again)."""
-        return any(
-            (a.task_id, a.uav, a.attempt, a.status) == (task_id, uav, attempt, "done") for a in self.history
-        )
+        return (task_id, uav, attempt) in self._done_keys
 
     def last_of(self, task_id: str, uav: str) -> Attempt | None:
         """``uav``'s latest attempt of ``task_id``, if any."""
@@ -131,6 +137,7 @@ class AttemptLedger:
                     as_built=journaled_as_built(fields.get("as_built")),
                 )
             )
+            self._done_keys.add((task_id, rec.uav, rec.attempt))
 
     def sort(self) -> None:
         """The history in the order the attempts began (after a restore)."""

@@ -186,8 +186,14 @@ class WaitWatch:
         log = self.log
         pending = self._pending
         dirty: set[str] = set()
-        if len(d.done) != len(self._seen_done):
-            for tid in [t for t in d.done if t not in self._seen_done]:
+        done, seen = d.done, self._seen_done
+        if len(done) != len(seen):
+            last = d.last_done
+            if len(done) == len(seen) + 1 and last is not None and last not in seen:
+                fresh = [last]  # (done only grows and the seen are among its tasks: the one new is the last)
+            else:
+                fresh = [t for t in done if t not in seen]
+            for tid in fresh:
                 self._seen_done.add(tid)
                 pending.discard(tid)
                 self._frontier.discard(tid)

@@ -152,6 +152,7 @@ class Dispatcher(DispatchQueries):
         self._blockers = [0] * n
         self._attempts = {}
         self._done = {self._ids[i] for i in range(n) if self._status[i] == _DONE}
+        self._last_done: str | None = None  # (the task marked done last: :attr:`last_done`)
         self._stuck = set()
         self._in_progress = {}
 
@@ -346,6 +347,7 @@ class Dispatcher(DispatchQueries):
         """Task ``i`` is done (one more attempt counted): the tasks that waited for it may become available."""
         self._status[i] = _DONE
         self._done.add(task_id)
+        self._last_done = task_id
         self._attempts[task_id] = self._attempts.get(task_id, 0) + 1
         prereqs = self._prereqs
         for d in self._dependents[i]:
@@ -480,6 +482,7 @@ class Dispatcher(DispatchQueries):
             self._status[i] = _DONE
             self._stuck.discard(tid)
             self._done.add(tid)
+            self._last_done = tid
             for d in self._dependents[i]:
                 self._prereqs[d] -= 1
         for tid, n in attempts.items():

@@ -34,6 +34,7 @@ class DispatchQueries:
     _uav_task: dict[str, int]
     _available: dict[str, dict[int, None]]
     _events: int
+    _last_done: str | None
 
     def _lookup(self, task_id: str, graph: str) -> int:
         try:
@@ -45,6 +46,12 @@ class DispatchQueries:
     def done(self) -> AbstractSet[str]:
         """Ids of completed tasks (pre-placed bricks included); a live read-only view."""
         return SetView(self._done)
+
+    @property
+    def last_done(self) -> str | None:
+        """The task marked done last (None: none yet), so that a watcher seeing :attr:`done` one larger knows
+        which without a scan."""
+        return self._last_done
 
     @property
     def in_progress(self) -> Mapping[str, str]:

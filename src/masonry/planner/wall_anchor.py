@@ -50,7 +50,7 @@ from dataclasses import dataclass, replace
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
-from masonry.planner.wall_solve import Sighting, Solution, solve
+from masonry.planner.wall_solve import Sighting, Solution, Wall
 
 Vec3 = tuple[float, float, float]
 
@@ -151,8 +151,8 @@ class WallAnchor:
             self._sightings.pop(brick, None)
         else:
             self._sightings[brick] = sighting
-        sightings = list(self._sightings.values())
-        relative = solve(self._fixed, sightings, variance_of=(brick,))
+        wall = Wall(self._fixed, list(self._sightings.values()))  # (its three solves share its tables)
+        relative = wall.solve(variance_of=(brick,))
         c = relative.centre_m.get(brick)
         if c is not None:
             w = look.position_m
@@ -160,10 +160,10 @@ class WallAnchor:
                 ((w[0] - c[0]) ** 2 + (w[1] - c[1]) ** 2) / 2.0 - relative.variance_m2[brick]
             )
         looks = {b: (p.position_m[0], p.position_m[1]) for b, p in self._looks.items()}
-        self._free = self._unsurveyed_residuals(sightings, looks)
+        self._free = self._unsurveyed_residuals(wall, looks)
         sigma_w = self.world_sigma_m()
         var_w = LOOSE_SIGMA_M**2 if sigma_w is None else sigma_w**2
-        solved = solve(self._fixed, sightings, {b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
+        solved = wall.solve({b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
         self.anchors = {}
         shift = self._wall_shift(solved)
         size = Counter(solved.root.values())
@@ -185,15 +185,11 @@ class WallAnchor:
         assert out is not None
         return out
 
-    def _unsurveyed_residuals(
-        self, sightings: Sequence[Sighting], looks: dict[int, tuple[float, float]]
-    ) -> tuple[float, int]:
+    def _unsurveyed_residuals(self, wall: Wall, looks: dict[int, tuple[float, float]]) -> tuple[float, int]:
         """The world looks' squared horizontal residuals per axis (m^2, summed) against the shape of their wall's
         sightings with no survey (the translation the looks' mean), and the degrees of freedom they hold (per
         component, its looks less one)."""
-        loose = solve(
-            self._fixed, sightings, {b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True
-        )
+        loose = wall.solve({b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
         total = 0.0
         members: dict[int, int] = {}  # (component root -> its looks)
         for b, (x, y) in loose.centre_m.items():

@@ -132,74 +132,123 @@ def solve(
     ``unsurveyed``: also the components with no surveyed brick but a prior (their translation is then the priors'
     weighted mean, their shape the sightings'), rooted on their lowest id with a prior.
     """
-    # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
+    return Wall(fixed, sightings).solve(priors, variance_of, unsurveyed)
 
-    sightings = [s for s in sightings if s.offsets]
-    table = _Table(sightings)
-    nodes, has, node_root = _components(fixed, table, (priors or {}).keys() if unsurveyed else ())
-    fixed_ids = np.array(sorted(fixed), dtype=np.int64)
-    free_at = has & ~np.isin(nodes, fixed_ids)
-    free_ids = nodes[free_at]
-    if not len(free_ids):
-        return Solution({}, {}, {})
-    free = free_ids.tolist()
-    index = {b: i for i, b in enumerate(free)}
-    # the sightings of a rooted brick, in order, and their measurements: the k-th such sighting's unknown is row
-    # m + k; every brick of such a sighting is rooted (its component is), so free or surveyed
-    m = len(free)
-    used = has[np.searchsorted(nodes, table.ids[table.first])]
-    n = m + int(used.sum())
-    kept = used[table.owner]
-    g = m + (np.cumsum(used) - 1)[table.owner][kept]
-    ids = table.ids[kept]
-    y = table.rows[kept, 1:3]
-    w = 1.0 / table.rows[kept, 3]
-    near = np.minimum(np.searchsorted(free_ids, ids), m - 1)
-    on_free = free_ids[near] == ids
-    p = np.where(on_free, near, -1)
-    fx = np.zeros((len(ids), 2))
-    if len(fixed_ids):
-        xy = np.array([fixed[b] for b in fixed_ids.tolist()], dtype=float).reshape(-1, 2)
-        fx = xy[np.minimum(np.searchsorted(fixed_ids, ids), len(fixed_ids) - 1)]
-    # per measurement: (g, g, w), then on a free brick (p, p, w), (p, g, -w), (g, p, -w): the measurement
-    # x_b - g = y with weight w
-    keep = np.stack([np.ones_like(on_free), on_free, on_free, on_free], axis=1)
-    rows = np.stack([g, p, p, g], axis=1)[keep]
-    cols = np.stack([g, p, g, p], axis=1)[keep]
-    vals = np.stack([w, w, -w, -w], axis=1)[keep]
-    # the right-hand side: on a fixed brick rhs[g] += w (fx - y); on a free one rhs[p] += w y, rhs[g] -= w y
-    wy = w[:, None] * y
-    first_at = np.where(on_free, p, g)
-    first = np.where(on_free[:, None], wy, w[:, None] * (fx - y))
-    at = np.stack([first_at, g], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
-    add = np.stack([first, -wy], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
-    prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
-    if prior:
-        pi = np.array([i for i, _, _ in prior], dtype=np.int64)
-        pv = np.array([v for _, _, v in prior], dtype=float)
-        pm = np.array([mv for _, mv, _ in prior], dtype=float).reshape(-1, 2)
-        rows = np.concatenate([rows, pi])
-        cols = np.concatenate([cols, pi])
-        vals = np.concatenate([vals, 1.0 / pv])
-        at = np.concatenate([at, pi])
-        add = np.concatenate([add, pm / pv[:, None]])
-    rhs = np.zeros((n, 2))
-    np.add.at(rhs[:, 0], at, add[:, 0])
-    np.add.at(rhs[:, 1], at, add[:, 1])
-    h = sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
-    lu = spla.splu(h)
-    x = lu.solve(rhs)
-    variance: dict[int, float] = {}
-    for b in variance_of:
-        if b in index:
-            e = np.zeros(n)
-            e[index[b]] = 1.0
-            variance[b] = float(lu.solve(e)[index[b]])
-    xs = x.tolist()
-    return Solution(
-        {b: (xs[i][0], xs[i][1]) for b, i in index.items()},
-        dict(zip(free, node_root[free_at].tolist(), strict=True)),
-        variance,
-    )
+
+@dataclass(frozen=True)
+class _Layout:
+    """The normal equations of one set of roots before the priors (:meth:`Wall.solve`): the free bricks, their
+    roots and index, the unknowns, and the matrix's and the right-hand side's entries in the order they are added."""
+
+    free: list[int]
+    roots: list[int]
+    index: dict[int, int]
+    n: int
+    rows: np.ndarray
+    cols: np.ndarray
+    vals: np.ndarray
+    at: np.ndarray
+    add: np.ndarray
+
+
+class Wall:
+    """The surveyed bricks and the sightings of one moment, solved for one or more sets of priors (:func:`solve`).
+
+    The measurements' table is built once and the equations' layout once per set of seeds (the priors' bricks
+    when ``unsurveyed``), so the wall anchor's three solves of one look share them: the same floats as one
+    :func:`solve` per call (the same entries, added in the same order).
+    """
+
+    def __init__(self, fixed: Mapping[int, Vec2], sightings: Sequence[Sighting]) -> None:
+        self.fixed = fixed
+        self.table = _Table([s for s in sightings if s.offsets])
+        self._layouts: dict[frozenset[int] | None, _Layout | None] = {}
+
+    def solve(
+        self,
+        priors: Mapping[int, tuple[Vec2, float]] | None = None,
+        variance_of: Collection[int] = (),
+        unsurveyed: bool = False,
+    ) -> Solution:
+        """:func:`solve` on this wall's surveyed bricks and sightings."""
+        # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
+        import scipy.sparse as sp
+        import scipy.sparse.linalg as spla
+
+        seeds = frozenset((priors or {}).keys()) if unsurveyed else None
+        if seeds in self._layouts:
+            lay = self._layouts[seeds]
+        else:
+            lay = self._layouts[seeds] = self._layout(seeds or ())
+        if lay is None:
+            return Solution({}, {}, {})
+        index, n = lay.index, lay.n
+        rows, cols, vals, at, add = lay.rows, lay.cols, lay.vals, lay.at, lay.add
+        prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
+        if prior:
+            pi = np.array([i for i, _, _ in prior], dtype=np.int64)
+            pv = np.array([v for _, _, v in prior], dtype=float)
+            pm = np.array([mv for _, mv, _ in prior], dtype=float).reshape(-1, 2)
+            rows = np.concatenate([rows, pi])
+            cols = np.concatenate([cols, pi])
+            vals = np.concatenate([vals, 1.0 / pv])
+            at = np.concatenate([at, pi])
+            add = np.concatenate([add, pm / pv[:, None]])
+        rhs = np.zeros((n, 2))
+        np.add.at(rhs[:, 0], at, add[:, 0])
+        np.add.at(rhs[:, 1], at, add[:, 1])
+        h = sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
+        lu = spla.splu(h)
+        x = lu.solve(rhs)
+        variance: dict[int, float] = {}
+        for b in variance_of:
+            if b in index:
+                e = np.zeros(n)
+                e[index[b]] = 1.0
+                variance[b] = float(lu.solve(e)[index[b]])
+        free = lay.free
+        xs = map(tuple, x[: len(free)].tolist())  # (the free bricks' rows; the sightings' offsets' follow)
+        return Solution(dict(zip(free, xs, strict=True)), dict(zip(free, lay.roots, strict=True)), variance)
+
+    def _layout(self, unsurveyed: Collection[int]) -> _Layout | None:
+        """The equations before the priors, the components rooted on ``unsurveyed`` after the surveyed bricks
+        (None: no free brick)."""
+        fixed, table = self.fixed, self.table
+        nodes, has, node_root = _components(fixed, table, unsurveyed)
+        fixed_ids = np.array(sorted(fixed), dtype=np.int64)
+        free_at = has & ~np.isin(nodes, fixed_ids)
+        free_ids = nodes[free_at]
+        if not len(free_ids):
+            return None
+        free = free_ids.tolist()
+        index = {b: i for i, b in enumerate(free)}
+        # the sightings of a rooted brick, in order, and their measurements: the k-th such sighting's unknown is row
+        # m + k; every brick of such a sighting is rooted (its component is), so free or surveyed
+        m = len(free)
+        used = has[np.searchsorted(nodes, table.ids[table.first])]
+        n = m + int(used.sum())
+        kept = used[table.owner]
+        g = m + (np.cumsum(used) - 1)[table.owner][kept]
+        ids = table.ids[kept]
+        y = table.rows[kept, 1:3]
+        w = 1.0 / table.rows[kept, 3]
+        near = np.minimum(np.searchsorted(free_ids, ids), m - 1)
+        on_free = free_ids[near] == ids
+        p = np.where(on_free, near, -1)
+        fx = np.zeros((len(ids), 2))
+        if len(fixed_ids):
+            xy = np.array([fixed[b] for b in fixed_ids.tolist()], dtype=float).reshape(-1, 2)
+            fx = xy[np.minimum(np.searchsorted(fixed_ids, ids), len(fixed_ids) - 1)]
+        # per measurement: (g, g, w), then on a free brick (p, p, w), (p, g, -w), (g, p, -w): the measurement
+        # x_b - g = y with weight w
+        keep = np.stack([np.ones_like(on_free), on_free, on_free, on_free], axis=1)
+        rows = np.stack([g, p, p, g], axis=1)[keep]
+        cols = np.stack([g, p, g, p], axis=1)[keep]
+        vals = np.stack([w, w, -w, -w], axis=1)[keep]
+        # the right-hand side: on a fixed brick rhs[g] += w (fx - y); on a free one rhs[p] += w y, rhs[g] -= w y
+        wy = w[:, None] * y
+        first_at = np.where(on_free, p, g)
+        first = np.where(on_free[:, None], wy, w[:, None] * (fx - y))
+        at = np.stack([first_at, g], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+        add = np.stack([first, -wy], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
+        return _Layout(free, node_root[free_at].tolist(), index, n, rows, cols, vals, at, add)

@@ -94,24 +94,35 @@ Layout = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 class LayoutCache:
     """:func:`marker_layout` of a world's frames, kept while the same bricks are asked and none of them moved:
-    the resting ones do not move while the field's ``version`` stays (:class:`masonry.sim.bricks.BrickField`),
-    a carried one is compared by its pose. Consecutive frames of a climb ask the same bricks (on a 20-course wall
-    ~110 of them): their arrays are built once, not concatenated again every frame."""
+    the resting ones do not move while the field's ``version`` stays (:class:`masonry.sim.bricks.BrickField`).
+    Consecutive frames of a climb ask the same bricks (on a 20-course wall ~110 of them): the arrays of the resting
+    ones (the candidates up to the first carried brick) are built once, not concatenated again every frame; the
+    carried ones after them (the fleet's, appended to every frame's candidates, moving every tick) are laid out
+    each frame and joined to them: the same arrays as :func:`marker_layout` of all of them."""
 
     def __init__(self) -> None:
         self._key: tuple[object, ...] | None = None
         self._layout: Layout | None = None
 
     def layout(self, bricks: Sequence[SimBrick], markers: MarkerSpec, version: int) -> Layout:
-        key = (
-            version,
-            markers,
-            tuple([b.id for b in bricks]),
-            tuple([(b.position_m, b.yaw_rad) for b in bricks if b.state == "carried"]),
-        )
+        n = len(bricks)
+        cut = 0
+        while cut < n and bricks[cut].state != "carried":
+            cut += 1
+        if cut == 0:
+            return marker_layout(bricks, markers)
+        key = (version, markers, tuple([b.id for b in bricks[:cut]]))
         if self._layout is None or key != self._key:
-            self._key, self._layout = key, marker_layout(bricks, markers)
-        return self._layout
+            self._key, self._layout = key, marker_layout(bricks[:cut], markers)
+        if cut == n:
+            return self._layout
+        ids, centres, corners = self._layout
+        more = marker_layout(bricks[cut:], markers)
+        return (
+            np.concatenate([ids, more[0]]),
+            np.concatenate([centres, more[1]]),
+            np.concatenate([corners, more[2]]),
+        )
 
 
 def observe_markers(
