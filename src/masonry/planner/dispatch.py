@@ -159,7 +159,7 @@ class Dispatcher(DispatchQueries):
         # prerequisites are done, blocked by a conflict or not.
         self._successors, predecessors = segment_links(tasks)
         self._ranking = Ranking(
-            self.policy, self._rank, self._start_m, self._leg_m, self._successors, predecessors, self._end_m
+            self.policy, self._rank, self._start_m, self._leg_m, self._successors, predecessors
         )
         #: per UAV, the adhesion segment it has just sprayed (until its next task): chaining's "after"
         self._sprayed: dict[str, int] = {}
@@ -192,16 +192,8 @@ class Dispatcher(DispatchQueries):
         p, end = self._position[uav], self._end_m[i]
         return i if math.hypot(p[0] - end[0], p[1] - end[1]) <= NEAR_END_M else None
 
-    def _others_m(self, role: str, uav: str) -> list[tuple[float, float, float]]:
-        """For a brick UAV, the sites of the tasks the other UAVs have in progress (``critical-path`` spreads the
-        brick UAVs away from them: docs/dispatch.md, "Spreading the brick UAVs"); none for an adhesion UAV or
-        another policy."""
-        if role != "brick" or self._ranking.policy != "critical-path":
-            return []
-        return [self._end_m[j] for u, j in self._uav_task.items() if u != uav]
-
     def _select(self, role: str, uav: str) -> int | None:
-        return self._ranking.pick(role, self._position[uav], self._after(uav), self._others_m(role, uav))
+        return self._ranking.pick(role, self._position[uav], self._after(uav))
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
@@ -218,9 +210,7 @@ class Dispatcher(DispatchQueries):
                 candidates = [i for i in candidates if coming_alone(i, lambda k: st[k] == _RUNNING, nb)]
         if not candidates:
             return None
-        return self._ranking.pick_among(
-            candidates, self._position[uav], self._after(uav), self._others_m(role, uav)
-        )
+        return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
 
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
         """``i``, or for a landed ``uav`` None while its role has its cap of busy UAVs, else the policy's best task
@@ -241,9 +231,7 @@ class Dispatcher(DispatchQueries):
         for pool in (self._available[role], self._ready[role]):
             free = [k for k in pool if not crowded(k, waiting, nb, pre)]
             if free:
-                return self._ranking.pick_among(
-                    free, self._position[uav], self._after(uav), self._others_m(role, uav)
-                )
+                return self._ranking.pick_among(free, self._position[uav], self._after(uav))
         return None
 
     def _prefetchable(self, role: str) -> list[int]:

@@ -18,7 +18,7 @@ flight, as before. The policy's ranking always comes first (critical-path's chai
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Collection, Sequence
+from collections.abc import Collection, Sequence
 
 from masonry.planner.tasks import AdhesionTask, Task
 
@@ -67,14 +67,11 @@ def chain_pick(
     successors: Sequence[tuple[int, ...]],
     predecessors: Sequence[tuple[int, ...]],
     after: int | None = None,
-    crowd: Callable[[int], float] | None = None,
 ) -> int:
     """The best of ``candidates`` (not empty; the policy ranks them alike) for a UAV at ``position_m``.
 
     Args:
         after: the adhesion task the UAV has just sprayed, if it is still near its end (None: it is not).
-        crowd: metres of flight added to a candidate's cost (the brick UAVs' spread along the wall,
-            :func:`masonry.planner.dispatch_ranking.crowd_m`; None: nothing added).
 
     Returns:
         A successor of ``after`` among the candidates (the lowest index); else the candidate with the shortest
@@ -89,7 +86,7 @@ def chain_pick(
     dist = math.dist
     near, near_cost = -1, math.inf
     for i in candidates:
-        cost = dist(position_m, start_m[i]) + leg_m[i] + (0.0 if crowd is None else crowd(i))
+        cost = dist(position_m, start_m[i]) + leg_m[i]
         if cost < near_cost or (cost == near_cost and i < near):
             near, near_cost = i, cost
     pick, seen = near, {near}

@@ -10,29 +10,10 @@ of contiguous segments (:mod:`masonry.planner.dispatch_chaining`). :class:`~maso
 from __future__ import annotations
 
 import heapq
-import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 from masonry.blueprint import ROLES
 from masonry.planner.dispatch_chaining import chain_pick
-
-#: critical-path's brick spread (docs/dispatch.md, "Spreading the brick UAVs along the wall"): a brick whose site
-#: is closer than ``SPREAD_RADIUS_M`` (horizontally) to the site of a task another UAV has in progress costs
-#: ``SPREAD_WEIGHT`` metres of flight per metre closer, summed over those tasks. Measured on the 12 m wall (seeds
-#: 1-6, 4 + 2 and 8 + 4): weight 1, 2 and 4 at 3 m, and 2 at 5 m; 2 at 3 m kept.
-SPREAD_RADIUS_M = 3.0
-SPREAD_WEIGHT = 2.0
-
-
-def crowd_m(site_m: Sequence[float], others_m: Sequence[Sequence[float]]) -> float:
-    """The spread's cost of a site (m of flight): ``SPREAD_WEIGHT`` times the metres by which it is closer than
-    ``SPREAD_RADIUS_M`` (horizontally) to each of ``others_m`` (the sites of the tasks other UAVs have)."""
-    out = 0.0
-    for q in others_m:
-        d = math.hypot(site_m[0] - q[0], site_m[1] - q[1])
-        if d < SPREAD_RADIUS_M:
-            out += SPREAD_RADIUS_M - d
-    return SPREAD_WEIGHT * out
 
 
 class Ranking:
@@ -45,8 +26,6 @@ class Ranking:
         leg_m: the part of each task's flight that does not depend on the UAV.
         successors, predecessors: each task's adhesion segments starting where it ends and ending where it
             starts (:func:`~masonry.planner.dispatch_chaining.segment_links`; None: no links, every task a head).
-        end_m: where each task's work is (its site: the drop-off, the segment's end), for ``critical-path``'s
-            spread (:func:`crowd_m`; None: no spread).
     """
 
     def __init__(
@@ -57,10 +36,9 @@ class Ranking:
         leg_m: Sequence[float],
         successors: Sequence[tuple[int, ...]] | None = None,
         predecessors: Sequence[tuple[int, ...]] | None = None,
-        end_m: Sequence[tuple[float, float, float]] | None = None,
     ) -> None:
         self.policy = policy
-        self._rank, self._start_m, self._leg_m, self._end_m = rank, start_m, leg_m, end_m
+        self._rank, self._start_m, self._leg_m = rank, start_m, leg_m
         none: list[tuple[int, ...]] = [() for _ in rank]
         self._succ = none if successors is None else successors
         self._pred = none if predecessors is None else predecessors
@@ -103,23 +81,9 @@ class Ranking:
             if not bucket:
                 del buckets[c]  # its heap entry is dropped lazily
 
-    def _crowd(self, others_m: Sequence[Sequence[float]]) -> Callable[[int], float] | None:
-        """``critical-path``'s spread over ``others_m`` as a cost per task (None: no spread to add)."""
-        end_m = self._end_m
-        if self.policy != "critical-path" or not others_m or end_m is None:
-            return None
-        return lambda i: crowd_m(end_m[i], others_m)
-
-    def pick(
-        self,
-        role: str,
-        position_m: Sequence[float],
-        after: int | None = None,
-        others_m: Sequence[Sequence[float]] = (),
-    ) -> int | None:
+    def pick(self, role: str, position_m: Sequence[float], after: int | None = None) -> int | None:
         """The policy's best available task of ``role`` for a UAV at ``position_m`` (None: none available);
-        ``after``: the adhesion segment the UAV has just sprayed, if it is still at its end (chaining);
-        ``others_m``: the sites of the tasks other UAVs have (``critical-path``'s spread, :func:`crowd_m`)."""
+        ``after``: the adhesion segment the UAV has just sprayed, if it is still at its end (chaining)."""
         avail = self.available[role]
         if not avail:
             return None
@@ -146,43 +110,22 @@ class Ranking:
                 self._heap_values[role].discard(c)
         # The segment chained to ``after``, else the nearest run head (shortest flight: to the start, plus
         # pickup -> drop-off for a brick); ties by plan order.
-        return chain_pick(
-            candidates,
-            position_m,
-            self._start_m,
-            self._leg_m,
-            self._succ,
-            self._pred,
-            after,
-            self._crowd(others_m),
-        )
+        return chain_pick(candidates, position_m, self._start_m, self._leg_m, self._succ, self._pred, after)
 
     def pick_among(
-        self,
-        candidates: Sequence[int],
-        position_m: Sequence[float],
-        after: int | None = None,
-        others_m: Sequence[Sequence[float]] = (),
+        self, candidates: Sequence[int], position_m: Sequence[float], after: int | None = None
     ) -> int:
         """The policy's best of ``candidates`` (not empty; not available: blocked or to prefetch) for a UAV at
         ``position_m``: highest chain step for ``critical-path``, plan order for ``fifo``; then the segment
-        chained to ``after``, else the nearest run head (plus the spread over ``others_m`` for
-        ``critical-path``), ties by plan order."""
+        chained to ``after``, else the nearest run head, ties by plan order."""
         if self.policy == "critical-path":
             top = max(self._rank[i] for i in candidates)
             candidates = [i for i in candidates if self._rank[i] == top]
         elif self.policy == "fifo":
             return min(candidates)
         return chain_pick(
-            dict.fromkeys(candidates),
-            position_m,
-            self._start_m,
-            self._leg_m,
-            self._succ,
-            self._pred,
-            after,
-            self._crowd(others_m),
+            dict.fromkeys(candidates), position_m, self._start_m, self._leg_m, self._succ, self._pred, after
         )
 
 
-__all__ = ["SPREAD_RADIUS_M", "SPREAD_WEIGHT", "Ranking", "crowd_m"]
+__all__ = ["Ranking"]
