@@ -116,6 +116,9 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,
+        # the grasp presses on until the magnet reports the brick (masonry.fsm.grasp_reach: the reported position
+        # wanders 4-7 cm at the bottom, about a 2 s period): up to two periods of it past the dwell
+        "grasp_patience_s": 4.0,
         # the spray descent's arrival: the window's mean within the valve's radius (masonry.fsm.descent_reach)
         "spray_tolerance_m": 0.03,
         # the swing gate: beside busy processes the real PX4's hover at its point reads 0.20-0.25 m/s rms (4-9 cm
