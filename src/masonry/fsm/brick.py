@@ -482,6 +482,8 @@ class BrickUav(PutBack):
         error = dropoff_error_m(self, tel, self._dropoff)
         if error is not None and (self._gate.closing(self, tel) or self._gate.low(self, tel)):
             error = None  # (masonry.fsm.release_gate: nearer by the next tick, or under the supports' tops)
+        if error is not None and self._wall.lags(self) and self._wall.taken(self) is None:
+            error = None  # (masonry.fsm.wall_align: the drop-off behind the wall in view would rest on a neighbour)
         if error is not None:
             taken = self._wall.taken(self)
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)
