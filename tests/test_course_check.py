@@ -19,6 +19,7 @@ from masonry.mission.course_check import CourseCheck, is_misplaced
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
 from masonry.mission.messages import MISSION_CONTROL
+from masonry.mission.report import control_report
 from masonry.mission.simulate import SimulatedMission
 from masonry.perception.types import AsBuiltPose
 from masonry.planner import plan
@@ -154,3 +155,7 @@ def test_a_release_refused_on_a_taken_place_is_not_tried_again() -> None:
     mc = _mission_control(TaskResult("B1", "failed", 0.0, reason=why))
     assert mc.dispatcher.stuck == {"B1"} and mc.dispatcher.attempts["B1"] == 1
     assert "B2" not in mc.dispatcher.done
+    # not silently stuck: the report says why each task left undone is
+    text = control_report(mc, mc.plan, policy="fifo").summary()
+    assert f"  B1: its attempt 1 failed: {why}" in text.splitlines(), text
+    assert "  B2: waits for dependency B1" in text.splitlines(), text

@@ -11,7 +11,7 @@ from masonry.fsm.attempt import AdhesionAttempt
 from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.fsm.bead import BeadPass, BeadSettings
 from masonry.fsm.config import UavConfig
-from masonry.fsm.descent_reach import DescentReach
+from masonry.fsm.descent_reach import DescentReach, HeightRunOff
 from masonry.fsm.hover_still import HoverStill
 from masonry.fsm.model import UavModel
 from masonry.fsm.noise_gate import MEAN_ALONE_AFTER
@@ -60,6 +60,7 @@ class AdhesionUav(UavModel):
         #: task's segment is judged at it, so it outlives the attempt)
         self._yaw_rad = 0.0
         self._descent = DescentReach(config.gate_window_s or 1.0)  # (masonry.fsm.descent_reach)
+        self._run_off = HeightRunOff()
         self._hover_still = HoverStill(config.gate_window_s or 1.0)  # (masonry.fsm.hover_still)
         self._climbing = False  # in ``ascend``: the climb out has begun (no chaining any more)
         self._climb_to_m = (
@@ -253,13 +254,22 @@ class AdhesionUav(UavModel):
         else:
             descent_s = spray_descent_leg_s(drop_m, cfg.vertical_speed_mps, cfg.spray_descent_s)
         self._descent.reset(descent_s)
-        self._fly_to(tel, start, descent_s, self._yaw_rad)
+        self._run_off.reset()
+        # from rest on a noisy position source (the px4 preset), as the brick's descents (BrickUav.
+        # _descent_from_rest): the hover's gate passed on its window's mean at any phase of the wander, and a leg
+        # started with that tick's velocity strays about 0.2 v0 T to the side (issue 29: 8 cm on the real PX4)
+        self._fly_to(tel, start, descent_s, self._yaw_rad, cfg.gate_window_s > 0.0)
 
     def do_descend(self, tel: Telemetry) -> None:
         cfg = self.config
         self._follow_lean(tel)
         # patience, as in the hover: align_patience_s past the descent's end the tolerance doubles; the attempt
-        # ends (with its reason) at release_timeout_s or, if later, twice the patience
+        # ends (with its reason) at release_timeout_s or, if later, twice the patience; on a noisy position source
+        # those count from the reported height's return after it ran off (masonry.fsm.descent_reach.HeightRunOff)
+        if cfg.gate_window_s > 0.0 and self._now_s > self.nav.end_s:
+            off_m = float(tel.position_m[2] - self.nav.target_m[2])
+            if self._run_off.waits(self._now_s, off_m, cfg.control_period_s, cfg.leg_timeout_s):
+                self.nav.wait(self._now_s)
         late = self._now_s - self.nav.end_s
         tolerance_m = cfg.spray_tolerance_m * (2.0 if late > cfg.align_patience_s else 1.0)
         if cfg.gate_window_s > 0.0:

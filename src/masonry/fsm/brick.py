@@ -16,6 +16,7 @@ from masonry.fsm.base import Vec3
 from masonry.fsm.brick_sight import sight_brick
 from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
+from masonry.fsm.descent_reach import HeightRunOff
 from masonry.fsm.dropoff_reach import DropoffReach, dropoff_error_m
 from masonry.fsm.grasp_reach import grasp_done
 from masonry.fsm.noise_gate import MEAN_ALONE_AFTER, HoverNoise, noise_aligned
@@ -94,6 +95,8 @@ class BrickUav(PutBack):
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         self._dropoff = DropoffReach(config.gate_window_s or 1.0)  # (masonry.fsm.dropoff_reach)
+        # (masonry.fsm.descent_reach: EKF2's height run off past the leg's end)
+        self._run_off = HeightRunOff()
         self._lean = WindLean()  # (masonry.fsm.wind_lean: the pickup's hovers)
         super().__init__(config, fc, link, clock, BRICK_STATES, BRICK_TRANSITIONS, clearance=clearance)
 
@@ -331,17 +334,23 @@ class BrickUav(PutBack):
             self.touched()
 
     def enter_pickup_grasp(self, *args: object, **kwargs: object) -> None:
-        pass  # keep tracking the descent's end point (pressing on the brick) with the magnet on
+        self._run_off.reset()  # keep tracking the descent's end point (pressing on the brick) with the magnet on
 
     def do_pickup_grasp(self, tel: Telemetry) -> None:
         # Press on the brick with the magnet on for the dwell (the magnet grips on contact; polling lets an
         # actuator board report it), then climb: the verification happens at cruise altitude. A body still above
         # the brick (an autopilot's vertical lag) presses on for up to grasp_patience_s (masonry.fsm.grasp_reach).
+        # On a noisy position source the press does not count while EKF2's height has run off (the body reported
+        # decimetres above the brick: descent_reach.HeightRunOff; a CI-load flight's first grasp pressed out its
+        # patience 0.5 m up, then missed)
         cfg = self.config
+        above_end_m = float(tel.position_m[2] - self.nav.target_m[2])
+        if cfg.gate_window_s > 0.0:
+            self._run_off.waits(self._now_s, above_end_m, cfg.control_period_s, cfg.leg_timeout_s)
         if grasp_done(
-            pressed_s=self._now_s - self._entered_s,
+            pressed_s=self._now_s - self._entered_s - self._run_off.waited_s,
             attached=self.gripper.is_attached(),
-            above_end_m=float(tel.position_m[2] - self.nav.target_m[2]),
+            above_end_m=above_end_m,
             dwell_s=cfg.grasp_dwell_s,
             press_m=cfg.grasp_press_m,
             patience_s=cfg.grasp_patience_s,
@@ -451,6 +460,7 @@ class BrickUav(PutBack):
         self._wall.apply(self)
         self._gate.reset(self)
         self._dropoff.reset()
+        self._run_off.reset()
 
     def do_place_descend(self, tel: Telemetry) -> None:
         cfg = self.config
@@ -465,9 +475,15 @@ class BrickUav(PutBack):
         self._side.step(self, self._place_yaw_rad())
         if self._gate.lost(self, tel):  # the last leg's pass missed the drop-off while fresh: look again now
             return
+        if cfg.gate_window_s > 0.0 and self._now_s > self.nav.end_s:  # (descent_reach.HeightRunOff)
+            off_m = float(tel.position_m[2] - self.nav.target_m[2])
+            if self._run_off.waits(self._now_s, off_m, cfg.control_period_s, cfg.leg_timeout_s):
+                self.nav.wait(self._now_s)
         error = dropoff_error_m(self, tel, self._dropoff)
         if error is not None and (self._gate.closing(self, tel) or self._gate.low(self, tel)):
             error = None  # (masonry.fsm.release_gate: nearer by the next tick, or under the supports' tops)
+        if error is not None and self._wall.lags(self) and self._wall.taken(self) is None:
+            error = None  # (masonry.fsm.wall_align: the drop-off behind the wall in view would rest on a neighbour)
         if error is not None:
             taken = self._wall.taken(self)
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)

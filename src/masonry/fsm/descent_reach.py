@@ -25,7 +25,15 @@ from collections.abc import Sequence
 
 from masonry.fsm.noise_gate import HoverNoise
 
-__all__ = ["DescentReach"]
+__all__ = ["HEIGHT_RUN_OFF_M", "HEIGHT_RUN_OFF_S", "DescentReach", "HeightRunOff"]
+
+#: A reported height this far from the descent's end point past its planned end is no hover's wander (on the
+#: real PX4 2.7 cm rms vertically) but EKF2's height running off (0.3-1.2 m for 3-5 s, issue 29).
+HEIGHT_RUN_OFF_M = 0.15
+#: ... for this long without a break: a vehicle still catching up with a short leg's end is no run-off (the
+#: simulated px4 model's body 16-17 cm above a side look's last leg for 0.3 s past its end; a wait there moved a
+#: pyramid's timing onto three failed drop-offs of one brick)
+HEIGHT_RUN_OFF_S = 1.0
 
 
 class DescentReach:
@@ -72,3 +80,38 @@ class DescentReach:
         """The window's mean position is within ``tolerance_m`` of the target (see :meth:`mean_error_m`)."""
         error_m = self.mean_error_m(reference_error_m)
         return error_m is not None and error_m <= tolerance_m
+
+
+class HeightRunOff:
+    """The descent's timeout held while the reported height has run off (issue 29).
+
+    On the real PX4 v1.16 SITL under load EKF2's reported height runs off the descent's reference by 0.3-1.2 m for
+    3-5 s now and then while masonry commands the descent, then comes back (PX4's log says nothing;
+    docs/performance/autopilots.md): a spray descent's window mean cannot pass while it lasts nor for a window
+    after, and the descent's timeout (8 s past its end) ran out on it, twice in a row on a loaded CI machine
+    ("could not reach the spraying height over A0 after 2 descents"). While the height is more than
+    :data:`HEIGHT_RUN_OFF_M` off past the descent's end for :data:`HEIGHT_RUN_OFF_S` on end, the timeout waits
+    (counts from the height's return), up to a budget (``leg_timeout_s``) a descent, after which it runs as before.
+    """
+
+    def __init__(self) -> None:
+        self.waited_s = 0.0
+        self._off_since_s: float | None = None
+
+    def reset(self) -> None:
+        """A new descent: its budget whole again."""
+        self.waited_s = 0.0
+        self._off_since_s = None
+
+    def waits(self, now_s: float, height_off_m: float, dt_s: float, budget_s: float) -> bool:
+        """The tick at ``now_s`` past the descent's end with the reported height ``height_off_m`` off its end point
+        (m): True when the timeout is to wait this tick (``dt_s`` of it; a run-off, within the budget)."""
+        if abs(height_off_m) <= HEIGHT_RUN_OFF_M:
+            self._off_since_s = None
+            return False
+        if self._off_since_s is None:
+            self._off_since_s = now_s
+        if now_s - self._off_since_s < HEIGHT_RUN_OFF_S or self.waited_s >= budget_s:
+            return False
+        self.waited_s += dt_s
+        return True

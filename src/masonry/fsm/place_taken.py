@@ -6,7 +6,9 @@ brick designed beside it, released at its drop-off, then rests on it a course to
 (:mod:`masonry.mission.course_check` finds it after the release, glued where it lies). With the wall's markers
 (``align_on_wall``) the camera sees that neighbour while the UAV descends: its estimated top-face centre and the
 drop-off are placed in the world by the same telemetry, so their horizontal offset is the true one (the wander
-cancels). A neighbour in the brick's course or above whose centre lies deeper than :data:`TAKEN_DEPTH_M` inside
+cancels) when both are one view's: the drop-off the view puts the brick at, at its designed offsets to the bricks
+in view as built (``WallAlign.taken``), and a view older than ``release_fresh_s`` judges nothing (a neighbour
+merely off its design is followed, not a taken place; docs/state-machines.md). A neighbour in the brick's course or above whose centre lies deeper than :data:`TAKEN_DEPTH_M` inside
 the drop-off's footprint along both of the brick's axes (footprints of the brick's own size and yaw) takes the
 place: the UAV does not release, the task fails with the reason (:data:`PLACE_TAKEN`, the brick, the neighbour,
 the depth) and the brick goes back to its pickup; mission control does not try it again (the neighbour will not

@@ -172,6 +172,9 @@ class WallAlign:
         self.estimates: dict[int, np.ndarray] = {}
         #: Every brick of the wall seen on the wall (within ``_REFERENCE_M`` of its design) in this placement
         self.seen_ids: set[int] = set()
+        #: The drop-off as that last view alone puts it (world, the view's own telemetry): the bricks in view at
+        #: their as-built places, the brick at its designed offsets to them (``place_taken``'s reference)
+        self.view_target_m: np.ndarray | None = None
 
     def reset(self, design_top_m: np.ndarray) -> None:
         """A new placement whose designed effector target (the brick's top-face centre) is ``design_top_m``."""
@@ -182,6 +185,7 @@ class WallAlign:
         self.seen_s = -math.inf
         self.estimates = {}
         self.seen_ids = set()
+        self.view_target_m = None
 
     @property
     def offset_m(self) -> np.ndarray:
@@ -240,7 +244,8 @@ class WallAlign:
         ):  # the cap relative to the bricks in view, not to the design (follow_in_view)
             follow = follow_in_view(self._follow_raw_m, at_design - offset, uav.config.wall_follow_cap_m)
         carried = self.carried.world_m(uav._place_yaw_rad())
-        delta = self.tracker.add(self._base_m(wall.get(own)) + follow + offset - carried)
+        self.view_target_m = self._base_m(wall.get(own)) + follow + offset - carried
+        delta = self.tracker.add(self.view_target_m)
         self.trend.span_s = uav.config.wall_trend_s
         # the drift filter in calm air only: in 4 m/s it failed px4 missions the straight line completes (the bond's
         # seed 1, the pyramid's seed 0: a brick put back after three descents; docs/performance/as-built.md)
@@ -279,19 +284,34 @@ class WallAlign:
         return own if float(np.linalg.norm(own - self.design_m)) > 1e-9 else self.design_m
 
     def taken(self, uav: BrickUav) -> str | None:
-        """The reason not to release ``uav``'s brick at its drop-off: a brick of the wall in the last view lies in
-        its footprint (:mod:`masonry.fsm.place_taken`); None otherwise (and always without ``align_on_wall``)."""
-        if not self.estimates or self._wall is None:
-            return None
-        task = uav.brick_task
-        target = np.asarray(uav.attempt.place_effector_target_m, dtype=float)
-        hit = taken_by(target, uav._place_yaw_rad(), task.size_m, self.estimates, self._wall, task.brick)
+        """The reason not to release ``uav``'s brick at its drop-off: in the last view, fresh, a brick of the wall
+        lies in the footprint of the drop-off as that view puts it (:mod:`masonry.fsm.place_taken`, "judged on the
+        wall as it stands"); None otherwise (and always without ``align_on_wall``)."""
+        hit = self._hit(uav, self.view_target_m)
         if hit is None:
             return None
         return (
-            f"{PLACE_TAKEN} B{hit[0]} seen {hit[1] * 100:.1f} cm into the place of {task.id}; not released "
+            f"{PLACE_TAKEN} B{hit[0]} seen {hit[1] * 100:.1f} cm into the place of {uav.brick_task.id}; not released "
             f"there (it would rest on B{hit[0]}, off its course)"
         )
+
+    def lags(self, uav: BrickUav) -> bool:
+        """The drop-off flown (its target, smoothed over the last frames and carried on the wander's trend) would
+        put the brick into a brick of the wall the last, fresh view shows, where that view's own drop-off is clear:
+        True to hold the release (the target catches up, or the descent looks again; never a taken place)."""
+        return self._hit(uav, np.asarray(uav.attempt.place_effector_target_m, dtype=float)) is not None
+
+    def _hit(self, uav: BrickUav, target_m: np.ndarray | None) -> tuple[int, float] | None:
+        """The brick of the last view deepest in the footprint at ``target_m`` (:func:`taken_by`), judged on a view
+        no older than ``release_fresh_s`` only: an older one was placed in the world by the wander of its own
+        time (the px4 pyramid, seed 1: a view 12 s old, the wander 14 cm on since, put B1 6.6 cm into B2's place
+        where B2, released, would have lain clear of it)."""
+        if not self.estimates or self._wall is None or target_m is None:
+            return None
+        if uav._now_s - self.seen_s > uav.config.release_fresh_s:
+            return None
+        task = uav.brick_task
+        return taken_by(target_m, uav._place_yaw_rad(), task.size_m, self.estimates, self._wall, task.brick)
 
     def apply(self, uav: BrickUav) -> None:
         """A new leg toward the design (the descent): shift it by the offset found so far (with ``align_on_wall``)."""

@@ -142,6 +142,23 @@ class MissionReport:
             lines.append(f"  ... {len(rows) - most} more (the JSON report and --gantt show them all)")
         return lines
 
+    def stuck_why(self) -> list[str]:
+        """Why each task left undone is: its last attempt's failure (a place taken, a brick off its course, the
+        attempts used up), else what it waited for last (its prerequisite, the fleet): no mission ends stuck
+        without saying why (issue 30)."""
+        lines = []
+        for t in self.tasks:
+            if t.status == "done" or t.id not in self.stuck:
+                continue
+            last = t.tries[-1] if t.tries else None
+            if last is not None and last.status == "failed" and last.reason:
+                lines.append(f"  {t.id}: its attempt {len(t.tries)} failed: {last.reason}")
+            elif t.waits:
+                cause = t.waits[-1].cause
+                on = f" {cause.blocking_task}" if cause.blocking_task else ""
+                lines.append(f"  {t.id}: waits for {cause.what}{on}")
+        return lines
+
     def summary(self) -> str:
         """A few human lines: outcome, makespan against the bound, fleet, checks."""
         done = sum(1 for t in self.tasks if t.status == "done")
@@ -197,6 +214,7 @@ class MissionReport:
         lines.extend(self.spares.lines() if self.spares is not None else ())
         if not self.completed:
             lines.append(f"stuck: {', '.join(self.stuck) or '-'}")
+            lines.extend(self.stuck_why())
         if self.stall is not None:
             lines.append(str(self.stall.get("line", "stalled")))
         if self.wall_time_s > 0:
