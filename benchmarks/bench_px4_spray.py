@@ -31,7 +31,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from case_study_procs import CASE_STUDY, masonry
-from masonry.adapters.mavlink_protocol import MAV_CMD_SET_MESSAGE_INTERVAL
+from masonry.adapters.mavlink_protocol import MAV_CMD_SET_MESSAGE_INTERVAL, MAV_MODE_FLAG_SAFETY_ARMED
 from px4_sitl import ENV, give_the_cpu, one_flight_at_a_time, px4
 
 #: PX4's ground station link: every instance sends there (README of ../shared/px4)
@@ -52,6 +52,7 @@ class Recorder(threading.Thread):
         self.sysid = instance + 1
         self.estimate: list[tuple[float, float]] = []  # (wall s, EKF2 up m)
         self.truth: list[tuple[float, float]] = []  # (wall s, SIH altitude m)
+        self.armed_s: float | None = None  # (wall s) its first armed HEARTBEAT
         self.stop = threading.Event()
 
     def run(self) -> None:
@@ -62,6 +63,8 @@ class Recorder(threading.Thread):
                 continue
             now = time.monotonic()
             kind = msg.get_type()
+            if kind == "HEARTBEAT" and self.armed_s is None and msg.base_mode & MAV_MODE_FLAG_SAFETY_ARMED:
+                self.armed_s = now
             if kind == "HEARTBEAT" and now - asked_s > 5.0:  # (again every 5 s: a request lost on UDP)
                 asked_s = now
                 for msg_id in (MSG_LOCAL_POSITION_NED, MSG_HIL_STATE_QUATERNION):
@@ -79,18 +82,22 @@ class Recorder(threading.Thread):
         self.conn.close()
 
 
-def height_figures(estimate: list[tuple[float, float]], truth: list[tuple[float, float]]) -> dict[str, Any]:
-    """EKF2's height minus the truth's over the flight (the truth 0.3 m up first to last), each from its value at
-    rest half a second before the take-off (as masonry measures the ground when it arms), and the seconds the
-    airframe stood on SIH's ground meanwhile with EKF2 0.3 m or more above it."""
+def height_figures(
+    estimate: list[tuple[float, float]], truth: list[tuple[float, float]], armed_s: float | None = None
+) -> dict[str, Any]:
+    """EKF2's height minus the truth's over the flight (the truth 0.3 m up first to last): EKF2's from its mean over
+    the third of a second before ``armed_s`` (as masonry measures the ground when it arms: the last ten reports
+    disarmed; without it, half a second before the take-off), the truth's from its first sample (at rest); and the
+    seconds the airframe stood on SIH's ground meanwhile with EKF2 0.3 m or more above it."""
     if len(estimate) < 2 or len(truth) < 2:
         return {"samples": (len(estimate), len(truth))}
     t0 = truth[0][1]
     up = [i for i, (_, alt) in enumerate(truth) if alt - t0 > 0.3]
     if not up:
         return {"airborne": False}
-    lift_w = next(w for w, alt in truth if alt - t0 > 0.05) - 0.5
-    e0 = next((e for w, e in reversed(estimate) if w <= lift_w), estimate[0][1])
+    until_w = armed_s if armed_s is not None else next(w for w, alt in truth if alt - t0 > 0.05) - 0.5
+    ground = [e for w, e in estimate if until_w - 1.0 / 3.0 <= w <= until_w] or [estimate[0][1]]
+    e0 = sum(ground) / len(ground)
     errors, grounded_s, j = [], 0.0, 0
     for (w, alt), (w_next, _) in zip(truth[up[0] : up[-1]], truth[up[0] + 1 : up[-1] + 1], strict=True):
         while j + 1 < len(estimate) and estimate[j + 1][0] <= w:
@@ -149,7 +156,7 @@ def main() -> None:
                     result = fly_a0(url, Path(tmp), args.wall)
             finally:
                 recorder.close()
-            figures = height_figures(recorder.estimate, recorder.truth)
+            figures = height_figures(recorder.estimate, recorder.truth, recorder.armed_s)
         row = {"run": run, "status": result.get("status"), "coverage": result.get("coverage"),
                "duration_s": result.get("duration_s"), "reason": result.get("reason"), **figures}  # fmt: skip
         rows.append(row)
