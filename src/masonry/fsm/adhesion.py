@@ -323,12 +323,10 @@ class AdhesionUav(UavModel):
         if step.valve_open != self.sprayer.is_valve_open():
             self.sprayer.set_valve(step.valve_open)
         ref = step.nozzle_ref_m
-        # on a noisy position source (the px4 preset) the lean averaged over _LEAN_TAU_S, not the tick's tilt: the
-        # tilt is the loop's own acceleration, and a target moved by it (6 cm at 0.17 rad) swung the real PX4's
-        # body 10-19 cm about it (issue 29)
-        tilt = attempt.lean_rad if cfg.gate_window_s > 0.0 else (tel.attitude_rad[0], tel.attitude_rad[1])
         body = self.nozzle.body_target(
-            (ref[0], ref[1], ref[2] + cfg.airframe.spray_height_m), self._yaw_rad, tilt
+            (ref[0], ref[1], ref[2] + cfg.airframe.spray_height_m),
+            self._yaw_rad,
+            (tel.attitude_rad[0], tel.attitude_rad[1]),
         )
         bead = attempt.bead
         remaining_s = abs((bead.length_m if bead.direction > 0 else 0.0) - bead.progress_m)
@@ -337,8 +335,6 @@ class AdhesionUav(UavModel):
 
     def do_spray(self, tel: Telemetry) -> None:
         cfg = self.config
-        if cfg.gate_window_s > 0.0:
-            self._follow_lean(tel)  # the lean the pass steers on there (_steer_bead)
         over = self._steer_bead(tel)
         bead = self.attempt.bead
         if over and bead.coverage() < 1.0:
