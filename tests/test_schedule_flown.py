@@ -3,12 +3,16 @@ machines fly them, recomputed here from the machines' phases and the runtime's l
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
 from masonry.blueprint_gen import running_bond
+from masonry.cli import app
 from masonry.fsm.battery import LEG_SETTLE_S
 from masonry.mission.altitudes import layer_base_m
 from masonry.mission.fleet import fleet_for, with_fleet
@@ -126,3 +130,18 @@ def test_a_flown_schedule_gives_each_brick_its_flown_visit_and_task():
             assert st.end_s - st.start_s >= md[t.id] + extra - 2 * tick - 1e-6
     assert seen == sum(isinstance(t, BrickTask) and not t.done for t in p.tasks)
     assert s.makespan_s > visit.makespan_s
+
+
+def test_cli_writes_the_flown_term():
+    case_study = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+    args = ["schedule", str(case_study), "--workers", "1", "--format", "json", "--time-limit", "5"]
+    runner = CliRunner()
+    res = runner.invoke(app, [*args, "--physical", "all+flown"])
+    assert res.exit_code == 0, res.output
+    flown = json.loads(res.stdout)
+    assert flown["physical"] == ["pallet", "battery", "visit", "flown"]
+    res = runner.invoke(app, [*args, "--physical", "all"])
+    assert res.exit_code == 0, res.output
+    floor = json.loads(res.stdout)
+    assert floor["physical"] == ["pallet", "battery", "visit"]
+    assert flown["makespan_s"] > floor["makespan_s"]
