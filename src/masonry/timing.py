@@ -24,6 +24,11 @@ Vec3 = tuple[float, float, float]
 #: So a leg of distance ``d`` flown with a peak speed ``v`` lasts ``1.875 d / v`` (:func:`min_jerk_leg_s`).
 MIN_JERK_PEAK_TO_MEAN_SPEED = 1.875
 
+#: Each leg of the state machines ends with the UAV brought to rest (below ``arrive_speed_mps``, settled before a
+#: transit's request): seconds added to a leg's planned duration (``masonry.fsm.battery`` re-exports it). On the
+#: arducopter vehicle a leg took 1-2 s past its plan.
+LEG_SETTLE_S = 1.5
+
 #: The state machines never plan a minimum-jerk leg shorter than this (a leg of a few centimetres still settles).
 MIN_LEG_S = 1.0
 

@@ -49,7 +49,10 @@ def schedule(
     physical: str = typer.Option(
         "",
         "--physical",
-        help="pallet,battery,visit | all: the physical terms (docs/schedule.md, 'The physical model'); none by default.",
+        help=(
+            "pallet,battery,visit,flown | all (every one but flown; all,flown for every one): the physical terms "
+            "(docs/schedule.md, 'The physical model'); none by default."
+        ),
     ),
     output: Path | None = typer.Option(
         None, "-o", "--output", help="Write the schedule (JSON) to this file."

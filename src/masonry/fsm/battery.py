@@ -17,13 +17,10 @@ import math
 from collections.abc import Callable
 
 from masonry.battery_drain import DrainMeter, flight_left_s
-from masonry.timing import MIN_JERK_PEAK_TO_MEAN_SPEED
+from masonry.timing import LEG_SETTLE_S, MIN_JERK_PEAK_TO_MEAN_SPEED
 
 Vec3 = tuple[float, float, float]
 
-#: Each leg ends with the UAV brought to rest (below ``arrive_speed_mps``, settled before a transit's request):
-#: seconds added to a leg's planned duration. On the arducopter vehicle a leg took 1-2 s past its plan.
-LEG_SETTLE_S = 1.5
 #: The autopilot's LAND from the cruise altitude, and the disarm: mean descent speed (m/s) and the touchdown (s).
 LAND_SPEED_MPS = 0.5
 LAND_TOUCHDOWN_S = 1.0

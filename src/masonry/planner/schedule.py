@@ -44,6 +44,7 @@ from masonry.planner.schedule_deadlines import (
     serial_horizon,
     tick_deadlines,
 )
+from masonry.planner.schedule_flown import flown_terms
 from masonry.planner.schedule_graph import ancestors as _ancestors
 from masonry.planner.schedule_graph import clique_cover as _clique_cover
 from masonry.planner.schedule_graph import parts as _parts
@@ -441,6 +442,23 @@ def _machines(
     return lits, into, away
 
 
+def _flown(
+    p: _Problem,
+    plan: Plan,
+    terms: tuple[str, ...],
+    timing: TaskTiming,
+    cruise_altitude_m: float,
+    clearance_m: float,
+) -> list[int] | None:
+    """``flown``: the tasks' durations and chain term as flown (set on ``p``) and their visits (ticks), else None."""
+    if "flown" not in terms:
+        return None
+    p.dur, visit, p.chain = flown_terms(
+        p.tasks, plan.tasks, p.dur, p.chain, timing, cruise_altitude_m, clearance_m, p.tick_s
+    )
+    return visit
+
+
 def solve_schedule(
     plan: Plan,
     fleet: Sequence[UavSpec],
@@ -473,8 +491,9 @@ def solve_schedule(
         max_full_tasks, part_tasks: ``auto`` decomposes plans with more tasks than ``max_full_tasks``; a part
             gathers whole courses up to ``part_tasks`` tasks (a course larger than that is one part).
         tick_s: the model's time unit; durations and flights are rounded down to it (the bound stays valid).
-        physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``, as
-            names or one comma-separated string, ``all``); none by default.
+        physical: the physical terms (:mod:`~masonry.planner.schedule_physical`: ``pallet``, ``battery``,
+            ``visit``, ``flown``, as names or one string separated by ``,`` or ``+``; ``all``: every one but
+            ``flown``); none by default.
         battery, clearance_m: the packs and swaps (``battery``) and the blueprint's r_c (``pallet``).
         chaining: the chain term (:mod:`~masonry.planner.schedule_chain`): a segment not sprayed right after the
             one ending at its start costs its climb out and first descent (default); False: every segment at its
@@ -508,6 +527,7 @@ def solve_schedule(
     terms = physical_terms(physical)
     p = _problem(plan, fleet, t_, cruise_altitude_m, reservation, tick_s)
     p.chain = chain_costs(p.tasks, t_, cruise_altitude_m, tick_s) if chaining else None
+    flown = _flown(p, plan, terms, t_, cruise_altitude_m, clearance_m)
     if terms:
         p.phys = make_physics(
             plan,
@@ -520,6 +540,7 @@ def solve_schedule(
             tick_s=tick_s,
             battery=battery,
             clearance_m=clearance_m,
+            flown_visit=flown,
         )
         p.phys.apply(p)
     check_open_feasible(p.deadlines, p.tasks, p.dur, tick_s, reservation)

@@ -18,9 +18,12 @@ empty legs between its tasks. What the simulated fleet cannot escape besides, ea
 * ``visit`` (under ``site``): each task's site part is the one it holds at run time, at its floor (a brick's
   flight in from r_c, align, placing and climb out; a segment's whole minimum duration:
   :mod:`masonry.planner.schedule_visit`); with ``pallet`` a brick's carry gives up the flight in and the align.
+* ``flown``: each task's duration and visit as the machines fly them (the descent from transit layer 0, the
+  climbs to it, each leg settled: :mod:`masonry.planner.schedule_flown`); its visit replaces ``visit``'s floor.
+  A model of the mission, not a bound (``all`` leaves it out).
 
 The empty legs between consecutive tasks of a UAV are in every model (the circuit of :func:`~masonry.planner.
-schedule._machines`). Every term is counted at its least, so each stays a lower bound of what the machines fly
+schedule._machines`). Every term but ``flown`` is counted at its least, so each stays a lower bound of what the machines fly
 (the UAV-to-UAV separation in flight is not a term: docs/schedule.md says why).
 """
 
@@ -45,8 +48,10 @@ if TYPE_CHECKING:  # the types only: ortools is imported by masonry.planner.sche
 
     from masonry.planner.schedule import _Problem
 
-#: The physical terms ``--physical`` may name (``all``: every one).
-PHYSICAL_TERMS: tuple[str, ...] = ("pallet", "battery", "visit")
+#: The physical terms ``--physical`` may name (``all``: every one but ``flown``, which is named on its own).
+PHYSICAL_TERMS: tuple[str, ...] = ("pallet", "battery", "visit", "flown")
+#: What ``all`` names (``flown`` is a model of the mission, not a bound: :mod:`~masonry.planner.schedule_flown`).
+ALL_TERMS: tuple[str, ...] = ("pallet", "battery", "visit")
 
 
 @dataclass(frozen=True)
@@ -82,16 +87,20 @@ DEFAULT_BATTERY = BatteryModel()
 
 
 def physical_terms(physical: str | Sequence[str]) -> tuple[str, ...]:
-    """``physical`` (a comma-separated string, ``all``, ``none`` or "", or a sequence of names) as terms of
-    :data:`PHYSICAL_TERMS`, in their order.
+    """``physical`` (a string of names separated by ``,`` or ``+``, ``all``, ``none`` or "", or a sequence of
+    names) as terms of :data:`PHYSICAL_TERMS`, in their order (``all``: :data:`ALL_TERMS`).
 
     Raises:
         PlanningError: an unknown name.
     """
-    names = [n.strip() for n in physical.split(",")] if isinstance(physical, str) else list(physical)
+    names = (
+        [n.strip() for n in physical.replace("+", ",").split(",")]
+        if isinstance(physical, str)
+        else list(physical)
+    )
     names = [n for n in names if n and n != "none"]
     if "all" in names:
-        return PHYSICAL_TERMS
+        names = [n for n in names if n != "all"] + list(ALL_TERMS)
     bad = [n for n in names if n not in PHYSICAL_TERMS]
     if bad:
         raise PlanningError(f"physical: unknown term {bad[0]!r} (of {', '.join(PHYSICAL_TERMS)}, all, none)")
@@ -140,7 +149,7 @@ class Physics:
 
     @property
     def visit(self) -> bool:
-        return "visit" in self.terms
+        return "visit" in self.terms or "flown" in self.terms
 
     @property
     def battery(self) -> bool:
@@ -346,13 +355,15 @@ def make_physics(
     tick_s: float,
     battery: BatteryModel = DEFAULT_BATTERY,
     clearance_m: float = DEFAULT_CLEARANCE_M,
+    flown_visit: Sequence[int] | None = None,
 ) -> Physics:
-    """The physical terms of a schedule problem (ticks)."""
+    """The physical terms of a schedule problem (ticks); ``flown_visit``: per task its visit as flown
+    (``flown``: :func:`~masonry.planner.schedule_flown.flown_terms`), which replaces ``visit``'s floor."""
     if not (math.isfinite(battery.pack_s) and battery.pack_s > 0 and 0 <= battery.low_fraction < 1):
         raise PlanningError(f"battery: a pack of {battery.pack_s!r} s down to {battery.low_fraction!r}")
     phases = brick_phases(plan, tasks, dur, timing, cruise_altitude_m, tick_s)
-    visit = None
-    if "visit" in terms:
+    visit = None if flown_visit is None else list(flown_visit)
+    if visit is None and "visit" in terms:
         site = [phases[i].site if i in phases else 0 for i in range(len(tasks))]
         post = [phases[i].post if i in phases else 0 for i in range(len(tasks))]
         visit = visit_site(tasks, dur, site, post, timing, clearance_m, tick_s)
@@ -485,6 +496,7 @@ def add_battery(
 
 
 __all__ = [
+    "ALL_TERMS",
     "DEFAULT_BATTERY",
     "PHYSICAL_TERMS",
     "BatteryModel",
