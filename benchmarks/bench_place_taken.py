@@ -17,27 +17,8 @@ import math
 import numpy as np
 
 from masonry.blueprint_gen import pyramid
+from masonry.mission.built_truth import neighbour_errors_m
 from masonry.mission.simulate import SimulatedMission
-
-
-def _neighbour_errors_m(mission: SimulatedMission) -> list[float]:
-    """Per placed brick with placed neighbours, its offset's distance to their mean offset (m, horizontal)."""
-    bp, world = mission.blueprint, mission.world
-    done = {a.task_id for a in mission.control.history if a.status == "done"}
-    placed = [b for b in bp.bricks if f"B{b.id}" in done]
-    off = {b.id: np.asarray(world.bricks[b.id].position_m) - np.asarray(b.position_m) for b in placed}
-    out = []
-    for b in placed:
-        near = [
-            o.id
-            for o in placed
-            if o.id != b.id
-            and math.dist(o.position_m[:2], b.position_m[:2]) <= b.size_m[0] * 1.01
-            and -1e-6 < b.position_m[2] - o.position_m[2] < b.size_m[2] + 1e-3
-        ]
-        if near:
-            out.append(float(np.linalg.norm((off[b.id] - np.mean([off[i] for i in near], axis=0))[:2])))
-    return out
 
 
 def main() -> None:
@@ -57,7 +38,7 @@ def main() -> None:
             if a.status == "failed" and (a.reason or "").startswith("place taken")
         ]
         taken += [f"{seed}:{t}" for t in refused]
-        errors += _neighbour_errors_m(mission)
+        errors += neighbour_errors_m(mission)
         stuck = ",".join(report.stuck) or "-"
         print(f"seed {seed:3d}  completed {report.completed!s:5}  stuck {stuck}", flush=True)
     over = sum(e > 0.02 for e in errors)

@@ -13,6 +13,7 @@ from masonry.errors import InputError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import PRESETS, uav_settings
 from masonry.fsm.wall_align import wall_offset_m
+from masonry.mission.built_truth import neighbour_errors_m
 from masonry.mission.simulate import SimulatedMission
 
 WALL = {0: (0.0, 0.0, 0.1), 1: (0.3, 0.0, 0.1), 2: (0.15, 0.0, 0.2)}
@@ -38,27 +39,6 @@ def test_only_the_px4_preset_turns_it_on() -> None:
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).align_on_wall is False
     assert PRESETS["px4"]["align_on_wall"] is True
     assert "align_on_wall" not in PRESETS["arducopter"]
-
-
-def _relative_m(mission: SimulatedMission) -> list[float]:
-    """Per placed brick (its task done), the horizontal distance of its offset from the design to the mean offset of the bricks it
-    touches in its course or stands on (what a wall built off as a whole does not show)."""
-    bp, world = mission.blueprint, mission.world
-    done = {a.task_id for a in mission.control.history if a.status == "done"}
-    placed = [b for b in bp.bricks if f"B{b.id}" in done]  # (not one found off its course: never done)
-    off = {b.id: np.asarray(world.bricks[b.id].position_m) - np.asarray(b.position_m) for b in placed}
-    out = []
-    for b in placed:
-        near = [
-            o.id
-            for o in placed
-            if o.id != b.id
-            and math.dist(o.position_m[:2], b.position_m[:2]) <= b.size_m[0] * 1.01
-            and -1e-6 < b.position_m[2] - o.position_m[2] < b.size_m[2] + 1e-3
-        ]
-        if near:
-            out.append(float(np.linalg.norm((off[b.id] - np.mean([off[i] for i in near], axis=0))[:2])))
-    return out
 
 
 def _px4_pyramid(align_on_wall: bool) -> SimulatedMission:
@@ -89,7 +69,7 @@ def test_on_gnss_the_bricks_keep_closer_to_their_neighbours() -> None:
     less than half as far from where their neighbours say they belong as on the absolute position (1.6 cm
     against 13.4 cm on this seed at main 524230c, every brick placed both ways; docs/performance/as-built.md has
     the benchmark)."""
-    on, off = _relative_m(_px4_pyramid(True)), _relative_m(_px4_pyramid(False))
+    on, off = neighbour_errors_m(_px4_pyramid(True)), neighbour_errors_m(_px4_pyramid(False))
     assert np.mean(on) < 0.5 * np.mean(off), (np.mean(on), np.mean(off))
 
 
