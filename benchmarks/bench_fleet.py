@@ -29,12 +29,15 @@ the CP-SAT schedule"; the first figures, before issue 15's fleet work, in docs/p
 table per policy. ``schedule`` follows the CP-SAT schedule above (``masonry sim --policy schedule``); the
 schedule is solved once per wall, fleet, reservation and time limit and cached on disk
 (``benchmarks/schedule_cache.py``, ``--schedule-cache DIR``), so every seed and policy of a sweep uses the same.
+``--schedule-physical TERMS`` gives that schedule physical terms (e.g. ``flown``: ``masonry schedule --physical
+flown``; none by default, the plain schedule).
 
 Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-path[,schedule]]
        [--reservation site|task] [--airspace columns|table]
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
        [--schedule-time-s 90] [--physical all|pallet|battery|visit|none] [--schedule-cache DIR]
+       [--schedule-physical none|flown|...]
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 
@@ -309,6 +312,11 @@ def main() -> None:
         help="the physical schedule's terms (pallet, battery, all; none: no physical column)",
     )
     ap.add_argument("--schedule-cache", type=Path, default=None, help="directory of the cached schedules")
+    ap.add_argument(
+        "--schedule-physical",
+        default="none",
+        help="the physical terms of the schedule --policy schedule follows (e.g. flown; none: the plain one)",
+    )
     args = ap.parse_args()
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30", "pyramid"])
     unknown = [w for w in walls if w not in WALLS]
@@ -320,6 +328,10 @@ def main() -> None:
         physical_terms(args.physical)
     except PlanningError as exc:
         ap.error(f"--physical: {exc}")
+    try:
+        physical_terms(args.schedule_physical)
+    except PlanningError as exc:
+        ap.error(f"--schedule-physical: {exc}")
     policies = policies_of(ap, args.policy, args.schedule_time_s)
     fleets = _pairs(args.fleets) if args.fleets else (QUICK_FLEETS if args.quick else FLEETS)
     print(
@@ -338,7 +350,13 @@ def main() -> None:
             schedule = None
             if args.schedule_time_s > 0:
                 schedule, took, cached = cached_schedule(
-                    blueprint, bricks, adhesion, args.reservation, args.schedule_time_s, args.schedule_cache
+                    blueprint,
+                    bricks,
+                    adhesion,
+                    args.reservation,
+                    args.schedule_time_s,
+                    args.schedule_cache,
+                    physical=args.schedule_physical,
                 )
                 print(
                     f"  scheduled {bricks} + {adhesion}: makespan {schedule.makespan_s:,.0f} s "

@@ -25,7 +25,7 @@ from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.schedule_file import read_schedule, stamp_schedule
 from masonry.planner import plan as make_plan
-from masonry.planner.schedule import solve_schedule
+from masonry.planner.schedule import physical_terms, solve_schedule
 from masonry.planner.schedule_values import OfflineSchedule
 
 #: the solver's seed and workers, as the benchmarks have always called it
@@ -64,23 +64,25 @@ def cached_schedule(
     time_limit_s: float,
     cache_dir: Path | None = None,
     chaining: bool = True,
+    physical: str = "",
 ) -> tuple[OfflineSchedule, float, bool]:
     """The schedule of ``blueprint`` flown by ``bricks`` + ``adhesion`` UAVs, the seconds it took to get (the
     solve, or reading the file) and whether it came from the cache (``chaining``: the model's chain term, as
-    ``solve_schedule``'s)."""
+    ``solve_schedule``'s; ``physical``: its ``--physical`` terms, e.g. ``flown``, none by default)."""
     fleet = fleet_for(blueprint, bricks, adhesion)
     bp = blueprint if fleet == blueprint.fleet else with_fleet(blueprint, fleet)
     where = cache_dir if cache_dir is not None else default_cache_dir()
     name = (
         f"{wall_digest(bp)}-{fleet_digest(bp)}-{reservation}-{time_limit_s:g}s-seed{SEED}-w{WORKERS}"
-        f"{'' if chaining else '-nochain'}-{model_digest()}.json"
+        f"{'' if chaining else '-nochain'}{_physical_tag(physical)}-{model_digest()}.json"
     )
     path = where / name
     wall0 = time.perf_counter()
     if path.exists():
         return read_schedule(path), time.perf_counter() - wall0, True
     result = stamp_schedule(
-        solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s, chaining=chaining), bp
+        solve_as_the_cli(blueprint, bricks, adhesion, reservation, time_limit_s, physical, chaining=chaining),
+        bp,
     )
     took_s = time.perf_counter() - wall0
     where.mkdir(parents=True, exist_ok=True)
@@ -88,6 +90,12 @@ def cached_schedule(
     tmp.write_text(json.dumps(result.to_dict(), indent=1) + "\n", encoding="utf-8")
     tmp.replace(path)
     return result, took_s, False
+
+
+def _physical_tag(physical: str) -> str:
+    """The file name's part for ``physical`` terms (none: nothing, so the plain schedules keep their names)."""
+    terms = physical_terms(physical)
+    return f"-{'+'.join(terms)}" if terms else ""
 
 
 def solve_as_the_cli(
