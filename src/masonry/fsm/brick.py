@@ -22,7 +22,7 @@ from masonry.fsm.grasp_reach import grasp_done
 from masonry.fsm.noise_gate import MEAN_ALONE_AFTER, HoverNoise, noise_aligned
 from masonry.fsm.putback import PutBack
 from masonry.fsm.release_gate import ReleaseGate
-from masonry.fsm.side_look import SideLook
+from masonry.fsm.side_look import SideLook, heading_flip_rad
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
 from masonry.fsm.wall_align import WallAlign
@@ -92,6 +92,7 @@ class BrickUav(PutBack):
         self._wall = WallAlign()  # (masonry.fsm.wall_align: with align_on_wall only)
         self._side = SideLook()  # (masonry.fsm.side_look: a tower's support, hidden from above)
         self._gate = ReleaseGate()  # (masonry.fsm.release_gate: a release on a fresh sighting of the wall)
+        self._flip_of: tuple[tuple[str, float], float] | None = None  # (_place_yaw_rad)
         self._gate_noise = HoverNoise(config.gate_window_s or 1.0)
         self._gate_entered_s = math.nan
         self._dropoff = DropoffReach(config.gate_window_s or 1.0)  # (masonry.fsm.dropoff_reach)
@@ -399,7 +400,11 @@ class BrickUav(PutBack):
 
     # -- transport and place -------------------------------------------------------------------------------
     def _place_yaw_rad(self) -> float:
-        return wrap_angle_rad(self.brick_task.yaw_rad - self.attempt.carry_yaw_rad)
+        heading = self.brick_task.yaw_rad - self.attempt.carry_yaw_rad
+        key = (self.brick_task.id, heading)  # (masonry.fsm.side_look.heading_flip_rad: a neighbour in view)
+        if self._flip_of is None or self._flip_of[0] != key:
+            self._flip_of = (key, heading_flip_rad(self, heading))
+        return wrap_angle_rad(heading + self._flip_of[1])
 
     def _place_effector_target_m(self) -> np.ndarray:
         t = self.brick_task

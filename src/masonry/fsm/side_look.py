@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,6 +42,7 @@ __all__ = [
     "TRACK_SPREAD_M",
     "LookScene",
     "SideLook",
+    "heading_flip_rad",
     "last_leg_lag_s",
     "look_offset_m",
     "marker_in_view",
@@ -345,8 +346,53 @@ def last_leg_lag_s(uav: BrickUav) -> float | None:
     return lag_s if lag_s > 0.0 and not uav.attempt.in_wind else None
 
 
-def scene_of(uav: BrickUav) -> LookScene:
-    """The placement in hand as :func:`look_offset_m` sees it (its design and the wall's, ``UavConfig.wall``)."""
+def _beside_seen(scene: LookScene, beside_m: Sequence[tuple[float, float, float]]) -> bool:
+    """A whole marker of a brick beside the drop-off in its course (top-face centres ``beside_m``) in the camera's
+    view, outside the carried brick's shadow, with the effector right over the drop-off at it or at the first look
+    point above it (the wall at its design)."""
+    others = tuple(o for o in scene.others if all(math.dist(o, t) > 1e-6 for t in beside_m))
+    look = replace(scene, supports=tuple(beside_m), others=others)
+    return any(_support_seen(look, np.zeros(2), h) for h in (0.0, PRE_RELEASE_GAP_M + _FIRST_LOOK_M))
+
+
+#: The first look point's height over the pre-release point (``release_gate.RELOOK_CLIMB_M``)
+_FIRST_LOOK_M = 0.05
+
+
+def heading_flip_rad(uav: BrickUav, heading_rad: float) -> float:
+    """pi to place ``uav``'s first-course brick turned a half turn (the body at ``heading_rad`` + pi), else 0.
+
+    A first-course drop-off beside bricks of its course, none of them in the camera's view at the release or the
+    first look point at ``heading_rad``, one of them in view turned: the camera sits 10 cm beside the rod, and a
+    neighbour on the far side is out of the image below about 13 cm and under the carried brick's shadow above (the
+    px4 pyramid's B2 beside B1: no height from 0 to 40 cm showed a marker of B1; its release waited on sightings
+    1-4 s old and failed seeds 15 and 19, and B2 lay 2-15 cm off B1 on 13 of the 18 other seeds;
+    docs/performance/as-built.md, branch ``pyrseed33``). The brick is the same turned; its markers are estimated
+    with their own orientation. Only with ``align_on_wall`` and ``side_look``."""
+    cfg, task = uav.config, uav.brick_task
+    if not (cfg.align_on_wall and cfg.side_look and cfg.wall):
+        return 0.0
+    bottom = task.position_m[2] - task.size_m[2] / 2.0
+    top = bottom + task.size_m[2]
+    beside, below = [], False
+    for bid, t in cfg.wall:
+        h = math.hypot(t[0] - task.position_m[0], t[1] - task.position_m[1])
+        if bid == task.brick or h >= 1.01 * task.size_m[0]:
+            continue
+        if abs(t[2] - bottom) < 1e-3 and h < 0.99 * task.size_m[0]:
+            below = True
+        elif abs(t[2] - top) < 1e-3:
+            beside.append((float(t[0]), float(t[1]), float(t[2])))
+    if below or not beside:
+        return 0.0
+    if _beside_seen(scene_of(uav, heading_rad), beside):
+        return 0.0
+    return math.pi if _beside_seen(scene_of(uav, heading_rad + math.pi), beside) else 0.0
+
+
+def scene_of(uav: BrickUav, body_yaw_rad: float | None = None) -> LookScene:
+    """The placement in hand as :func:`look_offset_m` sees it (its design and the wall's, ``UavConfig.wall``), the
+    body at ``body_yaw_rad`` (None: the placement's heading)."""
     cfg, task = uav.config, uav.brick_task
     top = uav._place_effector_target_m()
     drop = (float(top[0]), float(top[1]), float(top[2]))
@@ -363,7 +409,7 @@ def scene_of(uav: BrickUav) -> LookScene:
     eff = uav.effector.offset_body_m
     return LookScene(
         drop_top_m=drop,
-        body_yaw_rad=uav._place_yaw_rad(),
+        body_yaw_rad=uav._place_yaw_rad() if body_yaw_rad is None else body_yaw_rad,
         brick_yaw_rad=task.yaw_rad,
         size_m=task.size_m,
         supports=tuple(supports),
