@@ -266,10 +266,7 @@ class AdhesionUav(UavModel):
         # patience, as in the hover: align_patience_s past the descent's end the tolerance doubles; the attempt
         # ends (with its reason) at release_timeout_s or, if later, twice the patience; on a noisy position source
         # those count from the reported height's return after it ran off (masonry.fsm.descent_reach.HeightRunOff)
-        if cfg.gate_window_s > 0.0 and self._now_s > self.nav.end_s:
-            off_m = float(tel.position_m[2] - self.nav.target_m[2])
-            if self._run_off.waits(self._now_s, off_m, cfg.control_period_s, cfg.leg_timeout_s):
-                self.nav.wait(self._now_s)
+        self._run_off.hold(self.nav, self._now_s, float(tel.position_m[2]), cfg)
         late = self._now_s - self.nav.end_s
         tolerance_m = cfg.spray_tolerance_m * (2.0 if late > cfg.align_patience_s else 1.0)
         if cfg.gate_window_s > 0.0:

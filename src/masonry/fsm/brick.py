@@ -480,10 +480,7 @@ class BrickUav(PutBack):
         self._side.step(self, self._place_yaw_rad())
         if self._gate.lost(self, tel):  # the last leg's pass missed the drop-off while fresh: look again now
             return
-        if cfg.gate_window_s > 0.0 and self._now_s > self.nav.end_s:  # (descent_reach.HeightRunOff)
-            off_m = float(tel.position_m[2] - self.nav.target_m[2])
-            if self._run_off.waits(self._now_s, off_m, cfg.control_period_s, cfg.leg_timeout_s):
-                self.nav.wait(self._now_s)
+        self._run_off.hold(self.nav, self._now_s, float(tel.position_m[2]), cfg)
         error = dropoff_error_m(self, tel, self._dropoff)
         if error is not None and (self._gate.closing(self, tel) or self._gate.low(self, tel)):
             error = None  # (masonry.fsm.release_gate: nearer by the next tick, or under the supports' tops)

@@ -23,6 +23,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from masonry.fsm.config import UavConfig
+from masonry.fsm.navigator import Navigator
 from masonry.fsm.noise_gate import HoverNoise
 
 __all__ = ["HEIGHT_RUN_OFF_M", "HEIGHT_RUN_OFF_S", "DescentReach", "HeightRunOff"]
@@ -115,3 +117,12 @@ class HeightRunOff:
             return False
         self.waited_s += dt_s
         return True
+
+    def hold(self, nav: Navigator, now_s: float, height_m: float, config: UavConfig) -> None:
+        """A descent's tick at ``now_s`` with the reported height ``height_m`` (m): on a noisy position source
+        (``gate_window_s`` > 0) past the leg's end, the leg's timeout waits this tick while the height has run off
+        its end point (:meth:`waits`, ``leg_timeout_s`` its budget)."""
+        if config.gate_window_s > 0.0 and now_s > nav.end_s:
+            off_m = height_m - float(nav.target_m[2])
+            if self.waits(now_s, off_m, config.control_period_s, config.leg_timeout_s):
+                nav.wait(now_s)
