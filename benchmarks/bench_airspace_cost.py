@@ -16,6 +16,15 @@ says so), and the difference to ``main`` is what those reservations cost the mak
 - ``pallet`` / ``wall``: no pair of volumes both over the pallet (between the first and last pickup row, with
   ``SEPARATION_XY_M`` around) / both over the wall's footprint (the same margin);
 - ``hover``: no pair with a hold hover in it;
+- ``flight-zone`` / ``flight-hover`` / ``flight-pad``: no pair of a climb or a lateral leg with a zone (a UAV
+  working at a site, or the column a flight comes down into) / a hold hover / a landed UAV's pad: one kind of
+  what *stays* at a time, against flights (``flights`` is all three and ``crossings`` together);
+- ``flight-flight`` / ``flight-stay`` / ``flight-column``: told apart by whose volume it is (mission control's
+  :meth:`~masonry.mission.airspace.ColumnClearance.free` patched, not the pair test): no climb or leg conflicts
+  with another *flight* (its climb, its leg, or the column it comes down into; two columns down still keep apart)
+  / with what *stays* (a zone of a UAV not flying, a hold hover, a pad) / with a flight's column down only;
+- ``lane-hover``: no pair with a hold hover in the lane between the pallet and the wall (the hover's y between
+  the pickup row nearest the wall and the wall);
 - ``no-swaps``: every volume reserved as in ``main``, the packs drain 1/100 as fast (no battery swap);
 - ``no-separation``: ``simulate(separation=False)``: no layers, no columns (the site rule only).
 
@@ -42,12 +51,33 @@ import masonry.mission.airspace_queries as queries_mod
 import masonry.mission.airspace_requests as requests_mod
 import masonry.mission.linger as linger_mod
 from masonry.blueprint import Blueprint
+from masonry.mission.airspace import ColumnClearance
 from masonry.mission.report import MissionReport
 from masonry.mission.volumes import Volume, volumes_clear, volumes_conflict
 from masonry.separation import SEPARATION_XY_M
 from masonry.sim.faults import Faults
 
-MODES = ("main", "all", "flights", "crossings", "pallet", "wall", "hover", "no-swaps", "no-separation")
+MODES = (
+    "main",
+    "all",
+    "flights",
+    "crossings",
+    "pallet",
+    "wall",
+    "hover",
+    "flight-zone",
+    "flight-hover",
+    "flight-pad",
+    "lane-hover",
+    "flight-flight",
+    "flight-stay",
+    "flight-column",
+    "no-swaps",
+    "no-separation",
+)
+
+#: the volumes of a flight (what moves), against what stays (a zone, a hold hover, a pad)
+FLIGHT = frozenset({"climb", "leg"})
 
 #: the pack's drain with ``no-swaps``: 1/100 of the simulated vehicles' 1/1200 per second
 NO_SWAP_DRAIN_PER_S = 1.0 / 120000.0
@@ -67,8 +97,15 @@ def ignore_for(mode: str, blueprint: Blueprint) -> Ignore | None:
     """Which pairs of volumes the mode lets overlap (None: every pair is checked, as in ``main``)."""
     pallet, wall = bands(blueprint)
 
+    m = SEPARATION_XY_M
+    lo, hi = sorted(((pallet[0] + m, pallet[1] - m), (wall[0] + m, wall[1] - m)))
+    lane = (lo[1], hi[0])  # between the pickup rows nearest the wall and the wall
+
     def inside(v: Volume, band: tuple[float, float]) -> bool:
         return all(band[0] < y < band[1] for y in (v.a[1], v.b[1]))
+
+    def against(v: Volume, q: Volume, stay: str) -> bool:
+        return (v.kind in FLIGHT and q.kind == stay) or (q.kind in FLIGHT and v.kind == stay)
 
     rules: dict[str, Ignore] = {
         "all": lambda v, q: True,
@@ -77,6 +114,10 @@ def ignore_for(mode: str, blueprint: Blueprint) -> Ignore | None:
         "pallet": lambda v, q: inside(v, pallet) and inside(q, pallet),
         "wall": lambda v, q: inside(v, wall) and inside(q, wall),
         "hover": lambda v, q: "hover" in (v.kind, q.kind),
+        "flight-zone": lambda v, q: against(v, q, "zone"),
+        "flight-hover": lambda v, q: against(v, q, "hover"),
+        "flight-pad": lambda v, q: against(v, q, "pad"),
+        "lane-hover": lambda v, q: any(x.kind == "hover" and lane[0] < x.a[1] < lane[1] for x in (v, q)),
     }
     return rules.get(mode)
 
@@ -110,6 +151,44 @@ def patched(ignore: Ignore | None) -> Iterator[None]:
             setattr(mod, name, f)
 
 
+#: the owner-aware modes: which (my volume, its volume) pairs ``ColumnClearance.free`` lets pass, given whether
+#: each is a climb or leg (``move``) or a flight's column down (``column``)
+OWNER_MODES: dict[str, Callable[[bool, bool, bool, bool], bool]] = {
+    "flight-flight": lambda vm, vc, qm, qc: (vm and (qm or qc)) or (qm and vc),
+    "flight-stay": lambda vm, vc, qm, qc: (vm and not (qm or qc)) or (qm and not (vm or vc)),
+    "flight-column": lambda vm, vc, qm, qc: (vm and qc) or (qm and vc),
+}
+
+
+@contextmanager
+def owner_patched(mode: str) -> Iterator[None]:
+    """``ColumnClearance.free`` letting ``OWNER_MODES[mode]``'s pairs pass, for the ``with`` block."""
+    passes = OWNER_MODES[mode]
+    saved = ColumnClearance.free
+
+    def free(self: ColumnClearance, uav: str, vols: list[Volume]) -> bool:
+        mine = vols[-1] if vols and vols[-1].kind == "zone" else None
+        for other, u in self.records.items():
+            if other == uav:
+                continue
+            theirs = (
+                u.volumes[-1] if u.flight is not None and u.volumes and u.volumes[-1].kind == "zone" else None
+            )
+            for q in u.volumes:
+                for v in vols:
+                    if not volumes_conflict(v, q, self.sep_xy_m, self.spacing_m - 1e-9):
+                        continue
+                    if not passes(v.kind in FLIGHT, v is mine, q.kind in FLIGHT, q is theirs):
+                        return False
+        return True
+
+    ColumnClearance.free = free  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        ColumnClearance.free = saved  # type: ignore[method-assign]
+
+
 def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, mode: str) -> MissionReport:
     """One mission in ``mode``."""
     extra: dict[str, object] = {}
@@ -117,6 +196,9 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int, mode: str) 
         extra["faults"] = Faults(battery_drain_per_s=NO_SWAP_DRAIN_PER_S)
     if mode == "no-separation":
         extra["separation"] = False
+    if mode in OWNER_MODES:
+        with owner_patched(mode):
+            return simulate_fleet(blueprint, bricks, adhesion, seed, **extra)
     with patched(ignore_for(mode, blueprint)):
         return simulate_fleet(blueprint, bricks, adhesion, seed, **extra)
 
