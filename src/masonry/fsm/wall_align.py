@@ -26,9 +26,11 @@ at most ``wall_follow_cap_m`` from it: a course end that sees only its course ne
 neighbour's offset from its supports (docs/state-machines.md, "Building relative to the wall as it stands").
 
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
-same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
-planned on the as-built poses gives way to it: the offset is added to the brick's own design, not to the planned
-target (the bricks in view place it as the plan would, measured now).
+same smoothing and deadband, its mean over the frames no older than ``release_fresh_s`` before the newest,
+:func:`frames_span_s`: a fresh sighting is not averaged with frames seconds old); ``UavConfig.align_on_wall``
+turns it on (the ``px4`` control preset does). A drop-off planned on the as-built poses gives way to it: the offset
+is added to the brick's own design, not to the planned target (the bricks in view place it as the plan would,
+measured now).
 """
 
 from __future__ import annotations
@@ -51,7 +53,15 @@ if TYPE_CHECKING:
     from masonry.planner.tasks import BrickTask
     from masonry.ports import Telemetry
 
-__all__ = ["WallAlign", "follow_in_view", "frames_span_s", "follow_m", "neighbours_of", "supports_of", "wall_offset_m"]
+__all__ = [
+    "WallAlign",
+    "follow_in_view",
+    "follow_m",
+    "frames_span_s",
+    "neighbours_of",
+    "supports_of",
+    "wall_offset_m",
+]
 
 #: A brick seen farther than this from its design is not on the wall (a pallet, a magnet): no reference.
 _REFERENCE_M = 0.5
