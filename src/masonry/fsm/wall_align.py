@@ -96,7 +96,7 @@ def frames_span_s(release_fresh_s: float) -> float:
     """The wall alignment's target is the mean of its last frames no older than this (s) before the newest: the
     age of a sighting the release trusts (``UavConfig.release_fresh_s``; inf without one, the last five whatever
     their age). A neighbour that drops in and out of view leaves its last five frames seconds apart, and their mean
-    the wander of those seconds: the px4 wall in 4 m/s let bricks go on a sighting 0.0 s old with four of the five
+    the wander of those seconds: the px4 wall in 4 m/s let bricks go on a sighting 0.0 s old with three of the five
     frames 1.1-2.7 s older, the GNSS 20-25 mm/s on, the target 18-30 mm off its neighbour (rotated bond seed 0 B0,
     pyramid seed 9 B0; docs/performance/as-built.md, branch ``gust34``)."""
     return release_fresh_s if release_fresh_s > 0.0 else math.inf
