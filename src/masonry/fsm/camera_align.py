@@ -16,6 +16,7 @@ while the camera sees the brick: near the brick, out of the camera's view, the l
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from typing import TYPE_CHECKING
 
@@ -35,29 +36,52 @@ class CameraAlign:
         size: estimates averaged (at the 10 Hz control rate, half a second: GNSS wanders slower).
         min_estimates: fewer than this do not move the target.
         shift_m: the target follows once the mean is this far from it (a deadband for the camera's own noise).
+        span_s: estimates older than this (s) before the newest are left out of the mean (``add``'s ``time_s``;
+            inf: the last ``size`` whatever their age). Five frames are half a second at the 10 Hz control rate; a
+            brick that drops out of view between frames leaves the last five seconds apart, and their mean holds
+            the wander of those seconds (:mod:`masonry.fsm.wall_align`, ``frames_span_s``).
     """
 
-    def __init__(self, size: int = 5, min_estimates: int = 3, shift_m: float = 0.002) -> None:
+    def __init__(
+        self, size: int = 5, min_estimates: int = 3, shift_m: float = 0.002, span_s: float = math.inf
+    ) -> None:
         self.size = size
         self.min_estimates = min_estimates
         self.shift_m = shift_m
+        self.span_s = span_s
         self._recent: deque[np.ndarray] = deque(maxlen=size)
+        self._times: deque[float] = deque(maxlen=size)
+        self._count = 0  # estimates added since the reset
         self.center_m: np.ndarray | None = None
         self.shifted_m = 0.0  # the total distance the target was moved (for the record)
 
     def reset(self, center_m: np.ndarray) -> None:
         """A new alignment on the brick estimated at ``center_m``."""
         self._recent.clear()
+        self._times.clear()
+        self._count = 0
         self.center_m = np.asarray(center_m, dtype=float).copy()
         self.shifted_m = 0.0
 
-    def add(self, center_m: np.ndarray) -> np.ndarray | None:
-        """One fresh estimate; the move to make (m, world) when the mean has moved past ``shift_m``, else None."""
+    @property
+    def times_s(self) -> tuple[float, ...]:
+        """When (s) the estimates the mean is over were taken (``add``'s ``time_s``; 0.0 without one)."""
+        return tuple(self._times)
+
+    def add(self, center_m: np.ndarray, time_s: float = 0.0) -> np.ndarray | None:
+        """One fresh estimate taken at ``time_s``; the move to make (m, world) when the mean has moved past
+        ``shift_m``, else None. Once ``min_estimates`` have been added since the reset, the mean is over the last
+        ``size`` of them no older than ``span_s`` before this one, however few."""
         if self.center_m is None:
             self.reset(center_m)
             return None
         self._recent.append(np.asarray(center_m, dtype=float))
-        if len(self._recent) < self.min_estimates:
+        self._times.append(float(time_s))
+        self._count += 1
+        while self._times[0] < time_s - self.span_s:
+            self._times.popleft()
+            self._recent.popleft()
+        if self._count < self.min_estimates:
             return None
         mean = np.mean(np.stack(self._recent), axis=0)
         delta = mean - self.center_m

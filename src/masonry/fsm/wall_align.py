@@ -26,9 +26,11 @@ at most ``wall_follow_cap_m`` from it: a course end that sees only its course ne
 neighbour's offset from its supports (docs/state-machines.md, "Building relative to the wall as it stands").
 
 :class:`WallAlign` is a :class:`~masonry.fsm.camera_align.CameraAlign` over the drop-off's top-face centre (the
-same smoothing and deadband); ``UavConfig.align_on_wall`` turns it on (the ``px4`` control preset does). A drop-off
-planned on the as-built poses gives way to it: the offset is added to the brick's own design, not to the planned
-target (the bricks in view place it as the plan would, measured now).
+same smoothing and deadband, its mean over the frames no older than ``release_fresh_s`` before the newest,
+:func:`frames_span_s`: a fresh sighting is not averaged with frames seconds old); ``UavConfig.align_on_wall``
+turns it on (the ``px4`` control preset does). A drop-off planned on the as-built poses gives way to it: the offset
+is added to the brick's own design, not to the planned target (the bricks in view place it as the plan would,
+measured now).
 """
 
 from __future__ import annotations
@@ -51,7 +53,15 @@ if TYPE_CHECKING:
     from masonry.planner.tasks import BrickTask
     from masonry.ports import Telemetry
 
-__all__ = ["WallAlign", "follow_in_view", "follow_m", "neighbours_of", "supports_of", "wall_offset_m"]
+__all__ = [
+    "WallAlign",
+    "follow_in_view",
+    "follow_m",
+    "frames_span_s",
+    "neighbours_of",
+    "supports_of",
+    "wall_offset_m",
+]
 
 #: A brick seen farther than this from its design is not on the wall (a pallet, a magnet): no reference.
 _REFERENCE_M = 0.5
@@ -80,6 +90,16 @@ def wall_offset_m(
         return None
     close = [d for bid, d in offsets.items() if bid in near]
     return np.asarray(np.mean(close or list(offsets.values()), axis=0), dtype=float)
+
+
+def frames_span_s(release_fresh_s: float) -> float:
+    """The wall alignment's target is the mean of its last frames no older than this (s) before the newest: the
+    age of a sighting the release trusts (``UavConfig.release_fresh_s``; inf without one, the last five whatever
+    their age). A neighbour that drops in and out of view leaves its last five frames seconds apart, and their mean
+    the wander of those seconds: the px4 wall in 4 m/s let bricks go on a sighting 0.0 s old with three of the five
+    frames 1.1-2.7 s older, the GNSS 20-25 mm/s on, the target 18-30 mm off its neighbour (rotated bond seed 0 B0,
+    pyramid seed 9 B0; docs/performance/as-built.md, branch ``gust34``)."""
+    return release_fresh_s if release_fresh_s > 0.0 else math.inf
 
 
 def supports_of(
@@ -245,7 +265,9 @@ class WallAlign:
             follow = follow_in_view(self._follow_raw_m, at_design - offset, uav.config.wall_follow_cap_m)
         carried = self.carried.world_m(uav._place_yaw_rad())
         self.view_target_m = self._base_m(wall.get(own)) + follow + offset - carried
-        delta = self.tracker.add(self.view_target_m)
+        span_s = frames_span_s(uav.config.release_fresh_s)
+        self.tracker.span_s = self.trend.mean_span_s = span_s
+        delta = self.tracker.add(self.view_target_m, uav._now_s)
         self.trend.span_s = uav.config.wall_trend_s
         # the drift filter in calm air only: in 4 m/s it failed px4 missions the straight line completes (the bond's
         # seed 1, the pyramid's seed 0: a brick put back after three descents; docs/performance/as-built.md)

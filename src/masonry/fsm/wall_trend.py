@@ -28,6 +28,7 @@ so a long-stale release is not carried far). The px4 towers' bricks against thei
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Hashable
 
@@ -66,6 +67,9 @@ class WallTrend:
         self._mean_t: float | None = None
         #: the shift now applied on top of the wall alignment's target (world, m)
         self.shift_m = np.zeros(3)
+        #: the wall alignment's mean is over its frames no older than this (s) before the newest
+        #: (:attr:`masonry.fsm.camera_align.CameraAlign.span_s`)
+        self.mean_span_s = math.inf
 
     def reset(self, size: int) -> None:
         """A new placement; the wall alignment averages its last ``size`` frames."""
@@ -95,6 +99,10 @@ class WallTrend:
         while self._frames and now_s - self._frames[0][0] > self.span_s:
             self._frames.popleft()
         self._mean_times.append(now_s)
+        # the wall alignment's mean leaves out the frames older than its span before this one (CameraAlign.span_s)
+        while self._mean_times[0] < now_s - self.mean_span_s:
+            self._mean_times.popleft()
+            self._mean_offsets.popleft()
         self._mean_t = float(np.mean(self._mean_times))
 
     def rate_mps(self, now_s: float) -> np.ndarray | None:
