@@ -152,7 +152,7 @@ class WallAnchor:
         else:
             self._sightings[brick] = sighting
         wall = Wall(self._fixed, list(self._sightings.values()))  # (its three solves share its tables)
-        relative = wall.solve(variance_of=(brick,))
+        relative = wall.solve(variance_of=(brick,), only=(brick,))
         c = relative.centre_m.get(brick)
         if c is not None:
             w = look.position_m
