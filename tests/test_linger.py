@@ -238,17 +238,22 @@ def test_the_longest_task_still_to_do_kept_between_reviews_is_the_one_a_scan_fin
     """``LingerBook.affords`` keeps its role's longest expected task not done yet while the dispatcher's done tasks
     stay: after each assignment and each completion it is what a scan of the plan finds."""
     mission = SimulatedMission.from_blueprint(
-        load_blueprint(ROOT / "blueprints" / "pyramid.yaml"), SimOptions(brick_uavs=2, adhesion_uavs=1, seed=1)
+        load_blueprint(ROOT / "blueprints" / "pyramid.yaml"),
+        SimOptions(brick_uavs=2, adhesion_uavs=1, seed=1),
     )
     mc, book = mission.control, mission.control.lingers
-    book._due_s(mc, "brick", 0.0)  # (the expected durations, as the first ``affords`` with a drain computes them)
+    book._due_s(
+        mc, "brick", 0.0
+    )  # (the expected durations, as the first ``affords`` with a drain computes them)
     expected = book._expected_s
     assert expected is not None
 
     def scanned(role: str) -> float:
         done = mc.dispatcher.done
         tasks = mc.plan.tasks
-        return max((expected.get(t.id, 0.0) for t in tasks if t.kind == role and t.id not in done), default=0.0)
+        return max(
+            (expected.get(t.id, 0.0) for t in tasks if t.kind == role and t.id not in done), default=0.0
+        )
 
     answers = set()
     while True:

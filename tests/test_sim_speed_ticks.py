@@ -26,8 +26,16 @@ from masonry.mission.uav_facts import UavFacts
 from masonry.motion.pid import PID, AxisGains, PIDGains
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.sim.bricks import BrickField, SimBrick
-from masonry.sim.camera import LayoutCache, marker_layout
-from masonry.sim.shaping import ARDUCOPTER, PX4, PX4_BELOW_OWN_LOOP, Shaper, ShapingConfig, _Axis, _sqrt_controller
+from masonry.sim.camera import CameraConfig, LayoutCache, marker_layout, observe_markers
+from masonry.sim.shaping import (
+    ARDUCOPTER,
+    PX4,
+    PX4_BELOW_OWN_LOOP,
+    Shaper,
+    ShapingConfig,
+    _Axis,
+    _sqrt_controller,
+)
 from masonry.sim.vehicle import _Gauss
 
 finite = st.floats(-20.0, 20.0, allow_nan=False)
@@ -319,10 +327,20 @@ def test_the_pid_without_a_yaw_target_skips_the_yaw_axis_and_steers_as_before(ti
             integral[3] = 0.0
         yaw_was_active = target_yaw is not None
         prev_t = pid._prev_t_s
-        got = pid.step_floats(now, p, t, velocity_ff_mps=(0.1, -0.2, 0.0), yaw_rad=yaw, target_yaw_rad=target_yaw)
+        got = pid.step_floats(
+            now, p, t, velocity_ff_mps=(0.1, -0.2, 0.0), yaw_rad=yaw, target_yaw_rad=target_yaw
+        )
         # (the rates are measured before the loop: the reference reads them as step_floats left them)
         want = _pid_as_it_was(
-            pid, integral, now, p, t, (0.1, -0.2, 0.0), yaw, target_yaw, None if prev_t is None else now - prev_t
+            pid,
+            integral,
+            now,
+            p,
+            t,
+            (0.1, -0.2, 0.0),
+            yaw,
+            target_yaw,
+            None if prev_t is None else now - prev_t,
         )
         assert got == want
         assert pid._integral == integral
@@ -365,3 +383,40 @@ def test_the_drift_with_its_coefficients_kept_moves_as_it_did_when_the_step_chan
             assert fast.gps_error_m == slow.gps_error_m
             assert fast._velocity_wander_mps == slow._velocity_wander_mps
             assert fast._wander_m == slow._wander_m
+
+
+def test_the_kept_covered_answers_and_yaws_see_the_tags_asking_again_sees_frame_after_frame():
+    # (a world's frames over a wall of three courses: the resting bricks, then a carried one moving; bricks picked
+    # and put down between frames, uncovering and covering markers)
+    field, markers, config = _field_of(12), MarkerSpec(), CameraConfig()
+    R_wc = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])  # (looking straight down)
+    cache = LayoutCache()
+    field.pick(11, "brick-2")
+    carried = field.bricks[11]
+    seen = covered_seen = 0
+    for step in range(12):
+        if step in (3, 7):
+            field.pick(9 if step == 3 else 2, "brick-1")  # (a top brick leaves: the one under it shows)
+        if step in (5, 9):
+            field.drop(9 if step == 5 else 2, 0.0)
+        carried.position_m, carried.yaw_rad = (0.1 * step, 0.05, 0.6 + 0.02 * step), 0.15 * step
+        c_w = np.array([0.45 + 0.02 * step, 0.0, 1.0])
+        resting = list(field.near(float(c_w[0]), 0.0, 1.5))
+        frame = [*resting, carried] if step % 4 else resting
+        layout = cache.layout(frame, markers, field.version)
+        fast = observe_markers(
+            R_wc, c_w, frame, markers, config, np.random.default_rng(step), covered=field.covered_kept,
+            layout=layout, kept=cache,
+        )  # fmt: skip
+        slow = observe_markers(
+            R_wc, c_w, frame, markers, config, np.random.default_rng(step), covered=field.covered_at
+        )
+        everything = observe_markers(R_wc, c_w, frame, markers, config, np.random.default_rng(step))
+        assert [t.marker_id for t in fast] == [t.marker_id for t in slow]
+        for a, b in zip(fast, slow, strict=True):
+            assert np.array_equal(a.position_m, b.position_m) and np.array_equal(
+                a.R_cam_marker, b.R_cam_marker
+            )
+        seen += len(fast)
+        covered_seen += len(everything) - len(fast)
+    assert seen > 0 and covered_seen > 0  # (markers seen, and markers in view left out as covered)
