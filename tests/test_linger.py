@@ -232,3 +232,43 @@ def test_on_the_pyramid_a_wait_near_the_wall_ended_by_a_task_is_followed_by_the_
     assert home_next == 0
     assert report.min_separation_m is not None and report.min_separation_m >= 1.0
     assert report.conflict_violations == 0 and report.dependency_violations == 0
+
+
+def test_the_longest_task_still_to_do_kept_between_reviews_is_the_one_a_scan_finds():
+    """``LingerBook.affords`` keeps its role's longest expected task not done yet while the dispatcher's done tasks
+    stay: after each assignment and each completion it is what a scan of the plan finds."""
+    mission = SimulatedMission.from_blueprint(
+        load_blueprint(ROOT / "blueprints" / "pyramid.yaml"),
+        SimOptions(brick_uavs=2, adhesion_uavs=1, seed=1),
+    )
+    mc, book = mission.control, mission.control.lingers
+    book._due_s(
+        mc, "brick", 0.0
+    )  # (the expected durations, as the first ``affords`` with a drain computes them)
+    expected = book._expected_s
+    assert expected is not None
+
+    def scanned(role: str) -> float:
+        done = mc.dispatcher.done
+        tasks = mc.plan.tasks
+        return max(
+            (expected.get(t.id, 0.0) for t in tasks if t.kind == role and t.id not in done), default=0.0
+        )
+
+    answers = set()
+    while True:
+        for role in ("brick", "adhesion"):
+            kept = book._longest_task_s(mc, role)
+            assert kept == scanned(role)
+            answers.add(kept)
+        if len(mc.dispatcher.done) == len(mc.plan.tasks):
+            break
+        assigned = mc.dispatcher.assign()
+        assert assigned
+        for role in ("brick", "adhesion"):
+            assert book._longest_task_s(mc, role) == scanned(role)
+        for a in assigned:
+            mc.dispatcher.complete(a.task_id)
+            for role in ("brick", "adhesion"):
+                assert book._longest_task_s(mc, role) == scanned(role)
+    assert 0.0 in answers and len(answers) > 2  # (the answers changed as the tasks were done)

@@ -18,14 +18,24 @@ from fsm_rig import Rig
 from masonry.blueprint import Brick, MarkerSpec, UavSpec
 from masonry.fsm.config import UavConfig
 from masonry.fsm.navigator import Navigator
+from masonry.geometry import wrap_angle_rad
 from masonry.mission.liveness import Lapse, Liveness, LivenessTracker, Timeouts
 from masonry.mission.records import UavLink
 from masonry.mission.sites import SiteIntervals, SiteVisit
 from masonry.mission.uav_facts import UavFacts
+from masonry.motion.pid import PID, AxisGains, PIDGains
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.sim.bricks import BrickField, SimBrick
-from masonry.sim.camera import LayoutCache, marker_layout
-from masonry.sim.shaping import ARDUCOPTER, PX4, Shaper, _Axis, _sqrt_controller
+from masonry.sim.camera import CameraConfig, LayoutCache, marker_layout, observe_markers
+from masonry.sim.shaping import (
+    ARDUCOPTER,
+    PX4,
+    PX4_BELOW_OWN_LOOP,
+    Shaper,
+    ShapingConfig,
+    _Axis,
+    _sqrt_controller,
+)
 from masonry.sim.vehicle import _Gauss
 
 finite = st.floats(-20.0, 20.0, allow_nan=False)
@@ -267,3 +277,146 @@ def test_a_frame_over_no_brick_has_an_empty_layout_and_sees_nothing():
     markers = MarkerSpec()
     ids, centres, corners = LayoutCache().layout([], markers, 0)
     assert ids.shape == (0,) and centres.shape == (0, 3) and corners.shape == (0, 4, 3)
+
+
+# -- issue 27's fourth speed-up (branch simspeed34): the same floats as the code each replaced --------------------
+
+
+def _pid_as_it_was(pid, integral, now, p, t, ff, yaw, target_yaw, measure_dt):  # type: ignore[no-untyped-def]
+    """``PID.step_floats``'s axis loop as it was: all four axes, the yaw's thrown away without a yaw target."""
+    rate = pid._rate
+    yaw_active = target_yaw is not None
+    error = (t[0] - p[0], t[1] - p[1], t[2] - p[2], wrap_angle_rad(target_yaw - yaw) if yaw_active else 0.0)
+    integrate = measure_dt is not None and measure_dt > 0.0
+    out = [0.0, 0.0, 0.0, 0.0]
+    for i, (kp, ki, kd, out_lim, int_lim) in enumerate(pid._flat):
+        e = error[i]
+        base = (*ff, 0.0)[i] + kp * e - kd * rate[i]
+        if integrate:
+            candidate = min(int_lim, max(-int_lim, integral[i] + ki * e * measure_dt))
+            unsat = base + candidate
+            if not (abs(unsat) > out_lim and unsat * e > 0.0):
+                integral[i] = candidate
+        out[i] = min(out_lim, max(-out_lim, base + integral[i]))
+    if not yaw_active:
+        integral[3] = 0.0
+        return out[0], out[1], out[2], 0.0
+    return tuple(out)
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    ticks=st.lists(
+        st.tuples(
+            st.tuples(finite, finite, finite),
+            st.tuples(finite, finite, finite),
+            st.floats(-3.0, 3.0),
+            st.one_of(st.none(), st.floats(-3.0, 3.0)),
+        ),
+        min_size=1,
+        max_size=40,
+    )
+)
+def test_the_pid_without_a_yaw_target_skips_the_yaw_axis_and_steers_as_before(ticks):
+    pid = PID(PIDGains(yaw=AxisGains(kp=1.5, ki=0.4, kd=0.1, output_limit=1.0, integral_limit=0.5)))
+    integral = [0.0, 0.0, 0.0, 0.0]
+    yaw_was_active = False
+    for k, (p, t, yaw, target_yaw) in enumerate(ticks):
+        now = 0.1 * k
+        if target_yaw is not None and not yaw_was_active:
+            integral[3] = 0.0
+        yaw_was_active = target_yaw is not None
+        prev_t = pid._prev_t_s
+        got = pid.step_floats(
+            now, p, t, velocity_ff_mps=(0.1, -0.2, 0.0), yaw_rad=yaw, target_yaw_rad=target_yaw
+        )
+        # (the rates are measured before the loop: the reference reads them as step_floats left them)
+        want = _pid_as_it_was(
+            pid,
+            integral,
+            now,
+            p,
+            t,
+            (0.1, -0.2, 0.0),
+            yaw,
+            target_yaw,
+            None if prev_t is None else now - prev_t,
+        )
+        assert got == want
+        assert pid._integral == integral
+
+
+def _drift_as_it_was(shaper: Shaper, dt_s: float, gauss) -> None:  # type: ignore[no-untyped-def]
+    """``Shaper.drift`` as it was: its coefficients computed on every step, the axes in loops."""
+    cfg = shaper.config
+    if cfg.velocity_wander_mps > 0.0:
+        a = min(1.0, dt_s / cfg.velocity_wander_tau_s)
+        b = cfg.velocity_wander_mps * math.sqrt(a * (2.0 - a))
+        w = shaper._velocity_wander_mps
+        g = [gauss(), gauss(), gauss()]
+        for i in range(3):
+            w[i] += -w[i] * a + b * g[i]
+    sigma = cfg.gps_noise_m
+    if sigma <= 0.0:
+        return
+    a = dt_s / cfg.gps_noise_tau_s
+    b = sigma * math.sqrt(2.0 * a)
+    err = shaper.gps_error_m if cfg.gps_noise_smooth_s <= 0.0 else shaper._wander_m
+    g = [gauss(), gauss(), gauss()]
+    for i in range(3):
+        err[i] += -err[i] * a + b * g[i]
+    if cfg.gps_noise_smooth_s > 0.0:
+        k = min(1.0, dt_s / cfg.gps_noise_smooth_s)
+        for i in range(3):
+            shaper.gps_error_m[i] += k * (err[i] - shaper.gps_error_m[i])
+
+
+def test_the_drift_with_its_coefficients_kept_moves_as_it_did_when_the_step_changes_too():
+    unsmoothed = ShapingConfig(gps_noise_m=0.05, gps_noise_tau_s=3.0)
+    for config in (ARDUCOPTER, PX4, PX4_BELOW_OWN_LOOP, unsmoothed, ShapingConfig()):
+        fast, slow = Shaper(config), Shaper(config)
+        gauss, plain = _Gauss(np.random.default_rng(5)), _Gauss(np.random.default_rng(5))
+        for k in range(3000):
+            dt = (0.05, 0.01, 0.2)[(k // 700) % 3]  # (the kept coefficients follow a new step)
+            fast.drift(dt, gauss)
+            _drift_as_it_was(slow, dt, plain.__call__)
+            assert fast.gps_error_m == slow.gps_error_m
+            assert fast._velocity_wander_mps == slow._velocity_wander_mps
+            assert fast._wander_m == slow._wander_m
+
+
+def test_the_kept_covered_answers_and_yaws_see_the_tags_asking_again_sees_frame_after_frame():
+    # (a world's frames over a wall of three courses: the resting bricks, then a carried one moving; bricks picked
+    # and put down between frames, uncovering and covering markers)
+    field, markers, config = _field_of(12), MarkerSpec(), CameraConfig()
+    R_wc = np.array([[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, -1.0]])  # (looking straight down)
+    cache = LayoutCache()
+    field.pick(11, "brick-2")
+    carried = field.bricks[11]
+    seen = covered_seen = 0
+    for step in range(12):
+        if step in (3, 7):
+            field.pick(9 if step == 3 else 2, "brick-1")  # (a top brick leaves: the one under it shows)
+        if step in (5, 9):
+            field.drop(9 if step == 5 else 2, 0.0)
+        carried.position_m, carried.yaw_rad = (0.1 * step, 0.05, 0.6 + 0.02 * step), 0.15 * step
+        c_w = np.array([0.45 + 0.02 * step, 0.0, 1.0])
+        resting = list(field.near(float(c_w[0]), 0.0, 1.5))
+        frame = [*resting, carried] if step % 4 else resting
+        layout = cache.layout(frame, markers, field.version)
+        fast = observe_markers(
+            R_wc, c_w, frame, markers, config, np.random.default_rng(step), covered=field.covered_kept,
+            layout=layout, kept=cache,
+        )  # fmt: skip
+        slow = observe_markers(
+            R_wc, c_w, frame, markers, config, np.random.default_rng(step), covered=field.covered_at
+        )
+        everything = observe_markers(R_wc, c_w, frame, markers, config, np.random.default_rng(step))
+        assert [t.marker_id for t in fast] == [t.marker_id for t in slow]
+        for a, b in zip(fast, slow, strict=True):
+            assert np.array_equal(a.position_m, b.position_m) and np.array_equal(
+                a.R_cam_marker, b.R_cam_marker
+            )
+        seen += len(fast)
+        covered_seen += len(everything) - len(fast)
+    assert seen > 0 and covered_seen > 0  # (markers seen, and markers in view left out as covered)

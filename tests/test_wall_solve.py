@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, seed, settings
 from hypothesis import strategies as st
 
-from masonry.planner.wall_solve import Sighting, solve
+from masonry.planner.wall_solve import Sighting, Wall, solve
 
 HALF_M2 = 0.001**2 / 2.0  # (a brick's estimate in a look: half the link's variance)
 
@@ -285,3 +285,15 @@ def test_the_solve_is_bit_for_bit_the_normal_equations_built_entry_by_entry(case
     assert got.centre_m == centre, case
     assert got.root == root, case
     assert got.variance_m2 == variance, case
+
+
+@seed(34)
+@settings(max_examples=100, deadline=None)
+@given(random_sightings(), st.lists(st.integers(0, 15), max_size=4))
+def test_a_solve_of_some_bricks_only_gives_their_centres_and_roots_of_the_whole_solve(case, only) -> None:  # type: ignore[no-untyped-def]
+    fixed, sightings, priors, variance_of, unsurveyed = case
+    whole = Wall(fixed, sightings).solve(priors, variance_of, unsurveyed)
+    some = Wall(fixed, sightings).solve(priors, variance_of, unsurveyed, only=only)
+    assert some.centre_m == {b: whole.centre_m[b] for b in only if b in whole.centre_m}, case
+    assert some.root == {b: whole.root[b] for b in only if b in whole.root}, case
+    assert some.variance_m2 == whole.variance_m2, case

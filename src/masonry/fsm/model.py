@@ -159,14 +159,19 @@ class UavModel(CommonStates):
             if dogs is not self._guarded_dogs:  # another set of watchdogs (a test's): ask each state again
                 guarded.clear()
                 self._guarded_dogs = dogs
-            for i, dog in enumerate(dogs):  # masonry.fsm.watchdogs: those guarding the state (as it is then)
-                flags = guarded.get(self.state)
-                if flags is None:
-                    flags = guarded[self.state] = self._guard_flags(self.state)
+            # masonry.fsm.watchdogs: those guarding the state as it is then (the checks read the model; only a
+            # reaction to a verdict moves the machine)
+            flags = guarded.get(self.state)
+            if flags is None:
+                flags = guarded[self.state] = self._guard_flags(self.state)
+            for i, dog in enumerate(dogs):
                 if flags[i] and (tel.link_ok or not dog.needs_link):
                     verdict = dog.check(self._now_s, tel, self)
                     if verdict is not None:
                         self._react(verdict)
+                        flags = guarded.get(self.state)
+                        if flags is None:
+                            flags = guarded[self.state] = self._guard_flags(self.state)
             if not tel.link_ok:
                 return
             self._do[self.state](tel)

@@ -192,6 +192,9 @@ class LingerBook:
         self._expected_s: dict[str, float] | None = None
         self.drains: dict[str, DrainMeter] = {}  # each UAV's drain per airborne second, from its heartbeats
         self._prerequisites: dict[str, list[str]] | None = None
+        #: role -> (what it was computed at, the longest expected task of the role still to do): the dispatcher's
+        #: done set changes only with its events (an addition also with its size), the plan not at all
+        self._longest_s: dict[str, tuple[tuple[object, ...], float]] = {}
 
     def total_s(self, uav: str, now_s: float) -> float:
         """``uav``'s seconds waiting near the wall so far (one still waiting counts to ``now_s``)."""
@@ -215,18 +218,28 @@ class LingerBook:
         if self._expected_s is None:
             self._due_s(mc, link.spec.role, now_s)
         assert self._expected_s is not None
-        done = mc.dispatcher.done
-        task_s = max(
-            (
-                self._expected_s.get(t.id, 0.0)
-                for t in mc.plan.tasks
-                if t.kind == link.spec.role and t.id not in done
-            ),
-            default=0.0,
-        )
+        task_s = self._longest_task_s(mc, link.spec.role)
         home_s = 0.5 * round_trip_s(position_m, link.spec.home_m, mc.timing or DEFAULT_TIMING)
         need_s = max(0.0, until_s - now_s) + task_s + home_s
         return flight_left_s(link.battery, LOW_BATTERY, drain) >= need_s
+
+    def _longest_task_s(self, mc: MissionControl, role: str) -> float:
+        """The longest expected task of ``role`` not done yet (s), kept while the plan and the done tasks stay
+        (a lingering UAV asks on every review)."""
+        dispatcher = mc.dispatcher
+        done = dispatcher.done
+        key = (dispatcher, mc.plan, dispatcher.events, len(done))
+        kept = self._longest_s.get(role)
+        if kept is not None and kept[0] == key:
+            return kept[1]
+        expected = self._expected_s
+        assert expected is not None
+        task_s = max(
+            (expected.get(t.id, 0.0) for t in mc.plan.tasks if t.kind == role and t.id not in done),
+            default=0.0,
+        )
+        self._longest_s[role] = (key, task_s)
+        return task_s
 
     def _due_s(self, mc: MissionControl, role: str, now_s: float) -> list[float]:
         if self._expected_s is None or self._prerequisites is None:

@@ -151,6 +151,7 @@ class PID:
         self.gains = gains if gains is not None else PIDGains()
         self._axes = (self.gains.x, self.gains.y, self.gains.z, self.gains.yaw)
         self._flat = tuple((g.kp, g.ki, g.kd, g.output_limit, g.integral_limit) for g in self._axes)
+        self._flat_xyz = self._flat[:3]
         self.reset()
 
     def set_gains(self, gains: PIDGains) -> None:
@@ -158,6 +159,7 @@ class PID:
         self.gains = gains
         self._axes = (gains.x, gains.y, gains.z, gains.yaw)
         self._flat = tuple((g.kp, g.ki, g.kd, g.output_limit, g.integral_limit) for g in self._axes)
+        self._flat_xyz = self._flat[:3]
 
     def reset(self) -> None:
         """Forget the integral, the previous measurement and the previous time (e.g. after a mode change)."""
@@ -238,7 +240,8 @@ class PID:
         integrate = dt is not None and dt > 0.0
         ff = (fx, fy, fz, 0.0)
         out = [0.0, 0.0, 0.0, 0.0]
-        for i, (kp, ki, kd, out_lim, int_lim) in enumerate(self._flat):
+        # Without a yaw target the yaw axis's output is not used and its integral is zeroed below: skip it.
+        for i, (kp, ki, kd, out_lim, int_lim) in enumerate(self._flat if yaw_active else self._flat_xyz):
             e = error[i]
             base = ff[i] + kp * e - kd * rate[i]
             if integrate:
@@ -261,7 +264,6 @@ class PID:
             out[i] = u
         if not yaw_active:
             integral[3] = 0.0
-            # the yaw output was computed with the integral before it was zeroed; it is not used
             return out[0], out[1], out[2], 0.0
         return out[0], out[1], out[2], out[3]
 

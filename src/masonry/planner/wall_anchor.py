@@ -89,6 +89,7 @@ class WallAnchor:
         #: design's reach)
         self.anchors: dict[int, Anchor] = {}
         self._looks: dict[int, AsBuiltPose] = {}  # (brick id -> its world-frame look, in completion order)
+        self._looks_xy: dict[int, tuple[float, float]] = {}  # (the same, horizontally: every solve's priors)
         self._sightings: dict[int, Sighting] = {}
         self._residuals_m2: list[float] = []
         self._free: tuple[float, int] = (0.0, 0)  # (the unsurveyed walls' look residuals: m^2 summed, dof)
@@ -146,20 +147,21 @@ class WallAnchor:
         (:meth:`poses`)."""
         look = self.world(brick, pose)
         self._looks[brick] = look
+        self._looks_xy[brick] = (look.position_m[0], look.position_m[1])
         sighting = self._sighting(brick, look)
         if sighting is None:
             self._sightings.pop(brick, None)
         else:
             self._sightings[brick] = sighting
         wall = Wall(self._fixed, list(self._sightings.values()))  # (its three solves share its tables)
-        relative = wall.solve(variance_of=(brick,))
+        relative = wall.solve(variance_of=(brick,), only=(brick,))
         c = relative.centre_m.get(brick)
         if c is not None:
             w = look.position_m
             self._residuals_m2.append(
                 ((w[0] - c[0]) ** 2 + (w[1] - c[1]) ** 2) / 2.0 - relative.variance_m2[brick]
             )
-        looks = {b: (p.position_m[0], p.position_m[1]) for b, p in self._looks.items()}
+        looks = self._looks_xy
         self._free = self._unsurveyed_residuals(wall, looks)
         sigma_w = self.world_sigma_m()
         var_w = LOOSE_SIGMA_M**2 if sigma_w is None else sigma_w**2

@@ -169,8 +169,10 @@ class Wall:
         priors: Mapping[int, tuple[Vec2, float]] | None = None,
         variance_of: Collection[int] = (),
         unsurveyed: bool = False,
+        only: Collection[int] | None = None,
     ) -> Solution:
-        """:func:`solve` on this wall's surveyed bricks and sightings."""
+        """:func:`solve` on this wall's surveyed bricks and sightings; ``only``: the solution's centres and roots of
+        those bricks alone (the wall anchor's first solve reads one brick's), None: of every brick solved."""
         # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
         import scipy.sparse as sp
         import scipy.sparse.linalg as spla
@@ -207,6 +209,11 @@ class Wall:
                 e[index[b]] = 1.0
                 variance[b] = float(lu.solve(e)[index[b]])
         free = lay.free
+        if only is not None:
+            rows_of = [(b, index[b]) for b in only if b in index]
+            return Solution(
+                {b: tuple(x[i].tolist()) for b, i in rows_of}, {b: lay.roots[i] for b, i in rows_of}, variance
+            )
         xs = map(tuple, x[: len(free)].tolist())  # (the free bricks' rows; the sightings' offsets' follow)
         return Solution(dict(zip(free, xs, strict=True)), dict(zip(free, lay.roots, strict=True)), variance)
 

@@ -98,22 +98,31 @@ class LayoutCache:
     Consecutive frames of a climb ask the same bricks (on a 20-course wall ~110 of them): the arrays of the resting
     ones (the candidates up to the first carried brick) are built once, not concatenated again every frame; the
     carried ones after them (the fleet's, appended to every frame's candidates, moving every tick) are laid out
-    each frame and joined to them: the same arrays as :func:`marker_layout` of all of them."""
+    each frame and joined to them: the same arrays as :func:`marker_layout` of all of them. With the resting
+    ones' layout it keeps their yaws and each of their markers' ``covered`` answer (asked at the first frame that
+    has the marker in view): :meth:`uncovered` and :meth:`yaw_rad` of the last :meth:`layout`."""
 
     def __init__(self) -> None:
         self._key: tuple[object, ...] | None = None
         self._layout: Layout | None = None
+        self._covered = np.zeros(0, dtype=np.int8)  # (per resting row: -1 not asked yet, else the answer)
+        self._yaw = np.zeros(0)  # (per resting row: its brick's yaw)
+        self._rest_rows = 0  # (the resting rows at the head of the last layout)
+        self._carried: Sequence[SimBrick] = ()  # (the last layout's bricks after them)
 
     def layout(self, bricks: Sequence[SimBrick], markers: MarkerSpec, version: int) -> Layout:
         n = len(bricks)
         cut = 0
         while cut < n and bricks[cut].state != "carried":
             cut += 1
+        self._carried, self._rest_rows = bricks[cut:], 2 * cut
         if cut == 0:
             return marker_layout(bricks, markers)
         key = (version, markers, tuple([b.id for b in bricks[:cut]]))
         if self._layout is None or key != self._key:
             self._key, self._layout = key, marker_layout(bricks[:cut], markers)
+            self._covered = np.full(2 * cut, -1, dtype=np.int8)
+            self._yaw = np.repeat(np.array([b.yaw_rad for b in bricks[:cut]]), 2)
         if cut == n:
             return self._layout
         ids, centres, corners = self._layout
@@ -123,6 +132,33 @@ class LayoutCache:
             np.concatenate([centres, more[1]]),
             np.concatenate([corners, more[2]]),
         )
+
+    def uncovered(
+        self, index: np.ndarray, centres: np.ndarray, covered: Callable[[float, float, float], bool]
+    ) -> np.ndarray:
+        """The rows of ``index`` (ascending, rows of the last layout, whose ``centres`` these are) whose marker
+        ``covered`` does not say covered, in order: the resting rows' answers kept, the carried rows' asked."""
+        cut = int(np.searchsorted(index, self._rest_rows))
+        rest, more = index[:cut], index[cut:]
+        if cut:
+            state = self._covered
+            todo = rest[state[rest] < 0]
+            for i, p in zip(todo.tolist(), centres[todo].tolist(), strict=True):
+                state[i] = covered(*p)
+            rest = rest[state[rest] == 0]
+        if not len(more):
+            return rest
+        xyz = centres[more].tolist()
+        more = np.array([i for i, p in zip(more.tolist(), xyz, strict=True) if not covered(*p)], dtype=int)
+        return np.concatenate([rest, more]) if cut else more
+
+    def yaw_rad(self) -> np.ndarray:
+        """The yaw of each row's brick in the last layout (the resting rows' kept)."""
+        if not self._rest_rows:
+            return np.repeat(np.array([b.yaw_rad for b in self._carried]), 2)
+        if not self._carried:
+            return self._yaw
+        return np.concatenate([self._yaw, np.repeat(np.array([b.yaw_rad for b in self._carried]), 2)])
 
 
 def observe_markers(
@@ -137,6 +173,7 @@ def observe_markers(
     occluder: SimBrick | None = None,
     covered: Callable[[float, float, float], bool] | None = None,
     layout: Layout | None = None,
+    kept: LayoutCache | None = None,
 ) -> tuple[TagPose, ...]:
     """Noisy camera-frame poses of the markers of ``bricks`` seen by a camera at ``c_w`` with rotation ``R_wc``.
 
@@ -151,6 +188,8 @@ def observe_markers(
         occluder: the brick this UAV carries: markers behind it are not seen.
         covered: whether a marker centre (x, y, z) lies under a brick resting on it.
         layout: ``marker_layout(bricks, markers)`` if the caller keeps it (:class:`LayoutCache`; not modified).
+        kept: the cache whose last :meth:`LayoutCache.layout` gave ``layout`` (of these ``bricks``): its kept
+            ``covered`` answers and yaws are read (the answers and floats asking again would give).
     """
     if not bricks:
         return ()
@@ -174,7 +213,9 @@ def observe_markers(
     index = np.flatnonzero(ok)
     if hidden:
         index = np.array([i for i in index if int(ids[i]) not in hidden], dtype=int)
-    if covered is not None and len(index):
+    if covered is not None and kept is not None and len(index):
+        index = kept.uncovered(index, centres, covered)
+    elif covered is not None and len(index):
         rows = index.tolist()
         xyz = centres[index].tolist()  # (one conversion of the markers in view, not one per marker)
         index = np.array([i for i, p in zip(rows, xyz, strict=True) if not covered(*p)], dtype=int)
@@ -188,7 +229,7 @@ def observe_markers(
     dep = config.depth_noise_m + config.depth_noise_per_m * d
     ang = config.angle_noise_rad + config.angle_noise_per_m * d
     pos = p_c[index] + noise[:, :3] * np.stack([lat, lat, dep], axis=1)
-    yaw = np.repeat(np.array([b.yaw_rad for b in bricks]), 2)[index]
+    yaw = (np.repeat(np.array([b.yaw_rad for b in bricks]), 2) if kept is None else kept.yaw_rad())[index]
     cy, sy = np.cos(yaw), np.sin(yaw)
     R_wm = np.zeros((len(index), 3, 3))
     R_wm[:, 0, 0], R_wm[:, 0, 1], R_wm[:, 1, 0], R_wm[:, 1, 1], R_wm[:, 2, 2] = cy, -sy, sy, cy, 1.0

@@ -185,6 +185,8 @@ class Shaper:
         self._wander_m = [0.0, 0.0, 0.0]
         self._velocity_wander_mps = [0.0, 0.0, 0.0]  # what the airframe's velocity target gets (m/s)
         self._slow_xy = [0.0, 0.0]  # the horizontal setpoint followed over ``velocity_droop_s`` (the droop's)
+        self._drift_dt_s = math.nan  # (the step :attr:`_drift`'s constants are for; NaN: none yet)
+        self._drift = self._drift_constants(0.0)
 
     def reset(self, velocity_mps: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
         """Forget the delay line; the shaped velocity is ``velocity_mps`` (on the ground: zero)."""
@@ -220,27 +222,44 @@ class Shaper:
         """Move the GPS error and the velocity's wander on by ``dt_s`` (Ornstein-Uhlenbeck; ``gauss()`` a standard
         normal draw; a ``gauss`` with ``take(k)``, :class:`masonry.sim.vehicle._Gauss`, gives three at once, the
         same three in the same order)."""
+        if dt_s != self._drift_dt_s:  # (every physics step has the same dt_s: its constants once)
+            self._drift_dt_s, self._drift = dt_s, self._drift_constants(dt_s)
+        wander, a, b, sigma, c, d, smooth, k = self._drift
         take = getattr(gauss, "take", None)
-        wander = self.config.velocity_wander_mps
-        if wander > 0.0:
-            a = min(1.0, dt_s / self.config.velocity_wander_tau_s)
-            b = wander * math.sqrt(a * (2.0 - a))  # stationary at ``wander`` for any step
+        if wander:
             w = self._velocity_wander_mps
             g = take(3) if take is not None else [gauss(), gauss(), gauss()]
-            for i in range(3):
-                w[i] += -w[i] * a + b * g[i]
-        sigma = self.config.gps_noise_m
-        if sigma <= 0.0:
+            w[0] += -w[0] * a + b * g[0]
+            w[1] += -w[1] * a + b * g[1]
+            w[2] += -w[2] * a + b * g[2]
+        if not sigma:
             return
-        a = dt_s / self.config.gps_noise_tau_s
-        b = sigma * math.sqrt(2.0 * a)
-        smooth_s = self.config.gps_noise_smooth_s
-        err = self.gps_error_m if smooth_s <= 0.0 else self._wander_m
+        err = self._wander_m if smooth else self.gps_error_m
         g = take(3) if take is not None else [gauss(), gauss(), gauss()]
-        for i in range(3):
-            err[i] += -err[i] * a + b * g[i]
-        if smooth_s > 0.0:
-            k = min(1.0, dt_s / smooth_s)
+        err[0] += -err[0] * c + d * g[0]
+        err[1] += -err[1] * c + d * g[1]
+        err[2] += -err[2] * c + d * g[2]
+        if smooth:
             out = self.gps_error_m
-            for i in range(3):
-                out[i] += k * (err[i] - out[i])
+            out[0] += k * (err[0] - out[0])
+            out[1] += k * (err[1] - out[1])
+            out[2] += k * (err[2] - out[2])
+
+    def _drift_constants(self, dt_s: float) -> tuple[bool, float, float, bool, float, float, bool, float]:
+        """:meth:`drift`'s coefficients for a step of ``dt_s``: whether the velocity wanders, its decay and draw's
+        scale; whether the GPS error wanders, its decay and draw's scale; whether it is smoothed, the smoothing's
+        gain (the same floats the loops computed on every step)."""
+        cfg = self.config
+        wander = cfg.velocity_wander_mps
+        a = b = 0.0
+        if wander > 0.0:
+            a = min(1.0, dt_s / cfg.velocity_wander_tau_s)
+            b = wander * math.sqrt(a * (2.0 - a))  # stationary at ``wander`` for any step
+        sigma = cfg.gps_noise_m
+        c = d = k = 0.0
+        if sigma > 0.0:
+            c = dt_s / cfg.gps_noise_tau_s
+            d = sigma * math.sqrt(2.0 * c)
+            if cfg.gps_noise_smooth_s > 0.0:
+                k = min(1.0, dt_s / cfg.gps_noise_smooth_s)
+        return wander > 0.0, a, b, sigma > 0.0, c, d, cfg.gps_noise_smooth_s > 0.0, k

@@ -324,12 +324,7 @@ class World:
                     self._contact(uav)
                 if uav._brick_role:
                     # _grip's own guard, checked here first (the magnet stays on while a brick is carried)
-                    if (
-                        uav.magnet_on
-                        and uav.carried_brick is None
-                        and not uav.joint_locked
-                        and not uav.failed
-                    ):
+                    if uav.magnet_on and uav.carried_brick is None and not (uav.joint_locked or uav.failed):
                         self._grip(uav)
                 elif uav.valve_open:
                     self._spray(uav)
@@ -549,6 +544,7 @@ class World:
             occluder=occluder,
             covered=self.field.covered_kept,
             layout=self._layouts.layout(bricks, self.blueprint.markers, self.field.version),
+            kept=self._layouts,
         )
         return CameraFrame(time_s=now, tags=tags)
 
