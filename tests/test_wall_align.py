@@ -12,7 +12,7 @@ from masonry.blueprint_gen import pyramid
 from masonry.errors import InputError
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import PRESETS, uav_settings
-from masonry.fsm.wall_align import wall_offset_m
+from masonry.fsm.wall_align import drift_noise_mps_per_sqrt_s, off_support, wall_offset_m
 from masonry.mission.built_truth import neighbour_errors_m
 from masonry.mission.simulate import SimulatedMission
 
@@ -33,6 +33,23 @@ def test_a_brick_off_the_wall_is_no_reference_and_none_gives_none() -> None:
     # brick 1 seen on its pallet, 2 m from its place; brick 0 not seen
     assert wall_offset_m({1: np.array([2.3, -2.0, 0.05])}, WALL, own=2) is None
     assert wall_offset_m({}, WALL, own=2) is None
+
+
+def test_once_a_brick_it_touches_is_seen_a_frame_of_none_of_them_is_no_sighting() -> None:
+    # a tower's brick on B3 (it touches B3 alone): a frame of another tower's B0 alone counts only until B3 is seen
+    assert off_support(frozenset({3}), {3}, {0}) is True
+    assert off_support(frozenset({3}), {3}, {0, 3}) is False
+    assert off_support(frozenset({3}), {0}, {0}) is False  # none seen yet: the others are the best there is
+    # a course's end on B3 beside B5: either of them in view is a sighting
+    assert off_support(frozenset({3, 5}), {3}, {5}) is False
+    assert off_support(frozenset(), {0, 1}, {1}) is False  # two supports: every brick in view counts
+
+
+def test_in_a_wind_the_drift_filter_carries_the_side_looks_descent_only() -> None:
+    assert drift_noise_mps_per_sqrt_s(0.015, in_wind=False, side_look=False) == 0.015
+    assert drift_noise_mps_per_sqrt_s(0.015, in_wind=True, side_look=True) == 0.015
+    assert drift_noise_mps_per_sqrt_s(0.015, in_wind=True, side_look=False) == 0.0
+    assert drift_noise_mps_per_sqrt_s(0.0, in_wind=False, side_look=True) == 0.0
 
 
 def test_only_the_px4_preset_turns_it_on() -> None:

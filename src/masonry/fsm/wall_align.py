@@ -12,7 +12,9 @@ designed offsets to them). A brick farther than ``_REFERENCE_M`` from its design
 another UAV's magnet) is no reference; with none in view the last offset stands. Where the one brick the new one stands on
 (:func:`supports_of`) is in view, only it counts: a tower's third brick sees its support and the tower's first
 brick, and a support built 12 cm off the one under it would otherwise pull the new brick half way back to the
-design (the px4 towers, seed 4: 34.7 mm off its support; 3.5 mm with the supports only). Bricks beside it in
+design (the px4 towers, seed 4: 34.7 mm off its support; 3.5 mm with the supports only). Once that support has been
+seen, a frame without it is no sighting (:func:`off_support`: another tower's brick alone, at its own as-built
+place, put the drop-off 5-9 cm off). Bricks beside it in
 its course are not preferred so (measured, the rotated bond's worst brick grew from 21.9 to 34.2 mm, seed 3), nor
 one of two supports (a pyramid's brick: 11.6 -> 47.7 mm).
 
@@ -36,7 +38,7 @@ measured now).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Set
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -55,10 +57,12 @@ if TYPE_CHECKING:
 
 __all__ = [
     "WallAlign",
+    "drift_noise_mps_per_sqrt_s",
     "follow_in_view",
     "follow_m",
     "frames_span_s",
     "neighbours_of",
+    "off_support",
     "supports_of",
     "wall_offset_m",
 ]
@@ -171,6 +175,28 @@ def follow_in_view(follow_m: np.ndarray, seen_m: np.ndarray, cap_m: float) -> np
     return np.asarray(out, dtype=float)
 
 
+def off_support(touching: frozenset[int], seen_ids: Set[int], in_view: Set[int]) -> bool:
+    """A frame that shows bricks of the wall (``in_view``) but none of those the drop-off touches (``touching``:
+    its one support and the bricks beside it in its course, :func:`neighbours_of`; empty on two supports), one of
+    which has been seen in this placement (``seen_ids``): True, no sighting. Each brick counts at its own as-built
+    place, and a tower's bricks are each seen alone (their as-built poses carry their looks' GNSS wander, 6 cm per
+    axis): a frame of another tower only put the drop-off 5-9 cm off where its support puts it, and the mean of the
+    last five frames 1-2 cm (the px4 towers in 4 m/s, seeds 0-9: 472 such frames; seed 2's B7 let go 27 mm off its
+    support so, one such frame 0.8 s before the release; docs/performance/as-built.md, branch ``towers34``). Before
+    the first sighting of a brick it touches the others count as before."""
+    return bool(touching & seen_ids) and not touching & in_view
+
+
+def drift_noise_mps_per_sqrt_s(configured: float, in_wind: bool, side_look: bool) -> float:
+    """The drift filter's rate noise for this frame (:mod:`masonry.fsm.wall_trend`; 0: the straight line):
+    ``configured`` (``UavConfig.wall_drift_mps_per_sqrt_s``) in calm air, and in a wind on the side look's descent
+    only. Elsewhere in 4 m/s the filter failed px4 missions the straight line completes (the bond's seed 1, the
+    pyramid's seed 0: a first-course brick put back after three descents, branch ``drift30``); on the side look's
+    descent (a tower's brick, its support out of view for the last leg) it put the 4 m/s towers' targets 6.5 mm rms
+    off against the line's 8.6 (docs/performance/as-built.md, branch ``towers34``)."""
+    return configured if side_look or not in_wind else 0.0
+
+
 class WallAlign:
     """The drop-off's target as the bricks around it place it (see the module docstring)."""
 
@@ -181,6 +207,7 @@ class WallAlign:
         self.design_m = np.zeros(3)
         self._wall: dict[int, tuple[float, ...]] | None = None
         self._near: frozenset[int] = frozenset()
+        self._touching: frozenset[int] = frozenset()  # with one support: the bricks the drop-off touches
         self._near_of: BrickTask | None = None
         self._as_built: dict[int, tuple[float, float, float]] = {}
         #: the drop-off's deviation from the design relative to the wall: its neighbours' as built (follow_m)
@@ -227,6 +254,8 @@ class WallAlign:
             # one support (a tower's, a course's end): keep to it; on two, the mean of the wall seen, as before
             # (measured: keeping to one of two put a px4 pyramid's brick 47.7 mm off its neighbours, 11.6 before)
             self._near, self._near_of = (below if len(below) == 1 else frozenset()), task
+            # ... and once one brick it touches has been seen, to the bricks it touches (off_support)
+            self._touching = neighbours_of(wall, own, task.size_m) if self._near else frozenset()
             cfg = uav.config
             self._as_built = dict(task.wall_as_built) if cfg.wall_as_built else {}
             self.follow_m = follow_m(
@@ -248,7 +277,7 @@ class WallAlign:
             if est is not None:
                 estimates[bid] = est[0]
         offset = wall_offset_m(estimates, wall, own, self._near, self._as_built)
-        if offset is None:
+        if offset is None or off_support(self._touching, self.seen_ids, estimates.keys()):
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
         self.seen_ids.update(
@@ -269,9 +298,9 @@ class WallAlign:
         self.tracker.span_s = self.trend.mean_span_s = span_s
         delta = self.tracker.add(self.view_target_m, uav._now_s)
         self.trend.span_s = uav.config.wall_trend_s
-        # the drift filter in calm air only: in 4 m/s it failed px4 missions the straight line completes (the bond's
-        # seed 1, the pyramid's seed 0: a brick put back after three descents; docs/performance/as-built.md)
-        self.trend.drift_mps_per_sqrt_s = 0.0 if uav.attempt.in_wind else uav.config.wall_drift_mps_per_sqrt_s
+        self.trend.drift_mps_per_sqrt_s = drift_noise_mps_per_sqrt_s(
+            uav.config.wall_drift_mps_per_sqrt_s, uav.attempt.in_wind, uav._side.offset_m is not None
+        )
         self.trend.drift_tau_s = uav.config.wall_drift_tau_s
         self.trend.add(
             uav._now_s,
