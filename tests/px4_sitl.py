@@ -93,12 +93,12 @@ def one_flight_at_a_time() -> Iterator[None]:
 #: callouts (sensor_baro_sim, sensor_mag_sim, sensor_gps_sim, battery_simulator, load_mon) all stop for good at the
 #: moment of arming, while SIH's IMU, its range finder and the controllers run on; "Failsafe: blind land" follows
 #: and the take-off sinks back ("take-off stalled"). Traced on 2026-12-06 (benchmarks/bench_px4_takeoff.py, PX4's
-#: .ulg and gdb): 5 of 55 take-offs, PX4 at 10 % CPU and no thread of its busy (the timer-callout thread waiting on
+#: .ulg and gdb): 7 of 83 take-offs, PX4 at 10 % CPU and no thread of its busy (the timer-callout thread waiting on
 #: the simulated clock), so not the machine starving it as first thought (the name stays). PX4's fault, not the
 #: flight's: such a flight is flown again on a fresh PX4 (:func:`on_px4`).
 SIH_STARVED = "Preflight Fail: No valid data from"
-#: How many times :func:`on_px4` flies again on a fresh PX4 after :data:`SIH_STARVED` (at 5 in 55 flights, two
-#: re-flights leave about one test run in a thousand to it; one left one in a hundred).
+#: How many times :func:`on_px4` flies again on a fresh PX4 after :data:`SIH_STARVED` (at 7 in 83 flights, two
+#: re-flights leave about one test run in 1,700 to it; one left one in 140).
 REFLIGHTS = 2
 
 T = TypeVar("T")
