@@ -89,36 +89,55 @@ def one_flight_at_a_time() -> Iterator[None]:
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
-#: What PX4's SIH logs when the machine starved it of CPU: its simulated sensors stopped publishing (a blind-land
-#: failsafe follows). Seen in 2 of some 40 CI runs, only there; never in a flight that went on.
+#: What PX4 v1.16 SITL logs when its own simulated sensors stopped: the simulator modules PX4 runs on its timer
+#: callouts (sensor_baro_sim, sensor_mag_sim, sensor_gps_sim, battery_simulator, load_mon) all stop for good at the
+#: moment of arming, while SIH's IMU, its range finder and the controllers run on; "Failsafe: blind land" follows
+#: and the take-off sinks back ("take-off stalled"). Traced on 2026-12-06 (benchmarks/bench_px4_takeoff.py, PX4's
+#: .ulg and gdb): 7 of 83 take-offs, PX4 at 10 % CPU and no thread of its busy (the timer-callout thread waiting on
+#: the simulated clock), so not the machine starving it as first thought (the name stays). PX4's fault, not the
+#: flight's: such a flight is flown again on a fresh PX4 (:func:`on_px4`).
 SIH_STARVED = "Preflight Fail: No valid data from"
+#: How many times :func:`on_px4` flies again on a fresh PX4 after :data:`SIH_STARVED` (at 7 in 83 flights, two
+#: re-flights leave about one test run in 1,700 to it; one left one in 140).
+REFLIGHTS = 2
 
 T = TypeVar("T")
 
 
 def sih_starved(workdir: Path) -> bool:
-    """Whether the PX4 run in ``workdir`` logged its simulated sensors starved (:data:`SIH_STARVED`)."""
+    """Whether the PX4 run in ``workdir`` logged its simulated sensors stopped (:data:`SIH_STARVED`)."""
     log = workdir / "px4.log"
     return log.is_file() and SIH_STARVED in log.read_text(errors="replace")
 
 
+def flight_folders(workdir: Path) -> list[Path]:
+    """The folders :func:`on_px4` flies in, in order: ``workdir``, then ``<workdir>-2``, ``<workdir>-3``, ..."""
+    return [workdir, *(workdir.with_name(f"{workdir.name}-{n}") for n in range(2, REFLIGHTS + 2))]
+
+
 def on_px4(workdir: Path, instance: int, fly: Callable[[str], T], params: dict[str, str] | None = None) -> T:
-    """``fly(url)`` on a fresh PX4, one flight at a time; once more on another fresh PX4 (folder ``<workdir>-2``)
-    if the first failed with PX4's own log saying its simulator starved (:func:`sih_starved`): the reference
-    simulator failing, not the flight. Any other failure, or a second starved run, fails the test."""
-    for folder in (workdir, workdir.with_name(f"{workdir.name}-2")):
+    """``fly(url)`` on a fresh PX4, one flight at a time; flown again on another fresh PX4 (folder ``<workdir>-2``,
+    then ``-3``) while the failed flight's PX4 logged its simulated sensors stopped (:func:`sih_starved`): the
+    reference simulator failing, not the flight. Any other failure, or the last flight's, fails the test."""
+    folders = flight_folders(workdir)
+    for folder in folders:
         try:
             with one_flight_at_a_time(), px4(folder, instance, params) as url:
                 return fly(url)
         except (AssertionError, pytest.fail.Exception):
-            if folder != workdir or not sih_starved(folder):
+            if folder == folders[-1] or not sih_starved(folder):
                 raise
-            print(f"PX4: {folder / 'px4.log'}: its SIH starved ({SIH_STARVED!r}); flown again on a fresh PX4")
-    raise AssertionError("unreachable: the second run returns or raises")
+            print(f"PX4: {folder / 'px4.log'}: its simulated sensors stopped ({SIH_STARVED!r}); flown again")
+    raise AssertionError("unreachable: the last flight returns or raises")
 
 
 #: The PX4 process behind each URL :func:`px4` yields, while its block runs.
 _RUNNING: dict[str, subprocess.Popen[bytes]] = {}
+
+
+def px4_pid(url: str) -> int:
+    """The process id of the PX4 behind ``url`` (while its :func:`px4` block runs)."""
+    return _RUNNING[url].pid
 
 
 def kill_px4(url: str) -> None:
