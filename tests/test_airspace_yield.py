@@ -69,3 +69,34 @@ def test_a_hover_clear_of_the_way_out_stays_where_it_is():
     # asked from inside its zone: the hover keeps the separation from its climb, nothing moves
     assert c.request("brick", PALLET, 10.0, ZONE).granted
     assert all(g.uav != "glue" for g in c.grant(10.1))
+
+
+def test_a_hover_in_the_way_of_a_uav_it_does_not_wait_for_stays():
+    # the adhesion UAV waits for a zone of a third UAV; a brick UAV working beside its hold point asks to leave
+    # from 0.24 m outside its zone, towards the hover: in its way at every layer, but not a cycle (the hovering UAV
+    # waits for the third, which works and then leaves), so the hover stays and the brick UAV waits
+    c = ColumnClearance(R, BASE, S)
+    third = (5.0, 0.0, 1.2)
+    assert c.request("third", third, 0.0, third).granted
+    c.end_transit("third")
+    g = c.request("glue", (5.15, 0.0, 1.2), 1.0, (8.0, -3.0, 1.2))
+    assert not g.granted and g.hold_m is not None and g.layer_m is not None
+    c.progress("glue", (g.hold_m[0], g.hold_m[1], g.layer_m))
+    hx, hy = g.hold_m[0], g.hold_m[1]
+    d = math.hypot(hx - third[0], hy - third[1])
+    ux, uy = (hx - third[0]) / d, (hy - third[1]) / d
+    zone = (hx + 1.33 * ux, hy + 1.33 * uy, 1.2)  # beside the hover, on the far side from the third's zone
+    assert c.request("brick", zone, 2.0, zone).granted
+    c.end_transit("brick")
+    at = (zone[0] - 0.24 * ux, zone[1] - 0.24 * uy, 1.16)
+    far = (zone[0] + 4.0 * ux, zone[1] + 4.0 * uy, 1.2)
+    assert not c.request("brick", far, 10.0, at).granted
+    assert [b for b, _kind in c.blockers("brick")] == ["glue"]
+    assert "brick" not in {b for b, _kind in c.blockers("glue")}
+    assert c.grant(10.1) == [] and c.phase("glue") is Phase.AT_HOLD
+    assert c.volumes("glue")[0].a == (hx, hy)
+    c.release(
+        "third"
+    )  # the third leaves (out of the mission): the adhesion UAV is granted, then the brick UAV
+    assert [x.uav for x in c.grant(11.0) if x.granted] == ["glue"]
+    assert c.conflicts() == []

@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 from masonry.geofence import AIRSPACE_MARGIN_M
 from masonry.mission.airspace_approach import approach
-from masonry.mission.airspace_yield import make_way
 from masonry.mission.airspace_state import (
     OFF_LAYER,
     FlightRequest,
@@ -27,6 +26,7 @@ from masonry.mission.airspace_state import (
     hold_candidates,
     request_geometry,
 )
+from masonry.mission.airspace_yield import make_way
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned

@@ -6,10 +6,12 @@ brick UAV placed on the wall's frame (GNSS wander, the wall alignment) reports i
 its drop-off, farther than ``leave_from`` snaps. Its climb from there can reach within the separation of a hover
 granted beside the zone, at every layer (the hover at layer 0, the climb starting under it); the hovering UAV
 waits for that very zone: a cycle of two, which only hold patience broke (the towers, px4, seed 10 in 4 m/s wind:
-the adhesion task A0 given up three times). Here a hovering UAV whose hover alone (with the other hovers) keeps
-an asking UAV's flight from fitting is given a new hold flight, clear of that flight; once it has moved the
-flight fits. Hovers only move for a UAV that asks from where it stays (``ASKING``: its zone, its pad, where it
-stopped), never for another hovering UAV, so no two hovers chase each other. Pure: no I/O, no clock.
+the adhesion task A0 given up three times). Here a hovering UAV whose hover (with the other hovers) is in the
+way, at every layer, of the climb out of an asking UAV it waits for (directly or through other waiting UAVs) is
+given a hold flight to a point whose hover clears that climb (the same point a layer up, first); once it is there
+the asking UAV climbs out. Only to break such a cycle: a hover in the way of a UAV it does not wait for stays
+(that UAV waits for flights and work, which end), and hovers move only for a UAV that asks from where it stays
+(``ASKING``), never for another hovering UAV, so no two hovers chase each other. Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -57,10 +59,11 @@ def way_out(c: ColumnClearance, asker: str, o: UavAirspace) -> list[Volume] | No
 
 
 def make_way(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
-    """``uav`` hovers at its hold point in the way of an asking UAV's flight (:func:`way_out`): a hold flight to a
-    hold point (the same one higher up, or another near its site) whose hover clears that flight, the whole hold
-    flight clear of every volume of the others, taken as any hold flight is (None: it is in no one's way, or
-    nowhere fits). Its climb and leg are freed behind it as it flies (``progress``), the hover stays."""
+    """``uav`` hovers at its hold point in the way of the climb out of an asking UAV it waits for (:func:`way_out`,
+    :func:`waits_on`): a hold flight to a hold point (the same one higher up, or another near its site) whose hover
+    clears that climb, the whole hold flight clear of every volume of the others, taken as any hold flight is
+    (None: it is in no one's way, or nowhere fits). Its climb and leg are freed behind it as it flies
+    (``progress``); at the new point only its hover is its own, clear of the climb it made way for."""
     w, h = u.request, u.hold
     if w is None or h is None or u.phase is not Phase.AT_HOLD or h.layer == OFF_LAYER or len(u.volumes) != 1:
         return None
