@@ -256,7 +256,10 @@ class ColumnClearance:
                 continue
             before = u.answer
             g = airspace_requests.evaluate(self, uav, u, now_s)
-            if g.granted or (g.hold_m is not None and (before is None or before.hold_m != g.hold_m)):
+            if g.granted or (
+                g.hold_m is not None
+                and (before is None or (before.hold_m, before.layer_m) != (g.hold_m, g.layer_m))
+            ):
                 out.append(g)
         return out
 

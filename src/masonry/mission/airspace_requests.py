@@ -26,6 +26,7 @@ from masonry.mission.airspace_state import (
     hold_candidates,
     request_geometry,
 )
+from masonry.mission.airspace_yield import make_way
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.linger_airspace import linger_spans, linger_spots
 from masonry.mission.sites import enter_ungoverned
@@ -188,7 +189,8 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
         u.answer = Grant(uav, w.site, False)
         return u.answer
     assert u.hold is not None
-    nearer = approach(c, uav, u) if not blocked_site else None
+    # in the way of a UAV leaving from where it stays: it moves first (airspace_yield.py), else closes in
+    nearer = make_way(c, uav, u) or (approach(c, uav, u) if not blocked_site else None)
     u.answer = nearer or Grant(uav, w.site, False, u.hold.point_m, u.hold.layer_m)
     return u.answer
 
