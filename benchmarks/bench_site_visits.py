@@ -45,6 +45,7 @@ from masonry.mission.sites import SiteVisit, work_span_m
 from masonry.mission.uav_stack import build_machine
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.segments import point_segment_m
+from masonry.separation import SEPARATION_XY_M
 
 #: UAV name -> its ticks: (time s, task state, transit state, position or None)
 Ticks = dict[str, list[tuple[float, str, str, tuple[float, float, float] | None]]]
@@ -241,7 +242,49 @@ def hand_overs(f: Flown) -> list[str]:
         f"- the leaving UAV from its ask to moving off its site: {sum(off_s):.1f} s in the sum "
         f"({_stats(off_s)}); {len(climbed)} climbed 0.3 m or more there first ({sum(climbed):.1f} s)"
     )
+    steps = [_timeline(f, v, o) for _gap, v, o in gaps]
+    out.append(
+        "- the hand-over step by step (from the leaving UAV's ask to the waiting one's grant), summed (median):"
+    )
+    for i, what in enumerate(TIMELINE):
+        xs = [t[i + 1] - t[i] for t in steps if t[i] is not None and t[i + 1] is not None]
+        if xs:
+            out.append(f"  - {what}: {sum(xs):.1f} s ({statistics.median(xs):.2f} s, {len(xs)} hand-overs)")
     return out
+
+
+#: The steps of a hand-over (:func:`_timeline`), in the order printed.
+TIMELINE = (
+    "its ask to moving at all (the answer, its own wait)",
+    "moving to moving sideways (its climb there)",
+    f"moving sideways to {SEPARATION_XY_M} m off (its climb freed)",
+    f"{SEPARATION_XY_M} m off to the waiting UAV's grant",
+)
+
+
+def _timeline(f: Flown, v: SiteVisit, o: SiteVisit) -> tuple[float | None, ...]:
+    """When ``o``'s UAV asked, moved at all, moved sideways (``MOVED_M``) and was ``SEPARATION_XY_M`` off
+    (horizontally) from where it asked, and when ``v`` began (None: not within 30 s after)."""
+    assert o.end_s is not None
+    rows = [
+        r for r in f.ticks.get(o.uav, []) if o.end_s - 1e-6 <= r[0] <= v.start_s + 30.0 and r[3] is not None
+    ]
+    moved: float | None = None
+    sideways: float | None = None
+    off: float | None = None
+    if rows:
+        p0 = rows[0][3]
+        assert p0 is not None
+        for t, _s, _tr, p in rows:
+            assert p is not None
+            d = math.hypot(p[0] - p0[0], p[1] - p0[1])
+            if moved is None and (d > MOVED_M or abs(p[2] - p0[2]) > MOVED_M):
+                moved = t
+            if sideways is None and d > MOVED_M:
+                sideways = t
+            if off is None and d > SEPARATION_XY_M:
+                off = t
+    return o.end_s, moved, sideways, off, v.start_s
 
 
 #: What held a waiting UAV at a tick of a hand-over (:func:`_held_by`), in the order printed.
