@@ -14,7 +14,7 @@ import math
 from collections.abc import Mapping
 
 from masonry.geofence import Site
-from masonry.mission import airspace_climb, airspace_ground, airspace_queries, airspace_requests
+from masonry.mission import airspace_ground, airspace_queries, airspace_requests
 from masonry.mission.airspace_ground import ON_PAD_XY_M, ON_PAD_Z_M
 from masonry.mission.airspace_state import (
     Grant,
@@ -355,7 +355,6 @@ class ColumnClearance:
             self.arrive_at_hold(u)  # it hovers at its hold point
             return
         kept = ahead_of(vols, x, y, z)
-        kept = airspace_climb.climb_ahead(u, x, y, z, self.layer_m(uav)) if kept is None else kept
         if kept is None:
             return
         if len(kept) != len(vols) or any(k is not v for k, v in zip(kept, vols)):
@@ -417,7 +416,7 @@ class ColumnClearance:
 
     def free(self, uav: str, vols: list[Volume]) -> bool:
         """No volume of ``vols`` conflicts with another UAV's (:func:`volumes_clear`)."""
-        others = airspace_climb.others_volumes(self, uav)
+        others = [q for other, u in self.records.items() if other != uav for q in u.volumes]
         return volumes_clear(vols, others, self.sep_xy_m, self.spacing_m - 1e-9)
 
     def fits(self, uav: str, vols: list[Volume]) -> bool:

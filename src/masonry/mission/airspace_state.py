@@ -107,9 +107,6 @@ class UavAirspace:
     request: FlightRequest | None = None  # ASKING, TO_HOLD, AT_HOLD
     hold: HoldFlight | None = None  # TO_HOLD, AT_HOLD
     flight: GrantedFlight | None = None  # FLYING
-    #: its climb as granted, while the part below it is freed for the UAV coming down near where it set off only
-    #: (:mod:`masonry.mission.airspace_climb`): every other UAV keeps clear of the whole
-    climb: Volume | None = None
     seen_version: int = -1  # airspace version at the last evaluation of its request (unchanged: same answer)
     answer: Grant | None = None
 
