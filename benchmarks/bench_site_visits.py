@@ -17,7 +17,9 @@ camera), recording every UAV's control tick (task state, transit state, position
    waiting UAV in those seconds (the airspace's ``blockers`` at each tick of mission control: the leaving UAV's
    climb, which is where it set off until it is ``TRACK_M`` along its leg, its other volumes, only other UAVs',
    or nothing: the site gate, or the answer on its way), and how long the leaving UAV took from its ask to
-   moving off its site (its answer and its climb there).
+   moving off its site (its answer and its climb there); then the hand-over step by step, summed: the leaving
+   UAV's ask to moving at all, to moving sideways (its climb there), to ``SEPARATION_XY_M`` off (where its
+   climb is freed), to the waiting UAV's grant.
 
 Usage: python benchmarks/bench_site_visits.py [--walls 12m] [--fleets 4+2,8+4] [--seed 1] [--vehicle ideal]
 """
