@@ -19,6 +19,11 @@ geometric camera) and, at every tick of mission control's airspace
   lets the flight fit at one of those layers (``sole``: that class alone would free it; ``several``: no single
   class would), and each class's ``in the way`` counts every tick it blocks at layer 0.
 
+Mission control looks at the airspace only while some UAV waits (``control_airspace.grant_waiting``): a request
+made since the last look counts from when it was made (``FlightRequest.since_s``), not through the quiet gap before
+it (until branch ``holdfly35`` the gap was counted against the new request's cause, mostly ``to-hold``: 4 + 2 seed 1
+924 UAV-s of ``to-hold`` where its hold flights took 529 s).
+
 Per run: the makespan, the UAV-seconds per cause (and as a share of all UAV-seconds waited), and where the waiting
 UAVs wait (their own hover's class), split by what they wait to fly to (``wall``, ``pallet``, ``home``).
 
@@ -146,11 +151,15 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> tuple[fl
     original = ColumnClearance.grant
 
     def recorded(self: ColumnClearance, now_s: float) -> Any:
-        dt = 0.0 if last[0] is None else now_s - last[0]
-        last[0] = now_s
-        if dt > 0.0:
+        prev, last[0] = last[0], now_s
+        if prev is not None and now_s > prev:
             for uav, u in list(self.records.items()):
                 if u.request is None or uav in self.lingering:
+                    continue
+                # (mission control looks only while someone waits: a request made since the last look waited
+                # from when it was made, not through the quiet gap before it)
+                dt = now_s - max(prev, u.request.since_s)
+                if dt <= 0.0:
                     continue
                 why, in_way = cause(self, uav, u, where)
                 tally.causes[why] += dt
