@@ -418,3 +418,54 @@ def test_an_effector_under_its_supports_tops_on_a_fresh_sighting_is_not_let_go()
     # guarded: its height is the GNSS's, wandering centimetres): as before
     assert not _low_case(0.068, seen_ago_s=1.0)
     assert not _low_case(0.068, seen_ago_s=math.inf, guarded=False)
+
+
+def _wide_case(
+    error_m: float,
+    relooks: int = 0,
+    last_leg: bool = True,
+    guarded: bool = True,
+    in_wind: bool = False,
+    **config: object,
+) -> bool:
+    """ReleaseGate.wide on one tick: the effector ``error_m`` beside its drop-off, after ``relooks`` looks back
+    up, on the side look's last leg or not, the drop-off guarded or not, the placement in a wind or not, the px4
+    preset's settings (``config`` on top)."""
+    cfg = UavConfig("b", "brick", (0.0, 0.0, 0.0), **{**uav_settings("px4"), **config})
+    target = np.array([1.0, 2.0, 0.3])
+    uav = SimpleNamespace(
+        config=cfg,
+        _now_s=10.0,
+        _wall=SimpleNamespace(seen_s=9.7),
+        _side=SimpleNamespace(final=last_leg, offset_m=np.array([-0.13, -0.075, 0.0])),
+        effector=SimpleNamespace(
+            position=lambda _tel: target + np.array([0.6 * error_m, -0.8 * error_m, 0.0])
+        ),
+        attempt=SimpleNamespace(place_effector_target_m=target, in_wind=in_wind),
+    )
+    gate = ReleaseGate()
+    gate.guarded, gate.relooks = guarded, relooks
+    return gate.wide(cast("BrickUav", uav), cast("Telemetry", SimpleNamespace()))
+
+
+def test_in_calm_air_a_last_leg_tick_wide_of_the_drop_off_is_passed_over_while_looks_are_left() -> None:
+    """The px4 towers in calm air: the side look's last leg crosses the 1.5 cm disc at 0.2-0.4 m/s as the
+    support's sighting goes stale, and the first tick inside was let go anywhere in it (4 of 60 bricks over 2 cm
+    of their neighbours on seeds 0-9, 4 on 10-19; with the rule 0 and 0: docs/performance/as-built.md, branch
+    release35). On the px4 preset only a tick within 1 cm is, while a look back up is left to fly the pass again."""
+    assert _wide_case(0.012)
+    assert _wide_case(0.0101, relooks=MAX_LEG_LOOKS - 1)
+    # within 1 cm: let go (the other rules still apply)
+    assert not _wide_case(0.009)
+    # the last look's pass: let go within r_pl, as before (not a stale release after it)
+    assert not _wide_case(0.012, relooks=MAX_LEG_LOOKS)
+    # not the side look's last leg (a descent from above, the support in view), or not on bricks of the wall
+    assert not _wide_case(0.012, last_leg=False)
+    assert not _wide_case(0.012, guarded=False)
+    # in a wind: as before (the passes there come within 1 cm too seldom: stale releases after the looks)
+    assert not _wide_case(0.012, in_wind=True)
+    # off by default, and on the arducopter preset
+    assert not _wide_case(0.012, release_leg_m=0.0)
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).release_leg_m == 0.0
+    assert uav_settings("px4")["release_leg_m"] == 0.010
+    assert "release_leg_m" not in uav_settings("arducopter")

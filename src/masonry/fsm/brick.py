@@ -482,8 +482,9 @@ class BrickUav(PutBack):
             return
         self._run_off.hold(self.nav, self._now_s, float(tel.position_m[2]), cfg)
         error = dropoff_error_m(self, tel, self._dropoff)
-        if error is not None and (self._gate.closing(self, tel) or self._gate.low(self, tel)):
-            error = None  # (masonry.fsm.release_gate: nearer by the next tick, or under the supports' tops)
+        gate = self._gate
+        if error is not None and (gate.closing(self, tel) or gate.wide(self, tel) or gate.low(self, tel)):
+            error = None  # (masonry.fsm.release_gate: nearer by the next tick, wide of it, under the supports' tops)
         if error is not None and self._wall.lags(self) and self._wall.taken(self) is None:
             error = None  # (masonry.fsm.wall_align: the drop-off behind the wall in view would rest on a neighbour)
         if error is not None:

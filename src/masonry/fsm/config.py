@@ -119,6 +119,10 @@ class UavConfig:
     # 0: off
     release_hold_m: float = 0.0
     release_hold_s: float = 0.0
+    # With align_on_wall, on the side look's last leg of a guarded drop-off in calm air: a tick inside r_pl but
+    # farther than this (m) from the drop-off is passed over while looks back up are left (the pass is flown again
+    # from the look point; masonry.fsm.release_gate.ReleaseGate.wide). 0: off
+    release_leg_m: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off
     wall_trend_s: float = 1.5

@@ -52,6 +52,15 @@ fresh then, it waits that tick; past the freshness it lets go as before (a hold 
 worse: the drop-off ages, docs/performance/as-built.md, "The px4 tail over 20 seeds"). On every descent, not
 only that leg, it was a draw (the pyramid better, the rotated bond worse, seeds 0-9 21.3 mm against 19.3).
 
+In calm air, on that leg, a tick inside r_pl but more than ``UavConfig.release_leg_m`` (the ``px4`` preset's 1 cm)
+from the drop-off is passed over while looks back up are left (:meth:`ReleaseGate.wide`, issue 30, branch
+``release35``): the support leaves the view 7-11 cm out, the UAV trails the leg's reference by 4-8 cm and catches
+up through the disc at 0.2-0.4 m/s as the sighting goes stale, and the first tick inside was let go anywhere in it
+(the px4 towers, calm, seeds 0-19: 8 of 120 bricks over 2 cm of their neighbours; with it none, 4-6 s more
+descending a brick). A pass that comes no nearer is flown again from the look point (:meth:`lost`); the last
+look's pass is let go within r_pl as before. Not in a wind: passes within 1 cm are rarer there, and on the towers'
+seeds 10-19 12 bricks were let go stale after the looks (8 of 60 over 2 cm against 1).
+
 With the wall in view at the release tick (seen this tick or the last), on any descent, a tick inside r_pl but
 more than ``UavConfig.release_hold_m`` off (the ``px4`` preset's 1 cm) is passed over too, up to
 ``release_hold_s`` (3.5 s) past the leg's end (issues 29/30, branch ``px4land``). On the px4 model refitted to the
@@ -194,6 +203,23 @@ class ReleaseGate:
             return False
         ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
         return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
+
+    def wide(self, uav: BrickUav, tel: Telemetry) -> bool:
+        """Within r_pl of the drop-off this tick, on the side look's last leg in calm air: True to let it pass, the
+        effector farther than ``UavConfig.release_leg_m`` from the drop-off and looks back up left (guarded only;
+        see the module docstring). The pass goes on; if no tick of it comes within ``release_leg_m`` while the
+        sighting is fresh, :meth:`lost` flies it again from the look point. The last look's pass is let go within
+        r_pl."""
+        cfg = uav.config
+        if cfg.release_leg_m <= 0.0 or not self.guarded or not uav._side.final or uav.attempt.in_wind:
+            return False
+        if self.relooks >= self._most(uav):
+            return False
+        error_m = (
+            np.asarray(uav.effector.position(tel), dtype=float)[:2]
+            - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
+        )
+        return float(np.hypot(*error_m)) > cfg.release_leg_m
 
     def low(self, uav: BrickUav, tel: Telemetry) -> bool:
         """Within r_pl of the drop-off this tick: True to let it pass, the effector more than ``LOW_M`` below the
