@@ -23,7 +23,6 @@ from masonry.sim.camera import (
     CameraConfig,
     LayoutCache,
     _behind,
-    _rotvecs_to_matrices,
     _rows_all,
     marker_layout,
     observe_markers,
@@ -64,8 +63,21 @@ def _observe_as_it_was(R_wc, c_w, bricks, markers, config, rng, *, covered=None,
     cy, sy = np.cos(yaw), np.sin(yaw)
     R_wm = np.zeros((len(index), 3, 3))
     R_wm[:, 0, 0], R_wm[:, 0, 1], R_wm[:, 1, 0], R_wm[:, 1, 1], R_wm[:, 2, 2] = cy, -sy, sy, cy, 1.0
-    R = np.einsum("ji,njk,nkl->nil", R_wc, R_wm, _rotvecs_to_matrices(noise[:, 3:] * ang[:, None]))
+    R = np.einsum("ji,njk,nkl->nil", R_wc, R_wm, _rotvecs_as_they_were(noise[:, 3:] * ang[:, None]))
     return tuple(TagPose(int(ids[i]), pos[row], R[row]) for row, i in enumerate(index))
+
+
+def _rotvecs_as_they_were(w):  # type: ignore[no-untyped-def]
+    """``_rotvecs_to_matrices`` before this change (main at f02e937)."""
+    theta = np.linalg.norm(w, axis=1)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    k = w / safe[:, None]
+    K = np.zeros((len(w), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
+    cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
+    return np.eye(3)[None] + sin * K + cos * (K @ K)
 
 
 def _wall(courses: int, per_course: int) -> BrickField:

@@ -274,9 +274,13 @@ def _rows_all(b: np.ndarray) -> np.ndarray:
     return b.view(np.uint32)[:, 0] == _ALL_FOUR
 
 
+_EYE3 = np.eye(3)[None]
+_EYE3.flags.writeable = False
+
+
 def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     """Rodrigues' formula for a batch of rotation vectors (n, 3) -> (n, 3, 3)."""
-    theta = np.linalg.norm(w, axis=1)
+    theta = np.sqrt(np.add.reduce(w * w, axis=1))  # (np.linalg.norm(w, axis=1) without its checks)
     safe = np.where(theta > 1e-12, theta, 1.0)
     k = w / safe[:, None]
     K = np.zeros((len(w), 3, 3))
@@ -284,7 +288,7 @@ def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
     sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
     cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
-    return np.eye(3)[None] + sin * K + cos * (K @ K)
+    return _EYE3 + sin * K + cos * (K @ K)
 
 
 def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:
