@@ -271,7 +271,8 @@ _ALL_FOUR = int.from_bytes(b"\x01\x01\x01\x01", "little")  # (four true bytes re
 def _rows_all(b: np.ndarray) -> np.ndarray:
     """``np.all(b, axis=1)`` of a fresh (m, 4) boolean array: its rows' four bytes read as one 32-bit word (a
     reduction along a short axis costs numpy more than the comparison does)."""
-    return b.view(np.uint32)[:, 0] == _ALL_FOUR
+    every: np.ndarray = b.view(np.uint32)[:, 0] == _ALL_FOUR
+    return every
 
 
 _EYE3 = np.eye(3)[None]
