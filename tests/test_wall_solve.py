@@ -297,3 +297,17 @@ def test_a_solve_of_some_bricks_only_gives_their_centres_and_roots_of_the_whole_
     assert some.centre_m == {b: whole.centre_m[b] for b in only if b in whole.centre_m}, case
     assert some.root == {b: whole.root[b] for b in only if b in whole.root}, case
     assert some.variance_m2 == whole.variance_m2, case
+
+
+@seed(35)
+@settings(max_examples=100, deadline=None)
+@given(random_sightings())
+def test_the_rows_are_the_whole_solve_in_its_order_without_its_dictionaries(case) -> None:  # type: ignore[no-untyped-def]
+    # (the wall anchor reads every brick's centre of its loose and last solves from these lists)
+    fixed, sightings, priors, _, unsurveyed = case
+    whole = Wall(fixed, sightings).solve(priors, (), unsurveyed)
+    free, roots, xs = Wall(fixed, sightings).rows(priors, unsurveyed)
+    assert free == list(whole.centre_m), case
+    assert dict(zip(free, roots, strict=True)) == whole.root, case
+    assert [tuple(x) for x in xs] == list(whole.centre_m.values()), case
+    assert all(len(x) == 2 and all(type(v) is float for v in x) for x in xs), case

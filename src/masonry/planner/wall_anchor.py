@@ -50,7 +50,7 @@ from dataclasses import dataclass, replace
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
-from masonry.planner.wall_solve import Sighting, Solution, Wall
+from masonry.planner.wall_solve import Sighting, Wall
 
 Vec3 = tuple[float, float, float]
 
@@ -165,14 +165,13 @@ class WallAnchor:
         self._free = self._unsurveyed_residuals(wall, looks)
         sigma_w = self.world_sigma_m()
         var_w = LOOSE_SIGMA_M**2 if sigma_w is None else sigma_w**2
-        solved = wall.solve({b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
+        free, roots, xs = wall.rows({b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
         self.anchors = {}
-        shift = self._wall_shift(solved)
-        size = Counter(solved.root.values())
-        for b, (x, y) in solved.centre_m.items():
+        shift = self._wall_shift(free, roots, xs)
+        size = Counter(roots)
+        for b, root, (x, y) in zip(free, roots, xs, strict=True):
             design = self._design[b].position_m
             centre = (x, y, design[2])
-            root = solved.root[b]
             if root not in self._fixed and size[root] == 1:
                 continue  # (seen alone, tied to no brick: its look, :meth:`pose`)
             if root in self._fixed:
@@ -191,22 +190,26 @@ class WallAnchor:
         """The world looks' squared horizontal residuals per axis (m^2, summed) against the shape of their wall's
         sightings with no survey (the translation the looks' mean), and the degrees of freedom they hold (per
         component, its looks less one)."""
-        loose = wall.solve({b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
+        free, roots, xs = wall.rows({b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
         total = 0.0
         members: dict[int, int] = {}  # (component root -> its looks)
-        for b, (x, y) in loose.centre_m.items():
-            if b in looks and b not in self._fixed and loose.root[b] not in self._fixed:
+        fixed = self._fixed
+        for b, root, (x, y) in zip(free, roots, xs, strict=True):
+            if b in looks and b not in fixed and root not in fixed:
                 w = looks[b]
                 total += ((w[0] - x) ** 2 + (w[1] - y) ** 2) / 2.0
-                members[loose.root[b]] = members.get(loose.root[b], 0) + 1
+                members[root] = members.get(root, 0) + 1
         return total, sum(n - 1 for n in members.values())
 
-    def _wall_shift(self, solved: Solution) -> dict[int, tuple[float, float]]:
-        """Per component rooted on no surveyed brick, its bricks' mean horizontal offset from their design (m)."""
+    def _wall_shift(
+        self, free: list[int], roots: list[int], xs: list[list[float]]
+    ) -> dict[int, tuple[float, float]]:
+        """Per component (of the solution ``free``, ``roots``, ``xs``: :meth:`Wall.rows`), its bricks' mean
+        horizontal offset from their design (m): read for those rooted on no surveyed brick."""
         sums: dict[int, list[float]] = {}
-        for b, (x, y) in solved.centre_m.items():
+        for b, root, (x, y) in zip(free, roots, xs, strict=True):
             design = self._design[b].position_m
-            acc = sums.setdefault(solved.root[b], [0.0, 0.0, 0.0])
+            acc = sums.setdefault(root, [0.0, 0.0, 0.0])
             acc[0] += x - design[0]
             acc[1] += y - design[1]
             acc[2] += 1.0

@@ -173,6 +173,35 @@ class Wall:
     ) -> Solution:
         """:func:`solve` on this wall's surveyed bricks and sightings; ``only``: the solution's centres and roots of
         those bricks alone (the wall anchor's first solve reads one brick's), None: of every brick solved."""
+        solved = self._solve(priors, variance_of, unsurveyed)
+        if solved is None:
+            return Solution({}, {}, {})
+        lay, x, variance = solved
+        index = lay.index
+        free = lay.free
+        if only is not None:
+            rows_of = [(b, index[b]) for b in only if b in index]
+            return Solution(
+                {b: tuple(x[i].tolist()) for b, i in rows_of}, {b: lay.roots[i] for b, i in rows_of}, variance
+            )
+        xs = map(tuple, x[: len(free)].tolist())  # (the free bricks' rows; the sightings' offsets' follow)
+        return Solution(dict(zip(free, xs, strict=True)), dict(zip(free, lay.roots, strict=True)), variance)
+
+    def rows(
+        self, priors: Mapping[int, tuple[Vec2, float]] | None = None, unsurveyed: bool = False
+    ) -> tuple[list[int], list[int], list[list[float]]]:
+        """:meth:`solve`'s bricks, their roots and their centres ``[x, y]`` as three lists in its order (the same
+        floats, without its dictionaries: the wall anchor reads every brick's once)."""
+        solved = self._solve(priors, (), unsurveyed)
+        if solved is None:
+            return [], [], []
+        lay, x, _ = solved
+        return lay.free, lay.roots, x[: len(lay.free)].tolist()
+
+    def _solve(
+        self, priors: Mapping[int, tuple[Vec2, float]] | None, variance_of: Collection[int], unsurveyed: bool
+    ) -> tuple[_Layout, np.ndarray, dict[int, float]] | None:
+        """The layout, the solution (every unknown's row) and the variances asked for; None: no free brick."""
         # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
         import scipy.sparse as sp
         import scipy.sparse.linalg as spla
@@ -183,7 +212,7 @@ class Wall:
         else:
             lay = self._layouts[seeds] = self._layout(seeds or ())
         if lay is None:
-            return Solution({}, {}, {})
+            return None
         index, n = lay.index, lay.n
         rows, cols, vals, at, add = lay.rows, lay.cols, lay.vals, lay.at, lay.add
         prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
@@ -196,9 +225,10 @@ class Wall:
             vals = np.concatenate([vals, 1.0 / pv])
             at = np.concatenate([at, pi])
             add = np.concatenate([add, pm / pv[:, None]])
-        rhs = np.zeros((n, 2))
-        np.add.at(rhs[:, 0], at, add[:, 0])
-        np.add.at(rhs[:, 1], at, add[:, 1])
+        # each unknown's entries summed from 0.0 in the order they come (as np.add.at into zeros adds them)
+        rhs = np.empty((n, 2))
+        rhs[:, 0] = np.bincount(at, weights=add[:, 0], minlength=n)
+        rhs[:, 1] = np.bincount(at, weights=add[:, 1], minlength=n)
         h = sp.csc_matrix((vals, (rows, cols)), shape=(n, n))
         lu = spla.splu(h)
         x = lu.solve(rhs)
@@ -208,14 +238,7 @@ class Wall:
                 e = np.zeros(n)
                 e[index[b]] = 1.0
                 variance[b] = float(lu.solve(e)[index[b]])
-        free = lay.free
-        if only is not None:
-            rows_of = [(b, index[b]) for b in only if b in index]
-            return Solution(
-                {b: tuple(x[i].tolist()) for b, i in rows_of}, {b: lay.roots[i] for b, i in rows_of}, variance
-            )
-        xs = map(tuple, x[: len(free)].tolist())  # (the free bricks' rows; the sightings' offsets' follow)
-        return Solution(dict(zip(free, xs, strict=True)), dict(zip(free, lay.roots, strict=True)), variance)
+        return lay, x, variance
 
     def _layout(self, unsurveyed: Collection[int]) -> _Layout | None:
         """The equations before the priors, the components rooted on ``unsurveyed`` after the surveyed bricks

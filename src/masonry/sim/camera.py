@@ -152,6 +152,20 @@ class LayoutCache:
         more = np.array([i for i, p in zip(more.tolist(), xyz, strict=True) if not covered(*p)], dtype=int)
         return np.concatenate([rest, more]) if cut else more
 
+    def maybe_seen(self) -> np.ndarray | None:
+        """The rows of the last layout not known to be covered (ascending: the resting rows whose kept answer is
+        not "covered", then every carried row), or None: all of them (none known covered, or one row alone left,
+        whose matrix-vector product numpy takes another way than two rows' or more)."""
+        state = self._covered[: self._rest_rows]
+        if not (state > 0).any():
+            return None
+        rows = np.flatnonzero(state <= 0)
+        if self._carried:
+            rows = np.concatenate(
+                [rows, np.arange(self._rest_rows, self._rest_rows + 2 * len(self._carried))]
+            )
+        return rows if len(rows) >= 2 else None
+
     def yaw_rad(self) -> np.ndarray:
         """The yaw of each row's brick in the last layout (the resting rows' kept)."""
         if not self._rest_rows:
@@ -195,22 +209,31 @@ def observe_markers(
         return ()
     intr = config.intrinsics
     ids, centres, corners = marker_layout(bricks, markers) if layout is None else layout
-    p_c = (centres - c_w) @ R_wc  # camera frame = R_wc^T (p - c)
-    q_c = (corners - c_w) @ R_wc  # (m, 4, 3)
+    # the rows a kept answer says covered are dropped before projecting (LayoutCache.maybe_seen): every row below
+    # is its own (the same floats with or without the others), and a covered row would be dropped after it
+    pre = kept.maybe_seen() if covered is not None and kept is not None else None
+    at, at_corners = (centres, corners) if pre is None else (centres[pre], corners[pre])
+    p_c = (at - c_w) @ R_wc  # camera frame = R_wc^T (p - c)
+    q_c = (at_corners - c_w) @ R_wc  # (m, 4, 3)
     z = q_c[:, :, 2]
-    ok = np.all(z > 0.05, axis=1)
-    zs = np.where(z > 0.05, z, 1.0)
+    front = z > 0.05
+    zs = np.where(front, z, 1.0)
     u = intr.fx * q_c[:, :, 0] / zs + intr.cx
     v = intr.fy * q_c[:, :, 1] / zs + intr.cy
-    ok &= np.all((u >= 0.0) & (u <= intr.width_px - 1.0) & (v >= 0.0) & (v <= intr.height_px - 1.0), axis=1)
-    dist = np.linalg.norm(p_c, axis=1)
+    # every corner in front of the camera and inside the image (one test per corner, then per row: _rows_all)
+    ok = _rows_all(front & (u >= 0.0) & (u <= intr.width_px - 1.0) & (v >= 0.0) & (v <= intr.height_px - 1.0))
+    dist = np.sqrt(np.add.reduce(p_c * p_c, axis=1))  # (np.linalg.norm(p_c, axis=1) without its checks)
     normal_c = R_wc[2, :]  # world +z (the markers' face normal) in the camera frame
     cos_view = -(p_c @ normal_c) / np.maximum(dist, 1e-9)
     ok &= cos_view >= math.cos(config.max_view_angle_rad)
-    # side lengths corner k -> k+1 (cyclic): the differences np.diff gives on [u0, u1, u2, u3, u0]
-    side = np.hypot(u[:, _NEXT_CORNER] - u, v[:, _NEXT_CORNER] - v)
-    ok &= side.min(axis=1) >= config.min_marker_px
-    index = np.flatnonzero(ok)
+    # side lengths corner k -> k+1 (cyclic): the differences np.diff gives on [u0, u1, u2, u3, u0]; of the rows
+    # still in view only (each row's are its own), the smallest at least min_marker_px: all four at least that
+    near = np.flatnonzero(ok)
+    un, vn = u[near], v[near]
+    near = near[
+        _rows_all(np.hypot(un[:, _NEXT_CORNER] - un, vn[:, _NEXT_CORNER] - vn) >= config.min_marker_px)
+    ]
+    index = near if pre is None else pre[near]
     if hidden:
         index = np.array([i for i in index if int(ids[i]) not in hidden], dtype=int)
     if covered is not None and kept is not None and len(index):
@@ -223,12 +246,13 @@ def observe_markers(
         index = np.array([i for i in index if not _behind(occluder, c_w, centres[i])], dtype=int)
     if not len(index):
         return ()
-    d = dist[index]
+    local = index if pre is None else np.searchsorted(pre, index)  # (the rows' places in the projected ones)
+    d = dist[local]
     noise = rng.standard_normal((len(index), 6))
     lat = config.lateral_noise_m + config.lateral_noise_per_m * d
     dep = config.depth_noise_m + config.depth_noise_per_m * d
     ang = config.angle_noise_rad + config.angle_noise_per_m * d
-    pos = p_c[index] + noise[:, :3] * np.stack([lat, lat, dep], axis=1)
+    pos = p_c[local] + noise[:, :3] * np.stack([lat, lat, dep], axis=1)
     yaw = (np.repeat(np.array([b.yaw_rad for b in bricks]), 2) if kept is None else kept.yaw_rad())[index]
     cy, sy = np.cos(yaw), np.sin(yaw)
     R_wm = np.zeros((len(index), 3, 3))
@@ -241,11 +265,23 @@ def observe_markers(
 
 
 _NEXT_CORNER = np.array([1, 2, 3, 0])
+_ALL_FOUR = int.from_bytes(b"\x01\x01\x01\x01", "little")  # (four true bytes read as one 32-bit word)
+
+
+def _rows_all(b: np.ndarray) -> np.ndarray:
+    """``np.all(b, axis=1)`` of a fresh (m, 4) boolean array: its rows' four bytes read as one 32-bit word (a
+    reduction along a short axis costs numpy more than the comparison does)."""
+    every: np.ndarray = b.view(np.uint32)[:, 0] == _ALL_FOUR
+    return every
+
+
+_EYE3 = np.eye(3)[None]
+_EYE3.flags.writeable = False
 
 
 def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     """Rodrigues' formula for a batch of rotation vectors (n, 3) -> (n, 3, 3)."""
-    theta = np.linalg.norm(w, axis=1)
+    theta = np.sqrt(np.add.reduce(w * w, axis=1))  # (np.linalg.norm(w, axis=1) without its checks)
     safe = np.where(theta > 1e-12, theta, 1.0)
     k = w / safe[:, None]
     K = np.zeros((len(w), 3, 3))
@@ -253,7 +289,7 @@ def _rotvecs_to_matrices(w: np.ndarray) -> np.ndarray:
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
     sin = np.where(theta > 1e-12, np.sin(theta), 0.0)[:, None, None]
     cos = np.where(theta > 1e-12, 1.0 - np.cos(theta), 0.0)[:, None, None]
-    return np.eye(3)[None] + sin * K + cos * (K @ K)
+    return _EYE3 + sin * K + cos * (K @ K)
 
 
 def _behind(occluder: SimBrick, c_w: np.ndarray, p_w: np.ndarray) -> bool:
