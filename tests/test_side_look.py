@@ -4,6 +4,7 @@ sees one, so that on GNSS a tower's brick keeps to the brick it stands on."""
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ import pytest
 from masonry.airframe import camera_mount
 from masonry.blueprint_gen import running_bond, towers
 from masonry.fsm.config import UavConfig
-from masonry.fsm.side_look import LookScene, look_offset_m, marker_in_view
+from masonry.fsm.side_look import LookScene, SideLook, look_offset_m, marker_in_view
 from masonry.fsm.tuning import uav_settings
 from masonry.geometry import rot_z
 from masonry.mission.simulate import SimulatedMission
@@ -188,3 +189,61 @@ def test_it_is_on_with_the_wall_alignment_and_uav_yaml_may_switch_it_off() -> No
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).side_look is True  # (it acts only with align_on_wall)
     assert uav_settings("px4", {"side_look": False})["side_look"] is False
     assert "side_look" not in uav_settings("arducopter")
+
+
+def _pass_rig(lag_s: float = 0.5, in_wind: bool = False):
+    """A stand-in brick UAV for :class:`SideLook`'s pass bookkeeping: the drop-off at the origin, the pre-release
+    point 15 cm along -x (the leg runs along +x), the effector where ``rig.at`` says."""
+    rig = SimpleNamespace(at=np.zeros(3))
+    uav = SimpleNamespace(
+        config=SimpleNamespace(last_leg_lag_s=lag_s),
+        attempt=SimpleNamespace(in_wind=in_wind, place_effector_target_m=np.zeros(3)),
+        effector=SimpleNamespace(position=lambda tel: rig.at),
+    )
+    side = SideLook()
+    side.offset_m, side.final = np.array([-0.15, 0.0, 0.0]), True
+    return side, uav, rig
+
+
+def _fly_pass(side, uav, rig, xs_m: list[float]) -> float | None:
+    """One pass of the last leg: its lag, then the effector at ``xs_m`` along the leg, tick by tick."""
+    lag = side.leg_lag_s(uav)
+    for x in xs_m:
+        rig.at = np.array([x, 0.01, 0.0])
+        side.track(uav, None, looking=False)
+    return lag
+
+
+def test_the_last_legs_lag_comes_down_after_passes_past_the_drop_off_and_back_after_short_ones() -> None:
+    """Issue 29 on the real PX4: the last leg's passes on the px4 preset's 0.5 s lag ran 4-12 cm past the drop-off;
+    each pass more than 3 cm past takes 0.1 s off the next one's lag (down to none), one gone stale more than 3 cm
+    short puts 0.1 s back (never over the configured lag), one within 3 cm leaves it."""
+    side, uav, rig = _pass_rig()
+    overshooting = [-0.15, -0.08, 0.0, 0.06, 0.08]
+    lags = [_fly_pass(side, uav, rig, overshooting) for _ in range(7)]
+    assert lags == pytest.approx([0.5, 0.4, 0.3, 0.2, 0.1, 0.0, 0.0])
+    assert _fly_pass(side, uav, rig, [-0.15, -0.10, -0.06]) == pytest.approx(0.0)  # the one before overshot
+    assert _fly_pass(side, uav, rig, [-0.15, -0.01, 0.02]) == pytest.approx(0.1)  # the one before was short
+    assert _fly_pass(side, uav, rig, [-0.15, -0.01, 0.02]) == pytest.approx(0.1)  # within 3 cm: kept
+    for _ in range(8):  # short passes: back up to the configured lag, not past it
+        last = _fly_pass(side, uav, rig, [-0.15, -0.10])
+    assert last == pytest.approx(0.5)
+    # a look back up (ticks while looking) is no part of the pass
+    side.leg_lag_s(uav)
+    rig.at = np.array([0.2, 0.0, 0.0])
+    side.track(uav, None, looking=True)
+    assert _fly_pass(side, uav, rig, []) == pytest.approx(0.5)
+
+
+def test_a_new_placement_starts_no_pass_and_in_a_wind_the_last_leg_flies_the_uavs_own_lag() -> None:
+    """The lag learnt carries over to the next placement (the same vehicle), the pass in hand does not; in a wind
+    the last leg has no lag of its own (masonry.fsm.side_look.last_leg_lag_s) and nothing is learnt."""
+    side, uav, rig = _pass_rig()
+    _fly_pass(side, uav, rig, [0.0, 0.08])
+    side.offset_m, side._past_m = None, None  # plan(): a new alignment
+    side.offset_m, side.final = np.array([-0.15, 0.0, 0.0]), True
+    assert _fly_pass(side, uav, rig, [0.0, 0.08]) == pytest.approx(0.5)
+    assert _fly_pass(side, uav, rig, []) == pytest.approx(0.4)
+    windy, wuav, wrig = _pass_rig(in_wind=True)
+    assert _fly_pass(windy, wuav, wrig, [0.0, 0.08]) is None
+    assert _fly_pass(windy, wuav, wrig, []) is None

@@ -7,10 +7,13 @@ which runs on the autopilot's clock too. In lock-step the clock stands while the
 
 from __future__ import annotations
 
+import itertools
+import random
 from dataclasses import dataclass, field
 
 import pytest
 
+from fsm_rig import Rig
 from masonry.adapters.wiring import _advance_on
 
 
@@ -70,3 +73,38 @@ def test_a_lockstep_sitl_gone_is_paced_as_any_link() -> None:
     clock = WorkClock()
     _fly(clock, _advance_on(clock, None, Paced(lockstep=True, gone=True)), work_s=0.03, ticks=10)
     assert clock.slept_s[1:] == pytest.approx([0.02] * 9)
+
+
+def _machine_ticks(call_times_s: list[float]) -> list[float]:
+    """The times a brick UAV's machine (control period 0.1 s) ticked, stepped at ``call_times_s``."""
+    rig = Rig("brick")
+    ticks: list[float] = []
+    for t_s in call_times_s:
+        rig.clock.advance(t_s - rig.clock.now_s())
+        before = rig.uav._last_step_s
+        rig.uav.step(t_s)
+        if rig.uav._last_step_s != before:
+            ticks.append(t_s)
+    return ticks
+
+
+@pytest.mark.parametrize("jitter_s", [0.0, 0.002, 0.01])
+def test_the_machine_ticks_its_period_on_average_when_the_loop_comes_a_hair_early_or_late(
+    jitter_s: float,
+) -> None:
+    """A 20 Hz fly loop whose calls come ``jitter_s`` early or late (a real autopilot's clock) ticks the machine's
+    0.1 s period ten times a second: each tick due on the grid of the last one's due time. Due a period after the
+    last tick came, every other one waited a third call (0.15 s): 7.8 Hz on the real PX4 (issue 29)."""
+    rng = random.Random(3)
+    calls = [0.05 * k + rng.uniform(-jitter_s, jitter_s) for k in range(1, 401)]
+    ticks = _machine_ticks(calls)
+    gaps = [b - a for a, b in itertools.pairwise(ticks)]
+    assert 198 <= len(ticks) <= 201
+    assert max(gaps) <= 0.15 + 2 * jitter_s + 1e-9
+
+
+def test_after_a_stall_the_machine_ticks_once_then_a_period_later() -> None:
+    """A loop left unrun for 2 s: one tick when it runs again, the next a period after it (no burst to catch up)."""
+    calls = [0.05 * k for k in range(1, 21)] + [3.0 + 0.05 * k for k in range(10)]
+    ticks = _machine_ticks(calls)
+    assert [round(t, 2) for t in ticks if t >= 3.0] == [3.0, 3.1, 3.2, 3.3, 3.4]

@@ -478,6 +478,7 @@ class BrickUav(PutBack):
         if self._side.leg_due(self) and self._gate.before_leg(self, tel):
             return
         self._side.step(self, self._place_yaw_rad())
+        self._side.track(self, tel, self._gate.looking)
         if self._gate.lost(self, tel):  # the last leg's pass missed the drop-off while fresh: look again now
             return
         self._run_off.hold(self.nav, self._now_s, float(tel.position_m[2]), cfg)

@@ -84,7 +84,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M, last_leg_lag_s
+from masonry.fsm.side_look import FINAL_LEG_S, PRE_RELEASE_GAP_M
 from masonry.fsm.wall_align import neighbours_of, supports_of
 
 if TYPE_CHECKING:
@@ -325,7 +325,7 @@ class ReleaseGate:
             uav.effector.body_target(uav.attempt.place_effector_target_m, yaw),
             FINAL_LEG_S,
             yaw,
-            lag_s=last_leg_lag_s(uav),
+            lag_s=uav._side.leg_lag_s(uav),
         )
 
     def _fail(self, uav: BrickUav) -> None:

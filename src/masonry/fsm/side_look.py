@@ -34,10 +34,14 @@ from masonry.segments import point_segment_m
 
 if TYPE_CHECKING:
     from masonry.fsm.brick import BrickUav
+    from masonry.ports import Telemetry
 
 __all__ = [
     "ACQUIRE_SPREAD_M",
     "FINAL_LEG_S",
+    "LAG_STEP_S",
+    "LEG_REST_WAIT_S",
+    "PASS_OVERSHOOT_M",
     "PRE_RELEASE_GAP_M",
     "TRACK_SPREAD_M",
     "LookScene",
@@ -57,6 +61,13 @@ ACQUIRE_SPREAD_M = 0.10
 TRACK_SPREAD_M = 0.04
 #: The last leg, displaced point to drop-off (about 10-15 cm): short, the offset held is that old at the release.
 FINAL_LEG_S = 1.2
+#: A pass of the last leg this far (m) past its drop-off along the leg, or gone stale this far short of it, moves the
+#: next pass's lag by ``LAG_STEP_S`` (:meth:`SideLook.leg_lag_s`): twice r_pl, past the airframe's wander in a pass.
+PASS_OVERSHOOT_M = 0.03
+LAG_STEP_S = 0.1
+#: The first pass waits at most this long (s) past the displaced descent's end for the UAV to rest there (a look's
+#: ``release_gate.RELOOK_WAIT_S``).
+LEG_REST_WAIT_S = 3.0
 #: Displacements tried: every 22.5 degrees in the body frame, 4 to 35 cm.
 _DIRECTIONS = 16
 _DISTANCES_M = tuple(0.04 + 0.01 * i for i in range(47))
@@ -294,16 +305,21 @@ def _look(scene: LookScene, acquire_spread_m: float) -> tuple[np.ndarray, np.nda
 
 
 class SideLook:
-    """The brick UAV's side look for one placement: the displacement planned (None: none) and the leg flown."""
+    """The brick UAV's side look for one placement: the displacement planned (None: none) and the leg flown; and,
+    over its placements, the last leg's lag learnt from its passes (:meth:`leg_lag_s`)."""
 
     def __init__(self) -> None:
         self.offset_m: np.ndarray | None = None  # the pre-release point's displacement
         self.final = False
+        #: the last leg's feed-forward lag (s) learnt from its passes (None: ``UavConfig.last_leg_lag_s``)
+        self.lag_s: float | None = None
+        #: the pass in hand: the farthest (m) past the drop-off along the leg (None: no pass flown yet)
+        self._past_m: float | None = None
 
     def plan(self, uav: BrickUav) -> np.ndarray:
         """A new alignment above the drop-off: the displacement of its hover (zero without a side look; never
         without ``align_on_wall`` and ``side_look``)."""
-        self.offset_m, self.final = None, False
+        self.offset_m, self.final, self._past_m = None, False, None
         cfg = uav.config
         if not (uav.on_wall and cfg.side_look and cfg.wall):
             return np.zeros(3)
@@ -329,11 +345,54 @@ class SideLook:
         """The displaced descent over: fly the last leg to the drop-off (once)."""
         if self.offset_m is None or self.final or uav._now_s < uav.nav.end_s:
             return
-        self.final = True
         tel = uav._tel
         assert tel is not None
+        # from rest at the pre-release point, as a look's leg (masonry.fsm.release_gate), for at most LEG_REST_WAIT_S:
+        # on the real PX4 a first pass begun from the displaced descent's swing (0.15 m/s across the leg) swung 12 cm
+        # wide, came back through the drop-off at 0.42 m/s and let go at r_pl's edge, 20.4 mm off as built (branch
+        # px4case35); the support is in view there, so the wait keeps the sighting fresh
+        if uav._now_s < uav.nav.end_s + LEG_REST_WAIT_S and not uav.nav.rests_at(tel, uav.nav.target_m):
+            return
+        self.final = True
         body = uav.effector.body_target(uav.attempt.place_effector_target_m, yaw_rad)
-        uav._fly_to(tel, body, FINAL_LEG_S, yaw_rad, lag_s=last_leg_lag_s(uav))
+        uav._fly_to(tel, body, FINAL_LEG_S, yaw_rad, lag_s=self.leg_lag_s(uav))
+
+    def track(self, uav: BrickUav, tel: Telemetry, looking: bool) -> None:
+        """One tick of the descent: on the last leg's pass (not a look back up), how far past the drop-off the
+        effector has come along the leg (the leg runs from the pre-release point against ``offset_m``)."""
+        if self.offset_m is None or not self.final or looking or self._past_m is None:
+            return
+        away = np.asarray(self.offset_m, dtype=float)[:2]
+        norm = float(np.hypot(*away))
+        if norm < 1e-9:
+            return
+        error = (
+            np.asarray(uav.effector.position(tel), dtype=float)[:2]
+            - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
+        )
+        self._past_m = max(self._past_m, -float(error @ away) / norm)
+
+    def leg_lag_s(self, uav: BrickUav) -> float | None:
+        """The lag of a new pass of the last leg (:func:`last_leg_lag_s`, as learnt from the passes before it).
+
+        The pass before it, if one was flown in this placement, moves the lag by ``LAG_STEP_S``: down where it
+        ran more than ``PASS_OVERSHOOT_M`` past the drop-off, back up (never past the configured lag) where it
+        went stale more than that short of it. The configured lag was fitted on the ``px4`` model (25 % droop);
+        the real PX4 v1.16 follows the feed-forward's velocity in full after its dead time, and its passes on
+        0.5 s ran 4-12 cm past the drop-off (median 6) at up to twice the leg's speed, so a pass rarely had a tick
+        inside r_pl while the support's sighting was fresh: 20 looks back up a tower brick, 85-100 s a descent
+        (tests/test_px4_sitl.py's case study, docs/performance/autopilots.md, branch ``px4case35``)."""
+        base = last_leg_lag_s(uav)
+        past, self._past_m = self._past_m, -math.inf
+        if base is None:
+            return None
+        lag = base if self.lag_s is None else min(self.lag_s, base)
+        if past is not None and past > PASS_OVERSHOOT_M:
+            lag = max(0.0, lag - LAG_STEP_S)
+        elif past is not None and math.isfinite(past) and past < -PASS_OVERSHOOT_M:
+            lag = min(base, lag + LAG_STEP_S)
+        self.lag_s = lag
+        return lag
 
 
 def last_leg_lag_s(uav: BrickUav) -> float | None:
