@@ -109,9 +109,6 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # (masonry.fsm.release_gate; the refitted model's wander crosses the 1.5 cm disc)
         "release_hold_m": 0.010,
         "release_hold_s": 3.5,
-        # in calm air, on the side look's last leg only a tick within 1 cm while looks are left
-        # (masonry.fsm.release_gate; the px4 towers' first tick in the 1.5 cm disc, docs/performance/as-built.md)
-        "release_leg_m": 0.010,
         # a placement in a wind (its lean over 0.07 rad; calm: 0.05-0.055) aligns and descends on kp 2 /s
         # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of nine 4 m/s missions on the refitted model
         "wall_in_wind_rad": 0.07,
