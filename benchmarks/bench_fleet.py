@@ -49,7 +49,7 @@ import os
 import statistics
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -103,6 +103,27 @@ def walls_and_fleets(ap: argparse.ArgumentParser, walls: str, fleets: str) -> li
                 ap.error(f"--fleets: {fleet!r} is not BRICK+ADHESION (e.g. 4+2)")
             out.append((wall, bricks, adhesion))
     return out
+
+
+def sweep(description: str) -> Iterator[tuple[str, Blueprint, int, int, int]]:
+    """The airspace tracers' command line (``--walls`` names of :data:`WALLS`, ``--fleets`` BRICK+ADHESION pairs,
+    ``--seeds``, each comma-separated; 12m, 4+2,8+4 and 1 by default) as (the wall's title, its blueprint, brick
+    UAVs, adhesion UAVs, seed), wall by wall; a bad name, pair or seed ends the run with argparse's one-line error."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("--walls", default="12m")
+    ap.add_argument("--fleets", default="4+2,8+4")
+    ap.add_argument("--seeds", default="1")
+    args = ap.parse_args()
+    try:
+        seeds = [int(s) for s in args.seeds.split(",")]
+    except ValueError:
+        ap.error(f"--seeds: {args.seeds!r} is not a comma-separated list of integers")
+    blueprints: dict[str, Blueprint] = {}
+    for wall, bricks, adhesion in walls_and_fleets(ap, args.walls, args.fleets):
+        if wall not in blueprints:
+            blueprints[wall] = WALLS[wall][1]()
+        for seed in seeds:
+            yield WALLS[wall][0], blueprints[wall], bricks, adhesion, seed
 
 
 @dataclass(frozen=True)

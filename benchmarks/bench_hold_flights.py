@@ -22,7 +22,6 @@ Usage: python benchmarks/bench_hold_flights.py [--walls 12m] [--fleets 4+2,8+4] 
 
 from __future__ import annotations
 
-import argparse
 import math
 import statistics
 import sys
@@ -35,7 +34,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS, simulate_fleet
+from bench_fleet import simulate_fleet, sweep
 
 from masonry.blueprint import Blueprint
 from masonry.mission import airspace_requests
@@ -221,19 +220,10 @@ def summary(makespan_s: float, t: Trace) -> list[str]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--walls", default="12m")
-    ap.add_argument("--fleets", default="4+2,8+4")
-    ap.add_argument("--seeds", default="1")
-    args = ap.parse_args()
-    for wall in args.walls.split(","):
-        blueprint = WALLS[wall][1]()
-        for fleet in args.fleets.split(","):
-            bricks, adhesion = (int(x) for x in fleet.split("+"))
-            for seed in (int(s) for s in args.seeds.split(",")):
-                makespan, trace = fly(blueprint, bricks, adhesion, seed)
-                print(f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}\n")
-                print("\n".join(summary(makespan, trace)), flush=True)
+    for title, blueprint, bricks, adhesion, seed in sweep(__doc__.split("\n")[0]):
+        makespan, trace = fly(blueprint, bricks, adhesion, seed)
+        print(f"\n## {title}, {bricks} + {adhesion}, seed {seed}\n")
+        print("\n".join(summary(makespan, trace)), flush=True)
 
 
 if __name__ == "__main__":

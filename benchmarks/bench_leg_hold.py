@@ -19,7 +19,6 @@ Usage: python benchmarks/bench_leg_hold.py [--walls 12m] [--fleets 4+2,8+4] [--s
 
 from __future__ import annotations
 
-import argparse
 import math
 import statistics
 import sys
@@ -30,7 +29,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS
+from bench_fleet import sweep
 from bench_site_visits import Ticks, recording_machine
 
 from masonry.mission.simulate import SimulatedMission
@@ -141,49 +140,37 @@ def describe(xs: list[float]) -> str:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--walls", default="12m")
-    ap.add_argument("--fleets", default="4+2,8+4")
-    ap.add_argument("--seeds", default="1")
-    args = ap.parse_args()
-    for wall in args.walls.split(","):
-        blueprint = WALLS[wall][1]()
-        for fleet in args.fleets.split(","):
-            bricks, adhesion = (int(x) for x in fleet.split("+"))
-            for seed in (int(s) for s in args.seeds.split(",")):
-                makespan, flights = fly(blueprint, bricks, adhesion, seed)
-                print(
-                    f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: makespan {makespan:,.1f} s\n"
-                )
-                print("mean / median / p90 / max (sum) seconds per flight")
-                print()
-                print("| | flights | held | flown | held - flown |")
-                print("|---|---|---|---|---|")
-                cl = [f for f in flights if f.climb_held_s > 0]
-                lg = [f for f in flights if f.leg_held_s > 0]
-                print(
-                    f"| climb | {len(cl)} | {describe([f.climb_held_s for f in cl])} | "
-                    f"{describe([f.climb_flown_s for f in cl])} | "
-                    f"{describe([f.climb_held_s - f.climb_flown_s for f in cl])} |"
-                )
-                print(
-                    f"| leg | {len(lg)} | {describe([f.leg_held_s for f in lg])} | "
-                    f"{describe([f.leg_flown_s for f in lg])} | "
-                    f"{describe([f.leg_held_s - f.leg_flown_s for f in lg])} |"
-                )
-                far = [f.far_end_s for f in lg if f.far_end_s is not None]
-                print(f"\nthe first leg's far end (last 0.5 m) reached after the grant: {describe(far)} s")
-                ln = [f.leg_len_m for f in lg if f.leg_len_m > 0]
-                print(f"\nfirst leg's length: {describe(ln)} m")
-                worst = sorted(cl, key=lambda f: f.climb_flown_s - f.climb_held_s)[:3]
-                print("\nclimbs held longest past their flying (UAV, granted at, held, flown): ", end="")
-                print(
-                    "; ".join(
-                        f"{f.uav} {f.start_s:.1f} s {f.climb_held_s:.1f} / {f.climb_flown_s:.1f}"
-                        for f in worst
-                    )
-                )
-                sys.stdout.flush()
+    for title, blueprint, bricks, adhesion, seed in sweep(__doc__.split("\n")[0]):
+        makespan, flights = fly(blueprint, bricks, adhesion, seed)
+        print(f"\n## {title}, {bricks} + {adhesion}, seed {seed}: makespan {makespan:,.1f} s\n")
+        print("mean / median / p90 / max (sum) seconds per flight")
+        print()
+        print("| | flights | held | flown | held - flown |")
+        print("|---|---|---|---|---|")
+        cl = [f for f in flights if f.climb_held_s > 0]
+        lg = [f for f in flights if f.leg_held_s > 0]
+        print(
+            f"| climb | {len(cl)} | {describe([f.climb_held_s for f in cl])} | "
+            f"{describe([f.climb_flown_s for f in cl])} | "
+            f"{describe([f.climb_held_s - f.climb_flown_s for f in cl])} |"
+        )
+        print(
+            f"| leg | {len(lg)} | {describe([f.leg_held_s for f in lg])} | "
+            f"{describe([f.leg_flown_s for f in lg])} | "
+            f"{describe([f.leg_held_s - f.leg_flown_s for f in lg])} |"
+        )
+        far = [f.far_end_s for f in lg if f.far_end_s is not None]
+        print(f"\nthe first leg's far end (last 0.5 m) reached after the grant: {describe(far)} s")
+        ln = [f.leg_len_m for f in lg if f.leg_len_m > 0]
+        print(f"\nfirst leg's length: {describe(ln)} m")
+        worst = sorted(cl, key=lambda f: f.climb_flown_s - f.climb_held_s)[:3]
+        print("\nclimbs held longest past their flying (UAV, granted at, held, flown): ", end="")
+        print(
+            "; ".join(
+                f"{f.uav} {f.start_s:.1f} s {f.climb_held_s:.1f} / {f.climb_flown_s:.1f}" for f in worst
+            )
+        )
+        sys.stdout.flush()
 
 
 if __name__ == "__main__":

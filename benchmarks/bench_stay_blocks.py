@@ -32,7 +32,6 @@ Usage: python benchmarks/bench_stay_blocks.py [--walls 12m] [--fleets 4+2,8+4] [
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import sys
 from collections import Counter
@@ -42,7 +41,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_fleet import WALLS, simulate_fleet
+from bench_fleet import simulate_fleet, sweep
 
 from masonry.blueprint import Blueprint
 from masonry.mission.airspace import ColumnClearance, Phase
@@ -183,38 +182,25 @@ def fly(blueprint: Blueprint, bricks: int, adhesion: int, seed: int) -> tuple[fl
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--walls", default="12m")
-    ap.add_argument("--fleets", default="4+2,8+4")
-    ap.add_argument("--seeds", default="1")
-    args = ap.parse_args()
-    for wall in args.walls.split(","):
-        blueprint = WALLS[wall][1]()
-        for fleet in args.fleets.split(","):
-            bricks, adhesion = (int(x) for x in fleet.split("+"))
-            for seed in (int(s) for s in args.seeds.split(",")):
-                makespan, t = fly(blueprint, bricks, adhesion, seed)
-                print(
-                    f"\n## {WALLS[wall][0]}, {bricks} + {adhesion}, seed {seed}: makespan {makespan:,.1f} s\n"
-                )
-                print(f"UAV-seconds with a request (not lingering): {t.total_s:,.0f}\n")
-                print("| cause | UAV-s | share | | class in the way (layer 0) | UAV-s |")
-                print("|---|---|---|---|---|---|")
-                causes = t.causes.most_common()
-                ways = t.in_way.most_common()
-                for i in range(max(len(causes), len(ways))):
-                    a = causes[i] if i < len(causes) else None
-                    b = ways[i] if i < len(ways) else None
-                    left = f"| {a[0]} | {a[1]:,.0f} | {100 * a[1] / t.total_s:.0f} % |" if a else "| | | |"
-                    right = f" | {b[0]} | {b[1]:,.0f} |" if b else " | | |"
-                    print(left + right)
-                print(
-                    "\nwhere the waiting UAVs wait (own hover) -> what they wait to fly to, UAV-s: ", end=""
-                )
-                print(
-                    "; ".join(f"{a} -> {d} {s:,.0f}" for (a, d), s in t.waiting_at.most_common()),
-                    flush=True,
-                )
+    for title, blueprint, bricks, adhesion, seed in sweep(__doc__.split("\n")[0]):
+        makespan, t = fly(blueprint, bricks, adhesion, seed)
+        print(f"\n## {title}, {bricks} + {adhesion}, seed {seed}: makespan {makespan:,.1f} s\n")
+        print(f"UAV-seconds with a request (not lingering): {t.total_s:,.0f}\n")
+        print("| cause | UAV-s | share | | class in the way (layer 0) | UAV-s |")
+        print("|---|---|---|---|---|---|")
+        causes = t.causes.most_common()
+        ways = t.in_way.most_common()
+        for i in range(max(len(causes), len(ways))):
+            a = causes[i] if i < len(causes) else None
+            b = ways[i] if i < len(ways) else None
+            left = f"| {a[0]} | {a[1]:,.0f} | {100 * a[1] / t.total_s:.0f} % |" if a else "| | | |"
+            right = f" | {b[0]} | {b[1]:,.0f} |" if b else " | | |"
+            print(left + right)
+        print("\nwhere the waiting UAVs wait (own hover) -> what they wait to fly to, UAV-s: ", end="")
+        print(
+            "; ".join(f"{a} -> {d} {s:,.0f}" for (a, d), s in t.waiting_at.most_common()),
+            flush=True,
+        )
 
 
 if __name__ == "__main__":
