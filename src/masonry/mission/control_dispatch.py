@@ -27,18 +27,7 @@ def admit(mc: MissionControl, column_radius_m: float) -> None:
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
     width = site_width(((p[0], p[1]) for p in points), column_radius_m)
-    mc.dispatcher.admission = Admission(
-        width, lambda name: mc.columns.phase(name) is Phase.LANDED, lambda name: swap_hold(mc, name)
-    )
-
-
-def swap_hold(mc: MissionControl, name: str) -> bool:
-    """``name`` has a task its handler holds for a battery swap: its heartbeats say it flies home or stands on its
-    pad, and not because it was just given the task there (``taking_off``)."""
-    link = mc.uavs[name]
-    if link.lost or link.taking_off or mc.dispatcher.task_of(name) is None:
-        return False
-    return link.facts.flying_home or link.facts.on_pad
+    mc.dispatcher.admission = Admission(width, lambda name: mc.columns.phase(name) is Phase.LANDED)
 
 
 def may_take_off(mc: MissionControl, name: str) -> bool:
@@ -58,4 +47,4 @@ def may_take_off(mc: MissionControl, name: str) -> bool:
     return True
 
 
-__all__ = ["admit", "may_take_off", "swap_hold"]
+__all__ = ["admit", "may_take_off"]

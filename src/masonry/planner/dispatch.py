@@ -222,7 +222,7 @@ class Dispatcher(DispatchQueries):
         st, nb, pre = self._status, self._neighbours, self._prerequisites
         if not rule.landed(uav):
             return i  # already out: it is not added to the crowd (holding it back left holds unserved)
-        busy = sum(1 for n, j in self._uav_task.items() if self._role[j] == role and not rule.away(n))
+        busy = sum(1 for j in self._uav_task.values() if self._role[j] == role)
         if busy >= rule.cap(self._live_count[role], sum(self._live_count.values())):
             return None  # its role has its share of the UAVs the wall can keep busy: it stays on its pad
         running = list(self._uav_task.values())

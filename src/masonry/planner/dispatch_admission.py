@@ -94,13 +94,10 @@ class Admission:
     Args:
         width: :func:`site_width` of the wall's tasks at the conflict radius.
         landed: whether a UAV is on its pad (mission control's airspace).
-        away: whether a UAV with a task is away for its battery swap (its handler holds the task: it flies
-            home, stands on its pad or is swapped): it does not count against its role's cap.
     """
 
     width: int
     landed: Callable[[str], bool]
-    away: Callable[[str], bool] = lambda _name: False
 
     def applies(self, live_uavs: int) -> bool:
         """The fleet has more UAVs than :data:`UAVS_PER_SITE` per site the wall can work at once."""
