@@ -52,17 +52,15 @@ def fleet_for(
                 base = kept[-1].home_m
             else:
                 base = _default_home(blueprint, role)
-            others = [u.home_m[0] for u in (*blueprint.fleet, *out) if u.role != role]
-            step = -spacing if others and base[0] < sum(others) / len(others) else spacing
             k, n = 1, 0
             while len(kept) + n < count:
                 name = f"{prefix}-{len(kept) + n + 1}"
                 while name in taken:
                     name = f"{prefix}-{len(kept) + n + 1 + k * 100}"
                     k += 1
-                home = (base[0] + step * (n + 1), base[1], base[2])
+                home = (base[0] + spacing * (n + 1), base[1], base[2])
                 while any(math.dist(home[:2], h[:2]) < spacing * 0.99 for h in homes):
-                    home = (home[0] + step, home[1], home[2])
+                    home = (home[0] + spacing, home[1], home[2])
                 homes.append(home)
                 taken.add(name)
                 out.append(UavSpec(name, role, home))  # type: ignore[arg-type]
