@@ -95,6 +95,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CLOSING_MIN_M",
+    "LAST_PASS_STALE_S",
     "LOW_M",
     "MAX_LEG_LOOKS",
     "MAX_RELOOKS",
@@ -116,6 +117,9 @@ MAX_RELOOKS = 5
 #: after ten looks on sightings 1.6-3.7 s old, the four worst of them 29-79 mm off their neighbours
 #: (docs/performance/as-built.md).
 MAX_LEG_LOOKS = 20
+#: With the side look's looks all flown, its last pass is let go on a sighting at most this old (s); older, the
+#: descent fails and is flown again while descents are left (:meth:`ReleaseGate.lost`).
+LAST_PASS_STALE_S = 1.0
 #: A look that did not find the wall is followed by one this much higher (m) (the first: ``PRE_RELEASE_GAP_M`` +
 #: this).
 RELOOK_CLIMB_M = 0.05
@@ -221,7 +225,10 @@ class ReleaseGate:
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
-        return float(np.hypot(*error_m)) > cfg.release_leg_m
+        wide = float(np.hypot(*error_m)) > cfg.release_leg_m
+        if wide and self.fresh(uav):
+            uav._side.on_time = True  # (the learnt lag does not step on this pass: it was in r_pl in time)
+        return wide
 
     def low(self, uav: BrickUav, tel: Telemetry) -> bool:
         """Within r_pl of the drop-off this tick: True to let it pass, the effector more than ``LOW_M`` below the
@@ -248,6 +255,8 @@ class ReleaseGate:
         if self.fresh(uav):
             return True
         if self.relooks >= self._most(uav):
+            if self._descends_again(uav):
+                return False
             self.stale_age_s = uav._now_s - uav._wall.seen_s
             return True
         self._look(uav, tel)
@@ -276,8 +285,21 @@ class ReleaseGate:
         if not self.guarded or self.looking or not uav._side.final or self.fresh(uav):
             return False
         if self.relooks >= self._most(uav):
-            return False
+            return self._descends_again(uav)
         self._look(uav, tel)
+        return True
+
+    @staticmethod
+    def _descends_again(uav: BrickUav) -> bool:
+        """The side look's looks all flown and the last pass's sighting older than ``LAST_PASS_STALE_S``: True if
+        the descent has failed (the UAV aligns above the drop-off again and descends with new looks), not on the
+        last descent allowed (there the brick is let go on the last look's offset, as before)."""
+        if uav._side.offset_m is None or uav._now_s - uav._wall.seen_s <= LAST_PASS_STALE_S:
+            return False
+        if uav.attempt.place_attempts + 1 >= uav.config.max_place_attempts:
+            return False
+        uav.attempt.place_attempts += 1
+        uav.timeout()
         return True
 
     def retries(self, uav: BrickUav, tel: Telemetry) -> bool:
