@@ -315,11 +315,13 @@ class SideLook:
         self.lag_s: float | None = None
         #: the pass in hand: the farthest (m) past the drop-off along the leg (None: no pass flown yet)
         self._past_m: float | None = None
+        #: the pass in hand had a tick inside r_pl on a fresh sighting passed over (``ReleaseGate.wide``)
+        self.on_time = False
 
     def plan(self, uav: BrickUav) -> np.ndarray:
         """A new alignment above the drop-off: the displacement of its hover (zero without a side look; never
         without ``align_on_wall`` and ``side_look``)."""
-        self.offset_m, self.final, self._past_m = None, False, None
+        self.offset_m, self.final, self._past_m, self.on_time = None, False, None, False
         cfg = uav.config
         if not (uav.on_wall and cfg.side_look and cfg.wall):
             return np.zeros(3)
@@ -384,9 +386,12 @@ class SideLook:
         (tests/test_px4_sitl.py's case study, docs/performance/autopilots.md, branch ``px4case35``)."""
         base = last_leg_lag_s(uav)
         past, self._past_m = self._past_m, -math.inf
+        on_time, self.on_time = self.on_time, False
         if base is None:
             return None
         lag = base if self.lag_s is None else min(self.lag_s, base)
+        if on_time:  # it reached the drop-off in time (passed over wide): what it ran past after says nothing
+            past = None
         if past is not None and past > PASS_OVERSHOOT_M:
             lag = max(0.0, lag - LAG_STEP_S)
         elif past is not None and math.isfinite(past) and past < -PASS_OVERSHOOT_M:
