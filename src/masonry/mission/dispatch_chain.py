@@ -21,13 +21,13 @@ r_c, so only under the columns): past it the UAVs queue at the sites already, an
 adhesive's open times (a plan with deadlines keeps the glue dispatcher, which holds segments back on purpose);
 ``--policy schedule`` has its own ``chain`` rule.
 
-**Sprayers apart past the width** (issue 27, 2026-12-06, docs/dispatch.md "Sprayers apart"). Past that width the
-other way round holds too: a sprayer with no segment available (every ready one is within r_c of a task in
-progress) is given the policy's best ready segment within r_c of no other *sprayer's* segment in progress, where
-there is one, and only then one next to another sprayer (:meth:`ChainThrough._select_conflicting`). Two
-sprayers given segments within r_c of each other queue for each other's site intervals at every segment of their
-runs; a segment that conflicts only with a brick waits for one brick's visit (on the 6 x 30 wall at 6 + 3, seed 1,
-the sprayers' site waits behind another sprayer fell from 1,616 to 400 task-seconds). Pure: no I/O, no clock.
+**Sprayers apart past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width").
+Past that width the other way round holds too: a sprayer with no segment available (every ready one is within
+r_c of a task in progress) is given the policy's best ready segment within r_c of no other *sprayer's* segment in
+progress, where there is one, and only then one next to another sprayer (:meth:`ChainThrough._select_conflicting`).
+Two sprayers given segments within r_c of each other queue for each other's site intervals at every segment of
+their runs; a segment that conflicts only with a brick waits for one brick's visit (on the 6 x 30 wall at 6 + 3,
+seed 1, the sprayers' site waits behind another sprayer fell from 1,616 to 400 task-seconds). Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
