@@ -108,3 +108,36 @@ def test_missions_with_it_complete_and_keep_their_separation(
     assert all(t.status == "done" for t in r.tasks)
     assert r.min_separation_m >= 1.0
     assert r.conflict_violations == 0 and r.dependency_violations == 0
+
+
+TWO_SPRAYERS = [
+    UavSpec("brick-1", "brick", (0.0, -3.0, 0.0)),
+    UavSpec("brick-2", "brick", (3.0, -3.0, 0.0)),
+    UavSpec("glue-1", "adhesion", (-2.0, -3.0, 0.0)),
+    UavSpec("glue-2", "adhesion", (-1.5, -3.0, 0.0)),
+]
+
+
+def segments_by_two_bricks() -> Plan:
+    """A1 conflicts with A0 (the first sprayer's) and brick B0; A2, farther, with brick B1 only."""
+    tasks = (
+        glue(0, -1.05, -0.9),
+        glue(1, -0.9, -0.75),
+        glue(2, 1.0, 1.15),
+        BrickTask("B0", 0, False, (-0.6, 0.0, 0.15), 0.0, (-0.6, -2.0, 0.05)),
+        BrickTask("B1", 1, False, (1.3, 0.0, 0.15), 0.0, (1.3, -2.0, 0.05)),
+    )
+    return Plan(tasks, (), (("A0", "A1"), ("A1", "B0"), ("A2", "B1")))
+
+
+@pytest.mark.parametrize(("width", "second"), [(3, "A2"), (4, "A1"), (None, "A1")])
+def test_past_the_width_the_second_sprayer_is_given_a_segment_away_from_the_first(
+    width: int | None, second: str
+) -> None:
+    # nothing available for glue-2: A1 (nearer, next to glue-1's A0) or A2 (by a brick only); past the width
+    # (four UAVs, three sites) it is A2, else the nearest
+    d = ChainThrough(segments_by_two_bricks(), TWO_SPRAYERS, reservation="site")
+    if width is not None:
+        d.admission = Admission(width, lambda _name: False)
+    d.assign()
+    assert d.in_progress == {"B0": "brick-1", "B1": "brick-2", "A0": "glue-1", second: "glue-2"}
