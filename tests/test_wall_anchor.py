@@ -15,9 +15,9 @@ from masonry.blueprint_gen import pyramid, towers
 from masonry.mission.events import EventList
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.perception.types import AsBuiltPose
+from masonry.planner import wall_anchor
 from masonry.planner.graphs import plan
 from masonry.planner.tasks import BrickTask
-from masonry.planner import wall_anchor
 from masonry.planner.wall_anchor import MIN_WORLD_SIGMA_M, RELATIVE_SIGMA_M, WallAnchor
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
 from masonry.planner.wall_solve import Wall
@@ -309,7 +309,9 @@ def test_a_wall_on_no_survey_is_reported_within_5_mm_in_its_frame_and_on_arducop
         assert max(float(np.linalg.norm(e)) for e in errs.values()) < 0.005, errs
 
 
-def test_a_brick_taken_again_drops_its_old_links_from_the_kept_components(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_brick_taken_again_drops_its_old_links_from_the_kept_components(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """The anchor's union-find (``wall_solve.Groups``) only joins: a brick taken again (its old sighting replaced,
     or gone when the new look ties it to nothing) has the components found again from the sightings kept: the
     same poses as an anchor whose walls find their components from the sightings on every solve."""
