@@ -15,10 +15,12 @@ from masonry.blueprint_gen import pyramid, towers
 from masonry.mission.events import EventList
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.perception.types import AsBuiltPose
+from masonry.planner import wall_anchor
 from masonry.planner.graphs import plan
 from masonry.planner.tasks import BrickTask
 from masonry.planner.wall_anchor import MIN_WORLD_SIGMA_M, RELATIVE_SIGMA_M, WallAnchor
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
+from masonry.planner.wall_solve import Wall
 
 # one tower of four: B0 surveyed (placed), B1 on B0, B2 on B1, B3 on B2
 TOWER = plan(towers(1, 4, placed_courses=1))
@@ -305,3 +307,23 @@ def test_a_wall_on_no_survey_is_reported_within_5_mm_in_its_frame_and_on_arducop
     assert max(in_wall.values()) < 0.005, in_wall
     if mission.vehicle == "arducopter":
         assert max(float(np.linalg.norm(e)) for e in errs.values()) < 0.005, errs
+
+
+def test_a_brick_taken_again_drops_its_old_links_from_the_kept_components(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The anchor's union-find (``wall_solve.Groups``) only joins: a brick taken again (its old sighting replaced,
+    or gone when the new look ties it to nothing) has the components found again from the sightings kept: the
+    same poses as an anchor whose walls find their components from the sightings on every solve."""
+    truth = _truth([(0.012, -0.004), (0.020, 0.003), (0.018, 0.010)])
+    err = (0.05, -0.03, 0.0)
+    looks = [(b, _look(b, b - 1, truth, err, (0.0, 0.0, 0.0))) for b in (1, 2, 3)]
+    looks.append((2, _look(2, None, truth, err, (0.0, 0.0, 0.0))))  # (B2 again, tied to nothing)
+    looks.append((2, _look(2, 1, truth, err, (0.001, 0.0, 0.0))))  # (and again, tied to B1)
+    kept = WallAnchor(TOWER.tasks)
+    got = [(kept.take(b, look), dict(kept.anchors)) for b, look in looks]
+    # (B3's only way to the survey runs through B2's sighting: off it, B3 is on B2's own wall)
+    assert [a[3].root for _, a in got[2:]] == [0, 2, 0]
+    monkeypatch.setattr(wall_anchor, "Wall", lambda fixed, sightings, groups: Wall(fixed, sightings))
+    plain = WallAnchor(TOWER.tasks)
+    assert [(plain.take(b, look), dict(plain.anchors)) for b, look in looks] == got

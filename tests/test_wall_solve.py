@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, seed, settings
 from hypothesis import strategies as st
 
-from masonry.planner.wall_solve import Sighting, Wall, solve
+from masonry.planner.wall_solve import Groups, Sighting, Wall, _components, _Table, solve
 
 HALF_M2 = 0.001**2 / 2.0  # (a brick's estimate in a look: half the link's variance)
 
@@ -311,3 +311,31 @@ def test_the_rows_are_the_whole_solve_in_its_order_without_its_dictionaries(case
     assert dict(zip(free, roots, strict=True)) == whole.root, case
     assert [tuple(x) for x in xs] == list(whole.centre_m.values()), case
     assert all(len(x) == 2 and all(type(v) is float for v in x) for x in xs), case
+
+
+@seed(36)
+@settings(max_examples=200, deadline=None)
+@given(random_sightings(), st.lists(st.integers(0, 15), max_size=5))
+def test_the_kept_groups_give_the_components_the_graph_gives(case, loose) -> None:  # type: ignore[no-untyped-def]
+    # (the wall anchor keeps a union-find of its sightings as they come: the same bricks, flags and roots, as arrays)
+    fixed, sightings, _, _, _ = case
+    kept = [s for s in sightings if s.offsets]
+    table = _Table(kept)
+    groups = Groups()
+    for s in sightings:  # (one by one, as the anchor adds them; one with no offset joins nothing)
+        groups.add(s)
+    for seeds in ((), loose):
+        want = _components(fixed, table, seeds)
+        got = _components(fixed, table, seeds, groups)
+        assert [a.tolist() for a in got] == [a.tolist() for a in want], (case, seeds)
+        assert [a.dtype for a in got] == [a.dtype for a in want]
+
+
+@seed(36)
+@settings(max_examples=100, deadline=None)
+@given(random_sightings())
+def test_a_wall_with_kept_groups_solves_bit_for_bit_as_without(case) -> None:  # type: ignore[no-untyped-def]
+    fixed, sightings, priors, variance_of, unsurveyed = case
+    plain = Wall(fixed, sightings).solve(priors, variance_of, unsurveyed)
+    kept = Wall(fixed, sightings, Groups(sightings)).solve(priors, variance_of, unsurveyed)
+    assert kept == plain, case

@@ -50,7 +50,7 @@ from dataclasses import dataclass, replace
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
-from masonry.planner.wall_solve import Sighting, Wall
+from masonry.planner.wall_solve import Groups, Sighting, Wall
 
 Vec3 = tuple[float, float, float]
 
@@ -91,6 +91,7 @@ class WallAnchor:
         self._looks: dict[int, AsBuiltPose] = {}  # (brick id -> its world-frame look, in completion order)
         self._looks_xy: dict[int, tuple[float, float]] = {}  # (the same, horizontally: every solve's priors)
         self._sightings: dict[int, Sighting] = {}
+        self._groups = Groups()  # (the sightings' components, joined as they come: every solve's roots)
         self._residuals_m2: list[float] = []
         self._free: tuple[float, int] = (0.0, 0)  # (the unsurveyed walls' look residuals: m^2 summed, dof)
 
@@ -149,11 +150,17 @@ class WallAnchor:
         self._looks[brick] = look
         self._looks_xy[brick] = (look.position_m[0], look.position_m[1])
         sighting = self._sighting(brick, look)
+        again = brick in self._sightings  # (a brick taken again: its old sighting's links go)
         if sighting is None:
             self._sightings.pop(brick, None)
         else:
             self._sightings[brick] = sighting
-        wall = Wall(self._fixed, list(self._sightings.values()))  # (its three solves share its tables)
+        if again:
+            self._groups = Groups(list(self._sightings.values()))
+        elif sighting is not None:
+            self._groups.add(sighting)
+        # (its three solves share its tables)
+        wall = Wall(self._fixed, list(self._sightings.values()), self._groups)
         relative = wall.solve(variance_of=(brick,), only=(brick,))
         c = relative.centre_m.get(brick)
         if c is not None:

@@ -31,7 +31,7 @@ import numpy as np
 
 Vec2 = tuple[float, float]
 
-__all__ = ["Sighting", "Solution", "solve"]
+__all__ = ["Groups", "Sighting", "Solution", "Wall", "solve"]
 
 
 @dataclass(frozen=True)
@@ -86,20 +86,57 @@ class _Table:
         self.ids = self.rows[:, 0].astype(np.int64)
 
 
+class Groups:
+    """The connected components of sightings' graph (a brick and each neighbour it saw), kept as sightings come:
+    each brick's component label in a dictionary, a join relabelling the smaller component's bricks (integers
+    only). The wall anchor keeps one beside its sightings and hands it to each :class:`Wall` of them, whose solves
+    then find their roots (:func:`_components`) without building the whole graph again: the same components, so
+    the same roots."""
+
+    def __init__(self, sightings: Sequence[Sighting] = ()) -> None:
+        self.label: dict[int, int] = {}  # (a brick -> its component's label; absent: a brick alone, itself)
+        self._members: dict[int, list[int]] = {}  # (a label -> its component's bricks)
+        for s in sightings:
+            self.add(s)
+
+    def add(self, sighting: Sighting) -> None:
+        """Join ``sighting``'s brick and its neighbours' components (a sighting with no offset joins nothing)."""
+        for nb, _, _ in sighting.offsets:
+            self._join(sighting.brick, nb)
+
+    def _join(self, a: int, b: int) -> None:
+        label, members = self.label, self._members
+        la, lb = label.get(a, a), label.get(b, b)
+        if la == lb:
+            return
+        ma = members.pop(la, None) or [la]
+        mb = members.pop(lb, None) or [lb]
+        if len(ma) < len(mb):
+            la, ma, mb = lb, mb, ma
+        for x in mb:
+            label[x] = la
+        label[la] = la
+        ma.extend(mb)
+        members[la] = ma
+
+
 def _components(
-    fixed: Collection[int], table: _Table, unsurveyed: Collection[int]
+    fixed: Collection[int], table: _Table, unsurveyed: Collection[int], groups: Groups | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The bricks (sorted ids: those of the sightings and the seeds), whether each has a root, and its root
     (:func:`_roots`): the connected components of the sightings' graph, rooted on their lowest seed of the first
-    kind they hold (surveyed, else ``unsurveyed``)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
+    kind they hold (surveyed, else ``unsurveyed``). ``groups``: those components kept as the table's sightings
+    came (:class:`Groups`), else found from the table."""
     fixed_ids = np.array(sorted(fixed), dtype=np.int64)
     loose_ids = np.array(sorted(unsurveyed), dtype=np.int64)
     nodes = np.unique(np.concatenate([table.ids, fixed_ids, loose_ids]))
     if not len(nodes):
         return nodes, np.zeros(0, dtype=bool), nodes
+    if groups is not None:
+        return _kept_components(nodes, fixed_ids, loose_ids, groups)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
     pos = np.searchsorted(nodes, table.ids)
     edges = coo_matrix(
         (np.ones(len(pos)), (pos[table.first][table.owner], pos)), shape=(len(nodes), len(nodes))
@@ -116,6 +153,23 @@ def _components(
         root = np.where(has, root, best)
         has |= best != top
     return nodes, has[label], root[label]
+
+
+def _kept_components(
+    nodes: np.ndarray, fixed_ids: np.ndarray, loose_ids: np.ndarray, groups: Groups
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_components` of ``nodes`` from the components ``groups`` kept: each component's root its lowest
+    surveyed brick, else its lowest of ``loose_ids`` (both ascending)."""
+    of = groups.label.get
+    best: dict[int, int] = {}  # (a component -> its root: the first seed seen of it, surveyed ones first)
+    for b in fixed_ids.tolist():
+        best.setdefault(of(b, b), b)
+    for b in loose_ids.tolist():
+        best.setdefault(of(b, b), b)
+    top = np.iinfo(np.int64).max
+    root_of = best.get
+    root = np.array([root_of(of(b, b), top) for b in nodes.tolist()], dtype=np.int64)
+    return nodes, root != top, root
 
 
 def solve(
@@ -159,9 +213,12 @@ class Wall:
     :func:`solve` per call (the same entries, added in the same order).
     """
 
-    def __init__(self, fixed: Mapping[int, Vec2], sightings: Sequence[Sighting]) -> None:
+    def __init__(
+        self, fixed: Mapping[int, Vec2], sightings: Sequence[Sighting], groups: Groups | None = None
+    ) -> None:
         self.fixed = fixed
         self.table = _Table([s for s in sightings if s.offsets])
+        self.groups = groups  # (the components of these sightings, kept by the caller: :class:`Groups`)
         self._layouts: dict[frozenset[int] | None, _Layout | None] = {}
 
     def solve(
@@ -244,7 +301,7 @@ class Wall:
         """The equations before the priors, the components rooted on ``unsurveyed`` after the surveyed bricks
         (None: no free brick)."""
         fixed, table = self.fixed, self.table
-        nodes, has, node_root = _components(fixed, table, unsurveyed)
+        nodes, has, node_root = _components(fixed, table, unsurveyed, self.groups)
         fixed_ids = np.array(sorted(fixed), dtype=np.int64)
         free_at = has & ~np.isin(nodes, fixed_ids)
         free_ids = nodes[free_at]
