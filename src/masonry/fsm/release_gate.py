@@ -73,15 +73,17 @@ design). With the wall in view the offset stays fresh while the UAV waits for a 
 look's last leg) waiting ages it, so there only the nearest-tick rule above holds (a 1 cm gate without that
 condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-built.md).
 
-On that leg the release may also be timed inside the tick (``UavConfig.release_ahead_s``, :meth:`ReleaseGate.ahead`,
-issue 30, branch ``windrel36``): the leg crosses the 1.5 cm disc at 0.2-0.4 m/s, 2-4 cm a tick, and a tick's
-release let go 10.7 mm rms from the true drop-off (px4 towers in 4 m/s, seeds 0-9). From each tick's error and the
-effector's velocity the gate predicts the pass's nearest point to the drop-off; if it lies inside the coming tick
-(before its end), the drop-off tests judge the error predicted there and the release is let go then
-(``Gripper.release_at``: the simulator inside its physics step; a gripper that cannot time it lets go at the tick).
-A nearest point at the tick's end or beyond is left to the next tick, as before (timed at the end of the tick
-instead, passes that would have missed were let go on a prediction rather than flown again: the px4 towers in
-4 m/s went 6 of 60 over 2 cm against 1). The release part 10.7 -> 8.8 mm rms (docs/performance/as-built.md).
+On that leg the release may also be timed inside the tick (``UavConfig.release_ahead_s``, 0 by default and in the
+presets; :meth:`ReleaseGate.ahead`, issue 30, branch ``windrel36``): the leg crosses the 1.5 cm disc at 0.2-0.4
+m/s, 2-4 cm a tick, and a tick's release let go 10.7 mm rms from the true drop-off (px4 towers in 4 m/s, seeds
+0-9). From each tick's error and the effector's velocity the gate predicts the pass's nearest point to the
+drop-off; if it lies inside the coming tick (before its end), the drop-off tests judge the error predicted there
+and the brick is let go then (``Gripper.release_at``: the simulator inside its physics step; a gripper that cannot
+time it lets go at the tick). A nearest point at the tick's end or beyond is left to the next tick (timed at the
+tick's end too, passes that would have missed were let go on a prediction rather than flown again: the px4 towers
+in 4 m/s went 6 of 60 bricks over 2 cm against 1). With 0.1 s the towers' release part went 10.7 -> 8.8 mm rms and
+the towers improved (4 m/s 4/120 -> 2/120 over 2 cm, calm 4/60 -> 0/60), but the rotated bond in 4 m/s went 4/150
+-> 7/150 and the pyramid in calm air 1/100 -> 2/100, so it is not the ``px4`` preset's (docs/performance/as-built.md).
 
 On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
 height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
