@@ -89,8 +89,11 @@ def test_the_last_leg_release_is_timed_at_the_predicted_nearest_pass_within_the_
     assert _ahead(gate, uav, tel) == pytest.approx(0.04) == gate.ahead_s
     # the tests judge the error then: 4 mm, not the tick's 12.6; no tick to wait for (closing)
     assert not gate.closing(cast("BrickUav", uav), cast("Telemetry", tel))
+    # a tick outside r_pl: not timed (the rules at the tick, as before), even with its nearest pass in the tick
+    uav, tel = _uav((-0.018, 0.004), (0.3, 0.0))
+    assert _ahead(gate, uav, tel) == 0.0
     # nearest beyond the tick: not timed; the next tick measures it (the nearest-tick rule waits for it, fresh then)
-    uav, tel = _uav((-0.045, 0.004), (0.3, 0.0))
+    uav, tel = _uav((-0.014, 0.004), (0.1, 0.0))
     assert _ahead(gate, uav, tel) == 0.0
     assert gate.closing(cast("BrickUav", uav), cast("Telemetry", tel))
 

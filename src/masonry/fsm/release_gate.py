@@ -76,14 +76,15 @@ condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-b
 On that leg the release may also be timed inside the tick (``UavConfig.release_ahead_s``, 0 by default and in the
 presets; :meth:`ReleaseGate.ahead`, issue 30, branch ``windrel36``): the leg crosses the 1.5 cm disc at 0.2-0.4
 m/s, 2-4 cm a tick, and a tick's release let go 10.7 mm rms from the true drop-off (px4 towers in 4 m/s, seeds
-0-9). From each tick's error and the effector's velocity the gate predicts the pass's nearest point to the
-drop-off; if it lies inside the coming tick (before its end), the drop-off tests judge the error predicted there
-and the brick is let go then (``Gripper.release_at``: the simulator inside its physics step; a gripper that cannot
-time it lets go at the tick). A nearest point at the tick's end or beyond is left to the next tick (timed at the
-tick's end too, passes that would have missed were let go on a prediction rather than flown again: the px4 towers
-in 4 m/s went 6 of 60 bricks over 2 cm against 1). With 0.1 s the towers' release part went 10.7 -> 8.8 mm rms and
-the towers improved (4 m/s 4/120 -> 2/120 over 2 cm, calm 4/60 -> 0/60), but the rotated bond in 4 m/s went 4/150
--> 7/150 and the pyramid in calm air 1/100 -> 2/100, so it is not the ``px4`` preset's (docs/performance/as-built.md).
+0-9). At a tick inside r_pl the gate predicts, from the error and the effector's velocity, the pass's nearest
+point to the drop-off; if it lies inside the coming tick (before its end), the drop-off tests judge the error
+predicted there and the brick is let go then (``Gripper.release_at``: the simulator inside its physics step; a
+gripper that cannot time it lets go at the tick). A nearest point at the tick's end or beyond is left to the next
+tick (timed at the tick's end too, passes that would have missed were let go on a prediction rather than flown
+again: the px4 towers in 4 m/s went 6 of 60 bricks over 2 cm against 1); predicted from a tick outside r_pl as
+well, the towers' release part went 10.7 -> 8.8 mm rms but the rotated bond in 4 m/s 4/150 -> 7/150 over 2 cm.
+From ticks inside r_pl only: towers in 4 m/s 10.3 -> 8.6 mm mean, 1/60 as before; rotated bond in 4 m/s 2/150,
+maximum 23.9 -> 28.0 mm. Not measured on every wall, so not the ``px4`` preset's (docs/performance/as-built.md).
 
 On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
 height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
@@ -211,6 +212,10 @@ class ReleaseGate:
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
+        # only from a tick inside r_pl (one the rules at the tick could let go): predicted from a tick outside it,
+        # the rotated bond in 4 m/s went 4/150 -> 7/150 bricks over 2 cm; so 2/150 (docs/performance/as-built.md)
+        if float(np.hypot(*error_m)) > cfg.placement_radius_m:
+            return 0.0
         velocity_mps = np.asarray(tel.velocity_mps, dtype=float)[:2]
         ahead_s = nearest_pass_s(error_m, velocity_mps, cfg.release_ahead_s)
         # nearest at the interval's end or beyond it: the next tick measures it (the rules at the tick, as before)
