@@ -83,8 +83,9 @@ gripper that cannot time it lets go at the tick). A nearest point at the tick's 
 tick (timed at the tick's end too, passes that would have missed were let go on a prediction rather than flown
 again: the px4 towers in 4 m/s went 6 of 60 bricks over 2 cm against 1); predicted from a tick outside r_pl as
 well, the towers' release part went 10.7 -> 8.8 mm rms but the rotated bond in 4 m/s 4/150 -> 7/150 over 2 cm.
-From ticks inside r_pl only: towers in 4 m/s 10.3 -> 8.6 mm mean, 1/60 as before; rotated bond in 4 m/s 2/150,
-maximum 23.9 -> 28.0 mm. Not measured on every wall, so not the ``px4`` preset's (docs/performance/as-built.md).
+From ticks inside r_pl only: 14 -> 11 of 730 bricks over 2 cm over the px4 walls, calm and 4 m/s, seeds 0-9 (and
+the towers' 10-19), but the maxima mostly up (rotated bond in 4 m/s 23.9 -> 28.0 mm): not a clear gain, so not
+the ``px4`` preset's (docs/performance/as-built.md).
 
 On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
 height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
