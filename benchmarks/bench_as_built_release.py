@@ -49,7 +49,10 @@ def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
         "measured": (np.asarray(self.effector.position(tel), dtype=float) - target)[:2],
         "noise": (np.asarray(tel.position_m, dtype=float) - true_m - gps)[:2],
         "true_target": (target - gps)[:2],
-        "effector": np.asarray(sim.effector_m(), dtype=float)[:2],
+        # a release timed within the tick (ReleaseGate.ahead, Gripper.release_at): where the effector is then, on
+        # its true velocity
+        "effector": np.asarray(sim.effector_m(), dtype=float)[:2]
+        + np.asarray(sim.vehicle.velocity_mps, dtype=float)[:2] * self._gate.ahead_s,
         "age_s": self._now_s - self._wall.seen_s,
         "speed": np.asarray(sim.vehicle.velocity_mps, dtype=float)[:2],
         "past_end_s": self._now_s - self.nav.end_s,

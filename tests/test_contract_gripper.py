@@ -3,11 +3,13 @@ firmware (a pseudo-terminal).
 
 Each rig says how its gripper meets a brick (``touch``: the fake's contact, the simulated UAV lowered onto a brick,
 the board's brick sensor) and how time passes (``settle``). What every Gripper must do: start released, attach
-only with the magnet on and a brick in contact, let go when the magnet goes off, accept repeated commands.
+only with the magnet on and a brick in contact, let go when the magnet goes off, accept repeated commands, and let
+go at a time asked (``release_at``) by then, or say it cannot (False) and have let go at once.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -20,14 +22,17 @@ from masonry.ports import Gripper
 class Rig:
     gripper: Gripper
     touch: Callable[[], None]  # bring the magnet onto a brick
-    settle: Callable[[], None]  # let the device and the world react
+    settle: Callable[[], None]  # let the device and the world react (0.3 s of its clock at least)
+    now_s: Callable[[], float]  # the gripper's clock (the UAV's)
 
 
 def _fake_rig() -> Iterator[Rig]:
-    from masonry.fakes import FakeGripper
+    from masonry.fakes import FakeClock, FakeGripper
 
     contact = {"on": False}
-    yield Rig(FakeGripper(contact=lambda: contact["on"]), lambda: contact.update(on=True), lambda: None)
+    clock = FakeClock()
+    gripper = FakeGripper(contact=lambda: contact["on"], clock=clock)
+    yield Rig(gripper, lambda: contact.update(on=True), lambda: clock.advance(0.3), clock.now_s)
 
 
 def _sim_rig() -> Iterator[Rig]:
@@ -42,7 +47,7 @@ def _sim_rig() -> Iterator[Rig]:
         x, y, top = w.bricks[TARGET.id].top_center_m
         assert descend_on(w, uav, (x, y), top), "the simulated UAV did not reach the brick"
 
-    yield Rig(uav.gripper, touch, lambda: hover(w, uav, 0.3))
+    yield Rig(uav.gripper, touch, lambda: hover(w, uav, 0.3), w.clock.now_s)
 
 
 def _arduino_rig() -> Iterator[Rig]:
@@ -50,7 +55,8 @@ def _arduino_rig() -> Iterator[Rig]:
     from masonry.adapters.arduino_fake import FakeArduino
 
     with FakeArduino() as board, ArduinoActuators(board.port, boot_wait_s=0.05, timeout_s=0.5) as actuators:
-        yield Rig(actuators, lambda: board.logic.set_attached(True), lambda: None)  # the guide's brick switch
+        # the guide's brick switch; the board lets go when told (its magnet off clears the switch)
+        yield Rig(actuators, lambda: board.logic.set_attached(True), lambda: None, time.monotonic)
 
 
 RIGS = {"fake": _fake_rig, "sim": _sim_rig, "arduino": _arduino_rig}
@@ -96,4 +102,29 @@ def test_repeated_commands_are_accepted(rig: Rig) -> None:
     for _ in range(2):
         g.set_joint_locked(False)
     rig.settle()
+    assert g.is_attached() is False
+
+
+def test_release_at_lets_go_then_or_at_once(rig: Rig) -> None:
+    g = rig.gripper
+    g.set_joint_locked(False)
+    g.set_magnet(True)
+    rig.touch()
+    rig.settle()
+    assert g.is_attached() is True
+    timed = g.release_at(rig.now_s() + 0.12)
+    assert isinstance(timed, bool)
+    if timed:
+        assert g.is_attached() is True  # not yet
+        rig.settle()
+    assert g.is_attached() is False
+
+
+def test_release_at_a_time_past_lets_go_at_once(rig: Rig) -> None:
+    g = rig.gripper
+    g.set_joint_locked(False)
+    g.set_magnet(True)
+    rig.touch()
+    rig.settle()
+    g.release_at(rig.now_s() - 1.0)
     assert g.is_attached() is False

@@ -224,6 +224,12 @@ class Gripper(Protocol):
 
     def is_attached(self) -> bool: ...
 
+    def release_at(self, at_s: float) -> bool:
+        """Let go of the brick at ``at_s`` (s, the UAV's :class:`Clock`): True if it will be let go then; False if
+        this gripper cannot time a release, and has then let go at once (as ``set_magnet(False)``). A time already
+        past lets go at once. ``set_magnet`` before ``at_s`` cancels it."""
+        ...
+
 
 @runtime_checkable
 class Sprayer(Protocol):

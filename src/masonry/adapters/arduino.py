@@ -240,6 +240,12 @@ class ArduinoActuators:
     def is_attached(self) -> bool:
         return self.status().attached
 
+    def release_at(self, at_s: float) -> bool:
+        """The firmware has no timed release (masonry.actuator_protocol: MAG ON/OFF only) and the board does not
+        share the UAV's clock: the magnet is switched off now, and False says so (``Gripper.release_at``)."""
+        self.set_magnet(False)
+        return False
+
     def set_valve(self, open_: bool) -> None:
         self._transact("VALVE", ("OPEN" if open_ else "CLOSE",))
 

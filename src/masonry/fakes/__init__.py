@@ -354,13 +354,24 @@ class FakeGripper(_Scripted):
         self.attached = False
         self.attempts = 0
         self.commands: list[tuple[str, bool]] = []
+        self.release_due_s: float | None = None  # a timed release not yet due (``release_at``)
+        self.released_s: list[float] = []  # the clock's time at each timed release done
 
     def _tick(self) -> None:
         if self.clock is not None:
-            self._apply_due(self.clock.now_s())
+            now_s = self.clock.now_s()
+            self._apply_due(now_s)
+            if self.release_due_s is not None and now_s >= self.release_due_s:
+                self.released_s.append(now_s)
+                self.release_due_s = None
+                self._magnet(False)
 
     def set_magnet(self, on: bool) -> None:
         self._tick()
+        self.release_due_s = None
+        self._magnet(on)
+
+    def _magnet(self, on: bool) -> None:
         self.commands.append(("magnet", bool(on)))
         if on and not self.magnet_on:
             self.attempts += 1
@@ -370,6 +381,15 @@ class FakeGripper(_Scripted):
             else:
                 self.attached = False
         self.magnet_on = bool(on)
+
+    def release_at(self, at_s: float) -> bool:
+        """With a clock, the magnet goes off at the first call at or after ``at_s``; without one, now (False)."""
+        if self.clock is None:
+            self.set_magnet(False)
+            return False
+        self.release_due_s = float(at_s)
+        self._tick()
+        return True
 
     def set_joint_locked(self, locked: bool) -> None:
         self._tick()

@@ -506,7 +506,11 @@ class BrickUav(PutBack):
                 self.timeout()
 
     def enter_place_release(self, *args: object, **kwargs: object) -> None:
-        self.gripper.set_magnet(False)
+        ahead_s = self._gate.ahead_s  # (masonry.fsm.release_gate.ReleaseGate.ahead: timed within the tick)
+        if ahead_s > 0.0:
+            self.gripper.release_at(self._now_s + ahead_s)  # (False: it cannot time it, and has let go now)
+        else:
+            self.gripper.set_magnet(False)
 
     def _place_gains(self, in_wind: bool) -> None:
         """The position gains from this placement on (masonry.fsm.wind_lean.place_gains; only with

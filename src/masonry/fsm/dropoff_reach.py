@@ -59,6 +59,8 @@ from collections import deque
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from masonry.fsm.noise_gate import HoverNoise
 
 if TYPE_CHECKING:
@@ -220,6 +222,9 @@ def dropoff_error_m(uav: BrickUav, tel: Telemetry, reach: DropoffReach) -> float
     cfg, target = uav.config, uav.attempt.place_effector_target_m
     if cfg.gate_window_s > 0.0:
         error_m = uav.effector.position(tel) - target
+        ahead_s = uav._gate.ahead(uav, tel)  # a release timed within the tick: judged at its instant
+        if ahead_s > 0.0:
+            error_m = error_m + np.array([*tel.velocity_mps[:2], 0.0]) * ahead_s
         tracking_z_m = tel.position_m[2] - float(uav.nav.reference(uav._now_s)[0][2])
         # held up on the ground: only where no brick of the wall measures the drop-off's height (unguarded)
         held = not uav._gate.guarded and reach.held(

@@ -85,6 +85,20 @@ design). With the wall in view the offset stays fresh while the UAV waits for a 
 look's last leg) waiting ages it, so there only the nearest-tick rule above holds (a 1 cm gate without that
 condition, branch ``relpose``, moved the maxima both ways: docs/performance/as-built.md).
 
+On that leg the release may also be timed inside the tick (``UavConfig.release_ahead_s``, 0 by default and in the
+presets; :meth:`ReleaseGate.ahead`, issue 30, branch ``windrel36``): the leg crosses the 1.5 cm disc at 0.2-0.4
+m/s, 2-4 cm a tick, and a tick's release let go 10.7 mm rms from the true drop-off (px4 towers in 4 m/s, seeds
+0-9). At a tick inside r_pl the gate predicts, from the error and the effector's velocity, the pass's nearest
+point to the drop-off; if it lies inside the coming tick (before its end), the drop-off tests judge the error
+predicted there and the brick is let go then (``Gripper.release_at``: the simulator inside its physics step; a
+gripper that cannot time it lets go at the tick). A nearest point at the tick's end or beyond is left to the next
+tick (timed at the tick's end too, passes that would have missed were let go on a prediction rather than flown
+again: the px4 towers in 4 m/s went 6 of 60 bricks over 2 cm against 1); predicted from a tick outside r_pl as
+well, the towers' release part went 10.7 -> 8.8 mm rms but the rotated bond in 4 m/s 4/150 -> 7/150 over 2 cm.
+From ticks inside r_pl only: 14 -> 11 of 730 bricks over 2 cm over the px4 walls, calm and 4 m/s, seeds 0-9 (and
+the towers' 10-19), but the maxima mostly up (rotated bond in 4 m/s 23.9 -> 28.0 mm): not a clear gain, so not
+the ``px4`` preset's (docs/performance/as-built.md).
+
 On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
 height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
 pressed down rests on its support, :mod:`masonry.fsm.dropoff_reach`), but an effector that low has brought its
@@ -115,6 +129,7 @@ __all__ = [
     "RELOOK_FRAMES",
     "RELOOK_WAIT_S",
     "ReleaseGate",
+    "nearest_pass_s",
 ]
 
 #: Looks back up per descent before it counts as failed (or, each having found the wall, before a late leg is let
@@ -147,6 +162,15 @@ CLOSING_MIN_M = 0.001
 LOW_M = 0.03
 
 
+def nearest_pass_s(error_m: np.ndarray, velocity_mps: np.ndarray, most_s: float) -> float:
+    """When (s, in [0, ``most_s``]) ``error_m + velocity_mps * t`` (m, any dimension) is shortest: the straight
+    pass's nearest point to the origin, clamped to the interval (0 for a still or receding effector)."""
+    speed2 = float(np.dot(velocity_mps, velocity_mps))
+    if most_s <= 0.0 or speed2 <= 0.0:
+        return 0.0
+    return min(most_s, max(0.0, -float(np.dot(error_m, velocity_mps)) / speed2))
+
+
 class ReleaseGate:
     """One descent's release rule and its looks back up (see the module docstring)."""
 
@@ -162,11 +186,13 @@ class ReleaseGate:
         self._height_m = RELOOK_CLIMB_M  # the look point's height over the pre-release point
         #: At a release after ``MAX_RELOOKS`` looks that each found the wall: how old (s) its last sighting was
         self.stale_age_s: float | None = None
+        #: This tick's timed release (s after the tick; 0: at the tick): :meth:`ahead`
+        self.ahead_s = 0.0
 
     def reset(self, uav: BrickUav) -> None:
         """A new descent onto ``uav``'s drop-off (guarded only with ``align_on_wall`` and ``release_fresh_s``)."""
         cfg, task = uav.config, uav.brick_task
-        self.relooks, self.looking, self.stale_age_s = 0, False, None
+        self.relooks, self.looking, self.stale_age_s, self.ahead_s = 0, False, None, 0.0
         self._height_m = RELOOK_CLIMB_M
         wall = dict(cfg.wall)
         below = supports_of(wall, task.brick, task.size_m)
@@ -189,6 +215,30 @@ class ReleaseGate:
         """The wall was seen recently enough to release now (always, unguarded)."""
         return not self.guarded or uav._now_s - uav._wall.seen_s <= uav.config.release_fresh_s
 
+    def ahead(self, uav: BrickUav, tel: Telemetry) -> float:
+        """This tick's timed release on the side look's last leg (s after the tick, kept in ``ahead_s``): when the
+        effector, its error carried on its velocity, passes nearest the drop-off within the coming
+        ``UavConfig.release_ahead_s``; 0 off that leg, unguarded, or with the setting 0 (see the module docstring).
+        The drop-off tests (:func:`masonry.fsm.dropoff_reach.dropoff_error_m`, :meth:`closing`) then judge the
+        error predicted at that instant, and the release lets go then (``Gripper.release_at``)."""
+        cfg = uav.config
+        self.ahead_s = 0.0
+        if cfg.release_ahead_s <= 0.0 or not self.guarded or not uav._side.final or self.looking:
+            return 0.0
+        error_m = (
+            np.asarray(uav.effector.position(tel), dtype=float)[:2]
+            - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
+        )
+        # only from a tick inside r_pl (one the rules at the tick could let go): predicted from a tick outside it,
+        # the rotated bond in 4 m/s went 4/150 -> 7/150 bricks over 2 cm; so 2/150 (docs/performance/as-built.md)
+        if float(np.hypot(*error_m)) > cfg.placement_radius_m:
+            return 0.0
+        velocity_mps = np.asarray(tel.velocity_mps, dtype=float)[:2]
+        ahead_s = nearest_pass_s(error_m, velocity_mps, cfg.release_ahead_s)
+        # nearest at the interval's end or beyond it: the next tick measures it (the rules at the tick, as before)
+        self.ahead_s = ahead_s if ahead_s < cfg.release_ahead_s else 0.0
+        return self.ahead_s
+
     def closing(self, uav: BrickUav, tel: Telemetry) -> bool:
         """Within r_pl of the drop-off this tick, on the side look's last leg: True to let one more tick pass.
 
@@ -210,7 +260,11 @@ class ReleaseGate:
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
-        error = float(np.hypot(*error_m))
+        velocity_mps = np.asarray(tel.velocity_mps, dtype=float)[:2]
+        # a timed release (:meth:`ahead`) judged at its instant: before the coming tick's end, nothing to wait for
+        error = float(np.hypot(*(error_m + velocity_mps * self.ahead_s)))
+        if self.ahead_s > 0.0:
+            return False
         if (
             error > cfg.release_hold_m > 0.0
             and uav._now_s - uav.nav.end_s <= cfg.release_hold_s
@@ -219,8 +273,8 @@ class ReleaseGate:
             return True
         if alone or not uav._side.final:
             return False
-        ahead_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * dt_s
-        return float(np.hypot(*ahead_m)) < error - CLOSING_MIN_M
+        ahead_m = error_m + velocity_mps * dt_s
+        return float(np.hypot(*ahead_m)) < float(np.hypot(*error_m)) - CLOSING_MIN_M
 
     def wide(self, uav: BrickUav, tel: Telemetry) -> bool:
         """Within r_pl of the drop-off this tick, on the side look's last leg in calm air: True to let it pass, the

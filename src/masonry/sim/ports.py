@@ -95,6 +95,16 @@ class SimGripper:
     def is_attached(self) -> bool:
         return self._uav.carried_brick is not None
 
+    def release_at(self, at_s: float) -> bool:
+        """Let go at ``at_s`` of the world's clock, inside the physics step that holds it: the brick's pose there
+        is interpolated between the step's ends (:meth:`masonry.sim.world.World.step`)."""
+        uav = self._uav
+        if at_s <= uav.world.clock.now_s():
+            uav.set_magnet(False)
+        else:
+            uav.release_due_s = float(at_s)
+        return True
+
 
 class SimSprayer:
     """``Sprayer``: the adhesive valve."""

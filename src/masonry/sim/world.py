@@ -34,6 +34,7 @@ from masonry.sim.faults import Faults
 from masonry.sim.follow_contact import carried_support_m
 from masonry.sim.glue import GlueWatch
 from masonry.sim.ports import SimCamera, SimFlightController, SimGripper, SimSprayer
+from masonry.sim.release import release_brick, release_start, release_within
 from masonry.sim.render_camera import over_sampled_pickup, render_sample, rendered_frame
 from masonry.sim.spares import lay_out_spares
 from masonry.sim.vehicle import SimVehicle, VehicleConfig
@@ -87,6 +88,7 @@ class SimUav:
     joint_locked: bool = True
     valve_open: bool = False
     carried_brick: int | None = None
+    release_due_s: float | None = None  # a timed release (Gripper.release_at) not yet due
     failed: bool = False
     link_ok: bool = True
     _carry_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)  # brick top centre (body x, y) and yaw offset
@@ -160,6 +162,7 @@ class SimUav:
 
     def set_magnet(self, on: bool) -> None:
         self.magnet_on = on
+        self.release_due_s = None
         if not on:
             self._attempt = None
             if self.carried_brick is not None:
@@ -313,6 +316,7 @@ class World:
             if timed_faults and not uav.failed:
                 self._timed_faults(uav, now)
             if vehicle.armed or not vehicle.on_ground:
+                start = release_start(uav, field, now)
                 vehicle.step(dt_s)
                 if vehicle.failed and not uav.failed:
                     self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
@@ -322,6 +326,8 @@ class World:
                     or vehicle._z + uav._tool_dz_m <= field.max_top_z_m + _CONTACT_TOL_M
                 ):
                     self._contact(uav)
+                if start is not None:
+                    release_within(self, uav, start, now - dt_s, now)
                 if uav._brick_role:
                     # _grip's own guard, checked here first (the magnet stays on while a brick is carried)
                     if uav.magnet_on and uav.carried_brick is None and not (uav.joint_locked or uav.failed):
@@ -456,23 +462,7 @@ class World:
         self._carry_pose(uav, best)
 
     def _release(self, uav: SimUav) -> None:
-        brick_id = uav.carried_brick
-        if brick_id is None:
-            return
-        brick = self.field.bricks[brick_id]
-        self._carry_pose(uav, brick)
-        cfg = self.config
-        fall_m = brick.bottom_z_m - self.field.support_under(
-            brick.rect(cfg.support_margin_m), below_z_m=brick.bottom_z_m
-        )
-        sigma = cfg.release_scatter_m + cfg.release_scatter_per_m * max(0.0, fall_m)
-        dx, dy, dyaw = uav.rng.standard_normal(3).tolist()
-        x, y, z = brick.position_m
-        brick.position_m = (x + sigma * dx, y + sigma * dy, z)
-        brick.yaw_rad = math.remainder(brick.yaw_rad + cfg.release_yaw_scatter_rad * dyaw, 2.0 * math.pi)
-        self.field.drop(brick_id, cfg.support_margin_m)
-        uav.carried_brick = None
-        self.glue.placed(brick_id, brick.position_m, self.clock.now_s())
+        release_brick(self, uav)  # (masonry.sim.release)
 
     def _spray(self, uav: SimUav) -> None:
         nx, ny, nz = uav.nozzle_m()
