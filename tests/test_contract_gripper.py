@@ -105,12 +105,18 @@ def test_repeated_commands_are_accepted(rig: Rig) -> None:
     assert g.is_attached() is False
 
 
-def test_release_at_lets_go_then_or_at_once(rig: Rig) -> None:
+def _holding_a_brick(rig: Rig) -> Gripper:
+    """The rig's gripper with its magnet on a brick, the ball joint free."""
     g = rig.gripper
     g.set_joint_locked(False)
     g.set_magnet(True)
     rig.touch()
     rig.settle()
+    return g
+
+
+def test_release_at_lets_go_then_or_at_once(rig: Rig) -> None:
+    g = _holding_a_brick(rig)
     assert g.is_attached() is True
     timed = g.release_at(rig.now_s() + 0.12)
     assert isinstance(timed, bool)
@@ -121,10 +127,6 @@ def test_release_at_lets_go_then_or_at_once(rig: Rig) -> None:
 
 
 def test_release_at_a_time_past_lets_go_at_once(rig: Rig) -> None:
-    g = rig.gripper
-    g.set_joint_locked(False)
-    g.set_magnet(True)
-    rig.touch()
-    rig.settle()
+    g = _holding_a_brick(rig)
     g.release_at(rig.now_s() - 1.0)
     assert g.is_attached() is False
