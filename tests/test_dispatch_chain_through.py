@@ -10,7 +10,7 @@ import pytest
 
 from masonry.blueprint import UavSpec, load_blueprint
 from masonry.blueprint_gen import running_bond
-from masonry.mission.dispatch_chain import ChainThrough, mission_dispatcher
+from masonry.mission.dispatch_chain import APART_BRICK_REACH_M, ChainThrough, mission_dispatcher
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_admission import Admission
@@ -141,3 +141,45 @@ def test_past_the_width_the_second_sprayer_is_given_a_segment_away_from_the_firs
         d.admission = Admission(width, lambda _name: False)
     d.assign()
     assert d.in_progress == {"B0": "brick-1", "B1": "brick-2", "A0": "glue-1", second: "glue-2"}
+
+
+def bricks_by_a_sprayer(x_m: float = 3.0) -> tuple[Plan, list[UavSpec]]:
+    """B1 conflicts with brick B0, B2 (at ``x_m``) with segment A0 only; brick-2 waits nearer B1."""
+    tasks = (
+        BrickTask("B0", 0, False, (0.0, 0.0, 0.15), 0.0, (0.0, -2.0, 0.05)),
+        BrickTask("B1", 1, False, (0.3, 0.0, 0.15), 0.0, (0.3, -2.0, 0.05)),
+        BrickTask("B2", 2, False, (x_m, 0.0, 0.15), 0.0, (x_m, -2.0, 0.05)),
+        glue(0, x_m + 0.1, x_m + 0.25),
+    )
+    fleet = [
+        UavSpec("brick-1", "brick", (0.0, -3.0, 0.0)),
+        UavSpec("brick-2", "brick", (0.5, -3.0, 0.0)),
+        UavSpec("glue-1", "adhesion", (x_m, -3.0, 0.0)),
+    ]
+    return Plan(tasks, (), (("B0", "B1"), ("B2", "A0"))), fleet
+
+
+@pytest.mark.parametrize(("width", "second"), [(2, "B2"), (3, "B1"), (None, "B1")])
+def test_past_the_width_the_second_brick_uav_is_given_a_brick_away_from_the_first(
+    width: int | None, second: str
+) -> None:
+    # nothing available for brick-2 once brick-1 has B0 and glue-1 A0: B1 (nearer, next to B0) or B2 (by the
+    # segment only); past the width (three UAVs, two sites) it is B2, else the nearest
+    plan, fleet = bricks_by_a_sprayer()
+    d = ChainThrough(plan, fleet, reservation="site")
+    if width is not None:
+        d.admission = Admission(width, lambda _name: False)
+    d.assign(may_start=lambda name: name != "brick-2")
+    assert d.in_progress == {"B0": "brick-1", "A0": "glue-1"}
+    d.assign()
+    assert d.in_progress == {"B0": "brick-1", "A0": "glue-1", second: "brick-2"}
+
+
+def test_past_the_width_a_brick_away_from_the_first_is_not_looked_for_beyond_its_reach() -> None:
+    # B2 apart but 3.5 m from B1 (the dispatcher's own choice), beyond APART_BRICK_REACH_M: brick-2 takes B1
+    plan, fleet = bricks_by_a_sprayer(x_m=0.3 + APART_BRICK_REACH_M + 0.5)
+    d = ChainThrough(plan, fleet, reservation="site")
+    d.admission = Admission(2, lambda _name: False)
+    d.assign(may_start=lambda name: name != "brick-2")
+    d.assign()
+    assert d.in_progress == {"B0": "brick-1", "A0": "glue-1", "B1": "brick-2"}

@@ -21,13 +21,16 @@ r_c, so only under the columns): past it the UAVs queue at the sites already, an
 adhesive's open times (a plan with deadlines keeps the glue dispatcher, which holds segments back on purpose);
 ``--policy schedule`` has its own ``chain`` rule.
 
-**Sprayers apart past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width").
-Past that width the other way round holds too: a sprayer with no segment available (every ready one is within
-r_c of a task in progress) is given the policy's best ready segment within r_c of no other *sprayer's* segment in
-progress, where there is one, and only then one next to another sprayer (:meth:`ChainThrough._select_conflicting`).
-Two sprayers given segments within r_c of each other queue for each other's site intervals at every segment of
-their runs; a segment that conflicts only with a brick waits for one brick's visit (on the 6 x 30 wall at 6 + 3,
-seed 1, the sprayers' site waits behind another sprayer fell from 1,616 to 400 task-seconds). Pure: no I/O, no clock.
+**Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
+and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available
+(every ready task of its role is within r_c of a task in progress) is given the policy's best ready task within r_c
+of no task *of its own role* in progress (a brick UAV in the air with none ready: the best such brick to prefetch),
+where there is one, and only then the dispatcher's choice (:meth:`ChainThrough._select_conflicting`). Two UAVs of
+one role given tasks within r_c of each other queue for each other's site intervals (sprayers segment after segment
+of their runs, brick UAVs at the pickups and at the wall); a task that conflicts only with the other role's waits
+for one short visit. On the 6 x 30 wall at 6 + 3 (seed 1) the sprayers' site waits behind another sprayer fell from
+1,616 to 400 task-seconds with the sprayers' half of the rule alone. A brick UAV's brick apart is looked for only
+within :data:`APART_BRICK_REACH_M` of the brick the dispatcher would give it. Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -41,7 +44,13 @@ from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
-__all__ = ["ChainThrough", "mission_dispatcher"]
+__all__ = ["APART_BRICK_REACH_M", "ChainThrough", "mission_dispatcher"]
+
+#: Past the width, a brick UAV's brick away from the other brick UAVs is one within this (m, |dx| + |dy|) of the
+#: brick the dispatcher would give it: a farther one sends it across the wall, through the other UAVs' legs (12 m
+#: wall, 8 + 4, seed 3, no reach: the brick UAVs' airspace waits 1,830 -> 3,655 task-seconds, every sprayer home for
+#: a pack, 1,030 -> 1,299 s; 3 m: 944 s). Measured at 3 and 5 m (docs/performance/fleet.md).
+APART_BRICK_REACH_M = 3.0
 
 
 class ChainThrough(Dispatcher):
@@ -58,19 +67,35 @@ class ChainThrough(Dispatcher):
         return rule is not None and sum(self._live_count.values()) > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
-        """Past the width, a sprayer's conflicting segment is one within r_c of no other sprayer's segment in
-        progress, where the ready ones hold one (the policy's best of them); else the dispatcher's choice."""
-        if role == "adhesion" and self._past_width():
-            st, nb, roles = self._status, self._neighbours, self._role
-            available = self._available[role]
-            apart = [
-                i
-                for i in self._ready[role]
-                if i not in available and not any(st[k] == RUNNING and roles[k] == "adhesion" for k in nb[i])
-            ]
+        """Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
+        one; else the dispatcher's choice (a task next to another of its role, or a brick to prefetch)."""
+        if self._past_width():
+            apart = self._apart(role, uav)
+            if apart and role == "brick":
+                apart = self._near(apart, super()._select_conflicting(role, uav))
             if apart:
                 return self._ranking.pick_among(apart, self._position[uav], self._after(uav))
         return super()._select_conflicting(role, uav)
+
+    def _near(self, apart: list[int], choice: int | None) -> list[int]:
+        """The bricks of ``apart`` within :data:`APART_BRICK_REACH_M` (|dx| + |dy| of where they are laid) of the
+        dispatcher's own ``choice`` (all of them when it has none)."""
+        if choice is None:
+            return apart
+        end = self._end_m
+        cx, cy = end[choice][0], end[choice][1]
+        return [i for i in apart if abs(end[i][0] - cx) + abs(end[i][1] - cy) <= APART_BRICK_REACH_M]
+
+    def _apart(self, role: str, uav: str) -> list[int]:
+        """The ready tasks of ``role`` (for a brick UAV in the air with none ready: the bricks to prefetch) within
+        r_c of no task of ``role`` in progress."""
+        st, nb, roles = self._status, self._neighbours, self._role
+        available = self._available[role]
+        candidates = [i for i in self._ready[role] if i not in available]
+        landed = self.admission is not None and self.admission.landed(uav)
+        if not candidates and self.prefetch and role == "brick" and not landed:
+            candidates = self._prefetchable(role)  # (a UAV on its pad prefetches only as the one coming)
+        return [i for i in candidates if not any(st[k] == RUNNING and roles[k] == role for k in nb[i])]
 
     def _chained_through(self, role: str, uav: str) -> int | None:
         """The segment starting where ``uav`` has just sprayed (it is still there), ready but blocked by a
