@@ -11,10 +11,12 @@ import itertools
 import random
 from dataclasses import dataclass, field
 
+import numpy as np
 import pytest
 
 from fsm_rig import Rig
 from masonry.adapters.wiring import _advance_on
+from masonry.fsm.tuning import uav_settings
 
 
 @dataclass
@@ -108,3 +110,37 @@ def test_after_a_stall_the_machine_ticks_once_then_a_period_later() -> None:
     calls = [0.05 * k for k in range(1, 21)] + [3.0 + 0.05 * k for k in range(10)]
     ticks = _machine_ticks(calls)
     assert [round(t, 2) for t in ticks if t >= 3.0] == [3.0, 3.1, 3.2, 3.3, 3.4]
+
+
+def test_the_side_looks_pass_ticks_at_last_leg_period_s_where_the_loop_calls_that_often() -> None:
+    """On the side look's last leg's pass (``place_descend``, the leg flown, no look back up) a brick UAV with
+    ``last_leg_period_s`` ticks at that period: on the real PX4 the pass crossed the 1.5 cm disc at 0.2-0.35 m/s,
+    2-3.5 cm a 0.1 s tick, and went through it between two ticks (docs/performance/autopilots.md, branch px4leg37).
+    Anywhere else, and without the setting, the control period."""
+    assert uav_settings("px4")["last_leg_period_s"] == 0.05
+    assert "last_leg_period_s" not in uav_settings("arducopter")
+    rig = Rig("brick", config={"last_leg_period_s": 0.05})
+    uav = rig.uav
+    assert uav._control_period_s() == 0.1  # idle
+    uav._side.offset_m = np.array([-0.15, 0.0, 0.0])
+    uav._side.final = True
+    uav.state = "place_descend"
+    assert uav._control_period_s() == 0.05
+    uav._gate.looking = True  # a look back up: the control period
+    assert uav._control_period_s() == 0.1
+    uav._gate.looking = False
+    plain = Rig("brick").uav
+    plain._side.offset_m, plain._side.final, plain.state = np.array([-0.15, 0.0, 0.0]), True, "place_descend"
+    assert plain._control_period_s() == 0.1  # the setting off (the default)
+    # the tick's grid at the shorter period: a 20 Hz loop ticks it 20 times a second
+    rig = Rig("brick")
+    rig.uav._control_period_s = lambda: 0.05
+    ticks = []
+    for k in range(1, 41):
+        t_s = 0.05 * k
+        rig.clock.advance(t_s - rig.clock.now_s())
+        before = rig.uav._last_step_s
+        rig.uav.step(t_s)
+        if rig.uav._last_step_s != before:
+            ticks.append(t_s)
+    assert len(ticks) == 40

@@ -399,6 +399,15 @@ class BrickUav(PutBack):
             self.missed()
 
     # -- transport and place -------------------------------------------------------------------------------
+    def _control_period_s(self) -> float:
+        """On the side look's last leg's pass, ``last_leg_period_s`` (where set): a tick every 2-3.5 cm of the pass
+        across the 1.5 cm disc missed it between two ticks (docs/performance/autopilots.md)."""
+        cfg = self.config
+        period_s = cfg.last_leg_period_s
+        if period_s > 0.0 and self.state == "place_descend" and self._side.final and not self._gate.looking:
+            return min(period_s, cfg.control_period_s)
+        return cfg.control_period_s
+
     def _place_yaw_rad(self) -> float:
         heading = self.brick_task.yaw_rad - self.attempt.carry_yaw_rad
         key = (self.brick_task.id, heading)  # (masonry.fsm.side_look.heading_flip_rad: a neighbour in view)

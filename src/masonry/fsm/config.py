@@ -106,6 +106,10 @@ class UavConfig:
     # acceleration feed-forward of this velocity lag (s) instead of velocity_lag_s, not in a wind
     # (masonry.fsm.side_look); 0: off
     last_leg_lag_s: float = 0.0
+    # With align_on_wall: > 0, the side look's last leg's passes tick at this period (s) where the loop calls that
+    # often (masonry fly's 0.05 s; a simulated mission steps the machines at control_period_s): the pass crosses the
+    # 1.5 cm disc at 0.2-0.35 m/s, 2-3.5 cm a 0.1 s tick (masonry.fsm.brick.BrickUav._control_period_s). 0: off
+    last_leg_period_s: float = 0.0
     # With align_on_wall: a brick that stands on others is released only if a brick of the wall was in the
     # camera's view at most this long (s) before; else it looks again from above (masonry.fsm.release_gate). 0: off
     release_fresh_s: float = 0.45

@@ -144,7 +144,7 @@ class UavModel(CommonStates):
         """
         if now_s < self._due_s - 1e-9:
             return  # called faster than the control rate
-        period_s = self.config.control_period_s
+        period_s = self._control_period_s()
         # the next tick on the grid of this one's due time, not a period after it came: a loop whose calls come
         # a hair early or late (a real autopilot's clock, masonry fly's 0.05 s sleeps) ticked a 0.1 s period at
         # 0.15 s every other tick, two past each due time out of three (7.8 Hz on the real PX4, issue 29); after a
@@ -187,6 +187,10 @@ class UavModel(CommonStates):
                 self.fc.send_velocity(velocity_mps, yaw_rate_radps)
         except HardwareError as exc:
             self._hardware_failure(str(exc))
+
+    def _control_period_s(self) -> float:
+        """The period (s) after which the next tick is due: ``config.control_period_s`` (a state may ask less)."""
+        return self.config.control_period_s
 
     def _guard_flags(self, state: str) -> tuple[bool, ...]:
         """Which of :attr:`watchdogs` guard leaf ``state`` (asked once per state: the tick looks them up)."""

@@ -96,6 +96,10 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # and overshot past the sighting's freshness (the px4 towers' stale releases); on every leg it failed the
         # 4 m/s missions (docs/performance/as-built.md)
         "last_leg_lag_s": 0.5,
+        # the last leg's passes tick at 20 Hz where the loop calls that often (masonry fly): the real PX4's passes
+        # crossed the 1.5 cm disc at 0.2-0.35 m/s, 2-3.5 cm a 0.1 s tick, between two ticks as often as on one
+        # (docs/performance/autopilots.md, branch px4leg37); a simulated mission steps the machines at 0.1 s
+        "last_leg_period_s": 0.05,
         "velocity_from_position_s": 2.0,
         "gate_window_s": 3.0,
         "align_on_camera": True,
