@@ -336,7 +336,9 @@ def test_a_brick_taken_again_drops_its_old_links_from_the_kept_components(
     again=st.lists(st.integers(0, 6), max_size=2),
     survey=st.booleans(),
 )
-def test_an_anchor_read_for_its_brick_alone_gives_what_the_whole_dictionary_gives(gnss, again, survey) -> None:
+def test_an_anchor_read_for_its_brick_alone_gives_what_the_whole_dictionary_gives(
+    gnss, again, survey
+) -> None:
     """A take reads its own brick's anchor of the solve alone (``WallAnchor._anchor_of``: its row, its component's
     shift), the whole dictionary only when asked: the same answers and poses as an anchor whose dictionary is
     built after every take, on a wall with a survey and one without (each component's shift), bricks taken again."""
@@ -365,4 +367,6 @@ def test_an_anchor_read_for_its_brick_alone_gives_what_the_whole_dictionary_give
     assert lazy.poses() == whole.poses()
     assert lazy.anchors == built[-1]
     surveyed = {b for b, t in tasks.items() if t.done}
-    assert built[-1] and all((a.root in surveyed) == survey for a in built[-1].values())  # (no survey: shifts)
+    assert built[-1] and all(
+        (a.root in surveyed) == survey for a in built[-1].values()
+    )  # (no survey: shifts)
