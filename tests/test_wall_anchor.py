@@ -327,3 +327,46 @@ def test_a_brick_taken_again_drops_its_old_links_from_the_kept_components(
     monkeypatch.setattr(wall_anchor, "Wall", lambda fixed, sightings, groups: Wall(fixed, sightings))
     plain = WallAnchor(TOWER.tasks)
     assert [(plain.take(b, look), dict(plain.anchors)) for b, look in looks] == got
+
+
+@seed(37)
+@settings(max_examples=30, deadline=None, print_blob=True)
+@given(
+    gnss=st.lists(st.tuples(st.floats(-0.15, 0.15), st.floats(-0.15, 0.15)), min_size=9, max_size=9),
+    again=st.lists(st.integers(0, 6), max_size=2),
+    survey=st.booleans(),
+)
+def test_an_anchor_read_for_its_brick_alone_gives_what_the_whole_dictionary_gives(
+    gnss, again, survey
+) -> None:
+    """A take reads its own brick's anchor of the solve alone (``WallAnchor._anchor_of``: its row, its component's
+    shift), the whole dictionary only when asked: the same answers and poses as an anchor whose dictionary is
+    built after every take, on a wall with a survey and one without (each component's shift), bricks taken again."""
+    wall = plan(pyramid(3, yaw_rad=0.4, placed_courses=1 if survey else 0))
+    tasks = {t.brick: t for t in wall.tasks if isinstance(t, BrickTask)}
+    order = sorted(tasks, key=lambda b: (tasks[b].position_m[2], b))
+    order = [b for b in order if not tasks[b].done]
+    lazy, whole = WallAnchor(wall.tasks), WallAnchor(wall.tasks)
+    built = []
+    for k, b in enumerate(order + [order[i % len(order)] for i in again]):
+        t = tasks[b]
+        world = (t.position_m[0] + gnss[k][0], t.position_m[1] + gnss[k][1], t.position_m[2])
+        below = [
+            o
+            for o in tasks
+            if tasks[o].position_m[2] < t.position_m[2]
+            and math.dist(tasks[o].position_m[:2], t.position_m[:2]) <= t.size_m[0] * 1.01
+        ]
+        offsets = tuple((o, tuple(np.subtract(t.position_m, tasks[o].position_m)), 10) for o in below)
+        pose = AsBuiltPose(world, 0.0, 0.0, 0.9)
+        if offsets:
+            pose = replace(pose, relative_to=offsets[0][0], relative_offset_m=offsets[0][1])
+            pose = replace(pose, relative_deviation_m=0.0, relative_offsets=offsets)  # type: ignore[arg-type]
+        assert lazy.take(b, pose) == whole.take(b, pose)
+        built.append(dict(whole.anchors))  # (the whole dictionary, built after every take)
+    assert lazy.poses() == whole.poses()
+    assert lazy.anchors == built[-1]
+    surveyed = {b for b, t in tasks.items() if t.done}
+    assert built[-1] and all(
+        (a.root in surveyed) == survey for a in built[-1].values()
+    )  # (no survey: shifts)

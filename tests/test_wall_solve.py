@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, seed, settings
 from hypothesis import strategies as st
 
-from masonry.planner.wall_solve import Groups, Sighting, Wall, _components, _Table, solve
+from masonry.planner.wall_solve import Groups, Looks, Sighting, Wall, _components, _Table, solve
 
 HALF_M2 = 0.001**2 / 2.0  # (a brick's estimate in a look: half the link's variance)
 
@@ -339,3 +339,21 @@ def test_a_wall_with_kept_groups_solves_bit_for_bit_as_without(case) -> None:  #
     plain = Wall(fixed, sightings).solve(priors, variance_of, unsurveyed)
     kept = Wall(fixed, sightings, Groups(sightings)).solve(priors, variance_of, unsurveyed)
     assert kept == plain, case
+
+
+@seed(37)
+@settings(max_examples=150, deadline=None)
+@given(random_sightings(), st.floats(1e-8, 1.0))
+def test_the_rows_on_looks_are_the_rows_on_their_mapping_bit_for_bit(case, variance) -> None:  # type: ignore[no-untyped-def]
+    # (the wall anchor's priors: its looks as arrays in the order taken, one variance, not a mapping per solve)
+    fixed, sightings, priors, _, _ = case
+    mapping = {b: (m, variance) for b, (m, _) in (priors or {}).items()}
+    ids = np.array(list(mapping), dtype=np.int64)
+    xy = np.array([m for m, _ in mapping.values()], dtype=float).reshape(-1, 2)
+    wall = Wall(fixed, sightings)
+    looks = Looks(ids, xy, np.sort(ids))
+    want = Wall(fixed, sightings).rows(mapping, unsurveyed=True)
+    assert wall.rows_on(looks, variance) == want, case
+    assert wall.rows_on(looks, variance / 3.0) == Wall(fixed, sightings).rows(
+        {b: (m, variance / 3.0) for b, (m, _) in mapping.items()}, unsurveyed=True
+    ), case  # (a second solve on the same looks: the layout kept)

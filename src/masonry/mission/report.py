@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -233,6 +233,15 @@ def _until(link: Any, end_s: float) -> float:
     return end_s if lost is None else min(end_s, float(lost))
 
 
+def _by_task(attempts: Iterable[AttemptReport]) -> dict[str, list[AttemptReport]]:
+    """Task id -> its attempts in their order (one pass, not one over all of them per task: 2,881 x 3,000 on the
+    1,000-brick wall)."""
+    out: dict[str, list[AttemptReport]] = {}
+    for a in attempts:
+        out.setdefault(a.task_id, []).append(a)
+    return out
+
+
 def control_report(
     mc: Any,
     plan: Plan,
@@ -305,10 +314,11 @@ def control_report(
     if watch is not None:  # the handlers' holds for a battery swap, as the UAVs measured them
         holds = [(a.task_id, a.uav, a.start_s, a.phases.queued) for a in attempts if a.phases is not None]
         waits = with_battery_holds(waits, holds)
+    of_task = _by_task(attempts)
     for t in plan.tasks:
         if t.done:
             continue
-        tries = [a for a in attempts if a.task_id == t.id]
+        tries = of_task.get(t.id, [])
         n = max((a.attempt for a in tries), default=0)
         a = done_att.get(t.id)
         if a is not None:

@@ -43,14 +43,17 @@ neighbours; on no survey: that far off relative to the rest of its wall): the br
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from masonry.perception.types import AsBuiltPose
 from masonry.planner.tasks import BrickTask, Task
 from masonry.planner.wall_deviation import MAX_WALL_DEVIATION_M
-from masonry.planner.wall_solve import Groups, Sighting, Wall
+from masonry.planner.wall_solve import Groups, Looks, Sighting, Wall
 
 Vec3 = tuple[float, float, float]
 
@@ -85,11 +88,15 @@ class WallAnchor:
         self._design = {t.brick: t for t in tasks if isinstance(t, BrickTask)}
         self._fixed = {b: (t.position_m[0], t.position_m[1]) for b, t in self._design.items() if t.done}
         self.every_neighbour = every_neighbour
-        #: brick id -> its anchored centre in the last solve (every brick tied to a surveyed one, within its
-        #: design's reach)
-        self.anchors: dict[int, Anchor] = {}
+        self._anchors: dict[int, Anchor] | None = {}  # (:attr:`anchors`, None: not read from the solve yet)
+        self._solved: tuple[list[int], list[int], list[list[float]]] = ([], [], [])  # (the last solve's rows)
         self._looks: dict[int, AsBuiltPose] = {}  # (brick id -> its world-frame look, in completion order)
-        self._looks_xy: dict[int, tuple[float, float]] = {}  # (the same, horizontally: every solve's priors)
+        self._looks_xy: dict[int, tuple[float, float]] = {}  # (the same, horizontally)
+        # (the same again as arrays in that order, every solve's priors: :class:`Looks`; a brick taken again
+        # keeps its row)
+        self._look_row: dict[int, int] = {}
+        self._look_ids = np.zeros(64, dtype=np.int64)
+        self._look_xy = np.zeros((64, 2))
         self._sightings: dict[int, Sighting] = {}
         self._groups = Groups()  # (the sightings' components, joined as they come: every solve's roots)
         self._residuals_m2: list[float] = []
@@ -148,7 +155,13 @@ class WallAnchor:
         (:meth:`poses`)."""
         look = self.world(brick, pose)
         self._looks[brick] = look
-        self._looks_xy[brick] = (look.position_m[0], look.position_m[1])
+        self._looks_xy[brick] = xy = (look.position_m[0], look.position_m[1])
+        row = self._look_row.setdefault(brick, len(self._look_row))
+        if row == len(self._look_ids):
+            self._look_ids = np.concatenate([self._look_ids, np.zeros(row, dtype=np.int64)])
+            self._look_xy = np.concatenate([self._look_xy, np.zeros((row, 2))])
+        self._look_ids[row] = brick
+        self._look_xy[row] = xy
         sighting = self._sighting(brick, look)
         again = brick in self._sightings  # (a brick taken again: its old sighting's links go)
         if sighting is None:
@@ -168,36 +181,79 @@ class WallAnchor:
             self._residuals_m2.append(
                 ((w[0] - c[0]) ** 2 + (w[1] - c[1]) ** 2) / 2.0 - relative.variance_m2[brick]
             )
-        looks = self._looks_xy
-        self._free = self._unsurveyed_residuals(wall, looks)
+        n = len(self._look_row)
+        ids = self._look_ids[:n]
+        priors = Looks(ids, self._look_xy[:n], np.sort(ids))
+        self._free = self._unsurveyed_residuals(wall, priors)
         sigma_w = self.world_sigma_m()
         var_w = LOOSE_SIGMA_M**2 if sigma_w is None else sigma_w**2
-        free, roots, xs = wall.rows({b: (m, var_w) for b, m in looks.items()}, unsurveyed=True)
-        self.anchors = {}
-        shift = self._wall_shift(free, roots, xs)
-        size = Counter(roots)
-        for b, root, (x, y) in zip(free, roots, xs, strict=True):
-            design = self._design[b].position_m
-            centre = (x, y, design[2])
-            if root not in self._fixed and size[root] == 1:
-                continue  # (seen alone, tied to no brick: its look, :meth:`pose`)
-            if root in self._fixed:
-                ok = math.dist(centre, design) <= MAX_WALL_DEVIATION_M
-            else:
-                # (relative to the rest of its wall: a wall built on no survey sits where its looks put it)
-                dx, dy = shift[root]
-                ok = math.hypot(x - design[0] - dx, y - design[1] - dy) <= MAX_WALL_DEVIATION_M
-            if ok:
-                self.anchors[b] = Anchor(centre, root)
+        self._solved = wall.rows_on(priors, var_w)
+        self._anchors = None  # (read from the solve when asked: the take's brick alone, :meth:`_anchor_of`)
         out = self.pose(brick)
         assert out is not None
         return out
 
-    def _unsurveyed_residuals(self, wall: Wall, looks: dict[int, tuple[float, float]]) -> tuple[float, int]:
+    @property
+    def anchors(self) -> dict[int, Anchor]:
+        """Brick id -> its anchored centre in the last solve (every brick tied to a surveyed one, within its
+        design's reach)."""
+        return self._all_anchors()
+
+    def _all_anchors(self) -> dict[int, Anchor]:
+        if self._anchors is None:
+            free, roots, xs = self._solved
+            shift = self._wall_shift(free, roots, xs)
+            size = Counter(roots)
+            self._anchors = {}
+            for b, root, x in zip(free, roots, xs, strict=True):
+                anchor = self._anchored(b, root, x, size[root], shift.get(root))
+                if anchor is not None:
+                    self._anchors[b] = anchor
+        return self._anchors
+
+    def _anchor_of(self, brick: int) -> Anchor | None:
+        """``anchors.get(brick)``, of that brick's row of the last solve alone (its free bricks ascend) while the
+        whole dictionary is not built: the same floats (its wall's shift the same sums in the same order)."""
+        if self._anchors is not None:
+            return self._anchors.get(brick)
+        free, roots, xs = self._solved
+        i = bisect_left(free, brick)
+        if i == len(free) or free[i] != brick:
+            return None
+        root = roots[i]
+        shift = None
+        if root not in self._fixed:
+            mine = [j for j, r in enumerate(roots) if r == root]
+            if len(mine) > 1:
+                sums = self._wall_shift([free[j] for j in mine], [root] * len(mine), [xs[j] for j in mine])
+                shift = sums[root]
+            return self._anchored(brick, root, xs[i], len(mine), shift)
+        return self._anchored(brick, root, xs[i], 0, None)
+
+    def _anchored(
+        self, b: int, root: int, xy: list[float], size: int, shift: tuple[float, float] | None
+    ) -> Anchor | None:
+        """Brick ``b``'s anchor from its row of the solve (``size``, ``shift``: its component's bricks and their
+        mean offset from their design, read when its root is on no survey), None: not anchored."""
+        x, y = xy
+        design = self._design[b].position_m
+        centre = (x, y, design[2])
+        if root in self._fixed:
+            ok = math.dist(centre, design) <= MAX_WALL_DEVIATION_M
+        elif size == 1 or shift is None:
+            return None  # (seen alone, tied to no brick: its look, :meth:`pose`)
+        else:
+            # (relative to the rest of its wall: a wall built on no survey sits where its looks put it)
+            dx, dy = shift
+            ok = math.hypot(x - design[0] - dx, y - design[1] - dy) <= MAX_WALL_DEVIATION_M
+        return Anchor(centre, root) if ok else None
+
+    def _unsurveyed_residuals(self, wall: Wall, priors: Looks) -> tuple[float, int]:
         """The world looks' squared horizontal residuals per axis (m^2, summed) against the shape of their wall's
         sightings with no survey (the translation the looks' mean), and the degrees of freedom they hold (per
         component, its looks less one)."""
-        free, roots, xs = wall.rows({b: (m, LOOSE_SIGMA_M**2) for b, m in looks.items()}, unsurveyed=True)
+        looks = self._looks_xy
+        free, roots, xs = wall.rows_on(priors, LOOSE_SIGMA_M**2)
         total = 0.0
         members: dict[int, int] = {}  # (component root -> its looks)
         fixed = self._fixed
@@ -225,7 +281,7 @@ class WallAnchor:
     def pose(self, brick: int) -> AsBuiltPose | None:
         """Brick ``brick``'s best estimate after the looks taken so far (None: not taken)."""
         look = self._looks.get(brick)
-        anchor = self.anchors.get(brick)
+        anchor = self._anchor_of(brick)
         if look is None:
             return None
         design = self._design.get(brick)
@@ -250,4 +306,5 @@ class WallAnchor:
 
     def poses(self) -> dict[int, AsBuiltPose]:
         """Every brick taken -> its best estimate so far (:meth:`pose`), in completion order."""
+        self._all_anchors()  # (every brick's built once: not one search per brick)
         return {b: p for b in self._looks if (p := self.pose(b)) is not None}

@@ -31,7 +31,7 @@ import numpy as np
 
 Vec2 = tuple[float, float]
 
-__all__ = ["Groups", "Sighting", "Solution", "Wall", "solve"]
+__all__ = ["Groups", "Looks", "Sighting", "Solution", "Wall", "solve"]
 
 
 @dataclass(frozen=True)
@@ -128,7 +128,10 @@ def _components(
     kind they hold (surveyed, else ``unsurveyed``). ``groups``: those components kept as the table's sightings
     came (:class:`Groups`), else found from the table."""
     fixed_ids = np.array(sorted(fixed), dtype=np.int64)
-    loose_ids = np.array(sorted(unsurveyed), dtype=np.int64)
+    if isinstance(unsurveyed, np.ndarray):
+        loose_ids = unsurveyed  # (:attr:`Looks.seeds`: sorted already)
+    else:
+        loose_ids = np.array(sorted(unsurveyed), dtype=np.int64)
     nodes = np.unique(np.concatenate([table.ids, fixed_ids, loose_ids]))
     if not len(nodes):
         return nodes, np.zeros(0, dtype=bool), nodes
@@ -189,12 +192,26 @@ def solve(
     return Wall(fixed, sightings).solve(priors, variance_of, unsurveyed)
 
 
+@dataclass(frozen=True, eq=False)
+class Looks:
+    """The world looks as priors of one variance (:meth:`Wall.rows_on`): the bricks' ids (n,) in the order they
+    were taken, their horizontal centres (n, 2) and the ids sorted (the seeds of the components with no survey);
+    the same solution as the mapping ``{b: ((x, y), variance)}`` in that order, without building it (the wall
+    anchor's two solves a take, 1,000 looks on a 1,000-brick wall). Compared by identity: the solves of one wall
+    on one ``Looks`` share their layout."""
+
+    ids: np.ndarray
+    xy_m: np.ndarray
+    seeds: np.ndarray
+
+
 @dataclass(frozen=True)
 class _Layout:
     """The normal equations of one set of roots before the priors (:meth:`Wall.solve`): the free bricks, their
     roots and index, the unknowns, and the matrix's and the right-hand side's entries in the order they are added."""
 
     free: list[int]
+    free_ids: np.ndarray
     roots: list[int]
     index: dict[int, int]
     n: int
@@ -219,7 +236,7 @@ class Wall:
         self.fixed = fixed
         self.table = _Table([s for s in sightings if s.offsets])
         self.groups = groups  # (the components of these sightings, kept by the caller: :class:`Groups`)
-        self._layouts: dict[frozenset[int] | None, _Layout | None] = {}
+        self._layouts: dict[frozenset[int] | Looks | None, _Layout | None] = {}
 
     def solve(
         self,
@@ -255,28 +272,50 @@ class Wall:
         lay, x, _ = solved
         return lay.free, lay.roots, x[: len(lay.free)].tolist()
 
+    def rows_on(self, looks: Looks, variance_m2: float) -> tuple[list[int], list[int], list[list[float]]]:
+        """:meth:`rows` with the priors ``{b: ((x, y), variance_m2)}`` of ``looks`` in its order, ``unsurveyed``:
+        the same floats, the priors' rows found by a search of the free bricks, not a dictionary per look."""
+        solved = self._solve(None, (), True, (looks, variance_m2))
+        if solved is None:
+            return [], [], []
+        lay, x, _ = solved
+        return lay.free, lay.roots, x[: len(lay.free)].tolist()
+
     def _solve(
-        self, priors: Mapping[int, tuple[Vec2, float]] | None, variance_of: Collection[int], unsurveyed: bool
+        self,
+        priors: Mapping[int, tuple[Vec2, float]] | None,
+        variance_of: Collection[int],
+        unsurveyed: bool,
+        looks: tuple[Looks, float] | None = None,
     ) -> tuple[_Layout, np.ndarray, dict[int, float]] | None:
         """The layout, the solution (every unknown's row) and the variances asked for; None: no free brick."""
         # scipy on call, as everywhere in the pure packages: `masonry --help` and the planner's import stay light
         import scipy.sparse as sp
         import scipy.sparse.linalg as spla
 
-        seeds = frozenset((priors or {}).keys()) if unsurveyed else None
-        if seeds in self._layouts:
-            lay = self._layouts[seeds]
+        key: frozenset[int] | Looks | None
+        if looks is not None:
+            key = looks[0]
+            seeds: Collection[int] = looks[0].seeds
         else:
-            lay = self._layouts[seeds] = self._layout(seeds or ())
+            key = frozenset((priors or {}).keys()) if unsurveyed else None
+            seeds = key or ()
+        if key in self._layouts:
+            lay = self._layouts[key]
+        else:
+            lay = self._layouts[key] = self._layout(seeds)
         if lay is None:
             return None
         index, n = lay.index, lay.n
         rows, cols, vals, at, add = lay.rows, lay.cols, lay.vals, lay.at, lay.add
-        prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
-        if prior:
+        if looks is not None:
+            pi, pv, pm = _priors_on(lay.free_ids, *looks)
+        else:
+            prior = [(index[b], mv, v) for b, (mv, v) in (priors or {}).items() if b in index]
             pi = np.array([i for i, _, _ in prior], dtype=np.int64)
             pv = np.array([v for _, _, v in prior], dtype=float)
             pm = np.array([mv for _, mv, _ in prior], dtype=float).reshape(-1, 2)
+        if len(pi):
             rows = np.concatenate([rows, pi])
             cols = np.concatenate([cols, pi])
             vals = np.concatenate([vals, 1.0 / pv])
@@ -338,4 +377,18 @@ class Wall:
         first = np.where(on_free[:, None], wy, w[:, None] * (fx - y))
         at = np.stack([first_at, g], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
         add = np.stack([first, -wy], axis=1)[np.stack([np.ones_like(on_free), on_free], axis=1)]
-        return _Layout(free, node_root[free_at].tolist(), index, n, rows, cols, vals, at, add)
+        return _Layout(free, free_ids, node_root[free_at].tolist(), index, n, rows, cols, vals, at, add)
+
+
+def _priors_on(
+    free_ids: np.ndarray, looks: Looks, variance_m2: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The priors' unknowns, variances and centres (:meth:`Wall._solve`'s ``pi``, ``pv``, ``pm``) of the looks
+    on free bricks (``free_ids`` ascending), in the looks' order."""
+    ids = looks.ids
+    if not len(free_ids) or not len(ids):
+        return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros((0, 2))
+    at = np.minimum(np.searchsorted(free_ids, ids), len(free_ids) - 1)
+    hit = free_ids[at] == ids
+    pi = at[hit]
+    return pi, np.full(len(pi), float(variance_m2)), looks.xy_m[hit]
