@@ -1,6 +1,7 @@
 """Chaining through a queued task (masonry.mission.dispatch_chain): a sprayer at the end of its segment is given
 the next one of its run when it is ready, even while a conflicting brick task is in progress, as long as the
-fleet has no more UAVs than the wall has sites to work at once and more than one brick UAV."""
+fleet has no more UAVs than the wall has sites to work at once (or three brick UAVs or more per sprayer) and more
+than one brick UAV."""
 
 from __future__ import annotations
 
@@ -10,7 +11,12 @@ import pytest
 
 from masonry.blueprint import UavSpec, load_blueprint
 from masonry.blueprint_gen import running_bond
-from masonry.mission.dispatch_chain import APART_BRICK_REACH_M, ChainThrough, mission_dispatcher
+from masonry.mission.dispatch_chain import (
+    APART_BRICK_REACH_M,
+    CHAIN_THROUGH_BRICKS_PER_SPRAYER,
+    ChainThrough,
+    mission_dispatcher,
+)
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_admission import Admission
@@ -67,6 +73,15 @@ def test_not_past_the_walls_width_nor_without_the_admission_rule(width: int | No
     if width is not None:
         d.admission = Admission(width, lambda _name: False)  # three UAVs for two sites: they queue already
     assert after_a0(d) == ["A2"]
+
+
+def test_past_the_width_with_three_brick_uavs_per_sprayer() -> None:
+    # the one sprayer is the role the wall waits on: it chains through though the fleet queues at the sites
+    fleet = [*FLEET, UavSpec("brick-3", "brick", (6.0, -3.0, 0.0))]
+    d = ChainThrough(run_and_a_brick(), fleet, reservation="site")
+    d.admission = Admission(2, lambda _name: False)  # four UAVs for two sites
+    assert CHAIN_THROUGH_BRICKS_PER_SPRAYER == 3
+    assert after_a0(d) == ["A1"]  # (two brick UAVs per sprayer past the width: the test above, width 2)
 
 
 def test_not_with_one_brick_uav() -> None:

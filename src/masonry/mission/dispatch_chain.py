@@ -17,7 +17,10 @@ only on a site visit in progress, which ends. The sprayers are the role the 12 m
 
 Only while the fleet has no more UAVs than the wall has sites to work at once (the admission rule's width at
 r_c, so only under the columns): past it the UAVs queue at the sites already, and chaining through slowed the
-12 m wall at 8 + 4 (12 UAVs, width 8). Used by mission control for the reactive policies under ``site`` with no
+12 m wall at 8 + 4 (12 UAVs, width 8). Past it still, where the fleet has :data:`CHAIN_THROUGH_BRICKS_PER_SPRAYER`
+brick UAVs or more per sprayer: the few sprayers are then the role the wall waits on, and a sprayer sent elsewhere
+unchained costs it more than the brick UAV it queues behind (12 m wall, 8 + 2, seeds 1-3: 1,601 -> 1,225 s,
+against 4 + 2's 1,171 s; docs/performance/fleet.md). Used by mission control for the reactive policies under ``site`` with no
 adhesive's open times (a plan with deadlines keeps the glue dispatcher, which holds segments back on purpose);
 ``--policy schedule`` has its own ``chain`` rule.
 
@@ -44,13 +47,17 @@ from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
-__all__ = ["APART_BRICK_REACH_M", "ChainThrough", "mission_dispatcher"]
+__all__ = ["APART_BRICK_REACH_M", "CHAIN_THROUGH_BRICKS_PER_SPRAYER", "ChainThrough", "mission_dispatcher"]
 
 #: Past the width, a brick UAV's brick away from the other brick UAVs is one within this (m, |dx| + |dy|) of the
 #: brick the dispatcher would give it: a farther one sends it across the wall, through the other UAVs' legs (12 m
 #: wall, 8 + 4, seed 3, no reach: the brick UAVs' airspace waits 1,830 -> 3,655 task-seconds, every sprayer home for
 #: a pack, 1,030 -> 1,299 s; 3 m: 944 s). Measured at 3 and 5 m (docs/performance/fleet.md).
 APART_BRICK_REACH_M = 3.0
+#: Past the width, a sprayer still chains through while the fleet has at least this many brick UAVs per sprayer
+#: (12 m wall: 8 + 2 and 7 + 2 do, the default fleets' 2 per sprayer do not; 8 + 3 measured -1.9 % in the mean of
+#: seeds 1-3 with one seed +13 %, left out).
+CHAIN_THROUGH_BRICKS_PER_SPRAYER = 3
 
 
 class ChainThrough(Dispatcher):
@@ -65,6 +72,11 @@ class ChainThrough(Dispatcher):
         """The fleet has more UAVs than the wall has sites to work at once (False without the admission rule)."""
         rule = self.admission
         return rule is not None and sum(self._live_count.values()) > rule.width
+
+    def _few_sprayers(self) -> bool:
+        """The fleet has :data:`CHAIN_THROUGH_BRICKS_PER_SPRAYER` brick UAVs or more per live sprayer."""
+        live = self._live_count
+        return live["brick"] >= CHAIN_THROUGH_BRICKS_PER_SPRAYER * live["adhesion"]
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
@@ -102,8 +114,9 @@ class ChainThrough(Dispatcher):
         conflicting task in progress; None: none (the policy's pick, which chains an available one itself), or
         the fleet has more UAVs than the wall has sites to work at once (the admission rule's width: only
         under the columns), where the UAVs queue at the sites already and one more queue-jumper costs more
-        than the chain saves (12 m wall, 8 + 4: +59 s in the mean of seeds 1-3)."""
-        if role != "adhesion" or self.admission is None or self._past_width():
+        than the chain saves (12 m wall, 8 + 4: +59 s in the mean of seeds 1-3), unless the sprayers are few
+        (:meth:`_few_sprayers`)."""
+        if role != "adhesion" or self.admission is None or (self._past_width() and not self._few_sprayers()):
             return None
         if self._live_count["brick"] < 2:
             return None  # the one brick UAV is the whole of its role: its wait at the wall is the wall's
