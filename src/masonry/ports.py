@@ -230,6 +230,11 @@ class Gripper(Protocol):
         past lets go at once. ``set_magnet`` before ``at_s`` cancels it."""
         ...
 
+    def can_time_release(self) -> bool:
+        """True if :meth:`release_at` lets go at the time asked (else it lets go at once): the release gate predicts
+        a release from a tick outside r_pl only then (:meth:`masonry.fsm.release_gate.ReleaseGate.ahead`)."""
+        ...
+
 
 @runtime_checkable
 class Sprayer(Protocol):

@@ -246,6 +246,10 @@ class ArduinoActuators:
         self.set_magnet(False)
         return False
 
+    def can_time_release(self) -> bool:
+        """No: the firmware lets go at once (:meth:`release_at`)."""
+        return False
+
     def set_valve(self, open_: bool) -> None:
         self._transact("VALVE", ("OPEN" if open_ else "CLOSE",))
 

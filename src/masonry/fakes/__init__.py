@@ -391,6 +391,10 @@ class FakeGripper(_Scripted):
         self._tick()
         return True
 
+    def can_time_release(self) -> bool:
+        """With a clock (:meth:`release_at` times it then)."""
+        return self.clock is not None
+
     def set_joint_locked(self, locked: bool) -> None:
         self._tick()
         self.commands.append(("joint_locked", bool(locked)))

@@ -127,10 +127,10 @@ class UavConfig:
     # farther than this (m) from the drop-off is passed over while looks back up are left (the pass is flown again
     # from the look point; masonry.fsm.release_gate.ReleaseGate.wide). 0: off
     release_leg_m: float = 0.0
-    # With align_on_wall, on the side look's last leg of a guarded drop-off: the release is timed at the effector's
-    # predicted nearest pass to the drop-off (its error carried on its velocity) within this long (s) after the tick,
-    # through Gripper.release_at (masonry.fsm.release_gate.ReleaseGate.ahead). 0: off (a release at the tick), in the
-    # presets too: 0.1 s helped the px4 towers but not the rotated bond in 4 m/s (docs/performance/as-built.md)
+    # With align_on_wall, on the side look's last leg of a guarded drop-off in calm air: the release is timed at the
+    # effector's predicted nearest pass to the drop-off (its error carried on its velocity) within this long (s)
+    # after the tick, through Gripper.release_at (masonry.fsm.release_gate.ReleaseGate.ahead). 0: off (a release at
+    # the tick); the px4 preset's 0.1 (not in a wind: there it hurt the rotated bond; docs/performance/as-built.md)
     release_ahead_s: float = 0.0
     # With align_on_wall: while it descends, the drop-off follows the wall's offset's trend fitted over this last
     # stretch of its frames (s), past the frames its mean is of (masonry.fsm.wall_trend). 0: off

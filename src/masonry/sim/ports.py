@@ -105,6 +105,9 @@ class SimGripper:
             uav.release_due_s = float(at_s)
         return True
 
+    def can_time_release(self) -> bool:
+        return True
+
 
 class SimSprayer:
     """``Sprayer``: the adhesive valve."""
