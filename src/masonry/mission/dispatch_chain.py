@@ -84,7 +84,10 @@ class ChainThrough(Dispatcher):
         if self._past_width():
             apart = self._apart(role, uav)
             if apart and role == "brick":
-                apart = self._near(apart, super()._select_conflicting(role, uav))
+                choice = super()._select_conflicting(role, uav)
+                apart = self._near(apart, choice)
+                if not apart:
+                    return choice  # (asked once: none apart within reach of it)
             if apart:
                 return self._ranking.pick_among(apart, self._position[uav], self._after(uav))
         return super()._select_conflicting(role, uav)

@@ -106,6 +106,7 @@ class SimGripper:
         return True
 
     def can_time_release(self) -> bool:
+        """Yes: :meth:`release_at` lets go inside the physics step it falls in."""
         return True
 
 
