@@ -27,7 +27,11 @@ def admit(mc: MissionControl, column_radius_m: float) -> None:
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
     width = site_width(((p[0], p[1]) for p in points), column_radius_m)
-    mc.dispatcher.admission = Admission(width, lambda name: mc.columns.phase(name) is Phase.LANDED)
+    mc.dispatcher.admission = Admission(
+        width,
+        lambda name: mc.columns.phase(name) is Phase.LANDED,
+        swap_sent=lambda name: mc.swaps.is_sent(mc, name),
+    )
 
 
 def may_take_off(mc: MissionControl, name: str) -> bool:

@@ -222,7 +222,9 @@ class Dispatcher(DispatchQueries):
         st, nb, pre = self._status, self._neighbours, self._prerequisites
         if not rule.landed(uav):
             return i  # already out: it is not added to the crowd (holding it back left holds unserved)
-        busy = sum(1 for j in self._uav_task.values() if self._role[j] == role)
+        # busy: holding a task, or out with none (it takes the next one: a spare that took over a swapping UAV's
+        # work is not undercut by it back from its swap, and their segments' chains are not split)
+        busy = sum(1 for j in self._uav_task.values() if self._role[j] == role) + self._out_idle(role, rule)
         if busy >= rule.cap(self._live_count[role], sum(self._live_count.values())):
             return None  # its role has its share of the UAVs the wall can keep busy: it stays on its pad
         running = list(self._uav_task.values())
@@ -234,6 +236,24 @@ class Dispatcher(DispatchQueries):
             if free:
                 return self._ranking.pick_among(free, self._position[uav], self._after(uav))
         return None
+
+    def _out_idle(self, role: str, rule: Admission) -> int:
+        """The live UAVs of ``role`` in the air with no task, but those flying home for their swap."""
+        return sum(
+            1
+            for n, spec in self._fleet.items()
+            if spec.role == role
+            and n in self._live
+            and n not in self._uav_task
+            and not rule.landed(n)
+            and not rule.swap_sent(n)
+        )
+
+    def capped_alone(self, role: str) -> bool:
+        """The admission rule applies and lets one UAV of ``role`` be busy at a time (the pyramid's sprayers
+        at 4 + 2 to 8 + 4): that UAV's work is its role's (:func:`masonry.mission.swap_stagger.swap_due`)."""
+        rule, live = self.admission, sum(self._live_count.values())
+        return rule is not None and rule.applies(live) and rule.cap(self._live_count[role], live) == 1
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""

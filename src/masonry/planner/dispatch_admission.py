@@ -94,10 +94,13 @@ class Admission:
     Args:
         width: :func:`site_width` of the wall's tasks at the conflict radius.
         landed: whether a UAV is on its pad (mission control's airspace).
+        swap_sent: whether a UAV flies home for its battery swap (:mod:`masonry.mission.swap_stagger`).
     """
 
     width: int
     landed: Callable[[str], bool]
+    #: whether a UAV was sent home for its battery swap (mission control's stagger): not out to take a task
+    swap_sent: Callable[[str], bool] = lambda _name: False
 
     def applies(self, live_uavs: int) -> bool:
         """The fleet has more UAVs than :data:`UAVS_PER_SITE` per site the wall can work at once."""
