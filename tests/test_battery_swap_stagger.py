@@ -3,7 +3,10 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from masonry.battery_drain import DrainMeter
+from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.mission.handler import TOP_UP_FRACTION
 from masonry.mission.simulate import SimulatedMission
@@ -141,3 +144,22 @@ def test_a_simulated_uavs_heartbeat_says_its_ground_crew_swaps_its_pack() -> Non
     handler.step(mission.clock.now_s())  # its first heartbeat
     mission._step_control()
     assert mission.control.uavs["glue-1"].swaps_batteries
+
+
+def test_a_roles_one_busy_uav_under_the_reserve_is_sent_beside_a_spare() -> None:
+    """On a wall the admission rule keeps to one busy UAV of a role (the bundled pyramid's sprayers at 4 + 2),
+    that UAV under ``RESERVE`` is sent home even with a spare on its pad: held by its handler, its task would
+    stop the role's work for the whole swap; the spare takes it. A role capped higher keeps the spare rule."""
+    pyramid = Path(__file__).resolve().parent.parent / "blueprints" / "pyramid.yaml"
+    mc = SimulatedMission.from_blueprint(
+        load_blueprint(pyramid), brick_uavs=4, adhesion_uavs=2, seed=0
+    ).control
+    assert mc.dispatcher.capped_alone("adhesion") and not mc.dispatcher.capped_alone("brick")
+    for link in mc.uavs.values():
+        link.swaps_batteries = True
+        link.battery = 0.9
+    for spare in ("glue-2", "brick-4"):
+        mc.uavs[spare].facts = UavFacts(on_pad=True)  # spares on their pads, no task
+    mc.uavs["glue-1"].battery = mc.uavs["brick-1"].battery = RESERVE - 0.01
+    assert swap_due(mc, "glue-1")
+    assert not swap_due(mc, "brick-1")  # three brick UAVs may be busy: the spare rule holds

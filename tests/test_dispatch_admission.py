@@ -159,3 +159,32 @@ def test_the_bundled_pyramid_with_a_large_fleet_completes_apart_with_the_rule_on
     assert r.conflict_violations == 0 and r.dependency_violations == 0
     assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
     assert r.min_separation_m is not None and r.min_separation_m >= 1.0
+
+
+def test_a_uav_out_with_no_task_counts_against_its_roles_cap_but_not_one_flying_home_for_its_swap():
+    # a wall 1 site wide, 3 brick UAVs: 2 may be busy. brick-1 is out (in the air) with no task: it takes the
+    # next one, so it counts; brick-3, back on its pad, stays there. Sent home for its swap, brick-1 does not
+    # count: its place goes to a UAV on its pad.
+    plan = Plan(tuple(brick(i, 5.0 * i) for i in range(4)), (), ())
+    sent: set[str] = set()
+    d = Dispatcher(plan, brick_fleet(3), reservation="site")
+    d.admission = Admission(width=1, landed=lambda name: name != "brick-1", swap_sent=sent.__contains__)
+    got = d.assign()
+    assert [a.uav for a in got] == ["brick-1", "brick-2"]
+    d.complete(got[0].task_id)  # brick-1 is out with nothing
+    not_brick_1 = "brick-1".__ne__  # mission control gives it nothing now (its swap is due)
+    assert d.assign(may_start=not_brick_1) == []
+    sent.add("brick-1")
+    assert [a.uav for a in d.assign(may_start=not_brick_1)] == ["brick-3"]
+    assert not d.capped_alone("brick")  # 2 may be busy
+
+
+def test_a_role_capped_at_one_busy_uav_is_capped_alone():
+    glue = [UavSpec(f"glue-{k}", "adhesion", (2.0 + k, -3.0, 0.0)) for k in (1, 2)]
+    fleet = [*brick_fleet(4), *glue]
+    d = Dispatcher(bricks_in_one_place(2), fleet, reservation="site")
+    assert not d.capped_alone("adhesion")  # no rule
+    d.admission = Admission(width=2, landed=lambda _name: True)  # the pyramid at 4 + 2: 3 + 1 busy
+    assert d.capped_alone("adhesion") and not d.capped_alone("brick")
+    d.admission = Admission(width=3, landed=lambda _name: True)  # 6 UAVs, room for 6: the rule does not apply
+    assert not d.capped_alone("adhesion")
