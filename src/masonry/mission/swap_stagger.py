@@ -26,7 +26,10 @@ landing, the crew's 60 s and the take-off (78-115 s on the 12 m wall), while mis
 progress and gives it to no one else. Sent with nothing, it is swapped on its pad as an idle UAV, and the task
 goes to a UAV that can start it (12 m wall, means of seeds 1-6: 4 + 2 -1.8 %, 8 + 4 -3.0 %). Not while a spare
 waits on its pad (:meth:`SwapStagger.spare`): sent then, the task went to a spare from a pad farther out (the
-pyramid at 8 + 4, +4.2 %; docs/performance/fleet.md, "The brick UAVs' battery swaps").
+pyramid at 8 + 4, +4.2 %; docs/performance/fleet.md, "The brick UAVs' battery swaps"), except where the admission
+rule keeps its role to one busy UAV (:meth:`~masonry.planner.dispatch.Dispatcher.capped_alone`, the pyramid's
+sprayers from 4 + 2 up): held, its task stopped every site visit for the swap; the spare takes it ("The pyramid
+past 2 + 1").
 
 Nothing here relaxes the battery reserve: a UAV given a task its battery does not cover still has it held for a
 swap by its handler (docs/state-machines.md, "Battery budget"). Pure bookkeeping over mission control's state:

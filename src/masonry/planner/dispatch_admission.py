@@ -13,7 +13,8 @@ work (the pyramid took 1,349 s at 2 + 1 and 2,092 s at 8 + 4). The rule (docs/di
   site interval);
 - a task is *crowded* when a queued task lies within two conflict hops of it (conflicts with it, or with a task
   it conflicts with) and does not wait for it (a prerequisite is never held back by its dependent);
-- a UAV on its pad takes off only while fewer UAVs of its role are busy (hold a task) than the role's *cap*: its
+- a UAV on its pad takes off only while fewer UAVs of its role are busy (hold a task, or are in the air with
+  none: they take the next one; not one flying home for its battery swap) than the role's *cap*: its
   share of :data:`UAVS_PER_SITE` busy UAVs per site the wall can work at once, in proportion to the live fleet,
   rounded, one at least (:meth:`Admission.cap`; the pyramid: 3 brick + 1 adhesion UAVs at 4 + 2 to 8 + 4). Every
   role keeps a UAV it may fly, so the mission goes on as a smaller fleet's would;
