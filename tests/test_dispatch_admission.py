@@ -148,7 +148,9 @@ def test_the_uavs_past_the_cap_stay_on_their_pads_but_one_in_the_air_is_not_held
     assert len(on_pads.assign()) == 1
     in_air = Dispatcher(plan, brick_fleet(3), reservation="site")
     in_air.admission = Admission(width=1, landed=lambda name: name != "brick-3")
-    assert [a.uav for a in in_air.assign()] == ["brick-1", "brick-2", "brick-3"]
+    # brick-3, out with no task, is never held back; it counts against the cap (it takes the next task), so of
+    # the two on their pads only brick-1 goes (until branch pyr38 both went: three busy past the cap of two)
+    assert [a.uav for a in in_air.assign()] == ["brick-1", "brick-3"]
 
 
 @pytest.mark.slow
