@@ -41,19 +41,13 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from masonry.blueprint import UavSpec
-from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
+from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_values import RUNNING
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
-__all__ = [
-    "APART_BRICK_REACH_M",
-    "CHAIN_THROUGH_BRICKS_PER_SPRAYER",
-    "ChainThrough",
-    "mission_dispatcher",
-    "start_spots",
-]
+__all__ = ["APART_BRICK_REACH_M", "CHAIN_THROUGH_BRICKS_PER_SPRAYER", "ChainThrough", "mission_dispatcher"]
 
 #: Past the width, a brick UAV's brick away from the other brick UAVs is one within this (m, |dx| + |dy|) of the
 #: brick the dispatcher would give it: a farther one sends it across the wall, through the other UAVs' legs (12 m
@@ -68,49 +62,11 @@ CHAIN_THROUGH_BRICKS_PER_SPRAYER = 3
 
 class ChainThrough(Dispatcher):
     """The reactive dispatcher, with an adhesion UAV at the end of its segment given the next one of its run when
-    that one is ready, even while a conflicting task is in progress (see the module docstring); and each sprayer's
-    first segment at its own spot along the wall (:func:`start_spots`)."""
-
-    def __init__(
-        self,
-        plan: Plan,
-        fleet: Sequence[UavSpec],
-        policy: str = DEFAULT_POLICY,
-        max_attempts: int = 3,
-        durations_s: Mapping[str, float] | None = None,
-        reservation: str = "task",
-    ) -> None:
-        super().__init__(plan, fleet, policy, max_attempts, durations_s, reservation)
-        #: the sprayers given a segment already (their first is at their spot)
-        self._spraying: set[str] = set()
-        segments = [self._start_m[i] for i, r in enumerate(self._role) if r == "adhesion"]
-        sprayers = [s for s in fleet if s.role == "adhesion"]
-        self._spot_axis, self._spots = start_spots(segments, sprayers)
+    that one is ready, even while a conflicting task is in progress (see the module docstring)."""
 
     def _select(self, role: str, uav: str) -> int | None:
-        i = self._spread_start(role, uav)
-        if i is None:
-            i = self._chained_through(role, uav)
+        i = self._chained_through(role, uav)
         return super()._select(role, uav) if i is None else i
-
-    def _start(self, i: int, uav: str) -> None:
-        super()._start(i, uav)
-        if self._role[i] == "adhesion":
-            self._spraying.add(uav)
-
-    def _spread_start(self, role: str, uav: str) -> int | None:
-        """A sprayer's first segment of the mission, up to the width with two sprayers or more: the available one
-        starting nearest its spot (:func:`start_spots`); None: not its first, or the rule is off."""
-        if role != "adhesion" or uav in self._spraying or self.admission is None or self._past_width():
-            return None
-        spot = self._spots.get(uav)
-        if spot is None or self._live_count["adhesion"] < 2:
-            return None
-        available = self._available[role]
-        if not available:
-            return None
-        axis, start = self._spot_axis, self._start_m
-        return min(available, key=lambda k: (abs(start[k][axis] - spot), k))
 
     def _past_width(self) -> bool:
         """The fleet has more UAVs than the wall has sites to work at once (False without the admission rule)."""
@@ -175,26 +131,6 @@ class ChainThrough(Dispatcher):
             if s in ready and s not in available and self._status[s] != RUNNING:
                 return s
         return None
-
-
-def start_spots(
-    segments_m: Sequence[tuple[float, float, float]], sprayers: Sequence[UavSpec]
-) -> tuple[int, dict[str, float]]:
-    """Where each sprayer's first segment is (issue 27; docs/dispatch.md, "Sprayers start apart").
-
-    The wall's adhesion segments span ``[lo, hi]`` along their longer horizontal axis; the sprayers, ordered by
-    their homes along it (then fleet order), take the middles of ``n`` equal shares of the span: at 2 sprayers
-    the quarter points. Returns (the axis, 0 for x and 1 for y; the spot along it per sprayer); no spots without
-    segments.
-    """
-    if not segments_m:
-        return 0, {}
-    xs, ys = [p[0] for p in segments_m], [p[1] for p in segments_m]
-    axis = 0 if max(xs) - min(xs) >= max(ys) - min(ys) else 1
-    lo, hi = (min(xs), max(xs)) if axis == 0 else (min(ys), max(ys))
-    ordered = sorted(range(len(sprayers)), key=lambda k: (sprayers[k].home_m[axis], k))
-    n = len(sprayers)
-    return axis, {sprayers[k].name: lo + (j + 0.5) * (hi - lo) / n for j, k in enumerate(ordered)}
 
 
 def mission_dispatcher(
