@@ -1,7 +1,8 @@
 """Chaining through a queued task (masonry.mission.dispatch_chain): a sprayer at the end of its segment is given
 the next one of its run when it is ready, even while a conflicting brick task is in progress, as long as the
-fleet has no more UAVs than the wall has sites to work at once (or three brick UAVs or more per sprayer) and more
-than one brick UAV."""
+fleet's core (two brick UAVs per sprayer) has no more UAVs than the wall has sites to work at once and the fleet more
+than one brick UAV; and the spares past that core stay on their pads while the core's UAVs of their role are
+busy."""
 
 from __future__ import annotations
 
@@ -13,7 +14,6 @@ from masonry.blueprint import UavSpec, load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.mission.dispatch_chain import (
     APART_BRICK_REACH_M,
-    CHAIN_THROUGH_BRICKS_PER_SPRAYER,
     ChainThrough,
     mission_dispatcher,
 )
@@ -75,13 +75,43 @@ def test_not_past_the_walls_width_nor_without_the_admission_rule(width: int | No
     assert after_a0(d) == ["A2"]
 
 
-def test_past_the_width_with_three_brick_uavs_per_sprayer() -> None:
-    # the one sprayer is the role the wall waits on: it chains through though the fleet queues at the sites
+def test_past_the_width_counts_the_core_not_the_spares() -> None:
+    # three brick UAVs for one sprayer: a core of 2 + 1 (three UAVs, three sites) and one spare; the rules go by the
+    # core, so the sprayer chains through as the 2 + 1 fleet's would
     fleet = [*FLEET, UavSpec("brick-3", "brick", (6.0, -3.0, 0.0))]
     d = ChainThrough(run_and_a_brick(), fleet, reservation="site")
-    d.admission = Admission(2, lambda _name: False)  # four UAVs for two sites
-    assert CHAIN_THROUGH_BRICKS_PER_SPRAYER == 3
-    assert after_a0(d) == ["A1"]  # (two brick UAVs per sprayer past the width: the test above, width 2)
+    d.admission = Admission(3, lambda _name: False)
+    assert after_a0(d) == ["A1"]
+
+
+def bricks_apart(n: int) -> Plan:
+    """``n`` bricks 3 m apart (no conflicts) and one segment far from them."""
+    bricks = tuple(
+        BrickTask(f"B{k}", 0, False, (3.0 * k, 0.0, 0.15), 0.0, (3.0 * k, -2.0, 0.05)) for k in range(n)
+    )
+    return Plan((*bricks, glue(0, 20.0, 20.15)), (), ())
+
+
+@pytest.mark.parametrize(("bricks", "sprayers", "busy"), [(3, 1, 2), (5, 2, 4), (4, 2, 4), (2, 1, 2)])
+def test_a_spare_past_the_core_stays_on_its_pad_while_the_core_of_its_role_is_busy(
+    bricks: int, sprayers: int, busy: int
+) -> None:
+    fleet = [UavSpec(f"brick-{k + 1}", "brick", (3.0 * k, -5.0, 0.0)) for k in range(bricks)]
+    fleet += [UavSpec(f"glue-{k + 1}", "adhesion", (-3.0 - 3.0 * k, -5.0, 0.0)) for k in range(sprayers)]
+    d = ChainThrough(bricks_apart(6), fleet, reservation="site")
+    d.admission = Admission(6, lambda _name: True)  # every UAV on its pad
+    given = [a for a in d.assign() if a.task_id.startswith("B")]
+    assert [a.uav for a in given] == [f"brick-{k + 1}" for k in range(busy)]
+    d.complete(given[0].task_id)  # one of the core is free: the next idle UAV in fleet order takes its place
+    assert len([a for a in d.assign() if a.task_id.startswith("B")]) == 1
+
+
+def test_a_spare_in_the_air_is_not_held_back() -> None:
+    fleet = [UavSpec(f"brick-{k + 1}", "brick", (3.0 * k, -5.0, 0.0)) for k in range(3)]
+    fleet.append(UavSpec("glue-1", "adhesion", (-3.0, -5.0, 0.0)))
+    d = ChainThrough(bricks_apart(6), fleet, reservation="site")
+    d.admission = Admission(6, lambda _name: False)  # every UAV in the air: none is kept on its pad
+    assert len([a for a in d.assign() if a.task_id.startswith("B")]) == 3
 
 
 def test_not_with_one_brick_uav() -> None:
@@ -145,12 +175,13 @@ def segments_by_two_bricks() -> Plan:
     return Plan(tasks, (), (("A0", "A1"), ("A1", "B0"), ("A2", "B1")))
 
 
-@pytest.mark.parametrize(("width", "second"), [(3, "A2"), (4, "A1"), (None, "A1")])
+@pytest.mark.parametrize(("width", "second"), [(2, "A2"), (3, "A1"), (None, "A1")])
 def test_past_the_width_the_second_sprayer_is_given_a_segment_away_from_the_first(
     width: int | None, second: str
 ) -> None:
     # nothing available for glue-2: A1 (nearer, next to glue-1's A0) or A2 (by a brick only); past the width
-    # (four UAVs, three sites) it is A2, else the nearest
+    # (the 2 + 2 fleet's core of 2 + 1, three UAVs, for two sites) it is A2, else the nearest; glue-2, past the
+    # core, is in the air here, and a UAV in the air is never held back
     d = ChainThrough(segments_by_two_bricks(), TWO_SPRAYERS, reservation="site")
     if width is not None:
         d.admission = Admission(width, lambda _name: False)

@@ -15,14 +15,19 @@ sprayer, already there, asks at once). Nothing waits in a cycle: a ready segment
 only on a site visit in progress, which ends. The sprayers are the role the 12 m wall waits on at 4 + 2 and
 8 + 4 (the tasks waiting for a free sprayer, docs/performance/fleet.md "Chaining through a queued task").
 
-Only while the fleet has no more UAVs than the wall has sites to work at once (the admission rule's width at
-r_c, so only under the columns): past it the UAVs queue at the sites already, and chaining through slowed the
-12 m wall at 8 + 4 (12 UAVs, width 8). Past it still, where the fleet has :data:`CHAIN_THROUGH_BRICKS_PER_SPRAYER`
-brick UAVs or more per sprayer: the few sprayers are then the role the wall waits on, and a sprayer sent elsewhere
-unchained costs it more than the brick UAV it queues behind (12 m wall, 8 + 2, seeds 1-3: 1,601 -> 1,225 s,
-against 4 + 2's 1,171 s; docs/performance/fleet.md). Used by mission control for the reactive policies under ``site`` with no
-adhesive's open times (a plan with deadlines keeps the glue dispatcher, which holds segments back on purpose);
-``--policy schedule`` has its own ``chain`` rule.
+Only while the fleet's core (:func:`masonry.mission.fleet.core_counts`) has no more UAVs than the wall has sites to
+work at once (the admission rule's width at r_c, so only under the columns): past it the UAVs queue at the sites
+already, and chaining through slowed the 12 m wall at 8 + 4 (12 UAVs, width 8). Used by mission control for the
+reactive policies under ``site`` with no adhesive's open times (a plan with deadlines keeps the glue dispatcher,
+which holds segments back on purpose); ``--policy schedule`` has its own ``chain`` rule.
+
+**Spares past the core** (issue 27, 2026-12-06, branch ``grid38``; docs/dispatch.md, "Spares past the 2 : 1
+core"). A UAV on its pad is not given a task while its role has as many UAVs busy as the fleet's core has of it
+(two brick UAVs per sprayer, one sprayer per two brick UAVs): the 12 m wall's 8 + 2 flies as its 4 + 2 with four
+spares on their pads, which take off only when a UAV of the core, sent home for a fresh pack with no task
+(:mod:`masonry.mission.swap_stagger`), frees its place. The width rules here count the core, not the fleet. The
+12 m wall at 5 + 2 to 8 + 2 and 4 + 3 / 4 + 4 was slower than at 4 + 2 (the extra UAVs in the core's way, on
+both seeds flown); a fleet and its core fly the same mission up to the first swap.
 
 **Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
 and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available
@@ -41,23 +46,20 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from masonry.blueprint import UavSpec
+from masonry.mission.fleet import core_counts
 from masonry.planner.dispatch import Dispatcher
 from masonry.planner.dispatch_values import RUNNING
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
-__all__ = ["APART_BRICK_REACH_M", "CHAIN_THROUGH_BRICKS_PER_SPRAYER", "ChainThrough", "mission_dispatcher"]
+__all__ = ["APART_BRICK_REACH_M", "ChainThrough", "mission_dispatcher"]
 
 #: Past the width, a brick UAV's brick away from the other brick UAVs is one within this (m, |dx| + |dy|) of the
 #: brick the dispatcher would give it: a farther one sends it across the wall, through the other UAVs' legs (12 m
 #: wall, 8 + 4, seed 3, no reach: the brick UAVs' airspace waits 1,830 -> 3,655 task-seconds, every sprayer home for
 #: a pack, 1,030 -> 1,299 s; 3 m: 944 s). Measured at 3 and 5 m (docs/performance/fleet.md).
 APART_BRICK_REACH_M = 3.0
-#: Past the width, a sprayer still chains through while the fleet has at least this many brick UAVs per sprayer
-#: (12 m wall: 8 + 2 and 7 + 2 do, the default fleets' 2 per sprayer do not; 8 + 3 measured -1.9 % in the mean of
-#: seeds 1-3 with one seed +13 %, left out).
-CHAIN_THROUGH_BRICKS_PER_SPRAYER = 3
 
 
 class ChainThrough(Dispatcher):
@@ -68,15 +70,31 @@ class ChainThrough(Dispatcher):
         i = self._chained_through(role, uav)
         return super()._select(role, uav) if i is None else i
 
-    def _past_width(self) -> bool:
-        """The fleet has more UAVs than the wall has sites to work at once (False without the admission rule)."""
-        rule = self.admission
-        return rule is not None and sum(self._live_count.values()) > rule.width
-
-    def _few_sprayers(self) -> bool:
-        """The fleet has :data:`CHAIN_THROUGH_BRICKS_PER_SPRAYER` brick UAVs or more per live sprayer."""
+    def _core(self, role: str) -> int:
+        """How many UAVs of ``role`` the live fleet's core has (:func:`masonry.mission.fleet.core_counts`)."""
         live = self._live_count
-        return live["brick"] >= CHAIN_THROUGH_BRICKS_PER_SPRAYER * live["adhesion"]
+        bricks, sprayers = core_counts(live["brick"], live["adhesion"])
+        return bricks if role == "brick" else sprayers
+
+    def _admitted(self, uav: str, role: str, i: int) -> int | None:
+        """None for a spare (:meth:`_spare`), else the admission rule's answer."""
+        return None if self._spare(uav, role) else super()._admitted(uav, role, i)
+
+    def _spare(self, uav: str, role: str) -> bool:
+        """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy."""
+        rule = self.admission
+        if rule is None or not rule.landed(uav):
+            return False
+        core = self._core(role)
+        if core >= self._live_count[role]:
+            return False
+        return sum(1 for j in self._uav_task.values() if self._role[j] == role) >= core
+
+    def _past_width(self) -> bool:
+        """The fleet's core has more UAVs than the wall has sites to work at once (False without the admission
+        rule)."""
+        rule = self.admission
+        return rule is not None and self._core("brick") + self._core("adhesion") > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
@@ -115,11 +133,10 @@ class ChainThrough(Dispatcher):
     def _chained_through(self, role: str, uav: str) -> int | None:
         """The segment starting where ``uav`` has just sprayed (it is still there), ready but blocked by a
         conflicting task in progress; None: none (the policy's pick, which chains an available one itself), or
-        the fleet has more UAVs than the wall has sites to work at once (the admission rule's width: only
+        the fleet's core has more UAVs than the wall has sites to work at once (the admission rule's width: only
         under the columns), where the UAVs queue at the sites already and one more queue-jumper costs more
-        than the chain saves (12 m wall, 8 + 4: +59 s in the mean of seeds 1-3), unless the sprayers are few
-        (:meth:`_few_sprayers`)."""
-        if role != "adhesion" or self.admission is None or (self._past_width() and not self._few_sprayers()):
+        than the chain saves (12 m wall, 8 + 4: +59 s in the mean of seeds 1-3)."""
+        if role != "adhesion" or self.admission is None or self._past_width():
             return None
         if self._live_count["brick"] < 2:
             return None  # the one brick UAV is the whole of its role: its wait at the wall is the wall's

@@ -25,6 +25,22 @@ def with_fleet(blueprint: Blueprint, fleet: tuple[UavSpec, ...]) -> Blueprint:
     return out
 
 
+#: A fleet's *core*: at most this many brick UAVs per sprayer, and one sprayer per this many brick UAVs (rounded
+#: up), the ratio of the default fleets (4 + 2, 6 + 3, 8 + 4). The UAVs of a role past its core are *spares*: laid
+#: on pads past the core's, kept on them by the dispatcher until a UAV of the core goes home for its battery
+#: (docs/dispatch.md, "Spares past the 2 : 1 core"; the 12 m wall at 6 + 2, 8 + 2, 4 + 4 was slower than 4 + 2).
+BRICK_UAVS_PER_SPRAYER = 2
+
+
+def core_counts(brick_uavs: int, adhesion_uavs: int) -> tuple[int, int]:
+    """The (brick, adhesion) UAVs of a fleet's core (:data:`BRICK_UAVS_PER_SPRAYER`); a fleet with no UAV of a
+    role is all core."""
+    if brick_uavs < 1 or adhesion_uavs < 1:
+        return brick_uavs, adhesion_uavs
+    per = BRICK_UAVS_PER_SPRAYER
+    return min(brick_uavs, per * adhesion_uavs), min(adhesion_uavs, -(-brick_uavs // per))
+
+
 def fleet_for(
     blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None
 ) -> tuple[UavSpec, ...]:
@@ -32,22 +48,40 @@ def fleet_for(
 
     UAVs the blueprint names are kept (first ones of their role); extra ones are named ``brick-N`` /
     ``glue-N`` and parked in a row next to the last home of their role, ``2 * clearance`` apart, so
-    that homes never violate the clearance.
+    that homes never violate the clearance. With both sizes given, the fleet's core (:func:`core_counts`) is laid
+    first, as that fleet alone, and its spares after it, each past the last pad of its role and clear of every
+    core pad: adding spares moves no pad of the core (the 12 m wall's 8 + 2 keeps 4 + 2's pads).
     """
+    if brick_uavs is None or adhesion_uavs is None or brick_uavs < 0 or adhesion_uavs < 0:
+        return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, ())
+    core_b, core_a = core_counts(brick_uavs, adhesion_uavs)
+    core = _laid(blueprint, {"brick": core_b, "adhesion": core_a}, ())
+    if (core_b, core_a) == (brick_uavs, adhesion_uavs):
+        return core
+    return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, core)
+
+
+def _laid(
+    blueprint: Blueprint, counts: dict[str, int | None], core: tuple[UavSpec, ...]
+) -> tuple[UavSpec, ...]:
+    """:func:`fleet_for`'s rows: the blueprint's UAVs, then ``core``'s added ones, then new ones past both."""
     out: list[UavSpec] = []
-    taken = {u.name for u in blueprint.fleet}
+    own = {u.name for u in blueprint.fleet}
+    taken = own | {u.name for u in core}
     spacing = max(2.0, 2.0 * blueprint.clearance_m)
-    for role, count, prefix in (("brick", brick_uavs, "brick"), ("adhesion", adhesion_uavs, "glue")):
+    for role, prefix in (("brick", "brick"), ("adhesion", "glue")):
+        count = counts[role]
         existing = list(blueprint.uavs(role))  # type: ignore[arg-type]
         if count is None:
             out.extend(existing)
             continue
         if count < 0:
             raise InputError(f"`{role}_uavs` must be >= 0, got {count}", options=(f"{role}_uavs",))
-        kept = existing[:count]
+        added = [u for u in core if u.role == role and u.name not in own]
+        kept = existing[:count] + added[: max(0, count - len(existing))]
         out.extend(kept)
         if len(kept) < count:
-            homes = [u.home_m for u in blueprint.fleet] + [u.home_m for u in out]
+            homes = [u.home_m for u in blueprint.fleet] + [u.home_m for u in core] + [u.home_m for u in out]
             if kept:
                 base = kept[-1].home_m
             else:
@@ -79,4 +113,4 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["fleet_for", "with_fleet"]
+__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "fleet_for", "with_fleet"]

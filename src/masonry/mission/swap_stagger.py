@@ -31,6 +31,12 @@ rule keeps its role to one busy UAV (:meth:`~masonry.planner.dispatch.Dispatcher
 sprayers from 4 + 2 up): held, its task stopped every site visit for the swap; the spare takes it ("The pyramid
 past 2 + 1").
 
+A role with spares past the fleet's core (:func:`masonry.mission.fleet.core_counts`: the 12 m wall's 8 + 2 has four
+brick UAVs past its 4 + 2) has them on its pads by design (:mod:`masonry.mission.dispatch_chain`, "Spares past the
+core"), not because the wall cannot use more: there a spare waiting does not keep a low UAV at work. It is sent as
+in a role without one, and the spare takes its place (with the spare rule, the handlers held the core's tasks for
+their swaps while the spares sat: 12 m wall 8 + 2 seed 1, 1,183 s against 4 + 2's 1,157 s; without it 1,127 s).
+
 Nothing here relaxes the battery reserve: a UAV given a task its battery does not cover still has it held for a
 swap by its handler (docs/state-machines.md, "Battery budget"). Pure bookkeeping over mission control's state:
 no I/O, no clock.
@@ -41,13 +47,14 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from masonry.battery_drain import flight_left_s
+from masonry.mission.fleet import core_counts
 from masonry.planner.bounds import estimate_durations_s
 from masonry.timing import DEFAULT_TIMING
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["RESERVE", "SWAP_EARLY", "SWAP_SHARE", "SwapStagger", "swap_due"]
+__all__ = ["RESERVE", "SWAP_EARLY", "SWAP_SHARE", "SwapStagger", "past_core", "swap_due"]
 
 #: A UAV reporting less charge than this may be sent home for its swap early (above the handler's reserve).
 SWAP_EARLY = 0.5
@@ -118,10 +125,14 @@ def swap_due(mc: MissionControl, name: str) -> bool:
     if link.lost or not link.swaps_batteries or link.battery is None or link.battery >= SWAP_EARLY:
         return False
     role = [n for n, u in mc.uavs.items() if u.spec.role == link.spec.role and n != name and not u.lost]
-    # a spare on its pad takes the task, unless the admission rule keeps its role to this one busy UAV: then the
-    # handler's hold would stop the role's work for the whole swap (the pyramid's sprayer at 4 + 2 to 8 + 4)
-    alone = link.battery < RESERVE and mc.dispatcher.capped_alone(link.spec.role)
-    if link.battery < RESERVE and (alone or not any(book.spare(mc, n) for n in role)):
+    # a spare on its pad takes the task, unless the admission rule keeps its role to this one busy UAV (then the
+    # handler's hold would stop the role's work for the whole swap: the pyramid's sprayer at 4 + 2 to 8 + 4) or the
+    # role's spares wait past the fleet's core by design
+    if link.battery < RESERVE and (
+        mc.dispatcher.capped_alone(link.spec.role)
+        or past_core(mc, link.spec.role)
+        or not any(book.spare(mc, n) for n in role)
+    ):
         book.sent_s[name] = mc.now_s  # its handler would hold any task through the swap: it is given none
         return True
     if len(role) + 1 < SWAP_SHARE:
@@ -129,7 +140,17 @@ def swap_due(mc: MissionControl, name: str) -> bool:
     sent = sum(1 for n in role if book.is_sent(mc, n))
     if sent >= max(1, (len(role) + 1) // SWAP_SHARE) or sent >= len(role):
         return False  # enough of its role away for theirs, or none other there to work
-    if any(book.spare(mc, n) for n in role) or book.covers(mc, name):
+    if spare or book.covers(mc, name):
         return False
     book.sent_s[name] = mc.now_s
     return True
+
+
+def past_core(mc: MissionControl, role: str) -> bool:
+    """``role`` has more UAVs in the mission than the fleet's core has of it (:func:`core_counts`)."""
+    live = {"brick": 0, "adhesion": 0}
+    for u in mc.uavs.values():
+        if not u.lost:
+            live[u.spec.role] += 1
+    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
+    return live[role] > (bricks if role == "brick" else sprayers)

@@ -1,0 +1,64 @@
+"""A fleet's core (two brick UAVs per sprayer) and its spares' pads (masonry.mission.fleet, issue 27 §4): adding
+spares moves no pad of the core, and every pad keeps its spacing."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from masonry.blueprint_gen import running_bond
+from masonry.mission.fleet import core_counts, fleet_for
+
+
+@pytest.mark.parametrize(
+    ("fleet", "core"),
+    [
+        ((1, 1), (1, 1)),
+        ((2, 1), (2, 1)),
+        ((4, 2), (4, 2)),
+        ((6, 3), (6, 3)),
+        ((8, 4), (8, 4)),
+        ((8, 2), (4, 2)),
+        ((5, 2), (4, 2)),
+        ((3, 1), (2, 1)),
+        ((4, 4), (4, 2)),
+        ((5, 4), (5, 3)),
+        ((1, 3), (1, 1)),
+        ((3, 0), (3, 0)),
+        ((0, 2), (0, 2)),
+    ],
+)
+def test_the_core_is_two_brick_uavs_per_sprayer(fleet: tuple[int, int], core: tuple[int, int]) -> None:
+    assert core_counts(*fleet) == core
+    assert core_counts(*core) == core  # a core is its own core
+
+
+@pytest.mark.parametrize("fleet", [(8, 2), (5, 2), (4, 4), (8, 3), (3, 1)])
+def test_spares_move_no_pad_of_the_core_and_keep_the_spacing(fleet: tuple[int, int]) -> None:
+    bp = running_bond(3, 40, placed_courses=1)
+    whole = {u.name: u.home_m for u in fleet_for(bp, *fleet)}
+    core = {u.name: u.home_m for u in fleet_for(bp, *core_counts(*fleet))}
+    assert len(whole) == sum(fleet)
+    assert all(whole[name] == home for name, home in core.items())
+    spacing = max(2.0, 2.0 * bp.clearance_m)
+    own = {
+        u.name for u in bp.fleet
+    }  # (the blueprint's own pads may stand closer: its validation says how close)
+    for name, home in whole.items():
+        if name not in own:
+            others = [h for n, h in whole.items() if n != name]
+            assert all(math.dist(home[:2], h[:2]) >= spacing * 0.99 for h in others), name
+
+
+def test_a_fleet_that_is_its_own_core_keeps_its_pads() -> None:
+    bp = running_bond(3, 40, placed_courses=1)
+    pads = {u.name: round(u.home_m[0], 1) for u in fleet_for(bp, 4, 2)}
+    assert pads == {
+        "brick-1": -1.0,
+        "brick-2": 5.0,
+        "brick-3": 8.0,
+        "brick-4": 11.0,
+        "glue-1": 1.0,
+        "glue-2": 16.0,
+    }
