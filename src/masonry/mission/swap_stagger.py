@@ -125,14 +125,11 @@ def swap_due(mc: MissionControl, name: str) -> bool:
     if link.lost or not link.swaps_batteries or link.battery is None or link.battery >= SWAP_EARLY:
         return False
     role = [n for n, u in mc.uavs.items() if u.spec.role == link.spec.role and n != name and not u.lost]
-    # a spare on its pad takes the task, unless the admission rule keeps its role to this one busy UAV (then the
-    # handler's hold would stop the role's work for the whole swap: the pyramid's sprayer at 4 + 2 to 8 + 4) or the
-    # role's spares wait past the fleet's core by design
-    if link.battery < RESERVE and (
-        mc.dispatcher.capped_alone(link.spec.role)
-        or past_core(mc, link.spec.role)
-        or not any(book.spare(mc, n) for n in role)
-    ):
+    # a spare on its pad takes the task (not one past the fleet's core: it waits there by design), unless the
+    # admission rule keeps its role to this one busy UAV: then the handler's hold would stop the role's work for the
+    # whole swap (the pyramid's sprayer at 4 + 2 to 8 + 4)
+    spare = not past_core(mc, link.spec.role) and any(book.spare(mc, n) for n in role)
+    if link.battery < RESERVE and (not spare or mc.dispatcher.capped_alone(link.spec.role)):
         book.sent_s[name] = mc.now_s  # its handler would hold any task through the swap: it is given none
         return True
     if len(role) + 1 < SWAP_SHARE:
