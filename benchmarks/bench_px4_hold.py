@@ -3,12 +3,16 @@
 masonry's adapter takes off on ``../shared/px4/run.sh`` (SIH quadrotor), then a PI position loop (``--kp``,
 ``--ki``, as the ``px4`` tuning's) sends velocity setpoints for ``--hold`` seconds: with ``--loop autopilot`` PX4's
 velocity loop flies them (it closes on EKF2's velocity), with ``--loop own`` the adapter turns them into
-acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position). Prints per run the
-reported position's rms error about the point, the share of 1.5 s windows whose mean lies within the brick
-alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor timed out (SIH runs in real time:
-on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON summary.
+acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position; ``--kv`` and
+``--observer`` its gains), with ``--loop position`` PX4's own position controller holds the point (position
+setpoints). Prints per run the reported position's rms error about the point, its swing about its own mean point
+per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
+the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
+whose mean lies within the brick alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor
+timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON
+summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
 
-    python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 30
+    python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 40
 """
 
 from __future__ import annotations
@@ -88,14 +92,27 @@ def period_s(v: np.ndarray, dt_s: float) -> float:
 
 
 def hold(
-    url: str, *, loop: str, hold_s: float, kp: float, ki: float, kv: float, delay_s: float
+    url: str,
+    *,
+    loop: str,
+    hold_s: float,
+    kp: float,
+    ki: float,
+    kv: float,
+    observer: tuple[float, float],
 ) -> dict[str, float]:
     """One flight: take off to 1.2 m, hold the point reached for ``hold_s`` (the first 8 s not counted)."""
     fc = MavlinkFlightController(url, estimate_timeout_s=120.0, ground_m=(0.0, 0.0, 0.0))
     fc.own_velocity_loop = loop == "own"
     fc.connect()
     if fc.velocity_loop is not None:
-        fc.velocity_loop = VelocityLoop(VelocityLoopGains(kv_per_s=kv, delay_s=delay_s))
+        fc.velocity_loop = VelocityLoop(
+            VelocityLoopGains(
+                kv_per_s=kv,
+                observer_position_rate_per_s=observer[0],
+                observer_velocity_rate_per_s2=observer[1],
+            )
+        )
     truth = watch_the_truth(fc)
     try:
         for attempt in range(20):  # PX4 refuses to arm for a few seconds after boot (its checks settle)
@@ -165,8 +182,14 @@ def main() -> None:
     ap.add_argument("--kp", type=float, default=1.5)
     ap.add_argument("--ki", type=float, default=0.5)
     ap.add_argument("--kv", type=float, default=VelocityLoopGains().kv_per_s, help="own loop's kv (1/s)")
+    g = VelocityLoopGains()
     ap.add_argument(
-        "--delay", type=float, default=VelocityLoopGains().delay_s, help="own loop's Smith delay (s)"
+        "--observer",
+        type=float,
+        nargs=2,
+        metavar=("POS_PER_S", "VEL_PER_S2"),
+        default=(g.observer_position_rate_per_s, g.observer_velocity_rate_per_s2),
+        help="the own loop's observer rates",
     )
     ap.add_argument("--instance", type=int, default=6, help="PX4 instance (offboard link on 14540 + N)")
     args = ap.parse_args()
@@ -184,14 +207,14 @@ def main() -> None:
                         kp=args.kp,
                         ki=args.ki,
                         kv=args.kv,
-                        delay_s=args.delay,
+                        observer=tuple(args.observer),
                     ),
                 }
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
             log = (Path(tmp) / "px4.log").read_text(errors="replace")
             row["sensor_timeouts"] = log.count("fail:  TIMEOUT")
         rows.append(row)
-        print(f"run {run} ({args.loop} loop, kp {args.kp}, ki {args.ki}, kv {args.kv}, delay {args.delay}): rms error {row['rms_error_m']} m, "
+        print(f"run {run} ({args.loop} loop, kp {args.kp}, ki {args.ki}, kv {args.kv}, observer {args.observer}): rms error {row['rms_error_m']} m, "
               f"swing x/y {row['swing_x_m']}/{row['swing_y_m']} m (truth {row['truth_swing_x_m']}/{row['truth_swing_y_m']}, "
               f"estimate off it {row['estimate_off_truth_m']}), period {row['period_s']} s, "
               f"1.5 s means within 1.5 cm {row['windows_within_15mm']:.0%}, within 2.8 cm "
@@ -204,7 +227,7 @@ def main() -> None:
                 "kp": args.kp,
                 "ki": args.ki,
                 "kv": args.kv,
-                "delay_s": args.delay,
+                "observer": args.observer,
                 "runs": rows,
             }
         )

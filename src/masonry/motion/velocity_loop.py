@@ -14,7 +14,6 @@ acceleration of a velocity setpoint (all in one frame, the autopilot's NED in pr
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass
 
@@ -38,9 +37,6 @@ class VelocityLoopGains:
         accel_limit_z_mps2: the largest vertical acceleration commanded (either way).
         observer_position_rate_per_s: how fast the observer's position follows the reported one (1/s).
         observer_velocity_rate_per_s2: how fast the observer's velocity absorbs the position's residual (1/s^2).
-        delay_s: the autopilot's dead time from an acceleration setpoint to the position it reports (s); over 0, a
-            Smith predictor: the observer is driven by the acceleration commanded that long ago, and the loop
-            closes on the velocity that the accelerations commanded since will add (0: neither, as before).
     """
 
     kv_per_s: float = 4.0
@@ -52,11 +48,8 @@ class VelocityLoopGains:
     accel_limit_z_mps2: float = 2.0
     observer_position_rate_per_s: float = 15.0
     observer_velocity_rate_per_s2: float = 135.0
-    delay_s: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.delay_s) and 0.0 <= self.delay_s <= 1.0):
-            raise InputError(f"velocity loop delay_s must be within 0-1 s, got {self.delay_s!r}")
         for name in (
             "kv_per_s",
             "kv_z_per_s",
@@ -86,9 +79,6 @@ class VelocityLoop:
             None  # the velocity setpoint last asked (None: not flying on this loop)
         )
         self._i: list[float] = [0.0, 0.0, 0.0]  # the integral's acceleration
-        # with a delay: the observer's inputs as commanded, stamped with the last position's time (oldest first)
-        self._sent_s: list[float] = []
-        self._sent: list[tuple[float, float, float]] = []
 
     @property
     def ready(self) -> bool:
@@ -116,7 +106,6 @@ class VelocityLoop:
         self._a = [0.0, 0.0, 0.0]
         self._v_sp = None
         self._i = [0.0, 0.0, 0.0]
-        self._sent_s, self._sent = [], []
 
     def observe(self, t_s: float, position_m: Vec3) -> None:
         """A reported position, stamped ``t_s`` on the autopilot's clock (repeats and older stamps are ignored)."""
@@ -138,10 +127,9 @@ class VelocityLoop:
             for i, ki in enumerate((g.ki_per_s2, g.ki_per_s2, g.ki_z_per_s2)):
                 step = self._i[i] + ki * (self._v_sp[i] - self._v[i]) * dt
                 self._i[i] = max(-g.integral_limit_mps2, min(g.integral_limit_mps2, step))
-        a_in = self._a if g.delay_s <= 0.0 else self._sent_at(self._t_s - 0.5 * dt - g.delay_s)
         for i in range(3):
-            x_pred = self._x[i] + self._v[i] * dt + 0.5 * a_in[i] * dt * dt
-            v_pred = self._v[i] + a_in[i] * dt
+            x_pred = self._x[i] + self._v[i] * dt + 0.5 * self._a[i] * dt * dt
+            v_pred = self._v[i] + self._a[i] * dt
             r = p[i] - x_pred
             self._x[i] = x_pred + alpha * r
             self._v[i] = v_pred + beta * r / dt
@@ -150,46 +138,13 @@ class VelocityLoop:
         """The acceleration (m/s^2) that drives the observed velocity to ``velocity_mps``, within the limits."""
         g = self.gains
         self._v_sp = [float(c) for c in velocity_mps]
-        v = self._v if g.delay_s <= 0.0 else [c + d for c, d in zip(self._v, self._pending(), strict=True)]
-        ax = g.kv_per_s * (self._v_sp[0] - v[0]) + self._i[0]
-        ay = g.kv_per_s * (self._v_sp[1] - v[1]) + self._i[1]
-        az = g.kv_z_per_s * (self._v_sp[2] - v[2]) + self._i[2]
+        ax = g.kv_per_s * (self._v_sp[0] - self._v[0]) + self._i[0]
+        ay = g.kv_per_s * (self._v_sp[1] - self._v[1]) + self._i[1]
+        az = g.kv_z_per_s * (self._v_sp[2] - self._v[2]) + self._i[2]
         norm = math.hypot(ax, ay)
         if norm > g.accel_limit_mps2:
             ax, ay = ax * g.accel_limit_mps2 / norm, ay * g.accel_limit_mps2 / norm
         az = max(-g.accel_limit_z_mps2, min(g.accel_limit_z_mps2, az))
         # the observer's input: what the vehicle should realise, the integral being the autopilot's offset from it
         self._a = [ax - self._i[0], ay - self._i[1], az - self._i[2]]
-        if g.delay_s > 0.0 and self._t_s is not None:
-            self._remember(self._t_s, (self._a[0], self._a[1], self._a[2]))
         return (ax, ay, az)
-
-    def _remember(self, t_s: float, a: Vec3) -> None:
-        """Keep the input commanded at ``t_s`` (one per stamp: the latest wins), forgetting what is past the delay."""
-        if self._sent_s and self._sent_s[-1] >= t_s:
-            self._sent[-1] = a
-        else:
-            self._sent_s.append(t_s)
-            self._sent.append(a)
-        keep = bisect.bisect_right(self._sent_s, t_s - self.gains.delay_s - 0.5) - 1
-        if keep > 0:
-            del self._sent_s[:keep], self._sent[:keep]
-
-    def _sent_at(self, t_s: float) -> Vec3:
-        """The input in effect at ``t_s`` (the last commanded at or before it; none: zero)."""
-        k = bisect.bisect_right(self._sent_s, t_s) - 1
-        return self._sent[k] if k >= 0 else (0.0, 0.0, 0.0)
-
-    def _pending(self) -> Vec3:
-        """The velocity the inputs commanded within the last ``delay_s`` will add once they show (m/s)."""
-        if self._t_s is None or not self._sent_s:
-            return (0.0, 0.0, 0.0)
-        start, end = self._t_s - self.gains.delay_s, self._t_s
-        out = [0.0, 0.0, 0.0]
-        for k, t_k in enumerate(self._sent_s):
-            t_next = self._sent_s[k + 1] if k + 1 < len(self._sent_s) else end
-            span = min(t_next, end) - max(t_k, start)
-            if span > 0.0:
-                for i in range(3):
-                    out[i] += self._sent[k][i] * span
-        return (out[0], out[1], out[2])
