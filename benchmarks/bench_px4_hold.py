@@ -100,9 +100,16 @@ def hold(
     ki: float,
     kv: float,
     observer: tuple[float, float],
+    rates_hz: tuple[float, float] = (20.0, 30.0),
 ) -> dict[str, float]:
     """One flight: take off to 1.2 m, hold the point reached for ``hold_s`` (the first 8 s not counted)."""
-    fc = MavlinkFlightController(url, estimate_timeout_s=120.0, ground_m=(0.0, 0.0, 0.0))
+    fc = MavlinkFlightController(
+        url,
+        estimate_timeout_s=120.0,
+        ground_m=(0.0, 0.0, 0.0),
+        setpoint_rate_hz=rates_hz[0],
+        telemetry_rate_hz=rates_hz[1],
+    )
     fc.own_velocity_loop = loop == "own"
     fc.connect()
     if fc.velocity_loop is not None:
@@ -191,6 +198,8 @@ def main() -> None:
         default=(g.observer_position_rate_per_s, g.observer_velocity_rate_per_s2),
         help="the own loop's observer rates",
     )
+    ap.add_argument("--setpoint-hz", type=float, default=20.0, help="the adapter's setpoint stream (Hz)")
+    ap.add_argument("--telemetry-hz", type=float, default=30.0, help="LOCAL_POSITION_NED asked at (Hz)")
     ap.add_argument("--instance", type=int, default=6, help="PX4 instance (offboard link on 14540 + N)")
     args = ap.parse_args()
     os.environ[ENV] = str(args.run_sh.resolve())
@@ -208,6 +217,7 @@ def main() -> None:
                         ki=args.ki,
                         kv=args.kv,
                         observer=tuple(args.observer),
+                        rates_hz=(args.setpoint_hz, args.telemetry_hz),
                     ),
                 }
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
