@@ -4,7 +4,8 @@ masonry's adapter takes off on ``../shared/px4/run.sh`` (SIH quadrotor), then a 
 ``--ki``, as the ``px4`` tuning's) sends velocity setpoints for ``--hold`` seconds: with ``--loop autopilot`` PX4's
 velocity loop flies them (it closes on EKF2's velocity), with ``--loop own`` the adapter turns them into
 acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position; ``--kv`` and
-``--observer`` its gains), with ``--loop position`` PX4's own position controller holds the point (position
+``--observer`` its gains, ``--observer-input tilt`` its observer driven by the acceleration PX4's attitude gives
+rather than the commanded one), with ``--loop position`` PX4's own position controller holds the point (position
 setpoints). Prints per run the reported position's rms error about the point, its swing about its own mean point
 per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
 the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
@@ -80,6 +81,42 @@ def watch_the_truth(fc: MavlinkFlightController) -> list[float]:
     return latest
 
 
+def observe_on_tilt(fc: MavlinkFlightController, *, drive: bool) -> list[tuple[float, float, float, float]]:
+    """Beside each position the own loop observes, the horizontal acceleration PX4's attitude gives (NED, m/s^2:
+    the thrust tilted, its vertical part holding the weight) and the one the loop commanded; with ``drive`` the
+    loop's observer is driven by the tilt's instead of the command's. Returns the list it fills (commanded north,
+    east, tilt's north, east)."""
+    loop = fc.velocity_loop
+    pairs: list[tuple[float, float, float, float]] = []
+    if loop is None:
+        return pairs
+    observe = loop.observe
+
+    def on_tilt(t_s: float, position_m: tuple[float, float, float]) -> None:
+        roll, pitch, yaw = fc._state.attitude
+        g = 9.81
+        a_n = -g * (math.cos(yaw) * math.tan(pitch) + math.sin(yaw) * math.tan(roll) / math.cos(pitch))
+        a_e = -g * (math.sin(yaw) * math.tan(pitch) - math.cos(yaw) * math.tan(roll) / math.cos(pitch))
+        pairs.append((loop._a[0], loop._a[1], a_n, a_e))
+        if drive:
+            loop._a[0], loop._a[1] = a_n, a_e
+        observe(t_s, position_m)
+
+    loop.observe = on_tilt  # type: ignore[method-assign]
+    return pairs
+
+
+def tilt_lag_s(pairs: list[tuple[float, float, float, float]], dt_s: float) -> tuple[float, float]:
+    """How long after the command the tilt's acceleration follows it best (s), and that correlation (both axes)."""
+    a = np.array(pairs[len(pairs) // 4 :])
+    best = (0.0, -1.0)
+    for k in range(16):
+        c = [np.corrcoef(a[: len(a) - k, i], a[k:, i + 2])[0, 1] for i in (0, 1)]
+        if float(np.mean(c)) > best[1]:
+            best = (round(k * dt_s, 2), round(float(np.mean(c)), 2))
+    return best
+
+
 def period_s(v: np.ndarray, dt_s: float) -> float:
     """The swing's period: twice the lag of the velocity's autocorrelation's first minimum (nan: none)."""
     v = v - v.mean()
@@ -101,6 +138,7 @@ def hold(
     kv: float,
     observer: tuple[float, float],
     rates_hz: tuple[float, float] = (20.0, 30.0),
+    observer_input: str = "command",
 ) -> dict[str, float]:
     """One flight: take off to 1.2 m, hold the point reached for ``hold_s`` (the first 8 s not counted)."""
     fc = MavlinkFlightController(
@@ -121,6 +159,7 @@ def hold(
             )
         )
     truth = watch_the_truth(fc)
+    pairs = observe_on_tilt(fc, drive=observer_input == "tilt")
     try:
         for attempt in range(20):  # PX4 refuses to arm for a few seconds after boot (its checks settle)
             try:
@@ -173,6 +212,7 @@ def hold(
         "truth_swing_x_m": round(float(np.sqrt((true_dev[:, 0] ** 2).mean())), 4),
         "truth_swing_y_m": round(float(np.sqrt((true_dev[:, 1] ** 2).mean())), 4),
         "estimate_off_truth_m": round(float(np.sqrt((estimate_off**2).sum(axis=1).mean())), 4),
+        "tilt_lag_s": tilt_lag_s(pairs, 1.0 / rates_hz[1])[0] if len(pairs) > 40 else math.nan,
         "period_s": period_s(np.diff(a[:, 1]) / np.maximum(np.diff(a[:, 0]), 1e-3), 0.05),
         "windows_within_15mm": round(float((windows < 0.015).mean()), 2),
         "windows_within_28mm": round(float((windows < 0.028).mean()), 2),
@@ -200,6 +240,12 @@ def main() -> None:
     )
     ap.add_argument("--setpoint-hz", type=float, default=20.0, help="the adapter's setpoint stream (Hz)")
     ap.add_argument("--telemetry-hz", type=float, default=30.0, help="LOCAL_POSITION_NED asked at (Hz)")
+    ap.add_argument(
+        "--observer-input",
+        choices=("command", "tilt"),
+        default="command",
+        help="what drives the own loop's observer: the acceleration commanded (masonry's) or PX4's attitude's",
+    )
     ap.add_argument("--instance", type=int, default=6, help="PX4 instance (offboard link on 14540 + N)")
     args = ap.parse_args()
     os.environ[ENV] = str(args.run_sh.resolve())
@@ -218,6 +264,7 @@ def main() -> None:
                         kv=args.kv,
                         observer=tuple(args.observer),
                         rates_hz=(args.setpoint_hz, args.telemetry_hz),
+                        observer_input=args.observer_input,
                     ),
                 }
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
@@ -227,6 +274,7 @@ def main() -> None:
         print(f"run {run} ({args.loop} loop, kp {args.kp}, ki {args.ki}, kv {args.kv}, observer {args.observer}): rms error {row['rms_error_m']} m, "
               f"swing x/y {row['swing_x_m']}/{row['swing_y_m']} m (truth {row['truth_swing_x_m']}/{row['truth_swing_y_m']}, "
               f"estimate off it {row['estimate_off_truth_m']}), period {row['period_s']} s, "
+              f"tilt follows the command {row['tilt_lag_s']} s later, "
               f"1.5 s means within 1.5 cm {row['windows_within_15mm']:.0%}, within 2.8 cm "
               f"{row['windows_within_28mm']:.0%}, speed {row['speed_rms_mps']} m/s rms "
               f"(load {os.getloadavg()[0]:.1f}; PX4 sensor timeouts {row['sensor_timeouts']})")  # fmt: skip
@@ -238,6 +286,7 @@ def main() -> None:
                 "ki": args.ki,
                 "kv": args.kv,
                 "observer": args.observer,
+                "observer_input": args.observer_input,
                 "runs": rows,
             }
         )
