@@ -3,12 +3,17 @@
 masonry's adapter takes off on ``../shared/px4/run.sh`` (SIH quadrotor), then a PI position loop (``--kp``,
 ``--ki``, as the ``px4`` tuning's) sends velocity setpoints for ``--hold`` seconds: with ``--loop autopilot`` PX4's
 velocity loop flies them (it closes on EKF2's velocity), with ``--loop own`` the adapter turns them into
-acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position). Prints per run the
-reported position's rms error about the point, the share of 1.5 s windows whose mean lies within the brick
-alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor timed out (SIH runs in real time:
-on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON summary.
+acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position; ``--kv`` and
+``--observer`` its gains, ``--observer-input tilt`` its observer driven by the acceleration PX4's attitude gives
+rather than the commanded one), with ``--loop position`` PX4's own position controller holds the point (position
+setpoints). Prints per run the reported position's rms error about the point, its swing about its own mean point
+per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
+the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
+whose mean lies within the brick alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor
+timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON
+summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
 
-    python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 30
+    python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 40
 """
 
 from __future__ import annotations
@@ -27,15 +32,134 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from masonry.adapters.mavlink import MavlinkFlightController
+from masonry.adapters.mavlink_protocol import MAV_CMD_SET_MESSAGE_INTERVAL, MAV_FRAME_LOCAL_NED
 from masonry.errors import CommandRejected
+from masonry.motion.velocity_loop import VelocityLoop, VelocityLoopGains
 from px4_sitl import ENV, px4
 
+# PX4's position controller holds the point (``--loop position``): position + yaw rate kept, the rest ignored
+TYPE_MASK_POSITION_YAW_RATE = 8 | 16 | 32 | 64 | 128 | 256 | 1024
 
-def hold(url: str, *, own: bool, hold_s: float, kp: float, ki: float) -> dict[str, float]:
+
+def hold_on_position(fc: MavlinkFlightController) -> None:
+    """From now on the adapter's stream sends PX4 the held point as a position setpoint (PX4's loops hold it)."""
+    with fc._lock:
+        target_ned = fc._state.position_ned or (0.0, 0.0, 0.0)
+        fc.velocity_loop_engaged = False
+    target_ned = (target_ned[0], target_ned[1], -1.2)
+
+    def send(v_ned: tuple[float, float, float], yaw_rate_ned: float) -> None:
+        with fc._send_lock:
+            fc._conn.mav.set_position_target_local_ned_send(
+                int(fc._monotonic() * 1000) & 0xFFFFFFFF, fc.target_system, fc.target_component,
+                MAV_FRAME_LOCAL_NED, TYPE_MASK_POSITION_YAW_RATE,
+                *target_ned, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, float(yaw_rate_ned),
+            )  # fmt: skip
+        fc.setpoints_sent += 1
+
+    fc._send_position_target = send  # type: ignore[method-assign]
+
+
+def watch_the_truth(fc: MavlinkFlightController) -> list[float]:
+    """SIH's ground truth (HIL_STATE_QUATERNION at 30 Hz), east and north of its first sample (m), kept current in
+    the list returned as the adapter reads its messages."""
+    latest = [0.0, 0.0]
+    origin: list[float] = []
+    handle = fc._handle
+
+    def watch(msg: object, now: float) -> None:
+        if msg.get_type() == "HIL_STATE_QUATERNION":  # type: ignore[attr-defined]
+            lat, lon = msg.lat * 1e-7, msg.lon * 1e-7  # type: ignore[attr-defined]
+            if not origin:
+                origin.extend((lat, lon))
+            latest[0] = (lon - origin[1]) * 111_319.5 * math.cos(math.radians(origin[0]))
+            latest[1] = (lat - origin[0]) * 111_319.5
+        handle(msg, now)
+
+    fc._handle = watch  # type: ignore[method-assign]
+    fc._send_command(MAV_CMD_SET_MESSAGE_INTERVAL, (115, 1e6 / 30, 0, 0, 0, 0, 0), 0)
+    return latest
+
+
+def observe_on_tilt(fc: MavlinkFlightController, *, drive: bool) -> list[tuple[float, float, float, float]]:
+    """Beside each position the own loop observes, the horizontal acceleration PX4's attitude gives (NED, m/s^2:
+    the thrust tilted, its vertical part holding the weight) and the one the loop commanded; with ``drive`` the
+    loop's observer is driven by the tilt's instead of the command's. Returns the list it fills (commanded north,
+    east, tilt's north, east)."""
+    loop = fc.velocity_loop
+    pairs: list[tuple[float, float, float, float]] = []
+    if loop is None:
+        return pairs
+    observe = loop.observe
+
+    def on_tilt(t_s: float, position_m: tuple[float, float, float]) -> None:
+        roll, pitch, yaw = fc._state.attitude
+        g = 9.81
+        a_n = -g * (math.cos(yaw) * math.tan(pitch) + math.sin(yaw) * math.tan(roll) / math.cos(pitch))
+        a_e = -g * (math.sin(yaw) * math.tan(pitch) - math.cos(yaw) * math.tan(roll) / math.cos(pitch))
+        pairs.append((loop._a[0], loop._a[1], a_n, a_e))
+        if drive:
+            loop._a[0], loop._a[1] = a_n, a_e
+        observe(t_s, position_m)
+
+    loop.observe = on_tilt  # type: ignore[method-assign]
+    return pairs
+
+
+def tilt_lag_s(pairs: list[tuple[float, float, float, float]], dt_s: float) -> tuple[float, float]:
+    """How long after the command the tilt's acceleration follows it best (s), and that correlation (both axes)."""
+    a = np.array(pairs[len(pairs) // 4 :])
+    best = (0.0, -1.0)
+    for k in range(16):
+        c = [np.corrcoef(a[: len(a) - k, i], a[k:, i + 2])[0, 1] for i in (0, 1)]
+        if float(np.mean(c)) > best[1]:
+            best = (round(k * dt_s, 2), round(float(np.mean(c)), 2))
+    return best
+
+
+def period_s(v: np.ndarray, dt_s: float) -> float:
+    """The swing's period: twice the lag of the velocity's autocorrelation's first minimum (nan: none)."""
+    v = v - v.mean()
+    ac = np.correlate(v, v, "full")[len(v) - 1 :]
+    ac = ac / ac[0]
+    for k in range(1, len(ac) - 1):
+        if ac[k] < 0.0 and ac[k] <= ac[k - 1] and ac[k] <= ac[k + 1]:
+            return round(2.0 * k * dt_s, 2)
+    return math.nan
+
+
+def hold(
+    url: str,
+    *,
+    loop: str,
+    hold_s: float,
+    kp: float,
+    ki: float,
+    kv: float,
+    observer: tuple[float, float],
+    rates_hz: tuple[float, float] = (20.0, 30.0),
+    observer_input: str = "command",
+) -> dict[str, float]:
     """One flight: take off to 1.2 m, hold the point reached for ``hold_s`` (the first 8 s not counted)."""
-    fc = MavlinkFlightController(url, estimate_timeout_s=120.0, ground_m=(0.0, 0.0, 0.0))
-    fc.own_velocity_loop = own
+    fc = MavlinkFlightController(
+        url,
+        estimate_timeout_s=120.0,
+        ground_m=(0.0, 0.0, 0.0),
+        setpoint_rate_hz=rates_hz[0],
+        telemetry_rate_hz=rates_hz[1],
+    )
+    fc.own_velocity_loop = loop == "own"
     fc.connect()
+    if fc.velocity_loop is not None:
+        fc.velocity_loop = VelocityLoop(
+            VelocityLoopGains(
+                kv_per_s=kv,
+                observer_position_rate_per_s=observer[0],
+                observer_velocity_rate_per_s2=observer[1],
+            )
+        )
+    truth = watch_the_truth(fc)
+    pairs = observe_on_tilt(fc, drive=observer_input == "tilt")
     try:
         for attempt in range(20):  # PX4 refuses to arm for a few seconds after boot (its checks settle)
             try:
@@ -50,6 +174,8 @@ def hold(url: str, *, own: bool, hold_s: float, kp: float, ki: float) -> dict[st
         while fc._takeoff_target_m is not None and time.monotonic() - t0 < 60.0:
             time.sleep(0.05)
         target = np.array(fc.telemetry().position_m[:2])
+        if loop == "position":
+            hold_on_position(fc)
         integral = np.zeros(2)
         rows = []
         start = last = time.monotonic()
@@ -63,16 +189,31 @@ def hold(url: str, *, own: bool, hold_s: float, kp: float, ki: float) -> dict[st
             integral = np.clip(integral + e * dt, -0.5, 0.5)
             v = np.clip(kp * e + ki * integral, -1.5, 1.5)
             fc.send_velocity((float(v[0]), float(v[1]), float(np.clip(1.5 * (1.2 - p[2]), -0.7, 0.7))), 0.0)
-            rows.append((now - start, p[0], p[1], *tel.velocity_mps[:2]))
+            rows.append((now - start, p[0], p[1], *tel.velocity_mps[:2], *truth))
         fc.land()
     finally:
         fc.close()
+    save = os.environ.get("BENCH_PX4_HOLD_SAVE")  # every tick (t, reported x, y, velocity x, y, truth x, y)
+    if save:
+        Path(save).mkdir(parents=True, exist_ok=True)
+        out = Path(save) / f"hold-{time.time():.0f}.json"
+        out.write_text(json.dumps([[round(float(c), 4) for c in r] for r in rows]))
     a = np.array([r for r in rows if r[0] > 8.0])
     err = a[:, 1:3] - target
     n = max(1, round(1.5 / 0.05))
     windows = np.array([np.hypot(*err[i : i + n].mean(axis=0)) for i in range(0, len(err) - n, 3)])
+    dev = err - err.mean(axis=0)  # the swing about its own mean point, per axis (x east, y north)
+    true_dev = a[:, 5:7] - a[:, 5:7].mean(axis=0)  # SIH's truth about its own mean point (x east, y north)
+    estimate_off = dev - true_dev
     return {
         "rms_error_m": round(math.sqrt(float((err**2).sum(axis=1).mean())), 4),
+        "swing_x_m": round(float(np.sqrt((dev[:, 0] ** 2).mean())), 4),
+        "swing_y_m": round(float(np.sqrt((dev[:, 1] ** 2).mean())), 4),
+        "truth_swing_x_m": round(float(np.sqrt((true_dev[:, 0] ** 2).mean())), 4),
+        "truth_swing_y_m": round(float(np.sqrt((true_dev[:, 1] ** 2).mean())), 4),
+        "estimate_off_truth_m": round(float(np.sqrt((estimate_off**2).sum(axis=1).mean())), 4),
+        "tilt_lag_s": tilt_lag_s(pairs, 1.0 / rates_hz[1])[0] if len(pairs) > 40 else math.nan,
+        "period_s": period_s(np.diff(a[:, 1]) / np.maximum(np.diff(a[:, 0]), 1e-3), 0.05),
         "windows_within_15mm": round(float((windows < 0.015).mean()), 2),
         "windows_within_28mm": round(float((windows < 0.028).mean()), 2),
         "speed_rms_mps": round(math.sqrt(float((a[:, 3:5] ** 2).sum(axis=1).mean())), 3),
@@ -82,11 +223,29 @@ def hold(url: str, *, own: bool, hold_s: float, kp: float, ki: float) -> dict[st
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--run-sh", type=Path, default=Path(__file__).resolve().parents[2] / "shared/px4/run.sh")
-    ap.add_argument("--loop", choices=("own", "autopilot"), default="own")
+    ap.add_argument("--loop", choices=("own", "autopilot", "position"), default="own")
     ap.add_argument("--runs", type=int, default=2)
     ap.add_argument("--hold", type=float, default=30.0, help="seconds of hold (the first 8 not counted)")
     ap.add_argument("--kp", type=float, default=1.5)
     ap.add_argument("--ki", type=float, default=0.5)
+    ap.add_argument("--kv", type=float, default=VelocityLoopGains().kv_per_s, help="own loop's kv (1/s)")
+    g = VelocityLoopGains()
+    ap.add_argument(
+        "--observer",
+        type=float,
+        nargs=2,
+        metavar=("POS_PER_S", "VEL_PER_S2"),
+        default=(g.observer_position_rate_per_s, g.observer_velocity_rate_per_s2),
+        help="the own loop's observer rates",
+    )
+    ap.add_argument("--setpoint-hz", type=float, default=20.0, help="the adapter's setpoint stream (Hz)")
+    ap.add_argument("--telemetry-hz", type=float, default=30.0, help="LOCAL_POSITION_NED asked at (Hz)")
+    ap.add_argument(
+        "--observer-input",
+        choices=("command", "tilt"),
+        default="command",
+        help="what drives the own loop's observer: the acceleration commanded (masonry's) or PX4's attitude's",
+    )
     ap.add_argument("--instance", type=int, default=6, help="PX4 instance (offboard link on 14540 + N)")
     args = ap.parse_args()
     os.environ[ENV] = str(args.run_sh.resolve())
@@ -96,17 +255,42 @@ def main() -> None:
             with px4(Path(tmp), args.instance) as url:
                 row = {
                     "run": run,
-                    **hold(url, own=args.loop == "own", hold_s=args.hold, kp=args.kp, ki=args.ki),
+                    **hold(
+                        url,
+                        loop=args.loop,
+                        hold_s=args.hold,
+                        kp=args.kp,
+                        ki=args.ki,
+                        kv=args.kv,
+                        observer=tuple(args.observer),
+                        rates_hz=(args.setpoint_hz, args.telemetry_hz),
+                        observer_input=args.observer_input,
+                    ),
                 }
             # SIH runs in real time: a machine too loaded for it starves PX4's sensors (its log says so)
             log = (Path(tmp) / "px4.log").read_text(errors="replace")
             row["sensor_timeouts"] = log.count("fail:  TIMEOUT")
         rows.append(row)
-        print(f"run {run} ({args.loop} velocity loop, kp {args.kp}, ki {args.ki}): rms error {row['rms_error_m']} m, "
+        print(f"run {run} ({args.loop} loop, kp {args.kp}, ki {args.ki}, kv {args.kv}, observer {args.observer}): rms error {row['rms_error_m']} m, "
+              f"swing x/y {row['swing_x_m']}/{row['swing_y_m']} m (truth {row['truth_swing_x_m']}/{row['truth_swing_y_m']}, "
+              f"estimate off it {row['estimate_off_truth_m']}), period {row['period_s']} s, "
+              f"tilt follows the command {row['tilt_lag_s']} s later, "
               f"1.5 s means within 1.5 cm {row['windows_within_15mm']:.0%}, within 2.8 cm "
               f"{row['windows_within_28mm']:.0%}, speed {row['speed_rms_mps']} m/s rms "
               f"(load {os.getloadavg()[0]:.1f}; PX4 sensor timeouts {row['sensor_timeouts']})")  # fmt: skip
-    print(json.dumps({"loop": args.loop, "kp": args.kp, "ki": args.ki, "runs": rows}))
+    print(
+        json.dumps(
+            {
+                "loop": args.loop,
+                "kp": args.kp,
+                "ki": args.ki,
+                "kv": args.kv,
+                "observer": args.observer,
+                "observer_input": args.observer_input,
+                "runs": rows,
+            }
+        )
+    )
 
 
 if __name__ == "__main__":
