@@ -60,8 +60,29 @@ def _record(self: BrickUav, *args: object, **kwargs: object) -> None:
         # the carried brick's offset on the magnet the camera measured (masonry.fsm.carried_look): the target is
         # the effector's, the brick's is this much off it
         "carried": np.asarray(self._wall.carried.world_m(self._place_yaw_rad()), dtype=float)[:2],
+        # the error the gate judged: the tick's measured one carried on the measured velocity to a timed release
+        "predicted": (np.asarray(self.effector.position(tel), dtype=float) - target)[:2]
+        + np.asarray(tel.velocity_mps, dtype=float)[:2] * self._gate.ahead_s,
+        # the side look's last leg's direction (pre-release point to drop-off; zero off the side look)
+        "leg": _unit(-np.asarray(self._side.offset_m, dtype=float)[:2])
+        if self._side.offset_m is not None and self._side.final
+        else np.zeros(2),
     }
     _release(self, *args, **kwargs)
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    n = float(np.hypot(*v))
+    return v / n if n > 1e-9 else np.zeros(2)
+
+
+def _leg_mm(v: np.ndarray, leg: np.ndarray) -> str:
+    """``v`` (m) along / across the leg (mm), or as x / y off the side look."""
+    if not np.any(leg):
+        return f"xy ({v[0] * 1000:+.1f}, {v[1] * 1000:+.1f})"
+    along = float(v @ leg)
+    across = float(leg[0] * v[1] - leg[1] * v[0])
+    return f"along {along * 1000:+.1f} across {across * 1000:+.1f}"
 
 
 def _rms_mm(vs: list[np.ndarray]) -> float:
@@ -137,6 +158,27 @@ def main() -> None:
             for a in ages
         )
     )
+    legs = [r[3] for r in rows if np.any(r[3]["leg"])]
+    if legs:
+        parts = []
+        for name in ("final", "release", "align", "predicted"):
+            along = [float(np.asarray(p[name]) @ p["leg"]) for p in legs]
+            across = [float(p["leg"][0] * p[name][1] - p["leg"][1] * p[name][0]) for p in legs]
+            parts.append(
+                f"{name} {math.sqrt(np.mean(np.square(along))) * 1000:.1f} / "
+                f"{math.sqrt(np.mean(np.square(across))) * 1000:.1f} (mean {np.mean(along) * 1000:+.1f} / "
+                f"{np.mean(across) * 1000:+.1f})"
+            )
+        print(
+            f"{len(legs)} let go on the side look's last leg, rms (mean) along / across it (mm): "
+            + ", ".join(parts)
+        )
+    print(
+        "mean (x, y) mm over the bricks: "
+        + ", ".join(
+            f"{n} {np.round(np.mean([r[3][n] for r in rows], axis=0) * 1000, 1)}" for n in ("final", "align")
+        )
+    )
     for wall, seed, bid, p in sorted(rows, key=lambda r: -float(np.linalg.norm(r[3]["final"])))[: args.worst]:
         mm = {k: float(np.linalg.norm(p[k])) * 1000 for k in ("final", "release", "align", "carry", "noise")}
         print(
@@ -145,6 +187,12 @@ def main() -> None:
             f"the tick's noise {mm['noise']:.1f} mm; wall seen {float(p['age_s']):.2f} s before; "
             f"{float(np.linalg.norm(p['speed'])):.2f} m/s, {float(p['past_end_s']):+.2f} s past the leg's end, "
             f"{int(p['looks'])} looks"
+        )
+        leg = np.asarray(p["leg"])
+        print(
+            f"    predicted at the gate {float(np.linalg.norm(p['predicted'])) * 1000:.1f} mm; leg frame (mm): "
+            f"final {_leg_mm(p['final'], leg)}; release {_leg_mm(p['release'], leg)}; align "
+            f"{_leg_mm(p['align'], leg)}; velocity {_leg_mm(p['speed'], leg)} mm/s"
         )
 
 

@@ -127,6 +127,9 @@ class UavConfig:
     # farther than this (m) from the drop-off is passed over while looks back up are left (the pass is flown again
     # from the look point; masonry.fsm.release_gate.ReleaseGate.wide). 0: off
     release_leg_m: float = 0.0
+    # ... for the first this many looks back up of the descent only (0: all of them, up to the last look's pass);
+    # later passes are let go within r_pl (masonry.fsm.release_gate.ReleaseGate.wide)
+    release_leg_looks: int = 0
     # With align_on_wall, on the side look's last leg of a guarded drop-off in calm air: the release is timed at the
     # effector's predicted nearest pass to the drop-off (its error carried on its velocity) within this long (s)
     # after the tick, through Gripper.release_at (masonry.fsm.release_gate.ReleaseGate.ahead). 0: off (a release at

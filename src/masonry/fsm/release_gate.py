@@ -60,8 +60,8 @@ fresh then, it waits that tick; past the freshness it lets go as before (a hold 
 worse: the drop-off ages, docs/performance/as-built.md, "The px4 tail over 20 seeds"). On every descent, not
 only that leg, it was a draw (the pyramid better, the rotated bond worse, seeds 0-9 21.3 mm against 19.3).
 
-In calm air, on that leg, a tick inside r_pl but more than ``UavConfig.release_leg_m`` (0 by default and in the
-presets, see below; 1 cm on branch ``release35``) from the drop-off is passed over while looks back up are left (:meth:`ReleaseGate.wide`, issue 30, branch
+In calm air, on that leg, a tick inside r_pl but more than ``UavConfig.release_leg_m`` (0 by default, the ``px4``
+preset's 1 cm since branch ``towers38``, see below) from the drop-off is passed over while looks back up are left (:meth:`ReleaseGate.wide`, issue 30, branch
 ``release35``): the support leaves the view 7-11 cm out, the UAV trails the leg's reference by 4-8 cm and catches
 up through the disc at 0.2-0.4 m/s as the sighting goes stale, and the first tick inside was let go anywhere in it
 (the px4 towers, calm, seeds 0-19: 8 of 120 bricks over 2 cm of their neighbours; with it none, 4-6 s more
@@ -73,7 +73,11 @@ went 3 of 60 over 2 cm, one 84.8 mm off (docs/performance/as-built.md). Since br
 no step on a pass this rule passed over in time, and the stale release after the looks flies the descent again
 (above): the px4 model's towers in calm air then 3 of 120 over 2 cm, 25.9 mm at most (the preset as it stands 11 of
 120), but on the real PX4 the case study took 420-649 s (bound 720) against 199-264 s: its passes come within 1 cm
-seldom, and 6 descents in two runs ran out of their twenty looks. So it stays off in the preset.
+seldom, and 6 descents in two runs ran out of their twenty looks. So it stayed off in the preset until branch
+``towers38`` (issue 30): with the release timed inside the tick (below) the rule judges the pass's predicted nearest
+point, not the tick, and it holds for the first ``UavConfig.release_leg_looks`` looks only (the ``px4`` preset's 10;
+later passes are let go within r_pl): the px4 model's towers in calm air, seeds 0-29, 7 -> 1 of 180 bricks over 2 cm
+of their neighbours, 20.8 -> 23.4 s descending a brick; the real PX4 at most 10 passes more a descent (unmeasured).
 
 With the wall in view at the release tick (seen this tick or the last), on any descent, a tick inside r_pl but
 more than ``UavConfig.release_hold_m`` off (the ``px4`` preset's 1 cm) is passed over too, up to
@@ -298,12 +302,15 @@ class ReleaseGate:
         cfg = uav.config
         if cfg.release_leg_m <= 0.0 or not self.guarded or not uav._side.final or uav.attempt.in_wind:
             return False
-        if self.relooks >= self._most(uav):
+        if self.relooks >= self._most(uav) or 0 < cfg.release_leg_looks <= self.relooks:
             return False
         error_m = (
             np.asarray(uav.effector.position(tel), dtype=float)[:2]
             - np.asarray(uav.attempt.place_effector_target_m, dtype=float)[:2]
         )
+        # a timed release (:meth:`ahead`) judged at its instant: the pass's predicted nearest point (branch towers38)
+        if self.ahead_s > 0.0:
+            error_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * self.ahead_s
         wide = float(np.hypot(*error_m)) > cfg.release_leg_m
         if wide and self.fresh(uav):
             uav._side.on_time = True  # (the learnt lag does not step on this pass: it was in r_pl in time)
