@@ -31,6 +31,7 @@ from collections.abc import Mapping, Sequence
 from masonry.blueprint import UavSpec
 from masonry.errors import PlanningError
 from masonry.planner.dispatch import _PENDING, _RUNNING, Dispatcher
+from masonry.planner.dispatch_admission import Admission
 from masonry.planner.dispatch_glue import JustInTime, with_glue
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
@@ -186,6 +187,12 @@ class ScheduleDispatcher(Dispatcher):
             and owner not in self._uav_task
             and self._next(owner) == i
         )
+
+    def _out_idle(self, role: str, rule: Admission) -> int:
+        """None counted: a UAV in the air with no task waits for its own planned task, not the next one, so it
+        does not keep the UAV a task is planned for on its pad (counted, a random 2 + 1 layout stalled with both
+        brick UAVs idle, one out and one held; ``tests/test_schedule_policy.py``, seed 7)."""
+        return 0
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         nxt = self._next(uav)
