@@ -135,8 +135,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # a half of the pass, so its last gaps take passes; with its height held a pass took 1-25 s and one ran out
         # the default 25 s past the pass's time at 87 % (tests/test_px4_sitl.py's A0, branch a0px4_33)
         "spray_patience_s": 45.0,
-        # masonry's velocity loop's observer on the attitude's acceleration, not the command's (issues 29/30)
-        "velocity_observer_input": "tilt",
+        # (velocity_observer_input stays "command": "tilt" lowered the real PX4's hover swing, 48-57 -> 36-45 mm rms,
+        # but two of five case studies then rested a brick 20.7-23.6 mm off; branch tilt38, docs/hardware.md)
         # the swing gate: beside busy processes the real PX4's hover at its point reads 0.20-0.25 m/s rms (4-9 cm
         # off; docs/performance/autopilots.md), at the default 0.2, and 0.31 at load average 6 (0.11 m off: a
         # drop-off's alignment failed at 0.3, branch px4drop); a loop too fast for it swings at 0.4 and more
