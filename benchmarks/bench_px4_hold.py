@@ -5,9 +5,9 @@ masonry's adapter takes off on ``../shared/px4/run.sh`` (SIH quadrotor), then a 
 velocity loop flies them (it closes on EKF2's velocity), with ``--loop own`` the adapter turns them into
 acceleration setpoints (:mod:`masonry.motion.velocity_loop`, on the reported position; ``--kv`` and
 ``--observer`` its gains, ``--observer-input tilt`` its observer driven by the acceleration PX4's attitude gives
-rather than the commanded one), with ``--loop position`` PX4's own position controller holds the point (position
-setpoints). Prints per run the reported position's rms error about the point, its swing about its own mean point
-per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
+rather than the commanded one: the adapter's ``velocity_observer_input``), with ``--loop position`` PX4's own
+position controller holds the point (position setpoints). Prints per run the reported position's rms error about
+the point, its swing about its own mean point per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
 the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
 whose mean lies within the brick alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor
 timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON
@@ -34,7 +34,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.mavlink_protocol import MAV_CMD_SET_MESSAGE_INTERVAL, MAV_FRAME_LOCAL_NED
 from masonry.errors import CommandRejected
-from masonry.motion.velocity_loop import VelocityLoop, VelocityLoopGains
+from masonry.motion.velocity_loop import VelocityLoop, VelocityLoopGains, tilt_acceleration_mps2
 from px4_sitl import ENV, px4
 
 # PX4's position controller holds the point (``--loop position``): position + yaw rate kept, the rest ignored
@@ -81,26 +81,23 @@ def watch_the_truth(fc: MavlinkFlightController) -> list[float]:
     return latest
 
 
-def observe_on_tilt(fc: MavlinkFlightController, *, drive: bool) -> list[tuple[float, float, float, float]]:
+def record_tilt(fc: MavlinkFlightController) -> list[tuple[float, float, float, float]]:
     """Beside each position the own loop observes, the horizontal acceleration PX4's attitude gives (NED, m/s^2:
-    the thrust tilted, its vertical part holding the weight) and the one the loop commanded; with ``drive`` the
-    loop's observer is driven by the tilt's instead of the command's. Returns the list it fills (commanded north,
-    east, tilt's north, east)."""
+    :func:`~masonry.motion.velocity_loop.tilt_acceleration_mps2`) and the one the loop commanded. Returns the list
+    it fills (commanded north, east, tilt's north, east). What drives the observer is the adapter's
+    ``velocity_observer_input`` (``--observer-input``), not this."""
     loop = fc.velocity_loop
     pairs: list[tuple[float, float, float, float]] = []
     if loop is None:
         return pairs
     observe = loop.observe
 
-    def on_tilt(t_s: float, position_m: tuple[float, float, float]) -> None:
-        roll, pitch, yaw = fc._state.attitude
-        g = 9.81
-        a_n = -g * (math.cos(yaw) * math.tan(pitch) + math.sin(yaw) * math.tan(roll) / math.cos(pitch))
-        a_e = -g * (math.sin(yaw) * math.tan(pitch) - math.cos(yaw) * math.tan(roll) / math.cos(pitch))
+    def on_tilt(
+        t_s: float, position_m: tuple[float, float, float], tilt: tuple[float, float] | None = None
+    ) -> None:
+        a_n, a_e = tilt_acceleration_mps2(*fc._state.attitude)
         pairs.append((loop._a[0], loop._a[1], a_n, a_e))
-        if drive:
-            loop._a[0], loop._a[1] = a_n, a_e
-        observe(t_s, position_m)
+        observe(t_s, position_m, tilt)
 
     loop.observe = on_tilt  # type: ignore[method-assign]
     return pairs
@@ -159,7 +156,8 @@ def hold(
             )
         )
     truth = watch_the_truth(fc)
-    pairs = observe_on_tilt(fc, drive=observer_input == "tilt")
+    fc.velocity_observer_input = observer_input
+    pairs = record_tilt(fc)
     try:
         for attempt in range(20):  # PX4 refuses to arm for a few seconds after boot (its checks settle)
             try:

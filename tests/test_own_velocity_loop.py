@@ -7,10 +7,15 @@ v1.16 SITL"). ``masonry sitl --autopilot px4`` flies them through its model's ve
 
 from __future__ import annotations
 
+import pytest
+
 from masonry.adapters.sitl import SitlConfig
 from masonry.adapters.wiring import HardwareConfig
 from masonry.cli.fly_tuning import fly_settings
-from masonry.fsm.tuning import OWN_VELOCITY_LOOP_PID, uav_settings
+from masonry.errors import InputError
+from masonry.fsm import UavConfig
+from masonry.fsm.config import VELOCITY_OBSERVER_INPUTS
+from masonry.fsm.tuning import OWN_VELOCITY_LOOP_PID, PRESETS, uav_settings
 from masonry.ports import UavPorts
 from test_sitl import flight, take_off
 from waiting import wait_until
@@ -22,8 +27,11 @@ def _ports(fc) -> UavPorts:
     return UavPorts(fc=fc, gripper=None, sprayer=None, camera=None, clock=None)  # type: ignore[arg-type]
 
 
-def test_on_px4_the_adapter_flies_acceleration_setpoints_once_airborne() -> None:
+@pytest.mark.parametrize("observer_input", VELOCITY_OBSERVER_INPUTS)
+def test_on_px4_the_adapter_flies_acceleration_setpoints_once_airborne(observer_input: str) -> None:
+    # ``tilt``: the loop's observer on the acceleration the SITL's ATTITUDE gives (its vehicle tilts for its own)
     with flight(SitlConfig(autopilot="px4"), time_scale=SPEED) as (sitl, fc):
+        fc.velocity_observer_input = observer_input
         fc.connect()
         assert fc.velocity_loop is not None and not fc.velocity_loop_engaged
         take_off(
@@ -68,9 +76,15 @@ def test_on_ardupilot_and_when_switched_off_the_autopilot_keeps_its_velocity_loo
 def test_its_gains_come_with_the_px4_tuning_and_a_users_pid_still_wins() -> None:
     with flight(SitlConfig(autopilot="px4"), time_scale=SPEED) as (_, fc):
         fc.connect()
+        # the adapter is told the observer's input (issues 29/30): uav.yaml's, else the default's (the px4 preset
+        # leaves it at ``command``: docs/hardware.md, "The observer on PX4's attitude")
+        fly_settings(HardwareConfig(control={"velocity_observer_input": "tilt"}), "ideal", _ports(fc))
+        assert fc.velocity_observer_input == "tilt"
         ours = fly_settings(HardwareConfig(), "ideal", _ports(fc))
+        assert fc.velocity_observer_input == "command"
         theirs = fly_settings(HardwareConfig(pid={"x": {"kp": 2.5}}), "ideal", _ports(fc))
     assert ours == uav_settings("px4", own_velocity_loop=True)
+    assert "velocity_observer_input" not in PRESETS["px4"]
     assert ours["pid_gains"].x.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"] == ours["pid_gains"].y.kp
     assert ours["pid_gains"].x.ki == OWN_VELOCITY_LOOP_PID["xy"]["ki"]
     assert theirs["pid_gains"].x.kp == 2.5 and theirs["pid_gains"].y.kp == OWN_VELOCITY_LOOP_PID["xy"]["kp"]
@@ -79,3 +93,13 @@ def test_its_gains_come_with_the_px4_tuning_and_a_users_pid_still_wins() -> None
     assert uav_settings("px4") == ours
     assert "pid_gains" not in uav_settings("px4", own_velocity_loop=False)
     assert uav_settings("arducopter") == uav_settings("arducopter", own_velocity_loop=False)
+
+
+def test_a_bad_velocity_observer_input_is_refused_in_one_line() -> None:
+    with pytest.raises(
+        InputError, match=r"^uav.yaml: control: velocity_observer_input must be command or tilt, "
+    ):
+        uav_settings("px4", {"velocity_observer_input": "attitude"})
+    with pytest.raises(InputError, match=r"^velocity_observer_input must be command or tilt, got 1$"):
+        UavConfig(name="b", role="brick", home_m=(0.0, 0.0, 0.0), velocity_observer_input=1)  # type: ignore[arg-type]
+    assert UavConfig(name="b", role="brick", home_m=(0.0, 0.0, 0.0)).velocity_observer_input == "command"

@@ -54,7 +54,7 @@ from masonry.adapters.mavlink_protocol import (
 from masonry.adapters.pose_source import PoseSource
 from masonry.adapters.sitl_standstill import Standstill
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, InputError, LinkLost
-from masonry.motion.velocity_loop import VelocityLoop
+from masonry.motion.velocity_loop import VelocityLoop, tilt_acceleration_mps2
 from masonry.ports import Vec3
 
 # Re-exported: callers import these from here (the clock, the counters and the key reader live in link_values).
@@ -190,6 +190,7 @@ class MavlinkLink:
         #: close the velocity loop here, on the reported position, sending acceleration setpoints while
         #: :attr:`velocity_loop_engaged` (issue 29: PX4's loop closes on EKF2's velocity); None: on PX4 only
         self.own_velocity_loop: bool | None = None
+        self.velocity_observer_input = "command"  # its observer's input: the "command" sent, or the "tilt"
         self.velocity_loop: VelocityLoop | None = None
         self.velocity_loop_engaged = False
         self._stop = threading.Event()
@@ -413,7 +414,9 @@ class MavlinkLink:
                 st.velocity_ned = (msg.vx, msg.vy, msg.vz)
                 st.position_time_s = now
                 if self.velocity_loop is not None:
-                    self.velocity_loop.observe(msg.time_boot_ms / 1000.0, st.position_ned)
+                    tilt = self.velocity_observer_input == "tilt"  # the attitude's acceleration (29/30)
+                    a = tilt_acceleration_mps2(*st.attitude) if tilt else None
+                    self.velocity_loop.observe(msg.time_boot_ms / 1000.0, st.position_ned, a)
                 if not st.armed:
                     st.ground_heights.append(-float(msg.z))
                 self.clock.observe(msg.time_boot_ms / 1000.0, now)
@@ -481,12 +484,8 @@ class MavlinkLink:
                 mask, v, a = TYPE_MASK_ACCELERATION_YAW_RATE, (0.0, 0.0, 0.0), loop.acceleration(v_ned)
         with self._send_lock:
             self._conn.mav.set_position_target_local_ned_send(
-                int(self._monotonic() * 1000) & 0xFFFFFFFF,
-                self.target_system,
-                self.target_component,
-                MAV_FRAME_LOCAL_NED,
-                mask,
-                0.0, 0.0, 0.0,
+                int(self._monotonic() * 1000) & 0xFFFFFFFF, self.target_system, self.target_component,
+                MAV_FRAME_LOCAL_NED, mask, 0.0, 0.0, 0.0,
                 float(v[0]), float(v[1]), float(v[2]),
                 float(a[0]), float(a[1]), float(a[2]),
                 0.0, float(yaw_rate_ned),

@@ -22,11 +22,15 @@ def tuning_preset(vehicle: str, adapters: UavPorts | None) -> str:
 def fly_settings(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None) -> dict[str, Any]:
     """The :class:`~masonry.fsm.UavConfig` overrides a UAV flies: :func:`tuning_preset`'s, and the gains of
     masonry's own velocity loop where its flight controller flies it (a real PX4, issue 29) or where the simulated
-    vehicle models it (``--vehicle px4``: masonry.fsm.tuning.OWN_VELOCITY_LOOP_PRESETS)."""
+    vehicle models it (``--vehicle px4``: masonry.fsm.tuning.OWN_VELOCITY_LOOP_PRESETS). A MAVLink flight
+    controller is told what drives its loop's observer (``velocity_observer_input``, issues 29/30)."""
     fc = adapters.fc if adapters is not None else None
     # a MAVLink flight controller says whether it flies masonry's loop; a simulated one leaves it to the preset
     own = getattr(fc, "velocity_loop", None) is not None if hasattr(fc, "velocity_loop") else None
-    return hardware.uav_settings(tuning_preset(vehicle, adapters), own_velocity_loop=own)
+    settings = hardware.uav_settings(tuning_preset(vehicle, adapters), own_velocity_loop=own)
+    if hasattr(fc, "velocity_observer_input"):
+        fc.velocity_observer_input = settings.get("velocity_observer_input", "command")  # type: ignore[union-attr]
+    return settings
 
 
 def tuning_choice(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | None) -> TuningChoice:

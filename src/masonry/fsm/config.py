@@ -8,6 +8,7 @@ from typing import Any, TypedDict
 
 from masonry.airframe import DEFAULT_AIRFRAME, Airframe
 from masonry.blueprint import DEFAULT_CRUISE_ALTITUDE_M, Blueprint, MarkerSpec, Role, UavSpec
+from masonry.errors import InputError
 from masonry.geofence import Site
 from masonry.placement_check import wall_tops_m
 from masonry.ports import TAKEOFF_TIMEOUT_S
@@ -16,6 +17,9 @@ from masonry.timing import DEFAULT_TIMING as _T
 from masonry.timing import TaskTiming
 
 Vec3 = tuple[float, float, float]
+
+#: What may drive masonry's velocity loop's observer (:attr:`UavConfig.velocity_observer_input`).
+VELOCITY_OBSERVER_INPUTS = ("command", "tilt")
 
 
 @dataclass(frozen=True)
@@ -274,6 +278,18 @@ class UavConfig:
     chain_descent_s: float = _T.chain_descent_s
     # Control (None: the motion layer's defaults)
     pid_gains: Any = None
+    # Issues 29/30, where masonry closes the velocity loop on a MAVLink autopilot (a real PX4): what drives the
+    # loop's observer: ``command`` (the acceleration sent) or ``tilt`` (the acceleration the attitude the autopilot
+    # reports gives; PX4 realises a command as a tilt 0.17-0.2 s later). masonry fly sets the adapter's from this;
+    # the simulated vehicles ignore it (masonry.motion.velocity_loop, docs/performance/autopilots.md)
+    velocity_observer_input: str = "command"
+
+    def __post_init__(self) -> None:
+        if self.velocity_observer_input not in VELOCITY_OBSERVER_INPUTS:
+            choices = " or ".join(VELOCITY_OBSERVER_INPUTS)
+            raise InputError(
+                f"velocity_observer_input must be {choices}, got {self.velocity_observer_input!r}"
+            )
 
     def timing(self) -> TaskTiming:
         """The durations, speeds and tool geometry of this UAV's tasks, for the bound and the airspace."""

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from masonry.errors import InputError
-from masonry.fsm.config import UavConfig
+from masonry.fsm.config import VELOCITY_OBSERVER_INPUTS, UavConfig
 from masonry.motion import AxisGains, PIDGains
 
 #: UavConfig fields ``control:`` may not set: the UAV's identity and the blueprint's, and the gains (``pid:``).
@@ -45,6 +45,8 @@ _NOT_TUNING = frozenset(
 )
 #: UavConfig fields that are counts (integers), not measures.
 _COUNTS = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("int", int))
+#: UavConfig fields that are one of a few words.
+_CHOICES: Mapping[str, tuple[str, ...]] = {"velocity_observer_input": VELOCITY_OBSERVER_INPUTS}
 #: UavConfig fields that are switches (true / false).
 _SWITCHES = frozenset(f.name for f in dataclasses.fields(UavConfig) if f.type in ("bool", bool))
 
@@ -139,6 +141,8 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # a half of the pass, so its last gaps take passes; with its height held a pass took 1-25 s and one ran out
         # the default 25 s past the pass's time at 87 % (tests/test_px4_sitl.py's A0, branch a0px4_33)
         "spray_patience_s": 45.0,
+        # (velocity_observer_input stays "command": "tilt" lowered the real PX4's hover swing, 48-57 -> 36-45 mm rms,
+        # but two of five case studies then rested a brick 20.7-23.6 mm off; branch tilt38, docs/hardware.md)
         # the swing gate: beside busy processes the real PX4's hover at its point reads 0.20-0.25 m/s rms (4-9 cm
         # off; docs/performance/autopilots.md), at the default 0.2, and 0.31 at load average 6 (0.11 m off: a
         # drop-off's alignment failed at 0.3, branch px4drop); a loop too fast for it swings at 0.4 and more
@@ -202,6 +206,13 @@ def _control_fields(values: Mapping[str, Any], source: str) -> dict[str, Any]:
             raise InputError(
                 f"{source}: control: unknown setting {name!r} (known: {', '.join(sorted(known))})"
             )
+        if name in _CHOICES:
+            if value not in _CHOICES[name]:
+                raise InputError(
+                    f"{source}: control: {name} must be {' or '.join(_CHOICES[name])}, got {value!r}"
+                )
+            out[name] = value
+            continue
         if name in _SWITCHES:
             if not isinstance(value, bool):
                 raise InputError(f"{source}: control: {name} must be true or false, got {value!r}")

@@ -9,7 +9,11 @@ from the reported position (an alpha-beta observer driven by the acceleration it
 vehicle still answers a velocity setpoint with a first-order lag of about ``1 / kv``.
 
 Pure: no clock, no I/O; the adapter feeds it positions with their autopilot time stamps and asks for the
-acceleration of a velocity setpoint (all in one frame, the autopilot's NED in practice).
+acceleration of a velocity setpoint (all in one frame, the autopilot's NED in practice). Optionally (issues 29/30,
+``UavConfig.velocity_observer_input: tilt``) the adapter also feeds, with each position, the horizontal
+acceleration the vehicle's attitude gives (:func:`tilt_acceleration_mps2`): PX4 realises a commanded acceleration as
+a tilt 0.17-0.2 s later, and the observer driven by what is realised rather than what was asked predicts the
+position better (docs/performance/autopilots.md).
 """
 
 from __future__ import annotations
@@ -20,6 +24,20 @@ from dataclasses import dataclass
 from masonry.errors import InputError
 
 Vec3 = tuple[float, float, float]
+
+#: The acceleration of gravity (m/s^2) the tilt's horizontal acceleration is taken from.
+GRAVITY_MPS2 = 9.81
+
+
+def tilt_acceleration_mps2(roll_rad: float, pitch_rad: float, yaw_rad: float) -> tuple[float, float]:
+    """The horizontal acceleration (north, east; m/s^2) a multicopter at this attitude (FRD body in NED, Euler
+    roll-pitch-yaw) gives when its thrust's vertical part holds its weight: ``g`` times the tilt, turned by the yaw."""
+    g = GRAVITY_MPS2
+    tan_roll_over_cos_pitch = math.tan(roll_rad) / math.cos(pitch_rad)
+    tan_pitch = math.tan(pitch_rad)
+    a_n = -g * (math.cos(yaw_rad) * tan_pitch + math.sin(yaw_rad) * tan_roll_over_cos_pitch)
+    a_e = -g * (math.sin(yaw_rad) * tan_pitch - math.cos(yaw_rad) * tan_roll_over_cos_pitch)
+    return (a_n, a_e)
 
 
 @dataclass(frozen=True)
@@ -107,11 +125,22 @@ class VelocityLoop:
         self._v_sp = None
         self._i = [0.0, 0.0, 0.0]
 
-    def observe(self, t_s: float, position_m: Vec3) -> None:
-        """A reported position, stamped ``t_s`` on the autopilot's clock (repeats and older stamps are ignored)."""
+    def observe(
+        self, t_s: float, position_m: Vec3, horizontal_acceleration_mps2: tuple[float, float] | None = None
+    ) -> None:
+        """A reported position, stamped ``t_s`` on the autopilot's clock (repeats and older stamps are ignored).
+
+        ``horizontal_acceleration_mps2``: the horizontal acceleration the vehicle is measured to realise now
+        (:func:`tilt_acceleration_mps2` of its attitude): the observer predicts on it rather than on the horizontal
+        acceleration last commanded (which it otherwise takes as realised at once); None: on the command.
+        """
         p = [float(c) for c in position_m]
         if not all(math.isfinite(c) for c in p) or not math.isfinite(t_s):
             return
+        if horizontal_acceleration_mps2 is not None and all(
+            math.isfinite(c) for c in horizontal_acceleration_mps2
+        ):
+            self._a[0], self._a[1] = (float(c) for c in horizontal_acceleration_mps2)
         if self._t_s is None:
             self._t_s, self._x = float(t_s), p
             return
