@@ -38,7 +38,9 @@ def last_brick_on_two_segments() -> Plan:
 
 
 @pytest.mark.parametrize(("bricks", "uav"), [(3, "brick-3"), (2, None)])
-def test_the_spare_fetches_the_last_brick_once_the_glue_under_it_is_ready(bricks: int, uav: str | None) -> None:
+def test_the_spare_fetches_the_last_brick_once_the_glue_under_it_is_ready(
+    bricks: int, uav: str | None
+) -> None:
     # A0 and A1 ready, neither sprayed: no brick UAV of the core may prefetch B0 (its glue is not in progress), the
     # spare, on its pad, fetches it; a 2 + 1 fleet has no spare and waits for the glue
     d = ChainThrough(last_brick_on_two_segments(), fleet(bricks), reservation="site")
@@ -67,11 +69,12 @@ def bricks_on_one_segment() -> Plan:
     return Plan(tasks, (("B0", "A0"), ("B1", "A0"), ("B2", "A0")), ())
 
 
-def test_a_spare_on_its_pad_fetches_no_brick_ahead_of_its_glue() -> None:
-    # the core's two brick UAVs cannot start (away for their swaps): the spare is not sent to fetch a brick whose
-    # glue is still sprayed; once the glue is done it takes a brick it can start
+def test_past_the_width_a_spare_on_its_pad_fetches_no_brick_ahead_of_its_glue() -> None:
+    # the core (2 + 1, three UAVs) past the wall's two sites; its two brick UAVs cannot start (away for their
+    # swaps): the spare is not sent to fetch a brick whose glue is still sprayed; once the glue is done it takes a
+    # brick it can start
     d = ChainThrough(bricks_on_one_segment(), fleet(3), reservation="site")
-    d.admission = Admission(3, lambda _name: True)
+    d.admission = Admission(2, lambda _name: True)
     core_away = {"brick-1", "brick-2"}
     d.assign(may_start=lambda name: name not in core_away)
     assert d.in_progress == {"A0": "glue-1"}
@@ -80,16 +83,23 @@ def test_a_spare_on_its_pad_fetches_no_brick_ahead_of_its_glue() -> None:
     assert set(d.in_progress.values()) == {"brick-3"}
 
 
+def test_under_the_width_a_spare_on_its_pad_prefetches_as_before() -> None:
+    d = ChainThrough(bricks_on_one_segment(), fleet(3), reservation="site")
+    d.admission = Admission(3, lambda _name: True)  # three sites for the core's three UAVs
+    d.assign(may_start=lambda name: name not in ("brick-1", "brick-2"))
+    assert set(d.in_progress.values()) == {"glue-1", "brick-3"}
+
+
 def test_a_core_uav_on_its_pad_still_prefetches() -> None:
     d = ChainThrough(bricks_on_one_segment(), fleet(3), reservation="site")
-    d.admission = Admission(3, lambda _name: True)
+    d.admission = Admission(2, lambda _name: True)
     d.assign(may_start=lambda name: name != "brick-1")
     assert d.in_progress == {"A0": "glue-1", "B0": "brick-2"}
 
 
 def test_a_spare_in_the_air_prefetches_as_before() -> None:
     d = ChainThrough(bricks_on_one_segment(), fleet(3), reservation="site")
-    d.admission = Admission(3, lambda _name: False)  # every UAV in the air
+    d.admission = Admission(2, lambda _name: False)  # every UAV in the air
     d.assign(may_start=lambda name: name not in ("brick-1", "brick-2"))
     assert set(d.in_progress.values()) == {"glue-1", "brick-3"}  # the nearest brick to prefetch
 

@@ -31,15 +31,17 @@ both seeds flown); a fleet and its core fly the same mission up to the first swa
 
 **A spare brick UAV takes off for a brick it can start, or for the last brick** (issue 27, 2026-12-06, branch
 ``pyr39``; docs/dispatch.md, "Spares past the 2 : 1 core"). A brick UAV past the core in fleet order (its pad laid
-past the core's) that stands on its pad is given only a brick available now (no conflicting task in progress):
-not a brick to queue for nor one to fetch ahead of its glue, which the core's brick UAVs, back from their swaps, take
-in time. The pyramid's 3 + 1, seed 3: the spare, let go while both core UAVs swapped, fetched B27 ahead of its
-glue, crossed the sprayer's flight and took the site before the sprayer's chained A40 (+22 s over 2 + 1). The one
-exception is the wall's last brick (every other brick done or in progress): the spare fetches it as soon as every
-segment under it is ready, sprayed or being sprayed, where the core's UAVs would fetch it only once the last of
-them is given, a pallet trip (~40 s) before the site is free; the pyramid's last brick came 25-28 s after its last
-segment, 9 s with the spare (3 + 1, seeds 1-5: 13-16 s sooner than 2 + 1). In a fleet with spare brick UAVs each
-idle UAV is asked in turn (a core UAV with nothing to take does not stop the spare being asked).
+past the core's) that stands on its pad is given, past the width (the core alone keeps every site the wall can work
+busy), only a brick available now (no conflicting task in progress): not a brick to queue for nor one to fetch
+ahead of its glue, which the core's brick UAVs, back from their swaps, take in time. Under the width it prefetches
+as before (the 12 m wall's 8 + 2, seed 2, with the rule there too: +36 s). The pyramid's 3 + 1, seed 3: the spare,
+let go while both core UAVs swapped, fetched B27 ahead of its glue, crossed the sprayer's flight and took the site
+before the sprayer's chained A40 (+22 s over 2 + 1). The one exception is the wall's last brick (every other brick
+done or in progress): the spare fetches it as soon as every segment under it is ready, sprayed or being sprayed,
+where the core's UAVs would fetch it only once the last of them is given, a pallet trip (~40 s) before the site is
+free; the pyramid's last brick came 25-28 s after its last segment, 9-14 s with the spare (3 + 1, seeds 1-5: 13-16 s
+sooner than 2 + 1). In a fleet with spare brick UAVs each idle UAV is asked in turn (a core UAV with nothing to take
+does not stop the spare being asked).
 
 **Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
 and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available
@@ -143,12 +145,14 @@ class ChainThrough(Dispatcher):
         return rule is not None and self._core("brick") + self._core("adhesion") > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
-        """A spare brick UAV on its pad: the wall's last brick (:meth:`_last_brick`) or nothing. Past the width, a
-        UAV with nothing available is given the policy's best of :meth:`_apart`, where there is one; else the
-        dispatcher's choice (a task next to another of its role, or a brick to prefetch)."""
+        """A spare brick UAV on its pad: the wall's last brick (:meth:`_last_brick`), or past the width nothing.
+        Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
+        one; else the dispatcher's choice (a task next to another of its role, or a brick to prefetch)."""
         rule = self.admission
         if role == "brick" and rule is not None and rule.landed(uav) and self._spare_uav(uav, role):
-            return self._last_brick()
+            last = self._last_brick()
+            if last is not None or self._past_width():
+                return last
         if self._past_width():
             apart = self._apart(role, uav)
             if apart and role == "brick":
