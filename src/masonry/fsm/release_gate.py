@@ -75,9 +75,12 @@ no step on a pass this rule passed over in time, and the stale release after the
 120), but on the real PX4 the case study took 420-649 s (bound 720) against 199-264 s: its passes come within 1 cm
 seldom, and 6 descents in two runs ran out of their twenty looks. So it stayed off in the preset until branch
 ``towers38`` (issue 30): with the release timed inside the tick (below) the rule judges the pass's predicted nearest
-point, not the tick, and it holds for the first ``UavConfig.release_leg_looks`` looks only (10 where a uav.yaml sets it;
+point, not the tick, and it holds for the first ``UavConfig.release_leg_looks`` looks only (the ``px4`` preset's 10;
 later passes are let go within r_pl): the px4 model's towers in calm air, seeds 0-29, 7 -> 1 of 180 bricks over 2 cm
-of their neighbours, 20.8 -> 23.4 s descending a brick; the real PX4 at most 10 passes more a descent (unmeasured).
+of their neighbours, 20.8 -> 23.4 s descending a brick. Taken out of the preset after one failure of the real PX4's
+one-brick scenario (whose lone drop-off is never guarded, so never judged by it) and back since branch ``px439``:
+on the real PX4 the case study's calm placements were let go up to 14.4 mm off without it, and the target's
+sighting, the release's timing and the scatter add 5-10 mm (docs/performance/autopilots.md).
 
 With the wall in view at the release tick (seen this tick or the last), on any descent, a tick inside r_pl but
 more than ``UavConfig.release_hold_m`` off (the ``px4`` preset's 1 cm) is passed over too, up to
