@@ -68,6 +68,7 @@ def _uav(
     )
     target = np.array([1.0, 2.0, 0.3])
     uav = SimpleNamespace(
+        tick_interval_s=0.1,  # (a simulated mission's tick: the preset's release_ahead_s holds)
         config=cfg,
         _now_s=10.0,
         _wall=SimpleNamespace(seen_s=10.0 - seen_ago_s),

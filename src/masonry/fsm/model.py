@@ -100,6 +100,8 @@ class UavModel(CommonStates):
         # mission handler's battery reserve): a low battery sends the UAV home to land, not out of service.
         self._battery_service = clearance is not None and clearance.swaps_batteries is True
         self._last_step_s = -math.inf
+        #: The time (s) between this tick and the last (inf before the second): how soon the next one comes
+        self.tick_interval_s = math.inf
         self._due_s = -math.inf  # when the next control tick is due (:meth:`step`)
         self._waiting_since_s: float | None = None  # since when it has waited in the air for clearance
         #: the battery's drain per airborne second, measured (masonry.fsm.battery)
@@ -152,6 +154,7 @@ class UavModel(CommonStates):
         self._due_s = self._due_s + period_s if now_s < self._due_s + period_s else now_s + period_s
         step_s = now_s - self._last_step_s
         self._last_step_s = now_s
+        self.tick_interval_s = step_s
         self._now_s = float(now_s)
         if self.task is not None:  # the time since the last tick, in the phase the UAV was in meanwhile
             self.phase_clock.tick_in(self._now_s, self.state, self.transit.state)
