@@ -106,6 +106,31 @@ def test_a_spare_past_the_core_stays_on_its_pad_while_the_core_of_its_role_is_bu
     assert len([a for a in d.assign() if a.task_id.startswith("B")]) == 1
 
 
+def test_resting_spares_stay_on_their_pads_while_a_core_uav_is_away_and_the_core_takes_off_again() -> None:
+    # 4 + 4 (core 4 + 2): glue-1 of the core is away for its swap. Its role's spares past the core rest (the
+    # sprayers are not the wall's pace): glue-3 and glue-4 stay on their pads; glue-1, back on its pad, takes off
+    fleet = [UavSpec(f"brick-{k + 1}", "brick", (3.0 * k, -5.0, 0.0)) for k in range(4)]
+    fleet += [UavSpec(f"glue-{k + 1}", "adhesion", (-3.0 - 3.0 * k, -5.0, 0.0)) for k in range(4)]
+    segments = tuple(glue(k, 2.0 * k, 2.0 * k + 0.15) for k in range(6))
+    plan = Plan(segments, (), ())
+    away = {"glue-1"}
+    d = ChainThrough(plan, fleet, reservation="site")
+    d.admission = Admission(6, lambda name: name not in away)  # every UAV on its pad but glue-1
+    resting = {"adhesion": True}
+    d.spares_rest = lambda role: resting.get(role, False)
+
+    def home(name: str) -> bool:
+        return name not in away  # (mission control gives no task to a UAV away for its swap)
+
+    assert [a.uav for a in d.assign(may_start=home)] == ["glue-2"]  # glue-1 away: the spares stay down
+    away.clear()  # glue-1 back on its pad with a fresh pack
+    assert [a.uav for a in d.assign(may_start=home)] == ["glue-1"]
+    resting["adhesion"] = False  # the sprayers the pace: a spare takes a free place of the core
+    d.complete(d.task_of("glue-1") or "")
+    away.add("glue-1")
+    assert [a.uav for a in d.assign(may_start=home)] == ["glue-3"]
+
+
 def test_a_spare_in_the_air_is_not_held_back() -> None:
     fleet = [UavSpec(f"brick-{k + 1}", "brick", (3.0 * k, -5.0, 0.0)) for k in range(3)]
     fleet.append(UavSpec("glue-1", "adhesion", (-3.0, -5.0, 0.0)))

@@ -43,7 +43,7 @@ within :data:`APART_BRICK_REACH_M` of the brick the dispatcher would give it. Pu
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 from masonry.blueprint import UavSpec
 from masonry.mission.fleet import core_counts
@@ -66,6 +66,10 @@ class ChainThrough(Dispatcher):
     """The reactive dispatcher, with an adhesion UAV at the end of its segment given the next one of its run when
     that one is ready, even while a conflicting task is in progress (see the module docstring)."""
 
+    #: whether a role's spares past the fleet's core rest on their pads, the core's swaps too (mission control's
+    #: :meth:`masonry.mission.swap_stagger.SwapStagger.resting`; never, by default)
+    spares_rest: Callable[[str], bool] = staticmethod(lambda _role: False)
+
     def _select(self, role: str, uav: str) -> int | None:
         i = self._chained_through(role, uav)
         return super()._select(role, uav) if i is None else i
@@ -81,13 +85,19 @@ class ChainThrough(Dispatcher):
         return None if self._spare(uav, role) else super()._admitted(uav, role, i)
 
     def _spare(self, uav: str, role: str) -> bool:
-        """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy."""
+        """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy, or
+        its role's spares rest (:attr:`spares_rest`) and ``uav`` is not of the core (its first UAVs in fleet
+        order)."""
         rule = self.admission
         if rule is None or not rule.landed(uav):
             return False
         core = self._core(role)
         if core >= self._live_count[role]:
             return False
+        if self.spares_rest(role):
+            of_role = [n for n, s in self._fleet.items() if s.role == role and n in self._live]
+            if uav not in of_role[:core]:
+                return True
         return sum(1 for j in self._uav_task.values() if self._role[j] == role) >= core
 
     def _past_width(self) -> bool:
