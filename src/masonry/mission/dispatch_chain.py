@@ -28,6 +28,9 @@ spares on their pads, which take off only when a UAV of the core, sent home for 
 (:mod:`masonry.mission.swap_stagger`), frees its place. The width rules here count the core, not the fleet. The
 12 m wall at 5 + 2 to 8 + 2 and 4 + 3 / 4 + 4 was slower than at 4 + 2 (the extra UAVs in the core's way, on
 both seeds flown); a fleet and its core fly the same mission up to the first swap.
+While the role is not the wall's pace (its core would finish its work left before the other role's core,
+:func:`masonry.mission.fleet.spares_rest`) its spares *rest*: a spare on its pad is given no task even with a core
+UAV away for its swap, and the fleet flies its core's mission (the 12 m wall's 4 + 3 and 4 + 4 fly 4 + 2's).
 
 **Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
 and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available

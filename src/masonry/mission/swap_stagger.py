@@ -36,6 +36,10 @@ brick UAVs past its 4 + 2) has them on its pads by design (:mod:`masonry.mission
 core"), not because the wall cannot use more: there a spare waiting does not keep a low UAV at work. It is sent as
 in a role without one, and the spare takes its place (with the spare rule, the handlers held the core's tasks for
 their swaps while the spares sat: 12 m wall 8 + 2 seed 1, 1,183 s against 4 + 2's 1,157 s; without it 1,127 s).
+While the role is not the wall's pace its spares rest (:meth:`SwapStagger.resting`,
+:func:`masonry.mission.fleet.spares_rest`): the role is its core here too (:func:`core_of`), so a core of two is
+never sent early, as at 4 + 2 (the 12 m wall's 4 + 4 sent its fourth sprayer home at 50 %, in the middle of its run,
+and flew a spare in its place: +7 to +72 s over 4 + 2 on four of five seeds).
 
 Nothing here relaxes the battery reserve: a UAV given a task its battery does not cover still has it held for a
 swap by its handler (docs/state-machines.md, "Battery budget"). Pure bookkeeping over mission control's state:
