@@ -19,6 +19,8 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "masonry"
 MAX_MODULE_LINES = 600
 #: Issue 27 §4's simplicity target: no module under ``mission/`` over this many lines.
 MISSION_MAX_LINES = 500
+#: Issue 27 §4's target for mission control's shell (``mission/control.py``); it regrew past it once (396 -> 427).
+CONTROL_MAX_LINES = 400
 
 # Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
 CEILINGS = {"any_mentions": 538, "in_function_imports": 149}

@@ -9,10 +9,12 @@ time, ``masonry mission-control`` in wall time), so the same code runs in both.
 This class is the thin shell; its parts (issue 27 §2, docs/architecture.md): :mod:`~masonry.mission.reducer`
 (pure: what a message asks for, which results count: docs/security.md), :mod:`~masonry.mission.liveness` (one
 enum per UAV: heard, silent, lost, rejoined, out of service), :mod:`~masonry.mission.ledger` (the attempts and
-their journal lines), :mod:`~masonry.mission.outbox` (what is sent and told), :mod:`~masonry.mission.control_ports`
-(the operator's, the wind limit's and the journal's Protocols), and the effects: ``control_results``,
-``control_losses`` (startup: the UAVs never heard within ``startup_timeout_s`` are removed), ``control_airspace``
-(the airspace of docs/safety.md answers the UAVs' ``ClearanceRequest``), ``control_watch`` and ``control_resume``.
+their journal lines), :mod:`~masonry.mission.control_inbox` (what is received: decoded, screened, routed to
+the effects of its steps), :mod:`~masonry.mission.outbox` (what is sent and told),
+:mod:`~masonry.mission.control_ports` (the operator's, the wind limit's and the journal's Protocols), and the
+effects: ``control_results``, ``control_losses`` (startup: the UAVs never heard within ``startup_timeout_s``
+are removed), ``control_airspace`` (the airspace of docs/safety.md answers the UAVs' ``ClearanceRequest``),
+``control_watch`` and ``control_resume``.
 """
 
 from __future__ import annotations
@@ -22,13 +24,13 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.blueprint import UavSpec
-from masonry.errors import MissionError, ProtocolError
+from masonry.errors import MissionError
 from masonry.geofence import Site
 from masonry.mission import (
     control_airspace,
     control_dispatch,
+    control_inbox,
     control_losses,
-    control_results,
     control_resume,
     control_watch,
 )
@@ -42,23 +44,11 @@ from masonry.mission.journal_state import journaled_phases as _journaled_phases 
 from masonry.mission.ledger import AttemptLedger
 from masonry.mission.linger import LingerBook
 from masonry.mission.liveness import LivenessTracker, Timeouts
-from masonry.mission.messages import (
-    MISSION_CONTROL,
-    OPERATOR,
-    ClearanceRequest,
-    Heartbeat,
-    Message,
-    MissionEnd,
-    OperatorCommand,
-    Progress,
-    Recall,
-    Result,
-    decode,
-)
+from masonry.mission.messages import MISSION_CONTROL, Heartbeat, Message, MissionEnd, Recall
 from masonry.mission.operator import Operator
 from masonry.mission.outbox import MissionEvents, Outbox
 from masonry.mission.records import Attempt, UavLink
-from masonry.mission.reducer import OUT_OF_SERVICE_STATE, Step, steps_of
+from masonry.mission.reducer import OUT_OF_SERVICE_STATE
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
@@ -319,7 +309,7 @@ class MissionControl:
         if self.first_step_s is None:
             self.first_step_s = now_s
         for raw in self.transport.receive():
-            self._handle(raw, now_s)
+            control_inbox.handle(self, raw, now_s)  # decoded, screened, routed (mission/control_inbox.py)
         self.operator.step(self, now_s)
         control_losses.check_heartbeats(self, now_s)
         if self.glue is not None and self.glue.step(self, now_s):
@@ -345,45 +335,6 @@ class MissionControl:
             self._broadcast(
                 Heartbeat(MISSION_CONTROL, now_s, state="running" if self.ended_at_s is None else "ended")
             )
-
-    def _handle(self, raw: bytes, now_s: float) -> None:
-        """One message: decoded, screened, then the :func:`~masonry.mission.reducer.steps_of` it asks for."""
-        try:
-            msg = decode(raw, self.uavs.keys())
-        except ProtocolError as exc:
-            self.events.rejected += 1
-            self.events.errors.append(str(exc))
-            log.warning("rejected message: %s", exc)
-            return
-        self.events.received += 1
-        if isinstance(msg, OperatorCommand):
-            self.out.send(OPERATOR, self.operator.answer(self, msg, now_s))
-            return
-        if msg.sender == MISSION_CONTROL or msg.sender == OPERATOR:
-            return
-        link = self.uavs[msg.sender]
-        if control_losses.screened(self, link, msg, now_s):
-            return
-        self.liveness.heard(link, now_s)
-        if isinstance(msg, Result):
-            link.taking_off = False
-            if msg.position_m is not None:
-                link.moved_to(msg.position_m)
-        for step in steps_of(msg):
-            if step is Step.CLEARANCE and isinstance(msg, ClearanceRequest):
-                control_airspace.on_clearance_request(self, msg, now_s)
-            elif step is Step.RESULT and isinstance(msg, Result):
-                control_results.take_result_message(self, msg, now_s)
-            elif step is Step.RETIRE:
-                control_losses.lose(self, msg.sender, now_s, status="out of service")
-            elif step is Step.HEARTBEAT and isinstance(msg, Heartbeat):
-                control_results.on_heartbeat(self, msg, link, now_s)
-            elif step is Step.PROGRESS:
-                self.events.progress += 1
-            elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
-                control_airspace.report(self, link, msg, msg.position_m)
-                if self.sink is not None and self.uav_events:
-                    control_airspace.emit_uav(self, now_s, link)
 
     def _dispatch(self, now_s: float) -> None:
         self._dirty = False

@@ -41,7 +41,20 @@ one role given tasks within r_c of each other queue for each other's site interv
 of their runs, brick UAVs at the pickups and at the wall); a task that conflicts only with the other role's waits
 for one short visit. On the 6 x 30 wall at 6 + 3 (seed 1) the sprayers' site waits behind another sprayer fell from
 1,616 to 400 task-seconds with the sprayers' half of the rule alone. A brick UAV's brick apart is looked for only
-within :data:`APART_BRICK_REACH_M` of the brick the dispatcher would give it. Pure: no I/O, no clock.
+within :data:`APART_BRICK_REACH_M` of the brick the dispatcher would give it.
+
+**Sprayers start apart** (issue 27, 2026-12-06, branches ``front38``, ``front39``; docs/dispatch.md, "Sprayers
+start apart"). Up to the width, with two sprayers or more, each sprayer's first segment of the mission is the
+available one starting nearest its spot (:func:`start_spots`: the middles of equal shares of the wall's segments
+along it, the quarter points at two sprayers, the sprayers in the order of their homes along the wall), where the
+policy ranks every segment available at the start alike (the 12 m wall: its 79 first segments one critical-path
+step). There the policy's own picks start glue-2 six segments from the wall's end (+5.0 m): a short run, then a
+jump out of it, unchained; from the quarter points each sprayer has a run of 20 segments or more before any jump,
+and the brick UAVs behind the fronts hold less in the first 400 s (12 m wall, 4 + 2, seeds 1-7: 1,186.4 ->
+1,148.0 s). Where the policy ranks part of the wall first (the 6 x 30 wall: its +x third
+one step above the rest) the spots are not used: a sprayer sent to a spot of a lower step sprays one segment and
+is sent back to the top step, into the other sprayer's run (both held ~50 s at the start; seeds 1-5 +2.1 %).
+Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -50,13 +63,13 @@ from collections.abc import Callable, Mapping, Sequence
 
 from masonry.blueprint import UavSpec
 from masonry.mission.fleet import core_counts
-from masonry.planner.dispatch import Dispatcher
+from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
 from masonry.planner.dispatch_values import RUNNING
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
-__all__ = ["APART_BRICK_REACH_M", "ChainThrough", "mission_dispatcher"]
+__all__ = ["APART_BRICK_REACH_M", "ChainThrough", "mission_dispatcher", "start_spots"]
 
 #: Past the width, a brick UAV's brick away from the other brick UAVs is one within this (m, |dx| + |dy|) of the
 #: brick the dispatcher would give it: a farther one sends it across the wall, through the other UAVs' legs (12 m
@@ -67,15 +80,53 @@ APART_BRICK_REACH_M = 3.0
 
 class ChainThrough(Dispatcher):
     """The reactive dispatcher, with an adhesion UAV at the end of its segment given the next one of its run when
-    that one is ready, even while a conflicting task is in progress (see the module docstring)."""
+    that one is ready, even while a conflicting task is in progress; and each sprayer's first segment at its own
+    spot along the wall where the policy ranks the first segments alike (see the module docstring)."""
+
+    def __init__(
+        self,
+        plan: Plan,
+        fleet: Sequence[UavSpec],
+        policy: str = DEFAULT_POLICY,
+        max_attempts: int = 3,
+        durations_s: Mapping[str, float] | None = None,
+        reservation: str = "task",
+    ) -> None:
+        super().__init__(plan, fleet, policy, max_attempts, durations_s, reservation)
+        #: the sprayers given a segment already (only their first is at their spot)
+        self._spraying: set[str] = set()
+        first = self._available["adhesion"]
+        alike = len({self._rank[i] for i in first}) <= 1
+        segments = [self._start_m[i] for i, r in enumerate(self._role) if r == "adhesion"] if alike else []
+        self._spot_axis, self._spots = start_spots(segments, [s for s in fleet if s.role == "adhesion"])
 
     #: whether a role's spares past the fleet's core rest on their pads, the core's swaps too (mission control's
     #: :meth:`masonry.mission.swap_stagger.SwapStagger.resting`; never, by default)
     spares_rest: Callable[[str], bool] = staticmethod(lambda _role: False)
 
     def _select(self, role: str, uav: str) -> int | None:
-        i = self._chained_through(role, uav)
+        i = self._spread_start(role, uav)
+        if i is None:
+            i = self._chained_through(role, uav)
         return super()._select(role, uav) if i is None else i
+
+    def _start(self, i: int, uav: str) -> None:
+        super()._start(i, uav)
+        if self._role[i] == "adhesion":
+            self._spraying.add(uav)
+
+    def _spread_start(self, role: str, uav: str) -> int | None:
+        """A sprayer's first segment of the mission, up to the width with two sprayers or more: the available one
+        starting nearest its spot (:func:`start_spots`); None: not its first, no spots (the policy ranks the first
+        segments apart), or the rule is off."""
+        if role != "adhesion" or uav in self._spraying or self.admission is None or self._past_width():
+            return None
+        spot = self._spots.get(uav)
+        available = self._available[role]
+        if spot is None or self._live_count["adhesion"] < 2 or not available:
+            return None
+        axis, start = self._spot_axis, self._start_m
+        return min(available, key=lambda k: (abs(start[k][axis] - spot), k))
 
     def _core(self, role: str) -> int:
         """How many UAVs of ``role`` the live fleet's core has (:func:`masonry.mission.fleet.core_counts`)."""
@@ -161,6 +212,25 @@ class ChainThrough(Dispatcher):
             if s in ready and s not in available and self._status[s] != RUNNING:
                 return s
         return None
+
+
+def start_spots(
+    segments_m: Sequence[tuple[float, float, float]], sprayers: Sequence[UavSpec]
+) -> tuple[int, dict[str, float]]:
+    """Where each sprayer's first segment is (issue 27; docs/dispatch.md, "Sprayers start apart").
+
+    The segments' starts span ``[lo, hi]`` along their longer horizontal axis; the sprayers, ordered by their homes
+    along it (then fleet order), take the middles of ``n`` equal shares of the span: at 2 sprayers the quarter
+    points. Returns (the axis, 0 for x and 1 for y; the spot along it per sprayer); no spots without segments.
+    """
+    if not segments_m or not sprayers:
+        return 0, {}
+    xs, ys = [p[0] for p in segments_m], [p[1] for p in segments_m]
+    axis = 0 if max(xs) - min(xs) >= max(ys) - min(ys) else 1
+    lo, hi = (min(xs), max(xs)) if axis == 0 else (min(ys), max(ys))
+    ordered = sorted(range(len(sprayers)), key=lambda k: (sprayers[k].home_m[axis], k))
+    n = len(sprayers)
+    return axis, {sprayers[k].name: lo + (j + 0.5) * (hi - lo) / n for j, k in enumerate(ordered)}
 
 
 def mission_dispatcher(
