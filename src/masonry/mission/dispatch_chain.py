@@ -98,7 +98,10 @@ class ChainThrough(Dispatcher):
         first = self._available["adhesion"]
         alike = len({self._rank[i] for i in first}) <= 1
         segments = [self._start_m[i] for i, r in enumerate(self._role) if r == "adhesion"] if alike else []
-        self._spot_axis, self._spots = start_spots(segments, [s for s in fleet if s.role == "adhesion"])
+        sprayers = [s for s in fleet if s.role == "adhesion"]
+        # the core's sprayers only: the spares past it have no spot (4 + 4 starts as 4 + 2)
+        core = core_counts(len(fleet) - len(sprayers), len(sprayers))[1]
+        self._spot_axis, self._spots = start_spots(segments, sprayers[:core])
 
     #: whether a role's spares past the fleet's core rest on their pads, the core's swaps too (mission control's
     #: :meth:`masonry.mission.swap_stagger.SwapStagger.resting`; never, by default)
