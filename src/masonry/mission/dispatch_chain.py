@@ -137,6 +137,11 @@ class ChainThrough(Dispatcher):
         bricks, sprayers = core_counts(live["brick"], live["adhesion"])
         return bricks if role == "brick" else sprayers
 
+    def _cap_counts(self, role: str) -> tuple[int, int]:
+        """The admission cap shares the wall among the fleet's core, not its spares (the pyramid's 4 + 4 kept
+        2 + 2 busy where its core 4 + 2 keeps 3 + 1)."""
+        return self._core(role), self._core("brick") + self._core("adhesion")
+
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
         """None for a spare (:meth:`_spare`), else the admission rule's answer."""
         return None if self._spare(uav, role) else super()._admitted(uav, role, i)
