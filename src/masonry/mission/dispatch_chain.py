@@ -32,6 +32,20 @@ While the role is not the wall's pace (its core would finish its work left befor
 :func:`masonry.mission.fleet.spares_rest`) its spares *rest*: a spare on its pad is given no task even with a core
 UAV away for its swap, and the fleet flies its core's mission (the 12 m wall's 4 + 3 and 4 + 4 fly 4 + 2's).
 
+**A spare brick UAV takes off for a brick it can start, or for the last brick** (issue 27, 2026-12-06, branch
+``pyr39``; docs/dispatch.md, "Spares past the 2 : 1 core"). A brick UAV past the core in fleet order (its pad laid
+past the core's) that stands on its pad is given, past the width (the core alone keeps every site the wall can work
+busy), only a brick available now (no conflicting task in progress): not a brick to queue for nor one to fetch
+ahead of its glue, which the core's brick UAVs, back from their swaps, take in time. Under the width it prefetches
+as before (the 12 m wall's 8 + 2, seed 2, with the rule there too: +36 s). The pyramid's 3 + 1, seed 3: the spare,
+let go while both core UAVs swapped, fetched B27 ahead of its glue, crossed the sprayer's flight and took the site
+before the sprayer's chained A40 (+22 s over 2 + 1). The one exception is the wall's last brick (every other brick
+done or in progress): the spare fetches it as soon as every segment under it is ready, sprayed or being sprayed,
+where the core's UAVs would fetch it only once the last of them is given, a pallet trip (~40 s) before the site is
+free; the pyramid's last brick came 25-28 s after its last segment, 9-14 s with the spare (3 + 1, seeds 1-5: 13-16 s
+sooner than 2 + 1). In a fleet with spare brick UAVs each idle UAV is asked in turn (a core UAV with nothing to take
+does not stop the spare being asked).
+
 **Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
 and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available
 (every ready task of its role is within r_c of a task in progress) is given the policy's best ready task within r_c
@@ -60,11 +74,12 @@ Pure: no I/O, no clock.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from functools import cached_property
 
 from masonry.blueprint import UavSpec
 from masonry.mission.fleet import core_counts
 from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
-from masonry.planner.dispatch_values import RUNNING
+from masonry.planner.dispatch_values import PENDING, RUNNING
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
@@ -162,6 +177,39 @@ class ChainThrough(Dispatcher):
                 return True
         return sum(1 for j in self._uav_task.values() if self._role[j] == role) >= core
 
+    def _spare_uav(self, uav: str, role: str) -> bool:
+        """``uav`` comes after its role's core among the live UAVs of ``role`` in fleet order (its pad laid past
+        the core's: :func:`masonry.mission.fleet.fleet_for`)."""
+        core = self._core(role)
+        if core >= self._live_count[role]:
+            return False
+        names = [n for n, spec in self._fleet.items() if spec.role == role and n in self._live]
+        return names.index(uav) >= core
+
+    @property
+    def _per_uav_choice(self) -> bool:  # type: ignore[override]
+        """Each idle UAV is asked in turn while the fleet has spare brick UAVs (see the module docstring)."""
+        return self._core("brick") < self._live_count["brick"]
+
+    @cached_property
+    def _brick_tasks(self) -> list[int]:
+        """The indices of the plan's brick tasks."""
+        return [i for i, role in enumerate(self._role) if role == "brick"]
+
+    def _last_brick(self) -> int | None:
+        """The wall's last brick (every other brick task done, in progress or given up), when every
+        prerequisite of it is done, in progress or ready; None otherwise."""
+        st, left = self._status, self._prereqs
+        last = None
+        for i in self._brick_tasks:
+            if st[i] == PENDING:
+                if last is not None:
+                    return None
+                last = i
+        if last is None or any(st[p] == PENDING and left[p] for p in self._prerequisites[last]):
+            return None
+        return last
+
     def _past_width(self) -> bool:
         """The fleet's core has more UAVs than the wall has sites to work at once (False without the admission
         rule)."""
@@ -169,8 +217,14 @@ class ChainThrough(Dispatcher):
         return rule is not None and self._core("brick") + self._core("adhesion") > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
-        """Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
+        """A spare brick UAV on its pad: the wall's last brick (:meth:`_last_brick`), or past the width nothing.
+        Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
         one; else the dispatcher's choice (a task next to another of its role, or a brick to prefetch)."""
+        rule = self.admission
+        if role == "brick" and rule is not None and rule.landed(uav) and self._spare_uav(uav, role):
+            last = self._last_brick()
+            if last is not None or self._past_width():
+                return last
         if self._past_width():
             apart = self._apart(role, uav)
             if apart and role == "brick":
