@@ -8,9 +8,10 @@ from pathlib import Path
 from masonry.battery_drain import DrainMeter
 from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
+from masonry.mission.control import MissionControl
 from masonry.mission.handler import TOP_UP_FRACTION
 from masonry.mission.simulate import SimulatedMission
-from masonry.mission.swap_stagger import RESERVE, SWAP_EARLY, swap_due
+from masonry.mission.swap_stagger import RESERVE, SWAP_EARLY, core_of, swap_due
 from masonry.mission.uav_facts import UavFacts
 
 
@@ -163,3 +164,34 @@ def test_a_roles_one_busy_uav_under_the_reserve_is_sent_beside_a_spare() -> None
     mc.uavs["glue-1"].battery = mc.uavs["brick-1"].battery = RESERVE - 0.01
     assert swap_due(mc, "glue-1")
     assert not swap_due(mc, "brick-1")  # three brick UAVs may be busy: the spare rule holds
+
+
+def test_while_a_roles_spares_rest_its_core_swaps_as_the_core_alone_would() -> None:
+    """4 + 4 (core 4 + 2): while the sprayers are not the wall's pace their spares rest on their pads, and a core
+    sprayer under ``SWAP_EARLY`` is not sent early (a core of two never is, as at 4 + 2); under ``RESERVE`` it is.
+    With the sprayers the pace, the role of four sends one early and a spare takes its place."""
+
+    def control(done_kind: str) -> MissionControl:
+        mission = SimulatedMission.from_blueprint(running_bond(2, 8, brick_uavs=4, adhesion_uavs=4), seed=0)
+        mc = mission.control
+        done = [t.id for t in mc.plan.tasks if t.kind == done_kind and not t.done][2:]
+        mc.dispatcher.restore(done, {})  # all of one role's tasks done but two
+        for link in mc.uavs.values():
+            link.swaps_batteries = True
+            link.battery = 0.9
+        for spare in ("glue-3", "glue-4"):
+            mc.uavs[spare].facts = UavFacts(on_pad=True)
+        return mc
+
+    mc = control("adhesion")  # two segments left, the bricks the pace
+    assert mc.swaps.resting(mc, "adhesion") and not mc.swaps.resting(mc, "brick")
+    assert core_of(mc, "adhesion") == ["glue-1", "glue-2"]
+    mc.uavs["glue-1"].battery = SWAP_EARLY - 0.05
+    assert not swap_due(mc, "glue-1")
+    mc.uavs["glue-1"].battery = RESERVE - 0.01
+    assert swap_due(mc, "glue-1")
+
+    mc = control("brick")  # two bricks left, the sprayers the pace
+    assert not mc.swaps.resting(mc, "adhesion")
+    mc.uavs["glue-1"].battery = SWAP_EARLY - 0.05
+    assert swap_due(mc, "glue-1")

@@ -1,5 +1,6 @@
 """A fleet's core (two brick UAVs per sprayer) and its spares' pads (masonry.mission.fleet, issue 27 §4): adding
-spares moves no pad of the core, and every pad keeps its spacing."""
+spares moves no pad of the core, and every pad keeps its spacing; a role's spares rest while its core would finish
+before the other role's."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import math
 import pytest
 
 from masonry.blueprint_gen import running_bond
-from masonry.mission.fleet import core_counts, fleet_for
+from masonry.mission.fleet import core_counts, fleet_for, spares_rest
 
 
 @pytest.mark.parametrize(
@@ -62,3 +63,29 @@ def test_a_fleet_that_is_its_own_core_keeps_its_pads() -> None:
         "glue-1": 1.0,
         "glue-2": 16.0,
     }
+
+
+@pytest.mark.parametrize(
+    ("role", "live", "left_s", "rest"),
+    [
+        # the 12 m wall's 4 + 4 at its first swaps: 12 segments (~95 s) and 32 bricks (~960 s) left
+        ("adhesion", {"brick": 4, "adhesion": 4}, {"brick": 960.0, "adhesion": 95.0}, True),
+        ("adhesion", {"brick": 4, "adhesion": 3}, {"brick": 960.0, "adhesion": 95.0}, True),
+        # the sprayers the pace (their core of two would finish last): the spares fly in the swaps' places
+        ("adhesion", {"brick": 4, "adhesion": 4}, {"brick": 200.0, "adhesion": 400.0}, False),
+        # the 12 m wall's 8 + 2: the bricks the pace, the brick spares fly
+        ("brick", {"brick": 8, "adhesion": 2}, {"brick": 960.0, "adhesion": 95.0}, False),
+        ("brick", {"brick": 8, "adhesion": 2}, {"brick": 100.0, "adhesion": 400.0}, True),
+        # no spares: nothing rests, whatever the pace
+        ("adhesion", {"brick": 4, "adhesion": 2}, {"brick": 960.0, "adhesion": 95.0}, False),
+        ("brick", {"brick": 1, "adhesion": 1}, {"brick": 0.0, "adhesion": 95.0}, False),
+        # no UAV of the other role: nothing to be the pace against
+        ("adhesion", {"brick": 0, "adhesion": 3}, {"brick": 0.0, "adhesion": 95.0}, False),
+        # a tie: the role is the pace as much as the other, its spares fly
+        ("adhesion", {"brick": 4, "adhesion": 4}, {"brick": 400.0, "adhesion": 200.0}, False),
+    ],
+)
+def test_a_roles_spares_rest_while_its_core_would_finish_before_the_other_roles(
+    role: str, live: dict[str, int], left_s: dict[str, float], rest: bool
+) -> None:
+    assert spares_rest(role, left_s, live) is rest

@@ -95,3 +95,13 @@ def test_only_the_first_segment_goes_to_the_spot() -> None:
     again = {a.uav: a.task_id for a in d.assign({"glue-1": (end[0], end[1], 0.55)}) if a.uav == "glue-1"}
     nxt = d.plan.task(again["glue-1"])
     assert nxt.start_m[0] == pytest.approx(end[0])  # it chains on along its run
+
+
+@pytest.mark.parametrize("sprayers", [3, 4])
+def test_the_spares_past_the_core_have_no_spot_and_the_core_starts_as_4_plus_2(sprayers: int) -> None:
+    # 4 + 3 and 4 + 4 fly as their core 4 + 2 (the spares past it on their pads): the same quarter points
+    bp = running_bond(3, 40, placed_courses=1)
+    fleet = fleet_for(bp, 4, sprayers)
+    d = dispatcher(ChainThrough, bp, fleet, 8)
+    assert isinstance(d, ChainThrough) and set(d._spots) == {"glue-1", "glue-2"}
+    assert first_segments(d) == first_segments(dispatcher(ChainThrough, bp, fleet_for(bp, 4, 2), 8))

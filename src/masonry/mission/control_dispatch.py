@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.dispatch_chain import ChainThrough
 from masonry.mission.sites import work_point_m
 from masonry.mission.swap_stagger import swap_due
 from masonry.planner.dispatch_admission import Admission, site_width
@@ -32,6 +33,8 @@ def admit(mc: MissionControl, column_radius_m: float) -> None:
         lambda name: mc.columns.phase(name) is Phase.LANDED,
         swap_sent=lambda name: mc.swaps.is_sent(mc, name),
     )
+    if isinstance(mc.dispatcher, ChainThrough):
+        mc.dispatcher.spares_rest = lambda role: mc.swaps.resting(mc, role)
 
 
 def may_take_off(mc: MissionControl, name: str) -> bool:

@@ -28,6 +28,9 @@ spares on their pads, which take off only when a UAV of the core, sent home for 
 (:mod:`masonry.mission.swap_stagger`), frees its place. The width rules here count the core, not the fleet. The
 12 m wall at 5 + 2 to 8 + 2 and 4 + 3 / 4 + 4 was slower than at 4 + 2 (the extra UAVs in the core's way, on
 both seeds flown); a fleet and its core fly the same mission up to the first swap.
+While the role is not the wall's pace (its core would finish its work left before the other role's core,
+:func:`masonry.mission.fleet.spares_rest`) its spares *rest*: a spare on its pad is given no task even with a core
+UAV away for its swap, and the fleet flies its core's mission (the 12 m wall's 4 + 3 and 4 + 4 fly 4 + 2's).
 
 **A spare brick UAV takes off for a brick it can start, or for the last brick** (issue 27, 2026-12-06, branch
 ``pyr39``; docs/dispatch.md, "Spares past the 2 : 1 core"). A brick UAV past the core in fleet order (its pad laid
@@ -70,7 +73,7 @@ Pure: no I/O, no clock.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from functools import cached_property
 
 from masonry.blueprint import UavSpec
@@ -110,7 +113,14 @@ class ChainThrough(Dispatcher):
         first = self._available["adhesion"]
         alike = len({self._rank[i] for i in first}) <= 1
         segments = [self._start_m[i] for i, r in enumerate(self._role) if r == "adhesion"] if alike else []
-        self._spot_axis, self._spots = start_spots(segments, [s for s in fleet if s.role == "adhesion"])
+        sprayers = [s for s in fleet if s.role == "adhesion"]
+        # the core's sprayers only: the spares past it have no spot (4 + 4 starts as 4 + 2)
+        core = core_counts(len(fleet) - len(sprayers), len(sprayers))[1]
+        self._spot_axis, self._spots = start_spots(segments, sprayers[:core])
+
+    #: whether a role's spares past the fleet's core rest on their pads, the core's swaps too (mission control's
+    #: :meth:`masonry.mission.swap_stagger.SwapStagger.resting`; never, by default)
+    spares_rest: Callable[[str], bool] = staticmethod(lambda _role: False)
 
     def _select(self, role: str, uav: str) -> int | None:
         i = self._spread_start(role, uav)
@@ -142,18 +152,29 @@ class ChainThrough(Dispatcher):
         bricks, sprayers = core_counts(live["brick"], live["adhesion"])
         return bricks if role == "brick" else sprayers
 
+    def _cap_counts(self, role: str) -> tuple[int, int]:
+        """The admission cap shares the wall among the fleet's core, not its spares (the pyramid's 4 + 4 kept
+        2 + 2 busy where its core 4 + 2 keeps 3 + 1)."""
+        return self._core(role), self._core("brick") + self._core("adhesion")
+
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
         """None for a spare (:meth:`_spare`), else the admission rule's answer."""
         return None if self._spare(uav, role) else super()._admitted(uav, role, i)
 
     def _spare(self, uav: str, role: str) -> bool:
-        """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy."""
+        """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy, or
+        its role's spares rest (:attr:`spares_rest`) and ``uav`` is not of the core (its first UAVs in fleet
+        order)."""
         rule = self.admission
         if rule is None or not rule.landed(uav):
             return False
         core = self._core(role)
         if core >= self._live_count[role]:
             return False
+        if self.spares_rest(role):
+            of_role = [n for n, s in self._fleet.items() if s.role == role and n in self._live]
+            if uav not in of_role[:core]:
+                return True
         return sum(1 for j in self._uav_task.values() if self._role[j] == role) >= core
 
     def _spare_uav(self, uav: str, role: str) -> bool:

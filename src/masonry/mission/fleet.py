@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 
 from masonry.blueprint import Blueprint, UavSpec, validate_blueprint
 from masonry.errors import BlueprintError, InputError
@@ -39,6 +40,28 @@ def core_counts(brick_uavs: int, adhesion_uavs: int) -> tuple[int, int]:
         return brick_uavs, adhesion_uavs
     per = BRICK_UAVS_PER_SPRAYER
     return min(brick_uavs, per * adhesion_uavs), min(adhesion_uavs, -(-brick_uavs // per))
+
+
+def spares_rest(role: str, left_s: Mapping[str, float], live: Mapping[str, int]) -> bool:
+    """``role`` has spares past the fleet's core and its core would finish its work left before the other role's
+    core finishes theirs: the spares stay on their pads, through the core's battery swaps too, and the role flies as
+    its core (docs/dispatch.md, "Spares past the 2 : 1 core").
+
+    Args:
+        role: ``brick`` or ``adhesion``.
+        left_s: each role's expected seconds of tasks not done (:func:`masonry.planner.estimate_durations_s`).
+        live: each role's UAVs in the mission.
+
+    A spare of a role that is not the wall's pace lays nothing sooner: the wall waits on the other role. Flown in a
+    swapping UAV's place it only reorders the work and crosses the other role's legs (the 12 m wall's 4 + 4, seeds
+    1-3: +7 to +11 s over 4 + 2, the sprayers done 26-95 s sooner, the bricks later).
+    """
+    other = "adhesion" if role == "brick" else "brick"
+    bricks, sprayers = core_counts(live.get("brick", 0), live.get("adhesion", 0))
+    core = {"brick": bricks, "adhesion": sprayers}
+    if live.get(role, 0) <= core[role] or core[other] < 1:
+        return False
+    return left_s.get(role, 0.0) / core[role] < left_s.get(other, 0.0) / core[other]
 
 
 def fleet_for(
@@ -113,4 +136,4 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "fleet_for", "with_fleet"]
+__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "fleet_for", "spares_rest", "with_fleet"]

@@ -36,6 +36,10 @@ brick UAVs past its 4 + 2) has them on its pads by design (:mod:`masonry.mission
 core"), not because the wall cannot use more: there a spare waiting does not keep a low UAV at work. It is sent as
 in a role without one, and the spare takes its place (with the spare rule, the handlers held the core's tasks for
 their swaps while the spares sat: 12 m wall 8 + 2 seed 1, 1,183 s against 4 + 2's 1,157 s; without it 1,127 s).
+While the role is not the wall's pace its spares rest (:meth:`SwapStagger.resting`,
+:func:`masonry.mission.fleet.spares_rest`): the role is its core here too (:func:`core_of`), so a core of two is
+never sent early, as at 4 + 2 (the 12 m wall's 4 + 4 sent its fourth sprayer home at 50 %, in the middle of its run,
+and flew a spare in its place: +7 to +72 s over 4 + 2 on four of five seeds).
 
 Nothing here relaxes the battery reserve: a UAV given a task its battery does not cover still has it held for a
 swap by its handler (docs/state-machines.md, "Battery budget"). Pure bookkeeping over mission control's state:
@@ -47,14 +51,23 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from masonry.battery_drain import flight_left_s
-from masonry.mission.fleet import core_counts
+from masonry.mission.fleet import core_counts, spares_rest
 from masonry.planner.bounds import estimate_durations_s
 from masonry.timing import DEFAULT_TIMING
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["RESERVE", "SWAP_EARLY", "SWAP_SHARE", "SwapStagger", "past_core", "swap_due"]
+__all__ = [
+    "RESERVE",
+    "SWAP_EARLY",
+    "SWAP_SHARE",
+    "SwapStagger",
+    "core_of",
+    "live_counts",
+    "past_core",
+    "swap_due",
+]
 
 #: A UAV reporting less charge than this may be sent home for its swap early (above the handler's reserve).
 SWAP_EARLY = 0.5
@@ -71,6 +84,7 @@ class SwapStagger:
     def __init__(self) -> None:
         self.sent_s: dict[str, float] = {}
         self._expected_s: dict[str, float] | None = None  # each task's expected duration (planner.bounds)
+        self._left_s: dict[tuple[str, int], float] = {}  # (role, tasks done) -> its expected seconds left
 
     def is_sent(self, mc: MissionControl, name: str) -> bool:
         """``name`` was sent home for its swap and has not reported a fresh pack yet."""
@@ -94,16 +108,31 @@ class SwapStagger:
             and mc.dispatcher.task_of(name) is None
         )
 
-    def share_left_s(self, mc: MissionControl, role: str) -> float:
-        """The expected seconds of the tasks of ``role`` not done yet, per UAV of the role in the mission."""
+    def left_s(self, mc: MissionControl, role: str) -> float:
+        """The expected seconds of the tasks of ``role`` not done yet (summed once per task done)."""
         if self._expected_s is None:
             self._expected_s = estimate_durations_s(mc.plan, mc.fleet, timing=mc.timing or DEFAULT_TIMING)
         done = mc.dispatcher.done
-        left_s = sum(
-            self._expected_s.get(t.id, 0.0) for t in mc.plan.tasks if t.kind == role and t.id not in done
-        )
+        key = (role, len(done))
+        left = self._left_s.get(key)
+        if left is None:
+            left = sum(
+                self._expected_s.get(t.id, 0.0) for t in mc.plan.tasks if t.kind == role and t.id not in done
+            )
+            self._left_s = {k: v for k, v in self._left_s.items() if k[1] == len(done)}
+            self._left_s[key] = left
+        return left
+
+    def share_left_s(self, mc: MissionControl, role: str) -> float:
+        """The expected seconds of the tasks of ``role`` not done yet, per UAV of the role in the mission."""
         working = sum(1 for u in mc.uavs.values() if u.spec.role == role and not u.lost)
-        return left_s / max(1, working)
+        return self.left_s(mc, role) / max(1, working)
+
+    def resting(self, mc: MissionControl, role: str) -> bool:
+        """``role``'s spares past the fleet's core stay on their pads (:func:`masonry.mission.fleet.spares_rest`:
+        its core would finish before the other role's)."""
+        live = live_counts(mc)
+        return spares_rest(role, {r: self.left_s(mc, r) for r in live}, live)
 
     def covers(self, mc: MissionControl, name: str) -> bool:
         """``name``'s pack, above :data:`RESERVE` at the drain its heartbeats show, covers its share of the work
@@ -125,6 +154,9 @@ def swap_due(mc: MissionControl, name: str) -> bool:
     if link.lost or not link.swaps_batteries or link.battery is None or link.battery >= SWAP_EARLY:
         return False
     role = [n for n, u in mc.uavs.items() if u.spec.role == link.spec.role and n != name and not u.lost]
+    if book.resting(mc, link.spec.role):
+        # its spares rest on their pads: the role is its core (a core of two is never sent early, as at 4 + 2)
+        role = [n for n in core_of(mc, link.spec.role) if n != name]
     # a spare on its pad takes the task (not one past the fleet's core: it waits there by design), unless the
     # admission rule keeps its role to this one busy UAV: then the handler's hold would stop the role's work for the
     # whole swap (the pyramid's sprayer at 4 + 2 to 8 + 4)
@@ -145,9 +177,24 @@ def swap_due(mc: MissionControl, name: str) -> bool:
 
 def past_core(mc: MissionControl, role: str) -> bool:
     """``role`` has more UAVs in the mission than the fleet's core has of it (:func:`core_counts`)."""
+    live = live_counts(mc)
+    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
+    return live[role] > (bricks if role == "brick" else sprayers)
+
+
+def core_of(mc: MissionControl, role: str) -> list[str]:
+    """The live UAVs of ``role`` in the fleet's core: its first ones in fleet order (:func:`core_counts`; the
+    spares' pads are laid past the core's, :func:`masonry.mission.fleet.fleet_for`)."""
+    live = live_counts(mc)
+    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
+    names = [n for n, u in mc.uavs.items() if u.spec.role == role and not u.lost]
+    return names[: bricks if role == "brick" else sprayers]
+
+
+def live_counts(mc: MissionControl) -> dict[str, int]:
+    """How many UAVs of each role are in the mission (not lost)."""
     live = {"brick": 0, "adhesion": 0}
     for u in mc.uavs.values():
         if not u.lost:
             live[u.spec.role] += 1
-    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
-    return live[role] > (bricks if role == "brick" else sprayers)
+    return live

@@ -225,7 +225,7 @@ class Dispatcher(DispatchQueries):
         # busy: holding a task, or out with none (it takes the next one: a spare that took over a swapping UAV's
         # work is not undercut by it back from its swap, and their segments' chains are not split)
         busy = sum(1 for j in self._uav_task.values() if self._role[j] == role) + self._out_idle(role, rule)
-        if busy >= rule.cap(self._live_count[role], sum(self._live_count.values())):
+        if busy >= rule.cap(*self._cap_counts(role)):
             return None  # its role has its share of the UAVs the wall can keep busy: it stays on its pad
         running = list(self._uav_task.values())
         waiting = queued(running, lambda k: st[k] == _RUNNING, lambda j: nb[j])
@@ -253,7 +253,11 @@ class Dispatcher(DispatchQueries):
         """The admission rule applies and lets one UAV of ``role`` be busy at a time (the pyramid's sprayers
         at 4 + 2 to 8 + 4): that UAV's work is its role's (:func:`masonry.mission.swap_stagger.swap_due`)."""
         rule, live = self.admission, sum(self._live_count.values())
-        return rule is not None and rule.applies(live) and rule.cap(self._live_count[role], live) == 1
+        return rule is not None and rule.applies(live) and rule.cap(*self._cap_counts(role)) == 1
+
+    def _cap_counts(self, role: str) -> tuple[int, int]:
+        """The UAVs of ``role`` and of the fleet the admission cap shares the wall among (the live fleet)."""
+        return self._live_count[role], sum(self._live_count.values())
 
     def _prefetchable(self, role: str) -> list[int]:
         """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
