@@ -209,7 +209,7 @@ class ChainThrough(Dispatcher):
         return rule is not None and self._core("brick") + self._core("adhesion") > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
-        """Any brick UAV: the wall's last brick (:meth:`_last_brick`), but a UAV on its pad leaves it to one in
+        """Every brick UAV: the wall's last brick (:meth:`_last_brick`), but a UAV on its pad leaves it to one in
         the air with no task; else a spare brick UAV on its pad past the width nothing. Past the width, a UAV with
         nothing available is given the policy's best of :meth:`_apart`, where there is one; else the dispatcher's
         choice (a task next to another of its role, or a brick to prefetch)."""
