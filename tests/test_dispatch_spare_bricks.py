@@ -114,6 +114,19 @@ def test_not_before_every_segment_under_it_is_ready() -> None:
     assert d.in_progress == {"A0": "glue-1", "B0": "brick-3"}  # B1 placed: A1 ready, B0 the last brick
 
 
+def test_not_when_a_segment_under_it_was_given_up() -> None:
+    d = ChainThrough(last_brick_on_two_segments(), fleet(2), reservation="site")
+    d.admission = Admission(3, lambda _name: True)
+    glue_only = lambda name: name == "glue-1"  # noqa: E731
+    d.assign(may_start=glue_only)
+    sprayed = next(iter(d.in_progress))
+    d.complete(sprayed)
+    d.assign(may_start=glue_only)
+    assert not d.fail(next(iter(d.in_progress)), give_up=True)  # the other segment: given up (stuck)
+    d.assign()
+    assert d.in_progress == {} and "B0" not in d.done
+
+
 def bricks_on_one_segment() -> Plan:
     """B0, B1, B2 each on A0 alone (prefetchable once A0 is in progress)."""
     tasks = (glue(0, -0.3, 0.0), brick(0, 3.0), brick(1, 6.0), brick(2, 9.0))

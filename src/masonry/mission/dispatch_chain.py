@@ -85,7 +85,7 @@ from functools import cached_property
 from masonry.blueprint import UavSpec
 from masonry.mission.fleet import core_counts
 from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
-from masonry.planner.dispatch_values import PENDING, RUNNING
+from masonry.planner.dispatch_values import PENDING, RUNNING, STUCK
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
@@ -189,8 +189,8 @@ class ChainThrough(Dispatcher):
 
     def _last_brick(self) -> int | None:
         """The wall's last brick to give (every other brick task done, in progress or given up), when every
-        prerequisite of it is done, in progress or ready; None otherwise. Given to any brick UAV with no task
-        (:meth:`_select_conflicting`)."""
+        prerequisite of it is done, in progress or ready (none given up); None otherwise. Given to any brick UAV
+        with no task (:meth:`_select_conflicting`)."""
         st, left = self._status, self._prereqs
         last = None
         for i in self._brick_tasks:
@@ -198,7 +198,9 @@ class ChainThrough(Dispatcher):
                 if last is not None:
                     return None
                 last = i
-        if last is None or any(st[p] == PENDING and left[p] for p in self._prerequisites[last]):
+        if last is None or any(
+            st[p] == STUCK or (st[p] == PENDING and left[p]) for p in self._prerequisites[last]
+        ):
             return None
         return last
 
