@@ -1,6 +1,9 @@
-"""A spare brick UAV past the 2 : 1 core (masonry.mission.dispatch_chain): on its pad it is given a brick it can
-start now, or the wall's last brick as soon as the glue under it is ready, never a brick to fetch ahead of its
-glue (the pyramid's 3 + 1: docs/performance/fleet.md, "The third brick UAV of the pyramid's 3 + 1")."""
+"""The wall's last brick and the spare brick UAVs past the 2 : 1 core (masonry.mission.dispatch_chain).
+
+Any brick UAV with no task, on its pad or in the air, is given the wall's last brick as soon as the glue under it
+is ready (docs/performance/fleet.md, "The last brick for any brick UAV"); a spare on its pad is given a brick it
+can start now, never one to fetch ahead of its glue (the pyramid's 3 + 1: "The third brick UAV of the pyramid's
+3 + 1")."""
 
 from __future__ import annotations
 
@@ -37,17 +40,65 @@ def last_brick_on_two_segments() -> Plan:
     return Plan(tasks, deps, (("A0", "A1"), ("A0", "B0"), ("A1", "B0")))
 
 
-@pytest.mark.parametrize(("bricks", "uav"), [(3, "brick-3"), (2, None)])
-def test_the_spare_fetches_the_last_brick_once_the_glue_under_it_is_ready(
-    bricks: int, uav: str | None
+@pytest.mark.parametrize("bricks", [1, 2, 3])
+def test_the_first_brick_uav_on_its_pad_fetches_the_last_brick_once_the_glue_under_it_is_ready(
+    bricks: int,
 ) -> None:
-    # A0 and A1 ready, neither sprayed: no brick UAV of the core may prefetch B0 (its glue is not in progress), the
-    # spare, on its pad, fetches it; a 2 + 1 fleet has no spare and waits for the glue
+    # A0 and A1 ready, neither sprayed: B0 cannot be prefetched (its glue is not in progress), but it is the last
+    # brick: the first brick UAV, on its pad, fetches it while the glue is sprayed, in every fleet (1 + 1 to 3 + 1)
     d = ChainThrough(last_brick_on_two_segments(), fleet(bricks), reservation="site")
     d.admission = Admission(3, lambda _name: True)  # every UAV on its pad
     d.assign()
-    assert d.in_progress.get("B0") == uav
+    assert d.in_progress.get("B0") == "brick-1"
     assert "glue-1" in d.in_progress.values()
+
+
+@pytest.mark.parametrize("bricks", [2, 3])
+def test_a_brick_uav_in_the_air_with_no_task_fetches_the_last_brick_before_one_on_its_pad(
+    bricks: int,
+) -> None:
+    # brick-2 in the air (at the wall, its brick just placed), the others on their pads: brick-1, first in fleet
+    # order, leaves the last brick to it (no take-off)
+    d = ChainThrough(last_brick_on_two_segments(), fleet(bricks), reservation="site")
+    d.admission = Admission(3, lambda name: name != "brick-2")
+    d.assign()
+    assert d.in_progress == {"B0": "brick-2", "A0": "glue-1"}
+
+
+def test_a_brick_uav_flying_home_for_its_swap_leaves_the_last_brick_to_one_on_its_pad() -> None:
+    d = ChainThrough(last_brick_on_two_segments(), fleet(2), reservation="site")
+    d.admission = Admission(3, lambda name: name != "brick-2", swap_sent=lambda name: name == "brick-2")
+    d.assign(may_start=lambda name: name != "brick-2")  # (its swap is due: it may take no task)
+    assert d.in_progress == {"B0": "brick-1", "A0": "glue-1"}
+
+
+def test_the_spare_fetches_the_last_brick_while_the_core_cannot_start() -> None:
+    d = ChainThrough(last_brick_on_two_segments(), fleet(3), reservation="site")
+    d.admission = Admission(3, lambda _name: True)
+    d.assign(may_start=lambda name: name not in ("brick-1", "brick-2"))  # the core away for its swaps
+    assert d.in_progress == {"B0": "brick-3", "A0": "glue-1"}
+
+
+def three_bricks_on_three_segments() -> Plan:
+    """B<k> on A<k> (k = 0, 1, 2), 3 m apart, no segment sprayed."""
+    tasks = (*(glue(k, 3.0 * k - 0.3, 3.0 * k) for k in range(3)), *(brick(k, 3.0 * k) for k in range(3)))
+    deps = tuple((f"B{k}", f"A{k}") for k in range(3))
+    return Plan(tasks, deps, tuple((f"A{k}", f"B{k}") for k in range(3)))
+
+
+def test_only_the_last_brick_to_give_is_fetched_before_its_glue_is_given() -> None:
+    # B0 is prefetched as before (A0 given); B1 and B2 wait for their glue: neither is the last brick to give
+    d = ChainThrough(three_bricks_on_three_segments(), fleet(2), reservation="site")
+    d.admission = Admission(3, lambda _name: True)
+    d.assign()
+    assert d.in_progress == {"A0": "glue-1", "B0": "brick-1"}
+    d.complete("A0")
+    d.complete("B0")
+    d.assign(may_start=lambda name: name != "glue-1")  # the sprayer not on its way yet
+    assert d.in_progress == {}
+    # the sprayer given A1: B1 prefetched as before; B2 now the last brick to give, its glue ready: fetched too
+    d.assign()
+    assert d.in_progress == {"A1": "glue-1", "B1": "brick-1", "B2": "brick-2"}
 
 
 def test_not_before_every_segment_under_it_is_ready() -> None:
@@ -61,6 +112,19 @@ def test_not_before_every_segment_under_it_is_ready() -> None:
     d.complete("B1")
     d.assign(may_start=lambda name: name not in ("brick-1", "brick-2"))
     assert d.in_progress == {"A0": "glue-1", "B0": "brick-3"}  # B1 placed: A1 ready, B0 the last brick
+
+
+def test_not_when_a_segment_under_it_was_given_up() -> None:
+    d = ChainThrough(last_brick_on_two_segments(), fleet(2), reservation="site")
+    d.admission = Admission(3, lambda _name: True)
+    glue_only = lambda name: name == "glue-1"  # noqa: E731
+    d.assign(may_start=glue_only)
+    sprayed = next(iter(d.in_progress))
+    d.complete(sprayed)
+    d.assign(may_start=glue_only)
+    assert not d.fail(next(iter(d.in_progress)), give_up=True)  # the other segment: given up (stuck)
+    d.assign()
+    assert d.in_progress == {} and "B0" not in d.done
 
 
 def bricks_on_one_segment() -> Plan:
@@ -116,5 +180,9 @@ def test_the_pyramid_at_3_plus_1_completes_and_keeps_its_separation() -> None:
     assert all(t.status == "done" for t in r.tasks)
     assert r.min_separation_m is not None and r.min_separation_m >= 1.0
     assert r.conflict_violations == 0 and r.dependency_violations == 0
+    by_id = {t.id: t for t in r.tasks}
     last = max(r.tasks, key=lambda t: t.end_s or 0.0)
-    assert last.id == "B35" and last.uav == "brick-3"  # the spare laid the last brick
+    assert last.id == "B35"  # on A54 and A55, the last two segments
+    # given once B34 was placed (A55 ready), before the sprayer was given A55: at the pallet while it sprays
+    b35, a55 = by_id["B35"].start_s, by_id["A55"].start_s
+    assert b35 is not None and a55 is not None and b35 < a55

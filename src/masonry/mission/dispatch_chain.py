@@ -39,12 +39,21 @@ busy), only a brick available now (no conflicting task in progress): not a brick
 ahead of its glue, which the core's brick UAVs, back from their swaps, take in time. Under the width it prefetches
 as before (the 12 m wall's 8 + 2, seed 2, with the rule there too: +36 s). The pyramid's 3 + 1, seed 3: the spare,
 let go while both core UAVs swapped, fetched B27 ahead of its glue, crossed the sprayer's flight and took the site
-before the sprayer's chained A40 (+22 s over 2 + 1). The one exception is the wall's last brick (every other brick
-done or in progress): the spare fetches it as soon as every segment under it is ready, sprayed or being sprayed,
-where the core's UAVs would fetch it only once the last of them is given, a pallet trip (~40 s) before the site is
-free; the pyramid's last brick came 25-28 s after its last segment, 9-14 s with the spare (3 + 1, seeds 1-5: 13-16 s
-sooner than 2 + 1). In a fleet with spare brick UAVs each idle UAV is asked in turn (a core UAV with nothing to take
-does not stop the spare being asked).
+before the sprayer's chained A40 (+22 s over 2 + 1). The one exception is the wall's last brick (below). In a fleet
+with spare brick UAVs each idle UAV is asked in turn (a core UAV with nothing to take does not stop the spare being
+asked).
+
+**The last brick for any brick UAV** (issue 27, 2026-12-06, branches ``pyr39``, ``last39``; docs/dispatch.md, "The
+last brick"). The wall's last brick to give (every other brick done or in progress) goes to any brick UAV with no
+task, on its pad or in the air, as soon as every segment under it is done, being sprayed or ready, where the prefetch
+rule would give it only once the last of them is given: a pallet trip (~40 s) before the site is free, the
+pyramid's last brick 25-28 s after its last segment. A UAV on its pad leaves it to one in the air with no task (no
+take-off, often at the wall with its brick just placed; not one flying home for its swap), and while the last brick
+is to give each idle UAV is asked in turn. The pyramid, seeds 1-5: 2 + 1 -19 to -21 s, 4 + 2 and 8 + 4 -16 to -20 s
+on the seeds where the last segment waits for the brick before (else the prefetch gives the brick at the same
+instant), 3 + 1 -4 to -7 s (now the core's UAVs take it, as at 2 + 1); the 12 m and 6 x 30 walls unchanged. Given
+as soon as every other brick is given (a segment under it still waiting for the brick before) it came too soon
+(pyramid 4 + 2 +23 / +21 s on seeds 1 / 3: its UAV at the wall beside the brick before, placed 24 s later).
 
 **Apart from its own role past the width** (issue 27, 2026-12-06; docs/dispatch.md, "Sprayers apart past the width"
 and "Brick UAVs apart past the width"). Past that width the other way round holds too: a UAV with nothing available
@@ -79,7 +88,7 @@ from functools import cached_property
 from masonry.blueprint import UavSpec
 from masonry.mission.fleet import core_counts
 from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
-from masonry.planner.dispatch_values import PENDING, RUNNING
+from masonry.planner.dispatch_values import PENDING, RUNNING, STUCK
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
@@ -188,8 +197,11 @@ class ChainThrough(Dispatcher):
 
     @property
     def _per_uav_choice(self) -> bool:  # type: ignore[override]
-        """Each idle UAV is asked in turn while the fleet has spare brick UAVs (see the module docstring)."""
-        return self._core("brick") < self._live_count["brick"]
+        """Each idle UAV is asked in turn while the fleet has spare brick UAVs, or while the wall's last brick is
+        to be given (a UAV on its pad leaves it to one in the air: see the module docstring)."""
+        if self._core("brick") < self._live_count["brick"]:
+            return True
+        return self.admission is not None and self._last_brick() is not None
 
     @cached_property
     def _brick_tasks(self) -> list[int]:
@@ -197,8 +209,9 @@ class ChainThrough(Dispatcher):
         return [i for i, role in enumerate(self._role) if role == "brick"]
 
     def _last_brick(self) -> int | None:
-        """The wall's last brick (every other brick task done, in progress or given up), when every
-        prerequisite of it is done, in progress or ready; None otherwise."""
+        """The wall's last brick to give (every other brick task done, in progress or given up), when every
+        prerequisite of it is done, in progress or ready (none given up); None otherwise. Given to any brick UAV
+        with no task (:meth:`_select_conflicting`)."""
         st, left = self._status, self._prereqs
         last = None
         for i in self._brick_tasks:
@@ -206,7 +219,9 @@ class ChainThrough(Dispatcher):
                 if last is not None:
                     return None
                 last = i
-        if last is None or any(st[p] == PENDING and left[p] for p in self._prerequisites[last]):
+        if last is None or any(
+            st[p] == STUCK or (st[p] == PENDING and left[p]) for p in self._prerequisites[last]
+        ):
             return None
         return last
 
@@ -217,14 +232,17 @@ class ChainThrough(Dispatcher):
         return rule is not None and self._core("brick") + self._core("adhesion") > rule.width
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
-        """A spare brick UAV on its pad: the wall's last brick (:meth:`_last_brick`), or past the width nothing.
-        Past the width, a UAV with nothing available is given the policy's best of :meth:`_apart`, where there is
-        one; else the dispatcher's choice (a task next to another of its role, or a brick to prefetch)."""
+        """Every brick UAV: the wall's last brick (:meth:`_last_brick`), but a UAV on its pad leaves it to one in
+        the air with no task; else a spare brick UAV on its pad past the width nothing. Past the width, a UAV with
+        nothing available is given the policy's best of :meth:`_apart`, where there is one; else the dispatcher's
+        choice (a task next to another of its role, or a brick to prefetch)."""
         rule = self.admission
-        if role == "brick" and rule is not None and rule.landed(uav) and self._spare_uav(uav, role):
+        if role == "brick" and rule is not None:
             last = self._last_brick()
-            if last is not None or self._past_width():
-                return last
+            if last is not None:
+                return None if rule.landed(uav) and self._out_idle(role, rule) else last
+            if rule.landed(uav) and self._spare_uav(uav, role) and self._past_width():
+                return None
         if self._past_width():
             apart = self._apart(role, uav)
             if apart and role == "brick":
