@@ -86,7 +86,7 @@ from collections.abc import Callable, Mapping, Sequence
 from functools import cached_property
 
 from masonry.blueprint import UavSpec
-from masonry.mission.fleet import core_counts
+from masonry.mission.fleet import core_counts, core_of_role
 from masonry.planner.dispatch import DEFAULT_POLICY, Dispatcher
 from masonry.planner.dispatch_values import PENDING, RUNNING, STUCK
 from masonry.planner.schedule_policy import SCHEDULE_POLICY, make_dispatcher
@@ -157,9 +157,7 @@ class ChainThrough(Dispatcher):
 
     def _core(self, role: str) -> int:
         """How many UAVs of ``role`` the live fleet's core has (:func:`masonry.mission.fleet.core_counts`)."""
-        live = self._live_count
-        bricks, sprayers = core_counts(live["brick"], live["adhesion"])
-        return bricks if role == "brick" else sprayers
+        return core_of_role(role, self._live_count)
 
     def _cap_counts(self, role: str) -> tuple[int, int]:
         """The admission cap shares the wall among the fleet's core, not its spares (the pyramid's 4 + 4 kept
@@ -180,10 +178,8 @@ class ChainThrough(Dispatcher):
         core = self._core(role)
         if core >= self._live_count[role]:
             return False
-        if self.spares_rest(role):
-            of_role = [n for n, s in self._fleet.items() if s.role == role and n in self._live]
-            if uav not in of_role[:core]:
-                return True
+        if self.spares_rest(role) and self._spare_uav(uav, role):
+            return True
         return sum(1 for j in self._uav_task.values() if self._role[j] == role) >= core
 
     def _spare_uav(self, uav: str, role: str) -> bool:

@@ -42,6 +42,12 @@ def core_counts(brick_uavs: int, adhesion_uavs: int) -> tuple[int, int]:
     return min(brick_uavs, per * adhesion_uavs), min(adhesion_uavs, -(-brick_uavs // per))
 
 
+def core_of_role(role: str, live: Mapping[str, int]) -> int:
+    """How many UAVs of ``role`` the core of a fleet of ``live`` UAVs per role has (:func:`core_counts`)."""
+    bricks, sprayers = core_counts(live.get("brick", 0), live.get("adhesion", 0))
+    return bricks if role == "brick" else sprayers
+
+
 def spares_rest(role: str, left_s: Mapping[str, float], live: Mapping[str, int]) -> bool:
     """``role`` has spares past the fleet's core and its core would finish its work left before the other role's
     core finishes theirs: the spares stay on their pads, through the core's battery swaps too, and the role flies as
@@ -57,11 +63,10 @@ def spares_rest(role: str, left_s: Mapping[str, float], live: Mapping[str, int])
     1-3: +7 to +11 s over 4 + 2, the sprayers done 26-95 s sooner, the bricks later).
     """
     other = "adhesion" if role == "brick" else "brick"
-    bricks, sprayers = core_counts(live.get("brick", 0), live.get("adhesion", 0))
-    core = {"brick": bricks, "adhesion": sprayers}
-    if live.get(role, 0) <= core[role] or core[other] < 1:
+    core, core_other = core_of_role(role, live), core_of_role(other, live)
+    if live.get(role, 0) <= core or core_other < 1:
         return False
-    return left_s.get(role, 0.0) / core[role] < left_s.get(other, 0.0) / core[other]
+    return left_s.get(role, 0.0) / core < left_s.get(other, 0.0) / core_other
 
 
 def fleet_for(
@@ -136,4 +141,4 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "fleet_for", "spares_rest", "with_fleet"]
+__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "core_of_role", "fleet_for", "spares_rest", "with_fleet"]

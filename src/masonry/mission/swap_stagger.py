@@ -51,7 +51,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from masonry.battery_drain import flight_left_s
-from masonry.mission.fleet import core_counts, spares_rest
+from masonry.mission.fleet import core_of_role, spares_rest
 from masonry.planner.bounds import estimate_durations_s
 from masonry.timing import DEFAULT_TIMING
 
@@ -176,19 +176,18 @@ def swap_due(mc: MissionControl, name: str) -> bool:
 
 
 def past_core(mc: MissionControl, role: str) -> bool:
-    """``role`` has more UAVs in the mission than the fleet's core has of it (:func:`core_counts`)."""
+    """``role`` has more UAVs in the mission than the fleet's core has of it
+    (:func:`masonry.mission.fleet.core_counts`)."""
     live = live_counts(mc)
-    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
-    return live[role] > (bricks if role == "brick" else sprayers)
+    return live[role] > core_of_role(role, live)
 
 
 def core_of(mc: MissionControl, role: str) -> list[str]:
-    """The live UAVs of ``role`` in the fleet's core: its first ones in fleet order (:func:`core_counts`; the
-    spares' pads are laid past the core's, :func:`masonry.mission.fleet.fleet_for`)."""
-    live = live_counts(mc)
-    bricks, sprayers = core_counts(live["brick"], live["adhesion"])
+    """The live UAVs of ``role`` in the fleet's core: its first ones in fleet order
+    (:func:`masonry.mission.fleet.core_counts`; the spares' pads are laid past the core's,
+    :func:`masonry.mission.fleet.fleet_for`)."""
     names = [n for n, u in mc.uavs.items() if u.spec.role == role and not u.lost]
-    return names[: bricks if role == "brick" else sprayers]
+    return names[: core_of_role(role, live_counts(mc))]
 
 
 def live_counts(mc: MissionControl) -> dict[str, int]:
