@@ -6,6 +6,7 @@ import ast
 from pathlib import Path
 
 from code_health import (
+    AIRSPACE_MAX_LINES,
     CEILINGS,
     CONTROL_MAX_LINES,
     MAX_MODULE_LINES,
@@ -41,6 +42,14 @@ def test_mission_control_stays_within_the_issue_27_target() -> None:
     assert lines <= CONTROL_MAX_LINES, (
         f"mission/control.py is {lines} lines, over {CONTROL_MAX_LINES}: move a responsibility out to its own "
         "module (as control_inbox, control_watch), do not raise the target"
+    )
+
+
+def test_the_airspace_protocol_stays_within_its_ceiling() -> None:
+    lines = measure().module_lines["mission/airspace.py"]
+    assert lines <= AIRSPACE_MAX_LINES, (
+        f"mission/airspace.py is {lines} lines, over {AIRSPACE_MAX_LINES}: move a responsibility out to its own "
+        "module (as airspace_records, airspace_progress), do not raise the ceiling"
     )
 
 
