@@ -24,6 +24,9 @@ CONTROL_MAX_LINES = 400
 #: The airspace's protocol (``mission/airspace.py``): 499 lines before its records and its flights' progress moved
 #: out (``airspace_records``, ``airspace_progress``), 245 after; this keeps it from regrowing into the biggest.
 AIRSPACE_MAX_LINES = 300
+#: The UAV side's handler (``mission/handler.py``): 491 lines before its battery reserve and its assignment check
+#: moved out (``handler_battery``, ``handler_check``), 382 after.
+HANDLER_MAX_LINES = 400
 
 # Issue 28 counted 674 mentions of Any and 158 in-function imports when it was filed; the ceilings are today's.
 CEILINGS = {"any_mentions": 538, "in_function_imports": 149}

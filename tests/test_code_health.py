@@ -9,6 +9,7 @@ from code_health import (
     AIRSPACE_MAX_LINES,
     CEILINGS,
     CONTROL_MAX_LINES,
+    HANDLER_MAX_LINES,
     MAX_MODULE_LINES,
     MISSION_MAX_LINES,
     OVERSIZE_CEILINGS,
@@ -50,6 +51,14 @@ def test_the_airspace_protocol_stays_within_its_ceiling() -> None:
     assert lines <= AIRSPACE_MAX_LINES, (
         f"mission/airspace.py is {lines} lines, over {AIRSPACE_MAX_LINES}: move a responsibility out to its own "
         "module (as airspace_records, airspace_progress), do not raise the ceiling"
+    )
+
+
+def test_the_uav_handler_stays_within_its_ceiling() -> None:
+    lines = measure().module_lines["mission/handler.py"]
+    assert lines <= HANDLER_MAX_LINES, (
+        f"mission/handler.py is {lines} lines, over {HANDLER_MAX_LINES}: move a responsibility out to its own "
+        "module (as handler_battery, handler_check, handler_columns), do not raise the ceiling"
     )
 
 

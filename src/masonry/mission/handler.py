@@ -6,21 +6,16 @@ messages. ``step(now_s)`` reads the transport, sends the UAV's heartbeat, and ti
 its own trace of what the UAV actually executed (``executions``), from which the simulator measures
 conflict and dependency violations independently of mission control's bookkeeping.
 
-With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the handler keeps a battery reserve:
-below ``reserve_fraction`` a queued task is held back, so the machine flies home and lands, and starts once
-the pack is swapped (mission control sees the task in progress meanwhile). That hold is the ``queued`` phase
-the handler adds to the machine's phases in the result (docs/mission.md, "Where the time goes").
-Landed with nothing to do and under ``top_up_fraction``, the pack is swapped on the pad (docs/dispatch.md,
-"Battery swaps one after another").
+With a ``battery`` and a ``swap_battery`` (the simulator's ground crew), the handler keeps a battery reserve
+(:class:`~masonry.mission.handler_battery.GroundCrew`, a base class of the handler).
 
 Airspace (docs/safety.md): the columns over the sites, asked for and freed by
 :class:`~masonry.mission.handler_columns.ColumnRequests`, a base class of the handler.
 
-Assignments are checked against the UAV's own blueprint (docs/security.md): given its ``tasks``, ``spares``,
-``role`` and ``wall_digest``, it takes a task only with the same wall digest, one of the blueprint's tasks (same
-id and geometry, or with one of its spares of that size in the brick's place) of the UAV's role. Anything else
-is refused: counted in ``refused``, logged, answered with a failed result naming the reason (two blueprint
-files), unless that task is in hand or queued here: then the refused message cannot be mission control's.
+Assignments are checked against the UAV's own blueprint (:class:`~masonry.mission.handler_check.AssignmentCheck`,
+docs/security.md). Anything else is refused: counted in ``refused``, logged, answered with a failed result naming
+the reason (two blueprint files), unless that task is in hand or queued here: then the refused message cannot be
+mission control's.
 
 Mission control's heartbeat is watched: silent past the timeout (``mission_control_lost``), a UAV that had heard
 it abandons its tasks (failed, ``mission control lost``: no attempt counted) and flies home (mission control
@@ -28,8 +23,9 @@ gave them to another UAV, or a resumed one flies them). Heard again with no task
 
 The handler's parts, each a small module: the attempt record (:mod:`masonry.mission.execution`), what the parts
 share (:mod:`masonry.mission.handler_base`), the results and the kept completion
-(:mod:`masonry.mission.handler_results`), the site columns (:mod:`masonry.mission.handler_columns`); this module
-holds the queue, the heartbeat, the recall and the assignment check.
+(:mod:`masonry.mission.handler_results`), the site columns (:mod:`masonry.mission.handler_columns`), the battery
+reserve and ground crew (:mod:`masonry.mission.handler_battery`), the assignment check
+(:mod:`masonry.mission.handler_check`); this module holds the queue, the heartbeat, the recall and the refusals.
 """
 
 from __future__ import annotations
@@ -38,12 +34,13 @@ import logging
 import math
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import replace
 from typing import Any
 
 from masonry.errors import ProtocolError
 from masonry.mission.execution import Execution
 from masonry.mission.handler_base import Vec3
+from masonry.mission.handler_battery import TOP_UP_FRACTION, GroundCrew
+from masonry.mission.handler_check import AssignmentCheck
 from masonry.mission.handler_columns import ColumnRequests
 from masonry.mission.handler_results import ResultKeeper, ResultReports
 from masonry.mission.messages import (
@@ -57,10 +54,9 @@ from masonry.mission.messages import (
     Recall,
     decode,
 )
-from masonry.mission.spares import as_flown
 from masonry.mission.transport import Transport
 from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, facts_of
-from masonry.planner.tasks import BrickTask, Task
+from masonry.planner.tasks import Task
 from masonry.ports import (
     FINISHING_STATES,
     MISSION_CONTROL_LOST_REASON,
@@ -72,15 +68,11 @@ from masonry.spares import Spare
 log = logging.getLogger(__name__)
 
 
-#: An idle UAV on its pad with less charge than this has its pack swapped there (``UavHandler.top_up_fraction``;
-#: the line under which mission control sends a UAV home early, ``masonry.mission.swap_stagger.SWAP_EARLY``).
-TOP_UP_FRACTION = 0.5
-
 #: Refusals kept in ``UavHandler.refused`` (and logged); later ones are only counted in ``rejected``.
 MAX_REFUSALS_KEPT = 1000
 
 
-class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
+class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.
@@ -130,25 +122,14 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         wall_digest: str | None = None,
         keeper: ResultKeeper | None = None,
     ) -> None:
-        self._tasks = None if tasks is None else {t.id: t for t in tasks}
-        self._spares = {sp.id: sp for sp in spares or ()}  # (one may stand in for a brick)
-        self._role = role
-        self._wall_digest = wall_digest
+        self._check = AssignmentCheck.of(tasks, spares, role, wall_digest)
         self.refused: list[str] = []
-        self._battery = battery
-        self._swap_battery = swap_battery
-        self._return_brick = return_brick
-        self.bricks_returned: list[int] = []  # bricks the ground crew took off this UAV back to their pickup
-        #: what the heartbeats say of the battery (the reserve's, or ``report_battery``'s)
-        self._report_battery = report_battery if report_battery is not None else battery
+        self._init_battery(
+            battery, swap_battery, return_brick, report_battery, reserve_fraction, top_up_fraction
+        )
         #: what the heartbeats say of the wind (the autopilot's reading) and of this UAV's limit (uav.yaml)
         self._wind = wind
         self._max_wind_mps = max_wind_mps
-        self.reserve_fraction = reserve_fraction
-        self.top_up_fraction = top_up_fraction
-        self.battery_swaps = 0
-        self.top_ups = 0  # the swaps made while idle on the pad (``top_up_fraction``)
-        self._held_for: str | None = None  # why the battery budget holds the next task (logged once)
         self.name = name
         self.transport = transport
         self._position = position
@@ -193,37 +174,6 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         """When mission control was last heard from (None: never)."""
         return self._last_mc_s
 
-    @property
-    def swaps_batteries(self) -> bool:
-        """A ground crew swaps the battery before a task starts (the reserve): a low battery needs no retirement.
-
-        The state machine reads this: with it, a battery run low in the air (e.g. waiting for a site column)
-        aborts the task and lands the UAV at home, where the next task it is handed waits for the swap,
-        instead of taking the UAV out of service.
-        """
-        return self._battery is not None and self._swap_battery is not None
-
-    def return_brick(self, brick_id: int) -> bool:
-        """The ground crew takes brick ``brick_id`` off the landed UAV and back to its pickup (True once done).
-
-        Only a ground crew that swaps batteries does this (``swaps_batteries``); without one, False: the brick
-        stays on the UAV's pad for a person.
-        """
-        if not self.swaps_batteries or self._return_brick is None or not self._return_brick(brick_id):
-            return False
-        self.bricks_returned.append(brick_id)
-        log.info("%s: ground crew returned brick %d to its pickup", self.name, brick_id)
-        return True
-
-    @property
-    def out_of_service(self) -> bool:
-        """The machine is out of service (state ``halted``): it refuses every task it is handed, at once.
-
-        Such a UAV is handed its queued tasks without the battery reserve's hold, so that the refusal is not
-        delayed past the moment mission control (told by the ``halted`` heartbeat) has released the task.
-        """
-        return self.model is not None and str(getattr(self.model, "state", "")) == OUT_OF_SERVICE_STATE
-
     def _wind_reading(self) -> float | None:
         """The autopilot's wind now (m/s, within what a heartbeat may carry), or None."""
         if self._wind is None:
@@ -252,12 +202,8 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self.pump()
             if not self._queue:
                 return None
-        if self._battery is not None and not self.out_of_service and self._needs_swap(self._queue[0][0]):
-            # Battery reserve: the task waits while the machine, given nothing, flies home and lands; then
-            # the ground crew (``swap_battery``, True once done) swaps the pack and the task starts.
-            if self._swap_battery is None or not self._swap_battery():
-                return None
-            self.battery_swaps += 1
+        if self._held_for_swap(self._queue[0][0]):
+            return None  # the battery reserve holds it (:mod:`masonry.mission.handler_battery`)
         task, attempt, received_s = self._queue.popleft()
         self._ask_afresh()
         self._current = Execution(
@@ -265,39 +211,6 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
         )
         self.executions.append(self._current)
         return task
-
-    def _top_up_while_idle(self) -> None:
-        """Idle on its pad with nothing to do and under ``top_up_fraction``: the ground crew swaps the pack now,
-        off the critical path, rather than when the next task is held for it (a task handed over meanwhile
-        that the battery covers starts at once: the swap is abandoned)."""
-        if (
-            self._battery is None
-            or self._swap_battery is None
-            or self.mission_ended
-            or self.out_of_service
-            or self._battery() >= self.top_up_fraction
-        ):
-            return
-        if self._swap_battery():
-            self.battery_swaps += 1
-            self.top_ups += 1
-            log.info("%s: battery swapped while idle on its pad at %.0f s", self.name, self.now_s)
-
-    def _needs_swap(self, task: Task) -> bool:
-        """The battery is under ``reserve_fraction``, or (with a ground crew) does not cover ``task``: the
-        machine's battery budget (its ``battery_shortfall``: the task's flight, a budget of waiting for
-        clearance and the way home, at the drain it has measured; docs/state-machines.md, "Battery budget")."""
-        assert self._battery is not None
-        if self._battery() < self.reserve_fraction:
-            return True
-        shortfall = getattr(self.model, "battery_shortfall", None)
-        if self._swap_battery is None or shortfall is None:
-            return False
-        why = shortfall(task)
-        if why is not None and why != self._held_for:
-            log.info("%s: %s holds it for a battery swap", self.name, why)
-        self._held_for = why
-        return why is not None
 
     def report_progress(self, task_id: str, state: str, time_s: float) -> None:
         f = facts_of(
@@ -439,7 +352,7 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
                 self.rejected += 1
                 log.warning("%s got an assignment addressed to %s", self.name, msg.uav)
                 return
-            why = self._refusal(msg)
+            why = self._check.refusal(msg)
             if why is not None:
                 self._refuse(msg, why)
                 return
@@ -452,28 +365,6 @@ class UavHandler(ResultReports, ColumnRequests, MissionLink, ClearanceLink):
             self.mission_completed = msg.completed
         elif isinstance(msg, Recall) and msg.uav == self.name:
             self._recall = msg.reason  # applied at the next tick, outside the machine's callbacks
-
-    def _refusal(self, msg: Assign) -> str | None:
-        """Why this assignment is not one of this UAV's blueprint's tasks for its role (None: it is)."""
-        task = msg.task
-        if self._wall_digest is not None and msg.wall != self._wall_digest:
-            return (
-                f"task {task.id} is for the wall {msg.wall or '(none given)'}, this UAV's blueprint is "
-                f"{self._wall_digest}"
-            )
-        if self._role is not None and task.kind != self._role:
-            return (
-                f"task {task.id} is {task.kind} work, this UAV is {'an' if self._role[:1] == 'a' else 'a'} "
-                f"{self._role} UAV"
-            )
-        if self._tasks is not None:
-            mine = self._tasks.get(task.id)
-            if mine is None:
-                return f"task {task.id} is not a task of this UAV's blueprint"
-            if replace(task, done=mine.done) != as_flown(mine, getattr(task, "spare", None), self._spares):
-                what = "brick" if isinstance(task, BrickTask) else "segment"
-                return f"task {task.id}: its {what} geometry differs from this UAV's blueprint"
-        return None
 
     def _refuse(self, msg: Assign, why: str) -> None:
         self.rejected += 1

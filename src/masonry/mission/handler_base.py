@@ -35,10 +35,21 @@ class HandlerBase:
     _last_mc_s: float | None
     #: the task the machine has in hand (None: none)
     _current: Execution | None
+    #: mission control said the mission is over
+    mission_ended: bool
 
     @abstractmethod
     def pump(self) -> bool:
         """Read what has arrived now (between ticks); True if a task is waiting for the machine."""
+
+    @property
+    def out_of_service(self) -> bool:
+        """The machine is out of service (state ``halted``): it refuses every task it is handed, at once.
+
+        Such a UAV is handed its queued tasks without the battery reserve's hold, so that the refusal is not
+        delayed past the moment mission control (told by the ``halted`` heartbeat) has released the task.
+        """
+        return self.model is not None and str(getattr(self.model, "state", "")) == OUT_OF_SERVICE_STATE
 
     def _state(self) -> str:
         """The machine's state now (empty without a machine)."""
