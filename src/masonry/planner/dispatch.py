@@ -55,6 +55,10 @@ Vec3 = Sequence[float]
 _PENDING, _RUNNING, _DONE, _STUCK = PENDING, RUNNING, DONE, STUCK
 
 
+#: the wall's last tasks of a role whose prefetch may start with one segment under them still only ready
+END_BRICKS = 2
+
+
 class Dispatcher(DispatchQueries):
     """Assign available, non-conflicting tasks of a :class:`Plan` to idle UAVs, reacting to every event.
 
@@ -260,8 +264,13 @@ class Dispatcher(DispatchQueries):
         return self._live_count[role], sum(self._live_count.values())
 
     def _prefetchable(self, role: str) -> list[int]:
-        """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress."""
-        return prefetchable(role, self._uav_task.values(), self._status, self._role, self._graphs)
+        """Pending tasks of ``role`` not ready yet whose every prerequisite is done or in progress; for the wall's
+        last :data:`END_BRICKS` tasks of ``role``, one prerequisite may be ready instead (issue 27, branch
+        ``pyr40``: the pyramid's second-last brick fetched while the sprayer finishes the segment before its last)."""
+        st = self._status
+        pending = sum(1 for i, r in enumerate(self._role) if r == role and st[i] == _PENDING)
+        ready_left = 1 if pending <= END_BRICKS else 0
+        return prefetchable(role, self._uav_task.values(), st, self._role, self._graphs, ready_left)
 
     # ------------------------------------------------------------------ events
 

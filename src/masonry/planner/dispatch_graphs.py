@@ -162,9 +162,12 @@ def prefetchable(
     status: Sequence[int],
     roles: Sequence[str],
     graphs: Adjacency,
+    ready_left: int = 0,
 ) -> list[int]:
     """Pending tasks of ``role`` depending on a ``running`` task whose every prerequisite is done or in progress
-    (the ``site`` reservation's prefetch: a UAV fetches the brick while the task under it is flown)."""
+    (the ``site`` reservation's prefetch: a UAV fetches the brick while the task under it is flown), but up to
+    ``ready_left`` of them *ready* instead: pending, of the other role (a segment, never a brick, which would need a
+    UAV of the prefetching one's own role), their own prerequisites done (issue 27, branch ``pyr41``)."""
     out: list[int] = []
     seen: set[int] = set()
     for r in running:
@@ -172,7 +175,13 @@ def prefetchable(
             if d in seen or roles[d] != role or status[d] != PENDING:
                 continue
             seen.add(d)
-            if all(status[p] in (DONE, RUNNING) for p in graphs.prerequisites[d]):
+            left = [p for p in graphs.prerequisites[d] if status[p] not in (DONE, RUNNING)]
+            if len(left) <= ready_left and all(
+                roles[p] != role
+                and status[p] == PENDING
+                and all(status[q] == DONE for q in graphs.prerequisites[p])
+                for p in left
+            ):
                 out.append(d)
     return out
 
