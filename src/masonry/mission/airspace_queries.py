@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from masonry.mission.airspace_requests import climb_out, queued_near
 from masonry.mission.airspace_state import Phase
 from masonry.mission.volumes import Vec3, Volume, flight_volumes, volumes_conflict
 
@@ -58,33 +59,31 @@ def conflicting_pairs(c: ColumnClearance) -> list[tuple[str, str]]:
 
 
 def blockers(c: ColumnClearance, uav: str) -> list[tuple[str, str]]:
-    """Who is in the way of what ``uav`` waits for, and with what: ``(other UAV, volume kind)`` for every
-    other UAV whose volumes conflict with its flight at the lowest layer (or, landed, with its take-off
-    column), and ``(other, "earlier-request")`` for one that asked first for a site within the radius.
-    Empty: nothing blocks it (it is not waiting, or its answer is on the way). For the stall report."""
+    """Who is in the way of what ``uav`` waits for, and with what: ``(other, "earlier-request")`` for every UAV
+    whose turn its request waits for (:func:`~masonry.mission.airspace_requests.queued_near`, what the grant
+    itself asks: not one the site gate holds back), then ``(other UAV, volume kind)`` for every other UAV whose
+    volumes conflict with its flight at the lowest layer (or, landed, with its take-off column), then ``(other,
+    "hover")`` for a hold hover in the way of the climb out of its site's zone
+    (:func:`~masonry.mission.airspace_requests.climb_out`). Empty: nothing blocks it (it is not waiting, or its
+    answer is on the way). For the reports (``waits``, the stall) and the wait-for graph (airspace_yield.py)."""
     u = c.records.get(uav)
     if c.base_m is None or u is None:
         return []
     out: list[tuple[str, str]] = []
+    up: Volume | None = None
+    hovers: list[tuple[str, Volume]] = []
     if u.phase is Phase.LANDED:
         wanted = [c.home_column(uav)]
     elif u.request is not None:
         w = u.request
-        out = [
-            (other, "earlier-request")
-            for other, o in c.waiting_records()
-            if other != uav
-            and other not in c.lingering
-            and o.request is not None
-            and o.request.seq < w.seq
-            and math.hypot(o.request.site[0] - w.site[0], o.request.site[1] - w.site[1]) < c.wait_radius_m
-        ]
+        out = [(other, "earlier-request") for other in queued_near(c, w)]
         if u.phase is Phase.AT_HOLD and u.hold is not None:
             start = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
         else:
             start = w.position if w.position is not None else w.site
         home = c.is_home(uav, w.site)
         wanted = c.flight_volumes_at(start, w.site, w.top_m, 0, None, w.to, home=home)
+        up, hovers = climb_out(c, uav, wanted) or (None, [])
     else:
         return []
     for other, o in c.records.items():
@@ -93,6 +92,11 @@ def blockers(c: ColumnClearance, uav: str) -> list[tuple[str, str]]:
         kind = next((q.kind for q in o.volumes for v in wanted if c.conflict(v, q)), None)
         if kind is not None:
             out.append((other, kind))
+    named = {other for other, kind in out if kind != "earlier-request"}
+    for other, q in hovers:
+        if other not in named and up is not None and c.conflict(up, q):
+            named.add(other)
+            out.append((other, "hover"))
     return out
 
 

@@ -50,6 +50,7 @@ if TYPE_CHECKING:
 __all__ = [
     "LINGER_RING_STEP_M",
     "check_fence",
+    "climb_out",
     "evaluate",
     "few_airborne",
     "granted",
@@ -58,6 +59,7 @@ __all__ = [
     "hover_where",
     "off_layer_m",
     "queued_before",
+    "queued_near",
     "request",
 ]
 
@@ -138,11 +140,10 @@ def evaluate(c: ColumnClearance, uav: str, u: UavAirspace, now_s: float) -> Gran
         c.refused += 1
         u.answer = Grant(uav, w.site, False, refused=refused)
         return u.answer
-    earlier = queued_before(c, w.seq)
     lingers = linger_spans(c, uav, w.site) is not None  # its flight home held back: it waits near here
     blocked_site = (
         lingers
-        or any(math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m for e in earlier)
+        or bool(queued_near(c, w))  # (first come, first served)
         or (c.gate is not None and not c.gate.may_enter(uav, w.site))
     )
     if not blocked_site:
@@ -199,20 +200,33 @@ def climb_out_free(c: ColumnClearance, uav: str, vols: list[Volume]) -> bool:
     """The zone a flight ends in has its column clear up through every layer of the other UAVs' hold hovers: a
     UAV there can always climb out. A zone granted under a hover 1.1 m over its top (clear of it) could not be
     left at any layer while that UAV waited for the zone's site (``bench_layouts --large`` seed 3143)."""
+    way_up = climb_out(c, uav, vols)
+    if way_up is None:
+        return True
+    up, hovers = way_up
+    return volumes_clear([up], [q for _n, q in hovers], c.sep_xy_m, c.spacing_m - 1e-9)
+
+
+def climb_out(
+    c: ColumnClearance, uav: str, vols: list[Volume]
+) -> tuple[Volume, list[tuple[str, Volume]]] | None:
+    """The column up out of the zone ``vols`` end in, through every layer, and the hovers that may be in its way
+    with their UAVs: those of UAVs waiting for a site near the zone (they may wait for this UAV). None: the
+    flight ends in no zone. (:func:`climb_out_free`; :func:`masonry.mission.airspace_queries.blockers` names
+    those in the way.)"""
     z = vols[-1]
     if z.kind != "zone":
-        return True
+        return None
     up = dataclasses.replace(z, z1_m=max(z.z1_m, c.alt(c.max_layers - 1)))
-    # a hover whose UAV waits for a site near the zone: it may wait for this UAV
     near = 1.1 * c.wait_radius_m
     hovers = [
-        q
+        (n, q)
         for n, o in c.records.items()
         if n != uav and o.request is not None and point_segment_m(o.request.site[:2], z.a, z.b) < near
         for q in o.volumes
         if q.kind == "hover"
     ]
-    return volumes_clear([up], hovers, c.sep_xy_m, c.spacing_m - 1e-9)
+    return up, hovers
 
 
 def fast_end(c: ColumnClearance, uav: str, vols: list[Volume], home: bool = False) -> list[Volume] | None:
@@ -370,17 +384,30 @@ def check_fence(c: ColumnClearance, uav: str, w: FlightRequest) -> None:
         c.fence_refusals[uav] = problem
 
 
-def queued_before(c: ColumnClearance, seq: int) -> list[FlightRequest]:
-    """The requests made before ``seq`` that wait for the airspace: one the :class:`SiteGate` holds back (its
-    site is busy with conflicting work, or its prerequisites are not done) waits for work, not for the
-    airspace, and keeps no one else from coming down near its site (else the two could wait for each other:
-    an adhesion UAV waiting for the brick under its segment, whose UAV waited for the adhesion UAV's turn)."""
+def queued_before(c: ColumnClearance, seq: int) -> list[tuple[str, FlightRequest]]:
+    """The requests made before ``seq`` that wait for the airspace, with their UAVs: one the :class:`SiteGate`
+    holds back (its site is busy with conflicting work, or its prerequisites are not done) waits for work, not
+    for the airspace, and keeps no one else from coming down near its site (else the two could wait for each
+    other: an adhesion UAV waiting for the brick under its segment, whose UAV waited for the adhesion UAV's turn)."""
     gate = c.gate
     return [
-        u.request
+        (n, u.request)
         for n, u in c.waiting_records()
         if u.request is not None
         and u.request.seq < seq
         and (gate is None or gate.may_enter(n, u.request.site))
         and n not in c.lingering  # (its flight home is held back: it waits for a task, not the airspace)
+    ]
+
+
+def queued_near(c: ColumnClearance, w: FlightRequest) -> list[str]:
+    """The UAVs whose turn ``w`` waits for (first come, first served): those of the requests made before it for a
+    site within the wait radius of its own that wait for the airspace (:func:`queued_before`). A flight down to
+    ``w``'s site is granted only while there are none (:func:`evaluate`); they are the ``earlier-request``
+    blockers the reports name (:func:`masonry.mission.airspace_queries.blockers`), so the two cannot disagree
+    (a request the site gate held back was named, and held no one: issue 27)."""
+    return [
+        n
+        for n, e in queued_before(c, w.seq)
+        if math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m
     ]

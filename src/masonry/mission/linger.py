@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 
 from masonry.battery_drain import DrainMeter, flight_left_s
 from masonry.mission.airspace import ColumnClearance
-from masonry.mission.airspace_requests import hold_side, queued_before
+from masonry.mission.airspace_requests import hold_side, queued_near
 from masonry.mission.airspace_state import Phase, UavAirspace, hold_candidates
 from masonry.mission.fence import volumes_in_fence
 from masonry.mission.swap_stagger import swap_due
@@ -128,10 +128,7 @@ def wanted_flights(c: ColumnClearance, uav: str, u: UavAirspace) -> list[list[Vo
         start: Vec3 = (u.hold.point_m[0], u.hold.point_m[1], u.hold.layer_m)
     else:
         start = w.position if w.position is not None else w.site
-    turn = (c.gate is None or c.gate.may_enter(uav, w.site)) and not any(
-        math.hypot(e.site[0] - w.site[0], e.site[1] - w.site[1]) < c.wait_radius_m
-        for e in queued_before(c, w.seq)
-    )
+    turn = (c.gate is None or c.gate.may_enter(uav, w.site)) and not queued_near(c, w)
     out: list[list[Volume]] = []
     if turn:
         home = c.is_home(uav, w.site)

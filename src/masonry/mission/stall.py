@@ -28,7 +28,8 @@ DEFAULT_STALL_TIMEOUT_S = 300.0
 @dataclass(frozen=True)
 class Blocker:
     """Another UAV in the way, and what of it: the kind of its reserved volume (``pad``, ``zone``, ``climb``,
-    ``leg``, ``hover``) or ``earlier-request`` (it asked first for a site within r_c)."""
+    ``leg``, ``hover``) or ``earlier-request`` (it asked first for a site within the wait radius and its turn
+    comes first: :func:`masonry.mission.airspace_requests.queued_near`)."""
 
     uav: str
     holds: str
