@@ -28,8 +28,10 @@ placements (each the first pickup), which then flew as in a wind (kp 2, no timed
 let go anywhere within r_pl. A wind leans the UAV one way; a swing leans it both ways. So the lean is averaged as a
 direction too (the body's up axis in the world's horizontal plane, over the same :data:`LEAN_TAU_S`), and with
 ``UavConfig.wind_held_rad`` (the ``px4`` preset's 0.05 rad) a placement is in a wind only where that held lean is
-over it as well: the real PX4's calm came to 0.009-0.045 rad held at the judgement, the px4 model's 4 m/s to
-0.035-0.30 (three of 110 judgements under 0.05, each at the start of a mission, the rest 0.055 and more).
+over it as well: the real PX4's calm came to 0.004-0.047 rad held at the judgement (25 placements; the one read
+as a wind, 0.071 in magnitude, held 0.047), the px4 model's 4 m/s to 0.028-0.415 (12 of 389 judgements under 0.05,
+each of a magnitude of 0.073-0.092, light-wind moments: flown as calm, the three walls' bricks no farther apart;
+its calm air 0.0002-0.011, magnitude 0.043-0.065). docs/performance/autopilots.md.
 """
 
 from __future__ import annotations
