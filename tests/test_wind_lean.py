@@ -19,12 +19,12 @@ from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
 
 
-def _tel(roll_rad: float, pitch_rad: float) -> Telemetry:
+def _tel(roll_rad: float, pitch_rad: float, yaw_rad: float = 0.0) -> Telemetry:
     return Telemetry(
         time_s=0.0,
         position_m=(0.0, 0.0, 1.0),
         velocity_mps=(0.0, 0.0, 0.0),
-        attitude_rad=(roll_rad, pitch_rad, 0.0),
+        attitude_rad=(roll_rad, pitch_rad, yaw_rad),
         armed=True,
         mode="GUIDED",
         battery_fraction=1.0,
@@ -51,12 +51,36 @@ def test_the_tilt_averaged_over_the_hovers_says_wind() -> None:
     assert not one_gust.windy(0.02)
 
 
+def test_a_swing_about_the_vertical_is_not_a_wind_where_a_held_lean_is_asked() -> None:
+    """The real PX4's calm hover (issues 29/30, branch px441): it swings 0.1-0.13 rad either way at a ~1.3 s period, its
+    tilt averaged over 0.07 rad; held one way, averaged as a direction, it leans near 0. A wind leans it one way,
+    whatever way the UAV faces."""
+    swing = WindLean()
+    for i in range(int(3 * LEAN_TAU_S / 0.1)):
+        phase = 2.0 * math.pi * i * 0.1 / 1.3
+        swing.follow(_tel(0.12 * math.sin(phase), 0.03 * math.cos(phase)), 0.1)
+    assert swing.tilt_rad > 0.07 and swing.held_rad < 0.01
+    assert swing.windy(0.07)  # the magnitude alone says wind
+    assert not swing.windy(0.07, 0.05)
+    wind = WindLean()
+    for i in range(int(3 * LEAN_TAU_S / 0.1)):
+        # turning: the lean held toward -y in the world is a roll at yaw 0, a pitch at pi/2
+        yaw = 0.5 * i * 0.1
+        wind.follow(_tel(0.08 * math.cos(yaw), -0.08 * math.sin(yaw), yaw), 0.1)
+    assert wind.held_rad == pytest.approx(0.08, rel=0.1)
+    assert wind.windy(0.07, 0.05) and not wind.windy(0.07, 0.1)
+
+
 def test_only_the_arducopter_and_px4_presets_turn_it_on() -> None:
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).wall_in_wind_rad == 0.0
     assert PRESETS["arducopter"]["wall_in_wind_rad"] > 0.0
     # px4 aligns on the wall in any air: its lean says only which gain a placement flies (over its calm 0.05 rad)
     assert PRESETS["px4"]["wall_in_wind_rad"] > 0.055 and PRESETS["px4"]["wind_xy_kp_per_s"] == 2.0
     assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).wind_xy_kp_per_s == 0.0
+    # the held lean: px4 only (its real hover's swing); arducopter and ideal judge the magnitude alone
+    assert PRESETS["px4"]["wind_held_rad"] == 0.05
+    assert UavConfig("b", "brick", (0.0, 0.0, 0.0)).wind_held_rad == 0.0
+    assert "wind_held_rad" not in PRESETS["arducopter"] and "wind_held_rad" not in PRESETS["ideal"]
     assert "wind_xy_kp_per_s" not in PRESETS["arducopter"] and "wind_xy_kp_per_s" not in PRESETS["ideal"]
 
 

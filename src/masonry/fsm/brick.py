@@ -271,7 +271,7 @@ class BrickUav(PutBack):
         assert tel is not None and self.attempt.brick_estimate is not None
         center, yaw = self.attempt.brick_estimate
         above = np.array([center[0], center[1], tel.position_m[2] + self.effector.offset_body_m[2]])
-        self._place_gains(self._lean.windy(self.config.wall_in_wind_rad))
+        self._place_gains(self._lean.windy(self.config.wall_in_wind_rad, self.config.wind_held_rad))
         self._fly_to(tel, self.effector.body_target(above, yaw), yaw_rad=yaw)
         self._camera_align.reset(center)
 
@@ -430,7 +430,7 @@ class BrickUav(PutBack):
         # there spans drop-off to hover, and mission control must reserve it all (``to_m``), as it reserves an
         # adhesion UAV's segment. Planned now, as enter_place_align will plan it (the lean of the pickup's hovers
         # and the placement decide it; nothing changes them on the way).
-        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad)
+        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad, self.config.wind_held_rad)
         side = self._side.plan(self)
         to = np.array([body[0] + side[0], body[1] + side[1], alt]) if side.any() else None
         self._route(tel, np.array([body[0], body[1], alt]), yaw_rad=yaw, to_m=to)
@@ -445,7 +445,7 @@ class BrickUav(PutBack):
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
-        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad)
+        self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad, self.config.wind_held_rad)
         self._place_gains(self.attempt.in_wind)
         yaw = self._place_yaw_rad()
         body = self.effector.body_target(self._place_effector_target_m() + self._side.plan(self), yaw)

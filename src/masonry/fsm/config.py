@@ -93,6 +93,10 @@ class UavConfig:
     # horizontal position gain (1/s) over the configured one's, and flies it on (the next pickup's too) until a
     # placement in calm air (masonry.fsm.wind_lean); 0: the configured gains throughout
     wind_xy_kp_per_s: float = 0.0
+    # Issues 29/30: > 0, a placement is in a wind only where its lean held in one direction (averaged as a direction
+    # over the pickup's hovers) is over this (rad) too: a hover's swing about the vertical is not a wind (the real
+    # PX4's, masonry.fsm.wind_lean). 0: the tilt's magnitude alone
+    wind_held_rad: float = 0.0
     wall: tuple[tuple[int, tuple[float, ...]], ...] = ()
     # With align_on_wall: a drop-off whose supports the carried brick hides from above (a tower's) is aligned and
     # descended onto displaced, with a support in the camera's view, then a short last leg (masonry.fsm.side_look)

@@ -131,6 +131,9 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # (masonry.fsm.wind_lean.place_gains): kp 1.5 completed none of nine 4 m/s missions on the refitted model
         "wall_in_wind_rad": 0.07,
         "wind_xy_kp_per_s": 2.0,
+        # ... and a lean held one way over 0.05 rad: the real PX4's calm hover swings 0.036-0.085 rad averaged, held
+        # 0.004-0.047; the model's 4 m/s 0.028-0.415 held (masonry.fsm.wind_lean; issues 29/30, branch px441)
+        "wind_held_rad": 0.05,
         "ask_settle_tolerance_m": 0.05,
         "settle_speed_mps": 0.12,
         "align_patience_s": 4.0,

@@ -21,6 +21,17 @@ alignment gates' 3 s means with kp 1.5 (no mission of nine completed), and did w
 placed a pyramid's first course farther apart, so there it stays 1.5. Its tilt averaged so is 0.05-0.055 rad in calm
 air (its airframe's wander), 0.08-0.27 rad in 4 m/s: the ``px4`` preset's ``wall_in_wind_rad`` is 0.07
 (docs/performance/as-built.md "The px4 placement on the refitted model").
+
+On the real PX4 (v1.16 SIH, calm air, issues 29/30, branch ``px441``) the hover swings 4-6 cm at a 1.1-1.5 s
+period and tilts up to 0.1-0.13 rad either way: its tilt so averaged came to 0.040-0.085 rad, over 0.07 in 4 of 22
+placements (each the first pickup), which then flew as in a wind (kp 2, no timed release, no 1 cm rule) and were
+let go anywhere within r_pl. A wind leans the UAV one way; a swing leans it both ways. So the lean is averaged as a
+direction too (the body's up axis in the world's horizontal plane, over the same :data:`LEAN_TAU_S`), and with
+``UavConfig.wind_held_rad`` (the ``px4`` preset's 0.05 rad) a placement is in a wind only where that held lean is
+over it as well: the real PX4's calm came to 0.004-0.047 rad held at the judgement (25 placements; the one read
+as a wind, 0.071 in magnitude, held 0.047), the px4 model's 4 m/s to 0.028-0.415 (12 of 389 judgements under 0.05,
+each of a magnitude of 0.073-0.092, light-wind moments: flown as calm, the three walls' bricks no farther apart;
+its calm air 0.0002-0.011, magnitude 0.043-0.065). docs/performance/autopilots.md.
 """
 
 from __future__ import annotations
@@ -42,15 +53,30 @@ class WindLean:
 
     def __init__(self) -> None:
         self.tilt_rad = 0.0
+        #: the body's up axis in the world's horizontal plane (x, y; about rad for small tilts), averaged alike
+        self.up_xy = (0.0, 0.0)
+
+    @property
+    def held_rad(self) -> float:
+        """The lean held in one direction (rad): the averaged up axis's length; a swing about the vertical
+        averages out of it."""
+        return math.hypot(*self.up_xy)
 
     def follow(self, tel: Telemetry, dt_s: float) -> None:
-        """One tick of a hover: the mean moves toward ``tel``'s tilt (``dt_s`` since the last)."""
+        """One tick of a hover: the means move toward ``tel``'s tilt (``dt_s`` since the last)."""
         k = min(1.0, dt_s / LEAN_TAU_S)
-        self.tilt_rad += (math.hypot(tel.attitude_rad[0], tel.attitude_rad[1]) - self.tilt_rad) * k
+        roll, pitch, yaw = tel.attitude_rad
+        self.tilt_rad += (math.hypot(roll, pitch) - self.tilt_rad) * k
+        # the third column of R_world_body (masonry.geometry): the body's z axis in the world
+        cr, sr, sp = math.cos(roll), math.sin(roll), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        up_x, up_y = cy * sp * cr + sy * sr, sy * sp * cr - cy * sr
+        self.up_xy = (self.up_xy[0] + (up_x - self.up_xy[0]) * k, self.up_xy[1] + (up_y - self.up_xy[1]) * k)
 
-    def windy(self, threshold_rad: float) -> bool:
-        """The mean tilt is over ``threshold_rad`` (never for a threshold of 0 or less)."""
-        return 0.0 < threshold_rad < self.tilt_rad
+    def windy(self, threshold_rad: float, held_rad: float = 0.0) -> bool:
+        """The mean tilt is over ``threshold_rad`` (never for a threshold of 0 or less) and, for ``held_rad`` > 0,
+        the lean held in one direction (:attr:`held_rad`) is over ``held_rad`` too."""
+        return 0.0 < threshold_rad < self.tilt_rad and (held_rad <= 0.0 or held_rad < self.held_rad)
 
 
 def place_gains(configured: PIDGains | None, wind_xy_kp_per_s: float, in_wind: bool) -> PIDGains:
