@@ -26,11 +26,13 @@ if TYPE_CHECKING:
 
 __all__ = [
     "check_holds_task",
+    "given_up_reason",
     "heard_again",
     "ignore",
     "late_result",
     "misplaced",
     "on_heartbeat",
+    "release_waiting",
     "take_result_message",
 ]
 
@@ -82,9 +84,11 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         # attempt of the task
         count, give_up = mc.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
         give_up = give_up or is_place_taken(reason)  # (the brick in its place will not move: not again)
-        mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
+        again = mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
         mc.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
         mc.out.emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
+        if not again:
+            release_waiting(mc, r.task_id, now_s)
     mc.wake()
 
 
@@ -97,6 +101,23 @@ def misplaced(mc: MissionControl, att: Attempt, r: TaskResult, uav: str, why: st
     mc.dispatcher.fail(r.task_id, give_up=True)
     mc.ledger.journal_failed(now_s, r.task_id, uav, why)
     mc.out.emit(now_s, "failed", uav, r.task_id, attempt=att.attempt, reason=why)
+    release_waiting(mc, r.task_id, now_s)
+
+
+def release_waiting(mc: MissionControl, stuck: str, now_s: float) -> None:
+    """Task ``stuck`` was given up: every UAV on a task that depends on it (a brick fetched while the segment
+    under it was flown, waiting at its hold point for it) is recalled now, in the same event, its attempt failing
+    with :func:`given_up_reason` (it flies home, a brick on its magnet put back as any recall's), instead of
+    waiting until ``hold_patience_s`` ends the wait (issue 27: a wait is ended by the model, not a timer)."""
+    for task_id, uav in mc.dispatcher.waiting_on(stuck).items():
+        why = given_up_reason(stuck, task_id)
+        log.warning("%s: %s: recalled", uav, why)
+        mc.recall(uav, now_s, why)
+
+
+def given_up_reason(stuck: str, waiting: str) -> str:
+    """Why the attempt of ``waiting``, which depends on the given-up task ``stuck``, ends."""
+    return f"{stuck} under {waiting} was given up"
 
 
 def ignore(mc: MissionControl, reason: str, detail: str) -> None:

@@ -32,6 +32,7 @@ class DispatchQueries:
     _live: set[str]
     _live_count: dict[str, int]
     _uav_task: dict[str, int]
+    _dependents: list[list[int]]
     _available: dict[str, dict[int, None]]
     _events: int
     _last_done: str | None
@@ -122,6 +123,20 @@ class DispatchQueries:
         """The number the next (or current) attempt of ``task_id`` has: finished attempts + 1."""
         self._lookup(task_id, "query")
         return self._attempts.get(task_id, 0) + 1
+
+    def waiting_on(self, task_id: str) -> dict[str, str]:
+        """The tasks in progress that depend on ``task_id``, directly or through others (task id -> its UAV): a
+        brick fetched while the segment under it is flown (the ``site`` reservation's prefetch) waits for it, and
+        waits in vain once it is given up (issue 27, branch ``stuck41``)."""
+        seen: set[int] = set()
+        todo = [self._lookup(task_id, "query")]
+        while todo:
+            for d in self._dependents[todo.pop()]:
+                if d not in seen:
+                    seen.add(d)
+                    todo.append(d)
+        by_index = {i: uav for uav, i in self._uav_task.items()}
+        return {self._ids[i]: by_index[i] for i in sorted(seen) if i in by_index}
 
     def chain_s(self, task_id: str) -> float:
         """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
