@@ -132,7 +132,8 @@ def test_in_a_simulated_mission_the_brick_on_a_clogged_segment_is_put_back_at_on
     assert b9.status == "failed" and (b9.reason or "").startswith(given_up_reason(clogged, "B9"))
     (flown,) = [e for e in mission.handlers[b9.uav].executions if e.task_id == "B9"]
     assert flown.abandoned_s is not None and flown.abandoned_s - stuck_s <= 1.0  # not after 240 s
-    assert not report.completed
+    assert not report.completed and "B9" in report.stuck  # the report says why B9 was not placed:
+    assert f"  B9: its attempt 1 failed: {b9.reason}" in report.stuck_why()
     on_a7 = depends_on(mission.plan, clogged)
     done = {a.task_id for a in report.attempts if a.status == "done"}
     assert done == {t.id for t in mission.plan.tasks if not t.done} - on_a7 - {clogged}
