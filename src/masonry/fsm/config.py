@@ -138,6 +138,11 @@ class UavConfig:
     # ... for the first this many looks back up of the descent only (0: all of them, up to the last look's pass);
     # later passes are let go within r_pl (masonry.fsm.release_gate.ReleaseGate.wide)
     release_leg_looks: int = 0
+    # ... and in a wind (the placement's lean over wall_in_wind_rad), this far (m) instead (0: not in a wind), for
+    # the same first release_leg_looks looks (masonry.fsm.release_gate.ReleaseGate.wide). Off in the presets: on the
+    # px4 model 0.012 took the bricks over 2 cm in 4 m/s 13 -> 7 over the bond and the towers (seeds 0-19), but the
+    # towers' seeds 0-9 0 -> 2 (branch bond41, docs/performance/as-built.md)
+    release_leg_wind_m: float = 0.0
     # With align_on_wall, on the side look's last leg of a guarded drop-off in calm air: the release is timed at the
     # effector's predicted nearest pass to the drop-off (its error carried on its velocity) within this long (s)
     # after the tick, through Gripper.release_at (masonry.fsm.release_gate.ReleaseGate.ahead). 0: off (a release at

@@ -107,6 +107,10 @@ cm of their neighbours (from ticks inside r_pl only, seeds 0-19: 11 -> 8 of 120)
 wind: there, from any tick, the rotated bond in 4 m/s went 4/150 -> 7/150 over 2 cm, and from ticks inside r_pl
 its maximum 23.9 -> 28.0 mm (docs/performance/as-built.md).
 
+In a wind ``UavConfig.release_leg_wind_m`` stands for ``release_leg_m`` (0 by default and in the presets: a switch,
+branch ``bond41``): the px4 rotated bond's bricks over 2 cm in 4 m/s were let go at ticks the gate measured 13-14 mm
+off; with 1.2 cm the bond 4 -> 2 and 4 -> 1 of 150 (seeds 0-9, 10-19), the towers 0 -> 2 and 5 -> 2 of 60.
+
 On a guarded descent with the wall seen within ``release_fresh_s``, a tick more than ``LOW_M`` under the drop-off's
 height is passed over (:meth:`ReleaseGate.low`, branch ``fresh31``): the release's height test is one-sided (a brick
 pressed down rests on its support, :mod:`masonry.fsm.dropoff_reach`), but an effector that low has brought its
@@ -316,7 +320,8 @@ class ReleaseGate:
         sighting is fresh, :meth:`lost` flies it again from the look point. The last look's pass is let go within
         r_pl."""
         cfg = uav.config
-        if cfg.release_leg_m <= 0.0 or not self.guarded or not uav._side.final or uav.attempt.in_wind:
+        leg_m = cfg.release_leg_wind_m if uav.attempt.in_wind else cfg.release_leg_m
+        if leg_m <= 0.0 or not self.guarded or not uav._side.final:
             return False
         if self.relooks >= self._most(uav) or 0 < cfg.release_leg_looks <= self.relooks:
             return False
@@ -327,7 +332,7 @@ class ReleaseGate:
         # a timed release (:meth:`ahead`) judged at its instant: the pass's predicted nearest point (branch towers38)
         if self.ahead_s > 0.0:
             error_m = error_m + np.asarray(tel.velocity_mps, dtype=float)[:2] * self.ahead_s
-        wide = float(np.hypot(*error_m)) > cfg.release_leg_m
+        wide = float(np.hypot(*error_m)) > leg_m
         if wide and self.fresh(uav):
             uav._side.on_time = True  # (the learnt lag does not step on this pass: it was in r_pl in time)
         return wide
