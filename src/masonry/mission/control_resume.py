@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from masonry.errors import JournalError, PlanningError
 from masonry.mission import control_airspace
+from masonry.mission.control_results import release_waiting
 from masonry.mission.course_check import is_misplaced
 from masonry.mission.records import Liveness
 from masonry.mission.sites import journaled_visits
@@ -32,7 +33,9 @@ def restore(mc: MissionControl, state: JournalState) -> None:
     UAV says first decides (its completion, said again, is taken; its heartbeat naming the task keeps it
     flying; one naming no task gives it back to the pool, not counted; silence declares it lost). Handing
     them out again at once would fly a task twice whose completion never reached the journal.
-    UAVs the journal declared lost stay lost.
+    UAVs the journal declared lost stay lost. A UAV kept on a task that depends on a task the journal gave up (the
+    previous run stopped before its recall's failure reached the journal) is recalled at once with
+    :func:`~masonry.mission.control_results.given_up_reason`, as the run that gave it up did.
     """
 
     done = {rec.task_id: rec for rec in state.done}
@@ -54,6 +57,8 @@ def restore(mc: MissionControl, state: JournalState) -> None:
             mc.dispatcher.remove_uav(name)
     for run in state.running:
         adopt(mc, run)
+    for stuck in sorted(mc.dispatcher.stuck):  # a UAV kept on a task that waits for a given-up one: recalled
+        release_waiting(mc, stuck, state.last_time_s)
     mc.ledger.sort()
     mc.resumed_at_s = state.last_time_s
     mc.sites.restore(journaled_visits(state.meta, set(done), state.last_time_s))

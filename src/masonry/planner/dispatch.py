@@ -477,11 +477,14 @@ class Dispatcher(DispatchQueries):
         so (mission control hears from the UAV whether it is still on it, done with it, or forgot it).
 
         Call after :meth:`restore`, before the first :meth:`assign`. Its conflicting tasks are blocked as by
-        an assignment; the attempt number stays the journal's (finished attempts, plus this one).
+        an assignment; the attempt number stays the journal's (finished attempts, plus this one). With
+        ``prefetch`` a brick is adopted whatever its prerequisites' state, as it was given (its UAV fetched it while
+        the segment under it was flown, which may since have failed or been given up: mission control recalls it
+        then, :func:`~masonry.mission.control_results.release_waiting`).
 
         Raises:
-            PlanningError: the task is unknown, not pending or waits for a prerequisite; the UAV is unknown,
-                lost, of the other role or already holds a task.
+            PlanningError: the task is unknown, not pending or (but a ``prefetch`` brick) waits for a prerequisite;
+                the UAV is unknown, lost, of the other role or already holds a task.
         """
         i = self._lookup(task_id, "adopted attempt")
         spec = self._fleet.get(uav)
@@ -491,7 +494,8 @@ class Dispatcher(DispatchQueries):
             raise PlanningError(f"cannot adopt {task_id} on {uav}: it is lost or holds a task")
         if spec.role != self._role[i]:
             raise PlanningError(f"cannot adopt {task_id} on {uav}: a {spec.role} UAV")
-        if self._status[i] != _PENDING or self._prereqs[i]:
+        prefetched = self.prefetch and self._role[i] == "brick"  # (given before its segments were done)
+        if self._status[i] != _PENDING or (self._prereqs[i] and not prefetched):
             raise PlanningError(f"cannot adopt {task_id}: it is not pending with its prerequisites done")
         self._start(i, uav)
 
