@@ -19,6 +19,8 @@ from hypothesis import strategies as st
 
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.airspace_requests import evaluate
+from masonry.mission.wait_causes import airspace_cause
+from masonry.mission.waits import WaitCause
 from test_airspace_yield import BEAD, PALLET, _stuck_pair
 
 R = 1.5
@@ -194,3 +196,28 @@ def test_every_blocker_named_is_waited_for_and_a_request_with_none_is_granted(op
             w = u.request
             if w is not None and u.phase in (Phase.ASKING, Phase.AT_HOLD) and gate.may_enter(name, w.site):
                 _check_blockers(c, gate, name, t)
+
+
+def test_a_uav_flying_to_its_hold_point_waits_to_hold_until_it_arrives_then_for_what_is_in_the_way():
+    # b is sent to a hold point (a works at the site beside its own); a leaves while b is on its way: nothing is
+    # in the way of the rest, but the answer waits for b's arrival (before, the wait named no one: the 12 m
+    # wall at 4 + 2, seed 1, 44 task-seconds); e's leg, granted meanwhile, is then what the grant waits for
+    tasks = {"a": "A1", "b": "B3", "e": "A9"}
+    c = ColumnClearance(R, BASE, S)
+    assert c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, 0.0, 1.2)).granted
+    c.end_transit("a")
+    b = c.request("b", (0.5, 0.0, 1.2), 1.0, (0.0, -3.0, 1.2))
+    assert not b.granted and b.hold_m is not None and b.layer_m is not None
+    assert c.phase("b") is Phase.TO_HOLD
+    assert airspace_cause(c, "b", tasks.get, "air") == WaitCause("airspace", "a", "A1", "zone", "b", "air")
+    c.release("a")
+    assert c.blockers("b") == [] and c.grant(2.0) == []  # nothing in the way: b is not at its hold point yet
+    assert airspace_cause(c, "b", tasks.get, "air") == WaitCause(
+        "airspace", holds="to-hold", uav="b", where="air"
+    )
+    assert c.request("e", (-3.0, 0.0, 1.2), 2.5, (3.0, 0.0, 1.2)).granted  # its leg crosses b's way down
+    c.progress("b", (b.hold_m[0], b.hold_m[1], b.layer_m))
+    assert c.phase("b") is Phase.AT_HOLD and c.grant(3.0) == []
+    assert airspace_cause(c, "b", tasks.get, "air") == WaitCause("airspace", "e", "A9", "leg", "b", "air")
+    assert _granted_without(c, "b", {"e"}, 3.5)  # it is e's leg that holds b now
+    assert c.conflicts() == []

@@ -17,23 +17,29 @@ airspace answering them feeds the same record. Pure: no I/O, no clock.
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING
 
 from masonry.errors import MissionError
 from masonry.mission.airspace import ON_PAD_Z_M
+from masonry.mission.airspace_state import Phase
 from masonry.mission.report_codec import wait_record, waits_from_record
 from masonry.mission.waits import AIR, GROUND, TaskWait, WaitCause, WaitLog
 from masonry.planner.tasks import Plan
 
 if TYPE_CHECKING:
+    from masonry.mission.airspace import ColumnClearance
     from masonry.mission.control import MissionControl
     from masonry.mission.control_ports import JournalPort
+    from masonry.mission.reserved import TableClearance
 
 Vec3 = tuple[float, float, float]
 
 _OPERATOR = WaitCause("operator")
+
+#: ``holds`` of an ``airspace`` wait while the UAV flies to its hold point: the answer waits for its arrival
+TO_HOLD = "to-hold"
 
 
 #: Journal meta keys of the waits: ``waits/<task id>`` -> the task's closed waits (:func:`wait_record` each).
@@ -282,11 +288,24 @@ class WaitWatch:
                     return WaitCause("dependency", uav, prereq, None, name, where)
             if mc.sites.may_enter(name, site):
                 return WaitCause("glue", uav=name, where=where)
-        by = mc.columns.blockers(name)
-        if not by:
-            return WaitCause("airspace", uav=name, where=where)
-        other, kind = by[0]
-        return WaitCause("airspace", other, mc.dispatcher.task_of(other), kind, name, where)
+        return airspace_cause(mc.columns, name, mc.dispatcher.task_of, where)
 
 
-__all__ = ["WaitWatch"]
+def airspace_cause(
+    columns: ColumnClearance | TableClearance,
+    name: str,
+    task_of: Callable[[str], str | None],
+    where: str | None,
+) -> WaitCause:
+    """Why the airspace holds ``name``'s flight back: the first UAV the airspace names (``blockers``); when it
+    names none, ``to-hold`` while ``name`` flies to its hold point (the answer waits for its arrival; the
+    blockers judge the rest from where it asked), else no one (its answer is on the way)."""
+    by = columns.blockers(name)
+    if not by:
+        holds = TO_HOLD if columns.phase(name) is Phase.TO_HOLD else None
+        return WaitCause("airspace", holds=holds, uav=name, where=where)
+    other, kind = by[0]
+    return WaitCause("airspace", other, task_of(other), kind, name, where)
+
+
+__all__ = ["TO_HOLD", "WaitWatch", "airspace_cause"]

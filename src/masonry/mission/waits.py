@@ -42,7 +42,8 @@ class WaitCause:
         what: one of :data:`CAUSES`.
         blocking_uav: the UAV in the way, where known.
         blocking_task: the task in the way (the prerequisite, the conflicting task, the blocking UAV's task).
-        holds: what of the blocking UAV is in the way (its volume's kind, ``earlier-request``), where known.
+        holds: what of the blocking UAV is in the way (its volume's kind, ``earlier-request``), where known;
+            ``to-hold`` (no blocking UAV): the answer waits for the UAV's arrival at its hold point.
         uav: the UAV the task is assigned to while it waits (None: not assigned).
         where: ``ground`` or ``air``, where the waiting UAV was (None: no UAV waited).
     """
