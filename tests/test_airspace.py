@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from airspace_rig import apply_step
 from fsm_rig import HOME, PICKUP, Rig
 from masonry.blueprint_gen import running_bond, towers
 from masonry.errors import ProtocolError
@@ -243,23 +244,7 @@ def test_reserved_volumes_never_conflict_and_zones_keep_the_radius(ops):
     t = 0.0
     for uav, op, site, pos, top in ops:
         t += 1.0
-        if op == "req":
-            c.request(uav, (*site, 1.2), t, (*pos, 1.2), top_m=top)
-        elif op == "end":
-            c.end_transit(uav)
-        elif op == "away":
-            for h in c.held.get(uav, ()):
-                c.release(uav, h)
-        elif op == "move":
-            layer = c.layer_m(uav)
-            if layer is not None:
-                c.progress(uav, (*pos, layer))
-        elif op == "lost":
-            c.release(uav)
-        elif op == "takeoff":
-            c.take_off(uav)
-        elif op == "land" and uav in homes:
-            c.landed(uav, homes[uav])
+        apply_step(c, uav, op, site, pos, top, t, homes=homes)
         c.grant(t)
         assert c.conflicts() == []
         # work zones (not the columns over pads, where no one works) keep r_c

@@ -17,6 +17,7 @@ import math
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
+from airspace_rig import HeldGate, apply_step
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.airspace_requests import evaluate
 from masonry.mission.wait_causes import airspace_cause
@@ -27,25 +28,6 @@ R = 1.5
 BASE = 1.35
 S = 1.1
 BRICK_SITE = (0.0, 0.0, 1.2)
-
-
-class _Gate:
-    """A site gate that holds back the UAVs in ``held`` (their site is busy with conflicting work)."""
-
-    def __init__(self, *held: str) -> None:
-        self.held = set(held)
-
-    def may_enter(self, uav: str, site_m: tuple[float, float, float]) -> bool:
-        return uav not in self.held
-
-    def entered(self, uav: str, site_m: tuple[float, float, float], now_s: float) -> None:
-        pass
-
-    def waited_on(self, uav: str) -> tuple:
-        return ()
-
-    def left(self, uav: str, now_s: float) -> bool:
-        return False
 
 
 def _granted_without(c: ColumnClearance, uav: str, gone: set[str], now_s: float) -> bool:
@@ -61,7 +43,7 @@ def test_an_earlier_request_the_site_gate_holds_back_is_not_named_only_the_hover
     # brick waits for its site (the gate: another brick's visit beside it) at its hold point; glue asks later for
     # a site within the wait radius of brick's, on the far side of brick's hover: the grant skips brick's request
     # (it waits for work, not the airspace) and waits for the hover in the way of glue's flight down
-    gate = _Gate("brick")
+    gate = HeldGate("brick")
     c = ColumnClearance(R, BASE, S, gate=gate)
     hold = c.request("brick", BRICK_SITE, 0.0, (0.0, -6.0, 1.2))
     assert not hold.granted and hold.hold_m is not None and hold.layer_m is not None
@@ -95,7 +77,9 @@ def test_a_hover_over_the_climb_out_of_the_site_s_zone_is_named():
     moved = c.grant(10.1)[0]
     assert moved.uav == "glue" and moved.hold_m is not None and moved.layer_m is not None
     c.progress("glue", (moved.hold_m[0], moved.hold_m[1], moved.layer_m))
-    c.gate = _Gate("glue")  # glue's bead waits for work (the gate) from now on: its hover stays where it is
+    c.gate = HeldGate(
+        "glue"
+    )  # glue's bead waits for work (the gate) from now on: its hover stays where it is
     c.touch()
     assert [g.uav for g in c.grant(20.0) if g.granted] == ["brick"]
     c.release("brick", at)
@@ -121,31 +105,7 @@ UAVS = ("a", "b", "c", "d")
 OPS = ("req", "req", "req", "end", "end", "hold", "hold", "gate", "gate", "away", "move", "lost")
 
 
-def _apply(c: ColumnClearance, gate: _Gate, uav: str, op: str, site, pos, top: float, t: float) -> None:
-    if op == "req":
-        c.request(uav, (*site, 1.2), t, (*pos, 1.2), top_m=top)
-    elif op == "end":
-        c.end_transit(uav)
-    elif op == "away":
-        for h in c.held.get(uav, ()):
-            c.release(uav, h)
-    elif op == "move":
-        layer = c.layer_m(uav)
-        if layer is not None:
-            c.progress(uav, (*pos, layer))
-    elif op == "hold":  # a UAV flying to its hold point gets there
-        hover = [v for v in c.volumes(uav) if v.kind == "hover"]
-        layer = c.layer_m(uav)
-        if c.phase(uav) is Phase.TO_HOLD and hover and layer is not None:
-            c.progress(uav, (*hover[-1].a, layer))
-    elif op == "lost":
-        c.release(uav)
-    elif op == "gate":  # the site gate holds ``uav`` back, or lets it in again
-        gate.held ^= {uav}
-        c.touch()
-
-
-def _check_blockers(c: ColumnClearance, gate: _Gate, name: str, t: float) -> None:
+def _check_blockers(c: ColumnClearance, gate: HeldGate, name: str, t: float) -> None:
     """``name`` waits where it is (asking, or at its hold point) and the gate lets it in: the UAVs the airspace
     names are what its grant waits for."""
     w = c.records[name].request
@@ -184,12 +144,12 @@ def _check_blockers(c: ColumnClearance, gate: _Gate, name: str, t: float) -> Non
     )
 )
 def test_every_blocker_named_is_waited_for_and_a_request_with_none_is_granted(ops):
-    gate = _Gate()
+    gate = HeldGate()
     c = ColumnClearance(R, BASE, S, gate=gate)
     t = 0.0
     for uav, op, site, pos, top in ops:
         t += 1.0
-        _apply(c, gate, uav, op, site, pos, top, t)
+        apply_step(c, uav, op, site, pos, top, t, gate=gate)
         c.grant(t)
         assert c.conflicts() == []
         for name, u in c.records.items():

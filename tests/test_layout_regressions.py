@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from airspace_rig import HeldGate
 from masonry.blueprint_random import LayoutLimits, random_layout
 from masonry.fsm.config import blueprint_settings
 from masonry.fsm.side_look import look_offset_m
@@ -30,32 +31,13 @@ SEPARATION_BOUND_M = 1.0
 COMPACT = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
 
 
-class _Gate:
-    """A site gate that holds back the UAVs in ``held`` (their task's prerequisites are not done yet)."""
-
-    def __init__(self, *held: str) -> None:
-        self.held = set(held)
-
-    def may_enter(self, uav: str, site_m: tuple[float, float, float]) -> bool:
-        return uav not in self.held
-
-    def entered(self, uav: str, site_m: tuple[float, float, float], now_s: float) -> None:
-        pass
-
-    def waited_on(self, uav: str) -> tuple:
-        return ()
-
-    def left(self, uav: str, now_s: float) -> bool:
-        return False
-
-
 def test_a_uav_come_to_rest_just_past_its_bead_leaves_from_its_zone_past_a_hold_point_beside_it():
     # bench_layouts --large seed 3022 (4 + 4, r_c 1.175 m): brick-1 waited at its hold point for B25, held back by
     # the site gate; glue-3 meanwhile sprayed its way along the wall, each bead granted beside that hover (its zone
     # 1.20 m from it: clear), came to rest 5 cm past the last bead's end and asked for its pad. Its climb, reserved
     # where it was, was 1.15 m from the hover: refused at every layer, as was every hold flight; brick-1's flight
     # waited for glue-3's zone. 240 s later hold patience gave B25's attempt up.
-    c = ColumnClearance(radius_m=1.175, base_m=1.35, gate=(gate := _Gate("b")))
+    c = ColumnClearance(radius_m=1.175, base_m=1.35, gate=(gate := HeldGate("b")))
     site_b = (0.0, 0.0, 1.35)
     g = c.request("b", site_b, 0.0, (6.0, 0.0, 1.35))
     assert not g.granted and g.hold_m is not None
@@ -211,12 +193,12 @@ def test_no_zone_is_granted_under_the_hold_hover_of_a_uav_that_waits_beside_it()
         c.touch()
 
     # g waits, held back by the site gate (the brick under its bead is b's), for a site 0.5 m from b's
-    c = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
+    c = ColumnClearance(radius_m=0.8, base_m=1.45, gate=HeldGate("g"))
     waiting_at(c, "g", (0.6, 0.0), (0.5, 0.5, 1.35))
     g = c.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45)
     assert not g.granted  # (granted before: b's zone under g's hover, which it could never climb out through)
     assert c.conflicts() == []
-    far = ColumnClearance(radius_m=0.8, base_m=1.45, gate=_Gate("g"))
+    far = ColumnClearance(radius_m=0.8, base_m=1.45, gate=HeldGate("g"))
     waiting_at(far, "g", (0.6, 0.0), (9.0, 9.0, 1.35))  # it waits for a site far off: it will not wait for b
     assert far.request("b", (0.0, 0.0, 1.35), 1.0, (5.0, 0.0, 1.45), top_m=1.45).granted
 
