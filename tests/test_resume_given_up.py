@@ -45,6 +45,9 @@ class Uav:
                 self.result(now_s, TaskResult(self.task_id, "failed", now_s - self.t0_s, reason=msg.reason))
         if self.task_id == "B2" and now_s - self.t0_s >= fly_s:
             self.result(now_s, TaskResult("B2", "done", now_s - self.t0_s, placement_error_m=0.01))
+        self.beat(now_s)
+
+    def beat(self, now_s: float) -> None:
         state = "idle" if self.task_id is None else "transport"
         beat = Heartbeat(self.name, now_s, state=state, task_id=self.task_id, **asdict(facts_of(state)))
         self.link.send(MISSION_CONTROL, encode(beat))

@@ -32,6 +32,7 @@ __all__ = [
     "late_result",
     "misplaced",
     "on_heartbeat",
+    "recall_again",
     "release_waiting",
     "take_result_message",
 ]
@@ -115,6 +116,22 @@ def release_waiting(mc: MissionControl, stuck: str, now_s: float) -> None:
         mc.recall(uav, now_s, why)
 
 
+def recall_again(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
+    """A heartbeat naming the task mission control has its UAV on, a task that waits for a given-up one: the recall
+    is sent again, with :func:`given_up_reason` (the one :func:`release_waiting` sent, in the live run or at the
+    resume, may have been lost: a Zenoh session drops what it sends before it finds its peers). Sent on each such
+    heartbeat until the UAV's failure is taken, no timer; the handler ignores a recall when it holds nothing it has
+    not abandoned already, so one said again is harmless (issue 27, branch ``recall41``)."""
+    tid = mc.dispatcher.task_of(msg.sender)
+    if tid is None or msg.task_id != tid:
+        return
+    stuck = mc.dispatcher.given_up_under(tid)
+    if stuck is not None:
+        why = given_up_reason(stuck, tid)
+        log.info("%s: %s: recalled again", msg.sender, why)
+        mc.recall(msg.sender, now_s, why)
+
+
 def given_up_reason(stuck: str, waiting: str) -> str:
     """Why the attempt of ``waiting``, which depends on the given-up task ``stuck``, ends."""
     return f"{stuck} under {waiting} was given up"
@@ -190,3 +207,4 @@ def on_heartbeat(mc: MissionControl, msg: Heartbeat, link: UavLink, now_s: float
     if mc.heard_wind is not None and (msg.wind_mps is not None or msg.max_wind_mps is not None):
         mc.heard_wind.heard(msg.sender, now_s, msg.wind_mps, msg.max_wind_mps)
     check_holds_task(mc, msg, now_s)
+    recall_again(mc, msg, now_s)

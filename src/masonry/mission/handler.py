@@ -363,8 +363,15 @@ class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, Clearan
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed
-        elif isinstance(msg, Recall) and msg.uav == self.name:
+        elif isinstance(msg, Recall) and msg.uav == self.name and self._recallable():
             self._recall = msg.reason  # applied at the next tick, outside the machine's callbacks
+
+    def _recallable(self) -> bool:
+        """A recall has something to drop: an assignment queued or a task in hand not abandoned yet. One said again
+        (mission control repeats it on each heartbeat naming a task that waits in vain) is ignored once the task is
+        abandoned, so it cannot fail an assignment that comes after it in the same read."""
+        cur = self._current
+        return bool(self._queue) or (cur is not None and cur.abandoned_s is None)
 
     def _refuse(self, msg: Assign, why: str) -> None:
         self.rejected += 1

@@ -33,6 +33,7 @@ class DispatchQueries:
     _live_count: dict[str, int]
     _uav_task: dict[str, int]
     _dependents: list[list[int]]
+    _prerequisites: list[list[int]]
     _available: dict[str, dict[int, None]]
     _events: int
     _last_done: str | None
@@ -137,6 +138,21 @@ class DispatchQueries:
                     todo.append(d)
         by_index = {i: uav for uav, i in self._uav_task.items()}
         return {self._ids[i]: by_index[i] for i in sorted(seen) if i in by_index}
+
+    def given_up_under(self, task_id: str) -> str | None:
+        """The first (by id) given-up task that ``task_id`` depends on, directly or through others, or None: a task in
+        progress with one waits in vain (issue 27, branch ``recall41``). Only tasks not done are walked (a done
+        task's prerequisites are done), so a task with its prerequisites done costs nothing."""
+        if not self._stuck:
+            return None
+        seen: set[int] = set()
+        todo = [self._lookup(task_id, "query")]
+        while todo:
+            for p in self._prerequisites[todo.pop()]:
+                if p not in seen and self._status[p] != DONE:
+                    seen.add(p)
+                    todo.append(p)
+        return min((self._ids[p] for p in seen if self._ids[p] in self._stuck), default=None)
 
     def chain_s(self, task_id: str) -> float:
         """The longest dependency chain from ``task_id`` (its own weight included) used by ``critical-path``."""
