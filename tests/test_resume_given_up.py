@@ -58,6 +58,16 @@ class Uav:
         self.task_id = None
 
 
+def fly_to_the_end(mc: MissionControl, uavs: dict[str, Uav]) -> None:
+    """Step the scripted UAVs and mission control every 0.5 s from the resume until the mission ends (600 s at most)."""
+    now_s = STOP_S
+    while mc.ended_at_s is None and now_s < STOP_S + 600.0:
+        for u in uavs.values():
+            u.step(now_s)
+        mc.step(now_s)
+        now_s += 0.5
+
+
 def test_a_uav_kept_on_a_task_over_a_given_up_segment_is_recalled_at_the_resume(tmp_path: Path) -> None:
     with Journal(tmp_path / "j.db") as j:
         for k, (start_s, end_s) in enumerate(((1.0, 20.0), (21.0, 40.0), (41.0, STOP_S))):
@@ -83,12 +93,7 @@ def test_a_uav_kept_on_a_task_over_a_given_up_segment_is_recalled_at_the_resume(
     )
     mc.restore(state)
     assert mc.dispatcher.stuck == {"A0"} and mc.dispatcher.in_progress == {"B1": "brick-1"}  # B1 kept
-    now_s = STOP_S
-    while mc.ended_at_s is None and now_s < STOP_S + 600.0:
-        for u in uavs.values():
-            u.step(now_s)
-        mc.step(now_s)
-        now_s += 0.5
+    fly_to_the_end(mc, uavs)
     why = given_up_reason("A0", "B1")
     assert uavs["brick-1"].recalls == [(STOP_S, why)]  # at the resume: not after 240 s
     b1 = [(a.uav, a.attempt, a.status, a.reason, a.end_s) for a in mc.history if a.task_id == "B1"]

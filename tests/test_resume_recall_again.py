@@ -18,7 +18,7 @@ from masonry.mission.journal import Journal
 from masonry.mission.journal_state import JournalState
 from masonry.mission.messages import MISSION_CONTROL, Assign, Recall, Result, decode, encode
 from test_given_up_release import FLEET, PLAN
-from test_resume_given_up import STOP_S, Uav
+from test_resume_given_up import STOP_S, Uav, fly_to_the_end
 
 WHY = given_up_reason("A0", "B1")
 
@@ -79,12 +79,7 @@ def test_the_resumes_recall_lost_is_sent_again_on_the_heartbeat_naming_the_task(
     }
     mc, out = resumed(tmp_path, bus)
     assert out.lost == 1 and out.recalls[0].reason == WHY  # the resume's recall: lost
-    now_s = STOP_S
-    while mc.ended_at_s is None and now_s < STOP_S + 600.0:
-        for u in uavs.values():
-            u.step(now_s)
-        mc.step(now_s)
-        now_s += 0.5
+    fly_to_the_end(mc, uavs)
     assert uavs["brick-1"].recalls == [(STOP_S, WHY)]  # its first heartbeat brought it: the same reason
     assert [r.reason for r in out.recalls] == [WHY, WHY]  # lost once, sent once again: its failure then taken
     b1 = [(a.uav, a.attempt, a.status, a.reason, a.end_s) for a in mc.history if a.task_id == "B1"]
