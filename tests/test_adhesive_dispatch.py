@@ -247,7 +247,9 @@ class _Control:
     def touch(self) -> None:
         self.touched += 1
 
-    def recall(self, uav: str, now_s: float, reason: str) -> None:
+    def recall(
+        self, uav: str, now_s: float, reason: str, task_id: str | None = None, attempt: int = 0
+    ) -> None:
         self.recalls.append((uav, reason))
 
     def emit_event(self, *args: object, **kw: object) -> None:

@@ -28,8 +28,8 @@ STOP_S = 62.0  # the journal's last record: the resumed clock
 
 
 class Uav:
-    """A UAV on the bus by scripted steps: it holds the task it is given (or kept), fails it when recalled and
-    places B2 ``fly_s`` after it is given."""
+    """A UAV on the bus by scripted steps: it holds the task it is given (or kept), fails it when recalled (a
+    recall naming it, or none) and places B2 ``fly_s`` after it is given."""
 
     def __init__(self, bus: InprocBus, name: str, task_id: str | None = None, attempt: int = 0) -> None:
         self.name, self.link = name, bus.endpoint(name)
@@ -40,7 +40,7 @@ class Uav:
         for msg in map(decode, self.link.receive()):
             if isinstance(msg, Assign):
                 self.task_id, self.attempt, self.t0_s = msg.task.id, msg.attempt, now_s
-            elif isinstance(msg, Recall) and self.task_id is not None:
+            elif isinstance(msg, Recall) and self.task_id is not None and msg.task_id in (None, self.task_id):
                 self.recalls.append((msg.time_s, msg.reason))
                 self.result(now_s, TaskResult(self.task_id, "failed", now_s - self.t0_s, reason=msg.reason))
         if self.task_id == "B2" and now_s - self.t0_s >= fly_s:

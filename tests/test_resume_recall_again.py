@@ -3,8 +3,9 @@
 The guide: "treat the network as hostile", and no timer breaks a wait. The resumed mission control recalls the UAV
 kept on a task that waits for a given-up one (tests/test_resume_given_up.py), but over Zenoh a message sent straight
 after the session opens can be lost before it finds its peers. Each heartbeat naming such a task brings the recall
-again, with the same reason, until the UAV's failure is taken; the handler ignores a recall said again once its task
-is abandoned, so it cannot fail an assignment that comes after it."""
+again, with the same reason, until the UAV's failure is taken. The recall names the task and its attempt (protocol
+version 6, branch ``recall42``): the handler ignores one naming an assignment it does not hold, so one said again
+cannot fail an assignment that comes after it."""
 
 from __future__ import annotations
 
@@ -79,9 +80,11 @@ def test_the_resumes_recall_lost_is_sent_again_on_the_heartbeat_naming_the_task(
     }
     mc, out = resumed(tmp_path, bus)
     assert out.lost == 1 and out.recalls[0].reason == WHY  # the resume's recall: lost
+    assert (out.recalls[0].task_id, out.recalls[0].attempt) == ("B1", 1)  # it names what it recalls
     fly_to_the_end(mc, uavs)
     assert uavs["brick-1"].recalls == [(STOP_S, WHY)]  # its first heartbeat brought it: the same reason
-    assert [r.reason for r in out.recalls] == [WHY, WHY]  # lost once, sent once again: its failure then taken
+    assert [(r.reason, r.task_id, r.attempt) for r in out.recalls] == [(WHY, "B1", 1)] * 2  # lost once, sent
+    # once again: its failure then taken
     b1 = [(a.uav, a.attempt, a.status, a.reason, a.end_s) for a in mc.history if a.task_id == "B1"]
     assert b1 == [("brick-1", 1, "failed", WHY, STOP_S + 0.5)]  # one step later than with no loss
     assert mc.ended_at_s is not None and mc.ended_at_s - STOP_S <= 15.0
@@ -117,10 +120,15 @@ def test_a_recall_said_again_does_not_fail_the_assignment_after_it() -> None:
     mc_end = bus.endpoint(MISSION_CONTROL)
     h = UavHandler("brick-2", bus.endpoint("brick-2"))
     b2 = PLAN.tasks[2]
-    mc_end.send("brick-2", encode(Recall(MISSION_CONTROL, "brick-2", 1.0, WHY)))  # said again: nothing held
+    mc_end.send(
+        "brick-2", encode(Recall(MISSION_CONTROL, "brick-2", 1.0, WHY, "B1", 1))
+    )  # said again: B1 is over
     mc_end.send("brick-2", encode(Assign(MISSION_CONTROL, "brick-2", b2, 1, 1.0)))
     h.step(1.0)
     h.step(1.5)
     sent = [decode(raw) for raw in mc_end.receive()]
     assert not [m for m in sent if isinstance(m, Result)]  # B2 not failed back
     assert h.busy and h.poll_task() == b2
+    assert h.stale_recalls == 1 and [(r.task_id, r.attempt) for r in h.stale] == [
+        ("B1", 1)
+    ]  # ignored, visible

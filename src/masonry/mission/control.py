@@ -359,9 +359,12 @@ class MissionControl:
         """Dispatch again at the next step (the operator resumed, or changed a limit)."""
         self._dirty = True
 
-    def recall(self, uav: str, now_s: float, reason: str) -> None:
-        """Tell ``uav`` to drop its task, fly home and land (the operator's recall)."""
-        self.out.send(uav, Recall(MISSION_CONTROL, uav, now_s, reason))
+    def recall(
+        self, uav: str, now_s: float, reason: str, task_id: str | None = None, attempt: int = 0
+    ) -> None:
+        """Tell ``uav`` to drop attempt ``attempt`` of ``task_id``, fly home and land; ``task_id`` None: whatever
+        it holds when it reads the recall (the operator's recall)."""
+        self.out.send(uav, Recall(MISSION_CONTROL, uav, now_s, reason, task_id, attempt))
 
     def emit_event(
         self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object

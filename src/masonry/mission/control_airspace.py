@@ -112,7 +112,7 @@ def fail_outside_fence(mc: MissionControl, uav: str, reason: str, now_s: float) 
     if key in mc.fence_failed:
         return
     mc.fence_failed.add(key)
-    mc.recall(uav, now_s, reason)
+    mc.recall(uav, now_s, reason, task_id, key[2])
 
 
 def emit_clearance(mc: MissionControl, now_s: float, g: Grant) -> None:

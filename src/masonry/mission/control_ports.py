@@ -50,8 +50,10 @@ class MissionHost(Protocol):
     def wake(self) -> None:
         """Dispatch again at the next step."""
 
-    def recall(self, uav: str, now_s: float, reason: str) -> None:
-        """Tell ``uav`` to drop its task, fly home and land."""
+    def recall(
+        self, uav: str, now_s: float, reason: str, task_id: str | None = None, attempt: int = 0
+    ) -> None:
+        """Tell ``uav`` to drop attempt ``attempt`` of ``task_id`` (None: whatever it holds), fly home and land."""
 
     def emit_event(
         self, now_s: float, kind: str, uav: str | None = None, task_id: str | None = None, **fields: object

@@ -113,15 +113,16 @@ def release_waiting(mc: MissionControl, stuck: str, now_s: float) -> None:
     for task_id, uav in mc.dispatcher.waiting_on(stuck).items():
         why = given_up_reason(stuck, task_id)
         log.warning("%s: %s: recalled", uav, why)
-        mc.recall(uav, now_s, why)
+        mc.recall(uav, now_s, why, task_id, mc.dispatcher.attempt_of(task_id))
 
 
 def recall_again(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     """A heartbeat naming the task mission control has its UAV on, a task that waits for a given-up one: the recall
     is sent again, with :func:`given_up_reason` (the one :func:`release_waiting` sent, in the live run or at the
     resume, may have been lost: a Zenoh session drops what it sends before it finds its peers). Sent on each such
-    heartbeat until the UAV's failure is taken, no timer; the handler ignores a recall when it holds nothing it has
-    not abandoned already, so one said again is harmless (issue 27, branch ``recall41``)."""
+    heartbeat until the UAV's failure is taken, no timer; the recall names the task and its attempt, and the
+    handler ignores one naming an assignment it does not hold, so one said again is harmless (issue 27, branches
+    ``recall41``, ``recall42``)."""
     tid = mc.dispatcher.task_of(msg.sender)
     if tid is None or msg.task_id != tid:
         return
@@ -129,7 +130,7 @@ def recall_again(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     if stuck is not None:
         why = given_up_reason(stuck, tid)
         log.info("%s: %s: recalled again", msg.sender, why)
-        mc.recall(msg.sender, now_s, why)
+        mc.recall(msg.sender, now_s, why, tid, mc.dispatcher.attempt_of(tid))
 
 
 def given_up_reason(stuck: str, waiting: str) -> str:
@@ -159,6 +160,7 @@ def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
     settled = r.task_id in mc.dispatcher.done or r.task_id in mc.dispatcher.stuck
     if att is None or not late_completion(msg, att, settled, mc.dispatcher.in_progress.get(r.task_id)):
         return False
+    attempt = mc.dispatcher.attempt_of(r.task_id)  # (the attempt ``other`` flies, if any: counted done below)
     other = mc.dispatcher.complete_late(r.task_id)
     r = mc.placement.anchored(mc, r)
     log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
@@ -169,7 +171,7 @@ def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
         if again is not None:
             mc.ledger.end(again, now_s, "failed", why, result=False)
             mc.ledger.journal_failed(now_s, r.task_id, other, why)
-        mc.recall(other, now_s, why)
+        mc.recall(other, now_s, why, r.task_id, attempt)
     mc.ledger.journal_done(now_s, r, msg.sender, phases=False)
     mc.out.emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
     mc.wake()

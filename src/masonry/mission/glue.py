@@ -186,7 +186,7 @@ class GlueGate:
             # (an attempt: a brick never in time ends stuck, not looping); before, it keeps the brick and waits
             n = self._expired_in[brick, attempt] = self._expired_in.get((brick, attempt), 0) + 1
             if n == RECALL_AFTER_EXPIRIES:
-                mc.recall(carrier, now_s, EXPIRED_REASON)
+                mc.recall(carrier, now_s, EXPIRED_REASON, brick, attempt)
         self.dispatcher.reopen(bead)
         for att in reversed(mc.history):
             if att.task_id == bead and att.status == "done":

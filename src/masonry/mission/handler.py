@@ -25,7 +25,8 @@ The handler's parts, each a small module: the attempt record (:mod:`masonry.miss
 share (:mod:`masonry.mission.handler_base`), the results and the kept completion
 (:mod:`masonry.mission.handler_results`), the site columns (:mod:`masonry.mission.handler_columns`), the battery
 reserve and ground crew (:mod:`masonry.mission.handler_battery`), the assignment check
-(:mod:`masonry.mission.handler_check`); this module holds the queue, the heartbeat, the recall and the refusals.
+(:mod:`masonry.mission.handler_check`), the recalls (:mod:`masonry.mission.handler_recall`); this module holds the
+queue, the heartbeat and the refusals.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from masonry.mission.handler_base import Vec3
 from masonry.mission.handler_battery import TOP_UP_FRACTION, GroundCrew
 from masonry.mission.handler_check import AssignmentCheck
 from masonry.mission.handler_columns import ColumnRequests
+from masonry.mission.handler_recall import Recalls
 from masonry.mission.handler_results import ResultKeeper, ResultReports
 from masonry.mission.messages import (
     MAX_REPORTED_WIND_MPS,
@@ -57,12 +59,7 @@ from masonry.mission.messages import (
 from masonry.mission.transport import Transport
 from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE, facts_of
 from masonry.planner.tasks import Task
-from masonry.ports import (
-    FINISHING_STATES,
-    MISSION_CONTROL_LOST_REASON,
-    ClearanceLink,
-    MissionLink,
-)
+from masonry.ports import MISSION_CONTROL_LOST_REASON, ClearanceLink, MissionLink
 from masonry.spares import Spare
 
 log = logging.getLogger(__name__)
@@ -72,7 +69,7 @@ log = logging.getLogger(__name__)
 MAX_REFUSALS_KEPT = 1000
 
 
-class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, ClearanceLink):
+class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink, ClearanceLink):
     """Bridge between a transport and one UAV's state machine.
 
     Construct the handler, build the machine with ``link=handler``, then :meth:`attach` it.
@@ -138,8 +135,7 @@ class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, Clearan
         self.model = None
         self._queue: deque[tuple[Task, int, float]] = deque()  # task, attempt, when its assignment came
         self._current: Execution | None = None
-        #: the operator recalled this UAV (the reason): its task is dropped at the next tick it can be
-        self._recall: str | None = None
+        self._init_recalls()
         self._last_sent_hb_s: float | None = None
         self._last_mc_s: float | None = None
         self.mission_ended = False
@@ -296,45 +292,19 @@ class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, Clearan
         self._read_and_beat(now_s)
         if self._column is not None or self._columns_left:
             self._check_columns(now_s)
-        cur = self._current
-        if (
-            self._recall is None
-            and self.busy
-            and (cur is None or cur.abandoned_s is None)
-            and self._mission_control_gone()
-        ):
+        if self.busy and self._mission_control_gone():
             # mission control has declared this UAV lost by now (the same timeout) and given its task to another
             # UAV, or it has crashed and a resumed one flies the task again: carrying on would do it twice
-            self._recall = (
-                f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
-            )
-            log.warning("%s: %s: abandoning its task, flying home", self.name, self._recall)
-        if self._recall is not None:
-            self._apply_recall(self._recall)
+            why = f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"
+            if self._recall_held(why):
+                log.warning("%s: %s: abandoning its task, flying home", self.name, why)
+        if self._recalls:
+            self._apply_recalls()
         model = self.model
         if model is not None and (self._queue or self._current is not None or not model.finished):
             model.step(now_s)
         elif model is not None:
             self._top_up_while_idle()  # landed with nothing to do
-
-    def _apply_recall(self, reason: str) -> None:
-        """The operator's recall: assignments not started are failed back, the task in hand is aborted (the
-        machine reports it failed with ``reason`` and flies home); once nothing is left, done."""
-        state = self._state()
-        while self._queue:
-            task, attempt, _ = self._queue.popleft()
-            self._send_failed(task.id, attempt, reason, state)
-        model = self.model
-        if self._current is None:
-            self._recall = None
-        elif state in FINISHING_STATES:
-            pass  # the work is on the wall: the machine finishes and reports it done, then nothing is left
-        elif model is not None and getattr(model, "task", None) is not None and model.may_abort():
-            self._current.abandoned_s = self.now_s
-            if reason.startswith(MISSION_CONTROL_LOST_REASON):
-                self._drop_current(reason)
-            model.abort(reason=reason)  # reported failed through report_result; it flies home and lands
-            self._recall = None
 
     def _handle(self, raw: bytes, now_s: float) -> None:
         try:
@@ -363,15 +333,8 @@ class UavHandler(ResultReports, ColumnRequests, GroundCrew, MissionLink, Clearan
         elif isinstance(msg, MissionEnd):
             self.mission_ended = True
             self.mission_completed = msg.completed
-        elif isinstance(msg, Recall) and msg.uav == self.name and self._recallable():
-            self._recall = msg.reason  # applied at the next tick, outside the machine's callbacks
-
-    def _recallable(self) -> bool:
-        """A recall has something to drop: an assignment queued or a task in hand not abandoned yet. One said again
-        (mission control repeats it on each heartbeat naming a task that waits in vain) is ignored once the task is
-        abandoned, so it cannot fail an assignment that comes after it in the same read."""
-        cur = self._current
-        return bool(self._queue) or (cur is not None and cur.abandoned_s is None)
+        elif isinstance(msg, Recall) and msg.uav == self.name:
+            self._take_recall(msg)  # applied at the next tick, outside the machine's callbacks
 
     def _refuse(self, msg: Assign, why: str) -> None:
         self.rejected += 1

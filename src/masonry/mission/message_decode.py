@@ -368,7 +368,13 @@ def _recall(f: _Fields, sender: str, fleet: Collection[str] | None) -> Recall:
     _check_from_mission_control(f, sender)
     uav = f.str_("uav")
     _check_uav(f, fleet, uav, "uav")
-    return Recall(sender, uav, f.num("time_s"), str(f.data.get("reason") or "recalled"))
+    task_id = f.str_("task_id", optional=True)
+    attempt = f.int_("attempt")
+    if task_id is None and attempt != 0:
+        raise f.fail("attempt", f"must be 0 when no task is named, got {attempt}")
+    if task_id is not None and attempt < 1:
+        raise f.fail("attempt", f"must be >= 1 for task {task_id}, got {attempt}")
+    return Recall(sender, uav, f.num("time_s"), str(f.data.get("reason") or "recalled"), task_id, attempt)
 
 
 #: How the body of each message type is read, after the envelope (version, type, sender): one function per type.

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from masonry.planner.tasks import Task
 from masonry.ports import TaskResult
 
-PROTOCOL_VERSION = 5
+PROTOCOL_VERSION = 6
 MISSION_CONTROL = "mission-control"
 #: The sender name of an operator's commands (``masonry ctl``); mission control answers to it.
 OPERATOR = "operator"
@@ -177,12 +177,20 @@ class CommandAnswer:
 
 @dataclass(frozen=True)
 class Recall:
-    """Mission control tells ``uav`` to drop its task (reported failed with ``reason``), fly home and land."""
+    """Mission control tells ``uav`` to drop attempt ``attempt`` of ``task_id`` (reported failed with ``reason``),
+    fly home and land.
+
+    ``task_id`` None (``attempt`` 0): whatever the UAV holds when it reads the recall (the operator's recall, and
+    return-all and abort). A recall naming a task the UAV does not hold (done, failed or dropped since; a recall
+    said again, or late) is ignored: it cannot fail the assignment that came after it (issue 27, ``recall42``).
+    """
 
     sender: str
     uav: str
     time_s: float
     reason: str
+    task_id: str | None = None
+    attempt: int = 0
 
 
 Message = (

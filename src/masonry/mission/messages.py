@@ -1,6 +1,6 @@
 """The mission protocol: versioned, validated messages between mission control and UAV handlers.
 
-Every message travels as one JSON object with an envelope ``{"v": 5, "type": ..., "sender": ...}``.
+Every message travels as one JSON object with an envelope ``{"v": 6, "type": ..., "sender": ...}``.
 :func:`decode` checks the version, the type, every field's type and, when the fleet is given, that the
 sender (and the addressed UAV) belongs to it; anything else raises :class:`~masonry.errors.ProtocolError`.
 
@@ -22,7 +22,8 @@ Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 - :class:`OperatorCommand` operator (:data:`OPERATOR`, ``masonry ctl``) -> mission control: pause, resume,
   abort, recall a UAV, return all, set a role's fleet limit (:mod:`masonry.mission.operator`).
 - :class:`CommandAnswer` mission control -> operator: that command accepted, or refused with a reason.
-- :class:`Recall` mission control -> UAV: drop your task (it is reported failed, ``reason``), fly home and land.
+- :class:`Recall` mission control -> UAV: drop attempt ``attempt`` of ``task_id`` (it is reported failed,
+  ``reason``), fly home and land; ``task_id`` null: whatever you hold (the operator's).
 
 Version history: 1 the first five messages; 2 the clearance messages (a mixed pair refuses each other's messages
 at once instead of half-working); 3 ``wall`` in the assignment, ``attempt`` in the result (docs/security.md: a UAV
@@ -37,7 +38,9 @@ design; one that does refuses a ``planned`` that is not the task moved by at mos
 when left out): mission control decides from them, not from the state name (a version-4 UAV sends none, and
 would be taken for one that never carries a brick); within 5, a heartbeat's ``swaps_batteries`` (a ground crew
 swaps its pack: mission control may send it home for an early swap, :mod:`masonry.mission.swap_stagger`; one
-that does not send it is never sent home early).
+that does not send it is never sent home early); 6 a recall's ``task_id`` and ``attempt`` (the assignment it
+recalls; null and 0: whatever the UAV holds): a UAV ignores one naming an assignment it does not hold, so a recall
+said again cannot fail the next task (a version-5 UAV would take it for "whatever you hold").
 """
 
 from __future__ import annotations
@@ -257,7 +260,13 @@ def _operator_body(message: OperatorCommand | CommandAnswer | Recall) -> dict[st
             "reason": message.reason,
             "time_s": message.time_s,
         }
-    return {"uav": message.uav, "time_s": message.time_s, "reason": message.reason}
+    return {
+        "uav": message.uav,
+        "time_s": message.time_s,
+        "reason": message.reason,
+        "task_id": message.task_id,
+        "attempt": message.attempt,
+    }
 
 
 #: What ``json.dumps(body, separators=(",", ":"), allow_nan=False)`` builds on every call, built once.
