@@ -78,7 +78,7 @@ def test_the_real_px4s_calm_pickup_that_read_as_a_wind_is_calm_by_3_mrad() -> No
     29/30, branch px441's base-2): its tilt averaged to 0.071 rad, over the ``px4`` preset's 0.07 (on main before
     px441 it flew as in a wind: B0 let go at the tick, 20.2 mm off), and its lean held one way to 0.047, 3 mrad under
     the preset's 0.05. The real PX4's reported attitude holds EKF2's tilt error (branch px442: held 0.069 and 0.076
-    rad at most in two of three 40 s calm holds, SIH's truth 0.014-0.034), so this margin is thin by what the lean can
+    rad at most in two of three 40 s calm holds, SIH's truth 0.014-0.016), so this margin is thin by what the lean can
     tell; averaged over 8 s it was 0.037 (tried, not kept: the px4 model's 2 m/s bricks a little farther apart,
     docs/performance/autopilots.md)."""
     record = json.loads((Path(__file__).parent / "data" / "px4_calm_pickup.json").read_text())
