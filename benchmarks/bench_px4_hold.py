@@ -10,8 +10,9 @@ position controller holds the point (position setpoints). Prints per run the rep
 the point, its swing about its own mean point per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
 the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
 whose mean lies within the brick alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor
-timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON
-summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
+timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies), and the lean
+held one way (``masonry.fsm.wind_lean.WindLean``, what the brick UAV's wind judgement reads) of the reported attitude
+beside SIH's true one (in calm air the reported one's is EKF2's tilt error, issue 29); then a JSON summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
 
     python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 40
 """
