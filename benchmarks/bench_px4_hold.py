@@ -10,8 +10,9 @@ position controller holds the point (position setpoints). Prints per run the rep
 the point, its swing about its own mean point per axis (x east, y north) beside SIH's ground truth's (HIL_STATE_QUATERNION) and the estimate's distance from it,
 the swing's period (twice the lag of the velocity's autocorrelation's first minimum), the share of 1.5 s windows
 whose mean lies within the brick alignment's 1.5 cm and 2.8 cm, the speeds, and how often PX4's log says a sensor
-timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies); then a JSON
-summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
+timed out (SIH runs in real time: on a machine too loaded for it EKF2 diverges, whichever loop flies), and the lean
+held one way (``masonry.fsm.wind_lean.WindLean``, what the brick UAV's wind judgement reads) of the reported attitude
+beside SIH's true one (in calm air the reported one's is EKF2's tilt error, issue 29); then a JSON summary. ``BENCH_PX4_HOLD_SAVE=DIR`` writes every run's ticks there (JSON).
 
     python benchmarks/bench_px4_hold.py --run-sh ../shared/px4/run.sh --loop own --runs 2 --hold 40
 """
@@ -34,7 +35,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from masonry.adapters.mavlink import MavlinkFlightController
 from masonry.adapters.mavlink_protocol import MAV_CMD_SET_MESSAGE_INTERVAL, MAV_FRAME_LOCAL_NED
 from masonry.errors import CommandRejected
+from masonry.fsm.wind_lean import WindLean
 from masonry.motion.velocity_loop import VelocityLoop, VelocityLoopGains, tilt_acceleration_mps2
+from masonry.ports import Telemetry
 from px4_sitl import ENV, px4
 
 # PX4's position controller holds the point (``--loop position``): position + yaw rate kept, the rest ignored
@@ -61,9 +64,10 @@ def hold_on_position(fc: MavlinkFlightController) -> None:
 
 
 def watch_the_truth(fc: MavlinkFlightController) -> list[float]:
-    """SIH's ground truth (HIL_STATE_QUATERNION at 30 Hz), east and north of its first sample (m), kept current in
-    the list returned as the adapter reads its messages."""
-    latest = [0.0, 0.0]
+    """SIH's ground truth (HIL_STATE_QUATERNION at 30 Hz), east and north of its first sample (m), then its roll,
+    pitch and yaw (rad, NED as the telemetry's), kept current in the list returned as the adapter reads its
+    messages."""
+    latest = [0.0, 0.0, 0.0, 0.0, 0.0]
     origin: list[float] = []
     handle = fc._handle
 
@@ -74,6 +78,10 @@ def watch_the_truth(fc: MavlinkFlightController) -> list[float]:
                 origin.extend((lat, lon))
             latest[0] = (lon - origin[1]) * 111_319.5 * math.cos(math.radians(origin[0]))
             latest[1] = (lat - origin[0]) * 111_319.5
+            w, x, y, z = msg.attitude_quaternion  # type: ignore[attr-defined]
+            latest[2] = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+            latest[3] = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+            latest[4] = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
         handle(msg, now)
 
     fc._handle = watch  # type: ignore[method-assign]
@@ -187,11 +195,12 @@ def hold(
             integral = np.clip(integral + e * dt, -0.5, 0.5)
             v = np.clip(kp * e + ki * integral, -1.5, 1.5)
             fc.send_velocity((float(v[0]), float(v[1]), float(np.clip(1.5 * (1.2 - p[2]), -0.7, 0.7))), 0.0)
-            rows.append((now - start, p[0], p[1], *tel.velocity_mps[:2], *truth))
+            rows.append((now - start, p[0], p[1], *tel.velocity_mps[:2], *truth, *tel.attitude_rad))
         fc.land()
     finally:
         fc.close()
-    save = os.environ.get("BENCH_PX4_HOLD_SAVE")  # every tick (t, reported x, y, velocity x, y, truth x, y)
+    # every tick (t, reported x, y, velocity x, y, truth x, y, roll, pitch, yaw, reported roll, pitch, yaw)
+    save = os.environ.get("BENCH_PX4_HOLD_SAVE")
     if save:
         Path(save).mkdir(parents=True, exist_ok=True)
         out = Path(save) / f"hold-{time.time():.0f}.json"
@@ -215,7 +224,28 @@ def hold(
         "windows_within_15mm": round(float((windows < 0.015).mean()), 2),
         "windows_within_28mm": round(float((windows < 0.028).mean()), 2),
         "speed_rms_mps": round(math.sqrt(float((a[:, 3:5] ** 2).sum(axis=1).mean())), 3),
+        **held_leans_mrad(a),
     }
+
+
+def held_leans_mrad(a: np.ndarray) -> dict[str, float]:
+    """The lean held one way (``masonry.fsm.wind_lean.WindLean``, a 3 s mean from the count's start) over the
+    counted hold, of the reported attitude and of SIH's truth: its largest value and its mean (mrad), and the
+    tilt's magnitude so averaged, largest (what the brick UAV's wind judgement reads in a calm hover)."""
+    out: dict[str, float] = {}
+    for name, cols in (("reported", slice(10, 13)), ("truth", slice(7, 10))):
+        lean, held, tilt = WindLean(), [], []
+        for i in range(1, len(a)):
+            roll, pitch, yaw = (float(c) for c in a[i, cols])
+            tel = Telemetry(float(a[i, 0]), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (roll, pitch, yaw), True, "", 1.0,
+                            True, True, False)  # fmt: skip
+            lean.follow(tel, float(a[i, 0] - a[i - 1, 0]))
+            held.append(lean.held_rad)
+            tilt.append(lean.tilt_rad)
+        out[f"held_lean_{name}_max_mrad"] = round(1e3 * max(held), 1)
+        out[f"held_lean_{name}_mean_mrad"] = round(1e3 * float(np.mean(held)), 1)
+        out[f"tilt_{name}_max_mrad"] = round(1e3 * max(tilt), 1)
+    return out
 
 
 def main() -> None:
@@ -274,7 +304,10 @@ def main() -> None:
               f"estimate off it {row['estimate_off_truth_m']}), period {row['period_s']} s, "
               f"tilt follows the command {row['tilt_lag_s']} s later, "
               f"1.5 s means within 1.5 cm {row['windows_within_15mm']:.0%}, within 2.8 cm "
-              f"{row['windows_within_28mm']:.0%}, speed {row['speed_rms_mps']} m/s rms "
+              f"{row['windows_within_28mm']:.0%}, speed {row['speed_rms_mps']} m/s rms, lean held one way "
+              f"{row['held_lean_reported_mean_mrad']} mean / {row['held_lean_reported_max_mrad']} max mrad (truth "
+              f"{row['held_lean_truth_mean_mrad']} / {row['held_lean_truth_max_mrad']}), tilt averaged "
+              f"{row['tilt_reported_max_mrad']} max (truth {row['tilt_truth_max_mrad']}) "
               f"(load {os.getloadavg()[0]:.1f}; PX4 sensor timeouts {row['sensor_timeouts']})")  # fmt: skip
     print(
         json.dumps(

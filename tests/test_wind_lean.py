@@ -3,7 +3,9 @@ pickup's hovers, averaged, says whether it places in a wind; calm air keeps the 
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import pytest
 
@@ -69,6 +71,24 @@ def test_a_swing_about_the_vertical_is_not_a_wind_where_a_held_lean_is_asked() -
         wind.follow(_tel(0.08 * math.cos(yaw), -0.08 * math.sin(yaw), yaw), 0.1)
     assert wind.held_rad == pytest.approx(0.08, rel=0.1)
     assert wind.windy(0.07, 0.05) and not wind.windy(0.07, 0.1)
+
+
+def test_the_real_px4s_calm_pickup_that_read_as_a_wind_is_calm_by_3_mrad() -> None:
+    """Brick-1's first pickup on a real PX4 in calm air (tests/data/px4_calm_pickup.json, 14.6 s of hovers; issues
+    29/30, branch px441's base-2): its tilt averaged to 0.071 rad, over the ``px4`` preset's 0.07 (on main before
+    px441 it flew as in a wind: B0 let go at the tick, 20.2 mm off), and its lean held one way to 0.047, 3 mrad under
+    the preset's 0.05. The real PX4's reported attitude holds EKF2's tilt error (branch px442: held 0.069 and 0.076
+    rad at most in two of three 40 s calm holds, SIH's truth 0.014-0.016), so this margin is thin by what the lean can
+    tell; averaged over 8 s it was 0.037 (tried, not kept: the px4 model's 2 m/s bricks a little farther apart,
+    docs/performance/autopilots.md)."""
+    record = json.loads((Path(__file__).parent / "data" / "px4_calm_pickup.json").read_text())
+    lean = WindLean()
+    for roll, pitch, yaw in record["attitude_rad"]:
+        lean.follow(_tel(roll, pitch, yaw), record["tick_s"])
+    assert lean.tilt_rad == pytest.approx(0.071, abs=0.001)
+    assert lean.held_rad == pytest.approx(0.047, abs=0.001)
+    assert lean.windy(PRESETS["px4"]["wall_in_wind_rad"])  # the magnitude alone: a wind
+    assert not lean.windy(PRESETS["px4"]["wall_in_wind_rad"], PRESETS["px4"]["wind_held_rad"])
 
 
 def test_only_the_arducopter_and_px4_presets_turn_it_on() -> None:
