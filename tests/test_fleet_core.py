@@ -5,11 +5,17 @@ before the other role's."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
-from masonry.mission.fleet import core_counts, fleet_for, spares_rest
+from masonry.mission.fleet import core_counts, fleet_for, ladder, spares_rest
+
+PYRAMID = Path(__file__).resolve().parent.parent / "blueprints" / "pyramid.yaml"
 
 
 @pytest.mark.parametrize(
@@ -89,3 +95,58 @@ def test_a_roles_spares_rest_while_its_core_would_finish_before_the_other_roles(
     role: str, live: dict[str, int], left_s: dict[str, float], rest: bool
 ) -> None:
     assert spares_rest(role, left_s, live) is rest
+
+
+@pytest.mark.parametrize(
+    ("wall", "smaller", "larger"), [("pyramid", (4, 2), (8, 4)), ("12m", (4, 2), (6, 3))]
+)
+def test_a_larger_fleet_keeps_the_pads_of_the_smaller_steps(
+    wall: str, smaller: tuple[int, int], larger: tuple[int, int]
+) -> None:
+    """The bundled pyramid's 8 + 4 flew its lone sprayer's relief (glue-2) from 26 m, past eight brick pads,
+    where 4 + 2's glue-2 stands at 14 m: +25.3 s over 4 + 2 on seed 3 (issue 27 §4, branch ``more42``)."""
+    bp = load_blueprint(PYRAMID) if wall == "pyramid" else running_bond(3, 40, placed_courses=1)
+    small = {u.name: u.home_m for u in fleet_for(bp, *smaller)}
+    large = {u.name: u.home_m for u in fleet_for(bp, *larger)}
+    assert {name: large[name] for name in small} == small
+    if wall == "pyramid":
+        assert small["glue-2"][0] == pytest.approx(14.0)
+
+
+def test_the_ladder_steps_two_brick_uavs_and_a_sprayer_at_a_time() -> None:
+    assert ladder(8, 4) == [(2, 1), (4, 2), (6, 3), (8, 4)]
+    assert ladder(1, 1) == [(1, 1)]
+    assert ladder(5, 3) == [(2, 1), (4, 2), (5, 3)]
+    assert ladder(0, 2) == [(0, 1), (0, 2)]
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(min_value=1, max_value=9),
+    st.integers(min_value=1, max_value=5),
+    st.integers(min_value=1, max_value=9),
+    st.integers(min_value=1, max_value=5),
+)
+def test_a_fleet_holds_the_pads_of_every_smaller_core_on_its_ladder(
+    b1: int, a1: int, b2: int, a2: int
+) -> None:
+    """Of two cores (two brick UAVs per sprayer) one no larger than the other in either role, the larger's pads
+    hold the smaller's: a UAV added to a fleet moves no pad of a fleet it grows from, and every added pad keeps
+    the spacing."""
+    small_fleet = core_counts(min(b1, b2), min(a1, a2))
+    large_fleet = core_counts(max(b1, b2), max(a1, a2))
+    if small_fleet[0] > large_fleet[0] or small_fleet[1] > large_fleet[1]:
+        return  # (not one core inside the other)
+    if small_fleet not in ladder(*large_fleet):
+        return  # (a step off the ladder: 3 + 2 is not on 4 + 2's way, 2 + 1 and 4 + 2 are)
+    bp = running_bond(2, 12, placed_courses=1)
+    small = {u.name: u.home_m for u in fleet_for(bp, *small_fleet)}
+    large = {u.name: u.home_m for u in fleet_for(bp, *large_fleet)}
+    assert {name: large[name] for name in small} == small
+    spacing = max(2.0, 2.0 * bp.clearance_m)
+    own = {u.name for u in bp.fleet}
+    for name, home in large.items():
+        if name not in own:
+            assert all(math.dist(home[:2], h[:2]) >= spacing * 0.99 for n, h in large.items() if n != name), (
+                name
+            )

@@ -77,16 +77,31 @@ def fleet_for(
     UAVs the blueprint names are kept (first ones of their role); extra ones are named ``brick-N`` /
     ``glue-N`` and parked in a row next to the last home of their role, ``2 * clearance`` apart, so
     that homes never violate the clearance. With both sizes given, the fleet's core (:func:`core_counts`) is laid
-    first, as that fleet alone, and its spares after it, each past the last pad of its role and clear of every
-    core pad: adding spares moves no pad of the core (the 12 m wall's 8 + 2 keeps 4 + 2's pads).
+    first, step by step up its :func:`ladder` (2 + 1, then 4 + 2's added UAVs past those, ...), and its spares
+    after it, each past the last pad of its role and clear of every pad before: adding UAVs moves no pad of a
+    smaller fleet on the way (the 12 m wall's 8 + 2 keeps 4 + 2's pads, the pyramid's 8 + 4 keeps 4 + 2's glue-2
+    at 14 m where laid in one go it stood past all eight brick pads, at 26 m: issue 27 §4, branch ``more42``).
     """
     if brick_uavs is None or adhesion_uavs is None or brick_uavs < 0 or adhesion_uavs < 0:
         return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, ())
     core_b, core_a = core_counts(brick_uavs, adhesion_uavs)
-    core = _laid(blueprint, {"brick": core_b, "adhesion": core_a}, ())
+    core: tuple[UavSpec, ...] = ()
+    for step_b, step_a in ladder(core_b, core_a):
+        core = _laid(blueprint, {"brick": step_b, "adhesion": step_a}, core)
     if (core_b, core_a) == (brick_uavs, adhesion_uavs):
         return core
     return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, core)
+
+
+def ladder(brick_uavs: int, adhesion_uavs: int) -> list[tuple[int, int]]:
+    """The fleets a core of ``brick_uavs`` + ``adhesion_uavs`` is laid out through, smallest first: a step of
+    :data:`BRICK_UAVS_PER_SPRAYER` brick UAVs and one sprayer at a time (4 + 2 through 2 + 1 and 4 + 2; 8 + 4
+    through 2 + 1, 4 + 2, 6 + 3 and 8 + 4), each step's pads laid past the one's before, so a fleet's pads hold
+    every smaller step's (the pyramid's 8 + 4 keeps 4 + 2's glue-2 at 14 m, not past eight brick pads at 26 m)."""
+    per = BRICK_UAVS_PER_SPRAYER
+    steps = max(1, -(-brick_uavs // per), adhesion_uavs)
+    out = [(min(brick_uavs, per * k), min(adhesion_uavs, k)) for k in range(1, steps + 1)]
+    return out if out[-1] == (brick_uavs, adhesion_uavs) else [*out, (brick_uavs, adhesion_uavs)]
 
 
 def _laid(
@@ -141,4 +156,12 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "core_of_role", "fleet_for", "spares_rest", "with_fleet"]
+__all__ = [
+    "BRICK_UAVS_PER_SPRAYER",
+    "core_counts",
+    "core_of_role",
+    "fleet_for",
+    "ladder",
+    "spares_rest",
+    "with_fleet",
+]
