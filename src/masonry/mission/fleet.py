@@ -73,7 +73,11 @@ def spares_rest(role: str, left_s: Mapping[str, float], live: Mapping[str, int])
 
 
 def fleet_for(
-    blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None
+    blueprint: Blueprint,
+    brick_uavs: int | None = None,
+    adhesion_uavs: int | None = None,
+    *,
+    admission: bool = True,
 ) -> tuple[UavSpec, ...]:
     """The blueprint's fleet, or one with ``brick_uavs`` / ``adhesion_uavs`` UAVs of each role.
 
@@ -85,13 +89,15 @@ def fleet_for(
     (:func:`narrowed`: the admission rule keeps it to fewer busy UAVs) the core is laid step by step up its
     :func:`ladder` (2 + 1, then 4 + 2's added UAVs past those, ...), so it keeps every smaller step's pads: the
     pyramid's 8 + 4 keeps 4 + 2's glue-2 at 14 m, where laid in one go it stood past all eight brick pads, at 26 m
-    (issue 27 §4, branch ``more42``). Elsewhere the core is laid in one go.
+    (issue 27 §4, branch ``more42``). Elsewhere the core is laid in one go, and so everywhere with ``admission``
+    False: a mission with no admission rule (``--airspace table``, or no separation), where no wall narrows the
+    fleet (under the table the pyramid's 6 + 3, seed 1, laid up the ladder did not complete).
     """
     if brick_uavs is None or adhesion_uavs is None or brick_uavs < 0 or adhesion_uavs < 0:
         return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, ())
     core_b, core_a = core_counts(brick_uavs, adhesion_uavs)
     steps = ladder(core_b, core_a)
-    if len(steps) > 2 and not narrowed(blueprint, core_b + core_a):
+    if len(steps) > 2 and not (admission and narrowed(blueprint, core_b + core_a)):
         steps = steps[-1:]  # (laid in one go: up the ladder, the 12 m wall's 8 + 4 was +147 s on seed 1)
     core: tuple[UavSpec, ...] = ()
     for step_b, step_a in steps:
