@@ -10,6 +10,9 @@ from collections.abc import Mapping
 
 from masonry.blueprint import Blueprint, UavSpec, validate_blueprint
 from masonry.errors import BlueprintError, InputError
+from masonry.mission.sites import work_point_m
+from masonry.planner.dispatch_admission import Admission, site_width
+from masonry.planner.graphs import plan as make_plan
 
 
 def with_fleet(blueprint: Blueprint, fleet: tuple[UavSpec, ...]) -> Blueprint:
@@ -70,23 +73,59 @@ def spares_rest(role: str, left_s: Mapping[str, float], live: Mapping[str, int])
 
 
 def fleet_for(
-    blueprint: Blueprint, brick_uavs: int | None = None, adhesion_uavs: int | None = None
+    blueprint: Blueprint,
+    brick_uavs: int | None = None,
+    adhesion_uavs: int | None = None,
+    *,
+    admission: bool = True,
 ) -> tuple[UavSpec, ...]:
     """The blueprint's fleet, or one with ``brick_uavs`` / ``adhesion_uavs`` UAVs of each role.
 
     UAVs the blueprint names are kept (first ones of their role); extra ones are named ``brick-N`` /
     ``glue-N`` and parked in a row next to the last home of their role, ``2 * clearance`` apart, so
     that homes never violate the clearance. With both sizes given, the fleet's core (:func:`core_counts`) is laid
-    first, as that fleet alone, and its spares after it, each past the last pad of its role and clear of every
-    core pad: adding spares moves no pad of the core (the 12 m wall's 8 + 2 keeps 4 + 2's pads).
+    first, and its spares after it, each past the last pad of its role and clear of every pad before: adding
+    spares moves no pad of the core (the 12 m wall's 8 + 2 keeps 4 + 2's pads). On a wall that narrows the core
+    (:func:`narrowed`: the admission rule keeps it to fewer busy UAVs) the core is laid step by step up its
+    :func:`ladder` (2 + 1, then 4 + 2's added UAVs past those, ...), so it keeps every smaller step's pads: the
+    pyramid's 8 + 4 keeps 4 + 2's glue-2 at 14 m, where laid in one go it stood past all eight brick pads, at 26 m
+    (issue 27 §4, branch ``more42``). Elsewhere the core is laid in one go, and so everywhere with ``admission``
+    False: a mission with no admission rule (``--airspace table``, or no separation), where no wall narrows the
+    fleet (under the table the pyramid's 6 + 3, seed 1, laid up the ladder did not complete).
     """
     if brick_uavs is None or adhesion_uavs is None or brick_uavs < 0 or adhesion_uavs < 0:
         return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, ())
     core_b, core_a = core_counts(brick_uavs, adhesion_uavs)
-    core = _laid(blueprint, {"brick": core_b, "adhesion": core_a}, ())
+    steps = ladder(core_b, core_a)
+    if len(steps) > 2 and not (admission and narrowed(blueprint, core_b + core_a)):
+        steps = steps[-1:]  # (laid in one go: up the ladder, the 12 m wall's 8 + 4 was +147 s on seed 1)
+    core: tuple[UavSpec, ...] = ()
+    for step_b, step_a in steps:
+        core = _laid(blueprint, {"brick": step_b, "adhesion": step_a}, core)
     if (core_b, core_a) == (brick_uavs, adhesion_uavs):
         return core
     return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, core)
+
+
+def ladder(brick_uavs: int, adhesion_uavs: int) -> list[tuple[int, int]]:
+    """The fleets a core of ``brick_uavs`` + ``adhesion_uavs`` is laid out through, smallest first: a step of
+    :data:`BRICK_UAVS_PER_SPRAYER` brick UAVs and one sprayer at a time (4 + 2 through 2 + 1 and 4 + 2; 8 + 4
+    through 2 + 1, 4 + 2, 6 + 3 and 8 + 4), each step's pads laid past the one's before, so a fleet's pads hold
+    every smaller step's (used where the wall narrows the fleet: :func:`narrowed`)."""
+    per = BRICK_UAVS_PER_SPRAYER
+    steps = max(1, -(-brick_uavs // per), adhesion_uavs)
+    out = [(min(brick_uavs, per * k), min(adhesion_uavs, k)) for k in range(1, steps + 1)]
+    return out if out[-1] == (brick_uavs, adhesion_uavs) else [*out, (brick_uavs, adhesion_uavs)]
+
+
+def narrowed(blueprint: Blueprint, uavs: int) -> bool:
+    """The admission rule (:class:`masonry.planner.dispatch_admission.Admission`) keeps a fleet of ``uavs`` on
+    ``blueprint``'s wall to fewer busy UAVs from the start: more than :data:`~masonry.planner.dispatch_admission.
+    UAVS_PER_SITE` per site the wall can work at once, r_c apart (the bundled pyramid from 4 + 2 up; neither running
+    bond of the fleet benchmarks up to 8 + 4)."""
+    points = [work_point_m(t)[:2] for t in make_plan(blueprint, check_marker_ids=False).tasks if not t.done]
+    width = site_width(((p[0], p[1]) for p in points), blueprint.clearance_m)
+    return Admission(width, landed=lambda _name: True).applies(uavs)
 
 
 def _laid(
@@ -141,4 +180,13 @@ def _default_home(blueprint: Blueprint, role: str) -> tuple[float, float, float]
     return (min(xs) - 2.0 * blueprint.clearance_m, min(ys) - offset, 0.0)
 
 
-__all__ = ["BRICK_UAVS_PER_SPRAYER", "core_counts", "core_of_role", "fleet_for", "spares_rest", "with_fleet"]
+__all__ = [
+    "BRICK_UAVS_PER_SPRAYER",
+    "core_counts",
+    "core_of_role",
+    "fleet_for",
+    "ladder",
+    "narrowed",
+    "spares_rest",
+    "with_fleet",
+]

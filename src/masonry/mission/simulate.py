@@ -38,6 +38,7 @@ from masonry.mission.journal import open_mission_journal
 from masonry.mission.measured import MeasuredJournal, journaled_errors_m, kept_errors_m, simulated_report
 from masonry.mission.messages import MISSION_CONTROL
 from masonry.mission.report import MissionReport
+from masonry.mission.reserved import DEFAULT_AIRSPACE
 from masonry.mission.schedule_file import check_schedule, with_schedule_counts
 from masonry.mission.sim_loop import CONTROL_PERIOD_S, fly
 from masonry.mission.sim_options import SimFields, SimOptions, with_fields
@@ -312,7 +313,9 @@ class SimulatedMission:
         uav_config = template_config(uav_config, vehicle, opts.airspace)
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
-        fleet = fleet_for(blueprint, opts.brick_uavs, opts.adhesion_uavs)
+        # the pads follow the admission rule, which only the columns apply (mission.control_dispatch.admit)
+        admission = separation and opts.airspace == DEFAULT_AIRSPACE
+        fleet = fleet_for(blueprint, opts.brick_uavs, opts.adhesion_uavs, admission=admission)
         if not fleet:
             raise InputError(
                 "the fleet is empty: give `brick_uavs` / `adhesion_uavs` or a fleet in the blueprint",
