@@ -61,15 +61,15 @@ def test_a_brick_let_go_3_cm_off_its_neighbours_is_reseated_within_2_cm(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """A 3-brick pyramid, the top brick B2 (on B0 and B1) let go 3 cm off: left alone it is 3 cm off its
-    neighbours; with the re-seat (the default) its UAV lifts it and places it again, within 2 cm, and says so."""
+    neighbours; with the re-seat (the px4 preset's 1.8 cm) its UAV lifts it and places it again, within 2 cm, and says so."""
     _first_release_off(monkeypatch, 2)
-    report, mission = _fly(pyramid(2), reseat_over_m=0.0)
+    report, mission = _fly(pyramid(2), reseat_over_m=0.0, align_on_wall=True)
     assert report.completed
     assert _off_neighbours_m(mission, 2, (0, 1)) > 0.025
     assert report.as_built["B2"].reseats == 0
 
     _first_release_off(monkeypatch, 2)
-    report, mission = _fly(pyramid(2))
+    report, mission = _fly(pyramid(2), reseat_over_m=0.018, align_on_wall=True)
     assert report.completed
     assert report.as_built["B2"].reseats == 1
     assert _off_neighbours_m(mission, 2, (0, 1)) < 0.02
@@ -85,12 +85,16 @@ def test_the_glue_s_open_time_forbids_a_reseat_that_would_press_the_brick_too_la
     violation either way (the world measures the glue's age at each release)."""
     bp = pyramid(2)
     _first_release_off(monkeypatch, 2)
-    report, mission = _fly(dataclasses.replace(bp, adhesive=Adhesive(open_time_s=600.0)))
+    report, mission = _fly(
+        dataclasses.replace(bp, adhesive=Adhesive(open_time_s=600.0)), reseat_over_m=0.018, align_on_wall=True
+    )
     assert report.completed and report.as_built["B2"].reseats == 1
     assert mission.world.glue.open_violations == []
 
     _first_release_off(monkeypatch, 2)
-    report, mission = _fly(dataclasses.replace(bp, adhesive=Adhesive(open_time_s=45.0)))
+    report, mission = _fly(
+        dataclasses.replace(bp, adhesive=Adhesive(open_time_s=45.0)), reseat_over_m=0.018, align_on_wall=True
+    )
     assert report.completed and report.as_built["B2"].reseats == 0
     assert mission.world.glue.open_violations == []
     assert _off_neighbours_m(mission, 2, (0, 1)) > 0.02

@@ -492,7 +492,10 @@ class BrickUav(Reseat):
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)
                 self.abort(reason=taken)
             elif self._gate.allows(self, tel):
-                self.attempt.release_error_m = error
+                a = self.attempt
+                a.release_error_m = error
+                # (masonry.fsm.reseat: how long the placement took, from place_align to the release)
+                a.placing_s, a.place_began_s = self._now_s - a.place_began_s, math.nan
                 self.reached()
         elif self._now_s > self.nav.end_s + cfg.release_timeout_s and not self._gate.retries(self, tel):
             self.attempt.place_attempts += 1
@@ -505,9 +508,6 @@ class BrickUav(Reseat):
                 self.timeout()
 
     def enter_place_release(self, *args: object, **kwargs: object) -> None:
-        a = self.attempt
-        if not math.isnan(a.place_began_s):  # (a release again after one that stuck: the same placement)
-            a.placing_s, a.place_began_s = self._now_s - a.place_began_s, math.nan
         ahead_s = self._gate.ahead_s  # (masonry.fsm.release_gate.ReleaseGate.ahead: timed within the tick)
         if ahead_s > 0.0:
             self.gripper.release_at(self._now_s + ahead_s)  # (False: it cannot time it, and has let go now)

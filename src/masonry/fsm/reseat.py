@@ -5,7 +5,9 @@ After the release the UAV climbs out with the placed brick under its camera (``p
 bricks it touches that were seen with it (its course neighbours, its supports) are compared with their designed
 offsets: their mean deviation is how far the brick is from its design *relative to its neighbours*, the quantity
 ``benchmarks/bench_as_built.py`` measures, to camera noise (the position source's error cancels in the same frame).
-Farther than ``UavConfig.reseat_over_m``, the UAV re-seats it (``reseat``):
+Farther than ``UavConfig.reseat_over_m``, a placement aligned on the wall (``align_on_wall``, or in a wind:
+:mod:`masonry.fsm.wind_lean`; placed again on the absolute position, a brick would be aimed at its design, not at
+the neighbours the look judged it by) re-seats it (``reseat``):
 
 - ``reseat_descend``: magnet on, joint unlocked, the effector down onto the brick's top face as the look saw it
   (``grasp_press_m`` into it), the target following the brick in the camera's frames (the as-built look's camera
@@ -76,6 +78,10 @@ class Reseat(PutBack):
         cfg, a, look = self.config, self.attempt, self.as_built
         if a.reseat_judged or cfg.reseat_over_m <= 0.0 or a.reseats >= cfg.reseat_max:
             return False
+        if not (
+            cfg.align_on_wall or a.in_wind
+        ):  # placed on the absolute position: placed again, it would aim
+            return False  # at the design, not at the neighbours the look judges it by
         if not climbed and look.window.count < look.window.size:
             return False
         a.reseat_judged = True
