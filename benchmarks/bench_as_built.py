@@ -115,6 +115,8 @@ class Tally:
     attempt_s: list[float] = field(default_factory=list)
     #: brick attempts that failed (put back, flown again or left: "drop-off not reached ... after 3 descents")
     failed: int = 0
+    #: bricks re-seated by their UAV (masonry.fsm.reseat: the as-built pose's ``reseats``)
+    reseated: int = 0
 
     def __post_init__(self) -> None:
         self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
@@ -238,6 +240,7 @@ def run_one(
         pose = report.as_built.get(f"B{bid}")
         if pose is not None:
             tally.seen += 1
+            tally.reseated += int(pose.reseats > 0)
             tally.anchored += int(pose.anchored_to is not None)
             look = pose.world_position_m if pose.world_position_m is not None else pose.position_m
             tally.look_m.append(math.dist(look, world.bricks[bid].position_m))
@@ -373,7 +376,7 @@ def main() -> None:
         f"{'neighbours mean/max mm':>22}  {'estimate vs truth mean/max mm':>29}  {'in the wall frame mean/max mm':>29}  "
         f"{'estimate vs wall mean/max mm':>28}  {'relative estimate vs truth mean/max mm':>38}  "
         f"relative/anchored/seen/placed  off course/counted done  descending/attempt mean s  over 2 cm of neighbours  "
-        f"world look vs truth mean/max mm  single chain vs truth mean/max mm  failed attempts"
+        f"world look vs truth mean/max mm  single chain vs truth mean/max mm  failed attempts  re-seated"
     )
     for vehicle in args.vehicles.split(","):
         for wall in args.walls.split(","):
@@ -409,7 +412,7 @@ def main() -> None:
                     f"{tally.off_course}/{tally.off_course_done}  "
                     f"{np.mean(tally.descend_s or [math.nan]):.1f}/{np.mean(tally.attempt_s or [math.nan]):.1f}  "
                     f"{sum(d > NEIGHBOUR_LIMIT_M for d in tally.neighbour_m)}/{len(tally.neighbour_m)}  "
-                    f"{_mm(tally.look_m)}  {_mm(tally.chain_m)}  {tally.failed:>3}  "
+                    f"{_mm(tally.look_m)}  {_mm(tally.chain_m)}  {tally.failed:>3}  {tally.reseated:>3}  "
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )

@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from fsm_rig import HOME, Rig, adhesion_task, brick_task
 from masonry.fsm.states import ADHESION_STATES, BRICK_STATES, leaf_states
+from test_reseat import reseat_mission_states
 
 HAPPY_BRICK = [
     "idle",
@@ -638,9 +639,10 @@ def test_adhesion_next_task_arriving_while_it_waits_down_is_chained() -> None:
         assert climbed is not chained, (delay_s, max(heights))
 
 
-def test_scenarios_visit_every_state() -> None:
-    """Together the scenarios above reach every leaf state of both machines (checked on a few here)."""
-    brick = set(HAPPY_BRICK)
+def test_scenarios_visit_every_state(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Together the scenarios above reach every leaf state of both machines (checked on a few here; the re-seat's
+    in a simulated mission, tests/test_reseat.py)."""
+    brick = set(HAPPY_BRICK) | reseat_mission_states(monkeypatch)
     brick |= Rig("brick", fc={"battery_fraction": 0.3, "battery_drain_per_s": 0.008}).run().visited()
     brick |= Rig("brick", fc={"arm_rejection": "no"}).run().visited()
     brick |= Rig("brick", fc={"battery_fraction": 0.23, "battery_drain_per_s": 0.001}).run().visited()

@@ -68,7 +68,18 @@ TASK_DROPPED_REASON = "uav dropped the task"
 #: The machines' states in which a task's work is done or being finished on the wall (the brick released, the
 #: segment sprayed): an abort there would report failed a task that is done, so a recall or a lost link lets it
 #: finish, and mission control gives a UAV silent in one of them longer before it declares it lost.
-FINISHING_STATES = frozenset({"place_release", "place_verify", "place_ascend", "close", "ascend"})
+FINISHING_STATES = frozenset(
+    {
+        "place_release",
+        "place_verify",
+        "place_ascend",
+        "reseat_descend",
+        "reseat_grasp",
+        "reseat_ascend",
+        "close",
+        "ascend",
+    }
+)
 #: The brick machine's states after the grasp in which the brick is on the magnet (a UAV lost in one of them
 #: may have taken its brick down with it: mission control says so in the attempt's reason).
 CARRYING_STATES = frozenset(
@@ -78,6 +89,7 @@ CARRYING_STATES = frozenset(
         "transport",
         "place_align",
         "place_descend",
+        "reseat_ascend",
         "putback_goto",
         "putback_descend",
     }
@@ -285,6 +297,13 @@ class ClearanceAnswer(Protocol):
     def gentle(
         self,
     ) -> bool: ...  # its lateral leg's end is near another UAV's: fly it gently (docs/safety.md)
+
+    @property
+    def open_for_s(
+        self,
+    ) -> (
+        float | None
+    ): ...  # granted at a brick's drop-off: how long the glue under it stays open (None: no open time)
 
 
 @runtime_checkable

@@ -46,6 +46,7 @@ class FakeClearance:
     layer_m: float | None
     hold_m: Vec3 | None = None
     gentle: bool = True
+    open_for_s: float | None = None
 
 
 class ScriptedClearanceLink(QueueMissionLink):

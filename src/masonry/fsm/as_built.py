@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from masonry.planner.tasks import BrickTask
     from masonry.ports import Camera, CameraFrame, Telemetry
 
-__all__ = ["AsBuiltLook", "LooksBack", "frame_tags", "world_estimate"]
+__all__ = ["AsBuiltLook", "LooksBack", "frame_tags", "touches", "world_estimate"]
 
 
 @runtime_checkable
@@ -88,6 +88,16 @@ def world_estimate(
 
     est = estimate_brick_pose(to_world(tag1), to_world(tag2), config)
     return None if est is None else (np.asarray(est.center_m, dtype=float), float(est.yaw_rad))
+
+
+def touches(own_top_m: np.ndarray, other_top_m: np.ndarray, size_m: tuple[float, float, float]) -> bool:
+    """Designed top-face centres of two bricks of size ``size_m``: the other is the brick's course neighbour (centres
+    within a brick length in the same course) or under it (one course below, overlapping): a brick it touches."""
+    h = math.hypot(float(own_top_m[0] - other_top_m[0]), float(own_top_m[1] - other_top_m[1]))
+    dz = float(own_top_m[2] - other_top_m[2])
+    same = abs(dz) < 1e-6 and h <= size_m[0] * 1.01
+    below = abs(dz - size_m[2]) < 1e-3 and h < size_m[0] * 0.99
+    return same or below
 
 
 class AsBuiltLook:
@@ -159,3 +169,19 @@ class AsBuiltLook:
                 for r in self.relative.poses(task.marker_ids[0] // 2, designs)
             ),
         )
+
+    def neighbour_deviation_m(self, task: BrickTask) -> float | None:
+        """How far the placed brick is from its designed offsets to the bricks it touches that were seen with it
+        (the mean of its offset deviations from each: its own error less theirs, the wall's error cancelled);
+        None when none of them was seen in two frames with it."""
+        own = task.marker_ids[0] // 2
+        designs = self.relative.wall(self._wall)
+        own_design = designs.get(own)
+        if own_design is None:
+            return None
+        devs = [
+            np.asarray(r.offset_m) - (own_design - designs[r.relative_to])
+            for r in self.relative.poses(own, designs)
+            if touches(own_design, designs[r.relative_to], task.size_m)
+        ]
+        return float(np.linalg.norm(np.mean(devs, axis=0))) if devs else None

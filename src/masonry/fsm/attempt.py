@@ -78,6 +78,14 @@ class BrickAttempt(TaskAttempt):
     #: aligned on the wall for the wind (``UavConfig.wall_in_wind_rad``, masonry.fsm.wind_lean)
     in_wind: bool = False
     putback_reason: str = ""  # why the task was given up while the brick is being put back
+    #: re-seats (masonry.fsm.reseat): made, the as-built look judged for one, when the glue under the brick closes
+    #: (this UAV's clock; None: no open time said), when the placement began (place_align; nan: none under way)
+    #: and how long the last one took to its release (s)
+    reseats: int = 0
+    reseat_judged: bool = False
+    open_until_s: float | None = None
+    place_began_s: float = math.nan
+    placing_s: float = 0.0
     kept_on_board: str = ""  # flown home with the brick on the magnet: the failure reported once landed
 
 

@@ -1,7 +1,8 @@
 """The brick-carrier UAV (paper, Section IV): the callbacks of the brick machine (:data:`states.BRICK_STATES`).
 
-Its put-back, carrying altitude and way out of a task are :mod:`masonry.fsm.putback`'s; what it has done of the
-task in hand is its :class:`~masonry.fsm.attempt.BrickAttempt` (``attempt``).
+Its put-back, carrying altitude and way out of a task are :mod:`masonry.fsm.putback`'s, its re-seat of a brick
+placed out of place :mod:`masonry.fsm.reseat`'s; what it has done of the task in hand is its
+:class:`~masonry.fsm.attempt.BrickAttempt` (``attempt``).
 """
 
 from __future__ import annotations
@@ -18,10 +19,9 @@ from masonry.fsm.camera_align import CameraAlign, track_brick
 from masonry.fsm.config import UavConfig
 from masonry.fsm.descent_reach import HeightRunOff
 from masonry.fsm.dropoff_reach import DropoffReach, dropoff_error_m
-from masonry.fsm.grasp_reach import grasp_done
 from masonry.fsm.noise_gate import MEAN_ALONE_AFTER, HoverNoise, noise_aligned
-from masonry.fsm.putback import PutBack
 from masonry.fsm.release_gate import ReleaseGate
+from masonry.fsm.reseat import Reseat
 from masonry.fsm.side_look import SideLook, heading_flip_rad
 from masonry.fsm.states import BRICK_STATES, BRICK_TASK_STATES, BRICK_TRANSITIONS, leaf_states
 from masonry.fsm.tool import Tool
@@ -40,7 +40,7 @@ _ALIGN_S = 3.0
 _ESTIMATE_OFF_M = 0.25
 
 
-class BrickUav(PutBack):
+class BrickUav(Reseat):
     """The brick-carrier UAV (paper, Section IV): pick a brick up near ``pickup_m``, place it on the wall.
 
     Args:
@@ -344,19 +344,7 @@ class BrickUav(PutBack):
         # On a noisy position source the press does not count while EKF2's height has run off (the body reported
         # decimetres above the brick: descent_reach.HeightRunOff; a CI-load flight's first grasp pressed out its
         # patience 0.5 m up, then missed)
-        cfg = self.config
-        above_end_m = float(tel.position_m[2] - self.nav.target_m[2])
-        if cfg.gate_window_s > 0.0:
-            self._run_off.waits(self._now_s, above_end_m, cfg.control_period_s, cfg.leg_timeout_s)
-        if grasp_done(
-            pressed_s=self._now_s - self._entered_s - self._run_off.waited_s,
-            attached=self.gripper.is_attached(),
-            above_end_m=above_end_m,
-            dwell_s=cfg.grasp_dwell_s,
-            press_m=cfg.grasp_press_m,
-            patience_s=cfg.grasp_patience_s,
-            wait_for_contact=cfg.gate_window_s > 0.0,
-        ):
+        if self._pressed(tel):
             self.attempt.grasp_yaw_rad = tel.attitude_rad[2]
             self.grasped()
 
@@ -445,6 +433,8 @@ class BrickUav(PutBack):
         tel = self._tel
         assert tel is not None
         self.gripper.set_joint_locked(True)
+        if math.isnan(self.attempt.place_began_s):  # (masonry.fsm.reseat: how long a placement takes)
+            self.attempt.place_began_s = self._now_s
         self.attempt.in_wind = self._lean.windy(self.config.wall_in_wind_rad, self.config.wind_held_rad)
         self._place_gains(self.attempt.in_wind)
         yaw = self._place_yaw_rad()
@@ -502,7 +492,10 @@ class BrickUav(PutBack):
             if taken is not None:  # (masonry.fsm.place_taken: another brick lies in its place)
                 self.abort(reason=taken)
             elif self._gate.allows(self, tel):
-                self.attempt.release_error_m = error
+                a = self.attempt
+                a.release_error_m = error
+                # (masonry.fsm.reseat: how long the placement took, from place_align to the release)
+                a.placing_s, a.place_began_s = self._now_s - a.place_began_s, math.nan
                 self.reached()
         elif self._now_s > self.nav.end_s + cfg.release_timeout_s and not self._gate.retries(self, tel):
             self.attempt.place_attempts += 1
@@ -552,6 +545,7 @@ class BrickUav(PutBack):
         assert tel is not None
         self.gripper.set_joint_locked(True)
         self.as_built.begin()
+        self.attempt.reseat_judged = False
         p = tel.position_m
         self._fly_to(tel, np.array([p[0], p[1], self._transit_altitude_m()]))
 
@@ -566,7 +560,8 @@ class BrickUav(PutBack):
             self._est_config,
             self.config.wall,
         )
-        if self._advance(tel):
+        climbed = self._advance(tel)
+        if not self._reseat_now(tel, climbed) and climbed:  # (masonry.fsm.reseat: out of place, lifted again)
             self._complete_task(
-                placement_error_m=self.attempt.release_error_m, as_built=self.as_built.pose(t)
+                placement_error_m=self.attempt.release_error_m, as_built=self._as_built_pose()
             )

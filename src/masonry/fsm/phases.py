@@ -41,6 +41,9 @@ STATE_PHASES: Mapping[str, str] = MappingProxyType(
         "place_release": "placing",
         "place_verify": "placing",
         "place_ascend": "ascending",
+        "reseat_descend": "descending",  # a brick out of place lifted to be placed again (masonry.fsm.reseat)
+        "reseat_grasp": "grasping",
+        "reseat_ascend": "ascending",
         "putback_goto": "transit",  # a task given up with the brick on the magnet: it goes back to its pallet
         "putback_descend": "descending",
         "putback_release": "placing",

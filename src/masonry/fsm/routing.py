@@ -131,6 +131,7 @@ class Routing(ModelBase):
         p = np.asarray(tel.position_m, dtype=float)
         layer = self._transit_layer_m(answer, p)
         if answer.granted:
+            self._site_granted(answer)
             self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer, answer.gentle)
         else:
             # a hold flight at the altitude it is given: a later one may be at another (to a parking spot)
@@ -160,6 +161,7 @@ class Routing(ModelBase):
             or abs(answer.layer_m - layer) > 1e-6
         ):
             return False
+        self._site_granted(answer)
         transit.grant()
         legs = self.nav.layer_route_legs(np.array(site), layer)
         # on at the layer with the lateral speed it has, not the vertical one (:meth:`Navigator.fly_to`'s level)
@@ -178,6 +180,9 @@ class Routing(ModelBase):
             if layer is None:  # no layers: the altitude it is at (or the target's, if higher)
                 layer = self.config.lateral_altitude_m or max(float(p[2]), float(self.transit.site_m[2]))
         return layer
+
+    def _site_granted(self, answer: ClearanceAnswer) -> None:
+        """Mission control granted the transit's site with ``answer`` (the brick UAV reads its glue's open time)."""
 
     def _granted(self, tel: Telemetry, p: np.ndarray, layer: float, gentle: bool = True) -> None:
         """The column is the UAV's: fly there at ``layer`` (from a hold point perhaps another layer) and down

@@ -10,6 +10,8 @@ Brick UAV (paper, Section IV)::
 
     idle -> takeoff -> pickup {goto, estimate, align, descend, grasp, ascend, verify}
          -> transport -> place {align, descend, release, verify, ascend} -> (pickup | home) -> land -> idle
+    (a brick the as-built look saw out of place is lifted and placed again: place_ascend -> reseat {descend,
+    grasp, ascend} -> place_align)
     (a task assigned while flying home turns the UAV back: home -> pickup)
     (a task given up with the brick on the magnet puts it back first: -> putback {goto, descend, release,
     ascend} -> home, so that the retry finds it on its pallet)
@@ -71,6 +73,18 @@ BRICK_STATES: list[State] = [
         ],
     },
     {
+        # A brick the as-built look saw out of place relative to its neighbours, its glue still open: the UAV comes
+        # down onto it, grips it and climbs with it, then places it again (docs/state-machines.md, "Re-seating a
+        # brick"; masonry.fsm.reseat)
+        "name": "reseat",
+        "initial": "descend",
+        "children": [
+            {"name": "descend", "on_enter": "enter_reseat_descend"},
+            {"name": "grasp", "on_enter": "enter_reseat_grasp"},
+            {"name": "ascend", "on_enter": "enter_reseat_ascend"},
+        ],
+    },
+    {
         # A task given up while the brick is on the magnet (battery low, a drop-off not reached): the brick goes
         # back where it was picked up, then the UAV flies home (docs/state-machines.md, "Putting a brick back").
         "name": "putback",
@@ -86,7 +100,7 @@ BRICK_STATES: list[State] = [
 ]
 
 #: States in which a brick task is under way (``abort`` fires from these).
-BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place"]
+BRICK_TASK_STATES: list[str] = ["takeoff", "pickup", "transport", "place", "reseat"]
 #: States in which the UAV is (or may be) in the air under our control (``lost`` fires from these).
 _AIRBORNE_COMMON: list[str] = ["home", "land", "failsafe"]
 #: Brick task states in which the brick may be on the magnet (an ``abort`` there puts it back if it is; the
@@ -99,6 +113,9 @@ BRICK_LOADED_STATES: list[str] = [
     "transport",
     "place_align",
     "place_descend",
+    "reseat_descend",
+    "reseat_grasp",
+    "reseat_ascend",
 ]
 
 BRICK_TRANSITIONS: list[Transition] = [
@@ -121,6 +138,11 @@ BRICK_TRANSITIONS: list[Transition] = [
     {"trigger": "released", "source": "place_release", "dest": "place_verify"},
     {"trigger": "deposited", "source": "place_verify", "dest": "place_ascend"},
     {"trigger": "stuck", "source": "place_verify", "dest": "place_release"},
+    {"trigger": "reseat", "source": "place_ascend", "dest": "reseat"},
+    {"trigger": "touched", "source": "reseat_descend", "dest": "reseat_grasp"},
+    {"trigger": "grasped", "source": "reseat_grasp", "dest": "reseat_ascend"},
+    {"trigger": "attached", "source": "reseat_ascend", "dest": "place_align"},
+    {"trigger": "missed", "source": "reseat_ascend", "dest": "place_ascend"},
     {"trigger": "finish", "source": "place_ascend", "dest": "pickup", "conditions": "has_next_task"},
     {"trigger": "finish", "source": "place_ascend", "dest": "home"},
     {"trigger": "assign", "source": "home", "dest": "pickup"},

@@ -120,6 +120,11 @@ PRESETS: Mapping[str, Mapping[str, Any]] = {
         # the rule never judges it (its one failure with the rule in the lead's CI rehearsal was not the rule's)
         "release_leg_m": 0.010,
         "release_leg_looks": 10,
+        # a brick the as-built look sees over 1.8 cm off its designed offsets to the bricks it touches is lifted and
+        # placed again once, while its glue is open (masonry.fsm.reseat): seeds 0-9, the rotated bond in 4 m/s 4 -> 0
+        # of 150 bricks over 2 cm of its neighbours, the calm pyramid 1 -> 0 of 100, +1-2.5 s a brick attempt
+        # (docs/performance/as-built.md, branch reseat42)
+        "reseat_over_m": 0.018,
         # the wall's offset past its last sighting predicted on the GNSS wander's drift (masonry.fsm.wall_drift:
         # masonry.sim.shaping.PX4's 6 cm over 8 s, smoothed over 2 s: the rate diffuses 0.015 m/s per sqrt s)
         "wall_drift_mps_per_sqrt_s": 0.015,

@@ -140,7 +140,7 @@ def link_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:
 #: (which the way home begins with anyway), so a low battery does not give the task up there. Given up, the placed
 #: brick's task went back to the queue and its next attempt looked for the brick at its pickup ("not seen near its
 #: pickup after 3 climbs"): the wall stranded behind a brick that was on it.
-WORK_DONE_STATES = ("place_verify", "place_ascend")
+WORK_DONE_STATES = ("place_verify", "place_ascend", "reseat_descend", "reseat_grasp")
 
 
 def battery_watch(now_s: float, tel: Telemetry, a: Attempt) -> Abort | None:

@@ -96,8 +96,18 @@ def answer(mc: MissionControl, g: Grant, now_s: float) -> None:
     if not g.granted and g.hold_m is not None and mc.sites.left(g.uav, now_s):
         mc.columns.touch()  # its site is free: who waits for it may go now
     radius_m = mc.columns.release_radius_m
+    open_for_s = None if mc.glue is None or not g.granted else mc.glue.open_for_s(g.uav, g.site_m, now_s)
     answer = Clearance(
-        MISSION_CONTROL, g.uav, g.site_m, radius_m, now_s, g.granted, g.hold_m, g.layer_m, g.gentle
+        MISSION_CONTROL,
+        g.uav,
+        g.site_m,
+        radius_m,
+        now_s,
+        g.granted,
+        g.hold_m,
+        g.layer_m,
+        g.gentle,
+        open_for_s,
     )
     mc.out.send(g.uav, answer)
 

@@ -98,6 +98,19 @@ class GlueGate:
         lead = self._lead_s(uav, site_m)
         return all(self._fresh(a, lag, lead) for a, lag in self._open[tid])
 
+    def open_for_s(self, uav: str, site_m: Vec3, now_s: float) -> float | None:
+        """For ``uav`` granted ``site_m``: when it is its brick's drop-off with glue under it, the seconds from
+        ``now_s`` the glue stays open (the bead sprayed longest ago; a re-seat presses the brick again only within it,
+        :mod:`masonry.fsm.reseat`); None otherwise."""
+        tid = self.dispatcher.task_of(uav)
+        if tid is None or tid not in self._open:
+            return None
+        w = self._work[tid]
+        if math.hypot(site_m[0] - w[0], site_m[1] - w[1]) >= AT_SITE_M:
+            return None
+        closes = [self.sprayed_at_s[a] + lag for a, lag in self._open[tid] if a in self.sprayed_at_s]
+        return min(closes) - now_s if closes else 0.0
+
     def _lead_s(self, uav: str, site_m: Vec3) -> float:
         """The flight from where ``uav`` is (at the last tick) to ``site_m``, before its placing descent: a UAV
         granted from a hold point presses its brick that much later (0 s: its position is not known)."""

@@ -328,6 +328,7 @@ def _clearance(f: _Fields, sender: str, fleet: Collection[str] | None) -> Cleara
         f.vec("hold_m", optional=True),
         f.num("layer_m", optional=True),
         f.bool_("gentle") if "gentle" in f.data else True,
+        f.num("open_for_s", optional=True),
     )
 
 

@@ -144,6 +144,9 @@ class Clearance:
     #: fly the lateral leg to the site or hold point gently where the zones have no slack for its overshoot (False:
     #: nothing of another UAV's is near its end, which mission control widened: docs/safety.md)
     gentle: bool = True
+    #: granted at a brick's drop-off with glue under it: the seconds its glue stays open from ``time_s`` (the
+    #: bead sprayed longest ago; None: no open time). A re-seat presses the brick again only within it
+    open_for_s: float | None = None
 
 
 @dataclass(frozen=True)

@@ -224,6 +224,8 @@ def encode(message: Message) -> bytes:
         )
         if not message.gentle:  # (only said when not: an older mission control's answer is gentle)
             body["gentle"] = False
+        if message.open_for_s is not None:
+            body["open_for_s"] = message.open_for_s
     elif isinstance(message, MissionEnd):
         body.update(time_s=message.time_s, completed=message.completed)
     else:

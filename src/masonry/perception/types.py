@@ -85,6 +85,9 @@ class AsBuiltPose:
     anchored_to: int | None = None
     world_position_m: tuple[float, float, float] | None = None
     relative_offsets: tuple[tuple[int, tuple[float, float, float], int], ...] = ()
+    #: times its UAV re-seated it (lifted it and placed it again: ``UavConfig.reseat_over_m``); the pose is the look
+    #: after the last placement
+    reseats: int = 0
 
     def to_dict(self, digits: int | None = None) -> dict[str, object]:
         """``{position_m, yaw_rad, deviation_m, confidence}`` and, with a neighbour seen, ``{relative_to,
@@ -112,6 +115,8 @@ class AsBuiltPose:
             if self.anchored_to is not None:
                 out["anchored_to"] = self.anchored_to
             out["world_position_m"] = [r(v) for v in self.world_position_m]
+        if self.reseats:
+            out["reseats"] = self.reseats
         return out
 
     @classmethod
@@ -121,6 +126,17 @@ class AsBuiltPose:
         Raises:
             ValueError: not such a mapping (a field missing, not a number, not finite, a confidence off 0..1).
         """
+        if not isinstance(data, dict):
+            raise ValueError(f"an as-built pose must be an object, got {type(data).__name__}")
+        pose = cls._from_dict(data)
+        reseats = data.get("reseats", 0)
+        if isinstance(reseats, bool) or not isinstance(reseats, int) or reseats < 0:
+            raise ValueError(f"an as-built pose's reseats must be an integer >= 0: {data!r}")
+        return replace(pose, reseats=reseats) if reseats else pose
+
+    @classmethod
+    def _from_dict(cls, data: object) -> AsBuiltPose:
+        """:meth:`from_dict` but for ``reseats``."""
         if not isinstance(data, dict):
             raise ValueError(f"an as-built pose must be an object, got {type(data).__name__}")
         try:
