@@ -25,7 +25,6 @@ import argparse
 import contextlib
 import json
 import os
-import signal
 import socket
 import subprocess
 import sys
@@ -35,23 +34,13 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from bench_arducopter_case_study import MAIN, masonry_process, reap
+
 from ardupilot_sitl import SPEEDUP, arducopter
 from masonry.blueprint import load_blueprint
 
-MAIN = "from masonry.cli import main; main()"
 #: Wall seconds mission control may take (pre-flights, ~40 s of the autopilots' clocks to a GPS estimate, included).
 MISSION_WALL_S = 1800.0
-#: Wall seconds a UAV may take to end after mission control has (its return and landing).
-UAV_EXIT_S = 180.0
-
-
-def _masonry(out: Path, *args: str) -> subprocess.Popen[bytes]:
-    return subprocess.Popen(
-        [sys.executable, "-c", MAIN, *args],
-        stdout=out.with_suffix(".out").open("wb"),
-        stderr=out.with_suffix(".err").open("wb"),
-        start_new_session=True,
-    )
 
 
 def _free_port() -> int:
@@ -83,28 +72,14 @@ def run(reservation: str, folder: Path) -> None:
                    "--verbose", *name]  # fmt: skip
         if reservation != "site":
             mc_args += ["--reservation", reservation]
-        mc = _masonry(folder / "mission-control", *mc_args)
+        mc = masonry_process(folder / "mission-control", *mc_args)
         uavs = {}
         for (uav, role), url in zip(fleet, urls, strict=True):
-            uavs[uav] = _masonry(folder / f"{uav}-fly", "fly", "--uav", role, "--name", uav, "--blueprint",
+            uavs[uav] = masonry_process(folder / f"{uav}-fly", "fly", "--uav", role, "--name", uav, "--blueprint",
                                  str(blueprint), "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{_free_port()}",
                                  "--fc", url, "--actuators", "sim", "--camera", "sim", "--config", str(config),
                                  "--format", "json", "--wait", "60", "--heartbeat-timeout", "30", *name)  # fmt: skip
-        hung: list[str] = []
-        try:
-            mc.wait(timeout=MISSION_WALL_S)
-            ended_s = time.monotonic()
-            for uav, p in uavs.items():
-                try:
-                    p.wait(timeout=max(0.0, ended_s + UAV_EXIT_S - time.monotonic()))
-                except subprocess.TimeoutExpired:
-                    hung.append(uav)
-        finally:
-            for p in [mc, *uavs.values()]:
-                if p.poll() is None:
-                    with contextlib.suppress(ProcessLookupError):
-                        os.killpg(p.pid, signal.SIGKILL)
-                    p.wait()
+        hung = reap(mc, uavs, MISSION_WALL_S)
     print(f"reservation {reservation}, speedup {SPEEDUP}: wall {time.monotonic() - started:.0f} s, "
           f"mission control exit {mc.returncode} (load {os.getloadavg()[0]:.1f})")  # fmt: skip
     try:

@@ -68,13 +68,39 @@ def _arducopter(binary: Path, workdir: Path, instance: int, speedup: int) -> Ite
         log.close()
 
 
-def _masonry(out: Path, *args: str) -> subprocess.Popen[bytes]:
+def masonry_process(out: Path, *args: str) -> subprocess.Popen[bytes]:
+    """`masonry ARGS` in its own process group, its stdout and stderr to OUT.out and OUT.err."""
     return subprocess.Popen(
         [sys.executable, "-c", MAIN, *args],
         stdout=(out.with_suffix(".out")).open("wb"),
         stderr=(out.with_suffix(".err")).open("wb"),
         start_new_session=True,
     )
+
+
+def reap(
+    mc: subprocess.Popen[bytes], uavs: dict[str, subprocess.Popen[bytes]], mission_wall_s: float
+) -> list[str]:
+    """Wait for mission control (at most `mission_wall_s`), then each UAV up to UAV_EXIT_S after it; kill the rest.
+
+    Returns the UAVs still running UAV_EXIT_S after mission control ended (killed).
+    """
+    hung: list[str] = []
+    try:
+        mc.wait(timeout=mission_wall_s)
+        ended_s = time.monotonic()
+        for uav, p in uavs.items():
+            try:
+                p.wait(timeout=max(0.0, ended_s + UAV_EXIT_S - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                hung.append(uav)
+    finally:
+        for p in [mc, *uavs.values()]:
+            if p.poll() is None:
+                with contextlib.suppress(ProcessLookupError):
+                    os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+    return hung
 
 
 def _busy_ports() -> list[int]:
@@ -101,29 +127,14 @@ def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = 
         mc_args = ["mission-control", str(CASE_STUDY), "--listen", LISTEN, "--format", "json"]
         if reservation != "site":
             mc_args += ["--reservation", reservation]
-        mc = _masonry(folder / "mission-control", *mc_args)
+        mc = masonry_process(folder / "mission-control", *mc_args)
         uavs = {}
         for role, uav, url in (("brick", "brick-1", brick_url), ("adhesion", "glue-1", glue_url)):
-            uavs[uav] = _masonry(folder / uav, "fly", "--uav", role, "--name", uav, "--blueprint", str(CASE_STUDY),
+            uavs[uav] = masonry_process(folder / uav, "fly", "--uav", role, "--name", uav, "--blueprint", str(CASE_STUDY),
                                  "--mission", LISTEN, "--fc", url, "--actuators", "sim", "--camera", "sim",
                                  "--config", str(config), "--format", "json",
                                  *(["--log", str(folder / f"{uav}.mcap")] if log else []))  # fmt: skip
-        procs = [mc, *uavs.values()]
-        hung: list[str] = []  # UAVs still running UAV_EXIT_S after mission control ended
-        try:
-            mc.wait(timeout=1800)
-            ended_s = time.monotonic()
-            for uav, p in uavs.items():
-                try:
-                    p.wait(timeout=max(0.0, ended_s + UAV_EXIT_S - time.monotonic()))
-                except subprocess.TimeoutExpired:
-                    hung.append(uav)
-        finally:
-            for p in procs:
-                if p.poll() is None:
-                    with contextlib.suppress(ProcessLookupError):
-                        os.killpg(p.pid, signal.SIGKILL)
-                    p.wait()
+        hung = reap(mc, uavs, mission_wall_s=1800.0)
     wall_s = time.monotonic() - started
     print(
         f"reservation {reservation}, speedup {speedup}: wall {wall_s:.0f} s, mission control exit {mc.returncode}"
