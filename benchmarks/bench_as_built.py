@@ -29,6 +29,12 @@ in ``masonry sim`` (``SimulatedMission``) and prints per (vehicle, wall, wind):
   simulator's true offset between the two bricks' top-face centres, mean and max, millimetres, and how many of
   the bricks seen had such a neighbour.
 
+``--position-error`` adds, per brick seen, the UAV's own position error at its as-built look (:class:`PositionErrors`:
+the telemetry's position less the simulated vehicle's true one, horizontally, averaged over the frames the look's
+window took) beside the estimate's horizontal error (the reported pose's and the world-frame look's), and prints
+how much of the one the other explains (:func:`explained`: their per-axis correlation, and the estimate's error
+with the position error subtracted); ``--per-brick`` prints the pairs.
+
 ``--wander`` prints the ``px4`` model's GNSS wander instead: its standard deviation per axis (what any position
 estimated in the world frame on it carries) and how far it moves on, rms and 95th percentile per axis, in the
 seconds after a look (what an offset to the wall measured then is off by at the release).
@@ -52,19 +58,22 @@ import math
 import pickle
 import random
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from masonry.blueprint import Blueprint
 from masonry.blueprint_gen import pyramid, running_bond, towers
+from masonry.fsm.as_built import AsBuiltLook
 from masonry.fsm.config import UavConfig
 from masonry.fsm.tuning import uav_settings
 from masonry.mission.simulate import SimulatedMission
 from masonry.planner.wall_anchor import WallAnchor
 from masonry.sim import Faults
 from masonry.sim.shaping import PX4, Shaper
+from masonry.sim.vehicle_config import VEHICLE_PRESETS
 from masonry.sim.wind import WindConfig
 from masonry.sim.world import World
 
@@ -118,6 +127,10 @@ class Tally:
     #: bricks re-seated by their UAV (masonry.fsm.reseat: the as-built pose's ``reseats``)
     reseated: int = 0
 
+    #: per brick seen (``--position-error``): (label, its look's horizontal position error, the reported estimate's
+    #: horizontal error, the world-frame look's), m, as x-y vectors
+    position_pairs: list[tuple[str, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+
     def __post_init__(self) -> None:
         self.design_m, self.neighbour_m, self.estimate_m, self.estimate_wall_m = [], [], [], []
         self.relative_m = []
@@ -128,6 +141,64 @@ def _true_top_m(world: World, bid: int) -> np.ndarray:
     brick = world.bricks[bid]
     x, y, z = brick.position_m
     return np.array([x, y, z + brick.blueprint.size_m[2] / 2.0])
+
+
+class PositionErrors:
+    """Per brick, the UAV's own position error at the frames its as-built look used: the telemetry's position less
+    the simulated vehicle's true position at that tick (the camera sees from the truth; the look places what it
+    sees with the telemetry), averaged over the frames the look's window took (its pose is their mean)."""
+
+    def __init__(self) -> None:
+        self.by_brick: dict[
+            int, np.ndarray
+        ] = {}  # brick id -> mean (x, y, z) error, m (the last look reported)
+        self._frames: dict[
+            int, list[np.ndarray]
+        ] = {}  # (id of an AsBuiltLook -> its window's frames' errors)
+
+    @contextmanager
+    def watching(self) -> Iterator[PositionErrors]:
+        """Within: every :class:`AsBuiltLook` records its frames' position errors (a simulated camera's vehicle)."""
+        begin, look, pose = AsBuiltLook.begin, AsBuiltLook.look, AsBuiltLook.pose
+        frames = self._frames
+
+        def begin_(s: AsBuiltLook) -> None:
+            frames[id(s)] = []
+            begin(s)
+
+        def look_(s: AsBuiltLook, camera, brick_id, tel, *args, **kwargs) -> None:  # type: ignore[no-untyped-def]
+            count = s.window.count
+            look(s, camera, brick_id, tel, *args, **kwargs)
+            if s.window.count > count:  # (this frame's estimate joined the window)
+                vehicle = camera._uav.vehicle
+                assert abs(vehicle.time_s - tel.time_s) < 1e-9, "telemetry not of the vehicle's instant"
+                frames.setdefault(id(s), []).append(np.subtract(tel.position_m, vehicle.position_m))
+
+        def pose_(s: AsBuiltLook, task):  # type: ignore[no-untyped-def]
+            out = pose(s, task)
+            if out is not None and frames.get(id(s)):
+                self.by_brick[task.marker_ids[0] // 2] = np.mean(frames[id(s)], axis=0)
+            return out
+
+        AsBuiltLook.begin, AsBuiltLook.look, AsBuiltLook.pose = begin_, look_, pose_  # type: ignore[method-assign]
+        try:
+            yield self
+        finally:
+            AsBuiltLook.begin, AsBuiltLook.look, AsBuiltLook.pose = begin, look, pose  # type: ignore[method-assign]
+
+
+def explained(
+    position_xy: Sequence[np.ndarray], estimate_xy: Sequence[np.ndarray]
+) -> tuple[float, list[float]]:
+    """How much of the estimates' horizontal errors the position errors explain: the correlation of their x and y
+    components pooled (NaN with fewer than two pairs or no spread) and each estimate's error with its position
+    error subtracted (the norm of the difference, m)."""
+    p = np.reshape(np.asarray(position_xy, dtype=float), (-1, 2))
+    e = np.reshape(np.asarray(estimate_xy, dtype=float), (-1, 2))
+    left = [float(np.linalg.norm(d)) for d in e - p]
+    if len(p) < 2 or np.std(p) == 0.0 or np.std(e) == 0.0:
+        return math.nan, left
+    return float(np.corrcoef(p.ravel(), e.ravel())[0, 1]), left
 
 
 def _neighbours(bp: Blueprint) -> dict[int, list[int]]:
@@ -203,13 +274,16 @@ def run_one(
     trend: bool = True,
     overrides: Mapping[str, float] | None = None,
     dump: list[dict[str, object]] | None = None,
+    position: bool = False,
 ) -> None:
     faults = Faults(wind=WindConfig(speed_mps=wind_mps, turbulence="light")) if wind_mps > 0 else None
     config = _config(vehicle, wall=wall, side_look=side_look, trend=trend, overrides=overrides)
     mission = SimulatedMission.from_blueprint(
         bp, seed=seed, vehicle=vehicle, faults=faults, uav_config=config
     )
-    report = mission.run()
+    errors = PositionErrors()
+    with errors.watching() if position else nullcontext(errors):
+        report = mission.run()
     tally.runs += 1
     tally.completed += int(report.completed)
     if not report.completed:
@@ -245,6 +319,16 @@ def run_one(
             look = pose.world_position_m if pose.world_position_m is not None else pose.position_m
             tally.look_m.append(math.dist(look, world.bricks[bid].position_m))
             tally.estimate_m.append(math.dist(pose.position_m, world.bricks[bid].position_m))
+            if bid in errors.by_brick:
+                truth_xy = np.asarray(world.bricks[bid].position_m[:2])
+                tally.position_pairs.append(
+                    (
+                        f"{bp.name} seed {seed} wind {wind_mps:g} B{bid}",
+                        errors.by_brick[bid][:2],
+                        np.asarray(pose.position_m[:2]) - truth_xy,
+                        np.asarray(look[:2]) - truth_xy,
+                    )
+                )
             if pose.relative_to is not None and pose.relative_offset_m is not None:
                 true_offset = _true_top_m(world, bid) - _true_top_m(world, pose.relative_to)
                 assert tally.relative_m is not None
@@ -323,6 +407,41 @@ def wander(duration_s: float = 20000.0, dt_s: float = 0.02) -> None:
         )
 
 
+def look_average(vehicle: str, dt_s: float = 0.1, looks: int = 20000) -> None:
+    """``vehicle``'s position error (its GNSS-like wander and white noise, ``masonry.sim.vehicle_config``) averaged
+    over a look of T seconds at ``dt_s`` a frame: how far a brick seen alone is off for it, horizontally (the
+    as-built look's window: 22-30 frames, 2.1-2.9 s on the towers)."""
+    config = VEHICLE_PRESETS[vehicle]
+    rng = random.Random(1)
+    print(
+        f"{vehicle}: position error averaged over a look, horizontal mm ({looks} looks, {dt_s:g} s a frame)"
+    )
+    print(f"{'look s':>7}  {'rms':>5}  {'99th pct':>8}  {'1 in 180':>8}")
+    for look_s in (0.0, 2.5, 5.0, 10.0, 20.0):
+        shaper = Shaper(config.shaping) if config.shaping is not None else None
+        frames = max(1, round(look_s / dt_s))
+        err = np.empty(looks)
+        for i in range(looks):
+            for _ in range(round(20.0 / dt_s)):  # (20 s between looks: a look's error is its own)
+                if shaper is not None:
+                    shaper.drift(dt_s, rng.gauss)
+            total = np.zeros(2)
+            for _ in range(frames):
+                if shaper is not None:
+                    shaper.drift(dt_s, rng.gauss)
+                gps = shaper.gps_error_m if shaper is not None else (0.0, 0.0)
+                total += (
+                    gps[0] + config.mocap_noise_m * rng.gauss(0, 1),
+                    gps[1] + config.mocap_noise_m * rng.gauss(0, 1),
+                )
+            err[i] = float(np.linalg.norm(total / frames))
+        print(
+            f"{look_s:>7g}  {np.sqrt(np.mean(err**2)) * 1000:>5.1f}  {np.percentile(err, 99) * 1000:>8.1f}  "
+            f"{np.percentile(err, 100 - 100 / 180) * 1000:>8.1f}",
+            flush=True,
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=1)
@@ -363,8 +482,24 @@ def main() -> None:
     parser.add_argument(
         "--dump", help="pickle every run's looks, plan and truth to this file (offline estimators)"
     )
+    parser.add_argument(
+        "--position-error",
+        action="store_true",
+        help="the UAV's own position error at each as-built look beside the estimate's error (PositionErrors)",
+    )
+    parser.add_argument(
+        "--per-brick", action="store_true", help="with --position-error: print every brick's pair"
+    )
     parser.add_argument("--wander", action="store_true", help="print the px4 model's GNSS wander and stop")
+    parser.add_argument(
+        "--look-average",
+        metavar="VEHICLE",
+        help="print VEHICLE's position error averaged over looks of 0-20 s (a brick seen alone) and stop",
+    )
     args = parser.parse_args()
+    if args.look_average:
+        look_average(args.look_average)
+        return
     if args.wander:
         wander()
         return
@@ -396,6 +531,7 @@ def main() -> None:
                         trend=not args.no_trend,
                         overrides=overrides,
                         dump=dump,
+                        position=args.position_error,
                     )
                     if dump is not None:
                         with open(args.dump, "wb") as f:
@@ -416,6 +552,31 @@ def main() -> None:
                     f"({time.perf_counter() - start:.0f} s)",
                     flush=True,
                 )
+                if args.position_error:
+                    _print_position(tally, per_brick=args.per_brick)
+
+
+def _print_position(tally: Tally, *, per_brick: bool) -> None:
+    """The ``--position-error`` lines of one (vehicle, wall, wind): horizontal, mean/max mm."""
+    pairs = tally.position_pairs
+    if per_brick:
+        for label, p, e, w in pairs:
+            print(
+                f"    {label:<36} position error {np.linalg.norm(p) * 1000:5.1f} mm ({p[0] * 1000:+5.1f}, "
+                f"{p[1] * 1000:+5.1f})  estimate {np.linalg.norm(e) * 1000:5.1f} ({e[0] * 1000:+5.1f}, "
+                f"{e[1] * 1000:+5.1f})  less the position error {np.linalg.norm(e - p) * 1000:5.1f}  "
+                f"world look {np.linalg.norm(w) * 1000:5.1f}, less {np.linalg.norm(w - p) * 1000:5.1f}"
+            )
+    position = [p for _, p, _, _ in pairs]
+    corr, left = explained(position, [e for _, _, e, _ in pairs])
+    corr_look, left_look = explained(position, [w for _, _, _, w in pairs])
+    print(
+        f"    horizontal, mean/max mm, {len(pairs)} bricks: position error at the look {_mm([float(np.linalg.norm(p)) for p in position])}"
+        f"  estimate {_mm([float(np.linalg.norm(e)) for _, _, e, _ in pairs])}  less the position error {_mm(left)}"
+        f"  (correlation {corr:.2f})  world look {_mm([float(np.linalg.norm(w)) for _, _, _, w in pairs])}"
+        f"  less the position error {_mm(left_look)}  (correlation {corr_look:.2f})",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":
