@@ -145,6 +145,7 @@ def test_a_uav_sent_to_a_hold_point_for_its_next_task_has_left_the_site_of_its_l
     mc = SimpleNamespace(
         sites=sites,
         columns=ColumnClearance(radius_m=0.56, base_m=1.35),
+        glue=None,  # no adhesive open time on this wall: the grant carries no `open_for_s`
         out=SimpleNamespace(send=lambda uav, msg: sent.append((uav, msg))),
     )
     answer(mc, Grant("a", (0.3, 0.0, 1.2), layer_m=1.35), 20.5)  # granted on: the stay goes on
