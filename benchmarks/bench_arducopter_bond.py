@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import os
 import socket
 import subprocess
@@ -34,7 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from bench_arducopter_case_study import MAIN, masonry_process, reap
+from bench_arducopter_case_study import MAIN, masonry_process, read_report, reap
 
 from ardupilot_sitl import SPEEDUP, arducopter
 from masonry.blueprint import load_blueprint
@@ -82,12 +81,7 @@ def run(reservation: str, folder: Path) -> None:
         hung = reap(mc, uavs, MISSION_WALL_S)
     print(f"reservation {reservation}, speedup {SPEEDUP}: wall {time.monotonic() - started:.0f} s, "
           f"mission control exit {mc.returncode} (load {os.getloadavg()[0]:.1f})")  # fmt: skip
-    try:
-        report = json.loads((folder / "mission-control.out").read_text())
-    except json.JSONDecodeError:
-        print("  no report; mission control's stderr ends:")
-        print("   ", (folder / "mission-control.err").read_text()[-2000:].replace("\n", "\n    "))
-        report = {}
+    report = read_report(folder)
     if report:
         tasks = sorted(report["tasks"], key=lambda t: (t.get("end_s") is None, t.get("end_s") or 0.0))
         done = sum(t.get("status") == "done" for t in tasks)

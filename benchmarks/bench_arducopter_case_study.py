@@ -113,6 +113,16 @@ def _busy_ports() -> list[int]:
     return busy
 
 
+def read_report(folder: Path) -> dict:
+    """Mission control's JSON report in FOLDER, or {} after printing the end of its stderr when there is none."""
+    try:
+        return dict(json.loads((folder / "mission-control.out").read_text()))
+    except json.JSONDecodeError:
+        print("  no report; mission control's stderr ends:")
+        print("   ", (folder / "mission-control.err").read_text()[-2000:].replace("\n", "\n    "))
+        return {}
+
+
 def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = False) -> None:
     busy = _busy_ports()
     if busy:  # the issue's fixed ports: a second run beside one would join the other's vehicles and mission
@@ -139,13 +149,7 @@ def run(reservation: str, speedup: int, binary: Path, folder: Path, log: bool = 
     print(
         f"reservation {reservation}, speedup {speedup}: wall {wall_s:.0f} s, mission control exit {mc.returncode}"
     )
-    text = (folder / "mission-control.out").read_text()
-    try:
-        report = json.loads(text)
-    except json.JSONDecodeError:
-        print("  no report; mission control's stderr ends:")
-        print("   ", (folder / "mission-control.err").read_text()[-2000:].replace("\n", "\n    "))
-        report = {}
+    report = read_report(folder)
     if report:
         tasks = sorted(report["tasks"], key=lambda t: (t.get("end_s") is None, t.get("end_s") or 0.0))
         order = ", ".join(f"{t['id']} by {t.get('uav')} ({t.get('attempts')} att.)" for t in tasks)
