@@ -42,26 +42,35 @@ SHARED = Path(__file__).resolve().parents[2] / "shared"
 SLOW_PARM = "ATC_INPUT_TC 0.6\nPSC_JERK_XY 1.5\n"
 
 
-def fly(url: str, folder: Path, tuning: str, timeout_s: float) -> dict[str, object]:
+def fly(url: str, folder: Path, tuning: str, timeout_s: float, extra: str = "") -> dict[str, object]:
     """One ``masonry fly`` of the scenario: its JSON result with the identification's line and the swings."""
     (folder / "one_brick.yaml").write_text(px4_sitl.ONE_BRICK)
-    (folder / "uav.yaml").write_text(f"estimate_wait_s: 150\ntuning: {tuning}\n")
+    (folder / "uav.yaml").write_text(f"estimate_wait_s: 150\ntuning: {tuning}\n" + extra.replace("\\n", "\n"))
     cmd = [sys.executable, "-c", "from masonry.cli import main; main()", "fly", "--uav", "brick", "--task", "B1",
            "--blueprint", str(folder / "one_brick.yaml"), "--fc", url, "--actuators", "sim", "--camera", "sim",
            "--config", str(folder / "uav.yaml"), "--format", "json"]  # fmt: skip
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, check=False)
-    except subprocess.TimeoutExpired:
-        return {"status": "failed", "reason": f"no result within {timeout_s:g} s of wall time"}
-    said = ("identified on first hover", "identification unusable")
-    ident = next((line for line in proc.stderr.splitlines() if any(s in line for s in said)), "")
+    except subprocess.TimeoutExpired as exc:
+        err = exc.stderr.decode(errors="replace") if isinstance(exc.stderr, bytes) else (exc.stderr or "")
+        last = (err.strip().splitlines() or ["nothing on stderr"])[-1]
+        return {"status": "failed", "identified": _identified(err),
+                "reason": f"no result within {timeout_s:g} s of wall time (last said: {last})"}  # fmt: skip
+    ident = _identified(proc.stderr)
     lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
     if not lines:
         return {"status": "failed", "reason": (proc.stderr.strip().splitlines() or ["no output"])[-1]}
     out = dict(json.loads(lines[-1]))
-    out["identified"] = ident.split(": ", 1)[-1]
+    out["identified"] = ident
     out["swings"] = proc.stderr.count("swinging at") + proc.stdout.count("swinging at")
     return out
+
+
+def _identified(stderr: str) -> str:
+    """The first hover's line in ``masonry fly``'s log (empty: none)."""
+    said = ("identified on first hover", "identification unusable")
+    line = next((x for x in stderr.splitlines() if any(s in x for s in said)), "")
+    return line.split(": ", 1)[-1]
 
 
 def autopilot(case: str, folder: Path, args: argparse.Namespace) -> AbstractContextManager[str]:
@@ -112,6 +121,7 @@ def main() -> None:
     ap.add_argument("--speedup", type=int, default=2, help="ArduCopter SITL's speed-up")
     ap.add_argument("--slow-parm", default=SLOW_PARM, help="the slow case's parameters (NAME VALUE lines)")
     ap.add_argument("--timeout", type=float, default=400.0, help="wall seconds a run may take")
+    ap.add_argument("--extra", default="", help="lines added to uav.yaml (not the scenario's; e.g. a pid:)")
     args = ap.parse_args()
     summary = []
     for case in args.cases.split(","):
@@ -123,7 +133,7 @@ def main() -> None:
                     with autopilot(case, folder, args) as url:
                         if case == "px4":
                             time.sleep(10.0)  # it refuses to arm in its first seconds (bench_px4_brick.py)
-                        out = fly(url, folder, tuning, args.timeout)
+                        out = fly(url, folder, tuning, args.timeout, args.extra)
                 error = out.get("placement_error_m")
                 row = {
                     "status": out.get("status"),

@@ -61,7 +61,7 @@ class HoverTuning:
         return self.kp is not None
 
     def line(self) -> str:
-        """``identified on first hover: lag 0.57 s (fit 90%) -> kp 0.92 /s, ki 0.184 /s^2`` or the fall-back."""
+        """``identified on first hover: lag 0.57 s (fit 90%, 6 cm off the hover at most) -> kp 0.92 /s, ...``."""
         if self.kp is None:
             return f"first hover's identification unusable ({self.reason}): flies its preset's gains"
         return f"identified on first hover: {self.reason} -> kp {self.kp:.2f} /s, ki {self.ki:.3f} /s^2"
@@ -105,4 +105,9 @@ def derive_gains(m: HoverFit) -> HoverTuning:
         return HoverTuning(None, None, None, f"lag {m.lag_s:.2f} s: too slow (over {LAG_MAX_S:g} s)")
     lag = max(LAG_MIN_S, m.lag_s)
     kp, ki = gains_for_lag(lag)
-    return HoverTuning(kp, ki, lag, f"lag {m.lag_s:.2f} s (fit {m.fit:.0%})")
+    return HoverTuning(
+        kp,
+        ki,
+        lag,
+        f"lag {m.lag_s:.2f} s (fit {m.fit:.0%}, {m.excursion_m * 100:.0f} cm off the hover at most)",
+    )
