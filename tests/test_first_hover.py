@@ -3,8 +3,10 @@ preset with a reason, the simulated vehicles identify and fly, and the user's pr
 
 from __future__ import annotations
 
+import json
 import logging
 import math
+import signal
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
+from masonry.adapters.sitl import free_udp_port
 from masonry.adapters.wiring import hardware_config
 from masonry.cli import app
 from masonry.errors import InputError
@@ -29,6 +32,7 @@ from masonry.fsm.hover_gains import (
 )
 from masonry.fsm.tuning_choice import choose_tuning
 from masonry.separation import TRACK_SHARE_M
+from test_hw_mission import ONE_BRICK, SCALE, free_tcp_port, masonry
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 runner = CliRunner()
@@ -191,3 +195,47 @@ def test_the_users_control_preset_wins_in_flight(tmp_path: Path, caplog: pytest.
     code, out, err = _fly(tmp_path, "arducopter", "tuning: identify\npid: {xy: {kp: 1.0, ki: 0.2}}\n", caplog)
     assert code == 0, out + err
     assert "first hover" not in err
+
+
+@pytest.mark.slow
+def test_a_mission_uav_identifies_on_its_first_hover_through_the_mavlink_adapter(tmp_path: Path) -> None:
+    """Mission mode on the project's SITL (ArduCopter-like, lock-step): the brick UAV's first hover identifies the
+    lag through the MAVLink adapter, then the mission completes; the adhesion UAV (the preset's) does not."""
+    blueprint = tmp_path / "one-brick.yaml"
+    blueprint.write_text(ONE_BRICK)
+    config = tmp_path / "uav.yaml"
+    config.write_text("tuning: identify\n")
+    mav_port, zenoh_port = free_udp_port(), free_tcp_port()
+    endpoint = f"tcp/127.0.0.1:{zenoh_port}"
+    name = ["--mission-name", f"id-{zenoh_port}"]
+    sitl = masonry("sitl", "--port", str(mav_port), "--blueprint", str(blueprint), "--uav", "brick",
+                   "--time-scale", SCALE, "--lockstep")  # fmt: skip
+    mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", "--time-scale", SCALE,
+                 "--startup-timeout", "20", "--heartbeat-timeout", "5", "--max-time", "1200", *name)  # fmt: skip
+    brick = masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint), "--mission", endpoint,
+                    "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", f"udp:127.0.0.1:{mav_port}",
+                    "--actuators", "sim", "--camera", "sim", "--wait", "20", "--format", "json",
+                    "--config", str(config), *name)  # fmt: skip
+    glue = masonry("fly", "--uav", "adhesion", "--name", "glue-1", "--sim", "--blueprint", str(blueprint),
+                   "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--time-scale", SCALE,
+                   "--wait", "20", "--format", "json", *name)  # fmt: skip
+    procs = [mc, brick, glue]
+    try:
+        mc_out, mc_err = mc.communicate(timeout=240)
+        _, brick_err = brick.communicate(timeout=20)
+        _, glue_err = glue.communicate(timeout=20)
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        sitl.send_signal(signal.SIGINT)
+        sitl.communicate(timeout=10)
+    assert mc.returncode == 0, mc_out + mc_err + brick_err + glue_err
+    report = json.loads(mc_out)
+    assert report["completed"] is True
+    assert report["placement_error_m"]["B0"] < 0.03
+    assert "position gains identified on the first hover (`tuning: identify` of uav.yaml)" in brick_err
+    line = next(x for x in brick_err.splitlines() if "brick-1: identified on first hover: lag" in x)
+    assert KP_MIN_PER_S <= float(line.split("kp ")[1].split(" /s")[0]) <= KP_MAX_PER_S
+    assert "first hover" not in glue_err
