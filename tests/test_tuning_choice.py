@@ -95,6 +95,9 @@ def test_a_simulated_autopilot_flies_its_vehicles_preset() -> None:
     ("yaml", "line"),
     [
         ("", "[ok  ] tuning: control preset arducopter (ArduPilot autopilot, from its HEARTBEAT)"),
+        ("tuning: identify\n",
+         "[ok  ] tuning: control preset arducopter (ArduPilot autopilot, from its HEARTBEAT); position gains "
+         "identified on the first hover (`tuning: identify` of uav.yaml), the preset's if unusable"),
         ("control_preset: ideal\npid: {xy: {kp: 2.0}}\n",
          "[ok  ] tuning: control preset ideal (`control_preset:` of uav.yaml); `pid:` of uav.yaml over it"),
     ],

@@ -22,6 +22,7 @@ from masonry.adapters.preflight import _check_camera as _check_camera
 from masonry.adapters.preflight import _check_fence as _check_fence
 from masonry.blueprint import quote
 from masonry.errors import InputError
+from masonry.fsm.tuning_choice import TUNINGS
 from masonry.ports import Telemetry, UavPorts
 
 SIM = "sim"
@@ -71,6 +72,10 @@ class HardwareConfig:
     control_preset: str | None = None  # None: the autopilot's (masonry.fsm.tuning_choice), or --vehicle's
     control: dict[str, Any] = field(default_factory=dict)
     pid: dict[str, Any] = field(default_factory=dict)
+    # ``identify``: the first hover identifies the velocity response and the position gains are derived from it
+    # (masonry.fsm.first_hover; the preset's when unusable); ``preset``: the preset's. A ``control_preset`` or
+    # ``pid`` given wins: no identification then (masonry.fsm.tuning_choice)
+    tuning: str = "preset"
 
     def uav_settings(
         self, default_preset: str = "ideal", *, own_velocity_loop: bool | None = None
@@ -213,6 +218,8 @@ def hardware_config(cli: dict[str, Any], file_settings: dict[str, Any] | None = 
         elif file_settings and file_settings.get(f.name) is not None:
             merged[f.name] = file_settings[f.name]
     hw = HardwareConfig(**merged)
+    if hw.tuning not in TUNINGS:
+        raise InputError(f"tuning must be {' or '.join(TUNINGS)}, not {hw.tuning!r}")
     if hw.autopilot not in ("auto", "ardupilot", "px4"):
         raise InputError(f"autopilot must be auto, ardupilot or px4, not {hw.autopilot!r}")
     if not hw.sim_camera and hw.calibration is None:

@@ -28,6 +28,8 @@ def fly_settings(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | No
     # a MAVLink flight controller says whether it flies masonry's loop; a simulated one leaves it to the preset
     own = getattr(fc, "velocity_loop", None) is not None if hasattr(fc, "velocity_loop") else None
     settings = hardware.uav_settings(tuning_preset(vehicle, adapters), own_velocity_loop=own)
+    if tuning_choice(hardware, vehicle, adapters).identify:  # the first hover's (masonry.fsm.first_hover)
+        settings["identify_first_hover"] = True
     if hasattr(fc, "velocity_observer_input"):
         fc.velocity_observer_input = settings.get("velocity_observer_input", "command")  # type: ignore[union-attr]
     return settings
@@ -52,6 +54,7 @@ def tuning_choice(hardware: HardwareConfig, vehicle: str, adapters: UavPorts | N
         vehicle=vehicle,
         autopilot_setting=hardware.autopilot,
         overrides=overrides,
+        tuning=hardware.tuning,
     )
 
 

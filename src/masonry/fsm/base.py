@@ -23,7 +23,9 @@ if TYPE_CHECKING:
     from masonry.fsm.battery import DrainMeter
     from masonry.fsm.config import UavConfig
     from masonry.fsm.fence import FenceWatch
+    from masonry.fsm.first_hover import FirstHover
     from masonry.fsm.gates import Gate
+    from masonry.fsm.hover_gains import HoverTuning
     from masonry.fsm.navigator import Navigator
     from masonry.fsm.phases import PhaseClock
     from masonry.fsm.transit import Transit
@@ -58,6 +60,8 @@ class ModelBase:
     fence_watch: FenceWatch | None
     drain: DrainMeter
     gates: tuple[Gate, ...]
+    first_hover: FirstHover | None
+    hover_tuning: HoverTuning | None
     _now_s: float
     _entered_s: float
     _tel: Telemetry | None

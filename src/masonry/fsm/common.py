@@ -9,13 +9,17 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from masonry.errors import HardwareError
 from masonry.fsm.attempt import Swing, Takeoff
+from masonry.fsm.first_hover import FirstHover
+from masonry.fsm.hover_gains import derive_gains
 from masonry.fsm.taskbook import TaskBook
 from masonry.fsm.watchdogs import taken_over
+from masonry.motion import PID, PIDGains
 from masonry.ports import BATTERY_LOW_REASON, Telemetry
 
 log = logging.getLogger(__name__)
@@ -113,12 +117,18 @@ class CommonStates(TaskBook):
     def do_takeoff(self, tel: Telemetry) -> None:
         takeoff = self.attempt.takeoff
         assert takeoff is not None  # asked for on entering takeoff
-        if (
+        if self.first_hover is not None and not self.first_hover.done:
+            self._identify_tick(tel)
+        elif (
             not tel.on_ground
             and tel.position_m[2] >= takeoff.target_m - _TAKEOFF_SHORT_M
             and abs(tel.velocity_mps[2]) <= _TAKEOFF_SETTLE_MPS
         ):
-            self.airborne()
+            if self.config.identify_first_hover and self.first_hover is None:
+                self.first_hover = FirstHover(self._now_s, tel.position_m)  # once a flight: its first hover
+                self._identify_tick(tel)
+            else:
+                self.airborne()
         elif tel.on_ground and self._retry_takeoff(tel):
             pass
         elif self._now_s - self._entered_s > self.config.takeoff_timeout_s:
@@ -128,6 +138,29 @@ class CommonStates(TaskBook):
                 reason=f"takeoff did not reach {takeoff.target_m:.2f} m "
                 f"within {self.config.takeoff_timeout_s:.0f} s" + (f": {why}" if isinstance(why, str) else "")
             )
+
+    def _identify_tick(self, tel: Telemetry) -> None:
+        """The first hover's identification (:mod:`masonry.fsm.first_hover`): its velocity this tick; once over,
+        the gains derived from it (:func:`~masonry.fsm.hover_gains.derive_gains`) or the preset's, said in the
+        log, and on to the task."""
+        hover = self.first_hover
+        assert hover is not None
+        velocity = hover.command(self._now_s, tel)
+        if velocity is not None:
+            self.fc.send_velocity(velocity, 0.0)
+            return
+        tuning = derive_gains(hover.fit())
+        self.hover_tuning = tuning
+        if tuning.kp is not None and tuning.ki is not None and tuning.lag_s is not None:
+            gains = self.config.pid_gains or PIDGains()
+            xy = {"kp": tuning.kp, "ki": tuning.ki}
+            gains = replace(gains, x=replace(gains.x, **xy), y=replace(gains.y, **xy))
+            self.config = replace(self.config, pid_gains=gains, velocity_lag_s=tuning.lag_s)
+            self.nav.config = self.config
+            self.nav.pid = PID(gains)
+            self.nav.velocity_lag_s = self.nav.leg_lag_s = tuning.lag_s
+        log.warning("%s: %s", self.config.name, tuning.line())
+        self.airborne()
 
     def _gate_failure(self, tel: Telemetry) -> str | None:
         """The reason to fail a gate state (hover, alignment) now, or None: its declared gates

@@ -171,6 +171,9 @@ class UavConfig:
     # simulated vehicle's ``velocity_tau_s``): a leg's reference acceleration times this is added to its velocity
     # feed-forward, so the UAV does not trail the reference and overshoot its end (0: velocity feed-forward only)
     velocity_lag_s: float = 0.3
+    # On the first take-off's hover, identify the velocity response and fly the position gains derived from it
+    # (masonry.fsm.first_hover, masonry.fsm.hover_gains; uav.yaml ``tuning: identify``); False: the preset's gains
+    identify_first_hover: bool = False
     clearance_m: float = _T.clearance_m  # transit altitude keeps a carried brick this far above the drop-off
     # Transit layer (docs/safety.md): mission control hands out the altitude of each lateral leg; this one is for
     # a link without clearances (or mission control silent): lateral legs longer than ``layer_min_leg_m`` fly at

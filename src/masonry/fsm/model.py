@@ -106,6 +106,9 @@ class UavModel(CommonStates):
         self._waiting_since_s: float | None = None  # since when it has waited in the air for clearance
         #: the battery's drain per airborne second, measured (masonry.fsm.battery)
         self.drain = DrainMeter()
+        #: the first hover's identification (config.identify_first_hover) and what it gave (masonry.fsm.first_hover)
+        self.first_hover = None
+        self.hover_tuning = None
         self.attempt = self._new_attempt(0.0, 0.0)  # none yet: a fresh one with each task (_start_task)
         self._leaf_names = leaf_states(states)
         #: the cross-cutting checks run before each tick's work (masonry.fsm.watchdogs; add one here)

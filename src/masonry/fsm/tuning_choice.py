@@ -9,7 +9,12 @@ both; ``control:`` and ``pid:`` are laid over whichever preset is chosen (:func:
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+#: uav.yaml's ``tuning:``: ``identify`` the position gains on the first hover (masonry.fsm.first_hover), or fly the
+#: ``preset``'s. The default: see :data:`DEFAULT_TUNING`.
+TUNINGS = ("preset", "identify")
+DEFAULT_TUNING = "preset"
 
 #: The preset fitted to each autopilot (docs/hardware.md "Control on ArduCopter", "PX4 on GNSS").
 AUTOPILOT_PRESETS: Mapping[str, str] = {"ardupilot": "arducopter", "px4": "px4"}
@@ -23,13 +28,20 @@ class TuningChoice:
     preset: str
     reason: str
     overrides: tuple[str, ...] = ()  # the uav.yaml keys laid over the preset (control, pid, velocity_lag_s)
+    identify: bool = False  # the position gains are identified on the first hover (the preset's if unusable)
+    identify_note: str = ""  # why (not): ``tuning: identify`` of uav.yaml, or what won over it
 
     def detail(self) -> str:
         """One line for the pre-flight check: ``arducopter (ArduPilot autopilot, from its HEARTBEAT)``."""
         over = (
             f"; {', '.join(f'`{k}:`' for k in self.overrides)} of uav.yaml over it" if self.overrides else ""
         )
-        return f"control preset {self.preset} ({self.reason}){over}"
+        line = f"control preset {self.preset} ({self.reason}){over}"
+        if self.identify:
+            return line + (
+                f"; position gains identified on the first hover ({self.identify_note}), the preset's if unusable"
+            )
+        return line + (f"; {self.identify_note}" if self.identify_note else "")
 
 
 def choose_tuning(
@@ -39,6 +51,7 @@ def choose_tuning(
     vehicle: str = "ideal",
     autopilot_setting: str = "auto",
     overrides: tuple[str, ...] = (),
+    tuning: str = DEFAULT_TUNING,
 ) -> TuningChoice:
     """The preset to fly: ``control_preset`` when the user names one, else the autopilot's, else ``vehicle``'s.
 
@@ -48,12 +61,25 @@ def choose_tuning(
         vehicle: the simulated vehicle's preset (``--vehicle``), flown on a simulated autopilot.
         autopilot_setting: uav.yaml's ``autopilot:`` (``"auto"``: read from the HEARTBEAT).
         overrides: the uav.yaml keys laid over the preset, for the line the pre-flight prints.
+        tuning: uav.yaml's ``tuning:`` (:data:`TUNINGS`): ``identify`` unless ``control_preset`` or a ``pid``
+            override is given (the user's gains win: no identification then).
     """
     if control_preset is not None:
-        return TuningChoice(control_preset, "`control_preset:` of uav.yaml", overrides)
-    if autopilot is not None and autopilot in AUTOPILOT_PRESETS:
+        choice = TuningChoice(control_preset, "`control_preset:` of uav.yaml", overrides)
+    elif autopilot is not None and autopilot in AUTOPILOT_PRESETS:
         source = "from its HEARTBEAT" if autopilot_setting == "auto" else "`autopilot:` of uav.yaml"
-        return TuningChoice(
+        choice = TuningChoice(
             AUTOPILOT_PRESETS[autopilot], f"{_AUTOPILOT_NAMES[autopilot]} autopilot, {source}", overrides
         )
-    return TuningChoice(vehicle, f"the simulated vehicle's (--vehicle {vehicle})", overrides)
+    else:
+        choice = TuningChoice(vehicle, f"the simulated vehicle's (--vehicle {vehicle})", overrides)
+    if tuning != "identify":
+        return choice
+    won = [
+        k
+        for k, given in (("control_preset", control_preset is not None), ("pid", "pid" in overrides))
+        if given
+    ]
+    if won:
+        return replace(choice, identify_note=f"`{'`/`'.join(won)}:` of uav.yaml wins over `tuning: identify`")
+    return replace(choice, identify=True, identify_note="`tuning: identify` of uav.yaml")
