@@ -231,14 +231,18 @@ def test_an_expired_bead_waits_for_a_free_brick_uav() -> None:
 
 
 class _Control:
-    """What GlueGate asks of mission control: its attempts, journal, events, recalls, airspace and UAVs."""
+    """What GlueGate asks of mission control: its attempts (and their ledger, which numbers the assignments),
+    journal, events, recalls, airspace and UAVs."""
 
     def __init__(self) -> None:
         from masonry.mission.control import Attempt, UavLink
+        from masonry.mission.ledger import AttemptLedger
 
         self.history = [Attempt("A0", "glue-1", 1, 0.0, end_s=15.0, status="done")]
+        self.ledger = AttemptLedger(None)
         self.journal = None
         self.recalls: list[tuple[str, str]] = []
+        self.named: list[tuple[str | None, int]] = []  # the assignment each recall names
         self.touched = 0
         self.columns = self
         self.events: list[tuple[tuple[object, ...], dict[str, object]]] = []
@@ -251,6 +255,7 @@ class _Control:
         self, uav: str, now_s: float, reason: str, task_id: str | None = None, attempt: int = 0
     ) -> None:
         self.recalls.append((uav, reason))
+        self.named.append((task_id, attempt))
 
     def emit_event(self, *args: object, **kw: object) -> None:
         self.events.append((args, kw))
@@ -295,6 +300,7 @@ def test_the_gate_expires_a_bead_keeps_its_brick_waiting_then_recalls_it_and_lea
         assert gate is not None and gate.margin_s == 19.5
         mc = _Control()
         d.assign()  # A0 and B0 (fetched while the glue is laid)
+        mc.ledger.begin("B0", "brick-1", 10.0)
         d.complete("A0")
         gate.completed("A0", 15.0)
         if stuck:
@@ -318,6 +324,7 @@ def test_the_gate_expires_a_bead_keeps_its_brick_waiting_then_recalls_it_and_lea
             assert gate.step(mc, t)
             assert mc.recalls == ([] if n < RECALL_AFTER_EXPIRIES else recalled)
         assert len(gate.expiries) == RECALL_AFTER_EXPIRIES
+        assert mc.named == [("B0", 1)]  # the recall names the brick's assignment
 
 
 def test_the_log_keeps_the_glue_and_the_gantt_draws_the_open_windows(tmp_path: Path) -> None:

@@ -11,6 +11,7 @@ from masonry.mission.messages import ClearanceRequest, Heartbeat, Progress, Reca
 from masonry.mission.records import Attempt, UavLink
 from masonry.mission.reducer import (
     OUT_OF_SERVICE_STATE,
+    Ignored,
     Step,
     dropped_reason,
     late_completion,
@@ -63,22 +64,34 @@ def test_a_result_is_acted_on_only_from_its_uav_for_its_attempt_and_not_too_soon
 
 
 @pytest.mark.parametrize(
-    ("reason", "settled", "owner", "taken"),
+    ("reason", "settled", "taken"),
     [
-        (LOST_REASON, False, None, True),
-        (f"{TASK_DROPPED_REASON} (its heartbeat holds no task)", False, "b2", True),
-        (LOST_REASON, True, None, False),  # done (or stuck) since
-        (LOST_REASON, False, "b1", False),  # assigned to it again: an ordinary result
-        ("battery low", False, None, False),  # it failed the task itself
+        (LOST_REASON, False, True),
+        (f"{TASK_DROPPED_REASON} (its heartbeat holds no task)", False, True),
+        (LOST_REASON, True, False),  # done (or stuck) since
+        ("battery low", False, False),  # it failed the task itself
     ],
 )
 def test_a_completion_heard_late_counts_only_for_a_task_released_from_its_uav(
-    reason: str, settled: bool, owner: str | None, taken: bool
+    reason: str, settled: bool, taken: bool
 ) -> None:
-    last = Attempt("B0", "b1", 1, 0.0, 30.0, "failed", reason)
-    assert late_completion(_result(), last, settled, owner) is taken
-    assert not late_completion(_result(attempt=2), last, settled, owner)
-    assert not late_completion(_result("failed"), last, settled, owner)
+    named = Attempt("B0", "b1", 1, 0.0, 30.0, "failed", reason)
+    assert late_completion(_result(), named, settled) is taken
+    assert not late_completion(_result(attempt=2), named, settled)  # (not the attempt it names)
+    assert not late_completion(_result("failed"), named, settled)
+    assert not late_completion(_result(), None, settled)  # an attempt its UAV never had
+
+
+def test_a_late_completion_is_told_from_a_later_assignment_of_the_task_to_the_same_uav() -> None:
+    """Each assignment has its own number (issue 27, branch ``attempt43``): b1's first attempt, released when b1 was
+    declared lost, completes after b1 was given the task again (attempt 2): that completion is the first one's,
+    heard late, not the second's (before, both were attempt 1 and the completion was taken for the second)."""
+    first = Attempt("B0", "b1", 1, 0.0, 30.0, "failed", LOST_REASON)
+    second = Attempt("B0", "b1", 2, 40.0)
+    assert late_completion(_result(), first, False)
+    assert screen_result(_result(), "b1", second, 20.0, 0.9, 70.0) == Ignored(
+        "wrong-attempt", "a result for B0 from b1 for attempt 1: the current one is 2"
+    )
 
 
 def test_an_idle_heartbeat_with_no_task_releases_an_assignment_older_than_the_timeout() -> None:

@@ -19,6 +19,7 @@ from masonry.errors import ProtocolError
 from masonry.mission.auth import AuthenticatedTransport
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
+from masonry.mission.ledger import AttemptLedger
 from masonry.mission.messages import (
     MISSION_CONTROL,
     PROTOCOL_VERSION,
@@ -268,10 +269,13 @@ EVENT = st.one_of(
 def test_over_any_interleaving_a_recall_fails_only_what_it_names_and_held_when_read(events: list) -> None:
     """Assignments, recalls (of any assignment sent so far, or of none), completions and ticks in any order: each
     assignment has at most one result; a failure always comes from a recall read after its assignment that named
-    it (or none); and a recall read while its assignment is held fails it in that tick."""
+    it (or none); and a recall read while its assignment is held fails it in that tick. The assignments are
+    numbered as mission control numbers them (its :class:`AttemptLedger`: one more for each assignment of a task,
+    whether what ended the one before counted or not, issue 27 branch ``attempt43``), so a task given again after
+    its recall (not counted) is a new assignment that a recall of the old one cannot fail."""
     rig = Rig()
     assigns: list[tuple[str, int]] = []  # in the order sent
-    attempts: dict[str, int] = {}
+    ledger = AttemptLedger(None)  # (mission control's numbering of the assignments)
     recalls: list[tuple[str | None, int, int]] = []  # (task, attempt, assignments sent before it)
     pending: list[int] = []  # recalls sent, not read yet
     read_at: dict[int, int] = {}  # recall -> the tick it was read in
@@ -291,9 +295,9 @@ def test_over_any_interleaving_a_recall_fails_only_what_it_names_and_held_when_r
 
     for kind, arg in [*events, ("step", ""), ("step", "")]:
         if kind == "assign":
-            attempts[arg] = attempts.get(arg, 0) + 1
-            assigns.append((arg, attempts[arg]))
-            rig.assign(arg, attempts[arg])
+            number = ledger.begin(arg, UAV, rig.now_s).attempt
+            assigns.append((arg, number))
+            rig.assign(arg, number)
         elif kind == "recall":
             k = len(recalls)
             task, attempt = assigns[arg % len(assigns)] if assigns and arg < 8 else (None, 0)

@@ -132,7 +132,10 @@ def test_a_uav_that_names_no_task_after_the_resume_gives_it_back_without_countin
     first = next(a for a in mc.history if a.attempt == 2)
     assert first.status == "failed" and first.reason.startswith("uav dropped the task")
     assert mc.dispatcher.attempts["B0"] == 1  # the grasp failure only
-    assert [(a.task.id, a.attempt) for a in b1.assigned] == [("B0", 2)]  # flown again, same attempt number
+    # flown again, as a new assignment: attempt 3 (its count against the task's limit is still 2: issue 27,
+    # branch ``attempt43``; before, it was attempt 2 again, and anything naming the dropped one named it too)
+    assert [(a.task.id, a.attempt) for a in b1.assigned] == [("B0", 3)]
+    assert mc.dispatcher.attempt_of("B0") == 2
 
 
 def test_a_uav_never_heard_after_the_resume_is_declared_lost_and_its_task_goes_to_another(tmp_path):

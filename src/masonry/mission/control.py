@@ -341,8 +341,7 @@ class MissionControl:
         positions = {n: u.position_m for n, u in self.uavs.items() if u.position_m is not None and not u.lost}
         self._deferred_at = None
         for a in self.dispatcher.assign(positions or None, may_start=self._may_take_off):
-            attempt = a.attempt
-            self.ledger.begin(a.task_id, a.uav, attempt, now_s)
+            attempt = self.ledger.begin(a.task_id, a.uav, now_s).attempt  # (the assignment's own number)
             control_airspace.raise_layers(self, (a.task_id,))
             log.info("%s assigned to %s (attempt %d) at %.1f s", a.task_id, a.uav, attempt, now_s)
             self.out.emit(now_s, "assigned", a.uav, a.task_id, attempt=attempt)

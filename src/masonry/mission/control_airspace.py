@@ -118,7 +118,7 @@ def fail_outside_fence(mc: MissionControl, uav: str, reason: str, now_s: float) 
     task_id = mc.dispatcher.task_of(uav)
     if task_id is None:
         return
-    key = (uav, task_id, mc.dispatcher.attempt_of(task_id))
+    key = (uav, task_id, mc.ledger.number_of(task_id))
     if key in mc.fence_failed:
         return
     mc.fence_failed.add(key)

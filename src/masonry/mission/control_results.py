@@ -61,7 +61,7 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         mc.dispatcher.complete(r.task_id)
         if mc.glue is not None:
             mc.glue.completed(r.task_id, now_s)
-        mc.ledger.journal_done(now_s, r, msg.sender)
+        mc.ledger.journal_done(now_s, r, att)
         mc.out.emit(
             now_s,
             "completed",
@@ -86,7 +86,7 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         count, give_up = mc.spares.failed(r.task_id, reason, now_s)  # (its brick gone: a spare)
         give_up = give_up or is_place_taken(reason)  # (the brick in its place will not move: not again)
         again = mc.dispatcher.fail(r.task_id, count=count, give_up=give_up)
-        mc.ledger.journal_failed(now_s, r.task_id, msg.sender, reason)
+        mc.ledger.journal_failed(now_s, att, reason)
         mc.out.emit(now_s, "failed", msg.sender, r.task_id, attempt=att.attempt, reason=reason)
         if not again:
             release_waiting(mc, r.task_id, now_s)
@@ -100,7 +100,7 @@ def misplaced(mc: MissionControl, att: Attempt, r: TaskResult, uav: str, why: st
     take_result(att, r)
     log.warning("%s placed by %s (attempt %d) but %s", r.task_id, uav, att.attempt, why)
     mc.dispatcher.fail(r.task_id, give_up=True)
-    mc.ledger.journal_failed(now_s, r.task_id, uav, why)
+    mc.ledger.journal_failed(now_s, att, why)
     mc.out.emit(now_s, "failed", uav, r.task_id, attempt=att.attempt, reason=why)
     release_waiting(mc, r.task_id, now_s)
 
@@ -113,7 +113,7 @@ def release_waiting(mc: MissionControl, stuck: str, now_s: float) -> None:
     for task_id, uav in mc.dispatcher.waiting_on(stuck).items():
         why = given_up_reason(stuck, task_id)
         log.warning("%s: %s: recalled", uav, why)
-        mc.recall(uav, now_s, why, task_id, mc.dispatcher.attempt_of(task_id))
+        mc.recall(uav, now_s, why, task_id, mc.ledger.number_of(task_id))
 
 
 def recall_again(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
@@ -130,7 +130,7 @@ def recall_again(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     if stuck is not None:
         why = given_up_reason(stuck, tid)
         log.info("%s: %s: recalled again", msg.sender, why)
-        mc.recall(msg.sender, now_s, why, tid, mc.dispatcher.attempt_of(tid))
+        mc.recall(msg.sender, now_s, why, tid, mc.ledger.number_of(tid))
 
 
 def given_up_reason(stuck: str, waiting: str) -> str:
@@ -153,26 +153,28 @@ def heard_again(mc: MissionControl, msg: Result) -> bool:
 
 
 def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
-    """A completion from a UAV its task was released from (:func:`~masonry.mission.reducer.late_completion`):
-    done, and a UAV flying it again is recalled. True if taken."""
+    """A completion of an attempt its UAV was released from (:func:`~masonry.mission.reducer.late_completion`),
+    found by the number the result names: done, and the attempt flying the task now, if any, is recalled by its
+    own number (on another UAV, or a later assignment to the same one). True if taken."""
     r = msg.result
-    att = mc.ledger.last_of(r.task_id, msg.sender)
+    att = mc.ledger.find(r.task_id, msg.sender, msg.attempt)
     settled = r.task_id in mc.dispatcher.done or r.task_id in mc.dispatcher.stuck
-    if att is None or not late_completion(msg, att, settled, mc.dispatcher.in_progress.get(r.task_id)):
+    if not late_completion(msg, att, settled):
         return False
-    attempt = mc.dispatcher.attempt_of(r.task_id)  # (the attempt ``other`` flies, if any: counted done below)
+    assert att is not None  # (late_completion takes none without its attempt)
     other = mc.dispatcher.complete_late(r.task_id)
     r = mc.placement.anchored(mc, r)
     log.warning("%s done by %s (attempt %d), heard late: taken", r.task_id, msg.sender, att.attempt)
     mc.ledger.done(att, r, now_s)
     if other is not None:
         why = f"{RECALL_REASON}: {r.task_id} was done by {msg.sender}"
+        number = mc.ledger.number_of(r.task_id)  # (the attempt ``other`` flies)
         again = mc.ledger.running.get(r.task_id)
         if again is not None:
             mc.ledger.end(again, now_s, "failed", why, result=False)
-            mc.ledger.journal_failed(now_s, r.task_id, other, why)
-        mc.recall(other, now_s, why, r.task_id, attempt)
-    mc.ledger.journal_done(now_s, r, msg.sender, phases=False)
+            mc.ledger.journal_failed(now_s, again, why)
+        mc.recall(other, now_s, why, r.task_id, number)
+    mc.ledger.journal_done(now_s, r, att, phases=False)
     mc.out.emit(now_s, "completed", msg.sender, r.task_id, attempt=att.attempt)
     mc.wake()
     return True
@@ -190,7 +192,7 @@ def check_holds_task(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     log.warning("%s: %s: released", name, reason)
     mc.ledger.end(att, now_s, "failed", reason)
     mc.dispatcher.fail(tid, count=False)
-    mc.ledger.journal_failed(now_s, tid, name, reason)
+    mc.ledger.journal_failed(now_s, att, reason)
     mc.out.emit(now_s, "failed", name, tid, attempt=att.attempt, reason=reason)
     mc.wake()
 

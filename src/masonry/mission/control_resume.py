@@ -49,7 +49,7 @@ def restore(mc: MissionControl, state: JournalState) -> None:
     mc.dispatcher.restore(list(done), attempts)
     if mc.glue is not None:  # the beads' ages and the cures go on from the journal's completion times
         mc.glue.restore((rec.task_id, rec.time_s) for rec in done.values())
-    mc.ledger.restore(state.failures, done)
+    mc.ledger.restore(state.failures, done, state.numbers)
     for name in state.lost_uavs:
         link = mc.uavs.get(name)
         if link is not None and not link.lost:

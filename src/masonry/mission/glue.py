@@ -193,7 +193,7 @@ class GlueGate:
         del self.sprayed_at_s[bead]
         self.expiries.append((now_s, bead, brick))
         carrier = self.dispatcher.in_progress.get(brick)
-        attempt = self.dispatcher.attempt_of(brick)
+        attempt = mc.ledger.number_of(brick)
         if carrier is not None:
             # at the RECALL_AFTER_EXPIRIES-th expiry in one attempt its UAV puts the brick back and comes again
             # (an attempt: a brick never in time ends stuck, not looping); before, it keeps the brick and waits
@@ -205,7 +205,7 @@ class GlueGate:
             if att.task_id == bead and att.status == "done":
                 att.status, att.reason = "failed", EXPIRED_REASON
                 if mc.journal is not None:
-                    mc.journal.record_failure(now_s, bead, att.uav, EXPIRED_REASON)
+                    mc.journal.record_failure(now_s, bead, att.uav, EXPIRED_REASON, attempt=att.attempt)
                 mc.emit_event(now_s, "failed", att.uav, bead, attempt=att.attempt, reason=EXPIRED_REASON)
                 break
 

@@ -256,16 +256,23 @@ class Journal:
                 ) from exc
 
     def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int, **fields: Any) -> None:
-        """Task ``task_id`` was given to ``uav`` at mission time ``time_s`` as attempt ``attempt`` (from 1)."""
+        """Task ``task_id`` was given to ``uav`` at mission time ``time_s`` as attempt ``attempt`` (from 1: the
+        assignment's number, one more for each assignment of the task)."""
         self._insert("assign", time_s, task_id, uav, attempt, fields)
 
-    def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
-        """``uav`` completed ``task_id`` at ``time_s``; ``fields`` (JSON values) are kept with the record."""
-        self._insert("complete", time_s, task_id, uav, None, fields)
+    def record_completion(
+        self, time_s: float, task_id: str, uav: str, *, attempt: int | None = None, **fields: Any
+    ) -> None:
+        """``uav`` completed ``task_id`` at ``time_s`` (its attempt ``attempt``; None: not named, the running one);
+        ``fields`` (JSON values) are kept with the record."""
+        self._insert("complete", time_s, task_id, uav, attempt, fields)
 
-    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str, **fields: Any) -> None:
-        """An attempt of ``task_id`` by ``uav`` failed at ``time_s`` for ``reason``."""
-        self._insert("fail", time_s, task_id, uav, None, {**fields, "reason": str(reason)})
+    def record_failure(
+        self, time_s: float, task_id: str, uav: str, reason: str, *, attempt: int | None = None, **fields: Any
+    ) -> None:
+        """An attempt of ``task_id`` by ``uav`` (``attempt``; None: not named, the running one) failed at
+        ``time_s`` for ``reason``."""
+        self._insert("fail", time_s, task_id, uav, attempt, {**fields, "reason": str(reason)})
 
     def record_uav_lost(self, time_s: float, uav: str, **fields: Any) -> None:
         """``uav`` was declared lost at ``time_s`` (its task, if any, was released without counting an attempt)."""

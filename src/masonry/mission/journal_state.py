@@ -100,6 +100,9 @@ class JournalState:
             ``Dispatcher.restore``. Attempts cut short by a lost UAV or a crash are not counted.
         failures: every failed attempt, in order; an attempt released by its UAV's loss is one, with the reason
             :data:`LOST_REASON` (not counted in ``attempts``).
+        numbers: the highest attempt number any record gives each task id. An attempt's number names one
+            assignment (the protocol's ``attempt``): a resumed mission control numbers a task's next assignment
+            after it, so no number is given twice, even to a flight whose failure was not counted (issue 27).
         in_progress: task id -> UAV of attempts assigned but neither completed, failed nor released by a UAV
             loss when the journal ends (the previous run stopped while they flew).
         running: the same attempts with their assignment times and numbers (a resumed mission control keeps
@@ -115,6 +118,7 @@ class JournalState:
     done: tuple[DoneRecord, ...] = ()
     attempts: Mapping[str, int] = field(default_factory=dict)
     failures: tuple[FailureRecord, ...] = ()
+    numbers: Mapping[str, int] = field(default_factory=dict)
     in_progress: Mapping[str, str] = field(default_factory=dict)
     running: tuple[RunningRecord, ...] = ()
     lost_uavs: tuple[str, ...] = ()
@@ -184,6 +188,7 @@ class _Fold:
         self.done: dict[str, DoneRecord] = {}
         self.attempts: dict[str, int] = {}
         self.failures: list[FailureRecord] = []
+        self.numbers: dict[str, int] = {}  # task -> the highest attempt number named
         self.running: dict[str, tuple[str, float, int]] = {}  # task -> (uav, start_s, attempt)
         self.lost: list[str] = []
         self.last = 0.0
@@ -192,19 +197,28 @@ class _Fold:
     def assign(self, rec: JournalRecord, data: dict[str, Any]) -> None:
         task_id, attempt = rec.task_id, rec.attempt
         assert task_id is not None  # checked by fold_records
-        self.running[task_id] = (
-            rec.uav,
-            rec.time_s,
-            int(attempt) if attempt else self.attempts.get(task_id, 0) + 1,
-        )
+        number = int(attempt) if attempt else self.numbers.get(task_id, 0) + 1
+        self.running[task_id] = (rec.uav, rec.time_s, number)
+        self._numbered(task_id, number)
 
     def finish(self, rec: JournalRecord, data: dict[str, Any]) -> None:
-        """A completion or a failure: the attempt ends (a battery-low failure is not counted against the task)."""
+        """A completion or a failure: the attempt ends (a battery-low failure is not counted against the task).
+
+        The record names its attempt (journals before issue 27's numbering do not: then it is the running one of
+        the task's, or the task's next by count); one naming another attempt than the running one (a completion
+        heard late, a bead's glue expired) leaves the running one running."""
         task_id, uav, attempts = rec.task_id, rec.uav, self.attempts
         assert task_id is not None  # checked by fold_records
-        start = self.running.pop(task_id, None)
+        named = int(rec.attempt) if rec.attempt else None
+        start = self.running.get(task_id)
+        if start is not None and (named is None or start[2] == named):
+            del self.running[task_id]
+        else:
+            start = None
         start_s = start[1] if start is not None and start[0] == uav else None
         number = start[2] if start is not None and start[0] == uav else attempts.get(task_id, 0) + 1
+        number = named or number
+        self._numbered(task_id, number)
         if rec.kind == "complete" or not str(data.get("reason", "")).startswith(UNCOUNTED_REASONS):
             attempts[task_id] = attempts.get(task_id, 0) + 1  # (the UAV's battery is not the task's fault)
         if rec.kind == "complete":
@@ -216,6 +230,9 @@ class _Fold:
             self.failures.append(
                 FailureRecord(task_id, uav, rec.time_s, start_s, number, str(data.get("reason", "")))
             )
+
+    def _numbered(self, task_id: str, number: int) -> None:
+        self.numbers[task_id] = max(self.numbers.get(task_id, 0), number)
 
     def uav_lost(self, rec: JournalRecord, data: dict[str, Any]) -> None:
         """The UAV is lost: its running task is released, not counted (a failure with :data:`LOST_REASON`)."""
@@ -238,6 +255,7 @@ class _Fold:
             done=tuple(self.done.values()),
             attempts=MappingProxyType(self.attempts),
             failures=tuple(self.failures),
+            numbers=MappingProxyType(self.numbers),
             in_progress=MappingProxyType({t: u for t, (u, _, _) in self.running.items()}),
             running=tuple(RunningRecord(t, u, s, n) for t, (u, s, n) in self.running.items()),
             lost_uavs=tuple(self.lost),

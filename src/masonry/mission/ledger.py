@@ -5,6 +5,13 @@ An :class:`~masonry.mission.records.Attempt` begins when a task is assigned (jou
 completion heard late, done after all. :meth:`AttemptLedger.restore` rebuilds the history from a journal's
 replayed state (``--resume``). The ledger only records: what a result means for the dispatcher, the airspace and
 the spares is mission control's (:mod:`masonry.mission.control`).
+
+The ledger numbers the assignments: each assignment of a task gets the next number, whether the failure before it
+counted against the task or not (a lost link, the operator's recall, the battery, mission control lost). The
+number is the protocol's ``attempt`` (an assignment, its result and a recall of it name it), so a stale recall or
+result of an earlier flight cannot match a later one. It is journaled with the assignment and carries on after a
+resume (:meth:`restore`); how many attempts count against the task's ``max_attempts`` is the dispatcher's
+(``Dispatcher.attempts``), not this number (issue 27, branch ``attempt43``).
 """
 
 from __future__ import annotations
@@ -38,14 +45,19 @@ class AttemptLedger:
         #: (task id, UAV, attempt) of the attempts in ``history`` ended done (:meth:`completed`; kept by
         #: :meth:`end` and :meth:`restore`, so a result asks a set, not the whole history)
         self._done_keys: set[tuple[str, str, int]] = set()
+        #: task id -> the number of its latest assignment (:meth:`begin` gives the next one)
+        self._numbers: dict[str, int] = {}
 
-    def begin(self, task_id: str, uav: str, attempt: int, now_s: float) -> Attempt:
-        """``task_id`` assigned to ``uav`` now (its ``attempt``-th attempt): running, journaled."""
-        att = Attempt(task_id, uav, attempt, now_s)
+    def begin(self, task_id: str, uav: str, now_s: float) -> Attempt:
+        """``task_id`` assigned to ``uav`` now, numbered one more than its previous assignment: running,
+        journaled."""
+        number = self._numbers.get(task_id, 0) + 1
+        self._numbers[task_id] = number
+        att = Attempt(task_id, uav, number, now_s)
         self.history.append(att)
         self.running[task_id] = att
         if self.journal is not None:
-            self.journal.record_assignment(now_s, task_id, uav, attempt)
+            self.journal.record_assignment(now_s, task_id, uav, number)
         return att
 
     def adopt(self, task_id: str, uav: str, attempt: int, start_s: float) -> Attempt:
@@ -53,7 +65,14 @@ class AttemptLedger:
         att = Attempt(task_id, uav, attempt, start_s, adopted=True)
         self.history.append(att)
         self.running[task_id] = att
+        self._numbers[task_id] = max(self._numbers.get(task_id, 0), attempt)
         return att
+
+    def number_of(self, task_id: str) -> int:
+        """The number of ``task_id``'s running attempt, else of its latest one (0: never assigned): what a recall
+        of the assignment in progress names."""
+        att = self.running.get(task_id)
+        return att.attempt if att is not None else self._numbers.get(task_id, 0)
 
     def end(
         self,
@@ -83,15 +102,16 @@ class AttemptLedger:
         self.end(att, now_s, "done")
         take_result(att, r)
 
-    def journal_done(self, now_s: float, r: TaskResult, uav: str, *, phases: bool = True) -> None:
-        """Journal ``uav``'s completion ``r`` (with its phases unless ``phases`` is False: heard late)."""
+    def journal_done(self, now_s: float, r: TaskResult, att: Attempt, *, phases: bool = True) -> None:
+        """Journal the completion ``r`` of ``att`` (with its phases unless ``phases`` is False: heard late)."""
         if self.journal is not None:
-            self.journal.record_completion(now_s, r.task_id, uav, **completion_fields(r, phases=phases))
+            fields = completion_fields(r, phases=phases)
+            self.journal.record_completion(now_s, r.task_id, att.uav, attempt=att.attempt, **fields)
 
-    def journal_failed(self, now_s: float, task_id: str, uav: str, reason: str) -> None:
-        """Journal a failed attempt of ``task_id`` on ``uav``."""
+    def journal_failed(self, now_s: float, att: Attempt, reason: str) -> None:
+        """Journal that ``att`` failed with ``reason``."""
         if self.journal is not None:
-            self.journal.record_failure(now_s, task_id, uav, reason)
+            self.journal.record_failure(now_s, att.task_id, att.uav, reason, attempt=att.attempt)
 
     def journal_lost(self, now_s: float, uav: str) -> None:
         """Journal that ``uav`` is out of the mission."""
@@ -112,12 +132,27 @@ class AttemptLedger:
         """This very attempt was already taken as done (its UAV said it again)."""
         return (task_id, uav, attempt) in self._done_keys
 
-    def last_of(self, task_id: str, uav: str) -> Attempt | None:
-        """``uav``'s latest attempt of ``task_id``, if any."""
-        return next((a for a in reversed(self.history) if a.task_id == task_id and a.uav == uav), None)
+    def find(self, task_id: str, uav: str, attempt: int) -> Attempt | None:
+        """``uav``'s attempt ``attempt`` of ``task_id``, if it had that one."""
+        return next(
+            (
+                a
+                for a in reversed(self.history)
+                if a.task_id == task_id and a.attempt == attempt and a.uav == uav
+            ),
+            None,
+        )
 
-    def restore(self, failures: tuple[FailureRecord, ...], done: Mapping[str, DoneRecord]) -> None:
-        """The failed and the completed attempts of a journal's replayed state, into the history."""
+    def restore(
+        self,
+        failures: tuple[FailureRecord, ...],
+        done: Mapping[str, DoneRecord],
+        numbers: Mapping[str, int],
+    ) -> None:
+        """The failed and the completed attempts of a journal's replayed state, into the history; each task's next
+        assignment numbered after the highest number the journal gave it (``numbers``: ``JournalState.numbers``)."""
+        for task_id, n in numbers.items():
+            self._numbers[task_id] = max(self._numbers.get(task_id, 0), n)
         for f in failures:
             start_s = f.start_s if f.start_s is not None else f.time_s
             self.history.append(Attempt(f.task_id, f.uav, f.attempt, start_s, f.time_s, "failed", f.reason))

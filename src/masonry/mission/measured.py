@@ -141,11 +141,19 @@ class MeasuredJournal:
     def record_assignment(self, time_s: float, task_id: str, uav: str, attempt: int) -> None:
         self.journal.record_assignment(time_s, task_id, uav, attempt, measured=self.measurements())
 
-    def record_completion(self, time_s: float, task_id: str, uav: str, **fields: Any) -> None:
-        self.journal.record_completion(time_s, task_id, uav, **fields, measured=self.measurements(task_id))
+    def record_completion(
+        self, time_s: float, task_id: str, uav: str, *, attempt: int | None = None, **fields: Any
+    ) -> None:
+        self.journal.record_completion(
+            time_s, task_id, uav, attempt=attempt, **fields, measured=self.measurements(task_id)
+        )
 
-    def record_failure(self, time_s: float, task_id: str, uav: str, reason: str) -> None:
-        self.journal.record_failure(time_s, task_id, uav, reason, measured=self.measurements())
+    def record_failure(
+        self, time_s: float, task_id: str, uav: str, reason: str, *, attempt: int | None = None
+    ) -> None:
+        self.journal.record_failure(
+            time_s, task_id, uav, reason, attempt=attempt, measured=self.measurements()
+        )
 
     def record_uav_lost(self, time_s: float, uav: str) -> None:
         self.journal.record_uav_lost(time_s, uav, measured=self.measurements())

@@ -53,7 +53,8 @@ class Heartbeat:
 
 @dataclass(frozen=True)
 class Assign:
-    """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1) of the wall ``wall``.
+    """Mission control gives ``task`` to ``uav`` (attempt number ``attempt``, from 1: this assignment's own, one
+    more than the task's previous assignment) of the wall ``wall``.
 
     ``wall`` is :func:`masonry.fingerprint.wall_digest` of mission control's blueprint ("" when it has none).
     ``planned``: the same task with its target or segment moved onto the wall as built

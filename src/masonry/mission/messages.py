@@ -7,8 +7,9 @@ sender (and the addressed UAV) belongs to it; anything else raises :class:`~maso
 Messages (``sender`` is a UAV name or :data:`MISSION_CONTROL`):
 
 - :class:`Heartbeat` both ways, every ``heartbeat_period_s``: a silent peer is declared lost.
-- :class:`Assign` mission control -> UAV: one task (the whole task value), its attempt number and the digest of
-  the blueprint's wall (:func:`masonry.fingerprint.wall_digest`), so that a UAV flies only its own wall's tasks.
+- :class:`Assign` mission control -> UAV: one task (the whole task value), its attempt number (the assignment's
+  own) and the digest of the blueprint's wall (:func:`masonry.fingerprint.wall_digest`), so that a UAV flies only
+  its own wall's tasks.
 - :class:`Progress` UAV -> mission control: the UAV's state machine entered ``state`` while on ``task_id``.
 - :class:`Result` UAV -> mission control: the task is done or failed (a :class:`~masonry.ports.TaskResult`),
   for the attempt it was assigned with.
@@ -40,7 +41,10 @@ would be taken for one that never carries a brick); within 5, a heartbeat's ``sw
 swaps its pack: mission control may send it home for an early swap, :mod:`masonry.mission.swap_stagger`; one
 that does not send it is never sent home early); 6 a recall's ``task_id`` and ``attempt`` (the assignment it
 recalls; null and 0: whatever the UAV holds): a UAV ignores one naming an assignment it does not hold, so a recall
-said again cannot fail the next task (a version-5 UAV would take it for "whatever you hold").
+said again cannot fail the next task (a version-5 UAV would take it for "whatever you hold"); within 6, mission
+control numbers every assignment of a task anew (``attempt`` 1, 2, 3, ... whether what ended the one before
+counted against the task or not: :class:`~masonry.mission.ledger.AttemptLedger`): a UAV only echoes the number and
+compares recalls with it, so either side of a mixed pair works as before.
 """
 
 from __future__ import annotations

@@ -22,6 +22,8 @@ class Attempt:
 
     task_id: str
     uav: str
+    #: the assignment's own number (the protocol's ``attempt``: 1 for the task's first assignment, one more for each
+    #: after it, counted against the task or not; :class:`~masonry.mission.ledger.AttemptLedger`)
     attempt: int
     start_s: float
     end_s: float | None = None

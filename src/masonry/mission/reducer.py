@@ -104,22 +104,22 @@ def screen_result(
     return None
 
 
-def late_completion(msg: Result, last: Attempt | None, settled: bool, owner: str | None) -> bool:
-    """A completion from a UAV its task was released from when it was declared lost (or its heartbeat stopped
-    naming it): it did the task after all, its result delayed by the link. It counts unless the task is done or
-    stuck since (``settled``) or assigned to the same UAV again (``owner``: then it is an ordinary result).
+def late_completion(msg: Result, named: Attempt | None, settled: bool) -> bool:
+    """A completion of an attempt released from its UAV when it was declared lost (or its heartbeat stopped naming
+    it): it did the task after all, its result delayed by the link. It counts unless the task is done or stuck
+    since (``settled``). The attempt is the one the result names (each assignment has its own number), so a
+    completion of an earlier flight is told from a later assignment of the task, to another UAV or the same one
+    (issue 27, branch ``attempt43``: before, a task given to the same UAV again had the same number).
 
     Args:
-        last: the sender's latest attempt of the task.
+        named: the sender's attempt of the task with the number ``msg`` names (None: it had none).
     """
     r = msg.result
-    if r.status != "done" or settled or last is None:
+    if r.status != "done" or settled or named is None:
         return False
-    if last.attempt != msg.attempt or last.status != "failed":
+    if named.attempt != msg.attempt or named.status != "failed":
         return False
-    if not (last.reason or "").startswith((LOST_REASON, TASK_DROPPED_REASON)):
-        return False
-    return owner != msg.sender
+    return (named.reason or "").startswith((LOST_REASON, TASK_DROPPED_REASON))
 
 
 def dropped_reason(

@@ -319,7 +319,9 @@ def control_report(
         if t.done:
             continue
         tries = of_task.get(t.id, [])
-        n = max((a.attempt for a in tries), default=0)
+        # the attempts counted against its ``max_attempts``, a running one included (not its assignments: a flight
+        # failed for its UAV's battery, the operator or a lost link is not one, though it has its own number)
+        n = mc.dispatcher.attempts.get(t.id, 0) + (t.id in mc.dispatcher.in_progress)
         a = done_att.get(t.id)
         if a is not None:
             visit = last_visit.get((t.id, a.uav))

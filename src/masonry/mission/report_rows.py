@@ -93,7 +93,7 @@ class AttemptReport:
 
     task_id: str
     uav: str
-    attempt: int
+    attempt: int  # the assignment's number (``Attempt.attempt``), not its count against ``max_attempts``
     start_s: float
     end_s: float | None
     status: str  # "done", "failed", "running" (the mission ended first)

@@ -121,7 +121,10 @@ class DispatchQueries:
         return None if i is None else self._ids[i]
 
     def attempt_of(self, task_id: str) -> int:
-        """The number the next (or current) attempt of ``task_id`` has: finished attempts + 1."""
+        """The number the next (or current) attempt of ``task_id`` has among those counted against its
+        ``max_attempts``: finished (counted) attempts + 1. Not an assignment's identity: a flight failed for a
+        reason that is not the task's is followed by one with the same count (mission control's protocol numbers
+        each assignment: :meth:`masonry.mission.ledger.AttemptLedger.number_of`)."""
         self._lookup(task_id, "query")
         return self._attempts.get(task_id, 0) + 1
 

@@ -18,7 +18,9 @@ PENDING, RUNNING, DONE, STUCK = 0, 1, 2, 3
 
 @dataclass(frozen=True)
 class Assignment:
-    """Task ``task_id`` goes to UAV ``uav``; ``attempt`` counts from 1 (failed attempts before it + 1)."""
+    """Task ``task_id`` goes to UAV ``uav``; ``attempt`` counts from 1 (the attempts counted against the task's
+    ``max_attempts`` before it + 1; mission control numbers each assignment on its own:
+    :class:`~masonry.mission.ledger.AttemptLedger`)."""
 
     uav: str
     task_id: str
