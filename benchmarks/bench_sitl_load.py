@@ -40,7 +40,11 @@ SITL_TESTS = (
     "tests/test_wind_heard.py",
 )
 #: ArduCopter's SITL (tests/ardupilot_sitl.py; skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
-ARDUPILOT_TESTS = ("tests/test_ardupilot_sitl.py", "tests/test_mavlink_fence.py")
+ARDUPILOT_TESTS = (
+    "tests/test_ardupilot_sitl.py",
+    "tests/test_mavlink_fence.py",
+    "tests/test_ardupilot_bond.py",
+)
 
 
 def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[str, int], list[str], float]:

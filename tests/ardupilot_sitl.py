@@ -15,7 +15,7 @@ import signal
 import socket
 import subprocess
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import pytest
@@ -47,8 +47,17 @@ def sitl_binary() -> Path:
 
 
 @contextlib.contextmanager
-def arducopter(workdir: Path, instance: int, sysid: int, *, speedup: int = SPEEDUP) -> Iterator[str]:
-    """Run one ArduCopter hexacopter SITL (``-I instance``); yields its MAVLink URL (``tcp:127.0.0.1:PORT``)."""
+def arducopter(
+    workdir: Path,
+    instance: int,
+    sysid: int,
+    *,
+    speedup: int = SPEEDUP,
+    params: Mapping[str, float] | None = None,
+) -> Iterator[str]:
+    """Run one ArduCopter hexacopter SITL (``-I instance``); yields its MAVLink URL (``tcp:127.0.0.1:PORT``).
+
+    ``params``: ArduPilot parameters laid over its defaults (a ``--defaults`` file of their own)."""
     binary = sitl_binary()
     parms = ",".join(str(binary.parent / name) for name in ("copter.parm", "copter-hexa.parm"))
     workdir.mkdir(parents=True, exist_ok=True)
@@ -56,6 +65,9 @@ def arducopter(workdir: Path, instance: int, sysid: int, *, speedup: int = SPEED
     if wind:
         (workdir / "wind.parm").write_text(f"SIM_WIND_SPD {float(wind)}\nSIM_WIND_DIR 45\n")
         parms += f",{workdir / 'wind.parm'}"
+    if params:
+        (workdir / "test.parm").write_text("".join(f"{k} {v}\n" for k, v in params.items()))
+        parms += f",{workdir / 'test.parm'}"
     port = 5760 + 10 * instance
     log = (workdir / "sitl.log").open("w")
     proc = subprocess.Popen(

@@ -31,10 +31,18 @@ def free_tcp_port() -> int:
 
 
 def fly_mission(
-    role: str, uav: str, url: str, endpoint: str, config: Path, *extra: str, own_session: bool = False
+    role: str,
+    uav: str,
+    url: str,
+    endpoint: str,
+    config: Path,
+    *extra: str,
+    own_session: bool = False,
+    blueprint: str = CASE_STUDY,
 ) -> subprocess.Popen[str]:
-    """``masonry fly --mission`` for one UAV of the case study, simulated actuators and camera, JSON out."""
-    return masonry("fly", "--uav", role, "--name", uav, "--blueprint", CASE_STUDY, "--mission", endpoint,
+    """``masonry fly --mission`` for one UAV of the case study (or of ``blueprint``), simulated actuators and
+    camera, JSON out."""
+    return masonry("fly", "--uav", role, "--name", uav, "--blueprint", blueprint, "--mission", endpoint,
                    "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", url, "--actuators", "sim",
                    "--camera", "sim", "--config", str(config), "--format", "json", *extra,
                    own_session=own_session)  # fmt: skip

@@ -300,7 +300,9 @@ def _final_report(mc: Any, the_plan: Any, policy: str, expected_s: Any, transpor
     """The mission's report and security counts, also into the log."""
     from masonry.mission.report import control_report
 
-    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s)
+    # the least separation of two airborne UAVs, from their positions as heard (no world to measure it in)
+    sep = mc.heard_separation.min_separation_m
+    result = control_report(mc, the_plan, policy=policy, durations_s=expected_s, min_separation_m=sep)
     security = security_summary(transport, mc.events.ignored)
     watch.finish(result, {"security": security})
     return result, security

@@ -40,6 +40,7 @@ from masonry.mission.control_ports import JournalPort, WindGate
 from masonry.mission.dispatch_chain import mission_dispatcher
 from masonry.mission.events import EventSink
 from masonry.mission.glue import glue_gate
+from masonry.mission.heard_separation import HeardSeparation
 from masonry.mission.journal_state import journaled_phases as _journaled_phases  # noqa: F401 - its home before
 from masonry.mission.ledger import AttemptLedger
 from masonry.mission.linger import LingerBook
@@ -172,6 +173,9 @@ class MissionControl:
         #: called with each UAV heartbeat's sender and time stamp (the UAV's own clock): ``masonry
         #: mission-control`` paces mission time by them (:class:`~masonry.mission.fleet_clock.FleetClock`)
         self.heard_clock: Callable[[str, float], None] | None = None
+        #: the least separation of two airborne UAVs as their reports were heard (a real mission's measure; the
+        #: simulator's report has its world's, masonry.mission.heard_separation)
+        self.heard_separation = HeardSeparation()
         self.fleet = tuple(fleet)
         self.transport = transport
         self.wall_digest = wall_digest

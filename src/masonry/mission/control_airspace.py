@@ -52,7 +52,9 @@ def report(mc: MissionControl, link: UavLink, msg: Heartbeat | Progress, positio
         return
     link.moved_to(position_m)
     name = link.spec.name
-    if position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M:
+    airborne = position_m[2] - link.spec.home_m[2] > ON_PAD_Z_M
+    mc.heard_separation.note(name, mc.now_s, position_m, airborne=airborne)  # (heard at this step's time)
+    if airborne:
         link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
     mc.columns.progress(name, position_m)
     if link.facts.on_pad and not link.taking_off and mc.dispatcher.task_of(name) is None:
