@@ -103,3 +103,9 @@ def test_a_second_brick_uav_does_not_make_the_compact_layout_slower() -> None:
     assert one.completed and two.completed
     assert two.conflict_violations == 0 and two.dependency_violations == 0
     assert two.makespan_s <= one.makespan_s, (two.makespan_s, one.makespan_s)
+
+
+def test_not_with_several_uavs_of_the_other_role() -> None:
+    # two sprayers: either may take A0 where it is; brick-2 takes the brick the dispatcher chose, B1
+    fleet = [*FLEET, UavSpec("glue-2", "adhesion", (-3.0, -3.0, 0.0))]
+    assert first_round(ChainThrough(one_course(), fleet, reservation="site"), landed=True)["brick-2"] == "B1"

@@ -79,11 +79,11 @@ one step above the rest) the spots are not used: a sprayer sent to a spot of a l
 is sent back to the top step, into the other sprayer's run (both held ~50 s at the start; seeds 1-5 +2.1 %).
 
 **A take-off does not cut ahead of the other role's next task** (issue 27 §4, 2026-12-07, branch ``more43``;
-docs/dispatch.md). A UAV on its pad, while another of its role holds a task, is given the policy's best available
-task not within r_c of a task of the other role ready now or when a task in progress ends
-(:func:`masonry.planner.dispatch_admission.cuts_ahead`), where there is one; else the task chosen (never held on its
-pad: held there, the pyramid's 2 + 1 flew as 1 + 1). The compact layout of ``bench_layouts.py`` seed 7 at 2 + 1:
-500.2 -> 428.7 s (1 + 1 459.2 s).
+docs/dispatch.md). A UAV on its pad, while another of its role holds a task and the other role has one UAV, is
+given the policy's best available task not within r_c of a task of the other role ready now or when a task in
+progress ends (:func:`masonry.planner.dispatch_admission.cuts_ahead`), where there is one; else the task chosen
+(never held on its pad: held there, the pyramid's 2 + 1 flew as 1 + 1). The compact layout of ``bench_layouts.py``
+seed 7 at 2 + 1: 500.2 -> 428.7 s (1 + 1 459.2 s).
 Pure: no I/O, no clock.
 """
 
@@ -181,13 +181,15 @@ class ChainThrough(Dispatcher):
         return None if admitted is None else self._not_ahead(uav, role, admitted)
 
     def _not_ahead(self, uav: str, role: str, i: int) -> int:
-        """``i``, or for ``uav`` on its pad while another UAV of its role holds a task, when ``i`` cuts ahead of
-        the other role's next task (:func:`masonry.planner.dispatch_admission.cuts_ahead`), the policy's best
-        available task of ``role`` that does not; ``i`` where there is none (the rule picks among tasks, it never
-        keeps a UAV on its pad: held there, the pyramid's 2 + 1 flew as 1 + 1, 1,182.3 -> 1,274.9 s on seed 1)."""
+        """``i``, or for ``uav`` on its pad while another UAV of its role holds a task and the other role has one
+        UAV (its tasks are that UAV's one sequence), when ``i`` cuts ahead of the other role's next task
+        (:func:`masonry.planner.dispatch_admission.cuts_ahead`), the policy's best available task of ``role`` that
+        does not; ``i`` where there is none (the rule picks among tasks, it never keeps a UAV on its pad: held
+        there, the pyramid's 2 + 1 flew as 1 + 1, 1,182.3 -> 1,274.9 s on seed 1)."""
         rule = self.admission
-        if rule is None or not rule.landed(uav) or not self._cutting(i):
-            return i
+        other = "adhesion" if role == "brick" else "brick"
+        if rule is None or not rule.landed(uav) or self._live_count[other] != 1 or not self._cutting(i):
+            return i  # several of the other role: one may take the task elsewhere (6 x 30 6 + 3: +154 s)
         if not any(self._role[j] == role for j in self._uav_task.values()):
             return i  # the first of its role out: the role's work is its
         free = [k for k in self._available[role] if not self._cutting(k)]
