@@ -2,10 +2,16 @@
 property test tests/test_random_layouts.py, on more and larger layouts.
 
     python benchmarks/bench_layouts.py [--n 40] [--first-seed 0] [--large] [--faults] [--reservation site]
-        [--airspace columns|table] [--compact] [--policy critical-path|fifo|nearest]
+        [--airspace columns|table] [--compact] [--policy critical-path|fifo|nearest] [--sub-fleets]
 
 A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
 violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
+
+``--sub-fleets`` (issue 27 §4, "never slower with more UAVs of either role"): each layout is flown by its own
+fleet and by every smaller one (b + a with 1 <= b, a up to the blueprint's, its first UAVs of each role), and a
+line per layout gives each fleet's makespan and every *slower pair*: a fleet with at least as many UAVs of each
+role as another, and more of one, whose makespan is longer by more than 0.05 s. The last lines count the layouts
+with a slower pair and name the worst (docs/performance/fleet.md).
 """
 
 from __future__ import annotations
@@ -63,6 +69,72 @@ def fly(
     }
 
 
+#: A larger fleet counts as slower only past this much (the report's makespan is to the control period).
+SLOWER_BY_S = 0.05
+
+
+def sub_fleets(
+    seed: int, limits: LayoutLimits, reservation: str, airspace: str, policy: str
+) -> tuple[str, dict[tuple[int, int], float]]:
+    """The layout of ``seed`` and the makespan of its fleet and of every smaller one (see the module docstring)."""
+    bp = random_layout(random.Random(seed), limits)
+    n_brick, n_glue = len(bp.uavs("brick")), len(bp.uavs("adhesion"))
+    out: dict[tuple[int, int], float] = {}
+    for b in range(1, n_brick + 1):
+        for a in range(1, n_glue + 1):
+            r = simulate(
+                bp,
+                seed=seed,
+                reservation=reservation,
+                airspace=airspace,
+                policy=policy,
+                brick_uavs=b,
+                adhesion_uavs=a,
+            )
+            out[(b, a)] = r.makespan_s if r.completed else math.inf
+    return bp.name, out
+
+
+def slower_pairs(
+    makespans_s: dict[tuple[int, int], float],
+) -> list[tuple[tuple[int, int], tuple[int, int], float]]:
+    """Every (larger, smaller, seconds slower) where the larger fleet has at least as many UAVs of each role as
+    the smaller and takes longer by more than :data:`SLOWER_BY_S`; the most seconds first."""
+    pairs = [
+        (big, small, makespans_s[big] - makespans_s[small])
+        for big in makespans_s
+        for small in makespans_s
+        if big != small and big[0] >= small[0] and big[1] >= small[1]
+        if makespans_s[big] - makespans_s[small] > SLOWER_BY_S
+    ]
+    return sorted(pairs, key=lambda p: -p[2])
+
+
+def fleet_scaling(args: argparse.Namespace, limits: LayoutLimits) -> None:
+    """``--sub-fleets``: a line per layout, then the count of layouts with a slower pair and the worst."""
+    worst: tuple[float, int, str] = (0.0, -1, "")
+    slower = total_s = 0.0
+    for seed in range(args.first_seed, args.first_seed + args.n):
+        t0 = time.perf_counter()
+        wall, spans = sub_fleets(seed, limits, args.reservation, args.airspace, args.policy)
+        pairs = slower_pairs(spans)
+        total_s += sum(spans.values())
+        cells = " ".join(f"{b}+{a} {s:.1f}" for (b, a), s in sorted(spans.items()))
+        named = "; ".join(f"{b[0]}+{b[1]} over {s[0]}+{s[1]} +{d:.1f}" for b, s, d in pairs)
+        print(
+            f"{seed:<5} {wall:<26} {cells}   slower: {named or 'none'}   ({time.perf_counter() - t0:.0f} s)",
+            flush=True,
+        )
+        if pairs:
+            slower += 1
+            big, small, d = pairs[0]
+            if d > worst[0]:
+                worst = (d, seed, f"{big[0]}+{big[1]} over {small[0]}+{small[1]}")
+    print(f"{slower:.0f} of {args.n} layouts have a larger fleet slower; makespans summed {total_s:.1f} s")
+    if worst[1] >= 0:
+        print(f"worst: seed {worst[1]}, {worst[2]} +{worst[0]:.1f} s")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=40)
@@ -73,10 +145,16 @@ def main() -> None:
     ap.add_argument("--airspace", choices=AIRSPACES, default=DEFAULT_AIRSPACE)
     ap.add_argument("--compact", action="store_true", help="small walls, r_c 0.5-0.8 m (issue 27's layouts)")
     ap.add_argument("--policy", choices=POLICIES, default=DEFAULT_POLICY, help="the dispatch policy")
+    ap.add_argument(
+        "--sub-fleets", action="store_true", help="fly every smaller fleet too; print the slower pairs"
+    )
     args = ap.parse_args()
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     if args.compact:
         limits = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
+    if args.sub_fleets:
+        fleet_scaling(args, limits)
+        return
     print(
         f"pad separation {pad_separation_m():.2f} m; airspace {args.airspace}; policy {args.policy}; limits {limits}"
     )

@@ -21,6 +21,9 @@ work (the pyramid took 1,349 s at 2 + 1 and 2,092 s at 8 + 4). The rule (docs/di
 - on every wall, a UAV on its pad is sent to fetch a brick early (prefetch) only where it would be the one UAV
   coming to its site (:func:`coming_alone`: at most one conflicting task runs, and that one waits for no other;
   the 12 m wall's 6 + 3 and 8 + 4: docs/dispatch.md); a ready conflicting task is given as before;
+- a task *cuts ahead* (:func:`cuts_ahead`) of a task of the other role within r_c that is ready, or becomes ready
+  when a task in progress ends: mission control's dispatcher gives a UAV on its pad, with another of its role at
+  work, an available task that does not where there is one (:mod:`masonry.mission.dispatch_chain`);
 - a UAV on its pad whose chosen task is crowded is given the policy's best uncrowded task of its role instead,
   available first, else ready and conflicting; with none it stays on its pad until the next event.
 
@@ -88,6 +91,27 @@ def coming_alone(task: int, is_running: Callable[[int], bool], neighbours: Seque
     return all(not any(is_running(k) for k in neighbours[j] if k != task) for j in running)
 
 
+def cuts_ahead(
+    task: int,
+    roles: Sequence[str],
+    running: Callable[[int], bool],
+    done: Callable[[int], bool],
+    neighbours: Sequence[Sequence[int]],
+    prerequisites: Sequence[Sequence[int]],
+) -> bool:
+    """A task of the other role than ``task``'s conflicts with it, is neither done nor in progress, and has every
+    prerequisite done or in progress: it is ready, or becomes ready when a task in progress ends, for a UAV of its
+    role already at work (docs/dispatch.md, "A take-off does not cut ahead of the other role's next task")."""
+    role = roles[task]
+    return any(
+        roles[j] != role
+        and not running(j)
+        and not done(j)
+        and all(running(p) or done(p) for p in prerequisites[j])
+        for j in neighbours[task]
+    )
+
+
 @dataclass(frozen=True)
 class Admission:
     """The rule's facts about a mission: the wall's width and which UAVs stand on their pads.
@@ -116,4 +140,4 @@ class Admission:
         return max(1, (share_x2 + 1) // 2)
 
 
-__all__ = ["UAVS_PER_SITE", "Admission", "coming_alone", "crowded", "queued", "site_width"]
+__all__ = ["UAVS_PER_SITE", "Admission", "coming_alone", "crowded", "cuts_ahead", "queued", "site_width"]
