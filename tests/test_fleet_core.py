@@ -159,7 +159,7 @@ def test_on_the_pyramid_a_fleet_holds_the_pads_of_every_smaller_core_on_its_ladd
 
 
 def test_with_no_admission_rule_the_core_is_laid_in_one_go() -> None:
-    """Under ``--airspace table`` (or with no separation) no admission rule narrows the fleet, and the pads stay as
-    they were: the pyramid's 6 + 3 laid up the ladder did not complete under the table (seed 1, 2,236 s)."""
+    """With no separation (no admission rule) or under ``--airspace table`` the pads are not laid up the ladder: the
+    pyramid's 6 + 3 laid so did not complete under the table (seed 1, 2,236 s, before the rule held there too)."""
     pads = {u.name: round(u.home_m[0], 1) for u in fleet_for(PYRAMID_BLUEPRINT, 6, 3, admission=False)}
     assert pads["glue-2"] == 20.0 and pads["brick-5"] == 12.0

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.airspace import Phase
 from masonry.mission.dispatch_chain import ChainThrough
 from masonry.mission.sites import work_point_m
 from masonry.mission.swap_stagger import swap_due
@@ -20,11 +20,12 @@ if TYPE_CHECKING:
 
 
 def admit(mc: MissionControl, column_radius_m: float) -> None:
-    """Give ``mc``'s dispatcher the admission rule: under the columns (the default airspace) only, and none with
-    ``column_radius_m`` 0 (every column granted). Not under ``--airspace table``: its approach spots already
-    keep held UAVs over their sites, and with the rule as first written (UAVs in the air held back too) issue 27's
-    livelock pyramid stalled there at 355 s (a UAV flying home and a sprayer waiting for each other's stays)."""
-    if column_radius_m <= 0 or not isinstance(mc.columns, ColumnClearance):
+    """Give ``mc``'s dispatcher the admission rule, under either airspace; none with ``column_radius_m`` 0 (every
+    column granted). Under ``--airspace table`` too (issue 27, branch ``table44``): without it every UAV of the
+    pyramid's 8 + 4 took tasks, and the table grants a UAV the site gate does not hold back its whole hop down from
+    its pad, a site interval as long as that flight (68 s) on a wall whose intervals run one at a time: 4,234.8 s
+    against 1,671.3 s with the rule (docs/performance/fleet.md, "Why the table is slow on the pyramid")."""
+    if column_radius_m <= 0:
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]
     width = site_width(((p[0], p[1]) for p in points), column_radius_m)

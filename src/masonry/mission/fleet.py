@@ -90,8 +90,8 @@ def fleet_for(
     :func:`ladder` (2 + 1, then 4 + 2's added UAVs past those, ...), so it keeps every smaller step's pads: the
     pyramid's 8 + 4 keeps 4 + 2's glue-2 at 14 m, where laid in one go it stood past all eight brick pads, at 26 m
     (issue 27 §4, branch ``more42``). Elsewhere the core is laid in one go, and so everywhere with ``admission``
-    False: a mission with no admission rule (``--airspace table``, or no separation), where no wall narrows the
-    fleet (under the table the pyramid's 6 + 3, seed 1, laid up the ladder did not complete).
+    False: a mission with no separation (no admission rule), or under ``--airspace table`` (the rule holds there
+    since ``table44``, but the pyramid's 6 + 3, seed 1, laid up the ladder did not complete before it).
     """
     if brick_uavs is None or adhesion_uavs is None or brick_uavs < 0 or adhesion_uavs < 0:
         return _laid(blueprint, {"brick": brick_uavs, "adhesion": adhesion_uavs}, ())

@@ -313,7 +313,7 @@ class SimulatedMission:
         uav_config = template_config(uav_config, vehicle, opts.airspace)
         timing = DEFAULT_TIMING if uav_config is None else uav_config.timing()
 
-        # the pads follow the admission rule, which only the columns apply (mission.control_dispatch.admit)
+        # the pads up the admission rule's ladder under the columns only (mission.fleet.fleet_for)
         admission = separation and opts.airspace == DEFAULT_AIRSPACE
         fleet = fleet_for(blueprint, opts.brick_uavs, opts.adhesion_uavs, admission=admission)
         if not fleet:
