@@ -4,28 +4,30 @@
 case study on loopback at 25x real time. When mission control assigns B0 to brick-1, brick-1's process is
 killed with SIGKILL; mission control declares it lost (the heartbeat timeout), releases B0, and a new brick-1
 process started after that rejoins (its heartbeat holds no task) and takes B0 and B1. The mission completes,
-no task is done twice, and the conflict and dependency checks hold. Every wait is bounded, every process is
-killed at the end whatever happens, and nothing depends on how fast the loaded machine runs: each step waits
-for the line that says the previous one happened.
+no task is done twice, and the conflict and dependency checks hold. Every process is killed at the end whatever
+happens, and nothing depends on how fast the loaded machine runs: each step waits for the line that says the
+previous one happened, or for the process to exit (then its output says why), never for a number of seconds;
+and a process started mid-mission (the new brick-1, the resumed mission control) is started with the others and
+held after its imports (``tests/cli_procs.py``): let go at its step, its start-up no longer races the mission's
+windows or the handlers' patience with a silent mission control (a 60 s wait for "heard again" failed at load
+13: the mission had ended as stalled, 300 mission s or 12 wall s after the loss, while the new process was still
+importing; the stall watchdog is now given the rejoin window's length, see ``mission_control``).
 """
 
 from __future__ import annotations
 
 import json
 import os
-import queue
 import signal
 import socket
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 
 import pytest
 
+from cli_procs import Cli, spawn
+
 CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
-MAIN = "from masonry.cli import main; main()"
 
 
 def free_port() -> int:
@@ -34,97 +36,61 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def lines_of(stream) -> queue.Queue[str]:
-    """Every line of ``stream``, read by a thread (a pipe left unread would block its writer)."""
-    q: queue.Queue[str] = queue.Queue()
-
-    def pump() -> None:
-        for line in stream:
-            q.put(line)
-
-    threading.Thread(target=pump, daemon=True).start()
-    return q
-
-
-def wait_line(q: queue.Queue[str], text: str, timeout_s: float, seen: list[str]) -> str:
-    end = time.monotonic() + timeout_s
-    while time.monotonic() < end:
-        try:
-            line = q.get(timeout=0.2)
-        except queue.Empty:
-            continue
-        seen.append(line)
-        if text in line:
-            return line
-    raise AssertionError(f"no line with {text!r} within {timeout_s:.0f} s; last lines: {''.join(seen[-15:])}")
-
-
-def fly(name: str, role: str, endpoint: str, mission: str, *extra: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            MAIN,
-            "fly",
-            "--uav",
-            role,
-            "--name",
-            name,
-            "--sim",
-            "--blueprint",
-            str(CASE_STUDY),
-            "--mission",
-            endpoint,
-            "--listen",
-            f"tcp/127.0.0.1:{free_port()}",
-            "--mission-name",
-            mission,
-            "--wait",
-            "30",
-            "--format",
-            "json",
-            "--time-scale",
-            "25",
-            *extra,
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+def fly(name: str, role: str, endpoint: str, mission: str, *extra: str) -> Cli:
+    return spawn(
+        "fly",
+        "--uav",
+        role,
+        "--name",
+        name,
+        "--sim",
+        "--blueprint",
+        str(CASE_STUDY),
+        "--mission",
+        endpoint,
+        "--listen",
+        f"tcp/127.0.0.1:{free_port()}",
+        "--mission-name",
+        mission,
+        "--wait",
+        "30",
+        "--format",
+        "json",
+        "--time-scale",
+        "25",
+        *extra,
     )
 
 
-def mission_control(endpoint: str, mission: str, report: Path, *extra: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            MAIN,
-            "mission-control",
-            str(CASE_STUDY),
-            "--listen",
-            endpoint,
-            "--format",
-            "json",
-            "--report",
-            str(report),
-            "--startup-timeout",
-            "30",
-            "--heartbeat-timeout",
-            "3",
-            "--max-time",
-            "3000",
-            "--mission-name",
-            mission,
-            "--reservation",
-            "task",
-            "--time-scale",
-            "25",
-            "--verbose",
-            *extra,
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+def mission_control(endpoint: str, mission: str, report: Path, *extra: str) -> Cli:
+    return spawn(
+        "mission-control",
+        str(CASE_STUDY),
+        "--listen",
+        endpoint,
+        "--format",
+        "json",
+        "--report",
+        str(report),
+        "--startup-timeout",
+        "30",
+        "--heartbeat-timeout",
+        "3",
+        # the stall watchdog (mission seconds) no shorter than the rejoin window (--startup-timeout: 30 wall s,
+        # 750 mission s at x25): a lost UAV's restart is waited for as long as mission control says it waits for
+        # one, not ended as a stall after 300 mission s (12 wall s here, which a loaded machine's restart outran)
+        "--stall-timeout",
+        "750",
+        "--max-time",
+        "3000",
+        "--mission-name",
+        mission,
+        "--reservation",
+        "task",
+        "--time-scale",
+        "25",
+        "--verbose",
+        *extra,
     )
 
 
@@ -144,26 +110,26 @@ def test_mission_control_killed_mid_task_and_resumed_keeps_the_task_with_its_uav
     try:
         glue = fly("glue-1", "adhesion", endpoint, mission, "--heartbeat-timeout", "20")
         brick = fly("brick-1", "brick", endpoint, mission, "--heartbeat-timeout", "20")
-        procs += [glue, brick]
-        assert first.stderr is not None
-        seen: list[str] = []
-        wait_line(lines_of(first.stderr), "B0 assigned to brick-1", 120, seen)
-        time.sleep(0.3)  # journaled and sent (B0 takes about 2 s here): brick-1 is on it
-        os.kill(first.pid, signal.SIGKILL)
-        assert first.wait(timeout=10) == -signal.SIGKILL
+        # imported now, let go once the first is killed: inside the handlers' 20 s of patience whatever the load
         second = mission_control(endpoint, mission, report, "--journal", str(journal), "--resume")
-        procs.append(second)
-        assert second.stderr is not None
-        log = lines_of(second.stderr)
-        wait_line(log, "B0 kept on brick-1 (attempt 1) from before the resume", 60, seen)
-        out, err = second.communicate(timeout=180)
-        outs = [p.communicate(timeout=60) for p in (glue, brick)]
+        procs += [glue, brick, second]
+        for p in (first, glue, brick):
+            p.go()
+        seen: list[str] = []
+        first.wait_line("B0 assigned to brick-1", seen)
+        time.sleep(0.3)  # journaled and sent (B0 takes about 2 s here): brick-1 is on it
+        os.kill(first.popen.pid, signal.SIGKILL)
+        assert first.popen.wait(timeout=10) == -signal.SIGKILL
+        second.go()
+        second.wait_line("B0 kept on brick-1 (attempt 1) from before the resume", seen)
+        out, err = second.finish()
+        outs = [p.finish() for p in (glue, brick)]
     finally:
         for p in procs:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-    assert second.returncode == 0, "".join(seen[-30:]) + err[-3000:] + outs[1][0][-3000:] + outs[1][1][-3000:]
+            p.kill()
+    assert second.popen.returncode == 0, (
+        "".join(seen[-30:]) + err[-3000:] + outs[1][0][-3000:] + outs[1][1][-3000:]
+    )
     d = json.loads(out)
     assert d["completed"] is True
     assert d["conflict_violations"] == 0 and d["dependency_violations"] == 0
@@ -174,7 +140,7 @@ def test_mission_control_killed_mid_task_and_resumed_keeps_the_task_with_its_uav
     )
     flown: dict[str, list[str]] = {}
     for p, (stdout, err) in zip((glue, brick), outs):
-        assert p.returncode == 0, err[-2000:]
+        assert p.popen.returncode == 0, err[-2000:]
         run = json.loads(stdout)
         flown[run["uav"]] = [t["task"] for t in run["tasks"] if t["status"] == "done"]
     # one process per UAV flew the whole mission, across the restart: each task once
@@ -192,26 +158,26 @@ def test_a_handler_killed_mid_task_and_restarted_rejoins_and_the_mission_complet
     try:
         glue = fly("glue-1", "adhesion", endpoint, mission)
         first = fly("brick-1", "brick", endpoint, mission)
-        procs += [glue, first]
-        assert mc.stderr is not None
-        log = lines_of(mc.stderr)
-        seen: list[str] = []
-        wait_line(log, "B0 assigned to brick-1", 120, seen)
-        time.sleep(0.3)  # B0 takes a minute of mission time (over 2 s here): brick-1 is on it
-        os.kill(first.pid, signal.SIGKILL)
-        assert first.wait(timeout=10) == -signal.SIGKILL
-        wait_line(log, "UAV brick-1 silent", 60, seen)  # declared lost: B0 is released
+        # imported now, let go once brick-1 is declared lost: inside mission control's rejoin window (its
+        # --startup-timeout) whatever the load
         second = fly("brick-1", "brick", endpoint, mission)
-        procs.append(second)
-        wait_line(log, "UAV brick-1 heard again", 60, seen)
-        out, _ = mc.communicate(timeout=180)
-        outs = [p.communicate(timeout=60) for p in (glue, second)]
+        procs += [glue, first, second]
+        for p in (mc, glue, first):
+            p.go()
+        seen: list[str] = []
+        mc.wait_line("B0 assigned to brick-1", seen)
+        time.sleep(0.3)  # B0 takes a minute of mission time (over 2 s here): brick-1 is on it
+        os.kill(first.popen.pid, signal.SIGKILL)
+        assert first.popen.wait(timeout=10) == -signal.SIGKILL
+        mc.wait_line("UAV brick-1 silent", seen)  # declared lost: B0 is released
+        second.go()
+        mc.wait_line("UAV brick-1 heard again", seen)
+        out, err = mc.finish()
+        outs = [p.finish() for p in (glue, second)]
     finally:
         for p in procs:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-    assert mc.returncode == 0, "".join(seen[-30:])
+            p.kill()
+    assert mc.popen.returncode == 0, "".join(seen[-30:]) + err[-3000:]
     d = json.loads(out)
     assert d["completed"] is True
     assert d["conflict_violations"] == 0 and d["dependency_violations"] == 0
@@ -221,7 +187,7 @@ def test_a_handler_killed_mid_task_and_restarted_rejoins_and_the_mission_complet
     assert {u["name"]: u["status"] for u in d["uavs"]} == {"brick-1": "ok", "glue-1": "ok"}
     flown: dict[str, list[str]] = {}
     for p, (stdout, err) in zip((glue, second), outs):
-        assert p.returncode == 0, err[-2000:]
+        assert p.popen.returncode == 0, err[-2000:]
         run = json.loads(stdout)
         flown[run["uav"]] = [t["task"] for t in run["tasks"] if t["status"] == "done"]
     # the killed process placed nothing (killed in B0); each task was done once, by the processes that lived

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from cli_procs import HANG_GUARD_S
 from masonry.cli import app
 from masonry.mission.auth import write_key_file
 
@@ -29,7 +30,12 @@ def _free_port() -> int:
 
 def _ctl(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-c", MAIN, "ctl", *args], capture_output=True, text=True, timeout=60, check=False
+        # ends on its own (its --timeout for mission control's answer, after its imports): a hang guard only
+        [sys.executable, "-c", MAIN, "ctl", *args],
+        capture_output=True,
+        text=True,
+        timeout=HANG_GUARD_S,
+        check=False,
     )
 
 
@@ -51,10 +57,13 @@ def test_ctl_commands_a_running_mission_control(tmp_path):
             str(key),
             "--mission-name",
             name,
+            # waiting for its fleet (never started here) for as long as the ctl commands below take, each a
+            # process of its own: on a loaded machine their imports alone took up to 35 s each, so the waits are
+            # the bounds' maxima, hang guards only (the test kills mission control at its end)
             "--startup-timeout",
-            "120",
+            "3600",
             "--max-time",
-            "120",
+            "3600",
             "--format",
             "json",
             "--serve",
@@ -91,7 +100,7 @@ def test_ctl_commands_a_running_mission_control(tmp_path):
         assert mc.poll() is None  # the forged abort did nothing: mission control still waits for its fleet
     finally:
         mc.kill()
-        mc.communicate(timeout=30)
+        mc.communicate(timeout=HANG_GUARD_S)
 
 
 @pytest.mark.parametrize(

@@ -13,7 +13,6 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 from collections import Counter
 from pathlib import Path
 
@@ -48,13 +47,13 @@ def run_and_kill(journal: Path, after: int) -> None:
         text=True,
     )
     try:
-        deadline = time.monotonic() + 30.0
         seen = 0
         assert proc.stdout is not None
+        # a line, or the child's end (its mission is simulated and bounded): no wall-clock deadline, which a
+        # loaded machine spent on the child's imports alone
         while seen < after:
             line = proc.stdout.readline()
             assert line, f"child ended before {after} completions"
-            assert time.monotonic() < deadline
             if line.startswith("done "):
                 seen = int(line.split()[1])
         # the child blocks in its progress callback right after `after` completions, then is killed -9

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from cli_procs import HANG_GUARD_S, Cli, spawn
 from masonry.errors import MissionError
 from masonry.mission.auth import AuthenticatedTransport, write_key_file
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
@@ -198,8 +199,9 @@ def test_tls_needs_the_certificate_authority(tmp_path):
         assert b"eve" not in got
 
 
-def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subprocess.Popen[str]], Path]:
-    """Mission control and the two UAV handlers for the case study, in ``mode`` (plain, key or tls), in ``d``."""
+def _start_mission(d: Path, mode: str) -> tuple[Cli, list[Cli], Path]:
+    """Mission control and the two UAV handlers for the case study, in ``mode`` (plain, key or tls), in ``d``:
+    imported, waiting for :meth:`~cli_procs.Cli.go`."""
     d.mkdir()
     port = free_port()
     scheme = "tls" if mode == "tls" else "tcp"
@@ -219,77 +221,59 @@ def _start_mission(d: Path, mode: str) -> tuple[subprocess.Popen[str], list[subp
         mc_opts += ["--zenoh-config", str(mc_conf)]
         uav_opts += ["--zenoh-config", str(uav_conf)]
     mission_name = f"test-{port}"
-    mc = subprocess.Popen(
-        [
-            sys.executable,
-            "-c",
-            MAIN,
-            "mission-control",
-            str(CASE_STUDY),
-            "--listen",
-            endpoint,
-            "--format",
-            "json",
-            "--report",
-            str(report),
-            "--startup-timeout",
-            "20",
-            "--heartbeat-timeout",
-            "3",
-            "--max-time",
-            "1500",
-            "--mission-name",
-            mission_name,
-            "--reservation",
-            "task",  # the paper's rule: Section VI's order is checked below
-            *common,
-            *mc_opts,
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+    mc = spawn(
+        "mission-control",
+        str(CASE_STUDY),
+        "--listen",
+        endpoint,
+        "--format",
+        "json",
+        "--report",
+        str(report),
+        "--startup-timeout",
+        "20",
+        "--heartbeat-timeout",
+        "3",
+        "--max-time",
+        "1500",
+        "--mission-name",
+        mission_name,
+        "--reservation",
+        "task",  # the paper's rule: Section VI's order is checked below
+        *common,
+        *mc_opts,
     )
     uavs = [
-        subprocess.Popen(
-            [
-                sys.executable,
-                "-c",
-                MAIN,
-                "fly",
-                "--uav",
-                role,
-                "--name",
-                name,
-                "--sim",
-                "--blueprint",
-                str(CASE_STUDY),
-                "--mission",
-                endpoint,
-                "--listen",
-                f"tcp/127.0.0.1:{free_port()}",
-                "--mission-name",
-                mission_name,
-                "--wait",
-                "20",
-                "--format",
-                "json",
-                *common,
-                *uav_opts,
-                # the brick UAV's own log, read back below
-                *(["--log", str(d / f"{name}.mcap")] if mode == "key" and role == "brick" else []),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
+        spawn(
+            "fly",
+            "--uav",
+            role,
+            "--name",
+            name,
+            "--sim",
+            "--blueprint",
+            str(CASE_STUDY),
+            "--mission",
+            endpoint,
+            "--listen",
+            f"tcp/127.0.0.1:{free_port()}",
+            "--mission-name",
+            mission_name,
+            "--wait",
+            "20",
+            "--format",
+            "json",
+            *common,
+            *uav_opts,
+            # the brick UAV's own log, read back below
+            *(["--log", str(d / f"{name}.mcap")] if mode == "key" and role == "brick" else []),
         )
         for role, name in (("brick", "brick-1"), ("adhesion", "glue-1"))
     ]
     return mc, uavs, report
 
 
-def _check_mission(
-    mode: str, mc: subprocess.Popen[str], mc_out: str, mc_err: str, uavs, outs, report: Path
-) -> None:
+def _check_mission(mode: str, mc: Cli, mc_out: str, mc_err: str, uavs, outs, report: Path) -> None:
     assert mc.returncode == 0, (mode, mc_err)
     d = json.loads(mc_out)
     assert d == json.loads(report.read_text()), mode
@@ -315,7 +299,7 @@ def _check_mission(
             [sys.executable, "-c", MAIN, "replay", str(log), "--format", "json"],
             capture_output=True,
             text=True,
-            timeout=60,
+            timeout=HANG_GUARD_S,  # a replay ends on its own: a hang guard only
             check=False,
         )
         assert replayed.returncode == 0, replayed.stderr
@@ -324,7 +308,7 @@ def _check_mission(
             [sys.executable, "-c", MAIN, "replay", str(log), "--at", "1e9"],
             capture_output=True,
             text=True,
-            timeout=60,
+            timeout=HANG_GUARD_S,  # a replay ends on its own: a hang guard only
             check=False,
         )
         assert "mission completed; tasks: todo 0, running 0, done 4" in at.stdout, at.stdout
@@ -337,7 +321,7 @@ def _check_mission(
             [sys.executable, "-c", MAIN, "replay", str(uav_log), "--at", "1e9"],
             capture_output=True,
             text=True,
-            timeout=60,
+            timeout=HANG_GUARD_S,  # a replay ends on its own: a hang guard only
             check=False,
         )
         assert at.returncode == 0, at.stderr
@@ -347,7 +331,7 @@ def _check_mission(
             [sys.executable, "-c", MAIN, "replay", str(uav_log)],
             capture_output=True,
             text=True,
-            timeout=60,
+            timeout=HANG_GUARD_S,  # a replay ends on its own: a hang guard only
             check=False,
         )
         assert whole.returncode == 2 and "a UAV's log (masonry fly) holds no mission report" in whole.stderr
@@ -365,15 +349,17 @@ def test_case_study_across_three_processes(tmp_path):
     missions = {mode: _start_mission(tmp_path / mode, mode) for mode in modes}
     procs = [p for mc, uavs, _ in missions.values() for p in (mc, *uavs)]
     try:
+        # nine processes importing at once took long enough on a loaded machine for a mission control's
+        # --startup-timeout to run out before its UAVs were up: each imports first, then all are let go together
+        for p in procs:
+            p.go()
         results = {}
         for mode, (mc, uavs, _report) in missions.items():
-            mc_out, mc_err = mc.communicate(timeout=90)
-            results[mode] = (mc_out, mc_err, [p.communicate(timeout=30) for p in uavs])
+            mc_out, mc_err = mc.finish()  # ends on its own (--max-time at the latest)
+            results[mode] = (mc_out, mc_err, [p.finish() for p in uavs])
     finally:
         for p in procs:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
+            p.kill()
     for mode, (mc, uavs, report) in missions.items():
         mc_out, mc_err, outs = results[mode]
         _check_mission(mode, mc, mc_out, mc_err, uavs, outs, report)
