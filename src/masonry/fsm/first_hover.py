@@ -21,7 +21,6 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.signal import lfilter
 
 from masonry.fsm.hover_gains import HoverFit
 from masonry.ports import Telemetry
@@ -104,6 +103,9 @@ def fit_lag(samples: Sequence[tuple[float, int, float, float]]) -> tuple[float, 
             per_axis.append(np.array(rows))
     if not per_axis:
         return math.nan, math.nan, math.nan, math.nan
+    # here: the state machines (and `masonry --help`) import no scipy until a fit
+    from scipy.signal import lfilter
+
     best = (math.inf, math.nan, math.nan, math.nan, math.nan)
     measured = np.concatenate([r[:, 2] for r in per_axis])
     total = float(np.sum((measured - measured.mean()) ** 2))

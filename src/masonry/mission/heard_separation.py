@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from masonry.errors import InvalidArgument
+
 Vec3 = tuple[float, float, float]
 
 #: Two reports of one UAV further apart than this (mission seconds) are not interpolated between (a gap in its
@@ -41,7 +43,7 @@ class HeardSeparation:
 
     def __init__(self, max_gap_s: float = MAX_GAP_S) -> None:
         if not (math.isfinite(max_gap_s) and max_gap_s > 0.0):
-            raise ValueError(f"max_gap_s must be a finite number > 0, got {max_gap_s!r}")
+            raise InvalidArgument(f"max_gap_s must be a finite number > 0, got {max_gap_s!r}")
         self.max_gap_s = float(max_gap_s)
         self._last: dict[str, _Fix] = {}  #: each airborne UAV's last report (none: on its pad, or not heard)
         self.min_separation_m: float | None = None  #: None until two UAVs were heard airborne at once
