@@ -14,10 +14,12 @@ bounds a process that hangs without exiting.
 from __future__ import annotations
 
 import queue
+import socket
 import subprocess
 import sys
 import threading
 from dataclasses import dataclass, field
+from pathlib import Path
 
 #: Imports, says so on stderr, then runs the CLI when a line comes on stdin (exits 3 on a closed stdin).
 PRELOADED = (
@@ -114,3 +116,39 @@ def spawn(*args: str) -> Cli:
     for t in cli.pumps:
         t.start()
     return cli
+
+
+CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
+
+
+def free_port() -> int:
+    """A TCP port on the loopback free now."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def spawn_fly(role: str, name: str, endpoint: str, mission: str, *extra: str, wait_s: int = 30) -> Cli:
+    """``masonry fly --mission`` of the case study's ``role`` UAV ``name`` (simulated, JSON out), imported and
+    waiting for :meth:`Cli.go`; ``extra`` options after the common ones."""
+    return spawn(
+        "fly",
+        "--uav",
+        role,
+        "--name",
+        name,
+        "--sim",
+        "--blueprint",
+        str(CASE_STUDY),
+        "--mission",
+        endpoint,
+        "--listen",
+        f"tcp/127.0.0.1:{free_port()}",
+        "--mission-name",
+        mission,
+        "--wait",
+        str(wait_s),
+        "--format",
+        "json",
+        *extra,
+    )

@@ -19,47 +19,16 @@ from __future__ import annotations
 import json
 import os
 import signal
-import socket
 import time
 from pathlib import Path
 
 import pytest
 
-from cli_procs import Cli, spawn
-
-CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
+from cli_procs import CASE_STUDY, Cli, free_port, spawn, spawn_fly
 
 
 def fly(name: str, role: str, endpoint: str, mission: str, *extra: str) -> Cli:
-    return spawn(
-        "fly",
-        "--uav",
-        role,
-        "--name",
-        name,
-        "--sim",
-        "--blueprint",
-        str(CASE_STUDY),
-        "--mission",
-        endpoint,
-        "--listen",
-        f"tcp/127.0.0.1:{free_port()}",
-        "--mission-name",
-        mission,
-        "--wait",
-        "30",
-        "--format",
-        "json",
-        "--time-scale",
-        "25",
-        *extra,
-    )
+    return spawn_fly(role, name, endpoint, mission, "--time-scale", "25", *extra)
 
 
 def mission_control(endpoint: str, mission: str, report: Path, *extra: str) -> Cli:

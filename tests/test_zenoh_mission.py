@@ -12,7 +12,6 @@ import datetime
 import ipaddress
 import json
 import os
-import socket
 import subprocess
 import sys
 import time
@@ -20,20 +19,13 @@ from pathlib import Path
 
 import pytest
 
-from cli_procs import HANG_GUARD_S, Cli, spawn
+from cli_procs import CASE_STUDY, HANG_GUARD_S, Cli, free_port, spawn, spawn_fly
 from masonry.errors import MissionError
 from masonry.mission.auth import AuthenticatedTransport, write_key_file
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
 from masonry.mission.zenoh_transport import ZenohTransport, check_endpoint
 
-CASE_STUDY = Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml"
 MAIN = "from masonry.cli import main; main()"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def wait_for(pred, timeout_s=5.0):
@@ -244,29 +236,16 @@ def _start_mission(d: Path, mode: str) -> tuple[Cli, list[Cli], Path]:
         *mc_opts,
     )
     uavs = [
-        spawn(
-            "fly",
-            "--uav",
+        spawn_fly(
             role,
-            "--name",
             name,
-            "--sim",
-            "--blueprint",
-            str(CASE_STUDY),
-            "--mission",
             endpoint,
-            "--listen",
-            f"tcp/127.0.0.1:{free_port()}",
-            "--mission-name",
             mission_name,
-            "--wait",
-            "20",
-            "--format",
-            "json",
             *common,
             *uav_opts,
             # the brick UAV's own log, read back below
             *(["--log", str(d / f"{name}.mcap")] if mode == "key" and role == "brick" else []),
+            wait_s=20,
         )
         for role, name in (("brick", "brick-1"), ("adhesion", "glue-1"))
     ]
