@@ -6,7 +6,6 @@ from __future__ import annotations
 import json
 import logging
 import math
-import signal
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,6 @@ from hypothesis import given
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from masonry.adapters.sitl import free_udp_port
 from masonry.adapters.wiring import hardware_config
 from masonry.cli import app
 from masonry.errors import InputError
@@ -32,7 +30,7 @@ from masonry.fsm.hover_gains import (
 )
 from masonry.fsm.tuning_choice import choose_tuning
 from masonry.separation import TRACK_SHARE_M
-from test_hw_mission import ONE_BRICK, SCALE, free_tcp_port, masonry
+from test_hw_mission import fly_one_brick_mission
 
 CASE_STUDY = str(Path(__file__).resolve().parents[1] / "blueprints" / "paper_case_study.yaml")
 runner = CliRunner()
@@ -201,37 +199,11 @@ def test_the_users_control_preset_wins_in_flight(tmp_path: Path, caplog: pytest.
 def test_a_mission_uav_identifies_on_its_first_hover_through_the_mavlink_adapter(tmp_path: Path) -> None:
     """Mission mode on the project's SITL (ArduCopter-like, lock-step): the brick UAV's first hover identifies the
     lag through the MAVLink adapter, then the mission completes; the adhesion UAV (the preset's) does not."""
-    blueprint = tmp_path / "one-brick.yaml"
-    blueprint.write_text(ONE_BRICK)
     config = tmp_path / "uav.yaml"
     config.write_text("tuning: identify\n")
-    mav_port, zenoh_port = free_udp_port(), free_tcp_port()
-    endpoint = f"tcp/127.0.0.1:{zenoh_port}"
-    name = ["--mission-name", f"id-{zenoh_port}"]
-    sitl = masonry("sitl", "--port", str(mav_port), "--blueprint", str(blueprint), "--uav", "brick",
-                   "--time-scale", SCALE, "--lockstep")  # fmt: skip
-    mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", "--time-scale", SCALE,
-                 "--startup-timeout", "20", "--heartbeat-timeout", "5", "--max-time", "1200", *name)  # fmt: skip
-    brick = masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint), "--mission", endpoint,
-                    "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", f"udp:127.0.0.1:{mav_port}",
-                    "--actuators", "sim", "--camera", "sim", "--wait", "20", "--format", "json",
-                    "--config", str(config), *name)  # fmt: skip
-    glue = masonry("fly", "--uav", "adhesion", "--name", "glue-1", "--sim", "--blueprint", str(blueprint),
-                   "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--time-scale", SCALE,
-                   "--wait", "20", "--format", "json", *name)  # fmt: skip
-    procs = [mc, brick, glue]
-    try:
-        mc_out, mc_err = mc.communicate(timeout=240)
-        _, brick_err = brick.communicate(timeout=20)
-        _, glue_err = glue.communicate(timeout=20)
-    finally:
-        for p in procs:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-        sitl.send_signal(signal.SIGINT)
-        sitl.communicate(timeout=10)
-    assert mc.returncode == 0, mc_out + mc_err + brick_err + glue_err
+    run = fly_one_brick_mission(tmp_path, "id", "--config", str(config), mc_timeout_s=240.0)
+    mc_out, brick_err, glue_err = run.mc_out, run.brick_err, run.glue_err
+    assert run.mc_code == 0, mc_out + run.mc_err + brick_err + glue_err
     report = json.loads(mc_out)
     assert report["completed"] is True
     assert report["placement_error_m"]["B0"] < 0.03

@@ -16,6 +16,7 @@ import signal
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -57,27 +58,46 @@ def masonry(*args: str) -> subprocess.Popen[str]:
                             text=True)  # fmt: skip
 
 
-@pytest.mark.slow
-def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> None:
+@dataclass(frozen=True)
+class HwMission:
+    """What the four processes of :func:`fly_one_brick_mission` said, and their exit codes."""
+
+    mc_code: int
+    mc_out: str
+    mc_err: str
+    brick_code: int
+    brick_out: str
+    brick_err: str
+    glue_code: int
+    glue_out: str
+    glue_err: str
+    sitl_log: str
+
+
+def fly_one_brick_mission(
+    tmp_path: Path, mission_name: str, *brick_options: str, mc_timeout_s: float = 180.0
+) -> HwMission:
+    """:data:`ONE_BRICK` as a mission: ``masonry sitl --lockstep`` (the brick UAV's autopilot), mission control,
+    the brick UAV on the MAVLink adapter (``brick_options`` added) and a simulated adhesion UAV, every wait bounded."""
     blueprint = tmp_path / "one-brick.yaml"
     blueprint.write_text(ONE_BRICK)
     mav_port, zenoh_port = free_udp_port(), free_tcp_port()
     endpoint = f"tcp/127.0.0.1:{zenoh_port}"
-    name = ["--mission-name", f"hw-{zenoh_port}"]
-    started = time.monotonic()
+    name = ["--mission-name", f"{mission_name}-{zenoh_port}"]
     sitl = masonry("sitl", "--port", str(mav_port), "--blueprint", str(blueprint), "--uav", "brick",
                    "--time-scale", SCALE, "--lockstep")  # fmt: skip
     mc = masonry("mission-control", str(blueprint), "--listen", endpoint, "--format", "json", "--time-scale", SCALE,
                  "--startup-timeout", "20", "--heartbeat-timeout", "5", "--max-time", "1200", *name)  # fmt: skip
     brick = masonry("fly", "--uav", "brick", "--name", "brick-1", "--blueprint", str(blueprint), "--mission", endpoint,
                     "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--fc", f"udp:127.0.0.1:{mav_port}",
-                    "--actuators", "sim", "--camera", "sim", "--wait", "20", "--format", "json", *name)  # fmt: skip
+                    "--actuators", "sim", "--camera", "sim", "--wait", "20", "--format", "json", *brick_options,
+                    *name)  # fmt: skip
     glue = masonry("fly", "--uav", "adhesion", "--name", "glue-1", "--sim", "--blueprint", str(blueprint),
                    "--mission", endpoint, "--listen", f"tcp/127.0.0.1:{free_tcp_port()}", "--time-scale", SCALE,
                    "--wait", "20", "--format", "json", *name)  # fmt: skip
     procs = [mc, brick, glue]
     try:
-        mc_out, mc_err = mc.communicate(timeout=180)
+        mc_out, mc_err = mc.communicate(timeout=mc_timeout_s)
         brick_out, brick_err = brick.communicate(timeout=20)
         glue_out, glue_err = glue.communicate(timeout=20)
     finally:
@@ -87,8 +107,28 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
                 p.wait()
         sitl.send_signal(signal.SIGINT)
         sitl_log, _ = sitl.communicate(timeout=10)
+    return HwMission(
+        mc.returncode,
+        mc_out,
+        mc_err,
+        brick.returncode,
+        brick_out,
+        brick_err,
+        glue.returncode,
+        glue_out,
+        glue_err,
+        sitl_log,
+    )
+
+
+@pytest.mark.slow
+def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> None:
+    started = time.monotonic()
+    run_ = fly_one_brick_mission(tmp_path, "hw")
+    mc_out, mc_err, brick_out, brick_err = run_.mc_out, run_.mc_err, run_.brick_out, run_.brick_err
+    glue_out, glue_err, sitl_log = run_.glue_out, run_.glue_err, run_.sitl_log
     wall_s = time.monotonic() - started
-    assert mc.returncode == 0, mc_out + mc_err + brick_err + glue_err
+    assert run_.mc_code == 0, mc_out + mc_err + brick_err + glue_err
     report = json.loads(mc_out)
     assert report["completed"] is True
     assert [(t["id"], t["uav"], t["status"]) for t in report["tasks"]] == [
@@ -97,14 +137,14 @@ def test_mission_over_zenoh_with_the_brick_uav_on_the_sitl(tmp_path: Path) -> No
     ]
     assert report["placement_error_m"]["B0"] < 0.03
     assert report["dependency_violations"] == 0 and all(u["status"] == "ok" for u in report["uavs"])
-    assert brick.returncode == 0, brick_err
+    assert run_.brick_code == 0, brick_err
     run = json.loads(brick_out)
     assert run["uav"] == "brick-1" and run["mission_ended"] and run["mission_completed"]
     assert run["lockstep"]["grants"] > 100, run["lockstep"]  # its fly loop paced the SITL
     assert json.loads(glue_out)["lockstep"] is None
     assert [t["task"] for t in run["tasks"] if t["status"] == "done"] == ["B0"]
     assert "-> ready to arm" in brick_err and "[ok  ] position estimate" in brick_err
-    assert glue.returncode == 0, glue_err
+    assert run_.glue_code == 0, glue_err
     assert [t["task"] for t in json.loads(glue_out)["tasks"] if t["status"] == "done"] == ["A0"]
     # the autopilot flew it: armed in GUIDED, took off, landed and disarmed, in that order
     events = ["ground station connected", "mode GUIDED", "Arming motors", "takeoff to", "mode LAND",
