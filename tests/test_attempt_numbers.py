@@ -25,8 +25,9 @@ from masonry.mission.journal import Journal
 from masonry.mission.messages import MISSION_CONTROL, Assign, Heartbeat, Recall, Result, decode, encode
 from masonry.mission.report import control_report
 from masonry.mission.uav_facts import facts_of
-from masonry.planner.tasks import BrickTask, Plan, Task
+from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import BATTERY_LOW_REASON, RECALL_REASON, TaskResult
+from test_recall_names_task import Machine  # the scripted UAV machine (no physics)
 
 UAV = "brick-1"
 FLEET = (UavSpec(UAV, "brick", (0.0, -3.0, 0.0)),)
@@ -54,38 +55,6 @@ class Recorded:
 
     def close(self) -> None:
         self.inner.close()
-
-
-class Machine:
-    """A scripted UAV machine (no physics): takes the next task when it has none and holds it until ``finish`` is
-    set; it may always abort (it reports the failure and drops the task)."""
-
-    def __init__(self, link: UavHandler) -> None:
-        self.link = link
-        self.task: Task | None = None
-        self.finish = False
-        self.state = "idle"
-
-    @property
-    def finished(self) -> bool:
-        return self.task is None
-
-    def may_abort(self) -> bool:
-        return True
-
-    def abort(self, reason: str) -> None:
-        assert self.task is not None
-        self.link.report_result(TaskResult(self.task.id, "failed", 1.0, reason=reason))
-        self.task, self.state = None, "idle"
-
-    def step(self, now_s: float) -> None:
-        if self.task is not None and self.finish:
-            self.finish = False
-            self.link.report_result(TaskResult(self.task.id, "done", 40.0, placement_error_m=0.01))
-            self.task = None
-        if self.task is None:
-            self.task = self.link.poll_task()
-        self.state = "idle" if self.task is None else "transport"
 
 
 class Site:
