@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import os
 import signal
-import time
 from pathlib import Path
 
 import pytest
@@ -82,7 +81,7 @@ def test_mission_control_killed_mid_task_and_resumed_keeps_the_task_with_its_uav
             p.go()
         seen: list[str] = []
         first.wait_line("B0 assigned to brick-1", seen)
-        time.sleep(0.3)  # journaled and sent (B0 takes about 2 s here): brick-1 is on it
+        first.wait_line("B0 under way on brick-1", seen)  # journaled, sent, and brick-1 is on it
         os.kill(first.popen.pid, signal.SIGKILL)
         assert first.popen.wait(timeout=10) == -signal.SIGKILL
         second.go()
@@ -131,7 +130,7 @@ def test_a_handler_killed_mid_task_and_restarted_rejoins_and_the_mission_complet
             p.go()
         seen: list[str] = []
         mc.wait_line("B0 assigned to brick-1", seen)
-        time.sleep(0.3)  # B0 takes a minute of mission time (over 2 s here): brick-1 is on it
+        mc.wait_line("B0 under way on brick-1", seen)  # B0 takes a minute of mission time (over 2 s here)
         os.kill(first.popen.pid, signal.SIGKILL)
         assert first.popen.wait(timeout=10) == -signal.SIGKILL
         mc.wait_line("UAV brick-1 silent", seen)  # declared lost: B0 is released
