@@ -7,6 +7,7 @@ exactly once; lost UAVs release their task; bad messages are rejected without st
 
 from __future__ import annotations
 
+import logging
 import random
 
 import pytest
@@ -17,6 +18,7 @@ from masonry.blueprint import UavSpec
 from masonry.mission.control import MissionControl
 from masonry.mission.handler import UavHandler
 from masonry.mission.inproc import InprocBus
+from masonry.mission.ledger import AttemptLedger
 from masonry.mission.messages import MISSION_CONTROL, Heartbeat, decode, encode
 from masonry.mission.report import count_violations
 from masonry.planner.tasks import AdhesionTask, BrickTask, Plan
@@ -392,3 +394,30 @@ def test_transit_layers_start_over_what_is_built_and_rise_with_assignments_and_a
     assert resumed.columns.layer_base_m == work(high[:2]) > work(placed)
     fixed = MissionControl(plan, bp.fleet, InprocBus().endpoint(MISSION_CONTROL), layer_base_m=final)
     assert fixed.columns.layer_base_m == final  # without a floor: above the finished wall from the start
+
+
+def test_the_first_progress_a_uav_reports_on_its_attempt_is_said_once(caplog):
+    """`masonry mission-control --verbose` says when a UAV is on its task (the line the multi-process tests wait
+    for before they kill a process mid-task, instead of a guess of seconds); once per attempt, only its UAV's."""
+    caplog.set_level(logging.INFO, logger="masonry.mission.control")
+    plan = Plan(
+        (
+            BrickTask("B0", 0, False, (0, 0, 0.1), 0.0, (5, 0, 0.05)),
+            BrickTask("B1", 1, False, (2, 0, 0.1), 0.0, (5, 0, 0.05)),
+        ),
+        (("B1", "B0"),),
+        (),
+    )
+    mc, _handlers, _ = run_mission(plan, fleet_of(1, 0))
+    assert mc.finished
+    said = [r.getMessage().split(" at ")[0] for r in caplog.records if "under way" in r.getMessage()]
+    assert said == ["B0 under way on brick-1 (attempt 1)", "B1 under way on brick-1 (attempt 1)"]
+    ledger = AttemptLedger(None)
+    ledger.begin("B0", "brick-1", 0.0)
+    assert ledger.under_way("B0", "brick-2") is None  # not its attempt
+    att = ledger.under_way("B0", "brick-1")
+    assert att is not None and att.attempt == 1
+    assert ledger.under_way("B0", "brick-1") is None  # said once
+    ledger.end(att, 1.0, "failed", "uav lost")
+    ledger.begin("B0", "brick-1", 2.0)
+    assert ledger.under_way("B0", "brick-1") is not None  # the next attempt is said again

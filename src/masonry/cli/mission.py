@@ -123,7 +123,8 @@ def mission_control(
         help=help_text(
             "mission-control",
             "--startup-timeout",
-            "Wall seconds to wait for the whole fleet before starting without the rest.",
+            "Wall seconds to wait for the whole fleet before starting without the rest, and for a role's last "
+            "UAV declared lost to rejoin (--time-scale times as many mission seconds).",
         ),
     ),
     max_time: float | None = typer.Option(
@@ -141,7 +142,8 @@ def mission_control(
             "mission-control",
             "--stall-timeout",
             "Stop the mission, not completed, when nothing progresses for this many mission seconds, and "
-            "report who waits for whom (`stall` in the JSON); 0: never.",
+            "report who waits for whom (`stall` in the JSON); not counted while a wait with a known end is "
+            "open (a lost UAV's rejoin window); 0: never.",
         ),
     ),
     reservation: str = typer.Option(

@@ -68,8 +68,18 @@ def handle(mc: MissionControl, raw: bytes, now_s: float) -> None:
         elif step is Step.HEARTBEAT and isinstance(msg, Heartbeat):
             control_results.on_heartbeat(mc, msg, link, now_s)
         elif step is Step.PROGRESS:
-            mc.events.progress += 1
+            _progress(mc, msg, now_s)
         elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
             control_airspace.report(mc, link, msg, msg.position_m)
             if mc.sink is not None and mc.uav_events:
                 control_airspace.emit_uav(mc, now_s, link)
+
+
+def _progress(mc: MissionControl, msg: object, now_s: float) -> None:
+    """A progress report, counted; the first a UAV sends on its attempt said (INFO): the line a multi-process
+    test waits for before it kills a process mid-task (``tests/test_chaos_distributed.py``), not a guess of
+    seconds."""
+    mc.events.progress += 1
+    att = mc.ledger.under_way(msg.task_id, msg.sender) if isinstance(msg, Progress) else None
+    if att is not None:
+        log.info("%s under way on %s (attempt %d) at %.1f s", att.task_id, att.uav, att.attempt, now_s)

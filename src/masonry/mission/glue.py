@@ -83,6 +83,7 @@ class GlueGate:
         self._expired_in: dict[tuple[str, int], int] = {}  # (brick, attempt) -> its beads' expiries meanwhile
         self._untold: list[str] = []  # beads sprayed whose ``glue`` event is not emitted yet
         self._where: dict[str, Vec3] = {}  # UAV -> where it was at the last tick
+        self._open_until_s: list[float] = []  # the open beads' ends at the last step (known_ends_s)
 
     # -- the site gate ---------------------------------------------------------------------------------------
     def may_enter(self, uav: str, site_m: Vec3) -> bool:
@@ -164,18 +165,27 @@ class GlueGate:
                 news = True
         done = self.dispatcher.done
         stuck = self.dispatcher.stuck
+        self._open_until_s.clear()
         for brick, beads in self._open.items():
             if brick in done or brick in self.sites.on_site or brick in stuck:
                 continue  # (a stuck brick never comes: its glue is not sprayed again and again)
             for bead, lag in beads:
-                if bead in done and bead in self.sprayed_at_s and not self._fresh(bead, lag):
-                    self._expire(mc, bead, brick, now_s)
-                    news = True
+                if bead in done and bead in self.sprayed_at_s:
+                    if not self._fresh(bead, lag):
+                        self._expire(mc, bead, brick, now_s)
+                        news = True
+                    else:
+                        self._open_until_s.append(self.sprayed_at_s[bead] + lag)
         self._tell(mc)
         if news or self._changed:
             self._changed = False
             mc.columns.touch()  # the gate's answers changed: the waiting requests are looked at again
         return news
+
+    def known_ends_s(self) -> list[float]:
+        """When the adhesive's clocks run out (the stall watchdog's known waits): each curing brick's cure, each
+        sprayed bead's open time while its brick is still to come (it expires by then; as of the last :meth:`step`)."""
+        return [*self.cures_at_s.values(), *self._open_until_s]
 
     def _tell(self, mc: MissionControl) -> None:
         """A ``glue`` event for each bead sprayed since the last tick (with an open time, still open)."""

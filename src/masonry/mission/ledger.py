@@ -47,6 +47,8 @@ class AttemptLedger:
         self._done_keys: set[tuple[str, str, int]] = set()
         #: task id -> the number of its latest assignment (:meth:`begin` gives the next one)
         self._numbers: dict[str, int] = {}
+        #: (task id, attempt) of the attempts whose UAV said it works on them (:meth:`under_way`)
+        self._under_way: set[tuple[str, int]] = set()
 
     def begin(self, task_id: str, uav: str, now_s: float) -> Attempt:
         """``task_id`` assigned to ``uav`` now, numbered one more than its previous assignment: running,
@@ -66,6 +68,15 @@ class AttemptLedger:
         self.history.append(att)
         self.running[task_id] = att
         self._numbers[task_id] = max(self._numbers.get(task_id, 0), attempt)
+        return att
+
+    def under_way(self, task_id: str, uav: str) -> Attempt | None:
+        """``uav`` reported progress on ``task_id``: its running attempt if that is the first word of it from
+        ``uav`` (None: not its attempt, or said before)."""
+        att = self.running.get(task_id)
+        if att is None or att.uav != uav or (task_id, att.attempt) in self._under_way:
+            return None
+        self._under_way.add((task_id, att.attempt))
         return att
 
     def number_of(self, task_id: str) -> int:

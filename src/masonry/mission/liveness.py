@@ -124,6 +124,32 @@ class LivenessTracker:
             for link in self.links.values()
         )
 
+    def known_ends_s(self, now_s: float) -> list[float]:
+        """The ends of the waits on this tracker's clock still open at ``now_s`` (the stall watchdog's: a wait
+        whose end mission control knows is no stall): a rejoin window :meth:`awaiting_rejoin` waits out, the
+        airspace a lost UAV's way home holds (freed then, :attr:`Lapse.AIRSPACE_EXPIRED`), a UAV cut off while
+        finishing its work (declared lost by then, :meth:`Timeouts.silence_limit_s`)."""
+        rejoin_s, grace_s = self.timeouts.rejoin_s, self.timeouts.silence_limit_s(True, True)
+        live: set[str] | None = None
+        out: list[float] = []
+        for link in self.links.values():
+            liveness = link.liveness
+            if liveness is Liveness.HEARD or liveness is Liveness.REJOINED:
+                continue  # (every UAV but a quiet or lost one, every tick)
+            if liveness is Liveness.SILENT:
+                if link.last_heard_s is not None:
+                    out.append(link.last_heard_s + grace_s)
+                continue
+            if link.airspace_until_s is not None:
+                out.append(link.airspace_until_s)
+            lost_at_s = link.lost_at_s
+            if liveness is Liveness.LOST and lost_at_s is not None and now_s - lost_at_s <= rejoin_s:
+                if live is None:
+                    live = {other.spec.role for other in self.links.values() if not other.lost}
+                if link.spec.role not in live:  # (awaiting_rejoin's own test)
+                    out.append(lost_at_s + rejoin_s)
+        return out
+
     def online(self) -> list[str]:
         """The UAVs heard from and not out of the mission."""
         return [n for n, u in self.links.items() if u.last_heard_s is not None and not u.lost]

@@ -97,21 +97,37 @@ class Stall:
 
 
 class StallWatch:
-    """Says when the progress signature has not changed for ``timeout_s`` (None or 0: never)."""
+    """Says when the progress signature has not changed for ``timeout_s`` (None or 0: never), counted from the
+    later of the last change and the end of the last wait mission control knew the end of.
+
+    A wait with a known end is no stall (issue 27): a lost UAV's rejoin window still open, the airspace a lost
+    UAV's way home holds until a known time, an adhesive curing. Mission control passes the latest such end
+    still ahead (``known_until_s``); the timeout counts only from when none is left, so a UAV that rejoins 400 s
+    after its loss in a 750 s window is waited for, and a mission stuck with nothing on the clock still stops
+    ``timeout_s`` after its last progress or its last known wait, whichever came later.
+    """
 
     def __init__(self, timeout_s: float | None = DEFAULT_STALL_TIMEOUT_S) -> None:
         if timeout_s is not None and not (timeout_s >= 0.0 and math.isfinite(timeout_s)):
             raise InvalidArgument(f"stall timeout must be a finite number >= 0 s, got {timeout_s!r}")
         self.timeout_s = None if not timeout_s else float(timeout_s)
+        #: the last progress (the signature changed)
         self.since_s: float | None = None
+        #: where the count towards ``timeout_s`` starts: the last progress, or the last tick a known wait was open
+        self.counting_from_s: float | None = None
         self._last: Hashable = None
 
-    def observe(self, now_s: float, signature: Hashable) -> bool:
-        """Record the signature at ``now_s``; True when it has not changed for ``timeout_s``."""
+    def observe(self, now_s: float, signature: Hashable, known_until_s: float | None = None) -> bool:
+        """Record the signature at ``now_s``; True when it has not changed for ``timeout_s`` with no wait of a
+        known end open meanwhile (``known_until_s``: the latest end of one, None: none)."""
         if self.since_s is None or signature != self._last:
-            self.since_s, self._last = now_s, signature
+            self.since_s, self.counting_from_s, self._last = now_s, now_s, signature
             return False
-        return self.timeout_s is not None and now_s - self.since_s >= self.timeout_s
+        if known_until_s is not None and known_until_s >= now_s:
+            self.counting_from_s = now_s  # waiting for something on the clock: not stalled
+            return False
+        assert self.counting_from_s is not None
+        return self.timeout_s is not None and now_s - self.counting_from_s >= self.timeout_s
 
 
 def stall_of(
