@@ -6,18 +6,11 @@ accepted. The whole campaign (385 cases) is the benchmark; its figures are in do
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bad_inputs.py"
-_spec = importlib.util.spec_from_file_location("bad_inputs", _PATH)
-assert _spec is not None and _spec.loader is not None
-bad_inputs = importlib.util.module_from_spec(_spec)
-sys.modules["bad_inputs"] = bad_inputs
-_spec.loader.exec_module(bad_inputs)
+from benchmark_module import benchmark
+
+bad_inputs = benchmark("bad_inputs")
 
 SAMPLE = [
     ("blueprint/plan", "billion laughs in a position"),

@@ -5,30 +5,19 @@ estimate's error it explains."""
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 
+from benchmark_module import benchmark
 from masonry.blueprint_gen import towers
 from masonry.fsm.as_built import AsBuiltLook
 from masonry.mission.simulate import SimulatedMission
 from masonry.sim.vehicle_model import sim_vehicle
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _bench():
-    if "bench_as_built" in sys.modules:
-        return sys.modules["bench_as_built"]
-    spec = importlib.util.spec_from_file_location("bench_as_built", ROOT / "benchmarks" / "bench_as_built.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["bench_as_built"] = module  # (its dataclasses look their module up)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_as_built")
 
 
 def _exact(spec, config, **kwargs):

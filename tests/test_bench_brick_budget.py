@@ -2,25 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
+from benchmark_module import benchmark
 from masonry.blueprint_gen import running_bond
 from masonry.mission.simulate import simulate
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _bench():
-    spec = importlib.util.spec_from_file_location(
-        "bench_brick_budget", ROOT / "benchmarks" / "bench_brick_budget.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclass looks its module up
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_brick_budget")
 
 
 def test_the_brick_budget_adds_up_to_the_makespan_and_counts_every_brick():

@@ -2,24 +2,17 @@
 
 from __future__ import annotations
 
-import importlib.util
 from collections import Counter
-from pathlib import Path
 
+from benchmark_module import benchmark
 from masonry.blueprint_gen import running_bond
 from masonry.mission.sim_loop import CONTROL_PERIOD_S
 from masonry.mission.simulate import SimulatedMission, simulate
 from test_behaviour_pinned import schedule_digest
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _bench_speed():
-    spec = importlib.util.spec_from_file_location("bench_speed", ROOT / "benchmarks" / "bench_speed.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_speed")
 
 
 def test_the_occupancy_count_reads_every_live_uav_at_every_tick_and_leaves_the_mission_as_it_was():

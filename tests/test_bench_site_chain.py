@@ -3,26 +3,14 @@ second is put down to what the next visitor waited for."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
+from benchmark_module import benchmark
 from masonry.blueprint_gen import running_bond
 from masonry.mission.simulate import simulate
 from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 def _bench():
-    spec = importlib.util.spec_from_file_location(
-        "bench_site_chain", ROOT / "benchmarks" / "bench_site_chain.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclass looks its module up
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_site_chain")
 
 
 def test_the_site_chain_adds_up_to_the_makespan_and_names_every_gap_second():

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
-import importlib.util
 import json
 import typing
 from pathlib import Path
 
 import pytest
 
+from benchmark_module import benchmark
 from masonry import SimOptions, simulate
 from masonry.blueprint import load_blueprint
 from masonry.blueprint_gen import running_bond
@@ -27,13 +27,7 @@ CASE_STUDY = ROOT / "blueprints" / "paper_case_study.yaml"
 
 def _bench_vehicle_model():
     """benchmarks/bench_vehicle_model.py as a module (the example docs/architecture.md shows)."""
-    spec = importlib.util.spec_from_file_location(
-        "bench_vehicle_model", ROOT / "benchmarks" / "bench_vehicle_model.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark("bench_vehicle_model")
 
 
 def small():
