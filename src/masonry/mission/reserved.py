@@ -38,6 +38,7 @@ from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import Vec3, same_site
 from masonry.mission.volumes import Volume as AirVolume
 from masonry.reservation import (
+    LEG_PIECE_M,
     Airspace,
     Reservation,
     Separation,
@@ -238,7 +239,12 @@ class TableClearance:
             if u.request is not None
             and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and u.approach))
         }
-        waits = {n: u.blocked_by for n, u in asking.items()}
+        # (whose way a UAV is in: any waiting UAV's, one hovering at its parking spot too)
+        waits = {
+            n: u.blocked_by
+            for n, u in self._uavs.items()
+            if u.request is not None and u.phase in (Phase.ASKING, Phase.AT_HOLD)
+        }
         endless = [n for n, u in asking.items() if math.isinf(u.retry_s)]
         order = {n: u.request.seq for n, u in asking.items() if u.request is not None}
         for uav in to_park(waits, endless, order):
@@ -391,6 +397,7 @@ class TableClearance:
             0.0,
             any_layer=True,
             first_arrival=True,
+            piece_m=LEG_PIECE_M,
         )
 
     def tick(self, now_s: float) -> None:

@@ -20,6 +20,7 @@ from masonry.reservation.changes import Move, extend, lose, settle, way_home
 from masonry.reservation.decide import Decision, Grant, Wait, decide, start_table
 from masonry.reservation.flight import (
     DEFAULT_MARGIN_S,
+    LEG_PIECE_M,
     Airspace,
     FlightPlan,
     Place,
@@ -36,6 +37,7 @@ from masonry.reservation.table import PURPOSES, Reservation, Table, clash, viola
 __all__ = [
     "DEFAULT_MARGIN_S",
     "DEFAULT_SEPARATION",
+    "LEG_PIECE_M",
     "PURPOSES",
     "Airspace",
     "Decision",

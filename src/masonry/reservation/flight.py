@@ -28,6 +28,9 @@ PlaceKind = Literal["pad", "parking", "site", "air"]
 #: Seconds added to every window of a plan: a UAV this much behind its plan is still inside it.
 DEFAULT_MARGIN_S = 2.0
 
+#: A lateral leg is reserved in pieces this long at most (:attr:`Airspace.piece_m`).
+LEG_PIECE_M = 1.0
+
 #: Arrivals (or starts) this close are equal: the lower layer is chosen.
 ARRIVAL_TIE_S = 1e-6
 
@@ -97,6 +100,9 @@ class Airspace:
         first_arrival: of the layers, each at its earliest start, the one whose flight arrives first where it
             stays (a higher layer free now loses to a lower one free a little later when the climb takes longer
             than the wait); False: the earliest start (rule 4 of docs/safety.md).
+        piece_m: a lateral leg longer than this is reserved as pieces of at most this length, each from the leg's
+            start until the UAV is planned past it (its minimum-jerk profile) plus the margin: the air a UAV
+            has flown out of is free before its leg ends (0: the whole leg until its end, as before).
     """
 
     layers_m: tuple[float, ...]
@@ -106,6 +112,7 @@ class Airspace:
     horizon_s: float = 60.0
     any_layer: bool = False
     first_arrival: bool = False
+    piece_m: float = 0.0
 
     @classmethod
     def from_timing(
@@ -130,8 +137,14 @@ class Airspace:
     def __post_init__(self) -> None:
         if not self.layers_m or list(self.layers_m) != sorted(self.layers_m):
             raise InvalidArgument(f"`layers_m` must be a non-empty ascending sequence, got {self.layers_m}")
-        if not (self.cruise_mps > 0 and self.vertical_mps > 0 and self.margin_s >= 0 and self.horizon_s >= 0):
-            raise InvalidArgument("speeds must be > 0, the margin and horizon >= 0")
+        if not (
+            self.cruise_mps > 0
+            and self.vertical_mps > 0
+            and self.margin_s >= 0
+            and self.horizon_s >= 0
+            and self.piece_m >= 0
+        ):
+            raise InvalidArgument("speeds must be > 0, the margin, horizon and piece length >= 0")
 
 
 @dataclass(frozen=True)
@@ -180,11 +193,34 @@ def _hop(
     dist = math.hypot(b.xy[0] - a.xy[0], b.xy[1] - a.xy[1])
     if dist > 1e-6:
         transit = min_jerk_leg_s(dist, air.cruise_mps)
-        parts.append((leg(a.xy, b.xy, layer_m), "transit", task, t, t + transit + m))
+        n = max(1, math.ceil(dist / air.piece_m - 1e-9)) if air.piece_m > 0.0 else 1
+        for i in range(n):  # piece i: from the leg's start until the UAV is past its end (+ the margin)
+            p, q = _along(a.xy, b.xy, i / n), _along(a.xy, b.xy, (i + 1) / n)
+            past = transit if i == n - 1 else transit * min_jerk_time_fraction((i + 1) / n)
+            parts.append((leg(p, q, layer_m), "transit", task, t, t + past + m))
         t += transit
     descend = min_jerk_leg_s(abs(layer_m - b.z_m), air.vertical_mps)
     parts.append((column(b.xy, b.z_m, layer_m, b.radius_m), "descend", task, t, t + descend + m))
     return parts, t + descend
+
+
+def _along(a: XY, b: XY, f: float) -> XY:
+    """The point ``f`` (0..1) of the way from ``a`` to ``b``."""
+    return (a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f)
+
+
+def min_jerk_time_fraction(distance_fraction: float) -> float:
+    """The fraction of a rest-to-rest minimum-jerk leg's time at which it has covered ``distance_fraction`` of
+    its length (the inverse of ``10 u^3 - 15 u^4 + 6 u^5``, by bisection)."""
+    lo, hi = 0.0, 1.0
+    f = min(max(distance_fraction, 0.0), 1.0)
+    for _ in range(40):
+        u = (lo + hi) / 2
+        if u**3 * (10 - 15 * u + 6 * u * u) < f:
+            lo = u
+        else:
+            hi = u
+    return hi
 
 
 def _parts(request: Request, layer_m: float, air: Airspace) -> list[_Part]:
@@ -311,6 +347,7 @@ def blockers(
 
 __all__ = [
     "DEFAULT_MARGIN_S",
+    "LEG_PIECE_M",
     "Airspace",
     "FlightPlan",
     "Place",
@@ -320,5 +357,6 @@ __all__ = [
     "blockers",
     "earliest_start",
     "flight_reservations",
+    "min_jerk_time_fraction",
     "plan_flight",
 ]
