@@ -87,6 +87,9 @@ class AirspaceRecords:
         #: lingering UAVs just handed a task at their spot: their flight home is not granted until they ask again
         self.handed_task: set[str] = set()
         self.records: dict[str, UavAirspace] = {}
+        #: each UAV's role (mission control's fleet; empty: every pad is kept clear of hold points): a hold point
+        #: may lie by the pad of a landed UAV of the holder's role (:func:`masonry.mission.airspace_requests.hold_flight`)
+        self.roles: dict[str, str] = {}
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
         }

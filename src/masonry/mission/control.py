@@ -224,7 +224,10 @@ class MissionControl:
         homes = {u.name: u.home_m for u in self.fleet}
         layers_m = (layer_base_m, layer_spacing_m, layer_floor_m)
         gate, work = self.glue or self.sites, self.sites.is_work_site
-        self.columns = make_airspace(airspace, column_radius_m, layers_m, homes, gate, fence, timing, work)
+        roles = {u.name: u.role for u in self.fleet}
+        self.columns = make_airspace(
+            airspace, column_radius_m, layers_m, homes, gate, fence, timing, work, roles
+        )
         self.fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self.layer_floor_m, self.timing = layer_floor_m, timing
         #: each UAV's fixed layer for flights without mission control (``transit_layers_m``, as its machine has)

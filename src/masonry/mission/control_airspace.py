@@ -187,6 +187,7 @@ def make_airspace(
     fence: Site | None,
     timing: TaskTiming | None,
     work_site: Callable[[str, Vec3], bool] | None = None,
+    roles: Mapping[str, str] | None = None,
 ) -> ColumnClearance | TableClearance:
     """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
 
@@ -195,6 +196,8 @@ def make_airspace(
             ``layer_base_m``, ``layer_spacing_m`` and ``layer_floor_m``).
         work_site: is a site a UAV's task's (the table sends a UAV far from it to its approach spot first,
             :mod:`masonry.mission.reserved_approach`; None: no approach spots).
+        roles: each UAV's role: under the columns a hold point may lie by the pad of a landed UAV of the holder's
+            role (:func:`masonry.mission.airspace_requests.landed_alike`; None: by no pad).
     """
     if kind not in AIRSPACES:
         raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
@@ -205,6 +208,8 @@ def make_airspace(
     if isinstance(made, TableClearance):
         made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
         made.work_site = work_site
+    elif roles is not None:
+        made.roles = dict(roles)
     return made
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from masonry.mission.airspace import Phase
+from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.dispatch_chain import ChainThrough
 from masonry.mission.sites import work_point_m
 from masonry.mission.swap_stagger import swap_due
@@ -36,6 +36,8 @@ def admit(mc: MissionControl, column_radius_m: float) -> None:
     )
     if isinstance(mc.dispatcher, ChainThrough):
         mc.dispatcher.spares_rest = lambda role: mc.swaps.resting(mc, role)
+        if isinstance(mc.columns, ColumnClearance) and column_radius_m < mc.columns.sep_xy_m:
+            mc.dispatcher.apart_m = mc.columns.sep_xy_m  # (zones closer than r_c apart: docs/dispatch.md)
 
 
 def may_take_off(mc: MissionControl, name: str) -> bool:
