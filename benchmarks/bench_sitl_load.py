@@ -9,7 +9,8 @@ Usage: python benchmarks/bench_sitl_load.py [--runs 10] [--workers 2] [--no-busy
        [--tests tests/test_sitl_fly.py ...] [--log DIR] [--speedup K]
 
 ``--log DIR`` keeps each failing run's whole output (``--tb=long``: the failing test's stderr, e.g. mission
-control's) in ``DIR/run-NN.txt``. Each run's line ends with the load average (1, 5, 15 min) after it.
+control's) in ``DIR/run-NN.txt`` and its tests' temporary folders (pytest's ``--basetemp``: a real PX4's
+``px4.log``, ``fly.err``) in ``DIR/run-NN-tmp`` (a clean run's removed). Each run's line ends with the load average (1, 5, 15 min) after it.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -50,6 +52,12 @@ ARDUPILOT_TESTS = (
 PX4_TESTS = ("tests/test_px4_sitl.py",)
 
 
+def _tmp(log: Path) -> Path:
+    """A run's tests' temporary folders (pytest's ``--basetemp``) beside its log: kept where other sessions' pytest
+    runs would otherwise rotate them away before a failure is looked at."""
+    return log.with_name(f"{log.stem}-tmp")
+
+
 def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[str, int], list[str], float]:
     started = time.perf_counter()
     proc = subprocess.run(
@@ -63,6 +71,7 @@ def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[
             "--tb=line" if log is None else "--tb=long",
             "-p",
             "no:cacheprovider",
+            *([] if log is None else ["--basetemp", str(_tmp(log))]),
             *tests,
         ],
         check=False,
@@ -74,6 +83,8 @@ def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[
     wall_s = time.perf_counter() - started
     if log is not None and proc.returncode != 0:  # the whole output of a failing run, stderr and all
         log.write_text(proc.stdout + proc.stderr)
+    elif log is not None:  # a clean run's temporary folders (its SITLs' logs) are not kept
+        shutil.rmtree(_tmp(log), ignore_errors=True)
     counts = dict.fromkeys(("passed", "failed", "skipped", "error"), 0)
     for number, kind in re.findall(r"(\d+) (passed|failed|skipped|error)", proc.stdout):
         counts[kind] = int(number)
