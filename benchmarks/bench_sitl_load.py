@@ -1,15 +1,16 @@
 """The SITL tests under load: N runs in a row with a busy process on one core; prints passes and failures.
 
-Each run is ``pytest -n WORKERS`` over the tests that fly a SITL (the project's ``masonry sitl`` and, where
-``MASONRY_ARDUPILOT_SITL`` names it, ArduCopter's), while a process spins on one core for the whole loop
+Each run is ``pytest -n WORKERS`` over the tests that fly a SITL (the project's ``masonry sitl``, where
+``MASONRY_ARDUPILOT_SITL`` names it ArduCopter's, and where ``MASONRY_PX4_SITL`` names it the real PX4's), while a process spins on one core for the whole loop
 (issue 29: every such test must pass 10 runs in a row on a 2-core machine under ``-n 2`` with a core busy).
 Prints one line per run (passed, failed, skipped, wall seconds, the failing tests) and a total; asserts nothing.
 
-Usage: python benchmarks/bench_sitl_load.py [--runs 10] [--workers 2] [--no-busy] [--ardupilot]
+Usage: python benchmarks/bench_sitl_load.py [--runs 10] [--workers 2] [--no-busy] [--ardupilot] [--px4]
        [--tests tests/test_sitl_fly.py ...] [--log DIR] [--speedup K]
 
 ``--log DIR`` keeps each failing run's whole output (``--tb=long``: the failing test's stderr, e.g. mission
-control's) in ``DIR/run-NN.txt``. Each run's line ends with the load average (1, 5, 15 min) after it.
+control's) in ``DIR/run-NN.txt`` and its tests' temporary folders (pytest's ``--basetemp``: a real PX4's
+``px4.log``, ``fly.err``) in ``DIR/run-NN-tmp`` (a clean run's removed). Each run's line ends with the load average (1, 5, 15 min) after it.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -38,6 +40,7 @@ SITL_TESTS = (
     "tests/test_fsm_emergency.py",
     "tests/test_own_velocity_loop.py",
     "tests/test_wind_heard.py",
+    "tests/test_first_hover.py",
 )
 #: ArduCopter's SITL (tests/ardupilot_sitl.py; skipped by the tests where MASONRY_ARDUPILOT_SITL is unset).
 ARDUPILOT_TESTS = (
@@ -45,6 +48,14 @@ ARDUPILOT_TESTS = (
     "tests/test_mavlink_fence.py",
     "tests/test_ardupilot_bond.py",
 )
+#: The real PX4 v1.16 SITL (tests/px4_sitl.py; skipped by the tests where MASONRY_PX4_SITL is unset).
+PX4_TESTS = ("tests/test_px4_sitl.py",)
+
+
+def _tmp(log: Path) -> Path:
+    """A run's tests' temporary folders (pytest's ``--basetemp``) beside its log: kept where other sessions' pytest
+    runs would otherwise rotate them away before a failure is looked at."""
+    return log.with_name(f"{log.stem}-tmp")
 
 
 def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[str, int], list[str], float]:
@@ -60,17 +71,20 @@ def _run(tests: list[str], workers: int, log: Path | None = None) -> tuple[dict[
             "--tb=line" if log is None else "--tb=long",
             "-p",
             "no:cacheprovider",
+            *([] if log is None else ["--basetemp", str(_tmp(log))]),
             *tests,
         ],
         check=False,
         cwd=ROOT,
         capture_output=True,
         text=True,
-        timeout=1800,
+        timeout=3600,
     )
     wall_s = time.perf_counter() - started
     if log is not None and proc.returncode != 0:  # the whole output of a failing run, stderr and all
         log.write_text(proc.stdout + proc.stderr)
+    elif log is not None:  # a clean run's temporary folders (its SITLs' logs) are not kept
+        shutil.rmtree(_tmp(log), ignore_errors=True)
     counts = dict.fromkeys(("passed", "failed", "skipped", "error"), 0)
     for number, kind in re.findall(r"(\d+) (passed|failed|skipped|error)", proc.stdout):
         counts[kind] = int(number)
@@ -92,6 +106,7 @@ def main() -> None:
     ap.add_argument(
         "--ardupilot", action="store_true", help="add ArduCopter SITL's tests (needs its env var)"
     )
+    ap.add_argument("--px4", action="store_true", help="add the real PX4 SITL's tests (needs its env var)")
     ap.add_argument("--tests", nargs="*", default=None, help="test files or ids (default: the SITL tests)")
     ap.add_argument(
         "--speedup",
@@ -108,6 +123,10 @@ def main() -> None:
         if not os.environ.get("MASONRY_ARDUPILOT_SITL"):
             sys.exit("--ardupilot: set MASONRY_ARDUPILOT_SITL to the arducopter binary")
         tests += list(ARDUPILOT_TESTS)
+    if args.px4 and not args.tests:
+        if not os.environ.get("MASONRY_PX4_SITL"):
+            sys.exit("--px4: set MASONRY_PX4_SITL to ../shared/px4/run.sh")
+        tests += list(PX4_TESTS)
     if args.speedup is not None:
         os.environ["MASONRY_ARDUPILOT_SITL_SPEEDUP"] = str(args.speedup)  # read by tests/ardupilot_sitl.py
     busy = None if args.no_busy else subprocess.Popen([sys.executable, "-c", "while True: pass"])

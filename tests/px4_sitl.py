@@ -135,6 +135,11 @@ def on_px4(workdir: Path, instance: int, fly: Callable[[str], T], params: dict[s
 _RUNNING: dict[str, subprocess.Popen[bytes]] = {}
 
 
+def px4_log(url: str) -> Path:
+    """The log of the PX4 behind ``url`` (while its :func:`px4` block runs): its working folder's ``px4.log``."""
+    return Path(str(_RUNNING[url].args[2])).parent / "px4.log"
+
+
 def px4_pid(url: str) -> int:
     """The process id of the PX4 behind ``url`` (while its :func:`px4` block runs)."""
     return _RUNNING[url].pid
