@@ -4,8 +4,9 @@ Every generator lays the wall in its own frame (u along the wall, v across it, z
 ``yaw_rad`` about z and moves it to ``origin_m``. Bricks of the lowest ``placed_courses`` courses are placed
 already; every other brick gets a pickup point on a pallet: a grid on the ground on the -v side of the wall,
 ``pallet_distance_m`` (default r_c + 1 m) away from it. Along a long wall (>= 4.5 m) the pallet is as wide as the
-wall and each brick lies on the free slot nearest to its place (short carries; bricks placed together, r_c
-apart, are picked up about as far apart); a shorter wall's pallet is 10 slots wide (wider than the wall, so the
+wall and each brick lies on the free slot nearest to its place, every other brick of a course 3 rows behind
+(short carries; bricks side by side on the wall are picked up rows apart, bricks placed together, r_c apart,
+about as far apart); a shorter wall's pallet is 10 slots wide (wider than the wall, so the
 bricks fetched together are spread across it), filled row by row; so is one of ``pallet_columns`` columns. UAV homes are in a row beyond the pallet, r_c + 0.5 m
 apart (at least ``masonry.separation.pad_separation_m``, 1 m).
 """
@@ -40,6 +41,9 @@ GENERATORS: tuple[str, ...] = ("running-bond", "towers", "pyramid")
 #: A wall at least this many pallet columns long (0.5 m each: 4.5 m with the default brick) gets a pallet as wide
 #: as itself, each brick facing its place; a shorter one the old 10-column pallet filled row by row.
 PALLET_MIN_COLUMNS = 10
+#: On a long wall's pallet, every other brick of a course lies this many rows (0.45 m each) behind its neighbours,
+#: so that two bricks side by side on the wall are not picked up side by side (docs/performance/fleet.md).
+PALLET_ROW_STRIDE = 3
 #: A wall taller than the default cruise altitude is cruised over this much above its top (unless one is given).
 CRUISE_OVER_WALL_M = 0.5
 
@@ -185,7 +189,7 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
     else:
         # a long wall: a pallet as wide as the wall, each brick facing its place
         columns = wall_columns
-        slots = _pallet_slots(todo_u, columns, pallet_pitch_u, pallet_pitch_v, pallet_distance + width / 2.0)
+        slots = _pallet_slots(todo_u, _index_in_course(layout, todo), columns, pallet_pitch_u, pallet_pitch_v)
 
     def pallet(row: int, col: int) -> Vec3:
         u = (col - (columns - 1) / 2.0) * pallet_pitch_u
@@ -245,37 +249,37 @@ def _build(kind: str, layout: _Layout, options: Site) -> Blueprint:
 
 
 def _pallet_slots(
-    todo_u: list[float], columns: int, pitch_u: float, pitch_v: float, front_v: float
+    todo_u: list[float], todo_k: list[int], columns: int, pitch_u: float, pitch_v: float
 ) -> list[tuple[int, int]]:
-    """Pallet slots (row, column), in brick order, each brick on the free slot nearest to its place on the wall.
+    """Pallet slots (row, column), in brick order: each brick on the free slot nearest to its target.
 
-    A column is a stack of rows going away from the wall; its next free slot is its front-most empty one. In
-    brick order (course by course), each brick takes the column whose next free slot is the nearest (in the
-    plane) to the brick's place at along-wall coordinate u, the wall being ``front_v`` in front of row 0. So the
-    carry is short (about the pallet's distance, not a walk along the pallet), and bricks that are placed at the
-    same time -- at least r_c apart on the wall, else they conflict -- are picked up about as far apart.
+    A brick's target is the column facing its place (along-wall coordinate u), in the front row for an even brick of
+    its course (``todo_k``, its index in the course) and :data:`PALLET_ROW_STRIDE` rows behind for an odd one
+    (fewer if the bricks fill fewer rows). So the carry stays short (the pallet's distance, no walk along it), two
+    bricks side by side on the wall -- laid one after the other, the second fetched while the first is laid -- are
+    picked up rows apart, and bricks laid at the same time (r_c apart on the wall) about as far apart as laid.
     """
     offset = (columns - 1) / 2.0
-    height = [0] * columns
+    rows = -(-len(todo_u) // columns)
+    stride = min(PALLET_ROW_STRIDE, rows - 1)  # no deeper than the bricks fill (a compact pallet)
+    free = sorted((r, c) for r in range(rows + stride + 1) for c in range(columns))
     out: list[tuple[int, int]] = []
-    for u in todo_u:
-        near = min(columns - 1, max(0, round(u / pitch_u + offset)))
-        best, best_d = near, math.inf
-        # scan outwards from the nearest column; stop once the along-wall offset alone is no better
-        for step in range(columns):
-            done = True
-            for col in {near - step, near + step}:
-                if 0 <= col < columns:
-                    du = abs((col - offset) * pitch_u - u)
-                    if du < best_d:
-                        done = False
-                        d = math.hypot(du, front_v + height[col] * pitch_v)
-                        if d < best_d or (d == best_d and col < best):
-                            best, best_d = col, d
-            if done:
-                break
-        out.append((height[best], best))
-        height[best] += 1
+    for u, k in zip(todo_u, todo_k):
+        row = stride * (k % 2)
+        best = min(free, key=lambda s: (math.hypot((s[1] - offset) * pitch_u - u, (s[0] - row) * pitch_v), s))
+        free.remove(best)
+        out.append(best)
+    return out
+
+
+def _index_in_course(layout: _Layout, todo: list[int]) -> list[int]:
+    """Each brick's index among its course's bricks (in layout order)."""
+    seen: dict[int, int] = {}
+    out = []
+    for i in todo:
+        course = layout[i][2]
+        out.append(seen.get(course, 0))
+        seen[course] = out[-1] + 1
     return out
 
 
