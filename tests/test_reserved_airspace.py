@@ -18,6 +18,7 @@ from masonry.cli import app
 from masonry.errors import InputError
 from masonry.mission.airspace_state import Phase
 from masonry.mission.reserved import DEFAULT_AIRSPACE, TableClearance
+from masonry.mission.reserved_approach import APPROACH_OFF_M
 from masonry.mission.simulate import simulate
 from masonry.mission.sites import work_span_m
 from masonry.planner import plan as make_plan
@@ -286,8 +287,8 @@ class _BusyGate(_Gate):
 def test_a_uav_held_back_far_from_its_site_waits_at_its_approach_spot_and_its_site_interval_starts_there():
     # scenario (docs/safety.md, "The approach spot"): b works at its site; a, on its pad 5 m away, is given the
     # conflicting site beside it. The site gate holds a back: a does not wait over its pad (its site interval
-    # would then run through the whole 5 m flight once b is gone) but flies to the hover over its site at the
-    # layer under the top one, reserved like any flight; there it waits for the gate, and its site interval
+    # would then run through the whole 5 m flight once b is gone) but flies to the hover 1.5 m from its site
+    # towards it, at the top layer, reserved like any flight; there it waits for the gate, and its site interval
     # starts when its descent is granted, once b has moved on
     s_a, s_b = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2)
     gate = _BusyGate({s_a, s_b})
@@ -298,16 +299,17 @@ def test_a_uav_held_back_far_from_its_site_waits_at_its_approach_spot_and_its_si
     assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted  # near its site: straight there
     air.take_off("a")
     g = air.request("a", s_a, 1.0, (0.0, -5.0, 1.2))
-    top = air.airspace.layers_m[-2]  # (the layer under the top one)
-    assert not g.granted and g.hold_m == pytest.approx((0.0, 0.0, top)) and g.layer_m == pytest.approx(top)
+    top = air.airspace.layers_m[-1]
+    spot = (0.0, -APPROACH_OFF_M, top)  # (1.5 m from its site towards a)
+    assert not g.granted and g.hold_m == pytest.approx(spot) and g.layer_m == pytest.approx(top)
     assert air.phase("a") is Phase.TO_HOLD and gate.entered_at == [("b", 0.0)]
     assert air.approached_count == 1
     for t in range(2, 20):
         assert not any(g.granted for g in air.grant(float(t)))
     air.end_transit("b")
-    air.progress("a", (0.0, 0.0, top))  # a is at its approach spot
+    air.progress("a", spot)  # a is at its approach spot
     assert air.phase("a") is Phase.AT_HOLD
-    answer = air.request("a", s_a, 20.0, (0.0, 0.0, top))
+    answer = air.request("a", s_a, 20.0, spot)
     assert not answer.granted  # b is at its site: a waits where it is, at its spot
     assert air.blockers("a") == [("-", "site-rule")]
     air.request("b", (3.0, -5.0, 1.2), 30.0, s_b)  # b moves on: its site interval ends
@@ -317,21 +319,45 @@ def test_a_uav_held_back_far_from_its_site_waits_at_its_approach_spot_and_its_si
             air.progress("b", (3.0, -5.0, 1.2))  # b is over its pad, its flight's windows end
             air.end_transit("b")
         granted += [(g.uav, t) for g in air.grant(float(t)) if g.granted]
-    assert [u for u, _t in granted] == ["a"] and granted[0][
-        1
-    ] >= 45  # once b's climb and leg are out of the way
+    # once b has moved on: the spot is out of b's column, a's flight is timed around b's climb and leg
+    assert [u for u, _t in granted] == ["a"] and granted[0][1] >= 31
     assert gate.entered_at == [("b", 0.0), ("a", float(granted[0][1]))]  # a's site interval starts then
     climb = next(r.volume for r in air.table.of("a") if r.purpose == "climb")
-    assert climb.a == pytest.approx((0.0, 0.0)) and climb.z1_m == pytest.approx(top)  # from the spot, down
+    assert climb.a == pytest.approx(spot[:2]) and climb.z1_m == pytest.approx(top)  # from the spot
     assert air.conflicts() == []
+
+
+def test_a_uav_at_its_approach_spot_is_beside_the_site_out_of_a_neighbours_climb():
+    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
+    # on to a site beside a's, to work up to 3.5 m. The spot is 1.5 m from a's site, not over it, so b's climb
+    # and flight pass it and are granted at once (over a's site, at any layer, the hover was in their way: a
+    # cycle of waits, broken only by sending a to its parking spot 6 m up, its next site interval starting there)
+    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, 0.4, 1.2)
+    gate = _BusyGate({s_a, s_b})
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
+    air.work_site = lambda uav, site: site in (s_a, s_b, s_c)
+    air.take_off("b")
+    assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted
+    air.take_off("a")
+    spot = air.request("a", s_a, 1.0, (0.0, -5.0, 1.2)).hold_m
+    assert spot == pytest.approx((0.0, -1.5, air.airspace.layers_m[-1]))  # 1.5 m towards a, at the top layer
+    for t in range(2, 30):
+        air.grant(float(t))
+    air.end_transit("b")
+    air.progress("b", s_b)
+    air.progress("a", spot)
+    assert not air.request("a", s_a, 30.0, spot).granted and air.phase("a") is Phase.AT_HOLD
+    assert air.request("b", s_c, 31.0, s_b, top_m=3.5).granted
+    assert air.held_back == 0 and air.conflicts() == []
 
 
 def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_spot():
     # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
-    # on to a site beside a's, to work up to 2.6 m, which the hover over a's site is in the way of, while b's stay
-    # is in the way of a's descent: a cycle of waits. a, at its spot, is sent to its parking spot like any waiting
+    # on to a site beside a's spot, to work up to 4 m, which the spot is in the way of, while b's stay is in the
+    # way of a's descent: a cycle of waits. a, at its spot, is sent to its parking spot like any waiting
     # UAV of a cycle (b's own parking flight would climb through a's hover), and b's flight goes once a is there
-    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, 0.4, 1.2)
+    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, -1.1, 1.2)
     gate = _BusyGate({s_a, s_b})
     homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
     air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
@@ -347,7 +373,7 @@ def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_s
     air.progress("b", s_b)
     air.progress("a", spot)
     assert not air.request("a", s_a, 30.0, spot).granted and air.phase("a") is Phase.AT_HOLD
-    assert not air.request("b", s_c, 31.0, s_b, top_m=2.6).granted
+    assert not air.request("b", s_c, 31.0, s_b, top_m=4.0).granted
     assert air.blockers("b") == [("a", "stay")]
     parked, granted = None, []
     for k in range(64, 200):

@@ -250,7 +250,7 @@ class TableClearance:
         for uav in to_park(waits, endless, order):
             u = asking[uav]
             assert u.request is not None
-            if not u.approach:  # to the approach spot over its site, if it may go there: no detour home
+            if not u.approach:  # to the approach spot by its site, if it may go there: no detour home
                 hop = reserved_requests.hop_request(self, uav, u, u.request)
                 sent = approach(self, uav, u, u.request, (*hop.start.xy, hop.start.z_m), now_s)
                 if sent is not None:

@@ -7,11 +7,14 @@ its site, or a task it waits on is not done) waited where it asked, at the palle
 or was sent to its parking spot 6 m over its pad when it was in another waiting UAV's way; once the site freed, the
 flight from there (25-40 s) was part of its site interval, and every conflicting task waited through it. Now a UAV
 held back farther than :data:`APPROACH_FROM_M` from its site, or about to be sent to its parking spot, first flies
-to a hover over its site at the transit layer under the top one (:func:`approach_spot`), reserved as a parking
-flight is (climb or come down where it is, fly at the spot's altitude, hover there, open-ended), without the site
-gate; from there its hop down is planned and gated as any other, and its site interval starts then.
+to a hover :data:`APPROACH_OFF_M` from its site towards it, at the top transit layer (:func:`approach_spot`),
+reserved as a parking flight is (climb or come down where it is, fly at the spot's altitude, hover there,
+open-ended), without the site gate; from there its hop down is planned and gated as any other, and its site
+interval starts then.
 
-The spot is in the way only of legs at the two top layers and of climbs through them near the site: a UAV waiting
+The spot is beside the site, out of the climbs of the UAV leaving it (a hover over the site was in them: the two
+waited for each other until one was sent to its parking spot). It is in the way only of legs at the top layer and
+of climbs through it within the air separation of the spot: a UAV waiting
 there whose wait does not end by itself and that is in a waiting UAV's way is sent to its parking spot like any
 other (:func:`masonry.mission.reserved_parts.to_park`), and is not sent to an approach spot again for that
 request. Pure: no I/O, no clock.
@@ -41,17 +44,24 @@ if TYPE_CHECKING:
     from masonry.mission.reserved import TableClearance
     from masonry.mission.reserved_requests import TableUav
 
-__all__ = ["APPROACH_FROM_M", "approach", "approach_spot", "spot_plan", "wants_approach"]
+__all__ = ["APPROACH_FROM_M", "APPROACH_OFF_M", "approach", "approach_spot", "spot_plan", "wants_approach"]
 
-#: A UAV held back from its task's site farther than this (horizontally) waits at the approach spot over it.
+#: A UAV held back from its task's site farther than this (horizontally) waits at the approach spot near it.
 APPROACH_FROM_M = 2.0
 
+#: The approach spot is this far from the site (horizontally), towards where the UAV comes from: out of the column
+#: over the site and its neighbours' by more than the air separation (1.2 m), so a UAV leaving there climbs past it
+#: (docs/safety.md, "The approach spot"; docs/performance/fleet.md, "The approach spot beside the site").
+APPROACH_OFF_M = 1.5
 
-def approach_spot(c: TableClearance, site_m: Vec3) -> Vec3:
-    """The approach spot of ``site_m``: over it, at the transit layer under the top one (the top one with fewer than
-    two layers)."""
-    layers = c.airspace.layers_m
-    return (site_m[0], site_m[1], layers[max(0, len(layers) - 2)])
+
+def approach_spot(c: TableClearance, site_m: Vec3, start: Vec3) -> Vec3:
+    """The approach spot of ``site_m`` for a UAV at ``start``: :data:`APPROACH_OFF_M` from the site towards the
+    UAV (horizontally; over the site when the UAV is there), at the top transit layer."""
+    dx, dy = start[0] - site_m[0], start[1] - site_m[1]
+    d = math.hypot(dx, dy)
+    k = APPROACH_OFF_M / d if d > 1e-9 else 0.0
+    return (site_m[0] + k * dx, site_m[1] + k * dy, c.airspace.layers_m[-1])
 
 
 def wants_approach(c: TableClearance, uav: str, u: TableUav, w: FlightRequest, start: Vec3) -> bool:
@@ -87,7 +97,7 @@ def approach(
     rule does not apply: the request is planned as before)."""
     if not wants_approach(c, uav, u, w, start):
         return None
-    spot = approach_spot(c, w.site)
+    spot = approach_spot(c, w.site, start)
     plan = spot_plan(c.guarded_for(uav), uav, start, spot, now_s, c.airspace)
     if plan is None:
         return None

@@ -42,7 +42,7 @@ class TableUav:
     blocked_by: tuple[tuple[str, str], ...] = ()
     spot: Vec3 | None = None  # its parking spot, while it flies there or waits there
     approach: bool = (
-        False  # its spot is the approach spot over its site (:mod:`~masonry.mission.reserved_approach`)
+        False  # its spot is the approach spot by its site (:mod:`~masonry.mission.reserved_approach`)
     )
     approached: int = -1  # the request (seq) it was sent to an approach spot for: only once
 
