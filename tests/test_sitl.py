@@ -23,6 +23,7 @@ from masonry.adapters.mavlink import (
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
+from sitl_story import HeightTrace, describe_flight
 from waiting import HeldClock, wait_until
 
 TIME_SCALE = 8.0
@@ -48,8 +49,12 @@ def flight(
     fc_options.setdefault("connect_timeout_s", 3.0)
     fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", signing_key=fc_key, **fc_options)
     sitl.start()
+    started_wall_s = time.monotonic()
     try:
         yield sitl, fc
+    except Exception as exc:
+        exc.add_note(describe_flight(sitl, fc, started_wall_s))  # both sides at the failure (sitl_story)
+        raise
     finally:
         fc.close()
         sitl.stop()
@@ -58,12 +63,23 @@ def flight(
 def take_off(fc: MavlinkFlightController, altitude_m: float = 1.2) -> None:
     fc.arm()
     fc.takeoff(altitude_m)
+    take_off_wait(fc, altitude_m)
+
+
+def take_off_wait(fc: MavlinkFlightController, altitude_m: float) -> None:
+    """Wait for the take-off's altitude (within 0.05 m, still within 0.05 m/s); a miss shows the telemetry it saw
+    (and ``flight`` adds both sides then)."""
+    trace = HeightTrace(fc)
+
+    def reached() -> bool:
+        z, vz = trace.height_and_climb()
+        return z > altitude_m - 0.05 and abs(vz) < 0.05
+
     wait_until(
-        lambda: (
-            fc.telemetry().position_m[2] > altitude_m - 0.05 and abs(fc.telemetry().velocity_mps[2]) < 0.05
-        ),
+        reached,
         30.0,  # a bound on waiting for the evidence (about 0.5 s at x8 when the machine is idle)
-        "the takeoff altitude",
+        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        detail=trace.describe,
     )
 
 
@@ -116,6 +132,35 @@ def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
         assert tel.on_ground and tel.mode == "LAND" and tel.position_m[2] == pytest.approx(0.0, abs=0.02)
         assert tel.battery_fraction < 1.0
         assert "Land complete, disarming" in sitl.status_log
+
+
+def test_a_caller_left_unrun_right_after_the_take_off_ack_does_not_end_the_climb() -> None:
+    """Issue 29 (the SITL loop's run 7: "timed out after 30.0 s waiting for the takeoff altitude"). From the arming
+    the setpoint stream sent zero velocities, ignored on the ground, until the caller, back from NAV_TAKEOFF's
+    ACK, told it a take-off was climbing. A caller left unrun for 0.15 s of the autopilot's time after the ACK (a
+    loaded machine; at x1 a stall of 0.15 s of wall) let one arrive with the vehicle 1-2 cm off the ground: it
+    ended ArduPilot's climb, and the vehicle hovered where it stopped, 7-8 cm up. The stall is injected here, at x1 (the stream ticks a dozen
+    times while the vehicle climbs 0.3 m)."""
+    with flight(time_scale=1.0) as (sitl, fc):
+        fc.connect()
+        fc.arm()
+        command = fc.command
+
+        def left_unrun_after_the_ack(name: str, number: int, params: tuple[float, ...] = ()) -> None:
+            command(name, number, params)
+            if name == "takeoff":  # meanwhile the vehicle lifts off and the stream ticks on
+                wait_until(
+                    lambda: sitl.vehicle.position_m[2] > 0.3 or not sitl.vehicle.taking_off,
+                    10.0,
+                    "the climb to pass 0.3 m or to end",
+                )
+
+        fc.command = left_unrun_after_the_ack  # type: ignore[method-assign]
+        fc.takeoff(1.0)
+        assert sitl.vehicle.taking_off, (
+            f"the climb ended {sitl.vehicle.position_m[2]:.3f} m up (setpoint {sitl.last_setpoint_mps})"
+        )
+        take_off_wait(fc, 1.0)
 
 
 def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> None:

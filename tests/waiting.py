@@ -13,16 +13,23 @@ from contextlib import contextmanager
 POLL_S = 0.005
 
 
-def wait_until(predicate: Callable[[], object], timeout_s: float, what: str = "the condition") -> float:
+def wait_until(
+    predicate: Callable[[], object],
+    timeout_s: float,
+    what: str = "the condition",
+    detail: Callable[[], str] | None = None,
+) -> float:
     """Poll ``predicate`` until it is true; return the seconds waited.
 
     Raises:
-        AssertionError: still false after ``timeout_s`` (wall seconds), naming ``what``.
+        AssertionError: still false after ``timeout_s`` (wall seconds), naming ``what``, and with ``detail()``'s
+            lines (what the other side was doing then) where given.
     """
     started = time.monotonic()
     while not predicate():
         if time.monotonic() - started > timeout_s:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+            more = f"\n{detail()}" if detail is not None else ""
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}{more}")
         time.sleep(POLL_S)
     return time.monotonic() - started
 

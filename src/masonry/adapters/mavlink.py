@@ -26,6 +26,7 @@ MAV_RESULT and the autopilot's latest warning text (ArduPilot's "PreArm: ..."), 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
@@ -227,6 +228,8 @@ class MavlinkFlightController(EstimateLink):
         #: the EKF's ground height measured at the last arming (local up, m; None: not measured)
         self.ground_offset_m: float | None = None
         self._last_vision_stamp: Any = None
+        #: held across one stream decision and its send, and by takeoff() while it starts a climb (issue 29)
+        self._stream_lock = threading.Lock()
 
     # ----------------------------------------------------------------------------------------------- lifecycle
 
@@ -252,6 +255,12 @@ class MavlinkFlightController(EstimateLink):
     # ---------------------------------------------------------------------------------- the setpoint stream
 
     def _stream_setpoint(self, now: float) -> None:
+        with (
+            self._stream_lock
+        ):  # a decision is sent before takeoff() starts a climb, or made after (issue 29)
+            self._stream_setpoint_locked(now)
+
+    def _stream_setpoint_locked(self, now: float) -> None:
         with self._lock:
             streaming = self._streaming and self._state.armed
             setpoint = self._setpoint
@@ -432,9 +441,11 @@ class MavlinkFlightController(EstimateLink):
             raise CommandRejected("takeoff", "not armed (arm first)")
         ground_world = self.frame.position_to_world(position) if position is not None else self.frame.offset_m
         self._takeoff_mode = self.telemetry().mode
-        if self.autopilot == "ardupilot":
-            self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
-        with self._lock:
+        # The climb is started before NAV_TAKEOFF goes out, with no stream decision under way (issue 29): from the
+        # arming the stream sends zero velocities (ignored on the ground), and one that reached ArduPilot after it
+        # had accepted the take-off and lifted off (this caller left unrun 0.15 s after the ACK) ended its climb.
+        with self._stream_lock, self._lock:
+            before = (self._setpoint, self._streaming, self.velocity_loop_engaged)
             self._setpoint = None
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
@@ -448,6 +459,14 @@ class MavlinkFlightController(EstimateLink):
                 ClimbConfig(timeout_s=self._takeoff_limit_s, own_loop=own_loop),
             )
             self._climb = climb if self.autopilot == "px4" else None
+        if self.autopilot == "ardupilot":
+            try:
+                self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
+            except (CommandRejected, CommandTimeout, LinkLost):
+                with self._lock:  # no take-off: the stream as before it
+                    self._takeoff_target_m = None
+                    self._setpoint, self._streaming, self.velocity_loop_engaged = before
+                raise
 
     def land(self) -> None:
         """Land where the UAV is (ArduPilot LAND mode; PX4 MAV_CMD_NAV_LAND); the setpoint stream stops."""
