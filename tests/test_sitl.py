@@ -163,6 +163,20 @@ def test_a_caller_left_unrun_right_after_the_take_off_ack_does_not_end_the_climb
         take_off_wait(fc, 1.0)
 
 
+def test_a_refused_take_off_leaves_the_stream_flying_the_callers_setpoint() -> None:
+    # the climb is started before NAV_TAKEOFF goes out (issue 29): refused, the stream is as it was before
+    with flight() as (sitl, fc):
+        fc.connect()
+        take_off(fc, 1.0)
+        fc.send_velocity((0.2, 0.0, 0.0), 0.0)
+        with pytest.raises(CommandRejected, match="takeoff rejected: failed: Takeoff: already flying"):
+            fc.takeoff(0.5)
+        assert fc._takeoff_target_m is None
+        before = sitl.setpoints_received
+        wait_until(lambda: sitl.setpoints_received >= before + 2, 5.0, "the stream to go on")
+        assert sitl.last_setpoint_mps == pytest.approx((0.2, 0.0, 0.0), abs=1e-6)
+
+
 def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> None:
     with flight(setpoint_rate_hz=20.0, setpoint_hold_s=0.3) as (sitl, fc):
         fc.connect()
