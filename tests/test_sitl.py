@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
+from masonry.adapters.lockstep import LockstepClock
 from masonry.adapters.mavlink import (
     HEARTBEAT_MISSING_S,
     MAV_CMD_COMPONENT_ARM_DISARM,
@@ -24,10 +25,11 @@ from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
 from sitl_story import HeightTrace, describe_flight
-from waiting import HeldClock, wait_until
+from waiting import HeldClock, step_until, wait_until
 
 TIME_SCALE = 8.0
-DESCENT_SPEEDUP = 1.0
+#: lock-step's wait (wall s) before a SITL held at a grant runs free: far longer than a loaded machine's stall
+LOCKSTEP_WAIT_S = 60.0
 KEY = bytes(range(32))
 OTHER_KEY = bytes(range(1, 33))
 
@@ -40,12 +42,20 @@ def flight(
     fc_key: bytes | None = None,
     home_m=(0.0, 0.0, 0.0),
     time_scale: float = TIME_SCALE,
+    lockstep_wait_s: float | None = None,
     **fc_options,
 ) -> Iterator[tuple[MavlinkSitl, MavlinkFlightController]]:
     port = free_udp_port()
     # heartbeats at 4 Hz (ArduPilot: 1 Hz) so that armed/disarmed shows within a quarter second
     config = replace(config or SitlConfig(), heartbeat_hz=4.0)
-    sitl = MavlinkSitl(port, time_scale=time_scale, config=config, signing_key=sitl_key, home_m=home_m)
+    sitl = MavlinkSitl(
+        port,
+        time_scale=time_scale,
+        config=config,
+        signing_key=sitl_key,
+        home_m=home_m,
+        lockstep_wait_s=lockstep_wait_s,  # None: free at time_scale (lock-step: masonry.adapters.sitl_lockstep)
+    )
     fc_options.setdefault("connect_timeout_s", 3.0)
     fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", signing_key=fc_key, **fc_options)
     sitl.start()
@@ -84,13 +94,20 @@ def take_off_wait(fc: MavlinkFlightController, altitude_m: float) -> None:
 
 
 def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
-    # x1: the tracking loop below runs on the wall (a 0.02 s sleep); a stall of a loaded machine lags it by the
-    # stall times the speed-up (12.8 cm worst at x4 under load, issue 29)
-    with flight(home_m=(1.0, 2.0, 0.0), time_scale=DESCENT_SPEEDUP, telemetry_rate_hz=50.0) as (sitl, fc):
+    # In lock-step (docs/sitl-lockstep.md): the SITL's time moves only as the loop below grants it, so its
+    # figures are the same whatever the load (on the wall, a stall lagged the loop by the stall times the
+    # speed-up: 12.8 cm worst at x4 under load, issue 29; at x1 6.7-6.9 cm)
+    with flight(home_m=(1.0, 2.0, 0.0), telemetry_rate_hz=50.0, lockstep_wait_s=LOCKSTEP_WAIT_S) as (
+        sitl,
+        fc,
+    ):
+        clock = LockstepClock(fc)  # before connecting: the SITL announces lock-step on the first heartbeat
         fc.connect()
         assert fc.autopilot == "ardupilot" and fc.target_system == 1
         assert fc.warnings == []
-        fc.wait_for_estimate(timeout_s=2.0)
+        wait_until(lambda: clock.sleep(0.0) or clock.lockstep, 10.0, "the SITL's lock-step announcement")
+        # the EKF's convergence (0.5 s), on the SITL's time: granted, not waited for on the wall
+        step_until(clock, lambda: fc.telemetry().position_ok, 2.0, "the position estimate")
         wait_until(
             lambda: fc.telemetry().battery_fraction == fc.telemetry().battery_fraction, 2.0, "SYS_STATUS"
         )
@@ -101,37 +118,65 @@ def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
         )  # its local origin is its home (GPS-like)
         assert tel.battery_fraction == pytest.approx(1.0)
 
-        take_off(fc, 1.2)
+        take_off_granted(fc, clock, 1.2)
         tel = fc.telemetry()
         assert tel.armed and tel.mode == "GUIDED" and not tel.on_ground
         assert tel.position_m[2] == pytest.approx(1.2, abs=0.05)
 
-        # Minimum-jerk descent from 1.2 m to 0.6 m in 3 s (autopilot time), tracked with feedforward + P.
-        start = np.array(tel.position_m)
-        goal = start - np.array([0.0, 0.0, 0.6])
-        traj = MinJerk(start, np.zeros(3), np.zeros(3), goal, np.zeros(3), np.zeros(3), 3.0)
-        t0 = fc.clock.now_s()
-        worst = 0.0
-        while (t := fc.clock.now_s() - t0) < traj.duration_s + 3.0:
-            p = np.array(fc.telemetry().position_m)
-            if t < traj.duration_s:
-                ref = traj.position(t)
-                worst = max(worst, float(np.linalg.norm(ref - p)))
-            elif np.linalg.norm(goal - p) < 0.02:
-                break  # settled on the goal
-            v = traj.velocity(min(t, traj.duration_s)) + 1.5 * (traj.position(min(t, traj.duration_s)) - p)
-            fc.send_velocity(tuple(v), 0.0)
-            time.sleep(0.02)
-        end = np.array(fc.telemetry().position_m)
-        assert np.linalg.norm(end - goal) < 0.025
+        worst, end = minimum_jerk_descent(fc, clock)
+        assert end < 0.025
         assert worst < 0.1  # the autopilot's velocity lag and the telemetry latency
 
         fc.land()
-        wait_until(lambda: not fc.telemetry().armed, 5.0, "touchdown and disarm")
+        step_until(clock, lambda: not fc.telemetry().armed, 5.0, "touchdown and disarm")
         tel = fc.telemetry()
         assert tel.on_ground and tel.mode == "LAND" and tel.position_m[2] == pytest.approx(0.0, abs=0.02)
         assert tel.battery_fraction < 1.0
         assert "Land complete, disarming" in sitl.status_log
+        assert sitl.lockstep is not None and sitl.lockstep.free_runs == 0  # on the grants' time throughout
+        assert clock.late_replies == 0
+
+
+def take_off_granted(fc: MavlinkFlightController, clock: LockstepClock, altitude_m: float) -> None:
+    """``take_off`` on a SITL in lock-step: the climb waits for the SITL's time, granted 0.02 s at a time, for at
+    most 10 s of it (the climb takes about 3 s)."""
+    fc.arm()
+    fc.takeoff(altitude_m)
+    trace = HeightTrace(fc)
+
+    def reached() -> bool:
+        z, vz = trace.height_and_climb()
+        return z > altitude_m - 0.05 and abs(vz) < 0.05
+
+    step_until(
+        clock,
+        reached,
+        10.0,
+        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        detail=trace.describe,
+    )
+
+
+def minimum_jerk_descent(fc: MavlinkFlightController, clock: LockstepClock) -> tuple[float, float]:
+    """A minimum-jerk descent of 0.6 m in 3 s (the autopilot's time), tracked with feedforward + P every 0.02 s
+    of it: the worst distance (m) from the trajectory during it, and the distance from its goal at the end (after
+    at most 3 s more to settle within 2 cm)."""
+    start = np.array(fc.telemetry().position_m)
+    goal = start - np.array([0.0, 0.0, 0.6])
+    traj = MinJerk(start, np.zeros(3), np.zeros(3), goal, np.zeros(3), np.zeros(3), 3.0)
+    t0 = clock.now_s()
+    worst = 0.0
+    while (t := clock.now_s() - t0) < traj.duration_s + 3.0:
+        p = np.array(fc.telemetry().position_m)
+        if t < traj.duration_s:
+            ref = traj.position(t)
+            worst = max(worst, float(np.linalg.norm(ref - p)))
+        elif np.linalg.norm(goal - p) < 0.02:
+            break  # settled on the goal
+        v = traj.velocity(min(t, traj.duration_s)) + 1.5 * (traj.position(min(t, traj.duration_s)) - p)
+        fc.send_velocity(tuple(v), 0.0)
+        clock.sleep(0.02)
+    return worst, float(np.linalg.norm(np.array(fc.telemetry().position_m) - goal))
 
 
 def test_a_caller_left_unrun_right_after_the_take_off_ack_does_not_end_the_climb() -> None:
