@@ -133,8 +133,9 @@ def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
         assert tel.on_ground and tel.mode == "LAND" and tel.position_m[2] == pytest.approx(0.0, abs=0.02)
         assert tel.battery_fraction < 1.0
         assert "Land complete, disarming" in sitl.status_log
-        assert sitl.lockstep is not None and sitl.lockstep.free_runs == 0  # on the grants' time throughout
-        assert clock.late_replies == 0
+        # on the grants' time throughout (a reply later than 2 s of wall, a stall's, is not asserted on: the SITL
+        # stays at its grant meanwhile)
+        assert sitl.lockstep is not None and sitl.lockstep.free_runs == 0
 
 
 def take_off_granted(fc: MavlinkFlightController, clock: LockstepClock, altitude_m: float) -> None:
