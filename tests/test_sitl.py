@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
+from masonry.adapters.lockstep import LockstepClock
 from masonry.adapters.mavlink import (
     HEARTBEAT_MISSING_S,
     MAV_CMD_COMPONENT_ARM_DISARM,
@@ -23,10 +24,12 @@ from masonry.adapters.mavlink import (
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
-from waiting import HeldClock, wait_until
+from sitl_story import HeightTrace, describe_flight
+from waiting import HeldClock, step_until, wait_until
 
 TIME_SCALE = 8.0
-DESCENT_SPEEDUP = 1.0
+#: lock-step's wait (wall s) before a SITL held at a grant runs free: far longer than a loaded machine's stall
+LOCKSTEP_WAIT_S = 60.0
 KEY = bytes(range(32))
 OTHER_KEY = bytes(range(1, 33))
 
@@ -39,17 +42,29 @@ def flight(
     fc_key: bytes | None = None,
     home_m=(0.0, 0.0, 0.0),
     time_scale: float = TIME_SCALE,
+    lockstep_wait_s: float | None = None,
     **fc_options,
 ) -> Iterator[tuple[MavlinkSitl, MavlinkFlightController]]:
     port = free_udp_port()
     # heartbeats at 4 Hz (ArduPilot: 1 Hz) so that armed/disarmed shows within a quarter second
     config = replace(config or SitlConfig(), heartbeat_hz=4.0)
-    sitl = MavlinkSitl(port, time_scale=time_scale, config=config, signing_key=sitl_key, home_m=home_m)
+    sitl = MavlinkSitl(
+        port,
+        time_scale=time_scale,
+        config=config,
+        signing_key=sitl_key,
+        home_m=home_m,
+        lockstep_wait_s=lockstep_wait_s,  # None: free at time_scale (lock-step: masonry.adapters.sitl_lockstep)
+    )
     fc_options.setdefault("connect_timeout_s", 3.0)
     fc = MavlinkFlightController(f"udpin:127.0.0.1:{port}", signing_key=fc_key, **fc_options)
     sitl.start()
+    started_wall_s = time.monotonic()
     try:
         yield sitl, fc
+    except Exception as exc:
+        exc.add_note(describe_flight(sitl, fc, started_wall_s))  # both sides at the failure (sitl_story)
+        raise
     finally:
         fc.close()
         sitl.stop()
@@ -58,23 +73,41 @@ def flight(
 def take_off(fc: MavlinkFlightController, altitude_m: float = 1.2) -> None:
     fc.arm()
     fc.takeoff(altitude_m)
+    take_off_wait(fc, altitude_m)
+
+
+def take_off_wait(fc: MavlinkFlightController, altitude_m: float) -> None:
+    """Wait for the take-off's altitude (within 0.05 m, still within 0.05 m/s); a miss shows the telemetry it saw
+    (and ``flight`` adds both sides then)."""
+    trace = HeightTrace(fc)
+
+    def reached() -> bool:
+        z, vz = trace.height_and_climb()
+        return z > altitude_m - 0.05 and abs(vz) < 0.05
+
     wait_until(
-        lambda: (
-            fc.telemetry().position_m[2] > altitude_m - 0.05 and abs(fc.telemetry().velocity_mps[2]) < 0.05
-        ),
+        reached,
         30.0,  # a bound on waiting for the evidence (about 0.5 s at x8 when the machine is idle)
-        "the takeoff altitude",
+        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        detail=trace.describe,
     )
 
 
 def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
-    # x1: the tracking loop below runs on the wall (a 0.02 s sleep); a stall of a loaded machine lags it by the
-    # stall times the speed-up (12.8 cm worst at x4 under load, issue 29)
-    with flight(home_m=(1.0, 2.0, 0.0), time_scale=DESCENT_SPEEDUP, telemetry_rate_hz=50.0) as (sitl, fc):
+    # In lock-step (docs/sitl-lockstep.md): the SITL's time moves only as the loop below grants it, so its
+    # figures are the same whatever the load (on the wall, a stall lagged the loop by the stall times the
+    # speed-up: 12.8 cm worst at x4 under load, issue 29; at x1 6.7-6.9 cm)
+    with flight(home_m=(1.0, 2.0, 0.0), telemetry_rate_hz=50.0, lockstep_wait_s=LOCKSTEP_WAIT_S) as (
+        sitl,
+        fc,
+    ):
+        clock = LockstepClock(fc)  # before connecting: the SITL announces lock-step on the first heartbeat
         fc.connect()
         assert fc.autopilot == "ardupilot" and fc.target_system == 1
         assert fc.warnings == []
-        fc.wait_for_estimate(timeout_s=2.0)
+        wait_until(lambda: clock.sleep(0.0) or clock.lockstep, 10.0, "the SITL's lock-step announcement")
+        # the EKF's convergence (0.5 s), on the SITL's time: granted, not waited for on the wall
+        step_until(clock, lambda: fc.telemetry().position_ok, 2.0, "the position estimate")
         wait_until(
             lambda: fc.telemetry().battery_fraction == fc.telemetry().battery_fraction, 2.0, "SYS_STATUS"
         )
@@ -85,37 +118,109 @@ def test_connect_arm_takeoff_minimum_jerk_descent_land() -> None:
         )  # its local origin is its home (GPS-like)
         assert tel.battery_fraction == pytest.approx(1.0)
 
-        take_off(fc, 1.2)
+        take_off_granted(fc, clock, 1.2)
         tel = fc.telemetry()
         assert tel.armed and tel.mode == "GUIDED" and not tel.on_ground
         assert tel.position_m[2] == pytest.approx(1.2, abs=0.05)
 
-        # Minimum-jerk descent from 1.2 m to 0.6 m in 3 s (autopilot time), tracked with feedforward + P.
-        start = np.array(tel.position_m)
-        goal = start - np.array([0.0, 0.0, 0.6])
-        traj = MinJerk(start, np.zeros(3), np.zeros(3), goal, np.zeros(3), np.zeros(3), 3.0)
-        t0 = fc.clock.now_s()
-        worst = 0.0
-        while (t := fc.clock.now_s() - t0) < traj.duration_s + 3.0:
-            p = np.array(fc.telemetry().position_m)
-            if t < traj.duration_s:
-                ref = traj.position(t)
-                worst = max(worst, float(np.linalg.norm(ref - p)))
-            elif np.linalg.norm(goal - p) < 0.02:
-                break  # settled on the goal
-            v = traj.velocity(min(t, traj.duration_s)) + 1.5 * (traj.position(min(t, traj.duration_s)) - p)
-            fc.send_velocity(tuple(v), 0.0)
-            time.sleep(0.02)
-        end = np.array(fc.telemetry().position_m)
-        assert np.linalg.norm(end - goal) < 0.025
+        worst, end = minimum_jerk_descent(fc, clock)
+        assert end < 0.025
         assert worst < 0.1  # the autopilot's velocity lag and the telemetry latency
 
         fc.land()
-        wait_until(lambda: not fc.telemetry().armed, 5.0, "touchdown and disarm")
+        step_until(clock, lambda: not fc.telemetry().armed, 5.0, "touchdown and disarm")
         tel = fc.telemetry()
         assert tel.on_ground and tel.mode == "LAND" and tel.position_m[2] == pytest.approx(0.0, abs=0.02)
         assert tel.battery_fraction < 1.0
         assert "Land complete, disarming" in sitl.status_log
+        # on the grants' time throughout (a reply later than 2 s of wall, a stall's, is not asserted on: the SITL
+        # stays at its grant meanwhile)
+        assert sitl.lockstep is not None and sitl.lockstep.free_runs == 0
+
+
+def take_off_granted(fc: MavlinkFlightController, clock: LockstepClock, altitude_m: float) -> None:
+    """``take_off`` on a SITL in lock-step: the climb waits for the SITL's time, granted 0.02 s at a time, for at
+    most 10 s of it (the climb takes about 3 s)."""
+    fc.arm()
+    fc.takeoff(altitude_m)
+    trace = HeightTrace(fc)
+
+    def reached() -> bool:
+        z, vz = trace.height_and_climb()
+        return z > altitude_m - 0.05 and abs(vz) < 0.05
+
+    step_until(
+        clock,
+        reached,
+        10.0,
+        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        detail=trace.describe,
+    )
+
+
+def minimum_jerk_descent(fc: MavlinkFlightController, clock: LockstepClock) -> tuple[float, float]:
+    """A minimum-jerk descent of 0.6 m in 3 s (the autopilot's time), tracked with feedforward + P every 0.02 s
+    of it: the worst distance (m) from the trajectory during it, and the distance from its goal at the end (after
+    at most 3 s more to settle within 2 cm)."""
+    start = np.array(fc.telemetry().position_m)
+    goal = start - np.array([0.0, 0.0, 0.6])
+    traj = MinJerk(start, np.zeros(3), np.zeros(3), goal, np.zeros(3), np.zeros(3), 3.0)
+    t0 = clock.now_s()
+    worst = 0.0
+    while (t := clock.now_s() - t0) < traj.duration_s + 3.0:
+        p = np.array(fc.telemetry().position_m)
+        if t < traj.duration_s:
+            ref = traj.position(t)
+            worst = max(worst, float(np.linalg.norm(ref - p)))
+        elif np.linalg.norm(goal - p) < 0.02:
+            break  # settled on the goal
+        v = traj.velocity(min(t, traj.duration_s)) + 1.5 * (traj.position(min(t, traj.duration_s)) - p)
+        fc.send_velocity(tuple(v), 0.0)
+        clock.sleep(0.02)
+    return worst, float(np.linalg.norm(np.array(fc.telemetry().position_m) - goal))
+
+
+def test_a_caller_left_unrun_right_after_the_take_off_ack_does_not_end_the_climb() -> None:
+    """Issue 29 (the SITL loop's run 7: "timed out after 30.0 s waiting for the takeoff altitude"). From the arming
+    the setpoint stream sent zero velocities, ignored on the ground, until the caller, back from NAV_TAKEOFF's
+    ACK, told it a take-off was climbing. A caller left unrun for 0.15 s of the autopilot's time after the ACK (a
+    loaded machine; at x1 a stall of 0.15 s of wall) let one arrive with the vehicle 1-2 cm off the ground: it
+    ended ArduPilot's climb, and the vehicle hovered where it stopped, 7-8 cm up. The stall is injected here, at x1 (the stream ticks a dozen
+    times while the vehicle climbs 0.3 m)."""
+    with flight(time_scale=1.0) as (sitl, fc):
+        fc.connect()
+        fc.arm()
+        command = fc.command
+
+        def left_unrun_after_the_ack(name: str, number: int, params: tuple[float, ...] = ()) -> None:
+            command(name, number, params)
+            if name == "takeoff":  # meanwhile the vehicle lifts off and the stream ticks on
+                wait_until(
+                    lambda: sitl.vehicle.position_m[2] > 0.3 or not sitl.vehicle.taking_off,
+                    10.0,
+                    "the climb to pass 0.3 m or to end",
+                )
+
+        fc.command = left_unrun_after_the_ack  # type: ignore[method-assign]
+        fc.takeoff(1.0)
+        assert sitl.vehicle.taking_off, (
+            f"the climb ended {sitl.vehicle.position_m[2]:.3f} m up (setpoint {sitl.last_setpoint_mps})"
+        )
+        take_off_wait(fc, 1.0)
+
+
+def test_a_refused_take_off_leaves_the_stream_flying_the_callers_setpoint() -> None:
+    # the climb is started before NAV_TAKEOFF goes out (issue 29): refused, the stream is as it was before
+    with flight() as (sitl, fc):
+        fc.connect()
+        take_off(fc, 1.0)
+        fc.send_velocity((0.2, 0.0, 0.0), 0.0)
+        with pytest.raises(CommandRejected, match="takeoff rejected: failed: Takeoff: already flying"):
+            fc.takeoff(0.5)
+        assert fc._takeoff_target_m is None
+        before = sitl.setpoints_received
+        wait_until(lambda: sitl.setpoints_received >= before + 2, 5.0, "the stream to go on")
+        assert sitl.last_setpoint_mps == pytest.approx((0.2, 0.0, 0.0), abs=1e-6)
 
 
 def test_setpoints_stream_at_the_configured_rate_and_go_to_zero_when_stale() -> None:

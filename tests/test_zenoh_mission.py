@@ -170,25 +170,31 @@ def test_tls_needs_the_certificate_authority(tmp_path):
     mc_conf, uav_conf = make_tls_files(tmp_path)
     port = free_port()
     endpoint = f"tls/127.0.0.1:{port}"
-    with (
-        ZenohTransport(MISSION_CONTROL, listen=[endpoint], config_file=mc_conf, mission="t3") as mc,
-        ZenohTransport("brick-1", connect=[endpoint], config_file=uav_conf, mission="t3") as uav,
-        ZenohTransport("eve", connect=[endpoint], mission="t3") as eve,
-    ):  # no CA: the TLS handshake fails
-        got: list[bytes] = []
+    with ZenohTransport(MISSION_CONTROL, listen=[endpoint], config_file=mc_conf, mission="t3") as mc:
+        met: list[str] = []  # every session that opens a transport with mission control, from its start
+        listener = mc._session.info.declare_transport_events_listener(
+            lambda event: met.append(str(event.transport.zid)), history=True
+        )
+        # eve first, without the CA: zenoh.open tries its connect endpoints before it returns, so her TLS
+        # handshake has failed before brick-1's, with the CA, is tried on the same listener
+        with ZenohTransport("eve", connect=[endpoint], mission="t3") as eve:
+            assert list(eve._session.info.transports()) == []
+            with ZenohTransport("brick-1", connect=[endpoint], config_file=uav_conf, mission="t3") as uav:
+                got: list[bytes] = []
 
-        def ping():
-            eve.send(MISSION_CONTROL, b"eve")
-            uav.send(MISSION_CONTROL, b"brick-1")
-            got.extend(mc.receive())
-            return b"brick-1" in got
+                def ping():
+                    eve.send(MISSION_CONTROL, b"eve")
+                    uav.send(MISSION_CONTROL, b"brick-1")
+                    got.extend(mc.receive())
+                    return b"brick-1" in got
 
-        assert wait_for(ping)
-        time.sleep(0.5)  # eve had as long as brick-1, and more
-        eve.send(MISSION_CONTROL, b"eve")
-        time.sleep(0.3)
-        got.extend(mc.receive())
-        assert b"eve" not in got
+                assert wait_for(ping)
+                brick, intruder = str(uav._session.info.zid()), str(eve._session.info.zid())
+                assert brick in met and intruder not in met  # mission control never met eve
+                assert list(eve._session.info.transports()) == []  # linked to no one: her messages go nowhere
+                got.extend(mc.receive())
+                assert b"eve" not in got
+        listener.undeclare()
 
 
 def _start_mission(d: Path, mode: str) -> tuple[Cli, list[Cli], Path]:

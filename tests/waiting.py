@@ -9,22 +9,64 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import Protocol
 
 POLL_S = 0.005
 
 
-def wait_until(predicate: Callable[[], object], timeout_s: float, what: str = "the condition") -> float:
+def wait_until(
+    predicate: Callable[[], object],
+    timeout_s: float,
+    what: str = "the condition",
+    detail: Callable[[], str] | None = None,
+) -> float:
     """Poll ``predicate`` until it is true; return the seconds waited.
 
     Raises:
-        AssertionError: still false after ``timeout_s`` (wall seconds), naming ``what``.
+        AssertionError: still false after ``timeout_s`` (wall seconds), naming ``what``, and with ``detail()``'s
+            lines (what the other side was doing then) where given.
     """
     started = time.monotonic()
     while not predicate():
         if time.monotonic() - started > timeout_s:
-            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+            more = f"\n{detail()}" if detail is not None else ""
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}{more}")
         time.sleep(POLL_S)
     return time.monotonic() - started
+
+
+class SteppedClock(Protocol):
+    """A clock whose time moves as it is told (a SITL's lock-step: ``masonry.adapters.lockstep.LockstepClock``)."""
+
+    def now_s(self) -> float: ...
+
+    def sleep(self, duration_s: float) -> None: ...
+
+
+def step_until(
+    clock: SteppedClock,
+    predicate: Callable[[], object],
+    within_s: float,
+    what: str = "the condition",
+    *,
+    step_s: float = 0.02,
+    detail: Callable[[], str] | None = None,
+) -> float:
+    """Step ``clock`` ``step_s`` at a time until ``predicate`` is true; return the clock's seconds it took.
+
+    The bound is on the clock's time, not the wall's: against a SITL in lock-step, what the test waits for
+    happens at the same simulated time however loaded the machine is, and so does a miss.
+
+    Raises:
+        AssertionError: still false after ``within_s`` of the clock's time, naming ``what`` (and ``detail()``).
+    """
+    started = clock.now_s()
+    while not predicate():
+        if clock.now_s() - started > within_s:
+            more = f"\n{detail()}" if detail is not None else ""
+            raise AssertionError(f"not within {within_s} s of the clock's time: {what}{more}")
+        clock.sleep(step_s)
+    return clock.now_s() - started
 
 
 class HeldClock:

@@ -1,8 +1,9 @@
 """FlightController over MAVLink 2 (pymavlink): ArduPilot GUIDED or PX4 OFFBOARD velocity control.
 
-This module is the only place in masonry where NED appears. masonry's world is ENU (x east, y north, z up) with
-its origin at the autopilot's local origin, shifted by a configurable offset and rotated by a configurable yaw
-(:class:`FrameTransform`); MAVLink's local frame is NED and its body frame FRD.
+This module and :mod:`~masonry.adapters.mavlink_frame` are the only places in masonry where NED appears. masonry's
+world is ENU (x east, y north, z up) with its origin at the autopilot's local origin, shifted by a configurable
+offset and rotated by a configurable yaw (:class:`FrameTransform`); MAVLink's local frame is NED and its body
+frame FRD.
 
 Lifecycle (construct, then connect)::
 
@@ -25,13 +26,14 @@ MAV_RESULT and the autopilot's latest warning text (ArduPilot's "PreArm: ..."), 
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from masonry.adapters.arming import ARM_RETRY_S, arm_retrying
 from masonry.adapters.mavlink_estimate import EstimateLink
+from masonry.adapters.mavlink_frame import FrameTransform
 from masonry.adapters.mavlink_link import LinkClock, LinkStatus, MavlinkLink, load_signing_key, mavutil_module
 from masonry.adapters.mavlink_protocol import (
     ARDUPILOT_MODES,
@@ -127,65 +129,6 @@ __all__ = [
     "mavutil_module",
     "mode_name",
 ]
-
-
-@dataclass(frozen=True)
-class FrameTransform:
-    """masonry world ENU <-> autopilot local NED: ``p_world = R_z(yaw_rad) @ enu(p_local) + offset_m``.
-
-    ``offset_m`` is the autopilot's local origin expressed in the world frame, ``yaw_rad`` the rotation of the
-    autopilot's local ENU axes (east, north, up from its NED) about world z. The identity (the default) fits a
-    motion-capture setup whose poses are fed to the autopilot in the world frame.
-    """
-
-    offset_m: Vec3 = (0.0, 0.0, 0.0)
-    yaw_rad: float = 0.0
-
-    def _rotate(self, x: float, y: float, angle: float) -> tuple[float, float]:
-        c, s = math.cos(angle), math.sin(angle)
-        return (c * x - s * y, s * x + c * y)
-
-    def position_to_world(self, p_ned: Vec3) -> Vec3:
-        """A local NED position (m) as a world ENU position (m)."""
-        east, north, up = p_ned[1], p_ned[0], -p_ned[2]
-        x, y = self._rotate(east, north, self.yaw_rad)
-        return (x + self.offset_m[0], y + self.offset_m[1], up + self.offset_m[2])
-
-    def position_to_ned(self, p_world: Vec3) -> Vec3:
-        """A world ENU position (m) as a local NED position (m)."""
-        x, y = self._rotate(p_world[0] - self.offset_m[0], p_world[1] - self.offset_m[1], -self.yaw_rad)
-        return (y, x, -(p_world[2] - self.offset_m[2]))
-
-    def velocity_to_world(self, v_ned: Vec3) -> Vec3:
-        """A local NED velocity (m/s) as a world ENU velocity (m/s)."""
-        x, y = self._rotate(v_ned[1], v_ned[0], self.yaw_rad)
-        return (x, y, -v_ned[2])
-
-    def velocity_to_ned(self, v_world: Vec3) -> Vec3:
-        """A world ENU velocity (m/s) as a local NED velocity (m/s)."""
-        x, y = self._rotate(v_world[0], v_world[1], -self.yaw_rad)
-        return (y, x, -v_world[2])
-
-    def attitude_to_world(self, roll_rad: float, pitch_rad: float, yaw_ned_rad: float) -> Vec3:
-        """FRD roll/pitch/yaw in NED as FLU roll/pitch and yaw about world +z from world +x."""
-        return (roll_rad, -pitch_rad, _wrap(math.pi / 2.0 - yaw_ned_rad + self.yaw_rad))
-
-    def attitude_to_ned(self, roll_rad: float, pitch_rad: float, yaw_world_rad: float) -> Vec3:
-        """World FLU roll/pitch/yaw as FRD roll/pitch and yaw in the autopilot's NED frame."""
-        return (roll_rad, -pitch_rad, _wrap(math.pi / 2.0 - yaw_world_rad + self.yaw_rad))
-
-    @staticmethod
-    def yaw_rate_to_ned(yaw_rate_radps: float) -> float:
-        """Yaw rate about +z up (ENU) as yaw rate about +z down (NED)."""
-        return -yaw_rate_radps
-
-    @staticmethod
-    def yaw_rate_to_world(yaw_rate_ned_radps: float) -> float:
-        return -yaw_rate_ned_radps
-
-
-def _wrap(angle_rad: float) -> float:
-    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
 class MavlinkFlightController(EstimateLink):
@@ -285,6 +228,8 @@ class MavlinkFlightController(EstimateLink):
         #: the EKF's ground height measured at the last arming (local up, m; None: not measured)
         self.ground_offset_m: float | None = None
         self._last_vision_stamp: Any = None
+        #: held across one stream decision and its send, and by takeoff() while it starts a climb (issue 29)
+        self._stream_lock = threading.Lock()
 
     # ----------------------------------------------------------------------------------------------- lifecycle
 
@@ -310,6 +255,12 @@ class MavlinkFlightController(EstimateLink):
     # ---------------------------------------------------------------------------------- the setpoint stream
 
     def _stream_setpoint(self, now: float) -> None:
+        with (
+            self._stream_lock
+        ):  # a decision is sent before takeoff() starts a climb, or made after (issue 29)
+            self._stream_setpoint_locked(now)
+
+    def _stream_setpoint_locked(self, now: float) -> None:
         with self._lock:
             streaming = self._streaming and self._state.armed
             setpoint = self._setpoint
@@ -490,9 +441,11 @@ class MavlinkFlightController(EstimateLink):
             raise CommandRejected("takeoff", "not armed (arm first)")
         ground_world = self.frame.position_to_world(position) if position is not None else self.frame.offset_m
         self._takeoff_mode = self.telemetry().mode
-        if self.autopilot == "ardupilot":
-            self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
-        with self._lock:
+        # The climb is started before NAV_TAKEOFF goes out, with no stream decision under way (issue 29): from the
+        # arming the stream sends zero velocities (ignored on the ground), and one that reached ArduPilot after it
+        # had accepted the take-off and lifted off (this caller left unrun 0.15 s after the ACK) ended its climb.
+        with self._stream_lock, self._lock:
+            before = (self._setpoint, self._streaming, self.velocity_loop_engaged)
             self._setpoint = None
             self._streaming = True
             self._takeoff_target_m = ground_world[2] + altitude_m
@@ -506,6 +459,14 @@ class MavlinkFlightController(EstimateLink):
                 ClimbConfig(timeout_s=self._takeoff_limit_s, own_loop=own_loop),
             )
             self._climb = climb if self.autopilot == "px4" else None
+        if self.autopilot == "ardupilot":
+            try:
+                self.command("takeoff", MAV_CMD_NAV_TAKEOFF, (0, 0, 0, math.nan, 0, 0, altitude_m))
+            except (CommandRejected, CommandTimeout, LinkLost):
+                with self._lock:  # no take-off: the stream as before it
+                    self._takeoff_target_m = None
+                    self._setpoint, self._streaming, self.velocity_loop_engaged = before
+                raise
 
     def land(self) -> None:
         """Land where the UAV is (ArduPilot LAND mode; PX4 MAV_CMD_NAV_LAND); the setpoint stream stops."""
