@@ -252,7 +252,9 @@ def test_a_lock_step_flight_repeats_with_the_same_seed() -> None:
     states = [
         (f["status"], f.get("reason"), [(e["t_s"], e["state"]) for e in f["trace"]]) for f in (first, second)
     ]
-    assert first["status"] == second["status"] == "done", states
+    # the reasons first, in full (a list in the message is cut short: loop run 8's failure said only "failed")
+    why = f"{[(f['status'], f.get('reason')) for f in (first, second)]}; {states}"
+    assert first["status"] == second["status"] == "done", why
     assert first["trace"] == second["trace"], states
     assert first["trace"][0]["t_s"] < 1.0, states  # the flight starts where the pre-flight's grants left it
     assert second["placement_error_m"] == first["placement_error_m"], states
