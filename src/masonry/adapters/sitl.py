@@ -165,7 +165,10 @@ class MavlinkSitl:
         self._offboard_mode = "OFFBOARD" if self.px4 else "GUIDED"
         self._land_mode = "AUTO.LAND" if self.px4 else "LAND"
         self.mode = "POSCTL" if self.px4 else "STABILIZE"
-        self._setpoints = SetpointStream(self.config.starved_answers)  # PX4's OFFBOARD rules (issue 29)
+        # PX4's OFFBOARD rules (issue 29); in lock-step timed on the simulated clock, as the SITL's time (sitl_offboard)
+        self._setpoints = SetpointStream(
+            self.config.starved_answers, None if self.lockstep is None else (lambda: self.sim_time_s)
+        )
         self.link_down = False  # test hook: a radio outage (nothing sent, everything received is dropped)
         self.log = log  # a line per event (mode change, STATUSTEXT), e.g. print
         self.vision_received = 0

@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from masonry.ports import Telemetry
 
 __all__ = [
+    "LONE_SHIFT_M",
     "WallAlign",
     "drift_noise_mps_per_sqrt_s",
     "follow_in_view",
@@ -197,6 +198,10 @@ def drift_noise_mps_per_sqrt_s(configured: float, in_wind: bool, side_look: bool
     return configured if side_look or not in_wind else 0.0
 
 
+#: A lone brick's target follows the carried brick's measured offset once it has moved this far (m).
+LONE_SHIFT_M = 0.0005
+
+
 class WallAlign:
     """The drop-off's target as the bricks around it place it (see the module docstring)."""
 
@@ -277,6 +282,8 @@ class WallAlign:
             if est is not None:
                 estimates[bid] = est[0]
         offset = wall_offset_m(estimates, wall, own, self._near, self._as_built)
+        if offset is None and len(wall) <= 1:
+            return self._lone(uav)
         if offset is None or off_support(self._touching, self.seen_ids, estimates.keys()):
             return False
         self.seen_s, self.estimates = uav._now_s, estimates
@@ -309,6 +316,24 @@ class WallAlign:
         )
         if delta is None:
             return False
+        uav.nav.shift(tuple(float(v) for v in delta))
+        uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
+        return True
+
+    def _lone(self, uav: BrickUav) -> bool:
+        """A lone brick (no other in the blueprint: issue 29's one-brick scenario) has no wall to align on: its
+        drop-off is the design's, less the carried brick's offset on the magnet as the frames so far measure it
+        (:mod:`masonry.fsm.carried_look`), so that the brick, not the effector, lands on it. Without it the
+        offset (up to 6 mm) added to where the gate let go: on the real PX4 a brick let go 7 mm off rested 10 mm
+        off, the offset the same way (docs/performance/autopilots.md, branch ``px447``). True if the target moved."""
+        center = self.tracker.center_m
+        if self.carried.frames == 0 or center is None:
+            return False
+        # the offset's running mean, not a wall's noisy sighting: followed to LONE_SHIFT_M, not the tracker's 2 mm
+        delta = self.design_m - self.carried.world_m(uav._place_yaw_rad()) - center
+        if float(np.linalg.norm(delta)) <= LONE_SHIFT_M:
+            return False
+        self.tracker.center_m = center + delta
         uav.nav.shift(tuple(float(v) for v in delta))
         uav.attempt.place_effector_target_m = uav.attempt.place_effector_target_m + delta
         return True
