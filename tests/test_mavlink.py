@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from masonry.adapters.link_values import EXTRAPOLATION_HORIZON_S, HOLD_S, RATE_WINDOW_S
+from masonry.adapters.lockstep import LOCKSTEP_TEXT
 from masonry.adapters.mavlink import (
     ARDUPILOT_MODES,
     PX4_MODES,
@@ -403,3 +404,18 @@ def test_the_sender_thread_counts_failed_sends_and_keeps_streaming(caplog) -> No
     assert status.send_errors >= 3 and status.setpoints_sent == 0
     assert status.last_error == "send error: OSError: network is unreachable"
     assert any("send error" in r.getMessage() for r in caplog.records)
+
+
+def test_a_text_heard_before_the_autopilots_first_heartbeat_is_kept() -> None:
+    # issue 29: a lock-step SITL answers the adapter's first heartbeat with its announcement, which can come before
+    # the SITL's own heartbeat; dropped, the client never granted and its SITL sat at 0 s (a GIL-holding thread in
+    # the SITL load loop: "timed out after 10.0 s waiting for the SITL's lock-step announcement")
+    text = _Msg("STATUSTEXT", severity=6, text=LOCKSTEP_TEXT)
+    beat = _Msg("HEARTBEAT", type=2, autopilot=3, base_mode=0, custom_mode=4, system_status=4)
+    fc = MavlinkFlightController("udpin:127.0.0.1:9", connect_timeout_s=5.0)
+    fc._conn = _Conn([text, beat])
+    texts = fc.listen(("STATUSTEXT",))
+    fc._await_first_heartbeat()
+    assert fc.target_system == 1 and fc.autopilot == "ardupilot"
+    assert texts.get_nowait().text == LOCKSTEP_TEXT  # what LockstepClock reads
+    assert any(LOCKSTEP_TEXT in line for line in fc.status_texts())

@@ -310,14 +310,15 @@ class MavlinkLink:
 
     def _await_first_heartbeat(self) -> None:
         deadline = self._monotonic() + self.connect_timeout_s
-        next_beat = 0.0
+        next_beat, texts = 0.0, list[tuple[object, float]]()  # texts: heard before the heartbeat (issue 29)
         while self._monotonic() < deadline:
             now = self._monotonic()
             if now >= next_beat:  # a udpout/udpin peer learns our address from our first packet
                 self._send_heartbeat()
                 next_beat = now + 0.25
             msg = self._conn.recv_match(blocking=True, timeout=0.05)
-            if msg is None or msg.get_type() != "HEARTBEAT":
+            if msg is None or msg.get_type() != "HEARTBEAT":  # a lock-step SITL's announcement may come first
+                texts += [(msg, now)] if msg is not None and msg.get_type() == "STATUSTEXT" else []
                 continue
             if msg.type == MAV_TYPE_GCS or msg.autopilot == MAV_AUTOPILOT_INVALID:
                 continue  # another ground station, not an autopilot
@@ -330,6 +331,8 @@ class MavlinkLink:
             own = self.own_velocity_loop
             self.velocity_loop = VelocityLoop() if (self.autopilot == "px4" if own is None else own) else None
             self._handle(msg, self._monotonic())
+            for text, heard_s in texts:  # the autopilot's own (others are dropped as ever)
+                self._handle(text, heard_s)
             return
         hint = " (is the signing key the same on both ends?)" if self.signing_key is not None else ""
         raise DeviceNotFound(
@@ -516,11 +519,8 @@ class MavlinkLink:
     def _link_ok(self, now: float) -> bool:
         """The watchdog: a message within ``heartbeat_timeout_s``, a HEARTBEAT within 2.5 s (link_silence)."""
         silent_s, beatless = self._silences(now)
-        ok = (
-            self._conn is not None
-            and silent_s <= self.heartbeat_timeout_s
-            and beatless <= self._heartbeat_missing_s
-        )
+        ok = self._conn is not None and silent_s <= self.heartbeat_timeout_s
+        ok = ok and beatless <= self._heartbeat_missing_s
         # its transitions, what it read, logged
         if ok == (self._down_at is not None) and self._conn is not None:
             st, boot = self._state, self.clock.last_boot_s
