@@ -31,12 +31,9 @@ from tempfile import TemporaryDirectory
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from ardupilot_sitl import arducopter
+from ardupilot_sitl import REACHED_M, arducopter, ardupilot_take_off, hold_after_the_ack
 from masonry.adapters.mavlink import MavlinkFlightController
 from test_sitl import flight
-
-#: A take-off on ArduCopter counts as reaching its 1.2 m from this height above where it armed.
-REACHED_M = 1.1
 
 
 def take_off(stall_s: float, time_scale: float) -> str:
@@ -44,14 +41,7 @@ def take_off(stall_s: float, time_scale: float) -> str:
         fc.connect()
         fc.wait_for_estimate(timeout_s=5.0)
         fc.arm()
-        command = fc.command
-
-        def held_after_the_ack(name: str, number: int, params: tuple[float, ...] = ()) -> None:
-            command(name, number, params)
-            if name == "takeoff" and stall_s > 0.0:
-                time.sleep(stall_s)  # the caller left unrun: what the bench measures
-
-        fc.command = held_after_the_ack  # type: ignore[method-assign]
+        hold_after_the_ack(fc, stall_s)
         fc.takeoff(1.2)
         settle_s = 6.0 / time_scale + 1.0  # the climb takes about 3 s of the SITL's time
         end = time.monotonic() + settle_s
@@ -62,50 +52,6 @@ def take_off(stall_s: float, time_scale: float) -> str:
             f"stopped at {v.position_m[2]:.3f} m (taking off {v.taking_off}), {sitl.setpoints_received} setpoints "
             f"applied, the last {sitl.last_setpoint_mps}"
         )
-
-
-def _hold_after_the_ack(fc: MavlinkFlightController, stall_s: float) -> None:
-    command = fc.command
-
-    def held_after_the_ack(name: str, number: int, params: tuple[float, ...] = ()) -> None:
-        command(name, number, params)
-        if name == "takeoff" and stall_s > 0.0:
-            time.sleep(stall_s)  # the caller left unrun: what the bench measures
-
-    fc.command = held_after_the_ack  # type: ignore[method-assign]
-
-
-def _wait_autopilot_s(fc: MavlinkFlightController, span_s: float, wall_limit_s: float) -> float:
-    """Wait ``span_s`` of the autopilot's clock (at most ``wall_limit_s`` of wall); the highest height seen."""
-    start, end, top = fc.clock.now_s(), time.monotonic() + wall_limit_s, -float("inf")
-    while fc.clock.now_s() - start < span_s and time.monotonic() < end:
-        top = max(top, fc.telemetry().position_m[2])
-        time.sleep(0.02)
-    return top
-
-
-def ardupilot_take_off(fc: MavlinkFlightController, stall_s: float, settle_s: float) -> tuple[bool, str]:
-    """One take-off to 1.2 m on ArduCopter held ``stall_s`` after the ACK, then LAND: (reached, its line)."""
-    vars(fc).pop("command", None)  # the last take-off's hold
-    fc.arm()
-    ground = fc.telemetry().position_m[2]
-    _hold_after_the_ack(fc, stall_s)
-    fc.takeoff(1.2)
-    top = _wait_autopilot_s(fc, settle_s, wall_limit_s=60.0) - ground
-    tel = fc.telemetry()
-    last = tel.position_m[2] - ground
-    fc.land()
-    _wait_disarmed(fc)
-    reached = last >= REACHED_M
-    return reached, f"highest {top:.3f} m, last {last:.3f} m, armed {tel.armed}, mode {tel.mode}"
-
-
-def _wait_disarmed(fc: MavlinkFlightController, wall_limit_s: float = 90.0) -> None:
-    end = time.monotonic() + wall_limit_s
-    while fc.telemetry().armed and time.monotonic() < end:
-        time.sleep(0.05)
-    if fc.telemetry().armed:
-        raise RuntimeError("ArduCopter did not disarm after LAND")
 
 
 def ardupilot_main(args: argparse.Namespace) -> None:
