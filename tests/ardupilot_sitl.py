@@ -3,7 +3,7 @@
 ``MASONRY_ARDUPILOT_SITL`` names the ``arducopter`` binary (``.ci/run`` sets it from ``../shared/sitl/arducopter``
 when that exists; its ``copter.parm`` and ``copter-hexa.parm`` sit beside it). Without it, the tests that need
 it are skipped with one reason. Each instance runs in its own working folder and process group, killed whole
-afterwards; instance numbers 41-49 (MAVLink on TCP 5760 + 10 N) keep clear of a developer's -I0 and of parallel
+afterwards; instance numbers 41-50 (MAVLink on TCP 5760 + 10 N) keep clear of a developer's -I0 and of parallel
 tests. ``MASONRY_ARDUPILOT_SITL_WIND=3`` flies them in 3 m/s of wind (SIM_WIND_SPD).
 """
 
@@ -19,6 +19,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 import pytest
+
+from masonry.adapters.mavlink import MavlinkFlightController
 
 ENV = "MASONRY_ARDUPILOT_SITL"
 #: Wind for the same tests (m/s, ArduPilot's SIM_WIND_SPD from the north-east): issue 19's windy targets.
@@ -92,3 +94,53 @@ def arducopter(
             os.killpg(proc.pid, signal.SIGKILL)
         proc.wait(timeout=10)
         log.close()
+
+
+#: A take-off on ArduCopter counts as reaching its 1.2 m from this height above where it armed.
+REACHED_M = 1.1
+
+
+def hold_after_the_ack(fc: MavlinkFlightController, stall_s: float) -> None:
+    """Make ``fc``'s take-off command hold its caller ``stall_s`` of wall time once the ACK is back (issue 29:
+    the race of the setpoint stream against the climb, docs/hardware.md "Take-off dropped")."""
+    command = fc.command
+
+    def held_after_the_ack(name: str, number: int, params: tuple[float, ...] = ()) -> None:
+        command(name, number, params)
+        if name == "takeoff" and stall_s > 0.0:
+            time.sleep(stall_s)  # the caller left unrun (a stall of a loaded machine)
+
+    fc.command = held_after_the_ack  # type: ignore[method-assign]
+
+
+def _wait_autopilot_s(fc: MavlinkFlightController, span_s: float, wall_limit_s: float) -> float:
+    """Wait ``span_s`` of the autopilot's clock (at most ``wall_limit_s`` of wall); the highest height seen."""
+    start, end, top = fc.clock.now_s(), time.monotonic() + wall_limit_s, -float("inf")
+    while fc.clock.now_s() - start < span_s and time.monotonic() < end:
+        top = max(top, fc.telemetry().position_m[2])
+        time.sleep(0.02)
+    return top
+
+
+def ardupilot_take_off(fc: MavlinkFlightController, stall_s: float, settle_s: float) -> tuple[bool, str]:
+    """One take-off to 1.2 m on ArduCopter held ``stall_s`` after the ACK, then LAND: (reached, its line)."""
+    vars(fc).pop("command", None)  # the last take-off's hold
+    fc.arm()
+    ground = fc.telemetry().position_m[2]
+    hold_after_the_ack(fc, stall_s)
+    fc.takeoff(1.2)
+    top = _wait_autopilot_s(fc, settle_s, wall_limit_s=60.0) - ground
+    tel = fc.telemetry()
+    last = tel.position_m[2] - ground
+    fc.land()
+    _wait_disarmed(fc)
+    reached = last >= REACHED_M
+    return reached, f"highest {top:.3f} m, last {last:.3f} m, armed {tel.armed}, mode {tel.mode}"
+
+
+def _wait_disarmed(fc: MavlinkFlightController, wall_limit_s: float = 90.0) -> None:
+    end = time.monotonic() + wall_limit_s
+    while fc.telemetry().armed and time.monotonic() < end:
+        time.sleep(0.05)
+    if fc.telemetry().armed:
+        raise RuntimeError("ArduCopter did not disarm after LAND")

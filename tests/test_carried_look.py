@@ -21,6 +21,14 @@ from px4_sitl import ONE_BRICK
 YAW = math.radians(30.0)
 
 
+def _carry_truth_m(mission: SimulatedMission, uav: str) -> np.ndarray:
+    """The simulator's truth of the carried brick's offset on the magnet, in the world's x-y (m)."""
+    sim = mission.world.uavs[uav]
+    bx, by, _ = sim._carry_offset  # body frame
+    c, s = math.cos(sim.vehicle.yaw_rad), math.sin(sim.vehicle.yaw_rad)
+    return np.array([c * bx - s * by, s * bx + c * by])
+
+
 def test_nothing_seen_is_no_offset() -> None:
     look = CarriedLook()
     assert look.frames == 0
@@ -42,10 +50,7 @@ def test_the_offset_on_the_magnet_is_measured_and_the_brick_lands_on_it(
     release = BrickUav.enter_place_release
 
     def record(self: BrickUav, *args: object, **kwargs: object) -> None:
-        sim = mission.world.uavs[self.config.name]
-        bx, by, _ = sim._carry_offset  # (the simulator's truth, body frame)
-        c, s = math.cos(sim.vehicle.yaw_rad), math.sin(sim.vehicle.yaw_rad)
-        truth = np.array([c * bx - s * by, s * bx + c * by])
+        truth = _carry_truth_m(mission, self.config.name)
         seen.append((self._wall.carried.frames, truth, self._wall.carried.world_m(self._place_yaw_rad())[:2]))
         release(self, *args, **kwargs)
 
@@ -76,10 +81,7 @@ def test_a_lone_bricks_target_is_its_design_less_the_offset_on_the_magnet(
     release = BrickUav.enter_place_release
 
     def record(self: BrickUav, *args: object, **kwargs: object) -> None:
-        sim = mission.world.uavs[self.config.name]
-        bx, by, _ = sim._carry_offset  # (the simulator's truth, body frame)
-        c, s = math.cos(sim.vehicle.yaw_rad), math.sin(sim.vehicle.yaw_rad)
-        truth = np.array([c * bx - s * by, s * bx + c * by])
+        truth = _carry_truth_m(mission, self.config.name)
         target = np.asarray(self.attempt.place_effector_target_m, dtype=float)[:2]
         seen.append((self._wall.carried.frames, truth, target - np.asarray(self.brick_task.position_m[:2])))
         release(self, *args, **kwargs)

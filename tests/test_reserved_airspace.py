@@ -327,40 +327,16 @@ def test_a_uav_held_back_far_from_its_site_waits_at_its_approach_spot_and_its_si
     assert air.conflicts() == []
 
 
-def test_a_uav_at_its_approach_spot_is_beside_the_site_out_of_a_neighbours_climb():
-    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
-    # on to a site beside a's, to work up to 3.5 m. The spot is 1.5 m from a's site, not over it, so b's climb
-    # and flight pass it and are granted at once (over a's site, at any layer, the hover was in their way: a
-    # cycle of waits, broken only by sending a to its parking spot 6 m up, its next site interval starting there)
-    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, 0.4, 1.2)
-    gate = _BusyGate({s_a, s_b})
-    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
-    air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
-    air.work_site = lambda uav, site: site in (s_a, s_b, s_c)
-    air.take_off("b")
-    assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted
-    air.take_off("a")
-    spot = air.request("a", s_a, 1.0, (0.0, -5.0, 1.2)).hold_m
-    assert spot == pytest.approx((0.0, -1.5, air.airspace.layers_m[-1]))  # 1.5 m towards a, at the top layer
-    for t in range(2, 30):
-        air.grant(float(t))
-    air.end_transit("b")
-    air.progress("b", s_b)
-    air.progress("a", spot)
-    assert not air.request("a", s_a, 30.0, spot).granted and air.phase("a") is Phase.AT_HOLD
-    assert air.request("b", s_c, 31.0, s_b, top_m=3.5).granted
-    assert air.held_back == 0 and air.conflicts() == []
+_SPOT_HOMES = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
 
 
-def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_spot():
-    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
-    # on to a site beside a's spot, to work up to 4 m, which the spot is in the way of, while b's stay is in the
-    # way of a's descent: a cycle of waits. a, at its spot, is sent to its parking spot like any waiting
-    # UAV of a cycle (b's own parking flight would climb through a's hover), and b's flight goes once a is there
-    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, -1.1, 1.2)
+def _a_at_its_spot_for_bs_site(
+    s_a: tuple[float, float, float], s_b: tuple[float, float, float], s_c: tuple[float, float, float]
+) -> tuple[TableClearance, tuple[float, float, float], _BusyGate]:
+    """b works at s_b (beside s_a, busy); a, asking for s_a, is sent to its approach spot and waits there (held at
+    30 s); s_c is b's next site. Returns the table, a's spot and the sites' gate (homes: ``_SPOT_HOMES``)."""
     gate = _BusyGate({s_a, s_b})
-    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
-    air = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, gate=gate)
+    air = TableClearance(0.8, 2.0, homes=_SPOT_HOMES, start_base_m=1.2, gate=gate)
     air.work_site = lambda uav, site: site in (s_a, s_b, s_c)
     air.take_off("b")
     assert air.request("b", s_b, 0.0, (0.5, -1.5, 1.2)).granted
@@ -373,6 +349,28 @@ def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_s
     air.progress("b", s_b)
     air.progress("a", spot)
     assert not air.request("a", s_a, 30.0, spot).granted and air.phase("a") is Phase.AT_HOLD
+    return air, spot, gate
+
+
+def test_a_uav_at_its_approach_spot_is_beside_the_site_out_of_a_neighbours_climb():
+    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
+    # on to a site beside a's, to work up to 3.5 m. The spot is 1.5 m from a's site, not over it, so b's climb
+    # and flight pass it and are granted at once (over a's site, at any layer, the hover was in their way: a
+    # cycle of waits, broken only by sending a to its parking spot 6 m up, its next site interval starting there)
+    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, 0.4, 1.2)
+    air, spot, _gate = _a_at_its_spot_for_bs_site(s_a, s_b, s_c)
+    assert spot == pytest.approx((0.0, -1.5, air.airspace.layers_m[-1]))  # 1.5 m towards a, at the top layer
+    assert air.request("b", s_c, 31.0, s_b, top_m=3.5).granted
+    assert air.held_back == 0 and air.conflicts() == []
+
+
+def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_spot():
+    # scenario (docs/safety.md, "The approach spot"): a waits at its approach spot for b's site to free; b moves
+    # on to a site beside a's spot, to work up to 4 m, which the spot is in the way of, while b's stay is in the
+    # way of a's descent: a cycle of waits. a, at its spot, is sent to its parking spot like any waiting
+    # UAV of a cycle (b's own parking flight would climb through a's hover), and b's flight goes once a is there
+    s_a, s_b, s_c = (0.0, 0.0, 1.2), (0.5, 0.0, 1.2), (0.4, -1.1, 1.2)
+    air, _spot, gate = _a_at_its_spot_for_bs_site(s_a, s_b, s_c)
     assert not air.request("b", s_c, 31.0, s_b, top_m=4.0).granted
     assert air.blockers("b") == [("a", "stay")]
     parked, granted = None, []
@@ -385,7 +383,7 @@ def test_a_uav_at_its_approach_spot_in_a_cycle_of_waits_is_sent_to_its_parking_s
                 granted.append((g.uav, t))
         if parked is not None and t == parked[1] + 20.0:
             air.progress("a", parked[0])  # a is at its parking spot
-    assert parked is not None and parked[0][:2] == pytest.approx(homes["a"][:2])
+    assert parked is not None and parked[0][:2] == pytest.approx(_SPOT_HOMES["a"][:2])
     assert parked[0][2] > air.airspace.layers_m[-1]  # over every layer, over its pad
     assert granted and granted[0][0] == "b" and granted[0][1] >= parked[1]
     assert [u for u, _t in gate.entered_at] == ["b"]  # a's site interval has not started: it never came down
