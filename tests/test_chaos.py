@@ -298,6 +298,38 @@ def test_a_uav_lost_with_its_brick_on_the_magnet_says_so_in_the_attempts_reason(
     assert "B0" in mc.dispatcher.done
 
 
+@pytest.mark.parametrize(
+    ("state", "status", "reason"),
+    [
+        ("place_ascend", "done", None),
+        ("place_release", "done", None),
+        ("place_descend", "failed", "uav lost (last heard in place_descend, with brick 0 on its magnet)"),
+    ],
+)
+def test_a_uav_lost_after_its_release_has_its_brick_done(state, status, reason):
+    """tests/test_spares_sim.py with branch compact47's dispatch: brick-2 fell climbing out of its placement, its
+    task went back to the pool, and the retry looked for the brick (on the wall) at its pickup; a spare then met
+    it in its place. Last heard with its brick released, a lost UAV's task is done, not given again."""
+    bus = InprocBus()
+    mc = MissionControl(one_brick(), brick_fleet(2), bus.endpoint(MISSION_CONTROL), heartbeat_timeout_s=5.0)
+    b1, b2 = Uav(bus, "brick-1"), Uav(bus, "brick-2")
+    now = 0.0
+    while now < 2.0:
+        b1.beat(now, b1.assigned[0].task.id if b1.assigned else None, state=state if b1.assigned else "idle")
+        b2.beat(now)
+        mc.step(now)
+        now += 0.5
+    while not mc.uavs["brick-1"].lost:  # brick-1 falls silent
+        b2.beat(now, b2.assigned[0].task.id if b2.assigned else None)
+        mc.step(now)
+        now += 0.5
+    first = mc.history[0]
+    assert (first.uav, first.status, first.reason) == ("brick-1", status, reason)
+    assert ("B0" in mc.dispatcher.done) is (status == "done")
+    if status == "done":
+        assert b2.assigned == []  # not given again
+
+
 def long_drop_run(seed: int, uav: str, at_s: float) -> ChaosRun:
     run = random_chaos(seed, max_stops=0)
     return dataclasses.replace(run, link_drops=(LinkDrop(uav, at_s, 40.0),), stops_s=())

@@ -57,6 +57,8 @@ __all__ = [
     "hold_flight",
     "hold_side",
     "hover_where",
+    "landed_alike",
+    "landed_covered",
     "off_layer_m",
     "queued_before",
     "queued_near",
@@ -278,7 +280,11 @@ def hold_flight(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     assert w is not None
     start = w.position if w.position is not None else w.site
     others = [o for n, o in c.records.items() if n != uav]
-    pads = [(h[0], h[1]) for n, h in c.homes.items() if n != uav and not landed_alike(c, uav, n)]
+    pads = [
+        (h[0], h[1])
+        for n, h in c.homes.items()
+        if n != uav and not (landed_alike(c, uav, n) or landed_covered(c, uav, n))
+    ]
     waited = () if c.gate is None else c.gate.waited_on(uav)
     keep_clear = linger_spans(c, uav, w.site)
     if keep_clear is None:
@@ -328,6 +334,22 @@ def landed_alike(c: ColumnClearance, uav: str, other: str) -> bool:
     the first one's hold point into the brick UAV's leg (``bench_layouts.py --compact`` seed 2, 1 + 2: +15.4 s)."""
     o, role = c.records.get(other), c.roles.get(uav)
     return o is not None and o.phase is Phase.LANDED and role is not None and c.roles.get(other) == role
+
+
+def landed_covered(c: ColumnClearance, uav: str, other: str) -> bool:
+    """``other`` stands on its pad, is of the other role than ``uav``'s, and another UAV of ``other``'s role is out
+    (not on its pad): a hold point of ``uav``'s may lie by that pad too (docs/safety.md, "A hold point by the pad of
+    a landed UAV of its role", issue 27 §4, branch ``compact47``). What ``uav``'s task may wait on from ``other``'s
+    role (a prerequisite) is left to the one out, whose pad stays clear; an idle second brick UAV's pad moved the
+    sprayer's hold point into the brick UAV's leg to the pallet (``bench_layouts.py --compact`` seed 13, 2 + 1:
+    +12.2 s over 1 + 1 with it kept clear)."""
+    o, role, theirs = c.records.get(other), c.roles.get(uav), c.roles.get(other)
+    if o is None or o.phase is not Phase.LANDED or role is None or theirs is None or theirs == role:
+        return False
+    return any(
+        n != other and r == theirs and (rec := c.records.get(n)) is not None and rec.phase is not Phase.LANDED
+        for n, r in c.roles.items()
+    )
 
 
 def off_layer_m(c: ColumnClearance, w: FlightRequest) -> float | None:

@@ -15,7 +15,7 @@ from masonry.mission import control_airspace, control_results
 from masonry.mission.liveness import Lapse, way_home_s
 from masonry.mission.messages import Heartbeat, Message, Result
 from masonry.mission.records import Liveness, UavLink
-from masonry.mission.reducer import loss_reason, way_home_of
+from masonry.mission.reducer import loss_reason, placed_before_loss, way_home_of
 from masonry.mission.uav_facts import facts_from
 from masonry.planner.tasks import BrickTask
 from masonry.timing import DEFAULT_TIMING
@@ -92,6 +92,8 @@ def lose(mc: MissionControl, name: str, now_s: float, status: str = "lost") -> N
         mc.columns.release(name)  # retired (on the ground) or fell: its column is free
     if mc.sites.left(name, now_s):
         mc.columns.touch()
+    if status == "lost" and placed_before_loss(link.facts, isinstance(task, BrickTask)):
+        control_results.placed_by_lost(mc, name, link.state, now_s)  # (its brick on the wall: done)
     released = mc.dispatcher.remove_uav(name)
     att = None if released is None else mc.ledger.running.get(released)
     if released is not None and att is not None:

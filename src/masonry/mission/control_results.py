@@ -17,12 +17,11 @@ from masonry.mission.records import UavLink
 from masonry.mission.reducer import dropped_reason, late_completion, screen_result
 from masonry.mission.swap_stagger import SWAP_EARLY
 from masonry.placement_check import is_place_taken
-from masonry.ports import RECALL_REASON
+from masonry.ports import RECALL_REASON, TaskResult
 
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
     from masonry.mission.records import Attempt
-    from masonry.ports import TaskResult
 
 __all__ = [
     "check_holds_task",
@@ -32,6 +31,7 @@ __all__ = [
     "late_result",
     "misplaced",
     "on_heartbeat",
+    "placed_by_lost",
     "recall_again",
     "release_waiting",
     "take_result_message",
@@ -91,6 +91,31 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         if not again:
             release_waiting(mc, r.task_id, now_s)
     mc.wake()
+
+
+def placed_by_lost(mc: MissionControl, uav: str, last_state: str, now_s: float) -> bool:
+    """``uav``, taken out of the mission for its silence, was last heard with its brick on the wall
+    (:func:`~masonry.mission.reducer.placed_before_loss`): its task is done, with no result (no as-built look),
+    journaled so; not given again. True if it held a task so taken."""
+    task_id = mc.dispatcher.task_of(uav)
+    att = None if task_id is None else mc.ledger.running.get(task_id)
+    if task_id is None or att is None:
+        return False
+    r = TaskResult(task_id, "done", now_s - att.start_s)
+    mc.ledger.done(att, r, now_s)
+    log.warning(
+        "%s done by %s (attempt %d): lost after its release (last heard in %s)",
+        task_id,
+        uav,
+        att.attempt,
+        last_state,
+    )
+    mc.dispatcher.complete(task_id)
+    if mc.glue is not None:
+        mc.glue.completed(task_id, now_s)
+    mc.ledger.journal_done(now_s, r, att, phases=False)
+    mc.out.emit(now_s, "completed", uav, task_id, attempt=att.attempt)
+    return True
 
 
 def misplaced(mc: MissionControl, att: Attempt, r: TaskResult, uav: str, why: str, now_s: float) -> None:

@@ -83,7 +83,10 @@ docs/dispatch.md). A UAV on its pad, while another of its role holds a task and 
 given the policy's best available task not within r_c of a task of the other role ready now or when a task in
 progress ends (:func:`masonry.planner.dispatch_admission.cuts_ahead`), where there is one; else the task chosen
 (never held on its pad: held there, the pyramid's 2 + 1 flew as 1 + 1). The compact layout of ``bench_layouts.py``
-seed 7 at 2 + 1: 500.2 -> 428.7 s (1 + 1 459.2 s).
+seed 7 at 2 + 1: 500.2 -> 428.7 s (1 + 1 459.2 s). Where the columns keep work zones farther apart than r_c
+(:attr:`ChainThrough.apart_m`) "ahead" reaches that separation (:attr:`ChainThrough._beside`), whatever the other
+role's count, and with no task apart the UAV stays on its pad until the next event (branch ``compact47``: the 30
+compact layouts' slower larger fleets 4 -> 1, the worst +18.7 -> +2.3 s).
 
 **A take-off does not wait in the air for the work beside it** (issue 27 §4, branch ``compact45``; docs/dispatch.md).
 Where the columns keep work zones farther apart than r_c (:attr:`ChainThrough.apart_m`, the airspace's separation),
@@ -96,6 +99,7 @@ Pure: no I/O, no clock.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import cached_property
 
@@ -193,7 +197,8 @@ class ChainThrough(Dispatcher):
         admitted = super()._admitted(uav, role, i)
         if admitted is None:
             return None
-        return self._clear_of_work(uav, role, self._not_ahead(uav, role, admitted))
+        ahead = self._not_ahead(uav, role, admitted)
+        return None if ahead is None else self._clear_of_work(uav, role, ahead)
 
     def _clear_of_work(self, uav: str, role: str, i: int) -> int | None:
         """``i``, or for ``uav`` on its pad while another UAV of its role is out (holding a task, or in the air
@@ -234,32 +239,63 @@ class ChainThrough(Dispatcher):
             return end, end
         return (float(self._start_m[i][0]), float(self._start_m[i][1])), end
 
-    def _not_ahead(self, uav: str, role: str, i: int) -> int:
-        """``i``, or for ``uav`` on its pad while another UAV of its role holds a task and the other role has one
-        UAV (its tasks are that UAV's one sequence), when ``i`` cuts ahead of the other role's next task
-        (:func:`masonry.planner.dispatch_admission.cuts_ahead`), the policy's best available task of ``role`` that
-        does not; ``i`` where there is none (the rule picks among tasks, it never keeps a UAV on its pad: held
-        there, the pyramid's 2 + 1 flew as 1 + 1, 1,182.3 -> 1,274.9 s on seed 1)."""
-        rule = self.admission
+    def _not_ahead(self, uav: str, role: str, i: int) -> int | None:
+        """``i``, or for ``uav`` on its pad while another UAV of its role holds a task, when ``i`` cuts ahead of the
+        other role's next task (:func:`masonry.planner.dispatch_admission.cuts_ahead`), the policy's best available
+        task of ``role`` that does not. Where the columns keep work zones farther apart than r_c
+        (:attr:`apart_m`), "ahead" reaches that far, whatever the other role's count, and with no such task the UAV
+        stays on its pad until the next event (None; docs/dispatch.md, "A take-off does not cut ahead of the other
+        role's work beside it"). Elsewhere only where the other role has one UAV (its tasks are that UAV's one
+        sequence), and ``i`` where there is none (held there, the pyramid's 2 + 1 flew as 1 + 1, 1,182.3 -> 1,274.9
+        s on seed 1)."""
+        rule, apart = self.admission, self.apart_m
         other = "adhesion" if role == "brick" else "brick"
-        if rule is None or not rule.landed(uav) or self._live_count[other] != 1 or not self._cutting(i):
+        if rule is None or not rule.landed(uav) or (apart is None and self._live_count[other] != 1):
             return i  # several of the other role: one may take the task elsewhere (6 x 30 6 + 3: +154 s)
+        if not self._cutting(i):
+            return i
         if not any(self._role[j] == role for j in self._uav_task.values()):
             return i  # the first of its role out: the role's work is its
         free = [k for k in self._available[role] if not self._cutting(k)]
-        return self._ranking.pick_among(free, self._position[uav], self._after(uav)) if free else i
+        if free:
+            return self._ranking.pick_among(free, self._position[uav], self._after(uav))
+        return None if apart is not None else i
 
     def _cutting(self, i: int) -> bool:
-        """Task ``i`` cuts ahead of the other role's next task (:func:`cuts_ahead` on the dispatcher's state)."""
+        """Task ``i`` cuts ahead of the other role's next task (:func:`cuts_ahead` on the dispatcher's state), within
+        r_c, or within :attr:`apart_m` where it is set (:attr:`_beside`)."""
         st = self._status
         return cuts_ahead(
             i,
             self._role,
             lambda k: st[k] == RUNNING,
             lambda k: st[k] == DONE,
-            self._neighbours,
+            self._neighbours if self.apart_m is None else self._beside,
             self._prerequisites,
         )
+
+    @cached_property
+    def _beside(self) -> list[list[int]]:
+        """Per task, its conflicting tasks and the tasks of the other role whose sites lie within :attr:`apart_m`
+        of its site (:meth:`_site_gap_m`, horizontally); found through a grid of cells wider than the separation
+        plus the longest site twice, so the whole wall is never compared pair by pair."""
+        apart = self.apart_m or 0.0
+        sites = [self._site_xy(i) for i in range(len(self._role))]
+        cell = apart + 2.0 * max((math.dist(a, b) for a, b in sites), default=0.0) + 1e-6
+        grid: dict[tuple[int, int], list[int]] = {}
+        for i, (a, _) in enumerate(sites):
+            grid.setdefault((math.floor(a[0] / cell), math.floor(a[1] / cell)), []).append(i)
+        out: list[list[int]] = []
+        for i, (a, _) in enumerate(sites):
+            cx, cy = math.floor(a[0] / cell), math.floor(a[1] / cell)
+            near = set(self._neighbours[i])
+            for dx in (-1, 0, 1):
+                for dy in (-1, 0, 1):
+                    for j in grid.get((cx + dx, cy + dy), ()):
+                        if self._role[j] != self._role[i] and self._site_gap_m(i, j) < apart:
+                            near.add(j)
+            out.append(sorted(near))
+        return out
 
     def _spare(self, uav: str, role: str) -> bool:
         """``uav`` is on its pad (the admission rule says so) and its role has its core's count of UAVs busy, or

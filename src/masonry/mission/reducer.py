@@ -28,6 +28,7 @@ __all__ = [
     "dropped_reason",
     "late_completion",
     "loss_reason",
+    "placed_before_loss",
     "screen_result",
     "steps_of",
     "way_home_of",
@@ -155,3 +156,13 @@ def loss_reason(out_of_service: str | None, last_state: str, carried_brick: int 
     if carried_brick is None:
         return LOST_REASON
     return f"{LOST_REASON} (last heard in {last_state}, with brick {carried_brick} on its magnet)"
+
+
+def placed_before_loss(facts: UavFacts, brick_task: bool) -> bool:
+    """A brick UAV taken out of the mission for its silence, last heard with ``facts``, had its brick on the wall:
+    finishing its task (``FINISHING_STATES``) with no brick on its magnet, that is from the release on (its magnet
+    lets go as it enters ``place_release``; the descent before it is ``carrying``). Its task is done: given again,
+    its retry looked for the brick at its pickup ("not seen near its pickup"), a spare stood in for it and met the
+    brick in its place (``tests/test_spares_sim.py``, brick-2 lost 3.5 s after its release of brick 8). A sprayer's
+    facts do not tell the spraying from the climb after it: False."""
+    return brick_task and facts.finishing and not facts.carrying
