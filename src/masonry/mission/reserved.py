@@ -26,6 +26,7 @@ from masonry.mission.reserved_parts import (
     extend_or_force,
     forced,
     guarded,
+    in_parked_ways,
     leg_index,
     park_levels,
     park_plan,
@@ -259,8 +260,11 @@ class TableClearance:
             start = u.spot if u.approach else (u.request.position or u.position)
             if home is None or start is None:
                 continue
-            top, n = self._home_top_m(), self.max_layers
+            top, n, plan = self._home_top_m(), self.max_layers, None
+            parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.approach}
             for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
+                if in_parked_ways(uav, spot, self.airspace.layers_m[-1], parked, self.table.separation):
+                    continue  # (parked UAVs wait for no parked UAV: in a neighbour's way down, or it in its)
                 plan = park_plan(self.guarded_for(uav), uav, start, spot, now_s, self.airspace)
                 if plan is not None:
                     break

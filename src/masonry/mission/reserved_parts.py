@@ -21,8 +21,10 @@ from masonry.reservation import (
     Place,
     Request,
     Reservation,
+    Separation,
     Table,
     Volume,
+    clash,
     column,
     earliest_start,
     extend,
@@ -35,9 +37,15 @@ from masonry.timing import TaskTiming
 #: How far (horizontally and vertically) a reported position may be off a leg's volume and still be in it.
 ON_LEG_M = 0.3
 
+#: A UAV stopped this far under or over a level leg of its plan (its tracking error) is on it: its hover there is
+#: reserved at the leg's altitude (:func:`level_of`).
+ON_LAYER_M = 0.1
+
 #: A UAV this close (horizontally) to its parking spot, within ``AT_SPOT_Z_M`` of its altitude, is there.
 AT_SPOT_M = 0.15
 AT_SPOT_Z_M = 0.15
+
+_LEG_PURPOSES = ("climb", "transit", "descend")
 
 
 def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
@@ -75,6 +83,23 @@ def leg_index(legs: Sequence[Reservation], p: Vec3 | None) -> int | None:
     return None
 
 
+def level_of(rs: Iterable[Reservation], p: Vec3, now_s: float) -> float:
+    """The altitude ``p`` is at, as the table reads it: that of a level leg of ``rs`` (one UAV's reservations,
+    windows not over at ``now_s``) within :data:`ON_LEG_M` of ``p`` horizontally and :data:`ON_LAYER_M`
+    vertically, else ``p``'s own. A UAV that turned back in its climb 6 cm under its layer, over a stay 1.1 m
+    under the layer beside it, hovers on the layer, not 1.04 m over the stay (issue 27's random layouts)."""
+    for r in rs:
+        v = r.volume
+        if r.purpose not in _LEG_PURPOSES or r.t1_s <= now_s or v.z0_m != v.z1_m:
+            continue
+        if (
+            abs(p[2] - v.z0_m) <= ON_LAYER_M
+            and point_segment_m((p[0], p[1]), v.a, v.b) <= v.radius_m + ON_LEG_M
+        ):
+            return v.z0_m
+    return p[2]
+
+
 def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
     """Each UAV's parking level (0, 1, ...): two pads closer than ``separation_m`` never share one (greedy)."""
     out: dict[str, int] = {}
@@ -95,6 +120,28 @@ def park_spots(
     tiers = (0, 1 + max(levels.values(), default=0))
     zs = [base_m + (max_layers + levels.get(uav, 0) + t) * spacing_m for t in tiers]
     return [(home[0], home[1], z) for z in zs]
+
+
+def in_parked_ways(
+    uav: str, spot: Vec3, top_m: float, parked: Mapping[str, Vec3], separation: Separation
+) -> bool:
+    """``uav``'s parking ``spot`` is in the way down of a UAV at (or flying to) its parking spot (``parked``: UAV ->
+    spot), or one of those spots is in ``uav``'s way down from ``spot``: each way the column over the spot down to
+    ``top_m`` (the top transit layer, where a hop from a parking spot starts). Pads 1 m apart park a level apart,
+    and the way down from the higher spot passes the lower one 1 m beside it: a UAV parked over a neighbour
+    already parked higher waited for nothing that ends, the neighbour for it (issue 27's random layouts)."""
+
+    def way(o: str, s: Vec3) -> Reservation:
+        return Reservation(o, column(s[:2], min(top_m, s[2]), s[2]), 0.0, math.inf, "stay")
+
+    def hover(o: str, s: Vec3) -> Reservation:
+        return Reservation(o, column(s[:2], s[2], s[2]), 0.0, math.inf, "stay")
+
+    return any(
+        clash(hover(uav, spot), way(o, s), separation) or clash(way(uav, spot), hover(o, s), separation)
+        for o, s in parked.items()
+        if o != uav
+    )
 
 
 def park_plan(
@@ -191,13 +238,16 @@ def end_flight(rs: Sequence[Reservation], now_s: float, flight: Sequence[str]) -
 __all__ = [
     "AT_SPOT_M",
     "AT_SPOT_Z_M",
+    "ON_LAYER_M",
     "ON_LEG_M",
     "Volume",
     "end_flight",
     "extend_or_force",
     "forced",
     "guarded",
+    "in_parked_ways",
     "leg_index",
+    "level_of",
     "park_levels",
     "park_plan",
     "park_spots",

@@ -14,10 +14,11 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+from masonry.mission.airspace_ground import ON_PAD_XY_M
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
-from masonry.mission.reserved_parts import ON_LEG_M, forced
+from masonry.mission.reserved_parts import ON_LEG_M, forced, level_of
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
@@ -171,7 +172,10 @@ def hop_request(c: TableClearance, uav: str, u: TableUav, w: FlightRequest) -> R
         start = (*v.a, v.z1_m if v.z0_m == v.z1_m and abs(start[2] - v.z1_m) < ON_LEG_M else start[2])
     home = c.homes.get(uav)
     radius = 0.0 if home is not None and same_site(home, w.site) else c.zone_r_m
-    here = Place((start[0], start[1]), start[2], "site", radius)
+    # over its pad it climbs in the pad's column, as it took off: a zone's slack there (r_c > 1.2 m) came within the
+    # pad separation of the pads 1 m beside it, and it waited for good for its landed neighbours
+    on_pad = home is not None and math.hypot(start[0] - home[0], start[1] - home[1]) <= ON_PAD_XY_M
+    here = Place((start[0], start[1]), start[2], "site", 0.0 if on_pad else radius)
     work = Work((w.site[0], w.site[1]), w.top_m, 0.0, w.to, radius, 0.0)
     return Request(uav, here, work, None)
 
@@ -188,10 +192,13 @@ def check_fence(c: TableClearance, uav: str, w: FlightRequest) -> None:
 
 def stop_where(c: TableClearance, uav: str, u: TableUav, pos: Vec3 | None) -> None:
     """``uav`` stopped its plan where it is (``pos``), turned back for another site: a hover there is its stay
-    from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted."""
+    from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted. A UAV
+    within :data:`~masonry.mission.reserved_parts.ON_LAYER_M` under or over a level leg of its plan hovers at
+    the leg's altitude (:func:`~masonry.mission.reserved_parts.level_of`)."""
     where = pos if pos is not None else u.position
     if where is None:
         return
-    hover = Reservation(uav, column((where[0], where[1]), where[2], where[2], 0.3), c.now_s, math.inf, "stay")
+    z = level_of(c.table.of(uav), where, c.now_s)  # (a few centimetres under its layer: on it)
+    hover = Reservation(uav, column((where[0], where[1]), z, z, 0.3), c.now_s, math.inf, "stay")
     if not c.table.clashes(hover):
         c.set_stay(uav, hover.volume, Phase.PARKED)
