@@ -354,10 +354,10 @@ def test_a_uav_is_parked_neither_in_the_way_down_of_a_parked_neighbour_nor_over_
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("seed", "faults"), [(70, False), (82, False), (2080, True)])
+@pytest.mark.parametrize(("seed", "faults"), [(70, False), (82, False), (206, False), (2080, True)])
 def test_compact_layouts_that_stalled_under_the_table_complete_apart(seed, faults):
     # bench_layouts --compact --airspace table (82: glue-1 turned back 4 cm under its layer, 1.06 m over glue-2's
-    # stay, as seed 70 above; 2080: the parking spots above)
+    # stay, as seed 70 above; 206 and 2080: the flight on to the pad and the parking spots, above and below)
     rng = random.Random(seed)
     bp = random_layout(rng, COMPACT)
     r = simulate(bp, seed=seed, faults=Faults.mild(rng) if faults else Faults(), airspace="table")
@@ -380,3 +380,35 @@ def test_a_uav_leaving_its_pad_climbs_in_the_pads_column_beside_landed_neighbour
     assert g.granted, air.blockers("g")  # (was: waits for b1's and b2's pads, for good)
     climb = air.volumes("g")[0]
     assert climb.kind == "climb" and climb.slack_m == 0.0 and air.conflicts() == []
+
+
+def test_a_uav_turned_back_on_its_way_home_where_no_hover_fits_flies_on_to_its_pad_under_the_table():
+    # bench_layouts --compact --airspace table seed 206 (towers of 6, 1 + 2, r_c 0.50 m): glue-1, flying home at
+    # 1.2 m, was handed A0 0.70 m from brick-1's site, whose flight had been granted behind glue-1's leg. No hover
+    # fitted where glue-1 stopped; it kept its plan and hovered there, its windows ending by time, and brick-1 came
+    # down 0.66 m from it (then each waited for the other: 300 s without progress). It flies on to its pad's hover.
+    air = TableClearance(0.5, 2.0, homes={"g": (6.0, 0.0, 0.0), "b": (0.0, -6.0, 0.0)}, start_base_m=1.2)
+    air.take_off("g")
+    assert air.request("g", (0.0, 0.0, 1.2), 0.0, (6.0, 0.0, 1.2)).granted
+    air.progress("g", (0.0, 0.0, 1.2))
+    air.end_transit("g")
+    home = air.request("g", (6.0, 0.0, 1.2), 1.0, (0.0, 0.0, 1.2))
+    assert home.granted and home.layer_m == 1.2
+    air.take_off("b")
+    site_b = (3.0, 0.7, 1.2)
+    assert air.request(
+        "b", site_b, 1.0, (0.0, -6.0, 1.2)
+    ).granted  # down at (3.0, 0.7) after g's leg has passed
+    air.grant(9.0)
+    air.progress("g", (2.8, 0.0, 1.2))
+    turned = air.request(
+        "g", (3.2, 0.9, 1.2), 9.0, (2.8, 0.0, 1.2)
+    )  # next to b's site, 0.73 m from where it is
+    assert not turned.granted and turned.hold_m == pytest.approx((6.0, 0.0, 1.2))  # (was: wait where you are)
+    assert air.phase("g") is Phase.TO_HOLD and air.conflicts() == []
+    for t in (10.0, 12.0, 14.0):
+        air.grant(t)
+    air.progress("g", (6.0, 0.0, 1.2))
+    air.grant(15.0)
+    assert air.phase("g") is Phase.AT_HOLD
+    assert [v.kind for v in air.volumes("g")] == ["stay"] and air.conflicts() == []

@@ -26,7 +26,7 @@ from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, W
 if TYPE_CHECKING:
     from masonry.mission.reserved import TableClearance
 
-__all__ = ["TableUav", "check_fence", "evaluate", "hop_request", "request", "stop_where"]
+__all__ = ["TableUav", "check_fence", "evaluate", "fly_on", "hop_request", "request", "stop_where"]
 
 
 @dataclass
@@ -97,7 +97,27 @@ def request(
     u.request = FlightRequest(site, top, pos, now_s, c.seq, to)
     u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
     check_fence(c, uav, u.request)
-    return evaluate(c, uav, u, now_s)
+    g = evaluate(c, uav, u, now_s)
+    return g if g.granted or g.hold_m is not None else fly_on(c, uav, u, g)
+
+
+def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
+    """``uav`` turned back where no hover fits and keeps its plan (:func:`stop_where`); its new flight waits. If the
+    plan is its flight home at the layer it stays at over its pad, it flies on to that hover (a hold flight, on its
+    plan's windows) and waits there, not where it stopped: there its plan's windows ended by time, and the flights
+    granted after them came down where it hovered (``bench_layouts.py --compact --airspace table`` seed 206: glue-1
+    stopped on its way home 0.70 m from brick-1's site, granted before it turned back; brick-1 came down 0.66 m from
+    it). Else ``g`` (it waits where it stopped, as before)."""
+    stay, home = c.table.stay_of(uav), c.homes.get(uav)
+    if u.plan is None or u.request is None or stay is None or home is None or u.phase is not Phase.ASKING:
+        return g
+    v = stay.volume
+    over_pad = v.a == v.b and math.hypot(v.a[0] - home[0], v.a[1] - home[1]) <= ON_PAD_XY_M
+    if not over_pad or abs(u.plan.layer_m - v.z1_m) > 1e-6:
+        return g
+    u.phase, u.spot, u.approach = Phase.TO_HOLD, (v.a[0], v.a[1], v.z1_m), False
+    c.bump()
+    return Grant(uav, u.request.site, False, u.spot, u.spot[2])
 
 
 def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
