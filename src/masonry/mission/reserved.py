@@ -26,11 +26,11 @@ from masonry.mission.reserved_parts import (
     extend_or_force,
     forced,
     guarded,
-    in_parked_ways,
     leg_index,
     park_levels,
     park_plan,
     park_spots,
+    parking_order,
     silent_way,
     to_park,
 )
@@ -262,9 +262,9 @@ class TableClearance:
                 continue
             top, n, plan = self._home_top_m(), self.max_layers, None
             parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.approach}
-            for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
-                if in_parked_ways(uav, spot, self.airspace.layers_m[-1], parked, self.table.separation):
-                    continue  # (parked UAVs wait for no parked UAV: in a neighbour's way down, or it in its)
+            spots = park_spots(home, top, n, self.spacing_m, self._levels, uav)
+            # (never in the way down of a UAV parked before it: reserved_parts.parking_order)
+            for spot in parking_order(uav, spots, self.airspace.layers_m[-1], parked, self.table.separation):
                 plan = park_plan(self.guarded_for(uav), uav, start, spot, now_s, self.airspace)
                 if plan is not None:
                     break

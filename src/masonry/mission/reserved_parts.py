@@ -122,14 +122,14 @@ def park_spots(
     return [(home[0], home[1], z) for z in zs]
 
 
-def in_parked_ways(
+def parked_ways(
     uav: str, spot: Vec3, top_m: float, parked: Mapping[str, Vec3], separation: Separation
-) -> bool:
-    """``uav``'s parking ``spot`` is in the way down of a UAV at (or flying to) its parking spot (``parked``: UAV ->
-    spot), or one of those spots is in ``uav``'s way down from ``spot``: each way the column over the spot down to
-    ``top_m`` (the top transit layer, where a hop from a parking spot starts). Pads 1 m apart park a level apart,
-    and the way down from the higher spot passes the lower one 1 m beside it: a UAV parked over a neighbour
-    already parked higher waited for nothing that ends, the neighbour for it (issue 27's random layouts)."""
+) -> tuple[bool, bool]:
+    """Is ``uav``'s parking ``spot`` in the way down of a UAV at (or flying to) its parking spot (``parked``: UAV ->
+    spot), and is one of those spots in ``uav``'s way down from ``spot``? Each way is the column over the spot down
+    to ``top_m`` (the top transit layer, where a hop from a parking spot starts). Pads 1 m apart park a level apart,
+    and the way down from the higher spot passes the lower one 1 m beside it: a UAV parked under a neighbour
+    parked before it waited for nothing that ends, the neighbour for it (issue 27's random layouts)."""
 
     def way(o: str, s: Vec3) -> Reservation:
         return Reservation(o, column(s[:2], min(top_m, s[2]), s[2]), 0.0, math.inf, "stay")
@@ -137,11 +137,20 @@ def in_parked_ways(
     def hover(o: str, s: Vec3) -> Reservation:
         return Reservation(o, column(s[:2], s[2], s[2]), 0.0, math.inf, "stay")
 
-    return any(
-        clash(hover(uav, spot), way(o, s), separation) or clash(way(uav, spot), hover(o, s), separation)
-        for o, s in parked.items()
-        if o != uav
-    )
+    others = [(o, s) for o, s in parked.items() if o != uav]
+    in_theirs = any(clash(hover(uav, spot), way(o, s), separation) for o, s in others)
+    in_mine = any(clash(way(uav, spot), hover(o, s), separation) for o, s in others)
+    return in_theirs, in_mine
+
+
+def parking_order(
+    uav: str, spots: Sequence[Vec3], top_m: float, parked: Mapping[str, Vec3], separation: Separation
+) -> list[Vec3]:
+    """``spots`` (best first) ``uav`` may be sent to: none in the way down of a UAV parked before it, those whose
+    own way down passes no parked UAV first (:func:`parked_ways`). Over a neighbour parked before it, it waits for
+    that one to come down first, which waits for no parked UAV."""
+    ways = {s: parked_ways(uav, s, top_m, parked, separation) for s in spots}
+    return sorted((s for s in spots if not ways[s][0]), key=lambda s: ways[s][1])
 
 
 def park_plan(
@@ -245,12 +254,13 @@ __all__ = [
     "extend_or_force",
     "forced",
     "guarded",
-    "in_parked_ways",
     "leg_index",
     "level_of",
     "park_levels",
     "park_plan",
     "park_spots",
+    "parked_ways",
+    "parking_order",
     "silent_way",
     "to_park",
 ]
