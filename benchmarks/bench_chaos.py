@@ -2,7 +2,7 @@
 resumed from its journal one to three times; every run judged from the UAV handlers' traces.
 
     python benchmarks/bench_chaos.py [--runs 40] [--first-seed 0] [--vehicle ideal|arducopter|both]
-                                     [--lose-a-role] [--max-drop S] [--verbose]
+                                     [--lose-a-role] [--max-drop S] [--airspace columns|table] [--verbose]
 
 Each run (``masonry.mission.chaos.random_chaos``): a random site (1-3 UAVs per role), grasp failures, detection
 dropouts, occlusion and gusts (each present about half the time), UAVs lost at random times (never every UAV
@@ -24,10 +24,17 @@ import time
 from collections import Counter
 
 from masonry.mission.chaos import check_chaos, fly_chaos, random_chaos
+from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 
 
 def campaign(
-    runs: int, first: int, vehicle: str, lose_a_role: bool, verbose: bool, max_drop_s: float = 8.0
+    runs: int,
+    first: int,
+    vehicle: str,
+    lose_a_role: bool,
+    verbose: bool,
+    max_drop_s: float = 8.0,
+    airspace: str = DEFAULT_AIRSPACE,
 ) -> dict[str, object]:
     injected: Counter[str] = Counter()
     kinds: Counter[str] = Counter()
@@ -35,7 +42,9 @@ def campaign(
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as work:
         for seed in range(first, first + runs):
-            run = random_chaos(seed, vehicle=vehicle, lose_a_role=lose_a_role, max_drop_s=max_drop_s)
+            run = random_chaos(
+                seed, vehicle=vehicle, lose_a_role=lose_a_role, max_drop_s=max_drop_s, airspace=airspace
+            )
             injected.update(run.injected())
             out = fly_chaos(run, work)
             problems = check_chaos(out)
@@ -81,13 +90,18 @@ def main() -> None:
     ap.add_argument("--vehicle", choices=("ideal", "arducopter", "both"), default="both")
     ap.add_argument("--lose-a-role", action="store_true", help="may lose every UAV of a role")
     ap.add_argument("--max-drop", type=float, default=8.0, help="longest link drop, s (default 8)")
+    ap.add_argument(
+        "--airspace", choices=AIRSPACES, default=DEFAULT_AIRSPACE, help="mission control's airspace"
+    )
     ap.add_argument("--verbose", action="store_true", help="a line for every run")
     a = ap.parse_args()
     logging.getLogger("masonry").setLevel(
         logging.ERROR
     )  # every loss and rejoin is a warning: the table says it
     vehicles = ("ideal", "arducopter") if a.vehicle == "both" else (a.vehicle,)
-    rows = [campaign(a.runs, a.first_seed, v, a.lose_a_role, a.verbose, a.max_drop) for v in vehicles]
+    rows = [
+        campaign(a.runs, a.first_seed, v, a.lose_a_role, a.verbose, a.max_drop, a.airspace) for v in vehicles
+    ]
     print()
     print(
         "| vehicle | runs | faults injected | mc stops | missions completed | tasks left, with why | "

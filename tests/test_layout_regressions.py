@@ -9,6 +9,7 @@ import random
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from airspace_rig import HeldGate
 from masonry.blueprint_random import LayoutLimits, random_layout
@@ -18,11 +19,14 @@ from masonry.mission.airspace import ColumnClearance, Grant, Phase
 from masonry.mission.airspace_state import FlightRequest
 from masonry.mission.control_airspace import answer
 from masonry.mission.messages import Clearance, decode, encode
+from masonry.mission.reserved import TableClearance
+from masonry.mission.reserved_parts import park_levels, park_spots, parked_ways, parking_order
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, on_leg, point_segment_m
 from masonry.planner.tasks import BrickTask, Plan
-from masonry.separation import LEG_OVERSHOOT_M, TRACK_SHARE_M
+from masonry.reservation import Separation
+from masonry.separation import LAYER_SPACING_M, LEG_OVERSHOOT_M, SEPARATION_XY_M, TRACK_SHARE_M
 from masonry.sim import Faults
 
 #: The bound every whole-mission simulation keeps between two airborne UAVs (docs/safety.md).
@@ -290,3 +294,135 @@ def test_a_leg_is_flown_fast_only_where_nothing_is_near_its_end_which_is_kept_cl
     assert decode(encode(sent)) == sent
     assert decode(encode(dataclasses.replace(sent, gentle=True))).gentle
     assert b"gentle" not in encode(dataclasses.replace(sent, gentle=True))
+
+
+# -- under --airspace table (bench_layouts.py --airspace table, docs/performance/fleet.md, "The table over 1,300
+# random layouts") --------------------------------------------------------------------------------------------
+
+
+def test_a_uav_that_turned_back_in_its_climb_just_under_its_layer_hovers_on_the_layer_under_the_table():
+    # bench_layouts --compact --airspace table seed 70 (towers of 9, 1 + 3, r_c 0.77 m): glue-2, granted its way
+    # home at 2.3 m over brick-1's stay (its top 1.2 m, 1.20 m beside the climb), was handed A3 next to brick-1's
+    # site 6 cm under the layer. Its hover there was 1.04 m over the stay: refused, so it kept its flight home,
+    # open-ended for the others; brick-1 waited for that flight's transit and glue-2 for brick-1's stay, and
+    # neither was a stay the parking rule reads: 300 s without progress. It hovers on the layer now.
+    air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
+    site_b, site_g = (0.0, 0.0, 1.2), (1.2, 0.1, 1.2)
+    for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.2, 5.0, 1.2))):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, start).granted
+        air.progress(uav, site)
+        air.end_transit(uav)
+    home = air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g)  # its way home crosses b's zone: at 2.3 m
+    assert home.granted and home.layer_m is not None and math.isclose(home.layer_m, 2.3)
+    air.progress("g", (1.2, 0.1, 2.24))  # climbing, 6 cm under the layer
+    turned = air.request("g", (0.15, 0.0, 1.2), 3.0, (1.2, 0.1, 2.24))  # next to b's site: it waits for b
+    assert not turned.granted
+    stay = air.table.stay_of("g")
+    assert (
+        stay is not None and stay.volume.z0_m == stay.volume.z1_m == 2.3
+    )  # a hover on the layer (was: its legs)
+    assert [v.kind for v in air.volumes("g")] == ["stay"] and air.conflicts() == []
+
+
+def test_a_uav_is_not_parked_in_the_way_down_of_a_neighbour_parked_before_it():
+    # bench_layouts --compact --faults --airspace table seed 2080 (towers of 9, 3 + 3, r_c 0.51 m, pads 1 m apart):
+    # glue-2 was parked at 7.8 m over its pad; brick-1, from the pad 1 m beside it, at 5.6 m, in glue-2's way down
+    # (a hop from a parking spot comes down over its pad to the top layer, 4.5 m). brick-1 waited for the site rule
+    # (B5 on A3, glue-2's task), glue-2 for brick-1's hover: 300 s without progress. brick-1 takes the spot a tier
+    # higher, over glue-2, and comes down once glue-2 has.
+    homes = {
+        "brick-1": (-6.80, -5.44, 0.0),
+        "glue-2": (-6.03, -6.08, 0.0),
+        "brick-3": (-5.27, -6.72, 0.0),
+        "brick-2": (-4.50, -7.37, 0.0),
+        "glue-3": (-3.73, -8.01, 0.0),
+        "glue-1": (-2.97, -8.65, 0.0),
+    }
+    levels = park_levels(homes, SEPARATION_XY_M)
+    top, sep = 4.5, Separation(SEPARATION_XY_M, LAYER_SPACING_M - 1e-9, 1.0 - 1e-6)
+    low, high = park_spots(homes["brick-1"], 1.2, 4, LAYER_SPACING_M, levels, "brick-1")
+    glue_spot = park_spots(homes["glue-2"], 1.2, 4, LAYER_SPACING_M, levels, "glue-2")[0]
+    assert (low[2], glue_spot[2], high[2]) == pytest.approx((5.6, 7.8, 8.9))
+    parked = {"glue-2": glue_spot}
+    assert parked_ways("brick-1", low, top, parked, sep) == (True, False)  # in glue-2's way down (the stall)
+    assert parked_ways("brick-1", high, top, parked, sep) == (False, True)  # over it: it waits for glue-2
+    assert parking_order("brick-1", [low, high], top, parked, sep) == [high]
+    assert parking_order("brick-1", [low, high], top, {}, sep) == [low, high]
+    # a spot out of every way down comes first; one over a pad 3 m away is no matter
+    assert parking_order("glue-2", [glue_spot], top, {"glue-1": (-2.97, -8.65, 5.6)}, sep) == [glue_spot]
+    # bench_layouts --compact --faults --policy nearest seed 5339: with spots over a parked neighbour refused too,
+    # no UAV of a cycle of waits at sites beside a parked one could be parked (300 s without progress)
+    assert parking_order("glue-2", [glue_spot], top, {"brick-1": low}, sep) == [glue_spot]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("seed", "faults", "policy"),
+    [
+        (70, False, "critical-path"),
+        (82, False, "critical-path"),
+        (206, False, "critical-path"),
+        (2080, True, "critical-path"),
+        (5339, True, "nearest"),
+    ],
+)
+def test_compact_layouts_that_stalled_under_the_table_complete_apart(seed, faults, policy):
+    # bench_layouts --compact --airspace table (82: glue-1 turned back 4 cm under its layer, 1.06 m over glue-2's
+    # stay, as seed 70 above; 206, 2080 and 5339: the flight on to the pad and the parking spots, above and below)
+    rng = random.Random(seed)
+    bp = random_layout(rng, COMPACT)
+    r = simulate(
+        bp, seed=seed, faults=Faults.mild(rng) if faults else Faults(), airspace="table", policy=policy
+    )
+    assert r.completed and r.stall is None, r.stall
+    assert r.conflict_violations == 0 and r.dependency_violations == 0
+    assert not any("hold_patience_s" in (a.reason or "") for a in r.attempts)
+    assert r.min_separation_m is not None and r.min_separation_m >= SEPARATION_BOUND_M, r.min_separation_m
+
+
+def test_a_uav_leaving_its_pad_climbs_in_the_pads_column_beside_landed_neighbours_under_the_table():
+    # bench_chaos --airspace table seed 0 (towers of 2, 2 + 2, r_c 1.767 m, pads 1.0 m apart): glue-2's climb from
+    # its pad was reserved as wide as a work zone (0.28 m of slack at r_c > 1.2 m), within the pad separation of
+    # brick-1 and brick-2 landed on the pads beside it: refused at every layer while they waited on the ground for
+    # its bead, 385 s without progress. It climbs in its pad's column, as it took off.
+    homes = {"g": (0.0, 0.0, 0.0), "b1": (0.0, 1.0, 0.0), "b2": (-1.0, 0.0, 0.0)}
+    air = TableClearance(1.767, 2.0, homes=homes, start_base_m=1.2)
+    assert air.zone_r_m > 0.25
+    assert air.take_off("g")
+    g = air.request("g", (2.2, 2.3, 1.2), 0.0, (0.0, 0.0, 1.2))
+    assert g.granted, air.blockers("g")  # (was: waits for b1's and b2's pads, for good)
+    climb = air.volumes("g")[0]
+    assert climb.kind == "climb" and climb.slack_m == 0.0 and air.conflicts() == []
+
+
+def test_a_uav_turned_back_on_its_way_home_where_no_hover_fits_flies_on_to_its_pad_under_the_table():
+    # bench_layouts --compact --airspace table seed 206 (towers of 6, 1 + 2, r_c 0.50 m): glue-1, flying home at
+    # 1.2 m, was handed A0 0.70 m from brick-1's site, whose flight had been granted behind glue-1's leg. No hover
+    # fitted where glue-1 stopped; it kept its plan and hovered there, its windows ending by time, and brick-1 came
+    # down 0.66 m from it (then each waited for the other: 300 s without progress). It flies on to its pad's hover.
+    air = TableClearance(0.5, 2.0, homes={"g": (6.0, 0.0, 0.0), "b": (0.0, -6.0, 0.0)}, start_base_m=1.2)
+    air.take_off("g")
+    assert air.request("g", (0.0, 0.0, 1.2), 0.0, (6.0, 0.0, 1.2)).granted
+    air.progress("g", (0.0, 0.0, 1.2))
+    air.end_transit("g")
+    home = air.request("g", (6.0, 0.0, 1.2), 1.0, (0.0, 0.0, 1.2))
+    assert home.granted and home.layer_m == 1.2
+    air.take_off("b")
+    site_b = (3.0, 0.7, 1.2)
+    assert air.request(
+        "b", site_b, 1.0, (0.0, -6.0, 1.2)
+    ).granted  # down at (3.0, 0.7) after g's leg has passed
+    air.grant(9.0)
+    air.progress("g", (2.8, 0.0, 1.2))
+    turned = air.request(
+        "g", (3.2, 0.9, 1.2), 9.0, (2.8, 0.0, 1.2)
+    )  # next to b's site, 0.73 m from where it is
+    assert not turned.granted and turned.hold_m == pytest.approx((6.0, 0.0, 1.2))  # (was: wait where you are)
+    assert air.phase("g") is Phase.TO_HOLD and air.conflicts() == []
+    for t in (10.0, 12.0, 14.0):
+        air.grant(t)
+    air.progress("g", (6.0, 0.0, 1.2))
+    air.grant(15.0)
+    assert air.phase("g") is Phase.AT_HOLD
+    assert [v.kind for v in air.volumes("g")] == ["stay"] and air.conflicts() == []

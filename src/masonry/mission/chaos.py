@@ -72,6 +72,8 @@ class ChaosRun:
     #: ``task`` (the paper's rule): the traces' task intervals are what the conflict check needs (under ``site``
     #: conflicting tasks may overlap; only their site intervals, mission control's record, may not)
     reservation: str = "task"
+    #: mission control's airspace (``columns`` or ``table``, :mod:`masonry.mission.reserved`)
+    airspace: str = "columns"
 
     def injected(self) -> dict[str, int]:
         """How many faults of each kind the run injects (the table's "faults injected")."""
@@ -132,6 +134,7 @@ def random_chaos(
     max_stops: int = 3,
     lose_a_role: bool = False,
     max_drop_s: float = 8.0,
+    airspace: str = "columns",
 ) -> ChaosRun:
     """Draw one run of the campaign from ``seed`` (see the module docstring).
 
@@ -143,6 +146,7 @@ def random_chaos(
         lose_a_role: may lose every UAV of a role (then the report must say which tasks cannot be done).
         max_drop_s: a mission link drops for 1 s to this long (8: "a few seconds"; above ``LAST_RESORT_S``, 30, a
             UAV cut off flies home on its own).
+        airspace: mission control's airspace (``columns`` or ``table``).
     """
     from masonry.planner import estimate_durations_s
     from masonry.sim import Faults
@@ -178,7 +182,7 @@ def random_chaos(
     )
     n_stops = rng.randint(1, max_stops) if max_stops > 0 else 0
     stops = tuple(sorted(round(rng.uniform(3.0, span_s), 1) for _ in range(n_stops)))
-    return ChaosRun(seed, bp, Faults.parse(spec), stops, drops, vehicle)
+    return ChaosRun(seed, bp, Faults.parse(spec), stops, drops, vehicle, airspace=airspace)
 
 
 class _Stop(Exception):
@@ -209,6 +213,7 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
             resume=segment > 0,
             vehicle=run.vehicle,
             reservation=run.reservation,
+            airspace=run.airspace,
         )
         mission = SimulatedMission.from_blueprint(run.blueprint, options, faults=run.faults)
         stop_s = stops.pop(0) if stops else None

@@ -22,7 +22,6 @@ from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
-    ahead_of,
     end_flight,
     extend_or_force,
     forced,
@@ -31,6 +30,7 @@ from masonry.mission.reserved_parts import (
     park_levels,
     park_plan,
     park_spots,
+    parking_order,
     silent_way,
     to_park,
 )
@@ -260,8 +260,11 @@ class TableClearance:
             start = u.spot if u.approach else (u.request.position or u.position)
             if home is None or start is None:
                 continue
-            top, n = self._home_top_m(), self.max_layers
-            for spot in park_spots(home, top, n, self.spacing_m, self._levels, uav):
+            top, n, plan = self._home_top_m(), self.max_layers, None
+            parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.approach}
+            spots = park_spots(home, top, n, self.spacing_m, self._levels, uav)
+            # (never in the way down of a UAV parked before it: reserved_parts.parking_order)
+            for spot in parking_order(uav, spots, self.airspace.layers_m[-1], parked, self.table.separation):
                 plan = park_plan(self.guarded_for(uav), uav, start, spot, now_s, self.airspace)
                 if plan is not None:
                     break
@@ -368,24 +371,21 @@ class TableClearance:
             self.bump()
 
     def progress(self, uav: str, position_m: Vec3) -> None:
-        """``uav`` reports where it is: the legs of its flight behind it end now, and the leg it flies holds only
-        what lies ahead of it (:func:`~masonry.mission.reserved_parts.ahead_of`)."""
+        """``uav`` reports where it is: the legs of its flight behind it end now."""
         u = self._uavs.get(uav)
         if u is None:
             return
         u.position = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
         self.at_spot(uav, u)
-        if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
-            return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
+        if u.phase is not Phase.FLYING or u.plan is None:
+            return
         legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
         at = leg_index(legs, u.position)
-        if at is None:
+        if at is None or at == 0:
             return
         behind = [r for r in legs[:at] if r.t0_s < self.now_s]
-        on = legs[at]
-        ahead = ahead_of(on, u.position) if on.t0_s < self.now_s and on.purpose == "transit" else on
-        if behind or ahead != on:  # (the part of its leg it has flown out of is free too)
-            left = [ahead if r == on else r for r in self.table.of(uav) if r not in behind]
+        if behind:
+            left = [r for r in self.table.of(uav) if r not in behind]
             self._replace(uav, [*left, *(r.until(self.now_s) for r in behind)])
 
     # -- internals ---------------------------------------------------------------------------------------

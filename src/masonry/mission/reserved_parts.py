@@ -12,7 +12,6 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import replace
 
 from masonry.errors import PlanningError
 from masonry.mission.volumes import Vec3
@@ -22,8 +21,10 @@ from masonry.reservation import (
     Place,
     Request,
     Reservation,
+    Separation,
     Table,
     Volume,
+    clash,
     column,
     earliest_start,
     extend,
@@ -36,9 +37,15 @@ from masonry.timing import TaskTiming
 #: How far (horizontally and vertically) a reported position may be off a leg's volume and still be in it.
 ON_LEG_M = 0.3
 
+#: A UAV stopped this far under or over a level leg of its plan (its tracking error) is on it: its hover there is
+#: reserved at the leg's altitude (:func:`level_of`).
+ON_LAYER_M = 0.1
+
 #: A UAV this close (horizontally) to its parking spot, within ``AT_SPOT_Z_M`` of its altitude, is there.
 AT_SPOT_M = 0.15
 AT_SPOT_Z_M = 0.15
+
+_LEG_PURPOSES = ("climb", "transit", "descend")
 
 
 def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
@@ -76,19 +83,21 @@ def leg_index(legs: Sequence[Reservation], p: Vec3 | None) -> int | None:
     return None
 
 
-def ahead_of(r: Reservation, p: Vec3) -> Reservation:
-    """``r``, a lateral leg the UAV at ``p`` flies, from ``ON_LEG_M`` behind the UAV on: the air it has flown out
-    of is free before the leg's window ends (a column, or a UAV not yet ``ON_LEG_M`` along, keeps all of ``r``)."""
-    v = r.volume
-    length_m = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
-    if length_m <= 1e-9:
-        return r
-    along_m = ((p[0] - v.a[0]) * (v.b[0] - v.a[0]) + (p[1] - v.a[1]) * (v.b[1] - v.a[1])) / length_m
-    f = (min(along_m, length_m) - ON_LEG_M) / length_m
-    if f <= 1e-6:
-        return r
-    a = (v.a[0] + (v.b[0] - v.a[0]) * f, v.a[1] + (v.b[1] - v.a[1]) * f)
-    return replace(r, volume=replace(v, a=a))
+def level_of(rs: Iterable[Reservation], p: Vec3, now_s: float) -> float:
+    """The altitude ``p`` is at, as the table reads it: that of a level leg of ``rs`` (one UAV's reservations,
+    windows not over at ``now_s``) within :data:`ON_LEG_M` of ``p`` horizontally and :data:`ON_LAYER_M`
+    vertically, else ``p``'s own. A UAV that turned back in its climb 6 cm under its layer, over a stay 1.1 m
+    under the layer beside it, hovers on the layer, not 1.04 m over the stay (issue 27's random layouts)."""
+    for r in rs:
+        v = r.volume
+        if r.purpose not in _LEG_PURPOSES or r.t1_s <= now_s or v.z0_m != v.z1_m:
+            continue
+        if (
+            abs(p[2] - v.z0_m) <= ON_LAYER_M
+            and point_segment_m((p[0], p[1]), v.a, v.b) <= v.radius_m + ON_LEG_M
+        ):
+            return v.z0_m
+    return p[2]
 
 
 def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
@@ -111,6 +120,37 @@ def park_spots(
     tiers = (0, 1 + max(levels.values(), default=0))
     zs = [base_m + (max_layers + levels.get(uav, 0) + t) * spacing_m for t in tiers]
     return [(home[0], home[1], z) for z in zs]
+
+
+def parked_ways(
+    uav: str, spot: Vec3, top_m: float, parked: Mapping[str, Vec3], separation: Separation
+) -> tuple[bool, bool]:
+    """Is ``uav``'s parking ``spot`` in the way down of a UAV at (or flying to) its parking spot (``parked``: UAV ->
+    spot), and is one of those spots in ``uav``'s way down from ``spot``? Each way is the column over the spot down
+    to ``top_m`` (the top transit layer, where a hop from a parking spot starts). Pads 1 m apart park a level apart,
+    and the way down from the higher spot passes the lower one 1 m beside it: a UAV parked under a neighbour
+    parked before it waited for nothing that ends, the neighbour for it (issue 27's random layouts)."""
+
+    def way(o: str, s: Vec3) -> Reservation:
+        return Reservation(o, column(s[:2], min(top_m, s[2]), s[2]), 0.0, math.inf, "stay")
+
+    def hover(o: str, s: Vec3) -> Reservation:
+        return Reservation(o, column(s[:2], s[2], s[2]), 0.0, math.inf, "stay")
+
+    others = [(o, s) for o, s in parked.items() if o != uav]
+    in_theirs = any(clash(hover(uav, spot), way(o, s), separation) for o, s in others)
+    in_mine = any(clash(way(uav, spot), hover(o, s), separation) for o, s in others)
+    return in_theirs, in_mine
+
+
+def parking_order(
+    uav: str, spots: Sequence[Vec3], top_m: float, parked: Mapping[str, Vec3], separation: Separation
+) -> list[Vec3]:
+    """``spots`` (best first) ``uav`` may be sent to: none in the way down of a UAV parked before it, those whose
+    own way down passes no parked UAV first (:func:`parked_ways`). Over a neighbour parked before it, it waits for
+    that one to come down first, which waits for no parked UAV."""
+    ways = {s: parked_ways(uav, s, top_m, parked, separation) for s in spots}
+    return sorted((s for s in spots if not ways[s][0]), key=lambda s: ways[s][1])
 
 
 def park_plan(
@@ -207,17 +247,20 @@ def end_flight(rs: Sequence[Reservation], now_s: float, flight: Sequence[str]) -
 __all__ = [
     "AT_SPOT_M",
     "AT_SPOT_Z_M",
+    "ON_LAYER_M",
     "ON_LEG_M",
     "Volume",
-    "ahead_of",
     "end_flight",
     "extend_or_force",
     "forced",
     "guarded",
     "leg_index",
+    "level_of",
     "park_levels",
     "park_plan",
     "park_spots",
+    "parked_ways",
+    "parking_order",
     "silent_way",
     "to_park",
 ]

@@ -14,10 +14,11 @@ import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+from masonry.mission.airspace_ground import ON_PAD_XY_M
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
-from masonry.mission.reserved_parts import ON_LEG_M, forced
+from masonry.mission.reserved_parts import ON_LEG_M, forced, level_of
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
@@ -25,7 +26,7 @@ from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, W
 if TYPE_CHECKING:
     from masonry.mission.reserved import TableClearance
 
-__all__ = ["TableUav", "check_fence", "evaluate", "hop_request", "request", "stop_where"]
+__all__ = ["TableUav", "check_fence", "evaluate", "fly_on", "hop_request", "request", "stop_where"]
 
 
 @dataclass
@@ -96,7 +97,27 @@ def request(
     u.request = FlightRequest(site, top, pos, now_s, c.seq, to)
     u.phase, u.seen_version, u.retry_s = Phase.ASKING, -1, math.inf
     check_fence(c, uav, u.request)
-    return evaluate(c, uav, u, now_s)
+    g = evaluate(c, uav, u, now_s)
+    return g if g.granted or g.hold_m is not None else fly_on(c, uav, u, g)
+
+
+def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
+    """``uav`` turned back where no hover fits and keeps its plan (:func:`stop_where`); its new flight waits. If the
+    plan is its flight home at the layer it stays at over its pad, it flies on to that hover (a hold flight, on its
+    plan's windows) and waits there, not where it stopped: there its plan's windows ended by time, and the flights
+    granted after them came down where it hovered (``bench_layouts.py --compact --airspace table`` seed 206: glue-1
+    stopped on its way home 0.70 m from brick-1's site, granted before it turned back; brick-1 came down 0.66 m from
+    it). Else ``g`` (it waits where it stopped, as before)."""
+    stay, home = c.table.stay_of(uav), c.homes.get(uav)
+    if u.plan is None or u.request is None or stay is None or home is None or u.phase is not Phase.ASKING:
+        return g
+    v = stay.volume
+    over_pad = v.a == v.b and math.hypot(v.a[0] - home[0], v.a[1] - home[1]) <= ON_PAD_XY_M
+    if not over_pad or abs(u.plan.layer_m - v.z1_m) > 1e-6:
+        return g
+    u.phase, u.spot, u.approach = Phase.TO_HOLD, (v.a[0], v.a[1], v.z1_m), False
+    c.bump()
+    return Grant(uav, u.request.site, False, u.spot, u.spot[2])
 
 
 def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
@@ -171,7 +192,10 @@ def hop_request(c: TableClearance, uav: str, u: TableUav, w: FlightRequest) -> R
         start = (*v.a, v.z1_m if v.z0_m == v.z1_m and abs(start[2] - v.z1_m) < ON_LEG_M else start[2])
     home = c.homes.get(uav)
     radius = 0.0 if home is not None and same_site(home, w.site) else c.zone_r_m
-    here = Place((start[0], start[1]), start[2], "site", radius)
+    # over its pad it climbs in the pad's column, as it took off: a zone's slack there (r_c > 1.2 m) came within the
+    # pad separation of the pads 1 m beside it, and it waited for good for its landed neighbours
+    on_pad = home is not None and math.hypot(start[0] - home[0], start[1] - home[1]) <= ON_PAD_XY_M
+    here = Place((start[0], start[1]), start[2], "site", 0.0 if on_pad else radius)
     work = Work((w.site[0], w.site[1]), w.top_m, 0.0, w.to, radius, 0.0)
     return Request(uav, here, work, None)
 
@@ -188,10 +212,13 @@ def check_fence(c: TableClearance, uav: str, w: FlightRequest) -> None:
 
 def stop_where(c: TableClearance, uav: str, u: TableUav, pos: Vec3 | None) -> None:
     """``uav`` stopped its plan where it is (``pos``), turned back for another site: a hover there is its stay
-    from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted."""
+    from now if that clashes with nobody, else it keeps its plan (extended while it is late) until granted. A UAV
+    within :data:`~masonry.mission.reserved_parts.ON_LAYER_M` under or over a level leg of its plan hovers at
+    the leg's altitude (:func:`~masonry.mission.reserved_parts.level_of`)."""
     where = pos if pos is not None else u.position
     if where is None:
         return
-    hover = Reservation(uav, column((where[0], where[1]), where[2], where[2], 0.3), c.now_s, math.inf, "stay")
+    z = level_of(c.table.of(uav), where, c.now_s)  # (a few centimetres under its layer: on it)
+    hover = Reservation(uav, column((where[0], where[1]), z, z, 0.3), c.now_s, math.inf, "stay")
     if not c.table.clashes(hover):
         c.set_stay(uav, hover.volume, Phase.PARKED)
