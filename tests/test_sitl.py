@@ -80,15 +80,10 @@ def take_off_wait(fc: MavlinkFlightController, altitude_m: float) -> None:
     """Wait for the take-off's altitude (within 0.05 m, still within 0.05 m/s); a miss shows the telemetry it saw
     (and ``flight`` adds both sides then)."""
     trace = HeightTrace(fc)
-
-    def reached() -> bool:
-        z, vz = trace.height_and_climb()
-        return z > altitude_m - 0.05 and abs(vz) < 0.05
-
     wait_until(
-        reached,
+        lambda: trace.reached(altitude_m),
         30.0,  # a bound on waiting for the evidence (about 0.5 s at x8 when the machine is idle)
-        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        trace.awaited(altitude_m),
         detail=trace.describe,
     )
 
@@ -144,16 +139,11 @@ def take_off_granted(fc: MavlinkFlightController, clock: LockstepClock, altitude
     fc.arm()
     fc.takeoff(altitude_m)
     trace = HeightTrace(fc)
-
-    def reached() -> bool:
-        z, vz = trace.height_and_climb()
-        return z > altitude_m - 0.05 and abs(vz) < 0.05
-
     step_until(
         clock,
-        reached,
+        lambda: trace.reached(altitude_m),
         10.0,
-        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        trace.awaited(altitude_m),
         detail=trace.describe,
     )
 
