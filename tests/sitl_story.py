@@ -42,6 +42,16 @@ class HeightTrace:
             self.samples.append((wall_s, tel.time_s, z, vz))
         return z, vz
 
+    def reached(self, altitude_m: float) -> bool:
+        """The take-off's altitude reached: the height above ``altitude_m`` less 0.05 m, still within 0.05 m/s."""
+        z, vz = self.height_and_climb()
+        return z > altitude_m - 0.05 and abs(vz) < 0.05
+
+    @staticmethod
+    def awaited(altitude_m: float) -> str:
+        """What :meth:`reached` waits for, for a wait's message."""
+        return f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)"
+
     def describe(self) -> str:
         if self.highest is None:
             return "telemetry seen: none"

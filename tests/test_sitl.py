@@ -8,8 +8,9 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from masonry.adapters.mavlink import (
     mavutil_module,
 )
 from masonry.adapters.sitl import MavlinkSitl, SitlConfig, free_udp_port
+from masonry.adapters.sitl_config import EPHEMERAL_PORTS_DEFAULT, FREE_PORTS_FROM
 from masonry.errors import CommandRejected, CommandTimeout, DeviceNotFound, LinkLost
 from masonry.motion import MinJerk
 from sitl_story import HeightTrace, describe_flight
@@ -80,15 +82,10 @@ def take_off_wait(fc: MavlinkFlightController, altitude_m: float) -> None:
     """Wait for the take-off's altitude (within 0.05 m, still within 0.05 m/s); a miss shows the telemetry it saw
     (and ``flight`` adds both sides then)."""
     trace = HeightTrace(fc)
-
-    def reached() -> bool:
-        z, vz = trace.height_and_climb()
-        return z > altitude_m - 0.05 and abs(vz) < 0.05
-
     wait_until(
-        reached,
+        lambda: trace.reached(altitude_m),
         30.0,  # a bound on waiting for the evidence (about 0.5 s at x8 when the machine is idle)
-        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        trace.awaited(altitude_m),
         detail=trace.describe,
     )
 
@@ -144,16 +141,11 @@ def take_off_granted(fc: MavlinkFlightController, clock: LockstepClock, altitude
     fc.arm()
     fc.takeoff(altitude_m)
     trace = HeightTrace(fc)
-
-    def reached() -> bool:
-        z, vz = trace.height_and_climb()
-        return z > altitude_m - 0.05 and abs(vz) < 0.05
-
     step_until(
         clock,
-        reached,
+        lambda: trace.reached(altitude_m),
         10.0,
-        f"the takeoff altitude (above {altitude_m - 0.05:.2f} m and within 0.05 m/s)",
+        trace.awaited(altitude_m),
         detail=trace.describe,
     )
 
@@ -415,6 +407,17 @@ def test_signing_on_both_ends_and_a_wrongly_signed_peer_is_ignored() -> None:
         assert sitl.vehicle.armed
         assert sitl._conn.mav.signing.goodsig_count > 5
         assert fc._conn.mav.signing.goodsig_count > 5 and fc._conn.mav.signing.badsig_count == 0
+
+
+def test_a_free_port_is_drawn_below_the_kernels_ephemeral_ports() -> None:
+    """Issue 29 (the SITL load loop's run 15: "Address already in use" on the adapter's bind): a port the kernel
+    hands out to any socket that sends unbound (a SITL's) could be taken between the draw and the bind."""
+    ephemeral_from = EPHEMERAL_PORTS_DEFAULT[0]
+    with suppress(OSError):
+        ephemeral_from = int(Path("/proc/sys/net/ipv4/ip_local_port_range").read_text().split()[0])
+    ports = [free_udp_port() for _ in range(20)]
+    assert all(FREE_PORTS_FROM <= port < ephemeral_from for port in ports)
+    assert len(set(ports)) > 1  # drawn at random, not the same each time
 
 
 def sitl_port(sitl: MavlinkSitl) -> int:

@@ -36,11 +36,39 @@ DEFAULT_RATES_HZ = {
 }
 
 
+#: Where :func:`free_udp_port` draws its ports: below the kernel's ephemeral range and above the autopilots' fixed
+#: ports (PX4 14540-14600 and 18570-18600, ArduCopter 5760 on and 9002 on, MAVProxy 14550).
+FREE_PORTS_FROM = 20000
+#: Linux's default ephemeral range (``/proc/sys/net/ipv4/ip_local_port_range``), where that file cannot be read.
+EPHEMERAL_PORTS_DEFAULT = (32768, 60999)
+
+
 def free_udp_port(host: str = "127.0.0.1") -> int:
-    """A UDP port on ``host`` that nothing is bound to right now (for tests and ``masonry sitl --port 0``)."""
+    """A UDP port on ``host`` that nothing is bound to right now (for tests and ``masonry sitl --port 0``).
+
+    Drawn at random below the kernel's ephemeral ports: a port the kernel hands out (``bind`` to port 0, or any
+    socket that sends before it binds: every SITL's, every ``udpout`` link's) can be taken by another socket between
+    this check and the caller's own bind, and was (issue 29: the SITL load loop's run 15, "Address already in use").
+    A port outside that range is taken only by an explicit bind to its number.
+    """
+    import secrets
     import socket
 
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range", encoding="ascii") as f:
+            ephemeral_from = int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        ephemeral_from = EPHEMERAL_PORTS_DEFAULT[0]
+    count = ephemeral_from - FREE_PORTS_FROM
+    for _ in range(100 if count > 0 else 0):
+        port = FREE_PORTS_FROM + secrets.randbelow(count)
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:
+            try:
+                sock.bind((host, port))
+            except OSError:
+                continue  # bound already: another draw
+            return port
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sock:  # no room below the ephemeral range
         sock.bind((host, 0))
         return int(sock.getsockname()[1])
 
