@@ -34,6 +34,7 @@ __all__ = [
     "placed_by_lost",
     "recall_again",
     "release_waiting",
+    "settle_done",
     "take_result_message",
 ]
 
@@ -56,22 +57,9 @@ def take_result_message(mc: MissionControl, msg: Result, now_s: float) -> None:
         misplaced(mc, att, r, msg.sender, why, now_s)
     elif r.status == "done":
         r = mc.placement.anchored(mc, r)  # (the pose reported: anchored on the wall where it can be)
-        mc.ledger.done(att, r, now_s)
         log.info("%s done by %s (attempt %d) at %.1f s", r.task_id, msg.sender, att.attempt, now_s)
-        mc.dispatcher.complete(r.task_id)
-        if mc.glue is not None:
-            mc.glue.completed(r.task_id, now_s)
-        mc.ledger.journal_done(now_s, r, att)
-        mc.out.emit(
-            now_s,
-            "completed",
-            msg.sender,
-            r.task_id,
-            attempt=att.attempt,
-            placement_error_m=r.placement_error_m,
-            coverage=r.coverage,
-            **mc.placement.event_fields(r.as_built),
-        )
+        fields = {"placement_error_m": r.placement_error_m, "coverage": r.coverage}
+        settle_done(mc, att, r, msg.sender, now_s, {**fields, **mc.placement.event_fields(r.as_built)})
         mc.placement.completed(mc, r, msg.sender, now_s)
     else:
         reason = r.reason or "failed"
@@ -101,8 +89,6 @@ def placed_by_lost(mc: MissionControl, uav: str, last_state: str, now_s: float) 
     att = None if task_id is None else mc.ledger.running.get(task_id)
     if task_id is None or att is None:
         return False
-    r = TaskResult(task_id, "done", now_s - att.start_s)
-    mc.ledger.done(att, r, now_s)
     log.warning(
         "%s done by %s (attempt %d): lost after its release (last heard in %s)",
         task_id,
@@ -110,12 +96,28 @@ def placed_by_lost(mc: MissionControl, uav: str, last_state: str, now_s: float) 
         att.attempt,
         last_state,
     )
-    mc.dispatcher.complete(task_id)
-    if mc.glue is not None:
-        mc.glue.completed(task_id, now_s)
-    mc.ledger.journal_done(now_s, r, att, phases=False)
-    mc.out.emit(now_s, "completed", uav, task_id, attempt=att.attempt)
+    settle_done(mc, att, TaskResult(task_id, "done", now_s - att.start_s), uav, now_s, phases=False)
     return True
+
+
+def settle_done(
+    mc: MissionControl,
+    att: Attempt,
+    r: TaskResult,
+    uav: str,
+    now_s: float,
+    fields: dict[str, object] | None = None,
+    *,
+    phases: bool = True,
+) -> None:
+    """``att`` done by ``uav`` with ``r``: in the ledger, the dispatcher, the adhesive's clock, the journal (with
+    the attempt's phases unless ``phases`` is False) and a ``completed`` event (with ``fields``)."""
+    mc.ledger.done(att, r, now_s)
+    mc.dispatcher.complete(r.task_id)
+    if mc.glue is not None:
+        mc.glue.completed(r.task_id, now_s)
+    mc.ledger.journal_done(now_s, r, att, phases=phases)
+    mc.out.emit(now_s, "completed", uav, r.task_id, attempt=att.attempt, **(fields or {}))
 
 
 def misplaced(mc: MissionControl, att: Attempt, r: TaskResult, uav: str, why: str, now_s: float) -> None:
