@@ -22,6 +22,7 @@ from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
+    ahead_of,
     end_flight,
     extend_or_force,
     forced,
@@ -371,21 +372,24 @@ class TableClearance:
             self.bump()
 
     def progress(self, uav: str, position_m: Vec3) -> None:
-        """``uav`` reports where it is: the legs of its flight behind it end now."""
+        """``uav`` reports where it is: the legs of its flight behind it end now, and the leg it flies holds only
+        what lies ahead of it (:func:`~masonry.mission.reserved_parts.ahead_of`)."""
         u = self._uavs.get(uav)
         if u is None:
             return
         u.position = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
         self.at_spot(uav, u)
-        if u.phase is not Phase.FLYING or u.plan is None:
-            return
+        if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
+            return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
         legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
         at = leg_index(legs, u.position)
-        if at is None or at == 0:
+        if at is None:
             return
         behind = [r for r in legs[:at] if r.t0_s < self.now_s]
-        if behind:
-            left = [r for r in self.table.of(uav) if r not in behind]
+        on = legs[at]
+        ahead = ahead_of(on, u.position) if on.t0_s < self.now_s and on.purpose == "transit" else on
+        if behind or ahead != on:  # (the part of its leg it has flown out of is free too)
+            left = [ahead if r == on else r for r in self.table.of(uav) if r not in behind]
             self._replace(uav, [*left, *(r.until(self.now_s) for r in behind)])
 
     # -- internals ---------------------------------------------------------------------------------------

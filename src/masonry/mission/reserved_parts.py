@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import replace
 
 from masonry.errors import PlanningError
 from masonry.mission.volumes import Vec3
@@ -98,6 +99,21 @@ def level_of(rs: Iterable[Reservation], p: Vec3, now_s: float) -> float:
         ):
             return v.z0_m
     return p[2]
+
+
+def ahead_of(r: Reservation, p: Vec3) -> Reservation:
+    """``r``, a lateral leg the UAV at ``p`` flies, from ``ON_LEG_M`` behind the UAV on: the air it has flown out
+    of is free before the leg's window ends (a column, or a UAV not yet ``ON_LEG_M`` along, keeps all of ``r``)."""
+    v = r.volume
+    length_m = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
+    if length_m <= 1e-9:
+        return r
+    along_m = ((p[0] - v.a[0]) * (v.b[0] - v.a[0]) + (p[1] - v.a[1]) * (v.b[1] - v.a[1])) / length_m
+    f = (min(along_m, length_m) - ON_LEG_M) / length_m
+    if f <= 1e-6:
+        return r
+    a = (v.a[0] + (v.b[0] - v.a[0]) * f, v.a[1] + (v.b[1] - v.a[1]) * f)
+    return replace(r, volume=replace(v, a=a))
 
 
 def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
@@ -250,6 +266,7 @@ __all__ = [
     "ON_LAYER_M",
     "ON_LEG_M",
     "Volume",
+    "ahead_of",
     "end_flight",
     "extend_or_force",
     "forced",
