@@ -239,7 +239,7 @@ class TableClearance:
             n: u
             for n, u in self._uavs.items()
             if u.request is not None
-            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and u.approach))
+            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and (u.approach or u.flown_on)))
         }
         # (whose way a UAV is in: any waiting UAV's, one hovering at its parking spot too)
         waits = {
@@ -258,11 +258,15 @@ class TableClearance:
                 if sent is not None:
                     return sent
             home = self.homes.get(uav)
-            start = u.spot if u.approach else (u.request.position or u.position)
+            start = u.spot if u.approach or u.flown_on else (u.request.position or u.position)
             if home is None or start is None:
                 continue
             top, n, plan = self._home_top_m(), self.max_layers, None
-            parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.approach}
+            parked = {
+                o: p.spot
+                for o, p in self._uavs.items()
+                if p.spot is not None and not (p.approach or p.flown_on)
+            }
             spots = park_spots(home, top, n, self.spacing_m, self._levels, uav)
             # (never in the way down of a UAV parked before it: reserved_parts.parking_order)
             for spot in parking_order(uav, spots, self.airspace.layers_m[-1], parked, self.table.separation):
@@ -275,6 +279,7 @@ class TableClearance:
             left = self.table if stay is None else forced(self.table, [stay], [stay.until(now_s)])
             self.table = forced(left, [], plan.reservations)
             u.phase, u.plan, u.spot, u.site, u.approach = Phase.TO_HOLD, plan, spot, u.request.site, False
+            u.flown_on = False
             self.held_back += 1
             self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])

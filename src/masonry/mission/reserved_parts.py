@@ -116,6 +116,36 @@ def ahead_of(r: Reservation, p: Vec3) -> Reservation:
     return replace(r, volume=replace(v, a=a))
 
 
+def on_ahead(
+    rs: Sequence[Reservation], p: Vec3, now_s: float, layer_m: float
+) -> tuple[list[tuple[Vec3, int]], Reservation | None]:
+    """Where a UAV at ``p``, turned back in its plan (``rs``: its reservations, in plan order; lateral legs at
+    ``layer_m``), could hover further on along it, each reachable by a hold flight (up or down where it is, then
+    over at one altitude): the top of the climb it is in, then the end of every lateral leg ahead, nearest first,
+    each with the index (among the plan's legs under way) of the leg it ends; and the stay the plan ends in, if it
+    reaches it so (it is in the plan's last column, or the stay's top is the layer's end), else None."""
+    legs = [r for r in rs if r.purpose in _LEG_PURPOSES and r.t1_s > now_s]
+    at = leg_index(legs, p)
+    if at is None:
+        return [], None
+    out: list[tuple[Vec3, int]] = []
+    for i in range(at, len(legs)):
+        v = legs[i].volume
+        if v.a != v.b:
+            out.append(((v.b[0], v.b[1], v.z1_m), i))
+        elif i == at and legs[i].purpose == "climb":
+            out.append(((v.a[0], v.a[1], layer_m), i))
+    stay = next((r for r in reversed(rs) if r.open_ended and r.purpose == "stay"), None)
+    if stay is None or stay.volume.a != stay.volume.b:
+        return out, None
+    xy, top = stay.volume.a, stay.volume.z1_m
+    now = legs[at]
+    in_last = at == len(legs) - 1 and now.purpose == "descend" and now.volume.a == xy
+    ends = [r.volume for r in legs[at:] if r.volume.a != r.volume.b]
+    at_layer_end = bool(ends) and ends[-1].b == xy and abs(ends[-1].z1_m - top) <= 1e-6
+    return out, stay if in_last or at_layer_end else None
+
+
 def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
     """Each UAV's parking level (0, 1, ...): two pads closer than ``separation_m`` never share one (greedy)."""
     out: dict[str, int] = {}
@@ -273,6 +303,7 @@ __all__ = [
     "guarded",
     "leg_index",
     "level_of",
+    "on_ahead",
     "park_levels",
     "park_plan",
     "park_spots",
