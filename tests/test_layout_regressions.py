@@ -361,6 +361,7 @@ def test_a_uav_is_not_parked_in_the_way_down_of_a_neighbour_parked_before_it():
     ("seed", "faults", "policy"),
     [
         (70, False, "critical-path"),
+        (70, True, "critical-path"),
         (82, False, "critical-path"),
         (206, False, "critical-path"),
         (2080, True, "critical-path"),
@@ -369,7 +370,8 @@ def test_a_uav_is_not_parked_in_the_way_down_of_a_neighbour_parked_before_it():
 )
 def test_compact_layouts_that_stalled_under_the_table_complete_apart(seed, faults, policy):
     # bench_layouts --compact --airspace table (82: glue-1 turned back 4 cm under its layer, 1.06 m over glue-2's
-    # stay, as seed 70 above; 206, 2080 and 5339: the flight on to the pad and the parking spots, above and below)
+    # stay, as seed 70 above; 206, 2080 and 5339: the flight on to the pad and the parking spots, above and below;
+    # 70 with and without faults once more: the flight on along its plan, and parked from its layer, above)
     rng = random.Random(seed)
     bp = random_layout(rng, COMPACT)
     r = simulate(
@@ -482,3 +484,30 @@ def test_on_ahead_names_the_places_a_uav_turned_back_reaches_by_one_hold_flight_
     at_layer = Reservation("g", column((2.0, 0.0), 0.0, 2.3), 12.0, math.inf, "stay")  # home at the layer
     assert on_ahead([climb, *legs, at_layer], (0.5, 0.0, 2.3), 1.0, 2.3)[1] == at_layer
     assert on_ahead(plan, (5.0, 5.0, 2.3), 1.0, 2.3) == ([], None)  # off its plan: nowhere
+
+
+def test_a_uav_hovering_on_its_layer_after_it_turned_back_is_parked_from_the_layer_under_the_table():
+    # bench_layouts --compact --faults --airspace table seed 70 with table49's changes: glue-2 turned back 8 cm under
+    # its layer and hovers on it (1.1 m over brick-1's stay 1.18 m beside it); each waited for the other's stay. The
+    # parking rule planned glue-2's climb to its parking spot from where it had asked, 8 cm lower, 1.02 m over
+    # brick-1's stay, and brick-1's through glue-2's hover: neither could be parked, 300 s without progress. A UAV is
+    # parked from where it stays, as its hop would leave.
+    air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
+    site_b, site_g = (0.0, 0.0, 1.2), (1.205, 0.1, 1.2)
+    for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.205, 5.0, 1.2))):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, start).granted
+        air.progress(uav, site)
+        air.end_transit(uav)
+    assert air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g).layer_m == pytest.approx(2.3)
+    stopped = (1.18, 0.1, 2.22)  # (blown 2.5 cm towards b)
+    air.progress("g", stopped)
+    assert not air.request("g", (0.15, 0.0, 1.2), 3.0, stopped).granted  # next to b's site: it waits for b
+    stay = air.table.stay_of("g")
+    assert stay is not None and stay.volume.z0_m == pytest.approx(2.3)  # a hover on its layer
+    air.raise_base(1.3)  # the wall has risen: b's leg flies 1.0 m under g's hover
+    assert not air.request("b", (-2.0, 0.6, 1.2), 4.0, site_b).granted
+    assert air.blockers("b") == [("g", "stay")] and air.blockers("g") == [("b", "stay")]
+    sent = [g for t in range(5, 20) for g in air.grant(float(t)) if g.hold_m is not None]
+    assert sent and sent[0].uav == "g" and air.phase("g") is Phase.TO_HOLD  # (was: nobody, for good)
+    assert air.conflicts() == []

@@ -27,6 +27,7 @@ from masonry.mission.reserved_parts import (
     extend_or_force,
     forced,
     guarded,
+    hover_start,
     leg_index,
     park_levels,
     park_plan,
@@ -261,6 +262,10 @@ class TableClearance:
             start = u.spot if u.approach or u.flown_on else (u.request.position or u.position)
             if home is None or start is None:
                 continue
+            # a UAV hovering where it turned back leaves from its hover (on its layer, a few centimetres over where
+            # it asked: from 8 cm under it, 1.02 m over a neighbour's stay, neither UAV of a cycle of two could be
+            # parked, bench_layouts --compact --faults --airspace table seed 70)
+            start = hover_start(self.table.stay_of(uav), start)
             top, n, plan = self._home_top_m(), self.max_layers, None
             parked = {
                 o: p.spot

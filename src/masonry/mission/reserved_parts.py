@@ -116,6 +116,22 @@ def ahead_of(r: Reservation, p: Vec3) -> Reservation:
     return replace(r, volume=replace(v, a=a))
 
 
+def hover_start(stay: Reservation | None, start: Vec3) -> Vec3:
+    """Where a UAV at ``start`` leaves from if ``stay`` (its own) is a hover within :data:`ON_LEG_M` of it (it
+    turned back and hovers where it stopped, perhaps on the layer just over it: :func:`level_of`): the hover."""
+    if stay is None:
+        return start
+    v = stay.volume
+    if (
+        v.a != v.b
+        or v.z0_m != v.z1_m
+        or math.dist(v.a, start[:2]) >= ON_LEG_M
+        or abs(start[2] - v.z1_m) >= ON_LEG_M
+    ):
+        return start
+    return (v.a[0], v.a[1], v.z1_m)
+
+
 def on_ahead(
     rs: Sequence[Reservation], p: Vec3, now_s: float, layer_m: float
 ) -> tuple[list[tuple[Vec3, int]], Reservation | None]:
@@ -301,6 +317,7 @@ __all__ = [
     "extend_or_force",
     "forced",
     "guarded",
+    "hover_start",
     "leg_index",
     "level_of",
     "on_ahead",
