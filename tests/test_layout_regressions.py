@@ -20,12 +20,12 @@ from masonry.mission.airspace_state import FlightRequest
 from masonry.mission.control_airspace import answer
 from masonry.mission.messages import Clearance, decode, encode
 from masonry.mission.reserved import TableClearance
-from masonry.mission.reserved_parts import park_levels, park_spots, parked_ways, parking_order
+from masonry.mission.reserved_parts import on_ahead, park_levels, park_spots, parked_ways, parking_order
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.sites import SiteIntervals
 from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, on_leg, point_segment_m
 from masonry.planner.tasks import BrickTask, Plan
-from masonry.reservation import Separation
+from masonry.reservation import Reservation, Separation, column, leg
 from masonry.separation import LAYER_SPACING_M, LEG_OVERSHOOT_M, SEPARATION_XY_M, TRACK_SHARE_M
 from masonry.sim import Faults
 
@@ -361,6 +361,7 @@ def test_a_uav_is_not_parked_in_the_way_down_of_a_neighbour_parked_before_it():
     ("seed", "faults", "policy"),
     [
         (70, False, "critical-path"),
+        (70, True, "critical-path"),
         (82, False, "critical-path"),
         (206, False, "critical-path"),
         (2080, True, "critical-path"),
@@ -369,7 +370,8 @@ def test_a_uav_is_not_parked_in_the_way_down_of_a_neighbour_parked_before_it():
 )
 def test_compact_layouts_that_stalled_under_the_table_complete_apart(seed, faults, policy):
     # bench_layouts --compact --airspace table (82: glue-1 turned back 4 cm under its layer, 1.06 m over glue-2's
-    # stay, as seed 70 above; 206, 2080 and 5339: the flight on to the pad and the parking spots, above and below)
+    # stay, as seed 70 above; 206, 2080 and 5339: the flight on to the pad and the parking spots, above and below;
+    # 70 with and without faults once more: the flight on along its plan, and parked from its layer, above)
     rng = random.Random(seed)
     bp = random_layout(rng, COMPACT)
     r = simulate(
@@ -426,3 +428,86 @@ def test_a_uav_turned_back_on_its_way_home_where_no_hover_fits_flies_on_to_its_p
     air.grant(15.0)
     assert air.phase("g") is Phase.AT_HOLD
     assert [v.kind for v in air.volumes("g")] == ["stay"] and air.conflicts() == []
+
+
+def test_a_uav_turned_back_in_its_climb_where_no_hover_fits_flies_on_to_its_layer_and_waits_there_under_the_table():
+    # bench_layouts --compact --airspace table seed 70 with table49's changes (a flight to a spot frees its climb, a
+    # leg holds what lies ahead): glue-2, flying home at 2.3 m, was handed A3 and stopped at 2.05 m in its climb,
+    # 0.25 m under its layer; the hover there was 0.85 m over brick-1's stay, refused, so it kept its flight home and
+    # its new flight waited; brick-1's flight to its pickup waited on that flight's transit (extended while glue-2
+    # was late) and glue-2's on brick-1's stay: 300 s without progress. It flies on up its climb to the layer, where
+    # a hover fits, holds only that hover, and brick-1 flies under it.
+    air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
+    site_b, site_g = (0.0, 0.0, 1.2), (1.2, 0.1, 1.2)
+    for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.2, 5.0, 1.2))):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, start).granted
+        air.progress(uav, site)
+        air.end_transit(uav)
+    home = air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g)  # its way home crosses b's zone: at 2.3 m
+    assert home.granted and home.layer_m is not None and math.isclose(home.layer_m, 2.3)
+    stopped = (1.2, 0.1, 2.05)
+    air.progress("g", stopped)  # climbing, 0.25 m under the layer
+    turned = air.request("g", (0.15, 0.0, 1.2), 3.0, stopped)  # next to b's site: it waits for b
+    # (was: no answer but "wait where you are", its flight home held, open-ended for the others)
+    assert not turned.granted and turned.hold_m == pytest.approx((1.2, 0.1, 2.3))
+    assert air.phase("g") is Phase.TO_HOLD and air.conflicts() == []
+    assert [v.kind for v in air.volumes("g")] == ["climb", "stay"]  # its way home from the layer on is free
+    air.grant(4.0)
+    air.progress("g", (1.2, 0.1, 2.3))
+    air.grant(5.0)
+    assert air.phase("g") is Phase.AT_HOLD and [v.kind for v in air.volumes("g")] == ["stay"]
+    # b sets off under it, at 1.2 m (was: it waited for g's transit, g for b's stay)
+    assert air.request("b", (-2.0, 0.6, 1.2), 6.0, site_b).granted, air.blockers("b")
+    air.progress("b", (-2.0, 0.6, 1.2))
+    air.end_transit("b")
+    assert any(g.uav == "g" and g.granted for t in range(7, 60) for g in air.grant(float(t)))
+    assert air.conflicts() == []
+
+
+def test_on_ahead_names_the_places_a_uav_turned_back_reaches_by_one_hold_flight_along_its_plan():
+    climb = Reservation("g", column((0.0, 0.0), 1.2, 2.3), 0.0, 8.0, "climb")
+    legs = [
+        Reservation("g", leg((float(k), 0.0), (k + 1.0, 0.0), 2.3), 5.0, 9.0 + k, "transit") for k in range(2)
+    ]
+    down = Reservation("g", column((2.0, 0.0), 1.2, 2.3), 9.0, 14.0, "descend")
+    stay = Reservation("g", column((2.0, 0.0), 0.0, 1.2), 12.0, math.inf, "stay")
+    plan = [climb, *legs, down, stay]
+    points, end = on_ahead(plan, (0.0, 0.0, 2.05), 1.0, 2.3)  # in its climb: up to the layer, then along it
+    assert points == [((0.0, 0.0, 2.3), 0), ((1.0, 0.0, 2.3), 1), ((2.0, 0.0, 2.3), 2)] and end is None
+    points, end = on_ahead(plan, (1.4, 0.0, 2.3), 1.0, 2.3)  # on its second leg
+    assert points == [((2.0, 0.0, 2.3), 2)] and end is None
+    points, end = on_ahead(
+        plan, (2.0, 0.0, 1.6), 1.0, 2.3
+    )  # in its descent: on down to the stay it was granted
+    assert points == [] and end == stay
+    at_layer = Reservation("g", column((2.0, 0.0), 0.0, 2.3), 12.0, math.inf, "stay")  # home at the layer
+    assert on_ahead([climb, *legs, at_layer], (0.5, 0.0, 2.3), 1.0, 2.3)[1] == at_layer
+    assert on_ahead(plan, (5.0, 5.0, 2.3), 1.0, 2.3) == ([], None)  # off its plan: nowhere
+
+
+def test_a_uav_hovering_on_its_layer_after_it_turned_back_is_parked_from_the_layer_under_the_table():
+    # bench_layouts --compact --faults --airspace table seed 70 with table49's changes: glue-2 turned back 8 cm under
+    # its layer and hovers on it (1.1 m over brick-1's stay 1.18 m beside it); each waited for the other's stay. The
+    # parking rule planned glue-2's climb to its parking spot from where it had asked, 8 cm lower, 1.02 m over
+    # brick-1's stay, and brick-1's through glue-2's hover: neither could be parked, 300 s without progress. A UAV is
+    # parked from where it stays, as its hop would leave.
+    air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
+    site_b, site_g = (0.0, 0.0, 1.2), (1.205, 0.1, 1.2)
+    for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.205, 5.0, 1.2))):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, start).granted
+        air.progress(uav, site)
+        air.end_transit(uav)
+    assert air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g).layer_m == pytest.approx(2.3)
+    stopped = (1.18, 0.1, 2.22)  # (blown 2.5 cm towards b)
+    air.progress("g", stopped)
+    assert not air.request("g", (0.15, 0.0, 1.2), 3.0, stopped).granted  # next to b's site: it waits for b
+    stay = air.table.stay_of("g")
+    assert stay is not None and stay.volume.z0_m == pytest.approx(2.3)  # a hover on its layer
+    air.raise_base(1.3)  # the wall has risen: b's leg flies 1.0 m under g's hover
+    assert not air.request("b", (-2.0, 0.6, 1.2), 4.0, site_b).granted
+    assert air.blockers("b") == [("g", "stay")] and air.blockers("g") == [("b", "stay")]
+    sent = [g for t in range(5, 20) for g in air.grant(float(t)) if g.hold_m is not None]
+    assert sent and sent[0].uav == "g" and air.phase("g") is Phase.TO_HOLD  # (was: nobody, for good)
+    assert air.conflicts() == []

@@ -17,6 +17,7 @@ from typer.testing import CliRunner
 from masonry.blueprint import format_blueprint, load_blueprint
 from masonry.cli import app
 from masonry.mission.events import EventFanout, EventList, MissionEvent
+from masonry.mission.reserved_parts import ahead_of
 from masonry.mission.simulate import SimulatedMission
 from masonry.mission.table_events import TableWatch, watch_table
 from masonry.mission.table_view import TableView
@@ -349,3 +350,15 @@ def test_the_page_hides_the_timeline_without_a_table():
         page.wait_for_selector("#gantt rect.bar")
         assert not page.is_visible("#reserved-box") and page.locator("#reserved rect").count() == 0
         browser.close()
+
+
+def test_a_leg_cut_to_what_lies_ahead_of_its_uav_is_logged_moved_not_made_in_the_past():
+    # table49's leg cut (reserved_parts.ahead_of) keeps the leg's window with a shorter volume: logged as a new
+    # reservation, it was "made" with its window begun in the past
+    watch = TableWatch(lambda: None)
+    r = Reservation("a", leg((0.0, 0.0), (4.0, 0.0), 2.3), 1.0, 9.0, "transit")
+    assert [e.fields["change"] for e in watch.changes(Table((r,)), 1.0)] == ["made"]
+    cut = ahead_of(r, (2.0, 0.0, 2.3))
+    (e,) = watch.changes(Table((cut,)), 5.0)
+    assert e.fields["change"] == "moved" and e.fields["id"] == 1 and e.fields["t0_s"] == 1.0
+    assert e.fields["volume"][:2] == pytest.approx([cut.volume.a[0], 0.0]) and cut.volume.a[0] > 1.0

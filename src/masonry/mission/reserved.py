@@ -22,10 +22,12 @@ from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
+    ahead_of,
     end_flight,
     extend_or_force,
     forced,
     guarded,
+    hover_start,
     leg_index,
     park_levels,
     park_plan,
@@ -238,7 +240,7 @@ class TableClearance:
             n: u
             for n, u in self._uavs.items()
             if u.request is not None
-            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and u.approach))
+            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and (u.approach or u.flown_on)))
         }
         # (whose way a UAV is in: any waiting UAV's, one hovering at its parking spot too)
         waits = {
@@ -257,11 +259,19 @@ class TableClearance:
                 if sent is not None:
                     return sent
             home = self.homes.get(uav)
-            start = u.spot if u.approach else (u.request.position or u.position)
+            start = u.spot if u.approach or u.flown_on else (u.request.position or u.position)
             if home is None or start is None:
                 continue
+            # a UAV hovering where it turned back leaves from its hover (on its layer, a few centimetres over where
+            # it asked: from 8 cm under it, 1.02 m over a neighbour's stay, neither UAV of a cycle of two could be
+            # parked, bench_layouts --compact --faults --airspace table seed 70)
+            start = hover_start(self.table.stay_of(uav), start)
             top, n, plan = self._home_top_m(), self.max_layers, None
-            parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.approach}
+            parked = {
+                o: p.spot
+                for o, p in self._uavs.items()
+                if p.spot is not None and not (p.approach or p.flown_on)
+            }
             spots = park_spots(home, top, n, self.spacing_m, self._levels, uav)
             # (never in the way down of a UAV parked before it: reserved_parts.parking_order)
             for spot in parking_order(uav, spots, self.airspace.layers_m[-1], parked, self.table.separation):
@@ -274,6 +284,7 @@ class TableClearance:
             left = self.table if stay is None else forced(self.table, [stay], [stay.until(now_s)])
             self.table = forced(left, [], plan.reservations)
             u.phase, u.plan, u.spot, u.site, u.approach = Phase.TO_HOLD, plan, spot, u.request.site, False
+            u.flown_on = False
             self.held_back += 1
             self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])
@@ -371,21 +382,24 @@ class TableClearance:
             self.bump()
 
     def progress(self, uav: str, position_m: Vec3) -> None:
-        """``uav`` reports where it is: the legs of its flight behind it end now."""
+        """``uav`` reports where it is: the legs of its flight behind it end now, and the leg it flies holds only
+        what lies ahead of it (:func:`~masonry.mission.reserved_parts.ahead_of`)."""
         u = self._uavs.get(uav)
         if u is None:
             return
         u.position = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
         self.at_spot(uav, u)
-        if u.phase is not Phase.FLYING or u.plan is None:
-            return
+        if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
+            return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
         legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
         at = leg_index(legs, u.position)
-        if at is None or at == 0:
+        if at is None:
             return
         behind = [r for r in legs[:at] if r.t0_s < self.now_s]
-        if behind:
-            left = [r for r in self.table.of(uav) if r not in behind]
+        on = legs[at]
+        ahead = ahead_of(on, u.position) if on.t0_s < self.now_s and on.purpose == "transit" else on
+        if behind or ahead != on:  # (the part of its leg it has flown out of is free too)
+            left = [ahead if r == on else r for r in self.table.of(uav) if r not in behind]
             self._replace(uav, [*left, *(r.until(self.now_s) for r in behind)])
 
     # -- internals ---------------------------------------------------------------------------------------

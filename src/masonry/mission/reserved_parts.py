@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import replace
 
 from masonry.errors import PlanningError
 from masonry.mission.volumes import Vec3
@@ -98,6 +99,67 @@ def level_of(rs: Iterable[Reservation], p: Vec3, now_s: float) -> float:
         ):
             return v.z0_m
     return p[2]
+
+
+def ahead_of(r: Reservation, p: Vec3) -> Reservation:
+    """``r``, a lateral leg the UAV at ``p`` flies, from ``ON_LEG_M`` behind the UAV on: the air it has flown out
+    of is free before the leg's window ends (a column, or a UAV not yet ``ON_LEG_M`` along, keeps all of ``r``)."""
+    v = r.volume
+    length_m = math.hypot(v.b[0] - v.a[0], v.b[1] - v.a[1])
+    if length_m <= 1e-9:
+        return r
+    along_m = ((p[0] - v.a[0]) * (v.b[0] - v.a[0]) + (p[1] - v.a[1]) * (v.b[1] - v.a[1])) / length_m
+    f = (min(along_m, length_m) - ON_LEG_M) / length_m
+    if f <= 1e-6:
+        return r
+    a = (v.a[0] + (v.b[0] - v.a[0]) * f, v.a[1] + (v.b[1] - v.a[1]) * f)
+    return replace(r, volume=replace(v, a=a))
+
+
+def hover_start(stay: Reservation | None, start: Vec3) -> Vec3:
+    """Where a UAV at ``start`` leaves from if ``stay`` (its own) is a hover within :data:`ON_LEG_M` of it (it
+    turned back and hovers where it stopped, perhaps on the layer just over it: :func:`level_of`): the hover."""
+    if stay is None:
+        return start
+    v = stay.volume
+    if (
+        v.a != v.b
+        or v.z0_m != v.z1_m
+        or math.dist(v.a, start[:2]) >= ON_LEG_M
+        or abs(start[2] - v.z1_m) >= ON_LEG_M
+    ):
+        return start
+    return (v.a[0], v.a[1], v.z1_m)
+
+
+def on_ahead(
+    rs: Sequence[Reservation], p: Vec3, now_s: float, layer_m: float
+) -> tuple[list[tuple[Vec3, int]], Reservation | None]:
+    """Where a UAV at ``p``, turned back in its plan (``rs``: its reservations, in plan order; lateral legs at
+    ``layer_m``), could hover further on along it, each reachable by a hold flight (up or down where it is, then
+    over at one altitude): the top of the climb it is in, then the end of every lateral leg ahead, nearest first,
+    each with the index (among the plan's legs under way) of the leg it ends; and the stay the plan ends in, if it
+    reaches it so (it is in the plan's last column, or the stay's top is the layer's end), else None."""
+    legs = [r for r in rs if r.purpose in _LEG_PURPOSES and r.t1_s > now_s]
+    at = leg_index(legs, p)
+    if at is None:
+        return [], None
+    out: list[tuple[Vec3, int]] = []
+    for i in range(at, len(legs)):
+        v = legs[i].volume
+        if v.a != v.b:
+            out.append(((v.b[0], v.b[1], v.z1_m), i))
+        elif i == at and legs[i].purpose == "climb":
+            out.append(((v.a[0], v.a[1], layer_m), i))
+    stay = next((r for r in reversed(rs) if r.open_ended and r.purpose == "stay"), None)
+    if stay is None or stay.volume.a != stay.volume.b:
+        return out, None
+    xy, top = stay.volume.a, stay.volume.z1_m
+    now = legs[at]
+    in_last = at == len(legs) - 1 and now.purpose == "descend" and now.volume.a == xy
+    ends = [r.volume for r in legs[at:] if r.volume.a != r.volume.b]
+    at_layer_end = bool(ends) and ends[-1].b == xy and abs(ends[-1].z1_m - top) <= 1e-6
+    return out, stay if in_last or at_layer_end else None
 
 
 def park_levels(homes: Mapping[str, Vec3], separation_m: float) -> dict[str, int]:
@@ -250,12 +312,15 @@ __all__ = [
     "ON_LAYER_M",
     "ON_LEG_M",
     "Volume",
+    "ahead_of",
     "end_flight",
     "extend_or_force",
     "forced",
     "guarded",
+    "hover_start",
     "leg_index",
     "level_of",
+    "on_ahead",
     "park_levels",
     "park_plan",
     "park_spots",

@@ -18,7 +18,7 @@ from masonry.mission.airspace_ground import ON_PAD_XY_M
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
-from masonry.mission.reserved_parts import ON_LEG_M, forced, level_of
+from masonry.mission.reserved_parts import ON_LEG_M, forced, level_of, on_ahead
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
@@ -27,6 +27,12 @@ if TYPE_CHECKING:
     from masonry.mission.reserved import TableClearance
 
 __all__ = ["TableUav", "check_fence", "evaluate", "fly_on", "hop_request", "request", "stop_where"]
+
+#: The radius of the hover a UAV that stopped is reserved (its tracking error, and more).
+HOVER_R_M = 0.3
+
+_LEGS = ("climb", "transit", "descend")
+_PLAN_END = ("work", "site", "home")
 
 
 @dataclass
@@ -46,6 +52,7 @@ class TableUav:
         False  # its spot is the approach spot by its site (:mod:`~masonry.mission.reserved_approach`)
     )
     approached: int = -1  # the request (seq) it was sent to an approach spot for: only once
+    flown_on: bool = False  # its spot is where it flew on to along its plan, turned back (:func:`fly_on`)
 
 
 def request(
@@ -102,22 +109,32 @@ def request(
 
 
 def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
-    """``uav`` turned back where no hover fits and keeps its plan (:func:`stop_where`); its new flight waits. If the
-    plan is its flight home at the layer it stays at over its pad, it flies on to that hover (a hold flight, on its
-    plan's windows) and waits there, not where it stopped: there its plan's windows ended by time, and the flights
-    granted after them came down where it hovered (``bench_layouts.py --compact --airspace table`` seed 206: glue-1
-    stopped on its way home 0.70 m from brick-1's site, granted before it turned back; brick-1 came down 0.66 m from
-    it). Else ``g`` (it waits where it stopped, as before)."""
-    stay, home = c.table.stay_of(uav), c.homes.get(uav)
-    if u.plan is None or u.request is None or stay is None or home is None or u.phase is not Phase.ASKING:
+    """``uav`` turned back where no hover fits and keeps its plan (:func:`stop_where`); its new flight waits. It
+    flies its plan on (a hold flight, on the plan's windows) to the stay the plan ends in if one hold flight gets it
+    there, else to the nearest place along it where a hover fits (:func:`~masonry.mission.reserved_parts.on_ahead`),
+    and waits there, holding only that stay, from which the parking rule may send it on (``flown_on``). Where it
+    stopped, its plan's windows were extended while it waited (a UAV waiting on them waited for a volume held by a
+    UAV that waited: seed 70 of ``bench_layouts.py --compact --airspace table``), or ended by time, and the flights
+    granted after them came down where it hovered (seed 206: 0.66 m). Else ``g``: it waits where it stopped (no
+    such place along its plan: not met)."""
+    where = None if u.request is None else (u.request.position or u.position)
+    if u.plan is None or u.request is None or where is None or u.phase is not Phase.ASKING:
         return g
-    v = stay.volume
-    over_pad = v.a == v.b and math.hypot(v.a[0] - home[0], v.a[1] - home[1]) <= ON_PAD_XY_M
-    if not over_pad or abs(u.plan.layer_m - v.z1_m) > 1e-6:
+    mine = c.table.of(uav)
+    points, stay = on_ahead(mine, where, c.now_s, u.plan.layer_m)
+    legs = [r for r in mine if r.purpose in _LEGS and r.t1_s > c.now_s]
+    spot = None if stay is None else (stay.volume.a[0], stay.volume.a[1], stay.volume.z1_m)
+    for q, i in points if stay is None else ():
+        hover = Reservation(uav, column(q[:2], q[2], q[2], HOVER_R_M), c.now_s, math.inf, "stay")
+        if not c.table.clashes(hover):  # (the rest of its plan, from the leg that ends there on, is free)
+            rest = [r for r in mine if r.purpose in _PLAN_END or r.open_ended]
+            c.table, spot = forced(c.table, [*legs[i + 1 :], *rest], [hover]), q
+            break
+    if spot is None:
         return g
-    u.phase, u.spot, u.approach = Phase.TO_HOLD, (v.a[0], v.a[1], v.z1_m), False
+    u.phase, u.spot, u.approach, u.flown_on = Phase.TO_HOLD, spot, False, True
     c.bump()
-    return Grant(uav, u.request.site, False, u.spot, u.spot[2])
+    return Grant(uav, u.request.site, False, spot, spot[2])
 
 
 def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
@@ -167,6 +184,7 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
     left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
     c.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
     u.request, u.phase, u.blocked_by, u.spot, u.approach = None, Phase.FLYING, (), None, False
+    u.flown_on = False
     c.granted_count += 1
     if c.gate is not None:
         c.gate.entered(uav, w.site, now_s)
@@ -219,6 +237,6 @@ def stop_where(c: TableClearance, uav: str, u: TableUav, pos: Vec3 | None) -> No
     if where is None:
         return
     z = level_of(c.table.of(uav), where, c.now_s)  # (a few centimetres under its layer: on it)
-    hover = Reservation(uav, column((where[0], where[1]), z, z, 0.3), c.now_s, math.inf, "stay")
+    hover = Reservation(uav, column((where[0], where[1]), z, z, HOVER_R_M), c.now_s, math.inf, "stay")
     if not c.table.clashes(hover):
         c.set_stay(uav, hover.volume, Phase.PARKED)

@@ -8,7 +8,8 @@ every change it compares the table with the one it saw last and hands the missio
 
 - ``made``: new in the table;
 - ``moved``: the same UAV, volume, purpose and task with another window (shifted, extended for a late UAV, or
-  shortened: a stay that ends when its UAV sets off); ``was`` is the window before;
+  shortened: a stay that ends when its UAV sets off), or the same window with its volume cut to what lies ahead
+  of its UAV (a leg under way); ``was`` is the window before;
 - ``released``: dropped before its window ended, or its window cut to end now (a flight's legs once the UAV is
   down at its site, everything of a UAV out of the mission).
 
@@ -37,6 +38,20 @@ CHANGES = ("made", "moved", "released")
 def _key(r: Reservation) -> tuple[object, ...]:
     """What stays the same when a reservation moves: its UAV, volume, purpose and task."""
     return (r.uav, r.volume, r.purpose, r.task)
+
+
+def _arrival(arrived: dict[tuple[object, ...], list[Reservation]], r: Reservation) -> Reservation | None:
+    """What ``r`` became, taken out of ``arrived``: the same UAV, volume, purpose and task (moved), else the same
+    UAV, purpose, task and window with another volume (a leg under way cut to what lies ahead of its UAV,
+    :func:`masonry.mission.reserved_parts.ahead_of`); None: neither (released, or ended)."""
+    same = arrived.get(_key(r))
+    if same:
+        return same.pop(0)
+    for rs in arrived.values():
+        for i, q in enumerate(rs):
+            if (q.uav, q.purpose, q.task, q.t0_s, q.t1_s) == (r.uav, r.purpose, r.task, r.t0_s, r.t1_s):
+                return rs.pop(i)
+    return None
 
 
 def _end(t1_s: float) -> float | None:
@@ -97,9 +112,8 @@ class TableWatch:
         out: list[MissionEvent] = []
         for r in sorted(gone.elements(), key=lambda r: (r.uav, r.t0_s, r.t1_s)):
             rid = self._take_id(r)
-            same = arrived.get(_key(r))
-            if same:
-                after = same.pop(0)
+            after = _arrival(arrived, r)
+            if after is not None:
                 self._ids.setdefault(after, []).append(rid)
                 change = "released" if after.t1_s <= now_s < r.t1_s else "moved"
                 out.append(self._event(now_s, change, rid, after, was=[r.t0_s, _end(r.t1_s)]))
