@@ -365,3 +365,16 @@ def test_a_uav_cut_off_as_it_took_off_keeps_the_column_over_its_pad(tmp_path):
     from the pad beside it and flew past at 0.64 m. Now its way home (the column over its pad) stays reserved."""
     out = fly_chaos(random_chaos(47, vehicle="arducopter", max_drop_s=40.0), tmp_path)
     assert check_chaos(out) == []
+
+
+def test_a_role_lost_to_a_long_drop_ends_the_mission_stuck_and_says_so(tmp_path):
+    """Campaign seed 27 (ideal) with link drops up to 40 s: glue-1, the only sprayer, cut off for 26.1 s, was
+    declared lost and the mission ended blocked once rejoin_timeout_s had passed; its late A3 result, taken after
+    the end, freed B4 for brick-1, and the report called B4 and B5 `pending` (read from the dispatcher after the
+    end): two tasks left without a word. Now a mission that ended blocked calls what it left `stuck`."""
+    out = fly_chaos(random_chaos(27, max_drop_s=40.0), tmp_path)
+    assert not out.report.completed and out.lost_uavs == ("glue-1",)
+    assert {t.id: t.status for t in out.report.tasks if t.status != "done"} == dict.fromkeys(
+        ("B4", "B5", "A4", "A5"), "stuck"
+    )
+    assert check_chaos(out) == []

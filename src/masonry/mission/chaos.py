@@ -344,6 +344,9 @@ def _unexplained(outcome: ChaosOutcome) -> list[str]:
             continue  # its attempts ran out, each with the reason its UAV gave
         if tid in stuck and _waits_for_stuck(outcome.plan, tid, stuck | _role_less(outcome, alive)):
             continue  # a prerequisite can never be done
+        if tid in stuck and set(fleet_roles.values()) - alive:
+            continue  # the mission ended blocked for want of a role (the report's uavs say which): a lost UAV's
+            # late result taken after the end may have freed it since
         out.append(f"unexplained: {tid} not done, and not said why (roles with a UAV left: {sorted(alive)})")
     return out
 

@@ -219,6 +219,9 @@ class MissionControl:
         self._last_heartbeat_s: float | None = None
         self._dirty = True
         self.ended_at_s: float | None = None
+        #: :attr:`blocked` when the mission ended: a lost UAV's late result taken after the end may free work
+        #: nobody is left to do, and the report still says the mission ended stuck
+        self.ended_blocked = False
         self.resumed_at_s: float | None = None
         self.now_s = 0.0
         homes = {u.name: u.home_m for u in self.fleet}
@@ -334,7 +337,7 @@ class MissionControl:
             self.waits.observe(self, now_s)
             control_watch.watch_progress(self, now_s)
             if self.over:
-                self.ended_at_s = now_s
+                self.ended_at_s, self.ended_blocked = now_s, self.blocked
                 self._broadcast(MissionEnd(MISSION_CONTROL, now_s, self.finished))
                 self.out.emit(now_s, "end", completed=self.finished)
         if self._last_heartbeat_s is None or now_s - self._last_heartbeat_s >= self.heartbeat_period_s:

@@ -344,7 +344,9 @@ def control_report(
             continue
         last = tries[-1] if tries else None
         status = (
-            "stuck" if (t.id in mc.dispatcher.stuck or mc.blocked or mc.ended_at_s is None) else "pending"
+            "stuck"
+            if (t.id in mc.dispatcher.stuck or mc.ended_blocked or mc.ended_at_s is None)
+            else "pending"
         )
         stuck.append(t.id)
         tasks.append(
