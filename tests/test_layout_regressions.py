@@ -300,14 +300,14 @@ def test_a_leg_is_flown_fast_only_where_nothing_is_near_its_end_which_is_kept_cl
 # random layouts") --------------------------------------------------------------------------------------------
 
 
-def test_a_uav_that_turned_back_in_its_climb_just_under_its_layer_hovers_on_the_layer_under_the_table():
-    # bench_layouts --compact --airspace table seed 70 (towers of 9, 1 + 3, r_c 0.77 m): glue-2, granted its way
-    # home at 2.3 m over brick-1's stay (its top 1.2 m, 1.20 m beside the climb), was handed A3 next to brick-1's
-    # site 6 cm under the layer. Its hover there was 1.04 m over the stay: refused, so it kept its flight home,
-    # open-ended for the others; brick-1 waited for that flight's transit and glue-2 for brick-1's stay, and
-    # neither was a stay the parking rule reads: 300 s without progress. It hovers on the layer now.
+SEED_70_SITE_B = (0.0, 0.0, 1.2)
+
+
+def _seed_70_glue_flying_home() -> TableClearance:
+    """Seed 70's two UAVs under the table: b at its site, g granted its way home from its site beside b's at the
+    2.3 m layer (it crosses b's zone)."""
     air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
-    site_b, site_g = (0.0, 0.0, 1.2), (1.2, 0.1, 1.2)
+    site_b, site_g = SEED_70_SITE_B, (1.2, 0.1, 1.2)
     for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.2, 5.0, 1.2))):
         air.take_off(uav)
         assert air.request(uav, site, 0.0, start).granted
@@ -315,6 +315,16 @@ def test_a_uav_that_turned_back_in_its_climb_just_under_its_layer_hovers_on_the_
         air.end_transit(uav)
     home = air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g)  # its way home crosses b's zone: at 2.3 m
     assert home.granted and home.layer_m is not None and math.isclose(home.layer_m, 2.3)
+    return air
+
+
+def test_a_uav_that_turned_back_in_its_climb_just_under_its_layer_hovers_on_the_layer_under_the_table():
+    # bench_layouts --compact --airspace table seed 70 (towers of 9, 1 + 3, r_c 0.77 m): glue-2, granted its way
+    # home at 2.3 m over brick-1's stay (its top 1.2 m, 1.20 m beside the climb), was handed A3 next to brick-1's
+    # site 6 cm under the layer. Its hover there was 1.04 m over the stay: refused, so it kept its flight home,
+    # open-ended for the others; brick-1 waited for that flight's transit and glue-2 for brick-1's stay, and
+    # neither was a stay the parking rule reads: 300 s without progress. It hovers on the layer now.
+    air = _seed_70_glue_flying_home()
     air.progress("g", (1.2, 0.1, 2.24))  # climbing, 6 cm under the layer
     turned = air.request("g", (0.15, 0.0, 1.2), 3.0, (1.2, 0.1, 2.24))  # next to b's site: it waits for b
     assert not turned.granted
@@ -437,15 +447,7 @@ def test_a_uav_turned_back_in_its_climb_where_no_hover_fits_flies_on_to_its_laye
     # its new flight waited; brick-1's flight to its pickup waited on that flight's transit (extended while glue-2
     # was late) and glue-2's on brick-1's stay: 300 s without progress. It flies on up its climb to the layer, where
     # a hover fits, holds only that hover, and brick-1 flies under it.
-    air = TableClearance(0.77, 2.0, homes={"b": (0.0, -5.0, 0.0), "g": (-4.0, 1.2, 0.0)}, start_base_m=1.2)
-    site_b, site_g = (0.0, 0.0, 1.2), (1.2, 0.1, 1.2)
-    for uav, site, start in (("b", site_b, (0.0, -5.0, 1.2)), ("g", site_g, (1.2, 5.0, 1.2))):
-        air.take_off(uav)
-        assert air.request(uav, site, 0.0, start).granted
-        air.progress(uav, site)
-        air.end_transit(uav)
-    home = air.request("g", (-4.0, 1.2, 0.0), 1.0, site_g)  # its way home crosses b's zone: at 2.3 m
-    assert home.granted and home.layer_m is not None and math.isclose(home.layer_m, 2.3)
+    air = _seed_70_glue_flying_home()
     stopped = (1.2, 0.1, 2.05)
     air.progress("g", stopped)  # climbing, 0.25 m under the layer
     turned = air.request("g", (0.15, 0.0, 1.2), 3.0, stopped)  # next to b's site: it waits for b
@@ -458,7 +460,7 @@ def test_a_uav_turned_back_in_its_climb_where_no_hover_fits_flies_on_to_its_laye
     air.grant(5.0)
     assert air.phase("g") is Phase.AT_HOLD and [v.kind for v in air.volumes("g")] == ["stay"]
     # b sets off under it, at 1.2 m (was: it waited for g's transit, g for b's stay)
-    assert air.request("b", (-2.0, 0.6, 1.2), 6.0, site_b).granted, air.blockers("b")
+    assert air.request("b", (-2.0, 0.6, 1.2), 6.0, SEED_70_SITE_B).granted, air.blockers("b")
     air.progress("b", (-2.0, 0.6, 1.2))
     air.end_transit("b")
     assert any(g.uav == "g" and g.granted for t in range(7, 60) for g in air.grant(float(t)))
