@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 from masonry.mission.airspace import ColumnClearance, Phase
+from masonry.mission.reserved import TableClearance
 
 Vec3 = tuple[float, float, float]
 
@@ -69,3 +70,27 @@ def apply_step(
     elif op == "gate" and gate is not None:
         gate.held ^= {uav}
         c.touch()
+
+
+def table_pair() -> TableClearance:
+    """The table of two UAVs, a and b, with pads 3 m apart 5 m south of the wall (r_c 0.8 m)."""
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    return TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2)
+
+
+def table_pair_waiting_for_each_others_site() -> TableClearance:
+    """:func:`table_pair` with a at its site (0, 0), b at its site (3, 0), each refused the other's site at 30 s:
+    a cycle of stays the parking rule breaks."""
+    air = table_pair()
+    s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
+    for uav, site in (("a", s1), ("b", s2)):
+        air.take_off(uav)
+        assert air.request(uav, site, 0.0, (site[0], -5.0, 1.2)).granted
+    for t in range(1, 30):
+        air.grant(float(t))
+    for uav, site in (("a", s1), ("b", s2)):
+        air.end_transit(uav)
+        air.progress(uav, site)
+    assert not air.request("a", s2, 30.0, s1).granted
+    assert not air.request("b", s1, 30.5, s2).granted
+    return air

@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from airspace_rig import table_pair, table_pair_waiting_for_each_others_site
 from masonry.blueprint import UavSpec, load_blueprint, validate_blueprint
 from masonry.blueprint_gen import pyramid, running_bond, towers
 from masonry.blueprint_random import LayoutLimits, _box, _footprint, _pallet_on, random_layout
@@ -30,17 +31,12 @@ ROOT = Path(__file__).resolve().parent.parent
 SEPARATION_BOUND_M = 1.0
 
 
-def _airspace() -> TableClearance:
-    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
-    return TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2)
-
-
 def test_the_default_airspace_is_columns():
     assert DEFAULT_AIRSPACE == "columns"
 
 
 def test_a_landed_uav_holds_its_pad_and_takes_off_with_the_column_over_it():
-    air = _airspace()
+    air = table_pair()
     assert air.phase("a") is Phase.LANDED
     assert [v.kind for v in air.volumes("a")] == ["stay"]
     assert air.take_off("a")
@@ -49,7 +45,7 @@ def test_a_landed_uav_holds_its_pad_and_takes_off_with_the_column_over_it():
 
 
 def test_a_flight_is_granted_as_timed_legs_ending_in_a_stay_at_the_site():
-    air = _airspace()
+    air = table_pair()
     air.take_off("a")
     g = air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2))
     assert g.granted and g.layer_m is not None
@@ -59,7 +55,7 @@ def test_a_flight_is_granted_as_timed_legs_ending_in_a_stay_at_the_site():
 
 
 def test_a_second_uav_for_the_same_site_waits_where_it_is_and_is_granted_once_the_site_is_free():
-    air = _airspace()
+    air = table_pair()
     air.take_off("a")
     assert air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2)).granted
     air.take_off("b")
@@ -106,18 +102,8 @@ def test_a_uav_sent_to_its_parking_spot_is_granted_its_flight_from_there_not_fro
     # b's flight to a's old site starts where b waits, at its spot: planned from where b asked (b's old site, a's
     # stay now) it waited for good, and granted while b still flew to its spot it was a flight from a place b was
     # not at (a UAV flew where the table reserved nothing for it: min separation 0.65 m on the 12 m wall)
-    air = _airspace()
-    s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
-    for uav, site in (("a", s1), ("b", s2)):
-        air.take_off(uav)
-        assert air.request(uav, site, 0.0, (site[0], -5.0, 1.2)).granted
-    for t in range(1, 30):
-        air.grant(float(t))
-    for uav, site in (("a", s1), ("b", s2)):
-        air.end_transit(uav)
-        air.progress(uav, site)
-    assert not air.request("a", s2, 30.0, s1).granted
-    assert not air.request("b", s1, 30.5, s2).granted
+    air = table_pair_waiting_for_each_others_site()
+    s2 = (3.0, 0.0, 1.2)  # b's site
     granted: list[tuple[str, Phase]] = []
     spot = None
     for k in range(62, 200):
@@ -154,7 +140,7 @@ def test_a_uav_asking_for_the_next_site_ends_its_site_interval_however_close_the
 
 
 def test_a_leg_flies_at_the_lowest_layer_even_under_the_works_top():
-    air = _airspace()
+    air = table_pair()
     air.take_off("a")
     # hovering 4 cm over the lowest layer (1.2 m), off to a pickup worked up to 2.1 m: the leg flies at 1.2 m
     g = air.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.24), top_m=2.1)

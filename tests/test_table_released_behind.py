@@ -8,31 +8,16 @@ import math
 
 import pytest
 
+from airspace_rig import table_pair, table_pair_waiting_for_each_others_site
 from masonry.mission.airspace_state import Phase
 from masonry.mission.reserved import TableClearance
 from masonry.mission.reserved_parts import ON_LEG_M, ahead_of
 from masonry.reservation import Reservation, column, leg
 
 
-def _airspace() -> TableClearance:
-    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
-    return TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2)
-
-
 def _b_sent_to_its_spot() -> tuple[TableClearance, tuple[float, float, float]]:
     """Two UAVs each waiting for the other's site: b is sent to its parking spot (a cycle of stays broken)."""
-    air = _airspace()
-    s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
-    for uav, site in (("a", s1), ("b", s2)):
-        air.take_off(uav)
-        assert air.request(uav, site, 0.0, (site[0], -5.0, 1.2)).granted
-    for t in range(1, 30):
-        air.grant(float(t))
-    for uav, site in (("a", s1), ("b", s2)):
-        air.end_transit(uav)
-        air.progress(uav, site)
-    assert not air.request("a", s2, 30.0, s1).granted
-    assert not air.request("b", s1, 30.5, s2).granted
+    air = table_pair_waiting_for_each_others_site()
     for k in range(62, 80):
         for g in air.grant(k / 2.0):
             if g.hold_m is not None:
@@ -62,7 +47,7 @@ def test_a_leg_under_way_holds_only_what_lies_ahead_of_the_uav():
 
 
 def test_a_flight_under_way_frees_the_air_behind_the_uav_on_its_leg():
-    air = _airspace()
+    air = table_pair()
     air.take_off("a")
     assert air.request("a", (6.0, -5.0, 1.2), 0.0, (0.0, -5.0, 1.2)).granted
     layer = next(r.volume.z0_m for r in air.table.of("a") if r.purpose == "transit")
