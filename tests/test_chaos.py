@@ -378,3 +378,13 @@ def test_a_role_lost_to_a_long_drop_ends_the_mission_stuck_and_says_so(tmp_path)
         ("B4", "B5", "A4", "A5"), "stuck"
     )
     assert check_chaos(out) == []
+
+
+def test_a_brick_placed_by_a_uav_lost_after_its_release_counts_done_in_the_traces(tmp_path):
+    """Campaign seed 94 (ideal) with link drops up to 40 s: brick-2 died after releasing B5 on the wall; mission
+    control marked B5 done (placed_by_lost) but the campaign's trace had only the cut flight, so the check called
+    the report's done tasks wrong. The trace now asks the world: the brick rests at its place."""
+    out = fly_chaos(random_chaos(94, max_drop_s=40.0), tmp_path)
+    assert out.lost_uavs == ("brick-2",) and out.report.completed
+    assert [e.status for e in out.trace if e.task_id == "B5"] == ["done"]
+    assert check_chaos(out) == []

@@ -30,7 +30,8 @@ from masonry.mission.report import MissionReport
 from masonry.mission.sim_options import SimOptions
 from masonry.mission.simulate import SimulatedMission
 from masonry.planner import plan as make_plan
-from masonry.planner.tasks import Plan
+from masonry.planner.tasks import BrickTask, Plan
+from masonry.sim.glue import AT_PLACE_M
 
 __all__ = [
     "CHAOS_LIMITS",
@@ -104,7 +105,9 @@ class TraceEntry:
     task_id: str
     start_s: float
     end_s: float  # a task cut by a stop or by its UAV's loss ends then
-    status: str  # done, failed, or cut (stopped by a stop or by the UAV's loss)
+    #: done, failed, or cut (stopped by a stop or by the UAV's loss); done too for a UAV lost after its release
+    #: whose brick the world holds at its place (mission control marks that task done: ``placed_by_lost``)
+    status: str
     #: the end of its work at the site: ``end_s``, or when it was abandoned (recalled, or mission control silent:
     #: the machine then puts the brick back on its pallet or flies home, away from the site)
     site_end_s: float = math.inf
@@ -217,7 +220,8 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
         )
         mission = SimulatedMission.from_blueprint(run.blueprint, options, faults=run.faults)
         stop_s = stops.pop(0) if stops else None
-        mission.tick_hooks.append(_hook(mission, run.link_drops, stop_s))
+        placed_at_death: dict[str, str] = {}
+        mission.tick_hooks.append(_hook(mission, plan, run.link_drops, stop_s, placed_at_death))
         try:
             report = mission.run()
         except _Stop:
@@ -227,6 +231,8 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
             for e in h.executions:
                 end = e.end_s if e.end_s is not None else mission.dead.get(name, now)
                 status = e.status if e.end_s is not None else "cut"
+                if status == "cut" and placed_at_death.get(name) == e.task_id:
+                    status = "done"  # its UAV died after the release: the world held its brick in place
                 gone = e.abandoned_s if e.abandoned_s is not None else math.inf
                 trace.append(TraceEntry(segment, name, e.task_id, e.start_s, end, status, gone))
         lost |= {n for n, link in mission.control.uavs.items() if link.lost}
@@ -239,11 +245,42 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
     )
 
 
-def _hook(mission: SimulatedMission, drops: Sequence[LinkDrop], stop_s: float | None) -> Any:
-    """The tick hook of one segment: link drops (cut, then restored) and the stop."""
+def _on_the_wall(mission: SimulatedMission, plan: Plan, task_id: str) -> bool:
+    """Whether the world holds the brick of brick task ``task_id`` at rest within ``AT_PLACE_M`` of its place."""
+    task = next((t for t in plan.tasks if t.id == task_id), None)
+    if not isinstance(task, BrickTask):
+        return False
+    brick = mission.world.field.bricks.get(task.spare if task.spare is not None else task.brick)
+    return (
+        brick is not None
+        and brick.state == "placed"
+        and math.dist(brick.position_m[:2], task.position_m[:2]) <= AT_PLACE_M
+    )
+
+
+def _hook(
+    mission: SimulatedMission,
+    plan: Plan,
+    drops: Sequence[LinkDrop],
+    stop_s: float | None,
+    placed_at_death: dict[str, str],
+) -> Any:
+    """The tick hook of one segment: link drops (cut, then restored) and the stop; ``placed_at_death`` gets, for
+    each UAV as it dies, the task it flew if the world held that task's brick at its place then."""
     cut: set[str] = set()
+    seen_dead: set[str] = set()
+    carrying: dict[str, bool] = {}  # each live UAV's magnet held a brick at the tick before
 
     def hook(now_s: float) -> None:
+        for name in mission.dead.keys() - seen_dead:
+            seen_dead.add(name)
+            running = [e.task_id for e in mission.handlers[name].executions if e.end_s is None]
+            # released before it died, not a brick that fell with it
+            if running and not carrying.get(name, False) and _on_the_wall(mission, plan, running[-1]):
+                placed_at_death[name] = running[-1]
+        for name, u in mission.world.uavs.items():
+            if name not in seen_dead:
+                carrying[name] = u.carried_brick is not None
         for d in drops:
             down = d.at_s <= now_s < d.at_s + d.for_s
             if down and d.uav not in cut:
