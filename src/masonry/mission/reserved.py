@@ -29,6 +29,7 @@ from masonry.mission.reserved_parts import (
     guarded,
     hover_start,
     leg_index,
+    legs_under_way,
     park_levels,
     park_plan,
     park_spots,
@@ -69,7 +70,6 @@ TABLE_GUARD_S = 3.0
 AIRSPACES = ("columns", "table")
 DEFAULT_AIRSPACE = "columns"
 
-_LEGS = ("climb", "transit", "descend")
 _FLIGHT = ("climb", "transit", "descend", "work", "site", "home")
 
 
@@ -391,7 +391,7 @@ class TableClearance:
         self.at_spot(uav, u)
         if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
             return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
-        legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > self.now_s]
+        legs = legs_under_way(self.table.of(uav), self.now_s)
         at = leg_index(legs, u.position)
         if at is None:
             return
@@ -428,7 +428,7 @@ class TableClearance:
     def _keep_up(self, uav: str, u: TableUav, now_s: float) -> None:
         """A UAV still in a leg whose window ends within half the margin: its windows are extended by the margin
         (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced)."""
-        legs = [r for r in self.table.of(uav) if r.purpose in _LEGS and r.t1_s > now_s]
+        legs = legs_under_way(self.table.of(uav), now_s)
         at = leg_index(legs, u.position)
         current = legs[at] if at is not None else (legs[0] if legs else self.table.stay_of(uav))
         if (

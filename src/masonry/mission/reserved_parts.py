@@ -49,6 +49,11 @@ AT_SPOT_Z_M = 0.15
 _LEG_PURPOSES = ("climb", "transit", "descend")
 
 
+def legs_under_way(rs: Iterable[Reservation], now_s: float) -> list[Reservation]:
+    """The legs of ``rs`` (climb, transit, descend) whose window has not ended at ``now_s``, in their order."""
+    return [r for r in rs if r.purpose in _LEG_PURPOSES and r.t1_s > now_s]
+
+
 def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
     """``table`` without ``drop`` and with ``add``, not checked (what a UAV physically holds, or is late in)."""
     out = table.without(list(drop))
@@ -140,7 +145,7 @@ def on_ahead(
     over at one altitude): the top of the climb it is in, then the end of every lateral leg ahead, nearest first,
     each with the index (among the plan's legs under way) of the leg it ends; and the stay the plan ends in, if it
     reaches it so (it is in the plan's last column, or the stay's top is the layer's end), else None."""
-    legs = [r for r in rs if r.purpose in _LEG_PURPOSES and r.t1_s > now_s]
+    legs = legs_under_way(rs, now_s)
     at = leg_index(legs, p)
     if at is None:
         return [], None
@@ -319,6 +324,7 @@ __all__ = [
     "guarded",
     "hover_start",
     "leg_index",
+    "legs_under_way",
     "level_of",
     "on_ahead",
     "park_levels",

@@ -18,7 +18,7 @@ from masonry.mission.airspace_ground import ON_PAD_XY_M
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
-from masonry.mission.reserved_parts import ON_LEG_M, forced, level_of, on_ahead
+from masonry.mission.reserved_parts import ON_LEG_M, forced, legs_under_way, level_of, on_ahead
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
@@ -31,7 +31,6 @@ __all__ = ["TableUav", "check_fence", "evaluate", "fly_on", "hop_request", "requ
 #: The radius of the hover a UAV that stopped is reserved (its tracking error, and more).
 HOVER_R_M = 0.3
 
-_LEGS = ("climb", "transit", "descend")
 _PLAN_END = ("work", "site", "home")
 
 
@@ -122,7 +121,7 @@ def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
         return g
     mine = c.table.of(uav)
     points, stay = on_ahead(mine, where, c.now_s, u.plan.layer_m)
-    legs = [r for r in mine if r.purpose in _LEGS and r.t1_s > c.now_s]
+    legs = legs_under_way(mine, c.now_s)
     spot = None if stay is None else (stay.volume.a[0], stay.volume.a[1], stay.volume.z1_m)
     for q, i in points if stay is None else ():
         hover = Reservation(uav, column(q[:2], q[2], q[2], HOVER_R_M), c.now_s, math.inf, "stay")
