@@ -106,7 +106,9 @@ class TraceEntry:
     start_s: float
     end_s: float  # a task cut by a stop or by its UAV's loss ends then
     #: done, failed, or cut (stopped by a stop or by the UAV's loss); done too for a UAV lost after its release
-    #: whose brick the world holds at its place (mission control marks that task done: ``placed_by_lost``)
+    #: whose brick the world holds at its place (mission control marks that task done: ``placed_by_lost``), and
+    #: for one cut by a stop after its release (the rebuilt world has the brick in place; mission control, told
+    #: of the release, counts it done: branch ``resume50``)
     status: str
     #: the end of its work at the site: ``end_s``, or when it was abandoned (recalled, or mission control silent:
     #: the machine then puts the brick back on its pallet or flies home, away from the site)
@@ -225,7 +227,7 @@ def fly_chaos(run: ChaosRun, workdir: str | Path) -> ChaosOutcome:
         try:
             report = mission.run()
         except _Stop:
-            pass
+            placed_at_death.update(_placed_at_stop(mission, plan))
         now = mission.clock.now_s()
         for name, h in mission.handlers.items():
             for e in h.executions:
@@ -256,6 +258,23 @@ def _on_the_wall(mission: SimulatedMission, plan: Plan, task_id: str) -> bool:
         and brick.state == "placed"
         and math.dist(brick.position_m[:2], task.position_m[:2]) <= AT_PLACE_M
     )
+
+
+def _placed_at_stop(mission: SimulatedMission, plan: Plan) -> dict[str, str]:
+    """UAV -> the task it flew when mission control stopped, for each live UAV that had released that task's brick
+    in this flight, the world holding it at its place: the stop cut the flight, the brick stays on the wall (the
+    rebuilt world has it in place: ``masonry.mission.sim_resume``)."""
+    out: dict[str, str] = {}
+    for name, h in mission.handlers.items():
+        running = [e for e in h.executions if e.end_s is None]
+        uav = mission.world.uavs[name]
+        if name in mission.dead or not running or uav.carried_brick is not None:
+            continue
+        e = running[-1]
+        let_go = any(u == name and t >= e.start_s for t, u, _ in mission.world.releases)
+        if let_go and _on_the_wall(mission, plan, e.task_id):
+            out[name] = e.task_id
+    return out
 
 
 def _hook(

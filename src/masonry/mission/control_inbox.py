@@ -71,6 +71,7 @@ def handle(mc: MissionControl, raw: bytes, now_s: float) -> None:
             _progress(mc, msg, now_s)
         elif step is Step.REPORT and isinstance(msg, (Heartbeat, Progress)):
             control_airspace.report(mc, link, msg, msg.position_m)
+            control_results.note_release(mc, link, msg.task_id, now_s)  # (its brick on the wall: journaled)
             if mc.sink is not None and mc.uav_events:
                 control_airspace.emit_uav(mc, now_s, link)
 

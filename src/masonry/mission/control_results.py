@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING
 from masonry.mission.as_built import take_result
 from masonry.mission.messages import Heartbeat, Result
 from masonry.mission.records import UavLink
-from masonry.mission.reducer import dropped_reason, late_completion, screen_result
+from masonry.mission.reducer import dropped_reason, late_completion, placed_before_loss, screen_result
 from masonry.mission.swap_stagger import SWAP_EARLY
 from masonry.placement_check import is_place_taken
+from masonry.planner.tasks import BrickTask
 from masonry.ports import RECALL_REASON, TaskResult
 
 if TYPE_CHECKING:
@@ -30,6 +31,7 @@ __all__ = [
     "ignore",
     "late_result",
     "misplaced",
+    "note_release",
     "on_heartbeat",
     "placed_by_lost",
     "recall_again",
@@ -98,6 +100,21 @@ def placed_by_lost(mc: MissionControl, uav: str, last_state: str, now_s: float) 
     )
     settle_done(mc, att, TaskResult(task_id, "done", now_s - att.start_s), uav, now_s, phases=False)
     return True
+
+
+def note_release(mc: MissionControl, link: UavLink, task_id: str | None, now_s: float) -> None:
+    """``link``'s UAV, on ``task_id`` (the task its heartbeat or progress report names), says its brick is on the
+    wall (:func:`~masonry.mission.reducer.placed_before_loss`): journaled once per attempt
+    (:meth:`~masonry.mission.ledger.AttemptLedger.journal_released`), so that a mission control resumed before it
+    declared the UAV lost does what :func:`placed_by_lost` would (``control_resume``), not give the task again."""
+    name = link.spec.name
+    if task_id is None or mc.dispatcher.task_of(name) != task_id:
+        return
+    att = mc.ledger.running.get(task_id)
+    if att is None or att.uav != name:
+        return
+    if placed_before_loss(link.facts, isinstance(mc.tasks[task_id], BrickTask)):
+        mc.ledger.journal_released(now_s, att, link.state)
 
 
 def settle_done(
@@ -209,12 +226,23 @@ def late_result(mc: MissionControl, msg: Result, now_s: float) -> bool:
 
 def check_holds_task(mc: MissionControl, msg: Heartbeat, now_s: float) -> None:
     """A UAV's heartbeat says it forgot its task (:func:`~masonry.mission.reducer.dropped_reason`): the task
-    goes back to the pool without counting an attempt."""
+    goes back to the pool without counting an attempt; done instead if the attempt was kept from before a resume
+    and its UAV said its brick was on the wall (journaled: :func:`note_release`)."""
     name = msg.sender
     tid = mc.dispatcher.task_of(name)
     att = None if tid is None else mc.ledger.running.get(tid)
     reason = dropped_reason(msg, att, now_s, mc.heartbeat_timeout_s)
     if tid is None or att is None or reason is None:
+        return
+    if att.adopted and mc.ledger.released(att):
+        # kept from before a resume, its brick on the wall (it said so: ``note_release``), and it forgot the task
+        # since (its handler restarted, as a stop of the whole in-process mission restarts it; one that kept its
+        # completion says that first): done, as its loss would make it. (In a live run the no-task heartbeat may
+        # come before a completion said again after a link drop: that one goes back to the pool as before, and
+        # the completion is taken late with its measurements.)
+        log.warning("%s done by %s (attempt %d): %s after its release", tid, name, att.attempt, reason)
+        settle_done(mc, att, TaskResult(tid, "done", now_s - att.start_s), name, now_s, phases=False)
+        mc.wake()
         return
     log.warning("%s: %s: released", name, reason)
     mc.ledger.end(att, now_s, "failed", reason)

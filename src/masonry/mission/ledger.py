@@ -12,11 +12,17 @@ number is the protocol's ``attempt`` (an assignment, its result and a recall of 
 result of an earlier flight cannot match a later one. It is journaled with the assignment and carries on after a
 resume (:meth:`restore`); how many attempts count against the task's ``max_attempts`` is the dispatcher's
 (``Dispatcher.attempts``), not this number (issue 27, branch ``attempt43``).
+
+A brick attempt whose UAV said its brick is on the wall (released at its place, not yet reported done) is journaled
+too (:meth:`AttemptLedger.journal_released`, the meta key ``released/<task id>``): a resumed mission control that
+then loses the UAV counts the task done, as the run that heard it would have (:func:`journaled_releases`; branch
+``resume50``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from masonry.mission.as_built import journaled_as_built, take_result
@@ -30,7 +36,36 @@ if TYPE_CHECKING:
     from masonry.mission.journal_state import DoneRecord, FailureRecord
     from masonry.mission.sites import SiteVisit
 
-__all__ = ["AttemptLedger"]
+__all__ = ["RELEASED_META_PREFIX", "AttemptLedger", "ReleaseMark", "journaled_releases"]
+
+#: Journal meta keys of the brick attempts whose UAV said its brick was released at its place:
+#: ``released/<task id>`` -> {uav, attempt, time_s, state} (the latest such attempt of the task).
+RELEASED_META_PREFIX = "released/"
+
+
+@dataclass(frozen=True)
+class ReleaseMark:
+    """A brick attempt whose UAV was heard with its brick on the wall: its UAV, number, time and state then."""
+
+    task_id: str
+    uav: str
+    attempt: int
+    time_s: float
+    state: str = ""
+
+
+def journaled_releases(meta: Mapping[str, object]) -> dict[str, ReleaseMark]:
+    """The release marks a journal's meta table holds, by task id (anything unreadable in it is ignored; a journal
+    written before them has none)."""
+    out: dict[str, ReleaseMark] = {}
+    for key, v in meta.items():
+        if not key.startswith(RELEASED_META_PREFIX) or not isinstance(v, Mapping):
+            continue
+        uav, attempt, time_s, state = v.get("uav"), v.get("attempt"), v.get("time_s"), v.get("state", "")
+        if isinstance(uav, str) and isinstance(attempt, int) and isinstance(time_s, (int, float)):
+            tid = key[len(RELEASED_META_PREFIX) :]
+            out[tid] = ReleaseMark(tid, uav, attempt, float(time_s), str(state))
+    return out
 
 
 class AttemptLedger:
@@ -49,6 +84,8 @@ class AttemptLedger:
         self._numbers: dict[str, int] = {}
         #: (task id, attempt) of the attempts whose UAV said it works on them (:meth:`under_way`)
         self._under_way: set[tuple[str, int]] = set()
+        #: (task id, attempt) of the brick attempts journaled as released (:meth:`journal_released`)
+        self._released: set[tuple[str, int]] = set()
 
     def begin(self, task_id: str, uav: str, now_s: float) -> Attempt:
         """``task_id`` assigned to ``uav`` now, numbered one more than its previous assignment: running,
@@ -128,6 +165,24 @@ class AttemptLedger:
         """Journal that ``uav`` is out of the mission."""
         if self.journal is not None:
             self.journal.record_uav_lost(now_s, uav)
+
+    def journal_released(self, now_s: float, att: Attempt, state: str) -> None:
+        """``att``'s UAV said its brick is on the wall (in ``state``): journaled once per attempt (meta
+        ``released/<task id>``), for a resumed mission control that loses the UAV (:func:`journaled_releases`)."""
+        key = (att.task_id, att.attempt)
+        if key in self._released:
+            return
+        self._released.add(key)
+        mark = {"uav": att.uav, "attempt": att.attempt, "time_s": now_s, "state": state}
+        self.set_meta(f"{RELEASED_META_PREFIX}{att.task_id}", mark)
+
+    def released(self, att: Attempt) -> bool:
+        """``att``'s UAV said its brick is on the wall (:meth:`journal_released`, or the journal's mark)."""
+        return (att.task_id, att.attempt) in self._released
+
+    def released_before(self, mark: ReleaseMark) -> None:
+        """A release the journal holds (a resume): not journaled again."""
+        self._released.add((mark.task_id, mark.attempt))
 
     def set_meta(self, key: str, value: object) -> None:
         """Keep ``value`` under ``key`` in the journal's metadata (none without a journal)."""

@@ -42,6 +42,8 @@ class MeasuredJournal:
         plan: Plan,
         before: Mapping[str, Any],
         kept: Mapping[str, KeptCompletion] | None = None,
+        before_meta: Mapping[str, object] | None = None,
+        at_place_m: float | None = None,
     ) -> None:
         self.journal = journal
         #: UAV -> the completion it kept before the stop this run resumes from (:func:`kept_completions`)
@@ -58,10 +60,18 @@ class MeasuredJournal:
         self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
         self.dead: Mapping[str, float] = {}  # UAV -> the time it failed (it flies no more)
         self.spares: SpareBook | None = None  # mission control's, once it exists: which spare stands in where
+        #: brick id -> placement error of the bricks the world held at their places before the stop this run
+        #: resumes from (:data:`WALL_META_KEY`): rebuilt in place, their errors the ones measured then
+        self.before_on_wall = on_wall_of(before_meta)
+        self._releases_seen = 0  # the world's releases already looked at (:meth:`note_wall`)
+        #: a brick released this close to its design centre is at its place (None: the wall is not kept)
+        self.at_place_m = at_place_m
 
     def error_m(self, task_id: str) -> float | None:
         """The world's true placement error of a brick task's brick, or of the spare standing in for it
         (its distance from the brick's design centre; None: not released, or not on the wall)."""
+        if self._bricks[task_id] in self.before_on_wall:
+            return self.before_on_wall[self._bricks[task_id]]  # (placed before the stop: measured then)
         use = self.spares.spare_of(task_id) if self.spares is not None else None
         if use is None:
             err = self.world.placement_error_m(self._bricks[task_id])
@@ -116,6 +126,29 @@ class MeasuredJournal:
                 out["placement_error_m"] = float(err)
         return out
 
+    def note_wall(self) -> None:
+        """After the world's step: if a brick was released since the last call, keep in the journal file's meta
+        table (:data:`WALL_META_KEY`) the bricks the world holds at their places (within ``at_place_m`` of their
+        design centres: the simulator gives ``masonry.sim.glue.AT_PLACE_M``), with their errors. A stop rebuilds
+        the world, and they are on the wall whatever mission control knew of them (a UAV that released its brick
+        and fell, or was cut by the stop, before it reported done)."""
+        if self.journal is None or self.at_place_m is None or len(self.world.releases) == self._releases_seen:
+            return
+        self._releases_seen = len(self.world.releases)
+        on_wall = dict(self.before_on_wall)
+        for task_id, brick_id in self._bricks.items():
+            if brick_id not in on_wall and self._released(task_id):
+                err = self.error_m(task_id)
+                if err is not None and err <= self.at_place_m:
+                    on_wall[brick_id] = err
+        self.journal.set_meta(WALL_META_KEY, {str(b): e for b, e in sorted(on_wall.items())})
+
+    def _released(self, task_id: str) -> bool:
+        """Whether the brick of ``task_id`` (or the spare standing in for it) was released by a UAV in this world."""
+        use = self.spares.spare_of(task_id) if self.spares is not None else None
+        b = self.world.bricks.get(self._bricks[task_id] if use is None else use.spare)
+        return b is not None and b.released and b.state == "placed"
+
     # -- the UAVs' kept completions (masonry.mission.handler.ResultKeeper) ------------------------------------
     def kept(self, uav: str) -> bytes | None:
         """The completion ``uav`` kept in the journal file before a stop, unheard by mission control."""
@@ -160,6 +193,23 @@ class MeasuredJournal:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.journal, name)  # anything else mission control asks of the journal
+
+
+#: The simulator's journal meta key of the bricks its world held at their places (brick id -> placement error, m):
+#: a world rebuilt after a stop has them in place (:func:`masonry.mission.sim_resume.resumed_world`). Mission
+#: control neither writes nor reads it; a journal without it (a real mission's, an older one) rebuilds none.
+WALL_META_KEY = "world/on_wall"
+
+
+def on_wall_of(meta: Mapping[str, object] | None) -> dict[int, float]:
+    """The bricks :data:`WALL_META_KEY` says the world held at their places (anything unreadable is ignored)."""
+    value = meta.get(WALL_META_KEY) if meta is not None else None
+    items = value.items() if isinstance(value, Mapping) else ()
+    return {
+        int(k): float(v)
+        for k, v in items
+        if str(k).isdigit() and isinstance(v, (int, float)) and math.isfinite(v)
+    }
 
 
 #: Journal meta keys of the UAVs' kept completions: ``unheard/<uav>`` -> {message, placement_error_m} or null.
@@ -313,9 +363,11 @@ def simulated_report(
 
 __all__ = [
     "KEPT_META_PREFIX",
+    "WALL_META_KEY",
     "KeptCompletion",
     "MeasuredJournal",
     "journaled_errors_m",
     "kept_completions",
+    "on_wall_of",
     "simulated_report",
 ]

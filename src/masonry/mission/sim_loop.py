@@ -77,3 +77,4 @@ def fly(mission: SimulatedMission) -> None:
             break
         for _ in range(substeps):
             world.step(dt_s)
+        mission.measured.note_wall()  # (a brick released: the journal file says what the world holds on the wall)

@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from masonry.blueprint import Blueprint, UavSpec
-from masonry.mission.measured import KeptCompletion, kept_completions
+from masonry.mission.measured import KeptCompletion, kept_completions, on_wall_of
 from masonry.planner.tasks import BrickTask, Plan
 
 if TYPE_CHECKING:
@@ -35,7 +35,9 @@ def resumed_world(
     """The blueprint the resumed world is built from, and the time it resumes at (None: not a resume).
 
     Bricks the journal says are placed are in place, and so are those a UAV kept the completion of, unheard (it
-    says it again first thing: mission control takes it); the clock starts no earlier than a kept completion
+    says it again first thing: mission control takes it), and those the world held at their places
+    (:data:`~masonry.mission.measured.WALL_META_KEY`: a UAV that released its brick and fell before it reported
+    done; a real site has no restart that puts a brick back on its pallet); the clock starts no earlier than a kept completion
     (the UAV finished then, so the mission was running)."""
     if state is None:
         return blueprint, None
@@ -44,6 +46,7 @@ def resumed_world(
         for tid in [r.task_id for r in state.done] + [k.task_id for k in kept.values()]
         if isinstance(task := the_plan.task(tid), BrickTask)
     }
+    placed |= set(on_wall_of(state.meta))
     bricks = tuple(dataclasses.replace(b, placed=True) if b.id in placed else b for b in blueprint.bricks)
     resumed_from = max([float(state.last_time_s or 0.0), *(k.time_s for k in kept.values())])
     return dataclasses.replace(blueprint, bricks=bricks), resumed_from

@@ -63,6 +63,7 @@ from masonry.planner.schedule_policy import SCHEDULE_POLICY
 from masonry.planner.tasks import Plan
 from masonry.ports import Clock, UavPorts
 from masonry.sim import Faults, World
+from masonry.sim.glue import AT_PLACE_M
 from masonry.sim.vehicle_config import vehicle_name, vehicle_preset
 from masonry.sim.vehicle_model import VehicleModel, sim_vehicle
 from masonry.timing import DEFAULT_TIMING, TaskTiming
@@ -356,7 +357,13 @@ class SimulatedMission:
                 vehicle_model=vehicle_model,
             )
             measured = MeasuredJournal(
-                journal, world, the_plan, state.measured if state is not None else {}, kept
+                journal,
+                world,
+                the_plan,
+                state.measured if state is not None else {},
+                kept,
+                before_meta=state.meta if state is not None else None,
+                at_place_m=AT_PLACE_M,
             )
             expected_s = estimate_durations_s(
                 the_plan, fleet, cruise_altitude_m=blueprint.cruise_altitude_m, timing=timing

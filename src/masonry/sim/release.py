@@ -67,7 +67,9 @@ def release_brick(world: World, uav: SimUav, pose: Pose | None = None, at_s: flo
     brick.yaw_rad = math.remainder(brick.yaw_rad + cfg.release_yaw_scatter_rad * dyaw, 2.0 * math.pi)
     field.drop(brick_id, cfg.support_margin_m)
     uav.carried_brick = None
-    world.glue.placed(brick_id, brick.position_m, world.clock.now_s() if at_s is None else at_s)
+    when_s = world.clock.now_s() if at_s is None else at_s
+    world.releases.append((when_s, uav.name, brick_id))
+    world.glue.placed(brick_id, brick.position_m, when_s)
 
 
 def release_within(world: World, uav: SimUav, start: Pose, t0_s: float, t1_s: float) -> None:

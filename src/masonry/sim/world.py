@@ -232,6 +232,7 @@ class World:
         self._layouts = LayoutCache()  # the camera's marker arrays, kept between frames
         self.drawn_pickups = render_sample(blueprint) if camera == "mixed" else frozenset()  # mixed mode
         self.picks: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every grasp
+        self.releases: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every release
         self.rendered_frames = 0
         self._lay_out_bricks()
 
@@ -289,6 +290,12 @@ class World:
         )
         rngs = np.random.default_rng(uav_ss), np.random.default_rng(look_ss)
         self.uavs[spec.name] = uav = SimUav(spec.name, spec, self, vehicle, *rngs)
+        now = self.clock.now_s()
+        timed = (self.faults.uav_loss_at_s.get(spec.name), self.faults.link_loss_at_s.get(spec.name))
+        if any(at is not None and at < now for at in timed):
+            # failed (or cut off) before this world began (one rebuilt after a stop, at the journal's time): it
+            # stays down, silent from the start, not alive again until its first step
+            self._timed_faults(uav, now)
         return uav
 
     def add_fleet(self, fleet: Iterable[UavSpec] | None = None) -> list[SimUav]:
