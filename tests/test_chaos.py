@@ -388,3 +388,16 @@ def test_a_brick_placed_by_a_uav_lost_after_its_release_counts_done_in_the_trace
     assert out.lost_uavs == ("brick-2",) and out.report.completed
     assert [e.status for e in out.trace if e.task_id == "B5"] == ["done"]
     assert check_chaos(out) == []
+
+
+def test_a_completion_its_uav_could_never_report_is_not_a_task_done_twice(tmp_path):
+    """Campaign seed 61 (ideal) with link drops up to 40 s: glue-3, given A0 again as its link dropped, sprayed it
+    cut off (16.9 s) and fell (28.1 s) before the link came back; mission control, told nothing, had glue-1 spray
+    A0 again. No link could carry that completion: the check counts done twice only from a completion mission
+    control could have heard of. The same run with the link up would have told it (there, twice is a problem)."""
+    out = fly_chaos(random_chaos(61, max_drop_s=40.0), tmp_path)
+    a0 = [e for e in out.trace if e.task_id == "A0" and e.status == "done"]
+    assert [e.uav for e in a0] == ["glue-3", "glue-1"] and out.report.completed
+    assert check_chaos(out) == []
+    told = dataclasses.replace(out, run=dataclasses.replace(out.run, link_drops=()))
+    assert [p.split(":")[0] for p in check_chaos(told)] == ["done twice"]
