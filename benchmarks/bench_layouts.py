@@ -5,7 +5,9 @@ property test tests/test_random_layouts.py, on more and larger layouts.
         [--airspace columns|table] [--compact] [--policy critical-path|fifo|nearest] [--sub-fleets]
 
 A row per layout: seed, the wall, fleet, r_c, pad spacing, completed, stalled, conflict and dependency
-violations, min separation, makespan, lower bound, wall seconds. The last line counts the failures.
+violations, min separation, the worst envelope excursion in metres and seconds (``env_m``, ``env_s``: the report's
+``envelope_excursion``, docs/safety.md), makespan, lower bound, wall seconds. The last lines count the failures and
+give the worst excursion.
 
 ``--sub-fleets`` (issue 27 §4, "never slower with more UAVs of either role"): each layout is flown by its own
 fleet and by every smaller one (b + a with 1 <= b, a up to the blueprint's, its first UAVs of each role), and a
@@ -60,6 +62,7 @@ def fly(
         "conflicts": r.conflict_violations,
         "deps": r.dependency_violations,
         "min_sep": r.min_separation_m,
+        "envelope": r.envelope_excursion,
         "makespan": r.makespan_s,
         "bound": r.lower_bound_s,
         "wall_s": time.perf_counter() - t0,
@@ -159,9 +162,12 @@ def main() -> None:
         f"pad separation {pad_separation_m():.2f} m; airspace {args.airspace}; policy {args.policy}; limits {limits}"
     )
     print(
-        "seed  wall                       fleet  r_c   pads   done  stall conf deps held min_sep makespan bound  wall_s"
+        "seed  wall                       fleet  r_c   pads   done  stall conf deps held min_sep env_m env_s "
+        "makespan bound  wall_s"
     )
     bad = 0
+    worst_m: tuple[float, int] = (0.0, -1)
+    worst_s: tuple[float, int] = (0.0, -1)
     for seed in range(args.first_seed, args.first_seed + args.n):
         row = fly(seed, limits, args.faults, args.reservation, args.airspace, args.policy)
         sep = row["min_sep"]
@@ -174,15 +180,23 @@ def main() -> None:
             and (sep is None or sep >= SEPARATION_BOUND_M)
         )
         bad += not ok
+        env = row["envelope"]
+        env_m, env_s = ("-", "-") if env is None else (f"{env.m:.3f}", f"{env.s:.2f}")
+        if env is not None:
+            worst_m, worst_s = max(worst_m, (env.m, row["seed"])), max(worst_s, (env.s, row["seed"]))
         print(
             f"{row['seed']:<5} {row['wall']:<26} {row['fleet']:<6} {row['r_c']:<5.2f} {row['pads_m']:<6.2f} "
             f"{'yes' if row['completed'] else 'NO':<5} {'YES' if row['stalled'] else 'no':<5} "
             f"{row['conflicts']:<4} {row['deps']:<4} {row['held_up']:<4} {'-' if sep is None else f'{sep:.3f}':<7} "
-            f"{row['makespan']:<8.1f} {row['bound']:<6.1f} {row['wall_s']:.1f}"
+            f"{env_m:<5} {env_s:<5} {row['makespan']:<8.1f} {row['bound']:<6.1f} {row['wall_s']:.1f}"
             + ("" if ok else f"   <-- {row['stall'] or 'stuck: ' + ', '.join(row['stuck'])}"),
             flush=True,
         )
     print(f"{bad} of {args.n} layouts failed")
+    print(
+        f"worst envelope excursion {worst_m[0]:.3f} m (seed {worst_m[1]}), "
+        f"longest out {worst_s[0]:.2f} s (seed {worst_s[1]})"
+    )
 
 
 if __name__ == "__main__":

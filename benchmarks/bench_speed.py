@@ -2,7 +2,7 @@
 
 Runs ``masonry.mission.simulate`` on a running bond (geometric camera, no faults) and prints CPU (process) time,
 wall time, simulated time, real-time factors and the behaviour figures to compare before/after a speed-up
-(makespan, tasks done, min separation, mean placement error, a digest of the task schedule).
+(makespan, tasks done, min separation, envelope excursion, mean placement error, a digest of the task schedule).
 
 ``--occupancy`` also prints what the UAVs do at their control ticks (a tick hook, which only reads): the share of
 UAV ticks landed with the motors off, waiting in the air for clearance (the transit's ``ask`` or ``hold``), and
@@ -105,6 +105,10 @@ def main() -> None:
         f"{statistics.fmean(errs) if errs else float('nan'):.5f} m, "
         f"violations {report.conflict_violations}/{report.dependency_violations}"
     )
+    if report.envelope_excursion is not None:
+        print(
+            f"  {report.envelope_excursion.line()}, positions looked at {mission.envelope.looks if mission.envelope else 0}"
+        )
     print(f"  schedule digest {hashlib.sha1(sched.encode()).hexdigest()[:12]}")
     print(
         f"  CPU {cpu:.2f} s, wall {wall:.2f} s, real-time factor x{report.sim_time_s / cpu:.0f} (CPU), "

@@ -433,6 +433,10 @@ def test_airborne_uavs_stay_inside_the_volumes_mission_control_reserved_for_them
     assert columns.conflicts() == []
     bound = OUTSIDE_M[vehicle]
     assert max(worst.values()) < bound, worst
+    # the report's envelope excursion measures the same steps in 3-D (the hypotenuse, at least the box metric's)
+    e = r.envelope_excursion
+    assert e is not None and max(worst.values()) - 1e-9 <= e.m <= math.sqrt(2.0) * max(worst.values()) + 1e-9
+    assert e.s == 0.0, e  # never past the 0.1 m tracking share
     # so two UAVs keep the layer spacing less twice that (0.96-1.02 m on 4x25 before)
     assert r.min_separation_m is None or r.min_separation_m >= S - 2 * bound
 

@@ -36,6 +36,7 @@ def test_sim_json_is_exactly_the_report(tmp_path):
         "placement_error_m",
         "as_built",
         "min_separation_m",
+        "envelope_excursion",
         "conflict_violations",
         "dependency_violations",
     ]

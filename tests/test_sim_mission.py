@@ -32,6 +32,7 @@ REPORT_KEYS = [
     "placement_error_m",
     "as_built",
     "min_separation_m",
+    "envelope_excursion",
     "conflict_violations",
     "dependency_violations",
 ]

@@ -133,6 +133,10 @@ class ColumnClearance(AirspaceRecords):
         u = self.records.get(uav)
         return () if u is None else tuple(u.volumes)
 
+    def reserved_at(self, uav: str, t_s: float) -> tuple[Volume, ...]:
+        """The volumes ``uav`` holds now, whatever ``t_s`` (:class:`~masonry.mission.envelope.ReservedSpace`)."""
+        return self.volumes(uav)
+
     def layer_m(self, uav: str) -> float | None:
         """Altitude of ``uav``'s flight in progress (None: none, or no layers)."""
         if self.base_m is None:

@@ -16,6 +16,7 @@ from typing import Any
 from masonry.blueprint import Blueprint, UavSpec
 from masonry.errors import ProtocolError
 from masonry.mission.control import MissionControl
+from masonry.mission.envelope import EnvelopeExcursion, EnvelopeWatch, worse
 from masonry.mission.handler import UavHandler
 from masonry.mission.messages import Result, decode
 from masonry.mission.report import MissionReport, control_report
@@ -55,6 +56,10 @@ class MeasuredJournal:
         self.before_busy_s = _floats(before.get("busy_s"))
         sep = before.get("min_separation_m")
         self.before_min_separation_m = float(sep) if isinstance(sep, (int, float)) else None
+        was = before.get("envelope_excursion")
+        self.before_envelope = None if was is None else EnvelopeExcursion.from_dict(was)
+        #: the UAVs against their reserved envelopes (set by the mission; None: no airspace rules, no watch)
+        self.envelope: EnvelopeWatch | None = None
         # a rebuilt world lays the glue laid before the stop again, and goes on counting (masonry.sim.glue)
         world.glue.restore(before.get("glue"))
         self.handlers: Mapping[str, UavHandler] = {}  # set once the handlers exist
@@ -106,6 +111,11 @@ class MeasuredJournal:
         ]
         return float(min(seps)) if seps else None
 
+    def envelope_excursion(self) -> EnvelopeExcursion | None:
+        """The worst envelope excursion of the whole mission (a resumed one: with the run's before the stop)."""
+        now = None if self.envelope is None else self.envelope.worst(self.world.clock.now_s())
+        return worse(self.before_envelope, now)
+
     def measurements(self, task_id: str | None = None) -> dict[str, Any]:
         """What the world measured so far (and, for a brick task, its true placement error)."""
         out: dict[str, Any] = {
@@ -113,6 +123,9 @@ class MeasuredJournal:
             "busy_s": self.busy_s(),
             "min_separation_m": self.min_separation_m(),
         }
+        envelope = self.envelope_excursion()
+        if envelope is not None:
+            out["envelope_excursion"] = envelope.to_dict()
         if self.world.glue.enabled:  # (an adhesive: its beads' times, ages and violations so far)
             if task_id in self._beads:
                 self.world.glue.note_bead(*self._beads[task_id])
@@ -339,6 +352,7 @@ def simulated_report(
         distances_m={u.name: distances.get(u.name, 0.0) for u in fleet},
         placement_error_m=placement,
         min_separation_m=sep,
+        envelope_excursion=measured.envelope_excursion(),
         now_s=now,
         durations_s=minimum_s,
         work_s=min_cycles_s(the_plan, fleet, minimum_s, timing=timing),

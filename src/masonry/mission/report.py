@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from masonry.mission.as_built import as_built_lines
+from masonry.mission.envelope import EnvelopeExcursion
 from masonry.mission.report_rows import (
     AttemptReport,
     TaskReport,
@@ -81,6 +82,9 @@ class MissionReport:
     spares: SpareReport | None = None
     #: per brick task, the brick's pose as the UAV's camera saw it after the release (issue 30)
     as_built: Mapping[str, AsBuiltPose] = field(default_factory=dict)
+    #: the world's worst excursion of a UAV out of its reserved envelope (:mod:`masonry.mission.envelope`); None:
+    #: not measured (no simulated world, or an airspace without rules)
+    envelope_excursion: EnvelopeExcursion | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -105,6 +109,9 @@ class MissionReport:
             "placement_error_m": {k: _r(v, 4) for k, v in self.placement_error_m.items()},
             "as_built": {k: v.to_dict(4) for k, v in self.as_built.items()},
             "min_separation_m": _r(self.min_separation_m, 3),
+            "envelope_excursion": None
+            if self.envelope_excursion is None
+            else self.envelope_excursion.to_dict(),
             "conflict_violations": self.conflict_violations,
             "dependency_violations": self.dependency_violations,
         }
@@ -203,6 +210,8 @@ class MissionReport:
             )
         lines.extend(as_built_lines(self.as_built))
         sep = "n/a" if self.min_separation_m is None else f"{self.min_separation_m:.2f} m"
+        if self.envelope_excursion is not None:
+            sep += f", {self.envelope_excursion.line()}"
         lines.append(
             f"min separation {sep}; conflict violations {self.conflict_violations}, "
             f"dependency violations {self.dependency_violations}"

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from masonry.errors import MissionError
+from masonry.errors import InvalidArgument, MissionError
+from masonry.mission.envelope import EnvelopeExcursion
 from masonry.mission.report import AttemptReport, MissionReport, TaskReport, UavReport
 from masonry.mission.spares import SpareReport
 from masonry.mission.waits import TaskWait, WaitCause
@@ -126,6 +127,7 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         "tasks": [_row_out(t) for t in report.tasks],
         "placement_error_m": {k: _num_out(v) for k, v in report.placement_error_m.items()},
         "min_separation_m": _num_out(report.min_separation_m),
+        **_envelope_out(report.envelope_excursion),
         "conflict_violations": report.conflict_violations,
         "dependency_violations": report.dependency_violations,
         "stuck": list(report.stuck),
@@ -144,6 +146,26 @@ def report_to_record(report: MissionReport) -> dict[str, Any]:
         **({} if report.spares is None else {"spares": report.spares.to_record()}),
         **({"as_built": {k: v.to_dict() for k, v in report.as_built.items()}} if report.as_built else {}),
     }
+
+
+def _envelope_out(e: EnvelopeExcursion | None) -> dict[str, object]:
+    """The envelope excursion, exactly (only when measured: old records unchanged)."""
+    if e is None:
+        return {}
+    return {"envelope_excursion": {k: _num_out(v) for k, v in dataclasses.asdict(e).items()}}
+
+
+def _envelope_in(data: object) -> EnvelopeExcursion | None:
+    if data is None:
+        return None
+    if not isinstance(data, Mapping):
+        raise MissionError(
+            f"a report record's envelope_excursion must be an object, got {type(data).__name__}"
+        )
+    try:
+        return EnvelopeExcursion.from_dict({k: _num_in(v) for k, v in data.items()})
+    except InvalidArgument as exc:
+        raise MissionError(str(exc)) from None
 
 
 def _adhesive_out(report: MissionReport) -> dict[str, Any]:
@@ -182,6 +204,7 @@ def report_from_record(data: Any) -> MissionReport:
             tasks=tuple(_row_in(TaskReport, t) for t in data["tasks"]),
             placement_error_m={str(k): float(_num_in(v)) for k, v in dict(data["placement_error_m"]).items()},
             min_separation_m=_num_in(data["min_separation_m"]),
+            envelope_excursion=_envelope_in(data.get("envelope_excursion")),  # (absent: not measured, older)
             conflict_violations=int(data["conflict_violations"]),
             dependency_violations=int(data["dependency_violations"]),
             stuck=tuple(str(s) for s in data["stuck"]),

@@ -18,6 +18,7 @@ from masonry.errors import InvalidArgument
 from masonry.geofence import Site
 from masonry.mission import reserved_requests
 from masonry.mission.airspace_state import Grant, Phase
+from masonry.mission.envelope import TableWindows
 from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
@@ -133,6 +134,7 @@ class TableClearance:
         self.work_site: Callable[[str, Vec3], bool] | None = None
         self.approached_count = 0  # flights to an approach spot
         self._levels = park_levels(self.homes, self.sep_xy_m)
+        self._windows = TableWindows()  # (reserved_at's)
         self.airspace = self._make_airspace()
         if self.base_m is not None:
             for uav in self.homes:
@@ -181,6 +183,10 @@ class TableClearance:
             for r in self.table.of(uav)
             if r.t1_s > self.now_s and r.purpose != "site"
         )
+
+    def reserved_at(self, uav: str, t_s: float) -> tuple[AirVolume, ...]:
+        """``uav``'s volumes whose window holds ``t_s`` (:class:`~masonry.mission.envelope.ReservedSpace`)."""
+        return self._windows.at(self.table, uav, t_s)
 
     def conflicts(self) -> list[tuple[str, str]]:
         """Pairs of UAVs whose reservations clash (empty unless a late UAV's extension was forced)."""

@@ -3,7 +3,8 @@
 Every control tick (:data:`CONTROL_PERIOD_S`, 0.1 s of simulated time): each live UAV handler reads its messages
 and ticks its state machine (a UAV the world failed says nothing more), mission control steps, the observers get
 their samples and hooks, then the world advances in steps of ``dt_s``. The loop ends when the UAVs have landed
-after the mission's end (or :data:`LANDING_GRACE_S` later), or at ``max_time_s``.
+after the mission's end (or :data:`LANDING_GRACE_S` later), or at ``max_time_s``. After each world step the
+mission's envelope watch (:mod:`masonry.mission.envelope`) is shown where the airborne UAVs truly are.
 """
 
 from __future__ import annotations
@@ -43,6 +44,8 @@ def fly(mission: SimulatedMission) -> None:
     mission_end_s: float | None = None
     next_sample_s = clock.now_s()
     mc.uav_events = False  # the world's samples below tell the sink where each UAV is
+    envelope = mission.envelope
+    uavs = world.uavs
     while True:
         now = clock.now_s()
         for name, h in handlers.items():
@@ -77,4 +80,13 @@ def fly(mission: SimulatedMission) -> None:
             break
         for _ in range(substeps):
             world.step(dt_s)
+            if envelope is not None:
+                envelope.observe(
+                    clock.now_s(),
+                    [
+                        (n, u.vehicle.position_m)
+                        for n, u in uavs.items()
+                        if u.vehicle.armed and not u.vehicle.on_ground
+                    ],
+                )
         mission.measured.note_wall()  # (a brick released: the journal file says what the world holds on the wall)

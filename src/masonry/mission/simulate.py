@@ -30,6 +30,7 @@ from masonry.errors import InputError
 from masonry.fingerprint import fleet_digest, wall_digest
 from masonry.mission.airspace import layer_base_m, transit_layers_m
 from masonry.mission.control import LANDING_GRACE_S, MissionControl
+from masonry.mission.envelope import EnvelopeWatch
 from masonry.mission.events import EventSink
 from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.handler import UavHandler
@@ -244,6 +245,9 @@ class SimulatedMission:
         self.measured.dead = self.dead
         #: an offline schedule's proven bound for the report (``from_blueprint`` with a ``task`` schedule)
         self.cp_sat_bound_s: float | None = None
+        #: the world's UAVs against their reserved envelopes (None: the airspace has no rules, reserves nothing)
+        self.envelope = None if control.columns.base_m is None else EnvelopeWatch(control.columns)
+        self.measured.envelope = self.envelope
 
     def _step_control(self) -> None:
         self.control.step(self.clock.now_s())
