@@ -173,12 +173,18 @@ class Routing(ModelBase):
         return True
 
     def _transit_layer_m(self, answer: ClearanceAnswer, p: np.ndarray) -> float:
-        """The altitude of the transit's lateral legs: the one it has, else the answer's, else where it is."""
+        """The altitude of the transit's lateral legs: the one it has, else the answer's, else where it is. An
+        answer with no layer (no layers; mission control silent past ``LAST_RESORT_S``: nobody to ask) flies the
+        UAV's fixed ``config.lateral_altitude_m``, the fallback layer mission control reserves its way home at,
+        even when an earlier answer of the same transit gave it another (docs/safety.md, "Guarantees and what is
+        not covered")."""
+        if answer.layer_m is None and self.config.lateral_altitude_m is not None:
+            return self.config.lateral_altitude_m
         layer = self.transit.layer_m
         if layer is None:
             layer = answer.layer_m
             if layer is None:  # no layers: the altitude it is at (or the target's, if higher)
-                layer = self.config.lateral_altitude_m or max(float(p[2]), float(self.transit.site_m[2]))
+                layer = max(float(p[2]), float(self.transit.site_m[2]))
         return layer
 
     def _site_granted(self, answer: ClearanceAnswer) -> None:
