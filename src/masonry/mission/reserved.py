@@ -77,7 +77,10 @@ _FLIGHT = ("climb", "transit", "descend", "work", "site", "home")
 class TableClearance:
     """Mission control's airspace backed by a space-time reservation table (see the module docstring). Args: those of :class:`~masonry.mission.airspace.ColumnClearance` (``radius_m`` the blueprint's r_c, which
     widens work zones as it does there; ``base_m`` the transit layer base, None for no airspace rules), and
-    ``timing`` (the UAVs' speeds the legs are timed with) and ``margin_s`` (added to every window).
+    ``timing`` (the UAVs' speeds the legs are timed with) and ``margin_s`` (added to every window);
+    ``layer_climb_mps``: the peak speed the climbs to and descents from a layer are timed with (None: ``timing``'s
+    ``vertical_speed_mps``, 0.4 m/s, as before; the UAVs fly them at ``UavConfig.layer_vertical_speed_mps``, 0.9 m/s,
+    and are then up to 7 s ahead of their windows: docs/performance/fleet.md, branch ``climb50``).
     """
 
     def __init__(
@@ -96,6 +99,7 @@ class TableClearance:
         margin_s: float | None = None,
         guard_s: float | None = None,
         max_layers: int = 4,
+        layer_climb_mps: float | None = None,
     ) -> None:
         if not (radius_m >= 0.0 and math.isfinite(radius_m)):
             raise InvalidArgument(f"column radius must be a finite number >= 0, got {radius_m!r}")
@@ -112,6 +116,7 @@ class TableClearance:
         self.margin_s = float(TABLE_MARGIN_S if margin_s is None else margin_s)
         self.guard_s = float(TABLE_GUARD_S if guard_s is None else guard_s)
         self.max_layers = max_layers
+        self.layer_climb_mps = None if layer_climb_mps is None else float(layer_climb_mps)
         self.homes: dict[str, Vec3] = {
             u: (float(h[0]), float(h[1]), float(h[2])) for u, h in (homes or {}).items()
         }
@@ -416,7 +421,7 @@ class TableClearance:
         return Airspace(
             layers,
             t.cruise_speed_mps,
-            t.vertical_speed_mps,
+            t.vertical_speed_mps if self.layer_climb_mps is None else self.layer_climb_mps,
             self.margin_s,
             0.0,
             any_layer=True,
@@ -433,9 +438,15 @@ class TableClearance:
 
     def _keep_up(self, uav: str, u: TableUav, now_s: float) -> None:
         """A UAV still in a leg whose window ends within half the margin: its windows are extended by the margin
-        (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced)."""
+        (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced). A UAV
+        also in the legs after it whose windows have begun is in the last of them (at the top of its climb, on its
+        transit: not late)."""
         legs = legs_under_way(self.table.of(uav), now_s)
         at = leg_index(legs, u.position)
+        while at is not None and at + 1 < len(legs) and legs[at + 1].t0_s <= now_s:
+            if leg_index(legs[at + 1 : at + 2], u.position) is None:
+                break
+            at += 1
         current = legs[at] if at is not None else (legs[0] if legs else self.table.stay_of(uav))
         if (
             current is None
