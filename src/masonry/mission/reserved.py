@@ -23,13 +23,13 @@ from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
     AT_SPOT_Z_M,
-    ahead_of,
+    cut_behind,
     end_flight,
     extend_or_force,
     forced,
     guarded,
     hover_start,
-    leg_index,
+    leg_now,
     legs_under_way,
     park_levels,
     park_plan,
@@ -78,9 +78,8 @@ class TableClearance:
     """Mission control's airspace backed by a space-time reservation table (see the module docstring). Args: those of :class:`~masonry.mission.airspace.ColumnClearance` (``radius_m`` the blueprint's r_c, which
     widens work zones as it does there; ``base_m`` the transit layer base, None for no airspace rules), and
     ``timing`` (the UAVs' speeds the legs are timed with) and ``margin_s`` (added to every window);
-    ``layer_climb_mps``: the peak speed the climbs to and descents from a layer are timed with (None: ``timing``'s
-    ``vertical_speed_mps``, 0.4 m/s, as before; the UAVs fly them at ``UavConfig.layer_vertical_speed_mps``, 0.9 m/s,
-    and are then up to 7 s ahead of their windows: docs/performance/fleet.md, branch ``climb50``).
+    ``layer_climb_mps``: the climbs' and descents' peak speed (None: ``timing``'s, 0.4 m/s; the UAVs fly 0.9 m/s and
+    run up to 7 s ahead of their windows, docs/performance/fleet.md, ``climb50``).
     """
 
     def __init__(
@@ -402,16 +401,9 @@ class TableClearance:
         self.at_spot(uav, u)
         if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
             return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
-        legs = legs_under_way(self.table.of(uav), self.now_s)
-        at = leg_index(legs, u.position)
-        if at is None:
-            return
-        behind = [r for r in legs[:at] if r.t0_s < self.now_s]
-        on = legs[at]
-        ahead = ahead_of(on, u.position) if on.t0_s < self.now_s and on.purpose == "transit" else on
-        if behind or ahead != on:  # (the part of its leg it has flown out of is free too)
-            left = [ahead if r == on else r for r in self.table.of(uav) if r not in behind]
-            self._replace(uav, [*left, *(r.until(self.now_s) for r in behind)])
+        cut = cut_behind(self.table.of(uav), u.position, self.now_s)
+        if cut is not None:  # (the part of its leg it has flown out of is free too)
+            self._replace(uav, cut)
 
     # -- internals ---------------------------------------------------------------------------------------
     def _make_airspace(self, timing: TaskTiming | None = None) -> Airspace:
@@ -438,15 +430,10 @@ class TableClearance:
 
     def _keep_up(self, uav: str, u: TableUav, now_s: float) -> None:
         """A UAV still in a leg whose window ends within half the margin: its windows are extended by the margin
-        (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced). A UAV
-        also in the legs after it whose windows have begun is in the last of them (at the top of its climb, on its
-        transit: not late)."""
+        (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced); the leg
+        it is in is :func:`leg_now`'s (at the top of its climb, on its transit: not late)."""
         legs = legs_under_way(self.table.of(uav), now_s)
-        at = leg_index(legs, u.position)
-        while at is not None and at + 1 < len(legs) and legs[at + 1].t0_s <= now_s:
-            if leg_index(legs[at + 1 : at + 2], u.position) is None:
-                break
-            at += 1
+        at = leg_now(legs, u.position, now_s)
         current = legs[at] if at is not None else (legs[0] if legs else self.table.stay_of(uav))
         if (
             current is None

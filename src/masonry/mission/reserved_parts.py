@@ -54,6 +54,33 @@ def legs_under_way(rs: Iterable[Reservation], now_s: float) -> list[Reservation]
     return [r for r in rs if r.purpose in _LEG_PURPOSES and r.t1_s > now_s]
 
 
+def leg_now(legs: Sequence[Reservation], p: Vec3 | None, now_s: float) -> int | None:
+    """The index of the leg of ``legs`` a UAV at ``p`` flies at ``now_s`` (:func:`leg_index`), or None: one also in
+    the legs after it whose windows have begun is in the last of them (at the top of its climb, on its transit)."""
+    at = leg_index(legs, p)
+    while at is not None and at + 1 < len(legs) and legs[at + 1].t0_s <= now_s:
+        if leg_index(legs[at + 1 : at + 2], p) is None:
+            break
+        at += 1
+    return at
+
+
+def cut_behind(rs: Sequence[Reservation], p: Vec3 | None, now_s: float) -> list[Reservation] | None:
+    """A UAV's reservations ``rs`` with the legs behind it at ``p`` ended at ``now_s`` and the transit it flies
+    holding only what lies ahead of it (:func:`ahead_of`), or None: nothing it has flown out of."""
+    legs = legs_under_way(rs, now_s)
+    at = leg_index(legs, p)
+    if at is None or p is None:
+        return None
+    behind = [r for r in legs[:at] if r.t0_s < now_s]
+    on = legs[at]
+    ahead = ahead_of(on, p) if on.t0_s < now_s and on.purpose == "transit" else on
+    if not behind and ahead == on:
+        return None
+    left = [ahead if r == on else r for r in rs if r not in behind]
+    return [*left, *(r.until(now_s) for r in behind)]
+
+
 def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
     """``table`` without ``drop`` and with ``add``, not checked (what a UAV physically holds, or is late in)."""
     out = table.without(list(drop))
@@ -318,12 +345,14 @@ __all__ = [
     "ON_LEG_M",
     "Volume",
     "ahead_of",
+    "cut_behind",
     "end_flight",
     "extend_or_force",
     "forced",
     "guarded",
     "hover_start",
     "leg_index",
+    "leg_now",
     "legs_under_way",
     "level_of",
     "on_ahead",
