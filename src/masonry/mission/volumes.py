@@ -125,13 +125,17 @@ def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volum
         kept = rest
         break
     if kept is None:
-        # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
+        # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover); not still
+        # climbing at the leg's start a few decimetres from it (a hop to the next segment 0.3 m on: its climb and
+        # leg were freed under it, 0.15 m out of its volumes for 1.85 s, issue 27 §4.3)
         zone = vols[-1]
+        to_site = math.hypot(x - zone.a[0], y - zone.a[1])
         if (
             last_leg is None
             or zone.kind != "zone"
             or z >= last_leg.z0_m - 0.2
-            or math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M
+            or to_site >= TRACK_M
+            or to_site >= math.hypot(x - last_leg.a[0], y - last_leg.a[1])
             or math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6
         ):
             return None
