@@ -66,6 +66,10 @@ class AdhesionUav(UavModel):
         self._climb_to_m = (
             config.cruise_altitude_m
         )  # in ``ascend``: the transit altitude of the task just done
+        self._climb_over_m = (
+            0.0,
+            0.0,
+        )  # in ``ascend``: the point it holds at the bead's end, climbed out over
         super().__init__(config, fc, link, clock, ADHESION_STATES, ADHESION_TRANSITIONS, clearance=clearance)
 
     _TASK_STATES_SET = frozenset(ADHESION_TASK_STATES)
@@ -381,7 +385,9 @@ class AdhesionUav(UavModel):
         )  # its own measure: what the nozzle's track covered
         self._next_task = None
         self._climbing = False
-        self._hold(tel, self.nav.target_m.copy(), self._yaw_rad)
+        held = self.nav.target_m.copy()
+        self._climb_over_m = (float(held[0]), float(held[1]))
+        self._hold(tel, held, self._yaw_rad)
 
     def do_ascend(self, tel: Telemetry) -> None:
         """After a segment: hover up to ``chain_wait_s`` for the next task; one starting where the nozzle is goes
@@ -402,9 +408,12 @@ class AdhesionUav(UavModel):
             if nxt is None and self._now_s - self._entered_s < self.config.chain_wait_s:
                 return
             self._climbing = True
-            p = tel.position_m
-            top = max(self._climb_to_m, self._transit_altitude_m())  # the next task's, if it is higher
-            self._fly_to(tel, np.array([p[0], p[1], top]))
+            # inside the zone it holds (issue 27 §4.3): over the bead's end it holds, not over where it coasted
+            # to (0.10-0.13 m past a zone without slack at compact r_c), and up to the zone's top (this segment's
+            # transit altitude), not the next task's if that is higher (0.14-0.24 m over the top on the pyramid
+            # and the 200-brick bond): the climb on to it is the next flight's, reserved before it is flown
+            x, y = self._climb_over_m
+            self._fly_to(tel, np.array([x, y, self._climb_to_m]))
             return
         if self._advance(tel):
             self._leave_ascend()

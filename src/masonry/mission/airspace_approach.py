@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from masonry.geofence import AIRSPACE_MARGIN_M
 from masonry.mission.airspace_state import OFF_LAYER, Grant, HoldFlight, Phase, UavAirspace, hold_keep_out
-from masonry.mission.volumes import Vec3, point_segment_m
+from masonry.mission.volumes import flight_volumes, point_segment_m
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
@@ -61,7 +61,6 @@ def approach(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
     keep_out, spans = hold_keep_out(others, pads, waited)
     r = 1.1 * c.wait_radius_m
     ux, uy = (hx - w.site[0]) / far_m, (hy - w.site[1]) / far_m
-    start: Vec3 = (hx, hy, h.layer_m)
     steps = int((far_m - APPROACH_GAIN_M) / APPROACH_STEP_M + 1e-9)
     for i in range(steps + 1):
         d = i * APPROACH_STEP_M
@@ -72,7 +71,9 @@ def approach(c: ColumnClearance, uav: str, u: UavAirspace) -> Grant | None:
             continue
         if c.fence is not None and not c.fence.contains(p[0], p[1], AIRSPACE_MARGIN_M + c.zone_slack_m):
             continue
-        vols = c.flight_volumes_at(start, None, w.top_m, h.layer, p)
+        # at the altitude it hovers at and is told to fly (``h.layer_m``), not layer ``h.layer``'s now: the layer
+        # base may have risen since, and the UAV flew 0.1 m under the leg reserved for it (issue 27 §4.3)
+        vols = flight_volumes((hx, hy), h.layer_m, h.layer_m, None, w.top_m, p, None, c.zone_slack_m)
         if c.fits(uav, vols):
             c.take(u, vols)
             u.hold, u.phase = (

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from masonry.mission import airspace_queries
 from masonry.mission.airspace_state import Phase
-from masonry.mission.volumes import Vec3, same_site
+from masonry.mission.volumes import TRACK_M, Vec3, Volume, point_segment_m, same_site
 
 if TYPE_CHECKING:
     from masonry.mission.airspace import ColumnClearance
@@ -114,6 +114,43 @@ def silent(
     if u is None or uav not in c.homes:
         return 0.0
     way, length_m = airspace_queries.way_home(c, uav, position_m, layer_m, via_m)
+    end = leg_end_ahead(u.volumes, position_m)
+    if end is not None:
+        # it flies on along its leg until it notices the silence (3 s): to the leg's end, where it then climbs
+        # (issue 27 §4.3: a brick UAV cut off 1.15 m before its site climbed there, 1.22 m from the climb reserved
+        # where it was last heard, for 6.3 s)
+        more, more_m = airspace_queries.way_home(c, uav, end, layer_m, via_m)
+        way, length_m = (
+            [*way, *more, *stops_between(position_m, end, layer_m, via_m or c.homes[uav])],
+            max(length_m, more_m),
+        )
     u.volumes = [*u.volumes, *way]
     c.touch()
     return length_m
+
+
+def stops_between(p: Vec3, end: Vec3, layer_m: float | None, to: Vec3) -> list[Volume]:
+    """Where a UAV that stops anywhere on its leg from ``p`` to ``end`` climbs and flies on (to ``to``, its first
+    stop on the way home): the climb along the leg up to its layer, and the legs from there to ``to`` (within half
+    the leg's length of the one from the leg's middle)."""
+    alt = p[2] if layer_m is None else float(layer_m)
+    lo, hi = min(end[2], alt), max(end[2], alt)
+    mid = ((p[0] + end[0]) / 2.0, (p[1] + end[1]) / 2.0)
+    half = math.hypot(end[0] - p[0], end[1] - p[1]) / 2.0
+    return [
+        Volume((p[0], p[1]), (end[0], end[1]), lo, hi, 0.0, "climb"),
+        Volume(mid, (to[0], to[1]), alt, alt, half, "leg"),
+    ]
+
+
+def leg_end_ahead(vols: list[Volume], position_m: Vec3) -> Vec3 | None:
+    """The end of the lateral leg of ``vols`` a UAV at ``position_m`` is on (within ``TRACK_M`` of it, at its
+    altitude), if that end lies ahead of it; else None."""
+    x, y, z = position_m
+    for v in reversed(vols):
+        if v.kind != "leg" or abs(z - v.z0_m) >= 0.2 or point_segment_m((x, y), v.a, v.b) > TRACK_M:
+            continue
+        if math.hypot(v.b[0] - x, v.b[1] - y) <= TRACK_M:
+            return None  # (at its end already: the way home from where it is covers it)
+        return (v.b[0], v.b[1], v.z0_m)
+    return None

@@ -19,9 +19,11 @@ from masonry.mission.altitudes import DEFAULT_LAYER_SPACING_M
 from masonry.mission.fence import volumes_in_fence
 from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import (
+    PICKUP_OFFSET_M,
     XY,
     Vec3,
     Volume,
+    coasted,
     column,
     flight_volumes,
     same_site,
@@ -71,6 +73,8 @@ class AirspaceRecords:
         self.sep_xy_m = float(sep_xy_m)
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
         self.zone_slack_m = zone_slack_m(self.radius_m, self.sep_xy_m)
+        #: the bricks' approximate pickups: a zone there has at least ``PICKUP_OFFSET_M`` of slack
+        self.pickups: list[XY] = []
         #: how far a waiting UAV keeps from the sites others wait for (first come, first served) and hold points
         #: from everyone's sites: two zones' separation, r_c, or more when r_c is below the separation (a hold
         #: hover 1.1 r_c = 0.94 m from another's site at r_c 0.85 m blocked its descent, and that one's hold
@@ -131,7 +135,18 @@ class AirspaceRecords:
         return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
 
     def zone_column(self, site: Vec3, top: float, to: XY | None = None) -> Volume:
-        return column(site, top, to, self.zone_slack_m)
+        """The zone over ``site`` up to ``top`` (along a bead to ``to``, and on past its end as far as a sprayer
+        coasts: :func:`~masonry.mission.volumes.coasted`; at a pickup, as wide as the brick may lie off it)."""
+        return column(site, top, self.coasted(site, to), self.work_slack_m(site))
+
+    def work_slack_m(self, site: Vec3) -> float:
+        """A zone's slack at ``site``: the zones', at least ``PICKUP_OFFSET_M`` at a brick's pickup."""
+        if self.zone_slack_m >= PICKUP_OFFSET_M or not any(same_site(site, (*p, 0.0)) for p in self.pickups):
+            return self.zone_slack_m
+        return PICKUP_OFFSET_M
+
+    def coasted(self, site: Vec3, to: XY | None) -> XY | None:
+        return coasted((site[0], site[1]), to, self.zone_slack_m)
 
     def set_zone(self, uav: str, site: Vec3, top: float, to: XY | None = None) -> None:
         u = self.record(uav)
@@ -203,11 +218,15 @@ class AirspaceRecords:
     ) -> list[Volume]:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover; the
         column over a UAV's own pad, ``home``, has no work slack)."""
+        if target is not None:
+            to = self.coasted(target, to)
         vols = flight_volumes(
             (start[0], start[1]), self.snap(start[2]), self.alt(k), target, top, hold, to, self.zone_slack_m
         )
-        if home and target is not None and hold is None:
-            vols[-1] = dataclasses.replace(vols[-1], slack_m=0.0)
+        if target is not None and hold is None:
+            slack = 0.0 if home else self.work_slack_m(target)
+            if slack != vols[-1].slack_m:
+                vols[-1] = dataclasses.replace(vols[-1], slack_m=slack)
         return vols
 
     def take(self, u: UavAirspace, vols: list[Volume]) -> None:

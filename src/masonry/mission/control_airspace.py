@@ -20,10 +20,11 @@ from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SiteGate
 from masonry.mission.uav_facts import facts_from
 from masonry.mission.volumes import Vec3
+from masonry.planner.tasks import BrickTask, Plan
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Mapping
+    from collections.abc import Callable, Iterable, Mapping, Sequence
 
     from masonry.mission.control import MissionControl
 
@@ -35,6 +36,7 @@ __all__ = [
     "grant_waiting",
     "make_airspace",
     "on_clearance_request",
+    "pickups_of",
     "raise_layers",
     "report",
     "sample",
@@ -188,6 +190,7 @@ def make_airspace(
     timing: TaskTiming | None,
     work_site: Callable[[str, Vec3], bool] | None = None,
     roles: Mapping[str, str] | None = None,
+    pickups: Sequence[Vec3] = (),
 ) -> ColumnClearance | TableClearance:
     """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
 
@@ -198,6 +201,8 @@ def make_airspace(
             :mod:`masonry.mission.reserved_approach`; None: no approach spots).
         roles: each UAV's role: under the columns a hold point may lie by the pad of a landed UAV of the holder's
             role (:func:`masonry.mission.airspace_requests.landed_alike`; None: by no pad).
+        pickups: the bricks' approximate pickups: under the columns a zone there is as wide as a brick may lie
+            off it (``masonry.mission.volumes.PICKUP_OFFSET_M``).
     """
     if kind not in AIRSPACES:
         raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
@@ -208,9 +213,16 @@ def make_airspace(
     if isinstance(made, TableClearance):
         made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
         made.work_site = work_site
-    elif roles is not None:
-        made.roles = dict(roles)
+    else:
+        made.pickups = [(p[0], p[1]) for p in pickups]
+        if roles is not None:
+            made.roles = dict(roles)
     return made
+
+
+def pickups_of(plan: Plan) -> list[Vec3]:
+    """The approximate pickups of ``plan``'s bricks (:func:`make_airspace`'s ``pickups``)."""
+    return [t.pickup_m for t in plan.tasks if isinstance(t, BrickTask) and t.pickup_m is not None]
 
 
 def grant_waiting(mc: MissionControl, now_s: float) -> None:

@@ -35,6 +35,16 @@ STOP_M = 1.0
 #: target, each UAV's share of the tracking error.
 LEAVE_SNAP_M = 0.1
 
+#: How far a sprayer may coast on past the end of its bead as it stops spraying (its autopilot shapes the stop:
+#: 0.10-0.13 m on the ``arducopter`` vehicle, issue 27 §4.3): a zone along a bead reaches this far past the bead's
+#: end, less the zone's own slack (:func:`coasted`).
+BEAD_COAST_M = 0.15
+
+#: A brick lies up to this far from its approximate pickup (the simulated pallet's ``WorldConfig.pickup_offset_m``),
+#: and its UAV aligns over it and comes down there: a pickup's zone has at least this slack (issue 27 §4.3; a zone
+#: has none at r_c under 1.2 m).
+PICKUP_OFFSET_M = 0.05
+
 
 @dataclass(frozen=True)
 class Volume:
@@ -125,13 +135,17 @@ def ahead_of(vols: Sequence[Volume], x: float, y: float, z: float) -> list[Volum
         kept = rest
         break
     if kept is None:
-        # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover)
+        # coming down over its site at the end of its last leg (not a hold flight: that ends in a hover); not still
+        # climbing at the leg's start a few decimetres from it (a hop to the next segment 0.3 m on: its climb and
+        # leg were freed under it, 0.15 m out of its volumes for 1.85 s, issue 27 §4.3)
         zone = vols[-1]
+        to_site = math.hypot(x - zone.a[0], y - zone.a[1])
         if (
             last_leg is None
             or zone.kind != "zone"
             or z >= last_leg.z0_m - 0.2
-            or math.hypot(x - zone.a[0], y - zone.a[1]) >= TRACK_M
+            or to_site >= TRACK_M
+            or to_site >= math.hypot(x - last_leg.a[0], y - last_leg.a[1])
             or math.hypot(last_leg.b[0] - zone.a[0], last_leg.b[1] - zone.a[1]) > 1e-6
         ):
             return None
@@ -193,6 +207,19 @@ def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
     wide."""
     xy = (site[0], site[1])
     return Volume(xy, xy if to is None else to, 0.0, top_m, slack_m, "zone")
+
+
+def coasted(site: XY, to: XY | None, slack_m: float) -> XY | None:
+    """The end of a zone along a bead from ``site`` to ``to``, ``slack_m`` wide: ``to`` moved on along the bead by
+    what of :data:`BEAD_COAST_M` the slack does not cover (None: no bead; a zone of 0.15 m slack is unchanged)."""
+    if to is None:
+        return None
+    dx, dy = to[0] - site[0], to[1] - site[1]
+    n = math.hypot(dx, dy)
+    on = BEAD_COAST_M - slack_m
+    if n < 1e-9 or on <= 0.0:
+        return to
+    return (to[0] + on * dx / n, to[1] + on * dy / n)
 
 
 def flight_volumes(
@@ -302,15 +329,18 @@ def hold_points(
 
 
 __all__ = [
+    "BEAD_COAST_M",
     "HOLD_LINE_STEP_M",
     "HOVER_SLACK_M",
     "LEAVE_SNAP_M",
+    "PICKUP_OFFSET_M",
     "STOP_M",
     "TRACK_M",
     "XY",
     "Vec3",
     "Volume",
     "ahead_of",
+    "coasted",
     "column",
     "flight_volumes",
     "hold_points",
