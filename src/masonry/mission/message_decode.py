@@ -77,8 +77,9 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     on_pad = data.get("on_pad", False)
     finishing = data.get("finishing", False)
     out_of_service = data.get("out_of_service", False)
-    if data.get("plan_progress") is not None:
-        return None  # (the checked decoder reads it)
+    plan = _plan_progress_fast(data.get("plan_progress"))
+    if plan is False:
+        return None  # (the checked decoder says what is wrong with it)
     swaps = data.get("swaps_batteries", False)
     if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service, swaps)):
         return None
@@ -99,9 +100,26 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         on_pad=on_pad,
         finishing=finishing,
         out_of_service=out_of_service,
-        plan_progress=None,
+        plan_progress=plan,
     )
     return hb
+
+
+def _plan_progress_fast(raw: object) -> PlanProgress | bool | None:
+    """A heartbeat's ``plan_progress`` with :func:`_plan_progress`'s checks written out: the value, None (none), or
+    False (any check fails: :func:`decode`'s general path raises the precise error)."""
+    if raw is None:
+        return None
+    if type(raw) is not dict or len(raw) != len(PLAN_PROGRESS_FIELDS):
+        return False
+    grant, leg, fraction = raw.get("grant"), raw.get("leg"), raw.get("leg_fraction")
+    if type(grant) is not int or grant < 1 or type(leg) is not int or not 0 <= leg < len(PLAN_LEGS):
+        return False
+    if (
+        not (type(fraction) is float or type(fraction) is int) or not 0.0 <= fraction <= 1.0
+    ):  # (NaN fails too)
+        return False
+    return PlanProgress(grant, leg, float(fraction))
 
 
 def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
