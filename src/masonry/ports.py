@@ -281,8 +281,37 @@ class MissionLink(Protocol):
     def report_result(self, result: TaskResult) -> None: ...
 
 
+#: The legs of a flight mission control answered, as a UAV flies them (:class:`PlanProgress`): up or down to its
+#: layer where it is, along the layer, down over the site (a flight to a hold point has no descent).
+PLAN_LEGS = ("climb", "transit", "descend")
+
+
+@dataclass(frozen=True)
+class PlanProgress:
+    """How far a UAV is along the flight mission control answered it, as the UAV knows it (issue 27 §2.2): its
+    ``plan_progress`` fact, in heartbeats and progress reports (docs/safety.md, "The UAV's plan progress").
+
+    Attributes:
+        grant: the number of mission control's answer whose flight it flies (``Clearance.grant``, >= 1).
+        leg: the leg it flies, an index of :data:`PLAN_LEGS` (0 climb, 1 transit, 2 descend).
+        leg_fraction: how much of that leg is behind it, 0..1 (its position along the leg's line, from the leg's
+            start to its end; 1: at the end, e.g. hovering at its hold point).
+    """
+
+    grant: int
+    leg: int
+    leg_fraction: float
+
+    @property
+    def leg_name(self) -> str:
+        return PLAN_LEGS[self.leg]
+
+
 class ClearanceAnswer(Protocol):
     """Mission control's answer to a transit request (:class:`masonry.mission.messages.Clearance` is one)."""
+
+    @property
+    def grant(self) -> int: ...  # the answer's number, which the UAV's plan progress names (0: not numbered)
 
     @property
     def granted(self) -> bool: ...  # the column over the site is the UAV's: it may come down there

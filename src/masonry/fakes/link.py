@@ -47,6 +47,7 @@ class FakeClearance:
     hold_m: Vec3 | None = None
     gentle: bool = True
     open_for_s: float | None = None
+    grant: int = 0
 
 
 class ScriptedClearanceLink(QueueMissionLink):
@@ -101,9 +102,10 @@ class ScriptedClearanceLink(QueueMissionLink):
         waited = self.clock.now_s() - first
         if waited < self.answer_after_s:
             return None
+        n = list(self.asked).index(site) + 1  # (answers numbered: a hold flight 2n - 1, the granted one 2n)
         if waited < self.grant_after_s:
-            return FakeClearance(False, self.layer_m, self.hold_m)
-        return FakeClearance(True, self.layer_m)
+            return FakeClearance(False, self.layer_m, self.hold_m, grant=2 * n - 1)
+        return FakeClearance(True, self.layer_m, grant=2 * n)
 
     def end_transit(self, site_m: Vec3) -> None:
         self.arrived.append((float(site_m[0]), float(site_m[1]), float(site_m[2])))

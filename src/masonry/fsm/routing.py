@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from masonry.fsm.base import ModelBase, Vec3
-from masonry.ports import ClearanceAnswer, Telemetry
+from masonry.fsm.transit import flight_of, progress_on
+from masonry.ports import ClearanceAnswer, PlanProgress, Telemetry
 from masonry.segments import point_segment_m
 from masonry.separation import LEG_OVERSHOOT_M, TRACK_SHARE_M
 
@@ -118,6 +119,7 @@ class Routing(ModelBase):
         transit = self.transit
         if transit.state == "down":
             transit.arrive()
+            transit.flight = None
             self.clearance.end_transit(transit.site_m)
             return True
         self.nav.begin_settling(self._now_s)
@@ -133,11 +135,35 @@ class Routing(ModelBase):
         if answer.granted:
             self._site_granted(answer)
             self._granted(tel, p, answer.layer_m if answer.layer_m is not None else layer, answer.gentle)
+            self._note_flight(answer.grant, p)
         else:
             # a hold flight at the altitude it is given: a later one may be at another (to a parking spot)
             hold_layer = answer.layer_m if answer.hold_m is not None and answer.layer_m is not None else layer
-            self._refused(tel, p, answer.hold_m, hold_layer, answer.gentle)
+            if self._refused(tel, p, answer.hold_m, hold_layer, answer.gentle):
+                self._note_flight(answer.grant, p)
         return False
+
+    def _note_flight(self, grant: int, p: np.ndarray) -> None:
+        """The navigator now flies the flight of mission control's answer numbered ``grant`` from ``p`` (granted,
+        or a hold flight): its legs are kept, for :meth:`plan_progress` (an answer not numbered: none)."""
+        if grant <= 0:
+            self.transit.flight = None
+            return
+        nav = self.nav
+        points = [(float(p[0]), float(p[1]), float(p[2]))]
+        for q in (nav.target_m, *(end for end, _d in nav.legs)):
+            points.append((float(q[0]), float(q[1]), float(q[2])))
+        self.transit.flight = flight_of(grant, points)
+
+    def plan_progress(self, position_m: Vec3 | None) -> PlanProgress | None:
+        """How far the UAV at ``position_m`` is along the flight mission control last answered it (its
+        ``plan_progress`` fact, :class:`~masonry.ports.PlanProgress`); None: it flies none (none asked for, none
+        numbered, arrived, or it stopped or turned back)."""
+        flight = self.transit.flight
+        if flight is None or position_m is None or not self.transit.active:
+            return None
+        t = self.nav.target_m
+        return progress_on(flight, (float(t[0]), float(t[1]), float(t[2])), len(self.nav.legs), position_m)
 
     def _straight_on(self, tel: Telemetry) -> bool:
         """On the lateral leg to a hold point that lies on the straight line to the site: if the rest of the flight
@@ -170,6 +196,7 @@ class Routing(ModelBase):
         self.nav.fly_to(self._now_s, tel, legs[0][0], duration_s, yaw_rad=self.nav.target_yaw_rad, level=True)
         self.nav.legs = legs[1:]
         self.nav.legs_from_rest = True
+        self._note_flight(answer.grant, p)
         return True
 
     def _transit_layer_m(self, answer: ClearanceAnswer, p: np.ndarray) -> float:
@@ -219,9 +246,9 @@ class Routing(ModelBase):
 
     def _refused(
         self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float, gentle: bool = True
-    ) -> None:
-        """Not yet: wait at the hold point given (flying there at ``layer``, gently if ``gentle``), or where the
-        UAV is."""
+    ) -> bool:
+        """Not yet: wait at the hold point given (flying there at ``layer``, gently if ``gentle``: True), or where
+        the UAV is (False)."""
         first = self.transit.state == "ask"
         if hold is not None and (first or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
             self.transit.layer_m = layer
@@ -235,5 +262,6 @@ class Routing(ModelBase):
                 self.nav.target_yaw_rad,
                 self._end_accel_mps2(gentle),
             )
-        else:
-            self.nav.wait(self._now_s)
+            return True
+        self.nav.wait(self._now_s)
+        return False

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from masonry.errors import MissionError
 from masonry.geofence import Site
+from masonry.mission import plan_reading
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, task_work_altitude_m
 from masonry.mission.events import volume_list
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, Heartbeat, Progress
@@ -21,6 +22,7 @@ from masonry.mission.sites import SiteGate
 from masonry.mission.uav_facts import facts_from
 from masonry.mission.volumes import Vec3
 from masonry.planner.tasks import BrickTask, Plan
+from masonry.ports import PlanProgress
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
@@ -33,6 +35,7 @@ __all__ = [
     "emit_clearance",
     "emit_uav",
     "fail_outside_fence",
+    "grant_number",
     "grant_waiting",
     "make_airspace",
     "on_clearance_request",
@@ -50,6 +53,7 @@ def report(mc: MissionControl, link: UavLink, msg: Heartbeat | Progress, positio
     flying, it holds only the pad."""
     link.state = msg.state
     link.facts = facts_from(msg)
+    link.plan_progress = msg.plan_progress
     if position_m is None:
         return
     link.moved_to(position_m)
@@ -58,7 +62,10 @@ def report(mc: MissionControl, link: UavLink, msg: Heartbeat | Progress, positio
     mc.heard_separation.note(name, mc.now_s, position_m, airborne=airborne)  # (heard at this step's time)
     if airborne:
         link.taking_off = False  # it is in the air: whatever it reports from now on is after its take-off
-    mc.columns.progress(name, position_m)
+    if isinstance(mc.columns, TableClearance):  # (the table reads where the UAV says it is along its plan)
+        mc.columns.progress(name, position_m, msg.plan_progress)
+    else:
+        mc.columns.progress(name, position_m)
     if link.facts.on_pad and not link.taking_off and mc.dispatcher.task_of(name) is None:
         # (one landed with its task, for a fresh battery, takes off again on its own: it keeps its column)
         mc.columns.landed(name, position_m)
@@ -112,8 +119,25 @@ def answer(mc: MissionControl, g: Grant, now_s: float) -> None:
         g.layer_m,
         g.gentle,
         open_for_s,
+        grant_number(mc, g),
     )
     mc.out.send(g.uav, answer)
+
+
+def grant_number(mc: MissionControl, g: Grant) -> int:
+    """The number of the flight answer ``g`` sets its UAV flying (granted, or to a hold point), which its
+    ``plan_progress`` will name: under the table its plan's (one per plan, :mod:`masonry.mission.plan_reading`),
+    under the columns one more than the UAV's last; 0: the answer sets no flight (it waits where it is)."""
+    if not g.granted and g.hold_m is None:
+        return 0
+    if isinstance(mc.columns, TableClearance):
+        return plan_reading.grant_number(mc.columns.record(g.uav))
+    links: Mapping[str, UavLink] = getattr(mc, "uavs", {})  # (a mission control of parts, as tests build one)
+    link = links.get(g.uav)
+    if link is None:
+        return 0
+    link.grants += 1
+    return link.grants
 
 
 def fail_outside_fence(mc: MissionControl, uav: str, reason: str, now_s: float) -> None:
@@ -177,7 +201,20 @@ def emit_uav(
         battery=link.battery if battery is None else battery,
         status=link.status,
         volumes=volume_list(mc.columns.volumes(name)),
+        plan_progress=plan_progress_dict(link.plan_progress),
     )
+
+
+def plan_progress_dict(pp: PlanProgress | None) -> dict[str, object] | None:
+    """A UAV's ``plan_progress`` in an event (as on the wire, its leg named too; None: none)."""
+    if pp is None:
+        return None
+    return {
+        "grant": pp.grant,
+        "leg": pp.leg,
+        "leg_name": pp.leg_name,
+        "leg_fraction": round(pp.leg_fraction, 4),
+    }
 
 
 def make_airspace(

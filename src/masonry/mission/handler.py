@@ -212,18 +212,20 @@ class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink
         f = facts_of(
             state
         )  # (the handler knows its machine: mission control reads these, not the state name)
+        where = self._where()
         self._send(
             Progress(
                 self.name,
                 task_id,
                 state,
                 time_s,
-                self._where(),
+                where,
                 carrying=f.carrying,
                 flying_home=f.flying_home,
                 on_pad=f.on_pad,
                 finishing=f.finishing,
                 out_of_service=f.out_of_service,
+                plan_progress=self._plan_progress(where),
             )
         )
 
@@ -260,6 +262,7 @@ class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink
         cur = self._current
         state = self._state()
         f = facts_of(state)
+        where = self._where()
         self._send(
             Heartbeat(
                 self.name,
@@ -268,7 +271,7 @@ class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink
                 # the task in hand, or the one queued for it (mission control releases a task its UAV's
                 # heartbeats say it does not hold: a handler restarted)
                 task_id=cur.task_id if cur else (self._queue[0][0].id if self._queue else None),
-                position_m=self._where(),
+                position_m=where,
                 battery=None
                 if self._report_battery is None
                 else min(1.0, max(0.0, float(self._report_battery()))),
@@ -280,6 +283,7 @@ class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink
                 on_pad=f.on_pad,
                 finishing=f.finishing,
                 out_of_service=f.out_of_service,
+                plan_progress=self._plan_progress(where),
             )
         )
 

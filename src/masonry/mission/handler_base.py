@@ -15,7 +15,7 @@ from masonry.mission.execution import Execution
 from masonry.mission.messages import MISSION_CONTROL, Message, Result, encode
 from masonry.mission.transport import Transport
 from masonry.mission.uav_facts import OUT_OF_SERVICE_STATE
-from masonry.ports import TaskResult
+from masonry.ports import PlanProgress, TaskResult
 
 Vec3 = tuple[float, float, float]
 
@@ -54,6 +54,15 @@ class HandlerBase:
     def _state(self) -> str:
         """The machine's state now (empty without a machine)."""
         return str(getattr(self.model, "state", "")) if self.model is not None else ""
+
+    def _plan_progress(self, position_m: Vec3 | None) -> PlanProgress | None:
+        """How far the UAV is along the flight mission control last answered it (the machine's
+        ``plan_progress``, :meth:`masonry.fsm.routing.Routing.plan_progress`; None: none, or no such machine)."""
+        read = getattr(self.model, "plan_progress", None) if self.model is not None else None
+        if read is None:
+            return None
+        pp = read(position_m)
+        return pp if isinstance(pp, PlanProgress) else None
 
     def _where(self) -> Vec3 | None:
         if self._position is None:

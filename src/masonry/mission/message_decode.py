@@ -18,6 +18,7 @@ from masonry.mission.message_types import (
     MISSION_CONTROL,
     OPERATOR,
     OPERATOR_COMMANDS,
+    PLAN_PROGRESS_FIELDS,
     PROTOCOL_VERSION,
     Assign,
     Clearance,
@@ -33,7 +34,7 @@ from masonry.mission.message_types import (
 )
 from masonry.planner.as_built_plan import MAX_PLANNED_SHIFT_M, planned_shift_m
 from masonry.planner.tasks import Task
-from masonry.ports import TaskResult
+from masonry.ports import PLAN_LEGS, PlanProgress, TaskResult
 
 _new_message = object.__new__
 
@@ -76,6 +77,9 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
     on_pad = data.get("on_pad", False)
     finishing = data.get("finishing", False)
     out_of_service = data.get("out_of_service", False)
+    plan = _plan_progress_fast(data.get("plan_progress"))
+    if plan is False:
+        return None  # (the checked decoder says what is wrong with it)
     swaps = data.get("swaps_batteries", False)
     if not all(type(v) is bool for v in (carrying, flying_home, on_pad, finishing, out_of_service, swaps)):
         return None
@@ -96,8 +100,26 @@ def _heartbeat_fast(data: dict[str, Any], fleet: Collection[str] | None) -> Hear
         on_pad=on_pad,
         finishing=finishing,
         out_of_service=out_of_service,
+        plan_progress=plan,
     )
     return hb
+
+
+def _plan_progress_fast(raw: object) -> PlanProgress | bool | None:
+    """A heartbeat's ``plan_progress`` with :func:`_plan_progress`'s checks written out: the value, None (none), or
+    False (any check fails: :func:`decode`'s general path raises the precise error)."""
+    if raw is None:
+        return None
+    if type(raw) is not dict or len(raw) != len(PLAN_PROGRESS_FIELDS):
+        return False
+    grant, leg, fraction = raw.get("grant"), raw.get("leg"), raw.get("leg_fraction")
+    if type(grant) is not int or grant < 1 or type(leg) is not int or not 0 <= leg < len(PLAN_LEGS):
+        return False
+    if (
+        not (type(fraction) is float or type(fraction) is int) or not 0.0 <= fraction <= 1.0
+    ):  # (NaN fails too)
+        return False
+    return PlanProgress(grant, leg, float(fraction))
 
 
 def decode(raw: bytes | str, fleet: Collection[str] | None = None) -> Message:
@@ -176,6 +198,7 @@ def _heartbeat(f: _Fields, sender: str, fleet: Collection[str] | None) -> Heartb
         max_wind_mps=_speed(f, "max_wind_mps", 0.0, MAX_WIND_LIMIT_MPS, low_open=True),
         swaps_batteries=_flag(f, "swaps_batteries"),
         **_facts(f),
+        plan_progress=_plan_progress(f),
     )
 
 
@@ -193,6 +216,33 @@ def _facts(f: _Fields) -> dict[str, bool]:
     for name in FACT_FIELDS:
         out[name] = _flag(f, name)
     return out
+
+
+def _plan_progress(f: _Fields) -> PlanProgress | None:
+    """A heartbeat's or progress report's optional ``plan_progress`` (:data:`PLAN_PROGRESS_FIELDS`): the answer's
+    number an integer >= 1, the leg an index of :data:`~masonry.ports.PLAN_LEGS`, the fraction a finite number in
+    0..1, nothing else; null or left out: none. Anything else is refused with the reason (the network is hostile:
+    a report that moves mission control's table must say what it means)."""
+    raw = f.data.get("plan_progress")
+    if raw is None:
+        return None
+    if not isinstance(raw, dict):
+        raise f.fail("plan_progress", f"must be an object, got {type(raw).__name__}")
+    unknown = sorted(str(k) for k in raw if k not in PLAN_PROGRESS_FIELDS)
+    if unknown:
+        raise f.fail("plan_progress", f"has unknown field {', '.join(map(repr, unknown))}")
+    p = _Fields(raw, f"{f.what} plan_progress")
+    grant, leg = p.int_("grant"), p.int_("leg")
+    if grant < 1:
+        raise p.fail("grant", f"must be >= 1, got {grant}")
+    if not 0 <= leg < len(PLAN_LEGS):
+        raise p.fail(
+            "leg", f"must be an index of {', '.join(PLAN_LEGS)} (0..{len(PLAN_LEGS) - 1}), got {leg}"
+        )
+    fraction = p.num("leg_fraction")
+    if not 0.0 <= fraction <= 1.0:
+        raise p.fail("leg_fraction", f"must be in 0..1, got {fraction}")
+    return PlanProgress(grant, leg, fraction)
 
 
 #: A wind reading above this is no reading (a hurricane's sustained wind is 33 m/s), and a limit above
@@ -259,6 +309,7 @@ def _progress(f: _Fields, sender: str, fleet: Collection[str] | None) -> Progres
         f.num("time_s"),
         f.vec("position_m", optional=True),
         **_facts(f),
+        plan_progress=_plan_progress(f),
     )
 
 
@@ -288,7 +339,7 @@ def _result(f: _Fields, sender: str, fleet: Collection[str] | None) -> Result:
         f.vec("position_m", optional=True),
         state=str(f.data.get("state") or ""),
         attempt=attempt,
-        out_of_service=_facts(f)["out_of_service"],
+        out_of_service=_flag(f, "out_of_service"),
     )
 
 
@@ -329,7 +380,18 @@ def _clearance(f: _Fields, sender: str, fleet: Collection[str] | None) -> Cleara
         f.num("layer_m", optional=True),
         f.bool_("gentle") if "gentle" in f.data else True,
         f.num("open_for_s", optional=True),
+        _grant(f),
     )
+
+
+def _grant(f: _Fields) -> int:
+    """A clearance's optional ``grant``: an integer >= 0 (0 or left out: not numbered)."""
+    if "grant" not in f.data:
+        return 0
+    grant = f.int_("grant")
+    if grant < 0:
+        raise f.fail("grant", f"must be >= 0, got {grant}")
+    return grant
 
 
 def _operator_command(f: _Fields, sender: str, fleet: Collection[str] | None) -> OperatorCommand:

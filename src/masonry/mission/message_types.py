@@ -9,9 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from masonry.planner.tasks import Task
-from masonry.ports import TaskResult
+from masonry.ports import PlanProgress, TaskResult
 
-PROTOCOL_VERSION = 6
+PROTOCOL_VERSION = 7
 MISSION_CONTROL = "mission-control"
 #: The sender name of an operator's commands (``masonry ctl``); mission control answers to it.
 OPERATOR = "operator"
@@ -22,6 +22,9 @@ Vec3 = tuple[float, float, float]
 
 #: A heartbeat's and a progress report's typed facts (:mod:`masonry.mission.uav_facts`), booleans on the wire.
 FACT_FIELDS = ("carrying", "flying_home", "on_pad", "finishing", "out_of_service")
+#: The typed fact ``plan_progress`` (:class:`~masonry.ports.PlanProgress`, null or left out: none) and its fields on
+#: the wire: ``{"grant": int >= 1, "leg": index of PLAN_LEGS, "leg_fraction": 0..1}``.
+PLAN_PROGRESS_FIELDS = ("grant", "leg", "leg_fraction")
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,8 @@ class Heartbeat:
     on_pad: bool = False
     finishing: bool = False
     out_of_service: bool = False
+    #: how far it is along the flight mission control last answered it, as it knows it (None: it flies none)
+    plan_progress: PlanProgress | None = None
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,7 @@ class Progress:
     on_pad: bool = False
     finishing: bool = False
     out_of_service: bool = False
+    plan_progress: PlanProgress | None = None
 
 
 @dataclass(frozen=True)
@@ -148,6 +154,9 @@ class Clearance:
     #: granted at a brick's drop-off with glue under it: the seconds its glue stays open from ``time_s`` (the
     #: bead sprayed longest ago; None: no open time). A re-seat presses the brick again only within it
     open_for_s: float | None = None
+    #: the answer's number (>= 1; 0: not numbered): mission control numbers each flight it answers (a grant, a
+    #: hold flight), and the UAV's ``plan_progress`` names the one it flies
+    grant: int = 0
 
 
 @dataclass(frozen=True)

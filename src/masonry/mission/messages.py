@@ -1,6 +1,6 @@
 """The mission protocol: versioned, validated messages between mission control and UAV handlers.
 
-Every message travels as one JSON object with an envelope ``{"v": 6, "type": ..., "sender": ...}``.
+Every message travels as one JSON object with an envelope ``{"v": 7, "type": ..., "sender": ...}``.
 :func:`decode` checks the version, the type, every field's type and, when the fleet is given, that the
 sender (and the addressed UAV) belongs to it; anything else raises :class:`~masonry.errors.ProtocolError`.
 
@@ -44,7 +44,11 @@ recalls; null and 0: whatever the UAV holds): a UAV ignores one naming an assign
 said again cannot fail the next task (a version-5 UAV would take it for "whatever you hold"); within 6, mission
 control numbers every assignment of a task anew (``attempt`` 1, 2, 3, ... whether what ended the one before
 counted against the task or not: :class:`~masonry.mission.ledger.AttemptLedger`): a UAV only echoes the number and
-compares recalls with it, so either side of a mixed pair works as before.
+compares recalls with it, so either side of a mixed pair works as before; 7 a clearance's ``grant`` (the number
+of the flight it answers) and a heartbeat's and progress report's ``plan_progress`` (how far the UAV is along that
+flight, :class:`~masonry.ports.PlanProgress`; null or left out: none), which the table reads in place of the
+position rule (:mod:`masonry.mission.plan_reading`): a version-6 UAV would report none, and its mission control's
+answers would number nothing.
 """
 
 from __future__ import annotations
@@ -217,19 +221,7 @@ def encode(message: Message) -> bytes:
             to_m=_vec(message.to_m),
         )
     elif isinstance(message, Clearance):
-        body.update(
-            uav=message.uav,
-            site_m=_vec(message.site_m),
-            radius_m=message.radius_m,
-            time_s=message.time_s,
-            granted=message.granted,
-            hold_m=_vec(message.hold_m),
-            layer_m=message.layer_m,
-        )
-        if not message.gentle:  # (only said when not: an older mission control's answer is gentle)
-            body["gentle"] = False
-        if message.open_for_s is not None:
-            body["open_for_s"] = message.open_for_s
+        body.update(_clearance_body(message))
     elif isinstance(message, MissionEnd):
         body.update(time_s=message.time_s, completed=message.completed)
     else:
@@ -237,15 +229,39 @@ def encode(message: Message) -> bytes:
     return _ENCODER.encode(body).encode()
 
 
-def _facts(message: Heartbeat | Progress) -> dict[str, bool]:
-    """A heartbeat's or progress report's facts (:data:`~masonry.mission.message_types.FACT_FIELDS`)."""
-    return {
+def _facts(message: Heartbeat | Progress) -> dict[str, object]:
+    """A heartbeat's or progress report's facts (:data:`~masonry.mission.message_types.FACT_FIELDS`, and
+    ``plan_progress`` when it has one: :data:`~masonry.mission.message_types.PLAN_PROGRESS_FIELDS`)."""
+    out: dict[str, object] = {
         "carrying": message.carrying,
         "flying_home": message.flying_home,
         "on_pad": message.on_pad,
         "finishing": message.finishing,
         "out_of_service": message.out_of_service,
     }
+    pp = message.plan_progress
+    if pp is not None:
+        out["plan_progress"] = {"grant": pp.grant, "leg": pp.leg, "leg_fraction": pp.leg_fraction}
+    return out
+
+
+def _clearance_body(message: Clearance) -> dict[str, object]:
+    body: dict[str, object] = {
+        "uav": message.uav,
+        "site_m": _vec(message.site_m),
+        "radius_m": message.radius_m,
+        "time_s": message.time_s,
+        "granted": message.granted,
+        "hold_m": _vec(message.hold_m),
+        "layer_m": message.layer_m,
+    }
+    if not message.gentle:  # (only said when not: an older mission control's answer is gentle)
+        body["gentle"] = False
+    if message.open_for_s is not None:
+        body["open_for_s"] = message.open_for_s
+    if message.grant:  # (0: not numbered, left out)
+        body["grant"] = message.grant
+    return body
 
 
 def _operator_body(message: OperatorCommand | CommandAnswer | Recall) -> dict[str, Any]:

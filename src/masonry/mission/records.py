@@ -10,7 +10,7 @@ from typing import Literal
 from masonry.blueprint import UavSpec
 from masonry.mission.uav_facts import LANDED_STATE, UavFacts
 from masonry.perception.types import AsBuiltPose
-from masonry.ports import PhaseTimes, TaskResult
+from masonry.ports import PhaseTimes, PlanProgress, TaskResult
 
 Vec3 = tuple[float, float, float]
 AttemptStatus = Literal["running", "done", "failed"]
@@ -77,6 +77,11 @@ class UavLink:
     airspace_until_s: float | None = None
     #: silent with a brick on its magnet: the pickup it puts it back on, then home
     way_via_m: Vec3 | None = None
+    #: the flights mission control answered it so far (under the columns, the last answer's number)
+    grants: int = 0
+    #: how far it said it is along the flight last answered it (its last heartbeat's or progress report's; None:
+    #: none), for the log and the live page (the table reads its own copy: :mod:`masonry.mission.plan_reading`)
+    plan_progress: PlanProgress | None = None
 
     @property
     def lost(self) -> bool:

@@ -1,12 +1,11 @@
 """The airspace at run time as a space-time reservation table (``--airspace table``; docs/safety.md, "The table
 at run time"). :class:`TableClearance` answers what :class:`~masonry.mission.airspace.ColumnClearance` answers
-(mission control, the UAVs and the protocol are unchanged) from one :class:`~masonry.reservation.Table`: each hop
-granted as timed legs ending in an open-ended stay (:func:`~masonry.reservation.decide`), a UAV waiting where it
-stays, a late one extended, a silent one keeping its way home, UAVs waiting at sites for each other broken up by
-parking spots (:mod:`masonry.mission.reserved_parts`), a UAV held back far from its site waiting over it
-(:mod:`masonry.mission.reserved_approach`). A request is decided in
-:mod:`masonry.mission.reserved_requests` (over the class's internals below). No hold patience. Pure: no I/O, no
-clock.
+from one :class:`~masonry.reservation.Table`: each hop granted as timed legs ending in an open-ended stay
+(:func:`~masonry.reservation.decide`), a UAV waiting where it stays, a late one extended (the leg it flies as its
+``plan_progress`` says, :mod:`masonry.mission.plan_reading`), a silent one keeping its way home, UAVs waiting at
+sites for each other broken up by parking spots (:mod:`masonry.mission.reserved_parts`), a UAV held back far from
+its site waiting over it (:mod:`masonry.mission.reserved_approach`). A request is decided in
+:mod:`masonry.mission.reserved_requests`. No hold patience. Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -19,6 +18,7 @@ from masonry.geofence import Site
 from masonry.mission import reserved_requests
 from masonry.mission.airspace_state import Grant, Phase
 from masonry.mission.envelope import TableWindows
+from masonry.mission.plan_reading import matching, reported_leg
 from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
     AT_SPOT_M,
@@ -42,6 +42,7 @@ from masonry.mission.reserved_requests import TableUav
 from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import Vec3, same_site
 from masonry.mission.volumes import Volume as AirVolume
+from masonry.ports import PlanProgress
 from masonry.reservation import (
     LEG_PIECE_M,
     Airspace,
@@ -124,14 +125,13 @@ class TableClearance:
         )
         self._uavs: dict[str, TableUav] = {}
         self.on_change: Callable[[Table, float], object] = lambda table, now_s: None  # (a log watches)
-        self.seq = 0
-        self._version = 0
-        self.now_s = 0.0
+        self.seq, self._version, self.now_s = 0, 0, 0.0
         self.granted_count = 0
         self.held_back = 0  # flights to a parking spot (the watchdog's signature reads it)
         self.refused = 0  # answers "wait where you are"
         self.extended = 0  # windows extended for a late UAV
         self.forced = 0  # extensions no move could make room for (the table then holds a clash: counted)
+        self.plan_read = 0  # reports whose plan_progress spoke of the UAV's current plan
         self.fence_refusals: dict[str, str] = {}
         #: is this a UAV's flight to its task's site (then, held back far from it, it waits at the approach spot
         #: over it)? None: no approach spots (:mod:`masonry.mission.reserved_approach`)
@@ -391,17 +391,19 @@ class TableClearance:
             u.request, u.phase = None, (Phase.PARKED if u.plan is None else u.phase)
             self.bump()
 
-    def progress(self, uav: str, position_m: Vec3) -> None:
-        """``uav`` reports where it is: the legs of its flight behind it end now, and the leg it flies holds only
-        what lies ahead of it (:func:`~masonry.mission.reserved_parts.ahead_of`)."""
+    def progress(self, uav: str, position_m: Vec3, plan_progress: PlanProgress | None = None) -> None:
+        """``uav`` reports where it is (and its ``plan_progress``, :mod:`~masonry.mission.plan_reading`): the legs
+        behind it end now, the leg it flies holds only what lies ahead of it (:func:`~masonry.mission.reserved_parts.ahead_of`)."""
         u = self._uavs.get(uav)
         if u is None:
             return
         u.position = (float(position_m[0]), float(position_m[1]), float(position_m[2]))
+        u.reported, self.plan_read = plan_progress, self.plan_read + (matching(u, plan_progress) is not None)
         self.at_spot(uav, u)
         if u.phase not in (Phase.FLYING, Phase.TO_HOLD) or u.plan is None:
             return  # (a flight to a parking or approach spot too: its climb over the site it left ends)
-        cut = cut_behind(self.table.of(uav), u.position, self.now_s)
+        at = reported_leg(u, legs_under_way(self.table.of(uav), self.now_s), self.now_s)
+        cut = cut_behind(self.table.of(uav), u.position, self.now_s, at)
         if cut is not None:  # (the part of its leg it has flown out of is free too)
             self._replace(uav, cut)
 
@@ -433,7 +435,8 @@ class TableClearance:
         (:func:`extend`; the plans of others in the way move, or, when none can, the extension is forced); the leg
         it is in is :func:`leg_now`'s (at the top of its climb, on its transit: not late)."""
         legs = legs_under_way(self.table.of(uav), now_s)
-        at = leg_now(legs, u.position, now_s)
+        at = reported_leg(u, legs, now_s)  # (the leg its report says, else the one its position is in)
+        at = leg_now(legs, u.position, now_s) if at is None else at
         current = legs[at] if at is not None else (legs[0] if legs else self.table.stay_of(uav))
         if (
             current is None

@@ -58,18 +58,31 @@ def leg_now(legs: Sequence[Reservation], p: Vec3 | None, now_s: float) -> int | 
     """The index of the leg of ``legs`` a UAV at ``p`` flies at ``now_s`` (:func:`leg_index`), or None: one also in
     the legs after it whose windows have begun is in the last of them (at the top of its climb, on its transit)."""
     at = leg_index(legs, p)
-    while at is not None and at + 1 < len(legs) and legs[at + 1].t0_s <= now_s:
+    return None if at is None else on_from(legs, at, p, now_s)
+
+
+def on_from(legs: Sequence[Reservation], at: int, p: Vec3 | None, now_s: float) -> int:
+    """``at``, or the last of the legs after it whose windows have begun at ``now_s`` that ``p`` is also in, one
+    after the other (at the end of a leg, a UAV is at the start of the next: the top of its climb is on its
+    transit)."""
+    while at + 1 < len(legs) and legs[at + 1].t0_s <= now_s:
         if leg_index(legs[at + 1 : at + 2], p) is None:
             break
         at += 1
     return at
 
 
-def cut_behind(rs: Sequence[Reservation], p: Vec3 | None, now_s: float) -> list[Reservation] | None:
+def cut_behind(
+    rs: Sequence[Reservation], p: Vec3 | None, now_s: float, at: int | None = None
+) -> list[Reservation] | None:
     """A UAV's reservations ``rs`` with the legs behind it at ``p`` ended at ``now_s`` and the transit it flies
-    holding only what lies ahead of it (:func:`ahead_of`), or None: nothing it has flown out of."""
+    holding only what lies ahead of it (:func:`ahead_of`), or None: nothing it has flown out of. The leg it flies
+    is the first ``p`` is in (:func:`leg_index`), or, if it reported one (``at``, an index of its legs under way),
+    the reported one where ``p`` is in none (off its track by more than ``ON_LEG_M``) or in a later one: a leg
+    it is still in never ends by its word alone."""
     legs = legs_under_way(rs, now_s)
-    at = leg_index(legs, p)
+    pos = leg_index(legs, p)
+    at = pos if at is None or (pos is not None and pos < at) else at
     if at is None or p is None:
         return None
     behind = [r for r in legs[:at] if r.t0_s < now_s]
@@ -356,6 +369,7 @@ __all__ = [
     "legs_under_way",
     "level_of",
     "on_ahead",
+    "on_from",
     "park_levels",
     "park_plan",
     "park_spots",

@@ -21,6 +21,7 @@ from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import ON_LEG_M, forced, legs_under_way, level_of, on_ahead
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.volumes import Vec3, same_site
+from masonry.ports import PlanProgress
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
 
 if TYPE_CHECKING:
@@ -52,6 +53,11 @@ class TableUav:
     )
     approached: int = -1  # the request (seq) it was sent to an approach spot for: only once
     flown_on: bool = False  # its spot is where it flew on to along its plan, turned back (:func:`fly_on`)
+    #: the number mission control's answer gave its plan, with that plan (:mod:`masonry.mission.plan_reading`)
+    numbered: tuple[int, FlightPlan] | None = None
+    grants: int = 0  # its plans numbered so far
+    #: its last report's ``plan_progress`` (None: none, or a report without one came since)
+    reported: PlanProgress | None = None
 
 
 def request(
