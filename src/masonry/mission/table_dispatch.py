@@ -2,11 +2,13 @@
 
 Under ``--airspace table`` the dispatcher's :attr:`~masonry.planner.dispatch.Dispatcher.soonest` is set to
 :func:`choose`: of the few tasks the policy ranks alike (its pick first, then the nearest others:
-:data:`masonry.planner.dispatch_ranking.CHOOSE_AMONG`), a UAV is given the one it could finish soonest by the
+:data:`masonry.planner.dispatch_ranking.CHOOSE_AMONG`), a brick UAV is given the one it could finish soonest by the
 reservations the table holds now (:func:`masonry.reservation.soonest_order`: each site visit's flight planned as
 ``decide`` would, from where the UAV stays, nothing reserved), ties by the policy's order. The policy's priorities
-hold (critical-path's chain step, fifo's plan order: fifo has no ties to break); under the columns nothing changes.
-Pure: no I/O, no clock.
+hold (critical-path's chain step; fifo has no ties to break). A sprayer keeps the policy's pick, its run's head: by
+the soonest finish it sprayed its runs backwards (pyramid 4 + 2 +3.9 %, 12 m wall 4 + 2 +4.5 %, seeds 1-3; the 12 m
+wall at 8 + 4 -15.8 % with the brick UAVs' choice alone, docs/performance/fleet.md). Under the columns nothing
+changes. Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ if TYPE_CHECKING:
 
 __all__ = ["SOONEST_UNDER_TABLE", "choose", "install", "visits"]
 
-#: Whether mission control under ``--airspace table`` dispatches by the table's soonest finish (:func:`install`).
+#: Whether mission control under ``--airspace table`` dispatches by the table's soonest finish (:func:`install`;
+#: ``bench_fleet.py --table-dispatch policy`` turns it off).
 SOONEST_UNDER_TABLE = True
 
 

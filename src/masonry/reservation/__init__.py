@@ -12,8 +12,9 @@
 - :mod:`~masonry.reservation.changes`: running late, silence and loss as reservations;
 - :mod:`~masonry.reservation.layout`: the layout the deadlock-freedom argument needs.
 
-Mission control does not use it yet (docs/safety.md, "The space-time reservation model"). Pure: standard
-library and masonry's pure values only.
+Mission control runs it under ``--airspace table`` (``masonry.mission.reserved``; docs/safety.md, "The table at run
+time") and asks :func:`soonest_done` which brick a UAV could finish soonest (``masonry.mission.table_dispatch``).
+Pure: standard library and masonry's pure values only.
 """
 
 from __future__ import annotations
