@@ -13,8 +13,12 @@ from hypothesis import strategies as st
 from masonry.blueprint_gen import running_bond
 from masonry.errors import PlanningError
 from masonry.mission import table_dispatch
+from masonry.mission.fleet import fleet_for, with_fleet
 from masonry.mission.simulate import simulate
+from masonry.planner import plan as make_plan
 from masonry.planner.dispatch_ranking import CHOOSE_AMONG, Ranking
+from masonry.planner.schedule_policy import ScheduleDispatcher, make_dispatcher
+from masonry.planner.schedule_values import OfflineSchedule, ScheduledTask, UavSchedule
 from masonry.reservation import (
     Airspace,
     Grant,
@@ -226,3 +230,31 @@ def test_under_the_columns_or_switched_off_the_table_is_never_asked(monkeypatch)
     monkeypatch.setattr(table_dispatch, "SOONEST_UNDER_TABLE", False)
     r = simulate(running_bond(2, 3, brick_uavs=2, adhesion_uavs=1), seed=1, airspace="table")
     assert r.completed and not seen
+
+
+# ---- --policy schedule: its next few planned tasks through the same chooser (off by default: measured slower)
+
+
+def _scheduled(by_table: bool):
+    bp = running_bond(2, 4)
+    bp = with_fleet(bp, fleet_for(bp, 2, 1))
+    order = {"brick-1": ("B0", "B1", "B2", "B3"), "brick-2": (), "glue-1": ()}
+    uavs = tuple(
+        UavSchedule(n, r, tuple(ScheduledTask(t, float(k), k + 1.0) for k, t in enumerate(order[n])))
+        for n, r in (("brick-1", "brick"), ("brick-2", "brick"), ("glue-1", "adhesion"))
+    )
+    s = OfflineSchedule(uavs, 4.0, 0.0, "none", "feasible", 0.0, "none", "site", 0.0, 0, 0.1)
+    d = make_dispatcher(make_plan(bp), bp.fleet, "schedule", schedule=s, reservation="site")
+    assert isinstance(d, ScheduleDispatcher)
+    d.by_table = by_table
+    seen: list[list[str]] = []
+    d.soonest = lambda uav, ids: (seen.append(list(ids)), len(ids) - 1)[1]
+    return d, seen
+
+
+def test_the_schedule_policy_asks_the_chooser_among_its_next_planned_tasks_only_when_told():
+    d, seen = _scheduled(by_table=False)
+    assert [a.task_id for a in d.assign() if a.uav == "brick-1"] == ["B0"] and not seen
+    d, seen = _scheduled(by_table=True)
+    assert [a.task_id for a in d.assign() if a.uav == "brick-1"] == ["B3"]
+    assert seen[0] == ["B0", "B1", "B2", "B3"]  # its own next ones, in the schedule's order
