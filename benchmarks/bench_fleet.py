@@ -37,7 +37,9 @@ Usage: python benchmarks/bench_fleet.py [--quick] [--seed 1] [--policy critical-
        [--walls 12m,6x30,pyramid]
        [--fleets 1+1,2+1,4+2,6+3,8+4]
        [--schedule-time-s 90] [--physical all|pallet|battery|visit|none] [--schedule-cache DIR]
-       [--schedule-physical none|flown|...]
+       [--schedule-physical none|flown|...] [--table-dispatch soonest|policy]
+``--table-dispatch policy``: under ``--airspace table`` the brick UAVs take the policy's pick, not the task they
+can finish soonest by the table (:mod:`masonry.mission.table_dispatch`; issue 27 §1.6).
 ``--quick``: a 2-course wall of 12 bricks per course and fleets 1+1, 2+1, 4+2 (seconds, for a smoke run).
 """
 
@@ -61,6 +63,7 @@ from schedule_cache import cached_schedule, solve_as_the_cli
 from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.errors import PlanningError
+from masonry.mission import table_dispatch
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
@@ -338,7 +341,14 @@ def main() -> None:
         default="none",
         help="the physical terms of the schedule --policy schedule follows (e.g. flown; none: the plain one)",
     )
+    ap.add_argument(
+        "--table-dispatch",
+        choices=("soonest", "policy"),
+        default="soonest" if table_dispatch.SOONEST_UNDER_TABLE else "policy",
+        help="--airspace table: a brick UAV given the task it can finish soonest by the table, or the policy's pick",
+    )
     args = ap.parse_args()
+    table_dispatch.SOONEST_UNDER_TABLE = args.table_dispatch == "soonest"
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30", "pyramid"])
     unknown = [w for w in walls if w not in WALLS]
     if unknown:

@@ -24,6 +24,7 @@ import random
 import time
 
 from masonry.blueprint_random import LayoutLimits, random_layout
+from masonry.mission import table_dispatch
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
 from masonry.planner.dispatch import DEFAULT_POLICY, DEFAULT_RESERVATION, POLICIES, RESERVATIONS
@@ -151,7 +152,14 @@ def main() -> None:
     ap.add_argument(
         "--sub-fleets", action="store_true", help="fly every smaller fleet too; print the slower pairs"
     )
+    ap.add_argument(
+        "--table-dispatch",
+        choices=("soonest", "policy"),
+        default="soonest" if table_dispatch.SOONEST_UNDER_TABLE else "policy",
+        help="--airspace table: a brick UAV given the task it can finish soonest by the table, or the policy's pick",
+    )
     args = ap.parse_args()
+    table_dispatch.SOONEST_UNDER_TABLE = args.table_dispatch == "soonest"
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     if args.compact:
         limits = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))

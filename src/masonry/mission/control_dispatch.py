@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from masonry.mission import table_dispatch
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.dispatch_chain import ChainThrough
 from masonry.mission.sites import work_point_m
@@ -24,7 +25,10 @@ def admit(mc: MissionControl, column_radius_m: float) -> None:
     column granted). Under ``--airspace table`` too (issue 27, branch ``table44``): without it every UAV of the
     pyramid's 8 + 4 took tasks, and the table grants a UAV the site gate does not hold back its whole hop down from
     its pad, a site interval as long as that flight (68 s) on a wall whose intervals run one at a time: 4,234.8 s
-    against 1,671.3 s with the rule (docs/performance/fleet.md, "Why the table is slow on the pyramid")."""
+    against 1,671.3 s with the rule (docs/performance/fleet.md, "Why the table is slow on the pyramid").
+    Under the table the dispatcher also chooses among the policy's top few by the table
+    (:func:`masonry.mission.table_dispatch.install`)."""
+    table_dispatch.install(mc)
     if column_radius_m <= 0:
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]

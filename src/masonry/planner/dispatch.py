@@ -26,7 +26,7 @@ from masonry.planner.dispatch_admission import Admission, coming_alone, crowded,
 from masonry.planner.dispatch_chaining import NEAR_END_M, segment_links
 from masonry.planner.dispatch_graphs import adjacency, chains, index_tasks, prefetchable, tie_step
 from masonry.planner.dispatch_queries import DispatchQueries
-from masonry.planner.dispatch_ranking import Ranking
+from masonry.planner.dispatch_ranking import Choose, Ranking
 from masonry.planner.dispatch_values import (
     DONE,
     PENDING,
@@ -87,6 +87,10 @@ class Dispatcher(DispatchQueries):
     #: mission control's admission rule (:mod:`masonry.planner.dispatch_admission`; None: every idle UAV is
     #: given a task, as Algorithm 1)
     admission: Admission | None = None
+    #: airspace-aware dispatch (issue 27 §1.6): given a UAV and the task ids the policy ranks alike, its pick
+    #: first, the index of the one to give it (mission control under ``--airspace table``: the one it can finish
+    #: soonest by the reservations, :mod:`masonry.mission.table_dispatch`); None: the policy's pick
+    soonest: Callable[[str, Sequence[str]], int] | None = None
 
     def __init__(
         self,
@@ -198,7 +202,14 @@ class Dispatcher(DispatchQueries):
         return i if math.hypot(p[0] - end[0], p[1] - end[1]) <= NEAR_END_M else None
 
     def _select(self, role: str, uav: str) -> int | None:
-        return self._ranking.pick(role, self._position[uav], self._after(uav))
+        return self._ranking.pick(role, self._position[uav], self._after(uav), self._chooser(uav))
+
+    def _chooser(self, uav: str) -> Choose | None:
+        """:attr:`soonest` for ``uav`` over plan indices (None: not set)."""
+        soonest, ids = self.soonest, self._ids
+        if soonest is None:
+            return None
+        return lambda order: soonest(uav, [ids[i] for i in order])
 
     def _select_conflicting(self, role: str, uav: str) -> int | None:
         """``site`` reservation, nothing else available: the best ready task that conflicts with one in
@@ -215,7 +226,7 @@ class Dispatcher(DispatchQueries):
                 candidates = [i for i in candidates if coming_alone(i, lambda k: st[k] == _RUNNING, nb)]
         if not candidates:
             return None
-        return self._ranking.pick_among(candidates, self._position[uav], self._after(uav))
+        return self._ranking.pick_among(candidates, self._position[uav], self._after(uav), self._chooser(uav))
 
     def _admitted(self, uav: str, role: str, i: int) -> int | None:
         """``i``, or for a landed ``uav`` None while its role has its cap of busy UAVs, else the policy's best task

@@ -10,10 +10,18 @@ of contiguous segments (:mod:`masonry.planner.dispatch_chaining`). :class:`~maso
 from __future__ import annotations
 
 import heapq
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Collection, Sequence
 
 from masonry.blueprint import ROLES
 from masonry.planner.dispatch_chaining import chain_pick
+
+#: How many of the tasks the policy ranks alike a chooser (:data:`Choose`) is shown: the policy's pick, then the
+#: nearest others (issue 27 §1.6: the table's soonest finish among the policy's top few).
+CHOOSE_AMONG = 4
+
+#: Given candidates in the policy's order (its pick first), the index of the one to take (airspace-aware dispatch).
+Choose = Callable[[Sequence[int]], int]
 
 
 class Ranking:
@@ -81,9 +89,12 @@ class Ranking:
             if not bucket:
                 del buckets[c]  # its heap entry is dropped lazily
 
-    def pick(self, role: str, position_m: Sequence[float], after: int | None = None) -> int | None:
+    def pick(
+        self, role: str, position_m: Sequence[float], after: int | None = None, choose: Choose | None = None
+    ) -> int | None:
         """The policy's best available task of ``role`` for a UAV at ``position_m`` (None: none available);
-        ``after``: the adhesion segment the UAV has just sprayed, if it is still at its end (chaining)."""
+        ``after``: the adhesion segment the UAV has just sprayed, if it is still at its end (chaining); ``choose``:
+        picks among the policy's top few (:meth:`_finish`)."""
         avail = self.available[role]
         if not avail:
             return None
@@ -110,10 +121,34 @@ class Ranking:
                 self._heap_values[role].discard(c)
         # The segment chained to ``after``, else the nearest run head (shortest flight: to the start, plus
         # pickup -> drop-off for a brick); ties by plan order.
-        return chain_pick(candidates, position_m, self._start_m, self._leg_m, self._succ, self._pred, after)
+        return self._finish(candidates, position_m, after, choose)
+
+    def _finish(
+        self,
+        candidates: Collection[int],
+        position_m: Sequence[float],
+        after: int | None,
+        choose: Choose | None,
+    ) -> int:
+        """The last step of every pick among tasks the policy ranks alike: :func:`chain_pick`; with ``choose``, the
+        one it takes of chain_pick's choice and the :data:`CHOOSE_AMONG` - 1 nearest others (by the shortest flight,
+        ties by plan order), but a segment chained to ``after`` (no flight at all) is kept."""
+        pick = chain_pick(candidates, position_m, self._start_m, self._leg_m, self._succ, self._pred, after)
+        if choose is None or len(candidates) < 2 or (after is not None and pick in self._succ[after]):
+            return pick
+        start, leg = self._start_m, self._leg_m
+        others = sorted(
+            (i for i in candidates if i != pick), key=lambda i: (math.dist(position_m, start[i]) + leg[i], i)
+        )
+        order = [pick, *others[: CHOOSE_AMONG - 1]]
+        return order[choose(order)]
 
     def pick_among(
-        self, candidates: Sequence[int], position_m: Sequence[float], after: int | None = None
+        self,
+        candidates: Sequence[int],
+        position_m: Sequence[float],
+        after: int | None = None,
+        choose: Choose | None = None,
     ) -> int:
         """The policy's best of ``candidates`` (not empty; not available: blocked or to prefetch) for a UAV at
         ``position_m``: highest chain step for ``critical-path``, plan order for ``fifo``; then the segment
@@ -123,9 +158,7 @@ class Ranking:
             candidates = [i for i in candidates if self._rank[i] == top]
         elif self.policy == "fifo":
             return min(candidates)
-        return chain_pick(
-            dict.fromkeys(candidates), position_m, self._start_m, self._leg_m, self._succ, self._pred, after
-        )
+        return self._finish(dict.fromkeys(candidates), position_m, after, choose)
 
 
-__all__ = ["Ranking"]
+__all__ = ["CHOOSE_AMONG", "Choose", "Ranking"]

@@ -33,6 +33,7 @@ from masonry.errors import PlanningError
 from masonry.planner.dispatch import _PENDING, _RUNNING, Dispatcher
 from masonry.planner.dispatch_admission import Admission
 from masonry.planner.dispatch_glue import JustInTime, with_glue
+from masonry.planner.dispatch_ranking import CHOOSE_AMONG
 from masonry.planner.schedule_values import OfflineSchedule
 from masonry.planner.tasks import Plan
 
@@ -56,6 +57,9 @@ class ScheduleDispatcher(Dispatcher):
     #: assignment, and sends more UAVs into a crowded wall: with ``chain``, the pyramid at 8 + 4 1,782 -> 2,357 s,
     #: the 12 m wall at 4 + 2 faster on one seed of three; docs/performance/fleet.md, "The schedule's order flown")
     steal = False
+    #: with :attr:`soonest` (mission control under the table), a UAV takes of its next few available planned tasks
+    #: the one it can finish soonest, not the first in the schedule's order (issue 27 §1.6; measured, off)
+    by_table = False
     #: an adhesion UAV at the end of the segment it has just sprayed takes the segment starting there, if it is
     #: its own (or unclaimed) and available, before its next planned one: chained, no climb and descent
     chain = True
@@ -137,6 +141,18 @@ class ScheduleDispatcher(Dispatcher):
                 return i
         return None
 
+    def _soonest_own(self, uav: str, first: int, avail: Mapping[int, None]) -> int:
+        """``first`` (its next planned available task), or with :attr:`soonest` the one of it and the next
+        available tasks of its sequence (:data:`~masonry.planner.dispatch_ranking.CHOOSE_AMONG` in all, in the
+        schedule's order) that :attr:`soonest` takes (under the table: the one it can finish soonest)."""
+        choose = self._chooser(uav) if self.by_table else None
+        if choose is None:
+            return first
+        queue = self._queue.get(uav, ())
+        later = [i for i in queue[self._cursor.get(uav, 0) :] if i in avail and i != first]
+        order = [first, *later[: CHOOSE_AMONG - 1]]
+        return order[choose(order)] if len(order) > 1 else first
+
     def _select(self, role: str, uav: str) -> int | None:
         avail = self._available[role]
         nxt = self._next(uav)
@@ -147,11 +163,11 @@ class ScheduleDispatcher(Dispatcher):
                     if j in avail and (self._owner.get(j) == uav or self._unclaimed(j)):
                         return j
         if nxt is not None and nxt in avail:
-            return nxt
+            return self._soonest_own(uav, nxt, avail)
         if self.lookahead:
             own = self._own_available(uav, avail)
             if own is not None:
-                return own
+                return self._soonest_own(uav, own, avail)
         pick = self._best([i for i in avail if self._unclaimed(i)], uav)
         if pick is not None:
             return pick

@@ -7,11 +7,14 @@
 - :mod:`~masonry.reservation.flight`: :func:`plan_flight`, timed legs at the lowest free layer, earliest start
   first, ending where the UAV may stay;
 - :mod:`~masonry.reservation.decide`: :func:`decide`, grant or wait;
+- :mod:`~masonry.reservation.probe`: :func:`soonest_done`, how soon a UAV could finish a task's site visits by the
+  table, nothing reserved (airspace-aware dispatch);
 - :mod:`~masonry.reservation.changes`: running late, silence and loss as reservations;
 - :mod:`~masonry.reservation.layout`: the layout the deadlock-freedom argument needs.
 
-Mission control does not use it yet (docs/safety.md, "The space-time reservation model"). Pure: standard
-library and masonry's pure values only.
+Mission control runs it under ``--airspace table`` (``masonry.mission.reserved``; docs/safety.md, "The table at run
+time") and asks :func:`soonest_done` which brick a UAV could finish soonest (``masonry.mission.table_dispatch``).
+Pure: standard library and masonry's pure values only.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from masonry.reservation.flight import (
     plan_flight,
 )
 from masonry.reservation.layout import layout_problems
+from masonry.reservation.probe import soonest_done, soonest_order
 from masonry.reservation.space import DEFAULT_SEPARATION, Separation, Volume, column, leg, pad, site
 from masonry.reservation.table import PURPOSES, Reservation, Table, clash, violations
 
@@ -65,6 +69,8 @@ __all__ = [
     "plan_flight",
     "settle",
     "site",
+    "soonest_done",
+    "soonest_order",
     "start_table",
     "violations",
     "way_home",
