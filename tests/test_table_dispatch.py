@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from masonry.blueprint_gen import running_bond
@@ -112,6 +112,15 @@ _other = st.tuples(
 
 
 @settings(max_examples=60, deadline=None)
+@example(  # a flight planned to start as u3's transit ends: its descent's window met it by a float rounding
+    others=[
+        (0.0, 1.0, 0.0, 1.0, 0.0),
+        (0.0, 7.75, 0.0, 14.0, 0.0),
+        (-5.0, 1.0, 0.0, 18.741688607395524, 0.0),
+    ],
+    sites=[(-6.0, 1.0)],
+    now_s=0.0,
+)
 @given(
     others=st.lists(_other, min_size=0, max_size=3),
     sites=st.lists(st.tuples(st.floats(-6.0, 6.0), st.floats(1.0, 8.0)), min_size=1, max_size=3),
@@ -125,10 +134,7 @@ def test_the_probe_never_reserves_and_is_what_decide_then_grants(others, sites, 
     done = soonest_done(table, "me", start, visits, now_s, AIR)
     assert table.reservations == before  # nothing reserved
     first = soonest_done(table, "me", start, visits[:1], now_s, AIR)
-    try:
-        got = decide(table, Request("me", start, visits[0], None), now_s, AIR)
-    except PlanningError:  # decide's own float edge (a window ending as another starts): not the probe's
-        assume(False)
+    got = decide(table, Request("me", start, visits[0], None), now_s, AIR)
     if isinstance(got, Grant):  # on the unchanged table: no earlier than decide grants (exactly when)
         assert first == got.plan.stay.t0_s + visits[0].duration_s
         assert got.plan.start_s >= now_s

@@ -278,7 +278,7 @@ def earliest_start(
             continue
         for vol, a, b in parts:
             if sep.conflict(vol, q.volume):
-                lo, hi = q.t0_s - b, q.t1_s - a
+                lo, hi = _outside(q.t0_s, q.t1_s, a, b)
                 blocked.append((lo, hi))
                 if lo < from_s < hi and q not in in_way:
                     in_way.append(q)
@@ -288,6 +288,19 @@ def earliest_start(
             break
         t = max(t, hi)
     return t, tuple(in_way)
+
+
+def _outside(c_s: float, d_s: float, a_s: float, b_s: float) -> tuple[float, float]:
+    """The open interval of starts ``t`` at which a part ``[t + a, t + b)`` meets ``[c, d)``, rounded outwards
+    so that the windows later made as ``t + a`` and ``t + b`` (float sums) never meet ``[c, d)`` at a start
+    outside it: ``t <= lo`` gives ``t + b <= c`` and ``t >= hi`` gives ``t + a >= d`` exactly (a flight planned
+    to start as another UAV's window ends was refused by :meth:`Table.add` for a rounding of 1e-14 s)."""
+    lo, hi = c_s - b_s, d_s - a_s
+    while lo + b_s > c_s:
+        lo = math.nextafter(lo, -math.inf)
+    while hi + a_s < d_s:
+        hi = math.nextafter(hi, math.inf)
+    return lo, hi
 
 
 def plan_flight(table: Table, request: Request, from_s: float, airspace: Airspace) -> FlightPlan | None:
