@@ -19,7 +19,6 @@ from masonry.mission.altitudes import DEFAULT_LAYER_SPACING_M
 from masonry.mission.fence import volumes_in_fence
 from masonry.mission.sites import SiteGate
 from masonry.mission.volumes import (
-    PICKUP_OFFSET_M,
     XY,
     Vec3,
     Volume,
@@ -73,8 +72,6 @@ class AirspaceRecords:
         self.sep_xy_m = float(sep_xy_m)
         #: horizontal slack of a zone: two zones are ``radius_m`` apart
         self.zone_slack_m = zone_slack_m(self.radius_m, self.sep_xy_m)
-        #: the bricks' approximate pickups: a zone there has at least ``PICKUP_OFFSET_M`` of slack
-        self.pickups: list[XY] = []
         #: how far a waiting UAV keeps from the sites others wait for (first come, first served) and hold points
         #: from everyone's sites: two zones' separation, r_c, or more when r_c is below the separation (a hold
         #: hover 1.1 r_c = 0.94 m from another's site at r_c 0.85 m blocked its descent, and that one's hold
@@ -136,14 +133,8 @@ class AirspaceRecords:
 
     def zone_column(self, site: Vec3, top: float, to: XY | None = None) -> Volume:
         """The zone over ``site`` up to ``top`` (along a bead to ``to``, and on past its end as far as a sprayer
-        coasts: :func:`~masonry.mission.volumes.coasted`; at a pickup, as wide as the brick may lie off it)."""
-        return column(site, top, self.coasted(site, to), self.work_slack_m(site))
-
-    def work_slack_m(self, site: Vec3) -> float:
-        """A zone's slack at ``site``: the zones', at least ``PICKUP_OFFSET_M`` at a brick's pickup."""
-        if self.zone_slack_m >= PICKUP_OFFSET_M or not any(same_site(site, (*p, 0.0)) for p in self.pickups):
-            return self.zone_slack_m
-        return PICKUP_OFFSET_M
+        coasts: :func:`~masonry.mission.volumes.coasted`)."""
+        return column(site, top, self.coasted(site, to), self.zone_slack_m)
 
     def coasted(self, site: Vec3, to: XY | None) -> XY | None:
         return coasted((site[0], site[1]), to, self.zone_slack_m)
@@ -223,10 +214,8 @@ class AirspaceRecords:
         vols = flight_volumes(
             (start[0], start[1]), self.snap(start[2]), self.alt(k), target, top, hold, to, self.zone_slack_m
         )
-        if target is not None and hold is None:
-            slack = 0.0 if home else self.work_slack_m(target)
-            if slack != vols[-1].slack_m:
-                vols[-1] = dataclasses.replace(vols[-1], slack_m=slack)
+        if home and target is not None and hold is None:
+            vols[-1] = dataclasses.replace(vols[-1], slack_m=0.0)
         return vols
 
     def take(self, u: UavAirspace, vols: list[Volume]) -> None:

@@ -35,7 +35,7 @@ from masonry.mission import (
     control_watch,
 )
 from masonry.mission.as_built import PlacementWatch
-from masonry.mission.control_airspace import make_airspace, pickups_of
+from masonry.mission.control_airspace import make_airspace
 from masonry.mission.control_ports import JournalPort, WindGate
 from masonry.mission.dispatch_chain import mission_dispatcher
 from masonry.mission.events import EventSink
@@ -229,7 +229,7 @@ class MissionControl:
         gate, work = self.glue or self.sites, self.sites.is_work_site
         roles = {u.name: u.role for u in self.fleet}
         self.columns = make_airspace(
-            airspace, column_radius_m, layers_m, homes, gate, fence, timing, work, roles, pickups_of(plan)
+            airspace, column_radius_m, layers_m, homes, gate, fence, timing, work, roles
         )
         self.fence_failed: set[tuple[str, str, int]] = set()  # (UAV, task, attempt) failed for the fence
         self.layer_floor_m, self.timing = layer_floor_m, timing

@@ -26,7 +26,7 @@ from masonry.ports import PlanProgress
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Iterable, Mapping, Sequence
+    from collections.abc import Callable, Iterable, Mapping
 
     from masonry.mission.control import MissionControl
 
@@ -39,7 +39,6 @@ __all__ = [
     "grant_waiting",
     "make_airspace",
     "on_clearance_request",
-    "pickups_of",
     "raise_layers",
     "report",
     "sample",
@@ -227,7 +226,6 @@ def make_airspace(
     timing: TaskTiming | None,
     work_site: Callable[[str, Vec3], bool] | None = None,
     roles: Mapping[str, str] | None = None,
-    pickups: Sequence[Vec3] = (),
 ) -> ColumnClearance | TableClearance:
     """Mission control's airspace of ``kind`` (``columns`` or ``table``: :data:`masonry.mission.reserved.AIRSPACES`).
 
@@ -238,8 +236,6 @@ def make_airspace(
             :mod:`masonry.mission.reserved_approach`; None: no approach spots).
         roles: each UAV's role: under the columns a hold point may lie by the pad of a landed UAV of the holder's
             role (:func:`masonry.mission.airspace_requests.landed_alike`; None: by no pad).
-        pickups: the bricks' approximate pickups: under the columns a zone there is as wide as a brick may lie
-            off it (``masonry.mission.volumes.PICKUP_OFFSET_M``).
     """
     if kind not in AIRSPACES:
         raise MissionError(f"airspace must be one of {', '.join(AIRSPACES)}, got {kind!r}")
@@ -250,16 +246,9 @@ def make_airspace(
     if isinstance(made, TableClearance):
         made.use_timing(timing or DEFAULT_TIMING)  # the legs' windows: the UAVs' own speeds
         made.work_site = work_site
-    else:
-        made.pickups = [(p[0], p[1]) for p in pickups]
-        if roles is not None:
-            made.roles = dict(roles)
+    elif roles is not None:
+        made.roles = dict(roles)
     return made
-
-
-def pickups_of(plan: Plan) -> list[Vec3]:
-    """The approximate pickups of ``plan``'s bricks (:func:`make_airspace`'s ``pickups``)."""
-    return [t.pickup_m for t in plan.tasks if isinstance(t, BrickTask) and t.pickup_m is not None]
 
 
 def grant_waiting(mc: MissionControl, now_s: float) -> None:

@@ -40,11 +40,6 @@ LEAVE_SNAP_M = 0.1
 #: end, less the zone's own slack (:func:`coasted`).
 BEAD_COAST_M = 0.15
 
-#: A brick lies up to this far from its approximate pickup (the simulated pallet's ``WorldConfig.pickup_offset_m``),
-#: and its UAV aligns over it and comes down there: a pickup's zone has at least this slack (issue 27 §4.3; a zone
-#: has none at r_c under 1.2 m).
-PICKUP_OFFSET_M = 0.05
-
 
 @dataclass(frozen=True)
 class Volume:
@@ -333,7 +328,6 @@ __all__ = [
     "HOLD_LINE_STEP_M",
     "HOVER_SLACK_M",
     "LEAVE_SNAP_M",
-    "PICKUP_OFFSET_M",
     "STOP_M",
     "TRACK_M",
     "XY",
