@@ -23,7 +23,7 @@ from masonry.mission.reserved import TableClearance
 from masonry.mission.reserved_parts import on_ahead, park_levels, park_spots, parked_ways, parking_order
 from masonry.mission.simulate import SimulatedMission, simulate
 from masonry.mission.sites import SiteIntervals
-from masonry.mission.volumes import BEAD_COAST_M, LEAVE_SNAP_M, Volume, leave_from, on_leg, point_segment_m
+from masonry.mission.volumes import LEAVE_SNAP_M, Volume, leave_from, on_leg, point_segment_m
 from masonry.planner.tasks import BrickTask, Plan
 from masonry.reservation import Reservation, Separation, column, leg
 from masonry.separation import LAYER_SPACING_M, LEG_OVERSHOOT_M, SEPARATION_XY_M, TRACK_SHARE_M
@@ -49,20 +49,16 @@ def test_a_uav_come_to_rest_just_past_its_bead_leaves_from_its_zone_past_a_hold_
     c.progress("b", hold)
     c.request("b", site_b, 1.0, hold)
     assert c.phase("b") is Phase.AT_HOLD
-    # a bead on the line from the hold point to b's site, its zone's end 1.21 m from the hover (the zone reaches
-    # BEAD_COAST_M past the bead's end, which a sprayer may coast to: issue 27 §4.3)
+    # a bead on the line from the hold point to b's site, its end 1.21 m from the hover
     ux, uy = (
         (site_b[0] - hold[0]) / math.dist(site_b[:2], hold[:2]),
         (site_b[1] - hold[1]) / math.dist(site_b[:2], hold[:2]),
     )
-    zone_end = (hold[0] + 1.21 * ux, hold[1] + 1.21 * uy, 1.2)
-    bead_end = (zone_end[0] + BEAD_COAST_M * ux, zone_end[1] + BEAD_COAST_M * uy, 1.2)
-    start = (bead_end[0] + 0.15 * ux, bead_end[1] + 0.15 * uy, 1.2)
-    assert c.request("g", start, 2.0, (start[0], start[1], 1.35), top_m=1.2, to_m=bead_end).granted
-    end = c.volumes("g")[-1].b
-    assert math.dist(end, zone_end[:2]) < 1e-9
+    end = (hold[0] + 1.21 * ux, hold[1] + 1.21 * uy, 1.2)
+    start = (end[0] + 0.15 * ux, end[1] + 0.15 * uy, 1.2)
+    assert c.request("g", start, 2.0, (start[0], start[1], 1.35), top_m=1.2, to_m=end).granted
     c.end_transit("g")
-    # at rest 5 cm past its zone's end, towards the hover (1.16 m from it), it asks for its pad
+    # at rest 5 cm past the bead's end, towards the hover (1.16 m from it), it asks for its pad
     rest = (end[0] - 0.05 * ux, end[1] - 0.05 * uy, 1.2)
     assert math.dist(rest[:2], hold[:2]) < 1.2
     pad = (start[0] - 4.0 * uy, start[1] + 4.0 * ux, 0.0)

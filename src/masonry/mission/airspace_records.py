@@ -22,7 +22,6 @@ from masonry.mission.volumes import (
     XY,
     Vec3,
     Volume,
-    coasted,
     column,
     flight_volumes,
     same_site,
@@ -132,12 +131,7 @@ class AirspaceRecords:
         return volumes_conflict(p, q, self.sep_xy_m, self.spacing_m - 1e-9)
 
     def zone_column(self, site: Vec3, top: float, to: XY | None = None) -> Volume:
-        """The zone over ``site`` up to ``top`` (along a bead to ``to``, and on past its end as far as a sprayer
-        coasts: :func:`~masonry.mission.volumes.coasted`)."""
-        return column(site, top, self.coasted(site, to), self.zone_slack_m)
-
-    def coasted(self, site: Vec3, to: XY | None) -> XY | None:
-        return coasted((site[0], site[1]), to, self.zone_slack_m)
+        return column(site, top, to, self.zone_slack_m)
 
     def set_zone(self, uav: str, site: Vec3, top: float, to: XY | None = None) -> None:
         u = self.record(uav)
@@ -209,8 +203,6 @@ class AirspaceRecords:
     ) -> list[Volume]:
         """Climb at ``start`` to layer ``k``, leg to the target (or the hold point), its column (or hover; the
         column over a UAV's own pad, ``home``, has no work slack)."""
-        if target is not None:
-            to = self.coasted(target, to)
         vols = flight_volumes(
             (start[0], start[1]), self.snap(start[2]), self.alt(k), target, top, hold, to, self.zone_slack_m
         )

@@ -411,9 +411,7 @@ def check_fence(c: ColumnClearance, uav: str, w: FlightRequest) -> None:
     start = w.position if w.position is not None else w.site
     start = (start[0], start[1], c.snap(start[2]))
     layers = [c.alt(k) for k in range(c.max_layers)]
-    problem = flight_fence_problem(
-        c.fence, start, w.site, w.top_m, c.coasted(w.site, w.to), layers, c.zone_slack_m
-    )
+    problem = flight_fence_problem(c.fence, start, w.site, w.top_m, w.to, layers, c.zone_slack_m)
     if problem is not None:
         c.fence_refusals[uav] = problem
 

@@ -35,11 +35,6 @@ STOP_M = 1.0
 #: target, each UAV's share of the tracking error.
 LEAVE_SNAP_M = 0.1
 
-#: How far a sprayer may coast on past the end of its bead as it stops spraying (its autopilot shapes the stop:
-#: 0.10-0.13 m on the ``arducopter`` vehicle, issue 27 §4.3): a zone along a bead reaches this far past the bead's
-#: end, less the zone's own slack (:func:`coasted`).
-BEAD_COAST_M = 0.15
-
 
 @dataclass(frozen=True)
 class Volume:
@@ -204,19 +199,6 @@ def column(site: Vec3, top_m: float, to: XY | None, slack_m: float) -> Volume:
     return Volume(xy, xy if to is None else to, 0.0, top_m, slack_m, "zone")
 
 
-def coasted(site: XY, to: XY | None, slack_m: float) -> XY | None:
-    """The end of a zone along a bead from ``site`` to ``to``, ``slack_m`` wide: ``to`` moved on along the bead by
-    what of :data:`BEAD_COAST_M` the slack does not cover (None: no bead; a zone of 0.15 m slack is unchanged)."""
-    if to is None:
-        return None
-    dx, dy = to[0] - site[0], to[1] - site[1]
-    n = math.hypot(dx, dy)
-    on = BEAD_COAST_M - slack_m
-    if n < 1e-9 or on <= 0.0:
-        return to
-    return (to[0] + on * dx / n, to[1] + on * dy / n)
-
-
 def flight_volumes(
     start: XY,
     z0_m: float,
@@ -324,7 +306,6 @@ def hold_points(
 
 
 __all__ = [
-    "BEAD_COAST_M",
     "HOLD_LINE_STEP_M",
     "HOVER_SLACK_M",
     "LEAVE_SNAP_M",
@@ -334,7 +315,6 @@ __all__ = [
     "Vec3",
     "Volume",
     "ahead_of",
-    "coasted",
     "column",
     "flight_volumes",
     "hold_points",
