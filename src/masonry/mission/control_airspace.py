@@ -21,7 +21,6 @@ from masonry.mission.reserved import AIRSPACES, TableClearance
 from masonry.mission.sites import SiteGate
 from masonry.mission.uav_facts import facts_from
 from masonry.mission.volumes import Vec3
-from masonry.planner.tasks import BrickTask, Plan
 from masonry.ports import PlanProgress
 from masonry.timing import DEFAULT_TIMING, TaskTiming
 
