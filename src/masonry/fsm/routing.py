@@ -248,9 +248,14 @@ class Routing(ModelBase):
         self, tel: Telemetry, p: np.ndarray, hold: Vec3 | None, layer: float, gentle: bool = True
     ) -> bool:
         """Not yet: wait at the hold point given (flying there at ``layer``, gently if ``gentle``: True), or where
-        the UAV is (False)."""
+        the UAV is (False). A hold point at its layer straight under or over the UAV is flown to as well: a UAV
+        turned back over the stay its plan ends in flies on down into it (docs/safety.md, "A UAV turned back")."""
         first = self.transit.state == "ask"
-        if hold is not None and (first or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05):
+        if hold is not None and (
+            first
+            or math.hypot(hold[0] - p[0], hold[1] - p[1]) > 0.05
+            or (abs(hold[2] - layer) < 1e-6 and abs(layer - float(p[2])) > 0.05)
+        ):
             self.transit.layer_m = layer
             self.transit.wait()
             self.nav.layer_route(

@@ -21,8 +21,7 @@ from masonry.mission.envelope import TableWindows
 from masonry.mission.plan_reading import matching, reported_leg
 from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import (
-    AT_SPOT_M,
-    AT_SPOT_Z_M,
+    arrived,
     cut_behind,
     end_flight,
     extend_or_force,
@@ -294,18 +293,19 @@ class TableClearance:
             left = self.table if stay is None else forced(self.table, [stay], [stay.until(now_s)])
             self.table = forced(left, [], plan.reservations)
             u.phase, u.plan, u.spot, u.site, u.approach = Phase.TO_HOLD, plan, spot, u.request.site, False
-            u.flown_on = False
+            u.flown_on, u.down_to = False, None
             self.held_back += 1
             self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])
         return None
 
     def at_spot(self, uav: str, u: TableUav) -> None:
-        """A UAV flying to its parking spot is there (it said so): it hovers there, its flight's windows end."""
-        p, spot = u.position, u.spot
-        if u.phase is not Phase.TO_HOLD or p is None or spot is None:
-            return
-        if math.hypot(p[0] - spot[0], p[1] - spot[1]) < AT_SPOT_M and abs(p[2] - spot[2]) < AT_SPOT_Z_M:
+        """A UAV flying to its parking spot is there (it said so): it hovers there, its flight's windows end; over
+        its plan's stay (turned back: :func:`reserved_requests.fly_on`) it flies on down into the stay first."""
+        if u.phase is Phase.TO_HOLD and arrived(u.position, u.spot):
+            if u.down_to is not None:
+                u.spot, u.down_to = u.down_to, None
+                return
             self._replace(uav, end_flight(self.table.of(uav), self.now_s, _FLIGHT))
             u.phase, u.plan, u.seen_version = Phase.AT_HOLD, None, -1
 

@@ -46,6 +46,14 @@ ON_LAYER_M = 0.1
 AT_SPOT_M = 0.15
 AT_SPOT_Z_M = 0.15
 
+
+def arrived(p: Vec3 | None, spot: Vec3 | None) -> bool:
+    """Is a UAV at ``p`` at its ``spot`` (within :data:`AT_SPOT_M` beside it, :data:`AT_SPOT_Z_M` under or over)?"""
+    if p is None or spot is None:
+        return False
+    return math.hypot(p[0] - spot[0], p[1] - spot[1]) < AT_SPOT_M and abs(p[2] - spot[2]) < AT_SPOT_Z_M
+
+
 _LEG_PURPOSES = ("climb", "transit", "descend")
 
 
@@ -358,6 +366,7 @@ __all__ = [
     "ON_LEG_M",
     "Volume",
     "ahead_of",
+    "arrived",
     "cut_behind",
     "end_flight",
     "extend_or_force",

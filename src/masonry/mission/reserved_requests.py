@@ -53,6 +53,8 @@ class TableUav:
     )
     approached: int = -1  # the request (seq) it was sent to an approach spot for: only once
     flown_on: bool = False  # its spot is where it flew on to along its plan, turned back (:func:`fly_on`)
+    #: where it flies on down to once at its spot over its plan's stay (:func:`fly_on`'s second hold flight)
+    down_to: Vec3 | None = None
     #: the number mission control's answer gave its plan, with that plan (:mod:`masonry.mission.plan_reading`)
     numbered: tuple[int, FlightPlan] | None = None
     grants: int = 0  # its plans numbered so far
@@ -120,8 +122,10 @@ def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
     and waits there, holding only that stay, from which the parking rule may send it on (``flown_on``). Where it
     stopped, its plan's windows were extended while it waited (a UAV waiting on them waited for a volume held by a
     UAV that waited: seed 70 of ``bench_layouts.py --compact --airspace table``), or ended by time, and the flights
-    granted after them came down where it hovered (seed 206: 0.66 m). Else ``g``: it waits where it stopped (no
-    such place along its plan: not met)."""
+    granted after them came down where it hovered (seed 206: 0.66 m). Where no hover fits and its last lateral leg
+    ends over the stay the plan ends in (a flight to a site, turned back on its leg), it flies on over the stay at
+    its layer, then down its own descent into it (``down_to``: the second hold flight), and holds that stay only.
+    Else ``g``: it waits where it stopped (no such place along its plan: not met)."""
     where = None if u.request is None else (u.request.position or u.position)
     if u.plan is None or u.request is None or where is None or u.phase is not Phase.ASKING:
         return g
@@ -135,9 +139,15 @@ def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
             rest = [r for r in mine if r.purpose in _PLAN_END or r.open_ended]
             c.table, spot = forced(c.table, [*legs[i + 1 :], *rest], [hover]), q
             break
+    down = None
+    if spot is None and points:  # its last lateral leg ends over its plan's stay: over it, then down into it
+        q, _i = points[-1]
+        end = next((r for r in reversed(mine) if r.open_ended and r.purpose == "stay"), None)
+        if end is not None and end.volume.a == end.volume.b and math.dist(end.volume.a, q[:2]) < 1e-6:
+            spot, down = q, (q[0], q[1], end.volume.z1_m)
     if spot is None:
         return g
-    u.phase, u.spot, u.approach, u.flown_on = Phase.TO_HOLD, spot, False, True
+    u.phase, u.spot, u.approach, u.flown_on, u.down_to = Phase.TO_HOLD, spot, False, True, down
     c.bump()
     return Grant(uav, u.request.site, False, spot, spot[2])
 
@@ -189,7 +199,7 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
     left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
     c.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
     u.request, u.phase, u.blocked_by, u.spot, u.approach = None, Phase.FLYING, (), None, False
-    u.flown_on = False
+    u.flown_on, u.down_to = False, None
     c.granted_count += 1
     if c.gate is not None:
         c.gate.entered(uav, w.site, now_s)
