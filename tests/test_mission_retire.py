@@ -105,7 +105,7 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     (docs/state-machines.md, "Battery budget") no UAV in the air comes near it.
     """
     mission = SimulatedMission.from_blueprint(
-        running_bond(3, 10, brick_uavs=3, adhesion_uavs=2), seed=0, faults=Faults(battery_drain_per_s=0.0036)
+        running_bond(3, 10, brick_uavs=3, adhesion_uavs=2), seed=0, faults=Faults(battery_drain_per_s=0.0038)
     )
     lowest: list[float] = [1.0]
 
@@ -125,7 +125,10 @@ def test_a_battery_run_low_in_the_air_is_swapped_at_home_not_retired():
     # test is about the path when one does (3 + 2, measured: 1,288 s, 16 swaps, one task given up low in the air,
     # lowest 35 %). With the brick UAVs apart past the width (docs/dispatch.md, issue 27) 0.0033/s no longer takes
     # that path (1,149 s, 14 swaps, none given up low): at 0.0036/s it does (1,225 s, 15 swaps, one task given up low
-    # in the air, lowest 32 %). The figures below were measured at 4 + 2 before the stagger.
+    # in the air, lowest 32 %). With the sprayers' climb out of their zones kept inside them (issue 27 §4.3, branch
+    # envclimb51) 0.0036/s no longer does (none given up low; nor 0.0035/s, 1,223 s); 0.0037-0.0040/s do (0.0038/s:
+    # 1,235 s, 16 swaps, one task given up low in the air, lowest 30 %). The figures below were measured at 4 + 2
+    # before the stagger.
     # packs of 300 s: the UAVs ran low (and were swapped, since all are in service) many times. Measured with the
     # admission of landed UAVs (docs/dispatch.md): 1,028 s, 13 swaps, 2,894 s in the air over six UAVs; without it
     # 1,347 s, 25 swaps, 5,595 s in the air (the UAVs hovered waiting for columns the admission keeps them off).
