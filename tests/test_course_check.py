@@ -91,7 +91,19 @@ def test_a_brick_a_course_too_high_is_reported_misplaced_not_done() -> None:
         true_m = mission.world.bricks[brick].position_m[2] - WALL.bricks[brick].position_m[2]
         assert true_m == pytest.approx(course_m, abs=0.005), (seed, task_id)
         assert float(found.group(1)) / 100.0 == pytest.approx(true_m, abs=0.01), (seed, failed[task_id])
-    assert {"B3", "B5"} <= set(report.stuck)  # it, and the brick that would stand on it
+    # it, and a brick that would stand on it (which brick is high moves with the flights' timing: B3 until the
+    # sprayers' climb out of their zones changed, issue 27 §4.3; another since)
+    waits_on = plan(WALL).prerequisites()
+    for task_id in high:
+        assert task_id in report.stuck, (seed, task_id, report.stuck)
+        over, todo = set(), [task_id]
+        while todo:
+            below = todo.pop()
+            for t, pre in waits_on.items():
+                if below in pre and t not in over:
+                    over.add(t)
+                    todo.append(t)
+        assert {t for t in over if t.startswith("B")} & set(report.stuck), (seed, task_id, report.stuck)
     done = {a.task_id for a in mission.control.history if a.status == "done"}
     for b in mission.blueprint.bricks:  # no brick counted placed is off its course (the simulator's truth)
         if f"B{b.id}" in done:
