@@ -22,8 +22,6 @@ from masonry.reservation import Reservation
 
 __all__ = ["grant_number", "matching", "reported_leg"]
 
-_PURPOSES = dict(enumerate(PLAN_LEGS))  # (a leg of PLAN_LEGS is the table's leg of the same purpose)
-
 
 def grant_number(u: TableUav) -> int:
     """The number of ``u``'s plan (its first answer numbers it: 1, 2, ... per UAV); 0: it has none, or flies a plan
@@ -54,7 +52,7 @@ def reported_leg(u: TableUav, legs: Sequence[Reservation], now_s: float) -> int 
     pp = matching(u, u.reported)
     if pp is None or u.plan is None:
         return None
-    purpose = _PURPOSES[pp.leg]
+    purpose = PLAN_LEGS[pp.leg]  # (a leg of PLAN_LEGS is the table's leg of the same purpose)
     mine = [i for i, r in enumerate(legs) if r.purpose == purpose]
     if not mine:
         return None
