@@ -26,6 +26,9 @@ from test_geofence import NOTCH, _with_site
 from test_operator import CASE_STUDY
 from test_wind_limit import GUST_FRONT
 
+#: The case study's site with a ceiling of 4.2 m: the table's third and fourth layers are over it less 0.5 m.
+LOW_CEILING = "site: {boundary: [[-2, -4], [6, -4], [6, 3], [-2, 3]], max_altitude: 4.2}\n"
+
 Seen = list[tuple[float, set[tuple[str, frozenset[str]]]]]
 
 
@@ -138,13 +141,10 @@ def test_a_wind_above_the_limit_under_the_table_grounds_the_fleet_on_the_table_a
     assert all(h == set() for h in _holds_between(seen, 201.1, math.inf))
 
 
-def test_a_flight_across_the_fence_is_never_granted_under_the_table_and_its_task_fails_saying_why(
-    tmp_path: Path,
-) -> None:
-    """The case study with a notch between the wall and the pallet (tests/test_geofence.py): the brick tasks fail
-    their three attempts saying why, the adhesion tasks are done, and no flown reservation of the table ever left
-    the fence."""
-    bp = load_blueprint(_with_site(tmp_path, NOTCH))
+def _fly_fenced(tmp_path: Path, site: str):
+    """The case study with ``site`` under the table: its report, and every flown reservation the table ever held
+    outside the fence."""
+    bp = load_blueprint(_with_site(tmp_path, site))
     assert bp.site is not None
     mission = SimulatedMission.from_blueprint(bp, seed=1, vehicle="ideal", airspace="table")
     c, fence, outside = mission.control.columns, Fence(bp.site), []
@@ -156,7 +156,16 @@ def test_a_flight_across_the_fence_is_never_granted_under_the_table_and_its_task
         return watched(table, now_s)
 
     c.on_change = check
-    report = mission.run()
+    return mission.run(), outside
+
+
+def test_a_flight_across_the_fence_is_never_granted_under_the_table_and_its_task_fails_saying_why(
+    tmp_path: Path,
+) -> None:
+    """The case study with a notch between the wall and the pallet (tests/test_geofence.py): the brick tasks fail
+    their three attempts saying why, the adhesion tasks are done, and no flown reservation of the table ever left
+    the fence."""
+    report, outside = _fly_fenced(tmp_path, NOTCH)
     assert not report.completed and report.stall is None
     by_id = {t.id: t for t in report.tasks}
     assert by_id["A0"].status == by_id["A1"].status == "done"
@@ -164,6 +173,15 @@ def test_a_flight_across_the_fence_is_never_granted_under_the_table_and_its_task
         t = by_id[tid]
         assert t.status == "stuck" and len(t.tries) == 3
         assert all("leaves the site fence" in a.reason for a in t.tries), [a.reason for a in t.tries]
+    assert not outside, outside[:3]
+
+
+def test_under_a_low_ceiling_the_table_flies_no_spot_above_it(tmp_path: Path) -> None:
+    """A ceiling of 4.2 m (the table's top layers over it): the approach spot (at the top layer) and the parking
+    spots are not flown to above it; the mission completes inside the fence (before, brick-1 climbed to its approach
+    spot 0.5 m from the ceiling and the mission stalled there)."""
+    report, outside = _fly_fenced(tmp_path, LOW_CEILING)
+    assert report.completed and report.stall is None and report.conflict_violations == 0
     assert not outside, outside[:3]
 
 

@@ -30,6 +30,7 @@ from masonry.reservation import (
     earliest_start,
     extend,
     flight_reservations,
+    keeps_inside,
     way_home,
 )
 from masonry.segments import point_segment_m
@@ -280,7 +281,7 @@ def park_plan(
     rs[-1] = Reservation(uav, column(there.xy, spot[2], spot[2]), rs[-1].t0_s, math.inf, "stay")
     parts = [(r.volume, r.t0_s - now_s, r.t1_s - now_s) for r in rs]
     start_s, _ = earliest_start(table, uav, parts, now_s)
-    if start_s > now_s:
+    if start_s > now_s or not keeps_inside(airspace.fence, rs):  # (nor one whose flight leaves the fence)
         return None
     return FlightPlan(uav, now_s, spot[2], tuple(rs))
 

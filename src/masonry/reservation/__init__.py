@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from masonry.reservation.changes import Move, extend, lose, settle, way_home
 from masonry.reservation.decide import Decision, Grant, Wait, decide, start_table
-from masonry.reservation.fence import Fence
+from masonry.reservation.fence import Fence, keeps_inside
 from masonry.reservation.flight import (
     DEFAULT_MARGIN_S,
     LEG_PIECE_M,
@@ -72,6 +72,7 @@ __all__ = [
     "fenced_layers",
     "flight_reservations",
     "held_until",
+    "keeps_inside",
     "layout_problems",
     "leg",
     "lose",

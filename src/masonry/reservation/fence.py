@@ -10,10 +10,12 @@ intervals and a lost UAV's volume are where a UAV is or must be, not flown: not 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from masonry.geofence import AIRSPACE_MARGIN_M, Site
 from masonry.reservation.space import Volume
+from masonry.reservation.table import Reservation
 from masonry.segments import XY
 
 #: Where a leg comes in from the edge, its depth inside the boundary is checked this often (metres).
@@ -47,6 +49,12 @@ class Fence:
         return purpose == "transit" and heads_in(self.site, volume.a, volume.b, depth, need)
 
 
+def keeps_inside(fence: Fence | None, reservations: Iterable[Reservation]) -> bool:
+    """Every reservation of ``reservations`` (a flight planned at a chosen altitude, not by ``plan_flight``: a flight
+    to a parking or approach spot) keeps inside ``fence`` (None: no fence, True)."""
+    return fence is None or all(fence.admits(r.volume, r.purpose) for r in reservations)
+
+
 def heads_in(site: Site, a: XY, b: XY, depth_m: float, need_m: float) -> bool:
     """The leg ``a -> b`` (``a`` only ``depth_m`` inside) is ``min(need, depth + s)`` inside at every ``s`` metres
     along it: it heads in and never runs along the boundary."""
@@ -66,4 +74,4 @@ def heads_in(site: Site, a: XY, b: XY, depth_m: float, need_m: float) -> bool:
     return False
 
 
-__all__ = ["FLOWN", "Fence", "heads_in"]
+__all__ = ["FLOWN", "Fence", "heads_in", "keeps_inside"]
