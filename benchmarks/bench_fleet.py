@@ -63,10 +63,10 @@ from schedule_cache import cached_schedule, solve_as_the_cli
 from masonry.blueprint import Blueprint, load_blueprint
 from masonry.blueprint_gen import running_bond
 from masonry.errors import PlanningError
-from masonry.mission import table_dispatch
 from masonry.mission.report import MissionReport, phase_totals
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
+from masonry.mission.table_dispatch import DEFAULT_TABLE_DISPATCH, TABLE_DISPATCHES
 from masonry.planner.dispatch import DEFAULT_RESERVATION, POLICIES, RESERVATIONS
 from masonry.planner.schedule import physical_terms
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
@@ -175,6 +175,7 @@ def fly(
     reservation: str,
     airspace: str = DEFAULT_AIRSPACE,
     schedule: OfflineSchedule | None = None,
+    table_dispatch: str = DEFAULT_TABLE_DISPATCH,
 ) -> Run:
     """One mission; ``schedule`` is the one ``policy`` ``schedule`` follows (:func:`cached_schedule`)."""
     wall0 = time.perf_counter()
@@ -188,6 +189,7 @@ def fly(
         reservation=reservation,
         airspace=airspace,
         schedule=schedule if policy == SCHEDULE_POLICY else None,
+        table_dispatch=table_dispatch,
     )
     return Run(bricks, adhesion, report, time.perf_counter() - wall0)
 
@@ -343,12 +345,11 @@ def main() -> None:
     )
     ap.add_argument(
         "--table-dispatch",
-        choices=("soonest", "policy"),
-        default="soonest" if table_dispatch.SOONEST_UNDER_TABLE else "policy",
+        choices=TABLE_DISPATCHES,
+        default=DEFAULT_TABLE_DISPATCH,
         help="--airspace table: a brick UAV given the task it can finish soonest by the table, or the policy's pick",
     )
     args = ap.parse_args()
-    table_dispatch.SOONEST_UNDER_TABLE = args.table_dispatch == "soonest"
     walls = args.walls.split(",") if args.walls else (["quick"] if args.quick else ["12m", "6x30", "pyramid"])
     unknown = [w for w in walls if w not in WALLS]
     if unknown:
@@ -407,7 +408,15 @@ def main() -> None:
                 )
             for policy in policies:
                 run = fly(
-                    blueprint, bricks, adhesion, args.seed, policy, args.reservation, args.airspace, schedule
+                    blueprint,
+                    bricks,
+                    adhesion,
+                    args.seed,
+                    policy,
+                    args.reservation,
+                    args.airspace,
+                    schedule,
+                    args.table_dispatch,
                 )
                 if schedule is not None:
                     run = dataclasses.replace(

@@ -24,9 +24,9 @@ import random
 import time
 
 from masonry.blueprint_random import LayoutLimits, random_layout
-from masonry.mission import table_dispatch
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.simulate import simulate
+from masonry.mission.table_dispatch import DEFAULT_TABLE_DISPATCH, TABLE_DISPATCHES
 from masonry.planner.dispatch import DEFAULT_POLICY, DEFAULT_RESERVATION, POLICIES, RESERVATIONS
 from masonry.separation import pad_separation_m
 from masonry.sim import Faults
@@ -42,6 +42,7 @@ def fly(
     reservation: str = "task",
     airspace: str = DEFAULT_AIRSPACE,
     policy: str = DEFAULT_POLICY,
+    table_dispatch: str = DEFAULT_TABLE_DISPATCH,
 ) -> dict[str, object]:
     rng = random.Random(seed)
     bp = random_layout(rng, limits)
@@ -51,7 +52,15 @@ def fly(
         (math.dist(a[:2], b[:2]) for i, a in enumerate(homes) for b in homes[i + 1 :]), default=float("nan")
     )
     t0 = time.perf_counter()
-    r = simulate(bp, seed=seed, faults=f, reservation=reservation, airspace=airspace, policy=policy)
+    r = simulate(
+        bp,
+        seed=seed,
+        faults=f,
+        reservation=reservation,
+        airspace=airspace,
+        policy=policy,
+        table_dispatch=table_dispatch,
+    )
     return {
         "seed": seed,
         "wall": bp.name,
@@ -78,7 +87,12 @@ SLOWER_BY_S = 0.05
 
 
 def sub_fleets(
-    seed: int, limits: LayoutLimits, reservation: str, airspace: str, policy: str
+    seed: int,
+    limits: LayoutLimits,
+    reservation: str,
+    airspace: str,
+    policy: str,
+    table_dispatch: str = DEFAULT_TABLE_DISPATCH,
 ) -> tuple[str, dict[tuple[int, int], float]]:
     """The layout of ``seed`` and the makespan of its fleet and of every smaller one (see the module docstring)."""
     bp = random_layout(random.Random(seed), limits)
@@ -92,6 +106,7 @@ def sub_fleets(
                 reservation=reservation,
                 airspace=airspace,
                 policy=policy,
+                table_dispatch=table_dispatch,
                 brick_uavs=b,
                 adhesion_uavs=a,
             )
@@ -120,7 +135,9 @@ def fleet_scaling(args: argparse.Namespace, limits: LayoutLimits) -> None:
     slower = total_s = 0.0
     for seed in range(args.first_seed, args.first_seed + args.n):
         t0 = time.perf_counter()
-        wall, spans = sub_fleets(seed, limits, args.reservation, args.airspace, args.policy)
+        wall, spans = sub_fleets(
+            seed, limits, args.reservation, args.airspace, args.policy, args.table_dispatch
+        )
         pairs = slower_pairs(spans)
         total_s += sum(spans.values())
         cells = " ".join(f"{b}+{a} {s:.1f}" for (b, a), s in sorted(spans.items()))
@@ -154,12 +171,11 @@ def main() -> None:
     )
     ap.add_argument(
         "--table-dispatch",
-        choices=("soonest", "policy"),
-        default="soonest" if table_dispatch.SOONEST_UNDER_TABLE else "policy",
+        choices=TABLE_DISPATCHES,
+        default=DEFAULT_TABLE_DISPATCH,
         help="--airspace table: a brick UAV given the task it can finish soonest by the table, or the policy's pick",
     )
     args = ap.parse_args()
-    table_dispatch.SOONEST_UNDER_TABLE = args.table_dispatch == "soonest"
     limits = LayoutLimits(max_courses=6, max_per_course=12) if args.large else LayoutLimits()
     if args.compact:
         limits = LayoutLimits(max_courses=3, max_per_course=4, max_uavs_per_role=3, clearance_m=(0.5, 0.8))
@@ -177,7 +193,9 @@ def main() -> None:
     worst_m: tuple[float, int] = (0.0, -1)
     worst_s: tuple[float, int] = (0.0, -1)
     for seed in range(args.first_seed, args.first_seed + args.n):
-        row = fly(seed, limits, args.faults, args.reservation, args.airspace, args.policy)
+        row = fly(
+            seed, limits, args.faults, args.reservation, args.airspace, args.policy, args.table_dispatch
+        )
         sep = row["min_sep"]
         ok = (
             (row["completed"] or args.faults)

@@ -22,8 +22,10 @@ expected::
 ``does``: ``fly to (x, y) [z Z] [work S] [rc R] [task T] [then pad|site|(x, y)]`` (``z``: the work altitude, 1 m
 by default), ``home`` (straight to its pad), ``park (x, y)`` (straight to a parking spot there), ``late S``,
 ``silent``, ``lost [(x, y)]`` (its last volume: the column up to 3 m there, or where it stays), ``found`` (accounted
-for: back on its pad from now).
-``expect``: ``granted [now|later|at T] [layer K]``, ``waits [for u,v] [until T|until they leave]``,
+for: back on its pad from now), ``hold operator|wind`` and ``lift operator|wind`` (a hold on the UAV's take-offs
+from now, until lifted; the UAV ``*``: every UAV).
+``expect``: ``granted [now|later|at T] [layer K]``, ``waits [for u,v] [until T|until they leave] [held CAUSE]``,
+``waits outside the fence``,
 ``moves u,v`` or ``moves nobody``, ``refused [words of the reason]``, or ``-``. Times are to 0.05 s.
 """
 
@@ -39,6 +41,7 @@ from masonry.errors import PlanningError
 from masonry.reservation import (
     Airspace,
     Decision,
+    Fence,
     FlightPlan,
     Grant,
     Move,
@@ -55,6 +58,7 @@ from masonry.reservation import (
     start_table,
     violations,
     way_home,
+    with_holds,
 )
 from masonry.reservation.space import Volume
 
@@ -89,6 +93,8 @@ class Scenario:
     now_s: float = 0.0
     #: plan each flight at the layer that arrives first (``Airspace.first_arrival``, as mission control's table)
     first_arrival: bool = False
+    #: the site's fence every flown leg keeps inside (``Airspace.fence``; None: none)
+    fence: Fence | None = None
     table: Table = field(init=False)
     where: dict[str, Place] = field(init=False)
     last: Decision | None = field(init=False, default=None)
@@ -107,7 +113,11 @@ class Scenario:
     @property
     def airspace(self) -> Airspace:
         return Airspace(
-            self.layers_m, margin_s=self.margin_s, horizon_s=self.horizon_s, first_arrival=self.first_arrival
+            self.layers_m,
+            margin_s=self.margin_s,
+            horizon_s=self.horizon_s,
+            first_arrival=self.first_arrival,
+            fence=self.fence,
         )
 
     def at(self, t_s: float) -> Scenario:
@@ -227,6 +237,14 @@ class Scenario:
         check_table(self.table)
         return self
 
+    def hold(self, uav: str, cause: str, *, lift: bool = False) -> Scenario:
+        """``cause`` holds ``uav`` (``*``: every UAV) on the ground from now until lifted (``lift``: lifted now)."""
+        key = (cause, frozenset() if uav == "*" else frozenset({uav}))
+        wanted = {(h.cause, h.uavs) for h in self.table.holds if math.isinf(h.t1_s)}
+        self.table = with_holds(self.table, wanted - {key} if lift else wanted | {key}, self.now_s)
+        check_table(self.table)
+        return self
+
     def moved(self, *uavs: str) -> Scenario:
         """The last change moved exactly these UAVs' reservations (besides the one it was about)."""
         got = tuple(sorted({m.uav for m in self.moves} - {self.about}))
@@ -292,6 +310,8 @@ def _do(s: Scenario, uav: str, does: list[str], row: str) -> None:
         s.lost(uav, last)
     elif verb == "found":
         s.found(uav)
+    elif verb in ("hold", "lift"):
+        s.hold(uav, rest[0], lift=verb == "lift")
     else:
         raise AssertionError(f"{row!r}: unknown step {verb!r}")
 
@@ -317,24 +337,35 @@ def _expect(s: Scenario, words: list[str]) -> None:
             else:
                 raise AssertionError(f"granted: unknown word {word!r}")
     elif kind == "waits":
-        s.waits()
-        assert isinstance(s.last, Wait)
-        while rest:
-            word = rest.pop(0)
-            if word == "for":
-                s.waits(for_uavs=tuple(sorted(rest.pop(0).split(","))))
-            elif word == "until" and rest[:2] == ["they", "leave"]:
-                del rest[:2]
-                assert math.isinf(s.last.until_s), s.last.describe()
-            elif word == "until":
-                want = float(rest.pop(0))
-                assert abs(s.last.until_s - want) <= TIME_TOL_S, s.last.describe()
-            else:
-                raise AssertionError(f"waits: unknown word {word!r}")
+        _expect_wait(s, rest)
     elif kind == "moves":
         s.moved(*(() if rest == ["nobody"] else tuple(rest[0].split(","))))
     else:
         raise AssertionError(f"unknown expectation {kind!r}")
+
+
+def _expect_wait(s: Scenario, rest: list[str]) -> None:
+    """``waits ...``: the last request was told to wait, as the words say."""
+    s.waits()
+    assert isinstance(s.last, Wait)
+    while rest:
+        word = rest.pop(0)
+        if word == "for":
+            s.waits(for_uavs=tuple(sorted(rest.pop(0).split(","))))
+        elif word == "until" and rest[:2] == ["they", "leave"]:
+            del rest[:2]
+            assert math.isinf(s.last.until_s), s.last.describe()
+        elif word == "until":
+            want = float(rest.pop(0))
+            assert abs(s.last.until_s - want) <= TIME_TOL_S, s.last.describe()
+        elif word == "held":
+            cause = rest.pop(0)
+            assert s.last.held_by and s.last.cause == cause, s.last.describe()
+        elif word == "outside" and rest[:2] == ["the", "fence"]:
+            del rest[:2]
+            assert s.last.outside_fence and math.isinf(s.last.until_s), s.last.describe()
+        else:
+            raise AssertionError(f"waits: unknown word {word!r}")
 
 
 def play(pads: dict[str, XY], script: str, **scenario: object) -> Scenario:

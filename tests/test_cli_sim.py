@@ -114,6 +114,7 @@ def test_a_journal_resumes_only_with_its_reservation(tmp_path):
         (["--format", "yaml"], "--format must be text or json"),
         (["--gantt", "chart.pdf"], "--gantt chart.pdf"),
         (["--resume"], "--resume needs --journal"),
+        (["--table-dispatch", "nearest"], "--table-dispatch must be soonest or policy"),
     ],
 )
 def test_sim_bad_input_is_one_line_exit_2(args, message):

@@ -8,12 +8,30 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
 from masonry.errors import PlanningError
-from masonry.reservation import Reservation, Table, Wait, Work, layout_problems, leg, pad
+from masonry.geofence import Site
+from masonry.reservation import (
+    Airspace,
+    Fence,
+    Grant,
+    Hold,
+    Place,
+    Request,
+    Reservation,
+    Table,
+    Wait,
+    Work,
+    decide,
+    layout_problems,
+    leg,
+    pad,
+    start_table,
+)
 from reservation_scenario import LAYERS_M, Scenario, play
 
 SAFETY_MD = Path(__file__).resolve().parent.parent / "docs" / "safety.md"
@@ -104,6 +122,53 @@ def test_rule_earliest_start_then_lowest_layer() -> None:
     )
 
 
+#: An L-shaped site (its notch x > 6, y > 6 outside), 4.5 m high: layers 0 and 1 (2.5, 3.6 m) keep 0.5 m under it,
+#: layer 2 (4.7 m) does not
+L_SITE = Site(((-2.0, -2.0), (12.0, -2.0), (12.0, 6.0), (6.0, 6.0), (6.0, 12.0), (-2.0, 12.0)), 4.5)
+
+
+def test_no_flight_with_a_leg_outside_the_fence_is_granted() -> None:
+    # rule 4 with a fence: c's flight crosses a's (layer 0) and b's (layer 1): it would take layer 2 now, over the
+    # fence's ceiling; it takes a lower layer later. A flight whose straight leg cuts the notch, or to a site
+    # outside, is never granted (no layer keeps it inside)
+    s = play(
+        {"a": (0, 0), "b": (10, 0), "c": (5, -1.5)},
+        """
+        t_s | uav | does                    | expect
+        0   | a   | fly to (10, 4) work 20  | granted now layer 0
+        0   | b   | fly to (0, 4) work 20   | granted now layer 1
+        0   | c   | fly to (5, 8) work 20   | granted later
+        """,
+        fence=Fence(L_SITE),
+    )
+    assert s.plans["c"].layer_m in LAYERS_M[:2]
+    assert all(r.volume.z1_m <= 4.0 for u in "abc" for r in s.table.of(u))
+    script = """
+        t_s | uav | does                    | expect
+        0   | c   | fly to (5, 8) work 20   | granted now layer 2
+    """
+    play(
+        {"a": (0, 0), "b": (10, 0), "c": (5, -1.5)},
+        script.replace(
+            "0   | c",
+            "0   | a   | fly to (10, 4) work 20  | -\n0 | b | fly to (0, 4) work 20 | -\n0   | c",
+            1,
+        ),
+    )
+    play(
+        {"a": (0, 0), "d": (10, 4.5)},
+        """
+        t_s | uav | does                    | expect
+        0   | d   | fly to (5, 11) work 20  | waits outside the fence
+        0   | a   | fly to (20, 1) work 20  | waits outside the fence
+        0   | a   | fly to (5, 11) work 20  | granted now layer 0
+        """,
+        fence=Fence(L_SITE),
+    )
+    # without the fence the cut is flown
+    play({"d": (10, 4.5)}, "t_s | uav | does | expect\n0 | d | fly to (5, 11) work 20 | granted now layer 0")
+
+
 def test_rule_every_plan_ends_where_the_uav_may_stay() -> None:
     # a stays at its site, then flies to a parking spot, then home; each plan starts where the last one ended,
     # once the UAV is there (not before: the next flight from the site is granted from its arrival, 32.0 s)
@@ -175,6 +240,60 @@ def test_rule_a_waiting_uav_holds_only_where_it_stays() -> None:
         """,
     )
     assert [r.purpose for r in s.table.of("b")] == ["stay"]  # a wait reserves nothing
+
+
+def test_a_hold_keeps_take_offs_on_the_ground_not_the_uavs_in_the_air() -> None:
+    # rule 6 with holds: the operator's pause holds every take-off, named, until it is lifted; a wind grounding of
+    # a lets a in the air fly home, then keeps it on its pad; b is not held by a's
+    s = play(
+        {"a": (0, 0), "b": (10, 0)},
+        """
+        t_s | uav | does                             | expect
+        0   | *   | hold operator                    | -
+        0   | a   | fly to (5, 5) work 20 then site  | waits until they leave held operator
+        0   | b   | fly to (8, 5) work 20            | waits held operator
+        10  | *   | lift operator                    | -
+        10  | a   | fly to (5, 5) work 20 then site  | granted now
+        60  | a   | hold wind                        | -
+        60  | a   | home                             | granted now
+        60  | b   | fly to (8, 5) work 20            | granted
+        100 | a   | fly to (2, 5) work 20            | waits held wind
+        """,
+    )
+    assert [r.purpose for r in s.table.of("a")][-1] == "stay" and s.table.of("a")[-1].volume == pad(
+        (0.0, 0.0)
+    )
+    assert [(h.cause, h.t0_s, h.t1_s) for h in s.table.holds] == [("wind", 60.0, math.inf)]
+    # a hold with an end (a forecast): the take-off starts as it ends, within the horizon; one that starts after
+    # the flight would leave does not touch it; a flight that fits only inside a later hold starts after it
+    table = start_table({"a": (0.0, 0.0), "b": (10.0, 0.0)})
+    fly = Request("a", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 20.0), Place((0.0, 0.0)))
+    air = Airspace(LAYERS_M)
+    held = replace(table, holds=(Hold("wind", 0.0, 30.0, frozenset({"a"})),))
+    got = decide(held, fly, 0.0, air)
+    assert isinstance(got, Grant) and got.plan.start_s == 30.0
+    later = replace(table, holds=(Hold("operator", 20.0, 50.0),))
+    got = decide(later, fly, 0.0, air)
+    assert isinstance(got, Grant) and got.plan.start_s == 0.0
+    b_first = decide(
+        later, replace(fly, uav="b", start=Place((10.0, 0.0)), stay=Place((10.0, 0.0))), 0.0, air
+    )
+    assert isinstance(b_first, Grant)
+    crossing = Request("a", Place((0.0, 0.0)), Work((10.0, 4.0), 1.0, 20.0), Place((0.0, 0.0)))
+    one_layer = Airspace(LAYERS_M[:1], horizon_s=1000.0)
+    free_at = decide(b_first.table, crossing, 0.0, one_layer)
+    assert isinstance(free_at, Grant) and 0.0 < free_at.plan.start_s < 50.0
+    got = decide(
+        replace(b_first.table, holds=(Hold("operator", 0.0, free_at.plan.start_s + 1.0),)),
+        crossing,
+        0.0,
+        one_layer,
+    )
+    assert isinstance(got, Grant) and got.plan.start_s == free_at.plan.start_s + 1.0
+    wait = decide(replace(table, holds=(Hold("operator", 0.0),)), fly, 0.0, air)
+    assert (
+        isinstance(wait, Wait) and wait.cause == "operator" and "operator holds every UAV" in wait.describe()
+    )
 
 
 def test_rule_the_site_rule_holds_on_site_intervals() -> None:

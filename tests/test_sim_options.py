@@ -59,6 +59,7 @@ def test_the_default_options_are_masonry_sims_and_frozen():
         ("reservation", "none", "`reservation` must be one of"),
         ("dt_s", 0.0, "dt_s must be > 0"),
         ("resume", True, "`resume` needs `journal_path`"),
+        ("table_dispatch", "nearest", "`table_dispatch` must be one of soonest, policy"),
     ],
 )
 def test_a_bad_option_is_one_line_naming_it(field, value, match):

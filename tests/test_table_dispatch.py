@@ -213,7 +213,6 @@ def _spy(monkeypatch) -> list[tuple[str, tuple[str, ...], int, float]]:
         return k
 
     monkeypatch.setattr(table_dispatch, "choose", spy)
-    monkeypatch.setattr(table_dispatch, "SOONEST_UNDER_TABLE", True)
     return seen
 
 
@@ -233,9 +232,27 @@ def test_under_the_columns_or_switched_off_the_table_is_never_asked(monkeypatch)
     seen = _spy(monkeypatch)
     r = simulate(running_bond(2, 3, brick_uavs=2, adhesion_uavs=1), seed=1)
     assert r.completed and not seen
-    monkeypatch.setattr(table_dispatch, "SOONEST_UNDER_TABLE", False)
-    r = simulate(running_bond(2, 3, brick_uavs=2, adhesion_uavs=1), seed=1, airspace="table")
+    r = simulate(
+        running_bond(2, 3, brick_uavs=2, adhesion_uavs=1), seed=1, airspace="table", table_dispatch="policy"
+    )
     assert r.completed and not seen
+
+
+def test_the_table_dispatch_option_changes_which_task_a_uav_is_given():
+    """``simulate(..., table_dispatch=...)``, no global: the soonest finish (the default under the table) gives the
+    brick UAVs other tasks, in another order, than the policy's pick on the same wall and seed."""
+    bp = running_bond(2, 6, brick_uavs=2, adhesion_uavs=1)
+
+    def taken(**option: str) -> list[tuple[str, str]]:
+        r = simulate(bp, seed=1, airspace="table", **option)  # type: ignore[arg-type]
+        assert r.completed and r.conflict_violations == 0
+        return [
+            (a.uav, a.task_id) for a in sorted(r.attempts, key=lambda a: a.start_s) if a.uav.startswith("b")
+        ]
+
+    soonest = taken()
+    assert taken(table_dispatch="soonest") == soonest
+    assert taken(table_dispatch="policy") != soonest
 
 
 # ---- --policy schedule: its next few planned tasks through the same chooser (off by default: measured slower)

@@ -159,6 +159,12 @@ def mission_control(
         "as timed legs reserved in a space-time table, waiting on the ground or at the site (table). "
         "docs/safety.md.",
     ),
+    table_dispatch: str = typer.Option(
+        "soonest",
+        "--table-dispatch",
+        help="soonest | policy: with --airspace table, give a brick UAV, of the policy's top few, the task it "
+        "can finish soonest by the table (soonest), or the policy's pick (policy). docs/dispatch.md.",
+    ),
     fmt: str = typer.Option("text", "--format", help="text | json (the report at the end)."),
     report: Path | None = typer.Option(None, "--report", help="Write the JSON report to this file."),
     log: Path | None = typer.Option(
@@ -198,8 +204,12 @@ def mission_control(
         raise InputError(f"--policy must be one of {', '.join(POLICIES)}, got {policy!r}")
     if resume and journal is None:
         raise InputError("--resume needs --journal FILE")
-    check_choice("--reservation", reservation, ("site", "task"))
-    check_choice("--airspace", airspace, ("columns", "table"))
+    for flag, value, choices in (
+        ("--reservation", reservation, ("site", "task")),
+        ("--airspace", airspace, ("columns", "table")),
+        ("--table-dispatch", table_dispatch, ("soonest", "policy")),
+    ):
+        check_choice(flag, value, choices)
     check_all(
         "mission-control",
         {
@@ -255,6 +265,7 @@ def mission_control(
             stall_timeout_s=stall_timeout,
             reservation=reservation,
             airspace=airspace,
+            table_dispatch=table_dispatch,
             fence=bp.site,
             # the layer each `masonry fly --mission` UAV flies at without mission control (remote.py's)
             fallback_layers_m=transit_layers_m(bp),

@@ -62,6 +62,12 @@ def sim(
         "as timed legs reserved in a space-time table, waiting on the ground or at the site (table). "
         "docs/safety.md.",
     ),
+    table_dispatch: str = typer.Option(
+        _DEFAULTS.table_dispatch,
+        "--table-dispatch",
+        help="soonest | policy: with --airspace table, give a brick UAV, of the policy's top few, the task it "
+        "can finish soonest by the table (soonest), or the policy's pick (policy). docs/dispatch.md.",
+    ),
     seed: int = typer.Option(
         _DEFAULTS.seed, "--seed", help=help_text("sim", "--seed", "Seed of the simulated world.")
     ),
@@ -154,6 +160,7 @@ def sim(
         raise InputError(f"--format must be text or json, got {fmt!r}")
     check_choice("--reservation", reservation, ("site", "task"))
     check_choice("--airspace", airspace, ("columns", "table"))
+    check_choice("--table-dispatch", table_dispatch, ("soonest", "policy"))
     check_all(
         "sim",
         {
@@ -200,6 +207,7 @@ def sim(
         reservation=reservation,
         vehicle=vehicle,
         airspace=airspace,
+        table_dispatch=table_dispatch,
     )
     name = bp.name or blueprint.name
 

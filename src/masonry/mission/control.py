@@ -54,6 +54,7 @@ from masonry.mission.sites import SiteIntervals
 from masonry.mission.spares import SpareBook
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S, Stall, StallWatch
 from masonry.mission.swap_stagger import SwapStagger
+from masonry.mission.table_dispatch import DEFAULT_TABLE_DISPATCH
 from masonry.mission.transport import Transport
 from masonry.mission.volumes import Vec3
 from masonry.mission.wait_causes import WaitWatch
@@ -118,6 +119,7 @@ class MissionControl:
         fallback_layers_m: each UAV's fixed layer for flights without mission control (``transit_layers_m``):
             a UAV silent in the air keeps its way home there reserved (default: the altitude it was last at).
         airspace: ``columns`` (:class:`ColumnClearance`) or ``table`` (:class:`masonry.mission.reserved.TableClearance`).
+        table_dispatch: under the table, ``soonest`` or ``policy`` (:mod:`masonry.mission.table_dispatch`).
         placement: the blueprint's as-built check (``Blueprint.placement``; None: 2 cm, continue).
     """
 
@@ -151,6 +153,7 @@ class MissionControl:
         wind_limit: WindGate | None = None,
         fallback_layers_m: Mapping[str, float] | None = None,
         airspace: str = "columns",
+        table_dispatch: str = DEFAULT_TABLE_DISPATCH,
         placement: PlacementCheck | None = None,
     ) -> None:
         names = [u.name for u in fleet]
@@ -243,7 +246,9 @@ class MissionControl:
         self.stall: Stall | None = None
         self.waits = WaitWatch(plan, reservation)  # why each task waited (the report's ``waits``)
         control_airspace.raise_layers(self, [t.id for t in plan.tasks if t.done])
-        control_dispatch.admit(self, column_radius_m)  # who is not sent into a crowd (docs/dispatch.md)
+        control_dispatch.admit(
+            self, column_radius_m, table_dispatch
+        )  # who is not sent into a crowd (docs/dispatch.md)
 
     def restore(self, state: JournalState) -> None:
         """Continue from a journal's replayed state (:func:`masonry.mission.control_resume.restore`)."""

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from masonry.errors import MissionError
 from masonry.geofence import Site
-from masonry.mission import plan_reading
+from masonry.mission import plan_reading, table_holds
 from masonry.mission.airspace import ON_PAD_Z_M, ColumnClearance, Grant, task_work_altitude_m
 from masonry.mission.events import volume_list
 from masonry.mission.messages import MISSION_CONTROL, Clearance, ClearanceRequest, Heartbeat, Progress
@@ -253,6 +253,7 @@ def make_airspace(
 def grant_waiting(mc: MissionControl, now_s: float) -> None:
     """The airspace looks at the waiting requests again; each answer is sent, noted and told."""
     mc.lingers.review(mc, now_s)  # (a UAV that stops waiting near the wall asks to fly home)
+    table_holds.sync(mc, now_s)  # (under the table: the operator's and the wind's holds on take-offs)
     if not mc.columns.waiting:
         return
     for g in mc.columns.grant(now_s):

@@ -20,15 +20,17 @@ if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
 
-def admit(mc: MissionControl, column_radius_m: float) -> None:
+def admit(
+    mc: MissionControl, column_radius_m: float, table: str = table_dispatch.DEFAULT_TABLE_DISPATCH
+) -> None:
     """Give ``mc``'s dispatcher the admission rule, under either airspace; none with ``column_radius_m`` 0 (every
     column granted). Under ``--airspace table`` too (issue 27, branch ``table44``): without it every UAV of the
     pyramid's 8 + 4 took tasks, and the table grants a UAV the site gate does not hold back its whole hop down from
     its pad, a site interval as long as that flight (68 s) on a wall whose intervals run one at a time: 4,234.8 s
     against 1,671.3 s with the rule (docs/performance/fleet.md, "Why the table is slow on the pyramid").
     Under the table the dispatcher also chooses among the policy's top few by the table
-    (:func:`masonry.mission.table_dispatch.install`)."""
-    table_dispatch.install(mc)
+    (:func:`masonry.mission.table_dispatch.install`, ``table``: its ``table_dispatch``)."""
+    table_dispatch.install(mc, table)
     if column_radius_m <= 0:
         return
     points = [work_point_m(t)[:2] for t in mc.plan.tasks if not t.done]

@@ -9,6 +9,7 @@ import logging
 import math
 from typing import TYPE_CHECKING
 
+from masonry.mission import table_holds
 from masonry.mission.stall import stall_of
 
 if TYPE_CHECKING:
@@ -62,6 +63,7 @@ def on_wind(mc: MissionControl, now_s: float) -> None:
     wind = mc.wind_limit
     assert wind is not None
     mc.wake()
+    table_holds.sync(mc, now_s)  # (under the table: a grounded UAV's take-off held from now)
     speed = wind.speed_mps if wind.speed_mps is not None else math.nan
     grounded = sorted(wind.grounded)
     if grounded:

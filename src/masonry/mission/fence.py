@@ -8,14 +8,11 @@ control turns into a failed attempt of the task (docs/safety.md, "The site's fen
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 
 from masonry.geofence import AIRSPACE_MARGIN_M, Site
 from masonry.mission.volumes import XY, Vec3, Volume, flight_volumes
-
-#: Where a leg comes in from the edge, its depth inside the boundary is checked this often (metres).
-_STEP_M = 0.05
+from masonry.reservation.fence import heads_in
 
 
 def volume_in_fence(site: Site, v: Volume, margin_m: float = AIRSPACE_MARGIN_M) -> bool:
@@ -24,7 +21,7 @@ def volume_in_fence(site: Site, v: Volume, margin_m: float = AIRSPACE_MARGIN_M) 
     A climb (or descent) is where its UAV already is: only its altitude is checked. A leg that starts less than
     the margin inside (a UAV the wind pushed out, back from the edge) may stay as shallow as it started for its
     first metres only: at ``s`` metres along it, at least ``min(margin, start's depth + s)`` inside, so it heads
-    in and never runs along the boundary.
+    in and never runs along the boundary (:func:`masonry.reservation.fence.heads_in`, the table's check too).
     """
     if v.z1_m > site.max_altitude_m - margin_m + 1e-9:
         return False
@@ -36,25 +33,7 @@ def volume_in_fence(site: Site, v: Volume, margin_m: float = AIRSPACE_MARGIN_M) 
         return site.segment_inside(v.a, v.b, need)
     if v.kind != "leg":
         return False
-    return _heads_in(site, v.a, v.b, depth, need)
-
-
-def _heads_in(site: Site, a: XY, b: XY, depth_m: float, need_m: float) -> bool:
-    """The leg ``a -> b`` (``a`` only ``depth_m`` inside) is ``min(need, depth + s)`` inside at every ``s``."""
-    length = math.hypot(b[0] - a[0], b[1] - a[1])
-    if length < 1e-9:
-        return False
-    ux, uy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
-    s = 0.0
-    while s < length:
-        s = min(length, s + _STEP_M)
-        x, y = a[0] + s * ux, a[1] + s * uy
-        d = site.inside_m(x, y)
-        if d >= need_m:
-            return site.segment_inside((x, y), b, need_m)  # in: the rest of it exactly
-        if d < min(need_m, depth_m + s) - _STEP_M:
-            return False
-    return False
+    return heads_in(site, v.a, v.b, depth, need)
 
 
 def volumes_in_fence(site: Site, vols: Sequence[Volume], margin_m: float = AIRSPACE_MARGIN_M) -> bool:

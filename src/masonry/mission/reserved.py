@@ -45,6 +45,7 @@ from masonry.ports import PlanProgress
 from masonry.reservation import (
     LEG_PIECE_M,
     Airspace,
+    Fence,
     Reservation,
     Separation,
     Table,
@@ -109,9 +110,7 @@ class TableClearance:
         self.spacing_m = float(spacing_m)
         self.sep_xy_m = float(sep_xy_m)
         self.zone_r_m = zone_slack_m(float(radius_m), self.sep_xy_m)
-        self.gate = gate
-        self.fence = fence
-        self.timing = timing
+        self.gate, self.fence, self.timing = gate, fence, timing
         self.margin_s = float(TABLE_MARGIN_S if margin_s is None else margin_s)
         self.guard_s = float(TABLE_GUARD_S if guard_s is None else guard_s)
         self.max_layers = max_layers
@@ -124,8 +123,7 @@ class TableClearance:
         )
         self._uavs: dict[str, TableUav] = {}
         self.on_change: Callable[[Table, float], object] = lambda table, now_s: None  # (a log watches)
-        self.seq, self._version, self.now_s = 0, 0, 0.0
-        self.granted_count = 0
+        self.seq, self._version, self.now_s, self.granted_count = 0, 0, 0.0, 0
         self.held_back = 0  # flights to a parking spot (the watchdog's signature reads it)
         self.refused = 0  # answers "wait where you are"
         self.extended = 0  # windows extended for a late UAV
@@ -319,11 +317,12 @@ class TableClearance:
         u.plan, u.phase = None, Phase.PARKED
 
     def can_take_off(self, uav: str) -> bool:
-        """``uav`` may take off now: it is not landed, or the column over its pad clashes with nobody's reservation."""
+        """``uav`` may take off now: not landed, or its pad's column is free and no hold keeps it down (the table's)."""
         u = self._uavs.get(uav)
         if self.base_m is None or u is None or u.phase is not Phase.LANDED:
             return True
-        return not self.table.clashes(Reservation(uav, self._pad_column(uav), self.now_s, math.inf, "stay"))
+        up = Reservation(uav, self._pad_column(uav), self.now_s, math.inf, "stay")
+        return not self.table.clashes(up) and not any(h.covers(uav, self.now_s) for h in self.table.holds)
 
     def take_off(self, uav: str) -> bool:
         """``uav``, landed, takes off if it may (:meth:`can_take_off`; False: it stays on its pad): it holds the
@@ -421,6 +420,7 @@ class TableClearance:
             any_layer=True,
             first_arrival=True,
             piece_m=LEG_PIECE_M,
+            fence=None if self.fence is None else Fence(self.fence),  # (no leg granted outside it)
         )
 
     def tick(self, now_s: float) -> None:

@@ -38,6 +38,7 @@ from masonry.reservation import (
     column,
     earliest_start,
     flight_reservations,
+    keeps_inside,
 )
 
 if TYPE_CHECKING:
@@ -87,7 +88,8 @@ def spot_plan(
     rs = list(flight_reservations(Request(uav, here, None, there), now_s, spot[2], air))
     rs[-1] = Reservation(uav, column(there.xy, spot[2], spot[2]), rs[-1].t0_s, math.inf, "stay")
     start_s, _ = earliest_start(table, uav, [(r.volume, r.t0_s - now_s, r.t1_s - now_s) for r in rs], now_s)
-    return FlightPlan(uav, now_s, spot[2], tuple(rs)) if start_s <= now_s else None
+    inside = keeps_inside(airspace.fence, rs)  # (a spot whose flight leaves the fence is not flown to)
+    return FlightPlan(uav, now_s, spot[2], tuple(rs)) if start_s <= now_s and inside else None
 
 
 def approach(

@@ -30,6 +30,7 @@ from masonry.reservation import (
     earliest_start,
     extend,
     flight_reservations,
+    keeps_inside,
     way_home,
 )
 from masonry.segments import point_segment_m
@@ -105,7 +106,7 @@ def cut_behind(
 def forced(table: Table, drop: Iterable[Reservation], add: Iterable[Reservation]) -> Table:
     """``table`` without ``drop`` and with ``add``, not checked (what a UAV physically holds, or is late in)."""
     out = table.without(list(drop))
-    return Table((*out.reservations, *add), out.separation)
+    return replace(out, reservations=(*out.reservations, *add))
 
 
 def guarded(table: Table, uav: str, now_s: float, guard_s: float, stopped: Iterable[str]) -> Table:
@@ -113,14 +114,14 @@ def guarded(table: Table, uav: str, now_s: float, guard_s: float, stopped: Itera
     running late can be extended without a clash; a UAV in ``stopped`` (it turned back and waits for its new
     flight) may stay where it stopped: its windows under way are open-ended."""
     stopped = set(stopped)
-    return Table(
-        tuple(
+    return replace(
+        table,
+        reservations=tuple(
             r
             if r.uav == uav or r.open_ended
             else r.until(math.inf if r.uav in stopped and r.t0_s <= now_s else r.t1_s + guard_s)
             for r in table.reservations
         ),
-        table.separation,
     )
 
 
@@ -280,7 +281,7 @@ def park_plan(
     rs[-1] = Reservation(uav, column(there.xy, spot[2], spot[2]), rs[-1].t0_s, math.inf, "stay")
     parts = [(r.volume, r.t0_s - now_s, r.t1_s - now_s) for r in rs]
     start_s, _ = earliest_start(table, uav, parts, now_s)
-    if start_s > now_s:
+    if start_s > now_s or not keeps_inside(airspace.fence, rs):  # (nor one whose flight leaves the fence)
         return None
     return FlightPlan(uav, now_s, spot[2], tuple(rs))
 

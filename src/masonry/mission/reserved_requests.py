@@ -20,6 +20,7 @@ from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
 from masonry.mission.reserved_parts import ON_LEG_M, forced, legs_under_way, level_of, on_ahead
 from masonry.mission.sites import enter_ungoverned
+from masonry.mission.table_holds import fence_refusal, held_cause
 from masonry.mission.volumes import Vec3, same_site
 from masonry.ports import PlanProgress
 from masonry.reservation import FlightPlan, Place, Request, Reservation, Wait, Work, column, decide
@@ -192,8 +193,12 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
             plan = decision.plan
             decision = replace(decision, plan=replace(plan, reservations=(down, *plan.reservations[1:])))
     if isinstance(decision, Wait):
+        if decision.outside_fence:  # (no layer keeps its legs inside the fence: never granted)
+            return fence_refusal(c, uav, w)
         u.retry_s = decision.until_s
-        u.blocked_by = tuple(sorted({(r.uav, r.purpose) for r in decision.blocked_by}))
+        u.blocked_by = held_cause(decision) or tuple(
+            sorted({(r.uav, r.purpose) for r in decision.blocked_by})
+        )
         c.refused += 1
         return _hold_on(uav, u, w)
     left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off

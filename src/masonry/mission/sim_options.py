@@ -20,6 +20,7 @@ from typing import TypedDict
 from masonry.errors import InputError
 from masonry.mission.reserved import AIRSPACES, DEFAULT_AIRSPACE
 from masonry.mission.stall import DEFAULT_STALL_TIMEOUT_S
+from masonry.mission.table_dispatch import DEFAULT_TABLE_DISPATCH, TABLE_DISPATCHES
 from masonry.planner.dispatch import DEFAULT_RESERVATION, RESERVATIONS
 from masonry.planner.dispatch import POLICIES as DISPATCH_POLICIES
 from masonry.planner.schedule_policy import SCHEDULE_POLICY
@@ -66,9 +67,12 @@ class SimOptions:
             all or per UAV name (None: :data:`masonry.mission.wind_limit.DEFAULT_MAX_WIND_MPS`).
         airspace: ``columns`` (default) or ``table``: flights planned and reserved in a space-time table, no hold
             patience (:mod:`masonry.mission.reserved`, docs/safety.md).
+        table_dispatch: under ``airspace="table"``: ``soonest`` (default), a brick UAV given, of the policy's
+            top few, the task it can finish soonest by the table, or ``policy``, the policy's pick
+            (:mod:`masonry.mission.table_dispatch`, docs/dispatch.md). No effect under the columns.
 
     Raises:
-        InputError: an unknown policy, camera mode or reservation, a bad ``dt_s``, or ``resume`` without
+        InputError: an unknown policy, camera mode, reservation, airspace or table dispatch, a bad ``dt_s``, or ``resume`` without
             ``journal_path`` (one line naming the field).
         InvalidArgument: an unknown vehicle preset (the line names the presets).
     """
@@ -91,6 +95,7 @@ class SimOptions:
     vehicle: str | None = None
     max_wind_mps: float | Mapping[str, float] | None = None
     airspace: str = DEFAULT_AIRSPACE
+    table_dispatch: str = DEFAULT_TABLE_DISPATCH
 
     def __post_init__(self) -> None:
         if self.reservation not in RESERVATIONS:
@@ -116,6 +121,11 @@ class SimOptions:
                 f"`airspace` must be one of {', '.join(AIRSPACES)}, got {self.airspace!r}",
                 options=("airspace",),
             )
+        if self.table_dispatch not in TABLE_DISPATCHES:
+            raise InputError(
+                f"`table_dispatch` must be one of {', '.join(TABLE_DISPATCHES)}, got {self.table_dispatch!r}",
+                options=("table_dispatch",),
+            )
         vehicle_preset(self.vehicle)  # InvalidArgument naming the presets
 
 
@@ -140,6 +150,7 @@ class SimFields(TypedDict, total=False):
     vehicle: str | None
     max_wind_mps: float | Mapping[str, float] | None
     airspace: str
+    table_dispatch: str
 
 
 def with_fields(options: SimOptions | None, fields: SimFields) -> SimOptions:

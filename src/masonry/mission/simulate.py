@@ -401,6 +401,7 @@ class SimulatedMission:
                 wind_limit=site_wind_limit(faults.site_wind(), fleet, opts.max_wind_mps),
                 fallback_layers_m=transit_layers_m(blueprint, fleet, timing=timing) if separation else None,
                 airspace=opts.airspace,
+                table_dispatch=opts.table_dispatch,
                 placement=blueprint.placement,
             )
             if state is not None:

@@ -24,18 +24,20 @@ from masonry.timing import DEFAULT_TIMING, TaskTiming
 if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
 
-__all__ = ["SOONEST_UNDER_TABLE", "choose", "install", "visits"]
+__all__ = ["DEFAULT_TABLE_DISPATCH", "TABLE_DISPATCHES", "choose", "install", "visits"]
 
-#: Whether mission control under ``--airspace table`` dispatches by the table's soonest finish (:func:`install`;
-#: ``bench_fleet.py --table-dispatch policy`` turns it off).
-SOONEST_UNDER_TABLE = True
+#: How mission control under ``--airspace table`` dispatches (``SimOptions.table_dispatch``, ``masonry sim
+#: --table-dispatch``): ``soonest``, a brick UAV given the task it can finish soonest by the table (:func:`choose`),
+#: or ``policy``, the policy's pick as under the columns.
+TABLE_DISPATCHES = ("soonest", "policy")
+DEFAULT_TABLE_DISPATCH = "soonest"
 
 
-def install(mc: MissionControl) -> None:
+def install(mc: MissionControl, table_dispatch: str = DEFAULT_TABLE_DISPATCH) -> None:
     """Set ``mc``'s dispatcher to choose by the table (:func:`choose`) if its airspace is a table with airspace
-    rules and :data:`SOONEST_UNDER_TABLE`; else nothing (the columns: the policy's pick, as before)."""
+    rules and ``table_dispatch`` is ``soonest``; else nothing (the columns, or ``policy``: the policy's pick)."""
     c = mc.columns
-    if SOONEST_UNDER_TABLE and isinstance(c, TableClearance) and c.base_m is not None:
+    if table_dispatch == "soonest" and isinstance(c, TableClearance) and c.base_m is not None:
         mc.dispatcher.soonest = lambda uav, ids: choose(mc, c, uav, ids)
 
 

@@ -25,6 +25,7 @@ from masonry.errors import MissionError
 from masonry.mission.airspace import ON_PAD_Z_M
 from masonry.mission.airspace_state import Phase
 from masonry.mission.report_codec import wait_record, waits_from_record
+from masonry.mission.table_holds import is_held
 from masonry.mission.waits import AIR, GROUND, TaskWait, WaitCause, WaitLog
 from masonry.planner.tasks import Plan
 
@@ -301,6 +302,9 @@ def airspace_cause(
     names none, ``to-hold`` while ``name`` flies to its hold point (the answer waits for its arrival; the
     blockers judge the rest from where it asked), else no one (its answer is on the way)."""
     by = columns.blockers(name)
+    held = is_held(by)
+    if held is not None:  # (under the table: the operator's or the wind's hold keeps it on the ground)
+        return WaitCause(held, uav=name, where=where)
     if not by:
         holds = TO_HOLD if columns.phase(name) is Phase.TO_HOLD else None
         return WaitCause("airspace", holds=holds, uav=name, where=where)

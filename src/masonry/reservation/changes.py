@@ -77,7 +77,7 @@ def _move_plan(table: Table, r: Reservation, departure_s: float) -> tuple[Table,
     delta = start_s - departure_s
     moves = [Move(q, q.shifted(delta)) for q in plan] + [Move(q, q.until(q.t1_s + delta)) for q in waited]
     out = table.without([m.before for m in moves])
-    return Table((*out.reservations, *(m.after for m in moves)), table.separation), moves
+    return replace(out, reservations=(*out.reservations, *(m.after for m in moves))), moves
 
 
 def _hold(table: Table, uav: str, now_s: float) -> tuple[Table, list[Move]]:
@@ -94,7 +94,7 @@ def _hold(table: Table, uav: str, now_s: float) -> tuple[Table, list[Move]]:
     delta = start_s - t0
     moves = [Move(q, q.shifted(delta)) for q in later] + [Move(q, q.until(q.t1_s + delta)) for q in now]
     out = table.without([m.before for m in moves])
-    return Table((*out.reservations, *(m.after for m in moves)), table.separation), moves
+    return replace(out, reservations=(*out.reservations, *(m.after for m in moves))), moves
 
 
 def settle(table: Table, now_s: float, first: str) -> tuple[Table, tuple[Move, ...]]:
@@ -139,7 +139,7 @@ def extend(table: Table, uav: str, now_s: float, late_s: float) -> tuple[Table, 
         after = r.until(r.t1_s + late_s) if r.t0_s <= now_s else r.shifted(late_s)
         own.append(Move(r, after))
     out = table.without([m.before for m in own])
-    table = Table((*out.reservations, *(m.after for m in own)), table.separation)
+    table = replace(out, reservations=(*out.reservations, *(m.after for m in own)))
     table, moved = settle(table, now_s, uav)
     return table, (*own, *moved)
 
@@ -168,7 +168,7 @@ def way_home(
     problem = f"no layer takes {uav}'s way home at {now_s:.1f} s"
     for layer, mine in tries:
         try:
-            settled, moves = settle(Table((*left.reservations, *mine), left.separation), now_s, uav)
+            settled, moves = settle(replace(left, reservations=(*left.reservations, *mine)), now_s, uav)
         except PlanningError as exc:
             problem = str(exc)
             continue
@@ -189,7 +189,7 @@ def _withdraw(table: Table, held: Reservation, now_s: float) -> tuple[Table, lis
         dropped = [r for r in mine if r.t0_s >= departure_s and r not in waited]
         moves += [Move(r, r.until(r.t0_s)) for r in dropped] + [Move(r, r.until(math.inf)) for r in waited]
         out = table.without([*dropped, *waited])
-        table = Table((*out.reservations, *(r.until(math.inf) for r in waited)), table.separation)
+        table = replace(out, reservations=(*out.reservations, *(r.until(math.inf) for r in waited)))
     return table, moves
 
 
@@ -204,7 +204,7 @@ def lose(table: Table, uav: str, now_s: float, last: Volume) -> tuple[Table, tup
     left = table.release(uav, now_s)
     held = Reservation(uav, last, now_s, math.inf, "lost")
     left, withdrawn = _withdraw(left, held, now_s)
-    settled, moved = settle(Table((*left.reservations, held), left.separation), now_s, uav)
+    settled, moved = settle(replace(left, reservations=(*left.reservations, held)), now_s, uav)
     return settled, (*withdrawn, *moved)
 
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from masonry.errors import InvalidArgument
+from masonry.reservation.fence import Fence
 from masonry.reservation.space import Volume, column, leg, pad, site
 from masonry.reservation.table import Purpose, Reservation, Table
 from masonry.segments import XY
@@ -103,6 +104,8 @@ class Airspace:
         piece_m: a lateral leg longer than this is reserved as pieces of at most this length, each from the leg's
             start until the UAV is planned past it (its minimum-jerk profile) plus the margin: the air a UAV
             has flown out of is free before its leg ends (0: the whole leg until its end, as before).
+        fence: the site's fence (:class:`~masonry.reservation.fence.Fence`; None: none): a flight is planned only
+            at layers where every leg of it keeps inside (:func:`fenced_layers`).
     """
 
     layers_m: tuple[float, ...]
@@ -113,6 +116,7 @@ class Airspace:
     any_layer: bool = False
     first_arrival: bool = False
     piece_m: float = 0.0
+    fence: Fence | None = None
 
     @classmethod
     def from_timing(
@@ -252,6 +256,19 @@ def _parts(request: Request, layer_m: float, air: Airspace) -> list[_Part]:
     return [*parts, *home, (request.stay.volume(), "stay", "", end, math.inf)]
 
 
+def fenced_layers(request: Request, airspace: Airspace) -> tuple[float, ...]:
+    """The layers ``request``'s flight may fly at: at or over its floor (:attr:`Airspace.any_layer`) and, with a
+    fence, every flown part of the flight at that layer inside it (:meth:`~masonry.reservation.fence.Fence.admits`)."""
+    floor = _floor_m(request, airspace)
+    fence = airspace.fence
+    return tuple(
+        z
+        for z in airspace.layers_m
+        if z >= floor
+        and (fence is None or all(fence.admits(v, p) for v, p, _t, _a, _b in _parts(request, z, airspace)))
+    )
+
+
 def _floor_m(request: Request, airspace: Airspace) -> float:
     """The lowest layer ``request``'s legs may fly at (:attr:`Airspace.any_layer`)."""
     if airspace.any_layer:
@@ -309,14 +326,12 @@ def plan_flight(table: Table, request: Request, from_s: float, airspace: Airspac
     arrives first where it stays, the lowest among equal arrivals); None if no layer ever fits (an open-ended
     reservation of another UAV is in its way).
 
-    Layers below the start, the work or the stay are skipped (unless :attr:`Airspace.any_layer`). The UAV's own reservations are not in its way (it
-    leaves its stay when the flight starts).
+    Layers below the start, the work or the stay are skipped (unless :attr:`Airspace.any_layer`), and layers where
+    a leg leaves the fence (:func:`fenced_layers`). The UAV's own reservations are not in its way (it leaves its
+    stay when the flight starts).
     """
     best: tuple[float, float, float] | None = None  # (arrival, start, layer)
-    floor = _floor_m(request, airspace)
-    for layer in airspace.layers_m:
-        if layer < floor:
-            continue
+    for layer in fenced_layers(request, airspace):
         parts = _parts(request, layer, airspace)
         t, _ = earliest_start(table, request.uav, [(v, a, b) for v, _p, _t, a, b in parts], from_s)
         arrival = t + parts[-1][3] if airspace.first_arrival else t  # (where it stays, from then on)
@@ -344,8 +359,7 @@ def blockers(
     (``standing``: instead, the open-ended ones in its way at any time on any usable layer: no layer fits, and
     whoever waits in the way of a higher one may be what mission control must move, not only the lowest layer's
     blocker; docs/safety.md, "Parking spots break the cycles")."""
-    floor = _floor_m(request, airspace)
-    layers = [z for z in airspace.layers_m if z >= floor] or [airspace.layers_m[-1]]
+    layers = list(fenced_layers(request, airspace)) or [airspace.layers_m[-1]]
     parts = [(v, a, b) for v, _p, _t, a, b in _parts(request, layers[0], airspace)]
     if not standing:
         return earliest_start(table, request.uav, parts, from_s)[1]
@@ -369,6 +383,7 @@ __all__ = [
     "Work",
     "blockers",
     "earliest_start",
+    "fenced_layers",
     "flight_reservations",
     "min_jerk_time_fraction",
     "plan_flight",

@@ -3,8 +3,9 @@
 A :class:`Reservation` is a UAV, a :class:`~masonry.reservation.space.Volume` it may occupy, a time window
 ``[t0_s, t1_s)`` (``t1_s`` is ``math.inf`` where the UAV may stay: its pad, a parking spot, its site) and a
 purpose. A :class:`Table` never holds two reservations of different UAVs that overlap in space (the
-:class:`~masonry.reservation.space.Separation`) *and* in time: :meth:`Table.add` refuses them. Tables are values:
-every change returns a new one.
+:class:`~masonry.reservation.space.Separation`) *and* in time: :meth:`Table.add` refuses them. It also holds the
+constraints that are no one's volume, :class:`~masonry.reservation.holds.Hold` (no take-off in a window: the
+operator's pause or recall, the wind limit). Tables are values: every change returns a new one.
 """
 
 from __future__ import annotations
@@ -12,10 +13,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from masonry.errors import InvalidArgument, PlanningError
 from masonry.reservation.space import DEFAULT_SEPARATION, Separation, Volume
+
+if TYPE_CHECKING:
+    from masonry.reservation.holds import Hold
 
 #: What a reservation is for. ``stay``: a place the UAV may stay (open-ended); ``climb``, ``transit``,
 #: ``descend``: a flight's legs; ``work``: its work zone at a site; ``site``: the paper's conflict rule (its
@@ -80,10 +84,12 @@ def clash(p: Reservation, q: Reservation, separation: Separation = DEFAULT_SEPAR
 
 @dataclass(frozen=True)
 class Table:
-    """The reservations of a fleet: never two of different UAVs that :func:`clash`."""
+    """The reservations of a fleet: never two of different UAVs that :func:`clash`; and its holds (no take-off
+    in their windows: :mod:`masonry.reservation.holds`)."""
 
     reservations: tuple[Reservation, ...] = ()
     separation: Separation = DEFAULT_SEPARATION
+    holds: tuple[Hold, ...] = ()
 
     def clashes(self, r: Reservation) -> tuple[Reservation, ...]:
         """The reservations of other UAVs ``r`` would clash with."""
@@ -141,8 +147,9 @@ class Table:
         return replace(self, reservations=tuple(kept))
 
     def prune(self, now_s: float) -> Table:
-        """Without the windows that ended by ``now_s`` (they bind nobody any more)."""
-        return replace(self, reservations=tuple(r for r in self.reservations if r.t1_s > now_s))
+        """Without the windows (and holds) that ended by ``now_s`` (they bind nobody any more)."""
+        kept = tuple(r for r in self.reservations if r.t1_s > now_s)
+        return replace(self, reservations=kept, holds=tuple(h for h in self.holds if h.t1_s > now_s))
 
 
 def violations(table: Table) -> list[tuple[Reservation, Reservation]]:
