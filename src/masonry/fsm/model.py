@@ -37,7 +37,7 @@ from masonry.fsm.navigator import Navigator
 from masonry.fsm.phases import PhaseClock
 from masonry.fsm.states import State, Transition, leaf_states
 from masonry.fsm.transit import Transit
-from masonry.fsm.watchdogs import TRIGGERS, Abort, Failsafe, Watchdog, for_kind
+from masonry.fsm.watchdogs import TRIGGERS, Abort, Check, Failsafe, Watchdog, for_kind
 from masonry.planner.tasks import Task
 from masonry.ports import ClearanceLink, Clock, FlightController, MissionLink, TaskResult, Telemetry
 
@@ -113,8 +113,8 @@ class UavModel(CommonStates):
         self._leaf_names = leaf_states(states)
         #: the cross-cutting checks run before each tick's work (masonry.fsm.watchdogs; add one here)
         self.watchdogs: tuple[Watchdog, ...] = for_kind(self.KIND)
-        #: leaf state -> whether each of ``_guarded_dogs`` (the watchdogs as they were asked) guards it
-        self._guarded: dict[str, tuple[bool, ...]] = {}
+        #: leaf state -> the watchdogs of ``_guarded_dogs`` (as they were asked) guarding it (:meth:`_guarding`)
+        self._guarded: dict[str, tuple[tuple[int, Check, bool], ...]] = {}
         self._guarded_dogs = self.watchdogs
         #: the gate states' exit checks, run by their work after its own test (masonry.fsm.gates)
         self.gates = gates_for_kind(self.KIND)
@@ -168,24 +168,23 @@ class UavModel(CommonStates):
             tel = self.fc.telemetry()
             self._tel = tel
             self._observe(tel, step_s)
-            dogs, guarded = self.watchdogs, self._guarded
-            if dogs is not self._guarded_dogs:  # another set of watchdogs (a test's): ask each state again
-                guarded.clear()
-                self._guarded_dogs = dogs
+            if self.watchdogs is not self._guarded_dogs:  # another set (a test's): ask each state again
+                self._guarded.clear()
+                self._guarded_dogs = self.watchdogs
             # masonry.fsm.watchdogs: those guarding the state as it is then (the checks read the model; only a
-            # reaction to a verdict moves the machine)
-            flags = guarded.get(self.state)
-            if flags is None:
-                flags = guarded[self.state] = self._guard_flags(self.state)
-            for i, dog in enumerate(dogs):
-                if flags[i] and (tel.link_ok or not dog.needs_link):
-                    verdict = dog.check(self._now_s, tel, self)
+            # reaction to a verdict moves the machine, and the dogs after it are those of the state it left it in)
+            guarding = self._guarded.get(self.state)
+            if guarding is None:
+                guarding = self._guarding(self.state)
+            link_ok = tel.link_ok
+            for i, check, needs_link in guarding:
+                if link_ok or not needs_link:
+                    verdict = check(self._now_s, tel, self)
                     if verdict is not None:
                         self._react(verdict)
-                        flags = guarded.get(self.state)
-                        if flags is None:
-                            flags = guarded[self.state] = self._guard_flags(self.state)
-            if not tel.link_ok:
+                        self._dogs_after(i, tel)
+                        break
+            if not link_ok:
                 return
             self._do[self.state](tel)
             if self.nav.active:
@@ -198,9 +197,28 @@ class UavModel(CommonStates):
         """The period (s) after which the next tick is due: ``config.control_period_s`` (a state may ask less)."""
         return self.config.control_period_s
 
-    def _guard_flags(self, state: str) -> tuple[bool, ...]:
-        """Which of :attr:`watchdogs` guard leaf ``state`` (asked once per state: the tick looks them up)."""
-        return tuple(dog.guards(state, self._TASK_STATES_SET) for dog in self.watchdogs)
+    def _guarding(self, state: str) -> tuple[tuple[int, Check, bool], ...]:
+        """The watchdogs guarding leaf ``state``, each with its index in :attr:`watchdogs`, its check and whether
+        it needs the link (asked once per state: the tick looks them up)."""
+        got = self._guarded[state] = tuple(
+            (i, dog.check, dog.needs_link)
+            for i, dog in enumerate(self.watchdogs)
+            if dog.guards(state, self._TASK_STATES_SET)
+        )
+        return got
+
+    def _dogs_after(self, reacted: int, tel: Telemetry) -> None:
+        """The watchdogs after the one that moved the machine (index ``reacted``), as guard the state it is in now
+        (each reaction moves on to the state it leaves the machine in)."""
+        for i, dog in enumerate(self.watchdogs):
+            if (
+                i > reacted
+                and dog.guards(self.state, self._TASK_STATES_SET)
+                and (tel.link_ok or not dog.needs_link)
+            ):
+                verdict = dog.check(self._now_s, tel, self)
+                if verdict is not None:
+                    self._react(verdict)
 
     def _observe(self, tel: Telemetry, step_s: float) -> None:
         """The timers the watchdogs read (link down, waiting and held for clearance, outside the fence), the drain.

@@ -40,6 +40,10 @@ MIN_JERK_PEAK_JERK = 60.0
 MIN_JERK_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
 
 
+#: ``tuple.__new__``: builds a :class:`Setpoint` from its two fields (the navigator's, every control tick)
+_new_tuple = tuple.__new__
+
+
 class Setpoint(NamedTuple):
     """What the navigator asks of the flight controller for one tick (world ENU)."""
 
@@ -70,6 +74,9 @@ class Navigator:
         self.target_m = np.zeros(3)
         self.target_yaw_rad: float | None = None
         self.traj: MinJerk | None = None
+        self._traj_end: tuple[MinJerk, Vec3] | None = (
+            None  # the leg's end sample, and of which leg (reference)
+        )
         self.line: tuple[np.ndarray, np.ndarray, float] | None = None  # start, unit direction, length
         self.line_speed_mps = 0.0
         #: a reference the model sets every tick (position, velocity feed-forward): :meth:`steer`
@@ -419,16 +426,22 @@ class Navigator:
         traj = self.traj
         if traj is not None:
             t = now_s - self.t0_s
-            ref, vel, acc = traj.sample_floats(t)
             shift = self._shift_m
-            if shift is not None:
-                ref = (ref[0] + shift[0], ref[1] + shift[1], ref[2] + shift[2])
             if t < traj.duration_s:
+                ref, vel, acc = traj.sample_floats(t)
+                if shift is not None:
+                    ref = (ref[0] + shift[0], ref[1] + shift[1], ref[2] + shift[2])
                 # velocity, plus the acceleration times the autopilot's velocity lag: a first-order velocity
                 # loop then follows the reference's velocity instead of trailing it by lag x acceleration,
                 # which the integral would otherwise make up for as an overshoot at the end of the leg
                 lag = self.leg_lag_s
                 return ref, (vel[0] + lag * acc[0], vel[1] + lag * acc[1], vel[2] + lag * acc[2])
+            end = self._traj_end  # past its end the sample is the end's (held while the leg's hover lasts)
+            if end is None or end[0] is not traj:
+                end = self._traj_end = (traj, traj.sample_floats(t)[0])
+            ref = end[1]
+            if shift is not None:
+                ref = (ref[0] + shift[0], ref[1] + shift[1], ref[2] + shift[2])
             return ref, _ZERO_FF
         if self.steered is not None:
             return self.steered
@@ -456,4 +469,4 @@ class Navigator:
             yaw_rad=tel.attitude_rad[2],
             target_yaw_rad=self.target_yaw_rad,
         )
-        return Setpoint((vx, vy, vz), yaw_rate)
+        return _new_tuple(Setpoint, ((vx, vy, vz), yaw_rate))  # Setpoint(...) without its Python __new__

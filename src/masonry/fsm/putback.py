@@ -45,6 +45,8 @@ class PutBack(UavModel):
     stow: Callable[..., bool]
     #: the put-back's legs that do not depend on where the UAV is, and what they were computed for (_putback_legs)
     _putback_cache: tuple[tuple[object, ...], tuple[Vec3, float, float]] | None = None
+    #: the last :meth:`_putback_need_s`: from which point (the same object), with which legs, at which tick, and it
+    _putback_need_memo: tuple[Vec3, tuple[Vec3, float, float], float, float] | None = None
 
     def _new_attempt(self, start_s: float, wait_budget_s: float) -> BrickAttempt:
         return BrickAttempt(start_s=start_s, wait_budget_s=wait_budget_s)
@@ -76,10 +78,18 @@ class PutBack(UavModel):
         """Putting the brick back from ``from_m`` (the flight to its pickup, the descent, the release, the climb)
         and the way home from there, with no wait."""
         cfg = self.config
-        over, vertical_s, home_s = self._putback_legs()
-        return (
+        legs = self._putback_legs()
+        memo = (
+            self._putback_need_memo
+        )  # (the battery watch asks twice a tick from the same telemetry's point)
+        if memo is not None and memo[0] is from_m and memo[1] is legs and memo[2] == self._now_s:
+            return memo[3]
+        over, vertical_s, home_s = legs
+        need_s = (
             self._route_s(from_m, over) + cfg.descent_duration_s + cfg.release_dwell_s + vertical_s + home_s
         )
+        self._putback_need_memo = (from_m, legs, self._now_s, need_s)
+        return need_s
 
     def _putback_legs(self) -> tuple[Vec3, float, float]:
         """Where the put-back's descent starts, the climb back from the pallet and the way home from there: the

@@ -172,13 +172,15 @@ class Routing(ModelBase):
         assert self.clearance is not None
         transit, target = self.transit, self.nav.target_m
         layer, site = transit.layer_m, transit.site_m
-        p = np.asarray(tel.position_m, dtype=float)
-        if layer is None or abs(float(target[2]) - layer) > 1e-6 or abs(float(p[2]) - layer) > 0.2:
+        pos = tel.position_m  # (floats: asked on every tick of a hold flight's lateral leg)
+        if layer is None or abs(float(target[2]) - layer) > 1e-6 or abs(float(pos[2]) - layer) > 0.2:
             return False
-        if point_segment_m((float(target[0]), float(target[1])), (p[0], p[1]), (site[0], site[1])) > 0.02:
+        px, py = float(pos[0]), float(pos[1])
+        if point_segment_m((float(target[0]), float(target[1])), (px, py), (site[0], site[1])) > 0.02:
             return False
-        if math.hypot(float(target[0]) - p[0], float(target[1]) - p[1]) < STRAIGHT_ON_FROM_M:
+        if math.hypot(float(target[0]) - px, float(target[1]) - py) < STRAIGHT_ON_FROM_M:
             return False  # (as good as there: it stops and reads the answer at rest, as before)
+        p = np.asarray(pos, dtype=float)
         answer = self.clearance.request_clearance(site, transit.top_m, transit.to_m)
         if (
             answer is None

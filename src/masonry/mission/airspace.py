@@ -13,6 +13,8 @@ ColumnClearance is the protocol; its records, the layers and the volumes' shapes
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from masonry.mission import airspace_ground, airspace_progress, airspace_queries, airspace_requests
 from masonry.mission.airspace_ground import ON_PAD_XY_M, ON_PAD_Z_M
 from masonry.mission.airspace_progress import AT_HOLD_M
@@ -133,9 +135,11 @@ class ColumnClearance(AirspaceRecords):
         u = self.records.get(uav)
         return () if u is None else tuple(u.volumes)
 
-    def reserved_at(self, uav: str, t_s: float) -> tuple[Volume, ...]:
-        """The volumes ``uav`` holds now, whatever ``t_s`` (:class:`~masonry.mission.envelope.ReservedSpace`)."""
-        return self.volumes(uav)
+    def reserved_at(self, uav: str, t_s: float) -> Sequence[Volume]:
+        """The volumes ``uav`` holds now, whatever ``t_s`` (:class:`~masonry.mission.envelope.ReservedSpace`): its
+        record's own list, not a copy (the envelope watch reads it after every physics step)."""
+        u = self.records.get(uav)
+        return () if u is None else u.volumes
 
     def layer_m(self, uav: str) -> float | None:
         """Altitude of ``uav``'s flight in progress (None: none, or no layers)."""

@@ -293,10 +293,16 @@ class UavHandler(ResultReports, Recalls, ColumnRequests, GroundCrew, MissionLink
         self.now_s = now_s
         if self._kept is not None:
             self._say_kept(now_s)
-        self._read_and_beat(now_s)
-        if self._column is not None or self._columns_left:
-            self._check_columns(now_s)
-        if self.busy and self._mission_control_gone():
+        # _read_and_beat, inline (every tick of every UAV): the heartbeat's call only when one is due
+        for raw in self.transport.receive():
+            self._handle(raw, now_s)
+        last_hb_s = self._last_sent_hb_s
+        if last_hb_s is None or now_s - last_hb_s >= self.heartbeat_period_s:
+            self._heartbeat_when_due(now_s)
+        if (self._column is not None or self._columns_left) and now_s - self._column_checked_s >= 0.2:
+            self._check_columns(now_s)  # (its own early return, checked here first)
+        busy = bool(self._queue) or self._current is not None  # busy, inline
+        if busy and self._mission_control_gone():
             # mission control has declared this UAV lost by now (the same timeout) and given its task to another
             # UAV, or it has crashed and a resumed one flies the task again: carrying on would do it twice
             why = f"{MISSION_CONTROL_LOST_REASON} ({now_s - (self._last_mc_s or now_s):.1f} s silent)"

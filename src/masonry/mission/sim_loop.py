@@ -45,7 +45,6 @@ def fly(mission: SimulatedMission) -> None:
     next_sample_s = clock.now_s()
     mc.uav_events = False  # the world's samples below tell the sink where each UAV is
     envelope = mission.envelope
-    uavs = world.uavs
     while True:
         now = clock.now_s()
         for name, h in handlers.items():
@@ -81,12 +80,5 @@ def fly(mission: SimulatedMission) -> None:
         for _ in range(substeps):
             world.step(dt_s)
             if envelope is not None:
-                envelope.observe(
-                    clock.now_s(),
-                    [
-                        (n, u.vehicle.position_m)
-                        for n, u in uavs.items()
-                        if u.vehicle.armed and not u.vehicle.on_ground
-                    ],
-                )
+                envelope.observe(clock.now_s(), world.airborne)  # (armed in the air after the step)
         mission.measured.note_wall()  # (a brick released: the journal file says what the world holds on the wall)

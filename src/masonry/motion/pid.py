@@ -119,7 +119,8 @@ def _floats9(
         fx, fy, fz = velocity_ff_mps
         px, py, pz, tx, ty, tz = float(px), float(py), float(pz), float(tx), float(ty), float(tz)
         fx, fy, fz = float(fx), float(fy), float(fz)
-        if (
+        # one test for the nine: a sum of finite floats is finite unless it overflows (then each is asked below)
+        if isfinite(px + py + pz + tx + ty + tz + fx + fy + fz) or (
             isfinite(px)
             and isfinite(py)
             and isfinite(pz)
@@ -235,7 +236,20 @@ class PID:
         self._yaw_active = yaw_active
         yaw_error = wrap_angle_rad(float(target_yaw_rad) - yaw) if target_yaw_rad is not None else 0.0
         error = (tx - px, ty - py, tz - pz, yaw_error)
-        dt = self._measure(now, px, py, pz, yaw)
+        # the filtered rates from the previous measurement, and the time since it (None: none yet)
+        prev_t = self._prev_t_s
+        dt = None if prev_t is None else now - prev_t
+        prev = self._prev_meas
+        if dt is not None and dt > 0.0 and prev is not None:
+            tau = self.gains.derivative_tau_s
+            alpha = 1.0 if tau == 0.0 else dt / (tau + dt)
+            rate[0] += alpha * ((px - prev[0]) / dt - rate[0])
+            rate[1] += alpha * ((py - prev[1]) / dt - rate[1])
+            rate[2] += alpha * ((pz - prev[2]) / dt - rate[2])
+            rate[3] += alpha * (wrap_angle_rad(yaw - prev[3]) / dt - rate[3])
+        if dt is None or dt != 0.0:
+            self._prev_t_s = now
+            self._prev_meas = [px, py, pz, yaw]
 
         integrate = dt is not None and dt > 0.0
         ff = (fx, fy, fz, 0.0)
@@ -266,21 +280,3 @@ class PID:
             integral[3] = 0.0
             return out[0], out[1], out[2], 0.0
         return out[0], out[1], out[2], out[3]
-
-    def _measure(self, now: float, px: float, py: float, pz: float, yaw: float) -> float | None:
-        """Update the filtered rates from the previous measurement; return the time since it (None: none yet)."""
-        prev_t = self._prev_t_s
-        dt = None if prev_t is None else now - prev_t
-        prev = self._prev_meas
-        if dt is not None and dt > 0.0 and prev is not None:
-            rate = self._rate
-            tau = self.gains.derivative_tau_s
-            alpha = 1.0 if tau == 0.0 else dt / (tau + dt)
-            rate[0] += alpha * ((px - prev[0]) / dt - rate[0])
-            rate[1] += alpha * ((py - prev[1]) / dt - rate[1])
-            rate[2] += alpha * ((pz - prev[2]) / dt - rate[2])
-            rate[3] += alpha * (wrap_angle_rad(yaw - prev[3]) / dt - rate[3])
-        if dt is None or dt != 0.0:
-            self._prev_t_s = now
-            self._prev_meas = [px, py, pz, yaw]
-        return dt

@@ -229,6 +229,8 @@ class World:
         self.field = BrickField(self.config.cell_m)
         self._T_body_cam = airframe.T_body_cam()
         self._min_sep: float | None = None
+        #: the UAVs armed in the air after the last step, and where they are (the envelope watch reads it)
+        self.airborne: list[tuple[str, Vec3]] = []
         self._layouts = LayoutCache()  # the camera's marker arrays, kept between frames
         self.drawn_pickups = render_sample(blueprint) if camera == "mixed" else frozenset()  # mixed mode
         self.picks: list[tuple[float, str, int]] = []  # (time, UAV, brick) of every grasp
@@ -315,7 +317,8 @@ class World:
         now = self.clock.now_s() + dt_s
         faults = self.faults
         timed_faults = bool(faults.uav_loss_at_s) or bool(faults.link_loss_at_s)
-        airborne: list[Vec3] = []
+        airborne: list[tuple[str, Vec3]] = []
+        self.airborne = airborne  # (a new list each step: a caller may keep the last one)
         sample_s = self.config.path_sample_s
         field = self.field
         for uav in self.uavs.values():
@@ -323,7 +326,8 @@ class World:
             if timed_faults and not uav.failed:
                 self._timed_faults(uav, now)
             if vehicle.armed or not vehicle.on_ground:
-                start = release_start(uav, field, now)
+                # release_start's own early exit (no timed release due), checked here first
+                start = None if uav.release_due_s is None else release_start(uav, field, now)
                 vehicle.step(dt_s)
                 if vehicle.failed and not uav.failed:
                     self._fail(uav)  # the vehicle stopped on its own (battery empty in the air)
@@ -342,7 +346,7 @@ class World:
                 elif uav.valve_open:
                     self._spray(uav)
                 if vehicle.armed and not vehicle.on_ground:
-                    airborne.append((vehicle._x, vehicle._y, vehicle._z))
+                    airborne.append((uav.name, (vehicle._x, vehicle._y, vehicle._z)))
             else:
                 vehicle.idle(dt_s)  # parked (or fallen): only its clock moves
             if now >= uav._next_sample_s:
@@ -352,7 +356,7 @@ class World:
             self._record_separation(airborne)
         self.clock.advance(dt_s)
 
-    def _record_separation(self, airborne: list[Vec3]) -> None:
+    def _record_separation(self, airborne: list[tuple[str, Vec3]]) -> None:
         """Lower the smallest separation seen so far to the closest pair of ``airborne`` positions (two or more)."""
         best2 = math.inf  # smallest squared distance this step (one square root, not one per pair)
         # A pair whose x distance alone reaches the smallest separation so far cannot lower it: skip it after
@@ -361,8 +365,8 @@ class World:
         record = self._min_sep
         skip2 = math.inf if record is None else record * record * (1.0 + 1e-9)
         for i in range(len(airborne) - 1):
-            ax, ay, az = airborne[i]
-            for bx, by, bz in airborne[i + 1 :]:
+            ax, ay, az = airborne[i][1]
+            for _b, (bx, by, bz) in airborne[i + 1 :]:
                 dx = ax - bx
                 d2 = dx * dx
                 if d2 >= skip2:
