@@ -62,27 +62,28 @@ def test_a_waiting_uav_in_a_waiting_uavs_way_climbs_to_its_lift_spot_and_is_out_
     assert air.forced == 0 and air.conflicts() == []
 
 
-def test_of_two_uavs_waiting_for_each_others_site_the_later_one_climbs_to_its_lift_spot_not_to_its_parking_spot():
-    # a at (0, 0) asks for b's site, b at (3, 0) for a's: a cycle of stays. b, the later request, climbs straight
-    # up to its lift spot (before, the parking rule sent it 6 m up over its pad, 5 m away, and back); a then takes
-    # b's site once b is up, and b comes down to a's old site from its spot once a has left it
+def test_two_uavs_waiting_for_each_others_site_climb_to_their_lift_spots_not_to_their_parking_spots():
+    # a at (0, 0) asks for b's site, b at (3, 0) for a's: a cycle of stays. Each is in the other's way and climbs
+    # straight up to its lift spot (before, the parking rule sent one of them 6 m up over its pad, 5 m away, and
+    # back); once both are up, each comes down to the other's site from its spot
     air = TableClearance(0.8, 2.0, homes=HOMES, start_base_m=1.2)
     s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
     _at(air, "a", s1, 0.0)
     _at(air, "b", s2, 0.0)
     assert not air.request("a", s2, 30.0, s1).granted
     assert not air.request("b", s1, 30.5, s2).granted
-    spot = (s2[0], s2[1], air.airspace.layers_m[-1] + air.spacing_m)
+    top = air.airspace.layers_m[-1] + air.spacing_m
+    spots = {"a": (s1[0], s1[1], top), "b": (s2[0], s2[1], top)}
     granted: list[str] = []
     for k in range(62, 240):
         t = k / 2.0
         for g in air.grant(t):
-            assert g.granted or g.hold_m == pytest.approx(spot)  # b's lift, and no parking flight
+            assert g.granted or g.hold_m == pytest.approx(spots[g.uav])  # lifts, and no parking flight
             granted += [g.uav] if g.granted else []
         if t == 40.0:
-            air.progress("b", spot)  # b is up
-        if t == 60.0:
-            air.progress("a", s2)  # a is at b's old site
-            air.end_transit("a")
-    assert granted == ["a", "b"] and air.lifted_count == 1 and air.held_back == 0
-    assert air.conflicts() == []
+            air.progress("a", spots["a"])  # both are up
+            air.progress("b", spots["b"])
+        if len(granted) == 2:
+            break
+    assert sorted(granted) == ["a", "b"] and air.lifted_count == 2 and air.held_back == 0
+    assert air.forced == 0 and air.conflicts() == []

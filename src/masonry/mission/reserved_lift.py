@@ -6,14 +6,15 @@ work zone, open-ended) or at the pallet with its brick. That stay stood in the d
 working beside it, which then waited for it, and the next ones behind them: on the 12 m wall at 8 + 4, 25 s of
 every brick cycle were another UAV's stay, half of them chains of waiting UAVs (docs/performance/fleet.md, "Why
 the table is 62.5 % slower"). The columns send such a UAV to a hold point. Now a UAV at rest at a site, told to
-wait at least :data:`LIFT_AFTER_S` (or with no end), whose stay another waiting UAV's answer names in its way
-(:func:`masonry.mission.reserved_requests.lift_in_way`, the latest such request first, one a tick), climbs
+wait at least :data:`LIFT_AFTER_S` (or with no end), whose stay the last answer to another UAV's request names in
+its way (:func:`masonry.mission.reserved_requests.lift_in_way`, every tick), climbs
 straight up to its *lift spot*: a hover over where it is, one layer spacing over the top transit layer
 (:func:`lift_spot`), reserved as a parking flight is (climb where it is, hover there, open-ended), when that
 flight fits now. Its work zone is free once it has climbed out; from the spot its hop is planned and gated like
 any other (from the top layer, its way down to it checked, :func:`masonry.mission.reserved_requests.evaluate`).
 A UAV in nobody's way waits where it is: lifting every waiting UAV cost the climb up and down again for nothing
-(the bundled pyramid at 2 + 1 +5 %, the 12 m wall at 4 + 2 seed 2 +20 %; docs/performance/fleet.md).
+(the bundled pyramid at 2 + 1 +5 %, the 12 m wall at 4 + 2 seed 2 +20 %; docs/performance/fleet.md, "A waiting UAV
+in another's way climbs to its lift spot").
 
 The spot is in the way of no hop: every leg, climb and descent of a hop is at or under the top layer, 1.1 m under
 it, and the way down from a spot (a parking spot's or a lift spot's) is over the UAV's own pad or its own spot.

@@ -62,9 +62,8 @@ class TableUav:
     grants: int = 0  # its plans numbered so far
     #: its last report's ``plan_progress`` (None: none, or a report without one came since)
     reported: PlanProgress | None = None
-    lifted: bool = (
-        False  # its spot is its lift spot over the site it waited at (:mod:`~masonry.mission.reserved_lift`)
-    )
+    #: its spot is its lift spot over the site it waited at (:mod:`~masonry.mission.reserved_lift`)
+    lifted: bool = False
 
     @property
     def hovering(self) -> bool:
@@ -219,19 +218,20 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
 
 
 def lift_in_way(c: TableClearance, uavs: Mapping[str, TableUav], now_s: float) -> list[Grant]:
-    """The latest request of a UAV waiting at rest at a site whose stay is in the way of another waiting UAV's
-    flight, sent to its lift spot if its climb there fits now (:func:`~masonry.mission.reserved_lift.lift`)."""
-    waiting = [u for u in uavs.values() if u.request is not None and u.phase in (Phase.ASKING, Phase.AT_HOLD)]
-    named = {o for u in waiting for o, p in u.blocked_by if p == "stay"}
-    asking = [(u.request.seq, n, u) for n, u in uavs.items() if n in named and u.request is not None]
-    for _seq, uav, u in sorted(asking, key=lambda a: -a[0]):  # (the latest request first)
-        if u.request is None or u.phase is not Phase.ASKING or u.plan is not None:
+    """The UAVs waiting at rest at a site whose stay the last answer to another UAV's request names in its way
+    (that UAV waiting where it is, at a spot, or on its way to one), each sent to its lift spot if its climb there
+    fits now (:func:`~masonry.mission.reserved_lift.lift`)."""
+    named = {o for u in uavs.values() if u.request is not None for o, p in u.blocked_by if p == "stay"}
+    out = []
+    for uav in sorted(named):
+        u = uavs.get(uav)
+        if u is None or u.request is None or u.phase is not Phase.ASKING or u.plan is not None:
             continue
         hop = hop_request(c, uav, u, u.request)
         g = lift(c, uav, u, u.request, (*hop.start.xy, hop.start.z_m), u.retry_s, now_s)
-        if g is not None:  # (one a tick: the others' waits are looked at again first)
-            return [g]
-    return []
+        if g is not None:
+            out.append(g)
+    return out
 
 
 def _hold_on(uav: str, u: TableUav, w: FlightRequest) -> Grant:
