@@ -80,8 +80,10 @@ def table_pair() -> TableClearance:
 
 def table_pair_waiting_for_each_others_site() -> TableClearance:
     """:func:`table_pair` with a at its site (0, 0), b at its site (3, 0), each refused the other's site at 30 s:
-    a cycle of stays the parking rule breaks."""
+    a cycle of stays the parking rule breaks (lift spots off: one of them would break it first, the latest request's
+    UAV climbing to its lift spot, ``tests/test_table_lift.py``)."""
     air = table_pair()
+    air.lifting = False
     s1, s2 = (0.0, 0.0, 1.2), (3.0, 0.0, 1.2)
     for uav, site in (("a", s1), ("b", s2)):
         air.take_off(uav)

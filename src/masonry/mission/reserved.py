@@ -133,7 +133,7 @@ class TableClearance:
         #: is this a UAV's flight to its task's site (then, held back far from it, it waits at the approach spot
         #: over it)? None: no approach spots (:mod:`masonry.mission.reserved_approach`)
         self.work_site: Callable[[str, Vec3], bool] | None = None
-        self.approached_count = 0  # flights to an approach spot
+        self.approached_count, self.lifted_count, self.lifting = 0, 0, True  # (lift spots: reserved_lift.py)
         self._levels = park_levels(self.homes, self.sep_xy_m)
         self._windows = TableWindows()  # (reserved_at's)
         self.airspace = self._make_airspace()
@@ -238,6 +238,7 @@ class TableClearance:
             g = reserved_requests.evaluate(self, uav, u, now_s)
             if g.granted:
                 out.append(g)
+        out += reserved_requests.lift_in_way(self, self._uavs, now_s)  # (waiting UAVs in a waiting one's way)
         park = self._park(now_s)
         return out if park is None else [*out, park]
 
@@ -247,7 +248,7 @@ class TableClearance:
             n: u
             for n, u in self._uavs.items()
             if u.request is not None
-            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and (u.approach or u.flown_on)))
+            and (u.phase is Phase.ASKING or (u.phase is Phase.AT_HOLD and u.hovering))
         }
         # (whose way a UAV is in: any waiting UAV's, one hovering at its parking spot too)
         waits = {
@@ -266,7 +267,7 @@ class TableClearance:
                 if sent is not None:
                     return sent
             home = self.homes.get(uav)
-            start = u.spot if u.approach or u.flown_on else (u.request.position or u.position)
+            start = u.spot if u.hovering else (u.request.position or u.position)
             if home is None or start is None:
                 continue
             # a UAV hovering where it turned back leaves from its hover (on its layer, a few centimetres over where
@@ -274,11 +275,7 @@ class TableClearance:
             # parked, bench_layouts --compact --faults --airspace table seed 70)
             start = hover_start(self.table.stay_of(uav), start)
             top, n, plan = self._home_top_m(), self.max_layers, None
-            parked = {
-                o: p.spot
-                for o, p in self._uavs.items()
-                if p.spot is not None and not (p.approach or p.flown_on)
-            }
+            parked = {o: p.spot for o, p in self._uavs.items() if p.spot is not None and not p.hovering}
             spots = park_spots(home, top, n, self.spacing_m, self._levels, uav)
             # (never in the way down of a UAV parked before it: reserved_parts.parking_order)
             for spot in parking_order(uav, spots, self.airspace.layers_m[-1], parked, self.table.separation):
@@ -291,7 +288,7 @@ class TableClearance:
             left = self.table if stay is None else forced(self.table, [stay], [stay.until(now_s)])
             self.table = forced(left, [], plan.reservations)
             u.phase, u.plan, u.spot, u.site, u.approach = Phase.TO_HOLD, plan, spot, u.request.site, False
-            u.flown_on, u.down_to = False, None
+            u.flown_on, u.down_to, u.lifted = False, None, False
             self.held_back += 1
             self.bump()
             return Grant(uav, u.request.site, False, spot, spot[2])

@@ -105,7 +105,7 @@ def approach(
         return None
     c.table = forced(c.table.release(uav, now_s), [], plan.reservations)
     u.phase, u.plan, u.spot, u.site, u.approach, u.approached = Phase.TO_HOLD, plan, spot, w.site, True, w.seq
-    u.flown_on, u.down_to = False, None
+    u.flown_on, u.down_to, u.lifted = False, None, False
     u.blocked_by = (("-", "approach"),)  # (what it waits for while it flies there: its flight to the spot)
     c.approached_count += 1
     c.bump()

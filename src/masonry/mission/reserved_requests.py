@@ -11,6 +11,7 @@ spot, :mod:`masonry.mission.reserved_approach`). Pure: no I/O, no clock.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -18,6 +19,7 @@ from masonry.mission.airspace_ground import ON_PAD_XY_M
 from masonry.mission.airspace_state import FlightRequest, Grant, Phase, request_geometry
 from masonry.mission.fence import flight_fence_problem
 from masonry.mission.reserved_approach import approach
+from masonry.mission.reserved_lift import lift
 from masonry.mission.reserved_parts import ON_LEG_M, forced, legs_under_way, level_of, on_ahead
 from masonry.mission.sites import enter_ungoverned
 from masonry.mission.table_holds import fence_refusal, held_cause
@@ -61,6 +63,13 @@ class TableUav:
     grants: int = 0  # its plans numbered so far
     #: its last report's ``plan_progress`` (None: none, or a report without one came since)
     reported: PlanProgress | None = None
+    #: its spot is its lift spot over the site it waited at (:mod:`~masonry.mission.reserved_lift`)
+    lifted: bool = False
+
+    @property
+    def hovering(self) -> bool:
+        """Its spot is a hover it waits at (approach, flown on to, lift), not its parking spot."""
+        return self.approach or self.flown_on or self.lifted
 
 
 def request(
@@ -149,6 +158,7 @@ def fly_on(c: TableClearance, uav: str, u: TableUav, g: Grant) -> Grant:
     if spot is None:
         return g
     u.phase, u.spot, u.approach, u.flown_on, u.down_to = Phase.TO_HOLD, spot, False, True, down
+    u.lifted = False
     c.bump()
     return Grant(uav, u.request.site, False, spot, spot[2])
 
@@ -204,12 +214,29 @@ def evaluate(c: TableClearance, uav: str, u: TableUav, now_s: float) -> Grant:
     left = c.table.release(uav, decision.plan.start_s)  # its stay (or old plan) ends as it sets off
     c.table, u.plan, u.site = forced(left, [], decision.plan.reservations), decision.plan, w.site
     u.request, u.phase, u.blocked_by, u.spot, u.approach = None, Phase.FLYING, (), None, False
-    u.flown_on, u.down_to = False, None
+    u.flown_on, u.down_to, u.lifted = False, None, False
     c.granted_count += 1
     if c.gate is not None:
         c.gate.entered(uav, w.site, now_s)
     c.bump()
     return Grant(uav, w.site, layer_m=decision.plan.layer_m)
+
+
+def lift_in_way(c: TableClearance, uavs: Mapping[str, TableUav], now_s: float) -> list[Grant]:
+    """The UAVs waiting at rest at a site whose stay the last answer to another UAV's request names in its way
+    (that UAV waiting where it is, at a spot, or on its way to one), each sent to its lift spot if its climb there
+    fits now (:func:`~masonry.mission.reserved_lift.lift`)."""
+    named = {o for u in uavs.values() if u.request is not None for o, p in u.blocked_by if p == "stay"}
+    out = []
+    for uav in sorted(named):
+        u = uavs.get(uav)
+        if u is None or u.request is None or u.phase is not Phase.ASKING or u.plan is not None:
+            continue
+        hop = hop_request(c, uav, u, u.request)
+        g = lift(c, uav, u, u.request, (*hop.start.xy, hop.start.z_m), u.retry_s, now_s)
+        if g is not None:
+            out.append(g)
+    return out
 
 
 def _hold_on(uav: str, u: TableUav, w: FlightRequest) -> Grant:
