@@ -125,6 +125,26 @@ def test_any_layer_lets_a_leg_fly_below_the_works_top() -> None:
     assert (descent.volume.z0_m, descent.volume.z1_m) == (LAYERS_M[0], 3.0)
 
 
+def test_a_clash_the_table_was_given_unchecked_does_not_make_decide_raise() -> None:
+    # mission control gives the table what a UAV physically holds without a check (a UAV heard again after a
+    # link drop stays where it is: a column from the ground to it), which may clash with another's open-ended
+    # window. Ending the stay as the flight starts only shortens it: it was re-added with a check and raised
+    # "brick-2's stay from 19.4 s to 19.4 s clashes with glue-2's climb" (chaos seed 97, --airspace table;
+    # its window ended a fraction of a second after it began)
+    here = Reservation("a", column((0.0, 0.0), 0.0, 4.0), 19.4, math.inf, "stay")
+    climb = Reservation("b", column((1.0, 0.0), 0.5, 1.5), 17.4, math.inf, "climb")
+    table = Table(reservations=(here, climb))
+    assert table.clashes(here) == (climb,)
+    request = Request("a", Place((0.0, 0.0), 4.0, "site"), Work((8.0, 0.0), 1.0, 10.0))
+    granted = decide(table, request, 20.0, Airspace(LAYERS_M))
+    assert isinstance(granted, Grant) and granted.plan.start_s == pytest.approx(20.0)
+    ended = [r for r in granted.table.of("a") if r.purpose == "stay" and r.t0_s == 19.4]
+    assert [r.t1_s for r in ended] == [granted.plan.start_s]  # the stay ends as it sets off
+    assert climb in granted.table.reservations  # nothing of b's changed
+    with pytest.raises(PlanningError, match="cannot be made to end later"):
+        table.ended(here.until(20.0), 30.0)
+
+
 def test_decide_is_pure() -> None:
     table = start_table({"a": (0.0, 0.0)})
     request = Request("a", Place((0.0, 0.0)), Work((5.0, 5.0), 1.0, 10.0))

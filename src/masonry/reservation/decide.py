@@ -123,7 +123,7 @@ def decide(table: Table, request: Request, now_s: float, airspace: Airspace) -> 
     if plan.start_s > now_s + airspace.horizon_s:
         return Wait(uav, plan.start_s, blockers(table, request, from_s, airspace), held)
     # the stay ends as the flight starts (kept even if it ends as it begins: it marks the departure)
-    left = table.without([stay]).add(stay.until(plan.start_s))
+    left = table.ended(stay, plan.start_s)
     return Grant(left.add(*plan.reservations), plan)
 
 

@@ -135,6 +135,14 @@ class Table:
             kept.remove(r)
         return replace(self, reservations=tuple(kept))
 
+    def ended(self, r: Reservation, t1_s: float) -> Table:
+        """This table with ``r`` ending at ``t1_s``, no later than it did. Not checked: a window cut short clashes
+        with nothing the whole one did not, so a clash the table was given unchecked (what a UAV physically holds)
+        is kept, never raised here."""
+        if t1_s > r.t1_s:
+            raise PlanningError(f"{r.describe()} cannot be made to end later, at {t1_s:.1f} s")
+        return replace(self, reservations=tuple(r.until(t1_s) if q == r else q for q in self.reservations))
+
     def release(self, uav: str, from_s: float) -> Table:
         """``uav`` gives up everything from ``from_s`` on: windows that start then or later are dropped, windows
         running past it end there. Nothing of another UAV changes."""
