@@ -15,14 +15,16 @@ import pytest
 from airspace_rig import table_pair
 from masonry.blueprint import load_blueprint
 from masonry.geofence import Site
+from masonry.mission import table_holds
 from masonry.mission.airspace_state import Phase
+from masonry.mission.control_dispatch import may_take_off
 from masonry.mission.events import EventList
 from masonry.mission.reserved import TableClearance
 from masonry.mission.simulate import SimulatedMission
 from masonry.mission.wait_causes import airspace_cause
 from masonry.mission.waits import WaitCause
 from masonry.ports import RECALL_REASON
-from masonry.reservation import Fence, Hold, Table, with_holds
+from masonry.reservation import Fence, Hold, Table, column, with_holds
 from masonry.reservation.fence import FLOWN
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -244,3 +246,27 @@ def test_a_uav_cut_off_under_a_low_ceiling_flies_home_inside_what_the_table_rese
     assert len(cut) == 2 and homes, "glue-1 was cut off and its way home reserved"
     assert report.completed and report.conflict_violations == 0
     assert not outside, outside[:3]
+
+
+def test_dispatch_under_the_table_reads_the_tables_holds() -> None:
+    """Under the table dispatch asks the table's holds whether a UAV is recalled or grounded (``table_holds.holding``:
+    ``sync`` made them this tick from the operator and the wind limit), not the operator and the wind limit
+    beside it; under the columns it asks them. A UAV in the air (not landed: no take-off for its hold to refuse) is
+    given no task while the table holds it (before, dispatch did not look at the table)."""
+    bp = load_blueprint(CASE_STUDY)
+    mission = SimulatedMission.from_blueprint(bp, seed=0, airspace="table")
+    mc = mission.control
+    c = mc.columns
+    assert isinstance(c, TableClearance)
+    c.set_stay("brick-1", column((3.0, -0.5), 0.0, 2.1), Phase.PARKED)  # (in the air over its pad)
+    assert table_holds.holding(mc, "brick-1") == frozenset()
+    c.table = with_holds(c.table, {("wind", frozenset({"brick-1"}))}, 0.0)
+    assert table_holds.holding(mc, "brick-1") == frozenset({"wind"})
+    assert mc.wind_limit is None or mc.wind_limit.allows("brick-1")  # (the wind limit says nothing)
+    assert not may_take_off(mc, "brick-1")
+    c.table, mc.now_s = with_holds(c.table, {("operator", frozenset({"brick-1"}))}, 1.0), 1.0
+    assert table_holds.holding(mc, "brick-1") == frozenset({"operator"}) and not may_take_off(mc, "brick-1")
+    c.table, mc.now_s = with_holds(c.table, set(), 2.0), 2.0
+    assert may_take_off(mc, "brick-1")
+    columns = SimulatedMission.from_blueprint(bp, seed=0).control  # the columns: no table to read
+    assert table_holds.holding(columns, "brick-1") is None
