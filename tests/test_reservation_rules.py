@@ -169,6 +169,30 @@ def test_no_flight_with_a_leg_outside_the_fence_is_granted() -> None:
     play({"d": (10, 4.5)}, "t_s | uav | does | expect\n0 | d | fly to (5, 11) work 20 | granted now layer 0")
 
 
+def test_a_silent_uavs_way_home_keeps_inside_the_fence_where_a_layer_does() -> None:
+    # the setting of rule 10's test on two layers under a 4.2 m ceiling (b then flies on to (-1, 9), clear of a's
+    # site): a's way home is clear of b at 4.7 m, over the ceiling; it is reserved at 2.5 m, inside, and b's plan (not under way) moves. Before (as with no
+    # fence), the way home took the lowest layer clear of everyone, over the ceiling. Where no layer keeps it
+    # inside (a 2.8 m ceiling from when a falls silent: both over it) it is reserved all the same, at the lowest
+    # layer clear of everyone: it cannot wait
+    script = """
+        t_s   | uav | does                             | expect
+        0     | a   | fly to (5, 5) work 10 then site  | granted now
+        0     | b   | park (2.5, 2.5)                  | -
+        0     | b   | fly to (-1, 9) work 10           | -
+    """
+    box = ((-5.0, -5.0), (15.0, -5.0), (15.0, 15.0), (-5.0, 15.0))
+    for ceiling_m, layer_m, moved in ((None, 4.7, ()), (4.2, 2.5, ("b",)), (2.8, 4.7, ())):
+        s = play({"a": (0, 0), "b": (10, 0)}, script, layers_m=(2.5, 4.7), fence=Fence(Site(box, 4.2)))
+        fence = None if ceiling_m is None else Fence(Site(box, ceiling_m))
+        s.fence = fence  # (b's plans, at 2.5 m under the 4.2 m ceiling, the same in each)
+        s.at(48.5).silent("a").moved(*moved)
+        home = s.plans["a"]
+        assert home.layer_m == layer_m, (ceiling_m, home.layer_m)
+        inside = fence is None or all(fence.admits(r.volume, r.purpose) for r in home.reservations)
+        assert inside == (ceiling_m != 2.8), ceiling_m
+
+
 def test_rule_every_plan_ends_where_the_uav_may_stay() -> None:
     # a stays at its site, then flies to a parking spot, then home; each plan starts where the last one ended,
     # once the UAV is there (not before: the next flight from the site is granted from its arrival, 32.0 s)

@@ -10,15 +10,21 @@ import json
 import math
 from pathlib import Path
 
+import pytest
+
 from airspace_rig import table_pair
 from masonry.blueprint import load_blueprint
+from masonry.geofence import Site
+from masonry.mission import table_holds
 from masonry.mission.airspace_state import Phase
+from masonry.mission.control_dispatch import may_take_off
 from masonry.mission.events import EventList
+from masonry.mission.reserved import TableClearance
 from masonry.mission.simulate import SimulatedMission
 from masonry.mission.wait_causes import airspace_cause
 from masonry.mission.waits import WaitCause
 from masonry.ports import RECALL_REASON
-from masonry.reservation import Fence, Hold, Table, with_holds
+from masonry.reservation import Fence, Hold, Table, column, with_holds
 from masonry.reservation.fence import FLOWN
 from masonry.sim import Faults
 from masonry.sim.wind import WindConfig
@@ -188,3 +194,79 @@ def test_under_a_low_ceiling_the_table_flies_no_spot_above_it(tmp_path: Path) ->
 def test_a_hold_is_a_value_of_the_table() -> None:
     h = Hold("operator", 5.0)
     assert h.covers("x", 5.0) and not h.covers("x", 4.9) and h.until(3.0).t1_s == 5.0
+
+
+def test_a_silent_uavs_way_home_under_the_table_keeps_under_the_ceiling() -> None:
+    """A UAV falls silent with a fallback layer over the ceiling (4.5 m under a 4.2 m one: a blueprint's own layers
+    are checked under it, site_checks; a fallback given by hand is not): its way home is reserved where its clamped
+    setpoints fly it, 0.5 m under the ceiling, inside the fence (before: at 4.5 m, outside)."""
+    site = Site(((-4.0, -8.0), (8.0, -8.0), (8.0, 4.0), (-4.0, 4.0)), 4.2)
+    homes = {"a": (0.0, -5.0, 0.0), "b": (3.0, -5.0, 0.0)}
+    c = TableClearance(0.8, 2.0, homes=homes, start_base_m=1.2, fence=site)
+    assert c.take_off("a") and c.request("a", (0.0, 0.0, 1.2), 0.0, (0.0, -5.0, 1.2)).granted
+    for t in range(1, 5):
+        c.grant(float(t))
+    length_m = c.silent("a", (0.0, -3.0, 2.0), 4.5)
+    home = [r for r in c.table.of("a") if r.purpose == "home"]
+    assert home and max(r.volume.z1_m for r in home) == pytest.approx(3.7)
+    assert all(Fence(site).admits(r.volume, r.purpose) for r in home), [r.describe() for r in home]
+    assert length_m == pytest.approx(2.0 + 1.7 + 1.7)  # (up 1.7 m, 2 m along, down 1.7 m to over its pad)
+
+
+def test_a_uav_cut_off_under_a_low_ceiling_flies_home_inside_what_the_table_reserved(tmp_path: Path) -> None:
+    """The case study under a 4.2 m ceiling, glue-1's link cut for 40 s as it flies (its fallback layer, 3.4 m, is
+    under the ceiling: the blueprint's check): it flies home on its own, the mission completes, and no flown
+    reservation of the table, its way home among them, ever left the fence."""
+    bp = load_blueprint(_with_site(tmp_path, LOW_CEILING))
+    assert bp.site is not None
+    mission = SimulatedMission.from_blueprint(bp, seed=1, vehicle="ideal", airspace="table")
+    c, fence, outside, homes = mission.control.columns, Fence(bp.site), [], []
+    watched = c.on_change
+
+    def check(table: Table, now_s: float) -> object:
+        flown = [r for r in table.reservations if r.purpose in FLOWN]
+        outside.extend(r.describe() for r in flown if not fence.admits(r.volume, r.purpose))
+        homes.extend(r for r in flown if r.purpose == "home")
+        return watched(table, now_s)
+
+    c.on_change = check
+    cut: list[float] = []
+
+    def hook(now_s: float) -> None:
+        v = mission.world.uavs["glue-1"].vehicle
+        if not cut and now_s > 10.0 and math.hypot(v.velocity_mps[0], v.velocity_mps[1]) > 0.3:
+            cut.append(now_s)
+            mission.bus.cut("glue-1")
+        elif len(cut) == 1 and now_s > cut[0] + 40.0:
+            cut.append(now_s)
+            mission.bus.restore("glue-1")
+
+    mission.tick_hooks.append(hook)
+    report = mission.run()
+    assert len(cut) == 2 and homes, "glue-1 was cut off and its way home reserved"
+    assert report.completed and report.conflict_violations == 0
+    assert not outside, outside[:3]
+
+
+def test_dispatch_under_the_table_reads_the_tables_holds() -> None:
+    """Under the table dispatch asks the table's holds whether a UAV is recalled or grounded (``table_holds.holding``:
+    ``sync`` made them this tick from the operator and the wind limit), not the operator and the wind limit
+    beside it; under the columns it asks them. A UAV in the air (not landed: no take-off for its hold to refuse) is
+    given no task while the table holds it (before, dispatch did not look at the table)."""
+    bp = load_blueprint(CASE_STUDY)
+    mission = SimulatedMission.from_blueprint(bp, seed=0, airspace="table")
+    mc = mission.control
+    c = mc.columns
+    assert isinstance(c, TableClearance)
+    c.set_stay("brick-1", column((3.0, -0.5), 0.0, 2.1), Phase.PARKED)  # (in the air over its pad)
+    assert table_holds.holding(mc, "brick-1") == frozenset()
+    c.table = with_holds(c.table, {("wind", frozenset({"brick-1"}))}, 0.0)
+    assert table_holds.holding(mc, "brick-1") == frozenset({"wind"})
+    assert mc.wind_limit is None or mc.wind_limit.allows("brick-1")  # (the wind limit says nothing)
+    assert not may_take_off(mc, "brick-1")
+    c.table, mc.now_s = with_holds(c.table, {("operator", frozenset({"brick-1"}))}, 1.0), 1.0
+    assert table_holds.holding(mc, "brick-1") == frozenset({"operator"}) and not may_take_off(mc, "brick-1")
+    c.table, mc.now_s = with_holds(c.table, set(), 2.0), 2.0
+    assert may_take_off(mc, "brick-1")
+    columns = SimulatedMission.from_blueprint(bp, seed=0).control  # the columns: no table to read
+    assert table_holds.holding(columns, "brick-1") is None

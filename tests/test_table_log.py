@@ -25,7 +25,7 @@ from masonry.mission.view import MissionView, view_at, wall_layout
 from masonry.observe.mcap_log import McapLog, read_log
 from masonry.observe.web import ViewServer
 from masonry.planner import plan as make_plan
-from masonry.reservation import Reservation, Table, column, leg, pad
+from masonry.reservation import Reservation, Table, column, leg, pad, with_holds
 
 ROOT = Path(__file__).resolve().parents[1]
 CASE_STUDY = ROOT / "blueprints" / "paper_case_study.yaml"
@@ -362,3 +362,161 @@ def test_a_leg_cut_to_what_lies_ahead_of_its_uav_is_logged_moved_not_made_in_the
     (e,) = watch.changes(Table((cut,)), 5.0)
     assert e.fields["change"] == "moved" and e.fields["id"] == 1 and e.fields["t0_s"] == 1.0
     assert e.fields["volume"][:2] == pytest.approx([cut.volume.a[0], 0.0]) and cut.volume.a[0] > 1.0
+
+
+# -- the holds on take-offs (the operator's pause and recall, the wind limit) --------------------------------------
+
+
+def test_the_watch_reports_a_hold_made_and_released_with_its_cause_uavs_and_window():
+    events = EventList()
+    watch = TableWatch(lambda: events)
+    stay = Reservation("u1", pad((0.0, 0.0)), 0.0, math.inf, "stay")
+    watch(Table((stay,)), 0.0)
+    paused = with_holds(Table((stay,)), {("operator", frozenset())}, 5.0)
+    watch(paused, 5.0)  # the reservations the same, a hold made: reported
+    both = with_holds(paused, {("operator", frozenset()), ("wind", frozenset({"u1"}))}, 7.0)
+    watch(both, 7.0)
+    watch(with_holds(both, {("wind", frozenset({"u1"}))}, 9.0), 9.0)  # the pause lifted
+    watch(with_holds(both, {("wind", frozenset({"u1"}))}, 9.0), 9.5)  # no change: nothing
+    holds = [e for e in events.events if e.kind == "hold"]
+    got = [
+        (e.time_s, e.fields["change"], e.fields["id"], e.uav, e.fields["cause"], e.fields["uavs"])
+        for e in holds
+    ]
+    assert got == [
+        (5.0, "made", 1, None, "operator", []),
+        (7.0, "made", 2, "u1", "wind", ["u1"]),
+        (9.0, "released", 1, None, "operator", []),
+    ]
+    assert (holds[0].fields["t0_s"], holds[0].fields["t1_s"]) == (5.0, None)
+    assert (holds[2].fields["t0_s"], holds[2].fields["t1_s"]) == (5.0, 9.0)
+    assert "operator on every UAV from 5.0 s to until lifted" in holds[0].line()
+    view = TableView()
+    for e in events.events:
+        view.fold(e)
+    assert [h.cause for h in view.holds_at(6.0)] == ["operator"]
+    assert [h.cause for h in view.holds_at(9.5)] == ["wind"]
+    assert [(r["cause"], r["uavs"], r["t1_s"], r["released"]) for r in view.hold_rows()] == [
+        ("operator", [], 9.0, True),
+        ("wind", ["u1"], None, False),
+    ]
+    assert view.lines(9.5)[-2:] == [
+        "  holds on take-offs: 1",
+        f"    {'wind':<12} holds u1 on the ground      7.0 s -> until lifted",
+    ]
+
+
+PAUSE_S, RESUME_S = 20.0, 90.0
+
+
+@pytest.fixture(scope="module")
+def paused_run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+    """The case study under the table with ``--log``, paused at 20 s and resumed at 90 s (as
+    tests/test_table_holds.py flies it): its log and report."""
+    bp = load_blueprint(CASE_STUDY)
+    path = tmp_path_factory.mktemp("paused") / "run.mcap"
+    log = McapLog(path, make_plan(bp), format_blueprint(bp), title="case").open()
+    mission = SimulatedMission.from_blueprint(bp, seed=0, airspace="table", events_sink=log)
+    pending = [(PAUSE_S, {"command": "pause"}), (RESUME_S, {"command": "resume"})]
+
+    def operator(now_s: float) -> None:
+        while pending and now_s >= pending[0][0]:
+            mission.control.operator.submit(pending.pop(0)[1], lambda out: None)
+
+    mission.tick_hooks.append(operator)
+    report = mission.run()
+    log.finish(report)
+    log.close()
+    assert report.completed
+    return {"log": path, "report": report}
+
+
+def test_a_pause_under_the_table_is_logged_as_a_hold_made_and_released(paused_run):
+    events = read_log(paused_run["log"]).events
+    holds = [e for e in events if e.kind == "hold"]
+    assert [(e.fields["change"], e.fields["cause"], e.fields["uavs"], e.uav) for e in holds] == [
+        ("made", "operator", [], None),
+        ("released", "operator", [], None),
+    ]
+    made, released = holds
+    assert PAUSE_S <= made.time_s < PAUSE_S + 0.5 and made.fields["t0_s"] == made.time_s
+    assert RESUME_S <= released.time_s < RESUME_S + 0.5
+    assert released.fields["t1_s"] == released.time_s and released.fields["id"] == made.fields["id"] == 1
+    with open(paused_run["log"], "rb") as f:  # on the table's topic, valid against its schema
+        reader = make_reader(f)
+        on_topic = []
+        for schema, _channel, message in reader.iter_messages(topics=["/mission/reservations"]):
+            data = json.loads(message.data)
+            assert schema is not None and not list(
+                jsonschema.Draft7Validator(json.loads(schema.data)).iter_errors(data)
+            )
+            on_topic.append(data["kind"])
+    assert on_topic.count("hold") == 2 and "reservation" in on_topic
+    with open(paused_run["log"], "rb") as f:
+        kinds = {
+            json.loads(m.data)["kind"]
+            for _s, _c, m in make_reader(f).iter_messages(topics=["/mission/events"])
+        }
+    assert "hold" not in kinds and "operator" in kinds  # (the command itself stays an operator event)
+
+
+def test_replay_at_prints_the_holds_standing_then(paused_run):
+    during = runner.invoke(app, ["replay", str(paused_run["log"]), "--at", "50"])
+    assert during.exit_code == 0, during.output
+    lines = during.stdout.splitlines()
+    head = lines.index("  holds on take-offs: 1")
+    assert lines[head + 1].split()[:6] == ["operator", "holds", "every", "UAV", "on", "the"]
+    assert lines[head + 1].endswith("-> until lifted")
+    after = runner.invoke(app, ["replay", str(paused_run["log"]), "--at", str(RESUME_S + 1.0)])
+    assert after.exit_code == 0 and "holds on take-offs" not in after.stdout
+    before = runner.invoke(app, ["replay", str(paused_run["log"]), "--at", "10"])
+    assert before.exit_code == 0 and "holds on take-offs" not in before.stdout
+
+
+def test_the_page_state_carries_the_holds_for_the_timeline(paused_run, table_run):
+    rows = view_at(read_log(paused_run["log"]).events, 1e6).snapshot()["holds"]
+    assert len(rows) == 1 and rows[0]["cause"] == "operator" and rows[0]["uavs"] == [] and rows[0]["released"]
+    assert rows[0]["t0_s"] >= PAUSE_S and rows[0]["t1_s"] >= RESUME_S
+    assert (
+        view_at(read_log(table_run["log"]).events, 1e6).snapshot()["holds"] == []
+    )  # (none made: none drawn)
+
+
+@pytest.mark.slow
+def test_the_page_draws_a_hold_over_the_rows_of_the_uavs_it_holds_in_chromium(paused_run):
+    if CHROMIUM is None:
+        pytest.skip("chromium is not installed (apt-get install chromium; .ci/run does it where it can)")
+    from playwright.sync_api import sync_playwright
+
+    recorded = read_log(paused_run["log"])
+    bp = load_blueprint(CASE_STUDY)
+    plan = make_plan(bp)
+    ids = [t.id for t in plan.tasks]
+    end_s = max(e.time_s for e in recorded.events)
+    server = ViewServer(
+        "127.0.0.1",
+        0,
+        layout=wall_layout(plan, bp.fleet, "case"),
+        state=lambda t: view_at(recorded.events, end_s if t is None else t, ids).snapshot(),
+        version=lambda: 0,
+        replay=end_s,
+    )
+    with server, sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        errors: list[str] = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(server.url)
+        page.wait_for_selector("#reserved rect.res")
+        for at, drawn in ((10.0, 0), (50.0, 1)):
+            page.evaluate(f"const s = document.getElementById('slider'); s.value = {at}; s.oninput()")
+            page.wait_for_function(f"document.getElementById('clock').textContent === 't = {at:.1f} s'")
+            for uav in ("brick-1", "glue-1"):  # a pause holds every UAV: over each row
+                assert page.locator(f"#reserved rect.hold.operator[data-uav={uav}]").count() == drawn
+        titles = page.locator("#reserved rect.hold.operator title").all_text_contents()
+        assert all(t.startswith("operator holds every UAV on the ground: ") for t in titles), titles
+        assert all(t.endswith("until lifted") for t in titles), titles  # (at 50 s it is not lifted yet)
+        page.evaluate(f"const s = document.getElementById('slider'); s.value = {end_s}; s.oninput()")
+        page.wait_for_function("document.querySelectorAll('#reserved rect.hold.released').length === 2")
+        browser.close()
+    assert errors == []

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from masonry.mission import table_dispatch
+from masonry.mission import table_dispatch, table_holds
 from masonry.mission.airspace import ColumnClearance, Phase
 from masonry.mission.dispatch_chain import ChainThrough
 from masonry.mission.sites import work_point_m
@@ -48,12 +48,17 @@ def admit(
 
 def may_take_off(mc: MissionControl, name: str) -> bool:
     """A UAV landed on its pad takes a task only with the column over its pad for its take-off (reserved
-    here): take-offs from neighbouring pads go one after the other."""
-    if not mc.operator.may_fly(mc, name):
+    here): take-offs from neighbouring pads go one after the other. Under the table a recall and a wind grounding
+    are read from the table's holds (:func:`masonry.mission.table_holds.holding`), under the columns from the
+    operator and the wind limit: the same answers (docs/safety.md, "The operator, the wind and the fence on the
+    table")."""
+    held = table_holds.holding(mc, name)
+    recalled = name in mc.operator.held if held is None else "operator" in held
+    if recalled or not mc.operator.under_limit(mc, name):
         return False  # recalled, or its role at the operator's fleet limit
     if swap_due(mc, name):
         return False  # it flies home for a fresh pack now, while few of its role are away for theirs
-    if mc.wind_limit is not None and not mc.wind_limit.allows(name):
+    if (mc.wind_limit is not None and not mc.wind_limit.allows(name)) if held is None else "wind" in held:
         return False  # above its max_wind_mps: it finishes its task and lands
     if mc.columns.phase(name) is Phase.LANDED and not mc.columns.take_off(name):
         mc._deferred_at = mc.columns.version

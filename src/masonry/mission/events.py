@@ -31,6 +31,9 @@ Kinds (``MissionEvent.kind``) and their fields:
 - ``reservation``: with ``--airspace table``, a reservation of ``uav`` (for ``task_id``) ``made``, ``moved`` or
   ``released`` (``change``), its ``id``, ``purpose``, ``t0_s``, ``t1_s`` (None: open-ended), ``volume``, ``space``
   and, moved, the window it ``was`` (:mod:`masonry.mission.table_events`).
+- ``hold``: with ``--airspace table``, a hold on the table's take-offs ``made`` or ``released`` (``change``), its
+  ``id``, ``cause`` (``operator`` or ``wind``), ``uavs`` (empty: every UAV; ``uav`` the one it holds, None: not
+  one), ``t0_s`` and ``t1_s`` (None: until lifted) (:mod:`masonry.mission.table_events`).
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ KINDS = (
     "spare",
     "placement",
     "reservation",
+    "hold",
 )
 
 
@@ -144,6 +148,11 @@ class MissionEvent:
             t1 = f.get("t1_s")
             end = f"{t1:.1f} s" if isinstance(t1, (int, float)) else "open-ended"
             extra = f": {f.get('change')} {f.get('purpose')} from {f.get('t0_s', 0.0):.1f} s to {end}"
+        elif self.kind == "hold":
+            t1 = f.get("t1_s")
+            end = f"{t1:.1f} s" if isinstance(t1, (int, float)) else "until lifted"
+            held = ", ".join(f.get("uavs") or []) or "every UAV"
+            extra = f": {f.get('change')} {f.get('cause')} on {held} from {f.get('t0_s', 0.0):.1f} s to {end}"
         elif self.kind == "glue":
             until = f.get("open_until_s")
             extra = f" under {f.get('brick')}" + (

@@ -204,8 +204,10 @@ class Operator:
 
     def may_fly(self, mc: MissionHost, uav: str) -> bool:
         """May ``uav`` take a task now (not held, and its role under its limit)?"""
-        if uav in self.held:
-            return False
+        return uav not in self.held and self.under_limit(mc, uav)
+
+    def under_limit(self, mc: MissionHost, uav: str) -> bool:
+        """Is ``uav``'s role under the operator's limit on it (none: True), counting the others of it flying?"""
         link = mc.uavs[uav]
         limit = self.limits.get(link.spec.role)
         if limit is None:

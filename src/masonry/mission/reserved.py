@@ -367,10 +367,9 @@ class TableClearance:
         home = self.homes.get(uav)
         if home is None or self.base_m is None:
             return 0.0
-        via = None if via_m is None else (float(via_m[0]), float(via_m[1]), float(via_m[2]))
-        top = self._home_top_m()
+        home_m = (home[0], home[1], self._home_top_m())
         self.table, length_m = silent_way(
-            self.table, uav, position_m, layer_m, via, (home[0], home[1], top), self.now_s, self.timing
+            self.table, uav, position_m, layer_m, via_m, home_m, self.now_s, self.timing, self.fence
         )
         self.bump()
         return length_m

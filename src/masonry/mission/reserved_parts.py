@@ -15,9 +15,11 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import replace
 
 from masonry.errors import PlanningError
+from masonry.geofence import SETPOINT_MARGIN_M, Site
 from masonry.mission.volumes import Vec3
 from masonry.reservation import (
     Airspace,
+    Fence,
     FlightPlan,
     Place,
     Request,
@@ -311,16 +313,25 @@ def silent_way(
     home_m: Vec3,
     now_s: float,
     timing: TaskTiming,
+    fence: Site | None = None,
 ) -> tuple[Table, float]:
     """``table`` with a silent ``uav``'s reservations open-ended and its way home from ``position_m`` at its
     fallback ``layer_m`` (through ``via_m``'s column, a brick put back first, to over ``home_m``) reserved
     open-ended too (:func:`~masonry.reservation.way_home`, or forced where plans under way are in its way: it
-    flies it anyway); and the way's length in metres."""
+    flies it anyway); and the way's length in metres. Under ``fence``'s ceiling: at most its setpoint margin
+    under it, where the UAV's clamped setpoints fly it (docs/state-machines.md, "The site's fence"), so the way
+    keeps inside where a layer can; a leg across the boundary is reserved as it is (it flies home all the same,
+    along the boundary)."""
     held = [r.until(math.inf) for r in table.of(uav) if r.t1_s > now_s]
     x, y, z = (float(v) for v in position_m)
-    alt = max(float(layer_m) if layer_m is not None else z, z, home_m[2])
-    air = Airspace((alt,), timing.cruise_speed_mps, timing.vertical_speed_mps, 0.0, 0.0)
-    stops = [(x, y, z), *([] if via_m is None else [via_m]), home_m]
+    alt = float(layer_m) if layer_m is not None else z
+    if fence is not None:
+        alt = min(alt, fence.max_altitude_m - SETPOINT_MARGIN_M)
+    alt = max(alt, z, home_m[2])
+    within = None if fence is None else Fence(fence)
+    air = Airspace((alt,), timing.cruise_speed_mps, timing.vertical_speed_mps, 0.0, 0.0, fence=within)
+    via = None if via_m is None else (float(via_m[0]), float(via_m[1]), float(via_m[2]))
+    stops = [(x, y, z), *([] if via is None else [via]), home_m]
     way: list[Reservation] = []
     length_m = 0.0
     for a, b in itertools.pairwise(stops):

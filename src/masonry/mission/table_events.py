@@ -14,8 +14,12 @@ every change it compares the table with the one it saw last and hands the missio
   down at its site, everything of a UAV out of the mission).
 
 A window that runs to its end is not released: the table drops it then, and so does a reader (its ``t1_s`` says
-when). Each reservation has an ``id``, from 1 in the order made, that its later events repeat. Under the default
-``columns`` airspace there is no table, and no such event.
+when). Each reservation has an ``id``, from 1 in the order made, that its later events repeat.
+
+The table's holds on take-offs (:class:`~masonry.reservation.Hold`: the operator's pause and recall, the wind
+limit's groundings, :mod:`masonry.mission.table_holds`) are reported the same way, one ``hold`` event per hold
+``made`` or ``released`` (lifted: its window cut to end now), with its own ``id`` (from 1 among holds), its ``cause``,
+``uavs`` (empty: every UAV) and window. Under the default ``columns`` airspace there is no table, and no such event.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from masonry.mission.events import EventSink, MissionEvent
 
 if TYPE_CHECKING:  # (at run time this module needs only the events: the CLI imports it before any mission)
     from masonry.mission.control import MissionControl
-    from masonry.reservation import Reservation, Table
+    from masonry.reservation import Hold, Reservation, Table
 
 #: The changes a ``reservation`` event reports (its ``change`` field).
 CHANGES = ("made", "moved", "released")
@@ -56,6 +60,12 @@ def _arrival(arrived: dict[tuple[object, ...], list[Reservation]], r: Reservatio
 
 def _end(t1_s: float) -> float | None:
     return None if math.isinf(t1_s) else t1_s
+
+
+def hold_fields(h: Hold) -> dict[str, object]:
+    """A hold as an event's JSON fields: ``cause``, ``uavs`` (sorted; empty: every UAV), ``t0_s`` and ``t1_s``
+    (null: until lifted)."""
+    return {"cause": h.cause, "uavs": sorted(h.uavs), "t0_s": h.t0_s, "t1_s": _end(h.t1_s)}
 
 
 def reservation_fields(r: Reservation) -> dict[str, object]:
@@ -90,10 +100,14 @@ class TableWatch:
         self._ids: dict[Reservation, list[int]] = {}  # each reservation in the table seen last -> its ids
         self._next_id = 1
         self._tasks: dict[int, str | None] = {}  # id -> the task its UAV had in hand when it was made
+        self._holds: dict[tuple[str, frozenset[str], float], tuple[int, Hold]] = {}  # held seen last, by key
+        self._next_hold = 1
+        self._seen_holds: tuple[Hold, ...] = ()
 
     def __call__(self, table: Table, now_s: float) -> None:
         """The table changed at ``now_s``: hand the sink what changed."""
-        if table.reservations is self._seen or table.reservations == self._seen:
+        same = table.reservations is self._seen or table.reservations == self._seen
+        if same and (table.holds is self._seen_holds or table.holds == self._seen_holds):
             return
         sink = self.sink()
         if sink is None:
@@ -126,7 +140,38 @@ class TableWatch:
             self._ids.setdefault(r, []).append(rid)
             out.append(self._event(now_s, "made", rid, r))
         out.sort(key=lambda e: int(e.fields["id"]))
+        return [*out, *self.hold_changes(table.holds, now_s)]
+
+    def hold_changes(self, holds: tuple[Hold, ...], now_s: float) -> list[MissionEvent]:
+        """The ``hold`` events between the holds seen last and ``holds`` (which become the ones seen last): one
+        gone before its end (lifted) is ``released``, its window cut to end now (one that ran to its end: nothing);
+        one whose end changed ``moved`` (``released`` if it ends by now); a new one ``made``."""
+        self._seen_holds = holds
+        now = {(h.cause, h.uavs, h.t0_s): h for h in holds}
+        out: list[MissionEvent] = []
+        for key, (hid, h) in sorted(self._holds.items(), key=lambda kv: kv[1][0]):
+            after = now.get(key)
+            if after == h:
+                continue
+            del self._holds[key]
+            if after is None or after.t1_s <= now_s:
+                if h.t1_s > now_s:  # (lifted before its end)
+                    out.append(self._hold_event(now_s, "released", hid, h.until(now_s)))
+                now.pop(key, None)
+                continue
+            self._holds[key] = (hid, after)
+            out.append(self._hold_event(now_s, "moved", hid, after))
+        for key, h in now.items():
+            if key not in self._holds:
+                hid, self._next_hold = self._next_hold, self._next_hold + 1
+                self._holds[key] = (hid, h)
+                out.append(self._hold_event(now_s, "made", hid, h))
         return out
+
+    @staticmethod
+    def _hold_event(now_s: float, change: str, hid: int, h: Hold) -> MissionEvent:
+        uav = next(iter(h.uavs)) if len(h.uavs) == 1 else None
+        return MissionEvent(now_s, "hold", uav, None, {"change": change, "id": hid, **hold_fields(h)})
 
     def _take_id(self, r: Reservation) -> int:
         ids = self._ids.get(r)
@@ -171,4 +216,4 @@ def watch_table(control: MissionControl) -> TableWatch | None:
     return watch
 
 
-__all__ = ["CHANGES", "TableWatch", "WatchedTable", "reservation_fields", "watch_table"]
+__all__ = ["CHANGES", "TableWatch", "WatchedTable", "hold_fields", "reservation_fields", "watch_table"]

@@ -5,9 +5,9 @@ The operator (:mod:`masonry.mission.operator`) and the wind limit (:mod:`masonry
 not fly; :func:`sync` makes that the table's :class:`~masonry.reservation.Hold` s (a pause or an abort: every UAV,
 cause ``operator``; a recall: that UAV; a wind grounding: each UAV above its ``max_wind_mps``, cause ``wind``), from
 the moment they are said until they are lifted. ``decide`` then starts no take-off inside them: a landed UAV that
-has a task waits on its pad, the hold named in its task's ``waits`` (:func:`held_cause`). Dispatch still gives a
-held UAV no task and a UAV in the air finishes its task and flies home, as under the columns (docs/safety.md,
-"The table at run time"). Pure: no I/O, no clock.
+has a task waits on its pad, the hold named in its task's ``waits`` (:func:`held_cause`). Dispatch gives a held
+UAV no task, reading the table's holds (:func:`holding`), and a UAV in the air finishes its task and flies home,
+as under the columns (docs/safety.md, "The table at run time"). Pure: no I/O, no clock.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from masonry.mission.control import MissionControl
     from masonry.mission.reserved import TableClearance
 
-__all__ = ["fence_refusal", "held_cause", "is_held", "sync", "wanted"]
+__all__ = ["fence_refusal", "held_cause", "holding", "is_held", "sync", "wanted"]
 
 
 def wanted(mc: MissionControl) -> set[tuple[str, frozenset[str]]]:
@@ -49,6 +49,16 @@ def sync(mc: MissionControl, now_s: float) -> None:
     c.tick(now_s)  # (the table's clock: a hold from now covers a take-off asked now)
     c.table = with_holds(c.table, want, c.now_s)
     c.bump()
+
+
+def holding(mc: MissionControl, uav: str) -> frozenset[str] | None:
+    """The causes of the table's holds that bind ``uav`` now (what dispatch reads under the table, with airspace
+    rules: :func:`sync` made them this tick from the operator and the wind limit, before dispatch); None under the
+    columns or without airspace rules (no holds on the table: dispatch asks the operator and the wind limit)."""
+    c = mc.columns
+    if isinstance(c, ColumnClearance) or c.base_m is None:
+        return None
+    return frozenset(h.cause for h in c.table.holds if h.covers(uav, mc.now_s))
 
 
 def held_cause(decision: Wait) -> tuple[tuple[str, str], ...]:

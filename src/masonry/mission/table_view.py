@@ -2,7 +2,8 @@
 the live page draws under its Gantt chart (a per-UAV timeline of reserved windows).
 
 :class:`TableView` keeps every reservation by its ``id``: those held (their window not over, not released) and, for
-the timeline, the latest :data:`HISTORY` of those whose window ended or that were released. The events come from
+the timeline, the latest :data:`HISTORY` of those whose window ended or that were released; and the holds on take-offs (``hold``
+events: the operator's pause and recall, the wind limit's groundings), every one made. The events come from
 :mod:`masonry.mission.table_events` (``--airspace table``); a mission without them has an empty view.
 """
 
@@ -63,6 +64,36 @@ class Held:
         }
 
 
+@dataclass(frozen=True)
+class HeldDown:
+    """One hold on take-offs as its events tell it: ``uavs`` empty holds every UAV; ``t1_s`` ``math.inf`` until
+    lifted."""
+
+    id: int
+    cause: str
+    uavs: tuple[str, ...]
+    t0_s: float
+    t1_s: float
+    released_s: float | None = None  # when it was lifted (None: it was not)
+
+    def line(self) -> str:
+        """One line of ``masonry replay --at``."""
+        end = "until lifted" if math.isinf(self.t1_s) else f"{self.t1_s:8.1f} s"
+        who = ", ".join(self.uavs) or "every UAV"
+        return f"    {self.cause:<12} holds {who} on the ground {self.t0_s:8.1f} s -> {end}"
+
+    def row(self) -> dict[str, object]:
+        """Its window for the page (``uavs`` empty: every UAV; ``t1_s`` None: until lifted)."""
+        return {
+            "id": self.id,
+            "cause": self.cause,
+            "uavs": list(self.uavs),
+            "t0_s": self.t0_s,
+            "t1_s": None if math.isinf(self.t1_s) else self.t1_s,
+            "released": self.released_s is not None,
+        }
+
+
 def _float(value: object, default: float) -> float:
     return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else default
 
@@ -74,9 +105,13 @@ class TableView:
         self.held: dict[int, Held] = {}
         self.over: deque[Held] = deque(maxlen=HISTORY)
         self.seen = False  # a reservation event was folded (the table exists: --airspace table)
+        self.holds: dict[int, HeldDown] = {}  # every hold made, by id (few: one per command or wind front)
 
     def fold(self, e: MissionEvent) -> None:
-        """Fold one ``reservation`` event in (other kinds are not this view's)."""
+        """Fold one ``reservation`` or ``hold`` event in (other kinds are not this view's)."""
+        if e.kind == "hold":
+            self._fold_hold(e)
+            return
         if e.kind != "reservation":
             return
         self.seen = True
@@ -102,6 +137,25 @@ class TableView:
             self.held[rid] = now
         self._end(e.time_s)
 
+    def _fold_hold(self, e: MissionEvent) -> None:
+        self.seen = True
+        f = e.fields
+        t1 = f.get("t1_s")
+        uavs = f.get("uavs")
+        hold = HeldDown(
+            int(_float(f.get("id"), 0.0)),
+            str(f.get("cause", "")),
+            tuple(str(u) for u in uavs) if isinstance(uavs, list) else (),
+            _float(f.get("t0_s"), e.time_s),
+            math.inf if t1 is None else _float(t1, math.inf),
+            e.time_s if f.get("change") == "released" else None,
+        )
+        self.holds[hold.id] = hold
+
+    def holds_at(self, time_s: float) -> list[HeldDown]:
+        """The holds standing at ``time_s`` (begun, not over), in the order made."""
+        return [h for _i, h in sorted(self.holds.items()) if h.t0_s <= time_s < h.t1_s]
+
     def _end(self, time_s: float) -> None:
         """Windows over by ``time_s`` leave the table (for the timeline's history)."""
         for rid in [rid for rid, h in self.held.items() if h.t1_s <= time_s]:
@@ -116,12 +170,20 @@ class TableView:
         every: Sequence[Held] = [*self.over, *self.held.values()]
         return [h.row() for h in sorted(every, key=lambda h: (h.t0_s, h.id))]
 
+    def hold_rows(self) -> list[dict[str, object]]:
+        """Every hold made, in that order: the page's timeline draws them over the rows of the UAVs they hold."""
+        return [h.row() for _i, h in sorted(self.holds.items())]
+
     def lines(self, time_s: float) -> list[str]:
         """The table at ``time_s`` as text (``masonry replay --at``)."""
         held = self.at(time_s)
         out = [f"  reservation table: {len(held)} held (current and planned windows)"]
         out.extend(h.line() for h in held)
+        holds = self.holds_at(time_s)
+        if holds:
+            out.append(f"  holds on take-offs: {len(holds)}")
+            out.extend(h.line() for h in holds)
         return out
 
 
-__all__ = ["HISTORY", "Held", "TableView"]
+__all__ = ["HISTORY", "Held", "HeldDown", "TableView"]

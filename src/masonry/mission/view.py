@@ -102,7 +102,7 @@ class MissionView:
     def emit(self, event: MissionEvent) -> None:
         """Fold one event in."""
         with self._lock:
-            if event.kind == "reservation":  # the table's own (not among the latest events' lines)
+            if event.kind in ("reservation", "hold"):  # the table's own (not among the latest events' lines)
                 self.events += 1
                 self.time_s = max(self.time_s, event.time_s)
                 self.table.fold(event)
@@ -226,7 +226,11 @@ class MissionView:
         with self._lock:
             glue = {"glue": self.open_glue()} if self._glued else {}
             seen = {"as_built": {k: dict(v) for k, v in self.as_built.items()}} if self.as_built else {}
-            table = {"reservations": self.table.rows()} if self.table.seen else {}
+            table = (
+                {"reservations": self.table.rows(), "holds": self.table.hold_rows()}
+                if self.table.seen
+                else {}
+            )
             return {
                 **glue,
                 **seen,

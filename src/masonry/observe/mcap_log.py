@@ -10,7 +10,7 @@ report, losslessly (:mod:`masonry.mission.report_codec`). Foxglove's topics are 
 
 :func:`read_log` reads one back (:class:`RecordedMission`): the blueprint, the events, the report, from masonry's
 own JSON topics, which logs written before Foxglove's topics moved to the SDK (JSON there too) share; the
-reservation table's changes (``/mission/reservations``) come back as ``reservation`` events among the others. The SQLite
+reservation table's changes (``/mission/reservations``) come back as ``reservation`` and ``hold`` events among the others. The SQLite
 journal stays the source of truth for ``--resume``; the log is for people and tools.
 """
 
@@ -47,7 +47,7 @@ from masonry.planner.tasks import Plan
 PROFILE = ""
 
 #: The topics :func:`read_log` reads: masonry's own (``/mission/reservations``: the reservation table's changes,
-#: ``reservation`` events, only with ``--airspace table``; a log without them reads as before).
+#: ``reservation`` and ``hold`` events, only with ``--airspace table``; a log without them reads as before).
 _READ = ("/mission/blueprint", "/mission/events", "/mission/reservations", "/mission/report")
 
 

@@ -248,7 +248,10 @@ class MissionScene(ABC):
     def emit(self, event: MissionEvent) -> None:
         """Write one mission event, and what it changes on the other topics."""
         t = event.time_s
-        if event.kind == "reservation":  # the table's changes (--airspace table): a topic of their own
+        if event.kind in (
+            "reservation",
+            "hold",
+        ):  # the table's changes (--airspace table): a topic of their own
             if self.wants("/mission/reservations"):
                 self._put("/mission/reservations", t, event.to_dict())
             return

@@ -17,6 +17,7 @@ import math
 from dataclasses import dataclass, replace
 
 from masonry.errors import PlanningError
+from masonry.reservation.fence import keeps_inside
 from masonry.reservation.flight import (
     Airspace,
     FlightPlan,
@@ -148,7 +149,10 @@ def way_home(
     table: Table, uav: str, now_s: float, where: Place, home: Place, airspace: Airspace
 ) -> tuple[Table, FlightPlan, tuple[Move, ...]]:
     """Reserve a silent ``uav``'s flight from ``where`` home from ``now_s`` on (replacing what it held from then):
-    at the lowest layer where it clashes with nobody, else the lowest where every plan in its way can move.
+    at the lowest layer where it clashes with nobody, else the lowest where every plan in its way can move. With
+    ``airspace.fence`` only the layers whose way keeps inside it are tried, as :func:`plan_flight` plans; where
+    none does (a leg across the boundary, every layer over the ceiling) every layer is: it cannot wait, and flies
+    home all the same (:func:`~masonry.reservation.fence.keeps_inside` tells the caller).
 
     Raises:
         PlanningError: no layer works (plans under way are in its way on every layer).
@@ -156,12 +160,19 @@ def way_home(
     left = table.release(uav, now_s)
     request = Request(uav, where, None, home)
     layers = [z for z in airspace.layers_m if z >= max(where.z_m, home.z_m)]
-    tries: list[tuple[float, tuple[Reservation, ...]]] = []
-    for layer in layers:
-        mine = tuple(
-            r if r.purpose == "stay" else replace(r, purpose="home")
-            for r in flight_reservations(request, now_s, layer, airspace)
+    ways = [
+        (
+            layer,
+            tuple(
+                r if r.purpose == "stay" else replace(r, purpose="home")
+                for r in flight_reservations(request, now_s, layer, airspace)
+            ),
         )
+        for layer in layers
+    ]
+    inside = [(layer, mine) for layer, mine in ways if keeps_inside(airspace.fence, mine)]
+    tries: list[tuple[float, tuple[Reservation, ...]]] = []
+    for layer, mine in inside or ways:
         if not any(left.clashes(r) for r in mine):
             return left.add(*mine), FlightPlan(uav, now_s, layer, mine), ()
         tries.append((layer, mine))

@@ -154,13 +154,24 @@ function drawGantt(state) {
 
 // The reservation table (--airspace table) under the Gantt: one row per UAV, a box per reserved window on the
 // same time axis (flights and work full height, the stays it waits in on a lower band; open-ended ones run to
-// the axis' end). Without a table (the columns airspace) the section stays hidden.
+// the axis' end), behind them the holds on its take-offs. Without a table (the columns airspace) it stays hidden.
 function drawReserved(state) {
   const box = document.getElementById("reserved-box");
   box.hidden = state.reservations === undefined;
   if (box.hidden) return;
   const { svg, names, rowH, end, height, sx: along } = uavRows("reserved", state);
   const sx = (t) => along(Math.min(Math.max(t, 0), end));
+  // the holds on take-offs (the operator's, the wind's) behind the windows, over each row of a UAV they hold
+  for (const h of state.holds || []) {
+    const t1 = h.t1_s === null ? end : h.t1_s;
+    const who = h.uavs.length ? h.uavs.join(", ") : "every UAV";
+    for (const u of h.uavs.length ? h.uavs : names) {
+      const i = names.indexOf(u);
+      if (i < 0) continue;
+      const rect = el("rect", { class: `hold ${h.cause}` + (h.released ? " released" : "") + (h.t1_s === null ? " open" : ""), x: sx(h.t0_s), y: 2 + i * rowH, width: Math.max(sx(t1) - sx(h.t0_s), 1), height: rowH - 4, "data-uav": u, "data-cause": h.cause }, svg);
+      el("title", {}, rect, `${h.cause} holds ${who} on the ground: ${h.t0_s.toFixed(1)} s to ${h.t1_s === null ? "until lifted" : h.t1_s.toFixed(1) + " s"}`);
+    }
+  }
   for (const r of state.reservations) {
     const i = names.indexOf(r.uav);
     if (i < 0) continue;
