@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
 
 import jsonschema
@@ -61,6 +62,23 @@ def _reservations(log: Path) -> list[MissionEvent]:
 
 
 # -- the watch over a table (pure) -------------------------------------------------------------------------------
+
+
+def _replay_server(events: Sequence[MissionEvent]) -> tuple[ViewServer, float]:
+    """The live page replaying a logged case-study mission (as ``masonry replay --serve`` does), and its end."""
+    bp = load_blueprint(CASE_STUDY)
+    plan = make_plan(bp)
+    ids = [t.id for t in plan.tasks]
+    end_s = max(e.time_s for e in events)
+    server = ViewServer(
+        "127.0.0.1",
+        0,
+        layout=wall_layout(plan, bp.fleet, "case"),
+        state=lambda t: view_at(events, end_s if t is None else t, ids).snapshot(),
+        version=lambda: 0,
+        replay=end_s,
+    )
+    return server, end_s
 
 
 def test_the_watch_reports_made_moved_and_released_with_ids_and_is_silent_when_a_window_just_ends():
@@ -282,22 +300,11 @@ def test_the_page_draws_a_timeline_of_reserved_windows_under_the_gantt_in_chromi
     from playwright.sync_api import sync_playwright
 
     recorded = read_log(table_run["log"])
-    bp = load_blueprint(CASE_STUDY)
-    plan = make_plan(bp)
-    ids = [t.id for t in plan.tasks]
-    end_s = max(e.time_s for e in recorded.events)
+    server, _end_s = _replay_server(recorded.events)
     b0_transit = next(
         e
         for e in recorded.events
         if e.kind == "reservation" and e.task_id == "B0" and e.fields["purpose"] == "transit"
-    )
-    server = ViewServer(
-        "127.0.0.1",
-        0,
-        layout=wall_layout(plan, bp.fleet, "case"),
-        state=lambda t: view_at(recorded.events, end_s if t is None else t, ids).snapshot(),
-        version=lambda: 0,
-        replay=end_s,
     )
     with server, sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
@@ -489,18 +496,7 @@ def test_the_page_draws_a_hold_over_the_rows_of_the_uavs_it_holds_in_chromium(pa
     from playwright.sync_api import sync_playwright
 
     recorded = read_log(paused_run["log"])
-    bp = load_blueprint(CASE_STUDY)
-    plan = make_plan(bp)
-    ids = [t.id for t in plan.tasks]
-    end_s = max(e.time_s for e in recorded.events)
-    server = ViewServer(
-        "127.0.0.1",
-        0,
-        layout=wall_layout(plan, bp.fleet, "case"),
-        state=lambda t: view_at(recorded.events, end_s if t is None else t, ids).snapshot(),
-        version=lambda: 0,
-        replay=end_s,
-    )
+    server, end_s = _replay_server(recorded.events)
     with server, sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         page = browser.new_page(viewport={"width": 1400, "height": 1000})
